@@ -1,0 +1,193 @@
+//! The training dataset: every combination of the error-term grid, applied to every
+//! training trajectory, cut into windows. In: the checked spec and the trajectories.
+//! Out: a [`TrainingSet`] in a compact f32 layout, `[window, 6, time]` inputs (DVL x, y,
+//! z, then GNSS-RTK x, y, z) and `[window, 3, time]` ground-truth targets, with each
+//! combination's windows split 80:20 (or as the spec says) into training and validation.
+//! Combinations are generated in parallel, each from its own generator seeded by
+//! (seed, combination index), so the bytes do not depend on the thread count.
+
+use crate::data::Trajectory;
+use crate::noise::{BeamGeometry, SensorErrors, measure_trajectory};
+use crate::rng::task_rng;
+use crate::spec::{Grid, Spec};
+use indicatif::ProgressBar;
+use rayon::prelude::*;
+
+/// Rows of one input window: DVL x, y, z and GNSS-RTK x, y, z.
+pub const INPUT_ROWS: usize = 6;
+/// Rows of one target window: ground-truth x, y, z.
+pub const TARGET_ROWS: usize = 3;
+
+/// One combination of the training grid, in the spec's units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GridPoint {
+    pub scale_pct: f64,
+    pub bias_cm_s: f64,
+    pub noise_cm_s: f64,
+}
+
+impl Grid {
+    /// Every combination, scale outermost and noise innermost.
+    pub fn points(&self) -> Vec<GridPoint> {
+        let mut points =
+            Vec::with_capacity(self.scale_pct.len() * self.bias_cm_s.len() * self.noise_cm_s.len());
+        for &scale_pct in &self.scale_pct {
+            for &bias_cm_s in &self.bias_cm_s {
+                for &noise_cm_s in &self.noise_cm_s {
+                    points.push(GridPoint {
+                        scale_pct,
+                        bias_cm_s,
+                        noise_cm_s,
+                    });
+                }
+            }
+        }
+        points
+    }
+}
+
+/// Start samples of the windows of a trajectory of `len` samples.
+pub fn window_starts(len: usize, window: usize, stride: usize) -> impl Iterator<Item = usize> {
+    (0..)
+        .map(move |i| i * stride)
+        .take_while(move |start| start + window <= len)
+}
+
+/// Windows that one grid combination yields from the training trajectories.
+pub fn windows_per_combination(spec: &Spec, trajectories: &[Trajectory]) -> usize {
+    let d = &spec.dataset;
+    d.trajectories
+        .iter()
+        .map(|&t| window_starts(trajectories[t].ground_truth.len(), d.window, d.stride).count())
+        .sum()
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrainingSet {
+    pub points: Vec<GridPoint>,
+    /// Samples per window.
+    pub window: usize,
+    pub windows_per_combination: usize,
+    /// `[window, INPUT_ROWS, time]`, row-major.
+    pub inputs: Vec<f32>,
+    /// `[window, TARGET_ROWS, time]`, row-major.
+    pub targets: Vec<f32>,
+    /// One flag per window.
+    pub is_validation: Vec<bool>,
+}
+
+impl TrainingSet {
+    pub fn len(&self) -> usize {
+        self.is_validation.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.is_validation.is_empty()
+    }
+
+    pub fn validation_len(&self) -> usize {
+        self.is_validation.iter().filter(|&&v| v).count()
+    }
+
+    /// Bytes of the window data a set of `windows` windows of `window` samples holds.
+    pub fn size_bytes(windows: usize, window: usize) -> usize {
+        windows * (INPUT_ROWS + TARGET_ROWS) * window * std::mem::size_of::<f32>()
+            + windows * std::mem::size_of::<bool>()
+    }
+}
+
+/// Generates the whole training set; `progress` advances once per combination.
+pub fn generate(spec: &Spec, trajectories: &[Trajectory], progress: &ProgressBar) -> TrainingSet {
+    let geometry = BeamGeometry::janus_x(spec.beam_pitch_deg);
+    let points = spec.grid.points();
+    let window = spec.dataset.window;
+    let per_combination = windows_per_combination(spec, trajectories);
+    let total = points.len() * per_combination;
+    let mut inputs = vec![0f32; total * INPUT_ROWS * window];
+    let mut targets = vec![0f32; total * TARGET_ROWS * window];
+    let mut is_validation = vec![false; total];
+    let validation_count =
+        (spec.dataset.validation_fraction * per_combination as f64).round() as usize;
+
+    inputs
+        .par_chunks_mut(per_combination * INPUT_ROWS * window)
+        .zip(targets.par_chunks_mut(per_combination * TARGET_ROWS * window))
+        .zip(is_validation.par_chunks_mut(per_combination))
+        .enumerate()
+        .for_each(|(combination, ((inputs, targets), is_validation))| {
+            let point = points[combination];
+            let errors =
+                SensorErrors::from_spec_units(point.scale_pct, point.bias_cm_s, point.noise_cm_s);
+            let mut rng = task_rng(spec.seed, &[&"dataset", &combination]);
+            let mut next = 0;
+            for &t in &spec.dataset.trajectories {
+                let truth = &trajectories[t].ground_truth;
+                let measured =
+                    measure_trajectory(&geometry, truth, &errors, spec.gnss_noise_m_s, &mut rng);
+                for start in window_starts(truth.len(), window, spec.dataset.stride) {
+                    let input = &mut inputs[next * INPUT_ROWS * window..][..INPUT_ROWS * window];
+                    let target =
+                        &mut targets[next * TARGET_ROWS * window..][..TARGET_ROWS * window];
+                    for time in 0..window {
+                        for axis in 0..3 {
+                            input[axis * window + time] = measured.dvl[start + time][axis] as f32;
+                            input[(3 + axis) * window + time] =
+                                measured.gnss[start + time][axis] as f32;
+                            target[axis * window + time] = truth[start + time][axis] as f32;
+                        }
+                    }
+                    next += 1;
+                }
+            }
+            let mut split_rng = task_rng(spec.seed, &[&"split", &combination]);
+            for index in rand::seq::index::sample(&mut split_rng, per_combination, validation_count)
+            {
+                is_validation[index] = true;
+            }
+            progress.inc(1);
+        });
+    TrainingSet {
+        points,
+        window,
+        windows_per_combination: per_combination,
+        inputs,
+        targets,
+        is_validation,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn windows_of_10_s_every_9_s() {
+        assert_eq!(window_starts(28, 10, 9).collect::<Vec<_>>(), vec![0, 9, 18]);
+        assert_eq!(window_starts(27, 10, 9).count(), 2);
+        assert_eq!(window_starts(9, 10, 9).count(), 0);
+        // T1 of the Snapir split: 1339 samples.
+        assert_eq!(window_starts(1339, 10, 9).count(), 148);
+    }
+
+    #[test]
+    fn the_paper_grid_has_1134_combinations() {
+        let axis = |start: f64, step: f64, n: usize| {
+            (0..n).map(|i| start + i as f64 * step).collect::<Vec<_>>()
+        };
+        let grid = Grid {
+            scale_pct: axis(0.2, 0.1, 14),
+            bias_cm_s: axis(0.1, 0.1, 9),
+            noise_cm_s: axis(0.01, 0.01, 9),
+        };
+        let points = grid.points();
+        assert_eq!(points.len(), 1134);
+        assert_eq!(
+            points[1],
+            GridPoint {
+                scale_pct: 0.2,
+                bias_cm_s: 0.1,
+                noise_cm_s: 0.02
+            }
+        );
+    }
+}

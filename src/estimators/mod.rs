@@ -1,0 +1,175 @@
+//! Calibration methods behind one trait. An [`Estimator`] takes a calibration window of
+//! DVL and GNSS-RTK velocity and returns a [`Correction`] in the form of the measurement
+//! model `v_dvl = (1 + k)·v + b`; every error model (EM1–EM5, PAPER-NOTES) is that form
+//! with some terms fixed or tied. The protocol runs the list [`lineup`] builds.
+
+mod baseline;
+mod floor;
+mod least_squares;
+
+pub use baseline::Baseline;
+pub use floor::Floor;
+pub use least_squares::LeastSquares;
+
+use crate::Vec3;
+use crate::noise::BeamGeometry;
+use crate::spec::{Dvl, Spec};
+use std::fmt;
+use std::str::FromStr;
+
+/// Estimated error terms; `apply` undoes them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Correction {
+    /// Scale factor per axis, `k` (0.01 for 1 %).
+    pub scale: Vec3,
+    /// Bias per axis, m/s.
+    pub bias_m_s: Vec3,
+}
+
+impl Correction {
+    pub const NONE: Correction = Correction {
+        scale: [0.0; 3],
+        bias_m_s: [0.0; 3],
+    };
+
+    /// `(v − b) ⊘ (1 + k)`.
+    pub fn apply(&self, v: Vec3) -> Vec3 {
+        std::array::from_fn(|axis| (v[axis] - self.bias_m_s[axis]) / (1.0 + self.scale[axis]))
+    }
+}
+
+pub trait Estimator: Send + Sync {
+    /// Estimates the terms from matching DVL and GNSS-RTK samples of one window.
+    fn estimate(&self, dvl: &[Vec3], gnss: &[Vec3]) -> Correction;
+}
+
+/// The structure of the terms being estimated (PAPER-NOTES, "Error models").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum ErrorModel {
+    /// Scalar scale.
+    Em1,
+    /// Vector scale.
+    Em2,
+    /// Scalar bias.
+    Em3,
+    /// Vector bias.
+    Em4,
+    /// Vector scale and vector bias.
+    Em5,
+}
+
+impl ErrorModel {
+    pub const ALL: [ErrorModel; 5] = [Self::Em1, Self::Em2, Self::Em3, Self::Em4, Self::Em5];
+
+    /// Number of terms the model estimates: 1, 3, 1, 3, 6.
+    pub fn term_count(self) -> usize {
+        match self {
+            Self::Em1 | Self::Em3 => 1,
+            Self::Em2 | Self::Em4 => 3,
+            Self::Em5 => 6,
+        }
+    }
+}
+
+impl fmt::Display for ErrorModel {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "EM{}", *self as usize + 1)
+    }
+}
+
+impl FromStr for ErrorModel {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::ALL
+            .into_iter()
+            .find(|m| m.to_string() == s)
+            .ok_or_else(|| {
+                format!("unknown error model {s:?}; expected one of EM1, EM2, EM3, EM4, EM5")
+            })
+    }
+}
+
+/// A calibration method. The floor is no method but a bound: it corrects with the
+/// true terms, which shows what no calibration can beat.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum EstimatorKind {
+    Baseline,
+    LeastSquares,
+    Floor,
+}
+
+impl EstimatorKind {
+    pub const ALL: [EstimatorKind; 3] = [Self::Baseline, Self::LeastSquares, Self::Floor];
+
+    /// Whether the method is run once per error model.
+    pub fn takes_error_model(self) -> bool {
+        self == Self::LeastSquares
+    }
+
+    /// How the method is labelled in tables.
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::Baseline => "baseline",
+            Self::LeastSquares => "least squares",
+            Self::Floor => "floor (bound)",
+        }
+    }
+}
+
+impl fmt::Display for EstimatorKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Baseline => "baseline",
+            Self::LeastSquares => "least_squares",
+            Self::Floor => "floor",
+        })
+    }
+}
+
+impl FromStr for EstimatorKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::ALL
+            .into_iter()
+            .find(|m| m.to_string() == s)
+            .ok_or_else(|| {
+                format!("unknown estimator {s:?}; expected one of baseline, least_squares, floor")
+            })
+    }
+}
+
+/// A method as the protocol runs it on one DVL.
+pub struct Entry {
+    pub kind: EstimatorKind,
+    pub error_model: Option<ErrorModel>,
+    pub estimator: Box<dyn Estimator>,
+}
+
+/// Every (estimator kind, error model) the spec asks for, set up for `dvl`.
+pub fn lineup(spec: &Spec, dvl: &Dvl) -> Vec<Entry> {
+    let geometry = BeamGeometry::janus_x(spec.beam_pitch_deg);
+    let mut entries = Vec::new();
+    for &kind in &spec.kinds {
+        let models: Vec<Option<ErrorModel>> = if kind.takes_error_model() {
+            spec.error_models.iter().copied().map(Some).collect()
+        } else {
+            vec![None]
+        };
+        for error_model in models {
+            let estimator: Box<dyn Estimator> = match (kind, error_model) {
+                (EstimatorKind::Baseline, _) => Box::new(Baseline),
+                (EstimatorKind::LeastSquares, Some(model)) => Box::new(LeastSquares(model)),
+                (EstimatorKind::LeastSquares, None) => {
+                    unreachable!("least squares always has an error model")
+                }
+                (EstimatorKind::Floor, _) => Box::new(Floor::new(&dvl.errors, &geometry)),
+            };
+            entries.push(Entry {
+                kind,
+                error_model,
+                estimator,
+            });
+        }
+    }
+    entries
+}

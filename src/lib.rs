@@ -1,0 +1,28 @@
+//! dcnet-exp reproduces the experiments of "DCNet: A Data-Driven Framework for DVL
+//! Calibration" (Yampolsky & Klein). One experiment flows through the modules in this
+//! order:
+//!
+//! 1. [`spec`]: the TOML experiment spec, read, overridden and checked;
+//! 2. [`data`]: the trajectories (Snapir `.npy` recordings or synthetic) and their
+//!    ground truth;
+//! 3. [`noise`]: the beam-level DVL and GNSS-RTK measurement model;
+//! 4. [`dataset`]: the training windows over the error-term grid;
+//! 5. [`estimators`]: calibration methods behind one trait;
+//! 6. [`evaluate`]: the Monte Carlo calibration and evaluation protocol;
+//! 7. [`results`] and [`tables`]: Parquet files, manifest, and the printed tables;
+//! 8. [`cli`]: the subcommands that run the stages.
+
+pub mod cli;
+pub mod data;
+pub mod dataset;
+pub mod estimators;
+pub mod evaluate;
+pub mod noise;
+pub mod progress;
+pub mod results;
+pub mod rng;
+pub mod spec;
+pub mod tables;
+
+/// A velocity (or any xyz vector): x, y, z in m/s unless a name says otherwise.
+pub type Vec3 = [f64; 3];

@@ -1,0 +1,218 @@
+//! What a run leaves in `results/<name>/`: the resolved spec, `manifest.json` with the
+//! provenance, and the Parquet tables (`monte_carlo`, `calibration`, `evaluation`).
+//! Every file is written to a temporary file beside it and renamed into place, so a
+//! reader never sees half a file; the manifest is written last.
+
+use crate::estimators::{Correction, ErrorModel};
+use crate::evaluate::{CalibrationRow, EvaluationRow, ProtocolResult, RunRow};
+use arrow_array::{ArrayRef, BooleanArray, Float64Array, RecordBatch, StringArray, UInt32Array};
+use parquet::arrow::ArrowWriter;
+use parquet::basic::Compression;
+use parquet::file::properties::WriterProperties;
+use serde::Serialize;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+#[derive(Debug, thiserror::Error)]
+pub enum ResultsError {
+    #[error("writing {}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("encoding {}: {source}", path.display())]
+    Parquet {
+        path: PathBuf,
+        source: parquet::errors::ParquetError,
+    },
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same folder and a rename.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let folder = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let mut file = tempfile::Builder::new()
+        .prefix(".partial-")
+        .tempfile_in(folder)?;
+    let mut permissions = file.as_file().metadata()?.permissions();
+    file.write_all(bytes)?;
+    // Readable like any other output file, not the 0600 of a temporary file.
+    #[cfg(unix)]
+    std::os::unix::fs::PermissionsExt::set_mode(&mut permissions, 0o644);
+    file.as_file().set_permissions(permissions)?;
+    file.as_file().sync_all()?;
+    file.persist(path).map_err(|e| e.error)?;
+    Ok(())
+}
+
+/// Provenance of a run.
+#[derive(Debug, Clone, Serialize)]
+pub struct Manifest {
+    pub name: String,
+    pub spec_sha256: String,
+    pub git_commit: String,
+    pub crate_version: String,
+    pub started_at: String,
+    pub finished_at: String,
+    pub threads: usize,
+    pub host: String,
+    pub data_files: Vec<DataFile>,
+    pub stage_seconds: StageSeconds,
+}
+
+/// Wall time of each stage of a run.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct StageSeconds {
+    pub load: f64,
+    pub dataset: f64,
+    pub protocol: f64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct DataFile {
+    pub path: PathBuf,
+    pub sha256: String,
+}
+
+/// Writes the tables, then the resolved spec, then the manifest into `folder`.
+pub fn write_run(
+    folder: &Path,
+    resolved_spec: &str,
+    result: &ProtocolResult,
+    manifest: &Manifest,
+) -> Result<(), ResultsError> {
+    std::fs::create_dir_all(folder).map_err(io(folder))?;
+    for (file, batch) in [
+        ("monte_carlo.parquet", monte_carlo_batch(&result.runs)),
+        (
+            "calibration.parquet",
+            calibration_batch(&result.calibration),
+        ),
+        ("evaluation.parquet", evaluation_batch(&result.evaluation)),
+    ] {
+        let path = folder.join(file);
+        let bytes = parquet_bytes(&batch).map_err(|source| ResultsError::Parquet {
+            path: path.clone(),
+            source,
+        })?;
+        write_atomic(&path, &bytes).map_err(io(&path))?;
+    }
+    let spec_path = folder.join("spec.toml");
+    write_atomic(&spec_path, resolved_spec.as_bytes()).map_err(io(&spec_path))?;
+    let manifest_path = folder.join("manifest.json");
+    let json = serde_json::to_string_pretty(manifest).expect("a manifest always serializes");
+    write_atomic(&manifest_path, json.as_bytes()).map_err(io(&manifest_path))
+}
+
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> ResultsError + '_ {
+    move |source| ResultsError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+fn parquet_bytes(batch: &RecordBatch) -> Result<Vec<u8>, parquet::errors::ParquetError> {
+    let properties = WriterProperties::builder()
+        .set_compression(Compression::SNAPPY)
+        .build();
+    let mut bytes = Vec::new();
+    let mut writer = ArrowWriter::try_new(&mut bytes, batch.schema(), Some(properties))?;
+    writer.write(batch)?;
+    writer.close()?;
+    Ok(bytes)
+}
+
+fn strings<T>(rows: &[T], f: impl Fn(&T) -> String) -> ArrayRef {
+    Arc::new(StringArray::from_iter_values(rows.iter().map(f)))
+}
+fn error_models<T>(rows: &[T], f: impl Fn(&T) -> Option<ErrorModel>) -> ArrayRef {
+    Arc::new(StringArray::from_iter(
+        rows.iter().map(|r| f(r).map(|m| m.to_string())),
+    ))
+}
+fn floats<T>(rows: &[T], f: impl Fn(&T) -> f64) -> ArrayRef {
+    Arc::new(Float64Array::from_iter_values(rows.iter().map(f)))
+}
+
+fn batch(columns: Vec<(&str, ArrayRef)>) -> RecordBatch {
+    RecordBatch::try_from_iter(columns).expect("columns of one table have equal lengths")
+}
+
+/// One row per run × DVL × estimator × error model × (window or trajectory).
+pub fn monte_carlo_batch(rows: &[RunRow]) -> RecordBatch {
+    let term = |f: fn(&Correction) -> f64| floats(rows, move |r| f(&r.correction));
+    batch(vec![
+        (
+            "run",
+            Arc::new(UInt32Array::from_iter_values(
+                rows.iter().map(|r| r.run as u32),
+            )),
+        ),
+        ("dvl", strings(rows, |r| r.dvl.clone())),
+        ("estimator", strings(rows, |r| r.estimator.to_string())),
+        ("error_model", error_models(rows, |r| r.error_model)),
+        ("phase", strings(rows, |r| r.phase.as_str().to_string())),
+        ("window_s", floats(rows, |r| r.window_s)),
+        ("trajectory", strings(rows, |r| r.trajectory.clone())),
+        ("rmse_cm_s", floats(rows, |r| r.rmse_cm_s)),
+        ("scale_x_pct", term(|c| 100.0 * c.scale[0])),
+        ("scale_y_pct", term(|c| 100.0 * c.scale[1])),
+        ("scale_z_pct", term(|c| 100.0 * c.scale[2])),
+        ("bias_x_cm_s", term(|c| 100.0 * c.bias_m_s[0])),
+        ("bias_y_cm_s", term(|c| 100.0 * c.bias_m_s[1])),
+        ("bias_z_cm_s", term(|c| 100.0 * c.bias_m_s[2])),
+    ])
+}
+
+pub fn calibration_batch(rows: &[CalibrationRow]) -> RecordBatch {
+    batch(vec![
+        ("dvl", strings(rows, |r| r.dvl.clone())),
+        ("estimator", strings(rows, |r| r.estimator.to_string())),
+        ("error_model", error_models(rows, |r| r.error_model)),
+        ("window_s", floats(rows, |r| r.window_s)),
+        ("rmse_cm_s", floats(rows, |r| r.rmse_cm_s)),
+        ("rmse_std_cm_s", floats(rows, |r| r.rmse_std_cm_s)),
+        (
+            "is_t_conv",
+            Arc::new(BooleanArray::from_iter(
+                rows.iter().map(|r| Some(r.is_t_conv)),
+            )),
+        ),
+    ])
+}
+
+pub fn evaluation_batch(rows: &[EvaluationRow]) -> RecordBatch {
+    batch(vec![
+        ("dvl", strings(rows, |r| r.dvl.clone())),
+        ("estimator", strings(rows, |r| r.estimator.to_string())),
+        ("error_model", error_models(rows, |r| r.error_model)),
+        ("trajectory", strings(rows, |r| r.trajectory.clone())),
+        ("t_conv_s", floats(rows, |r| r.t_conv_s)),
+        ("rmse_cm_s", floats(rows, |r| r.rmse_cm_s)),
+        ("rmse_std_cm_s", floats(rows, |r| r.rmse_std_cm_s)),
+        (
+            "improvement_pct",
+            Arc::new(Float64Array::from_iter(
+                rows.iter().map(|r| r.improvement_pct),
+            )),
+        ),
+    ])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn atomic_writes_replace_whole_files_and_leave_no_temporaries() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.txt");
+        write_atomic(&path, b"first").unwrap();
+        write_atomic(&path, b"second").unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"second");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+}

@@ -1,0 +1,206 @@
+//! The experiment spec as written in TOML: plain serde types, every struct closed to
+//! unknown keys, defaults filled in. Nothing here is checked beyond its type; `check`
+//! turns a [`SpecFile`] into the checked [`crate::spec::Spec`].
+
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+
+/// A whole spec file.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpecFile {
+    /// Name of the experiment; results go to `results/<name>/`.
+    pub name: String,
+    /// Root of every random stream in the run.
+    #[serde(default)]
+    pub seed: u64,
+    pub data: DataFile,
+    #[serde(default)]
+    pub sensors: SensorsFile,
+    pub grid: GridFile,
+    pub dataset: DatasetFile,
+    pub dvl: Vec<DvlFile>,
+    pub calibration: CalibrationFile,
+    pub evaluation: EvaluationFile,
+    #[serde(default)]
+    pub estimators: EstimatorsFile,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct DataFile {
+    /// Samples per second of every trajectory.
+    #[serde(default = "default_sample_rate_hz")]
+    pub sample_rate_hz: f64,
+    /// Length of the forward moving average that makes the ground truth.
+    #[serde(default = "default_ground_truth_window_samples")]
+    pub ground_truth_window_samples: usize,
+    /// Parameters of the synthetic trajectory generator.
+    #[serde(default)]
+    pub synthetic: SyntheticFile,
+    pub trajectories: Vec<TrajectoryFile>,
+}
+
+/// One named trajectory: a sample range of a `.npy` file, or a synthetic one.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrajectoryFile {
+    pub name: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file: Option<PathBuf>,
+    /// Half-open `[start, end)` sample range in `file`; the whole file when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub samples: Option<[usize; 2]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub synthetic_duration_s: Option<f64>,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SyntheticFile {
+    /// Range of cruise speeds of the straight legs.
+    pub speed_m_s: [f64; 2],
+    /// Range of leg durations.
+    pub leg_duration_s: [f64; 2],
+    /// Largest heading change rate during a turn, which shows as sway.
+    pub turn_rate_deg_s: f64,
+    /// Amplitude of the slow vertical oscillation.
+    pub heave_amplitude_m_s: f64,
+    /// Length of the surface drift at the end of each trajectory.
+    pub surface_s: f64,
+    /// White noise on the recorded velocity (the smoothing that makes GT removes it).
+    pub recording_noise_cm_s: f64,
+}
+
+impl Default for SyntheticFile {
+    fn default() -> Self {
+        Self {
+            speed_m_s: [1.0, 2.0],
+            leg_duration_s: [60.0, 240.0],
+            turn_rate_deg_s: 3.0,
+            heave_amplitude_m_s: 0.05,
+            surface_s: 60.0,
+            recording_noise_cm_s: 0.2,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorsFile {
+    /// Pitch of each DVL beam from the vertical.
+    pub beam_pitch_deg: f64,
+    /// Standard deviation of the GNSS-RTK velocity noise, per axis.
+    pub gnss_noise_cm_s: f64,
+}
+
+impl Default for SensorsFile {
+    fn default() -> Self {
+        Self {
+            beam_pitch_deg: 20.0,
+            gnss_noise_cm_s: 0.5,
+        }
+    }
+}
+
+/// The training grid: every combination of the three axes.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct GridFile {
+    pub scale_pct: AxisFile,
+    pub bias_cm_s: AxisFile,
+    pub noise_cm_s: AxisFile,
+}
+
+/// One grid axis: explicit `values`, or `start`, `stop` (inclusive) and `step`.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxisFile {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub values: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stop: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub step: Option<f64>,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct DatasetFile {
+    /// Trajectories the training windows are cut from.
+    pub trajectories: Vec<String>,
+    #[serde(default = "default_window_s")]
+    pub window_s: f64,
+    #[serde(default = "default_stride_s")]
+    pub stride_s: f64,
+    #[serde(default = "default_validation_fraction")]
+    pub validation_fraction: f64,
+    /// The window count a publication reports, for `data info` to compare against.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub published_windows: Option<usize>,
+}
+
+/// A DVL under test: the error terms its measurements are made with.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct DvlFile {
+    pub name: String,
+    pub scale_pct: f64,
+    pub bias_cm_s: f64,
+    pub noise_cm_s: f64,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct CalibrationFile {
+    /// The trajectory calibrated on (T10Cal in the paper).
+    pub trajectory: String,
+    pub window_sizes_s: Vec<f64>,
+    pub monte_carlo_runs: usize,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct EvaluationFile {
+    pub trajectories: Vec<String>,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct EstimatorsFile {
+    /// Any of `baseline`, `least_squares`, `floor`.
+    pub kinds: Vec<String>,
+    /// Any of `EM1` .. `EM5`, for the kinds that take an error model.
+    pub error_models: Vec<String>,
+}
+
+impl Default for EstimatorsFile {
+    fn default() -> Self {
+        Self {
+            kinds: ["baseline", "least_squares", "floor"]
+                .map(String::from)
+                .to_vec(),
+            error_models: ["EM1", "EM2", "EM3", "EM4", "EM5"]
+                .map(String::from)
+                .to_vec(),
+        }
+    }
+}
+
+fn default_sample_rate_hz() -> f64 {
+    1.0
+}
+fn default_ground_truth_window_samples() -> usize {
+    5
+}
+fn default_window_s() -> f64 {
+    10.0
+}
+fn default_stride_s() -> f64 {
+    9.0
+}
+fn default_validation_fraction() -> f64 {
+    0.2
+}

@@ -1,0 +1,597 @@
+//! The experiment spec: [`file`] holds the serde types read from TOML, [`load`] reads a
+//! file, applies `--set` overrides and places every error at its file, line and key, and
+//! this module checks a [`SpecFile`] into a [`Spec`] whose every value is known good.
+//! Seconds become sample counts here, percent and cm/s become fractions and m/s.
+
+pub mod file;
+pub mod load;
+
+pub use file::SpecFile;
+pub use load::{SpecError, SpecErrors, load};
+
+use crate::estimators::{ErrorModel, EstimatorKind};
+use crate::noise::SensorErrors;
+use file::{AxisFile, SyntheticFile};
+use std::path::{Path, PathBuf};
+
+/// A checked spec, in the units the pipeline computes in.
+#[derive(Debug, Clone)]
+pub struct Spec {
+    pub name: String,
+    pub seed: u64,
+    pub sample_rate_hz: f64,
+    pub ground_truth_window: usize,
+    pub synthetic: SyntheticFile,
+    pub trajectories: Vec<TrajectorySource>,
+    pub beam_pitch_deg: f64,
+    pub gnss_noise_m_s: f64,
+    pub grid: Grid,
+    pub dataset: DatasetSpec,
+    pub dvls: Vec<Dvl>,
+    pub calibration: CalibrationSpec,
+    /// Indices into `trajectories`.
+    pub evaluation: Vec<usize>,
+    pub kinds: Vec<EstimatorKind>,
+    pub error_models: Vec<ErrorModel>,
+    /// The spec as resolved (defaults and overrides applied, paths absolute).
+    pub resolved: SpecFile,
+}
+
+#[derive(Debug, Clone)]
+pub struct TrajectorySource {
+    pub name: String,
+    pub origin: Origin,
+}
+
+#[derive(Debug, Clone)]
+pub enum Origin {
+    /// `[start, end)` of a `.npy` file, or all of it.
+    File {
+        path: PathBuf,
+        samples: Option<[usize; 2]>,
+    },
+    Synthetic {
+        samples: usize,
+    },
+}
+
+impl TrajectorySource {
+    /// Length in samples, when the spec alone tells it.
+    pub fn known_len(&self) -> Option<usize> {
+        match &self.origin {
+            Origin::File { samples, .. } => samples.map(|[start, end]| end - start),
+            Origin::Synthetic { samples } => Some(*samples),
+        }
+    }
+}
+
+/// The training grid, one list per axis, in the spec's units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Grid {
+    pub scale_pct: Vec<f64>,
+    pub bias_cm_s: Vec<f64>,
+    pub noise_cm_s: Vec<f64>,
+}
+
+#[derive(Debug, Clone)]
+pub struct DatasetSpec {
+    /// Indices into `Spec::trajectories`.
+    pub trajectories: Vec<usize>,
+    pub window: usize,
+    pub stride: usize,
+    pub validation_fraction: f64,
+    pub published_windows: Option<usize>,
+}
+
+#[derive(Debug, Clone)]
+pub struct Dvl {
+    pub name: String,
+    pub errors: SensorErrors,
+}
+
+#[derive(Debug, Clone)]
+pub struct CalibrationSpec {
+    /// Index into `Spec::trajectories`.
+    pub trajectory: usize,
+    /// Window sizes in samples.
+    pub window_sizes: Vec<usize>,
+    pub monte_carlo_runs: usize,
+}
+
+/// A key path such as `data.trajectories[2].samples`, and what is wrong there.
+type Fault = (String, String);
+
+/// Collects faults while checking, keyed by their path in the spec.
+#[derive(Default)]
+struct Faults(Vec<Fault>);
+
+impl Faults {
+    fn add(&mut self, key: impl Into<String>, message: impl Into<String>) {
+        self.0.push((key.into(), message.into()));
+    }
+}
+
+impl SpecFile {
+    /// Checks every value; `spec_dir` is where relative paths start.
+    /// Returns the faults as (key path, message) pairs.
+    pub fn check(self, spec_dir: &Path) -> Result<Spec, Vec<(String, String)>> {
+        let mut faults = Faults::default();
+        let SpecFile {
+            name,
+            seed,
+            data,
+            sensors,
+            grid,
+            dataset,
+            dvl,
+            calibration,
+            evaluation,
+            estimators,
+        } = self.clone();
+        let mut resolved = self;
+
+        if name.is_empty()
+            || !name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c))
+        {
+            faults.add("name", format!("{name:?} must be non-empty and use only letters, digits, '-', '_' and '.' (it names the results folder)"));
+        }
+
+        // Data.
+        let file::DataFile {
+            sample_rate_hz,
+            ground_truth_window_samples,
+            synthetic,
+            trajectories,
+        } = data;
+        if !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
+            faults.add(
+                "data.sample_rate_hz",
+                format!("{sample_rate_hz} must be a positive number"),
+            );
+        }
+        let rate = if sample_rate_hz > 0.0 {
+            sample_rate_hz
+        } else {
+            1.0
+        };
+        if ground_truth_window_samples == 0 {
+            faults.add("data.ground_truth_window_samples", "0 must be at least 1");
+        }
+        check_synthetic(&synthetic, &mut faults);
+        let mut sources: Vec<TrajectorySource> = Vec::new();
+        if trajectories.is_empty() {
+            faults.add("data.trajectories", "no trajectory is defined");
+        }
+        for (i, trajectory) in trajectories.iter().enumerate() {
+            let key = format!("data.trajectories[{i}]");
+            let file::TrajectoryFile {
+                name,
+                file,
+                samples,
+                synthetic_duration_s,
+            } = trajectory;
+            if sources.iter().any(|s| &s.name == name) {
+                faults.add(format!("{key}.name"), format!("{name:?} is defined twice"));
+            }
+            let origin = match (file, synthetic_duration_s) {
+                (Some(file), None) => {
+                    let path = spec_dir.join(file);
+                    resolved.data.trajectories[i].file = Some(path.clone());
+                    if !path.is_file() {
+                        faults.add(
+                            format!("{key}.file"),
+                            format!(
+                                "{} does not exist{}",
+                                path.display(),
+                                crate::data::fetch::hint_for(&path)
+                            ),
+                        );
+                    }
+                    if let Some([start, end]) = samples {
+                        if start >= end {
+                            faults.add(
+                                format!("{key}.samples"),
+                                format!("[{start}, {end}] is empty: start must be below end"),
+                            );
+                        }
+                    }
+                    Some(Origin::File {
+                        path,
+                        samples: *samples,
+                    })
+                }
+                (None, Some(duration_s)) => {
+                    if samples.is_some() {
+                        faults.add(format!("{key}.samples"), "is for file trajectories; a synthetic one has synthetic_duration_s only");
+                    }
+                    match seconds_to_samples(*duration_s, rate) {
+                        Some(samples) if samples > 0 => Some(Origin::Synthetic { samples }),
+                        _ => {
+                            faults.add(
+                                format!("{key}.synthetic_duration_s"),
+                                format!("{duration_s} must be a positive whole number of samples"),
+                            );
+                            None
+                        }
+                    }
+                }
+                (Some(_), Some(_)) => {
+                    faults.add(
+                        format!("{key}.file"),
+                        "give either file (with samples) or synthetic_duration_s, not both",
+                    );
+                    None
+                }
+                (None, None) => {
+                    faults.add(
+                        key.clone(),
+                        "needs either file (with samples) or synthetic_duration_s",
+                    );
+                    None
+                }
+            };
+            sources.push(TrajectorySource {
+                name: name.clone(),
+                origin: origin.unwrap_or(Origin::Synthetic { samples: 0 }),
+            });
+        }
+        let lookup = |key: &str, wanted: &str, faults: &mut Faults| -> Option<usize> {
+            let found = sources.iter().position(|s| s.name == wanted);
+            if found.is_none() {
+                let known: Vec<&str> = sources.iter().map(|s| s.name.as_str()).collect();
+                faults.add(
+                    key,
+                    format!(
+                        "unknown trajectory {wanted:?}; data.trajectories defines {}",
+                        known.join(", ")
+                    ),
+                );
+            }
+            found
+        };
+
+        // Sensors.
+        let file::SensorsFile {
+            beam_pitch_deg,
+            gnss_noise_cm_s,
+        } = sensors;
+        if !(beam_pitch_deg > 0.0 && beam_pitch_deg < 90.0) {
+            faults.add(
+                "sensors.beam_pitch_deg",
+                format!("{beam_pitch_deg} must lie strictly between 0 and 90"),
+            );
+        }
+        non_negative("sensors.gnss_noise_cm_s", gnss_noise_cm_s, &mut faults);
+
+        // Grid.
+        let file::GridFile {
+            scale_pct,
+            bias_cm_s,
+            noise_cm_s,
+        } = grid;
+        let grid = Grid {
+            scale_pct: expand_axis("grid.scale_pct", &scale_pct, &mut faults),
+            bias_cm_s: expand_axis("grid.bias_cm_s", &bias_cm_s, &mut faults),
+            noise_cm_s: expand_axis("grid.noise_cm_s", &noise_cm_s, &mut faults),
+        };
+        for (i, &value) in grid.scale_pct.iter().enumerate() {
+            if value <= -100.0 {
+                faults.add(
+                    format!("grid.scale_pct[{i}]"),
+                    format!("{value} must be above -100 %"),
+                );
+            }
+        }
+        for (i, &value) in grid.noise_cm_s.iter().enumerate() {
+            non_negative(&format!("grid.noise_cm_s[{i}]"), value, &mut faults);
+        }
+
+        // Dataset.
+        let file::DatasetFile {
+            trajectories: dataset_names,
+            window_s,
+            stride_s,
+            validation_fraction,
+            published_windows,
+        } = dataset;
+        let window = positive_samples("dataset.window_s", window_s, rate, &mut faults);
+        let stride = positive_samples("dataset.stride_s", stride_s, rate, &mut faults);
+        if dataset_names.is_empty() {
+            faults.add(
+                "dataset.trajectories",
+                "is empty: name at least one training trajectory",
+            );
+        }
+        let mut dataset_trajectories = Vec::new();
+        for (i, wanted) in dataset_names.iter().enumerate() {
+            let key = format!("dataset.trajectories[{i}]");
+            if let Some(index) = lookup(&key, wanted, &mut faults) {
+                if let (Some(len), Some(window)) = (sources[index].known_len(), window) {
+                    if len < window {
+                        faults.add(
+                            key,
+                            format!(
+                                "{wanted} has {len} samples, fewer than one window of {window_s} s"
+                            ),
+                        );
+                    }
+                }
+                dataset_trajectories.push(index);
+            }
+        }
+        if !(0.0..1.0).contains(&validation_fraction) {
+            faults.add(
+                "dataset.validation_fraction",
+                format!("{validation_fraction} must be at least 0 and below 1"),
+            );
+        }
+
+        // DVLs under test.
+        if dvl.is_empty() {
+            faults.add("dvl", "no DVL under test is defined");
+        }
+        let mut dvls: Vec<Dvl> = Vec::new();
+        for (i, unit) in dvl.iter().enumerate() {
+            let file::DvlFile {
+                name,
+                scale_pct,
+                bias_cm_s,
+                noise_cm_s,
+            } = unit;
+            let key = format!("dvl[{i}]");
+            if dvls.iter().any(|d| &d.name == name) {
+                faults.add(format!("{key}.name"), format!("{name:?} is defined twice"));
+            }
+            if !(scale_pct.is_finite() && *scale_pct > -100.0) {
+                faults.add(
+                    format!("{key}.scale_pct"),
+                    format!("{scale_pct} must be above -100 %"),
+                );
+            }
+            if !bias_cm_s.is_finite() {
+                faults.add(
+                    format!("{key}.bias_cm_s"),
+                    format!("{bias_cm_s} must be a finite number"),
+                );
+            }
+            non_negative(&format!("{key}.noise_cm_s"), *noise_cm_s, &mut faults);
+            dvls.push(Dvl {
+                name: name.clone(),
+                errors: SensorErrors::from_spec_units(*scale_pct, *bias_cm_s, *noise_cm_s),
+            });
+        }
+
+        // Calibration.
+        let file::CalibrationFile {
+            trajectory,
+            window_sizes_s,
+            monte_carlo_runs,
+        } = calibration;
+        let calibration_index = lookup("calibration.trajectory", &trajectory, &mut faults);
+        let segment = calibration_index.and_then(|i| sources[i].known_len());
+        if window_sizes_s.is_empty() {
+            faults.add(
+                "calibration.window_sizes_s",
+                "is empty: give at least one window size",
+            );
+        }
+        let mut window_sizes = Vec::new();
+        for (i, &size_s) in window_sizes_s.iter().enumerate() {
+            let key = format!("calibration.window_sizes_s[{i}]");
+            if let Some(size) = positive_samples(&key, size_s, rate, &mut faults) {
+                match segment {
+                    Some(len) if size >= len => faults.add(
+                        key,
+                        format!("{size_s} s is not shorter than {trajectory} ({} s): no samples would be left to evaluate on", len as f64 / rate),
+                    ),
+                    _ => window_sizes.push(size),
+                }
+            }
+        }
+        if monte_carlo_runs == 0 {
+            faults.add("calibration.monte_carlo_runs", "0 must be at least 1");
+        }
+
+        // Evaluation.
+        if evaluation.trajectories.is_empty() {
+            faults.add(
+                "evaluation.trajectories",
+                "is empty: name at least one test trajectory",
+            );
+        }
+        let evaluation: Vec<usize> = evaluation
+            .trajectories
+            .iter()
+            .enumerate()
+            .filter_map(|(i, wanted)| {
+                lookup(
+                    &format!("evaluation.trajectories[{i}]"),
+                    wanted,
+                    &mut faults,
+                )
+            })
+            .collect();
+
+        // Estimators.
+        let file::EstimatorsFile {
+            kinds,
+            error_models,
+        } = estimators;
+        let kinds = parse_names("estimators.kinds", &kinds, &mut faults);
+        let error_models = parse_names("estimators.error_models", &error_models, &mut faults);
+
+        if !faults.0.is_empty() {
+            return Err(faults.0);
+        }
+        Ok(Spec {
+            name,
+            seed,
+            sample_rate_hz,
+            ground_truth_window: ground_truth_window_samples,
+            synthetic,
+            trajectories: sources,
+            beam_pitch_deg,
+            gnss_noise_m_s: gnss_noise_cm_s / 100.0,
+            grid,
+            dataset: DatasetSpec {
+                trajectories: dataset_trajectories,
+                window: window.unwrap_or_default(),
+                stride: stride.unwrap_or_default(),
+                validation_fraction,
+                published_windows,
+            },
+            dvls,
+            calibration: CalibrationSpec {
+                trajectory: calibration_index.unwrap_or_default(),
+                window_sizes,
+                monte_carlo_runs,
+            },
+            evaluation,
+            kinds,
+            error_models,
+            resolved,
+        })
+    }
+}
+
+/// `seconds × rate` as a whole number of samples, if it is one.
+pub fn seconds_to_samples(seconds: f64, rate_hz: f64) -> Option<usize> {
+    let samples = seconds * rate_hz;
+    let rounded = samples.round();
+    (samples.is_finite() && rounded >= 0.0 && (samples - rounded).abs() < 1e-6)
+        .then_some(rounded as usize)
+}
+
+fn positive_samples(key: &str, seconds: f64, rate: f64, faults: &mut Faults) -> Option<usize> {
+    match seconds_to_samples(seconds, rate) {
+        Some(samples) if samples > 0 => Some(samples),
+        _ => {
+            faults.add(
+                key,
+                format!("{seconds} must be a positive whole number of samples at {rate} Hz"),
+            );
+            None
+        }
+    }
+}
+
+fn non_negative(key: &str, value: f64, faults: &mut Faults) {
+    if !(value.is_finite() && value >= 0.0) {
+        faults.add(key, format!("{value} must be zero or positive"));
+    }
+}
+
+fn check_synthetic(synthetic: &SyntheticFile, faults: &mut Faults) {
+    let SyntheticFile {
+        speed_m_s,
+        leg_duration_s,
+        turn_rate_deg_s,
+        heave_amplitude_m_s,
+        surface_s,
+        recording_noise_cm_s,
+    } = synthetic;
+    for (key, [low, high]) in [
+        ("data.synthetic.speed_m_s", speed_m_s),
+        ("data.synthetic.leg_duration_s", leg_duration_s),
+    ] {
+        if !(low.is_finite() && high.is_finite() && *low > 0.0 && low <= high) {
+            faults.add(
+                key,
+                format!("[{low}, {high}] must be a range of positive numbers, low first"),
+            );
+        }
+    }
+    for (key, value) in [
+        ("data.synthetic.turn_rate_deg_s", turn_rate_deg_s),
+        ("data.synthetic.heave_amplitude_m_s", heave_amplitude_m_s),
+        ("data.synthetic.surface_s", surface_s),
+        ("data.synthetic.recording_noise_cm_s", recording_noise_cm_s),
+    ] {
+        non_negative(key, *value, faults);
+    }
+}
+
+/// Expands `values` or `start`/`stop`/`step` into the list of grid values.
+fn expand_axis(key: &str, axis: &AxisFile, faults: &mut Faults) -> Vec<f64> {
+    let values = match axis {
+        AxisFile {
+            values: Some(values),
+            start: None,
+            stop: None,
+            step: None,
+        } => values.clone(),
+        AxisFile {
+            values: None,
+            start: Some(start),
+            stop: Some(stop),
+            step: Some(step),
+        } => {
+            if !(start.is_finite()
+                && stop.is_finite()
+                && step.is_finite()
+                && *step > 0.0
+                && stop >= start)
+            {
+                faults.add(key, format!("start {start}, stop {stop}, step {step}: step must be positive and stop at least start"));
+                return Vec::new();
+            }
+            let steps = (stop - start) / step;
+            if (steps - steps.round()).abs() > 1e-6 {
+                faults.add(
+                    key,
+                    format!("stop {stop} is not start {start} plus a whole number of steps {step}"),
+                );
+                return Vec::new();
+            }
+            // Rounded to 1e-9 so that 0.1 + 2 × 0.1 prints and compares as 0.3.
+            (0..=steps.round() as usize)
+                .map(|i| ((start + i as f64 * step) * 1e9).round() / 1e9)
+                .collect()
+        }
+        _ => {
+            faults.add(
+                key,
+                "give either values = [...] or all of start, stop and step",
+            );
+            return Vec::new();
+        }
+    };
+    if values.is_empty() {
+        faults.add(
+            key,
+            "is empty: the grid needs at least one value on every axis",
+        );
+    }
+    for (i, value) in values.iter().enumerate() {
+        if !value.is_finite() {
+            faults.add(
+                format!("{key}.values[{i}]"),
+                format!("{value} must be a finite number"),
+            );
+        }
+    }
+    values
+}
+
+fn parse_names<T: std::str::FromStr<Err = String> + PartialEq>(
+    key: &str,
+    names: &[String],
+    faults: &mut Faults,
+) -> Vec<T> {
+    if names.is_empty() {
+        faults.add(key, "is empty");
+    }
+    let mut parsed = Vec::new();
+    for (i, name) in names.iter().enumerate() {
+        match name.parse::<T>() {
+            Ok(value) if parsed.contains(&value) => {
+                faults.add(format!("{key}[{i}]"), format!("{name:?} is listed twice"))
+            }
+            Ok(value) => parsed.push(value),
+            Err(message) => faults.add(format!("{key}[{i}]"), message),
+        }
+    }
+    parsed
+}
