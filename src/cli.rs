@@ -161,7 +161,7 @@ pub fn main() -> Result<(), CliError> {
 }
 
 fn load_spec(path: &Path, set: &[String]) -> Result<Spec, CliError> {
-    load(path, set).map_err(|errors| input(anyhow::Error::new(errors).context("invalid spec")))
+    load(path, set).map_err(input)
 }
 
 fn run(spec_path: &Path, out: &Path, set: &[String]) -> Result<(), CliError> {

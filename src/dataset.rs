@@ -159,6 +159,66 @@ pub fn generate(spec: &Spec, trajectories: &[Trajectory], progress: &ProgressBar
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::data::load_trajectories;
+
+    fn quick_spec(overrides: &[&str]) -> Spec {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quick.toml");
+        let overrides: Vec<String> = overrides.iter().map(ToString::to_string).collect();
+        crate::spec::load(&path, &overrides).unwrap()
+    }
+
+    #[test]
+    fn one_and_two_threads_generate_identical_data() {
+        let spec = quick_spec(&[]);
+        let trajectories = load_trajectories(&spec).unwrap();
+        let with_threads = |n| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .unwrap();
+            pool.install(|| generate(&spec, &trajectories, &ProgressBar::hidden()))
+        };
+        let one = with_threads(1);
+        assert_eq!(one, with_threads(2));
+        assert_eq!(one.len(), 12 * 165);
+        assert_eq!(one.validation_len(), 12 * 33);
+    }
+
+    #[test]
+    fn windows_hold_the_measurements_and_the_ground_truth() {
+        // Without any error or noise, the DVL and GNSS rows equal the targets.
+        let spec = quick_spec(&[
+            "grid.scale_pct.values=[0.0, 1.0]",
+            "grid.bias_cm_s.values=[0.0]",
+            "grid.noise_cm_s.values=[0.0]",
+            "sensors.gnss_noise_cm_s=0.0",
+        ]);
+        let trajectories = load_trajectories(&spec).unwrap();
+        let set = generate(&spec, &trajectories, &ProgressBar::hidden());
+        let w = set.window;
+        let second = set.windows_per_combination - 1; // the last window of S2
+        let truth = &trajectories[1].ground_truth;
+        let start = 9 * (window_starts(truth.len(), w, 9).count() - 1);
+        for (combination, scale) in [(0, 1.0), (1, 1.01)] {
+            let index = combination * set.windows_per_combination + second;
+            let input = &set.inputs[index * INPUT_ROWS * w..][..INPUT_ROWS * w];
+            let target = &set.targets[index * TARGET_ROWS * w..][..TARGET_ROWS * w];
+            for time in 0..w {
+                for axis in 0..3 {
+                    let gt = truth[start + time][axis];
+                    assert_eq!(target[axis * w + time], gt as f32);
+                    assert!(
+                        (input[axis * w + time] - (scale * gt) as f32).abs() < 1e-6,
+                        "DVL row"
+                    );
+                    assert!(
+                        (input[(3 + axis) * w + time] - gt as f32).abs() < 1e-6,
+                        "GNSS row"
+                    );
+                }
+            }
+        }
+    }
 
     #[test]
     fn windows_of_10_s_every_9_s() {

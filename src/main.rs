@@ -7,7 +7,10 @@ fn main() -> ExitCode {
     match dcnet_exp::cli::main() {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("error: {:#}", error.cause());
+            // A spec can have several faults, one per line: each gets its own prefix.
+            for line in format!("{:#}", error.cause()).lines() {
+                eprintln!("error: {line}");
+            }
             ExitCode::from(error.exit_code())
         }
     }

@@ -1,0 +1,344 @@
+//! The command line as a user meets it: quick runs, thread-count independence,
+//! overrides, bad specs, and `data fetch` against a local server.
+
+mod common;
+use common::*;
+use std::path::Path;
+
+const TABLES: [&str; 3] = [
+    "monte_carlo.parquet",
+    "calibration.parquet",
+    "evaluation.parquet",
+];
+
+#[test]
+fn one_and_two_threads_write_identical_results() {
+    let project = project(false);
+    for threads in ["1", "2"] {
+        let out = format!("out{threads}");
+        let output = dcnet(
+            project.path(),
+            &[
+                "--threads",
+                threads,
+                "run",
+                "experiments/quick.toml",
+                "--out",
+                &out,
+            ],
+        );
+        assert!(output.status.success(), "{}", stderr(&output));
+    }
+    for table in TABLES {
+        let one = std::fs::read(project.path().join("out1/quick").join(table)).unwrap();
+        let two = std::fs::read(project.path().join("out2/quick").join(table)).unwrap();
+        assert!(one == two, "{table} differs between 1 and 2 threads");
+    }
+    let spec_one = std::fs::read_to_string(project.path().join("out1/quick/spec.toml")).unwrap();
+    assert!(spec_one.contains("monte_carlo_runs = 20"));
+}
+
+#[test]
+fn quick_run_prints_and_stores_both_tables() {
+    let project = project(false);
+    let output = dcnet(
+        project.path(),
+        &[
+            "run",
+            "experiments/quick.toml",
+            "--set",
+            "calibration.monte_carlo_runs=3",
+        ],
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = stdout(&output);
+    assert!(
+        text.contains("Calibration on SCal: RMSE in cm/s at T_conv, mean ± std over 3 runs"),
+        "{text}"
+    );
+    assert!(text.contains("| DVL2 | floor (bound) |"), "{text}");
+    let results = project.path().join("results/quick");
+    let runs = read_parquet(&results.join("monte_carlo.parquet"));
+    // 3 runs × 2 DVLs × 7 estimators × (5 windows + 2 test trajectories).
+    assert_eq!(runs.num_rows(), 3 * 2 * 7 * (5 + 2));
+    let calibration = calibration_rows(&results);
+    assert_eq!(calibration.len(), 2 * 7 * 5);
+    assert_eq!(calibration.iter().filter(|r| r.selected).count(), 2 * 7);
+    let evaluation = evaluation_rows(&results);
+    assert_eq!(evaluation.len(), 2 * 7 * 2);
+    // The improvement column is computed against the baseline row of the same cell.
+    for row in &evaluation {
+        let baseline = evaluation
+            .iter()
+            .find(|b| b.estimator == "baseline" && b.dvl == row.dvl && b.at == row.at)
+            .unwrap();
+        let expected = 100.0 * (baseline.rmse_cm_s - row.rmse_cm_s) / baseline.rmse_cm_s;
+        assert!((row.improvement_pct.unwrap() - expected).abs() < 1e-9);
+    }
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(results.join("manifest.json")).unwrap())
+            .unwrap();
+    assert_eq!(manifest["name"], "quick");
+    assert_eq!(manifest["spec_sha256"].as_str().unwrap().len(), 64);
+    assert!(manifest["threads"].as_u64().unwrap() >= 1);
+    let leftovers: Vec<_> = std::fs::read_dir(&results)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .filter(|n| n.to_string_lossy().starts_with('.'))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+}
+
+/// Writes quick.toml with `from` replaced by `to` and returns the 1-based line of `to`.
+fn quick_with(dir: &Path, from: &str, to: &str) -> usize {
+    let text = std::fs::read_to_string(repo().join("experiments/quick.toml")).unwrap();
+    assert!(text.contains(from), "quick.toml has no {from:?}");
+    let changed = text.replacen(from, to, 1);
+    std::fs::write(dir.join("spec.toml"), &changed).unwrap();
+    changed[..changed.find(to).unwrap()].matches('\n').count() + 1
+}
+
+/// Runs `run spec.toml` and checks exit code 1, the message, and an untouched `results/`.
+fn assert_rejected(dir: &Path, extra: &[&str], expected: &str) {
+    let mut args = vec!["run", "spec.toml"];
+    args.extend(extra);
+    let output = dcnet(dir, &args);
+    let message = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{message}");
+    assert!(
+        message.contains(expected),
+        "expected {expected:?} in:\n{message}"
+    );
+    assert!(
+        !dir.join("results").exists(),
+        "a rejected spec must not create results/"
+    );
+}
+
+#[test]
+fn bad_specs_are_rejected_with_file_line_and_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let line = quick_with(d, "noise_cm_s = 0.02\n", "noise_cm_s = -0.02\n");
+    assert_rejected(
+        d,
+        &[],
+        &format!("error: spec.toml:{line}: dvl[1].noise_cm_s: -0.02 must be zero or positive"),
+    );
+
+    let line = quick_with(
+        d,
+        "bias_cm_s = { values = [0.3, 0.7] }",
+        "bias_cm_s = { values = [] }",
+    );
+    assert_rejected(
+        d,
+        &[],
+        &format!(
+            "error: spec.toml:{line}: grid.bias_cm_s: is empty: the grid needs at least one value on every axis"
+        ),
+    );
+
+    let line = quick_with(d, "stride_s = 9.0", "stride_s = 0.0");
+    assert_rejected(
+        d,
+        &[],
+        &format!(
+            "error: spec.toml:{line}: dataset.stride_s: 0 must be a positive whole number of samples at 1 Hz"
+        ),
+    );
+
+    let line = quick_with(
+        d,
+        "window_sizes_s = [20.0, 40.0, 60.0, 80.0, 100.0]",
+        "window_sizes_s = [20.0, 250.0]",
+    );
+    assert_rejected(
+        d,
+        &[],
+        &format!(
+            "error: spec.toml:{line}: calibration.window_sizes_s[1]: 250 s is not shorter than SCal (200 s): no samples would be left to evaluate on"
+        ),
+    );
+
+    let line = quick_with(
+        d,
+        "trajectories = [\"S3\", \"S4\"]",
+        "trajectories = [\"S3\", \"S9\"]",
+    );
+    assert_rejected(
+        d,
+        &[],
+        &format!(
+            "error: spec.toml:{line}: evaluation.trajectories[1]: unknown trajectory \"S9\"; data.trajectories defines S1, S2, S3, S4, SCal"
+        ),
+    );
+
+    let line = quick_with(
+        d,
+        "monte_carlo_runs = 20",
+        "monte_carlo_runs = 20\ncolour = \"red\"",
+    ) + 1;
+    assert_rejected(
+        d,
+        &[],
+        &format!(
+            "error: spec.toml:{line}: calibration.colour: unknown field `colour`, expected one of `trajectory`, `window_sizes_s`, `monte_carlo_runs`"
+        ),
+    );
+
+    let line = quick_with(
+        d,
+        "name = \"SCal\"\nsynthetic_duration_s = 200",
+        "name = \"SCal\"\nfile = \"nowhere/V_test.npy\"\nsamples = [0, 200]",
+    ) + 1;
+    let missing = d.join("nowhere/V_test.npy");
+    assert_rejected(
+        d,
+        &[],
+        &format!(
+            "error: spec.toml:{line}: data.trajectories[4].file: {} does not exist; run `dcnet-exp data fetch --dest {}`",
+            missing.display(),
+            d.join("nowhere").display()
+        ),
+    );
+
+    let line = quick_with(d, "seed = 7", "seed = 7\n[broken") + 1;
+    assert_rejected(
+        d,
+        &[],
+        &format!("error: spec.toml:{line}: unclosed table, expected `]`"),
+    );
+
+    quick_with(d, "seed = 7", "seed = 7");
+    assert_rejected(
+        d,
+        &["--set", "calibration.monte_carlo_runs=-3"],
+        "error: --set calibration.monte_carlo_runs=-3: calibration.monte_carlo_runs: invalid value: integer `-3`, expected usize",
+    );
+    assert_rejected(
+        d,
+        &["--set", "dataset.window_s=0.5"],
+        "error: --set dataset.window_s=0.5: dataset.window_s: 0.5 must be a positive whole number of samples at 1 Hz",
+    );
+    assert_rejected(
+        d,
+        &["--set", "dvl[7].noise_cm_s=1"],
+        "error: --set dvl[7].noise_cm_s=1: index [7] is out of range: there are 2 entries",
+    );
+}
+
+#[test]
+fn validate_accepts_a_good_spec_and_overrides_apply() {
+    let project = project(false);
+    let output = dcnet(
+        project.path(),
+        &[
+            "validate",
+            "experiments/quick.toml",
+            "--set",
+            "calibration.monte_carlo_runs=5",
+        ],
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(
+        stdout(&output)
+            .contains("ok (5 trajectories, 1980 training windows, 2 DVLs, 5 Monte Carlo runs)"),
+        "{}",
+        stdout(&output)
+    );
+    assert!(!project.path().join("results").exists());
+}
+
+#[test]
+fn a_missing_recording_names_the_path_and_the_fetch_command() {
+    let project = project(false);
+    let output = dcnet(project.path(), &["validate", "experiments/paper.toml"]);
+    assert_eq!(output.status.code(), Some(1));
+    let message = stderr(&output);
+    assert!(message.contains("data.trajectories[0].file:"), "{message}");
+    assert!(
+        message.contains("data/snapir/V.npy does not exist; run `dcnet-exp data fetch --dest"),
+        "{message}"
+    );
+}
+
+/// Serves `files` (URL path → bytes) on 127.0.0.1 until the returned guard drops.
+fn serve(
+    files: Vec<(String, Vec<u8>)>,
+) -> (
+    String,
+    std::thread::JoinHandle<()>,
+    std::sync::Arc<tiny_http::Server>,
+) {
+    let server = std::sync::Arc::new(tiny_http::Server::http("127.0.0.1:0").unwrap());
+    let url = format!("http://{}", server.server_addr().to_ip().unwrap());
+    let worker = server.clone();
+    let handle = std::thread::spawn(move || {
+        for request in worker.incoming_requests() {
+            let response = match files.iter().find(|(path, _)| *path == request.url()) {
+                Some((_, bytes)) => tiny_http::Response::from_data(bytes.clone()),
+                None => tiny_http::Response::from_data(b"not found".to_vec()).with_status_code(404),
+            };
+            let _ = request.respond(response);
+        }
+    });
+    (url, handle, server)
+}
+
+#[test]
+fn data_fetch_downloads_and_checks_the_recordings() {
+    let snapir = snapir();
+    let files = vec![
+        (
+            "/dataset/TrainAndValidation/V.npy".to_string(),
+            std::fs::read(snapir.join("V.npy")).unwrap(),
+        ),
+        (
+            "/dataset/Test/V_test.npy".to_string(),
+            std::fs::read(snapir.join("V_test.npy")).unwrap(),
+        ),
+    ];
+    let (url, handle, server) = serve(files);
+    let dir = tempfile::tempdir().unwrap();
+    let output = dcnet(dir.path(), &["data", "fetch", "--base-url", &url]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    for name in ["V.npy", "V_test.npy"] {
+        assert_eq!(
+            std::fs::read(dir.path().join("data/snapir").join(name)).unwrap(),
+            std::fs::read(snapir.join(name)).unwrap()
+        );
+    }
+    let again = dcnet(dir.path(), &["data", "fetch", "--base-url", &url]);
+    assert!(
+        stderr(&again).contains("is already there (sha256 checked)"),
+        "{}",
+        stderr(&again)
+    );
+    server.unblock();
+    handle.join().unwrap();
+
+    // A server with the wrong bytes: refused, nothing written.
+    let (url, handle, server) = serve(vec![(
+        "/dataset/TrainAndValidation/V.npy".to_string(),
+        b"not the recording".to_vec(),
+    )]);
+    let output = dcnet(
+        dir.path(),
+        &["data", "fetch", "--base-url", &url, "--dest", "elsewhere"],
+    );
+    assert_eq!(output.status.code(), Some(2));
+    assert!(
+        stderr(&output).contains("V.npy: sha256 "),
+        "{}",
+        stderr(&output)
+    );
+    assert_eq!(
+        std::fs::read_dir(dir.path().join("elsewhere"))
+            .unwrap()
+            .count(),
+        0
+    );
+    server.unblock();
+    handle.join().unwrap();
+}

@@ -1,0 +1,177 @@
+//! Helpers for the integration tests: run the built binary in a temporary folder, read
+//! the Parquet results back, and find the Snapir recordings in `../shared/data/snapir`.
+
+#![allow(dead_code)]
+
+use arrow_array::{Array, BooleanArray, Float64Array, RecordBatch, StringArray};
+use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+pub fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The shared Snapir recordings; tests that need them fail with a clear message
+/// when they are not there.
+pub fn snapir() -> PathBuf {
+    let dir = repo().join("../shared/data/snapir");
+    assert!(
+        dir.join("V.npy").is_file(),
+        "the Snapir recordings are expected in {}",
+        dir.display()
+    );
+    dir
+}
+
+/// Runs `dcnet-exp ARGS` in `cwd`.
+pub fn dcnet(cwd: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_dcnet-exp"))
+        .current_dir(cwd)
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+pub fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+pub fn stdout(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
+/// A temporary project: `experiments/` with the repository's specs, `data/snapir`
+/// linked to the shared recordings when `with_data`.
+pub fn project(with_data: bool) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("experiments")).unwrap();
+    for spec in ["paper.toml", "quick.toml"] {
+        std::fs::copy(
+            repo().join("experiments").join(spec),
+            dir.path().join("experiments").join(spec),
+        )
+        .unwrap();
+    }
+    if with_data {
+        std::fs::create_dir(dir.path().join("data")).unwrap();
+        std::os::unix::fs::symlink(snapir(), dir.path().join("data/snapir")).unwrap();
+    }
+    dir
+}
+
+pub fn read_parquet(path: &Path) -> RecordBatch {
+    let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let reader = ParquetRecordBatchReaderBuilder::try_new(file)
+        .unwrap()
+        .build()
+        .unwrap();
+    let mut batches: Vec<RecordBatch> = reader.map(Result::unwrap).collect();
+    assert_eq!(batches.len(), 1, "the tool writes each table as one batch");
+    batches.remove(0)
+}
+
+pub fn strings(batch: &RecordBatch, column: &str) -> Vec<Option<String>> {
+    let array = batch
+        .column_by_name(column)
+        .unwrap_or_else(|| panic!("no column {column}"));
+    let array = array.as_any().downcast_ref::<StringArray>().unwrap();
+    (0..array.len())
+        .map(|i| array.is_valid(i).then(|| array.value(i).to_string()))
+        .collect()
+}
+
+pub fn floats(batch: &RecordBatch, column: &str) -> Vec<Option<f64>> {
+    let array = batch
+        .column_by_name(column)
+        .unwrap_or_else(|| panic!("no column {column}"));
+    let array = array.as_any().downcast_ref::<Float64Array>().unwrap();
+    (0..array.len())
+        .map(|i| array.is_valid(i).then(|| array.value(i)))
+        .collect()
+}
+
+pub fn bools(batch: &RecordBatch, column: &str) -> Vec<bool> {
+    let array = batch
+        .column_by_name(column)
+        .unwrap()
+        .as_any()
+        .downcast_ref::<BooleanArray>()
+        .unwrap();
+    (0..array.len()).map(|i| array.value(i)).collect()
+}
+
+/// One row of a results table, as the tests look rows up.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    pub dvl: String,
+    pub estimator: String,
+    pub error_model: Option<String>,
+    /// `window_s` (calibration) or `trajectory` (evaluation).
+    pub at: String,
+    pub rmse_cm_s: f64,
+    pub rmse_std_cm_s: f64,
+    /// `is_t_conv` (calibration) or always true (evaluation).
+    pub selected: bool,
+    pub t_conv_s: Option<f64>,
+    pub improvement_pct: Option<f64>,
+}
+
+pub fn calibration_rows(results: &Path) -> Vec<Row> {
+    let batch = read_parquet(&results.join("calibration.parquet"));
+    let (dvl, estimator, model) = (
+        strings(&batch, "dvl"),
+        strings(&batch, "estimator"),
+        strings(&batch, "error_model"),
+    );
+    let (window, rmse, std, t_conv) = (
+        floats(&batch, "window_s"),
+        floats(&batch, "rmse_cm_s"),
+        floats(&batch, "rmse_std_cm_s"),
+        bools(&batch, "is_t_conv"),
+    );
+    (0..batch.num_rows())
+        .map(|i| Row {
+            dvl: dvl[i].clone().unwrap(),
+            estimator: estimator[i].clone().unwrap(),
+            error_model: model[i].clone(),
+            at: window[i].unwrap().to_string(),
+            rmse_cm_s: rmse[i].unwrap(),
+            rmse_std_cm_s: std[i].unwrap(),
+            selected: t_conv[i],
+            t_conv_s: None,
+            improvement_pct: None,
+        })
+        .collect()
+}
+
+pub fn evaluation_rows(results: &Path) -> Vec<Row> {
+    let batch = read_parquet(&results.join("evaluation.parquet"));
+    let (dvl, estimator, model) = (
+        strings(&batch, "dvl"),
+        strings(&batch, "estimator"),
+        strings(&batch, "error_model"),
+    );
+    let (trajectory, rmse, std) = (
+        strings(&batch, "trajectory"),
+        floats(&batch, "rmse_cm_s"),
+        floats(&batch, "rmse_std_cm_s"),
+    );
+    let (t_conv, improvement) = (
+        floats(&batch, "t_conv_s"),
+        floats(&batch, "improvement_pct"),
+    );
+    (0..batch.num_rows())
+        .map(|i| Row {
+            dvl: dvl[i].clone().unwrap(),
+            estimator: estimator[i].clone().unwrap(),
+            error_model: model[i].clone(),
+            at: trajectory[i].clone().unwrap(),
+            rmse_cm_s: rmse[i].unwrap(),
+            rmse_std_cm_s: std[i].unwrap(),
+            selected: true,
+            t_conv_s: t_conv[i],
+            improvement_pct: improvement[i],
+        })
+        .collect()
+}
