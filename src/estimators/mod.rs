@@ -80,12 +80,7 @@ impl fmt::Display for ErrorModel {
 impl FromStr for ErrorModel {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        Self::ALL
-            .into_iter()
-            .find(|m| m.to_string() == s)
-            .ok_or_else(|| {
-                format!("unknown error model {s:?}; expected one of EM1, EM2, EM3, EM4, EM5")
-            })
+        parse_by_name(&Self::ALL, "error model", s)
     }
 }
 
@@ -129,13 +124,22 @@ impl fmt::Display for EstimatorKind {
 impl FromStr for EstimatorKind {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        Self::ALL
-            .into_iter()
-            .find(|m| m.to_string() == s)
-            .ok_or_else(|| {
-                format!("unknown estimator {s:?}; expected one of baseline, least_squares, floor")
-            })
+        parse_by_name(&Self::ALL, "estimator", s)
     }
+}
+
+/// The value of `all` whose name (its `Display`) is `name`.
+fn parse_by_name<T: Copy + fmt::Display>(all: &[T], what: &str, name: &str) -> Result<T, String> {
+    all.iter()
+        .copied()
+        .find(|value| value.to_string() == name)
+        .ok_or_else(|| {
+            let names: Vec<String> = all.iter().map(ToString::to_string).collect();
+            format!(
+                "unknown {what} {name:?}; expected one of {}",
+                names.join(", ")
+            )
+        })
 }
 
 /// A method as the protocol runs it on one DVL.
