@@ -8,7 +8,11 @@ use crate::evaluate::run_protocol;
 use crate::progress::bar;
 use crate::results::{self, Manifest, StageSeconds};
 use crate::spec::{Origin, Spec, load};
+use crate::estimators::EstimatorKind;
 use crate::tables;
+use crate::checkpoint::{ModelStore, Provenance, train_cached};
+use crate::train::{self, TrainError, Trained};
+use rayon::prelude::*;
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use std::path::{Path, PathBuf};
@@ -188,16 +192,20 @@ fn run(spec_path: &Path, out: &Path, set: &[String]) -> Result<(), CliError> {
     );
 
     let clock = Instant::now();
+    let folder = out.join(&spec.name);
+    let (dcnets, failures) = train_all(&spec, &training, &ModelStore::new(folder.join("models")));
+    stages.training = clock.elapsed().as_secs_f64();
+
+    let clock = Instant::now();
     let progress = bar(
         2 * spec.dvls.len() * spec.calibration.monte_carlo_runs,
         "monte carlo",
     );
-    let result = run_protocol(&spec, &trajectories, &progress);
+    let result = run_protocol(&spec, &trajectories, &dcnets, &progress);
     progress.finish_and_clear();
     stages.protocol = clock.elapsed().as_secs_f64();
 
     let resolved = toml::to_string_pretty(&spec.resolved).map_err(failure)?;
-    let folder = out.join(&spec.name);
     let manifest = Manifest {
         name: spec.name.clone(),
         spec_sha256: fetch::sha256_hex(resolved.as_bytes()),
@@ -206,11 +214,12 @@ fn run(spec_path: &Path, out: &Path, set: &[String]) -> Result<(), CliError> {
         started_at: humantime::format_rfc3339_seconds(started_at).to_string(),
         finished_at: humantime::format_rfc3339_seconds(SystemTime::now()).to_string(),
         threads: rayon::current_num_threads(),
+        backend: spec.training.backend.to_string(),
         host: gethostname::gethostname().to_string_lossy().into_owned(),
         data_files: data_files(&spec).map_err(failure)?,
         stage_seconds: stages,
     };
-    results::write_run(&folder, &resolved, &result, &manifest).map_err(failure)?;
+    results::write_run(&folder, &resolved, &result, &dcnets, &manifest).map_err(failure)?;
     let calibration_name = &trajectories[spec.calibration.trajectory].name;
     println!(
         "{}",
@@ -222,7 +231,57 @@ fn run(spec_path: &Path, out: &Path, set: &[String]) -> Result<(), CliError> {
     );
     println!("{}", tables::evaluation_table(&result.evaluation));
     eprintln!("results written to {}", folder.display());
-    Ok(())
+    match failures.into_iter().next() {
+        Some(first) => Err(failure(first)),
+        None => Ok(()),
+    }
+}
+
+/// Trains one DCNet per error model of the spec, concurrently; a model that fails is
+/// reported and left out, the others go on.
+fn train_all(spec: &Spec, set: &TrainingSet, store: &ModelStore) -> (Vec<Trained>, Vec<TrainError>) {
+    if !spec.kinds.contains(&EstimatorKind::Dcnet) {
+        return (Vec::new(), Vec::new());
+    }
+    let bars = indicatif::MultiProgress::new();
+    let outcomes: Vec<Result<(Trained, Provenance), TrainError>> = spec
+        .error_models
+        .par_iter()
+        .map(|&error_model| {
+            let progress = bars.add(bar(spec.training.epochs * train::batches_per_epoch(spec, set), "DCNet"));
+            progress.set_message(format!("DCNet {error_model}"));
+            let outcome = train_cached(spec, set, error_model, store, &progress);
+            progress.finish_and_clear();
+            outcome
+        })
+        .collect();
+    let mut trained = Vec::new();
+    let mut failures = Vec::new();
+    for outcome in outcomes {
+        match outcome {
+            Ok((model, provenance)) => {
+                let best = &model.history[model.best_epoch - 1];
+                let how = match provenance {
+                    Provenance::Trained => "trained".to_string(),
+                    Provenance::Resumed(epoch) => format!("resumed from the checkpoint of epoch {epoch}"),
+                    Provenance::Reused => format!("reused from {}", store.folder.display()),
+                };
+                eprintln!(
+                    "DCNet {}: {how}; best validation loss {:.4} (cm/s)² at epoch {} of {}",
+                    model.error_model,
+                    best.validation_loss,
+                    model.best_epoch,
+                    model.history.len()
+                );
+                trained.push(model);
+            }
+            Err(error) => {
+                eprintln!("error: {error}");
+                failures.push(error);
+            }
+        }
+    }
+    (trained, failures)
 }
 
 /// The `.npy` files the spec reads, with their SHA-256.
@@ -390,7 +449,7 @@ fn bench(spec_path: &Path, repeat: usize, set: &[String]) -> Result<(), CliError
     );
     let kinds: Vec<String> = spec.kinds.iter().map(ToString::to_string).collect();
     let (best, median) = time(&|| {
-        std::hint::black_box(run_protocol(&spec, &trajectories, &hidden));
+        std::hint::black_box(run_protocol(&spec, &trajectories, &[], &hidden));
     });
     println!(
         "protocol: {} runs × {} DVLs, estimators {}, best {best:.3} s, median {median:.3} s over {repeat} runs, {} threads",

@@ -15,6 +15,7 @@ use crate::estimators::{Correction, Entry, ErrorModel, EstimatorKind, lineup};
 use crate::noise::{BeamGeometry, Measurements, measure_trajectory};
 use crate::rng::task_rng;
 use crate::spec::{Dvl, Spec};
+use crate::train::Trained;
 use indicatif::ProgressBar;
 use rayon::prelude::*;
 
@@ -84,11 +85,12 @@ pub struct ProtocolResult {
 pub fn run_protocol(
     spec: &Spec,
     trajectories: &[Trajectory],
+    dcnets: &[Trained],
     progress: &ProgressBar,
 ) -> ProtocolResult {
     let mut result = ProtocolResult::default();
     for dvl in &spec.dvls {
-        run_dvl(spec, trajectories, dvl, progress, &mut result);
+        run_dvl(spec, trajectories, dvl, dcnets, progress, &mut result);
     }
     add_improvements(&mut result.evaluation);
     result
@@ -98,11 +100,12 @@ fn run_dvl(
     spec: &Spec,
     trajectories: &[Trajectory],
     dvl: &Dvl,
+    dcnets: &[Trained],
     progress: &ProgressBar,
     result: &mut ProtocolResult,
 ) {
     let geometry = BeamGeometry::janus_x(spec.beam_pitch_deg);
-    let entries = lineup(spec, dvl);
+    let entries = lineup(spec, dvl, dcnets);
     let runs = spec.calibration.monte_carlo_runs;
     let calibration = &trajectories[spec.calibration.trajectory];
     let windows = &spec.calibration.window_sizes;

@@ -7,15 +7,19 @@
 //!    ground truth;
 //! 3. [`noise`]: the beam-level DVL and GNSS-RTK measurement model;
 //! 4. [`dataset`]: the training windows over the error-term grid;
-//! 5. [`estimators`]: calibration methods behind one trait;
-//! 6. [`evaluate`]: the Monte Carlo calibration and evaluation protocol;
-//! 7. [`results`] and [`tables`]: Parquet files, manifest, and the printed tables;
-//! 8. [`cli`]: the subcommands that run the stages.
+//! 5. [`model`] and [`train`]: DCNet and its closed-loop training;
+//! 6. [`estimators`]: calibration methods behind one trait, DCNet among them;
+//! 7. [`evaluate`]: the Monte Carlo calibration and evaluation protocol;
+//! 8. [`results`] and [`tables`]: Parquet files, manifest, and the printed tables;
+//! 9. [`cli`]: the subcommands that run the stages.
 
 pub mod cli;
 pub mod data;
 pub mod dataset;
 pub mod estimators;
+pub mod model;
+pub mod train;
+pub mod checkpoint;
 pub mod evaluate;
 pub mod noise;
 pub mod progress;

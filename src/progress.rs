@@ -4,7 +4,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 
 /// A bar of `len` steps labelled `message`.
-pub fn bar(len: usize, message: &'static str) -> ProgressBar {
+pub fn bar(len: usize, message: impl Into<std::borrow::Cow<'static, str>>) -> ProgressBar {
     if !std::io::stderr().is_terminal() {
         return ProgressBar::hidden();
     }

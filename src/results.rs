@@ -5,6 +5,7 @@
 
 use crate::estimators::{Correction, ErrorModel};
 use crate::evaluate::{CalibrationRow, EvaluationRow, ProtocolResult, RunRow};
+use crate::train::{EpochRecord, Trained};
 use arrow_array::{ArrayRef, BooleanArray, Float64Array, RecordBatch, StringArray, UInt32Array};
 use parquet::arrow::ArrowWriter;
 use parquet::basic::Compression;
@@ -58,6 +59,8 @@ pub struct Manifest {
     pub started_at: String,
     pub finished_at: String,
     pub threads: usize,
+    /// burn backend DCNet trained and ran on.
+    pub backend: String,
     pub host: String,
     pub data_files: Vec<DataFile>,
     pub stage_seconds: StageSeconds,
@@ -68,6 +71,7 @@ pub struct Manifest {
 pub struct StageSeconds {
     pub load: f64,
     pub dataset: f64,
+    pub training: f64,
     pub protocol: f64,
 }
 
@@ -82,6 +86,7 @@ pub fn write_run(
     folder: &Path,
     resolved_spec: &str,
     result: &ProtocolResult,
+    dcnets: &[Trained],
     manifest: &Manifest,
 ) -> Result<(), ResultsError> {
     std::fs::create_dir_all(folder).map_err(io(folder))?;
@@ -92,6 +97,7 @@ pub fn write_run(
             calibration_batch(&result.calibration),
         ),
         ("evaluation.parquet", evaluation_batch(&result.evaluation)),
+        ("training.parquet", training_batch(dcnets)),
     ] {
         let path = folder.join(file);
         let bytes = parquet_bytes(&batch).map_err(|source| ResultsError::Parquet {
@@ -199,6 +205,20 @@ pub fn evaluation_batch(rows: &[EvaluationRow]) -> RecordBatch {
                 rows.iter().map(|r| r.improvement_pct),
             )),
         ),
+    ])
+}
+
+/// One row per error model × epoch of DCNet training.
+pub fn training_batch(dcnets: &[Trained]) -> RecordBatch {
+    let rows: Vec<(&Trained, &EpochRecord)> = dcnets.iter().flat_map(|t| t.history.iter().map(move |epoch| (t, epoch))).collect();
+    batch(vec![
+        ("error_model", strings(&rows, |(t, _)| t.error_model.to_string())),
+        ("epoch", Arc::new(UInt32Array::from_iter_values(rows.iter().map(|(_, e)| e.epoch as u32)))),
+        ("train_loss", floats(&rows, |(_, e)| e.train_loss)),
+        ("validation_loss", floats(&rows, |(_, e)| e.validation_loss)),
+        ("seconds", floats(&rows, |(_, e)| e.seconds)),
+        ("samples_per_s", floats(&rows, |(_, e)| e.samples_per_s)),
+        ("is_best", Arc::new(BooleanArray::from_iter(rows.iter().map(|(t, e)| Some(e.epoch == t.best_epoch))))),
     ])
 }
 

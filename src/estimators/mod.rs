@@ -4,15 +4,19 @@
 //! with some terms fixed or tied. The protocol runs the list [`lineup`] builds.
 
 mod baseline;
+mod dcnet;
 mod floor;
 mod least_squares;
 
 pub use baseline::Baseline;
+pub use dcnet::DcnetEstimator;
 pub use floor::Floor;
 pub use least_squares::LeastSquares;
 
 use crate::Vec3;
+use crate::model::Settings;
 use crate::noise::BeamGeometry;
+use crate::train::Trained;
 use crate::spec::{Dvl, Spec};
 use std::fmt;
 use std::str::FromStr;
@@ -90,15 +94,16 @@ impl FromStr for ErrorModel {
 pub enum EstimatorKind {
     Baseline,
     LeastSquares,
+    Dcnet,
     Floor,
 }
 
 impl EstimatorKind {
-    pub const ALL: [EstimatorKind; 3] = [Self::Baseline, Self::LeastSquares, Self::Floor];
+    pub const ALL: [EstimatorKind; 4] = [Self::Baseline, Self::LeastSquares, Self::Dcnet, Self::Floor];
 
     /// Whether the method is run once per error model.
     pub fn takes_error_model(self) -> bool {
-        self == Self::LeastSquares
+        matches!(self, Self::LeastSquares | Self::Dcnet)
     }
 
     /// How the method is labelled in tables.
@@ -106,6 +111,7 @@ impl EstimatorKind {
         match self {
             Self::Baseline => "baseline",
             Self::LeastSquares => "least squares",
+            Self::Dcnet => "DCNet",
             Self::Floor => "floor (bound)",
         }
     }
@@ -116,6 +122,7 @@ impl fmt::Display for EstimatorKind {
         f.write_str(match self {
             Self::Baseline => "baseline",
             Self::LeastSquares => "least_squares",
+            Self::Dcnet => "dcnet",
             Self::Floor => "floor",
         })
     }
@@ -149,8 +156,9 @@ pub struct Entry {
     pub estimator: Box<dyn Estimator>,
 }
 
-/// Every (estimator kind, error model) the spec asks for, set up for `dvl`.
-pub fn lineup(spec: &Spec, dvl: &Dvl) -> Vec<Entry> {
+/// Every (estimator kind, error model) the spec asks for, set up for `dvl`. DCNet
+/// runs for the error models in `dcnets`, the models that trained.
+pub fn lineup(spec: &Spec, dvl: &Dvl, dcnets: &[Trained]) -> Vec<Entry> {
     let geometry = BeamGeometry::janus_x(spec.beam_pitch_deg);
     let mut entries = Vec::new();
     for &kind in &spec.kinds {
@@ -163,8 +171,20 @@ pub fn lineup(spec: &Spec, dvl: &Dvl) -> Vec<Entry> {
             let estimator: Box<dyn Estimator> = match (kind, error_model) {
                 (EstimatorKind::Baseline, _) => Box::new(Baseline),
                 (EstimatorKind::LeastSquares, Some(model)) => Box::new(LeastSquares(model)),
-                (EstimatorKind::LeastSquares, None) => {
-                    unreachable!("least squares always has an error model")
+                (EstimatorKind::Dcnet, Some(model)) => {
+                    let Some(trained) = dcnets.iter().find(|t| t.error_model == model) else {
+                        continue;
+                    };
+                    Box::new(DcnetEstimator {
+                        model: trained.model.clone(),
+                        error_model: model,
+                        window: spec.dataset.window,
+                        settings: Settings::from(&spec.model),
+                        device: spec.training.backend.device(),
+                    })
+                }
+                (EstimatorKind::LeastSquares | EstimatorKind::Dcnet, None) => {
+                    unreachable!("{kind} always has an error model")
                 }
                 (EstimatorKind::Floor, _) => Box::new(Floor::new(&dvl.errors, &geometry)),
             };

@@ -24,6 +24,10 @@ pub struct SpecFile {
     pub evaluation: EvaluationFile,
     #[serde(default)]
     pub estimators: EstimatorsFile,
+    #[serde(default)]
+    pub model: ModelFile,
+    #[serde(default)]
+    pub training: TrainingFile,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -170,7 +174,7 @@ pub struct EvaluationFile {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct EstimatorsFile {
-    /// Any of `baseline`, `least_squares`, `floor`.
+    /// Any of `baseline`, `least_squares`, `dcnet`, `floor`.
     pub kinds: Vec<String>,
     /// Any of `EM1` .. `EM5`, for the kinds that take an error model.
     pub error_models: Vec<String>,
@@ -179,13 +183,96 @@ pub struct EstimatorsFile {
 impl Default for EstimatorsFile {
     fn default() -> Self {
         Self {
-            kinds: ["baseline", "least_squares", "floor"]
+            kinds: ["baseline", "least_squares", "dcnet", "floor"]
                 .map(String::from)
                 .to_vec(),
             error_models: ["EM1", "EM2", "EM3", "EM4", "EM5"]
                 .map(String::from)
                 .to_vec(),
         }
+    }
+}
+
+/// DCNet's layer sizes (PAPER-NOTES gives the layout, not the sizes).
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ModelFile {
+    /// Output channels of every convolution, in both heads.
+    pub conv_channels: usize,
+    /// Kernel length of the two Conv1d of the 1D head.
+    pub conv1d_kernel_size: usize,
+    /// Widths of the first three Linear layers of the FC batch.
+    pub fc_widths: [usize; 3],
+    /// Activation after each of the first three Linear layers: `tanh` or `leaky_relu`.
+    pub activation: String,
+    /// Negative slope of every LeakyReLU.
+    pub leaky_relu_slope: f64,
+    /// Dropout probability after each of the first three Linear layers.
+    pub dropout: f64,
+}
+
+impl Default for ModelFile {
+    fn default() -> Self {
+        Self {
+            conv_channels: 16,
+            conv1d_kernel_size: 2,
+            fc_widths: [128, 64, 32],
+            activation: "tanh".into(),
+            leaky_relu_slope: 0.05,
+            dropout: 0.3,
+        }
+    }
+}
+
+/// How DCNet is trained.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TrainingFile {
+    /// `flex` or `ndarray` (burn's CPU backends).
+    pub backend: String,
+    pub epochs: usize,
+    pub batch_size: usize,
+    /// RMSProp learning rate per error model.
+    pub learning_rate: LearningRatesFile,
+    /// RMSProp smoothing constant and epsilon (PyTorch's defaults; no momentum).
+    pub rmsprop_alpha: f64,
+    pub rmsprop_epsilon: f64,
+    /// A resumable checkpoint is written every this many epochs.
+    pub checkpoint_every_epochs: usize,
+}
+
+impl Default for TrainingFile {
+    fn default() -> Self {
+        Self {
+            backend: "flex".into(),
+            epochs: 100,
+            batch_size: 256,
+            learning_rate: LearningRatesFile::default(),
+            rmsprop_alpha: 0.99,
+            rmsprop_epsilon: 1e-8,
+            checkpoint_every_epochs: 5,
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LearningRatesFile {
+    #[serde(rename = "EM1")]
+    pub em1: f64,
+    #[serde(rename = "EM2")]
+    pub em2: f64,
+    #[serde(rename = "EM3")]
+    pub em3: f64,
+    #[serde(rename = "EM4")]
+    pub em4: f64,
+    #[serde(rename = "EM5")]
+    pub em5: f64,
+}
+
+impl Default for LearningRatesFile {
+    fn default() -> Self {
+        Self { em1: 5e-5, em2: 5e-5, em3: 5e-5, em4: 5e-5, em5: 5e-4 }
     }
 }
 

@@ -10,6 +10,8 @@ pub use file::SpecFile;
 pub use load::{SpecError, SpecErrors, load};
 
 use crate::estimators::{ErrorModel, EstimatorKind};
+use crate::model::Activation;
+use crate::train::Backend;
 use crate::noise::SensorErrors;
 use file::{AxisFile, SyntheticFile};
 use std::path::{Path, PathBuf};
@@ -33,6 +35,8 @@ pub struct Spec {
     pub evaluation: Vec<usize>,
     pub kinds: Vec<EstimatorKind>,
     pub error_models: Vec<ErrorModel>,
+    pub model: ModelSpec,
+    pub training: TrainingSpec,
     /// The spec as resolved (defaults and overrides applied, paths absolute).
     pub resolved: SpecFile,
 }
@@ -98,6 +102,36 @@ pub struct CalibrationSpec {
     pub monte_carlo_runs: usize,
 }
 
+/// DCNet's sizes, checked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelSpec {
+    pub conv_channels: usize,
+    pub conv1d_kernel_size: usize,
+    pub fc_widths: [usize; 3],
+    pub activation: Activation,
+    pub leaky_relu_slope: f64,
+    pub dropout: f64,
+}
+
+/// DCNet training settings, checked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrainingSpec {
+    pub backend: Backend,
+    pub epochs: usize,
+    pub batch_size: usize,
+    /// Indexed by `ErrorModel as usize`.
+    pub learning_rates: [f64; 5],
+    pub rmsprop_alpha: f64,
+    pub rmsprop_epsilon: f64,
+    pub checkpoint_every_epochs: usize,
+}
+
+impl TrainingSpec {
+    pub fn learning_rate(&self, model: ErrorModel) -> f64 {
+        self.learning_rates[model as usize]
+    }
+}
+
 /// A key path such as `data.trajectories[2].samples`, and what is wrong there.
 type Fault = (String, String);
 
@@ -127,6 +161,8 @@ impl SpecFile {
             calibration,
             evaluation,
             estimators,
+            model,
+            training,
         } = self.clone();
         let mut resolved = self;
 
@@ -422,6 +458,23 @@ impl SpecFile {
         let kinds = parse_names("estimators.kinds", &kinds, &mut faults);
         let error_models = parse_names("estimators.error_models", &error_models, &mut faults);
 
+        if kinds.contains(&EstimatorKind::Dcnet) {
+            if let Some(window) = window {
+                for (i, &size) in window_sizes.iter().enumerate() {
+                    if size < window {
+                        faults.add(
+                            format!("calibration.window_sizes_s[{i}]"),
+                            format!("{} s is shorter than one DCNet window (dataset.window_s = {window_s} s)", size as f64 / rate),
+                        );
+                    }
+                }
+            }
+        }
+
+        // Model and training.
+        let model = check_model(model, window, &mut faults);
+        let training = check_training(training, &mut faults);
+
         if !faults.0.is_empty() {
             return Err(faults.0);
         }
@@ -451,6 +504,8 @@ impl SpecFile {
             evaluation,
             kinds,
             error_models,
+            model,
+            training,
             resolved,
         })
     }
@@ -481,6 +536,63 @@ fn non_negative(key: &str, value: f64, faults: &mut Faults) {
     if !(value.is_finite() && value >= 0.0) {
         faults.add(key, format!("{value} must be zero or positive"));
     }
+}
+
+fn check_model(model: file::ModelFile, window: Option<usize>, faults: &mut Faults) -> ModelSpec {
+    let file::ModelFile { conv_channels, conv1d_kernel_size, fc_widths, activation, leaky_relu_slope, dropout } = model;
+    if conv_channels == 0 {
+        faults.add("model.conv_channels", "0 must be at least 1");
+    }
+    match window {
+        Some(window) if conv1d_kernel_size == 0 || 2 * (conv1d_kernel_size - 1) >= window => faults.add(
+            "model.conv1d_kernel_size",
+            format!("{conv1d_kernel_size} must be at least 1 and leave the two Conv1d an output of a window of {window} samples"),
+        ),
+        Some(window) if window < 4 => faults.add("dataset.window_s", format!("{window} samples are too few for the 2D head (at least 4)")),
+        _ => {}
+    }
+    for (i, width) in fc_widths.iter().enumerate() {
+        if *width == 0 {
+            faults.add(format!("model.fc_widths[{i}]"), "0 must be at least 1");
+        }
+    }
+    let activation = activation.parse().unwrap_or_else(|message: String| {
+        faults.add("model.activation", message);
+        Activation::Tanh
+    });
+    non_negative("model.leaky_relu_slope", leaky_relu_slope, faults);
+    if !(0.0..1.0).contains(&dropout) {
+        faults.add("model.dropout", format!("{dropout} must be at least 0 and below 1"));
+    }
+    ModelSpec { conv_channels, conv1d_kernel_size, fc_widths, activation, leaky_relu_slope, dropout }
+}
+
+fn check_training(training: file::TrainingFile, faults: &mut Faults) -> TrainingSpec {
+    let file::TrainingFile { backend, epochs, batch_size, learning_rate, rmsprop_alpha, rmsprop_epsilon, checkpoint_every_epochs } =
+        training;
+    let backend = backend.parse().unwrap_or_else(|message: String| {
+        faults.add("training.backend", message);
+        Backend::Flex
+    });
+    for (key, value) in [("training.epochs", epochs), ("training.batch_size", batch_size), ("training.checkpoint_every_epochs", checkpoint_every_epochs)] {
+        if value == 0 {
+            faults.add(key, "0 must be at least 1");
+        }
+    }
+    let file::LearningRatesFile { em1, em2, em3, em4, em5 } = learning_rate;
+    let learning_rates = [em1, em2, em3, em4, em5];
+    for (model, rate) in ErrorModel::ALL.iter().zip(learning_rates) {
+        if !(rate.is_finite() && rate > 0.0) {
+            faults.add(format!("training.learning_rate.{model}"), format!("{rate} must be a positive number"));
+        }
+    }
+    if !(rmsprop_alpha > 0.0 && rmsprop_alpha < 1.0) {
+        faults.add("training.rmsprop_alpha", format!("{rmsprop_alpha} must lie strictly between 0 and 1"));
+    }
+    if !(rmsprop_epsilon.is_finite() && rmsprop_epsilon > 0.0) {
+        faults.add("training.rmsprop_epsilon", format!("{rmsprop_epsilon} must be a positive number"));
+    }
+    TrainingSpec { backend, epochs, batch_size, learning_rates, rmsprop_alpha, rmsprop_epsilon, checkpoint_every_epochs }
 }
 
 fn check_synthetic(synthetic: &SyntheticFile, faults: &mut Faults) {

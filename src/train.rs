@@ -1,0 +1,228 @@
+//! Closed-loop training of one DCNet per error model. In: the spec and the training
+//! set. Out: the weights with the best validation loss and the per-epoch history.
+//!
+//! The loss corrects each window's DVL velocity with the predicted terms and takes the
+//! squared error against the ground truth in (cm/s)², summed over x, y, z and averaged
+//! over samples and windows (PAPER-NOTES). RMSProp updates the weights. Initial weights,
+//! the order of the windows in every epoch and the dropout masks come from generators
+//! seeded by (seed, error model, epoch), so a model does not depend on the thread count
+//! or on the other models training beside it.
+
+use crate::dataset::{INPUT_ROWS, TARGET_ROWS, TrainingSet};
+use crate::estimators::ErrorModel;
+use crate::model::{Dcnet, Settings, split_terms};
+use crate::rng::task_rng;
+use crate::spec::Spec;
+use burn::module::Module;
+use burn::optim::{GradientsParams, ModuleOptimizer, RmsPropConfig};
+use burn::tensor::{Device, Tensor, TensorData};
+use indicatif::ProgressBar;
+use rand::seq::SliceRandom;
+use std::fmt;
+use std::str::FromStr;
+use std::time::Instant;
+
+/// burn's CPU backends.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Backend {
+    /// burn-flex, the default: several times faster than ndarray on this model.
+    Flex,
+    /// burn-ndarray, deprecated by burn 0.22 but kept for comparison.
+    NdArray,
+}
+
+impl Backend {
+    pub fn device(self) -> Device {
+        match self {
+            Self::Flex => Device::flex(),
+            #[allow(deprecated)]
+            Self::NdArray => Device::ndarray(),
+        }
+    }
+}
+
+impl fmt::Display for Backend {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Flex => "flex",
+            Self::NdArray => "ndarray",
+        })
+    }
+}
+
+impl FromStr for Backend {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "flex" => Ok(Self::Flex),
+            "ndarray" => Ok(Self::NdArray),
+            _ => Err(format!("unknown backend {s:?}; expected flex or ndarray")),
+        }
+    }
+}
+
+/// One epoch of one model.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct EpochRecord {
+    pub epoch: usize,
+    /// Mean closed-loop loss over the epoch's training windows, (cm/s)².
+    pub train_loss: f64,
+    /// Closed-loop loss on the validation windows after the epoch, (cm/s)².
+    pub validation_loss: f64,
+    pub seconds: f64,
+    pub samples_per_s: f64,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum TrainError {
+    #[error("DCNet {error_model}: the training loss became {loss} at epoch {epoch}, batch {batch}; training of {error_model} stopped (try a lower training.learning_rate.{error_model})")]
+    NonFinite { error_model: ErrorModel, epoch: usize, batch: usize, loss: f32 },
+    #[error("DCNet {error_model}: no training windows (is dataset.validation_fraction leaving none?)")]
+    NoData { error_model: ErrorModel },
+    #[error(transparent)]
+    Checkpoint(#[from] crate::checkpoint::CheckpointError),
+}
+
+/// A trained model: the weights of its best validation epoch, on a plain (no autodiff)
+/// device, ready for inference.
+#[derive(Debug, Clone)]
+pub struct Trained {
+    pub error_model: ErrorModel,
+    pub model: Dcnet,
+    pub history: Vec<EpochRecord>,
+    pub best_epoch: usize,
+}
+
+/// Training state that an epoch advances; a checkpoint saves exactly this.
+pub struct State {
+    pub model: Dcnet,
+    pub optimizer: ModuleOptimizer,
+    pub best: Option<(usize, f64, Dcnet)>,
+    pub history: Vec<EpochRecord>,
+}
+
+impl State {
+    /// Fresh weights for `error_model`, on the autodiff device of the spec's backend.
+    pub fn new(spec: &Spec, error_model: ErrorModel) -> Self {
+        let device = spec.training.backend.device().autodiff();
+        let mut rng = task_rng(spec.seed, &[&"dcnet-init", &error_model]);
+        let model = Dcnet::new(&spec.model, error_model, spec.dataset.window, &device, &mut rng);
+        Self { model, optimizer: optimizer(spec), best: None, history: Vec::new() }
+    }
+
+    pub fn next_epoch(&self) -> usize {
+        self.history.len() + 1
+    }
+
+    /// The best weights and the history, once the epochs are done.
+    pub fn finish(self, error_model: ErrorModel) -> Trained {
+        let (best_epoch, _, model) = self.best.expect("at least one epoch ran");
+        Trained { error_model, model, history: self.history, best_epoch }
+    }
+}
+
+pub fn optimizer(spec: &Spec) -> ModuleOptimizer {
+    RmsPropConfig::new()
+        .with_alpha(spec.training.rmsprop_alpha as f32)
+        .with_epsilon(spec.training.rmsprop_epsilon as f32)
+        .with_momentum(0.0)
+        .init()
+}
+
+/// The closed-loop loss of `terms` `[batch, n]` on windows whose DVL rows are `dvl`
+/// `[batch, 3, time]` and ground truth `truth` `[batch, 3, time]`, in (cm/s)².
+pub fn closed_loop_loss(terms: Tensor<2>, error_model: ErrorModel, dvl: Tensor<3>, truth: Tensor<3>) -> Tensor<1> {
+    let [batch, axes, time] = dvl.dims();
+    let (scale_pct, bias_cm_s) = split_terms(terms, error_model);
+    let scale: Tensor<3> = (scale_pct / 100.0).reshape([batch, axes, 1]).expand([batch, axes, time]);
+    let bias: Tensor<3> = (bias_cm_s / 100.0).reshape([batch, axes, 1]).expand([batch, axes, time]);
+    let corrected = (dvl - bias) / (scale + 1.0);
+    ((corrected - truth) * 100.0).square().sum_dim(1).mean()
+}
+
+/// Windows `indices` of `set` as tensors: inputs `[n, 6, time]`, targets `[n, 3, time]`.
+fn batch_tensors(set: &TrainingSet, indices: &[usize], device: &Device) -> (Tensor<3>, Tensor<3>) {
+    let w = set.window;
+    let mut inputs = Vec::with_capacity(indices.len() * INPUT_ROWS * w);
+    let mut targets = Vec::with_capacity(indices.len() * TARGET_ROWS * w);
+    for &i in indices {
+        inputs.extend_from_slice(&set.inputs[i * INPUT_ROWS * w..][..INPUT_ROWS * w]);
+        targets.extend_from_slice(&set.targets[i * TARGET_ROWS * w..][..TARGET_ROWS * w]);
+    }
+    (
+        Tensor::from_data(TensorData::new(inputs, [indices.len(), INPUT_ROWS, w]), device),
+        Tensor::from_data(TensorData::new(targets, [indices.len(), TARGET_ROWS, w]), device),
+    )
+}
+
+fn dvl_rows(input: &Tensor<3>) -> Tensor<3> {
+    let [batch, _, time] = input.dims();
+    input.clone().slice([0..batch, 0..3, 0..time])
+}
+
+/// Mean closed-loop loss of `model` (plain device) over `indices`, in batches.
+pub fn mean_loss(spec: &Spec, model: &Dcnet, error_model: ErrorModel, set: &TrainingSet, indices: &[usize]) -> f64 {
+    let device = spec.training.backend.device();
+    let settings = Settings::from(&spec.model);
+    let mut total = 0.0;
+    for chunk in indices.chunks(spec.training.batch_size.max(1024)) {
+        let (input, target) = batch_tensors(set, chunk, &device);
+        let terms = model.forward(input.clone(), &settings, None);
+        let loss: f32 = closed_loop_loss(terms, error_model, dvl_rows(&input), target).into_scalar();
+        total += f64::from(loss) * chunk.len() as f64;
+    }
+    total / indices.len().max(1) as f64
+}
+
+/// Runs one epoch on `state`. `progress` advances once per batch.
+pub fn run_epoch(
+    spec: &Spec,
+    set: &TrainingSet,
+    error_model: ErrorModel,
+    state: &mut State,
+    progress: &ProgressBar,
+) -> Result<(), TrainError> {
+    let epoch = state.next_epoch();
+    let clock = Instant::now();
+    let device = spec.training.backend.device().autodiff();
+    let settings = Settings::from(&spec.model);
+    let (mut train, validation): (Vec<usize>, Vec<usize>) = (0..set.len()).partition(|&i| !set.is_validation[i]);
+    if train.is_empty() {
+        return Err(TrainError::NoData { error_model });
+    }
+    train.shuffle(&mut task_rng(spec.seed, &[&"dcnet-shuffle", &error_model, &epoch]));
+    let mut dropout_rng = task_rng(spec.seed, &[&"dcnet-dropout", &error_model, &epoch]);
+    let learning_rate = spec.training.learning_rate(error_model);
+    let mut loss_sum = 0.0;
+    let mut model = state.model.clone();
+    for (batch, indices) in train.chunks(spec.training.batch_size).enumerate() {
+        let (input, target) = batch_tensors(set, indices, &device);
+        let terms = model.forward(input.clone(), &settings, Some(&mut dropout_rng));
+        let loss = closed_loop_loss(terms, error_model, dvl_rows(&input), target);
+        let value: f32 = loss.clone().into_scalar();
+        if !value.is_finite() {
+            return Err(TrainError::NonFinite { error_model, epoch, batch: batch + 1, loss: value });
+        }
+        loss_sum += f64::from(value) * indices.len() as f64;
+        let grads = GradientsParams::from_grads(loss.backward(), &model);
+        model = state.optimizer.step(learning_rate, model, grads);
+        progress.inc(1);
+    }
+    let plain = model.valid();
+    let validation_loss = if validation.is_empty() { f64::NAN } else { mean_loss(spec, &plain, error_model, set, &validation) };
+    let train_loss = loss_sum / train.len() as f64;
+    let seconds = clock.elapsed().as_secs_f64();
+    state.history.push(EpochRecord { epoch, train_loss, validation_loss, seconds, samples_per_s: train.len() as f64 / seconds });
+    // Without validation windows the last epoch counts as the best.
+    let score = if validation.is_empty() { train_loss } else { validation_loss };
+    if state.best.as_ref().is_none_or(|(_, best, _)| score < *best) {
+        state.best = Some((epoch, score, plain));
+    }
+    state.model = model;
+    Ok(())
+}
+
+/// Batches in one epoch.
+pub fn batches_per_epoch(spec: &Spec, set: &TrainingSet) -> usize {
+    (set.len() - set.validation_len()).div_ceil(spec.training.batch_size)
+}
