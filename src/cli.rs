@@ -8,10 +8,10 @@ use crate::evaluate::run_protocol;
 use crate::progress::bar;
 use crate::results::{self, Manifest, StageSeconds};
 use crate::spec::{Origin, Spec, load};
-use crate::estimators::EstimatorKind;
+use crate::estimators::{ErrorModel, EstimatorKind};
 use crate::tables;
 use crate::checkpoint::{ModelStore, Provenance, train_cached};
-use crate::train::{self, TrainError, Trained};
+use crate::train::{self, Backend, TrainError, Trained};
 use rayon::prelude::*;
 use anyhow::Context;
 use clap::{Parser, Subcommand};
@@ -60,6 +60,9 @@ enum Command {
         /// Timed repetitions of each stage
         #[arg(long, default_value_t = 5)]
         repeat: usize,
+        /// Training batches timed per model and backend
+        #[arg(long, default_value_t = 40)]
+        training_batches: usize,
         #[command(flatten)]
         overrides: Overrides,
     },
@@ -159,8 +162,9 @@ pub fn main() -> Result<(), CliError> {
         Command::Bench {
             spec,
             repeat,
+            training_batches,
             overrides,
-        } => bench(&spec, repeat, &overrides.set),
+        } => bench(&spec, repeat, training_batches, &overrides.set),
     }
 }
 
@@ -422,7 +426,7 @@ fn fetch_data(dest: &Path, base_url: &str) -> Result<(), CliError> {
     Ok(())
 }
 
-fn bench(spec_path: &Path, repeat: usize, set: &[String]) -> Result<(), CliError> {
+fn bench(spec_path: &Path, repeat: usize, training_batches: usize, set: &[String]) -> Result<(), CliError> {
     let spec = load_spec(spec_path, set)?;
     let trajectories = load_trajectories(&spec).map_err(input)?;
     let repeat = repeat.max(1);
@@ -447,7 +451,7 @@ fn bench(spec_path: &Path, repeat: usize, set: &[String]) -> Result<(), CliError
         rayon::current_num_threads(),
         windows as f64 / best
     );
-    let kinds: Vec<String> = spec.kinds.iter().map(ToString::to_string).collect();
+    let kinds: Vec<String> = spec.kinds.iter().filter(|k| **k != EstimatorKind::Dcnet).map(ToString::to_string).collect();
     let (best, median) = time(&|| {
         std::hint::black_box(run_protocol(&spec, &trajectories, &[], &hidden));
     });
@@ -458,5 +462,40 @@ fn bench(spec_path: &Path, repeat: usize, set: &[String]) -> Result<(), CliError
         kinds.join(", "),
         rayon::current_num_threads()
     );
+    bench_training(&spec, &dataset::generate(&spec, &trajectories, &hidden), training_batches).map_err(failure)
+}
+
+/// Training samples/s of the spec's model and batch size on each backend: one model on
+/// one thread, and one model per thread training at once (as `run` trains the error
+/// models side by side).
+fn bench_training(spec: &Spec, set: &TrainingSet, batches: usize) -> Result<(), TrainError> {
+    let threads = rayon::current_num_threads();
+    let error_model = *spec.error_models.last().unwrap_or(&ErrorModel::Em5);
+    let hidden = indicatif::ProgressBar::hidden();
+    let samples = |order: &[usize]| order.len().min(batches * spec.training.batch_size);
+    let run_model = |spec: &Spec, seed_offset: u64| -> Result<usize, TrainError> {
+        let mut spec = spec.clone();
+        spec.seed += seed_offset;
+        let order = train::epoch_order(&spec, set, error_model, 1);
+        let order = &order[..samples(&order)];
+        let mut state = train::State::new(&spec, error_model);
+        train::train_pass(&spec, set, error_model, &mut state, 1, order, &hidden)?;
+        Ok(order.len())
+    };
+    for backend in [Backend::Flex, Backend::NdArray] {
+        let mut spec = spec.clone();
+        spec.training.backend = backend;
+        let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a pool of one thread");
+        let clock = Instant::now();
+        let done = one_thread.install(|| run_model(&spec, 0))?;
+        let single = done as f64 / clock.elapsed().as_secs_f64();
+        let clock = Instant::now();
+        let done: usize = (0..threads as u64).into_par_iter().map(|i| run_model(&spec, i)).sum::<Result<usize, _>>()?;
+        let together = done as f64 / clock.elapsed().as_secs_f64();
+        println!(
+            "training {error_model} on {backend}: {single:.0} samples/s with one model on one thread, {together:.0} samples/s with {threads} models on {threads} threads (batch {}, {} conv channels, FC {:?})",
+            spec.training.batch_size, spec.model.conv_channels, spec.model.fc_widths
+        );
+    }
     Ok(())
 }

@@ -10,7 +10,7 @@
 use crate::dataset::{INPUT_ROWS, TARGET_ROWS};
 use crate::estimators::{Correction, ErrorModel};
 use crate::spec::ModelSpec;
-use burn::module::{Module, Param};
+use burn::module::{Module, Param, ParamId};
 use burn::nn::conv::{Conv1d, Conv1dConfig, Conv2d, Conv2dConfig};
 use burn::nn::{Initializer, Linear, LinearConfig};
 use burn::tensor::activation::{leaky_relu, tanh};
@@ -71,16 +71,17 @@ impl Dcnet {
     /// A freshly initialised DCNet for `error_model` on windows of `window` samples:
     /// every weight and bias uniform in ±1/√fan_in (PyTorch's default), drawn from `rng`.
     pub fn new(spec: &ModelSpec, error_model: ErrorModel, window: usize, device: &Device, rng: &mut ChaCha8Rng) -> Self {
+        let params = &mut ParamSource { rng, next_id: 0 };
         let channels = spec.conv_channels;
         let kernel = spec.conv1d_kernel_size;
         let conv1d = vec![
-            conv1d(TARGET_ROWS, channels, kernel, device, rng),
-            conv1d(channels, channels, kernel, device, rng),
+            conv1d(TARGET_ROWS, channels, kernel, device, params),
+            conv1d(channels, channels, kernel, device, params),
         ];
         let conv2d = vec![
-            conv2d(1, channels, [3, 1], device, rng),
-            conv2d(channels, channels, [1, 1], device, rng),
-            conv2d(channels, channels, [1, 1], device, rng),
+            conv2d(1, channels, [3, 1], device, params),
+            conv2d(channels, channels, [1, 1], device, params),
+            conv2d(channels, channels, [1, 1], device, params),
         ];
         // 1D head: time shrinks by kernel − 1 per conv. 2D head: rows 6 → 3 → 2 → 1
         // (the first conv pairs row i with row i + 3), time shrinks by 1 per conv.
@@ -88,10 +89,10 @@ impl Dcnet {
         let flat_2d = channels * (window - 3);
         let [w1, w2, w3] = spec.fc_widths;
         let fc = vec![
-            linear(flat_1d + flat_2d, w1, device, rng),
-            linear(w1, w2, device, rng),
-            linear(w2, w3, device, rng),
-            linear(w3, error_model.term_count(), device, rng),
+            linear(flat_1d + flat_2d, w1, device, params),
+            linear(w1, w2, device, params),
+            linear(w2, w3, device, params),
+            linear(w3, error_model.term_count(), device, params),
         ];
         Self { conv1d, conv2d, fc }
     }
@@ -174,34 +175,47 @@ pub fn correction(terms: &[f32], error_model: ErrorModel) -> Correction {
     }
 }
 
-/// Uniform values in ±`bound`.
-fn uniform<const D: usize>(shape: [usize; D], bound: f64, device: &Device, rng: &mut ChaCha8Rng) -> Param<Tensor<D>> {
-    let values: Vec<f32> = (0..shape.iter().product()).map(|_| rng.random_range(-bound..bound) as f32).collect();
-    Param::from_data(TensorData::new(values, shape), device)
+/// Draws the parameters of one model: uniform values from the model's generator, and
+/// parameter ids numbered from 1 in creation order, so that saved weights and optimizer
+/// state are the same bytes in every run.
+struct ParamSource<'a> {
+    rng: &'a mut ChaCha8Rng,
+    next_id: u64,
 }
 
-fn conv1d(channels_in: usize, channels_out: usize, kernel: usize, device: &Device, rng: &mut ChaCha8Rng) -> Conv1d {
+impl ParamSource<'_> {
+    /// Uniform values in ±`bound`.
+    fn uniform<const D: usize>(&mut self, shape: [usize; D], bound: f64, device: &Device) -> Param<Tensor<D>> {
+        let values: Vec<f32> = (0..shape.iter().product()).map(|_| self.rng.random_range(-bound..bound) as f32).collect();
+        let tensor = Tensor::from_data(TensorData::new(values, shape), device);
+        let tensor = if device.is_autodiff() { tensor.require_grad() } else { tensor };
+        self.next_id += 1;
+        Param::initialized(ParamId::from(self.next_id), tensor)
+    }
+}
+
+fn conv1d(channels_in: usize, channels_out: usize, kernel: usize, device: &Device, params: &mut ParamSource) -> Conv1d {
     let mut conv = Conv1dConfig::new(channels_in, channels_out, kernel).with_initializer(Initializer::Zeros).init(device);
     let bound = 1.0 / ((channels_in * kernel) as f64).sqrt();
-    conv.weight = uniform([channels_out, channels_in, kernel], bound, device, rng);
-    conv.bias = Some(uniform([channels_out], bound, device, rng));
+    conv.weight = params.uniform([channels_out, channels_in, kernel], bound, device);
+    conv.bias = Some(params.uniform([channels_out], bound, device));
     conv
 }
 
 /// A 2×2 convolution with the given (row, time) dilation.
-fn conv2d(channels_in: usize, channels_out: usize, dilation: [usize; 2], device: &Device, rng: &mut ChaCha8Rng) -> Conv2d {
+fn conv2d(channels_in: usize, channels_out: usize, dilation: [usize; 2], device: &Device, params: &mut ParamSource) -> Conv2d {
     let mut conv =
         Conv2dConfig::new([channels_in, channels_out], [2, 2]).with_dilation(dilation).with_initializer(Initializer::Zeros).init(device);
     let bound = 1.0 / ((channels_in * 4) as f64).sqrt();
-    conv.weight = uniform([channels_out, channels_in, 2, 2], bound, device, rng);
-    conv.bias = Some(uniform([channels_out], bound, device, rng));
+    conv.weight = params.uniform([channels_out, channels_in, 2, 2], bound, device);
+    conv.bias = Some(params.uniform([channels_out], bound, device));
     conv
 }
 
-fn linear(d_input: usize, d_output: usize, device: &Device, rng: &mut ChaCha8Rng) -> Linear {
+fn linear(d_input: usize, d_output: usize, device: &Device, params: &mut ParamSource) -> Linear {
     let mut linear = LinearConfig::new(d_input, d_output).with_initializer(Initializer::Zeros).init(device);
     let bound = 1.0 / (d_input as f64).sqrt();
-    linear.weight = uniform([d_input, d_output], bound, device, rng);
-    linear.bias = Some(uniform([d_output], bound, device, rng));
+    linear.weight = params.uniform([d_input, d_output], bound, device);
+    linear.bias = Some(params.uniform([d_output], bound, device));
     linear
 }

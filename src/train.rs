@@ -174,28 +174,32 @@ pub fn mean_loss(spec: &Spec, model: &Dcnet, error_model: ErrorModel, set: &Trai
     total / indices.len().max(1) as f64
 }
 
-/// Runs one epoch on `state`. `progress` advances once per batch.
-pub fn run_epoch(
+/// The training windows in the order epoch `epoch` visits them.
+pub fn epoch_order(spec: &Spec, set: &TrainingSet, error_model: ErrorModel, epoch: usize) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..set.len()).filter(|&i| !set.is_validation[i]).collect();
+    order.shuffle(&mut task_rng(spec.seed, &[&"dcnet-shuffle", &error_model, &epoch]));
+    order
+}
+
+/// One optimizer step per batch of `order`, as epoch `epoch` (which seeds the dropout
+/// masks). Returns the sum of the batch losses weighted by batch size. `progress`
+/// advances once per batch.
+pub fn train_pass(
     spec: &Spec,
     set: &TrainingSet,
     error_model: ErrorModel,
     state: &mut State,
+    epoch: usize,
+    order: &[usize],
     progress: &ProgressBar,
-) -> Result<(), TrainError> {
-    let epoch = state.next_epoch();
-    let clock = Instant::now();
+) -> Result<f64, TrainError> {
     let device = spec.training.backend.device().autodiff();
     let settings = Settings::from(&spec.model);
-    let (mut train, validation): (Vec<usize>, Vec<usize>) = (0..set.len()).partition(|&i| !set.is_validation[i]);
-    if train.is_empty() {
-        return Err(TrainError::NoData { error_model });
-    }
-    train.shuffle(&mut task_rng(spec.seed, &[&"dcnet-shuffle", &error_model, &epoch]));
     let mut dropout_rng = task_rng(spec.seed, &[&"dcnet-dropout", &error_model, &epoch]);
     let learning_rate = spec.training.learning_rate(error_model);
     let mut loss_sum = 0.0;
     let mut model = state.model.clone();
-    for (batch, indices) in train.chunks(spec.training.batch_size).enumerate() {
+    for (batch, indices) in order.chunks(spec.training.batch_size).enumerate() {
         let (input, target) = batch_tensors(set, indices, &device);
         let terms = model.forward(input.clone(), &settings, Some(&mut dropout_rng));
         let loss = closed_loop_loss(terms, error_model, dvl_rows(&input), target);
@@ -208,17 +212,37 @@ pub fn run_epoch(
         model = state.optimizer.step(learning_rate, model, grads);
         progress.inc(1);
     }
-    let plain = model.valid();
+    state.model = model;
+    Ok(loss_sum)
+}
+
+/// Runs the next epoch on `state`: training, then the validation loss, and keeps the
+/// weights if they are the best so far.
+pub fn run_epoch(
+    spec: &Spec,
+    set: &TrainingSet,
+    error_model: ErrorModel,
+    state: &mut State,
+    progress: &ProgressBar,
+) -> Result<(), TrainError> {
+    let epoch = state.next_epoch();
+    let clock = Instant::now();
+    let order = epoch_order(spec, set, error_model, epoch);
+    if order.is_empty() {
+        return Err(TrainError::NoData { error_model });
+    }
+    let loss_sum = train_pass(spec, set, error_model, state, epoch, &order, progress)?;
+    let validation: Vec<usize> = (0..set.len()).filter(|&i| set.is_validation[i]).collect();
+    let plain = state.model.valid();
     let validation_loss = if validation.is_empty() { f64::NAN } else { mean_loss(spec, &plain, error_model, set, &validation) };
-    let train_loss = loss_sum / train.len() as f64;
+    let train_loss = loss_sum / order.len() as f64;
     let seconds = clock.elapsed().as_secs_f64();
-    state.history.push(EpochRecord { epoch, train_loss, validation_loss, seconds, samples_per_s: train.len() as f64 / seconds });
+    state.history.push(EpochRecord { epoch, train_loss, validation_loss, seconds, samples_per_s: order.len() as f64 / seconds });
     // Without validation windows the last epoch counts as the best.
     let score = if validation.is_empty() { train_loss } else { validation_loss };
     if state.best.as_ref().is_none_or(|(_, best, _)| score < *best) {
         state.best = Some((epoch, score, plain));
     }
-    state.model = model;
     Ok(())
 }
 
