@@ -262,3 +262,79 @@ fn read_model(path: &Path, spec: &Spec, error_model: ErrorModel, device: &Device
     let skeleton = Dcnet::new(&spec.model, error_model, spec.dataset.window, device, &mut rng);
     skeleton.try_load_record(record).map_err(|e| io_error(path, format!("{e:?}")))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use indicatif::ProgressBar;
+
+    fn quick_spec(overrides: &[&str]) -> Spec {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quick.toml");
+        let overrides: Vec<String> = overrides.iter().map(ToString::to_string).collect();
+        crate::spec::load(&path, &overrides).unwrap()
+    }
+
+    fn bytes(model: &Dcnet) -> Vec<u8> {
+        model.clone().into_record().into_bytes().unwrap().to_vec()
+    }
+
+    #[test]
+    fn a_training_resumed_from_a_checkpoint_ends_as_an_uninterrupted_one() {
+        let spec = quick_spec(&["training.epochs=4"]);
+        let trajectories = crate::data::load_trajectories(&spec).unwrap();
+        let set = crate::dataset::generate(&spec, &trajectories, &ProgressBar::hidden());
+        let em = ErrorModel::Em5;
+        let hidden = ProgressBar::hidden();
+
+        let mut state = State::new(&spec, em);
+        for _ in 0..4 {
+            train::run_epoch(&spec, &set, em, &mut state, &hidden).unwrap();
+        }
+        let uninterrupted = state.finish(em);
+
+        let dir = tempfile::tempdir().unwrap();
+        let store = ModelStore::new(dir.path().to_path_buf());
+        let key = key(&spec, em).unwrap();
+        let mut state = State::new(&spec, em);
+        for _ in 0..2 {
+            train::run_epoch(&spec, &set, em, &mut state, &hidden).unwrap();
+        }
+        store.save_checkpoint(&state, em, &key).unwrap();
+        drop(state);
+        let mut resumed = store.resume(&spec, em, &key).unwrap();
+        assert_eq!(resumed.next_epoch(), 3);
+        for _ in 0..2 {
+            train::run_epoch(&spec, &set, em, &mut resumed, &hidden).unwrap();
+        }
+        let resumed = resumed.finish(em);
+        assert_eq!(resumed.best_epoch, uninterrupted.best_epoch);
+        let losses = |t: &Trained| t.history.iter().map(|e| (e.train_loss, e.validation_loss)).collect::<Vec<_>>();
+        assert_eq!(losses(&resumed), losses(&uninterrupted));
+        assert!(bytes(&resumed.model) == bytes(&uninterrupted.model), "resumed weights differ");
+    }
+
+    #[test]
+    fn stored_models_are_reused_and_keyed_by_their_training_inputs() {
+        let spec = quick_spec(&["training.epochs=2"]);
+        let trajectories = crate::data::load_trajectories(&spec).unwrap();
+        let set = crate::dataset::generate(&spec, &trajectories, &ProgressBar::hidden());
+        let dir = tempfile::tempdir().unwrap();
+        let store = ModelStore::new(dir.path().to_path_buf());
+        let hidden = ProgressBar::hidden();
+        let (first, provenance) = train_cached(&spec, &set, ErrorModel::Em4, &store, &hidden).unwrap();
+        assert_eq!(provenance, Provenance::Trained);
+        let (again, provenance) = train_cached(&spec, &set, ErrorModel::Em4, &store, &hidden).unwrap();
+        assert_eq!(provenance, Provenance::Reused);
+        assert!(bytes(&again.model) == bytes(&first.model));
+        assert_eq!(again.history, first.history);
+
+        // Monte Carlo and evaluation settings do not touch the key; training settings do.
+        let key_of = |overrides: &[&str]| key(&quick_spec(&[&["training.epochs=2"], overrides].concat()), ErrorModel::Em4).unwrap();
+        let base = key_of(&[]);
+        assert_eq!(base, key_of(&["calibration.monte_carlo_runs=3", "evaluation.trajectories=[\"S3\"]"]));
+        assert_eq!(base, key_of(&["training.checkpoint_every_epochs=1", "training.learning_rate.EM5=1e-2"]));
+        for changed in ["training.learning_rate.EM4=1e-3", "training.batch_size=32", "model.dropout=0.1", "seed=8", "grid.noise_cm_s.values=[0.03]"] {
+            assert_ne!(base, key_of(&[changed]), "{changed} must change the key");
+        }
+    }
+}

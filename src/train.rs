@@ -250,3 +250,121 @@ pub fn run_epoch(
 pub fn batches_per_epoch(spec: &Spec, set: &TrainingSet) -> usize {
     (set.len() - set.validation_len()).div_ceil(spec.training.batch_size)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::estimators::Estimator;
+
+    fn quick_spec(overrides: &[&str]) -> Spec {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quick.toml");
+        let overrides: Vec<String> = overrides.iter().map(ToString::to_string).collect();
+        crate::spec::load(&path, &overrides).unwrap()
+    }
+
+    #[test]
+    fn closed_loop_loss_matches_a_hand_computed_value() {
+        let device = Device::flex();
+        // One window of two samples: x is 1 % too large, z carries a 0.7 cm/s bias.
+        let dvl = Tensor::<3>::from_data(TensorData::new(vec![1.01f32, 2.02, 0.0, 0.0, 0.007, 0.007], [1, 3, 2]), &device);
+        let truth = Tensor::<3>::from_data(TensorData::new(vec![1.0f32, 2.0, 0.0, 0.0, 0.0, 0.0], [1, 3, 2]), &device);
+        // EM4 removes a 0.5 cm/s z bias only: errors x 1 and 2 cm/s, z 0.2 cm/s.
+        // Loss = mean over samples of the sum over axes = ((1 + 0.04) + (4 + 0.04)) / 2.
+        let terms = Tensor::<2>::from_data(TensorData::new(vec![0.0f32, 0.0, 0.5], [1, 3]), &device);
+        let loss: f32 = closed_loop_loss(terms, ErrorModel::Em4, dvl.clone(), truth.clone()).into_scalar();
+        assert!((loss - 2.54).abs() < 1e-4, "loss {loss}");
+        // EM5 with the true terms corrects exactly.
+        let terms = Tensor::<2>::from_data(TensorData::new(vec![1.0f32, 1.0, 1.0, 0.0, 0.0, 0.7], [1, 6]), &device);
+        let loss: f32 = closed_loop_loss(terms, ErrorModel::Em5, dvl, truth).into_scalar();
+        assert!(loss < 1e-6, "loss {loss}");
+    }
+
+    /// A training set with one error combination and no noise: the network has to
+    /// learn constant terms, 1 % scale on every axis and the z bias of 0.7 cm/s beams.
+    fn known_answer_spec() -> Spec {
+        quick_spec(&[
+            "grid.scale_pct.values=[1.0]",
+            "grid.bias_cm_s.values=[0.7]",
+            "grid.noise_cm_s.values=[0.0]",
+            "sensors.gnss_noise_cm_s=0.0",
+            "dataset.trajectories=[\"S1\", \"S2\", \"S3\"]",
+            "model.dropout=0.0",
+            "training.epochs=60",
+            "training.batch_size=32",
+            "training.learning_rate.EM5=1e-3",
+        ])
+    }
+
+    #[test]
+    fn training_learns_a_known_scale_and_bias() {
+        let spec = known_answer_spec();
+        let trajectories = crate::data::load_trajectories(&spec).unwrap();
+        let set = crate::dataset::generate(&spec, &trajectories, &ProgressBar::hidden());
+        let mut state = State::new(&spec, ErrorModel::Em5);
+        while state.next_epoch() <= spec.training.epochs {
+            run_epoch(&spec, &set, ErrorModel::Em5, &mut state, &ProgressBar::hidden()).unwrap();
+        }
+        let trained = state.finish(ErrorModel::Em5);
+        let estimator = crate::estimators::DcnetEstimator {
+            model: trained.model,
+            error_model: ErrorModel::Em5,
+            window: spec.dataset.window,
+            settings: Settings::from(&spec.model),
+            device: spec.training.backend.device(),
+        };
+        // Estimate on the (unseen) calibration trajectory, noise-free.
+        let truth = &trajectories[4].ground_truth;
+        let geometry = crate::noise::BeamGeometry::janus_x(20.0);
+        let errors = crate::noise::SensorErrors::from_spec_units(1.0, 0.7, 0.0);
+        let measured = crate::noise::measure_trajectory(&geometry, truth, &errors, 0.0, &mut task_rng(1, &[]));
+        let correction = estimator.estimate(&measured.dvl[..100], &measured.gnss[..100]);
+        let z_bias = 0.7 / 20f64.to_radians().cos();
+        for axis in 0..3 {
+            assert!((correction.scale[axis] * 100.0 - 1.0).abs() < 0.15, "scale {:?} %", correction.scale.map(|k| k * 100.0));
+        }
+        assert!(correction.bias_m_s[0].abs() * 100.0 < 0.15, "bias {:?}", correction.bias_m_s);
+        assert!(correction.bias_m_s[1].abs() * 100.0 < 0.15, "bias {:?}", correction.bias_m_s);
+        assert!((correction.bias_m_s[2] * 100.0 - z_bias).abs() < 0.15, "bias {:?}", correction.bias_m_s);
+    }
+
+    fn weights(model: &Dcnet) -> Vec<u8> {
+        model.clone().into_record().into_bytes().unwrap().to_vec()
+    }
+
+    #[test]
+    fn one_and_two_threads_train_identical_weights() {
+        let spec = quick_spec(&["training.epochs=2", "training.batch_size=256"]);
+        let trajectories = crate::data::load_trajectories(&spec).unwrap();
+        let set = crate::dataset::generate(&spec, &trajectories, &ProgressBar::hidden());
+        let train_with = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                let mut state = State::new(&spec, ErrorModel::Em5);
+                for _ in 0..2 {
+                    run_epoch(&spec, &set, ErrorModel::Em5, &mut state, &ProgressBar::hidden()).unwrap();
+                }
+                (weights(&state.model), state.history.iter().map(|e| (e.train_loss, e.validation_loss)).collect::<Vec<_>>())
+            })
+        };
+        let (one, history_one) = train_with(1);
+        let (two, history_two) = train_with(2);
+        assert!(one == two, "weights differ between 1 and 2 threads");
+        assert_eq!(history_one, history_two);
+        // And training moved the weights away from their initial values.
+        assert!(weights(&State::new(&spec, ErrorModel::Em5).model) != one);
+    }
+
+    #[test]
+    fn a_non_finite_loss_stops_training_with_the_model_and_epoch() {
+        let spec = quick_spec(&["training.learning_rate.EM3=1e30"]);
+        let trajectories = crate::data::load_trajectories(&spec).unwrap();
+        let set = crate::dataset::generate(&spec, &trajectories, &ProgressBar::hidden());
+        let mut state = State::new(&spec, ErrorModel::Em3);
+        let error = (0..spec.training.epochs)
+            .find_map(|_| run_epoch(&spec, &set, ErrorModel::Em3, &mut state, &ProgressBar::hidden()).err())
+            .expect("a learning rate of 1e30 diverges");
+        let message = error.to_string();
+        assert!(matches!(error, TrainError::NonFinite { error_model: ErrorModel::Em3, epoch: 1, .. }), "{message}");
+        assert!(message.starts_with("DCNet EM3: the training loss became"), "{message}");
+    }
+}

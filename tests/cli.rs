@@ -29,11 +29,23 @@ fn one_and_two_threads_write_identical_results() {
         );
         assert!(output.status.success(), "{}", stderr(&output));
     }
-    for table in TABLES {
-        let one = std::fs::read(project.path().join("out1/quick").join(table)).unwrap();
-        let two = std::fs::read(project.path().join("out2/quick").join(table)).unwrap();
-        assert!(one == two, "{table} differs between 1 and 2 threads");
+    let models: Vec<String> = std::fs::read_dir(project.path().join("out1/quick/models"))
+        .unwrap()
+        .map(|e| format!("models/{}", e.unwrap().file_name().to_string_lossy()))
+        .filter(|name| name.ends_with(".bin"))
+        .collect();
+    assert_eq!(models.len(), 5, "{models:?}");
+    for file in TABLES.iter().map(|t| t.to_string()).chain(models) {
+        let one = std::fs::read(project.path().join("out1/quick").join(&file)).unwrap();
+        let two = std::fs::read(project.path().join("out2/quick").join(&file)).unwrap();
+        assert!(one == two, "{file} differs between 1 and 2 threads");
     }
+    // training.parquet also holds wall times; its losses must agree.
+    let losses = |out: &str| {
+        let batch = read_parquet(&project.path().join(out).join("quick/training.parquet"));
+        (floats(&batch, "train_loss"), floats(&batch, "validation_loss"))
+    };
+    assert_eq!(losses("out1"), losses("out2"));
     let spec_one = std::fs::read_to_string(project.path().join("out1/quick/spec.toml")).unwrap();
     assert!(spec_one.contains("monte_carlo_runs = 20"));
 }
@@ -59,13 +71,25 @@ fn quick_run_prints_and_stores_both_tables() {
     assert!(text.contains("| DVL2 | floor (bound) |"), "{text}");
     let results = project.path().join("results/quick");
     let runs = read_parquet(&results.join("monte_carlo.parquet"));
-    // 3 runs × 2 DVLs × 7 estimators × (5 windows + 2 test trajectories).
-    assert_eq!(runs.num_rows(), 3 * 2 * 7 * (5 + 2));
+    // 3 runs × 2 DVLs × 12 estimators (baseline, 5 least squares, 5 DCNet, floor)
+    // × (5 windows + 2 test trajectories).
+    assert_eq!(runs.num_rows(), 3 * 2 * 12 * (5 + 2));
     let calibration = calibration_rows(&results);
-    assert_eq!(calibration.len(), 2 * 7 * 5);
-    assert_eq!(calibration.iter().filter(|r| r.selected).count(), 2 * 7);
+    assert_eq!(calibration.len(), 2 * 12 * 5);
+    assert_eq!(calibration.iter().filter(|r| r.selected).count(), 2 * 12);
     let evaluation = evaluation_rows(&results);
-    assert_eq!(evaluation.len(), 2 * 7 * 2);
+    assert_eq!(evaluation.len(), 2 * 12 * 2);
+    // DCNet EM5 clearly beats the baseline on the low-noise DVL.
+    for trajectory in ["S3", "S4"] {
+        let em5 = evaluation
+            .iter()
+            .find(|r| r.dvl == "DVL2" && r.estimator == "dcnet" && r.error_model.as_deref() == Some("EM5") && r.at == trajectory)
+            .unwrap();
+        assert!(em5.improvement_pct.unwrap() > 40.0, "DCNet EM5 on {trajectory}: {em5:?}");
+    }
+    let training = read_parquet(&results.join("training.parquet"));
+    assert_eq!(training.num_rows(), 5 * 20, "5 models × 20 epochs");
+    assert_eq!(bools(&training, "is_best").iter().filter(|b| **b).count(), 5);
     // The improvement column is computed against the baseline row of the same cell.
     for row in &evaluation {
         let baseline = evaluation
@@ -81,12 +105,61 @@ fn quick_run_prints_and_stores_both_tables() {
     assert_eq!(manifest["name"], "quick");
     assert_eq!(manifest["spec_sha256"].as_str().unwrap().len(), 64);
     assert!(manifest["threads"].as_u64().unwrap() >= 1);
+    assert_eq!(manifest["backend"], "flex");
     let leftovers: Vec<_> = std::fs::read_dir(&results)
         .unwrap()
         .map(|e| e.unwrap().file_name())
         .filter(|n| n.to_string_lossy().starts_with('.'))
         .collect();
     assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+}
+
+/// The lines of a run's stderr that say how each DCNet came to be.
+fn provenance(output: &std::process::Output) -> Vec<String> {
+    stderr(output)
+        .lines()
+        .filter(|l| l.starts_with("DCNet EM"))
+        .map(|l| l.split(';').next().unwrap().to_string())
+        .collect()
+}
+
+#[test]
+fn trained_models_are_reused_until_a_training_setting_changes() {
+    let project = project(false);
+    let run = |extra: &[&str]| {
+        let mut args = vec!["run", "experiments/quick.toml", "--set", "training.epochs=3"];
+        args.extend(extra);
+        let output = dcnet(project.path(), &args);
+        assert!(output.status.success(), "{}", stderr(&output));
+        provenance(&output)
+    };
+    let models = ["EM1", "EM2", "EM3", "EM4", "EM5"];
+    assert_eq!(run(&[]), models.map(|m| format!("DCNet {m}: trained")));
+    let reused = |m: &str| format!("DCNet {m}: reused from results/quick/models");
+    assert_eq!(run(&["--set", "calibration.monte_carlo_runs=4"]), models.map(reused));
+    let lines = run(&["--set", "training.learning_rate.EM5=2e-4"]);
+    assert_eq!(lines[..4], models[..4].iter().map(|m| reused(m)).collect::<Vec<_>>());
+    assert_eq!(lines[4], "DCNet EM5: trained");
+}
+
+#[test]
+fn a_diverging_model_is_reported_and_the_others_are_kept() {
+    let project = project(false);
+    let output = dcnet(
+        project.path(),
+        &["run", "experiments/quick.toml", "--set", "training.learning_rate.EM3=1e30"],
+    );
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    let message = stderr(&output);
+    assert!(message.contains("error: DCNet EM3: the training loss became"), "{message}");
+    assert!(message.contains("at epoch 1, batch"), "{message}");
+    let evaluation = evaluation_rows(&project.path().join("results/quick"));
+    let dcnet_models: Vec<String> = evaluation
+        .iter()
+        .filter(|r| r.estimator == "dcnet" && r.dvl == "DVL1" && r.at == "S3")
+        .map(|r| r.error_model.clone().unwrap())
+        .collect();
+    assert_eq!(dcnet_models, ["EM1", "EM2", "EM4", "EM5"]);
 }
 
 /// Writes quick.toml with `from` replaced by `to` and returns the 1-based line of `to`.
