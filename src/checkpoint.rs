@@ -27,7 +27,10 @@ pub enum CheckpointError {
 }
 
 fn io_error(path: &Path, error: impl std::fmt::Display) -> CheckpointError {
-    CheckpointError::Io { path: path.to_path_buf(), message: error.to_string() }
+    CheckpointError::Io {
+        path: path.to_path_buf(),
+        message: error.to_string(),
+    }
 }
 
 /// Everything a trained model depends on, hashed into its key.
@@ -62,9 +65,14 @@ pub fn key(spec: &Spec, error_model: ErrorModel) -> Result<String, CheckpointErr
         let origin = match &source.origin {
             Origin::File { path, samples } => {
                 let bytes = std::fs::read(path).map_err(|e| io_error(path, e))?;
-                format!("sha256 {} samples {samples:?}", crate::data::fetch::sha256_hex(&bytes))
+                format!(
+                    "sha256 {} samples {samples:?}",
+                    crate::data::fetch::sha256_hex(&bytes)
+                )
             }
-            Origin::Synthetic { samples } => format!("synthetic {samples} {:?}", resolved.data.synthetic),
+            Origin::Synthetic { samples } => {
+                format!("synthetic {samples} {:?}", resolved.data.synthetic)
+            }
         };
         trajectories.push((source.name.clone(), origin));
     }
@@ -124,16 +132,34 @@ impl ModelStore {
     }
 
     /// The stored model with this key, if there is one.
-    pub fn load(&self, spec: &Spec, error_model: ErrorModel, key: &str) -> Result<Option<Trained>, CheckpointError> {
+    pub fn load(
+        &self,
+        spec: &Spec,
+        error_model: ErrorModel,
+        key: &str,
+    ) -> Result<Option<Trained>, CheckpointError> {
         let stem = self.stem(error_model, key);
         let summary_path = stem.with_extension("json");
-        let Ok(text) = std::fs::read_to_string(&summary_path) else { return Ok(None) };
-        let summary: Summary = serde_json::from_str(&text).map_err(|e| io_error(&summary_path, e))?;
+        let Ok(text) = std::fs::read_to_string(&summary_path) else {
+            return Ok(None);
+        };
+        let summary: Summary =
+            serde_json::from_str(&text).map_err(|e| io_error(&summary_path, e))?;
         if summary.key != key {
             return Ok(None);
         }
-        let model = read_model(&stem.with_extension("bin"), spec, error_model, &spec.training.backend.device())?;
-        Ok(Some(Trained { error_model, model, history: summary.history, best_epoch: summary.best_epoch }))
+        let model = read_model(
+            &stem.with_extension("bin"),
+            spec,
+            error_model,
+            &spec.training.backend.device(),
+        )?;
+        Ok(Some(Trained {
+            error_model,
+            model,
+            history: summary.history,
+            best_epoch: summary.best_epoch,
+        }))
     }
 
     /// Stores a finished model and removes its checkpoint.
@@ -148,7 +174,13 @@ impl ModelStore {
             history: trained.history.clone(),
         };
         let path = stem.with_extension("json");
-        write_atomic(&path, serde_json::to_string_pretty(&summary).expect("summary serializes").as_bytes()).map_err(|e| io_error(&path, e))?;
+        write_atomic(
+            &path,
+            serde_json::to_string_pretty(&summary)
+                .expect("summary serializes")
+                .as_bytes(),
+        )
+        .map_err(|e| io_error(&path, e))?;
         let checkpoint = stem.with_extension("checkpoint");
         if checkpoint.exists() {
             std::fs::remove_dir_all(&checkpoint).map_err(|e| io_error(&checkpoint, e))?;
@@ -157,13 +189,21 @@ impl ModelStore {
     }
 
     /// Writes the state after its last epoch as the checkpoint of `key`.
-    pub fn save_checkpoint(&self, state: &State, error_model: ErrorModel, key: &str) -> Result<(), CheckpointError> {
+    pub fn save_checkpoint(
+        &self,
+        state: &State,
+        error_model: ErrorModel,
+        key: &str,
+    ) -> Result<(), CheckpointError> {
         let folder = self.stem(error_model, key).with_extension("checkpoint");
         std::fs::create_dir_all(&folder).map_err(|e| io_error(&folder, e))?;
         let epoch = state.history.len();
         write_model(&folder.join(format!("epoch-{epoch}.model")), &state.model)?;
         let optimizer_path = folder.join(format!("epoch-{epoch}.optimizer"));
-        let bytes = state.optimizer.into_bytes().map_err(|e| io_error(&optimizer_path, format!("{e:?}")))?;
+        let bytes = state
+            .optimizer
+            .into_bytes()
+            .map_err(|e| io_error(&optimizer_path, format!("{e:?}")))?;
         write_atomic(&optimizer_path, &bytes).map_err(|e| io_error(&optimizer_path, e))?;
         if let Some((_, _, best)) = &state.best {
             write_model(&folder.join(format!("epoch-{epoch}.best")), best)?;
@@ -175,9 +215,18 @@ impl ModelStore {
             history: state.history.clone(),
         };
         let path = folder.join("state.json");
-        write_atomic(&path, serde_json::to_string(&record).expect("state serializes").as_bytes()).map_err(|e| io_error(&path, e))?;
+        write_atomic(
+            &path,
+            serde_json::to_string(&record)
+                .expect("state serializes")
+                .as_bytes(),
+        )
+        .map_err(|e| io_error(&path, e))?;
         // Older epochs are superseded once state.json names this one.
-        for entry in std::fs::read_dir(&folder).map_err(|e| io_error(&folder, e))?.flatten() {
+        for entry in std::fs::read_dir(&folder)
+            .map_err(|e| io_error(&folder, e))?
+            .flatten()
+        {
             let name = entry.file_name().to_string_lossy().into_owned();
             if name.starts_with("epoch-") && !name.starts_with(&format!("epoch-{epoch}.")) {
                 std::fs::remove_file(entry.path()).map_err(|e| io_error(&entry.path(), e))?;
@@ -187,24 +236,51 @@ impl ModelStore {
     }
 
     /// The training state of the checkpoint of `key`, or a fresh one.
-    pub fn resume(&self, spec: &Spec, error_model: ErrorModel, key: &str) -> Result<State, CheckpointError> {
+    pub fn resume(
+        &self,
+        spec: &Spec,
+        error_model: ErrorModel,
+        key: &str,
+    ) -> Result<State, CheckpointError> {
         let folder = self.stem(error_model, key).with_extension("checkpoint");
         let state_path = folder.join("state.json");
-        let Ok(text) = std::fs::read_to_string(&state_path) else { return Ok(State::new(spec, error_model)) };
-        let record: CheckpointState = serde_json::from_str(&text).map_err(|e| io_error(&state_path, e))?;
+        let Ok(text) = std::fs::read_to_string(&state_path) else {
+            return Ok(State::new(spec, error_model));
+        };
+        let record: CheckpointState =
+            serde_json::from_str(&text).map_err(|e| io_error(&state_path, e))?;
         let epoch = record.epoch;
         let device = spec.training.backend.device();
-        let model = read_model(&folder.join(format!("epoch-{epoch}.model")), spec, error_model, &device.clone().autodiff())?;
+        let model = read_model(
+            &folder.join(format!("epoch-{epoch}.model")),
+            spec,
+            error_model,
+            &device.clone().autodiff(),
+        )?;
         let optimizer_path = folder.join(format!("epoch-{epoch}.optimizer"));
         let bytes = std::fs::read(&optimizer_path).map_err(|e| io_error(&optimizer_path, e))?;
-        let optimizer = train::optimizer(spec).from_bytes(Bytes::from_bytes_vec(bytes)).map_err(|e| io_error(&optimizer_path, format!("{e:?}")))?;
+        let optimizer = train::optimizer(spec)
+            .from_bytes(Bytes::from_bytes_vec(bytes))
+            .map_err(|e| io_error(&optimizer_path, format!("{e:?}")))?;
         let best = match (record.best_epoch, record.best_score) {
-            (Some(best_epoch), Some(score)) => {
-                Some((best_epoch, score, read_model(&folder.join(format!("epoch-{epoch}.best")), spec, error_model, &device)?))
-            }
+            (Some(best_epoch), Some(score)) => Some((
+                best_epoch,
+                score,
+                read_model(
+                    &folder.join(format!("epoch-{epoch}.best")),
+                    spec,
+                    error_model,
+                    &device,
+                )?,
+            )),
             _ => None,
         };
-        Ok(State { model, optimizer, best, history: record.history })
+        Ok(State {
+            model,
+            optimizer,
+            best,
+            history: record.history,
+        })
     }
 }
 
@@ -250,17 +326,35 @@ pub fn train_cached(
 }
 
 fn write_model(path: &Path, model: &Dcnet) -> Result<(), CheckpointError> {
-    let bytes = model.clone().into_record().into_bytes().map_err(|e| io_error(path, format!("{e:?}")))?;
+    let bytes = model
+        .clone()
+        .into_record()
+        .into_bytes()
+        .map_err(|e| io_error(path, format!("{e:?}")))?;
     write_atomic(path, &bytes).map_err(|e| io_error(path, e))
 }
 
-fn read_model(path: &Path, spec: &Spec, error_model: ErrorModel, device: &Device) -> Result<Dcnet, CheckpointError> {
+fn read_model(
+    path: &Path,
+    spec: &Spec,
+    error_model: ErrorModel,
+    device: &Device,
+) -> Result<Dcnet, CheckpointError> {
     let bytes = std::fs::read(path).map_err(|e| io_error(path, e))?;
-    let record = ModuleRecord::from_bytes(Bytes::from_bytes_vec(bytes)).map_err(|e| io_error(path, format!("{e:?}")))?;
+    let record = ModuleRecord::from_bytes(Bytes::from_bytes_vec(bytes))
+        .map_err(|e| io_error(path, format!("{e:?}")))?;
     // The skeleton's own weights are all overwritten by the record.
     let mut rng = crate::rng::task_rng(0, &[&"skeleton"]);
-    let skeleton = Dcnet::new(&spec.model, error_model, spec.dataset.window, device, &mut rng);
-    skeleton.try_load_record(record).map_err(|e| io_error(path, format!("{e:?}")))
+    let skeleton = Dcnet::new(
+        &spec.model,
+        error_model,
+        spec.dataset.window,
+        device,
+        &mut rng,
+    );
+    skeleton
+        .try_load_record(record)
+        .map_err(|e| io_error(path, format!("{e:?}")))
 }
 
 #[cfg(test)]
@@ -308,9 +402,17 @@ mod tests {
         }
         let resumed = resumed.finish(em);
         assert_eq!(resumed.best_epoch, uninterrupted.best_epoch);
-        let losses = |t: &Trained| t.history.iter().map(|e| (e.train_loss, e.validation_loss)).collect::<Vec<_>>();
+        let losses = |t: &Trained| {
+            t.history
+                .iter()
+                .map(|e| (e.train_loss, e.validation_loss))
+                .collect::<Vec<_>>()
+        };
         assert_eq!(losses(&resumed), losses(&uninterrupted));
-        assert!(bytes(&resumed.model) == bytes(&uninterrupted.model), "resumed weights differ");
+        assert!(
+            bytes(&resumed.model) == bytes(&uninterrupted.model),
+            "resumed weights differ"
+        );
     }
 
     #[test]
@@ -321,19 +423,45 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let store = ModelStore::new(dir.path().to_path_buf());
         let hidden = ProgressBar::hidden();
-        let (first, provenance) = train_cached(&spec, &set, ErrorModel::Em4, &store, &hidden).unwrap();
+        let (first, provenance) =
+            train_cached(&spec, &set, ErrorModel::Em4, &store, &hidden).unwrap();
         assert_eq!(provenance, Provenance::Trained);
-        let (again, provenance) = train_cached(&spec, &set, ErrorModel::Em4, &store, &hidden).unwrap();
+        let (again, provenance) =
+            train_cached(&spec, &set, ErrorModel::Em4, &store, &hidden).unwrap();
         assert_eq!(provenance, Provenance::Reused);
         assert!(bytes(&again.model) == bytes(&first.model));
         assert_eq!(again.history, first.history);
 
         // Monte Carlo and evaluation settings do not touch the key; training settings do.
-        let key_of = |overrides: &[&str]| key(&quick_spec(&[&["training.epochs=2"], overrides].concat()), ErrorModel::Em4).unwrap();
+        let key_of = |overrides: &[&str]| {
+            key(
+                &quick_spec(&[&["training.epochs=2"], overrides].concat()),
+                ErrorModel::Em4,
+            )
+            .unwrap()
+        };
         let base = key_of(&[]);
-        assert_eq!(base, key_of(&["calibration.monte_carlo_runs=3", "evaluation.trajectories=[\"S3\"]"]));
-        assert_eq!(base, key_of(&["training.checkpoint_every_epochs=1", "training.learning_rate.EM5=1e-2"]));
-        for changed in ["training.learning_rate.EM4=1e-3", "training.batch_size=32", "model.dropout=0.1", "seed=8", "grid.noise_cm_s.values=[0.03]"] {
+        assert_eq!(
+            base,
+            key_of(&[
+                "calibration.monte_carlo_runs=3",
+                "evaluation.trajectories=[\"S3\"]"
+            ])
+        );
+        assert_eq!(
+            base,
+            key_of(&[
+                "training.checkpoint_every_epochs=1",
+                "training.learning_rate.EM5=1e-2"
+            ])
+        );
+        for changed in [
+            "training.learning_rate.EM4=1e-3",
+            "training.batch_size=32",
+            "model.dropout=0.1",
+            "seed=8",
+            "grid.noise_cm_s.values=[0.03]",
+        ] {
             assert_ne!(base, key_of(&[changed]), "{changed} must change the key");
         }
     }

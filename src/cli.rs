@@ -2,19 +2,19 @@
 //! reads a spec through [`crate::spec::load`], runs the stages it needs, and reports
 //! bad input (exit code 1) apart from failures while running (exit code 2).
 
+use crate::checkpoint::{ModelStore, Provenance, train_cached};
 use crate::data::{fetch, load_trajectories};
 use crate::dataset::{self, TrainingSet, window_starts};
+use crate::estimators::{ErrorModel, EstimatorKind};
 use crate::evaluate::run_protocol;
 use crate::progress::bar;
 use crate::results::{self, Manifest, StageSeconds};
 use crate::spec::{Origin, Spec, load};
-use crate::estimators::{ErrorModel, EstimatorKind};
 use crate::tables;
-use crate::checkpoint::{ModelStore, Provenance, train_cached};
 use crate::train::{self, Backend, TrainError, Trained};
-use rayon::prelude::*;
 use anyhow::Context;
 use clap::{Parser, Subcommand};
+use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::time::{Instant, SystemTime};
 
@@ -40,6 +40,9 @@ enum Command {
         /// Results go to OUT/<name>/
         #[arg(long, default_value = "results")]
         out: PathBuf,
+        /// burn CPU backend for DCNet, overriding training.backend: flex or ndarray
+        #[arg(long)]
+        backend: Option<String>,
         #[command(flatten)]
         overrides: Overrides,
     },
@@ -150,8 +153,14 @@ pub fn main() -> Result<(), CliError> {
         Command::Run {
             spec,
             out,
-            overrides,
-        } => run(&spec, &out, &overrides.set),
+            backend,
+            mut overrides,
+        } => {
+            if let Some(backend) = backend {
+                overrides.set.push(format!("training.backend={backend:?}"));
+            }
+            run(&spec, &out, &overrides.set)
+        }
         Command::Validate { spec, overrides } => validate(&spec, &overrides.set),
         Command::Data {
             command: DataCommand::Info { spec, overrides },
@@ -243,7 +252,11 @@ fn run(spec_path: &Path, out: &Path, set: &[String]) -> Result<(), CliError> {
 
 /// Trains one DCNet per error model of the spec, concurrently; a model that fails is
 /// reported and left out, the others go on.
-fn train_all(spec: &Spec, set: &TrainingSet, store: &ModelStore) -> (Vec<Trained>, Vec<TrainError>) {
+fn train_all(
+    spec: &Spec,
+    set: &TrainingSet,
+    store: &ModelStore,
+) -> (Vec<Trained>, Vec<TrainError>) {
     if !spec.kinds.contains(&EstimatorKind::Dcnet) {
         return (Vec::new(), Vec::new());
     }
@@ -252,7 +265,10 @@ fn train_all(spec: &Spec, set: &TrainingSet, store: &ModelStore) -> (Vec<Trained
         .error_models
         .par_iter()
         .map(|&error_model| {
-            let progress = bars.add(bar(spec.training.epochs * train::batches_per_epoch(spec, set), "DCNet"));
+            let progress = bars.add(bar(
+                spec.training.epochs * train::batches_per_epoch(spec, set),
+                "DCNet",
+            ));
             progress.set_message(format!("DCNet {error_model}"));
             let outcome = train_cached(spec, set, error_model, store, &progress);
             progress.finish_and_clear();
@@ -267,7 +283,9 @@ fn train_all(spec: &Spec, set: &TrainingSet, store: &ModelStore) -> (Vec<Trained
                 let best = &model.history[model.best_epoch - 1];
                 let how = match provenance {
                     Provenance::Trained => "trained".to_string(),
-                    Provenance::Resumed(epoch) => format!("resumed from the checkpoint of epoch {epoch}"),
+                    Provenance::Resumed(epoch) => {
+                        format!("resumed from the checkpoint of epoch {epoch}")
+                    }
                     Provenance::Reused => format!("reused from {}", store.folder.display()),
                 };
                 eprintln!(
@@ -426,7 +444,12 @@ fn fetch_data(dest: &Path, base_url: &str) -> Result<(), CliError> {
     Ok(())
 }
 
-fn bench(spec_path: &Path, repeat: usize, training_batches: usize, set: &[String]) -> Result<(), CliError> {
+fn bench(
+    spec_path: &Path,
+    repeat: usize,
+    training_batches: usize,
+    set: &[String],
+) -> Result<(), CliError> {
     let spec = load_spec(spec_path, set)?;
     let trajectories = load_trajectories(&spec).map_err(input)?;
     let repeat = repeat.max(1);
@@ -451,7 +474,12 @@ fn bench(spec_path: &Path, repeat: usize, training_batches: usize, set: &[String
         rayon::current_num_threads(),
         windows as f64 / best
     );
-    let kinds: Vec<String> = spec.kinds.iter().filter(|k| **k != EstimatorKind::Dcnet).map(ToString::to_string).collect();
+    let kinds: Vec<String> = spec
+        .kinds
+        .iter()
+        .filter(|k| **k != EstimatorKind::Dcnet)
+        .map(ToString::to_string)
+        .collect();
     let (best, median) = time(&|| {
         std::hint::black_box(run_protocol(&spec, &trajectories, &[], &hidden));
     });
@@ -462,7 +490,12 @@ fn bench(spec_path: &Path, repeat: usize, training_batches: usize, set: &[String
         kinds.join(", "),
         rayon::current_num_threads()
     );
-    bench_training(&spec, &dataset::generate(&spec, &trajectories, &hidden), training_batches).map_err(failure)
+    bench_training(
+        &spec,
+        &dataset::generate(&spec, &trajectories, &hidden),
+        training_batches,
+    )
+    .map_err(failure)
 }
 
 /// Training samples/s of the spec's model and batch size on each backend: one model on
@@ -485,12 +518,18 @@ fn bench_training(spec: &Spec, set: &TrainingSet, batches: usize) -> Result<(), 
     for backend in [Backend::Flex, Backend::NdArray] {
         let mut spec = spec.clone();
         spec.training.backend = backend;
-        let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a pool of one thread");
+        let one_thread = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .expect("a pool of one thread");
         let clock = Instant::now();
         let done = one_thread.install(|| run_model(&spec, 0))?;
         let single = done as f64 / clock.elapsed().as_secs_f64();
         let clock = Instant::now();
-        let done: usize = (0..threads as u64).into_par_iter().map(|i| run_model(&spec, i)).sum::<Result<usize, _>>()?;
+        let done: usize = (0..threads as u64)
+            .into_par_iter()
+            .map(|i| run_model(&spec, i))
+            .sum::<Result<usize, _>>()?;
         let together = done as f64 / clock.elapsed().as_secs_f64();
         println!(
             "training {error_model} on {backend}: {single:.0} samples/s with one model on one thread, {together:.0} samples/s with {threads} models on {threads} threads (batch {}, {} conv channels, FC {:?})",

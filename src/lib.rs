@@ -13,20 +13,20 @@
 //! 8. [`results`] and [`tables`]: Parquet files, manifest, and the printed tables;
 //! 9. [`cli`]: the subcommands that run the stages.
 
+pub mod checkpoint;
 pub mod cli;
 pub mod data;
 pub mod dataset;
 pub mod estimators;
-pub mod model;
-pub mod train;
-pub mod checkpoint;
 pub mod evaluate;
+pub mod model;
 pub mod noise;
 pub mod progress;
 pub mod results;
 pub mod rng;
 pub mod spec;
 pub mod tables;
+pub mod train;
 
 /// A velocity (or any xyz vector): x, y, z in m/s unless a name says otherwise.
 pub type Vec3 = [f64; 3];

@@ -42,7 +42,9 @@ impl FromStr for Activation {
         match s {
             "tanh" => Ok(Self::Tanh),
             "leaky_relu" => Ok(Self::LeakyRelu),
-            _ => Err(format!("unknown activation {s:?}; expected tanh or leaky_relu")),
+            _ => Err(format!(
+                "unknown activation {s:?}; expected tanh or leaky_relu"
+            )),
         }
     }
 }
@@ -63,14 +65,24 @@ pub struct Settings {
 
 impl From<&ModelSpec> for Settings {
     fn from(spec: &ModelSpec) -> Self {
-        Self { activation: spec.activation, leaky_relu_slope: spec.leaky_relu_slope, dropout: spec.dropout }
+        Self {
+            activation: spec.activation,
+            leaky_relu_slope: spec.leaky_relu_slope,
+            dropout: spec.dropout,
+        }
     }
 }
 
 impl Dcnet {
     /// A freshly initialised DCNet for `error_model` on windows of `window` samples:
     /// every weight and bias uniform in ±1/√fan_in (PyTorch's default), drawn from `rng`.
-    pub fn new(spec: &ModelSpec, error_model: ErrorModel, window: usize, device: &Device, rng: &mut ChaCha8Rng) -> Self {
+    pub fn new(
+        spec: &ModelSpec,
+        error_model: ErrorModel,
+        window: usize,
+        device: &Device,
+        rng: &mut ChaCha8Rng,
+    ) -> Self {
         let params = &mut ParamSource { rng, next_id: 0 };
         let channels = spec.conv_channels;
         let kernel = spec.conv1d_kernel_size;
@@ -99,7 +111,12 @@ impl Dcnet {
 
     /// `[batch, 6, time]` windows → `[batch, terms]`. Dropout is applied when
     /// `dropout_rng` is given (training), with masks drawn from it.
-    pub fn forward(&self, input: Tensor<3>, settings: &Settings, mut dropout_rng: Option<&mut ChaCha8Rng>) -> Tensor<2> {
+    pub fn forward(
+        &self,
+        input: Tensor<3>,
+        settings: &Settings,
+        mut dropout_rng: Option<&mut ChaCha8Rng>,
+    ) -> Tensor<2> {
         let [batch, rows, time] = input.dims();
         debug_assert_eq!(rows, INPUT_ROWS);
         let slope = settings.leaky_relu_slope;
@@ -143,7 +160,9 @@ fn dropout(x: Tensor<2>, p: f64, rng: &mut ChaCha8Rng) -> Tensor<2> {
     }
     let [rows, cols] = x.dims();
     let keep = (1.0 / (1.0 - p)) as f32;
-    let mask: Vec<f32> = (0..rows * cols).map(|_| if rng.random::<f64>() < p { 0.0 } else { keep }).collect();
+    let mask: Vec<f32> = (0..rows * cols)
+        .map(|_| if rng.random::<f64>() < p { 0.0 } else { keep })
+        .collect();
     let mask = Tensor::from_data(TensorData::new(mask, [rows, cols]), &x.device());
     x * mask
 }
@@ -159,7 +178,10 @@ pub fn split_terms(terms: Tensor<2>, error_model: ErrorModel) -> (Tensor<2>, Ten
         ErrorModel::Em2 => (terms, zeros()),
         ErrorModel::Em3 => (zeros(), terms.expand([batch, 3])),
         ErrorModel::Em4 => (zeros(), terms),
-        ErrorModel::Em5 => (terms.clone().slice([0..batch, 0..3]), terms.slice([0..batch, 3..6])),
+        ErrorModel::Em5 => (
+            terms.clone().slice([0..batch, 0..3]),
+            terms.slice([0..batch, 3..6]),
+        ),
     }
 }
 
@@ -167,11 +189,26 @@ pub fn split_terms(terms: Tensor<2>, error_model: ErrorModel) -> (Tensor<2>, Ten
 pub fn correction(terms: &[f32], error_model: ErrorModel) -> Correction {
     let t = |i: usize| f64::from(terms[i]) / 100.0;
     match error_model {
-        ErrorModel::Em1 => Correction { scale: [t(0); 3], bias_m_s: [0.0; 3] },
-        ErrorModel::Em2 => Correction { scale: [t(0), t(1), t(2)], bias_m_s: [0.0; 3] },
-        ErrorModel::Em3 => Correction { scale: [0.0; 3], bias_m_s: [t(0); 3] },
-        ErrorModel::Em4 => Correction { scale: [0.0; 3], bias_m_s: [t(0), t(1), t(2)] },
-        ErrorModel::Em5 => Correction { scale: [t(0), t(1), t(2)], bias_m_s: [t(3), t(4), t(5)] },
+        ErrorModel::Em1 => Correction {
+            scale: [t(0); 3],
+            bias_m_s: [0.0; 3],
+        },
+        ErrorModel::Em2 => Correction {
+            scale: [t(0), t(1), t(2)],
+            bias_m_s: [0.0; 3],
+        },
+        ErrorModel::Em3 => Correction {
+            scale: [0.0; 3],
+            bias_m_s: [t(0); 3],
+        },
+        ErrorModel::Em4 => Correction {
+            scale: [0.0; 3],
+            bias_m_s: [t(0), t(1), t(2)],
+        },
+        ErrorModel::Em5 => Correction {
+            scale: [t(0), t(1), t(2)],
+            bias_m_s: [t(3), t(4), t(5)],
+        },
     }
 }
 
@@ -185,17 +222,36 @@ struct ParamSource<'a> {
 
 impl ParamSource<'_> {
     /// Uniform values in ±`bound`.
-    fn uniform<const D: usize>(&mut self, shape: [usize; D], bound: f64, device: &Device) -> Param<Tensor<D>> {
-        let values: Vec<f32> = (0..shape.iter().product()).map(|_| self.rng.random_range(-bound..bound) as f32).collect();
+    fn uniform<const D: usize>(
+        &mut self,
+        shape: [usize; D],
+        bound: f64,
+        device: &Device,
+    ) -> Param<Tensor<D>> {
+        let values: Vec<f32> = (0..shape.iter().product())
+            .map(|_| self.rng.random_range(-bound..bound) as f32)
+            .collect();
         let tensor = Tensor::from_data(TensorData::new(values, shape), device);
-        let tensor = if device.is_autodiff() { tensor.require_grad() } else { tensor };
+        let tensor = if device.is_autodiff() {
+            tensor.require_grad()
+        } else {
+            tensor
+        };
         self.next_id += 1;
         Param::initialized(ParamId::from(self.next_id), tensor)
     }
 }
 
-fn conv1d(channels_in: usize, channels_out: usize, kernel: usize, device: &Device, params: &mut ParamSource) -> Conv1d {
-    let mut conv = Conv1dConfig::new(channels_in, channels_out, kernel).with_initializer(Initializer::Zeros).init(device);
+fn conv1d(
+    channels_in: usize,
+    channels_out: usize,
+    kernel: usize,
+    device: &Device,
+    params: &mut ParamSource,
+) -> Conv1d {
+    let mut conv = Conv1dConfig::new(channels_in, channels_out, kernel)
+        .with_initializer(Initializer::Zeros)
+        .init(device);
     let bound = 1.0 / ((channels_in * kernel) as f64).sqrt();
     conv.weight = params.uniform([channels_out, channels_in, kernel], bound, device);
     conv.bias = Some(params.uniform([channels_out], bound, device));
@@ -203,9 +259,17 @@ fn conv1d(channels_in: usize, channels_out: usize, kernel: usize, device: &Devic
 }
 
 /// A 2×2 convolution with the given (row, time) dilation.
-fn conv2d(channels_in: usize, channels_out: usize, dilation: [usize; 2], device: &Device, params: &mut ParamSource) -> Conv2d {
-    let mut conv =
-        Conv2dConfig::new([channels_in, channels_out], [2, 2]).with_dilation(dilation).with_initializer(Initializer::Zeros).init(device);
+fn conv2d(
+    channels_in: usize,
+    channels_out: usize,
+    dilation: [usize; 2],
+    device: &Device,
+    params: &mut ParamSource,
+) -> Conv2d {
+    let mut conv = Conv2dConfig::new([channels_in, channels_out], [2, 2])
+        .with_dilation(dilation)
+        .with_initializer(Initializer::Zeros)
+        .init(device);
     let bound = 1.0 / ((channels_in * 4) as f64).sqrt();
     conv.weight = params.uniform([channels_out, channels_in, 2, 2], bound, device);
     conv.bias = Some(params.uniform([channels_out], bound, device));
@@ -213,7 +277,9 @@ fn conv2d(channels_in: usize, channels_out: usize, dilation: [usize; 2], device:
 }
 
 fn linear(d_input: usize, d_output: usize, device: &Device, params: &mut ParamSource) -> Linear {
-    let mut linear = LinearConfig::new(d_input, d_output).with_initializer(Initializer::Zeros).init(device);
+    let mut linear = LinearConfig::new(d_input, d_output)
+        .with_initializer(Initializer::Zeros)
+        .init(device);
     let bound = 1.0 / (d_input as f64).sqrt();
     linear.weight = params.uniform([d_input, d_output], bound, device);
     linear.bias = Some(params.uniform([d_output], bound, device));

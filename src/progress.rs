@@ -9,7 +9,7 @@ pub fn bar(len: usize, message: impl Into<std::borrow::Cow<'static, str>>) -> Pr
         return ProgressBar::hidden();
     }
     let style = ProgressStyle::with_template(
-        "{msg:>12} [{bar:40}] {pos}/{len} {elapsed_precise} (eta {eta})",
+        "{msg:>12} [{bar:30}] {pos}/{len} {elapsed_precise} (eta {eta})",
     )
     .expect("the template is valid")
     .progress_chars("=> ");

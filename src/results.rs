@@ -210,15 +210,31 @@ pub fn evaluation_batch(rows: &[EvaluationRow]) -> RecordBatch {
 
 /// One row per error model × epoch of DCNet training.
 pub fn training_batch(dcnets: &[Trained]) -> RecordBatch {
-    let rows: Vec<(&Trained, &EpochRecord)> = dcnets.iter().flat_map(|t| t.history.iter().map(move |epoch| (t, epoch))).collect();
+    let rows: Vec<(&Trained, &EpochRecord)> = dcnets
+        .iter()
+        .flat_map(|t| t.history.iter().map(move |epoch| (t, epoch)))
+        .collect();
     batch(vec![
-        ("error_model", strings(&rows, |(t, _)| t.error_model.to_string())),
-        ("epoch", Arc::new(UInt32Array::from_iter_values(rows.iter().map(|(_, e)| e.epoch as u32)))),
+        (
+            "error_model",
+            strings(&rows, |(t, _)| t.error_model.to_string()),
+        ),
+        (
+            "epoch",
+            Arc::new(UInt32Array::from_iter_values(
+                rows.iter().map(|(_, e)| e.epoch as u32),
+            )),
+        ),
         ("train_loss", floats(&rows, |(_, e)| e.train_loss)),
         ("validation_loss", floats(&rows, |(_, e)| e.validation_loss)),
         ("seconds", floats(&rows, |(_, e)| e.seconds)),
         ("samples_per_s", floats(&rows, |(_, e)| e.samples_per_s)),
-        ("is_best", Arc::new(BooleanArray::from_iter(rows.iter().map(|(t, e)| Some(e.epoch == t.best_epoch))))),
+        (
+            "is_best",
+            Arc::new(BooleanArray::from_iter(
+                rows.iter().map(|(t, e)| Some(e.epoch == t.best_epoch)),
+            )),
+        ),
     ])
 }
 

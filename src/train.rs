@@ -75,9 +75,18 @@ pub struct EpochRecord {
 
 #[derive(Debug, thiserror::Error)]
 pub enum TrainError {
-    #[error("DCNet {error_model}: the training loss became {loss} at epoch {epoch}, batch {batch}; training of {error_model} stopped (try a lower training.learning_rate.{error_model})")]
-    NonFinite { error_model: ErrorModel, epoch: usize, batch: usize, loss: f32 },
-    #[error("DCNet {error_model}: no training windows (is dataset.validation_fraction leaving none?)")]
+    #[error(
+        "DCNet {error_model}: the training loss became {loss} at epoch {epoch}, batch {batch}; training of {error_model} stopped (try a lower training.learning_rate.{error_model})"
+    )]
+    NonFinite {
+        error_model: ErrorModel,
+        epoch: usize,
+        batch: usize,
+        loss: f32,
+    },
+    #[error(
+        "DCNet {error_model}: no training windows (is dataset.validation_fraction leaving none?)"
+    )]
     NoData { error_model: ErrorModel },
     #[error(transparent)]
     Checkpoint(#[from] crate::checkpoint::CheckpointError),
@@ -106,8 +115,19 @@ impl State {
     pub fn new(spec: &Spec, error_model: ErrorModel) -> Self {
         let device = spec.training.backend.device().autodiff();
         let mut rng = task_rng(spec.seed, &[&"dcnet-init", &error_model]);
-        let model = Dcnet::new(&spec.model, error_model, spec.dataset.window, &device, &mut rng);
-        Self { model, optimizer: optimizer(spec), best: None, history: Vec::new() }
+        let model = Dcnet::new(
+            &spec.model,
+            error_model,
+            spec.dataset.window,
+            &device,
+            &mut rng,
+        );
+        Self {
+            model,
+            optimizer: optimizer(spec),
+            best: None,
+            history: Vec::new(),
+        }
     }
 
     pub fn next_epoch(&self) -> usize {
@@ -117,7 +137,12 @@ impl State {
     /// The best weights and the history, once the epochs are done.
     pub fn finish(self, error_model: ErrorModel) -> Trained {
         let (best_epoch, _, model) = self.best.expect("at least one epoch ran");
-        Trained { error_model, model, history: self.history, best_epoch }
+        Trained {
+            error_model,
+            model,
+            history: self.history,
+            best_epoch,
+        }
     }
 }
 
@@ -131,11 +156,20 @@ pub fn optimizer(spec: &Spec) -> ModuleOptimizer {
 
 /// The closed-loop loss of `terms` `[batch, n]` on windows whose DVL rows are `dvl`
 /// `[batch, 3, time]` and ground truth `truth` `[batch, 3, time]`, in (cm/s)².
-pub fn closed_loop_loss(terms: Tensor<2>, error_model: ErrorModel, dvl: Tensor<3>, truth: Tensor<3>) -> Tensor<1> {
+pub fn closed_loop_loss(
+    terms: Tensor<2>,
+    error_model: ErrorModel,
+    dvl: Tensor<3>,
+    truth: Tensor<3>,
+) -> Tensor<1> {
     let [batch, axes, time] = dvl.dims();
     let (scale_pct, bias_cm_s) = split_terms(terms, error_model);
-    let scale: Tensor<3> = (scale_pct / 100.0).reshape([batch, axes, 1]).expand([batch, axes, time]);
-    let bias: Tensor<3> = (bias_cm_s / 100.0).reshape([batch, axes, 1]).expand([batch, axes, time]);
+    let scale: Tensor<3> = (scale_pct / 100.0)
+        .reshape([batch, axes, 1])
+        .expand([batch, axes, time]);
+    let bias: Tensor<3> = (bias_cm_s / 100.0)
+        .reshape([batch, axes, 1])
+        .expand([batch, axes, time]);
     let corrected = (dvl - bias) / (scale + 1.0);
     ((corrected - truth) * 100.0).square().sum_dim(1).mean()
 }
@@ -150,8 +184,14 @@ fn batch_tensors(set: &TrainingSet, indices: &[usize], device: &Device) -> (Tens
         targets.extend_from_slice(&set.targets[i * TARGET_ROWS * w..][..TARGET_ROWS * w]);
     }
     (
-        Tensor::from_data(TensorData::new(inputs, [indices.len(), INPUT_ROWS, w]), device),
-        Tensor::from_data(TensorData::new(targets, [indices.len(), TARGET_ROWS, w]), device),
+        Tensor::from_data(
+            TensorData::new(inputs, [indices.len(), INPUT_ROWS, w]),
+            device,
+        ),
+        Tensor::from_data(
+            TensorData::new(targets, [indices.len(), TARGET_ROWS, w]),
+            device,
+        ),
     )
 }
 
@@ -161,23 +201,38 @@ fn dvl_rows(input: &Tensor<3>) -> Tensor<3> {
 }
 
 /// Mean closed-loop loss of `model` (plain device) over `indices`, in batches.
-pub fn mean_loss(spec: &Spec, model: &Dcnet, error_model: ErrorModel, set: &TrainingSet, indices: &[usize]) -> f64 {
+pub fn mean_loss(
+    spec: &Spec,
+    model: &Dcnet,
+    error_model: ErrorModel,
+    set: &TrainingSet,
+    indices: &[usize],
+) -> f64 {
     let device = spec.training.backend.device();
     let settings = Settings::from(&spec.model);
     let mut total = 0.0;
     for chunk in indices.chunks(spec.training.batch_size.max(1024)) {
         let (input, target) = batch_tensors(set, chunk, &device);
         let terms = model.forward(input.clone(), &settings, None);
-        let loss: f32 = closed_loop_loss(terms, error_model, dvl_rows(&input), target).into_scalar();
+        let loss: f32 =
+            closed_loop_loss(terms, error_model, dvl_rows(&input), target).into_scalar();
         total += f64::from(loss) * chunk.len() as f64;
     }
     total / indices.len().max(1) as f64
 }
 
 /// The training windows in the order epoch `epoch` visits them.
-pub fn epoch_order(spec: &Spec, set: &TrainingSet, error_model: ErrorModel, epoch: usize) -> Vec<usize> {
+pub fn epoch_order(
+    spec: &Spec,
+    set: &TrainingSet,
+    error_model: ErrorModel,
+    epoch: usize,
+) -> Vec<usize> {
     let mut order: Vec<usize> = (0..set.len()).filter(|&i| !set.is_validation[i]).collect();
-    order.shuffle(&mut task_rng(spec.seed, &[&"dcnet-shuffle", &error_model, &epoch]));
+    order.shuffle(&mut task_rng(
+        spec.seed,
+        &[&"dcnet-shuffle", &error_model, &epoch],
+    ));
     order
 }
 
@@ -199,15 +254,22 @@ pub fn train_pass(
     let learning_rate = spec.training.learning_rate(error_model);
     let mut loss_sum = 0.0;
     let mut model = state.model.clone();
+    let label = format!("DCNet {error_model} epoch {epoch}/{}", spec.training.epochs);
     for (batch, indices) in order.chunks(spec.training.batch_size).enumerate() {
         let (input, target) = batch_tensors(set, indices, &device);
         let terms = model.forward(input.clone(), &settings, Some(&mut dropout_rng));
         let loss = closed_loop_loss(terms, error_model, dvl_rows(&input), target);
         let value: f32 = loss.clone().into_scalar();
         if !value.is_finite() {
-            return Err(TrainError::NonFinite { error_model, epoch, batch: batch + 1, loss: value });
+            return Err(TrainError::NonFinite {
+                error_model,
+                epoch,
+                batch: batch + 1,
+                loss: value,
+            });
         }
         loss_sum += f64::from(value) * indices.len() as f64;
+        progress.set_message(format!("{label} loss {value:.4}"));
         let grads = GradientsParams::from_grads(loss.backward(), &model);
         model = state.optimizer.step(learning_rate, model, grads);
         progress.inc(1);
@@ -234,12 +296,26 @@ pub fn run_epoch(
     let loss_sum = train_pass(spec, set, error_model, state, epoch, &order, progress)?;
     let validation: Vec<usize> = (0..set.len()).filter(|&i| set.is_validation[i]).collect();
     let plain = state.model.valid();
-    let validation_loss = if validation.is_empty() { f64::NAN } else { mean_loss(spec, &plain, error_model, set, &validation) };
+    let validation_loss = if validation.is_empty() {
+        f64::NAN
+    } else {
+        mean_loss(spec, &plain, error_model, set, &validation)
+    };
     let train_loss = loss_sum / order.len() as f64;
     let seconds = clock.elapsed().as_secs_f64();
-    state.history.push(EpochRecord { epoch, train_loss, validation_loss, seconds, samples_per_s: order.len() as f64 / seconds });
+    state.history.push(EpochRecord {
+        epoch,
+        train_loss,
+        validation_loss,
+        seconds,
+        samples_per_s: order.len() as f64 / seconds,
+    });
     // Without validation windows the last epoch counts as the best.
-    let score = if validation.is_empty() { train_loss } else { validation_loss };
+    let score = if validation.is_empty() {
+        train_loss
+    } else {
+        validation_loss
+    };
     if state.best.as_ref().is_none_or(|(_, best, _)| score < *best) {
         state.best = Some((epoch, score, plain));
     }
@@ -266,15 +342,26 @@ mod tests {
     fn closed_loop_loss_matches_a_hand_computed_value() {
         let device = Device::flex();
         // One window of two samples: x is 1 % too large, z carries a 0.7 cm/s bias.
-        let dvl = Tensor::<3>::from_data(TensorData::new(vec![1.01f32, 2.02, 0.0, 0.0, 0.007, 0.007], [1, 3, 2]), &device);
-        let truth = Tensor::<3>::from_data(TensorData::new(vec![1.0f32, 2.0, 0.0, 0.0, 0.0, 0.0], [1, 3, 2]), &device);
+        let dvl = Tensor::<3>::from_data(
+            TensorData::new(vec![1.01f32, 2.02, 0.0, 0.0, 0.007, 0.007], [1, 3, 2]),
+            &device,
+        );
+        let truth = Tensor::<3>::from_data(
+            TensorData::new(vec![1.0f32, 2.0, 0.0, 0.0, 0.0, 0.0], [1, 3, 2]),
+            &device,
+        );
         // EM4 removes a 0.5 cm/s z bias only: errors x 1 and 2 cm/s, z 0.2 cm/s.
         // Loss = mean over samples of the sum over axes = ((1 + 0.04) + (4 + 0.04)) / 2.
-        let terms = Tensor::<2>::from_data(TensorData::new(vec![0.0f32, 0.0, 0.5], [1, 3]), &device);
-        let loss: f32 = closed_loop_loss(terms, ErrorModel::Em4, dvl.clone(), truth.clone()).into_scalar();
+        let terms =
+            Tensor::<2>::from_data(TensorData::new(vec![0.0f32, 0.0, 0.5], [1, 3]), &device);
+        let loss: f32 =
+            closed_loop_loss(terms, ErrorModel::Em4, dvl.clone(), truth.clone()).into_scalar();
         assert!((loss - 2.54).abs() < 1e-4, "loss {loss}");
         // EM5 with the true terms corrects exactly.
-        let terms = Tensor::<2>::from_data(TensorData::new(vec![1.0f32, 1.0, 1.0, 0.0, 0.0, 0.7], [1, 6]), &device);
+        let terms = Tensor::<2>::from_data(
+            TensorData::new(vec![1.0f32, 1.0, 1.0, 0.0, 0.0, 0.7], [1, 6]),
+            &device,
+        );
         let loss: f32 = closed_loop_loss(terms, ErrorModel::Em5, dvl, truth).into_scalar();
         assert!(loss < 1e-6, "loss {loss}");
     }
@@ -302,7 +389,14 @@ mod tests {
         let set = crate::dataset::generate(&spec, &trajectories, &ProgressBar::hidden());
         let mut state = State::new(&spec, ErrorModel::Em5);
         while state.next_epoch() <= spec.training.epochs {
-            run_epoch(&spec, &set, ErrorModel::Em5, &mut state, &ProgressBar::hidden()).unwrap();
+            run_epoch(
+                &spec,
+                &set,
+                ErrorModel::Em5,
+                &mut state,
+                &ProgressBar::hidden(),
+            )
+            .unwrap();
         }
         let trained = state.finish(ErrorModel::Em5);
         let estimator = crate::estimators::DcnetEstimator {
@@ -316,15 +410,32 @@ mod tests {
         let truth = &trajectories[4].ground_truth;
         let geometry = crate::noise::BeamGeometry::janus_x(20.0);
         let errors = crate::noise::SensorErrors::from_spec_units(1.0, 0.7, 0.0);
-        let measured = crate::noise::measure_trajectory(&geometry, truth, &errors, 0.0, &mut task_rng(1, &[]));
+        let measured =
+            crate::noise::measure_trajectory(&geometry, truth, &errors, 0.0, &mut task_rng(1, &[]));
         let correction = estimator.estimate(&measured.dvl[..100], &measured.gnss[..100]);
         let z_bias = 0.7 / 20f64.to_radians().cos();
         for axis in 0..3 {
-            assert!((correction.scale[axis] * 100.0 - 1.0).abs() < 0.15, "scale {:?} %", correction.scale.map(|k| k * 100.0));
+            assert!(
+                (correction.scale[axis] * 100.0 - 1.0).abs() < 0.15,
+                "scale {:?} %",
+                correction.scale.map(|k| k * 100.0)
+            );
         }
-        assert!(correction.bias_m_s[0].abs() * 100.0 < 0.15, "bias {:?}", correction.bias_m_s);
-        assert!(correction.bias_m_s[1].abs() * 100.0 < 0.15, "bias {:?}", correction.bias_m_s);
-        assert!((correction.bias_m_s[2] * 100.0 - z_bias).abs() < 0.15, "bias {:?}", correction.bias_m_s);
+        assert!(
+            correction.bias_m_s[0].abs() * 100.0 < 0.15,
+            "bias {:?}",
+            correction.bias_m_s
+        );
+        assert!(
+            correction.bias_m_s[1].abs() * 100.0 < 0.15,
+            "bias {:?}",
+            correction.bias_m_s
+        );
+        assert!(
+            (correction.bias_m_s[2] * 100.0 - z_bias).abs() < 0.15,
+            "bias {:?}",
+            correction.bias_m_s
+        );
     }
 
     fn weights(model: &Dcnet) -> Vec<u8> {
@@ -337,13 +448,30 @@ mod tests {
         let trajectories = crate::data::load_trajectories(&spec).unwrap();
         let set = crate::dataset::generate(&spec, &trajectories, &ProgressBar::hidden());
         let train_with = |threads| {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
             pool.install(|| {
                 let mut state = State::new(&spec, ErrorModel::Em5);
                 for _ in 0..2 {
-                    run_epoch(&spec, &set, ErrorModel::Em5, &mut state, &ProgressBar::hidden()).unwrap();
+                    run_epoch(
+                        &spec,
+                        &set,
+                        ErrorModel::Em5,
+                        &mut state,
+                        &ProgressBar::hidden(),
+                    )
+                    .unwrap();
                 }
-                (weights(&state.model), state.history.iter().map(|e| (e.train_loss, e.validation_loss)).collect::<Vec<_>>())
+                (
+                    weights(&state.model),
+                    state
+                        .history
+                        .iter()
+                        .map(|e| (e.train_loss, e.validation_loss))
+                        .collect::<Vec<_>>(),
+                )
             })
         };
         let (one, history_one) = train_with(1);
@@ -355,16 +483,69 @@ mod tests {
     }
 
     #[test]
+    fn flex_and_ndarray_compute_the_same_training() {
+        let history = |backend: &str| {
+            let spec = quick_spec(&[
+                "training.epochs=1",
+                &format!("training.backend={backend:?}"),
+            ]);
+            let trajectories = crate::data::load_trajectories(&spec).unwrap();
+            let set = crate::dataset::generate(&spec, &trajectories, &ProgressBar::hidden());
+            let mut state = State::new(&spec, ErrorModel::Em2);
+            run_epoch(
+                &spec,
+                &set,
+                ErrorModel::Em2,
+                &mut state,
+                &ProgressBar::hidden(),
+            )
+            .unwrap();
+            state.history[0].clone()
+        };
+        let (flex, ndarray) = (history("flex"), history("ndarray"));
+        assert!(
+            (flex.train_loss - ndarray.train_loss).abs() < 1e-4 * flex.train_loss,
+            "{flex:?} vs {ndarray:?}"
+        );
+        assert!(
+            (flex.validation_loss - ndarray.validation_loss).abs() < 1e-4 * flex.validation_loss,
+            "{flex:?} vs {ndarray:?}"
+        );
+    }
+
+    #[test]
     fn a_non_finite_loss_stops_training_with_the_model_and_epoch() {
         let spec = quick_spec(&["training.learning_rate.EM3=1e30"]);
         let trajectories = crate::data::load_trajectories(&spec).unwrap();
         let set = crate::dataset::generate(&spec, &trajectories, &ProgressBar::hidden());
         let mut state = State::new(&spec, ErrorModel::Em3);
         let error = (0..spec.training.epochs)
-            .find_map(|_| run_epoch(&spec, &set, ErrorModel::Em3, &mut state, &ProgressBar::hidden()).err())
+            .find_map(|_| {
+                run_epoch(
+                    &spec,
+                    &set,
+                    ErrorModel::Em3,
+                    &mut state,
+                    &ProgressBar::hidden(),
+                )
+                .err()
+            })
             .expect("a learning rate of 1e30 diverges");
         let message = error.to_string();
-        assert!(matches!(error, TrainError::NonFinite { error_model: ErrorModel::Em3, epoch: 1, .. }), "{message}");
-        assert!(message.starts_with("DCNet EM3: the training loss became"), "{message}");
+        assert!(
+            matches!(
+                error,
+                TrainError::NonFinite {
+                    error_model: ErrorModel::Em3,
+                    epoch: 1,
+                    ..
+                }
+            ),
+            "{message}"
+        );
+        assert!(
+            message.starts_with("DCNet EM3: the training loss became"),
+            "{message}"
+        );
     }
 }

@@ -43,7 +43,10 @@ fn one_and_two_threads_write_identical_results() {
     // training.parquet also holds wall times; its losses must agree.
     let losses = |out: &str| {
         let batch = read_parquet(&project.path().join(out).join("quick/training.parquet"));
-        (floats(&batch, "train_loss"), floats(&batch, "validation_loss"))
+        (
+            floats(&batch, "train_loss"),
+            floats(&batch, "validation_loss"),
+        )
     };
     assert_eq!(losses("out1"), losses("out2"));
     let spec_one = std::fs::read_to_string(project.path().join("out1/quick/spec.toml")).unwrap();
@@ -83,13 +86,24 @@ fn quick_run_prints_and_stores_both_tables() {
     for trajectory in ["S3", "S4"] {
         let em5 = evaluation
             .iter()
-            .find(|r| r.dvl == "DVL2" && r.estimator == "dcnet" && r.error_model.as_deref() == Some("EM5") && r.at == trajectory)
+            .find(|r| {
+                r.dvl == "DVL2"
+                    && r.estimator == "dcnet"
+                    && r.error_model.as_deref() == Some("EM5")
+                    && r.at == trajectory
+            })
             .unwrap();
-        assert!(em5.improvement_pct.unwrap() > 40.0, "DCNet EM5 on {trajectory}: {em5:?}");
+        assert!(
+            em5.improvement_pct.unwrap() > 40.0,
+            "DCNet EM5 on {trajectory}: {em5:?}"
+        );
     }
     let training = read_parquet(&results.join("training.parquet"));
     assert_eq!(training.num_rows(), 5 * 20, "5 models × 20 epochs");
-    assert_eq!(bools(&training, "is_best").iter().filter(|b| **b).count(), 5);
+    assert_eq!(
+        bools(&training, "is_best").iter().filter(|b| **b).count(),
+        5
+    );
     // The improvement column is computed against the baseline row of the same cell.
     for row in &evaluation {
         let baseline = evaluation
@@ -127,7 +141,12 @@ fn provenance(output: &std::process::Output) -> Vec<String> {
 fn trained_models_are_reused_until_a_training_setting_changes() {
     let project = project(false);
     let run = |extra: &[&str]| {
-        let mut args = vec!["run", "experiments/quick.toml", "--set", "training.epochs=3"];
+        let mut args = vec![
+            "run",
+            "experiments/quick.toml",
+            "--set",
+            "training.epochs=3",
+        ];
         args.extend(extra);
         let output = dcnet(project.path(), &args);
         assert!(output.status.success(), "{}", stderr(&output));
@@ -136,9 +155,15 @@ fn trained_models_are_reused_until_a_training_setting_changes() {
     let models = ["EM1", "EM2", "EM3", "EM4", "EM5"];
     assert_eq!(run(&[]), models.map(|m| format!("DCNet {m}: trained")));
     let reused = |m: &str| format!("DCNet {m}: reused from results/quick/models");
-    assert_eq!(run(&["--set", "calibration.monte_carlo_runs=4"]), models.map(reused));
+    assert_eq!(
+        run(&["--set", "calibration.monte_carlo_runs=4"]),
+        models.map(reused)
+    );
     let lines = run(&["--set", "training.learning_rate.EM5=2e-4"]);
-    assert_eq!(lines[..4], models[..4].iter().map(|m| reused(m)).collect::<Vec<_>>());
+    assert_eq!(
+        lines[..4],
+        models[..4].iter().map(|m| reused(m)).collect::<Vec<_>>()
+    );
     assert_eq!(lines[4], "DCNet EM5: trained");
 }
 
@@ -147,11 +172,19 @@ fn a_diverging_model_is_reported_and_the_others_are_kept() {
     let project = project(false);
     let output = dcnet(
         project.path(),
-        &["run", "experiments/quick.toml", "--set", "training.learning_rate.EM3=1e30"],
+        &[
+            "run",
+            "experiments/quick.toml",
+            "--set",
+            "training.learning_rate.EM3=1e30",
+        ],
     );
     assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
     let message = stderr(&output);
-    assert!(message.contains("error: DCNet EM3: the training loss became"), "{message}");
+    assert!(
+        message.contains("error: DCNet EM3: the training loss became"),
+        "{message}"
+    );
     assert!(message.contains("at epoch 1, batch"), "{message}");
     let evaluation = evaluation_rows(&project.path().join("results/quick"));
     let dcnet_models: Vec<String> = evaluation
@@ -298,6 +331,11 @@ fn bad_specs_are_rejected_with_file_line_and_key() {
         d,
         &["--set", "dvl[7].noise_cm_s=1"],
         "error: --set dvl[7].noise_cm_s=1: index [7] is out of range: there are 2 entries",
+    );
+    assert_rejected(
+        d,
+        &["--backend", "cuda"],
+        "error: --set training.backend=\"cuda\": training.backend: unknown backend \"cuda\"; expected flex or ndarray",
     );
 }
 

@@ -22,7 +22,12 @@ fn paper_spec_reproduces_the_baseline_column_and_the_floor() {
     // The model-based methods only: DCNet's 100 epochs on the full grid take hours.
     let output = dcnet(
         project.path(),
-        &["run", "experiments/paper.toml", "--set", r#"estimators.kinds=["baseline", "least_squares", "floor"]"#],
+        &[
+            "run",
+            "experiments/paper.toml",
+            "--set",
+            r#"estimators.kinds=["baseline", "least_squares", "floor"]"#,
+        ],
     );
     assert!(output.status.success(), "{}", stderr(&output));
     let results = project.path().join("results/paper");

@@ -22,7 +22,11 @@ impl Estimator for DcnetEstimator {
         let w = self.window;
         // The spec check keeps every calibration window at least one network window long.
         let count = dvl.len() / w;
-        assert!(count > 0, "a calibration window of {} samples is shorter than DCNet's {w}", dvl.len());
+        assert!(
+            count > 0,
+            "a calibration window of {} samples is shorter than DCNet's {w}",
+            dvl.len()
+        );
         // [count, 6, w]: DVL x, y, z then GNSS x, y, z over time.
         let mut input = vec![0f32; count * INPUT_ROWS * w];
         for window in 0..count {
@@ -34,10 +38,18 @@ impl Estimator for DcnetEstimator {
                 }
             }
         }
-        let input = Tensor::<3>::from_data(TensorData::new(input, [count, INPUT_ROWS, w]), &self.device);
-        let terms: Vec<f32> = self.model.forward(input, &self.settings, None).into_data().try_to_vec().expect("DCNet outputs f32");
+        let input =
+            Tensor::<3>::from_data(TensorData::new(input, [count, INPUT_ROWS, w]), &self.device);
+        let terms: Vec<f32> = self
+            .model
+            .forward(input, &self.settings, None)
+            .into_data()
+            .try_to_vec()
+            .expect("DCNet outputs f32");
         let n = self.error_model.term_count();
-        let mean: Vec<f32> = (0..n).map(|t| (0..count).map(|row| terms[row * n + t]).sum::<f32>() / count as f32).collect();
+        let mean: Vec<f32> = (0..n)
+            .map(|t| (0..count).map(|row| terms[row * n + t]).sum::<f32>() / count as f32)
+            .collect();
         correction(&mean, self.error_model)
     }
 }

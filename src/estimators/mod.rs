@@ -16,8 +16,8 @@ pub use least_squares::LeastSquares;
 use crate::Vec3;
 use crate::model::Settings;
 use crate::noise::BeamGeometry;
-use crate::train::Trained;
 use crate::spec::{Dvl, Spec};
+use crate::train::Trained;
 use std::fmt;
 use std::str::FromStr;
 
@@ -99,7 +99,8 @@ pub enum EstimatorKind {
 }
 
 impl EstimatorKind {
-    pub const ALL: [EstimatorKind; 4] = [Self::Baseline, Self::LeastSquares, Self::Dcnet, Self::Floor];
+    pub const ALL: [EstimatorKind; 4] =
+        [Self::Baseline, Self::LeastSquares, Self::Dcnet, Self::Floor];
 
     /// Whether the method is run once per error model.
     pub fn takes_error_model(self) -> bool {

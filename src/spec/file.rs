@@ -272,7 +272,13 @@ pub struct LearningRatesFile {
 
 impl Default for LearningRatesFile {
     fn default() -> Self {
-        Self { em1: 5e-5, em2: 5e-5, em3: 5e-5, em4: 5e-5, em5: 5e-4 }
+        Self {
+            em1: 5e-5,
+            em2: 5e-5,
+            em3: 5e-5,
+            em4: 5e-5,
+            em5: 5e-4,
+        }
     }
 }
 

@@ -11,8 +11,8 @@ pub use load::{SpecError, SpecErrors, load};
 
 use crate::estimators::{ErrorModel, EstimatorKind};
 use crate::model::Activation;
-use crate::train::Backend;
 use crate::noise::SensorErrors;
+use crate::train::Backend;
 use file::{AxisFile, SyntheticFile};
 use std::path::{Path, PathBuf};
 
@@ -539,7 +539,14 @@ fn non_negative(key: &str, value: f64, faults: &mut Faults) {
 }
 
 fn check_model(model: file::ModelFile, window: Option<usize>, faults: &mut Faults) -> ModelSpec {
-    let file::ModelFile { conv_channels, conv1d_kernel_size, fc_widths, activation, leaky_relu_slope, dropout } = model;
+    let file::ModelFile {
+        conv_channels,
+        conv1d_kernel_size,
+        fc_widths,
+        activation,
+        leaky_relu_slope,
+        dropout,
+    } = model;
     if conv_channels == 0 {
         faults.add("model.conv_channels", "0 must be at least 1");
     }
@@ -562,37 +569,81 @@ fn check_model(model: file::ModelFile, window: Option<usize>, faults: &mut Fault
     });
     non_negative("model.leaky_relu_slope", leaky_relu_slope, faults);
     if !(0.0..1.0).contains(&dropout) {
-        faults.add("model.dropout", format!("{dropout} must be at least 0 and below 1"));
+        faults.add(
+            "model.dropout",
+            format!("{dropout} must be at least 0 and below 1"),
+        );
     }
-    ModelSpec { conv_channels, conv1d_kernel_size, fc_widths, activation, leaky_relu_slope, dropout }
+    ModelSpec {
+        conv_channels,
+        conv1d_kernel_size,
+        fc_widths,
+        activation,
+        leaky_relu_slope,
+        dropout,
+    }
 }
 
 fn check_training(training: file::TrainingFile, faults: &mut Faults) -> TrainingSpec {
-    let file::TrainingFile { backend, epochs, batch_size, learning_rate, rmsprop_alpha, rmsprop_epsilon, checkpoint_every_epochs } =
-        training;
+    let file::TrainingFile {
+        backend,
+        epochs,
+        batch_size,
+        learning_rate,
+        rmsprop_alpha,
+        rmsprop_epsilon,
+        checkpoint_every_epochs,
+    } = training;
     let backend = backend.parse().unwrap_or_else(|message: String| {
         faults.add("training.backend", message);
         Backend::Flex
     });
-    for (key, value) in [("training.epochs", epochs), ("training.batch_size", batch_size), ("training.checkpoint_every_epochs", checkpoint_every_epochs)] {
+    for (key, value) in [
+        ("training.epochs", epochs),
+        ("training.batch_size", batch_size),
+        ("training.checkpoint_every_epochs", checkpoint_every_epochs),
+    ] {
         if value == 0 {
             faults.add(key, "0 must be at least 1");
         }
     }
-    let file::LearningRatesFile { em1, em2, em3, em4, em5 } = learning_rate;
+    let file::LearningRatesFile {
+        em1,
+        em2,
+        em3,
+        em4,
+        em5,
+    } = learning_rate;
     let learning_rates = [em1, em2, em3, em4, em5];
     for (model, rate) in ErrorModel::ALL.iter().zip(learning_rates) {
         if !(rate.is_finite() && rate > 0.0) {
-            faults.add(format!("training.learning_rate.{model}"), format!("{rate} must be a positive number"));
+            faults.add(
+                format!("training.learning_rate.{model}"),
+                format!("{rate} must be a positive number"),
+            );
         }
     }
     if !(rmsprop_alpha > 0.0 && rmsprop_alpha < 1.0) {
-        faults.add("training.rmsprop_alpha", format!("{rmsprop_alpha} must lie strictly between 0 and 1"));
+        faults.add(
+            "training.rmsprop_alpha",
+            format!("{rmsprop_alpha} must lie strictly between 0 and 1"),
+        );
     }
     if !(rmsprop_epsilon.is_finite() && rmsprop_epsilon > 0.0) {
-        faults.add("training.rmsprop_epsilon", format!("{rmsprop_epsilon} must be a positive number"));
+        faults.add(
+            "training.rmsprop_epsilon",
+            format!("{rmsprop_epsilon} must be a positive number"),
+        );
     }
-    TrainingSpec { backend, epochs, batch_size, learning_rates, rmsprop_alpha, rmsprop_epsilon, checkpoint_every_epochs }
+    TrainingSpec {
+        backend,
+        epochs,
+        batch_size,
+        learning_rates,
+        rmsprop_alpha,
+        rmsprop_epsilon,
+        checkpoint_every_epochs,
+    }
 }
 
 fn check_synthetic(synthetic: &SyntheticFile, faults: &mut Faults) {
