@@ -360,46 +360,30 @@ fn read_model(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::spec::quick_spec;
+    use crate::train::tests::{run_epochs, training_set, weights};
     use indicatif::ProgressBar;
-
-    fn quick_spec(overrides: &[&str]) -> Spec {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quick.toml");
-        let overrides: Vec<String> = overrides.iter().map(ToString::to_string).collect();
-        crate::spec::load(&path, &overrides).unwrap()
-    }
-
-    fn bytes(model: &Dcnet) -> Vec<u8> {
-        model.clone().into_record().into_bytes().unwrap().to_vec()
-    }
 
     #[test]
     fn a_training_resumed_from_a_checkpoint_ends_as_an_uninterrupted_one() {
         let spec = quick_spec(&["training.epochs=4"]);
-        let trajectories = crate::data::load_trajectories(&spec).unwrap();
-        let set = crate::dataset::generate(&spec, &trajectories, &ProgressBar::hidden());
+        let set = training_set(&spec);
         let em = ErrorModel::Em5;
-        let hidden = ProgressBar::hidden();
 
         let mut state = State::new(&spec, em);
-        for _ in 0..4 {
-            train::run_epoch(&spec, &set, em, &mut state, &hidden).unwrap();
-        }
+        run_epochs(&spec, &set, em, &mut state, 4);
         let uninterrupted = state.finish(em);
 
         let dir = tempfile::tempdir().unwrap();
         let store = ModelStore::new(dir.path().to_path_buf());
         let key = key(&spec, em).unwrap();
         let mut state = State::new(&spec, em);
-        for _ in 0..2 {
-            train::run_epoch(&spec, &set, em, &mut state, &hidden).unwrap();
-        }
+        run_epochs(&spec, &set, em, &mut state, 2);
         store.save_checkpoint(&state, em, &key).unwrap();
         drop(state);
         let mut resumed = store.resume(&spec, em, &key).unwrap();
         assert_eq!(resumed.next_epoch(), 3);
-        for _ in 0..2 {
-            train::run_epoch(&spec, &set, em, &mut resumed, &hidden).unwrap();
-        }
+        run_epochs(&spec, &set, em, &mut resumed, 2);
         let resumed = resumed.finish(em);
         assert_eq!(resumed.best_epoch, uninterrupted.best_epoch);
         let losses = |t: &Trained| {
@@ -410,7 +394,7 @@ mod tests {
         };
         assert_eq!(losses(&resumed), losses(&uninterrupted));
         assert!(
-            bytes(&resumed.model) == bytes(&uninterrupted.model),
+            weights(&resumed.model) == weights(&uninterrupted.model),
             "resumed weights differ"
         );
     }
@@ -418,8 +402,7 @@ mod tests {
     #[test]
     fn stored_models_are_reused_and_keyed_by_their_training_inputs() {
         let spec = quick_spec(&["training.epochs=2"]);
-        let trajectories = crate::data::load_trajectories(&spec).unwrap();
-        let set = crate::dataset::generate(&spec, &trajectories, &ProgressBar::hidden());
+        let set = training_set(&spec);
         let dir = tempfile::tempdir().unwrap();
         let store = ModelStore::new(dir.path().to_path_buf());
         let hidden = ProgressBar::hidden();
@@ -429,7 +412,7 @@ mod tests {
         let (again, provenance) =
             train_cached(&spec, &set, ErrorModel::Em4, &store, &hidden).unwrap();
         assert_eq!(provenance, Provenance::Reused);
-        assert!(bytes(&again.model) == bytes(&first.model));
+        assert!(weights(&again.model) == weights(&first.model));
         assert_eq!(again.history, first.history);
 
         // Monte Carlo and evaluation settings do not touch the key; training settings do.

@@ -160,12 +160,7 @@ pub fn generate(spec: &Spec, trajectories: &[Trajectory], progress: &ProgressBar
 mod tests {
     use super::*;
     use crate::data::load_trajectories;
-
-    fn quick_spec(overrides: &[&str]) -> Spec {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quick.toml");
-        let overrides: Vec<String> = overrides.iter().map(ToString::to_string).collect();
-        crate::spec::load(&path, &overrides).unwrap()
-    }
+    use crate::spec::quick_spec;
 
     #[test]
     fn one_and_two_threads_generate_identical_data() {

@@ -328,15 +328,29 @@ pub fn batches_per_epoch(spec: &Spec, set: &TrainingSet) -> usize {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
-    use crate::estimators::Estimator;
+    use crate::spec::quick_spec;
 
-    fn quick_spec(overrides: &[&str]) -> Spec {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quick.toml");
-        let overrides: Vec<String> = overrides.iter().map(ToString::to_string).collect();
-        crate::spec::load(&path, &overrides).unwrap()
+    /// The training set of `spec`.
+    pub(crate) fn training_set(spec: &Spec) -> TrainingSet {
+        let trajectories = crate::data::load_trajectories(spec).unwrap();
+        crate::dataset::generate(spec, &trajectories, &ProgressBar::hidden())
     }
+
+    /// Runs `epochs` more epochs of `error_model` on `state`.
+    pub(crate) fn run_epochs(
+        spec: &Spec,
+        set: &TrainingSet,
+        error_model: ErrorModel,
+        state: &mut State,
+        epochs: usize,
+    ) {
+        for _ in 0..epochs {
+            run_epoch(spec, set, error_model, state, &ProgressBar::hidden()).unwrap();
+        }
+    }
+    use crate::estimators::Estimator;
 
     #[test]
     fn closed_loop_loss_matches_a_hand_computed_value() {
@@ -385,19 +399,15 @@ mod tests {
     #[test]
     fn training_learns_a_known_scale_and_bias() {
         let spec = known_answer_spec();
-        let trajectories = crate::data::load_trajectories(&spec).unwrap();
-        let set = crate::dataset::generate(&spec, &trajectories, &ProgressBar::hidden());
+        let set = training_set(&spec);
         let mut state = State::new(&spec, ErrorModel::Em5);
-        while state.next_epoch() <= spec.training.epochs {
-            run_epoch(
-                &spec,
-                &set,
-                ErrorModel::Em5,
-                &mut state,
-                &ProgressBar::hidden(),
-            )
-            .unwrap();
-        }
+        run_epochs(
+            &spec,
+            &set,
+            ErrorModel::Em5,
+            &mut state,
+            spec.training.epochs,
+        );
         let trained = state.finish(ErrorModel::Em5);
         let estimator = crate::estimators::DcnetEstimator {
             model: trained.model,
@@ -407,6 +417,7 @@ mod tests {
             device: spec.training.backend.device(),
         };
         // Estimate on the (unseen) calibration trajectory, noise-free.
+        let trajectories = crate::data::load_trajectories(&spec).unwrap();
         let truth = &trajectories[4].ground_truth;
         let geometry = crate::noise::BeamGeometry::janus_x(20.0);
         let errors = crate::noise::SensorErrors::from_spec_units(1.0, 0.7, 0.0);
@@ -438,15 +449,15 @@ mod tests {
         );
     }
 
-    fn weights(model: &Dcnet) -> Vec<u8> {
+    /// The saved bytes of `model`'s weights.
+    pub(crate) fn weights(model: &Dcnet) -> Vec<u8> {
         model.clone().into_record().into_bytes().unwrap().to_vec()
     }
 
     #[test]
     fn one_and_two_threads_train_identical_weights() {
         let spec = quick_spec(&["training.epochs=2", "training.batch_size=256"]);
-        let trajectories = crate::data::load_trajectories(&spec).unwrap();
-        let set = crate::dataset::generate(&spec, &trajectories, &ProgressBar::hidden());
+        let set = training_set(&spec);
         let train_with = |threads| {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
@@ -454,16 +465,7 @@ mod tests {
                 .unwrap();
             pool.install(|| {
                 let mut state = State::new(&spec, ErrorModel::Em5);
-                for _ in 0..2 {
-                    run_epoch(
-                        &spec,
-                        &set,
-                        ErrorModel::Em5,
-                        &mut state,
-                        &ProgressBar::hidden(),
-                    )
-                    .unwrap();
-                }
+                run_epochs(&spec, &set, ErrorModel::Em5, &mut state, 2);
                 (
                     weights(&state.model),
                     state
@@ -489,17 +491,8 @@ mod tests {
                 "training.epochs=1",
                 &format!("training.backend={backend:?}"),
             ]);
-            let trajectories = crate::data::load_trajectories(&spec).unwrap();
-            let set = crate::dataset::generate(&spec, &trajectories, &ProgressBar::hidden());
             let mut state = State::new(&spec, ErrorModel::Em2);
-            run_epoch(
-                &spec,
-                &set,
-                ErrorModel::Em2,
-                &mut state,
-                &ProgressBar::hidden(),
-            )
-            .unwrap();
+            run_epochs(&spec, &training_set(&spec), ErrorModel::Em2, &mut state, 1);
             state.history[0].clone()
         };
         let (flex, ndarray) = (history("flex"), history("ndarray"));
@@ -516,8 +509,7 @@ mod tests {
     #[test]
     fn a_non_finite_loss_stops_training_with_the_model_and_epoch() {
         let spec = quick_spec(&["training.learning_rate.EM3=1e30"]);
-        let trajectories = crate::data::load_trajectories(&spec).unwrap();
-        let set = crate::dataset::generate(&spec, &trajectories, &ProgressBar::hidden());
+        let set = training_set(&spec);
         let mut state = State::new(&spec, ErrorModel::Em3);
         let error = (0..spec.training.epochs)
             .find_map(|_| {

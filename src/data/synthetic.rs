@@ -83,15 +83,11 @@ pub fn generate(name: &str, samples: usize, spec: &Spec) -> Vec<Vec3> {
 mod tests {
     use super::*;
     use crate::data::{ground_truth, norm};
-
-    fn quick_spec() -> Spec {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quick.toml");
-        crate::spec::load(&path, &[]).unwrap()
-    }
+    use crate::spec::quick_spec;
 
     #[test]
     fn trajectories_are_auv_like_and_repeatable() {
-        let spec = quick_spec();
+        let spec = quick_spec(&[]);
         let a = generate("S1", 1200, &spec);
         assert_eq!(a, generate("S1", 1200, &spec));
         assert_ne!(a, generate("S2", 1200, &spec));

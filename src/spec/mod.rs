@@ -511,6 +511,14 @@ impl SpecFile {
     }
 }
 
+/// experiments/quick.toml with `overrides`, for tests.
+#[cfg(test)]
+pub(crate) fn quick_spec(overrides: &[&str]) -> Spec {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quick.toml");
+    let overrides: Vec<String> = overrides.iter().map(ToString::to_string).collect();
+    load(&path, &overrides).unwrap()
+}
+
 /// `seconds × rate` as a whole number of samples, if it is one.
 pub fn seconds_to_samples(seconds: f64, rate_hz: f64) -> Option<usize> {
     let samples = seconds * rate_hz;
