@@ -244,10 +244,12 @@ fn run(spec_path: &Path, out: &Path, set: &[String]) -> Result<(), CliError> {
     );
     println!("{}", tables::evaluation_table(&result.evaluation));
     eprintln!("results written to {}", folder.display());
-    match failures.into_iter().next() {
-        Some(first) => Err(failure(first)),
-        None => Ok(()),
+    if failures.is_empty() {
+        return Ok(());
     }
+    // Every failed model, one per line; the results above hold all the others.
+    let messages: Vec<String> = failures.iter().map(ToString::to_string).collect();
+    Err(failure(anyhow::anyhow!(messages.join("\n"))))
 }
 
 /// Trains one DCNet per error model of the spec, concurrently; a model that fails is
@@ -297,10 +299,7 @@ fn train_all(
                 );
                 trained.push(model);
             }
-            Err(error) => {
-                eprintln!("error: {error}");
-                failures.push(error);
-            }
+            Err(error) => failures.push(error),
         }
     }
     (trained, failures)
