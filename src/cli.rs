@@ -7,7 +7,10 @@ use crate::data::{fetch, load_trajectories};
 use crate::dataset::{self, TrainingSet, window_starts};
 use crate::estimators::{ErrorModel, EstimatorKind};
 use crate::evaluate::run_protocol;
+use crate::plots::{self, Format};
 use crate::progress::bar;
+use crate::report;
+use crate::results::read::StoredRun;
 use crate::results::{self, Manifest, StageSeconds};
 use crate::spec::{Origin, Spec, load};
 use crate::tables;
@@ -43,8 +46,25 @@ enum Command {
         /// burn CPU backend for DCNet, overriding training.backend: flex or ndarray
         #[arg(long)]
         backend: Option<String>,
+        /// Figures go to PLOTS/<name>/
+        #[arg(long, default_value = "plots")]
+        plots: PathBuf,
+        /// Write the results and report.md but draw no figures
+        #[arg(long)]
+        no_plots: bool,
         #[command(flatten)]
         overrides: Overrides,
+    },
+    /// Draw the figures and write report.md from a results folder, re-running nothing
+    Plot {
+        /// A results folder written by `run`, such as results/paper
+        results: PathBuf,
+        /// Figures go to OUT/<name>/
+        #[arg(long, default_value = "plots")]
+        out: PathBuf,
+        /// Write each figure as PNG, SVG or both
+        #[arg(long, value_enum, default_value_t = Format::Both)]
+        format: Format,
     },
     /// Check a spec and its data files without running anything
     Validate {
@@ -119,6 +139,12 @@ impl CliError {
             CliError::Input(e) | CliError::Failure(e) => e,
         }
     }
+
+    pub fn into_cause(self) -> anyhow::Error {
+        match self {
+            CliError::Input(e) | CliError::Failure(e) => e,
+        }
+    }
 }
 
 fn input(error: impl Into<anyhow::Error>) -> CliError {
@@ -154,13 +180,21 @@ pub fn main() -> Result<(), CliError> {
             spec,
             out,
             backend,
+            plots,
+            no_plots,
             mut overrides,
         } => {
             if let Some(backend) = backend {
                 overrides.set.push(format!("training.backend={backend:?}"));
             }
-            run(&spec, &out, &overrides.set)
+            let plots = (!no_plots).then_some(plots.as_path());
+            run(&spec, &out, plots, &overrides.set)
         }
+        Command::Plot {
+            results,
+            out,
+            format,
+        } => plot(&results, Some(&out), format),
         Command::Validate { spec, overrides } => validate(&spec, &overrides.set),
         Command::Data {
             command: DataCommand::Info { spec, overrides },
@@ -181,7 +215,7 @@ fn load_spec(path: &Path, set: &[String]) -> Result<Spec, CliError> {
     load(path, set).map_err(input)
 }
 
-fn run(spec_path: &Path, out: &Path, set: &[String]) -> Result<(), CliError> {
+fn run(spec_path: &Path, out: &Path, plots: Option<&Path>, set: &[String]) -> Result<(), CliError> {
     let started_at = SystemTime::now();
     let spec = load_spec(spec_path, set)?;
     let mut stages = StageSeconds::default();
@@ -218,10 +252,9 @@ fn run(spec_path: &Path, out: &Path, set: &[String]) -> Result<(), CliError> {
     progress.finish_and_clear();
     stages.protocol = clock.elapsed().as_secs_f64();
 
-    let resolved = toml::to_string_pretty(&spec.resolved).map_err(failure)?;
     let manifest = Manifest {
         name: spec.name.clone(),
-        spec_sha256: fetch::sha256_hex(resolved.as_bytes()),
+        spec_sha256: fetch::sha256_hex(spec.resolved_toml().as_bytes()),
         git_commit: env!("DCNET_GIT_COMMIT").to_string(),
         crate_version: env!("CARGO_PKG_VERSION").to_string(),
         started_at: humantime::format_rfc3339_seconds(started_at).to_string(),
@@ -232,7 +265,8 @@ fn run(spec_path: &Path, out: &Path, set: &[String]) -> Result<(), CliError> {
         data_files: data_files(&spec).map_err(failure)?,
         stage_seconds: stages,
     };
-    results::write_run(&folder, &resolved, &result, &dcnets, &manifest).map_err(failure)?;
+    results::write_run(&folder, &spec, &trajectories, &result, &dcnets, &manifest)
+        .map_err(failure)?;
     let calibration_name = &trajectories[spec.calibration.trajectory].name;
     println!(
         "{}",
@@ -244,12 +278,41 @@ fn run(spec_path: &Path, out: &Path, set: &[String]) -> Result<(), CliError> {
     );
     println!("{}", tables::evaluation_table(&result.evaluation));
     eprintln!("results written to {}", folder.display());
+    plot(&folder, plots, Format::Both).map_err(|e| failure(e.into_cause()))?;
     if failures.is_empty() {
         return Ok(());
     }
     // Every failed model, one per line; the results above hold all the others.
     let messages: Vec<String> = failures.iter().map(ToString::to_string).collect();
     Err(failure(anyhow::anyhow!(messages.join("\n"))))
+}
+
+/// Reads the results folder back, draws its figures into `out/<name>/` (none when
+/// `out` is `None`) and writes its report.
+fn plot(results: &Path, out: Option<&Path>, format: Format) -> Result<(), CliError> {
+    let stored = StoredRun::read(results).map_err(input)?;
+    let figures = match out {
+        Some(out) => {
+            let folder = out.join(&stored.spec.name);
+            let figures = plots::write_all(&stored, &folder, format).map_err(failure)?;
+            for figure in &figures {
+                match &figure.caption {
+                    Ok(_) => eprintln!(
+                        "figure {}: {} files in {}",
+                        figure.stem,
+                        figure.files.len(),
+                        folder.display()
+                    ),
+                    Err(why) => eprintln!("figure {}: not drawn, {why}", figure.stem),
+                }
+            }
+            figures
+        }
+        None => Vec::new(),
+    };
+    let report = report::write(&stored, &figures).map_err(failure)?;
+    eprintln!("report written to {}", report.display());
+    Ok(())
 }
 
 /// Trains one DCNet per error model of the spec, concurrently; a model that fails is
@@ -353,16 +416,7 @@ fn info(spec_path: &Path, set: &[String]) -> Result<(), CliError> {
         "windows",
     ]);
     for (index, (source, trajectory)) in spec.trajectories.iter().zip(&trajectories).enumerate() {
-        let mut roles = Vec::new();
-        if spec.dataset.trajectories.contains(&index) {
-            roles.push("train");
-        }
-        if spec.calibration.trajectory == index {
-            roles.push("calibration");
-        }
-        if spec.evaluation.contains(&index) {
-            roles.push("test");
-        }
+        let roles = spec.roles(index);
         let origin = match &source.origin {
             Origin::File {
                 path,

@@ -35,6 +35,16 @@ impl Phase {
     }
 }
 
+impl std::str::FromStr for Phase {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        [Phase::Calibration, Phase::Evaluation]
+            .into_iter()
+            .find(|p| p.as_str() == s)
+            .ok_or_else(|| format!("unknown phase {s:?}: expected calibration or evaluation"))
+    }
+}
+
 /// One estimator's result in one run, on one window (calibration) or trajectory
 /// (evaluation at T_conv).
 #[derive(Debug, Clone, PartialEq)]

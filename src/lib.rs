@@ -11,7 +11,9 @@
 //! 6. [`estimators`]: calibration methods behind one trait, DCNet among them;
 //! 7. [`evaluate`]: the Monte Carlo calibration and evaluation protocol;
 //! 8. [`results`] and [`tables`]: Parquet files, manifest, and the printed tables;
-//! 9. [`cli`]: the subcommands that run the stages.
+//! 9. [`plots`] and [`report`]: the figures and the comparison with the [`published`]
+//!    values, drawn from a results folder alone;
+//! 10. [`cli`]: the subcommands that run the stages.
 
 pub mod checkpoint;
 pub mod cli;
@@ -21,7 +23,10 @@ pub mod estimators;
 pub mod evaluate;
 pub mod model;
 pub mod noise;
+pub mod plots;
 pub mod progress;
+pub mod published;
+pub mod report;
 pub mod results;
 pub mod rng;
 pub mod spec;

@@ -28,6 +28,8 @@ pub struct SpecFile {
     pub model: ModelFile,
     #[serde(default)]
     pub training: TrainingFile,
+    #[serde(default)]
+    pub report: ReportFile,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -280,6 +282,37 @@ impl Default for LearningRatesFile {
             em5: 5e-4,
         }
     }
+}
+
+/// What the report and the figures show beyond the tables.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReportFile {
+    /// TOML file of published values to put beside ours (see `crate::published`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub published: Option<PathBuf>,
+    /// A cell is flagged when our RMSE differs from the published one by more than
+    /// this share of the published value.
+    #[serde(default = "default_tolerance_pct")]
+    pub tolerance_pct: f64,
+    /// The two trajectories of the velocity figure; the first training and the first
+    /// test trajectory when empty.
+    #[serde(default)]
+    pub velocity_trajectories: Vec<String>,
+}
+
+impl Default for ReportFile {
+    fn default() -> Self {
+        Self {
+            published: None,
+            tolerance_pct: default_tolerance_pct(),
+            velocity_trajectories: Vec::new(),
+        }
+    }
+}
+
+fn default_tolerance_pct() -> f64 {
+    10.0
 }
 
 fn default_sample_rate_hz() -> f64 {

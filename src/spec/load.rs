@@ -123,6 +123,63 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Spec, SpecErrors> {
     })
 }
 
+/// A TOML data file read into `T`, kept with its text so that later checks can name
+/// the line of a key.
+pub struct TomlFile<T> {
+    pub value: T,
+    shown: String,
+    text: String,
+}
+
+impl<T: serde::de::DeserializeOwned> TomlFile<T> {
+    /// Reads `path`; a fault reads `path:line: key: message`.
+    pub fn read(path: &Path) -> Result<Self, SpecError> {
+        let shown = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| SpecError {
+            location: shown.clone(),
+            key: String::new(),
+            message: format!("cannot read it: {e}"),
+        })?;
+        if let Err(e) = DeTable::parse(&text) {
+            let location = match e.span() {
+                Some(span) => format!("{shown}:{}", line_of(&text, span.start)),
+                None => shown.clone(),
+            };
+            return Err(SpecError {
+                location,
+                key: String::new(),
+                message: e.message().trim().to_string(),
+            });
+        }
+        let fault = |key: &str, message: &dyn fmt::Display| fault_at(&shown, &text, key, message);
+        let table: toml::Table = toml::from_str(&text).map_err(|e| fault("", &e.message()))?;
+        let value = serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
+            let key = e.path().to_string();
+            let key = if key == "." { String::new() } else { key };
+            fault(&key, &e.into_inner().message())
+        })?;
+        Ok(TomlFile { value, shown, text })
+    }
+}
+
+impl<T> TomlFile<T> {
+    /// A fault at `key`, placed on the key's line.
+    pub fn fault(&self, key: &str, message: impl fmt::Display) -> SpecError {
+        fault_at(&self.shown, &self.text, key, &message)
+    }
+}
+
+fn fault_at(shown: &str, text: &str, key: &str, message: &dyn fmt::Display) -> SpecError {
+    let line = DeTable::parse(text)
+        .map(|spans| line_of(text, span_of(&spans, key)))
+        .unwrap_or(1);
+    SpecError {
+        location: format!("{shown}:{line}"),
+        key: key.to_string(),
+        message: message.to_string(),
+    }
+}
+
 /// One step of a key path.
 #[derive(Debug, PartialEq)]
 enum Step<'a> {

@@ -7,11 +7,12 @@ pub mod file;
 pub mod load;
 
 pub use file::SpecFile;
-pub use load::{SpecError, SpecErrors, load};
+pub use load::{SpecError, SpecErrors, TomlFile, load};
 
 use crate::estimators::{ErrorModel, EstimatorKind};
 use crate::model::Activation;
 use crate::noise::SensorErrors;
+use crate::published::Published;
 use crate::train::Backend;
 use file::{AxisFile, SyntheticFile};
 use std::path::{Path, PathBuf};
@@ -37,6 +38,7 @@ pub struct Spec {
     pub error_models: Vec<ErrorModel>,
     pub model: ModelSpec,
     pub training: TrainingSpec,
+    pub report: ReportSpec,
     /// The spec as resolved (defaults and overrides applied, paths absolute).
     pub resolved: SpecFile,
 }
@@ -57,6 +59,28 @@ pub enum Origin {
     Synthetic {
         samples: usize,
     },
+}
+
+impl Spec {
+    /// The resolved spec as TOML, as stored beside the results.
+    pub fn resolved_toml(&self) -> String {
+        toml::to_string_pretty(&self.resolved).expect("a spec always serializes")
+    }
+
+    /// What the trajectory at `index` is used for: "train", "calibration", "test".
+    pub fn roles(&self, index: usize) -> Vec<&'static str> {
+        let mut roles = Vec::new();
+        if self.dataset.trajectories.contains(&index) {
+            roles.push("train");
+        }
+        if self.calibration.trajectory == index {
+            roles.push("calibration");
+        }
+        if self.evaluation.contains(&index) {
+            roles.push("test");
+        }
+        roles
+    }
 }
 
 impl TrajectorySource {
@@ -163,6 +187,7 @@ impl SpecFile {
             estimators,
             model,
             training,
+            report,
         } = self.clone();
         let mut resolved = self;
 
@@ -474,6 +499,14 @@ impl SpecFile {
         // Model and training.
         let model = check_model(model, window, &mut faults);
         let training = check_training(training, &mut faults);
+        let report = check_report(report, spec_dir, &mut resolved, &mut faults);
+        for (i, wanted) in report.velocity_trajectories.iter().enumerate() {
+            lookup(
+                &format!("report.velocity_trajectories[{i}]"),
+                wanted,
+                &mut faults,
+            );
+        }
 
         if !faults.0.is_empty() {
             return Err(faults.0);
@@ -506,8 +539,58 @@ impl SpecFile {
             error_models,
             model,
             training,
+            report,
             resolved,
         })
+    }
+}
+
+/// What the report and figures show beyond the tables.
+#[derive(Debug, Clone)]
+pub struct ReportSpec {
+    /// The published values, read and checked.
+    pub published: Option<Published>,
+    pub tolerance_pct: f64,
+    pub velocity_trajectories: Vec<String>,
+}
+
+fn check_report(
+    report: file::ReportFile,
+    spec_dir: &Path,
+    resolved: &mut SpecFile,
+    faults: &mut Faults,
+) -> ReportSpec {
+    let file::ReportFile {
+        published,
+        tolerance_pct,
+        velocity_trajectories,
+    } = report;
+    let published = published.and_then(|file| {
+        let path = spec_dir.join(file);
+        resolved.report.published = Some(path.clone());
+        Published::read(&path)
+            .map_err(|message| faults.add("report.published", message))
+            .ok()
+    });
+    if !(tolerance_pct.is_finite() && tolerance_pct >= 0.0) {
+        faults.add(
+            "report.tolerance_pct",
+            format!("{tolerance_pct} must be zero or positive"),
+        );
+    }
+    if !matches!(velocity_trajectories.len(), 0 | 2) {
+        faults.add(
+            "report.velocity_trajectories",
+            format!(
+                "has {} names: give two (a training and a test trajectory), or none",
+                velocity_trajectories.len()
+            ),
+        );
+    }
+    ReportSpec {
+        published,
+        tolerance_pct,
+        velocity_trajectories,
     }
 }
 

@@ -46,7 +46,8 @@ pub fn stdout(output: &Output) -> String {
 pub fn project(with_data: bool) -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
     std::fs::create_dir(dir.path().join("experiments")).unwrap();
-    for spec in ["paper.toml", "quick.toml"] {
+    std::fs::create_dir(dir.path().join("experiments/published")).unwrap();
+    for spec in ["paper.toml", "quick.toml", "published/dcnet-paper.toml"] {
         std::fs::copy(
             repo().join("experiments").join(spec),
             dir.path().join("experiments").join(spec),

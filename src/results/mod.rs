@@ -1,16 +1,22 @@
 //! What a run leaves in `results/<name>/`: the resolved spec, `manifest.json` with the
-//! provenance, and the Parquet tables (`monte_carlo`, `calibration`, `evaluation`).
-//! Every file is written to a temporary file beside it and renamed into place, so a
-//! reader never sees half a file; the manifest is written last.
+//! provenance, the Parquet tables (`monte_carlo`, `calibration`, `evaluation`,
+//! `training`, and `trajectories` with the GT velocity the figures draw) and a copy of
+//! the published values the report compares with. Every file is written to a
+//! temporary file beside it and renamed into place, so a reader never sees half a file;
+//! the manifest is written last. [`read`] reads a folder back.
 
+pub mod read;
+
+use crate::data::Trajectory;
 use crate::estimators::{Correction, ErrorModel};
 use crate::evaluate::{CalibrationRow, EvaluationRow, ProtocolResult, RunRow};
+use crate::spec::Spec;
 use crate::train::{EpochRecord, Trained};
 use arrow_array::{ArrayRef, BooleanArray, Float64Array, RecordBatch, StringArray, UInt32Array};
 use parquet::arrow::ArrowWriter;
 use parquet::basic::Compression;
 use parquet::file::properties::WriterProperties;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -50,7 +56,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 }
 
 /// Provenance of a run.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Manifest {
     pub name: String,
     pub spec_sha256: String,
@@ -67,7 +73,7 @@ pub struct Manifest {
 }
 
 /// Wall time of each stage of a run.
-#[derive(Debug, Clone, Default, Serialize)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct StageSeconds {
     pub load: f64,
     pub dataset: f64,
@@ -75,30 +81,51 @@ pub struct StageSeconds {
     pub protocol: f64,
 }
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct DataFile {
     pub path: PathBuf,
     pub sha256: String,
 }
 
-/// Writes the tables, then the resolved spec, then the manifest into `folder`.
+/// The Parquet tables of a results folder, in the order they are written.
+pub const TABLES: [&str; 5] = [
+    "monte_carlo.parquet",
+    "calibration.parquet",
+    "evaluation.parquet",
+    "training.parquet",
+    "trajectories.parquet",
+];
+pub const SPEC: &str = "spec.toml";
+pub const MANIFEST: &str = "manifest.json";
+/// The published values the report compares with, copied from `report.published`.
+pub const PUBLISHED: &str = "published.toml";
+
+/// Writes the tables, the published values, the resolved spec, then the manifest
+/// into `folder`.
 pub fn write_run(
     folder: &Path,
-    resolved_spec: &str,
+    spec: &Spec,
+    trajectories: &[Trajectory],
     result: &ProtocolResult,
     dcnets: &[Trained],
     manifest: &Manifest,
 ) -> Result<(), ResultsError> {
     std::fs::create_dir_all(folder).map_err(io(folder))?;
-    for (file, batch) in [
-        ("monte_carlo.parquet", monte_carlo_batch(&result.runs)),
-        (
-            "calibration.parquet",
-            calibration_batch(&result.calibration),
+    let batches = [
+        monte_carlo_batch(&result.runs),
+        calibration_batch(&result.calibration),
+        evaluation_batch(&result.evaluation),
+        training_batch(dcnets),
+        trajectories_batch(
+            &trajectories
+                .iter()
+                .enumerate()
+                .map(|(i, t)| (t, spec.roles(i).join(",")))
+                .collect::<Vec<_>>(),
+            spec.sample_rate_hz,
         ),
-        ("evaluation.parquet", evaluation_batch(&result.evaluation)),
-        ("training.parquet", training_batch(dcnets)),
-    ] {
+    ];
+    for (file, batch) in TABLES.iter().zip(batches) {
         let path = folder.join(file);
         let bytes = parquet_bytes(&batch).map_err(|source| ResultsError::Parquet {
             path: path.clone(),
@@ -106,9 +133,22 @@ pub fn write_run(
         })?;
         write_atomic(&path, &bytes).map_err(io(&path))?;
     }
-    let spec_path = folder.join("spec.toml");
-    write_atomic(&spec_path, resolved_spec.as_bytes()).map_err(io(&spec_path))?;
-    let manifest_path = folder.join("manifest.json");
+    let published_path = folder.join(PUBLISHED);
+    match &spec.resolved.report.published {
+        Some(source) => {
+            let bytes = std::fs::read(source).map_err(io(source))?;
+            write_atomic(&published_path, &bytes).map_err(io(&published_path))?;
+        }
+        None => match std::fs::remove_file(&published_path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(io(&published_path)(e));
+            }
+            _ => {}
+        },
+    }
+    let spec_path = folder.join(SPEC);
+    write_atomic(&spec_path, spec.resolved_toml().as_bytes()).map_err(io(&spec_path))?;
+    let manifest_path = folder.join(MANIFEST);
     let json = serde_json::to_string_pretty(manifest).expect("a manifest always serializes");
     write_atomic(&manifest_path, json.as_bytes()).map_err(io(&manifest_path))
 }
@@ -235,6 +275,35 @@ pub fn training_batch(dcnets: &[Trained]) -> RecordBatch {
                 rows.iter().map(|(t, e)| Some(e.epoch == t.best_epoch)),
             )),
         ),
+    ])
+}
+
+/// The GT velocity of each trajectory, one row per sample, with what the trajectory is
+/// used for ("train,test", say).
+pub fn trajectories_batch(
+    trajectories: &[(&Trajectory, String)],
+    sample_rate_hz: f64,
+) -> RecordBatch {
+    let rows: Vec<(&str, &str, usize, &crate::Vec3)> = trajectories
+        .iter()
+        .flat_map(|(t, roles)| {
+            t.ground_truth
+                .iter()
+                .enumerate()
+                .map(move |(i, v)| (t.name.as_str(), roles.as_str(), i, v))
+        })
+        .collect();
+    let axis = |a: usize| floats(&rows, move |(.., v)| v[a]);
+    batch(vec![
+        ("trajectory", strings(&rows, |(name, ..)| name.to_string())),
+        ("roles", strings(&rows, |(_, roles, ..)| roles.to_string())),
+        (
+            "time_s",
+            floats(&rows, |(_, _, i, _)| *i as f64 / sample_rate_hz),
+        ),
+        ("vx_m_s", axis(0)),
+        ("vy_m_s", axis(1)),
+        ("vz_m_s", axis(2)),
     ])
 }
 

@@ -1,0 +1,258 @@
+//! Drawing pieces the figures share: the look of each estimator and error model, the
+//! legend column, tick labels, category axes, bars and box plots.
+
+use super::render::FAMILY;
+use crate::estimators::{ErrorModel, EstimatorKind};
+use plotters::coord::Shift;
+use plotters::element::DashedPathElement;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+pub type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+pub type PlotResult<T = ()> = Result<T, Box<dyn std::error::Error + Send + Sync>>;
+
+pub const TITLE_SIZE: u32 = 22;
+pub const PANEL_TITLE_SIZE: u32 = 18;
+pub const LABEL_SIZE: u32 = 15;
+pub const LEGEND_WIDTH: u32 = 240;
+
+pub fn font(size: u32) -> TextStyle<'static> {
+    (FAMILY, size).into_font().color(&BLACK)
+}
+
+pub fn anchored(size: u32, h: HPos, v: VPos) -> TextStyle<'static> {
+    font(size).pos(Pos::new(h, v))
+}
+
+/// How a line is stroked.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Stroke {
+    Solid,
+    Dashed,
+    Dotted,
+}
+
+/// The look of one series: colour, stroke, and its name in legends.
+#[derive(Debug, Clone)]
+pub struct Look {
+    pub label: String,
+    pub color: RGBColor,
+    pub stroke: Stroke,
+}
+
+pub const GREY: RGBColor = RGBColor(120, 120, 120);
+const MODEL_COLORS: [RGBColor; 5] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+];
+
+/// Colour by error model, stroke by estimator: DCNet solid, least squares dashed; the
+/// baseline black and the floor grey and dotted.
+pub fn series_look(estimator: EstimatorKind, error_model: Option<ErrorModel>) -> Look {
+    let label = match error_model {
+        Some(model) => format!("{} {model}", estimator.label()),
+        None => estimator.label().to_string(),
+    };
+    let (color, stroke) = match (estimator, error_model) {
+        (EstimatorKind::Floor, _) => (GREY, Stroke::Dotted),
+        (_, None) => (BLACK, Stroke::Solid),
+        (estimator, Some(model)) => (
+            MODEL_COLORS[model as usize % MODEL_COLORS.len()],
+            if estimator == EstimatorKind::LeastSquares {
+                Stroke::Dashed
+            } else {
+                Stroke::Solid
+            },
+        ),
+    };
+    Look {
+        label,
+        color,
+        stroke,
+    }
+}
+
+/// Colour by estimator, for the bar figures whose x axis holds the error models.
+pub fn estimator_color(estimator: EstimatorKind) -> RGBColor {
+    match estimator {
+        EstimatorKind::Baseline => RGBColor(90, 90, 90),
+        EstimatorKind::LeastSquares => RGBColor(31, 119, 180),
+        EstimatorKind::Dcnet => RGBColor(214, 39, 40),
+        EstimatorKind::Floor => GREY,
+    }
+}
+
+/// A line through `points` in chart coordinates, stroked as `look` says.
+pub fn line<DB: DrawingBackend, X: Ranged<ValueType = f64>, Y: Ranged<ValueType = f64>>(
+    chart: &mut ChartContext<DB, Cartesian2d<X, Y>>,
+    points: Vec<(f64, f64)>,
+    color: RGBColor,
+    stroke: Stroke,
+) -> PlotResult
+where
+    DB::ErrorType: 'static,
+{
+    let style = color.stroke_width(2);
+    match stroke {
+        Stroke::Solid => {
+            chart.draw_series(LineSeries::new(points, style))?;
+        }
+        Stroke::Dashed => {
+            chart.draw_series(DashedLineSeries::new(points, 8, 5, style))?;
+        }
+        Stroke::Dotted => {
+            chart.draw_series(DashedLineSeries::new(points, 2, 4, style))?;
+        }
+    }
+    Ok(())
+}
+
+/// What a legend entry shows beside its text.
+#[derive(Debug, Clone)]
+pub enum Swatch {
+    Line(RGBColor, Stroke),
+    Bar(RGBColor),
+    Ring,
+    Dot(RGBColor),
+}
+
+/// A column of legend entries, top to bottom.
+pub fn legend(area: &Area, title: &str, entries: &[(Swatch, String)]) -> PlotResult {
+    let row = 24;
+    let mut y = 60;
+    area.draw(&Text::new(
+        title.to_string(),
+        (12, y - 28),
+        anchored(LABEL_SIZE, HPos::Left, VPos::Center),
+    ))?;
+    for (swatch, text) in entries {
+        let (x0, x1) = (12, 44);
+        match swatch {
+            Swatch::Line(color, stroke) => {
+                let style = color.stroke_width(2);
+                let points = vec![(x0, y), (x1, y)];
+                match stroke {
+                    Stroke::Solid => area.draw(&PathElement::new(points, style))?,
+                    Stroke::Dashed => area.draw(&DashedPathElement::new(points, 8, 5, style))?,
+                    Stroke::Dotted => area.draw(&DashedPathElement::new(points, 2, 4, style))?,
+                }
+            }
+            Swatch::Bar(color) => area.draw(&Rectangle::new(
+                [(x0 + 6, y - 7), (x1 - 6, y + 7)],
+                color.filled(),
+            ))?,
+            Swatch::Ring => area.draw(&Circle::new((28, y), 7, BLACK.stroke_width(2)))?,
+            Swatch::Dot(color) => area.draw(&Circle::new((28, y), 4, color.filled()))?,
+        }
+        area.draw(&Text::new(
+            text.clone(),
+            (x1 + 10, y),
+            anchored(LABEL_SIZE, HPos::Left, VPos::Center),
+        ))?;
+        y += row;
+    }
+    Ok(())
+}
+
+/// A tick label with at most three decimals and no trailing zeros.
+pub fn tick(value: &f64) -> String {
+    let text = format!("{value:.3}");
+    let text = text.trim_end_matches('0').trim_end_matches('.');
+    if text == "-0" {
+        "0".into()
+    } else {
+        text.into()
+    }
+}
+
+/// A log-axis tick label: only at 1, 2 and 5 times a power of ten, so labels never
+/// crowd; the grid keeps its other lines.
+pub fn log_tick(value: &f64) -> String {
+    let mantissa = value / 10f64.powf(value.log10().floor());
+    if [1.0, 2.0, 5.0, 10.0]
+        .iter()
+        .any(|m| (mantissa - m).abs() < 1e-6)
+    {
+        tick(value)
+    } else {
+        String::new()
+    }
+}
+
+/// The label of category `value` on an axis of categories at 0, 1, 2, …
+pub fn category(names: &[String], value: f64) -> String {
+    let index = value.round();
+    if (value - index).abs() > 1e-6 || index < 0.0 {
+        return String::new();
+    }
+    names.get(index as usize).cloned().unwrap_or_default()
+}
+
+/// A log axis range that holds `values` with some room.
+pub fn log_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
+    let (low, high) = values
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    if !low.is_finite() {
+        return 0.01..1.0;
+    }
+    (low / 1.5)..(high * 1.5)
+}
+
+/// Lower whisker, first quartile, median, third quartile, upper whisker: quartiles by
+/// linear interpolation, whiskers at the furthest values within 1.5 IQR of the box.
+pub fn box_stats(values: &[f64]) -> [f64; 5] {
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let quantile = |q: f64| {
+        let position = q * (sorted.len() - 1) as f64;
+        let (low, high) = (position.floor() as usize, position.ceil() as usize);
+        sorted[low] + (sorted[high] - sorted[low]) * (position - low as f64)
+    };
+    let (q1, median, q3) = (quantile(0.25), quantile(0.5), quantile(0.75));
+    let reach = 1.5 * (q3 - q1);
+    let low = sorted
+        .iter()
+        .copied()
+        .find(|v| *v >= q1 - reach)
+        .unwrap_or(q1);
+    let high = sorted
+        .iter()
+        .rev()
+        .copied()
+        .find(|v| *v <= q3 + reach)
+        .unwrap_or(q3);
+    [low, q1, median, q3, high]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn box_statistics_of_known_samples() {
+        let values: Vec<f64> = (1..=9).map(f64::from).collect();
+        assert_eq!(box_stats(&values), [1.0, 3.0, 5.0, 7.0, 9.0]);
+        // 100 lies beyond q3 + 1.5 IQR, so the whisker stops at the largest value within.
+        let values = [1.0, 2.0, 3.0, 4.0, 100.0];
+        assert_eq!(box_stats(&values), [1.0, 2.0, 3.0, 4.0, 4.0]);
+        assert_eq!(box_stats(&[2.5]), [2.5; 5]);
+    }
+
+    #[test]
+    fn tick_labels_are_short() {
+        assert_eq!(tick(&0.1), "0.1");
+        assert_eq!(tick(&20.0), "20");
+        assert_eq!(tick(&0.0586), "0.059");
+        assert_eq!(log_tick(&0.2), "0.2");
+        assert_eq!(log_tick(&50.0), "50");
+        assert_eq!(log_tick(&0.7), "");
+        assert_eq!(category(&["a".into(), "b".into()], 1.0), "b");
+        assert_eq!(category(&["a".into(), "b".into()], 0.5), "");
+    }
+}

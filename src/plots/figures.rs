@@ -1,0 +1,677 @@
+//! The six figures, each drawn from a [`StoredRun`] into SVG text. A figure whose data
+//! the run does not hold (no DCNet, no baseline, no EM5) says why instead.
+
+use super::draw::*;
+use crate::estimators::{ErrorModel, EstimatorKind};
+use crate::evaluate::{CalibrationRow, Phase};
+use crate::results::read::{StoredRun, StoredTrajectory};
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, VPos};
+
+/// A figure: its file stem, its caption, and the SVG plotters drew.
+pub struct Drawn {
+    pub stem: &'static str,
+    pub caption: String,
+    pub svg: String,
+}
+
+/// Either a figure, or why the run cannot have it.
+pub type Outcome = Result<Drawn, String>;
+
+/// Every figure of a run, in the order the report shows them.
+pub fn all(run: &StoredRun) -> PlotResult<Vec<(&'static str, Outcome)>> {
+    Ok(vec![
+        ("velocity", velocity(run)?),
+        ("calibration", calibration(run)?),
+        ("rmse_first_window", rmse_first_window(run)?),
+        ("improvement_em5", improvement_em5(run)?),
+        ("monte_carlo_spread", monte_carlo_spread(run)?),
+        ("training_loss", training_loss(run)?),
+    ])
+}
+
+fn draw_svg(size: (u32, u32), draw: impl FnOnce(&Area) -> PlotResult) -> PlotResult<String> {
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        root.fill(&WHITE)?;
+        draw(&root)?;
+        root.present()?;
+    }
+    Ok(svg)
+}
+
+fn calibration_name(run: &StoredRun) -> &str {
+    &run.spec.calibration.trajectory
+}
+
+/// Velocity of a training and a test trajectory over time, body frame.
+fn velocity(run: &StoredRun) -> PlotResult<Outcome> {
+    let chosen = &run.spec.report.velocity_trajectories;
+    let find = |name: &str| run.trajectories.iter().find(|t| t.name == name);
+    let with_role = |role: &str| {
+        run.trajectories
+            .iter()
+            .find(|t| t.roles.iter().any(|r| r == role))
+    };
+    let pair: Option<[&StoredTrajectory; 2]> = match chosen.as_slice() {
+        [a, b] => find(a).zip(find(b)).map(|(a, b)| [a, b]),
+        _ => with_role("train")
+            .zip(with_role("test"))
+            .map(|(a, b)| [a, b]),
+    };
+    let Some(pair) = pair else {
+        return Ok(Err(
+            "trajectories.parquet holds no training and test trajectory".into(),
+        ));
+    };
+    let caption = format!(
+        "GT velocity of {} and {} over time, body frame",
+        pair[0].name, pair[1].name
+    );
+    let svg = draw_svg((1100, 760), |root| {
+        let root = root.titled(&caption, font(TITLE_SIZE))?;
+        let (panels, legend_area) = root.split_horizontally(1100 - LEGEND_WIDTH);
+        let axes = [("vx", 0), ("vy", 1), ("vz", 2)];
+        let colors = [
+            RGBColor(31, 119, 180),
+            RGBColor(255, 127, 14),
+            RGBColor(44, 160, 44),
+        ];
+        for (area, trajectory) in panels.split_evenly((2, 1)).iter().zip(pair) {
+            let end = trajectory.time_s.last().copied().unwrap_or(1.0).max(1.0);
+            let (low, high) = trajectory
+                .velocity_m_s
+                .iter()
+                .flatten()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                    (lo.min(*v), hi.max(*v))
+                });
+            let pad = 0.05 * (high - low).max(0.1);
+            let mut chart = ChartBuilder::on(area)
+                .caption(
+                    format!("{} ({})", trajectory.name, trajectory.roles.join(", ")),
+                    font(PANEL_TITLE_SIZE),
+                )
+                .margin(12)
+                .x_label_area_size(45)
+                .y_label_area_size(70)
+                .build_cartesian_2d(0.0..end, (low - pad)..(high + pad))?;
+            chart
+                .configure_mesh()
+                .x_desc("time [s]")
+                .y_desc("velocity [m/s]")
+                .x_label_formatter(&tick)
+                .y_label_formatter(&tick)
+                .label_style(font(LABEL_SIZE))
+                .axis_desc_style(font(LABEL_SIZE))
+                .light_line_style(WHITE)
+                .draw()?;
+            for ((_, axis), color) in axes.iter().zip(colors) {
+                let points: Vec<(f64, f64)> = trajectory
+                    .time_s
+                    .iter()
+                    .zip(&trajectory.velocity_m_s)
+                    .map(|(t, v)| (*t, v[*axis]))
+                    .collect();
+                chart.draw_series(LineSeries::new(points, color.stroke_width(1)))?;
+            }
+        }
+        let entries: Vec<(Swatch, String)> = axes
+            .iter()
+            .zip(colors)
+            .map(|((name, _), color)| (Swatch::Line(color, Stroke::Solid), name.to_string()))
+            .collect();
+        legend(&legend_area, "GT velocity", &entries)
+    })?;
+    Ok(Ok(Drawn {
+        stem: "velocity",
+        caption,
+        svg,
+    }))
+}
+
+/// The estimator × error-model series of the calibration table, in a stable order.
+fn series_of(rows: &[CalibrationRow]) -> Vec<(EstimatorKind, Option<ErrorModel>)> {
+    let mut series: Vec<(EstimatorKind, Option<ErrorModel>)> = Vec::new();
+    for row in rows {
+        if !series.contains(&(row.estimator, row.error_model)) {
+            series.push((row.estimator, row.error_model));
+        }
+    }
+    series.sort_by_key(|(estimator, model)| (*estimator as usize, model.map(|m| m as usize)));
+    series
+}
+
+/// Mean RMSE against calibration window size, one panel per DVL, T_conv ringed.
+fn calibration(run: &StoredRun) -> PlotResult<Outcome> {
+    if run.calibration.is_empty() {
+        return Ok(Err("calibration.parquet is empty".into()));
+    }
+    let dvls = run.dvls();
+    let series = series_of(&run.calibration);
+    let caption = format!(
+        "Calibration on {}: mean RMSE over {} runs against window size (T_conv ringed)",
+        calibration_name(run),
+        run.spec.calibration.monte_carlo_runs
+    );
+    let width = 560 * dvls.len() as u32 + LEGEND_WIDTH;
+    let svg =
+        draw_svg((width, 620), |root| {
+            let root = root.titled(&caption, font(TITLE_SIZE))?;
+            let (panels, legend_area) = root.split_horizontally(width - LEGEND_WIDTH);
+            let windows: Vec<f64> = run.calibration.iter().map(|r| r.window_s).collect();
+            let (first, last) = windows.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), w| {
+                (lo.min(*w), hi.max(*w))
+            });
+            let pad = 0.05 * (last - first).max(10.0);
+            for (area, dvl) in panels.split_evenly((1, dvls.len())).iter().zip(&dvls) {
+                let rows: Vec<&CalibrationRow> =
+                    run.calibration.iter().filter(|r| &r.dvl == dvl).collect();
+                let mut chart = ChartBuilder::on(area)
+                    .caption(dvl, font(PANEL_TITLE_SIZE))
+                    .margin(12)
+                    .x_label_area_size(45)
+                    .y_label_area_size(70)
+                    .build_cartesian_2d(
+                        (first - pad)..(last + pad),
+                        log_range(rows.iter().map(|r| r.rmse_cm_s)).log_scale(),
+                    )?;
+                chart
+                    .configure_mesh()
+                    .x_desc("calibration window [s]")
+                    .y_desc("mean RMSE [cm/s]")
+                    .x_label_formatter(&tick)
+                    .y_label_formatter(&log_tick)
+                    .label_style(font(LABEL_SIZE))
+                    .axis_desc_style(font(LABEL_SIZE))
+                    .light_line_style(WHITE)
+                    .draw()?;
+                for &(estimator, model) in &series {
+                    let look = series_look(estimator, model);
+                    let points: Vec<&&CalibrationRow> = rows
+                        .iter()
+                        .filter(|r| r.estimator == estimator && r.error_model == model)
+                        .collect();
+                    let line_points = points.iter().map(|r| (r.window_s, r.rmse_cm_s)).collect();
+                    line(&mut chart, line_points, look.color, look.stroke)?;
+                    chart.draw_series(
+                        points.iter().map(|r| {
+                            Circle::new((r.window_s, r.rmse_cm_s), 3, look.color.filled())
+                        }),
+                    )?;
+                    chart.draw_series(points.iter().filter(|r| r.is_t_conv).map(|r| {
+                        Circle::new((r.window_s, r.rmse_cm_s), 8, BLACK.stroke_width(2))
+                    }))?;
+                }
+            }
+            let mut entries: Vec<(Swatch, String)> = series
+                .iter()
+                .map(|&(estimator, model)| {
+                    let look = series_look(estimator, model);
+                    (Swatch::Line(look.color, look.stroke), look.label)
+                })
+                .collect();
+            entries.push((Swatch::Ring, "T_conv".into()));
+            legend(&legend_area, "estimator", &entries)
+        })?;
+    Ok(Ok(Drawn {
+        stem: "calibration",
+        caption,
+        svg,
+    }))
+}
+
+/// One bar of a grouped bar chart.
+struct Bar {
+    group: usize,
+    estimator: EstimatorKind,
+    value: f64,
+    spread: Option<f64>,
+}
+
+/// Grouped bars with their values written on them; bars beyond `floor` are cut at it
+/// and keep their true value as text.
+fn bar_panel(
+    area: &Area,
+    title: &str,
+    groups: &[String],
+    bars: &[Bar],
+    y_desc: &str,
+    floor: Option<f64>,
+) -> PlotResult {
+    let top = bars
+        .iter()
+        .map(|b| b.value + b.spread.unwrap_or(0.0))
+        .fold(0.0f64, f64::max);
+    let bottom = bars.iter().map(|b| b.value).fold(0.0f64, f64::min);
+    let bottom = floor.map_or(bottom, |f| bottom.max(f));
+    let span = (top - bottom).max(1e-9);
+    let y_range = (bottom - 0.08 * span * f64::from(bottom < 0.0))..(top + 0.15 * span);
+    let mut chart = ChartBuilder::on(area)
+        .caption(title, font(PANEL_TITLE_SIZE))
+        .margin(12)
+        .x_label_area_size(45)
+        .y_label_area_size(70)
+        .build_cartesian_2d(-0.5..(groups.len() as f64 - 0.5), y_range.clone())?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(groups.len() + 1)
+        .x_label_formatter(&|x| category(groups, *x))
+        .y_label_formatter(&tick)
+        .y_desc(y_desc)
+        .label_style(font(LABEL_SIZE))
+        .axis_desc_style(font(LABEL_SIZE))
+        .light_line_style(WHITE)
+        .draw()?;
+    if y_range.start < 0.0 {
+        chart.draw_series(std::iter::once(PathElement::new(
+            vec![(-0.5, 0.0), (groups.len() as f64 - 0.5, 0.0)],
+            BLACK.stroke_width(1),
+        )))?;
+    }
+    for (group, _) in groups.iter().enumerate() {
+        let members: Vec<&Bar> = bars.iter().filter(|b| b.group == group).collect();
+        let width = 0.8 / members.len().max(1) as f64;
+        for (j, bar) in members.iter().enumerate() {
+            let x0 = group as f64 - 0.4 + j as f64 * width;
+            let (x1, middle) = (x0 + 0.92 * width, x0 + 0.46 * width);
+            let shown = bar.value.max(y_range.start);
+            chart.draw_series(std::iter::once(Rectangle::new(
+                [(x0, 0.0), (x1, shown)],
+                estimator_color(bar.estimator).filled(),
+            )))?;
+            if let Some(spread) = bar.spread.filter(|s| *s > 0.0) {
+                let (low, high) = (bar.value - spread, bar.value + spread);
+                chart.draw_series(std::iter::once(PathElement::new(
+                    vec![(middle, low.max(y_range.start)), (middle, high)],
+                    BLACK.stroke_width(1),
+                )))?;
+            }
+            if bar.value < y_range.start {
+                // Cut at the axis: the true value goes inside the bar's end.
+                chart.draw_series(std::iter::once(Text::new(
+                    format!("{:.0}", bar.value),
+                    (middle, y_range.start),
+                    anchored(LABEL_SIZE - 3, HPos::Center, VPos::Bottom).color(&WHITE),
+                )))?;
+                continue;
+            }
+            let text = if y_desc.contains('%') {
+                format!("{:+.0}", bar.value)
+            } else {
+                format!("{:.2}", bar.value)
+            };
+            let (y, v) = if shown >= 0.0 {
+                (shown + bar.spread.unwrap_or(0.0), VPos::Bottom)
+            } else {
+                (shown, VPos::Top)
+            };
+            chart.draw_series(std::iter::once(Text::new(
+                text,
+                (middle, y),
+                anchored(LABEL_SIZE - 2, HPos::Center, v),
+            )))?;
+        }
+    }
+    Ok(())
+}
+
+fn bar_legend(area: &Area, estimators: &[EstimatorKind], note: &str) -> PlotResult {
+    let mut entries: Vec<(Swatch, String)> = estimators
+        .iter()
+        .map(|e| (Swatch::Bar(estimator_color(*e)), e.label().to_string()))
+        .collect();
+    if !note.is_empty() {
+        entries.push((Swatch::Line(BLACK, Stroke::Solid), note.to_string()));
+    }
+    legend(area, "estimator", &entries)
+}
+
+/// RMSE at the first (shortest) calibration window for EM2, EM4 and EM5 against the
+/// baseline: the paper's bar figure, one panel per DVL.
+fn rmse_first_window(run: &StoredRun) -> PlotResult<Outcome> {
+    let Some(window) = run
+        .calibration
+        .iter()
+        .map(|r| r.window_s)
+        .min_by(f64::total_cmp)
+    else {
+        return Ok(Err("calibration.parquet is empty".into()));
+    };
+    let models: Vec<ErrorModel> = [ErrorModel::Em2, ErrorModel::Em4, ErrorModel::Em5]
+        .into_iter()
+        .filter(|m| run.calibration.iter().any(|r| r.error_model == Some(*m)))
+        .collect();
+    let has_baseline = run
+        .calibration
+        .iter()
+        .any(|r| r.estimator == EstimatorKind::Baseline);
+    if models.is_empty() || !has_baseline {
+        return Ok(Err(
+            "the run holds no baseline or none of EM2, EM4, EM5".into()
+        ));
+    }
+    let estimators: Vec<EstimatorKind> = [EstimatorKind::LeastSquares, EstimatorKind::Dcnet]
+        .into_iter()
+        .filter(|e| run.calibration.iter().any(|r| r.estimator == *e))
+        .collect();
+    let mut groups = vec!["baseline".to_string()];
+    groups.extend(models.iter().map(ToString::to_string));
+    let dvls = run.dvls();
+    let caption = format!(
+        "RMSE with the terms of the first {window} s of {}: mean ± std over {} runs",
+        calibration_name(run),
+        run.spec.calibration.monte_carlo_runs
+    );
+    let width = 520 * dvls.len() as u32 + LEGEND_WIDTH;
+    let svg = draw_svg((width, 560), |root| {
+        let root = root.titled(&caption, font(TITLE_SIZE))?;
+        let (panels, legend_area) = root.split_horizontally(width - LEGEND_WIDTH);
+        for (area, dvl) in panels.split_evenly((1, dvls.len())).iter().zip(&dvls) {
+            let at = |estimator: EstimatorKind, model: Option<ErrorModel>| {
+                run.calibration.iter().find(|r| {
+                    &r.dvl == dvl
+                        && r.window_s == window
+                        && r.estimator == estimator
+                        && r.error_model == model
+                })
+            };
+            let mut bars = Vec::new();
+            if let Some(r) = at(EstimatorKind::Baseline, None) {
+                bars.push(Bar {
+                    group: 0,
+                    estimator: EstimatorKind::Baseline,
+                    value: r.rmse_cm_s,
+                    spread: Some(r.rmse_std_cm_s),
+                });
+            }
+            for (i, model) in models.iter().enumerate() {
+                for &estimator in &estimators {
+                    if let Some(r) = at(estimator, Some(*model)) {
+                        bars.push(Bar {
+                            group: i + 1,
+                            estimator,
+                            value: r.rmse_cm_s,
+                            spread: Some(r.rmse_std_cm_s),
+                        });
+                    }
+                }
+            }
+            bar_panel(area, dvl, &groups, &bars, "RMSE [cm/s]", None)?;
+        }
+        let mut shown = vec![EstimatorKind::Baseline];
+        shown.extend(&estimators);
+        bar_legend(&legend_area, &shown, "± std over runs")
+    })?;
+    Ok(Ok(Drawn {
+        stem: "rmse_first_window",
+        caption,
+        svg,
+    }))
+}
+
+/// Improvement over the baseline per test trajectory of each estimator with EM5.
+fn improvement_em5(run: &StoredRun) -> PlotResult<Outcome> {
+    let rows: Vec<_> = run
+        .evaluation
+        .iter()
+        .filter(|r| r.error_model == Some(ErrorModel::Em5) && r.improvement_pct.is_some())
+        .collect();
+    if rows.is_empty() {
+        return Ok(Err(
+            "the run holds no EM5 estimator with a baseline to compare".into(),
+        ));
+    }
+    let mut trajectories: Vec<String> = Vec::new();
+    for row in &run.evaluation {
+        if !trajectories.contains(&row.trajectory) {
+            trajectories.push(row.trajectory.clone());
+        }
+    }
+    let estimators: Vec<EstimatorKind> = [EstimatorKind::LeastSquares, EstimatorKind::Dcnet]
+        .into_iter()
+        .filter(|e| rows.iter().any(|r| r.estimator == *e))
+        .collect();
+    let dvls = run.dvls();
+    let caption = "Improvement in RMSE over the baseline with EM5, per test trajectory".to_string();
+    let width = 520 * dvls.len() as u32 + LEGEND_WIDTH;
+    let svg = draw_svg((width, 560), |root| {
+        let root = root.titled(&caption, font(TITLE_SIZE))?;
+        let (panels, legend_area) = root.split_horizontally(width - LEGEND_WIDTH);
+        for (area, dvl) in panels.split_evenly((1, dvls.len())).iter().zip(&dvls) {
+            let bars: Vec<Bar> = rows
+                .iter()
+                .filter(|r| &r.dvl == dvl)
+                .filter_map(|r| {
+                    Some(Bar {
+                        group: trajectories.iter().position(|t| *t == r.trajectory)?,
+                        estimator: r.estimator,
+                        value: r.improvement_pct?,
+                        spread: None,
+                    })
+                })
+                .collect();
+            bar_panel(
+                area,
+                dvl,
+                &trajectories,
+                &bars,
+                "improvement over the baseline [%]",
+                Some(-100.0),
+            )?;
+        }
+        bar_legend(&legend_area, &estimators, "")?;
+        legend_area.draw(&Text::new(
+            "bars below -100 % are cut;".to_string(),
+            (12, 140),
+            anchored(LABEL_SIZE - 2, HPos::Left, VPos::Center),
+        ))?;
+        legend_area.draw(&Text::new(
+            "their value is written in white".to_string(),
+            (12, 158),
+            anchored(LABEL_SIZE - 2, HPos::Left, VPos::Center),
+        ))?;
+        Ok(())
+    })?;
+    Ok(Ok(Drawn {
+        stem: "improvement_em5",
+        caption,
+        svg,
+    }))
+}
+
+/// The distribution over runs of each estimator's RMSE at its T_conv, one panel per
+/// DVL, the floor's mean drawn across.
+fn monte_carlo_spread(run: &StoredRun) -> PlotResult<Outcome> {
+    let series = series_of(&run.calibration);
+    if series.is_empty() {
+        return Ok(Err("calibration.parquet is empty".into()));
+    }
+    let dvls = run.dvls();
+    // The first series on top.
+    let names: Vec<String> = series
+        .iter()
+        .rev()
+        .map(|&(e, m)| series_look(e, m).label)
+        .collect();
+    let caption = format!(
+        "RMSE on {} at T_conv over {} Monte Carlo runs (box: quartiles, whiskers: 1.5 IQR)",
+        calibration_name(run),
+        run.spec.calibration.monte_carlo_runs
+    );
+    let width = 560 * dvls.len() as u32;
+    let height = 140 + 34 * series.len() as u32;
+    let svg = draw_svg((width, height), |root| {
+        let root = root.titled(&caption, font(TITLE_SIZE))?;
+        for (area, dvl) in root.split_evenly((1, dvls.len())).iter().zip(&dvls) {
+            let samples: Vec<Vec<f64>> = series
+                .iter()
+                .map(|&(estimator, model)| {
+                    let t_conv = run.calibration.iter().find(|r| {
+                        &r.dvl == dvl
+                            && r.estimator == estimator
+                            && r.error_model == model
+                            && r.is_t_conv
+                    });
+                    run.runs
+                        .iter()
+                        .filter(|r| {
+                            r.phase == Phase::Calibration
+                                && &r.dvl == dvl
+                                && r.estimator == estimator
+                                && r.error_model == model
+                                && Some(r.window_s) == t_conv.map(|t| t.window_s)
+                        })
+                        .map(|r| r.rmse_cm_s)
+                        .collect()
+                })
+                .collect();
+            let mut chart = ChartBuilder::on(area)
+                .caption(dvl, font(PANEL_TITLE_SIZE))
+                .margin(12)
+                .x_label_area_size(45)
+                .y_label_area_size(150)
+                .build_cartesian_2d(
+                    log_range(samples.iter().flatten().copied()).log_scale(),
+                    -0.5..(series.len() as f64 - 0.5),
+                )?;
+            chart
+                .configure_mesh()
+                .disable_y_mesh()
+                .y_labels(series.len() + 1)
+                .y_label_formatter(&|y| category(&names, *y))
+                .x_label_formatter(&log_tick)
+                .x_desc("RMSE at T_conv [cm/s]")
+                .label_style(font(LABEL_SIZE))
+                .axis_desc_style(font(LABEL_SIZE))
+                .light_line_style(WHITE)
+                .draw()?;
+            for (i, (values, &(estimator, model))) in samples.iter().zip(&series).enumerate() {
+                if values.is_empty() {
+                    continue;
+                }
+                let color = series_look(estimator, model).color;
+                let [low, q1, median, q3, high] = box_stats(values);
+                let y = (series.len() - 1 - i) as f64;
+                chart.draw_series([
+                    Rectangle::new([(q1, y - 0.3), (q3, y + 0.3)], color.mix(0.25).filled()),
+                    Rectangle::new([(q1, y - 0.3), (q3, y + 0.3)], color.stroke_width(1)),
+                ])?;
+                chart.draw_series([
+                    PathElement::new(
+                        vec![(median, y - 0.3), (median, y + 0.3)],
+                        color.stroke_width(3),
+                    ),
+                    PathElement::new(vec![(low, y), (q1, y)], color.stroke_width(1)),
+                    PathElement::new(vec![(q3, y), (high, y)], color.stroke_width(1)),
+                ])?;
+                chart.draw_series(
+                    values
+                        .iter()
+                        .filter(|v| **v < low || **v > high)
+                        .map(|v| Circle::new((*v, y), 2, color.filled())),
+                )?;
+                if estimator == EstimatorKind::Floor {
+                    let mean = values.iter().sum::<f64>() / values.len() as f64;
+                    line(
+                        &mut chart,
+                        vec![(mean, -0.5), (mean, series.len() as f64 - 0.5)],
+                        GREY,
+                        Stroke::Dotted,
+                    )?;
+                }
+            }
+        }
+        Ok(())
+    })?;
+    Ok(Ok(Drawn {
+        stem: "monte_carlo_spread",
+        caption,
+        svg,
+    }))
+}
+
+/// Training and validation loss per epoch of each error model, log scale.
+fn training_loss(run: &StoredRun) -> PlotResult<Outcome> {
+    if run.training.is_empty() {
+        return Ok(Err(
+            "the run trained no DCNet (training.parquet is empty)".into()
+        ));
+    }
+    let mut models: Vec<ErrorModel> = run.training.iter().map(|e| e.error_model).collect();
+    models.dedup();
+    let epochs = run
+        .training
+        .iter()
+        .map(|e| e.record.epoch)
+        .max()
+        .unwrap_or(1) as f64;
+    let caption = "DCNet closed-loop loss per epoch: training solid, validation dashed".to_string();
+    let width = 1000;
+    let svg = draw_svg((width, 620), |root| {
+        let root = root.titled(&caption, font(TITLE_SIZE))?;
+        let (area, legend_area) = root.split_horizontally(width - LEGEND_WIDTH);
+        let losses = run
+            .training
+            .iter()
+            .flat_map(|e| [e.record.train_loss, e.record.validation_loss]);
+        let mut chart = ChartBuilder::on(&area)
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(80)
+            .build_cartesian_2d(0.5..(epochs + 0.5), log_range(losses).log_scale())?;
+        chart
+            .configure_mesh()
+            .x_desc("epoch")
+            .y_desc("loss [(cm/s)²]")
+            .x_label_formatter(&tick)
+            .y_label_formatter(&log_tick)
+            .label_style(font(LABEL_SIZE))
+            .axis_desc_style(font(LABEL_SIZE))
+            .light_line_style(WHITE)
+            .draw()?;
+        let mut entries = Vec::new();
+        for model in &models {
+            let look = series_look(EstimatorKind::Dcnet, Some(*model));
+            let epochs: Vec<_> = run
+                .training
+                .iter()
+                .filter(|e| e.error_model == *model)
+                .collect();
+            let train = epochs
+                .iter()
+                .map(|e| (e.record.epoch as f64, e.record.train_loss))
+                .collect();
+            let validation = epochs
+                .iter()
+                .map(|e| (e.record.epoch as f64, e.record.validation_loss))
+                .collect();
+            line(&mut chart, train, look.color, Stroke::Solid)?;
+            line(&mut chart, validation, look.color, Stroke::Dashed)?;
+            chart.draw_series(epochs.iter().filter(|e| e.is_best).map(|e| {
+                Circle::new(
+                    (e.record.epoch as f64, e.record.validation_loss),
+                    5,
+                    look.color.filled(),
+                )
+            }))?;
+            entries.push((
+                Swatch::Line(look.color, Stroke::Solid),
+                format!("{model} training"),
+            ));
+            entries.push((
+                Swatch::Line(look.color, Stroke::Dashed),
+                format!("{model} validation"),
+            ));
+        }
+        entries.push((Swatch::Dot(BLACK), "best validation epoch".into()));
+        legend(&legend_area, "error model", &entries)
+    })?;
+    Ok(Ok(Drawn {
+        stem: "training_loss",
+        caption,
+        svg,
+    }))
+}

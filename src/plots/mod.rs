@@ -1,0 +1,100 @@
+//! The figures of a run, drawn from its results folder alone: `run` calls this at its
+//! end and `plot` calls it on a stored folder. [`figures`] draws each figure as SVG with
+//! plotters, [`render`] writes it as PNG and as SVG with the text outlined, both from the
+//! embedded font.
+
+pub mod draw;
+pub mod figures;
+pub mod render;
+
+use crate::results::read::StoredRun;
+use crate::results::write_atomic;
+use std::path::{Path, PathBuf};
+
+/// Which files each figure is written as.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Format {
+    Png,
+    Svg,
+    Both,
+}
+
+impl Format {
+    fn extensions(self) -> &'static [&'static str] {
+        match self {
+            Format::Png => &["png"],
+            Format::Svg => &["svg"],
+            Format::Both => &["png", "svg"],
+        }
+    }
+}
+
+/// A figure as written, or why the run has none.
+#[derive(Debug, Clone)]
+pub struct Written {
+    pub stem: &'static str,
+    /// The caption, or why the figure is absent.
+    pub caption: Result<String, String>,
+    pub files: Vec<PathBuf>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum PlotError {
+    #[error("drawing {stem}: {message}")]
+    Draw { stem: &'static str, message: String },
+    #[error(transparent)]
+    Render(#[from] render::RenderError),
+    #[error("writing {}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+}
+
+/// Draws every figure of `run` into `folder`, each file written atomically.
+pub fn write_all(
+    run: &StoredRun,
+    folder: &Path,
+    format: Format,
+) -> Result<Vec<Written>, PlotError> {
+    render::register_font();
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| PlotError::Io { path, source }
+    };
+    std::fs::create_dir_all(folder).map_err(io(folder))?;
+    let drawn = figures::all(run).map_err(|e| PlotError::Draw {
+        stem: "figures",
+        message: e.to_string(),
+    })?;
+    let mut written = Vec::new();
+    for (stem, outcome) in drawn {
+        let figure = match outcome {
+            Ok(figure) => figure,
+            Err(why) => {
+                written.push(Written {
+                    stem,
+                    caption: Err(why),
+                    files: Vec::new(),
+                });
+                continue;
+            }
+        };
+        let mut files = Vec::new();
+        for extension in format.extensions() {
+            let bytes = match *extension {
+                "png" => render::png(&figure.svg)?,
+                _ => render::svg_with_outlined_text(&figure.svg)?.into_bytes(),
+            };
+            let path = folder.join(format!("{}.{extension}", figure.stem));
+            write_atomic(&path, &bytes).map_err(io(&path))?;
+            files.push(path);
+        }
+        written.push(Written {
+            stem,
+            caption: Ok(figure.caption),
+            files,
+        });
+    }
+    Ok(written)
+}

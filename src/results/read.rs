@@ -1,0 +1,399 @@
+//! Reads a results folder back, for `plot` and the report: the Parquet tables into the
+//! rows the run computed, the resolved spec, the manifest and the published values.
+//! Each table's schema is checked against the one the writer produces, so a missing
+//! file or a foreign schema is an error that names the file, never a wrong figure.
+
+use super::{
+    MANIFEST, Manifest, PUBLISHED, SPEC, TABLES, calibration_batch, evaluation_batch,
+    monte_carlo_batch, training_batch, trajectories_batch,
+};
+use crate::Vec3;
+use crate::estimators::{Correction, ErrorModel, EstimatorKind};
+use crate::evaluate::{CalibrationRow, EvaluationRow, Phase, RunRow};
+use crate::published::Published;
+use crate::spec::{SpecFile, TomlFile};
+use crate::train::EpochRecord;
+use arrow_array::{Array, BooleanArray, Float64Array, RecordBatch, StringArray, UInt32Array};
+use arrow_schema::Schema;
+use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, thiserror::Error)]
+pub enum ReadError {
+    #[error("{}: missing; a results folder written by `dcnet-exp run` holds it", path.display())]
+    Missing { path: PathBuf },
+    #[error("{}: {message}", path.display())]
+    Invalid { path: PathBuf, message: String },
+}
+
+/// Everything a run stored.
+#[derive(Debug, Clone)]
+pub struct StoredRun {
+    pub folder: PathBuf,
+    pub spec: SpecFile,
+    pub manifest: Manifest,
+    pub published: Option<Published>,
+    pub runs: Vec<RunRow>,
+    pub calibration: Vec<CalibrationRow>,
+    pub evaluation: Vec<EvaluationRow>,
+    pub training: Vec<StoredEpoch>,
+    pub trajectories: Vec<StoredTrajectory>,
+}
+
+/// One epoch of one error model's training.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StoredEpoch {
+    pub error_model: ErrorModel,
+    pub record: EpochRecord,
+    pub is_best: bool,
+}
+
+/// The GT velocity of one trajectory.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StoredTrajectory {
+    pub name: String,
+    /// "train", "calibration", "test".
+    pub roles: Vec<String>,
+    pub time_s: Vec<f64>,
+    pub velocity_m_s: Vec<Vec3>,
+}
+
+impl StoredRun {
+    pub fn read(folder: &Path) -> Result<StoredRun, ReadError> {
+        let invalid = |path: &Path, message: String| ReadError::Invalid {
+            path: path.to_path_buf(),
+            message,
+        };
+        let spec_path = existing(&folder.join(SPEC))?;
+        let spec = TomlFile::<SpecFile>::read(&spec_path)
+            .map_err(|e| invalid(&spec_path, e.to_string()))?
+            .value;
+        let manifest_path = existing(&folder.join(MANIFEST))?;
+        let manifest = std::fs::read(&manifest_path)
+            .map_err(|e| e.to_string())
+            .and_then(|bytes| serde_json::from_slice(&bytes).map_err(|e| e.to_string()))
+            .map_err(|message| invalid(&manifest_path, message))?;
+        let published_path = folder.join(PUBLISHED);
+        let published = if published_path.exists() {
+            Some(Published::read(&published_path).map_err(|m| invalid(&published_path, m))?)
+        } else {
+            None
+        };
+        let [runs, calibration, evaluation, training, trajectories] = TABLES;
+        Ok(StoredRun {
+            folder: folder.to_path_buf(),
+            spec,
+            manifest,
+            published,
+            runs: table(folder, runs, run_rows)?,
+            calibration: table(folder, calibration, calibration_rows)?,
+            evaluation: table(folder, evaluation, evaluation_rows)?,
+            training: table(folder, training, epoch_rows)?,
+            trajectories: gather_trajectories(table(folder, trajectories, trajectory_rows)?),
+        })
+    }
+
+    /// The stored DVL names, in the order the spec lists them.
+    pub fn dvls(&self) -> Vec<String> {
+        self.spec.dvl.iter().map(|d| d.name.clone()).collect()
+    }
+}
+
+fn existing(path: &Path) -> Result<PathBuf, ReadError> {
+    if path.is_file() {
+        Ok(path.to_path_buf())
+    } else {
+        Err(ReadError::Missing {
+            path: path.to_path_buf(),
+        })
+    }
+}
+
+/// Reads the table `file` of `folder`, checks its schema and turns each batch into rows.
+fn table<T>(
+    folder: &Path,
+    file: &str,
+    rows: fn(&Batch) -> Result<Vec<T>, String>,
+) -> Result<Vec<T>, ReadError> {
+    let path = existing(&folder.join(file))?;
+    let invalid = |message: String| ReadError::Invalid {
+        path: path.clone(),
+        message,
+    };
+    let opened = std::fs::File::open(&path).map_err(|e| invalid(e.to_string()))?;
+    let builder = ParquetRecordBatchReaderBuilder::try_new(opened)
+        .map_err(|e| invalid(format!("not a Parquet file: {e}")))?;
+    check_schema(builder.schema(), &expected_schema(file)).map_err(invalid)?;
+    let mut out = Vec::new();
+    for batch in builder.build().map_err(|e| invalid(e.to_string()))? {
+        let batch = batch.map_err(|e| invalid(e.to_string()))?;
+        out.extend(rows(&Batch(&batch)).map_err(invalid)?);
+    }
+    Ok(out)
+}
+
+/// The schema the writer gives `file`.
+fn expected_schema(file: &str) -> std::sync::Arc<Schema> {
+    let batch = match file {
+        "monte_carlo.parquet" => monte_carlo_batch(&[]),
+        "calibration.parquet" => calibration_batch(&[]),
+        "evaluation.parquet" => evaluation_batch(&[]),
+        "training.parquet" => training_batch(&[]),
+        "trajectories.parquet" => trajectories_batch(&[], 1.0),
+        other => unreachable!("{other} is not a results table"),
+    };
+    batch.schema()
+}
+
+fn check_schema(found: &Schema, expected: &Schema) -> Result<(), String> {
+    for field in expected.fields() {
+        match found.field_with_name(field.name()) {
+            Err(_) => {
+                return Err(format!(
+                    "column `{}` is missing: this is not the schema dcnet-exp writes",
+                    field.name()
+                ));
+            }
+            Ok(column) if column.data_type() != field.data_type() => {
+                return Err(format!(
+                    "column `{}` holds {}, expected {}: this is not the schema dcnet-exp writes",
+                    field.name(),
+                    column.data_type(),
+                    field.data_type()
+                ));
+            }
+            Ok(_) => {}
+        }
+    }
+    Ok(())
+}
+
+/// A batch whose schema was checked, read column by column.
+struct Batch<'a>(&'a RecordBatch);
+
+impl Batch<'_> {
+    fn column<A: Array + 'static>(&self, name: &str) -> &A {
+        self.0
+            .column_by_name(name)
+            .and_then(|c| c.as_any().downcast_ref::<A>())
+            .expect("the schema was checked")
+    }
+
+    fn no_nulls(&self, name: &str) -> Result<(), String> {
+        let column = self.0.column_by_name(name).expect("the schema was checked");
+        if column.null_count() > 0 {
+            return Err(format!("column `{name}` has empty values"));
+        }
+        Ok(())
+    }
+
+    fn floats(&self, name: &str) -> Result<Vec<f64>, String> {
+        self.no_nulls(name)?;
+        Ok(self.column::<Float64Array>(name).values().to_vec())
+    }
+
+    fn optional_floats(&self, name: &str) -> Vec<Option<f64>> {
+        self.column::<Float64Array>(name).iter().collect()
+    }
+
+    fn uints(&self, name: &str) -> Result<Vec<usize>, String> {
+        self.no_nulls(name)?;
+        Ok(self
+            .column::<UInt32Array>(name)
+            .values()
+            .iter()
+            .map(|&v| v as usize)
+            .collect())
+    }
+
+    fn bools(&self, name: &str) -> Result<Vec<bool>, String> {
+        self.no_nulls(name)?;
+        let column = self.column::<BooleanArray>(name);
+        Ok((0..column.len()).map(|i| column.value(i)).collect())
+    }
+
+    fn strings(&self, name: &str) -> Result<Vec<String>, String> {
+        self.no_nulls(name)?;
+        Ok(self
+            .column::<StringArray>(name)
+            .iter()
+            .map(|s| s.unwrap_or_default().to_string())
+            .collect())
+    }
+
+    /// A column of names parsed into `T`; `optional` allows empty values.
+    fn parsed<T: std::str::FromStr<Err = String>>(
+        &self,
+        name: &str,
+        optional: bool,
+    ) -> Result<Vec<Option<T>>, String> {
+        if !optional {
+            self.no_nulls(name)?;
+        }
+        self.column::<StringArray>(name)
+            .iter()
+            .map(|value| {
+                value
+                    .map(|v| v.parse().map_err(|e| format!("column `{name}`: {e}")))
+                    .transpose()
+            })
+            .collect()
+    }
+
+    fn required<T: std::str::FromStr<Err = String>>(&self, name: &str) -> Result<Vec<T>, String> {
+        Ok(self
+            .parsed(name, false)?
+            .into_iter()
+            .map(|v| v.expect("no nulls"))
+            .collect())
+    }
+}
+
+fn run_rows(batch: &Batch) -> Result<Vec<RunRow>, String> {
+    let run = batch.uints("run")?;
+    let dvl = batch.strings("dvl")?;
+    let estimator: Vec<EstimatorKind> = batch.required("estimator")?;
+    let error_model = batch.parsed("error_model", true)?;
+    let phase: Vec<Phase> = batch.required("phase")?;
+    let window_s = batch.floats("window_s")?;
+    let trajectory = batch.strings("trajectory")?;
+    let rmse = batch.floats("rmse_cm_s")?;
+    let terms = [
+        "scale_x_pct",
+        "scale_y_pct",
+        "scale_z_pct",
+        "bias_x_cm_s",
+        "bias_y_cm_s",
+        "bias_z_cm_s",
+    ]
+    .map(|name| batch.floats(name));
+    let [sx, sy, sz, bx, by, bz] = terms;
+    let (sx, sy, sz, bx, by, bz) = (sx?, sy?, sz?, bx?, by?, bz?);
+    Ok((0..run.len())
+        .map(|i| RunRow {
+            run: run[i],
+            dvl: dvl[i].clone(),
+            estimator: estimator[i],
+            error_model: error_model[i],
+            phase: phase[i],
+            window_s: window_s[i],
+            trajectory: trajectory[i].clone(),
+            rmse_cm_s: rmse[i],
+            correction: Correction {
+                scale: [sx[i] / 100.0, sy[i] / 100.0, sz[i] / 100.0],
+                bias_m_s: [bx[i] / 100.0, by[i] / 100.0, bz[i] / 100.0],
+            },
+        })
+        .collect())
+}
+
+fn calibration_rows(batch: &Batch) -> Result<Vec<CalibrationRow>, String> {
+    let dvl = batch.strings("dvl")?;
+    let estimator: Vec<EstimatorKind> = batch.required("estimator")?;
+    let error_model = batch.parsed("error_model", true)?;
+    let window_s = batch.floats("window_s")?;
+    let rmse = batch.floats("rmse_cm_s")?;
+    let std = batch.floats("rmse_std_cm_s")?;
+    let is_t_conv = batch.bools("is_t_conv")?;
+    Ok((0..dvl.len())
+        .map(|i| CalibrationRow {
+            dvl: dvl[i].clone(),
+            estimator: estimator[i],
+            error_model: error_model[i],
+            window_s: window_s[i],
+            rmse_cm_s: rmse[i],
+            rmse_std_cm_s: std[i],
+            is_t_conv: is_t_conv[i],
+        })
+        .collect())
+}
+
+fn evaluation_rows(batch: &Batch) -> Result<Vec<EvaluationRow>, String> {
+    let dvl = batch.strings("dvl")?;
+    let estimator: Vec<EstimatorKind> = batch.required("estimator")?;
+    let error_model = batch.parsed("error_model", true)?;
+    let trajectory = batch.strings("trajectory")?;
+    let t_conv_s = batch.floats("t_conv_s")?;
+    let rmse = batch.floats("rmse_cm_s")?;
+    let std = batch.floats("rmse_std_cm_s")?;
+    let improvement = batch.optional_floats("improvement_pct");
+    Ok((0..dvl.len())
+        .map(|i| EvaluationRow {
+            dvl: dvl[i].clone(),
+            estimator: estimator[i],
+            error_model: error_model[i],
+            trajectory: trajectory[i].clone(),
+            t_conv_s: t_conv_s[i],
+            rmse_cm_s: rmse[i],
+            rmse_std_cm_s: std[i],
+            improvement_pct: improvement[i],
+        })
+        .collect())
+}
+
+fn epoch_rows(batch: &Batch) -> Result<Vec<StoredEpoch>, String> {
+    let error_model: Vec<ErrorModel> = batch.required("error_model")?;
+    let epoch = batch.uints("epoch")?;
+    let train_loss = batch.floats("train_loss")?;
+    let validation_loss = batch.floats("validation_loss")?;
+    let seconds = batch.floats("seconds")?;
+    let samples_per_s = batch.floats("samples_per_s")?;
+    let is_best = batch.bools("is_best")?;
+    Ok((0..epoch.len())
+        .map(|i| StoredEpoch {
+            error_model: error_model[i],
+            record: EpochRecord {
+                epoch: epoch[i],
+                train_loss: train_loss[i],
+                validation_loss: validation_loss[i],
+                seconds: seconds[i],
+                samples_per_s: samples_per_s[i],
+            },
+            is_best: is_best[i],
+        })
+        .collect())
+}
+
+/// One sample of one trajectory: name, roles, time, velocity.
+type TrajectorySample = (String, String, f64, Vec3);
+
+fn trajectory_rows(batch: &Batch) -> Result<Vec<TrajectorySample>, String> {
+    let name = batch.strings("trajectory")?;
+    let roles = batch.strings("roles")?;
+    let time_s = batch.floats("time_s")?;
+    let [vx, vy, vz] = ["vx_m_s", "vy_m_s", "vz_m_s"].map(|c| batch.floats(c));
+    let (vx, vy, vz) = (vx?, vy?, vz?);
+    Ok((0..name.len())
+        .map(|i| {
+            (
+                name[i].clone(),
+                roles[i].clone(),
+                time_s[i],
+                [vx[i], vy[i], vz[i]],
+            )
+        })
+        .collect())
+}
+
+/// Groups the samples by trajectory, in the order they come.
+fn gather_trajectories(samples: Vec<TrajectorySample>) -> Vec<StoredTrajectory> {
+    let mut trajectories: Vec<StoredTrajectory> = Vec::new();
+    for (name, roles, time_s, velocity) in samples {
+        if trajectories.last().is_none_or(|t| t.name != name) {
+            trajectories.push(StoredTrajectory {
+                name,
+                roles: roles
+                    .split(',')
+                    .filter(|r| !r.is_empty())
+                    .map(String::from)
+                    .collect(),
+                time_s: Vec::new(),
+                velocity_m_s: Vec::new(),
+            });
+        }
+        let trajectory = trajectories.last_mut().expect("just pushed");
+        trajectory.time_s.push(time_s);
+        trajectory.velocity_m_s.push(velocity);
+    }
+    trajectories
+}

@@ -1,0 +1,341 @@
+//! The figures and the report, drawn from a stored results folder: every figure is a
+//! decodable, non-blank image of its size, drawn the same by `run` and by `plot` from
+//! the Parquet files alone; the report's numbers are the Parquet numbers beside the
+//! published ones; a broken results folder is refused with exit code 1.
+
+mod common;
+
+use common::*;
+use std::path::Path;
+
+/// The figures and their PNG sizes: the SVG size of each figure, twice.
+const FIGURES: [(&str, (u32, u32)); 6] = [
+    ("velocity", (2200, 1520)),
+    ("calibration", (2720, 1240)),
+    ("rmse_first_window", (2560, 1120)),
+    ("improvement_em5", (2560, 1120)),
+    ("monte_carlo_spread", (2240, 1096)),
+    ("training_loss", (2000, 1240)),
+];
+
+/// A small quick run: 3 Monte Carlo runs, 2 epochs.
+fn small_quick_run(dir: &Path, extra: &[&str]) {
+    let mut args = vec![
+        "run",
+        "experiments/quick.toml",
+        "--set",
+        "calibration.monte_carlo_runs=3",
+        "--set",
+        "training.epochs=2",
+    ];
+    args.extend(extra);
+    let output = dcnet(dir, &args);
+    assert!(output.status.success(), "{}", stderr(&output));
+}
+
+fn assert_png(path: &Path, size: (u32, u32)) {
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut reader = png::Decoder::new(std::io::Cursor::new(bytes))
+        .read_info()
+        .unwrap();
+    let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut pixels).unwrap();
+    assert_eq!((info.width, info.height), size, "{}", path.display());
+    let channels = info.color_type.samples();
+    let inked = pixels
+        .chunks(channels)
+        .filter(|p| p[..3].iter().any(|c| *c < 200))
+        .count();
+    let share = inked as f64 / (size.0 * size.1) as f64;
+    assert!(
+        share > 0.01,
+        "{}: only {:.2} % of the pixels are drawn on",
+        path.display(),
+        100.0 * share
+    );
+}
+
+fn assert_svg(path: &Path, size: (u32, u32)) {
+    let text = std::fs::read_to_string(path).unwrap();
+    assert!(
+        !text.contains("<text"),
+        "{}: text must be outlined",
+        path.display()
+    );
+    let tree = resvg::usvg::Tree::from_str(&text, &Default::default()).unwrap();
+    let svg_size = tree.size().to_int_size();
+    assert_eq!(
+        (2 * svg_size.width(), 2 * svg_size.height()),
+        size,
+        "{}",
+        path.display()
+    );
+}
+
+#[test]
+fn plot_draws_every_figure_from_the_parquet_files_alone_as_run_does() {
+    let project = project(false);
+    small_quick_run(project.path(), &[]);
+    let drawn_by_run = project.path().join("plots/quick");
+    let results = project.path().join("results/quick");
+    // `plot` needs no model and no spec file beyond the stored one.
+    std::fs::remove_dir_all(results.join("models")).unwrap();
+    let output = dcnet(
+        project.path(),
+        &["plot", "results/quick", "--out", "redrawn"],
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    for (stem, size) in FIGURES {
+        let png = project.path().join(format!("redrawn/quick/{stem}.png"));
+        let svg = project.path().join(format!("redrawn/quick/{stem}.svg"));
+        assert_png(&png, size);
+        assert_svg(&svg, size);
+        for file in [&png, &svg] {
+            let name = file.file_name().unwrap();
+            assert_eq!(
+                std::fs::read(file).unwrap(),
+                std::fs::read(drawn_by_run.join(name)).unwrap(),
+                "{} differs between run and plot",
+                name.display()
+            );
+        }
+    }
+    let report = std::fs::read_to_string(results.join("report.md")).unwrap();
+    assert!(
+        report.contains(
+            "![GT velocity of S1 and S3 over time, body frame](../../redrawn/quick/velocity.png)"
+        ),
+        "{report}"
+    );
+
+    let output = dcnet(
+        project.path(),
+        &[
+            "plot",
+            "results/quick",
+            "--out",
+            "svg-only",
+            "--format",
+            "svg",
+        ],
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let files = std::fs::read_dir(project.path().join("svg-only/quick")).unwrap();
+    assert!(
+        files
+            .map(|f| f.unwrap().path())
+            .all(|f| f.extension().unwrap() == "svg")
+    );
+}
+
+#[test]
+fn no_plots_writes_the_report_without_figures() {
+    let project = project(false);
+    small_quick_run(project.path(), &["--no-plots"]);
+    assert!(!project.path().join("plots").exists());
+    let report = std::fs::read_to_string(project.path().join("results/quick/report.md")).unwrap();
+    assert!(report.contains("None drawn (`--no-plots`)"), "{report}");
+    assert!(report.contains("only ours are shown"), "{report}");
+}
+
+/// The markdown table row that starts with `label` (first cell), as its cells.
+fn row(report: &str, first: &[&str]) -> Vec<String> {
+    report
+        .lines()
+        .map(|line| {
+            line.trim_matches('|')
+                .split('|')
+                .map(|cell| cell.trim().to_string())
+                .collect::<Vec<_>>()
+        })
+        .find(|cells| cells.len() > first.len() && cells[..first.len()] == *first)
+        .unwrap_or_else(|| panic!("no row {first:?} in\n{report}"))
+}
+
+#[test]
+fn the_report_puts_the_parquet_numbers_beside_the_published_ones() {
+    let project = project(true);
+    // The paper's baseline, and a published DVL2 baseline made 0.50 so that it is flagged.
+    let published = std::fs::read_to_string(repo().join("experiments/published/dcnet-paper.toml"))
+        .unwrap()
+        .replace(
+            "{ dvl = \"DVL2\", estimator = \"baseline\", rmse_cm_s = 0.74, t_conv_s = 100 }",
+            "{ dvl = \"DVL2\", estimator = \"baseline\", rmse_cm_s = 0.50, t_conv_s = 100 }",
+        );
+    std::fs::write(project.path().join("experiments/altered.toml"), published).unwrap();
+    let output = dcnet(
+        project.path(),
+        &[
+            "run",
+            "experiments/paper.toml",
+            "--no-plots",
+            "--set",
+            "estimators.kinds=[\"baseline\", \"least_squares\", \"floor\"]",
+            "--set",
+            "calibration.monte_carlo_runs=20",
+            "--set",
+            "report.published=\"altered.toml\"",
+        ],
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let results = project.path().join("results/paper");
+    let report = std::fs::read_to_string(results.join("report.md")).unwrap();
+
+    let calibration = calibration_rows(&results);
+    let at_t_conv = |dvl: &str, estimator: &str, model: Option<&str>| {
+        calibration
+            .iter()
+            .find(|r| {
+                r.selected
+                    && r.dvl == dvl
+                    && r.estimator == estimator
+                    && r.error_model.as_deref() == model
+            })
+            .unwrap()
+            .clone()
+    };
+    let baseline = at_t_conv("DVL1", "baseline", None);
+    assert_eq!(
+        row(&report, &["DVL1"])[1],
+        format!(
+            "{:.2} ({}) · paper 5.94 (100)",
+            baseline.rmse_cm_s, baseline.at
+        )
+    );
+    let baseline = at_t_conv("DVL2", "baseline", None);
+    assert_eq!(
+        row(&report, &["DVL2"])[1],
+        format!(
+            "{:.2} ({}) · paper 0.50 (100) ⚠",
+            baseline.rmse_cm_s, baseline.at
+        )
+    );
+    let em4 = at_t_conv("DVL2", "least_squares", Some("EM4"));
+    assert_eq!(
+        row(&report, &["DVL2 least squares"])[5],
+        format!("{:.2} ({})", em4.rmse_cm_s, em4.at)
+    );
+    let floor = at_t_conv("DVL2", "floor", None);
+    assert_eq!(
+        row(&report, &["DVL2 floor (true terms)"])[1],
+        format!("{:.2} ({})", floor.rmse_cm_s, floor.at)
+    );
+
+    let evaluation = evaluation_rows(&results);
+    let find = |dvl: &str, estimator: &str, model: Option<&str>, trajectory: &str| {
+        evaluation
+            .iter()
+            .find(|r| {
+                r.dvl == dvl
+                    && r.estimator == estimator
+                    && r.error_model.as_deref() == model
+                    && r.at == trajectory
+            })
+            .unwrap()
+            .clone()
+    };
+    let t10 = find("DVL1", "baseline", None, "T10Test");
+    assert_eq!(
+        row(&report, &["DVL1", "T10Test"])[2],
+        format!("{:.2} · paper 5.94", t10.rmse_cm_s)
+    );
+    let em5 = find("DVL2", "least_squares", Some("EM5"), "T6");
+    // The second table: floor, then least squares EM1..EM5.
+    let cells = report.split("Beyond the paper").nth(1).unwrap();
+    assert_eq!(
+        row(cells, &["DVL2", "T6"])[7],
+        format!(
+            "{:.2} ({:+.0} %)",
+            em5.rmse_cm_s,
+            em5.improvement_pct.unwrap()
+        )
+    );
+    // 2 calibration and 10 evaluation baseline cells have a published value; only the
+    // altered one is off by more than 10 %, unless the baseline's own T_conv moved.
+    let flagged = report
+        .lines()
+        .find(|l| l.contains("cells compared with the paper are flagged"))
+        .unwrap();
+    assert_eq!(
+        flagged,
+        "**1 of 12 cells compared with the paper are flagged ⚠.**"
+    );
+    assert!(report.contains("- backend: flex"), "{report}");
+    assert!(report.contains("| dataset  |"), "{report}");
+}
+
+#[test]
+fn a_broken_results_folder_is_refused_and_named() {
+    let project = project(false);
+    small_quick_run(project.path(), &["--no-plots"]);
+    let results = project.path().join("results/quick");
+    let plot = || dcnet(project.path(), &["plot", "results/quick", "--out", "figs"]);
+    let assert_refused = |expected: &str| {
+        let output = plot();
+        let message = stderr(&output);
+        assert_eq!(output.status.code(), Some(1), "{message}");
+        assert!(
+            message.contains(expected),
+            "expected {expected:?} in:\n{message}"
+        );
+        assert!(!project.path().join("figs").exists());
+    };
+
+    let trajectories = results.join("trajectories.parquet");
+    let saved = std::fs::read(&trajectories).unwrap();
+    std::fs::remove_file(&trajectories).unwrap();
+    assert_refused("error: results/quick/trajectories.parquet: missing");
+    std::fs::write(&trajectories, &saved).unwrap();
+
+    let calibration = results.join("calibration.parquet");
+    let saved = std::fs::read(&calibration).unwrap();
+    std::fs::copy(results.join("evaluation.parquet"), &calibration).unwrap();
+    assert_refused(
+        "error: results/quick/calibration.parquet: column `window_s` is missing: this is not the schema dcnet-exp writes",
+    );
+    std::fs::write(&calibration, b"not parquet").unwrap();
+    assert_refused("error: results/quick/calibration.parquet: not a Parquet file");
+    std::fs::write(&calibration, &saved).unwrap();
+
+    std::fs::write(results.join("manifest.json"), "{}").unwrap();
+    assert_refused("error: results/quick/manifest.json: missing field `name`");
+
+    let output = dcnet(project.path(), &["plot", "results/nothing"]);
+    assert_eq!(output.status.code(), Some(1));
+    assert!(
+        stderr(&output).contains("error: results/nothing/spec.toml: missing"),
+        "{}",
+        stderr(&output)
+    );
+}
+
+#[test]
+fn bad_report_settings_are_rejected() {
+    let project = project(false);
+    for (set, expected) in [
+        (
+            "report.velocity_trajectories=[\"S1\"]",
+            "report.velocity_trajectories: has 1 names: give two (a training and a test trajectory), or none",
+        ),
+        (
+            "report.velocity_trajectories=[\"S1\", \"S9\"]",
+            "report.velocity_trajectories[1]: unknown trajectory \"S9\"",
+        ),
+        ("report.published=\"nowhere.toml\"", "report.published: "),
+        (
+            "report.tolerance_pct=-1",
+            "report.tolerance_pct: -1 must be zero or positive",
+        ),
+    ] {
+        let output = dcnet(
+            project.path(),
+            &["validate", "experiments/quick.toml", "--set", set],
+        );
+        let message = stderr(&output);
+        assert_eq!(output.status.code(), Some(1), "{message}");
+        assert!(
+            message.contains(expected),
+            "expected {expected:?} in:\n{message}"
+        );
+    }
+}
