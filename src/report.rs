@@ -307,7 +307,10 @@ fn training_section(run: &StoredRun, out: &mut String) {
     if run.training.is_empty() {
         return;
     }
-    let _ = writeln!(out, "## DCNet training\n");
+    let _ = writeln!(
+        out,
+        "## DCNet training\n\nEpoch times are those of the run that trained each model; a model reused from `models/` costs this run no training time.\n"
+    );
     let mut table = Table::new();
     table.load_preset(ASCII_MARKDOWN);
     table.set_header([
