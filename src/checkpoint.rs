@@ -1,24 +1,19 @@
-//! Trained models on disk, under `results/<name>/models/`. A finished model is stored
-//! at full precision as `<EM>-<key>.bin` (weights) and `<EM>-<key>.json` (history),
-//! where the key is the hash of everything that determined it: the training, model
-//! and dataset settings, the seed, the data the training windows were cut from, and
-//! the training code version. A later run with the same key loads it instead of
-//! training. While a model trains, a checkpoint in `<EM>-<key>.checkpoint/` is written
+//! Trained models on disk, under `OUT/.cache/models/`. A finished model is stored at
+//! full precision as `<EM>-<key>.bin` (weights) and `<EM>-<key>.json` (history), where
+//! the key ([`crate::cache::model_key`]) is the hash of everything that determined it.
+//! A later run with the same key loads it instead of training. While a model trains, a checkpoint in `<EM>-<key>.checkpoint/` is written
 //! every few epochs, and an interrupted training resumes from it.
 
 use crate::estimators::ErrorModel;
 use crate::model::Dcnet;
 use crate::results::write_atomic;
-use crate::spec::{Origin, Spec};
+use crate::spec::Spec;
 use crate::train::{self, EpochRecord, State, Trained};
 use burn::module::Module;
 use burn::store::ModuleRecord;
 use burn::tensor::{Bytes, Device};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-
-/// Bumped whenever training changes in a way that changes the weights.
-const TRAINING_CODE_VERSION: u32 = 1;
 
 #[derive(Debug, thiserror::Error)]
 pub enum CheckpointError {
@@ -33,79 +28,13 @@ fn io_error(path: &Path, error: impl std::fmt::Display) -> CheckpointError {
     }
 }
 
-/// Everything a trained model depends on, hashed into its key.
-#[derive(Serialize)]
-struct KeyInputs<'a> {
-    code: (u32, &'a str),
-    error_model: String,
-    seed: u64,
-    model: &'a crate::spec::file::ModelFile,
-    backend: &'a str,
-    epochs: usize,
-    batch_size: usize,
-    learning_rate: f64,
-    rmsprop: (f64, f64),
-    sample_rate_hz: f64,
-    ground_truth_window_samples: usize,
-    sensors: &'a crate::spec::file::SensorsFile,
-    grid: &'a crate::spec::file::GridFile,
-    window_s: f64,
-    stride_s: f64,
-    validation_fraction: f64,
-    /// Each training trajectory: name and where its samples come from.
-    trajectories: Vec<(String, String)>,
-}
-
-/// The hash of the inputs of `error_model`'s training, in hex.
-pub fn key(spec: &Spec, error_model: ErrorModel) -> Result<String, CheckpointError> {
-    let resolved = &spec.resolved;
-    let mut trajectories = Vec::new();
-    for &index in &spec.dataset.trajectories {
-        let source = &spec.trajectories[index];
-        let origin = match &source.origin {
-            Origin::File { path, samples } => {
-                let bytes = std::fs::read(path).map_err(|e| io_error(path, e))?;
-                format!(
-                    "sha256 {} samples {samples:?}",
-                    crate::data::fetch::sha256_hex(&bytes)
-                )
-            }
-            Origin::Synthetic { samples } => {
-                format!("synthetic {samples} {:?}", resolved.data.synthetic)
-            }
-        };
-        trajectories.push((source.name.clone(), origin));
-    }
-    let inputs = KeyInputs {
-        code: (TRAINING_CODE_VERSION, env!("CARGO_PKG_VERSION")),
-        error_model: error_model.to_string(),
-        seed: spec.seed,
-        model: &resolved.model,
-        backend: &resolved.training.backend,
-        epochs: spec.training.epochs,
-        batch_size: spec.training.batch_size,
-        learning_rate: spec.training.learning_rate(error_model),
-        rmsprop: (spec.training.rmsprop_alpha, spec.training.rmsprop_epsilon),
-        sample_rate_hz: resolved.data.sample_rate_hz,
-        ground_truth_window_samples: resolved.data.ground_truth_window_samples,
-        sensors: &resolved.sensors,
-        grid: &resolved.grid,
-        window_s: resolved.dataset.window_s,
-        stride_s: resolved.dataset.stride_s,
-        validation_fraction: resolved.dataset.validation_fraction,
-        trajectories,
-    };
-    let json = serde_json::to_string(&inputs).expect("key inputs serialize");
-    Ok(crate::data::fetch::sha256_hex(json.as_bytes()))
-}
-
-/// What the `.json` beside a stored model holds.
-#[derive(Serialize, Deserialize)]
-struct Summary {
-    key: String,
-    error_model: String,
-    best_epoch: usize,
-    history: Vec<EpochRecord>,
+/// What the `.json` beside a stored model holds: how it trained.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Summary {
+    pub key: String,
+    pub error_model: ErrorModel,
+    pub best_epoch: usize,
+    pub history: Vec<EpochRecord>,
 }
 
 /// What a checkpoint's `state.json` holds; the weight files carry the epoch in their name.
@@ -131,6 +60,32 @@ impl ModelStore {
         self.folder.join(format!("{error_model}-{}", &key[..16]))
     }
 
+    /// How the stored model with this key trained, if there is one.
+    pub fn summary(
+        &self,
+        error_model: ErrorModel,
+        key: &str,
+    ) -> Result<Option<Summary>, CheckpointError> {
+        let path = self.stem(error_model, key).with_extension("json");
+        let Ok(text) = std::fs::read_to_string(&path) else {
+            return Ok(None);
+        };
+        let summary: Summary = serde_json::from_str(&text).map_err(|e| io_error(&path, e))?;
+        Ok((summary.key == key).then_some(summary))
+    }
+
+    /// The last epoch of the checkpoint of `key`, if one is waiting to be resumed.
+    pub fn checkpoint_epoch(&self, error_model: ErrorModel, key: &str) -> Option<usize> {
+        let path = self
+            .stem(error_model, key)
+            .with_extension("checkpoint")
+            .join("state.json");
+        let text = std::fs::read_to_string(path).ok()?;
+        serde_json::from_str::<CheckpointState>(&text)
+            .ok()
+            .map(|state| state.epoch)
+    }
+
     /// The stored model with this key, if there is one.
     pub fn load(
         &self,
@@ -138,16 +93,10 @@ impl ModelStore {
         error_model: ErrorModel,
         key: &str,
     ) -> Result<Option<Trained>, CheckpointError> {
-        let stem = self.stem(error_model, key);
-        let summary_path = stem.with_extension("json");
-        let Ok(text) = std::fs::read_to_string(&summary_path) else {
+        let Some(summary) = self.summary(error_model, key)? else {
             return Ok(None);
         };
-        let summary: Summary =
-            serde_json::from_str(&text).map_err(|e| io_error(&summary_path, e))?;
-        if summary.key != key {
-            return Ok(None);
-        }
+        let stem = self.stem(error_model, key);
         let model = read_model(
             &stem.with_extension("bin"),
             spec,
@@ -169,7 +118,7 @@ impl ModelStore {
         write_model(&stem.with_extension("bin"), &trained.model)?;
         let summary = Summary {
             key: key.to_string(),
-            error_model: trained.error_model.to_string(),
+            error_model: trained.error_model,
             best_epoch: trained.best_epoch,
             history: trained.history.clone(),
         };
@@ -294,20 +243,28 @@ pub enum Provenance {
     Reused,
 }
 
-/// Loads `error_model`'s stored model, or trains it (from its checkpoint if there is
-/// one), checkpointing every `training.checkpoint_every_epochs` and storing the result.
+/// Loads `error_model`'s stored model under `key`, or trains it (from its checkpoint
+/// if there is one), checkpointing every `training.checkpoint_every_epochs` and storing
+/// the result. `fresh` trains from scratch whatever is stored.
 pub fn train_cached(
     spec: &Spec,
     set: &crate::dataset::TrainingSet,
     error_model: ErrorModel,
+    key: &str,
     store: &ModelStore,
+    fresh: bool,
     progress: &indicatif::ProgressBar,
 ) -> Result<(Trained, Provenance), train::TrainError> {
-    let key = key(spec, error_model)?;
-    if let Some(trained) = store.load(spec, error_model, &key)? {
-        return Ok((trained, Provenance::Reused));
+    if !fresh {
+        if let Some(trained) = store.load(spec, error_model, key)? {
+            return Ok((trained, Provenance::Reused));
+        }
     }
-    let mut state = store.resume(spec, error_model, &key)?;
+    let mut state = if fresh {
+        State::new(spec, error_model)
+    } else {
+        store.resume(spec, error_model, key)?
+    };
     let provenance = match state.history.len() {
         0 => Provenance::Trained,
         epoch => Provenance::Resumed(epoch),
@@ -317,11 +274,11 @@ pub fn train_cached(
         train::run_epoch(spec, set, error_model, &mut state, progress)?;
         let epoch = state.history.len();
         if epoch % spec.training.checkpoint_every_epochs == 0 && epoch < spec.training.epochs {
-            store.save_checkpoint(&state, error_model, &key)?;
+            store.save_checkpoint(&state, error_model, key)?;
         }
     }
     let trained = state.finish(error_model);
-    store.save(&trained, &key)?;
+    store.save(&trained, key)?;
     Ok((trained, provenance))
 }
 
@@ -364,6 +321,11 @@ mod tests {
     use crate::train::tests::{run_epochs, training_set, weights};
     use indicatif::ProgressBar;
 
+    fn key(spec: &Spec, error_model: ErrorModel) -> String {
+        let hashes = crate::cache::DataHashes::default();
+        crate::cache::model_key(spec, error_model, &crate::cache::dataset_key(spec, &hashes))
+    }
+
     #[test]
     fn a_training_resumed_from_a_checkpoint_ends_as_an_uninterrupted_one() {
         let spec = quick_spec(&["training.epochs=4"]);
@@ -376,7 +338,7 @@ mod tests {
 
         let dir = tempfile::tempdir().unwrap();
         let store = ModelStore::new(dir.path().to_path_buf());
-        let key = key(&spec, em).unwrap();
+        let key = key(&spec, em);
         let mut state = State::new(&spec, em);
         run_epochs(&spec, &set, em, &mut state, 2);
         store.save_checkpoint(&state, em, &key).unwrap();
@@ -406,11 +368,12 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let store = ModelStore::new(dir.path().to_path_buf());
         let hidden = ProgressBar::hidden();
+        let em4 = key(&spec, ErrorModel::Em4);
         let (first, provenance) =
-            train_cached(&spec, &set, ErrorModel::Em4, &store, &hidden).unwrap();
+            train_cached(&spec, &set, ErrorModel::Em4, &em4, &store, false, &hidden).unwrap();
         assert_eq!(provenance, Provenance::Trained);
         let (again, provenance) =
-            train_cached(&spec, &set, ErrorModel::Em4, &store, &hidden).unwrap();
+            train_cached(&spec, &set, ErrorModel::Em4, &em4, &store, false, &hidden).unwrap();
         assert_eq!(provenance, Provenance::Reused);
         assert!(weights(&again.model) == weights(&first.model));
         assert_eq!(again.history, first.history);
@@ -421,7 +384,6 @@ mod tests {
                 &quick_spec(&[&["training.epochs=2"], overrides].concat()),
                 ErrorModel::Em4,
             )
-            .unwrap()
         };
         let base = key_of(&[]);
         assert_eq!(

@@ -1,25 +1,24 @@
-//! The subcommands: `run`, `validate`, `data info`, `data fetch` and `bench`. Each
-//! reads a spec through [`crate::spec::load`], runs the stages it needs, and reports
-//! bad input (exit code 1) apart from failures while running (exit code 2).
+//! The subcommands: `run`, `plan`, `collect`, `plot`, `validate`, `data info`, `data
+//! fetch` and `bench`. Each reads a spec through [`crate::spec::load_experiment`], hands
+//! the work to [`crate::pipeline`] or the stage it names, and reports bad input (exit
+//! code 1) apart from failures while running (exit code 2).
 
-use crate::checkpoint::{ModelStore, Provenance, train_cached};
 use crate::data::{fetch, load_trajectories};
 use crate::dataset::{self, TrainingSet, window_starts};
 use crate::estimators::{ErrorModel, EstimatorKind};
 use crate::evaluate::run_protocol;
-use crate::plots::{self, Format};
-use crate::progress::bar;
+use crate::pipeline::{Mode, Plan, Shard, Task, execute};
+use crate::plots::{self, Format, Metric};
 use crate::report;
 use crate::results::read::StoredRun;
-use crate::results::{self, Manifest, StageSeconds};
-use crate::spec::{Origin, Spec, load};
+use crate::spec::{Experiment, Origin, Spec, load, load_experiment};
+use crate::sweep;
 use crate::tables;
-use crate::train::{self, Backend, TrainError, Trained};
-use anyhow::Context;
+use crate::train::{self, Backend, TrainError};
 use clap::{Parser, Subcommand};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
-use std::time::{Instant, SystemTime};
+use std::time::Instant;
 
 #[derive(Debug, Parser)]
 #[command(
@@ -37,27 +36,38 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Run an experiment: dataset, Monte Carlo calibration and evaluation, results
+    /// Run an experiment, or every point of its sweep, doing only what is not done yet
     Run {
-        spec: PathBuf,
-        /// Results go to OUT/<name>/
-        #[arg(long, default_value = "results")]
-        out: PathBuf,
-        /// burn CPU backend for DCNet, overriding training.backend: flex or ndarray
-        #[arg(long)]
-        backend: Option<String>,
-        /// Figures go to PLOTS/<name>/
-        #[arg(long, default_value = "plots")]
-        plots: PathBuf,
-        /// Write the results and report.md but draw no figures
-        #[arg(long)]
-        no_plots: bool,
         #[command(flatten)]
-        overrides: Overrides,
+        target: Target,
+        #[command(flatten)]
+        drawing: Drawing,
+        /// Run only shard K of N (0 ≤ K < N) of the tasks and no results; `--shard N`
+        /// takes K from SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX
+        #[arg(long, value_name = "K/N")]
+        shard: Option<String>,
+        /// Recompute every task, cached or not
+        #[arg(long)]
+        force: bool,
+    },
+    /// List every task a run would do, each marked done or to do; changes nothing
+    Plan {
+        #[command(flatten)]
+        target: Target,
+        /// List only the tasks of shard K of N
+        #[arg(long, value_name = "K/N")]
+        shard: Option<String>,
+    },
+    /// Write the results of a sharded run once every shard has finished
+    Collect {
+        #[command(flatten)]
+        target: Target,
+        #[command(flatten)]
+        drawing: Drawing,
     },
     /// Draw the figures and write report.md from a results folder, re-running nothing
     Plot {
-        /// A results folder written by `run`, such as results/paper
+        /// A results folder written by `run`, such as results/paper, or a sweep's
         results: PathBuf,
         /// Figures go to OUT/<name>/
         #[arg(long, default_value = "plots")]
@@ -65,8 +75,11 @@ enum Command {
         /// Write each figure as PNG, SVG or both
         #[arg(long, value_enum, default_value_t = Format::Both)]
         format: Format,
+        /// What a sweep's figures plot against each swept value
+        #[arg(long, value_enum, default_value_t = Metric::EvaluationRmse)]
+        metric: Metric,
     },
-    /// Check a spec and its data files without running anything
+    /// Check a spec (every point of its sweep) and its data files without running anything
     Validate {
         spec: PathBuf,
         #[command(flatten)]
@@ -89,6 +102,37 @@ enum Command {
         #[command(flatten)]
         overrides: Overrides,
     },
+}
+
+/// The spec a command works on and where its results go.
+#[derive(Debug, clap::Args)]
+struct Target {
+    spec: PathBuf,
+    /// Results go to OUT/<name>/, the cache to OUT/.cache/
+    #[arg(long, default_value = "results")]
+    out: PathBuf,
+    /// burn CPU backend for DCNet, overriding training.backend: flex or ndarray
+    #[arg(long)]
+    backend: Option<String>,
+    #[command(flatten)]
+    overrides: Overrides,
+}
+
+/// Where the figures of the results a command writes go.
+#[derive(Debug, clap::Args)]
+struct Drawing {
+    /// Figures go to PLOTS/<name>/
+    #[arg(long, default_value = "plots")]
+    plots: PathBuf,
+    /// Write the results and report.md but draw no figures
+    #[arg(long)]
+    no_plots: bool,
+}
+
+impl Drawing {
+    fn folder(&self) -> Option<&Path> {
+        (!self.no_plots).then_some(self.plots.as_path())
+    }
 }
 
 #[derive(Debug, Subcommand)]
@@ -177,24 +221,19 @@ pub fn main() -> Result<(), CliError> {
     }
     match cli.command {
         Command::Run {
-            spec,
-            out,
-            backend,
-            plots,
-            no_plots,
-            mut overrides,
-        } => {
-            if let Some(backend) = backend {
-                overrides.set.push(format!("training.backend={backend:?}"));
-            }
-            let plots = (!no_plots).then_some(plots.as_path());
-            run(&spec, &out, plots, &overrides.set)
-        }
+            target,
+            drawing,
+            shard,
+            force,
+        } => run(&target, &drawing, shard.as_deref(), force),
+        Command::Plan { target, shard } => plan(&target, shard.as_deref()),
+        Command::Collect { target, drawing } => collect(&target, &drawing),
         Command::Plot {
             results,
             out,
             format,
-        } => plot(&results, Some(&out), format),
+            metric,
+        } => plot(&results, Some(&out), format, metric),
         Command::Validate { spec, overrides } => validate(&spec, &overrides.set),
         Command::Data {
             command: DataCommand::Info { spec, overrides },
@@ -215,97 +254,218 @@ fn load_spec(path: &Path, set: &[String]) -> Result<Spec, CliError> {
     load(path, set).map_err(input)
 }
 
-fn run(spec_path: &Path, out: &Path, plots: Option<&Path>, set: &[String]) -> Result<(), CliError> {
-    let started_at = SystemTime::now();
-    let spec = load_spec(spec_path, set)?;
-    let mut stages = StageSeconds::default();
-    let clock = Instant::now();
-    let trajectories = load_trajectories(&spec).map_err(input)?;
-    stages.load = clock.elapsed().as_secs_f64();
+fn load_target(target: &Target) -> Result<Experiment, CliError> {
+    let mut set = target.overrides.set.clone();
+    if let Some(backend) = &target.backend {
+        set.push(format!("training.backend={backend:?}"));
+    }
+    load_experiment(&target.spec, &set).map_err(input)
+}
 
-    let clock = Instant::now();
-    let progress = bar(spec.grid.points().len(), "dataset");
-    let training = dataset::generate(&spec, &trajectories, &progress);
-    progress.finish_and_clear();
-    stages.dataset = clock.elapsed().as_secs_f64();
-    eprintln!(
-        "dataset: {} combinations × {} windows = {} windows ({} validation), {:.1} MB, in {:.2} s",
-        training.points.len(),
-        training.windows_per_combination,
-        training.len(),
-        training.validation_len(),
-        TrainingSet::size_bytes(training.len(), training.window) as f64 / 1e6,
-        stages.dataset
-    );
+fn parse_shard(shard: Option<&str>) -> Result<Option<Shard>, CliError> {
+    shard
+        .map(|text| Shard::parse(text, |variable| std::env::var(variable).ok()))
+        .transpose()
+        .map_err(|message| input(anyhow::anyhow!(message)))
+}
 
-    let clock = Instant::now();
-    let folder = out.join(&spec.name);
-    let (dcnets, failures) = train_all(&spec, &training, &ModelStore::new(folder.join("models")));
-    stages.training = clock.elapsed().as_secs_f64();
-
-    let clock = Instant::now();
-    let progress = bar(
-        2 * spec.dvls.len() * spec.calibration.monte_carlo_runs,
-        "monte carlo",
-    );
-    let result = run_protocol(&spec, &trajectories, &dcnets, &progress);
-    progress.finish_and_clear();
-    stages.protocol = clock.elapsed().as_secs_f64();
-
-    let manifest = Manifest {
-        name: spec.name.clone(),
-        spec_sha256: fetch::sha256_hex(spec.resolved_toml().as_bytes()),
-        git_commit: env!("DCNET_GIT_COMMIT").to_string(),
-        crate_version: env!("CARGO_PKG_VERSION").to_string(),
-        started_at: humantime::format_rfc3339_seconds(started_at).to_string(),
-        finished_at: humantime::format_rfc3339_seconds(SystemTime::now()).to_string(),
-        threads: rayon::current_num_threads(),
-        backend: spec.training.backend.to_string(),
-        host: gethostname::gethostname().to_string_lossy().into_owned(),
-        data_files: data_files(&spec).map_err(failure)?,
-        stage_seconds: stages,
+fn run(
+    target: &Target,
+    drawing: &Drawing,
+    shard: Option<&str>,
+    force: bool,
+) -> Result<(), CliError> {
+    let experiment = load_target(target)?;
+    let plan = Plan::new(&experiment, &target.out).map_err(input)?;
+    let mode = match parse_shard(shard)? {
+        Some(shard) => Mode::Shard { shard, force },
+        None => Mode::All { force },
     };
-    results::write_run(&folder, &spec, &trajectories, &result, &dcnets, &manifest)
-        .map_err(failure)?;
-    let calibration_name = &trajectories[spec.calibration.trajectory].name;
+    let to_do = plan.to_do(mode);
+    let total = plan.tasks().len();
+    let folder = target.out.join(&experiment.name);
+    let whose = match mode {
+        Mode::Shard { shard, .. } => format!("{} shard {shard}", experiment.name),
+        _ => experiment.name.clone(),
+    };
+    if to_do.is_empty() {
+        eprintln!(
+            "nothing to do: every task of {whose} is done; the results in {} are current",
+            folder.display()
+        );
+        return Ok(());
+    }
+    eprintln!("{whose}: {} tasks to do ({total} in the plan)", to_do.len());
+    let outcome = execute(&plan, mode).map_err(failure)?;
+    if let Mode::Shard { shard, .. } = mode {
+        eprintln!(
+            "shard {shard}: {} tasks done; once every shard has finished, `dcnet-exp collect {}` writes the results",
+            outcome.done,
+            target.spec.display()
+        );
+    } else {
+        finish(&experiment, &outcome.written, drawing)?;
+    }
+    failed_models(outcome.failures)
+}
+
+/// Lists the tasks of a run, shard or not, with their state.
+fn plan(target: &Target, shard: Option<&str>) -> Result<(), CliError> {
+    let experiment = load_target(target)?;
+    let plan = Plan::new(&experiment, &target.out).map_err(input)?;
+    let shard = parse_shard(shard)?;
+    let mut table = comfy_table::Table::new();
+    table.load_preset(comfy_table::presets::ASCII_MARKDOWN);
+    let mut header = vec!["task", "key", "status"];
+    if experiment.is_sweep() {
+        header.insert(1, "point");
+    }
+    table.set_header(header);
+    let mode = match shard {
+        Some(shard) => Mode::Shard {
+            shard,
+            force: false,
+        },
+        None => Mode::All { force: false },
+    };
+    let to_do = plan.to_do(mode);
+    let mut listed = 0;
+    for task in plan.tasks() {
+        let in_scope = match (shard, task) {
+            (Some(shard), Task::Training(_) | Task::Block(_)) => plan.in_shard(task, shard),
+            (Some(_), Task::Dataset(_)) => to_do.contains(&task),
+            (Some(_), _) => false,
+            (None, _) => true,
+        };
+        if !in_scope {
+            continue;
+        }
+        listed += 1;
+        let status = plan.status(task);
+        let mut row = vec![
+            plan.label(task),
+            plan.key(task)
+                .map(|k| k[..16].to_string())
+                .unwrap_or_default(),
+            status.to_string(),
+        ];
+        if experiment.is_sweep() {
+            let point = plan
+                .point_of(task)
+                .map(|p| plan.spec(p).name.clone())
+                .unwrap_or_default();
+            row.insert(1, point);
+        }
+        table.add_row(row);
+    }
+    println!("{table}");
+    let scope = match shard {
+        Some(shard) => format!("shard {shard} of {}", experiment.name),
+        None => experiment.name.clone(),
+    };
     println!(
-        "{}",
-        tables::calibration_table(
-            &result.calibration,
-            calibration_name,
-            spec.calibration.monte_carlo_runs
-        )
+        "{scope}: {listed} tasks, {} to do; cache in {}",
+        to_do.len(),
+        crate::cache::root(&target.out).display()
     );
-    println!("{}", tables::evaluation_table(&result.evaluation));
-    eprintln!("results written to {}", folder.display());
-    plot(&folder, plots, Format::Both).map_err(|e| failure(e.into_cause()))?;
+    Ok(())
+}
+
+/// Writes the results of a sharded run from the cache the shards filled.
+fn collect(target: &Target, drawing: &Drawing) -> Result<(), CliError> {
+    let experiment = load_target(target)?;
+    let plan = Plan::new(&experiment, &target.out).map_err(input)?;
+    let outcome = execute(&plan, Mode::Collect).map_err(failure)?;
+    if outcome.done == 0 {
+        eprintln!(
+            "nothing to do: the results in {} are current",
+            target.out.join(&experiment.name).display()
+        );
+        return Ok(());
+    }
+    finish(&experiment, &outcome.written, drawing)
+}
+
+/// Prints the tables of a single run, and draws the figures and reports of what was
+/// written.
+fn finish(experiment: &Experiment, written: &[PathBuf], drawing: &Drawing) -> Result<(), CliError> {
+    for folder in written {
+        if !experiment.is_sweep() {
+            let stored = StoredRun::read(folder).map_err(failure)?;
+            println!(
+                "{}",
+                tables::calibration_table(
+                    &stored.calibration,
+                    &stored.spec.calibration.trajectory,
+                    stored.spec.calibration.monte_carlo_runs
+                )
+            );
+            println!("{}", tables::evaluation_table(&stored.evaluation));
+        }
+        eprintln!("results written to {}", folder.display());
+        plot_run(folder, drawing.folder(), Format::Both).map_err(|e| failure(e.into_cause()))?;
+    }
+    if experiment.is_sweep() {
+        let folder = experiment_folder(written, experiment);
+        if let Some(folder) = folder {
+            plot_sweep(
+                &folder,
+                drawing.folder(),
+                Format::Both,
+                Metric::EvaluationRmse,
+            )
+            .map_err(|e| failure(e.into_cause()))?;
+        }
+    }
+    Ok(())
+}
+
+/// The sweep folder, `OUT/<name>`, of the points written.
+fn experiment_folder(written: &[PathBuf], experiment: &Experiment) -> Option<PathBuf> {
+    let depth = experiment.points.first()?.spec.name.split('/').count() - 1;
+    let mut folder = written.first()?.clone();
+    for _ in 0..depth {
+        folder.pop();
+    }
+    Some(folder)
+}
+
+/// Every failed model, one per line; the results hold all the others.
+fn failed_models(failures: Vec<TrainError>) -> Result<(), CliError> {
     if failures.is_empty() {
         return Ok(());
     }
-    // Every failed model, one per line; the results above hold all the others.
     let messages: Vec<String> = failures.iter().map(ToString::to_string).collect();
     Err(failure(anyhow::anyhow!(messages.join("\n"))))
 }
 
+/// Draws the figures of a results folder, a single run's or a sweep's, and writes the
+/// reports.
+fn plot(
+    results: &Path,
+    out: Option<&Path>,
+    format: Format,
+    metric: Metric,
+) -> Result<(), CliError> {
+    if !results.join(sweep::INDEX).is_file() {
+        return plot_run(results, out, format);
+    }
+    let index = sweep::read_index(results).map_err(input)?;
+    for point in &index.points {
+        plot_run(&results.join(point), out, format)?;
+    }
+    plot_sweep(results, out, format, metric)
+}
+
 /// Reads the results folder back, draws its figures into `out/<name>/` (none when
 /// `out` is `None`) and writes its report.
-fn plot(results: &Path, out: Option<&Path>, format: Format) -> Result<(), CliError> {
+fn plot_run(results: &Path, out: Option<&Path>, format: Format) -> Result<(), CliError> {
     let stored = StoredRun::read(results).map_err(input)?;
     let figures = match out {
         Some(out) => {
             let folder = out.join(&stored.spec.name);
             let figures = plots::write_all(&stored, &folder, format).map_err(failure)?;
-            for figure in &figures {
-                match &figure.caption {
-                    Ok(_) => eprintln!(
-                        "figure {}: {} files in {}",
-                        figure.stem,
-                        figure.files.len(),
-                        folder.display()
-                    ),
-                    Err(why) => eprintln!("figure {}: not drawn, {why}", figure.stem),
-                }
-            }
+            report_figures(&figures, &folder);
             figures
         }
         None => Vec::new(),
@@ -315,89 +475,55 @@ fn plot(results: &Path, out: Option<&Path>, format: Format) -> Result<(), CliErr
     Ok(())
 }
 
-/// Trains one DCNet per error model of the spec, concurrently; a model that fails is
-/// reported and left out, the others go on.
-fn train_all(
-    spec: &Spec,
-    set: &TrainingSet,
-    store: &ModelStore,
-) -> (Vec<Trained>, Vec<TrainError>) {
-    if !spec.kinds.contains(&EstimatorKind::Dcnet) {
-        return (Vec::new(), Vec::new());
-    }
-    let bars = indicatif::MultiProgress::new();
-    let outcomes: Vec<Result<(Trained, Provenance), TrainError>> = spec
-        .error_models
-        .par_iter()
-        .map(|&error_model| {
-            let progress = bars.add(bar(
-                spec.training.epochs * train::batches_per_epoch(spec, set),
-                "DCNet",
-            ));
-            progress.set_message(format!("DCNet {error_model}"));
-            let outcome = train_cached(spec, set, error_model, store, &progress);
-            progress.finish_and_clear();
-            outcome
-        })
-        .collect();
-    let mut trained = Vec::new();
-    let mut failures = Vec::new();
-    for outcome in outcomes {
-        match outcome {
-            Ok((model, provenance)) => {
-                let best = &model.history[model.best_epoch - 1];
-                let how = match provenance {
-                    Provenance::Trained => "trained".to_string(),
-                    Provenance::Resumed(epoch) => {
-                        format!("resumed from the checkpoint of epoch {epoch}")
-                    }
-                    Provenance::Reused => format!("reused from {}", store.folder.display()),
-                };
-                eprintln!(
-                    "DCNet {}: {how}; best validation loss {:.4} (cm/s)² at epoch {} of {}",
-                    model.error_model,
-                    best.validation_loss,
-                    model.best_epoch,
-                    model.history.len()
-                );
-                trained.push(model);
-            }
-            Err(error) => failures.push(error),
-        }
-    }
-    (trained, failures)
+/// Draws a sweep's figures into `out/<name>/`.
+fn plot_sweep(
+    results: &Path,
+    out: Option<&Path>,
+    format: Format,
+    metric: Metric,
+) -> Result<(), CliError> {
+    let Some(out) = out else { return Ok(()) };
+    let stored = sweep::read(results).map_err(input)?;
+    let folder = out.join(&stored.index.name);
+    let figures = plots::write_sweep(&stored, metric, &folder, format).map_err(failure)?;
+    report_figures(&figures, &folder);
+    Ok(())
 }
 
-/// The `.npy` files the spec reads, with their SHA-256.
-fn data_files(spec: &Spec) -> anyhow::Result<Vec<results::DataFile>> {
-    let mut files: Vec<results::DataFile> = Vec::new();
-    for source in &spec.trajectories {
-        if let Origin::File { path, .. } = &source.origin {
-            if !files.iter().any(|f| &f.path == path) {
-                let bytes =
-                    std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
-                files.push(results::DataFile {
-                    path: path.clone(),
-                    sha256: fetch::sha256_hex(&bytes),
-                });
-            }
+fn report_figures(figures: &[plots::Written], folder: &Path) {
+    for figure in figures {
+        match &figure.caption {
+            Ok(_) => eprintln!(
+                "figure {}: {} files in {}",
+                figure.stem,
+                figure.files.len(),
+                folder.display()
+            ),
+            Err(why) => eprintln!("figure {}: not drawn, {why}", figure.stem),
         }
     }
-    Ok(files)
 }
 
 fn validate(spec_path: &Path, set: &[String]) -> Result<(), CliError> {
-    let spec = load_spec(spec_path, set)?;
-    let trajectories = load_trajectories(&spec).map_err(input)?;
-    let windows = dataset::windows_per_combination(&spec, &trajectories) * spec.grid.points().len();
-    println!(
-        "{}: ok ({} trajectories, {} training windows, {} DVLs, {} Monte Carlo runs)",
-        spec_path.display(),
-        trajectories.len(),
-        windows,
-        spec.dvls.len(),
-        spec.calibration.monte_carlo_runs
-    );
+    let experiment = load_experiment(spec_path, set).map_err(input)?;
+    for point in &experiment.points {
+        let spec = &point.spec;
+        let trajectories = load_trajectories(spec).map_err(input)?;
+        let windows =
+            dataset::windows_per_combination(spec, &trajectories) * spec.grid.points().len();
+        println!(
+            "{}: ok ({} trajectories, {} training windows, {} DVLs, {} Monte Carlo runs)",
+            if experiment.is_sweep() {
+                format!("{} point {}", spec_path.display(), spec.name)
+            } else {
+                spec_path.display().to_string()
+            },
+            trajectories.len(),
+            windows,
+            spec.dvls.len(),
+            spec.calibration.monte_carlo_runs
+        );
+    }
     Ok(())
 }
 

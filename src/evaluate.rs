@@ -91,31 +91,38 @@ pub struct ProtocolResult {
     pub evaluation: Vec<EvaluationRow>,
 }
 
-/// Runs the protocol for every DVL; `progress` advances once per run and phase.
+/// Runs the protocol for every DVL and estimator; `progress` advances once per run and
+/// phase of each DVL.
 pub fn run_protocol(
     spec: &Spec,
     trajectories: &[Trajectory],
     dcnets: &[Trained],
     progress: &ProgressBar,
 ) -> ProtocolResult {
-    let mut result = ProtocolResult::default();
-    for dvl in &spec.dvls {
-        run_dvl(spec, trajectories, dvl, dcnets, progress, &mut result);
-    }
-    add_improvements(&mut result.evaluation);
-    result
+    let runs: Vec<RunRow> = spec
+        .dvls
+        .iter()
+        .flat_map(|dvl| {
+            let entries = lineup(spec, dvl, dcnets);
+            run_block(spec, trajectories, dvl, &entries, progress)
+        })
+        .flatten()
+        .collect();
+    summarize(runs)
 }
 
-fn run_dvl(
+/// The protocol of `entries` on one DVL, every Monte Carlo run: one list of rows per
+/// entry, calibration rows (run, window) then evaluation rows (run, trajectory). Each
+/// entry's rows depend on nothing but that entry, so entries can be computed apart and
+/// put together; computing them together only shares the measurements.
+pub fn run_block(
     spec: &Spec,
     trajectories: &[Trajectory],
     dvl: &Dvl,
-    dcnets: &[Trained],
+    entries: &[Entry],
     progress: &ProgressBar,
-    result: &mut ProtocolResult,
-) {
+) -> Vec<Vec<RunRow>> {
     let geometry = BeamGeometry::janus_x(spec.beam_pitch_deg);
-    let entries = lineup(spec, dvl, dcnets);
     let runs = spec.calibration.monte_carlo_runs;
     let calibration = &trajectories[spec.calibration.trajectory];
     let windows = &spec.calibration.window_sizes;
@@ -152,45 +159,14 @@ fn run_dvl(
             per_entry
         })
         .collect();
-
-    let mut t_conv = Vec::with_capacity(entries.len());
-    for (e, entry) in entries.iter().enumerate() {
-        let stats: Vec<(f64, f64)> = (0..windows.len())
-            .map(|w| mean_std(calibrated.iter().map(|run| run[e][w].0)))
-            .collect();
-        let best = (0..windows.len()).fold(
-            0,
-            |best, w| if stats[w].0 < stats[best].0 { w } else { best },
-        );
-        t_conv.push(best);
-        for (w, &(mean, std)) in stats.iter().enumerate() {
-            result.calibration.push(CalibrationRow {
-                dvl: dvl.name.clone(),
-                estimator: entry.kind,
-                error_model: entry.error_model,
-                window_s: seconds(windows[w]),
-                rmse_cm_s: mean,
-                rmse_std_cm_s: std,
-                is_t_conv: w == best,
-            });
-        }
-    }
-    for (run, per_entry) in calibrated.iter().enumerate() {
-        for (entry, per_window) in entries.iter().zip(per_entry) {
-            for (&w, &(rmse_cm_s, correction)) in windows.iter().zip(per_window) {
-                result.runs.push(row(
-                    run,
-                    dvl,
-                    entry,
-                    Phase::Calibration,
-                    seconds(w),
-                    &calibration.name,
-                    rmse_cm_s,
-                    correction,
-                ));
-            }
-        }
-    }
+    let t_conv: Vec<usize> = (0..entries.len())
+        .map(|e| {
+            let means: Vec<f64> = (0..windows.len())
+                .map(|w| mean_std(calibrated.iter().map(|run| run[e][w].0)).0)
+                .collect();
+            t_conv_index(&means)
+        })
+        .collect();
 
     // Evaluation with each run's T_conv terms: [run][trajectory][entry] → rmse.
     let evaluated: Vec<Vec<Vec<f64>>> = (0..runs)
@@ -217,39 +193,117 @@ fn run_dvl(
             per_trajectory
         })
         .collect();
+
+    let mut blocks = Vec::with_capacity(entries.len());
     for (e, entry) in entries.iter().enumerate() {
-        for (i, &t) in spec.evaluation.iter().enumerate() {
-            let (mean, std) = mean_std(evaluated.iter().map(|run| run[i][e]));
+        let mut rows = Vec::new();
+        for (run, per_entry) in calibrated.iter().enumerate() {
+            for (&w, &(rmse_cm_s, correction)) in windows.iter().zip(&per_entry[e]) {
+                rows.push(row(
+                    run,
+                    dvl,
+                    entry,
+                    Phase::Calibration,
+                    seconds(w),
+                    &calibration.name,
+                    rmse_cm_s,
+                    correction,
+                ));
+            }
+        }
+        for (run, per_trajectory) in evaluated.iter().enumerate() {
+            for (i, &t) in spec.evaluation.iter().enumerate() {
+                rows.push(row(
+                    run,
+                    dvl,
+                    entry,
+                    Phase::Evaluation,
+                    seconds(windows[t_conv[e]]),
+                    &trajectories[t].name,
+                    per_trajectory[i][e],
+                    calibrated[run][e][t_conv[e]].1,
+                ));
+            }
+        }
+        blocks.push(rows);
+    }
+    blocks
+}
+
+/// The index of T_conv among the windows: the lowest mean RMSE, the first of equals.
+fn t_conv_index(mean_rmse: &[f64]) -> usize {
+    (0..mean_rmse.len()).fold(0, |best, w| {
+        if mean_rmse[w] < mean_rmse[best] {
+            w
+        } else {
+            best
+        }
+    })
+}
+
+/// The calibration and evaluation tables of the per-run rows of [`run_block`]: means
+/// and standard deviations over runs, summed in run order, and T_conv.
+pub fn summarize(runs: Vec<RunRow>) -> ProtocolResult {
+    let mut result = ProtocolResult::default();
+    let same = |a: &RunRow, b: &RunRow| {
+        a.dvl == b.dvl && a.estimator == b.estimator && a.error_model == b.error_model
+    };
+    let mut start = 0;
+    while start < runs.len() {
+        let end = start
+            + runs[start..]
+                .iter()
+                .take_while(|r| same(r, &runs[start]))
+                .count();
+        let block = &runs[start..end];
+        let first = &block[0];
+        let in_phase = |phase: Phase| block.iter().filter(move |r| r.phase == phase);
+        let windows = first_seen(in_phase(Phase::Calibration).map(|r| r.window_s));
+        let stats: Vec<(f64, f64, f64)> = windows
+            .iter()
+            .map(|&w| {
+                let (mean, std) = mean_std(
+                    in_phase(Phase::Calibration)
+                        .filter(|r| r.window_s == w)
+                        .map(|r| r.rmse_cm_s),
+                );
+                (w, mean, std)
+            })
+            .collect();
+        let means: Vec<f64> = stats.iter().map(|s| s.1).collect();
+        let best = t_conv_index(&means);
+        for (w, &(window_s, mean, std)) in stats.iter().enumerate() {
+            result.calibration.push(CalibrationRow {
+                dvl: first.dvl.clone(),
+                estimator: first.estimator,
+                error_model: first.error_model,
+                window_s,
+                rmse_cm_s: mean,
+                rmse_std_cm_s: std,
+                is_t_conv: w == best,
+            });
+        }
+        for trajectory in first_seen(in_phase(Phase::Evaluation).map(|r| r.trajectory.clone())) {
+            let rows: Vec<&RunRow> = in_phase(Phase::Evaluation)
+                .filter(|r| r.trajectory == trajectory)
+                .collect();
+            let (mean, std) = mean_std(rows.iter().map(|r| r.rmse_cm_s));
             result.evaluation.push(EvaluationRow {
-                dvl: dvl.name.clone(),
-                estimator: entry.kind,
-                error_model: entry.error_model,
-                trajectory: trajectories[t].name.clone(),
-                t_conv_s: seconds(windows[t_conv[e]]),
+                dvl: first.dvl.clone(),
+                estimator: first.estimator,
+                error_model: first.error_model,
+                trajectory,
+                t_conv_s: rows[0].window_s,
                 rmse_cm_s: mean,
                 rmse_std_cm_s: std,
                 improvement_pct: None,
             });
         }
+        start = end;
     }
-    for (run, per_trajectory) in evaluated.iter().enumerate() {
-        for (i, &t) in spec.evaluation.iter().enumerate() {
-            for (e, entry) in entries.iter().enumerate() {
-                let terms = calibrated[run][e][t_conv[e]].1;
-                let window_s = seconds(windows[t_conv[e]]);
-                result.runs.push(row(
-                    run,
-                    dvl,
-                    entry,
-                    Phase::Evaluation,
-                    window_s,
-                    &trajectories[t].name,
-                    per_trajectory[i][e],
-                    terms,
-                ));
-            }
-        }
-    }
+    add_improvements(&mut result.evaluation);
+    result.runs = runs;
+    result
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -303,6 +357,17 @@ pub fn rmse_cm_s(correction: &Correction, dvl: &[Vec3], truth: &[Vec3]) -> f64 {
         })
         .sum();
     100.0 * (sum / dvl.len() as f64).sqrt()
+}
+
+/// The distinct values of `values`, in the order they first appear.
+fn first_seen<T: PartialEq>(values: impl Iterator<Item = T>) -> Vec<T> {
+    let mut seen = Vec::new();
+    for value in values {
+        if !seen.contains(&value) {
+            seen.push(value);
+        }
+    }
+    seen
 }
 
 /// Mean and sample standard deviation (n − 1; 0 for a single value).

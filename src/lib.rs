@@ -13,8 +13,12 @@
 //! 8. [`results`] and [`tables`]: Parquet files, manifest, and the printed tables;
 //! 9. [`plots`] and [`report`]: the figures and the comparison with the [`published`]
 //!    values, drawn from a results folder alone;
-//! 10. [`cli`]: the subcommands that run the stages.
+//! 10. [`pipeline`]: the stages as tasks, cached by content in [`cache`] (with the
+//!     models of [`checkpoint`]), resumable, and shared out over shards; a spec's
+//!     [`sweep`] runs as many points;
+//! 11. [`cli`]: the subcommands.
 
+pub mod cache;
 pub mod checkpoint;
 pub mod cli;
 pub mod data;
@@ -23,6 +27,7 @@ pub mod estimators;
 pub mod evaluate;
 pub mod model;
 pub mod noise;
+pub mod pipeline;
 pub mod plots;
 pub mod progress;
 pub mod published;
@@ -30,6 +35,7 @@ pub mod report;
 pub mod results;
 pub mod rng;
 pub mod spec;
+pub mod sweep;
 pub mod tables;
 pub mod train;
 

@@ -78,8 +78,8 @@ fn plot_draws_every_figure_from_the_parquet_files_alone_as_run_does() {
     small_quick_run(project.path(), &[]);
     let drawn_by_run = project.path().join("plots/quick");
     let results = project.path().join("results/quick");
-    // `plot` needs no model and no spec file beyond the stored one.
-    std::fs::remove_dir_all(results.join("models")).unwrap();
+    // `plot` needs no model, no cache and no spec file beyond the stored one.
+    std::fs::remove_dir_all(project.path().join("results/.cache")).unwrap();
     let output = dcnet(
         project.path(),
         &["plot", "results/quick", "--out", "redrawn"],

@@ -47,8 +47,12 @@ pub trait Estimator: Send + Sync {
     fn estimate(&self, dvl: &[Vec3], gnss: &[Vec3]) -> Correction;
 }
 
-/// The structure of the terms being estimated (PAPER-NOTES, "Error models").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+/// The structure of the terms being estimated (PAPER-NOTES, "Error models"). Stored
+/// by name, "EM1" to "EM5".
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize,
+)]
+#[serde(try_from = "String", into = "String")]
 pub enum ErrorModel {
     /// Scalar scale.
     Em1,
@@ -78,6 +82,19 @@ impl ErrorModel {
 impl fmt::Display for ErrorModel {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "EM{}", *self as usize + 1)
+    }
+}
+
+impl TryFrom<String> for ErrorModel {
+    type Error = String;
+    fn try_from(name: String) -> Result<Self, String> {
+        name.parse()
+    }
+}
+
+impl From<ErrorModel> for String {
+    fn from(model: ErrorModel) -> String {
+        model.to_string()
     }
 }
 

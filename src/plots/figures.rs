@@ -8,9 +8,8 @@ use crate::results::read::{StoredRun, StoredTrajectory};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, VPos};
 
-/// A figure: its file stem, its caption, and the SVG plotters drew.
+/// A figure: its caption and the SVG plotters drew.
 pub struct Drawn {
-    pub stem: &'static str,
     pub caption: String,
     pub svg: String,
 }
@@ -19,18 +18,25 @@ pub struct Drawn {
 pub type Outcome = Result<Drawn, String>;
 
 /// Every figure of a run, in the order the report shows them.
-pub fn all(run: &StoredRun) -> PlotResult<Vec<(&'static str, Outcome)>> {
-    Ok(vec![
+pub fn all(run: &StoredRun) -> PlotResult<Vec<(String, Outcome)>> {
+    let figures: [(&str, Outcome); 6] = [
         ("velocity", velocity(run)?),
         ("calibration", calibration(run)?),
         ("rmse_first_window", rmse_first_window(run)?),
         ("improvement_em5", improvement_em5(run)?),
         ("monte_carlo_spread", monte_carlo_spread(run)?),
         ("training_loss", training_loss(run)?),
-    ])
+    ];
+    Ok(figures
+        .into_iter()
+        .map(|(stem, outcome)| (stem.to_string(), outcome))
+        .collect())
 }
 
-fn draw_svg(size: (u32, u32), draw: impl FnOnce(&Area) -> PlotResult) -> PlotResult<String> {
+pub(super) fn draw_svg(
+    size: (u32, u32),
+    draw: impl FnOnce(&Area) -> PlotResult,
+) -> PlotResult<String> {
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
@@ -124,11 +130,7 @@ fn velocity(run: &StoredRun) -> PlotResult<Outcome> {
             .collect();
         legend(&legend_area, "GT velocity", &entries)
     })?;
-    Ok(Ok(Drawn {
-        stem: "velocity",
-        caption,
-        svg,
-    }))
+    Ok(Ok(Drawn { caption, svg }))
 }
 
 /// The estimator × error-model series of the calibration table, in a stable order.
@@ -215,11 +217,7 @@ fn calibration(run: &StoredRun) -> PlotResult<Outcome> {
             entries.push((Swatch::Ring, "T_conv".into()));
             legend(&legend_area, "estimator", &entries)
         })?;
-    Ok(Ok(Drawn {
-        stem: "calibration",
-        caption,
-        svg,
-    }))
+    Ok(Ok(Drawn { caption, svg }))
 }
 
 /// One bar of a grouped bar chart.
@@ -405,11 +403,7 @@ fn rmse_first_window(run: &StoredRun) -> PlotResult<Outcome> {
         shown.extend(&estimators);
         bar_legend(&legend_area, &shown, "± std over runs")
     })?;
-    Ok(Ok(Drawn {
-        stem: "rmse_first_window",
-        caption,
-        svg,
-    }))
+    Ok(Ok(Drawn { caption, svg }))
 }
 
 /// Improvement over the baseline per test trajectory of each estimator with EM5.
@@ -475,11 +469,7 @@ fn improvement_em5(run: &StoredRun) -> PlotResult<Outcome> {
         ))?;
         Ok(())
     })?;
-    Ok(Ok(Drawn {
-        stem: "improvement_em5",
-        caption,
-        svg,
-    }))
+    Ok(Ok(Drawn { caption, svg }))
 }
 
 /// The distribution over runs of each estimator's RMSE at its T_conv, one panel per
@@ -586,11 +576,7 @@ fn monte_carlo_spread(run: &StoredRun) -> PlotResult<Outcome> {
         }
         Ok(())
     })?;
-    Ok(Ok(Drawn {
-        stem: "monte_carlo_spread",
-        caption,
-        svg,
-    }))
+    Ok(Ok(Drawn { caption, svg }))
 }
 
 /// Training and validation loss per epoch of each error model, log scale.
@@ -669,9 +655,5 @@ fn training_loss(run: &StoredRun) -> PlotResult<Outcome> {
         entries.push((Swatch::Dot(BLACK), "best validation epoch".into()));
         legend(&legend_area, "error model", &entries)
     })?;
-    Ok(Ok(Drawn {
-        stem: "training_loss",
-        caption,
-        svg,
-    }))
+    Ok(Ok(Drawn { caption, svg }))
 }

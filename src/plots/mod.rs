@@ -1,14 +1,19 @@
-//! The figures of a run, drawn from its results folder alone: `run` calls this at its
-//! end and `plot` calls it on a stored folder. [`figures`] draws each figure as SVG with
+//! The figures of a run, drawn from its results folder alone, and those of a sweep,
+//! drawn from its `sweep.parquet`: `run` calls this at its end and `plot` calls it on a
+//! stored folder. [`figures`] draws each figure as SVG with
 //! plotters, [`render`] writes it as PNG and as SVG with the text outlined, both from the
 //! embedded font.
 
 pub mod draw;
 pub mod figures;
 pub mod render;
+pub mod sweep_figures;
+
+pub use sweep_figures::Metric;
 
 use crate::results::read::StoredRun;
 use crate::results::write_atomic;
+use crate::sweep::StoredSweep;
 use std::path::{Path, PathBuf};
 
 /// Which files each figure is written as.
@@ -32,7 +37,7 @@ impl Format {
 /// A figure as written, or why the run has none.
 #[derive(Debug, Clone)]
 pub struct Written {
-    pub stem: &'static str,
+    pub stem: String,
     /// The caption, or why the figure is absent.
     pub caption: Result<String, String>,
     pub files: Vec<PathBuf>,
@@ -41,7 +46,7 @@ pub struct Written {
 #[derive(Debug, thiserror::Error)]
 pub enum PlotError {
     #[error("drawing {stem}: {message}")]
-    Draw { stem: &'static str, message: String },
+    Draw { stem: String, message: String },
     #[error(transparent)]
     Render(#[from] render::RenderError),
     #[error("writing {}: {source}", path.display())]
@@ -58,15 +63,38 @@ pub fn write_all(
     format: Format,
 ) -> Result<Vec<Written>, PlotError> {
     render::register_font();
+    let drawn = figures::all(run).map_err(|e| PlotError::Draw {
+        stem: "figures".into(),
+        message: e.to_string(),
+    })?;
+    write_figures(drawn, folder, format)
+}
+
+/// Draws a sweep's figures, `metric` against each swept key, into `folder`.
+pub fn write_sweep(
+    sweep: &StoredSweep,
+    metric: Metric,
+    folder: &Path,
+    format: Format,
+) -> Result<Vec<Written>, PlotError> {
+    render::register_font();
+    let drawn = sweep_figures::all(sweep, metric).map_err(|e| PlotError::Draw {
+        stem: "sweep".into(),
+        message: e.to_string(),
+    })?;
+    write_figures(drawn, folder, format)
+}
+
+fn write_figures(
+    drawn: Vec<(String, figures::Outcome)>,
+    folder: &Path,
+    format: Format,
+) -> Result<Vec<Written>, PlotError> {
     let io = |path: &Path| {
         let path = path.to_path_buf();
         move |source| PlotError::Io { path, source }
     };
     std::fs::create_dir_all(folder).map_err(io(folder))?;
-    let drawn = figures::all(run).map_err(|e| PlotError::Draw {
-        stem: "figures",
-        message: e.to_string(),
-    })?;
     let mut written = Vec::new();
     for (stem, outcome) in drawn {
         let figure = match outcome {
@@ -86,7 +114,7 @@ pub fn write_all(
                 "png" => render::png(&figure.svg)?,
                 _ => render::svg_with_outlined_text(&figure.svg)?.into_bytes(),
             };
-            let path = folder.join(format!("{}.{extension}", figure.stem));
+            let path = folder.join(format!("{stem}.{extension}"));
             write_atomic(&path, &bytes).map_err(io(&path))?;
             files.push(path);
         }

@@ -2,16 +2,18 @@
 //! provenance, the Parquet tables (`monte_carlo`, `calibration`, `evaluation`,
 //! `training`, and `trajectories` with the GT velocity the figures draw) and a copy of
 //! the published values the report compares with. Every file is written to a
-//! temporary file beside it and renamed into place, so a reader never sees half a file;
-//! the manifest is written last. [`read`] reads a folder back.
+//! temporary file beside it and renamed into place, so a reader never sees half a file
+//! (a writer killed mid-write leaves a hidden `.partial-<pid>-*` file, which the next
+//! run removes); the manifest is written last. [`read`] reads a folder back.
 
 pub mod read;
 
+use crate::checkpoint::Summary;
 use crate::data::Trajectory;
 use crate::estimators::{Correction, ErrorModel};
 use crate::evaluate::{CalibrationRow, EvaluationRow, ProtocolResult, RunRow};
 use crate::spec::Spec;
-use crate::train::{EpochRecord, Trained};
+use crate::train::EpochRecord;
 use arrow_array::{ArrayRef, BooleanArray, Float64Array, RecordBatch, StringArray, UInt32Array};
 use parquet::arrow::ArrowWriter;
 use parquet::basic::Compression;
@@ -35,6 +37,43 @@ pub enum ResultsError {
     },
 }
 
+/// How the temporary file of [`write_atomic`] starts; the writer's process id follows.
+const PARTIAL: &str = ".partial-";
+
+/// Removes the temporary files that writers killed mid-write left below `folder`:
+/// those of processes no longer running on this machine. Where the process table
+/// cannot be read (no `/proc`), nothing is removed.
+pub fn remove_stale_partials(folder: &Path) -> std::io::Result<usize> {
+    let processes = Path::new("/proc");
+    if !processes.is_dir() {
+        return Ok(0);
+    }
+    let mut removed = 0;
+    let Ok(entries) = std::fs::read_dir(folder) else {
+        return Ok(0);
+    };
+    for entry in entries {
+        let entry = entry?;
+        let path = entry.path();
+        if entry.file_type()?.is_dir() {
+            removed += remove_stale_partials(&path)?;
+            continue;
+        }
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let writer = name
+            .strip_prefix(PARTIAL)
+            .and_then(|rest| rest.split('-').next())
+            .and_then(|pid| pid.parse::<u32>().ok());
+        if let Some(pid) = writer {
+            if !processes.join(pid.to_string()).exists() {
+                std::fs::remove_file(&path)?;
+                removed += 1;
+            }
+        }
+    }
+    Ok(removed)
+}
+
 /// Writes `bytes` to `path` through a temporary file in the same folder and a rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let folder = path
@@ -42,7 +81,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
     let mut file = tempfile::Builder::new()
-        .prefix(".partial-")
+        .prefix(&format!("{PARTIAL}{}-", std::process::id()))
         .tempfile_in(folder)?;
     let mut permissions = file.as_file().metadata()?.permissions();
     file.write_all(bytes)?;
@@ -69,7 +108,13 @@ pub struct Manifest {
     pub backend: String,
     pub host: String,
     pub data_files: Vec<DataFile>,
+    /// Wall time this process spent in each stage, on every point of the spec; a model
+    /// or block taken from the cache adds nothing.
     pub stage_seconds: StageSeconds,
+    /// The hash of the resolved spec and of the cache keys of every block the tables
+    /// were put together from: the folder is current while it matches.
+    #[serde(default)]
+    pub results_key: String,
 }
 
 /// Wall time of each stage of a run.
@@ -107,7 +152,7 @@ pub fn write_run(
     spec: &Spec,
     trajectories: &[Trajectory],
     result: &ProtocolResult,
-    dcnets: &[Trained],
+    dcnets: &[Summary],
     manifest: &Manifest,
 ) -> Result<(), ResultsError> {
     std::fs::create_dir_all(folder).map_err(io(folder))?;
@@ -126,12 +171,7 @@ pub fn write_run(
         ),
     ];
     for (file, batch) in TABLES.iter().zip(batches) {
-        let path = folder.join(file);
-        let bytes = parquet_bytes(&batch).map_err(|source| ResultsError::Parquet {
-            path: path.clone(),
-            source,
-        })?;
-        write_atomic(&path, &bytes).map_err(io(&path))?;
+        write_table(&folder.join(file), &batch)?;
     }
     let published_path = folder.join(PUBLISHED);
     match &spec.resolved.report.published {
@@ -151,6 +191,15 @@ pub fn write_run(
     let manifest_path = folder.join(MANIFEST);
     let json = serde_json::to_string_pretty(manifest).expect("a manifest always serializes");
     write_atomic(&manifest_path, json.as_bytes()).map_err(io(&manifest_path))
+}
+
+/// Writes `batch` to `path` as Parquet, atomically.
+pub fn write_table(path: &Path, batch: &RecordBatch) -> Result<(), ResultsError> {
+    let bytes = parquet_bytes(batch).map_err(|source| ResultsError::Parquet {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    write_atomic(path, &bytes).map_err(io(path))
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> ResultsError + '_ {
@@ -249,8 +298,8 @@ pub fn evaluation_batch(rows: &[EvaluationRow]) -> RecordBatch {
 }
 
 /// One row per error model × epoch of DCNet training.
-pub fn training_batch(dcnets: &[Trained]) -> RecordBatch {
-    let rows: Vec<(&Trained, &EpochRecord)> = dcnets
+pub fn training_batch(dcnets: &[Summary]) -> RecordBatch {
+    let rows: Vec<(&Summary, &EpochRecord)> = dcnets
         .iter()
         .flat_map(|t| t.history.iter().map(move |epoch| (t, epoch)))
         .collect();
@@ -319,5 +368,22 @@ mod tests {
         write_atomic(&path, b"second").unwrap();
         assert_eq!(std::fs::read(&path).unwrap(), b"second");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn partial_files_of_dead_writers_are_removed_and_live_ones_kept() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join("sub")).unwrap();
+        // No process has the largest pid; this test's own process is alive.
+        let dead = dir.path().join(format!("sub/{PARTIAL}{}-abc", u32::MAX));
+        let live = dir
+            .path()
+            .join(format!("{PARTIAL}{}-abc", std::process::id()));
+        let other = dir.path().join("sub/kept.parquet");
+        for path in [&dead, &live, &other] {
+            std::fs::write(path, b"x").unwrap();
+        }
+        assert_eq!(remove_stale_partials(dir.path()).unwrap(), 1);
+        assert!(!dead.exists() && live.exists() && other.exists());
     }
 }

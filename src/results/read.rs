@@ -109,13 +109,27 @@ fn existing(path: &Path) -> Result<PathBuf, ReadError> {
     }
 }
 
+/// The per-run rows of a Parquet file written by [`super::monte_carlo_batch`].
+pub fn run_rows_at(path: &Path) -> Result<Vec<RunRow>, ReadError> {
+    table_at(path, TABLES[0], run_rows)
+}
+
 /// Reads the table `file` of `folder`, checks its schema and turns each batch into rows.
 fn table<T>(
     folder: &Path,
     file: &str,
     rows: fn(&Batch) -> Result<Vec<T>, String>,
 ) -> Result<Vec<T>, ReadError> {
-    let path = existing(&folder.join(file))?;
+    table_at(&folder.join(file), file, rows)
+}
+
+/// Reads `path` as the results table `file`.
+fn table_at<T>(
+    path: &Path,
+    file: &str,
+    rows: fn(&Batch) -> Result<Vec<T>, String>,
+) -> Result<Vec<T>, ReadError> {
+    let path = existing(path)?;
     let invalid = |message: String| ReadError::Invalid {
         path: path.clone(),
         message,

@@ -257,8 +257,9 @@ impl Default for TrainingFile {
     }
 }
 
-#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields, default)]
+/// RMSProp learning rate per error model: a table `{ EM1 = .., EM5 = .. }` (missing
+/// models keep their default) or one number for all five.
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct LearningRatesFile {
     #[serde(rename = "EM1")]
     pub em1: f64,
@@ -270,6 +271,81 @@ pub struct LearningRatesFile {
     pub em4: f64,
     #[serde(rename = "EM5")]
     pub em5: f64,
+}
+
+/// The table form of [`LearningRatesFile`].
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct LearningRatesTable {
+    #[serde(rename = "EM1")]
+    em1: f64,
+    #[serde(rename = "EM2")]
+    em2: f64,
+    #[serde(rename = "EM3")]
+    em3: f64,
+    #[serde(rename = "EM4")]
+    em4: f64,
+    #[serde(rename = "EM5")]
+    em5: f64,
+}
+
+impl Default for LearningRatesTable {
+    fn default() -> Self {
+        let LearningRatesFile {
+            em1,
+            em2,
+            em3,
+            em4,
+            em5,
+        } = LearningRatesFile::default();
+        Self {
+            em1,
+            em2,
+            em3,
+            em4,
+            em5,
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for LearningRatesFile {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Rates;
+        impl<'de> serde::de::Visitor<'de> for Rates {
+            type Value = LearningRatesFile;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number, or a table of numbers keyed EM1 to EM5")
+            }
+            fn visit_f64<E: serde::de::Error>(self, rate: f64) -> Result<Self::Value, E> {
+                Ok(LearningRatesFile {
+                    em1: rate,
+                    em2: rate,
+                    em3: rate,
+                    em4: rate,
+                    em5: rate,
+                })
+            }
+            fn visit_i64<E: serde::de::Error>(self, rate: i64) -> Result<Self::Value, E> {
+                self.visit_f64(rate as f64)
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> Result<Self::Value, A::Error> {
+                let t = LearningRatesTable::deserialize(
+                    serde::de::value::MapAccessDeserializer::new(map),
+                )?;
+                Ok(LearningRatesFile {
+                    em1: t.em1,
+                    em2: t.em2,
+                    em3: t.em3,
+                    em4: t.em4,
+                    em5: t.em5,
+                })
+            }
+        }
+        deserializer.deserialize_any(Rates)
+    }
 }
 
 impl Default for LearningRatesFile {
@@ -329,4 +405,19 @@ fn default_stride_s() -> f64 {
 }
 fn default_validation_fraction() -> f64 {
     0.2
+}
+
+/// The `[sweep]` table: the values of any spec keys, whose product is the grid of
+/// points to run, or a random sample of it.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepFile {
+    /// Run this many points drawn at random from the grid instead of all of them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sample: Option<usize>,
+    /// Seed of the sample; the spec's `seed` when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sample_seed: Option<u64>,
+    /// Dotted spec key → list of values, e.g. `"training.learning_rate" = [1e-4, 1e-3]`.
+    pub values: toml::Table,
 }

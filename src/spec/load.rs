@@ -2,6 +2,7 @@
 //! Every fault, from a TOML syntax error to a failed check, comes back as a
 //! [`SpecError`] that names the file and line (or the `--set` it came from) and the key.
 
+use super::file::SweepFile;
 use super::{Spec, SpecFile};
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -39,8 +40,38 @@ impl fmt::Display for SpecErrors {
     }
 }
 
-/// Reads, overrides, deserializes and checks the spec at `path`.
+/// A spec's points: the spec itself, or one per point of its `[sweep]`.
+#[derive(Debug, Clone)]
+pub struct Experiment {
+    pub name: String,
+    /// The swept keys in the order `[sweep.values]` lists them; empty without a sweep.
+    pub swept: Vec<String>,
+    pub points: Vec<Point>,
+}
+
+#[derive(Debug, Clone)]
+pub struct Point {
+    /// One value per swept key.
+    pub values: Vec<toml::Value>,
+    /// The point's spec; a sweep point is named `<name>/<point>`, its results folder.
+    pub spec: Spec,
+}
+
+impl Experiment {
+    pub fn is_sweep(&self) -> bool {
+        !self.swept.is_empty()
+    }
+}
+
+/// Reads the spec at `path` with its overrides; the first point of a sweep.
 pub fn load(path: &Path, overrides: &[String]) -> Result<Spec, SpecErrors> {
+    let mut experiment = load_experiment(path, overrides)?;
+    Ok(experiment.points.swap_remove(0).spec)
+}
+
+/// Reads, overrides, deserializes and checks the spec at `path`, and every point of
+/// its `[sweep]`.
+pub fn load_experiment(path: &Path, overrides: &[String]) -> Result<Experiment, SpecErrors> {
     let shown = path.display().to_string();
     let fail = |message: String| {
         SpecErrors(vec![SpecError {
@@ -65,11 +96,12 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Spec, SpecErrors> {
     let mut table: toml::Table =
         toml::from_str(&text).map_err(|e| fail(e.message().to_string()))?;
 
-    let mut applied = Vec::new();
+    // (key, where its value came from), latest last.
+    let mut applied: Vec<(String, String)> = Vec::new();
     let mut errors = Vec::new();
     for assignment in overrides {
         match apply_override(&mut table, assignment) {
-            Ok(key) => applied.push((key, assignment.clone())),
+            Ok(key) => applied.push((key, format!("--set {assignment}"))),
             Err(message) => errors.push(SpecError {
                 location: format!("--set {assignment}"),
                 key: String::new(),
@@ -80,29 +112,6 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Spec, SpecErrors> {
     if !errors.is_empty() {
         return Err(SpecErrors(errors));
     }
-    let locate = |key: String, message: String| {
-        let overridden = applied.iter().rev().find(|(set, _)| {
-            key == *set
-                || key.starts_with(&format!("{set}."))
-                || key.starts_with(&format!("{set}["))
-        });
-        let location = match overridden {
-            Some((_, assignment)) => format!("--set {assignment}"),
-            None => format!("{shown}:{}", line_of(&text, span_of(&spans, &key))),
-        };
-        SpecError {
-            location,
-            key,
-            message,
-        }
-    };
-
-    let file: SpecFile =
-        serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
-            let key = e.path().to_string();
-            let key = if key == "." { String::new() } else { key };
-            SpecErrors(vec![locate(key, e.into_inner().message().to_string())])
-        })?;
     let spec_dir = path
         .parent()
         .map(Path::to_path_buf)
@@ -113,14 +122,313 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Spec, SpecErrors> {
         spec_dir
     };
     let spec_dir = std::path::absolute(&spec_dir).unwrap_or(spec_dir);
-    file.check(&spec_dir).map_err(|faults| {
-        SpecErrors(
-            faults
-                .into_iter()
-                .map(|(key, message)| locate(key, message))
-                .collect(),
-        )
+    let locate = |applied: &[(String, String)], key: String, message: String| {
+        let overridden = applied.iter().rev().find(|(set, _)| {
+            key == *set
+                || key.starts_with(&format!("{set}."))
+                || key.starts_with(&format!("{set}["))
+        });
+        let location = match overridden {
+            Some((_, location)) => location.clone(),
+            None => format!("{shown}:{}", line_of(&text, span_of(&spans, &key))),
+        };
+        SpecError {
+            location,
+            key,
+            message,
+        }
+    };
+    let check = |table: toml::Table, applied: &[(String, String)]| -> Result<Spec, SpecErrors> {
+        let file: SpecFile =
+            serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
+                let key = e.path().to_string();
+                let key = if key == "." { String::new() } else { key };
+                SpecErrors(vec![locate(
+                    applied,
+                    key,
+                    e.into_inner().message().to_string(),
+                )])
+            })?;
+        file.check(&spec_dir).map_err(|faults| {
+            SpecErrors(
+                faults
+                    .into_iter()
+                    .map(|(key, message)| locate(applied, key, message))
+                    .collect(),
+            )
+        })
+    };
+
+    let Some(sweep) = table.remove("sweep") else {
+        let spec = check(table, &applied)?;
+        return Ok(Experiment {
+            name: spec.name.clone(),
+            swept: Vec::new(),
+            points: vec![Point {
+                values: Vec::new(),
+                spec,
+            }],
+        });
+    };
+    let sweep: SweepFile = serde_path_to_error::deserialize(sweep).map_err(|e| {
+        SpecErrors(vec![locate(
+            &applied,
+            format!("sweep.{}", e.path()),
+            e.into_inner().message().to_string(),
+        )])
+    })?;
+    let axes = sweep_axes(&sweep.values, &spans, &text, &shown)?;
+    let sizes: Vec<usize> = axes.iter().map(|a| a.values.len()).collect();
+    let total: usize = sizes.iter().product();
+    let chosen: Vec<usize> = match sweep.sample {
+        None => (0..total).collect(),
+        Some(n) if n == 0 || n > total => {
+            return Err(SpecErrors(vec![locate(
+                &applied,
+                "sweep.sample".into(),
+                format!("{n} points: choose between 1 and the grid's {total}"),
+            )]));
+        }
+        Some(n) => {
+            let seed = sweep
+                .sample_seed
+                .or_else(|| {
+                    table
+                        .get("seed")
+                        .and_then(|s| s.as_integer())
+                        .map(|s| s as u64)
+                })
+                .unwrap_or(0);
+            let mut rng = crate::rng::task_rng(seed, &[&"sweep"]);
+            let mut chosen = rand::seq::index::sample(&mut rng, total, n).into_vec();
+            chosen.sort_unstable();
+            chosen
+        }
+    };
+
+    let name = table
+        .get("name")
+        .and_then(|n| n.as_str())
+        .unwrap_or_default()
+        .to_string();
+    let mut points = Vec::new();
+    let mut errors: Vec<SpecError> = Vec::new();
+    let mut names: Vec<String> = Vec::new();
+    for index in chosen {
+        // Mixed radix, the first key outermost.
+        let mut rest = index;
+        let mut picks = vec![0; axes.len()];
+        for (axis, size) in sizes.iter().enumerate().rev() {
+            picks[axis] = rest % size;
+            rest /= size;
+        }
+        let values: Vec<toml::Value> = axes
+            .iter()
+            .zip(&picks)
+            .map(|(axis, &pick)| axis.values[pick].clone())
+            .collect();
+        let point_name = point_name(&axes, &picks);
+        let mut point_table = table.clone();
+        let mut point_applied = applied.clone();
+        for (axis, value) in axes.iter().zip(&values) {
+            let path = steps(&axis.key).expect("sweep keys were checked");
+            let mut root = toml::Value::Table(std::mem::take(&mut point_table));
+            let placed = set_at(&mut root, &path, value.clone());
+            if let toml::Value::Table(t) = root {
+                point_table = t;
+            }
+            let location = format!("{shown}:{} (sweep point {point_name})", axis.line);
+            if let Err(message) = placed {
+                errors.push(SpecError {
+                    location,
+                    key: axis.key.clone(),
+                    message,
+                });
+                continue;
+            }
+            point_applied.push((axis.key.clone(), location));
+        }
+        point_table.insert("name".into(), format!("{name}/{point_name}").into());
+        match check(point_table, &point_applied) {
+            Ok(spec) => {
+                if names.contains(&point_name) {
+                    errors.push(SpecError {
+                        location: shown.clone(),
+                        key: "sweep.values".into(),
+                        message: format!("two points are both named {point_name:?}: make the values differ as text"),
+                    });
+                }
+                names.push(point_name);
+                points.push(Point { values, spec });
+            }
+            Err(SpecErrors(faults)) => {
+                for fault in faults {
+                    if !errors.contains(&fault) {
+                        errors.push(fault);
+                    }
+                }
+            }
+        }
+    }
+    if !errors.is_empty() {
+        return Err(SpecErrors(errors));
+    }
+    Ok(Experiment {
+        name,
+        swept: axes.into_iter().map(|a| a.key).collect(),
+        points,
     })
+}
+
+/// One swept key, its values and the line they are written on.
+struct Axis {
+    key: String,
+    values: Vec<toml::Value>,
+    line: usize,
+}
+
+/// The lists of `[sweep.values]`, found at any depth: `"model.conv_channels" = [..]`
+/// and `model.conv_channels = [..]` are the same key.
+fn sweep_axes(
+    values: &toml::Table,
+    spans: &Spanned<DeTable<'_>>,
+    text: &str,
+    shown: &str,
+) -> Result<Vec<Axis>, SpecErrors> {
+    fn walk(
+        table: &toml::Table,
+        spanned: Option<&DeTable<'_>>,
+        prefix: &str,
+        text: &str,
+        axes: &mut Vec<Axis>,
+        faults: &mut Vec<(String, usize, String)>,
+    ) {
+        for (name, value) in table {
+            let key = if prefix.is_empty() {
+                name.clone()
+            } else {
+                format!("{prefix}.{name}")
+            };
+            let entry = spanned.and_then(|t| t.iter().find(|(n, _)| n.get_ref() == name));
+            let line = entry.map_or(1, |(n, _)| line_of(text, n.span().start));
+            match value {
+                toml::Value::Array(list) if list.is_empty() => {
+                    faults.push((key, line, "is empty: list at least one value".into()))
+                }
+                toml::Value::Array(list) => match steps(&key) {
+                    Ok(_) => axes.push(Axis {
+                        key,
+                        values: list.clone(),
+                        line,
+                    }),
+                    Err(message) => faults.push((key, line, message)),
+                },
+                toml::Value::Table(inner) => {
+                    let inner_spans = entry.and_then(|(_, v)| match v.get_ref() {
+                        DeValue::Table(t) => Some(t),
+                        _ => None,
+                    });
+                    walk(inner, inner_spans, &key, text, axes, faults)
+                }
+                _ => faults.push((
+                    key,
+                    line,
+                    "expected a list of the values to sweep, such as [1e-4, 1e-3]".into(),
+                )),
+            }
+        }
+    }
+    let values_spans = ["sweep", "values"]
+        .iter()
+        .try_fold(spans.get_ref(), |table, name| {
+            table
+                .iter()
+                .find(|(n, _)| n.get_ref() == name)
+                .and_then(|(_, v)| match v.get_ref() {
+                    DeValue::Table(t) => Some(t),
+                    _ => None,
+                })
+        });
+    let mut axes = Vec::new();
+    let mut faults = Vec::new();
+    walk(values, values_spans, "", text, &mut axes, &mut faults);
+    if axes.is_empty() && faults.is_empty() {
+        faults.push((
+            String::new(),
+            1,
+            "names no key: list at least one, such as \"training.learning_rate\" = [1e-4, 1e-3]"
+                .into(),
+        ));
+    }
+    if faults.is_empty() {
+        return Ok(axes);
+    }
+    Err(SpecErrors(
+        faults
+            .into_iter()
+            .map(|(key, line, message)| SpecError {
+                location: format!("{shown}:{line}"),
+                key: if key.is_empty() {
+                    "sweep.values".into()
+                } else {
+                    format!("sweep.values.{key}")
+                },
+                message,
+            })
+            .collect(),
+    ))
+}
+
+/// A point's folder name from its values, such as `learning_rate=0.001,conv_channels=8`:
+/// each key by its last part (its whole path when two keys share that part), each
+/// value as written, a list joined by '-', a table by its place in the list.
+fn point_name(axes: &[Axis], picks: &[usize]) -> String {
+    let short = |key: &str| key.rsplit('.').next().unwrap_or(key).to_string();
+    let parts: Vec<String> = axes
+        .iter()
+        .zip(picks)
+        .map(|(axis, &pick)| {
+            let ambiguous = axes
+                .iter()
+                .filter(|other| short(&other.key) == short(&axis.key))
+                .count()
+                > 1;
+            let key = if ambiguous {
+                axis.key.clone()
+            } else {
+                short(&axis.key)
+            };
+            let scalar = |value: &toml::Value| match value {
+                toml::Value::String(s) => Some(s.clone()),
+                toml::Value::Integer(_) | toml::Value::Float(_) | toml::Value::Boolean(_) => {
+                    Some(value.to_string())
+                }
+                _ => None,
+            };
+            let value = &axis.values[pick];
+            let text = match value {
+                toml::Value::Array(items) => items
+                    .iter()
+                    .map(scalar)
+                    .collect::<Option<Vec<_>>>()
+                    .map(|items| items.join("-")),
+                other => scalar(other),
+            }
+            .unwrap_or_else(|| format!("v{}", pick + 1));
+            let text: String = text
+                .chars()
+                .map(|c| {
+                    if c.is_ascii_alphanumeric() || "-_.".contains(c) {
+                        c
+                    } else {
+                        '_'
+                    }
+                })
+                .collect();
+            format!("{key}={text}")
+        })
+        .collect();
+    parts.join(",")
 }
 
 /// A TOML data file read into `T`, kept with its text so that later checks can name
@@ -302,6 +610,162 @@ fn line_of(text: &str, offset: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// quick.toml with `extra` appended, in a temporary folder beside its trajectories.
+    fn quick_plus(extra: &str) -> (tempfile::TempDir, PathBuf) {
+        let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let text = std::fs::read_to_string(repo.join("experiments/quick.toml")).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("spec.toml");
+        std::fs::write(&path, format!("{text}\n{extra}")).unwrap();
+        (dir, path)
+    }
+
+    fn line_containing(path: &Path, needle: &str) -> usize {
+        let text = std::fs::read_to_string(path).unwrap();
+        text.lines().position(|l| l.contains(needle)).unwrap() + 1
+    }
+
+    #[test]
+    fn sweep_points_are_the_product_in_order_and_named_by_their_values() {
+        let (_dir, path) = quick_plus(
+            "[sweep.values]\n\"training.learning_rate\" = [1e-4, 1e-3]\nmodel.conv_channels = [8, 16, 32]\n",
+        );
+        let experiment = load_experiment(&path, &[]).unwrap();
+        assert_eq!(experiment.name, "quick");
+        assert_eq!(
+            experiment.swept,
+            ["training.learning_rate", "model.conv_channels"]
+        );
+        let names: Vec<&str> = experiment
+            .points
+            .iter()
+            .map(|p| p.spec.name.as_str())
+            .collect();
+        assert_eq!(
+            names,
+            [
+                "quick/learning_rate=0.0001,conv_channels=8",
+                "quick/learning_rate=0.0001,conv_channels=16",
+                "quick/learning_rate=0.0001,conv_channels=32",
+                "quick/learning_rate=0.001,conv_channels=8",
+                "quick/learning_rate=0.001,conv_channels=16",
+                "quick/learning_rate=0.001,conv_channels=32",
+            ]
+        );
+        let point = &experiment.points[4];
+        assert_eq!(point.spec.training.learning_rates, [1e-3; 5]);
+        assert_eq!(point.spec.model.conv_channels, 16);
+        assert_eq!(
+            point.values,
+            [toml::Value::Float(1e-3), toml::Value::Integer(16)]
+        );
+        // Everything not swept is the spec's own.
+        assert_eq!(point.spec.calibration.monte_carlo_runs, 20);
+        // `load` gives the first point.
+        assert_eq!(load(&path, &[]).unwrap().name, names[0]);
+    }
+
+    #[test]
+    fn a_sample_draws_distinct_grid_points_from_its_seed() {
+        let values = "[sweep.values]\n\"model.conv_channels\" = [4, 8, 16]\n\"training.batch_size\" = [16, 32, 64]\n";
+        let sampled = |sample: &str| {
+            let (_dir, path) = quick_plus(&format!("[sweep]\n{sample}\n{values}"));
+            load_experiment(&path, &[]).map(|e| {
+                e.points
+                    .iter()
+                    .map(|p| (p.spec.model.conv_channels, p.spec.training.batch_size))
+                    .collect::<Vec<_>>()
+            })
+        };
+        let four = sampled("sample = 4").unwrap();
+        assert_eq!(four.len(), 4);
+        let mut sorted = four.clone();
+        sorted.sort();
+        sorted.dedup();
+        assert_eq!(sorted, four, "distinct and in grid order");
+        assert_eq!(four, sampled("sample = 4").unwrap());
+        assert_eq!(
+            four,
+            sampled("sample = 4\nsample_seed = 7").unwrap(),
+            "the spec's seed is 7"
+        );
+        let others: Vec<_> = (0..8)
+            .map(|seed| sampled(&format!("sample = 4\nsample_seed = {seed}")).unwrap())
+            .collect();
+        assert!(
+            others.iter().any(|o| *o != four),
+            "the seed changes the sample"
+        );
+        assert_eq!(sampled("sample = 9").unwrap().len(), 9);
+        let error = sampled("sample = 10").unwrap_err().to_string();
+        assert!(
+            error.ends_with("sweep.sample: 10 points: choose between 1 and the grid's 9"),
+            "{error}"
+        );
+    }
+
+    #[test]
+    fn bad_sweep_values_are_placed_on_their_line() {
+        let (_dir, path) = quick_plus("[sweep.values]\n\"model.dropout\" = [0.1, 2.0]\n");
+        let line = line_containing(&path, "\"model.dropout\" = [0.1, 2.0]");
+        let error = load_experiment(&path, &[]).unwrap_err().to_string();
+        let expected = format!(
+            "{}:{line} (sweep point dropout=2.0): model.dropout:",
+            path.display()
+        );
+        assert!(error.starts_with(&expected), "{error}");
+        assert_eq!(error.lines().count(), 1, "{error}");
+
+        let (_dir, path) = quick_plus("[sweep.values]\nmodel.channels = [8]\n");
+        let line = line_containing(&path, "model.channels = [8]");
+        let error = load_experiment(&path, &[]).unwrap_err().to_string();
+        assert!(
+            error.starts_with(&format!(
+                "{}:{line} (sweep point channels=8): model.channels: unknown field",
+                path.display()
+            )),
+            "{error}"
+        );
+
+        let (_dir, path) = quick_plus("[sweep.values]\n\"model.dropout\" = 0.1\n");
+        let line = line_containing(&path, "\"model.dropout\" = 0.1");
+        let error = load_experiment(&path, &[]).unwrap_err().to_string();
+        assert_eq!(
+            error,
+            format!(
+                "{}:{line}: sweep.values.model.dropout: expected a list of the values to sweep, such as [1e-4, 1e-3]",
+                path.display()
+            )
+        );
+
+        let (_dir, path) = quick_plus("[sweep]\nsamples = 3\n");
+        let error = load_experiment(&path, &[]).unwrap_err().to_string();
+        assert!(error.contains("sweep.samples: unknown field"), "{error}");
+    }
+
+    #[test]
+    fn a_learning_rate_is_one_number_for_all_models_or_one_per_model() {
+        let quick = |set: &[&str]| {
+            let (_dir, path) = quick_plus("");
+            let set: Vec<String> = set.iter().map(ToString::to_string).collect();
+            load(&path, &set).map(|s| s.training.learning_rates)
+        };
+        assert_eq!(quick(&["training.learning_rate=1e-3"]).unwrap(), [1e-3; 5]);
+        assert_eq!(quick(&["training.learning_rate=1"]).unwrap(), [1.0; 5]);
+        assert_eq!(
+            quick(&["training.learning_rate={EM2 = 2e-3}"]).unwrap(),
+            [5e-5, 2e-3, 5e-5, 5e-5, 5e-4],
+            "unlisted models keep their defaults"
+        );
+        let error = quick(&["training.learning_rate={EM6 = 1.0}"])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            error.contains("training.learning_rate.EM6: unknown field `EM6`"),
+            "{error}"
+        );
+    }
 
     #[test]
     fn key_paths_split_into_steps() {

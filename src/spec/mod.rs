@@ -7,7 +7,7 @@ pub mod file;
 pub mod load;
 
 pub use file::SpecFile;
-pub use load::{SpecError, SpecErrors, TomlFile, load};
+pub use load::{Experiment, Point, SpecError, SpecErrors, TomlFile, load, load_experiment};
 
 use crate::estimators::{ErrorModel, EstimatorKind};
 use crate::model::Activation;
@@ -191,11 +191,7 @@ impl SpecFile {
         } = self.clone();
         let mut resolved = self;
 
-        if name.is_empty()
-            || !name
-                .chars()
-                .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c))
-        {
+        if !is_folder_name(&name) {
             faults.add("name", format!("{name:?} must be non-empty and use only letters, digits, '-', '_' and '.' (it names the results folder)"));
         }
 
@@ -600,6 +596,19 @@ pub(crate) fn quick_spec(overrides: &[&str]) -> Spec {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quick.toml");
     let overrides: Vec<String> = overrides.iter().map(ToString::to_string).collect();
     load(&path, &overrides).unwrap()
+}
+
+/// Whether `name` can name a results folder: letters, digits, '-', '_', '.', and for
+/// the points of a sweep (`<name>/<point>`) '/', '=' and ','; no empty, `.` or `..` part.
+fn is_folder_name(name: &str) -> bool {
+    name.split('/').all(|part| {
+        !part.is_empty()
+            && part != "."
+            && part != ".."
+            && part
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || "-_.=,".contains(c))
+    })
 }
 
 /// `seconds × rate` as a whole number of samples, if it is one.

@@ -1,0 +1,202 @@
+//! The content-addressed store every run shares, `OUT/.cache/`. A dataset, a trained
+//! model and a Monte Carlo block are each keyed by the SHA-256 of exactly the inputs
+//! that determine them (the relevant settings of the resolved spec, the SHA-256 of the
+//! data files, the code version), so a run reuses whatever another run, sweep point or
+//! shard already computed, and a changed setting recomputes only what depends on it.
+//!
+//! - Datasets are keyed but not stored: generating one is faster than reading it back
+//!   (the paper's 203 MB in 0.26 s), so the points of a sweep that share a dataset
+//!   share it in memory, and a run whose models are all stored generates none.
+//! - Models live in `models/` ([`crate::checkpoint::ModelStore`]), with their
+//!   checkpoints while they train.
+//! - Monte Carlo blocks (one estimator on one DVL, every run) live in `monte_carlo/`
+//!   as Parquet files of their per-run rows.
+
+use crate::data::fetch::sha256_hex;
+use crate::estimators::{ErrorModel, EstimatorKind};
+use crate::evaluate::RunRow;
+use crate::results::{self, ResultsError, read};
+use crate::spec::{Origin, Spec};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Bumped whenever the dataset generation changes its bytes.
+const DATASET_CODE_VERSION: u32 = 1;
+/// Bumped whenever training changes in a way that changes the weights.
+const TRAINING_CODE_VERSION: u32 = 1;
+/// Bumped whenever the protocol or an estimator changes its numbers.
+const PROTOCOL_CODE_VERSION: u32 = 1;
+
+/// The folder of the cache under a results folder.
+pub const FOLDER: &str = ".cache";
+
+/// The SHA-256 of every data file the specs read, computed once.
+#[derive(Debug, Clone, Default)]
+pub struct DataHashes(BTreeMap<PathBuf, String>);
+
+impl DataHashes {
+    pub fn of<'a>(specs: impl IntoIterator<Item = &'a Spec>) -> std::io::Result<Self> {
+        let mut hashes = BTreeMap::new();
+        for spec in specs {
+            for source in &spec.trajectories {
+                if let Origin::File { path, .. } = &source.origin {
+                    if !hashes.contains_key(path) {
+                        let bytes = std::fs::read(path).map_err(|e| {
+                            std::io::Error::new(e.kind(), format!("{}: {e}", path.display()))
+                        })?;
+                        hashes.insert(path.clone(), sha256_hex(&bytes));
+                    }
+                }
+            }
+        }
+        Ok(Self(hashes))
+    }
+
+    /// The files `spec` reads, with their SHA-256, for the manifest.
+    pub fn files_of(&self, spec: &Spec) -> Vec<results::DataFile> {
+        let mut files: Vec<results::DataFile> = Vec::new();
+        for source in &spec.trajectories {
+            if let Origin::File { path, .. } = &source.origin {
+                if !files.iter().any(|f| &f.path == path) {
+                    files.push(results::DataFile {
+                        path: path.clone(),
+                        sha256: self.0[path].clone(),
+                    });
+                }
+            }
+        }
+        files
+    }
+
+    /// A trajectory as a key sees it: its name and where its samples come from.
+    fn source(&self, spec: &Spec, index: usize) -> (String, String) {
+        let source = &spec.trajectories[index];
+        let origin = match &source.origin {
+            Origin::File { path, samples } => {
+                format!("sha256 {} samples {samples:?}", self.0[path])
+            }
+            Origin::Synthetic { samples } => {
+                format!("synthetic {samples} {:?}", spec.resolved.data.synthetic)
+            }
+        };
+        (source.name.clone(), origin)
+    }
+}
+
+fn hash(inputs: &impl Serialize) -> String {
+    sha256_hex(
+        serde_json::to_string(inputs)
+            .expect("key inputs serialize")
+            .as_bytes(),
+    )
+}
+
+/// The key of the training set: what the windows are cut from and how.
+pub fn dataset_key(spec: &Spec, hashes: &DataHashes) -> String {
+    let r = &spec.resolved;
+    hash(&(
+        ("dataset", DATASET_CODE_VERSION, env!("CARGO_PKG_VERSION")),
+        spec.seed,
+        (r.data.sample_rate_hz, r.data.ground_truth_window_samples),
+        &r.sensors,
+        &r.grid,
+        (
+            r.dataset.window_s,
+            r.dataset.stride_s,
+            r.dataset.validation_fraction,
+        ),
+        spec.dataset
+            .trajectories
+            .iter()
+            .map(|&t| hashes.source(spec, t))
+            .collect::<Vec<_>>(),
+    ))
+}
+
+/// The key of `error_model`'s trained DCNet.
+pub fn model_key(spec: &Spec, error_model: ErrorModel, dataset_key: &str) -> String {
+    let r = &spec.resolved;
+    hash(&(
+        ("model", TRAINING_CODE_VERSION, env!("CARGO_PKG_VERSION")),
+        dataset_key,
+        error_model.to_string(),
+        spec.seed,
+        &r.model,
+        &r.training.backend,
+        (spec.training.epochs, spec.training.batch_size),
+        spec.training.learning_rate(error_model),
+        (spec.training.rmsprop_alpha, spec.training.rmsprop_epsilon),
+    ))
+}
+
+/// The key of one estimator's Monte Carlo block on the DVL at `dvl`; `model_key` is
+/// the key of the DCNet it runs, if it is one.
+pub fn block_key(
+    spec: &Spec,
+    hashes: &DataHashes,
+    dvl: usize,
+    estimator: EstimatorKind,
+    error_model: Option<ErrorModel>,
+    model_key: Option<&str>,
+) -> String {
+    let r = &spec.resolved;
+    hash(&(
+        (
+            "monte_carlo",
+            PROTOCOL_CODE_VERSION,
+            env!("CARGO_PKG_VERSION"),
+        ),
+        spec.seed,
+        &r.dvl[dvl],
+        &r.sensors,
+        (r.data.sample_rate_hz, r.data.ground_truth_window_samples),
+        hashes.source(spec, spec.calibration.trajectory),
+        (
+            &r.calibration.window_sizes_s,
+            r.calibration.monte_carlo_runs,
+        ),
+        spec.evaluation
+            .iter()
+            .map(|&t| hashes.source(spec, t))
+            .collect::<Vec<_>>(),
+        (estimator.to_string(), error_model.map(|m| m.to_string())),
+        model_key,
+    ))
+}
+
+/// The Monte Carlo blocks of the cache.
+pub struct BlockStore {
+    pub folder: PathBuf,
+}
+
+impl BlockStore {
+    pub fn new(folder: PathBuf) -> Self {
+        Self { folder }
+    }
+
+    pub fn path(&self, key: &str) -> PathBuf {
+        self.folder.join(format!("{}.parquet", &key[..16]))
+    }
+
+    pub fn contains(&self, key: &str) -> bool {
+        self.path(key).is_file()
+    }
+
+    pub fn save(&self, key: &str, rows: &[RunRow]) -> Result<(), ResultsError> {
+        std::fs::create_dir_all(&self.folder).map_err(|source| ResultsError::Io {
+            path: self.folder.clone(),
+            source,
+        })?;
+        results::write_table(&self.path(key), &results::monte_carlo_batch(rows))
+    }
+
+    pub fn load(&self, key: &str) -> Result<Vec<RunRow>, read::ReadError> {
+        read::run_rows_at(&self.path(key))
+    }
+}
+
+/// The cache under the results folder `out`.
+pub fn root(out: &Path) -> PathBuf {
+    out.join(FOLDER)
+}

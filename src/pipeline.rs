@@ -1,0 +1,838 @@
+//! An experiment as a list of tasks: for every point of the spec (one, or one per
+//! sweep point), a dataset, one DCNet training per error model, one Monte Carlo block
+//! per DVL × estimator, and the results folder put together from them. Tasks are
+//! deduplicated by their cache key ([`crate::cache`]), so sweep points that share a
+//! model train it once; a task is done when its output is in the cache. [`Plan`] lists
+//! the tasks and their state without touching anything; [`execute`] does what is left:
+//! all of it, one shard's part (`--shard K/N`), or only the putting together
+//! (`collect`).
+//!
+//! A shard takes whole groups: a training with every block that runs its model, or a
+//! block that needs no model. Groups are dealt out round-robin in plan order, trainings
+//! first, so shards need nothing from each other and each writes its own cache files.
+
+use crate::cache::{self, BlockStore, DataHashes};
+use crate::checkpoint::{ModelStore, Provenance, Summary, train_cached};
+use crate::data::{Trajectory, load_trajectories};
+use crate::dataset::{self, TrainingSet};
+use crate::estimators::{ErrorModel, EstimatorKind, lineup};
+use crate::evaluate::{ProtocolResult, run_block, summarize};
+use crate::progress::bar;
+use crate::results::{self, Manifest, StageSeconds};
+use crate::spec::{Experiment, Spec};
+use crate::sweep;
+use crate::train::{self, TrainError};
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+use std::time::{Instant, SystemTime};
+
+/// A deterministic share of an experiment's tasks: shard `index` of `count`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    pub index: usize,
+    pub count: usize,
+}
+
+impl Shard {
+    /// Environment variables a job scheduler sets to the index of an array task.
+    pub const INDEX_VARIABLES: [&str; 2] = ["SLURM_ARRAY_TASK_ID", "JOB_COMPLETION_INDEX"];
+
+    /// Reads `K/N`, or `N` with K from [`Self::INDEX_VARIABLES`] looked up in `env`.
+    pub fn parse(text: &str, env: impl Fn(&str) -> Option<String>) -> Result<Shard, String> {
+        let number = |part: &str, what: &str| {
+            part.trim()
+                .parse::<usize>()
+                .map_err(|_| format!("--shard {text}: {what} {part:?} is not a whole number"))
+        };
+        let (index, count) = match text.split_once('/') {
+            Some((index, count)) => (number(index, "shard index")?, number(count, "shard count")?),
+            None => {
+                let count = number(text, "shard count")?;
+                let (variable, value) = Self::INDEX_VARIABLES
+                    .iter()
+                    .find_map(|v| env(v).map(|value| (*v, value)))
+                    .ok_or_else(|| {
+                        format!(
+                            "--shard {text}: no shard index: write K/{text}, or set {}",
+                            Self::INDEX_VARIABLES.join(" or ")
+                        )
+                    })?;
+                let index = value.trim().parse::<usize>().map_err(|_| {
+                    format!("--shard {text}: {variable}={value:?} is not a whole number")
+                })?;
+                (index, count)
+            }
+        };
+        if count == 0 || index >= count {
+            return Err(format!(
+                "--shard {text}: shard {index} of {count} does not exist: K runs from 0 to N-1"
+            ));
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+impl std::fmt::Display for Shard {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+/// One training set, generated from the spec of its first point.
+pub struct Dataset {
+    pub key: String,
+    pub point: usize,
+}
+
+/// One DCNet training.
+pub struct Training {
+    pub key: String,
+    pub dataset: usize,
+    pub point: usize,
+    pub error_model: ErrorModel,
+}
+
+/// One estimator on one DVL, every Monte Carlo run.
+pub struct Block {
+    pub key: String,
+    pub point: usize,
+    pub dvl: usize,
+    pub estimator: EstimatorKind,
+    pub error_model: Option<ErrorModel>,
+    /// The training whose model it runs.
+    pub training: Option<usize>,
+}
+
+/// What one point is made of.
+pub struct PointPlan {
+    pub folder: PathBuf,
+    /// Its blocks in table order: DVL, then estimator and error model as the spec lists.
+    pub blocks: Vec<usize>,
+    pub trainings: Vec<usize>,
+    /// The results key its folder has when it is current.
+    pub results_key: String,
+}
+
+/// The state of a task.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Status {
+    Done,
+    ToDo,
+    /// A training with a checkpoint after this many epochs.
+    Resumable(usize),
+    /// A dataset no training left to do needs.
+    NotNeeded,
+}
+
+impl std::fmt::Display for Status {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Status::Done => f.write_str("done"),
+            Status::ToDo => f.write_str("to do"),
+            Status::Resumable(epoch) => write!(f, "to do (resumes after epoch {epoch})"),
+            Status::NotNeeded => f.write_str("not needed"),
+        }
+    }
+}
+
+/// A task of the plan, by kind and index.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Task {
+    Dataset(usize),
+    Training(usize),
+    Block(usize),
+    Results(usize),
+    /// The `sweep.parquet` of a sweep.
+    Sweep,
+}
+
+/// Every task of an experiment, written to `out`.
+pub struct Plan<'a> {
+    pub experiment: &'a Experiment,
+    pub out: PathBuf,
+    pub trajectories: Vec<Vec<Trajectory>>,
+    pub hashes: DataHashes,
+    pub datasets: Vec<Dataset>,
+    pub trainings: Vec<Training>,
+    pub blocks: Vec<Block>,
+    pub points: Vec<PointPlan>,
+    pub models: ModelStore,
+    pub block_store: BlockStore,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum PlanError {
+    #[error(transparent)]
+    Data(#[from] crate::data::DataError),
+    #[error("reading a data file: {0}")]
+    Hash(#[from] std::io::Error),
+}
+
+impl<'a> Plan<'a> {
+    /// Lists the tasks of `experiment`; reads the data files, writes nothing.
+    pub fn new(experiment: &'a Experiment, out: &Path) -> Result<Self, PlanError> {
+        let trajectories = experiment
+            .points
+            .iter()
+            .map(|p| load_trajectories(&p.spec))
+            .collect::<Result<Vec<_>, _>>()?;
+        let hashes = DataHashes::of(experiment.points.iter().map(|p| &p.spec))?;
+        let cache = cache::root(out);
+        let mut plan = Plan {
+            experiment,
+            out: out.to_path_buf(),
+            trajectories,
+            hashes,
+            datasets: Vec::new(),
+            trainings: Vec::new(),
+            blocks: Vec::new(),
+            points: Vec::new(),
+            models: ModelStore::new(cache.join("models")),
+            block_store: BlockStore::new(cache.join("monte_carlo")),
+        };
+        for (p, point) in experiment.points.iter().enumerate() {
+            plan.add_point(p, &point.spec);
+        }
+        Ok(plan)
+    }
+
+    fn add_point(&mut self, p: usize, spec: &Spec) {
+        let dataset_key = cache::dataset_key(spec, &self.hashes);
+        let mut trainings = Vec::new();
+        if spec.kinds.contains(&EstimatorKind::Dcnet) {
+            let dataset = match self.datasets.iter().position(|d| d.key == dataset_key) {
+                Some(d) => d,
+                None => {
+                    self.datasets.push(Dataset {
+                        key: dataset_key.clone(),
+                        point: p,
+                    });
+                    self.datasets.len() - 1
+                }
+            };
+            for &error_model in &spec.error_models {
+                let key = cache::model_key(spec, error_model, &dataset_key);
+                let t = match self.trainings.iter().position(|t| t.key == key) {
+                    Some(t) => t,
+                    None => {
+                        self.trainings.push(Training {
+                            key,
+                            dataset,
+                            point: p,
+                            error_model,
+                        });
+                        self.trainings.len() - 1
+                    }
+                };
+                trainings.push(t);
+            }
+        }
+        let mut blocks = Vec::new();
+        for dvl in 0..spec.dvls.len() {
+            for &estimator in &spec.kinds {
+                let models: Vec<Option<ErrorModel>> = if estimator.takes_error_model() {
+                    spec.error_models.iter().copied().map(Some).collect()
+                } else {
+                    vec![None]
+                };
+                for error_model in models {
+                    let training = (estimator == EstimatorKind::Dcnet).then(|| {
+                        let m = spec
+                            .error_models
+                            .iter()
+                            .position(|&m| Some(m) == error_model);
+                        trainings[m.expect("DCNet runs the spec's error models")]
+                    });
+                    let model_key = training.map(|t| self.trainings[t].key.as_str());
+                    let key = cache::block_key(
+                        spec,
+                        &self.hashes,
+                        dvl,
+                        estimator,
+                        error_model,
+                        model_key,
+                    );
+                    let b = match self.blocks.iter().position(|b| b.key == key) {
+                        Some(b) => b,
+                        None => {
+                            self.blocks.push(Block {
+                                key,
+                                point: p,
+                                dvl,
+                                estimator,
+                                error_model,
+                                training,
+                            });
+                            self.blocks.len() - 1
+                        }
+                    };
+                    blocks.push(b);
+                }
+            }
+        }
+        let block_keys: Vec<&str> = blocks
+            .iter()
+            .map(|&b| self.blocks[b].key.as_str())
+            .collect();
+        let results_key = crate::data::fetch::sha256_hex(
+            serde_json::to_string(&(spec.resolved_toml(), block_keys))
+                .expect("strings serialize")
+                .as_bytes(),
+        );
+        self.points.push(PointPlan {
+            folder: self.out.join(&spec.name),
+            blocks,
+            trainings,
+            results_key,
+        });
+    }
+
+    pub fn spec(&self, point: usize) -> &'a Spec {
+        &self.experiment.points[point].spec
+    }
+
+    /// Every task in the order a run does them.
+    pub fn tasks(&self) -> Vec<Task> {
+        let mut tasks: Vec<Task> = (0..self.datasets.len()).map(Task::Dataset).collect();
+        tasks.extend((0..self.trainings.len()).map(Task::Training));
+        tasks.extend((0..self.blocks.len()).map(Task::Block));
+        tasks.extend((0..self.points.len()).map(Task::Results));
+        if self.experiment.is_sweep() {
+            tasks.push(Task::Sweep);
+        }
+        tasks
+    }
+
+    /// The tasks the shard computes: whole groups, dealt out round-robin.
+    pub fn in_shard(&self, task: Task, shard: Shard) -> bool {
+        let group = match task {
+            Task::Training(t) => t,
+            Task::Block(b) => match self.blocks[b].training {
+                Some(t) => t,
+                None => {
+                    self.trainings.len()
+                        + self.blocks[..b]
+                            .iter()
+                            .filter(|other| other.training.is_none())
+                            .count()
+                }
+            },
+            // Datasets go with the trainings that need them; results with collect.
+            Task::Dataset(_) | Task::Results(_) | Task::Sweep => return false,
+        };
+        group % shard.count == shard.index
+    }
+
+    pub fn status(&self, task: Task) -> Status {
+        match task {
+            Task::Dataset(d) => {
+                let needed = self.trainings.iter().enumerate().any(|(t, training)| {
+                    training.dataset == d && self.status(Task::Training(t)) != Status::Done
+                });
+                if needed {
+                    Status::ToDo
+                } else {
+                    Status::NotNeeded
+                }
+            }
+            Task::Training(t) => {
+                let training = &self.trainings[t];
+                match self.models.summary(training.error_model, &training.key) {
+                    Ok(Some(_)) => Status::Done,
+                    _ => match self
+                        .models
+                        .checkpoint_epoch(training.error_model, &training.key)
+                    {
+                        Some(epoch) => Status::Resumable(epoch),
+                        None => Status::ToDo,
+                    },
+                }
+            }
+            Task::Block(b) => {
+                if self.block_store.contains(&self.blocks[b].key) {
+                    Status::Done
+                } else {
+                    Status::ToDo
+                }
+            }
+            Task::Results(p) => {
+                let point = &self.points[p];
+                let current = read_manifest(&point.folder)
+                    .is_some_and(|m| m.results_key == point.results_key);
+                if current { Status::Done } else { Status::ToDo }
+            }
+            Task::Sweep => {
+                let stored = sweep::read_index(&self.out.join(&self.experiment.name)).ok();
+                let keys: Vec<&str> = self.points.iter().map(|p| p.results_key.as_str()).collect();
+                if stored.is_some_and(|index| index.results_keys == keys) {
+                    Status::Done
+                } else {
+                    Status::ToDo
+                }
+            }
+        }
+    }
+
+    /// What a task is, for people: "train DCNet EM5", "monte carlo DVL1 baseline".
+    pub fn label(&self, task: Task) -> String {
+        match task {
+            Task::Dataset(_) => "generate dataset".into(),
+            Task::Training(t) => format!("train DCNet {}", self.trainings[t].error_model),
+            Task::Block(b) => {
+                let block = &self.blocks[b];
+                let dvl = &self.spec(block.point).dvls[block.dvl].name;
+                match block.error_model {
+                    Some(m) => format!("monte carlo {dvl} {} {m}", block.estimator),
+                    None => format!("monte carlo {dvl} {}", block.estimator),
+                }
+            }
+            Task::Results(p) => format!("write {}", self.points[p].folder.display()),
+            Task::Sweep => format!(
+                "write {}",
+                self.out
+                    .join(&self.experiment.name)
+                    .join(sweep::TABLE)
+                    .display()
+            ),
+        }
+    }
+
+    /// The point a task was planned from (the first of those that share it).
+    pub fn point_of(&self, task: Task) -> Option<usize> {
+        match task {
+            Task::Dataset(d) => Some(self.datasets[d].point),
+            Task::Training(t) => Some(self.trainings[t].point),
+            Task::Block(b) => Some(self.blocks[b].point),
+            Task::Results(p) => Some(p),
+            Task::Sweep => None,
+        }
+    }
+
+    /// The cache key of a task, where it has one.
+    pub fn key(&self, task: Task) -> Option<&str> {
+        match task {
+            Task::Dataset(d) => Some(&self.datasets[d].key),
+            Task::Training(t) => Some(&self.trainings[t].key),
+            Task::Block(b) => Some(&self.blocks[b].key),
+            Task::Results(p) => Some(&self.points[p].results_key),
+            Task::Sweep => None,
+        }
+    }
+}
+
+fn read_manifest(folder: &Path) -> Option<Manifest> {
+    let bytes = std::fs::read(folder.join(results::MANIFEST)).ok()?;
+    serde_json::from_slice(&bytes).ok()
+}
+
+/// What [`execute`] is asked to do.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    /// Every task left.
+    All { force: bool },
+    /// The trainings and blocks of one shard, no results.
+    Shard { shard: Shard, force: bool },
+    /// Only the results folders, from a cache the shards have filled.
+    Collect,
+}
+
+/// What [`execute`] did.
+#[derive(Debug, Default)]
+pub struct Outcome {
+    /// Tasks computed or written.
+    pub done: usize,
+    /// The results folders written.
+    pub written: Vec<PathBuf>,
+    /// Models that failed to train; their blocks are left out of the results.
+    pub failures: Vec<TrainError>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ExecuteError {
+    #[error(transparent)]
+    Train(#[from] TrainError),
+    #[error(transparent)]
+    Results(#[from] results::ResultsError),
+    #[error(transparent)]
+    Read(#[from] results::read::ReadError),
+    #[error(transparent)]
+    Checkpoint(#[from] crate::checkpoint::CheckpointError),
+    #[error("{count} tasks are not done yet, so there is nothing to collect:\n{list}")]
+    Incomplete { count: usize, list: String },
+}
+
+impl Mode {
+    fn force(self) -> bool {
+        match self {
+            Mode::All { force } | Mode::Shard { force, .. } => force,
+            Mode::Collect => false,
+        }
+    }
+}
+
+impl Plan<'_> {
+    /// The tasks `mode` does: those it covers that are not done (all it covers with
+    /// `force`). A dataset counts when a training needs it.
+    pub fn to_do(&self, mode: Mode) -> Vec<Task> {
+        let covers = |task: Task| match (mode, task) {
+            (_, Task::Dataset(_)) => false,
+            (Mode::All { .. }, _) => true,
+            (Mode::Shard { shard, .. }, _) => self.in_shard(task, shard),
+            (Mode::Collect, task) => matches!(task, Task::Results(_) | Task::Sweep),
+        };
+        let mut tasks: Vec<Task> = self
+            .tasks()
+            .into_iter()
+            .filter(|&task| covers(task) && (mode.force() || self.status(task) != Status::Done))
+            .collect();
+        let datasets: Vec<Task> = (0..self.datasets.len())
+            .filter(|&d| {
+                tasks.iter().any(
+                    |task| matches!(task, Task::Training(t) if self.trainings[*t].dataset == d),
+                )
+            })
+            .map(Task::Dataset)
+            .collect();
+        tasks.splice(0..0, datasets);
+        tasks
+    }
+}
+
+/// Does the tasks of `plan` that `mode` asks for and are not done.
+pub fn execute(plan: &Plan, mode: Mode) -> Result<Outcome, ExecuteError> {
+    let started_at = SystemTime::now();
+    if !matches!(mode, Mode::Shard { .. }) {
+        // Shards may be writing beside each other on other machines; a whole run or
+        // collect has the folders to itself.
+        for folder in [plan.out.join(&plan.experiment.name), cache::root(&plan.out)] {
+            results::remove_stale_partials(&folder).map_err(|source| {
+                results::ResultsError::Io {
+                    path: folder.clone(),
+                    source,
+                }
+            })?;
+        }
+    }
+    let force = mode.force();
+    let to_do = plan.to_do(mode);
+    let trainings: Vec<usize> = to_do
+        .iter()
+        .filter_map(|task| match task {
+            Task::Training(t) => Some(*t),
+            _ => None,
+        })
+        .collect();
+    let blocks: Vec<usize> = to_do
+        .iter()
+        .filter_map(|task| match task {
+            Task::Block(b) => Some(*b),
+            _ => None,
+        })
+        .collect();
+    if mode == Mode::Collect {
+        let missing: Vec<Task> = plan
+            .tasks()
+            .into_iter()
+            .filter(|&t| matches!(t, Task::Training(_) | Task::Block(_)))
+            .filter(|&t| plan.status(t) != Status::Done)
+            .collect();
+        if !missing.is_empty() {
+            let list: Vec<String> = missing
+                .iter()
+                .map(|&t| format!("  {}", plan.label(t)))
+                .collect();
+            return Err(ExecuteError::Incomplete {
+                count: missing.len(),
+                list: list.join("\n"),
+            });
+        }
+    }
+
+    let mut outcome = Outcome::default();
+    let mut stages = StageSeconds::default();
+    let failed = train(plan, &trainings, force, &mut stages, &mut outcome)?;
+    let clock = Instant::now();
+    monte_carlo(plan, &blocks, &failed, &mut outcome)?;
+    stages.protocol = clock.elapsed().as_secs_f64();
+    if matches!(mode, Mode::Shard { .. }) {
+        return Ok(outcome);
+    }
+
+    let sweep_to_do = to_do.contains(&Task::Sweep);
+    let mut summaries = Vec::new();
+    for (p, point) in plan.points.iter().enumerate() {
+        let results_to_do = to_do.contains(&Task::Results(p));
+        if !results_to_do && !sweep_to_do {
+            continue;
+        }
+        let (result, models) = gather(plan, p)?;
+        if results_to_do {
+            let spec = plan.spec(p);
+            let manifest = Manifest {
+                name: spec.name.clone(),
+                spec_sha256: crate::data::fetch::sha256_hex(spec.resolved_toml().as_bytes()),
+                git_commit: env!("DCNET_GIT_COMMIT").to_string(),
+                crate_version: env!("CARGO_PKG_VERSION").to_string(),
+                started_at: humantime::format_rfc3339_seconds(started_at).to_string(),
+                finished_at: humantime::format_rfc3339_seconds(SystemTime::now()).to_string(),
+                threads: rayon::current_num_threads(),
+                backend: spec.training.backend.to_string(),
+                host: gethostname::gethostname().to_string_lossy().into_owned(),
+                data_files: plan.hashes.files_of(spec),
+                stage_seconds: stages.clone(),
+                results_key: if models.len() == point.trainings.len() {
+                    point.results_key.clone()
+                } else {
+                    // Some model failed: the folder is not what the plan asks for.
+                    String::new()
+                },
+            };
+            results::write_run(
+                &point.folder,
+                spec,
+                &plan.trajectories[p],
+                &result,
+                &models,
+                &manifest,
+            )?;
+            outcome.done += 1;
+            outcome.written.push(point.folder.clone());
+        }
+        summaries.push((result, models));
+    }
+    if sweep_to_do {
+        let keys: Vec<String> = plan.points.iter().map(|p| p.results_key.clone()).collect();
+        sweep::write(
+            &plan.out.join(&plan.experiment.name),
+            plan.experiment,
+            &summaries,
+            &keys,
+        )?;
+        outcome.done += 1;
+    }
+    Ok(outcome)
+}
+
+/// Trains the models `trainings` asks for, those of one dataset side by side, and
+/// returns the trainings that failed.
+fn train(
+    plan: &Plan,
+    trainings: &[usize],
+    force: bool,
+    stages: &mut StageSeconds,
+    outcome: &mut Outcome,
+) -> Result<Vec<usize>, ExecuteError> {
+    let mut failed = Vec::new();
+    for (d, dataset) in plan.datasets.iter().enumerate() {
+        let mine: Vec<usize> = trainings
+            .iter()
+            .copied()
+            .filter(|&t| plan.trainings[t].dataset == d)
+            .collect();
+        if mine.is_empty() {
+            continue;
+        }
+        let spec = plan.spec(dataset.point);
+        let clock = Instant::now();
+        let progress = bar(spec.grid.points().len(), "dataset");
+        let set = dataset::generate(spec, &plan.trajectories[dataset.point], &progress);
+        progress.finish_and_clear();
+        stages.dataset += clock.elapsed().as_secs_f64();
+        eprintln!(
+            "dataset {}: {} combinations × {} windows = {} windows ({} validation), {:.1} MB, in {:.2} s",
+            &dataset.key[..16],
+            set.points.len(),
+            set.windows_per_combination,
+            set.len(),
+            set.validation_len(),
+            TrainingSet::size_bytes(set.len(), set.window) as f64 / 1e6,
+            clock.elapsed().as_secs_f64()
+        );
+        outcome.done += 1;
+
+        let clock = Instant::now();
+        let bars = indicatif::MultiProgress::new();
+        let results: Vec<_> = mine
+            .par_iter()
+            .map(|&t| {
+                let training = &plan.trainings[t];
+                let spec = plan.spec(training.point);
+                let progress = bars.add(bar(
+                    spec.training.epochs * train::batches_per_epoch(spec, &set),
+                    "DCNet",
+                ));
+                progress.set_message(format!("DCNet {}", training.error_model));
+                let outcome = train_cached(
+                    spec,
+                    &set,
+                    training.error_model,
+                    &training.key,
+                    &plan.models,
+                    force,
+                    &progress,
+                );
+                progress.finish_and_clear();
+                (t, outcome)
+            })
+            .collect();
+        stages.training += clock.elapsed().as_secs_f64();
+        for (t, result) in results {
+            match result {
+                Ok((model, provenance)) => {
+                    let best = &model.history[model.best_epoch - 1];
+                    let how = match provenance {
+                        Provenance::Trained => "trained".to_string(),
+                        Provenance::Resumed(epoch) => {
+                            format!("resumed from the checkpoint of epoch {epoch}")
+                        }
+                        Provenance::Reused => "reused".to_string(),
+                    };
+                    eprintln!(
+                        "DCNet {} {}: {how}; best validation loss {:.4} (cm/s)² at epoch {} of {}",
+                        model.error_model,
+                        &plan.trainings[t].key[..16],
+                        best.validation_loss,
+                        model.best_epoch,
+                        model.history.len()
+                    );
+                    outcome.done += 1;
+                }
+                Err(error) => {
+                    failed.push(t);
+                    outcome.failures.push(error);
+                }
+            }
+        }
+    }
+    Ok(failed)
+}
+
+/// Computes the blocks `blocks` asks for, those of one DVL of one point together (they
+/// share the measurements), and stores each as soon as its DVL is done.
+fn monte_carlo(
+    plan: &Plan,
+    blocks: &[usize],
+    failed: &[usize],
+    outcome: &mut Outcome,
+) -> Result<(), ExecuteError> {
+    let mut groups: Vec<(usize, usize, Vec<usize>)> = Vec::new();
+    for &b in blocks {
+        let block = &plan.blocks[b];
+        if block.training.is_some_and(|t| failed.contains(&t)) {
+            continue;
+        }
+        match groups
+            .iter_mut()
+            .find(|(p, dvl, _)| *p == block.point && *dvl == block.dvl)
+        {
+            Some((_, _, members)) => members.push(b),
+            None => groups.push((block.point, block.dvl, vec![b])),
+        }
+    }
+    for (p, dvl, members) in groups {
+        let spec = plan.spec(p);
+        let dvl = &spec.dvls[dvl];
+        let mut models = Vec::new();
+        for &b in &members {
+            if let Some(t) = plan.blocks[b].training {
+                let training = &plan.trainings[t];
+                let model = plan
+                    .models
+                    .load(spec, training.error_model, &training.key)?
+                    .ok_or_else(|| crate::checkpoint::CheckpointError::Io {
+                        path: plan.models.folder.clone(),
+                        message: format!(
+                            "the model of {} is not stored",
+                            plan.label(Task::Training(t))
+                        ),
+                    })?;
+                models.push(model);
+            }
+        }
+        let entries: Vec<_> = lineup(spec, dvl, &models)
+            .into_iter()
+            .filter(|entry| {
+                members.iter().any(|&b| {
+                    plan.blocks[b].estimator == entry.kind
+                        && plan.blocks[b].error_model == entry.error_model
+                })
+            })
+            .collect();
+        let progress = bar(2 * spec.calibration.monte_carlo_runs, "monte carlo");
+        let rows = run_block(spec, &plan.trajectories[p], dvl, &entries, &progress);
+        progress.finish_and_clear();
+        for (entry, rows) in entries.iter().zip(rows) {
+            let b = *members
+                .iter()
+                .find(|&&b| {
+                    plan.blocks[b].estimator == entry.kind
+                        && plan.blocks[b].error_model == entry.error_model
+                })
+                .expect("every entry is a member");
+            plan.block_store.save(&plan.blocks[b].key, &rows)?;
+            outcome.done += 1;
+        }
+        eprintln!(
+            "monte carlo {} {}: {} estimators × {} runs stored",
+            spec.name,
+            dvl.name,
+            entries.len(),
+            spec.calibration.monte_carlo_runs
+        );
+    }
+    Ok(())
+}
+
+/// The tables of point `p` from the cache, and the summaries of its stored models.
+/// Blocks whose model failed to train are left out.
+fn gather(plan: &Plan, p: usize) -> Result<(ProtocolResult, Vec<Summary>), ExecuteError> {
+    let point = &plan.points[p];
+    let mut models = Vec::new();
+    for &t in &point.trainings {
+        let training = &plan.trainings[t];
+        if let Some(summary) = plan.models.summary(training.error_model, &training.key)? {
+            models.push(summary);
+        }
+    }
+    let mut rows = Vec::new();
+    for &b in &point.blocks {
+        let block = &plan.blocks[b];
+        if !plan.block_store.contains(&block.key) {
+            continue;
+        }
+        let block_rows = plan.block_store.load(&block.key)?;
+        rows.extend(block_rows);
+    }
+    Ok((summarize(rows), models))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shards_come_from_the_argument_or_the_scheduler() {
+        let none = |_: &str| None;
+        assert_eq!(Shard::parse("2/3", none), Ok(Shard { index: 2, count: 3 }));
+        let slurm = |v: &str| (v == "SLURM_ARRAY_TASK_ID").then(|| "1".to_string());
+        assert_eq!(Shard::parse("4", slurm), Ok(Shard { index: 1, count: 4 }));
+        let kubernetes = |v: &str| (v == "JOB_COMPLETION_INDEX").then(|| "0".to_string());
+        assert_eq!(
+            Shard::parse("2", kubernetes),
+            Ok(Shard { index: 0, count: 2 })
+        );
+        assert_eq!(
+            Shard::parse("3/3", none).unwrap_err(),
+            "--shard 3/3: shard 3 of 3 does not exist: K runs from 0 to N-1"
+        );
+        assert_eq!(
+            Shard::parse("4", none).unwrap_err(),
+            "--shard 4: no shard index: write K/4, or set SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX"
+        );
+        assert!(
+            Shard::parse("a/2", none)
+                .unwrap_err()
+                .contains("\"a\" is not a whole number")
+        );
+    }
+}

@@ -1,0 +1,195 @@
+//! The figures of a sweep: for each swept key, the chosen metric against the key's
+//! values, one panel per DVL and one series per estimator and error model. The values
+//! sit evenly spaced and labelled exactly (numbers in ascending order), as a sweep's few
+//! values read best. Every point of the sweep is a dot; the line joins, at each value,
+//! the mean over the points that share it (over the other swept keys' values).
+
+use super::draw::*;
+use super::figures::{Drawn, Outcome, draw_svg};
+use crate::estimators::{ErrorModel, EstimatorKind};
+use crate::sweep::{StoredSweep, SweepRow, Swept};
+use plotters::prelude::*;
+
+/// What a sweep figure plots against the swept values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Metric {
+    /// Mean RMSE over the test trajectories
+    EvaluationRmse,
+    /// Mean RMSE at T_conv on the calibration trajectory
+    CalibrationRmse,
+    /// The convergence window
+    TConv,
+    /// DCNet training wall time
+    TrainingTime,
+}
+
+impl Metric {
+    fn of(self, row: &SweepRow) -> Option<f64> {
+        match self {
+            Metric::EvaluationRmse => Some(row.evaluation_rmse_cm_s),
+            Metric::CalibrationRmse => Some(row.calibration_rmse_cm_s),
+            Metric::TConv => Some(row.t_conv_s),
+            Metric::TrainingTime => row.training_s,
+        }
+    }
+
+    fn axis(self) -> &'static str {
+        match self {
+            Metric::EvaluationRmse => "evaluation RMSE [cm/s]",
+            Metric::CalibrationRmse => "calibration RMSE at T_conv [cm/s]",
+            Metric::TConv => "T_conv [s]",
+            Metric::TrainingTime => "training time [s]",
+        }
+    }
+}
+
+/// One figure per swept key, stem `sweep_<key>` with the key's dots as underscores.
+pub fn all(sweep: &StoredSweep, metric: Metric) -> PlotResult<Vec<(String, Outcome)>> {
+    sweep
+        .index
+        .swept
+        .iter()
+        .enumerate()
+        .map(|(k, key)| {
+            let stem = format!("sweep_{}", key.replace('.', "_"));
+            Ok((stem, against(sweep, metric, k)?))
+        })
+        .collect()
+}
+
+/// The distinct values of swept key `k`, numbers in ascending order, texts in the
+/// order they first appear, each with its label.
+fn categories(rows: &[(&SweepRow, f64)], k: usize) -> Vec<(Swept, String)> {
+    let mut values: Vec<Swept> = Vec::new();
+    for (row, _) in rows {
+        if !values.contains(&row.values[k]) {
+            values.push(row.values[k].clone());
+        }
+    }
+    if values.iter().all(|v| matches!(v, Swept::Number(_))) {
+        values.sort_by(|a, b| match (a, b) {
+            (Swept::Number(a), Swept::Number(b)) => a.total_cmp(b),
+            _ => std::cmp::Ordering::Equal,
+        });
+    }
+    values
+        .into_iter()
+        .map(|value| {
+            let label = match &value {
+                Swept::Number(n) => n.to_string(),
+                Swept::Text(t) => t.clone(),
+            };
+            (value, label)
+        })
+        .collect()
+}
+
+fn against(sweep: &StoredSweep, metric: Metric, k: usize) -> PlotResult<Outcome> {
+    let key = &sweep.index.swept[k];
+    let rows: Vec<(&SweepRow, f64)> = sweep
+        .rows
+        .iter()
+        .filter_map(|r| metric.of(r).filter(|v| v.is_finite()).map(|v| (r, v)))
+        .collect();
+    if rows.is_empty() {
+        return Ok(Err(format!(
+            "sweep.parquet has no {} to plot",
+            metric.axis()
+        )));
+    }
+    let categories = categories(&rows, k);
+    let labels: Vec<String> = categories.iter().map(|(_, label)| label.clone()).collect();
+    let x_of = |row: &SweepRow| {
+        categories
+            .iter()
+            .position(|(value, _)| *value == row.values[k])
+            .unwrap_or(0) as f64
+    };
+    let mut dvls: Vec<&str> = Vec::new();
+    let mut series: Vec<(EstimatorKind, Option<ErrorModel>)> = Vec::new();
+    for (row, _) in &rows {
+        if !dvls.contains(&row.dvl.as_str()) {
+            dvls.push(&row.dvl);
+        }
+        if !series.contains(&(row.estimator, row.error_model)) {
+            series.push((row.estimator, row.error_model));
+        }
+    }
+    let caption = if sweep.index.swept.len() == 1 {
+        format!("{} against {key}", metric.axis())
+    } else {
+        format!(
+            "{} against {key} (line: mean over the other swept values; dots: each point)",
+            metric.axis()
+        )
+    };
+    let width = 560 * dvls.len() as u32 + LEGEND_WIDTH;
+    let svg = draw_svg((width, 620), |root| {
+        let root = root.titled(&caption, font(TITLE_SIZE))?;
+        let (panels, legend_area) = root.split_horizontally(width - LEGEND_WIDTH);
+        for (area, dvl) in panels.split_evenly((1, dvls.len())).iter().zip(&dvls) {
+            let on_panel: Vec<(&SweepRow, f64)> = rows
+                .iter()
+                .copied()
+                .filter(|(r, _)| r.dvl == *dvl)
+                .collect();
+            let top = on_panel.iter().map(|(_, v)| *v).fold(0.0f64, f64::max);
+            let bottom = on_panel.iter().map(|(_, v)| *v).fold(0.0f64, f64::min);
+            let pad = 0.08 * (top - bottom).max(1e-9);
+            let mut chart = ChartBuilder::on(area)
+                .caption(*dvl, font(PANEL_TITLE_SIZE))
+                .margin(12)
+                .x_label_area_size(45)
+                .y_label_area_size(70)
+                .build_cartesian_2d(
+                    -0.5..(labels.len() as f64 - 0.5),
+                    (bottom - pad * f64::from(bottom < 0.0))..(top + pad),
+                )?;
+            chart
+                .configure_mesh()
+                .disable_x_mesh()
+                .x_labels(labels.len() + 1)
+                .x_desc(key.as_str())
+                .y_desc(metric.axis())
+                .x_label_formatter(&|v| category(&labels, *v))
+                .y_label_formatter(&tick)
+                .label_style(font(LABEL_SIZE))
+                .axis_desc_style(font(LABEL_SIZE))
+                .light_line_style(WHITE)
+                .draw()?;
+            for &(estimator, model) in &series {
+                let look = series_look(estimator, model);
+                let dots: Vec<(f64, f64)> = on_panel
+                    .iter()
+                    .filter(|(r, _)| r.estimator == estimator && r.error_model == model)
+                    .map(|(r, v)| (x_of(r), *v))
+                    .collect();
+                let means: Vec<(f64, f64)> = (0..labels.len())
+                    .filter_map(|x| {
+                        let at: Vec<f64> = dots
+                            .iter()
+                            .filter(|d| d.0 == x as f64)
+                            .map(|d| d.1)
+                            .collect();
+                        (!at.is_empty())
+                            .then(|| (x as f64, at.iter().sum::<f64>() / at.len() as f64))
+                    })
+                    .collect();
+                line(&mut chart, means, look.color, look.stroke)?;
+                chart.draw_series(
+                    dots.iter()
+                        .map(|&point| Circle::new(point, 4, look.color.filled())),
+                )?;
+            }
+        }
+        let entries: Vec<(Swatch, String)> = series
+            .iter()
+            .map(|&(estimator, model)| {
+                let look = series_look(estimator, model);
+                (Swatch::Line(look.color, look.stroke), look.label)
+            })
+            .collect();
+        legend(&legend_area, "estimator", &entries)
+    })?;
+    Ok(Ok(Drawn { caption, svg }))
+}

@@ -1,0 +1,567 @@
+//! Tasks, caching, resuming, sharding and sweeps, as a user meets them: `plan`, a run
+//! that has nothing left to do, a changed Monte Carlo setting, runs killed with
+//! SIGKILL mid-training and mid-Monte-Carlo, three shards and `collect`, and a sweep
+//! over two keys. Each compares with an uninterrupted single process byte for byte.
+
+mod common;
+use common::*;
+use std::collections::BTreeMap;
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant, SystemTime};
+
+/// The quick spec, small enough to train in a few seconds.
+const SMALL: [&str; 4] = [
+    "--set",
+    "training.epochs=4",
+    "--set",
+    "training.checkpoint_every_epochs=1",
+];
+
+/// The tables whose bytes a run must reproduce (`training.parquet` also holds wall
+/// times; its losses are compared apart).
+const TABLES: [&str; 4] = [
+    "monte_carlo.parquet",
+    "calibration.parquet",
+    "evaluation.parquet",
+    "trajectories.parquet",
+];
+
+fn run_ok(cwd: &Path, args: &[&str]) -> String {
+    let output = dcnet(cwd, args);
+    assert!(output.status.success(), "{args:?}: {}", stderr(&output));
+    stderr(&output)
+}
+
+fn args<'a>(first: &[&'a str], rest: &[&'a str]) -> Vec<&'a str> {
+    [first, rest].concat()
+}
+
+/// Asserts that two results folders hold the same tables and training losses.
+fn assert_same_results(a: &Path, b: &Path) {
+    for table in TABLES {
+        let one = std::fs::read(a.join(table)).unwrap();
+        let two = std::fs::read(b.join(table)).unwrap();
+        assert!(one == two, "{table} differs between {a:?} and {b:?}");
+    }
+    let losses = |folder: &Path| {
+        let batch = read_parquet(&folder.join("training.parquet"));
+        (
+            strings(&batch, "error_model"),
+            floats(&batch, "train_loss"),
+            floats(&batch, "validation_loss"),
+            bools(&batch, "is_best"),
+        )
+    };
+    assert_eq!(losses(a), losses(b));
+}
+
+/// Every file below `folder`: its bytes and modification time.
+fn snapshot(folder: &Path) -> BTreeMap<PathBuf, (Vec<u8>, SystemTime)> {
+    let mut files = BTreeMap::new();
+    let mut stack = vec![folder.to_path_buf()];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else {
+                let modified = path.metadata().unwrap().modified().unwrap();
+                files.insert(path.clone(), (std::fs::read(&path).unwrap(), modified));
+            }
+        }
+    }
+    files
+}
+
+fn names_below(folder: &Path) -> Vec<String> {
+    snapshot(folder)
+        .keys()
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect()
+}
+
+fn count_files(folder: &Path, extension: &str) -> usize {
+    std::fs::read_dir(folder).map_or(0, |entries| {
+        entries
+            .filter(|e| {
+                e.as_ref()
+                    .unwrap()
+                    .path()
+                    .extension()
+                    .is_some_and(|x| x == extension)
+            })
+            .count()
+    })
+}
+
+#[test]
+fn plan_lists_every_task_and_changes_nothing() {
+    let project = project(false);
+    let dir = project.path();
+    let plan = |extra: &[&str]| {
+        let output = dcnet(
+            dir,
+            &args(
+                &["plan", "experiments/quick.toml"],
+                &[&SMALL[..], extra].concat(),
+            ),
+        );
+        assert!(output.status.success(), "{}", stderr(&output));
+        stdout(&output)
+    };
+    let text = plan(&[]);
+    assert!(!dir.join("results").exists(), "plan wrote something");
+    let rows: Vec<(String, String)> = text
+        .lines()
+        .skip(2)
+        .filter(|l| l.starts_with('|'))
+        .map(|l| {
+            let cells: Vec<&str> = l.split('|').map(str::trim).collect();
+            (cells[1].to_string(), cells[3].to_string())
+        })
+        .collect();
+    let labels: Vec<&str> = rows.iter().map(|(label, _)| label.as_str()).collect();
+    assert_eq!(labels.len(), 1 + 5 + 2 * 12 + 1, "{text}");
+    assert_eq!(labels[0], "generate dataset");
+    assert_eq!(
+        labels[1..6],
+        [
+            "train DCNet EM1",
+            "train DCNet EM2",
+            "train DCNet EM3",
+            "train DCNet EM4",
+            "train DCNet EM5"
+        ]
+    );
+    assert_eq!(labels[6], "monte carlo DVL1 baseline");
+    assert_eq!(labels[7], "monte carlo DVL1 least_squares EM1");
+    assert_eq!(labels[29], "monte carlo DVL2 floor");
+    assert_eq!(labels[30], "write results/quick");
+    assert!(rows.iter().all(|(_, status)| status == "to do"), "{text}");
+    assert!(text.contains("quick: 31 tasks, 31 to do"), "{text}");
+
+    run_ok(
+        dir,
+        &args(&["run", "experiments/quick.toml", "--no-plots"], &SMALL),
+    );
+    let text = plan(&[]);
+    assert!(text.contains("quick: 31 tasks, 0 to do"), "{text}");
+    assert!(text.contains("| generate dataset "), "{text}");
+    assert!(text.contains("not needed"), "{text}");
+
+    // A Monte Carlo setting leaves the models done and the blocks to do.
+    let text = plan(&["--set", "calibration.monte_carlo_runs=5"]);
+    assert!(text.contains("quick: 31 tasks, 25 to do"), "{text}");
+    assert_eq!(text.matches("| train DCNet").count(), 5);
+    assert!(
+        !text
+            .lines()
+            .any(|l| l.contains("train DCNet") && l.contains("to do")),
+        "{text}"
+    );
+
+    // The shards split the trainings and blocks between them, each exactly once.
+    let mut seen = Vec::new();
+    for k in 0..3 {
+        let text = plan(&["--shard", &format!("{k}/3")]);
+        seen.extend(
+            text.lines()
+                .filter(|l| l.contains("train DCNet") || l.contains("monte carlo"))
+                .map(|l| l.split('|').nth(1).unwrap().trim().to_string()),
+        );
+    }
+    seen.sort();
+    let mut all: Vec<String> = labels[1..30].iter().map(|l| l.to_string()).collect();
+    all.sort();
+    assert_eq!(seen, all);
+}
+
+#[test]
+fn a_second_run_does_nothing_and_a_monte_carlo_change_trains_nothing() {
+    let project = project(false);
+    let dir = project.path();
+    let run = |extra: &[&str]| {
+        run_ok(
+            dir,
+            &args(
+                &["run", "experiments/quick.toml", "--no-plots"],
+                &[&SMALL[..], extra].concat(),
+            ),
+        )
+    };
+    run(&[]);
+    let before = snapshot(&dir.join("results"));
+    let second = run(&[]);
+    assert!(
+        second.contains("nothing to do: every task of quick is done"),
+        "{second}"
+    );
+    assert!(
+        !second.contains("DCNet") && !second.contains("monte carlo"),
+        "{second}"
+    );
+    assert!(
+        before == snapshot(&dir.join("results")),
+        "the second run touched a file"
+    );
+
+    let models = snapshot(&dir.join("results/.cache/models"));
+    let third = run(&["--set", "calibration.monte_carlo_runs=4"]);
+    assert!(!third.contains("DCNet"), "{third}");
+    assert!(!third.contains("dataset"), "{third}");
+    assert!(
+        third.contains("monte carlo quick DVL1: 12 estimators × 4 runs stored"),
+        "{third}"
+    );
+    assert!(
+        models == snapshot(&dir.join("results/.cache/models")),
+        "a model was touched"
+    );
+    let runs = read_parquet(&dir.join("results/quick/monte_carlo.parquet"));
+    assert_eq!(runs.num_rows(), 4 * 2 * 12 * (5 + 2));
+
+    // Back to the first setting: everything comes from the cache, nothing is computed.
+    let fourth = run(&[]);
+    assert!(
+        !fourth.contains("DCNet") && !fourth.contains("monte carlo"),
+        "{fourth}"
+    );
+    for table in TABLES {
+        let path = dir.join("results/quick").join(table);
+        assert!(
+            std::fs::read(&path).unwrap() == before[&path].0,
+            "{table} differs"
+        );
+    }
+}
+
+/// Starts `dcnet-exp ARGS` in `cwd` with stderr piped.
+fn spawn(cwd: &Path, args: &[&str]) -> std::process::Child {
+    Command::new(env!("CARGO_BIN_EXE_dcnet-exp"))
+        .current_dir(cwd)
+        .args(args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+fn no_partial_files(folder: &Path) {
+    let partial: Vec<String> = names_below(folder)
+        .into_iter()
+        .filter(|n| n.starts_with(".partial-"))
+        .collect();
+    assert!(partial.is_empty(), "partial files left: {partial:?}");
+}
+
+#[test]
+fn a_run_killed_mid_training_resumes_to_the_results_of_an_uninterrupted_one() {
+    let project = project(false);
+    let dir = project.path();
+    let spec = ["experiments/quick.toml", "--no-plots"];
+    run_ok(
+        dir,
+        &args(&["run", "--out", "whole"], &[&spec[..], &SMALL].concat()),
+    );
+
+    let killed = args(&["run", "--out", "killed"], &[&spec[..], &SMALL].concat());
+    let mut child = spawn(dir, &killed);
+    let models = dir.join("killed/.cache/models");
+    let started = Instant::now();
+    let checkpointed = || {
+        std::fs::read_dir(&models).is_ok_and(|entries| {
+            entries
+                .flatten()
+                .any(|e| e.path().join("state.json").is_file())
+        })
+    };
+    while !checkpointed() {
+        assert!(
+            started.elapsed() < Duration::from_secs(120),
+            "no checkpoint appeared"
+        );
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended before a checkpoint"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    assert!(count_files(&models, "bin") < 5, "every model had finished");
+    assert!(
+        !dir.join("killed/quick").exists(),
+        "results appeared before the run ended"
+    );
+
+    let resumed = run_ok(dir, &killed);
+    assert!(
+        resumed.contains("resumed from the checkpoint of epoch"),
+        "{resumed}"
+    );
+    assert_same_results(&dir.join("whole/quick"), &dir.join("killed/quick"));
+    no_partial_files(&dir.join("killed"));
+}
+
+#[test]
+fn a_run_killed_mid_monte_carlo_resumes_to_the_results_of_an_uninterrupted_one() {
+    let project = project(false);
+    let dir = project.path();
+    // No DCNet and many runs: the Monte Carlo stage lasts long enough to be cut.
+    let spec = [
+        "experiments/quick.toml",
+        "--no-plots",
+        "--set",
+        "estimators.kinds=[\"baseline\", \"least_squares\", \"floor\"]",
+        "--set",
+        "calibration.monte_carlo_runs=3000",
+    ];
+    run_ok(dir, &args(&["run", "--out", "whole"], &spec));
+
+    let killed = args(&["run", "--out", "killed"], &spec);
+    let mut child = spawn(dir, &killed);
+    let mut lines = BufReader::new(child.stderr.take().unwrap()).lines();
+    let first = lines
+        .find_map(|line| line.ok().filter(|l| l.starts_with("monte carlo quick")))
+        .expect("the run reports its first DVL");
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    assert!(
+        first.starts_with("monte carlo quick DVL1: 7 estimators"),
+        "{first}"
+    );
+    let blocks = dir.join("killed/.cache/monte_carlo");
+    assert_eq!(count_files(&blocks, "parquet"), 7, "DVL1's blocks only");
+    assert!(!dir.join("killed/quick").exists());
+
+    let resumed = run_ok(dir, &killed);
+    assert!(!resumed.contains("monte carlo quick DVL1"), "{resumed}");
+    assert!(
+        resumed.contains("monte carlo quick DVL2: 7 estimators"),
+        "{resumed}"
+    );
+    for table in TABLES {
+        let one = std::fs::read(dir.join("whole/quick").join(table)).unwrap();
+        let two = std::fs::read(dir.join("killed/quick").join(table)).unwrap();
+        assert!(one == two, "{table} differs");
+    }
+    no_partial_files(&dir.join("killed"));
+}
+
+#[test]
+fn three_shards_and_collect_write_what_one_process_writes() {
+    let project = project(false);
+    let dir = project.path();
+    let spec = ["experiments/quick.toml", "--no-plots"];
+    run_ok(
+        dir,
+        &args(&["run", "--out", "one"], &[&spec[..], &SMALL].concat()),
+    );
+
+    let shard = |k: usize, env: Option<(&str, &str)>| {
+        let index = format!("{k}/3");
+        let shard_arg = if env.is_some() { "3" } else { index.as_str() };
+        let mut command = Command::new(env!("CARGO_BIN_EXE_dcnet-exp"));
+        command
+            .current_dir(dir)
+            .args(args(
+                &["run", "--out", "sharded", "--shard", shard_arg],
+                &[&spec[..], &SMALL].concat(),
+            ))
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped());
+        if let Some((variable, value)) = env {
+            command.env(variable, value);
+        }
+        command.spawn().unwrap()
+    };
+    let collect = || {
+        dcnet(
+            dir,
+            &args(
+                &["collect", "--out", "sharded"],
+                &[&spec[..], &SMALL].concat(),
+            ),
+        )
+    };
+
+    let first = shard(0, None).wait_with_output().unwrap();
+    assert!(first.status.success(), "{}", stderr(&first));
+    assert!(stderr(&first).contains("shard 0/3: "), "{}", stderr(&first));
+    assert!(!dir.join("sharded/quick").exists(), "a shard wrote results");
+    let early = collect();
+    assert_eq!(early.status.code(), Some(2), "{}", stderr(&early));
+    assert!(
+        stderr(&early).contains("tasks are not done yet"),
+        "{}",
+        stderr(&early)
+    );
+
+    // The other two side by side, their indices from the schedulers' variables.
+    let others = [
+        shard(1, Some(("SLURM_ARRAY_TASK_ID", "1"))),
+        shard(2, Some(("JOB_COMPLETION_INDEX", "2"))),
+    ];
+    for child in others {
+        let output = child.wait_with_output().unwrap();
+        assert!(output.status.success(), "{}", stderr(&output));
+    }
+    let collected = collect();
+    assert!(collected.status.success(), "{}", stderr(&collected));
+    assert_same_results(&dir.join("one/quick"), &dir.join("sharded/quick"));
+    let again = collect();
+    assert!(
+        stderr(&again).contains("nothing to do"),
+        "{}",
+        stderr(&again)
+    );
+}
+
+#[test]
+fn a_sweep_over_two_keys_runs_every_point_and_tabulates_them() {
+    let project = project(false);
+    let dir = project.path();
+    let text = std::fs::read_to_string(dir.join("experiments/quick.toml")).unwrap();
+    let text = text.replacen("name = \"quick\"", "name = \"quick-sweep\"", 1)
+        + "\n[sweep.values]\n\"training.learning_rate\" = [5e-4, 2e-3]\nmodel.conv_channels = [8, 16]\n";
+    std::fs::write(dir.join("experiments/sweep.toml"), text).unwrap();
+    let spec = ["experiments/sweep.toml", "--set", "training.epochs=2"];
+
+    // Points that differ only in a Monte Carlo setting share their models.
+    let shared = dcnet(
+        dir,
+        &args(
+            &["plan"],
+            &[
+                &spec[..],
+                &[
+                    "--set",
+                    "sweep.values={\"calibration.monte_carlo_runs\" = [3, 4]}",
+                ],
+            ]
+            .concat(),
+        ),
+    );
+    assert!(shared.status.success(), "{}", stderr(&shared));
+    assert_eq!(
+        stdout(&shared).matches("train DCNet").count(),
+        5,
+        "{}",
+        stdout(&shared)
+    );
+
+    let output = run_ok(dir, &args(&["run"], &spec));
+    let points = [
+        "learning_rate=0.0005,conv_channels=8",
+        "learning_rate=0.0005,conv_channels=16",
+        "learning_rate=0.002,conv_channels=8",
+        "learning_rate=0.002,conv_channels=16",
+    ];
+    assert_eq!(output.matches("DCNet EM1").count(), 4, "{output}");
+    let folder = dir.join("results/quick-sweep");
+    for point in points {
+        assert!(
+            folder.join(point).join("manifest.json").is_file(),
+            "{point}"
+        );
+        assert!(
+            dir.join("plots/quick-sweep")
+                .join(point)
+                .join("calibration.png")
+                .is_file()
+        );
+    }
+    for stem in ["sweep_training_learning_rate", "sweep_model_conv_channels"] {
+        assert!(
+            dir.join("plots/quick-sweep")
+                .join(format!("{stem}.png"))
+                .is_file(),
+            "{stem}"
+        );
+    }
+
+    let sweep = read_parquet(&folder.join("sweep.parquet"));
+    assert_eq!(sweep.num_rows(), 4 * 2 * 12);
+    let point = strings(&sweep, "point");
+    let rate = floats(&sweep, "training.learning_rate");
+    let channels = floats(&sweep, "model.conv_channels");
+    let (dvl, estimator, model) = (
+        strings(&sweep, "dvl"),
+        strings(&sweep, "estimator"),
+        strings(&sweep, "error_model"),
+    );
+    let evaluation = floats(&sweep, "evaluation_rmse_cm_s");
+    let training_s = floats(&sweep, "training_s");
+    for (p, name) in points.iter().enumerate() {
+        let rows: Vec<usize> = (0..sweep.num_rows())
+            .filter(|&i| point[i].as_deref() == Some(name))
+            .collect();
+        assert_eq!(rows.len(), 24);
+        let expected_rate = [5e-4, 5e-4, 2e-3, 2e-3][p];
+        let expected_channels = [8.0, 16.0, 8.0, 16.0][p];
+        assert!(
+            rows.iter()
+                .all(|&i| rate[i] == Some(expected_rate) && channels[i] == Some(expected_channels))
+        );
+        // Each row holds the point's own numbers: the mean over its test trajectories,
+        // and its model's training time.
+        let i = *rows
+            .iter()
+            .find(|&&i| {
+                dvl[i].as_deref() == Some("DVL2")
+                    && estimator[i].as_deref() == Some("dcnet")
+                    && model[i].as_deref() == Some("EM5")
+            })
+            .unwrap();
+        let own = evaluation_rows(&folder.join(name));
+        let mean: Vec<f64> = own
+            .iter()
+            .filter(|r| {
+                r.dvl == "DVL2" && r.estimator == "dcnet" && r.error_model.as_deref() == Some("EM5")
+            })
+            .map(|r| r.rmse_cm_s)
+            .collect();
+        assert_eq!(mean.len(), 2);
+        assert!((evaluation[i].unwrap() - (mean[0] + mean[1]) / 2.0).abs() < 1e-12);
+        let history = read_parquet(&folder.join(name).join("training.parquet"));
+        let seconds: f64 = strings(&history, "error_model")
+            .iter()
+            .zip(floats(&history, "seconds"))
+            .filter(|(m, _)| m.as_deref() == Some("EM5"))
+            .map(|(_, s)| s.unwrap())
+            .sum();
+        assert!((training_s[i].unwrap() - seconds).abs() < 1e-9);
+    }
+    // The conv_channels = 8 and 16 models differ, so do their results.
+    assert_ne!(evaluation[0..24], evaluation[24..48]);
+
+    let plotted = dcnet(
+        dir,
+        &[
+            "plot",
+            "results/quick-sweep",
+            "--out",
+            "replot",
+            "--metric",
+            "training-time",
+            "--format",
+            "svg",
+        ],
+    );
+    assert!(plotted.status.success(), "{}", stderr(&plotted));
+    let svg =
+        std::fs::read_to_string(dir.join("replot/quick-sweep/sweep_training_learning_rate.svg"))
+            .unwrap();
+    assert!(svg.contains("<path"), "the figure has no drawing");
+    assert!(
+        dir.join("replot/quick-sweep")
+            .join(points[0])
+            .join("calibration.svg")
+            .is_file()
+    );
+
+    let again = run_ok(dir, &args(&["run"], &spec));
+    assert!(again.contains("nothing to do"), "{again}");
+}
