@@ -289,10 +289,13 @@ fn run(
         _ => experiment.name.clone(),
     };
     if to_do.is_empty() {
-        eprintln!(
-            "nothing to do: every task of {whose} is done; the results in {} are current",
-            folder.display()
-        );
+        match mode {
+            Mode::Shard { .. } => eprintln!("nothing to do: every task of {whose} is done"),
+            _ => eprintln!(
+                "nothing to do: every task of {whose} is done; the results in {} are current",
+                folder.display()
+            ),
+        }
         return Ok(());
     }
     eprintln!("{whose}: {} tasks to do ({total} in the plan)", to_do.len());

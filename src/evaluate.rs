@@ -9,13 +9,13 @@
 //! run, trajectory) and every mean is summed in run order, so the numbers do not
 //! depend on the thread count.
 
-use crate::Vec3;
 use crate::data::Trajectory;
 use crate::estimators::{Correction, Entry, ErrorModel, EstimatorKind, lineup};
 use crate::noise::{BeamGeometry, Measurements, measure_trajectory};
 use crate::rng::task_rng;
 use crate::spec::{Dvl, Spec};
 use crate::train::Trained;
+use crate::{Vec3, first_seen};
 use indicatif::ProgressBar;
 use rayon::prelude::*;
 
@@ -357,17 +357,6 @@ pub fn rmse_cm_s(correction: &Correction, dvl: &[Vec3], truth: &[Vec3]) -> f64 {
         })
         .sum();
     100.0 * (sum / dvl.len() as f64).sqrt()
-}
-
-/// The distinct values of `values`, in the order they first appear.
-fn first_seen<T: PartialEq>(values: impl Iterator<Item = T>) -> Vec<T> {
-    let mut seen = Vec::new();
-    for value in values {
-        if !seen.contains(&value) {
-            seen.push(value);
-        }
-    }
-    seen
 }
 
 /// Mean and sample standard deviation (n − 1; 0 for a single value).

@@ -41,3 +41,14 @@ pub mod train;
 
 /// A velocity (or any xyz vector): x, y, z in m/s unless a name says otherwise.
 pub type Vec3 = [f64; 3];
+
+/// The distinct values of `values`, in the order they first appear.
+pub fn first_seen<T: PartialEq>(values: impl IntoIterator<Item = T>) -> Vec<T> {
+    let mut seen = Vec::new();
+    for value in values {
+        if !seen.contains(&value) {
+            seen.push(value);
+        }
+    }
+    seen
+}

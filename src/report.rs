@@ -103,7 +103,7 @@ pub fn render(run: &StoredRun, figures: &[Written]) -> String {
         }
     }
 
-    let models = error_models(run);
+    let models = crate::tables::models_in(run.calibration.iter().map(|r| r.error_model));
     let dvls = run.dvls();
     let has = |kind: EstimatorKind| run.calibration.iter().any(|r| r.estimator == kind);
     let published = |dvl: &str, kind, model, trajectory: Option<&str>| {
@@ -170,7 +170,7 @@ pub fn render(run: &StoredRun, figures: &[Written]) -> String {
 
     // Evaluation, the paper's layout: DVL × trajectory rows, the baseline and DCNet.
     let _ = writeln!(out, "## Evaluation with the T_conv terms\n");
-    let trajectories = evaluation_trajectories(run);
+    let trajectories = crate::first_seen(run.evaluation.iter().map(|r| r.trajectory.clone()));
     let evaluation_cell =
         |dvl: &str, trajectory: &str, kind, model, with_paper: bool, tally: &mut Tally| {
             run.evaluation
@@ -195,63 +195,49 @@ pub fn render(run: &StoredRun, figures: &[Written]) -> String {
                 })
                 .unwrap_or_else(|| "—".into())
         };
-    let mut table = markdown_table("trajectory", &models, "Baseline");
-    for dvl in &dvls {
-        for trajectory in &trajectories {
-            let mut cells = vec![dvl.clone(), trajectory.clone()];
-            cells.push(evaluation_cell(
-                dvl,
-                trajectory,
-                EstimatorKind::Baseline,
-                None,
-                true,
-                &mut tally,
-            ));
-            for model in &models {
-                cells.push(evaluation_cell(
-                    dvl,
-                    trajectory,
-                    EstimatorKind::Dcnet,
-                    Some(*model),
-                    true,
-                    &mut tally,
-                ));
-            }
-            table.add_row(cells);
-        }
-    }
-    let _ = writeln!(out, "{table}\n");
-    if has(EstimatorKind::LeastSquares) || has(EstimatorKind::Floor) {
-        let _ = writeln!(
-            out,
-            "Beyond the paper: least squares on the same data, and the floor.\n"
-        );
-        let mut table = markdown_table("trajectory", &models, "floor (true terms)");
+    // One DVL × trajectory row per cell pair: `first` in the first value column, `per_model`
+    // with each error model in the others.
+    let mut evaluation_table = |first_label: &str, first, per_model, with_paper: bool| {
+        let mut table = markdown_table("trajectory", &models, first_label);
         for dvl in &dvls {
             for trajectory in &trajectories {
                 let mut cells = vec![dvl.clone(), trajectory.clone()];
                 cells.push(evaluation_cell(
-                    dvl,
-                    trajectory,
-                    EstimatorKind::Floor,
-                    None,
-                    false,
-                    &mut tally,
+                    dvl, trajectory, first, None, with_paper, &mut tally,
                 ));
                 for model in &models {
                     cells.push(evaluation_cell(
                         dvl,
                         trajectory,
-                        EstimatorKind::LeastSquares,
+                        per_model,
                         Some(*model),
-                        false,
+                        with_paper,
                         &mut tally,
                     ));
                 }
                 table.add_row(cells);
             }
         }
-        let _ = writeln!(out, "{table}\n");
+        table
+    };
+    let paper = evaluation_table(
+        "Baseline",
+        EstimatorKind::Baseline,
+        EstimatorKind::Dcnet,
+        true,
+    );
+    let _ = writeln!(out, "{paper}\n");
+    if has(EstimatorKind::LeastSquares) || has(EstimatorKind::Floor) {
+        let beyond = evaluation_table(
+            "floor (true terms)",
+            EstimatorKind::Floor,
+            EstimatorKind::LeastSquares,
+            false,
+        );
+        let _ = writeln!(
+            out,
+            "Beyond the paper: least squares on the same data, and the floor.\n\n{beyond}\n"
+        );
     }
     if run.published.is_some() {
         let _ = writeln!(
@@ -282,34 +268,13 @@ fn markdown_table(second: &str, models: &[ErrorModel], first: &str) -> Table {
     table
 }
 
-fn error_models(run: &StoredRun) -> Vec<ErrorModel> {
-    let mut models: Vec<ErrorModel> = run
-        .calibration
-        .iter()
-        .filter_map(|r| r.error_model)
-        .collect();
-    models.sort();
-    models.dedup();
-    models
-}
-
-fn evaluation_trajectories(run: &StoredRun) -> Vec<String> {
-    let mut names: Vec<String> = Vec::new();
-    for row in &run.evaluation {
-        if !names.contains(&row.trajectory) {
-            names.push(row.trajectory.clone());
-        }
-    }
-    names
-}
-
 fn training_section(run: &StoredRun, out: &mut String) {
     if run.training.is_empty() {
         return;
     }
     let _ = writeln!(
         out,
-        "## DCNet training\n\nEpoch times are those of the run that trained each model; a model reused from `models/` costs this run no training time.\n"
+        "## DCNet training\n\nEpoch times are those of the run that trained each model; a model taken from the cache costs this run no training time.\n"
     );
     let mut table = Table::new();
     table.load_preset(ASCII_MARKDOWN);
@@ -347,7 +312,10 @@ fn training_section(run: &StoredRun, out: &mut String) {
 fn provenance_section(run: &StoredRun, out: &mut String) {
     let m = &run.manifest;
     let s = &m.stage_seconds;
-    let _ = writeln!(out, "## Run\n");
+    let _ = writeln!(
+        out,
+        "## Run\n\nWall time of the process that wrote this folder, over every point of its spec; work taken from the cache counts nothing.\n"
+    );
     let mut table = Table::new();
     table.load_preset(ASCII_MARKDOWN);
     table.set_header(["stage", "wall time s"]);

@@ -6,14 +6,14 @@
 use crate::checkpoint::Summary;
 use crate::estimators::{ErrorModel, EstimatorKind};
 use crate::evaluate::ProtocolResult;
-use crate::results::read::ReadError;
+use crate::results::read::{Batch, ReadError, read_rows};
 use crate::results::{ResultsError, write_atomic, write_table};
 use crate::spec::Experiment;
+use arrow_array::types::{Float64Type, Int64Type};
 use arrow_array::{
-    Array, ArrayRef, Float64Array, RecordBatch, StringArray, cast::AsArray, types::Float64Type,
+    Array, ArrayRef, Float64Array, Int64Array, RecordBatch, StringArray, cast::AsArray,
 };
 use arrow_schema::DataType;
-use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::sync::Arc;
@@ -32,11 +32,33 @@ pub struct SweepIndex {
     pub results_keys: Vec<String>,
 }
 
-/// A swept value: a number, or any other TOML value as text.
+/// A swept value: an integer, a number, or any other TOML value as text.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Swept {
+    Integer(i64),
     Number(f64),
     Text(String),
+}
+
+impl Swept {
+    /// Its value on a numeric axis, if it has one.
+    pub fn number(&self) -> Option<f64> {
+        match self {
+            Swept::Integer(i) => Some(*i as f64),
+            Swept::Number(n) => Some(*n),
+            Swept::Text(_) => None,
+        }
+    }
+}
+
+impl std::fmt::Display for Swept {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Swept::Integer(i) => write!(f, "{i}"),
+            Swept::Number(n) => write!(f, "{n}"),
+            Swept::Text(t) => f.write_str(t),
+        }
+    }
 }
 
 /// One row of `sweep.parquet`.
@@ -111,7 +133,7 @@ pub fn rows(experiment: &Experiment, points: &[(ProtocolResult, Vec<Summary>)]) 
 
 fn swept(value: &toml::Value) -> Swept {
     match value {
-        toml::Value::Integer(i) => Swept::Number(*i as f64),
+        toml::Value::Integer(i) => Swept::Integer(*i),
         toml::Value::Float(f) => Swept::Number(*f),
         toml::Value::String(s) => Swept::Text(s.clone()),
         other => Swept::Text(other.to_string()),
@@ -154,8 +176,8 @@ pub fn write(
     .map_err(|source| ResultsError::Io { path, source })
 }
 
-/// The table: point, one column per swept key (numbers as Float64, anything else as
-/// its TOML text), then the fixed columns.
+/// The table: point, one column per swept key (integers as Int64, other numbers as
+/// Float64, anything else as its TOML text), then the fixed columns.
 fn batch(swept: &[String], rows: &[SweepRow]) -> RecordBatch {
     let strings = |f: &dyn Fn(&SweepRow) -> String| -> ArrayRef {
         Arc::new(StringArray::from_iter_values(rows.iter().map(f)))
@@ -166,17 +188,18 @@ fn batch(swept: &[String], rows: &[SweepRow]) -> RecordBatch {
     let mut columns: Vec<(String, ArrayRef)> =
         vec![("point".into(), strings(&|r| r.point.clone()))];
     for (k, key) in swept.iter().enumerate() {
-        let numeric = rows.iter().all(|r| matches!(r.values[k], Swept::Number(_)));
-        let column = if numeric {
-            floats(&|r| match &r.values[k] {
-                Swept::Number(n) => Some(*n),
-                Swept::Text(_) => None,
-            })
+        let all = |f: fn(&Swept) -> bool| rows.iter().all(|r| f(&r.values[k]));
+        let column: ArrayRef = if all(|v| matches!(v, Swept::Integer(_))) {
+            Arc::new(Int64Array::from_iter_values(rows.iter().map(
+                |r| match r.values[k] {
+                    Swept::Integer(i) => i,
+                    _ => unreachable!("every value is an integer"),
+                },
+            )))
+        } else if all(|v| v.number().is_some()) {
+            floats(&|r| r.values[k].number())
         } else {
-            strings(&|r| match &r.values[k] {
-                Swept::Number(n) => n.to_string(),
-                Swept::Text(t) => t.clone(),
-            })
+            strings(&|r| r.values[k].to_string())
         };
         columns.push((key.clone(), column));
     }
@@ -223,93 +246,69 @@ pub fn read_index(folder: &Path) -> Result<SweepIndex, ReadError> {
 /// Reads the sweep stored in `folder`.
 pub fn read(folder: &Path) -> Result<StoredSweep, ReadError> {
     let index = read_index(folder)?;
-    let path = folder.join(TABLE);
-    let invalid = |message: String| ReadError::Invalid {
-        path: path.clone(),
-        message,
-    };
-    let file = std::fs::File::open(&path).map_err(|_| ReadError::Missing { path: path.clone() })?;
-    let reader = ParquetRecordBatchReaderBuilder::try_new(file)
-        .and_then(|b| b.build())
-        .map_err(|e| invalid(format!("not a Parquet file: {e}")))?;
-    let mut rows = Vec::new();
-    for batch in reader {
-        let batch = batch.map_err(|e| invalid(e.to_string()))?;
-        let column = |name: &str| {
-            batch
-                .column_by_name(name)
-                .ok_or_else(|| invalid(format!("has no column {name:?}")))
-        };
-        let text = |name: &str| -> Result<Vec<Option<String>>, ReadError> {
-            let column = column(name)?;
-            let strings = column
-                .as_string_opt::<i32>()
-                .ok_or_else(|| invalid(format!("column {name:?} is not text")))?;
-            Ok(strings.iter().map(|s| s.map(str::to_string)).collect())
-        };
-        let numbers = |name: &str| -> Result<Vec<Option<f64>>, ReadError> {
-            let column = column(name)?;
-            let floats = column
-                .as_primitive_opt::<Float64Type>()
-                .ok_or_else(|| invalid(format!("column {name:?} is not Float64")))?;
-            Ok(floats.iter().collect())
-        };
-        let mut values: Vec<Vec<Swept>> = vec![Vec::new(); batch.num_rows()];
-        for key in &index.swept {
-            let column = column(key)?;
-            let swept: Vec<Swept> = if column.data_type() == &DataType::Float64 {
-                numbers(key)?
-                    .into_iter()
-                    .map(|v| Swept::Number(v.unwrap_or(f64::NAN)))
-                    .collect()
-            } else {
-                text(key)?
-                    .into_iter()
-                    .map(|v| Swept::Text(v.unwrap_or_default()))
-                    .collect()
-            };
-            for (row, value) in values.iter_mut().zip(swept) {
-                row.push(value);
+    // The fixed columns; the swept ones are read by their names in the index.
+    let expected = batch(&[], &[]).schema();
+    let rows = read_rows(&folder.join(TABLE), &expected, |b| {
+        sweep_rows(b, &index.swept)
+    })?;
+    Ok(StoredSweep { index, rows })
+}
+
+fn sweep_rows(batch: &Batch, swept: &[String]) -> Result<Vec<SweepRow>, String> {
+    let point = batch.strings("point")?;
+    let series = batch.series()?;
+    let t_conv = batch.floats("t_conv_s")?;
+    let calibration = batch.floats("calibration_rmse_cm_s")?;
+    let evaluation = batch.floats("evaluation_rmse_cm_s")?;
+    let improvement = batch.optional_floats("evaluation_improvement_pct");
+    let training = batch.optional_floats("training_s");
+    let mut values: Vec<Vec<Swept>> = vec![Vec::new(); point.len()];
+    for key in swept {
+        let column = batch
+            .0
+            .column_by_name(key)
+            .ok_or_else(|| format!("column `{key}`, a swept key of {INDEX}, is missing"))?;
+        let column: Vec<Swept> = match column.data_type() {
+            DataType::Int64 => column
+                .as_primitive::<Int64Type>()
+                .iter()
+                .map(|v| Swept::Integer(v.unwrap_or_default()))
+                .collect(),
+            DataType::Float64 => column
+                .as_primitive::<Float64Type>()
+                .iter()
+                .map(|v| Swept::Number(v.unwrap_or(f64::NAN)))
+                .collect(),
+            DataType::Utf8 => column
+                .as_string::<i32>()
+                .iter()
+                .map(|v| Swept::Text(v.unwrap_or_default().to_string()))
+                .collect(),
+            other => {
+                return Err(format!(
+                    "column `{key}` holds {other}, expected Int64, Float64 or Utf8"
+                ));
             }
-        }
-        let required = |values: Vec<Option<f64>>, name: &str| -> Result<Vec<f64>, ReadError> {
-            values
-                .into_iter()
-                .map(|v| v.ok_or_else(|| invalid(format!("column {name:?} has an empty cell"))))
-                .collect()
         };
-        let point = text("point")?;
-        let dvl = text("dvl")?;
-        let estimator = text("estimator")?;
-        let error_model = text("error_model")?;
-        let t_conv = required(numbers("t_conv_s")?, "t_conv_s")?;
-        let calibration = required(numbers("calibration_rmse_cm_s")?, "calibration_rmse_cm_s")?;
-        let evaluation = required(numbers("evaluation_rmse_cm_s")?, "evaluation_rmse_cm_s")?;
-        let improvement = numbers("evaluation_improvement_pct")?;
-        let training = numbers("training_s")?;
-        for (i, values) in values.into_iter().enumerate() {
-            let estimator: EstimatorKind = estimator[i]
-                .clone()
-                .unwrap_or_default()
-                .parse()
-                .map_err(invalid)?;
-            let error_model = match &error_model[i] {
-                Some(name) => Some(name.parse().map_err(invalid)?),
-                None => None,
-            };
-            rows.push(SweepRow {
-                point: point[i].clone().unwrap_or_default(),
-                values,
-                dvl: dvl[i].clone().unwrap_or_default(),
-                estimator,
-                error_model,
-                t_conv_s: t_conv[i],
-                calibration_rmse_cm_s: calibration[i],
-                evaluation_rmse_cm_s: evaluation[i],
-                evaluation_improvement_pct: improvement[i],
-                training_s: training[i],
-            });
+        for (row, value) in values.iter_mut().zip(column) {
+            row.push(value);
         }
     }
-    Ok(StoredSweep { index, rows })
+    Ok(series
+        .into_iter()
+        .zip(values)
+        .enumerate()
+        .map(|(i, (series, values))| SweepRow {
+            point: point[i].clone(),
+            values,
+            dvl: series.dvl,
+            estimator: series.estimator,
+            error_model: series.error_model,
+            t_conv_s: t_conv[i],
+            calibration_rmse_cm_s: calibration[i],
+            evaluation_rmse_cm_s: evaluation[i],
+            evaluation_improvement_pct: improvement[i],
+            training_s: training[i],
+        })
+        .collect())
 }

@@ -3,6 +3,7 @@
 
 use crate::estimators::ErrorModel;
 use crate::evaluate::{CalibrationRow, EvaluationRow};
+use crate::first_seen;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 
 /// Calibration at T_conv: one row per DVL and estimator, one column per error model
@@ -22,12 +23,11 @@ pub fn calibration_table(
     ];
     header.extend(models.iter().map(ToString::to_string));
     table.set_header(header);
-    let mut keys: Vec<(&str, _)> = Vec::new();
-    for row in rows.iter().filter(|r| r.is_t_conv) {
-        if !keys.contains(&(row.dvl.as_str(), row.estimator)) {
-            keys.push((row.dvl.as_str(), row.estimator));
-        }
-    }
+    let keys = first_seen(
+        rows.iter()
+            .filter(|r| r.is_t_conv)
+            .map(|r| (r.dvl.as_str(), r.estimator)),
+    );
     for (dvl, estimator) in keys {
         let mut cells = vec![dvl.to_string(), estimator.label().to_string()];
         for model in std::iter::once(None).chain(models.iter().copied().map(Some)) {
@@ -58,17 +58,11 @@ pub fn calibration_table(
 /// Evaluation with the T_conv terms: one row per DVL, estimator and error model, one
 /// column per test trajectory, with the improvement over the baseline.
 pub fn evaluation_table(rows: &[EvaluationRow]) -> String {
-    let mut trajectories: Vec<&str> = Vec::new();
-    let mut keys = Vec::new();
-    for row in rows {
-        if !trajectories.contains(&row.trajectory.as_str()) {
-            trajectories.push(&row.trajectory);
-        }
-        let key = (row.dvl.as_str(), row.estimator, row.error_model);
-        if !keys.contains(&key) {
-            keys.push(key);
-        }
-    }
+    let trajectories = first_seen(rows.iter().map(|r| r.trajectory.as_str()));
+    let keys = first_seen(
+        rows.iter()
+            .map(|r| (r.dvl.as_str(), r.estimator, r.error_model)),
+    );
     let mut table = Table::new();
     table.load_preset(ASCII_MARKDOWN);
     let mut header = vec![
@@ -113,7 +107,8 @@ pub fn evaluation_table(rows: &[EvaluationRow]) -> String {
     )
 }
 
-fn models_in(models: impl Iterator<Item = Option<ErrorModel>>) -> Vec<ErrorModel> {
+/// The error models among `models`, in order.
+pub(crate) fn models_in(models: impl Iterator<Item = Option<ErrorModel>>) -> Vec<ErrorModel> {
     let mut found: Vec<ErrorModel> = models.flatten().collect();
     found.sort();
     found.dedup();

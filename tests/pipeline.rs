@@ -486,7 +486,7 @@ fn a_sweep_over_two_keys_runs_every_point_and_tabulates_them() {
     assert_eq!(sweep.num_rows(), 4 * 2 * 12);
     let point = strings(&sweep, "point");
     let rate = floats(&sweep, "training.learning_rate");
-    let channels = floats(&sweep, "model.conv_channels");
+    let channels = integers(&sweep, "model.conv_channels");
     let (dvl, estimator, model) = (
         strings(&sweep, "dvl"),
         strings(&sweep, "estimator"),
@@ -500,7 +500,7 @@ fn a_sweep_over_two_keys_runs_every_point_and_tabulates_them() {
             .collect();
         assert_eq!(rows.len(), 24);
         let expected_rate = [5e-4, 5e-4, 2e-3, 2e-3][p];
-        let expected_channels = [8.0, 16.0, 8.0, 16.0][p];
+        let expected_channels = [8, 16, 8, 16][p];
         assert!(
             rows.iter()
                 .all(|&i| rate[i] == Some(expected_rate) && channels[i] == Some(expected_channels))
@@ -564,4 +564,22 @@ fn a_sweep_over_two_keys_runs_every_point_and_tabulates_them() {
 
     let again = run_ok(dir, &args(&["run"], &spec));
     assert!(again.contains("nothing to do"), "{again}");
+
+    // An index naming a column the table lacks is bad input, named as such.
+    let index = folder.join("sweep.json");
+    let text = std::fs::read_to_string(&index).unwrap();
+    std::fs::write(
+        &index,
+        text.replace("\"model.conv_channels\"", "\"model.dropout\""),
+    )
+    .unwrap();
+    let broken = dcnet(dir, &["plot", "results/quick-sweep", "--out", "replot"]);
+    assert_eq!(broken.status.code(), Some(1), "{}", stderr(&broken));
+    assert!(
+        stderr(&broken).contains(
+            "sweep.parquet: column `model.dropout`, a swept key of sweep.json, is missing"
+        ),
+        "{}",
+        stderr(&broken)
+    );
 }

@@ -3,7 +3,9 @@
 
 use super::render::FAMILY;
 use crate::estimators::{ErrorModel, EstimatorKind};
+use plotters::chart::MeshStyle;
 use plotters::coord::Shift;
+use plotters::coord::ranged1d::ValueFormatter;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -22,6 +24,40 @@ pub fn font(size: u32) -> TextStyle<'static> {
 
 pub fn anchored(size: u32, h: HPos, v: VPos) -> TextStyle<'static> {
     font(size).pos(Pos::new(h, v))
+}
+
+/// A chart on `area` with the figures' margin and label areas, `y_label_width` wide
+/// enough for its y tick labels, captioned `title` unless it is empty.
+pub fn chart_on<'a, 'b>(
+    area: &'a Area<'b>,
+    title: &str,
+    y_label_width: u32,
+) -> ChartBuilder<'a, 'b, SVGBackend<'b>> {
+    let mut builder = ChartBuilder::on(area);
+    builder
+        .margin(12)
+        .x_label_area_size(45)
+        .y_label_area_size(y_label_width);
+    if !title.is_empty() {
+        builder.caption(title, font(PANEL_TITLE_SIZE));
+    }
+    builder
+}
+
+/// The mesh of `chart` in the figures' style: labels in the figure font, white minor
+/// grid lines.
+pub fn mesh<'a, 'b, X, Y, XT, YT>(
+    chart: &'b mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
+) -> MeshStyle<'a, 'b, X, Y, SVGBackend<'a>>
+where
+    X: Ranged<ValueType = XT> + ValueFormatter<XT>,
+    Y: Ranged<ValueType = YT> + ValueFormatter<YT>,
+{
+    let mut mesh = chart.configure_mesh();
+    mesh.label_style(font(LABEL_SIZE))
+        .axis_desc_style(font(LABEL_SIZE))
+        .light_line_style(WHITE);
+    mesh
 }
 
 /// How a line is stroked.

@@ -94,24 +94,14 @@ fn velocity(run: &StoredRun) -> PlotResult<Outcome> {
                     (lo.min(*v), hi.max(*v))
                 });
             let pad = 0.05 * (high - low).max(0.1);
-            let mut chart = ChartBuilder::on(area)
-                .caption(
-                    format!("{} ({})", trajectory.name, trajectory.roles.join(", ")),
-                    font(PANEL_TITLE_SIZE),
-                )
-                .margin(12)
-                .x_label_area_size(45)
-                .y_label_area_size(70)
+            let title = format!("{} ({})", trajectory.name, trajectory.roles.join(", "));
+            let mut chart = chart_on(area, &title, 70)
                 .build_cartesian_2d(0.0..end, (low - pad)..(high + pad))?;
-            chart
-                .configure_mesh()
+            mesh(&mut chart)
                 .x_desc("time [s]")
                 .y_desc("velocity [m/s]")
                 .x_label_formatter(&tick)
                 .y_label_formatter(&tick)
-                .label_style(font(LABEL_SIZE))
-                .axis_desc_style(font(LABEL_SIZE))
-                .light_line_style(WHITE)
                 .draw()?;
             for ((_, axis), color) in axes.iter().zip(colors) {
                 let points: Vec<(f64, f64)> = trajectory
@@ -135,12 +125,7 @@ fn velocity(run: &StoredRun) -> PlotResult<Outcome> {
 
 /// The estimator × error-model series of the calibration table, in a stable order.
 fn series_of(rows: &[CalibrationRow]) -> Vec<(EstimatorKind, Option<ErrorModel>)> {
-    let mut series: Vec<(EstimatorKind, Option<ErrorModel>)> = Vec::new();
-    for row in rows {
-        if !series.contains(&(row.estimator, row.error_model)) {
-            series.push((row.estimator, row.error_model));
-        }
-    }
+    let mut series = crate::first_seen(rows.iter().map(|r| (r.estimator, r.error_model)));
     series.sort_by_key(|(estimator, model)| (*estimator as usize, model.map(|m| m as usize)));
     series
 }
@@ -170,24 +155,15 @@ fn calibration(run: &StoredRun) -> PlotResult<Outcome> {
             for (area, dvl) in panels.split_evenly((1, dvls.len())).iter().zip(&dvls) {
                 let rows: Vec<&CalibrationRow> =
                     run.calibration.iter().filter(|r| &r.dvl == dvl).collect();
-                let mut chart = ChartBuilder::on(area)
-                    .caption(dvl, font(PANEL_TITLE_SIZE))
-                    .margin(12)
-                    .x_label_area_size(45)
-                    .y_label_area_size(70)
-                    .build_cartesian_2d(
-                        (first - pad)..(last + pad),
-                        log_range(rows.iter().map(|r| r.rmse_cm_s)).log_scale(),
-                    )?;
-                chart
-                    .configure_mesh()
+                let mut chart = chart_on(area, dvl, 70).build_cartesian_2d(
+                    (first - pad)..(last + pad),
+                    log_range(rows.iter().map(|r| r.rmse_cm_s)).log_scale(),
+                )?;
+                mesh(&mut chart)
                     .x_desc("calibration window [s]")
                     .y_desc("mean RMSE [cm/s]")
                     .x_label_formatter(&tick)
                     .y_label_formatter(&log_tick)
-                    .label_style(font(LABEL_SIZE))
-                    .axis_desc_style(font(LABEL_SIZE))
-                    .light_line_style(WHITE)
                     .draw()?;
                 for &(estimator, model) in &series {
                     let look = series_look(estimator, model);
@@ -246,22 +222,14 @@ fn bar_panel(
     let bottom = floor.map_or(bottom, |f| bottom.max(f));
     let span = (top - bottom).max(1e-9);
     let y_range = (bottom - 0.08 * span * f64::from(bottom < 0.0))..(top + 0.15 * span);
-    let mut chart = ChartBuilder::on(area)
-        .caption(title, font(PANEL_TITLE_SIZE))
-        .margin(12)
-        .x_label_area_size(45)
-        .y_label_area_size(70)
+    let mut chart = chart_on(area, title, 70)
         .build_cartesian_2d(-0.5..(groups.len() as f64 - 0.5), y_range.clone())?;
-    chart
-        .configure_mesh()
+    mesh(&mut chart)
         .disable_x_mesh()
         .x_labels(groups.len() + 1)
         .x_label_formatter(&|x| category(groups, *x))
         .y_label_formatter(&tick)
         .y_desc(y_desc)
-        .label_style(font(LABEL_SIZE))
-        .axis_desc_style(font(LABEL_SIZE))
-        .light_line_style(WHITE)
         .draw()?;
     if y_range.start < 0.0 {
         chart.draw_series(std::iter::once(PathElement::new(
@@ -418,12 +386,7 @@ fn improvement_em5(run: &StoredRun) -> PlotResult<Outcome> {
             "the run holds no EM5 estimator with a baseline to compare".into(),
         ));
     }
-    let mut trajectories: Vec<String> = Vec::new();
-    for row in &run.evaluation {
-        if !trajectories.contains(&row.trajectory) {
-            trajectories.push(row.trajectory.clone());
-        }
-    }
+    let trajectories = crate::first_seen(run.evaluation.iter().map(|r| r.trajectory.clone()));
     let estimators: Vec<EstimatorKind> = [EstimatorKind::LeastSquares, EstimatorKind::Dcnet]
         .into_iter()
         .filter(|e| rows.iter().any(|r| r.estimator == *e))
@@ -518,25 +481,16 @@ fn monte_carlo_spread(run: &StoredRun) -> PlotResult<Outcome> {
                         .collect()
                 })
                 .collect();
-            let mut chart = ChartBuilder::on(area)
-                .caption(dvl, font(PANEL_TITLE_SIZE))
-                .margin(12)
-                .x_label_area_size(45)
-                .y_label_area_size(150)
-                .build_cartesian_2d(
-                    log_range(samples.iter().flatten().copied()).log_scale(),
-                    -0.5..(series.len() as f64 - 0.5),
-                )?;
-            chart
-                .configure_mesh()
+            let mut chart = chart_on(area, dvl, 150).build_cartesian_2d(
+                log_range(samples.iter().flatten().copied()).log_scale(),
+                -0.5..(series.len() as f64 - 0.5),
+            )?;
+            mesh(&mut chart)
                 .disable_y_mesh()
                 .y_labels(series.len() + 1)
                 .y_label_formatter(&|y| category(&names, *y))
                 .x_label_formatter(&log_tick)
                 .x_desc("RMSE at T_conv [cm/s]")
-                .label_style(font(LABEL_SIZE))
-                .axis_desc_style(font(LABEL_SIZE))
-                .light_line_style(WHITE)
                 .draw()?;
             for (i, (values, &(estimator, model))) in samples.iter().zip(&series).enumerate() {
                 if values.is_empty() {
@@ -603,20 +557,13 @@ fn training_loss(run: &StoredRun) -> PlotResult<Outcome> {
             .training
             .iter()
             .flat_map(|e| [e.record.train_loss, e.record.validation_loss]);
-        let mut chart = ChartBuilder::on(&area)
-            .margin(12)
-            .x_label_area_size(45)
-            .y_label_area_size(80)
+        let mut chart = chart_on(&area, "", 80)
             .build_cartesian_2d(0.5..(epochs + 0.5), log_range(losses).log_scale())?;
-        chart
-            .configure_mesh()
+        mesh(&mut chart)
             .x_desc("epoch")
             .y_desc("loss [(cm/s)²]")
             .x_label_formatter(&tick)
             .y_label_formatter(&log_tick)
-            .label_style(font(LABEL_SIZE))
-            .axis_desc_style(font(LABEL_SIZE))
-            .light_line_style(WHITE)
             .draw()?;
         let mut entries = Vec::new();
         for model in &models {

@@ -6,7 +6,7 @@
 
 use super::draw::*;
 use super::figures::{Drawn, Outcome, draw_svg};
-use crate::estimators::{ErrorModel, EstimatorKind};
+use crate::first_seen;
 use crate::sweep::{StoredSweep, SweepRow, Swept};
 use plotters::prelude::*;
 
@@ -60,25 +60,18 @@ pub fn all(sweep: &StoredSweep, metric: Metric) -> PlotResult<Vec<(String, Outco
 /// The distinct values of swept key `k`, numbers in ascending order, texts in the
 /// order they first appear, each with its label.
 fn categories(rows: &[(&SweepRow, f64)], k: usize) -> Vec<(Swept, String)> {
-    let mut values: Vec<Swept> = Vec::new();
-    for (row, _) in rows {
-        if !values.contains(&row.values[k]) {
-            values.push(row.values[k].clone());
-        }
-    }
-    if values.iter().all(|v| matches!(v, Swept::Number(_))) {
-        values.sort_by(|a, b| match (a, b) {
-            (Swept::Number(a), Swept::Number(b)) => a.total_cmp(b),
-            _ => std::cmp::Ordering::Equal,
+    let mut values = first_seen(rows.iter().map(|(row, _)| row.values[k].clone()));
+    if values.iter().all(|v| v.number().is_some()) {
+        values.sort_by(|a, b| {
+            a.number()
+                .unwrap_or(0.0)
+                .total_cmp(&b.number().unwrap_or(0.0))
         });
     }
     values
         .into_iter()
         .map(|value| {
-            let label = match &value {
-                Swept::Number(n) => n.to_string(),
-                Swept::Text(t) => t.clone(),
-            };
+            let label = value.to_string();
             (value, label)
         })
         .collect()
@@ -105,16 +98,8 @@ fn against(sweep: &StoredSweep, metric: Metric, k: usize) -> PlotResult<Outcome>
             .position(|(value, _)| *value == row.values[k])
             .unwrap_or(0) as f64
     };
-    let mut dvls: Vec<&str> = Vec::new();
-    let mut series: Vec<(EstimatorKind, Option<ErrorModel>)> = Vec::new();
-    for (row, _) in &rows {
-        if !dvls.contains(&row.dvl.as_str()) {
-            dvls.push(&row.dvl);
-        }
-        if !series.contains(&(row.estimator, row.error_model)) {
-            series.push((row.estimator, row.error_model));
-        }
-    }
+    let dvls = first_seen(rows.iter().map(|(row, _)| row.dvl.as_str()));
+    let series = first_seen(rows.iter().map(|(row, _)| (row.estimator, row.error_model)));
     let caption = if sweep.index.swept.len() == 1 {
         format!("{} against {key}", metric.axis())
     } else {
@@ -136,26 +121,17 @@ fn against(sweep: &StoredSweep, metric: Metric, k: usize) -> PlotResult<Outcome>
             let top = on_panel.iter().map(|(_, v)| *v).fold(0.0f64, f64::max);
             let bottom = on_panel.iter().map(|(_, v)| *v).fold(0.0f64, f64::min);
             let pad = 0.08 * (top - bottom).max(1e-9);
-            let mut chart = ChartBuilder::on(area)
-                .caption(*dvl, font(PANEL_TITLE_SIZE))
-                .margin(12)
-                .x_label_area_size(45)
-                .y_label_area_size(70)
-                .build_cartesian_2d(
-                    -0.5..(labels.len() as f64 - 0.5),
-                    (bottom - pad * f64::from(bottom < 0.0))..(top + pad),
-                )?;
-            chart
-                .configure_mesh()
+            let mut chart = chart_on(area, dvl, 70).build_cartesian_2d(
+                -0.5..(labels.len() as f64 - 0.5),
+                (bottom - pad * f64::from(bottom < 0.0))..(top + pad),
+            )?;
+            mesh(&mut chart)
                 .disable_x_mesh()
                 .x_labels(labels.len() + 1)
                 .x_desc(key.as_str())
                 .y_desc(metric.axis())
                 .x_label_formatter(&|v| category(&labels, *v))
                 .y_label_formatter(&tick)
-                .label_style(font(LABEL_SIZE))
-                .axis_desc_style(font(LABEL_SIZE))
-                .light_line_style(WHITE)
                 .draw()?;
             for &(estimator, model) in &series {
                 let look = series_look(estimator, model);

@@ -129,6 +129,16 @@ fn table_at<T>(
     file: &str,
     rows: fn(&Batch) -> Result<Vec<T>, String>,
 ) -> Result<Vec<T>, ReadError> {
+    read_rows(path, &expected_schema(file), rows)
+}
+
+/// Reads the Parquet file at `path`, checks that it has the columns of `expected`, and
+/// turns each batch into rows.
+pub(crate) fn read_rows<T>(
+    path: &Path,
+    expected: &Schema,
+    rows: impl Fn(&Batch) -> Result<Vec<T>, String>,
+) -> Result<Vec<T>, ReadError> {
     let path = existing(path)?;
     let invalid = |message: String| ReadError::Invalid {
         path: path.clone(),
@@ -137,7 +147,7 @@ fn table_at<T>(
     let opened = std::fs::File::open(&path).map_err(|e| invalid(e.to_string()))?;
     let builder = ParquetRecordBatchReaderBuilder::try_new(opened)
         .map_err(|e| invalid(format!("not a Parquet file: {e}")))?;
-    check_schema(builder.schema(), &expected_schema(file)).map_err(invalid)?;
+    check_schema(builder.schema(), expected).map_err(invalid)?;
     let mut out = Vec::new();
     for batch in builder.build().map_err(|e| invalid(e.to_string()))? {
         let batch = batch.map_err(|e| invalid(e.to_string()))?;
@@ -183,10 +193,10 @@ fn check_schema(found: &Schema, expected: &Schema) -> Result<(), String> {
 }
 
 /// A batch whose schema was checked, read column by column.
-struct Batch<'a>(&'a RecordBatch);
+pub(crate) struct Batch<'a>(pub(crate) &'a RecordBatch);
 
 impl Batch<'_> {
-    fn column<A: Array + 'static>(&self, name: &str) -> &A {
+    pub(crate) fn column<A: Array + 'static>(&self, name: &str) -> &A {
         self.0
             .column_by_name(name)
             .and_then(|c| c.as_any().downcast_ref::<A>())
@@ -201,12 +211,12 @@ impl Batch<'_> {
         Ok(())
     }
 
-    fn floats(&self, name: &str) -> Result<Vec<f64>, String> {
+    pub(crate) fn floats(&self, name: &str) -> Result<Vec<f64>, String> {
         self.no_nulls(name)?;
         Ok(self.column::<Float64Array>(name).values().to_vec())
     }
 
-    fn optional_floats(&self, name: &str) -> Vec<Option<f64>> {
+    pub(crate) fn optional_floats(&self, name: &str) -> Vec<Option<f64>> {
         self.column::<Float64Array>(name).iter().collect()
     }
 
@@ -226,7 +236,7 @@ impl Batch<'_> {
         Ok((0..column.len()).map(|i| column.value(i)).collect())
     }
 
-    fn strings(&self, name: &str) -> Result<Vec<String>, String> {
+    pub(crate) fn strings(&self, name: &str) -> Result<Vec<String>, String> {
         self.no_nulls(name)?;
         Ok(self
             .column::<StringArray>(name)
@@ -236,7 +246,7 @@ impl Batch<'_> {
     }
 
     /// A column of names parsed into `T`; `optional` allows empty values.
-    fn parsed<T: std::str::FromStr<Err = String>>(
+    pub(crate) fn parsed<T: std::str::FromStr<Err = String>>(
         &self,
         name: &str,
         optional: bool,
@@ -261,13 +271,35 @@ impl Batch<'_> {
             .map(|v| v.expect("no nulls"))
             .collect())
     }
+
+    /// The `dvl`, `estimator` and `error_model` of each row: which series it belongs to.
+    pub(crate) fn series(&self) -> Result<Vec<Series>, String> {
+        let dvl = self.strings("dvl")?;
+        let estimator: Vec<EstimatorKind> = self.required("estimator")?;
+        let error_model = self.parsed("error_model", true)?;
+        Ok(dvl
+            .into_iter()
+            .zip(estimator)
+            .zip(error_model)
+            .map(|((dvl, estimator), error_model)| Series {
+                dvl,
+                estimator,
+                error_model,
+            })
+            .collect())
+    }
+}
+
+/// The DVL, estimator and error model a row belongs to.
+pub(crate) struct Series {
+    pub dvl: String,
+    pub estimator: EstimatorKind,
+    pub error_model: Option<ErrorModel>,
 }
 
 fn run_rows(batch: &Batch) -> Result<Vec<RunRow>, String> {
     let run = batch.uints("run")?;
-    let dvl = batch.strings("dvl")?;
-    let estimator: Vec<EstimatorKind> = batch.required("estimator")?;
-    let error_model = batch.parsed("error_model", true)?;
+    let series = batch.series()?;
     let phase: Vec<Phase> = batch.required("phase")?;
     let window_s = batch.floats("window_s")?;
     let trajectory = batch.strings("trajectory")?;
@@ -283,12 +315,14 @@ fn run_rows(batch: &Batch) -> Result<Vec<RunRow>, String> {
     .map(|name| batch.floats(name));
     let [sx, sy, sz, bx, by, bz] = terms;
     let (sx, sy, sz, bx, by, bz) = (sx?, sy?, sz?, bx?, by?, bz?);
-    Ok((0..run.len())
-        .map(|i| RunRow {
+    Ok(series
+        .into_iter()
+        .enumerate()
+        .map(|(i, series)| RunRow {
             run: run[i],
-            dvl: dvl[i].clone(),
-            estimator: estimator[i],
-            error_model: error_model[i],
+            dvl: series.dvl,
+            estimator: series.estimator,
+            error_model: series.error_model,
             phase: phase[i],
             window_s: window_s[i],
             trajectory: trajectory[i].clone(),
@@ -302,18 +336,18 @@ fn run_rows(batch: &Batch) -> Result<Vec<RunRow>, String> {
 }
 
 fn calibration_rows(batch: &Batch) -> Result<Vec<CalibrationRow>, String> {
-    let dvl = batch.strings("dvl")?;
-    let estimator: Vec<EstimatorKind> = batch.required("estimator")?;
-    let error_model = batch.parsed("error_model", true)?;
+    let series = batch.series()?;
     let window_s = batch.floats("window_s")?;
     let rmse = batch.floats("rmse_cm_s")?;
     let std = batch.floats("rmse_std_cm_s")?;
     let is_t_conv = batch.bools("is_t_conv")?;
-    Ok((0..dvl.len())
-        .map(|i| CalibrationRow {
-            dvl: dvl[i].clone(),
-            estimator: estimator[i],
-            error_model: error_model[i],
+    Ok(series
+        .into_iter()
+        .enumerate()
+        .map(|(i, series)| CalibrationRow {
+            dvl: series.dvl,
+            estimator: series.estimator,
+            error_model: series.error_model,
             window_s: window_s[i],
             rmse_cm_s: rmse[i],
             rmse_std_cm_s: std[i],
@@ -323,19 +357,19 @@ fn calibration_rows(batch: &Batch) -> Result<Vec<CalibrationRow>, String> {
 }
 
 fn evaluation_rows(batch: &Batch) -> Result<Vec<EvaluationRow>, String> {
-    let dvl = batch.strings("dvl")?;
-    let estimator: Vec<EstimatorKind> = batch.required("estimator")?;
-    let error_model = batch.parsed("error_model", true)?;
+    let series = batch.series()?;
     let trajectory = batch.strings("trajectory")?;
     let t_conv_s = batch.floats("t_conv_s")?;
     let rmse = batch.floats("rmse_cm_s")?;
     let std = batch.floats("rmse_std_cm_s")?;
     let improvement = batch.optional_floats("improvement_pct");
-    Ok((0..dvl.len())
-        .map(|i| EvaluationRow {
-            dvl: dvl[i].clone(),
-            estimator: estimator[i],
-            error_model: error_model[i],
+    Ok(series
+        .into_iter()
+        .enumerate()
+        .map(|(i, series)| EvaluationRow {
+            dvl: series.dvl,
+            estimator: series.estimator,
+            error_model: series.error_model,
             trajectory: trajectory[i].clone(),
             t_conv_s: t_conv_s[i],
             rmse_cm_s: rmse[i],

@@ -3,7 +3,7 @@
 
 #![allow(dead_code)]
 
-use arrow_array::{Array, BooleanArray, Float64Array, RecordBatch, StringArray};
+use arrow_array::{Array, BooleanArray, Float64Array, Int64Array, RecordBatch, StringArray};
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -87,6 +87,16 @@ pub fn floats(batch: &RecordBatch, column: &str) -> Vec<Option<f64>> {
         .column_by_name(column)
         .unwrap_or_else(|| panic!("no column {column}"));
     let array = array.as_any().downcast_ref::<Float64Array>().unwrap();
+    (0..array.len())
+        .map(|i| array.is_valid(i).then(|| array.value(i)))
+        .collect()
+}
+
+pub fn integers(batch: &RecordBatch, column: &str) -> Vec<Option<i64>> {
+    let array = batch
+        .column_by_name(column)
+        .unwrap_or_else(|| panic!("no column {column}"));
+    let array = array.as_any().downcast_ref::<Int64Array>().unwrap();
     (0..array.len())
         .map(|i| array.is_valid(i).then(|| array.value(i)))
         .collect()
