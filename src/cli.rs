@@ -7,7 +7,7 @@ use crate::data::{fetch, load_trajectories};
 use crate::dataset::{self, TrainingSet, window_starts};
 use crate::estimators::{ErrorModel, EstimatorKind};
 use crate::evaluate::run_protocol;
-use crate::pipeline::{Mode, Plan, Shard, Task, execute};
+use crate::pipeline::{Mode, Outcome, Plan, Shard, Task, execute};
 use crate::plots::{self, Format, Metric};
 use crate::report;
 use crate::results::read::StoredRun;
@@ -307,7 +307,7 @@ fn run(
             target.spec.display()
         );
     } else {
-        finish(&experiment, &outcome.written, drawing)?;
+        finish(&experiment, &outcome, drawing)?;
     }
     failed_models(outcome.failures)
 }
@@ -386,13 +386,13 @@ fn collect(target: &Target, drawing: &Drawing) -> Result<(), CliError> {
         );
         return Ok(());
     }
-    finish(&experiment, &outcome.written, drawing)
+    finish(&experiment, &outcome, drawing)
 }
 
-/// Prints the tables of a single run, and draws the figures and reports of what was
-/// written.
-fn finish(experiment: &Experiment, written: &[PathBuf], drawing: &Drawing) -> Result<(), CliError> {
-    for folder in written {
+/// Prints the tables of a single run, and draws the figures and writes the reports of
+/// what was written.
+fn finish(experiment: &Experiment, outcome: &Outcome, drawing: &Drawing) -> Result<(), CliError> {
+    for folder in &outcome.written {
         if !experiment.is_sweep() {
             let stored = StoredRun::read(folder).map_err(failure)?;
             println!(
@@ -408,29 +408,20 @@ fn finish(experiment: &Experiment, written: &[PathBuf], drawing: &Drawing) -> Re
         eprintln!("results written to {}", folder.display());
         plot_run(folder, drawing.folder(), Format::Both).map_err(|e| failure(e.into_cause()))?;
     }
-    if experiment.is_sweep() {
-        let folder = experiment_folder(written, experiment);
-        if let Some(folder) = folder {
-            plot_sweep(
-                &folder,
-                drawing.folder(),
-                Format::Both,
-                Metric::EvaluationRmse,
-            )
-            .map_err(|e| failure(e.into_cause()))?;
-        }
+    if let Some(folder) = &outcome.sweep {
+        eprintln!(
+            "sweep table written to {}",
+            folder.join(sweep::TABLE).display()
+        );
+        plot_sweep(
+            folder,
+            drawing.folder(),
+            Format::Both,
+            Metric::EvaluationRmse,
+        )
+        .map_err(|e| failure(e.into_cause()))?;
     }
     Ok(())
-}
-
-/// The sweep folder, `OUT/<name>`, of the points written.
-fn experiment_folder(written: &[PathBuf], experiment: &Experiment) -> Option<PathBuf> {
-    let depth = experiment.points.first()?.spec.name.split('/').count() - 1;
-    let mut folder = written.first()?.clone();
-    for _ in 0..depth {
-        folder.pop();
-    }
-    Some(folder)
 }
 
 /// Every failed model, one per line; the results hold all the others.

@@ -358,7 +358,10 @@ impl<'a> Plan<'a> {
             Task::Results(p) => {
                 let point = &self.points[p];
                 let current = read_manifest(&point.folder)
-                    .is_some_and(|m| m.results_key == point.results_key);
+                    .is_some_and(|m| m.results_key == point.results_key)
+                    && results::TABLES
+                        .iter()
+                        .all(|table| point.folder.join(table).is_file());
                 if current { Status::Done } else { Status::ToDo }
             }
             Task::Sweep => {
@@ -443,6 +446,8 @@ pub struct Outcome {
     pub done: usize,
     /// The results folders written.
     pub written: Vec<PathBuf>,
+    /// The sweep folder, when its `sweep.parquet` was written.
+    pub sweep: Option<PathBuf>,
     /// Models that failed to train; their blocks are left out of the results.
     pub failures: Vec<TrainError>,
 }
@@ -601,14 +606,11 @@ pub fn execute(plan: &Plan, mode: Mode) -> Result<Outcome, ExecuteError> {
         summaries.push((result, models));
     }
     if sweep_to_do {
+        let folder = plan.out.join(&plan.experiment.name);
         let keys: Vec<String> = plan.points.iter().map(|p| p.results_key.clone()).collect();
-        sweep::write(
-            &plan.out.join(&plan.experiment.name),
-            plan.experiment,
-            &summaries,
-            &keys,
-        )?;
+        sweep::write(&folder, plan.experiment, &summaries, &keys)?;
         outcome.done += 1;
+        outcome.sweep = Some(folder);
     }
     Ok(outcome)
 }
