@@ -298,18 +298,30 @@ fn run(
         }
         return Ok(());
     }
-    eprintln!("{whose}: {} tasks to do ({total} in the plan)", to_do.len());
+    eprintln!(
+        "{whose}: {} to do ({total} in the plan)",
+        tasks(to_do.len())
+    );
     let outcome = execute(&plan, mode).map_err(failure)?;
     if let Mode::Shard { shard, .. } = mode {
         eprintln!(
-            "shard {shard}: {} tasks done; once every shard has finished, `dcnet-exp collect {}` writes the results",
-            outcome.done,
+            "shard {shard}: {} done; once every shard has finished, `dcnet-exp collect {}` writes the results",
+            tasks(outcome.done),
             target.spec.display()
         );
     } else {
         finish(&experiment, &outcome, drawing)?;
     }
     failed_models(outcome.failures)
+}
+
+/// "1 task", "31 tasks".
+fn tasks(count: usize) -> String {
+    if count == 1 {
+        "1 task".into()
+    } else {
+        format!("{count} tasks")
+    }
 }
 
 /// Lists the tasks of a run, shard or not, with their state.
@@ -355,7 +367,7 @@ fn plan(target: &Target, shard: Option<&str>) -> Result<(), CliError> {
         if experiment.is_sweep() {
             let point = plan
                 .point_of(task)
-                .map(|p| plan.spec(p).name.clone())
+                .map(|p| sweep::point_folder(&plan.spec(p).name).to_string())
                 .unwrap_or_default();
             row.insert(1, point);
         }
@@ -367,7 +379,8 @@ fn plan(target: &Target, shard: Option<&str>) -> Result<(), CliError> {
         None => experiment.name.clone(),
     };
     println!(
-        "{scope}: {listed} tasks, {} to do; cache in {}",
+        "{scope}: {}, {} to do; cache in {}",
+        tasks(listed),
         to_do.len(),
         crate::cache::root(&target.out).display()
     );

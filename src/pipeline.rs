@@ -389,6 +389,7 @@ impl<'a> Plan<'a> {
                     None => format!("monte carlo {dvl} {}", block.estimator),
                 }
             }
+            Task::Results(_) if self.experiment.is_sweep() => "write results".into(),
             Task::Results(p) => format!("write {}", self.points[p].folder.display()),
             Task::Sweep => format!(
                 "write {}",

@@ -140,8 +140,8 @@ fn swept(value: &toml::Value) -> Swept {
     }
 }
 
-/// `quick-sweep/lr=0.001` → `lr=0.001`.
-fn point_folder(spec_name: &str) -> &str {
+/// The folder of a sweep point under the sweep's: `quick-sweep/lr=0.001` → `lr=0.001`.
+pub fn point_folder(spec_name: &str) -> &str {
     spec_name
         .split_once('/')
         .map_or(spec_name, |(_, point)| point)

@@ -222,6 +222,22 @@ fn a_second_run_does_nothing_and_a_monte_carlo_change_trains_nothing() {
     let runs = read_parquet(&dir.join("results/quick/monte_carlo.parquet"));
     assert_eq!(runs.num_rows(), 4 * 2 * 12 * (5 + 2));
 
+    // A report setting rewrites the results folder and computes nothing.
+    let report = run(&[
+        "--set",
+        "calibration.monte_carlo_runs=4",
+        "--set",
+        "report.tolerance_pct=5",
+    ]);
+    assert!(
+        report.contains("quick: 1 task to do (31 in the plan)"),
+        "{report}"
+    );
+    assert!(
+        !report.contains("DCNet") && !report.contains("monte carlo"),
+        "{report}"
+    );
+
     // Back to the first setting: everything comes from the cache, nothing is computed.
     let fourth = run(&[]);
     assert!(
