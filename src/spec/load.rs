@@ -1,6 +1,8 @@
-//! Reads a spec file, applies `--set KEY=VALUE` overrides, deserializes and checks it.
-//! Every fault, from a TOML syntax error to a failed check, comes back as a
-//! [`SpecError`] that names the file and line (or the `--set` it came from) and the key.
+//! Reads a spec file, applies `--set KEY=VALUE` overrides, deserializes and checks it;
+//! a spec with a `[sweep]` becomes an [`Experiment`] of points, each checked the same
+//! way. Every fault, from a TOML syntax error to a failed check, comes back as a
+//! [`SpecError`] that names the file and line (or the `--set` or sweep value it came
+//! from) and the key.
 
 use super::file::SweepFile;
 use super::{Spec, SpecFile};

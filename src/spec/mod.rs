@@ -1,7 +1,8 @@
-//! The experiment spec: [`file`] holds the serde types read from TOML, [`load`] reads a
-//! file, applies `--set` overrides and places every error at its file, line and key, and
-//! this module checks a [`SpecFile`] into a [`Spec`] whose every value is known good.
-//! Seconds become sample counts here, percent and cm/s become fractions and m/s.
+//! The experiment spec: [`mod@file`] holds the serde types read from TOML,
+//! [`mod@load`] reads a file, applies `--set` overrides, expands a `[sweep]` into its
+//! points and places every error at its file, line and key, and this module checks a
+//! [`SpecFile`] into a [`Spec`] whose every value is known good. Seconds become sample
+//! counts here, percent and cm/s become fractions and m/s.
 
 pub mod file;
 pub mod load;
