@@ -616,8 +616,10 @@ pub fn execute(plan: &Plan, mode: Mode) -> Result<Outcome, ExecuteError> {
     Ok(outcome)
 }
 
-/// Trains the models `trainings` asks for, those of one dataset side by side, and
-/// returns the trainings that failed.
+/// Trains the models `trainings` asks for and returns the trainings that failed.
+/// Datasets are generated a few at a time, enough that every thread has a model to
+/// train, and the models of those datasets then train side by side; only those
+/// datasets are held in memory.
 fn train(
     plan: &Plan,
     trainings: &[usize],
@@ -625,8 +627,8 @@ fn train(
     stages: &mut StageSeconds,
     outcome: &mut Outcome,
 ) -> Result<Vec<usize>, ExecuteError> {
-    let mut failed = Vec::new();
-    for (d, dataset) in plan.datasets.iter().enumerate() {
+    let mut batches: Vec<Vec<(usize, Vec<usize>)>> = vec![Vec::new()];
+    for d in 0..plan.datasets.len() {
         let mine: Vec<usize> = trainings
             .iter()
             .copied()
@@ -635,24 +637,29 @@ fn train(
         if mine.is_empty() {
             continue;
         }
-        let spec = plan.spec(dataset.point);
-        let clock = Instant::now();
-        let progress = bar(spec.grid.points().len(), "dataset");
-        let set = dataset::generate(spec, &plan.trajectories[dataset.point], &progress);
-        progress.finish_and_clear();
-        stages.dataset += clock.elapsed().as_secs_f64();
-        eprintln!(
-            "dataset {}: {} combinations × {} windows = {} windows ({} validation), {:.1} MB, in {:.2} s",
-            &dataset.key[..16],
-            set.points.len(),
-            set.windows_per_combination,
-            set.len(),
-            set.validation_len(),
-            TrainingSet::size_bytes(set.len(), set.window) as f64 / 1e6,
-            clock.elapsed().as_secs_f64()
-        );
-        outcome.done += 1;
-
+        let last = batches.last_mut().expect("never empty");
+        if last.iter().map(|(_, m)| m.len()).sum::<usize>() >= rayon::current_num_threads() {
+            batches.push(vec![(d, mine)]);
+        } else {
+            last.push((d, mine));
+        }
+    }
+    let mut failed = Vec::new();
+    for batch in batches.into_iter().filter(|b| !b.is_empty()) {
+        let sets: Vec<(usize, TrainingSet)> = batch
+            .iter()
+            .map(|&(d, _)| (d, generate_dataset(plan, d, stages)))
+            .collect();
+        outcome.done += sets.len();
+        let set_of = |t: usize| {
+            let dataset = plan.trainings[t].dataset;
+            &sets
+                .iter()
+                .find(|(d, _)| *d == dataset)
+                .expect("generated")
+                .1
+        };
+        let mine: Vec<usize> = batch.iter().flat_map(|(_, m)| m.iter().copied()).collect();
         let clock = Instant::now();
         let bars = indicatif::MultiProgress::new();
         let results: Vec<_> = mine
@@ -660,14 +667,15 @@ fn train(
             .map(|&t| {
                 let training = &plan.trainings[t];
                 let spec = plan.spec(training.point);
+                let set = set_of(t);
                 let progress = bars.add(bar(
-                    spec.training.epochs * train::batches_per_epoch(spec, &set),
+                    spec.training.epochs * train::batches_per_epoch(spec, set),
                     "DCNet",
                 ));
                 progress.set_message(format!("DCNet {}", training.error_model));
                 let outcome = train_cached(
                     spec,
-                    &set,
+                    set,
                     training.error_model,
                     &training.key,
                     &plan.models,
@@ -708,6 +716,28 @@ fn train(
         }
     }
     Ok(failed)
+}
+
+/// Generates dataset `d` from the spec of its first point.
+fn generate_dataset(plan: &Plan, d: usize, stages: &mut StageSeconds) -> TrainingSet {
+    let dataset = &plan.datasets[d];
+    let spec = plan.spec(dataset.point);
+    let clock = Instant::now();
+    let progress = bar(spec.grid.points().len(), "dataset");
+    let set = dataset::generate(spec, &plan.trajectories[dataset.point], &progress);
+    progress.finish_and_clear();
+    stages.dataset += clock.elapsed().as_secs_f64();
+    eprintln!(
+        "dataset {}: {} combinations × {} windows = {} windows ({} validation), {:.1} MB, in {:.2} s",
+        &dataset.key[..16],
+        set.points.len(),
+        set.windows_per_combination,
+        set.len(),
+        set.validation_len(),
+        TrainingSet::size_bytes(set.len(), set.window) as f64 / 1e6,
+        clock.elapsed().as_secs_f64()
+    );
+    set
 }
 
 /// Computes the blocks `blocks` asks for, those of one DVL of one point together (they

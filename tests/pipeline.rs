@@ -599,3 +599,49 @@ fn a_sweep_over_two_keys_runs_every_point_and_tabulates_them() {
         stderr(&broken)
     );
 }
+
+#[test]
+fn a_sweep_point_holds_what_a_plain_run_of_its_values_holds() {
+    let project = project(false);
+    let dir = project.path();
+    let common = [
+        "experiments/quick.toml",
+        "--no-plots",
+        "--set",
+        "training.epochs=2",
+    ];
+    // Two grids: two datasets, each with its five models.
+    let swept = run_ok(
+        dir,
+        &args(
+            &["run", "--out", "swept"],
+            &[
+                &common[..],
+                &[
+                    "--set",
+                    "name=grid",
+                    "--set",
+                    "sweep.values={\"grid.noise_cm_s.values\" = [[0.02], [0.05, 0.1]]}",
+                ],
+            ]
+            .concat(),
+        ),
+    );
+    let datasets = swept.lines().filter(|l| l.starts_with("dataset ")).count();
+    assert_eq!(datasets, 2, "{swept}");
+    run_ok(
+        dir,
+        &args(
+            &["run", "--out", "plain"],
+            &[
+                &common[..],
+                &["--set", "grid.noise_cm_s.values=[0.05, 0.1]"],
+            ]
+            .concat(),
+        ),
+    );
+    assert_same_results(
+        &dir.join("swept/grid/noise_cm_s.values=0.05-0.1"),
+        &dir.join("plain/quick"),
+    );
+}

@@ -382,10 +382,15 @@ fn sweep_axes(
 }
 
 /// A point's folder name from its values, such as `learning_rate=0.001,conv_channels=8`:
-/// each key by its last part (its whole path when two keys share that part), each
-/// value as written, a list joined by '-', a table by its place in the list.
+/// each key without its section (`noise_cm_s.values` for `grid.noise_cm_s.values`; its
+/// whole path when two keys would read the same), each value as written, a list joined
+/// by '-', a table by its place in the list.
 fn point_name(axes: &[Axis], picks: &[usize]) -> String {
-    let short = |key: &str| key.rsplit('.').next().unwrap_or(key).to_string();
+    let short = |key: &str| {
+        key.split_once('.')
+            .map_or(key, |(_, rest)| rest)
+            .to_string()
+    };
     let parts: Vec<String> = axes
         .iter()
         .zip(picks)
