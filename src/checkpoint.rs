@@ -74,6 +74,24 @@ impl ModelStore {
         Ok((summary.key == key).then_some(summary))
     }
 
+    /// Records that the training of `key` failed and why, so that later runs and
+    /// `collect` leave the model out instead of training it again.
+    pub fn save_failure(
+        &self,
+        error_model: ErrorModel,
+        key: &str,
+        message: &str,
+    ) -> Result<(), CheckpointError> {
+        std::fs::create_dir_all(&self.folder).map_err(|e| io_error(&self.folder, e))?;
+        let path = self.stem(error_model, key).with_extension("failed");
+        write_atomic(&path, message.as_bytes()).map_err(|e| io_error(&path, e))
+    }
+
+    /// Why the training of `key` failed, if it did.
+    pub fn failure(&self, error_model: ErrorModel, key: &str) -> Option<String> {
+        std::fs::read_to_string(self.stem(error_model, key).with_extension("failed")).ok()
+    }
+
     /// The last epoch of the checkpoint of `key`, if one is waiting to be resumed.
     pub fn checkpoint_epoch(&self, error_model: ErrorModel, key: &str) -> Option<usize> {
         let path = self
@@ -111,7 +129,7 @@ impl ModelStore {
         }))
     }
 
-    /// Stores a finished model and removes its checkpoint.
+    /// Stores a finished model and removes its checkpoint and any failure record.
     pub fn save(&self, trained: &Trained, key: &str) -> Result<(), CheckpointError> {
         let stem = self.stem(trained.error_model, key);
         std::fs::create_dir_all(&self.folder).map_err(|e| io_error(&self.folder, e))?;
@@ -133,6 +151,10 @@ impl ModelStore {
         let checkpoint = stem.with_extension("checkpoint");
         if checkpoint.exists() {
             std::fs::remove_dir_all(&checkpoint).map_err(|e| io_error(&checkpoint, e))?;
+        }
+        let failed = stem.with_extension("failed");
+        if failed.exists() {
+            std::fs::remove_file(&failed).map_err(|e| io_error(&failed, e))?;
         }
         Ok(())
     }

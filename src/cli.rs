@@ -296,7 +296,7 @@ fn run(
                 folder.display()
             ),
         }
-        return Ok(());
+        return failed_models(plan.failures(mode));
     }
     eprintln!(
         "{whose}: {} to do ({total} in the plan)",
@@ -312,7 +312,7 @@ fn run(
     } else {
         finish(&experiment, &outcome, drawing)?;
     }
-    failed_models(outcome.failures)
+    failed_models(plan.failures(mode))
 }
 
 /// "1 task", "31 tasks".
@@ -397,9 +397,10 @@ fn collect(target: &Target, drawing: &Drawing) -> Result<(), CliError> {
             "nothing to do: the results in {} are current",
             target.out.join(&experiment.name).display()
         );
-        return Ok(());
+    } else {
+        finish(&experiment, &outcome, drawing)?;
     }
-    finish(&experiment, &outcome, drawing)
+    failed_models(plan.failures(Mode::Collect))
 }
 
 /// Prints the tables of a single run, and draws the figures and writes the reports of
@@ -437,13 +438,16 @@ fn finish(experiment: &Experiment, outcome: &Outcome, drawing: &Drawing) -> Resu
     Ok(())
 }
 
-/// Every failed model, one per line; the results hold all the others.
-fn failed_models(failures: Vec<TrainError>) -> Result<(), CliError> {
+/// Every model that failed to train, one per line, as an error; the results hold all
+/// the others.
+fn failed_models(failures: Vec<String>) -> Result<(), CliError> {
     if failures.is_empty() {
         return Ok(());
     }
-    let messages: Vec<String> = failures.iter().map(ToString::to_string).collect();
-    Err(failure(anyhow::anyhow!(messages.join("\n"))))
+    Err(failure(anyhow::anyhow!(
+        "{}\nthe results leave these models out; --force trains them again",
+        failures.join("\n")
+    )))
 }
 
 /// Draws the figures of a results folder, a single run's or a sweep's, and writes the

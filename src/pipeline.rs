@@ -117,6 +117,9 @@ pub struct PointPlan {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Status {
     Done,
+    /// A training that failed (its loss diverged), or a block of its model: left out
+    /// of the results until `--force` tries again.
+    Failed,
     ToDo,
     /// A training with a checkpoint after this many epochs.
     Resumable(usize),
@@ -124,10 +127,18 @@ pub enum Status {
     NotNeeded,
 }
 
+impl Status {
+    /// Whether there is nothing left to do: done, or failed for good.
+    pub fn is_settled(self) -> bool {
+        matches!(self, Status::Done | Status::Failed)
+    }
+}
+
 impl std::fmt::Display for Status {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Status::Done => f.write_str("done"),
+            Status::Failed => f.write_str("failed (--force tries again)"),
             Status::ToDo => f.write_str("to do"),
             Status::Resumable(epoch) => write!(f, "to do (resumes after epoch {epoch})"),
             Status::NotNeeded => f.write_str("not needed"),
@@ -327,7 +338,7 @@ impl<'a> Plan<'a> {
         match task {
             Task::Dataset(d) => {
                 let needed = self.trainings.iter().enumerate().any(|(t, training)| {
-                    training.dataset == d && self.status(Task::Training(t)) != Status::Done
+                    training.dataset == d && !self.status(Task::Training(t)).is_settled()
                 });
                 if needed {
                     Status::ToDo
@@ -337,20 +348,22 @@ impl<'a> Plan<'a> {
             }
             Task::Training(t) => {
                 let training = &self.trainings[t];
-                match self.models.summary(training.error_model, &training.key) {
-                    Ok(Some(_)) => Status::Done,
-                    _ => match self
-                        .models
-                        .checkpoint_epoch(training.error_model, &training.key)
-                    {
-                        Some(epoch) => Status::Resumable(epoch),
-                        None => Status::ToDo,
-                    },
+                let (model, key) = (training.error_model, &training.key);
+                if let Ok(Some(_)) = self.models.summary(model, key) {
+                    Status::Done
+                } else if self.models.failure(model, key).is_some() {
+                    Status::Failed
+                } else if let Some(epoch) = self.models.checkpoint_epoch(model, key) {
+                    Status::Resumable(epoch)
+                } else {
+                    Status::ToDo
                 }
             }
             Task::Block(b) => {
                 if self.block_store.contains(&self.blocks[b].key) {
                     Status::Done
+                } else if self.runs_failed_model(b) {
+                    Status::Failed
                 } else {
                     Status::ToDo
                 }
@@ -358,7 +371,7 @@ impl<'a> Plan<'a> {
             Task::Results(p) => {
                 let point = &self.points[p];
                 let current = read_manifest(&point.folder)
-                    .is_some_and(|m| m.results_key == point.results_key)
+                    .is_some_and(|m| m.results_key == self.results_key(p))
                     && results::TABLES
                         .iter()
                         .all(|table| point.folder.join(table).is_file());
@@ -366,7 +379,9 @@ impl<'a> Plan<'a> {
             }
             Task::Sweep => {
                 let stored = sweep::read_index(&self.out.join(&self.experiment.name)).ok();
-                let keys: Vec<&str> = self.points.iter().map(|p| p.results_key.as_str()).collect();
+                let keys: Vec<String> = (0..self.points.len())
+                    .map(|p| self.results_key(p))
+                    .collect();
                 if stored.is_some_and(|index| index.results_keys == keys) {
                     Status::Done
                 } else {
@@ -374,6 +389,45 @@ impl<'a> Plan<'a> {
                 }
             }
         }
+    }
+
+    /// The results key point `p`'s folder has when it is current: the plan's, marked
+    /// with the models that failed and are left out.
+    pub fn results_key(&self, p: usize) -> String {
+        let point = &self.points[p];
+        let failed: Vec<&str> = point
+            .trainings
+            .iter()
+            .filter(|&&t| self.status(Task::Training(t)) == Status::Failed)
+            .map(|&t| self.trainings[t].key.as_str())
+            .collect();
+        if failed.is_empty() {
+            return point.results_key.clone();
+        }
+        crate::data::fetch::sha256_hex(
+            format!("{} without {failed:?}", point.results_key).as_bytes(),
+        )
+    }
+
+    /// Why each failed training of the tasks `mode` covers failed, one line each.
+    pub fn failures(&self, mode: Mode) -> Vec<String> {
+        (0..self.trainings.len())
+            .filter(|&t| match mode {
+                Mode::Shard { shard, .. } => self.in_shard(Task::Training(t), shard),
+                _ => true,
+            })
+            .filter_map(|t| {
+                let training = &self.trainings[t];
+                self.models.failure(training.error_model, &training.key)
+            })
+            .collect()
+    }
+
+    /// Whether block `b` runs a model whose training failed.
+    fn runs_failed_model(&self, b: usize) -> bool {
+        self.blocks[b]
+            .training
+            .is_some_and(|t| self.status(Task::Training(t)) == Status::Failed)
     }
 
     /// What a task is, for people: "train DCNet EM5", "monte carlo DVL1 baseline".
@@ -449,8 +503,6 @@ pub struct Outcome {
     pub written: Vec<PathBuf>,
     /// The sweep folder, when its `sweep.parquet` was written.
     pub sweep: Option<PathBuf>,
-    /// Models that failed to train; their blocks are left out of the results.
-    pub failures: Vec<TrainError>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -489,7 +541,7 @@ impl Plan<'_> {
         let mut tasks: Vec<Task> = self
             .tasks()
             .into_iter()
-            .filter(|&task| covers(task) && (mode.force() || self.status(task) != Status::Done))
+            .filter(|&task| covers(task) && (mode.force() || !self.status(task).is_settled()))
             .collect();
         let datasets: Vec<Task> = (0..self.datasets.len())
             .filter(|&d| {
@@ -540,7 +592,7 @@ pub fn execute(plan: &Plan, mode: Mode) -> Result<Outcome, ExecuteError> {
             .tasks()
             .into_iter()
             .filter(|&t| matches!(t, Task::Training(_) | Task::Block(_)))
-            .filter(|&t| plan.status(t) != Status::Done)
+            .filter(|&t| !plan.status(t).is_settled())
             .collect();
         if !missing.is_empty() {
             let list: Vec<String> = missing
@@ -556,9 +608,9 @@ pub fn execute(plan: &Plan, mode: Mode) -> Result<Outcome, ExecuteError> {
 
     let mut outcome = Outcome::default();
     let mut stages = StageSeconds::default();
-    let failed = train(plan, &trainings, force, &mut stages, &mut outcome)?;
+    train(plan, &trainings, force, &mut stages, &mut outcome)?;
     let clock = Instant::now();
-    monte_carlo(plan, &blocks, &failed, &mut outcome)?;
+    monte_carlo(plan, &blocks, &mut outcome)?;
     stages.protocol = clock.elapsed().as_secs_f64();
     if matches!(mode, Mode::Shard { .. }) {
         return Ok(outcome);
@@ -586,12 +638,7 @@ pub fn execute(plan: &Plan, mode: Mode) -> Result<Outcome, ExecuteError> {
                 host: gethostname::gethostname().to_string_lossy().into_owned(),
                 data_files: plan.hashes.files_of(spec),
                 stage_seconds: stages.clone(),
-                results_key: if models.len() == point.trainings.len() {
-                    point.results_key.clone()
-                } else {
-                    // Some model failed: the folder is not what the plan asks for.
-                    String::new()
-                },
+                results_key: plan.results_key(p),
             };
             results::write_run(
                 &point.folder,
@@ -608,7 +655,9 @@ pub fn execute(plan: &Plan, mode: Mode) -> Result<Outcome, ExecuteError> {
     }
     if sweep_to_do {
         let folder = plan.out.join(&plan.experiment.name);
-        let keys: Vec<String> = plan.points.iter().map(|p| p.results_key.clone()).collect();
+        let keys: Vec<String> = (0..plan.points.len())
+            .map(|p| plan.results_key(p))
+            .collect();
         sweep::write(&folder, plan.experiment, &summaries, &keys)?;
         outcome.done += 1;
         outcome.sweep = Some(folder);
@@ -616,8 +665,8 @@ pub fn execute(plan: &Plan, mode: Mode) -> Result<Outcome, ExecuteError> {
     Ok(outcome)
 }
 
-/// Trains the models `trainings` asks for and returns the trainings that failed.
-/// Datasets are generated a few at a time, enough that every thread has a model to
+/// Trains the models `trainings` asks for; a model whose training fails is recorded as
+/// failed in the store, and the others go on. Datasets are generated a few at a time, enough that every thread has a model to
 /// train, and the models of those datasets then train side by side; only those
 /// datasets are held in memory.
 fn train(
@@ -626,7 +675,7 @@ fn train(
     force: bool,
     stages: &mut StageSeconds,
     outcome: &mut Outcome,
-) -> Result<Vec<usize>, ExecuteError> {
+) -> Result<(), ExecuteError> {
     let mut batches: Vec<Vec<(usize, Vec<usize>)>> = vec![Vec::new()];
     for d in 0..plan.datasets.len() {
         let mine: Vec<usize> = trainings
@@ -644,7 +693,6 @@ fn train(
             last.push((d, mine));
         }
     }
-    let mut failed = Vec::new();
     for batch in batches.into_iter().filter(|b| !b.is_empty()) {
         let sets: Vec<(usize, TrainingSet)> = batch
             .iter()
@@ -708,14 +756,19 @@ fn train(
                     );
                     outcome.done += 1;
                 }
+                Err(TrainError::Checkpoint(error)) => return Err(error.into()),
                 Err(error) => {
-                    failed.push(t);
-                    outcome.failures.push(error);
+                    let training = &plan.trainings[t];
+                    plan.models.save_failure(
+                        training.error_model,
+                        &training.key,
+                        &error.to_string(),
+                    )?;
                 }
             }
         }
     }
-    Ok(failed)
+    Ok(())
 }
 
 /// Generates dataset `d` from the spec of its first point.
@@ -741,17 +794,13 @@ fn generate_dataset(plan: &Plan, d: usize, stages: &mut StageSeconds) -> Trainin
 }
 
 /// Computes the blocks `blocks` asks for, those of one DVL of one point together (they
-/// share the measurements), and stores each as soon as its DVL is done.
-fn monte_carlo(
-    plan: &Plan,
-    blocks: &[usize],
-    failed: &[usize],
-    outcome: &mut Outcome,
-) -> Result<(), ExecuteError> {
+/// share the measurements), and stores each as soon as its DVL is done. Blocks of a
+/// model that failed to train are skipped.
+fn monte_carlo(plan: &Plan, blocks: &[usize], outcome: &mut Outcome) -> Result<(), ExecuteError> {
     let mut groups: Vec<(usize, usize, Vec<usize>)> = Vec::new();
     for &b in blocks {
         let block = &plan.blocks[b];
-        if block.training.is_some_and(|t| failed.contains(&t)) {
+        if plan.runs_failed_model(b) {
             continue;
         }
         match groups

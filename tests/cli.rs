@@ -174,29 +174,63 @@ fn trained_models_are_reused_until_a_training_setting_changes() {
 #[test]
 fn a_diverging_model_is_reported_and_the_others_are_kept() {
     let project = project(false);
-    let output = dcnet(
-        project.path(),
-        &[
-            "run",
-            "experiments/quick.toml",
-            "--set",
-            "training.learning_rate.EM3=1e30",
-        ],
-    );
-    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
-    let message = stderr(&output);
+    let dir = project.path();
+    let diverging = [
+        "experiments/quick.toml",
+        "--set",
+        "training.learning_rate.EM3=1e30",
+        "--set",
+        "training.epochs=3",
+        "--no-plots",
+    ];
+    let run = |extra: &[&str]| dcnet(dir, &[&["run"], &diverging[..], extra].concat());
+    let dcnet_models = |folder: &str| -> Vec<String> {
+        evaluation_rows(&dir.join(folder))
+            .iter()
+            .filter(|r| r.estimator == "dcnet" && r.dvl == "DVL1" && r.at == "S3")
+            .map(|r| r.error_model.clone().unwrap())
+            .collect()
+    };
+    let reported = |output: &std::process::Output| {
+        assert_eq!(output.status.code(), Some(2), "{}", stderr(output));
+        let message = stderr(output);
+        assert!(
+            message.contains("error: DCNet EM3: the training loss became"),
+            "{message}"
+        );
+        assert!(message.contains("at epoch 1, batch"), "{message}");
+        assert!(message.contains("--force trains them again"), "{message}");
+    };
+
+    let output = run(&[]);
+    reported(&output);
+    assert_eq!(dcnet_models("results/quick"), ["EM1", "EM2", "EM4", "EM5"]);
+
+    // The failure is recorded: a second run trains nothing and says why again.
+    let again = run(&[]);
+    reported(&again);
     assert!(
-        message.contains("error: DCNet EM3: the training loss became"),
-        "{message}"
+        stderr(&again).contains("nothing to do"),
+        "{}",
+        stderr(&again)
     );
-    assert!(message.contains("at epoch 1, batch"), "{message}");
-    let evaluation = evaluation_rows(&project.path().join("results/quick"));
-    let dcnet_models: Vec<String> = evaluation
-        .iter()
-        .filter(|r| r.estimator == "dcnet" && r.dvl == "DVL1" && r.at == "S3")
-        .map(|r| r.error_model.clone().unwrap())
-        .collect();
-    assert_eq!(dcnet_models, ["EM1", "EM2", "EM4", "EM5"]);
+    let plan = dcnet(dir, &[&["plan"], &diverging[..5]].concat());
+    assert!(
+        stdout(&plan).contains("failed (--force tries again)"),
+        "{}",
+        stdout(&plan)
+    );
+
+    // Shards record it too, and collect writes the results without it.
+    for shard in ["0/2", "1/2"] {
+        let _ = run(&["--out", "sharded", "--shard", shard]);
+    }
+    let collected = dcnet(
+        dir,
+        &[&["collect"], &diverging[..], &["--out", "sharded"]].concat(),
+    );
+    reported(&collected);
+    assert_eq!(dcnet_models("sharded/quick"), ["EM1", "EM2", "EM4", "EM5"]);
 }
 
 /// Writes quick.toml with `from` replaced by `to` and returns the 1-based line of `to`.
