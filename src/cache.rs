@@ -85,7 +85,8 @@ impl DataHashes {
     }
 }
 
-fn hash(inputs: &impl Serialize) -> String {
+/// The SHA-256, in hex, of `inputs` as JSON.
+pub(crate) fn hash(inputs: &impl Serialize) -> String {
     sha256_hex(
         serde_json::to_string(inputs)
             .expect("key inputs serialize")

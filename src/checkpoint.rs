@@ -94,14 +94,24 @@ impl ModelStore {
 
     /// The last epoch of the checkpoint of `key`, if one is waiting to be resumed.
     pub fn checkpoint_epoch(&self, error_model: ErrorModel, key: &str) -> Option<usize> {
+        let state = self.checkpoint_state(error_model, key).ok()??;
+        Some(state.epoch)
+    }
+
+    /// The `state.json` of the checkpoint of `key`, if there is one.
+    fn checkpoint_state(
+        &self,
+        error_model: ErrorModel,
+        key: &str,
+    ) -> Result<Option<CheckpointState>, CheckpointError> {
         let path = self
             .stem(error_model, key)
             .with_extension("checkpoint")
             .join("state.json");
-        let text = std::fs::read_to_string(path).ok()?;
-        serde_json::from_str::<CheckpointState>(&text)
-            .ok()
-            .map(|state| state.epoch)
+        let Ok(text) = std::fs::read_to_string(&path) else {
+            return Ok(None);
+        };
+        serde_json::from_str(&text).map_err(|e| io_error(&path, e))
     }
 
     /// The stored model with this key, if there is one.
@@ -214,12 +224,9 @@ impl ModelStore {
         key: &str,
     ) -> Result<State, CheckpointError> {
         let folder = self.stem(error_model, key).with_extension("checkpoint");
-        let state_path = folder.join("state.json");
-        let Ok(text) = std::fs::read_to_string(&state_path) else {
+        let Some(record) = self.checkpoint_state(error_model, key)? else {
             return Ok(State::new(spec, error_model));
         };
-        let record: CheckpointState =
-            serde_json::from_str(&text).map_err(|e| io_error(&state_path, e))?;
         let epoch = record.epoch;
         let device = spec.training.backend.device();
         let model = read_model(

@@ -302,7 +302,7 @@ fn run(
         "{whose}: {} to do ({total} in the plan)",
         tasks(to_do.len())
     );
-    let outcome = execute(&plan, mode).map_err(failure)?;
+    let outcome = execute(&plan, mode, &to_do).map_err(failure)?;
     if let Mode::Shard { shard, .. } = mode {
         eprintln!(
             "shard {shard}: {} done; once every shard has finished, `dcnet-exp collect {}` writes the results",
@@ -391,7 +391,7 @@ fn plan(target: &Target, shard: Option<&str>) -> Result<(), CliError> {
 fn collect(target: &Target, drawing: &Drawing) -> Result<(), CliError> {
     let experiment = load_target(target)?;
     let plan = Plan::new(&experiment, &target.out).map_err(input)?;
-    let outcome = execute(&plan, Mode::Collect).map_err(failure)?;
+    let outcome = execute(&plan, Mode::Collect, &plan.to_do(Mode::Collect)).map_err(failure)?;
     if outcome.done == 0 {
         eprintln!(
             "nothing to do: the results in {} are current",

@@ -15,7 +15,7 @@ use crate::cache::{self, BlockStore, DataHashes};
 use crate::checkpoint::{ModelStore, Provenance, Summary, train_cached};
 use crate::data::{Trajectory, load_trajectories};
 use crate::dataset::{self, TrainingSet};
-use crate::estimators::{ErrorModel, EstimatorKind, lineup};
+use crate::estimators::{ErrorModel, EstimatorKind, lineup, series};
 use crate::evaluate::{ProtocolResult, run_block, summarize};
 use crate::progress::bar;
 use crate::results::{self, Manifest, StageSeconds};
@@ -211,85 +211,63 @@ impl<'a> Plan<'a> {
         let dataset_key = cache::dataset_key(spec, &self.hashes);
         let mut trainings = Vec::new();
         if spec.kinds.contains(&EstimatorKind::Dcnet) {
-            let dataset = match self.datasets.iter().position(|d| d.key == dataset_key) {
-                Some(d) => d,
-                None => {
-                    self.datasets.push(Dataset {
-                        key: dataset_key.clone(),
-                        point: p,
-                    });
-                    self.datasets.len() - 1
-                }
-            };
+            let dataset = find_or_push(
+                &mut self.datasets,
+                |d| &d.key,
+                &dataset_key,
+                || Dataset {
+                    key: dataset_key.clone(),
+                    point: p,
+                },
+            );
             for &error_model in &spec.error_models {
                 let key = cache::model_key(spec, error_model, &dataset_key);
-                let t = match self.trainings.iter().position(|t| t.key == key) {
-                    Some(t) => t,
-                    None => {
-                        self.trainings.push(Training {
-                            key,
-                            dataset,
-                            point: p,
-                            error_model,
-                        });
-                        self.trainings.len() - 1
-                    }
-                };
-                trainings.push(t);
+                trainings.push(find_or_push(
+                    &mut self.trainings,
+                    |t| &t.key,
+                    &key,
+                    || Training {
+                        key: key.clone(),
+                        dataset,
+                        point: p,
+                        error_model,
+                    },
+                ));
             }
         }
         let mut blocks = Vec::new();
         for dvl in 0..spec.dvls.len() {
-            for &estimator in &spec.kinds {
-                let models: Vec<Option<ErrorModel>> = if estimator.takes_error_model() {
-                    spec.error_models.iter().copied().map(Some).collect()
-                } else {
-                    vec![None]
-                };
-                for error_model in models {
-                    let training = (estimator == EstimatorKind::Dcnet).then(|| {
-                        let m = spec
-                            .error_models
-                            .iter()
-                            .position(|&m| Some(m) == error_model);
-                        trainings[m.expect("DCNet runs the spec's error models")]
-                    });
-                    let model_key = training.map(|t| self.trainings[t].key.as_str());
-                    let key = cache::block_key(
-                        spec,
-                        &self.hashes,
+            for (estimator, error_model) in series(spec) {
+                let training = (estimator == EstimatorKind::Dcnet).then(|| {
+                    let m = spec
+                        .error_models
+                        .iter()
+                        .position(|&m| Some(m) == error_model);
+                    trainings[m.expect("DCNet runs the spec's error models")]
+                });
+                let model_key = training.map(|t| self.trainings[t].key.as_str());
+                let key =
+                    cache::block_key(spec, &self.hashes, dvl, estimator, error_model, model_key);
+                blocks.push(find_or_push(
+                    &mut self.blocks,
+                    |b| &b.key,
+                    &key,
+                    || Block {
+                        key: key.clone(),
+                        point: p,
                         dvl,
                         estimator,
                         error_model,
-                        model_key,
-                    );
-                    let b = match self.blocks.iter().position(|b| b.key == key) {
-                        Some(b) => b,
-                        None => {
-                            self.blocks.push(Block {
-                                key,
-                                point: p,
-                                dvl,
-                                estimator,
-                                error_model,
-                                training,
-                            });
-                            self.blocks.len() - 1
-                        }
-                    };
-                    blocks.push(b);
-                }
+                        training,
+                    },
+                ));
             }
         }
         let block_keys: Vec<&str> = blocks
             .iter()
             .map(|&b| self.blocks[b].key.as_str())
             .collect();
-        let results_key = crate::data::fetch::sha256_hex(
-            serde_json::to_string(&(spec.resolved_toml(), block_keys))
-                .expect("strings serialize")
-                .as_bytes(),
-        );
+        let results_key = cache::hash(&(spec.resolved_toml(), block_keys));
         self.points.push(PointPlan {
             folder: self.out.join(&spec.name),
             blocks,
@@ -404,9 +382,7 @@ impl<'a> Plan<'a> {
         if failed.is_empty() {
             return point.results_key.clone();
         }
-        crate::data::fetch::sha256_hex(
-            format!("{} without {failed:?}", point.results_key).as_bytes(),
-        )
+        cache::hash(&(&point.results_key, "without", failed))
     }
 
     /// Why each failed training of the tasks `mode` covers failed, one line each.
@@ -483,6 +459,22 @@ fn read_manifest(folder: &Path) -> Option<Manifest> {
     serde_json::from_slice(&bytes).ok()
 }
 
+/// The index of the item of `items` whose key is `key`, pushing `make()` when none is.
+fn find_or_push<T>(
+    items: &mut Vec<T>,
+    key_of: impl Fn(&T) -> &String,
+    key: &str,
+    make: impl FnOnce() -> T,
+) -> usize {
+    items
+        .iter()
+        .position(|item| key_of(item) == key)
+        .unwrap_or_else(|| {
+            items.push(make());
+            items.len() - 1
+        })
+}
+
 /// What [`execute`] is asked to do.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Mode {
@@ -556,8 +548,8 @@ impl Plan<'_> {
     }
 }
 
-/// Does the tasks of `plan` that `mode` asks for and are not done.
-pub fn execute(plan: &Plan, mode: Mode) -> Result<Outcome, ExecuteError> {
+/// Does `to_do`, the tasks [`Plan::to_do`] gives for `mode`.
+pub fn execute(plan: &Plan, mode: Mode, to_do: &[Task]) -> Result<Outcome, ExecuteError> {
     let started_at = SystemTime::now();
     if !matches!(mode, Mode::Shard { .. }) {
         // Shards may be writing beside each other on other machines; a whole run or
@@ -572,7 +564,6 @@ pub fn execute(plan: &Plan, mode: Mode) -> Result<Outcome, ExecuteError> {
         }
     }
     let force = mode.force();
-    let to_do = plan.to_do(mode);
     let trainings: Vec<usize> = to_do
         .iter()
         .filter_map(|task| match task {
@@ -831,26 +822,21 @@ fn monte_carlo(plan: &Plan, blocks: &[usize], outcome: &mut Outcome) -> Result<(
                 models.push(model);
             }
         }
-        let entries: Vec<_> = lineup(spec, dvl, &models)
+        // Each entry with the block it computes.
+        let (entries, entry_blocks): (Vec<_>, Vec<usize>) = lineup(spec, dvl, &models)
             .into_iter()
-            .filter(|entry| {
-                members.iter().any(|&b| {
+            .filter_map(|entry| {
+                let block = members.iter().copied().find(|&b| {
                     plan.blocks[b].estimator == entry.kind
                         && plan.blocks[b].error_model == entry.error_model
-                })
+                });
+                block.map(|b| (entry, b))
             })
-            .collect();
+            .unzip();
         let progress = bar(2 * spec.calibration.monte_carlo_runs, "monte carlo");
         let rows = run_block(spec, &plan.trajectories[p], dvl, &entries, &progress);
         progress.finish_and_clear();
-        for (entry, rows) in entries.iter().zip(rows) {
-            let b = *members
-                .iter()
-                .find(|&&b| {
-                    plan.blocks[b].estimator == entry.kind
-                        && plan.blocks[b].error_model == entry.error_model
-                })
-                .expect("every entry is a member");
+        for (b, rows) in entry_blocks.into_iter().zip(rows) {
             plan.block_store.save(&plan.blocks[b].key, &rows)?;
             outcome.done += 1;
         }

@@ -174,44 +174,51 @@ pub struct Entry {
     pub estimator: Box<dyn Estimator>,
 }
 
-/// Every (estimator kind, error model) the spec asks for, set up for `dvl`. DCNet
-/// runs for the error models in `dcnets`, the models that trained.
+/// Every (estimator kind, error model) the spec asks for, in table order: the kinds as
+/// listed, each with every error model when it takes one.
+pub fn series(spec: &Spec) -> Vec<(EstimatorKind, Option<ErrorModel>)> {
+    let mut series = Vec::new();
+    for &kind in &spec.kinds {
+        if kind.takes_error_model() {
+            series.extend(spec.error_models.iter().map(|&m| (kind, Some(m))));
+        } else {
+            series.push((kind, None));
+        }
+    }
+    series
+}
+
+/// Every (estimator kind, error model) of [`series`], set up for `dvl`. DCNet runs for
+/// the error models in `dcnets`, the models that trained.
 pub fn lineup(spec: &Spec, dvl: &Dvl, dcnets: &[Trained]) -> Vec<Entry> {
     let geometry = BeamGeometry::janus_x(spec.beam_pitch_deg);
     let mut entries = Vec::new();
-    for &kind in &spec.kinds {
-        let models: Vec<Option<ErrorModel>> = if kind.takes_error_model() {
-            spec.error_models.iter().copied().map(Some).collect()
-        } else {
-            vec![None]
+    for (kind, error_model) in series(spec) {
+        let estimator: Box<dyn Estimator> = match (kind, error_model) {
+            (EstimatorKind::Baseline, _) => Box::new(Baseline),
+            (EstimatorKind::LeastSquares, Some(model)) => Box::new(LeastSquares(model)),
+            (EstimatorKind::Dcnet, Some(model)) => {
+                let Some(trained) = dcnets.iter().find(|t| t.error_model == model) else {
+                    continue;
+                };
+                Box::new(DcnetEstimator {
+                    model: trained.model.clone(),
+                    error_model: model,
+                    window: spec.dataset.window,
+                    settings: Settings::from(&spec.model),
+                    device: spec.training.backend.device(),
+                })
+            }
+            (EstimatorKind::LeastSquares | EstimatorKind::Dcnet, None) => {
+                unreachable!("{kind} always has an error model")
+            }
+            (EstimatorKind::Floor, _) => Box::new(Floor::new(&dvl.errors, &geometry)),
         };
-        for error_model in models {
-            let estimator: Box<dyn Estimator> = match (kind, error_model) {
-                (EstimatorKind::Baseline, _) => Box::new(Baseline),
-                (EstimatorKind::LeastSquares, Some(model)) => Box::new(LeastSquares(model)),
-                (EstimatorKind::Dcnet, Some(model)) => {
-                    let Some(trained) = dcnets.iter().find(|t| t.error_model == model) else {
-                        continue;
-                    };
-                    Box::new(DcnetEstimator {
-                        model: trained.model.clone(),
-                        error_model: model,
-                        window: spec.dataset.window,
-                        settings: Settings::from(&spec.model),
-                        device: spec.training.backend.device(),
-                    })
-                }
-                (EstimatorKind::LeastSquares | EstimatorKind::Dcnet, None) => {
-                    unreachable!("{kind} always has an error model")
-                }
-                (EstimatorKind::Floor, _) => Box::new(Floor::new(&dvl.errors, &geometry)),
-            };
-            entries.push(Entry {
-                kind,
-                error_model,
-                estimator,
-            });
-        }
+        entries.push(Entry {
+            kind,
+            error_model,
+            estimator,
+        });
     }
     entries
 }
