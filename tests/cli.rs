@@ -436,6 +436,7 @@ fn serve(
 }
 
 #[test]
+#[ignore = "needs the Snapir recordings: dcnet-exp data fetch"]
 fn data_fetch_downloads_and_checks_the_recordings() {
     let snapir = snapir();
     let files = vec![
@@ -466,19 +467,22 @@ fn data_fetch_downloads_and_checks_the_recordings() {
     );
     server.unblock();
     handle.join().unwrap();
+}
 
-    // A server with the wrong bytes: refused, nothing written.
+#[test]
+fn data_fetch_refuses_bytes_that_are_not_the_recording() {
     let (url, handle, server) = serve(vec![(
         "/dataset/TrainAndValidation/V.npy".to_string(),
         b"not the recording".to_vec(),
     )]);
+    let dir = tempfile::tempdir().unwrap();
     let output = dcnet(
         dir.path(),
         &["data", "fetch", "--base-url", &url, "--dest", "elsewhere"],
     );
     assert_eq!(output.status.code(), Some(2));
     assert!(
-        stderr(&output).contains("V.npy: sha256 "),
+        stderr(&output).contains(&format!("{url}/dataset/TrainAndValidation/V.npy: sha256 ")),
         "{}",
         stderr(&output)
     );

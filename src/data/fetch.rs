@@ -11,18 +11,27 @@ pub const DEFAULT_BASE_URL: &str = "https://raw.githubusercontent.com/ansfl/Beam
 /// Where `dcnet-exp data fetch` puts the files, relative to the working directory.
 pub const DEFAULT_DEST: &str = "data/snapir";
 
-/// File name, path under the base URL, SHA-256.
-pub const FILES: [(&str, &str, &str); 2] = [
-    (
-        "V.npy",
-        "dataset/TrainAndValidation/V.npy",
-        "0c525b3f30e71f0d385af5c256930b0fc8bb9cc2e53581cda46943bb49308ed5",
-    ),
-    (
-        "V_test.npy",
-        "dataset/Test/V_test.npy",
-        "ee517105d2a2856d5c5ee062c979d7a11e2fe929ae776bb341c8bf1ebe1014f7",
-    ),
+/// One file to download: its name in the destination folder, its path under the base
+/// URL, and the SHA-256 it must have.
+#[derive(Debug, Clone, Copy)]
+pub struct RemoteFile {
+    pub name: &'static str,
+    pub remote_path: &'static str,
+    pub sha256: &'static str,
+}
+
+/// The Snapir recordings.
+pub const FILES: [RemoteFile; 2] = [
+    RemoteFile {
+        name: "V.npy",
+        remote_path: "dataset/TrainAndValidation/V.npy",
+        sha256: "0c525b3f30e71f0d385af5c256930b0fc8bb9cc2e53581cda46943bb49308ed5",
+    },
+    RemoteFile {
+        name: "V_test.npy",
+        remote_path: "dataset/Test/V_test.npy",
+        sha256: "ee517105d2a2856d5c5ee062c979d7a11e2fe929ae776bb341c8bf1ebe1014f7",
+    },
 ];
 
 #[derive(Debug, thiserror::Error)]
@@ -52,20 +61,35 @@ pub enum Outcome {
     AlreadyPresent(PathBuf),
 }
 
-/// Downloads every file of [`FILES`] from `base_url` into `dest`.
+/// Downloads the Snapir recordings ([`FILES`]) from `base_url` into `dest`.
 pub fn fetch(base_url: &str, dest: &Path) -> Result<Vec<Outcome>, FetchError> {
+    fetch_files(&FILES, base_url, dest)
+}
+
+/// Downloads `files` from `base_url` into `dest`, keeping those already there with the
+/// right hash; a download with another hash is refused and nothing of it is written.
+pub fn fetch_files(
+    files: &[RemoteFile],
+    base_url: &str,
+    dest: &Path,
+) -> Result<Vec<Outcome>, FetchError> {
     std::fs::create_dir_all(dest).map_err(|source| FetchError::Write {
         path: dest.to_path_buf(),
         source,
     })?;
     let mut outcomes = Vec::new();
-    for (name, remote, expected) in FILES {
+    for &RemoteFile {
+        name,
+        remote_path,
+        sha256: expected,
+    } in files
+    {
         let path = dest.join(name);
         if std::fs::read(&path).is_ok_and(|bytes| sha256_hex(&bytes) == expected) {
             outcomes.push(Outcome::AlreadyPresent(path));
             continue;
         }
-        let url = format!("{}/{remote}", base_url.trim_end_matches('/'));
+        let url = format!("{}/{remote_path}", base_url.trim_end_matches('/'));
         let http = |source| FetchError::Http {
             url: url.clone(),
             source: Box::new(source),
@@ -106,7 +130,7 @@ pub fn hint_for(path: &Path) -> String {
         .file_name()
         .and_then(|n| n.to_str())
         .unwrap_or_default();
-    if FILES.iter().any(|(file, _, _)| *file == name) {
+    if FILES.iter().any(|file| file.name == name) {
         let folder = path
             .parent()
             .map(|p| p.display().to_string())
@@ -116,5 +140,108 @@ pub fn hint_for(path: &Path) -> String {
         )
     } else {
         String::new()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Serves `files` (URL path → bytes) on 127.0.0.1 for `requests` requests, then stops.
+    fn serve(
+        files: Vec<(String, Vec<u8>)>,
+        requests: usize,
+    ) -> (String, std::thread::JoinHandle<()>) {
+        let server = tiny_http::Server::http("127.0.0.1:0").unwrap();
+        let url = format!("http://{}", server.server_addr().to_ip().unwrap());
+        let handle = std::thread::spawn(move || {
+            for request in server.incoming_requests().take(requests) {
+                let response = match files.iter().find(|(path, _)| *path == request.url()) {
+                    Some((_, bytes)) => tiny_http::Response::from_data(bytes.clone()),
+                    None => {
+                        tiny_http::Response::from_data(b"not found".to_vec()).with_status_code(404)
+                    }
+                };
+                let _ = request.respond(response);
+            }
+        });
+        (url, handle)
+    }
+
+    /// Two generated files, with the SHA-256 the fetch must find; leaked so that the
+    /// file list has the `'static` names a [`RemoteFile`] holds.
+    fn generated() -> (Vec<RemoteFile>, Vec<(String, Vec<u8>)>) {
+        let contents: Vec<Vec<u8>> = (0..2u8)
+            .map(|k| {
+                (0..50_000u32)
+                    .map(|i| (i * 7 + u32::from(k)) as u8)
+                    .collect()
+            })
+            .collect();
+        let files = [("a.npy", "one/a.npy"), ("b.npy", "two/b.npy")]
+            .iter()
+            .zip(&contents)
+            .map(|(&(name, remote_path), bytes)| RemoteFile {
+                name,
+                remote_path,
+                sha256: Box::leak(sha256_hex(bytes).into_boxed_str()),
+            })
+            .collect();
+        let served = ["/one/a.npy", "/two/b.npy"]
+            .iter()
+            .map(|path| path.to_string())
+            .zip(contents)
+            .collect();
+        (files, served)
+    }
+
+    #[test]
+    fn downloads_checks_and_keeps_files_already_there() {
+        let (files, served) = generated();
+        let dir = tempfile::tempdir().unwrap();
+        let dest = dir.path().join("data");
+        let (url, server) = serve(served.clone(), 2);
+        let outcomes = fetch_files(&files, &url, &dest).unwrap();
+        server.join().unwrap();
+        assert_eq!(
+            outcomes,
+            vec![
+                Outcome::Downloaded(dest.join("a.npy")),
+                Outcome::Downloaded(dest.join("b.npy"))
+            ]
+        );
+        for ((_, bytes), file) in served.iter().zip(&files) {
+            assert_eq!(&std::fs::read(dest.join(file.name)).unwrap(), bytes);
+        }
+        // No server now: both files are kept because their hashes match.
+        let again = fetch_files(&files, "http://127.0.0.1:9", &dest).unwrap();
+        assert_eq!(
+            again,
+            vec![
+                Outcome::AlreadyPresent(dest.join("a.npy")),
+                Outcome::AlreadyPresent(dest.join("b.npy"))
+            ]
+        );
+    }
+
+    #[test]
+    fn a_download_with_another_hash_is_refused_and_not_written() {
+        let (files, mut served) = generated();
+        served[0].1[0] ^= 1;
+        let dir = tempfile::tempdir().unwrap();
+        let (url, server) = serve(served, 1);
+        let error = fetch_files(&files, &url, dir.path()).unwrap_err();
+        server.join().unwrap();
+        assert!(
+            error
+                .to_string()
+                .starts_with(&format!("{url}/one/a.npy: sha256 ")),
+            "{error}"
+        );
+        assert!(error.to_string().ends_with(&format!(
+            ", expected {}: the download is not the published file",
+            files[0].sha256
+        )));
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
     }
 }

@@ -1,5 +1,10 @@
 //! Helpers for the integration tests: run the built binary in a temporary folder, read
-//! the Parquet results back, and find the Snapir recordings in `../shared/data/snapir`.
+//! the Parquet results back, and find the Snapir recordings where a user keeps them.
+//!
+//! Tests that need the recordings carry
+//! `#[ignore = "needs the Snapir recordings: dcnet-exp data fetch"]`, so a fresh clone
+//! reports them as ignored; `cargo test --release -- --include-ignored` runs them, and
+//! then a missing recording fails the test with the places searched.
 
 #![allow(dead_code)]
 
@@ -12,16 +17,36 @@ pub fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// The shared Snapir recordings; tests that need them fail with a clear message
-/// when they are not there.
+/// The places searched for the Snapir recordings, in order: `DCNET_SNAPIR_DIR`, then
+/// `data/snapir/` in the repository (where `dcnet-exp data fetch` puts them), then
+/// `../shared/data/snapir`.
+pub fn snapir_candidates() -> Vec<PathBuf> {
+    let mut candidates: Vec<PathBuf> = std::env::var_os("DCNET_SNAPIR_DIR")
+        .map(PathBuf::from)
+        .into_iter()
+        .collect();
+    candidates.push(repo().join("data/snapir"));
+    candidates.push(repo().join("../shared/data/snapir"));
+    candidates
+}
+
+/// The first folder of [`snapir_candidates`] that holds both recordings; a test that
+/// needs them fails here, naming every place searched, when none does.
 pub fn snapir() -> PathBuf {
-    let dir = repo().join("../shared/data/snapir");
-    assert!(
-        dir.join("V.npy").is_file(),
-        "the Snapir recordings are expected in {}",
-        dir.display()
-    );
-    dir
+    let candidates = snapir_candidates();
+    candidates
+        .iter()
+        .find(|dir| dir.join("V.npy").is_file() && dir.join("V_test.npy").is_file())
+        .cloned()
+        .unwrap_or_else(|| {
+            let searched: Vec<String> =
+                candidates.iter().map(|d| d.display().to_string()).collect();
+            panic!(
+                "the Snapir recordings (V.npy, V_test.npy) are in none of: {}; \
+                 run `cargo run --release -- data fetch` or set DCNET_SNAPIR_DIR",
+                searched.join(", ")
+            )
+        })
 }
 
 /// Runs `dcnet-exp ARGS` in `cwd`.
