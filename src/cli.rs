@@ -1,8 +1,10 @@
-//! The subcommands: `run`, `plan`, `collect`, `plot`, `validate`, `data info`, `data
-//! fetch` and `bench`. Each reads a spec through [`crate::spec::load_experiment`], hands
-//! the work to [`crate::pipeline`] or the stage it names, and reports bad input (exit
-//! code 1) apart from failures while running (exit code 2).
+//! The subcommands: `run`, `plan`, `collect`, `plot`, `compare`, `validate`, `data
+//! info`, `data fetch` and `bench`. Each reads a spec through
+//! [`crate::spec::load_experiment`] (or results folders), hands the work to
+//! [`crate::pipeline`] or the stage it names, and reports bad input (exit code 1) apart
+//! from failures while running (exit code 2).
 
+use crate::compare;
 use crate::data::{fetch, load_trajectories};
 use crate::dataset::{self, TrainingSet, window_starts};
 use crate::estimators::{ErrorModel, EstimatorKind};
@@ -78,6 +80,19 @@ enum Command {
         /// What a sweep's figures plot against each swept value
         #[arg(long, value_enum, default_value_t = Metric::EvaluationRmse)]
         metric: Metric,
+    },
+    /// Compare two results folders (or two sweep points) as Markdown: the spec keys that
+    /// differ, every cell with A, B and B − A, differences beyond 2 standard errors marked
+    Compare {
+        /// The first results folder, such as results/quick or results/<sweep>/<point>
+        #[arg(value_name = "A")]
+        first: PathBuf,
+        /// The second results folder
+        #[arg(value_name = "B")]
+        second: PathBuf,
+        /// Also write the Markdown to FILE
+        #[arg(long, value_name = "FILE", default_value = compare::DEFAULT_FILE)]
+        out: PathBuf,
     },
     /// Check a spec (every point of its sweep) and its data files without running anything
     Validate {
@@ -234,6 +249,7 @@ pub fn main() -> Result<(), CliError> {
             format,
             metric,
         } => plot(&results, Some(&out), format, metric),
+        Command::Compare { first, second, out } => compare_folders(&first, &second, &out),
         Command::Validate { spec, overrides } => validate(&spec, &overrides.set),
         Command::Data {
             command: DataCommand::Info { spec, overrides },
@@ -513,6 +529,17 @@ fn report_figures(figures: &[plots::Written], folder: &Path) {
             Err(why) => eprintln!("figure {}: not drawn, {why}", figure.stem),
         }
     }
+}
+
+/// Prints the comparison of two results folders and writes it to `out`.
+fn compare_folders(first: &Path, second: &Path, out: &Path) -> Result<(), CliError> {
+    let first = compare::read(first).map_err(input)?;
+    let second = compare::read(second).map_err(input)?;
+    let markdown = compare::render(&first, &second);
+    print!("{markdown}");
+    compare::write(out, &markdown).map_err(failure)?;
+    eprintln!("comparison written to {}", out.display());
+    Ok(())
 }
 
 fn validate(spec_path: &Path, set: &[String]) -> Result<(), CliError> {

@@ -12,7 +12,8 @@
 //! 7. [`evaluate`]: the Monte Carlo calibration and evaluation protocol;
 //! 8. [`results`] and [`tables`]: Parquet files, manifest, and the printed tables;
 //! 9. [`plots`] and [`report`]: the figures and the comparison with the [`published`]
-//!    values, drawn from a results folder alone;
+//!    values, drawn from a results folder alone; [`compare`] sets two results folders
+//!    side by side;
 //! 10. [`pipeline`]: the stages as tasks, cached by content in [`cache`] (with the
 //!     models of [`checkpoint`]), resumable, and shared out over shards; a spec's
 //!     [`sweep`] runs as many points;
@@ -21,6 +22,7 @@
 pub mod cache;
 pub mod checkpoint;
 pub mod cli;
+pub mod compare;
 pub mod data;
 pub mod dataset;
 pub mod estimators;
