@@ -6,6 +6,7 @@
 
 use super::draw::*;
 use super::figures::{Drawn, Outcome, draw_svg};
+use super::scale::Scale;
 use crate::first_seen;
 use crate::sweep::{StoredSweep, SweepRow, Swept};
 use plotters::prelude::*;
@@ -118,20 +119,17 @@ fn against(sweep: &StoredSweep, metric: Metric, k: usize) -> PlotResult<Outcome>
                 .copied()
                 .filter(|(r, _)| r.dvl == *dvl)
                 .collect();
-            let top = on_panel.iter().map(|(_, v)| *v).fold(0.0f64, f64::max);
-            let bottom = on_panel.iter().map(|(_, v)| *v).fold(0.0f64, f64::min);
-            let pad = 0.08 * (top - bottom).max(1e-9);
-            let mut chart = chart_on(area, dvl, 70).build_cartesian_2d(
-                -0.5..(labels.len() as f64 - 0.5),
-                (bottom - pad * f64::from(bottom < 0.0))..(top + pad),
-            )?;
+            // A far series may be cut: as many dots as there are points.
+            let values: Vec<f64> = on_panel.iter().map(|(_, v)| *v).collect();
+            let y = Scale::fit_values(&values, sweep.index.points.len());
+            let mut chart = chart_on(area, dvl, 70)
+                .build_cartesian_2d(-0.5..(labels.len() as f64 - 0.5), y.clone())?;
             mesh(&mut chart)
                 .disable_x_mesh()
                 .x_labels(labels.len() + 1)
                 .x_desc(key.as_str())
                 .y_desc(metric.axis())
                 .x_label_formatter(&|v| category(&labels, *v))
-                .y_label_formatter(&tick)
                 .draw()?;
             for &(estimator, model) in &series {
                 let look = series_look(estimator, model);
@@ -151,11 +149,20 @@ fn against(sweep: &StoredSweep, metric: Metric, k: usize) -> PlotResult<Outcome>
                             .then(|| (x as f64, at.iter().sum::<f64>() / at.len() as f64))
                     })
                     .collect();
-                line(&mut chart, means, look.color, look.stroke)?;
+                let shown = |(x, v): (f64, f64)| (x, y.shown(v));
+                line(
+                    &mut chart,
+                    means.into_iter().map(shown).collect(),
+                    look.color,
+                    look.stroke,
+                )?;
                 chart.draw_series(
                     dots.iter()
-                        .map(|&point| Circle::new(point, 4, look.color.filled())),
+                        .map(|&point| Circle::new(shown(point), 4, look.color.filled())),
                 )?;
+                for &(x, value) in dots.iter().filter(|(_, v)| y.is_cut(*v)) {
+                    cut_mark(&mut chart, shown((x, value)), value, look.color, Edge::Top)?;
+                }
             }
         }
         let entries: Vec<(Swatch, String)> = series
