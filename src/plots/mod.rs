@@ -10,6 +10,7 @@ pub mod figures;
 pub mod render;
 pub mod scale;
 pub mod sweep_figures;
+pub mod sweep_parallel;
 
 pub use sweep_figures::Metric;
 

@@ -2,7 +2,8 @@
 //! values, one panel per DVL and one series per estimator and error model. The values
 //! sit evenly spaced and labelled exactly (numbers in ascending order), as a sweep's few
 //! values read best. Every point of the sweep is a dot; the line joins, at each value,
-//! the mean over the points that share it (over the other swept keys' values).
+//! the mean over the points that share it (over the other swept keys' values). A sweep
+//! over two or more keys adds [`super::sweep_parallel`]'s figure.
 
 use super::draw::*;
 use super::figures::{Drawn, Outcome, draw_svg};
@@ -25,7 +26,7 @@ pub enum Metric {
 }
 
 impl Metric {
-    fn of(self, row: &SweepRow) -> Option<f64> {
+    pub(super) fn of(self, row: &SweepRow) -> Option<f64> {
         match self {
             Metric::EvaluationRmse => Some(row.evaluation_rmse_cm_s),
             Metric::CalibrationRmse => Some(row.calibration_rmse_cm_s),
@@ -34,7 +35,7 @@ impl Metric {
         }
     }
 
-    fn axis(self) -> &'static str {
+    pub(super) fn axis(self) -> &'static str {
         match self {
             Metric::EvaluationRmse => "evaluation RMSE [cm/s]",
             Metric::CalibrationRmse => "calibration RMSE at T_conv [cm/s]",
@@ -44,9 +45,10 @@ impl Metric {
     }
 }
 
-/// One figure per swept key, stem `sweep_<key>` with the key's dots as underscores.
+/// One figure per swept key, stem `sweep_<key>` with the key's dots as underscores,
+/// and, over two or more keys, `sweep_parallel` ([`super::sweep_parallel`]).
 pub fn all(sweep: &StoredSweep, metric: Metric) -> PlotResult<Vec<(String, Outcome)>> {
-    sweep
+    let mut figures = sweep
         .index
         .swept
         .iter()
@@ -55,7 +57,14 @@ pub fn all(sweep: &StoredSweep, metric: Metric) -> PlotResult<Vec<(String, Outco
             let stem = format!("sweep_{}", key.replace('.', "_"));
             Ok((stem, against(sweep, metric, k)?))
         })
-        .collect()
+        .collect::<PlotResult<Vec<_>>>()?;
+    if sweep.index.swept.len() >= 2 {
+        figures.push((
+            "sweep_parallel".to_string(),
+            super::sweep_parallel::parallel(sweep, metric)?,
+        ));
+    }
+    Ok(figures)
 }
 
 /// The distinct values of swept key `k`, numbers in ascending order, texts in the
