@@ -1,7 +1,8 @@
 //! Tasks, caching, resuming, sharding and sweeps, as a user meets them: `plan`, a run
 //! that has nothing left to do, a changed Monte Carlo setting, runs killed with
-//! SIGKILL mid-training and mid-Monte-Carlo, three shards and `collect`, and a sweep
-//! over two keys. Each compares with an uninterrupted single process byte for byte.
+//! SIGKILL mid-training and mid-Monte-Carlo, three shards and `collect`, and sweeps
+//! over two keys and over one, with their figures. Each compares with an uninterrupted
+//! single process byte for byte.
 
 mod common;
 use common::*;
@@ -497,6 +498,13 @@ fn a_sweep_over_two_keys_runs_every_point_and_tabulates_them() {
             "{stem}"
         );
     }
+    // Two keys: also the parallel coordinates, a panel per DVL of three axes each.
+    assert_png(
+        &dir.join("plots/quick-sweep/sweep_parallel.png"),
+        (1740, 1800),
+    );
+    let svg = std::fs::read_to_string(dir.join("plots/quick-sweep/sweep_parallel.svg")).unwrap();
+    assert!(svg.contains("<path") && !svg.contains("<text"), "{svg}");
 
     let sweep = read_parquet(&folder.join("sweep.parquet"));
     assert_eq!(sweep.num_rows(), 4 * 2 * 12);
@@ -644,4 +652,12 @@ fn a_sweep_point_holds_what_a_plain_run_of_its_values_holds() {
         &dir.join("swept/grid/noise_cm_s.values=0.05-0.1"),
         &dir.join("plain/quick"),
     );
+    // One key: its figure, and no parallel coordinates.
+    run_ok(dir, &["plot", "swept/grid", "--out", "figures"]);
+    assert!(
+        dir.join("figures/grid/sweep_grid_noise_cm_s_values.png")
+            .is_file()
+    );
+    assert!(!dir.join("figures/grid/sweep_parallel.png").exists());
+    assert!(!dir.join("figures/grid/sweep_parallel.svg").exists());
 }

@@ -33,28 +33,6 @@ fn small_quick_run(dir: &Path, extra: &[&str]) {
     assert!(output.status.success(), "{}", stderr(&output));
 }
 
-fn assert_png(path: &Path, size: (u32, u32)) {
-    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut reader = png::Decoder::new(std::io::Cursor::new(bytes))
-        .read_info()
-        .unwrap();
-    let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut pixels).unwrap();
-    assert_eq!((info.width, info.height), size, "{}", path.display());
-    let channels = info.color_type.samples();
-    let inked = pixels
-        .chunks(channels)
-        .filter(|p| p[..3].iter().any(|c| *c < 200))
-        .count();
-    let share = inked as f64 / (size.0 * size.1) as f64;
-    assert!(
-        share > 0.01,
-        "{}: only {:.2} % of the pixels are drawn on",
-        path.display(),
-        100.0 * share
-    );
-}
-
 fn assert_svg(path: &Path, size: (u32, u32)) {
     let text = std::fs::read_to_string(path).unwrap();
     assert!(

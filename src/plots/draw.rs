@@ -1,5 +1,6 @@
 //! Drawing pieces the figures share: the look of each estimator and error model, the
-//! legend column, tick labels, category axes, bars and box plots.
+//! legend column, category axes, values cut at a panel's edge with their number, bars
+//! and box plots.
 
 use super::render::FAMILY;
 use crate::estimators::{ErrorModel, EstimatorKind};
@@ -153,6 +154,8 @@ pub enum Swatch {
     Bar(RGBColor),
     Ring,
     Dot(RGBColor),
+    /// A value cut at the panel's edge.
+    Cut,
 }
 
 /// A column of legend entries, top to bottom.
@@ -182,6 +185,7 @@ pub fn legend(area: &Area, title: &str, entries: &[(Swatch, String)]) -> PlotRes
             ))?,
             Swatch::Ring => area.draw(&Circle::new((28, y), 7, BLACK.stroke_width(2)))?,
             Swatch::Dot(color) => area.draw(&Circle::new((28, y), 4, color.filled()))?,
+            Swatch::Cut => area.draw(&TriangleMarker::new((28, y), 7, BLACK.filled()))?,
         }
         area.draw(&Text::new(
             text.clone(),
@@ -193,29 +197,45 @@ pub fn legend(area: &Area, title: &str, entries: &[(Swatch, String)]) -> PlotRes
     Ok(())
 }
 
-/// A tick label with at most three decimals and no trailing zeros.
-pub fn tick(value: &f64) -> String {
-    let text = format!("{value:.3}");
-    let text = text.trim_end_matches('0').trim_end_matches('.');
-    if text == "-0" {
-        "0".into()
-    } else {
-        text.into()
-    }
+/// A value with three significant digits, or all of its integer digits.
+pub fn three_digits(value: f64) -> String {
+    let magnitude = value.abs().max(1e-12).log10().floor() as i32;
+    let decimals = (2 - magnitude).max(0) as usize;
+    format!("{value:.decimals$}")
 }
 
-/// A log-axis tick label: only at 1, 2 and 5 times a power of ten, so labels never
-/// crowd; the grid keeps its other lines.
-pub fn log_tick(value: &f64) -> String {
-    let mantissa = value / 10f64.powf(value.log10().floor());
-    if [1.0, 2.0, 5.0, 10.0]
-        .iter()
-        .any(|m| (mantissa - m).abs() < 1e-6)
-    {
-        tick(value)
-    } else {
-        String::new()
-    }
+/// The edge of a panel at which a value beyond the axis is drawn.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Edge {
+    /// The top of a value axis that runs up: the value is written below the mark.
+    Top,
+    /// The right end of a value axis that runs right: written left of and above it.
+    Right,
+}
+
+/// Marks a value drawn at the `edge` of a panel because it lies beyond: a triangle at
+/// `at` and the value written beside it, inside the panel.
+pub fn cut_mark<X: Ranged<ValueType = f64>, Y: Ranged<ValueType = f64>>(
+    chart: &mut ChartContext<SVGBackend, Cartesian2d<X, Y>>,
+    at: (f64, f64),
+    value: f64,
+    color: RGBColor,
+    edge: Edge,
+) -> PlotResult {
+    let (offset, anchor) = match edge {
+        Edge::Top => ((8, 4), Pos::new(HPos::Left, VPos::Top)),
+        Edge::Right => ((-6, -8), Pos::new(HPos::Right, VPos::Bottom)),
+    };
+    chart.draw_series(std::iter::once(
+        EmptyElement::at(at)
+            + TriangleMarker::new((0, 0), 7, color.filled())
+            + Text::new(
+                three_digits(value),
+                offset,
+                font(LABEL_SIZE - 1).pos(anchor),
+            ),
+    ))?;
+    Ok(())
 }
 
 /// The label of category `value` on an axis of categories at 0, 1, 2, …
@@ -225,19 +245,6 @@ pub fn category(names: &[String], value: f64) -> String {
         return String::new();
     }
     names.get(index as usize).cloned().unwrap_or_default()
-}
-
-/// A log axis range that holds `values` with some room.
-pub fn log_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
-    let (low, high) = values
-        .filter(|v| v.is_finite() && *v > 0.0)
-        .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
-            (lo.min(v), hi.max(v))
-        });
-    if !low.is_finite() {
-        return 0.01..1.0;
-    }
-    (low / 1.5)..(high * 1.5)
 }
 
 /// Lower whisker, first quartile, median, third quartile, upper whisker: quartiles by
@@ -281,13 +288,10 @@ mod tests {
     }
 
     #[test]
-    fn tick_labels_are_short() {
-        assert_eq!(tick(&0.1), "0.1");
-        assert_eq!(tick(&20.0), "20");
-        assert_eq!(tick(&0.0586), "0.059");
-        assert_eq!(log_tick(&0.2), "0.2");
-        assert_eq!(log_tick(&50.0), "50");
-        assert_eq!(log_tick(&0.7), "");
+    fn written_values_and_category_labels_are_short() {
+        assert_eq!(three_digits(26.41), "26.4");
+        assert_eq!(three_digits(0.5234), "0.523");
+        assert_eq!(three_digits(1234.0), "1234");
         assert_eq!(category(&["a".into(), "b".into()], 1.0), "b");
         assert_eq!(category(&["a".into(), "b".into()], 0.5), "");
     }

@@ -2,6 +2,7 @@
 //! the run does not hold (no DCNet, no baseline, no EM5) says why instead.
 
 use super::draw::*;
+use super::scale::{self, Scale};
 use crate::estimators::{ErrorModel, EstimatorKind};
 use crate::evaluate::{CalibrationRow, Phase};
 use crate::results::read::{StoredRun, StoredTrajectory};
@@ -95,13 +96,13 @@ fn velocity(run: &StoredRun) -> PlotResult<Outcome> {
                 });
             let pad = 0.05 * (high - low).max(0.1);
             let title = format!("{} ({})", trajectory.name, trajectory.roles.join(", "));
-            let mut chart = chart_on(area, &title, 70)
-                .build_cartesian_2d(0.0..end, (low - pad)..(high + pad))?;
+            let mut chart = chart_on(area, &title, 70).build_cartesian_2d(
+                Scale::linear(0.0..end),
+                Scale::linear((low - pad)..(high + pad)),
+            )?;
             mesh(&mut chart)
                 .x_desc("time [s]")
                 .y_desc("velocity [m/s]")
-                .x_label_formatter(&tick)
-                .y_label_formatter(&tick)
                 .draw()?;
             for ((_, axis), color) in axes.iter().zip(colors) {
                 let points: Vec<(f64, f64)> = trajectory
@@ -143,56 +144,71 @@ fn calibration(run: &StoredRun) -> PlotResult<Outcome> {
         run.spec.calibration.monte_carlo_runs
     );
     let width = 560 * dvls.len() as u32 + LEGEND_WIDTH;
-    let svg =
-        draw_svg((width, 620), |root| {
-            let root = root.titled(&caption, font(TITLE_SIZE))?;
-            let (panels, legend_area) = root.split_horizontally(width - LEGEND_WIDTH);
-            let windows: Vec<f64> = run.calibration.iter().map(|r| r.window_s).collect();
-            let (first, last) = windows.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), w| {
-                (lo.min(*w), hi.max(*w))
-            });
-            let pad = 0.05 * (last - first).max(10.0);
-            for (area, dvl) in panels.split_evenly((1, dvls.len())).iter().zip(&dvls) {
-                let rows: Vec<&CalibrationRow> =
-                    run.calibration.iter().filter(|r| &r.dvl == dvl).collect();
-                let mut chart = chart_on(area, dvl, 70).build_cartesian_2d(
-                    (first - pad)..(last + pad),
-                    log_range(rows.iter().map(|r| r.rmse_cm_s)).log_scale(),
-                )?;
-                mesh(&mut chart)
-                    .x_desc("calibration window [s]")
-                    .y_desc("mean RMSE [cm/s]")
-                    .x_label_formatter(&tick)
-                    .y_label_formatter(&log_tick)
-                    .draw()?;
-                for &(estimator, model) in &series {
-                    let look = series_look(estimator, model);
-                    let points: Vec<&&CalibrationRow> = rows
+    let svg = draw_svg((width, 620), |root| {
+        let root = root.titled(&caption, font(TITLE_SIZE))?;
+        let (panels, legend_area) = root.split_horizontally(width - LEGEND_WIDTH);
+        let windows: Vec<f64> = run.calibration.iter().map(|r| r.window_s).collect();
+        // A far series may be cut: as many values as there are windows.
+        let window_count = crate::first_seen(windows.iter()).len();
+        let (first, last) = windows.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), w| {
+            (lo.min(*w), hi.max(*w))
+        });
+        let pad = 0.05 * (last - first).max(10.0);
+        let mut cut = false;
+        for (area, dvl) in panels.split_evenly((1, dvls.len())).iter().zip(&dvls) {
+            let rows: Vec<&CalibrationRow> =
+                run.calibration.iter().filter(|r| &r.dvl == dvl).collect();
+            let values: Vec<f64> = rows.iter().map(|r| r.rmse_cm_s).collect();
+            let y = Scale::fit_values(&values, window_count);
+            let mut chart = chart_on(area, dvl, 70)
+                .build_cartesian_2d(Scale::linear((first - pad)..(last + pad)), y.clone())?;
+            mesh(&mut chart)
+                .x_desc("calibration window [s]")
+                .y_desc("mean RMSE [cm/s]")
+                .draw()?;
+            for &(estimator, model) in &series {
+                let look = series_look(estimator, model);
+                let points: Vec<(f64, f64)> = rows
+                    .iter()
+                    .filter(|r| r.estimator == estimator && r.error_model == model)
+                    .map(|r| (r.window_s, y.shown(r.rmse_cm_s)))
+                    .collect();
+                line(&mut chart, points.clone(), look.color, look.stroke)?;
+                chart.draw_series(
+                    points
                         .iter()
-                        .filter(|r| r.estimator == estimator && r.error_model == model)
-                        .collect();
-                    let line_points = points.iter().map(|r| (r.window_s, r.rmse_cm_s)).collect();
-                    line(&mut chart, line_points, look.color, look.stroke)?;
-                    chart.draw_series(
-                        points.iter().map(|r| {
-                            Circle::new((r.window_s, r.rmse_cm_s), 3, look.color.filled())
-                        }),
-                    )?;
-                    chart.draw_series(points.iter().filter(|r| r.is_t_conv).map(|r| {
-                        Circle::new((r.window_s, r.rmse_cm_s), 8, BLACK.stroke_width(2))
-                    }))?;
+                        .map(|&point| Circle::new(point, 3, look.color.filled())),
+                )?;
+            }
+            for row in &rows {
+                let at = (row.window_s, y.shown(row.rmse_cm_s));
+                if row.is_t_conv {
+                    chart.draw_series(std::iter::once(Circle::new(
+                        at,
+                        8,
+                        BLACK.stroke_width(2),
+                    )))?;
+                }
+                if y.is_cut(row.rmse_cm_s) {
+                    let color = series_look(row.estimator, row.error_model).color;
+                    cut_mark(&mut chart, at, row.rmse_cm_s, color, Edge::Top)?;
+                    cut = true;
                 }
             }
-            let mut entries: Vec<(Swatch, String)> = series
-                .iter()
-                .map(|&(estimator, model)| {
-                    let look = series_look(estimator, model);
-                    (Swatch::Line(look.color, look.stroke), look.label)
-                })
-                .collect();
-            entries.push((Swatch::Ring, "T_conv".into()));
-            legend(&legend_area, "estimator", &entries)
-        })?;
+        }
+        let mut entries: Vec<(Swatch, String)> = series
+            .iter()
+            .map(|&(estimator, model)| {
+                let look = series_look(estimator, model);
+                (Swatch::Line(look.color, look.stroke), look.label)
+            })
+            .collect();
+        entries.push((Swatch::Ring, "T_conv".into()));
+        if cut {
+            entries.push((Swatch::Cut, "beyond the axis".into()));
+        }
+        legend(&legend_area, "estimator", &entries)
+    })?;
     Ok(Ok(Drawn { caption, svg }))
 }
 
@@ -204,8 +220,11 @@ struct Bar {
     spread: Option<f64>,
 }
 
-/// Grouped bars with their values written on them; bars beyond `floor` are cut at it
-/// and keep their true value as text.
+/// Grouped bars with their values written on them. Bars below `floor` are cut at it,
+/// and with `cut_far`, when one bar (with its spread) reaches far above the others
+/// ([`scale::cut_above`]), the axis ends above the others and that bar is cut at the
+/// top; a cut bar keeps its value as white text inside its end. Says whether a bar was
+/// cut at the top.
 fn bar_panel(
     area: &Area,
     title: &str,
@@ -213,22 +232,33 @@ fn bar_panel(
     bars: &[Bar],
     y_desc: &str,
     floor: Option<f64>,
-) -> PlotResult {
-    let top = bars
+    cut_far: bool,
+) -> PlotResult<bool> {
+    let tops: Vec<f64> = bars
         .iter()
         .map(|b| b.value + b.spread.unwrap_or(0.0))
+        .chain([0.0])
+        .collect();
+    let ceiling = scale::cut_above(&tops, 1)
+        .filter(|_| cut_far)
+        .unwrap_or(f64::INFINITY);
+    let top = tops
+        .iter()
+        .copied()
+        .filter(|t| *t <= ceiling)
         .fold(0.0f64, f64::max);
     let bottom = bars.iter().map(|b| b.value).fold(0.0f64, f64::min);
     let bottom = floor.map_or(bottom, |f| bottom.max(f));
     let span = (top - bottom).max(1e-9);
     let y_range = (bottom - 0.08 * span * f64::from(bottom < 0.0))..(top + 0.15 * span);
-    let mut chart = chart_on(area, title, 70)
-        .build_cartesian_2d(-0.5..(groups.len() as f64 - 0.5), y_range.clone())?;
+    let mut chart = chart_on(area, title, 70).build_cartesian_2d(
+        -0.5..(groups.len() as f64 - 0.5),
+        Scale::linear(y_range.clone()),
+    )?;
     mesh(&mut chart)
         .disable_x_mesh()
         .x_labels(groups.len() + 1)
         .x_label_formatter(&|x| category(groups, *x))
-        .y_label_formatter(&tick)
         .y_desc(y_desc)
         .draw()?;
     if y_range.start < 0.0 {
@@ -237,62 +267,88 @@ fn bar_panel(
             BLACK.stroke_width(1),
         )))?;
     }
+    let label = |value: f64| {
+        if y_desc.contains('%') {
+            format!("{value:+.0}")
+        } else {
+            format!("{value:.2}")
+        }
+    };
+    let mut cut_at_top = false;
     for (group, _) in groups.iter().enumerate() {
         let members: Vec<&Bar> = bars.iter().filter(|b| b.group == group).collect();
         let width = 0.8 / members.len().max(1) as f64;
         for (j, bar) in members.iter().enumerate() {
             let x0 = group as f64 - 0.4 + j as f64 * width;
             let (x1, middle) = (x0 + 0.92 * width, x0 + 0.46 * width);
-            let shown = bar.value.max(y_range.start);
+            let shown = bar.value.clamp(y_range.start, y_range.end);
             chart.draw_series(std::iter::once(Rectangle::new(
                 [(x0, 0.0), (x1, shown)],
                 estimator_color(bar.estimator).filled(),
             )))?;
-            if let Some(spread) = bar.spread.filter(|s| *s > 0.0) {
+            let spread = bar.spread.filter(|s| *s > 0.0).unwrap_or(0.0);
+            if spread > 0.0 {
                 let (low, high) = (bar.value - spread, bar.value + spread);
                 chart.draw_series(std::iter::once(PathElement::new(
-                    vec![(middle, low.max(y_range.start)), (middle, high)],
+                    vec![
+                        (middle, low.max(y_range.start)),
+                        (middle, high.min(y_range.end)),
+                    ],
                     BLACK.stroke_width(1),
                 )))?;
             }
-            if bar.value < y_range.start {
-                // Cut at the axis: the true value goes inside the bar's end.
-                chart.draw_series(std::iter::once(Text::new(
-                    format!("{:.0}", bar.value),
-                    (middle, y_range.start),
-                    anchored(LABEL_SIZE - 3, HPos::Center, VPos::Bottom).color(&WHITE),
-                )))?;
-                continue;
-            }
-            let text = if y_desc.contains('%') {
-                format!("{:+.0}", bar.value)
+            // A cut bar: its value goes inside the bar's end.
+            let inside = if bar.value < y_range.start {
+                Some(VPos::Bottom)
+            } else if bar.value > y_range.end {
+                cut_at_top = true;
+                Some(VPos::Top)
             } else {
-                format!("{:.2}", bar.value)
+                None
             };
-            let (y, v) = if shown >= 0.0 {
-                (shown + bar.spread.unwrap_or(0.0), VPos::Bottom)
-            } else {
-                (shown, VPos::Top)
+            let (y, style) = match inside {
+                Some(v) => (
+                    shown,
+                    anchored(LABEL_SIZE - 3, HPos::Center, v).color(&WHITE),
+                ),
+                None if shown >= 0.0 => (
+                    (shown + spread).min(y_range.end),
+                    anchored(LABEL_SIZE - 2, HPos::Center, VPos::Bottom),
+                ),
+                None => (shown, anchored(LABEL_SIZE - 2, HPos::Center, VPos::Top)),
             };
-            chart.draw_series(std::iter::once(Text::new(
-                text,
-                (middle, y),
-                anchored(LABEL_SIZE - 2, HPos::Center, v),
-            )))?;
+            let text = label(bar.value);
+            chart.draw_series(std::iter::once(Text::new(text, (middle, y), style)))?;
         }
     }
-    Ok(())
+    Ok(cut_at_top)
 }
 
-fn bar_legend(area: &Area, estimators: &[EstimatorKind], note: &str) -> PlotResult {
+/// The legend of the bar figures: the estimators, then `whisker` as a line when it is
+/// not empty, then each line of `notes`.
+fn bar_legend(
+    area: &Area,
+    estimators: &[EstimatorKind],
+    whisker: &str,
+    notes: &[&str],
+) -> PlotResult {
     let mut entries: Vec<(Swatch, String)> = estimators
         .iter()
         .map(|e| (Swatch::Bar(estimator_color(*e)), e.label().to_string()))
         .collect();
-    if !note.is_empty() {
-        entries.push((Swatch::Line(BLACK, Stroke::Solid), note.to_string()));
+    if !whisker.is_empty() {
+        entries.push((Swatch::Line(BLACK, Stroke::Solid), whisker.to_string()));
     }
-    legend(area, "estimator", &entries)
+    legend(area, "estimator", &entries)?;
+    let below = 60 + 24 * entries.len() as i32 + 8;
+    for (i, note) in notes.iter().enumerate() {
+        area.draw(&Text::new(
+            note.to_string(),
+            (12, below + 18 * i as i32),
+            anchored(LABEL_SIZE - 2, HPos::Left, VPos::Center),
+        ))?;
+    }
+    Ok(())
 }
 
 /// RMSE at the first (shortest) calibration window for EM2, EM4 and EM5 against the
@@ -335,6 +391,7 @@ fn rmse_first_window(run: &StoredRun) -> PlotResult<Outcome> {
     let svg = draw_svg((width, 560), |root| {
         let root = root.titled(&caption, font(TITLE_SIZE))?;
         let (panels, legend_area) = root.split_horizontally(width - LEGEND_WIDTH);
+        let mut cut = false;
         for (area, dvl) in panels.split_evenly((1, dvls.len())).iter().zip(&dvls) {
             let at = |estimator: EstimatorKind, model: Option<ErrorModel>| {
                 run.calibration.iter().find(|r| {
@@ -365,11 +422,19 @@ fn rmse_first_window(run: &StoredRun) -> PlotResult<Outcome> {
                     }
                 }
             }
-            bar_panel(area, dvl, &groups, &bars, "RMSE [cm/s]", None)?;
+            cut |= bar_panel(area, dvl, &groups, &bars, "RMSE [cm/s]", None, true)?;
         }
         let mut shown = vec![EstimatorKind::Baseline];
         shown.extend(&estimators);
-        bar_legend(&legend_area, &shown, "± std over runs")
+        let notes: &[&str] = if cut {
+            &[
+                "bars above the axis are cut;",
+                "their value is written in white",
+            ]
+        } else {
+            &[]
+        };
+        bar_legend(&legend_area, &shown, "± std over runs", notes)
     })?;
     Ok(Ok(Drawn { caption, svg }))
 }
@@ -417,20 +482,18 @@ fn improvement_em5(run: &StoredRun) -> PlotResult<Outcome> {
                 &bars,
                 "improvement over the baseline [%]",
                 Some(-100.0),
+                false,
             )?;
         }
-        bar_legend(&legend_area, &estimators, "")?;
-        legend_area.draw(&Text::new(
-            "bars below -100 % are cut;".to_string(),
-            (12, 140),
-            anchored(LABEL_SIZE - 2, HPos::Left, VPos::Center),
-        ))?;
-        legend_area.draw(&Text::new(
-            "their value is written in white".to_string(),
-            (12, 158),
-            anchored(LABEL_SIZE - 2, HPos::Left, VPos::Center),
-        ))?;
-        Ok(())
+        bar_legend(
+            &legend_area,
+            &estimators,
+            "",
+            &[
+                "bars below -100 % are cut;",
+                "their value is written in white",
+            ],
+        )
     })?;
     Ok(Ok(Drawn { caption, svg }))
 }
@@ -481,15 +544,14 @@ fn monte_carlo_spread(run: &StoredRun) -> PlotResult<Outcome> {
                         .collect()
                 })
                 .collect();
-            let mut chart = chart_on(area, dvl, 150).build_cartesian_2d(
-                log_range(samples.iter().flatten().copied()).log_scale(),
-                -0.5..(series.len() as f64 - 0.5),
-            )?;
+            let values: Vec<f64> = samples.iter().flatten().copied().collect();
+            let x = Scale::fit_values(&values, 1);
+            let mut chart = chart_on(area, dvl, 150)
+                .build_cartesian_2d(x.clone(), -0.5..(series.len() as f64 - 0.5))?;
             mesh(&mut chart)
                 .disable_y_mesh()
                 .y_labels(series.len() + 1)
                 .y_label_formatter(&|y| category(&names, *y))
-                .x_label_formatter(&log_tick)
                 .x_desc("RMSE at T_conv [cm/s]")
                 .draw()?;
             for (i, (values, &(estimator, model))) in samples.iter().zip(&series).enumerate() {
@@ -497,7 +559,7 @@ fn monte_carlo_spread(run: &StoredRun) -> PlotResult<Outcome> {
                     continue;
                 }
                 let color = series_look(estimator, model).color;
-                let [low, q1, median, q3, high] = box_stats(values);
+                let [low, q1, median, q3, high] = box_stats(values).map(|v| x.shown(v));
                 let y = (series.len() - 1 - i) as f64;
                 chart.draw_series([
                     Rectangle::new([(q1, y - 0.3), (q3, y + 0.3)], color.mix(0.25).filled()),
@@ -514,9 +576,13 @@ fn monte_carlo_spread(run: &StoredRun) -> PlotResult<Outcome> {
                 chart.draw_series(
                     values
                         .iter()
-                        .filter(|v| **v < low || **v > high)
+                        .filter(|v| (**v < low || **v > high) && !x.is_cut(**v))
                         .map(|v| Circle::new((*v, y), 2, color.filled())),
                 )?;
+                for value in values.iter().filter(|v| x.is_cut(**v)) {
+                    let at = (x.shown(*value), y);
+                    cut_mark(&mut chart, at, *value, color, Edge::Right)?;
+                }
                 if estimator == EstimatorKind::Floor {
                     let mean = values.iter().sum::<f64>() / values.len() as f64;
                     line(
@@ -556,14 +622,16 @@ fn training_loss(run: &StoredRun) -> PlotResult<Outcome> {
         let losses = run
             .training
             .iter()
-            .flat_map(|e| [e.record.train_loss, e.record.validation_loss]);
+            .flat_map(|e| [e.record.train_loss, e.record.validation_loss])
+            .filter(|v| v.is_finite());
+        let (low, high) = losses.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
         let mut chart = chart_on(&area, "", 80)
-            .build_cartesian_2d(0.5..(epochs + 0.5), log_range(losses).log_scale())?;
+            .build_cartesian_2d(Scale::linear(0.0..(epochs + 1.0)), Scale::fit(low, high))?;
         mesh(&mut chart)
             .x_desc("epoch")
             .y_desc("loss [(cm/s)²]")
-            .x_label_formatter(&tick)
-            .y_label_formatter(&log_tick)
             .draw()?;
         let mut entries = Vec::new();
         for model in &models {

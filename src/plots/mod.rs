@@ -1,13 +1,16 @@
 //! The figures of a run, drawn from its results folder alone, and those of a sweep,
 //! drawn from its `sweep.parquet`: `run` calls this at its end and `plot` calls it on a
-//! stored folder. [`figures`] draws each figure as SVG with
-//! plotters, [`render`] writes it as PNG and as SVG with the text outlined, both from the
-//! embedded font.
+//! stored folder. [`figures`] and [`sweep_figures`] draw each figure as SVG with
+//! plotters, every numeric axis chosen by [`scale`] (linear or logarithmic, its ticks,
+//! far values cut), and [`render`] writes it as PNG and as SVG with the text outlined,
+//! both from the embedded font.
 
 pub mod draw;
 pub mod figures;
 pub mod render;
+pub mod scale;
 pub mod sweep_figures;
+pub mod sweep_parallel;
 
 pub use sweep_figures::Metric;
 

@@ -2,10 +2,12 @@
 //! values, one panel per DVL and one series per estimator and error model. The values
 //! sit evenly spaced and labelled exactly (numbers in ascending order), as a sweep's few
 //! values read best. Every point of the sweep is a dot; the line joins, at each value,
-//! the mean over the points that share it (over the other swept keys' values).
+//! the mean over the points that share it (over the other swept keys' values). A sweep
+//! over two or more keys adds [`super::sweep_parallel`]'s figure.
 
 use super::draw::*;
 use super::figures::{Drawn, Outcome, draw_svg};
+use super::scale::Scale;
 use crate::first_seen;
 use crate::sweep::{StoredSweep, SweepRow, Swept};
 use plotters::prelude::*;
@@ -24,7 +26,7 @@ pub enum Metric {
 }
 
 impl Metric {
-    fn of(self, row: &SweepRow) -> Option<f64> {
+    pub(super) fn of(self, row: &SweepRow) -> Option<f64> {
         match self {
             Metric::EvaluationRmse => Some(row.evaluation_rmse_cm_s),
             Metric::CalibrationRmse => Some(row.calibration_rmse_cm_s),
@@ -33,7 +35,7 @@ impl Metric {
         }
     }
 
-    fn axis(self) -> &'static str {
+    pub(super) fn axis(self) -> &'static str {
         match self {
             Metric::EvaluationRmse => "evaluation RMSE [cm/s]",
             Metric::CalibrationRmse => "calibration RMSE at T_conv [cm/s]",
@@ -43,9 +45,10 @@ impl Metric {
     }
 }
 
-/// One figure per swept key, stem `sweep_<key>` with the key's dots as underscores.
+/// One figure per swept key, stem `sweep_<key>` with the key's dots as underscores,
+/// and, over two or more keys, `sweep_parallel` ([`super::sweep_parallel`]).
 pub fn all(sweep: &StoredSweep, metric: Metric) -> PlotResult<Vec<(String, Outcome)>> {
-    sweep
+    let mut figures = sweep
         .index
         .swept
         .iter()
@@ -54,7 +57,14 @@ pub fn all(sweep: &StoredSweep, metric: Metric) -> PlotResult<Vec<(String, Outco
             let stem = format!("sweep_{}", key.replace('.', "_"));
             Ok((stem, against(sweep, metric, k)?))
         })
-        .collect()
+        .collect::<PlotResult<Vec<_>>>()?;
+    if sweep.index.swept.len() >= 2 {
+        figures.push((
+            "sweep_parallel".to_string(),
+            super::sweep_parallel::parallel(sweep, metric)?,
+        ));
+    }
+    Ok(figures)
 }
 
 /// The distinct values of swept key `k`, numbers in ascending order, texts in the
@@ -118,20 +128,17 @@ fn against(sweep: &StoredSweep, metric: Metric, k: usize) -> PlotResult<Outcome>
                 .copied()
                 .filter(|(r, _)| r.dvl == *dvl)
                 .collect();
-            let top = on_panel.iter().map(|(_, v)| *v).fold(0.0f64, f64::max);
-            let bottom = on_panel.iter().map(|(_, v)| *v).fold(0.0f64, f64::min);
-            let pad = 0.08 * (top - bottom).max(1e-9);
-            let mut chart = chart_on(area, dvl, 70).build_cartesian_2d(
-                -0.5..(labels.len() as f64 - 0.5),
-                (bottom - pad * f64::from(bottom < 0.0))..(top + pad),
-            )?;
+            // A far series may be cut: as many dots as there are points.
+            let values: Vec<f64> = on_panel.iter().map(|(_, v)| *v).collect();
+            let y = Scale::fit_values(&values, sweep.index.points.len());
+            let mut chart = chart_on(area, dvl, 70)
+                .build_cartesian_2d(-0.5..(labels.len() as f64 - 0.5), y.clone())?;
             mesh(&mut chart)
                 .disable_x_mesh()
                 .x_labels(labels.len() + 1)
                 .x_desc(key.as_str())
                 .y_desc(metric.axis())
                 .x_label_formatter(&|v| category(&labels, *v))
-                .y_label_formatter(&tick)
                 .draw()?;
             for &(estimator, model) in &series {
                 let look = series_look(estimator, model);
@@ -151,11 +158,20 @@ fn against(sweep: &StoredSweep, metric: Metric, k: usize) -> PlotResult<Outcome>
                             .then(|| (x as f64, at.iter().sum::<f64>() / at.len() as f64))
                     })
                     .collect();
-                line(&mut chart, means, look.color, look.stroke)?;
+                let shown = |(x, v): (f64, f64)| (x, y.shown(v));
+                line(
+                    &mut chart,
+                    means.into_iter().map(shown).collect(),
+                    look.color,
+                    look.stroke,
+                )?;
                 chart.draw_series(
                     dots.iter()
-                        .map(|&point| Circle::new(point, 4, look.color.filled())),
+                        .map(|&point| Circle::new(shown(point), 4, look.color.filled())),
                 )?;
+                for &(x, value) in dots.iter().filter(|(_, v)| y.is_cut(*v)) {
+                    cut_mark(&mut chart, shown((x, value)), value, look.color, Edge::Top)?;
+                }
             }
         }
         let entries: Vec<(Swatch, String)> = series
