@@ -562,10 +562,12 @@ fn info(spec_path: &Path, set: &[String]) -> Result<(), CliError> {
             Origin::File {
                 path,
                 samples: Some([start, end]),
+                ..
             } => format!("{} [{start}, {end})", file_name(path)),
             Origin::File {
                 path,
                 samples: None,
+                ..
             } => file_name(path),
             Origin::Synthetic { .. } => "synthetic".to_string(),
         };
