@@ -17,7 +17,7 @@ use crate::data::fetch::sha256_hex;
 use crate::estimators::{ErrorModel, EstimatorKind};
 use crate::evaluate::RunRow;
 use crate::results::{self, ResultsError, read};
-use crate::spec::{Origin, Spec};
+use crate::spec::{FileFormat, Origin, Spec};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -70,12 +70,27 @@ impl DataHashes {
         files
     }
 
-    /// A trajectory as a key sees it: its name and where its samples come from.
+    /// A trajectory as a key sees it: its name and where its samples come from (a
+    /// `.csv` file's with its velocity columns).
     fn source(&self, spec: &Spec, index: usize) -> (String, String) {
         let source = &spec.trajectories[index];
         let origin = match &source.origin {
-            Origin::File { path, samples } => {
+            Origin::File {
+                path,
+                format: FileFormat::Npy,
+                samples,
+            } => {
                 format!("sha256 {} samples {samples:?}", self.0[path])
+            }
+            Origin::File {
+                path,
+                format: FileFormat::Csv { columns },
+                samples,
+            } => {
+                format!(
+                    "sha256 {} columns {columns:?} samples {samples:?}",
+                    self.0[path]
+                )
             }
             Origin::Synthetic { samples } => {
                 format!("synthetic {samples} {:?}", spec.resolved.data.synthetic)

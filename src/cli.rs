@@ -67,7 +67,7 @@ enum Command {
         #[command(flatten)]
         drawing: Drawing,
     },
-    /// Draw the figures and write report.md from a results folder, re-running nothing
+    /// Draw the figures and write report.md and report.tex from a results folder, re-running nothing
     Plot {
         /// A results folder written by `run`, such as results/paper, or a sweep's
         results: PathBuf,
@@ -139,7 +139,7 @@ struct Drawing {
     /// Figures go to PLOTS/<name>/
     #[arg(long, default_value = "plots")]
     plots: PathBuf,
-    /// Write the results and report.md but draw no figures
+    /// Write the results and the reports but draw no figures
     #[arg(long)]
     no_plots: bool,
 }
@@ -497,8 +497,12 @@ fn plot_run(results: &Path, out: Option<&Path>, format: Format) -> Result<(), Cl
         }
         None => Vec::new(),
     };
-    let report = report::write(&stored, &figures).map_err(failure)?;
-    eprintln!("report written to {}", report.display());
+    let [markdown, tex] = report::write(&stored, &figures).map_err(failure)?;
+    eprintln!(
+        "report written to {} and {}",
+        markdown.display(),
+        tex.display()
+    );
     Ok(())
 }
 
@@ -585,10 +589,12 @@ fn info(spec_path: &Path, set: &[String]) -> Result<(), CliError> {
             Origin::File {
                 path,
                 samples: Some([start, end]),
+                ..
             } => format!("{} [{start}, {end})", file_name(path)),
             Origin::File {
                 path,
                 samples: None,
+                ..
             } => file_name(path),
             Origin::Synthetic { .. } => "synthetic".to_string(),
         };

@@ -3,7 +3,7 @@
 //! order:
 //!
 //! 1. [`spec`]: the TOML experiment spec, read, overridden and checked;
-//! 2. [`data`]: the trajectories (Snapir `.npy` recordings or synthetic) and their
+//! 2. [`data`]: the trajectories (`.npy` or `.csv` recordings, or synthetic) and their
 //!    ground truth;
 //! 3. [`noise`]: the beam-level DVL and GNSS-RTK measurement model;
 //! 4. [`dataset`]: the training windows over the error-term grid;

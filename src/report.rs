@@ -1,25 +1,33 @@
-//! `results/<name>/report.md`: the paper's two tables in its layout with our value
-//! beside the published one in every cell, cells off by more than the spec's tolerance
-//! flagged, our extra estimators and the floor, the training summary, wall time per
-//! stage and provenance from the manifest, and the figures. Drawn from a
-//! [`StoredRun`] alone, like the figures.
+//! `results/<name>/report.md` and `report.tex`: the paper's two tables in its layout
+//! with our value beside the published one in every cell, cells off by more than the
+//! spec's tolerance flagged, our extra estimators and the floor; the Markdown report
+//! adds the training summary, wall time per stage and provenance from the manifest,
+//! and the figures. Drawn from a [`StoredRun`] alone, like the figures. The tables are
+//! built once (`Tables`) and set as Markdown here and as LaTeX in `latex`.
+
+mod latex;
 
 use crate::estimators::{ErrorModel, EstimatorKind};
+use crate::evaluate::Phase;
 use crate::plots::Written;
 use crate::published::PublishedCell;
 use crate::results::read::StoredRun;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 use std::fmt::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 pub const FILE: &str = "report.md";
 const FLAG: &str = "⚠";
 
-/// Writes the report into the results folder, atomically; returns its path.
-pub fn write(run: &StoredRun, figures: &[Written]) -> std::io::Result<std::path::PathBuf> {
-    let path = run.folder.join(FILE);
-    crate::results::write_atomic(&path, render(run, figures).as_bytes())?;
-    Ok(path)
+/// Writes `report.md` and `report.tex` into the results folder, atomically; returns
+/// their paths.
+pub fn write(run: &StoredRun, figures: &[Written]) -> std::io::Result<[PathBuf; 2]> {
+    let tables = Tables::of(run);
+    let markdown = run.folder.join(FILE);
+    crate::results::write_atomic(&markdown, render(run, &tables, figures).as_bytes())?;
+    let tex = run.folder.join(latex::FILE);
+    crate::results::write_atomic(&tex, latex::render(run, &tables).as_bytes())?;
+    Ok([markdown, tex])
 }
 
 /// Counts the cells compared with a published value and those flagged.
@@ -29,57 +37,315 @@ struct Tally {
     flagged: usize,
 }
 
-/// Our RMSE (cm/s), with the published cell beside it when there is one.
-struct Cell<'a> {
-    rmse_cm_s: f64,
-    /// T_conv (calibration) or the improvement over the baseline (evaluation).
-    detail: Detail,
-    published: Option<&'a PublishedCell>,
+/// The report's tables, each cell computed once for both renderings.
+struct Tables {
+    /// Calibration at T_conv: DVL rows with the baseline and DCNet, then least squares
+    /// and the floor.
+    calibration: ReportTable,
+    /// Evaluation with the T_conv terms: DVL × trajectory rows, baseline and DCNet.
+    evaluation: ReportTable,
+    /// The same for the floor and least squares, when the run has either.
+    beyond: Option<ReportTable>,
 }
 
+/// A table of label columns, a first value column and one column per error model, its
+/// rows in one group per DVL.
+struct ReportTable {
+    /// Headers of the label columns: "DVL", and "trajectory" in the evaluation.
+    labels: Vec<&'static str>,
+    /// Headers of the value columns.
+    columns: Vec<String>,
+    groups: Vec<Vec<Row>>,
+    /// Its cells compared with a published value, and those flagged.
+    tally: Tally,
+}
+
+struct Row {
+    labels: Vec<String>,
+    /// One per value column; `None` where the run has no such value.
+    cells: Vec<Option<Entry>>,
+}
+
+/// One value cell: our figure, the published one beside it, and whether they disagree.
+struct Entry {
+    ours: Figure,
+    paper: Option<Figure>,
+    flagged: bool,
+}
+
+/// An RMSE (cm/s) and what the table sets beside it.
+struct Figure {
+    rmse_cm_s: f64,
+    detail: Option<Detail>,
+}
+
+#[derive(Clone, Copy)]
 enum Detail {
     TConv(f64),
-    Improvement(Option<f64>),
+    Improvement(f64),
 }
 
-impl Cell<'_> {
-    fn render(&self, tolerance_pct: f64, tally: &mut Tally) -> String {
-        let ours = match self.detail {
-            Detail::TConv(t) => format!("{:.2} ({t})", self.rmse_cm_s),
-            Detail::Improvement(Some(pct)) => format!("{:.2} ({pct:+.0} %)", self.rmse_cm_s),
-            Detail::Improvement(None) => format!("{:.2}", self.rmse_cm_s),
+/// How a rendering writes the signs of a [`Figure`].
+struct Signs {
+    percent: &'static str,
+    minus: &'static str,
+}
+
+impl Figure {
+    /// `5.93 (100)` with T_conv, `0.86 (+12 %)` with the improvement, `0.74` alone.
+    fn text(&self, signs: &Signs) -> String {
+        let rmse = format!("{:.2}", self.rmse_cm_s);
+        match self.detail {
+            None => rmse,
+            Some(Detail::TConv(t)) => format!("{rmse} ({t})"),
+            Some(Detail::Improvement(pct)) => {
+                let pct = format!("{pct:+.0}");
+                let pct = match pct.strip_prefix('-') {
+                    Some(magnitude) => format!("{}{magnitude}", signs.minus),
+                    None => pct,
+                };
+                format!("{rmse} ({pct}{})", signs.percent)
+            }
+        }
+    }
+}
+
+impl Entry {
+    /// Our figure beside the published cell: flagged when the RMSE is more than
+    /// `tolerance_pct` off, or the calibration's T_conv differs.
+    fn new(
+        ours: Figure,
+        published: Option<&PublishedCell>,
+        phase: Phase,
+        tolerance_pct: f64,
+        tally: &mut Tally,
+    ) -> Entry {
+        let paper = published.map(|cell| Figure {
+            rmse_cm_s: cell.rmse_cm_s,
+            detail: match phase {
+                Phase::Calibration => cell.t_conv_s.map(Detail::TConv),
+                Phase::Evaluation => cell.improvement_pct.map(Detail::Improvement),
+            },
+        });
+        let flagged = paper.as_ref().is_some_and(|paper| {
+            let off =
+                (ours.rmse_cm_s - paper.rmse_cm_s).abs() > tolerance_pct / 100.0 * paper.rmse_cm_s;
+            let other_t_conv = matches!(
+                (ours.detail, paper.detail),
+                (Some(Detail::TConv(a)), Some(Detail::TConv(b))) if a != b
+            );
+            off || other_t_conv
+        });
+        if paper.is_some() {
+            tally.compared += 1;
+            tally.flagged += usize::from(flagged);
+        }
+        Entry {
+            ours,
+            paper,
+            flagged,
+        }
+    }
+
+    fn markdown(&self) -> String {
+        const SIGNS: Signs = Signs {
+            percent: " %",
+            minus: "-",
         };
-        let Some(paper) = self.published else {
+        let ours = self.ours.text(&SIGNS);
+        let Some(paper) = &self.paper else {
             return ours;
         };
-        tally.compared += 1;
-        let mut flagged =
-            (self.rmse_cm_s - paper.rmse_cm_s).abs() > tolerance_pct / 100.0 * paper.rmse_cm_s;
-        let theirs = match (&self.detail, paper.t_conv_s, paper.improvement_pct) {
-            (Detail::TConv(ours), Some(t), _) => {
-                flagged |= *ours != t;
-                format!("{:.2} ({t})", paper.rmse_cm_s)
-            }
-            (Detail::Improvement(_), _, Some(pct)) => {
-                format!("{:.2} ({pct:+.0} %)", paper.rmse_cm_s)
-            }
-            _ => format!("{:.2}", paper.rmse_cm_s),
-        };
-        tally.flagged += usize::from(flagged);
-        let flag = if flagged {
+        let flag = if self.flagged {
             format!(" {FLAG}")
         } else {
             String::new()
         };
-        format!("{ours} · paper {theirs}{flag}")
+        format!("{ours} · paper {}{flag}", paper.text(&SIGNS))
+    }
+}
+
+impl Tables {
+    fn of(run: &StoredRun) -> Tables {
+        let tolerance = run.spec.report.tolerance_pct;
+        let models = crate::tables::models_in(run.calibration.iter().map(|r| r.error_model));
+        let dvls = run.dvls();
+        let has = |kind: EstimatorKind| run.calibration.iter().any(|r| r.estimator == kind);
+        let published = |dvl: &str, kind, model, trajectory: Option<&str>| {
+            run.published
+                .as_ref()
+                .and_then(|p| p.find(dvl, kind, model, trajectory))
+        };
+        let columns = |first: &str| {
+            std::iter::once(first.to_string())
+                .chain(models.iter().map(ToString::to_string))
+                .collect::<Vec<_>>()
+        };
+
+        // Calibration, the paper's layout: DVL rows with the baseline and DCNet.
+        let mut tally = Tally::default();
+        let mut groups = Vec::new();
+        for dvl in &dvls {
+            let mut cell = |kind: EstimatorKind, model: Option<ErrorModel>| {
+                run.calibration
+                    .iter()
+                    .find(|r| {
+                        r.is_t_conv
+                            && &r.dvl == dvl
+                            && r.estimator == kind
+                            && r.error_model == model
+                    })
+                    .map(|r| {
+                        let ours = Figure {
+                            rmse_cm_s: r.rmse_cm_s,
+                            detail: Some(Detail::TConv(r.window_s)),
+                        };
+                        let paper = published(dvl, kind, model, None);
+                        Entry::new(ours, paper, Phase::Calibration, tolerance, &mut tally)
+                    })
+            };
+            // (label, estimator of the first column, estimator of the error-model columns)
+            let mut kinds = vec![(
+                dvl.clone(),
+                Some(EstimatorKind::Baseline),
+                Some(EstimatorKind::Dcnet),
+            )];
+            if has(EstimatorKind::LeastSquares) {
+                kinds.push((
+                    format!("{dvl} least squares"),
+                    None,
+                    Some(EstimatorKind::LeastSquares),
+                ));
+            }
+            if has(EstimatorKind::Floor) {
+                kinds.push((
+                    format!("{dvl} floor (true terms)"),
+                    Some(EstimatorKind::Floor),
+                    None,
+                ));
+            }
+            let rows = kinds
+                .into_iter()
+                .map(|(label, first, per_model)| {
+                    let mut cells = vec![first.and_then(|kind| cell(kind, None))];
+                    for model in &models {
+                        cells.push(per_model.and_then(|kind| cell(kind, Some(*model))));
+                    }
+                    Row {
+                        labels: vec![label],
+                        cells,
+                    }
+                })
+                .collect();
+            groups.push(rows);
+        }
+        let calibration = ReportTable {
+            labels: vec!["DVL"],
+            columns: columns("Baseline"),
+            groups,
+            tally,
+        };
+
+        // Evaluation, the paper's layout: DVL × trajectory rows, the baseline and DCNet.
+        let trajectories = crate::first_seen(run.evaluation.iter().map(|r| r.trajectory.clone()));
+        let evaluation_cell =
+            |dvl: &str, trajectory: &str, kind, model, with_paper: bool, tally: &mut Tally| {
+                run.evaluation
+                    .iter()
+                    .find(|r| {
+                        r.dvl == dvl
+                            && r.trajectory == trajectory
+                            && r.estimator == kind
+                            && r.error_model == model
+                    })
+                    .map(|r| {
+                        let ours = Figure {
+                            rmse_cm_s: r.rmse_cm_s,
+                            detail: r
+                                .improvement_pct
+                                .filter(|_| kind != EstimatorKind::Baseline)
+                                .map(Detail::Improvement),
+                        };
+                        let paper =
+                            published(dvl, kind, model, Some(trajectory)).filter(|_| with_paper);
+                        Entry::new(ours, paper, Phase::Evaluation, tolerance, tally)
+                    })
+            };
+        // One DVL × trajectory row per cell pair: `first` in the first value column,
+        // `per_model` with each error model in the others.
+        let evaluation_table = |first_label: &str, first, per_model, with_paper: bool| {
+            let mut tally = Tally::default();
+            let groups = dvls
+                .iter()
+                .map(|dvl| {
+                    trajectories
+                        .iter()
+                        .map(|trajectory| {
+                            let mut cells = vec![evaluation_cell(
+                                dvl, trajectory, first, None, with_paper, &mut tally,
+                            )];
+                            for model in &models {
+                                cells.push(evaluation_cell(
+                                    dvl,
+                                    trajectory,
+                                    per_model,
+                                    Some(*model),
+                                    with_paper,
+                                    &mut tally,
+                                ));
+                            }
+                            Row {
+                                labels: vec![dvl.clone(), trajectory.clone()],
+                                cells,
+                            }
+                        })
+                        .collect()
+                })
+                .collect();
+            ReportTable {
+                labels: vec!["DVL", "trajectory"],
+                columns: columns(first_label),
+                groups,
+                tally,
+            }
+        };
+        let evaluation = evaluation_table(
+            "Baseline",
+            EstimatorKind::Baseline,
+            EstimatorKind::Dcnet,
+            true,
+        );
+        let beyond = (has(EstimatorKind::LeastSquares) || has(EstimatorKind::Floor)).then(|| {
+            evaluation_table(
+                "floor (true terms)",
+                EstimatorKind::Floor,
+                EstimatorKind::LeastSquares,
+                false,
+            )
+        });
+        Tables {
+            calibration,
+            evaluation,
+            beyond,
+        }
+    }
+
+    /// The cells compared with a published value and those flagged, in every table.
+    fn tally(&self) -> Tally {
+        let tables = [&self.calibration, &self.evaluation]
+            .into_iter()
+            .chain(self.beyond.as_ref());
+        tables.fold(Tally::default(), |sum, table| Tally {
+            compared: sum.compared + table.tally.compared,
+            flagged: sum.flagged + table.tally.flagged,
+        })
     }
 }
 
 /// The report as Markdown.
-pub fn render(run: &StoredRun, figures: &[Written]) -> String {
+fn render(run: &StoredRun, tables: &Tables, figures: &[Written]) -> String {
     let spec = &run.spec;
     let tolerance = spec.report.tolerance_pct;
-    let mut tally = Tally::default();
     let mut out = String::new();
     let _ = writeln!(out, "# {}: results beside the published ones\n", spec.name);
     let _ = writeln!(
@@ -103,143 +369,23 @@ pub fn render(run: &StoredRun, figures: &[Written]) -> String {
         }
     }
 
-    let models = crate::tables::models_in(run.calibration.iter().map(|r| r.error_model));
-    let dvls = run.dvls();
-    let has = |kind: EstimatorKind| run.calibration.iter().any(|r| r.estimator == kind);
-    let published = |dvl: &str, kind, model, trajectory: Option<&str>| {
-        run.published
-            .as_ref()
-            .and_then(|p| p.find(dvl, kind, model, trajectory))
-    };
-
-    // Calibration, the paper's layout: DVL rows with the baseline and DCNet.
     let _ = writeln!(out, "## Calibration on {}\n", spec.calibration.trajectory);
-    let mut table = markdown_table("", &models, "Baseline");
-    for dvl in &dvls {
-        let cell = |kind: EstimatorKind, model: Option<ErrorModel>, tally: &mut Tally| {
-            run.calibration
-                .iter()
-                .find(|r| {
-                    r.is_t_conv && &r.dvl == dvl && r.estimator == kind && r.error_model == model
-                })
-                .map(|r| {
-                    Cell {
-                        rmse_cm_s: r.rmse_cm_s,
-                        detail: Detail::TConv(r.window_s),
-                        published: published(dvl, kind, model, None),
-                    }
-                    .render(tolerance, tally)
-                })
-                .unwrap_or_else(|| "—".into())
-        };
-        // (label, estimator of the first column, estimator of the error-model columns)
-        let mut rows = vec![(
-            dvl.clone(),
-            Some(EstimatorKind::Baseline),
-            Some(EstimatorKind::Dcnet),
-        )];
-        if has(EstimatorKind::LeastSquares) {
-            rows.push((
-                format!("{dvl} least squares"),
-                None,
-                Some(EstimatorKind::LeastSquares),
-            ));
-        }
-        if has(EstimatorKind::Floor) {
-            rows.push((
-                format!("{dvl} floor (true terms)"),
-                Some(EstimatorKind::Floor),
-                None,
-            ));
-        }
-        for (label, first, per_model) in rows {
-            let mut cells = vec![label];
-            cells.push(first.map_or("—".into(), |kind| cell(kind, None, &mut tally)));
-            for model in &models {
-                cells.push(
-                    per_model.map_or("—".into(), |kind| cell(kind, Some(*model), &mut tally)),
-                );
-            }
-            table.add_row(cells);
-        }
-    }
     let _ = writeln!(
         out,
-        "The DVL rows hold the baseline and DCNet, as in the paper; the floor corrects with the true terms, a bound no estimator can beat.\n\n{table}\n"
+        "The DVL rows hold the baseline and DCNet, as in the paper; the floor corrects with the true terms, a bound no estimator can beat.\n\n{}\n",
+        markdown_table(&tables.calibration)
     );
-
-    // Evaluation, the paper's layout: DVL × trajectory rows, the baseline and DCNet.
     let _ = writeln!(out, "## Evaluation with the T_conv terms\n");
-    let trajectories = crate::first_seen(run.evaluation.iter().map(|r| r.trajectory.clone()));
-    let evaluation_cell =
-        |dvl: &str, trajectory: &str, kind, model, with_paper: bool, tally: &mut Tally| {
-            run.evaluation
-                .iter()
-                .find(|r| {
-                    r.dvl == dvl
-                        && r.trajectory == trajectory
-                        && r.estimator == kind
-                        && r.error_model == model
-                })
-                .map(|r| {
-                    Cell {
-                        rmse_cm_s: r.rmse_cm_s,
-                        detail: Detail::Improvement(
-                            r.improvement_pct
-                                .filter(|_| kind != EstimatorKind::Baseline),
-                        ),
-                        published: published(dvl, kind, model, Some(trajectory))
-                            .filter(|_| with_paper),
-                    }
-                    .render(tolerance, tally)
-                })
-                .unwrap_or_else(|| "—".into())
-        };
-    // One DVL × trajectory row per cell pair: `first` in the first value column, `per_model`
-    // with each error model in the others.
-    let mut evaluation_table = |first_label: &str, first, per_model, with_paper: bool| {
-        let mut table = markdown_table("trajectory", &models, first_label);
-        for dvl in &dvls {
-            for trajectory in &trajectories {
-                let mut cells = vec![dvl.clone(), trajectory.clone()];
-                cells.push(evaluation_cell(
-                    dvl, trajectory, first, None, with_paper, &mut tally,
-                ));
-                for model in &models {
-                    cells.push(evaluation_cell(
-                        dvl,
-                        trajectory,
-                        per_model,
-                        Some(*model),
-                        with_paper,
-                        &mut tally,
-                    ));
-                }
-                table.add_row(cells);
-            }
-        }
-        table
-    };
-    let paper = evaluation_table(
-        "Baseline",
-        EstimatorKind::Baseline,
-        EstimatorKind::Dcnet,
-        true,
-    );
-    let _ = writeln!(out, "{paper}\n");
-    if has(EstimatorKind::LeastSquares) || has(EstimatorKind::Floor) {
-        let beyond = evaluation_table(
-            "floor (true terms)",
-            EstimatorKind::Floor,
-            EstimatorKind::LeastSquares,
-            false,
-        );
+    let _ = writeln!(out, "{}\n", markdown_table(&tables.evaluation));
+    if let Some(beyond) = &tables.beyond {
         let _ = writeln!(
             out,
-            "Beyond the paper: least squares on the same data, and the floor.\n\n{beyond}\n"
+            "Beyond the paper: least squares on the same data, and the floor.\n\n{}\n",
+            markdown_table(beyond)
         );
     }
     if run.published.is_some() {
+        let tally = tables.tally();
         let _ = writeln!(
             out,
             "**{} of {} cells compared with the paper are flagged {FLAG}.**\n",
@@ -253,19 +399,25 @@ pub fn render(run: &StoredRun, figures: &[Written]) -> String {
     out
 }
 
-/// A Markdown table with a DVL column, an optional second label column, a first value
-/// column and one column per error model.
-fn markdown_table(second: &str, models: &[ErrorModel], first: &str) -> Table {
-    let mut table = Table::new();
-    table.load_preset(ASCII_MARKDOWN);
-    let mut header = vec!["DVL".to_string()];
-    if !second.is_empty() {
-        header.push(second.to_string());
+/// A report table as Markdown, `—` where a cell has no value.
+fn markdown_table(table: &ReportTable) -> Table {
+    let mut markdown = Table::new();
+    markdown.load_preset(ASCII_MARKDOWN);
+    let header: Vec<String> = table
+        .labels
+        .iter()
+        .map(ToString::to_string)
+        .chain(table.columns.iter().cloned())
+        .collect();
+    markdown.set_header(header);
+    for row in table.groups.iter().flatten() {
+        let cells = row.cells.iter().map(|cell| {
+            cell.as_ref()
+                .map_or_else(|| "—".to_string(), Entry::markdown)
+        });
+        markdown.add_row(row.labels.iter().cloned().chain(cells).collect::<Vec<_>>());
     }
-    header.push(first.to_string());
-    header.extend(models.iter().map(ToString::to_string));
-    table.set_header(header);
-    table
+    markdown
 }
 
 fn training_section(run: &StoredRun, out: &mut String) {

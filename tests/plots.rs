@@ -318,3 +318,215 @@ fn bad_report_settings_are_rejected() {
         );
     }
 }
+
+/// The rows of the `n`th table of a report.tex: its lines that end in `\\`, split on
+/// `&`, the DVL written into the rows below its first (where LaTeX leaves it blank).
+fn tex_rows(tex: &str, n: usize) -> Vec<Vec<String>> {
+    let table = tex
+        .split("\\begin{table}")
+        .nth(n + 1)
+        .unwrap_or_else(|| panic!("no table {n} in\n{tex}"))
+        .split("\\end{table}")
+        .next()
+        .unwrap();
+    let mut dvl = String::new();
+    table
+        .lines()
+        .filter_map(|line| line.trim().strip_suffix("\\\\"))
+        .map(|line| {
+            let mut cells: Vec<String> = line.split('&').map(|c| c.trim().to_string()).collect();
+            let published = cells.iter().any(|c| c.ends_with("\\textit{paper}"));
+            if cells[0].is_empty() && !published {
+                cells[0] = dvl.clone();
+            } else if !published {
+                dvl = cells[0].clone();
+            }
+            cells
+        })
+        .collect()
+}
+
+/// The row whose label cells are `labels`, and the row below it.
+fn tex_row(rows: &[Vec<String>], labels: &[&str]) -> (Vec<String>, Vec<String>) {
+    let i = rows
+        .iter()
+        .position(|cells| cells[..labels.len()] == *labels)
+        .unwrap_or_else(|| panic!("no row {labels:?} in {rows:?}"));
+    (
+        rows[i].clone(),
+        rows.get(i + 1).cloned().unwrap_or_default(),
+    )
+}
+
+/// An improvement as report.tex writes it: `+12\,\%`, `$-$3\,\%`.
+fn tex_percent(pct: f64) -> String {
+    format!("{pct:+.0}\\,\\%").replace('-', "$-$")
+}
+
+#[test]
+fn report_tex_sets_the_parquet_numbers_beside_the_published_ones() {
+    let project = project(false);
+    let dir = project.path();
+    small_quick_run(dir, &["--no-plots", "--set", "name=quick_tex"]);
+    let results = dir.join("results/quick_tex");
+    let tex = std::fs::read_to_string(results.join("report.tex")).unwrap();
+    assert!(
+        !tex.contains("\\textit{paper}") && !tex.contains("\\dag"),
+        "no published values, no paper rows:\n{tex}"
+    );
+
+    let calibration = calibration_rows(&results);
+    let at_t_conv = |dvl: &str, estimator: &str, model: Option<&str>| {
+        calibration
+            .iter()
+            .find(|r| {
+                r.selected
+                    && r.dvl == dvl
+                    && r.estimator == estimator
+                    && r.error_model.as_deref() == model
+            })
+            .unwrap()
+            .clone()
+    };
+    let evaluation = evaluation_rows(&results);
+    let find = |dvl: &str, estimator: &str, model: Option<&str>, trajectory: &str| {
+        evaluation
+            .iter()
+            .find(|r| {
+                r.dvl == dvl
+                    && r.estimator == estimator
+                    && r.error_model.as_deref() == model
+                    && r.at == trajectory
+            })
+            .unwrap()
+            .clone()
+    };
+    let baseline = at_t_conv("DVL1", "baseline", None);
+    let em5 = at_t_conv("DVL2", "dcnet", Some("EM5"));
+    let s3 = find("DVL1", "baseline", None, "S3");
+    let em4 = find("DVL2", "dcnet", Some("EM4"), "S4");
+
+    // Published values for the quick spec's names: DVL1's baseline as ours to two
+    // decimals (within 10 %: not flagged), DVL2's DCNet far off (flagged). Given to
+    // the results folder, so that `plot` rewrites both reports with them.
+    let published = format!(
+        r#"source = "made up for 100% of this test & more"
+calibration = [
+  {{ dvl = "DVL1", estimator = "baseline", rmse_cm_s = {:.2}, t_conv_s = {} }},
+  {{ dvl = "DVL2", estimator = "dcnet", error_model = "EM5", rmse_cm_s = 1000.0, t_conv_s = 20 }},
+]
+evaluation = [
+  {{ dvl = "DVL1", estimator = "baseline", trajectory = "S3", rmse_cm_s = {:.2} }},
+  {{ dvl = "DVL2", estimator = "dcnet", error_model = "EM4", trajectory = "S4", rmse_cm_s = 1000.0, improvement_pct = -12 }},
+]
+"#,
+        baseline.rmse_cm_s, baseline.at, s3.rmse_cm_s
+    );
+    std::fs::write(results.join("published.toml"), published).unwrap();
+    let output = dcnet(dir, &["plot", "results/quick_tex", "--out", "figs"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let tex = std::fs::read_to_string(results.join("report.tex")).unwrap();
+
+    // Table environments only, saying what they need.
+    assert!(tex.starts_with("% "), "{tex}");
+    assert!(tex.contains("\\usepackage{booktabs}"), "{tex}");
+    assert!(!tex.contains("\\documentclass"), "{tex}");
+    for command in [
+        "\\begin{table}",
+        "\\toprule",
+        "\\bottomrule",
+        "\\end{table}",
+    ] {
+        assert_eq!(tex.matches(command).count(), 3, "{command} in\n{tex}");
+    }
+    assert!(
+        tex.contains("\\caption{quick\\_tex: calibration on SCal."),
+        "{tex}"
+    );
+
+    let rows = tex_rows(&tex, 0);
+    assert_eq!(
+        rows[0],
+        ["DVL", "Baseline", "EM1", "EM2", "EM3", "EM4", "EM5"]
+    );
+    let ours = format!("{:.2} ({})", baseline.rmse_cm_s, baseline.at);
+    let (row, paper) = tex_row(&rows, &["DVL1"]);
+    assert_eq!(row[1], ours);
+    assert_eq!(paper[0], "\\quad\\textit{paper}");
+    assert_eq!(paper[1], format!("\\textit{{{ours}}}"));
+    assert!(paper[2..].iter().all(String::is_empty), "{paper:?}");
+    let (row, paper) = tex_row(&rows, &["DVL2"]);
+    assert_eq!(
+        row[6],
+        format!(
+            "{:.2} ({})\\rlap{{\\textsuperscript{{\\dag}}}}",
+            em5.rmse_cm_s, em5.at
+        )
+    );
+    assert_eq!(paper[6], "\\textit{1000.00 (20)}");
+    let least_squares = at_t_conv("DVL1", "least_squares", Some("EM4"));
+    let (row, _) = tex_row(&rows, &["DVL1 least squares"]);
+    assert_eq!(row[1], "---");
+    assert_eq!(
+        row[5],
+        format!("{:.2} ({})", least_squares.rmse_cm_s, least_squares.at)
+    );
+    let floor = at_t_conv("DVL2", "floor", None);
+    let (row, _) = tex_row(&rows, &["DVL2 floor (true terms)"]);
+    assert_eq!(row[1], format!("{:.2} ({})", floor.rmse_cm_s, floor.at));
+    assert_eq!(row[2], "---");
+
+    let rows = tex_rows(&tex, 1);
+    let (row, paper) = tex_row(&rows, &["DVL1", "S3"]);
+    assert_eq!(row[2], format!("{:.2}", s3.rmse_cm_s));
+    assert_eq!(
+        paper[..3],
+        [
+            String::new(),
+            "\\quad\\textit{paper}".into(),
+            format!("\\textit{{{:.2}}}", s3.rmse_cm_s)
+        ]
+    );
+    let (row, paper) = tex_row(&rows, &["DVL2", "S4"]);
+    assert_eq!(
+        row[6],
+        format!(
+            "{:.2} ({})\\rlap{{\\textsuperscript{{\\dag}}}}",
+            em4.rmse_cm_s,
+            tex_percent(em4.improvement_pct.unwrap())
+        )
+    );
+    assert_eq!(paper[6], "\\textit{1000.00 ($-$12\\,\\%)}");
+
+    // Beyond the paper: the floor, then least squares EM1..EM5; never a paper row.
+    let rows = tex_rows(&tex, 2);
+    let em5 = find("DVL2", "least_squares", Some("EM5"), "S4");
+    assert_eq!(
+        tex_row(&rows, &["DVL2", "S4"]).0[7],
+        format!(
+            "{:.2} ({})",
+            em5.rmse_cm_s,
+            tex_percent(em5.improvement_pct.unwrap())
+        )
+    );
+    assert!(
+        rows.iter().all(|cells| !cells[1].contains("paper")),
+        "{rows:?}"
+    );
+
+    // Under each table with published values, what the dagger means and how often.
+    let source = "Published values: made up for 100\\% of this test \\& more.";
+    for (n, what) in [(0, ", or another T\\textsubscript{conv}"), (1, "")] {
+        let table = tex.split("\\begin{table}").nth(n + 1).unwrap();
+        let expected = format!(
+            "\\dag{{}} flags an RMSE more than 10\\,\\% off the published one{what} (1 of 2 cells). {source}"
+        );
+        assert!(table.contains(&expected), "{expected} in\n{table}");
+    }
+    // report.md counts the same cells.
+    let report = std::fs::read_to_string(results.join("report.md")).unwrap();
+    assert!(
+        report.contains("**2 of 4 cells compared with the paper are flagged ⚠.**"),
+        "{report}"
+    );
+}

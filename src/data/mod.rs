@@ -1,15 +1,17 @@
-//! Trajectories: the recorded velocities named in the spec, read from `.npy` files or
-//! generated, each with its ground truth (a forward moving average, PAPER-NOTES).
+//! Trajectories: the recorded velocities named in the spec, read from `.npy` or `.csv`
+//! files or generated, each with its ground truth (a forward moving average, PAPER-NOTES).
 //! In: a checked [`Spec`]. Out: one [`Trajectory`] per `data.trajectories` entry, in
 //! spec order.
 
+pub mod csv;
 pub mod fetch;
 pub mod npy;
 pub mod synthetic;
 
 use crate::Vec3;
-use crate::spec::{Origin, Spec};
+use crate::spec::{FileFormat, Origin, Spec};
 use std::collections::BTreeMap;
+use std::collections::btree_map::Entry;
 use std::path::PathBuf;
 
 /// A recorded trajectory and its ground truth, body-frame velocity in m/s.
@@ -30,6 +32,8 @@ impl Trajectory {
 pub enum DataError {
     #[error(transparent)]
     Npy(#[from] npy::NpyError),
+    #[error(transparent)]
+    Csv(#[from] csv::CsvError),
     #[error("{path}: trajectory {trajectory} asks for samples [{start}, {end}) but the file has {len}", path = path.display())]
     OutOfRange {
         trajectory: String,
@@ -40,17 +44,25 @@ pub enum DataError {
     },
 }
 
-/// Loads every trajectory of the spec; each `.npy` file is read once.
+/// Loads every trajectory of the spec; each file is read once (a `.csv` once per choice
+/// of columns).
 pub fn load_trajectories(spec: &Spec) -> Result<Vec<Trajectory>, DataError> {
-    let mut files: BTreeMap<PathBuf, Vec<Vec3>> = BTreeMap::new();
+    let mut files: BTreeMap<(&PathBuf, &FileFormat), Vec<Vec3>> = BTreeMap::new();
     let mut trajectories = Vec::with_capacity(spec.trajectories.len());
     for source in &spec.trajectories {
         let recorded = match &source.origin {
-            Origin::File { path, samples } => {
-                if !files.contains_key(path) {
-                    files.insert(path.clone(), npy::read_velocities(path)?);
-                }
-                let all = &files[path];
+            Origin::File {
+                path,
+                format,
+                samples,
+            } => {
+                let all = match files.entry((path, format)) {
+                    Entry::Occupied(read) => read.into_mut(),
+                    Entry::Vacant(unread) => unread.insert(match format {
+                        FileFormat::Npy => npy::read_velocities(path)?,
+                        FileFormat::Csv { columns } => csv::read_velocities(path, columns)?,
+                    }),
+                };
                 let [start, end] = samples.unwrap_or([0, all.len()]);
                 if end > all.len() {
                     return Err(DataError::OutOfRange {

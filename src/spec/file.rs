@@ -47,19 +47,27 @@ pub struct DataFile {
     pub trajectories: Vec<TrajectoryFile>,
 }
 
-/// One named trajectory: a sample range of a `.npy` file, or a synthetic one.
+/// One named trajectory: a sample range of a `.npy` or `.csv` file, or a synthetic one.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct TrajectoryFile {
     pub name: String,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub file: Option<PathBuf>,
-    /// Half-open `[start, end)` sample range in `file`; the whole file when absent.
+    /// Half-open `[start, end)` sample range in `file` (rows below the header of a
+    /// `.csv`); the whole file when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub samples: Option<[usize; 2]>,
+    /// The x, y, z velocity columns of a `.csv` file; [`DEFAULT_CSV_COLUMNS`] when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub columns: Option<[String; 3]>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub synthetic_duration_s: Option<f64>,
 }
+
+/// The velocity columns read from a `.csv` file whose spec names none: the names
+/// `trajectories.parquet` gives them.
+pub const DEFAULT_CSV_COLUMNS: [&str; 3] = ["vx_m_s", "vy_m_s", "vz_m_s"];
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]

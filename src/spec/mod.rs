@@ -52,14 +52,24 @@ pub struct TrajectorySource {
 
 #[derive(Debug, Clone)]
 pub enum Origin {
-    /// `[start, end)` of a `.npy` file, or all of it.
+    /// `[start, end)` of a recording, or all of it.
     File {
         path: PathBuf,
+        format: FileFormat,
         samples: Option<[usize; 2]>,
     },
     Synthetic {
         samples: usize,
     },
+}
+
+/// How a recording's file is read, chosen by its extension.
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
+pub enum FileFormat {
+    /// A NumPy array, (3, N) or (N, 3).
+    Npy,
+    /// A CSV file with a header; the x, y, z velocity columns by name.
+    Csv { columns: [String; 3] },
 }
 
 impl Spec {
@@ -228,6 +238,7 @@ impl SpecFile {
                 name,
                 file,
                 samples,
+                columns,
                 synthetic_duration_s,
             } = trajectory;
             if sources.iter().any(|s| &s.name == name) {
@@ -255,14 +266,39 @@ impl SpecFile {
                             );
                         }
                     }
+                    let is_csv = path
+                        .extension()
+                        .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+                    let format = match (is_csv, columns) {
+                        (true, columns) => {
+                            let columns = columns
+                                .clone()
+                                .unwrap_or_else(|| file::DEFAULT_CSV_COLUMNS.map(String::from));
+                            check_columns(&format!("{key}.columns"), &columns, &mut faults);
+                            resolved.data.trajectories[i].columns = Some(columns.clone());
+                            FileFormat::Csv { columns }
+                        }
+                        (false, Some(_)) => {
+                            faults.add(
+                                format!("{key}.columns"),
+                                format!("is for .csv files; {} is read as .npy", path.display()),
+                            );
+                            FileFormat::Npy
+                        }
+                        (false, None) => FileFormat::Npy,
+                    };
                     Some(Origin::File {
                         path,
+                        format,
                         samples: *samples,
                     })
                 }
                 (None, Some(duration_s)) => {
                     if samples.is_some() {
                         faults.add(format!("{key}.samples"), "is for file trajectories; a synthetic one has synthetic_duration_s only");
+                    }
+                    if columns.is_some() {
+                        faults.add(format!("{key}.columns"), "is for .csv files; a synthetic trajectory has synthetic_duration_s only");
                     }
                     match seconds_to_samples(*duration_s, rate) {
                         Some(samples) if samples > 0 => Some(Origin::Synthetic { samples }),
@@ -629,6 +665,23 @@ fn positive_samples(key: &str, seconds: f64, rate: f64, faults: &mut Faults) -> 
                 format!("{seconds} must be a positive whole number of samples at {rate} Hz"),
             );
             None
+        }
+    }
+}
+
+/// The three velocity columns of a `.csv` file: named, and each once.
+fn check_columns(key: &str, columns: &[String; 3], faults: &mut Faults) {
+    for (i, column) in columns.iter().enumerate() {
+        if column.trim().is_empty() {
+            faults.add(
+                format!("{key}[{i}]"),
+                "is empty: name a column of the header",
+            );
+        } else if columns[..i].contains(column) {
+            faults.add(
+                format!("{key}[{i}]"),
+                format!("{column:?} is named twice: x, y and z need a column each"),
+            );
         }
     }
 }

@@ -1,0 +1,274 @@
+//! Reads a recording from a CSV file: a header row, then one row a sample, with the
+//! x, y, z velocity in m/s in the three columns the spec names (by default those of
+//! `trajectories.parquet`, [`crate::spec::file::DEFAULT_CSV_COLUMNS`]); other columns are
+//! ignored, in any order.
+//! Every row is checked: a field that is missing, empty, not a number or not finite is
+//! an error that names the file, the line (the header is line 1) and the column.
+
+use crate::Vec3;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, thiserror::Error)]
+pub enum CsvError {
+    #[error("{}: file not found", path.display())]
+    Missing { path: PathBuf },
+    #[error("{}: cannot read as CSV: {source}", path.display())]
+    Read { path: PathBuf, source: ::csv::Error },
+    #[error("{}:1: {column}: not in the header, which has {}", path.display(), found_list(found))]
+    MissingColumn {
+        path: PathBuf,
+        column: String,
+        found: Vec<String>,
+    },
+    #[error("{}:1: {column}: named twice in the header", path.display())]
+    DuplicateColumn { path: PathBuf, column: String },
+    #[error("{}: no rows below the header: a recording needs at least one sample", path.display())]
+    NoRows { path: PathBuf },
+    #[error("{}:{line}: {column}: {problem}", path.display())]
+    Field {
+        path: PathBuf,
+        line: u64,
+        /// The column's name in the header, or `field N` beyond it.
+        column: String,
+        problem: FieldProblem,
+    },
+}
+
+/// What is wrong with one field of a row.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FieldProblem {
+    #[error("missing: the row has {fields} fields, the header {header}")]
+    Missing { fields: usize, header: usize },
+    #[error("not in the header: the row has {fields} fields, the header {header}")]
+    Extra { fields: usize, header: usize },
+    #[error("empty: every row needs a velocity")]
+    Empty,
+    #[error("{0:?} is not a number")]
+    NotANumber(String),
+    #[error("{0:?} is not finite: every velocity must be a finite number")]
+    NonFinite(String),
+}
+
+fn found_list(found: &[String]) -> String {
+    if found.iter().all(String::is_empty) {
+        "no names (the first line is empty)".into()
+    } else {
+        found.join(", ")
+    }
+}
+
+/// The velocity samples of `path`, one `[x, y, z]` per row, from `columns` (x, y, z).
+pub fn read_velocities(path: &Path, columns: &[String; 3]) -> Result<Vec<Vec3>, CsvError> {
+    let bytes = std::fs::read(path).map_err(|source| match source.kind() {
+        std::io::ErrorKind::NotFound => CsvError::Missing {
+            path: path.to_path_buf(),
+        },
+        _ => CsvError::Read {
+            path: path.to_path_buf(),
+            source: source.into(),
+        },
+    })?;
+    let read_error = |source| CsvError::Read {
+        path: path.to_path_buf(),
+        source,
+    };
+    // A record's position starts at the blank lines the reader skipped before it.
+    let line_of = |position: &::csv::Position| {
+        let skipped = bytes[position.byte() as usize..]
+            .iter()
+            .take_while(|b| matches!(b, b'\n' | b'\r'))
+            .filter(|b| **b == b'\n')
+            .count();
+        position.line() + skipped as u64
+    };
+    let mut reader = ::csv::ReaderBuilder::new()
+        .flexible(true)
+        .trim(::csv::Trim::All)
+        .from_reader(&bytes[..]);
+    let header: Vec<String> = reader
+        .headers()
+        .map_err(read_error)?
+        .iter()
+        .map(String::from)
+        .collect();
+    let mut positions = [0; 3];
+    for (position, column) in positions.iter_mut().zip(columns) {
+        let mut found = header
+            .iter()
+            .enumerate()
+            .filter(|(_, name)| *name == column);
+        *position = match (found.next(), found.next()) {
+            (Some((index, _)), None) => index,
+            (Some(_), Some(_)) => {
+                return Err(CsvError::DuplicateColumn {
+                    path: path.to_path_buf(),
+                    column: column.clone(),
+                });
+            }
+            (None, _) => {
+                return Err(CsvError::MissingColumn {
+                    path: path.to_path_buf(),
+                    column: column.clone(),
+                    found: header.clone(),
+                });
+            }
+        };
+    }
+    let mut samples = Vec::new();
+    for record in reader.records() {
+        let record = record.map_err(read_error)?;
+        let line = record.position().map_or(0, line_of);
+        let fault = |index: usize, problem| CsvError::Field {
+            path: path.to_path_buf(),
+            line,
+            column: header
+                .get(index)
+                .cloned()
+                .unwrap_or_else(|| format!("field {}", index + 1)),
+            problem,
+        };
+        let (fields, width) = (record.len(), header.len());
+        if fields < width {
+            return Err(fault(
+                fields,
+                FieldProblem::Missing {
+                    fields,
+                    header: width,
+                },
+            ));
+        }
+        if fields > width {
+            return Err(fault(
+                width,
+                FieldProblem::Extra {
+                    fields,
+                    header: width,
+                },
+            ));
+        }
+        let mut sample = [0.0; 3];
+        for (value, &index) in sample.iter_mut().zip(&positions) {
+            *value = parse(&record[index]).map_err(|problem| fault(index, problem))?;
+        }
+        samples.push(sample);
+    }
+    if samples.is_empty() {
+        return Err(CsvError::NoRows {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(samples)
+}
+
+/// One field as a finite number.
+fn parse(text: &str) -> Result<f64, FieldProblem> {
+    if text.is_empty() {
+        return Err(FieldProblem::Empty);
+    }
+    match text.parse::<f64>() {
+        Ok(value) if value.is_finite() => Ok(value),
+        Ok(_) => Err(FieldProblem::NonFinite(text.to_string())),
+        Err(_) => Err(FieldProblem::NotANumber(text.to_string())),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn columns() -> [String; 3] {
+        crate::spec::file::DEFAULT_CSV_COLUMNS.map(String::from)
+    }
+
+    /// Reads `text` as a CSV file; errors with the file's path shown as FILE.
+    fn read(text: &str) -> Result<Vec<Vec3>, String> {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("recording.csv");
+        std::fs::write(&path, text).unwrap();
+        read_velocities(&path, &columns())
+            .map_err(|e| e.to_string().replace(&path.display().to_string(), "FILE"))
+    }
+
+    #[test]
+    fn reads_the_named_columns_in_any_order_and_ignores_the_others() {
+        let text = "time_s, vz_m_s,depth_m,vx_m_s,vy_m_s\n\
+                    0,0.01,5.0,1.5,-0.25\n\
+                    1, -0.02 ,5.1,1.25,1e-3\n";
+        assert_eq!(
+            read(text).unwrap(),
+            vec![[1.5, -0.25, 0.01], [1.25, 0.001, -0.02]]
+        );
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("other.csv");
+        std::fs::write(&path, "u,v,w\n1,2,3\n").unwrap();
+        let named = ["w", "u", "v"].map(String::from);
+        assert_eq!(
+            read_velocities(&path, &named).unwrap(),
+            vec![[3.0, 1.0, 2.0]]
+        );
+    }
+
+    #[test]
+    fn a_bad_row_names_the_line_and_the_column() {
+        let header = "time_s,vx_m_s,vy_m_s,vz_m_s\n0,1.0,0.5,0.0\n";
+        for (row, expected) in [
+            ("1,1.0,abc,0.0", "FILE:3: vy_m_s: \"abc\" is not a number"),
+            (
+                "1,1.0,,0.0",
+                "FILE:3: vy_m_s: empty: every row needs a velocity",
+            ),
+            (
+                "1,NaN,0.5,0.0",
+                "FILE:3: vx_m_s: \"NaN\" is not finite: every velocity must be a finite number",
+            ),
+            (
+                "1,1.0,0.5,inf",
+                "FILE:3: vz_m_s: \"inf\" is not finite: every velocity must be a finite number",
+            ),
+            (
+                "1,1.0,0.5",
+                "FILE:3: vz_m_s: missing: the row has 3 fields, the header 4",
+            ),
+            (
+                "1,1.0,0.5,0.0,9",
+                "FILE:3: field 5: not in the header: the row has 5 fields, the header 4",
+            ),
+        ] {
+            assert_eq!(read(&format!("{header}{row}\n")).unwrap_err(), expected);
+        }
+        // Blank lines are skipped but counted.
+        assert_eq!(
+            read(&format!("{header}\n\r\n1,x,0,0\n2,1,1,1\n\n3,1,y,1\n")).unwrap_err(),
+            "FILE:5: vx_m_s: \"x\" is not a number"
+        );
+        assert_eq!(
+            read(&format!("{header}\n1,0,0,0\n2,1,1,1\n\n3,1,y,1\n")).unwrap_err(),
+            "FILE:7: vy_m_s: \"y\" is not a number"
+        );
+        // Windows line ends.
+        assert_eq!(
+            read("vx_m_s,vy_m_s,vz_m_s\r\n0,1,2\r\n\r\n1,z,3\r\n").unwrap_err(),
+            "FILE:4: vy_m_s: \"z\" is not a number"
+        );
+    }
+
+    #[test]
+    fn a_bad_header_names_the_column_and_what_was_found() {
+        assert_eq!(
+            read("time_s,vx_m_s,vy_m_s\n0,1,2\n").unwrap_err(),
+            "FILE:1: vz_m_s: not in the header, which has time_s, vx_m_s, vy_m_s"
+        );
+        assert_eq!(
+            read("vx_m_s,vy_m_s,vz_m_s,vx_m_s\n0,1,2,3\n").unwrap_err(),
+            "FILE:1: vx_m_s: named twice in the header"
+        );
+        assert_eq!(
+            read("vx_m_s,vy_m_s,vz_m_s\n").unwrap_err(),
+            "FILE: no rows below the header: a recording needs at least one sample"
+        );
+        assert_eq!(
+            read("").unwrap_err(),
+            "FILE:1: vx_m_s: not in the header, which has no names (the first line is empty)"
+        );
+    }
+}

@@ -1,0 +1,220 @@
+//! `results/<name>/report.tex`: the tables of `report.md` as booktabs tables, for a
+//! paper to `\input`. In: the report's [`Tables`], built once for both renderings.
+//! Out: table environments only, no preamble; a comment on top names the one package
+//! they need (booktabs). Each DVL's row holds our values, the row below it the
+//! published ones in italics; a flagged cell carries a dagger explained under its table.
+
+use super::{Entry, ReportTable, Signs, Tables};
+use crate::results::read::StoredRun;
+use std::fmt::Write;
+
+pub const FILE: &str = "report.tex";
+
+const SIGNS: Signs = Signs {
+    percent: "\\,\\%",
+    minus: "$-$",
+};
+
+/// The tables as LaTeX.
+pub(super) fn render(run: &StoredRun, tables: &Tables) -> String {
+    let spec = &run.spec;
+    let name = escape(&spec.name);
+    let runs = spec.calibration.monte_carlo_runs;
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "% The tables of report.md ({}), written by dcnet-exp {}.",
+        spec.name,
+        env!("CARGO_PKG_VERSION")
+    );
+    let _ = writeln!(
+        out,
+        "% \\input{{report.tex}} in a document that loads booktabs: \\usepackage{{booktabs}}."
+    );
+    let _ = writeln!(
+        out,
+        "% Each table is centred on the page, into the margins where it is wider than the text;\n% in a two-column layout, make it a table* or scale its tabular with \\resizebox."
+    );
+    // In the caption of a table with published values.
+    let below = |table: &ReportTable| {
+        if table.tally.compared > 0 {
+            "; the published value in italics in the row below ours"
+        } else {
+            ""
+        }
+    };
+    // Under a table with published values: what its daggers mean, and their count.
+    let note = |table: &ReportTable, what: &str| {
+        let published = run.published.as_ref()?;
+        (table.tally.compared > 0).then(|| {
+            format!(
+                "\\dag{{}} flags an RMSE more than {}\\,\\% off the published one{what} ({} of {} cells). Published values: {}.",
+                spec.report.tolerance_pct,
+                table.tally.flagged,
+                table.tally.compared,
+                escape(&published.source)
+            )
+        })
+    };
+    let label = label(&spec.name);
+    table(
+        &mut out,
+        &tables.calibration,
+        &format!(
+            "{name}: calibration on {}. RMSE in cm/s at T\\textsubscript{{conv}}, mean over {runs} Monte Carlo runs, T\\textsubscript{{conv}} in s in brackets{}. The floor corrects with the true terms, a bound no estimator can beat.",
+            escape(&spec.calibration.trajectory),
+            below(&tables.calibration)
+        ),
+        &format!("tab:{label}-calibration"),
+        note(&tables.calibration, ", or another T\\textsubscript{conv}").as_deref(),
+    );
+    table(
+        &mut out,
+        &tables.evaluation,
+        &format!(
+            "{name}: evaluation with the T\\textsubscript{{conv}} terms. RMSE in cm/s, mean over {runs} Monte Carlo runs, improvement over the baseline in brackets{}.",
+            below(&tables.evaluation)
+        ),
+        &format!("tab:{label}-evaluation"),
+        note(&tables.evaluation, "").as_deref(),
+    );
+    if let Some(beyond) = &tables.beyond {
+        table(
+            &mut out,
+            beyond,
+            &format!(
+                "{name}: beyond the paper, least squares on the same data and the floor. RMSE in cm/s, mean over {runs} Monte Carlo runs, improvement over the baseline in brackets."
+            ),
+            &format!("tab:{label}-beyond"),
+            None,
+        );
+    }
+    out
+}
+
+/// One table environment: a row per row of `table`, the published values' row below
+/// it where it has any, a rule between DVLs, and `note` under the table.
+fn table(out: &mut String, table: &ReportTable, caption: &str, label: &str, note: Option<&str>) {
+    let labels = table.labels.len();
+    let _ = writeln!(out, "\n\\begin{{table}}[htbp]");
+    let _ = writeln!(out, "  \\centering\\small\\setlength{{\\tabcolsep}}{{4pt}}");
+    let _ = writeln!(out, "  \\caption{{{caption}}}");
+    let _ = writeln!(out, "  \\label{{{label}}}");
+    // Centred on the page, into both margins when wider than the text.
+    let _ = writeln!(out, "  \\makebox[\\linewidth]{{%");
+    let _ = writeln!(
+        out,
+        "  \\begin{{tabular}}{{{}{}}}",
+        "l".repeat(labels),
+        "r".repeat(table.columns.len())
+    );
+    let _ = writeln!(out, "    \\toprule");
+    let header: Vec<String> = table
+        .labels
+        .iter()
+        .map(|l| escape(l))
+        .chain(table.columns.iter().map(|c| escape(c)))
+        .collect();
+    row(out, &header);
+    for (g, group) in table.groups.iter().enumerate() {
+        let _ = writeln!(out, "    \\midrule");
+        for (r, line) in group.iter().enumerate() {
+            // The DVL is named on its group's first row only.
+            let mut cells: Vec<String> = line
+                .labels
+                .iter()
+                .enumerate()
+                .map(|(i, l)| {
+                    if i == 0 && r > 0 && labels > 1 {
+                        String::new()
+                    } else {
+                        escape(l)
+                    }
+                })
+                .collect();
+            cells.extend(line.cells.iter().map(|cell| match cell {
+                Some(entry) => ours(entry),
+                None => "---".into(),
+            }));
+            row(out, &cells);
+            if line
+                .cells
+                .iter()
+                .flatten()
+                .any(|entry| entry.paper.is_some())
+            {
+                let mut cells = vec![String::new(); labels - 1];
+                cells.push("\\quad\\textit{paper}".into());
+                cells.extend(line.cells.iter().map(|cell| {
+                    match cell.as_ref().and_then(|entry| entry.paper.as_ref()) {
+                        Some(paper) => format!("\\textit{{{}}}", paper.text(&SIGNS)),
+                        None => String::new(),
+                    }
+                }));
+                row(out, &cells);
+            }
+        }
+        if g + 1 == table.groups.len() {
+            let _ = writeln!(out, "    \\bottomrule");
+        }
+    }
+    let _ = writeln!(out, "  \\end{{tabular}}}}");
+    if let Some(note) = note {
+        let _ = writeln!(out, "  \\par\\smallskip");
+        let _ = writeln!(out, "  {{\\footnotesize\\raggedright {note}\\par}}");
+    }
+    let _ = writeln!(out, "\\end{{table}}");
+}
+
+fn row(out: &mut String, cells: &[String]) {
+    let _ = writeln!(out, "    {} \\\\", cells.join(" & "));
+}
+
+/// Our figure, with a dagger where the Markdown report has its ⚠.
+fn ours(entry: &Entry) -> String {
+    let text = entry.ours.text(&SIGNS);
+    if entry.flagged {
+        format!("{text}\\rlap{{\\textsuperscript{{\\dag}}}}")
+    } else {
+        text
+    }
+}
+
+/// `text` with the characters LaTeX treats as special written as text.
+fn escape(text: &str) -> String {
+    let mut escaped = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '\\' => escaped.push_str("\\textbackslash{}"),
+            '~' => escaped.push_str("\\textasciitilde{}"),
+            '^' => escaped.push_str("\\textasciicircum{}"),
+            '&' | '%' | '$' | '#' | '_' | '{' | '}' => {
+                escaped.push('\\');
+                escaped.push(c);
+            }
+            _ => escaped.push(c),
+        }
+    }
+    escaped
+}
+
+/// A `\label` key from the experiment's name: letters and digits, other characters `-`.
+fn label(name: &str) -> String {
+    name.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn specials_are_escaped_and_labels_are_plain() {
+        assert_eq!(
+            escape("T10_Cal & 50% #2 {a} $x ~^\\"),
+            "T10\\_Cal \\& 50\\% \\#2 \\{a\\} \\$x \\textasciitilde{}\\textasciicircum{}\\textbackslash{}"
+        );
+        assert_eq!(label("sweep/lr=0.5,c=8"), "sweep-lr-0-5-c-8");
+    }
+}
