@@ -8,22 +8,6 @@ mod common;
 use common::*;
 use std::path::Path;
 
-/// A small quick run: 3 Monte Carlo runs, 2 epochs.
-fn small_quick_run(dir: &Path, extra: &[&str]) {
-    let mut args = vec![
-        "run",
-        "experiments/quick.toml",
-        "--set",
-        "calibration.monte_carlo_runs=3",
-        "--set",
-        "training.epochs=2",
-        "--no-plots",
-    ];
-    args.extend(extra);
-    let output = dcnet(dir, &args);
-    assert!(output.status.success(), "{}", stderr(&output));
-}
-
 /// The rows of the Markdown table under `## {section}`, each cell trimmed.
 fn section_rows(markdown: &str, section: &str) -> Vec<Vec<String>> {
     let start = markdown
@@ -56,8 +40,8 @@ fn marked(rows: &[Vec<String>], mark_column: usize) -> Vec<String> {
 #[test]
 fn two_folders_of_one_spec_differ_in_no_key_and_no_cell_and_the_file_is_what_is_printed() {
     let project = project(false);
-    small_quick_run(project.path(), &[]);
-    small_quick_run(project.path(), &["--out", "again"]);
+    small_quick_run(project.path(), &["--no-plots"]);
+    small_quick_run(project.path(), &["--no-plots", "--out", "again"]);
     let output = dcnet(
         project.path(),
         &[
@@ -110,10 +94,11 @@ const MODEL_BASED: &str = "estimators.kinds=[\"baseline\", \"least_squares\", \"
 #[test]
 fn a_changed_dvl2_noise_marks_its_dvl2_cells_and_no_dvl1_cell() {
     let project = project(false);
-    small_quick_run(project.path(), &["--set", MODEL_BASED]);
+    small_quick_run(project.path(), &["--no-plots", "--set", MODEL_BASED]);
     small_quick_run(
         project.path(),
         &[
+            "--no-plots",
             "--set",
             MODEL_BASED,
             "--set",
@@ -239,7 +224,11 @@ fn a_folder_that_holds_no_results_is_refused_naming_its_file() {
     let project = project(false);
     small_quick_run(
         project.path(),
-        &["--set", "estimators.kinds=[\"baseline\", \"floor\"]"],
+        &[
+            "--no-plots",
+            "--set",
+            "estimators.kinds=[\"baseline\", \"floor\"]",
+        ],
     );
     let refused = |a: &str, b: &str, message: &str| {
         let output = dcnet(project.path(), &["compare", a, b]);

@@ -18,21 +18,6 @@ const FIGURES: [(&str, (u32, u32)); 6] = [
     ("training_loss", (2000, 1240)),
 ];
 
-/// A small quick run: 3 Monte Carlo runs, 2 epochs.
-fn small_quick_run(dir: &Path, extra: &[&str]) {
-    let mut args = vec![
-        "run",
-        "experiments/quick.toml",
-        "--set",
-        "calibration.monte_carlo_runs=3",
-        "--set",
-        "training.epochs=2",
-    ];
-    args.extend(extra);
-    let output = dcnet(dir, &args);
-    assert!(output.status.success(), "{}", stderr(&output));
-}
-
 fn assert_svg(path: &Path, size: (u32, u32)) {
     let text = std::fs::read_to_string(path).unwrap();
     assert!(

@@ -86,6 +86,21 @@ pub fn project(with_data: bool) -> tempfile::TempDir {
     dir
 }
 
+/// A small quick run: 3 Monte Carlo runs, 2 epochs.
+pub fn small_quick_run(dir: &Path, extra: &[&str]) {
+    let mut args = vec![
+        "run",
+        "experiments/quick.toml",
+        "--set",
+        "calibration.monte_carlo_runs=3",
+        "--set",
+        "training.epochs=2",
+    ];
+    args.extend(extra);
+    let output = dcnet(dir, &args);
+    assert!(output.status.success(), "{}", stderr(&output));
+}
+
 pub fn read_parquet(path: &Path) -> RecordBatch {
     let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let reader = ParquetRecordBatchReaderBuilder::try_new(file)
