@@ -6,7 +6,6 @@
 mod common;
 
 use common::*;
-use std::path::Path;
 
 /// The rows of the Markdown table under `## {section}`, each cell trimmed.
 fn section_rows(markdown: &str, section: &str) -> Vec<Vec<String>> {
