@@ -537,6 +537,12 @@ fn report_figures(figures: &[plots::Written], folder: &Path) {
 
 /// Prints the comparison of two results folders and writes it to `out`.
 fn compare_folders(first: &Path, second: &Path, out: &Path) -> Result<(), CliError> {
+    if out.is_dir() {
+        return Err(input(anyhow::anyhow!(
+            "--out {}: is a folder; name the file to write the comparison to",
+            out.display()
+        )));
+    }
     let first = compare::read(first).map_err(input)?;
     let second = compare::read(second).map_err(input)?;
     let markdown = compare::render(&first, &second);

@@ -36,11 +36,10 @@ pub enum CompareError {
         points.join(", ")
     )]
     Sweep { path: PathBuf, points: Vec<String> },
-    #[error("writing {}: {source}", path.display())]
+    #[error("writing {}: {error}", path.display())]
     Write {
         path: PathBuf,
-        #[source]
-        source: std::io::Error,
+        error: std::io::Error,
     },
 }
 
@@ -62,9 +61,9 @@ pub fn read(folder: &Path) -> Result<StoredRun, CompareError> {
 
 /// Writes the comparison to `path`, atomically, making its folder if need be.
 pub fn write(path: &Path, markdown: &str) -> Result<(), CompareError> {
-    let failed = |source| CompareError::Write {
+    let failed = |error| CompareError::Write {
         path: path.to_path_buf(),
-        source,
+        error,
     };
     if let Some(folder) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(folder).map_err(failed)?;

@@ -397,6 +397,21 @@ fn validate_accepts_a_good_spec_and_overrides_apply() {
         stdout(&output)
     );
     assert!(!project.path().join("results").exists());
+
+    // A key of [estimators] left out takes its default: all five error models.
+    let dir = tempfile::tempdir().unwrap();
+    quick_with(
+        dir.path(),
+        "error_models = [\"EM1\", \"EM2\", \"EM3\", \"EM4\", \"EM5\"]\n",
+        "",
+    );
+    let output = dcnet(dir.path(), &["plan", "spec.toml"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(
+        stdout(&output).contains("train DCNet EM5"),
+        "{}",
+        stdout(&output)
+    );
 }
 
 #[test]

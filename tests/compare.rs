@@ -274,4 +274,21 @@ fn a_folder_that_holds_no_results_is_refused_naming_its_file() {
         "results/quick",
         "error: sweep: a sweep folder, not a results folder; compare two of its points: sweep/seed=1, sweep/seed=2",
     );
+    // A folder as the file to write: refused before anything is printed, said once.
+    let output = dcnet(
+        project.path(),
+        &[
+            "compare",
+            "results/quick",
+            "results/quick",
+            "--out",
+            "empty",
+        ],
+    );
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert_eq!(
+        stderr(&output),
+        "error: --out empty: is a folder; name the file to write the comparison to\n"
+    );
+    assert!(stdout(&output).is_empty());
 }

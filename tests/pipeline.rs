@@ -501,7 +501,7 @@ fn a_sweep_over_two_keys_runs_every_point_and_tabulates_them() {
     // Two keys: also the parallel coordinates, a panel per DVL of three axes each.
     assert_png(
         &dir.join("plots/quick-sweep/sweep_parallel.png"),
-        (1740, 1800),
+        (2000, 1800),
     );
     let svg = std::fs::read_to_string(dir.join("plots/quick-sweep/sweep_parallel.svg")).unwrap();
     assert!(svg.contains("<path") && !svg.contains("<text"), "{svg}");

@@ -3,7 +3,8 @@
 //! `trajectories.parquet`, [`crate::spec::file::DEFAULT_CSV_COLUMNS`]); other columns are
 //! ignored, in any order.
 //! Every row is checked: a field that is missing, empty, not a number or not finite is
-//! an error that names the file, the line (the header is line 1) and the column.
+//! an error that names the file, the line (the header is line 1) and the column, and so
+//! is a blank line between samples (blank lines at the end are allowed).
 
 use crate::Vec3;
 use std::path::{Path, PathBuf};
@@ -12,8 +13,8 @@ use std::path::{Path, PathBuf};
 pub enum CsvError {
     #[error("{}: file not found", path.display())]
     Missing { path: PathBuf },
-    #[error("{}: cannot read as CSV: {source}", path.display())]
-    Read { path: PathBuf, source: ::csv::Error },
+    #[error("{}: cannot read as CSV: {error}", path.display())]
+    Read { path: PathBuf, error: ::csv::Error },
     #[error("{}:1: {column}: not in the header, which has {}", path.display(), found_list(found))]
     MissingColumn {
         path: PathBuf,
@@ -24,6 +25,11 @@ pub enum CsvError {
     DuplicateColumn { path: PathBuf, column: String },
     #[error("{}: no rows below the header: a recording needs at least one sample", path.display())]
     NoRows { path: PathBuf },
+    #[error(
+        "{}:{line}: blank line: every line below the header is a sample, and a blank one would shift the samples after it",
+        path.display()
+    )]
+    BlankLine { path: PathBuf, line: u64 },
     #[error("{}:{line}: {column}: {problem}", path.display())]
     Field {
         path: PathBuf,
@@ -65,21 +71,27 @@ pub fn read_velocities(path: &Path, columns: &[String; 3]) -> Result<Vec<Vec3>, 
         },
         _ => CsvError::Read {
             path: path.to_path_buf(),
-            source: source.into(),
+            error: source.into(),
         },
     })?;
-    let read_error = |source| CsvError::Read {
+    let read_error = |error| CsvError::Read {
         path: path.to_path_buf(),
-        source,
+        error,
     };
-    // A record's position starts at the blank lines the reader skipped before it.
-    let line_of = |position: &::csv::Position| {
-        let skipped = bytes[position.byte() as usize..]
+    // A record's position starts at the line ends the reader skipped before it: the
+    // `\n` of the previous line's `\r\n`, then those of blank lines. Returns the
+    // record's line and, when blank lines precede it, the first of them.
+    let lines_of = |position: &::csv::Position| {
+        let start = position.byte() as usize;
+        let newlines = bytes[start..]
             .iter()
             .take_while(|b| matches!(b, b'\n' | b'\r'))
             .filter(|b| **b == b'\n')
-            .count();
-        position.line() + skipped as u64
+            .count() as u64;
+        let crlf_end =
+            u64::from(start > 0 && bytes[start - 1] == b'\r' && bytes.get(start) == Some(&b'\n'));
+        let first_blank = (newlines > crlf_end).then_some(position.line() + crlf_end);
+        (position.line() + newlines, first_blank)
     };
     let mut reader = ::csv::ReaderBuilder::new()
         .flexible(true)
@@ -117,7 +129,13 @@ pub fn read_velocities(path: &Path, columns: &[String; 3]) -> Result<Vec<Vec3>, 
     let mut samples = Vec::new();
     for record in reader.records() {
         let record = record.map_err(read_error)?;
-        let line = record.position().map_or(0, line_of);
+        let (line, first_blank) = record.position().map_or((0, None), lines_of);
+        if let Some(line) = first_blank {
+            return Err(CsvError::BlankLine {
+                path: path.to_path_buf(),
+                line,
+            });
+        }
         let fault = |index: usize, problem| CsvError::Field {
             path: path.to_path_buf(),
             line,
@@ -236,19 +254,29 @@ mod tests {
         ] {
             assert_eq!(read(&format!("{header}{row}\n")).unwrap_err(), expected);
         }
-        // Blank lines are skipped but counted.
+        // A blank line between samples would shift the ones after it; at the end it
+        // shifts nothing.
+        let blank = "blank line: every line below the header is a sample, and a blank one would shift the samples after it";
         assert_eq!(
-            read(&format!("{header}\n\r\n1,x,0,0\n2,1,1,1\n\n3,1,y,1\n")).unwrap_err(),
-            "FILE:5: vx_m_s: \"x\" is not a number"
+            read(&format!("{header}1,0,0,0\n\n2,1,1,1\n")).unwrap_err(),
+            format!("FILE:4: {blank}")
         );
         assert_eq!(
-            read(&format!("{header}\n1,0,0,0\n2,1,1,1\n\n3,1,y,1\n")).unwrap_err(),
-            "FILE:7: vy_m_s: \"y\" is not a number"
+            read("vx_m_s,vy_m_s,vz_m_s\r\n0,1,2\r\n\r\n1,2,3\r\n").unwrap_err(),
+            format!("FILE:3: {blank}")
         );
-        // Windows line ends.
         assert_eq!(
-            read("vx_m_s,vy_m_s,vz_m_s\r\n0,1,2\r\n\r\n1,z,3\r\n").unwrap_err(),
-            "FILE:4: vy_m_s: \"z\" is not a number"
+            read(&format!("{header}1,0,0,0\n\n\r\n")).unwrap(),
+            vec![[1.0, 0.5, 0.0], [0.0, 0.0, 0.0]]
+        );
+        // Windows line ends, and a quoted field over two lines, keep the count.
+        assert_eq!(
+            read("vx_m_s,vy_m_s,vz_m_s\r\n0,1,2\r\n1,z,3\r\n").unwrap_err(),
+            "FILE:3: vy_m_s: \"z\" is not a number"
+        );
+        assert_eq!(
+            read("note,vx_m_s,vy_m_s,vz_m_s\n\"a\nb\",0,1,2\n,1,w,3\n").unwrap_err(),
+            "FILE:4: vy_m_s: \"w\" is not a number"
         );
     }
 

@@ -199,7 +199,10 @@ pub fn legend(area: &Area, title: &str, entries: &[(Swatch, String)]) -> PlotRes
 
 /// A value with three significant digits, or all of its integer digits.
 pub fn three_digits(value: f64) -> String {
-    let magnitude = value.abs().max(1e-12).log10().floor() as i32;
+    if value != 0.0 && value.abs() < 1e-3 {
+        return format!("{value:.2e}");
+    }
+    let magnitude = value.abs().log10().floor() as i32;
     let decimals = (2 - magnitude).max(0) as usize;
     format!("{value:.decimals$}")
 }
@@ -209,8 +212,32 @@ pub fn three_digits(value: f64) -> String {
 pub enum Edge {
     /// The top of a value axis that runs up: the value is written below the mark.
     Top,
+    /// The bottom of a value axis that runs up: the value is written above the mark.
+    Bottom,
     /// The right end of a value axis that runs right: written left of and above it.
     Right,
+    /// The left end of a value axis that runs right: written right of and above it.
+    Left,
+}
+
+impl Edge {
+    /// The edge of a vertical axis `scale` at which the cut `value` is drawn.
+    pub fn of_vertical(scale: &super::scale::Scale, value: f64) -> Edge {
+        if scale.is_below(value) {
+            Edge::Bottom
+        } else {
+            Edge::Top
+        }
+    }
+
+    /// The edge of a horizontal axis `scale` at which the cut `value` is drawn.
+    pub fn of_horizontal(scale: &super::scale::Scale, value: f64) -> Edge {
+        if scale.is_below(value) {
+            Edge::Left
+        } else {
+            Edge::Right
+        }
+    }
 }
 
 /// Marks a value drawn at the `edge` of a panel because it lies beyond: a triangle at
@@ -224,7 +251,9 @@ pub fn cut_mark<X: Ranged<ValueType = f64>, Y: Ranged<ValueType = f64>>(
 ) -> PlotResult {
     let (offset, anchor) = match edge {
         Edge::Top => ((8, 4), Pos::new(HPos::Left, VPos::Top)),
+        Edge::Bottom => ((8, -4), Pos::new(HPos::Left, VPos::Bottom)),
         Edge::Right => ((-6, -8), Pos::new(HPos::Right, VPos::Bottom)),
+        Edge::Left => ((6, -8), Pos::new(HPos::Left, VPos::Bottom)),
     };
     chart.draw_series(std::iter::once(
         EmptyElement::at(at)

@@ -191,7 +191,8 @@ fn calibration(run: &StoredRun) -> PlotResult<Outcome> {
                 }
                 if y.is_cut(row.rmse_cm_s) {
                     let color = series_look(row.estimator, row.error_model).color;
-                    cut_mark(&mut chart, at, row.rmse_cm_s, color, Edge::Top)?;
+                    let edge = Edge::of_vertical(&y, row.rmse_cm_s);
+                    cut_mark(&mut chart, at, row.rmse_cm_s, color, edge)?;
                     cut = true;
                 }
             }
@@ -579,9 +580,19 @@ fn monte_carlo_spread(run: &StoredRun) -> PlotResult<Outcome> {
                         .filter(|v| (**v < low || **v > high) && !x.is_cut(**v))
                         .map(|v| Circle::new((*v, y), 2, color.filled())),
                 )?;
-                for value in values.iter().filter(|v| x.is_cut(**v)) {
-                    let at = (x.shown(*value), y);
-                    cut_mark(&mut chart, at, *value, color, Edge::Right)?;
+                // One mark an end: the value furthest beyond it.
+                let below = values
+                    .iter()
+                    .copied()
+                    .filter(|v| x.is_below(*v))
+                    .reduce(f64::min);
+                let above = values
+                    .iter()
+                    .copied()
+                    .filter(|v| x.is_cut(*v) && !x.is_below(*v));
+                for value in below.into_iter().chain(above.reduce(f64::max)) {
+                    let at = (x.shown(value), y);
+                    cut_mark(&mut chart, at, value, color, Edge::of_horizontal(&x, value))?;
                 }
                 if estimator == EstimatorKind::Floor {
                     let mean = values.iter().sum::<f64>() / values.len() as f64;

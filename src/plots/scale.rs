@@ -2,8 +2,10 @@
 //! chooses a linear axis when they span less than a decade and a logarithmic one
 //! otherwise, with at least [`MIN_TICKS`] labelled ticks at round numbers;
 //! [`Scale::fit_values`] also ends the axis below one value, or one series, lying far
-//! above all the others ([`cut_above`]), so that the others keep the panel, and the
-//! figure draws that value at the edge with its number written on it. A [`Scale`] is a
+//! above all the others ([`cut_above`]), and above values more than [`MAX_DECADES`]
+//! below the highest (a floor of 10⁻¹² cm/s when a DVL has no noise), so that the
+//! others keep the panel, and the figure draws such a value at the edge with its
+//! number written on it. A [`Scale`] is a
 //! plotters coordinate: charts use it as an axis directly, and it labels its own ticks.
 
 use plotters::coord::ranged1d::{KeyPointHint, NoDefaultFormatting, Ranged, ValueFormatter};
@@ -15,6 +17,10 @@ pub const MIN_TICKS: usize = 3;
 /// Values are cut when the axis without them would be at most this share of the axis
 /// with them: the others would be squashed into that share of the panel.
 const OUTLIER_SHARE: f64 = 0.25;
+
+/// How many decades below a panel's highest value its axis reaches at most: values
+/// further below, such as an RMSE of rounding size, are drawn at the lower edge.
+const MAX_DECADES: i32 = 4;
 
 /// A numeric axis: its range, whether it is logarithmic, and its ticks with labels.
 #[derive(Debug, Clone, PartialEq)]
@@ -93,25 +99,41 @@ impl Scale {
     /// An axis for the values of a panel, as [`Scale::fit`] makes it, ending below at
     /// most `most` far values ([`cut_above`]): draw each value at [`Scale::shown`], and
     /// mark those that [`Scale::is_cut`] with their number.
+    /// Values more than [`MAX_DECADES`] below the highest are left below the axis.
     pub fn fit_values(values: &[f64], most: usize) -> Scale {
-        let cut = cut_above(values, most).unwrap_or(f64::INFINITY);
-        let (low, high) = values
+        let highest = values
             .iter()
-            .filter(|v| v.is_finite() && **v <= cut)
+            .filter(|v| v.is_finite())
+            .fold(f64::NEG_INFINITY, |high, v| high.max(*v));
+        let floor = highest / 10f64.powi(MAX_DECADES);
+        let near: Vec<f64> = values
+            .iter()
+            .copied()
+            .filter(|v| v.is_finite() && (highest <= 0.0 || *v < 0.0 || *v >= floor))
+            .collect();
+        let cut = cut_above(&near, most).unwrap_or(f64::INFINITY);
+        let (low, high) = near
+            .iter()
+            .filter(|v| **v <= cut)
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
                 (lo.min(*v), hi.max(*v))
             });
         Scale::fit(low, high)
     }
 
-    /// Whether `value` lies beyond the end of the axis.
+    /// Whether `value` lies beyond either end of the axis.
     pub fn is_cut(&self, value: f64) -> bool {
-        value > self.range.end
+        value > self.range.end || self.is_below(value)
     }
 
-    /// Where `value` is drawn: itself, or the end of the axis when it lies beyond.
+    /// Whether `value` lies below the start of the axis.
+    pub fn is_below(&self, value: f64) -> bool {
+        value < self.range.start
+    }
+
+    /// Where `value` is drawn: itself, or the end of the axis it lies beyond.
     pub fn shown(&self, value: f64) -> f64 {
-        value.min(self.range.end)
+        value.clamp(self.range.start, self.range.end)
     }
 
     /// The ticks, in ascending order.
@@ -364,5 +386,25 @@ mod tests {
         assert!(scale.is_cut(25.0) && !scale.is_cut(7.0));
         assert_eq!(scale.shown(25.0), scale.range().end);
         assert_eq!(scale.shown(6.3), 6.3);
+    }
+
+    #[test]
+    fn values_of_rounding_size_are_left_below_the_axis() {
+        // A DVL without noise: its floor is 1e-12 cm/s beside a panel near 6 cm/s, and
+        // least squares EM5 far above.
+        let values = [
+            1e-12, 2e-12, 5.8, 5.9, 6.0, 6.1, 6.2, 6.3, 6.4, 6.4, 6.3, 31.9,
+        ];
+        let scale = Scale::fit_values(&values, 1);
+        assert!(!scale.log);
+        assert_eq!(ticks(&scale), [5.8, 6.0, 6.2, 6.4]);
+        assert!(scale.is_cut(1e-12) && scale.is_below(1e-12) && scale.is_cut(31.9));
+        assert!(!scale.is_below(31.9) && !scale.is_cut(5.8));
+        assert_eq!(scale.shown(1e-12), scale.range().start);
+        // Within four decades of the highest value, nothing is left out: a log axis.
+        let scale = Scale::fit_values(&[0.001, 0.01, 0.1, 1.0, 5.0], 1);
+        assert!(scale.log && !scale.is_cut(0.001));
+        assert_eq!(labels(&scale), ["0.001", "0.01", "0.1", "1"]);
+        assert_eq!(super::super::draw::three_digits(1.234e-12), "1.23e-12");
     }
 }

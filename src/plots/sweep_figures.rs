@@ -170,7 +170,8 @@ fn against(sweep: &StoredSweep, metric: Metric, k: usize) -> PlotResult<Outcome>
                         .map(|&point| Circle::new(shown(point), 4, look.color.filled())),
                 )?;
                 for &(x, value) in dots.iter().filter(|(_, v)| y.is_cut(*v)) {
-                    cut_mark(&mut chart, shown((x, value)), value, look.color, Edge::Top)?;
+                    let edge = Edge::of_vertical(&y, value);
+                    cut_mark(&mut chart, shown((x, value)), value, look.color, edge)?;
                 }
             }
         }

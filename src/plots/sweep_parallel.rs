@@ -118,6 +118,8 @@ const PANEL_HEIGHT: u32 = 420;
 const AXIS_GAP: u32 = 240;
 const LEFT: i32 = 130;
 const COLOR_BAR_WIDTH: u32 = 200;
+/// The narrowest figure: its title fits in it whatever the metric.
+const MIN_WIDTH: u32 = 1000;
 
 /// The figure, or why the sweep has none.
 pub fn parallel(sweep: &StoredSweep, metric: Metric) -> PlotResult<Outcome> {
@@ -144,10 +146,11 @@ pub fn parallel(sweep: &StoredSweep, metric: Metric) -> PlotResult<Outcome> {
         })
         .collect();
     let caption = format!(
-        "{} of each sweep point, mean over its DCNet error models (one line per point)",
+        "{}, a line per point: mean over DCNet error models",
         metric.axis()
     );
-    let width = LEFT as u32 + AXIS_GAP * keys.len() as u32 + 60 + COLOR_BAR_WIDTH;
+    // Wide enough for the axes, and for the longest caption on two axes.
+    let width = (LEFT as u32 + AXIS_GAP * keys.len() as u32 + 60 + COLOR_BAR_WIDTH).max(MIN_WIDTH);
     let height = 60 + PANEL_HEIGHT * panels.len() as u32;
     let svg = draw_svg((width, height), |root| {
         let root = root.titled(&caption, font(TITLE_SIZE))?;

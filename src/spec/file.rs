@@ -181,8 +181,9 @@ pub struct EvaluationFile {
     pub trajectories: Vec<String>,
 }
 
+/// Each key left out takes its default: every kind, every error model.
 #[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, default)]
 pub struct EstimatorsFile {
     /// Any of `baseline`, `least_squares`, `dcnet`, `floor`.
     pub kinds: Vec<String>,
