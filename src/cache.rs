@@ -77,20 +77,15 @@ impl DataHashes {
         let origin = match &source.origin {
             Origin::File {
                 path,
-                format: FileFormat::Npy,
+                format,
                 samples,
             } => {
-                format!("sha256 {} samples {samples:?}", self.0[path])
-            }
-            Origin::File {
-                path,
-                format: FileFormat::Csv { columns },
-                samples,
-            } => {
-                format!(
-                    "sha256 {} columns {columns:?} samples {samples:?}",
-                    self.0[path]
-                )
+                // A `.npy` file's key is as it was before `.csv` files were read.
+                let columns = match format {
+                    FileFormat::Npy => String::new(),
+                    FileFormat::Csv { columns } => format!(" columns {columns:?}"),
+                };
+                format!("sha256 {}{columns} samples {samples:?}", self.0[path])
             }
             Origin::Synthetic { samples } => {
                 format!("synthetic {samples} {:?}", spec.resolved.data.synthetic)

@@ -80,6 +80,15 @@ pub struct Mean {
 }
 
 impl Mean {
+    /// A mean RMSE of `run`'s tables, over its Monte Carlo runs.
+    fn of(run: &StoredRun, rmse_cm_s: f64, std_cm_s: f64) -> Mean {
+        Mean {
+            rmse_cm_s,
+            std_cm_s,
+            runs: run.spec.calibration.monte_carlo_runs,
+        }
+    }
+
     /// The standard error of the mean, std / √n; none for a single run, whose stored
     /// standard deviation of 0 says nothing about the spread.
     pub fn standard_error(&self) -> Option<f64> {
@@ -378,15 +387,6 @@ fn spec_section(a: &StoredRun, b: &StoredRun, out: &mut String) {
 }
 
 fn calibration_section(a: &StoredRun, b: &StoredRun, tally: &mut Tally, out: &mut String) {
-    let mean = |run: &StoredRun| {
-        let runs = run.spec.calibration.monte_carlo_runs;
-        move |r: &CalibrationRow| Mean {
-            rmse_cm_s: r.rmse_cm_s,
-            std_cm_s: r.rmse_std_cm_s,
-            runs,
-        }
-    };
-    let (mean_a, mean_b) = (mean(a), mean(b));
     let mut table = new_table(&[
         "DVL",
         "estimator",
@@ -407,7 +407,9 @@ fn calibration_section(a: &StoredRun, b: &StoredRun, tally: &mut Tally, out: &mu
                 .map(|r| r.window_s.to_string())
                 .expect("a row"),
         );
-        cells.extend(rmse_columns(row_a.map(&mean_a), row_b.map(&mean_b), tally));
+        let mean_a = row_a.map(|r| Mean::of(a, r.rmse_cm_s, r.rmse_std_cm_s));
+        let mean_b = row_b.map(|r| Mean::of(b, r.rmse_cm_s, r.rmse_std_cm_s));
+        cells.extend(rmse_columns(mean_a, mean_b, tally));
         table.add_row(cells);
     }
     let _ = writeln!(
@@ -418,15 +420,6 @@ fn calibration_section(a: &StoredRun, b: &StoredRun, tally: &mut Tally, out: &mu
 }
 
 fn evaluation_section(a: &StoredRun, b: &StoredRun, tally: &mut Tally, out: &mut String) {
-    let mean = |run: &StoredRun| {
-        let runs = run.spec.calibration.monte_carlo_runs;
-        move |r: &EvaluationRow| Mean {
-            rmse_cm_s: r.rmse_cm_s,
-            std_cm_s: r.rmse_std_cm_s,
-            runs,
-        }
-    };
-    let (mean_a, mean_b) = (mean(a), mean(b));
     let mut table = new_table(&[
         "DVL",
         "estimator",
@@ -462,7 +455,9 @@ fn evaluation_section(a: &StoredRun, b: &StoredRun, tally: &mut Tally, out: &mut
             |row: Option<&EvaluationRow>| optional(row.map(|r| r.t_conv_s), |t| t.to_string());
         cells.push(t_conv(row_a));
         cells.push(t_conv(row_b));
-        cells.extend(rmse_columns(row_a.map(&mean_a), row_b.map(&mean_b), tally));
+        let mean_a = row_a.map(|r| Mean::of(a, r.rmse_cm_s, r.rmse_std_cm_s));
+        let mean_b = row_b.map(|r| Mean::of(b, r.rmse_cm_s, r.rmse_std_cm_s));
+        cells.extend(rmse_columns(mean_a, mean_b, tally));
         // The baseline's improvement over itself is 0 by definition: left out.
         let improvement = |row: Option<&EvaluationRow>| {
             optional(

@@ -44,6 +44,10 @@ pub mod train;
 /// A velocity (or any xyz vector): x, y, z in m/s unless a name says otherwise.
 pub type Vec3 = [f64; 3];
 
+/// The names of a velocity's x, y, z columns: in `trajectories.parquet`, and the
+/// columns read from a `.csv` recording whose spec names none.
+pub const VELOCITY_COLUMNS: [&str; 3] = ["vx_m_s", "vy_m_s", "vz_m_s"];
+
 /// The distinct values of `values`, in the order they first appear.
 pub fn first_seen<T: PartialEq>(values: impl IntoIterator<Item = T>) -> Vec<T> {
     let mut seen = Vec::new();

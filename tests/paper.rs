@@ -5,18 +5,6 @@
 mod common;
 use common::*;
 
-fn find<'a>(rows: &'a [Row], dvl: &str, estimator: &str, model: Option<&str>, at: &str) -> &'a Row {
-    rows.iter()
-        .find(|r| {
-            r.dvl == dvl
-                && r.estimator == estimator
-                && r.error_model.as_deref() == model
-                && r.at == at
-                && r.selected
-        })
-        .unwrap_or_else(|| panic!("no row {dvl} {estimator} {model:?} {at}"))
-}
-
 #[test]
 #[ignore = "needs the Snapir recordings: dcnet-exp data fetch"]
 fn paper_spec_reproduces_the_baseline_column_and_the_floor() {
@@ -51,14 +39,14 @@ fn paper_spec_reproduces_the_baseline_column_and_the_floor() {
 
     let evaluation = evaluation_rows(&results);
     for trajectory in ["T6", "T7", "T8", "T9", "T10Test"] {
-        let baseline = find(&evaluation, "DVL2", "baseline", None, trajectory);
+        let baseline = find_row(&evaluation, "DVL2", "baseline", None, Some(trajectory));
         assert!(
             (baseline.rmse_cm_s - 0.74).abs() <= 0.01,
             "{trajectory}: {}",
             baseline.rmse_cm_s
         );
         assert_eq!(baseline.improvement_pct, Some(0.0));
-        let floor = find(&evaluation, "DVL2", "floor", None, trajectory);
+        let floor = find_row(&evaluation, "DVL2", "floor", None, Some(trajectory));
         // Beam noise 0.02 cm/s × 2.97 / 1.01: what is left after a perfect correction.
         assert!(
             (floor.rmse_cm_s - 0.0588).abs() < 0.002,
@@ -66,7 +54,7 @@ fn paper_spec_reproduces_the_baseline_column_and_the_floor() {
             floor.rmse_cm_s
         );
     }
-    let floor_dvl1 = find(&evaluation, "DVL1", "floor", None, "T6");
+    let floor_dvl1 = find_row(&evaluation, "DVL1", "floor", None, Some("T6"));
     assert!(
         (floor_dvl1.rmse_cm_s - 5.88).abs() < 0.05,
         "DVL1 floor {}",

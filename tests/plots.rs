@@ -146,18 +146,7 @@ fn the_report_puts_the_parquet_numbers_beside_the_published_ones() {
     let report = std::fs::read_to_string(results.join("report.md")).unwrap();
 
     let calibration = calibration_rows(&results);
-    let at_t_conv = |dvl: &str, estimator: &str, model: Option<&str>| {
-        calibration
-            .iter()
-            .find(|r| {
-                r.selected
-                    && r.dvl == dvl
-                    && r.estimator == estimator
-                    && r.error_model.as_deref() == model
-            })
-            .unwrap()
-            .clone()
-    };
+    let at_t_conv = |dvl, estimator, model| find_row(&calibration, dvl, estimator, model, None);
     let baseline = at_t_conv("DVL1", "baseline", None);
     assert_eq!(
         row(&report, &["DVL1"])[1],
@@ -186,17 +175,8 @@ fn the_report_puts_the_parquet_numbers_beside_the_published_ones() {
     );
 
     let evaluation = evaluation_rows(&results);
-    let find = |dvl: &str, estimator: &str, model: Option<&str>, trajectory: &str| {
-        evaluation
-            .iter()
-            .find(|r| {
-                r.dvl == dvl
-                    && r.estimator == estimator
-                    && r.error_model.as_deref() == model
-                    && r.at == trajectory
-            })
-            .unwrap()
-            .clone()
+    let find = |dvl, estimator, model, trajectory| {
+        find_row(&evaluation, dvl, estimator, model, Some(trajectory))
     };
     let t10 = find("DVL1", "baseline", None, "T10Test");
     assert_eq!(
@@ -361,30 +341,10 @@ fn report_tex_sets_the_parquet_numbers_beside_the_published_ones() {
     );
 
     let calibration = calibration_rows(&results);
-    let at_t_conv = |dvl: &str, estimator: &str, model: Option<&str>| {
-        calibration
-            .iter()
-            .find(|r| {
-                r.selected
-                    && r.dvl == dvl
-                    && r.estimator == estimator
-                    && r.error_model.as_deref() == model
-            })
-            .unwrap()
-            .clone()
-    };
+    let at_t_conv = |dvl, estimator, model| find_row(&calibration, dvl, estimator, model, None);
     let evaluation = evaluation_rows(&results);
-    let find = |dvl: &str, estimator: &str, model: Option<&str>, trajectory: &str| {
-        evaluation
-            .iter()
-            .find(|r| {
-                r.dvl == dvl
-                    && r.estimator == estimator
-                    && r.error_model.as_deref() == model
-                    && r.at == trajectory
-            })
-            .unwrap()
-            .clone()
+    let find = |dvl, estimator, model, trajectory| {
+        find_row(&evaluation, dvl, estimator, model, Some(trajectory))
     };
     let baseline = at_t_conv("DVL1", "baseline", None);
     let em5 = at_t_conv("DVL2", "dcnet", Some("EM5"));

@@ -1,6 +1,6 @@
 //! Reads a recording from a CSV file: a header row, then one row a sample, with the
 //! x, y, z velocity in m/s in the three columns the spec names (by default those of
-//! `trajectories.parquet`, [`crate::spec::file::DEFAULT_CSV_COLUMNS`]); other columns are
+//! `trajectories.parquet`, [`crate::VELOCITY_COLUMNS`]); other columns are
 //! ignored, in any order.
 //! Every row is checked: a field that is missing, empty, not a number or not finite is
 //! an error that names the file, the line (the header is line 1) and the column, and so
@@ -195,7 +195,7 @@ mod tests {
     use super::*;
 
     fn columns() -> [String; 3] {
-        crate::spec::file::DEFAULT_CSV_COLUMNS.map(String::from)
+        crate::VELOCITY_COLUMNS.map(String::from)
     }
 
     /// Reads `text` as a CSV file; errors with the file's path shown as FILE.

@@ -343,6 +343,7 @@ pub fn trajectories_batch(
         })
         .collect();
     let axis = |a: usize| floats(&rows, move |(.., v)| v[a]);
+    let [vx, vy, vz] = crate::VELOCITY_COLUMNS;
     batch(vec![
         ("trajectory", strings(&rows, |(name, ..)| name.to_string())),
         ("roles", strings(&rows, |(_, roles, ..)| roles.to_string())),
@@ -350,9 +351,9 @@ pub fn trajectories_batch(
             "time_s",
             floats(&rows, |(_, _, i, _)| *i as f64 / sample_rate_hz),
         ),
-        ("vx_m_s", axis(0)),
-        ("vy_m_s", axis(1)),
-        ("vz_m_s", axis(2)),
+        (vx, axis(0)),
+        (vy, axis(1)),
+        (vz, axis(2)),
     ])
 }
 

@@ -409,7 +409,7 @@ fn trajectory_rows(batch: &Batch) -> Result<Vec<TrajectorySample>, String> {
     let name = batch.strings("trajectory")?;
     let roles = batch.strings("roles")?;
     let time_s = batch.floats("time_s")?;
-    let [vx, vy, vz] = ["vx_m_s", "vy_m_s", "vz_m_s"].map(|c| batch.floats(c));
+    let [vx, vy, vz] = crate::VELOCITY_COLUMNS.map(|c| batch.floats(c));
     let (vx, vy, vz) = (vx?, vy?, vz?);
     Ok((0..name.len())
         .map(|i| {

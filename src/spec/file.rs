@@ -58,16 +58,12 @@ pub struct TrajectoryFile {
     /// `.csv`); the whole file when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub samples: Option<[usize; 2]>,
-    /// The x, y, z velocity columns of a `.csv` file; [`DEFAULT_CSV_COLUMNS`] when absent.
+    /// The x, y, z velocity columns of a `.csv` file; [`crate::VELOCITY_COLUMNS`] when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub columns: Option<[String; 3]>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub synthetic_duration_s: Option<f64>,
 }
-
-/// The velocity columns read from a `.csv` file whose spec names none: the names
-/// `trajectories.parquet` gives them.
-pub const DEFAULT_CSV_COLUMNS: [&str; 3] = ["vx_m_s", "vy_m_s", "vz_m_s"];
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]

@@ -273,7 +273,7 @@ impl SpecFile {
                         (true, columns) => {
                             let columns = columns
                                 .clone()
-                                .unwrap_or_else(|| file::DEFAULT_CSV_COLUMNS.map(String::from));
+                                .unwrap_or_else(|| crate::VELOCITY_COLUMNS.map(String::from));
                             check_columns(&format!("{key}.columns"), &columns, &mut faults);
                             resolved.data.trajectories[i].columns = Some(columns.clone());
                             FileFormat::Csv { columns }

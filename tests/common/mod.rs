@@ -168,6 +168,26 @@ pub struct Row {
     pub improvement_pct: Option<f64>,
 }
 
+/// The selected row of `rows` (at T_conv, for calibration rows) of the DVL, estimator
+/// and error model, at `at` (a window or trajectory) when given.
+pub fn find_row<'a>(
+    rows: &'a [Row],
+    dvl: &str,
+    estimator: &str,
+    model: Option<&str>,
+    at: Option<&str>,
+) -> &'a Row {
+    rows.iter()
+        .find(|r| {
+            r.selected
+                && r.dvl == dvl
+                && r.estimator == estimator
+                && r.error_model.as_deref() == model
+                && at.is_none_or(|at| r.at == at)
+        })
+        .unwrap_or_else(|| panic!("no row {dvl} {estimator} {model:?} {at:?}"))
+}
+
 pub fn calibration_rows(results: &Path) -> Vec<Row> {
     let batch = read_parquet(&results.join("calibration.parquet"));
     let (dvl, estimator, model) = (
