@@ -25,7 +25,7 @@ use std::path::{Path, PathBuf};
 /// Bumped whenever the dataset generation changes its bytes.
 const DATASET_CODE_VERSION: u32 = 1;
 /// Bumped whenever training changes in a way that changes the weights.
-const TRAINING_CODE_VERSION: u32 = 1;
+const TRAINING_CODE_VERSION: u32 = 2;
 /// Bumped whenever the protocol or an estimator changes its numbers.
 const PROTOCOL_CODE_VERSION: u32 = 1;
 

@@ -16,9 +16,8 @@ use crate::results::read::StoredRun;
 use crate::spec::{Experiment, Origin, Spec, load, load_experiment};
 use crate::sweep;
 use crate::tables;
-use crate::train::{self, Backend, TrainError};
+use crate::train::{self, TrainError};
 use clap::{Parser, Subcommand};
-use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -744,9 +743,8 @@ fn bench_training(spec: &Spec, set: &TrainingSet, batches: usize) -> Result<(), 
         train::train_pass(&spec, set, error_model, &mut state, 1, order, &hidden)?;
         Ok(order.len())
     };
-    for backend in [Backend::Flex, Backend::NdArray] {
-        let mut spec = spec.clone();
-        spec.training.backend = backend;
+    {
+        let backend = spec.training.backend;
         let one_thread = rayon::ThreadPoolBuilder::new()
             .num_threads(1)
             .build()
@@ -755,10 +753,22 @@ fn bench_training(spec: &Spec, set: &TrainingSet, batches: usize) -> Result<(), 
         let done = one_thread.install(|| run_model(&spec, 0))?;
         let single = done as f64 / clock.elapsed().as_secs_f64();
         let clock = Instant::now();
-        let done: usize = (0..threads as u64)
-            .into_par_iter()
-            .map(|i| run_model(&spec, i))
-            .sum::<Result<usize, _>>()?;
+        let done: usize = std::thread::scope(|scope| {
+            let handles: Vec<_> = (0..threads as u64)
+                .map(|i| {
+                    let spec = &spec;
+                    let run_model = &run_model;
+                    scope.spawn(move || {
+                        rayon::ThreadPoolBuilder::new()
+                            .num_threads(1)
+                            .build()
+                            .expect("a pool of one thread")
+                            .install(|| run_model(spec, i))
+                    })
+                })
+                .collect();
+            handles.into_iter().map(|h| h.join().unwrap()).sum::<Result<usize, _>>()
+        })?;
         let together = done as f64 / clock.elapsed().as_secs_f64();
         println!(
             "training {error_model} on {backend}: {single:.0} samples/s with one model on one thread, {together:.0} samples/s with {threads} models on {threads} threads (batch {}, {} conv channels, FC {:?})",

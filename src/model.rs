@@ -1,7 +1,12 @@
 //! DCNet (PAPER-NOTES, "DCNet"): a 1D head on `v_dvl − v_gnss`, a 2D head on the whole
 //! 6×10 window, and a batch of four Linear layers that outputs the error model's terms.
-//! In: a `[batch, 6, time]` window of DVL and GNSS-RTK velocity in m/s. Out: the terms,
-//! scale in % and bias in cm/s (the spec's units, which keep the outputs near 1).
+//! In: windows of DVL and GNSS-RTK velocity in m/s. Out: the terms, scale in % and bias
+//! in cm/s (the spec's units, which keep the outputs near 1).
+//!
+//! Every convolution runs as one matrix product over its unfolded windows: activations
+//! are rows of channels, one row per (window, time, row of the 2D head), and a layer
+//! gathers each output's taps side by side and applies a Linear layer. This is the same
+//! network as a stack of Conv1d and Conv2d, in far fewer and larger operations.
 //!
 //! Weights are drawn from a generator the caller seeds, and dropout masks too, so a
 //! model does not depend on burn's process-wide random state or on which other models
@@ -11,10 +16,9 @@ use crate::dataset::{INPUT_ROWS, TARGET_ROWS};
 use crate::estimators::{Correction, ErrorModel};
 use crate::spec::ModelSpec;
 use burn::module::{Module, Param, ParamId};
-use burn::nn::conv::{Conv1d, Conv1dConfig, Conv2d, Conv2dConfig};
 use burn::nn::{Initializer, Linear, LinearConfig};
-use burn::tensor::activation::{leaky_relu, tanh};
-use burn::tensor::{Device, Tensor, TensorData};
+use burn::tensor::activation::{relu, sigmoid};
+use burn::tensor::{Device, Int, Tensor, TensorData};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use std::fmt;
@@ -49,10 +53,16 @@ impl FromStr for Activation {
     }
 }
 
+/// The three convolutions of the 2D head have 2×2 kernels; the first pairs row i with
+/// row i + 3 (DVL with GNSS), the next two neighbouring rows.
+const KERNEL_2D: usize = 4;
+
 #[derive(Module, Debug)]
 pub struct Dcnet {
-    conv1d: Vec<Conv1d>,
-    conv2d: Vec<Conv2d>,
+    /// The two Conv1d of the 1D head, each over `kernel` time steps of its input.
+    conv1d: Vec<Linear>,
+    /// The three 2×2 Conv2d of the 2D head.
+    conv2d: Vec<Linear>,
     fc: Vec<Linear>,
 }
 
@@ -61,6 +71,8 @@ pub struct Settings {
     pub activation: Activation,
     pub leaky_relu_slope: f64,
     pub dropout: f64,
+    /// Time steps of a Conv1d kernel.
+    pub kernel: usize,
 }
 
 impl From<&ModelSpec> for Settings {
@@ -69,8 +81,79 @@ impl From<&ModelSpec> for Settings {
             activation: spec.activation,
             leaky_relu_slope: spec.leaky_relu_slope,
             dropout: spec.dropout,
+            kernel: spec.conv1d_kernel_size,
         }
     }
+}
+
+/// A batch of windows as the network and the loss take it. The first layer of each
+/// head reads its unfolded input directly, built here on the CPU: it depends on the
+/// data only, never on the weights.
+pub struct Windows {
+    pub count: usize,
+    pub time: usize,
+    /// `[count × (time − kernel + 1), 3 × kernel]`: `v_dvl − v_gnss` in cm/s at each
+    /// tap of the first Conv1d, tap-major.
+    head_1d: Tensor<2>,
+    /// `[count × (time − 1) × 3, 4]`: the 2×2 taps of the first Conv2d, (row, time)-major.
+    head_2d: Tensor<2>,
+    /// `[count, time, 3]`: the DVL velocity in cm/s, which the loss corrects.
+    pub dvl_cm_s: Tensor<3>,
+}
+
+impl Windows {
+    /// `inputs` `[count, 6, time]` row-major: DVL x, y, z then GNSS x, y, z, in m/s.
+    pub fn new(inputs: &[f32], time: usize, kernel: usize, device: &Device) -> Self {
+        let count = inputs.len() / (INPUT_ROWS * time);
+        let value = |window: usize, row: usize, t: usize| inputs[(window * INPUT_ROWS + row) * time + t];
+        let steps_1d = time + 1 - kernel;
+        let mut head_1d = Vec::with_capacity(count * steps_1d * 3 * kernel);
+        let mut head_2d = Vec::with_capacity(count * (time - 1) * 3 * KERNEL_2D);
+        let mut dvl = Vec::with_capacity(count * time * 3);
+        for w in 0..count {
+            for t in 0..steps_1d {
+                for tap in 0..kernel {
+                    for axis in 0..3 {
+                        head_1d.push((value(w, axis, t + tap) - value(w, axis + 3, t + tap)) * 100.0);
+                    }
+                }
+            }
+            for t in 0..time - 1 {
+                for row in 0..3 {
+                    for (row_tap, time_tap) in [(0, 0), (0, 1), (3, 0), (3, 1)] {
+                        head_2d.push(value(w, row + row_tap, t + time_tap));
+                    }
+                }
+            }
+            for t in 0..time {
+                for axis in 0..3 {
+                    dvl.push(value(w, axis, t) * 100.0);
+                }
+            }
+        }
+        Self {
+            count,
+            time,
+            head_1d: Tensor::from_data(TensorData::new(head_1d, [count * steps_1d, 3 * kernel]), device),
+            head_2d: Tensor::from_data(TensorData::new(head_2d, [count * (time - 1) * 3, KERNEL_2D]), device),
+            dvl_cm_s: Tensor::from_data(TensorData::new(dvl, [count, time, 3]), device),
+        }
+    }
+}
+
+/// Targets `[count, 3, time]` row-major in m/s → `[count, time, 3]` in cm/s, the layout
+/// of [`Windows::dvl_cm_s`].
+pub fn truth_cm_s(targets: &[f32], time: usize, device: &Device) -> Tensor<3> {
+    let count = targets.len() / (TARGET_ROWS * time);
+    let mut truth = Vec::with_capacity(targets.len());
+    for w in 0..count {
+        for t in 0..time {
+            for axis in 0..TARGET_ROWS {
+                truth.push(targets[(w * TARGET_ROWS + axis) * time + t] * 100.0);
+            }
+        }
+    }
+    Tensor::from_data(TensorData::new(truth, [count, time, TARGET_ROWS]), device)
 }
 
 impl Dcnet {
@@ -87,13 +170,13 @@ impl Dcnet {
         let channels = spec.conv_channels;
         let kernel = spec.conv1d_kernel_size;
         let conv1d = vec![
-            conv1d(TARGET_ROWS, channels, kernel, device, params),
-            conv1d(channels, channels, kernel, device, params),
+            linear(TARGET_ROWS * kernel, channels, device, params),
+            linear(channels * kernel, channels, device, params),
         ];
         let conv2d = vec![
-            conv2d(1, channels, [3, 1], device, params),
-            conv2d(channels, channels, [1, 1], device, params),
-            conv2d(channels, channels, [1, 1], device, params),
+            linear(KERNEL_2D, channels, device, params),
+            linear(channels * KERNEL_2D, channels, device, params),
+            linear(channels * KERNEL_2D, channels, device, params),
         ];
         // 1D head: time shrinks by kernel − 1 per conv. 2D head: rows 6 → 3 → 2 → 1
         // (the first conv pairs row i with row i + 3), time shrinks by 1 per conv.
@@ -109,41 +192,21 @@ impl Dcnet {
         Self { conv1d, conv2d, fc }
     }
 
-    /// `[batch, 6, time]` windows → `[batch, terms]`. Dropout is applied when
-    /// `dropout_rng` is given (training), with masks drawn from it.
+    /// `windows` → terms `[count, terms]`. Dropout is applied when `dropout_rng` is
+    /// given (training), with masks drawn from it.
     pub fn forward(
         &self,
-        input: Tensor<3>,
+        windows: &Windows,
         settings: &Settings,
         mut dropout_rng: Option<&mut ChaCha8Rng>,
     ) -> Tensor<2> {
-        let [batch, rows, time] = input.dims();
-        debug_assert_eq!(rows, INPUT_ROWS);
-        let slope = settings.leaky_relu_slope;
-
-        // 1D head on the DVL − GNSS difference, in cm/s: [batch, 3, time].
-        let dvl = input.clone().slice([0..batch, 0..3, 0..time]);
-        let gnss = input.clone().slice([0..batch, 3..6, 0..time]);
-        let mut head_1d = (dvl - gnss) * 100.0;
-        for conv in &self.conv1d {
-            head_1d = leaky_relu(conv.forward(head_1d), slope);
-        }
-        let head_1d: Tensor<2> = head_1d.flatten(1, 2);
-
-        // 2D head on the window as one channel: [batch, 1, 6, time].
-        let mut head_2d: Tensor<4> = input.reshape([batch, 1, rows, time]);
-        for conv in &self.conv2d {
-            head_2d = leaky_relu(conv.forward(head_2d), slope);
-        }
-        let head_2d: Tensor<2> = head_2d.flatten(1, 3);
-
-        let mut x = Tensor::cat(vec![head_1d, head_2d], 1);
+        let mut x = self.features(windows, settings);
         let last = self.fc.len() - 1;
         for linear in &self.fc[..last] {
             x = linear.forward(x);
             x = match settings.activation {
                 Activation::Tanh => tanh(x),
-                Activation::LeakyRelu => leaky_relu(x, slope),
+                Activation::LeakyRelu => leaky_relu(x, settings.leaky_relu_slope),
             };
             if let Some(rng) = dropout_rng.as_deref_mut() {
                 x = dropout(x, settings.dropout, rng);
@@ -151,17 +214,101 @@ impl Dcnet {
         }
         self.fc[last].forward(x)
     }
+
+    /// The two heads side by side, `[count, flat_1d + flat_2d]`, each flattened
+    /// time-major (all channels of one time step, then the next).
+    fn features(&self, windows: &Windows, settings: &Settings) -> Tensor<2> {
+        let (count, time, kernel) = (windows.count, windows.time, settings.kernel);
+        let device = windows.head_1d.device();
+        let slope = settings.leaky_relu_slope;
+        let layer = |linear: &Linear, x: Tensor<2>| leaky_relu(linear.forward(x), slope);
+
+        // 1D head: rows (window, time), then the second conv gathers `kernel` rows.
+        let steps = time + 1 - kernel;
+        let head_1d = layer(&self.conv1d[0], windows.head_1d.clone());
+        let taps = unfold_1d(count, steps, kernel, &device);
+        let steps = steps + 1 - kernel;
+        let head_1d = layer(&self.conv1d[1], gather(head_1d, taps, count * steps));
+
+        // 2D head: rows (window, time, row); each conv gathers a 2×2 neighbourhood.
+        let mut head_2d = layer(&self.conv2d[0], windows.head_2d.clone());
+        let (mut steps, mut rows) = (time - 1, 3);
+        for conv in &self.conv2d[1..] {
+            let taps = unfold_2d(count, steps, rows, &device);
+            (steps, rows) = (steps - 1, rows - 1);
+            head_2d = layer(conv, gather(head_2d, taps, count * steps * rows));
+        }
+        Tensor::cat(
+            vec![
+                head_1d.reshape([count as i32, -1]),
+                head_2d.reshape([count as i32, -1]),
+            ],
+            1,
+        )
+    }
 }
 
-/// Zeroes each element with probability `p` and scales the rest by 1/(1 − p).
+/// The rows `taps` of `x` `[rows, channels]`, laid side by side `outputs` to a row:
+/// `[outputs, taps per output × channels]`.
+fn gather(x: Tensor<2>, taps: Tensor<1, Int>, outputs: usize) -> Tensor<2> {
+    x.select(0, taps).reshape([outputs as i32, -1])
+}
+
+/// For rows (window, time) with `steps` times per window: the `kernel` rows that each
+/// output (window, time < steps − kernel + 1) reads, in time order.
+fn unfold_1d(count: usize, steps: usize, kernel: usize, device: &Device) -> Tensor<1, Int> {
+    let mut taps = Vec::with_capacity(count * steps * kernel);
+    for w in 0..count {
+        for t in 0..steps + 1 - kernel {
+            taps.extend((0..kernel).map(|k| (w * steps + t + k) as i64));
+        }
+    }
+    Tensor::from_data(TensorData::new(taps, [count * (steps + 1 - kernel) * kernel]), device)
+}
+
+/// For rows (window, time, row) with `steps` times and `rows` rows per window: the four
+/// rows of each output's 2×2 neighbourhood, (row, time)-major as in [`Windows::head_2d`].
+fn unfold_2d(count: usize, steps: usize, rows: usize, device: &Device) -> Tensor<1, Int> {
+    let outputs = count * (steps - 1) * (rows - 1);
+    let mut taps = Vec::with_capacity(outputs * KERNEL_2D);
+    for w in 0..count {
+        for t in 0..steps - 1 {
+            for r in 0..rows - 1 {
+                for (row_tap, time_tap) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+                    taps.push(((w * steps + t + time_tap) * rows + r + row_tap) as i64);
+                }
+            }
+        }
+    }
+    Tensor::from_data(TensorData::new(taps, [outputs * KERNEL_2D]), device)
+}
+
+/// LeakyReLU as `(1 − slope)·relu(x) + slope·x`: burn's fused relu instead of a mask.
+fn leaky_relu<const D: usize>(x: Tensor<D>, slope: f64) -> Tensor<D> {
+    relu(x.clone()) * (1.0 - slope) + x * slope
+}
+
+/// tanh as `2σ(2x) − 1`: one exponential per element where the CPU backends' tanh
+/// costs two (forward and again in backward).
+fn tanh<const D: usize>(x: Tensor<D>) -> Tensor<D> {
+    sigmoid(x * 2.0) * 2.0 - 1.0
+}
+
+/// Zeroes each element with probability `p` and scales the rest by 1/(1 − p). One
+/// 32-bit draw per element decides it: an element drops when its draw is below
+/// p·2³².
 fn dropout(x: Tensor<2>, p: f64, rng: &mut ChaCha8Rng) -> Tensor<2> {
     if p == 0.0 {
         return x;
     }
     let [rows, cols] = x.dims();
     let keep = (1.0 / (1.0 - p)) as f32;
-    let mask: Vec<f32> = (0..rows * cols)
-        .map(|_| if rng.random::<f64>() < p { 0.0 } else { keep })
+    let threshold = (p * 2f64.powi(32)) as u64;
+    let mut draws = vec![0u32; rows * cols];
+    rng.fill(&mut draws[..]);
+    let mask: Vec<f32> = draws
+        .into_iter()
+        .map(|draw| if u64::from(draw) < threshold { 0.0 } else { keep })
         .collect();
     let mask = Tensor::from_data(TensorData::new(mask, [rows, cols]), &x.device());
     x * mask
@@ -242,40 +389,6 @@ impl ParamSource<'_> {
     }
 }
 
-fn conv1d(
-    channels_in: usize,
-    channels_out: usize,
-    kernel: usize,
-    device: &Device,
-    params: &mut ParamSource,
-) -> Conv1d {
-    let mut conv = Conv1dConfig::new(channels_in, channels_out, kernel)
-        .with_initializer(Initializer::Zeros)
-        .init(device);
-    let bound = 1.0 / ((channels_in * kernel) as f64).sqrt();
-    conv.weight = params.uniform([channels_out, channels_in, kernel], bound, device);
-    conv.bias = Some(params.uniform([channels_out], bound, device));
-    conv
-}
-
-/// A 2×2 convolution with the given (row, time) dilation.
-fn conv2d(
-    channels_in: usize,
-    channels_out: usize,
-    dilation: [usize; 2],
-    device: &Device,
-    params: &mut ParamSource,
-) -> Conv2d {
-    let mut conv = Conv2dConfig::new([channels_in, channels_out], [2, 2])
-        .with_dilation(dilation)
-        .with_initializer(Initializer::Zeros)
-        .init(device);
-    let bound = 1.0 / ((channels_in * 4) as f64).sqrt();
-    conv.weight = params.uniform([channels_out, channels_in, 2, 2], bound, device);
-    conv.bias = Some(params.uniform([channels_out], bound, device));
-    conv
-}
-
 fn linear(d_input: usize, d_output: usize, device: &Device, params: &mut ParamSource) -> Linear {
     let mut linear = LinearConfig::new(d_input, d_output)
         .with_initializer(Initializer::Zeros)
@@ -284,4 +397,98 @@ fn linear(d_input: usize, d_output: usize, device: &Device, params: &mut ParamSo
     linear.weight = params.uniform([d_input, d_output], bound, device);
     linear.bias = Some(params.uniform([d_output], bound, device));
     linear
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spec::quick_spec;
+    use burn::module::Param;
+    use burn::nn::PaddingConfig2d;
+    use burn::nn::conv::{Conv1dConfig, Conv2dConfig};
+    use rand::SeedableRng;
+
+    /// `linear`'s weight `[taps × c_in, c_out]` as a convolution kernel
+    /// `[c_out, c_in, taps]`.
+    fn kernel(linear: &Linear, taps: usize) -> Tensor<3> {
+        let [rows, c_out] = linear.weight.val().dims();
+        linear
+            .weight
+            .val()
+            .reshape([taps, rows / taps, c_out])
+            .permute([2, 1, 0])
+    }
+
+    /// The heads computed with burn's own Conv1d and Conv2d on the same weights agree
+    /// with the unfolded matrix products.
+    #[test]
+    fn unfolded_heads_match_burns_convolutions() {
+        let spec = quick_spec(&["model.conv1d_kernel_size=3"]);
+        let device = Device::flex();
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let window = spec.dataset.window;
+        let model = Dcnet::new(&spec.model, ErrorModel::Em5, window, &device, &mut rng);
+        let settings = Settings::from(&spec.model);
+        let (count, k, c) = (5, settings.kernel, spec.model.conv_channels);
+        let inputs: Vec<f32> = (0..count * INPUT_ROWS * window)
+            .map(|_| rng.random_range(-2.0..2.0))
+            .collect();
+        let windows = Windows::new(&inputs, window, k, &device);
+        let ours: Vec<f32> = model.features(&windows, &settings).into_data().try_to_vec::<f32>().unwrap();
+
+        let slope = settings.leaky_relu_slope;
+        let x = Tensor::<3>::from_data(TensorData::new(inputs, [count, INPUT_ROWS, window]), &device);
+        let diff = (x.clone().slice([0..count, 0..3, 0..window])
+            - x.clone().slice([0..count, 3..6, 0..window]))
+            * 100.0;
+        let mut head_1d = diff;
+        for (i, linear) in model.conv1d.iter().enumerate() {
+            let mut conv = Conv1dConfig::new(if i == 0 { 3 } else { c }, c, k).init(&device);
+            conv.weight = Param::from_tensor(kernel(linear, k));
+            conv.bias = Some(Param::from_tensor(linear.bias.as_ref().unwrap().val()));
+            head_1d = burn::tensor::activation::leaky_relu(conv.forward(head_1d), slope);
+        }
+        let mut head_2d: Tensor<4> = x.reshape([count, 1, INPUT_ROWS, window]);
+        for (i, linear) in model.conv2d.iter().enumerate() {
+            let c_in = if i == 0 { 1 } else { c };
+            let mut conv = Conv2dConfig::new([c_in, c], [2, 2])
+                .with_dilation([if i == 0 { 3 } else { 1 }, 1])
+                .with_padding(PaddingConfig2d::Valid)
+                .init(&device);
+            let weight: Tensor<4> = kernel(linear, 4).reshape([c, c_in, 2, 2]);
+            conv.weight = Param::from_tensor(weight);
+            conv.bias = Some(Param::from_tensor(linear.bias.as_ref().unwrap().val()));
+            head_2d = burn::tensor::activation::leaky_relu(conv.forward(head_2d), slope);
+        }
+        // Burn's layout is channel-major: [count, c, time] and [count, c, 1, time].
+        let head_2d: Tensor<3> = head_2d.squeeze_dim(2);
+        let theirs: Vec<f32> = Tensor::cat(
+            vec![
+                head_1d.swap_dims(1, 2).flatten::<2>(1, 2),
+                head_2d.swap_dims(1, 2).flatten::<2>(1, 2),
+            ],
+            1,
+        )
+        .into_data()
+        .try_to_vec::<f32>()
+        .unwrap();
+        assert_eq!(ours.len(), theirs.len());
+        for (i, (a, b)) in ours.iter().zip(&theirs).enumerate() {
+            assert!((a - b).abs() <= 1e-4 * (1.0 + b.abs()), "feature {i}: {a} vs {b}");
+        }
+    }
+
+    #[test]
+    fn tanh_and_leaky_relu_match_their_definitions() {
+        let device = Device::flex();
+        let values = [-8.0f32, -1.5, -0.3, -1e-3, 0.0, 1e-3, 0.4, 2.0, 9.0];
+        let x = Tensor::<1>::from_data(TensorData::new(values.to_vec(), [values.len()]), &device);
+        let tanh: Vec<f32> = tanh(x.clone()).into_data().try_to_vec::<f32>().unwrap();
+        let leaky: Vec<f32> = leaky_relu(x, 0.05).into_data().try_to_vec::<f32>().unwrap();
+        for (i, v) in values.iter().enumerate() {
+            assert!((tanh[i] - v.tanh()).abs() < 1e-6, "tanh({v}) = {}", tanh[i]);
+            let want = if *v >= 0.0 { *v } else { 0.05 * v };
+            assert!((leaky[i] - want).abs() <= 1e-6 * (1.0 + v.abs()), "leaky({v}) = {}", leaky[i]);
+        }
+    }
 }

@@ -10,12 +10,12 @@
 
 use crate::dataset::{INPUT_ROWS, TARGET_ROWS, TrainingSet};
 use crate::estimators::ErrorModel;
-use crate::model::{Dcnet, Settings, split_terms};
+use crate::model::{Dcnet, Settings, Windows, split_terms, truth_cm_s};
 use crate::rng::task_rng;
 use crate::spec::Spec;
 use burn::module::Module;
 use burn::optim::{GradientsParams, ModuleOptimizer, RmsPropConfig};
-use burn::tensor::{Device, Tensor, TensorData};
+use burn::tensor::{Device, Tensor};
 use indicatif::ProgressBar;
 use rand::seq::SliceRandom;
 use std::fmt;
@@ -154,28 +154,31 @@ pub fn optimizer(spec: &Spec) -> ModuleOptimizer {
         .init()
 }
 
-/// The closed-loop loss of `terms` `[batch, n]` on windows whose DVL rows are `dvl`
-/// `[batch, 3, time]` and ground truth `truth` `[batch, 3, time]`, in (cm/s)².
+/// The closed-loop loss of `terms` `[batch, n]` on windows whose DVL velocity is
+/// `dvl_cm_s` `[batch, time, 3]` and ground truth `truth_cm_s` `[batch, time, 3]`, in
+/// (cm/s)².
 pub fn closed_loop_loss(
     terms: Tensor<2>,
     error_model: ErrorModel,
-    dvl: Tensor<3>,
-    truth: Tensor<3>,
+    dvl_cm_s: Tensor<3>,
+    truth_cm_s: Tensor<3>,
 ) -> Tensor<1> {
-    let [batch, axes, time] = dvl.dims();
+    let [batch, time, axes] = dvl_cm_s.dims();
     let (scale_pct, bias_cm_s) = split_terms(terms, error_model);
-    let scale: Tensor<3> = (scale_pct / 100.0)
-        .reshape([batch, axes, 1])
-        .expand([batch, axes, time]);
-    let bias: Tensor<3> = (bias_cm_s / 100.0)
-        .reshape([batch, axes, 1])
-        .expand([batch, axes, time]);
-    let corrected = (dvl - bias) / (scale + 1.0);
-    ((corrected - truth) * 100.0).square().sum_dim(1).mean()
+    let per_window = |terms: Tensor<2>| -> Tensor<3> {
+        terms.reshape([batch, 1, axes]).expand([batch, time, axes])
+    };
+    let corrected = (dvl_cm_s - per_window(bias_cm_s)) / (per_window(scale_pct) / 100.0 + 1.0);
+    (corrected - truth_cm_s).square().sum() / (batch * time) as f64
 }
 
-/// Windows `indices` of `set` as tensors: inputs `[n, 6, time]`, targets `[n, 3, time]`.
-fn batch_tensors(set: &TrainingSet, indices: &[usize], device: &Device) -> (Tensor<3>, Tensor<3>) {
+/// Windows `indices` of `set`, ready for the network, and their ground truth.
+fn batch_of(
+    set: &TrainingSet,
+    indices: &[usize],
+    settings: &Settings,
+    device: &Device,
+) -> (Windows, Tensor<3>) {
     let w = set.window;
     let mut inputs = Vec::with_capacity(indices.len() * INPUT_ROWS * w);
     let mut targets = Vec::with_capacity(indices.len() * TARGET_ROWS * w);
@@ -184,20 +187,9 @@ fn batch_tensors(set: &TrainingSet, indices: &[usize], device: &Device) -> (Tens
         targets.extend_from_slice(&set.targets[i * TARGET_ROWS * w..][..TARGET_ROWS * w]);
     }
     (
-        Tensor::from_data(
-            TensorData::new(inputs, [indices.len(), INPUT_ROWS, w]),
-            device,
-        ),
-        Tensor::from_data(
-            TensorData::new(targets, [indices.len(), TARGET_ROWS, w]),
-            device,
-        ),
+        Windows::new(&inputs, w, settings.kernel, device),
+        truth_cm_s(&targets, w, device),
     )
-}
-
-fn dvl_rows(input: &Tensor<3>) -> Tensor<3> {
-    let [batch, _, time] = input.dims();
-    input.clone().slice([0..batch, 0..3, 0..time])
 }
 
 /// Mean closed-loop loss of `model` (plain device) over `indices`, in batches.
@@ -212,10 +204,10 @@ pub fn mean_loss(
     let settings = Settings::from(&spec.model);
     let mut total = 0.0;
     for chunk in indices.chunks(spec.training.batch_size.max(1024)) {
-        let (input, target) = batch_tensors(set, chunk, &device);
-        let terms = model.forward(input.clone(), &settings, None);
+        let (windows, truth) = batch_of(set, chunk, &settings, &device);
+        let terms = model.forward(&windows, &settings, None);
         let loss: f32 =
-            closed_loop_loss(terms, error_model, dvl_rows(&input), target).into_scalar();
+            closed_loop_loss(terms, error_model, windows.dvl_cm_s, truth).into_scalar();
         total += f64::from(loss) * chunk.len() as f64;
     }
     total / indices.len().max(1) as f64
@@ -256,9 +248,9 @@ pub fn train_pass(
     let mut model = state.model.clone();
     let label = format!("DCNet {error_model} epoch {epoch}/{}", spec.training.epochs);
     for (batch, indices) in order.chunks(spec.training.batch_size).enumerate() {
-        let (input, target) = batch_tensors(set, indices, &device);
-        let terms = model.forward(input.clone(), &settings, Some(&mut dropout_rng));
-        let loss = closed_loop_loss(terms, error_model, dvl_rows(&input), target);
+        let (windows, truth) = batch_of(set, indices, &settings, &device);
+        let terms = model.forward(&windows, &settings, Some(&mut dropout_rng));
+        let loss = closed_loop_loss(terms, error_model, windows.dvl_cm_s, truth);
         let value: f32 = loss.clone().into_scalar();
         if !value.is_finite() {
             return Err(TrainError::NonFinite {
@@ -351,17 +343,19 @@ pub(crate) mod tests {
         }
     }
     use crate::estimators::Estimator;
+    use burn::tensor::TensorData;
 
     #[test]
     fn closed_loop_loss_matches_a_hand_computed_value() {
         let device = Device::flex();
         // One window of two samples: x is 1 % too large, z carries a 0.7 cm/s bias.
+        // [window, time, axis] in cm/s.
         let dvl = Tensor::<3>::from_data(
-            TensorData::new(vec![1.01f32, 2.02, 0.0, 0.0, 0.007, 0.007], [1, 3, 2]),
+            TensorData::new(vec![101f32, 0.0, 0.7, 202.0, 0.0, 0.7], [1, 2, 3]),
             &device,
         );
         let truth = Tensor::<3>::from_data(
-            TensorData::new(vec![1.0f32, 2.0, 0.0, 0.0, 0.0, 0.0], [1, 3, 2]),
+            TensorData::new(vec![100f32, 0.0, 0.0, 200.0, 0.0, 0.0], [1, 2, 3]),
             &device,
         );
         // EM4 removes a 0.5 cm/s z bias only: errors x 1 and 2 cm/s, z 0.2 cm/s.

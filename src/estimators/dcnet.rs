@@ -5,8 +5,8 @@
 use super::{Correction, ErrorModel, Estimator};
 use crate::Vec3;
 use crate::dataset::INPUT_ROWS;
-use crate::model::{Dcnet, Settings, correction};
-use burn::tensor::{Device, Tensor, TensorData};
+use crate::model::{Dcnet, Settings, Windows, correction};
+use burn::tensor::Device;
 
 pub struct DcnetEstimator {
     pub model: Dcnet,
@@ -38,11 +38,10 @@ impl Estimator for DcnetEstimator {
                 }
             }
         }
-        let input =
-            Tensor::<3>::from_data(TensorData::new(input, [count, INPUT_ROWS, w]), &self.device);
+        let windows = Windows::new(&input, w, self.settings.kernel, &self.device);
         let terms: Vec<f32> = self
             .model
-            .forward(input, &self.settings, None)
+            .forward(&windows, &self.settings, None)
             .into_data()
             .try_to_vec()
             .expect("DCNet outputs f32");
