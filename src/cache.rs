@@ -139,6 +139,7 @@ pub fn model_key(spec: &Spec, error_model: ErrorModel, dataset_key: &str) -> Str
         (spec.training.epochs, spec.training.batch_size),
         spec.training.learning_rate(error_model),
         (spec.training.rmsprop_alpha, spec.training.rmsprop_epsilon),
+        &r.training.early_stopping,
     ))
 }
 

@@ -8,7 +8,7 @@ use crate::estimators::ErrorModel;
 use crate::model::Dcnet;
 use crate::results::write_atomic;
 use crate::spec::Spec;
-use crate::train::{self, EpochRecord, State, Trained};
+use crate::train::{self, EpochRecord, State, StopReason, Trained};
 use burn::module::Module;
 use burn::store::ModuleRecord;
 use burn::tensor::{Bytes, Device};
@@ -35,6 +35,7 @@ pub struct Summary {
     pub error_model: ErrorModel,
     pub best_epoch: usize,
     pub history: Vec<EpochRecord>,
+    pub stop: StopReason,
 }
 
 /// What a checkpoint's `state.json` holds; the weight files carry the epoch in their name.
@@ -136,6 +137,7 @@ impl ModelStore {
             model,
             history: summary.history,
             best_epoch: summary.best_epoch,
+            stop: summary.stop,
         }))
     }
 
@@ -149,6 +151,7 @@ impl ModelStore {
             error_model: trained.error_model,
             best_epoch: trained.best_epoch,
             history: trained.history.clone(),
+            stop: trained.stop,
         };
         let path = stem.with_extension("json");
         write_atomic(
@@ -272,43 +275,106 @@ pub enum Provenance {
     Reused,
 }
 
-/// Loads `error_model`'s stored model under `key`, or trains it (from its checkpoint
-/// if there is one), checkpointing every `training.checkpoint_every_epochs` and storing
-/// the result. `fresh` trains from scratch whatever is stored.
-pub fn train_cached(
-    spec: &Spec,
-    set: &crate::dataset::TrainingSet,
-    error_model: ErrorModel,
-    key: &str,
-    store: &ModelStore,
-    fresh: bool,
-    progress: &indicatif::ProgressBar,
-) -> Result<(Trained, Provenance), train::TrainError> {
-    if !fresh {
-        if let Some(trained) = store.load(spec, error_model, key)? {
-            return Ok((trained, Provenance::Reused));
+/// One model's way through training, one epoch at a time, so that a scheduler can
+/// interleave the epochs of several models: [`Stage::start`] loads the stored model
+/// or resumes its checkpoint, [`Stage::epoch`] trains one epoch and checkpoints
+/// every `training.checkpoint_every_epochs`, and the last epoch stores the model.
+pub enum Stage {
+    Running {
+        state: Box<State>,
+        provenance: Provenance,
+    },
+    Done(Box<Trained>, Provenance),
+}
+
+impl Stage {
+    /// `error_model`'s stored model under `key`, or its training from the checkpoint
+    /// if there is one. `fresh` trains from scratch whatever is stored.
+    pub fn start(
+        spec: &Spec,
+        error_model: ErrorModel,
+        key: &str,
+        store: &ModelStore,
+        fresh: bool,
+    ) -> Result<Self, CheckpointError> {
+        if !fresh {
+            if let Some(trained) = store.load(spec, error_model, key)? {
+                return Ok(Self::Done(Box::new(trained), Provenance::Reused));
+            }
         }
+        let state = if fresh {
+            State::new(spec, error_model)
+        } else {
+            store.resume(spec, error_model, key)?
+        };
+        let provenance = match state.history.len() {
+            0 => Provenance::Trained,
+            epoch => Provenance::Resumed(epoch),
+        };
+        Ok(Self::running(spec, error_model, key, store, state, provenance)?)
     }
-    let mut state = if fresh {
-        State::new(spec, error_model)
-    } else {
-        store.resume(spec, error_model, key)?
-    };
-    let provenance = match state.history.len() {
-        0 => Provenance::Trained,
-        epoch => Provenance::Resumed(epoch),
-    };
-    progress.inc((state.history.len() * train::batches_per_epoch(spec, set)) as u64);
-    while state.next_epoch() <= spec.training.epochs {
+
+    /// `state` as a running training, or as done (and stored) if it has ended.
+    fn running(
+        spec: &Spec,
+        error_model: ErrorModel,
+        key: &str,
+        store: &ModelStore,
+        state: State,
+        provenance: Provenance,
+    ) -> Result<Self, CheckpointError> {
+        Ok(match state.stop(spec) {
+            Some(stop) => {
+                let trained = state.finish(error_model, stop);
+                store.save(&trained, key)?;
+                Self::Done(Box::new(trained), provenance)
+            }
+            None => Self::Running {
+                state: Box::new(state),
+                provenance,
+            },
+        })
+    }
+
+    /// Trains the next epoch of a running training; a done one is returned as it is.
+    pub fn epoch(
+        self,
+        spec: &Spec,
+        set: &crate::dataset::TrainingSet,
+        error_model: ErrorModel,
+        key: &str,
+        store: &ModelStore,
+        progress: &indicatif::ProgressBar,
+    ) -> Result<Self, train::TrainError> {
+        let Self::Running {
+            mut state,
+            provenance,
+        } = self
+        else {
+            return Ok(self);
+        };
         train::run_epoch(spec, set, error_model, &mut state, progress)?;
         let epoch = state.history.len();
-        if epoch % spec.training.checkpoint_every_epochs == 0 && epoch < spec.training.epochs {
+        if epoch % spec.training.checkpoint_every_epochs == 0 && state.stop(spec).is_none() {
             store.save_checkpoint(&state, error_model, key)?;
         }
+        Ok(Self::running(
+            spec,
+            error_model,
+            key,
+            store,
+            *state,
+            provenance,
+        )?)
     }
-    let trained = state.finish(error_model);
-    store.save(&trained, key)?;
-    Ok((trained, provenance))
+
+    /// Epochs trained so far.
+    pub fn epochs_done(&self) -> usize {
+        match self {
+            Self::Running { state, .. } => state.history.len(),
+            Self::Done(trained, _) => trained.history.len(),
+        }
+    }
 }
 
 fn write_model(path: &Path, model: &Dcnet) -> Result<(), CheckpointError> {
@@ -350,6 +416,26 @@ mod tests {
     use crate::train::tests::{run_epochs, training_set, weights};
     use indicatif::ProgressBar;
 
+    /// Loads `error_model`'s stored model under `key`, or trains it to the end on this
+    /// thread (see [`Stage`]).
+    fn train_cached(
+        spec: &Spec,
+        set: &crate::dataset::TrainingSet,
+        error_model: ErrorModel,
+        key: &str,
+        store: &ModelStore,
+        fresh: bool,
+        progress: &indicatif::ProgressBar,
+    ) -> Result<(Trained, Provenance), train::TrainError> {
+        let mut training = Stage::start(spec, error_model, key, store, fresh)?;
+        loop {
+            match training {
+                Stage::Done(trained, provenance) => return Ok((*trained, provenance)),
+                running => training = running.epoch(spec, set, error_model, key, store, progress)?,
+            }
+        }
+    }
+
     fn key(spec: &Spec, error_model: ErrorModel) -> String {
         let hashes = crate::cache::DataHashes::default();
         crate::cache::model_key(spec, error_model, &crate::cache::dataset_key(spec, &hashes))
@@ -363,7 +449,7 @@ mod tests {
 
         let mut state = State::new(&spec, em);
         run_epochs(&spec, &set, em, &mut state, 4);
-        let uninterrupted = state.finish(em);
+        let uninterrupted = state.finish(em, StopReason::AllEpochs);
 
         let dir = tempfile::tempdir().unwrap();
         let store = ModelStore::new(dir.path().to_path_buf());
@@ -375,7 +461,7 @@ mod tests {
         let mut resumed = store.resume(&spec, em, &key).unwrap();
         assert_eq!(resumed.next_epoch(), 3);
         run_epochs(&spec, &set, em, &mut resumed, 2);
-        let resumed = resumed.finish(em);
+        let resumed = resumed.finish(em, StopReason::AllEpochs);
         assert_eq!(resumed.best_epoch, uninterrupted.best_epoch);
         let losses = |t: &Trained| {
             t.history

@@ -12,7 +12,7 @@
 //! first, so shards need nothing from each other and each writes its own cache files.
 
 use crate::cache::{self, BlockStore, DataHashes};
-use crate::checkpoint::{ModelStore, Provenance, Summary, train_cached};
+use crate::checkpoint::{ModelStore, Provenance, Stage, Summary};
 use crate::data::{Trajectory, load_trajectories};
 use crate::dataset::{self, TrainingSet};
 use crate::estimators::{ErrorModel, EstimatorKind, lineup, series};
@@ -21,8 +21,8 @@ use crate::progress::bar;
 use crate::results::{self, Manifest, StageSeconds};
 use crate::spec::{Experiment, Spec};
 use crate::sweep;
-use crate::train::{self, TrainError};
-use rayon::prelude::*;
+use crate::train::{self, StopReason, TrainError, Trained};
+use indicatif::ProgressBar;
 use std::path::{Path, PathBuf};
 use std::time::{Instant, SystemTime};
 
@@ -701,34 +701,38 @@ fn train(
         let mine: Vec<usize> = batch.iter().flat_map(|(_, m)| m.iter().copied()).collect();
         let clock = Instant::now();
         let bars = indicatif::MultiProgress::new();
-        let results: Vec<_> = mine
-            .par_iter()
-            .map(|&t| {
-                let training = &plan.trainings[t];
-                let spec = plan.spec(training.point);
-                let set = set_of(t);
-                let progress = bars.add(bar(
-                    spec.training.epochs * train::batches_per_epoch(spec, set),
-                    "DCNet",
-                ));
-                progress.set_message(format!("DCNet {}", training.error_model));
-                let outcome = train_cached(
-                    spec,
-                    set,
-                    training.error_model,
-                    &training.key,
-                    &plan.models,
-                    force,
-                    &progress,
+        let results = interleave_epochs(&mine, |t| {
+            let training = &plan.trainings[t];
+            let spec = plan.spec(training.point);
+            let set = set_of(t);
+            let progress = bars.add(bar(
+                spec.training.epochs * train::batches_per_epoch(spec, set),
+                "DCNet",
+            ));
+            progress.set_message(format!("DCNet {}", training.error_model));
+            let run = move |job: Stage, progress: &indicatif::ProgressBar| {
+                job.epoch(spec, set, training.error_model, &training.key, &plan.models, progress)
+            };
+            let job = Stage::start(
+                spec,
+                training.error_model,
+                &training.key,
+                &plan.models,
+                force,
+            )
+            .map_err(TrainError::from);
+            if let Ok(job) = &job {
+                progress.set_position(
+                    (job.epochs_done() * train::batches_per_epoch(spec, set)) as u64,
                 );
-                progress.finish_and_clear();
-                (t, outcome)
-            })
-            .collect();
+            }
+            (job, run, progress)
+        });
         stages.training += clock.elapsed().as_secs_f64();
         for (t, result) in results {
             match result {
                 Ok((model, provenance)) => {
+                    let model = *model;
                     let best = &model.history[model.best_epoch - 1];
                     let how = match provenance {
                         Provenance::Trained => "trained".to_string(),
@@ -737,8 +741,12 @@ fn train(
                         }
                         Provenance::Reused => "reused".to_string(),
                     };
+                    let stopped = match model.stop {
+                        StopReason::AllEpochs => String::new(),
+                        StopReason::EarlyStopping => ", stopped early".to_string(),
+                    };
                     eprintln!(
-                        "DCNet {} {}: {how}; best validation loss {:.4} (cm/s)² at epoch {} of {}",
+                        "DCNet {} {}: {how}; best validation loss {:.4} (cm/s)² at epoch {} of {}{stopped}",
                         model.error_model,
                         &plan.trainings[t].key[..16],
                         best.validation_loss,
@@ -760,6 +768,90 @@ fn train(
         }
     }
     Ok(())
+}
+
+/// One training's next epoch: its current stage in, its next stage out.
+type EpochStep<'a> = Box<dyn Fn(Stage, &ProgressBar) -> Result<Stage, TrainError> + Send + Sync + 'a>;
+
+/// Runs every training of `ids` to its end, epoch by epoch, on
+/// `rayon::current_num_threads()` workers. `start` gives each id its first stage, the
+/// step that trains one epoch, and its progress bar. A worker takes the training at
+/// the head of the queue, trains its next epoch and puts it back at the tail, so that
+/// every core trains while a training is left and the models advance together. Each
+/// worker runs its epochs on a one-thread pool: flex's inner parallelism stays on that
+/// core, and a model computes the same bytes whichever worker, and however many,
+/// train it. Returns each id's trained model or the error that ended it.
+fn interleave_epochs<'a, F, S>(
+    ids: &[usize],
+    start: S,
+) -> Vec<(usize, Result<(Box<Trained>, Provenance), TrainError>)>
+where
+    S: Fn(usize) -> (Result<Stage, TrainError>, F, ProgressBar),
+    F: Fn(Stage, &ProgressBar) -> Result<Stage, TrainError> + Send + Sync + 'a,
+{
+    let mut finished = Vec::new();
+    let mut queue = std::collections::VecDeque::new();
+    for &id in ids {
+        let (stage, step, progress) = start(id);
+        match stage {
+            Ok(Stage::Done(trained, provenance)) => {
+                progress.finish_and_clear();
+                finished.push((id, Ok((trained, provenance))));
+            }
+            Ok(running) => {
+                let step: EpochStep<'a> = Box::new(step);
+                queue.push_back((id, running, step, progress));
+            }
+            Err(error) => {
+                progress.finish_and_clear();
+                finished.push((id, Err(error)));
+            }
+        }
+    }
+    let queue = std::sync::Mutex::new(queue);
+    let finished = std::sync::Mutex::new(finished);
+    let workers = rayon::current_num_threads().min(ids.len()).max(1);
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(1)
+                    .build()
+                    .expect("a pool of one thread");
+                // The queue only shrinks while this worker is away: every training
+                // not in it is held by a worker that will carry on with it.
+                loop {
+                    let next = queue.lock().expect("no worker panics").pop_front();
+                    let Some((id, stage, step, progress)) = next else {
+                        break;
+                    };
+                    match pool.install(|| step(stage, &progress)) {
+                        Ok(Stage::Done(trained, provenance)) => {
+                            progress.finish_and_clear();
+                            finished
+                                .lock()
+                                .expect("no worker panics")
+                                .push((id, Ok((trained, provenance))));
+                        }
+                        Ok(running) => queue
+                            .lock()
+                            .expect("no worker panics")
+                            .push_back((id, running, step, progress)),
+                        Err(error) => {
+                            progress.finish_and_clear();
+                            finished
+                                .lock()
+                                .expect("no worker panics")
+                                .push((id, Err(error)));
+                        }
+                    }
+                }
+            });
+        }
+    });
+    let mut finished = finished.into_inner().expect("no worker panics");
+    finished.sort_by_key(|(id, _)| *id);
+    finished
 }
 
 /// Generates dataset `d` from the spec of its first point.

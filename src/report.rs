@@ -433,6 +433,7 @@ fn training_section(run: &StoredRun, out: &mut String) {
     table.set_header([
         "EM",
         "epochs",
+        "stopped by",
         "best epoch",
         "best validation loss (cm/s)²",
         "training s",
@@ -449,6 +450,7 @@ fn training_section(run: &StoredRun, out: &mut String) {
         table.add_row(vec![
             model.to_string(),
             epochs.len().to_string(),
+            epochs.first().map(|e| e.stop.to_string()).unwrap_or_default(),
             best.map(|e| e.record.epoch.to_string()).unwrap_or_default(),
             best.map(|e| format!("{:.4}", e.record.validation_loss))
                 .unwrap_or_default(),

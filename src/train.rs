@@ -92,6 +92,36 @@ pub enum TrainError {
     Checkpoint(#[from] crate::checkpoint::CheckpointError),
 }
 
+/// Why a training ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    /// It ran `training.epochs`.
+    AllEpochs,
+    /// `training.early_stopping` ended it: its patience ran out.
+    EarlyStopping,
+}
+
+impl fmt::Display for StopReason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::AllEpochs => "all epochs",
+            Self::EarlyStopping => "early stopping",
+        })
+    }
+}
+
+impl FromStr for StopReason {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "all epochs" => Ok(Self::AllEpochs),
+            "early stopping" => Ok(Self::EarlyStopping),
+            _ => Err(format!("unknown stop reason {s:?}")),
+        }
+    }
+}
+
 /// A trained model: the weights of its best validation epoch, on a plain (no autodiff)
 /// device, ready for inference.
 #[derive(Debug, Clone)]
@@ -100,6 +130,7 @@ pub struct Trained {
     pub model: Dcnet,
     pub history: Vec<EpochRecord>,
     pub best_epoch: usize,
+    pub stop: StopReason,
 }
 
 /// Training state that an epoch advances; a checkpoint saves exactly this.
@@ -134,14 +165,25 @@ impl State {
         self.history.len() + 1
     }
 
-    /// The best weights and the history, once the epochs are done.
-    pub fn finish(self, error_model: ErrorModel) -> Trained {
+    /// Why training is over, or `None` while epochs remain.
+    pub fn stop(&self, spec: &Spec) -> Option<StopReason> {
+        if self.history.len() >= spec.training.epochs {
+            return Some(StopReason::AllEpochs);
+        }
+        let rule = spec.training.early_stopping?;
+        (epochs_without_improvement(&self.history, rule.min_improvement) >= rule.patience)
+            .then_some(StopReason::EarlyStopping)
+    }
+
+    /// The best weights and the history, once [`State::stop`] says why training ended.
+    pub fn finish(self, error_model: ErrorModel, stop: StopReason) -> Trained {
         let (best_epoch, _, model) = self.best.expect("at least one epoch ran");
         Trained {
             error_model,
             model,
             history: self.history,
             best_epoch,
+            stop,
         }
     }
 }
@@ -314,6 +356,28 @@ pub fn run_epoch(
     Ok(())
 }
 
+/// Epochs since the validation loss last fell below its best so far by more than
+/// `min_improvement` (the first epoch always counts as an improvement). Without
+/// validation windows the training loss stands in, as it does for the best epoch.
+pub fn epochs_without_improvement(history: &[EpochRecord], min_improvement: f64) -> usize {
+    let mut best = f64::INFINITY;
+    let mut since = 0;
+    for record in history {
+        let score = if record.validation_loss.is_nan() {
+            record.train_loss
+        } else {
+            record.validation_loss
+        };
+        if score < best - min_improvement {
+            best = score;
+            since = 0;
+        } else {
+            since += 1;
+        }
+    }
+    since
+}
+
 /// Batches in one epoch.
 pub fn batches_per_epoch(spec: &Spec, set: &TrainingSet) -> usize {
     (set.len() - set.validation_len()).div_ceil(spec.training.batch_size)
@@ -402,7 +466,7 @@ pub(crate) mod tests {
             &mut state,
             spec.training.epochs,
         );
-        let trained = state.finish(ErrorModel::Em5);
+        let trained = state.finish(ErrorModel::Em5, StopReason::AllEpochs);
         let estimator = crate::estimators::DcnetEstimator {
             model: trained.model,
             error_model: ErrorModel::Em5,

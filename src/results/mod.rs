@@ -324,6 +324,7 @@ pub fn training_batch(dcnets: &[Summary]) -> RecordBatch {
                 rows.iter().map(|(t, e)| Some(e.epoch == t.best_epoch)),
             )),
         ),
+        ("stop_reason", strings(&rows, |(t, _)| t.stop.to_string())),
     ])
 }
 

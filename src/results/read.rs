@@ -12,7 +12,7 @@ use crate::estimators::{Correction, ErrorModel, EstimatorKind};
 use crate::evaluate::{CalibrationRow, EvaluationRow, Phase, RunRow};
 use crate::published::Published;
 use crate::spec::{SpecFile, TomlFile};
-use crate::train::EpochRecord;
+use crate::train::{EpochRecord, StopReason};
 use arrow_array::{Array, BooleanArray, Float64Array, RecordBatch, StringArray, UInt32Array};
 use arrow_schema::Schema;
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
@@ -46,6 +46,8 @@ pub struct StoredEpoch {
     pub error_model: ErrorModel,
     pub record: EpochRecord,
     pub is_best: bool,
+    /// Why the model's training ended (the same on every row of a model).
+    pub stop: StopReason,
 }
 
 /// The GT velocity of one trajectory.
@@ -387,6 +389,7 @@ fn epoch_rows(batch: &Batch) -> Result<Vec<StoredEpoch>, String> {
     let seconds = batch.floats("seconds")?;
     let samples_per_s = batch.floats("samples_per_s")?;
     let is_best = batch.bools("is_best")?;
+    let stop: Vec<StopReason> = batch.required("stop_reason")?;
     Ok((0..epoch.len())
         .map(|i| StoredEpoch {
             error_model: error_model[i],
@@ -398,6 +401,7 @@ fn epoch_rows(batch: &Batch) -> Result<Vec<StoredEpoch>, String> {
                 samples_per_s: samples_per_s[i],
             },
             is_best: is_best[i],
+            stop: stop[i],
         })
         .collect())
 }

@@ -246,6 +246,19 @@ pub struct TrainingFile {
     pub rmsprop_epsilon: f64,
     /// A resumable checkpoint is written every this many epochs.
     pub checkpoint_every_epochs: usize,
+    /// Stop before `epochs` once the validation loss stops improving; absent: train
+    /// every epoch, as the paper does.
+    pub early_stopping: Option<EarlyStoppingFile>,
+}
+
+/// `[training.early_stopping]`: stop once `patience_epochs` epochs in a row have not
+/// lowered the best validation loss by more than `min_improvement` (cm/s)².
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct EarlyStoppingFile {
+    pub patience_epochs: usize,
+    #[serde(default)]
+    pub min_improvement: f64,
 }
 
 impl Default for TrainingFile {
@@ -258,6 +271,7 @@ impl Default for TrainingFile {
             rmsprop_alpha: 0.99,
             rmsprop_epsilon: 1e-8,
             checkpoint_every_epochs: 5,
+            early_stopping: None,
         }
     }
 }

@@ -159,6 +159,15 @@ pub struct TrainingSpec {
     pub rmsprop_alpha: f64,
     pub rmsprop_epsilon: f64,
     pub checkpoint_every_epochs: usize,
+    pub early_stopping: Option<EarlyStopping>,
+}
+
+/// Training stops once `patience` epochs in a row have not lowered the best validation
+/// loss by more than `min_improvement` (cm/s)².
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EarlyStopping {
+    pub patience: usize,
+    pub min_improvement: f64,
 }
 
 impl TrainingSpec {
@@ -747,6 +756,7 @@ fn check_training(training: file::TrainingFile, faults: &mut Faults) -> Training
         rmsprop_alpha,
         rmsprop_epsilon,
         checkpoint_every_epochs,
+        early_stopping,
     } = training;
     let backend = backend.parse().unwrap_or_else(|message: String| {
         faults.add("training.backend", message);
@@ -789,6 +799,24 @@ fn check_training(training: file::TrainingFile, faults: &mut Faults) -> Training
             format!("{rmsprop_epsilon} must be a positive number"),
         );
     }
+    let early_stopping = early_stopping.map(|file| {
+        if file.patience_epochs == 0 {
+            faults.add(
+                "training.early_stopping.patience_epochs",
+                "0 must be at least 1",
+            );
+        }
+        if !(file.min_improvement.is_finite() && file.min_improvement >= 0.0) {
+            faults.add(
+                "training.early_stopping.min_improvement",
+                format!("{} must be 0 or more (cm/s)²", file.min_improvement),
+            );
+        }
+        EarlyStopping {
+            patience: file.patience_epochs,
+            min_improvement: file.min_improvement,
+        }
+    });
     TrainingSpec {
         backend,
         epochs,
@@ -797,6 +825,7 @@ fn check_training(training: file::TrainingFile, faults: &mut Faults) -> Training
         rmsprop_alpha,
         rmsprop_epsilon,
         checkpoint_every_epochs,
+        early_stopping,
     }
 }
 
