@@ -512,6 +512,46 @@ pub(crate) mod tests {
         model.clone().into_record().into_bytes().unwrap().to_vec()
     }
 
+    fn epoch(epoch: usize, validation_loss: f64) -> EpochRecord {
+        EpochRecord {
+            epoch,
+            train_loss: 1.0,
+            validation_loss,
+            seconds: 0.0,
+            samples_per_s: 0.0,
+        }
+    }
+
+    #[test]
+    fn early_stopping_counts_epochs_since_the_last_real_improvement() {
+        let losses = [1.0, 0.8, 0.79, 0.85, 0.7, 0.75, 0.71, 0.69];
+        let history: Vec<EpochRecord> = losses
+            .iter()
+            .enumerate()
+            .map(|(i, &l)| epoch(i + 1, l))
+            .collect();
+        // Every fall counts without a minimum: 0.69 at epoch 8 is the last.
+        assert_eq!(epochs_without_improvement(&history, 0.0), 0);
+        // With 0.05 (cm/s)²: 0.8 (epoch 2) then 0.7 (epoch 5); 0.69 is too small a step.
+        assert_eq!(epochs_without_improvement(&history, 0.05), 3);
+        assert_eq!(epochs_without_improvement(&history[..4], 0.05), 2);
+        assert_eq!(epochs_without_improvement(&[], 0.0), 0);
+
+        let spec = quick_spec(&[
+            "training.epochs=10",
+            "training.early_stopping = { patience_epochs = 3, min_improvement = 0.05 }",
+        ]);
+        let mut state = State::new(&spec, ErrorModel::Em1);
+        state.history = history[..7].to_vec();
+        assert_eq!(state.stop(&spec), None);
+        state.history = history.clone();
+        assert_eq!(state.stop(&spec), Some(StopReason::EarlyStopping));
+        let plain = quick_spec(&["training.epochs=8"]);
+        assert_eq!(state.stop(&plain), Some(StopReason::AllEpochs));
+        let longer = quick_spec(&["training.epochs=9"]);
+        assert_eq!(state.stop(&longer), None);
+    }
+
     #[test]
     fn one_and_two_threads_train_identical_weights() {
         let spec = quick_spec(&["training.epochs=2", "training.batch_size=256"]);

@@ -172,6 +172,73 @@ fn trained_models_are_reused_until_a_training_setting_changes() {
 }
 
 #[test]
+fn early_stopping_ends_training_records_why_and_keys_the_model() {
+    let project = project(false);
+    let run = |extra: &[&str]| {
+        let mut args = vec!["run", "experiments/quick.toml", "--set", "training.epochs=40"];
+        args.extend(extra);
+        let output = dcnet(project.path(), &args);
+        assert!(output.status.success(), "{}", stderr(&output));
+        output
+    };
+    let patience = ["--set", "training.early_stopping.patience_epochs=2"];
+    let output = run(&patience);
+    assert!(stderr(&output).contains("stopped early"), "{}", stderr(&output));
+    let batch = read_parquet(&project.path().join("results/quick/training.parquet"));
+    let models = strings(&batch, "error_model");
+    let reasons = strings(&batch, "stop_reason");
+    let validation = floats(&batch, "validation_loss");
+    for model in ["EM1", "EM2", "EM3", "EM4", "EM5"] {
+        let rows: Vec<usize> = (0..models.len())
+            .filter(|&i| models[i].as_deref() == Some(model))
+            .collect();
+        let epochs = rows.len();
+        assert!(epochs < 40, "{model} trained all {epochs} epochs");
+        assert!(rows.iter().all(|&i| reasons[i].as_deref() == Some("early stopping")));
+        // The last two epochs did not beat the best before them.
+        let loss = |k: usize| validation[rows[k]].unwrap();
+        let best_before = (0..epochs - 2).map(loss).fold(f64::INFINITY, f64::min);
+        assert!(loss(epochs - 1) >= best_before && loss(epochs - 2) >= best_before);
+    }
+    let report = std::fs::read_to_string(project.path().join("results/quick/report.md")).unwrap();
+    assert!(report.contains("| early stopping |"), "{report}");
+    // The same spec without early stopping is another model: all five train, to the end.
+    let output = run(&[]);
+    assert_eq!(provenance(&output).len(), 5, "{}", stderr(&output));
+    let batch = read_parquet(&project.path().join("results/quick/training.parquet"));
+    assert_eq!(batch.num_rows(), 5 * 40);
+    assert!(strings(&batch, "stop_reason").iter().all(|r| r.as_deref() == Some("all epochs")));
+    // And with early stopping again, every model comes from the cache.
+    assert!(provenance(&run(&patience)).is_empty());
+}
+
+#[test]
+fn a_model_trained_alone_is_the_model_trained_beside_others() {
+    let project = project(false);
+    for (out, models) in [("alone", r#"["EM5"]"#), ("beside", r#"["EM1","EM2","EM3","EM4","EM5"]"#)] {
+        let set = format!("estimators.error_models={models}");
+        let output = dcnet(
+            project.path(),
+            &["run", "experiments/quick.toml", "--out", out, "--set", &set],
+        );
+        assert!(output.status.success(), "{}", stderr(&output));
+    }
+    let em5 = |out: &str| -> Vec<u8> {
+        let folder = project.path().join(out).join(".cache/models");
+        let file = std::fs::read_dir(&folder)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .find(|p| {
+                let name = p.file_name().unwrap().to_string_lossy().into_owned();
+                name.starts_with("EM5-") && name.ends_with(".bin")
+            })
+            .expect("EM5 is stored");
+        std::fs::read(file).unwrap()
+    };
+    assert!(em5("alone") == em5("beside"), "EM5 depends on the models beside it");
+}
+
+#[test]
 fn a_diverging_model_is_reported_and_the_others_are_kept() {
     let project = project(false);
     let dir = project.path();
@@ -315,6 +382,19 @@ fn bad_specs_are_rejected_with_file_line_and_key() {
         &[],
         &format!(
             "error: spec.toml:{line}: evaluation.trajectories[1]: unknown trajectory \"S9\"; data.trajectories defines S1, S2, S3, S4, SCal"
+        ),
+    );
+
+    let line = quick_with(
+        d,
+        "checkpoint_every_epochs = 5",
+        "checkpoint_every_epochs = 5\nearly_stopping = { patience_epochs = 0 }",
+    ) + 1;
+    assert_rejected(
+        d,
+        &[],
+        &format!(
+            "error: spec.toml:{line}: training.early_stopping.patience_epochs: 0 must be at least 1"
         ),
     );
 
