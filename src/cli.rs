@@ -104,15 +104,19 @@ enum Command {
         #[command(subcommand)]
         command: DataCommand,
     },
-    /// Time the dataset generation and the Monte Carlo protocol of a spec
+    /// Time the dataset generation, the Monte Carlo protocol and DCNet training of a spec
     Bench {
         spec: PathBuf,
         /// Timed repetitions of each stage
         #[arg(long, default_value_t = 5)]
         repeat: usize,
-        /// Training batches timed per model and backend
+        /// Training batches timed per model
         #[arg(long, default_value_t = 40)]
         training_batches: usize,
+        /// The PyTorch peer script (torch_dcnet.py): times the same network in PyTorch
+        /// in the same arrangements, side by side
+        #[arg(long, value_name = "SCRIPT")]
+        pytorch: Option<PathBuf>,
         #[command(flatten)]
         overrides: Overrides,
     },
@@ -260,8 +264,15 @@ pub fn main() -> Result<(), CliError> {
             spec,
             repeat,
             training_batches,
+            pytorch,
             overrides,
-        } => bench(&spec, repeat, training_batches, &overrides.set),
+        } => bench(
+            &spec,
+            repeat,
+            training_batches,
+            pytorch.as_deref(),
+            &overrides.set,
+        ),
     }
 }
 
@@ -676,9 +687,13 @@ fn bench(
     spec_path: &Path,
     repeat: usize,
     training_batches: usize,
+    pytorch: Option<&Path>,
     set: &[String],
 ) -> Result<(), CliError> {
     let spec = load_spec(spec_path, set)?;
+    if pytorch.is_some() {
+        pytorch_shapes_match(&spec).map_err(|e| input(anyhow::anyhow!(e)))?;
+    }
     let trajectories = load_trajectories(&spec).map_err(input)?;
     let repeat = repeat.max(1);
     let time = |f: &dyn Fn()| {
@@ -718,62 +733,164 @@ fn bench(
         kinds.join(", "),
         rayon::current_num_threads()
     );
-    bench_training(
-        &spec,
-        &dataset::generate(&spec, &trajectories, &hidden),
-        training_batches,
-    )
-    .map_err(failure)
+    let set = dataset::generate(&spec, &trajectories, &hidden);
+    let ours = bench_training(&spec, &set, training_batches).map_err(failure)?;
+    let peer = pytorch
+        .map(|script| bench_pytorch(&spec, script, training_batches))
+        .transpose()
+        .map_err(|e| failure(anyhow::anyhow!(e)))?;
+    print_training_bench(&spec, &ours, peer.as_ref());
+    Ok(())
 }
 
-/// Training samples/s of the spec's model and batch size on each backend: one model on
-/// one thread, and one model per thread training at once (as `run` trains the error
-/// models side by side).
-fn bench_training(spec: &Spec, set: &TrainingSet, batches: usize) -> Result<(), TrainError> {
+/// Training samples/s in the two arrangements both tools can take: one model on one
+/// thread, and one model per core, all training at once (as `run` trains).
+struct TrainingRates {
+    one_thread: f64,
+    one_per_core: f64,
+}
+
+/// The PyTorch peer's samples/s: its two arrangements of [`TrainingRates`], and one
+/// process spreading one model over every core.
+struct PeerRates {
+    rates: TrainingRates,
+    one_model_all_threads: f64,
+}
+
+/// Training samples/s of the spec's model and batch size on its backend, each model on
+/// a pool of one thread, as `run` trains.
+fn bench_training(
+    spec: &Spec,
+    set: &TrainingSet,
+    batches: usize,
+) -> Result<TrainingRates, TrainError> {
     let threads = rayon::current_num_threads();
     let error_model = *spec.error_models.last().unwrap_or(&ErrorModel::Em5);
     let hidden = indicatif::ProgressBar::hidden();
-    let samples = |order: &[usize]| order.len().min(batches * spec.training.batch_size);
-    let run_model = |spec: &Spec, seed_offset: u64| -> Result<usize, TrainError> {
+    let run_model = |seed_offset: u64| -> Result<usize, TrainError> {
         let mut spec = spec.clone();
         spec.seed += seed_offset;
         let order = train::epoch_order(&spec, set, error_model, 1);
-        let order = &order[..samples(&order)];
+        let order = &order[..order.len().min(batches * spec.training.batch_size)];
         let mut state = train::State::new(&spec, error_model);
-        train::train_pass(&spec, set, error_model, &mut state, 1, order, &hidden)?;
-        Ok(order.len())
-    };
-    {
-        let backend = spec.training.backend;
-        let one_thread = rayon::ThreadPoolBuilder::new()
+        rayon::ThreadPoolBuilder::new()
             .num_threads(1)
             .build()
-            .expect("a pool of one thread");
-        let clock = Instant::now();
-        let done = one_thread.install(|| run_model(&spec, 0))?;
-        let single = done as f64 / clock.elapsed().as_secs_f64();
-        let clock = Instant::now();
-        let done: usize = std::thread::scope(|scope| {
-            let handles: Vec<_> = (0..threads as u64)
-                .map(|i| {
-                    let spec = &spec;
-                    let run_model = &run_model;
-                    scope.spawn(move || {
-                        rayon::ThreadPoolBuilder::new()
-                            .num_threads(1)
-                            .build()
-                            .expect("a pool of one thread")
-                            .install(|| run_model(spec, i))
-                    })
-                })
-                .collect();
-            handles.into_iter().map(|h| h.join().unwrap()).sum::<Result<usize, _>>()
-        })?;
-        let together = done as f64 / clock.elapsed().as_secs_f64();
-        println!(
-            "training {error_model} on {backend}: {single:.0} samples/s with one model on one thread, {together:.0} samples/s with {threads} models on {threads} threads (batch {}, {} conv channels, FC {:?})",
-            spec.training.batch_size, spec.model.conv_channels, spec.model.fc_widths
-        );
+            .expect("a pool of one thread")
+            .install(|| train::train_pass(&spec, set, error_model, &mut state, 1, order, &hidden))?;
+        Ok(order.len())
+    };
+    let clock = Instant::now();
+    let one_thread = run_model(0)? as f64 / clock.elapsed().as_secs_f64();
+    let clock = Instant::now();
+    let done = std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..threads as u64)
+            .map(|i| scope.spawn(move || run_model(i)))
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("a training thread panicked"))
+            .sum::<Result<usize, _>>()
+    })?;
+    Ok(TrainingRates {
+        one_thread,
+        one_per_core: done as f64 / clock.elapsed().as_secs_f64(),
+    })
+}
+
+/// The peer script builds DCNet with the paper's shapes only.
+fn pytorch_shapes_match(spec: &Spec) -> Result<(), String> {
+    let [w1, w2, w3] = spec.model.fc_widths;
+    if spec.dataset.window != 10
+        || spec.model.conv1d_kernel_size != 2
+        || (w2, w3) != (w1 / 2, w1 / 4)
+        || spec.model.activation != crate::model::Activation::Tanh
+    {
+        return Err(format!(
+            "--pytorch: the peer script builds windows of 10 samples, Conv1d kernels of 2, tanh and FC widths [w, w/2, w/4]; the spec has {} samples, kernel {}, {} and FC {:?}",
+            spec.dataset.window,
+            spec.model.conv1d_kernel_size,
+            spec.model.activation,
+            spec.model.fc_widths
+        ));
     }
     Ok(())
+}
+
+/// Runs the PyTorch peer `script` with the spec's sizes in each arrangement.
+fn bench_pytorch(spec: &Spec, script: &Path, batches: usize) -> Result<PeerRates, String> {
+    let threads = rayon::current_num_threads();
+    let run = |processes: usize, threads_each: usize| -> Result<f64, String> {
+        let output = std::process::Command::new("python3")
+            .arg(script)
+            .args(["--processes", &processes.to_string()])
+            .args(["--threads", &threads_each.to_string()])
+            .args(["--batches", &batches.to_string()])
+            .args(["--batch", &spec.training.batch_size.to_string()])
+            .args(["--channels", &spec.model.conv_channels.to_string()])
+            .args(["--width", &spec.model.fc_widths[0].to_string()])
+            .output()
+            .map_err(|e| format!("python3 {}: {e}", script.display()))?;
+        let stdout = String::from_utf8_lossy(&output.stdout);
+        stdout
+            .lines()
+            .find_map(|line| line.strip_prefix("pytorch: "))
+            .and_then(|rest| rest.split_whitespace().next())
+            .and_then(|rate| rate.parse().ok())
+            .ok_or_else(|| {
+                format!(
+                    "python3 {} printed no samples/s (is torch installed? pip install torch):\n{}{}",
+                    script.display(),
+                    stdout,
+                    String::from_utf8_lossy(&output.stderr)
+                )
+            })
+    };
+    Ok(PeerRates {
+        rates: TrainingRates {
+            one_thread: run(1, 1)?,
+            one_per_core: run(threads, 1)?,
+        },
+        one_model_all_threads: run(1, threads)?,
+    })
+}
+
+fn print_training_bench(spec: &Spec, ours: &TrainingRates, peer: Option<&PeerRates>) {
+    let threads = rayon::current_num_threads();
+    let backend = spec.training.backend;
+    println!(
+        "training: batch {}, {} conv channels, FC {:?}",
+        spec.training.batch_size, spec.model.conv_channels, spec.model.fc_widths
+    );
+    let mut table = comfy_table::Table::new();
+    table.load_preset(comfy_table::presets::ASCII_MARKDOWN);
+    let rate = |r: f64| format!("{r:.0}");
+    let mut header = vec!["arrangement".to_string(), format!("dcnet-exp ({backend}) samples/s")];
+    let mut rows = vec![
+        vec!["one model, one thread".to_string(), rate(ours.one_thread)],
+        vec![
+            format!("{threads} models, one per core"),
+            rate(ours.one_per_core),
+        ],
+        vec![format!("one model over {threads} threads"), "-".to_string()],
+    ];
+    if let Some(peer) = peer {
+        header.push("PyTorch samples/s".to_string());
+        rows[0].push(rate(peer.rates.one_thread));
+        rows[1].push(rate(peer.rates.one_per_core));
+        rows[2].push(rate(peer.one_model_all_threads));
+    }
+    table.set_header(header);
+    for row in rows {
+        table.add_row(row);
+    }
+    println!("{table}");
+    if let Some(peer) = peer {
+        let best_peer = peer.rates.one_per_core.max(peer.one_model_all_threads);
+        println!(
+            "on all {threads} cores: dcnet-exp {:.0} samples/s, PyTorch at its best {best_peer:.0}: {:.2}×",
+            ours.one_per_core,
+            ours.one_per_core / best_peer
+        );
+    }
 }
