@@ -1,8 +1,10 @@
 //! Trained models on disk, under `OUT/.cache/models/`. A finished model is stored at
 //! full precision as `<EM>-<key>.bin` (weights) and `<EM>-<key>.json` (history), where
 //! the key ([`crate::cache::model_key`]) is the hash of everything that determined it.
-//! A later run with the same key loads it instead of training. While a model trains, a checkpoint in `<EM>-<key>.checkpoint/` is written
-//! every few epochs, and an interrupted training resumes from it.
+//! A later run with the same key loads it instead of training. While a model trains, a
+//! checkpoint in `<EM>-<key>.checkpoint/` is written every few epochs, and an
+//! interrupted training resumes from it. [`Stage`] walks one model through this an
+//! epoch at a time, so that the pipeline can interleave the epochs of many models.
 
 use crate::estimators::ErrorModel;
 use crate::model::Dcnet;
@@ -311,7 +313,7 @@ impl Stage {
             0 => Provenance::Trained,
             epoch => Provenance::Resumed(epoch),
         };
-        Ok(Self::running(spec, error_model, key, store, state, provenance)?)
+        Self::running(spec, error_model, key, store, state, provenance)
     }
 
     /// `state` as a running training, or as done (and stored) if it has ended.
@@ -431,7 +433,9 @@ mod tests {
         loop {
             match training {
                 Stage::Done(trained, provenance) => return Ok((*trained, provenance)),
-                running => training = running.epoch(spec, set, error_model, key, store, progress)?,
+                running => {
+                    training = running.epoch(spec, set, error_model, key, store, progress)?
+                }
             }
         }
     }

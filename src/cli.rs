@@ -777,7 +777,9 @@ fn bench_training(
             .num_threads(1)
             .build()
             .expect("a pool of one thread")
-            .install(|| train::train_pass(&spec, set, error_model, &mut state, 1, order, &hidden))?;
+            .install(|| {
+                train::train_pass(&spec, set, error_model, &mut state, 1, order, &hidden)
+            })?;
         Ok(order.len())
     };
     let clock = Instant::now();
@@ -865,7 +867,10 @@ fn print_training_bench(spec: &Spec, ours: &TrainingRates, peer: Option<&PeerRat
     let mut table = comfy_table::Table::new();
     table.load_preset(comfy_table::presets::ASCII_MARKDOWN);
     let rate = |r: f64| format!("{r:.0}");
-    let mut header = vec!["arrangement".to_string(), format!("dcnet-exp ({backend}) samples/s")];
+    let mut header = vec![
+        "arrangement".to_string(),
+        format!("dcnet-exp ({backend}) samples/s"),
+    ];
     let mut rows = vec![
         vec!["one model, one thread".to_string(), rate(ours.one_thread)],
         vec![

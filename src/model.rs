@@ -105,7 +105,8 @@ impl Windows {
     /// `inputs` `[count, 6, time]` row-major: DVL x, y, z then GNSS x, y, z, in m/s.
     pub fn new(inputs: &[f32], time: usize, kernel: usize, device: &Device) -> Self {
         let count = inputs.len() / (INPUT_ROWS * time);
-        let value = |window: usize, row: usize, t: usize| inputs[(window * INPUT_ROWS + row) * time + t];
+        let value =
+            |window: usize, row: usize, t: usize| inputs[(window * INPUT_ROWS + row) * time + t];
         let steps_1d = time + 1 - kernel;
         let mut head_1d = Vec::with_capacity(count * steps_1d * 3 * kernel);
         let mut head_2d = Vec::with_capacity(count * (time - 1) * 3 * KERNEL_2D);
@@ -114,7 +115,8 @@ impl Windows {
             for t in 0..steps_1d {
                 for tap in 0..kernel {
                     for axis in 0..3 {
-                        head_1d.push((value(w, axis, t + tap) - value(w, axis + 3, t + tap)) * 100.0);
+                        head_1d
+                            .push((value(w, axis, t + tap) - value(w, axis + 3, t + tap)) * 100.0);
                     }
                 }
             }
@@ -134,8 +136,14 @@ impl Windows {
         Self {
             count,
             time,
-            head_1d: Tensor::from_data(TensorData::new(head_1d, [count * steps_1d, 3 * kernel]), device),
-            head_2d: Tensor::from_data(TensorData::new(head_2d, [count * (time - 1) * 3, KERNEL_2D]), device),
+            head_1d: Tensor::from_data(
+                TensorData::new(head_1d, [count * steps_1d, 3 * kernel]),
+                device,
+            ),
+            head_2d: Tensor::from_data(
+                TensorData::new(head_2d, [count * (time - 1) * 3, KERNEL_2D]),
+                device,
+            ),
             dvl_cm_s: Tensor::from_data(TensorData::new(dvl, [count, time, 3]), device),
         }
     }
@@ -263,7 +271,10 @@ fn unfold_1d(count: usize, steps: usize, kernel: usize, device: &Device) -> Tens
             taps.extend((0..kernel).map(|k| (w * steps + t + k) as i64));
         }
     }
-    Tensor::from_data(TensorData::new(taps, [count * (steps + 1 - kernel) * kernel]), device)
+    Tensor::from_data(
+        TensorData::new(taps, [count * (steps + 1 - kernel) * kernel]),
+        device,
+    )
 }
 
 /// For rows (window, time, row) with `steps` times and `rows` rows per window: the four
@@ -308,7 +319,13 @@ fn dropout(x: Tensor<2>, p: f64, rng: &mut ChaCha8Rng) -> Tensor<2> {
     rng.fill(&mut draws[..]);
     let mask: Vec<f32> = draws
         .into_iter()
-        .map(|draw| if u64::from(draw) < threshold { 0.0 } else { keep })
+        .map(|draw| {
+            if u64::from(draw) < threshold {
+                0.0
+            } else {
+                keep
+            }
+        })
         .collect();
     let mask = Tensor::from_data(TensorData::new(mask, [rows, cols]), &x.device());
     x * mask
@@ -434,10 +451,17 @@ mod tests {
             .map(|_| rng.random_range(-2.0..2.0))
             .collect();
         let windows = Windows::new(&inputs, window, k, &device);
-        let ours: Vec<f32> = model.features(&windows, &settings).into_data().try_to_vec::<f32>().unwrap();
+        let ours: Vec<f32> = model
+            .features(&windows, &settings)
+            .into_data()
+            .try_to_vec::<f32>()
+            .unwrap();
 
         let slope = settings.leaky_relu_slope;
-        let x = Tensor::<3>::from_data(TensorData::new(inputs, [count, INPUT_ROWS, window]), &device);
+        let x = Tensor::<3>::from_data(
+            TensorData::new(inputs, [count, INPUT_ROWS, window]),
+            &device,
+        );
         let diff = (x.clone().slice([0..count, 0..3, 0..window])
             - x.clone().slice([0..count, 3..6, 0..window]))
             * 100.0;
@@ -474,7 +498,10 @@ mod tests {
         .unwrap();
         assert_eq!(ours.len(), theirs.len());
         for (i, (a, b)) in ours.iter().zip(&theirs).enumerate() {
-            assert!((a - b).abs() <= 1e-4 * (1.0 + b.abs()), "feature {i}: {a} vs {b}");
+            assert!(
+                (a - b).abs() <= 1e-4 * (1.0 + b.abs()),
+                "feature {i}: {a} vs {b}"
+            );
         }
     }
 
@@ -488,7 +515,11 @@ mod tests {
         for (i, v) in values.iter().enumerate() {
             assert!((tanh[i] - v.tanh()).abs() < 1e-6, "tanh({v}) = {}", tanh[i]);
             let want = if *v >= 0.0 { *v } else { 0.05 * v };
-            assert!((leaky[i] - want).abs() <= 1e-6 * (1.0 + v.abs()), "leaky({v}) = {}", leaky[i]);
+            assert!(
+                (leaky[i] - want).abs() <= 1e-6 * (1.0 + v.abs()),
+                "leaky({v}) = {}",
+                leaky[i]
+            );
         }
     }
 }

@@ -450,7 +450,10 @@ fn training_section(run: &StoredRun, out: &mut String) {
         table.add_row(vec![
             model.to_string(),
             epochs.len().to_string(),
-            epochs.first().map(|e| e.stop.to_string()).unwrap_or_default(),
+            epochs
+                .first()
+                .map(|e| e.stop.to_string())
+                .unwrap_or_default(),
             best.map(|e| e.record.epoch.to_string()).unwrap_or_default(),
             best.map(|e| format!("{:.4}", e.record.validation_loss))
                 .unwrap_or_default(),

@@ -248,8 +248,7 @@ pub fn mean_loss(
     for chunk in indices.chunks(spec.training.batch_size.max(1024)) {
         let (windows, truth) = batch_of(set, chunk, &settings, &device);
         let terms = model.forward(&windows, &settings, None);
-        let loss: f32 =
-            closed_loop_loss(terms, error_model, windows.dvl_cm_s, truth).into_scalar();
+        let loss: f32 = closed_loop_loss(terms, error_model, windows.dvl_cm_s, truth).into_scalar();
         total += f64::from(loss) * chunk.len() as f64;
     }
     total / indices.len().max(1) as f64

@@ -175,7 +175,12 @@ fn trained_models_are_reused_until_a_training_setting_changes() {
 fn early_stopping_ends_training_records_why_and_keys_the_model() {
     let project = project(false);
     let run = |extra: &[&str]| {
-        let mut args = vec!["run", "experiments/quick.toml", "--set", "training.epochs=40"];
+        let mut args = vec![
+            "run",
+            "experiments/quick.toml",
+            "--set",
+            "training.epochs=40",
+        ];
         args.extend(extra);
         let output = dcnet(project.path(), &args);
         assert!(output.status.success(), "{}", stderr(&output));
@@ -183,7 +188,11 @@ fn early_stopping_ends_training_records_why_and_keys_the_model() {
     };
     let patience = ["--set", "training.early_stopping.patience_epochs=2"];
     let output = run(&patience);
-    assert!(stderr(&output).contains("stopped early"), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("stopped early"),
+        "{}",
+        stderr(&output)
+    );
     let batch = read_parquet(&project.path().join("results/quick/training.parquet"));
     let models = strings(&batch, "error_model");
     let reasons = strings(&batch, "stop_reason");
@@ -194,7 +203,10 @@ fn early_stopping_ends_training_records_why_and_keys_the_model() {
             .collect();
         let epochs = rows.len();
         assert!(epochs < 40, "{model} trained all {epochs} epochs");
-        assert!(rows.iter().all(|&i| reasons[i].as_deref() == Some("early stopping")));
+        assert!(
+            rows.iter()
+                .all(|&i| reasons[i].as_deref() == Some("early stopping"))
+        );
         // The last two epochs did not beat the best before them.
         let loss = |k: usize| validation[rows[k]].unwrap();
         let best_before = (0..epochs - 2).map(loss).fold(f64::INFINITY, f64::min);
@@ -207,7 +219,11 @@ fn early_stopping_ends_training_records_why_and_keys_the_model() {
     assert_eq!(provenance(&output).len(), 5, "{}", stderr(&output));
     let batch = read_parquet(&project.path().join("results/quick/training.parquet"));
     assert_eq!(batch.num_rows(), 5 * 40);
-    assert!(strings(&batch, "stop_reason").iter().all(|r| r.as_deref() == Some("all epochs")));
+    assert!(
+        strings(&batch, "stop_reason")
+            .iter()
+            .all(|r| r.as_deref() == Some("all epochs"))
+    );
     // And with early stopping again, every model comes from the cache.
     assert!(provenance(&run(&patience)).is_empty());
 }
@@ -215,7 +231,10 @@ fn early_stopping_ends_training_records_why_and_keys_the_model() {
 #[test]
 fn a_model_trained_alone_is_the_model_trained_beside_others() {
     let project = project(false);
-    for (out, models) in [("alone", r#"["EM5"]"#), ("beside", r#"["EM1","EM2","EM3","EM4","EM5"]"#)] {
+    for (out, models) in [
+        ("alone", r#"["EM5"]"#),
+        ("beside", r#"["EM1","EM2","EM3","EM4","EM5"]"#),
+    ] {
         let set = format!("estimators.error_models={models}");
         let output = dcnet(
             project.path(),
@@ -235,7 +254,10 @@ fn a_model_trained_alone_is_the_model_trained_beside_others() {
             .expect("EM5 is stored");
         std::fs::read(file).unwrap()
     };
-    assert!(em5("alone") == em5("beside"), "EM5 depends on the models beside it");
+    assert!(
+        em5("alone") == em5("beside"),
+        "EM5 depends on the models beside it"
+    );
 }
 
 #[test]
