@@ -691,8 +691,8 @@ fn bench(
     set: &[String],
 ) -> Result<(), CliError> {
     let spec = load_spec(spec_path, set)?;
-    if pytorch.is_some() {
-        pytorch_shapes_match(&spec).map_err(|e| input(anyhow::anyhow!(e)))?;
+    if let Some(script) = pytorch {
+        pytorch_ready(&spec, script).map_err(|e| input(anyhow::anyhow!(e)))?;
     }
     let trajectories = load_trajectories(&spec).map_err(input)?;
     let repeat = repeat.max(1);
@@ -800,20 +800,39 @@ fn bench_training(
     })
 }
 
-/// The peer script builds DCNet with the paper's shapes only.
-fn pytorch_shapes_match(spec: &Spec) -> Result<(), String> {
-    let [w1, w2, w3] = spec.model.fc_widths;
+/// Whether the PyTorch peer can run before anything is timed: the script is there,
+/// python3 imports torch, and the spec has the only shapes the script builds.
+fn pytorch_ready(spec: &Spec, script: &Path) -> Result<(), String> {
+    if !script.is_file() {
+        return Err(format!("--pytorch: {} is not a file", script.display()));
+    }
+    let import = std::process::Command::new("python3")
+        .args(["-c", "import torch"])
+        .output()
+        .map_err(|e| format!("--pytorch: cannot run python3: {e}"))?;
+    if !import.status.success() {
+        return Err(format!(
+            "--pytorch: python3 cannot import torch (pip install torch):\n{}",
+            String::from_utf8_lossy(&import.stderr).trim_end()
+        ));
+    }
+    let m = &spec.model;
+    let [w1, w2, w3] = m.fc_widths;
     if spec.dataset.window != 10
-        || spec.model.conv1d_kernel_size != 2
+        || m.conv1d_kernel_size != 2
         || (w2, w3) != (w1 / 2, w1 / 4)
-        || spec.model.activation != crate::model::Activation::Tanh
+        || m.activation != crate::model::Activation::Tanh
+        || m.dropout != 0.3
+        || m.leaky_relu_slope != 0.05
     {
         return Err(format!(
-            "--pytorch: the peer script builds windows of 10 samples, Conv1d kernels of 2, tanh and FC widths [w, w/2, w/4]; the spec has {} samples, kernel {}, {} and FC {:?}",
+            "--pytorch: the peer script builds windows of 10 samples, Conv1d kernels of 2, FC widths [w, w/2, w/4] with tanh, dropout 0.3 and LeakyReLU slope 0.05; the spec has {} samples, kernel {}, FC {:?} with {}, dropout {} and slope {}",
             spec.dataset.window,
-            spec.model.conv1d_kernel_size,
-            spec.model.activation,
-            spec.model.fc_widths
+            m.conv1d_kernel_size,
+            m.fc_widths,
+            m.activation,
+            m.dropout,
+            m.leaky_relu_slope
         ));
     }
     Ok(())
@@ -834,6 +853,15 @@ fn bench_pytorch(spec: &Spec, script: &Path, batches: usize) -> Result<PeerRates
             .output()
             .map_err(|e| format!("python3 {}: {e}", script.display()))?;
         let stdout = String::from_utf8_lossy(&output.stdout);
+        if !output.status.success() {
+            return Err(format!(
+                "python3 {} failed ({}):\n{}{}",
+                script.display(),
+                output.status,
+                stdout,
+                String::from_utf8_lossy(&output.stderr)
+            ));
+        }
         stdout
             .lines()
             .find_map(|line| line.strip_prefix("pytorch: "))

@@ -736,6 +736,7 @@ fn train(
             (job, run, progress)
         });
         stages.training += clock.elapsed().as_secs_f64();
+        let mut storage_error = None;
         for (t, result) in results {
             match result {
                 Ok((model, provenance)) => {
@@ -762,7 +763,10 @@ fn train(
                     );
                     outcome.done += 1;
                 }
-                Err(TrainError::Checkpoint(error)) => return Err(error.into()),
+                // The other models' outcomes are still recorded before this is returned.
+                Err(TrainError::Checkpoint(error)) => {
+                    storage_error.get_or_insert(error);
+                }
                 Err(error) => {
                     let training = &plan.trainings[t];
                     plan.models.save_failure(
@@ -772,6 +776,9 @@ fn train(
                     )?;
                 }
             }
+        }
+        if let Some(error) = storage_error {
+            return Err(error.into());
         }
     }
     Ok(())

@@ -343,7 +343,7 @@ pub fn run_epoch(
         seconds,
         samples_per_s: order.len() as f64 / seconds,
     });
-    // Without validation windows the last epoch counts as the best.
+    // Without validation windows the training loss decides the best epoch.
     let score = if validation.is_empty() {
         train_loss
     } else {
@@ -355,9 +355,11 @@ pub fn run_epoch(
     Ok(())
 }
 
-/// Epochs since the validation loss last fell below its best so far by more than
-/// `min_improvement` (the first epoch always counts as an improvement). Without
-/// validation windows the training loss stands in, as it does for the best epoch.
+/// Epochs since the last epoch that counted as an improvement: one whose validation
+/// loss fell more than `min_improvement` below that of the improvement before it (the
+/// first epoch always counts), as Lightning's EarlyStopping counts. Without validation
+/// windows (a NaN validation loss) the training loss stands in, as it does for the best
+/// epoch.
 pub fn epochs_without_improvement(history: &[EpochRecord], min_improvement: f64) -> usize {
     let mut best = f64::INFINITY;
     let mut since = 0;

@@ -261,6 +261,23 @@ fn a_model_trained_alone_is_the_model_trained_beside_others() {
 }
 
 #[test]
+fn bench_refuses_a_pytorch_peer_it_cannot_run_before_timing_anything() {
+    let project = project(false);
+    let output = dcnet(
+        project.path(),
+        &[
+            "bench",
+            "experiments/quick.toml",
+            "--pytorch",
+            "nowhere/torch_dcnet.py",
+        ],
+    );
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(stderr(&output).contains("--pytorch: nowhere/torch_dcnet.py is not a file"));
+    assert!(stdout(&output).is_empty(), "{}", stdout(&output));
+}
+
+#[test]
 fn a_diverging_model_is_reported_and_the_others_are_kept() {
     let project = project(false);
     let dir = project.path();

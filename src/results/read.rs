@@ -171,9 +171,14 @@ fn expected_schema(file: &str) -> std::sync::Arc<Schema> {
     batch.schema()
 }
 
+/// Columns added after the first results folders were written: a folder that lacks
+/// one still reads, with the value those runs implied.
+const LATER_COLUMNS: [&str; 1] = ["stop_reason"];
+
 fn check_schema(found: &Schema, expected: &Schema) -> Result<(), String> {
     for field in expected.fields() {
         match found.field_with_name(field.name()) {
+            Err(_) if LATER_COLUMNS.contains(&field.name().as_str()) => {}
             Err(_) => {
                 return Err(format!(
                     "column `{}` is missing: this is not the schema dcnet-exp writes",
@@ -389,7 +394,12 @@ fn epoch_rows(batch: &Batch) -> Result<Vec<StoredEpoch>, String> {
     let seconds = batch.floats("seconds")?;
     let samples_per_s = batch.floats("samples_per_s")?;
     let is_best = batch.bools("is_best")?;
-    let stop: Vec<StopReason> = batch.required("stop_reason")?;
+    // Runs from before early stopping trained every epoch.
+    let stop: Vec<StopReason> = if batch.0.column_by_name("stop_reason").is_some() {
+        batch.required("stop_reason")?
+    } else {
+        vec![StopReason::AllEpochs; epoch.len()]
+    };
     Ok((0..epoch.len())
         .map(|i| StoredEpoch {
             error_model: error_model[i],
@@ -448,4 +458,57 @@ fn gather_trajectories(samples: Vec<TrajectorySample>) -> Vec<StoredTrajectory> 
         trajectory.velocity_m_s.push(velocity);
     }
     trajectories
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::checkpoint::Summary;
+    use crate::train::StopReason;
+
+    fn summary(stop: StopReason) -> Summary {
+        let epoch = |epoch| EpochRecord {
+            epoch,
+            train_loss: 1.0,
+            validation_loss: 0.5,
+            seconds: 1.0,
+            samples_per_s: 1.0,
+        };
+        Summary {
+            key: "k".repeat(64),
+            error_model: ErrorModel::Em5,
+            best_epoch: 2,
+            history: vec![epoch(1), epoch(2)],
+            stop,
+        }
+    }
+
+    #[test]
+    fn the_stop_reason_reads_back_and_defaults_for_folders_written_before_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("training.parquet");
+        super::super::write_table(
+            &path,
+            &training_batch(&[summary(StopReason::EarlyStopping)]),
+        )
+        .unwrap();
+        let rows = table_at(&path, "training.parquet", epoch_rows).unwrap();
+        assert!(rows.iter().all(|r| r.stop == StopReason::EarlyStopping));
+        assert!(rows[1].is_best && !rows[0].is_best);
+
+        let mut older = training_batch(&[summary(StopReason::EarlyStopping)]);
+        older.remove_column(older.schema().index_of("stop_reason").unwrap());
+        super::super::write_table(&path, &older).unwrap();
+        let rows = table_at(&path, "training.parquet", epoch_rows).unwrap();
+        assert_eq!(rows.len(), 2);
+        assert!(rows.iter().all(|r| r.stop == StopReason::AllEpochs));
+
+        older.remove_column(older.schema().index_of("is_best").unwrap());
+        super::super::write_table(&path, &older).unwrap();
+        let error = table_at(&path, "training.parquet", epoch_rows).unwrap_err();
+        assert!(
+            error.to_string().contains("column `is_best` is missing"),
+            "{error}"
+        );
+    }
 }

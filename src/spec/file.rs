@@ -252,7 +252,8 @@ pub struct TrainingFile {
 }
 
 /// `[training.early_stopping]`: stop once `patience_epochs` epochs in a row have not
-/// lowered the best validation loss by more than `min_improvement` (cm/s)².
+/// improved on the validation loss of the last improvement by more than
+/// `min_improvement` (cm/s)².
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct EarlyStoppingFile {

@@ -162,8 +162,9 @@ pub struct TrainingSpec {
     pub early_stopping: Option<EarlyStopping>,
 }
 
-/// Training stops once `patience` epochs in a row have not lowered the best validation
-/// loss by more than `min_improvement` (cm/s)².
+/// Training stops once `patience` epochs in a row have not improved on the validation
+/// loss of the last improvement by more than `min_improvement` (cm/s)²
+/// ([`crate::train::epochs_without_improvement`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EarlyStopping {
     pub patience: usize,
