@@ -1,5 +1,6 @@
 //! Closed-loop training of one DCNet per error model. In: the spec and the training
-//! set. Out: the weights with the best validation loss and the per-epoch history.
+//! set. Out: the weights with the best validation loss, the per-epoch history, and why
+//! training ended (every epoch, or `training.early_stopping`).
 //!
 //! The loss corrects each window's DVL velocity with the predicted terms and takes the
 //! squared error against the ground truth in (cm/s)², summed over x, y, z and averaged
