@@ -773,13 +773,9 @@ fn bench_training(
         let order = train::epoch_order(&spec, set, error_model, 1);
         let order = &order[..order.len().min(batches * spec.training.batch_size)];
         let mut state = train::State::new(&spec, error_model);
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .expect("a pool of one thread")
-            .install(|| {
-                train::train_pass(&spec, set, error_model, &mut state, 1, order, &hidden)
-            })?;
+        train::one_thread_pool().install(|| {
+            train::train_pass(&spec, set, error_model, &mut state, 1, order, &hidden)
+        })?;
         Ok(order.len())
     };
     let clock = Instant::now();
@@ -869,7 +865,7 @@ fn bench_pytorch(spec: &Spec, script: &Path, batches: usize) -> Result<PeerRates
             .and_then(|rate| rate.parse().ok())
             .ok_or_else(|| {
                 format!(
-                    "python3 {} printed no samples/s (is torch installed? pip install torch):\n{}{}",
+                    "python3 {} printed no samples/s:\n{}{}",
                     script.display(),
                     stdout,
                     String::from_utf8_lossy(&output.stderr)

@@ -796,45 +796,40 @@ type EpochStep<'a> =
 /// step that trains one epoch, and its progress bar. A worker takes the training at
 /// the head of the queue, trains its next epoch and puts it back at the tail, so that
 /// every core trains while at least as many trainings as cores are left, and the models
-/// advance together. Each worker runs its epochs on a one-thread pool: flex's inner
-/// parallelism stays on that core (it barely speeds up one model: a lone training on
-/// two threads ran its epoch in 6.7 s against 6.9 s on one), and a model computes the
-/// same bytes whichever worker, and however many, train it. Returns each id's trained
-/// model or the error that ended it.
+/// advance together. Each worker runs its epochs on [`train::one_thread_pool`], so a
+/// model computes the same bytes whichever worker, and however many, train it. Returns
+/// each id's trained model or the error that ended it.
 fn interleave_epochs<'a, F, S>(ids: &[usize], start: S) -> Vec<(usize, Ended)>
 where
     S: Fn(usize) -> (Result<Stage, TrainError>, F, ProgressBar),
     F: Fn(Stage, &ProgressBar) -> Result<Stage, TrainError> + Send + Sync + 'a,
 {
-    let mut finished = Vec::new();
-    let mut queue = std::collections::VecDeque::new();
+    let queue = std::sync::Mutex::new(std::collections::VecDeque::new());
+    let finished = std::sync::Mutex::new(Vec::new());
+    // A running training goes to the tail of the queue; an ended one is finished.
+    let place =
+        |id, outcome: Result<Stage, TrainError>, step: EpochStep<'a>, progress: ProgressBar| {
+            let ended = match outcome {
+                Ok(Stage::Done(trained, provenance)) => Ok((trained, provenance)),
+                Ok(running) => {
+                    let mut queue = queue.lock().expect("no worker panics");
+                    queue.push_back((id, running, step, progress));
+                    return;
+                }
+                Err(error) => Err(error),
+            };
+            progress.finish_and_clear();
+            finished.lock().expect("no worker panics").push((id, ended));
+        };
     for &id in ids {
         let (stage, step, progress) = start(id);
-        match stage {
-            Ok(Stage::Done(trained, provenance)) => {
-                progress.finish_and_clear();
-                finished.push((id, Ok((trained, provenance))));
-            }
-            Ok(running) => {
-                let step: EpochStep<'a> = Box::new(step);
-                queue.push_back((id, running, step, progress));
-            }
-            Err(error) => {
-                progress.finish_and_clear();
-                finished.push((id, Err(error)));
-            }
-        }
+        place(id, stage, Box::new(step), progress);
     }
-    let queue = std::sync::Mutex::new(queue);
-    let finished = std::sync::Mutex::new(finished);
     let workers = rayon::current_num_threads().min(ids.len()).max(1);
     std::thread::scope(|scope| {
         for _ in 0..workers {
             scope.spawn(|| {
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(1)
-                    .build()
-                    .expect("a pool of one thread");
+                let pool = train::one_thread_pool();
                 // The queue only shrinks while this worker is away: every training
                 // not in it is held by a worker that will carry on with it.
                 loop {
@@ -842,26 +837,8 @@ where
                     let Some((id, stage, step, progress)) = next else {
                         break;
                     };
-                    match pool.install(|| step(stage, &progress)) {
-                        Ok(Stage::Done(trained, provenance)) => {
-                            progress.finish_and_clear();
-                            finished
-                                .lock()
-                                .expect("no worker panics")
-                                .push((id, Ok((trained, provenance))));
-                        }
-                        Ok(running) => queue
-                            .lock()
-                            .expect("no worker panics")
-                            .push_back((id, running, step, progress)),
-                        Err(error) => {
-                            progress.finish_and_clear();
-                            finished
-                                .lock()
-                                .expect("no worker panics")
-                                .push((id, Err(error)));
-                        }
-                    }
+                    let outcome = pool.install(|| step(stage, &progress));
+                    place(id, outcome, step, progress);
                 }
             });
         }

@@ -146,16 +146,10 @@ fn provenance(output: &std::process::Output) -> Vec<String> {
 fn trained_models_are_reused_until_a_training_setting_changes() {
     let project = project(false);
     let run = |extra: &[&str]| {
-        let mut args = vec![
-            "run",
-            "experiments/quick.toml",
-            "--set",
-            "training.epochs=3",
-        ];
-        args.extend(extra);
-        let output = dcnet(project.path(), &args);
-        assert!(output.status.success(), "{}", stderr(&output));
-        provenance(&output)
+        provenance(&quick_run(
+            project.path(),
+            &[&["--set", "training.epochs=3"], extra].concat(),
+        ))
     };
     let models = ["EM1", "EM2", "EM3", "EM4", "EM5"];
     assert_eq!(run(&[]), models.map(|m| format!("DCNet {m}: trained")));
@@ -175,16 +169,10 @@ fn trained_models_are_reused_until_a_training_setting_changes() {
 fn early_stopping_ends_training_records_why_and_keys_the_model() {
     let project = project(false);
     let run = |extra: &[&str]| {
-        let mut args = vec![
-            "run",
-            "experiments/quick.toml",
-            "--set",
-            "training.epochs=40",
-        ];
-        args.extend(extra);
-        let output = dcnet(project.path(), &args);
-        assert!(output.status.success(), "{}", stderr(&output));
-        output
+        quick_run(
+            project.path(),
+            &[&["--set", "training.epochs=40"], extra].concat(),
+        )
     };
     let patience = ["--set", "training.early_stopping.patience_epochs=2"];
     let output = run(&patience);
@@ -236,11 +224,7 @@ fn a_model_trained_alone_is_the_model_trained_beside_others() {
         ("beside", r#"["EM1","EM2","EM3","EM4","EM5"]"#),
     ] {
         let set = format!("estimators.error_models={models}");
-        let output = dcnet(
-            project.path(),
-            &["run", "experiments/quick.toml", "--out", out, "--set", &set],
-        );
-        assert!(output.status.success(), "{}", stderr(&output));
+        quick_run(project.path(), &["--out", out, "--set", &set]);
     }
     let em5 = |out: &str| -> Vec<u8> {
         let folder = project.path().join(out).join(".cache/models");

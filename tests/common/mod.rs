@@ -86,19 +86,23 @@ pub fn project(with_data: bool) -> tempfile::TempDir {
     dir
 }
 
+/// `run experiments/quick.toml` with `extra` arguments, which must succeed.
+pub fn quick_run(dir: &Path, extra: &[&str]) -> Output {
+    let args = [&["run", "experiments/quick.toml"], extra].concat();
+    let output = dcnet(dir, &args);
+    assert!(output.status.success(), "{}", stderr(&output));
+    output
+}
+
 /// A small quick run: 3 Monte Carlo runs, 2 epochs.
 pub fn small_quick_run(dir: &Path, extra: &[&str]) {
-    let mut args = vec![
-        "run",
-        "experiments/quick.toml",
+    let small = [
         "--set",
         "calibration.monte_carlo_runs=3",
         "--set",
         "training.epochs=2",
     ];
-    args.extend(extra);
-    let output = dcnet(dir, &args);
-    assert!(output.status.success(), "{}", stderr(&output));
+    quick_run(dir, &[&small, extra].concat());
 }
 
 pub fn read_parquet(path: &Path) -> RecordBatch {
