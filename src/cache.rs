@@ -13,11 +13,11 @@
 //! - Monte Carlo blocks (one estimator on one DVL, every run) live in `monte_carlo/`
 //!   as Parquet files of their per-run rows.
 
-use crate::data::fetch::sha256_hex;
-use crate::estimators::{ErrorModel, EstimatorKind};
 use crate::evaluate::RunRow;
+use crate::files::sha256_hex;
 use crate::results::{self, ResultsError, read};
 use crate::spec::{FileFormat, Origin, Spec};
+use crate::vocab::{ErrorModel, EstimatorKind};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -1,16 +1,15 @@
 //! Trained models on disk, under `OUT/.cache/models/`. A finished model is stored at
 //! full precision as `<EM>-<key>.bin` (weights) and `<EM>-<key>.json` (history), where
-//! the key ([`crate::cache::model_key`]) is the hash of everything that determined it.
-//! A later run with the same key loads it instead of training. While a model trains, a
+//! the key, made by the content-addressed cache, is the hash of everything that
+//! determined it. A later run with the same key loads it instead of training. While a model trains, a
 //! checkpoint in `<EM>-<key>.checkpoint/` is written every few epochs, and an
 //! interrupted training resumes from it. [`Stage`] walks one model through this an
 //! epoch at a time, so that the pipeline can interleave the epochs of many models.
-
-use crate::estimators::ErrorModel;
+use crate::files::write_atomic;
 use crate::model::Dcnet;
-use crate::results::write_atomic;
 use crate::spec::Spec;
-use crate::train::{self, EpochRecord, State, StopReason, Trained};
+use crate::train::{self, EpochRecord, State, Trained};
+use crate::vocab::{ErrorModel, StopReason};
 use burn::module::Module;
 use burn::store::ModuleRecord;
 use burn::tensor::{Bytes, Device};
@@ -277,6 +276,15 @@ pub enum Provenance {
     Reused,
 }
 
+/// Why a step of [`Stage`] failed: the training itself, or storing its model.
+#[derive(Debug, thiserror::Error)]
+pub enum StageError {
+    #[error(transparent)]
+    Train(#[from] train::TrainError),
+    #[error(transparent)]
+    Store(#[from] CheckpointError),
+}
+
 /// One model's way through training, one epoch at a time, so that a scheduler can
 /// interleave the epochs of several models: [`Stage::start`] loads the stored model
 /// or resumes its checkpoint, [`Stage::epoch`] trains one epoch and checkpoints
@@ -347,7 +355,7 @@ impl Stage {
         key: &str,
         store: &ModelStore,
         progress: &indicatif::ProgressBar,
-    ) -> Result<Self, train::TrainError> {
+    ) -> Result<Self, StageError> {
         let Self::Running {
             mut state,
             provenance,
@@ -428,7 +436,7 @@ mod tests {
         store: &ModelStore,
         fresh: bool,
         progress: &indicatif::ProgressBar,
-    ) -> Result<(Trained, Provenance), train::TrainError> {
+    ) -> Result<(Trained, Provenance), StageError> {
         let mut training = Stage::start(spec, error_model, key, store, fresh)?;
         loop {
             match training {

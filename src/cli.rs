@@ -7,7 +7,6 @@
 use crate::compare;
 use crate::data::{fetch, load_trajectories};
 use crate::dataset::{self, TrainingSet, window_starts};
-use crate::estimators::{ErrorModel, EstimatorKind};
 use crate::evaluate::run_protocol;
 use crate::pipeline::{Mode, Outcome, Plan, Shard, Task, execute};
 use crate::plots::{self, Format, Metric};
@@ -17,6 +16,7 @@ use crate::spec::{Experiment, Origin, Spec, load, load_experiment};
 use crate::sweep;
 use crate::tables;
 use crate::train::{self, TrainError};
+use crate::vocab::{ErrorModel, EstimatorKind};
 use clap::{Parser, Subcommand};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -817,7 +817,7 @@ fn pytorch_ready(spec: &Spec, script: &Path) -> Result<(), String> {
     if spec.dataset.window != 10
         || m.conv1d_kernel_size != 2
         || (w2, w3) != (w1 / 2, w1 / 4)
-        || m.activation != crate::model::Activation::Tanh
+        || m.activation != crate::vocab::Activation::Tanh
         || m.dropout != 0.3
         || m.leaky_relu_slope != 0.05
     {

@@ -6,12 +6,11 @@
 //! A, B and B − A, each RMSE difference marked when it exceeds twice the combined Monte
 //! Carlo standard error, then the DCNet training times and the wall time per stage side
 //! by side, and a count of the marked cells.
-
-use crate::estimators::{ErrorModel, EstimatorKind};
 use crate::evaluate::{CalibrationRow, EvaluationRow};
+use crate::files::write_atomic;
 use crate::results::read::{ReadError, StoredRun};
-use crate::results::write_atomic;
 use crate::sweep;
+use crate::vocab::{ErrorModel, EstimatorKind};
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 use std::fmt::Write;
 use std::path::{Path, PathBuf};

@@ -10,40 +10,15 @@
 //! depend on the thread count.
 
 use crate::data::Trajectory;
-use crate::estimators::{Correction, Entry, ErrorModel, EstimatorKind, lineup};
+use crate::estimators::{Entry, lineup};
 use crate::noise::{BeamGeometry, Measurements, measure_trajectory};
 use crate::rng::task_rng;
 use crate::spec::{Dvl, Spec};
 use crate::train::Trained;
+use crate::vocab::{Correction, ErrorModel, EstimatorKind, Phase};
 use crate::{Vec3, first_seen};
 use indicatif::ProgressBar;
 use rayon::prelude::*;
-
-/// Which phase a Monte Carlo row belongs to.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Phase {
-    Calibration,
-    Evaluation,
-}
-
-impl Phase {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Phase::Calibration => "calibration",
-            Phase::Evaluation => "evaluation",
-        }
-    }
-}
-
-impl std::str::FromStr for Phase {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        [Phase::Calibration, Phase::Evaluation]
-            .into_iter()
-            .find(|p| p.as_str() == s)
-            .ok_or_else(|| format!("unknown phase {s:?}: expected calibration or evaluation"))
-    }
-}
 
 /// One estimator's result in one run, on one window (calibration) or trajectory
 /// (evaluation at T_conv).

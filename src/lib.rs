@@ -18,6 +18,11 @@
 //!     models of [`checkpoint`]), resumable, and shared out over shards; a spec's
 //!     [`sweep`] runs as many points;
 //! 11. [`cli`]: the subcommands.
+//!
+//! Beneath them all, importing no other module: [`vocab`], the words every stage
+//! shares (error models, methods, corrections, activation, backend, stop reason,
+//! phase), and [`files`], atomic writes and content hashes. No module imports one
+//! that imports it back (`tools/import_cycles.py` checks the whole of `src/`).
 
 pub mod cache;
 pub mod checkpoint;
@@ -27,6 +32,7 @@ pub mod data;
 pub mod dataset;
 pub mod estimators;
 pub mod evaluate;
+pub mod files;
 pub mod model;
 pub mod noise;
 pub mod pipeline;
@@ -40,6 +46,7 @@ pub mod spec;
 pub mod sweep;
 pub mod tables;
 pub mod train;
+pub mod vocab;
 
 /// A velocity (or any xyz vector): x, y, z in m/s unless a name says otherwise.
 pub type Vec3 = [f64; 3];

@@ -15,45 +15,14 @@
 //! train at the same time.
 
 use crate::dataset::{INPUT_ROWS, TARGET_ROWS};
-use crate::estimators::{Correction, ErrorModel};
 use crate::spec::ModelSpec;
+use crate::vocab::{Activation, Correction, ErrorModel};
 use burn::module::{Module, Param, ParamId};
 use burn::nn::{Initializer, Linear, LinearConfig};
 use burn::tensor::activation::{relu, sigmoid};
 use burn::tensor::{Device, Int, Tensor, TensorData};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
-use std::fmt;
-use std::str::FromStr;
-
-/// The activation of the FC batch.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Activation {
-    Tanh,
-    LeakyRelu,
-}
-
-impl fmt::Display for Activation {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            Self::Tanh => "tanh",
-            Self::LeakyRelu => "leaky_relu",
-        })
-    }
-}
-
-impl FromStr for Activation {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "tanh" => Ok(Self::Tanh),
-            "leaky_relu" => Ok(Self::LeakyRelu),
-            _ => Err(format!(
-                "unknown activation {s:?}; expected tanh or leaky_relu"
-            )),
-        }
-    }
-}
 
 /// The three convolutions of the 2D head have 2×2 kernels; the first pairs row i with
 /// row i + 3 (DVL with GNSS), the next two neighbouring rows.

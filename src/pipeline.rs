@@ -12,16 +12,17 @@
 //! first, so shards need nothing from each other and each writes its own cache files.
 
 use crate::cache::{self, BlockStore, DataHashes};
-use crate::checkpoint::{ModelStore, Provenance, Stage, Summary};
+use crate::checkpoint::{ModelStore, Provenance, Stage, StageError, Summary};
 use crate::data::{Trajectory, load_trajectories};
 use crate::dataset::{self, TrainingSet};
-use crate::estimators::{ErrorModel, EstimatorKind, lineup, series};
+use crate::estimators::{lineup, series};
 use crate::evaluate::{ProtocolResult, run_block, summarize};
 use crate::progress::bar;
 use crate::results::{self, Manifest, StageSeconds};
 use crate::spec::{Experiment, Spec};
 use crate::sweep;
-use crate::train::{self, StopReason, TrainError, Trained};
+use crate::train::{self, Trained};
+use crate::vocab::{ErrorModel, EstimatorKind, StopReason};
 use indicatif::ProgressBar;
 use std::path::{Path, PathBuf};
 use std::time::{Instant, SystemTime};
@@ -500,8 +501,6 @@ pub struct Outcome {
 #[derive(Debug, thiserror::Error)]
 pub enum ExecuteError {
     #[error(transparent)]
-    Train(#[from] TrainError),
-    #[error(transparent)]
     Results(#[from] results::ResultsError),
     #[error(transparent)]
     Read(#[from] results::read::ReadError),
@@ -555,7 +554,7 @@ pub fn execute(plan: &Plan, mode: Mode, to_do: &[Task]) -> Result<Outcome, Execu
         // Shards may be writing beside each other on other machines; a whole run or
         // collect has the folders to itself.
         for folder in [plan.out.join(&plan.experiment.name), cache::root(&plan.out)] {
-            results::remove_stale_partials(&folder).map_err(|source| {
+            crate::files::remove_stale_partials(&folder).map_err(|source| {
                 results::ResultsError::Io {
                     path: folder.clone(),
                     source,
@@ -619,7 +618,7 @@ pub fn execute(plan: &Plan, mode: Mode, to_do: &[Task]) -> Result<Outcome, Execu
             let spec = plan.spec(p);
             let manifest = Manifest {
                 name: spec.name.clone(),
-                spec_sha256: crate::data::fetch::sha256_hex(spec.resolved_toml().as_bytes()),
+                spec_sha256: crate::files::sha256_hex(spec.resolved_toml().as_bytes()),
                 git_commit: env!("DCNET_GIT_COMMIT").to_string(),
                 crate_version: env!("CARGO_PKG_VERSION").to_string(),
                 started_at: humantime::format_rfc3339_seconds(started_at).to_string(),
@@ -728,7 +727,7 @@ fn train(
                 &plan.models,
                 force,
             )
-            .map_err(TrainError::from);
+            .map_err(StageError::from);
             if let Ok(job) = &job {
                 progress
                     .set_position((job.epochs_done() * train::batches_per_epoch(spec, set)) as u64);
@@ -764,7 +763,7 @@ fn train(
                     outcome.done += 1;
                 }
                 // The other models' outcomes are still recorded before this is returned.
-                Err(TrainError::Checkpoint(error)) => {
+                Err(StageError::Store(error)) => {
                     storage_error.get_or_insert(error);
                 }
                 Err(error) => {
@@ -785,11 +784,11 @@ fn train(
 }
 
 /// How one training ended: its model and where it came from, or the error that ended it.
-type Ended = Result<(Box<Trained>, Provenance), TrainError>;
+type Ended = Result<(Box<Trained>, Provenance), StageError>;
 
 /// One training's next epoch: its current stage in, its next stage out.
 type EpochStep<'a> =
-    Box<dyn Fn(Stage, &ProgressBar) -> Result<Stage, TrainError> + Send + Sync + 'a>;
+    Box<dyn Fn(Stage, &ProgressBar) -> Result<Stage, StageError> + Send + Sync + 'a>;
 
 /// Runs every training of `ids` to its end, epoch by epoch, on
 /// `rayon::current_num_threads()` workers. `start` gives each id its first stage, the
@@ -801,14 +800,14 @@ type EpochStep<'a> =
 /// each id's trained model or the error that ended it.
 fn interleave_epochs<'a, F, S>(ids: &[usize], start: S) -> Vec<(usize, Ended)>
 where
-    S: Fn(usize) -> (Result<Stage, TrainError>, F, ProgressBar),
-    F: Fn(Stage, &ProgressBar) -> Result<Stage, TrainError> + Send + Sync + 'a,
+    S: Fn(usize) -> (Result<Stage, StageError>, F, ProgressBar),
+    F: Fn(Stage, &ProgressBar) -> Result<Stage, StageError> + Send + Sync + 'a,
 {
     let queue = std::sync::Mutex::new(std::collections::VecDeque::new());
     let finished = std::sync::Mutex::new(Vec::new());
     // A running training goes to the tail of the queue; an ended one is finished.
     let place =
-        |id, outcome: Result<Stage, TrainError>, step: EpochStep<'a>, progress: ProgressBar| {
+        |id, outcome: Result<Stage, StageError>, step: EpochStep<'a>, progress: ProgressBar| {
             let ended = match outcome {
                 Ok(Stage::Done(trained, provenance)) => Ok((trained, provenance)),
                 Ok(running) => {

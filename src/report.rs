@@ -6,12 +6,10 @@
 //! built once (`Tables`) and set as Markdown here and as LaTeX in `latex`.
 
 mod latex;
-
-use crate::estimators::{ErrorModel, EstimatorKind};
-use crate::evaluate::Phase;
 use crate::plots::Written;
 use crate::published::PublishedCell;
 use crate::results::read::StoredRun;
+use crate::vocab::{ErrorModel, EstimatorKind, Phase};
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -24,9 +22,9 @@ const FLAG: &str = "⚠";
 pub fn write(run: &StoredRun, figures: &[Written]) -> std::io::Result<[PathBuf; 2]> {
     let tables = Tables::of(run);
     let markdown = run.folder.join(FILE);
-    crate::results::write_atomic(&markdown, render(run, &tables, figures).as_bytes())?;
+    crate::files::write_atomic(&markdown, render(run, &tables, figures).as_bytes())?;
     let tex = run.folder.join(latex::FILE);
-    crate::results::write_atomic(&tex, latex::render(run, &tables).as_bytes())?;
+    crate::files::write_atomic(&tex, latex::render(run, &tables).as_bytes())?;
     Ok([markdown, tex])
 }
 

@@ -4,11 +4,12 @@
 //! training time), and `sweep.json`, the index of the points, written last.
 
 use crate::checkpoint::Summary;
-use crate::estimators::{ErrorModel, EstimatorKind};
 use crate::evaluate::ProtocolResult;
+use crate::files::write_atomic;
 use crate::results::read::{Batch, ReadError, read_rows};
-use crate::results::{ResultsError, write_atomic, write_table};
+use crate::results::{ResultsError, write_table};
 use crate::spec::Experiment;
+use crate::vocab::{ErrorModel, EstimatorKind};
 use arrow_array::types::{Float64Type, Int64Type};
 use arrow_array::{
     Array, ArrayRef, Float64Array, Int64Array, RecordBatch, StringArray, cast::AsArray,

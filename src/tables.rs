@@ -1,9 +1,8 @@
 //! The calibration and evaluation tables printed at the end of a run, in the paper's
 //! layout: error models across, DVLs and estimators down, `mean ± std (T_conv)` cells.
-
-use crate::estimators::ErrorModel;
 use crate::evaluate::{CalibrationRow, EvaluationRow};
 use crate::first_seen;
+use crate::vocab::ErrorModel;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 
 /// Calibration at T_conv: one row per DVL and estimator, one column per error model
@@ -92,7 +91,7 @@ pub fn evaluation_table(rows: &[EvaluationRow]) -> String {
                 .iter()
                 .find(|r| r.trajectory == *trajectory)
                 .map(|r| match r.improvement_pct {
-                    Some(pct) if r.estimator != crate::estimators::EstimatorKind::Baseline => {
+                    Some(pct) if r.estimator != crate::vocab::EstimatorKind::Baseline => {
                         format!("{:.2} ± {:.2} ({pct:+.0} %)", r.rmse_cm_s, r.rmse_std_cm_s)
                     }
                     _ => format!("{:.2} ± {:.2}", r.rmse_cm_s, r.rmse_std_cm_s),

@@ -10,57 +10,16 @@
 //! or on the other models training beside it.
 
 use crate::dataset::{INPUT_ROWS, TARGET_ROWS, TrainingSet};
-use crate::estimators::ErrorModel;
 use crate::model::{Dcnet, Settings, Windows, split_terms, truth_cm_s};
 use crate::rng::task_rng;
 use crate::spec::Spec;
+use crate::vocab::{ErrorModel, StopReason};
 use burn::module::Module;
 use burn::optim::{GradientsParams, ModuleOptimizer, RmsPropConfig};
 use burn::tensor::{Device, Tensor};
 use indicatif::ProgressBar;
 use rand::seq::SliceRandom;
-use std::fmt;
-use std::str::FromStr;
 use std::time::Instant;
-
-/// burn's CPU backends.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Backend {
-    /// burn-flex, the default: several times faster than ndarray on this model.
-    Flex,
-    /// burn-ndarray, deprecated by burn 0.22 but kept for comparison.
-    NdArray,
-}
-
-impl Backend {
-    pub fn device(self) -> Device {
-        match self {
-            Self::Flex => Device::flex(),
-            #[allow(deprecated)]
-            Self::NdArray => Device::ndarray(),
-        }
-    }
-}
-
-impl fmt::Display for Backend {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            Self::Flex => "flex",
-            Self::NdArray => "ndarray",
-        })
-    }
-}
-
-impl FromStr for Backend {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "flex" => Ok(Self::Flex),
-            "ndarray" => Ok(Self::NdArray),
-            _ => Err(format!("unknown backend {s:?}; expected flex or ndarray")),
-        }
-    }
-}
 
 /// One epoch of one model.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -89,39 +48,6 @@ pub enum TrainError {
         "DCNet {error_model}: no training windows (is dataset.validation_fraction leaving none?)"
     )]
     NoData { error_model: ErrorModel },
-    #[error(transparent)]
-    Checkpoint(#[from] crate::checkpoint::CheckpointError),
-}
-
-/// Why a training ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub enum StopReason {
-    /// It ran `training.epochs`.
-    #[serde(rename = "all epochs")]
-    AllEpochs,
-    /// `training.early_stopping` ended it: its patience ran out.
-    #[serde(rename = "early stopping")]
-    EarlyStopping,
-}
-
-impl fmt::Display for StopReason {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            Self::AllEpochs => "all epochs",
-            Self::EarlyStopping => "early stopping",
-        })
-    }
-}
-
-impl FromStr for StopReason {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "all epochs" => Ok(Self::AllEpochs),
-            "early stopping" => Ok(Self::EarlyStopping),
-            _ => Err(format!("unknown stop reason {s:?}")),
-        }
-    }
 }
 
 /// A trained model: the weights of its best validation epoch, on a plain (no autodiff)

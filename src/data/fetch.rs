@@ -2,7 +2,7 @@
 //! the BeamsNet repository, checks their SHA-256 against PAPER-NOTES, and writes them
 //! atomically. A file already present with the right hash is kept.
 
-use sha2::{Digest, Sha256};
+use crate::files::sha256_hex;
 use std::path::{Path, PathBuf};
 
 /// Raw files of the BeamsNet repository (Cohen & Klein 2022) on its main branch.
@@ -108,20 +108,13 @@ pub fn fetch_files(
                 expected: expected.to_string(),
             });
         }
-        crate::results::write_atomic(&path, &bytes).map_err(|source| FetchError::Write {
+        crate::files::write_atomic(&path, &bytes).map_err(|source| FetchError::Write {
             path: path.clone(),
             source,
         })?;
         outcomes.push(Outcome::Downloaded(path));
     }
     Ok(outcomes)
-}
-
-pub fn sha256_hex(bytes: &[u8]) -> String {
-    Sha256::digest(bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
 }
 
 /// A hint to append to a "file not found" message when the file is one we can fetch.

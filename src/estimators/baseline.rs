@@ -1,9 +1,10 @@
 //! The paper's baseline (eq. 9-10): a scalar scale `k_t = |v_dvl,t| / |v_gnss,t| − 1`
 //! averaged over the calibration window, corrected as `v / (1 + k)`.
 
-use super::{Correction, Estimator};
+use super::Estimator;
 use crate::Vec3;
 use crate::data::norm;
+use crate::vocab::Correction;
 
 pub struct Baseline;
 

@@ -2,10 +2,11 @@
 //! windows of the training length, the trained network estimates the terms of each in
 //! one batch, and their mean is the estimate (PAPER-NOTES, "Evaluation protocol").
 
-use super::{Correction, ErrorModel, Estimator};
+use super::Estimator;
 use crate::Vec3;
 use crate::dataset::INPUT_ROWS;
 use crate::model::{Dcnet, Settings, Windows, correction};
+use crate::vocab::{Correction, ErrorModel};
 use burn::tensor::Device;
 
 pub struct DcnetEstimator {

@@ -1,9 +1,10 @@
 //! The floor: corrects with the true terms of the noising settings, so what is left is
 //! the beam noise alone. A bound for every method, not a method.
 
-use super::{Correction, Estimator};
+use super::Estimator;
 use crate::Vec3;
 use crate::noise::{BeamGeometry, SensorErrors};
+use crate::vocab::Correction;
 
 pub struct Floor(Correction);
 

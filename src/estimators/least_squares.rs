@@ -4,8 +4,9 @@
 //! axis. GNSS-RTK noise sits in the regressor, so the EM5 slope is attenuated when the
 //! window barely varies in speed: that is the textbook errors-in-variables bias.
 
-use super::{Correction, ErrorModel, Estimator};
+use super::Estimator;
 use crate::Vec3;
+use crate::vocab::{Correction, ErrorModel};
 
 pub struct LeastSquares(pub ErrorModel);
 

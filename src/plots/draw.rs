@@ -3,7 +3,7 @@
 //! and box plots.
 
 use super::render::FAMILY;
-use crate::estimators::{ErrorModel, EstimatorKind};
+use crate::vocab::{ErrorModel, EstimatorKind};
 use plotters::chart::MeshStyle;
 use plotters::coord::Shift;
 use plotters::coord::ranged1d::ValueFormatter;

@@ -3,9 +3,9 @@
 
 use super::draw::*;
 use super::scale::{self, Scale};
-use crate::estimators::{ErrorModel, EstimatorKind};
-use crate::evaluate::{CalibrationRow, Phase};
+use crate::evaluate::CalibrationRow;
 use crate::results::read::{StoredRun, StoredTrajectory};
+use crate::vocab::{ErrorModel, EstimatorKind, Phase};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, VPos};
 

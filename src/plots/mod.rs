@@ -14,8 +14,8 @@ pub mod sweep_parallel;
 
 pub use sweep_figures::Metric;
 
+use crate::files::write_atomic;
 use crate::results::read::StoredRun;
-use crate::results::write_atomic;
 use crate::sweep::StoredSweep;
 use std::path::{Path, PathBuf};
 

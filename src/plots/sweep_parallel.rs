@@ -10,9 +10,9 @@ use super::draw::*;
 use super::figures::{Drawn, Outcome, draw_svg};
 use super::scale::Scale;
 use super::sweep_figures::Metric;
-use crate::estimators::EstimatorKind;
 use crate::first_seen;
 use crate::sweep::{StoredSweep, Swept};
+use crate::vocab::EstimatorKind;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, VPos};
 

@@ -8,11 +8,11 @@ use super::{
     monte_carlo_batch, training_batch, trajectories_batch,
 };
 use crate::Vec3;
-use crate::estimators::{Correction, ErrorModel, EstimatorKind};
-use crate::evaluate::{CalibrationRow, EvaluationRow, Phase, RunRow};
+use crate::evaluate::{CalibrationRow, EvaluationRow, RunRow};
 use crate::published::Published;
 use crate::spec::{SpecFile, TomlFile};
-use crate::train::{EpochRecord, StopReason};
+use crate::train::EpochRecord;
+use crate::vocab::{Correction, ErrorModel, EstimatorKind, Phase, StopReason};
 use arrow_array::{Array, BooleanArray, Float64Array, RecordBatch, StringArray, UInt32Array};
 use arrow_schema::Schema;
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
@@ -464,7 +464,7 @@ fn gather_trajectories(samples: Vec<TrajectorySample>) -> Vec<StoredTrajectory> 
 mod tests {
     use super::*;
     use crate::checkpoint::Summary;
-    use crate::train::StopReason;
+    use crate::vocab::StopReason;
 
     fn summary(stop: StopReason) -> Summary {
         let epoch = |epoch| EpochRecord {

@@ -6,15 +6,15 @@
 
 pub mod file;
 pub mod load;
+pub mod toml_file;
 
 pub use file::SpecFile;
-pub use load::{Experiment, Point, SpecError, SpecErrors, TomlFile, load, load_experiment};
+pub use load::{Experiment, Point, load, load_experiment};
+pub use toml_file::{SpecError, SpecErrors, TomlFile};
 
-use crate::estimators::{ErrorModel, EstimatorKind};
-use crate::model::Activation;
 use crate::noise::SensorErrors;
 use crate::published::Published;
-use crate::train::Backend;
+use crate::vocab::{Activation, Backend, ErrorModel, EstimatorKind};
 use file::{AxisFile, SyntheticFile};
 use std::path::{Path, PathBuf};
 
@@ -164,7 +164,7 @@ pub struct TrainingSpec {
 
 /// Training stops once `patience` epochs in a row have not improved on the validation
 /// loss of the last improvement by more than `min_improvement` (cm/s)²
-/// ([`crate::train::epochs_without_improvement`]).
+/// (counted as `train::epochs_without_improvement` counts).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EarlyStopping {
     pub patience: usize,

@@ -1,0 +1,276 @@
+//! The words every stage shares: the error models, the calibration methods and the
+//! corrections they return, the network's activation, burn's backend, why a training
+//! ended, and the two phases of the protocol. In: nothing of the crate. Out: plain
+//! types that the spec names and every later stage reads, each with the one spelling
+//! it has in a spec, a Parquet column and a table.
+
+use crate::Vec3;
+use burn::tensor::Device;
+use std::fmt;
+use std::str::FromStr;
+
+/// Estimated error terms; `apply` undoes them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Correction {
+    /// Scale factor per axis, `k` (0.01 for 1 %).
+    pub scale: Vec3,
+    /// Bias per axis, m/s.
+    pub bias_m_s: Vec3,
+}
+
+impl Correction {
+    pub const NONE: Correction = Correction {
+        scale: [0.0; 3],
+        bias_m_s: [0.0; 3],
+    };
+
+    /// `(v − b) ⊘ (1 + k)`.
+    pub fn apply(&self, v: Vec3) -> Vec3 {
+        std::array::from_fn(|axis| (v[axis] - self.bias_m_s[axis]) / (1.0 + self.scale[axis]))
+    }
+}
+
+/// The structure of the terms being estimated (PAPER-NOTES, "Error models"). Stored
+/// by name, "EM1" to "EM5".
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize,
+)]
+#[serde(try_from = "String", into = "String")]
+pub enum ErrorModel {
+    /// Scalar scale.
+    Em1,
+    /// Vector scale.
+    Em2,
+    /// Scalar bias.
+    Em3,
+    /// Vector bias.
+    Em4,
+    /// Vector scale and vector bias.
+    Em5,
+}
+
+impl ErrorModel {
+    pub const ALL: [ErrorModel; 5] = [Self::Em1, Self::Em2, Self::Em3, Self::Em4, Self::Em5];
+
+    /// Number of terms the model estimates: 1, 3, 1, 3, 6.
+    pub fn term_count(self) -> usize {
+        match self {
+            Self::Em1 | Self::Em3 => 1,
+            Self::Em2 | Self::Em4 => 3,
+            Self::Em5 => 6,
+        }
+    }
+}
+
+impl fmt::Display for ErrorModel {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "EM{}", *self as usize + 1)
+    }
+}
+
+impl TryFrom<String> for ErrorModel {
+    type Error = String;
+    fn try_from(name: String) -> Result<Self, String> {
+        name.parse()
+    }
+}
+
+impl From<ErrorModel> for String {
+    fn from(model: ErrorModel) -> String {
+        model.to_string()
+    }
+}
+
+impl FromStr for ErrorModel {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        parse_by_name(&Self::ALL, "error model", s)
+    }
+}
+
+/// A calibration method. The floor is no method but a bound: it corrects with the
+/// true terms, which shows what no calibration can beat.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum EstimatorKind {
+    Baseline,
+    LeastSquares,
+    Dcnet,
+    Floor,
+}
+
+impl EstimatorKind {
+    pub const ALL: [EstimatorKind; 4] =
+        [Self::Baseline, Self::LeastSquares, Self::Dcnet, Self::Floor];
+
+    /// Whether the method is run once per error model.
+    pub fn takes_error_model(self) -> bool {
+        matches!(self, Self::LeastSquares | Self::Dcnet)
+    }
+
+    /// How the method is labelled in tables.
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::Baseline => "baseline",
+            Self::LeastSquares => "least squares",
+            Self::Dcnet => "DCNet",
+            Self::Floor => "floor (bound)",
+        }
+    }
+}
+
+impl fmt::Display for EstimatorKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Baseline => "baseline",
+            Self::LeastSquares => "least_squares",
+            Self::Dcnet => "dcnet",
+            Self::Floor => "floor",
+        })
+    }
+}
+
+impl FromStr for EstimatorKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        parse_by_name(&Self::ALL, "estimator", s)
+    }
+}
+
+/// The value of `all` whose name (its `Display`) is `name`.
+fn parse_by_name<T: Copy + fmt::Display>(all: &[T], what: &str, name: &str) -> Result<T, String> {
+    all.iter()
+        .copied()
+        .find(|value| value.to_string() == name)
+        .ok_or_else(|| {
+            let names: Vec<String> = all.iter().map(ToString::to_string).collect();
+            format!(
+                "unknown {what} {name:?}; expected one of {}",
+                names.join(", ")
+            )
+        })
+}
+
+/// The activation of the FC batch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Activation {
+    Tanh,
+    LeakyRelu,
+}
+
+impl fmt::Display for Activation {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Tanh => "tanh",
+            Self::LeakyRelu => "leaky_relu",
+        })
+    }
+}
+
+impl FromStr for Activation {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "tanh" => Ok(Self::Tanh),
+            "leaky_relu" => Ok(Self::LeakyRelu),
+            _ => Err(format!(
+                "unknown activation {s:?}; expected tanh or leaky_relu"
+            )),
+        }
+    }
+}
+
+/// burn's CPU backends.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Backend {
+    /// burn-flex, the default: several times faster than ndarray on this model.
+    Flex,
+    /// burn-ndarray, deprecated by burn 0.22 but kept for comparison.
+    NdArray,
+}
+
+impl Backend {
+    pub fn device(self) -> Device {
+        match self {
+            Self::Flex => Device::flex(),
+            #[allow(deprecated)]
+            Self::NdArray => Device::ndarray(),
+        }
+    }
+}
+
+impl fmt::Display for Backend {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Flex => "flex",
+            Self::NdArray => "ndarray",
+        })
+    }
+}
+
+impl FromStr for Backend {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "flex" => Ok(Self::Flex),
+            "ndarray" => Ok(Self::NdArray),
+            _ => Err(format!("unknown backend {s:?}; expected flex or ndarray")),
+        }
+    }
+}
+
+/// Why a training ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum StopReason {
+    /// It ran `training.epochs`.
+    #[serde(rename = "all epochs")]
+    AllEpochs,
+    /// `training.early_stopping` ended it: its patience ran out.
+    #[serde(rename = "early stopping")]
+    EarlyStopping,
+}
+
+impl fmt::Display for StopReason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::AllEpochs => "all epochs",
+            Self::EarlyStopping => "early stopping",
+        })
+    }
+}
+
+impl FromStr for StopReason {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "all epochs" => Ok(Self::AllEpochs),
+            "early stopping" => Ok(Self::EarlyStopping),
+            _ => Err(format!("unknown stop reason {s:?}")),
+        }
+    }
+}
+
+/// Which phase a Monte Carlo row belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Phase {
+    Calibration,
+    Evaluation,
+}
+
+impl Phase {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Phase::Calibration => "calibration",
+            Phase::Evaluation => "evaluation",
+        }
+    }
+}
+
+impl std::str::FromStr for Phase {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        [Phase::Calibration, Phase::Evaluation]
+            .into_iter()
+            .find(|p| p.as_str() == s)
+            .ok_or_else(|| format!("unknown phase {s:?}: expected calibration or evaluation"))
+    }
+}
