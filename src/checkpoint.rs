@@ -1,10 +1,11 @@
 //! Trained models on disk, under `OUT/.cache/models/`. A finished model is stored at
 //! full precision as `<EM>-<key>.bin` (weights) and `<EM>-<key>.json` (history), where
 //! the key, made by the content-addressed cache, is the hash of everything that
-//! determined it. A later run with the same key loads it instead of training. While a model trains, a
-//! checkpoint in `<EM>-<key>.checkpoint/` is written every few epochs, and an
-//! interrupted training resumes from it. [`Stage`] walks one model through this an
+//! determined it. A later run with the same key loads it instead of training. While a
+//! model trains, a checkpoint in `<EM>-<key>.checkpoint/` is written every few epochs,
+//! and an interrupted training resumes from it. [`Stage`] walks one model through this an
 //! epoch at a time, so that the pipeline can interleave the epochs of many models.
+
 use crate::files::write_atomic;
 use crate::model::Dcnet;
 use crate::spec::Spec;

@@ -6,6 +6,7 @@
 //! A, B and B − A, each RMSE difference marked when it exceeds twice the combined Monte
 //! Carlo standard error, then the DCNet training times and the wall time per stage side
 //! by side, and a count of the marked cells.
+
 use crate::evaluate::{CalibrationRow, EvaluationRow};
 use crate::files::write_atomic;
 use crate::results::read::{ReadError, StoredRun};

@@ -3,6 +3,7 @@
 //! tables). One entry per table cell: the DVL, the estimator, the error model and, in
 //! the evaluation table, the trajectory; the RMSE, and T_conv or the improvement over
 //! the baseline where the paper gives them.
+
 use crate::spec::toml_file::TomlFile;
 use crate::vocab::{ErrorModel, EstimatorKind};
 use serde::Deserialize;

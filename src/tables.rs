@@ -1,5 +1,6 @@
 //! The calibration and evaluation tables printed at the end of a run, in the paper's
 //! layout: error models across, DVLs and estimators down, `mean ± std (T_conv)` cells.
+
 use crate::evaluate::{CalibrationRow, EvaluationRow};
 use crate::first_seen;
 use crate::vocab::ErrorModel;
