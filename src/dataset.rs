@@ -7,9 +7,10 @@
 //! (seed, combination index), so the bytes do not depend on the thread count.
 
 use crate::data::Trajectory;
-use crate::noise::{BeamGeometry, SensorErrors, measure_trajectory};
+use crate::noise::{BeamGeometry, measure_trajectory};
 use crate::rng::task_rng;
 use crate::spec::{Grid, Spec};
+use crate::vocab::SensorErrors;
 use indicatif::ProgressBar;
 use rayon::prelude::*;
 
@@ -53,13 +54,42 @@ pub fn window_starts(len: usize, window: usize, stride: usize) -> impl Iterator<
         .take_while(move |start| start + window <= len)
 }
 
-/// Windows that one grid combination yields from the training trajectories.
-pub fn windows_per_combination(spec: &Spec, trajectories: &[Trajectory]) -> usize {
-    let d = &spec.dataset;
-    d.trajectories
-        .iter()
-        .map(|&t| window_starts(trajectories[t].ground_truth.len(), d.window, d.stride).count())
-        .sum()
+/// How many windows a spec's training set has, known before any is generated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DatasetSize {
+    /// Combinations of the error-term grid.
+    pub combinations: usize,
+    /// Windows that one combination yields from the training trajectories.
+    pub per_combination: usize,
+    /// Of those, the validation windows.
+    pub validation_per_combination: usize,
+}
+
+impl DatasetSize {
+    pub fn of(spec: &Spec, trajectories: &[Trajectory]) -> Self {
+        let d = &spec.dataset;
+        let per_combination = d
+            .trajectories
+            .iter()
+            .map(|&t| window_starts(trajectories[t].ground_truth.len(), d.window, d.stride).count())
+            .sum();
+        Self {
+            combinations: spec.grid.points().len(),
+            per_combination,
+            validation_per_combination: (d.validation_fraction * per_combination as f64).round()
+                as usize,
+        }
+    }
+
+    /// Every window of the set.
+    pub fn windows(&self) -> usize {
+        self.combinations * self.per_combination
+    }
+
+    /// The validation windows of the set.
+    pub fn validation(&self) -> usize {
+        self.combinations * self.validation_per_combination
+    }
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -101,13 +131,12 @@ pub fn generate(spec: &Spec, trajectories: &[Trajectory], progress: &ProgressBar
     let geometry = BeamGeometry::janus_x(spec.beam_pitch_deg);
     let points = spec.grid.points();
     let window = spec.dataset.window;
-    let per_combination = windows_per_combination(spec, trajectories);
-    let total = points.len() * per_combination;
+    let size = DatasetSize::of(spec, trajectories);
+    let (per_combination, total) = (size.per_combination, size.windows());
     let mut inputs = vec![0f32; total * INPUT_ROWS * window];
     let mut targets = vec![0f32; total * TARGET_ROWS * window];
     let mut is_validation = vec![false; total];
-    let validation_count =
-        (spec.dataset.validation_fraction * per_combination as f64).round() as usize;
+    let validation_count = size.validation_per_combination;
 
     inputs
         .par_chunks_mut(per_combination * INPUT_ROWS * window)

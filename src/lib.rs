@@ -24,10 +24,7 @@
 //! phase), and [`files`], atomic writes and content hashes. No module imports one
 //! that imports it back (`tools/import_cycles.py` checks the whole of `src/`).
 
-pub mod cache;
-pub mod checkpoint;
 pub mod cli;
-pub mod compare;
 pub mod data;
 pub mod dataset;
 pub mod estimators;
@@ -36,15 +33,11 @@ pub mod files;
 pub mod model;
 pub mod noise;
 pub mod pipeline;
-pub mod plots;
 pub mod progress;
-pub mod published;
 pub mod report;
 pub mod results;
 pub mod rng;
 pub mod spec;
-pub mod sweep;
-pub mod tables;
 pub mod train;
 pub mod vocab;
 

@@ -5,30 +5,9 @@
 //! GNSS-RTK velocity in m/s, from a caller-seeded generator.
 
 use crate::Vec3;
+use crate::vocab::SensorErrors;
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
-
-/// Error terms of one DVL, in the units the pipeline computes in.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SensorErrors {
-    /// Beam scale factor `s` (0.01 for 1 %).
-    pub scale: f64,
-    /// Beam bias `b` in m/s.
-    pub bias_m_s: f64,
-    /// Standard deviation of the beam noise in m/s.
-    pub noise_m_s: f64,
-}
-
-impl SensorErrors {
-    /// From the spec's units: scale in %, bias and noise in cm/s.
-    pub fn from_spec_units(scale_pct: f64, bias_cm_s: f64, noise_cm_s: f64) -> Self {
-        Self {
-            scale: scale_pct / 100.0,
-            bias_m_s: bias_cm_s / 100.0,
-            noise_m_s: noise_cm_s / 100.0,
-        }
-    }
-}
 
 /// The four beam directions of a Janus "x" DVL and the least-squares map back to
 /// a velocity.

@@ -21,6 +21,17 @@ use indicatif::ProgressBar;
 use rand::seq::SliceRandom;
 use std::time::Instant;
 
+/// How one model trained: its cache key, every epoch's losses, the epoch whose
+/// weights it kept and why it stopped; the `.json` beside a stored model.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct TrainingHistory {
+    pub key: String,
+    pub error_model: ErrorModel,
+    pub best_epoch: usize,
+    pub history: Vec<EpochRecord>,
+    pub stop: StopReason,
+}
+
 /// One epoch of one model.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct EpochRecord {
@@ -418,7 +429,7 @@ pub(crate) mod tests {
         let trajectories = crate::data::load_trajectories(&spec).unwrap();
         let truth = &trajectories[4].ground_truth;
         let geometry = crate::noise::BeamGeometry::janus_x(20.0);
-        let errors = crate::noise::SensorErrors::from_spec_units(1.0, 0.7, 0.0);
+        let errors = crate::vocab::SensorErrors::from_spec_units(1.0, 0.7, 0.0);
         let measured =
             crate::noise::measure_trajectory(&geometry, truth, &errors, 0.0, &mut task_rng(1, &[]));
         let correction = estimator.estimate(&measured.dvl[..100], &measured.gnss[..100]);

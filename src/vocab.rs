@@ -1,5 +1,5 @@
-//! The words every stage shares: the error models, the calibration methods and the
-//! corrections they return, the network's activation, burn's backend, why a training
+//! The words every stage shares: a DVL's error terms, the error models, the
+//! calibration methods and the corrections they return, the network's activation, burn's backend, why a training
 //! ended, and the two phases of the protocol. In: nothing of the crate. Out: plain
 //! types that the spec names and every later stage reads, each with the one spelling
 //! it has in a spec, a Parquet column and a table.
@@ -272,5 +272,27 @@ impl std::str::FromStr for Phase {
             .into_iter()
             .find(|p| p.as_str() == s)
             .ok_or_else(|| format!("unknown phase {s:?}: expected calibration or evaluation"))
+    }
+}
+
+/// Error terms of one DVL, in the units the pipeline computes in.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SensorErrors {
+    /// Beam scale factor `s` (0.01 for 1 %).
+    pub scale: f64,
+    /// Beam bias `b` in m/s.
+    pub bias_m_s: f64,
+    /// Standard deviation of the beam noise in m/s.
+    pub noise_m_s: f64,
+}
+
+impl SensorErrors {
+    /// From the spec's units: scale in %, bias and noise in cm/s.
+    pub fn from_spec_units(scale_pct: f64, bias_cm_s: f64, noise_cm_s: f64) -> Self {
+        Self {
+            scale: scale_pct / 100.0,
+            bias_m_s: bias_cm_s / 100.0,
+            noise_m_s: noise_cm_s / 100.0,
+        }
     }
 }

@@ -3,6 +3,7 @@
 //! atomically. A file already present with the right hash is kept.
 
 use crate::files::sha256_hex;
+use crate::spec::recordings::{FILES, RemoteFile};
 use std::path::{Path, PathBuf};
 
 /// Raw files of the BeamsNet repository (Cohen & Klein 2022) on its main branch.
@@ -10,29 +11,6 @@ pub const DEFAULT_BASE_URL: &str = "https://raw.githubusercontent.com/ansfl/Beam
 
 /// Where `dcnet-exp data fetch` puts the files, relative to the working directory.
 pub const DEFAULT_DEST: &str = "data/snapir";
-
-/// One file to download: its name in the destination folder, its path under the base
-/// URL, and the SHA-256 it must have.
-#[derive(Debug, Clone, Copy)]
-pub struct RemoteFile {
-    pub name: &'static str,
-    pub remote_path: &'static str,
-    pub sha256: &'static str,
-}
-
-/// The Snapir recordings.
-pub const FILES: [RemoteFile; 2] = [
-    RemoteFile {
-        name: "V.npy",
-        remote_path: "dataset/TrainAndValidation/V.npy",
-        sha256: "0c525b3f30e71f0d385af5c256930b0fc8bb9cc2e53581cda46943bb49308ed5",
-    },
-    RemoteFile {
-        name: "V_test.npy",
-        remote_path: "dataset/Test/V_test.npy",
-        sha256: "ee517105d2a2856d5c5ee062c979d7a11e2fe929ae776bb341c8bf1ebe1014f7",
-    },
-];
 
 #[derive(Debug, thiserror::Error)]
 pub enum FetchError {
@@ -56,13 +34,13 @@ pub enum FetchError {
 
 /// What happened to one file.
 #[derive(Debug, PartialEq)]
-pub enum Outcome {
+pub enum Fetched {
     Downloaded(PathBuf),
     AlreadyPresent(PathBuf),
 }
 
 /// Downloads the Snapir recordings ([`FILES`]) from `base_url` into `dest`.
-pub fn fetch(base_url: &str, dest: &Path) -> Result<Vec<Outcome>, FetchError> {
+pub fn fetch(base_url: &str, dest: &Path) -> Result<Vec<Fetched>, FetchError> {
     fetch_files(&FILES, base_url, dest)
 }
 
@@ -72,12 +50,12 @@ pub fn fetch_files(
     files: &[RemoteFile],
     base_url: &str,
     dest: &Path,
-) -> Result<Vec<Outcome>, FetchError> {
+) -> Result<Vec<Fetched>, FetchError> {
     std::fs::create_dir_all(dest).map_err(|source| FetchError::Write {
         path: dest.to_path_buf(),
         source,
     })?;
-    let mut outcomes = Vec::new();
+    let mut fetched = Vec::new();
     for &RemoteFile {
         name,
         remote_path,
@@ -86,7 +64,7 @@ pub fn fetch_files(
     {
         let path = dest.join(name);
         if std::fs::read(&path).is_ok_and(|bytes| sha256_hex(&bytes) == expected) {
-            outcomes.push(Outcome::AlreadyPresent(path));
+            fetched.push(Fetched::AlreadyPresent(path));
             continue;
         }
         let url = format!("{}/{remote_path}", base_url.trim_end_matches('/'));
@@ -112,28 +90,9 @@ pub fn fetch_files(
             path: path.clone(),
             source,
         })?;
-        outcomes.push(Outcome::Downloaded(path));
+        fetched.push(Fetched::Downloaded(path));
     }
-    Ok(outcomes)
-}
-
-/// A hint to append to a "file not found" message when the file is one we can fetch.
-pub fn hint_for(path: &Path) -> String {
-    let name = path
-        .file_name()
-        .and_then(|n| n.to_str())
-        .unwrap_or_default();
-    if FILES.iter().any(|file| file.name == name) {
-        let folder = path
-            .parent()
-            .map(|p| p.display().to_string())
-            .unwrap_or_default();
-        format!(
-            "; run `dcnet-exp data fetch --dest {folder}` to download the Snapir recordings there"
-        )
-    } else {
-        String::new()
-    }
+    Ok(fetched)
 }
 
 #[cfg(test)]
@@ -194,13 +153,13 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let dest = dir.path().join("data");
         let (url, server) = serve(served.clone(), 2);
-        let outcomes = fetch_files(&files, &url, &dest).unwrap();
+        let fetched = fetch_files(&files, &url, &dest).unwrap();
         server.join().unwrap();
         assert_eq!(
-            outcomes,
+            fetched,
             vec![
-                Outcome::Downloaded(dest.join("a.npy")),
-                Outcome::Downloaded(dest.join("b.npy"))
+                Fetched::Downloaded(dest.join("a.npy")),
+                Fetched::Downloaded(dest.join("b.npy"))
             ]
         );
         for ((_, bytes), file) in served.iter().zip(&files) {
@@ -211,8 +170,8 @@ mod tests {
         assert_eq!(
             again,
             vec![
-                Outcome::AlreadyPresent(dest.join("a.npy")),
-                Outcome::AlreadyPresent(dest.join("b.npy"))
+                Fetched::AlreadyPresent(dest.join("a.npy")),
+                Fetched::AlreadyPresent(dest.join("b.npy"))
             ]
         );
     }

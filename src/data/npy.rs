@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 #[derive(Debug, thiserror::Error)]
 pub enum NpyError {
-    #[error("{}: file not found{}", path.display(), super::fetch::hint_for(path))]
+    #[error("{}: file not found{}", path.display(), crate::spec::recordings::hint_for(path))]
     Missing { path: PathBuf },
     #[error("{}: cannot read as .npy: {source}", path.display())]
     Read {

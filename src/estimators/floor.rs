@@ -3,8 +3,9 @@
 
 use super::Estimator;
 use crate::Vec3;
-use crate::noise::{BeamGeometry, SensorErrors};
+use crate::noise::BeamGeometry;
 use crate::vocab::Correction;
+use crate::vocab::SensorErrors;
 
 pub struct Floor(Correction);
 

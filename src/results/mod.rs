@@ -7,13 +7,14 @@
 //! run removes); the manifest is written last. [`read`] reads a folder back.
 
 pub mod read;
+pub mod sweep;
 
-use crate::checkpoint::Summary;
 use crate::data::Trajectory;
 use crate::evaluate::{CalibrationRow, EvaluationRow, ProtocolResult, RunRow};
 use crate::files::write_atomic;
 use crate::spec::Spec;
 use crate::train::EpochRecord;
+use crate::train::TrainingHistory;
 use crate::vocab::{Correction, ErrorModel};
 use arrow_array::{ArrayRef, BooleanArray, Float64Array, RecordBatch, StringArray, UInt32Array};
 use parquet::arrow::ArrowWriter;
@@ -95,7 +96,7 @@ pub fn write_run(
     spec: &Spec,
     trajectories: &[Trajectory],
     result: &ProtocolResult,
-    dcnets: &[Summary],
+    dcnets: &[TrainingHistory],
     manifest: &Manifest,
 ) -> Result<(), ResultsError> {
     std::fs::create_dir_all(folder).map_err(io(folder))?;
@@ -241,8 +242,8 @@ pub fn evaluation_batch(rows: &[EvaluationRow]) -> RecordBatch {
 }
 
 /// One row per error model × epoch of DCNet training.
-pub fn training_batch(dcnets: &[Summary]) -> RecordBatch {
-    let rows: Vec<(&Summary, &EpochRecord)> = dcnets
+pub fn training_batch(dcnets: &[TrainingHistory]) -> RecordBatch {
+    let rows: Vec<(&TrainingHistory, &EpochRecord)> = dcnets
         .iter()
         .flat_map(|t| t.history.iter().map(move |epoch| (t, epoch)))
         .collect();

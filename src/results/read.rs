@@ -9,7 +9,7 @@ use super::{
 };
 use crate::Vec3;
 use crate::evaluate::{CalibrationRow, EvaluationRow, RunRow};
-use crate::published::Published;
+use crate::spec::published::Published;
 use crate::spec::{SpecFile, TomlFile};
 use crate::train::EpochRecord;
 use crate::vocab::{Correction, ErrorModel, EstimatorKind, Phase, StopReason};
@@ -463,10 +463,10 @@ fn gather_trajectories(samples: Vec<TrajectorySample>) -> Vec<StoredTrajectory> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::checkpoint::Summary;
+    use crate::train::TrainingHistory;
     use crate::vocab::StopReason;
 
-    fn summary(stop: StopReason) -> Summary {
+    fn summary(stop: StopReason) -> TrainingHistory {
         let epoch = |epoch| EpochRecord {
             epoch,
             train_loss: 1.0,
@@ -474,7 +474,7 @@ mod tests {
             seconds: 1.0,
             samples_per_s: 1.0,
         };
-        Summary {
+        TrainingHistory {
             key: "k".repeat(64),
             error_model: ErrorModel::Em5,
             best_epoch: 2,

@@ -384,7 +384,7 @@ impl Default for LearningRatesFile {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ReportFile {
-    /// TOML file of published values to put beside ours (see `crate::published`).
+    /// TOML file of published values to put beside ours (see `crate::spec::published`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub published: Option<PathBuf>,
     /// A cell is flagged when our RMSE differs from the published one by more than

@@ -6,14 +6,16 @@
 
 pub mod file;
 pub mod load;
+pub mod published;
+pub mod recordings;
 pub mod toml_file;
 
 pub use file::SpecFile;
 pub use load::{Experiment, Point, load, load_experiment};
 pub use toml_file::{SpecError, SpecErrors, TomlFile};
 
-use crate::noise::SensorErrors;
-use crate::published::Published;
+use crate::spec::published::Published;
+use crate::vocab::SensorErrors;
 use crate::vocab::{Activation, Backend, ErrorModel, EstimatorKind};
 use file::{AxisFile, SyntheticFile};
 use std::path::{Path, PathBuf};
@@ -264,7 +266,7 @@ impl SpecFile {
                             format!(
                                 "{} does not exist{}",
                                 path.display(),
-                                crate::data::fetch::hint_for(&path)
+                                recordings::hint_for(&path)
                             ),
                         );
                     }

@@ -16,11 +16,11 @@ pub use sweep_figures::Metric;
 
 use crate::files::write_atomic;
 use crate::results::read::StoredRun;
-use crate::sweep::StoredSweep;
+use crate::results::sweep::StoredSweep;
 use std::path::{Path, PathBuf};
 
 /// Which files each figure is written as.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Format {
     Png,
     Svg,
@@ -28,6 +28,17 @@ pub enum Format {
 }
 
 impl Format {
+    pub const ALL: [Format; 3] = [Format::Png, Format::Svg, Format::Both];
+
+    /// How the command line spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Png => "png",
+            Format::Svg => "svg",
+            Format::Both => "both",
+        }
+    }
+
     fn extensions(self) -> &'static [&'static str] {
         match self {
             Format::Png => &["png"],

@@ -10,7 +10,7 @@
 use crate::evaluate::{CalibrationRow, EvaluationRow};
 use crate::files::write_atomic;
 use crate::results::read::{ReadError, StoredRun};
-use crate::sweep;
+use crate::results::sweep;
 use crate::vocab::{ErrorModel, EstimatorKind};
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 use std::fmt::Write;
@@ -493,7 +493,7 @@ fn training_of(run: &StoredRun, model: ErrorModel) -> Option<(usize, f64, f64)> 
 
 fn training_section(a: &StoredRun, b: &StoredRun, out: &mut String) {
     let _ = writeln!(out, "## DCNet training\n");
-    let models = crate::tables::models_in(
+    let models = crate::report::tables::models_in(
         a.training
             .iter()
             .chain(&b.training)

@@ -5,10 +5,13 @@
 //! and the figures. Drawn from a [`StoredRun`] alone, like the figures. The tables are
 //! built once (`Tables`) and set as Markdown here and as LaTeX in `latex`.
 
+pub mod compare;
 mod latex;
-use crate::plots::Written;
-use crate::published::PublishedCell;
+pub mod plots;
+pub mod tables;
+use crate::report::plots::Written;
 use crate::results::read::StoredRun;
+use crate::spec::published::PublishedCell;
 use crate::vocab::{ErrorModel, EstimatorKind, Phase};
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 use std::fmt::Write;
@@ -166,7 +169,8 @@ impl Entry {
 impl Tables {
     fn of(run: &StoredRun) -> Tables {
         let tolerance = run.spec.report.tolerance_pct;
-        let models = crate::tables::models_in(run.calibration.iter().map(|r| r.error_model));
+        let models =
+            crate::report::tables::models_in(run.calibration.iter().map(|r| r.error_model));
         let dvls = run.dvls();
         let has = |kind: EstimatorKind| run.calibration.iter().any(|r| r.estimator == kind);
         let published = |dvl: &str, kind, model, trajectory: Option<&str>| {

@@ -9,35 +9,51 @@
 use crate::files::write_atomic;
 use crate::model::Dcnet;
 use crate::spec::Spec;
-use crate::train::{self, EpochRecord, State, Trained};
-use crate::vocab::{ErrorModel, StopReason};
+use crate::train::{self, EpochRecord, State, Trained, TrainingHistory};
+use crate::vocab::ErrorModel;
 use burn::module::Module;
-use burn::store::ModuleRecord;
+use burn::store::{ModuleRecord, RecordError};
 use burn::tensor::{Bytes, Device};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, thiserror::Error)]
 pub enum CheckpointError {
-    #[error("{}: {message}", path.display())]
-    Io { path: PathBuf, message: String },
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{}: {source}", path.display())]
+    Json {
+        path: PathBuf,
+        #[source]
+        source: serde_json::Error,
+    },
+    #[error("{}: {source:?}", path.display())]
+    Record {
+        path: PathBuf,
+        #[source]
+        source: RecordError,
+    },
+    #[error("{}: the model of {task} is not stored", folder.display())]
+    NotStored { folder: PathBuf, task: String },
 }
 
-fn io_error(path: &Path, error: impl std::fmt::Display) -> CheckpointError {
-    CheckpointError::Io {
-        path: path.to_path_buf(),
-        message: error.to_string(),
-    }
+fn io_error(path: &Path) -> impl FnOnce(std::io::Error) -> CheckpointError {
+    let path = path.to_path_buf();
+    |source| CheckpointError::Io { path, source }
 }
 
-/// What the `.json` beside a stored model holds: how it trained.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct Summary {
-    pub key: String,
-    pub error_model: ErrorModel,
-    pub best_epoch: usize,
-    pub history: Vec<EpochRecord>,
-    pub stop: StopReason,
+fn json_error(path: &Path) -> impl FnOnce(serde_json::Error) -> CheckpointError {
+    let path = path.to_path_buf();
+    |source| CheckpointError::Json { path, source }
+}
+
+fn record_error(path: &Path) -> impl FnOnce(RecordError) -> CheckpointError {
+    let path = path.to_path_buf();
+    |source| CheckpointError::Record { path, source }
 }
 
 /// What a checkpoint's `state.json` holds; the weight files carry the epoch in their name.
@@ -64,17 +80,17 @@ impl ModelStore {
     }
 
     /// How the stored model with this key trained, if there is one.
-    pub fn summary(
+    pub fn history(
         &self,
         error_model: ErrorModel,
         key: &str,
-    ) -> Result<Option<Summary>, CheckpointError> {
+    ) -> Result<Option<TrainingHistory>, CheckpointError> {
         let path = self.stem(error_model, key).with_extension("json");
         let Ok(text) = std::fs::read_to_string(&path) else {
             return Ok(None);
         };
-        let summary: Summary = serde_json::from_str(&text).map_err(|e| io_error(&path, e))?;
-        Ok((summary.key == key).then_some(summary))
+        let history: TrainingHistory = serde_json::from_str(&text).map_err(json_error(&path))?;
+        Ok((history.key == key).then_some(history))
     }
 
     /// Records that the training of `key` failed and why, so that later runs and
@@ -85,9 +101,9 @@ impl ModelStore {
         key: &str,
         message: &str,
     ) -> Result<(), CheckpointError> {
-        std::fs::create_dir_all(&self.folder).map_err(|e| io_error(&self.folder, e))?;
+        std::fs::create_dir_all(&self.folder).map_err(io_error(&self.folder))?;
         let path = self.stem(error_model, key).with_extension("failed");
-        write_atomic(&path, message.as_bytes()).map_err(|e| io_error(&path, e))
+        write_atomic(&path, message.as_bytes()).map_err(io_error(&path))
     }
 
     /// Why the training of `key` failed, if it did.
@@ -114,7 +130,7 @@ impl ModelStore {
         let Ok(text) = std::fs::read_to_string(&path) else {
             return Ok(None);
         };
-        serde_json::from_str(&text).map_err(|e| io_error(&path, e))
+        serde_json::from_str(&text).map_err(json_error(&path))
     }
 
     /// The stored model with this key, if there is one.
@@ -124,7 +140,7 @@ impl ModelStore {
         error_model: ErrorModel,
         key: &str,
     ) -> Result<Option<Trained>, CheckpointError> {
-        let Some(summary) = self.summary(error_model, key)? else {
+        let Some(history) = self.history(error_model, key)? else {
             return Ok(None);
         };
         let stem = self.stem(error_model, key);
@@ -137,18 +153,18 @@ impl ModelStore {
         Ok(Some(Trained {
             error_model,
             model,
-            history: summary.history,
-            best_epoch: summary.best_epoch,
-            stop: summary.stop,
+            history: history.history,
+            best_epoch: history.best_epoch,
+            stop: history.stop,
         }))
     }
 
     /// Stores a finished model and removes its checkpoint and any failure record.
     pub fn save(&self, trained: &Trained, key: &str) -> Result<(), CheckpointError> {
         let stem = self.stem(trained.error_model, key);
-        std::fs::create_dir_all(&self.folder).map_err(|e| io_error(&self.folder, e))?;
+        std::fs::create_dir_all(&self.folder).map_err(io_error(&self.folder))?;
         write_model(&stem.with_extension("bin"), &trained.model)?;
-        let summary = Summary {
+        let summary = TrainingHistory {
             key: key.to_string(),
             error_model: trained.error_model,
             best_epoch: trained.best_epoch,
@@ -162,14 +178,14 @@ impl ModelStore {
                 .expect("summary serializes")
                 .as_bytes(),
         )
-        .map_err(|e| io_error(&path, e))?;
+        .map_err(io_error(&path))?;
         let checkpoint = stem.with_extension("checkpoint");
         if checkpoint.exists() {
-            std::fs::remove_dir_all(&checkpoint).map_err(|e| io_error(&checkpoint, e))?;
+            std::fs::remove_dir_all(&checkpoint).map_err(io_error(&checkpoint))?;
         }
         let failed = stem.with_extension("failed");
         if failed.exists() {
-            std::fs::remove_file(&failed).map_err(|e| io_error(&failed, e))?;
+            std::fs::remove_file(&failed).map_err(io_error(&failed))?;
         }
         Ok(())
     }
@@ -182,15 +198,15 @@ impl ModelStore {
         key: &str,
     ) -> Result<(), CheckpointError> {
         let folder = self.stem(error_model, key).with_extension("checkpoint");
-        std::fs::create_dir_all(&folder).map_err(|e| io_error(&folder, e))?;
+        std::fs::create_dir_all(&folder).map_err(io_error(&folder))?;
         let epoch = state.history.len();
         write_model(&folder.join(format!("epoch-{epoch}.model")), &state.model)?;
         let optimizer_path = folder.join(format!("epoch-{epoch}.optimizer"));
         let bytes = state
             .optimizer
             .into_bytes()
-            .map_err(|e| io_error(&optimizer_path, format!("{e:?}")))?;
-        write_atomic(&optimizer_path, &bytes).map_err(|e| io_error(&optimizer_path, e))?;
+            .map_err(record_error(&optimizer_path))?;
+        write_atomic(&optimizer_path, &bytes).map_err(io_error(&optimizer_path))?;
         if let Some((_, _, best)) = &state.best {
             write_model(&folder.join(format!("epoch-{epoch}.best")), best)?;
         }
@@ -207,15 +223,15 @@ impl ModelStore {
                 .expect("state serializes")
                 .as_bytes(),
         )
-        .map_err(|e| io_error(&path, e))?;
+        .map_err(io_error(&path))?;
         // Older epochs are superseded once state.json names this one.
         for entry in std::fs::read_dir(&folder)
-            .map_err(|e| io_error(&folder, e))?
+            .map_err(io_error(&folder))?
             .flatten()
         {
             let name = entry.file_name().to_string_lossy().into_owned();
             if name.starts_with("epoch-") && !name.starts_with(&format!("epoch-{epoch}.")) {
-                std::fs::remove_file(entry.path()).map_err(|e| io_error(&entry.path(), e))?;
+                std::fs::remove_file(entry.path()).map_err(io_error(&entry.path()))?;
             }
         }
         Ok(())
@@ -241,10 +257,10 @@ impl ModelStore {
             &device.clone().autodiff(),
         )?;
         let optimizer_path = folder.join(format!("epoch-{epoch}.optimizer"));
-        let bytes = std::fs::read(&optimizer_path).map_err(|e| io_error(&optimizer_path, e))?;
+        let bytes = std::fs::read(&optimizer_path).map_err(io_error(&optimizer_path))?;
         let optimizer = train::optimizer(spec)
             .from_bytes(Bytes::from_bytes_vec(bytes))
-            .map_err(|e| io_error(&optimizer_path, format!("{e:?}")))?;
+            .map_err(record_error(&optimizer_path))?;
         let best = match (record.best_epoch, record.best_score) {
             (Some(best_epoch), Some(score)) => Some((
                 best_epoch,
@@ -393,8 +409,8 @@ fn write_model(path: &Path, model: &Dcnet) -> Result<(), CheckpointError> {
         .clone()
         .into_record()
         .into_bytes()
-        .map_err(|e| io_error(path, format!("{e:?}")))?;
-    write_atomic(path, &bytes).map_err(|e| io_error(path, e))
+        .map_err(record_error(path))?;
+    write_atomic(path, &bytes).map_err(io_error(path))
 }
 
 fn read_model(
@@ -403,9 +419,9 @@ fn read_model(
     error_model: ErrorModel,
     device: &Device,
 ) -> Result<Dcnet, CheckpointError> {
-    let bytes = std::fs::read(path).map_err(|e| io_error(path, e))?;
-    let record = ModuleRecord::from_bytes(Bytes::from_bytes_vec(bytes))
-        .map_err(|e| io_error(path, format!("{e:?}")))?;
+    let bytes = std::fs::read(path).map_err(io_error(path))?;
+    let record =
+        ModuleRecord::from_bytes(Bytes::from_bytes_vec(bytes)).map_err(record_error(path))?;
     // The skeleton's own weights are all overwritten by the record.
     let mut rng = crate::rng::task_rng(0, &[&"skeleton"]);
     let skeleton = Dcnet::new(
@@ -415,9 +431,7 @@ fn read_model(
         device,
         &mut rng,
     );
-    skeleton
-        .try_load_record(record)
-        .map_err(|e| io_error(path, format!("{e:?}")))
+    skeleton.try_load_record(record).map_err(record_error(path))
 }
 
 #[cfg(test)]
@@ -450,8 +464,12 @@ mod tests {
     }
 
     fn key(spec: &Spec, error_model: ErrorModel) -> String {
-        let hashes = crate::cache::DataHashes::default();
-        crate::cache::model_key(spec, error_model, &crate::cache::dataset_key(spec, &hashes))
+        let hashes = crate::pipeline::cache::DataHashes::default();
+        crate::pipeline::cache::model_key(
+            spec,
+            error_model,
+            &crate::pipeline::cache::dataset_key(spec, &hashes),
+        )
     }
 
     #[test]
@@ -462,7 +480,7 @@ mod tests {
 
         let mut state = State::new(&spec, em);
         run_epochs(&spec, &set, em, &mut state, 4);
-        let uninterrupted = state.finish(em, StopReason::AllEpochs);
+        let uninterrupted = state.finish(em, crate::vocab::StopReason::AllEpochs);
 
         let dir = tempfile::tempdir().unwrap();
         let store = ModelStore::new(dir.path().to_path_buf());
@@ -474,7 +492,7 @@ mod tests {
         let mut resumed = store.resume(&spec, em, &key).unwrap();
         assert_eq!(resumed.next_epoch(), 3);
         run_epochs(&spec, &set, em, &mut resumed, 2);
-        let resumed = resumed.finish(em, StopReason::AllEpochs);
+        let resumed = resumed.finish(em, crate::vocab::StopReason::AllEpochs);
         assert_eq!(resumed.best_epoch, uninterrupted.best_epoch);
         let losses = |t: &Trained| {
             t.history

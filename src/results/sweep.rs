@@ -3,12 +3,12 @@
 //! and the numbers a sweep is read by (calibration RMSE and T_conv, evaluation RMSE,
 //! training time), and `sweep.json`, the index of the points, written last.
 
-use crate::checkpoint::Summary;
 use crate::evaluate::ProtocolResult;
 use crate::files::write_atomic;
 use crate::results::read::{Batch, ReadError, read_rows};
 use crate::results::{ResultsError, write_table};
 use crate::spec::Experiment;
+use crate::train::TrainingHistory;
 use crate::vocab::{ErrorModel, EstimatorKind};
 use arrow_array::types::{Float64Type, Int64Type};
 use arrow_array::{
@@ -89,7 +89,10 @@ pub struct StoredSweep {
 }
 
 /// The rows of `sweep.parquet` from each point's tables and model summaries.
-pub fn rows(experiment: &Experiment, points: &[(ProtocolResult, Vec<Summary>)]) -> Vec<SweepRow> {
+pub fn rows(
+    experiment: &Experiment,
+    points: &[(ProtocolResult, Vec<TrainingHistory>)],
+) -> Vec<SweepRow> {
     let mut rows = Vec::new();
     for (point, (result, models)) in experiment.points.iter().zip(points) {
         let name = point_folder(&point.spec.name);
@@ -152,7 +155,7 @@ pub fn point_folder(spec_name: &str) -> &str {
 pub fn write(
     folder: &Path,
     experiment: &Experiment,
-    points: &[(ProtocolResult, Vec<Summary>)],
+    points: &[(ProtocolResult, Vec<TrainingHistory>)],
     results_keys: &[String],
 ) -> Result<(), ResultsError> {
     let rows = rows(experiment, points);

@@ -8,14 +8,19 @@
 //!   fsynced write of them takes 1 s and reading them back would save at most 0.1 s.
 //!   The points of a sweep that share a dataset share it in memory, and a run whose
 //!   models are all stored generates none.
-//! - Models live in `models/` ([`crate::checkpoint::ModelStore`]), with their
+//! - Models live in `models/` ([`models::ModelStore`]), with their
 //!   checkpoints while they train.
 //! - Monte Carlo blocks (one estimator on one DVL, every run) live in `monte_carlo/`
 //!   as Parquet files of their per-run rows.
 
-use crate::evaluate::RunRow;
+pub mod blocks;
+pub mod models;
+
+pub use blocks::BlockStore;
+pub use models::ModelStore;
+
 use crate::files::sha256_hex;
-use crate::results::{self, ResultsError, read};
+use crate::results;
 use crate::spec::{FileFormat, Origin, Spec};
 use crate::vocab::{ErrorModel, EstimatorKind};
 use serde::Serialize;
@@ -176,37 +181,6 @@ pub fn block_key(
         (estimator.to_string(), error_model.map(|m| m.to_string())),
         model_key,
     ))
-}
-
-/// The Monte Carlo blocks of the cache.
-pub struct BlockStore {
-    pub folder: PathBuf,
-}
-
-impl BlockStore {
-    pub fn new(folder: PathBuf) -> Self {
-        Self { folder }
-    }
-
-    pub fn path(&self, key: &str) -> PathBuf {
-        self.folder.join(format!("{}.parquet", &key[..16]))
-    }
-
-    pub fn contains(&self, key: &str) -> bool {
-        self.path(key).is_file()
-    }
-
-    pub fn save(&self, key: &str, rows: &[RunRow]) -> Result<(), ResultsError> {
-        std::fs::create_dir_all(&self.folder).map_err(|source| ResultsError::Io {
-            path: self.folder.clone(),
-            source,
-        })?;
-        results::write_table(&self.path(key), &results::monte_carlo_batch(rows))
-    }
-
-    pub fn load(&self, key: &str) -> Result<Vec<RunRow>, read::ReadError> {
-        read::run_rows_at(&self.path(key))
-    }
 }
 
 /// The cache under the results folder `out`.

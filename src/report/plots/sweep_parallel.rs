@@ -11,7 +11,7 @@ use super::figures::{Drawn, Outcome, draw_svg};
 use super::scale::Scale;
 use super::sweep_figures::Metric;
 use crate::first_seen;
-use crate::sweep::{StoredSweep, Swept};
+use crate::results::sweep::{StoredSweep, Swept};
 use crate::vocab::EstimatorKind;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, VPos};

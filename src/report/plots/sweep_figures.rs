@@ -9,11 +9,11 @@ use super::draw::*;
 use super::figures::{Drawn, Outcome, draw_svg};
 use super::scale::Scale;
 use crate::first_seen;
-use crate::sweep::{StoredSweep, SweepRow, Swept};
+use crate::results::sweep::{StoredSweep, SweepRow, Swept};
 use plotters::prelude::*;
 
 /// What a sweep figure plots against the swept values.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Metric {
     /// Mean RMSE over the test trajectories
     EvaluationRmse,
@@ -26,6 +26,33 @@ pub enum Metric {
 }
 
 impl Metric {
+    pub const ALL: [Metric; 4] = [
+        Metric::EvaluationRmse,
+        Metric::CalibrationRmse,
+        Metric::TConv,
+        Metric::TrainingTime,
+    ];
+
+    /// How the command line spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Metric::EvaluationRmse => "evaluation-rmse",
+            Metric::CalibrationRmse => "calibration-rmse",
+            Metric::TConv => "t-conv",
+            Metric::TrainingTime => "training-time",
+        }
+    }
+
+    /// What it is, in a sentence's words.
+    pub fn description(self) -> &'static str {
+        match self {
+            Metric::EvaluationRmse => "Mean RMSE over the test trajectories",
+            Metric::CalibrationRmse => "Mean RMSE at T_conv on the calibration trajectory",
+            Metric::TConv => "The convergence window",
+            Metric::TrainingTime => "DCNet training wall time",
+        }
+    }
+
     pub(super) fn of(self, row: &SweepRow) -> Option<f64> {
         match self {
             Metric::EvaluationRmse => Some(row.evaluation_rmse_cm_s),

@@ -1,0 +1,188 @@
+//! The command line as clap reads it: the subcommands, their arguments and the words
+//! they accept. The plotting code's own types name the figure formats and sweep
+//! metrics; this module tells clap how they are spelled.
+
+use crate::data::fetch;
+use crate::report::compare;
+use crate::report::plots::{Format, Metric};
+use clap::builder::PossibleValue;
+use clap::{Parser, Subcommand};
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "dcnet-exp",
+    version,
+    about = "Reproduce and extend the DCNet DVL-calibration experiments"
+)]
+pub struct Cli {
+    /// Worker threads [default: all cores, or RAYON_NUM_THREADS]; results do not depend on it
+    #[arg(long, global = true)]
+    pub(super) threads: Option<usize>,
+    #[command(subcommand)]
+    pub(super) command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub(super) enum Command {
+    /// Run an experiment, or every point of its sweep, doing only what is not done yet
+    Run {
+        #[command(flatten)]
+        target: Target,
+        #[command(flatten)]
+        drawing: Drawing,
+        /// Run only shard K of N (0 ≤ K < N) of the tasks and no results; `--shard N`
+        /// takes K from SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX
+        #[arg(long, value_name = "K/N")]
+        shard: Option<String>,
+        /// Recompute every task, cached or not
+        #[arg(long)]
+        force: bool,
+    },
+    /// List every task a run would do, each marked done or to do; changes nothing
+    Plan {
+        #[command(flatten)]
+        target: Target,
+        /// List only the tasks of shard K of N
+        #[arg(long, value_name = "K/N")]
+        shard: Option<String>,
+    },
+    /// Write the results of a sharded run once every shard has finished
+    Collect {
+        #[command(flatten)]
+        target: Target,
+        #[command(flatten)]
+        drawing: Drawing,
+    },
+    /// Draw the figures and write report.md and report.tex from a results folder, re-running nothing
+    Plot {
+        /// A results folder written by `run`, such as results/paper, or a sweep's
+        results: PathBuf,
+        /// Figures go to OUT/<name>/
+        #[arg(long, default_value = "plots")]
+        out: PathBuf,
+        /// Write each figure as PNG, SVG or both
+        #[arg(long, value_enum, default_value_t = Format::Both)]
+        format: Format,
+        /// What a sweep's figures plot against each swept value
+        #[arg(long, value_enum, default_value_t = Metric::EvaluationRmse)]
+        metric: Metric,
+    },
+    /// Compare two results folders (or two sweep points) as Markdown: the spec keys that
+    /// differ, every cell with A, B and B − A, differences beyond 2 standard errors marked
+    Compare {
+        /// The first results folder, such as results/quick or results/<sweep>/<point>
+        #[arg(value_name = "A")]
+        first: PathBuf,
+        /// The second results folder
+        #[arg(value_name = "B")]
+        second: PathBuf,
+        /// Also write the Markdown to FILE
+        #[arg(long, value_name = "FILE", default_value = compare::DEFAULT_FILE)]
+        out: PathBuf,
+    },
+    /// Check a spec (every point of its sweep) and its data files without running anything
+    Validate {
+        spec: PathBuf,
+        #[command(flatten)]
+        overrides: Overrides,
+    },
+    /// Inspect or download the data
+    Data {
+        #[command(subcommand)]
+        command: DataCommand,
+    },
+    /// Time the dataset generation, the Monte Carlo protocol and DCNet training of a spec
+    Bench {
+        spec: PathBuf,
+        /// Timed repetitions of each stage
+        #[arg(long, default_value_t = 5)]
+        repeat: usize,
+        /// Training batches timed per model
+        #[arg(long, default_value_t = 40)]
+        training_batches: usize,
+        /// The PyTorch peer script (torch_dcnet.py): times the same network in PyTorch
+        /// in the same arrangements, side by side
+        #[arg(long, value_name = "SCRIPT")]
+        pytorch: Option<PathBuf>,
+        #[command(flatten)]
+        overrides: Overrides,
+    },
+}
+
+/// The spec a command works on and where its results go.
+#[derive(Debug, clap::Args)]
+pub(super) struct Target {
+    pub(super) spec: PathBuf,
+    /// Results go to OUT/<name>/, the cache to OUT/.cache/
+    #[arg(long, default_value = "results")]
+    pub(super) out: PathBuf,
+    /// burn CPU backend for DCNet, overriding training.backend: flex or ndarray
+    #[arg(long)]
+    pub(super) backend: Option<String>,
+    #[command(flatten)]
+    pub(super) overrides: Overrides,
+}
+
+/// Where the figures of the results a command writes go.
+#[derive(Debug, clap::Args)]
+pub(super) struct Drawing {
+    /// Figures go to PLOTS/<name>/
+    #[arg(long, default_value = "plots")]
+    pub(super) plots: PathBuf,
+    /// Write the results and the reports but draw no figures
+    #[arg(long)]
+    pub(super) no_plots: bool,
+}
+
+impl Drawing {
+    pub(super) fn folder(&self) -> Option<&Path> {
+        (!self.no_plots).then_some(self.plots.as_path())
+    }
+}
+
+#[derive(Debug, Subcommand)]
+pub(super) enum DataCommand {
+    /// Trajectories, lengths, mean speeds, window counts and dataset size of a spec
+    Info {
+        spec: PathBuf,
+        #[command(flatten)]
+        overrides: Overrides,
+    },
+    /// Download the Snapir recordings (V.npy, V_test.npy) and check their SHA-256
+    Fetch {
+        /// Folder to write the files to
+        #[arg(long, default_value = fetch::DEFAULT_DEST)]
+        dest: PathBuf,
+        /// Where the files are served (the BeamsNet repository by default)
+        #[arg(long, default_value = fetch::DEFAULT_BASE_URL)]
+        base_url: String,
+    },
+}
+
+#[derive(Debug, clap::Args)]
+pub(super) struct Overrides {
+    /// Override a spec key, e.g. --set calibration.monte_carlo_runs=50 (value read as TOML)
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub(super) set: Vec<String>,
+}
+
+impl clap::ValueEnum for Format {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Format::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<PossibleValue> {
+        Some(PossibleValue::new(self.name()))
+    }
+}
+
+impl clap::ValueEnum for Metric {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Metric::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<PossibleValue> {
+        Some(PossibleValue::new(self.name()).help(self.description()))
+    }
+}

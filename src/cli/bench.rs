@@ -1,0 +1,254 @@
+//! `bench`: times the dataset generation, the Monte Carlo protocol and DCNet training
+//! of a spec, and, given the PyTorch peer script, the same network in PyTorch in the
+//! same arrangements, side by side.
+
+use super::{CliError, failure, input, load_spec};
+use crate::data::load_trajectories;
+use crate::dataset::{self, DatasetSize, TrainingSet};
+use crate::evaluate::run_protocol;
+use crate::spec::Spec;
+use crate::train::{self, TrainError};
+use crate::vocab::{ErrorModel, EstimatorKind};
+use std::path::Path;
+use std::time::Instant;
+
+pub(super) fn bench(
+    spec_path: &Path,
+    repeat: usize,
+    training_batches: usize,
+    pytorch: Option<&Path>,
+    set: &[String],
+) -> Result<(), CliError> {
+    let spec = load_spec(spec_path, set)?;
+    if let Some(script) = pytorch {
+        pytorch_ready(&spec, script).map_err(|e| input(anyhow::anyhow!(e)))?;
+    }
+    let trajectories = load_trajectories(&spec).map_err(input)?;
+    let repeat = repeat.max(1);
+    let time = |f: &dyn Fn()| {
+        let mut seconds: Vec<f64> = (0..repeat)
+            .map(|_| {
+                let clock = Instant::now();
+                f();
+                clock.elapsed().as_secs_f64()
+            })
+            .collect();
+        seconds.sort_by(f64::total_cmp);
+        (seconds[0], seconds[seconds.len() / 2])
+    };
+    let hidden = indicatif::ProgressBar::hidden();
+    let windows = DatasetSize::of(&spec, &trajectories).windows();
+    let (best, median) = time(&|| {
+        std::hint::black_box(dataset::generate(&spec, &trajectories, &hidden));
+    });
+    println!(
+        "dataset generation: {windows} windows, best {best:.3} s, median {median:.3} s over {repeat} runs, {} threads ({:.0} windows/s)",
+        rayon::current_num_threads(),
+        windows as f64 / best
+    );
+    let kinds: Vec<String> = spec
+        .kinds
+        .iter()
+        .filter(|k| **k != EstimatorKind::Dcnet)
+        .map(ToString::to_string)
+        .collect();
+    let (best, median) = time(&|| {
+        std::hint::black_box(run_protocol(&spec, &trajectories, &[], &hidden));
+    });
+    println!(
+        "protocol: {} runs × {} DVLs, estimators {}, best {best:.3} s, median {median:.3} s over {repeat} runs, {} threads",
+        spec.calibration.monte_carlo_runs,
+        spec.dvls.len(),
+        kinds.join(", "),
+        rayon::current_num_threads()
+    );
+    let set = dataset::generate(&spec, &trajectories, &hidden);
+    let ours = bench_training(&spec, &set, training_batches).map_err(failure)?;
+    let peer = pytorch
+        .map(|script| bench_pytorch(&spec, script, training_batches))
+        .transpose()
+        .map_err(|e| failure(anyhow::anyhow!(e)))?;
+    print_training_bench(&spec, &ours, peer.as_ref());
+    Ok(())
+}
+
+/// Training samples/s in the two arrangements both tools can take: one model on one
+/// thread, and one model per core, all training at once (as `run` trains).
+struct TrainingRates {
+    one_thread: f64,
+    one_per_core: f64,
+}
+
+/// The PyTorch peer's samples/s: its two arrangements of [`TrainingRates`], and one
+/// process spreading one model over every core.
+struct PeerRates {
+    rates: TrainingRates,
+    one_model_all_threads: f64,
+}
+
+/// Training samples/s of the spec's model and batch size on its backend, each model on
+/// a pool of one thread, as `run` trains.
+fn bench_training(
+    spec: &Spec,
+    set: &TrainingSet,
+    batches: usize,
+) -> Result<TrainingRates, TrainError> {
+    let threads = rayon::current_num_threads();
+    let error_model = *spec.error_models.last().unwrap_or(&ErrorModel::Em5);
+    let hidden = indicatif::ProgressBar::hidden();
+    let run_model = |seed_offset: u64| -> Result<usize, TrainError> {
+        let mut spec = spec.clone();
+        spec.seed += seed_offset;
+        let order = train::epoch_order(&spec, set, error_model, 1);
+        let order = &order[..order.len().min(batches * spec.training.batch_size)];
+        let mut state = train::State::new(&spec, error_model);
+        train::one_thread_pool().install(|| {
+            train::train_pass(&spec, set, error_model, &mut state, 1, order, &hidden)
+        })?;
+        Ok(order.len())
+    };
+    let clock = Instant::now();
+    let one_thread = run_model(0)? as f64 / clock.elapsed().as_secs_f64();
+    let clock = Instant::now();
+    let done = std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..threads as u64)
+            .map(|i| scope.spawn(move || run_model(i)))
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("a training thread panicked"))
+            .sum::<Result<usize, _>>()
+    })?;
+    Ok(TrainingRates {
+        one_thread,
+        one_per_core: done as f64 / clock.elapsed().as_secs_f64(),
+    })
+}
+
+/// Whether the PyTorch peer can run before anything is timed: the script is there,
+/// python3 imports torch, and the spec has the only shapes the script builds.
+fn pytorch_ready(spec: &Spec, script: &Path) -> Result<(), String> {
+    if !script.is_file() {
+        return Err(format!("--pytorch: {} is not a file", script.display()));
+    }
+    let import = std::process::Command::new("python3")
+        .args(["-c", "import torch"])
+        .output()
+        .map_err(|e| format!("--pytorch: cannot run python3: {e}"))?;
+    if !import.status.success() {
+        return Err(format!(
+            "--pytorch: python3 cannot import torch (pip install torch):\n{}",
+            String::from_utf8_lossy(&import.stderr).trim_end()
+        ));
+    }
+    let m = &spec.model;
+    let [w1, w2, w3] = m.fc_widths;
+    if spec.dataset.window != 10
+        || m.conv1d_kernel_size != 2
+        || (w2, w3) != (w1 / 2, w1 / 4)
+        || m.activation != crate::vocab::Activation::Tanh
+        || m.dropout != 0.3
+        || m.leaky_relu_slope != 0.05
+    {
+        return Err(format!(
+            "--pytorch: the peer script builds windows of 10 samples, Conv1d kernels of 2, FC widths [w, w/2, w/4] with tanh, dropout 0.3 and LeakyReLU slope 0.05; the spec has {} samples, kernel {}, FC {:?} with {}, dropout {} and slope {}",
+            spec.dataset.window,
+            m.conv1d_kernel_size,
+            m.fc_widths,
+            m.activation,
+            m.dropout,
+            m.leaky_relu_slope
+        ));
+    }
+    Ok(())
+}
+
+/// Runs the PyTorch peer `script` with the spec's sizes in each arrangement.
+fn bench_pytorch(spec: &Spec, script: &Path, batches: usize) -> Result<PeerRates, String> {
+    let threads = rayon::current_num_threads();
+    let run = |processes: usize, threads_each: usize| -> Result<f64, String> {
+        let output = std::process::Command::new("python3")
+            .arg(script)
+            .args(["--processes", &processes.to_string()])
+            .args(["--threads", &threads_each.to_string()])
+            .args(["--batches", &batches.to_string()])
+            .args(["--batch", &spec.training.batch_size.to_string()])
+            .args(["--channels", &spec.model.conv_channels.to_string()])
+            .args(["--width", &spec.model.fc_widths[0].to_string()])
+            .output()
+            .map_err(|e| format!("python3 {}: {e}", script.display()))?;
+        let stdout = String::from_utf8_lossy(&output.stdout);
+        if !output.status.success() {
+            return Err(format!(
+                "python3 {} failed ({}):\n{}{}",
+                script.display(),
+                output.status,
+                stdout,
+                String::from_utf8_lossy(&output.stderr)
+            ));
+        }
+        stdout
+            .lines()
+            .find_map(|line| line.strip_prefix("pytorch: "))
+            .and_then(|rest| rest.split_whitespace().next())
+            .and_then(|rate| rate.parse().ok())
+            .ok_or_else(|| {
+                format!(
+                    "python3 {} printed no samples/s:\n{}{}",
+                    script.display(),
+                    stdout,
+                    String::from_utf8_lossy(&output.stderr)
+                )
+            })
+    };
+    Ok(PeerRates {
+        rates: TrainingRates {
+            one_thread: run(1, 1)?,
+            one_per_core: run(threads, 1)?,
+        },
+        one_model_all_threads: run(1, threads)?,
+    })
+}
+
+fn print_training_bench(spec: &Spec, ours: &TrainingRates, peer: Option<&PeerRates>) {
+    let threads = rayon::current_num_threads();
+    let backend = spec.training.backend;
+    println!(
+        "training: batch {}, {} conv channels, FC {:?}",
+        spec.training.batch_size, spec.model.conv_channels, spec.model.fc_widths
+    );
+    let mut table = comfy_table::Table::new();
+    table.load_preset(comfy_table::presets::ASCII_MARKDOWN);
+    let rate = |r: f64| format!("{r:.0}");
+    let mut header = vec![
+        "arrangement".to_string(),
+        format!("dcnet-exp ({backend}) samples/s"),
+    ];
+    let mut rows = vec![
+        vec!["one model, one thread".to_string(), rate(ours.one_thread)],
+        vec![
+            format!("{threads} models, one per core"),
+            rate(ours.one_per_core),
+        ],
+        vec![format!("one model over {threads} threads"), "-".to_string()],
+    ];
+    if let Some(peer) = peer {
+        header.push("PyTorch samples/s".to_string());
+        rows[0].push(rate(peer.rates.one_thread));
+        rows[1].push(rate(peer.rates.one_per_core));
+        rows[2].push(rate(peer.one_model_all_threads));
+    }
+    table.set_header(header);
+    for row in rows {
+        table.add_row(row);
+    }
+    println!("{table}");
+    if let Some(peer) = peer {
+        let best_peer = peer.rates.one_per_core.max(peer.one_model_all_threads);
+        println!(
+            "on all {threads} cores: dcnet-exp {:.0} samples/s, PyTorch at its best {best_peer:.0}: {:.2}×",
+            ours.one_per_core,
+            ours.one_per_core / best_peer
+        );
+    }
+}

@@ -1,0 +1,126 @@
+//! `validate`, `data info` and `data fetch`: a spec and its data checked and
+//! described without running anything, and the Snapir recordings downloaded.
+
+use super::{CliError, failure, input, load_spec};
+use crate::data::{fetch, load_trajectories};
+use crate::dataset::{DatasetSize, TrainingSet, window_starts};
+use crate::spec::{Origin, load_experiment};
+use std::path::Path;
+
+pub(super) fn validate(spec_path: &Path, set: &[String]) -> Result<(), CliError> {
+    let experiment = load_experiment(spec_path, set).map_err(input)?;
+    for point in &experiment.points {
+        let spec = &point.spec;
+        let trajectories = load_trajectories(spec).map_err(input)?;
+        let windows = DatasetSize::of(spec, &trajectories).windows();
+        println!(
+            "{}: ok ({} trajectories, {} training windows, {} DVLs, {} Monte Carlo runs)",
+            if experiment.is_sweep() {
+                format!("{} point {}", spec_path.display(), spec.name)
+            } else {
+                spec_path.display().to_string()
+            },
+            trajectories.len(),
+            windows,
+            spec.dvls.len(),
+            spec.calibration.monte_carlo_runs
+        );
+    }
+    Ok(())
+}
+
+pub(super) fn info(spec_path: &Path, set: &[String]) -> Result<(), CliError> {
+    let spec = load_spec(spec_path, set)?;
+    let trajectories = load_trajectories(&spec).map_err(input)?;
+    let mut table = comfy_table::Table::new();
+    table.load_preset(comfy_table::presets::ASCII_MARKDOWN);
+    table.set_header([
+        "trajectory",
+        "role",
+        "source",
+        "samples",
+        "duration min",
+        "mean speed m/s",
+        "windows",
+    ]);
+    for (index, (source, trajectory)) in spec.trajectories.iter().zip(&trajectories).enumerate() {
+        let roles = spec.roles(index);
+        let origin = match &source.origin {
+            Origin::File {
+                path,
+                samples: Some([start, end]),
+                ..
+            } => format!("{} [{start}, {end})", file_name(path)),
+            Origin::File {
+                path,
+                samples: None,
+                ..
+            } => file_name(path),
+            Origin::Synthetic { .. } => "synthetic".to_string(),
+        };
+        let len = trajectory.ground_truth.len();
+        let windows = if roles.contains(&"train") {
+            window_starts(len, spec.dataset.window, spec.dataset.stride)
+                .count()
+                .to_string()
+        } else {
+            String::new()
+        };
+        table.add_row(vec![
+            trajectory.name.clone(),
+            roles.join(", "),
+            origin,
+            len.to_string(),
+            format!("{:.1}", len as f64 / spec.sample_rate_hz / 60.0),
+            format!("{:.2}", trajectory.mean_speed_m_s()),
+            windows,
+        ]);
+    }
+    println!("{table}");
+    let size = DatasetSize::of(&spec, &trajectories);
+    let (combinations, per_combination) = (size.combinations, size.per_combination);
+    let (windows, validation) = (size.windows(), size.validation());
+    println!(
+        "grid: {} scale × {} bias × {} noise = {combinations} combinations",
+        spec.grid.scale_pct.len(),
+        spec.grid.bias_cm_s.len(),
+        spec.grid.noise_cm_s.len()
+    );
+    println!(
+        "windows: {per_combination} per combination × {combinations} = {windows} ({} train, {validation} validation), {} s long every {} s",
+        windows - validation,
+        spec.dataset.window as f64 / spec.sample_rate_hz,
+        spec.dataset.stride as f64 / spec.sample_rate_hz
+    );
+    if let Some(published) = spec.dataset.published_windows {
+        println!(
+            "published: {published} windows; this spec makes {:.3} of that",
+            windows as f64 / published as f64
+        );
+    }
+    println!(
+        "dataset size: {} bytes (f32 inputs and targets, one split flag per window)",
+        TrainingSet::size_bytes(windows, spec.dataset.window)
+    );
+    Ok(())
+}
+
+fn file_name(path: &Path) -> String {
+    path.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+pub(super) fn fetch_data(dest: &Path, base_url: &str) -> Result<(), CliError> {
+    for executed in fetch::fetch(base_url, dest).map_err(failure)? {
+        match executed {
+            fetch::Fetched::Downloaded(path) => {
+                eprintln!("downloaded {} (sha256 checked)", path.display())
+            }
+            fetch::Fetched::AlreadyPresent(path) => {
+                eprintln!("{} is already there (sha256 checked)", path.display())
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,132 @@
+//! The subcommands: `run`, `plan`, `collect`, `plot`, `compare`, `validate`, `data
+//! info`, `data fetch` and `bench`. Each reads a spec through
+//! [`crate::spec::load_experiment`] (or results folders), hands the work to
+//! [`crate::pipeline`] or the stage it names, and reports bad input (exit code 1) apart
+//! from failures while running (exit code 2). In: the command line. Out: what the
+//! stages write, and what they did on stderr.
+//!
+//! [`args`] declares the command line; [`run`] runs, plans and collects experiments;
+//! [`plot`] draws and compares results folders; [`inspect`] checks specs and fetches
+//! data; [`bench`] times the stages.
+
+mod args;
+mod bench;
+mod inspect;
+mod plot;
+mod run;
+
+pub use args::Cli;
+
+use crate::spec::{Experiment, Spec, load, load_experiment};
+use args::{Command, DataCommand, Target};
+use clap::Parser;
+use std::path::Path;
+
+/// Why a command did not finish.
+#[derive(Debug)]
+pub enum CliError {
+    /// Bad spec, data or arguments: exit code 1.
+    Input(anyhow::Error),
+    /// A failure while running: exit code 2.
+    Failure(anyhow::Error),
+}
+
+impl CliError {
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            CliError::Input(_) => 1,
+            CliError::Failure(_) => 2,
+        }
+    }
+
+    pub fn cause(&self) -> &anyhow::Error {
+        match self {
+            CliError::Input(e) | CliError::Failure(e) => e,
+        }
+    }
+
+    pub fn into_cause(self) -> anyhow::Error {
+        match self {
+            CliError::Input(e) | CliError::Failure(e) => e,
+        }
+    }
+}
+
+fn input(error: impl Into<anyhow::Error>) -> CliError {
+    CliError::Input(error.into())
+}
+fn failure(error: impl Into<anyhow::Error>) -> CliError {
+    CliError::Failure(error.into())
+}
+
+pub fn main() -> Result<(), CliError> {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if !e.use_stderr() => {
+            e.print().map_err(failure)?;
+            return Ok(());
+        }
+        Err(e) => {
+            let _ = e.print();
+            std::process::exit(1);
+        }
+    };
+    if let Some(threads) = cli.threads {
+        if threads == 0 {
+            return Err(input(anyhow::anyhow!("--threads must be at least 1")));
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build_global()
+            .map_err(failure)?;
+    }
+    match cli.command {
+        Command::Run {
+            target,
+            drawing,
+            shard,
+            force,
+        } => run::run(&target, &drawing, shard.as_deref(), force),
+        Command::Plan { target, shard } => run::plan(&target, shard.as_deref()),
+        Command::Collect { target, drawing } => run::collect(&target, &drawing),
+        Command::Plot {
+            results,
+            out,
+            format,
+            metric,
+        } => plot::plot(&results, Some(&out), format, metric),
+        Command::Compare { first, second, out } => plot::compare_folders(&first, &second, &out),
+        Command::Validate { spec, overrides } => inspect::validate(&spec, &overrides.set),
+        Command::Data {
+            command: DataCommand::Info { spec, overrides },
+        } => inspect::info(&spec, &overrides.set),
+        Command::Data {
+            command: DataCommand::Fetch { dest, base_url },
+        } => inspect::fetch_data(&dest, &base_url),
+        Command::Bench {
+            spec,
+            repeat,
+            training_batches,
+            pytorch,
+            overrides,
+        } => bench::bench(
+            &spec,
+            repeat,
+            training_batches,
+            pytorch.as_deref(),
+            &overrides.set,
+        ),
+    }
+}
+
+fn load_spec(path: &Path, set: &[String]) -> Result<Spec, CliError> {
+    load(path, set).map_err(input)
+}
+
+fn load_target(target: &Target) -> Result<Experiment, CliError> {
+    let mut set = target.overrides.set.clone();
+    if let Some(backend) = &target.backend {
+        set.push(format!("training.backend={backend:?}"));
+    }
+    load_experiment(&target.spec, &set).map_err(input)
+}

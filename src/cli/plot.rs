@@ -1,0 +1,95 @@
+//! `plot` and `compare`: figures and reports drawn from results folders alone, and two
+//! folders set side by side; nothing is re-run.
+
+use super::{CliError, failure, input};
+use crate::report::plots::{self, Format, Metric};
+use crate::report::{self, compare};
+use crate::results::read::StoredRun;
+use crate::results::sweep;
+use std::path::Path;
+
+/// Draws the figures of a results folder, a single run's or a sweep's, and writes the
+/// reports.
+pub(super) fn plot(
+    results: &Path,
+    out: Option<&Path>,
+    format: Format,
+    metric: Metric,
+) -> Result<(), CliError> {
+    if !results.join(sweep::INDEX).is_file() {
+        return plot_run(results, out, format);
+    }
+    let index = sweep::read_index(results).map_err(input)?;
+    for point in &index.points {
+        plot_run(&results.join(point), out, format)?;
+    }
+    plot_sweep(results, out, format, metric)
+}
+
+/// Reads the results folder back, draws its figures into `out/<name>/` (none when
+/// `out` is `None`) and writes its report.
+pub(super) fn plot_run(results: &Path, out: Option<&Path>, format: Format) -> Result<(), CliError> {
+    let stored = StoredRun::read(results).map_err(input)?;
+    let figures = match out {
+        Some(out) => {
+            let folder = out.join(&stored.spec.name);
+            let figures = plots::write_all(&stored, &folder, format).map_err(failure)?;
+            report_figures(&figures, &folder);
+            figures
+        }
+        None => Vec::new(),
+    };
+    let [markdown, tex] = report::write(&stored, &figures).map_err(failure)?;
+    eprintln!(
+        "report written to {} and {}",
+        markdown.display(),
+        tex.display()
+    );
+    Ok(())
+}
+
+/// Draws a sweep's figures into `out/<name>/`.
+pub(super) fn plot_sweep(
+    results: &Path,
+    out: Option<&Path>,
+    format: Format,
+    metric: Metric,
+) -> Result<(), CliError> {
+    let Some(out) = out else { return Ok(()) };
+    let stored = sweep::read(results).map_err(input)?;
+    let folder = out.join(&stored.index.name);
+    let figures = plots::write_sweep(&stored, metric, &folder, format).map_err(failure)?;
+    report_figures(&figures, &folder);
+    Ok(())
+}
+
+fn report_figures(figures: &[plots::Written], folder: &Path) {
+    for figure in figures {
+        match &figure.caption {
+            Ok(_) => eprintln!(
+                "figure {}: {} files in {}",
+                figure.stem,
+                figure.files.len(),
+                folder.display()
+            ),
+            Err(why) => eprintln!("figure {}: not drawn, {why}", figure.stem),
+        }
+    }
+}
+
+/// Prints the comparison of two results folders and writes it to `out`.
+pub(super) fn compare_folders(first: &Path, second: &Path, out: &Path) -> Result<(), CliError> {
+    if out.is_dir() {
+        return Err(input(anyhow::anyhow!(
+            "--out {}: is a folder; name the file to write the comparison to",
+            out.display()
+        )));
+    }
+    let first = compare::read(first).map_err(input)?;
+    let second = compare::read(second).map_err(input)?;
+    let markdown = compare::render(&first, &second);
+    print!("{markdown}");
+    compare::write(out, &markdown).map_err(failure)?;
+    eprintln!("comparison written to {}", out.display());
+    Ok(())
+}

@@ -1,0 +1,200 @@
+//! `run`, `plan` and `collect`: an experiment's plan, shown or done, whole or one
+//! shard at a time, and what a run wrote, printed and drawn.
+
+use super::args::{Drawing, Target};
+use super::plot::{plot_run, plot_sweep};
+use super::{CliError, failure, input, load_target};
+use crate::pipeline::{Executed, Mode, Plan, Shard, Task, execute};
+use crate::report::plots::{Format, Metric};
+use crate::report::tables;
+use crate::results::read::StoredRun;
+use crate::results::sweep;
+use crate::spec::Experiment;
+
+fn parse_shard(shard: Option<&str>) -> Result<Option<Shard>, CliError> {
+    shard
+        .map(|text| Shard::parse(text, |variable| std::env::var(variable).ok()))
+        .transpose()
+        .map_err(|message| input(anyhow::anyhow!(message)))
+}
+
+pub(super) fn run(
+    target: &Target,
+    drawing: &Drawing,
+    shard: Option<&str>,
+    force: bool,
+) -> Result<(), CliError> {
+    let experiment = load_target(target)?;
+    let plan = Plan::new(&experiment, &target.out).map_err(input)?;
+    let mode = match parse_shard(shard)? {
+        Some(shard) => Mode::Shard { shard, force },
+        None => Mode::All { force },
+    };
+    let to_do = plan.to_do(mode);
+    let total = plan.tasks().len();
+    let folder = target.out.join(&experiment.name);
+    let whose = match mode {
+        Mode::Shard { shard, .. } => format!("{} shard {shard}", experiment.name),
+        _ => experiment.name.clone(),
+    };
+    if to_do.is_empty() {
+        match mode {
+            Mode::Shard { .. } => eprintln!("nothing to do: every task of {whose} is done"),
+            _ => eprintln!(
+                "nothing to do: every task of {whose} is done; the results in {} are current",
+                folder.display()
+            ),
+        }
+        return failed_models(plan.failures(mode));
+    }
+    eprintln!(
+        "{whose}: {} to do ({total} in the plan)",
+        tasks(to_do.len())
+    );
+    let executed = execute(&plan, mode, &to_do).map_err(failure)?;
+    if let Mode::Shard { shard, .. } = mode {
+        eprintln!(
+            "shard {shard}: {} done; once every shard has finished, `dcnet-exp collect {}` writes the results",
+            tasks(executed.done),
+            target.spec.display()
+        );
+    } else {
+        finish(&experiment, &executed, drawing)?;
+    }
+    failed_models(plan.failures(mode))
+}
+
+/// "1 task", "31 tasks".
+fn tasks(count: usize) -> String {
+    if count == 1 {
+        "1 task".into()
+    } else {
+        format!("{count} tasks")
+    }
+}
+
+/// Lists the tasks of a run, shard or not, with their state.
+pub(super) fn plan(target: &Target, shard: Option<&str>) -> Result<(), CliError> {
+    let experiment = load_target(target)?;
+    let plan = Plan::new(&experiment, &target.out).map_err(input)?;
+    let shard = parse_shard(shard)?;
+    let mut table = comfy_table::Table::new();
+    table.load_preset(comfy_table::presets::ASCII_MARKDOWN);
+    let mut header = vec!["task", "key", "status"];
+    if experiment.is_sweep() {
+        header.insert(1, "point");
+    }
+    table.set_header(header);
+    let mode = match shard {
+        Some(shard) => Mode::Shard {
+            shard,
+            force: false,
+        },
+        None => Mode::All { force: false },
+    };
+    let to_do = plan.to_do(mode);
+    let mut listed = 0;
+    for task in plan.tasks() {
+        let in_scope = match (shard, task) {
+            (Some(shard), Task::Training(_) | Task::Block(_)) => plan.in_shard(task, shard),
+            (Some(_), Task::Dataset(_)) => to_do.contains(&task),
+            (Some(_), _) => false,
+            (None, _) => true,
+        };
+        if !in_scope {
+            continue;
+        }
+        listed += 1;
+        let status = plan.status(task);
+        let mut row = vec![
+            plan.label(task),
+            plan.key(task)
+                .map(|k| k[..16].to_string())
+                .unwrap_or_default(),
+            status.to_string(),
+        ];
+        if experiment.is_sweep() {
+            let point = plan
+                .point_of(task)
+                .map(|p| sweep::point_folder(&plan.spec(p).name).to_string())
+                .unwrap_or_default();
+            row.insert(1, point);
+        }
+        table.add_row(row);
+    }
+    println!("{table}");
+    let scope = match shard {
+        Some(shard) => format!("shard {shard} of {}", experiment.name),
+        None => experiment.name.clone(),
+    };
+    println!(
+        "{scope}: {}, {} to do; cache in {}",
+        tasks(listed),
+        to_do.len(),
+        crate::pipeline::cache::root(&target.out).display()
+    );
+    Ok(())
+}
+
+/// Writes the results of a sharded run from the cache the shards filled.
+pub(super) fn collect(target: &Target, drawing: &Drawing) -> Result<(), CliError> {
+    let experiment = load_target(target)?;
+    let plan = Plan::new(&experiment, &target.out).map_err(input)?;
+    let executed = execute(&plan, Mode::Collect, &plan.to_do(Mode::Collect)).map_err(failure)?;
+    if executed.done == 0 {
+        eprintln!(
+            "nothing to do: the results in {} are current",
+            target.out.join(&experiment.name).display()
+        );
+    } else {
+        finish(&experiment, &executed, drawing)?;
+    }
+    failed_models(plan.failures(Mode::Collect))
+}
+
+/// Prints the tables of a single run, and draws the figures and writes the reports of
+/// what was written.
+fn finish(experiment: &Experiment, executed: &Executed, drawing: &Drawing) -> Result<(), CliError> {
+    for folder in &executed.written {
+        if !experiment.is_sweep() {
+            let stored = StoredRun::read(folder).map_err(failure)?;
+            println!(
+                "{}",
+                tables::calibration_table(
+                    &stored.calibration,
+                    &stored.spec.calibration.trajectory,
+                    stored.spec.calibration.monte_carlo_runs
+                )
+            );
+            println!("{}", tables::evaluation_table(&stored.evaluation));
+        }
+        eprintln!("results written to {}", folder.display());
+        plot_run(folder, drawing.folder(), Format::Both).map_err(|e| failure(e.into_cause()))?;
+    }
+    if let Some(folder) = &executed.sweep {
+        eprintln!(
+            "sweep table written to {}",
+            folder.join(sweep::TABLE).display()
+        );
+        plot_sweep(
+            folder,
+            drawing.folder(),
+            Format::Both,
+            Metric::EvaluationRmse,
+        )
+        .map_err(|e| failure(e.into_cause()))?;
+    }
+    Ok(())
+}
+
+/// Every model that failed to train, one per line, as an error; the results hold all
+/// the others.
+fn failed_models(failures: Vec<String>) -> Result<(), CliError> {
+    if failures.is_empty() {
+        return Ok(());
+    }
+    Err(failure(anyhow::anyhow!(
+        "{}\nthe results leave these models out; --force trains them again",
+        failures.join("\n")
+    )))
+}

@@ -1,0 +1,183 @@
+//! An experiment as a list of tasks: for every point of the spec (one, or one per
+//! sweep point), a dataset, one DCNet training per error model, one Monte Carlo block
+//! per DVL × estimator, and the results folder put together from them. Tasks are
+//! deduplicated by their cache key ([`crate::pipeline::cache`]), so sweep points that share a
+//! model train it once; a task is done when its output is in the cache. [`Plan`] lists
+//! the tasks and their state without touching anything; [`execute`] does what is left:
+//! all of it, one shard's part (`--shard K/N`), or only the putting together
+//! (`collect`).
+//!
+//! A shard takes whole groups: a training with every block that runs its model, or a
+//! block that needs no model. Groups are dealt out round-robin in plan order, trainings
+//! first, so shards need nothing from each other and each writes its own cache files.
+
+pub mod cache;
+mod monte_carlo;
+pub mod plan;
+mod schedule;
+pub mod shard;
+
+pub use plan::{Mode, Plan, Status, Task};
+pub use shard::Shard;
+
+use crate::results::{self, Manifest, StageSeconds, sweep};
+use std::path::PathBuf;
+use std::time::{Instant, SystemTime};
+
+/// What [`execute`] did.
+#[derive(Debug, Default)]
+pub struct Executed {
+    /// Tasks computed or written.
+    pub done: usize,
+    /// The results folders written.
+    pub written: Vec<PathBuf>,
+    /// The sweep folder, when its `sweep.parquet` was written.
+    pub sweep: Option<PathBuf>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ExecuteError {
+    #[error(transparent)]
+    Results(#[from] results::ResultsError),
+    #[error(transparent)]
+    Read(#[from] results::read::ReadError),
+    #[error(transparent)]
+    Checkpoint(#[from] cache::models::CheckpointError),
+    #[error("{count} tasks are not done yet, so there is nothing to collect:\n{list}")]
+    Incomplete { count: usize, list: String },
+}
+
+/// Does `to_do`, the tasks [`Plan::to_do`] gives for `mode`.
+pub fn execute(plan: &Plan, mode: Mode, to_do: &[Task]) -> Result<Executed, ExecuteError> {
+    let started_at = SystemTime::now();
+    if !matches!(mode, Mode::Shard { .. }) {
+        // Shards may be writing beside each other on other machines; a whole run or
+        // collect has the folders to itself.
+        remove_stale_partials(plan)?;
+    }
+    if mode == Mode::Collect {
+        check_collectable(plan)?;
+    }
+    let trainings: Vec<usize> = to_do
+        .iter()
+        .filter_map(|task| match task {
+            Task::Training(t) => Some(*t),
+            _ => None,
+        })
+        .collect();
+    let blocks: Vec<usize> = to_do
+        .iter()
+        .filter_map(|task| match task {
+            Task::Block(b) => Some(*b),
+            _ => None,
+        })
+        .collect();
+
+    let mut executed = Executed::default();
+    let mut stages = StageSeconds::default();
+    schedule::train(plan, &trainings, mode.force(), &mut stages, &mut executed)?;
+    let clock = Instant::now();
+    monte_carlo::run(plan, &blocks, &mut executed)?;
+    stages.protocol = clock.elapsed().as_secs_f64();
+    if !matches!(mode, Mode::Shard { .. }) {
+        write_results(plan, to_do, started_at, &stages, &mut executed)?;
+    }
+    Ok(executed)
+}
+
+/// Collect puts together what the shards computed: every training and block must be
+/// settled first.
+fn check_collectable(plan: &Plan) -> Result<(), ExecuteError> {
+    let missing: Vec<String> = plan
+        .tasks()
+        .into_iter()
+        .filter(|&t| matches!(t, Task::Training(_) | Task::Block(_)))
+        .filter(|&t| !plan.status(t).is_settled())
+        .map(|t| format!("  {}", plan.label(t)))
+        .collect();
+    if missing.is_empty() {
+        return Ok(());
+    }
+    Err(ExecuteError::Incomplete {
+        count: missing.len(),
+        list: missing.join("\n"),
+    })
+}
+
+/// Removes what an interrupted run left half-written in the experiment's folder and
+/// the cache.
+fn remove_stale_partials(plan: &Plan) -> Result<(), ExecuteError> {
+    for folder in [plan.out.join(&plan.experiment.name), cache::root(&plan.out)] {
+        crate::files::remove_stale_partials(&folder).map_err(|source| {
+            results::ResultsError::Io {
+                path: folder,
+                source,
+            }
+        })?;
+    }
+    Ok(())
+}
+
+/// Writes the results folders and the sweep table that `to_do` asks for, from the
+/// cache.
+fn write_results(
+    plan: &Plan,
+    to_do: &[Task],
+    started_at: SystemTime,
+    stages: &StageSeconds,
+    executed: &mut Executed,
+) -> Result<(), ExecuteError> {
+    let sweep_to_do = to_do.contains(&Task::Sweep);
+    let mut points = Vec::new();
+    for (p, point) in plan.points.iter().enumerate() {
+        let results_to_do = to_do.contains(&Task::Results(p));
+        if !results_to_do && !sweep_to_do {
+            continue;
+        }
+        let (result, models) = monte_carlo::gather(plan, p)?;
+        if results_to_do {
+            let spec = plan.spec(p);
+            let manifest = manifest(plan, p, started_at, stages);
+            results::write_run(
+                &point.folder,
+                spec,
+                &plan.trajectories[p],
+                &result,
+                &models,
+                &manifest,
+            )?;
+            executed.done += 1;
+            executed.written.push(point.folder.clone());
+        }
+        points.push((result, models));
+    }
+    if sweep_to_do {
+        let folder = plan.out.join(&plan.experiment.name);
+        let keys: Vec<String> = (0..plan.points.len())
+            .map(|p| plan.results_key(p))
+            .collect();
+        sweep::write(&folder, plan.experiment, &points, &keys)?;
+        executed.done += 1;
+        executed.sweep = Some(folder);
+    }
+    Ok(())
+}
+
+/// The manifest of point `p`'s results folder.
+fn manifest(plan: &Plan, p: usize, started_at: SystemTime, stages: &StageSeconds) -> Manifest {
+    let spec = plan.spec(p);
+    Manifest {
+        name: spec.name.clone(),
+        spec_sha256: crate::files::sha256_hex(spec.resolved_toml().as_bytes()),
+        git_commit: env!("DCNET_GIT_COMMIT").to_string(),
+        crate_version: env!("CARGO_PKG_VERSION").to_string(),
+        started_at: humantime::format_rfc3339_seconds(started_at).to_string(),
+        finished_at: humantime::format_rfc3339_seconds(SystemTime::now()).to_string(),
+        threads: rayon::current_num_threads(),
+        backend: spec.training.backend.to_string(),
+        host: gethostname::gethostname().to_string_lossy().into_owned(),
+        data_files: plan.hashes.files_of(spec),
+        stage_seconds: stages.clone(),
+        results_key: plan.results_key(p),
+    }
+}

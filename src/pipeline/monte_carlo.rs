@@ -1,0 +1,115 @@
+//! The Monte Carlo stage of a run: the blocks of one DVL computed together and
+//! stored one by one, and a point's tables gathered back from the stored blocks.
+
+use super::cache::models::CheckpointError;
+use super::plan::{Plan, Task};
+use super::{ExecuteError, Executed};
+use crate::estimators::lineup;
+use crate::evaluate::{ProtocolResult, run_block, summarize};
+use crate::progress::bar;
+use crate::spec::Spec;
+use crate::train::{Trained, TrainingHistory};
+
+/// Computes the blocks `blocks` asks for, those of one DVL of one point together (they
+/// share the measurements), and stores each as soon as its DVL is done. Blocks of a
+/// model that failed to train are skipped.
+pub(super) fn run(
+    plan: &Plan,
+    blocks: &[usize],
+    executed: &mut Executed,
+) -> Result<(), ExecuteError> {
+    for (p, dvl, members) in group_by_dvl(plan, blocks) {
+        let spec = plan.spec(p);
+        let dvl = &spec.dvls[dvl];
+        let models = load_models(plan, spec, &members)?;
+        // Each estimator with the block it computes.
+        let (estimators, estimator_blocks): (Vec<_>, Vec<usize>) = lineup(spec, dvl, &models)
+            .into_iter()
+            .filter_map(|estimator| {
+                let block = members.iter().copied().find(|&b| {
+                    plan.blocks[b].estimator == estimator.kind
+                        && plan.blocks[b].error_model == estimator.error_model
+                });
+                block.map(|b| (estimator, b))
+            })
+            .unzip();
+        let progress = bar(2 * spec.calibration.monte_carlo_runs, "monte carlo");
+        let rows = run_block(spec, &plan.trajectories[p], dvl, &estimators, &progress);
+        progress.finish_and_clear();
+        for (b, rows) in estimator_blocks.into_iter().zip(rows) {
+            plan.block_store.save(&plan.blocks[b].key, &rows)?;
+            executed.done += 1;
+        }
+        eprintln!(
+            "monte carlo {} {}: {} estimators × {} runs stored",
+            spec.name,
+            dvl.name,
+            estimators.len(),
+            spec.calibration.monte_carlo_runs
+        );
+    }
+    Ok(())
+}
+
+/// `blocks` grouped by point and DVL, in the order they first appear, without those
+/// of a model that failed to train: (point, DVL, blocks).
+fn group_by_dvl(plan: &Plan, blocks: &[usize]) -> Vec<(usize, usize, Vec<usize>)> {
+    let mut groups: Vec<(usize, usize, Vec<usize>)> = Vec::new();
+    for &b in blocks {
+        let block = &plan.blocks[b];
+        if plan.runs_failed_model(b) {
+            continue;
+        }
+        match groups
+            .iter_mut()
+            .find(|(p, dvl, _)| *p == block.point && *dvl == block.dvl)
+        {
+            Some((_, _, members)) => members.push(b),
+            None => groups.push((block.point, block.dvl, vec![b])),
+        }
+    }
+    groups
+}
+
+/// The stored models that the DCNet blocks among `blocks` of `spec` run, in their order.
+fn load_models(plan: &Plan, spec: &Spec, blocks: &[usize]) -> Result<Vec<Trained>, ExecuteError> {
+    let mut models = Vec::new();
+    for t in blocks.iter().filter_map(|&b| plan.blocks[b].training) {
+        let training = &plan.trainings[t];
+        let model = plan
+            .models
+            .load(spec, training.error_model, &training.key)?
+            .ok_or_else(|| CheckpointError::NotStored {
+                folder: plan.models.folder.clone(),
+                task: plan.label(Task::Training(t)),
+            })?;
+        models.push(model);
+    }
+    Ok(models)
+}
+
+/// The tables of point `p` from the cache, and the summaries of its stored models.
+/// Blocks whose model failed to train are left out.
+pub(super) fn gather(
+    plan: &Plan,
+    p: usize,
+) -> Result<(ProtocolResult, Vec<TrainingHistory>), ExecuteError> {
+    let point = &plan.points[p];
+    let mut models = Vec::new();
+    for &t in &point.trainings {
+        let training = &plan.trainings[t];
+        if let Some(summary) = plan.models.history(training.error_model, &training.key)? {
+            models.push(summary);
+        }
+    }
+    let mut rows = Vec::new();
+    for &b in &point.blocks {
+        let block = &plan.blocks[b];
+        if !plan.block_store.contains(&block.key) {
+            continue;
+        }
+        let block_rows = plan.block_store.load(&block.key)?;
+        rows.extend(block_rows);
+    }
+    Ok((summarize(rows), models))
+}

@@ -1,0 +1,247 @@
+//! The training scheduler: datasets generated a few at a time, and the models that
+//! train on them interleaved epoch by epoch over the cores, each on a one-thread pool so
+//! that its bytes do not depend on the thread count.
+
+use super::cache::models::{Provenance, Stage, StageError};
+use super::plan::Plan;
+use super::{ExecuteError, Executed};
+use crate::dataset::{self, TrainingSet};
+use crate::progress::bar;
+use crate::results::StageSeconds;
+use crate::train::{self, Trained};
+use crate::vocab::StopReason;
+use indicatif::ProgressBar;
+use std::time::Instant;
+
+/// Trains the models `trainings` asks for; a model whose training fails is recorded as
+/// failed in the store, and the others go on. Datasets are generated a few at a time
+/// ([`dataset_batches`]), and the models of those datasets then train together, epoch
+/// by epoch ([`interleave_epochs`]); only those datasets are held in memory.
+pub(super) fn train(
+    plan: &Plan,
+    trainings: &[usize],
+    force: bool,
+    stages: &mut StageSeconds,
+    executed: &mut Executed,
+) -> Result<(), ExecuteError> {
+    for batch in dataset_batches(plan, trainings) {
+        let sets: Vec<(usize, TrainingSet)> = batch
+            .iter()
+            .map(|&(d, _)| (d, generate_dataset(plan, d, stages)))
+            .collect();
+        executed.done += sets.len();
+        let set_of = |t: usize| {
+            let dataset = plan.trainings[t].dataset;
+            &sets
+                .iter()
+                .find(|(d, _)| *d == dataset)
+                .expect("generated")
+                .1
+        };
+        let mine: Vec<usize> = batch.iter().flat_map(|(_, m)| m.iter().copied()).collect();
+        let clock = Instant::now();
+        let bars = indicatif::MultiProgress::new();
+        let results = interleave_epochs(&mine, |t| {
+            let training = &plan.trainings[t];
+            let spec = plan.spec(training.point);
+            let set = set_of(t);
+            let progress = bars.add(bar(
+                spec.training.epochs * train::batches_per_epoch(spec, set),
+                "DCNet",
+            ));
+            progress.set_message(format!("DCNet {}", training.error_model));
+            let run = move |job: Stage, progress: &indicatif::ProgressBar| {
+                job.epoch(
+                    spec,
+                    set,
+                    training.error_model,
+                    &training.key,
+                    &plan.models,
+                    progress,
+                )
+            };
+            let job = Stage::start(
+                spec,
+                training.error_model,
+                &training.key,
+                &plan.models,
+                force,
+            )
+            .map_err(StageError::from);
+            if let Ok(job) = &job {
+                progress
+                    .set_position((job.epochs_done() * train::batches_per_epoch(spec, set)) as u64);
+            }
+            (job, run, progress)
+        });
+        stages.training += clock.elapsed().as_secs_f64();
+        record(plan, results, executed)?;
+    }
+    Ok(())
+}
+
+/// The datasets that `trainings` need, in groups that train together: each group has
+/// just enough models that every thread has one to train. A group lists each dataset
+/// with its trainings.
+fn dataset_batches(plan: &Plan, trainings: &[usize]) -> Vec<Vec<(usize, Vec<usize>)>> {
+    let mut batches: Vec<Vec<(usize, Vec<usize>)>> = vec![Vec::new()];
+    for d in 0..plan.datasets.len() {
+        let mine: Vec<usize> = trainings
+            .iter()
+            .copied()
+            .filter(|&t| plan.trainings[t].dataset == d)
+            .collect();
+        if mine.is_empty() {
+            continue;
+        }
+        let last = batches.last_mut().expect("never empty");
+        if last.iter().map(|(_, m)| m.len()).sum::<usize>() >= rayon::current_num_threads() {
+            batches.push(vec![(d, mine)]);
+        } else {
+            last.push((d, mine));
+        }
+    }
+    batches.retain(|batch| !batch.is_empty());
+    batches
+}
+
+/// Reports each ended training and stores the failures; a storage error is returned
+/// once every other training's end is recorded.
+fn record(
+    plan: &Plan,
+    ended: Vec<(usize, Ended)>,
+    executed: &mut Executed,
+) -> Result<(), ExecuteError> {
+    let mut storage_error = None;
+    for (t, result) in ended {
+        match result {
+            Ok((model, provenance)) => {
+                eprintln!("{}", describe(&model, provenance, &plan.trainings[t].key));
+                executed.done += 1;
+            }
+            Err(StageError::Store(error)) => {
+                storage_error.get_or_insert(error);
+            }
+            Err(error) => {
+                let training = &plan.trainings[t];
+                plan.models.save_failure(
+                    training.error_model,
+                    &training.key,
+                    &error.to_string(),
+                )?;
+            }
+        }
+    }
+    match storage_error {
+        Some(error) => Err(error.into()),
+        None => Ok(()),
+    }
+}
+
+/// One line on a trained model: where it came from and its best validation loss.
+fn describe(model: &Trained, provenance: Provenance, key: &str) -> String {
+    let best = &model.history[model.best_epoch - 1];
+    let how = match provenance {
+        Provenance::Trained => "trained".to_string(),
+        Provenance::Resumed(epoch) => format!("resumed from the checkpoint of epoch {epoch}"),
+        Provenance::Reused => "reused".to_string(),
+    };
+    let stopped = match model.stop {
+        StopReason::AllEpochs => "",
+        StopReason::EarlyStopping => ", stopped early",
+    };
+    format!(
+        "DCNet {} {}: {how}; best validation loss {:.4} (cm/s)² at epoch {} of {}{stopped}",
+        model.error_model,
+        &key[..16],
+        best.validation_loss,
+        model.best_epoch,
+        model.history.len()
+    )
+}
+
+/// How one training ended: its model and where it came from, or the error that ended it.
+type Ended = Result<(Box<Trained>, Provenance), StageError>;
+
+/// One training's next epoch: its current stage in, its next stage out.
+type EpochStep<'a> =
+    Box<dyn Fn(Stage, &ProgressBar) -> Result<Stage, StageError> + Send + Sync + 'a>;
+
+/// Runs every training of `ids` to its end, epoch by epoch, on
+/// `rayon::current_num_threads()` workers. `start` gives each id its first stage, the
+/// step that trains one epoch, and its progress bar. A worker takes the training at
+/// the head of the queue, trains its next epoch and puts it back at the tail, so that
+/// every core trains while at least as many trainings as cores are left, and the models
+/// advance together. Each worker runs its epochs on [`train::one_thread_pool`], so a
+/// model computes the same bytes whichever worker, and however many, train it. Returns
+/// each id's trained model or the error that ended it.
+fn interleave_epochs<'a, F, S>(ids: &[usize], start: S) -> Vec<(usize, Ended)>
+where
+    S: Fn(usize) -> (Result<Stage, StageError>, F, ProgressBar),
+    F: Fn(Stage, &ProgressBar) -> Result<Stage, StageError> + Send + Sync + 'a,
+{
+    let queue = std::sync::Mutex::new(std::collections::VecDeque::new());
+    let finished = std::sync::Mutex::new(Vec::new());
+    // A running training goes to the tail of the queue; an ended one is finished.
+    let place =
+        |id, stepped: Result<Stage, StageError>, step: EpochStep<'a>, progress: ProgressBar| {
+            let ended = match stepped {
+                Ok(Stage::Done(trained, provenance)) => Ok((trained, provenance)),
+                Ok(running) => {
+                    let mut queue = queue.lock().expect("no worker panics");
+                    queue.push_back((id, running, step, progress));
+                    return;
+                }
+                Err(error) => Err(error),
+            };
+            progress.finish_and_clear();
+            finished.lock().expect("no worker panics").push((id, ended));
+        };
+    for &id in ids {
+        let (stage, step, progress) = start(id);
+        place(id, stage, Box::new(step), progress);
+    }
+    let workers = rayon::current_num_threads().min(ids.len()).max(1);
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| {
+                let pool = train::one_thread_pool();
+                // The queue only shrinks while this worker is away: every training
+                // not in it is held by a worker that will carry on with it.
+                loop {
+                    let next = queue.lock().expect("no worker panics").pop_front();
+                    let Some((id, stage, step, progress)) = next else {
+                        break;
+                    };
+                    let stepped = pool.install(|| step(stage, &progress));
+                    place(id, stepped, step, progress);
+                }
+            });
+        }
+    });
+    let mut finished = finished.into_inner().expect("no worker panics");
+    finished.sort_by_key(|(id, _)| *id);
+    finished
+}
+
+/// Generates dataset `d` from the spec of its first point.
+fn generate_dataset(plan: &Plan, d: usize, stages: &mut StageSeconds) -> TrainingSet {
+    let dataset = &plan.datasets[d];
+    let spec = plan.spec(dataset.point);
+    let clock = Instant::now();
+    let progress = bar(spec.grid.points().len(), "dataset");
+    let set = dataset::generate(spec, &plan.trajectories[dataset.point], &progress);
+    progress.finish_and_clear();
+    stages.dataset += clock.elapsed().as_secs_f64();
+    eprintln!(
+        "dataset {}: {} combinations × {} windows = {} windows ({} validation), {:.1} MB, in {:.2} s",
+        &dataset.key[..16],
+        set.points.len(),
+        set.windows_per_combination,
+        set.len(),
+        set.validation_len(),
+        TrainingSet::size_bytes(set.len(), set.window) as f64 / 1e6,
+        clock.elapsed().as_secs_f64()
+    );
+    set
+}
