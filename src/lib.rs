@@ -1,8 +1,10 @@
 //! dcnet-exp reproduces the experiments of "DCNet: A Data-Driven Framework for DVL
 //! Calibration" (Yampolsky & Klein). One experiment flows through the modules in this
-//! order:
+//! order, and each imports only modules above it in this list:
 //!
-//! 1. [`spec`]: the TOML experiment spec, read, overridden and checked;
+//! 1. [`spec`]: the TOML experiment spec, read, overridden and checked, with the
+//!    [`spec::published`] values it is compared with and the [`spec::recordings`] it may
+//!    name;
 //! 2. [`data`]: the trajectories (`.npy` or `.csv` recordings, or synthetic) and their
 //!    ground truth;
 //! 3. [`noise`]: the beam-level DVL and GNSS-RTK measurement model;
@@ -10,36 +12,37 @@
 //! 5. [`model`] and [`train`]: DCNet and its closed-loop training;
 //! 6. [`estimators`]: calibration methods behind one trait, DCNet among them;
 //! 7. [`evaluate`]: the Monte Carlo calibration and evaluation protocol;
-//! 8. [`results`] and [`tables`]: Parquet files, manifest, and the printed tables;
-//! 9. [`plots`] and [`report`]: the figures and the comparison with the [`published`]
-//!    values, drawn from a results folder alone; [`compare`] sets two results folders
-//!    side by side;
-//! 10. [`pipeline`]: the stages as tasks, cached by content in [`cache`] (with the
-//!     models of [`checkpoint`]), resumable, and shared out over shards; a spec's
-//!     [`sweep`] runs as many points;
+//! 8. [`results`]: the Parquet files and manifest of a run, and a sweep's table;
+//! 9. [`report`]: what is drawn from results folders alone: the printed tables, the
+//!    figures, report.md and report.tex, and two folders compared;
+//! 10. [`pipeline`]: the stages as tasks, planned, cached by content (datasets, models,
+//!     Monte Carlo blocks), resumable, and shared out over shards;
 //! 11. [`cli`]: the subcommands.
 //!
 //! Beneath them all, importing no other module: [`vocab`], the words every stage
-//! shares (error models, methods, corrections, activation, backend, stop reason,
-//! phase), and [`files`], atomic writes and content hashes. No module imports one
-//! that imports it back (`tools/import_cycles.py` checks the whole of `src/`).
+//! shares (a DVL's error terms, error models, methods, corrections, activation,
+//! backend, stop reason, phase); [`files`], atomic writes and content hashes; [`rng`],
+//! the seeded streams; and [`progress`], the progress bars. The modules are declared
+//! below in this order, and `tests/layering.rs` fails on an import that points up it or
+//! on any import cycle in `src/`.
 
-pub mod cli;
+pub mod files;
+pub mod progress;
+pub mod rng;
+pub mod vocab;
+
+pub mod spec;
 pub mod data;
+pub mod noise;
 pub mod dataset;
+pub mod model;
+pub mod train;
 pub mod estimators;
 pub mod evaluate;
-pub mod files;
-pub mod model;
-pub mod noise;
-pub mod pipeline;
-pub mod progress;
-pub mod report;
 pub mod results;
-pub mod rng;
-pub mod spec;
-pub mod train;
-pub mod vocab;
+pub mod report;
+pub mod pipeline;
+pub mod cli;
 
 /// A velocity (or any xyz vector): x, y, z in m/s unless a name says otherwise.
 pub type Vec3 = [f64; 3];

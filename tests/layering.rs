@@ -74,8 +74,8 @@ fn imported_paths(text: &str) -> Vec<Vec<String>> {
     paths
 }
 
-#[test]
-fn no_file_of_src_imports_one_that_imports_it_back() {
+/// Every source file's module path, with the module paths it imports, in other files.
+fn imports() -> BTreeMap<Vec<String>, BTreeSet<Vec<String>>> {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let mut files = BTreeMap::new();
     modules(&src, &[], &mut files);
@@ -85,7 +85,7 @@ fn no_file_of_src_imports_one_that_imports_it_back() {
             .find(|&n| files.contains_key(&path[..n]))
             .map(|n| path[..n].to_vec())
     };
-    let mut imports: BTreeMap<Vec<String>, BTreeSet<Vec<String>>> = BTreeMap::new();
+    let mut imports = BTreeMap::new();
     for (module, file) in &files {
         let text = std::fs::read_to_string(file).unwrap();
         let code = text.split("#[cfg(test)]").next().unwrap();
@@ -96,6 +96,12 @@ fn no_file_of_src_imports_one_that_imports_it_back() {
             .collect();
         imports.insert(module.clone(), targets);
     }
+    imports
+}
+
+#[test]
+fn no_file_of_src_imports_one_that_imports_it_back() {
+    let imports = imports();
     // A module reaches itself through others exactly when it is on a cycle.
     let mut cycles = Vec::new();
     for start in imports.keys() {
@@ -111,11 +117,52 @@ fn no_file_of_src_imports_one_that_imports_it_back() {
             }
         }
     }
-    assert!(files.len() > 30, "found only {} source files", files.len());
+    assert!(
+        imports.len() > 30,
+        "found only {} source files",
+        imports.len()
+    );
     assert!(
         cycles.is_empty(),
         "these modules import, through others, a module that imports them: {}",
         cycles.join(", ")
+    );
+}
+
+/// lib.rs declares its modules in the order data flows through them, the leaves that
+/// every stage shares first: a module may import only those declared before it.
+#[test]
+fn each_module_imports_only_those_lib_rs_declares_before_it() {
+    let lib =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/lib.rs")).unwrap();
+    let order: Vec<String> = lib
+        .lines()
+        .filter_map(|line| line.strip_prefix("pub mod "))
+        .map(|rest| rest.trim_end_matches(';').to_string())
+        .collect();
+    assert!(order.len() > 10, "lib.rs declares only {order:?}");
+    let rank = |module: &[String]| {
+        module
+            .first()
+            .and_then(|top| order.iter().position(|m| m == top))
+    };
+    let mut upward = Vec::new();
+    for (module, targets) in imports() {
+        let Some(from) = rank(&module) else { continue };
+        for target in targets {
+            if rank(&target).is_some_and(|to| to > from) {
+                upward.push(format!(
+                    "{} imports {}",
+                    module.join("::"),
+                    target.join("::")
+                ));
+            }
+        }
+    }
+    assert!(
+        upward.is_empty(),
+        "these imports point against lib.rs's order:\n{}",
+        upward.join("\n")
     );
 }
 
