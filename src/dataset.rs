@@ -71,7 +71,14 @@ impl DatasetSize {
         let per_combination = d
             .trajectories
             .iter()
-            .map(|&t| window_starts(trajectories[t].ground_truth.len(), d.window, d.stride).count())
+            .map(|&t| {
+                window_starts(
+                    trajectories[t].ground_truth.len(),
+                    d.window_samples,
+                    d.stride_samples,
+                )
+                .count()
+            })
             .sum();
         Self {
             combinations: spec.grid.points().len(),
@@ -130,7 +137,7 @@ impl TrainingSet {
 pub fn generate(spec: &Spec, trajectories: &[Trajectory], progress: &ProgressBar) -> TrainingSet {
     let geometry = BeamGeometry::janus_x(spec.beam_pitch_deg);
     let points = spec.grid.points();
-    let window = spec.dataset.window;
+    let window = spec.dataset.window_samples;
     let size = DatasetSize::of(spec, trajectories);
     let (per_combination, total) = (size.per_combination, size.windows());
     let mut inputs = vec![0f32; total * INPUT_ROWS * window];
@@ -153,7 +160,7 @@ pub fn generate(spec: &Spec, trajectories: &[Trajectory], progress: &ProgressBar
                 let truth = &trajectories[t].ground_truth;
                 let measured =
                     measure_trajectory(&geometry, truth, &errors, spec.gnss_noise_m_s, &mut rng);
-                for start in window_starts(truth.len(), window, spec.dataset.stride) {
+                for start in window_starts(truth.len(), window, spec.dataset.stride_samples) {
                     let input = &mut inputs[next * INPUT_ROWS * window..][..INPUT_ROWS * window];
                     let target =
                         &mut targets[next * TARGET_ROWS * window..][..TARGET_ROWS * window];

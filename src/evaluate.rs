@@ -10,7 +10,7 @@
 //! depend on the thread count.
 
 use crate::data::Trajectory;
-use crate::estimators::{Entry, lineup};
+use crate::estimators::{DvlEstimator, set_up};
 use crate::noise::{BeamGeometry, Measurements, measure_trajectory};
 use crate::rng::task_rng;
 use crate::spec::{Dvl, Spec};
@@ -78,12 +78,12 @@ pub fn run_protocol(
         .dvls
         .iter()
         .flat_map(|dvl| {
-            let entries = lineup(spec, dvl, dcnets);
+            let entries = set_up(spec, dvl, dcnets);
             run_block(spec, trajectories, dvl, &entries, progress)
         })
         .flatten()
         .collect();
-    summarize(runs)
+    ProtocolResult::from_runs(runs)
 }
 
 /// The protocol of `entries` on one DVL, every Monte Carlo run: one list of rows per
@@ -94,7 +94,7 @@ pub fn run_block(
     spec: &Spec,
     trajectories: &[Trajectory],
     dvl: &Dvl,
-    entries: &[Entry],
+    entries: &[DvlEstimator],
     progress: &ProgressBar,
 ) -> Vec<Vec<RunRow>> {
     let geometry = BeamGeometry::janus_x(spec.beam_pitch_deg);
@@ -216,76 +216,78 @@ fn t_conv_index(mean_rmse: &[f64]) -> usize {
     })
 }
 
-/// The calibration and evaluation tables of the per-run rows of [`run_block`]: means
-/// and standard deviations over runs, summed in run order, and T_conv.
-pub fn summarize(runs: Vec<RunRow>) -> ProtocolResult {
-    let mut result = ProtocolResult::default();
-    let same = |a: &RunRow, b: &RunRow| {
-        a.dvl == b.dvl && a.estimator == b.estimator && a.error_model == b.error_model
-    };
-    let mut start = 0;
-    while start < runs.len() {
-        let end = start
-            + runs[start..]
+impl ProtocolResult {
+    /// The calibration and evaluation tables of the per-run rows of [`run_block`]: means
+    /// and standard deviations over runs, summed in run order, and T_conv.
+    pub fn from_runs(runs: Vec<RunRow>) -> ProtocolResult {
+        let mut result = ProtocolResult::default();
+        let same = |a: &RunRow, b: &RunRow| {
+            a.dvl == b.dvl && a.estimator == b.estimator && a.error_model == b.error_model
+        };
+        let mut start = 0;
+        while start < runs.len() {
+            let end = start
+                + runs[start..]
+                    .iter()
+                    .take_while(|r| same(r, &runs[start]))
+                    .count();
+            let block = &runs[start..end];
+            let first = &block[0];
+            let in_phase = |phase: Phase| block.iter().filter(move |r| r.phase == phase);
+            let windows = first_seen(in_phase(Phase::Calibration).map(|r| r.window_s));
+            let stats: Vec<(f64, f64, f64)> = windows
                 .iter()
-                .take_while(|r| same(r, &runs[start]))
-                .count();
-        let block = &runs[start..end];
-        let first = &block[0];
-        let in_phase = |phase: Phase| block.iter().filter(move |r| r.phase == phase);
-        let windows = first_seen(in_phase(Phase::Calibration).map(|r| r.window_s));
-        let stats: Vec<(f64, f64, f64)> = windows
-            .iter()
-            .map(|&w| {
-                let (mean, std) = mean_std(
-                    in_phase(Phase::Calibration)
-                        .filter(|r| r.window_s == w)
-                        .map(|r| r.rmse_cm_s),
-                );
-                (w, mean, std)
-            })
-            .collect();
-        let means: Vec<f64> = stats.iter().map(|s| s.1).collect();
-        let best = t_conv_index(&means);
-        for (w, &(window_s, mean, std)) in stats.iter().enumerate() {
-            result.calibration.push(CalibrationRow {
-                dvl: first.dvl.clone(),
-                estimator: first.estimator,
-                error_model: first.error_model,
-                window_s,
-                rmse_cm_s: mean,
-                rmse_std_cm_s: std,
-                is_t_conv: w == best,
-            });
-        }
-        for trajectory in first_seen(in_phase(Phase::Evaluation).map(|r| r.trajectory.clone())) {
-            let rows: Vec<&RunRow> = in_phase(Phase::Evaluation)
-                .filter(|r| r.trajectory == trajectory)
+                .map(|&w| {
+                    let (mean, std) = mean_std(
+                        in_phase(Phase::Calibration)
+                            .filter(|r| r.window_s == w)
+                            .map(|r| r.rmse_cm_s),
+                    );
+                    (w, mean, std)
+                })
                 .collect();
-            let (mean, std) = mean_std(rows.iter().map(|r| r.rmse_cm_s));
-            result.evaluation.push(EvaluationRow {
-                dvl: first.dvl.clone(),
-                estimator: first.estimator,
-                error_model: first.error_model,
-                trajectory,
-                t_conv_s: rows[0].window_s,
-                rmse_cm_s: mean,
-                rmse_std_cm_s: std,
-                improvement_pct: None,
-            });
+            let means: Vec<f64> = stats.iter().map(|s| s.1).collect();
+            let best = t_conv_index(&means);
+            for (w, &(window_s, mean, std)) in stats.iter().enumerate() {
+                result.calibration.push(CalibrationRow {
+                    dvl: first.dvl.clone(),
+                    estimator: first.estimator,
+                    error_model: first.error_model,
+                    window_s,
+                    rmse_cm_s: mean,
+                    rmse_std_cm_s: std,
+                    is_t_conv: w == best,
+                });
+            }
+            for trajectory in first_seen(in_phase(Phase::Evaluation).map(|r| r.trajectory.clone()))
+            {
+                let rows: Vec<&RunRow> = in_phase(Phase::Evaluation)
+                    .filter(|r| r.trajectory == trajectory)
+                    .collect();
+                let (mean, std) = mean_std(rows.iter().map(|r| r.rmse_cm_s));
+                result.evaluation.push(EvaluationRow {
+                    dvl: first.dvl.clone(),
+                    estimator: first.estimator,
+                    error_model: first.error_model,
+                    trajectory,
+                    t_conv_s: rows[0].window_s,
+                    rmse_cm_s: mean,
+                    rmse_std_cm_s: std,
+                    improvement_pct: None,
+                });
+            }
+            start = end;
         }
-        start = end;
+        add_improvements(&mut result.evaluation);
+        result.runs = runs;
+        result
     }
-    add_improvements(&mut result.evaluation);
-    result.runs = runs;
-    result
 }
-
 #[allow(clippy::too_many_arguments)]
 fn row(
     run: usize,
     dvl: &Dvl,
-    entry: &Entry,
+    entry: &DvlEstimator,
     phase: Phase,
     window_s: f64,
     trajectory: &str,
@@ -307,7 +309,7 @@ fn row(
 
 /// Estimates from the first `window` samples and scores the correction on the rest.
 fn calibrate(
-    entry: &Entry,
+    entry: &DvlEstimator,
     measured: &Measurements,
     truth: &[Vec3],
     window: usize,

@@ -414,7 +414,7 @@ mod tests {
         let spec = quick_spec(&["model.conv1d_kernel_size=3"]);
         let device = Device::flex();
         let mut rng = ChaCha8Rng::seed_from_u64(7);
-        let window = spec.dataset.window;
+        let window = spec.dataset.window_samples;
         let model = Dcnet::new(&spec.model, ErrorModel::Em5, window, &device, &mut rng);
         let settings = Settings::from(&spec.model);
         let (count, k, c) = (5, settings.kernel, spec.model.conv_channels);

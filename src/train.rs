@@ -88,7 +88,7 @@ impl State {
         let model = Dcnet::new(
             &spec.model,
             error_model,
-            spec.dataset.window,
+            spec.dataset.window_samples,
             &device,
             &mut rng,
         );
@@ -421,7 +421,7 @@ pub(crate) mod tests {
         let estimator = crate::estimators::DcnetEstimator {
             model: trained.model,
             error_model: ErrorModel::Em5,
-            window: spec.dataset.window,
+            window: spec.dataset.window_samples,
             settings: Settings::from(&spec.model),
             device: spec.training.backend.device(),
         };

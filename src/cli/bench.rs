@@ -143,7 +143,7 @@ fn pytorch_ready(spec: &Spec, script: &Path) -> Result<(), String> {
     }
     let m = &spec.model;
     let [w1, w2, w3] = m.fc_widths;
-    if spec.dataset.window != 10
+    if spec.dataset.window_samples != 10
         || m.conv1d_kernel_size != 2
         || (w2, w3) != (w1 / 2, w1 / 4)
         || m.activation != crate::vocab::Activation::Tanh
@@ -152,7 +152,7 @@ fn pytorch_ready(spec: &Spec, script: &Path) -> Result<(), String> {
     {
         return Err(format!(
             "--pytorch: the peer script builds windows of 10 samples, Conv1d kernels of 2, FC widths [w, w/2, w/4] with tanh, dropout 0.3 and LeakyReLU slope 0.05; the spec has {} samples, kernel {}, FC {:?} with {}, dropout {} and slope {}",
-            spec.dataset.window,
+            spec.dataset.window_samples,
             m.conv1d_kernel_size,
             m.fc_widths,
             m.activation,

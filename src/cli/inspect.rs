@@ -60,9 +60,13 @@ pub(super) fn info(spec_path: &Path, set: &[String]) -> Result<(), CliError> {
         };
         let len = trajectory.ground_truth.len();
         let windows = if roles.contains(&"train") {
-            window_starts(len, spec.dataset.window, spec.dataset.stride)
-                .count()
-                .to_string()
+            window_starts(
+                len,
+                spec.dataset.window_samples,
+                spec.dataset.stride_samples,
+            )
+            .count()
+            .to_string()
         } else {
             String::new()
         };
@@ -89,8 +93,8 @@ pub(super) fn info(spec_path: &Path, set: &[String]) -> Result<(), CliError> {
     println!(
         "windows: {per_combination} per combination × {combinations} = {windows} ({} train, {validation} validation), {} s long every {} s",
         windows - validation,
-        spec.dataset.window as f64 / spec.sample_rate_hz,
-        spec.dataset.stride as f64 / spec.sample_rate_hz
+        spec.dataset.window_samples as f64 / spec.sample_rate_hz,
+        spec.dataset.stride_samples as f64 / spec.sample_rate_hz
     );
     if let Some(published) = spec.dataset.published_windows {
         println!(
@@ -100,7 +104,7 @@ pub(super) fn info(spec_path: &Path, set: &[String]) -> Result<(), CliError> {
     }
     println!(
         "dataset size: {} bytes (f32 inputs and targets, one split flag per window)",
-        TrainingSet::size_bytes(windows, spec.dataset.window)
+        TrainingSet::size_bytes(windows, spec.dataset.window_samples)
     );
     Ok(())
 }

@@ -79,7 +79,7 @@ pub fn load_trajectories(spec: &Spec) -> Result<Vec<Trajectory>, DataError> {
         };
         trajectories.push(Trajectory {
             name: source.name.clone(),
-            ground_truth: ground_truth(&recorded, spec.ground_truth_window),
+            ground_truth: ground_truth(&recorded, spec.ground_truth_window_samples),
         });
     }
     Ok(trajectories)

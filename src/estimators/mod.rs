@@ -1,7 +1,7 @@
 //! Calibration methods behind one trait. An [`Estimator`] takes a calibration window of
 //! DVL and GNSS-RTK velocity and returns a [`Correction`] in the form of the measurement
 //! model `v_dvl = (1 + k)·v + b`; every error model (EM1–EM5, PAPER-NOTES) is that form
-//! with some terms fixed or tied. The protocol runs the list [`lineup`] builds.
+//! with some terms fixed or tied. The protocol runs the list [`set_up`] builds.
 
 mod baseline;
 mod dcnet;
@@ -26,7 +26,7 @@ pub trait Estimator: Send + Sync {
 }
 
 /// A method as the protocol runs it on one DVL.
-pub struct Entry {
+pub struct DvlEstimator {
     pub kind: EstimatorKind,
     pub error_model: Option<ErrorModel>,
     pub estimator: Box<dyn Estimator>,
@@ -34,24 +34,24 @@ pub struct Entry {
 
 /// Every (estimator kind, error model) the spec asks for, in table order: the kinds as
 /// listed, each with every error model when it takes one.
-pub fn series(spec: &Spec) -> Vec<(EstimatorKind, Option<ErrorModel>)> {
-    let mut series = Vec::new();
+pub fn requested(spec: &Spec) -> Vec<(EstimatorKind, Option<ErrorModel>)> {
+    let mut requested = Vec::new();
     for &kind in &spec.kinds {
         if kind.takes_error_model() {
-            series.extend(spec.error_models.iter().map(|&m| (kind, Some(m))));
+            requested.extend(spec.error_models.iter().map(|&m| (kind, Some(m))));
         } else {
-            series.push((kind, None));
+            requested.push((kind, None));
         }
     }
-    series
+    requested
 }
 
-/// Every (estimator kind, error model) of [`series`], set up for `dvl`. DCNet runs for
+/// Every (estimator kind, error model) of [`requested`], set up for `dvl`. DCNet runs for
 /// the error models in `dcnets`, the models that trained.
-pub fn lineup(spec: &Spec, dvl: &Dvl, dcnets: &[Trained]) -> Vec<Entry> {
+pub fn set_up(spec: &Spec, dvl: &Dvl, dcnets: &[Trained]) -> Vec<DvlEstimator> {
     let geometry = BeamGeometry::janus_x(spec.beam_pitch_deg);
     let mut entries = Vec::new();
-    for (kind, error_model) in series(spec) {
+    for (kind, error_model) in requested(spec) {
         let estimator: Box<dyn Estimator> = match (kind, error_model) {
             (EstimatorKind::Baseline, _) => Box::new(Baseline),
             (EstimatorKind::LeastSquares, Some(model)) => Box::new(LeastSquares(model)),
@@ -62,7 +62,7 @@ pub fn lineup(spec: &Spec, dvl: &Dvl, dcnets: &[Trained]) -> Vec<Entry> {
                 Box::new(DcnetEstimator {
                     model: trained.model.clone(),
                     error_model: model,
-                    window: spec.dataset.window,
+                    window: spec.dataset.window_samples,
                     settings: Settings::from(&spec.model),
                     device: spec.training.backend.device(),
                 })
@@ -72,7 +72,7 @@ pub fn lineup(spec: &Spec, dvl: &Dvl, dcnets: &[Trained]) -> Vec<Entry> {
             }
             (EstimatorKind::Floor, _) => Box::new(Floor::new(&dvl.errors, &geometry)),
         };
-        entries.push(Entry {
+        entries.push(DvlEstimator {
             kind,
             error_model,
             estimator,

@@ -4,8 +4,8 @@
 use super::cache::models::CheckpointError;
 use super::plan::{Plan, Task};
 use super::{ExecuteError, Executed};
-use crate::estimators::lineup;
-use crate::evaluate::{ProtocolResult, run_block, summarize};
+use crate::estimators::set_up;
+use crate::evaluate::{ProtocolResult, run_block};
 use crate::progress::bar;
 use crate::spec::Spec;
 use crate::train::{Trained, TrainingHistory};
@@ -23,7 +23,7 @@ pub(super) fn run(
         let dvl = &spec.dvls[dvl];
         let models = load_models(plan, spec, &members)?;
         // Each estimator with the block it computes.
-        let (estimators, estimator_blocks): (Vec<_>, Vec<usize>) = lineup(spec, dvl, &models)
+        let (estimators, estimator_blocks): (Vec<_>, Vec<usize>) = set_up(spec, dvl, &models)
             .into_iter()
             .filter_map(|estimator| {
                 let block = members.iter().copied().find(|&b| {
@@ -111,5 +111,5 @@ pub(super) fn gather(
         let block_rows = plan.block_store.load(&block.key)?;
         rows.extend(block_rows);
     }
-    Ok((summarize(rows), models))
+    Ok((ProtocolResult::from_runs(rows), models))
 }

@@ -6,7 +6,7 @@
 use super::cache::{self, BlockStore, DataHashes, ModelStore};
 use super::shard::Shard;
 use crate::data::{Trajectory, load_trajectories};
-use crate::estimators::series;
+use crate::estimators::requested;
 use crate::results::{self, Manifest, sweep};
 use crate::spec::{Experiment, Spec};
 use crate::vocab::{ErrorModel, EstimatorKind};
@@ -171,7 +171,7 @@ impl<'a> Plan<'a> {
         }
         let mut blocks = Vec::new();
         for dvl in 0..spec.dvls.len() {
-            for (estimator, error_model) in series(spec) {
+            for (estimator, error_model) in requested(spec) {
                 let training = (estimator == EstimatorKind::Dcnet).then(|| {
                     let m = spec
                         .error_models

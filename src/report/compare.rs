@@ -315,7 +315,7 @@ fn model_text(model: Option<ErrorModel>) -> String {
 }
 
 /// The DVL, estimator and error model of a row, whichever side holds it.
-fn series<R>(
+fn row_labels<R>(
     a: Option<&R>,
     b: Option<&R>,
     of: impl Fn(&R) -> (&str, EstimatorKind, Option<ErrorModel>),
@@ -400,7 +400,7 @@ fn calibration_section(a: &StoredRun, b: &StoredRun, tally: &mut Tally, out: &mu
     ]);
     let key = |r: &CalibrationRow| (r.dvl.clone(), r.estimator, r.error_model, r.window_s);
     for (row_a, row_b) in pair(&a.calibration, &b.calibration, key) {
-        let mut cells = series(row_a, row_b, |r| (&r.dvl, r.estimator, r.error_model)).to_vec();
+        let mut cells = row_labels(row_a, row_b, |r| (&r.dvl, r.estimator, r.error_model)).to_vec();
         cells.push(
             row_a
                 .or(row_b)
@@ -444,7 +444,7 @@ fn evaluation_section(a: &StoredRun, b: &StoredRun, tally: &mut Tally, out: &mut
         )
     };
     for (row_a, row_b) in pair(&a.evaluation, &b.evaluation, key) {
-        let mut cells = series(row_a, row_b, |r| (&r.dvl, r.estimator, r.error_model)).to_vec();
+        let mut cells = row_labels(row_a, row_b, |r| (&r.dvl, r.estimator, r.error_model)).to_vec();
         cells.push(
             row_a
                 .or(row_b)

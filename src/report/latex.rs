@@ -4,7 +4,7 @@
 //! they need (booktabs). Each DVL's row holds our values, the row below it the
 //! published ones in italics; a flagged cell carries a dagger explained under its table.
 
-use super::{Entry, ReportTable, Signs, Tables};
+use super::{Cell, ReportTable, Signs, Tables};
 use crate::results::read::StoredRun;
 use std::fmt::Write;
 
@@ -171,7 +171,7 @@ fn row(out: &mut String, cells: &[String]) {
 }
 
 /// Our figure, with a dagger where the Markdown report has its ⚠.
-fn ours(entry: &Entry) -> String {
+fn ours(entry: &Cell) -> String {
     let text = entry.ours.text(&SIGNS);
     if entry.flagged {
         format!("{text}\\rlap{{\\textsuperscript{{\\dag}}}}")

@@ -64,11 +64,11 @@ struct ReportTable {
 struct Row {
     labels: Vec<String>,
     /// One per value column; `None` where the run has no such value.
-    cells: Vec<Option<Entry>>,
+    cells: Vec<Option<Cell>>,
 }
 
 /// One value cell: our figure, the published one beside it, and whether they disagree.
-struct Entry {
+struct Cell {
     ours: Figure,
     paper: Option<Figure>,
     flagged: bool,
@@ -111,7 +111,7 @@ impl Figure {
     }
 }
 
-impl Entry {
+impl Cell {
     /// Our figure beside the published cell: flagged when the RMSE is more than
     /// `tolerance_pct` off, or the calibration's T_conv differs.
     fn new(
@@ -120,7 +120,7 @@ impl Entry {
         phase: Phase,
         tolerance_pct: f64,
         tally: &mut Tally,
-    ) -> Entry {
+    ) -> Cell {
         let paper = published.map(|cell| Figure {
             rmse_cm_s: cell.rmse_cm_s,
             detail: match phase {
@@ -141,7 +141,7 @@ impl Entry {
             tally.compared += 1;
             tally.flagged += usize::from(flagged);
         }
-        Entry {
+        Cell {
             ours,
             paper,
             flagged,
@@ -203,7 +203,7 @@ impl Tables {
                             detail: Some(Detail::TConv(r.window_s)),
                         };
                         let paper = published(dvl, kind, model, None);
-                        Entry::new(ours, paper, Phase::Calibration, tolerance, &mut tally)
+                        Cell::new(ours, paper, Phase::Calibration, tolerance, &mut tally)
                     })
             };
             // (label, estimator of the first column, estimator of the error-model columns)
@@ -270,7 +270,7 @@ impl Tables {
                         };
                         let paper =
                             published(dvl, kind, model, Some(trajectory)).filter(|_| with_paper);
-                        Entry::new(ours, paper, Phase::Evaluation, tolerance, tally)
+                        Cell::new(ours, paper, Phase::Evaluation, tolerance, tally)
                     })
             };
         // One DVL × trajectory row per cell pair: `first` in the first value column,
@@ -415,7 +415,7 @@ fn markdown_table(table: &ReportTable) -> Table {
     for row in table.groups.iter().flatten() {
         let cells = row.cells.iter().map(|cell| {
             cell.as_ref()
-                .map_or_else(|| "—".to_string(), Entry::markdown)
+                .map_or_else(|| "—".to_string(), Cell::markdown)
         });
         markdown.add_row(row.labels.iter().cloned().chain(cells).collect::<Vec<_>>());
     }

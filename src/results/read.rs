@@ -280,7 +280,7 @@ impl Batch<'_> {
     }
 
     /// The `dvl`, `estimator` and `error_model` of each row: which series it belongs to.
-    pub(crate) fn series(&self) -> Result<Vec<Series>, String> {
+    pub(crate) fn row_keys(&self) -> Result<Vec<RowKey>, String> {
         let dvl = self.strings("dvl")?;
         let estimator: Vec<EstimatorKind> = self.required("estimator")?;
         let error_model = self.parsed("error_model", true)?;
@@ -288,7 +288,7 @@ impl Batch<'_> {
             .into_iter()
             .zip(estimator)
             .zip(error_model)
-            .map(|((dvl, estimator), error_model)| Series {
+            .map(|((dvl, estimator), error_model)| RowKey {
                 dvl,
                 estimator,
                 error_model,
@@ -298,7 +298,7 @@ impl Batch<'_> {
 }
 
 /// The DVL, estimator and error model a row belongs to.
-pub(crate) struct Series {
+pub(crate) struct RowKey {
     pub dvl: String,
     pub estimator: EstimatorKind,
     pub error_model: Option<ErrorModel>,
@@ -306,7 +306,7 @@ pub(crate) struct Series {
 
 fn run_rows(batch: &Batch) -> Result<Vec<RunRow>, String> {
     let run = batch.uints("run")?;
-    let series = batch.series()?;
+    let row_keys = batch.row_keys()?;
     let phase: Vec<Phase> = batch.required("phase")?;
     let window_s = batch.floats("window_s")?;
     let trajectory = batch.strings("trajectory")?;
@@ -322,7 +322,7 @@ fn run_rows(batch: &Batch) -> Result<Vec<RunRow>, String> {
     .map(|name| batch.floats(name));
     let [sx, sy, sz, bx, by, bz] = terms;
     let (sx, sy, sz, bx, by, bz) = (sx?, sy?, sz?, bx?, by?, bz?);
-    Ok(series
+    Ok(row_keys
         .into_iter()
         .enumerate()
         .map(|(i, series)| RunRow {
@@ -343,12 +343,12 @@ fn run_rows(batch: &Batch) -> Result<Vec<RunRow>, String> {
 }
 
 fn calibration_rows(batch: &Batch) -> Result<Vec<CalibrationRow>, String> {
-    let series = batch.series()?;
+    let row_keys = batch.row_keys()?;
     let window_s = batch.floats("window_s")?;
     let rmse = batch.floats("rmse_cm_s")?;
     let std = batch.floats("rmse_std_cm_s")?;
     let is_t_conv = batch.bools("is_t_conv")?;
-    Ok(series
+    Ok(row_keys
         .into_iter()
         .enumerate()
         .map(|(i, series)| CalibrationRow {
@@ -364,13 +364,13 @@ fn calibration_rows(batch: &Batch) -> Result<Vec<CalibrationRow>, String> {
 }
 
 fn evaluation_rows(batch: &Batch) -> Result<Vec<EvaluationRow>, String> {
-    let series = batch.series()?;
+    let row_keys = batch.row_keys()?;
     let trajectory = batch.strings("trajectory")?;
     let t_conv_s = batch.floats("t_conv_s")?;
     let rmse = batch.floats("rmse_cm_s")?;
     let std = batch.floats("rmse_std_cm_s")?;
     let improvement = batch.optional_floats("improvement_pct");
-    Ok(series
+    Ok(row_keys
         .into_iter()
         .enumerate()
         .map(|(i, series)| EvaluationRow {

@@ -260,7 +260,7 @@ pub fn read(folder: &Path) -> Result<StoredSweep, ReadError> {
 
 fn sweep_rows(batch: &Batch, swept: &[String]) -> Result<Vec<SweepRow>, String> {
     let point = batch.strings("point")?;
-    let series = batch.series()?;
+    let row_keys = batch.row_keys()?;
     let t_conv = batch.floats("t_conv_s")?;
     let calibration = batch.floats("calibration_rmse_cm_s")?;
     let evaluation = batch.floats("evaluation_rmse_cm_s")?;
@@ -298,7 +298,7 @@ fn sweep_rows(batch: &Batch, swept: &[String]) -> Result<Vec<SweepRow>, String> 
             row.push(value);
         }
     }
-    Ok(series
+    Ok(row_keys
         .into_iter()
         .zip(values)
         .enumerate()

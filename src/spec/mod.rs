@@ -26,7 +26,7 @@ pub struct Spec {
     pub name: String,
     pub seed: u64,
     pub sample_rate_hz: f64,
-    pub ground_truth_window: usize,
+    pub ground_truth_window_samples: usize,
     pub synthetic: SyntheticFile,
     pub trajectories: Vec<TrajectorySource>,
     pub beam_pitch_deg: f64,
@@ -118,8 +118,8 @@ pub struct Grid {
 pub struct DatasetSpec {
     /// Indices into `Spec::trajectories`.
     pub trajectories: Vec<usize>,
-    pub window: usize,
-    pub stride: usize,
+    pub window_samples: usize,
+    pub stride_samples: usize,
     pub validation_fraction: f64,
     pub published_windows: Option<usize>,
 }
@@ -560,7 +560,7 @@ impl SpecFile {
             name,
             seed,
             sample_rate_hz,
-            ground_truth_window: ground_truth_window_samples,
+            ground_truth_window_samples,
             synthetic,
             trajectories: sources,
             beam_pitch_deg,
@@ -568,8 +568,8 @@ impl SpecFile {
             grid,
             dataset: DatasetSpec {
                 trajectories: dataset_trajectories,
-                window: window.unwrap_or_default(),
-                stride: stride.unwrap_or_default(),
+                window_samples: window.unwrap_or_default(),
+                stride_samples: stride.unwrap_or_default(),
                 validation_fraction,
                 published_windows,
             },

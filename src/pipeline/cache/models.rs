@@ -427,7 +427,7 @@ fn read_model(
     let skeleton = Dcnet::new(
         &spec.model,
         error_model,
-        spec.dataset.window,
+        spec.dataset.window_samples,
         device,
         &mut rng,
     );

@@ -16,11 +16,11 @@ pub struct Drawn {
 }
 
 /// Either a figure, or why the run cannot have it.
-pub type Outcome = Result<Drawn, String>;
+pub type MaybeDrawn = Result<Drawn, String>;
 
 /// Every figure of a run, in the order the report shows them.
-pub fn all(run: &StoredRun) -> PlotResult<Vec<(String, Outcome)>> {
-    let figures: [(&str, Outcome); 6] = [
+pub fn all(run: &StoredRun) -> PlotResult<Vec<(String, MaybeDrawn)>> {
+    let figures: [(&str, MaybeDrawn); 6] = [
         ("velocity", velocity(run)?),
         ("calibration", calibration(run)?),
         ("rmse_first_window", rmse_first_window(run)?),
@@ -53,7 +53,7 @@ fn calibration_name(run: &StoredRun) -> &str {
 }
 
 /// Velocity of a training and a test trajectory over time, body frame.
-fn velocity(run: &StoredRun) -> PlotResult<Outcome> {
+fn velocity(run: &StoredRun) -> PlotResult<MaybeDrawn> {
     let chosen = &run.spec.report.velocity_trajectories;
     let find = |name: &str| run.trajectories.iter().find(|t| t.name == name);
     let with_role = |role: &str| {
@@ -132,7 +132,7 @@ fn series_of(rows: &[CalibrationRow]) -> Vec<(EstimatorKind, Option<ErrorModel>)
 }
 
 /// Mean RMSE against calibration window size, one panel per DVL, T_conv ringed.
-fn calibration(run: &StoredRun) -> PlotResult<Outcome> {
+fn calibration(run: &StoredRun) -> PlotResult<MaybeDrawn> {
     if run.calibration.is_empty() {
         return Ok(Err("calibration.parquet is empty".into()));
     }
@@ -354,7 +354,7 @@ fn bar_legend(
 
 /// RMSE at the first (shortest) calibration window for EM2, EM4 and EM5 against the
 /// baseline: the paper's bar figure, one panel per DVL.
-fn rmse_first_window(run: &StoredRun) -> PlotResult<Outcome> {
+fn rmse_first_window(run: &StoredRun) -> PlotResult<MaybeDrawn> {
     let Some(window) = run
         .calibration
         .iter()
@@ -441,7 +441,7 @@ fn rmse_first_window(run: &StoredRun) -> PlotResult<Outcome> {
 }
 
 /// Improvement over the baseline per test trajectory of each estimator with EM5.
-fn improvement_em5(run: &StoredRun) -> PlotResult<Outcome> {
+fn improvement_em5(run: &StoredRun) -> PlotResult<MaybeDrawn> {
     let rows: Vec<_> = run
         .evaluation
         .iter()
@@ -501,7 +501,7 @@ fn improvement_em5(run: &StoredRun) -> PlotResult<Outcome> {
 
 /// The distribution over runs of each estimator's RMSE at its T_conv, one panel per
 /// DVL, the floor's mean drawn across.
-fn monte_carlo_spread(run: &StoredRun) -> PlotResult<Outcome> {
+fn monte_carlo_spread(run: &StoredRun) -> PlotResult<MaybeDrawn> {
     let series = series_of(&run.calibration);
     if series.is_empty() {
         return Ok(Err("calibration.parquet is empty".into()));
@@ -611,7 +611,7 @@ fn monte_carlo_spread(run: &StoredRun) -> PlotResult<Outcome> {
 }
 
 /// Training and validation loss per epoch of each error model, log scale.
-fn training_loss(run: &StoredRun) -> PlotResult<Outcome> {
+fn training_loss(run: &StoredRun) -> PlotResult<MaybeDrawn> {
     if run.training.is_empty() {
         return Ok(Err(
             "the run trained no DCNet (training.parquet is empty)".into()

@@ -100,7 +100,7 @@ pub fn write_sweep(
 }
 
 fn write_figures(
-    drawn: Vec<(String, figures::Outcome)>,
+    drawn: Vec<(String, figures::MaybeDrawn)>,
     folder: &Path,
     format: Format,
 ) -> Result<Vec<Written>, PlotError> {

@@ -6,7 +6,7 @@
 //! over two or more keys adds [`super::sweep_parallel`]'s figure.
 
 use super::draw::*;
-use super::figures::{Drawn, Outcome, draw_svg};
+use super::figures::{Drawn, MaybeDrawn, draw_svg};
 use super::scale::Scale;
 use crate::first_seen;
 use crate::results::sweep::{StoredSweep, SweepRow, Swept};
@@ -74,7 +74,7 @@ impl Metric {
 
 /// One figure per swept key, stem `sweep_<key>` with the key's dots as underscores,
 /// and, over two or more keys, `sweep_parallel` ([`super::sweep_parallel`]).
-pub fn all(sweep: &StoredSweep, metric: Metric) -> PlotResult<Vec<(String, Outcome)>> {
+pub fn all(sweep: &StoredSweep, metric: Metric) -> PlotResult<Vec<(String, MaybeDrawn)>> {
     let mut figures = sweep
         .index
         .swept
@@ -114,7 +114,7 @@ fn categories(rows: &[(&SweepRow, f64)], k: usize) -> Vec<(Swept, String)> {
         .collect()
 }
 
-fn against(sweep: &StoredSweep, metric: Metric, k: usize) -> PlotResult<Outcome> {
+fn against(sweep: &StoredSweep, metric: Metric, k: usize) -> PlotResult<MaybeDrawn> {
     let key = &sweep.index.swept[k];
     let rows: Vec<(&SweepRow, f64)> = sweep
         .rows

@@ -7,7 +7,7 @@
 //! (a TOML array or string) gets its values as evenly spaced categories.
 
 use super::draw::*;
-use super::figures::{Drawn, Outcome, draw_svg};
+use super::figures::{Drawn, MaybeDrawn, draw_svg};
 use super::scale::Scale;
 use super::sweep_figures::Metric;
 use crate::first_seen;
@@ -122,7 +122,7 @@ const COLOR_BAR_WIDTH: u32 = 200;
 const MIN_WIDTH: u32 = 1000;
 
 /// The figure, or why the sweep has none.
-pub fn parallel(sweep: &StoredSweep, metric: Metric) -> PlotResult<Outcome> {
+pub fn parallel(sweep: &StoredSweep, metric: Metric) -> PlotResult<MaybeDrawn> {
     let keys = &sweep.index.swept;
     let dvls = first_seen(sweep.rows.iter().map(|r| r.dvl.clone()));
     let panels: Vec<(String, Vec<Line>)> = dvls
