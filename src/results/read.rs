@@ -10,7 +10,7 @@ use super::{
 use crate::Vec3;
 use crate::evaluate::{CalibrationRow, EvaluationRow, RunRow};
 use crate::spec::published::Published;
-use crate::spec::{SpecFile, TomlFile};
+use crate::spec::{SpecErrors, SpecFile, TomlFile};
 use crate::train::EpochRecord;
 use crate::vocab::{Correction, ErrorModel, EstimatorKind, Phase, StopReason};
 use arrow_array::{Array, BooleanArray, Float64Array, RecordBatch, StringArray, UInt32Array};
@@ -24,6 +24,27 @@ pub enum ReadError {
     Missing { path: PathBuf },
     #[error("{}: {message}", path.display())]
     Invalid { path: PathBuf, message: String },
+    #[error("{}: {source}", path.display())]
+    Spec {
+        path: PathBuf,
+        #[source]
+        source: SpecErrors,
+    },
+    #[error("{}: {source}", path.display())]
+    Manifest {
+        path: PathBuf,
+        #[source]
+        source: ManifestError,
+    },
+}
+
+/// Why a manifest could not be read.
+#[derive(Debug, thiserror::Error)]
+pub enum ManifestError {
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
 }
 
 /// Everything a run stored.
@@ -62,22 +83,29 @@ pub struct StoredTrajectory {
 
 impl StoredRun {
     pub fn read(folder: &Path) -> Result<StoredRun, ReadError> {
-        let invalid = |path: &Path, message: String| ReadError::Invalid {
-            path: path.to_path_buf(),
-            message,
-        };
         let spec_path = existing(&folder.join(SPEC))?;
         let spec = TomlFile::<SpecFile>::read(&spec_path)
-            .map_err(|e| invalid(&spec_path, e.to_string()))?
+            .map_err(|e| ReadError::Spec {
+                path: spec_path.clone(),
+                source: SpecErrors(vec![e]),
+            })?
             .value;
         let manifest_path = existing(&folder.join(MANIFEST))?;
         let manifest = std::fs::read(&manifest_path)
-            .map_err(|e| e.to_string())
-            .and_then(|bytes| serde_json::from_slice(&bytes).map_err(|e| e.to_string()))
-            .map_err(|message| invalid(&manifest_path, message))?;
+            .map_err(ManifestError::from)
+            .and_then(|bytes| Ok(serde_json::from_slice(&bytes)?))
+            .map_err(|source| ReadError::Manifest {
+                path: manifest_path.clone(),
+                source,
+            })?;
         let published_path = folder.join(PUBLISHED);
         let published = if published_path.exists() {
-            Some(Published::read(&published_path).map_err(|m| invalid(&published_path, m))?)
+            Some(
+                Published::read(&published_path).map_err(|source| ReadError::Spec {
+                    path: published_path.clone(),
+                    source,
+                })?,
+            )
         } else {
             None
         };

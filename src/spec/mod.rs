@@ -614,7 +614,7 @@ fn check_report(
         let path = spec_dir.join(file);
         resolved.report.published = Some(path.clone());
         Published::read(&path)
-            .map_err(|message| faults.add("report.published", message))
+            .map_err(|errors| faults.add("report.published", errors.to_string()))
             .ok()
     });
     if !(tolerance_pct.is_finite() && tolerance_pct >= 0.0) {

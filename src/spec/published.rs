@@ -4,7 +4,7 @@
 //! the evaluation table, the trajectory; the RMSE, and T_conv or the improvement over
 //! the baseline where the paper gives them.
 
-use crate::spec::toml_file::TomlFile;
+use crate::spec::toml_file::{SpecErrors, TomlFile};
 use crate::vocab::{ErrorModel, EstimatorKind};
 use serde::Deserialize;
 use std::path::Path;
@@ -59,20 +59,21 @@ pub struct PublishedCell {
 
 impl Published {
     /// Reads and checks `path`; the error names the file, line and key of every fault.
-    pub fn read(path: &Path) -> Result<Self, String> {
-        let file = TomlFile::<PublishedFile>::read(path).map_err(|e| e.to_string())?;
+    pub fn read(path: &Path) -> Result<Self, SpecErrors> {
+        let file = TomlFile::<PublishedFile>::read(path).map_err(|e| SpecErrors(vec![e]))?;
         let mut faults = Vec::new();
         let mut cells = |table: &str, entries: &[CellFile]| -> Vec<PublishedCell> {
             let mut cells = Vec::new();
             for (i, entry) in entries.iter().enumerate() {
                 let key = |field: &str| format!("{table}[{i}].{field}");
-                let estimator = entry.estimator.parse().map_err(|message: String| {
-                    faults.push(file.fault(&key("estimator"), message).to_string())
-                });
+                let estimator = entry
+                    .estimator
+                    .parse()
+                    .map_err(|message: String| faults.push(file.fault(&key("estimator"), message)));
                 let error_model = match &entry.error_model {
                     None => Ok(None),
                     Some(name) => name.parse().map(Some).map_err(|message: String| {
-                        faults.push(file.fault(&key("error_model"), message).to_string())
+                        faults.push(file.fault(&key("error_model"), message))
                     }),
                 };
                 if (table == "evaluation") != entry.trajectory.is_some() {
@@ -81,11 +82,11 @@ impl Published {
                     } else {
                         "a calibration cell has no trajectory"
                     };
-                    faults.push(file.fault(&format!("{table}[{i}]"), message).to_string());
+                    faults.push(file.fault(&format!("{table}[{i}]"), message));
                 }
                 if !(entry.rmse_cm_s.is_finite() && entry.rmse_cm_s >= 0.0) {
                     let message = format!("{} must be zero or positive", entry.rmse_cm_s);
-                    faults.push(file.fault(&key("rmse_cm_s"), message).to_string());
+                    faults.push(file.fault(&key("rmse_cm_s"), message));
                 }
                 if let (Ok(estimator), Ok(error_model)) = (estimator, error_model) {
                     cells.push(PublishedCell {
@@ -104,7 +105,7 @@ impl Published {
         let calibration = cells("calibration", &file.value.calibration);
         let evaluation = cells("evaluation", &file.value.evaluation);
         if !faults.is_empty() {
-            return Err(faults.join("\n"));
+            return Err(SpecErrors(faults));
         }
         Ok(Published {
             source: file.value.source.clone(),
@@ -142,7 +143,8 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("published.toml");
         std::fs::write(&path, text).unwrap();
-        Published::read(&path).map_err(|e| e.replace(&path.display().to_string(), "FILE"))
+        Published::read(&path)
+            .map_err(|e| e.to_string().replace(&path.display().to_string(), "FILE"))
     }
 
     #[test]
