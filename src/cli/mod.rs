@@ -5,9 +5,9 @@
 //! from failures while running (exit code 2). In: the command line. Out: what the
 //! stages write, and what they did on stderr.
 //!
-//! [`args`] declares the command line; [`run`] runs, plans and collects experiments;
-//! [`plot`] draws and compares results folders; [`inspect`] checks specs and fetches
-//! data; [`bench`] times the stages.
+//! `args` declares the command line; `run` runs, plans and collects experiments;
+//! `plot` draws and compares results folders; `inspect` checks specs and fetches
+//! data; `bench` times the stages.
 
 mod args;
 mod bench;

@@ -1,7 +1,9 @@
 //! Calibration methods behind one trait. An [`Estimator`] takes a calibration window of
 //! DVL and GNSS-RTK velocity and returns a [`Correction`] in the form of the measurement
 //! model `v_dvl = (1 + k)·v + b`; every error model (EM1–EM5, PAPER-NOTES) is that form
-//! with some terms fixed or tied. The protocol runs the list [`set_up`] builds.
+//! with some terms fixed or tied. In: the spec, one DVL and the trained DCNets. Out: the
+//! [`DvlEstimator`]s that [`set_up`] builds, one per (method, error model) the spec
+//! [`requested`], which the protocol runs.
 
 mod baseline;
 mod dcnet;

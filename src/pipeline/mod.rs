@@ -1,11 +1,16 @@
 //! An experiment as a list of tasks: for every point of the spec (one, or one per
 //! sweep point), a dataset, one DCNet training per error model, one Monte Carlo block
-//! per DVL × estimator, and the results folder put together from them. Tasks are
-//! deduplicated by their cache key ([`crate::pipeline::cache`]), so sweep points that share a
-//! model train it once; a task is done when its output is in the cache. [`Plan`] lists
-//! the tasks and their state without touching anything; [`execute`] does what is left:
-//! all of it, one shard's part (`--shard K/N`), or only the putting together
-//! (`collect`).
+//! per DVL × estimator, and the results folder put together from them. In: a checked
+//! [`Experiment`](crate::spec::Experiment) and a results folder. Out: the results
+//! folders, every intermediate kept in the [`cache`].
+//!
+//! - [`plan`]: the tasks, deduplicated by their cache key so that sweep points that
+//!   share a model train it once, and the state of each without touching anything;
+//! - [`shard`]: one machine's share of them (`--shard K/N`);
+//! - [`execute`] does what is left: all of it, one shard's part, or only the putting
+//!   together (`collect`), training in `schedule` and running the protocol in
+//!   `monte_carlo`;
+//! - [`cache`]: the content-addressed store of models and Monte Carlo blocks.
 //!
 //! A shard takes whole groups: a training with every block that runs its model, or a
 //! block that needs no model. Groups are dealt out round-robin in plan order, trainings

@@ -415,7 +415,7 @@ fn find_or_push<T>(
         })
 }
 
-/// What [`execute`] is asked to do.
+/// What [`execute`](super::execute) is asked to do.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Mode {
     /// Every task left.

@@ -4,7 +4,9 @@
 //! the published values the report compares with. Every file is written to a
 //! temporary file beside it and renamed into place, so a reader never sees half a file
 //! (a writer killed mid-write leaves a hidden `.partial-<pid>-*` file, which the next
-//! run removes); the manifest is written last. [`read`] reads a folder back.
+//! run removes); the manifest is written last. In: the protocol's tables and the models'
+//! training histories. Out: the folder; [`read`] reads it back, and [`sweep`] writes
+//! and reads the table that sets a sweep's points side by side.
 
 pub mod read;
 pub mod sweep;

@@ -3,15 +3,16 @@
 //! that determine them (the relevant settings of the resolved spec, the SHA-256 of the
 //! data files, the code version), so a run reuses whatever another run, sweep point or
 //! shard already computed, and a changed setting recomputes only what depends on it.
+//! In: the spec and its data files. Out: the keys, and the two stores.
 //!
 //! - Datasets are keyed but not stored: the paper's 203 MB generate in 0.26 s, while an
 //!   fsynced write of them takes 1 s and reading them back would save at most 0.1 s.
 //!   The points of a sweep that share a dataset share it in memory, and a run whose
 //!   models are all stored generates none.
-//! - Models live in `models/` ([`models::ModelStore`]), with their
-//!   checkpoints while they train.
+//! - Models live in `models/` ([`ModelStore`]), with their checkpoints while they
+//!   train.
 //! - Monte Carlo blocks (one estimator on one DVL, every run) live in `monte_carlo/`
-//!   as Parquet files of their per-run rows.
+//!   ([`BlockStore`]) as Parquet files of their per-run rows.
 
 pub mod blocks;
 pub mod models;
