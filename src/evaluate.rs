@@ -97,112 +97,174 @@ pub fn run_block(
     entries: &[DvlEstimator],
     progress: &ProgressBar,
 ) -> Vec<Vec<RunRow>> {
-    let geometry = BeamGeometry::janus_x(spec.beam_pitch_deg);
-    let runs = spec.calibration.monte_carlo_runs;
-    let calibration = &trajectories[spec.calibration.trajectory];
-    let windows = &spec.calibration.window_sizes;
-    let seconds = |samples: usize| samples as f64 / spec.sample_rate_hz;
-    let measure = |run: usize, trajectory: &Trajectory| {
+    let block = Block {
+        spec,
+        trajectories,
+        dvl,
+        entries,
+        geometry: BeamGeometry::janus_x(spec.beam_pitch_deg),
+        progress,
+    };
+    let calibrated = block.calibrate_runs();
+    let t_conv = block.t_conv(&calibrated);
+    let evaluated = block.evaluate_runs(&calibrated, &t_conv);
+    (0..entries.len())
+        .map(|e| block.entry_rows(e, &calibrated, &evaluated, t_conv[e]))
+        .collect()
+}
+
+/// Calibration results: [run][entry][window] → (rmse, terms).
+type Calibrated = Vec<Vec<Vec<(f64, Correction)>>>;
+
+/// Evaluation results with each run's T_conv terms: [run][trajectory][entry] → rmse.
+type Evaluated = Vec<Vec<Vec<f64>>>;
+
+/// What every stage of [`run_block`] reads: the spec, the DVL and its estimators.
+struct Block<'a> {
+    spec: &'a Spec,
+    trajectories: &'a [Trajectory],
+    dvl: &'a Dvl,
+    entries: &'a [DvlEstimator],
+    geometry: BeamGeometry,
+    progress: &'a ProgressBar,
+}
+
+impl Block<'_> {
+    /// The calibration trajectory.
+    fn calibration(&self) -> &Trajectory {
+        &self.trajectories[self.spec.calibration.trajectory]
+    }
+
+    /// `samples` at the spec's sample rate, in seconds.
+    fn seconds(&self, samples: usize) -> f64 {
+        samples as f64 / self.spec.sample_rate_hz
+    }
+
+    /// The DVL's and GNSS's measurements of `trajectory` in Monte Carlo run `run`.
+    fn measure(&self, run: usize, trajectory: &Trajectory) -> Measurements {
         let mut rng = task_rng(
-            spec.seed,
-            &[&"monte_carlo", &dvl.name, &run, &trajectory.name],
+            self.spec.seed,
+            &[&"monte_carlo", &self.dvl.name, &run, &trajectory.name],
         );
         measure_trajectory(
-            &geometry,
+            &self.geometry,
             &trajectory.ground_truth,
-            &dvl.errors,
-            spec.gnss_noise_m_s,
+            &self.dvl.errors,
+            self.spec.gnss_noise_m_s,
             &mut rng,
         )
-    };
+    }
 
-    // Calibration: [run][entry][window] → (rmse, terms).
-    let calibrated: Vec<Vec<Vec<(f64, Correction)>>> = (0..runs)
-        .into_par_iter()
-        .map(|run| {
-            let measured = measure(run, calibration);
-            let per_entry = entries
-                .iter()
-                .map(|entry| {
-                    windows
-                        .iter()
-                        .map(|&w| calibrate(entry, &measured, &calibration.ground_truth, w))
-                        .collect()
-                })
-                .collect();
-            progress.inc(1);
-            per_entry
-        })
-        .collect();
-    let t_conv: Vec<usize> = (0..entries.len())
-        .map(|e| {
-            let means: Vec<f64> = (0..windows.len())
-                .map(|w| mean_std(calibrated.iter().map(|run| run[e][w].0)).0)
-                .collect();
-            t_conv_index(&means)
-        })
-        .collect();
+    /// Every entry calibrated on every window, in every run; `progress` advances once
+    /// a run.
+    fn calibrate_runs(&self) -> Calibrated {
+        let calibration = self.calibration();
+        let windows = &self.spec.calibration.window_sizes;
+        (0..self.spec.calibration.monte_carlo_runs)
+            .into_par_iter()
+            .map(|run| {
+                let measured = self.measure(run, calibration);
+                let per_entry = self
+                    .entries
+                    .iter()
+                    .map(|entry| {
+                        windows
+                            .iter()
+                            .map(|&w| calibrate(entry, &measured, &calibration.ground_truth, w))
+                            .collect()
+                    })
+                    .collect();
+                self.progress.inc(1);
+                per_entry
+            })
+            .collect()
+    }
 
-    // Evaluation with each run's T_conv terms: [run][trajectory][entry] → rmse.
-    let evaluated: Vec<Vec<Vec<f64>>> = (0..runs)
-        .into_par_iter()
-        .map(|run| {
-            let per_trajectory = spec
-                .evaluation
-                .iter()
-                .map(|&t| {
-                    let trajectory = &trajectories[t];
-                    let measured = measure(run, trajectory);
-                    (0..entries.len())
-                        .map(|e| {
-                            rmse_cm_s(
-                                &calibrated[run][e][t_conv[e]].1,
-                                &measured.dvl,
-                                &trajectory.ground_truth,
-                            )
-                        })
-                        .collect()
-                })
-                .collect();
-            progress.inc(1);
-            per_trajectory
-        })
-        .collect();
+    /// Each entry's T_conv: the index of the window with the lowest mean RMSE over runs.
+    fn t_conv(&self, calibrated: &Calibrated) -> Vec<usize> {
+        let windows = self.spec.calibration.window_sizes.len();
+        (0..self.entries.len())
+            .map(|e| {
+                let means: Vec<f64> = (0..windows)
+                    .map(|w| mean_std(calibrated.iter().map(|run| run[e][w].0)).0)
+                    .collect();
+                t_conv_index(&means)
+            })
+            .collect()
+    }
 
-    let mut blocks = Vec::with_capacity(entries.len());
-    for (e, entry) in entries.iter().enumerate() {
+    /// Every entry's T_conv terms of each run scored on that run's measurements of every
+    /// evaluation trajectory; `progress` advances once a run.
+    fn evaluate_runs(&self, calibrated: &Calibrated, t_conv: &[usize]) -> Evaluated {
+        (0..self.spec.calibration.monte_carlo_runs)
+            .into_par_iter()
+            .map(|run| {
+                let per_trajectory = self
+                    .spec
+                    .evaluation
+                    .iter()
+                    .map(|&t| {
+                        let trajectory = &self.trajectories[t];
+                        let measured = self.measure(run, trajectory);
+                        (0..self.entries.len())
+                            .map(|e| {
+                                rmse_cm_s(
+                                    &calibrated[run][e][t_conv[e]].1,
+                                    &measured.dvl,
+                                    &trajectory.ground_truth,
+                                )
+                            })
+                            .collect()
+                    })
+                    .collect();
+                self.progress.inc(1);
+                per_trajectory
+            })
+            .collect()
+    }
+
+    /// Entry `e`'s rows, calibration (run, window) then evaluation (run, trajectory) at
+    /// its T_conv window `t_conv`.
+    fn entry_rows(
+        &self,
+        e: usize,
+        calibrated: &Calibrated,
+        evaluated: &Evaluated,
+        t_conv: usize,
+    ) -> Vec<RunRow> {
+        let entry = &self.entries[e];
+        let windows = &self.spec.calibration.window_sizes;
         let mut rows = Vec::new();
         for (run, per_entry) in calibrated.iter().enumerate() {
             for (&w, &(rmse_cm_s, correction)) in windows.iter().zip(&per_entry[e]) {
                 rows.push(row(
                     run,
-                    dvl,
+                    self.dvl,
                     entry,
                     Phase::Calibration,
-                    seconds(w),
-                    &calibration.name,
+                    self.seconds(w),
+                    &self.calibration().name,
                     rmse_cm_s,
                     correction,
                 ));
             }
         }
         for (run, per_trajectory) in evaluated.iter().enumerate() {
-            for (i, &t) in spec.evaluation.iter().enumerate() {
+            for (i, &t) in self.spec.evaluation.iter().enumerate() {
                 rows.push(row(
                     run,
-                    dvl,
+                    self.dvl,
                     entry,
                     Phase::Evaluation,
-                    seconds(windows[t_conv[e]]),
-                    &trajectories[t].name,
+                    self.seconds(windows[t_conv]),
+                    &self.trajectories[t].name,
                     per_trajectory[i][e],
-                    calibrated[run][e][t_conv[e]].1,
+                    calibrated[run][e][t_conv].1,
                 ));
             }
         }
-        blocks.push(rows);
+        rows
     }
-    blocks
 }
 
 /// The index of T_conv among the windows: the lowest mean RMSE, the first of equals.

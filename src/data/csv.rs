@@ -65,33 +65,10 @@ fn found_list(found: &[String]) -> String {
 
 /// The velocity samples of `path`, one `[x, y, z]` per row, from `columns` (x, y, z).
 pub fn read_velocities(path: &Path, columns: &[String; 3]) -> Result<Vec<Vec3>, CsvError> {
-    let bytes = std::fs::read(path).map_err(|source| match source.kind() {
-        std::io::ErrorKind::NotFound => CsvError::Missing {
-            path: path.to_path_buf(),
-        },
-        _ => CsvError::Read {
-            path: path.to_path_buf(),
-            error: source.into(),
-        },
-    })?;
+    let bytes = read_bytes(path)?;
     let read_error = |error| CsvError::Read {
         path: path.to_path_buf(),
         error,
-    };
-    // A record's position starts at the line ends the reader skipped before it: the
-    // `\n` of the previous line's `\r\n`, then those of blank lines. Returns the
-    // record's line and, when blank lines precede it, the first of them.
-    let lines_of = |position: &::csv::Position| {
-        let start = position.byte() as usize;
-        let newlines = bytes[start..]
-            .iter()
-            .take_while(|b| matches!(b, b'\n' | b'\r'))
-            .filter(|b| **b == b'\n')
-            .count() as u64;
-        let crlf_end =
-            u64::from(start > 0 && bytes[start - 1] == b'\r' && bytes.get(start) == Some(&b'\n'));
-        let first_blank = (newlines > crlf_end).then_some(position.line() + crlf_end);
-        (position.line() + newlines, first_blank)
     };
     let mut reader = ::csv::ReaderBuilder::new()
         .flexible(true)
@@ -103,6 +80,48 @@ pub fn read_velocities(path: &Path, columns: &[String; 3]) -> Result<Vec<Vec3>, 
         .iter()
         .map(String::from)
         .collect();
+    let positions = column_positions(path, &header, columns)?;
+    let mut samples = Vec::new();
+    for record in reader.records() {
+        let record = record.map_err(read_error)?;
+        let (line, first_blank) = record
+            .position()
+            .map_or((0, None), |position| record_lines(&bytes, position));
+        if let Some(line) = first_blank {
+            return Err(CsvError::BlankLine {
+                path: path.to_path_buf(),
+                line,
+            });
+        }
+        samples.push(read_sample(path, line, &header, &positions, &record)?);
+    }
+    if samples.is_empty() {
+        return Err(CsvError::NoRows {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(samples)
+}
+
+/// The bytes of `path`; a missing file is [`CsvError::Missing`].
+fn read_bytes(path: &Path) -> Result<Vec<u8>, CsvError> {
+    std::fs::read(path).map_err(|source| match source.kind() {
+        std::io::ErrorKind::NotFound => CsvError::Missing {
+            path: path.to_path_buf(),
+        },
+        _ => CsvError::Read {
+            path: path.to_path_buf(),
+            error: source.into(),
+        },
+    })
+}
+
+/// The index in `header` of each of `columns`, each of which must be there exactly once.
+fn column_positions(
+    path: &Path,
+    header: &[String],
+    columns: &[String; 3],
+) -> Result<[usize; 3], CsvError> {
     let mut positions = [0; 3];
     for (position, column) in positions.iter_mut().zip(columns) {
         let mut found = header
@@ -121,61 +140,73 @@ pub fn read_velocities(path: &Path, columns: &[String; 3]) -> Result<Vec<Vec3>, 
                 return Err(CsvError::MissingColumn {
                     path: path.to_path_buf(),
                     column: column.clone(),
-                    found: header.clone(),
+                    found: header.to_vec(),
                 });
             }
         };
     }
-    let mut samples = Vec::new();
-    for record in reader.records() {
-        let record = record.map_err(read_error)?;
-        let (line, first_blank) = record.position().map_or((0, None), lines_of);
-        if let Some(line) = first_blank {
-            return Err(CsvError::BlankLine {
-                path: path.to_path_buf(),
-                line,
-            });
-        }
-        let fault = |index: usize, problem| CsvError::Field {
-            path: path.to_path_buf(),
-            line,
-            column: header
-                .get(index)
-                .cloned()
-                .unwrap_or_else(|| format!("field {}", index + 1)),
-            problem,
-        };
-        let (fields, width) = (record.len(), header.len());
-        if fields < width {
-            return Err(fault(
+    Ok(positions)
+}
+
+/// A record's line in `bytes` and, when blank lines precede it, the first of them.
+///
+/// A record's position starts at the line ends the reader skipped before it: the `\n`
+/// of the previous line's `\r\n`, then those of blank lines.
+fn record_lines(bytes: &[u8], position: &::csv::Position) -> (u64, Option<u64>) {
+    let start = position.byte() as usize;
+    let newlines = bytes[start..]
+        .iter()
+        .take_while(|b| matches!(b, b'\n' | b'\r'))
+        .filter(|b| **b == b'\n')
+        .count() as u64;
+    let crlf_end =
+        u64::from(start > 0 && bytes[start - 1] == b'\r' && bytes.get(start) == Some(&b'\n'));
+    let first_blank = (newlines > crlf_end).then_some(position.line() + crlf_end);
+    (position.line() + newlines, first_blank)
+}
+
+/// The sample of `record`, on `line`, from the fields at `positions`; the record must
+/// be as wide as `header`.
+fn read_sample(
+    path: &Path,
+    line: u64,
+    header: &[String],
+    positions: &[usize; 3],
+    record: &::csv::StringRecord,
+) -> Result<Vec3, CsvError> {
+    let fault = |index: usize, problem| CsvError::Field {
+        path: path.to_path_buf(),
+        line,
+        column: header
+            .get(index)
+            .cloned()
+            .unwrap_or_else(|| format!("field {}", index + 1)),
+        problem,
+    };
+    let (fields, width) = (record.len(), header.len());
+    if fields < width {
+        return Err(fault(
+            fields,
+            FieldProblem::Missing {
                 fields,
-                FieldProblem::Missing {
-                    fields,
-                    header: width,
-                },
-            ));
-        }
-        if fields > width {
-            return Err(fault(
-                width,
-                FieldProblem::Extra {
-                    fields,
-                    header: width,
-                },
-            ));
-        }
-        let mut sample = [0.0; 3];
-        for (value, &index) in sample.iter_mut().zip(&positions) {
-            *value = parse(&record[index]).map_err(|problem| fault(index, problem))?;
-        }
-        samples.push(sample);
+                header: width,
+            },
+        ));
     }
-    if samples.is_empty() {
-        return Err(CsvError::NoRows {
-            path: path.to_path_buf(),
-        });
+    if fields > width {
+        return Err(fault(
+            width,
+            FieldProblem::Extra {
+                fields,
+                header: width,
+            },
+        ));
     }
-    Ok(samples)
+    let mut sample = [0.0; 3];
+    for (value, &index) in sample.iter_mut().zip(positions) {
+        *value = parse(&record[index]).map_err(|problem| fault(index, problem))?;
+    }
+    Ok(sample)
 }
 
 /// One field as a finite number.
