@@ -5,11 +5,9 @@
 //! from) and the key.
 
 use super::file::SweepFile;
-use super::toml_file::{SpecError, SpecErrors, Step, line_of, span_of, steps};
+use super::toml_file::{SpecError, SpecErrors, Step, TomlText, deserialize, steps};
 use super::{Spec, SpecFile};
 use std::path::{Path, PathBuf};
-use toml::Spanned;
-use toml::de::{DeTable, DeValue};
 
 /// A spec's points: the spec itself, or one per point of its `[sweep]`.
 #[derive(Debug, Clone)]
@@ -43,36 +41,39 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Spec, SpecErrors> {
 /// Reads, overrides, deserializes and checks the spec at `path`, and every point of
 /// its `[sweep]`.
 pub fn load_experiment(path: &Path, overrides: &[String]) -> Result<Experiment, SpecErrors> {
-    let shown = path.display().to_string();
-    let fail = |message: String| {
-        SpecErrors(vec![SpecError {
-            location: shown.clone(),
-            key: String::new(),
-            message,
-        }])
-    };
-    let text =
-        std::fs::read_to_string(path).map_err(|e| fail(format!("cannot read the spec: {e}")))?;
-    let spans = DeTable::parse(&text).map_err(|e| {
-        let location = match e.span() {
-            Some(span) => format!("{shown}:{}", line_of(&text, span.start)),
-            None => shown.clone(),
-        };
-        SpecErrors(vec![SpecError {
-            location,
-            key: String::new(),
-            message: e.message().trim().to_string(),
-        }])
-    })?;
+    let text = TomlText::read(path, "cannot read the spec")?;
+    text.check_syntax()?;
     let mut table: toml::Table =
-        toml::from_str(&text).map_err(|e| fail(e.message().to_string()))?;
+        toml::from_str(text.text()).map_err(|e| text.fault_of_file(e.message()))?;
+    let assigned = apply_overrides(&mut table, overrides)?;
+    let source = Source {
+        text,
+        folder: spec_folder(path),
+    };
+    match table.remove("sweep") {
+        None => {
+            let spec = source.check(table, &assigned)?;
+            Ok(Experiment {
+                name: spec.name.clone(),
+                swept: Vec::new(),
+                points: vec![Point {
+                    values: Vec::new(),
+                    spec,
+                }],
+            })
+        }
+        Some(sweep) => load_sweep(&source, table, sweep, &assigned),
+    }
+}
 
-    // (key, where its value came from), latest last.
-    let mut applied: Vec<(String, String)> = Vec::new();
+/// Applies every `--set KEY=VALUE` to `table`; the keys set, or a fault per assignment
+/// that failed.
+fn apply_overrides(table: &mut toml::Table, overrides: &[String]) -> Result<Assigned, SpecErrors> {
+    let mut assigned = Assigned::default();
     let mut errors = Vec::new();
     for assignment in overrides {
-        match apply_override(&mut table, assignment) {
-            Ok(key) => applied.push((key, format!("--set {assignment}"))),
+        match apply_override(table, assignment) {
+            Ok(key) => assigned.0.push((key, format!("--set {assignment}"))),
             Err(message) => errors.push(SpecError {
                 location: format!("--set {assignment}"),
                 key: String::new(),
@@ -83,83 +84,128 @@ pub fn load_experiment(path: &Path, overrides: &[String]) -> Result<Experiment, 
     if !errors.is_empty() {
         return Err(SpecErrors(errors));
     }
-    let spec_dir = path
+    Ok(assigned)
+}
+
+/// The folder the relative paths of the spec at `path` start from, absolute if it can be.
+fn spec_folder(path: &Path) -> PathBuf {
+    let folder = path
         .parent()
         .map(Path::to_path_buf)
         .unwrap_or_else(|| PathBuf::from("."));
-    let spec_dir = if spec_dir.as_os_str().is_empty() {
+    let folder = if folder.as_os_str().is_empty() {
         PathBuf::from(".")
     } else {
-        spec_dir
+        folder
     };
-    let spec_dir = std::path::absolute(&spec_dir).unwrap_or(spec_dir);
-    let locate = |applied: &[(String, String)], key: String, message: String| {
-        let overridden = applied.iter().rev().find(|(set, _)| {
-            key == *set
-                || key.starts_with(&format!("{set}."))
-                || key.starts_with(&format!("{set}["))
-        });
-        let location = match overridden {
-            Some((_, location)) => location.clone(),
-            None => format!("{shown}:{}", line_of(&text, span_of(&spans, &key))),
-        };
-        SpecError {
-            location,
-            key,
-            message,
+    std::path::absolute(&folder).unwrap_or(folder)
+}
+
+/// Keys whose value does not come from the spec's own line, each with where it came
+/// from (`--set KEY=VALUE`, or a sweep value's line and point), latest last.
+#[derive(Debug, Clone, Default)]
+struct Assigned(Vec<(String, String)>);
+
+impl Assigned {
+    /// Where the value at `key` came from, when it or a table above it was assigned.
+    fn origin(&self, key: &str) -> Option<&str> {
+        self.0
+            .iter()
+            .rev()
+            .find(|(set, _)| {
+                key == *set
+                    || key.starts_with(&format!("{set}."))
+                    || key.starts_with(&format!("{set}["))
+            })
+            .map(|(_, location)| location.as_str())
+    }
+}
+
+/// The spec's text and the folder its relative paths start from.
+struct Source {
+    text: TomlText,
+    folder: PathBuf,
+}
+
+impl Source {
+    /// A fault at `key`, placed where its value came from.
+    fn locate(&self, assigned: &Assigned, key: String, message: String) -> SpecError {
+        match assigned.origin(&key) {
+            Some(location) => SpecError {
+                location: location.to_string(),
+                key,
+                message,
+            },
+            None => self.text.fault(&key, message),
         }
-    };
-    let check = |table: toml::Table, applied: &[(String, String)]| -> Result<Spec, SpecErrors> {
-        let file: SpecFile =
-            serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
-                let key = e.path().to_string();
-                let key = if key == "." { String::new() } else { key };
-                SpecErrors(vec![locate(
-                    applied,
-                    key,
-                    e.into_inner().message().to_string(),
-                )])
-            })?;
-        file.check(&spec_dir).map_err(|faults| {
+    }
+
+    /// Deserializes and checks `table`, each fault placed where its value came from.
+    fn check(&self, table: toml::Table, assigned: &Assigned) -> Result<Spec, SpecErrors> {
+        let file: SpecFile = deserialize(toml::Value::Table(table))
+            .map_err(|(key, message)| self.locate(assigned, key, message))?;
+        file.check(&self.folder).map_err(|faults| {
             SpecErrors(
                 faults
                     .into_iter()
-                    .map(|(key, message)| locate(applied, key, message))
+                    .map(|(key, message)| self.locate(assigned, key, message))
                     .collect(),
             )
         })
-    };
+    }
+}
 
-    let Some(sweep) = table.remove("sweep") else {
-        let spec = check(table, &applied)?;
-        return Ok(Experiment {
-            name: spec.name.clone(),
-            swept: Vec::new(),
-            points: vec![Point {
-                values: Vec::new(),
-                spec,
-            }],
-        });
-    };
+/// Every chosen point of `sweep` over `table`, each checked; the faults of all points,
+/// each once.
+fn load_sweep(
+    source: &Source,
+    table: toml::Table,
+    sweep: toml::Value,
+    assigned: &Assigned,
+) -> Result<Experiment, SpecErrors> {
     let sweep: SweepFile = serde_path_to_error::deserialize(sweep).map_err(|e| {
-        SpecErrors(vec![locate(
-            &applied,
+        source.locate(
+            assigned,
             format!("sweep.{}", e.path()),
             e.into_inner().message().to_string(),
-        )])
+        )
     })?;
-    let axes = sweep_axes(&sweep.values, &spans, &text, &shown)?;
-    let sizes: Vec<usize> = axes.iter().map(|a| a.values.len()).collect();
-    let total: usize = sizes.iter().product();
-    let chosen: Vec<usize> = match sweep.sample {
-        None => (0..total).collect(),
-        Some(n) if n == 0 || n > total => {
-            return Err(SpecErrors(vec![locate(
-                &applied,
-                "sweep.sample".into(),
-                format!("{n} points: choose between 1 and the grid's {total}"),
-            )]));
-        }
+    let axes = sweep_axes(&sweep.values, &source.text)?;
+    let chosen = chosen_points(&sweep, &axes, &table)
+        .map_err(|message| source.locate(assigned, "sweep.sample".into(), message))?;
+    let name = table
+        .get("name")
+        .and_then(|n| n.as_str())
+        .unwrap_or_default()
+        .to_string();
+    let mut points = SweepPoints::default();
+    for index in chosen {
+        let picks = picks_at(index, &axes);
+        points.add(source, &table, assigned, &axes, &picks, &name);
+    }
+    if !points.errors.is_empty() {
+        return Err(SpecErrors(points.errors));
+    }
+    Ok(Experiment {
+        name,
+        swept: axes.into_iter().map(|a| a.key).collect(),
+        points: points.points,
+    })
+}
+
+/// The grid indices a sweep runs, in grid order: all of them, or `sample` of them drawn
+/// from `sample_seed` (the spec's `seed` when absent).
+fn chosen_points(
+    sweep: &SweepFile,
+    axes: &[Axis],
+    table: &toml::Table,
+) -> Result<Vec<usize>, String> {
+    let total: usize = axes.iter().map(|a| a.values.len()).product();
+    match sweep.sample {
+        None => Ok((0..total).collect()),
+        Some(n) if n == 0 || n > total => Err(format!(
+            "{n} points: choose between 1 and the grid's {total}"
+        )),
         Some(n) => {
             let seed = sweep
                 .sample_seed
@@ -173,82 +219,107 @@ pub fn load_experiment(path: &Path, overrides: &[String]) -> Result<Experiment, 
             let mut rng = crate::rng::task_rng(seed, &[&"sweep"]);
             let mut chosen = rand::seq::index::sample(&mut rng, total, n).into_vec();
             chosen.sort_unstable();
-            chosen
+            Ok(chosen)
         }
-    };
+    }
+}
 
-    let name = table
-        .get("name")
-        .and_then(|n| n.as_str())
-        .unwrap_or_default()
-        .to_string();
-    let mut points = Vec::new();
-    let mut errors: Vec<SpecError> = Vec::new();
-    let mut names: Vec<String> = Vec::new();
-    for index in chosen {
-        // Mixed radix, the first key outermost.
-        let mut rest = index;
-        let mut picks = vec![0; axes.len()];
-        for (axis, size) in sizes.iter().enumerate().rev() {
-            picks[axis] = rest % size;
-            rest /= size;
-        }
+/// Which value of each axis grid point `index` takes: mixed radix, the first axis
+/// outermost.
+fn picks_at(index: usize, axes: &[Axis]) -> Vec<usize> {
+    let mut rest = index;
+    let mut picks = vec![0; axes.len()];
+    for (axis, size) in axes.iter().map(|a| a.values.len()).enumerate().rev() {
+        picks[axis] = rest % size;
+        rest /= size;
+    }
+    picks
+}
+
+/// A sweep's points as they are checked: the good ones with their names, and the
+/// faults of all, each once.
+#[derive(Default)]
+struct SweepPoints {
+    points: Vec<Point>,
+    names: Vec<String>,
+    errors: Vec<SpecError>,
+}
+
+impl SweepPoints {
+    /// Checks the point of `table` that takes value `picks[i]` of axis `i`, keeping
+    /// the point or its faults.
+    fn add(
+        &mut self,
+        source: &Source,
+        table: &toml::Table,
+        assigned: &Assigned,
+        axes: &[Axis],
+        picks: &[usize],
+        name: &str,
+    ) {
         let values: Vec<toml::Value> = axes
             .iter()
-            .zip(&picks)
+            .zip(picks)
             .map(|(axis, &pick)| axis.values[pick].clone())
             .collect();
-        let point_name = point_name(&axes, &picks);
-        let mut point_table = table.clone();
-        let mut point_applied = applied.clone();
-        for (axis, value) in axes.iter().zip(&values) {
-            let path = steps(&axis.key).expect("sweep keys were checked");
-            let mut root = toml::Value::Table(std::mem::take(&mut point_table));
-            let placed = set_at(&mut root, &path, value.clone());
-            if let toml::Value::Table(t) = root {
-                point_table = t;
+        let point_name = point_name(axes, picks);
+        let (mut point_table, point_assigned) =
+            self.place(source, table, assigned, axes, &values, &point_name);
+        point_table.insert("name".into(), format!("{name}/{point_name}").into());
+        match source.check(point_table, &point_assigned) {
+            Ok(spec) => {
+                if self.names.contains(&point_name) {
+                    self.errors.push(SpecError {
+                        location: source.text.shown().to_string(),
+                        key: "sweep.values".into(),
+                        message: format!("two points are both named {point_name:?}: make the values differ as text"),
+                    });
+                }
+                self.names.push(point_name);
+                self.points.push(Point { values, spec });
             }
-            let location = format!("{shown}:{} (sweep point {point_name})", axis.line);
+            Err(SpecErrors(faults)) => {
+                for fault in faults {
+                    if !self.errors.contains(&fault) {
+                        self.errors.push(fault);
+                    }
+                }
+            }
+        }
+    }
+
+    /// `table` with each axis's key set to the point's value, and `assigned` with each
+    /// key set placed on its axis's line; a key that cannot be set is a fault.
+    fn place(
+        &mut self,
+        source: &Source,
+        table: &toml::Table,
+        assigned: &Assigned,
+        axes: &[Axis],
+        values: &[toml::Value],
+        point_name: &str,
+    ) -> (toml::Table, Assigned) {
+        let mut point_table = table.clone();
+        let mut point_assigned = assigned.clone();
+        for (axis, value) in axes.iter().zip(values) {
+            let path = steps(&axis.key).expect("sweep keys were checked");
+            let placed = set_in(&mut point_table, &path, value.clone());
+            let location = format!(
+                "{} (sweep point {point_name})",
+                source.text.at_line(axis.line)
+            );
             if let Err(message) = placed {
-                errors.push(SpecError {
+                self.errors.push(SpecError {
                     location,
                     key: axis.key.clone(),
                     message,
                 });
                 continue;
             }
-            point_applied.push((axis.key.clone(), location));
+            point_assigned.0.push((axis.key.clone(), location));
         }
-        point_table.insert("name".into(), format!("{name}/{point_name}").into());
-        match check(point_table, &point_applied) {
-            Ok(spec) => {
-                if names.contains(&point_name) {
-                    errors.push(SpecError {
-                        location: shown.clone(),
-                        key: "sweep.values".into(),
-                        message: format!("two points are both named {point_name:?}: make the values differ as text"),
-                    });
-                }
-                names.push(point_name);
-                points.push(Point { values, spec });
-            }
-            Err(SpecErrors(faults)) => {
-                for fault in faults {
-                    if !errors.contains(&fault) {
-                        errors.push(fault);
-                    }
-                }
-            }
-        }
+        (point_table, point_assigned)
     }
-    if !errors.is_empty() {
-        return Err(SpecErrors(errors));
-    }
-    Ok(Experiment {
-        name,
-        swept: axes.into_iter().map(|a| a.key).collect(),
-        points,
-    })
 }
 
 /// One swept key, its values and the line they are written on.
@@ -258,71 +329,15 @@ struct Axis {
     line: usize,
 }
 
+/// A fault in `[sweep.values]`: the key below it, its line, and the message.
+type ValuesFault = (String, usize, String);
+
 /// The lists of `[sweep.values]`, found at any depth: `"model.conv_channels" = [..]`
 /// and `model.conv_channels = [..]` are the same key.
-fn sweep_axes(
-    values: &toml::Table,
-    spans: &Spanned<DeTable<'_>>,
-    text: &str,
-    shown: &str,
-) -> Result<Vec<Axis>, SpecErrors> {
-    fn walk(
-        table: &toml::Table,
-        spanned: Option<&DeTable<'_>>,
-        prefix: &str,
-        text: &str,
-        axes: &mut Vec<Axis>,
-        faults: &mut Vec<(String, usize, String)>,
-    ) {
-        for (name, value) in table {
-            let key = if prefix.is_empty() {
-                name.clone()
-            } else {
-                format!("{prefix}.{name}")
-            };
-            let entry = spanned.and_then(|t| t.iter().find(|(n, _)| n.get_ref() == name));
-            let line = entry.map_or(1, |(n, _)| line_of(text, n.span().start));
-            match value {
-                toml::Value::Array(list) if list.is_empty() => {
-                    faults.push((key, line, "is empty: list at least one value".into()))
-                }
-                toml::Value::Array(list) => match steps(&key) {
-                    Ok(_) => axes.push(Axis {
-                        key,
-                        values: list.clone(),
-                        line,
-                    }),
-                    Err(message) => faults.push((key, line, message)),
-                },
-                toml::Value::Table(inner) => {
-                    let inner_spans = entry.and_then(|(_, v)| match v.get_ref() {
-                        DeValue::Table(t) => Some(t),
-                        _ => None,
-                    });
-                    walk(inner, inner_spans, &key, text, axes, faults)
-                }
-                _ => faults.push((
-                    key,
-                    line,
-                    "expected a list of the values to sweep, such as [1e-4, 1e-3]".into(),
-                )),
-            }
-        }
-    }
-    let values_spans = ["sweep", "values"]
-        .iter()
-        .try_fold(spans.get_ref(), |table, name| {
-            table
-                .iter()
-                .find(|(n, _)| n.get_ref() == name)
-                .and_then(|(_, v)| match v.get_ref() {
-                    DeValue::Table(t) => Some(t),
-                    _ => None,
-                })
-        });
+fn sweep_axes(values: &toml::Table, text: &TomlText) -> Result<Vec<Axis>, SpecErrors> {
     let mut axes = Vec::new();
     let mut faults = Vec::new();
-    walk(values, values_spans, "", text, &mut axes, &mut faults);
+    collect_axes(values, &[], text, &mut axes, &mut faults);
     if axes.is_empty() && faults.is_empty() {
         faults.push((
             String::new(),
@@ -338,7 +353,7 @@ fn sweep_axes(
         faults
             .into_iter()
             .map(|(key, line, message)| SpecError {
-                location: format!("{shown}:{line}"),
+                location: text.at_line(line),
                 key: if key.is_empty() {
                     "sweep.values".into()
                 } else {
@@ -348,6 +363,43 @@ fn sweep_axes(
             })
             .collect(),
     ))
+}
+
+/// Adds the lists in `table`, which is at `names` below `[sweep.values]`, to `axes`;
+/// what is neither a list nor a table to `faults`.
+fn collect_axes<'a>(
+    table: &'a toml::Table,
+    names: &[&'a str],
+    text: &TomlText,
+    axes: &mut Vec<Axis>,
+    faults: &mut Vec<ValuesFault>,
+) {
+    for (name, value) in table {
+        let names = [names, &[name.as_str()]].concat();
+        let key = names.join(".");
+        let line = text
+            .written_line(&[&["sweep", "values"], &names[..]].concat())
+            .unwrap_or(1);
+        match value {
+            toml::Value::Array(list) if list.is_empty() => {
+                faults.push((key, line, "is empty: list at least one value".into()))
+            }
+            toml::Value::Array(list) => match steps(&key) {
+                Ok(_) => axes.push(Axis {
+                    key,
+                    values: list.clone(),
+                    line,
+                }),
+                Err(message) => faults.push((key, line, message)),
+            },
+            toml::Value::Table(inner) => collect_axes(inner, &names, text, axes, faults),
+            _ => faults.push((
+                key,
+                line,
+                "expected a list of the values to sweep, such as [1e-4, 1e-3]".into(),
+            )),
+        }
+    }
 }
 
 /// A point's folder name from its values, such as `learning_rate=0.001,conv_channels=8`:
@@ -419,12 +471,7 @@ fn apply_override(table: &mut toml::Table, assignment: &str) -> Result<String, S
         .ok()
         .and_then(|mut t| t.remove("value"))
         .unwrap_or_else(|| toml::Value::String(raw.to_string()));
-    let mut root = toml::Value::Table(std::mem::take(table));
-    let result = set_at(&mut root, &path, value);
-    if let toml::Value::Table(t) = root {
-        *table = t;
-    }
-    result.map(|()| {
+    set_in(table, &path, value).map(|()| {
         let mut canonical = String::new();
         for step in &path {
             match step {
@@ -435,6 +482,16 @@ fn apply_override(table: &mut toml::Table, assignment: &str) -> Result<String, S
         }
         canonical
     })
+}
+
+/// Puts `new` at `path` in `table`, creating missing tables on the way.
+fn set_in(table: &mut toml::Table, path: &[Step<'_>], new: toml::Value) -> Result<(), String> {
+    let mut root = toml::Value::Table(std::mem::take(table));
+    let result = set_at(&mut root, path, new);
+    if let toml::Value::Table(t) = root {
+        *table = t;
+    }
+    result
 }
 
 /// Puts `new` at `path` below `value`, creating missing tables on the way.
@@ -648,18 +705,5 @@ mod tests {
         assert_eq!(table["c"][0]["d"], toml::Value::String("hello".into()));
         assert!(apply_override(&mut table, "c[5].d=1").is_err());
         assert!(apply_override(&mut table, "novalue").is_err());
-    }
-
-    #[test]
-    fn keys_are_found_on_their_lines() {
-        let text = "name = \"x\"\n\n[calibration]\nruns = 3\nwindow_sizes_s = [1, 2]\n\n[[dvl]]\nname = \"a\"\n[[dvl]]\nname = \"b\"\nnoise = 1\n";
-        let spans = DeTable::parse(text).unwrap();
-        assert_eq!(
-            line_of(text, span_of(&spans, "calibration.window_sizes_s")),
-            5
-        );
-        assert_eq!(line_of(text, span_of(&spans, "dvl[1].noise")), 11);
-        // A missing key points at its deepest parent that exists.
-        assert_eq!(line_of(text, span_of(&spans, "calibration.missing")), 3);
     }
 }

@@ -217,341 +217,21 @@ impl SpecFile {
         if !is_folder_name(&name) {
             faults.add("name", format!("{name:?} must be non-empty and use only letters, digits, '-', '_' and '.' (it names the results folder)"));
         }
-
-        // Data.
-        let file::DataFile {
-            sample_rate_hz,
-            ground_truth_window_samples,
-            synthetic,
-            trajectories,
-        } = data;
-        if !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
-            faults.add(
-                "data.sample_rate_hz",
-                format!("{sample_rate_hz} must be a positive number"),
-            );
-        }
-        let rate = if sample_rate_hz > 0.0 {
-            sample_rate_hz
-        } else {
-            1.0
-        };
-        if ground_truth_window_samples == 0 {
-            faults.add("data.ground_truth_window_samples", "0 must be at least 1");
-        }
-        check_synthetic(&synthetic, &mut faults);
-        let mut sources: Vec<TrajectorySource> = Vec::new();
-        if trajectories.is_empty() {
-            faults.add("data.trajectories", "no trajectory is defined");
-        }
-        for (i, trajectory) in trajectories.iter().enumerate() {
-            let key = format!("data.trajectories[{i}]");
-            let file::TrajectoryFile {
-                name,
-                file,
-                samples,
-                columns,
-                synthetic_duration_s,
-            } = trajectory;
-            if sources.iter().any(|s| &s.name == name) {
-                faults.add(format!("{key}.name"), format!("{name:?} is defined twice"));
-            }
-            let origin = match (file, synthetic_duration_s) {
-                (Some(file), None) => {
-                    let path = spec_dir.join(file);
-                    resolved.data.trajectories[i].file = Some(path.clone());
-                    if !path.is_file() {
-                        faults.add(
-                            format!("{key}.file"),
-                            format!(
-                                "{} does not exist{}",
-                                path.display(),
-                                recordings::hint_for(&path)
-                            ),
-                        );
-                    }
-                    if let Some([start, end]) = samples {
-                        if start >= end {
-                            faults.add(
-                                format!("{key}.samples"),
-                                format!("[{start}, {end}] is empty: start must be below end"),
-                            );
-                        }
-                    }
-                    let is_csv = path
-                        .extension()
-                        .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
-                    let format = match (is_csv, columns) {
-                        (true, columns) => {
-                            let columns = columns
-                                .clone()
-                                .unwrap_or_else(|| crate::VELOCITY_COLUMNS.map(String::from));
-                            check_columns(&format!("{key}.columns"), &columns, &mut faults);
-                            resolved.data.trajectories[i].columns = Some(columns.clone());
-                            FileFormat::Csv { columns }
-                        }
-                        (false, Some(_)) => {
-                            faults.add(
-                                format!("{key}.columns"),
-                                format!("is for .csv files; {} is read as .npy", path.display()),
-                            );
-                            FileFormat::Npy
-                        }
-                        (false, None) => FileFormat::Npy,
-                    };
-                    Some(Origin::File {
-                        path,
-                        format,
-                        samples: *samples,
-                    })
-                }
-                (None, Some(duration_s)) => {
-                    if samples.is_some() {
-                        faults.add(format!("{key}.samples"), "is for file trajectories; a synthetic one has synthetic_duration_s only");
-                    }
-                    if columns.is_some() {
-                        faults.add(format!("{key}.columns"), "is for .csv files; a synthetic trajectory has synthetic_duration_s only");
-                    }
-                    match seconds_to_samples(*duration_s, rate) {
-                        Some(samples) if samples > 0 => Some(Origin::Synthetic { samples }),
-                        _ => {
-                            faults.add(
-                                format!("{key}.synthetic_duration_s"),
-                                format!("{duration_s} must be a positive whole number of samples"),
-                            );
-                            None
-                        }
-                    }
-                }
-                (Some(_), Some(_)) => {
-                    faults.add(
-                        format!("{key}.file"),
-                        "give either file (with samples) or synthetic_duration_s, not both",
-                    );
-                    None
-                }
-                (None, None) => {
-                    faults.add(
-                        key.clone(),
-                        "needs either file (with samples) or synthetic_duration_s",
-                    );
-                    None
-                }
-            };
-            sources.push(TrajectorySource {
-                name: name.clone(),
-                origin: origin.unwrap_or(Origin::Synthetic { samples: 0 }),
-            });
-        }
-        let lookup = |key: &str, wanted: &str, faults: &mut Faults| -> Option<usize> {
-            let found = sources.iter().position(|s| s.name == wanted);
-            if found.is_none() {
-                let known: Vec<&str> = sources.iter().map(|s| s.name.as_str()).collect();
-                faults.add(
-                    key,
-                    format!(
-                        "unknown trajectory {wanted:?}; data.trajectories defines {}",
-                        known.join(", ")
-                    ),
-                );
-            }
-            found
-        };
-
-        // Sensors.
-        let file::SensorsFile {
-            beam_pitch_deg,
-            gnss_noise_cm_s,
-        } = sensors;
-        if !(beam_pitch_deg > 0.0 && beam_pitch_deg < 90.0) {
-            faults.add(
-                "sensors.beam_pitch_deg",
-                format!("{beam_pitch_deg} must lie strictly between 0 and 90"),
-            );
-        }
-        non_negative("sensors.gnss_noise_cm_s", gnss_noise_cm_s, &mut faults);
-
-        // Grid.
-        let file::GridFile {
-            scale_pct,
-            bias_cm_s,
-            noise_cm_s,
-        } = grid;
-        let grid = Grid {
-            scale_pct: expand_axis("grid.scale_pct", &scale_pct, &mut faults),
-            bias_cm_s: expand_axis("grid.bias_cm_s", &bias_cm_s, &mut faults),
-            noise_cm_s: expand_axis("grid.noise_cm_s", &noise_cm_s, &mut faults),
-        };
-        for (i, &value) in grid.scale_pct.iter().enumerate() {
-            if value <= -100.0 {
-                faults.add(
-                    format!("grid.scale_pct[{i}]"),
-                    format!("{value} must be above -100 %"),
-                );
-            }
-        }
-        for (i, &value) in grid.noise_cm_s.iter().enumerate() {
-            non_negative(&format!("grid.noise_cm_s[{i}]"), value, &mut faults);
-        }
-
-        // Dataset.
-        let file::DatasetFile {
-            trajectories: dataset_names,
-            window_s,
-            stride_s,
-            validation_fraction,
-            published_windows,
-        } = dataset;
-        let window = positive_samples("dataset.window_s", window_s, rate, &mut faults);
-        let stride = positive_samples("dataset.stride_s", stride_s, rate, &mut faults);
-        if dataset_names.is_empty() {
-            faults.add(
-                "dataset.trajectories",
-                "is empty: name at least one training trajectory",
-            );
-        }
-        let mut dataset_trajectories = Vec::new();
-        for (i, wanted) in dataset_names.iter().enumerate() {
-            let key = format!("dataset.trajectories[{i}]");
-            if let Some(index) = lookup(&key, wanted, &mut faults) {
-                if let (Some(len), Some(window)) = (sources[index].known_len(), window) {
-                    if len < window {
-                        faults.add(
-                            key,
-                            format!(
-                                "{wanted} has {len} samples, fewer than one window of {window_s} s"
-                            ),
-                        );
-                    }
-                }
-                dataset_trajectories.push(index);
-            }
-        }
-        if !(0.0..1.0).contains(&validation_fraction) {
-            faults.add(
-                "dataset.validation_fraction",
-                format!("{validation_fraction} must be at least 0 and below 1"),
-            );
-        }
-
-        // DVLs under test.
-        if dvl.is_empty() {
-            faults.add("dvl", "no DVL under test is defined");
-        }
-        let mut dvls: Vec<Dvl> = Vec::new();
-        for (i, unit) in dvl.iter().enumerate() {
-            let file::DvlFile {
-                name,
-                scale_pct,
-                bias_cm_s,
-                noise_cm_s,
-            } = unit;
-            let key = format!("dvl[{i}]");
-            if dvls.iter().any(|d| &d.name == name) {
-                faults.add(format!("{key}.name"), format!("{name:?} is defined twice"));
-            }
-            if !(scale_pct.is_finite() && *scale_pct > -100.0) {
-                faults.add(
-                    format!("{key}.scale_pct"),
-                    format!("{scale_pct} must be above -100 %"),
-                );
-            }
-            if !bias_cm_s.is_finite() {
-                faults.add(
-                    format!("{key}.bias_cm_s"),
-                    format!("{bias_cm_s} must be a finite number"),
-                );
-            }
-            non_negative(&format!("{key}.noise_cm_s"), *noise_cm_s, &mut faults);
-            dvls.push(Dvl {
-                name: name.clone(),
-                errors: SensorErrors::from_spec_units(*scale_pct, *bias_cm_s, *noise_cm_s),
-            });
-        }
-
-        // Calibration.
-        let file::CalibrationFile {
-            trajectory,
-            window_sizes_s,
-            monte_carlo_runs,
-        } = calibration;
-        let calibration_index = lookup("calibration.trajectory", &trajectory, &mut faults);
-        let segment = calibration_index.and_then(|i| sources[i].known_len());
-        if window_sizes_s.is_empty() {
-            faults.add(
-                "calibration.window_sizes_s",
-                "is empty: give at least one window size",
-            );
-        }
-        let mut window_sizes = Vec::new();
-        for (i, &size_s) in window_sizes_s.iter().enumerate() {
-            let key = format!("calibration.window_sizes_s[{i}]");
-            if let Some(size) = positive_samples(&key, size_s, rate, &mut faults) {
-                match segment {
-                    Some(len) if size >= len => faults.add(
-                        key,
-                        format!("{size_s} s is not shorter than {trajectory} ({} s): no samples would be left to evaluate on", len as f64 / rate),
-                    ),
-                    _ => window_sizes.push(size),
-                }
-            }
-        }
-        if monte_carlo_runs == 0 {
-            faults.add("calibration.monte_carlo_runs", "0 must be at least 1");
-        }
-
-        // Evaluation.
-        if evaluation.trajectories.is_empty() {
-            faults.add(
-                "evaluation.trajectories",
-                "is empty: name at least one test trajectory",
-            );
-        }
-        let evaluation: Vec<usize> = evaluation
-            .trajectories
-            .iter()
-            .enumerate()
-            .filter_map(|(i, wanted)| {
-                lookup(
-                    &format!("evaluation.trajectories[{i}]"),
-                    wanted,
-                    &mut faults,
-                )
-            })
-            .collect();
-
-        // Estimators.
-        let file::EstimatorsFile {
-            kinds,
-            error_models,
-        } = estimators;
-        let kinds = parse_names("estimators.kinds", &kinds, &mut faults);
-        let error_models = parse_names("estimators.error_models", &error_models, &mut faults);
-
+        let data = check_data(data, spec_dir, &mut resolved.data.trajectories, &mut faults);
+        let (rate, sources) = (data.rate, &data.trajectories);
+        let (beam_pitch_deg, gnss_noise_m_s) = check_sensors(sensors, &mut faults);
+        let grid = check_grid(grid, &mut faults);
+        let (dataset, window) = check_dataset(dataset, sources, rate, &mut faults);
+        let dvls = check_dvls(&dvl, &mut faults);
+        let calibration = check_calibration(calibration, sources, rate, &mut faults);
+        let evaluation = check_evaluation(evaluation, sources, &mut faults);
+        let (kinds, error_models) = check_estimators(estimators, &mut faults);
         if kinds.contains(&EstimatorKind::Dcnet) {
-            if let Some(window) = window {
-                for (i, &size) in window_sizes.iter().enumerate() {
-                    if size < window {
-                        faults.add(
-                            format!("calibration.window_sizes_s[{i}]"),
-                            format!("{} s is shorter than one DCNet window (dataset.window_s = {window_s} s)", size as f64 / rate),
-                        );
-                    }
-                }
-            }
+            check_dcnet_windows(window, &calibration.window_sizes, rate, &mut faults);
         }
-
-        // Model and training.
-        let model = check_model(model, window, &mut faults);
+        let model = check_model(model, window.samples, &mut faults);
         let training = check_training(training, &mut faults);
-        let report = check_report(report, spec_dir, &mut resolved, &mut faults);
-        for (i, wanted) in report.velocity_trajectories.iter().enumerate() {
-            lookup(
-                &format!("report.velocity_trajectories[{i}]"),
-                wanted,
-                &mut faults,
-            );
-        }
+        let report = check_report(report, spec_dir, sources, &mut resolved, &mut faults);
 
         if !faults.0.is_empty() {
             return Err(faults.0);
@@ -559,26 +239,16 @@ impl SpecFile {
         Ok(Spec {
             name,
             seed,
-            sample_rate_hz,
-            ground_truth_window_samples,
-            synthetic,
-            trajectories: sources,
+            sample_rate_hz: data.sample_rate_hz,
+            ground_truth_window_samples: data.ground_truth_window_samples,
+            synthetic: data.synthetic,
+            trajectories: data.trajectories,
             beam_pitch_deg,
-            gnss_noise_m_s: gnss_noise_cm_s / 100.0,
+            gnss_noise_m_s,
             grid,
-            dataset: DatasetSpec {
-                trajectories: dataset_trajectories,
-                window_samples: window.unwrap_or_default(),
-                stride_samples: stride.unwrap_or_default(),
-                validation_fraction,
-                published_windows,
-            },
+            dataset,
             dvls,
-            calibration: CalibrationSpec {
-                trajectory: calibration_index.unwrap_or_default(),
-                window_sizes,
-                monte_carlo_runs,
-            },
+            calibration,
             evaluation,
             kinds,
             error_models,
@@ -587,6 +257,492 @@ impl SpecFile {
             report,
             resolved,
         })
+    }
+}
+
+/// The `[data]` section, checked.
+struct Data {
+    sample_rate_hz: f64,
+    /// The rate seconds are counted in samples with: 1 Hz when `sample_rate_hz` is
+    /// not positive, so that the other checks still run.
+    rate: f64,
+    ground_truth_window_samples: usize,
+    synthetic: SyntheticFile,
+    trajectories: Vec<TrajectorySource>,
+}
+
+/// Checks `[data]`: the sample rate, the ground truth's window, the synthetic
+/// generator and every trajectory; `resolved` gets the trajectories' absolute paths.
+fn check_data(
+    data: file::DataFile,
+    spec_dir: &Path,
+    resolved: &mut [file::TrajectoryFile],
+    faults: &mut Faults,
+) -> Data {
+    let file::DataFile {
+        sample_rate_hz,
+        ground_truth_window_samples,
+        synthetic,
+        trajectories,
+    } = data;
+    if !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
+        faults.add(
+            "data.sample_rate_hz",
+            format!("{sample_rate_hz} must be a positive number"),
+        );
+    }
+    let rate = if sample_rate_hz > 0.0 {
+        sample_rate_hz
+    } else {
+        1.0
+    };
+    if ground_truth_window_samples == 0 {
+        faults.add("data.ground_truth_window_samples", "0 must be at least 1");
+    }
+    check_synthetic(&synthetic, faults);
+    let trajectories = check_trajectories(&trajectories, spec_dir, rate, resolved, faults);
+    Data {
+        sample_rate_hz,
+        rate,
+        ground_truth_window_samples,
+        synthetic,
+        trajectories,
+    }
+}
+
+/// Checks `data.trajectories`: at least one, each named once and with one origin.
+fn check_trajectories(
+    trajectories: &[file::TrajectoryFile],
+    spec_dir: &Path,
+    rate: f64,
+    resolved: &mut [file::TrajectoryFile],
+    faults: &mut Faults,
+) -> Vec<TrajectorySource> {
+    let mut sources: Vec<TrajectorySource> = Vec::new();
+    if trajectories.is_empty() {
+        faults.add("data.trajectories", "no trajectory is defined");
+    }
+    for (i, trajectory) in trajectories.iter().enumerate() {
+        let key = format!("data.trajectories[{i}]");
+        let name = &trajectory.name;
+        if sources.iter().any(|s| &s.name == name) {
+            faults.add(format!("{key}.name"), format!("{name:?} is defined twice"));
+        }
+        let origin = check_origin(&key, trajectory, spec_dir, rate, &mut resolved[i], faults);
+        sources.push(TrajectorySource {
+            name: name.clone(),
+            origin: origin.unwrap_or(Origin::Synthetic { samples: 0 }),
+        });
+    }
+    sources
+}
+
+/// Where one trajectory's samples come from: a file, or the synthetic generator (its
+/// name is checked by [`check_trajectories`]).
+fn check_origin(
+    key: &str,
+    trajectory: &file::TrajectoryFile,
+    spec_dir: &Path,
+    rate: f64,
+    resolved: &mut file::TrajectoryFile,
+    faults: &mut Faults,
+) -> Option<Origin> {
+    let file::TrajectoryFile {
+        name: _,
+        file,
+        samples,
+        columns,
+        synthetic_duration_s,
+    } = trajectory;
+    match (file, synthetic_duration_s) {
+        (Some(file), None) => Some(check_file_trajectory(
+            key,
+            spec_dir.join(file),
+            *samples,
+            columns,
+            resolved,
+            faults,
+        )),
+        (None, Some(duration_s)) => {
+            check_synthetic_trajectory(key, *duration_s, samples, columns, rate, faults)
+        }
+        (Some(_), Some(_)) => {
+            faults.add(
+                format!("{key}.file"),
+                "give either file (with samples) or synthetic_duration_s, not both",
+            );
+            None
+        }
+        (None, None) => {
+            faults.add(
+                key,
+                "needs either file (with samples) or synthetic_duration_s",
+            );
+            None
+        }
+    }
+}
+
+/// A trajectory read from the file at `path`: it exists, its sample range is not
+/// empty, and a `.csv` names its columns; `resolved` gets the path and the columns.
+fn check_file_trajectory(
+    key: &str,
+    path: PathBuf,
+    samples: Option<[usize; 2]>,
+    columns: &Option<[String; 3]>,
+    resolved: &mut file::TrajectoryFile,
+    faults: &mut Faults,
+) -> Origin {
+    resolved.file = Some(path.clone());
+    if !path.is_file() {
+        faults.add(
+            format!("{key}.file"),
+            format!(
+                "{} does not exist{}",
+                path.display(),
+                recordings::hint_for(&path)
+            ),
+        );
+    }
+    if let Some([start, end]) = samples {
+        if start >= end {
+            faults.add(
+                format!("{key}.samples"),
+                format!("[{start}, {end}] is empty: start must be below end"),
+            );
+        }
+    }
+    let is_csv = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+    let format = match (is_csv, columns) {
+        (true, columns) => {
+            let columns = columns
+                .clone()
+                .unwrap_or_else(|| crate::VELOCITY_COLUMNS.map(String::from));
+            check_columns(&format!("{key}.columns"), &columns, faults);
+            resolved.columns = Some(columns.clone());
+            FileFormat::Csv { columns }
+        }
+        (false, Some(_)) => {
+            faults.add(
+                format!("{key}.columns"),
+                format!("is for .csv files; {} is read as .npy", path.display()),
+            );
+            FileFormat::Npy
+        }
+        (false, None) => FileFormat::Npy,
+    };
+    Origin::File {
+        path,
+        format,
+        samples,
+    }
+}
+
+/// A synthetic trajectory of `duration_s`: a positive whole number of samples, and no
+/// keys that only a file takes.
+fn check_synthetic_trajectory(
+    key: &str,
+    duration_s: f64,
+    samples: &Option<[usize; 2]>,
+    columns: &Option<[String; 3]>,
+    rate: f64,
+    faults: &mut Faults,
+) -> Option<Origin> {
+    if samples.is_some() {
+        faults.add(
+            format!("{key}.samples"),
+            "is for file trajectories; a synthetic one has synthetic_duration_s only",
+        );
+    }
+    if columns.is_some() {
+        faults.add(
+            format!("{key}.columns"),
+            "is for .csv files; a synthetic trajectory has synthetic_duration_s only",
+        );
+    }
+    match seconds_to_samples(duration_s, rate) {
+        Some(samples) if samples > 0 => Some(Origin::Synthetic { samples }),
+        _ => {
+            faults.add(
+                format!("{key}.synthetic_duration_s"),
+                format!("{duration_s} must be a positive whole number of samples"),
+            );
+            None
+        }
+    }
+}
+
+/// The index of the trajectory named `wanted`; a fault at `key` when none is.
+fn lookup(
+    sources: &[TrajectorySource],
+    key: &str,
+    wanted: &str,
+    faults: &mut Faults,
+) -> Option<usize> {
+    let found = sources.iter().position(|s| s.name == wanted);
+    if found.is_none() {
+        let known: Vec<&str> = sources.iter().map(|s| s.name.as_str()).collect();
+        faults.add(
+            key,
+            format!(
+                "unknown trajectory {wanted:?}; data.trajectories defines {}",
+                known.join(", ")
+            ),
+        );
+    }
+    found
+}
+
+/// Checks `[sensors]`; returns the beam pitch in degrees and the GNSS noise in m/s.
+fn check_sensors(sensors: file::SensorsFile, faults: &mut Faults) -> (f64, f64) {
+    let file::SensorsFile {
+        beam_pitch_deg,
+        gnss_noise_cm_s,
+    } = sensors;
+    if !(beam_pitch_deg > 0.0 && beam_pitch_deg < 90.0) {
+        faults.add(
+            "sensors.beam_pitch_deg",
+            format!("{beam_pitch_deg} must lie strictly between 0 and 90"),
+        );
+    }
+    non_negative("sensors.gnss_noise_cm_s", gnss_noise_cm_s, faults);
+    (beam_pitch_deg, gnss_noise_cm_s / 100.0)
+}
+
+/// Checks `[grid]`: each axis expanded, scales above -100 %, noises not negative.
+fn check_grid(grid: file::GridFile, faults: &mut Faults) -> Grid {
+    let file::GridFile {
+        scale_pct,
+        bias_cm_s,
+        noise_cm_s,
+    } = grid;
+    let grid = Grid {
+        scale_pct: expand_axis("grid.scale_pct", &scale_pct, faults),
+        bias_cm_s: expand_axis("grid.bias_cm_s", &bias_cm_s, faults),
+        noise_cm_s: expand_axis("grid.noise_cm_s", &noise_cm_s, faults),
+    };
+    for (i, &value) in grid.scale_pct.iter().enumerate() {
+        if value <= -100.0 {
+            faults.add(
+                format!("grid.scale_pct[{i}]"),
+                format!("{value} must be above -100 %"),
+            );
+        }
+    }
+    for (i, &value) in grid.noise_cm_s.iter().enumerate() {
+        non_negative(&format!("grid.noise_cm_s[{i}]"), value, faults);
+    }
+    grid
+}
+
+/// DCNet's input window: as written, in seconds, and in samples when that is good.
+#[derive(Clone, Copy)]
+struct Window {
+    seconds: f64,
+    samples: Option<usize>,
+}
+
+/// Checks `[dataset]`: window, stride and validation share, and training trajectories
+/// that each hold one window.
+fn check_dataset(
+    dataset: file::DatasetFile,
+    sources: &[TrajectorySource],
+    rate: f64,
+    faults: &mut Faults,
+) -> (DatasetSpec, Window) {
+    let file::DatasetFile {
+        trajectories: names,
+        window_s,
+        stride_s,
+        validation_fraction,
+        published_windows,
+    } = dataset;
+    let window = positive_samples("dataset.window_s", window_s, rate, faults);
+    let stride = positive_samples("dataset.stride_s", stride_s, rate, faults);
+    if names.is_empty() {
+        faults.add(
+            "dataset.trajectories",
+            "is empty: name at least one training trajectory",
+        );
+    }
+    let mut trajectories = Vec::new();
+    for (i, wanted) in names.iter().enumerate() {
+        let key = format!("dataset.trajectories[{i}]");
+        if let Some(index) = lookup(sources, &key, wanted, faults) {
+            if let (Some(len), Some(window)) = (sources[index].known_len(), window) {
+                if len < window {
+                    faults.add(
+                        key,
+                        format!(
+                            "{wanted} has {len} samples, fewer than one window of {window_s} s"
+                        ),
+                    );
+                }
+            }
+            trajectories.push(index);
+        }
+    }
+    if !(0.0..1.0).contains(&validation_fraction) {
+        faults.add(
+            "dataset.validation_fraction",
+            format!("{validation_fraction} must be at least 0 and below 1"),
+        );
+    }
+    let dataset = DatasetSpec {
+        trajectories,
+        window_samples: window.unwrap_or_default(),
+        stride_samples: stride.unwrap_or_default(),
+        validation_fraction,
+        published_windows,
+    };
+    let window = Window {
+        seconds: window_s,
+        samples: window,
+    };
+    (dataset, window)
+}
+
+/// Checks `[[dvl]]`: at least one, each named once, with error terms in range.
+fn check_dvls(units: &[file::DvlFile], faults: &mut Faults) -> Vec<Dvl> {
+    if units.is_empty() {
+        faults.add("dvl", "no DVL under test is defined");
+    }
+    let mut dvls: Vec<Dvl> = Vec::new();
+    for (i, unit) in units.iter().enumerate() {
+        let file::DvlFile {
+            name,
+            scale_pct,
+            bias_cm_s,
+            noise_cm_s,
+        } = unit;
+        let key = format!("dvl[{i}]");
+        if dvls.iter().any(|d| &d.name == name) {
+            faults.add(format!("{key}.name"), format!("{name:?} is defined twice"));
+        }
+        if !(scale_pct.is_finite() && *scale_pct > -100.0) {
+            faults.add(
+                format!("{key}.scale_pct"),
+                format!("{scale_pct} must be above -100 %"),
+            );
+        }
+        if !bias_cm_s.is_finite() {
+            faults.add(
+                format!("{key}.bias_cm_s"),
+                format!("{bias_cm_s} must be a finite number"),
+            );
+        }
+        non_negative(&format!("{key}.noise_cm_s"), *noise_cm_s, faults);
+        dvls.push(Dvl {
+            name: name.clone(),
+            errors: SensorErrors::from_spec_units(*scale_pct, *bias_cm_s, *noise_cm_s),
+        });
+    }
+    dvls
+}
+
+/// Checks `[calibration]`: its trajectory, window sizes that each leave samples to
+/// evaluate on, and at least one Monte Carlo run.
+fn check_calibration(
+    calibration: file::CalibrationFile,
+    sources: &[TrajectorySource],
+    rate: f64,
+    faults: &mut Faults,
+) -> CalibrationSpec {
+    let file::CalibrationFile {
+        trajectory,
+        window_sizes_s,
+        monte_carlo_runs,
+    } = calibration;
+    let index = lookup(sources, "calibration.trajectory", &trajectory, faults);
+    let segment = index.and_then(|i| sources[i].known_len());
+    if window_sizes_s.is_empty() {
+        faults.add(
+            "calibration.window_sizes_s",
+            "is empty: give at least one window size",
+        );
+    }
+    let mut window_sizes = Vec::new();
+    for (i, &size_s) in window_sizes_s.iter().enumerate() {
+        let key = format!("calibration.window_sizes_s[{i}]");
+        if let Some(size) = positive_samples(&key, size_s, rate, faults) {
+            match segment {
+                Some(len) if size >= len => faults.add(
+                    key,
+                    format!("{size_s} s is not shorter than {trajectory} ({} s): no samples would be left to evaluate on", len as f64 / rate),
+                ),
+                _ => window_sizes.push(size),
+            }
+        }
+    }
+    if monte_carlo_runs == 0 {
+        faults.add("calibration.monte_carlo_runs", "0 must be at least 1");
+    }
+    CalibrationSpec {
+        trajectory: index.unwrap_or_default(),
+        window_sizes,
+        monte_carlo_runs,
+    }
+}
+
+/// Checks `[evaluation]`: at least one test trajectory, each defined.
+fn check_evaluation(
+    evaluation: file::EvaluationFile,
+    sources: &[TrajectorySource],
+    faults: &mut Faults,
+) -> Vec<usize> {
+    let file::EvaluationFile { trajectories } = evaluation;
+    if trajectories.is_empty() {
+        faults.add(
+            "evaluation.trajectories",
+            "is empty: name at least one test trajectory",
+        );
+    }
+    trajectories
+        .iter()
+        .enumerate()
+        .filter_map(|(i, wanted)| {
+            lookup(
+                sources,
+                &format!("evaluation.trajectories[{i}]"),
+                wanted,
+                faults,
+            )
+        })
+        .collect()
+}
+
+/// Checks `[estimators]`: kinds and error models known, each listed once.
+fn check_estimators(
+    estimators: file::EstimatorsFile,
+    faults: &mut Faults,
+) -> (Vec<EstimatorKind>, Vec<ErrorModel>) {
+    let file::EstimatorsFile {
+        kinds,
+        error_models,
+    } = estimators;
+    let kinds = parse_names("estimators.kinds", &kinds, faults);
+    let error_models = parse_names("estimators.error_models", &error_models, faults);
+    (kinds, error_models)
+}
+
+/// With DCNet among the estimators: every calibration window holds one DCNet window.
+fn check_dcnet_windows(window: Window, window_sizes: &[usize], rate: f64, faults: &mut Faults) {
+    let Some(samples) = window.samples else {
+        return;
+    };
+    for (i, &size) in window_sizes.iter().enumerate() {
+        if size < samples {
+            faults.add(
+                format!("calibration.window_sizes_s[{i}]"),
+                format!(
+                    "{} s is shorter than one DCNet window (dataset.window_s = {} s)",
+                    size as f64 / rate,
+                    window.seconds
+                ),
+            );
+        }
     }
 }
 
@@ -599,9 +755,12 @@ pub struct ReportSpec {
     pub velocity_trajectories: Vec<String>,
 }
 
+/// Checks `[report]`: the published values read, a tolerance not negative, and none or
+/// two defined trajectories to draw the velocity of; `resolved` gets the absolute path.
 fn check_report(
     report: file::ReportFile,
     spec_dir: &Path,
+    sources: &[TrajectorySource],
     resolved: &mut SpecFile,
     faults: &mut Faults,
 ) -> ReportSpec {
@@ -630,6 +789,14 @@ fn check_report(
                 "has {} names: give two (a training and a test trajectory), or none",
                 velocity_trajectories.len()
             ),
+        );
+    }
+    for (i, wanted) in velocity_trajectories.iter().enumerate() {
+        lookup(
+            sources,
+            &format!("report.velocity_trajectories[{i}]"),
+            wanted,
+            faults,
         );
     }
     ReportSpec {
@@ -704,6 +871,8 @@ fn non_negative(key: &str, value: f64, faults: &mut Faults) {
     }
 }
 
+/// Checks `[model]`: sizes of at least 1 that fit the window, a known activation, a
+/// dropout below 1.
 fn check_model(model: file::ModelFile, window: Option<usize>, faults: &mut Faults) -> ModelSpec {
     let file::ModelFile {
         conv_channels,
@@ -750,6 +919,8 @@ fn check_model(model: file::ModelFile, window: Option<usize>, faults: &mut Fault
     }
 }
 
+/// Checks `[training]`: a known backend, counts of at least 1, RMSProp's settings in
+/// range, and the learning rates and early stopping.
 fn check_training(training: file::TrainingFile, faults: &mut Faults) -> TrainingSpec {
     let file::TrainingFile {
         backend,
@@ -774,6 +945,35 @@ fn check_training(training: file::TrainingFile, faults: &mut Faults) -> Training
             faults.add(key, "0 must be at least 1");
         }
     }
+    let learning_rates = check_learning_rates(learning_rate, faults);
+    if !(rmsprop_alpha > 0.0 && rmsprop_alpha < 1.0) {
+        faults.add(
+            "training.rmsprop_alpha",
+            format!("{rmsprop_alpha} must lie strictly between 0 and 1"),
+        );
+    }
+    if !(rmsprop_epsilon.is_finite() && rmsprop_epsilon > 0.0) {
+        faults.add(
+            "training.rmsprop_epsilon",
+            format!("{rmsprop_epsilon} must be a positive number"),
+        );
+    }
+    let early_stopping = early_stopping.map(|file| check_early_stopping(file, faults));
+    TrainingSpec {
+        backend,
+        epochs,
+        batch_size,
+        learning_rates,
+        rmsprop_alpha,
+        rmsprop_epsilon,
+        checkpoint_every_epochs,
+        early_stopping,
+    }
+}
+
+/// Checks `training.learning_rate`: a positive number per error model, in
+/// `ErrorModel` order.
+fn check_learning_rates(learning_rate: file::LearningRatesFile, faults: &mut Faults) -> [f64; 5] {
     let file::LearningRatesFile {
         em1,
         em2,
@@ -790,48 +990,38 @@ fn check_training(training: file::TrainingFile, faults: &mut Faults) -> Training
             );
         }
     }
-    if !(rmsprop_alpha > 0.0 && rmsprop_alpha < 1.0) {
+    learning_rates
+}
+
+/// Checks `[training.early_stopping]`: a patience of at least 1 epoch, an improvement
+/// not negative.
+fn check_early_stopping(
+    early_stopping: file::EarlyStoppingFile,
+    faults: &mut Faults,
+) -> EarlyStopping {
+    let file::EarlyStoppingFile {
+        patience_epochs,
+        min_improvement,
+    } = early_stopping;
+    if patience_epochs == 0 {
         faults.add(
-            "training.rmsprop_alpha",
-            format!("{rmsprop_alpha} must lie strictly between 0 and 1"),
+            "training.early_stopping.patience_epochs",
+            "0 must be at least 1",
         );
     }
-    if !(rmsprop_epsilon.is_finite() && rmsprop_epsilon > 0.0) {
+    if !(min_improvement.is_finite() && min_improvement >= 0.0) {
         faults.add(
-            "training.rmsprop_epsilon",
-            format!("{rmsprop_epsilon} must be a positive number"),
+            "training.early_stopping.min_improvement",
+            format!("{min_improvement} must be 0 or more (cm/s)²"),
         );
     }
-    let early_stopping = early_stopping.map(|file| {
-        if file.patience_epochs == 0 {
-            faults.add(
-                "training.early_stopping.patience_epochs",
-                "0 must be at least 1",
-            );
-        }
-        if !(file.min_improvement.is_finite() && file.min_improvement >= 0.0) {
-            faults.add(
-                "training.early_stopping.min_improvement",
-                format!("{} must be 0 or more (cm/s)²", file.min_improvement),
-            );
-        }
-        EarlyStopping {
-            patience: file.patience_epochs,
-            min_improvement: file.min_improvement,
-        }
-    });
-    TrainingSpec {
-        backend,
-        epochs,
-        batch_size,
-        learning_rates,
-        rmsprop_alpha,
-        rmsprop_epsilon,
-        checkpoint_every_epochs,
-        early_stopping,
+    EarlyStopping {
+        patience: patience_epochs,
+        min_improvement,
     }
 }
 
+/// Checks `[data.synthetic]`: ranges of positive numbers, amounts not negative.
 fn check_synthetic(synthetic: &SyntheticFile, faults: &mut Faults) {
     let SyntheticFile {
         speed_m_s,

@@ -1,7 +1,8 @@
 //! TOML files that report their faults where a user can find them: `path:line: key:
-//! message`. [`TomlFile`] reads a file into a type and places any later fault on its
-//! key's line; the spec, its `--set` overrides and the published values all locate
-//! keys here. In: a path or a TOML text. Out: the value, or [`SpecError`]s.
+//! message`. `TomlText` keeps a file's text with its path and places a fault at a key
+//! on the key's line; [`TomlFile`] reads a file into a type with it. The spec, its
+//! `--set` overrides, its sweep values and the published values all locate keys here.
+//! In: a path or a TOML text. Out: the value, or [`SpecError`]s.
 
 use std::fmt;
 use std::path::Path;
@@ -39,65 +40,134 @@ impl fmt::Display for SpecErrors {
     }
 }
 
+impl From<SpecError> for SpecErrors {
+    fn from(fault: SpecError) -> Self {
+        SpecErrors(vec![fault])
+    }
+}
+
+/// A TOML text and the name its faults show it by (its path), which places a fault at
+/// a key on the key's line.
+pub(super) struct TomlText {
+    shown: String,
+    text: String,
+}
+
+impl TomlText {
+    /// Reads `path`; when it cannot, the fault reads `path: {unreadable}: {cause}`.
+    pub fn read(path: &Path, unreadable: &str) -> Result<Self, SpecError> {
+        let shown = path.display().to_string();
+        match std::fs::read_to_string(path) {
+            Ok(text) => Ok(TomlText { shown, text }),
+            Err(e) => Err(SpecError {
+                location: shown,
+                key: String::new(),
+                message: format!("{unreadable}: {e}"),
+            }),
+        }
+    }
+
+    /// The text itself.
+    pub fn text(&self) -> &str {
+        &self.text
+    }
+
+    /// The name faults show the text by.
+    pub fn shown(&self) -> &str {
+        &self.shown
+    }
+
+    /// `path:line`, where a fault on `line` is shown.
+    pub fn at_line(&self, line: usize) -> String {
+        format!("{}:{line}", self.shown)
+    }
+
+    /// Whether the text is TOML; its syntax error is placed on the line it is found on.
+    pub fn check_syntax(&self) -> Result<(), SpecError> {
+        let Err(e) = DeTable::parse(&self.text) else {
+            return Ok(());
+        };
+        let location = match e.span() {
+            Some(span) => self.at_line(line_of(&self.text, span.start)),
+            None => self.shown.clone(),
+        };
+        Err(SpecError {
+            location,
+            key: String::new(),
+            message: e.message().trim().to_string(),
+        })
+    }
+
+    /// A fault of the whole text, placed on no line and at no key.
+    pub fn fault_of_file(&self, message: impl fmt::Display) -> SpecError {
+        SpecError {
+            location: self.shown.clone(),
+            key: String::new(),
+            message: message.to_string(),
+        }
+    }
+
+    /// A fault at `key`, placed on the key's line (or its deepest parent's that is
+    /// written; line 1 when the text is not TOML).
+    pub fn fault(&self, key: &str, message: impl fmt::Display) -> SpecError {
+        let line = DeTable::parse(&self.text)
+            .map(|spans| line_of(&self.text, span_of(&spans, key)))
+            .unwrap_or(1);
+        SpecError {
+            location: self.at_line(line),
+            key: key.to_string(),
+            message: message.to_string(),
+        }
+    }
+
+    /// The line of the key at exactly `names` (one table key a step, dots and all),
+    /// when the text writes it.
+    pub fn written_line(&self, names: &[&str]) -> Option<usize> {
+        let spans = DeTable::parse(&self.text).ok()?;
+        let path: Vec<Step<'_>> = names.iter().map(|name| Step::Key(name)).collect();
+        match find(&spans, &path) {
+            (start, true) => Some(line_of(&self.text, start)),
+            (_, false) => None,
+        }
+    }
+}
+
+/// `value` read into `T`; a value that does not fit comes back as its dotted key path
+/// (empty for the whole value) and message.
+pub(super) fn deserialize<T: serde::de::DeserializeOwned>(
+    value: toml::Value,
+) -> Result<T, (String, String)> {
+    serde_path_to_error::deserialize(value).map_err(|e| {
+        let key = e.path().to_string();
+        let key = if key == "." { String::new() } else { key };
+        (key, e.into_inner().message().to_string())
+    })
+}
+
 /// A TOML data file read into `T`, kept with its text so that later checks can name
 /// the line of a key.
 pub struct TomlFile<T> {
     pub value: T,
-    shown: String,
-    text: String,
+    source: TomlText,
 }
 
 impl<T: serde::de::DeserializeOwned> TomlFile<T> {
     /// Reads `path`; a fault reads `path:line: key: message`.
     pub fn read(path: &Path) -> Result<Self, SpecError> {
-        let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SpecError {
-            location: shown.clone(),
-            key: String::new(),
-            message: format!("cannot read it: {e}"),
-        })?;
-        if let Err(e) = DeTable::parse(&text) {
-            let location = match e.span() {
-                Some(span) => format!("{shown}:{}", line_of(&text, span.start)),
-                None => shown.clone(),
-            };
-            return Err(SpecError {
-                location,
-                key: String::new(),
-                message: e.message().trim().to_string(),
-            });
-        }
-        let fault = |key: &str, message: &dyn fmt::Display| fault_at(&shown, &text, key, message);
-        let table: toml::Table = toml::from_str(&text).map_err(|e| fault("", &e.message()))?;
-        let value = serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
-            let key = e.path().to_string();
-            let key = if key == "." { String::new() } else { key };
-            fault(&key, &e.into_inner().message())
-        })?;
-        Ok(TomlFile { value, shown, text })
+        let source = TomlText::read(path, "cannot read it")?;
+        source.check_syntax()?;
+        let table: toml::Table =
+            toml::from_str(source.text()).map_err(|e| source.fault("", e.message()))?;
+        let value = deserialize(toml::Value::Table(table))
+            .map_err(|(key, message)| source.fault(&key, message))?;
+        Ok(TomlFile { value, source })
     }
 }
 
 impl<T> TomlFile<T> {
     /// A fault at `key`, placed on the key's line.
     pub fn fault(&self, key: &str, message: impl fmt::Display) -> SpecError {
-        fault_at(&self.shown, &self.text, key, &message)
-    }
-}
-
-pub(super) fn fault_at(
-    shown: &str,
-    text: &str,
-    key: &str,
-    message: &dyn fmt::Display,
-) -> SpecError {
-    let line = DeTable::parse(text)
-        .map(|spans| line_of(text, span_of(&spans, key)))
-        .unwrap_or(1);
-    SpecError {
-        location: format!("{shown}:{line}"),
-        key: key.to_string(),
-        message: message.to_string(),
+        self.source.fault(key, message)
     }
 }
 
@@ -134,9 +204,14 @@ pub(super) fn steps(key: &str) -> Result<Vec<Step<'_>>, String> {
 }
 
 /// Byte offset where `key` (or its deepest existing parent) is written in the spec.
-pub(super) fn span_of(root: &Spanned<DeTable<'_>>, key: &str) -> usize {
+fn span_of(root: &Spanned<DeTable<'_>>, key: &str) -> usize {
+    steps(key).map_or(0, |path| find(root, &path).0)
+}
+
+/// Where `path` is written: the byte offset of its deepest step that the text has (0
+/// for none), and whether the text has every step.
+fn find(root: &Spanned<DeTable<'_>>, path: &[Step<'_>]) -> (usize, bool) {
     let mut best = 0;
-    let Ok(path) = steps(key) else { return best };
     let mut table = Some(root.get_ref());
     let mut array: Option<&[Spanned<DeValue<'_>>]> = None;
     for step in path {
@@ -145,10 +220,12 @@ pub(super) fn span_of(root: &Spanned<DeTable<'_>>, key: &str) -> usize {
                 .iter()
                 .find(|(name, _)| name.get_ref() == k)
                 .map(|(name, value)| (name.span().start, value)),
-            (Step::Index(i), _, Some(a)) => a.get(i).map(|value| (value.span().start, value)),
+            (Step::Index(i), _, Some(a)) => a.get(*i).map(|value| (value.span().start, value)),
             _ => None,
         };
-        let Some((start, value)) = found else { break };
+        let Some((start, value)) = found else {
+            return (best, false);
+        };
         best = start;
         (table, array) = match value.get_ref() {
             DeValue::Table(t) => (Some(t), None),
@@ -156,9 +233,28 @@ pub(super) fn span_of(root: &Spanned<DeTable<'_>>, key: &str) -> usize {
             _ => (None, None),
         };
     }
-    best
+    (best, true)
 }
 
-pub(super) fn line_of(text: &str, offset: usize) -> usize {
+/// The 1-based line that byte `offset` of `text` is on.
+fn line_of(text: &str, offset: usize) -> usize {
     text[..offset.min(text.len())].matches('\n').count() + 1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn keys_are_found_on_their_lines() {
+        let text = "name = \"x\"\n\n[calibration]\nruns = 3\nwindow_sizes_s = [1, 2]\n\n[[dvl]]\nname = \"a\"\n[[dvl]]\nname = \"b\"\nnoise = 1\n";
+        let spans = DeTable::parse(text).unwrap();
+        assert_eq!(
+            line_of(text, span_of(&spans, "calibration.window_sizes_s")),
+            5
+        );
+        assert_eq!(line_of(text, span_of(&spans, "dvl[1].noise")), 11);
+        // A missing key points at its deepest parent that exists.
+        assert_eq!(line_of(text, span_of(&spans, "calibration.missing")), 3);
+    }
 }
