@@ -1,8 +1,16 @@
-//! The experiment spec: [`mod@file`] holds the serde types read from TOML,
-//! [`mod@load`] reads a file, applies `--set` overrides, expands a `[sweep]` into its
-//! points and places every error at its file, line and key, and this module checks a
-//! [`SpecFile`] into a [`Spec`] whose every value is known good. Seconds become sample
-//! counts here, percent and cm/s become fractions and m/s.
+//! The experiment spec. In: a TOML file and `--set` overrides. Out: an [`Experiment`],
+//! one checked [`Spec`] per point, whose every value is known good, or every fault at
+//! its file, line and key.
+//!
+//! - [`mod@file`] holds the serde types read from TOML;
+//! - [`mod@toml_file`] reads TOML files and places a fault on its key's line, for the
+//!   spec, its overrides and the published values alike;
+//! - [`mod@load`] reads a spec, applies `--set` overrides and expands a `[sweep]` into its
+//!   points;
+//! - this module checks a [`SpecFile`] into a [`Spec`], one section at a time. Seconds
+//!   become sample counts here, percent and cm/s become fractions and m/s;
+//! - [`published`] reads the published values a spec names, and [`recordings`] lists
+//!   the Snapir recordings a spec may name and where to download them.
 
 pub mod file;
 pub mod load;
@@ -14,10 +22,9 @@ pub use file::SpecFile;
 pub use load::{Experiment, Point, load, load_experiment};
 pub use toml_file::{SpecError, SpecErrors, TomlFile};
 
-use crate::spec::published::Published;
-use crate::vocab::SensorErrors;
-use crate::vocab::{Activation, Backend, ErrorModel, EstimatorKind};
+use crate::vocab::{Activation, Backend, ErrorModel, EstimatorKind, SensorErrors};
 use file::{AxisFile, SyntheticFile};
+use published::Published;
 use std::path::{Path, PathBuf};
 
 /// A checked spec, in the units the pipeline computes in.
