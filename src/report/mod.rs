@@ -167,164 +167,25 @@ impl Cell {
 }
 
 impl Tables {
+    /// Every table of `run`'s report.
     fn of(run: &StoredRun) -> Tables {
-        let tolerance = run.spec.report.tolerance_pct;
-        let models =
-            crate::report::tables::models_in(run.calibration.iter().map(|r| r.error_model));
-        let dvls = run.dvls();
-        let has = |kind: EstimatorKind| run.calibration.iter().any(|r| r.estimator == kind);
-        let published = |dvl: &str, kind, model, trajectory: Option<&str>| {
-            run.published
-                .as_ref()
-                .and_then(|p| p.find(dvl, kind, model, trajectory))
-        };
-        let columns = |first: &str| {
-            std::iter::once(first.to_string())
-                .chain(models.iter().map(ToString::to_string))
-                .collect::<Vec<_>>()
-        };
-
-        // Calibration, the paper's layout: DVL rows with the baseline and DCNet.
-        let mut tally = Tally::default();
-        let mut groups = Vec::new();
-        for dvl in &dvls {
-            let mut cell = |kind: EstimatorKind, model: Option<ErrorModel>| {
-                run.calibration
-                    .iter()
-                    .find(|r| {
-                        r.is_t_conv
-                            && &r.dvl == dvl
-                            && r.estimator == kind
-                            && r.error_model == model
-                    })
-                    .map(|r| {
-                        let ours = Figure {
-                            rmse_cm_s: r.rmse_cm_s,
-                            detail: Some(Detail::TConv(r.window_s)),
-                        };
-                        let paper = published(dvl, kind, model, None);
-                        Cell::new(ours, paper, Phase::Calibration, tolerance, &mut tally)
-                    })
-            };
-            // (label, estimator of the first column, estimator of the error-model columns)
-            let mut kinds = vec![(
-                dvl.clone(),
-                Some(EstimatorKind::Baseline),
-                Some(EstimatorKind::Dcnet),
-            )];
-            if has(EstimatorKind::LeastSquares) {
-                kinds.push((
-                    format!("{dvl} least squares"),
-                    None,
-                    Some(EstimatorKind::LeastSquares),
-                ));
-            }
-            if has(EstimatorKind::Floor) {
-                kinds.push((
-                    format!("{dvl} floor (true terms)"),
-                    Some(EstimatorKind::Floor),
-                    None,
-                ));
-            }
-            let rows = kinds
-                .into_iter()
-                .map(|(label, first, per_model)| {
-                    let mut cells = vec![first.and_then(|kind| cell(kind, None))];
-                    for model in &models {
-                        cells.push(per_model.and_then(|kind| cell(kind, Some(*model))));
-                    }
-                    Row {
-                        labels: vec![label],
-                        cells,
-                    }
-                })
-                .collect();
-            groups.push(rows);
-        }
-        let calibration = ReportTable {
-            labels: vec!["DVL"],
-            columns: columns("Baseline"),
-            groups,
-            tally,
-        };
-
-        // Evaluation, the paper's layout: DVL × trajectory rows, the baseline and DCNet.
-        let trajectories = crate::first_seen(run.evaluation.iter().map(|r| r.trajectory.clone()));
-        let evaluation_cell =
-            |dvl: &str, trajectory: &str, kind, model, with_paper: bool, tally: &mut Tally| {
-                run.evaluation
-                    .iter()
-                    .find(|r| {
-                        r.dvl == dvl
-                            && r.trajectory == trajectory
-                            && r.estimator == kind
-                            && r.error_model == model
-                    })
-                    .map(|r| {
-                        let ours = Figure {
-                            rmse_cm_s: r.rmse_cm_s,
-                            detail: r
-                                .improvement_pct
-                                .filter(|_| kind != EstimatorKind::Baseline)
-                                .map(Detail::Improvement),
-                        };
-                        let paper =
-                            published(dvl, kind, model, Some(trajectory)).filter(|_| with_paper);
-                        Cell::new(ours, paper, Phase::Evaluation, tolerance, tally)
-                    })
-            };
-        // One DVL × trajectory row per cell pair: `first` in the first value column,
-        // `per_model` with each error model in the others.
-        let evaluation_table = |first_label: &str, first, per_model, with_paper: bool| {
-            let mut tally = Tally::default();
-            let groups = dvls
-                .iter()
-                .map(|dvl| {
-                    trajectories
-                        .iter()
-                        .map(|trajectory| {
-                            let mut cells = vec![evaluation_cell(
-                                dvl, trajectory, first, None, with_paper, &mut tally,
-                            )];
-                            for model in &models {
-                                cells.push(evaluation_cell(
-                                    dvl,
-                                    trajectory,
-                                    per_model,
-                                    Some(*model),
-                                    with_paper,
-                                    &mut tally,
-                                ));
-                            }
-                            Row {
-                                labels: vec![dvl.clone(), trajectory.clone()],
-                                cells,
-                            }
-                        })
-                        .collect()
-                })
-                .collect();
-            ReportTable {
-                labels: vec!["DVL", "trajectory"],
-                columns: columns(first_label),
-                groups,
-                tally,
-            }
-        };
-        let evaluation = evaluation_table(
+        let source = Source::of(run);
+        let calibration = source.calibration_table();
+        let evaluation = source.evaluation_table(
             "Baseline",
             EstimatorKind::Baseline,
             EstimatorKind::Dcnet,
             true,
         );
-        let beyond = (has(EstimatorKind::LeastSquares) || has(EstimatorKind::Floor)).then(|| {
-            evaluation_table(
-                "floor (true terms)",
-                EstimatorKind::Floor,
-                EstimatorKind::LeastSquares,
-                false,
-            )
-        });
+        let beyond = (source.has(EstimatorKind::LeastSquares) || source.has(EstimatorKind::Floor))
+            .then(|| {
+                source.evaluation_table(
+                    "floor (true terms)",
+                    EstimatorKind::Floor,
+                    EstimatorKind::LeastSquares,
+                    false,
+                )
+            });
         Tables {
             calibration,
             evaluation,
@@ -341,6 +202,220 @@ impl Tables {
             compared: sum.compared + table.tally.compared,
             flagged: sum.flagged + table.tally.flagged,
         })
+    }
+}
+
+/// What the tables are built from: the run, its tolerance, and the error models, DVLs
+/// and test trajectories that give their columns and rows.
+struct Source<'a> {
+    run: &'a StoredRun,
+    tolerance: f64,
+    models: Vec<ErrorModel>,
+    dvls: Vec<String>,
+    trajectories: Vec<String>,
+}
+
+/// A calibration row's layout: its label, the estimator of the first value column and
+/// that of the error-model columns.
+type CalibrationKinds = (String, Option<EstimatorKind>, Option<EstimatorKind>);
+
+impl<'a> Source<'a> {
+    /// The error models, DVLs and test trajectories of `run`.
+    fn of(run: &'a StoredRun) -> Source<'a> {
+        Source {
+            run,
+            tolerance: run.spec.report.tolerance_pct,
+            models: crate::report::tables::models_in(run.calibration.iter().map(|r| r.error_model)),
+            dvls: run.dvls(),
+            trajectories: crate::first_seen(run.evaluation.iter().map(|r| r.trajectory.clone())),
+        }
+    }
+
+    /// Whether the run's calibration holds estimator `kind`.
+    fn has(&self, kind: EstimatorKind) -> bool {
+        self.run.calibration.iter().any(|r| r.estimator == kind)
+    }
+
+    /// The published cell of a calibration or (with `trajectory`) an evaluation row.
+    fn published(
+        &self,
+        dvl: &str,
+        kind: EstimatorKind,
+        model: Option<ErrorModel>,
+        trajectory: Option<&str>,
+    ) -> Option<&'a PublishedCell> {
+        self.run
+            .published
+            .as_ref()
+            .and_then(|p| p.find(dvl, kind, model, trajectory))
+    }
+
+    /// The value columns' headers: `first`, then each error model.
+    fn columns(&self, first: &str) -> Vec<String> {
+        std::iter::once(first.to_string())
+            .chain(self.models.iter().map(ToString::to_string))
+            .collect()
+    }
+
+    /// A row of `labels`: estimator `first` in the first value column and `per_model`
+    /// with each error model in the others, each cell as `cell` finds it.
+    fn row(
+        &self,
+        labels: Vec<String>,
+        first: Option<EstimatorKind>,
+        per_model: Option<EstimatorKind>,
+        mut cell: impl FnMut(EstimatorKind, Option<ErrorModel>) -> Option<Cell>,
+    ) -> Row {
+        let mut cells = vec![first.and_then(|kind| cell(kind, None))];
+        for model in &self.models {
+            cells.push(per_model.and_then(|kind| cell(kind, Some(*model))));
+        }
+        Row { labels, cells }
+    }
+
+    /// Calibration, the paper's layout: DVL rows with the baseline and DCNet, then
+    /// least squares and the floor.
+    fn calibration_table(&self) -> ReportTable {
+        let mut tally = Tally::default();
+        let groups = self
+            .dvls
+            .iter()
+            .map(|dvl| {
+                self.calibration_kinds(dvl)
+                    .into_iter()
+                    .map(|(label, first, per_model)| {
+                        self.row(vec![label], first, per_model, |kind, model| {
+                            self.calibration_cell(dvl, kind, model, &mut tally)
+                        })
+                    })
+                    .collect()
+            })
+            .collect();
+        ReportTable {
+            labels: vec!["DVL"],
+            columns: self.columns("Baseline"),
+            groups,
+            tally,
+        }
+    }
+
+    /// The calibration rows of `dvl`: the baseline and DCNet, then least squares and
+    /// the floor where the run has them.
+    fn calibration_kinds(&self, dvl: &str) -> Vec<CalibrationKinds> {
+        let mut kinds = vec![(
+            dvl.to_string(),
+            Some(EstimatorKind::Baseline),
+            Some(EstimatorKind::Dcnet),
+        )];
+        if self.has(EstimatorKind::LeastSquares) {
+            kinds.push((
+                format!("{dvl} least squares"),
+                None,
+                Some(EstimatorKind::LeastSquares),
+            ));
+        }
+        if self.has(EstimatorKind::Floor) {
+            kinds.push((
+                format!("{dvl} floor (true terms)"),
+                Some(EstimatorKind::Floor),
+                None,
+            ));
+        }
+        kinds
+    }
+
+    /// The calibration cell at T_conv of `dvl`, `kind` and `model`, beside the
+    /// published one.
+    fn calibration_cell(
+        &self,
+        dvl: &str,
+        kind: EstimatorKind,
+        model: Option<ErrorModel>,
+        tally: &mut Tally,
+    ) -> Option<Cell> {
+        self.run
+            .calibration
+            .iter()
+            .find(|r| r.is_t_conv && r.dvl == dvl && r.estimator == kind && r.error_model == model)
+            .map(|r| {
+                let ours = Figure {
+                    rmse_cm_s: r.rmse_cm_s,
+                    detail: Some(Detail::TConv(r.window_s)),
+                };
+                let paper = self.published(dvl, kind, model, None);
+                Cell::new(ours, paper, Phase::Calibration, self.tolerance, tally)
+            })
+    }
+
+    /// Evaluation, the paper's layout: one DVL × trajectory row per cell pair, `first`
+    /// in the first value column, `per_model` with each error model in the others,
+    /// beside the published cells when `with_paper`.
+    fn evaluation_table(
+        &self,
+        first_label: &str,
+        first: EstimatorKind,
+        per_model: EstimatorKind,
+        with_paper: bool,
+    ) -> ReportTable {
+        let mut tally = Tally::default();
+        let groups = self
+            .dvls
+            .iter()
+            .map(|dvl| {
+                self.trajectories
+                    .iter()
+                    .map(|trajectory| {
+                        let labels = vec![dvl.clone(), trajectory.clone()];
+                        self.row(labels, Some(first), Some(per_model), |kind, model| {
+                            self.evaluation_cell(
+                                dvl, trajectory, kind, model, with_paper, &mut tally,
+                            )
+                        })
+                    })
+                    .collect()
+            })
+            .collect();
+        ReportTable {
+            labels: vec!["DVL", "trajectory"],
+            columns: self.columns(first_label),
+            groups,
+            tally,
+        }
+    }
+
+    /// The evaluation cell of `dvl` on `trajectory`, `kind` and `model`, beside the
+    /// published one when `with_paper`.
+    fn evaluation_cell(
+        &self,
+        dvl: &str,
+        trajectory: &str,
+        kind: EstimatorKind,
+        model: Option<ErrorModel>,
+        with_paper: bool,
+        tally: &mut Tally,
+    ) -> Option<Cell> {
+        self.run
+            .evaluation
+            .iter()
+            .find(|r| {
+                r.dvl == dvl
+                    && r.trajectory == trajectory
+                    && r.estimator == kind
+                    && r.error_model == model
+            })
+            .map(|r| {
+                let ours = Figure {
+                    rmse_cm_s: r.rmse_cm_s,
+                    detail: r
+                        .improvement_pct
+                        .filter(|_| kind != EstimatorKind::Baseline)
+                        .map(Detail::Improvement),
+                };
+                let paper = self
+                    .published(dvl, kind, model, Some(trajectory))
+                    .filter(|_| with_paper);
+                Cell::new(ours, paper, Phase::Evaluation, self.tolerance, tally)
+            })
     }
 }
 

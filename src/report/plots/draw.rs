@@ -1,6 +1,6 @@
 //! Drawing pieces the figures share: the look of each estimator and error model, the
-//! legend column, category axes, values cut at a panel's edge with their number, bars
-//! and box plots.
+//! panels beside the legend column and the legend's entries, category axes, values cut
+//! at a panel's edge with their number, bars and box plots.
 
 use super::render::FAMILY;
 use crate::vocab::{ErrorModel, EstimatorKind};
@@ -13,6 +13,10 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 pub type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
 pub type PlotResult<T = ()> = Result<T, Box<dyn std::error::Error + Send + Sync>>;
+/// A chart drawn on an [`Area`], `X` and `Y` its axes.
+pub type Chart<'a, 'b, X, Y> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<X, Y>>;
+/// One series of a figure: an estimator, with its error model where it has one.
+pub type Series = (EstimatorKind, Option<ErrorModel>);
 
 pub const TITLE_SIZE: u32 = 22;
 pub const PANEL_TITLE_SIZE: u32 = 18;
@@ -43,6 +47,19 @@ pub fn chart_on<'a, 'b>(
         builder.caption(title, font(PANEL_TITLE_SIZE));
     }
     builder
+}
+
+/// `root` titled `caption`, its `width` split into `count` panels side by side and the
+/// legend column on the right; returns the panels and the legend's area.
+pub fn panels_and_legend<'a>(
+    root: &Area<'a>,
+    caption: &str,
+    width: u32,
+    count: usize,
+) -> PlotResult<(Vec<Area<'a>>, Area<'a>)> {
+    let root = root.titled(caption, font(TITLE_SIZE))?;
+    let (panels, legend_area) = root.split_horizontally(width - LEGEND_WIDTH);
+    Ok((panels.split_evenly((1, count)), legend_area))
 }
 
 /// The mesh of `chart` in the figures' style: labels in the figure font, white minor
@@ -110,6 +127,17 @@ pub fn series_look(estimator: EstimatorKind, error_model: Option<ErrorModel>) ->
         color,
         stroke,
     }
+}
+
+/// The legend entries of `series`, each with its line as drawn.
+pub fn series_entries(series: &[Series]) -> Vec<(Swatch, String)> {
+    series
+        .iter()
+        .map(|&(estimator, model)| {
+            let look = series_look(estimator, model);
+            (Swatch::Line(look.color, look.stroke), look.label)
+        })
+        .collect()
 }
 
 /// Colour by estimator, for the bar figures whose x axis holds the error models.

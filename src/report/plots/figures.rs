@@ -6,8 +6,10 @@ use super::scale::{self, Scale};
 use crate::evaluate::CalibrationRow;
 use crate::results::read::{StoredRun, StoredTrajectory};
 use crate::vocab::{ErrorModel, EstimatorKind, Phase};
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, VPos};
+use std::ops::Range;
 
 /// A figure: its caption and the SVG plotters drew.
 pub struct Drawn {
@@ -125,7 +127,7 @@ fn velocity(run: &StoredRun) -> PlotResult<MaybeDrawn> {
 }
 
 /// The estimator × error-model series of the calibration table, in a stable order.
-fn series_of(rows: &[CalibrationRow]) -> Vec<(EstimatorKind, Option<ErrorModel>)> {
+fn series_of(rows: &[CalibrationRow]) -> Vec<Series> {
     let mut series = crate::first_seen(rows.iter().map(|r| (r.estimator, r.error_model)));
     series.sort_by_key(|(estimator, model)| (*estimator as usize, model.map(|m| m as usize)));
     series
@@ -145,65 +147,13 @@ fn calibration(run: &StoredRun) -> PlotResult<MaybeDrawn> {
     );
     let width = 560 * dvls.len() as u32 + LEGEND_WIDTH;
     let svg = draw_svg((width, 620), |root| {
-        let root = root.titled(&caption, font(TITLE_SIZE))?;
-        let (panels, legend_area) = root.split_horizontally(width - LEGEND_WIDTH);
-        let windows: Vec<f64> = run.calibration.iter().map(|r| r.window_s).collect();
-        // A far series may be cut: as many values as there are windows.
-        let window_count = crate::first_seen(windows.iter()).len();
-        let (first, last) = windows.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), w| {
-            (lo.min(*w), hi.max(*w))
-        });
-        let pad = 0.05 * (last - first).max(10.0);
+        let (panels, legend_area) = panels_and_legend(root, &caption, width, dvls.len())?;
+        let windows = WindowAxis::of(&run.calibration);
         let mut cut = false;
-        for (area, dvl) in panels.split_evenly((1, dvls.len())).iter().zip(&dvls) {
-            let rows: Vec<&CalibrationRow> =
-                run.calibration.iter().filter(|r| &r.dvl == dvl).collect();
-            let values: Vec<f64> = rows.iter().map(|r| r.rmse_cm_s).collect();
-            let y = Scale::fit_values(&values, window_count);
-            let mut chart = chart_on(area, dvl, 70)
-                .build_cartesian_2d(Scale::linear((first - pad)..(last + pad)), y.clone())?;
-            mesh(&mut chart)
-                .x_desc("calibration window [s]")
-                .y_desc("mean RMSE [cm/s]")
-                .draw()?;
-            for &(estimator, model) in &series {
-                let look = series_look(estimator, model);
-                let points: Vec<(f64, f64)> = rows
-                    .iter()
-                    .filter(|r| r.estimator == estimator && r.error_model == model)
-                    .map(|r| (r.window_s, y.shown(r.rmse_cm_s)))
-                    .collect();
-                line(&mut chart, points.clone(), look.color, look.stroke)?;
-                chart.draw_series(
-                    points
-                        .iter()
-                        .map(|&point| Circle::new(point, 3, look.color.filled())),
-                )?;
-            }
-            for row in &rows {
-                let at = (row.window_s, y.shown(row.rmse_cm_s));
-                if row.is_t_conv {
-                    chart.draw_series(std::iter::once(Circle::new(
-                        at,
-                        8,
-                        BLACK.stroke_width(2),
-                    )))?;
-                }
-                if y.is_cut(row.rmse_cm_s) {
-                    let color = series_look(row.estimator, row.error_model).color;
-                    let edge = Edge::of_vertical(&y, row.rmse_cm_s);
-                    cut_mark(&mut chart, at, row.rmse_cm_s, color, edge)?;
-                    cut = true;
-                }
-            }
+        for (area, dvl) in panels.iter().zip(&dvls) {
+            cut |= calibration_panel(area, dvl, run, &series, &windows)?;
         }
-        let mut entries: Vec<(Swatch, String)> = series
-            .iter()
-            .map(|&(estimator, model)| {
-                let look = series_look(estimator, model);
-                (Swatch::Line(look.color, look.stroke), look.label)
-            })
-            .collect();
+        let mut entries = series_entries(&series);
         entries.push((Swatch::Ring, "T_conv".into()));
         if cut {
             entries.push((Swatch::Cut, "beyond the axis".into()));
@@ -211,6 +161,88 @@ fn calibration(run: &StoredRun) -> PlotResult<MaybeDrawn> {
         legend(&legend_area, "estimator", &entries)
     })?;
     Ok(Ok(Drawn { caption, svg }))
+}
+
+/// The window axis of the calibration figure: its padded range, and how many windows
+/// it holds.
+struct WindowAxis {
+    range: Range<f64>,
+    count: usize,
+}
+
+impl WindowAxis {
+    /// The axis over every window of `rows`.
+    fn of(rows: &[CalibrationRow]) -> WindowAxis {
+        let windows: Vec<f64> = rows.iter().map(|r| r.window_s).collect();
+        // A far series may be cut: as many values as there are windows.
+        let count = crate::first_seen(windows.iter()).len();
+        let (first, last) = windows.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), w| {
+            (lo.min(*w), hi.max(*w))
+        });
+        let pad = 0.05 * (last - first).max(10.0);
+        WindowAxis {
+            range: (first - pad)..(last + pad),
+            count,
+        }
+    }
+}
+
+/// One DVL's panel of the calibration figure: a line per series; says whether a value
+/// was cut at the axis.
+fn calibration_panel(
+    area: &Area,
+    dvl: &str,
+    run: &StoredRun,
+    series: &[Series],
+    windows: &WindowAxis,
+) -> PlotResult<bool> {
+    let rows: Vec<&CalibrationRow> = run.calibration.iter().filter(|r| r.dvl == dvl).collect();
+    let values: Vec<f64> = rows.iter().map(|r| r.rmse_cm_s).collect();
+    let y = Scale::fit_values(&values, windows.count);
+    let mut chart = chart_on(area, dvl, 70)
+        .build_cartesian_2d(Scale::linear(windows.range.clone()), y.clone())?;
+    mesh(&mut chart)
+        .x_desc("calibration window [s]")
+        .y_desc("mean RMSE [cm/s]")
+        .draw()?;
+    for &(estimator, model) in series {
+        let look = series_look(estimator, model);
+        let points: Vec<(f64, f64)> = rows
+            .iter()
+            .filter(|r| r.estimator == estimator && r.error_model == model)
+            .map(|r| (r.window_s, y.shown(r.rmse_cm_s)))
+            .collect();
+        line(&mut chart, points.clone(), look.color, look.stroke)?;
+        chart.draw_series(
+            points
+                .iter()
+                .map(|&point| Circle::new(point, 3, look.color.filled())),
+        )?;
+    }
+    calibration_marks(&mut chart, &rows, &y)
+}
+
+/// Rings each T_conv of `rows` and marks each value beyond the axis `y`; says whether
+/// one was.
+fn calibration_marks(
+    chart: &mut Chart<'_, '_, Scale, Scale>,
+    rows: &[&CalibrationRow],
+    y: &Scale,
+) -> PlotResult<bool> {
+    let mut cut = false;
+    for row in rows {
+        let at = (row.window_s, y.shown(row.rmse_cm_s));
+        if row.is_t_conv {
+            chart.draw_series(std::iter::once(Circle::new(at, 8, BLACK.stroke_width(2))))?;
+        }
+        if y.is_cut(row.rmse_cm_s) {
+            let color = series_look(row.estimator, row.error_model).color;
+            let edge = Edge::of_vertical(y, row.rmse_cm_s);
+            cut_mark(chart, at, row.rmse_cm_s, color, edge)?;
+            cut = true;
+        }
+    }
+    Ok(cut)
 }
 
 /// One bar of a grouped bar chart.
@@ -235,23 +267,7 @@ fn bar_panel(
     floor: Option<f64>,
     cut_far: bool,
 ) -> PlotResult<bool> {
-    let tops: Vec<f64> = bars
-        .iter()
-        .map(|b| b.value + b.spread.unwrap_or(0.0))
-        .chain([0.0])
-        .collect();
-    let ceiling = scale::cut_above(&tops, 1)
-        .filter(|_| cut_far)
-        .unwrap_or(f64::INFINITY);
-    let top = tops
-        .iter()
-        .copied()
-        .filter(|t| *t <= ceiling)
-        .fold(0.0f64, f64::max);
-    let bottom = bars.iter().map(|b| b.value).fold(0.0f64, f64::min);
-    let bottom = floor.map_or(bottom, |f| bottom.max(f));
-    let span = (top - bottom).max(1e-9);
-    let y_range = (bottom - 0.08 * span * f64::from(bottom < 0.0))..(top + 0.15 * span);
+    let y_range = bar_range(bars, floor, cut_far);
     let mut chart = chart_on(area, title, 70).build_cartesian_2d(
         -0.5..(groups.len() as f64 - 0.5),
         Scale::linear(y_range.clone()),
@@ -268,60 +284,95 @@ fn bar_panel(
             BLACK.stroke_width(1),
         )))?;
     }
-    let label = |value: f64| {
-        if y_desc.contains('%') {
-            format!("{value:+.0}")
-        } else {
-            format!("{value:.2}")
-        }
-    };
+    let percent = y_desc.contains('%');
     let mut cut_at_top = false;
     for (group, _) in groups.iter().enumerate() {
         let members: Vec<&Bar> = bars.iter().filter(|b| b.group == group).collect();
         let width = 0.8 / members.len().max(1) as f64;
         for (j, bar) in members.iter().enumerate() {
             let x0 = group as f64 - 0.4 + j as f64 * width;
-            let (x1, middle) = (x0 + 0.92 * width, x0 + 0.46 * width);
-            let shown = bar.value.clamp(y_range.start, y_range.end);
-            chart.draw_series(std::iter::once(Rectangle::new(
-                [(x0, 0.0), (x1, shown)],
-                estimator_color(bar.estimator).filled(),
-            )))?;
-            let spread = bar.spread.filter(|s| *s > 0.0).unwrap_or(0.0);
-            if spread > 0.0 {
-                let (low, high) = (bar.value - spread, bar.value + spread);
-                chart.draw_series(std::iter::once(PathElement::new(
-                    vec![
-                        (middle, low.max(y_range.start)),
-                        (middle, high.min(y_range.end)),
-                    ],
-                    BLACK.stroke_width(1),
-                )))?;
-            }
-            // A cut bar: its value goes inside the bar's end.
-            let inside = if bar.value < y_range.start {
-                Some(VPos::Bottom)
-            } else if bar.value > y_range.end {
-                cut_at_top = true;
-                Some(VPos::Top)
-            } else {
-                None
-            };
-            let (y, style) = match inside {
-                Some(v) => (
-                    shown,
-                    anchored(LABEL_SIZE - 3, HPos::Center, v).color(&WHITE),
-                ),
-                None if shown >= 0.0 => (
-                    (shown + spread).min(y_range.end),
-                    anchored(LABEL_SIZE - 2, HPos::Center, VPos::Bottom),
-                ),
-                None => (shown, anchored(LABEL_SIZE - 2, HPos::Center, VPos::Top)),
-            };
-            let text = label(bar.value);
-            chart.draw_series(std::iter::once(Text::new(text, (middle, y), style)))?;
+            cut_at_top |= draw_bar(&mut chart, bar, x0, width, &y_range, percent)?;
         }
     }
+    Ok(cut_at_top)
+}
+
+/// The value axis of a bar panel: from 0, or below it to the lowest bar (no lower than
+/// `floor`), up to the highest top, with a margin; with `cut_far`, a top far above the
+/// others does not count.
+fn bar_range(bars: &[Bar], floor: Option<f64>, cut_far: bool) -> Range<f64> {
+    let tops: Vec<f64> = bars
+        .iter()
+        .map(|b| b.value + b.spread.unwrap_or(0.0))
+        .chain([0.0])
+        .collect();
+    let ceiling = scale::cut_above(&tops, 1)
+        .filter(|_| cut_far)
+        .unwrap_or(f64::INFINITY);
+    let top = tops
+        .iter()
+        .copied()
+        .filter(|t| *t <= ceiling)
+        .fold(0.0f64, f64::max);
+    let bottom = bars.iter().map(|b| b.value).fold(0.0f64, f64::min);
+    let bottom = floor.map_or(bottom, |f| bottom.max(f));
+    let span = (top - bottom).max(1e-9);
+    (bottom - 0.08 * span * f64::from(bottom < 0.0))..(top + 0.15 * span)
+}
+
+/// One bar from `x0`, a `width` wide slot, with its spread as a whisker and its value
+/// (a percentage when `percent`); says whether it was cut at the top of `y_range`.
+fn draw_bar(
+    chart: &mut Chart<'_, '_, RangedCoordf64, Scale>,
+    bar: &Bar,
+    x0: f64,
+    width: f64,
+    y_range: &Range<f64>,
+    percent: bool,
+) -> PlotResult<bool> {
+    let (x1, middle) = (x0 + 0.92 * width, x0 + 0.46 * width);
+    let shown = bar.value.clamp(y_range.start, y_range.end);
+    chart.draw_series(std::iter::once(Rectangle::new(
+        [(x0, 0.0), (x1, shown)],
+        estimator_color(bar.estimator).filled(),
+    )))?;
+    let spread = bar.spread.filter(|s| *s > 0.0).unwrap_or(0.0);
+    if spread > 0.0 {
+        let (low, high) = (bar.value - spread, bar.value + spread);
+        chart.draw_series(std::iter::once(PathElement::new(
+            vec![
+                (middle, low.max(y_range.start)),
+                (middle, high.min(y_range.end)),
+            ],
+            BLACK.stroke_width(1),
+        )))?;
+    }
+    // A cut bar: its value goes inside the bar's end.
+    let inside = if bar.value < y_range.start {
+        Some(VPos::Bottom)
+    } else if bar.value > y_range.end {
+        Some(VPos::Top)
+    } else {
+        None
+    };
+    let cut_at_top = matches!(inside, Some(VPos::Top));
+    let (y, style) = match inside {
+        Some(v) => (
+            shown,
+            anchored(LABEL_SIZE - 3, HPos::Center, v).color(&WHITE),
+        ),
+        None if shown >= 0.0 => (
+            (shown + spread).min(y_range.end),
+            anchored(LABEL_SIZE - 2, HPos::Center, VPos::Bottom),
+        ),
+        None => (shown, anchored(LABEL_SIZE - 2, HPos::Center, VPos::Top)),
+    };
+    let text = if percent {
+        format!("{:+.0}", bar.value)
+    } else {
+        format!("{:.2}", bar.value)
+    };
+    chart.draw_series(std::iter::once(Text::new(text, (middle, y), style)))?;
     Ok(cut_at_top)
 }
 
@@ -390,39 +441,10 @@ fn rmse_first_window(run: &StoredRun) -> PlotResult<MaybeDrawn> {
     );
     let width = 520 * dvls.len() as u32 + LEGEND_WIDTH;
     let svg = draw_svg((width, 560), |root| {
-        let root = root.titled(&caption, font(TITLE_SIZE))?;
-        let (panels, legend_area) = root.split_horizontally(width - LEGEND_WIDTH);
+        let (panels, legend_area) = panels_and_legend(root, &caption, width, dvls.len())?;
         let mut cut = false;
-        for (area, dvl) in panels.split_evenly((1, dvls.len())).iter().zip(&dvls) {
-            let at = |estimator: EstimatorKind, model: Option<ErrorModel>| {
-                run.calibration.iter().find(|r| {
-                    &r.dvl == dvl
-                        && r.window_s == window
-                        && r.estimator == estimator
-                        && r.error_model == model
-                })
-            };
-            let mut bars = Vec::new();
-            if let Some(r) = at(EstimatorKind::Baseline, None) {
-                bars.push(Bar {
-                    group: 0,
-                    estimator: EstimatorKind::Baseline,
-                    value: r.rmse_cm_s,
-                    spread: Some(r.rmse_std_cm_s),
-                });
-            }
-            for (i, model) in models.iter().enumerate() {
-                for &estimator in &estimators {
-                    if let Some(r) = at(estimator, Some(*model)) {
-                        bars.push(Bar {
-                            group: i + 1,
-                            estimator,
-                            value: r.rmse_cm_s,
-                            spread: Some(r.rmse_std_cm_s),
-                        });
-                    }
-                }
-            }
+        for (area, dvl) in panels.iter().zip(&dvls) {
+            let bars = first_window_bars(run, dvl, window, &models, &estimators);
             cut |= bar_panel(area, dvl, &groups, &bars, "RMSE [cm/s]", None, true)?;
         }
         let mut shown = vec![EstimatorKind::Baseline];
@@ -438,6 +460,40 @@ fn rmse_first_window(run: &StoredRun) -> PlotResult<MaybeDrawn> {
         bar_legend(&legend_area, &shown, "± std over runs", notes)
     })?;
     Ok(Ok(Drawn { caption, svg }))
+}
+
+/// The bars of one DVL's panel of the first-window figure: the baseline, then each of
+/// `models` with each of `estimators`, mean ± std at `window`.
+fn first_window_bars(
+    run: &StoredRun,
+    dvl: &str,
+    window: f64,
+    models: &[ErrorModel],
+    estimators: &[EstimatorKind],
+) -> Vec<Bar> {
+    let bar = |group: usize, estimator: EstimatorKind, model: Option<ErrorModel>| {
+        run.calibration
+            .iter()
+            .find(|r| {
+                r.dvl == dvl
+                    && r.window_s == window
+                    && r.estimator == estimator
+                    && r.error_model == model
+            })
+            .map(|r| Bar {
+                group,
+                estimator,
+                value: r.rmse_cm_s,
+                spread: Some(r.rmse_std_cm_s),
+            })
+    };
+    let mut bars: Vec<Bar> = bar(0, EstimatorKind::Baseline, None).into_iter().collect();
+    for (i, model) in models.iter().enumerate() {
+        for &estimator in estimators {
+            bars.extend(bar(i + 1, estimator, Some(*model)));
+        }
+    }
+    bars
 }
 
 /// Improvement over the baseline per test trajectory of each estimator with EM5.
@@ -461,9 +517,8 @@ fn improvement_em5(run: &StoredRun) -> PlotResult<MaybeDrawn> {
     let caption = "Improvement in RMSE over the baseline with EM5, per test trajectory".to_string();
     let width = 520 * dvls.len() as u32 + LEGEND_WIDTH;
     let svg = draw_svg((width, 560), |root| {
-        let root = root.titled(&caption, font(TITLE_SIZE))?;
-        let (panels, legend_area) = root.split_horizontally(width - LEGEND_WIDTH);
-        for (area, dvl) in panels.split_evenly((1, dvls.len())).iter().zip(&dvls) {
+        let (panels, legend_area) = panels_and_legend(root, &caption, width, dvls.len())?;
+        for (area, dvl) in panels.iter().zip(&dvls) {
             let bars: Vec<Bar> = rows
                 .iter()
                 .filter(|r| &r.dvl == dvl)
@@ -523,91 +578,119 @@ fn monte_carlo_spread(run: &StoredRun) -> PlotResult<MaybeDrawn> {
     let svg = draw_svg((width, height), |root| {
         let root = root.titled(&caption, font(TITLE_SIZE))?;
         for (area, dvl) in root.split_evenly((1, dvls.len())).iter().zip(&dvls) {
-            let samples: Vec<Vec<f64>> = series
-                .iter()
-                .map(|&(estimator, model)| {
-                    let t_conv = run.calibration.iter().find(|r| {
-                        &r.dvl == dvl
-                            && r.estimator == estimator
-                            && r.error_model == model
-                            && r.is_t_conv
-                    });
-                    run.runs
-                        .iter()
-                        .filter(|r| {
-                            r.phase == Phase::Calibration
-                                && &r.dvl == dvl
-                                && r.estimator == estimator
-                                && r.error_model == model
-                                && Some(r.window_s) == t_conv.map(|t| t.window_s)
-                        })
-                        .map(|r| r.rmse_cm_s)
-                        .collect()
-                })
-                .collect();
-            let values: Vec<f64> = samples.iter().flatten().copied().collect();
-            let x = Scale::fit_values(&values, 1);
-            let mut chart = chart_on(area, dvl, 150)
-                .build_cartesian_2d(x.clone(), -0.5..(series.len() as f64 - 0.5))?;
-            mesh(&mut chart)
-                .disable_y_mesh()
-                .y_labels(series.len() + 1)
-                .y_label_formatter(&|y| category(&names, *y))
-                .x_desc("RMSE at T_conv [cm/s]")
-                .draw()?;
-            for (i, (values, &(estimator, model))) in samples.iter().zip(&series).enumerate() {
-                if values.is_empty() {
-                    continue;
-                }
-                let color = series_look(estimator, model).color;
-                let [low, q1, median, q3, high] = box_stats(values).map(|v| x.shown(v));
-                let y = (series.len() - 1 - i) as f64;
-                chart.draw_series([
-                    Rectangle::new([(q1, y - 0.3), (q3, y + 0.3)], color.mix(0.25).filled()),
-                    Rectangle::new([(q1, y - 0.3), (q3, y + 0.3)], color.stroke_width(1)),
-                ])?;
-                chart.draw_series([
-                    PathElement::new(
-                        vec![(median, y - 0.3), (median, y + 0.3)],
-                        color.stroke_width(3),
-                    ),
-                    PathElement::new(vec![(low, y), (q1, y)], color.stroke_width(1)),
-                    PathElement::new(vec![(q3, y), (high, y)], color.stroke_width(1)),
-                ])?;
-                chart.draw_series(
-                    values
-                        .iter()
-                        .filter(|v| (**v < low || **v > high) && !x.is_cut(**v))
-                        .map(|v| Circle::new((*v, y), 2, color.filled())),
-                )?;
-                // One mark an end: the value furthest beyond it.
-                let below = values
-                    .iter()
-                    .copied()
-                    .filter(|v| x.is_below(*v))
-                    .reduce(f64::min);
-                let above = values
-                    .iter()
-                    .copied()
-                    .filter(|v| x.is_cut(*v) && !x.is_below(*v));
-                for value in below.into_iter().chain(above.reduce(f64::max)) {
-                    let at = (x.shown(value), y);
-                    cut_mark(&mut chart, at, value, color, Edge::of_horizontal(&x, value))?;
-                }
-                if estimator == EstimatorKind::Floor {
-                    let mean = values.iter().sum::<f64>() / values.len() as f64;
-                    line(
-                        &mut chart,
-                        vec![(mean, -0.5), (mean, series.len() as f64 - 0.5)],
-                        GREY,
-                        Stroke::Dotted,
-                    )?;
-                }
-            }
+            let samples = t_conv_samples(run, dvl, &series);
+            spread_panel(area, dvl, &series, &names, &samples)?;
         }
         Ok(())
     })?;
     Ok(Ok(Drawn { caption, svg }))
+}
+
+/// Each series' RMSE on `dvl` at its T_conv, one value per Monte Carlo run.
+fn t_conv_samples(run: &StoredRun, dvl: &str, series: &[Series]) -> Vec<Vec<f64>> {
+    series
+        .iter()
+        .map(|&(estimator, model)| {
+            let t_conv = run.calibration.iter().find(|r| {
+                r.dvl == dvl && r.estimator == estimator && r.error_model == model && r.is_t_conv
+            });
+            run.runs
+                .iter()
+                .filter(|r| {
+                    r.phase == Phase::Calibration
+                        && r.dvl == dvl
+                        && r.estimator == estimator
+                        && r.error_model == model
+                        && Some(r.window_s) == t_conv.map(|t| t.window_s)
+                })
+                .map(|r| r.rmse_cm_s)
+                .collect()
+        })
+        .collect()
+}
+
+/// One DVL's panel of the spread figure: a box per series of `samples`, the first on
+/// top, named `names` from the bottom, and the floor's mean drawn across.
+fn spread_panel(
+    area: &Area,
+    dvl: &str,
+    series: &[Series],
+    names: &[String],
+    samples: &[Vec<f64>],
+) -> PlotResult {
+    let values: Vec<f64> = samples.iter().flatten().copied().collect();
+    let x = Scale::fit_values(&values, 1);
+    let mut chart = chart_on(area, dvl, 150)
+        .build_cartesian_2d(x.clone(), -0.5..(series.len() as f64 - 0.5))?;
+    mesh(&mut chart)
+        .disable_y_mesh()
+        .y_labels(series.len() + 1)
+        .y_label_formatter(&|y| category(names, *y))
+        .x_desc("RMSE at T_conv [cm/s]")
+        .draw()?;
+    for (i, (values, &(estimator, model))) in samples.iter().zip(series).enumerate() {
+        if values.is_empty() {
+            continue;
+        }
+        let color = series_look(estimator, model).color;
+        let y = (series.len() - 1 - i) as f64;
+        spread_box(&mut chart, &x, values, y, color)?;
+        if estimator == EstimatorKind::Floor {
+            let mean = values.iter().sum::<f64>() / values.len() as f64;
+            line(
+                &mut chart,
+                vec![(mean, -0.5), (mean, series.len() as f64 - 0.5)],
+                GREY,
+                Stroke::Dotted,
+            )?;
+        }
+    }
+    Ok(())
+}
+
+/// The box plot of `values` at height `y`: box, median, whiskers, the values beyond
+/// them as dots, and one mark at each end of the axis `x` for the values beyond it.
+fn spread_box(
+    chart: &mut Chart<'_, '_, Scale, RangedCoordf64>,
+    x: &Scale,
+    values: &[f64],
+    y: f64,
+    color: RGBColor,
+) -> PlotResult {
+    let [low, q1, median, q3, high] = box_stats(values).map(|v| x.shown(v));
+    chart.draw_series([
+        Rectangle::new([(q1, y - 0.3), (q3, y + 0.3)], color.mix(0.25).filled()),
+        Rectangle::new([(q1, y - 0.3), (q3, y + 0.3)], color.stroke_width(1)),
+    ])?;
+    chart.draw_series([
+        PathElement::new(
+            vec![(median, y - 0.3), (median, y + 0.3)],
+            color.stroke_width(3),
+        ),
+        PathElement::new(vec![(low, y), (q1, y)], color.stroke_width(1)),
+        PathElement::new(vec![(q3, y), (high, y)], color.stroke_width(1)),
+    ])?;
+    chart.draw_series(
+        values
+            .iter()
+            .filter(|v| (**v < low || **v > high) && !x.is_cut(**v))
+            .map(|v| Circle::new((*v, y), 2, color.filled())),
+    )?;
+    // One mark an end: the value furthest beyond it.
+    let below = values
+        .iter()
+        .copied()
+        .filter(|v| x.is_below(*v))
+        .reduce(f64::min);
+    let above = values
+        .iter()
+        .copied()
+        .filter(|v| x.is_cut(*v) && !x.is_below(*v));
+    for value in below.into_iter().chain(above.reduce(f64::max)) {
+        let at = (x.shown(value), y);
+        cut_mark(chart, at, value, color, Edge::of_horizontal(x, value))?;
+    }
+    Ok(())
 }
 
 /// Training and validation loss per epoch of each error model, log scale.

@@ -10,6 +10,7 @@ use super::figures::{Drawn, MaybeDrawn, draw_svg};
 use super::scale::Scale;
 use crate::first_seen;
 use crate::results::sweep::{StoredSweep, SweepRow, Swept};
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
 /// What a sweep figure plots against the swept values.
@@ -114,6 +115,8 @@ fn categories(rows: &[(&SweepRow, f64)], k: usize) -> Vec<(Swept, String)> {
         .collect()
 }
 
+/// The metric against swept key `k`, one panel per DVL and one series per estimator
+/// and error model.
 fn against(sweep: &StoredSweep, metric: Metric, k: usize) -> PlotResult<MaybeDrawn> {
     let key = &sweep.index.swept[k];
     let rows: Vec<(&SweepRow, f64)> = sweep
@@ -128,15 +131,17 @@ fn against(sweep: &StoredSweep, metric: Metric, k: usize) -> PlotResult<MaybeDra
         )));
     }
     let categories = categories(&rows, k);
-    let labels: Vec<String> = categories.iter().map(|(_, label)| label.clone()).collect();
-    let x_of = |row: &SweepRow| {
-        categories
-            .iter()
-            .position(|(value, _)| *value == row.values[k])
-            .unwrap_or(0) as f64
-    };
     let dvls = first_seen(rows.iter().map(|(row, _)| row.dvl.as_str()));
-    let series = first_seen(rows.iter().map(|(row, _)| (row.estimator, row.error_model)));
+    let figure = MetricAgainstKey {
+        key,
+        metric,
+        key_index: k,
+        labels: categories.iter().map(|(_, label)| label.clone()).collect(),
+        categories,
+        series: first_seen(rows.iter().map(|(row, _)| (row.estimator, row.error_model))),
+        points: sweep.index.points.len(),
+        rows,
+    };
     let caption = if sweep.index.swept.len() == 1 {
         format!("{} against {key}", metric.axis())
     } else {
@@ -147,69 +152,112 @@ fn against(sweep: &StoredSweep, metric: Metric, k: usize) -> PlotResult<MaybeDra
     };
     let width = 560 * dvls.len() as u32 + LEGEND_WIDTH;
     let svg = draw_svg((width, 620), |root| {
-        let root = root.titled(&caption, font(TITLE_SIZE))?;
-        let (panels, legend_area) = root.split_horizontally(width - LEGEND_WIDTH);
-        for (area, dvl) in panels.split_evenly((1, dvls.len())).iter().zip(&dvls) {
-            let on_panel: Vec<(&SweepRow, f64)> = rows
-                .iter()
-                .copied()
-                .filter(|(r, _)| r.dvl == *dvl)
-                .collect();
-            // A far series may be cut: as many dots as there are points.
-            let values: Vec<f64> = on_panel.iter().map(|(_, v)| *v).collect();
-            let y = Scale::fit_values(&values, sweep.index.points.len());
-            let mut chart = chart_on(area, dvl, 70)
-                .build_cartesian_2d(-0.5..(labels.len() as f64 - 0.5), y.clone())?;
-            mesh(&mut chart)
-                .disable_x_mesh()
-                .x_labels(labels.len() + 1)
-                .x_desc(key.as_str())
-                .y_desc(metric.axis())
-                .x_label_formatter(&|v| category(&labels, *v))
-                .draw()?;
-            for &(estimator, model) in &series {
-                let look = series_look(estimator, model);
-                let dots: Vec<(f64, f64)> = on_panel
-                    .iter()
-                    .filter(|(r, _)| r.estimator == estimator && r.error_model == model)
-                    .map(|(r, v)| (x_of(r), *v))
-                    .collect();
-                let means: Vec<(f64, f64)> = (0..labels.len())
-                    .filter_map(|x| {
-                        let at: Vec<f64> = dots
-                            .iter()
-                            .filter(|d| d.0 == x as f64)
-                            .map(|d| d.1)
-                            .collect();
-                        (!at.is_empty())
-                            .then(|| (x as f64, at.iter().sum::<f64>() / at.len() as f64))
-                    })
-                    .collect();
-                let shown = |(x, v): (f64, f64)| (x, y.shown(v));
-                line(
-                    &mut chart,
-                    means.into_iter().map(shown).collect(),
-                    look.color,
-                    look.stroke,
-                )?;
-                chart.draw_series(
-                    dots.iter()
-                        .map(|&point| Circle::new(shown(point), 4, look.color.filled())),
-                )?;
-                for &(x, value) in dots.iter().filter(|(_, v)| y.is_cut(*v)) {
-                    let edge = Edge::of_vertical(&y, value);
-                    cut_mark(&mut chart, shown((x, value)), value, look.color, edge)?;
-                }
-            }
+        let (panels, legend_area) = panels_and_legend(root, &caption, width, dvls.len())?;
+        for (area, dvl) in panels.iter().zip(&dvls) {
+            figure.panel(area, dvl)?;
         }
-        let entries: Vec<(Swatch, String)> = series
-            .iter()
-            .map(|&(estimator, model)| {
-                let look = series_look(estimator, model);
-                (Swatch::Line(look.color, look.stroke), look.label)
-            })
-            .collect();
-        legend(&legend_area, "estimator", &entries)
+        legend(&legend_area, "estimator", &series_entries(&figure.series))
     })?;
     Ok(Ok(Drawn { caption, svg }))
+}
+
+/// What the figure of the metric against one swept key draws from.
+struct MetricAgainstKey<'a> {
+    /// The swept key.
+    key: &'a str,
+    metric: Metric,
+    /// The key's index among the swept keys.
+    key_index: usize,
+    /// The rows with a finite metric, each with its value.
+    rows: Vec<(&'a SweepRow, f64)>,
+    /// The key's values on the x axis, each with its label.
+    categories: Vec<(Swept, String)>,
+    labels: Vec<String>,
+    series: Vec<Series>,
+    /// How many points the sweep has.
+    points: usize,
+}
+
+impl MetricAgainstKey<'_> {
+    /// Where `row`'s value of the key lies on the x axis.
+    fn x_of(&self, row: &SweepRow) -> f64 {
+        self.categories
+            .iter()
+            .position(|(value, _)| *value == row.values[self.key_index])
+            .unwrap_or(0) as f64
+    }
+
+    /// The panel of `dvl`: each series' dots and the line through their means.
+    fn panel(&self, area: &Area, dvl: &str) -> PlotResult {
+        let on_panel: Vec<(&SweepRow, f64)> = self
+            .rows
+            .iter()
+            .copied()
+            .filter(|(r, _)| r.dvl == *dvl)
+            .collect();
+        // A far series may be cut: as many dots as there are points.
+        let values: Vec<f64> = on_panel.iter().map(|(_, v)| *v).collect();
+        let y = Scale::fit_values(&values, self.points);
+        let labels = &self.labels;
+        let mut chart = chart_on(area, dvl, 70)
+            .build_cartesian_2d(-0.5..(labels.len() as f64 - 0.5), y.clone())?;
+        mesh(&mut chart)
+            .disable_x_mesh()
+            .x_labels(labels.len() + 1)
+            .x_desc(self.key)
+            .y_desc(self.metric.axis())
+            .x_label_formatter(&|v| category(labels, *v))
+            .draw()?;
+        for &(estimator, model) in &self.series {
+            let dots: Vec<(f64, f64)> = on_panel
+                .iter()
+                .filter(|(r, _)| r.estimator == estimator && r.error_model == model)
+                .map(|(r, v)| (self.x_of(r), *v))
+                .collect();
+            let means = means_at(&dots, labels.len());
+            series_dots(&mut chart, &y, &dots, means, series_look(estimator, model))?;
+        }
+        Ok(())
+    }
+}
+
+/// At each of the `count` x positions that has dots, the mean of their values.
+fn means_at(dots: &[(f64, f64)], count: usize) -> Vec<(f64, f64)> {
+    (0..count)
+        .filter_map(|x| {
+            let at: Vec<f64> = dots
+                .iter()
+                .filter(|d| d.0 == x as f64)
+                .map(|d| d.1)
+                .collect();
+            (!at.is_empty()).then(|| (x as f64, at.iter().sum::<f64>() / at.len() as f64))
+        })
+        .collect()
+}
+
+/// One series on a panel with the value axis `y`: the line through `means`, the
+/// `dots`, and a mark for each dot beyond the axis.
+fn series_dots(
+    chart: &mut Chart<'_, '_, RangedCoordf64, Scale>,
+    y: &Scale,
+    dots: &[(f64, f64)],
+    means: Vec<(f64, f64)>,
+    look: Look,
+) -> PlotResult {
+    let shown = |(x, v): (f64, f64)| (x, y.shown(v));
+    line(
+        chart,
+        means.into_iter().map(shown).collect(),
+        look.color,
+        look.stroke,
+    )?;
+    chart.draw_series(
+        dots.iter()
+            .map(|&point| Circle::new(shown(point), 4, look.color.filled())),
+    )?;
+    for &(x, value) in dots.iter().filter(|(_, v)| y.is_cut(*v)) {
+        let edge = Edge::of_vertical(y, value);
+        cut_mark(chart, shown((x, value)), value, look.color, edge)?;
+    }
+    Ok(())
 }
