@@ -1,9 +1,16 @@
-//! `results/<name>/report.md` and `report.tex`: the paper's two tables in its layout
-//! with our value beside the published one in every cell, cells off by more than the
-//! spec's tolerance flagged, our extra estimators and the floor; the Markdown report
-//! adds the training summary, wall time per stage and provenance from the manifest,
-//! and the figures. Drawn from a [`StoredRun`] alone, like the figures. The tables are
-//! built once (`Tables`) and set as Markdown here and as LaTeX in `latex`.
+//! Everything drawn from results folders alone, never from a run's memory, so that it
+//! can be redrawn without re-running. In: a [`StoredRun`] (or a sweep's table, or two
+//! folders). Out: text and files for people.
+//!
+//! - [`tables`]: the calibration and evaluation tables that `run` prints;
+//! - [`plots`]: the figures of a run and of a sweep;
+//! - this module: `results/<name>/report.md` and `report.tex`, the paper's two tables
+//!   in its layout with our value beside the published one in every cell, cells off by
+//!   more than the spec's tolerance flagged, our extra estimators and the floor; the
+//!   Markdown report adds the training summary, wall time per stage, provenance from
+//!   the manifest, and the figures. The tables are built once (`Tables`) and set as
+//!   Markdown here and as LaTeX in `latex`;
+//! - [`compare`]: two results folders side by side.
 
 pub mod compare;
 mod latex;
