@@ -3,7 +3,7 @@
 //! stored folder. [`figures`] and [`sweep_figures`] draw each figure as SVG with
 //! plotters, every numeric axis chosen by [`scale`] (linear or logarithmic, its ticks,
 //! far values cut), and [`render`] writes it as PNG and as SVG with the text outlined,
-//! both from the embedded font. In: a [`StoredRun`](crate::results::read::StoredRun) or
+//! both from the embedded font. In: a [`StoredRun`] or
 //! a stored sweep. Out: the figure files, and each figure's caption or why it is absent.
 
 pub mod draw;

@@ -2,7 +2,7 @@
 //! chooses a linear axis when they span less than a decade and a logarithmic one
 //! otherwise, with at least [`MIN_TICKS`] labelled ticks at round numbers;
 //! [`Scale::fit_values`] also ends the axis below one value, or one series, lying far
-//! above all the others ([`cut_above`]), and above values more than [`MAX_DECADES`]
+//! above all the others ([`cut_above`]), and above values more than `MAX_DECADES`
 //! below the highest (a floor of 10⁻¹² cm/s when a DVL has no noise), so that the
 //! others keep the panel, and the figure draws such a value at the edge with its
 //! number written on it. A [`Scale`] is a
@@ -99,7 +99,7 @@ impl Scale {
     /// An axis for the values of a panel, as [`Scale::fit`] makes it, ending below at
     /// most `most` far values ([`cut_above`]): draw each value at [`Scale::shown`], and
     /// mark those that [`Scale::is_cut`] with their number.
-    /// Values more than [`MAX_DECADES`] below the highest are left below the axis.
+    /// Values more than `MAX_DECADES` below the highest are left below the axis.
     pub fn fit_values(values: &[f64], most: usize) -> Scale {
         let highest = values
             .iter()
