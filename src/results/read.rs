@@ -31,6 +31,30 @@ pub enum ReadError {
         source: SpecErrors,
     },
     #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{}: not a Parquet file: {source}", path.display())]
+    NotParquet {
+        path: PathBuf,
+        #[source]
+        source: parquet::errors::ParquetError,
+    },
+    #[error("{}: {source}", path.display())]
+    Parquet {
+        path: PathBuf,
+        #[source]
+        source: parquet::errors::ParquetError,
+    },
+    #[error("{}: {source}", path.display())]
+    Arrow {
+        path: PathBuf,
+        #[source]
+        source: arrow_schema::ArrowError,
+    },
+    #[error("{}: {source}", path.display())]
     Manifest {
         path: PathBuf,
         #[source]
@@ -174,13 +198,27 @@ pub(crate) fn read_rows<T>(
         path: path.clone(),
         message,
     };
-    let opened = std::fs::File::open(&path).map_err(|e| invalid(e.to_string()))?;
-    let builder = ParquetRecordBatchReaderBuilder::try_new(opened)
-        .map_err(|e| invalid(format!("not a Parquet file: {e}")))?;
+    let opened = std::fs::File::open(&path).map_err(|source| ReadError::Io {
+        path: path.clone(),
+        source,
+    })?;
+    let builder = ParquetRecordBatchReaderBuilder::try_new(opened).map_err(|source| {
+        ReadError::NotParquet {
+            path: path.clone(),
+            source,
+        }
+    })?;
     check_schema(builder.schema(), expected).map_err(invalid)?;
     let mut out = Vec::new();
-    for batch in builder.build().map_err(|e| invalid(e.to_string()))? {
-        let batch = batch.map_err(|e| invalid(e.to_string()))?;
+    let batches = builder.build().map_err(|source| ReadError::Parquet {
+        path: path.clone(),
+        source,
+    })?;
+    for batch in batches {
+        let batch = batch.map_err(|source| ReadError::Arrow {
+            path: path.clone(),
+            source,
+        })?;
         out.extend(rows(&Batch(&batch)).map_err(invalid)?);
     }
     Ok(out)
