@@ -14,7 +14,7 @@ pub const DEFAULT_DEST: &str = "data/snapir";
 
 #[derive(Debug, thiserror::Error)]
 pub enum FetchError {
-    #[error("downloading {url}: {source}")]
+    #[error("downloading {url}")]
     Http {
         url: String,
         source: Box<ureq::Error>,
@@ -25,7 +25,7 @@ pub enum FetchError {
         actual: String,
         expected: String,
     },
-    #[error("writing {}: {source}", path.display())]
+    #[error("writing {}", path.display())]
     Write {
         path: PathBuf,
         source: std::io::Error,

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 pub enum NpyError {
     #[error("{}: file not found{}", path.display(), crate::spec::recordings::hint_for(path))]
     Missing { path: PathBuf },
-    #[error("{}: cannot read as .npy: {source}", path.display())]
+    #[error("{}: cannot read as .npy", path.display())]
     Read {
         path: PathBuf,
         source: std::io::Error,

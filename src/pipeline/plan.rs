@@ -109,7 +109,7 @@ pub struct Plan<'a> {
 pub enum PlanError {
     #[error(transparent)]
     Data(#[from] crate::data::DataError),
-    #[error("reading a data file: {0}")]
+    #[error("reading a data file")]
     Hash(#[from] std::io::Error),
 }
 

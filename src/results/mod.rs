@@ -28,12 +28,12 @@ use std::sync::Arc;
 
 #[derive(Debug, thiserror::Error)]
 pub enum ResultsError {
-    #[error("writing {}: {source}", path.display())]
+    #[error("writing {}", path.display())]
     Io {
         path: PathBuf,
         source: std::io::Error,
     },
-    #[error("encoding {}: {source}", path.display())]
+    #[error("encoding {}", path.display())]
     Parquet {
         path: PathBuf,
         source: parquet::errors::ParquetError,

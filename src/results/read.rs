@@ -24,37 +24,37 @@ pub enum ReadError {
     Missing { path: PathBuf },
     #[error("{}: {message}", path.display())]
     Invalid { path: PathBuf, message: String },
-    #[error("{}: {source}", path.display())]
+    #[error("{}", path.display())]
     Spec {
         path: PathBuf,
         #[source]
         source: SpecErrors,
     },
-    #[error("{}: {source}", path.display())]
+    #[error("{}", path.display())]
     Io {
         path: PathBuf,
         #[source]
         source: std::io::Error,
     },
-    #[error("{}: not a Parquet file: {source}", path.display())]
+    #[error("{}: not a Parquet file", path.display())]
     NotParquet {
         path: PathBuf,
         #[source]
         source: parquet::errors::ParquetError,
     },
-    #[error("{}: {source}", path.display())]
+    #[error("{}", path.display())]
     Parquet {
         path: PathBuf,
         #[source]
         source: parquet::errors::ParquetError,
     },
-    #[error("{}: {source}", path.display())]
+    #[error("{}", path.display())]
     Arrow {
         path: PathBuf,
         #[source]
         source: arrow_schema::ArrowError,
     },
-    #[error("{}: {source}", path.display())]
+    #[error("{}", path.display())]
     Manifest {
         path: PathBuf,
         #[source]
@@ -576,5 +576,20 @@ mod tests {
             error.to_string().contains("column `is_best` is missing"),
             "{error}"
         );
+    }
+
+    #[test]
+    fn a_damaged_file_names_its_cause_once() {
+        let folder = tempfile::tempdir().unwrap();
+        let path = folder.path().join("block.parquet");
+        std::fs::write(&path, "not parquet").unwrap();
+        let error = run_rows_at(&path).unwrap_err();
+        assert!(matches!(error, ReadError::NotParquet { .. }), "{error:?}");
+        let shown = format!("{:#}", anyhow::Error::from(error));
+        assert!(
+            shown.starts_with(&format!("{}: not a Parquet file: ", path.display())),
+            "{shown}"
+        );
+        assert_eq!(shown.matches("Parquet error").count(), 1, "{shown}");
     }
 }

@@ -64,7 +64,7 @@ pub enum PlotError {
     Draw { stem: String, message: String },
     #[error(transparent)]
     Render(#[from] render::RenderError),
-    #[error("writing {}: {source}", path.display())]
+    #[error("writing {}", path.display())]
     Io {
         path: PathBuf,
         source: std::io::Error,
