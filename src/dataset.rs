@@ -9,7 +9,7 @@
 use crate::data::Trajectory;
 use crate::noise::{BeamGeometry, measure_trajectory};
 use crate::rng::task_rng;
-use crate::spec::{Grid, Spec};
+use crate::spec::{Grid, Spec, window_starts};
 use crate::vocab::SensorErrors;
 use indicatif::ProgressBar;
 use rayon::prelude::*;
@@ -45,13 +45,6 @@ impl Grid {
         }
         points
     }
-}
-
-/// Start samples of the windows of a trajectory of `len` samples.
-pub fn window_starts(len: usize, window: usize, stride: usize) -> impl Iterator<Item = usize> {
-    (0..)
-        .map(move |i| i * stride)
-        .take_while(move |start| start + window <= len)
 }
 
 /// How many windows a spec's training set has, known before any is generated.

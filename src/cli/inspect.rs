@@ -3,8 +3,8 @@
 
 use super::{CliError, failure, input, load_spec};
 use crate::data::{fetch, load_trajectories};
-use crate::dataset::{DatasetSize, TrainingSet, window_starts};
-use crate::spec::{Origin, load_experiment};
+use crate::dataset::{DatasetSize, TrainingSet};
+use crate::spec::{Origin, load_experiment, window_starts};
 use std::path::Path;
 
 pub(super) fn validate(spec_path: &Path, set: &[String]) -> Result<(), CliError> {

@@ -113,6 +113,14 @@ impl TrajectorySource {
     }
 }
 
+/// Start samples of the windows of a trajectory of `len` samples: every `stride`
+/// samples, as long as a whole window fits.
+pub fn window_starts(len: usize, window: usize, stride: usize) -> impl Iterator<Item = usize> {
+    (0..)
+        .map(move |i| i * stride)
+        .take_while(move |start| start + window <= len)
+}
+
 /// The training grid, one list per axis, in the spec's units.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Grid {
@@ -577,6 +585,10 @@ fn check_dataset(
     let mut trajectories = Vec::new();
     for (i, wanted) in names.iter().enumerate() {
         let key = format!("dataset.trajectories[{i}]");
+        if names[..i].contains(wanted) {
+            faults.add(key, format!("{wanted:?} is listed twice"));
+            continue;
+        }
         if let Some(index) = lookup(sources, &key, wanted, faults) {
             if let (Some(len), Some(window)) = (sources[index].known_len(), window) {
                 if len < window {
@@ -591,10 +603,21 @@ fn check_dataset(
             trajectories.push(index);
         }
     }
-    if !(0.0..1.0).contains(&validation_fraction) {
+    if !(validation_fraction > 0.0 && validation_fraction < 1.0) {
         faults.add(
             "dataset.validation_fraction",
-            format!("{validation_fraction} must be at least 0 and below 1"),
+            format!(
+                "{validation_fraction} must be above 0 and below 1: training keeps the epoch with the best validation loss"
+            ),
+        );
+    } else if let (Some(window), Some(stride)) = (window, stride) {
+        check_split(
+            &trajectories,
+            sources,
+            window,
+            stride,
+            validation_fraction,
+            faults,
         );
     }
     let dataset = DatasetSpec {
@@ -609,6 +632,38 @@ fn check_dataset(
         samples: window,
     };
     (dataset, window)
+}
+
+/// Where the training trajectories' lengths are known, checks that
+/// `validation_fraction` leaves each grid combination at least one validation window
+/// and at least one training window.
+fn check_split(
+    trajectories: &[usize],
+    sources: &[TrajectorySource],
+    window: usize,
+    stride: usize,
+    validation_fraction: f64,
+    faults: &mut Faults,
+) {
+    let lengths: Option<Vec<usize>> = trajectories
+        .iter()
+        .map(|&t| sources[t].known_len())
+        .collect();
+    let Some(lengths) = lengths else { return };
+    let windows: usize = lengths
+        .iter()
+        .map(|&len| window_starts(len, window, stride).count())
+        .sum();
+    let validation = (validation_fraction * windows as f64).round() as usize;
+    if windows > 0 && (validation == 0 || validation == windows) {
+        faults.add(
+            "dataset.validation_fraction",
+            format!(
+                "{validation_fraction} of {windows} windows per combination leaves {validation} for validation and {} for training: each needs at least one",
+                windows - validation
+            ),
+        );
+    }
 }
 
 /// Checks `[[dvl]]`: at least one, each named once, with error terms in range.
@@ -671,9 +726,18 @@ fn check_calibration(
         );
     }
     let mut window_sizes = Vec::new();
+    let mut first_of_size: Vec<(usize, usize)> = Vec::new();
     for (i, &size_s) in window_sizes_s.iter().enumerate() {
         let key = format!("calibration.window_sizes_s[{i}]");
         if let Some(size) = positive_samples(&key, size_s, rate, faults) {
+            if let Some(&(first, _)) = first_of_size.iter().find(|&&(_, s)| s == size) {
+                faults.add(
+                    key,
+                    format!("{size_s} s is calibration.window_sizes_s[{first}] again: each window size is calibrated once"),
+                );
+                continue;
+            }
+            first_of_size.push((i, size));
             match segment {
                 Some(len) if size >= len => faults.add(
                     key,
@@ -710,12 +774,12 @@ fn check_evaluation(
         .iter()
         .enumerate()
         .filter_map(|(i, wanted)| {
-            lookup(
-                sources,
-                &format!("evaluation.trajectories[{i}]"),
-                wanted,
-                faults,
-            )
+            let key = format!("evaluation.trajectories[{i}]");
+            if trajectories[..i].contains(wanted) {
+                faults.add(key, format!("{wanted:?} is listed twice"));
+                return None;
+            }
+            lookup(sources, &key, wanted, faults)
         })
         .collect()
 }
@@ -814,13 +878,6 @@ fn check_report(
 }
 
 /// experiments/quick.toml with `overrides`, for tests.
-#[cfg(test)]
-pub(crate) fn quick_spec(overrides: &[&str]) -> Spec {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quick.toml");
-    let overrides: Vec<String> = overrides.iter().map(ToString::to_string).collect();
-    load(&path, &overrides).unwrap()
-}
-
 /// Whether `name` can name a results folder: letters, digits, '-', '_', '.', and for
 /// the points of a sweep (`<name>/<point>`) '/', '=' and ','; no empty, `.` or `..` part.
 fn is_folder_name(name: &str) -> bool {
@@ -1116,6 +1173,13 @@ fn expand_axis(key: &str, axis: &AxisFile, faults: &mut Faults) -> Vec<f64> {
                 format!("{key}.values[{i}]"),
                 format!("{value} must be a finite number"),
             );
+        } else if values[..i].contains(value) {
+            faults.add(
+                format!("{key}.values[{i}]"),
+                format!(
+                    "{value} is listed twice: every combination with it would be generated twice"
+                ),
+            );
         }
     }
     values
@@ -1140,4 +1204,83 @@ fn parse_names<T: std::str::FromStr<Err = String> + PartialEq>(
         }
     }
     parsed
+}
+
+#[cfg(test)]
+pub(crate) fn quick_spec(overrides: &[&str]) -> Spec {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quick.toml");
+    let overrides: Vec<String> = overrides.iter().map(ToString::to_string).collect();
+    load(&path, &overrides).unwrap()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The faults `load` finds in quick.toml with `overrides`, one per line.
+    fn faults(overrides: &[&str]) -> String {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quick.toml");
+        let overrides: Vec<String> = overrides.iter().map(ToString::to_string).collect();
+        load(&path, &overrides).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn lists_whose_repeats_make_no_sense_are_refused() {
+        let error = faults(&["calibration.window_sizes_s=[20, 40, 20.0]"]);
+        assert!(
+            error.contains(
+                "calibration.window_sizes_s[2]: 20 s is calibration.window_sizes_s[0] again"
+            ),
+            "{error}"
+        );
+        let error = faults(&["dataset.trajectories=[\"S1\", \"S2\", \"S1\"]"]);
+        assert!(
+            error.contains("dataset.trajectories[2]: \"S1\" is listed twice"),
+            "{error}"
+        );
+        let error = faults(&["evaluation.trajectories=[\"S3\", \"S3\"]"]);
+        assert!(
+            error.contains("evaluation.trajectories[1]: \"S3\" is listed twice"),
+            "{error}"
+        );
+        let error = faults(&["grid.scale_pct={values = [0.5, 1.0, 0.5]}"]);
+        assert!(
+            error.contains("grid.scale_pct.values[2]: 0.5 is listed twice"),
+            "{error}"
+        );
+        let error = faults(&["estimators.kinds=[\"baseline\", \"baseline\"]"]);
+        assert!(
+            error.contains("estimators.kinds[1]: \"baseline\" is listed twice"),
+            "{error}"
+        );
+    }
+
+    #[test]
+    fn training_needs_validation_and_training_windows() {
+        let error = faults(&["dataset.validation_fraction=0.0"]);
+        assert!(
+            error.contains("dataset.validation_fraction: 0 must be above 0 and below 1"),
+            "{error}"
+        );
+        // quick.toml's S1 and S2 give 165 windows per combination.
+        let error = faults(&["dataset.validation_fraction=0.001"]);
+        assert!(
+            error.contains(
+                "0.001 of 165 windows per combination leaves 0 for validation and 165 for training"
+            ),
+            "{error}"
+        );
+        let error = faults(&["dataset.validation_fraction=0.999"]);
+        assert!(
+            error.contains("leaves 165 for validation and 0 for training"),
+            "{error}"
+        );
+        assert!(
+            load(
+                &Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quick.toml"),
+                &["dataset.validation_fraction=0.01".to_string()]
+            )
+            .is_ok()
+        );
+    }
 }
