@@ -116,8 +116,12 @@ fn file_name(path: &Path) -> String {
 }
 
 pub(super) fn fetch_data(dest: &Path, base_url: &str) -> Result<(), CliError> {
-    for executed in fetch::fetch(base_url, dest).map_err(failure)? {
-        match executed {
+    let fetched = fetch::fetch(base_url, dest).map_err(|error| match error {
+        fetch::FetchError::BadUrl { .. } => input(error),
+        _ => failure(error),
+    })?;
+    for file in fetched {
+        match file {
             fetch::Fetched::Downloaded(path) => {
                 eprintln!("downloaded {} (sha256 checked)", path.display())
             }

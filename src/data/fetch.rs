@@ -1,10 +1,15 @@
 //! `dcnet-exp data fetch`: downloads the Snapir recordings (`V.npy`, `V_test.npy`) from
 //! the BeamsNet repository, checks their SHA-256 against PAPER-NOTES, and writes them
-//! atomically. A file already present with the right hash is kept.
+//! atomically. A file already present with the right hash is kept. A server that does
+//! not answer, or stalls mid-body, times out; a failed download is tried again a few
+//! times, waiting longer each time, before the fetch gives up naming the URL.
 
 use crate::files::sha256_hex;
+use crate::progress::bar;
 use crate::spec::recordings::{FILES, RemoteFile};
+use std::io::Read;
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 /// Raw files of the BeamsNet repository (Cohen & Klein 2022) on its main branch.
 pub const DEFAULT_BASE_URL: &str = "https://raw.githubusercontent.com/ansfl/BeamsNet/main";
@@ -12,11 +17,36 @@ pub const DEFAULT_BASE_URL: &str = "https://raw.githubusercontent.com/ansfl/Beam
 /// Where `dcnet-exp data fetch` puts the files, relative to the working directory.
 pub const DEFAULT_DEST: &str = "data/snapir";
 
+/// How long to wait for a server, and how often to try.
+#[derive(Debug, Clone, Copy)]
+pub struct Patience {
+    /// For the connection to open.
+    pub connect: Duration,
+    /// For the response to begin, and for each read of the body.
+    pub read: Duration,
+    /// Tries per file, the first included.
+    pub attempts: u32,
+    /// The wait before the second try; it doubles before each later one.
+    pub backoff: Duration,
+}
+
+impl Patience {
+    pub const DEFAULT: Patience = Patience {
+        connect: Duration::from_secs(15),
+        read: Duration::from_secs(30),
+        attempts: 4,
+        backoff: Duration::from_secs(2),
+    };
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum FetchError {
-    #[error("downloading {url}")]
+    #[error("--base-url {url}: not an http:// or https:// address with a host")]
+    BadUrl { url: String },
+    #[error("downloading {url}: gave up after {attempts} tries")]
     Http {
         url: String,
+        attempts: u32,
         source: Box<ureq::Error>,
     },
     #[error("{url}: sha256 {actual}, expected {expected}: the download is not the published file")]
@@ -41,7 +71,7 @@ pub enum Fetched {
 
 /// Downloads the Snapir recordings ([`FILES`]) from `base_url` into `dest`.
 pub fn fetch(base_url: &str, dest: &Path) -> Result<Vec<Fetched>, FetchError> {
-    fetch_files(&FILES, base_url, dest)
+    fetch_files(&FILES, base_url, dest, Patience::DEFAULT)
 }
 
 /// Downloads `files` from `base_url` into `dest`, keeping those already there with the
@@ -50,11 +80,27 @@ pub fn fetch_files(
     files: &[RemoteFile],
     base_url: &str,
     dest: &Path,
+    patience: Patience,
 ) -> Result<Vec<Fetched>, FetchError> {
+    let base_url = base_url.trim_end_matches('/');
+    let has_host = base_url.parse::<ureq::http::Uri>().is_ok_and(|uri| {
+        matches!(uri.scheme_str(), Some("http" | "https")) && uri.host().is_some()
+    });
+    if !has_host {
+        return Err(FetchError::BadUrl {
+            url: base_url.to_string(),
+        });
+    }
     std::fs::create_dir_all(dest).map_err(|source| FetchError::Write {
         path: dest.to_path_buf(),
         source,
     })?;
+    let agent: ureq::Agent = ureq::Agent::config_builder()
+        .timeout_connect(Some(patience.connect))
+        .timeout_recv_response(Some(patience.read))
+        .timeout_per_read(Some(patience.read))
+        .build()
+        .into();
     let mut fetched = Vec::new();
     for &RemoteFile {
         name,
@@ -67,17 +113,8 @@ pub fn fetch_files(
             fetched.push(Fetched::AlreadyPresent(path));
             continue;
         }
-        let url = format!("{}/{remote_path}", base_url.trim_end_matches('/'));
-        let http = |source| FetchError::Http {
-            url: url.clone(),
-            source: Box::new(source),
-        };
-        let bytes = ureq::get(&url)
-            .call()
-            .map_err(http)?
-            .body_mut()
-            .read_to_vec()
-            .map_err(http)?;
+        let url = format!("{base_url}/{remote_path}");
+        let bytes = download_with_retries(&agent, &url, name, patience)?;
         let actual = sha256_hex(&bytes);
         if actual != expected {
             return Err(FetchError::Checksum {
@@ -93,6 +130,68 @@ pub fn fetch_files(
         fetched.push(Fetched::Downloaded(path));
     }
     Ok(fetched)
+}
+
+/// `url`'s body, tried up to `patience.attempts` times while the failure may pass (no
+/// answer, a stall, a server error); a client error such as 404 is final.
+fn download_with_retries(
+    agent: &ureq::Agent,
+    url: &str,
+    name: &str,
+    patience: Patience,
+) -> Result<Vec<u8>, FetchError> {
+    let mut wait = patience.backoff;
+    let mut attempt = 1;
+    loop {
+        match download(agent, url, name) {
+            Ok(bytes) => return Ok(bytes),
+            Err(error) if attempt < patience.attempts && may_pass(&error) => {
+                eprintln!("downloading {url}: {error}; trying again in {wait:?}");
+                std::thread::sleep(wait);
+                wait *= 2;
+                attempt += 1;
+            }
+            Err(error) => {
+                return Err(FetchError::Http {
+                    url: url.to_string(),
+                    attempts: attempt,
+                    source: Box::new(error),
+                });
+            }
+        }
+    }
+}
+
+/// Whether a failed download may succeed when tried again.
+fn may_pass(error: &ureq::Error) -> bool {
+    match error {
+        ureq::Error::StatusCode(status) => *status >= 500 || *status == 429,
+        ureq::Error::BadUri(_) | ureq::Error::InvalidProxyUrl => false,
+        _ => true,
+    }
+}
+
+/// One try at `url`'s body, with a progress bar on a terminal.
+fn download(agent: &ureq::Agent, url: &str, name: &str) -> Result<Vec<u8>, ureq::Error> {
+    let mut response = agent.get(url).call()?;
+    let body = response.body_mut();
+    let progress = bar(
+        body.content_length().unwrap_or(0) as usize,
+        name.to_string(),
+    );
+    let mut bytes = Vec::new();
+    let mut reader = body.with_config().limit(u64::MAX).reader();
+    let mut chunk = vec![0u8; 1 << 16];
+    loop {
+        let read = reader.read(&mut chunk).map_err(ureq::Error::Io)?;
+        if read == 0 {
+            break;
+        }
+        bytes.extend_from_slice(&chunk[..read]);
+        progress.inc(read as u64);
+    }
+    progress.finish_and_clear();
+    Ok(bytes)
 }
 
 #[cfg(test)]
@@ -153,7 +252,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let dest = dir.path().join("data");
         let (url, server) = serve(served.clone(), 2);
-        let fetched = fetch_files(&files, &url, &dest).unwrap();
+        let fetched = fetch_files(&files, &url, &dest, Patience::DEFAULT).unwrap();
         server.join().unwrap();
         assert_eq!(
             fetched,
@@ -166,7 +265,7 @@ mod tests {
             assert_eq!(&std::fs::read(dest.join(file.name)).unwrap(), bytes);
         }
         // No server now: both files are kept because their hashes match.
-        let again = fetch_files(&files, "http://127.0.0.1:9", &dest).unwrap();
+        let again = fetch_files(&files, "http://127.0.0.1:9", &dest, Patience::DEFAULT).unwrap();
         assert_eq!(
             again,
             vec![
@@ -182,7 +281,7 @@ mod tests {
         served[0].1[0] ^= 1;
         let dir = tempfile::tempdir().unwrap();
         let (url, server) = serve(served, 1);
-        let error = fetch_files(&files, &url, dir.path()).unwrap_err();
+        let error = fetch_files(&files, &url, dir.path(), Patience::DEFAULT).unwrap_err();
         server.join().unwrap();
         assert!(
             error
@@ -195,5 +294,82 @@ mod tests {
             files[0].sha256
         )));
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    /// Patience short enough for a test: half a second per read, two tries.
+    const IMPATIENT: Patience = Patience {
+        connect: Duration::from_millis(500),
+        read: Duration::from_millis(500),
+        attempts: 2,
+        backoff: Duration::from_millis(10),
+    };
+
+    /// A server on 127.0.0.1 that answers every connection with `reply` (perhaps
+    /// nothing) and then holds it open without a word more, for `connections`
+    /// connections.
+    fn stalling(reply: &'static [u8], connections: usize) -> (String, std::thread::JoinHandle<()>) {
+        use std::io::Write;
+        let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        let url = format!("http://{}", listener.local_addr().unwrap());
+        let handle = std::thread::spawn(move || {
+            let mut held = Vec::new();
+            for stream in listener.incoming().take(connections) {
+                let mut stream = stream.unwrap();
+                let _ = stream.write_all(reply);
+                held.push(stream);
+            }
+            std::thread::sleep(Duration::from_secs(2));
+        });
+        (url, handle)
+    }
+
+    #[test]
+    fn a_server_that_never_answers_or_stalls_mid_body_times_out_and_is_named() {
+        let (files, _) = generated();
+        let partial: &[u8] = b"HTTP/1.1 200 OK\r\nContent-Length: 50000\r\n\r\nfirst bytes";
+        for reply in [&b""[..], partial] {
+            let (url, server) = stalling(reply, 2);
+            let dir = tempfile::tempdir().unwrap();
+            let clock = std::time::Instant::now();
+            let error = fetch_files(&files, &url, dir.path(), IMPATIENT).unwrap_err();
+            assert!(
+                clock.elapsed() < Duration::from_secs(10),
+                "{:?}",
+                clock.elapsed()
+            );
+            let shown = format!("{:#}", anyhow::Error::from(error));
+            assert!(
+                shown.starts_with(&format!(
+                    "downloading {url}/one/a.npy: gave up after 2 tries: "
+                )),
+                "{shown}"
+            );
+            assert!(
+                shown.contains("timeout") || shown.contains("timed out"),
+                "{shown}"
+            );
+            assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+            server.join().unwrap();
+        }
+    }
+
+    #[test]
+    fn a_missing_file_is_not_asked_for_again_and_a_bad_url_is_refused() {
+        let (files, _) = generated();
+        let (url, server) = serve(Vec::new(), 1);
+        let dir = tempfile::tempdir().unwrap();
+        let error = fetch_files(&files, &url, dir.path(), IMPATIENT).unwrap_err();
+        server.join().unwrap();
+        assert!(
+            matches!(error, FetchError::Http { attempts: 1, .. }),
+            "{error:?}"
+        );
+        for url in ["localhost:8000", "ftp://example.org/x", "not a url"] {
+            let error = fetch_files(&files, url, dir.path(), IMPATIENT).unwrap_err();
+            assert!(
+                matches!(error, FetchError::BadUrl { .. }),
+                "{url}: {error:?}"
+            );
+        }
     }
 }
