@@ -476,8 +476,65 @@ fn bad_specs_are_rejected_with_file_line_and_key() {
     assert_rejected(
         d,
         &["--backend", "cuda"],
-        "error: --set training.backend=\"cuda\": training.backend: unknown backend \"cuda\"; expected flex or ndarray",
+        "error: --backend cuda: unknown backend \"cuda\"; expected flex or ndarray",
     );
+}
+
+#[test]
+fn bad_arguments_and_names_are_bad_input_before_anything_runs() {
+    let dir = project(false);
+    let d = dir.path();
+    std::fs::write(d.join("a-file"), "").unwrap();
+    let cases: [(&[&str], &str); 6] = [
+        (
+            &["--threads", "10000", "plan", "experiments/quick.toml"],
+            "error: --threads 10000: give 1 to 1024",
+        ),
+        (
+            &["run", "experiments/quick.toml", "--out", "a-file"],
+            "error: --out a-file: is a file; results go into a folder",
+        ),
+        (
+            &["bench", "experiments/quick.toml", "--repeat", "0"],
+            "0 is not in 1..=1000",
+        ),
+        (
+            &[
+                "data",
+                "fetch",
+                "--base-url",
+                "localhost:1",
+                "--dest",
+                "fetched",
+            ],
+            "error: --base-url localhost:1: not an http:// or https:// address with a host",
+        ),
+        (
+            &["run", "experiments/quick.toml", "--set", "name=\".cache\""],
+            "name: \".cache\" must be non-empty, at most 200 characters",
+        ),
+        (
+            &[
+                "validate",
+                "experiments/quick.toml",
+                "--set",
+                "calibration.window_sizes_s=[20, 20]",
+            ],
+            "calibration.window_sizes_s[1]: 20 s is calibration.window_sizes_s[0] again",
+        ),
+    ];
+    for (args, expected) in cases {
+        let output = dcnet(d, args);
+        let message = stderr(&output);
+        assert_eq!(output.status.code(), Some(1), "{args:?}: {message}");
+        assert!(
+            message.contains(expected),
+            "{args:?}: expected {expected:?} in:\n{message}"
+        );
+        for made in ["results", "fetched"] {
+            assert!(!d.join(made).exists(), "{args:?} made {made}/");
+        }
+    }
 }
 
 #[test]

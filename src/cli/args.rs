@@ -96,11 +96,11 @@ pub(super) enum Command {
     Bench {
         spec: PathBuf,
         /// Timed repetitions of each stage
-        #[arg(long, default_value_t = 5)]
-        repeat: usize,
+        #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
+        repeat: u32,
         /// Training batches timed per model
-        #[arg(long, default_value_t = 40)]
-        training_batches: usize,
+        #[arg(long, default_value_t = 40, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+        training_batches: u32,
         /// The PyTorch peer script (torch_dcnet.py): times the same network in PyTorch
         /// in the same arrangements, side by side
         #[arg(long, value_name = "SCRIPT")]

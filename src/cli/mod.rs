@@ -72,8 +72,10 @@ pub fn main() -> Result<(), CliError> {
         }
     };
     if let Some(threads) = cli.threads {
-        if threads == 0 {
-            return Err(input(anyhow::anyhow!("--threads must be at least 1")));
+        if !(1..=MAX_THREADS).contains(&threads) {
+            return Err(input(anyhow::anyhow!(
+                "--threads {threads}: give 1 to {MAX_THREADS}"
+            )));
         }
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -111,8 +113,8 @@ pub fn main() -> Result<(), CliError> {
             overrides,
         } => bench::bench(
             &spec,
-            repeat,
-            training_batches,
+            repeat as usize,
+            training_batches as usize,
             pytorch.as_deref(),
             &overrides.set,
         ),
@@ -123,10 +125,25 @@ fn load_spec(path: &Path, set: &[String]) -> Result<Spec, CliError> {
     load(path, set).map_err(input)
 }
 
+/// The most worker threads `--threads` may ask for.
+const MAX_THREADS: usize = 1024;
+
+/// The experiment a command works on: its spec with `--set`, and `--backend` checked
+/// as itself before it overrides `training.backend`; OUT, when it exists, must be a
+/// folder.
 fn load_target(target: &Target) -> Result<Experiment, CliError> {
     let mut set = target.overrides.set.clone();
     if let Some(backend) = &target.backend {
+        backend
+            .parse::<crate::vocab::Backend>()
+            .map_err(|message| input(anyhow::anyhow!("--backend {backend}: {message}")))?;
         set.push(format!("training.backend={backend:?}"));
+    }
+    if target.out.exists() && !target.out.is_dir() {
+        return Err(input(anyhow::anyhow!(
+            "--out {}: is a file; results go into a folder",
+            target.out.display()
+        )));
     }
     load_experiment(&target.spec, &set).map_err(input)
 }

@@ -17,7 +17,12 @@ impl Shard {
         let number = |part: &str, what: &str| {
             part.trim()
                 .parse::<usize>()
-                .map_err(|_| format!("--shard {text}: {what} {part:?} is not a whole number"))
+                .map_err(|error| match error.kind() {
+                    std::num::IntErrorKind::PosOverflow => {
+                        format!("--shard {text}: {what} {part} is too large")
+                    }
+                    _ => format!("--shard {text}: {what} {part:?} is not a whole number"),
+                })
         };
         let (index, count) = match text.split_once('/') {
             Some((index, count)) => (number(index, "shard index")?, number(count, "shard count")?),
@@ -75,6 +80,10 @@ mod tests {
         assert_eq!(
             Shard::parse("4", none).unwrap_err(),
             "--shard 4: no shard index: write K/4, or set SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX"
+        );
+        assert_eq!(
+            Shard::parse("0/99999999999999999999", none).unwrap_err(),
+            "--shard 0/99999999999999999999: shard count 99999999999999999999 is too large"
         );
         assert!(
             Shard::parse("a/2", none)

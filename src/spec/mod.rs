@@ -27,6 +27,9 @@ use file::{AxisFile, SyntheticFile};
 use published::Published;
 use std::path::{Path, PathBuf};
 
+/// The longest name (or sweep point name) a results folder may have.
+pub const MAX_NAME_CHARS: usize = 200;
+
 /// A checked spec, in the units the pipeline computes in.
 #[derive(Debug, Clone)]
 pub struct Spec {
@@ -230,7 +233,7 @@ impl SpecFile {
         let mut resolved = self;
 
         if !is_folder_name(&name) {
-            faults.add("name", format!("{name:?} must be non-empty and use only letters, digits, '-', '_' and '.' (it names the results folder)"));
+            faults.add("name", format!("{name:?} must be non-empty, at most {MAX_NAME_CHARS} characters, use only letters, digits, '-', '_' and '.', and not start with '.' (it names the results folder)"));
         }
         let data = check_data(data, spec_dir, &mut resolved.data.trajectories, &mut faults);
         let (rate, sources) = (data.rate, &data.trajectories);
@@ -409,7 +412,15 @@ fn check_file_trajectory(
     faults: &mut Faults,
 ) -> Origin {
     resolved.file = Some(path.clone());
-    if !path.is_file() {
+    if path.is_dir() {
+        faults.add(
+            format!("{key}.file"),
+            format!(
+                "{} is a folder: name the recording file in it",
+                path.display()
+            ),
+        );
+    } else if !path.is_file() {
         faults.add(
             format!("{key}.file"),
             format!(
@@ -877,14 +888,15 @@ fn check_report(
     }
 }
 
-/// experiments/quick.toml with `overrides`, for tests.
 /// Whether `name` can name a results folder: letters, digits, '-', '_', '.', and for
-/// the points of a sweep (`<name>/<point>`) '/', '=' and ','; no empty, `.` or `..` part.
+/// the points of a sweep (`<name>/<point>`) '/', '=' and ','; no part empty, longer
+/// than [`MAX_NAME_CHARS`] or starting with '.' (`.`, `..`, and the `.cache` beside the
+/// results).
 fn is_folder_name(name: &str) -> bool {
     name.split('/').all(|part| {
         !part.is_empty()
-            && part != "."
-            && part != ".."
+            && !part.starts_with('.')
+            && part.len() <= MAX_NAME_CHARS
             && part
                 .chars()
                 .all(|c| c.is_ascii_alphanumeric() || "-_.=,".contains(c))
@@ -1206,6 +1218,7 @@ fn parse_names<T: std::str::FromStr<Err = String> + PartialEq>(
     parsed
 }
 
+/// experiments/quick.toml with `overrides`, for tests.
 #[cfg(test)]
 pub(crate) fn quick_spec(overrides: &[&str]) -> Spec {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quick.toml");
