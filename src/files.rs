@@ -1,12 +1,15 @@
 //! Files written so that nothing is lost: a file is written whole or not at all
 //! ([`write_atomic`]: a temporary file beside it, synced, then renamed), the
 //! temporaries of writers killed mid-write are cleaned up, and contents are named by
-//! their SHA-256. In: paths and bytes. Out: files on disk, hex digests. Every stage
-//! that stores something writes through here.
+//! their SHA-256. A cache entry is sealed ([`write_sealed`]): a `.sha256` file beside it
+//! names its key and the SHA-256 of its bytes, so that a damaged, truncated or swapped
+//! entry is found when read ([`check_seal`]) and set aside ([`set_aside`]) rather than
+//! trusted. In: paths and bytes. Out: files on disk, hex digests. Every stage that
+//! stores something writes through here.
 
 use sha2::{Digest, Sha256};
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// How the temporary file of [`write_atomic`] starts; the writer's process id follows.
 const PARTIAL: &str = ".partial-";
@@ -73,6 +76,87 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
         .collect()
 }
 
+/// What a sealed file's seal says of it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Seal {
+    /// Neither the file nor its seal is there.
+    Absent,
+    /// The file has the bytes its seal names, for the key asked for.
+    Intact,
+    /// Why the file cannot be trusted.
+    Damaged(String),
+}
+
+/// The seal of `path`: `path` with `.sha256` appended.
+pub fn seal_path(path: &Path) -> PathBuf {
+    let mut name = path.as_os_str().to_owned();
+    name.push(".sha256");
+    PathBuf::from(name)
+}
+
+/// Writes `bytes` to `path`, then its seal naming `key` and the bytes' SHA-256, each
+/// atomically: a writer killed between the two leaves a file without a seal, which
+/// [`check_seal`] reports as damaged.
+pub fn write_sealed(path: &Path, bytes: &[u8], key: &str) -> std::io::Result<()> {
+    write_atomic(path, bytes)?;
+    seal(path, key)
+}
+
+/// Seals the file already at `path` for `key`.
+pub fn seal(path: &Path, key: &str) -> std::io::Result<()> {
+    let digest = sha256_hex(&std::fs::read(path)?);
+    write_atomic(&seal_path(path), format!("{key} {digest}\n").as_bytes())
+}
+
+/// Whether the file at `path` is the one sealed for `key`.
+pub fn check_seal(path: &Path, key: &str) -> Seal {
+    let seal = seal_path(path);
+    let (bytes, sealed) = (std::fs::read(path), std::fs::read_to_string(&seal));
+    let (bytes, sealed) = match (bytes, sealed) {
+        (Err(_), Err(_)) => return Seal::Absent,
+        (Err(_), Ok(_)) => return Seal::Damaged("it is missing beside its seal".into()),
+        (Ok(_), Err(_)) => {
+            return Seal::Damaged(
+                "it has no seal (a write that was interrupted, or a cache from before seals)"
+                    .into(),
+            );
+        }
+        (Ok(bytes), Ok(sealed)) => (bytes, sealed),
+    };
+    match sealed.trim().split_once(' ') {
+        Some((sealed_key, _)) if sealed_key != key => {
+            Seal::Damaged(format!("it is sealed for another key, {sealed_key}"))
+        }
+        Some((_, digest)) if digest == sha256_hex(&bytes) => Seal::Intact,
+        Some(_) => Seal::Damaged("its bytes do not match the SHA-256 of its seal".into()),
+        None => Seal::Damaged("its seal is unreadable".into()),
+    }
+}
+
+/// Moves `path` and its seal, where they exist, into `folder`, each name followed by
+/// the time in seconds, and returns where the file went.
+pub fn set_aside(path: &Path, folder: &Path) -> std::io::Result<PathBuf> {
+    std::fs::create_dir_all(folder)?;
+    let seconds = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let mut moved = folder.to_path_buf();
+    for file in [path.to_path_buf(), seal_path(path)] {
+        let Some(name) = file.file_name() else {
+            continue;
+        };
+        if !file.exists() {
+            continue;
+        }
+        let destination = folder.join(format!("{}.{seconds}", name.to_string_lossy()));
+        std::fs::rename(&file, &destination)?;
+        if file == path {
+            moved = destination;
+        }
+    }
+    Ok(moved)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -102,5 +186,40 @@ mod tests {
         }
         assert_eq!(remove_stale_partials(dir.path()).unwrap(), 1);
         assert!(!dead.exists() && live.exists() && other.exists());
+    }
+
+    #[test]
+    fn a_seal_tells_intact_from_flipped_swapped_truncated_and_unsealed() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("entry.bin");
+        assert_eq!(check_seal(&path, "k1"), Seal::Absent);
+        write_sealed(&path, b"the bytes", "k1").unwrap();
+        assert_eq!(
+            std::fs::read_to_string(seal_path(&path)).unwrap(),
+            format!("k1 {}\n", sha256_hex(b"the bytes"))
+        );
+        assert_eq!(check_seal(&path, "k1"), Seal::Intact);
+        let damaged = |seal: Seal| matches!(seal, Seal::Damaged(_));
+        assert!(damaged(check_seal(&path, "k2")), "another key's entry");
+        std::fs::write(&path, b"the bytez").unwrap();
+        assert!(damaged(check_seal(&path, "k1")), "a flipped byte");
+        std::fs::write(&path, b"the byte").unwrap();
+        assert!(damaged(check_seal(&path, "k1")), "truncated");
+        std::fs::remove_file(seal_path(&path)).unwrap();
+        assert!(damaged(check_seal(&path, "k1")), "no seal");
+        write_sealed(&path, b"the bytes", "k1").unwrap();
+        std::fs::remove_file(&path).unwrap();
+        assert!(damaged(check_seal(&path, "k1")), "a seal without its file");
+
+        write_sealed(&path, b"the bytes", "k1").unwrap();
+        let moved = set_aside(&path, &dir.path().join("damaged")).unwrap();
+        assert_eq!(std::fs::read(&moved).unwrap(), b"the bytes");
+        assert_eq!(
+            std::fs::read_dir(dir.path().join("damaged"))
+                .unwrap()
+                .count(),
+            2
+        );
+        assert_eq!(check_seal(&path, "k1"), Seal::Absent);
     }
 }

@@ -661,3 +661,81 @@ fn a_sweep_point_holds_what_a_plain_run_of_its_values_holds() {
     assert!(!dir.join("figures/grid/sweep_parallel.png").exists());
     assert!(!dir.join("figures/grid/sweep_parallel.svg").exists());
 }
+
+/// The files of `folder` whose extension is `extension`, sorted.
+fn files_with(folder: &Path, extension: &str) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(folder)
+        .unwrap()
+        .map(|entry| entry.unwrap().path())
+        .filter(|path| path.extension().is_some_and(|e| e == extension))
+        .collect();
+    files.sort();
+    files
+}
+
+#[test]
+fn a_damaged_cache_entry_is_set_aside_and_computed_again() {
+    let dir = project(false);
+    let d = dir.path();
+    let run = args(&["run", "experiments/quick.toml", "--no-plots"], &SMALL);
+    run_ok(d, &run);
+    let cache = d.join("results/.cache");
+    // One flipped byte in EM3's weights, and one Monte Carlo block copied over another.
+    let weights = files_with(&cache.join("models"), "bin")
+        .into_iter()
+        .find(|path| {
+            path.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("EM3-")
+        })
+        .unwrap();
+    let good_weights = std::fs::read(&weights).unwrap();
+    let mut flipped = good_weights.clone();
+    let middle = flipped.len() / 2;
+    flipped[middle] ^= 1;
+    std::fs::write(&weights, flipped).unwrap();
+    let blocks = files_with(&cache.join("monte_carlo"), "parquet");
+    let good_block = std::fs::read(&blocks[1]).unwrap();
+    std::fs::copy(&blocks[0], &blocks[1]).unwrap();
+
+    let plan = dcnet(d, &args(&["plan", "experiments/quick.toml"], &SMALL));
+    assert_eq!(
+        stdout(&plan).matches("to do (damaged)").count(),
+        2,
+        "{}",
+        stdout(&plan)
+    );
+    assert!(!cache.join("damaged").exists(), "plan changes nothing");
+
+    let log = run_ok(d, &run);
+    assert!(log.contains("DCNet EM3: damaged model "), "{log}");
+    assert!(
+        log.contains("its bytes do not match the SHA-256 of its seal"),
+        "{log}"
+    );
+    assert!(log.contains("damaged Monte Carlo block "), "{log}");
+    // Set aside, not deleted: the model (weights and history) and the block, each with
+    // its seal.
+    assert_eq!(std::fs::read_dir(cache.join("damaged")).unwrap().count(), 6);
+    // Computed again, to the bytes they had before the damage.
+    assert_eq!(std::fs::read(&weights).unwrap(), good_weights);
+    assert_eq!(std::fs::read(&blocks[1]).unwrap(), good_block);
+    assert!(run_ok(d, &run).contains("nothing to do"));
+
+    // A damaged table, or a report lost to a kill, makes the folder not current.
+    let folder = d.join("results/quick");
+    let table = folder.join("calibration.parquet");
+    let good_table = std::fs::read(&table).unwrap();
+    let mut truncated = good_table.clone();
+    truncated.truncate(good_table.len() - 1);
+    std::fs::write(&table, truncated).unwrap();
+    let log = run_ok(d, &run);
+    assert!(log.contains("1 task to do"), "{log}");
+    assert_eq!(std::fs::read(&table).unwrap(), good_table);
+    std::fs::remove_file(folder.join("report.tex")).unwrap();
+    let log = run_ok(d, &run);
+    assert!(log.contains("1 task to do"), "{log}");
+    assert!(folder.join("report.tex").is_file());
+    assert!(run_ok(d, &run).contains("nothing to do"));
+}

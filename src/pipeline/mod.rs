@@ -184,5 +184,6 @@ fn manifest(plan: &Plan, p: usize, started_at: SystemTime, stages: &StageSeconds
         data_files: plan.hashes.files_of(spec),
         stage_seconds: stages.clone(),
         results_key: plan.results_key(p),
+        files_sha256: Default::default(),
     }
 }

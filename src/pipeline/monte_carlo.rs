@@ -19,6 +19,11 @@ pub(super) fn run(
     executed: &mut Executed,
 ) -> Result<(), ExecuteError> {
     for (p, dvl, members) in group_by_dvl(plan, blocks) {
+        for &b in &members {
+            if let Some(damage) = plan.block_store.set_aside_damaged(&plan.blocks[b].key)? {
+                eprintln!("{damage}");
+            }
+        }
         let spec = plan.spec(p);
         let dvl = &spec.dvls[dvl];
         let models = load_models(plan, spec, &members)?;

@@ -7,6 +7,7 @@ use super::cache::{self, BlockStore, DataHashes, ModelStore};
 use super::shard::Shard;
 use crate::data::{Trajectory, load_trajectories};
 use crate::estimators::requested;
+use crate::files::Seal;
 use crate::results::{self, Manifest, sweep};
 use crate::spec::{Experiment, Spec};
 use crate::vocab::{ErrorModel, EstimatorKind};
@@ -59,6 +60,9 @@ pub enum Status {
     Resumable(usize),
     /// A dataset no training left to do needs.
     NotNeeded,
+    /// A model or block in the cache that fails its seal: it is set aside and
+    /// computed again.
+    Damaged,
 }
 
 impl Status {
@@ -76,6 +80,7 @@ impl std::fmt::Display for Status {
             Status::ToDo => f.write_str("to do"),
             Status::Resumable(epoch) => write!(f, "to do (resumes after epoch {epoch})"),
             Status::NotNeeded => f.write_str("not needed"),
+            Status::Damaged => f.write_str("to do (damaged)"),
         }
     }
 }
@@ -262,8 +267,11 @@ impl<'a> Plan<'a> {
             }
             Task::Training(t) => self.training_status(t),
             Task::Block(b) => {
-                if self.block_store.contains(&self.blocks[b].key) {
+                let integrity = self.block_store.integrity(&self.blocks[b].key);
+                if integrity == Seal::Intact {
                     Status::Done
+                } else if matches!(integrity, Seal::Damaged(_)) {
+                    Status::Damaged
                 } else if self.runs_failed_model(b) {
                     Status::Failed
                 } else {
@@ -272,11 +280,13 @@ impl<'a> Plan<'a> {
             }
             Task::Results(p) => {
                 let point = &self.points[p];
-                let current = read_manifest(&point.folder)
-                    .is_some_and(|m| m.results_key == self.results_key(p))
-                    && results::TABLES
-                        .iter()
-                        .all(|table| point.folder.join(table).is_file());
+                // Current: made from these blocks, every file as written, and the
+                // reports there (a run killed before them writes them again).
+                let current = read_manifest(&point.folder).is_some_and(|m| {
+                    m.results_key == self.results_key(p) && results::is_intact(&point.folder, &m)
+                }) && crate::report::FILES
+                    .iter()
+                    .all(|report| point.folder.join(report).is_file());
                 if current { Status::Done } else { Status::ToDo }
             }
             Task::Sweep => {
@@ -298,10 +308,15 @@ impl<'a> Plan<'a> {
     fn training_status(&self, t: usize) -> Status {
         let training = &self.trainings[t];
         let (model, key) = (training.error_model, &training.key);
-        if let Ok(Some(_)) = self.models.history(model, key) {
+        let damaged = |seal| matches!(seal, Seal::Damaged(_));
+        if damaged(self.models.integrity(model, key)) {
+            Status::Damaged
+        } else if let Ok(Some(_)) = self.models.history(model, key) {
             Status::Done
         } else if self.models.failure(model, key).is_some() {
             Status::Failed
+        } else if damaged(self.models.checkpoint_integrity(model, key)) {
+            Status::Damaged
         } else if let Some(epoch) = self.models.checkpoint_epoch(model, key) {
             Status::Resumable(epoch)
         } else {

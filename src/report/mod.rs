@@ -25,6 +25,8 @@ use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
 pub const FILE: &str = "report.md";
+/// The reports a results folder holds once a run, `collect` or `plot` has finished it.
+pub const FILES: [&str; 2] = [FILE, latex::FILE];
 const FLAG: &str = "⚠";
 
 /// Writes `report.md` and `report.tex` into the results folder, atomically; returns

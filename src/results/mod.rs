@@ -13,7 +13,7 @@ pub mod sweep;
 
 use crate::data::Trajectory;
 use crate::evaluate::{CalibrationRow, EvaluationRow, ProtocolResult, RunRow};
-use crate::files::write_atomic;
+use crate::files::{sha256_hex, write_atomic};
 use crate::spec::Spec;
 use crate::train::EpochRecord;
 use crate::train::TrainingHistory;
@@ -23,6 +23,7 @@ use parquet::arrow::ArrowWriter;
 use parquet::basic::Compression;
 use parquet::file::properties::WriterProperties;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -61,6 +62,10 @@ pub struct Manifest {
     /// were put together from: the folder is current while it matches.
     #[serde(default)]
     pub results_key: String,
+    /// The SHA-256 of every file written before the manifest, by name: the folder is
+    /// intact while its files have them.
+    #[serde(default)]
+    pub files_sha256: BTreeMap<String, String>,
 }
 
 /// Wall time of each stage of a run.
@@ -134,9 +139,32 @@ pub fn write_run(
     }
     let spec_path = folder.join(SPEC);
     write_atomic(&spec_path, spec.resolved_toml().as_bytes()).map_err(io(&spec_path))?;
+    let mut manifest = manifest.clone();
+    manifest.files_sha256.clear();
+    for name in TABLES.iter().chain([&SPEC, &PUBLISHED]) {
+        let path = folder.join(name);
+        match std::fs::read(&path) {
+            Ok(bytes) => {
+                manifest
+                    .files_sha256
+                    .insert(name.to_string(), sha256_hex(&bytes));
+            }
+            Err(e) if *name == PUBLISHED && e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => return Err(io(&path)(e)),
+        }
+    }
     let manifest_path = folder.join(MANIFEST);
-    let json = serde_json::to_string_pretty(manifest).expect("a manifest always serializes");
+    let json = serde_json::to_string_pretty(&manifest).expect("a manifest always serializes");
     write_atomic(&manifest_path, json.as_bytes()).map_err(io(&manifest_path))
+}
+
+/// Whether every file `manifest` names in `folder` still has the SHA-256 it was written
+/// with.
+pub fn is_intact(folder: &Path, manifest: &Manifest) -> bool {
+    !manifest.files_sha256.is_empty()
+        && manifest.files_sha256.iter().all(|(name, digest)| {
+            std::fs::read(folder.join(name)).is_ok_and(|bytes| &sha256_hex(&bytes) == digest)
+        })
 }
 
 /// Writes `batch` to `path` as Parquet, atomically.

@@ -2,6 +2,7 @@
 //! per-run rows of one estimator on one DVL, keyed by [`super::block_key`].
 
 use crate::evaluate::RunRow;
+use crate::files::{self, Seal};
 use crate::results::{self, ResultsError, read};
 use std::path::PathBuf;
 
@@ -19,8 +20,33 @@ impl BlockStore {
         self.folder.join(format!("{}.parquet", &key[..16]))
     }
 
+    /// Whether the block of `key` is stored and intact.
     pub fn contains(&self, key: &str) -> bool {
-        self.path(key).is_file()
+        self.integrity(key) == Seal::Intact
+    }
+
+    /// Whether the block of `key` is there and has the bytes its seal names.
+    pub fn integrity(&self, key: &str) -> Seal {
+        files::check_seal(&self.path(key), key)
+    }
+
+    /// Moves a damaged block of `key` into the cache's `damaged/` folder, so that it is
+    /// computed again; returns what was wrong with it.
+    pub fn set_aside_damaged(&self, key: &str) -> Result<Option<String>, ResultsError> {
+        let Seal::Damaged(why) = self.integrity(key) else {
+            return Ok(None);
+        };
+        let path = self.path(key);
+        let damaged = self.folder.with_file_name("damaged");
+        files::set_aside(&path, &damaged).map_err(|source| ResultsError::Io {
+            path: path.clone(),
+            source,
+        })?;
+        Ok(Some(format!(
+            "damaged Monte Carlo block {}: {why}; moved to {} and computed again",
+            path.display(),
+            damaged.display()
+        )))
     }
 
     pub fn save(&self, key: &str, rows: &[RunRow]) -> Result<(), ResultsError> {
@@ -28,7 +54,9 @@ impl BlockStore {
             path: self.folder.clone(),
             source,
         })?;
-        results::write_table(&self.path(key), &results::monte_carlo_batch(rows))
+        let path = self.path(key);
+        results::write_table(&path, &results::monte_carlo_batch(rows))?;
+        files::seal(&path, key).map_err(|source| ResultsError::Io { path, source })
     }
 
     pub fn load(&self, key: &str) -> Result<Vec<RunRow>, read::ReadError> {

@@ -6,7 +6,7 @@
 //! and an interrupted training resumes from it. [`Stage`] walks one model through this an
 //! epoch at a time, so that the pipeline can interleave the epochs of many models.
 
-use crate::files::write_atomic;
+use crate::files::{self, Seal, write_atomic};
 use crate::model::Dcnet;
 use crate::spec::Spec;
 use crate::train::{self, EpochRecord, State, Trained, TrainingHistory};
@@ -79,12 +79,58 @@ impl ModelStore {
         self.folder.join(format!("{error_model}-{}", &key[..16]))
     }
 
-    /// How the stored model with this key trained, if there is one.
+    /// Whether the stored model of `key`, weights and history, is there and has the
+    /// bytes its seals name.
+    pub fn integrity(&self, error_model: ErrorModel, key: &str) -> Seal {
+        let stem = self.stem(error_model, key);
+        let [weights, history] = ["bin", "json"].map(|ext| {
+            let path = stem.with_extension(ext);
+            (files::check_seal(&path, key), path)
+        });
+        match (weights, history) {
+            ((Seal::Absent, _), (Seal::Absent, _)) => Seal::Absent,
+            ((Seal::Intact, _), (Seal::Intact, _)) => Seal::Intact,
+            ((Seal::Damaged(why), path), _) | (_, (Seal::Damaged(why), path)) => {
+                Seal::Damaged(format!("{}: {why}", path.display()))
+            }
+            ((Seal::Absent, path), _) | (_, (Seal::Absent, path)) => Seal::Damaged(format!(
+                "{}: it is missing beside the rest of the model",
+                path.display()
+            )),
+        }
+    }
+
+    /// Moves a damaged stored model of `key` into the cache's `damaged/` folder, so that
+    /// it is trained again; returns what was wrong with it.
+    pub fn set_aside_damaged(
+        &self,
+        error_model: ErrorModel,
+        key: &str,
+    ) -> Result<Option<String>, CheckpointError> {
+        let Seal::Damaged(why) = self.integrity(error_model, key) else {
+            return Ok(None);
+        };
+        let damaged = self.folder.with_file_name("damaged");
+        let stem = self.stem(error_model, key);
+        for ext in ["bin", "json"] {
+            let path = stem.with_extension(ext);
+            files::set_aside(&path, &damaged).map_err(io_error(&path))?;
+        }
+        Ok(Some(format!(
+            "damaged model {why}; moved to {} and trained again",
+            damaged.display()
+        )))
+    }
+
+    /// How the stored model with this key trained, if there is one and it is intact.
     pub fn history(
         &self,
         error_model: ErrorModel,
         key: &str,
     ) -> Result<Option<TrainingHistory>, CheckpointError> {
+        if self.integrity(error_model, key) != Seal::Intact {
+            return Ok(None);
+        }
         let path = self.stem(error_model, key).with_extension("json");
         let Ok(text) = std::fs::read_to_string(&path) else {
             return Ok(None);
@@ -111,18 +157,59 @@ impl ModelStore {
         std::fs::read_to_string(self.stem(error_model, key).with_extension("failed")).ok()
     }
 
-    /// The last epoch of the checkpoint of `key`, if one is waiting to be resumed.
+    /// The last epoch of the checkpoint of `key`, if an intact one is waiting to be
+    /// resumed.
     pub fn checkpoint_epoch(&self, error_model: ErrorModel, key: &str) -> Option<usize> {
         let state = self.checkpoint_state(error_model, key).ok()??;
         Some(state.epoch)
     }
 
-    /// The `state.json` of the checkpoint of `key`, if there is one.
+    /// Whether the checkpoint of `key` is there (its `state.json` written) and every
+    /// file of its last epoch has the bytes its seal names.
+    pub fn checkpoint_integrity(&self, error_model: ErrorModel, key: &str) -> Seal {
+        let folder = self.stem(error_model, key).with_extension("checkpoint");
+        let state_path = folder.join("state.json");
+        let damaged = |path: &Path, why: &dyn std::fmt::Display| {
+            Seal::Damaged(format!("{}: {why}", path.display()))
+        };
+        match files::check_seal(&state_path, key) {
+            Seal::Intact => {}
+            Seal::Damaged(why) => return damaged(&state_path, &why),
+            Seal::Absent => return Seal::Absent,
+        }
+        let state: CheckpointState = match std::fs::read_to_string(&state_path)
+            .map_err(|e| e.to_string())
+            .and_then(|text| serde_json::from_str(&text).map_err(|e| e.to_string()))
+        {
+            Ok(state) => state,
+            Err(why) => return damaged(&state_path, &why),
+        };
+        let epoch = state.epoch;
+        let mut parts = vec!["model", "optimizer"];
+        if state.best_epoch.is_some() {
+            parts.push("best");
+        }
+        for part in parts {
+            let path = folder.join(format!("epoch-{epoch}.{part}"));
+            let why = match files::check_seal(&path, key) {
+                Seal::Intact => continue,
+                Seal::Absent => "it is missing".to_string(),
+                Seal::Damaged(why) => why,
+            };
+            return damaged(&path, &why);
+        }
+        Seal::Intact
+    }
+
+    /// The `state.json` of the checkpoint of `key`, if there is an intact one.
     fn checkpoint_state(
         &self,
         error_model: ErrorModel,
         key: &str,
     ) -> Result<Option<CheckpointState>, CheckpointError> {
+        if self.checkpoint_integrity(error_model, key) != Seal::Intact {
+            return Ok(None);
+        }
         let path = self
             .stem(error_model, key)
             .with_extension("checkpoint")
@@ -131,6 +218,25 @@ impl ModelStore {
             return Ok(None);
         };
         serde_json::from_str(&text).map_err(json_error(&path))
+    }
+
+    /// Moves a damaged checkpoint of `key` into the cache's `damaged/` folder, so that
+    /// its training starts again; returns what was wrong with it.
+    fn set_aside_damaged_checkpoint(
+        &self,
+        error_model: ErrorModel,
+        key: &str,
+    ) -> Result<Option<String>, CheckpointError> {
+        let Seal::Damaged(why) = self.checkpoint_integrity(error_model, key) else {
+            return Ok(None);
+        };
+        let folder = self.stem(error_model, key).with_extension("checkpoint");
+        let damaged = self.folder.with_file_name("damaged");
+        files::set_aside(&folder, &damaged).map_err(io_error(&folder))?;
+        Ok(Some(format!(
+            "damaged checkpoint {why}; moved to {} and trained from the start",
+            damaged.display()
+        )))
     }
 
     /// The stored model with this key, if there is one.
@@ -163,7 +269,9 @@ impl ModelStore {
     pub fn save(&self, trained: &Trained, key: &str) -> Result<(), CheckpointError> {
         let stem = self.stem(trained.error_model, key);
         std::fs::create_dir_all(&self.folder).map_err(io_error(&self.folder))?;
-        write_model(&stem.with_extension("bin"), &trained.model)?;
+        let weights = stem.with_extension("bin");
+        write_model(&weights, &trained.model)?;
+        files::seal(&weights, key).map_err(io_error(&weights))?;
         let summary = TrainingHistory {
             key: key.to_string(),
             error_model: trained.error_model,
@@ -172,11 +280,12 @@ impl ModelStore {
             stop: trained.stop,
         };
         let path = stem.with_extension("json");
-        write_atomic(
+        files::write_sealed(
             &path,
             serde_json::to_string_pretty(&summary)
                 .expect("summary serializes")
                 .as_bytes(),
+            key,
         )
         .map_err(io_error(&path))?;
         let checkpoint = stem.with_extension("checkpoint");
@@ -200,15 +309,19 @@ impl ModelStore {
         let folder = self.stem(error_model, key).with_extension("checkpoint");
         std::fs::create_dir_all(&folder).map_err(io_error(&folder))?;
         let epoch = state.history.len();
-        write_model(&folder.join(format!("epoch-{epoch}.model")), &state.model)?;
+        let sealed_model = |path: PathBuf, model: &Dcnet| {
+            write_model(&path, model)?;
+            files::seal(&path, key).map_err(io_error(&path))
+        };
+        sealed_model(folder.join(format!("epoch-{epoch}.model")), &state.model)?;
         let optimizer_path = folder.join(format!("epoch-{epoch}.optimizer"));
         let bytes = state
             .optimizer
             .into_bytes()
             .map_err(record_error(&optimizer_path))?;
-        write_atomic(&optimizer_path, &bytes).map_err(io_error(&optimizer_path))?;
+        files::write_sealed(&optimizer_path, &bytes, key).map_err(io_error(&optimizer_path))?;
         if let Some((_, _, best)) = &state.best {
-            write_model(&folder.join(format!("epoch-{epoch}.best")), best)?;
+            sealed_model(folder.join(format!("epoch-{epoch}.best")), best)?;
         }
         let record = CheckpointState {
             epoch,
@@ -217,11 +330,12 @@ impl ModelStore {
             history: state.history.clone(),
         };
         let path = folder.join("state.json");
-        write_atomic(
+        files::write_sealed(
             &path,
             serde_json::to_string(&record)
                 .expect("state serializes")
                 .as_bytes(),
+            key,
         )
         .map_err(io_error(&path))?;
         // Older epochs are superseded once state.json names this one.
@@ -244,6 +358,9 @@ impl ModelStore {
         error_model: ErrorModel,
         key: &str,
     ) -> Result<State, CheckpointError> {
+        if let Some(damage) = self.set_aside_damaged_checkpoint(error_model, key)? {
+            eprintln!("DCNet {error_model}: {damage}");
+        }
         let folder = self.stem(error_model, key).with_extension("checkpoint");
         let Some(record) = self.checkpoint_state(error_model, key)? else {
             return Ok(State::new(spec, error_model));
@@ -324,6 +441,9 @@ impl Stage {
         store: &ModelStore,
         fresh: bool,
     ) -> Result<Self, CheckpointError> {
+        if let Some(damage) = store.set_aside_damaged(error_model, key)? {
+            eprintln!("DCNet {error_model}: {damage}");
+        }
         if !fresh {
             if let Some(trained) = store.load(spec, error_model, key)? {
                 return Ok(Self::Done(Box::new(trained), Provenance::Reused));
@@ -504,6 +624,43 @@ mod tests {
         assert!(
             weights(&resumed.model) == weights(&uninterrupted.model),
             "resumed weights differ"
+        );
+    }
+
+    #[test]
+    fn a_damaged_checkpoint_is_set_aside_and_training_starts_again() {
+        let spec = quick_spec(&["training.epochs=4"]);
+        let set = training_set(&spec);
+        let em = ErrorModel::Em2;
+        let dir = tempfile::tempdir().unwrap();
+        let store = ModelStore::new(dir.path().join("models"));
+        let key = key(&spec, em);
+        let mut state = State::new(&spec, em);
+        run_epochs(&spec, &set, em, &mut state, 2);
+        store.save_checkpoint(&state, em, &key).unwrap();
+        assert_eq!(store.checkpoint_integrity(em, &key), Seal::Intact);
+        assert_eq!(store.checkpoint_epoch(em, &key), Some(2));
+
+        let optimizer_path = store
+            .stem(em, &key)
+            .with_extension("checkpoint")
+            .join("epoch-2.optimizer");
+        let mut bytes = std::fs::read(&optimizer_path).unwrap();
+        let middle = bytes.len() / 2;
+        bytes[middle] ^= 1;
+        std::fs::write(&optimizer_path, bytes).unwrap();
+        assert!(
+            matches!(store.checkpoint_integrity(em, &key), Seal::Damaged(why) if why.contains("epoch-2.optimizer"))
+        );
+        assert_eq!(store.checkpoint_epoch(em, &key), None);
+        let fresh = store.resume(&spec, em, &key).unwrap();
+        assert_eq!(fresh.next_epoch(), 1, "training starts again");
+        assert!(!store.stem(em, &key).with_extension("checkpoint").exists());
+        assert_eq!(
+            std::fs::read_dir(dir.path().join("damaged"))
+                .unwrap()
+                .count(),
+            1
         );
     }
 
