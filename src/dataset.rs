@@ -61,23 +61,15 @@ pub struct DatasetSize {
 impl DatasetSize {
     pub fn of(spec: &Spec, trajectories: &[Trajectory]) -> Self {
         let d = &spec.dataset;
-        let per_combination = d
-            .trajectories
-            .iter()
-            .map(|&t| {
-                window_starts(
-                    trajectories[t].ground_truth.len(),
-                    d.window_samples,
-                    d.stride_samples,
-                )
-                .count()
-            })
-            .sum();
+        let per_combination = d.windows_per_combination(
+            d.trajectories
+                .iter()
+                .map(|&t| trajectories[t].ground_truth.len()),
+        );
         Self {
             combinations: spec.grid.points().len(),
             per_combination,
-            validation_per_combination: (d.validation_fraction * per_combination as f64).round()
-                as usize,
+            validation_per_combination: d.validation_windows(per_combination),
         }
     }
 

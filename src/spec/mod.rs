@@ -142,6 +142,22 @@ pub struct DatasetSpec {
     pub published_windows: Option<usize>,
 }
 
+impl DatasetSpec {
+    /// The windows that one grid combination yields from training trajectories of
+    /// these lengths, in samples.
+    pub fn windows_per_combination(&self, lengths: impl IntoIterator<Item = usize>) -> usize {
+        lengths
+            .into_iter()
+            .map(|len| window_starts(len, self.window_samples, self.stride_samples).count())
+            .sum()
+    }
+
+    /// How many of one combination's `windows` are kept for validation.
+    pub fn validation_windows(&self, windows: usize) -> usize {
+        (self.validation_fraction * windows as f64).round() as usize
+    }
+}
+
 #[derive(Debug, Clone)]
 pub struct Dvl {
     pub name: String,
@@ -614,21 +630,13 @@ fn check_dataset(
             trajectories.push(index);
         }
     }
-    if !(validation_fraction > 0.0 && validation_fraction < 1.0) {
+    let valid_fraction = validation_fraction > 0.0 && validation_fraction < 1.0;
+    if !valid_fraction {
         faults.add(
             "dataset.validation_fraction",
             format!(
                 "{validation_fraction} must be above 0 and below 1: training keeps the epoch with the best validation loss"
             ),
-        );
-    } else if let (Some(window), Some(stride)) = (window, stride) {
-        check_split(
-            &trajectories,
-            sources,
-            window,
-            stride,
-            validation_fraction,
-            faults,
         );
     }
     let dataset = DatasetSpec {
@@ -638,6 +646,9 @@ fn check_dataset(
         validation_fraction,
         published_windows,
     };
+    if valid_fraction && window.is_some() && stride.is_some() {
+        check_split(&dataset, sources, faults);
+    }
     let window = Window {
         seconds: window_s,
         samples: window,
@@ -648,29 +659,21 @@ fn check_dataset(
 /// Where the training trajectories' lengths are known, checks that
 /// `validation_fraction` leaves each grid combination at least one validation window
 /// and at least one training window.
-fn check_split(
-    trajectories: &[usize],
-    sources: &[TrajectorySource],
-    window: usize,
-    stride: usize,
-    validation_fraction: f64,
-    faults: &mut Faults,
-) {
-    let lengths: Option<Vec<usize>> = trajectories
+fn check_split(dataset: &DatasetSpec, sources: &[TrajectorySource], faults: &mut Faults) {
+    let lengths: Option<Vec<usize>> = dataset
+        .trajectories
         .iter()
         .map(|&t| sources[t].known_len())
         .collect();
     let Some(lengths) = lengths else { return };
-    let windows: usize = lengths
-        .iter()
-        .map(|&len| window_starts(len, window, stride).count())
-        .sum();
-    let validation = (validation_fraction * windows as f64).round() as usize;
+    let windows = dataset.windows_per_combination(lengths);
+    let validation = dataset.validation_windows(windows);
     if windows > 0 && (validation == 0 || validation == windows) {
         faults.add(
             "dataset.validation_fraction",
             format!(
-                "{validation_fraction} of {windows} windows per combination leaves {validation} for validation and {} for training: each needs at least one",
+                "{} of {windows} windows per combination leaves {validation} for validation and {} for training: each needs at least one",
+                dataset.validation_fraction,
                 windows - validation
             ),
         );
