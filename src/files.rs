@@ -99,12 +99,7 @@ pub fn seal_path(path: &Path) -> PathBuf {
 /// [`check_seal`] reports as damaged.
 pub fn write_sealed(path: &Path, bytes: &[u8], key: &str) -> std::io::Result<()> {
     write_atomic(path, bytes)?;
-    seal(path, key)
-}
-
-/// Seals the file already at `path` for `key`.
-pub fn seal(path: &Path, key: &str) -> std::io::Result<()> {
-    let digest = sha256_hex(&std::fs::read(path)?);
+    let digest = sha256_hex(bytes);
     write_atomic(&seal_path(path), format!("{key} {digest}\n").as_bytes())
 }
 

@@ -308,19 +308,18 @@ impl<'a> Plan<'a> {
     fn training_status(&self, t: usize) -> Status {
         let training = &self.trainings[t];
         let (model, key) = (training.error_model, &training.key);
-        let damaged = |seal| matches!(seal, Seal::Damaged(_));
-        if damaged(self.models.integrity(model, key)) {
-            Status::Damaged
-        } else if let Ok(Some(_)) = self.models.history(model, key) {
-            Status::Done
-        } else if self.models.failure(model, key).is_some() {
-            Status::Failed
-        } else if damaged(self.models.checkpoint_integrity(model, key)) {
-            Status::Damaged
-        } else if let Some(epoch) = self.models.checkpoint_epoch(model, key) {
-            Status::Resumable(epoch)
-        } else {
-            Status::ToDo
+        match self.models.integrity(model, key) {
+            Seal::Intact => return Status::Done,
+            Seal::Damaged(_) => return Status::Damaged,
+            Seal::Absent => {}
+        }
+        if self.models.failure(model, key).is_some() {
+            return Status::Failed;
+        }
+        match self.models.checkpoint_epoch(model, key) {
+            Ok(Some(epoch)) => Status::Resumable(epoch),
+            Ok(None) => Status::ToDo,
+            Err(_) => Status::Damaged,
         }
     }
 

@@ -121,38 +121,34 @@ pub fn write_run(
             spec.sample_rate_hz,
         ),
     ];
-    for (file, batch) in TABLES.iter().zip(batches) {
-        write_table(&folder.join(file), &batch)?;
-    }
-    let published_path = folder.join(PUBLISHED);
-    match &spec.resolved.report.published {
-        Some(source) => {
-            let bytes = std::fs::read(source).map_err(io(source))?;
-            write_atomic(&published_path, &bytes).map_err(io(&published_path))?;
-        }
-        None => match std::fs::remove_file(&published_path) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                return Err(io(&published_path)(e));
-            }
-            _ => {}
-        },
-    }
-    let spec_path = folder.join(SPEC);
-    write_atomic(&spec_path, spec.resolved_toml().as_bytes()).map_err(io(&spec_path))?;
-    let mut manifest = manifest.clone();
-    manifest.files_sha256.clear();
-    for name in TABLES.iter().chain([&SPEC, &PUBLISHED]) {
+    // Each file's SHA-256 goes into the manifest, written last.
+    let mut files_sha256 = BTreeMap::new();
+    let mut write = |name: &str, bytes: &[u8]| {
         let path = folder.join(name);
-        match std::fs::read(&path) {
-            Ok(bytes) => {
-                manifest
-                    .files_sha256
-                    .insert(name.to_string(), sha256_hex(&bytes));
+        write_atomic(&path, bytes).map_err(io(&path))?;
+        files_sha256.insert(name.to_string(), sha256_hex(bytes));
+        Ok::<(), ResultsError>(())
+    };
+    for (file, batch) in TABLES.iter().zip(batches) {
+        write(file, &table_bytes(&folder.join(file), &batch)?)?;
+    }
+    match &spec.resolved.report.published {
+        Some(source) => write(PUBLISHED, &std::fs::read(source).map_err(io(source))?)?,
+        None => {
+            let published_path = folder.join(PUBLISHED);
+            match std::fs::remove_file(&published_path) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                    return Err(io(&published_path)(e));
+                }
+                _ => {}
             }
-            Err(e) if *name == PUBLISHED && e.kind() == std::io::ErrorKind::NotFound => {}
-            Err(e) => return Err(io(&path)(e)),
         }
     }
+    write(SPEC, spec.resolved_toml().as_bytes())?;
+    let manifest = Manifest {
+        files_sha256,
+        ..manifest.clone()
+    };
     let manifest_path = folder.join(MANIFEST);
     let json = serde_json::to_string_pretty(&manifest).expect("a manifest always serializes");
     write_atomic(&manifest_path, json.as_bytes()).map_err(io(&manifest_path))
@@ -169,11 +165,15 @@ pub fn is_intact(folder: &Path, manifest: &Manifest) -> bool {
 
 /// Writes `batch` to `path` as Parquet, atomically.
 pub fn write_table(path: &Path, batch: &RecordBatch) -> Result<(), ResultsError> {
-    let bytes = parquet_bytes(batch).map_err(|source| ResultsError::Parquet {
+    write_atomic(path, &table_bytes(path, batch)?).map_err(io(path))
+}
+
+/// `batch` as the bytes of the Parquet file at `path`.
+pub fn table_bytes(path: &Path, batch: &RecordBatch) -> Result<Vec<u8>, ResultsError> {
+    parquet_bytes(batch).map_err(|source| ResultsError::Parquet {
         path: path.to_path_buf(),
         source,
-    })?;
-    write_atomic(path, &bytes).map_err(io(path))
+    })
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> ResultsError + '_ {

@@ -55,8 +55,8 @@ impl BlockStore {
             source,
         })?;
         let path = self.path(key);
-        results::write_table(&path, &results::monte_carlo_batch(rows))?;
-        files::seal(&path, key).map_err(|source| ResultsError::Io { path, source })
+        let bytes = results::table_bytes(&path, &results::monte_carlo_batch(rows))?;
+        files::write_sealed(&path, &bytes, key).map_err(|source| ResultsError::Io { path, source })
     }
 
     pub fn load(&self, key: &str) -> Result<Vec<RunRow>, read::ReadError> {

@@ -157,33 +157,37 @@ impl ModelStore {
         std::fs::read_to_string(self.stem(error_model, key).with_extension("failed")).ok()
     }
 
-    /// The last epoch of the checkpoint of `key`, if an intact one is waiting to be
-    /// resumed.
-    pub fn checkpoint_epoch(&self, error_model: ErrorModel, key: &str) -> Option<usize> {
-        let state = self.checkpoint_state(error_model, key).ok()??;
-        Some(state.epoch)
+    /// The last epoch of the checkpoint of `key`, if one is waiting to be resumed, or
+    /// what is wrong with it.
+    pub fn checkpoint_epoch(
+        &self,
+        error_model: ErrorModel,
+        key: &str,
+    ) -> Result<Option<usize>, String> {
+        Ok(self.checkpoint(error_model, key)?.map(|state| state.epoch))
     }
 
-    /// Whether the checkpoint of `key` is there (its `state.json` written) and every
-    /// file of its last epoch has the bytes its seal names.
-    pub fn checkpoint_integrity(&self, error_model: ErrorModel, key: &str) -> Seal {
+    /// The `state.json` of the checkpoint of `key`, with every file of its last epoch
+    /// checked against its seal: none when there is no checkpoint, or what is wrong
+    /// with it.
+    fn checkpoint(
+        &self,
+        error_model: ErrorModel,
+        key: &str,
+    ) -> Result<Option<CheckpointState>, String> {
         let folder = self.stem(error_model, key).with_extension("checkpoint");
         let state_path = folder.join("state.json");
-        let damaged = |path: &Path, why: &dyn std::fmt::Display| {
-            Seal::Damaged(format!("{}: {why}", path.display()))
-        };
+        let damaged =
+            |path: &Path, why: &dyn std::fmt::Display| format!("{}: {why}", path.display());
         match files::check_seal(&state_path, key) {
             Seal::Intact => {}
-            Seal::Damaged(why) => return damaged(&state_path, &why),
-            Seal::Absent => return Seal::Absent,
+            Seal::Damaged(why) => return Err(damaged(&state_path, &why)),
+            Seal::Absent => return Ok(None),
         }
-        let state: CheckpointState = match std::fs::read_to_string(&state_path)
+        let state: CheckpointState = std::fs::read_to_string(&state_path)
             .map_err(|e| e.to_string())
             .and_then(|text| serde_json::from_str(&text).map_err(|e| e.to_string()))
-        {
-            Ok(state) => state,
-            Err(why) => return damaged(&state_path, &why),
-        };
+            .map_err(|why| damaged(&state_path, &why))?;
         let epoch = state.epoch;
         let mut parts = vec!["model", "optimizer"];
         if state.best_epoch.is_some() {
@@ -196,47 +200,9 @@ impl ModelStore {
                 Seal::Absent => "it is missing".to_string(),
                 Seal::Damaged(why) => why,
             };
-            return damaged(&path, &why);
+            return Err(damaged(&path, &why));
         }
-        Seal::Intact
-    }
-
-    /// The `state.json` of the checkpoint of `key`, if there is an intact one.
-    fn checkpoint_state(
-        &self,
-        error_model: ErrorModel,
-        key: &str,
-    ) -> Result<Option<CheckpointState>, CheckpointError> {
-        if self.checkpoint_integrity(error_model, key) != Seal::Intact {
-            return Ok(None);
-        }
-        let path = self
-            .stem(error_model, key)
-            .with_extension("checkpoint")
-            .join("state.json");
-        let Ok(text) = std::fs::read_to_string(&path) else {
-            return Ok(None);
-        };
-        serde_json::from_str(&text).map_err(json_error(&path))
-    }
-
-    /// Moves a damaged checkpoint of `key` into the cache's `damaged/` folder, so that
-    /// its training starts again; returns what was wrong with it.
-    fn set_aside_damaged_checkpoint(
-        &self,
-        error_model: ErrorModel,
-        key: &str,
-    ) -> Result<Option<String>, CheckpointError> {
-        let Seal::Damaged(why) = self.checkpoint_integrity(error_model, key) else {
-            return Ok(None);
-        };
-        let folder = self.stem(error_model, key).with_extension("checkpoint");
-        let damaged = self.folder.with_file_name("damaged");
-        files::set_aside(&folder, &damaged).map_err(io_error(&folder))?;
-        Ok(Some(format!(
-            "damaged checkpoint {why}; moved to {} and trained from the start",
-            damaged.display()
-        )))
+        Ok(Some(state))
     }
 
     /// The stored model with this key, if there is one.
@@ -270,8 +236,7 @@ impl ModelStore {
         let stem = self.stem(trained.error_model, key);
         std::fs::create_dir_all(&self.folder).map_err(io_error(&self.folder))?;
         let weights = stem.with_extension("bin");
-        write_model(&weights, &trained.model)?;
-        files::seal(&weights, key).map_err(io_error(&weights))?;
+        write_model(&weights, &trained.model, key)?;
         let summary = TrainingHistory {
             key: key.to_string(),
             error_model: trained.error_model,
@@ -309,11 +274,11 @@ impl ModelStore {
         let folder = self.stem(error_model, key).with_extension("checkpoint");
         std::fs::create_dir_all(&folder).map_err(io_error(&folder))?;
         let epoch = state.history.len();
-        let sealed_model = |path: PathBuf, model: &Dcnet| {
-            write_model(&path, model)?;
-            files::seal(&path, key).map_err(io_error(&path))
-        };
-        sealed_model(folder.join(format!("epoch-{epoch}.model")), &state.model)?;
+        write_model(
+            &folder.join(format!("epoch-{epoch}.model")),
+            &state.model,
+            key,
+        )?;
         let optimizer_path = folder.join(format!("epoch-{epoch}.optimizer"));
         let bytes = state
             .optimizer
@@ -321,7 +286,7 @@ impl ModelStore {
             .map_err(record_error(&optimizer_path))?;
         files::write_sealed(&optimizer_path, &bytes, key).map_err(io_error(&optimizer_path))?;
         if let Some((_, _, best)) = &state.best {
-            sealed_model(folder.join(format!("epoch-{epoch}.best")), best)?;
+            write_model(&folder.join(format!("epoch-{epoch}.best")), best, key)?;
         }
         let record = CheckpointState {
             epoch,
@@ -358,12 +323,19 @@ impl ModelStore {
         error_model: ErrorModel,
         key: &str,
     ) -> Result<State, CheckpointError> {
-        if let Some(damage) = self.set_aside_damaged_checkpoint(error_model, key)? {
-            eprintln!("DCNet {error_model}: {damage}");
-        }
         let folder = self.stem(error_model, key).with_extension("checkpoint");
-        let Some(record) = self.checkpoint_state(error_model, key)? else {
-            return Ok(State::new(spec, error_model));
+        let record = match self.checkpoint(error_model, key) {
+            Ok(Some(record)) => record,
+            Ok(None) => return Ok(State::new(spec, error_model)),
+            Err(why) => {
+                let damaged = self.folder.with_file_name("damaged");
+                files::set_aside(&folder, &damaged).map_err(io_error(&folder))?;
+                eprintln!(
+                    "DCNet {error_model}: damaged checkpoint {why}; moved to {} and trained from the start",
+                    damaged.display()
+                );
+                return Ok(State::new(spec, error_model));
+            }
         };
         let epoch = record.epoch;
         let device = spec.training.backend.device();
@@ -524,13 +496,14 @@ impl Stage {
     }
 }
 
-fn write_model(path: &Path, model: &Dcnet) -> Result<(), CheckpointError> {
+/// Writes `model`'s weights to `path`, sealed for `key`.
+fn write_model(path: &Path, model: &Dcnet, key: &str) -> Result<(), CheckpointError> {
     let bytes = model
         .clone()
         .into_record()
         .into_bytes()
         .map_err(record_error(path))?;
-    write_atomic(path, &bytes).map_err(io_error(path))
+    files::write_sealed(path, &bytes, key).map_err(io_error(path))
 }
 
 fn read_model(
@@ -638,8 +611,7 @@ mod tests {
         let mut state = State::new(&spec, em);
         run_epochs(&spec, &set, em, &mut state, 2);
         store.save_checkpoint(&state, em, &key).unwrap();
-        assert_eq!(store.checkpoint_integrity(em, &key), Seal::Intact);
-        assert_eq!(store.checkpoint_epoch(em, &key), Some(2));
+        assert_eq!(store.checkpoint_epoch(em, &key), Ok(Some(2)));
 
         let optimizer_path = store
             .stem(em, &key)
@@ -650,9 +622,8 @@ mod tests {
         bytes[middle] ^= 1;
         std::fs::write(&optimizer_path, bytes).unwrap();
         assert!(
-            matches!(store.checkpoint_integrity(em, &key), Seal::Damaged(why) if why.contains("epoch-2.optimizer"))
+            matches!(store.checkpoint_epoch(em, &key), Err(why) if why.contains("epoch-2.optimizer"))
         );
-        assert_eq!(store.checkpoint_epoch(em, &key), None);
         let fresh = store.resume(&spec, em, &key).unwrap();
         assert_eq!(fresh.next_epoch(), 1, "training starts again");
         assert!(!store.stem(em, &key).with_extension("checkpoint").exists());
