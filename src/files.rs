@@ -103,6 +103,31 @@ pub fn write_sealed(path: &Path, bytes: &[u8], key: &str) -> std::io::Result<()>
     write_atomic(&seal_path(path), format!("{key} {digest}\n").as_bytes())
 }
 
+/// `body` with its seal as its first line, for a file that must be whole and
+/// trustworthy on its own, written in one atomic step: no kill can separate the two.
+pub fn inline_sealed(body: &[u8], key: &str) -> Vec<u8> {
+    let mut bytes = format!("{key} {}\n", sha256_hex(body)).into_bytes();
+    bytes.extend_from_slice(body);
+    bytes
+}
+
+/// The body of [`inline_sealed`] bytes, if their seal holds for `key`, or why not.
+pub fn open_inline_sealed<'a>(bytes: &'a [u8], key: &str) -> Result<&'a [u8], String> {
+    let newline = bytes.iter().position(|&b| b == b'\n');
+    let (seal, body) = match newline {
+        Some(at) => (String::from_utf8_lossy(&bytes[..at]), &bytes[at + 1..]),
+        None => return Err("it has no seal line".into()),
+    };
+    match seal.split_once(' ') {
+        Some((sealed_key, _)) if sealed_key != key => {
+            Err(format!("it is sealed for another key, {sealed_key}"))
+        }
+        Some((_, digest)) if digest == sha256_hex(body) => Ok(body),
+        Some(_) => Err("its bytes do not match the SHA-256 of its seal".into()),
+        None => Err("its seal is unreadable".into()),
+    }
+}
+
 /// Whether the file at `path` is the one sealed for `key`.
 pub fn check_seal(path: &Path, key: &str) -> Seal {
     let seal = seal_path(path);
@@ -216,5 +241,27 @@ mod tests {
             2
         );
         assert_eq!(check_seal(&path, "k1"), Seal::Absent);
+    }
+
+    #[test]
+    fn an_inline_seal_holds_only_for_its_key_and_its_bytes() {
+        let sealed = inline_sealed(b"{\"epoch\": 2}", "k1");
+        assert_eq!(
+            open_inline_sealed(&sealed, "k1"),
+            Ok(&b"{\"epoch\": 2}"[..])
+        );
+        assert!(
+            open_inline_sealed(&sealed, "k2")
+                .unwrap_err()
+                .contains("another key")
+        );
+        let mut flipped = sealed.clone();
+        *flipped.last_mut().unwrap() ^= 1;
+        assert!(
+            open_inline_sealed(&flipped, "k1")
+                .unwrap_err()
+                .contains("do not match")
+        );
+        assert!(open_inline_sealed(b"{}", "k1").is_err());
     }
 }

@@ -56,7 +56,8 @@ fn record_error(path: &Path) -> impl FnOnce(RecordError) -> CheckpointError {
     |source| CheckpointError::Record { path, source }
 }
 
-/// What a checkpoint's `state.json` holds; the weight files carry the epoch in their name.
+/// What a checkpoint's `state.json` holds, below its inline seal; the weight files carry
+/// the epoch in their name.
 #[derive(Serialize, Deserialize)]
 struct CheckpointState {
     epoch: usize,
@@ -179,14 +180,11 @@ impl ModelStore {
         let state_path = folder.join("state.json");
         let damaged =
             |path: &Path, why: &dyn std::fmt::Display| format!("{}: {why}", path.display());
-        match files::check_seal(&state_path, key) {
-            Seal::Intact => {}
-            Seal::Damaged(why) => return Err(damaged(&state_path, &why)),
-            Seal::Absent => return Ok(None),
-        }
-        let state: CheckpointState = std::fs::read_to_string(&state_path)
-            .map_err(|e| e.to_string())
-            .and_then(|text| serde_json::from_str(&text).map_err(|e| e.to_string()))
+        let Ok(bytes) = std::fs::read(&state_path) else {
+            return Ok(None);
+        };
+        let state: CheckpointState = files::open_inline_sealed(&bytes, key)
+            .and_then(|body| serde_json::from_slice(body).map_err(|e| e.to_string()))
             .map_err(|why| damaged(&state_path, &why))?;
         let epoch = state.epoch;
         let mut parts = vec!["model", "optimizer"];
@@ -294,15 +292,12 @@ impl ModelStore {
             best_score: state.best.as_ref().map(|b| b.1),
             history: state.history.clone(),
         };
+        // Sealed inline, so that one rename replaces it whole: a kill leaves the last
+        // state.json, whose epoch files are still there, or this one.
         let path = folder.join("state.json");
-        files::write_sealed(
-            &path,
-            serde_json::to_string(&record)
-                .expect("state serializes")
-                .as_bytes(),
-            key,
-        )
-        .map_err(io_error(&path))?;
+        let body = serde_json::to_string(&record).expect("state serializes");
+        write_atomic(&path, &files::inline_sealed(body.as_bytes(), key))
+            .map_err(io_error(&path))?;
         // Older epochs are superseded once state.json names this one.
         for entry in std::fs::read_dir(&folder)
             .map_err(io_error(&folder))?
