@@ -60,12 +60,15 @@ pub struct DatasetSize {
 
 impl DatasetSize {
     pub fn of(spec: &Spec, trajectories: &[Trajectory]) -> Self {
+        let lengths: Vec<usize> = trajectories.iter().map(|t| t.ground_truth.len()).collect();
+        Self::from_lengths(spec, &lengths)
+    }
+
+    /// The size from the lengths in samples of the spec's trajectories, before any is
+    /// loaded.
+    pub fn from_lengths(spec: &Spec, lengths: &[usize]) -> Self {
         let d = &spec.dataset;
-        let per_combination = d.windows_per_combination(
-            d.trajectories
-                .iter()
-                .map(|&t| trajectories[t].ground_truth.len()),
-        );
+        let per_combination = d.windows_per_combination(d.trajectories.iter().map(|&t| lengths[t]));
         Self {
             combinations: spec.grid.points().len(),
             per_combination,
@@ -111,10 +114,11 @@ impl TrainingSet {
         self.is_validation.iter().filter(|&&v| v).count()
     }
 
-    /// Bytes of the window data a set of `windows` windows of `window` samples holds.
-    pub fn size_bytes(windows: usize, window: usize) -> usize {
-        windows * (INPUT_ROWS + TARGET_ROWS) * window * std::mem::size_of::<f32>()
-            + windows * std::mem::size_of::<bool>()
+    /// Bytes of the window data a set of `windows` windows of `window` samples holds
+    /// (in floating point, so that no size overflows).
+    pub fn size_bytes(windows: f64, window: f64) -> f64 {
+        windows * (INPUT_ROWS + TARGET_ROWS) as f64 * window * std::mem::size_of::<f32>() as f64
+            + windows * std::mem::size_of::<bool>() as f64
     }
 }
 

@@ -11,7 +11,8 @@
 //! 4. [`dataset`]: the training windows over the error-term grid;
 //! 5. [`model`] and [`train`]: DCNet and its closed-loop training;
 //! 6. [`estimators`]: calibration methods behind one trait, DCNet among them;
-//! 7. [`evaluate`]: the Monte Carlo calibration and evaluation protocol;
+//! 7. [`evaluate`]: the Monte Carlo calibration and evaluation protocol, and
+//!    [`footprint`]: the memory and time a spec asks for, known before it runs;
 //! 8. [`results`]: the Parquet files and manifest of a run, and a sweep's table;
 //! 9. [`report`]: what is drawn from results folders alone: the printed tables, the
 //!    figures, report.md and report.tex, and two folders compared;
@@ -39,6 +40,7 @@ pub mod model;
 pub mod train;
 pub mod estimators;
 pub mod evaluate;
+pub mod footprint;
 pub mod results;
 pub mod report;
 pub mod pipeline;

@@ -57,6 +57,51 @@ impl From<&ModelSpec> for Settings {
     }
 }
 
+/// One linear map of the network, `inputs` → `outputs`, applied at `positions` places
+/// of a window (its time steps and rows for a convolution, once for a dense layer).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LayerShape {
+    pub inputs: usize,
+    pub outputs: usize,
+    pub positions: usize,
+}
+
+impl LayerShape {
+    pub fn parameters(&self) -> usize {
+        (self.inputs + 1) * self.outputs
+    }
+}
+
+/// DCNet's layers on windows of `window` samples, in the order their weights are
+/// drawn: the two Conv1d of the 1D head, the three Conv2d of the 2D head, the four
+/// Linear. The 1D head's time shrinks by `kernel − 1` per conv; the 2D head's rows go
+/// 6 → 3 → 2 → 1 (the first conv pairs row i with row i + 3) and its time shrinks by 1
+/// per conv.
+pub fn layer_shapes(spec: &ModelSpec, error_model: ErrorModel, window: usize) -> Vec<LayerShape> {
+    let channels = spec.conv_channels;
+    let kernel = spec.conv1d_kernel_size;
+    let shape = |inputs, outputs, positions| LayerShape {
+        inputs,
+        outputs,
+        positions,
+    };
+    let steps_1d = [window + 1 - kernel, window + 2 - 2 * kernel];
+    let flat_1d = channels * steps_1d[1];
+    let flat_2d = channels * (window - 3);
+    let [w1, w2, w3] = spec.fc_widths;
+    vec![
+        shape(TARGET_ROWS * kernel, channels, steps_1d[0]),
+        shape(channels * kernel, channels, steps_1d[1]),
+        shape(KERNEL_2D, channels, 3 * (window - 1)),
+        shape(channels * KERNEL_2D, channels, 2 * (window - 2)),
+        shape(channels * KERNEL_2D, channels, window - 3),
+        shape(flat_1d + flat_2d, w1, 1),
+        shape(w1, w2, 1),
+        shape(w2, w3, 1),
+        shape(w3, error_model.term_count(), 1),
+    ]
+}
+
 /// A batch of windows as the network and the loss take it. The first layer of each
 /// head reads its unfolded input directly, built here on the CPU: it depends on the
 /// data only, never on the weights.
@@ -146,28 +191,11 @@ impl Dcnet {
         rng: &mut ChaCha8Rng,
     ) -> Self {
         let params = &mut ParamSource { rng, next_id: 0 };
-        let channels = spec.conv_channels;
-        let kernel = spec.conv1d_kernel_size;
-        let conv1d = vec![
-            linear(TARGET_ROWS * kernel, channels, device, params),
-            linear(channels * kernel, channels, device, params),
-        ];
-        let conv2d = vec![
-            linear(KERNEL_2D, channels, device, params),
-            linear(channels * KERNEL_2D, channels, device, params),
-            linear(channels * KERNEL_2D, channels, device, params),
-        ];
-        // 1D head: time shrinks by kernel − 1 per conv. 2D head: rows 6 → 3 → 2 → 1
-        // (the first conv pairs row i with row i + 3), time shrinks by 1 per conv.
-        let flat_1d = channels * (window - 2 * (kernel - 1));
-        let flat_2d = channels * (window - 3);
-        let [w1, w2, w3] = spec.fc_widths;
-        let fc = vec![
-            linear(flat_1d + flat_2d, w1, device, params),
-            linear(w1, w2, device, params),
-            linear(w2, w3, device, params),
-            linear(w3, error_model.term_count(), device, params),
-        ];
+        let mut layers = layer_shapes(spec, error_model, window)
+            .into_iter()
+            .map(|shape| linear(shape.inputs, shape.outputs, device, params));
+        let mut take = |n: usize| layers.by_ref().take(n).collect::<Vec<_>>();
+        let (conv1d, conv2d, fc) = (take(2), take(3), take(4));
         Self { conv1d, conv2d, fc }
     }
 

@@ -322,6 +322,33 @@ pub fn epochs_without_improvement(history: &[EpochRecord], min_improvement: f64)
 /// stays on the core that runs the model (it barely speeds up one model of this size: a
 /// lone paper-size training ran an epoch in 6.7 s on two threads, 6.9 s on one),
 /// and the model's bytes do not depend on how many threads there are.
+/// The seconds one training batch of `error_model` takes on one thread of this
+/// machine, as `run` trains: the faster of two steps over a batch of windows at rest
+/// (a step's time does not depend on the values).
+pub fn seconds_per_batch(spec: &Spec, error_model: ErrorModel) -> Result<f64, TrainError> {
+    let (batch, window) = (spec.training.batch_size, spec.dataset.window_samples);
+    let set = TrainingSet {
+        points: Vec::new(),
+        window,
+        windows_per_combination: batch,
+        inputs: vec![0.0; batch * INPUT_ROWS * window],
+        targets: vec![0.0; batch * TARGET_ROWS * window],
+        is_validation: vec![false; batch],
+    };
+    let order: Vec<usize> = (0..batch).collect();
+    let mut state = State::new(spec, error_model);
+    let hidden = ProgressBar::hidden();
+    one_thread_pool().install(|| {
+        let mut fastest = f64::INFINITY;
+        for epoch in 1..=2 {
+            let clock = Instant::now();
+            train_pass(spec, &set, error_model, &mut state, epoch, &order, &hidden)?;
+            fastest = fastest.min(clock.elapsed().as_secs_f64());
+        }
+        Ok(fastest)
+    })
+}
+
 pub fn one_thread_pool() -> rayon::ThreadPool {
     rayon::ThreadPoolBuilder::new()
         .num_threads(1)
@@ -557,7 +584,9 @@ pub(crate) mod tests {
 
     #[test]
     fn a_non_finite_loss_stops_training_with_the_model_and_epoch() {
-        let spec = quick_spec(&["training.learning_rate.EM3=1e30"]);
+        // A rate no spec may hold (they stop at 1), to make training diverge at once.
+        let mut spec = quick_spec(&[]);
+        spec.training.learning_rates[ErrorModel::Em3 as usize] = 1e30;
         let set = training_set(&spec);
         let mut state = State::new(&spec, ErrorModel::Em3);
         let error = (0..spec.training.epochs)

@@ -537,6 +537,44 @@ fn bad_arguments_and_names_are_bad_input_before_anything_runs() {
     }
 }
 
+/// Specs that cannot fit in this machine's memory (the test machines have far less
+/// than a terabyte), refused before anything is allocated: by `validate`, `plan` and
+/// `run`, at the key of the largest part, with the estimate.
+#[test]
+fn a_spec_beyond_this_machines_memory_is_refused_with_its_estimate_and_key() {
+    let dir = project(false);
+    let d = dir.path();
+    let wide = "model.fc_widths=[65536, 65536, 64]";
+    for command in ["validate", "plan", "run"] {
+        let output = dcnet(d, &[command, "experiments/quick.toml", "--set", wide]);
+        let message = stderr(&output);
+        assert_eq!(output.status.code(), Some(1), "{command}: {message}");
+        assert!(
+            message.contains(&format!("--set {wide}: model.fc_widths[0]: needs about ")),
+            "{command}: {message}"
+        );
+        assert!(
+            message.contains("of memory and this machine has")
+                && message.contains("is the models in training"),
+            "{command}: {message}"
+        );
+        assert!(!d.join("results").exists(), "{command} made results/");
+    }
+    // The same in a sweep, placed at the point that needs it.
+    let spec = std::fs::read_to_string(d.join("experiments/quick.toml")).unwrap()
+        + "\n[sweep.values]\n\"model.fc_widths\" = [[128, 64, 32], [65536, 65536, 64]]\n";
+    std::fs::write(d.join("experiments/sweep.toml"), spec).unwrap();
+    let output = dcnet(d, &["validate", "experiments/sweep.toml"]);
+    let message = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{message}");
+    assert!(
+        message.contains(
+            "sweep.toml:80: model.fc_widths[0]: point quick/fc_widths=65536-65536-64: needs about"
+        ),
+        "{message}"
+    );
+}
+
 #[test]
 fn validate_accepts_a_good_spec_and_overrides_apply() {
     let project = project(false);

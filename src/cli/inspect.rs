@@ -1,30 +1,50 @@
 //! `validate`, `data info` and `data fetch`: a spec and its data checked and
 //! described without running anything, and the Snapir recordings downloaded.
 
-use super::{CliError, failure, input, load_spec};
+use super::{CliError, about, failure, footprints, input, load_spec, training_seconds};
 use crate::data::{fetch, load_trajectories};
 use crate::dataset::{DatasetSize, TrainingSet};
+use crate::footprint::{self, Bytes};
 use crate::spec::{Origin, load_experiment, window_starts};
 use std::path::Path;
 
 pub(super) fn validate(spec_path: &Path, set: &[String]) -> Result<(), CliError> {
     let experiment = load_experiment(spec_path, set).map_err(input)?;
-    for point in &experiment.points {
+    let memory = Bytes(footprint::machine_memory() as f64);
+    for (point, (footprint, lengths)) in experiment.points.iter().zip(footprints(&experiment)?) {
         let spec = &point.spec;
-        let trajectories = load_trajectories(spec).map_err(input)?;
-        let windows = DatasetSize::of(spec, &trajectories).windows();
+        let windows = DatasetSize::from_lengths(spec, &lengths).windows();
         println!(
-            "{}: ok ({} trajectories, {} training windows, {} DVLs, {} Monte Carlo runs)",
+            "{}: ok ({} trajectories, {windows} training windows, {} DVLs, {} Monte Carlo runs)",
             if experiment.is_sweep() {
                 format!("{} point {}", spec_path.display(), spec.name)
             } else {
                 spec_path.display().to_string()
             },
-            trajectories.len(),
-            windows,
+            spec.trajectories.len(),
             spec.dvls.len(),
             spec.calibration.monte_carlo_runs
         );
+        let largest = footprint.largest();
+        println!(
+            "  memory: about {} of this machine's {memory}, most of it the {} ({})",
+            Bytes(footprint.bytes()),
+            largest.what,
+            Bytes(largest.bytes)
+        );
+        let trainings: Vec<_> = spec
+            .trained_models()
+            .iter()
+            .map(|_| (spec, lengths.clone()))
+            .collect();
+        if !trainings.is_empty() {
+            println!(
+                "  training: {} models, about {} on {} threads (from one batch timed here; cached models take none)",
+                trainings.len(),
+                about(training_seconds(&trainings)?),
+                rayon::current_num_threads()
+            );
+        }
     }
     Ok(())
 }
@@ -104,7 +124,7 @@ pub(super) fn info(spec_path: &Path, set: &[String]) -> Result<(), CliError> {
     }
     println!(
         "dataset size: {} bytes (f32 inputs and targets, one split flag per window)",
-        TrainingSet::size_bytes(windows, spec.dataset.window_samples)
+        TrainingSet::size_bytes(windows as f64, spec.dataset.window_samples as f64)
     );
     Ok(())
 }

@@ -17,7 +17,10 @@ mod run;
 
 pub use args::Cli;
 
-use crate::spec::{Experiment, Spec, load, load_experiment};
+use crate::data;
+use crate::footprint::{self, Footprint};
+use crate::spec::{Experiment, Spec, SpecErrors, TrajectorySource, load, load_experiment};
+use crate::vocab::ErrorModel;
 use args::{Command, DataCommand, Target};
 use clap::Parser;
 use std::path::Path;
@@ -145,5 +148,75 @@ fn load_target(target: &Target) -> Result<Experiment, CliError> {
             target.out.display()
         )));
     }
-    load_experiment(&target.spec, &set).map_err(input)
+    let experiment = load_experiment(&target.spec, &set).map_err(input)?;
+    footprints(&experiment)?;
+    Ok(experiment)
+}
+
+/// About how many seconds `trainings` take on this machine's threads, each given by
+/// its spec and its trajectories' lengths, from one batch timed per model shape.
+fn training_seconds(trainings: &[(&Spec, Vec<usize>)]) -> Result<f64, CliError> {
+    let threads = rayon::current_num_threads();
+    let mut timed: Vec<(String, f64)> = Vec::new();
+    let mut seconds = 0.0;
+    for (spec, lengths) in trainings {
+        let shape = format!(
+            "{:?} {} {} {}",
+            spec.model,
+            spec.training.backend,
+            spec.training.batch_size,
+            spec.dataset.window_samples
+        );
+        let per_batch = match timed.iter().find(|(s, _)| *s == shape) {
+            Some(&(_, per_batch)) => per_batch,
+            None => {
+                let per_batch =
+                    crate::train::seconds_per_batch(spec, ErrorModel::Em5).map_err(failure)?;
+                timed.push((shape, per_batch));
+                per_batch
+            }
+        };
+        seconds += footprint::training_seconds(spec, lengths, 1, 1, per_batch);
+    }
+    Ok(seconds / threads.clamp(1, trainings.len().max(1)) as f64)
+}
+
+/// A duration as a person reads it, to the second below an hour and to the minute
+/// above: `4m 12s`, `2h 10m`.
+fn about(seconds: f64) -> String {
+    let whole = if seconds < 3600.0 {
+        seconds.round()
+    } else {
+        (seconds / 60.0).round() * 60.0
+    };
+    humantime::format_duration(std::time::Duration::from_secs_f64(whole)).to_string()
+}
+
+/// What each point of `experiment` asks of this machine, and its trajectories'
+/// lengths, known before anything is allocated; a point beyond this machine's memory is bad input, placed at the key of
+/// its largest part.
+fn footprints(experiment: &Experiment) -> Result<Vec<(Footprint, Vec<usize>)>, CliError> {
+    let memory = footprint::machine_memory();
+    let threads = rayon::current_num_threads();
+    let mut known: Option<(&[TrajectorySource], Vec<usize>)> = None;
+    let mut footprints = Vec::new();
+    for point in &experiment.points {
+        let spec = &point.spec;
+        let lengths = match &known {
+            Some((sources, lengths)) if *sources == &spec.trajectories[..] => lengths.clone(),
+            _ => data::lengths(spec).map_err(input)?,
+        };
+        let footprint = Footprint::of(spec, &lengths, threads);
+        if let Some((key, message)) = footprint.refusal(memory) {
+            let message = if experiment.is_sweep() {
+                format!("point {}: {message}", spec.name)
+            } else {
+                message
+            };
+            return Err(input(SpecErrors::from(experiment.fault(&key, message))));
+        }
+        known = Some((&spec.trajectories, lengths.clone()));
+        footprints.push((footprint, lengths));
+    }
+    Ok(footprints)
 }

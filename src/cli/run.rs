@@ -3,7 +3,7 @@
 
 use super::args::{Drawing, Target};
 use super::plot::{plot_run, plot_sweep};
-use super::{CliError, failure, input, load_target};
+use super::{CliError, about, failure, input, load_target, training_seconds};
 use crate::pipeline::{Executed, Mode, Plan, Shard, Task, execute};
 use crate::report::plots::{Format, Metric};
 use crate::report::tables;
@@ -51,6 +51,7 @@ pub(super) fn run(
         "{whose}: {} to do ({total} in the plan)",
         tasks(to_do.len())
     );
+    say_how_long(&plan, &to_do)?;
     let executed = execute(&plan, mode, &to_do).map_err(failure)?;
     if let Mode::Shard { shard, .. } = mode {
         eprintln!(
@@ -62,6 +63,40 @@ pub(super) fn run(
         finish(&experiment, &executed, drawing)?;
     }
     failed_models(plan.failures(mode))
+}
+
+/// Trainings that take longer than this are announced with how long they take.
+const LONG_TRAINING_S: f64 = 600.0;
+
+/// Says how long the trainings of `to_do` will take, when that is long.
+fn say_how_long(plan: &Plan, to_do: &[Task]) -> Result<(), CliError> {
+    let trainings: Vec<_> = to_do
+        .iter()
+        .filter_map(|task| match task {
+            Task::Training(t) => Some(plan.trainings[*t].point),
+            _ => None,
+        })
+        .map(|p| {
+            let lengths = plan.trajectories[p]
+                .iter()
+                .map(|t| t.ground_truth.len())
+                .collect();
+            (plan.spec(p), lengths)
+        })
+        .collect();
+    if trainings.is_empty() {
+        return Ok(());
+    }
+    let seconds = training_seconds(&trainings)?;
+    if seconds > LONG_TRAINING_S {
+        eprintln!(
+            "training {} models will take about {} on {} threads (from one batch timed here)",
+            trainings.len(),
+            about(seconds),
+            rayon::current_num_threads()
+        );
+    }
+    Ok(())
 }
 
 /// "1 task", "31 tasks".

@@ -103,6 +103,30 @@ pub fn read_velocities(path: &Path, columns: &[String; 3]) -> Result<Vec<Vec3>, 
     Ok(samples)
 }
 
+/// How many rows below the header `path` holds, counted without parsing them: an
+/// upper bound of its samples, known before it is read.
+pub fn row_count(path: &Path) -> Result<usize, CsvError> {
+    use std::io::BufRead;
+    let file = std::fs::File::open(path).map_err(|source| match source.kind() {
+        std::io::ErrorKind::NotFound => CsvError::Missing {
+            path: path.to_path_buf(),
+        },
+        _ => CsvError::Read {
+            path: path.to_path_buf(),
+            error: source.into(),
+        },
+    })?;
+    let mut lines = 0;
+    for chunk in std::io::BufReader::new(file).split(b'\n') {
+        let chunk = chunk.map_err(|source| CsvError::Read {
+            path: path.to_path_buf(),
+            error: source.into(),
+        })?;
+        lines += usize::from(!chunk.is_empty());
+    }
+    Ok(lines.saturating_sub(1))
+}
+
 /// The bytes of `path`; a missing file is [`CsvError::Missing`].
 fn read_bytes(path: &Path) -> Result<Vec<u8>, CsvError> {
     std::fs::read(path).map_err(|source| match source.kind() {

@@ -9,10 +9,10 @@ pub mod npy;
 pub mod synthetic;
 
 use crate::Vec3;
-use crate::spec::{FileFormat, Origin, Spec};
+use crate::spec::{FileFormat, Origin, Spec, ranges};
 use std::collections::BTreeMap;
 use std::collections::btree_map::Entry;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// A recorded trajectory and its ground truth, body-frame velocity in m/s.
 #[derive(Debug, Clone, PartialEq)]
@@ -34,6 +34,13 @@ pub enum DataError {
     Npy(#[from] npy::NpyError),
     #[error(transparent)]
     Csv(#[from] csv::CsvError),
+    #[error("{path}: sample {sample}, axis {axis} is {value} m/s: {why}", path = path.display(), why = ranges::SPEED_M_S.why)]
+    Implausible {
+        path: PathBuf,
+        sample: usize,
+        axis: usize,
+        value: f64,
+    },
     #[error("{path}: trajectory {trajectory} asks for samples [{start}, {end}) but the file has {len}", path = path.display())]
     OutOfRange {
         trajectory: String,
@@ -42,6 +49,22 @@ pub enum DataError {
         end: usize,
         len: usize,
     },
+}
+
+/// The length in samples of every trajectory of the spec, known without loading any:
+/// from the spec, a `.npy` file's header, or a `.csv` file's rows.
+pub fn lengths(spec: &Spec) -> Result<Vec<usize>, DataError> {
+    spec.trajectories
+        .iter()
+        .map(|source| match (&source.origin, source.known_len()) {
+            (_, Some(len)) => Ok(len),
+            (Origin::File { path, format, .. }, None) => Ok(match format {
+                FileFormat::Npy => npy::sample_count(path)?,
+                FileFormat::Csv { .. } => csv::row_count(path)?,
+            }),
+            (Origin::Synthetic { samples }, None) => Ok(*samples),
+        })
+        .collect()
 }
 
 /// Loads every trajectory of the spec; each file is read once (a `.csv` once per choice
@@ -58,10 +81,13 @@ pub fn load_trajectories(spec: &Spec) -> Result<Vec<Trajectory>, DataError> {
             } => {
                 let all = match files.entry((path, format)) {
                     Entry::Occupied(read) => read.into_mut(),
-                    Entry::Vacant(unread) => unread.insert(match format {
-                        FileFormat::Npy => npy::read_velocities(path)?,
-                        FileFormat::Csv { columns } => csv::read_velocities(path, columns)?,
-                    }),
+                    Entry::Vacant(unread) => unread.insert(plausible(
+                        path,
+                        match format {
+                            FileFormat::Npy => npy::read_velocities(path)?,
+                            FileFormat::Csv { columns } => csv::read_velocities(path, columns)?,
+                        },
+                    )?),
                 };
                 let [start, end] = samples.unwrap_or([0, all.len()]);
                 if end > all.len() {
@@ -83,6 +109,24 @@ pub fn load_trajectories(spec: &Spec) -> Result<Vec<Trajectory>, DataError> {
         });
     }
     Ok(trajectories)
+}
+
+/// `recorded`, when every velocity in it is one an AUV can have: at most
+/// [`ranges::SPEED_M_S`] on each axis.
+fn plausible(path: &Path, recorded: Vec<Vec3>) -> Result<Vec<Vec3>, DataError> {
+    for (sample, velocity) in recorded.iter().enumerate() {
+        for (axis, &value) in velocity.iter().enumerate() {
+            if value.abs() > ranges::SPEED_M_S.max {
+                return Err(DataError::Implausible {
+                    path: path.to_path_buf(),
+                    sample,
+                    axis,
+                    value,
+                });
+            }
+        }
+    }
+    Ok(recorded)
 }
 
 /// Forward moving average: `out[i] = mean(x[i .. i + window])`, shrinking at the end.

@@ -26,6 +26,28 @@ pub enum NpyError {
     },
 }
 
+/// How many samples `path` holds, from its header alone.
+pub fn sample_count(path: &Path) -> Result<usize, NpyError> {
+    let read_error = |source| NpyError::Read {
+        path: path.to_path_buf(),
+        source,
+    };
+    let file = std::fs::File::open(path).map_err(|source| match source.kind() {
+        std::io::ErrorKind::NotFound => NpyError::Missing {
+            path: path.to_path_buf(),
+        },
+        _ => read_error(source),
+    })?;
+    let header = npyz::NpyFile::new(std::io::BufReader::new(file)).map_err(read_error)?;
+    match header.shape() {
+        [3, n] | [n, 3] => Ok(*n as usize),
+        shape => Err(NpyError::Shape {
+            path: path.to_path_buf(),
+            shape: shape.to_vec(),
+        }),
+    }
+}
+
 /// The velocity samples of `path`, one `[x, y, z]` per sample.
 pub fn read_velocities(path: &Path) -> Result<Vec<Vec3>, NpyError> {
     let read_error = |source| NpyError::Read {

@@ -48,6 +48,8 @@ pub enum ExecuteError {
     Read(#[from] results::read::ReadError),
     #[error(transparent)]
     Checkpoint(#[from] cache::models::CheckpointError),
+    #[error("{0} is not a finite number; nothing of it is stored")]
+    NonFinite(String),
     #[error("{count} tasks are not done yet, so there is nothing to collect:\n{list}")]
     Incomplete { count: usize, list: String },
 }

@@ -5,7 +5,7 @@ use super::cache::models::CheckpointError;
 use super::plan::{Plan, Task};
 use super::{ExecuteError, Executed};
 use crate::estimators::set_up;
-use crate::evaluate::{ProtocolResult, run_block};
+use crate::evaluate::{ProtocolResult, RunRow, run_block};
 use crate::progress::bar;
 use crate::spec::Spec;
 use crate::train::{Trained, TrainingHistory};
@@ -42,6 +42,9 @@ pub(super) fn run(
         let rows = run_block(spec, &plan.trajectories[p], dvl, &estimators, &progress);
         progress.finish_and_clear();
         for (b, rows) in estimator_blocks.into_iter().zip(rows) {
+            if let Some(row) = rows.iter().find(|row| !row.rmse_cm_s.is_finite()) {
+                return Err(ExecuteError::NonFinite(describe(spec, row)));
+            }
             plan.block_store.save(&plan.blocks[b].key, &rows)?;
             executed.done += 1;
         }
@@ -54,6 +57,25 @@ pub(super) fn run(
         );
     }
     Ok(())
+}
+
+/// Where a Monte Carlo row came from: its point, DVL, estimator, run, and window or
+/// trajectory.
+fn describe(spec: &Spec, row: &RunRow) -> String {
+    let estimator = match row.error_model {
+        Some(error_model) => format!("{} {error_model}", row.estimator),
+        None => row.estimator.to_string(),
+    };
+    format!(
+        "{} {} {estimator}, Monte Carlo run {}, {} on {} ({} s window): RMSE {} cm/s",
+        spec.name,
+        row.dvl,
+        row.run,
+        row.phase.as_str(),
+        row.trajectory,
+        row.window_s,
+        row.rmse_cm_s
+    )
 }
 
 /// `blocks` grouped by point and DVL, in the order they first appear, without those

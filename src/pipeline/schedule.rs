@@ -240,7 +240,7 @@ fn generate_dataset(plan: &Plan, d: usize, stages: &mut StageSeconds) -> Trainin
         set.windows_per_combination,
         set.len(),
         set.validation_len(),
-        TrainingSet::size_bytes(set.len(), set.window) as f64 / 1e6,
+        TrainingSet::size_bytes(set.len() as f64, set.window as f64) / 1e6,
         clock.elapsed().as_secs_f64()
     );
     set

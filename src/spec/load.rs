@@ -16,6 +16,9 @@ pub struct Experiment {
     /// The swept keys in the order `[sweep.values]` lists them; empty without a sweep.
     pub swept: Vec<String>,
     pub points: Vec<Point>,
+    /// Where the spec's keys are written or were set, to place later faults.
+    source: Source,
+    assigned: Assigned,
 }
 
 #[derive(Debug, Clone)]
@@ -30,6 +33,13 @@ impl Experiment {
     pub fn is_sweep(&self) -> bool {
         !self.swept.is_empty()
     }
+
+    /// A fault at `key` found after loading, such as the memory a point needs, placed
+    /// where the key is written or was set.
+    pub fn fault(&self, key: &str, message: impl Into<String>) -> SpecError {
+        self.source
+            .locate(&self.assigned, key.to_string(), message.into())
+    }
 }
 
 /// Reads the spec at `path` with its overrides; the first point of a sweep.
@@ -42,9 +52,7 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Spec, SpecErrors> {
 /// its `[sweep]`.
 pub fn load_experiment(path: &Path, overrides: &[String]) -> Result<Experiment, SpecErrors> {
     let text = TomlText::read(path, "cannot read the spec")?;
-    text.check_syntax()?;
-    let mut table: toml::Table =
-        toml::from_str(text.text()).map_err(|e| text.fault_of_file(e.message()))?;
+    let mut table = text.table()?;
     let assigned = apply_overrides(&mut table, overrides)?;
     let source = Source {
         text,
@@ -60,9 +68,11 @@ pub fn load_experiment(path: &Path, overrides: &[String]) -> Result<Experiment, 
                     values: Vec::new(),
                     spec,
                 }],
+                source,
+                assigned,
             })
         }
-        Some(sweep) => load_sweep(&source, table, sweep, &assigned),
+        Some(sweep) => load_sweep(source, table, sweep, assigned),
     }
 }
 
@@ -76,7 +86,10 @@ fn apply_overrides(table: &mut toml::Table, overrides: &[String]) -> Result<Assi
             Ok(key) => assigned.0.push((key, format!("--set {assignment}"))),
             Err(message) => errors.push(SpecError {
                 location: format!("--set {assignment}"),
-                key: String::new(),
+                key: assignment
+                    .split_once('=')
+                    .map(|(key, _)| key.trim().to_string())
+                    .unwrap_or_default(),
                 message,
             }),
         }
@@ -122,6 +135,7 @@ impl Assigned {
 }
 
 /// The spec's text and the folder its relative paths start from.
+#[derive(Debug, Clone)]
 struct Source {
     text: TomlText,
     folder: PathBuf,
@@ -158,21 +172,21 @@ impl Source {
 /// Every chosen point of `sweep` over `table`, each checked; the faults of all points,
 /// each once.
 fn load_sweep(
-    source: &Source,
+    source: Source,
     table: toml::Table,
     sweep: toml::Value,
-    assigned: &Assigned,
+    assigned: Assigned,
 ) -> Result<Experiment, SpecErrors> {
     let sweep: SweepFile = serde_path_to_error::deserialize(sweep).map_err(|e| {
         source.locate(
-            assigned,
+            &assigned,
             format!("sweep.{}", e.path()),
             e.into_inner().message().to_string(),
         )
     })?;
     let axes = sweep_axes(&sweep.values, &source.text)?;
     let chosen = chosen_points(&sweep, &axes, &table)
-        .map_err(|message| source.locate(assigned, "sweep.sample".into(), message))?;
+        .map_err(|message| source.locate(&assigned, "sweep.sample".into(), message))?;
     let name = table
         .get("name")
         .and_then(|n| n.as_str())
@@ -181,7 +195,7 @@ fn load_sweep(
     let mut points = SweepPoints::default();
     for index in chosen {
         let picks = picks_at(index, &axes);
-        points.add(source, &table, assigned, &axes, &picks, &name);
+        points.add(&source, &table, &assigned, &axes, &picks, &name);
     }
     if !points.errors.is_empty() {
         return Err(SpecErrors(points.errors));
@@ -190,6 +204,8 @@ fn load_sweep(
         name,
         swept: axes.into_iter().map(|a| a.key).collect(),
         points: points.points,
+        source,
+        assigned,
     })
 }
 
@@ -200,7 +216,20 @@ fn chosen_points(
     axes: &[Axis],
     table: &toml::Table,
 ) -> Result<Vec<usize>, String> {
-    let total: usize = axes.iter().map(|a| a.values.len()).product();
+    let total = axes
+        .iter()
+        .try_fold(1usize, |total, a| total.checked_mul(a.values.len()));
+    let limit = &super::ranges::SWEEP_POINTS;
+    let Some(total) = total else {
+        return Err(format!(
+            "the grid's points do not fit in a count: {}",
+            limit.why
+        ));
+    };
+    let runs = sweep.sample.unwrap_or(total);
+    if let Some(why) = limit.exceeded(runs as f64) {
+        return Err(format!("{runs} points of a grid of {total}: {why}"));
+    }
     match sweep.sample {
         None => Ok((0..total).collect()),
         Some(n) if n == 0 || n > total => Err(format!(
@@ -467,10 +496,18 @@ fn apply_override(table: &mut toml::Table, assignment: &str) -> Result<String, S
         .ok_or("expected KEY=VALUE, such as calibration.monte_carlo_runs=50")?;
     let key = key.trim();
     let path = steps(key)?;
-    let value = toml::from_str::<toml::Table>(&format!("value = {raw}"))
-        .ok()
-        .and_then(|mut t| t.remove("value"))
-        .unwrap_or_else(|| toml::Value::String(raw.to_string()));
+    let value = match toml::from_str::<toml::Table>(&format!("value = {raw}")) {
+        Ok(mut read) => read.remove("value"),
+        Err(_) if raw.trim().replace('_', "").parse::<i128>().is_ok() => {
+            return Err(format!(
+                "{} is larger than TOML's largest integer, {}",
+                raw.trim(),
+                i64::MAX
+            ));
+        }
+        Err(_) => None,
+    }
+    .unwrap_or_else(|| toml::Value::String(raw.to_string()));
     set_in(table, &path, value).map(|()| {
         let mut canonical = String::new();
         for step in &path {

@@ -15,6 +15,7 @@
 pub mod file;
 pub mod load;
 pub mod published;
+pub mod ranges;
 pub mod recordings;
 pub mod toml_file;
 
@@ -56,13 +57,13 @@ pub struct Spec {
     pub resolved: SpecFile,
 }
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct TrajectorySource {
     pub name: String,
     pub origin: Origin,
 }
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Origin {
     /// `[start, end)` of a recording, or all of it.
     File {
@@ -85,6 +86,16 @@ pub enum FileFormat {
 }
 
 impl Spec {
+    /// The error models a DCNet is trained for: every one the spec lists when DCNet is
+    /// among its estimators, none otherwise.
+    pub fn trained_models(&self) -> &[ErrorModel] {
+        if self.kinds.contains(&EstimatorKind::Dcnet) {
+            &self.error_models
+        } else {
+            &[]
+        }
+    }
+
     /// The resolved spec as TOML, as stored beside the results.
     pub fn resolved_toml(&self) -> String {
         toml::to_string_pretty(&self.resolved).expect("a spec always serializes")
@@ -330,8 +341,16 @@ fn check_data(
     } else {
         1.0
     };
+    ranges::SAMPLE_RATE_HZ.check("data.sample_rate_hz", sample_rate_hz, faults);
     if ground_truth_window_samples == 0 {
         faults.add("data.ground_truth_window_samples", "0 must be at least 1");
+    }
+    let ground_truth_s = ground_truth_window_samples as f64 / rate;
+    if let Some(why) = ranges::GROUND_TRUTH_WINDOW_S.exceeded(ground_truth_s) {
+        faults.add(
+            "data.ground_truth_window_samples",
+            format!("{ground_truth_window_samples} samples at {rate} Hz: {why}"),
+        );
     }
     check_synthetic(&synthetic, faults);
     let trajectories = check_trajectories(&trajectories, spec_dir, rate, resolved, faults);
@@ -363,9 +382,16 @@ fn check_trajectories(
             faults.add(format!("{key}.name"), format!("{name:?} is defined twice"));
         }
         let origin = check_origin(&key, trajectory, spec_dir, rate, &mut resolved[i], faults);
+        // A trajectory whose origin is at fault stands in as a file of unknown length,
+        // so that the checks of the windows cut from it add no faults of their own.
+        let origin = origin.unwrap_or(Origin::File {
+            path: PathBuf::new(),
+            format: FileFormat::Npy,
+            samples: None,
+        });
         sources.push(TrajectorySource {
             name: name.clone(),
-            origin: origin.unwrap_or(Origin::Synthetic { samples: 0 }),
+            origin,
         });
     }
     sources
@@ -504,11 +530,16 @@ fn check_synthetic_trajectory(
             "is for .csv files; a synthetic trajectory has synthetic_duration_s only",
         );
     }
+    let key = format!("{key}.synthetic_duration_s");
+    if let Some(why) = ranges::TRAJECTORY_S.exceeded(duration_s) {
+        faults.add(key, why);
+        return None;
+    }
     match seconds_to_samples(duration_s, rate) {
         Some(samples) if samples > 0 => Some(Origin::Synthetic { samples }),
         _ => {
             faults.add(
-                format!("{key}.synthetic_duration_s"),
+                key,
                 format!("{duration_s} must be a positive whole number of samples"),
             );
             None
@@ -550,10 +581,12 @@ fn check_sensors(sensors: file::SensorsFile, faults: &mut Faults) -> (f64, f64) 
         );
     }
     non_negative("sensors.gnss_noise_cm_s", gnss_noise_cm_s, faults);
+    ranges::VELOCITY_ERROR_CM_S.check("sensors.gnss_noise_cm_s", gnss_noise_cm_s, faults);
     (beam_pitch_deg, gnss_noise_cm_s / 100.0)
 }
 
-/// Checks `[grid]`: each axis expanded, scales above -100 %, noises not negative.
+/// Checks `[grid]`: each axis expanded, error terms in their ranges, and not too many
+/// combinations.
 fn check_grid(grid: file::GridFile, faults: &mut Faults) -> Grid {
     let file::GridFile {
         scale_pct,
@@ -566,16 +599,16 @@ fn check_grid(grid: file::GridFile, faults: &mut Faults) -> Grid {
         noise_cm_s: expand_axis("grid.noise_cm_s", &noise_cm_s, faults),
     };
     for (i, &value) in grid.scale_pct.iter().enumerate() {
-        if value <= -100.0 {
-            faults.add(
-                format!("grid.scale_pct[{i}]"),
-                format!("{value} must be above -100 %"),
-            );
-        }
+        check_scale(&format!("grid.scale_pct[{i}]"), value, faults);
+    }
+    for (i, &value) in grid.bias_cm_s.iter().enumerate() {
+        ranges::VELOCITY_ERROR_CM_S.check(&format!("grid.bias_cm_s[{i}]"), value.abs(), faults);
     }
     for (i, &value) in grid.noise_cm_s.iter().enumerate() {
-        non_negative(&format!("grid.noise_cm_s[{i}]"), value, faults);
+        check_noise(&format!("grid.noise_cm_s[{i}]"), value, faults);
     }
+    let combinations = grid.scale_pct.len() * grid.bias_cm_s.len() * grid.noise_cm_s.len();
+    ranges::GRID_COMBINATIONS.check("grid", combinations as f64, faults);
     grid
 }
 
@@ -601,7 +634,13 @@ fn check_dataset(
         validation_fraction,
         published_windows,
     } = dataset;
-    let window = positive_samples("dataset.window_s", window_s, rate, faults);
+    let window = match ranges::DCNET_WINDOW_S.exceeded(window_s) {
+        Some(why) => {
+            faults.add("dataset.window_s", why);
+            None
+        }
+        None => positive_samples("dataset.window_s", window_s, rate, faults),
+    };
     let stride = positive_samples("dataset.stride_s", stride_s, rate, faults);
     if names.is_empty() {
         faults.add(
@@ -697,19 +736,15 @@ fn check_dvls(units: &[file::DvlFile], faults: &mut Faults) -> Vec<Dvl> {
         if dvls.iter().any(|d| &d.name == name) {
             faults.add(format!("{key}.name"), format!("{name:?} is defined twice"));
         }
-        if !(scale_pct.is_finite() && *scale_pct > -100.0) {
-            faults.add(
-                format!("{key}.scale_pct"),
-                format!("{scale_pct} must be above -100 %"),
-            );
-        }
+        check_scale(&format!("{key}.scale_pct"), *scale_pct, faults);
         if !bias_cm_s.is_finite() {
             faults.add(
                 format!("{key}.bias_cm_s"),
                 format!("{bias_cm_s} must be a finite number"),
             );
         }
-        non_negative(&format!("{key}.noise_cm_s"), *noise_cm_s, faults);
+        ranges::VELOCITY_ERROR_CM_S.check(&format!("{key}.bias_cm_s"), bias_cm_s.abs(), faults);
+        check_noise(&format!("{key}.noise_cm_s"), *noise_cm_s, faults);
         dvls.push(Dvl {
             name: name.clone(),
             errors: SensorErrors::from_spec_units(*scale_pct, *bias_cm_s, *noise_cm_s),
@@ -764,6 +799,11 @@ fn check_calibration(
     if monte_carlo_runs == 0 {
         faults.add("calibration.monte_carlo_runs", "0 must be at least 1");
     }
+    ranges::MONTE_CARLO_RUNS.check(
+        "calibration.monte_carlo_runs",
+        monte_carlo_runs as f64,
+        faults,
+    );
     CalibrationSpec {
         trajectory: index.unwrap_or_default(),
         window_sizes,
@@ -944,6 +984,20 @@ fn check_columns(key: &str, columns: &[String; 3], faults: &mut Faults) {
     }
 }
 
+/// A scale factor error: above -100 % (the DVL still measures) and within its range.
+fn check_scale(key: &str, value: f64, faults: &mut Faults) {
+    if !(value.is_finite() && value > -100.0) {
+        faults.add(key, format!("{value} must be above -100 %"));
+    }
+    ranges::SCALE_PCT.check(key, value, faults);
+}
+
+/// A velocity noise: zero or positive and within its range.
+fn check_noise(key: &str, value: f64, faults: &mut Faults) {
+    non_negative(key, value, faults);
+    ranges::VELOCITY_ERROR_CM_S.check(key, value, faults);
+}
+
 fn non_negative(key: &str, value: f64, faults: &mut Faults) {
     if !(value.is_finite() && value >= 0.0) {
         faults.add(key, format!("{value} must be zero or positive"));
@@ -964,6 +1018,7 @@ fn check_model(model: file::ModelFile, window: Option<usize>, faults: &mut Fault
     if conv_channels == 0 {
         faults.add("model.conv_channels", "0 must be at least 1");
     }
+    ranges::CONV_CHANNELS.check("model.conv_channels", conv_channels as f64, faults);
     match window {
         Some(window) if conv1d_kernel_size == 0 || 2 * (conv1d_kernel_size - 1) >= window => faults.add(
             "model.conv1d_kernel_size",
@@ -976,6 +1031,7 @@ fn check_model(model: file::ModelFile, window: Option<usize>, faults: &mut Fault
         if *width == 0 {
             faults.add(format!("model.fc_widths[{i}]"), "0 must be at least 1");
         }
+        ranges::FC_WIDTH.check(&format!("model.fc_widths[{i}]"), *width as f64, faults);
     }
     let activation = activation.parse().unwrap_or_else(|message: String| {
         faults.add("model.activation", message);
@@ -1024,6 +1080,8 @@ fn check_training(training: file::TrainingFile, faults: &mut Faults) -> Training
             faults.add(key, "0 must be at least 1");
         }
     }
+    ranges::EPOCHS.check("training.epochs", epochs as f64, faults);
+    ranges::BATCH_SIZE.check("training.batch_size", batch_size as f64, faults);
     let learning_rates = check_learning_rates(learning_rate, faults);
     if !(rmsprop_alpha > 0.0 && rmsprop_alpha < 1.0) {
         faults.add(
@@ -1062,12 +1120,11 @@ fn check_learning_rates(learning_rate: file::LearningRatesFile, faults: &mut Fau
     } = learning_rate;
     let learning_rates = [em1, em2, em3, em4, em5];
     for (model, rate) in ErrorModel::ALL.iter().zip(learning_rates) {
+        let key = format!("training.learning_rate.{model}");
         if !(rate.is_finite() && rate > 0.0) {
-            faults.add(
-                format!("training.learning_rate.{model}"),
-                format!("{rate} must be a positive number"),
-            );
+            faults.add(&key, format!("{rate} must be a positive number"));
         }
+        ranges::LEARNING_RATE.check(&key, rate, faults);
     }
     learning_rates
 }
@@ -1100,7 +1157,8 @@ fn check_early_stopping(
     }
 }
 
-/// Checks `[data.synthetic]`: ranges of positive numbers, amounts not negative.
+/// Checks `[data.synthetic]`: ranges of positive numbers, amounts not negative, each
+/// within what an AUV does.
 fn check_synthetic(synthetic: &SyntheticFile, faults: &mut Faults) {
     let SyntheticFile {
         speed_m_s,
@@ -1121,13 +1179,36 @@ fn check_synthetic(synthetic: &SyntheticFile, faults: &mut Faults) {
             );
         }
     }
-    for (key, value) in [
-        ("data.synthetic.turn_rate_deg_s", turn_rate_deg_s),
-        ("data.synthetic.heave_amplitude_m_s", heave_amplitude_m_s),
-        ("data.synthetic.surface_s", surface_s),
-        ("data.synthetic.recording_noise_cm_s", recording_noise_cm_s),
+    for (key, value, limit) in [
+        (
+            "data.synthetic.speed_m_s[1]",
+            speed_m_s[1],
+            ranges::SPEED_M_S,
+        ),
+        (
+            "data.synthetic.leg_duration_s[1]",
+            leg_duration_s[1],
+            ranges::TRAJECTORY_S,
+        ),
+        (
+            "data.synthetic.turn_rate_deg_s",
+            *turn_rate_deg_s,
+            ranges::TURN_RATE_DEG_S,
+        ),
+        (
+            "data.synthetic.heave_amplitude_m_s",
+            *heave_amplitude_m_s,
+            ranges::SPEED_M_S,
+        ),
+        ("data.synthetic.surface_s", *surface_s, ranges::TRAJECTORY_S),
+        (
+            "data.synthetic.recording_noise_cm_s",
+            *recording_noise_cm_s,
+            ranges::VELOCITY_ERROR_CM_S,
+        ),
     ] {
-        non_negative(key, *value, faults);
+        non_negative(key, value, faults);
+        limit.check(key, value, faults);
     }
 }
 
@@ -1156,6 +1237,10 @@ fn expand_axis(key: &str, axis: &AxisFile, faults: &mut Faults) -> Vec<f64> {
                 return Vec::new();
             }
             let steps = (stop - start) / step;
+            if let Some(why) = ranges::GRID_AXIS_VALUES.exceeded(steps.round() + 1.0) {
+                faults.add(key, why);
+                return Vec::new();
+            }
             if (steps - steps.round()).abs() > 1e-6 {
                 faults.add(
                     key,
@@ -1181,6 +1266,10 @@ fn expand_axis(key: &str, axis: &AxisFile, faults: &mut Faults) -> Vec<f64> {
             key,
             "is empty: the grid needs at least one value on every axis",
         );
+    }
+    if let Some(why) = ranges::GRID_AXIS_VALUES.exceeded(values.len() as f64) {
+        faults.add(key, why);
+        return Vec::new();
     }
     for (i, value) in values.iter().enumerate() {
         if !value.is_finite() {
@@ -1267,6 +1356,149 @@ mod tests {
         let error = faults(&["estimators.kinds=[\"baseline\", \"baseline\"]"]);
         assert!(
             error.contains("estimators.kinds[1]: \"baseline\" is listed twice"),
+            "{error}"
+        );
+    }
+
+    #[test]
+    fn values_beyond_their_physical_range_are_refused_at_their_key() {
+        for (set, key, why) in [
+            (
+                "data.sample_rate_hz=5000",
+                "data.sample_rate_hz",
+                "faster than any DVL",
+            ),
+            (
+                "data.ground_truth_window_samples=100000",
+                "data.ground_truth_window_samples",
+                "100000 samples at 1 Hz",
+            ),
+            (
+                "data.trajectories[0].synthetic_duration_s=1e12",
+                "data.trajectories[0].synthetic_duration_s",
+                "30-day AUV mission",
+            ),
+            (
+                "data.synthetic.speed_m_s=[1, 100]",
+                "data.synthetic.speed_m_s[1]",
+                "faster than an AUV travels",
+            ),
+            (
+                "data.synthetic.turn_rate_deg_s=1000",
+                "data.synthetic.turn_rate_deg_s",
+                "faster than an AUV turns",
+            ),
+            (
+                "sensors.gnss_noise_cm_s=500",
+                "sensors.gnss_noise_cm_s",
+                "more than 1 m/s",
+            ),
+            (
+                "grid.bias_cm_s={values = [0.3, -150]}",
+                "grid.bias_cm_s[1]",
+                "more than 1 m/s",
+            ),
+            (
+                "grid.scale_pct={values = [0.5, 250]}",
+                "grid.scale_pct[1]",
+                "above 100 %",
+            ),
+            (
+                "grid.noise_cm_s={start = 0.0, stop = 100.0, step = 0.001}",
+                "grid.noise_cm_s",
+                "100001 values",
+            ),
+            (
+                "dvl[1].noise_cm_s=101",
+                "dvl[1].noise_cm_s",
+                "more than 1 m/s",
+            ),
+            (
+                "dataset.window_s=1000",
+                "dataset.window_s",
+                "DCNet's windows",
+            ),
+            (
+                "calibration.monte_carlo_runs=1000000000",
+                "calibration.monte_carlo_runs",
+                "the paper runs 200",
+            ),
+            (
+                "model.conv_channels=1000000",
+                "model.conv_channels",
+                "the paper's convolutions",
+            ),
+            (
+                "model.fc_widths=[100000000, 64, 32]",
+                "model.fc_widths[0]",
+                "the paper's widest layer",
+            ),
+            (
+                "training.epochs=10000000",
+                "training.epochs",
+                "the paper trains for 100",
+            ),
+            (
+                "training.batch_size=100000000",
+                "training.batch_size",
+                "hold 256",
+            ),
+            (
+                "training.learning_rate.EM2=10",
+                "training.learning_rate.EM2",
+                "RMSProp diverges",
+            ),
+        ] {
+            let error = faults(&[set]);
+            assert!(
+                error.contains(&format!("--set {set}: {key}: ")),
+                "{set}: {error}"
+            );
+            assert!(error.contains(why), "{set}: {error}");
+            assert_eq!(
+                error.lines().count(),
+                1,
+                "{set}: one fault, no echoes: {error}"
+            );
+        }
+        let combinations = faults(&[
+            "grid.scale_pct={start = 0.1, stop = 100.0, step = 0.1}",
+            "grid.bias_cm_s={start = 0.1, stop = 10.0, step = 0.1}",
+        ]);
+        assert!(
+            combinations.contains(": grid: 200000 combinations is above 100000"),
+            "{combinations}"
+        );
+    }
+
+    #[test]
+    fn an_integer_beyond_toml_is_placed_at_its_line_and_key() {
+        let folder = tempfile::tempdir().unwrap();
+        let quick = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quick.toml");
+        let text = std::fs::read_to_string(&quick).unwrap().replace(
+            "fc_widths = [128, 64, 32]",
+            "fc_widths = [128, 18446744073709551616, 32]",
+        );
+        let path = folder.path().join("huge.toml");
+        std::fs::write(&path, &text).unwrap();
+        let line = text
+            .lines()
+            .position(|l| l.starts_with("fc_widths"))
+            .unwrap()
+            + 1;
+        let error = load(&path, &[]).unwrap_err().to_string();
+        assert_eq!(
+            error,
+            format!(
+                "{}:{line}: model.fc_widths[1]: 18446744073709551616 is larger than TOML's largest integer, 9223372036854775807",
+                path.display()
+            )
+        );
+        let error = faults(&["seed=18446744073709551615"]);
+        assert!(
+            error.starts_with(
+                "--set seed=18446744073709551615: seed: 18446744073709551615 is larger"
+            ),
             "{error}"
         );
     }

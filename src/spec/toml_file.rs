@@ -48,6 +48,7 @@ impl From<SpecError> for SpecErrors {
 
 /// A TOML text and the name its faults show it by (its path), which places a fault at
 /// a key on the key's line.
+#[derive(Debug, Clone)]
 pub(super) struct TomlText {
     shown: String,
     text: String,
@@ -65,11 +66,6 @@ impl TomlText {
                 message: format!("{unreadable}: {e}"),
             }),
         }
-    }
-
-    /// The text itself.
-    pub fn text(&self) -> &str {
-        &self.text
     }
 
     /// The name faults show the text by.
@@ -95,6 +91,34 @@ impl TomlText {
             location,
             key: String::new(),
             message: e.message().trim().to_string(),
+        })
+    }
+
+    /// The text as a TOML table; a value TOML cannot hold (an integer beyond 2⁶³ − 1)
+    /// is a fault placed on its line and at its key.
+    pub fn table(&self) -> Result<toml::Table, SpecError> {
+        self.check_syntax()?;
+        toml::from_str(&self.text).map_err(|e| {
+            let Some(span) = e.span() else {
+                return self.fault_of_file(e.message().trim());
+            };
+            let written = self.text[span.clone()].trim();
+            let message = if written.replace('_', "").parse::<i128>().is_ok() {
+                format!(
+                    "{written} is larger than TOML's largest integer, {}",
+                    i64::MAX
+                )
+            } else {
+                e.message().trim().to_string()
+            };
+            let key = DeTable::parse(&self.text)
+                .map(|root| key_at(root.get_ref(), span.start))
+                .unwrap_or_default();
+            SpecError {
+                location: self.at_line(line_of(&self.text, span.start)),
+                key,
+                message,
+            }
         })
     }
 
@@ -155,9 +179,7 @@ impl<T: serde::de::DeserializeOwned> TomlFile<T> {
     /// Reads `path`; a fault reads `path:line: key: message`.
     pub fn read(path: &Path) -> Result<Self, SpecError> {
         let source = TomlText::read(path, "cannot read it")?;
-        source.check_syntax()?;
-        let table: toml::Table =
-            toml::from_str(source.text()).map_err(|e| source.fault("", e.message()))?;
+        let table = source.table()?;
         let value = deserialize(toml::Value::Table(table))
             .map_err(|(key, message)| source.fault(&key, message))?;
         Ok(TomlFile { value, source })
@@ -234,6 +256,39 @@ fn find(root: &Spanned<DeTable<'_>>, path: &[Step<'_>]) -> (usize, bool) {
         };
     }
     (best, true)
+}
+
+/// The dotted key path of the value written at byte `offset`: at each level the
+/// entry that starts last before it (a table's keys follow its header, an array's
+/// items follow each other).
+fn key_at(table: &DeTable<'_>, offset: usize) -> String {
+    let Some((name, mut value)) = table
+        .iter()
+        .filter(|(name, _)| name.span().start <= offset)
+        .max_by_key(|(name, _)| name.span().start)
+    else {
+        return String::new();
+    };
+    let mut path = name.get_ref().to_string();
+    loop {
+        match value.get_ref() {
+            DeValue::Table(t) => {
+                let inner = key_at(t, offset);
+                if !inner.is_empty() {
+                    path = format!("{path}.{inner}");
+                }
+                return path;
+            }
+            DeValue::Array(items) => {
+                let Some(i) = items.iter().rposition(|item| item.span().start <= offset) else {
+                    return path;
+                };
+                path = format!("{path}[{i}]");
+                value = &items[i];
+            }
+            _ => return path,
+        }
+    }
 }
 
 /// The 1-based line that byte `offset` of `text` is on.

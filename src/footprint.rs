@@ -1,0 +1,306 @@
+//! What a spec asks of this machine, known before anything is allocated: the memory of
+//! its trajectories, its training set, the models that train side by side with their
+//! batches, and its Monte Carlo rows, each part with the spec key that drives it; and
+//! the time its trainings take, from one training batch timed on this machine.
+//! `validate` shows both; `validate` and `run` refuse a spec whose memory is beyond
+//! this machine's, naming the key of its largest part, and `run` says how long a long
+//! training will take. In: a checked spec and its trajectories' lengths. Out: a
+//! [`Footprint`].
+
+use crate::dataset::{DatasetSize, TrainingSet};
+use crate::evaluate::RunRow;
+use crate::model::layer_shapes;
+use crate::spec::{Origin, Spec};
+use crate::vocab::{ErrorModel, EstimatorKind};
+use std::fmt;
+
+/// Bytes a stored float of the network takes.
+const FLOAT_BYTES: f64 = 4.0;
+/// Copies of a model's weights while it trains: the weights, their gradients, RMSProp's
+/// running mean square and the best epoch's weights.
+const MODEL_COPIES: f64 = 4.0;
+/// A forward pass keeps each layer's input and output for the backward pass, which
+/// makes a gradient of each: three floats per value.
+const BATCH_COPIES: f64 = 3.0;
+/// The validation loss is taken over chunks of at least this many windows.
+const VALIDATION_CHUNK: usize = 1024;
+/// Copies of the Monte Carlo rows at the end of a run: the rows, their gathered
+/// copy and their Arrow columns.
+const ROW_COPIES: f64 = 3.0;
+/// Heap bytes of a row beyond its own size: its DVL and trajectory names.
+const ROW_NAME_BYTES: f64 = 64.0;
+
+/// One part of a spec's memory.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Part {
+    pub what: &'static str,
+    pub bytes: f64,
+    /// The spec key the part grows with.
+    pub key: String,
+}
+
+/// The memory a spec needs at its peak: every part, as if all were held at once.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Footprint {
+    pub parts: Vec<Part>,
+}
+
+impl Footprint {
+    /// The parts of `spec` whose trajectories are `lengths` samples long, with
+    /// `threads` threads training a model each.
+    pub fn of(spec: &Spec, lengths: &[usize], threads: usize) -> Self {
+        let mut parts = vec![trajectories(spec, lengths), training_set(spec, lengths)];
+        if !spec.trained_models().is_empty() {
+            parts.extend(training(spec, threads));
+        }
+        parts.push(monte_carlo_rows(spec));
+        Self { parts }
+    }
+
+    pub fn bytes(&self) -> f64 {
+        self.parts.iter().map(|p| p.bytes).sum()
+    }
+
+    /// The part that needs the most memory.
+    pub fn largest(&self) -> &Part {
+        self.parts
+            .iter()
+            .max_by(|a, b| a.bytes.total_cmp(&b.bytes))
+            .expect("a footprint has parts")
+    }
+
+    /// Why the spec cannot run on a machine of `memory` bytes, when it cannot: the
+    /// key to change and the message.
+    pub fn refusal(&self, memory: u64) -> Option<(String, String)> {
+        if self.bytes() <= memory as f64 {
+            return None;
+        }
+        let largest = self.largest();
+        Some((
+            largest.key.clone(),
+            format!(
+                "needs about {} of memory and this machine has {}; most of it, {}, is the {}, which grows with this key",
+                Bytes(self.bytes()),
+                Bytes(memory as f64),
+                Bytes(largest.bytes),
+                largest.what
+            ),
+        ))
+    }
+}
+
+/// The memory this process may use: the machine's, or its control group's limit when
+/// that is lower.
+pub fn machine_memory() -> u64 {
+    let mut system = sysinfo::System::new();
+    system.refresh_memory();
+    let total = system.total_memory();
+    system
+        .cgroup_limits()
+        .map_or(total, |limits| total.min(limits.total_memory))
+}
+
+/// The recorded velocities and their ground truth, for every trajectory.
+fn trajectories(spec: &Spec, lengths: &[usize]) -> Part {
+    let samples: f64 = lengths.iter().map(|&len| len as f64).sum();
+    let longest = (0..lengths.len()).max_by_key(|&i| lengths[i]).unwrap_or(0);
+    let key = match spec.trajectories.get(longest).map(|t| &t.origin) {
+        Some(Origin::File { .. }) => format!("data.trajectories[{longest}].file"),
+        _ => format!("data.trajectories[{longest}].synthetic_duration_s"),
+    };
+    Part {
+        what: "trajectories",
+        bytes: samples * 2.0 * std::mem::size_of::<crate::Vec3>() as f64,
+        key,
+    }
+}
+
+/// Every window of every grid combination, as [`TrainingSet`] holds them.
+fn training_set(spec: &Spec, lengths: &[usize]) -> Part {
+    let size = DatasetSize::from_lengths(spec, lengths);
+    let windows = size.combinations as f64 * size.per_combination as f64;
+    Part {
+        what: "training set",
+        bytes: TrainingSet::size_bytes(windows, spec.dataset.window_samples as f64),
+        key: "grid".into(),
+    }
+}
+
+/// The models of every error model, which train side by side, and the batches that
+/// `threads` of them run at once.
+fn training(spec: &Spec, threads: usize) -> [Part; 2] {
+    let window = spec.dataset.window_samples;
+    let shapes = layer_shapes(&spec.model, ErrorModel::Em5, window);
+    let parameters: f64 = shapes.iter().map(|s| s.parameters() as f64).sum();
+    let per_window: f64 = shapes
+        .iter()
+        .map(|s| (s.inputs + s.outputs) as f64 * s.positions as f64)
+        .sum();
+    let models = spec.trained_models().len() as f64;
+    let biggest = (0..shapes.len())
+        .max_by_key(|&i| shapes[i].parameters())
+        .unwrap_or(0);
+    let widths = spec.model.fc_widths;
+    let width_key = match biggest {
+        // The first dense layer reads the convolutions' flattened output.
+        5 if widths[0] < spec.model.conv_channels => "model.conv_channels".to_string(),
+        5 => "model.fc_widths[0]".to_string(),
+        6 | 7 => {
+            let (a, b) = (biggest - 6, biggest - 5);
+            format!(
+                "model.fc_widths[{}]",
+                if widths[a] >= widths[b] { a } else { b }
+            )
+        }
+        8 => "model.fc_widths[2]".to_string(),
+        _ => "model.conv_channels".to_string(),
+    };
+    let running = threads.clamp(1, spec.trained_models().len()) as f64;
+    let batch = spec.training.batch_size.max(VALIDATION_CHUNK) as f64;
+    [
+        Part {
+            what: "models in training",
+            bytes: models * parameters * MODEL_COPIES * FLOAT_BYTES,
+            key: width_key,
+        },
+        Part {
+            what: "training batches",
+            bytes: running * batch * per_window * BATCH_COPIES * FLOAT_BYTES,
+            key: "training.batch_size".into(),
+        },
+    ]
+}
+
+/// One row per run, DVL, estimator and calibration window or test trajectory.
+fn monte_carlo_rows(spec: &Spec) -> Part {
+    let estimators = spec
+        .kinds
+        .iter()
+        .map(|kind| match kind {
+            EstimatorKind::Dcnet => spec.error_models.len(),
+            _ => 1,
+        })
+        .sum::<usize>() as f64;
+    let places = (spec.calibration.window_sizes.len() + spec.evaluation.len()) as f64;
+    let rows =
+        spec.calibration.monte_carlo_runs as f64 * spec.dvls.len() as f64 * estimators * places;
+    let row_bytes = std::mem::size_of::<RunRow>() as f64 + ROW_NAME_BYTES;
+    Part {
+        what: "Monte Carlo rows",
+        bytes: rows * row_bytes * ROW_COPIES,
+        key: "calibration.monte_carlo_runs".into(),
+    }
+}
+
+/// The seconds `trainings` trainings of `spec` take on `threads` threads, each model
+/// on a thread of its own, at `seconds_per_batch`: every epoch's training batches, and
+/// its validation windows at a third of a batch's time (forward only).
+pub fn training_seconds(
+    spec: &Spec,
+    lengths: &[usize],
+    trainings: usize,
+    threads: usize,
+    seconds_per_batch: f64,
+) -> f64 {
+    let size = DatasetSize::from_lengths(spec, lengths);
+    let batch = spec.training.batch_size as f64;
+    let validation = size.validation() as f64;
+    let batches = ((size.windows() as f64 - validation) / batch).ceil() + validation / batch / 3.0;
+    let parallel = threads.clamp(1, trainings.max(1)) as f64;
+    trainings as f64 * spec.training.epochs as f64 * batches * seconds_per_batch / parallel
+}
+
+/// A byte count as a person reads it: `1.5 GiB`.
+pub struct Bytes(pub f64);
+
+impl fmt::Display for Bytes {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        const UNITS: [&str; 7] = ["B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
+        let mut value = self.0;
+        let mut unit = 0;
+        while value >= 1024.0 && unit + 1 < UNITS.len() {
+            value /= 1024.0;
+            unit += 1;
+        }
+        if unit == 0 {
+            write!(f, "{value:.0} B")
+        } else {
+            write!(f, "{value:.1} {}", UNITS[unit])
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spec::quick_spec;
+
+    fn lengths(spec: &Spec) -> Vec<usize> {
+        spec.trajectories
+            .iter()
+            .map(|t| t.known_len().unwrap())
+            .collect()
+    }
+
+    #[test]
+    fn the_training_set_part_is_the_set_the_dataset_generates() {
+        let spec = quick_spec(&[]);
+        let trajectories = crate::data::load_trajectories(&spec).unwrap();
+        let set = crate::dataset::generate(&spec, &trajectories, &indicatif::ProgressBar::hidden());
+        let footprint = Footprint::of(&spec, &lengths(&spec), 2);
+        let part = footprint
+            .parts
+            .iter()
+            .find(|p| p.what == "training set")
+            .unwrap();
+        let held = (set.inputs.len() + set.targets.len()) * 4 + set.is_validation.len();
+        assert_eq!(part.bytes, held as f64);
+    }
+
+    #[test]
+    fn the_models_part_counts_the_weights_of_every_error_model() {
+        let spec = quick_spec(&[]);
+        let footprint = Footprint::of(&spec, &lengths(&spec), 2);
+        let part = footprint
+            .parts
+            .iter()
+            .find(|p| p.what == "models in training")
+            .unwrap();
+        let model = crate::model::Dcnet::new(
+            &spec.model,
+            ErrorModel::Em5,
+            spec.dataset.window_samples,
+            &spec.training.backend.device(),
+            &mut crate::rng::task_rng(0, &[&"test"]),
+        );
+        use burn::module::Module;
+        let weights = model.num_params() as f64 * FLOAT_BYTES * MODEL_COPIES;
+        assert_eq!(part.bytes, weights * spec.error_models.len() as f64);
+    }
+
+    #[test]
+    fn a_spec_beyond_the_machine_is_refused_with_the_key_of_its_largest_part() {
+        let spec = quick_spec(&["calibration.monte_carlo_runs=100000"]);
+        let footprint = Footprint::of(&spec, &lengths(&spec), 2);
+        assert_eq!(footprint.refusal(u64::MAX), None);
+        let (key, message) = footprint.refusal(1 << 20).unwrap();
+        assert_eq!(key, "calibration.monte_carlo_runs");
+        assert!(message.contains("this machine has 1.0 MiB"), "{message}");
+        assert!(message.contains("Monte Carlo rows"), "{message}");
+        for (widths, key) in [
+            ("[64,65536,65536]", "model.fc_widths[1]"),
+            ("[65536,65536,64]", "model.fc_widths[0]"),
+        ] {
+            let wide = quick_spec(&[&format!("model.fc_widths={widths}")]);
+            let footprint = Footprint::of(&wide, &lengths(&wide), 2);
+            assert_eq!(footprint.refusal(1 << 20).unwrap().0, key, "{widths}");
+        }
+    }
+
+    #[test]
+    fn bytes_read_in_binary_units() {
+        assert_eq!(Bytes(512.0).to_string(), "512 B");
+        assert_eq!(Bytes(1536.0).to_string(), "1.5 KiB");
+        assert_eq!(Bytes(15.8 * 1024f64.powi(4)).to_string(), "15.8 TiB");
+    }
+}

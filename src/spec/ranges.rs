@@ -1,0 +1,123 @@
+//! The physical and practical ranges of a spec's values, each with the reason a value
+//! beyond it makes no sense: an AUV's speeds and missions, a DVL's error terms, and
+//! counts past which a run is no longer an experiment but a mistake (a grid of 10⁸
+//! combinations, 10⁹ Monte Carlo runs). The checks in [`super`] take their upper ends
+//! from here; the lower ends (positive, at least 1) are theirs. Memory is estimated
+//! later, from the sizes these ranges let through (`crate::footprint`).
+
+use super::Faults;
+
+/// The largest value a key may take, and why.
+#[derive(Debug, Clone, Copy)]
+pub struct Limit {
+    pub max: f64,
+    pub unit: &'static str,
+    pub why: &'static str,
+}
+
+pub const SAMPLE_RATE_HZ: Limit = Limit {
+    max: 1000.0,
+    unit: "Hz",
+    why: "faster than any DVL pings",
+};
+pub const GROUND_TRUTH_WINDOW_S: Limit = Limit {
+    max: 60.0,
+    unit: "s",
+    why: "a moving average that long smooths away the manoeuvres the DVL measures",
+};
+pub const TRAJECTORY_S: Limit = Limit {
+    max: 30.0 * 86_400.0,
+    unit: "s",
+    why: "longer than a 30-day AUV mission",
+};
+pub const SPEED_M_S: Limit = Limit {
+    max: 10.0,
+    unit: "m/s",
+    why: "faster than an AUV travels",
+};
+pub const TURN_RATE_DEG_S: Limit = Limit {
+    max: 180.0,
+    unit: "deg/s",
+    why: "faster than an AUV turns",
+};
+pub const VELOCITY_ERROR_CM_S: Limit = Limit {
+    max: 100.0,
+    unit: "cm/s",
+    why: "a velocity error of more than 1 m/s is no DVL or GNSS-RTK worth calibrating",
+};
+pub const SCALE_PCT: Limit = Limit {
+    max: 100.0,
+    unit: "%",
+    why: "a scale factor error above 100 % is no DVL worth calibrating",
+};
+pub const DCNET_WINDOW_S: Limit = Limit {
+    max: 600.0,
+    unit: "s",
+    why: "DCNet's windows are seconds long; its first layer grows with the window",
+};
+pub const LEARNING_RATE: Limit = Limit {
+    max: 1.0,
+    unit: "",
+    why: "RMSProp diverges at rates that large",
+};
+pub const GRID_AXIS_VALUES: Limit = Limit {
+    max: 10_000.0,
+    unit: "values",
+    why: "an axis that fine is no longer a grid of error terms",
+};
+pub const GRID_COMBINATIONS: Limit = Limit {
+    max: 100_000.0,
+    unit: "combinations",
+    why: "the paper's grid has 1134; each combination is a copy of the training trajectories",
+};
+pub const MONTE_CARLO_RUNS: Limit = Limit {
+    max: 100_000.0,
+    unit: "runs",
+    why: "the paper runs 200; at 100 000 the standard error of a mean RMSE is a 300th of its spread",
+};
+pub const CONV_CHANNELS: Limit = Limit {
+    max: 4096.0,
+    unit: "channels",
+    why: "the paper's convolutions have 16",
+};
+pub const FC_WIDTH: Limit = Limit {
+    max: 65_536.0,
+    unit: "units",
+    why: "the paper's widest layer has 128",
+};
+pub const EPOCHS: Limit = Limit {
+    max: 100_000.0,
+    unit: "epochs",
+    why: "the paper trains for 100",
+};
+pub const BATCH_SIZE: Limit = Limit {
+    max: 1_000_000.0,
+    unit: "windows",
+    why: "the paper's batches hold 256",
+};
+pub const SWEEP_POINTS: Limit = Limit {
+    max: 10_000.0,
+    unit: "points",
+    why: "each point is a run of its own; draw some with sample = N",
+};
+
+impl Limit {
+    /// Adds a fault at `key` when `value` is above the limit.
+    pub(super) fn check(&self, key: &str, value: f64, faults: &mut Faults) {
+        if let Some(message) = self.exceeded(value) {
+            faults.add(key, message);
+        }
+    }
+
+    /// Why `value` is too large, when it is.
+    pub fn exceeded(&self, value: f64) -> Option<String> {
+        (value > self.max).then(|| {
+            let unit = if self.unit.is_empty() {
+                String::new()
+            } else {
+                format!(" {}", self.unit)
+            };
+            format!("{value}{unit} is above {}{unit}: {}", self.max, self.why)
+        })
+    }
+}
