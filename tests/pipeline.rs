@@ -739,3 +739,55 @@ fn a_damaged_cache_entry_is_set_aside_and_computed_again() {
     assert!(folder.join("report.tex").is_file());
     assert!(run_ok(d, &run).contains("nothing to do"));
 }
+
+/// A results folder is done only with its report and every figure it links to: a run
+/// whose figures cannot be written fails (exit 2) and leaves the folder to do, keeping
+/// what it computed, and a figure lost later is drawn again.
+#[test]
+fn a_folder_whose_figures_are_missing_is_not_done() {
+    let dir = project(false);
+    let d = dir.path();
+    let run = args(
+        &["run", "experiments/quick.toml", "--plots", "figures"],
+        &SMALL,
+    );
+    // A file where the figures' folder goes: it cannot be written, even by root.
+    std::fs::create_dir(d.join("figures")).unwrap();
+    std::fs::write(d.join("figures/quick"), "").unwrap();
+    let failed = dcnet(d, &run);
+    assert_eq!(failed.status.code(), Some(2), "{}", stderr(&failed));
+    assert!(
+        stderr(&failed).contains("figures/quick"),
+        "{}",
+        stderr(&failed)
+    );
+    let plan = stdout(&dcnet(
+        d,
+        &args(&["plan", "experiments/quick.toml"], &SMALL),
+    ));
+    let results_row = plan
+        .lines()
+        .find(|l| l.contains("write results/quick"))
+        .unwrap();
+    assert!(results_row.contains("to do"), "{plan}");
+    // Nothing computed was lost: every other task is done.
+    let to_do: Vec<&str> = plan
+        .lines()
+        .filter(|l| l.starts_with("| ") && l.contains("to do"))
+        .collect();
+    assert_eq!(to_do, [results_row], "{plan}");
+
+    std::fs::remove_file(d.join("figures/quick")).unwrap();
+    let log = run_ok(d, &run);
+    assert!(
+        log.contains("1 task to do"),
+        "only the results are left: {log}"
+    );
+    let figure = d.join("figures/quick/calibration.png");
+    assert!(figure.is_file(), "{log}");
+    std::fs::remove_file(&figure).unwrap();
+    let log = run_ok(d, &run);
+    assert!(log.contains("1 task to do"), "{log}");
+    assert!(figure.is_file());
+    assert!(run_ok(d, &run).contains("nothing to do"));
+}

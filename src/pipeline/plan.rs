@@ -281,12 +281,11 @@ impl<'a> Plan<'a> {
             Task::Results(p) => {
                 let point = &self.points[p];
                 // Current: made from these blocks, every file as written, and the
-                // reports there (a run killed before them writes them again).
+                // reports and their figures there (a run killed before them, or whose
+                // figures could not be written, writes them again).
                 let current = read_manifest(&point.folder).is_some_and(|m| {
                     m.results_key == self.results_key(p) && results::is_intact(&point.folder, &m)
-                }) && crate::report::FILES
-                    .iter()
-                    .all(|report| point.folder.join(report).is_file());
+                }) && crate::report::is_complete(&point.folder);
                 if current { Status::Done } else { Status::ToDo }
             }
             Task::Sweep => {

@@ -25,8 +25,6 @@ use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
 pub const FILE: &str = "report.md";
-/// The reports a results folder holds once a run, `collect` or `plot` has finished it.
-pub const FILES: [&str; 2] = [FILE, latex::FILE];
 const FLAG: &str = "⚠";
 
 /// Writes `report.md` and `report.tex` into the results folder, atomically; returns
@@ -39,6 +37,46 @@ pub fn write(run: &StoredRun, figures: &[Written]) -> std::io::Result<[PathBuf; 
     crate::files::write_atomic(&tex, latex::render(run, &tables).as_bytes())?;
     Ok([markdown, tex])
 }
+
+/// Whether `folder` holds everything a finished run promises beyond its tables: both
+/// reports, and every figure file that report.md links to (a report that drew none
+/// says so and links none).
+pub fn is_complete(folder: &Path) -> bool {
+    let Ok(markdown) = std::fs::read_to_string(folder.join(FILE)) else {
+        return false;
+    };
+    folder.join(latex::FILE).is_file()
+        && figure_links(&markdown)
+            .iter()
+            .all(|link| folder.join(link.replace("%20", " ")).is_file())
+}
+
+/// The files that the figures section of a report.md links to, as written there by
+/// [`figures_section`]: an image's link, or the files listed after a caption.
+fn figure_links(markdown: &str) -> Vec<&str> {
+    let Some((_, section)) = markdown.split_once("## Figures\n") else {
+        return Vec::new();
+    };
+    let section = section.split("\n## ").next().unwrap_or_default();
+    let mut links = Vec::new();
+    for line in section.lines() {
+        if line.starts_with("![") {
+            if let Some((_, link)) = line.rsplit_once("](") {
+                links.push(link.trim_end_matches(')'));
+            }
+        } else if let Some(item) = line.strip_prefix("- ") {
+            if let Some((_, files)) = item.rsplit_once(": ") {
+                if !item.contains(NOT_DRAWN) {
+                    links.extend(files.split(", "));
+                }
+            }
+        }
+    }
+    links
+}
+
+/// What a figure that could not be drawn says in its stead.
+const NOT_DRAWN: &str = ": not drawn, ";
 
 /// Counts the cells compared with a published value and those flagged.
 #[derive(Debug, Default)]
@@ -626,7 +664,7 @@ fn figures_section(run: &StoredRun, figures: &[Written], out: &mut String) {
                 }
             }
             Err(why) => {
-                let _ = writeln!(out, "- {}: not drawn, {why}\n", figure.stem);
+                let _ = writeln!(out, "- {}{NOT_DRAWN}{why}\n", figure.stem);
             }
         }
     }
