@@ -791,3 +791,38 @@ fn a_folder_whose_figures_are_missing_is_not_done() {
     assert!(figure.is_file());
     assert!(run_ok(d, &run).contains("nothing to do"));
 }
+
+/// Two runs into one OUT at once share the work: each training and Monte Carlo block is
+/// computed by one of them while the other waits for it, and both end with the results
+/// of one run alone.
+#[test]
+fn two_concurrent_runs_compute_each_task_once() {
+    let alone = project(false);
+    let run = args(&["run", "experiments/quick.toml", "--no-plots"], &SMALL);
+    run_ok(alone.path(), &run);
+
+    let dir = project(false);
+    let d = dir.path();
+    let both = [spawn(d, &run), spawn(d, &run)].map(|child| child.wait_with_output().unwrap());
+    let mut logs = String::new();
+    for output in &both {
+        assert!(output.status.success(), "{}", stderr(output));
+        logs += &stderr(output);
+    }
+    let trained = logs.matches(": trained; best validation loss").count();
+    let models = 5;
+    assert_eq!(trained, models, "each model trained once:\n{logs}");
+    // Each run stores its DVLs' blocks as "monte carlo quick DVL: N estimators × 3 runs".
+    let stored: usize = logs
+        .lines()
+        .filter(|l| l.starts_with("monte carlo quick "))
+        .map(|l| l.split(": ").nth(1).unwrap().split(' ').next().unwrap())
+        .map(|n| n.parse::<usize>().unwrap())
+        .sum();
+    let blocks = 2 * (1 + 2 * models + 1);
+    assert_eq!(stored, blocks, "each block computed once:\n{logs}");
+    assert_same_results(
+        &alone.path().join("results/quick"),
+        &d.join("results/quick"),
+    );
+}

@@ -10,13 +10,16 @@
 //! - [`execute`] does what is left: all of it, one shard's part, or only the putting
 //!   together (`collect`), training in `schedule` and running the protocol in
 //!   `monte_carlo`;
-//! - [`cache`]: the content-addressed store of models and Monte Carlo blocks.
+//! - [`cache`]: the content-addressed store of models and Monte Carlo blocks;
+//! - [`claim`]: the locks that keep processes sharing a folder from computing the same
+//!   task.
 //!
 //! A shard takes whole groups: a training with every block that runs its model, or a
 //! block that needs no model. Groups are dealt out round-robin in plan order, trainings
 //! first, so shards need nothing from each other and each writes its own cache files.
 
 pub mod cache;
+pub mod claim;
 mod monte_carlo;
 pub mod plan;
 mod schedule;
@@ -82,14 +85,73 @@ pub fn execute(plan: &Plan, mode: Mode, to_do: &[Task]) -> Result<Executed, Exec
 
     let mut executed = Executed::default();
     let mut stages = StageSeconds::default();
-    schedule::train(plan, &trainings, mode.force(), &mut stages, &mut executed)?;
+    // Each stage does the tasks it can claim, then those another process held that it
+    // left undone; blocks start once every model they need is settled.
+    let force = mode.force();
+    claimed_then_left(plan, &trainings, Task::Training, |ids| {
+        schedule::train(plan, ids, force, &mut stages, &mut executed)
+    })?;
     let clock = Instant::now();
-    monte_carlo::run(plan, &blocks, &mut executed)?;
+    claimed_then_left(plan, &blocks, Task::Block, |ids| {
+        monte_carlo::run(plan, ids, &mut executed)
+    })?;
     stages.protocol = clock.elapsed().as_secs_f64();
     if !matches!(mode, Mode::Shard { .. }) {
         write_results(plan, to_do, started_at, &stages, &mut executed)?;
     }
     Ok(executed)
+}
+
+/// Does `work` on the tasks of `ids` in two passes, each holding the claims of its
+/// tasks: first those it can claim at once, then those another process held, each
+/// waited for and done only when that process left it unsettled.
+fn claimed_then_left(
+    plan: &Plan,
+    ids: &[usize],
+    task: fn(usize) -> Task,
+    mut work: impl FnMut(&[usize]) -> Result<(), ExecuteError>,
+) -> Result<(), ExecuteError> {
+    let key = |id: usize| {
+        plan.key(task(id))
+            .expect("computed tasks have keys")
+            .to_string()
+    };
+    let (claimed, busy) = claim::split(&plan.out, ids, key).map_err(locks_error(plan))?;
+    let (now, claims): (Vec<usize>, Vec<claim::Claim>) = claimed.into_iter().unzip();
+    work(&now)?;
+    drop(claims);
+    if busy.is_empty() {
+        return Ok(());
+    }
+    let first = plan.label(task(busy[0]));
+    eprintln!(
+        "waiting for another process computing {} of these tasks ({first}{})",
+        busy.len(),
+        if busy.len() > 1 { ", …" } else { "" }
+    );
+    let (mut left, mut claims) = (Vec::new(), Vec::new());
+    for &id in &busy {
+        let held = claim::claim(&plan.out, &key(id)).map_err(locks_error(plan))?;
+        if !plan.status(task(id)).is_settled() {
+            left.push(id);
+            claims.push(held);
+        }
+    }
+    eprintln!(
+        "the other process did {} of them; {} left to do here",
+        busy.len() - left.len(),
+        left.len()
+    );
+    work(&left)
+}
+
+/// An I/O error of the claims' locks.
+fn locks_error(plan: &Plan) -> impl Fn(std::io::Error) -> results::ResultsError + use<> {
+    let folder = claim::folder(&plan.out);
+    move |source| results::ResultsError::Io {
+        path: folder.clone(),
+        source,
+    }
 }
 
 /// Collect puts together what the shards computed: every training and block must be
@@ -142,7 +204,14 @@ fn write_results(
             continue;
         }
         let (result, models) = monte_carlo::gather(plan, p)?;
-        if results_to_do {
+        // Another process writing the same folder is waited for, and its folder kept.
+        let _claim = claim::claim(&plan.out, &plan.results_key(p)).map_err(locks_error(plan))?;
+        if results_to_do && plan.status(Task::Results(p)) == Status::Done {
+            eprintln!(
+                "{}: written by another process meanwhile",
+                point.folder.display()
+            );
+        } else if results_to_do {
             let spec = plan.spec(p);
             let manifest = manifest(plan, p, started_at, stages);
             results::write_run(

@@ -1,0 +1,87 @@
+//! Claims on tasks, so that processes sharing an OUT (two runs, two shards on one
+//! machine, a run beside a `collect`) never compute the same task. A task is claimed
+//! by an exclusive lock on `OUT/.cache/locks/<key>.lock`, which the system releases
+//! when the claim is dropped or its process ends, however it ends; a lock file left
+//! behind claims nothing. A process computes the tasks it can claim at once, then
+//! waits for the others and computes only what their holder left undone.
+
+use super::cache;
+use std::fs::{File, TryLockError};
+use std::io;
+use std::path::{Path, PathBuf};
+
+/// The locks folder of the cache under `out`.
+pub fn folder(out: &Path) -> PathBuf {
+    cache::root(out).join("locks")
+}
+
+/// A held claim on one task; dropping it releases the task.
+#[derive(Debug)]
+pub struct Claim {
+    _lock: File,
+}
+
+/// The lock file of the task with cache key `key`.
+fn open(out: &Path, key: &str) -> io::Result<File> {
+    let folder = folder(out);
+    std::fs::create_dir_all(&folder)?;
+    File::options()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(folder.join(format!("{}.lock", &key[..key.len().min(16)])))
+}
+
+/// The claim on task `key`, when no other process holds it.
+pub fn try_claim(out: &Path, key: &str) -> io::Result<Option<Claim>> {
+    let lock = open(out, key)?;
+    match lock.try_lock() {
+        Ok(()) => Ok(Some(Claim { _lock: lock })),
+        Err(TryLockError::WouldBlock) => Ok(None),
+        Err(TryLockError::Error(error)) => Err(error),
+    }
+}
+
+/// The claim on task `key`, once the process that holds it lets it go.
+pub fn claim(out: &Path, key: &str) -> io::Result<Claim> {
+    let lock = open(out, key)?;
+    lock.lock()?;
+    Ok(Claim { _lock: lock })
+}
+
+/// Of `tasks`, those claimed now, each with its claim, and those another process holds.
+pub fn split<T: Copy>(
+    out: &Path,
+    tasks: &[T],
+    key: impl Fn(T) -> String,
+) -> io::Result<(Vec<(T, Claim)>, Vec<T>)> {
+    let mut claimed = Vec::new();
+    let mut busy = Vec::new();
+    for &task in tasks {
+        match try_claim(out, &key(task))? {
+            Some(claim) => claimed.push((task, claim)),
+            None => busy.push(task),
+        }
+    }
+    Ok((claimed, busy))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_claim_is_held_until_dropped() {
+        let out = tempfile::tempdir().unwrap();
+        let key = "0123456789abcdef0123";
+        let held = try_claim(out.path(), key).unwrap().expect("free");
+        assert!(try_claim(out.path(), key).unwrap().is_none(), "held");
+        assert!(try_claim(out.path(), "fedcba9876543210").unwrap().is_some());
+        drop(held);
+        assert!(try_claim(out.path(), key).unwrap().is_some(), "released");
+        let (claimed, busy) = split(out.path(), &[1, 2], |i| format!("{i:016}")).unwrap();
+        assert_eq!((claimed.len(), busy.len()), (2, 0));
+        let (again, busy) = split(out.path(), &[2, 3], |i| format!("{i:016}")).unwrap();
+        assert_eq!((again.len(), busy), (1, vec![2]));
+    }
+}
