@@ -38,11 +38,11 @@ pub fn remove_stale_partials(folder: &Path) -> std::io::Result<usize> {
             .strip_prefix(PARTIAL)
             .and_then(|rest| rest.split('-').next())
             .and_then(|pid| pid.parse::<u32>().ok());
-        if let Some(pid) = writer {
-            if !processes.join(pid.to_string()).exists() {
-                std::fs::remove_file(&path)?;
-                removed += 1;
-            }
+        if let Some(pid) = writer
+            && !processes.join(pid.to_string()).exists()
+        {
+            std::fs::remove_file(&path)?;
+            removed += 1;
         }
     }
     Ok(removed)

@@ -49,12 +49,11 @@ pub fn claim(out: &Path, key: &str) -> io::Result<Claim> {
     Ok(Claim { _lock: lock })
 }
 
-/// Of `tasks`, those claimed now, each with its claim, and those another process holds.
-pub fn split<T: Copy>(
-    out: &Path,
-    tasks: &[T],
-    key: impl Fn(T) -> String,
-) -> io::Result<(Vec<(T, Claim)>, Vec<T>)> {
+/// Tasks claimed, each with its claim, and tasks another process holds.
+pub type Split<T> = (Vec<(T, Claim)>, Vec<T>);
+
+/// Of `tasks`, those claimed now and those another process holds.
+pub fn split<T: Copy>(out: &Path, tasks: &[T], key: impl Fn(T) -> String) -> io::Result<Split<T>> {
     let mut claimed = Vec::new();
     let mut busy = Vec::new();
     for &task in tasks {

@@ -64,12 +64,11 @@ fn figure_links(markdown: &str) -> Vec<&str> {
             if let Some((_, link)) = line.rsplit_once("](") {
                 links.push(link.trim_end_matches(')'));
             }
-        } else if let Some(item) = line.strip_prefix("- ") {
-            if let Some((_, files)) = item.rsplit_once(": ") {
-                if !item.contains(NOT_DRAWN) {
-                    links.extend(files.split(", "));
-                }
-            }
+        } else if let Some(item) = line.strip_prefix("- ")
+            && let Some((_, files)) = item.rsplit_once(": ")
+            && !item.contains(NOT_DRAWN)
+        {
+            links.extend(files.split(", "));
         }
     }
     links

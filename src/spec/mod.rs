@@ -472,13 +472,13 @@ fn check_file_trajectory(
             ),
         );
     }
-    if let Some([start, end]) = samples {
-        if start >= end {
-            faults.add(
-                format!("{key}.samples"),
-                format!("[{start}, {end}] is empty: start must be below end"),
-            );
-        }
+    if let Some([start, end]) = samples
+        && start >= end
+    {
+        faults.add(
+            format!("{key}.samples"),
+            format!("[{start}, {end}] is empty: start must be below end"),
+        );
     }
     let is_csv = path
         .extension()
@@ -656,15 +656,13 @@ fn check_dataset(
             continue;
         }
         if let Some(index) = lookup(sources, &key, wanted, faults) {
-            if let (Some(len), Some(window)) = (sources[index].known_len(), window) {
-                if len < window {
-                    faults.add(
-                        key,
-                        format!(
-                            "{wanted} has {len} samples, fewer than one window of {window_s} s"
-                        ),
-                    );
-                }
+            if let (Some(len), Some(window)) = (sources[index].known_len(), window)
+                && len < window
+            {
+                faults.add(
+                    key,
+                    format!("{wanted} has {len} samples, fewer than one window of {window_s} s"),
+                );
             }
             trajectories.push(index);
         }

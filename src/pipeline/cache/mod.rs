@@ -53,13 +53,13 @@ impl DataHashes {
         let mut hashes = BTreeMap::new();
         for spec in specs {
             for source in &spec.trajectories {
-                if let Origin::File { path, .. } = &source.origin {
-                    if !hashes.contains_key(path) {
-                        let bytes = std::fs::read(path).map_err(|e| {
-                            std::io::Error::new(e.kind(), format!("{}: {e}", path.display()))
-                        })?;
-                        hashes.insert(path.clone(), sha256_hex(&bytes));
-                    }
+                if let Origin::File { path, .. } = &source.origin
+                    && !hashes.contains_key(path)
+                {
+                    let bytes = std::fs::read(path).map_err(|e| {
+                        std::io::Error::new(e.kind(), format!("{}: {e}", path.display()))
+                    })?;
+                    hashes.insert(path.clone(), sha256_hex(&bytes));
                 }
             }
         }
@@ -70,13 +70,13 @@ impl DataHashes {
     pub fn files_of(&self, spec: &Spec) -> Vec<results::DataFile> {
         let mut files: Vec<results::DataFile> = Vec::new();
         for source in &spec.trajectories {
-            if let Origin::File { path, .. } = &source.origin {
-                if !files.iter().any(|f| &f.path == path) {
-                    files.push(results::DataFile {
-                        path: path.clone(),
-                        sha256: self.0[path].clone(),
-                    });
-                }
+            if let Origin::File { path, .. } = &source.origin
+                && !files.iter().any(|f| &f.path == path)
+            {
+                files.push(results::DataFile {
+                    path: path.clone(),
+                    sha256: self.0[path].clone(),
+                });
             }
         }
         files

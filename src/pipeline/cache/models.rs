@@ -411,10 +411,8 @@ impl Stage {
         if let Some(damage) = store.set_aside_damaged(error_model, key)? {
             eprintln!("DCNet {error_model}: {damage}");
         }
-        if !fresh {
-            if let Some(trained) = store.load(spec, error_model, key)? {
-                return Ok(Self::Done(Box::new(trained), Provenance::Reused));
-            }
+        if !fresh && let Some(trained) = store.load(spec, error_model, key)? {
+            return Ok(Self::Done(Box::new(trained), Provenance::Reused));
         }
         let state = if fresh {
             State::new(spec, error_model)
