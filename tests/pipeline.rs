@@ -589,6 +589,16 @@ fn a_sweep_over_two_keys_runs_every_point_and_tabulates_them() {
     let again = run_ok(dir, &args(&["run"], &spec));
     assert!(again.contains("nothing to do"), "{again}");
 
+    // A damaged table is written again, to the bytes it had.
+    let table = folder.join("sweep.parquet");
+    let good = std::fs::read(&table).unwrap();
+    let mut flipped = good.clone();
+    flipped[good.len() / 2] ^= 1;
+    std::fs::write(&table, flipped).unwrap();
+    let again = run_ok(dir, &args(&["run"], &spec));
+    assert!(again.contains("1 task to do"), "{again}");
+    assert_eq!(std::fs::read(&table).unwrap(), good);
+
     // An index naming a column the table lacks is bad input, named as such.
     let index = folder.join("sweep.json");
     let text = std::fs::read_to_string(&index).unwrap();

@@ -289,11 +289,14 @@ impl<'a> Plan<'a> {
                 if current { Status::Done } else { Status::ToDo }
             }
             Task::Sweep => {
-                let stored = sweep::read_index(&self.out.join(&self.experiment.name)).ok();
+                let folder = self.out.join(&self.experiment.name);
+                let stored = sweep::read_index(&folder).ok();
                 let keys: Vec<String> = (0..self.points.len())
                     .map(|p| self.results_key(p))
                     .collect();
-                if stored.is_some_and(|index| index.results_keys == keys) {
+                if stored.is_some_and(|index| {
+                    index.results_keys == keys && index.table_is_intact(&folder)
+                }) {
                     Status::Done
                 } else {
                     Status::ToDo

@@ -6,7 +6,7 @@
 use crate::evaluate::ProtocolResult;
 use crate::files::write_atomic;
 use crate::results::read::{Batch, ReadError, read_rows};
-use crate::results::{ResultsError, write_table};
+use crate::results::{ResultsError, table_bytes};
 use crate::spec::Experiment;
 use crate::train::TrainingHistory;
 use crate::vocab::{ErrorModel, EstimatorKind};
@@ -31,6 +31,18 @@ pub struct SweepIndex {
     /// Each point's folder name under `results/<name>/`.
     pub points: Vec<String>,
     pub results_keys: Vec<String>,
+    /// The SHA-256 of the table it was written with; empty in an index from before
+    /// the table was hashed.
+    #[serde(default)]
+    pub table_sha256: String,
+}
+
+impl SweepIndex {
+    /// Whether the table in `folder` has the bytes this index was written with.
+    pub fn table_is_intact(&self, folder: &Path) -> bool {
+        std::fs::read(folder.join(TABLE))
+            .is_ok_and(|bytes| crate::files::sha256_hex(&bytes) == self.table_sha256)
+    }
 }
 
 /// A swept value: an integer, a number, or any other TOML value as text.
@@ -159,7 +171,12 @@ pub fn write(
     results_keys: &[String],
 ) -> Result<(), ResultsError> {
     let rows = rows(experiment, points);
-    write_table(&folder.join(TABLE), &batch(&experiment.swept, &rows))?;
+    let table = folder.join(TABLE);
+    let bytes = table_bytes(&table, &batch(&experiment.swept, &rows))?;
+    write_atomic(&table, &bytes).map_err(|source| ResultsError::Io {
+        path: table.clone(),
+        source,
+    })?;
     let index = SweepIndex {
         name: experiment.name.clone(),
         swept: experiment.swept.clone(),
@@ -169,6 +186,7 @@ pub fn write(
             .map(|p| point_folder(&p.spec.name).to_string())
             .collect(),
         results_keys: results_keys.to_vec(),
+        table_sha256: crate::files::sha256_hex(&bytes),
     };
     let path = folder.join(INDEX);
     write_atomic(

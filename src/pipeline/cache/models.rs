@@ -150,12 +150,16 @@ impl ModelStore {
     ) -> Result<(), CheckpointError> {
         std::fs::create_dir_all(&self.folder).map_err(io_error(&self.folder))?;
         let path = self.stem(error_model, key).with_extension("failed");
-        write_atomic(&path, message.as_bytes()).map_err(io_error(&path))
+        let sealed = files::inline_sealed(message.as_bytes(), key);
+        write_atomic(&path, &sealed).map_err(io_error(&path))
     }
 
-    /// Why the training of `key` failed, if it did.
+    /// Why the training of `key` failed, if it did; a record whose seal does not hold
+    /// is no record, so the training is tried again.
     pub fn failure(&self, error_model: ErrorModel, key: &str) -> Option<String> {
-        std::fs::read_to_string(self.stem(error_model, key).with_extension("failed")).ok()
+        let bytes = std::fs::read(self.stem(error_model, key).with_extension("failed")).ok()?;
+        let message = files::open_inline_sealed(&bytes, key).ok()?;
+        Some(String::from_utf8_lossy(message).into_owned())
     }
 
     /// The last epoch of the checkpoint of `key`, if one is waiting to be resumed, or
@@ -626,6 +630,27 @@ mod tests {
                 .count(),
             1
         );
+    }
+
+    #[test]
+    fn a_failure_record_holds_only_for_its_key_and_its_bytes() {
+        let folder = tempfile::tempdir().unwrap();
+        let store = ModelStore::new(folder.path().to_path_buf());
+        let key = "0123456789abcdef0123456789abcdef";
+        store
+            .save_failure(ErrorModel::Em3, key, "loss is NaN at epoch 2")
+            .unwrap();
+        let failure = store.failure(ErrorModel::Em3, key);
+        assert_eq!(failure.as_deref(), Some("loss is NaN at epoch 2"));
+        let path = store.stem(ErrorModel::Em3, key).with_extension("failed");
+        let other = "fedcba9876543210fedcba9876543210";
+        let other_path = store.stem(ErrorModel::Em3, other).with_extension("failed");
+        std::fs::copy(&path, &other_path).unwrap();
+        let mut bytes = std::fs::read(&path).unwrap();
+        *bytes.last_mut().unwrap() ^= 1;
+        std::fs::write(&path, &bytes).unwrap();
+        assert_eq!(store.failure(ErrorModel::Em3, key), None, "flipped");
+        assert_eq!(store.failure(ErrorModel::Em3, other), None, "swapped");
     }
 
     #[test]
