@@ -13,7 +13,8 @@ pub(super) fn validate(spec_path: &Path, set: &[String]) -> Result<(), CliError>
     let memory = Bytes(footprint::machine_memory() as f64);
     for (point, (footprint, lengths)) in experiment.points.iter().zip(footprints(&experiment)?) {
         let spec = &point.spec;
-        let windows = DatasetSize::from_lengths(spec, &lengths).windows();
+        let trajectories = load_trajectories(spec).map_err(input)?;
+        let windows = DatasetSize::of(spec, &trajectories).windows();
         println!(
             "{}: ok ({} trajectories, {windows} training windows, {} DVLs, {} Monte Carlo runs)",
             if experiment.is_sweep() {
@@ -21,7 +22,7 @@ pub(super) fn validate(spec_path: &Path, set: &[String]) -> Result<(), CliError>
             } else {
                 spec_path.display().to_string()
             },
-            spec.trajectories.len(),
+            trajectories.len(),
             spec.dvls.len(),
             spec.calibration.monte_carlo_runs
         );
