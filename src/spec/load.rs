@@ -132,6 +132,17 @@ impl Assigned {
             })
             .map(|(_, location)| location.as_str())
     }
+
+    /// Where a value below `key` came from, when one was assigned.
+    fn below(&self, key: &str) -> Option<&str> {
+        self.0
+            .iter()
+            .rev()
+            .find(|(set, _)| {
+                set.starts_with(&format!("{key}.")) || set.starts_with(&format!("{key}["))
+            })
+            .map(|(_, location)| location.as_str())
+    }
 }
 
 /// The spec's text and the folder its relative paths start from.
@@ -142,9 +153,16 @@ struct Source {
 }
 
 impl Source {
-    /// A fault at `key`, placed where its value came from.
+    /// A fault at `key`, placed where its value came from: the `--set` or sweep value
+    /// that assigned it (or, for a key the file does not write, one below it, such as
+    /// an unknown table), or its line.
     fn locate(&self, assigned: &Assigned, key: String, message: String) -> SpecError {
-        match assigned.origin(&key) {
+        let origin = assigned.origin(&key).or_else(|| {
+            (!self.text.writes(&key))
+                .then(|| assigned.below(&key))
+                .flatten()
+        });
+        match origin {
             Some(location) => SpecError {
                 location: location.to_string(),
                 key,
@@ -180,11 +198,28 @@ fn load_sweep(
     let sweep: SweepFile = serde_path_to_error::deserialize(sweep).map_err(|e| {
         source.locate(
             &assigned,
-            format!("sweep.{}", e.path()),
+            match e.path().to_string().as_str() {
+                "." => "sweep".to_string(),
+                path => format!("sweep.{path}"),
+            },
             e.into_inner().message().to_string(),
         )
     })?;
-    let axes = sweep_axes(&sweep.values, &source.text)?;
+    let axes = sweep_axes(&sweep.values, &source.text).map_err(|SpecErrors(faults)| {
+        // Values given with `--set` are placed there, not on a line of the file.
+        SpecErrors(
+            faults
+                .into_iter()
+                .map(|fault| match assigned.origin(&fault.key) {
+                    Some(origin) => SpecError {
+                        location: origin.to_string(),
+                        ..fault
+                    },
+                    None => fault,
+                })
+                .collect(),
+        )
+    })?;
     let chosen = chosen_points(&sweep, &axes, &table)
         .map_err(|message| source.locate(&assigned, "sweep.sample".into(), message))?;
     let name = table

@@ -557,12 +557,14 @@ fn lookup(
     let found = sources.iter().position(|s| s.name == wanted);
     if found.is_none() {
         let known: Vec<&str> = sources.iter().map(|s| s.name.as_str()).collect();
+        let known = if known.is_empty() {
+            "none".to_string()
+        } else {
+            known.join(", ")
+        };
         faults.add(
             key,
-            format!(
-                "unknown trajectory {wanted:?}; data.trajectories defines {}",
-                known.join(", ")
-            ),
+            format!("unknown trajectory {wanted:?}; data.trajectories defines {known}"),
         );
     }
     found
@@ -598,13 +600,22 @@ fn check_grid(grid: file::GridFile, faults: &mut Faults) -> Grid {
         bias_cm_s: expand_axis("grid.bias_cm_s", &bias_cm_s, faults),
         noise_cm_s: expand_axis("grid.noise_cm_s", &noise_cm_s, faults),
     };
-    for (i, &value) in grid.scale_pct.iter().enumerate() {
+    // Values that are not finite numbers are reported by `expand_axis`.
+    let finite = |values: &[f64]| -> Vec<(usize, f64)> {
+        values
+            .iter()
+            .copied()
+            .enumerate()
+            .filter(|(_, v)| v.is_finite())
+            .collect()
+    };
+    for (i, value) in finite(&grid.scale_pct) {
         check_scale(&format!("grid.scale_pct[{i}]"), value, faults);
     }
-    for (i, &value) in grid.bias_cm_s.iter().enumerate() {
+    for (i, value) in finite(&grid.bias_cm_s) {
         ranges::VELOCITY_ERROR_CM_S.check(&format!("grid.bias_cm_s[{i}]"), value.abs(), faults);
     }
-    for (i, &value) in grid.noise_cm_s.iter().enumerate() {
+    for (i, value) in finite(&grid.noise_cm_s) {
         check_noise(&format!("grid.noise_cm_s[{i}]"), value, faults);
     }
     let combinations = grid.scale_pct.len() * grid.bias_cm_s.len() * grid.noise_cm_s.len();

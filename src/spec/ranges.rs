@@ -109,9 +109,10 @@ impl Limit {
         }
     }
 
-    /// Why `value` is too large, when it is.
+    /// Why `value` is too large, when it is; a value that is not finite is left to the
+    /// checks that ask for a number.
     pub fn exceeded(&self, value: f64) -> Option<String> {
-        (value > self.max).then(|| {
+        (value.is_finite() && value > self.max).then(|| {
             let unit = if self.unit.is_empty() {
                 String::new()
             } else {

@@ -144,6 +144,14 @@ impl TomlText {
         }
     }
 
+    /// Whether the text writes `key` (a dotted key path with indices).
+    pub fn writes(&self, key: &str) -> bool {
+        let Ok(root) = DeTable::parse(&self.text) else {
+            return false;
+        };
+        steps(key).is_ok_and(|path| find(&root, &path).1)
+    }
+
     /// The line of the key at exactly `names` (one table key a step, dots and all),
     /// when the text writes it.
     pub fn written_line(&self, names: &[&str]) -> Option<usize> {
