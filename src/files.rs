@@ -154,7 +154,8 @@ pub fn check_seal(path: &Path, key: &str) -> Seal {
 }
 
 /// Moves `path` and its seal, where they exist, into `folder`, each name followed by
-/// the time in seconds, and returns where the file went.
+/// the time in seconds (and a count, when an earlier copy of that second is there), and
+/// returns where the file went.
 pub fn set_aside(path: &Path, folder: &Path) -> std::io::Result<PathBuf> {
     std::fs::create_dir_all(folder)?;
     let seconds = std::time::SystemTime::now()
@@ -168,7 +169,15 @@ pub fn set_aside(path: &Path, folder: &Path) -> std::io::Result<PathBuf> {
         if !file.exists() {
             continue;
         }
-        let destination = folder.join(format!("{}.{seconds}", name.to_string_lossy()));
+        // The time names the copy; a count after it keeps copies of one second apart.
+        let destination = (0..)
+            .map(|n| match n {
+                0 => format!("{}.{seconds}", name.to_string_lossy()),
+                n => format!("{}.{seconds}-{n}", name.to_string_lossy()),
+            })
+            .map(|name| folder.join(name))
+            .find(|destination| !destination.exists())
+            .expect("a free name");
         std::fs::rename(&file, &destination)?;
         if file == path {
             moved = destination;

@@ -33,6 +33,7 @@ pub(super) fn plot_run(results: &Path, out: Option<&Path>, format: Format) -> Re
     let figures = match out {
         Some(out) => {
             let folder = out.join(&stored.spec.name);
+            remove_stale_partials(&folder)?;
             let figures = plots::write_all(&stored, &folder, format).map_err(failure)?;
             report_figures(&figures, &folder);
             figures
@@ -58,9 +59,17 @@ pub(super) fn plot_sweep(
     let Some(out) = out else { return Ok(()) };
     let stored = sweep::read(results).map_err(input)?;
     let folder = out.join(&stored.index.name);
+    remove_stale_partials(&folder)?;
     let figures = plots::write_sweep(&stored, metric, &folder, format).map_err(failure)?;
     report_figures(&figures, &folder);
     Ok(())
+}
+
+/// Removes what figure writers killed mid-write left in `folder`.
+fn remove_stale_partials(folder: &Path) -> Result<(), CliError> {
+    crate::files::remove_stale_partials(folder)
+        .map(|_| ())
+        .map_err(|e| failure(anyhow::Error::new(e).context(folder.display().to_string())))
 }
 
 fn report_figures(figures: &[plots::Written], folder: &Path) {

@@ -4,7 +4,7 @@
 use super::args::{Drawing, Target};
 use super::plot::{plot_run, plot_sweep};
 use super::{CliError, about, failure, input, load_target, training_seconds};
-use crate::pipeline::{Executed, Mode, Plan, Shard, Task, execute};
+use crate::pipeline::{Executed, Mode, Plan, Shard, Task, execute, remove_spent_checkpoints};
 use crate::report::plots::{Format, Metric};
 use crate::report::tables;
 use crate::results::read::StoredRun;
@@ -30,6 +30,7 @@ pub(super) fn run(
         Some(shard) => Mode::Shard { shard, force },
         None => Mode::All { force },
     };
+    remove_spent_checkpoints(&plan).map_err(failure)?;
     let to_do = plan.to_do(mode);
     let total = plan.tasks().len();
     let folder = target.out.join(&experiment.name);

@@ -102,6 +102,21 @@ pub fn execute(plan: &Plan, mode: Mode, to_do: &[Task]) -> Result<Executed, Exec
     Ok(executed)
 }
 
+/// Removes the checkpoints that kills left beside stored models, each under its
+/// training's claim (a process holding it is finishing that model, and removes it).
+pub fn remove_spent_checkpoints(plan: &Plan) -> Result<(), ExecuteError> {
+    for training in &plan.trainings {
+        let (error_model, key) = (training.error_model, &training.key);
+        if !plan.models.has_spent_checkpoint(error_model, key) {
+            continue;
+        }
+        if let Some(_claim) = claim::try_claim(&plan.out, key).map_err(locks_error(plan))? {
+            plan.models.remove_spent_checkpoint(error_model, key)?;
+        }
+    }
+    Ok(())
+}
+
 /// Does `work` on the tasks of `ids` in two passes, each holding the claims of its
 /// tasks: first those it can claim at once, then those another process held, each
 /// waited for and done only when that process left it unsettled.

@@ -27,55 +27,68 @@ use std::path::{Path, PathBuf};
 pub const FILE: &str = "report.md";
 const FLAG: &str = "⚠";
 
-/// Writes `report.md` and `report.tex` into the results folder, atomically; returns
-/// their paths.
+/// The seal of what a finished run promises beyond its tables, written last: the
+/// SHA-256 of `manifest.json`, both reports and every figure drawn, one
+/// `<sha256>  <path from the results folder>` line each (`sha256sum -c` reads it).
+pub const SEAL: &str = "report.sha256";
+
+/// Writes `report.md` and `report.tex` into the results folder, then [`SEAL`], each
+/// atomically; returns the reports' paths.
 pub fn write(run: &StoredRun, figures: &[Written]) -> std::io::Result<[PathBuf; 2]> {
     let tables = Tables::of(run);
     let markdown = run.folder.join(FILE);
     crate::files::write_atomic(&markdown, render(run, &tables, figures).as_bytes())?;
     let tex = run.folder.join(latex::FILE);
     crate::files::write_atomic(&tex, latex::render(run, &tables).as_bytes())?;
+    let mut sealed = vec![
+        run.folder.join(crate::results::MANIFEST),
+        markdown.clone(),
+        tex.clone(),
+    ];
+    sealed.extend(figures.iter().flat_map(|f| f.files.iter().cloned()));
+    let mut seal = String::new();
+    for path in sealed {
+        let bytes = std::fs::read(&path)?;
+        let shown = pathdiff::diff_paths(absolute(&path), absolute(&run.folder)).unwrap_or(path);
+        let _ = writeln!(
+            seal,
+            "{}  {}",
+            crate::files::sha256_hex(&bytes),
+            shown.display()
+        );
+    }
+    crate::files::write_atomic(&run.folder.join(SEAL), seal.as_bytes())?;
     Ok([markdown, tex])
 }
 
-/// Whether `folder` holds everything a finished run promises beyond its tables: both
-/// reports, and every figure file that report.md links to (a report that drew none
-/// says so and links none).
+/// `path` made absolute through its links, or as it is when it cannot be.
+fn absolute(path: &Path) -> PathBuf {
+    std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())
+}
+
+/// Whether `folder` holds everything a finished run promises beyond its tables, with
+/// the bytes it was written with: its manifest, both reports and every figure its
+/// [`SEAL`] names (a report drawn with `--no-plots` says so and names none).
 pub fn is_complete(folder: &Path) -> bool {
-    let Ok(markdown) = std::fs::read_to_string(folder.join(FILE)) else {
+    let Ok(seal) = std::fs::read_to_string(folder.join(SEAL)) else {
         return false;
     };
-    folder.join(latex::FILE).is_file()
-        && figure_links(&markdown)
-            .iter()
-            .all(|link| folder.join(link.replace("%20", " ")).is_file())
-}
-
-/// The files that the figures section of a report.md links to, as written there by
-/// [`figures_section`]: an image's link, or the files listed after a caption.
-fn figure_links(markdown: &str) -> Vec<&str> {
-    let Some((_, section)) = markdown.split_once("## Figures\n") else {
-        return Vec::new();
-    };
-    let section = section.split("\n## ").next().unwrap_or_default();
-    let mut links = Vec::new();
-    for line in section.lines() {
-        if line.starts_with("![") {
-            if let Some((_, link)) = line.rsplit_once("](") {
-                links.push(link.trim_end_matches(')'));
-            }
-        } else if let Some(item) = line.strip_prefix("- ")
-            && let Some((_, files)) = item.rsplit_once(": ")
-            && !item.contains(NOT_DRAWN)
-        {
-            links.extend(files.split(", "));
+    let mut named = Vec::new();
+    for line in seal.lines() {
+        let Some((digest, path)) = line.split_once("  ") else {
+            return false;
+        };
+        let intact = std::fs::read(folder.join(path))
+            .is_ok_and(|bytes| crate::files::sha256_hex(&bytes) == digest);
+        if !intact {
+            return false;
         }
+        named.push(path);
     }
-    links
+    [crate::results::MANIFEST, FILE, latex::FILE]
+        .iter()
+        .all(|required| named.contains(required))
 }
-
-/// What a figure that could not be drawn says in its stead.
-const NOT_DRAWN: &str = ": not drawn, ";
 
 /// Counts the cells compared with a published value and those flagged.
 #[derive(Debug, Default)]
@@ -663,7 +676,7 @@ fn figures_section(run: &StoredRun, figures: &[Written], out: &mut String) {
                 }
             }
             Err(why) => {
-                let _ = writeln!(out, "- {}{NOT_DRAWN}{why}\n", figure.stem);
+                let _ = writeln!(out, "- {}: not drawn, {why}\n", figure.stem);
             }
         }
     }
@@ -671,7 +684,6 @@ fn figures_section(run: &StoredRun, figures: &[Written], out: &mut String) {
 
 /// `file` as a link from a document in `folder`.
 fn relative_link(folder: &Path, file: &Path) -> String {
-    let absolute = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
     pathdiff::diff_paths(absolute(file), absolute(folder))
         .unwrap_or_else(|| file.to_path_buf())
         .to_string_lossy()

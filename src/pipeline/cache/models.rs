@@ -154,6 +154,27 @@ impl ModelStore {
         write_atomic(&path, &sealed).map_err(io_error(&path))
     }
 
+    /// Removes the checkpoint of `key` once its model is stored whole, as saving does,
+    /// and as a kill between the two leaves undone; returns whether there was one.
+    pub fn remove_spent_checkpoint(
+        &self,
+        error_model: ErrorModel,
+        key: &str,
+    ) -> Result<bool, CheckpointError> {
+        if !self.has_spent_checkpoint(error_model, key) {
+            return Ok(false);
+        }
+        let checkpoint = self.stem(error_model, key).with_extension("checkpoint");
+        std::fs::remove_dir_all(&checkpoint).map_err(io_error(&checkpoint))?;
+        Ok(true)
+    }
+
+    /// Whether a checkpoint of `key` is left beside its model, stored whole.
+    pub fn has_spent_checkpoint(&self, error_model: ErrorModel, key: &str) -> bool {
+        let checkpoint = self.stem(error_model, key).with_extension("checkpoint");
+        checkpoint.is_dir() && self.integrity(error_model, key) == Seal::Intact
+    }
+
     /// Why the training of `key` failed, if it did; a record whose seal does not hold
     /// is no record, so the training is tried again.
     pub fn failure(&self, error_model: ErrorModel, key: &str) -> Option<String> {
@@ -185,7 +206,15 @@ impl ModelStore {
         let damaged =
             |path: &Path, why: &dyn std::fmt::Display| format!("{}: {why}", path.display());
         let Ok(bytes) = std::fs::read(&state_path) else {
-            return Ok(None);
+            // Epoch files without the state that names their epoch: a checkpoint whose
+            // state.json was lost, or whose first write was cut short.
+            return match folder.is_dir() {
+                true => Err(damaged(
+                    &state_path,
+                    &"it is missing beside the epoch files",
+                )),
+                false => Ok(None),
+            };
         };
         let state: CheckpointState = files::open_inline_sealed(&bytes, key)
             .and_then(|body| serde_json::from_slice(body).map_err(|e| e.to_string()))
@@ -255,10 +284,7 @@ impl ModelStore {
             key,
         )
         .map_err(io_error(&path))?;
-        let checkpoint = stem.with_extension("checkpoint");
-        if checkpoint.exists() {
-            std::fs::remove_dir_all(&checkpoint).map_err(io_error(&checkpoint))?;
-        }
+        self.remove_spent_checkpoint(trained.error_model, key)?;
         let failed = stem.with_extension("failed");
         if failed.exists() {
             std::fs::remove_file(&failed).map_err(io_error(&failed))?;
@@ -416,6 +442,7 @@ impl Stage {
             eprintln!("DCNet {error_model}: {damage}");
         }
         if !fresh && let Some(trained) = store.load(spec, error_model, key)? {
+            store.remove_spent_checkpoint(error_model, key)?;
             return Ok(Self::Done(Box::new(trained), Provenance::Reused));
         }
         let state = if fresh {
