@@ -584,9 +584,7 @@ pub(crate) mod tests {
 
     #[test]
     fn a_non_finite_loss_stops_training_with_the_model_and_epoch() {
-        // A rate no spec may hold (they stop at 1), to make training diverge at once.
-        let mut spec = quick_spec(&[]);
-        spec.training.learning_rates[ErrorModel::Em3 as usize] = 1e30;
+        let spec = quick_spec(&["training.learning_rate.EM3=1e30"]);
         let set = training_set(&spec);
         let mut state = State::new(&spec, ErrorModel::Em3);
         let error = (0..spec.training.epochs)

@@ -455,11 +455,6 @@ const RULES: &[(&str, &str, &str)] = &[
         "0 must be a positive number",
     ),
     (
-        "training.learning_rate.EM2=10",
-        "training.learning_rate.EM2",
-        "10 is above 1: RMSProp diverges at rates that",
-    ),
-    (
         "training.rmsprop_alpha=1",
         "training.rmsprop_alpha",
         "1 must lie strictly between 0 and 1",

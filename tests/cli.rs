@@ -471,7 +471,7 @@ fn bad_specs_are_rejected_with_file_line_and_key() {
     assert_rejected(
         d,
         &["--set", "dvl[7].noise_cm_s=1"],
-        "error: --set dvl[7].noise_cm_s=1: index [7] is out of range: there are 2 entries",
+        "error: --set dvl[7].noise_cm_s=1: dvl[7].noise_cm_s: index [7] is out of range: there are 2 entries",
     );
     assert_rejected(
         d,

@@ -310,8 +310,24 @@ fn the_example_spec_reads_its_recording() {
     let output = dcnet(&repo(), &["validate", "experiments/own-recording.toml"]);
     assert!(output.status.success(), "{}", stderr(&output));
     // Survey1 (1500 rows) and Survey2 (900) give 166 + 99 windows of 10 s every 9 s.
+    let printed = stdout(&output);
+    let mut lines = printed.lines();
     assert_eq!(
-        stdout(&output),
-        "experiments/own-recording.toml: ok (5 trajectories, 3180 training windows, 1 DVLs, 20 Monte Carlo runs)\n"
+        lines.next(),
+        Some(
+            "experiments/own-recording.toml: ok (5 trajectories, 3180 training windows, 1 DVLs, 20 Monte Carlo runs)"
+        )
+    );
+    // Then the memory it needs and how long its training takes here.
+    assert!(
+        lines.next().unwrap().starts_with("  memory: about "),
+        "{printed}"
+    );
+    assert!(
+        lines
+            .next()
+            .unwrap()
+            .starts_with("  training: 5 models, about "),
+        "{printed}"
     );
 }

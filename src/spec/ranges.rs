@@ -3,7 +3,7 @@
 //! counts past which a run is no longer an experiment but a mistake (a grid of 10⁸
 //! combinations, 10⁹ Monte Carlo runs). The checks in [`super`] take their upper ends
 //! from here; the lower ends (positive, at least 1) are theirs. Memory is estimated
-//! later, from the sizes these ranges let through (`crate::footprint`).
+//! later, from the sizes these ranges let through, by the footprint module.
 
 use super::Faults;
 
@@ -54,11 +54,6 @@ pub const DCNET_WINDOW_S: Limit = Limit {
     max: 600.0,
     unit: "s",
     why: "DCNet's windows are seconds long; its first layer grows with the window",
-};
-pub const LEARNING_RATE: Limit = Limit {
-    max: 1.0,
-    unit: "",
-    why: "RMSProp diverges at rates that large",
 };
 pub const GRID_AXIS_VALUES: Limit = Limit {
     max: 10_000.0,
