@@ -195,15 +195,13 @@ fn load_sweep(
     sweep: toml::Value,
     assigned: Assigned,
 ) -> Result<Experiment, SpecErrors> {
-    let sweep: SweepFile = serde_path_to_error::deserialize(sweep).map_err(|e| {
-        source.locate(
-            &assigned,
-            match e.path().to_string().as_str() {
-                "." => "sweep".to_string(),
-                path => format!("sweep.{path}"),
-            },
-            e.into_inner().message().to_string(),
-        )
+    let sweep: SweepFile = deserialize(sweep).map_err(|(key, message)| {
+        let key = if key.is_empty() {
+            "sweep".into()
+        } else {
+            format!("sweep.{key}")
+        };
+        source.locate(&assigned, key, message)
     })?;
     let axes = sweep_axes(&sweep.values, &source.text).map_err(|SpecErrors(faults)| {
         // Values given with `--set` are placed there, not on a line of the file.

@@ -118,10 +118,11 @@ impl Spec {
 }
 
 impl TrajectorySource {
-    /// Length in samples, when the spec alone tells it.
+    /// Length in samples, when the spec alone tells it (not for a range that ends
+    /// before it starts, which the check refuses).
     pub fn known_len(&self) -> Option<usize> {
         match &self.origin {
-            Origin::File { samples, .. } => samples.map(|[start, end]| end - start),
+            Origin::File { samples, .. } => samples.and_then(|[start, end]| end.checked_sub(start)),
             Origin::Synthetic { samples } => Some(*samples),
         }
     }
@@ -133,6 +134,14 @@ pub fn window_starts(len: usize, window: usize, stride: usize) -> impl Iterator<
     (0..)
         .map(move |i| i * stride)
         .take_while(move |start| start + window <= len)
+}
+
+/// How many windows [`window_starts`] gives, counted without walking them.
+pub fn window_count(len: usize, window: usize, stride: usize) -> usize {
+    match len.checked_sub(window) {
+        Some(room) if stride > 0 => room / stride + 1,
+        _ => 0,
+    }
 }
 
 /// The training grid, one list per axis, in the spec's units.
@@ -159,8 +168,8 @@ impl DatasetSpec {
     pub fn windows_per_combination(&self, lengths: impl IntoIterator<Item = usize>) -> usize {
         lengths
             .into_iter()
-            .map(|len| window_starts(len, self.window_samples, self.stride_samples).count())
-            .sum()
+            .map(|len| window_count(len, self.window_samples, self.stride_samples))
+            .fold(0, usize::saturating_add)
     }
 
     /// How many of one combination's `windows` are kept for validation.
@@ -309,7 +318,7 @@ impl SpecFile {
 struct Data {
     sample_rate_hz: f64,
     /// The rate seconds are counted in samples with: 1 Hz when `sample_rate_hz` is
-    /// not positive, so that the other checks still run.
+    /// outside its range, so that the other checks still run.
     rate: f64,
     ground_truth_window_samples: usize,
     synthetic: SyntheticFile,
@@ -336,7 +345,7 @@ fn check_data(
             format!("{sample_rate_hz} must be a positive number"),
         );
     }
-    let rate = if sample_rate_hz > 0.0 {
+    let rate = if sample_rate_hz > 0.0 && sample_rate_hz <= ranges::SAMPLE_RATE_HZ.max {
         sample_rate_hz
     } else {
         1.0
@@ -1511,6 +1520,25 @@ mod tests {
             ),
             "{error}"
         );
+    }
+
+    #[test]
+    fn windows_are_counted_as_they_are_cut() {
+        for (len, window, stride) in [
+            (0, 10, 9),
+            (9, 10, 9),
+            (10, 10, 9),
+            (165, 10, 9),
+            (1000, 7, 3),
+        ] {
+            let cut = window_starts(len, window, stride).count();
+            assert_eq!(
+                window_count(len, window, stride),
+                cut,
+                "{len} {window} {stride}"
+            );
+        }
+        assert_eq!(window_count(usize::MAX, 10, 1), usize::MAX - 9);
     }
 
     #[test]

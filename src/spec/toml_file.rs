@@ -172,8 +172,22 @@ pub(super) fn deserialize<T: serde::de::DeserializeOwned>(
     serde_path_to_error::deserialize(value).map_err(|e| {
         let key = e.path().to_string();
         let key = if key == "." { String::new() } else { key };
-        (key, e.into_inner().message().to_string())
+        let message = e.into_inner().message().to_string();
+        (with_missing_field(key, &message), message)
     })
+}
+
+/// `key` with the field that `message` says is missing appended (`calibration` and
+/// ``missing field `trajectory` `` give `calibration.trajectory`): the key to add.
+fn with_missing_field(key: String, message: &str) -> String {
+    let field = message
+        .strip_prefix("missing field `")
+        .and_then(|rest| rest.strip_suffix('`'));
+    match field {
+        None => key,
+        Some(field) if key.is_empty() => field.to_string(),
+        Some(field) => format!("{key}.{field}"),
+    }
 }
 
 /// A TOML data file read into `T`, kept with its text so that later checks can name
@@ -299,9 +313,11 @@ fn key_at(table: &DeTable<'_>, offset: usize) -> String {
     }
 }
 
-/// The 1-based line that byte `offset` of `text` is on.
+/// The 1-based line that byte `offset` of `text` is on; the last line for the end of
+/// a text that ends with a newline.
 fn line_of(text: &str, offset: usize) -> usize {
-    text[..offset.min(text.len())].matches('\n').count() + 1
+    let line = text[..offset.min(text.len())].matches('\n').count() + 1;
+    line.min(text.lines().count().max(1))
 }
 
 #[cfg(test)]
