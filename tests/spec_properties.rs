@@ -553,10 +553,10 @@ fn any_set_loads_or_is_refused_at_its_set_and_key() {
         let mut overrides = Vec::new();
         for (at, key, raw) in assignments {
             let path = &paths[at.index(paths.len())];
-            if key.is_none() {
-                if let Some(place) = get_mut(&mut spec, path) {
-                    *place = read_as_the_loader_does(&raw);
-                }
+            if key.is_none()
+                && let Some(place) = get_mut(&mut spec, path)
+            {
+                *place = read_as_the_loader_does(&raw);
             }
             let key = key.unwrap_or_else(|| render(path));
             overrides.push(format!("{key}={raw}"));
