@@ -500,7 +500,7 @@ const RULES: &[(&str, &str, &str)] = &[
         "unknown field `bogus`, expected one of `name`,",
     ),
     ("sweep.values={}", "sweep.values", "names no key"),
-    ("sweep.sample=0", "sweep", "missing field `values`"),
+    ("sweep.sample=0", "sweep.values", "missing field `values`"),
 ];
 
 /// Every file below `folder` with its bytes.

@@ -158,9 +158,19 @@ impl Source {
     /// an unknown table), or its line.
     fn locate(&self, assigned: &Assigned, key: String, message: String) -> SpecError {
         let origin = assigned.origin(&key).or_else(|| {
-            (!self.text.writes(&key))
-                .then(|| assigned.below(&key))
-                .flatten()
+            // The key, or the deepest table above it that the file does not write
+            // either (a missing key of a table that only `--set` gives).
+            let mut unwritten = Some(key.as_str()).filter(|k| !self.text.writes(k));
+            while let Some(k) = unwritten {
+                if let Some(origin) = assigned.below(k) {
+                    return Some(origin);
+                }
+                unwritten = k
+                    .rsplit_once(['.', '['])
+                    .map(|(parent, _)| parent)
+                    .filter(|parent| !self.text.writes(parent));
+            }
+            None
         });
         match origin {
             Some(location) => SpecError {
