@@ -24,7 +24,7 @@ use sha2::{Digest, Sha256};
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Command, Output};
 use std::sync::mpsc;
 use std::time::{Duration, Instant, SystemTime};
 
@@ -82,16 +82,6 @@ fn plan_args(out: &str, extra: &[&str]) -> Vec<String> {
 fn exe(cwd: &Path, args: &[String]) -> Output {
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     dcnet(cwd, &args)
-}
-
-fn spawn(cwd: &Path, args: &[String]) -> Child {
-    Command::new(env!("CARGO_BIN_EXE_dcnet-exp"))
-        .current_dir(cwd)
-        .args(args)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap()
 }
 
 /// Returns early from a function giving `Result<_, String>` when `cond` fails.

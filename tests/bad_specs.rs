@@ -2,13 +2,11 @@
 //! is refused by `run` with exit 1, its first message naming the `--set` it came from, the
 //! key and what is wrong, before anything runs; a few are written into the spec file
 //! instead and named by its path, line and key. A results folder and cache computed
-//! before are left as they were, byte for byte.
+//! before are left as they were, byte for byte and modification time.
 
 mod common;
 
-use common::{dcnet, project, small_quick_run, stderr};
-use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use common::{dcnet, project, small_quick_run, snapshot, stderr};
 
 /// (`--set` assignment, the key the fault names, the start of its message).
 const RULES: &[(&str, &str, &str)] = &[
@@ -502,23 +500,6 @@ const RULES: &[(&str, &str, &str)] = &[
     ("sweep.values={}", "sweep.values", "names no key"),
     ("sweep.sample=0", "sweep.values", "missing field `values`"),
 ];
-
-/// Every file below `folder` with its bytes.
-fn snapshot(folder: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
-    let mut files = BTreeMap::new();
-    let mut pending = vec![folder.to_path_buf()];
-    while let Some(dir) = pending.pop() {
-        for entry in std::fs::read_dir(&dir).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                pending.push(path);
-            } else {
-                files.insert(path.clone(), std::fs::read(&path).unwrap());
-            }
-        }
-    }
-    files
-}
 
 #[test]
 fn every_rule_refuses_its_bad_value_at_its_key_and_loses_nothing() {

@@ -6,11 +6,10 @@
 
 mod common;
 use common::*;
-use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use std::time::{Duration, Instant, SystemTime};
+use std::time::{Duration, Instant};
 
 /// The quick spec, small enough to train in a few seconds.
 const SMALL: [&str; 4] = [
@@ -56,24 +55,6 @@ fn assert_same_results(a: &Path, b: &Path) {
         )
     };
     assert_eq!(losses(a), losses(b));
-}
-
-/// Every file below `folder`: its bytes and modification time.
-fn snapshot(folder: &Path) -> BTreeMap<PathBuf, (Vec<u8>, SystemTime)> {
-    let mut files = BTreeMap::new();
-    let mut stack = vec![folder.to_path_buf()];
-    while let Some(dir) = stack.pop() {
-        for entry in std::fs::read_dir(&dir).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                stack.push(path);
-            } else {
-                let modified = path.metadata().unwrap().modified().unwrap();
-                files.insert(path.clone(), (std::fs::read(&path).unwrap(), modified));
-            }
-        }
-    }
-    files
 }
 
 fn names_below(folder: &Path) -> Vec<String> {
@@ -252,17 +233,6 @@ fn a_second_run_does_nothing_and_a_monte_carlo_change_trains_nothing() {
             "{table} differs"
         );
     }
-}
-
-/// Starts `dcnet-exp ARGS` in `cwd` with stderr piped.
-fn spawn(cwd: &Path, args: &[&str]) -> std::process::Child {
-    Command::new(env!("CARGO_BIN_EXE_dcnet-exp"))
-        .current_dir(cwd)
-        .args(args)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap()
 }
 
 fn no_partial_files(folder: &Path) {
