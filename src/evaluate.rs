@@ -9,6 +9,7 @@
 //! run, trajectory) and every mean is summed in run order, so the numbers do not
 //! depend on the thread count.
 
+use crate::bound::{BoundRow, bounds};
 use crate::data::Trajectory;
 use crate::estimators::{DvlEstimator, set_up};
 use crate::noise::{BeamGeometry, Measurements, measure_trajectory};
@@ -44,6 +45,8 @@ pub struct CalibrationRow {
     pub rmse_cm_s: f64,
     pub rmse_std_cm_s: f64,
     pub is_t_conv: bool,
+    /// The bound at this window over this RMSE; absent for the floor and the bound.
+    pub efficiency: Option<f64>,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -57,6 +60,9 @@ pub struct EvaluationRow {
     pub rmse_std_cm_s: f64,
     /// `(baseline − this) / baseline · 100`; absent when the spec runs no baseline.
     pub improvement_pct: Option<f64>,
+    /// The bound at this T_conv on this trajectory over this RMSE; absent for the floor
+    /// and the bound.
+    pub efficiency: Option<f64>,
 }
 
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -83,7 +89,7 @@ pub fn run_protocol(
         })
         .flatten()
         .collect();
-    ProtocolResult::from_runs(runs)
+    ProtocolResult::from_runs(runs, &bounds(spec, trajectories))
 }
 
 /// The protocol of `entries` on one DVL, every Monte Carlo run: one list of rows per
@@ -280,8 +286,9 @@ fn t_conv_index(mean_rmse: &[f64]) -> usize {
 
 impl ProtocolResult {
     /// The calibration and evaluation tables of the per-run rows of [`run_block`]: means
-    /// and standard deviations over runs, summed in run order, and T_conv.
-    pub fn from_runs(runs: Vec<RunRow>) -> ProtocolResult {
+    /// and standard deviations over runs, summed in run order, and T_conv; with each
+    /// DVL's `bounds` after its estimators, and every estimator's efficiency.
+    pub fn from_runs(runs: Vec<RunRow>, bounds: &[BoundRow]) -> ProtocolResult {
         let mut result = ProtocolResult::default();
         let same = |a: &RunRow, b: &RunRow| {
             a.dvl == b.dvl && a.estimator == b.estimator && a.error_model == b.error_model
@@ -319,6 +326,7 @@ impl ProtocolResult {
                     rmse_cm_s: mean,
                     rmse_std_cm_s: std,
                     is_t_conv: w == best,
+                    efficiency: None,
                 });
             }
             for trajectory in first_seen(in_phase(Phase::Evaluation).map(|r| r.trajectory.clone()))
@@ -336,14 +344,92 @@ impl ProtocolResult {
                     rmse_cm_s: mean,
                     rmse_std_cm_s: std,
                     improvement_pct: None,
+                    efficiency: None,
                 });
             }
             start = end;
         }
+        add_bounds(&mut result, bounds);
         add_improvements(&mut result.evaluation);
         result.runs = runs;
         result
     }
+}
+
+/// Puts each DVL's bound after its estimators' rows, calibration rows for every window
+/// and evaluation rows at the bound's own T_conv, and sets every estimator's
+/// efficiency: the bound over its RMSE, at its window (calibration) or T_conv
+/// (evaluation).
+fn add_bounds(result: &mut ProtocolResult, bounds: &[BoundRow]) {
+    // The calibration bound of a window is scored on the rest of the one calibration
+    // trajectory; an evaluation bound on the trajectory named.
+    let bound = |dvl: &str, window_s: f64, trajectory: Option<&str>| {
+        bounds.iter().find(|b| {
+            b.dvl == dvl
+                && b.window_s == window_s
+                && match trajectory {
+                    None => b.phase == Phase::Calibration,
+                    Some(t) => b.phase == Phase::Evaluation && b.trajectory == t,
+                }
+        })
+    };
+    let efficiency = |kind: EstimatorKind, bound: Option<&BoundRow>, rmse_cm_s: f64| {
+        bound
+            .filter(|_| kind != EstimatorKind::Floor)
+            .map(|b| b.rmse_cm_s / rmse_cm_s)
+    };
+    for row in &mut result.calibration {
+        let at = bound(&row.dvl, row.window_s, None);
+        row.efficiency = efficiency(row.estimator, at, row.rmse_cm_s);
+    }
+    for row in &mut result.evaluation {
+        let at = bound(&row.dvl, row.t_conv_s, Some(&row.trajectory));
+        row.efficiency = efficiency(row.estimator, at, row.rmse_cm_s);
+    }
+    for dvl in first_seen(bounds.iter().map(|b| b.dvl.as_str())) {
+        let curve: Vec<&BoundRow> = bounds
+            .iter()
+            .filter(|b| b.dvl == dvl && b.phase == Phase::Calibration)
+            .collect();
+        let best = t_conv_index(&curve.iter().map(|b| b.rmse_cm_s).collect::<Vec<_>>());
+        let calibration = curve.iter().enumerate().map(|(w, b)| CalibrationRow {
+            dvl: dvl.to_string(),
+            estimator: EstimatorKind::Bound,
+            error_model: None,
+            window_s: b.window_s,
+            rmse_cm_s: b.rmse_cm_s,
+            rmse_std_cm_s: b.rmse_std_cm_s,
+            is_t_conv: w == best,
+            efficiency: None,
+        });
+        let t_conv_s = curve[best].window_s;
+        let evaluation = bounds
+            .iter()
+            .filter(|b| b.dvl == dvl && b.phase == Phase::Evaluation && b.window_s == t_conv_s)
+            .map(|b| EvaluationRow {
+                dvl: dvl.to_string(),
+                estimator: EstimatorKind::Bound,
+                error_model: None,
+                trajectory: b.trajectory.clone(),
+                t_conv_s,
+                rmse_cm_s: b.rmse_cm_s,
+                rmse_std_cm_s: b.rmse_std_cm_s,
+                improvement_pct: None,
+                efficiency: None,
+            });
+        insert_after_dvl(&mut result.calibration, |r| r.dvl == dvl, calibration);
+        insert_after_dvl(&mut result.evaluation, |r| r.dvl == dvl, evaluation);
+    }
+}
+
+/// Inserts `new` after the last row that `of_dvl` holds, or at the end.
+fn insert_after_dvl<T>(
+    rows: &mut Vec<T>,
+    of_dvl: impl Fn(&T) -> bool,
+    new: impl Iterator<Item = T>,
+) {
+    let at = rows.iter().rposition(of_dvl).map_or(rows.len(), |i| i + 1);
+    rows.splice(at..at, new);
 }
 #[allow(clippy::too_many_arguments)]
 fn row(
@@ -435,6 +521,69 @@ mod tests {
         let dvl = vec![[0.03, 0.04, 0.0], [0.0, 0.0, 0.0]];
         // sqrt((0.0009 + 0.0016 + 0) / 2) m/s = 0.035355 m/s.
         assert!((rmse_cm_s(&Correction::NONE, &dvl, &truth) - 3.5355339).abs() < 1e-6);
+    }
+
+    /// 1000 Monte Carlo runs of every estimator but DCNet on the quick spec's synthetic
+    /// trajectories, both DVLs: the beam-model WLS, an efficient estimator, has the
+    /// bound's mean RMSE within 3 % at every window and on every test trajectory, and
+    /// no estimator's mean RMSE is below the bound by more than its standard error.
+    #[test]
+    fn the_bound_is_the_efficient_estimators_mean_and_no_estimator_beats_it() {
+        let runs = 1000;
+        let spec = crate::spec::quick_spec(&[
+            "estimators.kinds=[\"baseline\", \"least_squares\", \"beam_wls\", \"floor\"]",
+            &format!("calibration.monte_carlo_runs={runs}"),
+        ]);
+        let trajectories = crate::data::load_trajectories(&spec).unwrap();
+        let result = run_protocol(&spec, &trajectories, &[], &ProgressBar::hidden());
+        let bound_rows = result
+            .calibration
+            .iter()
+            .filter(|r| r.estimator == EstimatorKind::Bound);
+        assert_eq!(bound_rows.count(), 2 * spec.calibration.window_sizes.len());
+        let cells = result
+            .calibration
+            .iter()
+            .map(|r| {
+                (
+                    r.estimator,
+                    r.error_model,
+                    r.efficiency,
+                    r.rmse_cm_s,
+                    r.rmse_std_cm_s,
+                )
+            })
+            .chain(result.evaluation.iter().map(|r| {
+                (
+                    r.estimator,
+                    r.error_model,
+                    r.efficiency,
+                    r.rmse_cm_s,
+                    r.rmse_std_cm_s,
+                )
+            }));
+        let mut efficient = 0;
+        for (estimator, model, efficiency, rmse, std) in cells {
+            if matches!(estimator, EstimatorKind::Floor | EstimatorKind::Bound) {
+                assert_eq!(efficiency, None);
+                continue;
+            }
+            let efficiency = efficiency.expect("every estimator has an efficiency");
+            let bound = efficiency * rmse;
+            let standard_error = std / (runs as f64).sqrt();
+            assert!(
+                rmse >= bound - standard_error,
+                "{estimator} {model:?}: {rmse} cm/s is below the bound {bound} by more than {standard_error}"
+            );
+            if estimator == EstimatorKind::BeamWls {
+                assert!(
+                    (efficiency - 1.0).abs() < 0.03,
+                    "beam-model WLS at {rmse} cm/s against the bound {bound}"
+                );
+                efficient += 1;
+            }
+        }
+        assert_eq!(efficient, 2 * (5 + 2));
     }
 
     #[test]

@@ -176,9 +176,9 @@ fn monte_carlo_rows(spec: &Spec) -> Part {
     let estimators = spec
         .kinds
         .iter()
-        .map(|kind| match kind {
-            EstimatorKind::Dcnet => spec.error_models.len(),
-            _ => 1,
+        .map(|kind| match kind.takes_error_model() {
+            true => spec.error_models.len(),
+            false => 1,
         })
         .sum::<usize>() as f64;
     let places = (spec.calibration.window_sizes.len() + spec.evaluation.len()) as f64;

@@ -7,7 +7,8 @@
 //!    name;
 //! 2. [`data`]: the trajectories (`.npy` or `.csv` recordings, or synthetic) and their
 //!    ground truth;
-//! 3. [`noise`]: the beam-level DVL and GNSS-RTK measurement model;
+//! 3. [`noise`]: the beam-level DVL and GNSS-RTK measurement model, and [`bound`]: the
+//!    information bound it puts on any calibration from w seconds of data;
 //! 4. [`dataset`]: the training windows over the error-term grid;
 //! 5. [`model`] and [`train`]: DCNet and its closed-loop training;
 //! 6. [`estimators`]: calibration methods behind one trait, DCNet among them;
@@ -35,6 +36,7 @@ pub mod vocab;
 pub mod spec;
 pub mod data;
 pub mod noise;
+pub mod bound;
 pub mod dataset;
 pub mod model;
 pub mod train;

@@ -54,6 +54,15 @@ impl BeamGeometry {
         std::array::from_fn(|axis| bias_m_s * self.pseudo_inverse[axis].iter().sum::<f64>())
     }
 
+    /// The variance per axis (m²/s²) of the velocity noise that beam noise of standard
+    /// deviation `noise_m_s` becomes: the diagonal of `σ²(HᵀH)⁻¹`, which is diagonal
+    /// for a Janus DVL.
+    pub fn velocity_noise_variances(&self, noise_m_s: f64) -> Vec3 {
+        std::array::from_fn(|axis| {
+            noise_m_s.powi(2) * self.pseudo_inverse[axis].iter().map(|p| p * p).sum::<f64>()
+        })
+    }
+
     /// One DVL measurement of the true velocity `v`, with beam noise drawn from `rng`.
     pub fn measure(&self, v: Vec3, errors: &SensorErrors, rng: &mut impl Rng) -> Vec3 {
         let beams: [f64; 4] = std::array::from_fn(|beam| {

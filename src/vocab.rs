@@ -88,19 +88,30 @@ impl FromStr for ErrorModel {
     }
 }
 
-/// A calibration method. The floor is no method but a bound: it corrects with the
-/// true terms, which shows what no calibration can beat.
+/// A calibration method, or one of the two limits set beside them. The floor corrects
+/// with the true terms: no calibration beats it. The bound is the mean RMSE of an
+/// efficient estimator of the terms from the calibration window (the Cramér–Rao
+/// bound): no unbiased calibration from that much data beats it. The bound is
+/// computed, not run, for every DVL; a spec does not list it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum EstimatorKind {
     Baseline,
     LeastSquares,
+    BeamWls,
     Dcnet,
     Floor,
+    Bound,
 }
 
 impl EstimatorKind {
-    pub const ALL: [EstimatorKind; 4] =
-        [Self::Baseline, Self::LeastSquares, Self::Dcnet, Self::Floor];
+    pub const ALL: [EstimatorKind; 6] = [
+        Self::Baseline,
+        Self::LeastSquares,
+        Self::BeamWls,
+        Self::Dcnet,
+        Self::Floor,
+        Self::Bound,
+    ];
 
     /// Whether the method is run once per error model.
     pub fn takes_error_model(self) -> bool {
@@ -112,8 +123,10 @@ impl EstimatorKind {
         match self {
             Self::Baseline => "baseline",
             Self::LeastSquares => "least squares",
+            Self::BeamWls => "beam-model WLS",
             Self::Dcnet => "DCNet",
-            Self::Floor => "floor (bound)",
+            Self::Floor => "floor (true terms)",
+            Self::Bound => "information bound",
         }
     }
 }
@@ -123,8 +136,10 @@ impl fmt::Display for EstimatorKind {
         f.write_str(match self {
             Self::Baseline => "baseline",
             Self::LeastSquares => "least_squares",
+            Self::BeamWls => "beam_wls",
             Self::Dcnet => "dcnet",
             Self::Floor => "floor",
+            Self::Bound => "bound",
         })
     }
 }

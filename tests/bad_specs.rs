@@ -353,6 +353,11 @@ const RULES: &[(&str, &str, &str)] = &[
     ),
     ("estimators.kinds=[]", "estimators.kinds", "is empty"),
     (
+        "estimators.kinds=[\"baseline\", \"bound\"]",
+        "estimators.kinds[1]",
+        "the bound is no method to list: it is computed for every DVL",
+    ),
+    (
         "estimators.error_models=[\"EM9\"]",
         "estimators.error_models[0]",
         "unknown error model \"EM9\"; expected one of EM1,",

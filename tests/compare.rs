@@ -62,11 +62,11 @@ fn two_folders_of_one_spec_differ_in_no_key_and_no_cell_and_the_file_is_what_is_
         markdown.contains("## Spec\n\nThe resolved specs are the same.\n"),
         "{markdown}"
     );
-    // 2 DVLs × (baseline, floor, least squares and DCNet with EM1-EM5) = 24 series, at
-    // 5 windows and on 2 test trajectories.
+    // 2 DVLs × (baseline, beam-model WLS, floor, bound, least squares and DCNet with
+    // EM1-EM5) = 28 series, at 5 windows and on 2 test trajectories.
     let calibration = section_rows(&markdown, "Calibration");
     let evaluation = section_rows(&markdown, "Evaluation");
-    assert_eq!((calibration.len(), evaluation.len()), (120, 48));
+    assert_eq!((calibration.len(), evaluation.len()), (140, 56));
     for row in calibration.iter().chain(&evaluation) {
         let at = if row.len() == 9 { 6 } else { 8 };
         assert_eq!(row[at], "+0.0000", "{row:?}");
@@ -83,7 +83,7 @@ fn two_folders_of_one_spec_differ_in_no_key_and_no_cell_and_the_file_is_what_is_
     );
     assert_eq!(
         markdown.lines().last().unwrap(),
-        "0 of 168 cells differ beyond 2 combined standard errors"
+        "0 of 196 cells differ beyond 2 combined standard errors"
     );
 }
 
@@ -126,9 +126,9 @@ fn a_changed_dvl2_noise_marks_its_dvl2_cells_and_no_dvl1_cell() {
     );
     let calibration = section_rows(&markdown, "Calibration");
     let evaluation = section_rows(&markdown, "Evaluation");
-    // 2 DVLs × (baseline, floor, least squares EM1-EM5) = 14 series, at 5 windows and
-    // on 2 test trajectories.
-    assert_eq!((calibration.len(), evaluation.len()), (70, 28));
+    // 2 DVLs × (baseline, floor, bound, least squares EM1-EM5) = 16 series, at 5
+    // windows and on 2 test trajectories.
+    assert_eq!((calibration.len(), evaluation.len()), (80, 32));
     // DVL1's blocks are seeded by (seed, DVL1, run, trajectory): the same bytes, so a
     // difference of exactly 0 and the same T_conv.
     for row in calibration.iter().filter(|row| row[0] == "DVL1") {
@@ -156,7 +156,7 @@ fn a_changed_dvl2_noise_marks_its_dvl2_cells_and_no_dvl1_cell() {
     for (rows, a) in [(&calibration, 4), (&evaluation, 6)] {
         for row in rows.iter().filter(|row| row[0] == "DVL2") {
             assert!(value(&row[a + 2]) > 0.0, "{row:?}");
-            if row[1] == "floor (bound)" {
+            if row[1] == "floor (true terms)" {
                 assert!(
                     (value(&row[a + 1]) - 2.5 * value(&row[a])).abs() < 3e-4,
                     "{row:?}"
@@ -177,13 +177,20 @@ fn a_changed_dvl2_noise_marks_its_dvl2_cells_and_no_dvl1_cell() {
     .map(String::from)
     .into();
     for window in ["20", "40", "60", "80", "100"] {
-        expected_calibration.push(format!("DVL2 floor (bound) - {window}"));
+        expected_calibration.push(format!("DVL2 floor (true terms) - {window}"));
+    }
+    // The bound rises with the noise too; at 20 s its spread over runs is wider than
+    // the change.
+    for window in ["40", "60", "80", "100"] {
+        expected_calibration.push(format!("DVL2 information bound - {window}"));
     }
     let expected_evaluation = [
         "DVL2 least squares EM1 S3",
         "DVL2 least squares EM1 S4",
-        "DVL2 floor (bound) - S3",
-        "DVL2 floor (bound) - S4",
+        "DVL2 floor (true terms) - S3",
+        "DVL2 floor (true terms) - S4",
+        "DVL2 information bound - S3",
+        "DVL2 information bound - S4",
     ];
     assert_eq!(marked(&calibration, 8), expected_calibration, "{markdown}");
     assert_eq!(marked(&evaluation, 10), expected_evaluation, "{markdown}");
@@ -214,7 +221,7 @@ fn a_changed_dvl2_noise_marks_its_dvl2_cells_and_no_dvl1_cell() {
     }
     assert_eq!(
         markdown.lines().last().unwrap(),
-        "16 of 98 cells differ beyond 2 combined standard errors"
+        "22 of 112 cells differ beyond 2 combined standard errors"
     );
 }
 

@@ -14,7 +14,7 @@ const FIGURES: [(&str, (u32, u32)); 6] = [
     ("calibration", (2720, 1240)),
     ("rmse_first_window", (2560, 1120)),
     ("improvement_em5", (2560, 1120)),
-    ("monte_carlo_spread", (2240, 1096)),
+    ("monte_carlo_spread", (2240, 1164)),
     ("training_loss", (2000, 1240)),
 ];
 
@@ -382,7 +382,7 @@ evaluation = [
         "\\bottomrule",
         "\\end{table}",
     ] {
-        assert_eq!(tex.matches(command).count(), 3, "{command} in\n{tex}");
+        assert_eq!(tex.matches(command).count(), 4, "{command} in\n{tex}");
     }
     assert!(
         tex.contains("\\caption{quick\\_tex: calibration on SCal."),

@@ -92,7 +92,7 @@ monte_carlo_runs = 3
 trajectories = ["Test"]
 
 [estimators]
-kinds = ["baseline", "least_squares", "dcnet", "floor"]
+kinds = ["baseline", "least_squares", "beam_wls", "dcnet", "floor"]
 error_models = ["EM5"]
 
 [training]
@@ -143,7 +143,11 @@ fn a_csv_recording_gives_the_results_of_the_same_samples_in_a_npy_file() {
         );
     }
     let rows = calibration_rows(&dir.join("from-csv/own"));
-    assert_eq!(rows.len(), 2 * 4, "two windows × four estimators: {rows:?}");
+    assert_eq!(
+        rows.len(),
+        2 * 6,
+        "two windows × five estimators and the bound: {rows:?}"
+    );
 
     let manifest: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("from-csv/own/manifest.json")).unwrap())

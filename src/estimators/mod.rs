@@ -6,11 +6,13 @@
 //! [`requested`], which the protocol runs.
 
 mod baseline;
+mod beam_wls;
 mod dcnet;
 mod floor;
 mod least_squares;
 
 pub use baseline::Baseline;
+pub use beam_wls::BeamWls;
 pub use dcnet::DcnetEstimator;
 pub use floor::Floor;
 pub use least_squares::LeastSquares;
@@ -72,7 +74,11 @@ pub fn set_up(spec: &Spec, dvl: &Dvl, dcnets: &[Trained]) -> Vec<DvlEstimator> {
             (EstimatorKind::LeastSquares | EstimatorKind::Dcnet, None) => {
                 unreachable!("{kind} always has an error model")
             }
+            (EstimatorKind::BeamWls, _) => {
+                Box::new(BeamWls::new(&dvl.errors, &geometry, spec.gnss_noise_m_s))
+            }
             (EstimatorKind::Floor, _) => Box::new(Floor::new(&dvl.errors, &geometry)),
+            (EstimatorKind::Bound, _) => unreachable!("the bound is computed, not run"),
         };
         entries.push(DvlEstimator {
             kind,

@@ -4,6 +4,7 @@
 use super::cache::models::CheckpointError;
 use super::plan::{Plan, Task};
 use super::{ExecuteError, Executed};
+use crate::bound::bounds;
 use crate::estimators::set_up;
 use crate::evaluate::{ProtocolResult, RunRow, run_block};
 use crate::progress::bar;
@@ -138,5 +139,6 @@ pub(super) fn gather(
         let block_rows = plan.block_store.load(&block.key)?;
         rows.extend(block_rows);
     }
-    Ok((ProtocolResult::from_runs(rows), models))
+    let bounds = bounds(plan.spec(p), &plan.trajectories[p]);
+    Ok((ProtocolResult::from_runs(rows, &bounds), models))
 }

@@ -106,6 +106,8 @@ struct Tables {
     evaluation: ReportTable,
     /// The same for the floor and least squares, when the run has either.
     beyond: Option<ReportTable>,
+    /// Every estimator against the information bound, when the run has one.
+    efficiency: Option<ReportTable>,
 }
 
 /// A table of label columns, a first value column and one column per error model, its
@@ -143,6 +145,8 @@ struct Figure {
 enum Detail {
     TConv(f64),
     Improvement(f64),
+    /// The bound over the RMSE.
+    Efficiency(f64),
 }
 
 /// How a rendering writes the signs of a [`Figure`].
@@ -152,7 +156,8 @@ struct Signs {
 }
 
 impl Figure {
-    /// `5.93 (100)` with T_conv, `0.86 (+12 %)` with the improvement, `0.74` alone.
+    /// `5.93 (100)` with T_conv, `0.86 (+12 %)` with the improvement, `0.17 (94 %)`
+    /// with the efficiency, `0.74` alone.
     fn text(&self, signs: &Signs) -> String {
         let rmse = format!("{:.2}", self.rmse_cm_s);
         match self.detail {
@@ -165,6 +170,9 @@ impl Figure {
                     None => pct,
                 };
                 format!("{rmse} ({pct}{})", signs.percent)
+            }
+            Some(Detail::Efficiency(ratio)) => {
+                format!("{rmse} ({:.0}{})", 100.0 * ratio, signs.percent)
             }
         }
     }
@@ -245,10 +253,14 @@ impl Tables {
                     false,
                 )
             });
+        let efficiency = source
+            .has(EstimatorKind::Bound)
+            .then(|| source.efficiency_table());
         Tables {
             calibration,
             evaluation,
             beyond,
+            efficiency,
         }
     }
 
@@ -256,7 +268,8 @@ impl Tables {
     fn tally(&self) -> Tally {
         let tables = [&self.calibration, &self.evaluation]
             .into_iter()
-            .chain(self.beyond.as_ref());
+            .chain(self.beyond.as_ref())
+            .chain(self.efficiency.as_ref());
         tables.fold(Tally::default(), |sum, table| Tally {
             compared: sum.compared + table.tally.compared,
             flagged: sum.flagged + table.tally.flagged,
@@ -373,14 +386,85 @@ impl<'a> Source<'a> {
                 Some(EstimatorKind::LeastSquares),
             ));
         }
-        if self.has(EstimatorKind::Floor) {
-            kinds.push((
-                format!("{dvl} floor (true terms)"),
-                Some(EstimatorKind::Floor),
-                None,
-            ));
+        for kind in [
+            EstimatorKind::BeamWls,
+            EstimatorKind::Floor,
+            EstimatorKind::Bound,
+        ] {
+            if self.has(kind) {
+                kinds.push((format!("{dvl} {}", kind.label()), Some(kind), None));
+            }
         }
         kinds
+    }
+
+    /// Every estimator of each DVL, then the bound itself: the RMSE with the
+    /// efficiency (bound / RMSE) in brackets, calibrating at the estimator's T_conv on
+    /// the rest of the calibration trajectory, then on each test trajectory with the
+    /// T_conv terms.
+    fn efficiency_table(&self) -> ReportTable {
+        let figure = |rmse_cm_s: f64, efficiency: Option<f64>| Cell {
+            ours: Figure {
+                rmse_cm_s,
+                detail: efficiency.map(Detail::Efficiency),
+            },
+            paper: None,
+            flagged: false,
+        };
+        let groups = self
+            .dvls
+            .iter()
+            .map(|dvl| {
+                let series = crate::first_seen(
+                    self.run
+                        .calibration
+                        .iter()
+                        .filter(|r| r.dvl == *dvl && r.estimator != EstimatorKind::Floor)
+                        .map(|r| (r.estimator, r.error_model)),
+                );
+                series
+                    .into_iter()
+                    .map(|(kind, model)| {
+                        let label = match model {
+                            Some(model) => format!("{} {model}", kind.label()),
+                            None => kind.label().to_string(),
+                        };
+                        let at_t_conv = self.run.calibration.iter().find(|r| {
+                            r.is_t_conv
+                                && r.dvl == *dvl
+                                && r.estimator == kind
+                                && r.error_model == model
+                        });
+                        let mut cells = vec![at_t_conv.map(|r| figure(r.rmse_cm_s, r.efficiency))];
+                        cells.extend(self.trajectories.iter().map(|trajectory| {
+                            self.run
+                                .evaluation
+                                .iter()
+                                .find(|r| {
+                                    r.dvl == *dvl
+                                        && r.trajectory == *trajectory
+                                        && r.estimator == kind
+                                        && r.error_model == model
+                                })
+                                .map(|r| figure(r.rmse_cm_s, r.efficiency))
+                        }));
+                        let t_conv = at_t_conv.map_or(String::new(), |r| r.window_s.to_string());
+                        Row {
+                            labels: vec![dvl.clone(), label, t_conv],
+                            cells,
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        ReportTable {
+            labels: vec!["DVL", "estimator", "T_conv s"],
+            columns: std::iter::once(format!("{} rest", self.run.spec.calibration.trajectory))
+                .chain(self.trajectories.iter().cloned())
+                .collect(),
+            groups,
+            tally: Tally::default(),
+        }
     }
 
     /// The calibration cell at T_conv of `dvl`, `kind` and `model`, beside the
@@ -508,7 +592,7 @@ fn render(run: &StoredRun, tables: &Tables, figures: &[Written]) -> String {
     let _ = writeln!(out, "## Calibration on {}\n", spec.calibration.trajectory);
     let _ = writeln!(
         out,
-        "The DVL rows hold the baseline and DCNet, as in the paper; the floor corrects with the true terms, a bound no estimator can beat.\n\n{}\n",
+        "The DVL rows hold the baseline and DCNet, as in the paper. The floor corrects with the true terms, which no estimator can beat; the bound is the best mean RMSE any unbiased estimator can reach from the window's data (see \"Against the information bound\").\n\n{}\n",
         markdown_table(&tables.calibration)
     );
     let _ = writeln!(out, "## Evaluation with the T_conv terms\n");
@@ -518,6 +602,14 @@ fn render(run: &StoredRun, tables: &Tables, figures: &[Written]) -> String {
             out,
             "Beyond the paper: least squares on the same data, and the floor.\n\n{}\n",
             markdown_table(beyond)
+        );
+    }
+    if let Some(efficiency) = &tables.efficiency {
+        let _ = writeln!(out, "## Against the information bound\n");
+        let _ = writeln!(
+            out,
+            "The bound is the mean RMSE of an efficient estimator of the DVL's scale and bias from the calibration window (the Cramér–Rao bound on the terms, propagated to the corrected velocity): no unbiased calibration from that much data does better on average. The floor is the limit with perfect terms; the bound, the limit with w seconds of data. In brackets, each estimator's efficiency: the bound at its T_conv over its RMSE.\n\n{}\n",
+            markdown_table(efficiency)
         );
     }
     if run.published.is_some() {

@@ -206,6 +206,10 @@ fn floats<T>(rows: &[T], f: impl Fn(&T) -> f64) -> ArrayRef {
     Arc::new(Float64Array::from_iter_values(rows.iter().map(f)))
 }
 
+fn optional_floats<T>(rows: &[T], f: impl Fn(&T) -> Option<f64>) -> ArrayRef {
+    Arc::new(Float64Array::from_iter(rows.iter().map(f)))
+}
+
 fn batch(columns: Vec<(&str, ArrayRef)>) -> RecordBatch {
     RecordBatch::try_from_iter(columns).expect("columns of one table have equal lengths")
 }
@@ -250,6 +254,7 @@ pub fn calibration_batch(rows: &[CalibrationRow]) -> RecordBatch {
                 rows.iter().map(|r| Some(r.is_t_conv)),
             )),
         ),
+        ("efficiency", optional_floats(rows, |r| r.efficiency)),
     ])
 }
 
@@ -264,10 +269,9 @@ pub fn evaluation_batch(rows: &[EvaluationRow]) -> RecordBatch {
         ("rmse_std_cm_s", floats(rows, |r| r.rmse_std_cm_s)),
         (
             "improvement_pct",
-            Arc::new(Float64Array::from_iter(
-                rows.iter().map(|r| r.improvement_pct),
-            )),
+            optional_floats(rows, |r| r.improvement_pct),
         ),
+        ("efficiency", optional_floats(rows, |r| r.efficiency)),
     ])
 }
 

@@ -239,7 +239,7 @@ fn expected_schema(file: &str) -> std::sync::Arc<Schema> {
 
 /// Columns added after the first results folders were written: a folder that lacks
 /// one still reads, with the value those runs implied.
-const LATER_COLUMNS: [&str; 1] = ["stop_reason"];
+const LATER_COLUMNS: [&str; 2] = ["stop_reason", "efficiency"];
 
 fn check_schema(found: &Schema, expected: &Schema) -> Result<(), String> {
     for field in expected.fields() {
@@ -291,6 +291,14 @@ impl Batch<'_> {
 
     pub(crate) fn optional_floats(&self, name: &str) -> Vec<Option<f64>> {
         self.column::<Float64Array>(name).iter().collect()
+    }
+
+    /// A column of [`LATER_COLUMNS`]: its values, or none where the folder predates it.
+    fn later_floats(&self, name: &str) -> Vec<Option<f64>> {
+        match self.0.column_by_name(name) {
+            Some(_) => self.optional_floats(name),
+            None => vec![None; self.0.num_rows()],
+        }
     }
 
     fn uints(&self, name: &str) -> Result<Vec<usize>, String> {
@@ -414,6 +422,7 @@ fn calibration_rows(batch: &Batch) -> Result<Vec<CalibrationRow>, String> {
     let rmse = batch.floats("rmse_cm_s")?;
     let std = batch.floats("rmse_std_cm_s")?;
     let is_t_conv = batch.bools("is_t_conv")?;
+    let efficiency = batch.later_floats("efficiency");
     Ok(row_keys
         .into_iter()
         .enumerate()
@@ -425,6 +434,7 @@ fn calibration_rows(batch: &Batch) -> Result<Vec<CalibrationRow>, String> {
             rmse_cm_s: rmse[i],
             rmse_std_cm_s: std[i],
             is_t_conv: is_t_conv[i],
+            efficiency: efficiency[i],
         })
         .collect())
 }
@@ -436,6 +446,7 @@ fn evaluation_rows(batch: &Batch) -> Result<Vec<EvaluationRow>, String> {
     let rmse = batch.floats("rmse_cm_s")?;
     let std = batch.floats("rmse_std_cm_s")?;
     let improvement = batch.optional_floats("improvement_pct");
+    let efficiency = batch.later_floats("efficiency");
     Ok(row_keys
         .into_iter()
         .enumerate()
@@ -448,6 +459,7 @@ fn evaluation_rows(batch: &Batch) -> Result<Vec<EvaluationRow>, String> {
             rmse_cm_s: rmse[i],
             rmse_std_cm_s: std[i],
             improvement_pct: improvement[i],
+            efficiency: efficiency[i],
         })
         .collect())
 }

@@ -190,7 +190,7 @@ pub struct EstimatorsFile {
 impl Default for EstimatorsFile {
     fn default() -> Self {
         Self {
-            kinds: ["baseline", "least_squares", "dcnet", "floor"]
+            kinds: ["baseline", "least_squares", "beam_wls", "dcnet", "floor"]
                 .map(String::from)
                 .to_vec(),
             error_models: ["EM1", "EM2", "EM3", "EM4", "EM5"]

@@ -865,7 +865,14 @@ fn check_estimators(
         kinds,
         error_models,
     } = estimators;
-    let kinds = parse_names("estimators.kinds", &kinds, faults);
+    let mut kinds = parse_names("estimators.kinds", &kinds, faults);
+    if let Some(i) = kinds.iter().position(|&k| k == EstimatorKind::Bound) {
+        faults.add(
+            format!("estimators.kinds[{i}]"),
+            "the bound is no method to list: it is computed for every DVL",
+        );
+        kinds.remove(i);
+    }
     let error_models = parse_names("estimators.error_models", &error_models, faults);
     (kinds, error_models)
 }

@@ -104,7 +104,8 @@ const MODEL_COLORS: [RGBColor; 5] = [
 ];
 
 /// Colour by error model, stroke by estimator: DCNet solid, least squares dashed; the
-/// baseline black and the floor grey and dotted.
+/// baseline black, the beam-model WLS brown and dashed, the floor grey and dotted, the
+/// bound black and dotted.
 pub fn series_look(estimator: EstimatorKind, error_model: Option<ErrorModel>) -> Look {
     let label = match error_model {
         Some(model) => format!("{} {model}", estimator.label()),
@@ -112,6 +113,8 @@ pub fn series_look(estimator: EstimatorKind, error_model: Option<ErrorModel>) ->
     };
     let (color, stroke) = match (estimator, error_model) {
         (EstimatorKind::Floor, _) => (GREY, Stroke::Dotted),
+        (EstimatorKind::Bound, _) => (BLACK, Stroke::Dotted),
+        (EstimatorKind::BeamWls, _) => (estimator_color(estimator), Stroke::Dashed),
         (_, None) => (BLACK, Stroke::Solid),
         (estimator, Some(model)) => (
             MODEL_COLORS[model as usize % MODEL_COLORS.len()],
@@ -145,8 +148,10 @@ pub fn estimator_color(estimator: EstimatorKind) -> RGBColor {
     match estimator {
         EstimatorKind::Baseline => RGBColor(90, 90, 90),
         EstimatorKind::LeastSquares => RGBColor(31, 119, 180),
+        EstimatorKind::BeamWls => RGBColor(140, 86, 75),
         EstimatorKind::Dcnet => RGBColor(214, 39, 40),
         EstimatorKind::Floor => GREY,
+        EstimatorKind::Bound => BLACK,
     }
 }
 

@@ -557,7 +557,9 @@ fn improvement_em5(run: &StoredRun) -> PlotResult<MaybeDrawn> {
 /// The distribution over runs of each estimator's RMSE at its T_conv, one panel per
 /// DVL, the floor's mean drawn across.
 fn monte_carlo_spread(run: &StoredRun) -> PlotResult<MaybeDrawn> {
-    let series = series_of(&run.calibration);
+    // The bound is computed, not run: it has no runs to spread.
+    let mut series = series_of(&run.calibration);
+    series.retain(|(estimator, _)| *estimator != EstimatorKind::Bound);
     if series.is_empty() {
         return Ok(Err("calibration.parquet is empty".into()));
     }
