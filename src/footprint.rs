@@ -11,7 +11,7 @@ use crate::dataset::{DatasetSize, TrainingSet};
 use crate::evaluate::RunRow;
 use crate::model::layer_shapes;
 use crate::spec::{Origin, Spec};
-use crate::vocab::{ErrorModel, EstimatorKind};
+use crate::vocab::ErrorModel;
 use std::fmt;
 
 /// Bytes a stored float of the network takes.
