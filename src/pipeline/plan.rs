@@ -206,7 +206,7 @@ impl<'a> Plan<'a> {
             .iter()
             .map(|&b| self.blocks[b].key.as_str())
             .collect();
-        let results_key = cache::hash(&(spec.resolved_toml(), block_keys));
+        let results_key = cache::results_key(spec, &block_keys);
         self.points.push(PointPlan {
             folder: self.out.join(&spec.name),
             blocks,

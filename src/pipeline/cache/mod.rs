@@ -40,6 +40,9 @@ const DATASET_CODE_VERSION: u32 = 1;
 const TRAINING_CODE_VERSION: u32 = 2;
 /// Bumped whenever the protocol or an estimator changes its numbers.
 const PROTOCOL_CODE_VERSION: u32 = 1;
+/// Bumped whenever the tables put together from the blocks change (2: the bound rows
+/// and the efficiency column).
+const TABLES_CODE_VERSION: u32 = 2;
 
 /// The folder of the cache under a results folder.
 pub const FOLDER: &str = ".cache";
@@ -152,6 +155,16 @@ pub fn model_key(spec: &Spec, error_model: ErrorModel, dataset_key: &str) -> Str
         spec.training.learning_rate(error_model),
         (spec.training.rmsprop_alpha, spec.training.rmsprop_epsilon),
         &r.training.early_stopping,
+    ))
+}
+
+/// The key of a results folder: its resolved spec and the blocks it is put together
+/// from.
+pub fn results_key(spec: &Spec, block_keys: &[&str]) -> String {
+    hash(&(
+        ("results", TABLES_CODE_VERSION),
+        spec.resolved_toml(),
+        block_keys,
     ))
 }
 
