@@ -2,8 +2,10 @@
 //! calibration trajectory with fresh noise, every estimator estimates its terms from the
 //! first w seconds for every window size w, and the RMSE of the corrected remainder is
 //! taken. T_conv is the window with the lowest mean RMSE over runs. Each run's T_conv
-//! terms then correct freshly measured test trajectories. In: the spec, the
-//! trajectories. Out: per-run rows and the calibration and evaluation tables.
+//! terms then correct freshly measured test trajectories. The tables set each DVL's
+//! information bound after its estimators and give every estimator its efficiency
+//! against it. In: the spec, the trajectories. Out: per-run rows and the calibration
+//! and evaluation tables.
 //!
 //! Runs go in parallel; every measurement draws from a generator seeded by (seed, DVL,
 //! run, trajectory) and every mean is summed in run order, so the numbers do not
