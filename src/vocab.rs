@@ -30,6 +30,21 @@ impl Correction {
     }
 }
 
+impl Correction {
+    /// The mean of `corrections`' terms, term by term: what an ensemble of models
+    /// estimates.
+    pub fn mean(corrections: &[Correction]) -> Correction {
+        let n = corrections.len() as f64;
+        let mean = |term: fn(&Correction) -> Vec3| -> Vec3 {
+            std::array::from_fn(|axis| corrections.iter().map(|c| term(c)[axis]).sum::<f64>() / n)
+        };
+        Correction {
+            scale: mean(|c| c.scale),
+            bias_m_s: mean(|c| c.bias_m_s),
+        }
+    }
+}
+
 /// The structure of the terms being estimated (PAPER-NOTES, "Error models"). Stored
 /// by name, "EM1" to "EM5".
 #[derive(
@@ -95,16 +110,24 @@ pub enum EstimatorKind {
     Baseline,
     LeastSquares,
     Dcnet,
+    /// The mean of the terms of `training.replicates` DCNets; it runs beside DCNet when
+    /// there are several, and a spec does not list it.
+    DcnetEnsemble,
     Floor,
 }
 
 impl EstimatorKind {
-    pub const ALL: [EstimatorKind; 4] =
-        [Self::Baseline, Self::LeastSquares, Self::Dcnet, Self::Floor];
+    pub const ALL: [EstimatorKind; 5] = [
+        Self::Baseline,
+        Self::LeastSquares,
+        Self::Dcnet,
+        Self::DcnetEnsemble,
+        Self::Floor,
+    ];
 
     /// Whether the method is run once per error model.
     pub fn takes_error_model(self) -> bool {
-        matches!(self, Self::LeastSquares | Self::Dcnet)
+        matches!(self, Self::LeastSquares | Self::Dcnet | Self::DcnetEnsemble)
     }
 
     /// How the method is labelled in tables.
@@ -113,6 +136,7 @@ impl EstimatorKind {
             Self::Baseline => "baseline",
             Self::LeastSquares => "least squares",
             Self::Dcnet => "DCNet",
+            Self::DcnetEnsemble => "DCNet ensemble",
             Self::Floor => "floor (bound)",
         }
     }
@@ -124,6 +148,7 @@ impl fmt::Display for EstimatorKind {
             Self::Baseline => "baseline",
             Self::LeastSquares => "least_squares",
             Self::Dcnet => "dcnet",
+            Self::DcnetEnsemble => "dcnet_ensemble",
             Self::Floor => "floor",
         })
     }

@@ -210,10 +210,11 @@ fn batch(columns: Vec<(&str, ArrayRef)>) -> RecordBatch {
     RecordBatch::try_from_iter(columns).expect("columns of one table have equal lengths")
 }
 
-/// One row per run × DVL × estimator × error model × (window or trajectory).
+/// One row per run × DVL × estimator × error model × (window or trajectory), and a
+/// `replicate` column (empty but for DCNet) when DCNet has several replicates.
 pub fn monte_carlo_batch(rows: &[RunRow]) -> RecordBatch {
     let term = |f: fn(&Correction) -> f64| floats(rows, move |r| f(&r.correction));
-    batch(vec![
+    let mut columns: Vec<(&str, ArrayRef)> = vec![
         (
             "run",
             Arc::new(UInt32Array::from_iter_values(
@@ -233,11 +234,42 @@ pub fn monte_carlo_batch(rows: &[RunRow]) -> RecordBatch {
         ("bias_x_cm_s", term(|c| 100.0 * c.bias_m_s[0])),
         ("bias_y_cm_s", term(|c| 100.0 * c.bias_m_s[1])),
         ("bias_z_cm_s", term(|c| 100.0 * c.bias_m_s[2])),
-    ])
+    ];
+    if rows.iter().any(|r| r.replicate.is_some()) {
+        let replicate = rows.iter().map(|r| r.replicate.map(|r| r as u32));
+        columns.push((
+            REPLICATE,
+            Arc::new(UInt32Array::from_iter(replicate)) as ArrayRef,
+        ));
+    }
+    batch(columns)
+}
+
+/// The column of a DCNet row's replicate, in `monte_carlo.parquet` when there are
+/// several.
+pub const REPLICATE: &str = "replicate";
+
+/// The column of the 95 % confidence interval over DCNet replicates, in the
+/// calibration and evaluation tables when there are several.
+pub const RMSE_CI: &str = "rmse_ci_cm_s";
+
+/// `columns`, with the confidence interval column when a row has one.
+fn with_ci<T>(
+    mut columns: Vec<(&'static str, ArrayRef)>,
+    rows: &[T],
+    ci: impl Fn(&T) -> Option<f64>,
+) -> RecordBatch {
+    if rows.iter().any(|r| ci(r).is_some()) {
+        columns.push((
+            RMSE_CI,
+            Arc::new(Float64Array::from_iter(rows.iter().map(ci))) as ArrayRef,
+        ));
+    }
+    batch(columns)
 }
 
 pub fn calibration_batch(rows: &[CalibrationRow]) -> RecordBatch {
-    batch(vec![
+    let columns: Vec<(&'static str, ArrayRef)> = vec![
         ("dvl", strings(rows, |r| r.dvl.clone())),
         ("estimator", strings(rows, |r| r.estimator.to_string())),
         ("error_model", error_models(rows, |r| r.error_model)),
@@ -250,11 +282,12 @@ pub fn calibration_batch(rows: &[CalibrationRow]) -> RecordBatch {
                 rows.iter().map(|r| Some(r.is_t_conv)),
             )),
         ),
-    ])
+    ];
+    with_ci(columns, rows, |r| r.rmse_ci_cm_s)
 }
 
 pub fn evaluation_batch(rows: &[EvaluationRow]) -> RecordBatch {
-    batch(vec![
+    let columns: Vec<(&'static str, ArrayRef)> = vec![
         ("dvl", strings(rows, |r| r.dvl.clone())),
         ("estimator", strings(rows, |r| r.estimator.to_string())),
         ("error_model", error_models(rows, |r| r.error_model)),
@@ -268,7 +301,8 @@ pub fn evaluation_batch(rows: &[EvaluationRow]) -> RecordBatch {
                 rows.iter().map(|r| r.improvement_pct),
             )),
         ),
-    ])
+    ];
+    with_ci(columns, rows, |r| r.rmse_ci_cm_s)
 }
 
 /// One row per error model × epoch of DCNet training.

@@ -303,6 +303,31 @@ impl Batch<'_> {
             .collect())
     }
 
+    /// A column that only some tables have, empty values and all; all empty when the
+    /// table lacks it.
+    fn optional_uints(&self, name: &str) -> Vec<Option<usize>> {
+        match self.0.column_by_name(name) {
+            Some(column) => column
+                .as_any()
+                .downcast_ref::<UInt32Array>()
+                .map(|c| c.iter().map(|v| v.map(|v| v as usize)).collect())
+                .unwrap_or_else(|| vec![None; self.0.num_rows()]),
+            None => vec![None; self.0.num_rows()],
+        }
+    }
+
+    /// Like [`Batch::optional_uints`], for floats.
+    fn optional_float_column(&self, name: &str) -> Vec<Option<f64>> {
+        match self.0.column_by_name(name) {
+            Some(column) => column
+                .as_any()
+                .downcast_ref::<Float64Array>()
+                .map(|c| c.iter().collect())
+                .unwrap_or_else(|| vec![None; self.0.num_rows()]),
+            None => vec![None; self.0.num_rows()],
+        }
+    }
+
     fn bools(&self, name: &str) -> Result<Vec<bool>, String> {
         self.no_nulls(name)?;
         let column = self.column::<BooleanArray>(name);
@@ -372,6 +397,7 @@ pub(crate) struct RowKey {
 
 fn run_rows(batch: &Batch) -> Result<Vec<RunRow>, String> {
     let run = batch.uints("run")?;
+    let replicate = batch.optional_uints(super::REPLICATE);
     let row_keys = batch.row_keys()?;
     let phase: Vec<Phase> = batch.required("phase")?;
     let window_s = batch.floats("window_s")?;
@@ -396,6 +422,7 @@ fn run_rows(batch: &Batch) -> Result<Vec<RunRow>, String> {
             dvl: series.dvl,
             estimator: series.estimator,
             error_model: series.error_model,
+            replicate: replicate[i],
             phase: phase[i],
             window_s: window_s[i],
             trajectory: trajectory[i].clone(),
@@ -414,6 +441,7 @@ fn calibration_rows(batch: &Batch) -> Result<Vec<CalibrationRow>, String> {
     let rmse = batch.floats("rmse_cm_s")?;
     let std = batch.floats("rmse_std_cm_s")?;
     let is_t_conv = batch.bools("is_t_conv")?;
+    let ci = batch.optional_float_column(super::RMSE_CI);
     Ok(row_keys
         .into_iter()
         .enumerate()
@@ -424,6 +452,7 @@ fn calibration_rows(batch: &Batch) -> Result<Vec<CalibrationRow>, String> {
             window_s: window_s[i],
             rmse_cm_s: rmse[i],
             rmse_std_cm_s: std[i],
+            rmse_ci_cm_s: ci[i],
             is_t_conv: is_t_conv[i],
         })
         .collect())
@@ -436,6 +465,7 @@ fn evaluation_rows(batch: &Batch) -> Result<Vec<EvaluationRow>, String> {
     let rmse = batch.floats("rmse_cm_s")?;
     let std = batch.floats("rmse_std_cm_s")?;
     let improvement = batch.optional_floats("improvement_pct");
+    let ci = batch.optional_float_column(super::RMSE_CI);
     Ok(row_keys
         .into_iter()
         .enumerate()
@@ -447,6 +477,7 @@ fn evaluation_rows(batch: &Batch) -> Result<Vec<EvaluationRow>, String> {
             t_conv_s: t_conv_s[i],
             rmse_cm_s: rmse[i],
             rmse_std_cm_s: std[i],
+            rmse_ci_cm_s: ci[i],
             improvement_pct: improvement[i],
         })
         .collect())
@@ -543,6 +574,7 @@ mod tests {
         TrainingHistory {
             key: "k".repeat(64),
             error_model: ErrorModel::Em5,
+            replicate: 0,
             best_epoch: 2,
             history: vec![epoch(1), epoch(2)],
             stop,

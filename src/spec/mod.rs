@@ -216,6 +216,9 @@ pub struct TrainingSpec {
     pub rmsprop_epsilon: f64,
     pub checkpoint_every_epochs: usize,
     pub early_stopping: Option<EarlyStopping>,
+    /// DCNets trained per error model, each from its own seeds (replicate 0 from the
+    /// seeds of a run without replicates).
+    pub replicates: usize,
 }
 
 /// Training stops once `patience` epochs in a row have not improved on the validation
@@ -865,6 +868,13 @@ fn check_estimators(
         kinds,
         error_models,
     } = estimators;
+    let ensemble = EstimatorKind::DcnetEnsemble.to_string();
+    if let Some(i) = kinds.iter().position(|name| *name == ensemble) {
+        faults.add(
+            format!("estimators.kinds[{i}]"),
+            "\"dcnet_ensemble\" is not listed: it runs beside \"dcnet\" when training.replicates is above 1",
+        );
+    }
     let kinds = parse_names("estimators.kinds", &kinds, faults);
     let error_models = parse_names("estimators.error_models", &error_models, faults);
     (kinds, error_models)
@@ -1084,6 +1094,7 @@ fn check_training(training: file::TrainingFile, faults: &mut Faults) -> Training
         rmsprop_epsilon,
         checkpoint_every_epochs,
         early_stopping,
+        replicates,
     } = training;
     let backend = backend.parse().unwrap_or_else(|message: String| {
         faults.add("training.backend", message);
@@ -1093,6 +1104,7 @@ fn check_training(training: file::TrainingFile, faults: &mut Faults) -> Training
         ("training.epochs", epochs),
         ("training.batch_size", batch_size),
         ("training.checkpoint_every_epochs", checkpoint_every_epochs),
+        ("training.replicates", replicates),
     ] {
         if value == 0 {
             faults.add(key, "0 must be at least 1");
@@ -1100,6 +1112,7 @@ fn check_training(training: file::TrainingFile, faults: &mut Faults) -> Training
     }
     ranges::EPOCHS.check("training.epochs", epochs as f64, faults);
     ranges::BATCH_SIZE.check("training.batch_size", batch_size as f64, faults);
+    ranges::REPLICATES.check("training.replicates", replicates as f64, faults);
     let learning_rates = check_learning_rates(learning_rate, faults);
     if !(rmsprop_alpha > 0.0 && rmsprop_alpha < 1.0) {
         faults.add(
@@ -1123,6 +1136,7 @@ fn check_training(training: file::TrainingFile, faults: &mut Faults) -> Training
         rmsprop_epsilon,
         checkpoint_every_epochs,
         early_stopping,
+        replicates,
     }
 }
 

@@ -146,6 +146,7 @@ pub fn estimator_color(estimator: EstimatorKind) -> RGBColor {
         EstimatorKind::Baseline => RGBColor(90, 90, 90),
         EstimatorKind::LeastSquares => RGBColor(31, 119, 180),
         EstimatorKind::Dcnet => RGBColor(214, 39, 40),
+        EstimatorKind::DcnetEnsemble => RGBColor(148, 103, 189),
         EstimatorKind::Floor => GREY,
     }
 }
