@@ -106,6 +106,8 @@ struct Tables {
     evaluation: ReportTable,
     /// The same for the floor and least squares, when the run has either.
     beyond: Option<ReportTable>,
+    /// The same for the ensemble of DCNet replicates, when the run has several.
+    ensemble: Option<ReportTable>,
 }
 
 /// A table of label columns, a first value column and one column per error model, its
@@ -136,6 +138,8 @@ struct Cell {
 /// An RMSE (cm/s) and what the table sets beside it.
 struct Figure {
     rmse_cm_s: f64,
+    /// Half-width of the 95 % confidence interval over DCNet replicates.
+    ci_cm_s: Option<f64>,
     detail: Option<Detail>,
 }
 
@@ -149,12 +153,17 @@ enum Detail {
 struct Signs {
     percent: &'static str,
     minus: &'static str,
+    plus_minus: &'static str,
 }
 
 impl Figure {
-    /// `5.93 (100)` with T_conv, `0.86 (+12 %)` with the improvement, `0.74` alone.
+    /// `5.93 (100)` with T_conv, `0.86 (+12 %)` with the improvement, `0.74` alone;
+    /// `0.09 ± 0.01 (20)` with a confidence interval.
     fn text(&self, signs: &Signs) -> String {
-        let rmse = format!("{:.2}", self.rmse_cm_s);
+        let rmse = match self.ci_cm_s {
+            Some(ci) => format!("{:.2}{}{ci:.2}", self.rmse_cm_s, signs.plus_minus),
+            None => format!("{:.2}", self.rmse_cm_s),
+        };
         match self.detail {
             None => rmse,
             Some(Detail::TConv(t)) => format!("{rmse} ({t})"),
@@ -182,6 +191,7 @@ impl Cell {
     ) -> Cell {
         let paper = published.map(|cell| Figure {
             rmse_cm_s: cell.rmse_cm_s,
+            ci_cm_s: None,
             detail: match phase {
                 Phase::Calibration => cell.t_conv_s.map(Detail::TConv),
                 Phase::Evaluation => cell.improvement_pct.map(Detail::Improvement),
@@ -211,6 +221,7 @@ impl Cell {
         const SIGNS: Signs = Signs {
             percent: " %",
             minus: "-",
+            plus_minus: " ± ",
         };
         let ours = self.ours.text(&SIGNS);
         let Some(paper) = &self.paper else {
@@ -245,10 +256,19 @@ impl Tables {
                     false,
                 )
             });
+        let ensemble = source.has(EstimatorKind::DcnetEnsemble).then(|| {
+            source.evaluation_table(
+                "Baseline",
+                EstimatorKind::Baseline,
+                EstimatorKind::DcnetEnsemble,
+                false,
+            )
+        });
         Tables {
             calibration,
             evaluation,
             beyond,
+            ensemble,
         }
     }
 
@@ -256,7 +276,8 @@ impl Tables {
     fn tally(&self) -> Tally {
         let tables = [&self.calibration, &self.evaluation]
             .into_iter()
-            .chain(self.beyond.as_ref());
+            .chain(self.beyond.as_ref())
+            .chain(self.ensemble.as_ref());
         tables.fold(Tally::default(), |sum, table| Tally {
             compared: sum.compared + table.tally.compared,
             flagged: sum.flagged + table.tally.flagged,
@@ -366,6 +387,13 @@ impl<'a> Source<'a> {
             Some(EstimatorKind::Baseline),
             Some(EstimatorKind::Dcnet),
         )];
+        if self.has(EstimatorKind::DcnetEnsemble) {
+            kinds.push((
+                format!("{dvl} DCNet ensemble"),
+                None,
+                Some(EstimatorKind::DcnetEnsemble),
+            ));
+        }
         if self.has(EstimatorKind::LeastSquares) {
             kinds.push((
                 format!("{dvl} least squares"),
@@ -399,6 +427,7 @@ impl<'a> Source<'a> {
             .map(|r| {
                 let ours = Figure {
                     rmse_cm_s: r.rmse_cm_s,
+                    ci_cm_s: r.rmse_ci_cm_s,
                     detail: Some(Detail::TConv(r.window_s)),
                 };
                 let paper = self.published(dvl, kind, model, None);
@@ -465,6 +494,7 @@ impl<'a> Source<'a> {
             .map(|r| {
                 let ours = Figure {
                     rmse_cm_s: r.rmse_cm_s,
+                    ci_cm_s: r.rmse_ci_cm_s,
                     detail: r
                         .improvement_pct
                         .filter(|_| kind != EstimatorKind::Baseline)
@@ -489,6 +519,9 @@ fn render(run: &StoredRun, tables: &Tables, figures: &[Written]) -> String {
         "RMSE in cm/s, mean over {} Monte Carlo runs. Calibration cells give T_conv in s in brackets, evaluation cells the improvement over the baseline.\n",
         spec.calibration.monte_carlo_runs
     );
+    if let Some(note) = replicates_note(spec.training.replicates) {
+        let _ = writeln!(out, "{note}\n");
+    }
     match &run.published {
         Some(published) => {
             let _ = writeln!(
@@ -520,6 +553,14 @@ fn render(run: &StoredRun, tables: &Tables, figures: &[Written]) -> String {
             markdown_table(beyond)
         );
     }
+    if let Some(ensemble) = &tables.ensemble {
+        let _ = writeln!(
+            out,
+            "The DCNet ensemble: the mean of the {} replicates' terms in each calibration window.\n\n{}\n",
+            spec.training.replicates,
+            markdown_table(ensemble)
+        );
+    }
     if run.published.is_some() {
         let tally = tables.tally();
         let _ = writeln!(
@@ -533,6 +574,15 @@ fn render(run: &StoredRun, tables: &Tables, figures: &[Written]) -> String {
     provenance_section(run, &mut out);
     figures_section(run, figures, &mut out);
     out
+}
+
+/// What a DCNet cell holds when there are several replicates, for the captions.
+fn replicates_note(replicates: usize) -> Option<String> {
+    (replicates > 1).then(|| {
+        format!(
+            "DCNet cells give the mean over {replicates} replicates (models trained from independent seeds) ± the half-width of its 95 % confidence interval across them (Student t); their T_conv is that of the mean curve in calibration, the mean of the replicates' in evaluation."
+        )
+    })
 }
 
 /// A report table as Markdown, `—` where a cell has no value.
