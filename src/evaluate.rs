@@ -547,6 +547,77 @@ mod tests {
         assert!((ci - 2.4841).abs() < 1e-4, "{ci}");
     }
 
+    /// A DCNet run row of `replicate`: calibration on window `window_s`, or evaluation
+    /// on "T" at T_conv `window_s`.
+    fn dcnet_row(replicate: usize, run: usize, phase: Phase, window_s: f64, rmse: f64) -> RunRow {
+        RunRow {
+            run,
+            dvl: "DVL1".into(),
+            estimator: EstimatorKind::Dcnet,
+            error_model: Some(ErrorModel::Em5),
+            replicate: Some(replicate),
+            phase,
+            window_s,
+            trajectory: "T".into(),
+            rmse_cm_s: rmse,
+            correction: Correction::NONE,
+        }
+    }
+
+    #[test]
+    fn replicates_become_one_series_with_a_confidence_interval() {
+        // Two runs each; replicate means: window 20 → 1, 2, 3; window 40 → 2, 2, 2.
+        // Each replicate's own T_conv: 20, 20, 40; the mean curve's: 40.
+        let mut runs = Vec::new();
+        for (replicate, (at_20, at_40, t_conv, test)) in [
+            (1.0, 2.0, 20.0, 1.0),
+            (2.0, 2.0, 20.0, 2.0),
+            (3.0, 2.0, 40.0, 3.0),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            for run in 0..2 {
+                let spread = if run == 0 { -0.5 } else { 0.5 };
+                runs.push(dcnet_row(
+                    replicate,
+                    run,
+                    Phase::Calibration,
+                    20.0,
+                    at_20 + spread,
+                ));
+                runs.push(dcnet_row(replicate, run, Phase::Calibration, 40.0, at_40));
+            }
+            for run in 0..2 {
+                runs.push(dcnet_row(replicate, run, Phase::Evaluation, t_conv, test));
+            }
+        }
+        let result = ProtocolResult::from_runs(runs);
+        assert_eq!(result.calibration.len(), 2);
+        let [at_20, at_40] = [&result.calibration[0], &result.calibration[1]];
+        assert_eq!(at_20.rmse_cm_s, 2.0);
+        assert!((at_20.rmse_ci_cm_s.unwrap() - 2.4841).abs() < 1e-4);
+        assert_eq!((at_40.rmse_cm_s, at_40.rmse_ci_cm_s), (2.0, Some(0.0)));
+        // Equal means: the first of equals, as for one model.
+        assert!(at_20.is_t_conv && !at_40.is_t_conv);
+        assert_eq!(result.evaluation.len(), 1);
+        let test = &result.evaluation[0];
+        assert_eq!(test.rmse_cm_s, 2.0);
+        assert!((test.rmse_ci_cm_s.unwrap() - 2.4841).abs() < 1e-4);
+        assert!((test.t_conv_s - 80.0 / 3.0).abs() < 1e-12);
+        // The spread over all six runs at window 20: 0.5 around 1, 2, 3.
+        let all = [0.5, 1.5, 1.5, 2.5, 2.5, 3.5];
+        assert!((at_20.rmse_std_cm_s - mean_std(all.into_iter()).1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_single_model_has_no_confidence_interval() {
+        let mut rows = vec![dcnet_row(0, 0, Phase::Calibration, 20.0, 1.0)];
+        rows[0].replicate = None;
+        let result = ProtocolResult::from_runs(rows);
+        assert_eq!(result.calibration[0].rmse_ci_cm_s, None);
+    }
+
     #[test]
     fn sample_standard_deviation() {
         let (mean, std) = mean_std([1.0, 2.0, 3.0, 4.0].into_iter());

@@ -110,10 +110,10 @@ pub fn set_up(spec: &Spec, dvl: &Dvl, dcnets: &[Trained]) -> Vec<DvlEstimator> {
                 Box::new(dcnet(trained))
             }
             (EstimatorKind::DcnetEnsemble, Some(model)) => {
-                let members: Vec<DcnetEstimator> = dcnets
+                let members: Vec<Box<dyn Estimator>> = dcnets
                     .iter()
                     .filter(|t| t.error_model == model)
-                    .map(dcnet)
+                    .map(|t| Box::new(dcnet(t)) as Box<dyn Estimator>)
                     .collect();
                 if members.len() < spec.training.replicates {
                     continue;

@@ -624,17 +624,24 @@ fn training_section(run: &StoredRun, out: &mut String) {
         "best validation loss (cm/s)²",
         "training s",
     ]);
-    let mut models: Vec<ErrorModel> = run.training.iter().map(|e| e.error_model).collect();
+    let mut models: Vec<(ErrorModel, Option<usize>)> = run
+        .training
+        .iter()
+        .map(|e| (e.error_model, e.replicate))
+        .collect();
     models.dedup();
-    for model in models {
+    for (model, replicate) in models {
         let epochs: Vec<_> = run
             .training
             .iter()
-            .filter(|e| e.error_model == model)
+            .filter(|e| e.error_model == model && e.replicate == replicate)
             .collect();
         let best = epochs.iter().find(|e| e.is_best);
         table.add_row(vec![
-            model.to_string(),
+            match replicate {
+                Some(r) => format!("{model}, replicate {}", r + 1),
+                None => model.to_string(),
+            },
             epochs.len().to_string(),
             epochs
                 .first()

@@ -245,8 +245,8 @@ pub fn monte_carlo_batch(rows: &[RunRow]) -> RecordBatch {
     batch(columns)
 }
 
-/// The column of a DCNet row's replicate, in `monte_carlo.parquet` when there are
-/// several.
+/// The column of a DCNet row's replicate, in `monte_carlo.parquet` and
+/// `training.parquet` when there are several.
 pub const REPLICATE: &str = "replicate";
 
 /// The column of the 95 % confidence interval over DCNet replicates, in the
@@ -305,13 +305,14 @@ pub fn evaluation_batch(rows: &[EvaluationRow]) -> RecordBatch {
     with_ci(columns, rows, |r| r.rmse_ci_cm_s)
 }
 
-/// One row per error model × epoch of DCNet training.
+/// One row per error model × epoch of DCNet training, and a `replicate` column when
+/// DCNet has several replicates.
 pub fn training_batch(dcnets: &[TrainingHistory]) -> RecordBatch {
     let rows: Vec<(&TrainingHistory, &EpochRecord)> = dcnets
         .iter()
         .flat_map(|t| t.history.iter().map(move |epoch| (t, epoch)))
         .collect();
-    batch(vec![
+    let mut columns: Vec<(&str, ArrayRef)> = vec![
         (
             "error_model",
             strings(&rows, |(t, _)| t.error_model.to_string()),
@@ -333,7 +334,15 @@ pub fn training_batch(dcnets: &[TrainingHistory]) -> RecordBatch {
             )),
         ),
         ("stop_reason", strings(&rows, |(t, _)| t.stop.to_string())),
-    ])
+    ];
+    if dcnets.iter().any(|t| t.replicate > 0) {
+        let replicate = rows.iter().map(|(t, _)| t.replicate as u32);
+        columns.push((
+            REPLICATE,
+            Arc::new(UInt32Array::from_iter_values(replicate)),
+        ));
+    }
+    batch(columns)
 }
 
 /// The GT velocity of each trajectory, one row per sample, with what the trajectory is

@@ -89,6 +89,8 @@ pub struct StoredRun {
 #[derive(Debug, Clone, PartialEq)]
 pub struct StoredEpoch {
     pub error_model: ErrorModel,
+    /// Which replicate, when DCNet has several.
+    pub replicate: Option<usize>,
     pub record: EpochRecord,
     pub is_best: bool,
     /// Why the model's training ended (the same on every row of a model).
@@ -491,6 +493,7 @@ fn epoch_rows(batch: &Batch) -> Result<Vec<StoredEpoch>, String> {
     let seconds = batch.floats("seconds")?;
     let samples_per_s = batch.floats("samples_per_s")?;
     let is_best = batch.bools("is_best")?;
+    let replicate = batch.optional_uints(super::REPLICATE);
     // Runs from before early stopping trained every epoch.
     let stop: Vec<StopReason> = if batch.0.column_by_name("stop_reason").is_some() {
         batch.required("stop_reason")?
@@ -500,6 +503,7 @@ fn epoch_rows(batch: &Batch) -> Result<Vec<StoredEpoch>, String> {
     Ok((0..epoch.len())
         .map(|i| StoredEpoch {
             error_model: error_model[i],
+            replicate: replicate[i],
             record: EpochRecord {
                 epoch: epoch[i],
                 train_loss: train_loss[i],
