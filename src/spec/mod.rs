@@ -96,6 +96,11 @@ impl Spec {
         }
     }
 
+    /// How many DCNets the spec trains: one per trained error model and replicate.
+    pub fn model_count(&self) -> usize {
+        self.trained_models().len() * self.training.replicates
+    }
+
     /// The resolved spec as TOML, as stored beside the results.
     pub fn resolved_toml(&self) -> String {
         toml::to_string_pretty(&self.resolved).expect("a spec always serializes")
