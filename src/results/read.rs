@@ -319,7 +319,7 @@ impl Batch<'_> {
     }
 
     /// Like [`Batch::optional_uints`], for floats.
-    fn optional_float_column(&self, name: &str) -> Vec<Option<f64>> {
+    pub(crate) fn optional_float_column(&self, name: &str) -> Vec<Option<f64>> {
         match self.0.column_by_name(name) {
             Some(column) => column
                 .as_any()
