@@ -140,11 +140,15 @@ fn calibration(run: &StoredRun) -> PlotResult<MaybeDrawn> {
     }
     let dvls = run.dvls();
     let series = series_of(&run.calibration);
-    let caption = format!(
+    let mut caption = format!(
         "Calibration on {}: mean RMSE over {} runs against window size (T_conv ringed)",
         calibration_name(run),
         run.spec.calibration.monte_carlo_runs
     );
+    let replicates = run.spec.training.replicates;
+    if replicates > 1 {
+        caption += &format!("; DCNet: mean of {replicates} replicates, bars their 95 % CI");
+    }
     let width = 560 * dvls.len() as u32 + LEGEND_WIDTH;
     let svg = draw_svg((width, 620), |root| {
         let (panels, legend_area) = panels_and_legend(root, &caption, width, dvls.len())?;
@@ -218,6 +222,15 @@ fn calibration_panel(
                 .iter()
                 .map(|&point| Circle::new(point, 3, look.color.filled())),
         )?;
+        // The confidence interval across DCNet replicates, as error bars.
+        let bars = rows.iter().filter_map(|r| {
+            let ci = r
+                .rmse_ci_cm_s
+                .filter(|_| r.estimator == estimator && r.error_model == model)?;
+            let ends = [r.rmse_cm_s - ci, r.rmse_cm_s + ci].map(|v| (r.window_s, y.shown(v)));
+            Some(PathElement::new(ends.to_vec(), look.color.stroke_width(2)))
+        });
+        chart.draw_series(bars)?;
     }
     calibration_marks(&mut chart, &rows, &y)
 }
