@@ -115,10 +115,10 @@ pub fn series_look(estimator: EstimatorKind, error_model: Option<ErrorModel>) ->
         (_, None) => (BLACK, Stroke::Solid),
         (estimator, Some(model)) => (
             MODEL_COLORS[model as usize % MODEL_COLORS.len()],
-            if estimator == EstimatorKind::LeastSquares {
-                Stroke::Dashed
-            } else {
-                Stroke::Solid
+            match estimator {
+                EstimatorKind::LeastSquares => Stroke::Dashed,
+                EstimatorKind::DcnetEnsemble => Stroke::Dotted,
+                _ => Stroke::Solid,
             },
         ),
     };
