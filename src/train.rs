@@ -577,6 +577,30 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn replicate_zero_draws_the_streams_of_a_run_without_replicates() {
+        let spec = quick_spec(&["training.epochs=1"]);
+        let em = ErrorModel::Em5;
+        let legacy = Dcnet::new(
+            &spec.model,
+            em,
+            spec.dataset.window_samples,
+            &spec.training.backend.device().autodiff(),
+            &mut task_rng(spec.seed, &[&"dcnet-init", &em]),
+        );
+        assert!(weights(&State::new(&spec, em, 0).model) == weights(&legacy));
+        assert!(weights(&State::new(&spec, em, 1).model) != weights(&legacy));
+        assert!(
+            weights(&State::new(&spec, em, 1).model) != weights(&State::new(&spec, em, 2).model)
+        );
+        let set = training_set(&spec);
+        let mut legacy_order: Vec<usize> =
+            (0..set.len()).filter(|&i| !set.is_validation[i]).collect();
+        legacy_order.shuffle(&mut task_rng(spec.seed, &[&"dcnet-shuffle", &em, &3]));
+        assert_eq!(epoch_order(&spec, &set, em, 0, 3), legacy_order);
+        assert_ne!(epoch_order(&spec, &set, em, 1, 3), legacy_order);
+    }
+
+    #[test]
     fn one_and_two_threads_train_identical_weights() {
         let spec = quick_spec(&["training.epochs=2", "training.batch_size=256"]);
         let set = training_set(&spec);
