@@ -706,14 +706,19 @@ fn spread_box(
     Ok(())
 }
 
-/// Training and validation loss per epoch of each error model, log scale.
+/// Training and validation loss per epoch of each error model (and replicate, each in
+/// its model's colour), log scale.
 fn training_loss(run: &StoredRun) -> PlotResult<MaybeDrawn> {
     if run.training.is_empty() {
         return Ok(Err(
             "the run trained no DCNet (training.parquet is empty)".into()
         ));
     }
-    let mut models: Vec<ErrorModel> = run.training.iter().map(|e| e.error_model).collect();
+    let mut models: Vec<(ErrorModel, Option<usize>)> = run
+        .training
+        .iter()
+        .map(|e| (e.error_model, e.replicate))
+        .collect();
     models.dedup();
     let epochs = run
         .training
@@ -741,12 +746,12 @@ fn training_loss(run: &StoredRun) -> PlotResult<MaybeDrawn> {
             .y_desc("loss [(cm/s)²]")
             .draw()?;
         let mut entries = Vec::new();
-        for model in &models {
-            let look = series_look(EstimatorKind::Dcnet, Some(*model));
+        for &(model, replicate) in &models {
+            let look = series_look(EstimatorKind::Dcnet, Some(model));
             let epochs: Vec<_> = run
                 .training
                 .iter()
-                .filter(|e| e.error_model == *model)
+                .filter(|e| e.error_model == model && e.replicate == replicate)
                 .collect();
             let train = epochs
                 .iter()
@@ -765,6 +770,9 @@ fn training_loss(run: &StoredRun) -> PlotResult<MaybeDrawn> {
                     look.color.filled(),
                 )
             }))?;
+            if replicate.is_some_and(|r| r > 0) {
+                continue;
+            }
             entries.push((
                 Swatch::Line(look.color, Stroke::Solid),
                 format!("{model} training"),
