@@ -75,6 +75,25 @@ fn one_replicate_is_a_run_without_replicates_byte_for_byte() {
         let b = std::fs::read(folder(one.path()).join(file)).unwrap();
         assert!(a == b, "{file} differs");
     }
+    // training.parquet: the same columns and values but the wall-clock ones.
+    let training = |dir: &Path| {
+        let batch = read_parquet(&folder(dir).join("training.parquet"));
+        let names: Vec<String> = batch
+            .schema()
+            .fields()
+            .iter()
+            .map(|f| f.name().clone())
+            .collect();
+        (
+            names,
+            strings(&batch, "error_model"),
+            floats(&batch, "train_loss"),
+            floats(&batch, "validation_loss"),
+            bools(&batch, "is_best"),
+            strings(&batch, "stop_reason"),
+        )
+    };
+    assert_eq!(training(plain.path()), training(one.path()));
     let spec = std::fs::read_to_string(folder(one.path()).join("spec.toml")).unwrap();
     assert!(!spec.contains("replicates"), "{spec}");
     let runs = read_parquet(&folder(one.path()).join("monte_carlo.parquet"));
