@@ -204,3 +204,46 @@ fn each_replicate_is_a_training_and_a_third_trains_only_the_third() {
     assert!(report.contains(" ± "), "{report}");
     assert!(report.contains("mean over 3 replicates"), "{report}");
 }
+
+#[test]
+fn a_sweep_with_replicates_tabulates_dcnet_intervals() {
+    let project = project(false);
+    let dir = project.path();
+    let text = std::fs::read_to_string(dir.join("experiments/quick.toml")).unwrap();
+    let text = text.replacen("name = \"quick\"", "name = \"quick-sweep\"", 1)
+        + "\n[sweep.values]\n\"calibration.monte_carlo_runs\" = [3, 4]\n";
+    std::fs::write(dir.join("experiments/sweep.toml"), text).unwrap();
+    let args = [
+        "run",
+        "experiments/sweep.toml",
+        "--no-plots",
+        "--set",
+        "training.epochs=2",
+        "--set",
+        "dataset.trajectories=[\"S1\"]",
+        "--set",
+        "estimators.error_models=[\"EM5\"]",
+        "--set",
+        "training.replicates=2",
+    ];
+    let output = dcnet(dir, &args);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let table = read_parquet(&dir.join("results/quick-sweep/sweep.parquet"));
+    let estimators = strings(&table, "estimator");
+    for column in ["calibration_rmse_ci_cm_s", "evaluation_rmse_ci_cm_s"] {
+        let ci = floats(&table, column);
+        for (estimator, ci) in estimators.iter().zip(&ci) {
+            let dcnet = estimator.as_deref() == Some("dcnet");
+            assert_eq!(dcnet, ci.is_some(), "{column} of {estimator:?}");
+            assert!(ci.is_none_or(|ci| ci.is_finite() && ci >= 0.0));
+        }
+    }
+    assert_eq!(
+        estimators
+            .iter()
+            .filter(|e| e.as_deref() == Some("dcnet"))
+            .count(),
+        2 * 2,
+        "2 points × 2 DVLs"
+    );
+}
