@@ -247,3 +247,40 @@ fn a_sweep_with_replicates_tabulates_dcnet_intervals() {
         "2 points × 2 DVLs"
     );
 }
+
+#[test]
+fn a_shard_holds_every_replicate_of_its_models_and_their_ensemble() {
+    let project = project(false);
+    let dir = project.path();
+    let mut seen = Vec::new();
+    for k in 0..3 {
+        let shard = format!("{k}/3");
+        let rows = plan(
+            dir,
+            &["--set", "training.replicates=2", "--shard", shard.as_str()],
+        );
+        let labels: Vec<&str> = rows
+            .iter()
+            .map(|(label, _)| label.as_str())
+            .filter(|l| l.starts_with("train DCNet") || l.starts_with("monte carlo"))
+            .collect();
+        for model in ["EM1", "EM2", "EM3", "EM4", "EM5"] {
+            let has = |label: String| labels.contains(&label.as_str());
+            let trains = has(format!("train DCNet {model} replicate 1/2"));
+            assert_eq!(trains, has(format!("train DCNet {model} replicate 2/2")));
+            for dvl in ["DVL1", "DVL2"] {
+                assert_eq!(
+                    trains,
+                    has(format!("monte carlo {dvl} dcnet_ensemble {model}")),
+                    "shard {shard}: {labels:?}"
+                );
+            }
+        }
+        seen.extend(labels.iter().map(|l| l.to_string()));
+    }
+    let count = seen.len();
+    seen.sort();
+    seen.dedup();
+    assert_eq!(seen.len(), count, "a task in two shards");
+    assert_eq!(count, 10 + 2 * (1 + 5 + 5 * 3 + 1), "every task in a shard");
+}

@@ -27,6 +27,9 @@ pub struct Training {
     pub error_model: ErrorModel,
     /// Which of `training.replicates` it trains.
     pub replicate: usize,
+    /// The training of its replicate 0 (itself without replicates): the replicates of a
+    /// model share a shard, so the ensemble's block finds every model it runs there.
+    pub group: usize,
 }
 
 /// One estimator on one DVL, every Monte Carlo run.
@@ -165,9 +168,11 @@ impl<'a> Plan<'a> {
                 },
             );
             for &error_model in &spec.error_models {
+                // Replicate 0 is pushed next, or was by an earlier point.
+                let mut group = self.trainings.len();
                 for replicate in 0..spec.training.replicates {
                     let key = cache::model_key(spec, error_model, replicate, &dataset_key);
-                    trainings.push(find_or_push(
+                    let t = find_or_push(
                         &mut self.trainings,
                         |t| &t.key,
                         &key,
@@ -177,8 +182,13 @@ impl<'a> Plan<'a> {
                             point: p,
                             error_model,
                             replicate,
+                            group,
                         },
-                    ));
+                    );
+                    if replicate == 0 {
+                        group = self.trainings[t].group;
+                    }
+                    trainings.push(t);
                 }
             }
         }
@@ -256,12 +266,13 @@ impl<'a> Plan<'a> {
         tasks
     }
 
-    /// The tasks the shard computes: whole groups, dealt out round-robin.
+    /// The tasks the shard computes: whole groups (a model's replicates, its blocks and
+    /// their ensemble's), dealt out round-robin.
     pub fn in_shard(&self, task: Task, shard: Shard) -> bool {
         let group = match task {
-            Task::Training(t) => t,
+            Task::Training(t) => self.trainings[t].group,
             Task::Block(b) => match self.blocks[b].trainings.first() {
-                Some(&t) => t,
+                Some(&t) => self.trainings[t].group,
                 None => {
                     self.trainings.len()
                         + self.blocks[..b]
