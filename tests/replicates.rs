@@ -284,3 +284,57 @@ fn a_shard_holds_every_replicate_of_its_models_and_their_ensemble() {
     assert_eq!(seen.len(), count, "a task in two shards");
     assert_eq!(count, 10 + 2 * (1 + 5 + 5 * 3 + 1), "every task in a shard");
 }
+
+#[test]
+fn a_sweep_over_replicates_shares_replicate_zero_with_the_point_without() {
+    let project = project(false);
+    let dir = project.path();
+    let text = std::fs::read_to_string(dir.join("experiments/quick.toml")).unwrap();
+    let text = text.replacen("name = \"quick\"", "name = \"quick-sweep\"", 1)
+        + "\n[sweep.values]\n\"training.replicates\" = [1, 2]\n";
+    std::fs::write(dir.join("experiments/sweep.toml"), text).unwrap();
+    let args = [
+        "run",
+        "experiments/sweep.toml",
+        "--no-plots",
+        "--set",
+        "training.epochs=2",
+        "--set",
+        "calibration.monte_carlo_runs=3",
+        "--set",
+        "dataset.trajectories=[\"S1\"]",
+        "--set",
+        "estimators.error_models=[\"EM5\"]",
+    ];
+    let output = dcnet(dir, &args);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = stderr(&output);
+    assert_eq!(text.matches(": trained;").count(), 2, "two models: {text}");
+    let sweep = dir.join("results/quick-sweep");
+    let folders: Vec<_> = std::fs::read_dir(&sweep)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_dir())
+        .collect();
+    assert_eq!(folders.len(), 2);
+    for folder in folders {
+        let two = folder.to_string_lossy().ends_with('2');
+        let runs = read_parquet(&folder.join("monte_carlo.parquet"));
+        assert_eq!(
+            runs.column_by_name("replicate").is_some(),
+            two,
+            "{folder:?}"
+        );
+        if two {
+            let estimators = strings(&runs, "estimator");
+            let dcnet: Vec<Option<u32>> = replicates(&runs)
+                .into_iter()
+                .zip(&estimators)
+                .filter(|(_, e)| e.as_deref() == Some("dcnet"))
+                .map(|(r, _)| r)
+                .collect();
+            assert!(dcnet.contains(&Some(0)) && dcnet.contains(&Some(1)));
+            assert!(dcnet.iter().all(Option::is_some));
+        }
+    }
+}

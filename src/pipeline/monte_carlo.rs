@@ -9,6 +9,7 @@ use crate::evaluate::{ProtocolResult, RunRow, run_block};
 use crate::progress::bar;
 use crate::spec::Spec;
 use crate::train::{Trained, TrainingHistory};
+use crate::vocab::EstimatorKind;
 
 /// Computes the blocks `blocks` asks for, those of one DVL of one point together (they
 /// share the measurements), and stores each as soon as its DVL is done. Blocks of a
@@ -147,11 +148,17 @@ pub(super) fn gather(
         if !plan.block_store.contains(&block.key) {
             continue;
         }
+        // The replicate as this point counts them: a block may be shared with a point
+        // without replicates.
+        let replicate = (block.estimator == EstimatorKind::Dcnet
+            && plan.spec(p).training.replicates > 1)
+            .then(|| plan.trainings[block.trainings[0]].replicate);
         let block_rows = plan.block_store.load(&block.key)?;
-        rows.extend(block_rows.into_iter().map(|row| RunRow {
-            replicate: block.replicate,
-            ..row
-        }));
+        rows.extend(
+            block_rows
+                .into_iter()
+                .map(|row| RunRow { replicate, ..row }),
+        );
     }
     Ok((ProtocolResult::from_runs(rows), models))
 }
