@@ -7,6 +7,12 @@
 //! against it. In: the spec, the trajectories. Out: per-run rows and the calibration
 //! and evaluation tables.
 //!
+//! With `training.replicates` above 1, each DCNet replicate runs the protocol as its
+//! own method (its own T_conv); the tables then hold one row per window or trajectory
+//! for DCNet: the mean over replicates with a 95 % Student t confidence interval
+//! across them, T_conv the argmin of the replicate-mean curve in calibration and the
+//! mean of the replicates' T_conv in evaluation.
+//!
 //! Runs go in parallel; every measurement draws from a generator seeded by (seed, DVL,
 //! run, trajectory) and every mean is summed in run order, so the numbers do not
 //! depend on the thread count.
@@ -31,6 +37,8 @@ pub struct RunRow {
     pub dvl: String,
     pub estimator: EstimatorKind,
     pub error_model: Option<ErrorModel>,
+    /// The DCNet replicate, when `training.replicates` is above 1.
+    pub replicate: Option<usize>,
     pub phase: Phase,
     pub window_s: f64,
     pub trajectory: String,
@@ -46,6 +54,9 @@ pub struct CalibrationRow {
     pub window_s: f64,
     pub rmse_cm_s: f64,
     pub rmse_std_cm_s: f64,
+    /// Half-width of the 95 % confidence interval of the mean over DCNet replicates,
+    /// when there are several.
+    pub rmse_ci_cm_s: Option<f64>,
     pub is_t_conv: bool,
     /// The bound at this window over this RMSE; absent for the floor and the bound.
     pub efficiency: Option<f64>,
@@ -60,6 +71,9 @@ pub struct EvaluationRow {
     pub t_conv_s: f64,
     pub rmse_cm_s: f64,
     pub rmse_std_cm_s: f64,
+    /// Half-width of the 95 % confidence interval of the mean over DCNet replicates,
+    /// when there are several.
+    pub rmse_ci_cm_s: Option<f64>,
     /// `(baseline − this) / baseline · 100`; absent when the spec runs no baseline.
     pub improvement_pct: Option<f64>,
     /// The bound at this T_conv on this trajectory over this RMSE; absent for the floor
@@ -288,8 +302,9 @@ fn t_conv_index(mean_rmse: &[f64]) -> usize {
 
 impl ProtocolResult {
     /// The calibration and evaluation tables of the per-run rows of [`run_block`]: means
-    /// and standard deviations over runs, summed in run order, and T_conv; with each
-    /// DVL's `bounds` after its estimators, and every estimator's efficiency.
+    /// and standard deviations over runs, summed in run order, and T_conv. The rows of
+    /// DCNet replicates become one series: see [`combine_replicates`]. Each DVL's
+    /// `bounds` follow its estimators, and every estimator gets its efficiency.
     pub fn from_runs(runs: Vec<RunRow>, bounds: &[BoundRow]) -> ProtocolResult {
         let mut result = ProtocolResult::default();
         let same = |a: &RunRow, b: &RunRow| {
@@ -303,52 +318,25 @@ impl ProtocolResult {
                     .take_while(|r| same(r, &runs[start]))
                     .count();
             let block = &runs[start..end];
-            let first = &block[0];
-            let in_phase = |phase: Phase| block.iter().filter(move |r| r.phase == phase);
-            let windows = first_seen(in_phase(Phase::Calibration).map(|r| r.window_s));
-            let stats: Vec<(f64, f64, f64)> = windows
-                .iter()
-                .map(|&w| {
-                    let (mean, std) = mean_std(
-                        in_phase(Phase::Calibration)
-                            .filter(|r| r.window_s == w)
-                            .map(|r| r.rmse_cm_s),
-                    );
-                    (w, mean, std)
-                })
-                .collect();
-            let means: Vec<f64> = stats.iter().map(|s| s.1).collect();
-            let best = t_conv_index(&means);
-            for (w, &(window_s, mean, std)) in stats.iter().enumerate() {
-                result.calibration.push(CalibrationRow {
-                    dvl: first.dvl.clone(),
-                    estimator: first.estimator,
-                    error_model: first.error_model,
-                    window_s,
-                    rmse_cm_s: mean,
-                    rmse_std_cm_s: std,
-                    is_t_conv: w == best,
-                    efficiency: None,
-                });
-            }
-            for trajectory in first_seen(in_phase(Phase::Evaluation).map(|r| r.trajectory.clone()))
-            {
-                let rows: Vec<&RunRow> = in_phase(Phase::Evaluation)
-                    .filter(|r| r.trajectory == trajectory)
+            let replicates = first_seen(block.iter().map(|r| r.replicate));
+            let (calibration, evaluation) = if replicates == [None] {
+                summarize(block)
+            } else {
+                let per_replicate: Vec<Tables> = replicates
+                    .iter()
+                    .map(|&replicate| {
+                        let rows: Vec<RunRow> = block
+                            .iter()
+                            .filter(|r| r.replicate == replicate)
+                            .cloned()
+                            .collect();
+                        summarize(&rows)
+                    })
                     .collect();
-                let (mean, std) = mean_std(rows.iter().map(|r| r.rmse_cm_s));
-                result.evaluation.push(EvaluationRow {
-                    dvl: first.dvl.clone(),
-                    estimator: first.estimator,
-                    error_model: first.error_model,
-                    trajectory,
-                    t_conv_s: rows[0].window_s,
-                    rmse_cm_s: mean,
-                    rmse_std_cm_s: std,
-                    improvement_pct: None,
-                    efficiency: None,
-                });
-            }
+                combine_replicates(block, &per_replicate)
+            };
+            result.calibration.extend(calibration);
+            result.evaluation.extend(evaluation);
             start = end;
         }
         add_bounds(&mut result, bounds);
@@ -401,6 +389,7 @@ fn add_bounds(result: &mut ProtocolResult, bounds: &[BoundRow]) {
             window_s: b.window_s,
             rmse_cm_s: b.rmse_cm_s,
             rmse_std_cm_s: b.rmse_std_cm_s,
+            rmse_ci_cm_s: None,
             is_t_conv: w == best,
             efficiency: None,
         });
@@ -416,6 +405,7 @@ fn add_bounds(result: &mut ProtocolResult, bounds: &[BoundRow]) {
                 t_conv_s,
                 rmse_cm_s: b.rmse_cm_s,
                 rmse_std_cm_s: b.rmse_std_cm_s,
+                rmse_ci_cm_s: None,
                 improvement_pct: None,
                 efficiency: None,
             });
@@ -433,6 +423,104 @@ fn insert_after_dvl<T>(
     let at = rows.iter().rposition(of_dvl).map_or(rows.len(), |i| i + 1);
     rows.splice(at..at, new);
 }
+/// The calibration and evaluation rows of one series.
+type Tables = (Vec<CalibrationRow>, Vec<EvaluationRow>);
+
+/// The tables of the runs of one series (DVL, estimator, error model, replicate).
+fn summarize(block: &[RunRow]) -> Tables {
+    let first = &block[0];
+    let in_phase = |phase: Phase| block.iter().filter(move |r| r.phase == phase);
+    let windows = first_seen(in_phase(Phase::Calibration).map(|r| r.window_s));
+    let stats: Vec<(f64, f64, f64)> = windows
+        .iter()
+        .map(|&w| {
+            let (mean, std) = mean_std(
+                in_phase(Phase::Calibration)
+                    .filter(|r| r.window_s == w)
+                    .map(|r| r.rmse_cm_s),
+            );
+            (w, mean, std)
+        })
+        .collect();
+    let means: Vec<f64> = stats.iter().map(|s| s.1).collect();
+    let best = t_conv_index(&means);
+    let calibration = stats
+        .iter()
+        .enumerate()
+        .map(|(w, &(window_s, mean, std))| CalibrationRow {
+            dvl: first.dvl.clone(),
+            estimator: first.estimator,
+            error_model: first.error_model,
+            window_s,
+            rmse_cm_s: mean,
+            rmse_std_cm_s: std,
+            rmse_ci_cm_s: None,
+            is_t_conv: w == best,
+            efficiency: None,
+        })
+        .collect();
+    let evaluation = first_seen(in_phase(Phase::Evaluation).map(|r| r.trajectory.clone()))
+        .into_iter()
+        .map(|trajectory| {
+            let rows: Vec<&RunRow> = in_phase(Phase::Evaluation)
+                .filter(|r| r.trajectory == trajectory)
+                .collect();
+            let (mean, std) = mean_std(rows.iter().map(|r| r.rmse_cm_s));
+            EvaluationRow {
+                dvl: first.dvl.clone(),
+                estimator: first.estimator,
+                error_model: first.error_model,
+                trajectory,
+                t_conv_s: rows[0].window_s,
+                rmse_cm_s: mean,
+                rmse_std_cm_s: std,
+                rmse_ci_cm_s: None,
+                improvement_pct: None,
+                efficiency: None,
+            }
+        })
+        .collect();
+    (calibration, evaluation)
+}
+
+/// One series from the tables of its replicates: each RMSE the mean of the replicates'
+/// means with its 95 % confidence interval, each standard deviation that of every run
+/// of every replicate (`block`); the calibration's T_conv the argmin of the mean curve,
+/// the evaluation's the mean of the replicates' T_conv.
+fn combine_replicates(block: &[RunRow], per_replicate: &[Tables]) -> Tables {
+    let (mut calibration, mut evaluation) = per_replicate[0].clone();
+    let pooled_std = |phase: Phase, keep: &dyn Fn(&RunRow) -> bool| {
+        mean_std(
+            block
+                .iter()
+                .filter(|r| r.phase == phase && keep(r))
+                .map(|r| r.rmse_cm_s),
+        )
+        .1
+    };
+    for (w, row) in calibration.iter_mut().enumerate() {
+        let means: Vec<f64> = per_replicate.iter().map(|t| t.0[w].rmse_cm_s).collect();
+        let (mean, ci) = mean_ci95(&means);
+        row.rmse_cm_s = mean;
+        row.rmse_ci_cm_s = Some(ci);
+        row.rmse_std_cm_s = pooled_std(Phase::Calibration, &|r| r.window_s == row.window_s);
+    }
+    let means: Vec<f64> = calibration.iter().map(|r| r.rmse_cm_s).collect();
+    let best = t_conv_index(&means);
+    for (w, row) in calibration.iter_mut().enumerate() {
+        row.is_t_conv = w == best;
+    }
+    for (j, row) in evaluation.iter_mut().enumerate() {
+        let means: Vec<f64> = per_replicate.iter().map(|t| t.1[j].rmse_cm_s).collect();
+        let (mean, ci) = mean_ci95(&means);
+        row.rmse_cm_s = mean;
+        row.rmse_ci_cm_s = Some(ci);
+        row.rmse_std_cm_s = pooled_std(Phase::Evaluation, &|r| r.trajectory == row.trajectory);
+        row.t_conv_s = mean_std(per_replicate.iter().map(|t| t.1[j].t_conv_s)).0;
+    }
+    (calibration, evaluation)
+}
+
 #[allow(clippy::too_many_arguments)]
 fn row(
     run: usize,
@@ -449,6 +537,7 @@ fn row(
         dvl: dvl.name.clone(),
         estimator: entry.kind,
         error_model: entry.error_model,
+        replicate: entry.replicate,
         phase,
         window_s,
         trajectory: trajectory.to_string(),
@@ -497,6 +586,20 @@ pub fn mean_std(values: impl Iterator<Item = f64>) -> (f64, f64) {
         0.0
     };
     (mean, std)
+}
+
+/// The mean of `values` and the half-width of its 95 % confidence interval,
+/// `t_{0.975, n−1} · sd / √n` (Student t, sd the sample standard deviation); needs two
+/// values or more.
+pub fn mean_ci95(values: &[f64]) -> (f64, f64) {
+    use statrs::distribution::{ContinuousCDF, StudentsT};
+    let n = values.len();
+    assert!(n > 1, "a confidence interval needs two values or more");
+    let (mean, std) = mean_std(values.iter().copied());
+    let t = StudentsT::new(0.0, 1.0, (n - 1) as f64)
+        .expect("n − 1 ≥ 1 degrees of freedom")
+        .inverse_cdf(0.975);
+    (mean, t * std / (n as f64).sqrt())
 }
 
 fn add_improvements(rows: &mut [EvaluationRow]) {
@@ -586,6 +689,85 @@ mod tests {
             }
         }
         assert_eq!(efficient, 2 * (5 + 2));
+    }
+
+    #[test]
+    fn confidence_interval_of_three_values() {
+        // t_{0.975, 2} = 4.3027; sd of [1, 2, 3] = 1; 4.3027 / √3 = 2.4841.
+        let (mean, ci) = mean_ci95(&[1.0, 2.0, 3.0]);
+        assert_eq!(mean, 2.0);
+        assert!((ci - 2.4841).abs() < 1e-4, "{ci}");
+    }
+
+    /// A DCNet run row of `replicate`: calibration on window `window_s`, or evaluation
+    /// on "T" at T_conv `window_s`.
+    fn dcnet_row(replicate: usize, run: usize, phase: Phase, window_s: f64, rmse: f64) -> RunRow {
+        RunRow {
+            run,
+            dvl: "DVL1".into(),
+            estimator: EstimatorKind::Dcnet,
+            error_model: Some(ErrorModel::Em5),
+            replicate: Some(replicate),
+            phase,
+            window_s,
+            trajectory: "T".into(),
+            rmse_cm_s: rmse,
+            correction: Correction::NONE,
+        }
+    }
+
+    #[test]
+    fn replicates_become_one_series_with_a_confidence_interval() {
+        // Two runs each; replicate means: window 20 → 1, 2, 3; window 40 → 2, 2, 2.
+        // Each replicate's own T_conv: 20, 20, 40; the mean curve's: 40.
+        let mut runs = Vec::new();
+        for (replicate, (at_20, at_40, t_conv, test)) in [
+            (1.0, 2.0, 20.0, 1.0),
+            (2.0, 2.0, 20.0, 2.0),
+            (3.0, 2.0, 40.0, 3.0),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            for run in 0..2 {
+                let spread = if run == 0 { -0.5 } else { 0.5 };
+                runs.push(dcnet_row(
+                    replicate,
+                    run,
+                    Phase::Calibration,
+                    20.0,
+                    at_20 + spread,
+                ));
+                runs.push(dcnet_row(replicate, run, Phase::Calibration, 40.0, at_40));
+            }
+            for run in 0..2 {
+                runs.push(dcnet_row(replicate, run, Phase::Evaluation, t_conv, test));
+            }
+        }
+        let result = ProtocolResult::from_runs(runs, &[]);
+        assert_eq!(result.calibration.len(), 2);
+        let [at_20, at_40] = [&result.calibration[0], &result.calibration[1]];
+        assert_eq!(at_20.rmse_cm_s, 2.0);
+        assert!((at_20.rmse_ci_cm_s.unwrap() - 2.4841).abs() < 1e-4);
+        assert_eq!((at_40.rmse_cm_s, at_40.rmse_ci_cm_s), (2.0, Some(0.0)));
+        // Equal means: the first of equals, as for one model.
+        assert!(at_20.is_t_conv && !at_40.is_t_conv);
+        assert_eq!(result.evaluation.len(), 1);
+        let test = &result.evaluation[0];
+        assert_eq!(test.rmse_cm_s, 2.0);
+        assert!((test.rmse_ci_cm_s.unwrap() - 2.4841).abs() < 1e-4);
+        assert!((test.t_conv_s - 80.0 / 3.0).abs() < 1e-12);
+        // The spread over all six runs at window 20: 0.5 around 1, 2, 3.
+        let all = [0.5, 1.5, 1.5, 2.5, 2.5, 3.5];
+        assert!((at_20.rmse_std_cm_s - mean_std(all.into_iter()).1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_single_model_has_no_confidence_interval() {
+        let mut rows = vec![dcnet_row(0, 0, Phase::Calibration, 20.0, 1.0)];
+        rows[0].replicate = None;
+        let result = ProtocolResult::from_runs(rows, &[]);
+        assert_eq!(result.calibration[0].rmse_ci_cm_s, None);
     }
 
     #[test]

@@ -11,7 +11,7 @@ use crate::dataset::{DatasetSize, TrainingSet};
 use crate::evaluate::RunRow;
 use crate::model::layer_shapes;
 use crate::spec::{Origin, Spec};
-use crate::vocab::ErrorModel;
+use crate::vocab::{ErrorModel, EstimatorKind};
 use std::fmt;
 
 /// Bytes a stored float of the network takes.
@@ -126,7 +126,7 @@ fn training_set(spec: &Spec, lengths: &[usize]) -> Part {
     }
 }
 
-/// The models of every error model, which train side by side, and the batches that
+/// The models of every error model and replicate, which train side by side, and the batches that
 /// `threads` of them run at once.
 fn training(spec: &Spec, threads: usize) -> [Part; 2] {
     let window = spec.dataset.window_samples;
@@ -136,7 +136,7 @@ fn training(spec: &Spec, threads: usize) -> [Part; 2] {
         .iter()
         .map(|s| (s.inputs + s.outputs) as f64 * s.positions as f64)
         .sum();
-    let models = spec.trained_models().len() as f64;
+    let models = spec.model_count() as f64;
     let biggest = (0..shapes.len())
         .max_by_key(|&i| shapes[i].parameters())
         .unwrap_or(0);
@@ -155,7 +155,7 @@ fn training(spec: &Spec, threads: usize) -> [Part; 2] {
         8 => "model.fc_widths[2]".to_string(),
         _ => "model.conv_channels".to_string(),
     };
-    let running = threads.clamp(1, spec.trained_models().len()) as f64;
+    let running = threads.clamp(1, spec.model_count()) as f64;
     let batch = spec.training.batch_size.max(VALIDATION_CHUNK) as f64;
     [
         Part {
@@ -176,9 +176,13 @@ fn monte_carlo_rows(spec: &Spec) -> Part {
     let estimators = spec
         .kinds
         .iter()
-        .map(|kind| match kind.takes_error_model() {
-            true => spec.error_models.len(),
-            false => 1,
+        .map(|kind| match kind {
+            // Each replicate, and their ensemble when there are several.
+            EstimatorKind::Dcnet if spec.training.replicates > 1 => {
+                spec.error_models.len() * (spec.training.replicates + 1)
+            }
+            kind if kind.takes_error_model() => spec.error_models.len(),
+            _ => 1,
         })
         .sum::<usize>() as f64;
     let places = (spec.calibration.window_sizes.len() + spec.evaluation.len()) as f64;
@@ -258,7 +262,7 @@ mod tests {
     }
 
     #[test]
-    fn the_models_part_counts_the_weights_of_every_error_model() {
+    fn the_models_part_counts_the_weights_of_every_error_model_and_replicate() {
         let spec = quick_spec(&[]);
         let footprint = Footprint::of(&spec, &lengths(&spec), 2);
         let part = footprint
@@ -276,6 +280,14 @@ mod tests {
         use burn::module::Module;
         let weights = model.num_params() as f64 * FLOAT_BYTES * MODEL_COPIES;
         assert_eq!(part.bytes, weights * spec.error_models.len() as f64);
+        let three = quick_spec(&["training.replicates=3"]);
+        let footprint = Footprint::of(&three, &lengths(&three), 2);
+        let part = footprint
+            .parts
+            .iter()
+            .find(|p| p.what == "models in training")
+            .unwrap();
+        assert_eq!(part.bytes, 3.0 * weights * spec.error_models.len() as f64);
     }
 
     #[test]

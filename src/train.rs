@@ -6,8 +6,9 @@
 //! squared error against the ground truth in (cm/s)², summed over x, y, z and averaged
 //! over samples and windows (PAPER-NOTES). RMSProp updates the weights. Initial weights,
 //! the order of the windows in every epoch and the dropout masks come from generators
-//! seeded by (seed, error model, epoch), so a model does not depend on the thread count
-//! or on the other models training beside it.
+//! seeded by (seed, error model, epoch, replicate), so a model does not depend on the
+//! thread count or on the other models training beside it; replicate 0 (the only one
+//! without `training.replicates`) draws from the streams of (seed, error model, epoch).
 
 use crate::dataset::{INPUT_ROWS, TARGET_ROWS, TrainingSet};
 use crate::model::{Dcnet, Settings, Windows, split_terms, truth_cm_s};
@@ -19,6 +20,7 @@ use burn::optim::{GradientsParams, ModuleOptimizer, RmsPropConfig};
 use burn::tensor::{Device, Tensor};
 use indicatif::ProgressBar;
 use rand::seq::SliceRandom;
+use rand_chacha::ChaCha8Rng;
 use std::time::Instant;
 
 /// How one model trained: its cache key, every epoch's losses, the epoch whose
@@ -27,6 +29,9 @@ use std::time::Instant;
 pub struct TrainingHistory {
     pub key: String,
     pub error_model: ErrorModel,
+    /// Which of `training.replicates` it is; absent for replicate 0, as before replicates.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub replicate: usize,
     pub best_epoch: usize,
     pub history: Vec<EpochRecord>,
     pub stop: StopReason,
@@ -61,11 +66,17 @@ pub enum TrainError {
     NoData { error_model: ErrorModel },
 }
 
+fn is_zero(value: &usize) -> bool {
+    *value == 0
+}
+
 /// A trained model: the weights of its best validation epoch, on a plain (no autodiff)
 /// device, ready for inference.
 #[derive(Debug, Clone)]
 pub struct Trained {
     pub error_model: ErrorModel,
+    /// Which of `training.replicates` it is.
+    pub replicate: usize,
     pub model: Dcnet,
     pub history: Vec<EpochRecord>,
     pub best_epoch: usize,
@@ -74,6 +85,8 @@ pub struct Trained {
 
 /// Training state that an epoch advances; a checkpoint saves exactly this.
 pub struct State {
+    /// Which of `training.replicates` this training is; it seeds the streams.
+    pub replicate: usize,
     pub model: Dcnet,
     pub optimizer: ModuleOptimizer,
     pub best: Option<(usize, f64, Dcnet)>,
@@ -81,10 +94,11 @@ pub struct State {
 }
 
 impl State {
-    /// Fresh weights for `error_model`, on the autodiff device of the spec's backend.
-    pub fn new(spec: &Spec, error_model: ErrorModel) -> Self {
+    /// Fresh weights for replicate `replicate` of `error_model`, on the autodiff device
+    /// of the spec's backend.
+    pub fn new(spec: &Spec, error_model: ErrorModel, replicate: usize) -> Self {
         let device = spec.training.backend.device().autodiff();
-        let mut rng = task_rng(spec.seed, &[&"dcnet-init", &error_model]);
+        let mut rng = model_rng(spec, "dcnet-init", error_model, replicate, None);
         let model = Dcnet::new(
             &spec.model,
             error_model,
@@ -93,6 +107,7 @@ impl State {
             &mut rng,
         );
         Self {
+            replicate,
             model,
             optimizer: optimizer(spec),
             best: None,
@@ -119,6 +134,7 @@ impl State {
         let (best_epoch, _, model) = self.best.expect("at least one epoch ran");
         Trained {
             error_model,
+            replicate: self.replicate,
             model,
             history: self.history,
             best_epoch,
@@ -193,17 +209,41 @@ pub fn mean_loss(
     total / indices.len().max(1) as f64
 }
 
-/// The training windows in the order epoch `epoch` visits them.
+/// The generator of `stream` ("dcnet-init", "dcnet-shuffle", "dcnet-dropout") for
+/// replicate `replicate` of `error_model`'s DCNet, at `epoch` where the stream has one.
+/// Replicate 0 draws what a run without replicates draws.
+fn model_rng(
+    spec: &Spec,
+    stream: &str,
+    error_model: ErrorModel,
+    replicate: usize,
+    epoch: Option<usize>,
+) -> ChaCha8Rng {
+    let mut parts: Vec<&dyn std::fmt::Display> = vec![&stream, &error_model];
+    if let Some(epoch) = &epoch {
+        parts.push(epoch);
+    }
+    if replicate > 0 {
+        parts.extend([&"replicate" as &dyn std::fmt::Display, &replicate]);
+    }
+    task_rng(spec.seed, &parts)
+}
+
+/// The training windows in the order epoch `epoch` of replicate `replicate` visits them.
 pub fn epoch_order(
     spec: &Spec,
     set: &TrainingSet,
     error_model: ErrorModel,
+    replicate: usize,
     epoch: usize,
 ) -> Vec<usize> {
     let mut order: Vec<usize> = (0..set.len()).filter(|&i| !set.is_validation[i]).collect();
-    order.shuffle(&mut task_rng(
-        spec.seed,
-        &[&"dcnet-shuffle", &error_model, &epoch],
+    order.shuffle(&mut model_rng(
+        spec,
+        "dcnet-shuffle",
+        error_model,
+        replicate,
+        Some(epoch),
     ));
     order
 }
@@ -222,7 +262,13 @@ pub fn train_pass(
 ) -> Result<f64, TrainError> {
     let device = spec.training.backend.device().autodiff();
     let settings = Settings::from(&spec.model);
-    let mut dropout_rng = task_rng(spec.seed, &[&"dcnet-dropout", &error_model, &epoch]);
+    let mut dropout_rng = model_rng(
+        spec,
+        "dcnet-dropout",
+        error_model,
+        state.replicate,
+        Some(epoch),
+    );
     let learning_rate = spec.training.learning_rate(error_model);
     let mut loss_sum = 0.0;
     let mut model = state.model.clone();
@@ -261,7 +307,7 @@ pub fn run_epoch(
 ) -> Result<(), TrainError> {
     let epoch = state.next_epoch();
     let clock = Instant::now();
-    let order = epoch_order(spec, set, error_model, epoch);
+    let order = epoch_order(spec, set, error_model, state.replicate, epoch);
     if order.is_empty() {
         return Err(TrainError::NoData { error_model });
     }
@@ -336,7 +382,7 @@ pub fn seconds_per_batch(spec: &Spec, error_model: ErrorModel) -> Result<f64, Tr
         is_validation: vec![false; batch],
     };
     let order: Vec<usize> = (0..batch).collect();
-    let mut state = State::new(spec, error_model);
+    let mut state = State::new(spec, error_model, 0);
     let hidden = ProgressBar::hidden();
     one_thread_pool().install(|| {
         let mut fastest = f64::INFINITY;
@@ -436,7 +482,7 @@ pub(crate) mod tests {
     fn training_learns_a_known_scale_and_bias() {
         let spec = known_answer_spec();
         let set = training_set(&spec);
-        let mut state = State::new(&spec, ErrorModel::Em5);
+        let mut state = State::new(&spec, ErrorModel::Em5, 0);
         run_epochs(
             &spec,
             &set,
@@ -519,7 +565,7 @@ pub(crate) mod tests {
             "training.epochs=10",
             "training.early_stopping = { patience_epochs = 3, min_improvement = 0.05 }",
         ]);
-        let mut state = State::new(&spec, ErrorModel::Em1);
+        let mut state = State::new(&spec, ErrorModel::Em1, 0);
         state.history = history[..7].to_vec();
         assert_eq!(state.stop(&spec), None);
         state.history = history.clone();
@@ -528,6 +574,30 @@ pub(crate) mod tests {
         assert_eq!(state.stop(&plain), Some(StopReason::AllEpochs));
         let longer = quick_spec(&["training.epochs=9"]);
         assert_eq!(state.stop(&longer), None);
+    }
+
+    #[test]
+    fn replicate_zero_draws_the_streams_of_a_run_without_replicates() {
+        let spec = quick_spec(&["training.epochs=1"]);
+        let em = ErrorModel::Em5;
+        let legacy = Dcnet::new(
+            &spec.model,
+            em,
+            spec.dataset.window_samples,
+            &spec.training.backend.device().autodiff(),
+            &mut task_rng(spec.seed, &[&"dcnet-init", &em]),
+        );
+        assert!(weights(&State::new(&spec, em, 0).model) == weights(&legacy));
+        assert!(weights(&State::new(&spec, em, 1).model) != weights(&legacy));
+        assert!(
+            weights(&State::new(&spec, em, 1).model) != weights(&State::new(&spec, em, 2).model)
+        );
+        let set = training_set(&spec);
+        let mut legacy_order: Vec<usize> =
+            (0..set.len()).filter(|&i| !set.is_validation[i]).collect();
+        legacy_order.shuffle(&mut task_rng(spec.seed, &[&"dcnet-shuffle", &em, &3]));
+        assert_eq!(epoch_order(&spec, &set, em, 0, 3), legacy_order);
+        assert_ne!(epoch_order(&spec, &set, em, 1, 3), legacy_order);
     }
 
     #[test]
@@ -540,7 +610,7 @@ pub(crate) mod tests {
                 .build()
                 .unwrap();
             pool.install(|| {
-                let mut state = State::new(&spec, ErrorModel::Em5);
+                let mut state = State::new(&spec, ErrorModel::Em5, 0);
                 run_epochs(&spec, &set, ErrorModel::Em5, &mut state, 2);
                 (
                     weights(&state.model),
@@ -557,7 +627,7 @@ pub(crate) mod tests {
         assert!(one == two, "weights differ between 1 and 2 threads");
         assert_eq!(history_one, history_two);
         // And training moved the weights away from their initial values.
-        assert!(weights(&State::new(&spec, ErrorModel::Em5).model) != one);
+        assert!(weights(&State::new(&spec, ErrorModel::Em5, 0).model) != one);
     }
 
     #[test]
@@ -567,7 +637,7 @@ pub(crate) mod tests {
                 "training.epochs=1",
                 &format!("training.backend={backend:?}"),
             ]);
-            let mut state = State::new(&spec, ErrorModel::Em2);
+            let mut state = State::new(&spec, ErrorModel::Em2, 0);
             run_epochs(&spec, &training_set(&spec), ErrorModel::Em2, &mut state, 1);
             state.history[0].clone()
         };
@@ -586,7 +656,7 @@ pub(crate) mod tests {
     fn a_non_finite_loss_stops_training_with_the_model_and_epoch() {
         let spec = quick_spec(&["training.learning_rate.EM3=1e30"]);
         let set = training_set(&spec);
-        let mut state = State::new(&spec, ErrorModel::Em3);
+        let mut state = State::new(&spec, ErrorModel::Em3, 0);
         let error = (0..spec.training.epochs)
             .find_map(|_| {
                 run_epoch(

@@ -30,6 +30,21 @@ impl Correction {
     }
 }
 
+impl Correction {
+    /// The mean of `corrections`' terms, term by term: what an ensemble of models
+    /// estimates.
+    pub fn mean(corrections: &[Correction]) -> Correction {
+        let n = corrections.len() as f64;
+        let mean = |term: fn(&Correction) -> Vec3| -> Vec3 {
+            std::array::from_fn(|axis| corrections.iter().map(|c| term(c)[axis]).sum::<f64>() / n)
+        };
+        Correction {
+            scale: mean(|c| c.scale),
+            bias_m_s: mean(|c| c.bias_m_s),
+        }
+    }
+}
+
 /// The structure of the terms being estimated (PAPER-NOTES, "Error models"). Stored
 /// by name, "EM1" to "EM5".
 #[derive(
@@ -99,23 +114,27 @@ pub enum EstimatorKind {
     LeastSquares,
     BeamWls,
     Dcnet,
+    /// The mean of the terms of `training.replicates` DCNets; it runs beside DCNet when
+    /// there are several, and a spec does not list it.
+    DcnetEnsemble,
     Floor,
     Bound,
 }
 
 impl EstimatorKind {
-    pub const ALL: [EstimatorKind; 6] = [
+    pub const ALL: [EstimatorKind; 7] = [
         Self::Baseline,
         Self::LeastSquares,
         Self::BeamWls,
         Self::Dcnet,
+        Self::DcnetEnsemble,
         Self::Floor,
         Self::Bound,
     ];
 
     /// Whether the method is run once per error model.
     pub fn takes_error_model(self) -> bool {
-        matches!(self, Self::LeastSquares | Self::Dcnet)
+        matches!(self, Self::LeastSquares | Self::Dcnet | Self::DcnetEnsemble)
     }
 
     /// How the method is labelled in tables.
@@ -125,6 +144,7 @@ impl EstimatorKind {
             Self::LeastSquares => "least squares",
             Self::BeamWls => "beam-model WLS",
             Self::Dcnet => "DCNet",
+            Self::DcnetEnsemble => "DCNet ensemble",
             Self::Floor => "floor (true terms)",
             Self::Bound => "information bound",
         }
@@ -138,6 +158,7 @@ impl fmt::Display for EstimatorKind {
             Self::LeastSquares => "least_squares",
             Self::BeamWls => "beam_wls",
             Self::Dcnet => "dcnet",
+            Self::DcnetEnsemble => "dcnet_ensemble",
             Self::Floor => "floor",
             Self::Bound => "bound",
         })

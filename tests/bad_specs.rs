@@ -448,6 +448,26 @@ const RULES: &[(&str, &str, &str)] = &[
         "100000000 windows is above 1000000 windows: the",
     ),
     (
+        "estimators.kinds=[\"baseline\", \"dcnet_ensemble\"]",
+        "estimators.kinds[1]",
+        "\"dcnet_ensemble\" is not listed: it runs beside",
+    ),
+    (
+        "training.replicates=0",
+        "training.replicates",
+        "0 must be at least 1",
+    ),
+    (
+        "training.replicates=101",
+        "training.replicates",
+        "101 replicates is above 100 replicates: at 100 the",
+    ),
+    (
+        "training.replicates=1.5",
+        "training.replicates",
+        "invalid type: floating point `1.5`, expected usize",
+    ),
+    (
         "training.checkpoint_every_epochs=0",
         "training.checkpoint_every_epochs",
         "0 must be at least 1",

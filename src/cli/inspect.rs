@@ -33,9 +33,7 @@ pub(super) fn validate(spec_path: &Path, set: &[String]) -> Result<(), CliError>
             largest.what,
             Bytes(largest.bytes)
         );
-        let trainings: Vec<_> = spec
-            .trained_models()
-            .iter()
+        let trainings: Vec<_> = (0..spec.model_count())
             .map(|_| (spec, lengths.clone()))
             .collect();
         if !trainings.is_empty() {

@@ -2,18 +2,20 @@
 //! DVL and GNSS-RTK velocity and returns a [`Correction`] in the form of the measurement
 //! model `v_dvl = (1 + k)·v + b`; every error model (EM1–EM5, PAPER-NOTES) is that form
 //! with some terms fixed or tied. In: the spec, one DVL and the trained DCNets. Out: the
-//! [`DvlEstimator`]s that [`set_up`] builds, one per (method, error model) the spec
-//! [`requested`], which the protocol runs.
+//! [`DvlEstimator`]s that [`set_up`] builds, one per (method, error model, replicate)
+//! the spec [`requested`], which the protocol runs.
 
 mod baseline;
 mod beam_wls;
 mod dcnet;
+mod ensemble;
 mod floor;
 mod least_squares;
 
 pub use baseline::Baseline;
 pub use beam_wls::BeamWls;
 pub use dcnet::DcnetEstimator;
+pub use ensemble::Ensemble;
 pub use floor::Floor;
 pub use least_squares::LeastSquares;
 
@@ -33,45 +35,97 @@ pub trait Estimator: Send + Sync {
 pub struct DvlEstimator {
     pub kind: EstimatorKind,
     pub error_model: Option<ErrorModel>,
+    /// Which DCNet replicate it runs, when `training.replicates` is above 1.
+    pub replicate: Option<usize>,
     pub estimator: Box<dyn Estimator>,
 }
 
-/// Every (estimator kind, error model) the spec asks for, in table order: the kinds as
-/// listed, each with every error model when it takes one.
-pub fn requested(spec: &Spec) -> Vec<(EstimatorKind, Option<ErrorModel>)> {
+/// A method the spec asks for: its kind, error model and DCNet replicate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Requested {
+    pub kind: EstimatorKind,
+    pub error_model: Option<ErrorModel>,
+    /// Which DCNet replicate, when `training.replicates` is above 1.
+    pub replicate: Option<usize>,
+}
+
+/// Every method the spec asks for, in table order: the kinds as listed, each with every
+/// error model when it takes one. With `training.replicates` above 1, DCNet runs once
+/// per replicate and the ensemble of the replicates after them.
+pub fn requested(spec: &Spec) -> Vec<Requested> {
+    let replicates = spec.training.replicates;
     let mut requested = Vec::new();
     for &kind in &spec.kinds {
-        if kind.takes_error_model() {
-            requested.extend(spec.error_models.iter().map(|&m| (kind, Some(m))));
-        } else {
-            requested.push((kind, None));
+        if !kind.takes_error_model() {
+            requested.push(Requested {
+                kind,
+                error_model: None,
+                replicate: None,
+            });
+            continue;
+        }
+        for &model in &spec.error_models {
+            let one = |kind, replicate| Requested {
+                kind,
+                error_model: Some(model),
+                replicate,
+            };
+            if kind == EstimatorKind::Dcnet && replicates > 1 {
+                requested.extend((0..replicates).map(|r| one(kind, Some(r))));
+                requested.push(one(EstimatorKind::DcnetEnsemble, None));
+            } else {
+                requested.push(one(kind, None));
+            }
         }
     }
     requested
 }
 
-/// Every (estimator kind, error model) of [`requested`], set up for `dvl`. DCNet runs for
-/// the error models in `dcnets`, the models that trained.
+/// Every method of [`requested`], set up for `dvl`. DCNet runs the models in `dcnets`,
+/// those that trained; the ensemble needs every replicate of its error model.
 pub fn set_up(spec: &Spec, dvl: &Dvl, dcnets: &[Trained]) -> Vec<DvlEstimator> {
     let geometry = BeamGeometry::janus_x(spec.beam_pitch_deg);
+    let dcnet = |trained: &Trained| DcnetEstimator {
+        model: trained.model.clone(),
+        error_model: trained.error_model,
+        window: spec.dataset.window_samples,
+        settings: Settings::from(&spec.model),
+        device: spec.training.backend.device(),
+    };
     let mut entries = Vec::new();
-    for (kind, error_model) in requested(spec) {
+    for Requested {
+        kind,
+        error_model,
+        replicate,
+    } in requested(spec)
+    {
         let estimator: Box<dyn Estimator> = match (kind, error_model) {
             (EstimatorKind::Baseline, _) => Box::new(Baseline),
             (EstimatorKind::LeastSquares, Some(model)) => Box::new(LeastSquares(model)),
             (EstimatorKind::Dcnet, Some(model)) => {
-                let Some(trained) = dcnets.iter().find(|t| t.error_model == model) else {
+                let Some(trained) = dcnets
+                    .iter()
+                    .find(|t| t.error_model == model && t.replicate == replicate.unwrap_or(0))
+                else {
                     continue;
                 };
-                Box::new(DcnetEstimator {
-                    model: trained.model.clone(),
-                    error_model: model,
-                    window: spec.dataset.window_samples,
-                    settings: Settings::from(&spec.model),
-                    device: spec.training.backend.device(),
-                })
+                Box::new(dcnet(trained))
             }
-            (EstimatorKind::LeastSquares | EstimatorKind::Dcnet, None) => {
+            (EstimatorKind::DcnetEnsemble, Some(model)) => {
+                let members: Vec<Box<dyn Estimator>> = dcnets
+                    .iter()
+                    .filter(|t| t.error_model == model)
+                    .map(|t| Box::new(dcnet(t)) as Box<dyn Estimator>)
+                    .collect();
+                if members.len() < spec.training.replicates {
+                    continue;
+                }
+                Box::new(Ensemble { members })
+            }
+            (
+                EstimatorKind::LeastSquares | EstimatorKind::Dcnet | EstimatorKind::DcnetEnsemble,
+                None,
+            ) => {
                 unreachable!("{kind} always has an error model")
             }
             (EstimatorKind::BeamWls, _) => {
@@ -83,6 +137,7 @@ pub fn set_up(spec: &Spec, dvl: &Dvl, dcnets: &[Trained]) -> Vec<DvlEstimator> {
         entries.push(DvlEstimator {
             kind,
             error_model,
+            replicate,
             estimator,
         });
     }

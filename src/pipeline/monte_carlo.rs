@@ -10,6 +10,7 @@ use crate::evaluate::{ProtocolResult, RunRow, run_block};
 use crate::progress::bar;
 use crate::spec::Spec;
 use crate::train::{Trained, TrainingHistory};
+use crate::vocab::EstimatorKind;
 
 /// Computes the blocks `blocks` asks for, those of one DVL of one point together (they
 /// share the measurements), and stores each as soon as its DVL is done. Blocks of a
@@ -35,6 +36,7 @@ pub(super) fn run(
                 let block = members.iter().copied().find(|&b| {
                     plan.blocks[b].estimator == estimator.kind
                         && plan.blocks[b].error_model == estimator.error_model
+                        && plan.blocks[b].replicate == estimator.replicate
                 });
                 block.map(|b| (estimator, b))
             })
@@ -42,9 +44,14 @@ pub(super) fn run(
         let progress = bar(2 * spec.calibration.monte_carlo_runs, "monte carlo");
         let rows = run_block(spec, &plan.trajectories[p], dvl, &estimators, &progress);
         progress.finish_and_clear();
-        for (b, rows) in estimator_blocks.into_iter().zip(rows) {
+        for (b, mut rows) in estimator_blocks.into_iter().zip(rows) {
             if let Some(row) = rows.iter().find(|row| !row.rmse_cm_s.is_finite()) {
                 return Err(ExecuteError::NonFinite(describe(spec, row)));
+            }
+            // A block does not name its replicate (gather does), so replicate 0 shares
+            // the block of a run without replicates.
+            for row in &mut rows {
+                row.replicate = None;
             }
             plan.block_store.save(&plan.blocks[b].key, &rows)?;
             executed.done += 1;
@@ -99,10 +106,16 @@ fn group_by_dvl(plan: &Plan, blocks: &[usize]) -> Vec<(usize, usize, Vec<usize>)
     groups
 }
 
-/// The stored models that the DCNet blocks among `blocks` of `spec` run, in their order.
+/// The stored models that the DCNet blocks among `blocks` of `spec` run, each once, in
+/// their order.
 fn load_models(plan: &Plan, spec: &Spec, blocks: &[usize]) -> Result<Vec<Trained>, ExecuteError> {
+    let trainings = crate::first_seen(
+        blocks
+            .iter()
+            .flat_map(|&b| plan.blocks[b].trainings.iter().copied()),
+    );
     let mut models = Vec::new();
-    for t in blocks.iter().filter_map(|&b| plan.blocks[b].training) {
+    for t in trainings {
         let training = &plan.trainings[t];
         let model = plan
             .models
@@ -136,8 +149,17 @@ pub(super) fn gather(
         if !plan.block_store.contains(&block.key) {
             continue;
         }
+        // The replicate as this point counts them: a block may be shared with a point
+        // without replicates.
+        let replicate = (block.estimator == EstimatorKind::Dcnet
+            && plan.spec(p).training.replicates > 1)
+            .then(|| plan.trainings[block.trainings[0]].replicate);
         let block_rows = plan.block_store.load(&block.key)?;
-        rows.extend(block_rows);
+        rows.extend(
+            block_rows
+                .into_iter()
+                .map(|row| RunRow { replicate, ..row }),
+        );
     }
     let bounds = bounds(plan.spec(p), &plan.trajectories[p]);
     Ok((ProtocolResult::from_runs(rows, &bounds), models))

@@ -6,7 +6,7 @@
 use super::cache::{self, BlockStore, DataHashes, ModelStore};
 use super::shard::Shard;
 use crate::data::{Trajectory, load_trajectories};
-use crate::estimators::requested;
+use crate::estimators::{Requested, requested};
 use crate::files::Seal;
 use crate::results::{self, Manifest, sweep};
 use crate::spec::{Experiment, Spec};
@@ -25,6 +25,11 @@ pub struct Training {
     pub dataset: usize,
     pub point: usize,
     pub error_model: ErrorModel,
+    /// Which of `training.replicates` it trains.
+    pub replicate: usize,
+    /// The training of its replicate 0 (itself without replicates): the replicates of a
+    /// model share a shard, so the ensemble's block finds every model it runs there.
+    pub group: usize,
 }
 
 /// One estimator on one DVL, every Monte Carlo run.
@@ -34,8 +39,11 @@ pub struct Block {
     pub dvl: usize,
     pub estimator: EstimatorKind,
     pub error_model: Option<ErrorModel>,
-    /// The training whose model it runs.
-    pub training: Option<usize>,
+    /// The DCNet replicate it runs, when `training.replicates` is above 1.
+    pub replicate: Option<usize>,
+    /// The trainings whose models it runs: one for DCNet, every replicate's for the
+    /// ensemble, none for the other methods.
+    pub trainings: Vec<usize>,
 }
 
 /// What one point is made of.
@@ -160,33 +168,59 @@ impl<'a> Plan<'a> {
                 },
             );
             for &error_model in &spec.error_models {
-                let key = cache::model_key(spec, error_model, &dataset_key);
-                trainings.push(find_or_push(
-                    &mut self.trainings,
-                    |t| &t.key,
-                    &key,
-                    || Training {
-                        key: key.clone(),
-                        dataset,
-                        point: p,
-                        error_model,
-                    },
-                ));
+                // Replicate 0 is pushed next, or was by an earlier point.
+                let mut group = self.trainings.len();
+                for replicate in 0..spec.training.replicates {
+                    let key = cache::model_key(spec, error_model, replicate, &dataset_key);
+                    let t = find_or_push(
+                        &mut self.trainings,
+                        |t| &t.key,
+                        &key,
+                        || Training {
+                            key: key.clone(),
+                            dataset,
+                            point: p,
+                            error_model,
+                            replicate,
+                            group,
+                        },
+                    );
+                    if replicate == 0 {
+                        group = self.trainings[t].group;
+                    }
+                    trainings.push(t);
+                }
             }
         }
         let mut blocks = Vec::new();
         for dvl in 0..spec.dvls.len() {
-            for (estimator, error_model) in requested(spec) {
-                let training = (estimator == EstimatorKind::Dcnet).then(|| {
-                    let m = spec
-                        .error_models
-                        .iter()
-                        .position(|&m| Some(m) == error_model);
-                    trainings[m.expect("DCNet runs the spec's error models")]
-                });
-                let model_key = training.map(|t| self.trainings[t].key.as_str());
+            for Requested {
+                kind: estimator,
+                error_model,
+                replicate,
+            } in requested(spec)
+            {
+                let runs: Vec<usize> = trainings
+                    .iter()
+                    .copied()
+                    .filter(|&t| {
+                        let training = &self.trainings[t];
+                        Some(training.error_model) == error_model
+                            && match estimator {
+                                EstimatorKind::Dcnet => {
+                                    training.replicate == replicate.unwrap_or(0)
+                                }
+                                EstimatorKind::DcnetEnsemble => true,
+                                _ => false,
+                            }
+                    })
+                    .collect();
+                let model_keys: Vec<&str> = runs
+                    .iter()
+                    .map(|&t| self.trainings[t].key.as_str())
+                    .collect();
                 let key =
-                    cache::block_key(spec, &self.hashes, dvl, estimator, error_model, model_key);
+                    cache::block_key(spec, &self.hashes, dvl, estimator, error_model, &model_keys);
                 blocks.push(find_or_push(
                     &mut self.blocks,
                     |b| &b.key,
@@ -197,7 +231,8 @@ impl<'a> Plan<'a> {
                         dvl,
                         estimator,
                         error_model,
-                        training,
+                        replicate,
+                        trainings: runs,
                     },
                 ));
             }
@@ -231,17 +266,18 @@ impl<'a> Plan<'a> {
         tasks
     }
 
-    /// The tasks the shard computes: whole groups, dealt out round-robin.
+    /// The tasks the shard computes: whole groups (a model's replicates, its blocks and
+    /// their ensemble's), dealt out round-robin.
     pub fn in_shard(&self, task: Task, shard: Shard) -> bool {
         let group = match task {
-            Task::Training(t) => t,
-            Task::Block(b) => match self.blocks[b].training {
-                Some(t) => t,
+            Task::Training(t) => self.trainings[t].group,
+            Task::Block(b) => match self.blocks[b].trainings.first() {
+                Some(&t) => self.trainings[t].group,
                 None => {
                     self.trainings.len()
                         + self.blocks[..b]
                             .iter()
-                            .filter(|other| other.training.is_none())
+                            .filter(|other| other.trainings.is_empty())
                             .count()
                 }
             },
@@ -358,22 +394,41 @@ impl<'a> Plan<'a> {
     /// Whether block `b` runs a model whose training failed.
     pub(super) fn runs_failed_model(&self, b: usize) -> bool {
         self.blocks[b]
-            .training
-            .is_some_and(|t| self.training_status(t) == Status::Failed)
+            .trainings
+            .iter()
+            .any(|&t| self.training_status(t) == Status::Failed)
     }
 
-    /// What a task is, for people: "train DCNet EM5", "monte carlo DVL1 baseline".
+    /// What a task is, for people: "train DCNet EM5", "train DCNet EM5 replicate 2/3",
+    /// "monte carlo DVL1 baseline".
     pub fn label(&self, task: Task) -> String {
         match task {
             Task::Dataset(_) => "generate dataset".into(),
-            Task::Training(t) => format!("train DCNet {}", self.trainings[t].error_model),
+            Task::Training(t) => {
+                let training = &self.trainings[t];
+                let replicates = self.spec(training.point).training.replicates;
+                let label = format!("train DCNet {}", training.error_model);
+                if replicates > 1 {
+                    format!("{label} replicate {}/{replicates}", training.replicate + 1)
+                } else {
+                    label
+                }
+            }
             Task::Block(b) => {
                 let block = &self.blocks[b];
                 let dvl = &self.spec(block.point).dvls[block.dvl].name;
-                match block.error_model {
-                    Some(m) => format!("monte carlo {dvl} {} {m}", block.estimator),
-                    None => format!("monte carlo {dvl} {}", block.estimator),
+                let mut label = format!("monte carlo {dvl} {}", block.estimator);
+                if let Some(m) = block.error_model {
+                    label += &format!(" {m}");
                 }
+                if let Some(r) = block.replicate {
+                    label += &format!(
+                        " replicate {}/{}",
+                        r + 1,
+                        self.spec(block.point).training.replicates
+                    );
+                }
+                label
             }
             Task::Results(_) if self.experiment.is_sweep() => "write results".into(),
             Task::Results(p) => format!("write {}", self.points[p].folder.display()),

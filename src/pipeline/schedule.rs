@@ -63,6 +63,7 @@ pub(super) fn train(
             let job = Stage::start(
                 spec,
                 training.error_model,
+                training.replicate,
                 &training.key,
                 &plan.models,
                 force,

@@ -4,7 +4,7 @@
 //! they need (booktabs). Each DVL's row holds our values, the row below it the
 //! published ones in italics; a flagged cell carries a dagger explained under its table.
 
-use super::{Cell, ReportTable, Signs, Tables};
+use super::{Cell, ReportTable, Signs, Tables, replicates_note};
 use crate::results::read::StoredRun;
 use std::fmt::Write;
 
@@ -13,6 +13,7 @@ pub const FILE: &str = "report.tex";
 const SIGNS: Signs = Signs {
     percent: "\\,\\%",
     minus: "$-$",
+    plus_minus: "\\,$\\pm$\\,",
 };
 
 /// The tables as LaTeX.
@@ -57,11 +58,15 @@ pub(super) fn render(run: &StoredRun, tables: &Tables) -> String {
         })
     };
     let label = label(&spec.name);
+    // In every caption when DCNet has replicates.
+    let replicates = replicates_note(spec.training.replicates)
+        .map(|note| format!(" {}", escape(&note).replace('±', "$\\pm$")))
+        .unwrap_or_default();
     table(
         &mut out,
         &tables.calibration,
         &format!(
-            "{name}: calibration on {}. RMSE in cm/s at T\\textsubscript{{conv}}, mean over {runs} Monte Carlo runs, T\\textsubscript{{conv}} in s in brackets{}. The floor corrects with the true terms, which no estimator can beat; the bound is the best mean RMSE of any unbiased estimator from the window's data.",
+            "{name}: calibration on {}. RMSE in cm/s at T\\textsubscript{{conv}}, mean over {runs} Monte Carlo runs, T\\textsubscript{{conv}} in s in brackets{}. The floor corrects with the true terms, which no estimator can beat; the bound is the best mean RMSE of any unbiased estimator from the window's data.{replicates}",
             escape(&spec.calibration.trajectory),
             below(&tables.calibration)
         ),
@@ -72,7 +77,7 @@ pub(super) fn render(run: &StoredRun, tables: &Tables) -> String {
         &mut out,
         &tables.evaluation,
         &format!(
-            "{name}: evaluation with the T\\textsubscript{{conv}} terms. RMSE in cm/s, mean over {runs} Monte Carlo runs, improvement over the baseline in brackets{}.",
+            "{name}: evaluation with the T\\textsubscript{{conv}} terms. RMSE in cm/s, mean over {runs} Monte Carlo runs, improvement over the baseline in brackets{}.{replicates}",
             below(&tables.evaluation)
         ),
         &format!("tab:{label}-evaluation"),
@@ -86,6 +91,18 @@ pub(super) fn render(run: &StoredRun, tables: &Tables) -> String {
                 "{name}: beyond the paper, least squares on the same data and the floor. RMSE in cm/s, mean over {runs} Monte Carlo runs, improvement over the baseline in brackets."
             ),
             &format!("tab:{label}-beyond"),
+            None,
+        );
+    }
+    if let Some(ensemble) = &tables.ensemble {
+        table(
+            &mut out,
+            ensemble,
+            &format!(
+                "{name}: the DCNet ensemble, the mean of the {} replicates' terms in each calibration window. RMSE in cm/s, mean over {runs} Monte Carlo runs, improvement over the baseline in brackets.",
+                spec.training.replicates
+            ),
+            &format!("tab:{label}-ensemble"),
             None,
         );
     }

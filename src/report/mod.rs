@@ -106,6 +106,8 @@ struct Tables {
     evaluation: ReportTable,
     /// The same for the floor and least squares, when the run has either.
     beyond: Option<ReportTable>,
+    /// The same for the ensemble of DCNet replicates, when the run has several.
+    ensemble: Option<ReportTable>,
     /// Every estimator against the information bound, when the run has one.
     efficiency: Option<ReportTable>,
 }
@@ -138,6 +140,8 @@ struct Cell {
 /// An RMSE (cm/s) and what the table sets beside it.
 struct Figure {
     rmse_cm_s: f64,
+    /// Half-width of the 95 % confidence interval over DCNet replicates.
+    ci_cm_s: Option<f64>,
     detail: Option<Detail>,
 }
 
@@ -153,13 +157,17 @@ enum Detail {
 struct Signs {
     percent: &'static str,
     minus: &'static str,
+    plus_minus: &'static str,
 }
 
 impl Figure {
     /// `5.93 (100)` with T_conv, `0.86 (+12 %)` with the improvement, `0.17 (94 %)`
-    /// with the efficiency, `0.74` alone.
+    /// with the efficiency, `0.74` alone; `0.09 ± 0.01 (20)` with a confidence interval.
     fn text(&self, signs: &Signs) -> String {
-        let rmse = format!("{:.2}", self.rmse_cm_s);
+        let rmse = match self.ci_cm_s {
+            Some(ci) => format!("{:.2}{}{ci:.2}", self.rmse_cm_s, signs.plus_minus),
+            None => format!("{:.2}", self.rmse_cm_s),
+        };
         match self.detail {
             None => rmse,
             Some(Detail::TConv(t)) => format!("{rmse} ({t})"),
@@ -190,6 +198,7 @@ impl Cell {
     ) -> Cell {
         let paper = published.map(|cell| Figure {
             rmse_cm_s: cell.rmse_cm_s,
+            ci_cm_s: None,
             detail: match phase {
                 Phase::Calibration => cell.t_conv_s.map(Detail::TConv),
                 Phase::Evaluation => cell.improvement_pct.map(Detail::Improvement),
@@ -219,6 +228,7 @@ impl Cell {
         const SIGNS: Signs = Signs {
             percent: " %",
             minus: "-",
+            plus_minus: " ± ",
         };
         let ours = self.ours.text(&SIGNS);
         let Some(paper) = &self.paper else {
@@ -253,6 +263,14 @@ impl Tables {
                     false,
                 )
             });
+        let ensemble = source.has(EstimatorKind::DcnetEnsemble).then(|| {
+            source.evaluation_table(
+                "Baseline",
+                EstimatorKind::Baseline,
+                EstimatorKind::DcnetEnsemble,
+                false,
+            )
+        });
         let efficiency = source
             .has(EstimatorKind::Bound)
             .then(|| source.efficiency_table());
@@ -260,6 +278,7 @@ impl Tables {
             calibration,
             evaluation,
             beyond,
+            ensemble,
             efficiency,
         }
     }
@@ -269,6 +288,7 @@ impl Tables {
         let tables = [&self.calibration, &self.evaluation]
             .into_iter()
             .chain(self.beyond.as_ref())
+            .chain(self.ensemble.as_ref())
             .chain(self.efficiency.as_ref());
         tables.fold(Tally::default(), |sum, table| Tally {
             compared: sum.compared + table.tally.compared,
@@ -379,6 +399,13 @@ impl<'a> Source<'a> {
             Some(EstimatorKind::Baseline),
             Some(EstimatorKind::Dcnet),
         )];
+        if self.has(EstimatorKind::DcnetEnsemble) {
+            kinds.push((
+                format!("{dvl} DCNet ensemble"),
+                None,
+                Some(EstimatorKind::DcnetEnsemble),
+            ));
+        }
         if self.has(EstimatorKind::LeastSquares) {
             kinds.push((
                 format!("{dvl} least squares"),
@@ -403,9 +430,10 @@ impl<'a> Source<'a> {
     /// the rest of the calibration trajectory, then on each test trajectory with the
     /// T_conv terms.
     fn efficiency_table(&self) -> ReportTable {
-        let figure = |rmse_cm_s: f64, efficiency: Option<f64>| Cell {
+        let figure = |rmse_cm_s: f64, ci_cm_s: Option<f64>, efficiency: Option<f64>| Cell {
             ours: Figure {
                 rmse_cm_s,
+                ci_cm_s,
                 detail: efficiency.map(Detail::Efficiency),
             },
             paper: None,
@@ -435,7 +463,9 @@ impl<'a> Source<'a> {
                                 && r.estimator == kind
                                 && r.error_model == model
                         });
-                        let mut cells = vec![at_t_conv.map(|r| figure(r.rmse_cm_s, r.efficiency))];
+                        let mut cells = vec![
+                            at_t_conv.map(|r| figure(r.rmse_cm_s, r.rmse_ci_cm_s, r.efficiency)),
+                        ];
                         cells.extend(self.trajectories.iter().map(|trajectory| {
                             self.run
                                 .evaluation
@@ -446,7 +476,7 @@ impl<'a> Source<'a> {
                                         && r.estimator == kind
                                         && r.error_model == model
                                 })
-                                .map(|r| figure(r.rmse_cm_s, r.efficiency))
+                                .map(|r| figure(r.rmse_cm_s, r.rmse_ci_cm_s, r.efficiency))
                         }));
                         let t_conv = at_t_conv.map_or(String::new(), |r| r.window_s.to_string());
                         Row {
@@ -483,6 +513,7 @@ impl<'a> Source<'a> {
             .map(|r| {
                 let ours = Figure {
                     rmse_cm_s: r.rmse_cm_s,
+                    ci_cm_s: r.rmse_ci_cm_s,
                     detail: Some(Detail::TConv(r.window_s)),
                 };
                 let paper = self.published(dvl, kind, model, None);
@@ -549,6 +580,7 @@ impl<'a> Source<'a> {
             .map(|r| {
                 let ours = Figure {
                     rmse_cm_s: r.rmse_cm_s,
+                    ci_cm_s: r.rmse_ci_cm_s,
                     detail: r
                         .improvement_pct
                         .filter(|_| kind != EstimatorKind::Baseline)
@@ -573,6 +605,9 @@ fn render(run: &StoredRun, tables: &Tables, figures: &[Written]) -> String {
         "RMSE in cm/s, mean over {} Monte Carlo runs. Calibration cells give T_conv in s in brackets, evaluation cells the improvement over the baseline.\n",
         spec.calibration.monte_carlo_runs
     );
+    if let Some(note) = replicates_note(spec.training.replicates) {
+        let _ = writeln!(out, "{note}\n");
+    }
     match &run.published {
         Some(published) => {
             let _ = writeln!(
@@ -604,6 +639,14 @@ fn render(run: &StoredRun, tables: &Tables, figures: &[Written]) -> String {
             markdown_table(beyond)
         );
     }
+    if let Some(ensemble) = &tables.ensemble {
+        let _ = writeln!(
+            out,
+            "The DCNet ensemble: the mean of the {} replicates' terms in each calibration window.\n\n{}\n",
+            spec.training.replicates,
+            markdown_table(ensemble)
+        );
+    }
     if let Some(efficiency) = &tables.efficiency {
         let _ = writeln!(out, "## Against the information bound\n");
         let _ = writeln!(
@@ -625,6 +668,15 @@ fn render(run: &StoredRun, tables: &Tables, figures: &[Written]) -> String {
     provenance_section(run, &mut out);
     figures_section(run, figures, &mut out);
     out
+}
+
+/// What a DCNet cell holds when there are several replicates, for the captions.
+fn replicates_note(replicates: usize) -> Option<String> {
+    (replicates > 1).then(|| {
+        format!(
+            "DCNet cells give the mean over {replicates} replicates (models trained from independent seeds) ± the half-width of its 95 % confidence interval across them (Student t); their T_conv is that of the mean curve in calibration, the mean of the replicates' in evaluation."
+        )
+    })
 }
 
 /// A report table as Markdown, `—` where a cell has no value.
@@ -666,17 +718,24 @@ fn training_section(run: &StoredRun, out: &mut String) {
         "best validation loss (cm/s)²",
         "training s",
     ]);
-    let mut models: Vec<ErrorModel> = run.training.iter().map(|e| e.error_model).collect();
+    let mut models: Vec<(ErrorModel, Option<usize>)> = run
+        .training
+        .iter()
+        .map(|e| (e.error_model, e.replicate))
+        .collect();
     models.dedup();
-    for model in models {
+    for (model, replicate) in models {
         let epochs: Vec<_> = run
             .training
             .iter()
-            .filter(|e| e.error_model == model)
+            .filter(|e| e.error_model == model && e.replicate == replicate)
             .collect();
         let best = epochs.iter().find(|e| e.is_best);
         table.add_row(vec![
-            model.to_string(),
+            match replicate {
+                Some(r) => format!("{model}, replicate {}", r + 1),
+                None => model.to_string(),
+            },
             epochs.len().to_string(),
             epochs
                 .first()

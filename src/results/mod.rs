@@ -214,10 +214,11 @@ fn batch(columns: Vec<(&str, ArrayRef)>) -> RecordBatch {
     RecordBatch::try_from_iter(columns).expect("columns of one table have equal lengths")
 }
 
-/// One row per run × DVL × estimator × error model × (window or trajectory).
+/// One row per run × DVL × estimator × error model × (window or trajectory), and a
+/// `replicate` column (empty but for DCNet) when DCNet has several replicates.
 pub fn monte_carlo_batch(rows: &[RunRow]) -> RecordBatch {
     let term = |f: fn(&Correction) -> f64| floats(rows, move |r| f(&r.correction));
-    batch(vec![
+    let mut columns: Vec<(&str, ArrayRef)> = vec![
         (
             "run",
             Arc::new(UInt32Array::from_iter_values(
@@ -237,11 +238,42 @@ pub fn monte_carlo_batch(rows: &[RunRow]) -> RecordBatch {
         ("bias_x_cm_s", term(|c| 100.0 * c.bias_m_s[0])),
         ("bias_y_cm_s", term(|c| 100.0 * c.bias_m_s[1])),
         ("bias_z_cm_s", term(|c| 100.0 * c.bias_m_s[2])),
-    ])
+    ];
+    if rows.iter().any(|r| r.replicate.is_some()) {
+        let replicate = rows.iter().map(|r| r.replicate.map(|r| r as u32));
+        columns.push((
+            REPLICATE,
+            Arc::new(UInt32Array::from_iter(replicate)) as ArrayRef,
+        ));
+    }
+    batch(columns)
+}
+
+/// The column of a DCNet row's replicate, in `monte_carlo.parquet` and
+/// `training.parquet` when there are several.
+pub const REPLICATE: &str = "replicate";
+
+/// The column of the 95 % confidence interval over DCNet replicates, in the
+/// calibration and evaluation tables when there are several.
+pub const RMSE_CI: &str = "rmse_ci_cm_s";
+
+/// `columns`, with the confidence interval column when a row has one.
+fn with_ci<T>(
+    mut columns: Vec<(&'static str, ArrayRef)>,
+    rows: &[T],
+    ci: impl Fn(&T) -> Option<f64>,
+) -> RecordBatch {
+    if rows.iter().any(|r| ci(r).is_some()) {
+        columns.push((
+            RMSE_CI,
+            Arc::new(Float64Array::from_iter(rows.iter().map(ci))) as ArrayRef,
+        ));
+    }
+    batch(columns)
 }
 
 pub fn calibration_batch(rows: &[CalibrationRow]) -> RecordBatch {
-    batch(vec![
+    let columns: Vec<(&'static str, ArrayRef)> = vec![
         ("dvl", strings(rows, |r| r.dvl.clone())),
         ("estimator", strings(rows, |r| r.estimator.to_string())),
         ("error_model", error_models(rows, |r| r.error_model)),
@@ -255,11 +287,12 @@ pub fn calibration_batch(rows: &[CalibrationRow]) -> RecordBatch {
             )),
         ),
         ("efficiency", optional_floats(rows, |r| r.efficiency)),
-    ])
+    ];
+    with_ci(columns, rows, |r| r.rmse_ci_cm_s)
 }
 
 pub fn evaluation_batch(rows: &[EvaluationRow]) -> RecordBatch {
-    batch(vec![
+    let columns: Vec<(&'static str, ArrayRef)> = vec![
         ("dvl", strings(rows, |r| r.dvl.clone())),
         ("estimator", strings(rows, |r| r.estimator.to_string())),
         ("error_model", error_models(rows, |r| r.error_model)),
@@ -272,16 +305,18 @@ pub fn evaluation_batch(rows: &[EvaluationRow]) -> RecordBatch {
             optional_floats(rows, |r| r.improvement_pct),
         ),
         ("efficiency", optional_floats(rows, |r| r.efficiency)),
-    ])
+    ];
+    with_ci(columns, rows, |r| r.rmse_ci_cm_s)
 }
 
-/// One row per error model × epoch of DCNet training.
+/// One row per error model × epoch of DCNet training, and a `replicate` column when
+/// DCNet has several replicates.
 pub fn training_batch(dcnets: &[TrainingHistory]) -> RecordBatch {
     let rows: Vec<(&TrainingHistory, &EpochRecord)> = dcnets
         .iter()
         .flat_map(|t| t.history.iter().map(move |epoch| (t, epoch)))
         .collect();
-    batch(vec![
+    let mut columns: Vec<(&str, ArrayRef)> = vec![
         (
             "error_model",
             strings(&rows, |(t, _)| t.error_model.to_string()),
@@ -303,7 +338,15 @@ pub fn training_batch(dcnets: &[TrainingHistory]) -> RecordBatch {
             )),
         ),
         ("stop_reason", strings(&rows, |(t, _)| t.stop.to_string())),
-    ])
+    ];
+    if dcnets.iter().any(|t| t.replicate > 0) {
+        let replicate = rows.iter().map(|(t, _)| t.replicate as u32);
+        columns.push((
+            REPLICATE,
+            Arc::new(UInt32Array::from_iter_values(replicate)),
+        ));
+    }
+    batch(columns)
 }
 
 /// The GT velocity of each trajectory, one row per sample, with what the trajectory is

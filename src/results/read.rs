@@ -89,6 +89,8 @@ pub struct StoredRun {
 #[derive(Debug, Clone, PartialEq)]
 pub struct StoredEpoch {
     pub error_model: ErrorModel,
+    /// Which replicate, when DCNet has several.
+    pub replicate: Option<usize>,
     pub record: EpochRecord,
     pub is_best: bool,
     /// Why the model's training ended (the same on every row of a model).
@@ -293,14 +295,6 @@ impl Batch<'_> {
         self.column::<Float64Array>(name).iter().collect()
     }
 
-    /// A column of [`LATER_COLUMNS`]: its values, or none where the folder predates it.
-    fn later_floats(&self, name: &str) -> Vec<Option<f64>> {
-        match self.0.column_by_name(name) {
-            Some(_) => self.optional_floats(name),
-            None => vec![None; self.0.num_rows()],
-        }
-    }
-
     fn uints(&self, name: &str) -> Result<Vec<usize>, String> {
         self.no_nulls(name)?;
         Ok(self
@@ -309,6 +303,31 @@ impl Batch<'_> {
             .iter()
             .map(|&v| v as usize)
             .collect())
+    }
+
+    /// A column that only some tables have, empty values and all; all empty when the
+    /// table lacks it.
+    fn optional_uints(&self, name: &str) -> Vec<Option<usize>> {
+        match self.0.column_by_name(name) {
+            Some(column) => column
+                .as_any()
+                .downcast_ref::<UInt32Array>()
+                .map(|c| c.iter().map(|v| v.map(|v| v as usize)).collect())
+                .unwrap_or_else(|| vec![None; self.0.num_rows()]),
+            None => vec![None; self.0.num_rows()],
+        }
+    }
+
+    /// Like [`Batch::optional_uints`], for floats.
+    pub(crate) fn optional_float_column(&self, name: &str) -> Vec<Option<f64>> {
+        match self.0.column_by_name(name) {
+            Some(column) => column
+                .as_any()
+                .downcast_ref::<Float64Array>()
+                .map(|c| c.iter().collect())
+                .unwrap_or_else(|| vec![None; self.0.num_rows()]),
+            None => vec![None; self.0.num_rows()],
+        }
     }
 
     fn bools(&self, name: &str) -> Result<Vec<bool>, String> {
@@ -380,6 +399,7 @@ pub(crate) struct RowKey {
 
 fn run_rows(batch: &Batch) -> Result<Vec<RunRow>, String> {
     let run = batch.uints("run")?;
+    let replicate = batch.optional_uints(super::REPLICATE);
     let row_keys = batch.row_keys()?;
     let phase: Vec<Phase> = batch.required("phase")?;
     let window_s = batch.floats("window_s")?;
@@ -404,6 +424,7 @@ fn run_rows(batch: &Batch) -> Result<Vec<RunRow>, String> {
             dvl: series.dvl,
             estimator: series.estimator,
             error_model: series.error_model,
+            replicate: replicate[i],
             phase: phase[i],
             window_s: window_s[i],
             trajectory: trajectory[i].clone(),
@@ -422,7 +443,8 @@ fn calibration_rows(batch: &Batch) -> Result<Vec<CalibrationRow>, String> {
     let rmse = batch.floats("rmse_cm_s")?;
     let std = batch.floats("rmse_std_cm_s")?;
     let is_t_conv = batch.bools("is_t_conv")?;
-    let efficiency = batch.later_floats("efficiency");
+    let efficiency = batch.optional_float_column("efficiency");
+    let ci = batch.optional_float_column(super::RMSE_CI);
     Ok(row_keys
         .into_iter()
         .enumerate()
@@ -433,6 +455,7 @@ fn calibration_rows(batch: &Batch) -> Result<Vec<CalibrationRow>, String> {
             window_s: window_s[i],
             rmse_cm_s: rmse[i],
             rmse_std_cm_s: std[i],
+            rmse_ci_cm_s: ci[i],
             is_t_conv: is_t_conv[i],
             efficiency: efficiency[i],
         })
@@ -446,7 +469,8 @@ fn evaluation_rows(batch: &Batch) -> Result<Vec<EvaluationRow>, String> {
     let rmse = batch.floats("rmse_cm_s")?;
     let std = batch.floats("rmse_std_cm_s")?;
     let improvement = batch.optional_floats("improvement_pct");
-    let efficiency = batch.later_floats("efficiency");
+    let efficiency = batch.optional_float_column("efficiency");
+    let ci = batch.optional_float_column(super::RMSE_CI);
     Ok(row_keys
         .into_iter()
         .enumerate()
@@ -458,6 +482,7 @@ fn evaluation_rows(batch: &Batch) -> Result<Vec<EvaluationRow>, String> {
             t_conv_s: t_conv_s[i],
             rmse_cm_s: rmse[i],
             rmse_std_cm_s: std[i],
+            rmse_ci_cm_s: ci[i],
             improvement_pct: improvement[i],
             efficiency: efficiency[i],
         })
@@ -472,6 +497,7 @@ fn epoch_rows(batch: &Batch) -> Result<Vec<StoredEpoch>, String> {
     let seconds = batch.floats("seconds")?;
     let samples_per_s = batch.floats("samples_per_s")?;
     let is_best = batch.bools("is_best")?;
+    let replicate = batch.optional_uints(super::REPLICATE);
     // Runs from before early stopping trained every epoch.
     let stop: Vec<StopReason> = if batch.0.column_by_name("stop_reason").is_some() {
         batch.required("stop_reason")?
@@ -481,6 +507,7 @@ fn epoch_rows(batch: &Batch) -> Result<Vec<StoredEpoch>, String> {
     Ok((0..epoch.len())
         .map(|i| StoredEpoch {
             error_model: error_model[i],
+            replicate: replicate[i],
             record: EpochRecord {
                 epoch: epoch[i],
                 train_loss: train_loss[i],
@@ -555,6 +582,7 @@ mod tests {
         TrainingHistory {
             key: "k".repeat(64),
             error_model: ErrorModel::Em5,
+            replicate: 0,
             best_epoch: 2,
             history: vec![epoch(1), epoch(2)],
             stop,

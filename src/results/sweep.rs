@@ -1,15 +1,16 @@
 //! What a sweep adds to its points' results folders: `results/<name>/sweep.parquet`,
 //! one row per point × DVL × estimator × error model with the swept values as columns
 //! and the numbers a sweep is read by (calibration RMSE and T_conv, evaluation RMSE,
-//! training time), and `sweep.json`, the index of the points, written last.
+//! training time; with DCNet replicates, the 95 % confidence intervals of DCNet's RMSEs
+//! across them), and `sweep.json`, the index of the points, written last.
 
-use crate::evaluate::ProtocolResult;
+use crate::evaluate::{ProtocolResult, mean_ci95};
 use crate::files::write_atomic;
 use crate::results::read::{Batch, ReadError, read_rows};
 use crate::results::{ResultsError, table_bytes};
 use crate::spec::Experiment;
 use crate::train::TrainingHistory;
-use crate::vocab::{ErrorModel, EstimatorKind};
+use crate::vocab::{ErrorModel, EstimatorKind, Phase};
 use arrow_array::types::{Float64Type, Int64Type};
 use arrow_array::{
     Array, ArrayRef, Float64Array, Int64Array, RecordBatch, StringArray, cast::AsArray,
@@ -89,8 +90,12 @@ pub struct SweepRow {
     /// Mean over the test trajectories of the mean RMSE over runs.
     pub evaluation_rmse_cm_s: f64,
     pub evaluation_improvement_pct: Option<f64>,
-    /// Wall time of the DCNet's training, summed over its epochs.
+    /// Wall time of the DCNet's training, summed over its epochs (and replicates).
     pub training_s: Option<f64>,
+    /// With DCNet replicates: the half-width of the 95 % confidence interval across
+    /// them of the calibration RMSE at T_conv, and of the evaluation RMSE.
+    pub calibration_rmse_ci_cm_s: Option<f64>,
+    pub evaluation_rmse_ci_cm_s: Option<f64>,
 }
 
 /// A stored sweep: its index and table.
@@ -124,12 +129,42 @@ pub fn rows(
                 evaluation.iter().map(|r| r.improvement_pct).collect();
             let training_s = (at_t_conv.estimator == EstimatorKind::Dcnet)
                 .then(|| {
-                    models
+                    let trained: Vec<_> = models
                         .iter()
-                        .find(|m| Some(m.error_model) == at_t_conv.error_model)
-                        .map(|m| m.history.iter().map(|e| e.seconds).sum())
+                        .filter(|m| Some(m.error_model) == at_t_conv.error_model)
+                        .collect();
+                    (!trained.is_empty()).then(|| {
+                        trained
+                            .iter()
+                            .flat_map(|m| &m.history)
+                            .map(|e| e.seconds)
+                            .sum()
+                    })
                 })
                 .flatten();
+            // Each replicate's evaluation RMSE, its mean over runs and test trajectories.
+            let evaluation_rmse_ci_cm_s = at_t_conv.rmse_ci_cm_s.map(|_| {
+                let series = result.runs.iter().filter(|r| {
+                    r.phase == Phase::Evaluation
+                        && r.dvl == at_t_conv.dvl
+                        && r.estimator == at_t_conv.estimator
+                        && r.error_model == at_t_conv.error_model
+                });
+                let per_replicate: Vec<f64> =
+                    crate::first_seen(series.clone().map(|r| r.replicate))
+                        .into_iter()
+                        .map(|replicate| {
+                            mean(
+                                series
+                                    .clone()
+                                    .filter(|r| r.replicate == replicate)
+                                    .map(|r| r.rmse_cm_s)
+                                    .collect(),
+                            )
+                        })
+                        .collect();
+                mean_ci95(&per_replicate).1
+            });
             rows.push(SweepRow {
                 point: name.to_string(),
                 values: values.clone(),
@@ -141,6 +176,8 @@ pub fn rows(
                 evaluation_rmse_cm_s: mean(evaluation.iter().map(|r| r.rmse_cm_s).collect()),
                 evaluation_improvement_pct: improvements.filter(|i| !i.is_empty()).map(mean),
                 training_s,
+                calibration_rmse_ci_cm_s: at_t_conv.rmse_ci_cm_s,
+                evaluation_rmse_ci_cm_s,
             });
         }
     }
@@ -252,8 +289,24 @@ fn batch(swept: &[String], rows: &[SweepRow]) -> RecordBatch {
         ),
         ("training_s".to_string(), floats(&|r| r.training_s)),
     ]);
+    if rows.iter().any(|r| r.calibration_rmse_ci_cm_s.is_some()) {
+        columns.extend([
+            (
+                CALIBRATION_CI.to_string(),
+                floats(&|r| r.calibration_rmse_ci_cm_s),
+            ),
+            (
+                EVALUATION_CI.to_string(),
+                floats(&|r| r.evaluation_rmse_ci_cm_s),
+            ),
+        ]);
+    }
     RecordBatch::try_from_iter(columns).expect("columns of one table have equal lengths")
 }
+
+/// The confidence interval columns, in the table when DCNet has replicates.
+const CALIBRATION_CI: &str = "calibration_rmse_ci_cm_s";
+const EVALUATION_CI: &str = "evaluation_rmse_ci_cm_s";
 
 /// Reads `sweep.json` of `folder`.
 pub fn read_index(folder: &Path) -> Result<SweepIndex, ReadError> {
@@ -284,6 +337,8 @@ fn sweep_rows(batch: &Batch, swept: &[String]) -> Result<Vec<SweepRow>, String> 
     let evaluation = batch.floats("evaluation_rmse_cm_s")?;
     let improvement = batch.optional_floats("evaluation_improvement_pct");
     let training = batch.optional_floats("training_s");
+    let calibration_ci = batch.optional_float_column(CALIBRATION_CI);
+    let evaluation_ci = batch.optional_float_column(EVALUATION_CI);
     let mut values: Vec<Vec<Swept>> = vec![Vec::new(); point.len()];
     for key in swept {
         let column = batch
@@ -331,6 +386,8 @@ fn sweep_rows(batch: &Batch, swept: &[String]) -> Result<Vec<SweepRow>, String> 
             evaluation_rmse_cm_s: evaluation[i],
             evaluation_improvement_pct: improvement[i],
             training_s: training[i],
+            calibration_rmse_ci_cm_s: calibration_ci[i],
+            evaluation_rmse_ci_cm_s: evaluation_ci[i],
         })
         .collect())
 }

@@ -249,6 +249,14 @@ pub struct TrainingFile {
     /// Stop before `epochs` once the validation loss stops improving; absent: train
     /// every epoch, as the paper does.
     pub early_stopping: Option<EarlyStoppingFile>,
+    /// DCNets trained per error model, from independent seeds; left out of the
+    /// resolved spec when 1, so a spec without it keeps its results key.
+    #[serde(skip_serializing_if = "is_one")]
+    pub replicates: usize,
+}
+
+fn is_one(value: &usize) -> bool {
+    *value == 1
 }
 
 /// `[training.early_stopping]`: stop once `patience_epochs` epochs in a row have not
@@ -273,6 +281,7 @@ impl Default for TrainingFile {
             rmsprop_epsilon: 1e-8,
             checkpoint_every_epochs: 5,
             early_stopping: None,
+            replicates: 1,
         }
     }
 }

@@ -96,6 +96,11 @@ impl Spec {
         }
     }
 
+    /// How many DCNets the spec trains: one per trained error model and replicate.
+    pub fn model_count(&self) -> usize {
+        self.trained_models().len() * self.training.replicates
+    }
+
     /// The resolved spec as TOML, as stored beside the results.
     pub fn resolved_toml(&self) -> String {
         toml::to_string_pretty(&self.resolved).expect("a spec always serializes")
@@ -216,6 +221,9 @@ pub struct TrainingSpec {
     pub rmsprop_epsilon: f64,
     pub checkpoint_every_epochs: usize,
     pub early_stopping: Option<EarlyStopping>,
+    /// DCNets trained per error model, each from its own seeds (replicate 0 from the
+    /// seeds of a run without replicates).
+    pub replicates: usize,
 }
 
 /// Training stops once `patience` epochs in a row have not improved on the validation
@@ -865,14 +873,25 @@ fn check_estimators(
         kinds,
         error_models,
     } = estimators;
-    let mut kinds = parse_names("estimators.kinds", &kinds, faults);
-    if let Some(i) = kinds.iter().position(|&k| k == EstimatorKind::Bound) {
-        faults.add(
-            format!("estimators.kinds[{i}]"),
+    let names = kinds;
+    let mut kinds = parse_names("estimators.kinds", &names, faults);
+    // Two kinds that a spec does not list: the tables always have them, or have them
+    // whenever they apply.
+    for (kind, why) in [
+        (
+            EstimatorKind::Bound,
             "the bound is no method to list: it is computed for every DVL",
-        );
-        kinds.remove(i);
+        ),
+        (
+            EstimatorKind::DcnetEnsemble,
+            "\"dcnet_ensemble\" is not listed: it runs beside \"dcnet\" when training.replicates is above 1",
+        ),
+    ] {
+        if let Some(i) = names.iter().position(|name| *name == kind.to_string()) {
+            faults.add(format!("estimators.kinds[{i}]"), why);
+        }
     }
+    kinds.retain(|k| !matches!(k, EstimatorKind::Bound | EstimatorKind::DcnetEnsemble));
     let error_models = parse_names("estimators.error_models", &error_models, faults);
     (kinds, error_models)
 }
@@ -1091,6 +1110,7 @@ fn check_training(training: file::TrainingFile, faults: &mut Faults) -> Training
         rmsprop_epsilon,
         checkpoint_every_epochs,
         early_stopping,
+        replicates,
     } = training;
     let backend = backend.parse().unwrap_or_else(|message: String| {
         faults.add("training.backend", message);
@@ -1100,6 +1120,7 @@ fn check_training(training: file::TrainingFile, faults: &mut Faults) -> Training
         ("training.epochs", epochs),
         ("training.batch_size", batch_size),
         ("training.checkpoint_every_epochs", checkpoint_every_epochs),
+        ("training.replicates", replicates),
     ] {
         if value == 0 {
             faults.add(key, "0 must be at least 1");
@@ -1107,6 +1128,7 @@ fn check_training(training: file::TrainingFile, faults: &mut Faults) -> Training
     }
     ranges::EPOCHS.check("training.epochs", epochs as f64, faults);
     ranges::BATCH_SIZE.check("training.batch_size", batch_size as f64, faults);
+    ranges::REPLICATES.check("training.replicates", replicates as f64, faults);
     let learning_rates = check_learning_rates(learning_rate, faults);
     if !(rmsprop_alpha > 0.0 && rmsprop_alpha < 1.0) {
         faults.add(
@@ -1130,6 +1152,7 @@ fn check_training(training: file::TrainingFile, faults: &mut Faults) -> Training
         rmsprop_epsilon,
         checkpoint_every_epochs,
         early_stopping,
+        replicates,
     }
 }
 

@@ -90,6 +90,11 @@ pub const BATCH_SIZE: Limit = Limit {
     unit: "windows",
     why: "the paper's batches hold 256",
 };
+pub const REPLICATES: Limit = Limit {
+    max: 100.0,
+    unit: "replicates",
+    why: "at 100 the confidence interval's t factor is 1.98, near its limit 1.96: more replicates only train more models",
+};
 pub const SWEEP_POINTS: Limit = Limit {
     max: 10_000.0,
     unit: "points",

@@ -141,10 +141,16 @@ pub fn dataset_key(spec: &Spec, hashes: &DataHashes) -> String {
     ))
 }
 
-/// The key of `error_model`'s trained DCNet.
-pub fn model_key(spec: &Spec, error_model: ErrorModel, dataset_key: &str) -> String {
+/// The key of replicate `replicate` of `error_model`'s trained DCNet; replicate 0
+/// keeps the key of a run without replicates.
+pub fn model_key(
+    spec: &Spec,
+    error_model: ErrorModel,
+    replicate: usize,
+    dataset_key: &str,
+) -> String {
     let r = &spec.resolved;
-    hash(&(
+    let key = hash(&(
         ("model", TRAINING_CODE_VERSION, env!("CARGO_PKG_VERSION")),
         dataset_key,
         error_model.to_string(),
@@ -155,7 +161,11 @@ pub fn model_key(spec: &Spec, error_model: ErrorModel, dataset_key: &str) -> Str
         spec.training.learning_rate(error_model),
         (spec.training.rmsprop_alpha, spec.training.rmsprop_epsilon),
         &r.training.early_stopping,
-    ))
+    ));
+    if replicate == 0 {
+        return key;
+    }
+    hash(&(key, "replicate", replicate))
 }
 
 /// The key of a results folder: its resolved spec and the blocks it is put together
@@ -168,17 +178,22 @@ pub fn results_key(spec: &Spec, block_keys: &[&str]) -> String {
     ))
 }
 
-/// The key of one estimator's Monte Carlo block on the DVL at `dvl`; `model_key` is
-/// the key of the DCNet it runs, if it is one.
+/// The key of one estimator's Monte Carlo block on the DVL at `dvl`; `model_keys` are
+/// the keys of the DCNets it runs (one for DCNet, each replicate's for the ensemble).
 pub fn block_key(
     spec: &Spec,
     hashes: &DataHashes,
     dvl: usize,
     estimator: EstimatorKind,
     error_model: Option<ErrorModel>,
-    model_key: Option<&str>,
+    model_keys: &[&str],
 ) -> String {
     let r = &spec.resolved;
+    let model_key = match model_keys {
+        [] => None,
+        [one] => Some(one.to_string()),
+        many => Some(hash(&many)),
+    };
     hash(&(
         (
             "monte_carlo",

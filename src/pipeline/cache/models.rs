@@ -255,6 +255,7 @@ impl ModelStore {
         )?;
         Ok(Some(Trained {
             error_model,
+            replicate: history.replicate,
             model,
             history: history.history,
             best_epoch: history.best_epoch,
@@ -271,6 +272,7 @@ impl ModelStore {
         let summary = TrainingHistory {
             key: key.to_string(),
             error_model: trained.error_model,
+            replicate: trained.replicate,
             best_epoch: trained.best_epoch,
             history: trained.history.clone(),
             stop: trained.stop,
@@ -341,17 +343,19 @@ impl ModelStore {
         Ok(())
     }
 
-    /// The training state of the checkpoint of `key`, or a fresh one.
+    /// The training state of the checkpoint of `key`, or a fresh one for replicate
+    /// `replicate`.
     pub fn resume(
         &self,
         spec: &Spec,
         error_model: ErrorModel,
+        replicate: usize,
         key: &str,
     ) -> Result<State, CheckpointError> {
         let folder = self.stem(error_model, key).with_extension("checkpoint");
         let record = match self.checkpoint(error_model, key) {
             Ok(Some(record)) => record,
-            Ok(None) => return Ok(State::new(spec, error_model)),
+            Ok(None) => return Ok(State::new(spec, error_model, replicate)),
             Err(why) => {
                 let damaged = self.folder.with_file_name("damaged");
                 files::set_aside(&folder, &damaged).map_err(io_error(&folder))?;
@@ -359,7 +363,7 @@ impl ModelStore {
                     "DCNet {error_model}: damaged checkpoint {why}; moved to {} and trained from the start",
                     damaged.display()
                 );
-                return Ok(State::new(spec, error_model));
+                return Ok(State::new(spec, error_model, replicate));
             }
         };
         let epoch = record.epoch;
@@ -389,6 +393,7 @@ impl ModelStore {
             _ => None,
         };
         Ok(State {
+            replicate,
             model,
             optimizer,
             best,
@@ -429,11 +434,13 @@ pub enum Stage {
 }
 
 impl Stage {
-    /// `error_model`'s stored model under `key`, or its training from the checkpoint
-    /// if there is one. `fresh` trains from scratch whatever is stored.
+    /// `error_model`'s stored model under `key`, or the training of its replicate
+    /// `replicate` from the checkpoint if there is one. `fresh` trains from scratch
+    /// whatever is stored.
     pub fn start(
         spec: &Spec,
         error_model: ErrorModel,
+        replicate: usize,
         key: &str,
         store: &ModelStore,
         fresh: bool,
@@ -446,9 +453,9 @@ impl Stage {
             return Ok(Self::Done(Box::new(trained), Provenance::Reused));
         }
         let state = if fresh {
-            State::new(spec, error_model)
+            State::new(spec, error_model, replicate)
         } else {
-            store.resume(spec, error_model, key)?
+            store.resume(spec, error_model, replicate, key)?
         };
         let provenance = match state.history.len() {
             0 => Provenance::Trained,
@@ -569,7 +576,7 @@ mod tests {
         fresh: bool,
         progress: &indicatif::ProgressBar,
     ) -> Result<(Trained, Provenance), StageError> {
-        let mut training = Stage::start(spec, error_model, key, store, fresh)?;
+        let mut training = Stage::start(spec, error_model, 0, key, store, fresh)?;
         loop {
             match training {
                 Stage::Done(trained, provenance) => return Ok((*trained, provenance)),
@@ -585,6 +592,7 @@ mod tests {
         crate::pipeline::cache::model_key(
             spec,
             error_model,
+            0,
             &crate::pipeline::cache::dataset_key(spec, &hashes),
         )
     }
@@ -595,18 +603,18 @@ mod tests {
         let set = training_set(&spec);
         let em = ErrorModel::Em5;
 
-        let mut state = State::new(&spec, em);
+        let mut state = State::new(&spec, em, 0);
         run_epochs(&spec, &set, em, &mut state, 4);
         let uninterrupted = state.finish(em, crate::vocab::StopReason::AllEpochs);
 
         let dir = tempfile::tempdir().unwrap();
         let store = ModelStore::new(dir.path().to_path_buf());
         let key = key(&spec, em);
-        let mut state = State::new(&spec, em);
+        let mut state = State::new(&spec, em, 0);
         run_epochs(&spec, &set, em, &mut state, 2);
         store.save_checkpoint(&state, em, &key).unwrap();
         drop(state);
-        let mut resumed = store.resume(&spec, em, &key).unwrap();
+        let mut resumed = store.resume(&spec, em, 0, &key).unwrap();
         assert_eq!(resumed.next_epoch(), 3);
         run_epochs(&spec, &set, em, &mut resumed, 2);
         let resumed = resumed.finish(em, crate::vocab::StopReason::AllEpochs);
@@ -632,7 +640,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let store = ModelStore::new(dir.path().join("models"));
         let key = key(&spec, em);
-        let mut state = State::new(&spec, em);
+        let mut state = State::new(&spec, em, 0);
         run_epochs(&spec, &set, em, &mut state, 2);
         store.save_checkpoint(&state, em, &key).unwrap();
         assert_eq!(store.checkpoint_epoch(em, &key), Ok(Some(2)));
@@ -648,7 +656,7 @@ mod tests {
         assert!(
             matches!(store.checkpoint_epoch(em, &key), Err(why) if why.contains("epoch-2.optimizer"))
         );
-        let fresh = store.resume(&spec, em, &key).unwrap();
+        let fresh = store.resume(&spec, em, 0, &key).unwrap();
         assert_eq!(fresh.next_epoch(), 1, "training starts again");
         assert!(!store.stem(em, &key).with_extension("checkpoint").exists());
         assert_eq!(

@@ -118,10 +118,10 @@ pub fn series_look(estimator: EstimatorKind, error_model: Option<ErrorModel>) ->
         (_, None) => (BLACK, Stroke::Solid),
         (estimator, Some(model)) => (
             MODEL_COLORS[model as usize % MODEL_COLORS.len()],
-            if estimator == EstimatorKind::LeastSquares {
-                Stroke::Dashed
-            } else {
-                Stroke::Solid
+            match estimator {
+                EstimatorKind::LeastSquares => Stroke::Dashed,
+                EstimatorKind::DcnetEnsemble => Stroke::Dotted,
+                _ => Stroke::Solid,
             },
         ),
     };
@@ -150,6 +150,7 @@ pub fn estimator_color(estimator: EstimatorKind) -> RGBColor {
         EstimatorKind::LeastSquares => RGBColor(31, 119, 180),
         EstimatorKind::BeamWls => RGBColor(140, 86, 75),
         EstimatorKind::Dcnet => RGBColor(214, 39, 40),
+        EstimatorKind::DcnetEnsemble => RGBColor(148, 103, 189),
         EstimatorKind::Floor => GREY,
         EstimatorKind::Bound => BLACK,
     }

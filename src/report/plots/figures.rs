@@ -140,11 +140,15 @@ fn calibration(run: &StoredRun) -> PlotResult<MaybeDrawn> {
     }
     let dvls = run.dvls();
     let series = series_of(&run.calibration);
-    let caption = format!(
+    let mut caption = format!(
         "Calibration on {}: mean RMSE over {} runs against window size (T_conv ringed)",
         calibration_name(run),
         run.spec.calibration.monte_carlo_runs
     );
+    let replicates = run.spec.training.replicates;
+    if replicates > 1 {
+        caption += &format!("; DCNet: mean of {replicates} replicates, bars their 95 % CI");
+    }
     let width = 560 * dvls.len() as u32 + LEGEND_WIDTH;
     let svg = draw_svg((width, 620), |root| {
         let (panels, legend_area) = panels_and_legend(root, &caption, width, dvls.len())?;
@@ -218,6 +222,15 @@ fn calibration_panel(
                 .iter()
                 .map(|&point| Circle::new(point, 3, look.color.filled())),
         )?;
+        // The confidence interval across DCNet replicates, as error bars.
+        let bars = rows.iter().filter_map(|r| {
+            let ci = r
+                .rmse_ci_cm_s
+                .filter(|_| r.estimator == estimator && r.error_model == model)?;
+            let ends = [r.rmse_cm_s - ci, r.rmse_cm_s + ci].map(|v| (r.window_s, y.shown(v)));
+            Some(PathElement::new(ends.to_vec(), look.color.stroke_width(2)))
+        });
+        chart.draw_series(bars)?;
     }
     calibration_marks(&mut chart, &rows, &y)
 }
@@ -695,14 +708,19 @@ fn spread_box(
     Ok(())
 }
 
-/// Training and validation loss per epoch of each error model, log scale.
+/// Training and validation loss per epoch of each error model (and replicate, each in
+/// its model's colour), log scale.
 fn training_loss(run: &StoredRun) -> PlotResult<MaybeDrawn> {
     if run.training.is_empty() {
         return Ok(Err(
             "the run trained no DCNet (training.parquet is empty)".into()
         ));
     }
-    let mut models: Vec<ErrorModel> = run.training.iter().map(|e| e.error_model).collect();
+    let mut models: Vec<(ErrorModel, Option<usize>)> = run
+        .training
+        .iter()
+        .map(|e| (e.error_model, e.replicate))
+        .collect();
     models.dedup();
     let epochs = run
         .training
@@ -730,12 +748,12 @@ fn training_loss(run: &StoredRun) -> PlotResult<MaybeDrawn> {
             .y_desc("loss [(cm/s)²]")
             .draw()?;
         let mut entries = Vec::new();
-        for model in &models {
-            let look = series_look(EstimatorKind::Dcnet, Some(*model));
+        for &(model, replicate) in &models {
+            let look = series_look(EstimatorKind::Dcnet, Some(model));
             let epochs: Vec<_> = run
                 .training
                 .iter()
-                .filter(|e| e.error_model == *model)
+                .filter(|e| e.error_model == model && e.replicate == replicate)
                 .collect();
             let train = epochs
                 .iter()
@@ -754,6 +772,9 @@ fn training_loss(run: &StoredRun) -> PlotResult<MaybeDrawn> {
                     look.color.filled(),
                 )
             }))?;
+            if replicate.is_some_and(|r| r > 0) {
+                continue;
+            }
             entries.push((
                 Swatch::Line(look.color, Stroke::Solid),
                 format!("{model} training"),
