@@ -320,7 +320,7 @@ impl ProtocolResult {
             let block = &runs[start..end];
             let replicates = first_seen(block.iter().map(|r| r.replicate));
             let (calibration, evaluation) = if replicates == [None] {
-                summarize(block)
+                with_efficiency(summarize(block), bounds)
             } else {
                 let per_replicate: Vec<Tables> = replicates
                     .iter()
@@ -330,7 +330,7 @@ impl ProtocolResult {
                             .filter(|r| r.replicate == replicate)
                             .cloned()
                             .collect();
-                        summarize(&rows)
+                        with_efficiency(summarize(&rows), bounds)
                     })
                     .collect();
                 combine_replicates(block, &per_replicate)
@@ -346,11 +346,9 @@ impl ProtocolResult {
     }
 }
 
-/// Puts each DVL's bound after its estimators' rows, calibration rows for every window
-/// and evaluation rows at the bound's own T_conv, and sets every estimator's
-/// efficiency: the bound over its RMSE, at its window (calibration) or T_conv
-/// (evaluation).
-fn add_bounds(result: &mut ProtocolResult, bounds: &[BoundRow]) {
+/// The tables of one series with every row's efficiency: the bound over its RMSE, at
+/// its window (calibration) or T_conv (evaluation); none for the floor.
+fn with_efficiency((mut calibration, mut evaluation): Tables, bounds: &[BoundRow]) -> Tables {
     // The calibration bound of a window is scored on the rest of the one calibration
     // trajectory; an evaluation bound on the trajectory named.
     let bound = |dvl: &str, window_s: f64, trajectory: Option<&str>| {
@@ -368,14 +366,20 @@ fn add_bounds(result: &mut ProtocolResult, bounds: &[BoundRow]) {
             .filter(|_| kind != EstimatorKind::Floor)
             .map(|b| b.rmse_cm_s / rmse_cm_s)
     };
-    for row in &mut result.calibration {
+    for row in &mut calibration {
         let at = bound(&row.dvl, row.window_s, None);
         row.efficiency = efficiency(row.estimator, at, row.rmse_cm_s);
     }
-    for row in &mut result.evaluation {
+    for row in &mut evaluation {
         let at = bound(&row.dvl, row.t_conv_s, Some(&row.trajectory));
         row.efficiency = efficiency(row.estimator, at, row.rmse_cm_s);
     }
+    (calibration, evaluation)
+}
+
+/// Puts each DVL's bound after its estimators' rows: calibration rows for every window
+/// and evaluation rows at the bound's own T_conv.
+fn add_bounds(result: &mut ProtocolResult, bounds: &[BoundRow]) {
     for dvl in first_seen(bounds.iter().map(|b| b.dvl.as_str())) {
         let curve: Vec<&BoundRow> = bounds
             .iter()
@@ -486,7 +490,8 @@ fn summarize(block: &[RunRow]) -> Tables {
 /// One series from the tables of its replicates: each RMSE the mean of the replicates'
 /// means with its 95 % confidence interval, each standard deviation that of every run
 /// of every replicate (`block`); the calibration's T_conv the argmin of the mean curve,
-/// the evaluation's the mean of the replicates' T_conv.
+/// the evaluation's the mean of the replicates' T_conv; each efficiency the mean of the
+/// replicates' bounds (each at its own T_conv) over the mean RMSE.
 fn combine_replicates(block: &[RunRow], per_replicate: &[Tables]) -> Tables {
     let (mut calibration, mut evaluation) = per_replicate[0].clone();
     let pooled_std = |phase: Phase, keep: &dyn Fn(&RunRow) -> bool| {
@@ -498,9 +503,17 @@ fn combine_replicates(block: &[RunRow], per_replicate: &[Tables]) -> Tables {
         )
         .1
     };
+    // The mean of the replicates' bounds (efficiency × RMSE) over `mean`.
+    let efficiency = |bounds: Option<Vec<f64>>, mean: f64| {
+        bounds.map(|b| b.iter().sum::<f64>() / b.len() as f64 / mean)
+    };
     for (w, row) in calibration.iter_mut().enumerate() {
         let means: Vec<f64> = per_replicate.iter().map(|t| t.0[w].rmse_cm_s).collect();
         let (mean, ci) = mean_ci95(&means);
+        let bounds = per_replicate
+            .iter()
+            .map(|t| t.0[w].efficiency.map(|e| e * t.0[w].rmse_cm_s));
+        row.efficiency = efficiency(bounds.collect(), mean);
         row.rmse_cm_s = mean;
         row.rmse_ci_cm_s = Some(ci);
         row.rmse_std_cm_s = pooled_std(Phase::Calibration, &|r| r.window_s == row.window_s);
@@ -513,6 +526,10 @@ fn combine_replicates(block: &[RunRow], per_replicate: &[Tables]) -> Tables {
     for (j, row) in evaluation.iter_mut().enumerate() {
         let means: Vec<f64> = per_replicate.iter().map(|t| t.1[j].rmse_cm_s).collect();
         let (mean, ci) = mean_ci95(&means);
+        let bounds = per_replicate
+            .iter()
+            .map(|t| t.1[j].efficiency.map(|e| e * t.1[j].rmse_cm_s));
+        row.efficiency = efficiency(bounds.collect(), mean);
         row.rmse_cm_s = mean;
         row.rmse_ci_cm_s = Some(ci);
         row.rmse_std_cm_s = pooled_std(Phase::Evaluation, &|r| r.trajectory == row.trajectory);
@@ -744,17 +761,39 @@ mod tests {
                 runs.push(dcnet_row(replicate, run, Phase::Evaluation, t_conv, test));
             }
         }
-        let result = ProtocolResult::from_runs(runs, &[]);
-        assert_eq!(result.calibration.len(), 2);
-        let [at_20, at_40] = [&result.calibration[0], &result.calibration[1]];
+        // The bound on T: 0.5 cm/s from 20 s of calibration, 1.4 from 40 s; on the
+        // calibration trajectory 1.0 at both.
+        let bound = |window_s: f64, phase: Phase, rmse_cm_s: f64| BoundRow {
+            dvl: "DVL1".into(),
+            window_s,
+            phase,
+            trajectory: "T".into(),
+            rmse_cm_s,
+            rmse_std_cm_s: 0.0,
+        };
+        let bounds = [
+            bound(20.0, Phase::Calibration, 1.0),
+            bound(20.0, Phase::Evaluation, 0.5),
+            bound(40.0, Phase::Calibration, 1.0),
+            bound(40.0, Phase::Evaluation, 1.4),
+        ];
+        let result = ProtocolResult::from_runs(runs, &bounds);
+        let estimator = |r: &&CalibrationRow| r.estimator == EstimatorKind::Dcnet;
+        let calibration: Vec<&CalibrationRow> =
+            result.calibration.iter().filter(estimator).collect();
+        assert_eq!(calibration.len(), 2);
+        let [at_20, at_40] = [calibration[0], calibration[1]];
+        assert_eq!(at_20.efficiency, Some(1.0 / 2.0));
         assert_eq!(at_20.rmse_cm_s, 2.0);
         assert!((at_20.rmse_ci_cm_s.unwrap() - 2.4841).abs() < 1e-4);
         assert_eq!((at_40.rmse_cm_s, at_40.rmse_ci_cm_s), (2.0, Some(0.0)));
         // Equal means: the first of equals, as for one model.
         assert!(at_20.is_t_conv && !at_40.is_t_conv);
-        assert_eq!(result.evaluation.len(), 1);
+        assert_eq!(result.evaluation.len(), 2, "DCNet's row and the bound's");
         let test = &result.evaluation[0];
         assert_eq!(test.rmse_cm_s, 2.0);
+        // Each replicate's bound at its own T_conv, 0.5, 0.5 and 1.4, over the mean RMSE.
+        assert!((test.efficiency.unwrap() - 0.8 / 2.0).abs() < 1e-12);
         assert!((test.rmse_ci_cm_s.unwrap() - 2.4841).abs() < 1e-4);
         assert!((test.t_conv_s - 80.0 / 3.0).abs() < 1e-12);
         // The spread over all six runs at window 20: 0.5 around 1, 2, 3.
