@@ -132,6 +132,16 @@ impl EstimatorKind {
         Self::Bound,
     ];
 
+    /// The kinds a spec lists in `estimators.kinds`: not the ensemble, which runs
+    /// whenever DCNet has replicates, nor the bound, which is computed for every DVL.
+    pub const LISTED: [EstimatorKind; 5] = [
+        Self::Baseline,
+        Self::LeastSquares,
+        Self::BeamWls,
+        Self::Dcnet,
+        Self::Floor,
+    ];
+
     /// Whether the method is run once per error model.
     pub fn takes_error_model(self) -> bool {
         matches!(self, Self::LeastSquares | Self::Dcnet | Self::DcnetEnsemble)
@@ -167,8 +177,11 @@ impl fmt::Display for EstimatorKind {
 
 impl FromStr for EstimatorKind {
     type Err = String;
+    /// Any kind a table names; an unknown name is told the kinds a spec may list.
     fn from_str(s: &str) -> Result<Self, String> {
-        parse_by_name(&Self::ALL, "estimator", s)
+        parse_by_name(&Self::ALL, "estimator", s).map_err(|_| {
+            parse_by_name(&Self::LISTED, "estimator", s).expect_err("not among all kinds")
+        })
     }
 }
 
