@@ -411,10 +411,10 @@ fn three_shards_and_collect_write_what_one_process_writes() {
 fn a_sweep_over_two_keys_runs_every_point_and_tabulates_them() {
     let project = project(false);
     let dir = project.path();
-    let text = std::fs::read_to_string(dir.join("experiments/quick.toml")).unwrap();
-    let text = text.replacen("name = \"quick\"", "name = \"quick-sweep\"", 1)
-        + "\n[sweep.values]\n\"training.learning_rate\" = [5e-4, 2e-3]\nmodel.conv_channels = [8, 16]\n";
-    std::fs::write(dir.join("experiments/sweep.toml"), text).unwrap();
+    write_quick_sweep(
+        dir,
+        "\"training.learning_rate\" = [5e-4, 2e-3]\nmodel.conv_channels = [8, 16]\n",
+    );
     let spec = ["experiments/sweep.toml", "--set", "training.epochs=2"];
 
     // Points that differ only in a Monte Carlo setting share their models.

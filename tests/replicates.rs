@@ -209,10 +209,7 @@ fn each_replicate_is_a_training_and_a_third_trains_only_the_third() {
 fn a_sweep_with_replicates_tabulates_dcnet_intervals() {
     let project = project(false);
     let dir = project.path();
-    let text = std::fs::read_to_string(dir.join("experiments/quick.toml")).unwrap();
-    let text = text.replacen("name = \"quick\"", "name = \"quick-sweep\"", 1)
-        + "\n[sweep.values]\n\"calibration.monte_carlo_runs\" = [3, 4]\n";
-    std::fs::write(dir.join("experiments/sweep.toml"), text).unwrap();
+    write_quick_sweep(dir, "\"calibration.monte_carlo_runs\" = [3, 4]\n");
     let args = [
         "run",
         "experiments/sweep.toml",
@@ -291,10 +288,7 @@ fn a_shard_holds_every_replicate_of_its_models_and_their_ensemble() {
 fn a_sweep_over_replicates_shares_replicate_zero_with_the_point_without() {
     let project = project(false);
     let dir = project.path();
-    let text = std::fs::read_to_string(dir.join("experiments/quick.toml")).unwrap();
-    let text = text.replacen("name = \"quick\"", "name = \"quick-sweep\"", 1)
-        + "\n[sweep.values]\n\"training.replicates\" = [1, 2]\n";
-    std::fs::write(dir.join("experiments/sweep.toml"), text).unwrap();
+    write_quick_sweep(dir, "\"training.replicates\" = [1, 2]\n");
     let args = [
         "run",
         "experiments/sweep.toml",

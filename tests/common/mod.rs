@@ -96,6 +96,16 @@ pub fn quick_run(dir: &Path, extra: &[&str]) -> Output {
     output
 }
 
+/// Writes `experiments/sweep.toml` in `dir`: quick.toml named "quick-sweep", with the
+/// `[sweep.values]` table whose lines are `values`.
+pub fn write_quick_sweep(dir: &Path, values: &str) {
+    let quick = std::fs::read_to_string(dir.join("experiments/quick.toml")).unwrap();
+    let text = quick.replacen("name = \"quick\"", "name = \"quick-sweep\"", 1)
+        + "\n[sweep.values]\n"
+        + values;
+    std::fs::write(dir.join("experiments/sweep.toml"), text).unwrap();
+}
+
 /// A small quick run: 3 Monte Carlo runs, 2 epochs.
 pub fn small_quick_run(dir: &Path, extra: &[&str]) {
     let small = [
