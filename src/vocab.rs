@@ -147,6 +147,14 @@ impl EstimatorKind {
         matches!(self, Self::LeastSquares | Self::Dcnet | Self::DcnetEnsemble)
     }
 
+    /// The label of this method with `error_model`: "DCNet EM5", or "baseline".
+    pub fn label_with(self, error_model: Option<ErrorModel>) -> String {
+        match error_model {
+            Some(model) => format!("{} {model}", self.label()),
+            None => self.label().to_string(),
+        }
+    }
+
     /// How the method is labelled in tables.
     pub fn label(self) -> &'static str {
         match self {

@@ -16,6 +16,7 @@ pub mod compare;
 mod latex;
 pub mod plots;
 pub mod tables;
+use crate::evaluate::{CalibrationRow, EvaluationRow};
 use crate::report::plots::Written;
 use crate::results::read::StoredRun;
 use crate::spec::published::PublishedCell;
@@ -453,29 +454,13 @@ impl<'a> Source<'a> {
                 series
                     .into_iter()
                     .map(|(kind, model)| {
-                        let label = match model {
-                            Some(model) => format!("{} {model}", kind.label()),
-                            None => kind.label().to_string(),
-                        };
-                        let at_t_conv = self.run.calibration.iter().find(|r| {
-                            r.is_t_conv
-                                && r.dvl == *dvl
-                                && r.estimator == kind
-                                && r.error_model == model
-                        });
+                        let label = kind.label_with(model);
+                        let at_t_conv = self.at_t_conv(dvl, kind, model);
                         let mut cells = vec![
                             at_t_conv.map(|r| figure(r.rmse_cm_s, r.rmse_ci_cm_s, r.efficiency)),
                         ];
                         cells.extend(self.trajectories.iter().map(|trajectory| {
-                            self.run
-                                .evaluation
-                                .iter()
-                                .find(|r| {
-                                    r.dvl == *dvl
-                                        && r.trajectory == *trajectory
-                                        && r.estimator == kind
-                                        && r.error_model == model
-                                })
+                            self.evaluated(dvl, trajectory, kind, model)
                                 .map(|r| figure(r.rmse_cm_s, r.rmse_ci_cm_s, r.efficiency))
                         }));
                         let t_conv = at_t_conv.map_or(String::new(), |r| r.window_s.to_string());
@@ -497,6 +482,35 @@ impl<'a> Source<'a> {
         }
     }
 
+    /// The calibration row at T_conv of `dvl`, `kind` and `model`.
+    fn at_t_conv(
+        &self,
+        dvl: &str,
+        kind: EstimatorKind,
+        model: Option<ErrorModel>,
+    ) -> Option<&'a CalibrationRow> {
+        self.run
+            .calibration
+            .iter()
+            .find(|r| r.is_t_conv && r.dvl == dvl && r.estimator == kind && r.error_model == model)
+    }
+
+    /// The evaluation row of `dvl` on `trajectory`, `kind` and `model`.
+    fn evaluated(
+        &self,
+        dvl: &str,
+        trajectory: &str,
+        kind: EstimatorKind,
+        model: Option<ErrorModel>,
+    ) -> Option<&'a EvaluationRow> {
+        self.run.evaluation.iter().find(|r| {
+            r.dvl == dvl
+                && r.trajectory == trajectory
+                && r.estimator == kind
+                && r.error_model == model
+        })
+    }
+
     /// The calibration cell at T_conv of `dvl`, `kind` and `model`, beside the
     /// published one.
     fn calibration_cell(
@@ -506,19 +520,15 @@ impl<'a> Source<'a> {
         model: Option<ErrorModel>,
         tally: &mut Tally,
     ) -> Option<Cell> {
-        self.run
-            .calibration
-            .iter()
-            .find(|r| r.is_t_conv && r.dvl == dvl && r.estimator == kind && r.error_model == model)
-            .map(|r| {
-                let ours = Figure {
-                    rmse_cm_s: r.rmse_cm_s,
-                    ci_cm_s: r.rmse_ci_cm_s,
-                    detail: Some(Detail::TConv(r.window_s)),
-                };
-                let paper = self.published(dvl, kind, model, None);
-                Cell::new(ours, paper, Phase::Calibration, self.tolerance, tally)
-            })
+        self.at_t_conv(dvl, kind, model).map(|r| {
+            let ours = Figure {
+                rmse_cm_s: r.rmse_cm_s,
+                ci_cm_s: r.rmse_ci_cm_s,
+                detail: Some(Detail::TConv(r.window_s)),
+            };
+            let paper = self.published(dvl, kind, model, None);
+            Cell::new(ours, paper, Phase::Calibration, self.tolerance, tally)
+        })
     }
 
     /// Evaluation, the paper's layout: one DVL × trajectory row per cell pair, `first`
@@ -568,29 +578,20 @@ impl<'a> Source<'a> {
         with_paper: bool,
         tally: &mut Tally,
     ) -> Option<Cell> {
-        self.run
-            .evaluation
-            .iter()
-            .find(|r| {
-                r.dvl == dvl
-                    && r.trajectory == trajectory
-                    && r.estimator == kind
-                    && r.error_model == model
-            })
-            .map(|r| {
-                let ours = Figure {
-                    rmse_cm_s: r.rmse_cm_s,
-                    ci_cm_s: r.rmse_ci_cm_s,
-                    detail: r
-                        .improvement_pct
-                        .filter(|_| kind != EstimatorKind::Baseline)
-                        .map(Detail::Improvement),
-                };
-                let paper = self
-                    .published(dvl, kind, model, Some(trajectory))
-                    .filter(|_| with_paper);
-                Cell::new(ours, paper, Phase::Evaluation, self.tolerance, tally)
-            })
+        self.evaluated(dvl, trajectory, kind, model).map(|r| {
+            let ours = Figure {
+                rmse_cm_s: r.rmse_cm_s,
+                ci_cm_s: r.rmse_ci_cm_s,
+                detail: r
+                    .improvement_pct
+                    .filter(|_| kind != EstimatorKind::Baseline)
+                    .map(Detail::Improvement),
+            };
+            let paper = self
+                .published(dvl, kind, model, Some(trajectory))
+                .filter(|_| with_paper);
+            Cell::new(ours, paper, Phase::Evaluation, self.tolerance, tally)
+        })
     }
 }
 

@@ -264,10 +264,7 @@ fn with_ci<T>(
     ci: impl Fn(&T) -> Option<f64>,
 ) -> RecordBatch {
     if rows.iter().any(|r| ci(r).is_some()) {
-        columns.push((
-            RMSE_CI,
-            Arc::new(Float64Array::from_iter(rows.iter().map(ci))) as ArrayRef,
-        ));
+        columns.push((RMSE_CI, optional_floats(rows, ci)));
     }
     batch(columns)
 }

@@ -107,10 +107,7 @@ const MODEL_COLORS: [RGBColor; 5] = [
 /// baseline black, the beam-model WLS brown and dashed, the floor grey and dotted, the
 /// bound black and dotted.
 pub fn series_look(estimator: EstimatorKind, error_model: Option<ErrorModel>) -> Look {
-    let label = match error_model {
-        Some(model) => format!("{} {model}", estimator.label()),
-        None => estimator.label().to_string(),
-    };
+    let label = estimator.label_with(error_model);
     let (color, stroke) = match (estimator, error_model) {
         (EstimatorKind::Floor, _) => (GREY, Stroke::Dotted),
         (EstimatorKind::Bound, _) => (BLACK, Stroke::Dotted),
