@@ -1,15 +1,25 @@
 #!/usr/bin/env bash
 # A Slurm job array that runs one experiment in N shards, then collects the results.
+# From the folder that holds the spec, on a filesystem every node mounts:
 #
-#   sbatch --array=0-7 docs/slurm-array.sh experiments/sweep.toml
-#   sbatch --dependency=afterok:<array job id> --wrap \
-#       "dcnet-exp collect experiments/sweep.toml --out /shared/results"
+#   mkdir -p logs
+#   job=$(sbatch --parsable --array=0-7 docs/slurm-array.sh experiments/sweep.toml)
+#   sbatch --dependency=afterany:$job --output=logs/collect-%j.out \
+#       --wrap "dcnet-exp collect experiments/sweep.toml --out /shared/results"
 #
 # Every shard writes its models and Monte Carlo blocks into /shared/results/.cache/ on
 # the shared filesystem; `collect` puts the results folders together from them. The
 # array indices must run from 0 to N-1 (N = the array size): dcnet-exp reads K from
 # SLURM_ARRAY_TASK_ID. A shard that is killed or preempted resumes where it stopped when
-# it is requeued (training checkpoints, stored blocks), so --requeue is safe.
+# it is requeued (training checkpoints, stored blocks), so --requeue is safe. A shard
+# whose model fails (a diverging training) exits 2 and the others go on; collect, run
+# after every task whatever its end (afterany), writes the results without that model
+# and exits 2 naming it. Each task's log says every 30 s how far its tasks are.
+#
+# sbatch's options override the #SBATCH lines (--cpus-per-task=2 --mem=4G on a small
+# node). The environment passes to the jobs: DCNET_RESULTS sets the results folder,
+# DCNET_LOG_EVERY the seconds between progress lines, and dcnet-exp must be on PATH.
+# scripts/slurm-e2e.sh submits this file, unchanged, to a one-node Slurm.
 #SBATCH --job-name=dcnet-exp
 #SBATCH --cpus-per-task=8
 #SBATCH --mem=16G

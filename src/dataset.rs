@@ -8,10 +8,10 @@
 
 use crate::data::Trajectory;
 use crate::noise::{BeamGeometry, measure_trajectory};
+use crate::progress::Progress;
 use crate::rng::task_rng;
 use crate::spec::{Grid, Spec, window_starts};
 use crate::vocab::SensorErrors;
-use indicatif::ProgressBar;
 use rayon::prelude::*;
 
 /// Rows of one input window: DVL x, y, z and GNSS-RTK x, y, z.
@@ -114,6 +114,11 @@ impl TrainingSet {
         self.is_validation.iter().filter(|&&v| v).count()
     }
 
+    /// The windows an epoch trains on.
+    pub fn training_len(&self) -> usize {
+        self.len() - self.validation_len()
+    }
+
     /// Bytes of the window data a set of `windows` windows of `window` samples holds
     /// (in floating point, so that no size overflows).
     pub fn size_bytes(windows: f64, window: f64) -> f64 {
@@ -123,7 +128,7 @@ impl TrainingSet {
 }
 
 /// Generates the whole training set; `progress` advances once per combination.
-pub fn generate(spec: &Spec, trajectories: &[Trajectory], progress: &ProgressBar) -> TrainingSet {
+pub fn generate(spec: &Spec, trajectories: &[Trajectory], progress: &Progress) -> TrainingSet {
     let geometry = BeamGeometry::janus_x(spec.beam_pitch_deg);
     let points = spec.grid.points();
     let window = spec.dataset.window_samples;
@@ -196,7 +201,7 @@ mod tests {
                 .num_threads(n)
                 .build()
                 .unwrap();
-            pool.install(|| generate(&spec, &trajectories, &ProgressBar::hidden()))
+            pool.install(|| generate(&spec, &trajectories, &Progress::hidden()))
         };
         let one = with_threads(1);
         assert_eq!(one, with_threads(2));
@@ -214,7 +219,7 @@ mod tests {
             "sensors.gnss_noise_cm_s=0.0",
         ]);
         let trajectories = load_trajectories(&spec).unwrap();
-        let set = generate(&spec, &trajectories, &ProgressBar::hidden());
+        let set = generate(&spec, &trajectories, &Progress::hidden());
         let w = set.window;
         let second = set.windows_per_combination - 1; // the last window of S2
         let truth = &trajectories[1].ground_truth;

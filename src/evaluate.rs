@@ -21,12 +21,12 @@ use crate::bound::{BoundRow, bounds};
 use crate::data::Trajectory;
 use crate::estimators::{DvlEstimator, set_up};
 use crate::noise::{BeamGeometry, Measurements, measure_trajectory};
+use crate::progress::Progress;
 use crate::rng::task_rng;
 use crate::spec::{Dvl, Spec};
 use crate::train::Trained;
 use crate::vocab::{Correction, ErrorModel, EstimatorKind, Phase};
 use crate::{Vec3, first_seen};
-use indicatif::ProgressBar;
 use rayon::prelude::*;
 
 /// One estimator's result in one run, on one window (calibration) or trajectory
@@ -94,7 +94,7 @@ pub fn run_protocol(
     spec: &Spec,
     trajectories: &[Trajectory],
     dcnets: &[Trained],
-    progress: &ProgressBar,
+    progress: &Progress,
 ) -> ProtocolResult {
     let runs: Vec<RunRow> = spec
         .dvls
@@ -117,7 +117,7 @@ pub fn run_block(
     trajectories: &[Trajectory],
     dvl: &Dvl,
     entries: &[DvlEstimator],
-    progress: &ProgressBar,
+    progress: &Progress,
 ) -> Vec<Vec<RunRow>> {
     let block = Block {
         spec,
@@ -127,8 +127,13 @@ pub fn run_block(
         geometry: BeamGeometry::janus_x(spec.beam_pitch_deg),
         progress,
     };
+    progress.set_message(format!(
+        "calibration on {}",
+        trajectories[spec.calibration.trajectory].name
+    ));
     let calibrated = block.calibrate_runs();
     let t_conv = block.t_conv(&calibrated);
+    progress.set_message("evaluation at T_conv".to_string());
     let evaluated = block.evaluate_runs(&calibrated, &t_conv);
     (0..entries.len())
         .map(|e| block.entry_rows(e, &calibrated, &evaluated, t_conv[e]))
@@ -148,7 +153,7 @@ struct Block<'a> {
     dvl: &'a Dvl,
     entries: &'a [DvlEstimator],
     geometry: BeamGeometry,
-    progress: &'a ProgressBar,
+    progress: &'a Progress,
 }
 
 impl Block<'_> {
@@ -657,7 +662,7 @@ mod tests {
             &format!("calibration.monte_carlo_runs={runs}"),
         ]);
         let trajectories = crate::data::load_trajectories(&spec).unwrap();
-        let result = run_protocol(&spec, &trajectories, &[], &ProgressBar::hidden());
+        let result = run_protocol(&spec, &trajectories, &[], &Progress::hidden());
         let bound_rows = result
             .calibration
             .iter()

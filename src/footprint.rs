@@ -250,7 +250,8 @@ mod tests {
     fn the_training_set_part_is_the_set_the_dataset_generates() {
         let spec = quick_spec(&[]);
         let trajectories = crate::data::load_trajectories(&spec).unwrap();
-        let set = crate::dataset::generate(&spec, &trajectories, &indicatif::ProgressBar::hidden());
+        let set =
+            crate::dataset::generate(&spec, &trajectories, &crate::progress::Progress::hidden());
         let footprint = Footprint::of(&spec, &lengths(&spec), 2);
         let part = footprint
             .parts

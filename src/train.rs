@@ -12,13 +12,13 @@
 
 use crate::dataset::{INPUT_ROWS, TARGET_ROWS, TrainingSet};
 use crate::model::{Dcnet, Settings, Windows, split_terms, truth_cm_s};
+use crate::progress::Progress;
 use crate::rng::task_rng;
 use crate::spec::Spec;
 use crate::vocab::{ErrorModel, StopReason};
 use burn::module::Module;
 use burn::optim::{GradientsParams, ModuleOptimizer, RmsPropConfig};
 use burn::tensor::{Device, Tensor};
-use indicatif::ProgressBar;
 use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
 use std::time::Instant;
@@ -250,7 +250,7 @@ pub fn epoch_order(
 
 /// One optimizer step per batch of `order`, as epoch `epoch` (which seeds the dropout
 /// masks). Returns the sum of the batch losses weighted by batch size. `progress`
-/// advances once per batch.
+/// advances by each batch's samples.
 pub fn train_pass(
     spec: &Spec,
     set: &TrainingSet,
@@ -258,7 +258,7 @@ pub fn train_pass(
     state: &mut State,
     epoch: usize,
     order: &[usize],
-    progress: &ProgressBar,
+    progress: &Progress,
 ) -> Result<f64, TrainError> {
     let device = spec.training.backend.device().autodiff();
     let settings = Settings::from(&spec.model);
@@ -272,7 +272,6 @@ pub fn train_pass(
     let learning_rate = spec.training.learning_rate(error_model);
     let mut loss_sum = 0.0;
     let mut model = state.model.clone();
-    let label = format!("DCNet {error_model} epoch {epoch}/{}", spec.training.epochs);
     for (batch, indices) in order.chunks(spec.training.batch_size).enumerate() {
         let (windows, truth) = batch_of(set, indices, &settings, &device);
         let terms = model.forward(&windows, &settings, Some(&mut dropout_rng));
@@ -287,10 +286,13 @@ pub fn train_pass(
             });
         }
         loss_sum += f64::from(value) * indices.len() as f64;
-        progress.set_message(format!("{label} loss {value:.4}"));
+        progress.set_message(format!(
+            "epoch {epoch}/{}, batch loss {value:.4}",
+            spec.training.epochs
+        ));
         let grads = GradientsParams::from_grads(loss.backward(), &model);
         model = state.optimizer.step(learning_rate, model, grads);
-        progress.inc(1);
+        progress.inc(indices.len());
     }
     state.model = model;
     Ok(loss_sum)
@@ -303,7 +305,7 @@ pub fn run_epoch(
     set: &TrainingSet,
     error_model: ErrorModel,
     state: &mut State,
-    progress: &ProgressBar,
+    progress: &Progress,
 ) -> Result<(), TrainError> {
     let epoch = state.next_epoch();
     let clock = Instant::now();
@@ -383,7 +385,7 @@ pub fn seconds_per_batch(spec: &Spec, error_model: ErrorModel) -> Result<f64, Tr
     };
     let order: Vec<usize> = (0..batch).collect();
     let mut state = State::new(spec, error_model, 0);
-    let hidden = ProgressBar::hidden();
+    let hidden = Progress::hidden();
     one_thread_pool().install(|| {
         let mut fastest = f64::INFINITY;
         for epoch in 1..=2 {
@@ -402,11 +404,6 @@ pub fn one_thread_pool() -> rayon::ThreadPool {
         .expect("a pool of one thread")
 }
 
-/// Batches in one epoch.
-pub fn batches_per_epoch(spec: &Spec, set: &TrainingSet) -> usize {
-    (set.len() - set.validation_len()).div_ceil(spec.training.batch_size)
-}
-
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
@@ -415,7 +412,7 @@ pub(crate) mod tests {
     /// The training set of `spec`.
     pub(crate) fn training_set(spec: &Spec) -> TrainingSet {
         let trajectories = crate::data::load_trajectories(spec).unwrap();
-        crate::dataset::generate(spec, &trajectories, &ProgressBar::hidden())
+        crate::dataset::generate(spec, &trajectories, &Progress::hidden())
     }
 
     /// Runs `epochs` more epochs of `error_model` on `state`.
@@ -427,7 +424,7 @@ pub(crate) mod tests {
         epochs: usize,
     ) {
         for _ in 0..epochs {
-            run_epoch(spec, set, error_model, state, &ProgressBar::hidden()).unwrap();
+            run_epoch(spec, set, error_model, state, &Progress::hidden()).unwrap();
         }
     }
     use crate::estimators::Estimator;
@@ -664,7 +661,7 @@ pub(crate) mod tests {
                     &set,
                     ErrorModel::Em3,
                     &mut state,
-                    &ProgressBar::hidden(),
+                    &Progress::hidden(),
                 )
                 .err()
             })

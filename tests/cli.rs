@@ -130,9 +130,10 @@ fn quick_run_prints_and_stores_both_tables() {
     assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
 }
 
-/// The lines of a run's stderr that say how each DCNet came to be, without its key.
+/// The lines of a run's stderr that say how each DCNet came to be, without its key, in
+/// the order of the error models (trainings end in any order).
 fn provenance(output: &std::process::Output) -> Vec<String> {
-    stderr(output)
+    let mut lines: Vec<String> = stderr(output)
         .lines()
         .filter(|l| l.starts_with("DCNet EM"))
         .map(|l| {
@@ -140,7 +141,88 @@ fn provenance(output: &std::process::Output) -> Vec<String> {
             let model = model.split(' ').take(2).collect::<Vec<_>>().join(" ");
             format!("{model}:{}", rest.split(';').next().unwrap())
         })
-        .collect()
+        .collect();
+    lines.sort();
+    lines
+}
+
+/// Where stderr is not a terminal (a cluster job's log), each task logs a plain line
+/// at most every `--log-every` seconds, with what it is doing, how far it is, its rate
+/// and its ETA, and one line when it ends. By default (30 s) a run of seconds logs only
+/// the ends.
+#[test]
+fn a_run_logged_to_a_file_says_how_far_each_task_is_and_when_it_ends() {
+    let project = project(false);
+    let small = [
+        "--set",
+        "training.epochs=3",
+        "--set",
+        "calibration.monte_carlo_runs=3",
+    ];
+    let by_default = stderr(&quick_run(project.path(), &small));
+    assert!(!by_default.contains("/s, ETA"), "{by_default}");
+    std::fs::remove_dir_all(project.path().join("results")).unwrap();
+
+    let log = stderr(&quick_run(
+        project.path(),
+        &[&small[..], &["--log-every", "0"]].concat(),
+    ));
+    let lines: Vec<&str> = log.lines().collect();
+    // "DCNet EM1 0123456789abcdef: epoch 2/3, batch loss 0.4321, 3200/4752 samples,
+    // 31000 samples/s, ETA 1s"
+    for model in ["EM1", "EM2", "EM3", "EM4", "EM5"] {
+        let task = format!("DCNet {model} ");
+        let progress: Vec<usize> = (0..lines.len())
+            .filter(|&i| lines[i].starts_with(&task) && lines[i].contains(" samples/s, ETA "))
+            .collect();
+        assert!(!progress.is_empty(), "no progress line of {model}:\n{log}");
+        for &i in &progress {
+            let (name, rest) = lines[i].split_once(": ").unwrap();
+            assert_eq!(name.len(), task.len() + 16, "{}", lines[i]);
+            assert!(rest.starts_with("epoch "), "{}", lines[i]);
+            assert!(rest.contains("/3, batch loss "), "{}", lines[i]);
+        }
+        let last = lines[*progress.last().unwrap()];
+        let done = last.split(", ").nth(2).unwrap();
+        let (position, len) = done.trim_end_matches(" samples").split_once('/').unwrap();
+        assert_eq!(position, len, "the last line is not at the end: {last}");
+        assert!(last.contains("epoch 3/3"), "{last}");
+        assert!(last.ends_with("ETA 0s"), "{last}");
+        let ended = lines
+            .iter()
+            .position(|l| l.starts_with(&task) && l.contains(": trained; best validation loss"))
+            .unwrap_or_else(|| panic!("no end line for {model}:\n{log}"));
+        assert!(ended > *progress.last().unwrap(), "{log}");
+    }
+    for (task, doing, unit) in [
+        ("dataset ", "", "12/12 combinations"),
+        (
+            "monte carlo quick DVL1: ",
+            "calibration on SCal, ",
+            "1/6 passes",
+        ),
+        (
+            "monte carlo quick DVL2: ",
+            "evaluation at T_conv, ",
+            "6/6 passes",
+        ),
+    ] {
+        assert!(
+            lines
+                .iter()
+                .any(|l| l.starts_with(task) && l.contains(&format!("{doing}{unit}, "))),
+            "no line of {task}{doing}{unit}:\n{log}"
+        );
+    }
+    let ends = [
+        "dataset ",
+        "monte carlo quick DVL1: ",
+        "monte carlo quick DVL2: ",
+    ];
+    for task in ends {
+        let last = lines.iter().rposition(|l| l.starts_with(task)).unwrap();
+        assert!(!lines[last].contains("ETA"), "{task} logs no end: {log}");
+    }
 }
 
 #[test]
@@ -486,7 +568,7 @@ fn bad_arguments_and_names_are_bad_input_before_anything_runs() {
     let dir = project(false);
     let d = dir.path();
     std::fs::write(d.join("a-file"), "").unwrap();
-    let cases: [(&[&str], &str); 6] = [
+    let cases: [(&[&str], &str); 7] = [
         (
             &["--threads", "10000", "plan", "experiments/quick.toml"],
             "error: --threads 10000: give 1 to 1024",
@@ -494,6 +576,10 @@ fn bad_arguments_and_names_are_bad_input_before_anything_runs() {
         (
             &["run", "experiments/quick.toml", "--out", "a-file"],
             "error: --out a-file: is a file; results go into a folder",
+        ),
+        (
+            &["--log-every", "1e6", "plan", "experiments/quick.toml"],
+            "error: --log-every 1000000 (or DCNET_LOG_EVERY): give 0 to 86400 seconds",
         ),
         (
             &["bench", "experiments/quick.toml", "--repeat", "0"],

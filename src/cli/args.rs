@@ -19,6 +19,10 @@ pub struct Cli {
     /// Worker threads [default: all cores, or RAYON_NUM_THREADS]; results do not depend on it
     #[arg(long, global = true)]
     pub(super) threads: Option<usize>,
+    /// Where stderr is not a terminal (a cluster job's log), seconds between two
+    /// progress lines of a task [default: 30]
+    #[arg(long, global = true, env = "DCNET_LOG_EVERY", value_name = "SECONDS")]
+    pub(super) log_every: Option<f64>,
     #[command(subcommand)]
     pub(super) command: Command,
 }

@@ -36,7 +36,7 @@ pub(super) fn bench(
         seconds.sort_by(f64::total_cmp);
         (seconds[0], seconds[seconds.len() / 2])
     };
-    let hidden = indicatif::ProgressBar::hidden();
+    let hidden = crate::progress::Progress::hidden();
     let windows = DatasetSize::of(&spec, &trajectories).windows();
     let (best, median) = time(&|| {
         std::hint::black_box(dataset::generate(&spec, &trajectories, &hidden));
@@ -95,7 +95,7 @@ fn bench_training(
 ) -> Result<TrainingRates, TrainError> {
     let threads = rayon::current_num_threads();
     let error_model = *spec.error_models.last().unwrap_or(&ErrorModel::Em5);
-    let hidden = indicatif::ProgressBar::hidden();
+    let hidden = crate::progress::Progress::hidden();
     let run_model = |seed_offset: u64| -> Result<usize, TrainError> {
         let mut spec = spec.clone();
         spec.seed += seed_offset;

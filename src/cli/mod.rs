@@ -85,6 +85,14 @@ pub fn main() -> Result<(), CliError> {
             .build_global()
             .map_err(failure)?;
     }
+    if let Some(seconds) = cli.log_every {
+        if !(0.0..=MAX_LOG_EVERY_S).contains(&seconds) {
+            return Err(input(anyhow::anyhow!(
+                "--log-every {seconds} (or DCNET_LOG_EVERY): give 0 to {MAX_LOG_EVERY_S} seconds"
+            )));
+        }
+        crate::progress::set_log_every(std::time::Duration::from_secs_f64(seconds));
+    }
     match cli.command {
         Command::Run {
             target,
@@ -127,6 +135,9 @@ pub fn main() -> Result<(), CliError> {
 fn load_spec(path: &Path, set: &[String]) -> Result<Spec, CliError> {
     load(path, set).map_err(input)
 }
+
+/// The longest interval `--log-every` may ask for: a day.
+const MAX_LOG_EVERY_S: f64 = 86_400.0;
 
 /// The most worker threads `--threads` may ask for.
 const MAX_THREADS: usize = 1024;

@@ -5,7 +5,7 @@
 //! times, waiting longer each time, before the fetch gives up naming the URL.
 
 use crate::files::sha256_hex;
-use crate::progress::bar;
+use crate::progress::Progress;
 use crate::spec::recordings::{FILES, RemoteFile};
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -175,9 +175,10 @@ fn may_pass(error: &ureq::Error) -> bool {
 fn download(agent: &ureq::Agent, url: &str, name: &str) -> Result<Vec<u8>, ureq::Error> {
     let mut response = agent.get(url).call()?;
     let body = response.body_mut();
-    let progress = bar(
-        body.content_length().unwrap_or(0) as usize,
+    let progress = Progress::new(
         name.to_string(),
+        body.content_length().unwrap_or(0) as usize,
+        "bytes",
     );
     let mut bytes = Vec::new();
     let mut reader = body.with_config().limit(u64::MAX).reader();
@@ -188,9 +189,9 @@ fn download(agent: &ureq::Agent, url: &str, name: &str) -> Result<Vec<u8>, ureq:
             break;
         }
         bytes.extend_from_slice(&chunk[..read]);
-        progress.inc(read as u64);
+        progress.inc(read);
     }
-    progress.finish_and_clear();
+    progress.finish();
     Ok(bytes)
 }
 

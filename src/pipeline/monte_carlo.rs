@@ -7,7 +7,7 @@ use super::{ExecuteError, Executed};
 use crate::bound::bounds;
 use crate::estimators::set_up;
 use crate::evaluate::{ProtocolResult, RunRow, run_block};
-use crate::progress::bar;
+use crate::progress::Progress;
 use crate::spec::Spec;
 use crate::train::{Trained, TrainingHistory};
 use crate::vocab::EstimatorKind;
@@ -41,9 +41,14 @@ pub(super) fn run(
                 block.map(|b| (estimator, b))
             })
             .unzip();
-        let progress = bar(2 * spec.calibration.monte_carlo_runs, "monte carlo");
+        // Each run is a pass of calibration, then a pass of evaluation.
+        let progress = Progress::new(
+            format!("monte carlo {} {}", spec.name, dvl.name),
+            2 * spec.calibration.monte_carlo_runs,
+            "passes",
+        );
         let rows = run_block(spec, &plan.trajectories[p], dvl, &estimators, &progress);
-        progress.finish_and_clear();
+        progress.finish();
         for (b, mut rows) in estimator_blocks.into_iter().zip(rows) {
             if let Some(row) = rows.iter().find(|row| !row.rmse_cm_s.is_finite()) {
                 return Err(ExecuteError::NonFinite(describe(spec, row)));

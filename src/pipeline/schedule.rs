@@ -6,11 +6,10 @@ use super::cache::models::{Provenance, Stage, StageError};
 use super::plan::Plan;
 use super::{ExecuteError, Executed};
 use crate::dataset::{self, TrainingSet};
-use crate::progress::bar;
+use crate::progress::Progress;
 use crate::results::StageSeconds;
 use crate::train::{self, Trained};
-use crate::vocab::StopReason;
-use indicatif::ProgressBar;
+use crate::vocab::{ErrorModel, StopReason};
 use std::time::Instant;
 
 /// Trains the models `trainings` asks for; a model whose training fails is recorded as
@@ -41,16 +40,19 @@ pub(super) fn train(
         let mine: Vec<usize> = batch.iter().flat_map(|(_, m)| m.iter().copied()).collect();
         let clock = Instant::now();
         let bars = indicatif::MultiProgress::new();
-        let results = interleave_epochs(&mine, |t| {
+        let announce = |t: usize, ended: &Ended| eprintln!("{}", describe(plan, t, ended));
+        let results = interleave_epochs(&mine, announce, |t| {
             let training = &plan.trainings[t];
             let spec = plan.spec(training.point);
             let set = set_of(t);
-            let progress = bars.add(bar(
-                spec.training.epochs * train::batches_per_epoch(spec, set),
-                "DCNet",
-            ));
-            progress.set_message(format!("DCNet {}", training.error_model));
-            let run = move |job: Stage, progress: &indicatif::ProgressBar| {
+            let samples_per_epoch = set.training_len();
+            let progress = Progress::new(
+                task_name(training.error_model, &training.key),
+                spec.training.epochs * samples_per_epoch,
+                "samples",
+            )
+            .shown_in(&bars);
+            let run = move |job: Stage, progress: &Progress| {
                 job.epoch(
                     spec,
                     set,
@@ -70,8 +72,7 @@ pub(super) fn train(
             )
             .map_err(StageError::from);
             if let Ok(job) = &job {
-                progress
-                    .set_position((job.epochs_done() * train::batches_per_epoch(spec, set)) as u64);
+                progress.set_position(job.epochs_done() * samples_per_epoch);
             }
             (job, run, progress)
         });
@@ -106,8 +107,8 @@ fn dataset_batches(plan: &Plan, trainings: &[usize]) -> Vec<Vec<(usize, Vec<usiz
     batches
 }
 
-/// Reports each ended training and stores the failures; a storage error is returned
-/// once every other training's end is recorded.
+/// Counts the trained models and stores the failures; a storage error is returned once
+/// every other training's end is recorded.
 fn record(
     plan: &Plan,
     ended: Vec<(usize, Ended)>,
@@ -116,10 +117,7 @@ fn record(
     let mut storage_error = None;
     for (t, result) in ended {
         match result {
-            Ok((model, provenance)) => {
-                eprintln!("{}", describe(&model, provenance, &plan.trainings[t].key));
-                executed.done += 1;
-            }
+            Ok(_) => executed.done += 1,
             Err(StageError::Store(error)) => {
                 storage_error.get_or_insert(error);
             }
@@ -139,8 +137,20 @@ fn record(
     }
 }
 
-/// One line on a trained model: where it came from and its best validation loss.
-fn describe(model: &Trained, provenance: Provenance, key: &str) -> String {
+/// How the log names a training: its error model and the start of its key.
+fn task_name(error_model: ErrorModel, key: &str) -> String {
+    format!("DCNet {error_model} {}", &key[..16])
+}
+
+/// The line that says how training `t` ended: where its model came from and its best
+/// validation loss, or the error that ended it.
+fn describe(plan: &Plan, t: usize, ended: &Ended) -> String {
+    let training = &plan.trainings[t];
+    let task = task_name(training.error_model, &training.key);
+    let (model, provenance) = match ended {
+        Ok((model, provenance)) => (model, provenance),
+        Err(error) => return format!("{task}: failed: {error}"),
+    };
     let best = &model.history[model.best_epoch - 1];
     let how = match provenance {
         Provenance::Trained => "trained".to_string(),
@@ -152,9 +162,7 @@ fn describe(model: &Trained, provenance: Provenance, key: &str) -> String {
         StopReason::EarlyStopping => ", stopped early",
     };
     format!(
-        "DCNet {} {}: {how}; best validation loss {:.4} (cm/s)² at epoch {} of {}{stopped}",
-        model.error_model,
-        &key[..16],
+        "{task}: {how}; best validation loss {:.4} (cm/s)² at epoch {} of {}{stopped}",
         best.validation_loss,
         model.best_epoch,
         model.history.len()
@@ -165,8 +173,7 @@ fn describe(model: &Trained, provenance: Provenance, key: &str) -> String {
 type Ended = Result<(Box<Trained>, Provenance), StageError>;
 
 /// One training's next epoch: its current stage in, its next stage out.
-type EpochStep<'a> =
-    Box<dyn Fn(Stage, &ProgressBar) -> Result<Stage, StageError> + Send + Sync + 'a>;
+type EpochStep<'a> = Box<dyn Fn(Stage, &Progress) -> Result<Stage, StageError> + Send + Sync + 'a>;
 
 /// Runs every training of `ids` to its end, epoch by epoch, on
 /// `rayon::current_num_threads()` workers. `start` gives each id its first stage, the
@@ -174,18 +181,23 @@ type EpochStep<'a> =
 /// the head of the queue, trains its next epoch and puts it back at the tail, so that
 /// every core trains while at least as many trainings as cores are left, and the models
 /// advance together. Each worker runs its epochs on [`train::one_thread_pool`], so a
-/// model computes the same bytes whichever worker, and however many, train it. Returns
-/// each id's trained model or the error that ended it.
-fn interleave_epochs<'a, F, S>(ids: &[usize], start: S) -> Vec<(usize, Ended)>
+/// model computes the same bytes whichever worker, and however many, train it.
+/// `announce` is told of each training as it ends. Returns each id's trained model or
+/// the error that ended it.
+fn interleave_epochs<'a, F, S>(
+    ids: &[usize],
+    announce: impl Fn(usize, &Ended) + Sync,
+    start: S,
+) -> Vec<(usize, Ended)>
 where
-    S: Fn(usize) -> (Result<Stage, StageError>, F, ProgressBar),
-    F: Fn(Stage, &ProgressBar) -> Result<Stage, StageError> + Send + Sync + 'a,
+    S: Fn(usize) -> (Result<Stage, StageError>, F, Progress),
+    F: Fn(Stage, &Progress) -> Result<Stage, StageError> + Send + Sync + 'a,
 {
     let queue = std::sync::Mutex::new(std::collections::VecDeque::new());
     let finished = std::sync::Mutex::new(Vec::new());
     // A running training goes to the tail of the queue; an ended one is finished.
     let place =
-        |id, stepped: Result<Stage, StageError>, step: EpochStep<'a>, progress: ProgressBar| {
+        |id, stepped: Result<Stage, StageError>, step: EpochStep<'a>, progress: Progress| {
             let ended = match stepped {
                 Ok(Stage::Done(trained, provenance)) => Ok((trained, provenance)),
                 Ok(running) => {
@@ -195,7 +207,8 @@ where
                 }
                 Err(error) => Err(error),
             };
-            progress.finish_and_clear();
+            progress.finish();
+            announce(id, &ended);
             finished.lock().expect("no worker panics").push((id, ended));
         };
     for &id in ids {
@@ -230,9 +243,13 @@ fn generate_dataset(plan: &Plan, d: usize, stages: &mut StageSeconds) -> Trainin
     let dataset = &plan.datasets[d];
     let spec = plan.spec(dataset.point);
     let clock = Instant::now();
-    let progress = bar(spec.grid.points().len(), "dataset");
+    let progress = Progress::new(
+        format!("dataset {}", &dataset.key[..16]),
+        spec.grid.points().len(),
+        "combinations",
+    );
     let set = dataset::generate(spec, &plan.trajectories[dataset.point], &progress);
-    progress.finish_and_clear();
+    progress.finish();
     stages.dataset += clock.elapsed().as_secs_f64();
     eprintln!(
         "dataset {}: {} combinations × {} windows = {} windows ({} validation), {:.1} MB, in {:.2} s",

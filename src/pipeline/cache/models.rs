@@ -494,7 +494,7 @@ impl Stage {
         error_model: ErrorModel,
         key: &str,
         store: &ModelStore,
-        progress: &indicatif::ProgressBar,
+        progress: &crate::progress::Progress,
     ) -> Result<Self, StageError> {
         let Self::Running {
             mut state,
@@ -561,9 +561,9 @@ fn read_model(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::progress::Progress;
     use crate::spec::quick_spec;
     use crate::train::tests::{run_epochs, training_set, weights};
-    use indicatif::ProgressBar;
 
     /// Loads `error_model`'s stored model under `key`, or trains it to the end on this
     /// thread (see [`Stage`]).
@@ -574,7 +574,7 @@ mod tests {
         key: &str,
         store: &ModelStore,
         fresh: bool,
-        progress: &indicatif::ProgressBar,
+        progress: &crate::progress::Progress,
     ) -> Result<(Trained, Provenance), StageError> {
         let mut training = Stage::start(spec, error_model, 0, key, store, fresh)?;
         loop {
@@ -694,7 +694,7 @@ mod tests {
         let set = training_set(&spec);
         let dir = tempfile::tempdir().unwrap();
         let store = ModelStore::new(dir.path().to_path_buf());
-        let hidden = ProgressBar::hidden();
+        let hidden = Progress::hidden();
         let em4 = key(&spec, ErrorModel::Em4);
         let (first, provenance) =
             train_cached(&spec, &set, ErrorModel::Em4, &em4, &store, false, &hidden).unwrap();
