@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # A Slurm job array that runs one experiment in N shards, then collects the results.
-# From the folder that holds the spec, on a filesystem every node mounts:
+# From the project folder (the one with docs/ and experiments/), on a filesystem every
+# node mounts:
 #
 #   mkdir -p logs
 #   job=$(sbatch --parsable --array=0-7 docs/slurm-array.sh experiments/sweep.toml)
 #   sbatch --dependency=afterany:$job --output=logs/collect-%j.out \
-#       --wrap "dcnet-exp collect experiments/sweep.toml --out /shared/results"
+#       --wrap "dcnet-exp collect experiments/sweep.toml --out ${DCNET_RESULTS:-/shared/results}"
 #
 # Every shard writes its models and Monte Carlo blocks into /shared/results/.cache/ on
 # the shared filesystem; `collect` puts the results folders together from them. The
@@ -14,7 +15,7 @@
 # it is requeued (training checkpoints, stored blocks), so --requeue is safe. A shard
 # whose model fails (a diverging training) exits 2 and the others go on; collect, run
 # after every task whatever its end (afterany), writes the results without that model
-# and exits 2 naming it. Each task's log says every 30 s how far its tasks are.
+# and exits 2 naming it. Each task's log says, at most every 30 s, how far its tasks are.
 #
 # sbatch's options override the #SBATCH lines (--cpus-per-task=2 --mem=4G on a small
 # node). The environment passes to the jobs: DCNET_RESULTS sets the results folder,

@@ -134,7 +134,7 @@ impl LogLines {
     /// the ETA assumes it holds.
     fn due(&mut self, now: Instant, position: u64, len: u64, message: &str) -> Option<String> {
         let since = now.duration_since(self.last_time);
-        if since < self.every {
+        if since < self.every || since.is_zero() {
             return None;
         }
         let rate = position.saturating_sub(self.last_position) as f64 / since.as_secs_f64();

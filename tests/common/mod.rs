@@ -56,6 +56,7 @@ pub fn dcnet(cwd: &Path, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_dcnet-exp"))
         .current_dir(cwd)
         .args(args)
+        .env_remove("DCNET_LOG_EVERY")
         .output()
         .expect("the binary runs")
 }
