@@ -49,6 +49,13 @@ stop_daemon() { # NAME PIDFILE
     kill -9 "$pid" 2>/dev/null || true
     return 1
 }
+stop_daemons() { # fails if a daemon had to be killed
+    local stopped=0
+    stop_daemon slurmd "$work/slurmd.pid" || stopped=1
+    stop_daemon slurmctld "$work/slurmctld.pid" || stopped=1
+    stop_daemon munged "$work/munge/munged.pid" || stopped=1
+    return "$stopped"
+}
 teardown() {
     local status=$? stopped=0
     trap - EXIT
@@ -70,9 +77,7 @@ teardown() {
                 sleep 0.2
             done
         fi
-        stop_daemon slurmd "$work/slurmd.pid" || stopped=1
-        stop_daemon slurmctld "$work/slurmctld.pid" || stopped=1
-        stop_daemon munged "$work/munge/munged.pid" || stopped=1
+        stop_daemons || stopped=1
         if [ "$status" -eq 0 ] && [ "$stopped" -eq 0 ]; then
             rm -rf "$work"
         else
@@ -192,11 +197,12 @@ mkdir experiments logs
 quick=$(cat "$repo/experiments/quick.toml")
 sweep=${quick/name = \"quick\"/name = \"slurm-e2e\"}
 sweep=${sweep/epochs = 20/epochs = 40}
-printf '%s\n\n[sweep.values]\n"model.dropout" = [0.2, 0.3]\n' "$sweep" >experiments/sweep.toml
 diverging=${sweep/name = \"slurm-e2e\"/name = \"slurm-e2e-diverging\"}
 diverging=${diverging/EM3 = 5e-4/EM3 = 1e30}
-printf '%s\n\n[sweep.values]\n"model.dropout" = [0.2, 0.3]\n' "$diverging" \
-    >experiments/diverging.toml
+sweep_values='[sweep.values]
+"model.dropout" = [0.2, 0.3]'
+printf '%s\n\n%s\n' "$sweep" "$sweep_values" >experiments/sweep.toml
+printf '%s\n\n%s\n' "$diverging" "$sweep_values" >experiments/diverging.toml
 grep -q 'epochs = 40' experiments/sweep.toml || fail "quick.toml no longer has 'epochs = 20'"
 grep -q 'EM3 = 1e30' experiments/diverging.toml || fail "quick.toml no longer has 'EM3 = 5e-4'"
 dcnet-exp validate experiments/sweep.toml >/dev/null
@@ -307,14 +313,7 @@ for point in dropout=0.2 dropout=0.3; do
 done
 
 step "stop the daemons"
-# The teardown stops them by their PID files; here we check that they are gone.
-trap - EXIT
-stopped=0
-stop_daemon slurmd "$work/slurmd.pid" || stopped=1
-stop_daemon slurmctld "$work/slurmctld.pid" || stopped=1
-stop_daemon munged "$work/munge/munged.pid" || stopped=1
-trap teardown EXIT
-[ "$stopped" -eq 0 ] || fail "a daemon had to be killed"
+stop_daemons || fail "a daemon had to be killed"
 for pid in $pids; do
     ! kill -0 "$pid" 2>/dev/null || fail "daemon $pid still running"
 done

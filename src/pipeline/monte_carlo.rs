@@ -42,8 +42,9 @@ pub(super) fn run(
             })
             .unzip();
         // Each run is a pass of calibration, then a pass of evaluation.
+        let task = format!("monte carlo {} {}", spec.name, dvl.name);
         let progress = Progress::new(
-            format!("monte carlo {} {}", spec.name, dvl.name),
+            task.clone(),
             2 * spec.calibration.monte_carlo_runs,
             "passes",
         );
@@ -62,9 +63,7 @@ pub(super) fn run(
             executed.done += 1;
         }
         eprintln!(
-            "monte carlo {} {}: {} estimators × {} runs stored",
-            spec.name,
-            dvl.name,
+            "{task}: {} estimators × {} runs stored",
             estimators.len(),
             spec.calibration.monte_carlo_runs
         );

@@ -243,17 +243,13 @@ fn generate_dataset(plan: &Plan, d: usize, stages: &mut StageSeconds) -> Trainin
     let dataset = &plan.datasets[d];
     let spec = plan.spec(dataset.point);
     let clock = Instant::now();
-    let progress = Progress::new(
-        format!("dataset {}", &dataset.key[..16]),
-        spec.grid.points().len(),
-        "combinations",
-    );
+    let task = format!("dataset {}", &dataset.key[..16]);
+    let progress = Progress::new(task.clone(), spec.grid.points().len(), "combinations");
     let set = dataset::generate(spec, &plan.trajectories[dataset.point], &progress);
     progress.finish();
     stages.dataset += clock.elapsed().as_secs_f64();
     eprintln!(
-        "dataset {}: {} combinations × {} windows = {} windows ({} validation), {:.1} MB, in {:.2} s",
-        &dataset.key[..16],
+        "{task}: {} combinations × {} windows = {} windows ({} validation), {:.1} MB, in {:.2} s",
         set.points.len(),
         set.windows_per_combination,
         set.len(),
