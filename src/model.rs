@@ -1,4 +1,4 @@
-//! DCNet (PAPER-NOTES, "DCNet"): a 1D head on `v_dvl − v_gnss`, a 2D head on the whole
+//! DCNet (docs/paper.md, "DCNet"): a 1D head on `v_dvl − v_gnss`, a 2D head on the whole
 //! 6×10 window, and a batch of four Linear layers that outputs the error model's terms.
 //! In: windows of DVL and GNSS-RTK velocity in m/s. Out: the terms, scale in % and bias
 //! in cm/s (the spec's units, which keep the outputs near 1).

@@ -1,4 +1,4 @@
-//! The measurement model of PAPER-NOTES. A DVL measures four beam velocities
+//! The measurement model of the paper (docs/paper.md). A DVL measures four beam velocities
 //! `y = (H v)(1 + s) + b + n`, with one scale `s` and bias `b` shared by the beams and
 //! white noise `n` per beam, and reports `v_dvl = (HᵀH)⁻¹Hᵀ y`; a GNSS-RTK receiver
 //! reports `v + N(0, σ²)` per axis. In: ground-truth velocity in m/s. Out: noisy DVL and

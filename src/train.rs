@@ -4,7 +4,7 @@
 //!
 //! The loss corrects each window's DVL velocity with the predicted terms and takes the
 //! squared error against the ground truth in (cm/s)², summed over x, y, z and averaged
-//! over samples and windows (PAPER-NOTES). RMSProp updates the weights. Initial weights,
+//! over samples and windows (docs/paper.md, "DCNet"). RMSProp updates the weights. Initial weights,
 //! the order of the windows in every epoch and the dropout masks come from generators
 //! seeded by (seed, error model, epoch, replicate), so a model does not depend on the
 //! thread count or on the other models training beside it; replicate 0 (the only one

@@ -45,7 +45,7 @@ impl Correction {
     }
 }
 
-/// The structure of the terms being estimated (PAPER-NOTES, "Error models"). Stored
+/// The structure of the terms being estimated (docs/paper.md, "Error models"). Stored
 /// by name, "EM1" to "EM5".
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize,

@@ -1,5 +1,5 @@
 //! `dcnet-exp data fetch`: downloads the Snapir recordings (`V.npy`, `V_test.npy`) from
-//! the BeamsNet repository, checks their SHA-256 against PAPER-NOTES, and writes them
+//! the BeamsNet repository, checks their SHA-256 against the published ones, and writes them
 //! atomically. A file already present with the right hash is kept. A server that does
 //! not answer, or stalls mid-body, times out; a failed download is tried again a few
 //! times, waiting longer each time, before the fetch gives up naming the URL.

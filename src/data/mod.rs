@@ -1,5 +1,5 @@
 //! Trajectories: the recorded velocities named in the spec, read from `.npy` or `.csv`
-//! files or generated, each with its ground truth (a forward moving average, PAPER-NOTES).
+//! files or generated, each with its ground truth (a forward moving average, docs/paper.md).
 //! In: a checked [`Spec`]. Out: one [`Trajectory`] per `data.trajectories` entry, in
 //! spec order.
 

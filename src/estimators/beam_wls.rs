@@ -1,6 +1,6 @@
 //! Beam-model weighted least squares: the DVL's own error model fitted directly. A scale
 //! `s` and a bias `b` shared by the four beams make the velocity error
-//! `v_dvl − v = s·v + β·e_z + P·n` with `β = b / cos α` (PAPER-NOTES), so the residual
+//! `v_dvl − v = s·v + β·e_z + P·n` with `β = b / cos α` (docs/paper.md, "Measurement model"), so the residual
 //! `v_dvl − v_gnss` is regressed on `[v_gnss, e_z]` over every axis at once, each axis
 //! weighted by the inverse of its residual variance (beam noise through `(HᵀH)⁻¹`,
 //! plus the GNSS-RTK noise). The GNSS-RTK noise in the regressor would pull `s` toward

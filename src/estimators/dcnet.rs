@@ -1,6 +1,6 @@
 //! DCNet as a calibration method: the calibration window is cut into consecutive
 //! windows of the training length, the trained network estimates the terms of each in
-//! one batch, and their mean is the estimate (PAPER-NOTES, "Evaluation protocol").
+//! one batch, and their mean is the estimate (docs/paper.md, "Evaluation protocol").
 
 use super::Estimator;
 use crate::Vec3;

@@ -1,6 +1,6 @@
 //! Calibration methods behind one trait. An [`Estimator`] takes a calibration window of
 //! DVL and GNSS-RTK velocity and returns a [`Correction`] in the form of the measurement
-//! model `v_dvl = (1 + k)·v + b`; every error model (EM1–EM5, PAPER-NOTES) is that form
+//! model `v_dvl = (1 + k)·v + b`; every error model (EM1–EM5, docs/paper.md) is that form
 //! with some terms fixed or tied. In: the spec, one DVL and the trained DCNets. Out: the
 //! [`DvlEstimator`]s that [`set_up`] builds, one per (method, error model, replicate)
 //! the spec [`requested`], which the protocol runs.
