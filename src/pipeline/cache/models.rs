@@ -4,7 +4,7 @@
 //! determined it. A later run with the same key loads it instead of training. A
 //! training that failed leaves `<EM>-<key>.failed`, its reason, so that later runs leave
 //! the model out. While a model trains, its checkpoint lives beside it
-//! ([`super::checkpoints`]). In: trained models and keys. Out: the stored models.
+//! (`checkpoints`). In: trained models and keys. Out: the stored models.
 
 use crate::files::{self, Seal, write_atomic};
 use crate::model::Dcnet;
