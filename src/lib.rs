@@ -12,13 +12,15 @@
 //! 4. [`dataset`]: the training windows over the error-term grid;
 //! 5. [`model`] and [`train`]: DCNet and its closed-loop training;
 //! 6. [`estimators`]: calibration methods behind one trait, DCNet among them;
-//! 7. [`evaluate`]: the Monte Carlo calibration and evaluation protocol, and
-//!    [`footprint`]: the memory and time a spec asks for, known before it runs;
+//! 7. [`evaluate`]: the Monte Carlo calibration and evaluation protocol (its runs, the
+//!    tables summed from them, the bound's efficiency), and [`footprint`]: the memory
+//!    and time a spec asks for, known before it runs;
 //! 8. [`results`]: the Parquet files and manifest of a run, and a sweep's table;
 //! 9. [`report`]: what is drawn from results folders alone: the printed tables, the
 //!    figures, report.md and report.tex, and two folders compared;
 //! 10. [`pipeline`]: the stages as tasks, planned, cached by content (datasets, models,
-//!     Monte Carlo blocks), resumable, and shared out over shards;
+//!     Monte Carlo blocks), resumable (each model a training job), and shared out over
+//!     shards;
 //! 11. [`cli`]: the subcommands.
 //!
 //! Beneath them all, importing no other module: [`vocab`], the words every stage

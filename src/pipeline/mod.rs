@@ -8,8 +8,8 @@
 //!   share a model train it once, and the state of each without touching anything;
 //! - [`shard`]: one machine's share of them (`--shard K/N`);
 //! - [`execute`] does what is left: all of it, one shard's part, or only the putting
-//!   together (`collect`), training in `schedule` and running the protocol in
-//!   `monte_carlo`;
+//!   together (`collect`), training in `training` (each model's `TrainingJob`
+//!   interleaved epoch by epoch) and running the protocol in `monte_carlo`;
 //! - [`cache`]: the content-addressed store of models and Monte Carlo blocks;
 //! - [`claim`]: the locks that keep processes sharing a folder from computing the same
 //!   task.
@@ -22,7 +22,7 @@ pub mod cache;
 pub mod claim;
 mod monte_carlo;
 pub mod plan;
-mod schedule;
+mod training;
 pub mod shard;
 
 pub use plan::{Mode, Plan, Status, Task};
@@ -50,7 +50,7 @@ pub enum ExecuteError {
     #[error(transparent)]
     Read(#[from] results::read::ReadError),
     #[error(transparent)]
-    Checkpoint(#[from] cache::models::CheckpointError),
+    Models(#[from] cache::ModelStoreError),
     #[error("{0} is not a finite number; nothing of it is stored")]
     NonFinite(String),
     #[error("{count} tasks are not done yet, so there is nothing to collect:\n{list}")]
@@ -89,7 +89,7 @@ pub fn execute(plan: &Plan, mode: Mode, to_do: &[Task]) -> Result<Executed, Exec
     // left undone; blocks start once every model they need is settled.
     let force = mode.force();
     claimed_then_left(plan, &trainings, Task::Training, |ids| {
-        schedule::train(plan, ids, force, &mut stages, &mut executed)
+        training::train(plan, ids, force, &mut stages, &mut executed)
     })?;
     let clock = Instant::now();
     claimed_then_left(plan, &blocks, Task::Block, |ids| {

@@ -1,12 +1,12 @@
 //! The Monte Carlo stage of a run: the blocks of one DVL computed together and
 //! stored one by one, and a point's tables gathered back from the stored blocks.
 
-use super::cache::models::CheckpointError;
+use super::cache::ModelStoreError;
 use super::plan::{Plan, Task};
 use super::{ExecuteError, Executed};
 use crate::bound::bounds;
 use crate::estimators::set_up;
-use crate::evaluate::{ProtocolResult, RunRow, run_block};
+use crate::evaluate::{ProtocolResult, RunRow, run_on_dvl};
 use crate::progress::Progress;
 use crate::spec::Spec;
 use crate::train::{Trained, TrainingHistory};
@@ -48,7 +48,7 @@ pub(super) fn run(
             2 * spec.calibration.monte_carlo_runs,
             "passes",
         );
-        let rows = run_block(spec, &plan.trajectories[p], dvl, &estimators, &progress);
+        let rows = run_on_dvl(spec, &plan.trajectories[p], dvl, &estimators, &progress);
         progress.finish();
         for (b, mut rows) in estimator_blocks.into_iter().zip(rows) {
             if let Some(row) = rows.iter().find(|row| !row.rmse_cm_s.is_finite()) {
@@ -124,7 +124,7 @@ fn load_models(plan: &Plan, spec: &Spec, blocks: &[usize]) -> Result<Vec<Trained
         let model = plan
             .models
             .load(spec, training.error_model, &training.key)?
-            .ok_or_else(|| CheckpointError::NotStored {
+            .ok_or_else(|| ModelStoreError::NotStored {
                 folder: plan.models.folder.clone(),
                 task: plan.label(Task::Training(t)),
             })?;

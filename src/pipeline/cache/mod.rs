@@ -15,16 +15,17 @@
 //!   fsynced write of them takes 1 s and reading them back would save at most 0.1 s.
 //!   The points of a sweep that share a dataset share it in memory, and a run whose
 //!   models are all stored generates none.
-//! - Models live in `models/` ([`ModelStore`]), with their checkpoints while they
+//! - Models live in `models/` ([`ModelStore`]), with their [`checkpoints`] while they
 //!   train.
 //! - Monte Carlo blocks (one estimator on one DVL, every run) live in `monte_carlo/`
 //!   ([`BlockStore`]) as Parquet files of their per-run rows.
 
 pub mod blocks;
+pub mod checkpoints;
 pub mod models;
 
 pub use blocks::BlockStore;
-pub use models::ModelStore;
+pub use models::{ModelStore, ModelStoreError};
 
 use crate::files::sha256_hex;
 use crate::results;

@@ -2,14 +2,16 @@
 //! train on them interleaved epoch by epoch over the cores, each on a one-thread pool so
 //! that its bytes do not depend on the thread count.
 
-use super::cache::models::{Provenance, Stage, StageError};
-use super::plan::Plan;
-use super::{ExecuteError, Executed};
+pub mod job;
+
 use crate::dataset::{self, TrainingSet};
+use crate::pipeline::plan::Plan;
+use crate::pipeline::{ExecuteError, Executed};
 use crate::progress::Progress;
 use crate::results::StageSeconds;
 use crate::train::{self, Trained};
 use crate::vocab::{ErrorModel, StopReason};
+use job::{Provenance, TrainingJob, TrainingJobError};
 use std::time::Instant;
 
 /// Trains the models `trainings` asks for; a model whose training fails is recorded as
@@ -52,7 +54,7 @@ pub(super) fn train(
                 "samples",
             )
             .shown_in(&bars);
-            let run = move |job: Stage, progress: &Progress| {
+            let run = move |job: TrainingJob, progress: &Progress| {
                 job.epoch(
                     spec,
                     set,
@@ -62,7 +64,7 @@ pub(super) fn train(
                     progress,
                 )
             };
-            let job = Stage::start(
+            let job = TrainingJob::start(
                 spec,
                 training.error_model,
                 training.replicate,
@@ -70,7 +72,7 @@ pub(super) fn train(
                 &plan.models,
                 force,
             )
-            .map_err(StageError::from);
+            .map_err(TrainingJobError::from);
             if let Ok(job) = &job {
                 progress.set_position(job.epochs_done() * samples_per_epoch);
             }
@@ -118,7 +120,7 @@ fn record(
     for (t, result) in ended {
         match result {
             Ok(_) => executed.done += 1,
-            Err(StageError::Store(error)) => {
+            Err(TrainingJobError::Store(error)) => {
                 storage_error.get_or_insert(error);
             }
             Err(error) => {
@@ -170,13 +172,14 @@ fn describe(plan: &Plan, t: usize, ended: &Ended) -> String {
 }
 
 /// How one training ended: its model and where it came from, or the error that ended it.
-type Ended = Result<(Box<Trained>, Provenance), StageError>;
+type Ended = Result<(Box<Trained>, Provenance), TrainingJobError>;
 
-/// One training's next epoch: its current stage in, its next stage out.
-type EpochStep<'a> = Box<dyn Fn(Stage, &Progress) -> Result<Stage, StageError> + Send + Sync + 'a>;
+/// One training's next epoch: its job in, the job one epoch on out.
+type EpochStep<'a> =
+    Box<dyn Fn(TrainingJob, &Progress) -> Result<TrainingJob, TrainingJobError> + Send + Sync + 'a>;
 
 /// Runs every training of `ids` to its end, epoch by epoch, on
-/// `rayon::current_num_threads()` workers. `start` gives each id its first stage, the
+/// `rayon::current_num_threads()` workers. `start` gives each id its job, the
 /// step that trains one epoch, and its progress bar. A worker takes the training at
 /// the head of the queue, trains its next epoch and puts it back at the tail, so that
 /// every core trains while at least as many trainings as cores are left, and the models
@@ -190,30 +193,32 @@ fn interleave_epochs<'a, F, S>(
     start: S,
 ) -> Vec<(usize, Ended)>
 where
-    S: Fn(usize) -> (Result<Stage, StageError>, F, Progress),
-    F: Fn(Stage, &Progress) -> Result<Stage, StageError> + Send + Sync + 'a,
+    S: Fn(usize) -> (Result<TrainingJob, TrainingJobError>, F, Progress),
+    F: Fn(TrainingJob, &Progress) -> Result<TrainingJob, TrainingJobError> + Send + Sync + 'a,
 {
     let queue = std::sync::Mutex::new(std::collections::VecDeque::new());
     let finished = std::sync::Mutex::new(Vec::new());
     // A running training goes to the tail of the queue; an ended one is finished.
-    let place =
-        |id, stepped: Result<Stage, StageError>, step: EpochStep<'a>, progress: Progress| {
-            let ended = match stepped {
-                Ok(Stage::Done(trained, provenance)) => Ok((trained, provenance)),
-                Ok(running) => {
-                    let mut queue = queue.lock().expect("no worker panics");
-                    queue.push_back((id, running, step, progress));
-                    return;
-                }
-                Err(error) => Err(error),
-            };
-            progress.finish();
-            announce(id, &ended);
-            finished.lock().expect("no worker panics").push((id, ended));
+    let place = |id,
+                 stepped: Result<TrainingJob, TrainingJobError>,
+                 step: EpochStep<'a>,
+                 progress: Progress| {
+        let ended = match stepped {
+            Ok(TrainingJob::Done(trained, provenance)) => Ok((trained, provenance)),
+            Ok(running) => {
+                let mut queue = queue.lock().expect("no worker panics");
+                queue.push_back((id, running, step, progress));
+                return;
+            }
+            Err(error) => Err(error),
         };
+        progress.finish();
+        announce(id, &ended);
+        finished.lock().expect("no worker panics").push((id, ended));
+    };
     for &id in ids {
-        let (stage, step, progress) = start(id);
-        place(id, stage, Box::new(step), progress);
+        let (job, step, progress) = start(id);
+        place(id, job, Box::new(step), progress);
     }
     let workers = rayon::current_num_threads().min(ids.len()).max(1);
     std::thread::scope(|scope| {
@@ -224,10 +229,10 @@ where
                 // not in it is held by a worker that will carry on with it.
                 loop {
                     let next = queue.lock().expect("no worker panics").pop_front();
-                    let Some((id, stage, step, progress)) = next else {
+                    let Some((id, job, step, progress)) = next else {
                         break;
                     };
-                    let stepped = pool.install(|| step(stage, &progress));
+                    let stepped = pool.install(|| step(job, &progress));
                     place(id, stepped, step, progress);
                 }
             });

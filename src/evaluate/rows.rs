@@ -1,0 +1,65 @@
+//! The rows the protocol gives: one per estimator, run and window or trajectory
+//! ([`RunRow`]), and the calibration and evaluation tables summed from them
+//! ([`CalibrationRow`], [`EvaluationRow`]), all three in a [`ProtocolResult`]. In:
+//! nothing. Out: the types that `results` writes as Parquet and `report` reads back.
+
+use crate::vocab::{Correction, ErrorModel, EstimatorKind, Phase};
+
+/// One estimator's result in one run, on one window (calibration) or trajectory
+/// (evaluation at T_conv).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunRow {
+    pub run: usize,
+    pub dvl: String,
+    pub estimator: EstimatorKind,
+    pub error_model: Option<ErrorModel>,
+    /// The DCNet replicate, when `training.replicates` is above 1.
+    pub replicate: Option<usize>,
+    pub phase: Phase,
+    pub window_s: f64,
+    pub trajectory: String,
+    pub rmse_cm_s: f64,
+    pub correction: Correction,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrationRow {
+    pub dvl: String,
+    pub estimator: EstimatorKind,
+    pub error_model: Option<ErrorModel>,
+    pub window_s: f64,
+    pub rmse_cm_s: f64,
+    pub rmse_std_cm_s: f64,
+    /// Half-width of the 95 % confidence interval of the mean over DCNet replicates,
+    /// when there are several.
+    pub rmse_ci_cm_s: Option<f64>,
+    pub is_t_conv: bool,
+    /// The bound at this window over this RMSE; absent for the floor and the bound.
+    pub efficiency: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct EvaluationRow {
+    pub dvl: String,
+    pub estimator: EstimatorKind,
+    pub error_model: Option<ErrorModel>,
+    pub trajectory: String,
+    pub t_conv_s: f64,
+    pub rmse_cm_s: f64,
+    pub rmse_std_cm_s: f64,
+    /// Half-width of the 95 % confidence interval of the mean over DCNet replicates,
+    /// when there are several.
+    pub rmse_ci_cm_s: Option<f64>,
+    /// `(baseline − this) / baseline · 100`; absent when the spec runs no baseline.
+    pub improvement_pct: Option<f64>,
+    /// The bound at this T_conv on this trajectory over this RMSE; absent for the floor
+    /// and the bound.
+    pub efficiency: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ProtocolResult {
+    pub runs: Vec<RunRow>,
+    pub calibration: Vec<CalibrationRow>,
+    pub evaluation: Vec<EvaluationRow>,
+}
