@@ -41,8 +41,7 @@ pub enum CompareError {
     #[error("writing {}", path.display())]
     Write {
         path: PathBuf,
-        #[source]
-        error: std::io::Error,
+        source: std::io::Error,
     },
 }
 
@@ -64,12 +63,31 @@ pub fn read(folder: &Path) -> Result<StoredRun, CompareError> {
 
 /// Writes the comparison to `path`, atomically, making its folder if need be.
 pub fn write(path: &Path, markdown: &str) -> Result<(), CompareError> {
-    let failed = |error| CompareError::Write {
+    let failed = |source| CompareError::Write {
         path: path.to_path_buf(),
-        error,
+        source,
     };
     if let Some(folder) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(folder).map_err(failed)?;
     }
     write_atomic(path, markdown.as_bytes()).map_err(failed)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_failed_write_keeps_its_cause_for_the_chain_to_print_once() {
+        let folder = tempfile::tempdir().unwrap();
+        let file = folder.path().join("a-file");
+        std::fs::write(&file, "").unwrap();
+        let error = write(&file.join("compare.md"), "# text").unwrap_err();
+        let cause = std::error::Error::source(&error).expect("the I/O error as its source");
+        assert!(cause.downcast_ref::<std::io::Error>().is_some());
+        assert_eq!(
+            error.to_string(),
+            format!("writing {}", file.join("compare.md").display())
+        );
+    }
 }
