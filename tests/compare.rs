@@ -298,4 +298,23 @@ fn a_folder_that_holds_no_results_is_refused_naming_its_file() {
         "error: --out empty: is a folder; name the file to write the comparison to\n"
     );
     assert!(stdout(&output).is_empty());
+    // A file that cannot be written: a failure, its cause printed once after the path.
+    std::fs::write(project.path().join("a-file"), "").unwrap();
+    let output = dcnet(
+        project.path(),
+        &[
+            "compare",
+            "results/quick",
+            "results/quick",
+            "--out",
+            "a-file/compare.md",
+        ],
+    );
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    let error = stderr(&output);
+    let cause = error
+        .strip_prefix("error: writing a-file/compare.md: ")
+        .unwrap_or_else(|| panic!("{error}"));
+    assert_eq!(cause.lines().count(), 1, "{error}");
+    assert_eq!(error.matches("(os error").count(), 1, "{error}");
 }

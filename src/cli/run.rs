@@ -6,7 +6,7 @@ use super::plot::{plot_run, plot_sweep};
 use super::{CliError, about, failure, input, load_target, training_seconds};
 use crate::pipeline::{Executed, Mode, Plan, Shard, Task, execute, remove_spent_checkpoints};
 use crate::report::plots::{Format, Metric};
-use crate::report::tables;
+use crate::report::printed;
 use crate::results::read::StoredRun;
 use crate::results::sweep;
 use crate::spec::Experiment;
@@ -196,13 +196,13 @@ fn finish(experiment: &Experiment, executed: &Executed, drawing: &Drawing) -> Re
             let stored = StoredRun::read(folder).map_err(failure)?;
             println!(
                 "{}",
-                tables::calibration_table(
+                printed::calibration_table(
                     &stored.calibration,
                     &stored.spec.calibration.trajectory,
                     stored.spec.calibration.monte_carlo_runs
                 )
             );
-            println!("{}", tables::evaluation_table(&stored.evaluation));
+            println!("{}", printed::evaluation_table(&stored.evaluation));
         }
         eprintln!("results written to {}", folder.display());
         plot_run(folder, drawing.folder(), Format::Both).map_err(|e| failure(e.into_cause()))?;

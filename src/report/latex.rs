@@ -1,10 +1,10 @@
 //! `results/<name>/report.tex`: the tables of `report.md` as booktabs tables, for a
-//! paper to `\input`. In: the report's [`Tables`], built once for both renderings.
+//! paper to `\input`. In: the report's [`ReportTables`], built once for both renderings.
 //! Out: table environments only, no preamble; a comment on top names the one package
 //! they need (booktabs). Each DVL's row holds our values, the row below it the
 //! published ones in italics; a flagged cell carries a dagger explained under its table.
 
-use super::{Cell, ReportTable, Signs, Tables, replicates_note};
+use crate::report::table::{Cell, ReportTable, ReportTables, Signs, replicates_note};
 use crate::results::read::StoredRun;
 use std::fmt::Write;
 
@@ -17,7 +17,7 @@ const SIGNS: Signs = Signs {
 };
 
 /// The tables as LaTeX.
-pub(super) fn render(run: &StoredRun, tables: &Tables) -> String {
+pub(super) fn render(run: &StoredRun, tables: &ReportTables) -> String {
     let spec = &run.spec;
     let name = escape(&spec.name);
     let runs = spec.calibration.monte_carlo_runs;
@@ -199,7 +199,7 @@ fn row(out: &mut String, cells: &[String]) {
     let _ = writeln!(out, "    {} \\\\", cells.join(" & "));
 }
 
-/// Our figure, with a dagger where the Markdown report has its ⚠.
+/// Our value, with a dagger where the Markdown report has its ⚠.
 fn ours(entry: &Cell) -> String {
     let text = entry.ours.text(&SIGNS);
     if entry.flagged {

@@ -158,9 +158,25 @@ pub fn write_run(
 /// with.
 pub fn is_intact(folder: &Path, manifest: &Manifest) -> bool {
     !manifest.files_sha256.is_empty()
-        && manifest.files_sha256.iter().all(|(name, digest)| {
-            std::fs::read(folder.join(name)).is_ok_and(|bytes| &sha256_hex(&bytes) == digest)
-        })
+        && files_intact(
+            folder,
+            manifest
+                .files_sha256
+                .iter()
+                .map(|(name, digest)| (name.as_str(), digest.as_str())),
+        )
+}
+
+/// Whether each `(path from folder, SHA-256 in hex)` of `digests` names a file of
+/// `folder` that still has that SHA-256; the check of the manifest's files and of the
+/// report's seal.
+pub fn files_intact<'a>(
+    folder: &Path,
+    digests: impl IntoIterator<Item = (&'a str, &'a str)>,
+) -> bool {
+    digests.into_iter().all(|(path, digest)| {
+        std::fs::read(folder.join(path)).is_ok_and(|bytes| sha256_hex(&bytes) == digest)
+    })
 }
 
 /// Writes `batch` to `path` as Parquet, atomically.

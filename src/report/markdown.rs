@@ -1,0 +1,323 @@
+//! `results/<name>/report.md`: the report's tables ([`ReportTables`]) set as Markdown
+//! with the captions that explain them, then the training summary, wall time per stage,
+//! provenance from the manifest, and the figures. In: a [`StoredRun`], its tables and
+//! the figures drawn. Out: the Markdown text; a cell reads `ours · paper`, flagged ⚠.
+
+use crate::report::plots::Written;
+use crate::report::table::{Cell, ReportTable, ReportTables, Signs, replicates_note};
+use crate::results::read::StoredRun;
+use crate::vocab::ErrorModel;
+use comfy_table::{Table, presets::ASCII_MARKDOWN};
+use std::fmt::Write;
+use std::path::{Path, PathBuf};
+
+pub const FILE: &str = "report.md";
+const FLAG: &str = "⚠";
+
+const SIGNS: Signs = Signs {
+    percent: " %",
+    minus: "-",
+    plus_minus: " ± ",
+};
+
+/// The report as Markdown.
+pub(super) fn render(run: &StoredRun, tables: &ReportTables, figures: &[Written]) -> String {
+    let spec = &run.spec;
+    let tolerance = spec.report.tolerance_pct;
+    let mut out = String::new();
+    let _ = writeln!(out, "# {}: results beside the published ones\n", spec.name);
+    let _ = writeln!(
+        out,
+        "RMSE in cm/s, mean over {} Monte Carlo runs. Calibration cells give T_conv in s in brackets, evaluation cells the improvement over the baseline.\n",
+        spec.calibration.monte_carlo_runs
+    );
+    if let Some(note) = replicates_note(spec.training.replicates) {
+        let _ = writeln!(out, "{note}\n");
+    }
+    match &run.published {
+        Some(published) => {
+            let _ = writeln!(
+                out,
+                "A cell reads `ours · paper`; {FLAG} flags an RMSE more than {tolerance} % off the published one, or another T_conv. Published values: {}.\n",
+                published.source
+            );
+        }
+        None => {
+            let _ = writeln!(
+                out,
+                "The spec names no published values (`report.published`), so only ours are shown.\n"
+            );
+        }
+    }
+
+    let _ = writeln!(out, "## Calibration on {}\n", spec.calibration.trajectory);
+    let _ = writeln!(
+        out,
+        "The DVL rows hold the baseline and DCNet, as in the paper. The floor corrects with the true terms, which no estimator can beat; the bound is the best mean RMSE any unbiased estimator can reach from the window's data (see \"Against the information bound\").\n\n{}\n",
+        markdown_table(&tables.calibration)
+    );
+    let _ = writeln!(out, "## Evaluation with the T_conv terms\n");
+    let _ = writeln!(out, "{}\n", markdown_table(&tables.evaluation));
+    if let Some(beyond) = &tables.beyond {
+        let _ = writeln!(
+            out,
+            "Beyond the paper: least squares on the same data, and the floor.\n\n{}\n",
+            markdown_table(beyond)
+        );
+    }
+    if let Some(ensemble) = &tables.ensemble {
+        let _ = writeln!(
+            out,
+            "The DCNet ensemble: the mean of the {} replicates' terms in each calibration window.\n\n{}\n",
+            spec.training.replicates,
+            markdown_table(ensemble)
+        );
+    }
+    if let Some(efficiency) = &tables.efficiency {
+        let _ = writeln!(out, "## Against the information bound\n");
+        let _ = writeln!(
+            out,
+            "The bound is the mean RMSE of an efficient estimator of the DVL's scale and bias from the calibration window (the Cramér–Rao bound on the terms, propagated to the corrected velocity): no unbiased calibration from that much data does better on average. The floor is the limit with perfect terms; the bound, the limit with w seconds of data. In brackets, each estimator's efficiency: the bound at its T_conv over its RMSE.\n\n{}\n",
+            markdown_table(efficiency)
+        );
+    }
+    if run.published.is_some() {
+        let tally = tables.tally();
+        let _ = writeln!(
+            out,
+            "**{} of {} cells compared with the paper are flagged {FLAG}.**\n",
+            tally.flagged, tally.compared
+        );
+    }
+
+    training_section(run, &mut out);
+    provenance_section(run, &mut out);
+    figures_section(run, figures, &mut out);
+    out
+}
+
+/// A report table as Markdown, `—` where a cell has no value.
+fn markdown_table(table: &ReportTable) -> Table {
+    let mut markdown = Table::new();
+    markdown.load_preset(ASCII_MARKDOWN);
+    let header: Vec<String> = table
+        .labels
+        .iter()
+        .map(ToString::to_string)
+        .chain(table.columns.iter().cloned())
+        .collect();
+    markdown.set_header(header);
+    for row in table.groups.iter().flatten() {
+        let cells = row
+            .cells
+            .iter()
+            .map(|cell| cell.as_ref().map_or_else(|| "—".to_string(), cell_text));
+        markdown.add_row(row.labels.iter().cloned().chain(cells).collect::<Vec<_>>());
+    }
+    markdown
+}
+
+/// Our value, then the published one beside it, flagged where they disagree.
+fn cell_text(entry: &Cell) -> String {
+    let ours = entry.ours.text(&SIGNS);
+    let Some(paper) = &entry.paper else {
+        return ours;
+    };
+    let flag = if entry.flagged {
+        format!(" {FLAG}")
+    } else {
+        String::new()
+    };
+    format!("{ours} · paper {}{flag}", paper.text(&SIGNS))
+}
+
+fn training_section(run: &StoredRun, out: &mut String) {
+    if run.training.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        out,
+        "## DCNet training\n\nEpoch times are those of the run that trained each model; a model taken from the cache costs this run no training time.\n"
+    );
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    table.set_header([
+        "EM",
+        "epochs",
+        "stopped by",
+        "best epoch",
+        "best validation loss (cm/s)²",
+        "training s",
+    ]);
+    let mut models: Vec<(ErrorModel, Option<usize>)> = run
+        .training
+        .iter()
+        .map(|e| (e.error_model, e.replicate))
+        .collect();
+    models.dedup();
+    for (model, replicate) in models {
+        let epochs: Vec<_> = run
+            .training
+            .iter()
+            .filter(|e| e.error_model == model && e.replicate == replicate)
+            .collect();
+        let best = epochs.iter().find(|e| e.is_best);
+        table.add_row(vec![
+            match replicate {
+                Some(r) => format!("{model}, replicate {}", r + 1),
+                None => model.to_string(),
+            },
+            epochs.len().to_string(),
+            epochs
+                .first()
+                .map(|e| e.stop.to_string())
+                .unwrap_or_default(),
+            best.map(|e| e.record.epoch.to_string()).unwrap_or_default(),
+            best.map(|e| format!("{:.4}", e.record.validation_loss))
+                .unwrap_or_default(),
+            format!(
+                "{:.0}",
+                epochs.iter().map(|e| e.record.seconds).sum::<f64>()
+            ),
+        ]);
+    }
+    let _ = writeln!(out, "{table}\n");
+}
+
+fn provenance_section(run: &StoredRun, out: &mut String) {
+    let m = &run.manifest;
+    let s = &m.stage_seconds;
+    let _ = writeln!(
+        out,
+        "## Run\n\nWall time of the process that wrote this folder, over every point of its spec; work taken from the cache counts nothing.\n"
+    );
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    table.set_header(["stage", "wall time s"]);
+    for (stage, seconds) in [
+        ("load", s.load),
+        ("dataset", s.dataset),
+        ("training", s.training),
+        ("protocol", s.protocol),
+        ("total", s.load + s.dataset + s.training + s.protocol),
+    ] {
+        table.add_row(vec![stage.to_string(), format!("{seconds:.2}")]);
+    }
+    let _ = writeln!(out, "{table}\n");
+    let _ = writeln!(
+        out,
+        "- backend: {}, {} threads, host {}",
+        m.backend, m.threads, m.host
+    );
+    let _ = writeln!(
+        out,
+        "- dcnet-exp {} at commit {}",
+        m.crate_version, m.git_commit
+    );
+    let _ = writeln!(
+        out,
+        "- started {}, finished {}",
+        m.started_at, m.finished_at
+    );
+    let _ = writeln!(
+        out,
+        "- spec sha256 {} (`spec.toml` beside this report)",
+        m.spec_sha256
+    );
+    for file in &m.data_files {
+        let _ = writeln!(out, "- data {} sha256 {}", file.path.display(), file.sha256);
+    }
+    let _ = writeln!(out);
+}
+
+fn figures_section(run: &StoredRun, figures: &[Written], out: &mut String) {
+    if figures.is_empty() {
+        let _ = writeln!(
+            out,
+            "## Figures\n\nNone drawn (`--no-plots`); `dcnet-exp plot {}` draws them.",
+            run.folder.display()
+        );
+        return;
+    }
+    let _ = writeln!(out, "## Figures\n");
+    for figure in figures {
+        match &figure.caption {
+            Ok(caption) => {
+                let links: Vec<String> = figure
+                    .files
+                    .iter()
+                    .map(|f| relative_link(&run.folder, f))
+                    .collect();
+                match links.iter().find(|l| l.ends_with(".png")) {
+                    Some(png) => {
+                        let _ = writeln!(out, "![{caption}]({png})\n");
+                    }
+                    None => {
+                        let _ = writeln!(out, "- {caption}: {}\n", links.join(", "));
+                    }
+                }
+            }
+            Err(why) => {
+                let _ = writeln!(out, "- {}: not drawn, {why}\n", figure.stem);
+            }
+        }
+    }
+}
+
+/// `file` as a link from a document in `folder`.
+fn relative_link(folder: &Path, file: &Path) -> String {
+    path_from(folder, file)
+        .unwrap_or_else(|| file.to_path_buf())
+        .to_string_lossy()
+        .replace(' ', "%20")
+}
+
+/// `file` as a path from `folder`, both taken through their links; none where there
+/// is no such path.
+pub(super) fn path_from(folder: &Path, file: &Path) -> Option<PathBuf> {
+    pathdiff::diff_paths(absolute(file), absolute(folder))
+}
+
+/// `path` made absolute through its links, or as it is when it cannot be.
+fn absolute(path: &Path) -> PathBuf {
+    std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::table::{Detail, RmseValue, Row, Tally};
+
+    fn value(rmse_cm_s: f64, t_conv_s: f64) -> RmseValue {
+        RmseValue {
+            rmse_cm_s,
+            ci_cm_s: None,
+            detail: Some(Detail::TConv(t_conv_s)),
+        }
+    }
+
+    #[test]
+    fn a_cell_reads_ours_then_the_paper_flagged_where_they_disagree() {
+        let flagged = Cell {
+            ours: value(5.0, 20.0),
+            paper: Some(value(5.0, 100.0)),
+            flagged: true,
+        };
+        let table = ReportTable {
+            labels: vec!["DVL"],
+            columns: vec!["Baseline".into(), "EM5".into()],
+            groups: vec![vec![Row {
+                labels: vec!["DVL1".into()],
+                cells: vec![None, Some(flagged)],
+            }]],
+            tally: Tally::default(),
+        };
+        assert_eq!(
+            markdown_table(&table).to_string(),
+            "| DVL  | Baseline | EM5                            |\n\
+             |------|----------|--------------------------------|\n\
+             | DVL1 | —        | 5.00 (20) · paper 5.00 (100) ⚠ |"
+        );
+        assert_eq!(cell_text(&Cell::alone(value(0.74, 100.0))), "0.74 (100)");
+    }
+}
