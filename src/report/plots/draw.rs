@@ -8,7 +8,7 @@ use crate::vocab::{ErrorModel, EstimatorKind};
 use plotters::chart::MeshStyle;
 use plotters::coord::Shift;
 use plotters::coord::ranged1d::ValueFormatter;
-use plotters::element::{DashedPathElement, DynElement, IntoDynElement, Polygon};
+use plotters::element::{DashedPathElement, Polygon};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
@@ -205,28 +205,69 @@ pub enum Marker {
 }
 
 impl Marker {
-    /// The mark centred on `at`, in `color`.
-    pub fn at<'a, DB: DrawingBackend + 'a, C: Clone + 'a>(
+    /// The mark at each of `points` of `chart`, in `color`.
+    pub fn draw<X: Ranged<ValueType = f64>, Y: Ranged<ValueType = f64>>(
         self,
-        at: C,
+        chart: &mut ChartContext<SVGBackend, Cartesian2d<X, Y>>,
+        points: &[(f64, f64)],
         color: RGBColor,
-    ) -> DynElement<'a, DB, C> {
+    ) -> PlotResult {
+        let at = |point: &(f64, f64)| EmptyElement::at(*point);
+        match self {
+            Marker::Circle => chart.draw_series(
+                points
+                    .iter()
+                    .map(|p| at(p) + Circle::new((0, 0), 4, color.filled())),
+            )?,
+            Marker::Ring => chart.draw_series(
+                points
+                    .iter()
+                    .map(|p| at(p) + Circle::new((0, 0), 4, color.stroke_width(2))),
+            )?,
+            Marker::Square => chart.draw_series(
+                points
+                    .iter()
+                    .map(|p| at(p) + Rectangle::new([(-4, -4), (4, 4)], color.filled())),
+            )?,
+            Marker::Diamond => chart.draw_series(
+                points
+                    .iter()
+                    .map(|p| at(p) + Polygon::new(DIAMOND.to_vec(), color.filled())),
+            )?,
+            Marker::Cross => chart.draw_series(
+                points
+                    .iter()
+                    .map(|p| at(p) + Cross::new((0, 0), 4, color.stroke_width(2))),
+            )?,
+            Marker::Dot => chart.draw_series(
+                points
+                    .iter()
+                    .map(|p| at(p) + Circle::new((0, 0), 2, color.filled())),
+            )?,
+        };
+        Ok(())
+    }
+
+    /// The mark centred on `at` of `area`, in `color`.
+    fn draw_on(self, area: &Area, at: (i32, i32), color: RGBColor) -> PlotResult {
         let origin = EmptyElement::at(at);
         match self {
-            Marker::Circle => (origin + Circle::new((0, 0), 4, color.filled())).into_dyn(),
-            Marker::Ring => (origin + Circle::new((0, 0), 4, color.stroke_width(2))).into_dyn(),
+            Marker::Circle => area.draw(&(origin + Circle::new((0, 0), 4, color.filled()))),
+            Marker::Ring => area.draw(&(origin + Circle::new((0, 0), 4, color.stroke_width(2)))),
             Marker::Square => {
-                (origin + Rectangle::new([(-4, -4), (4, 4)], color.filled())).into_dyn()
+                area.draw(&(origin + Rectangle::new([(-4, -4), (4, 4)], color.filled())))
             }
             Marker::Diamond => {
-                let corners = vec![(0, -5), (5, 0), (0, 5), (-5, 0)];
-                (origin + Polygon::new(corners, color.filled())).into_dyn()
+                area.draw(&(origin + Polygon::new(DIAMOND.to_vec(), color.filled())))
             }
-            Marker::Cross => (origin + Cross::new((0, 0), 4, color.stroke_width(2))).into_dyn(),
-            Marker::Dot => (origin + Circle::new((0, 0), 2, color.filled())).into_dyn(),
+            Marker::Cross => area.draw(&(origin + Cross::new((0, 0), 4, color.stroke_width(2)))),
+            Marker::Dot => area.draw(&(origin + Circle::new((0, 0), 2, color.filled()))),
         }
     }
 }
+
+/// The corners of [`Marker::Diamond`] around its centre, in pixels.
+const DIAMOND: [(i32, i32); 4] = [(0, -5), (5, 0), (0, 5), (-5, 0)];
 
 /// A column of legend entries, top to bottom.
 pub fn legend(area: &Area, title: &str, entries: &[(Swatch, String)]) -> PlotResult {
@@ -263,7 +304,7 @@ fn legend_from(
             Swatch::Line(color, stroke) => legend_line(area, (x0, x1, y), *color, *stroke)?,
             Swatch::Marked(color, stroke, marker) => {
                 legend_line(area, (x0, x1, y), *color, *stroke)?;
-                area.draw(&marker.at((28, y), *color))?;
+                marker.draw_on(area, (28, y), *color)?;
             }
             Swatch::Bar(color) => area.draw(&Rectangle::new(
                 [(x0 + 6, y - 7), (x1 - 6, y + 7)],

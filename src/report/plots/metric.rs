@@ -1,6 +1,7 @@
 //! The metric a sweep figure plots against the swept values: its name on the command
 //! line, its description, its value in a row of `sweep.parquet` and its axis label.
-//! Both sweep figures ([`super::sweep_figures`], [`super::sweep_parallel`]) read it.
+//! Both sweep figures (the metric against each key, and the parallel coordinates) read
+//! it.
 
 use crate::results::sweep::SweepRow;
 

@@ -2,13 +2,15 @@
 //! drawn from its `sweep.parquet`: `run` calls this at its end and `plot` calls it on a
 //! stored folder. [`figures`] (one file per figure or family) and [`sweep_figures`]
 //! with [`sweep_parallel`] draw each figure as SVG with plotters on a [`canvas`] and
-//! give back an [`canvas::Outcome`] (the figure, or why it does not apply), every
-//! numeric axis chosen by [`scale`] (linear or logarithmic, its ticks, far values cut)
-//! and the shared pieces (looks, legends, marks) taken from [`draw`]; [`render`] writes
-//! each as PNG and as SVG with the text outlined, both from the embedded font. In: a
+//! give back an [`canvas::Outcome`] (the figure, or why it does not apply). Every
+//! numeric axis is chosen by [`scale`] (linear or logarithmic, its ticks, far values
+//! cut), or by [`broken_axis`] in the calibration figure's crowded panels; the shared
+//! pieces (looks, legends, marks) come from [`draw`]. [`render`] writes each figure as
+//! PNG and as SVG with the text outlined, both from the embedded font. In: a
 //! [`StoredRun`] or a stored sweep. Out: the figure files, and each figure's caption or
 //! why it is absent.
 
+pub mod broken_axis;
 pub mod canvas;
 pub mod draw;
 pub mod figures;

@@ -121,6 +121,11 @@ impl Scale {
         Scale::fit(low, high)
     }
 
+    /// Whether the axis is logarithmic.
+    pub fn is_log(&self) -> bool {
+        self.log
+    }
+
     /// Whether `value` lies beyond either end of the axis.
     pub fn is_cut(&self, value: f64) -> bool {
         value > self.range.end || self.is_below(value)

@@ -1,13 +1,19 @@
 //! The calibration figure: mean RMSE against the calibration window, one panel per
-//! DVL, one line per estimator and error model, each T_conv ringed. In: a
+//! DVL, one line per estimator and error model, each T_conv ringed. A line's colour is
+//! its error model (or its estimator's own, for one without), its stroke and marker
+//! its kind of estimator, so the legend lists the kinds and the error models apart. A
+//! panel's value axis says when it is logarithmic, and one whose lines crowd in a band
+//! while another group lies far above is broken between them ([`BrokenAxis`]). In: a
 //! [`StoredRun`]'s calibration table. Out: the figure, or why the table is empty.
 
 use super::{calibration_name, series_of};
 use crate::evaluate::CalibrationRow;
+use crate::report::plots::broken_axis::BrokenAxis;
 use crate::report::plots::canvas::{Drawn, Outcome, draw_svg};
 use crate::report::plots::draw::*;
 use crate::report::plots::scale::Scale;
 use crate::results::read::StoredRun;
+use crate::vocab::{ErrorModel, EstimatorKind};
 use plotters::prelude::*;
 use std::ops::Range;
 
@@ -33,16 +39,11 @@ pub fn calibration(run: &StoredRun) -> PlotResult<Outcome> {
     let svg = draw_svg((width, 620), |root| {
         let (panels, legend_area) = panels_and_legend(root, &caption, width, dvls.len())?;
         let windows = WindowAxis::of(&run.calibration);
-        let mut cut = false;
+        let mut marks = PanelMarks::default();
         for (area, dvl) in panels.iter().zip(&dvls) {
-            cut |= calibration_panel(area, dvl, run, &series, &windows)?;
+            marks = marks.or(calibration_panel(area, dvl, run, &series, &windows)?);
         }
-        let mut entries = series_entries(&series);
-        entries.push((Swatch::Ring, "T_conv".into()));
-        if cut {
-            entries.push((Swatch::Cut, "beyond the axis".into()));
-        }
-        legend(&legend_area, "estimator", &entries)
+        legends(&legend_area, &legend_sections(&series, marks))
     })?;
     Ok(Outcome::Drawn(Drawn { caption, svg }))
 }
@@ -71,24 +72,117 @@ impl WindowAxis {
     }
 }
 
-/// One DVL's panel of the calibration figure: a line per series; says whether a value
-/// was cut at the axis.
+/// What a panel drew that the legend explains.
+#[derive(Debug, Clone, Copy, Default)]
+struct PanelMarks {
+    /// A value beyond the axis, drawn at its edge.
+    cut: bool,
+    /// A break in the value axis.
+    broken: bool,
+}
+
+impl PanelMarks {
+    fn or(self, other: PanelMarks) -> PanelMarks {
+        PanelMarks {
+            cut: self.cut || other.cut,
+            broken: self.broken || other.broken,
+        }
+    }
+}
+
+/// The shade of the band where a value axis is broken.
+const BREAK_SHADE: RGBColor = RGBColor(225, 225, 225);
+/// The colour of a kind of estimator in the legend, when its lines take their error
+/// model's colour.
+const KIND_GREY: RGBColor = RGBColor(80, 80, 80);
+
+/// The marker of a kind of estimator on its lines; its stroke is [`series_look`]'s.
+fn marker_of(estimator: EstimatorKind) -> Marker {
+    match estimator {
+        EstimatorKind::Baseline => Marker::Square,
+        EstimatorKind::LeastSquares => Marker::Cross,
+        EstimatorKind::BeamWls => Marker::Diamond,
+        EstimatorKind::Dcnet => Marker::Circle,
+        EstimatorKind::DcnetEnsemble => Marker::Ring,
+        EstimatorKind::Floor | EstimatorKind::Bound => Marker::Dot,
+    }
+}
+
+/// The legend's sections: the kinds of estimator (stroke and marker), the error models
+/// (colour), and the marks on the lines.
+fn legend_sections(
+    series: &[Series],
+    marks: PanelMarks,
+) -> Vec<(&'static str, Vec<(Swatch, String)>)> {
+    let kinds = crate::first_seen(series.iter().map(|(estimator, _)| *estimator));
+    let kinds = kinds
+        .into_iter()
+        .map(|estimator| {
+            let look = series_look(estimator, None);
+            let color = if estimator.takes_error_model() {
+                KIND_GREY
+            } else {
+                look.color
+            };
+            let swatch = Swatch::Marked(color, look.stroke, marker_of(estimator));
+            (swatch, estimator.label().to_string())
+        })
+        .collect();
+    let models: Vec<ErrorModel> = crate::first_seen(series.iter().filter_map(|(_, model)| *model));
+    let models = models
+        .into_iter()
+        .map(|model| {
+            let color = series_look(EstimatorKind::Dcnet, Some(model)).color;
+            (Swatch::Bar(color), model.to_string())
+        })
+        .collect::<Vec<_>>();
+    let mut on_lines = vec![(Swatch::Ring, "T_conv".to_string())];
+    if marks.cut {
+        on_lines.push((Swatch::Cut, "beyond the axis".into()));
+    }
+    if marks.broken {
+        on_lines.push((Swatch::Bar(BREAK_SHADE), "axis broken".into()));
+    }
+    let mut sections = vec![("estimator: line, marker", kinds)];
+    if !models.is_empty() {
+        sections.push(("error model: colour", models));
+    }
+    sections.push(("marks", on_lines));
+    sections
+}
+
+/// One DVL's panel of the calibration figure: a line per series; says what it drew
+/// that the legend explains.
 fn calibration_panel(
     area: &Area,
     dvl: &str,
     run: &StoredRun,
     series: &[Series],
     windows: &WindowAxis,
-) -> PlotResult<bool> {
+) -> PlotResult<PanelMarks> {
     let rows: Vec<&CalibrationRow> = run.calibration.iter().filter(|r| r.dvl == dvl).collect();
     let values: Vec<f64> = rows.iter().map(|r| r.rmse_cm_s).collect();
-    let y = Scale::fit_values(&values, windows.count);
-    let mut chart = chart_on(area, dvl, 70)
-        .build_cartesian_2d(Scale::linear(windows.range.clone()), y.clone())?;
+    let y = BrokenAxis::fit(&values, windows.count);
+    let x = Scale::linear(windows.range.clone());
+    let mut chart = chart_on(area, dvl, 70).build_cartesian_2d(x, y.clone())?;
+    let y_desc = if y.is_log() {
+        "mean RMSE [cm/s], log scale"
+    } else if y.gap().is_some() {
+        "mean RMSE [cm/s], axis broken"
+    } else {
+        "mean RMSE [cm/s]"
+    };
     mesh(&mut chart)
         .x_desc("calibration window [s]")
-        .y_desc("mean RMSE [cm/s]")
+        .y_desc(y_desc)
         .draw()?;
+    if let Some(gap) = y.gap() {
+        let Range { start, end } = windows.range.clone();
+        chart.draw_series(std::iter::once(Rectangle::new(
+            [(start, gap.start), (end, gap.end)],
+            BREAK_SHADE.filled(),
+        )))?;
+    }
     for &(estimator, model) in series {
         let look = series_look(estimator, model);
         let points: Vec<(f64, f64)> = rows
@@ -97,11 +191,8 @@ fn calibration_panel(
             .map(|r| (r.window_s, y.shown(r.rmse_cm_s)))
             .collect();
         line(&mut chart, points.clone(), look.color, look.stroke)?;
-        chart.draw_series(
-            points
-                .iter()
-                .map(|&point| Circle::new(point, 3, look.color.filled())),
-        )?;
+        let marker = marker_of(estimator);
+        marker.draw(&mut chart, &points, look.color)?;
         // The confidence interval across DCNet replicates, as error bars.
         let bars = rows.iter().filter_map(|r| {
             let ci = r
@@ -112,15 +203,19 @@ fn calibration_panel(
         });
         chart.draw_series(bars)?;
     }
-    calibration_marks(&mut chart, &rows, &y)
+    let cut = calibration_marks(&mut chart, &rows, &y)?;
+    Ok(PanelMarks {
+        cut,
+        broken: y.gap().is_some(),
+    })
 }
 
 /// Rings each T_conv of `rows` and marks each value beyond the axis `y`; says whether
 /// one was.
 fn calibration_marks(
-    chart: &mut Chart<'_, '_, Scale, Scale>,
+    chart: &mut Chart<'_, '_, Scale, BrokenAxis>,
     rows: &[&CalibrationRow],
-    y: &Scale,
+    y: &BrokenAxis,
 ) -> PlotResult<bool> {
     let mut cut = false;
     for row in rows {
@@ -130,7 +225,11 @@ fn calibration_marks(
         }
         if y.is_cut(row.rmse_cm_s) {
             let color = series_look(row.estimator, row.error_model).color;
-            let edge = Edge::of_vertical(y, row.rmse_cm_s);
+            let edge = if y.is_below(row.rmse_cm_s) {
+                Edge::Bottom
+            } else {
+                Edge::Top
+            };
             cut_mark(chart, at, row.rmse_cm_s, color, edge)?;
             cut = true;
         }
