@@ -20,6 +20,9 @@ const MAX_DECADES: i32 = 4;
 const BREAK_GAP_SHARE: f64 = 0.25;
 /// The share of the axis the band of the gap takes.
 const GAP_BAND: f64 = 0.05;
+/// Above a group with values cut above it, room for their marks: this share of the
+/// group's span.
+const CUT_HEADROOM: f64 = 0.25;
 /// The least share of the axis either group takes.
 const MIN_GROUP_SHARE: f64 = 0.2;
 
@@ -88,7 +91,14 @@ impl BrokenAxis {
         }
         let (below, above) = kept.split_at(at);
         let lower = Scale::fit(below[0], below[below.len() - 1]);
-        let upper = Scale::fit(above[0], above[above.len() - 1]);
+        let (first, last) = (above[0], above[above.len() - 1]);
+        // Room above the group for the marks of the values cut above it.
+        let headroom = if cut.is_finite() {
+            CUT_HEADROOM * (last - first)
+        } else {
+            0.0
+        };
+        let upper = Scale::fit(first, last + headroom);
         if lower.range().end >= upper.range().start {
             return whole();
         }

@@ -118,8 +118,10 @@ fn legend_sections(
     let kinds = kinds
         .into_iter()
         .map(|estimator| {
-            let look = series_look(estimator, None);
-            let color = if estimator.takes_error_model() {
+            // Drawn with any error model, for its stroke.
+            let model = estimator.takes_error_model().then_some(ErrorModel::Em1);
+            let look = series_look(estimator, model);
+            let color = if model.is_some() {
                 KIND_GREY
             } else {
                 look.color
@@ -151,6 +153,17 @@ fn legend_sections(
     sections
 }
 
+/// The label of a panel's value axis, saying when it is logarithmic or broken.
+fn value_label(axis: &BrokenAxis) -> &'static str {
+    if axis.is_log() {
+        "mean RMSE [cm/s], log scale"
+    } else if axis.gap().is_some() {
+        "mean RMSE [cm/s], axis broken"
+    } else {
+        "mean RMSE [cm/s]"
+    }
+}
+
 /// One DVL's panel of the calibration figure: a line per series; says what it drew
 /// that the legend explains.
 fn calibration_panel(
@@ -165,16 +178,9 @@ fn calibration_panel(
     let y = BrokenAxis::fit(&values, windows.count);
     let x = Scale::linear(windows.range.clone());
     let mut chart = chart_on(area, dvl, 70).build_cartesian_2d(x, y.clone())?;
-    let y_desc = if y.is_log() {
-        "mean RMSE [cm/s], log scale"
-    } else if y.gap().is_some() {
-        "mean RMSE [cm/s], axis broken"
-    } else {
-        "mean RMSE [cm/s]"
-    };
     mesh(&mut chart)
         .x_desc("calibration window [s]")
-        .y_desc(y_desc)
+        .y_desc(value_label(&y))
         .draw()?;
     if let Some(gap) = y.gap() {
         let Range { start, end } = windows.range.clone();
@@ -235,4 +241,84 @@ fn calibration_marks(
         }
     }
     Ok(cut)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The quick spec's fourteen series.
+    fn quick_series() -> Vec<Series> {
+        let mut series = vec![(EstimatorKind::Baseline, None)];
+        for estimator in [EstimatorKind::LeastSquares, EstimatorKind::Dcnet] {
+            series.extend(ErrorModel::ALL.map(|model| (estimator, Some(model))));
+        }
+        series.insert(6, (EstimatorKind::BeamWls, None));
+        series.extend([(EstimatorKind::Floor, None), (EstimatorKind::Bound, None)]);
+        series
+    }
+
+    fn texts(entries: &[(Swatch, String)]) -> Vec<&str> {
+        entries.iter().map(|(_, text)| text.as_str()).collect()
+    }
+
+    #[test]
+    fn the_legend_lists_kinds_and_error_models_apart() {
+        let series = quick_series();
+        assert_eq!(series.len(), 14);
+        let sections = legend_sections(&series, PanelMarks::default());
+        let titles: Vec<&str> = sections.iter().map(|(title, _)| *title).collect();
+        assert_eq!(
+            titles,
+            ["estimator: line, marker", "error model: colour", "marks"]
+        );
+        assert_eq!(
+            texts(&sections[0].1),
+            [
+                "baseline",
+                "least squares",
+                "beam-model WLS",
+                "DCNet",
+                "floor (true terms)",
+                "information bound"
+            ]
+        );
+        assert_eq!(texts(&sections[1].1), ["EM1", "EM2", "EM3", "EM4", "EM5"]);
+        assert_eq!(texts(&sections[2].1), ["T_conv"]);
+        // A kind drawn in its error model's colour is grey in the legend.
+        assert!(matches!(
+            sections[0].1[1].0,
+            Swatch::Marked(color, Stroke::Dashed, Marker::Cross) if color == KIND_GREY
+        ));
+        // Every kind has its own stroke and marker, or its own colour.
+        let looks: Vec<String> = sections[0]
+            .1
+            .iter()
+            .map(|(s, _)| format!("{s:?}"))
+            .collect();
+        assert_eq!(crate::first_seen(looks.iter()).len(), looks.len());
+
+        let marks = PanelMarks {
+            cut: true,
+            broken: true,
+        };
+        let sections = legend_sections(&series[..1], marks);
+        assert_eq!(sections.len(), 2, "no error model, no section for them");
+        assert_eq!(
+            texts(&sections[1].1),
+            ["T_conv", "beyond the axis", "axis broken"]
+        );
+    }
+
+    #[test]
+    fn the_value_axis_says_when_it_is_logarithmic_or_broken() {
+        let decades = BrokenAxis::fit(&[0.058, 0.06, 0.09, 0.1, 0.5, 0.7, 2.1], 5);
+        assert_eq!(value_label(&decades), "mean RMSE [cm/s], log scale");
+        let mut crowded: Vec<f64> = (0..40).map(|i| 5.9 + 0.005 * f64::from(i)).collect();
+        crowded.extend([6.4, 6.42, 6.45, 6.43, 6.41]);
+        let broken = BrokenAxis::fit(&crowded, 5);
+        assert_eq!(value_label(&broken), "mean RMSE [cm/s], axis broken");
+        let even: Vec<f64> = (0..30).map(|i| 5.8 + 0.03 * f64::from(i)).collect();
+        assert_eq!(value_label(&BrokenAxis::fit(&even, 5)), "mean RMSE [cm/s]");
+    }
 }
