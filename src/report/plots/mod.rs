@@ -153,3 +153,20 @@ fn write_figures(
     }
     Ok(written)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use plotters::drawing::DrawingAreaErrorKind;
+
+    #[test]
+    fn a_drawing_error_keeps_its_cause_and_prints_it_once() {
+        let error = PlotError::Draw {
+            what: "run's",
+            source: DrawingAreaErrorKind::LayoutError,
+        };
+        assert!(std::error::Error::source(&error).is_some());
+        let chain = format!("{:#}", anyhow::Error::new(error));
+        assert_eq!(chain, "drawing the run's figures: Bad layout");
+    }
+}

@@ -92,6 +92,20 @@ mod tests {
     const TEXT: &str = r#"<svg xmlns="http://www.w3.org/2000/svg" width="200" height="50" viewBox="0 0 200 50"><text x="10" y="30" font-family="sans-serif" font-size="20">RMSE ± σ</text></svg>"#;
 
     #[test]
+    fn a_broken_svg_names_its_cause_once() {
+        let error = png("<svg").unwrap_err();
+        let cause = std::error::Error::source(&error)
+            .expect("the parser's error is kept")
+            .to_string();
+        let chain = format!("{:#}", anyhow::Error::new(error));
+        assert!(
+            chain.starts_with("rendering a figure: reading the SVG plotters drew: "),
+            "{chain}"
+        );
+        assert_eq!(chain.matches(&cause).count(), 1, "{chain}");
+    }
+
+    #[test]
     fn text_becomes_paths_drawn_with_the_embedded_font() {
         let svg = svg_with_outlined_text(TEXT).unwrap();
         assert!(!svg.contains("<text"), "{svg}");
