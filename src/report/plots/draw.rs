@@ -3,16 +3,20 @@
 //! at a panel's edge with their number, bars and box plots.
 
 use super::render::FAMILY;
+use super::scale::{Scale, three_digits};
 use crate::vocab::{ErrorModel, EstimatorKind};
 use plotters::chart::MeshStyle;
 use plotters::coord::Shift;
 use plotters::coord::ranged1d::ValueFormatter;
-use plotters::element::DashedPathElement;
+use plotters::element::{DashedPathElement, Polygon};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 pub type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
-pub type PlotResult<T = ()> = Result<T, Box<dyn std::error::Error + Send + Sync>>;
+/// What drawing on an [`Area`] fails with: plotters' error, over the SVG backend's.
+pub type DrawError = DrawingAreaErrorKind<std::io::Error>;
+/// What a drawing step returns.
+pub type PlotResult<T = ()> = Result<T, DrawError>;
 /// A chart drawn on an [`Area`], `X` and `Y` its axes.
 pub type Chart<'a, 'b, X, Y> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<X, Y>>;
 /// One series of a figure: an estimator, with its error model where it has one.
@@ -154,15 +158,12 @@ pub fn estimator_color(estimator: EstimatorKind) -> RGBColor {
 }
 
 /// A line through `points` in chart coordinates, stroked as `look` says.
-pub fn line<DB: DrawingBackend, X: Ranged<ValueType = f64>, Y: Ranged<ValueType = f64>>(
-    chart: &mut ChartContext<DB, Cartesian2d<X, Y>>,
+pub fn line<X: Ranged<ValueType = f64>, Y: Ranged<ValueType = f64>>(
+    chart: &mut ChartContext<SVGBackend, Cartesian2d<X, Y>>,
     points: Vec<(f64, f64)>,
     color: RGBColor,
     stroke: Stroke,
-) -> PlotResult
-where
-    DB::ErrorType: 'static,
-{
+) -> PlotResult {
     let style = color.stroke_width(2);
     match stroke {
         Stroke::Solid => {
@@ -182,6 +183,8 @@ where
 #[derive(Debug, Clone)]
 pub enum Swatch {
     Line(RGBColor, Stroke),
+    /// A line with its marker in the middle.
+    Marked(RGBColor, Stroke, Marker),
     Bar(RGBColor),
     Ring,
     Dot(RGBColor),
@@ -189,10 +192,107 @@ pub enum Swatch {
     Cut,
 }
 
+/// The mark drawn at each point of a line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Marker {
+    Circle,
+    Ring,
+    Square,
+    Diamond,
+    Cross,
+    /// A small filled circle.
+    Dot,
+}
+
+impl Marker {
+    /// The mark at each of `points` of `chart`, in `color`.
+    pub fn draw<X: Ranged<ValueType = f64>, Y: Ranged<ValueType = f64>>(
+        self,
+        chart: &mut ChartContext<SVGBackend, Cartesian2d<X, Y>>,
+        points: &[(f64, f64)],
+        color: RGBColor,
+    ) -> PlotResult {
+        let at = |point: &(f64, f64)| EmptyElement::at(*point);
+        match self {
+            Marker::Circle => chart.draw_series(
+                points
+                    .iter()
+                    .map(|p| at(p) + Circle::new((0, 0), 4, color.filled())),
+            )?,
+            Marker::Ring => chart.draw_series(
+                points
+                    .iter()
+                    .map(|p| at(p) + Circle::new((0, 0), 4, color.stroke_width(2))),
+            )?,
+            Marker::Square => chart.draw_series(
+                points
+                    .iter()
+                    .map(|p| at(p) + Rectangle::new([(-4, -4), (4, 4)], color.filled())),
+            )?,
+            Marker::Diamond => chart.draw_series(
+                points
+                    .iter()
+                    .map(|p| at(p) + Polygon::new(DIAMOND.to_vec(), color.filled())),
+            )?,
+            Marker::Cross => chart.draw_series(
+                points
+                    .iter()
+                    .map(|p| at(p) + Cross::new((0, 0), 4, color.stroke_width(2))),
+            )?,
+            Marker::Dot => chart.draw_series(
+                points
+                    .iter()
+                    .map(|p| at(p) + Circle::new((0, 0), 2, color.filled())),
+            )?,
+        };
+        Ok(())
+    }
+
+    /// The mark centred on `at` of `area`, in `color`.
+    fn draw_on(self, area: &Area, at: (i32, i32), color: RGBColor) -> PlotResult {
+        let origin = EmptyElement::at(at);
+        match self {
+            Marker::Circle => area.draw(&(origin + Circle::new((0, 0), 4, color.filled()))),
+            Marker::Ring => area.draw(&(origin + Circle::new((0, 0), 4, color.stroke_width(2)))),
+            Marker::Square => {
+                area.draw(&(origin + Rectangle::new([(-4, -4), (4, 4)], color.filled())))
+            }
+            Marker::Diamond => {
+                area.draw(&(origin + Polygon::new(DIAMOND.to_vec(), color.filled())))
+            }
+            Marker::Cross => area.draw(&(origin + Cross::new((0, 0), 4, color.stroke_width(2)))),
+            Marker::Dot => area.draw(&(origin + Circle::new((0, 0), 2, color.filled()))),
+        }
+    }
+}
+
+/// The corners of [`Marker::Diamond`] around its centre, in pixels.
+const DIAMOND: [(i32, i32); 4] = [(0, -5), (5, 0), (0, 5), (-5, 0)];
+
 /// A column of legend entries, top to bottom.
 pub fn legend(area: &Area, title: &str, entries: &[(Swatch, String)]) -> PlotResult {
-    let row = 24;
+    legend_from(area, 60, title, entries).map(|_| ())
+}
+
+/// Legends one below the other in a column, each a title and its entries.
+pub fn legends(area: &Area, sections: &[(&str, Vec<(Swatch, String)>)]) -> PlotResult {
     let mut y = 60;
+    for (title, entries) in sections {
+        // Room for the next title above its first entry.
+        y = legend_from(area, y, title, entries)? + 40;
+    }
+    Ok(())
+}
+
+/// A legend whose first entry is at height `y`, its title above; returns the height
+/// below its last entry.
+fn legend_from(
+    area: &Area,
+    mut y: i32,
+    title: &str,
+    entries: &[(Swatch, String)],
+) -> PlotResult<i32> {
+    let row = 24;
     area.draw(&Text::new(
         title.to_string(),
         (12, y - 28),
@@ -201,14 +301,10 @@ pub fn legend(area: &Area, title: &str, entries: &[(Swatch, String)]) -> PlotRes
     for (swatch, text) in entries {
         let (x0, x1) = (12, 44);
         match swatch {
-            Swatch::Line(color, stroke) => {
-                let style = color.stroke_width(2);
-                let points = vec![(x0, y), (x1, y)];
-                match stroke {
-                    Stroke::Solid => area.draw(&PathElement::new(points, style))?,
-                    Stroke::Dashed => area.draw(&DashedPathElement::new(points, 8, 5, style))?,
-                    Stroke::Dotted => area.draw(&DashedPathElement::new(points, 2, 4, style))?,
-                }
+            Swatch::Line(color, stroke) => legend_line(area, (x0, x1, y), *color, *stroke)?,
+            Swatch::Marked(color, stroke, marker) => {
+                legend_line(area, (x0, x1, y), *color, *stroke)?;
+                marker.draw_on(area, (28, y), *color)?;
             }
             Swatch::Bar(color) => area.draw(&Rectangle::new(
                 [(x0 + 6, y - 7), (x1 - 6, y + 7)],
@@ -225,17 +321,23 @@ pub fn legend(area: &Area, title: &str, entries: &[(Swatch, String)]) -> PlotRes
         ))?;
         y += row;
     }
-    Ok(())
+    Ok(y)
 }
 
-/// A value with three significant digits, or all of its integer digits.
-pub fn three_digits(value: f64) -> String {
-    if value != 0.0 && value.abs() < 1e-3 {
-        return format!("{value:.2e}");
+/// The line of a legend entry, from `x0` to `x1` at height `y`.
+fn legend_line(
+    area: &Area,
+    (x0, x1, y): (i32, i32, i32),
+    color: RGBColor,
+    stroke: Stroke,
+) -> PlotResult {
+    let style = color.stroke_width(2);
+    let points = vec![(x0, y), (x1, y)];
+    match stroke {
+        Stroke::Solid => area.draw(&PathElement::new(points, style)),
+        Stroke::Dashed => area.draw(&DashedPathElement::new(points, 8, 5, style)),
+        Stroke::Dotted => area.draw(&DashedPathElement::new(points, 2, 4, style)),
     }
-    let magnitude = value.abs().log10().floor() as i32;
-    let decimals = (2 - magnitude).max(0) as usize;
-    format!("{value:.decimals$}")
 }
 
 /// The edge of a panel at which a value beyond the axis is drawn.
@@ -253,7 +355,7 @@ pub enum Edge {
 
 impl Edge {
     /// The edge of a vertical axis `scale` at which the cut `value` is drawn.
-    pub fn of_vertical(scale: &super::scale::Scale, value: f64) -> Edge {
+    pub fn of_vertical(scale: &Scale, value: f64) -> Edge {
         if scale.is_below(value) {
             Edge::Bottom
         } else {
@@ -262,7 +364,7 @@ impl Edge {
     }
 
     /// The edge of a horizontal axis `scale` at which the cut `value` is drawn.
-    pub fn of_horizontal(scale: &super::scale::Scale, value: f64) -> Edge {
+    pub fn of_horizontal(scale: &Scale, value: f64) -> Edge {
         if scale.is_below(value) {
             Edge::Left
         } else {

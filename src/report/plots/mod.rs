@@ -1,23 +1,31 @@
 //! The figures of a run, drawn from its results folder alone, and those of a sweep,
 //! drawn from its `sweep.parquet`: `run` calls this at its end and `plot` calls it on a
-//! stored folder. [`figures`] and [`sweep_figures`] draw each figure as SVG with
-//! plotters, every numeric axis chosen by [`scale`] (linear or logarithmic, its ticks,
-//! far values cut), and [`render`] writes it as PNG and as SVG with the text outlined,
-//! both from the embedded font. In: a [`StoredRun`] or
-//! a stored sweep. Out: the figure files, and each figure's caption or why it is absent.
+//! stored folder. [`figures`] (one file per figure or family) and [`sweep_figures`]
+//! with [`sweep_parallel`] draw each figure as SVG with plotters on a [`canvas`] and
+//! give back an [`canvas::Outcome`] (the figure, or why it does not apply). Every
+//! numeric axis is chosen by [`scale`] (linear or logarithmic, its ticks, far values
+//! cut), or by [`broken_axis`] in the calibration figure's crowded panels; the shared
+//! pieces (looks, legends, marks) come from [`draw`]. [`render`] writes each figure as
+//! PNG and as SVG with the text outlined, both from the embedded font. In: a
+//! [`StoredRun`] or a stored sweep. Out: the figure files, and each figure's caption or
+//! why it is absent.
 
+pub mod broken_axis;
+pub mod canvas;
 pub mod draw;
 pub mod figures;
+pub mod metric;
 pub mod render;
 pub mod scale;
 pub mod sweep_figures;
 pub mod sweep_parallel;
 
-pub use sweep_figures::Metric;
+pub use metric::Metric;
 
 use crate::files::write_atomic;
 use crate::results::read::StoredRun;
 use crate::results::sweep::StoredSweep;
+use canvas::Outcome;
 use std::path::{Path, PathBuf};
 
 /// Which files each figure is written as.
@@ -60,8 +68,12 @@ pub struct Written {
 
 #[derive(Debug, thiserror::Error)]
 pub enum PlotError {
-    #[error("drawing {stem}: {message}")]
-    Draw { stem: String, message: String },
+    #[error("drawing the {what} figures")]
+    Draw {
+        /// Whose figures: a run's or a sweep's.
+        what: &'static str,
+        source: draw::DrawError,
+    },
     #[error(transparent)]
     Render(#[from] render::RenderError),
     #[error("writing {}", path.display())]
@@ -78,9 +90,9 @@ pub fn write_all(
     format: Format,
 ) -> Result<Vec<Written>, PlotError> {
     render::register_font();
-    let drawn = figures::all(run).map_err(|e| PlotError::Draw {
-        stem: "figures".into(),
-        message: e.to_string(),
+    let drawn = figures::all(run).map_err(|source| PlotError::Draw {
+        what: "run's",
+        source,
     })?;
     write_figures(drawn, folder, format)
 }
@@ -93,15 +105,15 @@ pub fn write_sweep(
     format: Format,
 ) -> Result<Vec<Written>, PlotError> {
     render::register_font();
-    let drawn = sweep_figures::all(sweep, metric).map_err(|e| PlotError::Draw {
-        stem: "sweep".into(),
-        message: e.to_string(),
+    let drawn = sweep_figures::all(sweep, metric).map_err(|source| PlotError::Draw {
+        what: "sweep's",
+        source,
     })?;
     write_figures(drawn, folder, format)
 }
 
 fn write_figures(
-    drawn: Vec<(String, figures::MaybeDrawn)>,
+    drawn: Vec<(String, Outcome)>,
     folder: &Path,
     format: Format,
 ) -> Result<Vec<Written>, PlotError> {
@@ -113,8 +125,8 @@ fn write_figures(
     let mut written = Vec::new();
     for (stem, outcome) in drawn {
         let figure = match outcome {
-            Ok(figure) => figure,
-            Err(why) => {
+            Outcome::Drawn(figure) => figure,
+            Outcome::NotApplicable(why) => {
                 written.push(Written {
                     stem,
                     caption: Err(why),
@@ -140,4 +152,21 @@ fn write_figures(
         });
     }
     Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use plotters::drawing::DrawingAreaErrorKind;
+
+    #[test]
+    fn a_drawing_error_keeps_its_cause_and_prints_it_once() {
+        let error = PlotError::Draw {
+            what: "run's",
+            source: DrawingAreaErrorKind::LayoutError,
+        };
+        assert!(std::error::Error::source(&error).is_some());
+        let chain = format!("{:#}", anyhow::Error::new(error));
+        assert_eq!(chain, "drawing the run's figures: Bad layout");
+    }
 }

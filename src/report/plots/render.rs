@@ -36,9 +36,16 @@ fn fonts() -> Arc<usvg::fontdb::Database> {
         .clone()
 }
 
+/// Why a drawn figure could not be written as a file.
 #[derive(Debug, thiserror::Error)]
-#[error("rendering a figure: {0}")]
-pub struct RenderError(String);
+pub enum RenderError {
+    #[error("rendering a figure: reading the SVG plotters drew")]
+    Parse(#[source] usvg::Error),
+    #[error("rendering a figure: its size {width} × {height} is empty")]
+    Empty { width: u32, height: u32 },
+    #[error("rendering a figure: encoding the PNG")]
+    Encode(#[source] Box<dyn std::error::Error + Send + Sync>),
+}
 
 fn tree(svg: &str) -> Result<usvg::Tree, RenderError> {
     let options = usvg::Options {
@@ -46,7 +53,7 @@ fn tree(svg: &str) -> Result<usvg::Tree, RenderError> {
         font_family: "DejaVu Sans".into(),
         ..Default::default()
     };
-    usvg::Tree::from_str(svg, &options).map_err(|e| RenderError(e.to_string()))
+    usvg::Tree::from_str(svg, &options).map_err(RenderError::Parse)
 }
 
 /// The SVG with its text as paths.
@@ -59,8 +66,12 @@ pub fn png(svg: &str) -> Result<Vec<u8>, RenderError> {
     let tree = tree(svg)?;
     let size = tree.size().to_int_size();
     let mut pixmap =
-        resvg::tiny_skia::Pixmap::new(size.width() * PNG_SCALE, size.height() * PNG_SCALE)
-            .ok_or_else(|| RenderError(format!("empty figure {size:?}")))?;
+        resvg::tiny_skia::Pixmap::new(size.width() * PNG_SCALE, size.height() * PNG_SCALE).ok_or(
+            RenderError::Empty {
+                width: size.width(),
+                height: size.height(),
+            },
+        )?;
     pixmap.fill(resvg::tiny_skia::Color::WHITE);
     let scale = PNG_SCALE as f32;
     resvg::render(
@@ -68,7 +79,10 @@ pub fn png(svg: &str) -> Result<Vec<u8>, RenderError> {
         resvg::tiny_skia::Transform::from_scale(scale, scale),
         &mut pixmap.as_mut(),
     );
-    pixmap.encode_png().map_err(|e| RenderError(e.to_string()))
+    // tiny-skia's PNG error is of a png crate this crate does not name: boxed.
+    pixmap
+        .encode_png()
+        .map_err(|e| RenderError::Encode(Box::new(e)))
 }
 
 #[cfg(test)]
@@ -76,6 +90,20 @@ mod tests {
     use super::*;
 
     const TEXT: &str = r#"<svg xmlns="http://www.w3.org/2000/svg" width="200" height="50" viewBox="0 0 200 50"><text x="10" y="30" font-family="sans-serif" font-size="20">RMSE ± σ</text></svg>"#;
+
+    #[test]
+    fn a_broken_svg_names_its_cause_once() {
+        let error = png("<svg").unwrap_err();
+        let cause = std::error::Error::source(&error)
+            .expect("the parser's error is kept")
+            .to_string();
+        let chain = format!("{:#}", anyhow::Error::new(error));
+        assert!(
+            chain.starts_with("rendering a figure: reading the SVG plotters drew: "),
+            "{chain}"
+        );
+        assert_eq!(chain.matches(&cause).count(), 1, "{chain}");
+    }
 
     #[test]
     fn text_becomes_paths_drawn_with_the_embedded_font() {

@@ -5,8 +5,8 @@
 //! above all the others ([`cut_above`]), and above values more than `MAX_DECADES`
 //! below the highest (a floor of 10⁻¹² cm/s when a DVL has no noise), so that the
 //! others keep the panel, and the figure draws such a value at the edge with its
-//! number written on it. A [`Scale`] is a
-//! plotters coordinate: charts use it as an axis directly, and it labels its own ticks.
+//! number written on it ([`three_digits`]). A [`Scale`] is a plotters coordinate:
+//! charts use it as an axis directly, and it labels its own ticks.
 
 use plotters::coord::ranged1d::{KeyPointHint, NoDefaultFormatting, Ranged, ValueFormatter};
 use std::ops::Range;
@@ -121,6 +121,11 @@ impl Scale {
         Scale::fit(low, high)
     }
 
+    /// Whether the axis is logarithmic.
+    pub fn is_log(&self) -> bool {
+        self.log
+    }
+
     /// Whether `value` lies beyond either end of the axis.
     pub fn is_cut(&self, value: f64) -> bool {
         value > self.range.end || self.is_below(value)
@@ -146,10 +151,7 @@ impl Scale {
         self.ticks
             .iter()
             .find(|(tick, _)| *tick == value)
-            .map_or_else(
-                || super::draw::three_digits(value),
-                |(_, label)| label.clone(),
-            )
+            .map_or_else(|| three_digits(value), |(_, label)| label.clone())
     }
 
     /// Where `value` lies along the axis: 0 at its start, 1 at its end.
@@ -162,6 +164,16 @@ impl Scale {
             (value - start) / (end - start)
         }
     }
+}
+
+/// A value with three significant digits, or all of its integer digits.
+pub fn three_digits(value: f64) -> String {
+    if value != 0.0 && value.abs() < 1e-3 {
+        return format!("{value:.2e}");
+    }
+    let magnitude = value.abs().log10().floor() as i32;
+    let decimals = (2 - magnitude).max(0) as usize;
+    format!("{value:.decimals$}")
 }
 
 /// The multiples of `mantissa` × 10^`exponent` within `low..=high`, labelled with the
@@ -405,6 +417,6 @@ mod tests {
         let scale = Scale::fit_values(&[0.001, 0.01, 0.1, 1.0, 5.0], 1);
         assert!(scale.log && !scale.is_cut(0.001));
         assert_eq!(labels(&scale), ["0.001", "0.01", "0.1", "1"]);
-        assert_eq!(super::super::draw::three_digits(1.234e-12), "1.23e-12");
+        assert_eq!(three_digits(1.234e-12), "1.23e-12");
     }
 }

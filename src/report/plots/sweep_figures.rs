@@ -5,77 +5,18 @@
 //! the mean over the points that share it (over the other swept keys' values). A sweep
 //! over two or more keys adds [`super::sweep_parallel`]'s figure.
 
+use super::canvas::{Drawn, Outcome, draw_svg};
 use super::draw::*;
-use super::figures::{Drawn, MaybeDrawn, draw_svg};
+use super::metric::Metric;
 use super::scale::Scale;
 use crate::first_seen;
 use crate::results::sweep::{StoredSweep, SweepRow, Swept};
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
-/// What a sweep figure plots against the swept values.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Metric {
-    /// Mean RMSE over the test trajectories
-    EvaluationRmse,
-    /// Mean RMSE at T_conv on the calibration trajectory
-    CalibrationRmse,
-    /// The convergence window
-    TConv,
-    /// DCNet training wall time
-    TrainingTime,
-}
-
-impl Metric {
-    pub const ALL: [Metric; 4] = [
-        Metric::EvaluationRmse,
-        Metric::CalibrationRmse,
-        Metric::TConv,
-        Metric::TrainingTime,
-    ];
-
-    /// How the command line spells it.
-    pub fn name(self) -> &'static str {
-        match self {
-            Metric::EvaluationRmse => "evaluation-rmse",
-            Metric::CalibrationRmse => "calibration-rmse",
-            Metric::TConv => "t-conv",
-            Metric::TrainingTime => "training-time",
-        }
-    }
-
-    /// What it is, in a sentence's words.
-    pub fn description(self) -> &'static str {
-        match self {
-            Metric::EvaluationRmse => "Mean RMSE over the test trajectories",
-            Metric::CalibrationRmse => "Mean RMSE at T_conv on the calibration trajectory",
-            Metric::TConv => "The convergence window",
-            Metric::TrainingTime => "DCNet training wall time",
-        }
-    }
-
-    pub(super) fn of(self, row: &SweepRow) -> Option<f64> {
-        match self {
-            Metric::EvaluationRmse => Some(row.evaluation_rmse_cm_s),
-            Metric::CalibrationRmse => Some(row.calibration_rmse_cm_s),
-            Metric::TConv => Some(row.t_conv_s),
-            Metric::TrainingTime => row.training_s,
-        }
-    }
-
-    pub(super) fn axis(self) -> &'static str {
-        match self {
-            Metric::EvaluationRmse => "evaluation RMSE [cm/s]",
-            Metric::CalibrationRmse => "calibration RMSE at T_conv [cm/s]",
-            Metric::TConv => "T_conv [s]",
-            Metric::TrainingTime => "training time [s]",
-        }
-    }
-}
-
 /// One figure per swept key, stem `sweep_<key>` with the key's dots as underscores,
 /// and, over two or more keys, `sweep_parallel` ([`super::sweep_parallel`]).
-pub fn all(sweep: &StoredSweep, metric: Metric) -> PlotResult<Vec<(String, MaybeDrawn)>> {
+pub fn all(sweep: &StoredSweep, metric: Metric) -> PlotResult<Vec<(String, Outcome)>> {
     let mut figures = sweep
         .index
         .swept
@@ -117,7 +58,7 @@ fn categories(rows: &[(&SweepRow, f64)], k: usize) -> Vec<(Swept, String)> {
 
 /// The metric against swept key `k`, one panel per DVL and one series per estimator
 /// and error model.
-fn against(sweep: &StoredSweep, metric: Metric, k: usize) -> PlotResult<MaybeDrawn> {
+fn against(sweep: &StoredSweep, metric: Metric, k: usize) -> PlotResult<Outcome> {
     let key = &sweep.index.swept[k];
     let rows: Vec<(&SweepRow, f64)> = sweep
         .rows
@@ -125,7 +66,7 @@ fn against(sweep: &StoredSweep, metric: Metric, k: usize) -> PlotResult<MaybeDra
         .filter_map(|r| metric.of(r).filter(|v| v.is_finite()).map(|v| (r, v)))
         .collect();
     if rows.is_empty() {
-        return Ok(Err(format!(
+        return Ok(Outcome::NotApplicable(format!(
             "sweep.parquet has no {} to plot",
             metric.axis()
         )));
@@ -158,7 +99,7 @@ fn against(sweep: &StoredSweep, metric: Metric, k: usize) -> PlotResult<MaybeDra
         }
         legend(&legend_area, "estimator", &series_entries(&figure.series))
     })?;
-    Ok(Ok(Drawn { caption, svg }))
+    Ok(Outcome::Drawn(Drawn { caption, svg }))
 }
 
 /// What the figure of the metric against one swept key draws from.

@@ -6,10 +6,10 @@
 //! DVL, one panel per DVL. Numeric keys get a numeric axis ([`Scale`]); any other key
 //! (a TOML array or string) gets its values as evenly spaced categories.
 
+use super::canvas::{Drawn, Outcome, draw_svg};
 use super::draw::*;
-use super::figures::{Drawn, MaybeDrawn, draw_svg};
-use super::scale::Scale;
-use super::sweep_figures::Metric;
+use super::metric::Metric;
+use super::scale::{Scale, three_digits};
 use crate::first_seen;
 use crate::results::sweep::{StoredSweep, Swept};
 use crate::vocab::EstimatorKind;
@@ -122,7 +122,7 @@ const COLOR_BAR_WIDTH: u32 = 200;
 const MIN_WIDTH: u32 = 1000;
 
 /// The figure, or why the sweep has none.
-pub fn parallel(sweep: &StoredSweep, metric: Metric) -> PlotResult<MaybeDrawn> {
+pub fn parallel(sweep: &StoredSweep, metric: Metric) -> PlotResult<Outcome> {
     let keys = &sweep.index.swept;
     let dvls = first_seen(sweep.rows.iter().map(|r| r.dvl.clone()));
     let panels: Vec<(String, Vec<Line>)> = dvls
@@ -134,7 +134,7 @@ pub fn parallel(sweep: &StoredSweep, metric: Metric) -> PlotResult<MaybeDrawn> {
         .filter(|(_, lines)| !lines.is_empty())
         .collect();
     if panels.is_empty() {
-        return Ok(Err(format!(
+        return Ok(Outcome::NotApplicable(format!(
             "sweep.parquet has no DCNet row with a {}",
             metric.axis()
         )));
@@ -166,7 +166,7 @@ pub fn parallel(sweep: &StoredSweep, metric: Metric) -> PlotResult<MaybeDrawn> {
         }
         Ok(())
     })?;
-    Ok(Ok(Drawn { caption, svg }))
+    Ok(Outcome::Drawn(Drawn { caption, svg }))
 }
 
 /// One DVL's panel: an axis per swept key and the metric's (`names` names them all),
