@@ -14,7 +14,7 @@ pub struct SpecFile {
     /// Root of every random stream in the run.
     #[serde(default)]
     pub seed: u64,
-    pub data: DataFile,
+    pub data: DataSectionFile,
     #[serde(default)]
     pub sensors: SensorsFile,
     pub grid: GridFile,
@@ -32,9 +32,12 @@ pub struct SpecFile {
     pub report: ReportFile,
 }
 
+/// The `[data]` section: the trajectories an experiment runs on and how they are
+/// sampled (not a data file: the files are its `trajectories`). Serde's messages
+/// still call it `struct DataFile`, as before the rename.
 #[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct DataFile {
+#[serde(deny_unknown_fields, rename = "DataFile")]
+pub struct DataSectionFile {
     /// Samples per second of every trajectory.
     #[serde(default = "default_sample_rate_hz")]
     pub sample_rate_hz: f64,
