@@ -33,10 +33,10 @@ pub struct SpecFile {
 }
 
 /// The `[data]` section: the trajectories an experiment runs on and how they are
-/// sampled (not a data file: the files are its `trajectories`). Serde's messages
-/// still call it `struct DataFile`, as before the rename.
+/// sampled (not a data file: the files are its `trajectories`). A fault's message
+/// still calls it `struct DataFile`, as it did before the type was renamed.
 #[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields, rename = "DataFile")]
+#[serde(deny_unknown_fields, expecting = "struct DataFile")]
 pub struct DataSectionFile {
     /// Samples per second of every trajectory.
     #[serde(default = "default_sample_rate_hz")]

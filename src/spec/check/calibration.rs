@@ -90,3 +90,34 @@ pub(in crate::spec) fn check_dcnet_windows(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::spec::fixture::{quick_faults, quick_spec};
+
+    #[test]
+    fn window_sizes_are_samples_shorter_than_the_trajectory() {
+        let spec = quick_spec(&["data.sample_rate_hz=2"]);
+        assert_eq!(spec.calibration.window_sizes, [40, 80, 120, 160, 200]);
+        let set = "calibration.window_sizes_s=[200]";
+        assert_eq!(
+            quick_faults(&[set]),
+            format!(
+                "--set {set}: calibration.window_sizes_s[0]: 200 s is not shorter than SCal (200 s): no samples would be left to evaluate on"
+            )
+        );
+    }
+
+    #[test]
+    fn a_window_shorter_than_dcnets_is_refused_only_with_dcnet() {
+        let set = "calibration.window_sizes_s=[5]";
+        assert_eq!(
+            quick_faults(&[set]),
+            format!(
+                "--set {set}: calibration.window_sizes_s[0]: 5 s is shorter than one DCNet window (dataset.window_s = 10 s)"
+            )
+        );
+        let without = quick_spec(&[set, "estimators.kinds=[\"baseline\"]"]);
+        assert_eq!(without.calibration.window_sizes, [5]);
+    }
+}

@@ -324,3 +324,36 @@ fn check_synthetic(synthetic: &SyntheticFile, faults: &mut Faults) {
         limit.check(key, value, faults);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::spec::Origin;
+    use crate::spec::fixture::{quick_faults, quick_spec};
+
+    #[test]
+    fn a_synthetic_trajectory_is_counted_in_samples_at_the_rate() {
+        let origin = |spec: &crate::spec::Spec| spec.trajectories[0].origin.clone();
+        assert_eq!(origin(&quick_spec(&[])), Origin::Synthetic { samples: 900 });
+        assert_eq!(
+            origin(&quick_spec(&["data.sample_rate_hz=2"])),
+            Origin::Synthetic { samples: 1800 }
+        );
+        let set = "data.trajectories[0].synthetic_duration_s=0.5";
+        assert_eq!(
+            quick_faults(&[set]),
+            format!(
+                "--set {set}: data.trajectories[0].synthetic_duration_s: 0.5 must be a positive whole number of samples"
+            )
+        );
+    }
+
+    #[test]
+    fn a_rate_at_fault_is_its_only_fault() {
+        // The other sections count their seconds at 1 Hz instead.
+        let set = "data.sample_rate_hz=0";
+        assert_eq!(
+            quick_faults(&[set]),
+            format!("--set {set}: data.sample_rate_hz: 0 must be a positive number")
+        );
+    }
+}

@@ -58,3 +58,19 @@ fn parse_names<T: std::str::FromStr<Err = String> + PartialEq>(
     }
     parsed
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::spec::fixture::quick_faults;
+
+    #[test]
+    fn the_bound_is_not_listed() {
+        let set = "estimators.kinds=[\"baseline\", \"bound\"]";
+        assert_eq!(
+            quick_faults(&[set]),
+            format!(
+                "--set {set}: estimators.kinds[1]: the bound is no method to list: it is computed for every DVL"
+            )
+        );
+    }
+}

@@ -30,3 +30,20 @@ pub(in crate::spec) fn check_evaluation(
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::spec::fixture::{quick_faults, quick_spec};
+
+    #[test]
+    fn test_trajectories_are_found_by_name() {
+        assert_eq!(quick_spec(&[]).evaluation, [2, 3]);
+        let set = "evaluation.trajectories=[\"S9\"]";
+        assert_eq!(
+            quick_faults(&[set]),
+            format!(
+                "--set {set}: evaluation.trajectories[0]: unknown trajectory \"S9\"; data.trajectories defines S1, S2, S3, S4, SCal"
+            )
+        );
+    }
+}

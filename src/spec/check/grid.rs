@@ -123,3 +123,28 @@ fn expand_axis(key: &str, axis: &AxisFile, faults: &mut Faults) -> Vec<f64> {
     }
     values
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::spec::fixture::{quick_faults, quick_spec};
+
+    #[test]
+    fn a_range_expands_to_its_values_rounded() {
+        let spec = quick_spec(&["grid.scale_pct={start = 0.1, stop = 0.3, step = 0.1}"]);
+        assert_eq!(spec.grid.scale_pct, [0.1, 0.2, 0.3]);
+        let set = "grid.scale_pct={start = 0, stop = 1, step = 0.3}";
+        assert_eq!(
+            quick_faults(&[set]),
+            format!(
+                "--set {set}: grid.scale_pct: stop 1 is not start 0 plus a whole number of steps 0.3"
+            )
+        );
+        let set = "grid.bias_cm_s={values = [1.0], step = 1.0}";
+        assert_eq!(
+            quick_faults(&[set]),
+            format!(
+                "--set {set}: grid.bias_cm_s: give either values = [...] or all of start, stop and step"
+            )
+        );
+    }
+}

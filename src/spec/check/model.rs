@@ -61,3 +61,20 @@ pub(in crate::spec) fn check_model(
         dropout,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::spec::fixture::quick_faults;
+
+    #[test]
+    fn the_kernel_leaves_the_convolutions_an_output() {
+        // quick.toml's window is 10 samples: two Conv1d of kernel 6 leave none.
+        let set = "model.conv1d_kernel_size=6";
+        assert_eq!(
+            quick_faults(&[set]),
+            format!(
+                "--set {set}: model.conv1d_kernel_size: 6 must be at least 1 and leave the two Conv1d an output of a window of 10 samples"
+            )
+        );
+    }
+}

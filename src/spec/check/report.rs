@@ -60,3 +60,24 @@ pub(in crate::spec) fn check_report(
         velocity_trajectories,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::spec::fixture::quick_faults;
+
+    #[test]
+    fn the_velocity_figure_takes_two_trajectories_or_none() {
+        let set = "report.velocity_trajectories=[\"S1\"]";
+        assert_eq!(
+            quick_faults(&[set]),
+            format!(
+                "--set {set}: report.velocity_trajectories: has 1 names: give two (a training and a test trajectory), or none"
+            )
+        );
+        let set = "report.tolerance_pct=-1";
+        assert_eq!(
+            quick_faults(&[set]),
+            format!("--set {set}: report.tolerance_pct: -1 must be zero or positive")
+        );
+    }
+}

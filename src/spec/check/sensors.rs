@@ -62,3 +62,31 @@ pub(in crate::spec) fn check_dvls(units: &[file::DvlFile], faults: &mut Faults) 
     }
     dvls
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::spec::fixture::{quick_faults, quick_spec};
+
+    #[test]
+    fn error_terms_become_fractions_and_m_s() {
+        let spec = quick_spec(&["dvl[0].scale_pct=2.5", "dvl[0].bias_cm_s=-3"]);
+        assert_eq!(spec.gnss_noise_m_s, 0.005);
+        assert_eq!(spec.dvls[0].errors.scale, 0.025);
+        assert_eq!(spec.dvls[0].errors.bias_m_s, -0.03);
+        assert_eq!(spec.dvls[0].errors.noise_m_s, 0.02);
+    }
+
+    #[test]
+    fn a_pitch_of_90_degrees_and_a_name_twice_are_refused() {
+        let set = "sensors.beam_pitch_deg=90";
+        assert_eq!(
+            quick_faults(&[set]),
+            format!("--set {set}: sensors.beam_pitch_deg: 90 must lie strictly between 0 and 90")
+        );
+        let set = "dvl[1].name=DVL1";
+        assert_eq!(
+            quick_faults(&[set]),
+            format!("--set {set}: dvl[1].name: \"DVL1\" is defined twice")
+        );
+    }
+}

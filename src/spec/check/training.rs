@@ -116,3 +116,26 @@ fn check_early_stopping(
         min_improvement,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::spec::fixture::{quick_faults, quick_spec};
+    use crate::vocab::ErrorModel;
+
+    #[test]
+    fn learning_rates_and_early_stopping_are_checked_at_their_keys() {
+        let spec = quick_spec(&["training.learning_rate.EM3=2e-3"]);
+        assert_eq!(spec.training.learning_rate(ErrorModel::Em3), 2e-3);
+        assert_eq!(spec.training.learning_rate(ErrorModel::Em5), 5e-4);
+        let set = "training.learning_rate.EM3=0";
+        assert_eq!(
+            quick_faults(&[set]),
+            format!("--set {set}: training.learning_rate.EM3: 0 must be a positive number")
+        );
+        let set = "training.early_stopping={patience_epochs = 0}";
+        assert_eq!(
+            quick_faults(&[set]),
+            format!("--set {set}: training.early_stopping.patience_epochs: 0 must be at least 1")
+        );
+    }
+}
