@@ -203,7 +203,7 @@ impl Default for EstimatorsFile {
     }
 }
 
-/// DCNet's layer sizes (PAPER-NOTES gives the layout, not the sizes).
+/// DCNet's layer sizes (docs/paper.md gives the layout, not the sizes).
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ModelFile {

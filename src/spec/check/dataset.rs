@@ -38,6 +38,42 @@ pub(in crate::spec) fn check_dataset(
         None => positive_samples("dataset.window_s", window_s, rate, faults),
     };
     let stride = positive_samples("dataset.stride_s", stride_s, rate, faults);
+    let trajectories = check_training_trajectories(&names, sources, window, window_s, faults);
+    let valid_fraction = validation_fraction > 0.0 && validation_fraction < 1.0;
+    if !valid_fraction {
+        faults.add(
+            "dataset.validation_fraction",
+            format!(
+                "{validation_fraction} must be above 0 and below 1: training keeps the epoch with the best validation loss"
+            ),
+        );
+    }
+    let dataset = DatasetSpec {
+        trajectories,
+        window_samples: window.unwrap_or_default(),
+        stride_samples: stride.unwrap_or_default(),
+        validation_fraction,
+        published_windows,
+    };
+    if valid_fraction && window.is_some() && stride.is_some() {
+        check_split(&dataset, sources, faults);
+    }
+    let window = Window {
+        seconds: window_s,
+        samples: window,
+    };
+    (dataset, window)
+}
+
+/// The training trajectories by index: each defined, listed once, and (where its
+/// length is known) holding one window of `window` samples (`window_s` as written).
+fn check_training_trajectories(
+    names: &[String],
+    sources: &[TrajectorySource],
+    window: Option<usize>,
+    window_s: f64,
+    faults: &mut Faults,
+) -> Vec<usize> {
     if names.is_empty() {
         faults.add(
             "dataset.trajectories",
@@ -63,30 +99,7 @@ pub(in crate::spec) fn check_dataset(
             trajectories.push(index);
         }
     }
-    let valid_fraction = validation_fraction > 0.0 && validation_fraction < 1.0;
-    if !valid_fraction {
-        faults.add(
-            "dataset.validation_fraction",
-            format!(
-                "{validation_fraction} must be above 0 and below 1: training keeps the epoch with the best validation loss"
-            ),
-        );
-    }
-    let dataset = DatasetSpec {
-        trajectories,
-        window_samples: window.unwrap_or_default(),
-        stride_samples: stride.unwrap_or_default(),
-        validation_fraction,
-        published_windows,
-    };
-    if valid_fraction && window.is_some() && stride.is_some() {
-        check_split(&dataset, sources, faults);
-    }
-    let window = Window {
-        seconds: window_s,
-        samples: window,
-    };
-    (dataset, window)
+    trajectories
 }
 
 /// Where the training trajectories' lengths are known, checks that

@@ -59,35 +59,10 @@ fn expand_axis(key: &str, axis: &AxisFile, faults: &mut Faults) -> Vec<f64> {
             start: Some(start),
             stop: Some(stop),
             step: Some(step),
-        } => {
-            if !(start.is_finite()
-                && stop.is_finite()
-                && step.is_finite()
-                && *step > 0.0
-                && stop >= start)
-            {
-                faults.add(key, format!("start {start}, stop {stop}, step {step}: step must be positive and stop at least start"));
-                return Vec::new();
-            }
-            let steps = (stop - start) / step;
-            // A quotient that overflows to infinity is too many values too.
-            let count = (steps.round() + 1.0).min(f64::MAX);
-            if let Some(why) = ranges::GRID_AXIS_VALUES.exceeded(count) {
-                faults.add(key, why);
-                return Vec::new();
-            }
-            if (steps - steps.round()).abs() > 1e-6 {
-                faults.add(
-                    key,
-                    format!("stop {stop} is not start {start} plus a whole number of steps {step}"),
-                );
-                return Vec::new();
-            }
-            // Rounded to 1e-9 so that 0.1 + 2 × 0.1 prints and compares as 0.3.
-            (0..=steps.round() as usize)
-                .map(|i| ((start + i as f64 * step) * 1e9).round() / 1e9)
-                .collect()
-        }
+        } => match expand_range(key, *start, *stop, *step, faults) {
+            Some(values) => values,
+            None => return Vec::new(),
+        },
         _ => {
             faults.add(
                 key,
@@ -122,6 +97,41 @@ fn expand_axis(key: &str, axis: &AxisFile, faults: &mut Faults) -> Vec<f64> {
         }
     }
     values
+}
+
+/// The values from `start` to `stop` (inclusive) every `step`, each rounded to 1e-9; a
+/// fault at `key` when the range is empty, too fine, or not a whole number of steps.
+fn expand_range(
+    key: &str,
+    start: f64,
+    stop: f64,
+    step: f64,
+    faults: &mut Faults,
+) -> Option<Vec<f64>> {
+    if !(start.is_finite() && stop.is_finite() && step.is_finite() && step > 0.0 && stop >= start) {
+        faults.add(key, format!("start {start}, stop {stop}, step {step}: step must be positive and stop at least start"));
+        return None;
+    }
+    let steps = (stop - start) / step;
+    // A quotient that overflows to infinity is too many values too.
+    let count = (steps.round() + 1.0).min(f64::MAX);
+    if let Some(why) = ranges::GRID_AXIS_VALUES.exceeded(count) {
+        faults.add(key, why);
+        return None;
+    }
+    if (steps - steps.round()).abs() > 1e-6 {
+        faults.add(
+            key,
+            format!("stop {stop} is not start {start} plus a whole number of steps {step}"),
+        );
+        return None;
+    }
+    // Rounded to 1e-9 so that 0.1 + 2 × 0.1 prints and compares as 0.3.
+    Some(
+        (0..=steps.round() as usize)
+            .map(|i| ((start + i as f64 * step) * 1e9).round() / 1e9)
+            .collect(),
+    )
 }
 
 #[cfg(test)]
