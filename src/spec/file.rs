@@ -14,7 +14,7 @@ pub struct SpecFile {
     /// Root of every random stream in the run.
     #[serde(default)]
     pub seed: u64,
-    pub data: DataFile,
+    pub data: DataSectionFile,
     #[serde(default)]
     pub sensors: SensorsFile,
     pub grid: GridFile,
@@ -32,9 +32,12 @@ pub struct SpecFile {
     pub report: ReportFile,
 }
 
+/// The `[data]` section: the trajectories an experiment runs on and how they are
+/// sampled (not a data file: the files are its `trajectories`). A fault's message
+/// still calls it `struct DataFile`, as it did before the type was renamed.
 #[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct DataFile {
+#[serde(deny_unknown_fields, expecting = "struct DataFile")]
+pub struct DataSectionFile {
     /// Samples per second of every trajectory.
     #[serde(default = "default_sample_rate_hz")]
     pub sample_rate_hz: f64,
@@ -200,7 +203,7 @@ impl Default for EstimatorsFile {
     }
 }
 
-/// DCNet's layer sizes (PAPER-NOTES gives the layout, not the sizes).
+/// DCNet's layer sizes (docs/paper.md gives the layout, not the sizes).
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ModelFile {

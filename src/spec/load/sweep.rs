@@ -1,205 +1,18 @@
-//! Reads a spec file, applies `--set KEY=VALUE` overrides, deserializes and checks it;
-//! a spec with a `[sweep]` becomes an [`Experiment`] of points, each checked the same
-//! way. Every fault, from a TOML syntax error to a failed check, comes back as a
-//! [`SpecError`] that names the file and line (or the `--set` or sweep value it came
-//! from) and the key.
+//! A spec's `[sweep]`. In: the spec's table without its `[sweep]`, the sweep table,
+//! and where each key was written or set. Out: an [`Experiment`] of the chosen points
+//! (the whole product of the swept values in order, or a sample drawn from a seed),
+//! each point's spec checked and named `<name>/<point>` by its values; or the faults of
+//! all points, each once and placed on the line of the sweep value that caused it.
 
-use super::file::SweepFile;
-use super::toml_file::{SpecError, SpecErrors, Step, TomlText, deserialize, steps};
-use super::{Spec, SpecFile};
-use std::path::{Path, PathBuf};
-
-/// A spec's points: the spec itself, or one per point of its `[sweep]`.
-#[derive(Debug, Clone)]
-pub struct Experiment {
-    pub name: String,
-    /// The swept keys in the order `[sweep.values]` lists them; empty without a sweep.
-    pub swept: Vec<String>,
-    pub points: Vec<Point>,
-    /// Where the spec's keys are written or were set, to place later faults.
-    source: Source,
-    assigned: Assigned,
-}
-
-#[derive(Debug, Clone)]
-pub struct Point {
-    /// One value per swept key.
-    pub values: Vec<toml::Value>,
-    /// The point's spec; a sweep point is named `<name>/<point>`, its results folder.
-    pub spec: Spec,
-}
-
-impl Experiment {
-    pub fn is_sweep(&self) -> bool {
-        !self.swept.is_empty()
-    }
-
-    /// A fault at `key` found after loading, such as the memory a point needs, placed
-    /// where the key is written or was set.
-    pub fn fault(&self, key: &str, message: impl Into<String>) -> SpecError {
-        self.source
-            .locate(&self.assigned, key.to_string(), message.into())
-    }
-}
-
-/// Reads the spec at `path` with its overrides; the first point of a sweep.
-pub fn load(path: &Path, overrides: &[String]) -> Result<Spec, SpecErrors> {
-    let mut experiment = load_experiment(path, overrides)?;
-    Ok(experiment.points.swap_remove(0).spec)
-}
-
-/// Reads, overrides, deserializes and checks the spec at `path`, and every point of
-/// its `[sweep]`.
-pub fn load_experiment(path: &Path, overrides: &[String]) -> Result<Experiment, SpecErrors> {
-    let text = TomlText::read(path, "cannot read the spec")?;
-    let mut table = text.table()?;
-    let assigned = apply_overrides(&mut table, overrides)?;
-    let source = Source {
-        text,
-        folder: spec_folder(path),
-    };
-    match table.remove("sweep") {
-        None => {
-            let spec = source.check(table, &assigned)?;
-            Ok(Experiment {
-                name: spec.name.clone(),
-                swept: Vec::new(),
-                points: vec![Point {
-                    values: Vec::new(),
-                    spec,
-                }],
-                source,
-                assigned,
-            })
-        }
-        Some(sweep) => load_sweep(source, table, sweep, assigned),
-    }
-}
-
-/// Applies every `--set KEY=VALUE` to `table`; the keys set, or a fault per assignment
-/// that failed.
-fn apply_overrides(table: &mut toml::Table, overrides: &[String]) -> Result<Assigned, SpecErrors> {
-    let mut assigned = Assigned::default();
-    let mut errors = Vec::new();
-    for assignment in overrides {
-        match apply_override(table, assignment) {
-            Ok(key) => assigned.0.push((key, format!("--set {assignment}"))),
-            Err(message) => errors.push(SpecError {
-                location: format!("--set {assignment}"),
-                key: assignment
-                    .split_once('=')
-                    .map(|(key, _)| key.trim().to_string())
-                    .unwrap_or_default(),
-                message,
-            }),
-        }
-    }
-    if !errors.is_empty() {
-        return Err(SpecErrors(errors));
-    }
-    Ok(assigned)
-}
-
-/// The folder the relative paths of the spec at `path` start from, absolute if it can be.
-fn spec_folder(path: &Path) -> PathBuf {
-    let folder = path
-        .parent()
-        .map(Path::to_path_buf)
-        .unwrap_or_else(|| PathBuf::from("."));
-    let folder = if folder.as_os_str().is_empty() {
-        PathBuf::from(".")
-    } else {
-        folder
-    };
-    std::path::absolute(&folder).unwrap_or(folder)
-}
-
-/// Keys whose value does not come from the spec's own line, each with where it came
-/// from (`--set KEY=VALUE`, or a sweep value's line and point), latest last.
-#[derive(Debug, Clone, Default)]
-struct Assigned(Vec<(String, String)>);
-
-impl Assigned {
-    /// Where the value at `key` came from, when it or a table above it was assigned.
-    fn origin(&self, key: &str) -> Option<&str> {
-        self.0
-            .iter()
-            .rev()
-            .find(|(set, _)| {
-                key == *set
-                    || key.starts_with(&format!("{set}."))
-                    || key.starts_with(&format!("{set}["))
-            })
-            .map(|(_, location)| location.as_str())
-    }
-
-    /// Where a value below `key` came from, when one was assigned.
-    fn below(&self, key: &str) -> Option<&str> {
-        self.0
-            .iter()
-            .rev()
-            .find(|(set, _)| {
-                set.starts_with(&format!("{key}.")) || set.starts_with(&format!("{key}["))
-            })
-            .map(|(_, location)| location.as_str())
-    }
-}
-
-/// The spec's text and the folder its relative paths start from.
-#[derive(Debug, Clone)]
-struct Source {
-    text: TomlText,
-    folder: PathBuf,
-}
-
-impl Source {
-    /// A fault at `key`, placed where its value came from: the `--set` or sweep value
-    /// that assigned it (or, for a key the file does not write, one below it, such as
-    /// an unknown table), or its line.
-    fn locate(&self, assigned: &Assigned, key: String, message: String) -> SpecError {
-        let origin = assigned.origin(&key).or_else(|| {
-            // The key, or the deepest table above it that the file does not write
-            // either (a missing key of a table that only `--set` gives).
-            let mut unwritten = Some(key.as_str()).filter(|k| !self.text.writes(k));
-            while let Some(k) = unwritten {
-                if let Some(origin) = assigned.below(k) {
-                    return Some(origin);
-                }
-                unwritten = k
-                    .rsplit_once(['.', '['])
-                    .map(|(parent, _)| parent)
-                    .filter(|parent| !self.text.writes(parent));
-            }
-            None
-        });
-        match origin {
-            Some(location) => SpecError {
-                location: location.to_string(),
-                key,
-                message,
-            },
-            None => self.text.fault(&key, message),
-        }
-    }
-
-    /// Deserializes and checks `table`, each fault placed where its value came from.
-    fn check(&self, table: toml::Table, assigned: &Assigned) -> Result<Spec, SpecErrors> {
-        let file: SpecFile = deserialize(toml::Value::Table(table))
-            .map_err(|(key, message)| self.locate(assigned, key, message))?;
-        file.check(&self.folder).map_err(|faults| {
-            SpecErrors(
-                faults
-                    .into_iter()
-                    .map(|(key, message)| self.locate(assigned, key, message))
-                    .collect(),
-            )
-        })
-    }
-}
+use super::overrides::set_in;
+use super::source::{Assigned, Source};
+use super::{Experiment, Point};
+use crate::spec::file::SweepFile;
+use crate::spec::toml_file::{SpecError, SpecErrors, TomlText, deserialize, steps};
 
 /// Every chosen point of `sweep` over `table`, each checked; the faults of all points,
 /// each once.
-fn load_sweep(
+pub(super) fn load_sweep(
     source: Source,
     table: toml::Table,
     sweep: toml::Value,
@@ -262,7 +75,7 @@ fn chosen_points(
     let total = axes
         .iter()
         .try_fold(1usize, |total, a| total.checked_mul(a.values.len()));
-    let limit = &super::ranges::SWEEP_POINTS;
+    let limit = &crate::spec::ranges::SWEEP_POINTS;
     let Some(total) = total else {
         return Err(format!(
             "the grid's points do not fit in a count: {}",
@@ -531,89 +344,11 @@ fn point_name(axes: &[Axis], picks: &[usize]) -> String {
     parts.join(",")
 }
 
-/// Applies `key=value` to `table`; the value is read as TOML, or as a string when it
-/// is not valid TOML. Returns the key in the form errors are reported with.
-fn apply_override(table: &mut toml::Table, assignment: &str) -> Result<String, String> {
-    let (key, raw) = assignment
-        .split_once('=')
-        .ok_or("expected KEY=VALUE, such as calibration.monte_carlo_runs=50")?;
-    let key = key.trim();
-    let path = steps(key)?;
-    let value = match toml::from_str::<toml::Table>(&format!("value = {raw}")) {
-        Ok(mut read) => read.remove("value"),
-        Err(_) if raw.trim().replace('_', "").parse::<i128>().is_ok() => {
-            return Err(format!(
-                "{} is larger than TOML's largest integer, {}",
-                raw.trim(),
-                i64::MAX
-            ));
-        }
-        Err(_) => None,
-    }
-    .unwrap_or_else(|| toml::Value::String(raw.to_string()));
-    set_in(table, &path, value).map(|()| {
-        let mut canonical = String::new();
-        for step in &path {
-            match step {
-                Step::Key(k) if canonical.is_empty() => canonical.push_str(k),
-                Step::Key(k) => canonical.push_str(&format!(".{k}")),
-                Step::Index(i) => canonical.push_str(&format!("[{i}]")),
-            }
-        }
-        canonical
-    })
-}
-
-/// Puts `new` at `path` in `table`, creating missing tables on the way.
-fn set_in(table: &mut toml::Table, path: &[Step<'_>], new: toml::Value) -> Result<(), String> {
-    let mut root = toml::Value::Table(std::mem::take(table));
-    let result = set_at(&mut root, path, new);
-    if let toml::Value::Table(t) = root {
-        *table = t;
-    }
-    result
-}
-
-/// Puts `new` at `path` below `value`, creating missing tables on the way.
-fn set_at(value: &mut toml::Value, path: &[Step<'_>], new: toml::Value) -> Result<(), String> {
-    let Some((first, rest)) = path.split_first() else {
-        *value = new;
-        return Ok(());
-    };
-    let child = match (first, value) {
-        (Step::Key(k), toml::Value::Table(t)) => t
-            .entry(k.to_string())
-            .or_insert_with(|| toml::Value::Table(Default::default())),
-        (Step::Index(i), toml::Value::Array(a)) => {
-            let len = a.len();
-            a.get_mut(*i)
-                .ok_or_else(|| format!("index [{i}] is out of range: there are {len} entries"))?
-        }
-        (Step::Key(k), _) => {
-            return Err(format!("cannot set key {k:?}: its parent is not a table"));
-        }
-        (Step::Index(i), _) => {
-            return Err(format!(
-                "cannot set index [{i}]: its parent is not an array"
-            ));
-        }
-    };
-    set_at(child, rest, new)
-}
-
 #[cfg(test)]
 mod tests {
-    use super::*;
-
-    /// quick.toml with `extra` appended, in a temporary folder beside its trajectories.
-    fn quick_plus(extra: &str) -> (tempfile::TempDir, PathBuf) {
-        let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
-        let text = std::fs::read_to_string(repo.join("experiments/quick.toml")).unwrap();
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("spec.toml");
-        std::fs::write(&path, format!("{text}\n{extra}")).unwrap();
-        (dir, path)
-    }
+    use crate::spec::fixture::quick_plus;
+    use crate::spec::{load, load_experiment};
+    use std::path::Path;
 
     fn line_containing(path: &Path, needle: &str) -> usize {
         let text = std::fs::read_to_string(path).unwrap();
@@ -736,54 +471,5 @@ mod tests {
         let (_dir, path) = quick_plus("[sweep]\nsamples = 3\n");
         let error = load_experiment(&path, &[]).unwrap_err().to_string();
         assert!(error.contains("sweep.samples: unknown field"), "{error}");
-    }
-
-    #[test]
-    fn a_learning_rate_is_one_number_for_all_models_or_one_per_model() {
-        let quick = |set: &[&str]| {
-            let (_dir, path) = quick_plus("");
-            let set: Vec<String> = set.iter().map(ToString::to_string).collect();
-            load(&path, &set).map(|s| s.training.learning_rates)
-        };
-        assert_eq!(quick(&["training.learning_rate=1e-3"]).unwrap(), [1e-3; 5]);
-        assert_eq!(quick(&["training.learning_rate=1"]).unwrap(), [1.0; 5]);
-        assert_eq!(
-            quick(&["training.learning_rate={EM2 = 2e-3}"]).unwrap(),
-            [5e-5, 2e-3, 5e-5, 5e-5, 5e-4],
-            "unlisted models keep their defaults"
-        );
-        let error = quick(&["training.learning_rate={EM6 = 1.0}"])
-            .unwrap_err()
-            .to_string();
-        assert!(
-            error.contains("training.learning_rate.EM6: unknown field `EM6`"),
-            "{error}"
-        );
-    }
-
-    #[test]
-    fn key_paths_split_into_steps() {
-        assert_eq!(
-            steps("dvl[1].noise_cm_s").unwrap(),
-            vec![Step::Key("dvl"), Step::Index(1), Step::Key("noise_cm_s")]
-        );
-        assert_eq!(
-            steps("dvl.1.noise_cm_s").unwrap(),
-            steps("dvl[1].noise_cm_s").unwrap()
-        );
-    }
-
-    #[test]
-    fn overrides_read_toml_values_and_fall_back_to_strings() {
-        let mut table: toml::Table = toml::from_str("[a]\nb = 1\n[[c]]\nd = 2\n").unwrap();
-        assert_eq!(apply_override(&mut table, "a.b=[3, 4]").unwrap(), "a.b");
-        assert_eq!(apply_override(&mut table, "c.0.d=hello").unwrap(), "c[0].d");
-        assert_eq!(
-            table["a"]["b"],
-            toml::Value::Array(vec![3.into(), 4.into()])
-        );
-        assert_eq!(table["c"][0]["d"], toml::Value::String("hello".into()));
-        assert!(apply_override(&mut table, "c[5].d=1").is_err());
-        assert!(apply_override(&mut table, "novalue").is_err());
     }
 }

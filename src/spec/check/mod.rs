@@ -1,0 +1,160 @@
+//! The checks of a spec, one file per section. In: a section of the [`SpecFile`] as
+//! read from TOML, and what earlier sections gave (the trajectories, the sample rate,
+//! DCNet's window). Out: the section's checked type, and every fault as its key path
+//! and message in `Faults`. [`SpecFile::check`] calls them in the order of the file.
+//!
+//! This file holds what the sections share: `Faults`, a trajectory looked up by name,
+//! seconds as a positive number of samples, the rules of an error term and of a
+//! results folder's name, and `Limit::check`, which adds a fault for a value beyond
+//! its [`Limit`]. A new key's rule goes in its section's file, beside its tests.
+//!
+//! [`SpecFile`]: crate::spec::SpecFile
+//! [`SpecFile::check`]: crate::spec::SpecFile::check
+
+pub mod data;
+pub mod sensors;
+pub mod grid;
+pub mod dataset;
+pub mod calibration;
+pub mod evaluation;
+pub mod estimators;
+pub mod model;
+pub mod training;
+pub mod report;
+
+use crate::spec::ranges::{self, Limit};
+use crate::spec::{MAX_NAME_CHARS, TrajectorySource, seconds_to_samples};
+
+/// A key path such as `data.trajectories[2].samples`, and what is wrong there.
+pub(super) type Fault = (String, String);
+
+/// Collects faults while checking, keyed by their path in the spec.
+#[derive(Default)]
+pub(super) struct Faults(pub(super) Vec<Fault>);
+
+impl Faults {
+    pub(super) fn add(&mut self, key: impl Into<String>, message: impl Into<String>) {
+        self.0.push((key.into(), message.into()));
+    }
+}
+
+impl Limit {
+    /// Adds a fault at `key` when `value` is above the limit.
+    pub(super) fn check(&self, key: &str, value: f64, faults: &mut Faults) {
+        if let Some(message) = self.exceeded(value) {
+            faults.add(key, message);
+        }
+    }
+}
+
+/// Whether `name` can name a results folder: letters, digits, '-', '_', '.', and for
+/// the points of a sweep (`<name>/<point>`) '/', '=' and ','; no part empty, longer
+/// than [`MAX_NAME_CHARS`] or starting with '.' (`.`, `..`, and the `.cache` beside the
+/// results).
+pub(super) fn is_folder_name(name: &str) -> bool {
+    name.split('/').all(|part| {
+        !part.is_empty()
+            && !part.starts_with('.')
+            && part.len() <= MAX_NAME_CHARS
+            && part
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || "-_.=,".contains(c))
+    })
+}
+
+/// The index of the trajectory named `wanted`; a fault at `key` when none is.
+pub(super) fn lookup(
+    sources: &[TrajectorySource],
+    key: &str,
+    wanted: &str,
+    faults: &mut Faults,
+) -> Option<usize> {
+    let found = sources.iter().position(|s| s.name == wanted);
+    if found.is_none() {
+        let known: Vec<&str> = sources.iter().map(|s| s.name.as_str()).collect();
+        let known = if known.is_empty() {
+            "none".to_string()
+        } else {
+            known.join(", ")
+        };
+        faults.add(
+            key,
+            format!("unknown trajectory {wanted:?}; data.trajectories defines {known}"),
+        );
+    }
+    found
+}
+
+pub(super) fn positive_samples(
+    key: &str,
+    seconds: f64,
+    rate: f64,
+    faults: &mut Faults,
+) -> Option<usize> {
+    match seconds_to_samples(seconds, rate) {
+        Some(samples) if samples > 0 => Some(samples),
+        _ => {
+            faults.add(
+                key,
+                format!("{seconds} must be a positive whole number of samples at {rate} Hz"),
+            );
+            None
+        }
+    }
+}
+
+/// A scale factor error: above -100 % (the DVL still measures) and within its range.
+pub(super) fn check_scale(key: &str, value: f64, faults: &mut Faults) {
+    if !(value.is_finite() && value > -100.0) {
+        faults.add(key, format!("{value} must be above -100 %"));
+    }
+    ranges::SCALE_PCT.check(key, value, faults);
+}
+
+/// A velocity noise: zero or positive and within its range.
+pub(super) fn check_noise(key: &str, value: f64, faults: &mut Faults) {
+    non_negative(key, value, faults);
+    ranges::VELOCITY_ERROR_CM_S.check(key, value, faults);
+}
+
+pub(super) fn non_negative(key: &str, value: f64, faults: &mut Faults) {
+    if !(value.is_finite() && value >= 0.0) {
+        faults.add(key, format!("{value} must be zero or positive"));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::spec::fixture::quick_faults;
+
+    #[test]
+    fn lists_whose_repeats_make_no_sense_are_refused() {
+        let error = quick_faults(&["calibration.window_sizes_s=[20, 40, 20.0]"]);
+        assert!(
+            error.contains(
+                "calibration.window_sizes_s[2]: 20 s is calibration.window_sizes_s[0] again"
+            ),
+            "{error}"
+        );
+        let error = quick_faults(&["dataset.trajectories=[\"S1\", \"S2\", \"S1\"]"]);
+        assert!(
+            error.contains("dataset.trajectories[2]: \"S1\" is listed twice"),
+            "{error}"
+        );
+        let error = quick_faults(&["evaluation.trajectories=[\"S3\", \"S3\"]"]);
+        assert!(
+            error.contains("evaluation.trajectories[1]: \"S3\" is listed twice"),
+            "{error}"
+        );
+        let error = quick_faults(&["grid.scale_pct={values = [0.5, 1.0, 0.5]}"]);
+        assert!(
+            error.contains("grid.scale_pct.values[2]: 0.5 is listed twice"),
+            "{error}"
+        );
+        let error = quick_faults(&["estimators.kinds=[\"baseline\", \"baseline\"]"]);
+        assert!(
+            error.contains("estimators.kinds[1]: \"baseline\" is listed twice"),
+            "{error}"
+        );
+    }
+}

@@ -1,0 +1,165 @@
+//! Reads a spec file, applies `--set KEY=VALUE` overrides, deserializes and checks it;
+//! a spec with a `[sweep]` becomes an [`Experiment`] of points, each checked the same
+//! way. Every fault, from a TOML syntax error to a failed check, comes back as a
+//! [`SpecError`] that names the file and line (or the `--set` or sweep value it came
+//! from) and the key.
+//!
+//! - this file reads the spec and hands it on: [`load_experiment`] and [`load`];
+//! - [`source`] keeps the spec's text and where each key's value was assigned, places a
+//!   fault there, and checks a table with its faults so placed;
+//! - [`overrides`] applies `--set` assignments to the spec's table;
+//! - [`sweep`] expands `[sweep.values]` into its points, draws a sample of them, and
+//!   names each point's results folder by its values.
+
+pub mod source;
+pub mod overrides;
+pub mod sweep;
+
+use super::Spec;
+use super::toml_file::{SpecError, SpecErrors, TomlText};
+use overrides::apply_overrides;
+use source::{Assigned, Source};
+use std::path::{Path, PathBuf};
+use sweep::load_sweep;
+
+/// A spec's points: the spec itself, or one per point of its `[sweep]`.
+#[derive(Debug, Clone)]
+pub struct Experiment {
+    pub name: String,
+    /// The swept keys in the order `[sweep.values]` lists them; empty without a sweep.
+    pub swept: Vec<String>,
+    pub points: Vec<Point>,
+    /// Where the spec's keys are written or were set, to place later faults.
+    source: Source,
+    assigned: Assigned,
+}
+
+#[derive(Debug, Clone)]
+pub struct Point {
+    /// One value per swept key.
+    pub values: Vec<toml::Value>,
+    /// The point's spec; a sweep point is named `<name>/<point>`, its results folder.
+    pub spec: Spec,
+}
+
+impl Experiment {
+    pub fn is_sweep(&self) -> bool {
+        !self.swept.is_empty()
+    }
+
+    /// A fault at `key` found after loading, such as the memory a point needs, placed
+    /// where the key is written or was set.
+    pub fn fault(&self, key: &str, message: impl Into<String>) -> SpecError {
+        self.source
+            .locate(&self.assigned, key.to_string(), message.into())
+    }
+}
+
+/// Reads the spec at `path` with its overrides; the first point of a sweep.
+pub fn load(path: &Path, overrides: &[String]) -> Result<Spec, SpecErrors> {
+    let mut experiment = load_experiment(path, overrides)?;
+    Ok(experiment.points.swap_remove(0).spec)
+}
+
+/// Reads, overrides, deserializes and checks the spec at `path`, and every point of
+/// its `[sweep]`.
+pub fn load_experiment(path: &Path, overrides: &[String]) -> Result<Experiment, SpecErrors> {
+    let text = TomlText::read(path, "cannot read the spec")?;
+    let mut table = text.table()?;
+    let assigned = apply_overrides(&mut table, overrides)?;
+    let source = Source {
+        text,
+        folder: spec_folder(path),
+    };
+    match table.remove("sweep") {
+        None => {
+            let spec = source.check(table, &assigned)?;
+            Ok(Experiment {
+                name: spec.name.clone(),
+                swept: Vec::new(),
+                points: vec![Point {
+                    values: Vec::new(),
+                    spec,
+                }],
+                source,
+                assigned,
+            })
+        }
+        Some(sweep) => load_sweep(source, table, sweep, assigned),
+    }
+}
+
+/// The folder the relative paths of the spec at `path` start from, absolute if it can be.
+fn spec_folder(path: &Path) -> PathBuf {
+    let folder = path
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| PathBuf::from("."));
+    let folder = if folder.as_os_str().is_empty() {
+        PathBuf::from(".")
+    } else {
+        folder
+    };
+    std::path::absolute(&folder).unwrap_or(folder)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spec::fixture::{quick_faults, quick_plus};
+
+    #[test]
+    fn a_learning_rate_is_one_number_for_all_models_or_one_per_model() {
+        let quick = |set: &[&str]| {
+            let (_dir, path) = quick_plus("");
+            let set: Vec<String> = set.iter().map(ToString::to_string).collect();
+            load(&path, &set).map(|s| s.training.learning_rates)
+        };
+        assert_eq!(quick(&["training.learning_rate=1e-3"]).unwrap(), [1e-3; 5]);
+        assert_eq!(quick(&["training.learning_rate=1"]).unwrap(), [1.0; 5]);
+        assert_eq!(
+            quick(&["training.learning_rate={EM2 = 2e-3}"]).unwrap(),
+            [5e-5, 2e-3, 5e-5, 5e-5, 5e-4],
+            "unlisted models keep their defaults"
+        );
+        let error = quick(&["training.learning_rate={EM6 = 1.0}"])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            error.contains("training.learning_rate.EM6: unknown field `EM6`"),
+            "{error}"
+        );
+    }
+
+    #[test]
+    fn an_integer_beyond_toml_is_placed_at_its_line_and_key() {
+        let folder = tempfile::tempdir().unwrap();
+        let quick = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quick.toml");
+        let text = std::fs::read_to_string(&quick).unwrap().replace(
+            "fc_widths = [128, 64, 32]",
+            "fc_widths = [128, 18446744073709551616, 32]",
+        );
+        let path = folder.path().join("huge.toml");
+        std::fs::write(&path, &text).unwrap();
+        let line = text
+            .lines()
+            .position(|l| l.starts_with("fc_widths"))
+            .unwrap()
+            + 1;
+        let error = load(&path, &[]).unwrap_err().to_string();
+        assert_eq!(
+            error,
+            format!(
+                "{}:{line}: model.fc_widths[1]: 18446744073709551616 is larger than TOML's largest integer, 9223372036854775807",
+                path.display()
+            )
+        );
+        let error = quick_faults(&["seed=18446744073709551615"]);
+        assert!(
+            error.starts_with(
+                "--set seed=18446744073709551615: seed: 18446744073709551615 is larger"
+            ),
+            "{error}"
+        );
+    }
+}
