@@ -75,13 +75,13 @@ fn remove_stale_partials(folder: &Path) -> Result<(), CliError> {
 fn report_figures(figures: &[plots::Written], folder: &Path) {
     for figure in figures {
         match &figure.caption {
-            Ok(_) => eprintln!(
+            plots::Caption::Drawn(_) => eprintln!(
                 "figure {}: {} files in {}",
                 figure.stem,
                 figure.files.len(),
                 folder.display()
             ),
-            Err(why) => eprintln!("figure {}: not drawn, {why}", figure.stem),
+            plots::Caption::NotApplicable(why) => eprintln!("figure {}: not drawn, {why}", figure.stem),
         }
     }
 }

@@ -3,7 +3,7 @@
 //! provenance from the manifest, and the figures. In: a [`StoredRun`], its tables and
 //! the figures drawn. Out: the Markdown text; a cell reads `ours · paper`, flagged ⚠.
 
-use crate::report::plots::Written;
+use crate::report::plots::{Caption, Written};
 use crate::report::table::{Cell, ReportTable, ReportTables, Signs, replicates_note};
 use crate::results::read::StoredRun;
 use crate::vocab::ErrorModel;
@@ -242,7 +242,7 @@ fn figures_section(run: &StoredRun, figures: &[Written], out: &mut String) {
     let _ = writeln!(out, "## Figures\n");
     for figure in figures {
         match &figure.caption {
-            Ok(caption) => {
+            Caption::Drawn(caption) => {
                 let links: Vec<String> = figure
                     .files
                     .iter()
@@ -257,7 +257,7 @@ fn figures_section(run: &StoredRun, figures: &[Written], out: &mut String) {
                     }
                 }
             }
-            Err(why) => {
+            Caption::NotApplicable(why) => {
                 let _ = writeln!(out, "- {}: not drawn, {why}\n", figure.stem);
             }
         }

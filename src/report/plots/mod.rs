@@ -61,9 +61,18 @@ impl Format {
 #[derive(Debug, Clone)]
 pub struct Written {
     pub stem: String,
-    /// The caption, or why the figure is absent.
-    pub caption: Result<String, String>,
+    pub caption: Caption,
+    /// The files written: none for a figure that does not apply.
     pub files: Vec<PathBuf>,
+}
+
+/// What the report says of a figure.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Caption {
+    /// The figure was written; its caption.
+    Drawn(String),
+    /// The data hold nothing the figure shows; why, in words that follow "not drawn, ".
+    NotApplicable(String),
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -129,7 +138,7 @@ fn write_figures(
             Outcome::NotApplicable(why) => {
                 written.push(Written {
                     stem,
-                    caption: Err(why),
+                    caption: Caption::NotApplicable(why),
                     files: Vec::new(),
                 });
                 continue;
@@ -147,7 +156,7 @@ fn write_figures(
         }
         written.push(Written {
             stem,
-            caption: Ok(figure.caption),
+            caption: Caption::Drawn(figure.caption),
             files,
         });
     }
