@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 pub enum ReadError {
     #[error("{}: missing; a results folder written by `dcnet-exp run` holds it", path.display())]
     Missing { path: PathBuf },
-    /// A table with a column that dcnet-exp does not write so.
+    /// A table with a column that is not as dcnet-exp writes it; [`ColumnError`] says how.
     #[error("{}: {fault}", path.display())]
     Column { path: PathBuf, fault: ColumnError },
     /// A JSON file beside the tables (`sweep.json`) that does not parse.
