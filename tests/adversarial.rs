@@ -20,7 +20,6 @@ mod common;
 use arrow_array::RecordBatch;
 use common::*;
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
-use sha2::{Digest, Sha256};
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
@@ -95,27 +94,6 @@ macro_rules! ensure {
 
 // ---------------------------------------------------------------- files
 
-/// Every file below `root`, hidden ones too, by its path relative to `root`.
-fn tree(root: &Path) -> BTreeMap<String, PathBuf> {
-    let mut files = BTreeMap::new();
-    let mut stack = vec![root.to_path_buf()];
-    while let Some(dir) = stack.pop() {
-        let Ok(entries) = std::fs::read_dir(&dir) else {
-            continue;
-        };
-        for entry in entries.flatten() {
-            let path = entry.path();
-            if path.is_dir() {
-                stack.push(path);
-            } else {
-                let rel = path.strip_prefix(root).unwrap().to_string_lossy();
-                files.insert(rel.replace('\\', "/"), path);
-            }
-        }
-    }
-    files
-}
-
 fn copy_tree(from: &Path, to: &Path) {
     for (rel, path) in tree(from) {
         let destination = to.join(&rel);
@@ -128,13 +106,6 @@ fn file_name(rel: &str) -> &str {
     rel.rsplit('/').next().unwrap()
 }
 
-fn sha256(bytes: &[u8]) -> String {
-    Sha256::digest(bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
-}
-
 /// The temporary files of writers below `root` (`.partial-<pid>-*`).
 fn partials(root: &Path) -> Vec<String> {
     tree(root)
@@ -144,15 +115,12 @@ fn partials(root: &Path) -> Vec<String> {
 }
 
 /// Every file below `root` but the set-aside ones and the claims' lock files (made as
-/// tasks are claimed): its bytes and modification time.
-fn snapshot(root: &Path) -> BTreeMap<String, (Vec<u8>, SystemTime)> {
+/// tasks are claimed), by its path relative to `root`: its bytes and modification time.
+fn kept_snapshot(root: &Path) -> BTreeMap<String, (Vec<u8>, SystemTime)> {
     tree(root)
         .into_iter()
         .filter(|(rel, _)| !rel.starts_with(".cache/damaged/") && !rel.starts_with(".cache/locks/"))
-        .map(|(rel, path)| {
-            let modified = path.metadata().unwrap().modified().unwrap();
-            (rel, (std::fs::read(&path).unwrap(), modified))
-        })
+        .map(|(rel, path)| (rel, file_state(&path)))
         .collect()
 }
 
@@ -937,7 +905,7 @@ impl Bench {
             "plan set something aside"
         );
 
-        let before = snapshot(&out);
+        let before = kept_snapshot(&out);
         let output = exe(&dir, &run_args(&name, extra));
         let log = stderr(&output);
         ensure!(
@@ -990,7 +958,7 @@ impl Bench {
             .iter()
             .map(|(p, _)| entry_prefix(&p.strip_prefix(&out).unwrap().to_string_lossy()))
             .collect();
-        let after = snapshot(&out);
+        let after = kept_snapshot(&out);
         for (rel, (bytes, modified)) in &before {
             let untouched = rel.starts_with(".cache/")
                 && !(cache_entry && affected.iter().any(|a| rel.starts_with(a.as_str())))

@@ -2,11 +2,18 @@
 //! is refused by `run` with exit 1, its first message naming the `--set` it came from, the
 //! key and what is wrong, before anything runs; a few are written into the spec file
 //! instead and named by its path, line and key. A results folder and cache computed
-//! before are left as they were, byte for byte and modification time.
+//! before are left as they were, byte for byte and modification time. Each refusal's
+//! whole stderr is an insta snapshot in `tests/snapshots/` (`bad_specs__<the --set,
+//! lowercase, other characters as _>.snap`, `bad_specs__file_<key>.snap`), so a change
+//! of wording shows in review; `INSTA_UPDATE=always cargo test --release --test
+//! bad_specs` rewrites them after a deliberate change.
 
 mod common;
 
-use common::{dcnet, project, small_quick_run, snapshot, stderr};
+use common::{
+    assert_error_snapshot, dcnet, project, small_quick_run, snapshot, snapshot_name, stderr,
+};
+use std::collections::BTreeSet;
 
 /// (`--set` assignment, the key the fault names, the start of its message).
 const RULES: &[(&str, &str, &str)] = &[
@@ -533,6 +540,7 @@ fn every_rule_refuses_its_bad_value_at_its_key_and_loses_nothing() {
     small_quick_run(d, &["--no-plots"]);
     let before = snapshot(&d.join("results"));
     let mut refused = 0;
+    let mut names = BTreeSet::new();
     for &(set, key, message) in RULES {
         let output = dcnet(d, &["run", "experiments/quick.toml", "--set", set]);
         let error = stderr(&output);
@@ -543,6 +551,10 @@ fn every_rule_refuses_its_bad_value_at_its_key_and_loses_nothing() {
             first.starts_with(&expected) && first.contains(message),
             "--set {set}:\nexpected {expected:?} and {message:?}\n     got {error:?}"
         );
+        let name = snapshot_name(set);
+        assert!(names.insert(name.clone()), "two rules are named {name}");
+        let command = format!("dcnet-exp run experiments/quick.toml --set {set}");
+        assert_error_snapshot!(&name, &command, &error, d);
         refused += 1;
     }
     assert_eq!(refused, RULES.len());
@@ -606,6 +618,9 @@ fn a_fault_written_in_the_file_is_named_by_its_path_line_and_key() {
             error.starts_with(&expected),
             "expected {expected:?}\n     got {error:?}"
         );
+        let command =
+            format!("dcnet-exp run experiments/bad.toml, quick.toml with {replacement:?}");
+        assert_error_snapshot!(&format!("file_{}", snapshot_name(key)), &command, &error, d);
         assert!(!d.join("results").exists(), "{replacement}: made results/");
     }
 }

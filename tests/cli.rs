@@ -415,8 +415,9 @@ fn quick_with(dir: &Path, from: &str, to: &str) -> usize {
     changed[..changed.find(to).unwrap()].matches('\n').count() + 1
 }
 
-/// Runs `run spec.toml` and checks exit code 1, the message, and an untouched `results/`.
-fn assert_rejected(dir: &Path, extra: &[&str], expected: &str) {
+/// Runs `run spec.toml` and checks exit code 1, the message, and an untouched `results/`;
+/// the whole message is the snapshot `name` (`tests/snapshots/cli__<name>.snap`).
+fn assert_rejected(dir: &Path, name: &str, extra: &[&str], expected: &str) {
     let mut args = vec!["run", "spec.toml"];
     args.extend(extra);
     let output = dcnet(dir, &args);
@@ -426,6 +427,8 @@ fn assert_rejected(dir: &Path, extra: &[&str], expected: &str) {
         message.contains(expected),
         "expected {expected:?} in:\n{message}"
     );
+    let command = format!("dcnet-exp {}", args.join(" "));
+    assert_error_snapshot!(name, &command, &message, dir);
     assert!(
         !dir.join("results").exists(),
         "a rejected spec must not create results/"
@@ -439,6 +442,7 @@ fn bad_specs_are_rejected_with_file_line_and_key() {
     let line = quick_with(d, "noise_cm_s = 0.02\n", "noise_cm_s = -0.02\n");
     assert_rejected(
         d,
+        "file_dvl_noise_negative",
         &[],
         &format!("error: spec.toml:{line}: dvl[1].noise_cm_s: -0.02 must be zero or positive"),
     );
@@ -450,6 +454,7 @@ fn bad_specs_are_rejected_with_file_line_and_key() {
     );
     assert_rejected(
         d,
+        "file_grid_axis_empty",
         &[],
         &format!(
             "error: spec.toml:{line}: grid.bias_cm_s: is empty: the grid needs at least one value on every axis"
@@ -459,6 +464,7 @@ fn bad_specs_are_rejected_with_file_line_and_key() {
     let line = quick_with(d, "stride_s = 9.0", "stride_s = 0.0");
     assert_rejected(
         d,
+        "file_stride_zero",
         &[],
         &format!(
             "error: spec.toml:{line}: dataset.stride_s: 0 must be a positive whole number of samples at 1 Hz"
@@ -472,6 +478,7 @@ fn bad_specs_are_rejected_with_file_line_and_key() {
     );
     assert_rejected(
         d,
+        "file_window_longer_than_scal",
         &[],
         &format!(
             "error: spec.toml:{line}: calibration.window_sizes_s[1]: 250 s is not shorter than SCal (200 s): no samples would be left to evaluate on"
@@ -485,6 +492,7 @@ fn bad_specs_are_rejected_with_file_line_and_key() {
     );
     assert_rejected(
         d,
+        "file_unknown_trajectory",
         &[],
         &format!(
             "error: spec.toml:{line}: evaluation.trajectories[1]: unknown trajectory \"S9\"; data.trajectories defines S1, S2, S3, S4, SCal"
@@ -498,6 +506,7 @@ fn bad_specs_are_rejected_with_file_line_and_key() {
     ) + 1;
     assert_rejected(
         d,
+        "file_patience_zero",
         &[],
         &format!(
             "error: spec.toml:{line}: training.early_stopping.patience_epochs: 0 must be at least 1"
@@ -511,6 +520,7 @@ fn bad_specs_are_rejected_with_file_line_and_key() {
     ) + 1;
     assert_rejected(
         d,
+        "file_unknown_key",
         &[],
         &format!(
             "error: spec.toml:{line}: calibration.colour: unknown field `colour`, expected one of `trajectory`, `window_sizes_s`, `monte_carlo_runs`"
@@ -525,6 +535,7 @@ fn bad_specs_are_rejected_with_file_line_and_key() {
     let missing = d.join("nowhere/V_test.npy");
     assert_rejected(
         d,
+        "file_missing_recording",
         &[],
         &format!(
             "error: spec.toml:{line}: data.trajectories[4].file: {} does not exist; run `dcnet-exp data fetch --dest {}`",
@@ -536,6 +547,7 @@ fn bad_specs_are_rejected_with_file_line_and_key() {
     let line = quick_with(d, "seed = 7", "seed = 7\n[broken") + 1;
     assert_rejected(
         d,
+        "file_unclosed_table",
         &[],
         &format!("error: spec.toml:{line}: unclosed table, expected `]`"),
     );
@@ -543,21 +555,25 @@ fn bad_specs_are_rejected_with_file_line_and_key() {
     quick_with(d, "seed = 7", "seed = 7");
     assert_rejected(
         d,
+        "set_monte_carlo_runs_negative",
         &["--set", "calibration.monte_carlo_runs=-3"],
         "error: --set calibration.monte_carlo_runs=-3: calibration.monte_carlo_runs: invalid value: integer `-3`, expected usize",
     );
     assert_rejected(
         d,
+        "set_window_not_whole_samples",
         &["--set", "dataset.window_s=0.5"],
         "error: --set dataset.window_s=0.5: dataset.window_s: 0.5 must be a positive whole number of samples at 1 Hz",
     );
     assert_rejected(
         d,
+        "set_index_out_of_range",
         &["--set", "dvl[7].noise_cm_s=1"],
         "error: --set dvl[7].noise_cm_s=1: dvl[7].noise_cm_s: index [7] is out of range: there are 2 entries",
     );
     assert_rejected(
         d,
+        "backend_cuda",
         &["--backend", "cuda"],
         "error: --backend cuda: unknown backend \"cuda\"; expected flex or ndarray",
     );
@@ -618,6 +634,9 @@ fn bad_arguments_and_names_are_bad_input_before_anything_runs() {
             message.contains(expected),
             "{args:?}: expected {expected:?} in:\n{message}"
         );
+        let command = format!("dcnet-exp {}", args.join(" "));
+        let name = format!("arguments_{}", snapshot_name(&args.join(" ")));
+        assert_error_snapshot!(&name, &command, &message, d);
         for made in ["results", "fetched"] {
             assert!(!d.join(made).exists(), "{args:?} made {made}/");
         }

@@ -95,15 +95,7 @@ fn plan_lists_every_task_and_changes_nothing() {
     };
     let text = plan(&[]);
     assert!(!dir.join("results").exists(), "plan wrote something");
-    let rows: Vec<(String, String)> = text
-        .lines()
-        .skip(2)
-        .filter(|l| l.starts_with('|'))
-        .map(|l| {
-            let cells: Vec<&str> = l.split('|').map(str::trim).collect();
-            (cells[1].to_string(), cells[3].to_string())
-        })
-        .collect();
+    let rows = plan_rows(&text);
     let labels: Vec<&str> = rows.iter().map(|(label, _)| label.as_str()).collect();
     assert_eq!(labels.len(), 1 + 5 + 2 * 13 + 1, "{text}");
     assert_eq!(labels[0], "generate dataset");

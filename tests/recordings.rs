@@ -6,7 +6,6 @@
 mod common;
 
 use common::*;
-use sha2::{Digest, Sha256};
 use std::path::Path;
 
 /// AUV-like body-frame velocity, m/s: a cruise speed that changes slowly, sway and heave.
@@ -102,19 +101,15 @@ batch_size = 16
     )
 }
 
-fn sha256_hex(bytes: &[u8]) -> String {
-    Sha256::digest(bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
-}
-
 /// Runs `args` in `dir` and expects exit code 1 with exactly `expected` on stderr, and
-/// no results written.
-fn assert_refused(dir: &Path, args: &[&str], expected: &str) {
+/// no results written; the message is the snapshot `name`
+/// (`tests/snapshots/recordings__<name>.snap`).
+fn assert_refused(dir: &Path, name: &str, args: &[&str], expected: &str) {
     let output = dcnet(dir, args);
     assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
     assert_eq!(stderr(&output), format!("{expected}\n"));
+    let command = format!("dcnet-exp {}", args.join(" "));
+    assert_error_snapshot!(name, &command, &stderr(&output), dir);
     assert!(!dir.join("results").exists(), "a refused run wrote results");
 }
 
@@ -160,7 +155,7 @@ fn a_csv_recording_gives_the_results_of_the_same_samples_in_a_npy_file() {
     );
     assert_eq!(
         files[0]["sha256"].as_str().unwrap(),
-        sha256_hex(&std::fs::read(dir.join("rec.csv")).unwrap())
+        sha256(&std::fs::read(dir.join("rec.csv")).unwrap())
     );
     // The resolved spec names the columns read.
     let resolved = std::fs::read_to_string(dir.join("from-csv/own/spec.toml")).unwrap();
@@ -215,6 +210,7 @@ fn a_bad_row_or_header_is_named_and_nothing_is_written() {
     let file = dir.join("bad.csv");
     assert_refused(
         dir,
+        "csv_field_not_a_number",
         &["run", "own.toml"],
         &format!(
             "error: {}:38: vy_m_s: \"abc\" is not a number",
@@ -232,6 +228,7 @@ fn a_bad_row_or_header_is_named_and_nothing_is_written() {
     .unwrap();
     assert_refused(
         dir,
+        "csv_field_missing",
         &["run", "own.toml"],
         &format!(
             "error: {}:38: vy_m_s: missing: the row has 3 fields, the header 5",
@@ -243,6 +240,7 @@ fn a_bad_row_or_header_is_named_and_nothing_is_written() {
     std::fs::write(dir.join("own.toml"), spec("rec.csv", "")).unwrap();
     assert_refused(
         dir,
+        "csv_column_not_in_header",
         &[
             "run",
             "own.toml",
@@ -270,6 +268,7 @@ fn columns_are_for_csv_files_only_and_each_named_once() {
     .unwrap();
     assert_refused(
         dir,
+        "columns_for_npy",
         &["validate", "own.toml"],
         &format!(
             "error: own.toml:8: data.trajectories[0].columns: is for .csv files; {} is read as .npy",
@@ -287,6 +286,12 @@ fn columns_are_for_csv_files_only_and_each_named_once() {
         stderr(&output),
         "error: own.toml:8: data.trajectories[0].columns[1]: \"vx_m_s\" is named twice: x, y and z need a column each\n\
          error: own.toml:8: data.trajectories[0].columns[2]: is empty: name a column of the header\n"
+    );
+    assert_error_snapshot!(
+        "columns_named_twice_and_empty",
+        "dcnet-exp validate own.toml",
+        &stderr(&output),
+        dir
     );
 
     let project = common::project(false);
@@ -306,6 +311,12 @@ fn columns_are_for_csv_files_only_and_each_named_once() {
         ),
         "{}",
         stderr(&output)
+    );
+    assert_error_snapshot!(
+        "set_columns_for_synthetic",
+        "dcnet-exp validate experiments/quick.toml --set data.trajectories[0].columns=[\"a\", \"b\", \"c\"]",
+        &stderr(&output),
+        project.path()
     );
 }
 

@@ -35,15 +35,7 @@ fn plan(dir: &Path, extra: &[&str]) -> Vec<(String, String)> {
     let args = [&["plan", "experiments/quick.toml"], &SMALL[..], extra].concat();
     let output = dcnet(dir, &args);
     assert!(output.status.success(), "{}", stderr(&output));
-    stdout(&output)
-        .lines()
-        .skip(2)
-        .filter(|l| l.starts_with('|'))
-        .map(|l| {
-            let cells: Vec<&str> = l.split('|').map(str::trim).collect();
-            (cells[1].to_string(), cells[3].to_string())
-        })
-        .collect()
+    plan_rows(&stdout(&output))
 }
 
 fn replicates(batch: &arrow_array::RecordBatch) -> Vec<Option<u32>> {

@@ -13,8 +13,18 @@ use std::path::{Path, PathBuf};
 pub enum CsvError {
     #[error("{}: file not found", path.display())]
     Missing { path: PathBuf },
-    #[error("{}: cannot read as CSV: {error}", path.display())]
-    Read { path: PathBuf, error: ::csv::Error },
+    #[error("{}: cannot read as CSV", path.display())]
+    Read {
+        path: PathBuf,
+        #[source]
+        source: ::csv::Error,
+    },
+    #[error("{}: cannot read as CSV", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
     #[error("{}:1: {column}: not in the header, which has {}", path.display(), found_list(found))]
     MissingColumn {
         path: PathBuf,
@@ -66,9 +76,9 @@ fn found_list(found: &[String]) -> String {
 /// The velocity samples of `path`, one `[x, y, z]` per row, from `columns` (x, y, z).
 pub fn read_velocities(path: &Path, columns: &[String; 3]) -> Result<Vec<Vec3>, CsvError> {
     let bytes = read_bytes(path)?;
-    let read_error = |error| CsvError::Read {
+    let read_error = |source| CsvError::Read {
         path: path.to_path_buf(),
-        error,
+        source,
     };
     let mut reader = ::csv::ReaderBuilder::new()
         .flexible(true)
@@ -107,20 +117,12 @@ pub fn read_velocities(path: &Path, columns: &[String; 3]) -> Result<Vec<Vec3>, 
 /// upper bound of its samples, known before it is read.
 pub fn row_count(path: &Path) -> Result<usize, CsvError> {
     use std::io::BufRead;
-    let file = std::fs::File::open(path).map_err(|source| match source.kind() {
-        std::io::ErrorKind::NotFound => CsvError::Missing {
-            path: path.to_path_buf(),
-        },
-        _ => CsvError::Read {
-            path: path.to_path_buf(),
-            error: source.into(),
-        },
-    })?;
+    let file = std::fs::File::open(path).map_err(|source| io_error(path, source))?;
     let mut lines = 0;
     for chunk in std::io::BufReader::new(file).split(b'\n') {
-        let chunk = chunk.map_err(|source| CsvError::Read {
+        let chunk = chunk.map_err(|source| CsvError::Io {
             path: path.to_path_buf(),
-            error: source.into(),
+            source,
         })?;
         lines += usize::from(!chunk.is_empty());
     }
@@ -129,15 +131,21 @@ pub fn row_count(path: &Path) -> Result<usize, CsvError> {
 
 /// The bytes of `path`; a missing file is [`CsvError::Missing`].
 fn read_bytes(path: &Path) -> Result<Vec<u8>, CsvError> {
-    std::fs::read(path).map_err(|source| match source.kind() {
+    std::fs::read(path).map_err(|source| io_error(path, source))
+}
+
+/// `source`, met opening or reading `path`: [`CsvError::Missing`] where the file is
+/// not there.
+fn io_error(path: &Path, source: std::io::Error) -> CsvError {
+    match source.kind() {
         std::io::ErrorKind::NotFound => CsvError::Missing {
             path: path.to_path_buf(),
         },
-        _ => CsvError::Read {
+        _ => CsvError::Io {
             path: path.to_path_buf(),
-            error: source.into(),
+            source,
         },
-    })
+    }
 }
 
 /// The index in `header` of each of `columns`, each of which must be there exactly once.
@@ -333,6 +341,35 @@ mod tests {
             read("note,vx_m_s,vy_m_s,vz_m_s\n\"a\nb\",0,1,2\n,1,w,3\n").unwrap_err(),
             "FILE:4: vy_m_s: \"w\" is not a number"
         );
+    }
+
+    #[test]
+    fn a_file_that_cannot_be_read_keeps_its_cause_and_prints_it_once() {
+        let dir = tempfile::tempdir().unwrap();
+        let error = read_velocities(dir.path(), &columns()).unwrap_err();
+        assert!(matches!(error, CsvError::Io { .. }), "{error:?}");
+        let cause = std::error::Error::source(&error)
+            .expect("the cause is kept")
+            .to_string();
+        let shown = format!("{:#}", anyhow::Error::from(error));
+        assert_eq!(
+            shown,
+            format!("{}: cannot read as CSV: {cause}", dir.path().display())
+        );
+        // Invalid UTF-8 in the header is the CSV reader's fault, kept as the cause.
+        let path = dir.path().join("latin1.csv");
+        std::fs::write(&path, b"vx_m_s,vy_m_s,vz_\xb5\n0,1,2\n").unwrap();
+        let error = read_velocities(&path, &columns()).unwrap_err();
+        assert!(matches!(error, CsvError::Read { .. }), "{error:?}");
+        let shown = format!("{:#}", anyhow::Error::from(error));
+        assert!(
+            shown.starts_with(&format!(
+                "{}: cannot read as CSV: CSV parse error",
+                path.display()
+            )),
+            "{shown}"
+        );
+        assert_eq!(shown.matches("cannot read").count(), 1, "{shown}");
     }
 
     #[test]

@@ -1,7 +1,9 @@
 //! Reads a results folder back, for `plot` and the report: the Parquet tables into the
 //! rows the run computed, the resolved spec, the manifest and the published values.
 //! Each table's schema is checked against the one the writer produces, so a missing
-//! file or a foreign schema is an error that names the file, never a wrong figure.
+//! file or a foreign schema is an error that names the file, never a wrong figure; a
+//! column that is missing, of another type, with empty values or with a value no run
+//! writes is a [`ColumnError`] that names the column.
 
 use super::{
     MANIFEST, Manifest, PUBLISHED, SPEC, TABLES, calibration_batch, evaluation_batch,
@@ -14,7 +16,7 @@ use crate::spec::{SpecErrors, SpecFile, TomlFile};
 use crate::train::EpochRecord;
 use crate::vocab::{Correction, ErrorModel, EstimatorKind, Phase, StopReason};
 use arrow_array::{Array, BooleanArray, Float64Array, RecordBatch, StringArray, UInt32Array};
-use arrow_schema::Schema;
+use arrow_schema::{DataType, Schema};
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 use std::path::{Path, PathBuf};
 
@@ -22,8 +24,16 @@ use std::path::{Path, PathBuf};
 pub enum ReadError {
     #[error("{}: missing; a results folder written by `dcnet-exp run` holds it", path.display())]
     Missing { path: PathBuf },
-    #[error("{}: {message}", path.display())]
-    Invalid { path: PathBuf, message: String },
+    /// A table with a column that is not as dcnet-exp writes it; [`ColumnError`] says how.
+    #[error("{}: {fault}", path.display())]
+    Column { path: PathBuf, fault: ColumnError },
+    /// A JSON file beside the tables (`sweep.json`) that does not parse.
+    #[error("{}", path.display())]
+    Json {
+        path: PathBuf,
+        #[source]
+        source: serde_json::Error,
+    },
     #[error("{}", path.display())]
     Spec {
         path: PathBuf,
@@ -60,6 +70,32 @@ pub enum ReadError {
         #[source]
         source: ManifestError,
     },
+}
+
+/// What is wrong with one column of a stored table: the fault itself, shown after the
+/// file's path by [`ReadError::Column`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ColumnError {
+    #[error("column `{column}` is missing: this is not the schema dcnet-exp writes")]
+    Missing { column: String },
+    #[error(
+        "column `{column}` holds {found}, expected {expected}: this is not the schema dcnet-exp writes"
+    )]
+    Type {
+        column: String,
+        found: DataType,
+        expected: DataType,
+    },
+    #[error("column `{column}` has empty values")]
+    Empty { column: String },
+    /// A name that does not parse; `problem` is what the name's type says of it.
+    #[error("column `{column}`: {problem}")]
+    Value { column: String, problem: String },
+    /// A swept key of the sweep's index that the sweep table lacks.
+    #[error("column `{column}`, a swept key of {index}, is missing")]
+    SweptMissing { column: String, index: &'static str },
+    #[error("column `{column}` holds {found}, expected Int64, Float64 or Utf8")]
+    SweptType { column: String, found: DataType },
 }
 
 /// Why a manifest could not be read.
@@ -174,7 +210,7 @@ pub fn run_rows_at(path: &Path) -> Result<Vec<RunRow>, ReadError> {
 fn table<T>(
     folder: &Path,
     file: &str,
-    rows: fn(&Batch) -> Result<Vec<T>, String>,
+    rows: fn(&Batch) -> Result<Vec<T>, ColumnError>,
 ) -> Result<Vec<T>, ReadError> {
     table_at(&folder.join(file), file, rows)
 }
@@ -183,7 +219,7 @@ fn table<T>(
 fn table_at<T>(
     path: &Path,
     file: &str,
-    rows: fn(&Batch) -> Result<Vec<T>, String>,
+    rows: fn(&Batch) -> Result<Vec<T>, ColumnError>,
 ) -> Result<Vec<T>, ReadError> {
     read_rows(path, &expected_schema(file), rows)
 }
@@ -193,12 +229,12 @@ fn table_at<T>(
 pub(crate) fn read_rows<T>(
     path: &Path,
     expected: &Schema,
-    rows: impl Fn(&Batch) -> Result<Vec<T>, String>,
+    rows: impl Fn(&Batch) -> Result<Vec<T>, ColumnError>,
 ) -> Result<Vec<T>, ReadError> {
     let path = existing(path)?;
-    let invalid = |message: String| ReadError::Invalid {
+    let invalid = |fault| ReadError::Column {
         path: path.clone(),
-        message,
+        fault,
     };
     let opened = std::fs::File::open(&path).map_err(|source| ReadError::Io {
         path: path.clone(),
@@ -243,23 +279,21 @@ fn expected_schema(file: &str) -> std::sync::Arc<Schema> {
 /// one still reads, with the value those runs implied.
 const LATER_COLUMNS: [&str; 2] = ["stop_reason", "efficiency"];
 
-fn check_schema(found: &Schema, expected: &Schema) -> Result<(), String> {
+fn check_schema(found: &Schema, expected: &Schema) -> Result<(), ColumnError> {
     for field in expected.fields() {
         match found.field_with_name(field.name()) {
             Err(_) if LATER_COLUMNS.contains(&field.name().as_str()) => {}
             Err(_) => {
-                return Err(format!(
-                    "column `{}` is missing: this is not the schema dcnet-exp writes",
-                    field.name()
-                ));
+                return Err(ColumnError::Missing {
+                    column: field.name().clone(),
+                });
             }
             Ok(column) if column.data_type() != field.data_type() => {
-                return Err(format!(
-                    "column `{}` holds {}, expected {}: this is not the schema dcnet-exp writes",
-                    field.name(),
-                    column.data_type(),
-                    field.data_type()
-                ));
+                return Err(ColumnError::Type {
+                    column: field.name().clone(),
+                    found: column.data_type().clone(),
+                    expected: field.data_type().clone(),
+                });
             }
             Ok(_) => {}
         }
@@ -278,15 +312,17 @@ impl Batch<'_> {
             .expect("the schema was checked")
     }
 
-    fn no_nulls(&self, name: &str) -> Result<(), String> {
+    fn no_nulls(&self, name: &str) -> Result<(), ColumnError> {
         let column = self.0.column_by_name(name).expect("the schema was checked");
         if column.null_count() > 0 {
-            return Err(format!("column `{name}` has empty values"));
+            return Err(ColumnError::Empty {
+                column: name.to_string(),
+            });
         }
         Ok(())
     }
 
-    pub(crate) fn floats(&self, name: &str) -> Result<Vec<f64>, String> {
+    pub(crate) fn floats(&self, name: &str) -> Result<Vec<f64>, ColumnError> {
         self.no_nulls(name)?;
         Ok(self.column::<Float64Array>(name).values().to_vec())
     }
@@ -295,7 +331,7 @@ impl Batch<'_> {
         self.column::<Float64Array>(name).iter().collect()
     }
 
-    fn uints(&self, name: &str) -> Result<Vec<usize>, String> {
+    fn uints(&self, name: &str) -> Result<Vec<usize>, ColumnError> {
         self.no_nulls(name)?;
         Ok(self
             .column::<UInt32Array>(name)
@@ -330,13 +366,13 @@ impl Batch<'_> {
         }
     }
 
-    fn bools(&self, name: &str) -> Result<Vec<bool>, String> {
+    fn bools(&self, name: &str) -> Result<Vec<bool>, ColumnError> {
         self.no_nulls(name)?;
         let column = self.column::<BooleanArray>(name);
         Ok((0..column.len()).map(|i| column.value(i)).collect())
     }
 
-    pub(crate) fn strings(&self, name: &str) -> Result<Vec<String>, String> {
+    pub(crate) fn strings(&self, name: &str) -> Result<Vec<String>, ColumnError> {
         self.no_nulls(name)?;
         Ok(self
             .column::<StringArray>(name)
@@ -350,7 +386,7 @@ impl Batch<'_> {
         &self,
         name: &str,
         optional: bool,
-    ) -> Result<Vec<Option<T>>, String> {
+    ) -> Result<Vec<Option<T>>, ColumnError> {
         if !optional {
             self.no_nulls(name)?;
         }
@@ -358,13 +394,21 @@ impl Batch<'_> {
             .iter()
             .map(|value| {
                 value
-                    .map(|v| v.parse().map_err(|e| format!("column `{name}`: {e}")))
+                    .map(|v| {
+                        v.parse().map_err(|problem| ColumnError::Value {
+                            column: name.to_string(),
+                            problem,
+                        })
+                    })
                     .transpose()
             })
             .collect()
     }
 
-    fn required<T: std::str::FromStr<Err = String>>(&self, name: &str) -> Result<Vec<T>, String> {
+    fn required<T: std::str::FromStr<Err = String>>(
+        &self,
+        name: &str,
+    ) -> Result<Vec<T>, ColumnError> {
         Ok(self
             .parsed(name, false)?
             .into_iter()
@@ -373,7 +417,7 @@ impl Batch<'_> {
     }
 
     /// The `dvl`, `estimator` and `error_model` of each row: which series it belongs to.
-    pub(crate) fn row_keys(&self) -> Result<Vec<RowKey>, String> {
+    pub(crate) fn row_keys(&self) -> Result<Vec<RowKey>, ColumnError> {
         let dvl = self.strings("dvl")?;
         let estimator: Vec<EstimatorKind> = self.required("estimator")?;
         let error_model = self.parsed("error_model", true)?;
@@ -397,7 +441,7 @@ pub(crate) struct RowKey {
     pub error_model: Option<ErrorModel>,
 }
 
-fn run_rows(batch: &Batch) -> Result<Vec<RunRow>, String> {
+fn run_rows(batch: &Batch) -> Result<Vec<RunRow>, ColumnError> {
     let run = batch.uints("run")?;
     let replicate = batch.optional_uints(super::REPLICATE);
     let row_keys = batch.row_keys()?;
@@ -437,7 +481,7 @@ fn run_rows(batch: &Batch) -> Result<Vec<RunRow>, String> {
         .collect())
 }
 
-fn calibration_rows(batch: &Batch) -> Result<Vec<CalibrationRow>, String> {
+fn calibration_rows(batch: &Batch) -> Result<Vec<CalibrationRow>, ColumnError> {
     let row_keys = batch.row_keys()?;
     let window_s = batch.floats("window_s")?;
     let rmse = batch.floats("rmse_cm_s")?;
@@ -462,7 +506,7 @@ fn calibration_rows(batch: &Batch) -> Result<Vec<CalibrationRow>, String> {
         .collect())
 }
 
-fn evaluation_rows(batch: &Batch) -> Result<Vec<EvaluationRow>, String> {
+fn evaluation_rows(batch: &Batch) -> Result<Vec<EvaluationRow>, ColumnError> {
     let row_keys = batch.row_keys()?;
     let trajectory = batch.strings("trajectory")?;
     let t_conv_s = batch.floats("t_conv_s")?;
@@ -489,7 +533,7 @@ fn evaluation_rows(batch: &Batch) -> Result<Vec<EvaluationRow>, String> {
         .collect())
 }
 
-fn epoch_rows(batch: &Batch) -> Result<Vec<StoredEpoch>, String> {
+fn epoch_rows(batch: &Batch) -> Result<Vec<StoredEpoch>, ColumnError> {
     let error_model: Vec<ErrorModel> = batch.required("error_model")?;
     let epoch = batch.uints("epoch")?;
     let train_loss = batch.floats("train_loss")?;
@@ -524,7 +568,7 @@ fn epoch_rows(batch: &Batch) -> Result<Vec<StoredEpoch>, String> {
 /// One sample of one trajectory: name, roles, time, velocity.
 type TrajectorySample = (String, String, f64, Vec3);
 
-fn trajectory_rows(batch: &Batch) -> Result<Vec<TrajectorySample>, String> {
+fn trajectory_rows(batch: &Batch) -> Result<Vec<TrajectorySample>, ColumnError> {
     let name = batch.strings("trajectory")?;
     let roles = batch.strings("roles")?;
     let time_s = batch.floats("time_s")?;
@@ -616,6 +660,58 @@ mod tests {
             error.to_string().contains("column `is_best` is missing"),
             "{error}"
         );
+    }
+
+    /// `batch` with its column `name` replaced by `values`, as text.
+    fn with_text_column(batch: &RecordBatch, name: &str, values: &[&str]) -> RecordBatch {
+        use arrow_schema::Field;
+        use std::sync::Arc;
+        let index = batch.schema().index_of(name).unwrap();
+        let mut columns = batch.columns().to_vec();
+        let mut fields: Vec<_> = batch.schema().fields().iter().cloned().collect();
+        columns[index] = Arc::new(StringArray::from(values.to_vec()));
+        fields[index] = Arc::new(Field::new(name, DataType::Utf8, false));
+        RecordBatch::try_new(Arc::new(Schema::new(fields)), columns).unwrap()
+    }
+
+    #[test]
+    fn a_foreign_column_is_named_after_its_file_once() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("training.parquet");
+        let batch = training_batch(&[summary(StopReason::AllEpochs)]);
+        let shown = |error: ReadError| format!("{:#}", anyhow::Error::from(error));
+
+        super::super::write_table(&path, &with_text_column(&batch, "epoch", &["1", "2"])).unwrap();
+        let error = table_at(&path, "training.parquet", epoch_rows).unwrap_err();
+        assert!(
+            matches!(&error, ReadError::Column {
+                fault: ColumnError::Type { column, found: DataType::Utf8, expected: DataType::UInt32 },
+                ..
+            } if column == "epoch"),
+            "{error:?}"
+        );
+        assert_eq!(
+            shown(error),
+            format!(
+                "{}: column `epoch` holds Utf8, expected UInt32: this is not the schema dcnet-exp writes",
+                path.display()
+            )
+        );
+
+        let bogus = with_text_column(&batch, "stop_reason", &["bogus", "bogus"]);
+        super::super::write_table(&path, &bogus).unwrap();
+        let error = table_at(&path, "training.parquet", epoch_rows).unwrap_err();
+        let ReadError::Column {
+            fault: ColumnError::Value { column, problem },
+            ..
+        } = &error
+        else {
+            panic!("{error:?}")
+        };
+        assert_eq!(column, "stop_reason");
+        assert!(problem.contains("bogus"), "{problem}");
+        let expected = format!("{}: column `stop_reason`: {problem}", path.display());
+        assert_eq!(shown(error), expected);
     }
 
     #[test]

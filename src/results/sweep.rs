@@ -6,7 +6,7 @@
 
 use crate::evaluate::{ProtocolResult, mean_ci95};
 use crate::files::write_atomic;
-use crate::results::read::{Batch, ReadError, read_rows};
+use crate::results::read::{Batch, ColumnError, ReadError, read_rows};
 use crate::results::{ResultsError, table_bytes};
 use crate::spec::Experiment;
 use crate::train::TrainingHistory;
@@ -312,10 +312,7 @@ const EVALUATION_CI: &str = "evaluation_rmse_ci_cm_s";
 pub fn read_index(folder: &Path) -> Result<SweepIndex, ReadError> {
     let path = folder.join(INDEX);
     let bytes = std::fs::read(&path).map_err(|_| ReadError::Missing { path: path.clone() })?;
-    serde_json::from_slice(&bytes).map_err(|e| ReadError::Invalid {
-        path,
-        message: e.to_string(),
-    })
+    serde_json::from_slice(&bytes).map_err(|source| ReadError::Json { path, source })
 }
 
 /// Reads the sweep stored in `folder`.
@@ -329,7 +326,7 @@ pub fn read(folder: &Path) -> Result<StoredSweep, ReadError> {
     Ok(StoredSweep { index, rows })
 }
 
-fn sweep_rows(batch: &Batch, swept: &[String]) -> Result<Vec<SweepRow>, String> {
+fn sweep_rows(batch: &Batch, swept: &[String]) -> Result<Vec<SweepRow>, ColumnError> {
     let point = batch.strings("point")?;
     let row_keys = batch.row_keys()?;
     let t_conv = batch.floats("t_conv_s")?;
@@ -344,7 +341,10 @@ fn sweep_rows(batch: &Batch, swept: &[String]) -> Result<Vec<SweepRow>, String> 
         let column = batch
             .0
             .column_by_name(key)
-            .ok_or_else(|| format!("column `{key}`, a swept key of {INDEX}, is missing"))?;
+            .ok_or_else(|| ColumnError::SweptMissing {
+                column: key.clone(),
+                index: INDEX,
+            })?;
         let column: Vec<Swept> = match column.data_type() {
             DataType::Int64 => column
                 .as_primitive::<Int64Type>()
@@ -362,9 +362,10 @@ fn sweep_rows(batch: &Batch, swept: &[String]) -> Result<Vec<SweepRow>, String> 
                 .map(|v| Swept::Text(v.unwrap_or_default().to_string()))
                 .collect(),
             other => {
-                return Err(format!(
-                    "column `{key}` holds {other}, expected Int64, Float64 or Utf8"
-                ));
+                return Err(ColumnError::SweptType {
+                    column: key.clone(),
+                    found: other.clone(),
+                });
             }
         };
         for (row, value) in values.iter_mut().zip(column) {

@@ -1,5 +1,8 @@
 //! Helpers for the integration tests: run the built binary in a temporary folder, read
-//! the Parquet results back, and find the Snapir recordings where a user keeps them.
+//! the Parquet results and the printed plan back, list and hash the files below a
+//! folder (`tree`, `snapshot`, `sha256`), store an error message whole as an insta
+//! snapshot (`assert_error_snapshot!`), and find the Snapir recordings where a user
+//! keeps them.
 //!
 //! Tests that need the recordings carry
 //! `#[ignore = "needs the Snapir recordings: dcnet-exp data fetch"]`, so a fresh clone
@@ -10,6 +13,7 @@
 
 use arrow_array::{Array, BooleanArray, Float64Array, Int64Array, RecordBatch, StringArray};
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
+use sha2::{Digest, Sha256};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
@@ -298,20 +302,133 @@ pub fn spawn<S: AsRef<std::ffi::OsStr>>(cwd: &Path, args: &[S]) -> Child {
         .unwrap()
 }
 
-/// Every file below `folder`: its bytes and modification time.
-pub fn snapshot(folder: &Path) -> BTreeMap<PathBuf, (Vec<u8>, SystemTime)> {
+/// Every file below `root`, hidden ones too, by its path relative to `root` (with `/`
+/// between folders); a folder that cannot be read, or is gone, holds none.
+pub fn tree(root: &Path) -> BTreeMap<String, PathBuf> {
     let mut files = BTreeMap::new();
-    let mut stack = vec![folder.to_path_buf()];
+    let mut stack = vec![root.to_path_buf()];
     while let Some(dir) = stack.pop() {
-        for entry in std::fs::read_dir(&dir).unwrap() {
-            let path = entry.unwrap().path();
+        let Ok(entries) = std::fs::read_dir(&dir) else {
+            continue;
+        };
+        for entry in entries.flatten() {
+            let path = entry.path();
             if path.is_dir() {
                 stack.push(path);
             } else {
-                let modified = path.metadata().unwrap().modified().unwrap();
-                files.insert(path.clone(), (std::fs::read(&path).unwrap(), modified));
+                let rel = path.strip_prefix(root).unwrap().to_string_lossy();
+                files.insert(rel.replace('\\', "/"), path);
             }
         }
     }
     files
 }
+
+/// The bytes and modification time of the file at `path`.
+pub fn file_state(path: &Path) -> (Vec<u8>, SystemTime) {
+    let modified = path.metadata().unwrap().modified().unwrap();
+    (std::fs::read(path).unwrap(), modified)
+}
+
+/// Every file below the folder `folder`, by its path: its bytes and modification time.
+pub fn snapshot(folder: &Path) -> BTreeMap<PathBuf, (Vec<u8>, SystemTime)> {
+    assert!(folder.is_dir(), "{} is no folder", folder.display());
+    tree(folder)
+        .into_values()
+        .map(|path| (path.clone(), file_state(&path)))
+        .collect()
+}
+
+/// The SHA-256 of `bytes` in lowercase hex, as the tool's seals and manifests write it.
+pub fn sha256(bytes: &[u8]) -> String {
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// The (task, status) rows of the table that `plan` prints (the first and third
+/// columns), below its header and delimiter lines.
+pub fn plan_rows(printed: &str) -> Vec<(String, String)> {
+    printed
+        .lines()
+        .skip(2)
+        .filter(|l| l.starts_with('|'))
+        .map(|l| {
+            let cells: Vec<&str> = l.split('|').map(str::trim).collect();
+            (cells[1].to_string(), cells[3].to_string())
+        })
+        .collect()
+}
+
+/// `text` as an error snapshot stores it, the same on every machine: the temporary
+/// folder `dir` (as given and as its canonical path) written `[TEMP]`, and the sizes in
+/// a memory estimate (they depend on how many threads train at once and on this
+/// machine's memory) written `[MEMORY]`.
+pub fn redact(text: &str, dir: &Path) -> String {
+    let mut text = text.to_string();
+    let canonical = dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf());
+    for dir in [canonical, dir.to_path_buf()] {
+        text = text.replace(&dir.display().to_string(), "[TEMP]");
+    }
+    for (start, end) in [
+        ("needs about ", " of memory"),
+        ("this machine has ", ";"),
+        ("most of it, ", ","),
+    ] {
+        text = replace_between(&text, start, end, "[MEMORY]");
+    }
+    text
+}
+
+/// `text` with what stands between `start` and the next `end` on the same line written
+/// `token`, wherever `start` is.
+fn replace_between(text: &str, start: &str, end: &str, token: &str) -> String {
+    let mut replaced = String::new();
+    let mut rest = text;
+    while let Some(at) = rest.find(start) {
+        let (before, after) = rest.split_at(at + start.len());
+        replaced.push_str(before);
+        let line = &after[..after.find('\n').unwrap_or(after.len())];
+        if let Some(n) = line.find(end) {
+            replaced.push_str(token);
+            rest = &after[n..];
+        } else {
+            rest = after;
+        }
+    }
+    replaced.push_str(rest);
+    replaced
+}
+
+/// A name for a snapshot made of `text`: its letters and digits, lowercase, each run of
+/// other characters one `_` (`dvl[0].bias_cm_s=-500` gives `dvl_0_bias_cm_s_500`).
+pub fn snapshot_name(text: &str) -> String {
+    let mut name = String::new();
+    for c in text.chars() {
+        if c.is_ascii_alphanumeric() {
+            name.push(c.to_ascii_lowercase());
+        } else if !name.ends_with('_') {
+            name.push('_');
+        }
+    }
+    name.trim_matches('_').to_string()
+}
+
+/// Stores `error`, the stderr of `command` run in the temporary folder `dir`, whole as
+/// the insta snapshot `name` of the calling test file (`tests/snapshots/<test
+/// file>__<name>.snap`), [`redact`]ed, with `command` as its description. Where CI is
+/// set, insta writes nothing and a message that differs from its snapshot fails.
+#[allow(unused_macros)]
+macro_rules! assert_error_snapshot {
+    ($name:expr, $command:expr, $error:expr, $dir:expr $(,)?) => {{
+        let mut settings = insta::Settings::clone_current();
+        settings.set_description($command);
+        settings.set_omit_expression(true);
+        let name: &str = $name;
+        let redacted = crate::common::redact($error, $dir);
+        settings.bind(|| insta::assert_snapshot!(name, redacted));
+    }};
+}
+#[allow(unused_imports)]
+pub(crate) use assert_error_snapshot;
