@@ -16,8 +16,11 @@
 //!    tables summed from them, the bound's efficiency), and [`footprint`]: the memory
 //!    and time a spec asks for, known before it runs;
 //! 8. [`results`]: the Parquet files and manifest of a run, and a sweep's table;
-//! 9. [`report`]: what is drawn from results folders alone: the printed tables, the
-//!    figures, report.md and report.tex, and two folders compared;
+//! 9. [`report`]: what is drawn from results folders alone: the printed tables
+//!    ([`report::printed`]), the figures ([`report::plots`], one file per figure), one
+//!    table model of the report ([`report::table`]) set by two renderers
+//!    ([`report::markdown`], [`report::latex`]), and two folders compared
+//!    ([`report::compare`]);
 //! 10. [`pipeline`]: the stages as tasks, planned, cached by content (datasets, models,
 //!     Monte Carlo blocks), resumable (each model a training job), and shared out over
 //!     shards;

@@ -81,7 +81,9 @@ fn report_figures(figures: &[plots::Written], folder: &Path) {
                 figure.files.len(),
                 folder.display()
             ),
-            plots::Caption::NotApplicable(why) => eprintln!("figure {}: not drawn, {why}", figure.stem),
+            plots::Caption::NotApplicable(why) => {
+                eprintln!("figure {}: not drawn, {why}", figure.stem)
+            }
         }
     }
 }

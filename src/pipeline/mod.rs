@@ -8,8 +8,9 @@
 //!   share a model train it once, and the state of each without touching anything;
 //! - [`shard`]: one machine's share of them (`--shard K/N`);
 //! - [`execute`] does what is left: all of it, one shard's part, or only the putting
-//!   together (`collect`), training in `training` (each model's `TrainingJob`
-//!   interleaved epoch by epoch) and running the protocol in `monte_carlo`;
+//!   together (`collect`), training in [`training`] (each model's
+//!   [`TrainingJob`](training::job::TrainingJob) interleaved epoch by epoch) and running the
+//!   protocol in [`monte_carlo`];
 //! - [`cache`]: the content-addressed store of models and Monte Carlo blocks;
 //! - [`claim`]: the locks that keep processes sharing a folder from computing the same
 //!   task.
@@ -20,9 +21,9 @@
 
 pub mod cache;
 pub mod claim;
-mod monte_carlo;
+pub mod monte_carlo;
 pub mod plan;
-mod training;
+pub mod training;
 pub mod shard;
 
 pub use plan::{Mode, Plan, Status, Task};

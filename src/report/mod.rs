@@ -5,19 +5,19 @@
 //! - [`printed`]: the calibration and evaluation tables that `run` prints;
 //! - [`plots`]: the figures of a run and of a sweep;
 //! - this module: `results/<name>/report.md` and `report.tex`, written and sealed. The
-//!   report's tables are built once from the run (`table`: the paper's two tables in its
+//!   report's tables are built once from the run ([`table`]: the paper's two tables in its
 //!   layout with our value beside the published one in every cell, cells off by more
 //!   than the spec's tolerance flagged, our extra estimators and the bound) and set by
-//!   two renderers: as Markdown in `markdown`, with the training summary, wall time per
-//!   stage, provenance from the manifest and the figures, and as LaTeX in `latex`;
+//!   two renderers: as Markdown in [`markdown`], with the training summary, wall time per
+//!   stage, provenance from the manifest and the figures, and as LaTeX in [`latex`];
 //! - [`compare`]: two results folders side by side.
 
 pub mod compare;
-mod latex;
-mod markdown;
+pub mod latex;
+pub mod markdown;
 pub mod plots;
 pub mod printed;
-mod table;
+pub mod table;
 
 pub use markdown::FILE;
 

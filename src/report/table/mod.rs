@@ -6,8 +6,8 @@
 //! extra estimators and the bound. [`source`] finds each cell's rows; [`cell`] holds a
 //! cell and the rule that flags it.
 
-mod cell;
-mod source;
+pub mod cell;
+pub mod source;
 
 pub(crate) use cell::{Cell, Detail, RmseValue, Signs, Tally};
 
