@@ -4,7 +4,7 @@
 //! they need (booktabs). Each DVL's row holds our values, the row below it the
 //! published ones in italics; a flagged cell carries a dagger explained under its table.
 
-use crate::report::table::{Cell, ReportTable, ReportTables, Signs, replicates_note};
+use crate::report::table::{Cell, ReportTable, ReportTables, Row, Signs, replicates_note};
 use crate::results::read::StoredRun;
 use std::fmt::Write;
 
@@ -209,38 +209,14 @@ fn table(out: &mut String, table: &ReportTable, caption: &str, label: &str, note
         let _ = writeln!(out, "    \\midrule");
         for (r, line) in group.iter().enumerate() {
             // The DVL is named on its group's first row only.
-            let mut cells: Vec<String> = line
-                .labels
-                .iter()
-                .enumerate()
-                .map(|(i, l)| {
-                    if i == 0 && r > 0 && labels > 1 {
-                        String::new()
-                    } else {
-                        escape(l)
-                    }
-                })
-                .collect();
-            cells.extend(line.cells.iter().map(|cell| match cell {
-                Some(entry) => ours(entry),
-                None => "---".into(),
-            }));
-            row(out, &cells);
+            row(out, &our_cells(line, r > 0 && labels > 1));
             if line
                 .cells
                 .iter()
                 .flatten()
                 .any(|entry| entry.paper.is_some())
             {
-                let mut cells = vec![String::new(); labels - 1];
-                cells.push("\\quad\\textit{paper}".into());
-                cells.extend(line.cells.iter().map(|cell| {
-                    match cell.as_ref().and_then(|entry| entry.paper.as_ref()) {
-                        Some(paper) => format!("\\textit{{{}}}", paper.text(&SIGNS)),
-                        None => String::new(),
-                    }
-                }));
-                row(out, &cells);
+                row(out, &paper_cells(line, labels));
             }
         }
         if g + 1 == table.groups.len() {
@@ -253,6 +229,42 @@ fn table(out: &mut String, table: &ReportTable, caption: &str, label: &str, note
         let _ = writeln!(out, "  {{\\footnotesize\\raggedright {note}\\par}}");
     }
     let _ = writeln!(out, "\\end{{table}}");
+}
+
+/// The cells of our row of `line`: its labels, the first (the DVL) left empty where
+/// `dvl_named_above`, then our values.
+fn our_cells(line: &Row, dvl_named_above: bool) -> Vec<String> {
+    let mut cells: Vec<String> = line
+        .labels
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            if i == 0 && dvl_named_above {
+                String::new()
+            } else {
+                escape(l)
+            }
+        })
+        .collect();
+    cells.extend(line.cells.iter().map(|cell| match cell {
+        Some(entry) => ours(entry),
+        None => "---".into(),
+    }));
+    cells
+}
+
+/// The cells of the row below `line`: `paper` in its last label column, then the
+/// published values in italics, empty where there is none.
+fn paper_cells(line: &Row, labels: usize) -> Vec<String> {
+    let mut cells = vec![String::new(); labels - 1];
+    cells.push("\\quad\\textit{paper}".into());
+    cells.extend(line.cells.iter().map(|cell| {
+        match cell.as_ref().and_then(|entry| entry.paper.as_ref()) {
+            Some(paper) => format!("\\textit{{{}}}", paper.text(&SIGNS)),
+            None => String::new(),
+        }
+    }));
+    cells
 }
 
 fn row(out: &mut String, cells: &[String]) {
