@@ -7,7 +7,7 @@
 //!
 //! - this module: [`StoredRun`], the folder read whole, and [`ReadError`], which puts
 //!   the path of the file in front of whatever went wrong with it;
-//! - [`columns`]: the schema check and typed access to a table's columns ([`Batch`]);
+//! - [`columns`]: the schema check and typed access to a table's columns (`Batch`);
 //! - [`rows`]: one decoder per table, from its columns to the rows the run computed.
 
 pub mod columns;
