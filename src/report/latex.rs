@@ -4,7 +4,7 @@
 //! they need (booktabs). Each DVL's row holds our values, the row below it the
 //! published ones in italics; a flagged cell carries a dagger explained under its table.
 
-use crate::report::table::{Cell, ReportTable, ReportTables, Signs, replicates_note};
+use crate::report::table::{Cell, ReportTable, ReportTables, Row, Signs, replicates_note};
 use crate::results::read::StoredRun;
 use std::fmt::Write;
 
@@ -18,14 +18,52 @@ const SIGNS: Signs = Signs {
 
 /// The tables as LaTeX.
 pub(super) fn render(run: &StoredRun, tables: &ReportTables) -> String {
-    let spec = &run.spec;
-    let name = escape(&spec.name);
-    let runs = spec.calibration.monte_carlo_runs;
     let mut out = String::new();
+    header(&mut out, &run.spec.name);
+    let captions = Captions::of(run);
+    let label = label(&run.spec.name);
+    let tag = |table: &str| format!("tab:{label}-{table}");
+    table(
+        &mut out,
+        &tables.calibration,
+        &captions.calibration(&tables.calibration),
+        &tag("calibration"),
+        captions
+            .note(&tables.calibration, ", or another T\\textsubscript{conv}")
+            .as_deref(),
+    );
+    table(
+        &mut out,
+        &tables.evaluation,
+        &captions.evaluation(&tables.evaluation),
+        &tag("evaluation"),
+        captions.note(&tables.evaluation, "").as_deref(),
+    );
+    if let Some(beyond) = &tables.beyond {
+        table(&mut out, beyond, &captions.beyond(), &tag("beyond"), None);
+    }
+    if let Some(ensemble) = &tables.ensemble {
+        table(
+            &mut out,
+            ensemble,
+            &captions.ensemble(),
+            &tag("ensemble"),
+            None,
+        );
+    }
+    if let Some(efficiency) = &tables.efficiency {
+        table(&mut out, efficiency, &captions.bound(), &tag("bound"), None);
+    }
+    out
+}
+
+/// The comment on top: where the tables come from, the package they need, and how
+/// they sit on the page.
+fn header(out: &mut String, name: &str) {
     let _ = writeln!(
         out,
         "% The tables of report.md ({}), written by dcnet-exp {}.",
-        spec.name,
+        name,
         env!("CARGO_PKG_VERSION")
     );
     let _ = writeln!(
@@ -36,17 +74,46 @@ pub(super) fn render(run: &StoredRun, tables: &ReportTables) -> String {
         out,
         "% Each table is centred on the page, into the margins where it is wider than the text;\n% in a two-column layout, make it a table* or scale its tabular with \\resizebox."
     );
-    // In the caption of a table with published values.
-    let below = |table: &ReportTable| {
+}
+
+/// The caption of each table, and the note under those with published values: what
+/// they say of the run.
+struct Captions<'a> {
+    run: &'a StoredRun,
+    /// The experiment's name, escaped.
+    name: String,
+    /// Monte Carlo runs per value.
+    runs: usize,
+    /// In every caption when DCNet has replicates.
+    replicates: String,
+}
+
+impl<'a> Captions<'a> {
+    fn of(run: &'a StoredRun) -> Self {
+        let spec = &run.spec;
+        Captions {
+            run,
+            name: escape(&spec.name),
+            runs: spec.calibration.monte_carlo_runs,
+            replicates: replicates_note(spec.training.replicates)
+                .map(|note| format!(" {}", escape(&note).replace('±', "$\\pm$")))
+                .unwrap_or_default(),
+        }
+    }
+
+    /// In the caption of a table with published values.
+    fn below(table: &ReportTable) -> &'static str {
         if table.tally.compared > 0 {
             "; the published value in italics in the row below ours"
         } else {
             ""
         }
-    };
-    // Under a table with published values: what its daggers mean, and their count.
-    let note = |table: &ReportTable, what: &str| {
-        let published = run.published.as_ref()?;
+    }
+
+    /// Under a table with published values: what its daggers mean, and their count.
+    fn note(&self, table: &ReportTable, what: &str) -> Option<String> {
+        let spec = &self.run.spec;
+        let published = self.run.published.as_ref()?;
         (table.tally.compared > 0).then(|| {
             format!(
                 "\\dag{{}} flags an RMSE more than {}\\,\\% off the published one{what} ({} of {} cells). Published values: {}.",
@@ -56,69 +123,62 @@ pub(super) fn render(run: &StoredRun, tables: &ReportTables) -> String {
                 escape(&published.source)
             )
         })
-    };
-    let label = label(&spec.name);
-    // In every caption when DCNet has replicates.
-    let replicates = replicates_note(spec.training.replicates)
-        .map(|note| format!(" {}", escape(&note).replace('±', "$\\pm$")))
-        .unwrap_or_default();
-    table(
-        &mut out,
-        &tables.calibration,
-        &format!(
+    }
+
+    fn calibration(&self, table: &ReportTable) -> String {
+        let Captions {
+            run,
+            name,
+            runs,
+            replicates,
+        } = self;
+        format!(
             "{name}: calibration on {}. RMSE in cm/s at T\\textsubscript{{conv}}, mean over {runs} Monte Carlo runs, T\\textsubscript{{conv}} in s in brackets{}. The floor corrects with the true terms, which no estimator can beat; the bound is the best mean RMSE of any unbiased estimator from the window's data.{replicates}",
-            escape(&spec.calibration.trajectory),
-            below(&tables.calibration)
-        ),
-        &format!("tab:{label}-calibration"),
-        note(&tables.calibration, ", or another T\\textsubscript{conv}").as_deref(),
-    );
-    table(
-        &mut out,
-        &tables.evaluation,
-        &format!(
+            escape(&run.spec.calibration.trajectory),
+            Self::below(table)
+        )
+    }
+
+    fn evaluation(&self, table: &ReportTable) -> String {
+        let Captions {
+            name,
+            runs,
+            replicates,
+            ..
+        } = self;
+        format!(
             "{name}: evaluation with the T\\textsubscript{{conv}} terms. RMSE in cm/s, mean over {runs} Monte Carlo runs, improvement over the baseline in brackets{}.{replicates}",
-            below(&tables.evaluation)
-        ),
-        &format!("tab:{label}-evaluation"),
-        note(&tables.evaluation, "").as_deref(),
-    );
-    if let Some(beyond) = &tables.beyond {
-        table(
-            &mut out,
-            beyond,
-            &format!(
-                "{name}: beyond the paper, least squares on the same data and the floor. RMSE in cm/s, mean over {runs} Monte Carlo runs, improvement over the baseline in brackets."
-            ),
-            &format!("tab:{label}-beyond"),
-            None,
-        );
+            Self::below(table)
+        )
     }
-    if let Some(ensemble) = &tables.ensemble {
-        table(
-            &mut out,
-            ensemble,
-            &format!(
-                "{name}: the DCNet ensemble, the mean of the {} replicates' terms in each calibration window. RMSE in cm/s, mean over {runs} Monte Carlo runs, improvement over the baseline in brackets.",
-                spec.training.replicates
-            ),
-            &format!("tab:{label}-ensemble"),
-            None,
-        );
+
+    fn beyond(&self) -> String {
+        let Captions { name, runs, .. } = self;
+        format!(
+            "{name}: beyond the paper, least squares on the same data and the floor. RMSE in cm/s, mean over {runs} Monte Carlo runs, improvement over the baseline in brackets."
+        )
     }
-    if let Some(efficiency) = &tables.efficiency {
-        table(
-            &mut out,
-            efficiency,
-            &format!(
-                "{name}: every estimator against the information bound, the mean RMSE of an efficient estimator of the DVL's scale and bias from the calibration window. RMSE in cm/s, mean over {runs} Monte Carlo runs, efficiency (bound / RMSE) in brackets; calibration at each estimator's T\\textsubscript{{conv}} on the rest of {}, evaluation with the T\\textsubscript{{conv}} terms.",
-                escape(&spec.calibration.trajectory)
-            ),
-            &format!("tab:{label}-bound"),
-            None,
-        );
+
+    fn ensemble(&self) -> String {
+        let Captions {
+            run, name, runs, ..
+        } = self;
+        format!(
+            "{name}: the DCNet ensemble, the mean of the {} replicates' terms in each calibration window. RMSE in cm/s, mean over {runs} Monte Carlo runs, improvement over the baseline in brackets.",
+            run.spec.training.replicates
+        )
     }
-    out
+
+    /// The caption of the table against the information bound.
+    fn bound(&self) -> String {
+        let Captions {
+            run, name, runs, ..
+        } = self;
+        format!(
+            "{name}: every estimator against the information bound, the mean RMSE of an efficient estimator of the DVL's scale and bias from the calibration window. RMSE in cm/s, mean over {runs} Monte Carlo runs, efficiency (bound / RMSE) in brackets; calibration at each estimator's T\\textsubscript{{conv}} on the rest of {}, evaluation with the T\\textsubscript{{conv}} terms.",
+            escape(&run.spec.calibration.trajectory)
+        )
+    }
 }
 
 /// One table environment: a row per row of `table`, the published values' row below
@@ -149,38 +209,14 @@ fn table(out: &mut String, table: &ReportTable, caption: &str, label: &str, note
         let _ = writeln!(out, "    \\midrule");
         for (r, line) in group.iter().enumerate() {
             // The DVL is named on its group's first row only.
-            let mut cells: Vec<String> = line
-                .labels
-                .iter()
-                .enumerate()
-                .map(|(i, l)| {
-                    if i == 0 && r > 0 && labels > 1 {
-                        String::new()
-                    } else {
-                        escape(l)
-                    }
-                })
-                .collect();
-            cells.extend(line.cells.iter().map(|cell| match cell {
-                Some(entry) => ours(entry),
-                None => "---".into(),
-            }));
-            row(out, &cells);
+            row(out, &our_cells(line, r > 0 && labels > 1));
             if line
                 .cells
                 .iter()
                 .flatten()
                 .any(|entry| entry.paper.is_some())
             {
-                let mut cells = vec![String::new(); labels - 1];
-                cells.push("\\quad\\textit{paper}".into());
-                cells.extend(line.cells.iter().map(|cell| {
-                    match cell.as_ref().and_then(|entry| entry.paper.as_ref()) {
-                        Some(paper) => format!("\\textit{{{}}}", paper.text(&SIGNS)),
-                        None => String::new(),
-                    }
-                }));
-                row(out, &cells);
+                row(out, &paper_cells(line, labels));
             }
         }
         if g + 1 == table.groups.len() {
@@ -193,6 +229,42 @@ fn table(out: &mut String, table: &ReportTable, caption: &str, label: &str, note
         let _ = writeln!(out, "  {{\\footnotesize\\raggedright {note}\\par}}");
     }
     let _ = writeln!(out, "\\end{{table}}");
+}
+
+/// The cells of our row of `line`: its labels, the first (the DVL) left empty where
+/// `dvl_named_above`, then our values.
+fn our_cells(line: &Row, dvl_named_above: bool) -> Vec<String> {
+    let mut cells: Vec<String> = line
+        .labels
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            if i == 0 && dvl_named_above {
+                String::new()
+            } else {
+                escape(l)
+            }
+        })
+        .collect();
+    cells.extend(line.cells.iter().map(|cell| match cell {
+        Some(entry) => ours(entry),
+        None => "---".into(),
+    }));
+    cells
+}
+
+/// The cells of the row below `line`: `paper` in its last label column, then the
+/// published values in italics, empty where there is none.
+fn paper_cells(line: &Row, labels: usize) -> Vec<String> {
+    let mut cells = vec![String::new(); labels - 1];
+    cells.push("\\quad\\textit{paper}".into());
+    cells.extend(line.cells.iter().map(|cell| {
+        match cell.as_ref().and_then(|entry| entry.paper.as_ref()) {
+            Some(paper) => format!("\\textit{{{}}}", paper.text(&SIGNS)),
+            None => String::new(),
+        }
+    }));
+    cells
 }
 
 fn row(out: &mut String, cells: &[String]) {

@@ -26,7 +26,7 @@ use super::cache::{self, BlockStore, DataHashes, ModelStore};
 use crate::data::{Trajectory, load_trajectories};
 use crate::estimators::{Requested, requested};
 use crate::spec::{Experiment, Spec};
-use crate::vocab::EstimatorKind;
+use crate::vocab::{ErrorModel, EstimatorKind};
 use std::path::{Path, PathBuf};
 
 /// Every task of an experiment, written to `out`.
@@ -79,44 +79,70 @@ impl<'a> Plan<'a> {
         Ok(plan)
     }
 
+    /// Adds the tasks of point `p`, those another point already listed only by index.
     fn add_point(&mut self, p: usize, spec: &Spec) {
-        let dataset_key = cache::dataset_key(spec, &self.hashes);
+        let trainings = self.add_trainings(p, spec);
+        let blocks = self.add_blocks(p, spec, &trainings);
+        let block_keys: Vec<&str> = blocks
+            .iter()
+            .map(|&b| self.blocks[b].key.as_str())
+            .collect();
+        let results_key = cache::results_key(spec, &block_keys);
+        self.points.push(PointPlan {
+            folder: self.out.join(&spec.name),
+            blocks,
+            trainings,
+            results_key,
+        });
+    }
+
+    /// The dataset and the models of point `p` where it runs DCNet (none where it does
+    /// not): the indices of its trainings, every replicate of an error model in a row.
+    fn add_trainings(&mut self, p: usize, spec: &Spec) -> Vec<usize> {
         let mut trainings = Vec::new();
-        if spec.kinds.contains(&EstimatorKind::Dcnet) {
-            let dataset = find_or_push(
-                &mut self.datasets,
-                |d| &d.key,
-                &dataset_key,
-                || Dataset {
-                    key: dataset_key.clone(),
-                    point: p,
-                },
-            );
-            for &error_model in &spec.error_models {
-                // Replicate 0 is pushed next, or was by an earlier point.
-                let mut group = self.trainings.len();
-                for replicate in 0..spec.training.replicates {
-                    let key = cache::model_key(spec, error_model, replicate, &dataset_key);
-                    let t = find_or_push(
-                        &mut self.trainings,
-                        |t| &t.key,
-                        &key,
-                        || Training {
-                            key: key.clone(),
-                            dataset,
-                            point: p,
-                            error_model,
-                            replicate,
-                            group,
-                        },
-                    );
-                    if replicate == 0 {
-                        group = self.trainings[t].group;
-                    }
-                    trainings.push(t);
+        if !spec.kinds.contains(&EstimatorKind::Dcnet) {
+            return trainings;
+        }
+        let dataset_key = cache::dataset_key(spec, &self.hashes);
+        let dataset = find_or_push(
+            &mut self.datasets,
+            |d| &d.key,
+            &dataset_key,
+            || Dataset {
+                key: dataset_key.clone(),
+                point: p,
+            },
+        );
+        for &error_model in &spec.error_models {
+            // Replicate 0 is pushed next, or was by an earlier point.
+            let mut group = self.trainings.len();
+            for replicate in 0..spec.training.replicates {
+                let key = cache::model_key(spec, error_model, replicate, &dataset_key);
+                let t = find_or_push(
+                    &mut self.trainings,
+                    |t| &t.key,
+                    &key,
+                    || Training {
+                        key: key.clone(),
+                        dataset,
+                        point: p,
+                        error_model,
+                        replicate,
+                        group,
+                    },
+                );
+                if replicate == 0 {
+                    group = self.trainings[t].group;
                 }
+                trainings.push(t);
             }
         }
+        trainings
+    }
+
+    /// The Monte Carlo blocks of point `p`, one per DVL and requested method, in that
+    /// order: their indices. `trainings` are the point's.
+    fn add_blocks(&mut self, p: usize, spec: &Spec, trainings: &[usize]) -> Vec<usize> {
         let mut blocks = Vec::new();
         for dvl in 0..spec.dvls.len() {
             for Requested {
@@ -125,21 +151,7 @@ impl<'a> Plan<'a> {
                 replicate,
             } in requested(spec)
             {
-                let runs: Vec<usize> = trainings
-                    .iter()
-                    .copied()
-                    .filter(|&t| {
-                        let training = &self.trainings[t];
-                        Some(training.error_model) == error_model
-                            && match estimator {
-                                EstimatorKind::Dcnet => {
-                                    training.replicate == replicate.unwrap_or(0)
-                                }
-                                EstimatorKind::DcnetEnsemble => true,
-                                _ => false,
-                            }
-                    })
-                    .collect();
+                let runs = self.models_of_block(trainings, estimator, error_model, replicate);
                 let model_keys: Vec<&str> = runs
                     .iter()
                     .map(|&t| self.trainings[t].key.as_str())
@@ -162,17 +174,31 @@ impl<'a> Plan<'a> {
                 ));
             }
         }
-        let block_keys: Vec<&str> = blocks
+        blocks
+    }
+
+    /// Which of `trainings` the block of `estimator` runs: DCNet the model of its
+    /// replicate, the ensemble every replicate of its error model, the others none.
+    fn models_of_block(
+        &self,
+        trainings: &[usize],
+        estimator: EstimatorKind,
+        error_model: Option<ErrorModel>,
+        replicate: Option<usize>,
+    ) -> Vec<usize> {
+        trainings
             .iter()
-            .map(|&b| self.blocks[b].key.as_str())
-            .collect();
-        let results_key = cache::results_key(spec, &block_keys);
-        self.points.push(PointPlan {
-            folder: self.out.join(&spec.name),
-            blocks,
-            trainings,
-            results_key,
-        });
+            .copied()
+            .filter(|&t| {
+                let training = &self.trainings[t];
+                Some(training.error_model) == error_model
+                    && match estimator {
+                        EstimatorKind::Dcnet => training.replicate == replicate.unwrap_or(0),
+                        EstimatorKind::DcnetEnsemble => true,
+                        _ => false,
+                    }
+            })
+            .collect()
     }
 
     pub fn spec(&self, point: usize) -> &'a Spec {

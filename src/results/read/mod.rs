@@ -1,0 +1,317 @@
+//! Reads a results folder back, for `plot` and the report: the Parquet tables into the
+//! rows the run computed, the resolved spec, the manifest and the published values.
+//! Each table's schema is checked against the one the writer produces, so a missing
+//! file or a foreign schema is an error that names the file, never a wrong figure; a
+//! column that is missing, of another type, with empty values or with a value no run
+//! writes is a [`ColumnError`] that names the column.
+//!
+//! - this module: [`StoredRun`], the folder read whole, and [`ReadError`], which puts
+//!   the path of the file in front of whatever went wrong with it;
+//! - [`columns`]: the schema check and typed access to a table's columns (`Batch`);
+//! - [`rows`]: one decoder per table, from its columns to the rows the run computed.
+
+pub mod columns;
+pub mod rows;
+
+pub(crate) use columns::Batch;
+pub use columns::ColumnError;
+pub use rows::{StoredEpoch, StoredTrajectory};
+
+use super::{
+    MANIFEST, Manifest, PUBLISHED, SPEC, TABLES, calibration_batch, evaluation_batch,
+    monte_carlo_batch, training_batch, trajectories_batch,
+};
+use crate::evaluate::{CalibrationRow, EvaluationRow, RunRow};
+use crate::spec::published::Published;
+use crate::spec::{SpecErrors, SpecFile, TomlFile};
+use arrow_schema::Schema;
+use columns::check_schema;
+use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
+use rows::{
+    calibration_rows, epoch_rows, evaluation_rows, gather_trajectories, run_rows, trajectory_rows,
+};
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, thiserror::Error)]
+pub enum ReadError {
+    #[error("{}: missing; a results folder written by `dcnet-exp run` holds it", path.display())]
+    Missing { path: PathBuf },
+    /// A table with a column that is not as dcnet-exp writes it; [`ColumnError`] says how.
+    #[error("{}: {fault}", path.display())]
+    Column { path: PathBuf, fault: ColumnError },
+    /// A JSON file beside the tables (`sweep.json`) that does not parse.
+    #[error("{}", path.display())]
+    Json {
+        path: PathBuf,
+        #[source]
+        source: serde_json::Error,
+    },
+    #[error("{}", path.display())]
+    Spec {
+        path: PathBuf,
+        #[source]
+        source: SpecErrors,
+    },
+    #[error("{}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{}: not a Parquet file", path.display())]
+    NotParquet {
+        path: PathBuf,
+        #[source]
+        source: parquet::errors::ParquetError,
+    },
+    #[error("{}", path.display())]
+    Parquet {
+        path: PathBuf,
+        #[source]
+        source: parquet::errors::ParquetError,
+    },
+    #[error("{}", path.display())]
+    Arrow {
+        path: PathBuf,
+        #[source]
+        source: arrow_schema::ArrowError,
+    },
+    #[error("{}", path.display())]
+    Manifest {
+        path: PathBuf,
+        #[source]
+        source: ManifestError,
+    },
+}
+
+/// Why a manifest could not be read.
+#[derive(Debug, thiserror::Error)]
+pub enum ManifestError {
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
+}
+
+/// Everything a run stored.
+#[derive(Debug, Clone)]
+pub struct StoredRun {
+    pub folder: PathBuf,
+    pub spec: SpecFile,
+    pub manifest: Manifest,
+    pub published: Option<Published>,
+    pub runs: Vec<RunRow>,
+    pub calibration: Vec<CalibrationRow>,
+    pub evaluation: Vec<EvaluationRow>,
+    pub training: Vec<StoredEpoch>,
+    pub trajectories: Vec<StoredTrajectory>,
+}
+
+impl StoredRun {
+    pub fn read(folder: &Path) -> Result<StoredRun, ReadError> {
+        let spec_path = existing(&folder.join(SPEC))?;
+        let spec = TomlFile::<SpecFile>::read(&spec_path)
+            .map_err(|e| ReadError::Spec {
+                path: spec_path.clone(),
+                source: SpecErrors(vec![e]),
+            })?
+            .value;
+        let manifest_path = existing(&folder.join(MANIFEST))?;
+        let manifest = std::fs::read(&manifest_path)
+            .map_err(ManifestError::from)
+            .and_then(|bytes| Ok(serde_json::from_slice(&bytes)?))
+            .map_err(|source| ReadError::Manifest {
+                path: manifest_path.clone(),
+                source,
+            })?;
+        let published_path = folder.join(PUBLISHED);
+        let published = if published_path.exists() {
+            Some(
+                Published::read(&published_path).map_err(|source| ReadError::Spec {
+                    path: published_path.clone(),
+                    source,
+                })?,
+            )
+        } else {
+            None
+        };
+        let [runs, calibration, evaluation, training, trajectories] = TABLES;
+        Ok(StoredRun {
+            folder: folder.to_path_buf(),
+            spec,
+            manifest,
+            published,
+            runs: table(folder, runs, run_rows)?,
+            calibration: table(folder, calibration, calibration_rows)?,
+            evaluation: table(folder, evaluation, evaluation_rows)?,
+            training: table(folder, training, epoch_rows)?,
+            trajectories: gather_trajectories(table(folder, trajectories, trajectory_rows)?),
+        })
+    }
+
+    /// The stored DVL names, in the order the spec lists them.
+    pub fn dvls(&self) -> Vec<String> {
+        self.spec.dvl.iter().map(|d| d.name.clone()).collect()
+    }
+}
+
+fn existing(path: &Path) -> Result<PathBuf, ReadError> {
+    if path.is_file() {
+        Ok(path.to_path_buf())
+    } else {
+        Err(ReadError::Missing {
+            path: path.to_path_buf(),
+        })
+    }
+}
+
+/// The per-run rows of a Parquet file written by [`super::monte_carlo_batch`].
+pub fn run_rows_at(path: &Path) -> Result<Vec<RunRow>, ReadError> {
+    table_at(path, TABLES[0], run_rows)
+}
+
+/// Reads the table `file` of `folder`, checks its schema and turns each batch into rows.
+fn table<T>(
+    folder: &Path,
+    file: &str,
+    rows: fn(&Batch) -> Result<Vec<T>, ColumnError>,
+) -> Result<Vec<T>, ReadError> {
+    table_at(&folder.join(file), file, rows)
+}
+
+/// Reads `path` as the results table `file`.
+fn table_at<T>(
+    path: &Path,
+    file: &str,
+    rows: fn(&Batch) -> Result<Vec<T>, ColumnError>,
+) -> Result<Vec<T>, ReadError> {
+    read_rows(path, &expected_schema(file), rows)
+}
+
+/// Reads the Parquet file at `path`, checks that it has the columns of `expected`, and
+/// turns each batch into rows.
+pub(crate) fn read_rows<T>(
+    path: &Path,
+    expected: &Schema,
+    rows: impl Fn(&Batch) -> Result<Vec<T>, ColumnError>,
+) -> Result<Vec<T>, ReadError> {
+    let path = existing(path)?;
+    let invalid = |fault| ReadError::Column {
+        path: path.clone(),
+        fault,
+    };
+    let opened = std::fs::File::open(&path).map_err(|source| ReadError::Io {
+        path: path.clone(),
+        source,
+    })?;
+    let builder = ParquetRecordBatchReaderBuilder::try_new(opened).map_err(|source| {
+        ReadError::NotParquet {
+            path: path.clone(),
+            source,
+        }
+    })?;
+    check_schema(builder.schema(), expected).map_err(invalid)?;
+    let mut out = Vec::new();
+    let batches = builder.build().map_err(|source| ReadError::Parquet {
+        path: path.clone(),
+        source,
+    })?;
+    for batch in batches {
+        let batch = batch.map_err(|source| ReadError::Arrow {
+            path: path.clone(),
+            source,
+        })?;
+        out.extend(rows(&Batch(&batch)).map_err(invalid)?);
+    }
+    Ok(out)
+}
+
+/// The schema the writer gives `file`.
+fn expected_schema(file: &str) -> std::sync::Arc<Schema> {
+    let batch = match file {
+        "monte_carlo.parquet" => monte_carlo_batch(&[]),
+        "calibration.parquet" => calibration_batch(&[]),
+        "evaluation.parquet" => evaluation_batch(&[]),
+        "training.parquet" => training_batch(&[]),
+        "trajectories.parquet" => trajectories_batch(&[], 1.0),
+        other => unreachable!("{other} is not a results table"),
+    };
+    batch.schema()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::results::training_batch;
+    use crate::vocab::StopReason;
+    use arrow_array::{RecordBatch, StringArray};
+    use arrow_schema::DataType;
+    use rows::tests::summary;
+
+    /// `batch` with its column `name` replaced by `values`, as text.
+    fn with_text_column(batch: &RecordBatch, name: &str, values: &[&str]) -> RecordBatch {
+        use arrow_schema::Field;
+        use std::sync::Arc;
+        let index = batch.schema().index_of(name).unwrap();
+        let mut columns = batch.columns().to_vec();
+        let mut fields: Vec<_> = batch.schema().fields().iter().cloned().collect();
+        columns[index] = Arc::new(StringArray::from(values.to_vec()));
+        fields[index] = Arc::new(Field::new(name, DataType::Utf8, false));
+        RecordBatch::try_new(Arc::new(Schema::new(fields)), columns).unwrap()
+    }
+
+    #[test]
+    fn a_foreign_column_is_named_after_its_file_once() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("training.parquet");
+        let batch = training_batch(&[summary(StopReason::AllEpochs)]);
+        let shown = |error: ReadError| format!("{:#}", anyhow::Error::from(error));
+
+        super::super::write_table(&path, &with_text_column(&batch, "epoch", &["1", "2"])).unwrap();
+        let error = table_at(&path, "training.parquet", epoch_rows).unwrap_err();
+        assert!(
+            matches!(&error, ReadError::Column {
+                fault: ColumnError::Type { column, found: DataType::Utf8, expected: DataType::UInt32 },
+                ..
+            } if column == "epoch"),
+            "{error:?}"
+        );
+        assert_eq!(
+            shown(error),
+            format!(
+                "{}: column `epoch` holds Utf8, expected UInt32: this is not the schema dcnet-exp writes",
+                path.display()
+            )
+        );
+
+        let bogus = with_text_column(&batch, "stop_reason", &["bogus", "bogus"]);
+        super::super::write_table(&path, &bogus).unwrap();
+        let error = table_at(&path, "training.parquet", epoch_rows).unwrap_err();
+        let ReadError::Column {
+            fault: ColumnError::Value { column, problem },
+            ..
+        } = &error
+        else {
+            panic!("{error:?}")
+        };
+        assert_eq!(column, "stop_reason");
+        assert!(problem.contains("bogus"), "{problem}");
+        let expected = format!("{}: column `stop_reason`: {problem}", path.display());
+        assert_eq!(shown(error), expected);
+    }
+
+    #[test]
+    fn a_damaged_file_names_its_cause_once() {
+        let folder = tempfile::tempdir().unwrap();
+        let path = folder.path().join("block.parquet");
+        std::fs::write(&path, "not parquet").unwrap();
+        let error = run_rows_at(&path).unwrap_err();
+        assert!(matches!(error, ReadError::NotParquet { .. }), "{error:?}");
+        let shown = format!("{:#}", anyhow::Error::from(error));
+        assert!(
+            shown.starts_with(&format!("{}: not a Parquet file: ", path.display())),
+            "{shown}"
+        );
+        assert_eq!(shown.matches("Parquet error").count(), 1, "{shown}");
+    }
+}
