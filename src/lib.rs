@@ -2,9 +2,10 @@
 //! Calibration" (Yampolsky & Klein). One experiment flows through the modules in this
 //! order, and each imports only modules above it in this list:
 //!
-//! 1. [`spec`]: the TOML experiment spec, read, overridden and swept ([`spec::load`]),
-//!    checked section by section ([`spec::check`]), with the [`spec::published`] values
-//!    it is compared with and the [`spec::recordings`] it may name;
+//! 1. [`spec`]: the TOML experiment spec, read, overridden and swept
+//!    ([`spec::load`](mod@spec::load)), checked section by section ([`spec::check`]),
+//!    with the [`spec::published`] values it is compared with and the
+//!    [`spec::recordings`] it may name;
 //! 2. [`data`]: the trajectories (`.npy` or `.csv` recordings, or synthetic) and their
 //!    ground truth;
 //! 3. [`noise`]: the beam-level DVL and GNSS-RTK measurement model, and [`bound`]: the

@@ -34,7 +34,7 @@ struct SeriesSummary {
 impl ProtocolResult {
     /// The calibration and evaluation tables of the per-run rows of `run_on_dvl`: means
     /// and standard deviations over runs, summed in run order, and T_conv. The rows of
-    /// DCNet replicates become one series: see [`combine_replicates`]. Each DVL's
+    /// DCNet replicates become one series: see `combine_replicates`. Each DVL's
     /// `bounds` follow its estimators, and every estimator gets its efficiency.
     pub fn from_runs(runs: Vec<RunRow>, bounds: &[BoundRow]) -> ProtocolResult {
         let mut result = ProtocolResult::default();

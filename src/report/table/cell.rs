@@ -15,7 +15,7 @@ pub(crate) struct Tally {
 
 /// One value cell: our value, the published one beside it, and whether they disagree.
 #[derive(Debug, Clone, PartialEq)]
-pub(crate) struct Cell {
+pub struct Cell {
     pub(crate) ours: RmseValue,
     pub(crate) paper: Option<RmseValue>,
     pub(crate) flagged: bool,
@@ -23,7 +23,7 @@ pub(crate) struct Cell {
 
 /// An RMSE (cm/s) and what the table sets beside it.
 #[derive(Debug, Clone, PartialEq)]
-pub(crate) struct RmseValue {
+pub struct RmseValue {
     pub(crate) rmse_cm_s: f64,
     /// Half-width of the 95 % confidence interval over DCNet replicates.
     pub(crate) ci_cm_s: Option<f64>,
@@ -31,7 +31,7 @@ pub(crate) struct RmseValue {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum Detail {
+pub enum Detail {
     TConv(f64),
     Improvement(f64),
     /// The bound over the RMSE.
@@ -39,7 +39,7 @@ pub(crate) enum Detail {
 }
 
 /// How a rendering writes the signs of an [`RmseValue`].
-pub(crate) struct Signs {
+pub struct Signs {
     pub(crate) percent: &'static str,
     pub(crate) minus: &'static str,
     pub(crate) plus_minus: &'static str,

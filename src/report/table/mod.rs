@@ -16,7 +16,7 @@ use crate::vocab::EstimatorKind;
 use source::Source;
 
 /// The report's tables, each cell computed once for both renderings.
-pub(crate) struct ReportTables {
+pub struct ReportTables {
     /// Calibration at T_conv: DVL rows with the baseline and DCNet, then least squares
     /// and the floor.
     pub(crate) calibration: ReportTable,
@@ -32,7 +32,7 @@ pub(crate) struct ReportTables {
 
 /// A table of label columns, a first value column and one column per error model, its
 /// rows in one group per DVL.
-pub(crate) struct ReportTable {
+pub struct ReportTable {
     /// Headers of the label columns: "DVL", and "trajectory" in the evaluation.
     pub(crate) labels: Vec<&'static str>,
     /// Headers of the value columns.
@@ -42,7 +42,7 @@ pub(crate) struct ReportTable {
     pub(crate) tally: Tally,
 }
 
-pub(crate) struct Row {
+pub struct Row {
     pub(crate) labels: Vec<String>,
     /// One per value column; `None` where the run has no such value.
     pub(crate) cells: Vec<Option<Cell>>,
