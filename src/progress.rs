@@ -88,19 +88,27 @@ impl Progress {
 
     /// Advances the task by `steps`, and logs a line if one is due.
     pub fn inc(&self, steps: usize) {
-        self.bar.inc(steps as u64);
+        if let Some(line) = self.step(steps) {
+            eprintln!("{line}");
+        }
+    }
+
+    /// Advances the task by `steps`; the log line due, if any. The step and the line are
+    /// taken under the log's lock, so that workers stepping at once each log the position
+    /// they reached (never one another's), in order.
+    fn step(&self, steps: usize) -> Option<String> {
         let Some(log) = &self.log else {
-            return;
+            self.bar.inc(steps as u64);
+            return None;
         };
-        let line = log.lock().expect("no logger panics").due(
+        let mut log = log.lock().expect("no logger panics");
+        self.bar.inc(steps as u64);
+        log.due(
             Instant::now(),
             self.bar.position(),
             self.bar.length().unwrap_or(0),
             &self.bar.message(),
-        );
-        if let Some(line) = line {
-            eprintln!("{line}");
-        }
+        )
     }
 
     /// Removes the bar; the stage prints the line that says how the task ended.
@@ -172,6 +180,58 @@ fn format_rate(rate: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn workers_stepping_at_once_each_log_their_own_position() {
+        let steps = 2000;
+        let bar = ProgressBar::hidden();
+        bar.set_length(steps);
+        let log = LogLines::new(
+            "monte carlo".into(),
+            "passes",
+            Duration::ZERO,
+            Instant::now(),
+        );
+        let progress = Progress {
+            bar,
+            log: Some(Arc::new(Mutex::new(log))),
+        };
+        let lines: Vec<String> = std::thread::scope(|scope| {
+            let workers: Vec<_> = (0..4)
+                .map(|_| {
+                    scope.spawn(|| {
+                        (0..steps / 4)
+                            .filter_map(|_| progress.step(1))
+                            .collect::<Vec<_>>()
+                    })
+                })
+                .collect();
+            workers
+                .into_iter()
+                .flat_map(|w| w.join().unwrap())
+                .collect()
+        });
+        let mut positions: Vec<u64> = lines
+            .iter()
+            .map(|line| {
+                let done = line.split(", ").next().unwrap();
+                done.split(": ")
+                    .nth(1)
+                    .unwrap()
+                    .split('/')
+                    .next()
+                    .unwrap()
+                    .parse()
+                    .unwrap()
+            })
+            .collect();
+        assert!(positions.len() > 1, "{lines:?}");
+        let logged = positions.len();
+        positions.sort_unstable();
+        positions.dedup();
+        assert_eq!(positions.len(), logged, "two lines logged one position");
+        assert_eq!(progress.bar.position(), steps);
+    }
 
     #[test]
     fn a_line_is_logged_once_the_interval_has_passed_with_the_rate_since_the_last() {
