@@ -50,15 +50,26 @@ pub fn remove_stale_partials(folder: &Path) -> std::io::Result<usize> {
 
 /// Writes `bytes` to `path` through a temporary file in the same folder and a rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let mut file = partial_beside(path)?;
+    file.write_all(bytes)?;
+    persist_partial(file, path)
+}
+
+/// A temporary file in `path`'s folder, removed when dropped unless
+/// [`persist_partial`] renames it to `path`; for a file written piece by piece.
+pub fn partial_beside(path: &Path) -> std::io::Result<tempfile::NamedTempFile> {
     let folder = path
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
-    let mut file = tempfile::Builder::new()
+    tempfile::Builder::new()
         .prefix(&format!("{PARTIAL}{}-", std::process::id()))
-        .tempfile_in(folder)?;
+        .tempfile_in(folder)
+}
+
+/// Syncs the temporary `file` of [`partial_beside`] and renames it to `path`.
+pub fn persist_partial(file: tempfile::NamedTempFile, path: &Path) -> std::io::Result<()> {
     let mut permissions = file.as_file().metadata()?.permissions();
-    file.write_all(bytes)?;
     // Readable like any other output file, not the 0600 of a temporary file.
     #[cfg(unix)]
     std::os::unix::fs::PermissionsExt::set_mode(&mut permissions, 0o644);

@@ -789,10 +789,49 @@ fn data_fetch_downloads_and_checks_the_recordings() {
 }
 
 #[test]
+fn data_fetch_stops_a_body_longer_than_the_recording() {
+    use std::io::Read;
+    // One request, answered with 10 MB and no declared length, for the 333,392 bytes of
+    // V.npy; the server gives up waiting after 10 s.
+    let server = tiny_http::Server::http("127.0.0.1:0").unwrap();
+    let url = format!("http://{}", server.server_addr().to_ip().unwrap());
+    let handle = std::thread::spawn(move || {
+        if let Ok(Some(request)) = server.recv_timeout(std::time::Duration::from_secs(10)) {
+            let body = std::io::repeat(b'x').take(10_000_000);
+            let _ = request.respond(tiny_http::Response::new(
+                200.into(),
+                Vec::new(),
+                body,
+                None,
+                None,
+            ));
+        }
+    });
+    let dir = tempfile::tempdir().unwrap();
+    let output = dcnet(dir.path(), &["data", "fetch", "--base-url", &url]);
+    handle.join().unwrap();
+    assert_eq!(output.status.code(), Some(2));
+    assert!(
+        stderr(&output).contains(&format!(
+            "{url}/dataset/TrainAndValidation/V.npy: the server sent more than the 333392 bytes of the file; stopped there, nothing written"
+        )),
+        "{}",
+        stderr(&output)
+    );
+    assert_eq!(
+        std::fs::read_dir(dir.path().join("data/snapir"))
+            .unwrap()
+            .count(),
+        0
+    );
+}
+
+#[test]
 fn data_fetch_refuses_bytes_that_are_not_the_recording() {
+    // The size of V.npy, so that it is the hash that refuses them.
     let (url, handle, server) = serve(vec![(
         "/dataset/TrainAndValidation/V.npy".to_string(),
-        b"not the recording".to_vec(),
+        b"not the recording".repeat(19_612)[..333_392].to_vec(),
     )]);
     let dir = tempfile::tempdir().unwrap();
     let output = dcnet(

@@ -1,21 +1,30 @@
 //! `dcnet-exp data fetch`: downloads the Snapir recordings (`V.npy`, `V_test.npy`) from
-//! the BeamsNet repository, checks their SHA-256 against the published ones, and writes them
-//! atomically. A file already present with the right hash is kept. A server that does
-//! not answer, or stalls mid-body, times out; a failed download is tried again a few
-//! times, waiting longer each time, before the fetch gives up naming the URL.
+//! the BeamsNet repository, streaming each body to a temporary file beside its place
+//! while hashing it, and renames it there once its size and SHA-256 are the published
+//! ones. A file already present with the right hash is kept. A body longer than the
+//! file's known size is cut off at the first chunk past it, so memory stays bounded
+//! whatever the server sends. A server that does not answer, stalls, or is not done
+//! within a deadline per try times out; a failed download is tried again a few times,
+//! waiting longer each time, before the fetch gives up naming the URL
+//! ([`Patience::DEFAULT`] states the worst case).
 
 use crate::files::sha256_hex;
 use crate::progress::Progress;
 use crate::spec::recordings::{FILES, RemoteFile};
-use std::io::Read;
+use sha2::{Digest, Sha256};
+use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// Raw files of the BeamsNet repository (Cohen & Klein 2022) on its main branch.
 pub const DEFAULT_BASE_URL: &str = "https://raw.githubusercontent.com/ansfl/BeamsNet/main";
 
 /// Where `dcnet-exp data fetch` puts the files, relative to the working directory.
 pub const DEFAULT_DEST: &str = "data/snapir";
+
+/// How much of a body is read at a time: the most read past a file's known size before
+/// the fetch stops.
+const CHUNK_BYTES: usize = 1 << 16;
 
 /// How long to wait for a server, and how often to try.
 #[derive(Debug, Clone, Copy)]
@@ -24,6 +33,8 @@ pub struct Patience {
     pub connect: Duration,
     /// For the response to begin, and for each read of the body.
     pub read: Duration,
+    /// For one try as a whole, from the connection to the body's last byte.
+    pub deadline: Duration,
     /// Tries per file, the first included.
     pub attempts: u32,
     /// The wait before the second try; it doubles before each later one.
@@ -31,12 +42,25 @@ pub struct Patience {
 }
 
 impl Patience {
+    /// 15 s to connect, 30 s for each read, 60 s for a try as a whole (at least
+    /// 5.5 kB/s for the 333 kB of `V.npy`), four tries with waits of 2, 4 and 8 s: a
+    /// file is given up on after at most 4 × 60 + 14 = 254 s, both after 508 s.
     pub const DEFAULT: Patience = Patience {
         connect: Duration::from_secs(15),
         read: Duration::from_secs(30),
+        deadline: Duration::from_secs(60),
         attempts: 4,
         backoff: Duration::from_secs(2),
     };
+
+    /// The longest a file can take before it is given up on: every try until its
+    /// deadline, and the waits between them.
+    pub fn worst_case(&self) -> Duration {
+        let waits: Duration = (0..self.attempts.saturating_sub(1))
+            .map(|k| self.backoff * 2u32.pow(k))
+            .sum();
+        self.deadline * self.attempts + waits
+    }
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -48,6 +72,26 @@ pub enum FetchError {
         url: String,
         attempts: u32,
         source: Box<ureq::Error>,
+    },
+    #[error(
+        "downloading {url}: gave up after {attempts} tries, none done within the deadline of {deadline:?} per try"
+    )]
+    Deadline {
+        url: String,
+        attempts: u32,
+        deadline: Duration,
+    },
+    #[error(
+        "{url}: the server sent more than the {expected} bytes of the file; stopped there, nothing written"
+    )]
+    TooLong { url: String, expected: u64 },
+    #[error(
+        "{url}: the server declares {declared} bytes (Content-Length), the file has {expected}; nothing read"
+    )]
+    Length {
+        url: String,
+        declared: u64,
+        expected: u64,
     },
     #[error("{url}: sha256 {actual}, expected {expected}: the download is not the published file")]
     Checksum {
@@ -75,7 +119,8 @@ pub fn fetch(base_url: &str, dest: &Path) -> Result<Vec<Fetched>, FetchError> {
 }
 
 /// Downloads `files` from `base_url` into `dest`, keeping those already there with the
-/// right hash; a download with another hash is refused and nothing of it is written.
+/// right hash; a download with another hash or size is refused and nothing of it is
+/// written.
 pub fn fetch_files(
     files: &[RemoteFile],
     base_url: &str,
@@ -99,66 +144,80 @@ pub fn fetch_files(
         .timeout_connect(Some(patience.connect))
         .timeout_recv_response(Some(patience.read))
         .timeout_per_read(Some(patience.read))
+        .timeout_global(Some(patience.deadline))
         .build()
         .into();
     let mut fetched = Vec::new();
-    for &RemoteFile {
-        name,
-        remote_path,
-        sha256: expected,
-    } in files
-    {
-        let path = dest.join(name);
-        if std::fs::read(&path).is_ok_and(|bytes| sha256_hex(&bytes) == expected) {
+    for file in files {
+        let path = dest.join(file.name);
+        let present = std::fs::metadata(&path).is_ok_and(|meta| meta.len() == file.size_bytes)
+            && std::fs::read(&path).is_ok_and(|bytes| sha256_hex(&bytes) == file.sha256);
+        if present {
             fetched.push(Fetched::AlreadyPresent(path));
             continue;
         }
-        let url = format!("{base_url}/{remote_path}");
-        let bytes = download_with_retries(&agent, &url, name, patience)?;
-        let actual = sha256_hex(&bytes);
-        if actual != expected {
-            return Err(FetchError::Checksum {
-                url,
-                actual,
-                expected: expected.to_string(),
-            });
-        }
-        crate::files::write_atomic(&path, &bytes).map_err(|source| FetchError::Write {
-            path: path.clone(),
-            source,
-        })?;
+        let url = format!("{}/{}", base_url, file.remote_path);
+        download_with_retries(&agent, &url, file, &path, patience)?;
         fetched.push(Fetched::Downloaded(path));
     }
     Ok(fetched)
 }
 
-/// `url`'s body, tried up to `patience.attempts` times while the failure may pass (no
-/// answer, a stall, a server error); a client error such as 404 is final.
+/// Why one try failed.
+enum Failure {
+    /// The server or the network; another try may pass (see [`may_pass`]).
+    Http(ureq::Error),
+    /// The try was not done within [`Patience::deadline`].
+    Deadline,
+    /// Another try would get the same answer.
+    Final(FetchError),
+}
+
+/// Downloads `url` to `path`, tried up to `patience.attempts` times while the failure
+/// may pass (no answer, a stall, the deadline, a server error); a client error such as
+/// 404, a wrong size or a wrong hash is final.
 fn download_with_retries(
     agent: &ureq::Agent,
     url: &str,
-    name: &str,
+    file: &RemoteFile,
+    path: &Path,
     patience: Patience,
-) -> Result<Vec<u8>, FetchError> {
+) -> Result<(), FetchError> {
     let mut wait = patience.backoff;
     let mut attempt = 1;
     loop {
-        match download(agent, url, name) {
-            Ok(bytes) => return Ok(bytes),
-            Err(error) if attempt < patience.attempts && may_pass(&error) => {
+        let failure = match download(agent, url, file, path, patience.deadline) {
+            Ok(()) => return Ok(()),
+            Err(failure) => failure,
+        };
+        let retry = attempt < patience.attempts;
+        match failure {
+            Failure::Http(error) if retry && may_pass(&error) => {
                 eprintln!("downloading {url}: {error}; trying again in {wait:?}");
-                std::thread::sleep(wait);
-                wait *= 2;
-                attempt += 1;
             }
-            Err(error) => {
+            Failure::Deadline if retry => eprintln!(
+                "downloading {url}: not done within {:?}; trying again in {wait:?}",
+                patience.deadline
+            ),
+            Failure::Http(error) => {
                 return Err(FetchError::Http {
                     url: url.to_string(),
                     attempts: attempt,
                     source: Box::new(error),
                 });
             }
+            Failure::Deadline => {
+                return Err(FetchError::Deadline {
+                    url: url.to_string(),
+                    attempts: attempt,
+                    deadline: patience.deadline,
+                });
+            }
+            Failure::Final(error) => return Err(error),
         }
+        std::thread::sleep(wait);
+        wait *= 2;
+        attempt += 1;
     }
 }
 
@@ -171,28 +230,107 @@ fn may_pass(error: &ureq::Error) -> bool {
     }
 }
 
-/// One try at `url`'s body, with a progress bar on a terminal.
-fn download(agent: &ureq::Agent, url: &str, name: &str) -> Result<Vec<u8>, ureq::Error> {
-    let mut response = agent.get(url).call()?;
+/// One try at `url`: its body streamed to a temporary file beside `path` (never more
+/// than `file.size_bytes` and one chunk read), checked against the file's size and
+/// SHA-256, then renamed to `path`; with a progress bar on a terminal.
+fn download(
+    agent: &ureq::Agent,
+    url: &str,
+    file: &RemoteFile,
+    path: &Path,
+    deadline: Duration,
+) -> Result<(), Failure> {
+    let started = Instant::now();
+    let timed = |error: ureq::Error| match error {
+        ureq::Error::Timeout(ureq::Timeout::Global) => Failure::Deadline,
+        _ if started.elapsed() >= deadline => Failure::Deadline,
+        error => Failure::Http(error),
+    };
+    let mut response = agent.get(url).call().map_err(timed)?;
     let body = response.body_mut();
-    let progress = Progress::new(
-        name.to_string(),
-        body.content_length().unwrap_or(0) as usize,
-        "bytes",
-    );
-    let mut bytes = Vec::new();
-    let mut reader = body.with_config().limit(u64::MAX).reader();
-    let mut chunk = vec![0u8; 1 << 16];
-    loop {
-        let read = reader.read(&mut chunk).map_err(ureq::Error::Io)?;
-        if read == 0 {
-            break;
-        }
-        bytes.extend_from_slice(&chunk[..read]);
-        progress.inc(read);
+    if let Some(declared) = body.content_length()
+        && declared != file.size_bytes
+    {
+        return Err(Failure::Final(FetchError::Length {
+            url: url.to_string(),
+            declared,
+            expected: file.size_bytes,
+        }));
     }
+    let write = |source| {
+        Failure::Final(FetchError::Write {
+            path: path.to_path_buf(),
+            source,
+        })
+    };
+    let mut partial = crate::files::partial_beside(path).map_err(write)?;
+    let progress = Progress::new(file.name.to_string(), file.size_bytes as usize, "bytes");
+    let reader = body.with_config().limit(u64::MAX).reader();
+    let copied = copy_at_most(reader, &mut partial, file.size_bytes, |read| {
+        progress.inc(read)
+    });
     progress.finish();
-    Ok(bytes)
+    let actual = match copied {
+        Ok(actual) => actual,
+        Err(Copy::TooLong) => {
+            return Err(Failure::Final(FetchError::TooLong {
+                url: url.to_string(),
+                expected: file.size_bytes,
+            }));
+        }
+        Err(Copy::Read(error)) => return Err(timed(ureq::Error::Io(error))),
+        Err(Copy::Write(error)) => return Err(write(error)),
+    };
+    if actual != file.sha256 {
+        return Err(Failure::Final(FetchError::Checksum {
+            url: url.to_string(),
+            actual,
+            expected: file.sha256.to_string(),
+        }));
+    }
+    crate::files::persist_partial(partial, path).map_err(write)
+}
+
+/// Why [`copy_at_most`] stopped.
+#[derive(Debug)]
+enum Copy {
+    TooLong,
+    Read(std::io::Error),
+    Write(std::io::Error),
+}
+
+/// Copies `reader` to `writer` a chunk at a time, stopping as soon as more than
+/// `size_bytes` have come, telling `copied` the size of each chunk; returns the SHA-256
+/// of what was copied, in hex.
+fn copy_at_most(
+    mut reader: impl Read,
+    mut writer: impl Write,
+    size_bytes: u64,
+    mut copied: impl FnMut(usize),
+) -> Result<String, Copy> {
+    let mut hasher = Sha256::new();
+    let mut chunk = vec![0u8; CHUNK_BYTES];
+    let mut total = 0u64;
+    loop {
+        let read = match reader.read(&mut chunk) {
+            Ok(0) => break,
+            Ok(read) => read,
+            Err(error) if error.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(error) => return Err(Copy::Read(error)),
+        };
+        total += read as u64;
+        if total > size_bytes {
+            return Err(Copy::TooLong);
+        }
+        hasher.update(&chunk[..read]);
+        writer.write_all(&chunk[..read]).map_err(Copy::Write)?;
+        copied(read);
+    }
+    Ok(hasher
+        .finalize()
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect())
 }
 
 #[cfg(test)]
@@ -236,6 +374,7 @@ mod tests {
             .map(|(&(name, remote_path), bytes)| RemoteFile {
                 name,
                 remote_path,
+                size_bytes: bytes.len() as u64,
                 sha256: Box::leak(sha256_hex(bytes).into_boxed_str()),
             })
             .collect();
@@ -297,10 +436,12 @@ mod tests {
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
     }
 
-    /// Patience short enough for a test: half a second per read, two tries.
+    /// Patience short enough for a test: half a second per read, two seconds a try, two
+    /// tries.
     const IMPATIENT: Patience = Patience {
         connect: Duration::from_millis(500),
         read: Duration::from_millis(500),
+        deadline: Duration::from_secs(2),
         attempts: 2,
         backoff: Duration::from_millis(10),
     };
@@ -372,5 +513,125 @@ mod tests {
                 "{url}: {error:?}"
             );
         }
+    }
+    /// A reader of endless bytes that counts how many it handed out.
+    struct Counting {
+        handed_out: u64,
+    }
+
+    impl Read for Counting {
+        fn read(&mut self, buffer: &mut [u8]) -> std::io::Result<usize> {
+            buffer.fill(b'x');
+            self.handed_out += buffer.len() as u64;
+            Ok(buffer.len())
+        }
+    }
+
+    #[test]
+    fn an_endless_body_is_read_no_further_than_one_chunk_past_the_size() {
+        let mut endless = Counting { handed_out: 0 };
+        let mut written = Vec::new();
+        let copied = copy_at_most(&mut endless, &mut written, 333_392, |_| {});
+        assert!(matches!(copied, Err(Copy::TooLong)), "{copied:?}");
+        assert!(endless.handed_out <= 333_392 + CHUNK_BYTES as u64);
+        assert!(written.len() <= 333_392);
+    }
+
+    /// Answers one request on 127.0.0.1 with `response`, then stops.
+    fn answer_once(
+        response: tiny_http::Response<Box<dyn Read + Send>>,
+    ) -> (String, std::thread::JoinHandle<()>) {
+        let server = tiny_http::Server::http("127.0.0.1:0").unwrap();
+        let url = format!("http://{}", server.server_addr().to_ip().unwrap());
+        let handle = std::thread::spawn(move || {
+            if let Ok(Some(request)) = server.recv_timeout(Duration::from_secs(10)) {
+                let _ = request.respond(response);
+            }
+        });
+        (url, handle)
+    }
+
+    #[test]
+    fn a_body_longer_than_the_file_is_cut_off_and_nothing_written() {
+        let (files, _) = generated();
+        // 10 MB without a declared length (chunked), for a file of 50,000 bytes.
+        let body: Box<dyn Read + Send> = Box::new(std::io::repeat(b'x').take(10_000_000));
+        let (url, server) = answer_once(tiny_http::Response::new(
+            200.into(),
+            Vec::new(),
+            body,
+            None,
+            None,
+        ));
+        let dir = tempfile::tempdir().unwrap();
+        let error = fetch_files(&files, &url, dir.path(), IMPATIENT).unwrap_err();
+        server.join().unwrap();
+        assert_eq!(
+            error.to_string(),
+            format!(
+                "{url}/one/a.npy: the server sent more than the 50000 bytes of the file; stopped there, nothing written"
+            )
+        );
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn a_declared_length_other_than_the_file_size_is_refused_before_reading() {
+        let (files, served) = generated();
+        let mut bytes = served[0].1.clone();
+        bytes.push(0);
+        let length = bytes.len();
+        let body: Box<dyn Read + Send> = Box::new(std::io::Cursor::new(bytes));
+        let (url, server) = answer_once(
+            tiny_http::Response::new(200.into(), Vec::new(), body, Some(length), None)
+                .with_chunked_threshold(usize::MAX),
+        );
+        let dir = tempfile::tempdir().unwrap();
+        let error = fetch_files(&files, &url, dir.path(), IMPATIENT).unwrap_err();
+        server.join().unwrap();
+        assert_eq!(
+            error.to_string(),
+            format!(
+                "{url}/one/a.npy: the server declares 50001 bytes (Content-Length), the file has 50000; nothing read"
+            )
+        );
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn a_server_that_trickles_is_given_up_on_at_the_deadline_and_named() {
+        use std::io::Write;
+        let (files, _) = generated();
+        let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        let url = format!("http://{}", listener.local_addr().unwrap());
+        // One byte every 100 ms, each read well within the 500 ms per read, for each of
+        // the two tries; each connection is given up after 5 s at most.
+        let server = std::thread::spawn(move || {
+            for stream in listener.incoming().take(IMPATIENT.attempts as usize) {
+                let mut stream = stream.unwrap();
+                let _ = stream.write_all(b"HTTP/1.1 200 OK\r\nContent-Length: 50000\r\n\r\n");
+                let clock = Instant::now();
+                while clock.elapsed() < Duration::from_secs(5)
+                    && stream.write_all(b"x").and_then(|()| stream.flush()).is_ok()
+                {
+                    std::thread::sleep(Duration::from_millis(100));
+                }
+            }
+        });
+        let dir = tempfile::tempdir().unwrap();
+        let error = fetch_files(&files, &url, dir.path(), IMPATIENT).unwrap_err();
+        assert_eq!(
+            error.to_string(),
+            format!(
+                "downloading {url}/one/a.npy: gave up after 2 tries, none done within the deadline of 2s per try"
+            )
+        );
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        server.join().unwrap();
+    }
+
+    #[test]
+    fn the_default_worst_case_is_the_one_the_docs_state() {
+        assert_eq!(Patience::DEFAULT.worst_case(), Duration::from_secs(254));
     }
 }

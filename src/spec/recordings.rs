@@ -5,11 +5,12 @@
 use std::path::Path;
 
 /// One file to download: its name in the destination folder, its path under the base
-/// URL, and the SHA-256 it must have.
+/// URL, its size in bytes and the SHA-256 it must have.
 #[derive(Debug, Clone, Copy)]
 pub struct RemoteFile {
     pub name: &'static str,
     pub remote_path: &'static str,
+    pub size_bytes: u64,
     pub sha256: &'static str,
 }
 
@@ -18,11 +19,13 @@ pub const FILES: [RemoteFile; 2] = [
     RemoteFile {
         name: "V.npy",
         remote_path: "dataset/TrainAndValidation/V.npy",
+        size_bytes: 333_392,
         sha256: "0c525b3f30e71f0d385af5c256930b0fc8bb9cc2e53581cda46943bb49308ed5",
     },
     RemoteFile {
         name: "V_test.npy",
         remote_path: "dataset/Test/V_test.npy",
+        size_bytes: 48_152,
         sha256: "ee517105d2a2856d5c5ee062c979d7a11e2fe929ae776bb341c8bf1ebe1014f7",
     },
 ];
