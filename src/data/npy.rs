@@ -1,5 +1,6 @@
 //! Reads a recording from a NumPy `.npy` file: a float array of shape (3, N) or (N, 3)
-//! holding x, y, z velocity in m/s, checked for shape, dtype and finite values.
+//! holding x, y, z velocity in m/s, checked for a whole header and body, shape, dtype and
+//! finite values.
 
 use crate::Vec3;
 use std::path::{Path, PathBuf};
@@ -12,6 +13,18 @@ pub enum NpyError {
     Read {
         path: PathBuf,
         source: std::io::Error,
+    },
+    #[error("{}: the .npy header is truncated: expected {expected} bytes, found {found}", path.display())]
+    TruncatedHeader {
+        path: PathBuf,
+        expected: u64,
+        found: u64,
+    },
+    #[error("{}: the .npy data are truncated: expected {expected} bytes after the header, found {found}", path.display())]
+    TruncatedData {
+        path: PathBuf,
+        expected: u64,
+        found: u64,
     },
     #[error("{}: shape {shape:?}: expected (3, N) or (N, 3) velocity samples", path.display())]
     Shape { path: PathBuf, shape: Vec<u64> },
@@ -26,18 +39,68 @@ pub enum NpyError {
     },
 }
 
+/// The magic string that opens every `.npy` file.
+const MAGIC: &[u8] = b"\x93NUMPY";
+
+/// The bytes before the header's text: the magic string, the version, and the header
+/// length (two bytes in version 1, four in later ones).
+const PRELUDE_BYTES: u64 = 10;
+
+/// The length of the header of a `.npy` file that opens with `prefix` (at least its first
+/// 12 bytes, or the whole file if shorter) and holds `found` bytes, or the
+/// [`NpyError::TruncatedHeader`] it is cut in. A file that does not open with the magic
+/// string is left to the `.npy` reader to refuse.
+fn header_bytes(path: &Path, prefix: &[u8], found: u64) -> Result<u64, NpyError> {
+    let truncated = |expected| NpyError::TruncatedHeader {
+        path: path.to_path_buf(),
+        expected,
+        found,
+    };
+    let opening = &prefix[..prefix.len().min(MAGIC.len())];
+    if found < PRELUDE_BYTES && MAGIC.starts_with(opening) {
+        return Err(truncated(PRELUDE_BYTES));
+    }
+    if opening != MAGIC {
+        return Ok(0);
+    }
+    let expected = if prefix[6] == 1 {
+        PRELUDE_BYTES + u64::from(u16::from_le_bytes([prefix[8], prefix[9]]))
+    } else if found < PRELUDE_BYTES + 2 {
+        return Err(truncated(PRELUDE_BYTES + 2));
+    } else {
+        PRELUDE_BYTES
+            + 2
+            + u64::from(u32::from_le_bytes([
+                prefix[8], prefix[9], prefix[10], prefix[11],
+            ]))
+    };
+    if found < expected {
+        return Err(truncated(expected));
+    }
+    Ok(expected)
+}
+
 /// How many samples `path` holds, from its header alone.
 pub fn sample_count(path: &Path) -> Result<usize, NpyError> {
+    use std::io::Read;
     let read_error = |source| NpyError::Read {
         path: path.to_path_buf(),
         source,
     };
-    let file = std::fs::File::open(path).map_err(|source| match source.kind() {
+    let mut file = std::fs::File::open(path).map_err(|source| match source.kind() {
         std::io::ErrorKind::NotFound => NpyError::Missing {
             path: path.to_path_buf(),
         },
         _ => read_error(source),
     })?;
+    let found = file.metadata().map_err(read_error)?.len();
+    let mut prefix = Vec::with_capacity(12);
+    (&mut file)
+        .take(12)
+        .read_to_end(&mut prefix)
+        .map_err(read_error)?;
+    header_bytes(path, &prefix, found)?;
+    let file = std::io::Read::chain(std::io::Cursor::new(prefix), file);
     let header = npyz::NpyFile::new(std::io::BufReader::new(file)).map_err(read_error)?;
     match header.shape() {
         [3, n] | [n, 3] => Ok(*n as usize),
@@ -60,6 +123,7 @@ pub fn read_velocities(path: &Path) -> Result<Vec<Vec3>, NpyError> {
         },
         _ => read_error(source),
     })?;
+    let header = header_bytes(path, &bytes, bytes.len() as u64)?;
     let file = npyz::NpyFile::new(&bytes[..]).map_err(read_error)?;
     let shape = file.shape().to_vec();
     let strides = file.strides().to_vec();
@@ -74,6 +138,15 @@ pub fn read_velocities(path: &Path) -> Result<Vec<Vec3>, NpyError> {
         }
     };
     let dtype = file.dtype();
+    let expected = dtype.num_bytes().unwrap_or(0) as u64 * samples as u64 * 3;
+    let found = bytes.len() as u64 - header;
+    if header > 0 && found < expected {
+        return Err(NpyError::TruncatedData {
+            path: path.to_path_buf(),
+            expected,
+            found,
+        });
+    }
     let values: Vec<f64> = match dtype.descr().as_str() {
         "'<f8'" | "'>f8'" => file.into_vec::<f64>().map_err(read_error)?,
         "'<f4'" | "'>f4'" => file
@@ -181,5 +254,32 @@ pub(crate) mod tests {
             .unwrap_err()
             .to_string();
         assert!(missing.contains("dcnet-exp data fetch"), "{missing}");
+    }
+
+    #[test]
+    fn a_truncated_header_or_body_is_named_with_the_bytes_expected_and_found() {
+        let dir = tempfile::tempdir().unwrap();
+        let whole = dir.path().join("whole.npy");
+        write_f64(&whole, &[3, 2], &[0.0; 6]);
+        let bytes = std::fs::read(&whole).unwrap();
+        // Version 1: a 10-byte prelude and a header padded to 128 bytes in all.
+        let cut = dir.path().join("cut.npy");
+        for (kept, expected) in [(4, 10), (9, 10), (60, 128)] {
+            std::fs::write(&cut, &bytes[..kept]).unwrap();
+            let message = format!(
+                "{}: the .npy header is truncated: expected {expected} bytes, found {kept}",
+                cut.display()
+            );
+            assert_eq!(read_velocities(&cut).unwrap_err().to_string(), message);
+            assert_eq!(sample_count(&cut).unwrap_err().to_string(), message);
+        }
+        std::fs::write(&cut, &bytes[..bytes.len() - 5]).unwrap();
+        assert_eq!(
+            read_velocities(&cut).unwrap_err().to_string(),
+            format!(
+                "{}: the .npy data are truncated: expected 48 bytes after the header, found 43",
+                cut.display()
+            )
+        );
     }
 }
