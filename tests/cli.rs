@@ -731,6 +731,26 @@ fn a_missing_recording_names_the_path_and_the_fetch_command() {
     );
 }
 
+#[test]
+fn a_recording_path_in_a_loop_of_symbolic_links_is_named_a_loop() {
+    let project = project(false);
+    let snapir = project.path().join("data/snapir");
+    std::fs::create_dir_all(&snapir).unwrap();
+    // V.npy -> loop.npy -> V.npy
+    std::os::unix::fs::symlink("loop.npy", snapir.join("V.npy")).unwrap();
+    std::os::unix::fs::symlink("V.npy", snapir.join("loop.npy")).unwrap();
+    let output = dcnet(project.path(), &["validate", "experiments/paper.toml"]);
+    assert_eq!(output.status.code(), Some(1));
+    let message = stderr(&output);
+    assert!(
+        message.contains(&format!(
+            "data.trajectories[0].file: {}/experiments/../data/snapir/V.npy is a loop of symbolic links that leads back to itself: name the recording file",
+            project.path().display()
+        )),
+        "{message}"
+    );
+}
+
 /// Serves `files` (URL path → bytes) on 127.0.0.1 until the returned guard drops.
 fn serve(
     files: Vec<(String, Vec<u8>)>,

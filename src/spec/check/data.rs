@@ -149,6 +149,24 @@ fn check_origin(
     }
 }
 
+/// Whether `path` is a symbolic link whose chain of targets comes back to a link it
+/// passed (or goes on past 40 links, where the system gives up).
+fn is_symlink_loop(path: &Path) -> bool {
+    let mut passed = Vec::new();
+    let mut link = path.to_path_buf();
+    while std::fs::symlink_metadata(&link).is_ok_and(|meta| meta.file_type().is_symlink()) {
+        if passed.contains(&link) || passed.len() > 40 {
+            return true;
+        }
+        let Ok(target) = std::fs::read_link(&link) else {
+            return false;
+        };
+        let next = link.parent().unwrap_or(Path::new("")).join(target);
+        passed.push(std::mem::replace(&mut link, next));
+    }
+    false
+}
+
 /// A trajectory read from the file at `path`: it exists, its sample range is not
 /// empty, and a `.csv` names its columns; `resolved` gets the path and the columns.
 fn check_file_trajectory(
@@ -165,6 +183,14 @@ fn check_file_trajectory(
             format!("{key}.file"),
             format!(
                 "{} is a folder: name the recording file in it",
+                path.display()
+            ),
+        );
+    } else if is_symlink_loop(&path) {
+        faults.add(
+            format!("{key}.file"),
+            format!(
+                "{} is a loop of symbolic links that leads back to itself: name the recording file",
                 path.display()
             ),
         );
