@@ -624,3 +624,91 @@ fn a_fault_written_in_the_file_is_named_by_its_path_line_and_key() {
         assert!(!d.join("results").exists(), "{replacement}: made results/");
     }
 }
+
+/// `dcnet-exp ARGS` in `cwd` under a limit of `megabytes` of address space, so that a
+/// run that holds more than that fails instead of passing.
+fn dcnet_within(cwd: &std::path::Path, megabytes: u64, args: &[&str]) -> std::process::Output {
+    std::process::Command::new("sh")
+        .current_dir(cwd)
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v {} && exec \"$0\" \"$@\"",
+            megabytes * 1024
+        ))
+        .arg(env!("CARGO_BIN_EXE_dcnet-exp"))
+        .args(args)
+        .env_remove("DCNET_LOG_EVERY")
+        .output()
+        .expect("the binary runs")
+}
+
+/// Stderr's bounds whatever the number of faults: the first 20 messages, then how many
+/// more, no line longer than a few hundred characters.
+fn assert_bounded(error: &str, faults: usize) {
+    let lines: Vec<&str> = error.lines().collect();
+    assert_eq!(lines.len(), 21, "{error}");
+    assert_eq!(
+        lines[20],
+        format!("error: … and {} more faults", faults - 20),
+        "{error}"
+    );
+    assert!(
+        lines.iter().all(|line| line.len() < 300),
+        "a line repeats a long value: {error}"
+    );
+    assert!(error.len() < 21 * 300, "{} bytes of stderr", error.len());
+}
+
+#[test]
+fn a_hundred_thousand_bad_values_in_the_file_give_a_short_answer_in_little_memory() {
+    let dir = project(false);
+    let d = dir.path();
+    let quick = std::fs::read_to_string(d.join("experiments/quick.toml")).unwrap();
+    let values: Vec<String> = (1..=100_000).map(|i| format!("-{i}")).collect();
+    let line = "window_sizes_s = [20.0, 40.0, 60.0, 80.0, 100.0]";
+    let text = quick.replacen(
+        line,
+        &format!("window_sizes_s = [{}]", values.join(", ")),
+        1,
+    );
+    assert_ne!(text, quick, "{line} is in quick.toml");
+    let number = text
+        .lines()
+        .position(|l| l.starts_with("window_sizes_s"))
+        .unwrap()
+        + 1;
+    std::fs::write(d.join("experiments/many.toml"), text).unwrap();
+    let output = dcnet_within(d, 1024, &["validate", "experiments/many.toml"]);
+    let error = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{error}");
+    assert!(
+        error.starts_with(&format!(
+            "error: experiments/many.toml:{number}: calibration.window_sizes_s[0]: -1 must be"
+        )),
+        "{error}"
+    );
+    assert_bounded(&error, 100_000);
+}
+
+#[test]
+fn a_long_set_value_is_shown_by_its_start_and_length() {
+    let dir = project(false);
+    let d = dir.path();
+    let values: Vec<String> = (1..=15_000).map(|i| i.to_string()).collect();
+    let set = format!("calibration.window_sizes_s=[{}]", values.join(","));
+    let output = dcnet_within(
+        d,
+        1024,
+        &["validate", "experiments/quick.toml", "--set", &set],
+    );
+    let error = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{error}");
+    assert!(
+        error.starts_with(
+            "error: --set calibration.window_sizes_s=[1, 2, 3, … (15000 values)]: calibration.window_sizes_s["
+        ),
+        "{error}"
+    );
+    // Windows of 200 s and more are not shorter than SCal; 1–9 s are shorter than DCNet's.
+    assert_bounded(&error, 15_000 - 199 + 9);
+}

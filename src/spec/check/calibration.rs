@@ -31,18 +31,19 @@ pub(in crate::spec) fn check_calibration(
         );
     }
     let mut window_sizes = Vec::new();
-    let mut first_of_size: Vec<(usize, usize)> = Vec::new();
+    // Each size in samples and the index it was first listed at.
+    let mut first_of_size = std::collections::HashMap::new();
     for (i, &size_s) in window_sizes_s.iter().enumerate() {
         let key = format!("calibration.window_sizes_s[{i}]");
         if let Some(size) = positive_samples(&key, size_s, rate, faults) {
-            if let Some(&(first, _)) = first_of_size.iter().find(|&&(_, s)| s == size) {
+            if let Some(&first) = first_of_size.get(&size) {
                 faults.add(
                     key,
                     format!("{size_s} s is calibration.window_sizes_s[{first}] again: each window size is calibrated once"),
                 );
                 continue;
             }
-            first_of_size.push((i, size));
+            first_of_size.insert(size, i);
             match segment {
                 Some(len) if size >= len => faults.add(
                     key,
