@@ -326,7 +326,32 @@ const RULES: &[(&str, &str, &str)] = &[
     (
         "calibration.monte_carlo_runs=0",
         "calibration.monte_carlo_runs",
-        "0 must be at least 1",
+        "0 must be at least 2",
+    ),
+    (
+        "calibration.monte_carlo_runs=1",
+        "calibration.monte_carlo_runs",
+        "1 must be at least 2: the spread of the RMSE over runs",
+    ),
+    (
+        "calibration.window_sizes_s=[11, 20]",
+        "calibration.window_sizes_s[0]",
+        "11 s holds 11 samples at 1 Hz: least squares needs at least 12 (2 per term of EM5's 6)",
+    ),
+    (
+        "name=\"a/c\"",
+        "name",
+        "\"a/c\" must use only letters, digits, '-', '_' and '.' (it names the results folder; '/', '=' and ',' name the points of a sweep)",
+    ),
+    (
+        "name=qs/monte_carlo_runs=10",
+        "name",
+        "\"qs/monte_carlo_runs=10\" must use only letters",
+    ),
+    (
+        "grid.scale_pct=1",
+        "grid.scale_pct",
+        "invalid type: integer `1`, expected a table with `values`, or `start`, `stop` and `step`",
     ),
     (
         "calibration.monte_carlo_runs=1000000000",
@@ -710,5 +735,76 @@ fn a_long_set_value_is_shown_by_its_start_and_length() {
         "{error}"
     );
     // Windows of 200 s and more are not shorter than SCal; 1–9 s are shorter than DCNet's.
-    assert_bounded(&error, 15_000 - 199 + 9);
+    // 1–11 s hold fewer than 12 samples, least squares' least for EM5.
+    assert_bounded(&error, 15_000 - 199 + 9 + 11);
+}
+
+#[test]
+fn a_name_too_long_for_the_file_system_is_refused_by_validate() {
+    let dir = project(false);
+    let d = dir.path();
+    let name = vec!["x".repeat(200); 25].join("/");
+    let set = format!("name={name}");
+    let output = dcnet(d, &["validate", "experiments/quick.toml", "--set", &set]);
+    let error = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{error}");
+    assert!(
+        error.starts_with("error: --set name=xxxxxxxxxxxxxxxxxxxxxxxxxxxxxx… (5024 characters): name: \"xxxxxxxxxxxxxxxxxxxxxxxxxxxxxx… (5024 characters)\" must use only letters"),
+        "{error}"
+    );
+    assert!(error.lines().all(|line| line.len() < 300), "{error}");
+}
+
+#[test]
+fn a_spec_that_is_not_utf8_is_named_by_its_line_and_byte() {
+    let dir = project(false);
+    let d = dir.path();
+    let mut bytes = std::fs::read(d.join("experiments/quick.toml")).unwrap();
+    let at = bytes.windows(4).position(|w| w == b"seed").unwrap();
+    let line = bytes[..at].iter().filter(|&&b| b == b'\n').count() + 1;
+    bytes[at + 1] = 0xff;
+    std::fs::write(d.join("experiments/latin.toml"), bytes).unwrap();
+    let output = dcnet(d, &["validate", "experiments/latin.toml"]);
+    let error = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{error}");
+    assert_eq!(
+        error.trim_end(),
+        format!(
+            "error: experiments/latin.toml:{line}: cannot read the spec: it is not UTF-8: byte 0xff at offset {} (line {line}, column 2) starts no UTF-8 character; save the file as UTF-8",
+            at + 1
+        )
+    );
+}
+
+#[test]
+fn a_sweep_naming_no_key_is_placed_on_its_line() {
+    let dir = project(false);
+    let d = dir.path();
+    let quick = std::fs::read_to_string(d.join("experiments/quick.toml")).unwrap();
+    let text = format!("{quick}\n\n[sweep.values]\n");
+    let line = text.lines().count();
+    std::fs::write(d.join("experiments/empty-sweep.toml"), &text).unwrap();
+    let output = dcnet(d, &["validate", "experiments/empty-sweep.toml"]);
+    let error = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{error}");
+    assert!(
+        error.starts_with(&format!(
+            "error: experiments/empty-sweep.toml:{line}: sweep.values: names no key"
+        )),
+        "{error}"
+    );
+}
+
+#[test]
+fn evaluating_on_the_calibration_trajectory_is_accepted_with_a_warning() {
+    let dir = project(false);
+    let d = dir.path();
+    let set = "evaluation.trajectories=[\"S3\", \"SCal\"]";
+    let output = dcnet(d, &["validate", "experiments/quick.toml", "--set", set]);
+    let error = stderr(&output);
+    assert_eq!(output.status.code(), Some(0), "{error}");
+    assert!(
+        error.starts_with(&format!("warning: --set {set}: evaluation.trajectories[1]: \"SCal\" is also calibration.trajectory: it is evaluated on the trajectory it was calibrated on")),
+        "{error}"
+    );
 }

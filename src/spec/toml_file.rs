@@ -92,14 +92,30 @@ impl TomlText {
     /// Reads `path`; when it cannot, the fault reads `path: {unreadable}: {cause}`.
     pub fn read(path: &Path, unreadable: &str) -> Result<Self, SpecError> {
         let shown = path.display().to_string();
-        match std::fs::read_to_string(path) {
-            Ok(text) => Ok(TomlText { shown, text }),
-            Err(e) => Err(SpecError {
-                location: shown,
-                key: String::new(),
-                message: format!("{unreadable}: {e}"),
-            }),
-        }
+        let bytes = std::fs::read(path).map_err(|e| SpecError {
+            location: shown.clone(),
+            key: String::new(),
+            message: format!("{unreadable}: {e}"),
+        })?;
+        String::from_utf8(bytes)
+            .map(|text| TomlText {
+                shown: shown.clone(),
+                text,
+            })
+            .map_err(|e| {
+                let valid = e.utf8_error().valid_up_to();
+                let bytes = e.as_bytes();
+                let line = bytes[..valid].iter().filter(|&&b| b == b'\n').count() + 1;
+                let column = valid - bytes[..valid].iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1) + 1;
+                SpecError {
+                    location: format!("{shown}:{line}"),
+                    key: String::new(),
+                    message: format!(
+                        "{unreadable}: it is not UTF-8: byte 0x{:02x} at offset {valid} (line {line}, column {column}) starts no UTF-8 character; save the file as UTF-8",
+                        bytes[valid]
+                    ),
+                }
+            })
     }
 
     /// The name faults show the text by.
