@@ -326,7 +326,32 @@ const RULES: &[(&str, &str, &str)] = &[
     (
         "calibration.monte_carlo_runs=0",
         "calibration.monte_carlo_runs",
-        "0 must be at least 1",
+        "0 must be at least 2",
+    ),
+    (
+        "calibration.monte_carlo_runs=1",
+        "calibration.monte_carlo_runs",
+        "1 must be at least 2: the spread of the RMSE over runs",
+    ),
+    (
+        "calibration.window_sizes_s=[11, 20]",
+        "calibration.window_sizes_s[0]",
+        "11 s holds 11 samples at 1 Hz: least squares needs at least 12 (2 per term of EM5's 6)",
+    ),
+    (
+        "name=\"a/c\"",
+        "name",
+        "\"a/c\" must use only letters, digits, '-', '_' and '.' (it names the results folder; '/', '=' and ',' name the points of a sweep)",
+    ),
+    (
+        "name=qs/monte_carlo_runs=10",
+        "name",
+        "\"qs/monte_carlo_runs=10\" must use only letters",
+    ),
+    (
+        "grid.scale_pct=1",
+        "grid.scale_pct",
+        "invalid type: integer `1`, expected a table with `values`, or `start`, `stop` and `step`",
     ),
     (
         "calibration.monte_carlo_runs=1000000000",
@@ -623,4 +648,163 @@ fn a_fault_written_in_the_file_is_named_by_its_path_line_and_key() {
         assert_error_snapshot!(&format!("file_{}", snapshot_name(key)), &command, &error, d);
         assert!(!d.join("results").exists(), "{replacement}: made results/");
     }
+}
+
+/// `dcnet-exp ARGS` in `cwd` under a limit of `megabytes` of address space, so that a
+/// run that holds more than that fails instead of passing.
+fn dcnet_within(cwd: &std::path::Path, megabytes: u64, args: &[&str]) -> std::process::Output {
+    std::process::Command::new("sh")
+        .current_dir(cwd)
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v {} && exec \"$0\" \"$@\"",
+            megabytes * 1024
+        ))
+        .arg(env!("CARGO_BIN_EXE_dcnet-exp"))
+        .args(args)
+        .env_remove("DCNET_LOG_EVERY")
+        .output()
+        .expect("the binary runs")
+}
+
+/// Stderr's bounds whatever the number of faults: the first 20 messages, then how many
+/// more, no line longer than a few hundred characters.
+fn assert_bounded(error: &str, faults: usize) {
+    let lines: Vec<&str> = error.lines().collect();
+    assert_eq!(lines.len(), 21, "{error}");
+    assert_eq!(
+        lines[20],
+        format!("error: … and {} more faults", faults - 20),
+        "{error}"
+    );
+    assert!(
+        lines.iter().all(|line| line.len() < 300),
+        "a line repeats a long value: {error}"
+    );
+    assert!(error.len() < 21 * 300, "{} bytes of stderr", error.len());
+}
+
+#[test]
+fn a_hundred_thousand_bad_values_in_the_file_give_a_short_answer_in_little_memory() {
+    let dir = project(false);
+    let d = dir.path();
+    let quick = std::fs::read_to_string(d.join("experiments/quick.toml")).unwrap();
+    let values: Vec<String> = (1..=100_000).map(|i| format!("-{i}")).collect();
+    let line = "window_sizes_s = [20.0, 40.0, 60.0, 80.0, 100.0]";
+    let text = quick.replacen(
+        line,
+        &format!("window_sizes_s = [{}]", values.join(", ")),
+        1,
+    );
+    assert_ne!(text, quick, "{line} is in quick.toml");
+    let number = text
+        .lines()
+        .position(|l| l.starts_with("window_sizes_s"))
+        .unwrap()
+        + 1;
+    std::fs::write(d.join("experiments/many.toml"), text).unwrap();
+    let output = dcnet_within(d, 1024, &["validate", "experiments/many.toml"]);
+    let error = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{error}");
+    assert!(
+        error.starts_with(&format!(
+            "error: experiments/many.toml:{number}: calibration.window_sizes_s[0]: -1 must be"
+        )),
+        "{error}"
+    );
+    assert_bounded(&error, 100_000);
+}
+
+#[test]
+fn a_long_set_value_is_shown_by_its_start_and_length() {
+    let dir = project(false);
+    let d = dir.path();
+    let values: Vec<String> = (1..=15_000).map(|i| i.to_string()).collect();
+    let set = format!("calibration.window_sizes_s=[{}]", values.join(","));
+    let output = dcnet_within(
+        d,
+        1024,
+        &["validate", "experiments/quick.toml", "--set", &set],
+    );
+    let error = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{error}");
+    assert!(
+        error.starts_with(
+            "error: --set calibration.window_sizes_s=[1, 2, 3, … (15000 values)]: calibration.window_sizes_s["
+        ),
+        "{error}"
+    );
+    // Windows of 200 s and more are not shorter than SCal; 1–9 s are shorter than DCNet's.
+    // 1–11 s hold fewer than 12 samples, least squares' least for EM5.
+    assert_bounded(&error, 15_000 - 199 + 9 + 11);
+}
+
+#[test]
+fn a_name_too_long_for_the_file_system_is_refused_by_validate() {
+    let dir = project(false);
+    let d = dir.path();
+    let name = vec!["x".repeat(200); 25].join("/");
+    let set = format!("name={name}");
+    let output = dcnet(d, &["validate", "experiments/quick.toml", "--set", &set]);
+    let error = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{error}");
+    assert!(
+        error.starts_with("error: --set name=xxxxxxxxxxxxxxxxxxxxxxxxxxxxxx… (5024 characters): name: \"xxxxxxxxxxxxxxxxxxxxxxxxxxxxxx… (5024 characters)\" must use only letters"),
+        "{error}"
+    );
+    assert!(error.lines().all(|line| line.len() < 300), "{error}");
+}
+
+#[test]
+fn a_spec_that_is_not_utf8_is_named_by_its_line_and_byte() {
+    let dir = project(false);
+    let d = dir.path();
+    let mut bytes = std::fs::read(d.join("experiments/quick.toml")).unwrap();
+    let at = bytes.windows(4).position(|w| w == b"seed").unwrap();
+    let line = bytes[..at].iter().filter(|&&b| b == b'\n').count() + 1;
+    bytes[at + 1] = 0xff;
+    std::fs::write(d.join("experiments/latin.toml"), bytes).unwrap();
+    let output = dcnet(d, &["validate", "experiments/latin.toml"]);
+    let error = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{error}");
+    assert_eq!(
+        error.trim_end(),
+        format!(
+            "error: experiments/latin.toml:{line}: cannot read the spec: it is not UTF-8: byte 0xff at offset {} (line {line}, column 2) starts no UTF-8 character; save the file as UTF-8",
+            at + 1
+        )
+    );
+}
+
+#[test]
+fn a_sweep_naming_no_key_is_placed_on_its_line() {
+    let dir = project(false);
+    let d = dir.path();
+    let quick = std::fs::read_to_string(d.join("experiments/quick.toml")).unwrap();
+    let text = format!("{quick}\n\n[sweep.values]\n");
+    let line = text.lines().count();
+    std::fs::write(d.join("experiments/empty-sweep.toml"), &text).unwrap();
+    let output = dcnet(d, &["validate", "experiments/empty-sweep.toml"]);
+    let error = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{error}");
+    assert!(
+        error.starts_with(&format!(
+            "error: experiments/empty-sweep.toml:{line}: sweep.values: names no key"
+        )),
+        "{error}"
+    );
+}
+
+#[test]
+fn evaluating_on_the_calibration_trajectory_is_accepted_with_a_warning() {
+    let dir = project(false);
+    let d = dir.path();
+    let set = "evaluation.trajectories=[\"S3\", \"SCal\"]";
+    let output = dcnet(d, &["validate", "experiments/quick.toml", "--set", set]);
+    let error = stderr(&output);
+    assert_eq!(output.status.code(), Some(0), "{error}");
+    assert!(
+        error.starts_with(&format!("warning: --set {set}: evaluation.trajectories[1]: \"SCal\" is also calibration.trajectory: it is evaluated on the trajectory it was calibrated on")),
+        "{error}"
+    );
 }

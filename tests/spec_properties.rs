@@ -448,7 +448,12 @@ fn load_in_time(path: &Path, overrides: &[String]) -> Result<Result<(), SpecErro
 fn placed(fault: &SpecError, path: &Path, text: &str, overrides: &[String]) -> bool {
     let SpecError { location, key, .. } = fault;
     if let Some(assignment) = location.strip_prefix("--set ") {
-        return overrides.iter().any(|o| o == assignment);
+        // A long value is shown by its start, `…` and its length, after its key.
+        let key_of = |a: &str| a.split_once('=').map(|(key, _)| key.to_string());
+        return overrides.iter().any(|o| {
+            o == assignment
+                || (assignment.contains('…') && o.len() > 60 && key_of(o) == key_of(assignment))
+        });
     }
     let syntax_error = text.parse::<toml::Table>().is_err();
     let Some(rest) = location.strip_prefix(&format!("{}:", path.display())) else {

@@ -62,6 +62,7 @@ pub(super) fn bench(
         kinds.join(", "),
         rayon::current_num_threads()
     );
+    bench_refusal(spec_path).map_err(failure)?;
     let set = dataset::generate(&spec, &trajectories, &hidden);
     let ours = bench_training(&spec, &set, training_batches).map_err(failure)?;
     let peer = pytorch
@@ -69,6 +70,51 @@ pub(super) fn bench(
         .transpose()
         .map_err(|e| failure(anyhow::anyhow!(e)))?;
     print_training_bench(&spec, &ours, peer.as_ref());
+    Ok(())
+}
+
+/// Times refusing the spec at `spec_path` with 10³, 10⁴ and 10⁵ invalid calibration
+/// window sizes written in the file (each negative, so each is its own fault placed on
+/// its line), to show that checking is linear in the number of faults.
+fn bench_refusal(spec_path: &Path) -> std::io::Result<()> {
+    let text = std::fs::read_to_string(spec_path)?;
+    let folder = tempfile::tempdir()?;
+    for count in [1_000, 10_000, 100_000] {
+        let values: Vec<String> = (1..=count).map(|i| format!("-{i}")).collect();
+        let window_sizes = format!("window_sizes_s = [{}]", values.join(", "));
+        let mut written = false;
+        let bad: Vec<&str> = text
+            .lines()
+            .map(|line| {
+                if !written && line.trim_start().starts_with("window_sizes_s") {
+                    written = true;
+                    window_sizes.as_str()
+                } else {
+                    line
+                }
+            })
+            .collect();
+        if !written {
+            println!("spec refusal: skipped, the spec writes no window_sizes_s");
+            return Ok(());
+        }
+        let path = folder
+            .path()
+            .join(spec_path.file_name().unwrap_or_default());
+        std::fs::write(&path, bad.join("\n"))?;
+        let clock = Instant::now();
+        let faults = match crate::spec::load_experiment(&path, &[]) {
+            Ok(_) => 0,
+            Err(errors) => {
+                std::hint::black_box(errors.to_string());
+                errors.0.len()
+            }
+        };
+        println!(
+            "spec refusal: {count} invalid window sizes, {faults} faults, {:.3} s",
+            clock.elapsed().as_secs_f64()
+        );
+    }
     Ok(())
 }
 

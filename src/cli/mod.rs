@@ -206,7 +206,11 @@ fn about(seconds: f64) -> String {
 /// What each point of `experiment` asks of this machine, and its trajectories'
 /// lengths, known before anything is allocated; a point beyond this machine's memory is bad input, placed at the key of
 /// its largest part.
+/// The spec's warnings are printed here, once per command that loads a spec.
 fn footprints(experiment: &Experiment) -> Result<Vec<(Footprint, Vec<usize>)>, CliError> {
+    for warning in experiment.warnings() {
+        eprintln!("warning: {warning}");
+    }
     let memory = footprint::machine_memory();
     let threads = rayon::current_num_threads();
     let mut known: Option<(&[TrajectorySource], Vec<usize>)> = None;

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 /// A whole spec file.
 #[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, expecting = "a table of the spec's sections")]
 pub struct SpecFile {
     /// Name of the experiment; results go to `results/<name>/`.
     pub name: String,
@@ -34,9 +34,12 @@ pub struct SpecFile {
 
 /// The `[data]` section: the trajectories an experiment runs on and how they are
 /// sampled (not a data file: the files are its `trajectories`). A fault's message
-/// still calls it `struct DataFile`, as it did before the type was renamed.
+/// says what is expected in words.
 #[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields, expecting = "struct DataFile")]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a table with `sample_rate_hz` and `trajectories`"
+)]
 pub struct DataSectionFile {
     /// Samples per second of every trajectory.
     #[serde(default = "default_sample_rate_hz")]
@@ -52,7 +55,10 @@ pub struct DataSectionFile {
 
 /// One named trajectory: a sample range of a `.npy` or `.csv` file, or a synthetic one.
 #[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a table with `name`, and `file` or `synthetic_duration_s`"
+)]
 pub struct TrajectoryFile {
     pub name: String,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -69,7 +75,10 @@ pub struct TrajectoryFile {
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a table of the synthetic trajectories' settings"
+)]
 pub struct SyntheticFile {
     /// Range of cruise speeds of the straight legs.
     pub speed_m_s: [f64; 2],
@@ -99,7 +108,10 @@ impl Default for SyntheticFile {
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a table with `beam_pitch_deg` and `gnss_noise_m_s`"
+)]
 pub struct SensorsFile {
     /// Pitch of each DVL beam from the vertical.
     pub beam_pitch_deg: f64,
@@ -118,7 +130,10 @@ impl Default for SensorsFile {
 
 /// The training grid: every combination of the three axes.
 #[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a table with `scale_pct`, `bias_cm_s` and `noise_cm_s`"
+)]
 pub struct GridFile {
     pub scale_pct: AxisFile,
     pub bias_cm_s: AxisFile,
@@ -127,7 +142,10 @@ pub struct GridFile {
 
 /// One grid axis: explicit `values`, or `start`, `stop` (inclusive) and `step`.
 #[derive(Debug, Clone, Default, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a table with `values`, or `start`, `stop` and `step`"
+)]
 pub struct AxisFile {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub values: Option<Vec<f64>>,
@@ -140,7 +158,7 @@ pub struct AxisFile {
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, expecting = "a table with `trajectories`")]
 pub struct DatasetFile {
     /// Trajectories the training windows are cut from.
     pub trajectories: Vec<String>,
@@ -157,7 +175,10 @@ pub struct DatasetFile {
 
 /// A DVL under test: the error terms its measurements are made with.
 #[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a table with `name`, `scale_pct`, `bias_cm_s` and `noise_cm_s`"
+)]
 pub struct DvlFile {
     pub name: String,
     pub scale_pct: f64,
@@ -166,7 +187,10 @@ pub struct DvlFile {
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a table with `trajectory`, `window_sizes_s` and `monte_carlo_runs`"
+)]
 pub struct CalibrationFile {
     /// The trajectory calibrated on (T10Cal in the paper).
     pub trajectory: String,
@@ -175,14 +199,18 @@ pub struct CalibrationFile {
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, expecting = "a table with `trajectories`")]
 pub struct EvaluationFile {
     pub trajectories: Vec<String>,
 }
 
 /// Each key left out takes its default: every kind, every error model.
 #[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(
+    deny_unknown_fields,
+    default,
+    expecting = "a table with `kinds` and `error_models`"
+)]
 pub struct EstimatorsFile {
     /// Any of `baseline`, `least_squares`, `dcnet`, `floor`.
     pub kinds: Vec<String>,
@@ -205,7 +233,11 @@ impl Default for EstimatorsFile {
 
 /// DCNet's layer sizes (docs/paper.md gives the layout, not the sizes).
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(
+    deny_unknown_fields,
+    default,
+    expecting = "a table of the model's settings"
+)]
 pub struct ModelFile {
     /// Output channels of every convolution, in both heads.
     pub conv_channels: usize,
@@ -236,7 +268,11 @@ impl Default for ModelFile {
 
 /// How DCNet is trained.
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(
+    deny_unknown_fields,
+    default,
+    expecting = "a table of the training's settings"
+)]
 pub struct TrainingFile {
     /// `flex` or `ndarray` (burn's CPU backends).
     pub backend: String,
@@ -266,7 +302,10 @@ fn is_one(value: &usize) -> bool {
 /// improved on the validation loss of the last improvement by more than
 /// `min_improvement` (cm/s)².
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a table of early stopping's settings"
+)]
 pub struct EarlyStoppingFile {
     pub patience_epochs: usize,
     #[serde(default)]
@@ -394,7 +433,7 @@ impl Default for LearningRatesFile {
 
 /// What the report and the figures show beyond the tables.
 #[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, expecting = "a table of the report's settings")]
 pub struct ReportFile {
     /// TOML file of published values to put beside ours (see `crate::spec::published`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -442,7 +481,7 @@ fn default_validation_fraction() -> f64 {
 /// The `[sweep]` table: the values of any spec keys, whose product is the grid of
 /// points to run, or a random sample of it.
 #[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, expecting = "a table with `values`")]
 pub struct SweepFile {
     /// Run this many points drawn at random from the grid instead of all of them.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -44,7 +44,7 @@ pub use toml_file::{SpecError, SpecErrors, TomlFile};
 pub use windows::{seconds_to_samples, window_count, window_starts};
 
 use crate::vocab::{Activation, Backend, ErrorModel, EstimatorKind, SensorErrors};
-use check::calibration::{check_calibration, check_dcnet_windows};
+use check::calibration::{check_calibration, check_dcnet_windows, check_fitted_windows};
 use check::data::check_data;
 use check::dataset::check_dataset;
 use check::estimators::check_estimators;
@@ -301,6 +301,12 @@ impl SpecFile {
         let (kinds, error_models) = check_estimators(estimators, &mut faults);
         if kinds.contains(&EstimatorKind::Dcnet) {
             check_dcnet_windows(window, &calibration.window_sizes, rate, &mut faults);
+        }
+        if kinds
+            .iter()
+            .any(|k| matches!(k, EstimatorKind::LeastSquares | EstimatorKind::BeamWls))
+        {
+            check_fitted_windows(&error_models, &calibration.window_sizes, rate, &mut faults);
         }
         let model = check_model(model, window.samples, &mut faults);
         let training = check_training(training, &mut faults);

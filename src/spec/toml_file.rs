@@ -33,11 +33,45 @@ impl fmt::Display for SpecError {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub struct SpecErrors(pub Vec<SpecError>);
 
+/// The most faults shown; the rest are counted, so that a spec with a hundred
+/// thousand bad values gives a short answer.
+pub const SHOWN_FAULTS: usize = 20;
+
 impl fmt::Display for SpecErrors {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let lines: Vec<String> = self.0.iter().map(ToString::to_string).collect();
-        f.write_str(&lines.join("\n"))
+        for (i, fault) in self.0.iter().take(SHOWN_FAULTS).enumerate() {
+            if i > 0 {
+                f.write_str("\n")?;
+            }
+            write!(f, "{fault}")?;
+        }
+        match self.0.len().saturating_sub(SHOWN_FAULTS) {
+            0 => Ok(()),
+            1 => f.write_str("\n… and 1 more fault"),
+            more => write!(f, "\n… and {more} more faults"),
+        }
     }
+}
+
+/// `value` as a message shows it: whole when short, else its start and its length,
+/// such as `[1, 2, 3, … (15000 values)]` for a long array.
+pub fn shown_value(value: &str) -> String {
+    const LONGEST: usize = 60;
+    if value.chars().count() <= LONGEST {
+        return value.to_string();
+    }
+    if let Ok(toml::Value::Array(items)) = value.parse::<toml::Value>().or_else(|_| {
+        toml::from_str::<toml::Table>(&format!("value = {value}"))
+            .map(|mut t| t.remove("value").unwrap_or(toml::Value::Boolean(false)))
+    }) {
+        let first: Vec<String> = items.iter().take(3).map(ToString::to_string).collect();
+        let first = first.join(", ");
+        if first.chars().count() <= LONGEST {
+            return format!("[{first}, … ({} values)]", items.len());
+        }
+    }
+    let start: String = value.chars().take(LONGEST / 2).collect();
+    format!("{start}… ({} characters)", value.chars().count())
 }
 
 impl From<SpecError> for SpecErrors {
@@ -58,14 +92,30 @@ impl TomlText {
     /// Reads `path`; when it cannot, the fault reads `path: {unreadable}: {cause}`.
     pub fn read(path: &Path, unreadable: &str) -> Result<Self, SpecError> {
         let shown = path.display().to_string();
-        match std::fs::read_to_string(path) {
-            Ok(text) => Ok(TomlText { shown, text }),
-            Err(e) => Err(SpecError {
-                location: shown,
-                key: String::new(),
-                message: format!("{unreadable}: {e}"),
-            }),
-        }
+        let bytes = std::fs::read(path).map_err(|e| SpecError {
+            location: shown.clone(),
+            key: String::new(),
+            message: format!("{unreadable}: {e}"),
+        })?;
+        String::from_utf8(bytes)
+            .map(|text| TomlText {
+                shown: shown.clone(),
+                text,
+            })
+            .map_err(|e| {
+                let valid = e.utf8_error().valid_up_to();
+                let bytes = e.as_bytes();
+                let line = bytes[..valid].iter().filter(|&&b| b == b'\n').count() + 1;
+                let column = valid - bytes[..valid].iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1) + 1;
+                SpecError {
+                    location: format!("{shown}:{line}"),
+                    key: String::new(),
+                    message: format!(
+                        "{unreadable}: it is not UTF-8: byte 0x{:02x} at offset {valid} (line {line}, column {column}) starts no UTF-8 character; save the file as UTF-8",
+                        bytes[valid]
+                    ),
+                }
+            })
     }
 
     /// The name faults show the text by.
@@ -134,22 +184,18 @@ impl TomlText {
     /// A fault at `key`, placed on the key's line (or its deepest parent's that is
     /// written; line 1 when the text is not TOML).
     pub fn fault(&self, key: &str, message: impl fmt::Display) -> SpecError {
-        let line = DeTable::parse(&self.text)
-            .map(|spans| line_of(&self.text, span_of(&spans, key)))
-            .unwrap_or(1);
-        SpecError {
-            location: self.at_line(line),
-            key: key.to_string(),
-            message: message.to_string(),
-        }
+        self.placer().fault(key, message)
     }
 
-    /// Whether the text writes `key` (a dotted key path with indices).
-    pub fn writes(&self, key: &str) -> bool {
-        let Ok(root) = DeTable::parse(&self.text) else {
-            return false;
-        };
-        steps(key).is_ok_and(|path| find(&root, &path).1)
+    /// The text parsed once, to place any number of faults without parsing it again.
+    pub fn placer(&self) -> Placer<'_> {
+        Placer {
+            text: self,
+            root: DeTable::parse(&self.text).ok(),
+            line_starts: std::iter::once(0)
+                .chain(self.text.match_indices('\n').map(|(i, _)| i + 1))
+                .collect(),
+        }
     }
 
     /// The line of the key at exactly `names` (one table key a step, dots and all),
@@ -161,6 +207,50 @@ impl TomlText {
             (start, true) => Some(line_of(&self.text, start)),
             (_, false) => None,
         }
+    }
+}
+
+/// A [`TomlText`] parsed once, with where its lines start: places each fault at a key
+/// in time proportional to the key's depth, so many faults cost one parse.
+pub(super) struct Placer<'a> {
+    text: &'a TomlText,
+    /// `None` when the text is not TOML.
+    root: Option<Spanned<DeTable<'a>>>,
+    /// The byte offset of each line's start, the first line's (0) first.
+    line_starts: Vec<usize>,
+}
+
+impl Placer<'_> {
+    /// A fault at `key`, placed on the key's line (or its deepest parent's that is
+    /// written; line 1 when the text is not TOML).
+    pub fn fault(&self, key: &str, message: impl fmt::Display) -> SpecError {
+        let line = self
+            .root
+            .as_ref()
+            .map_or(1, |root| self.line_at(span_of(root, key)));
+        SpecError {
+            location: self.text.at_line(line),
+            key: key.to_string(),
+            message: message.to_string(),
+        }
+    }
+
+    /// Whether the text writes `key` (a dotted key path with indices).
+    pub fn writes(&self, key: &str) -> bool {
+        let Some(root) = &self.root else {
+            return false;
+        };
+        steps(key).is_ok_and(|path| find(root, &path).1)
+    }
+
+    /// The 1-based line that byte `offset` is on, as [`line_of`] counts it.
+    fn line_at(&self, offset: usize) -> usize {
+        let text = &self.text.text;
+        let offset = offset.min(text.len());
+        let line = self.line_starts.partition_point(|&start| start <= offset);
+        // `lines()` counts no empty line after a final newline.
+        let lines = self.line_starts.len() - usize::from(text.ends_with('\n'));
+        line.min(lines.max(1))
     }
 }
 

@@ -16,7 +16,7 @@ pub mod overrides;
 pub mod sweep;
 
 use super::Spec;
-use super::toml_file::{SpecError, SpecErrors, TomlText};
+use super::toml_file::{SpecError, SpecErrors, TomlText, shown_value};
 use overrides::apply_overrides;
 use source::{Assigned, Source};
 use std::path::{Path, PathBuf};
@@ -47,6 +47,35 @@ impl Experiment {
         !self.swept.is_empty()
     }
 
+    /// What the spec asks that runs but says little, each placed like a fault: a test
+    /// trajectory that is the calibration trajectory (its error is measured on the
+    /// samples the calibration saw).
+    pub fn warnings(&self) -> Vec<SpecError> {
+        let mut warnings: Vec<SpecError> = Vec::new();
+        for point in &self.points {
+            let spec = &point.spec;
+            let calibration = spec.calibration.trajectory;
+            for (i, _) in spec
+                .evaluation
+                .iter()
+                .enumerate()
+                .filter(|&(_, &t)| t == calibration)
+            {
+                let warning = self.fault(
+                    &format!("evaluation.trajectories[{i}]"),
+                    format!(
+                        "{:?} is also calibration.trajectory: it is evaluated on the trajectory it was calibrated on, so its RMSE says little of another dive",
+                        spec.trajectories[calibration].name
+                    ),
+                );
+                if !warnings.contains(&warning) {
+                    warnings.push(warning);
+                }
+            }
+        }
+        warnings
+    }
+
     /// A fault at `key` found after loading, such as the memory a point needs, placed
     /// where the key is written or was set.
     pub fn fault(&self, key: &str, message: impl Into<String>) -> SpecError {
@@ -71,6 +100,15 @@ pub fn load_experiment(path: &Path, overrides: &[String]) -> Result<Experiment, 
         text,
         folder: spec_folder(path),
     };
+    // '/', '=' and ',' name a sweep's points (`<name>/<point>`): a spec's own name with
+    // them would write into a sweep's folder, or below another results folder.
+    if let Some(name) = table.get("name").and_then(toml::Value::as_str)
+        && name.contains(['/', '=', ','])
+    {
+        return Err(source
+            .locate(&assigned, "name".into(), format!("{:?} must use only letters, digits, '-', '_' and '.' (it names the results folder; '/', '=' and ',' name the points of a sweep)", shown_value(name)))
+            .into());
+    }
     match table.remove("sweep") {
         None => {
             let spec = source.check(table, &assigned)?;

@@ -5,7 +5,7 @@
 //! `--set`; or a fault per assignment that failed.
 
 use super::source::Assigned;
-use crate::spec::toml_file::{SpecError, SpecErrors, Step, steps};
+use crate::spec::toml_file::{SpecError, SpecErrors, Step, shown_value, steps};
 
 /// Applies every `--set KEY=VALUE` to `table`; the keys set, or a fault per assignment
 /// that failed.
@@ -16,10 +16,14 @@ pub(super) fn apply_overrides(
     let mut assigned = Assigned::default();
     let mut errors = Vec::new();
     for assignment in overrides {
+        let location = match assignment.split_once('=') {
+            Some((key, value)) => format!("--set {key}={}", shown_value(value)),
+            None => format!("--set {}", shown_value(assignment)),
+        };
         match apply_override(table, assignment) {
-            Ok(key) => assigned.0.push((key, format!("--set {assignment}"))),
+            Ok(key) => assigned.0.push((key, location)),
             Err(message) => errors.push(SpecError {
-                location: format!("--set {assignment}"),
+                location,
                 key: assignment
                     .split_once('=')
                     .map(|(key, _)| key.trim().to_string())

@@ -4,7 +4,7 @@
 //! that assigned its key (or one below it), or on the key's line; and a table
 //! deserialized and checked into a [`Spec`], every fault so placed.
 
-use crate::spec::toml_file::{SpecError, SpecErrors, TomlText, deserialize};
+use crate::spec::toml_file::{Placer, SpecError, SpecErrors, TomlText, deserialize};
 use crate::spec::{Spec, SpecFile};
 use std::path::PathBuf;
 
@@ -51,10 +51,15 @@ impl Source {
     /// that assigned it (or, for a key the file does not write, one below it, such as
     /// an unknown table), or its line.
     pub(super) fn locate(&self, assigned: &Assigned, key: String, message: String) -> SpecError {
+        Self::place(&self.text.placer(), assigned, key, message)
+    }
+
+    /// [`Source::locate`] with the text parsed once, for many faults.
+    fn place(placer: &Placer<'_>, assigned: &Assigned, key: String, message: String) -> SpecError {
         let origin = assigned.origin(&key).or_else(|| {
             // The key, or the deepest table above it that the file does not write
             // either (a missing key of a table that only `--set` gives).
-            let mut unwritten = Some(key.as_str()).filter(|k| !self.text.writes(k));
+            let mut unwritten = Some(key.as_str()).filter(|k| !placer.writes(k));
             while let Some(k) = unwritten {
                 if let Some(origin) = assigned.below(k) {
                     return Some(origin);
@@ -62,7 +67,7 @@ impl Source {
                 unwritten = k
                     .rsplit_once(['.', '['])
                     .map(|(parent, _)| parent)
-                    .filter(|parent| !self.text.writes(parent));
+                    .filter(|parent| !placer.writes(parent));
             }
             None
         });
@@ -72,7 +77,7 @@ impl Source {
                 key,
                 message,
             },
-            None => self.text.fault(&key, message),
+            None => placer.fault(&key, message),
         }
     }
 
@@ -85,10 +90,11 @@ impl Source {
         let file: SpecFile = deserialize(toml::Value::Table(table))
             .map_err(|(key, message)| self.locate(assigned, key, message))?;
         file.check(&self.folder).map_err(|faults| {
+            let placer = self.text.placer();
             SpecErrors(
                 faults
                     .into_iter()
-                    .map(|(key, message)| self.locate(assigned, key, message))
+                    .map(|(key, message)| Self::place(&placer, assigned, key, message))
                     .collect(),
             )
         })

@@ -224,9 +224,10 @@ fn sweep_axes(values: &toml::Table, text: &TomlText) -> Result<Vec<Axis>, SpecEr
     let mut faults = Vec::new();
     collect_axes(values, &[], text, &mut axes, &mut faults);
     if axes.is_empty() && faults.is_empty() {
+        let line = sweep_line(text);
         faults.push((
             String::new(),
-            1,
+            line,
             "names no key: list at least one, such as \"training.learning_rate\" = [1e-4, 1e-3]"
                 .into(),
         ));
@@ -250,6 +251,14 @@ fn sweep_axes(values: &toml::Table, text: &TomlText) -> Result<Vec<Axis>, SpecEr
     ))
 }
 
+/// The line `[sweep.values]` (or `[sweep]`) is written on; 1 when neither is, as when
+/// `--set` gives the sweep.
+fn sweep_line(text: &TomlText) -> usize {
+    text.written_line(&["sweep", "values"])
+        .or_else(|| text.written_line(&["sweep"]))
+        .unwrap_or(1)
+}
+
 /// Adds the lists in `table`, which is at `names` below `[sweep.values]`, to `axes`;
 /// what is neither a list nor a table to `faults`.
 fn collect_axes<'a>(
@@ -264,7 +273,7 @@ fn collect_axes<'a>(
         let key = names.join(".");
         let line = text
             .written_line(&[&["sweep", "values"], &names[..]].concat())
-            .unwrap_or(1);
+            .unwrap_or_else(|| sweep_line(text));
         match value {
             toml::Value::Array(list) if list.is_empty() => {
                 faults.push((key, line, "is empty: list at least one value".into()))
