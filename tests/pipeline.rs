@@ -766,6 +766,31 @@ fn a_folder_whose_figures_are_missing_is_not_done() {
     assert!(run_ok(d, &run).contains("nothing to do"));
 }
 
+/// `--force` on a current folder computes everything again and writes the folder anew,
+/// saying so; it never claims another process wrote it.
+#[test]
+fn force_on_a_current_folder_writes_it_again() {
+    let dir = project(false);
+    let d = dir.path();
+    let run = args(&["run", "experiments/quick.toml", "--no-plots"], &SMALL);
+    run_ok(d, &run);
+    let manifest_path = d.join("results/quick/manifest.json");
+    let started_at = |manifest: &str| {
+        let json: serde_json::Value = serde_json::from_str(manifest).unwrap();
+        json["started_at"].as_str().unwrap().to_string()
+    };
+    let before = std::fs::read_to_string(&manifest_path).unwrap();
+    // Seconds apart: the new manifest's start differs from the old one's.
+    std::thread::sleep(Duration::from_millis(1100));
+
+    let log = run_ok(d, &args(&run, &["--force"]));
+    assert!(!log.contains("another process"), "{log}");
+    assert!(log.contains("results written to"), "{log}");
+    let after = std::fs::read_to_string(&manifest_path).unwrap();
+    assert_ne!(started_at(&before), started_at(&after), "{after}");
+    assert!(run_ok(d, &run).contains("nothing to do"));
+}
+
 /// Two runs into one OUT at once share the work: each training and Monte Carlo block is
 /// computed by one of them while the other waits for it, and both end with the results
 /// of one run alone.

@@ -98,7 +98,7 @@ pub fn execute(plan: &Plan, mode: Mode, to_do: &[Task]) -> Result<Executed, Exec
     })?;
     stages.protocol = clock.elapsed().as_secs_f64();
     if !matches!(mode, Mode::Shard { .. }) {
-        write_results(plan, to_do, started_at, &stages, &mut executed)?;
+        write_results(plan, to_do, force, started_at, &stages, &mut executed)?;
     }
     Ok(executed)
 }
@@ -204,10 +204,11 @@ fn remove_stale_partials(plan: &Plan) -> Result<(), ExecuteError> {
 }
 
 /// Writes the results folders and the sweep table that `to_do` asks for, from the
-/// cache.
+/// cache; with `force`, a folder that is current is written again.
 fn write_results(
     plan: &Plan,
     to_do: &[Task],
+    force: bool,
     started_at: SystemTime,
     stages: &StageSeconds,
     executed: &mut Executed,
@@ -222,7 +223,7 @@ fn write_results(
         let (result, models) = monte_carlo::gather(plan, p)?;
         // Another process writing the same folder is waited for, and its folder kept.
         let _claim = claim::claim(&plan.out, &plan.results_key(p)).map_err(locks_error(plan))?;
-        if results_to_do && plan.status(Task::Results(p)) == Status::Done {
+        if results_to_do && !force && plan.status(Task::Results(p)) == Status::Done {
             eprintln!(
                 "{}: written by another process meanwhile",
                 point.folder.display()
