@@ -6,7 +6,6 @@
 use crate::report::plots::{Caption, Written};
 use crate::report::table::{Cell, ReportTable, ReportTables, Signs, replicates_note};
 use crate::results::read::StoredRun;
-use crate::vocab::ErrorModel;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -149,12 +148,7 @@ fn training_section(run: &StoredRun, out: &mut String) {
         "best validation loss (cm/s)²",
         "training s",
     ]);
-    let mut models: Vec<(ErrorModel, Option<usize>)> = run
-        .training
-        .iter()
-        .map(|e| (e.error_model, e.replicate))
-        .collect();
-    models.dedup();
+    let models = run.trained_models();
     for (model, replicate) in models {
         let epochs: Vec<_> = run
             .training

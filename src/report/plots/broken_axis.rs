@@ -9,7 +9,7 @@
 //! [`Scale::fit`] chooses, linear or logarithmic. Like [`Scale`], a [`BrokenAxis`] is a
 //! plotters coordinate that labels its own ticks.
 
-use super::scale::{Scale, cut_above};
+use super::scale::{Scale, cut_above, pixel_at};
 use plotters::coord::ranged1d::{KeyPointHint, NoDefaultFormatting, Ranged, ValueFormatter};
 use std::ops::Range;
 
@@ -176,9 +176,7 @@ impl Ranged for BrokenAxis {
     type ValueType = f64;
 
     fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
-        let length = f64::from(limit.1 - limit.0);
-        let position = (self.fraction(*value) * length).clamp(-1e6, 1e6);
-        limit.0 + (position + 1e-3).floor() as i32
+        pixel_at(self.fraction(*value), limit)
     }
 
     /// The ticks, as the bold mesh lines; no light lines.

@@ -256,14 +256,20 @@ pub fn cut_above(values: &[f64], most: usize) -> Option<f64> {
         .find(|kept| distance(*kept) <= OUTLIER_SHARE * all)
 }
 
+/// The pixel at `fraction` of the way from `limit.0` to `limit.1`, as every axis of
+/// these figures maps a value (far values clamped, so they stay drawable).
+pub fn pixel_at(fraction: f64, limit: (i32, i32)) -> i32 {
+    let length = f64::from(limit.1 - limit.0);
+    let position = (fraction * length).clamp(-1e6, 1e6);
+    limit.0 + (position + 1e-3).floor() as i32
+}
+
 impl Ranged for Scale {
     type FormatOption = NoDefaultFormatting;
     type ValueType = f64;
 
     fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
-        let length = f64::from(limit.1 - limit.0);
-        let position = (self.fraction(*value) * length).clamp(-1e6, 1e6);
-        limit.0 + (position + 1e-3).floor() as i32
+        pixel_at(self.fraction(*value), limit)
     }
 
     /// The ticks, as the bold mesh lines; no light lines.

@@ -24,6 +24,7 @@ use super::{
 use crate::evaluate::{CalibrationRow, EvaluationRow, RunRow};
 use crate::spec::published::Published;
 use crate::spec::{SpecErrors, SpecFile, TomlFile};
+use crate::vocab::ErrorModel;
 use arrow_schema::Schema;
 use columns::check_schema;
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
@@ -152,6 +153,17 @@ impl StoredRun {
     /// The stored DVL names, in the order the spec lists them.
     pub fn dvls(&self) -> Vec<String> {
         self.spec.dvl.iter().map(|d| d.name.clone()).collect()
+    }
+
+    /// The DCNets trained, (error model, replicate), in the order of `training.parquet`.
+    pub fn trained_models(&self) -> Vec<(ErrorModel, Option<usize>)> {
+        let mut models: Vec<_> = self
+            .training
+            .iter()
+            .map(|e| (e.error_model, e.replicate))
+            .collect();
+        models.dedup();
+        models
     }
 }
 

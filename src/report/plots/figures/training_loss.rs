@@ -7,7 +7,7 @@ use crate::report::plots::canvas::{Drawn, Outcome, draw_svg};
 use crate::report::plots::draw::*;
 use crate::report::plots::scale::Scale;
 use crate::results::read::StoredRun;
-use crate::vocab::{ErrorModel, EstimatorKind};
+use crate::vocab::EstimatorKind;
 use plotters::prelude::*;
 
 /// Training and validation loss per epoch of each error model (and replicate, each in
@@ -18,12 +18,7 @@ pub fn training_loss(run: &StoredRun) -> PlotResult<Outcome> {
             "the run trained no DCNet (training.parquet is empty)".into(),
         ));
     }
-    let mut models: Vec<(ErrorModel, Option<usize>)> = run
-        .training
-        .iter()
-        .map(|e| (e.error_model, e.replicate))
-        .collect();
-    models.dedup();
+    let models = run.trained_models();
     let epochs = run
         .training
         .iter()
