@@ -1596,3 +1596,166 @@ fn a_full_disk_fails_with_exit_2_naming_the_file_and_resumes_to_the_same_bytes()
     }
     tally.finish("full disk");
 }
+
+// ---------------------------------------------------------------- whose folder
+
+/// What makes the other spec file's spec another one: a report setting.
+const OTHER: [&str; 2] = ["--set", "report.tolerance_pct=5"];
+
+/// `run` with the spec file `spec` in place of the quick one.
+fn run_of(spec: &str, out: &str, extra: &[&str]) -> Vec<String> {
+    let mut args = run_args(out, extra);
+    args[1] = spec.to_string();
+    args
+}
+
+/// A results folder is never replaced by a run of another spec file with the same
+/// `name`, nor a sweep's point by a run that is not the sweep, unless `--force`: the
+/// error names the folder and both specs, and the folder is left as it was.
+#[test]
+fn a_results_folder_of_another_spec_is_refused_unless_forced() {
+    let project = project(false);
+    let d = project.path();
+    std::fs::copy(d.join(SPEC), d.join("experiments/other.toml")).unwrap();
+    let output = exe(d, &run_args("out", &[]));
+    assert!(output.status.success(), "{}", stderr(&output));
+    let manifest = d.join("out/quick/manifest.json");
+    let before = std::fs::read(&manifest).unwrap();
+
+    let other = run_of("experiments/other.toml", "out", &OTHER);
+    let refused = exe(d, &other);
+    let message = stderr(&refused);
+    assert_eq!(refused.status.code(), Some(1), "{message}");
+    for part in [
+        "out/quick",
+        "experiments/quick.toml",
+        "experiments/other.toml",
+    ] {
+        assert!(message.contains(part), "{part}: {message}");
+    }
+    assert!(message.contains("--force"), "{message}");
+    assert!(!message.contains("results written"), "{message}");
+    assert!(
+        std::fs::read(&manifest).unwrap() == before,
+        "the folder changed"
+    );
+
+    let forced = exe(d, &[other, vec!["--force".into()]].concat());
+    assert!(forced.status.success(), "{}", stderr(&forced));
+    let after = std::fs::read_to_string(&manifest).unwrap();
+    assert!(after.contains("experiments/other.toml"), "{after}");
+
+    // A plain run whose folder is a point of a sweep.
+    let output = exe(d, &run_args("out", &SWEEP));
+    assert!(output.status.success(), "{}", stderr(&output));
+    let point = d.join("out/quick-sweep/monte_carlo_runs=2/manifest.json");
+    let before = std::fs::read(&point).unwrap();
+    let plain = run_args("out/quick-sweep", &["--set", "name=monte_carlo_runs=2"]);
+    let refused = exe(d, &plain);
+    let message = stderr(&refused);
+    assert_eq!(refused.status.code(), Some(1), "{message}");
+    assert!(
+        message.contains("out/quick-sweep/monte_carlo_runs=2: is a point of the sweep"),
+        "{message}"
+    );
+    assert!(
+        std::fs::read(&point).unwrap() == before,
+        "the point changed"
+    );
+}
+
+/// Two runs of different spec files with one `name`, started together: one writes the
+/// folder, the other is refused with both specs named, whichever comes first.
+#[test]
+fn two_specs_with_one_name_at_once_write_one_folder_and_refuse_the_other() {
+    let project = project(false);
+    let d = project.path();
+    std::fs::copy(d.join(SPEC), d.join("experiments/other.toml")).unwrap();
+    let both = [
+        spawn(d, &run_args("out", &[])),
+        spawn(d, &run_of("experiments/other.toml", "out", &OTHER)),
+    ]
+    .map(|child| child.wait_with_output().unwrap());
+    let ok: Vec<&Output> = both.iter().filter(|o| o.status.success()).collect();
+    let refused: Vec<&Output> = both.iter().filter(|o| !o.status.success()).collect();
+    assert_eq!(
+        (ok.len(), refused.len()),
+        (1, 1),
+        "{}\n{}",
+        stderr(&both[0]),
+        stderr(&both[1])
+    );
+    let message = stderr(refused[0]);
+    for part in [
+        "out/quick",
+        "experiments/quick.toml",
+        "experiments/other.toml",
+    ] {
+        assert!(message.contains(part), "{part}: {message}");
+    }
+    assert!(!message.contains("results written"), "{message}");
+}
+
+// ---------------------------------------------------------------- tables edited by hand
+
+/// `table` of `folder` rewritten, a valid Parquet file of the same schema, with every
+/// value of `column` set to `value`.
+fn edit_table(folder: &Path, table: &str, column: &str, value: f64) {
+    use arrow_array::{ArrayRef, Float64Array};
+    let path = folder.join(table);
+    let batch = read_parquet(&path);
+    let columns: Vec<ArrayRef> = batch
+        .schema()
+        .fields()
+        .iter()
+        .zip(batch.columns())
+        .map(|(field, array)| match field.name() == column {
+            true => std::sync::Arc::new(Float64Array::from(vec![value; array.len()])) as ArrayRef,
+            false => array.clone(),
+        })
+        .collect();
+    let edited = RecordBatch::try_new(batch.schema(), columns).unwrap();
+    let mut bytes = Vec::new();
+    let mut writer =
+        parquet::arrow::ArrowWriter::try_new(&mut bytes, edited.schema(), None).unwrap();
+    writer.write(&edited).unwrap();
+    writer.close().unwrap();
+    std::fs::write(&path, bytes).unwrap();
+}
+
+/// `plot` of a folder whose table was edited (to NaN, to infinity) after the run is
+/// refused with exit code 1, naming the table: the manifest holds each table's SHA-256.
+#[test]
+fn plot_refuses_a_table_whose_digest_is_not_the_manifests() {
+    let project = project(false);
+    let d = project.path();
+    let output = exe(d, &run_args("out", &[]));
+    assert!(output.status.success(), "{}", stderr(&output));
+    let folder = d.join("out/quick");
+    let saved = std::fs::read(folder.join("calibration.parquet")).unwrap();
+    let plot = ["plot", "out/quick", "--out", "figures"];
+    assert!(dcnet(d, &plot).status.success());
+    for value in [f64::NAN, f64::INFINITY] {
+        edit_table(&folder, "calibration.parquet", "rmse_cm_s", value);
+        let refused = dcnet(d, &plot);
+        let message = stderr(&refused);
+        assert_eq!(refused.status.code(), Some(1), "{value}: {message}");
+        assert!(
+            message.contains("out/quick/calibration.parquet: its SHA-256 is"),
+            "{message}"
+        );
+        assert!(message.contains("manifest.json"), "{message}");
+    }
+    std::fs::write(folder.join("calibration.parquet"), saved).unwrap();
+    edit_table(
+        &folder,
+        "evaluation.parquet",
+        "rmse_cm_s",
+        f64::NEG_INFINITY,
+    );
+    let message = stderr(&dcnet(d, &plot));
+    assert!(
+        message.contains("out/quick/evaluation.parquet"),
+        "{message}"
+    );
+}

@@ -30,6 +30,7 @@ pub(super) fn plot(
 /// `out` is `None`) and writes its report.
 pub(super) fn plot_run(results: &Path, out: Option<&Path>, format: Format) -> Result<(), CliError> {
     let stored = StoredRun::read(results).map_err(input)?;
+    stored.check_tables().map_err(input)?;
     let figures = match out {
         Some(out) => {
             let folder = out.join(&stored.spec.name);

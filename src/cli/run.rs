@@ -4,7 +4,9 @@
 use super::args::{Drawing, Target};
 use super::plot::{plot_run, plot_sweep};
 use super::{CliError, about, failure, input, load_target, training_seconds};
-use crate::pipeline::{Executed, Mode, Plan, Shard, Task, execute, remove_spent_checkpoints};
+use crate::pipeline::{
+    Executed, Mode, Plan, Shard, Task, execute, owner, remove_spent_checkpoints,
+};
 use crate::report::plots::{Format, Metric};
 use crate::report::printed;
 use crate::results::read::StoredRun;
@@ -25,13 +27,14 @@ pub(super) fn run(
     force: bool,
 ) -> Result<(), CliError> {
     let experiment = load_target(target)?;
-    let plan = Plan::new(&experiment, &target.out).map_err(input)?;
+    let plan = planned(&experiment, target)?;
     let mode = match parse_shard(shard)? {
         Some(shard) => Mode::Shard { shard, force },
         None => Mode::All { force },
     };
     remove_spent_checkpoints(&plan).map_err(failure)?;
     let to_do = plan.to_do(mode);
+    check_owners(&plan, &to_do, force)?;
     let total = plan.tasks().len();
     let folder = target.out.join(&experiment.name);
     let whose = match mode {
@@ -64,6 +67,25 @@ pub(super) fn run(
         finish(&experiment, &executed, drawing)?;
     }
     failed_models(plan.failures(mode))
+}
+
+/// The plan of `experiment`, whose results folders record the spec file they come
+/// from.
+fn planned<'a>(experiment: &'a Experiment, target: &Target) -> Result<Plan<'a>, CliError> {
+    let mut plan = Plan::new(experiment, &target.out).map_err(input)?;
+    plan.spec_file = std::fs::canonicalize(&target.spec).ok();
+    Ok(plan)
+}
+
+/// Refuses, before anything is computed, to write a results folder that another spec
+/// wrote, unless `force`.
+fn check_owners(plan: &Plan, to_do: &[Task], force: bool) -> Result<(), CliError> {
+    for task in to_do {
+        if let Task::Results(p) = *task {
+            owner::check(plan, p, force).map_err(input)?;
+        }
+    }
+    Ok(())
 }
 
 /// Trainings that take longer than this are announced with how long they take.
@@ -175,8 +197,10 @@ pub(super) fn plan(target: &Target, shard: Option<&str>) -> Result<(), CliError>
 /// Writes the results of a sharded run from the cache the shards filled.
 pub(super) fn collect(target: &Target, drawing: &Drawing) -> Result<(), CliError> {
     let experiment = load_target(target)?;
-    let plan = Plan::new(&experiment, &target.out).map_err(input)?;
-    let executed = execute(&plan, Mode::Collect, &plan.to_do(Mode::Collect)).map_err(failure)?;
+    let plan = planned(&experiment, target)?;
+    let to_do = plan.to_do(Mode::Collect);
+    check_owners(&plan, &to_do, false)?;
+    let executed = execute(&plan, Mode::Collect, &to_do).map_err(failure)?;
     if executed.done == 0 {
         eprintln!(
             "nothing to do: the results in {} are current",

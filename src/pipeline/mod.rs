@@ -22,6 +22,7 @@
 pub mod cache;
 pub mod claim;
 pub mod monte_carlo;
+pub mod owner;
 pub mod plan;
 pub mod training;
 pub mod shard;
@@ -54,6 +55,8 @@ pub enum ExecuteError {
     Models(#[from] cache::ModelStoreError),
     #[error("{0} is not a finite number; nothing of it is stored")]
     NonFinite(String),
+    #[error(transparent)]
+    Owner(#[from] owner::OwnerError),
     #[error("{count} tasks are not done yet, so there is nothing to collect:\n{list}")]
     Incomplete { count: usize, list: String },
 }
@@ -221,8 +224,13 @@ fn write_results(
             continue;
         }
         let (result, models) = monte_carlo::gather(plan, p)?;
-        // Another process writing the same folder is waited for, and its folder kept.
-        let _claim = claim::claim(&plan.out, &plan.results_key(p)).map_err(locks_error(plan))?;
+        // Another process writing the same folder is waited for: its folder is kept
+        // when it is this one's, refused when another spec wrote it.
+        let _claim =
+            claim::claim(&plan.out, &owner::folder_key(plan, p)).map_err(locks_error(plan))?;
+        if results_to_do {
+            owner::check(plan, p, force)?;
+        }
         if results_to_do && !force && plan.status(Task::Results(p)) == Status::Done {
             eprintln!(
                 "{}: written by another process meanwhile",
@@ -273,5 +281,10 @@ fn manifest(plan: &Plan, p: usize, started_at: SystemTime, stages: &StageSeconds
         stage_seconds: stages.clone(),
         results_key: plan.results_key(p),
         files_sha256: Default::default(),
+        spec_file: plan
+            .spec_file
+            .as_ref()
+            .map(|path| path.display().to_string())
+            .unwrap_or_default(),
     }
 }

@@ -41,6 +41,9 @@ pub struct Plan<'a> {
     pub points: Vec<PointPlan>,
     pub models: ModelStore,
     pub block_store: BlockStore,
+    /// The spec file the experiment was read from, as its results folders record it:
+    /// a folder written from another file is not replaced without `--force`.
+    pub spec_file: Option<PathBuf>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -72,6 +75,7 @@ impl<'a> Plan<'a> {
             points: Vec::new(),
             models: ModelStore::new(cache.join("models")),
             block_store: BlockStore::new(cache.join("monte_carlo")),
+            spec_file: None,
         };
         for (p, point) in experiment.points.iter().enumerate() {
             plan.add_point(p, &point.spec);

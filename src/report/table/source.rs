@@ -397,6 +397,7 @@ mod tests {
             stage_seconds: Default::default(),
             results_key: String::new(),
             files_sha256: Default::default(),
+            spec_file: String::new(),
         };
         let mut baseline_at_100 = calibration("DVL1", Baseline, None, 100.0, 5.92, true);
         baseline_at_100.efficiency = Some(0.8);

@@ -77,12 +77,26 @@ pub enum ReadError {
         #[source]
         source: arrow_schema::ArrowError,
     },
+    #[error(transparent)]
+    Altered(#[from] Box<Altered>),
     #[error("{}", path.display())]
     Manifest {
         path: PathBuf,
         #[source]
         source: ManifestError,
     },
+}
+
+/// A file of the folder whose bytes are not those the run wrote.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "{}: its SHA-256 is {found}, not the {recorded} that {MANIFEST} records: it was changed after the run wrote it; run the spec again to write it anew",
+    path.display()
+)]
+pub struct Altered {
+    pub path: PathBuf,
+    pub found: String,
+    pub recorded: String,
 }
 
 /// Why a manifest could not be read.
@@ -109,6 +123,33 @@ pub struct StoredRun {
 }
 
 impl StoredRun {
+    /// Checks the Parquet tables against the SHA-256 the manifest records for each: the
+    /// first that differs (a table edited by hand, say) is an error naming it. The
+    /// published values may be edited (`plot` then compares with the new ones); a
+    /// manifest from before digests records none and is not checked.
+    pub fn check_tables(&self) -> Result<(), ReadError> {
+        let recorded = TABLES
+            .iter()
+            .filter_map(|name| Some((name, self.manifest.files_sha256.get(*name)?)));
+        for (name, recorded) in recorded {
+            let path = self.folder.join(name);
+            let bytes = std::fs::read(&path).map_err(|source| ReadError::Io {
+                path: path.clone(),
+                source,
+            })?;
+            let found = crate::files::sha256_hex(&bytes);
+            if &found != recorded {
+                return Err(Box::new(Altered {
+                    path,
+                    found,
+                    recorded: recorded.clone(),
+                })
+                .into());
+            }
+        }
+        Ok(())
+    }
+
     pub fn read(folder: &Path) -> Result<StoredRun, ReadError> {
         let spec_path = existing(&folder.join(SPEC))?;
         let spec = TomlFile::<SpecFile>::read(&spec_path)
