@@ -48,6 +48,23 @@ pub fn remove_stale_partials(folder: &Path) -> std::io::Result<usize> {
     Ok(removed)
 }
 
+/// Makes the folder `path` and its parents, like `create_dir_all`, but where a file
+/// stands in the place of one of them the error names that file.
+pub fn create_folder(path: &Path) -> std::io::Result<()> {
+    for ancestor in path.ancestors() {
+        if ancestor.exists() && !ancestor.is_dir() {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::AlreadyExists,
+                format!(
+                    "{} is a file, where a folder is needed; move or remove it",
+                    ancestor.display()
+                ),
+            ));
+        }
+    }
+    std::fs::create_dir_all(path)
+}
+
 /// Writes `bytes` to `path` through a temporary file in the same folder and a rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let mut file = partial_beside(path)?;

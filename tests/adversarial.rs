@@ -1759,3 +1759,63 @@ fn plot_refuses_a_table_whose_digest_is_not_the_manifests() {
         "{message}"
     );
 }
+
+// ---------------------------------------------------------------- what stands in the way
+
+/// A file where the results folder or the cache goes, and a folder where a lock file
+/// goes, are refused with the path that is in the way, never "File exists"; the
+/// results folder is checked before anything is computed.
+#[test]
+fn a_file_or_folder_in_the_way_is_named() {
+    let project = project(false);
+    let d = project.path();
+    std::fs::create_dir(d.join("out")).unwrap();
+    std::fs::write(d.join("out/quick"), "").unwrap();
+    let refused = exe(d, &run_args("out", &[]));
+    let message = stderr(&refused);
+    assert_eq!(refused.status.code(), Some(1), "{message}");
+    assert!(
+        message.contains("out/quick: is a file, where the results folder goes"),
+        "{message}"
+    );
+    assert!(!message.contains("trained"), "{message}");
+    assert!(!message.contains("os error 17"), "{message}");
+    std::fs::remove_file(d.join("out/quick")).unwrap();
+
+    std::fs::write(d.join("out/.cache"), "").unwrap();
+    let message = stderr(&exe(d, &run_args("out", &[])));
+    assert!(
+        message.contains("out/.cache is a file, where a folder is needed"),
+        "{message}"
+    );
+    std::fs::remove_file(d.join("out/.cache")).unwrap();
+
+    // The first lock a run takes is its first training's, named by its key.
+    let plan = stdout(&exe(d, &plan_args("out", &[])));
+    let key = plan
+        .lines()
+        .find(|l| l.starts_with("| train DCNet"))
+        .map(|l| l.split('|').nth(2).unwrap().trim().to_string())
+        .expect(&plan);
+    let lock = format!("out/.cache/locks/{key}.lock");
+    std::fs::create_dir_all(d.join(&lock)).unwrap();
+    let message = stderr(&exe(d, &run_args("out", &[])));
+    assert!(message.contains(&lock), "{message}");
+}
+
+/// `DCNET_LOG_EVERY` that is not a number is refused naming the variable, not the
+/// `--log-every` flag the user never typed.
+#[test]
+fn a_bad_log_every_variable_is_named() {
+    let project = project(false);
+    let output = Command::new(env!("CARGO_BIN_EXE_dcnet-exp"))
+        .current_dir(project.path())
+        .args(["validate", SPEC])
+        .env("DCNET_LOG_EVERY", "abc")
+        .output()
+        .unwrap();
+    let message = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{message}");
+    assert!(message.contains("DCNET_LOG_EVERY=abc"), "{message}");
+    assert!(!message.contains("'--log-every"), "{message}");
+}

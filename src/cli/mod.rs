@@ -62,7 +62,26 @@ fn failure(error: impl Into<anyhow::Error>) -> CliError {
     CliError::Failure(error.into())
 }
 
+/// The variable that gives `--log-every` when the flag is not typed.
+const LOG_EVERY_VARIABLE: &str = "DCNET_LOG_EVERY";
+
+/// Refuses a `DCNET_LOG_EVERY` that is not a number, naming the variable (clap would
+/// name the `--log-every` flag, which the user never typed). A typed flag wins.
+fn check_log_every_variable() -> Result<(), CliError> {
+    let typed = std::env::args_os().any(|arg| arg.to_string_lossy().starts_with("--log-every"));
+    match std::env::var_os(LOG_EVERY_VARIABLE) {
+        Some(value) if !typed && value.to_string_lossy().parse::<f64>().is_err() => {
+            Err(input(anyhow::anyhow!(
+                "{LOG_EVERY_VARIABLE}={}: not a number of seconds; give 0 to {MAX_LOG_EVERY_S}",
+                value.to_string_lossy()
+            )))
+        }
+        _ => Ok(()),
+    }
+}
+
 pub fn main() -> Result<(), CliError> {
+    check_log_every_variable()?;
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) if !e.use_stderr() => {

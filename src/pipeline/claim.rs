@@ -21,31 +21,49 @@ pub struct Claim {
     _lock: File,
 }
 
-/// The lock file of the task with cache key `key`.
-fn open(out: &Path, key: &str) -> io::Result<File> {
+/// A lock that could not be opened or taken, with the path of the lock file (or of
+/// the folder that could not be made for it).
+#[derive(Debug, thiserror::Error)]
+#[error("locking {}", path.display())]
+pub struct ClaimError {
+    pub path: PathBuf,
+    #[source]
+    pub source: io::Error,
+}
+
+/// The lock file of the task with cache key `key`, and the file opened.
+fn open(out: &Path, key: &str) -> Result<(PathBuf, File), ClaimError> {
     let folder = folder(out);
-    std::fs::create_dir_all(&folder)?;
-    File::options()
+    crate::files::create_folder(&folder).map_err(|source| ClaimError {
+        path: folder.clone(),
+        source,
+    })?;
+    let path = folder.join(format!("{}.lock", &key[..key.len().min(16)]));
+    let file = File::options()
         .create(true)
         .truncate(false)
         .write(true)
-        .open(folder.join(format!("{}.lock", &key[..key.len().min(16)])))
+        .open(&path);
+    match file {
+        Ok(file) => Ok((path, file)),
+        Err(source) => Err(ClaimError { path, source }),
+    }
 }
 
 /// The claim on task `key`, when no other process holds it.
-pub fn try_claim(out: &Path, key: &str) -> io::Result<Option<Claim>> {
-    let lock = open(out, key)?;
+pub fn try_claim(out: &Path, key: &str) -> Result<Option<Claim>, ClaimError> {
+    let (path, lock) = open(out, key)?;
     match lock.try_lock() {
         Ok(()) => Ok(Some(Claim { _lock: lock })),
         Err(TryLockError::WouldBlock) => Ok(None),
-        Err(TryLockError::Error(error)) => Err(error),
+        Err(TryLockError::Error(source)) => Err(ClaimError { path, source }),
     }
 }
 
 /// The claim on task `key`, once the process that holds it lets it go.
-pub fn claim(out: &Path, key: &str) -> io::Result<Claim> {
-    let lock = open(out, key)?;
-    lock.lock()?;
+pub fn claim(out: &Path, key: &str) -> Result<Claim, ClaimError> {
+    let (path, lock) = open(out, key)?;
+    lock.lock().map_err(|source| ClaimError { path, source })?;
     Ok(Claim { _lock: lock })
 }
 
@@ -53,7 +71,11 @@ pub fn claim(out: &Path, key: &str) -> io::Result<Claim> {
 pub type Split<T> = (Vec<(T, Claim)>, Vec<T>);
 
 /// Of `tasks`, those claimed now and those another process holds.
-pub fn split<T: Copy>(out: &Path, tasks: &[T], key: impl Fn(T) -> String) -> io::Result<Split<T>> {
+pub fn split<T: Copy>(
+    out: &Path,
+    tasks: &[T],
+    key: impl Fn(T) -> String,
+) -> Result<Split<T>, ClaimError> {
     let mut claimed = Vec::new();
     let mut busy = Vec::new();
     for &task in tasks {

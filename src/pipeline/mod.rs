@@ -164,12 +164,11 @@ fn claimed_then_left(
     work(&left)
 }
 
-/// An I/O error of the claims' locks.
-fn locks_error(plan: &Plan) -> impl Fn(std::io::Error) -> results::ResultsError + use<> {
-    let folder = claim::folder(&plan.out);
-    move |source| results::ResultsError::Io {
-        path: folder.clone(),
-        source,
+/// An I/O error of the claims' locks, naming the lock file.
+fn locks_error(_plan: &Plan) -> impl Fn(claim::ClaimError) -> results::ResultsError + use<> {
+    |error| results::ResultsError::Io {
+        path: error.path,
+        source: error.source,
     }
 }
 

@@ -25,6 +25,11 @@ pub enum OwnerError {
         our_hash: String,
     },
     #[error(
+        "{}: is a file, where the results folder goes; move or remove it",
+        folder.display()
+    )]
+    NotAFolder { folder: PathBuf },
+    #[error(
         "{}: is a point of the sweep in {}; this run of {ours} ({our_name}) is not that sweep: give it another `name`, or --force replaces the point",
         folder.display(),
         sweep.display()
@@ -45,10 +50,15 @@ pub fn folder_key(plan: &Plan, p: usize) -> String {
 
 /// Refuses to write point `p`'s folder, unless `force`, when another spec wrote it.
 pub fn check(plan: &Plan, p: usize, force: bool) -> Result<(), OwnerError> {
+    let folder = &plan.points[p].folder;
+    if folder.exists() && !folder.is_dir() {
+        return Err(OwnerError::NotAFolder {
+            folder: folder.clone(),
+        });
+    }
     if force {
         return Ok(());
     }
-    let folder = &plan.points[p].folder;
     let spec = plan.spec(p);
     let ours = plan
         .spec_file

@@ -110,7 +110,7 @@ pub fn write_run(
     dcnets: &[TrainingHistory],
     manifest: &Manifest,
 ) -> Result<(), ResultsError> {
-    std::fs::create_dir_all(folder).map_err(io(folder))?;
+    crate::files::create_folder(folder).map_err(io(folder))?;
     let batches = [
         monte_carlo_batch(&result.runs),
         calibration_batch(&result.calibration),

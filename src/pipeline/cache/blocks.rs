@@ -50,7 +50,7 @@ impl BlockStore {
     }
 
     pub fn save(&self, key: &str, rows: &[RunRow]) -> Result<(), ResultsError> {
-        std::fs::create_dir_all(&self.folder).map_err(|source| ResultsError::Io {
+        crate::files::create_folder(&self.folder).map_err(|source| ResultsError::Io {
             path: self.folder.clone(),
             source,
         })?;

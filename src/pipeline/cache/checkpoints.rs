@@ -107,7 +107,7 @@ impl ModelStore {
         key: &str,
     ) -> Result<(), ModelStoreError> {
         let folder = self.stem(error_model, key).with_extension("checkpoint");
-        std::fs::create_dir_all(&folder).map_err(io_error(&folder))?;
+        crate::files::create_folder(&folder).map_err(io_error(&folder))?;
         let epoch = state.history.len();
         write_model(
             &folder.join(format!("epoch-{epoch}.model")),

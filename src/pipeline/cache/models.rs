@@ -138,7 +138,7 @@ impl ModelStore {
         key: &str,
         message: &str,
     ) -> Result<(), ModelStoreError> {
-        std::fs::create_dir_all(&self.folder).map_err(io_error(&self.folder))?;
+        crate::files::create_folder(&self.folder).map_err(io_error(&self.folder))?;
         let path = self.stem(error_model, key).with_extension("failed");
         let sealed = files::inline_sealed(message.as_bytes(), key);
         write_atomic(&path, &sealed).map_err(io_error(&path))
@@ -182,7 +182,7 @@ impl ModelStore {
     /// Stores a finished model and removes its checkpoint and any failure record.
     pub fn save(&self, trained: &Trained, key: &str) -> Result<(), ModelStoreError> {
         let stem = self.stem(trained.error_model, key);
-        std::fs::create_dir_all(&self.folder).map_err(io_error(&self.folder))?;
+        crate::files::create_folder(&self.folder).map_err(io_error(&self.folder))?;
         let weights = stem.with_extension("bin");
         write_model(&weights, &trained.model, key)?;
         let summary = TrainingHistory {
