@@ -1610,8 +1610,8 @@ fn run_of(spec: &str, out: &str, extra: &[&str]) -> Vec<String> {
 }
 
 /// A results folder is never replaced by a run of another spec file with the same
-/// `name`, nor a sweep's point by a run that is not the sweep, unless `--force`: the
-/// error names the folder and both specs, and the folder is left as it was.
+/// `name` unless `--force`: the error names the folder and both specs, and the folder
+/// is left as it was. A single run and a sweep never share a folder.
 #[test]
 fn a_results_folder_of_another_spec_is_refused_unless_forced() {
     let project = project(false);
@@ -1645,22 +1645,65 @@ fn a_results_folder_of_another_spec_is_refused_unless_forced() {
     let after = std::fs::read_to_string(&manifest).unwrap();
     assert!(after.contains("experiments/other.toml"), "{after}");
 
-    // A plain run whose folder is a point of a sweep.
+    // A single run named like a sweep, and a sweep named like a single run: one
+    // folder cannot hold both, --force or not.
     let output = exe(d, &run_args("out", &SWEEP));
     assert!(output.status.success(), "{}", stderr(&output));
-    let point = d.join("out/quick-sweep/monte_carlo_runs=2/manifest.json");
-    let before = std::fs::read(&point).unwrap();
-    let plain = run_args("out/quick-sweep", &["--set", "name=monte_carlo_runs=2"]);
-    let refused = exe(d, &plain);
-    let message = stderr(&refused);
-    assert_eq!(refused.status.code(), Some(1), "{message}");
+    let index = d.join("out/quick-sweep/sweep.json");
+    let before = std::fs::read(&index).unwrap();
+    for force in [false, true] {
+        let mut plain = run_args("out", &["--set", "name=quick-sweep"]);
+        let mut sweep = run_args("out", &[&SWEEP[2..], &["--set", "name=quick"]].concat());
+        if force {
+            plain.push("--force".into());
+            sweep.push("--force".into());
+        }
+        for (args, expected) in [
+            (plain, "out/quick-sweep: holds the points of a sweep"),
+            (sweep, "out/quick: holds the results of a single run"),
+        ] {
+            let refused = exe(d, &args);
+            let message = stderr(&refused);
+            assert_eq!(refused.status.code(), Some(1), "{message}");
+            assert!(message.contains(expected), "{expected}: {message}");
+            assert!(message.contains("experiments/quick.toml"), "{message}");
+        }
+    }
     assert!(
-        message.contains("out/quick-sweep/monte_carlo_runs=2: is a point of the sweep"),
-        "{message}"
+        std::fs::read(&index).unwrap() == before,
+        "the sweep changed"
     );
+    assert!(!d.join("out/quick-sweep/manifest.json").exists());
+    assert!(!d.join("out/quick/monte_carlo_runs=2").exists());
+}
+
+/// A project copied whole, its specs and results together, keeps its folders' owners:
+/// the manifest records the spec file by its path from the output folder, so the
+/// copy's run of the same spec, edited, replaces its folder.
+#[test]
+fn a_project_copied_whole_keeps_its_folders_owners() {
+    let project = project(false);
+    let d = project.path();
+    let output = exe(d, &run_args("out", &[]));
+    assert!(output.status.success(), "{}", stderr(&output));
+    let manifest = std::fs::read_to_string(d.join("out/quick/manifest.json")).unwrap();
     assert!(
-        std::fs::read(&point).unwrap() == before,
-        "the point changed"
+        manifest.contains(r#""spec_file": "../experiments/quick.toml""#),
+        "{manifest}"
+    );
+    let copy = tempfile::tempdir().unwrap();
+    let status = Command::new("cp")
+        .args(["-a", &format!("{}/.", d.display())])
+        .arg(copy.path())
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let edited = exe(copy.path(), &run_args("out", &OTHER));
+    assert!(edited.status.success(), "{}", stderr(&edited));
+    assert!(
+        stderr(&edited).contains("results written"),
+        "{}",
+        stderr(&edited)
     );
 }
 

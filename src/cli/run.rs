@@ -73,7 +73,7 @@ pub(super) fn run(
 /// from.
 fn planned<'a>(experiment: &'a Experiment, target: &Target) -> Result<Plan<'a>, CliError> {
     let mut plan = Plan::new(experiment, &target.out).map_err(input)?;
-    plan.spec_file = std::fs::canonicalize(&target.spec).ok();
+    plan.spec_file = owner::recorded(&target.spec, &target.out);
     Ok(plan)
 }
 

@@ -114,7 +114,7 @@ pub fn remove_spent_checkpoints(plan: &Plan) -> Result<(), ExecuteError> {
         if !plan.models.has_spent_checkpoint(error_model, key) {
             continue;
         }
-        if let Some(_claim) = claim::try_claim(&plan.out, key).map_err(locks_error(plan))? {
+        if let Some(_claim) = claim::try_claim(&plan.out, key).map_err(lock_error)? {
             plan.models.remove_spent_checkpoint(error_model, key)?;
         }
     }
@@ -135,7 +135,7 @@ fn claimed_then_left(
             .expect("computed tasks have keys")
             .to_string()
     };
-    let (claimed, busy) = claim::split(&plan.out, ids, key).map_err(locks_error(plan))?;
+    let (claimed, busy) = claim::split(&plan.out, ids, key).map_err(lock_error)?;
     let (now, claims): (Vec<usize>, Vec<claim::Claim>) = claimed.into_iter().unzip();
     work(&now)?;
     drop(claims);
@@ -150,7 +150,7 @@ fn claimed_then_left(
     );
     let (mut left, mut claims) = (Vec::new(), Vec::new());
     for &id in &busy {
-        let held = claim::claim(&plan.out, &key(id)).map_err(locks_error(plan))?;
+        let held = claim::claim(&plan.out, &key(id)).map_err(lock_error)?;
         if !plan.status(task(id)).is_settled() {
             left.push(id);
             claims.push(held);
@@ -165,8 +165,8 @@ fn claimed_then_left(
 }
 
 /// An I/O error of the claims' locks, naming the lock file.
-fn locks_error(_plan: &Plan) -> impl Fn(claim::ClaimError) -> results::ResultsError + use<> {
-    |error| results::ResultsError::Io {
+fn lock_error(error: claim::ClaimError) -> results::ResultsError {
+    results::ResultsError::Io {
         path: error.path,
         source: error.source,
     }
@@ -225,8 +225,7 @@ fn write_results(
         let (result, models) = monte_carlo::gather(plan, p)?;
         // Another process writing the same folder is waited for: its folder is kept
         // when it is this one's, refused when another spec wrote it.
-        let _claim =
-            claim::claim(&plan.out, &owner::folder_key(plan, p)).map_err(locks_error(plan))?;
+        let _claim = claim::claim(&plan.out, &owner::folder_key(plan, p)).map_err(lock_error)?;
         if results_to_do {
             owner::check(plan, p, force)?;
         }
@@ -280,10 +279,6 @@ fn manifest(plan: &Plan, p: usize, started_at: SystemTime, stages: &StageSeconds
         stage_seconds: stages.clone(),
         results_key: plan.results_key(p),
         files_sha256: Default::default(),
-        spec_file: plan
-            .spec_file
-            .as_ref()
-            .map(|path| path.display().to_string())
-            .unwrap_or_default(),
+        spec_file: plan.spec_file.clone().unwrap_or_default(),
     }
 }

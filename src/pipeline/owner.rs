@@ -1,26 +1,28 @@
-//! Whose a results folder is: the spec file its manifest records. A run replaces a
-//! folder written from its own spec file (an edited spec, other `--set` values), but
-//! never, without `--force`, one that another spec file with the same `name` wrote, nor
-//! a point of a sweep from a run that is not that sweep. In: a plan and one of its
-//! points. Out: nothing, or an [`OwnerError`] naming both specs.
+//! Whose a results folder is: the spec file its manifest records, by its path from the
+//! output folder (so a project moved or copied whole, results and specs together,
+//! keeps its owners). A run replaces a folder written from its own spec file (an
+//! edited spec, other `--set` values), but never, without `--force`, one that another
+//! spec file with the same `name` wrote; a single run never writes into a sweep's
+//! folder, nor a sweep into a single run's. In: a plan and one of its points. Out:
+//! nothing, or an [`OwnerError`] naming both.
 
 use super::{Plan, cache};
 use crate::results::{self, Manifest, sweep};
-use std::path::PathBuf;
+use std::path::{Component, Path, PathBuf};
 
 /// A results folder that belongs to another spec.
 #[derive(Debug, thiserror::Error)]
 pub enum OwnerError {
     #[error(
-        "{}: holds the results of {theirs} ({their_name}, spec SHA-256 {their_hash}); this run's spec is {ours} ({our_name}, spec SHA-256 {our_hash}), whose `name` is the same: give it another `name`, or --force replaces those results",
-        folder.display()
+        "{}: holds the results of {} ({their_name}, spec SHA-256 {their_hash}); this run's spec is {} ({our_name}, spec SHA-256 {our_hash}), whose `name` is the same: give it another `name`, or --force replaces those results",
+        folder.display(), theirs.display(), ours.display()
     )]
     AnotherSpec {
         folder: PathBuf,
-        theirs: String,
+        theirs: PathBuf,
         their_name: String,
         their_hash: String,
-        ours: String,
+        ours: PathBuf,
         our_name: String,
         our_hash: String,
     },
@@ -30,15 +32,15 @@ pub enum OwnerError {
     )]
     NotAFolder { folder: PathBuf },
     #[error(
-        "{}: is a point of the sweep in {}; this run of {ours} ({our_name}) is not that sweep: give it another `name`, or --force replaces the point",
-        folder.display(),
-        sweep.display()
+        "{}: holds {theirs}, and this run of {} ({name}) is {ours}: one folder cannot hold both; give the spec another `name`, or move the folder away",
+        folder.display(), spec.display()
     )]
-    SweepPoint {
+    OtherKind {
         folder: PathBuf,
-        sweep: PathBuf,
-        ours: String,
-        our_name: String,
+        theirs: &'static str,
+        ours: &'static str,
+        spec: PathBuf,
+        name: String,
     },
 }
 
@@ -46,6 +48,32 @@ pub enum OwnerError {
 /// it: processes writing one folder take turns.
 pub fn folder_key(plan: &Plan, p: usize) -> String {
     cache::hash(&("results folder", &plan.spec(p).name))
+}
+
+/// `spec_file` as a manifest records it: its path from the output folder `out`.
+pub fn recorded(spec_file: &Path, out: &Path) -> Option<String> {
+    let spec_file = std::fs::canonicalize(spec_file).ok()?;
+    let out = std::fs::canonicalize(out)
+        .or_else(|_| std::path::absolute(out))
+        .ok()?;
+    let relative = pathdiff::diff_paths(&spec_file, &out)?;
+    Some(relative.to_string_lossy().into_owned())
+}
+
+/// The spec file that `recorded` (a path from `out`) names, for a message.
+fn resolved(out: &Path, recorded: &str) -> PathBuf {
+    let out = std::path::absolute(out).unwrap_or_else(|_| out.to_path_buf());
+    let mut path = PathBuf::new();
+    for component in out.join(recorded).components() {
+        match component {
+            Component::ParentDir => {
+                path.pop();
+            }
+            Component::CurDir => {}
+            other => path.push(other),
+        }
+    }
+    path
 }
 
 /// Refuses to write point `p`'s folder, unless `force`, when another spec wrote it.
@@ -56,25 +84,12 @@ pub fn check(plan: &Plan, p: usize, force: bool) -> Result<(), OwnerError> {
             folder: folder.clone(),
         });
     }
+    let spec = plan.spec(p);
+    let ours = plan.spec_file.clone().unwrap_or_default();
+    let our_path = resolved(&plan.out, &ours);
+    check_kind(plan, folder, &our_path, &spec.name)?;
     if force {
         return Ok(());
-    }
-    let spec = plan.spec(p);
-    let ours = plan
-        .spec_file
-        .as_ref()
-        .map_or_else(String::new, |path| path.display().to_string());
-    let our_hash = crate::files::sha256_hex(spec.resolved_toml().as_bytes());
-    if !plan.experiment.is_sweep()
-        && let Some(parent) = folder.parent()
-        && parent.join(sweep::INDEX).is_file()
-    {
-        return Err(OwnerError::SweepPoint {
-            folder: folder.clone(),
-            sweep: parent.to_path_buf(),
-            ours: shown(&ours),
-            our_name: spec.name.clone(),
-        });
     }
     let Some(manifest) = read_manifest(folder) else {
         return Ok(());
@@ -84,31 +99,86 @@ pub fn check(plan: &Plan, p: usize, force: bool) -> Result<(), OwnerError> {
     if manifest.spec_file.is_empty() || ours.is_empty() || manifest.spec_file == ours {
         return Ok(());
     }
+    let our_hash = crate::files::sha256_hex(spec.resolved_toml().as_bytes());
     Err(OwnerError::AnotherSpec {
         folder: folder.clone(),
-        theirs: manifest.spec_file,
+        theirs: resolved(&plan.out, &manifest.spec_file),
         their_name: manifest.name,
         their_hash: short(&manifest.spec_sha256),
-        ours,
+        ours: our_path,
         our_name: spec.name.clone(),
         our_hash: short(&our_hash),
     })
 }
 
-fn read_manifest(folder: &std::path::Path) -> Option<Manifest> {
-    let bytes = std::fs::read(folder.join(results::MANIFEST)).ok()?;
-    serde_json::from_slice(&bytes).ok()
+/// Refuses a single run's results in a sweep's folder, and a sweep's points in a
+/// single run's folder.
+fn check_kind(plan: &Plan, folder: &Path, spec: &Path, name: &str) -> Result<(), OwnerError> {
+    const SWEEP: &str = "the points of a sweep";
+    const SINGLE: &str = "the results of a single run";
+    let (holder, theirs, ours) = if plan.experiment.is_sweep() {
+        let sweep_folder = folder.parent().unwrap_or(folder);
+        (sweep_folder, SINGLE, SWEEP)
+    } else {
+        (folder, SWEEP, SINGLE)
+    };
+    let mark = match plan.experiment.is_sweep() {
+        true => results::MANIFEST,
+        false => sweep::INDEX,
+    };
+    if !holder.join(mark).is_file() {
+        return Ok(());
+    }
+    Err(OwnerError::OtherKind {
+        folder: holder.to_path_buf(),
+        theirs,
+        ours,
+        spec: spec.to_path_buf(),
+        name: name.to_string(),
+    })
 }
 
-fn shown(file: &str) -> String {
-    if file.is_empty() {
-        "this spec".into()
-    } else {
-        file.into()
-    }
+fn read_manifest(folder: &Path) -> Option<Manifest> {
+    let bytes = std::fs::read(folder.join(results::MANIFEST)).ok()?;
+    serde_json::from_slice(&bytes).ok()
 }
 
 /// The first 16 hex digits of a SHA-256, as `plan` shows keys.
 fn short(digest: &str) -> String {
     digest[..digest.len().min(16)].to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_recorded_path_resolves_against_the_output_folder() {
+        assert_eq!(
+            resolved(Path::new("/p/results"), "../experiments/quick.toml"),
+            PathBuf::from("/p/experiments/quick.toml")
+        );
+        assert_eq!(
+            resolved(Path::new("/p/results"), "./a.toml"),
+            PathBuf::from("/p/results/a.toml")
+        );
+    }
+
+    #[test]
+    fn a_spec_file_is_recorded_by_its_path_from_the_output_folder() {
+        let project = tempfile::tempdir().unwrap();
+        let spec = project.path().join("experiments/quick.toml");
+        std::fs::create_dir_all(spec.parent().unwrap()).unwrap();
+        std::fs::write(&spec, "").unwrap();
+        let out = project.path().join("results");
+        assert_eq!(
+            recorded(&spec, &out).as_deref(),
+            Some("../experiments/quick.toml")
+        );
+        std::fs::create_dir_all(&out).unwrap();
+        assert_eq!(
+            recorded(&spec, &out).as_deref(),
+            Some("../experiments/quick.toml")
+        );
+    }
 }

@@ -66,8 +66,9 @@ pub struct Manifest {
     /// intact while its files have them.
     #[serde(default)]
     pub files_sha256: BTreeMap<String, String>,
-    /// The spec file the run was read from (absolute): the folder belongs to it, and a
-    /// run of another file with the same `name` is refused unless `--force`.
+    /// The spec file the run was read from, by its path from the output folder: the
+    /// folder belongs to it, and a run of another file with the same `name` is refused
+    /// unless `--force`.
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub spec_file: String,
 }

@@ -41,9 +41,10 @@ pub struct Plan<'a> {
     pub points: Vec<PointPlan>,
     pub models: ModelStore,
     pub block_store: BlockStore,
-    /// The spec file the experiment was read from, as its results folders record it:
-    /// a folder written from another file is not replaced without `--force`.
-    pub spec_file: Option<PathBuf>,
+    /// The spec file the experiment was read from, as its results folders record it
+    /// (its path from `out`): a folder written from another file is not replaced
+    /// without `--force`.
+    pub spec_file: Option<String>,
 }
 
 #[derive(Debug, thiserror::Error)]
