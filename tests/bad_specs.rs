@@ -715,6 +715,82 @@ fn a_hundred_thousand_bad_values_in_the_file_give_a_short_answer_in_little_memor
     assert_bounded(&error, 100_000);
 }
 
+/// Every name distinct and none defined, beside two thousand defined trajectories:
+/// each name is looked up in constant time, and each message lists the first defined
+/// names and how many there are, not all of them.
+#[test]
+fn a_hundred_thousand_unknown_trajectories_give_a_short_answer_in_little_memory() {
+    let dir = project(false);
+    let d = dir.path();
+    let quick = std::fs::read_to_string(d.join("experiments/quick.toml")).unwrap();
+    let names: Vec<String> = (1..=100_000).map(|i| format!("\"unknown-{i}\"")).collect();
+    let line = "trajectories = [\"S1\", \"S2\"]";
+    let defined: String = (0..2_000)
+        .map(|i| format!("[[data.trajectories]]\nname = \"T{i}\"\nsynthetic_duration_s = 900\n\n"))
+        .collect();
+    let text = quick
+        .replacen(line, &format!("trajectories = [{}]", names.join(", ")), 1)
+        .replacen("[sensors]", &format!("{defined}[sensors]"), 1);
+    assert_ne!(text, quick, "{line} is in quick.toml");
+    std::fs::write(d.join("experiments/many.toml"), text).unwrap();
+    let output = dcnet_within(d, 1024, &["validate", "experiments/many.toml"]);
+    let error = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{error}");
+    assert!(
+        error.contains(": dataset.trajectories[0]: unknown trajectory \"unknown-1\"; data.trajectories defines S1, S2, S3, S4, SCal, T0, T1, T2, T3, T4, … (2005 in all)\n"),
+        "{error}"
+    );
+    assert_bounded(&error, 100_000);
+}
+
+/// A spec of tens of megabytes is refused by its size before it is parsed, which
+/// would take memory many times its size.
+#[test]
+fn a_spec_of_forty_megabytes_is_refused_by_its_size_in_little_memory() {
+    let dir = project(false);
+    let d = dir.path();
+    let quick = std::fs::read_to_string(d.join("experiments/quick.toml")).unwrap();
+    let values: Vec<String> = (0..6_000_000).map(|i| i.to_string()).collect();
+    let text = quick.replacen(
+        "sample_rate_hz = 1.0",
+        &format!("sample_rate_hz = [{}]", values.join(",")),
+        1,
+    );
+    std::fs::write(d.join("experiments/huge.toml"), text).unwrap();
+    let output = dcnet_within(d, 512, &["validate", "experiments/huge.toml"]);
+    let error = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{error}");
+    assert!(
+        error.starts_with(
+            "error: experiments/huge.toml: cannot read the spec: it is larger than 4 MiB"
+        ),
+        "{error}"
+    );
+}
+
+/// A string of a megabyte where a number goes is quoted by its start and length.
+#[test]
+fn a_long_string_in_the_file_is_shown_by_its_start_and_length() {
+    let dir = project(false);
+    let d = dir.path();
+    let quick = std::fs::read_to_string(d.join("experiments/quick.toml")).unwrap();
+    let long = "x".repeat(1 << 20);
+    let text = quick.replacen(
+        "sample_rate_hz = 1.0",
+        &format!("sample_rate_hz = \"{long}\""),
+        1,
+    );
+    std::fs::write(d.join("experiments/long.toml"), text).unwrap();
+    let error = stderr(&dcnet(d, &["validate", "experiments/long.toml"]));
+    assert_eq!(
+        error,
+        format!(
+            "error: experiments/long.toml:7: data.sample_rate_hz: invalid type: string \"{}… (1048576 characters)\", expected f64\n",
+            "x".repeat(30)
+        )
+    );
+}
+
 #[test]
 fn a_long_set_value_is_shown_by_its_start_and_length() {
     let dir = project(false);

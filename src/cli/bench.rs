@@ -73,49 +73,63 @@ pub(super) fn bench(
     Ok(())
 }
 
-/// Times refusing the spec at `spec_path` with 10³, 10⁴ and 10⁵ invalid calibration
-/// window sizes written in the file (each negative, so each is its own fault placed on
-/// its line), to show that checking is linear in the number of faults.
+/// Times refusing the spec at `spec_path` with 10³, 10⁴ and 10⁵ faults written in the
+/// file, each its own fault placed on its line: invalid calibration window sizes (each
+/// negative), and training trajectory names that are all different and none defined.
+/// The times grow as the counts do: checking is linear in the number of faults.
 fn bench_refusal(spec_path: &Path) -> std::io::Result<()> {
     let text = std::fs::read_to_string(spec_path)?;
     let folder = tempfile::tempdir()?;
-    for count in [1_000, 10_000, 100_000] {
-        let values: Vec<String> = (1..=count).map(|i| format!("-{i}")).collect();
-        let window_sizes = format!("window_sizes_s = [{}]", values.join(", "));
-        let mut written = false;
-        let bad: Vec<&str> = text
-            .lines()
-            .map(|line| {
-                if !written && line.trim_start().starts_with("window_sizes_s") {
-                    written = true;
-                    window_sizes.as_str()
-                } else {
-                    line
+    let path = folder
+        .path()
+        .join(spec_path.file_name().unwrap_or_default());
+    let cases: [(&str, &str, fn(usize) -> String); 2] = [
+        ("invalid window sizes", "window_sizes_s", |i| {
+            format!("-{i}")
+        }),
+        ("unknown training trajectories", "trajectories", |i| {
+            format!("\"unknown-{i}\"")
+        }),
+    ];
+    for (what, key, value) in cases {
+        for count in [1_000, 10_000, 100_000] {
+            let values: Vec<String> = (1..=count).map(value).collect();
+            let Some(bad) = with_first_value(&text, key, &values.join(", ")) else {
+                println!("spec refusal: skipped, the spec writes no {key}");
+                break;
+            };
+            std::fs::write(&path, bad)?;
+            let clock = Instant::now();
+            let faults = match crate::spec::load_experiment(&path, &[]) {
+                Ok(_) => 0,
+                Err(errors) => {
+                    std::hint::black_box(errors.to_string());
+                    errors.0.len()
                 }
-            })
-            .collect();
-        if !written {
-            println!("spec refusal: skipped, the spec writes no window_sizes_s");
-            return Ok(());
+            };
+            println!(
+                "spec refusal: {count} {what}, {faults} faults, {:.3} s",
+                clock.elapsed().as_secs_f64()
+            );
         }
-        let path = folder
-            .path()
-            .join(spec_path.file_name().unwrap_or_default());
-        std::fs::write(&path, bad.join("\n"))?;
-        let clock = Instant::now();
-        let faults = match crate::spec::load_experiment(&path, &[]) {
-            Ok(_) => 0,
-            Err(errors) => {
-                std::hint::black_box(errors.to_string());
-                errors.0.len()
-            }
-        };
-        println!(
-            "spec refusal: {count} invalid window sizes, {faults} faults, {:.3} s",
-            clock.elapsed().as_secs_f64()
-        );
     }
     Ok(())
+}
+
+/// `text` with the first line that writes `key` writing `key = [values]` instead.
+fn with_first_value(text: &str, key: &str, values: &str) -> Option<String> {
+    let line = text.lines().position(|line| {
+        line.trim_start()
+            .strip_prefix(key)
+            .is_some_and(|rest| rest.trim_start().starts_with('='))
+    })?;
+    let replaced = format!("{key} = [{values}]");
+    let lines: Vec<&str> = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| if i == line { replaced.as_str() } else { l })
+        .collect();
+    Some(lines.join("\n"))
 }
 
 /// Training samples/s in the two arrangements both tools can take: one model on one

@@ -291,7 +291,7 @@ impl SpecFile {
             faults.add("name", format!("{name:?} must be non-empty, at most {MAX_NAME_CHARS} characters, use only letters, digits, '-', '_' and '.', and not start with '.' (it names the results folder)"));
         }
         let data = check_data(data, spec_dir, &mut resolved.data.trajectories, &mut faults);
-        let (rate, sources) = (data.rate, &data.trajectories);
+        let (rate, sources) = (data.rate, &check::Defined::new(&data.trajectories));
         let (beam_pitch_deg, gnss_noise_m_s) = check_sensors(sensors, &mut faults);
         let grid = check_grid(grid, &mut faults);
         let (dataset, window) = check_dataset(dataset, sources, rate, &mut faults);

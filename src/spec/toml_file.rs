@@ -10,7 +10,7 @@ use toml::Spanned;
 use toml::de::{DeTable, DeValue};
 
 /// One fault in a spec, placed where a user can find it.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
 pub struct SpecError {
     /// `path/to/spec.toml:14`, or `--set key=value`.
     pub location: String,
@@ -32,6 +32,10 @@ impl fmt::Display for SpecError {
 /// Every fault found in a spec, one per line.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub struct SpecErrors(pub Vec<SpecError>);
+
+/// The largest TOML file read: a spec with a hundred thousand values is a fraction of
+/// it, and parsing it takes memory many times its size.
+pub const MAX_TOML_BYTES: u64 = 4 << 20;
 
 /// The most faults shown; the rest are counted, so that a spec with a hundred
 /// thousand bad values gives a short answer.
@@ -89,14 +93,26 @@ pub(super) struct TomlText {
 }
 
 impl TomlText {
-    /// Reads `path`; when it cannot, the fault reads `path: {unreadable}: {cause}`.
+    /// Reads `path`; when it cannot, or it is larger than [`MAX_TOML_BYTES`], the fault
+    /// reads `path: {unreadable}: {cause}`.
     pub fn read(path: &Path, unreadable: &str) -> Result<Self, SpecError> {
+        use std::io::Read;
         let shown = path.display().to_string();
-        let bytes = std::fs::read(path).map_err(|e| SpecError {
+        let fault = |message: String| SpecError {
             location: shown.clone(),
             key: String::new(),
-            message: format!("{unreadable}: {e}"),
-        })?;
+            message: format!("{unreadable}: {message}"),
+        };
+        let mut bytes = Vec::new();
+        std::fs::File::open(path)
+            .and_then(|file| file.take(MAX_TOML_BYTES + 1).read_to_end(&mut bytes))
+            .map_err(|e| fault(e.to_string()))?;
+        if bytes.len() as u64 > MAX_TOML_BYTES {
+            return Err(fault(format!(
+                "it is larger than {} MiB, the most a spec or published-values file may be (checking it would take memory many times its size); a spec lists values, not data: put recordings in files that data.trajectories names",
+                MAX_TOML_BYTES >> 20
+            )));
+        }
         String::from_utf8(bytes)
             .map(|text| TomlText {
                 shown: shown.clone(),
@@ -262,9 +278,35 @@ pub(super) fn deserialize<T: serde::de::DeserializeOwned>(
     serde_path_to_error::deserialize(value).map_err(|e| {
         let key = e.path().to_string();
         let key = if key == "." { String::new() } else { key };
-        let message = e.into_inner().message().to_string();
+        let message = shortened_quotes(e.into_inner().message());
         (with_missing_field(key, &message), message)
     })
+}
+
+/// `message` with each value it quotes from the file (`"…"` or `` `…` ``) longer than
+/// [`shown_value`] shows whole cut to its start and its length, so that a long string
+/// in a spec gives a short message.
+fn shortened_quotes(message: &str) -> String {
+    let mut shortened = String::with_capacity(message.len().min(1024));
+    let mut rest = message;
+    while let Some(open) = rest.find(['"', '`']) {
+        let quote = rest[open..].chars().next().unwrap_or('"');
+        let inner = &rest[open + 1..];
+        // A quote inside a `"…"` value is written escaped, `\"`.
+        let mut escaped = false;
+        let close = inner.char_indices().find_map(|(i, c)| {
+            let end = c == quote && !escaped;
+            escaped = quote == '"' && c == '\\' && !escaped;
+            end.then_some(i)
+        });
+        let Some(close) = close else { break };
+        shortened.push_str(&rest[..=open]);
+        shortened.push_str(&shown_value(&inner[..close]));
+        shortened.push(quote);
+        rest = &inner[close + 1..];
+    }
+    shortened.push_str(rest);
+    shortened
 }
 
 /// `key` with the field that `message` says is missing appended (`calibration` and
@@ -413,6 +455,32 @@ fn line_of(text: &str, offset: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn long_quoted_values_are_cut_short_and_short_ones_kept() {
+        let long = "x".repeat(5_000);
+        let message = format!("invalid type: string \"{long}\", expected f64");
+        assert_eq!(
+            shortened_quotes(&message),
+            format!(
+                "invalid type: string \"{}… (5000 characters)\", expected f64",
+                "x".repeat(30)
+            )
+        );
+        let message = format!("unknown variant `{long}`, expected `relu` or `tanh`");
+        assert!(
+            shortened_quotes(&message).ends_with("… (5000 characters)`, expected `relu` or `tanh`")
+        );
+        let escaped = format!("string \"a\\\"{long}\", expected f64");
+        assert!(shortened_quotes(&escaped).ends_with("(5003 characters)\", expected f64"));
+        for kept in [
+            "invalid type: string \"S1\", expected f64",
+            "an \"unclosed quote",
+            "",
+        ] {
+            assert_eq!(shortened_quotes(kept), kept);
+        }
+    }
 
     #[test]
     fn keys_are_found_on_their_lines() {

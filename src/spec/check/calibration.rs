@@ -6,15 +6,15 @@
 //! [`CalibrationSpec`]: crate::spec::CalibrationSpec
 
 use super::dataset::Window;
-use super::{Faults, lookup, positive_samples};
-use crate::spec::{CalibrationSpec, TrajectorySource, file, ranges};
+use super::{Defined, Faults, positive_samples};
+use crate::spec::{CalibrationSpec, file, ranges};
 use crate::vocab::ErrorModel;
 
 /// Checks `[calibration]`: its trajectory, window sizes that each leave samples to
 /// evaluate on, and at least one Monte Carlo run.
 pub(in crate::spec) fn check_calibration(
     calibration: file::CalibrationFile,
-    sources: &[TrajectorySource],
+    sources: &Defined,
     rate: f64,
     faults: &mut Faults,
 ) -> CalibrationSpec {
@@ -23,7 +23,7 @@ pub(in crate::spec) fn check_calibration(
         window_sizes_s,
         monte_carlo_runs,
     } = calibration;
-    let index = lookup(sources, "calibration.trajectory", &trajectory, faults);
+    let index = sources.lookup("calibration.trajectory", &trajectory, faults);
     let segment = index.and_then(|i| sources[i].known_len());
     if window_sizes_s.is_empty() {
         faults.add(

@@ -78,13 +78,14 @@ fn check_trajectories(
     faults: &mut Faults,
 ) -> Vec<TrajectorySource> {
     let mut sources: Vec<TrajectorySource> = Vec::new();
+    let mut names = std::collections::HashSet::new();
     if trajectories.is_empty() {
         faults.add("data.trajectories", "no trajectory is defined");
     }
     for (i, trajectory) in trajectories.iter().enumerate() {
         let key = format!("data.trajectories[{i}]");
         let name = &trajectory.name;
-        if sources.iter().any(|s| &s.name == name) {
+        if !names.insert(name) {
             faults.add(format!("{key}.name"), format!("{name:?} is defined twice"));
         }
         let origin = check_origin(&key, trajectory, spec_dir, rate, &mut resolved[i], faults);

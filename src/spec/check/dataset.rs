@@ -5,8 +5,9 @@
 //!
 //! [`DatasetSpec`]: crate::spec::DatasetSpec
 
-use super::{Faults, lookup, positive_samples};
-use crate::spec::{DatasetSpec, TrajectorySource, file, ranges};
+use super::{Defined, Faults, positive_samples};
+use crate::spec::{DatasetSpec, file, ranges};
+use std::collections::HashSet;
 
 /// DCNet's input window: as written, in seconds, and in samples when that is good.
 #[derive(Clone, Copy)]
@@ -19,7 +20,7 @@ pub(in crate::spec) struct Window {
 /// that each hold one window.
 pub(in crate::spec) fn check_dataset(
     dataset: file::DatasetFile,
-    sources: &[TrajectorySource],
+    sources: &Defined,
     rate: f64,
     faults: &mut Faults,
 ) -> (DatasetSpec, Window) {
@@ -69,7 +70,7 @@ pub(in crate::spec) fn check_dataset(
 /// length is known) holding one window of `window` samples (`window_s` as written).
 fn check_training_trajectories(
     names: &[String],
-    sources: &[TrajectorySource],
+    sources: &Defined,
     window: Option<usize>,
     window_s: f64,
     faults: &mut Faults,
@@ -81,13 +82,14 @@ fn check_training_trajectories(
         );
     }
     let mut trajectories = Vec::new();
+    let mut listed = HashSet::new();
     for (i, wanted) in names.iter().enumerate() {
         let key = format!("dataset.trajectories[{i}]");
-        if names[..i].contains(wanted) {
+        if !listed.insert(wanted) {
             faults.add(key, format!("{wanted:?} is listed twice"));
             continue;
         }
-        if let Some(index) = lookup(sources, &key, wanted, faults) {
+        if let Some(index) = sources.lookup(&key, wanted, faults) {
             if let (Some(len), Some(window)) = (sources[index].known_len(), window)
                 && len < window
             {
@@ -105,7 +107,7 @@ fn check_training_trajectories(
 /// Where the training trajectories' lengths are known, checks that
 /// `validation_fraction` leaves each grid combination at least one validation window
 /// and at least one training window.
-fn check_split(dataset: &DatasetSpec, sources: &[TrajectorySource], faults: &mut Faults) {
+fn check_split(dataset: &DatasetSpec, sources: &Defined, faults: &mut Faults) {
     let lengths: Option<Vec<usize>> = dataset
         .trajectories
         .iter()

@@ -1,13 +1,14 @@
 //! Checks `[evaluation]`. In: the test trajectories by name, and the trajectories
 //! `[data]` gave. Out: their indices into the spec's trajectories.
 
-use super::{Faults, lookup};
-use crate::spec::{TrajectorySource, file};
+use super::{Defined, Faults};
+use crate::spec::file;
+use std::collections::HashSet;
 
 /// Checks `[evaluation]`: at least one test trajectory, each defined.
 pub(in crate::spec) fn check_evaluation(
     evaluation: file::EvaluationFile,
-    sources: &[TrajectorySource],
+    sources: &Defined,
     faults: &mut Faults,
 ) -> Vec<usize> {
     let file::EvaluationFile { trajectories } = evaluation;
@@ -17,16 +18,17 @@ pub(in crate::spec) fn check_evaluation(
             "is empty: name at least one test trajectory",
         );
     }
+    let mut listed = HashSet::new();
     trajectories
         .iter()
         .enumerate()
         .filter_map(|(i, wanted)| {
             let key = format!("evaluation.trajectories[{i}]");
-            if trajectories[..i].contains(wanted) {
+            if !listed.insert(wanted) {
                 faults.add(key, format!("{wanted:?} is listed twice"));
                 return None;
             }
-            lookup(sources, &key, wanted, faults)
+            sources.lookup(&key, wanted, faults)
         })
         .collect()
 }

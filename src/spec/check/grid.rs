@@ -81,13 +81,15 @@ fn expand_axis(key: &str, axis: &AxisFile, faults: &mut Faults) -> Vec<f64> {
         faults.add(key, why);
         return Vec::new();
     }
+    // -0.0 is 0.0, as `==` has it.
+    let mut listed = std::collections::HashSet::new();
     for (i, value) in values.iter().enumerate() {
         if !value.is_finite() {
             faults.add(
                 format!("{key}.values[{i}]"),
                 format!("{value} must be a finite number"),
             );
-        } else if values[..i].contains(value) {
+        } else if !listed.insert((value + 0.0).to_bits()) {
             faults.add(
                 format!("{key}.values[{i}]"),
                 format!(

@@ -24,6 +24,7 @@ pub mod report;
 
 use crate::spec::ranges::{self, Limit};
 use crate::spec::{MAX_NAME_CHARS, TrajectorySource, seconds_to_samples};
+use std::collections::HashMap;
 
 /// A key path such as `data.trajectories[2].samples`, and what is wrong there.
 pub(super) type Fault = (String, String);
@@ -62,27 +63,60 @@ pub(super) fn is_folder_name(name: &str) -> bool {
     })
 }
 
-/// The index of the trajectory named `wanted`; a fault at `key` when none is.
-pub(super) fn lookup(
-    sources: &[TrajectorySource],
-    key: &str,
-    wanted: &str,
-    faults: &mut Faults,
-) -> Option<usize> {
-    let found = sources.iter().position(|s| s.name == wanted);
-    if found.is_none() {
-        let known: Vec<&str> = sources.iter().map(|s| s.name.as_str()).collect();
-        let known = if known.is_empty() {
-            "none".to_string()
-        } else {
-            known.join(", ")
-        };
-        faults.add(
-            key,
-            format!("unknown trajectory {wanted:?}; data.trajectories defines {known}"),
-        );
+/// The trajectories `[data]` defines, indexed by name: each lookup takes the same
+/// time however many there are, so a spec listing many names is checked in linear time.
+pub(in crate::spec) struct Defined<'a> {
+    sources: &'a [TrajectorySource],
+    by_name: HashMap<&'a str, usize>,
+}
+
+/// The most defined names a fault lists; the rest are counted.
+const LISTED_NAMES: usize = 10;
+
+impl<'a> Defined<'a> {
+    pub(in crate::spec) fn new(sources: &'a [TrajectorySource]) -> Self {
+        let mut by_name = HashMap::with_capacity(sources.len());
+        for (i, source) in sources.iter().enumerate() {
+            by_name.entry(source.name.as_str()).or_insert(i);
+        }
+        Defined { sources, by_name }
     }
-    found
+
+    /// The index of the trajectory named `wanted`; a fault at `key` when none is.
+    pub(super) fn lookup(&self, key: &str, wanted: &str, faults: &mut Faults) -> Option<usize> {
+        let found = self.by_name.get(wanted).copied();
+        if found.is_none() {
+            let mut known: Vec<&str> = self
+                .sources
+                .iter()
+                .take(LISTED_NAMES)
+                .map(|s| s.name.as_str())
+                .collect();
+            let more = self.sources.len().saturating_sub(LISTED_NAMES);
+            let all = format!("… ({} in all)", self.sources.len());
+            if more > 0 {
+                known.push(&all);
+            }
+            let known = if known.is_empty() {
+                "none".to_string()
+            } else {
+                known.join(", ")
+            };
+            faults.add(
+                key,
+                format!("unknown trajectory {wanted:?}; data.trajectories defines {known}"),
+            );
+        }
+        found
+    }
+}
+
+impl std::ops::Index<usize> for Defined<'_> {
+    type Output = TrajectorySource;
+
+    fn index(&self, i: usize) -> &TrajectorySource {
+        &self.sources[i]
+    }
 }
 
 pub(super) fn positive_samples(

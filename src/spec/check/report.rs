@@ -5,9 +5,9 @@
 //!
 //! [`ReportSpec`]: crate::spec::ReportSpec
 
-use super::{Faults, lookup};
+use super::{Defined, Faults};
 use crate::spec::published::Published;
-use crate::spec::{ReportSpec, SpecFile, TrajectorySource, file};
+use crate::spec::{ReportSpec, SpecFile, file};
 use std::path::Path;
 
 /// Checks `[report]`: the published values read, a tolerance not negative, and none or
@@ -15,7 +15,7 @@ use std::path::Path;
 pub(in crate::spec) fn check_report(
     report: file::ReportFile,
     spec_dir: &Path,
-    sources: &[TrajectorySource],
+    sources: &Defined,
     resolved: &mut SpecFile,
     faults: &mut Faults,
 ) -> ReportSpec {
@@ -47,8 +47,7 @@ pub(in crate::spec) fn check_report(
         );
     }
     for (i, wanted) in velocity_trajectories.iter().enumerate() {
-        lookup(
-            sources,
+        sources.lookup(
             &format!("report.velocity_trajectories[{i}]"),
             wanted,
             faults,

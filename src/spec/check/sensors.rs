@@ -35,6 +35,7 @@ pub(in crate::spec) fn check_dvls(units: &[file::DvlFile], faults: &mut Faults) 
         faults.add("dvl", "no DVL under test is defined");
     }
     let mut dvls: Vec<Dvl> = Vec::new();
+    let mut names = std::collections::HashSet::new();
     for (i, unit) in units.iter().enumerate() {
         let file::DvlFile {
             name,
@@ -43,7 +44,7 @@ pub(in crate::spec) fn check_dvls(units: &[file::DvlFile], faults: &mut Faults) 
             noise_cm_s,
         } = unit;
         let key = format!("dvl[{i}]");
-        if dvls.iter().any(|d| &d.name == name) {
+        if !names.insert(name) {
             faults.add(format!("{key}.name"), format!("{name:?} is defined twice"));
         }
         check_scale(&format!("{key}.scale_pct"), *scale_pct, faults);

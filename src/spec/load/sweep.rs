@@ -9,6 +9,7 @@ use super::source::{Assigned, Source};
 use super::{Experiment, Point};
 use crate::spec::file::SweepFile;
 use crate::spec::toml_file::{SpecError, SpecErrors, TomlText, deserialize, steps};
+use std::collections::HashSet;
 
 /// Every chosen point of `sweep` over `table`, each checked; the faults of all points,
 /// each once.
@@ -122,12 +123,13 @@ fn picks_at(index: usize, axes: &[Axis]) -> Vec<usize> {
 }
 
 /// A sweep's points as they are checked: the good ones with their names, and the
-/// faults of all, each once.
+/// faults of all, each once (the sets make that linear in the number of faults).
 #[derive(Default)]
 struct SweepPoints {
     points: Vec<Point>,
-    names: Vec<String>,
+    names: HashSet<String>,
     errors: Vec<SpecError>,
+    seen: HashSet<SpecError>,
 }
 
 impl SweepPoints {
@@ -153,19 +155,18 @@ impl SweepPoints {
         point_table.insert("name".into(), format!("{name}/{point_name}").into());
         match source.check(point_table, &point_assigned) {
             Ok(spec) => {
-                if self.names.contains(&point_name) {
+                if !self.names.insert(point_name.clone()) {
                     self.errors.push(SpecError {
                         location: source.text.shown().to_string(),
                         key: "sweep.values".into(),
                         message: format!("two points are both named {point_name:?}: make the values differ as text"),
                     });
                 }
-                self.names.push(point_name);
                 self.points.push(Point { values, spec });
             }
             Err(SpecErrors(faults)) => {
                 for fault in faults {
-                    if !self.errors.contains(&fault) {
+                    if self.seen.insert(fault.clone()) {
                         self.errors.push(fault);
                     }
                 }
