@@ -1,6 +1,7 @@
 //! Whose a results folder is: the spec file its manifest records, by its path from the
 //! output folder (so a project moved or copied whole, results and specs together,
-//! keeps its owners). A run replaces a folder written from its own spec file (an
+//! keeps its owners; a folder copied away from its spec file, where that path leads
+//! to no file, belongs to anyone). A run replaces a folder written from its own spec file (an
 //! edited spec, other `--set` values), but never, without `--force`, one that another
 //! spec file with the same `name` wrote; a single run never writes into a sweep's
 //! folder, nor a sweep into a single run's. In: a plan and one of its points. Out:
@@ -95,14 +96,21 @@ pub fn check(plan: &Plan, p: usize, force: bool) -> Result<(), OwnerError> {
         return Ok(());
     };
     // A folder from before manifests named their spec file, or a run that named none,
-    // belongs to anyone.
-    if manifest.spec_file.is_empty() || ours.is_empty() || manifest.spec_file == ours {
+    // belongs to anyone; so does a folder copied away from its spec file, where the
+    // path it records leads to no file.
+    let theirs = resolved(&plan.out, &manifest.spec_file);
+    if manifest.spec_file.is_empty()
+        || ours.is_empty()
+        || manifest.spec_file == ours
+        || !theirs.is_file()
+        || same_file(&theirs, &our_path)
+    {
         return Ok(());
     }
     let our_hash = crate::files::sha256_hex(spec.resolved_toml().as_bytes());
     Err(OwnerError::AnotherSpec {
         folder: folder.clone(),
-        theirs: resolved(&plan.out, &manifest.spec_file),
+        theirs,
         their_name: manifest.name,
         their_hash: short(&manifest.spec_sha256),
         ours: our_path,
@@ -136,6 +144,13 @@ fn check_kind(plan: &Plan, folder: &Path, spec: &Path, name: &str) -> Result<(),
         spec: spec.to_path_buf(),
         name: name.to_string(),
     })
+}
+
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    }
 }
 
 fn read_manifest(folder: &Path) -> Option<Manifest> {
