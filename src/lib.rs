@@ -14,7 +14,9 @@
 //! 5. [`model`] and [`train`]: DCNet and its closed-loop training;
 //! 6. [`estimators`]: calibration methods behind one trait, DCNet among them;
 //! 7. [`evaluate`]: the Monte Carlo calibration and evaluation protocol (its runs, the
-//!    tables summed from them, the bound's efficiency), and [`footprint`]: the memory
+//!    tables summed from them, the bound's efficiency), [`installation`]: a real DVL
+//!    installation (scale, misalignment, lever arm, time offset, bias) calibrated
+//!    against a reference with attitude, with its bound, and [`footprint`]: the memory
 //!    and time a spec asks for, known before it runs;
 //! 8. [`results`]: the Parquet files and manifest of a run, and a sweep's table;
 //! 9. [`report`]: what is drawn from results folders alone: the printed tables
@@ -48,6 +50,7 @@ pub mod model;
 pub mod train;
 pub mod estimators;
 pub mod evaluate;
+pub mod installation;
 pub mod footprint;
 pub mod results;
 pub mod report;

@@ -1,11 +1,13 @@
 //! Trajectories: the recorded velocities named in the spec, read from `.npy` or `.csv`
-//! files or generated, each with its ground truth (a forward moving average, docs/paper.md).
+//! files or generated, each with its ground truth (a forward moving average, docs/paper.md);
+//! and [`paired`]: a DVL recorded beside a reference with attitude.
 //! In: a checked [`Spec`]. Out: one [`Trajectory`] per `data.trajectories` entry, in
 //! spec order.
 
 pub mod csv;
 pub mod fetch;
 pub mod npy;
+pub mod paired;
 pub mod synthetic;
 
 use crate::Vec3;

@@ -1,0 +1,15 @@
+//! The errors of a real DVL installation, calibrated against a reference with
+//! attitude: the model `v_dvl(t) = (I + S) · R(δ) · [C_n^b(t+τ) · v_n(t+τ) + ω_b(t+τ) × l] + b`
+//! with scale S, misalignment δ, lever arm l, time offset τ and bias b, each switched on
+//! or off. In data-flow order: [`frames`] puts the reference in the body frame at any
+//! time (rotation, body rate); [`terms`] holds which terms are estimated, their values,
+//! the model's prediction and the correction of a DVL record; [`fit`] estimates the
+//! selected terms by nonlinear least squares; [`bound`] gives their Fisher information:
+//! standard deviations, correlations and the terms a segment cannot show.
+//! In: [`PairedRecording`](crate::data::paired::PairedRecording)s. Out: terms, their
+//! bound, corrected records.
+
+pub mod frames;
+pub mod terms;
+pub mod fit;
+pub mod bound;
