@@ -1,8 +1,8 @@
 //! Helpers for the integration tests: run the built binary in a temporary folder, read
 //! the Parquet results and the printed plan back, list and hash the files below a
 //! folder (`tree`, `snapshot`, `sha256`), store an error message whole as an insta
-//! snapshot (`assert_error_snapshot!`), and find the Snapir recordings where a user
-//! keeps them.
+//! snapshot (`assert_error_snapshot!`), and find the Snapir and A-KIT recordings
+//! where a user keeps them.
 //!
 //! Tests that need the recordings carry
 //! `#[ignore = "needs the Snapir recordings: dcnet-exp data fetch"]`, so a fresh clone
@@ -50,6 +50,46 @@ pub fn snapir() -> PathBuf {
             panic!(
                 "the Snapir recordings (V.npy, V_test.npy) are in none of: {}; \
                  run `cargo run --release -- data fetch` or set DCNET_SNAPIR_DIR",
+                searched.join(", ")
+            )
+        })
+}
+
+/// The places searched for the A-KIT recordings, in order: `DCNET_AKIT_DIR`, then
+/// `data/akit/` in the repository (where `dcnet-exp data fetch akit` puts them), then
+/// `../shared/data/akit`. Tests that need them carry
+/// `#[ignore = "needs the A-KIT recordings: dcnet-exp data fetch akit"]`.
+pub fn akit_candidates() -> Vec<PathBuf> {
+    let mut candidates: Vec<PathBuf> = std::env::var_os("DCNET_AKIT_DIR")
+        .map(PathBuf::from)
+        .into_iter()
+        .collect();
+    candidates.push(repo().join("data/akit"));
+    candidates.push(repo().join("../shared/data/akit"));
+    candidates
+}
+
+/// The first folder of [`akit_candidates`] that holds the 13 segments; a test that
+/// needs them fails here, naming every place searched, when none does.
+pub fn akit() -> PathBuf {
+    let candidates = akit_candidates();
+    let complete = |dir: &PathBuf| {
+        (1..=13).all(|n| {
+            let segment = dir.join(format!("Trajectory{n}"));
+            segment.join(format!("DVL_trajectory{n}.csv")).is_file()
+                && segment.join(format!("GT_trajectory{n}.csv")).is_file()
+        })
+    };
+    candidates
+        .iter()
+        .find(|dir| complete(dir))
+        .cloned()
+        .unwrap_or_else(|| {
+            let searched: Vec<String> =
+                candidates.iter().map(|d| d.display().to_string()).collect();
+            panic!(
+                "the A-KIT recordings (Trajectory1/ to Trajectory13/) are in none of: {}; \
+                 run `cargo run --release -- data fetch akit` or set DCNET_AKIT_DIR",
                 searched.join(", ")
             )
         })
