@@ -128,6 +128,76 @@ pub fn load_experiment(path: &Path, overrides: &[String]) -> Result<Experiment, 
 }
 
 /// The folder the relative paths of the spec at `path` start from, absolute if it can be.
+/// The `kind` a spec file declares at its top: `None` for the paper's experiments (the
+/// default), `Some("installation")` for a study of a real installation. Read before the
+/// spec is checked, to choose its checks.
+pub fn declared_kind(path: &Path) -> Result<Option<String>, SpecErrors> {
+    let text = TomlText::read(path, "cannot read the spec")?;
+    let table = text.table()?;
+    match table.get("kind") {
+        None => Ok(None),
+        Some(toml::Value::String(kind)) => Ok(Some(kind.clone())),
+        Some(other) => Err(text
+            .fault("kind", format!("{other} must be a string such as \"installation\""))
+            .into()),
+    }
+}
+
+/// A TOML document of another kind than the paper's experiments (a study of a real
+/// installation), read with the same `--set` overrides and the same placing of faults:
+/// its value, the folder its relative paths start from, and where each key came from.
+pub struct Document<T> {
+    pub value: T,
+    pub folder: PathBuf,
+    /// The document with its overrides, as TOML: stored beside its results.
+    pub resolved_toml: String,
+    source: Source,
+    assigned: Assigned,
+}
+
+impl<T> Document<T> {
+    /// A fault at `key`, placed where its value came from.
+    pub fn fault(&self, key: &str, message: impl Into<String>) -> SpecError {
+        self.source
+            .locate(&self.assigned, key.to_string(), message.into())
+    }
+
+    /// Every fault of `faults` (key, message), each placed where its value came from.
+    pub fn faults(&self, faults: Vec<(String, String)>) -> SpecErrors {
+        SpecErrors(
+            faults
+                .into_iter()
+                .map(|(key, message)| self.fault(&key, message))
+                .collect(),
+        )
+    }
+}
+
+/// Reads `path` with `overrides` into `T`; a value that does not fit is a fault placed
+/// on its line or its `--set`.
+pub fn load_document<T: serde::de::DeserializeOwned>(
+    path: &Path,
+    overrides: &[String],
+) -> Result<Document<T>, SpecErrors> {
+    let text = TomlText::read(path, "cannot read the spec")?;
+    let mut table = text.table()?;
+    let assigned = apply_overrides(&mut table, overrides)?;
+    let source = Source {
+        text,
+        folder: spec_folder(path),
+    };
+    let resolved_toml = toml::to_string_pretty(&table).expect("a TOML table serializes");
+    let value = super::toml_file::deserialize(toml::Value::Table(table))
+        .map_err(|(key, message)| source.locate(&assigned, key, message))?;
+    Ok(Document {
+        value,
+        folder: source.folder.clone(),
+        resolved_toml,
+        source,
+        assigned,
+    })
+}
+
 fn spec_folder(path: &Path) -> PathBuf {
     let folder = path
         .parent()
