@@ -35,6 +35,13 @@ pub struct PairedColumns {
     pub angles_in_degrees: bool,
 }
 
+impl PairedColumns {
+    /// The A-KIT recordings' column names.
+    pub fn akit() -> Self {
+        todo!("issue 26: the A-KIT column names")
+    }
+}
+
 /// The files of one recording: the DVL's and the reference's (the same file when both
 /// are in one).
 #[derive(Debug, Clone, PartialEq)]

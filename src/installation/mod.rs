@@ -9,6 +9,7 @@
 //! In: [`PairedRecording`](crate::data::paired::PairedRecording)s. Out: terms, their
 //! bound, corrected records.
 
+pub mod spec;
 pub mod frames;
 pub mod terms;
 pub mod fit;

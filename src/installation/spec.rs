@@ -1,0 +1,318 @@
+//! The spec of an installation study (`kind = "installation"`): the paired recordings,
+//! the DVL and reference noise the bound assumes, the calibration windows, the methods
+//! (the paper's baseline and least squares, named term sets of the installation model,
+//! DCNet models of a paper spec), and the tolerances past which a term counts as not
+//! seen. In: a TOML file and `--set` overrides. Out: an [`InstallationSpec`], or every
+//! fault placed on its line.
+
+use crate::data::paired::{PairedColumns, PairedFiles};
+use crate::spec::{Document, SpecErrors, load_document};
+use crate::vocab::ErrorModel;
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+
+/// The value of `kind` that makes a spec an installation study.
+pub const KIND: &str = "installation";
+
+/// One term of the installation model, as a spec names it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TermName {
+    /// One scale for all axes.
+    Scale,
+    ScalePerAxis,
+    Misalignment,
+    LeverArm,
+    TimeOffset,
+    /// One bias per axis.
+    Bias,
+    /// One bias for all axes.
+    BiasScalar,
+}
+
+/// The file as written.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InstallationFile {
+    pub name: String,
+    pub kind: String,
+    pub recordings: RecordingsFile,
+    pub noise: NoiseFile,
+    pub calibration: StudyCalibrationFile,
+    #[serde(default)]
+    pub observability: ObservabilityFile,
+    pub dcnet: Option<DcnetModelsFile>,
+}
+
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecordingsFile {
+    /// The column names, when they are not A-KIT's.
+    pub columns: Option<PairedColumns>,
+    pub trajectories: Vec<PairedTrajectoryFile>,
+}
+
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PairedTrajectoryFile {
+    pub name: String,
+    /// The DVL's CSV file, relative to the spec.
+    pub dvl: PathBuf,
+    /// The reference's CSV file; the DVL's when it holds both.
+    pub reference: Option<PathBuf>,
+}
+
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NoiseFile {
+    /// The DVL's white noise per axis, cm/s.
+    pub dvl_cm_s: f64,
+    /// The reference velocity's white noise per axis, cm/s.
+    pub reference_cm_s: f64,
+}
+
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StudyCalibrationFile {
+    /// Calibration windows: the first w seconds of the calibration trajectory; a w at
+    /// least its length takes all of it.
+    pub window_s: Vec<f64>,
+    /// The paper's methods: "baseline", "EM1" to "EM5" (least squares), "dcnet".
+    pub methods: Vec<String>,
+    /// Named term sets of the installation model, fitted by nonlinear least squares.
+    #[serde(default)]
+    pub models: Vec<TermSetFile>,
+}
+
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TermSetFile {
+    pub name: String,
+    pub terms: Vec<TermName>,
+}
+
+/// The standard deviation past which a term counts as not seen, and the correlation
+/// past which a pair does.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ObservabilityFile {
+    pub scale_pct: f64,
+    pub misalignment_deg: f64,
+    pub lever_arm_m: f64,
+    pub time_offset_s: f64,
+    pub bias_cm_s: f64,
+    pub max_correlation: f64,
+}
+
+impl Default for ObservabilityFile {
+    fn default() -> Self {
+        ObservabilityFile {
+            scale_pct: 0.5,
+            misalignment_deg: 0.5,
+            lever_arm_m: 0.1,
+            time_offset_s: 0.05,
+            bias_cm_s: 1.0,
+            max_correlation: 0.95,
+        }
+    }
+}
+
+/// The DCNet models a paper spec trained, applied to these recordings.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DcnetModelsFile {
+    /// The paper spec whose models are used, relative to this spec.
+    pub spec: PathBuf,
+}
+
+/// A method of the study: how the terms of a calibration window are estimated.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Method {
+    /// The paper's baseline: a scalar scale from speed ratios.
+    Baseline,
+    /// The paper's closed-form least squares of an error model.
+    LeastSquares(ErrorModel),
+    /// A named term set of the installation model, by nonlinear least squares.
+    Installation { name: String, terms: Vec<TermName> },
+    /// The paper spec's DCNet for an error model.
+    Dcnet(ErrorModel),
+}
+
+impl Method {
+    /// How the method is labelled in tables and figures.
+    pub fn label(&self) -> String {
+        match self {
+            Method::Baseline => "baseline".into(),
+            Method::LeastSquares(model) => format!("least squares {model}"),
+            Method::Installation { name, .. } => format!("installation {name}"),
+            Method::Dcnet(model) => format!("DCNet {model}"),
+        }
+    }
+}
+
+/// The checked spec.
+#[derive(Debug, Clone)]
+pub struct InstallationSpec {
+    pub name: String,
+    /// Each trajectory's name and files.
+    pub trajectories: Vec<(String, PairedFiles)>,
+    pub columns: PairedColumns,
+    pub dvl_noise_m_s: f64,
+    pub reference_noise_m_s: f64,
+    /// In increasing order.
+    pub windows_s: Vec<f64>,
+    pub methods: Vec<Method>,
+    pub observability: ObservabilityFile,
+    /// The paper spec whose DCNet models are used, when `dcnet` is a method.
+    pub dcnet_spec: Option<PathBuf>,
+    /// The spec with its overrides, as TOML.
+    pub resolved_toml: String,
+}
+
+/// Reads and checks the installation spec at `path`.
+pub fn load(path: &Path, overrides: &[String]) -> Result<InstallationSpec, SpecErrors> {
+    let document: Document<InstallationFile> = load_document(path, overrides)?;
+    let mut faults = Vec::new();
+    let spec = check(&document, &mut faults);
+    if faults.is_empty() {
+        Ok(spec)
+    } else {
+        Err(document.faults(faults))
+    }
+}
+
+fn check(document: &Document<InstallationFile>, faults: &mut Vec<(String, String)>) -> InstallationSpec {
+    let file = &document.value;
+    let mut fault = |key: String, message: String| faults.push((key, message));
+    if file.kind != KIND {
+        fault("kind".into(), format!("{:?} must be {KIND:?} here", file.kind));
+    }
+    let folder_name = !file.name.is_empty()
+        && !file.name.starts_with('.')
+        && file.name.len() <= crate::spec::MAX_NAME_CHARS
+        && file.name.chars().all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c));
+    if !folder_name {
+        fault("name".into(), format!("{:?} must be non-empty, at most {} characters, use only letters, digits, '-', '_' and '.', and not start with '.' (it names the results folder)", file.name, crate::spec::MAX_NAME_CHARS));
+    }
+
+    let mut names = HashSet::new();
+    let mut trajectories = Vec::new();
+    for (i, trajectory) in file.recordings.trajectories.iter().enumerate() {
+        if !names.insert(trajectory.name.as_str()) {
+            fault(format!("recordings.trajectories[{i}].name"), format!("{:?} is defined twice", trajectory.name));
+        }
+        let dvl = document.folder.join(&trajectory.dvl);
+        let reference = trajectory.reference.as_ref().map_or_else(|| dvl.clone(), |r| document.folder.join(r));
+        trajectories.push((trajectory.name.clone(), PairedFiles { dvl, reference }));
+    }
+    if trajectories.len() < 2 {
+        fault("recordings.trajectories".into(), format!("has {} trajectories: held-out scores need at least two (one to calibrate on, another to score on)", trajectories.len()));
+    }
+
+    let noise = &file.noise;
+    if !(noise.dvl_cm_s.is_finite() && noise.dvl_cm_s > 0.0) {
+        fault("noise.dvl_cm_s".into(), format!("{} must be a positive number: the bound divides by it", noise.dvl_cm_s));
+    }
+    if !(noise.reference_cm_s.is_finite() && noise.reference_cm_s >= 0.0) {
+        fault("noise.reference_cm_s".into(), format!("{} must be zero or positive", noise.reference_cm_s));
+    }
+
+    let calibration = &file.calibration;
+    if calibration.window_s.is_empty() {
+        fault("calibration.window_s".into(), "is empty: give at least one window, in seconds (one at least a trajectory's length takes all of it)".into());
+    }
+    let mut windows_s = Vec::new();
+    for (i, &w) in calibration.window_s.iter().enumerate() {
+        if !(w.is_finite() && w > 0.0) {
+            fault(format!("calibration.window_s[{i}]"), format!("{w} must be a positive number of seconds"));
+        } else if windows_s.contains(&w) {
+            fault(format!("calibration.window_s[{i}]"), format!("{w} is listed twice"));
+        } else {
+            windows_s.push(w);
+        }
+    }
+    windows_s.sort_by(f64::total_cmp);
+
+    let mut methods = Vec::new();
+    let mut listed = HashSet::new();
+    let mut wants_dcnet = false;
+    for (i, method) in calibration.methods.iter().enumerate() {
+        let key = format!("calibration.methods[{i}]");
+        if !listed.insert(method.as_str()) {
+            fault(key, format!("{method:?} is listed twice"));
+            continue;
+        }
+        match method.as_str() {
+            "baseline" => methods.push(Method::Baseline),
+            "dcnet" => wants_dcnet = true,
+            other => match other.parse::<ErrorModel>() {
+                Ok(model) => methods.push(Method::LeastSquares(model)),
+                Err(_) => fault(key, format!("{other:?} is not a method: give \"baseline\", \"EM1\" to \"EM5\" (the paper's least squares) or \"dcnet\"; term sets of the installation model go in [[calibration.models]]")),
+            },
+        }
+    }
+    let mut model_names = HashSet::new();
+    for (i, model) in calibration.models.iter().enumerate() {
+        let key = format!("calibration.models[{i}]");
+        if !model_names.insert(model.name.as_str()) {
+            fault(format!("{key}.name"), format!("{:?} is defined twice", model.name));
+        }
+        if model.terms.is_empty() {
+            fault(format!("{key}.terms"), "is empty: name at least one term (scale, scale_per_axis, misalignment, lever_arm, time_offset, bias, bias_scalar)".into());
+        }
+        let has = |term| model.terms.contains(&term);
+        if has(TermName::Scale) && has(TermName::ScalePerAxis) {
+            fault(format!("{key}.terms"), "lists scale and scale_per_axis: give one".into());
+        }
+        if has(TermName::Bias) && has(TermName::BiasScalar) {
+            fault(format!("{key}.terms"), "lists bias and bias_scalar: give one".into());
+        }
+        let mut seen = HashSet::new();
+        for (j, term) in model.terms.iter().enumerate() {
+            if !seen.insert(term) {
+                fault(format!("{key}.terms[{j}]"), format!("{term:?} is listed twice"));
+            }
+        }
+        methods.push(Method::Installation { name: model.name.clone(), terms: model.terms.clone() });
+    }
+    let dcnet_spec = match (&file.dcnet, wants_dcnet) {
+        (Some(dcnet), true) => {
+            methods.extend(ErrorModel::ALL.map(Method::Dcnet));
+            Some(document.folder.join(&dcnet.spec))
+        }
+        (None, true) => {
+            fault("dcnet".into(), "is missing: the method \"dcnet\" needs [dcnet] spec = \"<paper spec>\", whose trained models it applies".into());
+            None
+        }
+        (_, false) => None,
+    };
+
+    let o = &file.observability;
+    for (key, value) in [
+        ("scale_pct", o.scale_pct),
+        ("misalignment_deg", o.misalignment_deg),
+        ("lever_arm_m", o.lever_arm_m),
+        ("time_offset_s", o.time_offset_s),
+        ("bias_cm_s", o.bias_cm_s),
+    ] {
+        if !(value.is_finite() && value > 0.0) {
+            fault(format!("observability.{key}"), format!("{value} must be a positive number: a term whose standard deviation is beyond it counts as not seen"));
+        }
+    }
+    if !(o.max_correlation > 0.0 && o.max_correlation < 1.0) {
+        fault("observability.max_correlation".into(), format!("{} must be above 0 and below 1", o.max_correlation));
+    }
+
+    InstallationSpec {
+        name: file.name.clone(),
+        trajectories,
+        columns: file.recordings.columns.clone().unwrap_or_else(PairedColumns::akit),
+        dvl_noise_m_s: noise.dvl_cm_s / 100.0,
+        reference_noise_m_s: noise.reference_cm_s / 100.0,
+        windows_s,
+        methods,
+        observability: o.clone(),
+        dcnet_spec,
+        resolved_toml: document.resolved_toml.clone(),
+    }
+}

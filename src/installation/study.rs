@@ -1,0 +1,349 @@
+//! The held-out study: every trajectory in turn is the calibration segment (its first w
+//! seconds, for each window of the spec), each method estimates the installation's
+//! terms there, and those terms correct the DVL of every other trajectory, scored
+//! against the reference in the body frame beside no calibration at all. The paper's
+//! methods (baseline, least squares EM1 to EM5, DCNet) estimate a scale and a bias from
+//! the DVL and the reference's body velocity on the same time stamps; the installation
+//! models fit their term sets by nonlinear least squares, with their Fisher bound.
+//! In: an [`InstallationSpec`] and its recordings. Out: a [`Study`]: held-out rows,
+//! estimated terms with their bound, and the summary per method.
+
+use super::bound::{Noise, TermBound, Tolerances, bound};
+use super::fit::fit;
+use super::frames::Reference;
+use super::spec::{InstallationSpec, Method, TermName};
+use super::terms::{Installation, PerAxis, TermSet, score};
+use crate::Vec3;
+use crate::data::paired::PairedRecording;
+use crate::estimators::{Estimator, baseline::Baseline, least_squares::LeastSquares};
+use crate::evaluate::statistics::mean_ci95;
+use crate::vocab::Correction;
+use rayon::prelude::*;
+
+/// The label of the row that corrects nothing.
+pub const NO_CALIBRATION: &str = "no calibration";
+
+/// One recording with its reference in the body frame.
+pub struct Segment {
+    pub name: String,
+    pub recording: PairedRecording,
+    pub reference: Reference,
+}
+
+impl Segment {
+    pub fn new(name: String, recording: PairedRecording) -> Self {
+        let reference = Reference::new(&recording);
+        Segment {
+            name,
+            recording,
+            reference,
+        }
+    }
+
+    /// The samples of the first `window_s` seconds (all of them when the recording is
+    /// shorter), and the seconds they span.
+    pub fn first_seconds(&self, window_s: f64) -> (std::ops::Range<usize>, f64) {
+        let time = &self.recording.time_s;
+        let start = time[0];
+        let end = time.partition_point(|&t| t - start < window_s);
+        let span = time[end - 1] - start + sample_interval(time);
+        (0..end, span.min(window_s))
+    }
+}
+
+/// The median interval between two samples, s.
+fn sample_interval(time: &[f64]) -> f64 {
+    let mut steps: Vec<f64> = time.windows(2).map(|w| w[1] - w[0]).collect();
+    if steps.is_empty() {
+        return 0.0;
+    }
+    steps.sort_by(f64::total_cmp);
+    steps[steps.len() / 2]
+}
+
+/// The held-out RMSE of one method's terms from one calibration window, on one other
+/// trajectory, cm/s.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeldOutRow {
+    pub method: String,
+    pub calibration: String,
+    /// The window as the spec gives it, s.
+    pub window_s: f64,
+    pub scored: String,
+    pub rmse_cm_s: Vec3,
+    pub total_cm_s: f64,
+}
+
+/// One estimated term of one calibration, with its bound.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TermRow {
+    pub method: String,
+    pub calibration: String,
+    pub window_s: f64,
+    /// Such as `lever_arm_x_m`.
+    pub term: String,
+    pub value: f64,
+    /// The bound's standard deviation, in the term's unit.
+    pub std: f64,
+    /// Why the window cannot show the term; empty when it can.
+    pub unseen: String,
+}
+
+/// A method's mean held-out RMSE over calibration trajectories, with its 95 % interval.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SummaryRow {
+    pub method: String,
+    pub window_s: f64,
+    pub mean_cm_s: f64,
+    pub ci95_cm_s: f64,
+    /// The mean divided by no calibration's on the same pairs.
+    pub ratio: f64,
+}
+
+/// One sample of the residual figure: a held-out trajectory's DVL against the
+/// reference in the body frame, before and after the best method's correction, with the
+/// yaw rate under it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TracePoint {
+    /// The trajectory drawn.
+    pub trajectory: String,
+    /// The method whose correction is drawn, and the trajectory it calibrated on.
+    pub method: String,
+    pub calibration: String,
+    pub time_s: f64,
+    pub before_cm_s: Vec3,
+    pub after_cm_s: Vec3,
+    pub yaw_rate_deg_s: f64,
+}
+
+/// Everything the study computes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Study {
+    pub heldout: Vec<HeldOutRow>,
+    pub terms: Vec<TermRow>,
+    pub summary: Vec<SummaryRow>,
+    pub trace: Vec<TracePoint>,
+}
+
+/// What a method estimated on one window.
+struct Estimate {
+    installation: Installation,
+    bound: Option<TermBound>,
+}
+
+/// The terms of a spec's term names.
+pub fn term_set(terms: &[TermName]) -> TermSet {
+    let has = |term| terms.contains(&term);
+    let either = |one, per_axis| match (has(one), has(per_axis)) {
+        (_, true) => PerAxis::PerAxis,
+        (true, false) => PerAxis::Scalar,
+        (false, false) => PerAxis::Off,
+    };
+    TermSet {
+        scale: either(TermName::Scale, TermName::ScalePerAxis),
+        misalignment: has(TermName::Misalignment),
+        lever_arm: has(TermName::LeverArm),
+        time_offset: has(TermName::TimeOffset),
+        bias: either(TermName::BiasScalar, TermName::Bias),
+    }
+}
+
+/// A scale-and-bias correction as installation terms: `(v − b) ⊘ (1 + k)` is the
+/// installation's correction with no misalignment, lever arm or time offset.
+pub fn from_correction(correction: &Correction) -> Installation {
+    Installation {
+        scale: correction.scale,
+        bias_m_s: correction.bias_m_s,
+        ..Installation::default()
+    }
+}
+
+/// The reference's body velocity on the DVL's own time stamps, where it is recorded.
+fn reference_on_stamps(segment: &Segment, range: std::ops::Range<usize>) -> (Vec<Vec3>, Vec<Vec3>) {
+    let recording = &segment.recording;
+    range
+        .filter_map(|i| {
+            let at = segment.reference.at(recording.time_s[i])?;
+            Some((recording.dvl_m_s[i], at.velocity_body_m_s))
+        })
+        .unzip()
+}
+
+/// Runs the study of `spec` over `segments` (in spec order); `dcnet` estimates the
+/// DCNet methods' corrections from a DVL window and its reference, when given.
+pub fn run(
+    spec: &InstallationSpec,
+    segments: &[Segment],
+    dcnet: Option<&(dyn Fn(crate::vocab::ErrorModel, &[Vec3], &[Vec3]) -> Correction + Sync)>,
+) -> Study {
+    let noise = Noise {
+        dvl_m_s: spec.dvl_noise_m_s,
+        reference_m_s: spec.reference_noise_m_s,
+    };
+    let o = &spec.observability;
+    let tolerances = Tolerances {
+        scale: o.scale_pct / 100.0,
+        misalignment_rad: o.misalignment_deg.to_radians(),
+        lever_arm_m: o.lever_arm_m,
+        time_offset_s: o.time_offset_s,
+        bias_m_s: o.bias_cm_s / 100.0,
+        max_correlation: o.max_correlation,
+    };
+    let cases: Vec<(usize, f64)> = (0..segments.len())
+        .flat_map(|c| spec.windows_s.iter().map(move |&w| (c, w)))
+        .collect();
+    let per_case: Vec<(Vec<HeldOutRow>, Vec<TermRow>)> = cases
+        .par_iter()
+        .map(|&(c, window_s)| {
+            let calibration = &segments[c];
+            let (range, _) = calibration.first_seconds(window_s);
+            let mut heldout = Vec::new();
+            let mut terms = Vec::new();
+            let mut methods: Vec<(String, Estimate)> = vec![(
+                NO_CALIBRATION.to_string(),
+                Estimate {
+                    installation: Installation::default(),
+                    bound: None,
+                },
+            )];
+            for method in &spec.methods {
+                let estimate = match method {
+                    Method::Baseline | Method::LeastSquares(_) | Method::Dcnet(_) => {
+                        let (dvl, reference) = reference_on_stamps(calibration, range.clone());
+                        let correction = match method {
+                            Method::Baseline => Baseline.estimate(&dvl, &reference),
+                            Method::LeastSquares(model) => LeastSquares(*model).estimate(&dvl, &reference),
+                            Method::Dcnet(model) => match dcnet {
+                                Some(dcnet) => dcnet(*model, &dvl, &reference),
+                                None => continue,
+                            },
+                            Method::Installation { .. } => unreachable!(),
+                        };
+                        Estimate {
+                            installation: from_correction(&correction),
+                            bound: None,
+                        }
+                    }
+                    Method::Installation { terms, .. } => {
+                        let recording = &calibration.recording;
+                        match fit(
+                            &recording.time_s[range.clone()],
+                            &recording.dvl_m_s[range.clone()],
+                            &calibration.reference,
+                            term_set(terms),
+                        ) {
+                            Ok(fitted) => Estimate {
+                                installation: fitted.installation,
+                                bound: Some(bound(&fitted, noise, &tolerances)),
+                            },
+                            Err(_) => continue,
+                        }
+                    }
+                };
+                methods.push((method.label(), estimate));
+            }
+            for (label, estimate) in &methods {
+                if let Some(bound) = &estimate.bound {
+                    for (i, name) in bound.names.iter().enumerate() {
+                        let unseen = bound
+                            .unseen
+                            .iter()
+                            .filter(|u| u.term == *name)
+                            .map(|u| u.why.clone())
+                            .collect::<Vec<_>>()
+                            .join("; ");
+                        terms.push(TermRow {
+                            method: label.clone(),
+                            calibration: calibration.name.clone(),
+                            window_s,
+                            term: name.to_string(),
+                            value: bound.value[i],
+                            std: bound.std[i],
+                            unseen,
+                        });
+                    }
+                }
+                for (s, scored) in segments.iter().enumerate() {
+                    if s == c {
+                        continue;
+                    }
+                    let recording = &scored.recording;
+                    let rmse = score(
+                        &estimate.installation,
+                        &recording.time_s,
+                        &recording.dvl_m_s,
+                        &scored.reference,
+                        0..recording.time_s.len(),
+                    );
+                    heldout.push(HeldOutRow {
+                        method: label.clone(),
+                        calibration: calibration.name.clone(),
+                        window_s,
+                        scored: scored.name.clone(),
+                        rmse_cm_s: [100.0 * rmse.x, 100.0 * rmse.y, 100.0 * rmse.z],
+                        total_cm_s: 100.0 * rmse.total,
+                    });
+                }
+            }
+            (heldout, terms)
+        })
+        .collect();
+    let (heldout, terms): (Vec<Vec<HeldOutRow>>, Vec<Vec<TermRow>>) = per_case.into_iter().unzip();
+    let heldout: Vec<HeldOutRow> = heldout.into_iter().flatten().collect();
+    let summary = summarize(&heldout, &spec.windows_s);
+    Study {
+        heldout,
+        terms: terms.into_iter().flatten().collect(),
+        summary,
+        trace: Vec::new(),
+    }
+}
+
+/// Per method and window: the mean over calibration trajectories of each one's mean
+/// held-out RMSE, its 95 % interval, and its ratio to no calibration's.
+pub fn summarize(heldout: &[HeldOutRow], windows_s: &[f64]) -> Vec<SummaryRow> {
+    let mut methods: Vec<&str> = Vec::new();
+    for row in heldout {
+        if !methods.contains(&row.method.as_str()) {
+            methods.push(&row.method);
+        }
+    }
+    let per_calibration = |method: &str, window_s: f64| -> Vec<f64> {
+        let mut calibrations: Vec<&str> = Vec::new();
+        for row in heldout.iter().filter(|r| r.method == method && r.window_s == window_s) {
+            if !calibrations.contains(&row.calibration.as_str()) {
+                calibrations.push(&row.calibration);
+            }
+        }
+        calibrations
+            .iter()
+            .map(|c| {
+                let scores: Vec<f64> = heldout
+                    .iter()
+                    .filter(|r| r.method == method && r.window_s == window_s && r.calibration == *c)
+                    .map(|r| r.total_cm_s)
+                    .collect();
+                scores.iter().sum::<f64>() / scores.len() as f64
+            })
+            .collect()
+    };
+    let mut rows = Vec::new();
+    for &window_s in windows_s {
+        let (none, _) = mean_ci95(&per_calibration(NO_CALIBRATION, window_s));
+        for method in &methods {
+            let values = per_calibration(method, window_s);
+            if values.is_empty() {
+                continue;
+            }
+            let (mean, ci95) = mean_ci95(&values);
+            rows.push(SummaryRow {
+                method: method.to_string(),
+                window_s,
+                mean_cm_s: mean,
+                ci95_cm_s: ci95,
+                ratio: mean / none,
+            });
+        }
+    }
+    rows
+}
