@@ -17,7 +17,7 @@ use crate::Vec3;
 use crate::data::paired::PairedRecording;
 use crate::estimators::{Estimator, baseline::Baseline, least_squares::LeastSquares};
 use crate::evaluate::statistics::mean_ci95;
-use crate::vocab::Correction;
+use crate::vocab::{Correction, ErrorModel};
 use rayon::prelude::*;
 
 /// The label of the row that corrects nothing.
@@ -131,6 +131,20 @@ struct Estimate {
     bound: Option<TermBound>,
 }
 
+/// The terms one method estimated on one calibration window.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Estimated {
+    pub method: String,
+    pub calibration: String,
+    pub window_s: f64,
+    pub installation: Installation,
+}
+
+/// How DCNet estimates a scale and a bias from a DVL window and the reference's body
+/// velocity on its stamps, for an error model; `None` where it cannot (no model, or a
+/// window shorter than the network's).
+pub type DcnetEstimate<'a> = dyn Fn(ErrorModel, &[Vec3], &[Vec3]) -> Option<Correction> + Sync + 'a;
+
 /// The terms of a spec's term names.
 pub fn term_set(terms: &[TermName]) -> TermSet {
     let has = |term| terms.contains(&term);
@@ -169,13 +183,9 @@ fn reference_on_stamps(segment: &Segment, range: std::ops::Range<usize>) -> (Vec
         .unzip()
 }
 
-/// Runs the study of `spec` over `segments` (in spec order); `dcnet` estimates the
-/// DCNet methods' corrections from a DVL window and its reference, when given.
-pub fn run(
-    spec: &InstallationSpec,
-    segments: &[Segment],
-    dcnet: Option<&(dyn Fn(crate::vocab::ErrorModel, &[Vec3], &[Vec3]) -> Correction + Sync)>,
-) -> Study {
+/// Runs the study of `spec` over `segments` (in spec order), with `dcnet` for the DCNet
+/// methods; also gives back every method's terms on every window.
+pub fn run(spec: &InstallationSpec, segments: &[Segment], dcnet: &DcnetEstimate) -> (Study, Vec<Estimated>) {
     let noise = Noise {
         dvl_m_s: spec.dvl_noise_m_s,
         reference_m_s: spec.reference_noise_m_s,
@@ -192,7 +202,7 @@ pub fn run(
     let cases: Vec<(usize, f64)> = (0..segments.len())
         .flat_map(|c| spec.windows_s.iter().map(move |&w| (c, w)))
         .collect();
-    let per_case: Vec<(Vec<HeldOutRow>, Vec<TermRow>)> = cases
+    let per_case: Vec<(Vec<HeldOutRow>, Vec<TermRow>, Vec<Estimated>)> = cases
         .par_iter()
         .map(|&(c, window_s)| {
             let calibration = &segments[c];
@@ -213,8 +223,8 @@ pub fn run(
                         let correction = match method {
                             Method::Baseline => Baseline.estimate(&dvl, &reference),
                             Method::LeastSquares(model) => LeastSquares(*model).estimate(&dvl, &reference),
-                            Method::Dcnet(model) => match dcnet {
-                                Some(dcnet) => dcnet(*model, &dvl, &reference),
+                            Method::Dcnet(model) => match dcnet(*model, &dvl, &reference) {
+                                Some(correction) => correction,
                                 None => continue,
                             },
                             Method::Installation { .. } => unreachable!(),
@@ -242,6 +252,15 @@ pub fn run(
                 };
                 methods.push((method.label(), estimate));
             }
+            let estimated = methods
+                .iter()
+                .map(|(label, estimate)| Estimated {
+                    method: label.clone(),
+                    calibration: calibration.name.clone(),
+                    window_s,
+                    installation: estimate.installation,
+                })
+                .collect();
             for (label, estimate) in &methods {
                 if let Some(bound) = &estimate.bound {
                     for (i, name) in bound.names.iter().enumerate() {
@@ -285,18 +304,25 @@ pub fn run(
                     });
                 }
             }
-            (heldout, terms)
+            (heldout, terms, estimated)
         })
         .collect();
-    let (heldout, terms): (Vec<Vec<HeldOutRow>>, Vec<Vec<TermRow>>) = per_case.into_iter().unzip();
-    let heldout: Vec<HeldOutRow> = heldout.into_iter().flatten().collect();
+    let mut heldout = Vec::new();
+    let mut terms = Vec::new();
+    let mut estimated = Vec::new();
+    for (h, t, e) in per_case {
+        heldout.extend(h);
+        terms.extend(t);
+        estimated.extend(e);
+    }
     let summary = summarize(&heldout, &spec.windows_s);
-    Study {
+    let study = Study {
         heldout,
-        terms: terms.into_iter().flatten().collect(),
+        terms,
         summary,
         trace: Vec::new(),
-    }
+    };
+    (study, estimated)
 }
 
 /// Per method and window: the mean over calibration trajectories of each one's mean

@@ -9,6 +9,7 @@
 //! and reads the table that sets a sweep's points side by side.
 
 pub mod read;
+pub mod corrected;
 pub mod sweep;
 
 use crate::data::Trajectory;

@@ -1,0 +1,108 @@
+//! A DVL recording corrected by its calibration, written as CSV and as Parquet with the
+//! same columns: the sample's own time stamp, the time the corrected velocity is valid
+//! at (the stamp plus the time offset), and the corrected body-frame velocity in the
+//! columns a CSV recording is read from by default ([`crate::VELOCITY_COLUMNS`]), so the
+//! corrected file can be named in a spec as it is.
+//! In: the corrected samples. Out: `<stem>-corrected.csv` and `.parquet`.
+
+use super::{batch, floats, parquet_bytes};
+use crate::Vec3;
+use crate::files::write_atomic;
+use std::path::{Path, PathBuf};
+
+/// One corrected sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CorrectedSample {
+    /// The DVL sample's own stamp, s.
+    pub time_s: f64,
+    /// When the corrected velocity is valid: the stamp plus the time offset, s.
+    pub valid_at_s: f64,
+    /// The corrected velocity, body frame, m/s.
+    pub velocity_m_s: Vec3,
+}
+
+/// The column names, in order.
+const TIME: &str = "time_s";
+const VALID_AT: &str = "valid_at_s";
+
+#[derive(Debug, thiserror::Error)]
+pub enum CorrectedError {
+    #[error("writing {}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("writing {} as Parquet", path.display())]
+    Parquet {
+        path: PathBuf,
+        #[source]
+        source: parquet::errors::ParquetError,
+    },
+}
+
+/// The CSV text of `samples`, every number with all its digits.
+pub fn csv_text(samples: &[CorrectedSample]) -> String {
+    let [x, y, z] = crate::VELOCITY_COLUMNS;
+    let mut text = format!("{TIME},{VALID_AT},{x},{y},{z}\n");
+    for s in samples {
+        let [vx, vy, vz] = s.velocity_m_s;
+        text.push_str(&format!("{},{},{vx},{vy},{vz}\n", s.time_s, s.valid_at_s));
+    }
+    text
+}
+
+/// Writes `out/<stem>-corrected.csv` and `.parquet`, each atomically; their paths.
+pub fn write(out: &Path, stem: &str, samples: &[CorrectedSample]) -> Result<Vec<PathBuf>, CorrectedError> {
+    crate::files::create_folder(out).map_err(|source| CorrectedError::Io {
+        path: out.to_path_buf(),
+        source,
+    })?;
+    let csv = out.join(format!("{stem}-corrected.csv"));
+    write_atomic(&csv, csv_text(samples).as_bytes()).map_err(|source| CorrectedError::Io {
+        path: csv.clone(),
+        source,
+    })?;
+    let [x, y, z] = crate::VELOCITY_COLUMNS;
+    let table = batch(vec![
+        (TIME, floats(samples, |s| s.time_s)),
+        (VALID_AT, floats(samples, |s| s.valid_at_s)),
+        (x, floats(samples, |s| s.velocity_m_s[0])),
+        (y, floats(samples, |s| s.velocity_m_s[1])),
+        (z, floats(samples, |s| s.velocity_m_s[2])),
+    ]);
+    let parquet = out.join(format!("{stem}-corrected.parquet"));
+    let bytes = parquet_bytes(&table).map_err(|source| CorrectedError::Parquet {
+        path: parquet.clone(),
+        source,
+    })?;
+    write_atomic(&parquet, &bytes).map_err(|source| CorrectedError::Io {
+        path: parquet.clone(),
+        source,
+    })?;
+    Ok(vec![csv, parquet])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_csv_reads_back_as_a_recording_of_the_corrected_velocity() {
+        let samples = [
+            CorrectedSample { time_s: 0.0, valid_at_s: 1.5, velocity_m_s: [1.25, -0.5, 0.0625] },
+            CorrectedSample { time_s: 1.0, valid_at_s: 2.5, velocity_m_s: [1.5, 0.1, -0.2] },
+        ];
+        let folder = tempfile::tempdir().unwrap();
+        let written = write(folder.path(), "dvl", &samples).unwrap();
+        assert_eq!(written[0], folder.path().join("dvl-corrected.csv"));
+        let columns = crate::VELOCITY_COLUMNS.map(String::from);
+        let read = crate::data::csv::read_velocities(&written[0], &columns).unwrap();
+        assert_eq!(read, vec![samples[0].velocity_m_s, samples[1].velocity_m_s]);
+        assert_eq!(
+            std::fs::read_to_string(&written[0]).unwrap().lines().next(),
+            Some("time_s,valid_at_s,vx_m_s,vy_m_s,vz_m_s")
+        );
+        assert!(written[1].is_file());
+    }
+}
