@@ -11,6 +11,8 @@
 
 #![allow(dead_code)]
 
+pub mod installed;
+
 use arrow_array::{Array, BooleanArray, Float64Array, Int64Array, RecordBatch, StringArray};
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 use sha2::{Digest, Sha256};

@@ -1,0 +1,122 @@
+//! Synthetic recordings of an installed DVL beside an INS reference, written in the
+//! A-KIT format (a DVL file and a reference file per trajectory), with known
+//! installation terms: the known answer of the installation study's end-to-end tests.
+//! The motion is analytic (turns, speed changes, pitch), so the reference at t + τ and
+//! the body rate are exact.
+
+use rand::SeedableRng;
+use rand_distr::{Distribution, Normal};
+use std::fmt::Write;
+use std::path::Path;
+
+/// The terms a synthetic DVL is installed with.
+#[derive(Debug, Clone, Copy)]
+pub struct Installed {
+    pub scale: f64,
+    pub lever_arm_m: [f64; 3],
+    pub time_offset_s: f64,
+    pub bias_m_s: [f64; 3],
+    pub noise_m_s: f64,
+}
+
+/// The installation the end-to-end tests recover: the DVL 1.9 m aft of the
+/// reference point and 0.4 m below it, its stamps 0.6 s ahead, 1 % scale, a small bias.
+pub const INSTALLED: Installed = Installed {
+    scale: 0.01,
+    lever_arm_m: [-1.9, 0.05, 0.4],
+    time_offset_s: 0.6,
+    bias_m_s: [0.01, -0.005, 0.003],
+    noise_m_s: 0.02,
+};
+
+/// Roll, pitch, yaw (rad) and their rates at `t` for trajectory `k`: turns of up to
+/// about 12°/s one way and the other, and a slow pitch; `turning` false holds the
+/// heading.
+fn attitude(t: f64, k: usize, turning: bool) -> ([f64; 3], [f64; 3]) {
+    let phase = 0.7 * k as f64;
+    let w = 2.0 * std::f64::consts::PI / (60.0 + 10.0 * k as f64);
+    let (yaw, yaw_rate) = if turning {
+        let amplitude = 1.6;
+        (amplitude * (w * t + phase).sin() + 0.3 * k as f64, amplitude * w * (w * t + phase).cos())
+    } else {
+        (0.3 * k as f64, 0.0)
+    };
+    let wp = 2.0 * std::f64::consts::PI / 90.0;
+    let pitch = 0.08 * (wp * t).sin();
+    let pitch_rate = 0.08 * wp * (wp * t).cos();
+    let roll = 0.03 * (wp * 1.7 * t).cos();
+    let roll_rate = -0.03 * wp * 1.7 * (wp * 1.7 * t).sin();
+    ([roll, pitch, yaw], [roll_rate, pitch_rate, yaw_rate])
+}
+
+/// C_b^n for roll, pitch, yaw (aerospace ZYX).
+fn body_to_ned([roll, pitch, yaw]: [f64; 3]) -> [[f64; 3]; 3] {
+    let (sr, cr) = roll.sin_cos();
+    let (sp, cp) = pitch.sin_cos();
+    let (sy, cy) = yaw.sin_cos();
+    [
+        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+        [-sp, cp * sr, cp * cr],
+    ]
+}
+
+/// The body velocity (m/s) at `t`: surge with speed changes, a little heave.
+fn body_velocity(t: f64, k: usize) -> [f64; 3] {
+    let surge = 1.8 + 0.3 * (2.0 * std::f64::consts::PI * t / (75.0 + 5.0 * k as f64)).sin();
+    [surge, 0.0, 0.05 * (t / 13.0).sin()]
+}
+
+/// The body rate (p, q, r) from the Euler angles and their rates.
+fn body_rate([roll, pitch, _]: [f64; 3], [droll, dpitch, dyaw]: [f64; 3]) -> [f64; 3] {
+    [
+        droll - dyaw * pitch.sin(),
+        dpitch * roll.cos() + dyaw * roll.sin() * pitch.cos(),
+        -dpitch * roll.sin() + dyaw * roll.cos() * pitch.cos(),
+    ]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
+/// Writes `TrajectoryN/DVL_trajectoryN.csv` and `GT_trajectoryN.csv` for N = 1..=count
+/// into `folder`, 400 samples at 1 Hz each; trajectories listed in `straight` hold
+/// their heading.
+pub fn write_installed(folder: &Path, count: usize, straight: &[usize], installed: Installed, seed: u64) {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let noise = Normal::new(0.0, installed.noise_m_s).unwrap();
+    for n in 1..=count {
+        let turning = !straight.contains(&n);
+        let segment = folder.join(format!("Trajectory{n}"));
+        std::fs::create_dir_all(&segment).unwrap();
+        let mut dvl = String::from("Time [s],DVL X [m/s],DVL Y [m/s],DVL Z [m/s]\n");
+        let mut reference = String::from("Time [s],Longitude [rad],Latitude [rad],Altitude [m],V North [m/s],V East [m/s],V Down [m/s],Roll [rad],Pitch [rad],Yaw [rad]\n");
+        for i in 0..400 {
+            let t = i as f64;
+            let (angles, _) = attitude(t, n, turning);
+            let c = body_to_ned(angles);
+            let v_b = body_velocity(t, n);
+            let v_n: Vec<f64> = (0..3).map(|r| (0..3).map(|k| c[r][k] * v_b[k]).sum()).collect();
+            // Yaw as an INS records it: wrapped to (−π, π].
+            let yaw = (angles[2] + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI) - std::f64::consts::PI;
+            writeln!(
+                reference,
+                "{t},0.6,0.57,-20.0,{},{},{},{},{},{yaw}",
+                v_n[0], v_n[1], v_n[2], angles[0], angles[1]
+            )
+            .unwrap();
+            let later = t + installed.time_offset_s;
+            let (angles, rates) = attitude(later, n, turning);
+            let omega = body_rate(angles, rates);
+            let lever = cross(omega, installed.lever_arm_m);
+            let v = body_velocity(later, n);
+            let measured: Vec<f64> = (0..3)
+                .map(|a| (1.0 + installed.scale) * (v[a] + lever[a]) + installed.bias_m_s[a] + noise.sample(&mut rng))
+                .collect();
+            writeln!(dvl, "{t},{},{},{}", measured[0], measured[1], measured[2]).unwrap();
+        }
+        std::fs::write(segment.join(format!("DVL_trajectory{n}.csv")), dvl).unwrap();
+        std::fs::write(segment.join(format!("GT_trajectory{n}.csv")), reference).unwrap();
+    }
+}
