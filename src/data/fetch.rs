@@ -677,6 +677,67 @@ mod tests {
     }
 
     #[test]
+    fn files_named_in_folders_go_to_those_folders_below_the_destination() {
+        let (mut files, served) = generated();
+        files[0].name = "Trajectory1/DVL_trajectory1.csv";
+        files[1].name = "Trajectory1/GT_trajectory1.csv";
+        let dir = tempfile::tempdir().unwrap();
+        let dest = dir.path().join("data/akit");
+        let (url, server) = serve(served.clone(), 2);
+        let fetched = fetch_files(&files, &url, &dest, Patience::DEFAULT).unwrap();
+        server.join().unwrap();
+        let folder = dest.join("Trajectory1");
+        assert_eq!(
+            fetched,
+            vec![
+                Fetched::Downloaded(folder.join("DVL_trajectory1.csv")),
+                Fetched::Downloaded(folder.join("GT_trajectory1.csv"))
+            ]
+        );
+        assert_eq!(
+            std::fs::read(folder.join("GT_trajectory1.csv")).unwrap(),
+            served[1].1
+        );
+        assert_eq!(std::fs::read_dir(&folder).unwrap().count(), 2);
+    }
+
+    #[test]
+    fn every_dataset_lists_its_files_once_with_their_sizes_and_hashes() {
+        assert_eq!(Dataset::Snapir.files().len(), 2);
+        assert_eq!(Dataset::Akit.files().len(), 26);
+        for dataset in Dataset::ALL {
+            let names: std::collections::BTreeSet<_> =
+                dataset.files().iter().map(|file| file.name).collect();
+            assert_eq!(names.len(), dataset.files().len(), "{dataset:?}");
+            for file in dataset.files() {
+                assert_eq!(file.sha256.len(), 64, "{}", file.name);
+                assert!(file.sha256.bytes().all(|b| b.is_ascii_hexdigit()));
+                assert!(file.size_bytes > 0);
+            }
+        }
+        assert_eq!(AKIT_FILES[25].name, "Trajectory13/GT_trajectory13.csv");
+        assert_eq!(AKIT_FILES[25].size_bytes, 63_257);
+        assert_eq!(
+            AKIT_FILES[25].sha256,
+            "5d035f6fc11632dc0ea82d6b20599b147abcef3379daee332d058c57e3a7c95f"
+        );
+    }
+
+    #[test]
+    fn a_missing_akit_file_is_given_the_command_that_fetches_it() {
+        assert_eq!(
+            akit_hint(Path::new("/data/akit/Trajectory7/GT_trajectory7.csv")),
+            "; run `dcnet-exp data fetch akit --dest /data/akit` to download the A-KIT recordings there"
+        );
+        assert_eq!(
+            akit_hint(Path::new("Trajectory7/GT_trajectory7.csv")),
+            "; run `dcnet-exp data fetch akit --dest .` to download the A-KIT recordings there"
+        );
+        assert_eq!(akit_hint(Path::new("/data/akit/GT_trajectory7.csv")), "");
+        assert_eq!(akit_hint(Path::new("/data/V.npy")), "");
+    }
+
+    #[test]
     fn a_download_with_another_hash_is_refused_and_not_written() {
         let (files, mut served) = generated();
         served[0].1[0] ^= 1;
