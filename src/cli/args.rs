@@ -2,7 +2,7 @@
 //! they accept. The plotting code's own types name the figure formats and sweep
 //! metrics; this module tells clap how they are spelled.
 
-use crate::data::fetch;
+use crate::data::fetch::Dataset;
 use crate::report::compare;
 use crate::report::plots::{Format, Metric};
 use clap::builder::PossibleValue;
@@ -153,14 +153,19 @@ pub(super) enum DataCommand {
         #[command(flatten)]
         overrides: Overrides,
     },
-    /// Download the Snapir recordings (V.npy, V_test.npy) and check their SHA-256
+    /// Download a dataset's recordings and check their SHA-256: `data fetch` (or `data fetch
+    /// snapir`) the Snapir recordings, `data fetch akit` the A-KIT recordings
     Fetch {
-        /// Folder to write the files to
-        #[arg(long, default_value = fetch::DEFAULT_DEST)]
-        dest: PathBuf,
-        /// Where the files are served (the BeamsNet repository by default)
-        #[arg(long, default_value = fetch::DEFAULT_BASE_URL)]
-        base_url: String,
+        /// Which recordings
+        #[arg(value_enum, default_value_t = Dataset::Snapir)]
+        dataset: Dataset,
+        /// Folder to write the files to [default: data/snapir, or data/akit for akit]
+        #[arg(long)]
+        dest: Option<PathBuf>,
+        /// Where the files are served [default: the BeamsNet repository, or the A-KIT
+        /// repository's Data/ folder at the checked commit for akit]
+        #[arg(long)]
+        base_url: Option<String>,
     },
 }
 
@@ -184,6 +189,16 @@ impl clap::ValueEnum for Format {
 impl clap::ValueEnum for Metric {
     fn value_variants<'a>() -> &'a [Self] {
         &Metric::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<PossibleValue> {
+        Some(PossibleValue::new(self.name()).help(self.description()))
+    }
+}
+
+impl clap::ValueEnum for Dataset {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Dataset::ALL
     }
 
     fn to_possible_value(&self) -> Option<PossibleValue> {

@@ -1,5 +1,5 @@
 //! `validate`, `data info` and `data fetch`: a spec and its data checked and
-//! described without running anything, and the Snapir recordings downloaded.
+//! described without running anything, and the Snapir or A-KIT recordings downloaded.
 
 use super::{CliError, about, failure, footprints, input, load_spec, training_seconds};
 use crate::data::{fetch, load_trajectories};
@@ -134,8 +134,12 @@ fn file_name(path: &Path) -> String {
         .unwrap_or_default()
 }
 
-pub(super) fn fetch_data(dest: &Path, base_url: &str) -> Result<(), CliError> {
-    let fetched = fetch::fetch(base_url, dest).map_err(|error| match error {
+pub(super) fn fetch_data(
+    dataset: fetch::Dataset,
+    dest: &Path,
+    base_url: &str,
+) -> Result<(), CliError> {
+    let fetched = fetch::fetch(dataset, base_url, dest).map_err(|error| match error {
         fetch::FetchError::BadUrl { .. } => input(error),
         _ => failure(error),
     })?;

@@ -133,8 +133,17 @@ pub fn main() -> Result<(), CliError> {
             command: DataCommand::Info { spec, overrides },
         } => inspect::info(&spec, &overrides.set),
         Command::Data {
-            command: DataCommand::Fetch { dest, base_url },
-        } => inspect::fetch_data(&dest, &base_url),
+            command:
+                DataCommand::Fetch {
+                    dataset,
+                    dest,
+                    base_url,
+                },
+        } => inspect::fetch_data(
+            dataset,
+            dest.as_deref().unwrap_or(Path::new(dataset.default_dest())),
+            base_url.as_deref().unwrap_or(dataset.default_base_url()),
+        ),
         Command::Bench {
             spec,
             repeat,

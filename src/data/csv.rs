@@ -1,7 +1,8 @@
 //! Reads a recording from a CSV file: a header row, then one row a sample, with the
 //! x, y, z velocity in m/s in the three columns the spec names (by default those of
 //! `trajectories.parquet`, [`crate::VELOCITY_COLUMNS`]); other columns are
-//! ignored, in any order.
+//! ignored, in any order. [`read_columns`] reads any named columns the same way (the
+//! paired recordings of [`super::paired`] use it).
 //! Every row is checked: a field that is missing, empty, not a number or not finite is
 //! an error that names the file, the line (the header is line 1) and the column, and so
 //! is a blank line between samples (blank lines at the end are allowed).
@@ -57,12 +58,82 @@ pub enum FieldProblem {
     Missing { fields: usize, header: usize },
     #[error("not in the header: the row has {fields} fields, the header {header}")]
     Extra { fields: usize, header: usize },
-    #[error("empty: every row needs a velocity")]
-    Empty,
+    #[error("empty: every row needs {}", .0.with_article())]
+    Empty(Quantity),
     #[error("{0:?} is not a number")]
     NotANumber(String),
-    #[error("{0:?} is not finite: every velocity must be a finite number")]
-    NonFinite(String),
+    #[error("{0:?} is not finite: every {noun} must be a finite number", noun = .1.noun())]
+    NonFinite(String, Quantity),
+}
+
+/// What a column holds, in the words its faults use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Quantity {
+    Time,
+    Velocity,
+    Angle,
+    AngularRate,
+}
+
+impl Quantity {
+    /// "velocity", as in "every velocity must be a finite number".
+    pub fn noun(self) -> &'static str {
+        match self {
+            Quantity::Time => "time stamp",
+            Quantity::Velocity => "velocity",
+            Quantity::Angle => "angle",
+            Quantity::AngularRate => "angular rate",
+        }
+    }
+
+    /// "a velocity", as in "every row needs a velocity".
+    pub fn with_article(self) -> &'static str {
+        match self {
+            Quantity::Time => "a time stamp",
+            Quantity::Velocity => "a velocity",
+            Quantity::Angle => "an angle",
+            Quantity::AngularRate => "an angular rate",
+        }
+    }
+}
+
+/// One column to read: its name in the header and what it holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Column<'a> {
+    pub name: &'a str,
+    pub holds: Quantity,
+}
+
+/// The columns asked of a CSV file, read and checked: each row's line in the file (the
+/// header is line 1) and its values, in the order the columns were asked for.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Rows {
+    /// The line of each row.
+    pub lines: Vec<u64>,
+    /// How many values a row has: the number of columns asked for.
+    pub width: usize,
+    /// The values, row after row.
+    pub values: Vec<f64>,
+}
+
+impl Rows {
+    pub fn len(&self) -> usize {
+        self.lines.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.lines.is_empty()
+    }
+
+    /// The values of row `index`, in the order the columns were asked for.
+    pub fn row(&self, index: usize) -> &[f64] {
+        &self.values[index * self.width..(index + 1) * self.width]
+    }
+
+    /// The values of column `column` (its place among those asked for), row after row.
+    pub fn column(&self, column: usize) -> impl Iterator<Item = f64> + '_ {
+        self.values.iter().skip(column).step_by(self.width).copied()
+    }
 }
 
 fn found_list(found: &[String]) -> String {
@@ -75,6 +146,27 @@ fn found_list(found: &[String]) -> String {
 
 /// The velocity samples of `path`, one `[x, y, z]` per row, from `columns` (x, y, z).
 pub fn read_velocities(path: &Path, columns: &[String; 3]) -> Result<Vec<Vec3>, CsvError> {
+    let columns = columns.each_ref().map(|name| Column {
+        name,
+        holds: Quantity::Velocity,
+    });
+    let rows = read_columns(path, &columns)?;
+    if rows.is_empty() {
+        return Err(CsvError::NoRows {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(rows
+        .values
+        .chunks_exact(3)
+        .map(|row| [row[0], row[1], row[2]])
+        .collect())
+}
+
+/// The `columns` of `path`, every row checked: each field of a row must be there and,
+/// in the columns asked for, a finite number; a blank line between rows is an error.
+/// A file with a header and no rows gives no rows.
+pub fn read_columns(path: &Path, columns: &[Column]) -> Result<Rows, CsvError> {
     let bytes = read_bytes(path)?;
     let read_error = |source| CsvError::Read {
         path: path.to_path_buf(),
@@ -91,7 +183,11 @@ pub fn read_velocities(path: &Path, columns: &[String; 3]) -> Result<Vec<Vec3>, 
         .map(String::from)
         .collect();
     let positions = column_positions(path, &header, columns)?;
-    let mut samples = Vec::new();
+    let mut rows = Rows {
+        lines: Vec::new(),
+        width: columns.len(),
+        values: Vec::new(),
+    };
     for record in reader.records() {
         let record = record.map_err(read_error)?;
         let (line, first_blank) = record
@@ -103,14 +199,10 @@ pub fn read_velocities(path: &Path, columns: &[String; 3]) -> Result<Vec<Vec3>, 
                 line,
             });
         }
-        samples.push(read_sample(path, line, &header, &positions, &record)?);
+        read_row(path, line, &header, &positions, &record, &mut rows.values)?;
+        rows.lines.push(line);
     }
-    if samples.is_empty() {
-        return Err(CsvError::NoRows {
-            path: path.to_path_buf(),
-        });
-    }
-    Ok(samples)
+    Ok(rows)
 }
 
 /// How many rows below the header `path` holds, counted without parsing them: an
@@ -148,34 +240,36 @@ fn io_error(path: &Path, source: std::io::Error) -> CsvError {
     }
 }
 
-/// The index in `header` of each of `columns`, each of which must be there exactly once.
+/// The index in `header` of each of `columns` and what it holds; each column must be
+/// there exactly once.
 fn column_positions(
     path: &Path,
     header: &[String],
-    columns: &[String; 3],
-) -> Result<[usize; 3], CsvError> {
-    let mut positions = [0; 3];
-    for (position, column) in positions.iter_mut().zip(columns) {
+    columns: &[Column],
+) -> Result<Vec<(usize, Quantity)>, CsvError> {
+    let mut positions = Vec::with_capacity(columns.len());
+    for column in columns {
         let mut found = header
             .iter()
             .enumerate()
-            .filter(|(_, name)| *name == column);
-        *position = match (found.next(), found.next()) {
+            .filter(|(_, name)| *name == column.name);
+        let position = match (found.next(), found.next()) {
             (Some((index, _)), None) => index,
             (Some(_), Some(_)) => {
                 return Err(CsvError::DuplicateColumn {
                     path: path.to_path_buf(),
-                    column: column.clone(),
+                    column: column.name.to_string(),
                 });
             }
             (None, _) => {
                 return Err(CsvError::MissingColumn {
                     path: path.to_path_buf(),
-                    column: column.clone(),
+                    column: column.name.to_string(),
                     found: header.to_vec(),
                 });
             }
         };
+        positions.push((position, column.holds));
     }
     Ok(positions)
 }
@@ -197,15 +291,16 @@ fn record_lines(bytes: &[u8], position: &::csv::Position) -> (u64, Option<u64>) 
     (position.line() + newlines, first_blank)
 }
 
-/// The sample of `record`, on `line`, from the fields at `positions`; the record must
-/// be as wide as `header`.
-fn read_sample(
+/// The values of `record`, on `line`, from the fields at `positions`, appended to
+/// `values`; the record must be as wide as `header`.
+fn read_row(
     path: &Path,
     line: u64,
     header: &[String],
-    positions: &[usize; 3],
+    positions: &[(usize, Quantity)],
     record: &::csv::StringRecord,
-) -> Result<Vec3, CsvError> {
+    values: &mut Vec<f64>,
+) -> Result<(), CsvError> {
     let fault = |index: usize, problem| CsvError::Field {
         path: path.to_path_buf(),
         line,
@@ -234,21 +329,20 @@ fn read_sample(
             },
         ));
     }
-    let mut sample = [0.0; 3];
-    for (value, &index) in sample.iter_mut().zip(positions) {
-        *value = parse(&record[index]).map_err(|problem| fault(index, problem))?;
+    for &(index, holds) in positions {
+        values.push(parse(&record[index], holds).map_err(|problem| fault(index, problem))?);
     }
-    Ok(sample)
+    Ok(())
 }
 
-/// One field as a finite number.
-fn parse(text: &str) -> Result<f64, FieldProblem> {
+/// One field, which holds `holds`, as a finite number.
+fn parse(text: &str, holds: Quantity) -> Result<f64, FieldProblem> {
     if text.is_empty() {
-        return Err(FieldProblem::Empty);
+        return Err(FieldProblem::Empty(holds));
     }
     match text.parse::<f64>() {
         Ok(value) if value.is_finite() => Ok(value),
-        Ok(_) => Err(FieldProblem::NonFinite(text.to_string())),
+        Ok(_) => Err(FieldProblem::NonFinite(text.to_string(), holds)),
         Err(_) => Err(FieldProblem::NotANumber(text.to_string())),
     }
 }

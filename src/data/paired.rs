@@ -1,18 +1,31 @@
 //! A DVL recorded beside a reference with attitude: per sample, the time, the DVL's
 //! velocity in its body frame, and the reference's NED velocity, roll, pitch and yaw
 //! (optionally its body angular rate), read from one or two CSV files whose columns the
-//! spec names (the A-KIT names by default). Every row is checked: time stamps that go
-//! back or repeat, attitude out of range or not finite, a DVL and a reference of other
-//! lengths or times are errors naming the file, the line and the column.
-//! In: the file paths and column names. Out: a [`PairedRecording`].
+//! spec names (the A-KIT names by default, [`PairedColumns::akit`]). Every row is
+//! checked: a field that is missing, empty, not a number or not finite (as
+//! [`super::csv`] checks it), time stamps that go back or repeat, attitude out of
+//! range, a DVL and a reference of other lengths or times, fewer than 3 samples: each
+//! is an error naming the file, the line (the header is line 1) and the column, and
+//! nothing is returned.
+//! In: the file paths and column names. Out: a [`PairedRecording`], angles in radians.
 
+use super::csv::{self as table, Column, CsvError, Quantity, Rows};
+use super::fetch;
 use crate::Vec3;
+use std::f64::consts::PI;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
+
+/// The fewest samples a recording may have.
+pub const MIN_SAMPLES: usize = 3;
+
+/// How far apart the DVL's and the reference's time stamps of one row may be, seconds.
+pub const TIME_TOLERANCE_S: f64 = 1e-3;
 
 /// One recording: the DVL as measured and the reference, on the same time stamps.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PairedRecording {
-    /// Seconds, strictly increasing.
+    /// Seconds, strictly increasing (the DVL file's).
     pub time_s: Vec<f64>,
     /// The DVL's velocity in its body frame (x forward, y starboard, z down), m/s.
     pub dvl_m_s: Vec<Vec3>,
@@ -24,21 +37,79 @@ pub struct PairedRecording {
     pub rate_rad_s: Option<Vec<Vec3>>,
 }
 
-/// Where each quantity is, by column name; angles in radians or degrees.
+impl PairedRecording {
+    /// How many samples it has.
+    pub fn len(&self) -> usize {
+        self.time_s.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.time_s.is_empty()
+    }
+
+    /// From its first time stamp to its last, seconds.
+    pub fn duration_s(&self) -> f64 {
+        match (self.time_s.first(), self.time_s.last()) {
+            (Some(first), Some(last)) => last - first,
+            _ => 0.0,
+        }
+    }
+
+    /// The samples of `range`, which must lie within the recording (as for a slice).
+    pub fn slice(&self, range: Range<usize>) -> PairedRecording {
+        PairedRecording {
+            time_s: self.time_s[range.clone()].to_vec(),
+            dvl_m_s: self.dvl_m_s[range.clone()].to_vec(),
+            velocity_ned_m_s: self.velocity_ned_m_s[range.clone()].to_vec(),
+            attitude_rad: self.attitude_rad[range.clone()].to_vec(),
+            rate_rad_s: self.rate_rad_s.as_ref().map(|rate| rate[range].to_vec()),
+        }
+    }
+
+    /// The samples stamped less than `window_s` after the first: the first
+    /// `window_s` seconds (all of it where the recording is shorter).
+    pub fn first_seconds(&self, window_s: f64) -> PairedRecording {
+        let start = self.time_s.first().copied().unwrap_or_default();
+        let end = self.time_s.partition_point(|t| t - start < window_s);
+        self.slice(0..end)
+    }
+}
+
+/// Where each quantity is, by column name; angles (and the angular rate) in radians
+/// (rad/s) or, with `angles_in_degrees`, degrees (deg/s).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct PairedColumns {
+    /// The time stamp, in seconds, in the DVL's file and the reference's.
     pub time: String,
+    /// The DVL's body-frame x, y, z velocity, m/s.
     pub dvl: [String; 3],
+    /// The reference's north, east, down velocity, m/s.
     pub velocity_ned: [String; 3],
+    /// The reference's roll, pitch, yaw.
     pub attitude: [String; 3],
+    /// The reference's body angular rate p, q, r, when recorded.
+    #[serde(default)]
     pub rate: Option<[String; 3]>,
+    #[serde(default)]
     pub angles_in_degrees: bool,
 }
 
 impl PairedColumns {
-    /// The A-KIT recordings' column names.
-    pub fn akit() -> Self {
-        todo!("issue 26: the A-KIT column names")
+    /// The columns of the A-KIT recordings, as their headers spell them: the DVL file's
+    /// `Time [s], DVL X [m/s], DVL Y [m/s], DVL Z [m/s]`, the reference (GT) file's
+    /// `Time [s], V North [m/s], V East [m/s], V Down [m/s], Roll [rad], Pitch [rad],
+    /// Yaw [rad]` (its position columns are not read); no angular rate.
+    pub fn akit() -> PairedColumns {
+        let names = |names: [&str; 3]| names.map(String::from);
+        PairedColumns {
+            time: "Time [s]".into(),
+            dvl: names(["DVL X [m/s]", "DVL Y [m/s]", "DVL Z [m/s]"]),
+            velocity_ned: names(["V North [m/s]", "V East [m/s]", "V Down [m/s]"]),
+            attitude: names(["Roll [rad]", "Pitch [rad]", "Yaw [rad]"]),
+            rate: None,
+            angles_in_degrees: false,
+        }
     }
 }
 
@@ -50,11 +121,573 @@ pub struct PairedFiles {
     pub reference: PathBuf,
 }
 
-#[derive(Debug, thiserror::Error)]
-pub enum PairedError {}
+impl PairedFiles {
+    /// The files of A-KIT segment `segment` (1 to 13) below `folder`, where
+    /// `dcnet-exp data fetch akit` puts them: `TrajectoryN/DVL_trajectoryN.csv` and
+    /// `TrajectoryN/GT_trajectoryN.csv`.
+    pub fn akit(folder: &Path, segment: usize) -> PairedFiles {
+        let segment_folder = folder.join(format!("Trajectory{segment}"));
+        PairedFiles {
+            dvl: segment_folder.join(format!("DVL_trajectory{segment}.csv")),
+            reference: segment_folder.join(format!("GT_trajectory{segment}.csv")),
+        }
+    }
+}
 
-/// Reads and checks one recording.
+#[derive(Debug, thiserror::Error)]
+pub enum PairedError {
+    #[error("{}: file not found{hint}", path.display())]
+    Missing { path: PathBuf, hint: String },
+    #[error(transparent)]
+    Csv(CsvError),
+    #[error(
+        "{}:{line}: {column}: {time_s} s follows {previous_s} s of line {previous_line}: time stamps must increase",
+        path.display()
+    )]
+    TimeNotIncreasing {
+        path: PathBuf,
+        line: u64,
+        column: String,
+        time_s: f64,
+        previous_line: u64,
+        previous_s: f64,
+    },
+    #[error(
+        "{}:{line}: {column}: {value} {unit} is out of range: {angle} lies in [-{limit}, {limit}] {unit}{hint}",
+        path.display(),
+        unit = if *.degrees { "deg" } else { "rad" },
+        limit = angle_limit(*.angle, *.degrees).1,
+        angle = angle_limit(*.angle, *.degrees).0,
+        hint = degrees_hint(*.value, *.degrees),
+    )]
+    AttitudeOutOfRange {
+        path: PathBuf,
+        line: u64,
+        column: String,
+        /// 0 roll, 1 pitch, 2 yaw.
+        angle: usize,
+        value: f64,
+        degrees: bool,
+    },
+    #[error(
+        "{}: {dvl_samples} samples (lines 2 to {}), but {}: {reference_samples} (lines 2 to {}): the DVL and the reference need one row per time stamp each",
+        dvl.display(),
+        dvl_samples + 1,
+        reference.display(),
+        reference_samples + 1
+    )]
+    Lengths {
+        dvl: PathBuf,
+        dvl_samples: usize,
+        reference: PathBuf,
+        reference_samples: usize,
+    },
+    #[error(
+        "{}:{dvl_line}: {column}: {dvl_s} s, but {}:{reference_line} has {reference_s} s: the DVL and the reference must be on the same time stamps (within {} s)",
+        dvl.display(),
+        reference.display(),
+        TIME_TOLERANCE_S
+    )]
+    Times {
+        dvl: PathBuf,
+        dvl_line: u64,
+        reference: PathBuf,
+        reference_line: u64,
+        column: String,
+        dvl_s: f64,
+        reference_s: f64,
+    },
+    #[error(
+        "{}: {samples} samples below the header: a recording of a DVL beside a reference needs at least {MIN_SAMPLES}",
+        path.display()
+    )]
+    TooShort { path: PathBuf, samples: usize },
+}
+
+impl From<CsvError> for PairedError {
+    fn from(error: CsvError) -> PairedError {
+        match error {
+            CsvError::Missing { path } => PairedError::Missing {
+                hint: fetch::akit_hint(&path),
+                path,
+            },
+            error => PairedError::Csv(error),
+        }
+    }
+}
+
+/// The name of angle `angle` (0 roll, 1 pitch, 2 yaw) and the bound of its range, in
+/// degrees or radians.
+fn angle_limit(angle: usize, degrees: bool) -> (&'static str, &'static str) {
+    match (angle, degrees) {
+        (0, false) => ("roll", "π"),
+        (1, false) => ("pitch", "π/2"),
+        (_, false) => ("yaw", "2π"),
+        (0, true) => ("roll", "180"),
+        (1, true) => ("pitch", "90"),
+        (_, true) => ("yaw", "360"),
+    }
+}
+
+/// A hint for an angle out of range in radians that would be in range in degrees.
+fn degrees_hint(value: f64, degrees: bool) -> &'static str {
+    if !degrees && value.abs() <= 360.0 {
+        "; if the file's angles are in degrees, set angles_in_degrees = true"
+    } else {
+        ""
+    }
+}
+
+/// Reads and checks one recording: the DVL's columns from `files.dvl`, the
+/// reference's from `files.reference` (one read when they are the same file).
 pub fn read(files: &PairedFiles, columns: &PairedColumns) -> Result<PairedRecording, PairedError> {
-    let _ = (files, columns, Path::new(""));
-    todo!("issue 26: the paired recording reader")
+    let time = Column {
+        name: &columns.time,
+        holds: Quantity::Time,
+    };
+    fn triple(names: &[String; 3], holds: Quantity) -> Vec<Column<'_>> {
+        names.iter().map(|name| Column { name, holds }).collect()
+    }
+    let dvl_columns: Vec<Column> = std::iter::once(time)
+        .chain(triple(&columns.dvl, Quantity::Velocity))
+        .collect();
+    let reference_columns: Vec<Column> = std::iter::once(time)
+        .chain(triple(&columns.velocity_ned, Quantity::Velocity))
+        .chain(triple(&columns.attitude, Quantity::Angle))
+        .chain(
+            columns
+                .rate
+                .iter()
+                .flat_map(|rate| triple(rate, Quantity::AngularRate)),
+        )
+        .collect();
+    // Where the reference's values start in a row: after the time, or, in one file,
+    // after the time and the DVL's three.
+    let (dvl, reference, reference_start) = if files.dvl == files.reference {
+        let all: Vec<Column> = dvl_columns
+            .iter()
+            .chain(&reference_columns[1..])
+            .copied()
+            .collect();
+        let rows = table::read_columns(&files.dvl, &all)?;
+        (rows.clone(), rows, 4)
+    } else {
+        let dvl = table::read_columns(&files.dvl, &dvl_columns)?;
+        let reference = table::read_columns(&files.reference, &reference_columns)?;
+        (dvl, reference, 1)
+    };
+    check_increasing(&files.dvl, &columns.time, &dvl)?;
+    if files.dvl != files.reference {
+        check_increasing(&files.reference, &columns.time, &reference)?;
+    }
+    check_attitude(files, columns, &reference, reference_start + 3)?;
+    if dvl.len() != reference.len() {
+        return Err(PairedError::Lengths {
+            dvl: files.dvl.clone(),
+            dvl_samples: dvl.len(),
+            reference: files.reference.clone(),
+            reference_samples: reference.len(),
+        });
+    }
+    for row in 0..dvl.len() {
+        let (dvl_s, reference_s) = (dvl.row(row)[0], reference.row(row)[0]);
+        if (dvl_s - reference_s).abs() > TIME_TOLERANCE_S {
+            return Err(PairedError::Times {
+                dvl: files.dvl.clone(),
+                dvl_line: dvl.lines[row],
+                reference: files.reference.clone(),
+                reference_line: reference.lines[row],
+                column: columns.time.clone(),
+                dvl_s,
+                reference_s,
+            });
+        }
+    }
+    if dvl.len() < MIN_SAMPLES {
+        return Err(PairedError::TooShort {
+            path: files.dvl.clone(),
+            samples: dvl.len(),
+        });
+    }
+    let to_rad = if columns.angles_in_degrees {
+        1f64.to_radians()
+    } else {
+        1.0
+    };
+    let triples = |rows: &Rows, start: usize, scale: f64| -> Vec<Vec3> {
+        (0..rows.len())
+            .map(|row| {
+                let values = &rows.row(row)[start..start + 3];
+                [values[0] * scale, values[1] * scale, values[2] * scale]
+            })
+            .collect()
+    };
+    Ok(PairedRecording {
+        time_s: dvl.column(0).collect(),
+        dvl_m_s: triples(&dvl, 1, 1.0),
+        velocity_ned_m_s: triples(&reference, reference_start, 1.0),
+        attitude_rad: triples(&reference, reference_start + 3, to_rad),
+        rate_rad_s: columns
+            .rate
+            .as_ref()
+            .map(|_| triples(&reference, reference_start + 6, to_rad)),
+    })
+}
+
+/// Every time stamp of `rows` (their first value) after the one before it.
+fn check_increasing(path: &Path, column: &str, rows: &Rows) -> Result<(), PairedError> {
+    for row in 1..rows.len() {
+        let (previous_s, time_s) = (rows.row(row - 1)[0], rows.row(row)[0]);
+        if time_s <= previous_s {
+            return Err(PairedError::TimeNotIncreasing {
+                path: path.to_path_buf(),
+                line: rows.lines[row],
+                column: column.to_string(),
+                time_s,
+                previous_line: rows.lines[row - 1],
+                previous_s,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Roll, pitch and yaw (the three values of each row of `reference` from `start`)
+/// within their ranges: [-π, π], [-π/2, π/2], [-2π, 2π] in radians, or the same in
+/// degrees.
+fn check_attitude(
+    files: &PairedFiles,
+    columns: &PairedColumns,
+    reference: &Rows,
+    start: usize,
+) -> Result<(), PairedError> {
+    let degrees = columns.angles_in_degrees;
+    for row in 0..reference.len() {
+        let angles = &reference.row(row)[start..start + 3];
+        for (angle, &value) in angles.iter().enumerate() {
+            let bound = if degrees {
+                [180.0, 90.0, 360.0][angle]
+            } else {
+                [PI, PI / 2.0, 2.0 * PI][angle]
+            };
+            if value.abs() > bound {
+                return Err(PairedError::AttitudeOutOfRange {
+                    path: files.reference.clone(),
+                    line: reference.lines[row],
+                    column: columns.attitude[angle].clone(),
+                    angle,
+                    value,
+                    degrees,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Columns of a small recording in one file: `t, u, v, w, n, e, d, roll, pitch, yaw`.
+    fn short_columns() -> PairedColumns {
+        let names = |names: [&str; 3]| names.map(String::from);
+        PairedColumns {
+            time: "t".into(),
+            dvl: names(["u", "v", "w"]),
+            velocity_ned: names(["n", "e", "d"]),
+            attitude: names(["roll", "pitch", "yaw"]),
+            rate: None,
+            angles_in_degrees: false,
+        }
+    }
+
+    const DVL_HEADER: &str = "Time [s],DVL X [m/s],DVL Y [m/s],DVL Z [m/s]\r\n";
+    const GT_HEADER: &str = "Time [s],Longitude [rad],Latitude [rad],Altitude [m],V North [m/s],V East [m/s],V Down [m/s],Roll [rad],Pitch [rad],Yaw [rad]\r\n";
+
+    /// Four rows of an A-KIT DVL file, half a second apart.
+    const DVL_ROWS: &str = "0,1.5,0.1,-0.01\r\n\
+                            0.5,2.5,0.1,-0.01\r\n\
+                            1,3.5,0.1,-0.01\r\n\
+                            1.5,4.5,0.1,-0.01\r\n";
+
+    /// Four rows of an A-KIT reference (GT) file, on the time stamps of [`DVL_ROWS`].
+    const GT_ROWS: &str = "0,0.6,0.57,-19.8,-1.9,-0.6,0.01,0.01,-0.02,-3\r\n\
+                           0.5,0.6,0.57,-19.8,-2.9,-0.6,0.01,0.01,-0.02,-2.5\r\n\
+                           1,0.6,0.57,-19.8,-3.9,-0.6,0.01,0.01,-0.02,-2\r\n\
+                           1.5,0.6,0.57,-19.8,-4.9,-0.6,0.01,0.01,-0.02,-1.5\r\n";
+
+    /// `header` and the first `count` lines of `rows`.
+    fn file(header: &str, rows: &str, count: usize) -> String {
+        let rows: String = rows.split_inclusive('\n').take(count).collect();
+        format!("{header}{rows}")
+    }
+
+    fn assert_close(actual: Vec3, expected: Vec3) {
+        for (a, e) in actual.iter().zip(expected) {
+            assert!((a - e).abs() < 1e-12, "{actual:?} against {expected:?}");
+        }
+    }
+    /// Reads `dvl` and `gt` as the two files of an A-KIT segment; errors with the
+    /// files' paths shown as DVL and GT.
+    fn read_two(dvl: &str, gt: &str) -> Result<PairedRecording, String> {
+        let dir = tempfile::tempdir().unwrap();
+        let files = PairedFiles {
+            dvl: dir.path().join("dvl.csv"),
+            reference: dir.path().join("gt.csv"),
+        };
+        std::fs::write(&files.dvl, dvl).unwrap();
+        std::fs::write(&files.reference, gt).unwrap();
+        read(&files, &PairedColumns::akit()).map_err(|e| {
+            e.to_string()
+                .replace(&files.dvl.display().to_string(), "DVL")
+                .replace(&files.reference.display().to_string(), "GT")
+        })
+    }
+
+    /// Reads `text` as one file holding the DVL and the reference, with `columns`;
+    /// errors with the file's path shown as FILE.
+    fn read_one(text: &str, columns: &PairedColumns) -> Result<PairedRecording, String> {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("both.csv");
+        std::fs::write(&path, text).unwrap();
+        let files = PairedFiles {
+            dvl: path.clone(),
+            reference: path.clone(),
+        };
+        read(&files, columns)
+            .map_err(|e| e.to_string().replace(&path.display().to_string(), "FILE"))
+    }
+
+    #[test]
+    fn reads_the_akit_layout_from_two_files() {
+        let recording =
+            read_two(&file(DVL_HEADER, DVL_ROWS, 3), &file(GT_HEADER, GT_ROWS, 3)).unwrap();
+        assert_eq!(recording.time_s, vec![0.0, 0.5, 1.0]);
+        assert_eq!(recording.dvl_m_s[2], [3.5, 0.1, -0.01]);
+        assert_eq!(recording.velocity_ned_m_s[1], [-2.9, -0.6, 0.01]);
+        assert_eq!(recording.attitude_rad[2], [0.01, -0.02, -2.0]);
+        assert_eq!(recording.rate_rad_s, None);
+        assert_eq!(recording.len(), 3);
+        assert_eq!(recording.duration_s(), 1.0);
+    }
+
+    #[test]
+    fn reads_one_file_in_degrees_with_a_rate_and_cuts_it() {
+        let mut columns = short_columns();
+        columns.rate = Some(["p", "q", "r"].map(String::from));
+        columns.angles_in_degrees = true;
+        let text = "t,u,v,w,n,e,d,roll,pitch,yaw,p,q,r\n\
+                    0,1,2,3,4,5,6,180,-90,-360,0,0,90\n\
+                    0.5,1,2,3,4,5,6,0,45,270,0,0,-180\n\
+                    1,1,2,3,4,5,6,0,0,0,0,0,0\n\
+                    1.5,1,2,3,4,5,6,0,0,0,0,0,0\n";
+        let recording = read_one(text, &columns).unwrap();
+        assert_eq!(recording.dvl_m_s[0], [1.0, 2.0, 3.0]);
+        assert_eq!(recording.velocity_ned_m_s[0], [4.0, 5.0, 6.0]);
+        assert_close(recording.attitude_rad[0], [PI, -PI / 2.0, -2.0 * PI]);
+        assert_close(recording.attitude_rad[1], [0.0, PI / 4.0, 1.5 * PI]);
+        let rate = recording.rate_rad_s.as_ref().unwrap();
+        assert_close(rate[0], [0.0, 0.0, PI / 2.0]);
+        assert_close(rate[1], [0.0, 0.0, -PI]);
+        let first = recording.first_seconds(1.0);
+        assert_eq!(first.time_s, vec![0.0, 0.5]);
+        assert_eq!(first.rate_rad_s.as_ref().unwrap().len(), 2);
+        assert_eq!(recording.first_seconds(100.0), recording);
+        let middle = recording.slice(1..3);
+        assert_eq!(middle.time_s, vec![0.5, 1.0]);
+        assert_eq!(middle.attitude_rad[0], recording.attitude_rad[1]);
+    }
+
+    #[test]
+    fn a_missing_file_or_column_is_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let files = PairedFiles::akit(dir.path(), 4);
+        let error = read(&files, &PairedColumns::akit())
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            error,
+            format!(
+                "{}: file not found; run `dcnet-exp data fetch akit --dest {}` to download the A-KIT recordings there",
+                files.dvl.display(),
+                dir.path().display()
+            )
+        );
+        let files = PairedFiles {
+            dvl: dir.path().join("mine.csv"),
+            reference: dir.path().join("mine.csv"),
+        };
+        assert_eq!(
+            read(&files, &PairedColumns::akit())
+                .unwrap_err()
+                .to_string(),
+            format!("{}: file not found", files.dvl.display())
+        );
+        // The reference is missing where the DVL is there.
+        let dvl_only = tempfile::tempdir().unwrap();
+        let files = PairedFiles::akit(dvl_only.path(), 12);
+        std::fs::create_dir(files.dvl.parent().unwrap()).unwrap();
+        std::fs::write(&files.dvl, file(DVL_HEADER, DVL_ROWS, 4)).unwrap();
+        assert!(
+            read(&files, &PairedColumns::akit())
+                .unwrap_err()
+                .to_string()
+                .starts_with(&format!(
+                    "{}: file not found; run",
+                    files.reference.display()
+                ))
+        );
+        let gt = GT_HEADER.replace(",Pitch [rad]", ",Pitch[rad]");
+        assert_eq!(
+            read_two(&file(DVL_HEADER, DVL_ROWS, 3), &file(&gt, GT_ROWS, 3)).unwrap_err(),
+            "GT:1: Pitch [rad]: not in the header, which has Time [s], Longitude [rad], Latitude [rad], Altitude [m], V North [m/s], V East [m/s], V Down [m/s], Roll [rad], Pitch[rad], Yaw [rad]"
+        );
+    }
+
+    #[test]
+    fn a_bad_field_names_the_line_the_column_and_what_it_holds() {
+        let dvl = file(DVL_HEADER, DVL_ROWS, 4);
+        let gt = file(GT_HEADER, GT_ROWS, 4);
+        for (dvl, gt, expected) in [
+            (
+                dvl.replace("\r\n1,", "\r\n,"),
+                gt.clone(),
+                "DVL:4: Time [s]: empty: every row needs a time stamp",
+            ),
+            (
+                dvl.replace(",2.5,", ",fast,"),
+                gt.clone(),
+                "DVL:3: DVL X [m/s]: \"fast\" is not a number",
+            ),
+            (
+                dvl.clone(),
+                gt.replace(",-2.9,", ",inf,"),
+                "GT:3: V North [m/s]: \"inf\" is not finite: every velocity must be a finite number",
+            ),
+            (
+                dvl.clone(),
+                gt.replace(",-2.5\r\n", ",NaN\r\n"),
+                "GT:3: Yaw [rad]: \"NaN\" is not finite: every angle must be a finite number",
+            ),
+            (
+                dvl.clone(),
+                gt.replace(",-0.02,-2.5\r\n", ",,-2.5\r\n"),
+                "GT:3: Pitch [rad]: empty: every row needs an angle",
+            ),
+        ] {
+            assert_eq!(read_two(&dvl, &gt).unwrap_err(), expected);
+        }
+        let mut columns = short_columns();
+        columns.rate = Some(["p", "q", "r"].map(String::from));
+        assert_eq!(
+            read_one(
+                "t,u,v,w,n,e,d,roll,pitch,yaw,p,q,r\n0,1,2,3,4,5,6,0,0,0,0,-inf,0\n",
+                &columns
+            )
+            .unwrap_err(),
+            "FILE:2: q: \"-inf\" is not finite: every angular rate must be a finite number"
+        );
+    }
+
+    #[test]
+    fn time_stamps_that_go_back_or_repeat_name_both_lines() {
+        let dvl = file(DVL_HEADER, DVL_ROWS, 4);
+        let gt = file(GT_HEADER, GT_ROWS, 4);
+        assert_eq!(
+            read_two(&dvl.replace("\r\n1,", "\r\n0.5,"), &gt).unwrap_err(),
+            "DVL:4: Time [s]: 0.5 s follows 0.5 s of line 3: time stamps must increase"
+        );
+        assert_eq!(
+            read_two(&dvl, &gt.replace("\r\n1.5,", "\r\n0.25,")).unwrap_err(),
+            "GT:5: Time [s]: 0.25 s follows 1 s of line 4: time stamps must increase"
+        );
+    }
+
+    #[test]
+    fn attitude_out_of_range_names_the_angle_and_its_range() {
+        let dvl = file(DVL_HEADER, DVL_ROWS, 3);
+        let gt = file(GT_HEADER, GT_ROWS, 3);
+        let hint = "; if the file's angles are in degrees, set angles_in_degrees = true";
+        for (gt, expected) in [
+            (
+                gt.replace("0.01,-0.02,-2.5", "3.2,-0.02,-2.5"),
+                format!(
+                    "GT:3: Roll [rad]: 3.2 rad is out of range: roll lies in [-π, π] rad{hint}"
+                ),
+            ),
+            (
+                gt.replace("-0.02,-3\r\n", "-1.6,-3\r\n"),
+                format!(
+                    "GT:2: Pitch [rad]: -1.6 rad is out of range: pitch lies in [-π/2, π/2] rad{hint}"
+                ),
+            ),
+            (
+                gt.replace(",-2\r\n", ",6.3\r\n"),
+                format!(
+                    "GT:4: Yaw [rad]: 6.3 rad is out of range: yaw lies in [-2π, 2π] rad{hint}"
+                ),
+            ),
+            (
+                gt.replace(",-2\r\n", ",400\r\n"),
+                "GT:4: Yaw [rad]: 400 rad is out of range: yaw lies in [-2π, 2π] rad".to_string(),
+            ),
+        ] {
+            assert_eq!(read_two(&dvl, &gt).unwrap_err(), expected);
+        }
+        let mut columns = short_columns();
+        columns.angles_in_degrees = true;
+        assert_eq!(
+            read_one(
+                "t,u,v,w,n,e,d,roll,pitch,yaw\n0,1,2,3,4,5,6,0,90.5,0\n",
+                &columns
+            )
+            .unwrap_err(),
+            "FILE:2: pitch: 90.5 deg is out of range: pitch lies in [-90, 90] deg"
+        );
+    }
+
+    #[test]
+    fn a_dvl_and_a_reference_of_other_lengths_or_times_are_refused() {
+        let dvl = file(DVL_HEADER, DVL_ROWS, 4);
+        let gt = file(GT_HEADER, GT_ROWS, 4);
+        assert_eq!(
+            read_two(&dvl, &file(GT_HEADER, GT_ROWS, 3)).unwrap_err(),
+            "DVL: 4 samples (lines 2 to 5), but GT: 3 (lines 2 to 4): the DVL and the reference need one row per time stamp each"
+        );
+        // Within 1 ms is the same time stamp; 2 ms apart is not.
+        assert!(read_two(&dvl, &gt.replace("\r\n1,", "\r\n1.0009,")).is_ok());
+        assert_eq!(
+            read_two(&dvl, &gt.replace("\r\n1,", "\r\n1.002,")).unwrap_err(),
+            "DVL:4: Time [s]: 1 s, but GT:4 has 1.002 s: the DVL and the reference must be on the same time stamps (within 0.001 s)"
+        );
+    }
+
+    #[test]
+    fn a_recording_of_fewer_than_three_samples_is_refused() {
+        assert_eq!(
+            read_two(&file(DVL_HEADER, DVL_ROWS, 2), &file(GT_HEADER, GT_ROWS, 2)).unwrap_err(),
+            "DVL: 2 samples below the header: a recording of a DVL beside a reference needs at least 3"
+        );
+        assert_eq!(
+            read_one("t,u,v,w,n,e,d,roll,pitch,yaw\n", &short_columns()).unwrap_err(),
+            "FILE: 0 samples below the header: a recording of a DVL beside a reference needs at least 3"
+        );
+    }
+
+    #[test]
+    fn the_akit_files_are_the_ones_fetched() {
+        let root = Path::new("data/akit");
+        let fetched: Vec<PathBuf> = fetch::AKIT_FILES
+            .iter()
+            .map(|file| root.join(file.name))
+            .collect();
+        let read: Vec<PathBuf> = (1..=fetch::AKIT_SEGMENTS)
+            .flat_map(|segment| {
+                let files = PairedFiles::akit(root, segment);
+                [files.dvl, files.reference]
+            })
+            .collect();
+        assert_eq!(fetched, read);
+    }
 }
