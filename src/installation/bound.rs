@@ -1,5 +1,397 @@
 //! The Fisher information of the selected terms on a calibration window, from the DVL
 //! and reference noise: each term's standard deviation, their correlation matrix, and
-//! the terms that window cannot show (a standard deviation beyond its tolerance, or a
-//! pair correlated beyond 0.95).
-//! In: a DVL record, its reference, the fitted [`Installation`]. Out: a [`TermBound`].
+//! the terms that window cannot show (a standard deviation beyond its tolerance, a
+//! pair correlated beyond [`CORRELATION_LIMIT`], or a direction the residuals do not
+//! feel at all).
+//! In: a [`Fit`] (its Jacobian at the solution). Out: a [`TermBound`].
+//!
+//! With white noise of standard deviation σ on every component of every residual,
+//! σ² = σ_dvl² + σ_reference², the information is `JᵀJ / σ²` and the covariance its
+//! inverse. The inverse is taken on the information scaled to a unit diagonal, by its
+//! eigenvalues: a direction whose eigenvalue is below [`FLAT_EIGENVALUE`] times the
+//! largest is flat, and every term with a weight in it has an infinite standard
+//! deviation and is flagged, naming the others that share it.
+
+use super::fit::Fit;
+use super::terms::TermKind;
+use nalgebra::{DMatrix, SymmetricEigen};
+use std::fmt;
+
+/// |correlation| beyond which two terms cannot be told apart.
+pub const CORRELATION_LIMIT: f64 = 0.95;
+
+/// An eigenvalue of the unit-diagonal information below this fraction of the largest
+/// is a flat direction (the condition number of JᵀJ on A-KIT's straight segments is
+/// about 1e6; this is far below anything real data gives).
+pub const FLAT_EIGENVALUE: f64 = 1e-12;
+
+/// A term's weight (in a unit eigenvector) above which a flat direction involves it.
+const FLAT_WEIGHT: f64 = 0.01;
+
+/// The white noise on each velocity component, m/s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Noise {
+    /// The DVL's (A-KIT's is specified at 0.02 m/s).
+    pub dvl_m_s: f64,
+    /// The reference's body velocity.
+    pub reference_m_s: f64,
+}
+
+/// The standard deviation beyond which a term means nothing, per kind of term.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tolerances {
+    /// A fraction (0.005 for 0.5 %).
+    pub scale: f64,
+    pub misalignment_rad: f64,
+    pub lever_arm_m: f64,
+    pub time_offset_s: f64,
+    pub bias_m_s: f64,
+}
+
+impl Default for Tolerances {
+    /// Each one is the uncertainty that makes about 1 cm/s of velocity error (half
+    /// A-KIT's specified DVL noise) on a vehicle at 2 m/s: a scale of 0.5 % and a
+    /// misalignment of 0.5° (0.0087 × 2 m/s = 1.7 cm/s) at 2 m/s; a lever arm of
+    /// 0.1 m at 6°/s of turn; a time offset of 0.05 s at 0.2 m/s² of acceleration
+    /// (a 15°/s turn at 2 m/s is 0.5 m/s²); a bias of 1 cm/s.
+    fn default() -> Self {
+        Tolerances {
+            scale: 0.005,
+            misalignment_rad: 0.5f64.to_radians(),
+            lever_arm_m: 0.1,
+            time_offset_s: 0.05,
+            bias_m_s: 0.01,
+        }
+    }
+}
+
+impl Tolerances {
+    /// The tolerance of a term of this kind.
+    pub fn of(&self, kind: TermKind) -> f64 {
+        match kind {
+            TermKind::Scale => self.scale,
+            TermKind::Misalignment => self.misalignment_rad,
+            TermKind::LeverArm => self.lever_arm_m,
+            TermKind::TimeOffset => self.time_offset_s,
+            TermKind::Bias => self.bias_m_s,
+        }
+    }
+}
+
+/// Why a term cannot be seen on a window.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Why {
+    /// Its standard deviation exceeds its tolerance.
+    Uncertain { std: f64, tolerance: f64 },
+    /// It is correlated beyond [`CORRELATION_LIMIT`] with another term.
+    Correlated {
+        with: &'static str,
+        correlation: f64,
+    },
+    /// Moving it (with the others named, in some proportion) leaves the residuals
+    /// unchanged.
+    Flat { with: Vec<&'static str> },
+}
+
+impl fmt::Display for Why {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Why::Uncertain { std, tolerance } => {
+                write!(
+                    f,
+                    "standard deviation {std:.3e} above its tolerance {tolerance:.3e}"
+                )
+            }
+            Why::Correlated { with, correlation } => {
+                write!(f, "correlated {correlation:+.3} with {with}")
+            }
+            Why::Flat { with } if with.is_empty() => {
+                f.write_str("the residuals do not depend on it")
+            }
+            Why::Flat { with } => {
+                write!(f, "flat together with {}", with.join(", "))
+            }
+        }
+    }
+}
+
+/// A term a window cannot show, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Unseen {
+    pub term: &'static str,
+    pub why: Why,
+}
+
+/// The bound of a fit's terms, in the order of its parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TermBound {
+    pub names: Vec<&'static str>,
+    pub value: Vec<f64>,
+    /// Standard deviations, in each term's unit; infinite on a flat direction.
+    pub std: Vec<f64>,
+    /// Correlation coefficients, `[term][term]`; NaN with a term of infinite std.
+    pub correlation: Vec<Vec<f64>>,
+    /// Every reason each term cannot be seen (a term may appear more than once).
+    pub unseen: Vec<Unseen>,
+}
+
+impl TermBound {
+    /// Whether the window cannot show the term named `name`.
+    pub fn is_unseen(&self, name: &str) -> bool {
+        self.unseen.iter().any(|unseen| unseen.term == name)
+    }
+}
+
+/// The bound of `fit`'s terms under `noise`, with the terms beyond `tolerances`.
+pub fn bound(fit: &Fit, noise: Noise, tolerances: &Tolerances) -> TermBound {
+    let names = fit.terms.parameter_names();
+    let kinds = fit.terms.parameter_kinds();
+    let n = names.len();
+    let sigma_m_s = (noise.dvl_m_s.powi(2) + noise.reference_m_s.powi(2)).sqrt();
+    // JᵀJ, scaled to a unit diagonal: D⁻¹ JᵀJ D⁻¹ with D = √diag(JᵀJ).
+    let normal = fit.jacobian.transpose() * &fit.jacobian;
+    let scale: Vec<f64> = (0..n).map(|k| normal[(k, k)].sqrt()).collect();
+    let felt: Vec<usize> = (0..n).filter(|&k| scale[k] > 0.0).collect();
+    let unit = DMatrix::from_fn(felt.len(), felt.len(), |a, b| {
+        normal[(felt[a], felt[b])] / (scale[felt[a]] * scale[felt[b]])
+    });
+
+    // Some(others) for a term on a flat direction; a term the residuals ignore is
+    // flat alone.
+    let mut flat_with: Vec<Option<Vec<&'static str>>> = (0..n)
+        .map(|k| (!felt.contains(&k)).then(Vec::new))
+        .collect();
+    // The pseudo-inverse of the unit-diagonal matrix, over its non-flat directions.
+    let mut inverse = DMatrix::<f64>::zeros(felt.len(), felt.len());
+    if !felt.is_empty() {
+        let eigen = SymmetricEigen::new(unit);
+        let largest = eigen.eigenvalues.max();
+        for (index, &eigenvalue) in eigen.eigenvalues.iter().enumerate() {
+            let vector = eigen.eigenvectors.column(index);
+            if eigenvalue > FLAT_EIGENVALUE * largest {
+                inverse += vector * vector.transpose() / eigenvalue;
+                continue;
+            }
+            let involved: Vec<usize> = (0..felt.len())
+                .filter(|&a| vector[a].abs() > FLAT_WEIGHT)
+                .collect();
+            for &a in &involved {
+                let others = flat_with[felt[a]].get_or_insert_with(Vec::new);
+                for &b in &involved {
+                    if b != a && !others.contains(&names[felt[b]]) {
+                        others.push(names[felt[b]]);
+                    }
+                }
+            }
+        }
+    }
+    let position = |k: usize| felt.iter().position(|&f| f == k);
+    let std: Vec<f64> = (0..n)
+        .map(|k| match (position(k), &flat_with[k]) {
+            (Some(a), None) => sigma_m_s * inverse[(a, a)].sqrt() / scale[k],
+            _ => f64::INFINITY,
+        })
+        .collect();
+    let correlation: Vec<Vec<f64>> = (0..n)
+        .map(|j| {
+            (0..n)
+                .map(|k| {
+                    if j == k {
+                        1.0
+                    } else if !std[j].is_finite() || !std[k].is_finite() {
+                        f64::NAN
+                    } else {
+                        let (a, b) = (position(j).unwrap(), position(k).unwrap());
+                        inverse[(a, b)] / (inverse[(a, a)] * inverse[(b, b)]).sqrt()
+                    }
+                })
+                .collect()
+        })
+        .collect();
+
+    let mut unseen = Vec::new();
+    for k in 0..n {
+        if let Some(with) = &flat_with[k] {
+            unseen.push(Unseen {
+                term: names[k],
+                why: Why::Flat { with: with.clone() },
+            });
+            continue;
+        }
+        let tolerance = tolerances.of(kinds[k]);
+        if std[k] > tolerance {
+            unseen.push(Unseen {
+                term: names[k],
+                why: Why::Uncertain {
+                    std: std[k],
+                    tolerance,
+                },
+            });
+        }
+        for j in 0..n {
+            if j != k && correlation[k][j].abs() > CORRELATION_LIMIT {
+                unseen.push(Unseen {
+                    term: names[k],
+                    why: Why::Correlated {
+                        with: names[j],
+                        correlation: correlation[k][j],
+                    },
+                });
+            }
+        }
+    }
+    TermBound {
+        names,
+        value: fit.parameters.clone(),
+        std,
+        correlation,
+        unseen,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::installation::terms::{Installation, PerAxis, TermSet};
+
+    /// A fit whose Jacobian is `columns` (each a column of residual derivatives).
+    fn fit_with(terms: TermSet, columns: &[Vec<f64>]) -> Fit {
+        let rows = columns[0].len();
+        Fit {
+            terms,
+            installation: Installation::default(),
+            parameters: vec![0.0; columns.len()],
+            jacobian: DMatrix::from_fn(rows, columns.len(), |r, c| columns[c][r]),
+            residual_rms_m_s: [0.0; 3],
+            sample_count: rows / 3,
+            termination: "test".into(),
+        }
+    }
+
+    const NOISE: Noise = Noise {
+        dvl_m_s: 0.02,
+        reference_m_s: 0.0,
+    };
+
+    #[test]
+    fn a_bias_alone_has_the_noise_over_root_n() {
+        // 300 samples, a bias on each axis: std = σ / √300.
+        let terms = TermSet::of_error_model(crate::vocab::ErrorModel::Em4);
+        let columns: Vec<Vec<f64>> = (0..3)
+            .map(|axis| {
+                (0..900)
+                    .map(|row| if row % 3 == axis { -1.0 } else { 0.0 })
+                    .collect()
+            })
+            .collect();
+        let bound = bound(&fit_with(terms, &columns), NOISE, &Tolerances::default());
+        for std in &bound.std {
+            assert!((std - 0.02 / 300f64.sqrt()).abs() < 1e-15);
+        }
+        assert!(bound.unseen.is_empty());
+        assert_eq!(bound.correlation[0][1], 0.0);
+        // Both noises add in quadrature: 3 and 4 cm/s make 5.
+        let both = Noise {
+            dvl_m_s: 0.03,
+            reference_m_s: 0.04,
+        };
+        let wider = super::bound(&fit_with(terms, &columns), both, &Tolerances::default());
+        assert!((wider.std[0] - 0.05 / 300f64.sqrt()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn a_scale_at_constant_speed_is_a_bias_and_both_are_flagged_as_one_flat_direction() {
+        // x only: the scale's column is the speed (2 m/s everywhere), the bias's is 1.
+        let terms = TermSet {
+            scale: PerAxis::Scalar,
+            bias: PerAxis::Scalar,
+            ..TermSet::NONE
+        };
+        let columns = vec![vec![-2.0; 30], vec![-1.0; 30]];
+        let bound = bound(&fit_with(terms, &columns), NOISE, &Tolerances::default());
+        assert!(bound.std.iter().all(|s| s.is_infinite()));
+        assert_eq!(
+            bound.unseen,
+            vec![
+                Unseen {
+                    term: "scale",
+                    why: Why::Flat {
+                        with: vec!["bias_m_s"]
+                    }
+                },
+                Unseen {
+                    term: "bias_m_s",
+                    why: Why::Flat {
+                        with: vec!["scale"]
+                    }
+                },
+            ]
+        );
+        assert!(bound.correlation[0][1].is_nan());
+    }
+
+    #[test]
+    fn a_term_the_residuals_ignore_is_flat_and_a_near_copy_is_correlated() {
+        let terms = TermSet {
+            lever_arm: true,
+            ..TermSet::NONE
+        };
+        // l_x moves nothing; l_y and l_z move nearly the same residuals.
+        let ramp: Vec<f64> = (0..60).map(|i| (i as f64 * 0.37).sin()).collect();
+        let near: Vec<f64> = ramp
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v + 0.05 * (i as f64).cos())
+            .collect();
+        let bound = bound(
+            &fit_with(terms, &[vec![0.0; 60], ramp, near]),
+            NOISE,
+            &Tolerances::default(),
+        );
+        assert!(bound.std[0].is_infinite());
+        assert_eq!(
+            bound.unseen[0],
+            Unseen {
+                term: "lever_arm_x_m",
+                why: Why::Flat { with: vec![] }
+            }
+        );
+        // Columns alike make estimates that move against each other.
+        assert!(bound.correlation[1][2] < -CORRELATION_LIMIT);
+        assert!(bound.unseen.iter().any(|u| u.term == "lever_arm_y_m"
+            && matches!(
+                u.why,
+                Why::Correlated {
+                    with: "lever_arm_z_m",
+                    ..
+                }
+            )));
+        assert!(bound.is_unseen("lever_arm_z_m"));
+    }
+
+    #[test]
+    fn a_term_beyond_its_tolerance_is_flagged_with_its_std() {
+        // One time offset column, tiny: std = 0.02 / (0.01 · √30) ≈ 0.37 s.
+        let terms = TermSet {
+            time_offset: true,
+            ..TermSet::NONE
+        };
+        let bound = bound(
+            &fit_with(terms, &[vec![0.01; 30]]),
+            NOISE,
+            &Tolerances::default(),
+        );
+        let expected = 0.02 / (0.01 * 30f64.sqrt());
+        assert!((bound.std[0] - expected).abs() < 1e-12);
+        assert_eq!(
+            bound.unseen,
+            vec![Unseen {
+                term: "time_offset_s",
+                why: Why::Uncertain {
+                    std: bound.std[0],
+                    tolerance: 0.05
+                }
+            }]
+        );
+    }
+}

@@ -1,4 +1,393 @@
 //! Nonlinear least squares of the selected terms (Levenberg–Marquardt), τ included:
 //! the terms that make the model's prediction from the reference closest to the DVL
 //! over a calibration window.
-//! In: a DVL record, its reference, a [`TermSet`]. Out: an [`Installation`].
+//! In: a DVL record, its reference, a [`TermSet`]. Out: a [`Fit`] (the
+//! [`Installation`], the Jacobian at the solution for the bound, the residuals).
+//!
+//! The residual of sample i is `v_dvl(t_i) − predict(reference at t_i + τ)`, three
+//! components, over the samples at least [`TIME_OFFSET_MARGIN_S`] inside the
+//! reference at both ends: a fixed mask, so costs at different τ compare. Every term
+//! starts at zero; τ, whose cost has many local minima a sample period apart, starts
+//! from the best of a scan over ±[`TIME_OFFSET_MARGIN_S`] in steps of
+//! [`TIME_OFFSET_SCAN_STEP_S`], with the other terms solved at each step. The Jacobian
+//! is analytic; its τ column is the reference's slope (a central difference of the
+//! linear interpolation, [`SLOPE_STEP_S`] each side).
+
+use super::frames::{Reference, ReferenceAt};
+use super::terms::{Installation, TermSet};
+use crate::Vec3;
+use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
+use nalgebra::storage::Owned;
+use nalgebra::{DMatrix, DVector, Dyn};
+
+/// The largest time offset a fit considers, s; also the margin of the fixed mask: the
+/// samples stamped within it of either end of the reference are not fitted.
+pub const TIME_OFFSET_MARGIN_S: f64 = 3.0;
+
+/// The step of the scan over τ that gives LM its start, s: a quarter of A-KIT's 1 s
+/// sample period, so the scan's best lies in the basin of the best minimum.
+pub const TIME_OFFSET_SCAN_STEP_S: f64 = 0.25;
+
+/// Half the step of the central difference that gives the reference's slope, s.
+pub const SLOPE_STEP_S: f64 = 1e-4;
+
+/// The relative tolerances that stop LM (on the cost, the step and the gradient).
+const TOLERANCE: f64 = 1e-12;
+
+/// A calibration: the terms that fit a window best, with what the bound needs.
+#[derive(Debug, Clone)]
+pub struct Fit {
+    pub terms: TermSet,
+    pub installation: Installation,
+    /// The estimated parameters, in the order of [`TermSet::parameter_names`].
+    pub parameters: Vec<f64>,
+    /// ∂(v_dvl − predict)/∂θ at the solution, `[3 · sample_count, parameters]`, rows
+    /// sample by sample, x, y, z within a sample.
+    pub jacobian: DMatrix<f64>,
+    /// The RMS of the residual v_dvl − predict per DVL axis, m/s.
+    pub residual_rms_m_s: Vec3,
+    /// How many DVL samples were fitted (those inside the fixed mask).
+    pub sample_count: usize,
+    /// How LM stopped ("none" when nothing was estimated).
+    pub termination: String,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum FitError {
+    #[error("{time} time stamps but {dvl} DVL samples")]
+    LengthMismatch { time: usize, dvl: usize },
+    #[error(
+        "{usable} DVL samples lie more than {margin_s} s inside the reference, \
+         too few for {parameters} parameters"
+    )]
+    TooFewSamples {
+        usable: usize,
+        parameters: usize,
+        margin_s: f64,
+    },
+    #[error("the fit did not converge: {termination}")]
+    NotConverged { termination: String },
+    #[error(
+        "the fitted time offset {time_offset_s} s is beyond ±{margin_s} s, \
+         outside what the window can show"
+    )]
+    TimeOffsetBeyondMargin { time_offset_s: f64, margin_s: f64 },
+}
+
+/// The least-squares problem LM solves: `terms` are free, the rest of `base` is held.
+struct Problem<'a> {
+    time_s: &'a [f64],
+    dvl_m_s: &'a [Vec3],
+    reference: &'a Reference,
+    terms: TermSet,
+    base: Installation,
+    parameters: DVector<f64>,
+}
+
+impl Problem<'_> {
+    fn installation(&self) -> Installation {
+        self.base
+            .with_parameters(&self.terms, self.parameters.as_slice())
+    }
+
+    /// The reference at `time_s`, held at its ends when LM tries a τ beyond the
+    /// margin (the fit then fails with [`FitError::TimeOffsetBeyondMargin`]).
+    fn reference_at(&self, time_s: f64) -> ReferenceAt {
+        let first = self.reference.time_s[0];
+        let last = self.reference.time_s[self.reference.time_s.len() - 1];
+        self.reference
+            .at(time_s.clamp(first, last))
+            .expect("a time inside the reference")
+    }
+
+    fn slope_at(&self, time_s: f64) -> ReferenceAt {
+        let first = self.reference.time_s[0];
+        let last = self.reference.time_s[self.reference.time_s.len() - 1];
+        let (before, after) = (
+            (time_s - SLOPE_STEP_S).clamp(first, last),
+            (time_s + SLOPE_STEP_S).clamp(first, last),
+        );
+        let (a, b) = (self.reference_at(before), self.reference_at(after));
+        let span = after - before;
+        let rate = |x: Vec3, y: Vec3| [0, 1, 2].map(|k| (y[k] - x[k]) / span);
+        ReferenceAt {
+            velocity_body_m_s: rate(a.velocity_body_m_s, b.velocity_body_m_s),
+            rate_rad_s: rate(a.rate_rad_s, b.rate_rad_s),
+        }
+    }
+
+    fn residual_vector(&self) -> DVector<f64> {
+        let installation = self.installation();
+        let mut residuals = DVector::zeros(3 * self.time_s.len());
+        for (i, (&t, dvl)) in self.time_s.iter().zip(self.dvl_m_s).enumerate() {
+            let predicted = installation.predict(self.reference_at(t + installation.time_offset_s));
+            for k in 0..3 {
+                residuals[3 * i + k] = dvl[k] - predicted[k];
+            }
+        }
+        residuals
+    }
+
+    fn jacobian_matrix(&self) -> DMatrix<f64> {
+        let installation = self.installation();
+        let mut jacobian = DMatrix::zeros(3 * self.time_s.len(), self.terms.parameter_count());
+        for (i, &t) in self.time_s.iter().enumerate() {
+            let time_s = t + installation.time_offset_s;
+            let columns = installation.predict_jacobian(
+                &self.terms,
+                self.reference_at(time_s),
+                self.slope_at(time_s),
+            );
+            for (column, derivative) in columns.iter().enumerate() {
+                for k in 0..3 {
+                    jacobian[(3 * i + k, column)] = -derivative[k];
+                }
+            }
+        }
+        jacobian
+    }
+
+    fn cost(&self) -> f64 {
+        self.residual_vector().norm_squared()
+    }
+}
+
+impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
+    type ResidualStorage = Owned<f64, Dyn>;
+    type JacobianStorage = Owned<f64, Dyn, Dyn>;
+    type ParameterStorage = Owned<f64, Dyn>;
+
+    fn set_params(&mut self, parameters: &DVector<f64>) {
+        self.parameters.copy_from(parameters);
+    }
+
+    fn params(&self) -> DVector<f64> {
+        self.parameters.clone()
+    }
+
+    fn residuals(&self) -> Option<DVector<f64>> {
+        Some(self.residual_vector())
+    }
+
+    fn jacobian(&self) -> Option<DMatrix<f64>> {
+        Some(self.jacobian_matrix())
+    }
+}
+
+/// Runs LM on `problem` from its current parameters.
+fn minimize(problem: Problem<'_>) -> Result<(Problem<'_>, String), FitError> {
+    let (problem, report) = LevenbergMarquardt::new()
+        .with_ftol(TOLERANCE)
+        .with_xtol(TOLERANCE)
+        .with_gtol(TOLERANCE)
+        .minimize(problem);
+    let termination = format!("{:?}", report.termination);
+    if report.termination.was_successful() {
+        Ok((problem, termination))
+    } else {
+        Err(FitError::NotConverged { termination })
+    }
+}
+
+/// Fits the terms of `terms` to the DVL record (`time_s`, `dvl_m_s`) against the
+/// `reference`, every term starting at zero. With nothing to estimate, the fit is the
+/// zero installation and its residuals.
+pub fn fit(
+    time_s: &[f64],
+    dvl_m_s: &[Vec3],
+    reference: &Reference,
+    terms: TermSet,
+) -> Result<Fit, FitError> {
+    if time_s.len() != dvl_m_s.len() {
+        return Err(FitError::LengthMismatch {
+            time: time_s.len(),
+            dvl: dvl_m_s.len(),
+        });
+    }
+    let parameter_count = terms.parameter_count();
+    let mask = reference.interior(time_s, TIME_OFFSET_MARGIN_S);
+    if 3 * mask.len() <= parameter_count || mask.is_empty() {
+        return Err(FitError::TooFewSamples {
+            usable: mask.len(),
+            parameters: parameter_count,
+            margin_s: TIME_OFFSET_MARGIN_S,
+        });
+    }
+    let problem = |terms: TermSet, base: Installation| Problem {
+        time_s: &time_s[mask.clone()],
+        dvl_m_s: &dvl_m_s[mask.clone()],
+        reference,
+        terms,
+        base,
+        parameters: DVector::from_vec(base.to_parameters(&terms)),
+    };
+
+    let (solved, termination) = if parameter_count == 0 {
+        (problem(terms, Installation::default()), "none".to_string())
+    } else if terms.time_offset {
+        // The scan: τ held at each step, the other terms solved from zero.
+        let others = TermSet {
+            time_offset: false,
+            ..terms
+        };
+        let steps = (TIME_OFFSET_MARGIN_S / TIME_OFFSET_SCAN_STEP_S).round() as i64;
+        let mut best: Option<(f64, Installation)> = None;
+        for step in -steps..=steps {
+            let held = Installation {
+                time_offset_s: step as f64 * TIME_OFFSET_SCAN_STEP_S,
+                ..Installation::default()
+            };
+            let candidate = if others.parameter_count() == 0 {
+                problem(others, held)
+            } else {
+                minimize(problem(others, held))?.0
+            };
+            let cost = candidate.cost();
+            if best.as_ref().is_none_or(|(lowest, _)| cost < *lowest) {
+                best = Some((cost, candidate.installation()));
+            }
+        }
+        let start = best.expect("the scan has steps").1;
+        minimize(problem(terms, start))?
+    } else {
+        minimize(problem(terms, Installation::default()))?
+    };
+
+    let installation = solved.installation();
+    if installation.time_offset_s.abs() > TIME_OFFSET_MARGIN_S {
+        return Err(FitError::TimeOffsetBeyondMargin {
+            time_offset_s: installation.time_offset_s,
+            margin_s: TIME_OFFSET_MARGIN_S,
+        });
+    }
+    let residuals = solved.residual_vector();
+    let sample_count = mask.len();
+    let residual_rms_m_s = [0, 1, 2].map(|k| {
+        let sum: f64 = (0..sample_count)
+            .map(|i| residuals[3 * i + k].powi(2))
+            .sum();
+        (sum / sample_count as f64).sqrt()
+    });
+    Ok(Fit {
+        terms,
+        installation,
+        parameters: installation.to_parameters(&terms),
+        jacobian: solved.jacobian_matrix(),
+        residual_rms_m_s,
+        sample_count,
+        termination,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::paired::PairedRecording;
+    use crate::installation::terms::PerAxis;
+
+    /// A vehicle weaving at up to about 11°/s with a changing speed, sampled at 1 Hz,
+    /// and its DVL as the model predicts it from the sampled reference (no noise).
+    fn weaving(truth: &Installation) -> (Vec<f64>, Vec<Vec3>, Reference) {
+        let time_s: Vec<f64> = (0..300).map(f64::from).collect();
+        let yaw = |t: f64| 1.5 * (t / 8.0).sin() + 0.3 * (t / 3.0).cos();
+        let speed = |t: f64| 2.0 + 0.3 * (t / 11.0).sin();
+        let recording = PairedRecording {
+            dvl_m_s: vec![[0.0; 3]; time_s.len()],
+            time_s: time_s.clone(),
+            velocity_ned_m_s: time_s
+                .iter()
+                .map(|&t| {
+                    [
+                        speed(t) * yaw(t).cos(),
+                        speed(t) * yaw(t).sin(),
+                        0.1 * (t / 5.0).sin(),
+                    ]
+                })
+                .collect(),
+            attitude_rad: time_s
+                .iter()
+                .map(|&t| [0.02 * (t / 4.0).sin(), 0.05 * (t / 7.0).cos(), yaw(t)])
+                .collect(),
+            rate_rad_s: None,
+        };
+        let reference = Reference::new(&recording);
+        let last = *time_s.last().unwrap();
+        let dvl = time_s
+            .iter()
+            .map(|&t| {
+                truth.predict(
+                    reference
+                        .at((t + truth.time_offset_s).clamp(0.0, last))
+                        .unwrap(),
+                )
+            })
+            .collect();
+        (time_s, dvl, reference)
+    }
+
+    #[test]
+    fn noiseless_terms_are_recovered_exactly() {
+        let truth = Installation {
+            scale: [0.01; 3],
+            misalignment_rad: [0.0, 0.01, -0.02],
+            lever_arm_m: [-1.9, 0.05, 0.4],
+            time_offset_s: 0.6,
+            bias_m_s: [0.01, -0.01, 0.005],
+        };
+        let terms = TermSet {
+            scale: PerAxis::Scalar,
+            misalignment: true,
+            lever_arm: true,
+            time_offset: true,
+            bias: PerAxis::PerAxis,
+        };
+        let (time_s, dvl, reference) = weaving(&truth);
+        let fit = fit(&time_s, &dvl, &reference, terms).unwrap();
+        let expected = truth.to_parameters(&terms);
+        for (name, (got, want)) in terms
+            .parameter_names()
+            .iter()
+            .zip(fit.parameters.iter().zip(&expected))
+        {
+            assert!((got - want).abs() < 1e-6, "{name}: {got} against {want}");
+        }
+        assert!(fit.residual_rms_m_s.iter().all(|r| *r < 1e-8));
+        assert_eq!(fit.sample_count, 294);
+        assert_eq!(fit.jacobian.shape(), (3 * 294, 11));
+    }
+
+    #[test]
+    fn nothing_to_estimate_gives_the_zero_installation_and_the_raw_residual() {
+        let truth = Installation {
+            bias_m_s: [0.03, 0.0, -0.04],
+            ..Installation::default()
+        };
+        let (time_s, dvl, reference) = weaving(&truth);
+        let fit = fit(&time_s, &dvl, &reference, TermSet::NONE).unwrap();
+        assert_eq!(fit.installation, Installation::default());
+        assert!((fit.residual_rms_m_s[0] - 0.03).abs() < 1e-12);
+        assert!((fit.residual_rms_m_s[2] - 0.04).abs() < 1e-12);
+        assert_eq!(fit.jacobian.ncols(), 0);
+    }
+
+    #[test]
+    fn a_record_shorter_than_the_margins_is_refused() {
+        let (time_s, dvl, reference) = weaving(&Installation::default());
+        let error = fit(
+            &time_s[..4],
+            &dvl[..4],
+            &reference,
+            TermSet::of_error_model(crate::vocab::ErrorModel::Em4),
+        )
+        .unwrap_err();
+        assert!(
+            matches!(error, FitError::TooFewSamples { usable: 1, .. }),
+            "{error}"
+        );
+        let error = fit(&time_s, &dvl[..5], &reference, TermSet::NONE).unwrap_err();
+        assert!(matches!(
+            error,
+            FitError::LengthMismatch { time: 300, dvl: 5 }
+        ));
+    }
+}

@@ -3,26 +3,135 @@
 //! unwrapped, central differences) where no rate is recorded, and the reference in the
 //! body frame at any time between its samples (linear interpolation).
 //! In: a [`PairedRecording`]. Out: a [`Reference`] to read at any time.
+//!
+//! Frames: NED is north, east, down; the body frame is x forward, y starboard, z down.
+//! Angles are roll φ, pitch θ, yaw ψ in radians; C_b^n = Rz(ψ) · Ry(θ) · Rx(φ) takes a
+//! body-frame vector into NED, and C_n^b = (C_b^n)ᵀ takes it back.
 
 use crate::Vec3;
 use crate::data::paired::PairedRecording;
+use std::f64::consts::PI;
+use std::ops::Range;
 
 /// A 3×3 matrix, row by row.
 pub type Mat3 = [[f64; 3]; 3];
 
-/// C_b^n: rotates a body-frame vector into NED, for roll, pitch, yaw in radians.
+/// Rx(φ): a right-handed rotation by `angle_rad` about x, `[[1,0,0],[0,c,−s],[0,s,c]]`.
+pub fn rotation_x(angle_rad: f64) -> Mat3 {
+    let (s, c) = angle_rad.sin_cos();
+    [[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]]
+}
+
+/// Ry(θ): a right-handed rotation by `angle_rad` about y, `[[c,0,s],[0,1,0],[−s,0,c]]`.
+pub fn rotation_y(angle_rad: f64) -> Mat3 {
+    let (s, c) = angle_rad.sin_cos();
+    [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]
+}
+
+/// Rz(ψ): a right-handed rotation by `angle_rad` about z, `[[c,−s,0],[s,c,0],[0,0,1]]`.
+pub fn rotation_z(angle_rad: f64) -> Mat3 {
+    let (s, c) = angle_rad.sin_cos();
+    [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
+}
+
+/// C_b^n = Rz(ψ) · Ry(θ) · Rx(φ): rotates a body-frame vector into NED, for
+/// `attitude_rad` = (roll φ, pitch θ, yaw ψ) in radians. Heading east (ψ = 90°), the
+/// body's x axis points east: C_b^n · (1, 0, 0) = (0, 1, 0).
 pub fn body_to_ned(attitude_rad: Vec3) -> Mat3 {
-    let _ = attitude_rad;
-    todo!("issue 26")
+    let [roll, pitch, yaw] = attitude_rad;
+    multiply(
+        &multiply(&rotation_z(yaw), &rotation_y(pitch)),
+        &rotation_x(roll),
+    )
+}
+
+/// The product a · b.
+pub fn multiply(a: &Mat3, b: &Mat3) -> Mat3 {
+    let mut out = [[0.0; 3]; 3];
+    for (row, out_row) in out.iter_mut().enumerate() {
+        for (column, value) in out_row.iter_mut().enumerate() {
+            *value = (0..3).map(|k| a[row][k] * b[k][column]).sum();
+        }
+    }
+    out
+}
+
+/// The transpose of a (for a rotation, its inverse).
+pub fn transpose(a: &Mat3) -> Mat3 {
+    let mut out = [[0.0; 3]; 3];
+    for (row, out_row) in out.iter_mut().enumerate() {
+        for (column, value) in out_row.iter_mut().enumerate() {
+            *value = a[column][row];
+        }
+    }
+    out
+}
+
+/// The product a · v.
+pub fn apply(a: &Mat3, v: Vec3) -> Vec3 {
+    [0, 1, 2].map(|row| a[row][0] * v[0] + a[row][1] * v[1] + a[row][2] * v[2])
+}
+
+/// The cross product a × b.
+pub fn cross(a: Vec3, b: Vec3) -> Vec3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// Angles with the 2π jumps of a wrapped angle removed: each step between neighbours
+/// is brought into [−π, π) by whole turns, so a yaw that crosses ±π keeps going.
+pub fn unwrap(angles_rad: &[f64]) -> Vec<f64> {
+    let mut out = Vec::with_capacity(angles_rad.len());
+    let mut offset = 0.0;
+    for (index, &angle) in angles_rad.iter().enumerate() {
+        if index > 0 {
+            let step = angle - angles_rad[index - 1];
+            offset -= (2.0 * PI) * ((step + PI) / (2.0 * PI)).floor();
+        }
+        out.push(angle + offset);
+    }
+    out
+}
+
+/// The time derivative of each component of `values`, sampled at `time_s`: a central
+/// difference (v[i+1] − v[i−1]) / (t[i+1] − t[i−1]) inside, one-sided at the two ends.
+fn derivative(time_s: &[f64], values: &[Vec3]) -> Vec<Vec3> {
+    let n = values.len();
+    (0..n)
+        .map(|i| {
+            let (before, after) = (i.saturating_sub(1), (i + 1).min(n - 1));
+            let span_s = time_s[after] - time_s[before];
+            [0, 1, 2].map(|k| (values[after][k] - values[before][k]) / span_s)
+        })
+        .collect()
+}
+
+/// The body angular rate (p, q, r) in rad/s from the attitude (roll, pitch, yaw in
+/// radians) and its time derivative, by the ZYX Euler-angle kinematics:
+/// p = φ̇ − ψ̇ sinθ, q = θ̇ cosφ + ψ̇ sinφ cosθ, r = −θ̇ sinφ + ψ̇ cosφ cosθ.
+pub fn body_rate(attitude_rad: Vec3, attitude_rate_rad_s: Vec3) -> Vec3 {
+    let [roll, pitch, _] = attitude_rad;
+    let [roll_rate, pitch_rate, yaw_rate] = attitude_rate_rad_s;
+    let (sin_roll, cos_roll) = roll.sin_cos();
+    let (sin_pitch, cos_pitch) = pitch.sin_cos();
+    [
+        roll_rate - yaw_rate * sin_pitch,
+        pitch_rate * cos_roll + yaw_rate * sin_roll * cos_pitch,
+        -pitch_rate * sin_roll + yaw_rate * cos_roll * cos_pitch,
+    ]
 }
 
 /// The reference as the body sees it, at each recorded time.
 #[derive(Debug, Clone)]
 pub struct Reference {
+    /// Seconds, strictly increasing.
     pub time_s: Vec<f64>,
-    /// C_n^b · v_n, m/s.
+    /// v_b = C_n^b · v_n, m/s: the reference point's velocity in body axes.
     pub velocity_body_m_s: Vec<Vec3>,
-    /// ω_b, rad/s: recorded, or derived from the attitude.
+    /// ω_b = (p, q, r), rad/s, body axes: recorded, or derived from the attitude.
     pub rate_rad_s: Vec<Vec3>,
 }
 
@@ -34,14 +143,221 @@ pub struct ReferenceAt {
 }
 
 impl Reference {
+    /// The reference of a recording: v_b = C_n^b · v_n at every sample, and ω_b as
+    /// recorded, or else from the attitude: yaw unwrapped, the Euler angles
+    /// differentiated (central differences inside, one-sided at the ends), then
+    /// [`body_rate`].
     pub fn new(recording: &PairedRecording) -> Self {
-        let _ = recording;
-        todo!("issue 26")
+        let velocity_body_m_s = recording
+            .attitude_rad
+            .iter()
+            .zip(&recording.velocity_ned_m_s)
+            .map(|(&attitude, &velocity)| apply(&transpose(&body_to_ned(attitude)), velocity))
+            .collect();
+        let rate_rad_s = match &recording.rate_rad_s {
+            Some(rate) => rate.clone(),
+            None => {
+                let yaw: Vec<f64> = recording.attitude_rad.iter().map(|a| a[2]).collect();
+                let attitude: Vec<Vec3> = recording
+                    .attitude_rad
+                    .iter()
+                    .zip(unwrap(&yaw))
+                    .map(|(a, yaw)| [a[0], a[1], yaw])
+                    .collect();
+                let attitude_rate = derivative(&recording.time_s, &attitude);
+                attitude
+                    .iter()
+                    .zip(&attitude_rate)
+                    .map(|(&angles, &rates)| body_rate(angles, rates))
+                    .collect()
+            }
+        };
+        Reference {
+            time_s: recording.time_s.clone(),
+            velocity_body_m_s,
+            rate_rad_s,
+        }
     }
 
-    /// The reference at `time_s`, interpolated; `None` outside the recorded times.
+    /// The reference at `time_s`, linearly interpolated between the two samples around
+    /// it (exact at a sample); `None` outside [t₀, t_N] or when not finite.
     pub fn at(&self, time_s: f64) -> Option<ReferenceAt> {
-        let _ = time_s;
-        todo!("issue 26")
+        let (&first, &last) = (self.time_s.first()?, self.time_s.last()?);
+        if !(first..=last).contains(&time_s) {
+            return None;
+        }
+        // The first sample at or after `time_s`.
+        let after = self.time_s.partition_point(|&t| t < time_s);
+        if self.time_s[after] == time_s {
+            return Some(ReferenceAt {
+                velocity_body_m_s: self.velocity_body_m_s[after],
+                rate_rad_s: self.rate_rad_s[after],
+            });
+        }
+        let before = after - 1;
+        let weight = (time_s - self.time_s[before]) / (self.time_s[after] - self.time_s[before]);
+        let blend = |a: Vec3, b: Vec3| [0, 1, 2].map(|k| a[k] + weight * (b[k] - a[k]));
+        Some(ReferenceAt {
+            velocity_body_m_s: blend(
+                self.velocity_body_m_s[before],
+                self.velocity_body_m_s[after],
+            ),
+            rate_rad_s: blend(self.rate_rad_s[before], self.rate_rad_s[after]),
+        })
+    }
+
+    /// The samples of a record stamped `time_s` whose t + τ lies inside the reference
+    /// for every |τ| ≤ `margin_s`: a fixed mask, the same whatever τ, so costs at
+    /// different τ compare. Empty when there is none.
+    pub fn interior(&self, time_s: &[f64], margin_s: f64) -> Range<usize> {
+        let (Some(&first), Some(&last)) = (self.time_s.first(), self.time_s.last()) else {
+            return 0..0;
+        };
+        let start = time_s.partition_point(|&t| t - margin_s < first);
+        let end = time_s.partition_point(|&t| t + margin_s <= last);
+        start..end.max(start)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: Vec3, b: Vec3, tolerance: f64) -> bool {
+        (0..3).all(|k| (a[k] - b[k]).abs() <= tolerance)
+    }
+
+    fn recording(
+        time_s: Vec<f64>,
+        attitude_rad: Vec<Vec3>,
+        velocity_ned_m_s: Vec<Vec3>,
+    ) -> PairedRecording {
+        PairedRecording {
+            dvl_m_s: vec![[0.0; 3]; time_s.len()],
+            time_s,
+            velocity_ned_m_s,
+            attitude_rad,
+            rate_rad_s: None,
+        }
+    }
+
+    #[test]
+    fn heading_east_the_body_x_axis_points_east_and_a_northward_velocity_is_to_port() {
+        let c_b_n = body_to_ned([0.0, 0.0, PI / 2.0]);
+        assert!(close(
+            apply(&c_b_n, [1.0, 0.0, 0.0]),
+            [0.0, 1.0, 0.0],
+            1e-15
+        ));
+        // v_b = C_n^b · v_n: north seen from a vehicle heading east is −y (port).
+        assert!(close(
+            apply(&transpose(&c_b_n), [1.0, 0.0, 0.0]),
+            [0.0, -1.0, 0.0],
+            1e-15
+        ));
+    }
+
+    #[test]
+    fn pitched_up_the_body_x_axis_points_up_and_rolled_to_starboard_y_points_down() {
+        // θ = +90°: nose up, so body x is NED up (−down).
+        let pitched = body_to_ned([0.0, PI / 2.0, 0.0]);
+        assert!(close(
+            apply(&pitched, [1.0, 0.0, 0.0]),
+            [0.0, 0.0, -1.0],
+            1e-15
+        ));
+        // φ = +90°: starboard wing down, so body y is NED down.
+        let rolled = body_to_ned([PI / 2.0, 0.0, 0.0]);
+        assert!(close(
+            apply(&rolled, [0.0, 1.0, 0.0]),
+            [0.0, 0.0, 1.0],
+            1e-15
+        ));
+    }
+
+    #[test]
+    fn the_rotation_is_yaw_then_pitch_then_roll() {
+        // Rz(ψ) Ry(θ) Rx(φ) applied to body z: roll first, then pitch, then yaw.
+        let (roll, pitch, yaw) = (0.3, -0.2, 2.5);
+        let expected = apply(
+            &rotation_z(yaw),
+            apply(
+                &rotation_y(pitch),
+                apply(&rotation_x(roll), [0.0, 0.0, 1.0]),
+            ),
+        );
+        let got = apply(&body_to_ned([roll, pitch, yaw]), [0.0, 0.0, 1.0]);
+        assert!(close(got, expected, 1e-15));
+        // Its (3,3) element is cosθ cosφ.
+        assert!((body_to_ned([roll, pitch, yaw])[2][2] - pitch.cos() * roll.cos()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn a_constant_yaw_rate_through_the_wrap_is_the_body_rate() {
+        // 10°/s of yaw, level, crossing ±π many times; the rate must be r = 10°/s
+        // everywhere, ends included.
+        let yaw_rate_rad_s = 10f64.to_radians();
+        let time_s: Vec<f64> = (0..200).map(|i| i as f64 * 0.5).collect();
+        let attitude: Vec<Vec3> = time_s
+            .iter()
+            .map(|t| {
+                let yaw = (yaw_rate_rad_s * t + PI).rem_euclid(2.0 * PI) - PI;
+                [0.0, 0.0, yaw]
+            })
+            .collect();
+        let reference = Reference::new(&recording(
+            time_s.clone(),
+            attitude,
+            vec![[1.0, 0.0, 0.0]; 200],
+        ));
+        for rate in &reference.rate_rad_s {
+            assert!(close(*rate, [0.0, 0.0, yaw_rate_rad_s], 1e-12), "{rate:?}");
+        }
+    }
+
+    #[test]
+    fn a_yaw_rate_while_pitched_shows_on_x_and_z() {
+        // ψ̇ with θ fixed: p = −ψ̇ sinθ, q = 0, r = ψ̇ cosθ.
+        let (pitch, yaw_rate) = (0.4, 0.1);
+        let time_s: Vec<f64> = (0..20).map(f64::from).collect();
+        let attitude: Vec<Vec3> = time_s.iter().map(|t| [0.0, pitch, yaw_rate * t]).collect();
+        let reference = Reference::new(&recording(time_s, attitude, vec![[0.0; 3]; 20]));
+        let expected = [-yaw_rate * pitch.sin(), 0.0, yaw_rate * pitch.cos()];
+        assert!(close(reference.rate_rad_s[7], expected, 1e-12));
+    }
+
+    #[test]
+    fn a_recorded_rate_is_kept() {
+        let mut paired = recording(vec![0.0, 1.0], vec![[0.0; 3]; 2], vec![[0.0; 3]; 2]);
+        paired.rate_rad_s = Some(vec![[0.1, 0.2, 0.3], [0.4, 0.5, 0.6]]);
+        assert_eq!(
+            Reference::new(&paired).rate_rad_s,
+            vec![[0.1, 0.2, 0.3], [0.4, 0.5, 0.6]]
+        );
+    }
+
+    #[test]
+    fn interpolation_is_exact_at_samples_linear_between_and_none_outside() {
+        let time_s = vec![0.0, 1.0, 3.0];
+        let attitude = vec![[0.0; 3]; 3];
+        let velocity = vec![[1.0, 2.0, 3.0], [3.0, 2.0, 1.0], [5.0, 0.0, 1.0]];
+        let reference = Reference::new(&recording(time_s.clone(), attitude, velocity.clone()));
+        for (index, t) in time_s.iter().enumerate() {
+            assert_eq!(reference.at(*t).unwrap().velocity_body_m_s, velocity[index]);
+        }
+        // A quarter of the way from t = 1 to t = 3.
+        let between = reference.at(1.5).unwrap().velocity_body_m_s;
+        assert!(close(between, [3.5, 1.5, 1.0], 1e-15));
+        assert!(reference.at(-1e-9).is_none());
+        assert!(reference.at(3.0 + 1e-9).is_none());
+        assert!(reference.at(f64::NAN).is_none());
+    }
+
+    #[test]
+    fn the_interior_keeps_the_samples_a_margin_away_from_the_ends() {
+        let time_s: Vec<f64> = (0..400).map(|i| i as f64 * 400.0 / 399.0).collect();
+        let recording = recording(time_s.clone(), vec![[0.0; 3]; 400], vec![[0.0; 3]; 400]);
+        // Three samples dropped at each end for a 3 s margin at 400/399 s spacing.
+        assert_eq!(Reference::new(&recording).interior(&time_s, 3.0), 3..397);
     }
 }
