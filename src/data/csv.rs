@@ -2,7 +2,7 @@
 //! x, y, z velocity in m/s in the three columns the spec names (by default those of
 //! `trajectories.parquet`, [`crate::VELOCITY_COLUMNS`]); other columns are
 //! ignored, in any order. [`read_columns`] reads any named columns the same way (the
-//! paired recordings of [`super::paired`] use it).
+//! recordings of a DVL beside a reference use it).
 //! Every row is checked: a field that is missing, empty, not a number or not finite is
 //! an error that names the file, the line (the header is line 1) and the column, and so
 //! is a blank line between samples (blank lines at the end are allowed).
