@@ -91,8 +91,8 @@ pub struct TermSetFile {
     pub terms: Vec<TermName>,
 }
 
-/// The standard deviation past which a term counts as not seen, and the correlation
-/// past which a pair does.
+/// The standard deviation past which a term counts as not seen (a pair correlated
+/// beyond [`CORRELATION_LIMIT`](super::bound::CORRELATION_LIMIT) is not seen either).
 #[derive(Debug, Clone, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ObservabilityFile {
@@ -101,7 +101,6 @@ pub struct ObservabilityFile {
     pub lever_arm_m: f64,
     pub time_offset_s: f64,
     pub bias_cm_s: f64,
-    pub max_correlation: f64,
 }
 
 impl Default for ObservabilityFile {
@@ -112,7 +111,19 @@ impl Default for ObservabilityFile {
             lever_arm_m: 0.1,
             time_offset_s: 0.05,
             bias_cm_s: 1.0,
-            max_correlation: 0.95,
+        }
+    }
+}
+
+impl ObservabilityFile {
+    /// The tolerances in the bound's units.
+    pub fn tolerances(&self) -> super::bound::Tolerances {
+        super::bound::Tolerances {
+            scale: self.scale_pct / 100.0,
+            misalignment_rad: self.misalignment_deg.to_radians(),
+            lever_arm_m: self.lever_arm_m,
+            time_offset_s: self.time_offset_s,
+            bias_m_s: self.bias_cm_s / 100.0,
         }
     }
 }
@@ -298,9 +309,6 @@ fn check(document: &Document<InstallationFile>, faults: &mut Vec<(String, String
         if !(value.is_finite() && value > 0.0) {
             fault(format!("observability.{key}"), format!("{value} must be a positive number: a term whose standard deviation is beyond it counts as not seen"));
         }
-    }
-    if !(o.max_correlation > 0.0 && o.max_correlation < 1.0) {
-        fault("observability.max_correlation".into(), format!("{} must be above 0 and below 1", o.max_correlation));
     }
 
     InstallationSpec {

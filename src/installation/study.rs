@@ -8,14 +8,14 @@
 //! In: an [`InstallationSpec`] and its recordings. Out: a [`Study`]: held-out rows,
 //! estimated terms with their bound, and the summary per method.
 
-use super::bound::{Noise, TermBound, Tolerances, bound};
-use super::fit::fit;
+use super::bound::{Noise, TermBound, bound};
+use super::fit::{TIME_OFFSET_MARGIN_S, fit};
 use super::frames::Reference;
 use super::spec::{InstallationSpec, Method, TermName};
 use super::terms::{Installation, PerAxis, TermSet, score};
 use crate::Vec3;
 use crate::data::paired::PairedRecording;
-use crate::estimators::{Estimator, baseline::Baseline, least_squares::LeastSquares};
+use crate::estimators::{Baseline, Estimator, LeastSquares};
 use crate::evaluate::statistics::mean_ci95;
 use crate::vocab::{Correction, ErrorModel};
 use rayon::prelude::*;
@@ -191,14 +191,7 @@ pub fn run(spec: &InstallationSpec, segments: &[Segment], dcnet: &DcnetEstimate)
         reference_m_s: spec.reference_noise_m_s,
     };
     let o = &spec.observability;
-    let tolerances = Tolerances {
-        scale: o.scale_pct / 100.0,
-        misalignment_rad: o.misalignment_deg.to_radians(),
-        lever_arm_m: o.lever_arm_m,
-        time_offset_s: o.time_offset_s,
-        bias_m_s: o.bias_cm_s / 100.0,
-        max_correlation: o.max_correlation,
-    };
+    let tolerances = o.tolerances();
     let cases: Vec<(usize, f64)> = (0..segments.len())
         .flat_map(|c| spec.windows_s.iter().map(move |&w| (c, w)))
         .collect();
@@ -268,7 +261,7 @@ pub fn run(spec: &InstallationSpec, segments: &[Segment], dcnet: &DcnetEstimate)
                             .unseen
                             .iter()
                             .filter(|u| u.term == *name)
-                            .map(|u| u.why.clone())
+                            .map(|u| u.why.to_string())
                             .collect::<Vec<_>>()
                             .join("; ");
                         terms.push(TermRow {
@@ -287,20 +280,25 @@ pub fn run(spec: &InstallationSpec, segments: &[Segment], dcnet: &DcnetEstimate)
                         continue;
                     }
                     let recording = &scored.recording;
-                    let rmse = score(
+                    // Every method is scored on the same samples, those inside the
+                    // reference whatever the time offset.
+                    let samples = scored.reference.interior(&recording.time_s, TIME_OFFSET_MARGIN_S);
+                    let Some(rmse) = score(
                         &estimate.installation,
                         &recording.time_s,
                         &recording.dvl_m_s,
                         &scored.reference,
-                        0..recording.time_s.len(),
-                    );
+                        samples,
+                    ) else {
+                        continue;
+                    };
                     heldout.push(HeldOutRow {
                         method: label.clone(),
                         calibration: calibration.name.clone(),
                         window_s,
                         scored: scored.name.clone(),
-                        rmse_cm_s: [100.0 * rmse.x, 100.0 * rmse.y, 100.0 * rmse.z],
-                        total_cm_s: 100.0 * rmse.total,
+                        rmse_cm_s: [100.0 * rmse.x_m_s, 100.0 * rmse.y_m_s, 100.0 * rmse.z_m_s],
+                        total_cm_s: 100.0 * rmse.total_m_s,
                     });
                 }
             }

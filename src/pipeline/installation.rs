@@ -9,7 +9,7 @@ use super::Plan;
 use crate::Vec3;
 use crate::data::paired;
 use crate::estimators::Estimator;
-use crate::estimators::dcnet::DcnetEstimator;
+use crate::estimators::DcnetEstimator;
 use crate::files::{sha256_hex, write_atomic};
 use crate::installation::spec::InstallationSpec;
 use crate::installation::study::{self, Estimated, NO_CALIBRATION, Segment, Study, TracePoint};
