@@ -91,6 +91,37 @@ pub(super) enum Command {
         #[command(flatten)]
         overrides: Overrides,
     },
+    /// Calibrate one recording of a DVL beside a reference with attitude: print the
+    /// terms with their standard deviations and those the recording cannot show, and
+    /// write the recording corrected (CSV and Parquet)
+    Calibrate {
+        /// The DVL's CSV file (A-KIT's columns unless --columns names others)
+        dvl: PathBuf,
+        /// The reference's CSV file, when it is not the DVL's
+        #[arg(long)]
+        reference: Option<PathBuf>,
+        /// A TOML file whose [columns] table names the columns (time, dvl, velocity_ned,
+        /// attitude, rate, angles_in_degrees), as an installation spec's
+        /// [recordings.columns] does
+        #[arg(long)]
+        columns: Option<PathBuf>,
+        /// The terms to estimate: scale, scale_per_axis, misalignment, lever_arm,
+        /// time_offset, bias, bias_scalar
+        #[arg(long, value_delimiter = ',', default_value = "lever_arm,time_offset,bias")]
+        terms: Vec<String>,
+        /// Calibrate on the first SECONDS of the recording [default: all of it]
+        #[arg(long, value_name = "SECONDS")]
+        window_s: Option<f64>,
+        /// The DVL's white noise per axis, cm/s, for the bound
+        #[arg(long, default_value_t = 2.0)]
+        dvl_noise_cm_s: f64,
+        /// The reference velocity's white noise per axis, cm/s, for the bound
+        #[arg(long, default_value_t = 0.5)]
+        reference_noise_cm_s: f64,
+        /// Folder the corrected recording goes to
+        #[arg(long, default_value = "calibrated")]
+        out: PathBuf,
+    },
     /// Inspect or download the data
     Data {
         #[command(subcommand)]

@@ -14,6 +14,7 @@ mod bench;
 mod inspect;
 mod plot;
 mod run;
+mod study;
 
 pub use args::Cli;
 
@@ -128,7 +129,35 @@ pub fn main() -> Result<(), CliError> {
             metric,
         } => plot::plot(&results, Some(&out), format, metric),
         Command::Compare { first, second, out } => plot::compare_folders(&first, &second, &out),
-        Command::Validate { spec, overrides } => inspect::validate(&spec, &overrides.set),
+        Command::Validate { spec, overrides } => match installation_kind(&spec)? {
+            true => study::validate(&spec, &overrides.set),
+            false => inspect::validate(&spec, &overrides.set),
+        },
+        Command::Calibrate {
+            dvl,
+            reference,
+            columns,
+            terms,
+            window_s,
+            dvl_noise_cm_s,
+            reference_noise_cm_s,
+            out,
+        } => {
+            let terms: Vec<crate::installation::spec::TermName> = terms
+                .iter()
+                .map(|term| term.parse().map_err(|message| input(anyhow::anyhow!("--terms {term}: {message}"))))
+                .collect::<Result<_, _>>()?;
+            study::calibrate(&study::CalibrateArgs {
+                dvl: &dvl,
+                reference: reference.as_deref(),
+                columns: columns.as_deref(),
+                terms: &terms,
+                window_s,
+                dvl_noise_cm_s,
+                reference_noise_cm_s,
+                out: &out,
+            })
+        }
         Command::Data {
             command: DataCommand::Info { spec, overrides },
         } => inspect::info(&spec, &overrides.set),
@@ -160,7 +189,26 @@ pub fn main() -> Result<(), CliError> {
     }
 }
 
+/// Whether the spec at `path` declares `kind = "installation"`; another kind is refused.
+fn installation_kind(path: &Path) -> Result<bool, CliError> {
+    use crate::installation::spec::KIND;
+    match crate::spec::declared_kind(path).map_err(input)? {
+        None => Ok(false),
+        Some(kind) if kind == KIND => Ok(true),
+        Some(kind) => Err(input(anyhow::anyhow!(
+            "{}: kind: {kind:?} is not a kind of spec: leave it out for the paper's experiments, or give {KIND:?} for a study of a real installation",
+            path.display()
+        ))),
+    }
+}
+
 fn load_spec(path: &Path, set: &[String]) -> Result<Spec, CliError> {
+    if installation_kind(path)? {
+        return Err(input(anyhow::anyhow!(
+            "{}: an installation study has no training data to inspect nor training to bench: `dcnet-exp validate` checks it, `dcnet-exp run` runs it",
+            path.display()
+        )));
+    }
     load(path, set).map_err(input)
 }
 
@@ -174,6 +222,13 @@ const MAX_THREADS: usize = 1024;
 /// as itself before it overrides `training.backend`; OUT, when it exists, must be a
 /// folder.
 fn load_target(target: &Target) -> Result<Experiment, CliError> {
+    if installation_kind(&target.spec)? {
+        return Err(input(anyhow::anyhow!(
+            "{}: an installation study has no tasks to plan, shard or collect, nor training to bench: `dcnet-exp run {}` runs it whole, in seconds",
+            target.spec.display(),
+            target.spec.display()
+        )));
+    }
     let mut set = target.overrides.set.clone();
     if let Some(backend) = &target.backend {
         backend

@@ -16,6 +16,9 @@ pub(super) fn plot(
     format: Format,
     metric: Metric,
 ) -> Result<(), CliError> {
+    if crate::results::installation::is_study(results) {
+        return super::study::plot(results, out.unwrap_or(Path::new("plots")));
+    }
     if !results.join(sweep::INDEX).is_file() {
         return plot_run(results, out, format);
     }

@@ -26,6 +26,9 @@ pub(super) fn run(
     shard: Option<&str>,
     force: bool,
 ) -> Result<(), CliError> {
+    if shard.is_none() && super::installation_kind(&target.spec)? {
+        return super::study::run(target, drawing, force);
+    }
     let experiment = load_target(target)?;
     let plan = planned(&experiment, target)?;
     let mode = match parse_shard(shard)? {

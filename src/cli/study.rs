@@ -8,12 +8,13 @@
 use super::args::{Drawing, Target};
 use super::{CliError, failure, input};
 use crate::data::paired::{self, PairedColumns, PairedFiles};
-use crate::installation::bound::{Noise, Tolerances, bound};
-use crate::installation::fit::fit;
+use crate::installation::bound::{Noise, TermBound, bound};
+use crate::installation::fit::{TIME_OFFSET_MARGIN_S, fit};
 use crate::installation::frames::Reference;
 use crate::installation::spec::{self as study_spec, ObservabilityFile, TermName};
-use crate::installation::study::term_set;
-use crate::installation::terms::score;
+use crate::installation::study::{table_unit, term_set};
+use crate::installation::terms::{AxisRmse, score};
+use comfy_table::{Table, presets::ASCII_MARKDOWN};
 use crate::pipeline::installation::{Outcome, run_study};
 use crate::report::plots::Format;
 use crate::spec::TomlFile;
@@ -93,6 +94,49 @@ fn columns(path: Option<&Path>) -> Result<PairedColumns, CliError> {
     }
 }
 
+/// The terms of a calibration with their standard deviations, the terms the window
+/// cannot show and why, and the RMSE against the reference before and after.
+fn printed_calibration(
+    bound: &TermBound,
+    samples: usize,
+    before: Option<AxisRmse>,
+    after: Option<AxisRmse>,
+) -> String {
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    table.set_header(["term", "estimate", "standard deviation", "seen"]);
+    for (i, name) in bound.names.iter().enumerate() {
+        let (factor, unit) = table_unit(name);
+        let seen = if bound.is_unseen(name) { "no" } else { "yes" };
+        table.add_row([
+            name.to_string(),
+            format!("{:.4} {unit}", bound.value[i] * factor),
+            format!("{:.4} {unit}", bound.std[i] * factor),
+            seen.to_string(),
+        ]);
+    }
+    let mut text = format!("calibrated on {samples} samples\n{table}\n");
+    for unseen in &bound.unseen {
+        text.push_str(&format!("not seen here: {}: {}\n", unseen.term, unseen.why));
+    }
+    let rmse = |rmse: Option<AxisRmse>| match rmse {
+        Some(r) => format!(
+            "{:.2} cm/s (x {:.2}, y {:.2}, z {:.2})",
+            100.0 * r.total_m_s,
+            100.0 * r.x_m_s,
+            100.0 * r.y_m_s,
+            100.0 * r.z_m_s
+        ),
+        None => "no sample inside the reference".into(),
+    };
+    text.push_str(&format!(
+        "RMSE against the reference, body frame, on the whole recording: {} before, {} after",
+        rmse(before),
+        rmse(after)
+    ));
+    text
+}
+
 /// `calibrate`: the terms of one recording, their bound, and the recording corrected.
 pub(super) fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
     let files = PairedFiles {
@@ -114,21 +158,13 @@ pub(super) fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
         terms,
     )
     .map_err(input)?;
-    let defaults = ObservabilityFile::default();
-    let tolerances = Tolerances {
-        scale: defaults.scale_pct / 100.0,
-        misalignment_rad: defaults.misalignment_deg.to_radians(),
-        lever_arm_m: defaults.lever_arm_m,
-        time_offset_s: defaults.time_offset_s,
-        bias_m_s: defaults.bias_cm_s / 100.0,
-        max_correlation: defaults.max_correlation,
-    };
+    let tolerances = ObservabilityFile::default().tolerances();
     let noise = Noise {
         dvl_m_s: args.dvl_noise_cm_s / 100.0,
         reference_m_s: args.reference_noise_cm_s / 100.0,
     };
     let bounded = bound(&fitted, noise, &tolerances);
-    let all = 0..recording.time_s.len();
+    let all = reference.interior(&recording.time_s, TIME_OFFSET_MARGIN_S);
     let before = score(
         &Default::default(),
         &recording.time_s,
@@ -143,11 +179,8 @@ pub(super) fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
         &reference,
         all,
     );
-    println!(
-        "{}",
-        crate::report::installation::calibration_printed(&bounded, end, &before, &after)
-    );
-    let corrected = crate::installation::terms::corrected_record(
+    println!("{}", printed_calibration(&bounded, end, before, after));
+    let corrected = crate::results::corrected::corrected_samples(
         &fitted.installation,
         &recording.time_s,
         &recording.dvl_m_s,

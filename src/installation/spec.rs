@@ -30,6 +30,30 @@ pub enum TermName {
     BiasScalar,
 }
 
+impl std::str::FromStr for TermName {
+    type Err = String;
+
+    fn from_str(name: &str) -> Result<Self, String> {
+        const NAMES: [(&str, TermName); 7] = [
+            ("scale", TermName::Scale),
+            ("scale_per_axis", TermName::ScalePerAxis),
+            ("misalignment", TermName::Misalignment),
+            ("lever_arm", TermName::LeverArm),
+            ("time_offset", TermName::TimeOffset),
+            ("bias", TermName::Bias),
+            ("bias_scalar", TermName::BiasScalar),
+        ];
+        NAMES
+            .iter()
+            .find(|(written, _)| *written == name)
+            .map(|(_, term)| *term)
+            .ok_or_else(|| {
+                let names: Vec<&str> = NAMES.iter().map(|(written, _)| *written).collect();
+                format!("{name:?} is not a term: give {}", names.join(", "))
+            })
+    }
+}
+
 /// The file as written.
 #[derive(Debug, Clone, serde::Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -1,4 +1,4 @@
-//! A DVL recording corrected by its calibration, written as CSV and as Parquet with the
+//! A DVL recording corrected by its calibration's terms, written as CSV and as Parquet with the
 //! same columns: the sample's own time stamp, the time the corrected velocity is valid
 //! at (the stamp plus the time offset), and the corrected body-frame velocity in the
 //! columns a CSV recording is read from by default ([`crate::VELOCITY_COLUMNS`]), so the
@@ -8,6 +8,8 @@
 use super::{batch, floats, parquet_bytes};
 use crate::Vec3;
 use crate::files::write_atomic;
+use crate::installation::frames::Reference;
+use crate::installation::terms::Installation;
 use std::path::{Path, PathBuf};
 
 /// One corrected sample.
@@ -19,6 +21,30 @@ pub struct CorrectedSample {
     pub valid_at_s: f64,
     /// The corrected velocity, body frame, m/s.
     pub velocity_m_s: Vec3,
+}
+
+/// The samples of a DVL record (`time_s`, `dvl_m_s`) corrected by `installation`,
+/// each valid at its stamp plus the time offset; a sample whose t + τ lies outside the
+/// reference is left out, since its correction needs the body rate there.
+pub fn corrected_samples(
+    installation: &Installation,
+    time_s: &[f64],
+    dvl_m_s: &[Vec3],
+    reference: &Reference,
+) -> Vec<CorrectedSample> {
+    time_s
+        .iter()
+        .zip(dvl_m_s)
+        .filter_map(|(&t, &dvl)| {
+            let valid_at_s = t + installation.time_offset_s;
+            let at = reference.at(valid_at_s)?;
+            Some(CorrectedSample {
+                time_s: t,
+                valid_at_s,
+                velocity_m_s: installation.correct(dvl, at.rate_rad_s),
+            })
+        })
+        .collect()
 }
 
 /// The column names, in order.
