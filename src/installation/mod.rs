@@ -14,3 +14,4 @@ pub mod frames;
 pub mod terms;
 pub mod fit;
 pub mod bound;
+pub mod rows;
