@@ -16,7 +16,7 @@ pub(super) fn plot(
     format: Format,
     metric: Metric,
 ) -> Result<(), CliError> {
-    if crate::results::installation::is_study(results) {
+    if results.join(crate::results::installation::HELDOUT).is_file() {
         return super::study::plot(results, out.unwrap_or(Path::new("plots")));
     }
     if !results.join(sweep::INDEX).is_file() {
@@ -76,7 +76,7 @@ fn remove_stale_partials(folder: &Path) -> Result<(), CliError> {
         .map_err(|e| failure(anyhow::Error::new(e).context(folder.display().to_string())))
 }
 
-fn report_figures(figures: &[plots::Written], folder: &Path) {
+pub(super) fn report_figures(figures: &[plots::Written], folder: &Path) {
     for figure in figures {
         match &figure.caption {
             plots::Caption::Drawn(_) => eprintln!(

@@ -17,6 +17,7 @@ use crate::installation::terms::{AxisRmse, score};
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 use crate::pipeline::installation::{Outcome, run_study};
 use crate::report::plots::Format;
+use crate::installation::rows::Study;
 use crate::spec::TomlFile;
 use std::path::{Path, PathBuf};
 
@@ -28,7 +29,7 @@ pub(super) fn run(target: &Target, drawing: &Drawing, force: bool) -> Result<(),
             eprintln!("nothing to do: the results in {} are current", folder.display());
         }
         Outcome::Written { folder, study } => {
-            println!("{}", crate::report::installation::printed(&study));
+            println!("{}", printed(&study));
             if let Some(plots) = drawing.folder() {
                 draw(&study, &plots.join(&spec.name))?;
             }
@@ -45,13 +46,29 @@ pub(super) fn plot(results: &Path, out: &Path) -> Result<(), CliError> {
     draw(&study, &out.join(name))
 }
 
-fn draw(study: &crate::installation::rows::Study, folder: &Path) -> Result<(), CliError> {
-    let drawn = crate::report::plots::figures::installation::draw_all(study, folder, Format::Both)
+fn draw(study: &Study, folder: &Path) -> Result<(), CliError> {
+    let drawn = crate::report::installation::draw_all(study, folder, Format::Both)
         .map_err(failure)?;
-    for (figure, caption) in drawn {
-        eprintln!("{figure}: {caption}");
-    }
+    super::plot::report_figures(&drawn, folder);
     Ok(())
+}
+
+/// The headline: each method's mean held-out RMSE at the largest window, with its
+/// 95 % interval and its ratio to no calibration.
+fn printed(study: &Study) -> String {
+    let largest = study.summary.iter().map(|s| s.window_s).fold(f64::NAN, f64::max);
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    table.set_header(["method", "held-out RMSE (cm/s)", "95 % interval", "÷ no calibration"]);
+    for row in study.summary.iter().filter(|s| s.window_s == largest) {
+        table.add_row([
+            row.method.clone(),
+            format!("{:.2}", row.mean_cm_s),
+            format!("± {:.2}", row.ci95_cm_s),
+            format!("{:.3}", row.ratio),
+        ]);
+    }
+    format!("held-out trajectories, calibration windows of {largest} s:\n{table}")
 }
 
 /// `validate` of an installation spec: its faults, or what it would compute.

@@ -14,4 +14,5 @@ pub mod frames;
 pub mod terms;
 pub mod fit;
 pub mod bound;
+pub mod rows;
 pub mod study;

@@ -9,6 +9,7 @@
 //! estimated terms with their bound, and the summary per method.
 
 use super::bound::{Noise, TermBound, bound};
+use super::rows::{HeldOutRow, NO_CALIBRATION, Study, SummaryRow, TermRow};
 use super::fit::{TIME_OFFSET_MARGIN_S, fit};
 use super::frames::Reference;
 use super::spec::{InstallationSpec, Method, TermName};
@@ -19,9 +20,6 @@ use crate::estimators::{Baseline, Estimator, LeastSquares};
 use crate::evaluate::statistics::mean_ci95;
 use crate::vocab::{Correction, ErrorModel};
 use rayon::prelude::*;
-
-/// The label of the row that corrects nothing.
-pub const NO_CALIBRATION: &str = "no calibration";
 
 /// One recording with its reference in the body frame.
 pub struct Segment {
@@ -59,70 +57,6 @@ fn sample_interval(time: &[f64]) -> f64 {
     }
     steps.sort_by(f64::total_cmp);
     steps[steps.len() / 2]
-}
-
-/// The held-out RMSE of one method's terms from one calibration window, on one other
-/// trajectory, cm/s.
-#[derive(Debug, Clone, PartialEq)]
-pub struct HeldOutRow {
-    pub method: String,
-    pub calibration: String,
-    /// The window as the spec gives it, s.
-    pub window_s: f64,
-    pub scored: String,
-    pub rmse_cm_s: Vec3,
-    pub total_cm_s: f64,
-}
-
-/// One estimated term of one calibration, with its bound.
-#[derive(Debug, Clone, PartialEq)]
-pub struct TermRow {
-    pub method: String,
-    pub calibration: String,
-    pub window_s: f64,
-    /// Such as `lever_arm_x_m`.
-    pub term: String,
-    pub value: f64,
-    /// The bound's standard deviation, in the term's unit.
-    pub std: f64,
-    /// Why the window cannot show the term; empty when it can.
-    pub unseen: String,
-}
-
-/// A method's mean held-out RMSE over calibration trajectories, with its 95 % interval.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SummaryRow {
-    pub method: String,
-    pub window_s: f64,
-    pub mean_cm_s: f64,
-    pub ci95_cm_s: f64,
-    /// The mean divided by no calibration's on the same pairs.
-    pub ratio: f64,
-}
-
-/// One sample of the residual figure: a held-out trajectory's DVL against the
-/// reference in the body frame, before and after the best method's correction, with the
-/// yaw rate under it.
-#[derive(Debug, Clone, PartialEq)]
-pub struct TracePoint {
-    /// The trajectory drawn.
-    pub trajectory: String,
-    /// The method whose correction is drawn, and the trajectory it calibrated on.
-    pub method: String,
-    pub calibration: String,
-    pub time_s: f64,
-    pub before_cm_s: Vec3,
-    pub after_cm_s: Vec3,
-    pub yaw_rate_deg_s: f64,
-}
-
-/// Everything the study computes.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Study {
-    pub heldout: Vec<HeldOutRow>,
-    pub terms: Vec<TermRow>,
-    pub summary: Vec<SummaryRow>,
-    pub trace: Vec<TracePoint>,
 }
 
 /// What a method estimated on one window.

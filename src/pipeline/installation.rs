@@ -12,7 +12,8 @@ use crate::estimators::Estimator;
 use crate::estimators::DcnetEstimator;
 use crate::files::{sha256_hex, write_atomic};
 use crate::installation::spec::InstallationSpec;
-use crate::installation::study::{self, Estimated, NO_CALIBRATION, Segment, Study, TracePoint};
+use crate::installation::rows::{NO_CALIBRATION, Study, TracePoint};
+use crate::installation::study::{self, Estimated, Segment};
 use crate::model::Settings;
 use crate::results::{self, DataFile, Manifest, StageSeconds};
 use crate::vocab::{Correction, ErrorModel};
@@ -47,7 +48,7 @@ pub enum StudyError {
         source: std::io::Error,
     },
     #[error(transparent)]
-    Results(#[from] results::installation::TableError),
+    Results(#[from] results::ResultsError),
 }
 
 /// What a study run did.
@@ -252,7 +253,7 @@ fn write_folder(
         files.push((name.to_string(), bytes));
     }
     files.push(("report.md".into(), crate::report::installation::markdown(study).into_bytes()));
-    files.push(("report.tex".into(), crate::report::installation::latex(study).into_bytes()));
+    files.push(("report.tex".into(), crate::report::installation::latex(study, &spec.name).into_bytes()));
     let mut digests = std::collections::BTreeMap::new();
     for (name, bytes) in &files {
         let path = folder.join(name);

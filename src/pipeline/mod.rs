@@ -21,7 +21,7 @@
 
 pub mod cache;
 pub mod claim;
-// pub mod installation;
+pub mod installation;
 pub mod monte_carlo;
 pub mod owner;
 pub mod plan;

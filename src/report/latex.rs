@@ -10,7 +10,7 @@ use std::fmt::Write;
 
 pub const FILE: &str = "report.tex";
 
-const SIGNS: Signs = Signs {
+pub(crate) const SIGNS: Signs = Signs {
     percent: "\\,\\%",
     minus: "$-$",
     plus_minus: "\\,$\\pm$\\,",
@@ -282,7 +282,7 @@ fn ours(entry: &Cell) -> String {
 }
 
 /// `text` with the characters LaTeX treats as special written as text.
-fn escape(text: &str) -> String {
+pub(crate) fn escape(text: &str) -> String {
     let mut escaped = String::with_capacity(text.len());
     for c in text.chars() {
         match c {
@@ -300,7 +300,7 @@ fn escape(text: &str) -> String {
 }
 
 /// A `\label` key from the experiment's name: letters and digits, other characters `-`.
-fn label(name: &str) -> String {
+pub(crate) fn label(name: &str) -> String {
     name.chars()
         .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
         .collect()

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 pub const FILE: &str = "report.md";
 const FLAG: &str = "⚠";
 
-const SIGNS: Signs = Signs {
+pub(crate) const SIGNS: Signs = Signs {
     percent: " %",
     minus: "-",
     plus_minus: " ± ",

@@ -13,6 +13,7 @@
 //! - [`compare`]: two results folders side by side.
 
 pub mod compare;
+pub mod installation;
 pub mod latex;
 pub mod markdown;
 pub mod plots;

@@ -8,6 +8,7 @@
 //! training histories. Out: the folder; [`read`] reads it back, and [`sweep`] writes
 //! and reads the table that sets a sweep's points side by side.
 
+pub mod installation;
 pub mod read;
 pub mod corrected;
 pub mod sweep;

@@ -121,7 +121,9 @@ pub fn write_sweep(
     write_figures(drawn, folder, format)
 }
 
-fn write_figures(
+/// Writes each drawn figure into `folder` as `format` says, atomically; a figure that
+/// does not apply is written as why.
+pub(crate) fn write_figures(
     drawn: Vec<(String, Outcome)>,
     folder: &Path,
     format: Format,

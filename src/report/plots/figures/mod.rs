@@ -7,6 +7,9 @@
 
 pub mod bars;
 pub mod calibration;
+pub mod installation_matrix;
+pub mod installation_residual;
+pub mod installation_windows;
 pub mod spread;
 pub mod training_loss;
 pub mod velocity;

@@ -1,0 +1,75 @@
+//! The rows of an installation study, as the study computes them and its tables store
+//! them: each method's held-out RMSE per calibration window and scored trajectory, the
+//! terms each calibration estimated with their bound, the mean per method and window,
+//! and the samples of the residual figure. In: nothing (data types only). Out: the
+//! [`Study`] that `study` fills, `results::installation` writes and reads, and
+//! `report::installation` sets as tables and figures.
+
+use crate::Vec3;
+
+/// The label of the row that corrects nothing.
+pub const NO_CALIBRATION: &str = "no calibration";
+
+/// The held-out RMSE of one method's terms from one calibration window, on one other
+/// trajectory, cm/s.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeldOutRow {
+    pub method: String,
+    pub calibration: String,
+    /// The window as the spec gives it, s.
+    pub window_s: f64,
+    pub scored: String,
+    pub rmse_cm_s: Vec3,
+    pub total_cm_s: f64,
+}
+
+/// One estimated term of one calibration, with its bound.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TermRow {
+    pub method: String,
+    pub calibration: String,
+    pub window_s: f64,
+    /// Such as `lever_arm_x_m`.
+    pub term: String,
+    pub value: f64,
+    /// The bound's standard deviation, in the term's unit.
+    pub std: f64,
+    /// Why the window cannot show the term; empty when it can.
+    pub unseen: String,
+}
+
+/// A method's mean held-out RMSE over calibration trajectories, with its 95 % interval.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SummaryRow {
+    pub method: String,
+    pub window_s: f64,
+    pub mean_cm_s: f64,
+    pub ci95_cm_s: f64,
+    /// The mean divided by no calibration's on the same pairs.
+    pub ratio: f64,
+}
+
+/// One sample of the residual figure: a held-out trajectory's DVL against the
+/// reference in the body frame, before and after the best method's correction, with the
+/// yaw rate under it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TracePoint {
+    /// The trajectory drawn.
+    pub trajectory: String,
+    /// The method whose correction is drawn, and the trajectory it calibrated on.
+    pub method: String,
+    pub calibration: String,
+    pub time_s: f64,
+    pub before_cm_s: Vec3,
+    pub after_cm_s: Vec3,
+    pub yaw_rate_deg_s: f64,
+}
+
+/// Everything the study computes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Study {
+    pub heldout: Vec<HeldOutRow>,
+    pub terms: Vec<TermRow>,
+    pub summary: Vec<SummaryRow>,
+    pub trace: Vec<TracePoint>,
+}

@@ -1,0 +1,178 @@
+//! The installation study's window figure: each method's mean held-out RMSE against the
+//! calibration window, its 95 % interval over calibration trajectories as bars, one
+//! line per method and no calibration as a dashed reference. The paper's methods keep
+//! the look they have in a run's figures (least squares dashed in its error model's
+//! colour); each installation model has a colour of its own. In: a [`Study`]'s summary.
+//! Out: the figure, or why there is none (fewer than two windows).
+
+use crate::installation::rows::{NO_CALIBRATION, Study};
+use crate::report::plots::canvas::{Drawn, Outcome, draw_svg};
+use crate::report::plots::draw::*;
+use crate::report::plots::scale::Scale;
+use crate::vocab::{ErrorModel, EstimatorKind};
+use plotters::prelude::*;
+
+/// The colours of the installation models, in the order the study lists them.
+const INSTALLATION_COLORS: [RGBColor; 5] = [
+    RGBColor(0, 128, 128),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+];
+
+/// How a method of the study is drawn: its look and its marker (none for the
+/// reference). `installation` counts the installation models listed before it.
+pub fn method_look(method: &str, installation: usize) -> (Look, Option<Marker>) {
+    let paper = |estimator: EstimatorKind, rest: &str| {
+        rest.trim()
+            .parse::<ErrorModel>()
+            .ok()
+            .map(|model| series_look(estimator, Some(model)))
+    };
+    let look = |color, stroke| Look {
+        label: method.to_string(),
+        color,
+        stroke,
+    };
+    if method == NO_CALIBRATION {
+        return (look(BLACK, Stroke::Dashed), None);
+    }
+    if method == EstimatorKind::Baseline.label() {
+        return (look(BLACK, Stroke::Solid), Some(Marker::Square));
+    }
+    if let Some(rest) = method.strip_prefix(EstimatorKind::LeastSquares.label())
+        && let Some(found) = paper(EstimatorKind::LeastSquares, rest)
+    {
+        return (look(found.color, found.stroke), Some(Marker::Cross));
+    }
+    if let Some(rest) = method.strip_prefix(EstimatorKind::Dcnet.label())
+        && let Some(found) = paper(EstimatorKind::Dcnet, rest)
+    {
+        return (look(found.color, found.stroke), Some(Marker::Circle));
+    }
+    if method.starts_with("installation") {
+        let color = INSTALLATION_COLORS[installation % INSTALLATION_COLORS.len()];
+        return (look(color, Stroke::Solid), Some(Marker::Diamond));
+    }
+    (look(GREY, Stroke::Solid), Some(Marker::Dot))
+}
+
+/// The looks of `methods`, in order.
+pub fn method_looks(methods: &[&str]) -> Vec<(Look, Option<Marker>)> {
+    let mut installation = 0;
+    methods
+        .iter()
+        .map(|method| {
+            let look = method_look(method, installation);
+            installation += usize::from(method.starts_with("installation"));
+            look
+        })
+        .collect()
+}
+
+/// Mean held-out RMSE ± its 95 % interval against the calibration window.
+pub fn installation_windows(study: &Study) -> PlotResult<Outcome> {
+    let windows = crate::first_seen(study.summary.iter().map(|r| r.window_s));
+    if windows.len() < 2 {
+        return Ok(Outcome::NotApplicable(format!(
+            "the study has {} calibration window{}",
+            windows.len(),
+            if windows.len() == 1 { "" } else { "s" }
+        )));
+    }
+    let mut methods = crate::first_seen(study.summary.iter().map(|r| r.method.as_str()));
+    methods.sort_by_key(|m| *m != NO_CALIBRATION);
+    let looks = method_looks(&methods);
+    let (first, last) = windows
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), w| {
+            (lo.min(*w), hi.max(*w))
+        });
+    let pad = 0.05 * (last - first);
+    let x = Scale::linear((first - pad)..(last + pad));
+    let ends: Vec<f64> = study
+        .summary
+        .iter()
+        .flat_map(|r| [r.mean_cm_s - r.ci95_cm_s, r.mean_cm_s + r.ci95_cm_s])
+        .collect();
+    // From zero, so that a line's height against no calibration's reads as their ratio.
+    let high = ends.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let y = Scale::linear(0.0..1.06 * high.max(f64::MIN_POSITIVE));
+    let caption =
+        "Held-out RMSE against the calibration window: mean over calibration trajectories, bars its 95 % interval"
+            .to_string();
+    let width = 760 + LEGEND_WIDTH + 60;
+    let svg = draw_svg((width, 560), |root| {
+        let (panels, legend_area) = panels_and_legend(root, &caption, width - 60, 1)?;
+        let mut chart = chart_on(&panels[0], "", 60).build_cartesian_2d(x.clone(), y.clone())?;
+        mesh(&mut chart)
+            .x_desc("calibration window [s]")
+            .y_desc("held-out RMSE [cm/s]")
+            .draw()?;
+        for (method, (look, marker)) in methods.iter().zip(&looks) {
+            let mut rows: Vec<_> = study
+                .summary
+                .iter()
+                .filter(|r| r.method == *method)
+                .collect();
+            rows.sort_by(|a, b| a.window_s.total_cmp(&b.window_s));
+            let points: Vec<(f64, f64)> = rows.iter().map(|r| (r.window_s, r.mean_cm_s)).collect();
+            line(&mut chart, points.clone(), look.color, look.stroke)?;
+            if let Some(marker) = marker {
+                marker.draw(&mut chart, &points, look.color)?;
+                chart.draw_series(rows.iter().map(|r| {
+                    PathElement::new(
+                        vec![
+                            (r.window_s, r.mean_cm_s - r.ci95_cm_s),
+                            (r.window_s, r.mean_cm_s + r.ci95_cm_s),
+                        ],
+                        look.color.stroke_width(2),
+                    )
+                }))?;
+            }
+        }
+        let entries: Vec<(Swatch, String)> = looks
+            .iter()
+            .map(|(look, marker)| {
+                let swatch = match marker {
+                    Some(marker) => Swatch::Marked(look.color, look.stroke, *marker),
+                    None => Swatch::Line(look.color, look.stroke),
+                };
+                (swatch, look.label.clone())
+            })
+            .collect();
+        legend(&legend_area, "method", &entries)
+    })?;
+    Ok(Outcome::Drawn(Drawn { caption, svg }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_paper_methods_keep_their_looks_and_installation_models_have_their_own() {
+        let methods = [
+            NO_CALIBRATION,
+            "baseline",
+            "least squares EM2",
+            "installation lever+offset",
+            "DCNet EM5",
+            "installation lever+offset+bias",
+        ];
+        let looks = method_looks(&methods);
+        assert_eq!(looks[0].1, None);
+        assert_eq!(looks[0].0.stroke, Stroke::Dashed);
+        let em2 = series_look(EstimatorKind::LeastSquares, Some(ErrorModel::Em2));
+        assert_eq!(
+            (looks[2].0.color, looks[2].0.stroke, looks[2].1),
+            (em2.color, Stroke::Dashed, Some(Marker::Cross))
+        );
+        assert_eq!(looks[3].0.color, INSTALLATION_COLORS[0]);
+        assert_eq!(looks[5].0.color, INSTALLATION_COLORS[1]);
+        let dcnet = series_look(EstimatorKind::Dcnet, Some(ErrorModel::Em5));
+        assert_eq!(looks[4].0.color, dcnet.color);
+        assert_eq!(looks[5].0.label, "installation lever+offset+bias");
+    }
+}

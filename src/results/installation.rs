@@ -1,0 +1,355 @@
+//! The Parquet tables of an installation study, in its results folder beside the
+//! manifest: `heldout.parquet` (each method's held-out RMSE per calibration window and
+//! scored trajectory, per axis and in total), `terms.parquet` (the terms each
+//! calibration estimated, with the bound's standard deviation and why a term is not
+//! seen), `summary.parquet` (the mean per method and window with its 95 % interval and
+//! its ratio to no calibration) and `trace.parquet` (one trajectory's residual before
+//! and after, with the yaw rate). In: a [`Study`]. Out: each table's bytes, written with
+//! the fixed settings of every results table so the same study gives the same bytes;
+//! [`read_study`] reads them back into the same [`Study`].
+
+use super::read::{Batch, ColumnError, ReadError, read_rows};
+use super::{ResultsError, batch, floats, strings, table_bytes as parquet_table_bytes};
+use crate::installation::rows::{HeldOutRow, Study, SummaryRow, TermRow, TracePoint};
+use arrow_array::RecordBatch;
+use std::path::Path;
+
+pub const HELDOUT: &str = "heldout.parquet";
+pub const TERMS: &str = "terms.parquet";
+pub const SUMMARY: &str = "summary.parquet";
+pub const TRACE: &str = "trace.parquet";
+/// The study's tables, in the order they are written.
+pub const TABLES: [&str; 4] = [HELDOUT, TERMS, SUMMARY, TRACE];
+
+/// Each table of `study` as (file name, Parquet bytes), in [`TABLES`] order, for the
+/// caller to write atomically before the manifest.
+pub fn table_bytes(study: &Study) -> Result<Vec<(&'static str, Vec<u8>)>, ResultsError> {
+    let batches = [
+        heldout_batch(&study.heldout),
+        terms_batch(&study.terms),
+        summary_batch(&study.summary),
+        trace_batch(&study.trace),
+    ];
+    TABLES
+        .iter()
+        .zip(batches)
+        .map(|(name, batch)| Ok((*name, parquet_table_bytes(Path::new(name), &batch)?)))
+        .collect()
+}
+
+/// Reads the study's tables from `folder`; an error names the file.
+pub fn read_study(folder: &Path) -> Result<Study, ReadError> {
+    let read = |name: &str, empty: RecordBatch| {
+        let path = folder.join(name);
+        (path, empty.schema())
+    };
+    let (path, schema) = read(HELDOUT, heldout_batch(&[]));
+    let heldout = read_rows(&path, &schema, heldout_rows)?;
+    let (path, schema) = read(TERMS, terms_batch(&[]));
+    let terms = read_rows(&path, &schema, term_rows)?;
+    let (path, schema) = read(SUMMARY, summary_batch(&[]));
+    let summary = read_rows(&path, &schema, summary_rows)?;
+    let (path, schema) = read(TRACE, trace_batch(&[]));
+    let trace = read_rows(&path, &schema, trace_rows)?;
+    Ok(Study {
+        heldout,
+        terms,
+        summary,
+        trace,
+    })
+}
+
+/// One row per method × calibration trajectory × window × scored trajectory.
+pub fn heldout_batch(rows: &[HeldOutRow]) -> RecordBatch {
+    batch(vec![
+        ("method", strings(rows, |r| r.method.clone())),
+        ("calibration", strings(rows, |r| r.calibration.clone())),
+        ("window_s", floats(rows, |r| r.window_s)),
+        ("scored", strings(rows, |r| r.scored.clone())),
+        ("rmse_x_cm_s", floats(rows, |r| r.rmse_cm_s[0])),
+        ("rmse_y_cm_s", floats(rows, |r| r.rmse_cm_s[1])),
+        ("rmse_z_cm_s", floats(rows, |r| r.rmse_cm_s[2])),
+        ("rmse_cm_s", floats(rows, |r| r.total_cm_s)),
+    ])
+}
+
+/// One row per method × calibration trajectory × window × estimated term.
+pub fn terms_batch(rows: &[TermRow]) -> RecordBatch {
+    batch(vec![
+        ("method", strings(rows, |r| r.method.clone())),
+        ("calibration", strings(rows, |r| r.calibration.clone())),
+        ("window_s", floats(rows, |r| r.window_s)),
+        ("term", strings(rows, |r| r.term.clone())),
+        ("value", floats(rows, |r| r.value)),
+        ("std", floats(rows, |r| r.std)),
+        ("unseen", strings(rows, |r| r.unseen.clone())),
+    ])
+}
+
+/// One row per method × window.
+pub fn summary_batch(rows: &[SummaryRow]) -> RecordBatch {
+    batch(vec![
+        ("method", strings(rows, |r| r.method.clone())),
+        ("window_s", floats(rows, |r| r.window_s)),
+        ("rmse_cm_s", floats(rows, |r| r.mean_cm_s)),
+        ("rmse_ci_cm_s", floats(rows, |r| r.ci95_cm_s)),
+        ("ratio", floats(rows, |r| r.ratio)),
+    ])
+}
+
+/// One row per sample of the trajectory the residual figure draws.
+pub fn trace_batch(rows: &[TracePoint]) -> RecordBatch {
+    batch(vec![
+        ("trajectory", strings(rows, |r| r.trajectory.clone())),
+        ("method", strings(rows, |r| r.method.clone())),
+        ("calibration", strings(rows, |r| r.calibration.clone())),
+        ("time_s", floats(rows, |r| r.time_s)),
+        ("before_x_cm_s", floats(rows, |r| r.before_cm_s[0])),
+        ("before_y_cm_s", floats(rows, |r| r.before_cm_s[1])),
+        ("before_z_cm_s", floats(rows, |r| r.before_cm_s[2])),
+        ("after_x_cm_s", floats(rows, |r| r.after_cm_s[0])),
+        ("after_y_cm_s", floats(rows, |r| r.after_cm_s[1])),
+        ("after_z_cm_s", floats(rows, |r| r.after_cm_s[2])),
+        ("yaw_rate_deg_s", floats(rows, |r| r.yaw_rate_deg_s)),
+    ])
+}
+
+/// The x, y, z columns `prefix_x_cm_s`, … of `batch`, as vectors.
+fn vectors(batch: &Batch, prefix: &str) -> Result<Vec<crate::Vec3>, ColumnError> {
+    let [x, y, z] = ["x", "y", "z"].map(|axis| batch.floats(&format!("{prefix}_{axis}_cm_s")));
+    let (x, y, z) = (x?, y?, z?);
+    Ok((0..x.len()).map(|i| [x[i], y[i], z[i]]).collect())
+}
+
+fn heldout_rows(batch: &Batch) -> Result<Vec<HeldOutRow>, ColumnError> {
+    let method = batch.strings("method")?;
+    let calibration = batch.strings("calibration")?;
+    let window_s = batch.floats("window_s")?;
+    let scored = batch.strings("scored")?;
+    let rmse = vectors(batch, "rmse")?;
+    let total = batch.floats("rmse_cm_s")?;
+    Ok((0..method.len())
+        .map(|i| HeldOutRow {
+            method: method[i].clone(),
+            calibration: calibration[i].clone(),
+            window_s: window_s[i],
+            scored: scored[i].clone(),
+            rmse_cm_s: rmse[i],
+            total_cm_s: total[i],
+        })
+        .collect())
+}
+
+fn term_rows(batch: &Batch) -> Result<Vec<TermRow>, ColumnError> {
+    let method = batch.strings("method")?;
+    let calibration = batch.strings("calibration")?;
+    let window_s = batch.floats("window_s")?;
+    let term = batch.strings("term")?;
+    let value = batch.floats("value")?;
+    let std = batch.floats("std")?;
+    let unseen = batch.strings("unseen")?;
+    Ok((0..method.len())
+        .map(|i| TermRow {
+            method: method[i].clone(),
+            calibration: calibration[i].clone(),
+            window_s: window_s[i],
+            term: term[i].clone(),
+            value: value[i],
+            std: std[i],
+            unseen: unseen[i].clone(),
+        })
+        .collect())
+}
+
+fn summary_rows(batch: &Batch) -> Result<Vec<SummaryRow>, ColumnError> {
+    let method = batch.strings("method")?;
+    let window_s = batch.floats("window_s")?;
+    let mean = batch.floats("rmse_cm_s")?;
+    let ci95 = batch.floats("rmse_ci_cm_s")?;
+    let ratio = batch.floats("ratio")?;
+    Ok((0..method.len())
+        .map(|i| SummaryRow {
+            method: method[i].clone(),
+            window_s: window_s[i],
+            mean_cm_s: mean[i],
+            ci95_cm_s: ci95[i],
+            ratio: ratio[i],
+        })
+        .collect())
+}
+
+fn trace_rows(batch: &Batch) -> Result<Vec<TracePoint>, ColumnError> {
+    let trajectory = batch.strings("trajectory")?;
+    let method = batch.strings("method")?;
+    let calibration = batch.strings("calibration")?;
+    let time_s = batch.floats("time_s")?;
+    let before = vectors(batch, "before")?;
+    let after = vectors(batch, "after")?;
+    let yaw_rate = batch.floats("yaw_rate_deg_s")?;
+    Ok((0..trajectory.len())
+        .map(|i| TracePoint {
+            trajectory: trajectory[i].clone(),
+            method: method[i].clone(),
+            calibration: calibration[i].clone(),
+            time_s: time_s[i],
+            before_cm_s: before[i],
+            after_cm_s: after[i],
+            yaw_rate_deg_s: yaw_rate[i],
+        })
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A study of two trajectories with every kind of row, awkward values included.
+    fn study() -> Study {
+        Study {
+            heldout: vec![
+                HeldOutRow {
+                    method: "no calibration".into(),
+                    calibration: "T1".into(),
+                    window_s: 400.0,
+                    scored: "T2".into(),
+                    rmse_cm_s: [4.0, 12.6, 2.4],
+                    total_cm_s: 13.4,
+                },
+                HeldOutRow {
+                    method: "installation lever+offset".into(),
+                    calibration: "T2".into(),
+                    window_s: 100.5,
+                    scored: "T1".into(),
+                    rmse_cm_s: [2.6, 3.8, 1.0 / 3.0],
+                    total_cm_s: 4.6,
+                },
+            ],
+            terms: vec![
+                TermRow {
+                    method: "installation lever+offset".into(),
+                    calibration: "T2".into(),
+                    window_s: 100.5,
+                    term: "lever_arm_x_m".into(),
+                    value: -1.89,
+                    std: 0.017,
+                    unseen: String::new(),
+                },
+                TermRow {
+                    method: "installation lever+offset".into(),
+                    calibration: "T2".into(),
+                    window_s: 100.5,
+                    term: "time_offset_s".into(),
+                    value: 1.51,
+                    std: f64::INFINITY,
+                    unseen: "standard deviation 1e9 s; correlated −0.97 with bias_y_m_s".into(),
+                },
+            ],
+            summary: vec![SummaryRow {
+                method: "no calibration".into(),
+                window_s: 400.0,
+                mean_cm_s: 15.07,
+                ci95_cm_s: 2.3,
+                ratio: 1.0,
+            }],
+            trace: (0..3)
+                .map(|i| TracePoint {
+                    trajectory: "T1".into(),
+                    method: "installation lever+offset".into(),
+                    calibration: "T2".into(),
+                    time_s: f64::from(i) * 400.0 / 399.0,
+                    before_cm_s: [1.0, -17.0 + f64::from(i), 0.2],
+                    after_cm_s: [0.1, -0.3, f64::from(i) * 1e-3],
+                    yaw_rate_deg_s: -15.7 * f64::from(i),
+                })
+                .collect(),
+        }
+    }
+
+    fn write(folder: &Path, tables: &[(&str, Vec<u8>)]) {
+        for (name, bytes) in tables {
+            std::fs::write(folder.join(name), bytes).unwrap();
+        }
+    }
+
+    #[test]
+    fn a_study_reads_back_exactly_and_writes_the_same_bytes_twice() {
+        let folder = tempfile::tempdir().unwrap();
+        let study = study();
+        let tables = table_bytes(&study).unwrap();
+        let names: Vec<&str> = tables.iter().map(|(name, _)| *name).collect();
+        assert_eq!(
+            names,
+            [
+                "heldout.parquet",
+                "terms.parquet",
+                "summary.parquet",
+                "trace.parquet"
+            ]
+        );
+        write(folder.path(), &tables);
+        assert_eq!(read_study(folder.path()).unwrap(), study);
+        assert_eq!(table_bytes(&study).unwrap(), tables);
+        let empty = Study {
+            heldout: vec![],
+            terms: vec![],
+            summary: vec![],
+            trace: vec![],
+        };
+        write(folder.path(), &table_bytes(&empty).unwrap());
+        assert_eq!(read_study(folder.path()).unwrap(), empty);
+    }
+
+    #[test]
+    fn the_columns_are_named_as_the_results_document_says() {
+        let names = |batch: RecordBatch| -> Vec<String> {
+            batch
+                .schema()
+                .fields()
+                .iter()
+                .map(|f| f.name().clone())
+                .collect()
+        };
+        assert_eq!(
+            names(heldout_batch(&[])),
+            [
+                "method",
+                "calibration",
+                "window_s",
+                "scored",
+                "rmse_x_cm_s",
+                "rmse_y_cm_s",
+                "rmse_z_cm_s",
+                "rmse_cm_s"
+            ]
+        );
+        assert_eq!(
+            names(summary_batch(&[])),
+            ["method", "window_s", "rmse_cm_s", "rmse_ci_cm_s", "ratio"]
+        );
+        assert_eq!(names(trace_batch(&[]))[4], "before_x_cm_s");
+        assert_eq!(names(terms_batch(&[]))[6], "unseen");
+    }
+
+    #[test]
+    fn a_missing_or_foreign_table_is_named() {
+        let folder = tempfile::tempdir().unwrap();
+        let tables = table_bytes(&study()).unwrap();
+        write(folder.path(), &tables[..3]);
+        let error = read_study(folder.path()).unwrap_err();
+        let trace = folder.path().join(TRACE);
+        assert!(
+            matches!(&error, ReadError::Missing { path } if *path == trace),
+            "{error:?}"
+        );
+        // The summary's bytes under the name of the held-out table.
+        std::fs::write(folder.path().join(HELDOUT), &tables[2].1).unwrap();
+        let error = read_study(folder.path()).unwrap_err();
+        assert_eq!(
+            error.to_string(),
+            format!(
+                "{}: column `calibration` is missing: this is not the schema dcnet-exp writes",
+                folder.path().join(HELDOUT).display()
+            )
+        );
+    }
+}
