@@ -168,10 +168,11 @@ pub fn read_parquet(path: &Path) -> RecordBatch {
     let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let reader = ParquetRecordBatchReaderBuilder::try_new(file)
         .unwrap()
+        .with_batch_size(1 << 24)
         .build()
         .unwrap();
     let mut batches: Vec<RecordBatch> = reader.map(Result::unwrap).collect();
-    assert_eq!(batches.len(), 1, "the tool writes each table as one batch");
+    assert_eq!(batches.len(), 1, "the tool writes each table as one row group");
     batches.remove(0)
 }
 

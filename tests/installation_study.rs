@@ -1,0 +1,256 @@
+//! The installation study end to end, as a user runs it: `run` of a spec with
+//! `kind = "installation"` on synthetic recordings with known terms (any clone) and on
+//! the A-KIT recordings (ignored without them), `calibrate` of one recording, `plot`
+//! of a stored study, and bad input refused with the file, line and column named.
+
+mod common;
+
+use common::installed::{INSTALLED, write_installed};
+use common::*;
+use std::path::Path;
+
+/// An installation spec over `count` trajectories in `data/<folder>/` of `dir`.
+fn write_spec(dir: &Path, name: &str, folder: &str, count: usize, extra: &str) {
+    let mut text = format!("name = \"{name}\"\nkind = \"installation\"\n\n[recordings]\n");
+    for n in 1..=count {
+        text.push_str(&format!(
+            "\n[[recordings.trajectories]]\nname = \"S{n}\"\ndvl = \"../data/{folder}/Trajectory{n}/DVL_trajectory{n}.csv\"\nreference = \"../data/{folder}/Trajectory{n}/GT_trajectory{n}.csv\"\n"
+        ));
+    }
+    text.push_str(
+        "\n[noise]\ndvl_cm_s = 2.0\nreference_cm_s = 0.0\n\n[calibration]\nwindow_s = [100.0, 400.0]\nmethods = [\"baseline\", \"EM5\"]\n\n[[calibration.models]]\nname = \"lever+offset+bias+scale\"\nterms = [\"lever_arm\", \"time_offset\", \"bias\", \"scale\"]\n",
+    );
+    text.push_str(extra);
+    std::fs::create_dir_all(dir.join("experiments")).unwrap();
+    std::fs::write(dir.join(format!("experiments/{name}.toml")), text).unwrap();
+}
+
+/// The rows of `terms.parquet` for `method` at `window_s`: (calibration, term, value,
+/// std, why unseen).
+fn term_rows(folder: &Path, method: &str, window_s: f64) -> Vec<(String, String, f64, f64, String)> {
+    let batch = read_parquet(&folder.join("terms.parquet"));
+    let text = |column| strings(&batch, column).into_iter().map(Option::unwrap);
+    let number = |column| floats(&batch, column).into_iter().map(Option::unwrap);
+    text("method")
+        .zip(number("window_s"))
+        .zip(text("calibration"))
+        .zip(text("term"))
+        .zip(number("value"))
+        .zip(number("std"))
+        .zip(text("unseen"))
+        .filter(|((((((m, w), _), _), _), _), _)| m == method && *w == window_s)
+        .map(|((((((_, _), c), t), v), s), u)| (c, t, v, s, u))
+        .collect()
+}
+
+/// Each method's mean held-out RMSE and ratio to no calibration at `window_s`.
+fn summary(folder: &Path, window_s: f64) -> Vec<(String, f64, f64)> {
+    let batch = read_parquet(&folder.join("summary.parquet"));
+    let methods = strings(&batch, "method");
+    let windows = floats(&batch, "window_s");
+    let means = floats(&batch, "rmse_cm_s");
+    let ratios = floats(&batch, "ratio");
+    (0..batch.num_rows())
+        .filter(|&i| windows[i] == Some(window_s))
+        .map(|i| (methods[i].clone().unwrap(), means[i].unwrap(), ratios[i].unwrap()))
+        .collect()
+}
+
+#[test]
+fn a_synthetic_installation_is_recovered_within_its_bound_and_a_straight_segment_cannot_show_the_lever_arm() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_installed(&d.join("data/syn"), 4, &[4], INSTALLED, 11);
+    write_spec(d, "syn", "syn", 4, "");
+    let output = dcnet(d, &["run", "experiments/syn.toml"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let folder = d.join("results/syn");
+    let method = "installation lever+offset+bias+scale";
+    let rows = term_rows(&folder, method, 400.0);
+    let truth = |term: &str| match term {
+        "scale" => INSTALLED.scale,
+        "lever_arm_x_m" => INSTALLED.lever_arm_m[0],
+        "lever_arm_y_m" => INSTALLED.lever_arm_m[1],
+        "lever_arm_z_m" => INSTALLED.lever_arm_m[2],
+        "time_offset_s" => INSTALLED.time_offset_s,
+        "bias_x_m_s" => INSTALLED.bias_m_s[0],
+        "bias_y_m_s" => INSTALLED.bias_m_s[1],
+        "bias_z_m_s" => INSTALLED.bias_m_s[2],
+        other => panic!("unexpected term {other}"),
+    };
+    for (calibration, term, value, std, unseen) in &rows {
+        if calibration == "S4" {
+            continue;
+        }
+        let z = (value - truth(term)) / std;
+        assert!(z.abs() < 3.0, "{calibration} {term}: {value} ± {std}, truth {}", truth(term));
+        // The vertical lever arm shows only through roll and pitch rates, which
+        // these trajectories barely have; the horizontal one through the turns.
+        if term == "lever_arm_x_m" || term == "lever_arm_y_m" {
+            assert!(unseen.is_empty(), "{calibration} {term}: {unseen}");
+        }
+    }
+    let straight: Vec<_> = rows
+        .iter()
+        .filter(|(c, t, ..)| c == "S4" && t.starts_with("lever_arm_x"))
+        .collect();
+    assert_eq!(straight.len(), 1);
+    assert!(!straight[0].4.is_empty(), "the straight S4 shows the lever arm: {straight:?}");
+
+    // Held out: the installation model leaves the DVL's own noise (√3 · 2 cm/s in
+    // total), the paper's models most of the error.
+    let means = summary(&folder, 400.0);
+    let of = |m: &str| means.iter().find(|(method, ..)| method == m).unwrap().clone();
+    let noise_floor = 3f64.sqrt() * 100.0 * INSTALLED.noise_m_s;
+    assert!(of(method).1 < 1.1 * noise_floor, "{means:?}");
+    assert!(of(method).2 < 0.3, "{means:?}");
+    assert!(of("least squares EM5").2 > 0.5, "{means:?}");
+
+    let again = dcnet(d, &["run", "experiments/syn.toml"]);
+    assert!(stderr(&again).contains("nothing to do"), "{}", stderr(&again));
+    let plotted = dcnet(d, &["plot", "results/syn", "--out", "redrawn"]);
+    assert!(plotted.status.success(), "{}", stderr(&plotted));
+    assert_png(&d.join("redrawn/syn/installation_residual.png"), (0, 0));
+    for file in ["heldout.parquet", "terms.parquet", "summary.parquet", "trace.parquet", "report.md", "report.tex", "manifest.json", "spec.toml"] {
+        assert!(folder.join(file).is_file(), "{file}");
+    }
+}
+
+#[test]
+fn a_study_gives_the_same_bytes_whatever_the_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_installed(&d.join("data/syn"), 3, &[], INSTALLED, 5);
+    write_spec(d, "syn", "syn", 3, "");
+    let mut digests = Vec::new();
+    for threads in ["1", "2"] {
+        let out = format!("out{threads}");
+        let output = dcnet(d, &["run", "experiments/syn.toml", "--out", &out, "--no-plots", "--threads", threads]);
+        assert!(output.status.success(), "{}", stderr(&output));
+        let tables: Vec<String> = ["heldout.parquet", "terms.parquet", "summary.parquet", "trace.parquet", "report.md", "report.tex"]
+            .iter()
+            .map(|f| sha256(&std::fs::read(d.join(&out).join("syn").join(f)).unwrap()))
+            .collect();
+        digests.push(tables);
+    }
+    assert_eq!(digests[0], digests[1]);
+}
+
+#[test]
+fn calibrate_prints_the_terms_and_writes_the_recording_corrected() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_installed(&d.join("data/syn"), 1, &[], INSTALLED, 3);
+    let output = dcnet(
+        d,
+        &[
+            "calibrate",
+            "data/syn/Trajectory1/DVL_trajectory1.csv",
+            "--reference",
+            "data/syn/Trajectory1/GT_trajectory1.csv",
+            "--terms",
+            "lever_arm,time_offset,bias,scale",
+            "--reference-noise-cm-s",
+            "0",
+            "--out",
+            "fixed",
+        ],
+    );
+    let printed = stdout(&output);
+    assert!(output.status.success(), "{}", stderr(&output));
+    for term in ["lever_arm_x_m", "time_offset_s", "bias_x_m_s", "scale"] {
+        assert!(printed.contains(&format!("| {term}")), "{term}: {printed}");
+    }
+    let line = printed.lines().find(|l| l.starts_with("| lever_arm_x_m")).unwrap();
+    let value: f64 = line.split('|').nth(2).unwrap().trim().trim_end_matches(" m").parse().unwrap();
+    assert!((value - INSTALLED.lever_arm_m[0]).abs() < 0.05, "{line}");
+    let csv = d.join("fixed/DVL_trajectory1-corrected.csv");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(text.starts_with("time_s,valid_at_s,vx_m_s,vy_m_s,vz_m_s\n"), "{text}");
+    assert!(d.join("fixed/DVL_trajectory1-corrected.parquet").is_file());
+    // Each corrected sample is valid at its stamp plus the time offset.
+    let second: Vec<f64> = text.lines().nth(2).unwrap().split(',').map(|f| f.parse().unwrap()).collect();
+    assert!((second[1] - second[0] - INSTALLED.time_offset_s).abs() < 0.05, "{second:?}");
+}
+
+#[test]
+fn bad_recordings_and_specs_are_refused_naming_the_file_and_nothing_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_installed(&d.join("data/syn"), 2, &[], INSTALLED, 1);
+    write_spec(d, "syn", "syn", 2, "");
+    // A time stamp that goes back.
+    let gt = d.join("data/syn/Trajectory2/GT_trajectory2.csv");
+    let text = std::fs::read_to_string(&gt).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    lines[5] = lines[5].replacen("4,", "2.5,", 1);
+    std::fs::write(&gt, lines.join("\n") + "\n").unwrap();
+    let output = dcnet(d, &["run", "experiments/syn.toml"]);
+    let message = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{message}");
+    assert!(message.contains("GT_trajectory2.csv:6: Time [s]: 2.5 s follows 3 s of line 5"), "{message}");
+    assert!(!d.join("results/syn").exists());
+
+    // A missing file, a kind that is none, a term that is none.
+    std::fs::remove_file(d.join("data/syn/Trajectory1/DVL_trajectory1.csv")).unwrap();
+    let message = stderr(&dcnet(d, &["run", "experiments/syn.toml"]));
+    assert!(message.contains("DVL_trajectory1.csv: file not found"), "{message}");
+    let message = stderr(&dcnet(d, &["validate", "experiments/syn.toml", "--set", "kind=\"instalation\""]));
+    assert!(message.contains("kind: \"instalation\" must be \"installation\" here"), "{message}");
+    let spec = std::fs::read_to_string(d.join("experiments/syn.toml")).unwrap();
+    std::fs::write(d.join("experiments/typo.toml"), spec.replace("kind = \"installation\"", "kind = \"instalation\"")).unwrap();
+    let message = stderr(&dcnet(d, &["run", "experiments/typo.toml"]));
+    assert!(message.contains("experiments/typo.toml: kind: \"instalation\" is not a kind of spec"), "{message}");
+    let message = stderr(&dcnet(d, &["validate", "experiments/syn.toml", "--set", "calibration.models[0].terms=[\"lever\"]"]));
+    assert!(message.contains("calibration.models[0].terms[0]: unknown variant `lever`"), "{message}");
+    let message = stderr(&dcnet(d, &["plan", "experiments/syn.toml"]));
+    assert!(message.contains("an installation study has no tasks to plan"), "{message}");
+    assert!(!d.join("results/syn").exists());
+}
+
+/// The A-KIT run: from a trajectory with turns the installation model's held-out RMSE
+/// is at most a third of no calibration's; the straight T12 cannot show the lever arm,
+/// the turning T1 can.
+#[test]
+#[ignore = "needs the A-KIT recordings: dcnet-exp data fetch akit"]
+fn the_akit_study_removes_two_thirds_of_the_error_from_a_turning_segment() {
+    let dir = project(false);
+    let d = dir.path();
+    std::fs::copy(repo().join("experiments/akit.toml"), d.join("experiments/akit.toml")).unwrap();
+    std::fs::create_dir_all(d.join("data")).unwrap();
+    std::os::unix::fs::symlink(akit(), d.join("data/akit")).unwrap();
+    let output = dcnet(d, &["run", "experiments/akit.toml", "--no-plots"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let folder = d.join("results/akit");
+    let batch = read_parquet(&folder.join("heldout.parquet"));
+    let methods = strings(&batch, "method");
+    let calibrations = strings(&batch, "calibration");
+    let windows = floats(&batch, "window_s");
+    let totals = floats(&batch, "rmse_cm_s");
+    let mean = |method: &str, calibration: &str| {
+        let values: Vec<f64> = (0..batch.num_rows())
+            .filter(|&i| {
+                methods[i].as_deref() == Some(method)
+                    && calibrations[i].as_deref() == Some(calibration)
+                    && windows[i] == Some(400.0)
+            })
+            .map(|i| totals[i].unwrap())
+            .collect();
+        assert_eq!(values.len(), 12, "{method} from {calibration}");
+        values.iter().sum::<f64>() / 12.0
+    };
+    let none = mean("no calibration", "T1");
+    let best = mean("installation lever+offset+bias", "T1");
+    assert!(best <= none / 3.0, "from T1: {best:.2} cm/s against {none:.2} uncalibrated");
+    let seen = |calibration: &str| {
+        term_rows(&folder, "installation lever+offset+bias", 400.0)
+            .into_iter()
+            .filter(|(c, t, ..)| c == calibration && t.starts_with("lever_arm_x"))
+            .map(|(.., why)| why)
+            .next()
+            .unwrap()
+    };
+    assert!(seen("T1").is_empty(), "{}", seen("T1"));
+    assert!(!seen("T12").is_empty(), "T12 shows the lever arm");
+    assert!(!seen("T13").is_empty(), "T13 shows the lever arm");
+}
