@@ -132,12 +132,37 @@ pub fn draw_all(study: &Study, folder: &Path, format: Format) -> Result<Vec<Writ
     write_figures(drawn, folder, format)
 }
 
-/// `text` with the signs LaTeX sets in math mode written there.
+/// The characters of our text and of the bound's reasons that LaTeX sets in math mode
+/// (or that its default font would set as other glyphs: `<` and `>`), and how.
+const MATH: [(char, &str); 16] = [
+    ('±', "$\\pm$"),
+    ('σ', "$\\sigma$"),
+    ('τ', "$\\tau$"),
+    ('δ', "$\\delta$"),
+    ('ω', "$\\omega$"),
+    ('ρ', "$\\rho$"),
+    ('×', "$\\times$"),
+    ('∞', "$\\infty$"),
+    ('−', "$-$"),
+    ('≥', "$\\geq$"),
+    ('≤', "$\\leq$"),
+    ('>', "$>$"),
+    ('<', "$<$"),
+    ('°', "$^\\circ$"),
+    ('→', "$\\to$"),
+    ('|', "$|$"),
+];
+
+/// `text` with the characters of [`MATH`] written as LaTeX sets them.
 fn symbols(text: &str) -> String {
-    text.replace('±', "$\\pm$")
-        .replace('σ', "$\\sigma$")
-        .replace('×', "$\\times$")
-        .replace('∞', "$\\infty$")
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match MATH.iter().find(|(m, _)| *m == c) {
+            Some((_, latex)) => out.push_str(latex),
+            None => out.push(c),
+        }
+    }
+    out
 }
 
 /// What the section's numbers are, above its tables.
@@ -706,6 +731,15 @@ pub(crate) mod tests {
             "{text}"
         );
         assert!(text.contains("95 \\% interval"), "{text}");
+        assert!(
+            text.contains("T12, not seen: lever arm x: $\\sigma$ 0.36 m $>$ 0.1 m."),
+            "{text}"
+        );
+        assert!(
+            text.contains("0.9 $\\times$ the median $\\sigma$ of 0.015 m"),
+            "{text}"
+        );
+        assert_eq!(symbols("ρ −0.97 ≥ 0.95"), "$\\rho$ $-$0.97 $\\geq$ 0.95");
     }
 
     /// A deterministic jitter in -1..1 from `seed`.
