@@ -3,9 +3,11 @@
 //! with scale S, misalignment δ, lever arm l, time offset τ and bias b, each switched on
 //! or off. In data-flow order: [`frames`] puts the reference in the body frame at any
 //! time (rotation, body rate); [`terms`] holds which terms are estimated, their values,
-//! the model's prediction and the correction of a DVL record; [`fit`] estimates the
-//! selected terms by nonlinear least squares; [`bound`] gives their Fisher information:
-//! standard deviations, correlations and the terms a segment cannot show.
+//! the model's prediction, the correction of a DVL record and its score against the
+//! reference; [`fit`] estimates the selected terms by nonlinear least squares
+//! (Levenberg–Marquardt from a scan over τ, on a fixed interior mask); [`bound`] gives
+//! their Fisher information: standard deviations, correlations and the terms a segment
+//! cannot show.
 //! In: [`PairedRecording`](crate::data::paired::PairedRecording)s. Out: terms, their
 //! bound, corrected records.
 
