@@ -27,7 +27,11 @@ fn write_spec(dir: &Path, name: &str, folder: &str, count: usize, extra: &str) {
 
 /// The rows of `terms.parquet` for `method` at `window_s`: (calibration, term, value,
 /// std, why unseen).
-fn term_rows(folder: &Path, method: &str, window_s: f64) -> Vec<(String, String, f64, f64, String)> {
+fn term_rows(
+    folder: &Path,
+    method: &str,
+    window_s: f64,
+) -> Vec<(String, String, f64, f64, String)> {
     let batch = read_parquet(&folder.join("terms.parquet"));
     let text = |column| strings(&batch, column).into_iter().map(Option::unwrap);
     let number = |column| floats(&batch, column).into_iter().map(Option::unwrap);
@@ -52,12 +56,19 @@ fn summary(folder: &Path, window_s: f64) -> Vec<(String, f64, f64)> {
     let ratios = floats(&batch, "ratio");
     (0..batch.num_rows())
         .filter(|&i| windows[i] == Some(window_s))
-        .map(|i| (methods[i].clone().unwrap(), means[i].unwrap(), ratios[i].unwrap()))
+        .map(|i| {
+            (
+                methods[i].clone().unwrap(),
+                means[i].unwrap(),
+                ratios[i].unwrap(),
+            )
+        })
         .collect()
 }
 
 #[test]
-fn a_synthetic_installation_is_recovered_within_its_bound_and_a_straight_segment_cannot_show_the_lever_arm() {
+fn a_synthetic_installation_is_recovered_within_its_bound_and_a_straight_segment_cannot_show_the_lever_arm()
+ {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     write_installed(&d.join("data/syn"), 4, &[4], INSTALLED, 11);
@@ -83,7 +94,11 @@ fn a_synthetic_installation_is_recovered_within_its_bound_and_a_straight_segment
             continue;
         }
         let z = (value - truth(term)) / std;
-        assert!(z.abs() < 3.0, "{calibration} {term}: {value} ± {std}, truth {}", truth(term));
+        assert!(
+            z.abs() < 3.0,
+            "{calibration} {term}: {value} ± {std}, truth {}",
+            truth(term)
+        );
         // The vertical lever arm shows only through roll and pitch rates, which
         // these trajectories barely have; the horizontal one through the turns.
         if term == "lever_arm_x_m" || term == "lever_arm_y_m" {
@@ -95,23 +110,48 @@ fn a_synthetic_installation_is_recovered_within_its_bound_and_a_straight_segment
         .filter(|(c, t, ..)| c == "S4" && t.starts_with("lever_arm_x"))
         .collect();
     assert_eq!(straight.len(), 1);
-    assert!(!straight[0].4.is_empty(), "the straight S4 shows the lever arm: {straight:?}");
+    assert!(
+        !straight[0].4.is_empty(),
+        "the straight S4 shows the lever arm: {straight:?}"
+    );
 
     // Held out: the installation model leaves the DVL's own noise (√3 · 2 cm/s in
     // total), the paper's models most of the error.
     let means = summary(&folder, 400.0);
-    let of = |m: &str| means.iter().find(|(method, ..)| method == m).unwrap().clone();
+    let of = |m: &str| {
+        means
+            .iter()
+            .find(|(method, ..)| method == m)
+            .unwrap()
+            .clone()
+    };
     let noise_floor = 3f64.sqrt() * 100.0 * INSTALLED.noise_m_s;
     assert!(of(method).1 < 1.1 * noise_floor, "{means:?}");
     assert!(of(method).2 < 0.3, "{means:?}");
     assert!(of("least squares EM5").2 > 0.5, "{means:?}");
 
     let again = dcnet(d, &["run", "experiments/syn.toml"]);
-    assert!(stderr(&again).contains("nothing to do"), "{}", stderr(&again));
+    assert!(
+        stderr(&again).contains("nothing to do"),
+        "{}",
+        stderr(&again)
+    );
     let plotted = dcnet(d, &["plot", "results/syn", "--out", "redrawn"]);
     assert!(plotted.status.success(), "{}", stderr(&plotted));
-    assert_png(&d.join("redrawn/syn/installation_residual.png"), (0, 0));
-    for file in ["heldout.parquet", "terms.parquet", "summary.parquet", "trace.parquet", "report.md", "report.tex", "manifest.json", "spec.toml"] {
+    assert_png(
+        &d.join("redrawn/syn/installation_residual.png"),
+        (2680, 1800),
+    );
+    for file in [
+        "heldout.parquet",
+        "terms.parquet",
+        "summary.parquet",
+        "trace.parquet",
+        "report.md",
+        "report.tex",
+        "manifest.json",
+        "spec.toml",
+    ] {
         assert!(folder.join(file).is_file(), "{file}");
     }
 }
@@ -125,12 +165,30 @@ fn a_study_gives_the_same_bytes_whatever_the_thread_count() {
     let mut digests = Vec::new();
     for threads in ["1", "2"] {
         let out = format!("out{threads}");
-        let output = dcnet(d, &["run", "experiments/syn.toml", "--out", &out, "--no-plots", "--threads", threads]);
+        let output = dcnet(
+            d,
+            &[
+                "run",
+                "experiments/syn.toml",
+                "--out",
+                &out,
+                "--no-plots",
+                "--threads",
+                threads,
+            ],
+        );
         assert!(output.status.success(), "{}", stderr(&output));
-        let tables: Vec<String> = ["heldout.parquet", "terms.parquet", "summary.parquet", "trace.parquet", "report.md", "report.tex"]
-            .iter()
-            .map(|f| sha256(&std::fs::read(d.join(&out).join("syn").join(f)).unwrap()))
-            .collect();
+        let tables: Vec<String> = [
+            "heldout.parquet",
+            "terms.parquet",
+            "summary.parquet",
+            "trace.parquet",
+            "report.md",
+            "report.tex",
+        ]
+        .iter()
+        .map(|f| sha256(&std::fs::read(d.join(&out).join("syn").join(f)).unwrap()))
+        .collect();
         digests.push(tables);
     }
     assert_eq!(digests[0], digests[1]);
@@ -161,16 +219,38 @@ fn calibrate_prints_the_terms_and_writes_the_recording_corrected() {
     for term in ["lever_arm_x_m", "time_offset_s", "bias_x_m_s", "scale"] {
         assert!(printed.contains(&format!("| {term}")), "{term}: {printed}");
     }
-    let line = printed.lines().find(|l| l.starts_with("| lever_arm_x_m")).unwrap();
-    let value: f64 = line.split('|').nth(2).unwrap().trim().trim_end_matches(" m").parse().unwrap();
+    let line = printed
+        .lines()
+        .find(|l| l.starts_with("| lever_arm_x_m"))
+        .unwrap();
+    let value: f64 = line
+        .split('|')
+        .nth(2)
+        .unwrap()
+        .trim()
+        .trim_end_matches(" m")
+        .parse()
+        .unwrap();
     assert!((value - INSTALLED.lever_arm_m[0]).abs() < 0.05, "{line}");
     let csv = d.join("fixed/DVL_trajectory1-corrected.csv");
     let text = std::fs::read_to_string(&csv).unwrap();
-    assert!(text.starts_with("time_s,valid_at_s,vx_m_s,vy_m_s,vz_m_s\n"), "{text}");
+    assert!(
+        text.starts_with("time_s,valid_at_s,vx_m_s,vy_m_s,vz_m_s\n"),
+        "{text}"
+    );
     assert!(d.join("fixed/DVL_trajectory1-corrected.parquet").is_file());
     // Each corrected sample is valid at its stamp plus the time offset.
-    let second: Vec<f64> = text.lines().nth(2).unwrap().split(',').map(|f| f.parse().unwrap()).collect();
-    assert!((second[1] - second[0] - INSTALLED.time_offset_s).abs() < 0.05, "{second:?}");
+    let second: Vec<f64> = text
+        .lines()
+        .nth(2)
+        .unwrap()
+        .split(',')
+        .map(|f| f.parse().unwrap())
+        .collect();
+    assert!(
+        (second[1] - second[0] - INSTALLED.time_offset_s).abs() < 0.05,
+        "{second:?}"
+    );
 }
 
 #[test]
@@ -188,23 +268,61 @@ fn bad_recordings_and_specs_are_refused_naming_the_file_and_nothing_is_written()
     let output = dcnet(d, &["run", "experiments/syn.toml"]);
     let message = stderr(&output);
     assert_eq!(output.status.code(), Some(1), "{message}");
-    assert!(message.contains("GT_trajectory2.csv:6: Time [s]: 2.5 s follows 3 s of line 5"), "{message}");
+    assert!(
+        message.contains("GT_trajectory2.csv:6: Time [s]: 2.5 s follows 3 s of line 5"),
+        "{message}"
+    );
     assert!(!d.join("results/syn").exists());
 
     // A missing file, a kind that is none, a term that is none.
     std::fs::remove_file(d.join("data/syn/Trajectory1/DVL_trajectory1.csv")).unwrap();
     let message = stderr(&dcnet(d, &["run", "experiments/syn.toml"]));
-    assert!(message.contains("DVL_trajectory1.csv: file not found"), "{message}");
-    let message = stderr(&dcnet(d, &["validate", "experiments/syn.toml", "--set", "kind=\"instalation\""]));
-    assert!(message.contains("kind: \"instalation\" must be \"installation\" here"), "{message}");
+    assert!(
+        message.contains("DVL_trajectory1.csv: file not found"),
+        "{message}"
+    );
+    let message = stderr(&dcnet(
+        d,
+        &[
+            "validate",
+            "experiments/syn.toml",
+            "--set",
+            "kind=\"instalation\"",
+        ],
+    ));
+    assert!(
+        message.contains("kind: \"instalation\" must be \"installation\" here"),
+        "{message}"
+    );
     let spec = std::fs::read_to_string(d.join("experiments/syn.toml")).unwrap();
-    std::fs::write(d.join("experiments/typo.toml"), spec.replace("kind = \"installation\"", "kind = \"instalation\"")).unwrap();
+    std::fs::write(
+        d.join("experiments/typo.toml"),
+        spec.replace("kind = \"installation\"", "kind = \"instalation\""),
+    )
+    .unwrap();
     let message = stderr(&dcnet(d, &["run", "experiments/typo.toml"]));
-    assert!(message.contains("experiments/typo.toml: kind: \"instalation\" is not a kind of spec"), "{message}");
-    let message = stderr(&dcnet(d, &["validate", "experiments/syn.toml", "--set", "calibration.models[0].terms=[\"lever\"]"]));
-    assert!(message.contains("calibration.models[0].terms[0]: unknown variant `lever`"), "{message}");
+    assert!(
+        message.contains("experiments/typo.toml: kind: \"instalation\" is not a kind of spec"),
+        "{message}"
+    );
+    let message = stderr(&dcnet(
+        d,
+        &[
+            "validate",
+            "experiments/syn.toml",
+            "--set",
+            "calibration.models[0].terms=[\"lever\"]",
+        ],
+    ));
+    assert!(
+        message.contains("calibration.models[0].terms[0]: unknown variant `lever`"),
+        "{message}"
+    );
     let message = stderr(&dcnet(d, &["plan", "experiments/syn.toml"]));
-    assert!(message.contains("an installation study has no tasks to plan"), "{message}");
+    assert!(
+        message.contains("an installation study has no tasks to plan"),
+        "{message}"
+    );
     assert!(!d.join("results/syn").exists());
 }
 
@@ -216,7 +334,11 @@ fn bad_recordings_and_specs_are_refused_naming_the_file_and_nothing_is_written()
 fn the_akit_study_removes_two_thirds_of_the_error_from_a_turning_segment() {
     let dir = project(false);
     let d = dir.path();
-    std::fs::copy(repo().join("experiments/akit.toml"), d.join("experiments/akit.toml")).unwrap();
+    std::fs::copy(
+        repo().join("experiments/akit.toml"),
+        d.join("experiments/akit.toml"),
+    )
+    .unwrap();
     std::fs::create_dir_all(d.join("data")).unwrap();
     std::os::unix::fs::symlink(akit(), d.join("data/akit")).unwrap();
     let output = dcnet(d, &["run", "experiments/akit.toml", "--no-plots"]);
@@ -241,7 +363,10 @@ fn the_akit_study_removes_two_thirds_of_the_error_from_a_turning_segment() {
     };
     let none = mean("no calibration", "T1");
     let best = mean("installation lever+offset+bias", "T1");
-    assert!(best <= none / 3.0, "from T1: {best:.2} cm/s against {none:.2} uncalibrated");
+    assert!(
+        best <= none / 3.0,
+        "from T1: {best:.2} cm/s against {none:.2} uncalibrated"
+    );
     let seen = |calibration: &str| {
         term_rows(&folder, "installation lever+offset+bias", 400.0)
             .into_iter()

@@ -107,7 +107,11 @@ pub(super) enum Command {
         columns: Option<PathBuf>,
         /// The terms to estimate: scale, scale_per_axis, misalignment, lever_arm,
         /// time_offset, bias, bias_scalar
-        #[arg(long, value_delimiter = ',', default_value = "lever_arm,time_offset,bias")]
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "lever_arm,time_offset,bias"
+        )]
         terms: Vec<String>,
         /// Calibrate on the first SECONDS of the recording [default: all of it]
         #[arg(long, value_name = "SECONDS")]

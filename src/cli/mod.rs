@@ -145,7 +145,10 @@ pub fn main() -> Result<(), CliError> {
         } => {
             let terms: Vec<crate::installation::spec::TermName> = terms
                 .iter()
-                .map(|term| term.parse().map_err(|message| input(anyhow::anyhow!("--terms {term}: {message}"))))
+                .map(|term| {
+                    term.parse()
+                        .map_err(|message| input(anyhow::anyhow!("--terms {term}: {message}")))
+                })
                 .collect::<Result<_, _>>()?;
             study::calibrate(&study::CalibrateArgs {
                 dvl: &dvl,

@@ -16,7 +16,10 @@ pub(super) fn plot(
     format: Format,
     metric: Metric,
 ) -> Result<(), CliError> {
-    if results.join(crate::results::installation::HELDOUT).is_file() {
+    if results
+        .join(crate::results::installation::HELDOUT)
+        .is_file()
+    {
         return super::study::plot(results, out.unwrap_or(Path::new("plots")));
     }
     if !results.join(sweep::INDEX).is_file() {

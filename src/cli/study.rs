@@ -11,14 +11,14 @@ use crate::data::paired::{self, PairedColumns, PairedFiles};
 use crate::installation::bound::{Noise, TermBound, bound};
 use crate::installation::fit::{TIME_OFFSET_MARGIN_S, fit};
 use crate::installation::frames::Reference;
+use crate::installation::rows::Study;
 use crate::installation::spec::{self as study_spec, ObservabilityFile, TermName};
 use crate::installation::study::{table_unit, term_set};
 use crate::installation::terms::{AxisRmse, score};
-use comfy_table::{Table, presets::ASCII_MARKDOWN};
 use crate::pipeline::installation::{Outcome, run_study};
 use crate::report::plots::Format;
-use crate::installation::rows::Study;
 use crate::spec::TomlFile;
+use comfy_table::{Table, presets::ASCII_MARKDOWN};
 use std::path::{Path, PathBuf};
 
 /// `run` of an installation spec.
@@ -26,7 +26,10 @@ pub(super) fn run(target: &Target, drawing: &Drawing, force: bool) -> Result<(),
     let spec = study_spec::load(&target.spec, &target.overrides.set).map_err(input)?;
     match run_study(&spec, &target.out, force).map_err(input)? {
         Outcome::Current(folder) => {
-            eprintln!("nothing to do: the results in {} are current", folder.display());
+            eprintln!(
+                "nothing to do: the results in {} are current",
+                folder.display()
+            );
         }
         Outcome::Written { folder, study } => {
             println!("{}", printed(&study));
@@ -47,8 +50,8 @@ pub(super) fn plot(results: &Path, out: &Path) -> Result<(), CliError> {
 }
 
 fn draw(study: &Study, folder: &Path) -> Result<(), CliError> {
-    let drawn = crate::report::installation::draw_all(study, folder, Format::Both)
-        .map_err(failure)?;
+    let drawn =
+        crate::report::installation::draw_all(study, folder, Format::Both).map_err(failure)?;
     super::plot::report_figures(&drawn, folder);
     Ok(())
 }
@@ -56,10 +59,19 @@ fn draw(study: &Study, folder: &Path) -> Result<(), CliError> {
 /// The headline: each method's mean held-out RMSE at the largest window, with its
 /// 95 % interval and its ratio to no calibration.
 fn printed(study: &Study) -> String {
-    let largest = study.summary.iter().map(|s| s.window_s).fold(f64::NAN, f64::max);
+    let largest = study
+        .summary
+        .iter()
+        .map(|s| s.window_s)
+        .fold(f64::NAN, f64::max);
     let mut table = Table::new();
     table.load_preset(ASCII_MARKDOWN);
-    table.set_header(["method", "held-out RMSE (cm/s)", "95 % interval", "÷ no calibration"]);
+    table.set_header([
+        "method",
+        "held-out RMSE (cm/s)",
+        "95 % interval",
+        "÷ no calibration",
+    ]);
     for row in study.summary.iter().filter(|s| s.window_s == largest) {
         table.add_row([
             row.method.clone(),

@@ -216,40 +216,77 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<InstallationSpec, SpecE
     }
 }
 
-fn check(document: &Document<InstallationFile>, faults: &mut Vec<(String, String)>) -> InstallationSpec {
+fn check(
+    document: &Document<InstallationFile>,
+    faults: &mut Vec<(String, String)>,
+) -> InstallationSpec {
     let file = &document.value;
     let mut fault = |key: String, message: String| faults.push((key, message));
     if file.kind != KIND {
-        fault("kind".into(), format!("{:?} must be {KIND:?} here", file.kind));
+        fault(
+            "kind".into(),
+            format!("{:?} must be {KIND:?} here", file.kind),
+        );
     }
     let folder_name = !file.name.is_empty()
         && !file.name.starts_with('.')
         && file.name.len() <= crate::spec::MAX_NAME_CHARS
-        && file.name.chars().all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c));
+        && file
+            .name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c));
     if !folder_name {
-        fault("name".into(), format!("{:?} must be non-empty, at most {} characters, use only letters, digits, '-', '_' and '.', and not start with '.' (it names the results folder)", file.name, crate::spec::MAX_NAME_CHARS));
+        fault(
+            "name".into(),
+            format!(
+                "{:?} must be non-empty, at most {} characters, use only letters, digits, '-', '_' and '.', and not start with '.' (it names the results folder)",
+                file.name,
+                crate::spec::MAX_NAME_CHARS
+            ),
+        );
     }
 
     let mut names = HashSet::new();
     let mut trajectories = Vec::new();
     for (i, trajectory) in file.recordings.trajectories.iter().enumerate() {
         if !names.insert(trajectory.name.as_str()) {
-            fault(format!("recordings.trajectories[{i}].name"), format!("{:?} is defined twice", trajectory.name));
+            fault(
+                format!("recordings.trajectories[{i}].name"),
+                format!("{:?} is defined twice", trajectory.name),
+            );
         }
         let dvl = document.folder.join(&trajectory.dvl);
-        let reference = trajectory.reference.as_ref().map_or_else(|| dvl.clone(), |r| document.folder.join(r));
+        let reference = trajectory
+            .reference
+            .as_ref()
+            .map_or_else(|| dvl.clone(), |r| document.folder.join(r));
         trajectories.push((trajectory.name.clone(), PairedFiles { dvl, reference }));
     }
     if trajectories.len() < 2 {
-        fault("recordings.trajectories".into(), format!("has {} trajectories: held-out scores need at least two (one to calibrate on, another to score on)", trajectories.len()));
+        fault(
+            "recordings.trajectories".into(),
+            format!(
+                "has {} trajectories: held-out scores need at least two (one to calibrate on, another to score on)",
+                trajectories.len()
+            ),
+        );
     }
 
     let noise = &file.noise;
     if !(noise.dvl_cm_s.is_finite() && noise.dvl_cm_s > 0.0) {
-        fault("noise.dvl_cm_s".into(), format!("{} must be a positive number: the bound divides by it", noise.dvl_cm_s));
+        fault(
+            "noise.dvl_cm_s".into(),
+            format!(
+                "{} must be a positive number: the bound divides by it",
+                noise.dvl_cm_s
+            ),
+        );
     }
     if !(noise.reference_cm_s.is_finite() && noise.reference_cm_s >= 0.0) {
-        fault("noise.reference_cm_s".into(), format!("{} must be zero or positive", noise.reference_cm_s));
+        fault(
+            "noise.reference_cm_s".into(),
+            format!("{} must be zero or positive", noise.reference_cm_s),
+        );
     }
 
     let calibration = &file.calibration;
@@ -259,9 +296,15 @@ fn check(document: &Document<InstallationFile>, faults: &mut Vec<(String, String
     let mut windows_s = Vec::new();
     for (i, &w) in calibration.window_s.iter().enumerate() {
         if !(w.is_finite() && w > 0.0) {
-            fault(format!("calibration.window_s[{i}]"), format!("{w} must be a positive number of seconds"));
+            fault(
+                format!("calibration.window_s[{i}]"),
+                format!("{w} must be a positive number of seconds"),
+            );
         } else if windows_s.contains(&w) {
-            fault(format!("calibration.window_s[{i}]"), format!("{w} is listed twice"));
+            fault(
+                format!("calibration.window_s[{i}]"),
+                format!("{w} is listed twice"),
+            );
         } else {
             windows_s.push(w);
         }
@@ -282,7 +325,12 @@ fn check(document: &Document<InstallationFile>, faults: &mut Vec<(String, String
             "dcnet" => wants_dcnet = true,
             other => match other.parse::<ErrorModel>() {
                 Ok(model) => methods.push(Method::LeastSquares(model)),
-                Err(_) => fault(key, format!("{other:?} is not a method: give \"baseline\", \"EM1\" to \"EM5\" (the paper's least squares) or \"dcnet\"; term sets of the installation model go in [[calibration.models]]")),
+                Err(_) => fault(
+                    key,
+                    format!(
+                        "{other:?} is not a method: give \"baseline\", \"EM1\" to \"EM5\" (the paper's least squares) or \"dcnet\"; term sets of the installation model go in [[calibration.models]]"
+                    ),
+                ),
             },
         }
     }
@@ -290,25 +338,40 @@ fn check(document: &Document<InstallationFile>, faults: &mut Vec<(String, String
     for (i, model) in calibration.models.iter().enumerate() {
         let key = format!("calibration.models[{i}]");
         if !model_names.insert(model.name.as_str()) {
-            fault(format!("{key}.name"), format!("{:?} is defined twice", model.name));
+            fault(
+                format!("{key}.name"),
+                format!("{:?} is defined twice", model.name),
+            );
         }
         if model.terms.is_empty() {
             fault(format!("{key}.terms"), "is empty: name at least one term (scale, scale_per_axis, misalignment, lever_arm, time_offset, bias, bias_scalar)".into());
         }
         let has = |term| model.terms.contains(&term);
         if has(TermName::Scale) && has(TermName::ScalePerAxis) {
-            fault(format!("{key}.terms"), "lists scale and scale_per_axis: give one".into());
+            fault(
+                format!("{key}.terms"),
+                "lists scale and scale_per_axis: give one".into(),
+            );
         }
         if has(TermName::Bias) && has(TermName::BiasScalar) {
-            fault(format!("{key}.terms"), "lists bias and bias_scalar: give one".into());
+            fault(
+                format!("{key}.terms"),
+                "lists bias and bias_scalar: give one".into(),
+            );
         }
         let mut seen = HashSet::new();
         for (j, term) in model.terms.iter().enumerate() {
             if !seen.insert(term) {
-                fault(format!("{key}.terms[{j}]"), format!("{term:?} is listed twice"));
+                fault(
+                    format!("{key}.terms[{j}]"),
+                    format!("{term:?} is listed twice"),
+                );
             }
         }
-        methods.push(Method::Installation { name: model.name.clone(), terms: model.terms.clone() });
+        methods.push(Method::Installation {
+            name: model.name.clone(),
+            terms: model.terms.clone(),
+        });
     }
     let dcnet_spec = match (&file.dcnet, wants_dcnet) {
         (Some(dcnet), true) => {
@@ -331,14 +394,23 @@ fn check(document: &Document<InstallationFile>, faults: &mut Vec<(String, String
         ("bias_cm_s", o.bias_cm_s),
     ] {
         if !(value.is_finite() && value > 0.0) {
-            fault(format!("observability.{key}"), format!("{value} must be a positive number: a term whose standard deviation is beyond it counts as not seen"));
+            fault(
+                format!("observability.{key}"),
+                format!(
+                    "{value} must be a positive number: a term whose standard deviation is beyond it counts as not seen"
+                ),
+            );
         }
     }
 
     InstallationSpec {
         name: file.name.clone(),
         trajectories,
-        columns: file.recordings.columns.clone().unwrap_or_else(PairedColumns::akit),
+        columns: file
+            .recordings
+            .columns
+            .clone()
+            .unwrap_or_else(PairedColumns::akit),
         dvl_noise_m_s: noise.dvl_cm_s / 100.0,
         reference_noise_m_s: noise.reference_cm_s / 100.0,
         windows_s,

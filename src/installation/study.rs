@@ -9,9 +9,9 @@
 //! estimated terms with their bound, and the summary per method.
 
 use super::bound::{Noise, TermBound, bound};
-use super::rows::{HeldOutRow, NO_CALIBRATION, Study, SummaryRow, TermRow};
 use super::fit::{TIME_OFFSET_MARGIN_S, fit};
 use super::frames::Reference;
+use super::rows::{HeldOutRow, NO_CALIBRATION, Study, SummaryRow, TermRow};
 use super::spec::{InstallationSpec, Method, TermName};
 use super::terms::{Installation, PerAxis, TermSet, score};
 use crate::Vec3;
@@ -136,7 +136,11 @@ fn reference_on_stamps(segment: &Segment, range: std::ops::Range<usize>) -> (Vec
 
 /// Runs the study of `spec` over `segments` (in spec order), with `dcnet` for the DCNet
 /// methods; also gives back every method's terms on every window.
-pub fn run(spec: &InstallationSpec, segments: &[Segment], dcnet: &DcnetEstimate) -> (Study, Vec<Estimated>) {
+pub fn run(
+    spec: &InstallationSpec,
+    segments: &[Segment],
+    dcnet: &DcnetEstimate,
+) -> (Study, Vec<Estimated>) {
     let noise = Noise {
         dvl_m_s: spec.dvl_noise_m_s,
         reference_m_s: spec.reference_noise_m_s,
@@ -166,7 +170,9 @@ pub fn run(spec: &InstallationSpec, segments: &[Segment], dcnet: &DcnetEstimate)
                         let (dvl, reference) = reference_on_stamps(calibration, range.clone());
                         let correction = match method {
                             Method::Baseline => Baseline.estimate(&dvl, &reference),
-                            Method::LeastSquares(model) => LeastSquares(*model).estimate(&dvl, &reference),
+                            Method::LeastSquares(model) => {
+                                LeastSquares(*model).estimate(&dvl, &reference)
+                            }
                             Method::Dcnet(model) => match dcnet(*model, &dvl, &reference) {
                                 Some(correction) => correction,
                                 None => continue,
@@ -233,7 +239,9 @@ pub fn run(spec: &InstallationSpec, segments: &[Segment], dcnet: &DcnetEstimate)
                     let recording = &scored.recording;
                     // Every method is scored on the same samples, those inside the
                     // reference whatever the time offset.
-                    let samples = scored.reference.interior(&recording.time_s, TIME_OFFSET_MARGIN_S);
+                    let samples = scored
+                        .reference
+                        .interior(&recording.time_s, TIME_OFFSET_MARGIN_S);
                     let Some(rmse) = score(
                         &estimate.installation,
                         &recording.time_s,
@@ -285,7 +293,10 @@ pub fn summarize(heldout: &[HeldOutRow], windows_s: &[f64]) -> Vec<SummaryRow> {
     }
     let per_calibration = |method: &str, window_s: f64| -> Vec<f64> {
         let mut calibrations: Vec<&str> = Vec::new();
-        for row in heldout.iter().filter(|r| r.method == method && r.window_s == window_s) {
+        for row in heldout
+            .iter()
+            .filter(|r| r.method == method && r.window_s == window_s)
+        {
             if !calibrations.contains(&row.calibration.as_str()) {
                 calibrations.push(&row.calibration);
             }

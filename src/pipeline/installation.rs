@@ -8,11 +8,11 @@
 use super::Plan;
 use crate::Vec3;
 use crate::data::paired;
-use crate::estimators::Estimator;
 use crate::estimators::DcnetEstimator;
+use crate::estimators::Estimator;
 use crate::files::{sha256_hex, write_atomic};
-use crate::installation::spec::InstallationSpec;
 use crate::installation::rows::{NO_CALIBRATION, Study, TracePoint};
+use crate::installation::spec::InstallationSpec;
 use crate::installation::study::{self, Estimated, Segment};
 use crate::model::Settings;
 use crate::results::{self, DataFile, Manifest, StageSeconds};
@@ -55,7 +55,10 @@ pub enum StudyError {
 pub enum Outcome {
     /// The folder was current and intact.
     Current(PathBuf),
-    Written { folder: PathBuf, study: Study },
+    Written {
+        folder: PathBuf,
+        study: Study,
+    },
 }
 
 /// Runs the study of `spec` into `out/<name>/` unless that folder is current (or
@@ -110,26 +113,31 @@ pub fn run_study(spec: &InstallationSpec, out: &Path, force: bool) -> Result<Out
     let (mut study, estimates) = study::run(spec, &segments, &dcnet);
     study.trace = trace(&study, &estimates, &segments);
     let protocol_s = clock.elapsed().as_secs_f64() - load_s;
-    write_folder(spec, &folder, &study, Manifest {
-        name: spec.name.clone(),
-        spec_sha256: sha256_hex(spec.resolved_toml.as_bytes()),
-        git_commit: env!("DCNET_GIT_COMMIT").to_string(),
-        crate_version: env!("CARGO_PKG_VERSION").to_string(),
-        started_at: humantime::format_rfc3339_seconds(started_at).to_string(),
-        finished_at: String::new(),
-        threads: rayon::current_num_threads(),
-        backend: String::new(),
-        host: gethostname::gethostname().to_string_lossy().into_owned(),
-        data_files,
-        stage_seconds: StageSeconds {
-            load: load_s,
-            protocol: protocol_s,
-            ..StageSeconds::default()
+    write_folder(
+        spec,
+        &folder,
+        &study,
+        Manifest {
+            name: spec.name.clone(),
+            spec_sha256: sha256_hex(spec.resolved_toml.as_bytes()),
+            git_commit: env!("DCNET_GIT_COMMIT").to_string(),
+            crate_version: env!("CARGO_PKG_VERSION").to_string(),
+            started_at: humantime::format_rfc3339_seconds(started_at).to_string(),
+            finished_at: String::new(),
+            threads: rayon::current_num_threads(),
+            backend: String::new(),
+            host: gethostname::gethostname().to_string_lossy().into_owned(),
+            data_files,
+            stage_seconds: StageSeconds {
+                load: load_s,
+                protocol: protocol_s,
+                ..StageSeconds::default()
+            },
+            results_key,
+            files_sha256: Default::default(),
+            spec_file: String::new(),
         },
-        results_key,
-        files_sha256: Default::default(),
-        spec_file: String::new(),
-    })?;
+    )?;
     Ok(Outcome::Written { folder, study })
 }
 
@@ -199,7 +207,9 @@ fn trace(study: &Study, estimates: &[Estimated], segments: &[Segment]) -> Vec<Tr
     let scored = study
         .heldout
         .iter()
-        .filter(|r| r.method == NO_CALIBRATION && r.calibration == calibration.name && r.window_s == largest)
+        .filter(|r| {
+            r.method == NO_CALIBRATION && r.calibration == calibration.name && r.window_s == largest
+        })
         .max_by(|a, b| a.total_cm_s.total_cmp(&b.total_cm_s));
     let (Some(best), Some(scored)) = (best, scored) else {
         return Vec::new();
@@ -209,7 +219,9 @@ fn trace(study: &Study, estimates: &[Estimated], segments: &[Segment]) -> Vec<Tr
     };
     let Some(installation) = estimates
         .iter()
-        .find(|e| e.method == best.method && e.calibration == calibration.name && e.window_s == largest)
+        .find(|e| {
+            e.method == best.method && e.calibration == calibration.name && e.window_s == largest
+        })
         .map(|e| e.installation)
     else {
         return Vec::new();
@@ -222,7 +234,8 @@ fn trace(study: &Study, estimates: &[Estimated], segments: &[Segment]) -> Vec<Tr
             let after_t = t + installation.time_offset_s;
             let after = segment.reference.at(after_t)?;
             let corrected = installation.correct(recording.dvl_m_s[i], after.rate_rad_s);
-            let residual = |v: Vec3, r: Vec3| -> Vec3 { std::array::from_fn(|a| 100.0 * (v[a] - r[a])) };
+            let residual =
+                |v: Vec3, r: Vec3| -> Vec3 { std::array::from_fn(|a| 100.0 * (v[a] - r[a])) };
             Some(TracePoint {
                 trajectory: segment.name.clone(),
                 method: best.method.clone(),
@@ -248,12 +261,21 @@ fn write_folder(
         path: folder.to_path_buf(),
         source,
     })?;
-    let mut files: Vec<(String, Vec<u8>)> = vec![(results::SPEC.to_string(), spec.resolved_toml.clone().into_bytes())];
+    let mut files: Vec<(String, Vec<u8>)> = vec![(
+        results::SPEC.to_string(),
+        spec.resolved_toml.clone().into_bytes(),
+    )];
     for (name, bytes) in results::installation::table_bytes(study)? {
         files.push((name.to_string(), bytes));
     }
-    files.push(("report.md".into(), crate::report::installation::markdown(study).into_bytes()));
-    files.push(("report.tex".into(), crate::report::installation::latex(study, &spec.name).into_bytes()));
+    files.push((
+        "report.md".into(),
+        crate::report::installation::markdown(study).into_bytes(),
+    ));
+    files.push((
+        "report.tex".into(),
+        crate::report::installation::latex(study, &spec.name).into_bytes(),
+    ));
     let mut digests = std::collections::BTreeMap::new();
     for (name, bytes) in &files {
         let path = folder.join(name);

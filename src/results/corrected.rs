@@ -79,7 +79,11 @@ pub fn csv_text(samples: &[CorrectedSample]) -> String {
 }
 
 /// Writes `out/<stem>-corrected.csv` and `.parquet`, each atomically; their paths.
-pub fn write(out: &Path, stem: &str, samples: &[CorrectedSample]) -> Result<Vec<PathBuf>, CorrectedError> {
+pub fn write(
+    out: &Path,
+    stem: &str,
+    samples: &[CorrectedSample],
+) -> Result<Vec<PathBuf>, CorrectedError> {
     crate::files::create_folder(out).map_err(|source| CorrectedError::Io {
         path: out.to_path_buf(),
         source,
@@ -116,8 +120,16 @@ mod tests {
     #[test]
     fn the_csv_reads_back_as_a_recording_of_the_corrected_velocity() {
         let samples = [
-            CorrectedSample { time_s: 0.0, valid_at_s: 1.5, velocity_m_s: [1.25, -0.5, 0.0625] },
-            CorrectedSample { time_s: 1.0, valid_at_s: 2.5, velocity_m_s: [1.5, 0.1, -0.2] },
+            CorrectedSample {
+                time_s: 0.0,
+                valid_at_s: 1.5,
+                velocity_m_s: [1.25, -0.5, 0.0625],
+            },
+            CorrectedSample {
+                time_s: 1.0,
+                valid_at_s: 2.5,
+                velocity_m_s: [1.5, 0.1, -0.2],
+            },
         ];
         let folder = tempfile::tempdir().unwrap();
         let written = write(folder.path(), "dvl", &samples).unwrap();

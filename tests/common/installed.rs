@@ -37,7 +37,10 @@ fn attitude(t: f64, k: usize, turning: bool) -> ([f64; 3], [f64; 3]) {
     let w = 2.0 * std::f64::consts::PI / (60.0 + 10.0 * k as f64);
     let (yaw, yaw_rate) = if turning {
         let amplitude = 1.6;
-        (amplitude * (w * t + phase).sin() + 0.3 * k as f64, amplitude * w * (w * t + phase).cos())
+        (
+            amplitude * (w * t + phase).sin() + 0.3 * k as f64,
+            amplitude * w * (w * t + phase).cos(),
+        )
     } else {
         (0.3 * k as f64, 0.0)
     };
@@ -77,13 +80,23 @@ fn body_rate([roll, pitch, _]: [f64; 3], [droll, dpitch, dyaw]: [f64; 3]) -> [f6
 }
 
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 
 /// Writes `TrajectoryN/DVL_trajectoryN.csv` and `GT_trajectoryN.csv` for N = 1..=count
 /// into `folder`, 400 samples at 1 Hz each; trajectories listed in `straight` hold
 /// their heading.
-pub fn write_installed(folder: &Path, count: usize, straight: &[usize], installed: Installed, seed: u64) {
+pub fn write_installed(
+    folder: &Path,
+    count: usize,
+    straight: &[usize],
+    installed: Installed,
+    seed: u64,
+) {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let noise = Normal::new(0.0, installed.noise_m_s).unwrap();
     for n in 1..=count {
@@ -91,15 +104,20 @@ pub fn write_installed(folder: &Path, count: usize, straight: &[usize], installe
         let segment = folder.join(format!("Trajectory{n}"));
         std::fs::create_dir_all(&segment).unwrap();
         let mut dvl = String::from("Time [s],DVL X [m/s],DVL Y [m/s],DVL Z [m/s]\n");
-        let mut reference = String::from("Time [s],Longitude [rad],Latitude [rad],Altitude [m],V North [m/s],V East [m/s],V Down [m/s],Roll [rad],Pitch [rad],Yaw [rad]\n");
+        let mut reference = String::from(
+            "Time [s],Longitude [rad],Latitude [rad],Altitude [m],V North [m/s],V East [m/s],V Down [m/s],Roll [rad],Pitch [rad],Yaw [rad]\n",
+        );
         for i in 0..400 {
             let t = i as f64;
             let (angles, _) = attitude(t, n, turning);
             let c = body_to_ned(angles);
             let v_b = body_velocity(t, n);
-            let v_n: Vec<f64> = (0..3).map(|r| (0..3).map(|k| c[r][k] * v_b[k]).sum()).collect();
+            let v_n: Vec<f64> = (0..3)
+                .map(|r| (0..3).map(|k| c[r][k] * v_b[k]).sum())
+                .collect();
             // Yaw as an INS records it: wrapped to (−π, π].
-            let yaw = (angles[2] + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI) - std::f64::consts::PI;
+            let yaw = (angles[2] + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI)
+                - std::f64::consts::PI;
             writeln!(
                 reference,
                 "{t},0.6,0.57,-20.0,{},{},{},{},{},{yaw}",
@@ -112,7 +130,11 @@ pub fn write_installed(folder: &Path, count: usize, straight: &[usize], installe
             let lever = cross(omega, installed.lever_arm_m);
             let v = body_velocity(later, n);
             let measured: Vec<f64> = (0..3)
-                .map(|a| (1.0 + installed.scale) * (v[a] + lever[a]) + installed.bias_m_s[a] + noise.sample(&mut rng))
+                .map(|a| {
+                    (1.0 + installed.scale) * (v[a] + lever[a])
+                        + installed.bias_m_s[a]
+                        + noise.sample(&mut rng)
+                })
                 .collect();
             writeln!(dvl, "{t},{},{},{}", measured[0], measured[1], measured[2]).unwrap();
         }

@@ -172,7 +172,11 @@ pub fn read_parquet(path: &Path) -> RecordBatch {
         .build()
         .unwrap();
     let mut batches: Vec<RecordBatch> = reader.map(Result::unwrap).collect();
-    assert_eq!(batches.len(), 1, "the tool writes each table as one row group");
+    assert_eq!(
+        batches.len(),
+        1,
+        "the tool writes each table as one row group"
+    );
     batches.remove(0)
 }
 

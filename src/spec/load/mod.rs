@@ -138,7 +138,10 @@ pub fn declared_kind(path: &Path) -> Result<Option<String>, SpecErrors> {
         None => Ok(None),
         Some(toml::Value::String(kind)) => Ok(Some(kind.clone())),
         Some(other) => Err(text
-            .fault("kind", format!("{other} must be a string such as \"installation\""))
+            .fault(
+                "kind",
+                format!("{other} must be a string such as \"installation\""),
+            )
             .into()),
     }
 }
