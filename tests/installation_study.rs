@@ -379,3 +379,33 @@ fn the_akit_study_removes_two_thirds_of_the_error_from_a_turning_segment() {
     assert!(!seen("T12").is_empty(), "T12 shows the lever arm");
     assert!(!seen("T13").is_empty(), "T13 shows the lever arm");
 }
+
+/// DCNet as the paper would use it: the models a paper spec trained (here the quick
+/// spec's) estimate each calibration window's scale and bias, scored like every other
+/// method; before they are trained, the study says which command trains them.
+#[test]
+fn the_dcnet_models_of_a_paper_spec_are_scored_beside_the_other_methods() {
+    let dir = project(false);
+    let d = dir.path();
+    write_installed(&d.join("data/syn"), 3, &[], INSTALLED, 9);
+    write_spec(d, "syn", "syn", 3, "\n[dcnet]\nspec = \"quick.toml\"\n");
+    let set = ["--set", "calibration.methods=[\"baseline\", \"EM5\", \"dcnet\"]"];
+    let refused = dcnet(d, &[&["run", "experiments/syn.toml", "--no-plots"][..], &set].concat());
+    let message = stderr(&refused);
+    assert_eq!(refused.status.code(), Some(1), "{message}");
+    assert!(
+        message.contains("is not trained: run `dcnet-exp run ") && message.contains("quick.toml --out results` first"),
+        "{message}"
+    );
+    assert!(!d.join("results/syn").exists());
+
+    quick_run(d, &["--no-plots"]);
+    let output = dcnet(d, &[&["run", "experiments/syn.toml", "--no-plots"][..], &set].concat());
+    assert!(output.status.success(), "{}", stderr(&output));
+    let means = summary(&d.join("results/syn"), 400.0);
+    for model in ["EM1", "EM2", "EM3", "EM4", "EM5"] {
+        let label = format!("DCNet {model}");
+        let row = means.iter().find(|(m, ..)| *m == label);
+        assert!(row.is_some_and(|(_, mean, _)| mean.is_finite()), "{label}: {means:?}");
+    }
+}
