@@ -389,23 +389,36 @@ fn the_dcnet_models_of_a_paper_spec_are_scored_beside_the_other_methods() {
     let d = dir.path();
     write_installed(&d.join("data/syn"), 3, &[], INSTALLED, 9);
     write_spec(d, "syn", "syn", 3, "\n[dcnet]\nspec = \"quick.toml\"\n");
-    let set = ["--set", "calibration.methods=[\"baseline\", \"EM5\", \"dcnet\"]"];
-    let refused = dcnet(d, &[&["run", "experiments/syn.toml", "--no-plots"][..], &set].concat());
+    let set = [
+        "--set",
+        "calibration.methods=[\"baseline\", \"EM5\", \"dcnet\"]",
+    ];
+    let refused = dcnet(
+        d,
+        &[&["run", "experiments/syn.toml", "--no-plots"][..], &set].concat(),
+    );
     let message = stderr(&refused);
     assert_eq!(refused.status.code(), Some(1), "{message}");
     assert!(
-        message.contains("is not trained: run `dcnet-exp run ") && message.contains("quick.toml --out results` first"),
+        message.contains("is not trained: run `dcnet-exp run ")
+            && message.contains("quick.toml --out results` first"),
         "{message}"
     );
     assert!(!d.join("results/syn").exists());
 
     quick_run(d, &["--no-plots"]);
-    let output = dcnet(d, &[&["run", "experiments/syn.toml", "--no-plots"][..], &set].concat());
+    let output = dcnet(
+        d,
+        &[&["run", "experiments/syn.toml", "--no-plots"][..], &set].concat(),
+    );
     assert!(output.status.success(), "{}", stderr(&output));
     let means = summary(&d.join("results/syn"), 400.0);
     for model in ["EM1", "EM2", "EM3", "EM4", "EM5"] {
         let label = format!("DCNet {model}");
         let row = means.iter().find(|(m, ..)| *m == label);
-        assert!(row.is_some_and(|(_, mean, _)| mean.is_finite()), "{label}: {means:?}");
+        assert!(
+            row.is_some_and(|(_, mean, _)| mean.is_finite()),
+            "{label}: {means:?}"
+        );
     }
 }

@@ -192,6 +192,23 @@ pub fn main() -> Result<(), CliError> {
     }
 }
 
+/// Says, for each figure, where its files went or why it was not drawn.
+fn report_figures(figures: &[crate::report::plots::Written], folder: &Path) {
+    for figure in figures {
+        match &figure.caption {
+            crate::report::plots::Caption::Drawn(_) => eprintln!(
+                "figure {}: {} files in {}",
+                figure.stem,
+                figure.files.len(),
+                folder.display()
+            ),
+            crate::report::plots::Caption::NotApplicable(why) => {
+                eprintln!("figure {}: not drawn, {why}", figure.stem)
+            }
+        }
+    }
+}
+
 /// Whether the spec at `path` declares `kind = "installation"`; another kind is refused.
 fn installation_kind(path: &Path) -> Result<bool, CliError> {
     use crate::installation::spec::KIND;

@@ -1,7 +1,7 @@
 //! `plot` and `compare`: figures and reports drawn from results folders alone, and two
 //! folders set side by side; nothing is re-run.
 
-use super::{CliError, failure, input};
+use super::{CliError, failure, input, report_figures};
 use crate::report::plots::{self, Format, Metric};
 use crate::report::{self, compare};
 use crate::results::read::StoredRun;
@@ -77,22 +77,6 @@ fn remove_stale_partials(folder: &Path) -> Result<(), CliError> {
     crate::files::remove_stale_partials(folder)
         .map(|_| ())
         .map_err(|e| failure(anyhow::Error::new(e).context(folder.display().to_string())))
-}
-
-pub(super) fn report_figures(figures: &[plots::Written], folder: &Path) {
-    for figure in figures {
-        match &figure.caption {
-            plots::Caption::Drawn(_) => eprintln!(
-                "figure {}: {} files in {}",
-                figure.stem,
-                figure.files.len(),
-                folder.display()
-            ),
-            plots::Caption::NotApplicable(why) => {
-                eprintln!("figure {}: not drawn, {why}", figure.stem)
-            }
-        }
-    }
 }
 
 /// Prints the comparison of two results folders and writes it to `out`.

@@ -52,7 +52,7 @@ pub(super) fn plot(results: &Path, out: &Path) -> Result<(), CliError> {
 fn draw(study: &Study, folder: &Path) -> Result<(), CliError> {
     let drawn =
         crate::report::installation::draw_all(study, folder, Format::Both).map_err(failure)?;
-    super::plot::report_figures(&drawn, folder);
+    super::report_figures(&drawn, folder);
     Ok(())
 }
 
