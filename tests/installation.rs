@@ -7,7 +7,7 @@
 mod common;
 
 use dcnet_exp::Vec3;
-use dcnet_exp::data::paired::PairedRecording;
+use dcnet_exp::data::paired::{PairedColumns, PairedFiles, PairedRecording};
 use dcnet_exp::installation::bound::{Noise, TermBound, Tolerances, bound};
 use dcnet_exp::installation::fit::{Fit, TIME_OFFSET_MARGIN_S, fit};
 use dcnet_exp::installation::frames::{
@@ -18,7 +18,6 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use std::f64::consts::PI;
-use std::path::Path;
 
 /// A-KIT's DVL noise as specified.
 const NOISE: Noise = Noise {
@@ -264,42 +263,10 @@ fn on_a_straight_synthetic_segment_the_lever_arm_is_flagged_and_the_bias_is_not(
 // ---------------------------------------------------------------------------------
 // A-KIT
 
-/// The numbers of each row of a CSV file with a header.
-fn read_rows(path: &Path) -> Vec<Vec<f64>> {
-    let mut reader =
-        csv::Reader::from_path(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    reader
-        .records()
-        .map(|record| {
-            let record = record.unwrap();
-            record
-                .iter()
-                .map(|field| field.trim().parse::<f64>().unwrap())
-                .collect()
-        })
-        .collect()
-}
-
-/// Trajectory `n` of A-KIT: DVL (Time, X, Y, Z) and GT (Time, longitude, latitude,
-/// altitude, V North, V East, V Down, roll, pitch, yaw; radians) on the same stamps.
+/// Trajectory `n` of A-KIT, read as the tool reads it.
 fn akit_recording(n: usize) -> PairedRecording {
-    let folder = common::akit().join(format!("Trajectory{n}"));
-    let dvl = read_rows(&folder.join(format!("DVL_trajectory{n}.csv")));
-    let reference = read_rows(&folder.join(format!("GT_trajectory{n}.csv")));
-    assert_eq!(dvl.len(), reference.len());
-    PairedRecording {
-        time_s: dvl.iter().map(|row| row[0]).collect(),
-        dvl_m_s: dvl.iter().map(|row| [row[1], row[2], row[3]]).collect(),
-        velocity_ned_m_s: reference
-            .iter()
-            .map(|row| [row[4], row[5], row[6]])
-            .collect(),
-        attitude_rad: reference
-            .iter()
-            .map(|row| [row[7], row[8], row[9]])
-            .collect(),
-        rate_rad_s: None,
-    }
+    let files = PairedFiles::akit(&common::akit(), n);
+    dcnet_exp::data::paired::read(&files, &PairedColumns::akit()).unwrap()
 }
 
 /// The RMSE of the DVL against `rotate(attitude) · v_n` on the fixed mask.
@@ -413,54 +380,6 @@ fn the_lever_arm_is_flagged_on_the_straight_segments_and_not_on_a_turning_one() 
 /// Prints, for every trajectory, lever arm, time offset and bias with their standard
 /// deviations and flags, and the held-out score of each on the other twelve
 /// (`cargo test --release --test installation -- --ignored --nocapture akit_table`).
-#[test]
-#[ignore = "needs the A-KIT recordings: dcnet-exp data fetch akit"]
-fn akit_table_of_every_calibration_trajectory() {
-    let recordings: Vec<PairedRecording> = (1..=13).map(akit_recording).collect();
-    let none: Vec<f64> = recordings
-        .iter()
-        .map(|r| held_out(&Installation::default(), r).total_m_s)
-        .collect();
-    for (index, recording) in recordings.iter().enumerate() {
-        let (fit, bound) = fit_akit(recording, lever_time_bias());
-        let cells: Vec<String> = (0..bound.names.len())
-            .map(|k| {
-                let unit = if k >= 4 { 100.0 } else { 1.0 };
-                format!("{:+.3}±{:.3}", bound.value[k] * unit, bound.std[k] * unit)
-            })
-            .collect();
-        let others: Vec<usize> = (0..recordings.len()).filter(|&j| j != index).collect();
-        let held: f64 = others
-            .iter()
-            .map(|&j| held_out(&fit.installation, &recordings[j]).total_m_s)
-            .sum::<f64>()
-            / others.len() as f64;
-        let baseline: f64 = others.iter().map(|&j| none[j]).sum::<f64>() / others.len() as f64;
-        let flags: Vec<String> = bound
-            .unseen
-            .iter()
-            .map(|u| format!("{} ({})", u.term, u.why))
-            .collect();
-        eprintln!(
-            "T{:<2} resid {:.2} cm/s | l {} m | τ {} s | b {} cm/s | held-out {:.2} cm/s ({:.3} × none {:.2}) | {}",
-            index + 1,
-            100.0 * (fit.residual_rms_m_s.iter().map(|r| r * r).sum::<f64>() / 3.0).sqrt(),
-            cells[0..3].join(" "),
-            cells[3],
-            cells[4..7].join(" "),
-            100.0 * held,
-            held / baseline,
-            100.0 * baseline,
-            if flags.is_empty() {
-                "seen".to_string()
-            } else {
-                flags.join("; ")
-            },
-        );
-        assert!(fit.termination.contains("Converged") || fit.termination.contains("Orthogonal"));
-    }
-}
-
 /// Every term set fits every trajectory: flat and nearly flat directions are flagged,
 /// never an error. With all 13 terms, the pairs a constant forward speed cannot tell
 /// apart (x scale and x bias, yaw misalignment and y bias) are flagged on T1.
