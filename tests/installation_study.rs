@@ -422,3 +422,87 @@ fn the_dcnet_models_of_a_paper_spec_are_scored_beside_the_other_methods() {
         );
     }
 }
+
+/// A study's folder belongs to its spec file, and a study, a single run and a sweep
+/// never share a folder.
+#[test]
+fn a_study_never_replaces_another_specs_folder_nor_a_runs() {
+    let dir = project(false);
+    let d = dir.path();
+    write_installed(&d.join("data/syn"), 2, &[], INSTALLED, 4);
+    write_spec(d, "syn", "syn", 2, "");
+    let first = dcnet(d, &["run", "experiments/syn.toml", "--no-plots"]);
+    assert!(first.status.success(), "{}", stderr(&first));
+    std::fs::copy(
+        d.join("experiments/syn.toml"),
+        d.join("experiments/other.toml"),
+    )
+    .unwrap();
+    let refused = dcnet(
+        d,
+        &[
+            "run",
+            "experiments/other.toml",
+            "--no-plots",
+            "--set",
+            "noise.dvl_cm_s=3.0",
+        ],
+    );
+    let message = stderr(&refused);
+    assert_eq!(refused.status.code(), Some(1), "{message}");
+    for part in [
+        "results/syn: holds the results of",
+        "experiments/syn.toml",
+        "experiments/other.toml",
+        "--force",
+    ] {
+        assert!(message.contains(part), "{part}: {message}");
+    }
+    let forced = dcnet(
+        d,
+        &[
+            "run",
+            "experiments/other.toml",
+            "--no-plots",
+            "--set",
+            "noise.dvl_cm_s=3.0",
+            "--force",
+        ],
+    );
+    assert!(forced.status.success(), "{}", stderr(&forced));
+
+    // A study named like a paper run's folder, and a paper run named like a study's.
+    quick_run(d, &["--no-plots"]);
+    let message = stderr(&dcnet(
+        d,
+        &[
+            "run",
+            "experiments/syn.toml",
+            "--no-plots",
+            "--set",
+            "name=\"quick\"",
+        ],
+    ));
+    assert!(
+        message.contains("results/quick: holds the results of a single run, and this run of"),
+        "{message}"
+    );
+    assert!(
+        message.contains("is the results of an installation study"),
+        "{message}"
+    );
+    let message = stderr(&dcnet(
+        d,
+        &[
+            "run",
+            "experiments/quick.toml",
+            "--no-plots",
+            "--set",
+            "name=\"syn\"",
+        ],
+    ));
+    assert!(
+        message.contains("results/syn: holds the results of an installation study"),
+        "{message}"
+    );
+}

@@ -24,7 +24,8 @@ use std::path::{Path, PathBuf};
 /// `run` of an installation spec.
 pub(super) fn run(target: &Target, drawing: &Drawing, force: bool) -> Result<(), CliError> {
     let spec = study_spec::load(&target.spec, &target.overrides.set).map_err(input)?;
-    match run_study(&spec, &target.out, force).map_err(input)? {
+    let spec_file = crate::pipeline::owner::recorded(&target.spec, &target.out).unwrap_or_default();
+    match run_study(&spec, &spec_file, &target.out, force).map_err(input)? {
         Outcome::Current(folder) => {
             eprintln!(
                 "nothing to do: the results in {} are current",

@@ -5,7 +5,7 @@
 //! manifest last, each file atomically) and draws its figures.
 //! In: an [`InstallationSpec`] and the output folder. Out: the folder, or why not.
 
-use super::Plan;
+use super::{Plan, owner};
 use crate::Vec3;
 use crate::data::paired;
 use crate::estimators::DcnetEstimator;
@@ -24,8 +24,8 @@ use std::time::{Instant, SystemTime};
 pub enum StudyError {
     #[error(transparent)]
     Recording(#[from] paired::PairedError),
-    #[error("{}: is a file, where the results folder goes; move or remove it", .0.display())]
-    NotAFolder(PathBuf),
+    #[error(transparent)]
+    Owner(#[from] owner::OwnerError),
     #[error("the DCNet models of {}", spec.display())]
     DcnetSpec {
         spec: PathBuf,
@@ -61,15 +61,20 @@ pub enum Outcome {
     },
 }
 
-/// Runs the study of `spec` into `out/<name>/` unless that folder is current (or
-/// `force`).
-pub fn run_study(spec: &InstallationSpec, out: &Path, force: bool) -> Result<Outcome, StudyError> {
+/// Runs the study of `spec`, read from `spec_file` (as a manifest records it, see
+/// [`owner::recorded`]), into `out/<name>/` unless that folder is current (or `force`);
+/// a folder another spec file wrote is refused unless `force`.
+pub fn run_study(
+    spec: &InstallationSpec,
+    spec_file: &str,
+    out: &Path,
+    force: bool,
+) -> Result<Outcome, StudyError> {
     let started_at = SystemTime::now();
     let clock = Instant::now();
     let folder = out.join(&spec.name);
-    if folder.exists() && !folder.is_dir() {
-        return Err(StudyError::NotAFolder(folder));
-    }
+    let spec_sha256 = sha256_hex(spec.resolved_toml.as_bytes());
+    owner::check_study(&folder, out, spec_file, &spec.name, &spec_sha256, force)?;
     let mut segments = Vec::new();
     let mut data_files = Vec::new();
     for (name, files) in &spec.trajectories {
@@ -119,7 +124,7 @@ pub fn run_study(spec: &InstallationSpec, out: &Path, force: bool) -> Result<Out
         &study,
         Manifest {
             name: spec.name.clone(),
-            spec_sha256: sha256_hex(spec.resolved_toml.as_bytes()),
+            spec_sha256,
             git_commit: env!("DCNET_GIT_COMMIT").to_string(),
             crate_version: env!("CARGO_PKG_VERSION").to_string(),
             started_at: humantime::format_rfc3339_seconds(started_at).to_string(),
@@ -135,7 +140,7 @@ pub fn run_study(spec: &InstallationSpec, out: &Path, force: bool) -> Result<Out
             },
             results_key,
             files_sha256: Default::default(),
-            spec_file: String::new(),
+            spec_file: spec_file.to_string(),
         },
     )?;
     Ok(Outcome::Written { folder, study })

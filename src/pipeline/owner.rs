@@ -3,8 +3,8 @@
 //! keeps its owners; a folder copied away from its spec file, where that path leads
 //! to no file, belongs to anyone). A run replaces a folder written from its own spec file (an
 //! edited spec, other `--set` values), but never, without `--force`, one that another
-//! spec file with the same `name` wrote; a single run never writes into a sweep's
-//! folder, nor a sweep into a single run's. In: a plan and one of its points. Out:
+//! spec file with the same `name` wrote; a single run, a sweep and an installation
+//! study never write into a folder that holds another of them. In: a plan and one of its points. Out:
 //! nothing, or an [`OwnerError`] naming both.
 
 use super::{Plan, cache};
@@ -87,18 +87,61 @@ pub fn check(plan: &Plan, p: usize, force: bool) -> Result<(), OwnerError> {
     }
     let spec = plan.spec(p);
     let ours = plan.spec_file.clone().unwrap_or_default();
-    let our_path = resolved(&plan.out, &ours);
-    check_kind(plan, folder, &our_path, &spec.name)?;
+    check_kind(plan, folder, &resolved(&plan.out, &ours), &spec.name)?;
     if force {
         return Ok(());
     }
+    let our_hash = crate::files::sha256_hex(spec.resolved_toml().as_bytes());
+    another_spec(folder, &plan.out, &ours, &spec.name, &our_hash)
+}
+
+/// Refuses, unless `force`, to write an installation study named `name` from the spec
+/// file `ours` (as [`recorded`] gives it) into `folder` when another spec file's study
+/// is there; and, `force` or not, when a paper run or a sweep is.
+pub fn check_study(
+    folder: &Path,
+    out: &Path,
+    ours: &str,
+    name: &str,
+    spec_sha256: &str,
+    force: bool,
+) -> Result<(), OwnerError> {
+    if folder.exists() && !folder.is_dir() {
+        return Err(OwnerError::NotAFolder {
+            folder: folder.to_path_buf(),
+        });
+    }
+    let held = Held::of(folder);
+    if !matches!(held, Held::Nothing | Held::Study) {
+        return Err(OwnerError::OtherKind {
+            folder: folder.to_path_buf(),
+            theirs: held.words(),
+            ours: Held::Study.words(),
+            spec: resolved(out, ours),
+            name: name.to_string(),
+        });
+    }
+    if force {
+        return Ok(());
+    }
+    another_spec(folder, out, ours, name, spec_sha256)
+}
+
+/// Refuses a folder whose manifest records a spec file other than `ours` that still
+/// exists (a folder from before manifests named their spec file, a run that named
+/// none, or a folder copied away from its spec file belongs to anyone).
+fn another_spec(
+    folder: &Path,
+    out: &Path,
+    ours: &str,
+    our_name: &str,
+    our_hash: &str,
+) -> Result<(), OwnerError> {
     let Some(manifest) = read_manifest(folder) else {
         return Ok(());
     };
-    // A folder from before manifests named their spec file, or a run that named none,
-    // belongs to anyone; so does a folder copied away from its spec file, where the
-    // path it records leads to no file.
-    let theirs = resolved(&plan.out, &manifest.spec_file);
+    let theirs = resolved(out, &manifest.spec_file);
+    let our_path = resolved(out, ours);
     if manifest.spec_file.is_empty()
         || ours.is_empty()
         || manifest.spec_file == ours
@@ -107,40 +150,64 @@ pub fn check(plan: &Plan, p: usize, force: bool) -> Result<(), OwnerError> {
     {
         return Ok(());
     }
-    let our_hash = crate::files::sha256_hex(spec.resolved_toml().as_bytes());
     Err(OwnerError::AnotherSpec {
-        folder: folder.clone(),
+        folder: folder.to_path_buf(),
         theirs,
         their_name: manifest.name,
         their_hash: short(&manifest.spec_sha256),
         ours: our_path,
-        our_name: spec.name.clone(),
-        our_hash: short(&our_hash),
+        our_name: our_name.to_string(),
+        our_hash: short(our_hash),
     })
 }
 
-/// Refuses a single run's results in a sweep's folder, and a sweep's points in a
-/// single run's folder.
+/// What a results folder holds.
+enum Held {
+    Nothing,
+    Single,
+    Sweep,
+    Study,
+}
+
+impl Held {
+    fn of(folder: &Path) -> Held {
+        if folder.join(crate::results::installation::HELDOUT).is_file() {
+            Held::Study
+        } else if folder.join(sweep::INDEX).is_file() {
+            Held::Sweep
+        } else if folder.join(results::MANIFEST).is_file() {
+            Held::Single
+        } else {
+            Held::Nothing
+        }
+    }
+
+    fn words(&self) -> &'static str {
+        match self {
+            Held::Nothing => "nothing",
+            Held::Single => "the results of a single run",
+            Held::Sweep => "the points of a sweep",
+            Held::Study => "the results of an installation study",
+        }
+    }
+}
+
+/// Refuses a single run's results in a sweep's or a study's folder, and a sweep's
+/// points in a single run's or a study's folder.
 fn check_kind(plan: &Plan, folder: &Path, spec: &Path, name: &str) -> Result<(), OwnerError> {
-    const SWEEP: &str = "the points of a sweep";
-    const SINGLE: &str = "the results of a single run";
-    let (holder, theirs, ours) = if plan.experiment.is_sweep() {
-        let sweep_folder = folder.parent().unwrap_or(folder);
-        (sweep_folder, SINGLE, SWEEP)
+    let (holder, ours, fits) = if plan.experiment.is_sweep() {
+        (folder.parent().unwrap_or(folder), Held::Sweep, Held::Sweep)
     } else {
-        (folder, SWEEP, SINGLE)
+        (folder, Held::Single, Held::Single)
     };
-    let mark = match plan.experiment.is_sweep() {
-        true => results::MANIFEST,
-        false => sweep::INDEX,
-    };
-    if !holder.join(mark).is_file() {
+    let held = Held::of(holder);
+    if matches!(held, Held::Nothing) || held.words() == fits.words() {
         return Ok(());
     }
     Err(OwnerError::OtherKind {
         folder: holder.to_path_buf(),
-        theirs,
-        ours,
+        theirs: held.words(),
+        ours: ours.words(),
         spec: spec.to_path_buf(),
         name: name.to_string(),
     })
