@@ -72,6 +72,7 @@ fn printed(study: &Study) -> String {
         "held-out RMSE (cm/s)",
         "95 % interval",
         "÷ no calibration",
+        "calibrations",
     ]);
     for row in study.summary.iter().filter(|s| s.window_s == largest) {
         table.add_row([
@@ -79,9 +80,23 @@ fn printed(study: &Study) -> String {
             format!("{:.2}", row.mean_cm_s),
             format!("± {:.2}", row.ci95_cm_s),
             format!("{:.3}", row.ratio),
+            row.calibrations.to_string(),
         ]);
     }
-    format!("held-out trajectories, calibration windows of {largest} s:\n{table}")
+    let mut text = format!("held-out trajectories, calibration windows of {largest} s:\n{table}");
+    if !study.failures.is_empty() {
+        text.push_str(&format!(
+            "\n{} fits failed, each leaving its method one calibration trajectory fewer at its window (failures.parquet; report.md lists them), such as:",
+            study.failures.len()
+        ));
+        for failure in study.failures.iter().take(3) {
+            text.push_str(&format!(
+                "\n  {} on {} at {} s: {}",
+                failure.method, failure.calibration, failure.window_s, failure.why
+            ));
+        }
+    }
+    text
 }
 
 /// `validate` of an installation spec: its faults, or what it would compute.

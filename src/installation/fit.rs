@@ -31,6 +31,11 @@ pub const TIME_OFFSET_SCAN_STEP_S: f64 = 0.25;
 /// Half the step of the central difference that gives the reference's slope, s.
 pub const SLOPE_STEP_S: f64 = 1e-4;
 
+/// LM's patience: it gives up after this many times (parameters + 1) evaluations. A
+/// pair of terms a window hardly tells apart (a scale and a bias at constant speed)
+/// makes a long, flat valley, which LM's default of 100 does not always cross.
+const PATIENCE: usize = 2000;
+
 /// The relative tolerances that stop LM (on the cost, the step and the gradient).
 const TOLERANCE: f64 = 1e-12;
 
@@ -180,6 +185,7 @@ fn minimize(problem: Problem<'_>) -> Result<(Problem<'_>, String), FitError> {
         .with_ftol(TOLERANCE)
         .with_xtol(TOLERANCE)
         .with_gtol(TOLERANCE)
+        .with_patience(PATIENCE)
         .minimize(problem);
     let termination = format!("{:?}", report.termination);
     if report.termination.was_successful() {

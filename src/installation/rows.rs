@@ -47,6 +47,19 @@ pub struct SummaryRow {
     pub ci95_cm_s: f64,
     /// The mean divided by no calibration's on the same pairs.
     pub ratio: f64,
+    /// How many calibration trajectories the mean is over: fewer than the study's
+    /// where a fit failed (see [`Study::failures`]).
+    pub calibrations: usize,
+}
+
+/// A calibration window on which a method's fit failed, and why: that window gives
+/// the method no held-out rows and no terms.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitFailure {
+    pub method: String,
+    pub calibration: String,
+    pub window_s: f64,
+    pub why: String,
 }
 
 /// One sample of the residual figure: a held-out trajectory's DVL against the
@@ -72,4 +85,5 @@ pub struct Study {
     pub terms: Vec<TermRow>,
     pub summary: Vec<SummaryRow>,
     pub trace: Vec<TracePoint>,
+    pub failures: Vec<FitFailure>,
 }

@@ -11,7 +11,7 @@
 use super::bound::{Noise, TermBound, bound};
 use super::fit::{TIME_OFFSET_MARGIN_S, fit};
 use super::frames::Reference;
-use super::rows::{HeldOutRow, NO_CALIBRATION, Study, SummaryRow, TermRow};
+use super::rows::{FitFailure, HeldOutRow, NO_CALIBRATION, Study, SummaryRow, TermRow};
 use super::spec::{InstallationSpec, Method, TermName};
 use super::terms::{Installation, PerAxis, TermSet, score};
 use crate::Vec3;
@@ -150,13 +150,20 @@ pub fn run(
     let cases: Vec<(usize, f64)> = (0..segments.len())
         .flat_map(|c| spec.windows_s.iter().map(move |&w| (c, w)))
         .collect();
-    let per_case: Vec<(Vec<HeldOutRow>, Vec<TermRow>, Vec<Estimated>)> = cases
+    #[allow(clippy::type_complexity)]
+    let per_case: Vec<(
+        Vec<HeldOutRow>,
+        Vec<TermRow>,
+        Vec<Estimated>,
+        Vec<FitFailure>,
+    )> = cases
         .par_iter()
         .map(|&(c, window_s)| {
             let calibration = &segments[c];
             let (range, _) = calibration.first_seconds(window_s);
             let mut heldout = Vec::new();
             let mut terms = Vec::new();
+            let mut failures = Vec::new();
             let mut methods: Vec<(String, Estimate)> = vec![(
                 NO_CALIBRATION.to_string(),
                 Estimate {
@@ -196,7 +203,15 @@ pub fn run(
                                 installation: fitted.installation,
                                 bound: Some(bound(&fitted, noise, &tolerances)),
                             },
-                            Err(_) => continue,
+                            Err(why) => {
+                                failures.push(FitFailure {
+                                    method: method.label(),
+                                    calibration: calibration.name.clone(),
+                                    window_s,
+                                    why: why.to_string(),
+                                });
+                                continue;
+                            }
                         }
                     }
                 };
@@ -261,16 +276,18 @@ pub fn run(
                     });
                 }
             }
-            (heldout, terms, estimated)
+            (heldout, terms, estimated, failures)
         })
         .collect();
     let mut heldout = Vec::new();
     let mut terms = Vec::new();
     let mut estimated = Vec::new();
-    for (h, t, e) in per_case {
+    let mut failures = Vec::new();
+    for (h, t, e, f) in per_case {
         heldout.extend(h);
         terms.extend(t);
         estimated.extend(e);
+        failures.extend(f);
     }
     let summary = summarize(&heldout, &spec.windows_s);
     let study = Study {
@@ -278,6 +295,7 @@ pub fn run(
         terms,
         summary,
         trace: Vec::new(),
+        failures,
     };
     (study, estimated)
 }
@@ -328,6 +346,7 @@ pub fn summarize(heldout: &[HeldOutRow], windows_s: &[f64]) -> Vec<SummaryRow> {
                 mean_cm_s: mean,
                 ci95_cm_s: ci95,
                 ratio: mean / none,
+                calibrations: values.len(),
             });
         }
     }

@@ -26,6 +26,14 @@ pub enum StudyError {
     Recording(#[from] paired::PairedError),
     #[error(transparent)]
     Owner(#[from] owner::OwnerError),
+    #[error(
+        "{method} could not be fitted on any calibration trajectory with a window of {window_s} s ({why}); nothing is written: give calibration.window_s values that leave samples for its terms, or fewer terms"
+    )]
+    NoFit {
+        method: String,
+        window_s: f64,
+        why: String,
+    },
     #[error("the DCNet models of {}", spec.display())]
     DcnetSpec {
         spec: PathBuf,
@@ -100,7 +108,7 @@ pub fn run_study(
             &spec.resolved_toml,
             data_files.iter().map(|f| &f.sha256).collect::<Vec<_>>(),
             dcnets.iter().map(|(_, key)| key).collect::<Vec<_>>(),
-            env!("CARGO_PKG_VERSION"),
+            env!("DCNET_GIT_COMMIT"),
         ))
         .expect("strings serialize")
         .as_bytes(),
@@ -116,6 +124,7 @@ pub fn run_study(
         (dvl.len() >= estimator.window).then(|| estimator.estimate(dvl, reference))
     };
     let (mut study, estimates) = study::run(spec, &segments, &dcnet);
+    no_window_without_a_fit(spec, &study)?;
     study.trace = trace(&study, &estimates, &segments);
     let protocol_s = clock.elapsed().as_secs_f64() - load_s;
     write_folder(
@@ -144,6 +153,32 @@ pub fn run_study(
         },
     )?;
     Ok(Outcome::Written { folder, study })
+}
+
+/// Refuses a study in which a method fitted on no calibration trajectory at some
+/// window: it would have no row at all there.
+fn no_window_without_a_fit(spec: &InstallationSpec, study: &Study) -> Result<(), StudyError> {
+    for &window_s in &spec.windows_s {
+        for method in &spec.methods {
+            let label = method.label();
+            let fitted = study
+                .summary
+                .iter()
+                .any(|row| row.method == label && row.window_s == window_s);
+            let failure = study
+                .failures
+                .iter()
+                .find(|f| f.method == label && f.window_s == window_s);
+            if let (false, Some(failure)) = (fitted, failure) {
+                return Err(StudyError::NoFit {
+                    method: label,
+                    window_s,
+                    why: failure.why.clone(),
+                });
+            }
+        }
+    }
+    Ok(())
 }
 
 /// `paths` without repeats (a recording whose DVL and reference share one file).

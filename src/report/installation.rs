@@ -599,6 +599,7 @@ pub(crate) mod tests {
             mean_cm_s,
             ci95_cm_s,
             ratio,
+            calibrations: 3,
         };
         let term = |calibration: &str, term: &str, value, std, unseen: &str| TermRow {
             method: "installation lever+offset".into(),
@@ -631,6 +632,7 @@ pub(crate) mod tests {
                 summary("installation lever+offset", 400.0, 6.0, 0.4, 0.398),
             ],
             trace: Vec::new(),
+            failures: Vec::new(),
         }
     }
 
@@ -828,6 +830,7 @@ pub(crate) mod tests {
                     mean_cm_s: mean,
                     ci95_cm_s: ci,
                     ratio: mean / reference,
+                    calibrations: 13,
                 });
             }
         }
@@ -904,6 +907,7 @@ pub(crate) mod tests {
             terms,
             summary,
             trace,
+            failures: Vec::new(),
         }
     }
 
@@ -943,6 +947,7 @@ pub(crate) mod tests {
             terms: vec![],
             summary: vec![],
             trace: vec![],
+            failures: vec![],
         };
         let written = draw_all(&empty, temporary.path(), Format::Png).unwrap();
         assert!(written.iter().all(|w| w.files.is_empty()), "{written:?}");

@@ -10,7 +10,7 @@
 
 use super::read::{Batch, ColumnError, ReadError, read_rows};
 use super::{ResultsError, batch, floats, strings, table_bytes as parquet_table_bytes};
-use crate::installation::rows::{HeldOutRow, Study, SummaryRow, TermRow, TracePoint};
+use crate::installation::rows::{FitFailure, HeldOutRow, Study, SummaryRow, TermRow, TracePoint};
 use arrow_array::RecordBatch;
 use std::path::Path;
 
@@ -18,8 +18,9 @@ pub const HELDOUT: &str = "heldout.parquet";
 pub const TERMS: &str = "terms.parquet";
 pub const SUMMARY: &str = "summary.parquet";
 pub const TRACE: &str = "trace.parquet";
+pub const FAILURES: &str = "failures.parquet";
 /// The study's tables, in the order they are written.
-pub const TABLES: [&str; 4] = [HELDOUT, TERMS, SUMMARY, TRACE];
+pub const TABLES: [&str; 5] = [HELDOUT, TERMS, SUMMARY, TRACE, FAILURES];
 
 /// Each table of `study` as (file name, Parquet bytes), in [`TABLES`] order, for the
 /// caller to write atomically before the manifest.
@@ -29,6 +30,7 @@ pub fn table_bytes(study: &Study) -> Result<Vec<(&'static str, Vec<u8>)>, Result
         terms_batch(&study.terms),
         summary_batch(&study.summary),
         trace_batch(&study.trace),
+        failures_batch(&study.failures),
     ];
     TABLES
         .iter()
@@ -51,11 +53,14 @@ pub fn read_study(folder: &Path) -> Result<Study, ReadError> {
     let summary = read_rows(&path, &schema, summary_rows)?;
     let (path, schema) = read(TRACE, trace_batch(&[]));
     let trace = read_rows(&path, &schema, trace_rows)?;
+    let (path, schema) = read(FAILURES, failures_batch(&[]));
+    let failures = read_rows(&path, &schema, failure_rows)?;
     Ok(Study {
         heldout,
         terms,
         summary,
         trace,
+        failures,
     })
 }
 
@@ -94,7 +99,39 @@ pub fn summary_batch(rows: &[SummaryRow]) -> RecordBatch {
         ("rmse_cm_s", floats(rows, |r| r.mean_cm_s)),
         ("rmse_ci_cm_s", floats(rows, |r| r.ci95_cm_s)),
         ("ratio", floats(rows, |r| r.ratio)),
+        ("calibrations", uints(rows, |r| r.calibrations)),
     ])
+}
+
+/// One row per method × calibration trajectory × window whose fit failed.
+pub fn failures_batch(rows: &[FitFailure]) -> RecordBatch {
+    batch(vec![
+        ("method", strings(rows, |r| r.method.clone())),
+        ("calibration", strings(rows, |r| r.calibration.clone())),
+        ("window_s", floats(rows, |r| r.window_s)),
+        ("why", strings(rows, |r| r.why.clone())),
+    ])
+}
+
+fn uints<T>(rows: &[T], f: impl Fn(&T) -> usize) -> arrow_array::ArrayRef {
+    std::sync::Arc::new(arrow_array::UInt32Array::from_iter_values(
+        rows.iter().map(|r| f(r) as u32),
+    ))
+}
+
+fn failure_rows(batch: &Batch) -> Result<Vec<FitFailure>, ColumnError> {
+    let method = batch.strings("method")?;
+    let calibration = batch.strings("calibration")?;
+    let window_s = batch.floats("window_s")?;
+    let why = batch.strings("why")?;
+    Ok((0..method.len())
+        .map(|i| FitFailure {
+            method: method[i].clone(),
+            calibration: calibration[i].clone(),
+            window_s: window_s[i],
+            why: why[i].clone(),
+        })
+        .collect())
 }
 
 /// One row per sample of the trajectory the residual figure draws.
@@ -167,6 +204,7 @@ fn summary_rows(batch: &Batch) -> Result<Vec<SummaryRow>, ColumnError> {
     let mean = batch.floats("rmse_cm_s")?;
     let ci95 = batch.floats("rmse_ci_cm_s")?;
     let ratio = batch.floats("ratio")?;
+    let calibrations = batch.uints("calibrations")?;
     Ok((0..method.len())
         .map(|i| SummaryRow {
             method: method[i].clone(),
@@ -174,6 +212,7 @@ fn summary_rows(batch: &Batch) -> Result<Vec<SummaryRow>, ColumnError> {
             mean_cm_s: mean[i],
             ci95_cm_s: ci95[i],
             ratio: ratio[i],
+            calibrations: calibrations[i],
         })
         .collect())
 }
@@ -250,6 +289,13 @@ mod tests {
                 mean_cm_s: 15.07,
                 ci95_cm_s: 2.3,
                 ratio: 1.0,
+                calibrations: 13,
+            }],
+            failures: vec![FitFailure {
+                method: "installation all".into(),
+                calibration: "T12".into(),
+                window_s: 50.0,
+                why: "the fit did not converge: LostPatience".into(),
             }],
             trace: (0..3)
                 .map(|i| TracePoint {
@@ -294,6 +340,7 @@ mod tests {
             terms: vec![],
             summary: vec![],
             trace: vec![],
+            failures: vec![],
         };
         write(folder.path(), &table_bytes(&empty).unwrap());
         assert_eq!(read_study(folder.path()).unwrap(), empty);

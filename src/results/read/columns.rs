@@ -91,7 +91,7 @@ impl Batch<'_> {
         self.column::<Float64Array>(name).iter().collect()
     }
 
-    pub(super) fn uints(&self, name: &str) -> Result<Vec<usize>, ColumnError> {
+    pub(crate) fn uints(&self, name: &str) -> Result<Vec<usize>, ColumnError> {
         self.no_nulls(name)?;
         Ok(self
             .column::<UInt32Array>(name)
