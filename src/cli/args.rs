@@ -114,7 +114,7 @@ pub(super) enum Command {
         )]
         terms: Vec<String>,
         /// Calibrate on the first SECONDS of the recording [default: all of it]
-        #[arg(long, value_name = "SECONDS")]
+        #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
         window_s: Option<f64>,
         /// The DVL's white noise per axis, cm/s, for the bound
         #[arg(long, default_value_t = 2.0)]

@@ -9,7 +9,7 @@ use super::args::{Drawing, Target};
 use super::{CliError, failure, input};
 use crate::data::paired::{self, PairedColumns, PairedFiles};
 use crate::installation::bound::{Noise, TermBound, bound};
-use crate::installation::fit::{TIME_OFFSET_MARGIN_S, fit};
+use crate::installation::fit::{Fit, TIME_OFFSET_MARGIN_S, fit};
 use crate::installation::frames::Reference;
 use crate::installation::rows::Study;
 use crate::installation::spec::{self as study_spec, ObservabilityFile, TermName};
@@ -102,6 +102,9 @@ fn printed(study: &Study) -> String {
 /// `validate` of an installation spec: its faults, or what it would compute.
 pub(super) fn validate(path: &Path, set: &[String]) -> Result<(), CliError> {
     let spec = study_spec::load(path, set).map_err(input)?;
+    for (_, files) in &spec.trajectories {
+        paired::read(files, &spec.columns).map_err(input)?;
+    }
     println!(
         "{}: ok (an installation study: {} trajectories, {} windows, {} methods)",
         path.display(),
@@ -143,9 +146,11 @@ fn columns(path: Option<&Path>) -> Result<PairedColumns, CliError> {
 /// cannot show and why, and the RMSE against the reference before and after.
 fn printed_calibration(
     bound: &TermBound,
-    samples: usize,
+    fitted: &Fit,
+    (scored, recorded): (usize, usize),
     before: Option<AxisRmse>,
     after: Option<AxisRmse>,
+    noise: Noise,
 ) -> String {
     let mut table = Table::new();
     table.load_preset(ASCII_MARKDOWN);
@@ -160,7 +165,16 @@ fn printed_calibration(
             seen.to_string(),
         ]);
     }
-    let mut text = format!("calibrated on {samples} samples\n{table}\n");
+    let residual = fitted.residual_rms_m_s.map(|r| 100.0 * r);
+    let assumed = 100.0 * (noise.dvl_m_s.powi(2) + noise.reference_m_s.powi(2)).sqrt();
+    let mut text = format!(
+        "calibrated on {} samples (those {TIME_OFFSET_MARGIN_S} s inside the reference)\n{table}\n",
+        fitted.sample_count
+    );
+    text.push_str(&format!(
+        "the standard deviations assume white noise of {assumed:.2} cm/s per axis; the fit leaves {:.2}, {:.2}, {:.2} cm/s (x, y, z): where the two differ, or the noise is not white, they are off by about as much\n",
+        residual[0], residual[1], residual[2]
+    ));
     for unseen in &bound.unseen {
         text.push_str(&format!("not seen here: {}: {}\n", unseen.term, unseen.why));
     }
@@ -175,7 +189,7 @@ fn printed_calibration(
         None => "no sample inside the reference".into(),
     };
     text.push_str(&format!(
-        "RMSE against the reference, body frame, on the whole recording: {} before, {} after",
+        "RMSE against the reference, body frame, on the {scored} of {recorded} samples {TIME_OFFSET_MARGIN_S} s inside it: {} before, {} after",
         rmse(before),
         rmse(after)
     ));
@@ -184,6 +198,27 @@ fn printed_calibration(
 
 /// `calibrate`: the terms of one recording, their bound, and the recording corrected.
 pub(super) fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
+    let refuse = |message: String| Err(input(anyhow::anyhow!(message)));
+    if let Some((_, message)) = study_spec::term_list_faults(args.terms).first() {
+        return refuse(format!("--terms: {message}"));
+    }
+    if !(args.dvl_noise_cm_s.is_finite() && args.dvl_noise_cm_s > 0.0) {
+        return refuse(format!(
+            "--dvl-noise-cm-s {}: give a positive number: the bound divides by it",
+            args.dvl_noise_cm_s
+        ));
+    }
+    if !(args.reference_noise_cm_s.is_finite() && args.reference_noise_cm_s >= 0.0) {
+        return refuse(format!(
+            "--reference-noise-cm-s {}: give zero or a positive number",
+            args.reference_noise_cm_s
+        ));
+    }
+    if let Some(w) = args.window_s
+        && !(w.is_finite() && w > 0.0)
+    {
+        return refuse(format!("--window-s {w}: give a positive number of seconds"));
+    }
     let files = PairedFiles {
         dvl: args.dvl.to_path_buf(),
         reference: args.reference.unwrap_or(args.dvl).to_path_buf(),
@@ -202,7 +237,14 @@ pub(super) fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
         &reference,
         terms,
     )
-    .map_err(input)?;
+    .map_err(|error| {
+        input(anyhow::anyhow!(
+            "{}: calibrating {} on {} samples: {error}; a window too short for its terms, or terms it cannot tell apart (a scale and a bias at constant speed, say), fail this way: give a longer --window-s or fewer --terms",
+            args.dvl.display(),
+            args.terms.iter().map(|t| format!("{t:?}")).collect::<Vec<_>>().join(", "),
+            end
+        ))
+    })?;
     let tolerances = ObservabilityFile::default().tolerances();
     let noise = Noise {
         dvl_m_s: args.dvl_noise_cm_s / 100.0,
@@ -210,6 +252,7 @@ pub(super) fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
     };
     let bounded = bound(&fitted, noise, &tolerances);
     let all = reference.interior(&recording.time_s, TIME_OFFSET_MARGIN_S);
+    let all_samples = (all.len(), recording.time_s.len());
     let before = score(
         &Default::default(),
         &recording.time_s,
@@ -224,7 +267,10 @@ pub(super) fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
         &reference,
         all,
     );
-    println!("{}", printed_calibration(&bounded, end, before, after));
+    println!(
+        "{}",
+        printed_calibration(&bounded, &fitted, all_samples, before, after, noise)
+    );
     let corrected = crate::results::corrected::corrected_samples(
         &fitted.installation,
         &recording.time_s,

@@ -54,6 +54,29 @@ impl std::str::FromStr for TermName {
     }
 }
 
+/// What is wrong with a list of terms, each with the index it is at (`None` for the
+/// list): empty, a term listed twice, or a term with its per-axis form.
+pub fn term_list_faults(terms: &[TermName]) -> Vec<(Option<usize>, String)> {
+    let mut faults = Vec::new();
+    if terms.is_empty() {
+        faults.push((None, "is empty: name at least one term (scale, scale_per_axis, misalignment, lever_arm, time_offset, bias, bias_scalar)".to_string()));
+    }
+    let has = |term| terms.contains(&term);
+    if has(TermName::Scale) && has(TermName::ScalePerAxis) {
+        faults.push((None, "lists scale and scale_per_axis: give one".to_string()));
+    }
+    if has(TermName::Bias) && has(TermName::BiasScalar) {
+        faults.push((None, "lists bias and bias_scalar: give one".to_string()));
+    }
+    let mut seen = HashSet::new();
+    for (j, term) in terms.iter().enumerate() {
+        if !seen.insert(term) {
+            faults.push((Some(j), format!("{term:?} is listed twice")));
+        }
+    }
+    faults
+}
+
 /// The file as written.
 #[derive(Debug, Clone, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -343,30 +366,12 @@ fn check(
                 format!("{:?} is defined twice", model.name),
             );
         }
-        if model.terms.is_empty() {
-            fault(format!("{key}.terms"), "is empty: name at least one term (scale, scale_per_axis, misalignment, lever_arm, time_offset, bias, bias_scalar)".into());
-        }
-        let has = |term| model.terms.contains(&term);
-        if has(TermName::Scale) && has(TermName::ScalePerAxis) {
-            fault(
-                format!("{key}.terms"),
-                "lists scale and scale_per_axis: give one".into(),
-            );
-        }
-        if has(TermName::Bias) && has(TermName::BiasScalar) {
-            fault(
-                format!("{key}.terms"),
-                "lists bias and bias_scalar: give one".into(),
-            );
-        }
-        let mut seen = HashSet::new();
-        for (j, term) in model.terms.iter().enumerate() {
-            if !seen.insert(term) {
-                fault(
-                    format!("{key}.terms[{j}]"),
-                    format!("{term:?} is listed twice"),
-                );
-            }
+        for (at, message) in term_list_faults(&model.terms) {
+            let key = match at {
+                Some(j) => format!("{key}.terms[{j}]"),
+                None => format!("{key}.terms"),
+            };
+            fault(key, message);
         }
         methods.push(Method::Installation {
             name: model.name.clone(),
