@@ -256,6 +256,10 @@ fn decimals(std: f64) -> usize {
 /// it ([`table_unit`]) and the name without its unit suffix:
 /// `lever_arm_x_m` → ("lever arm x", "m", 1), `bias_x_m_s` → ("bias x", "cm/s", 100),
 /// `misalignment_x_rad` → degrees, `scale_x` → %.
+pub(crate) fn readable_term(term: &str) -> (String, &'static str, f64) {
+    readable(term)
+}
+
 fn readable(term: &str) -> (String, &'static str, f64) {
     let (factor, unit) = table_unit(term);
     let stem = ["_m_s", "_rad", "_m", "_s"]
