@@ -225,7 +225,9 @@ fn terms_section(a: &[TermRow], b: &[TermRow], out: &mut String) {
             let difference = match (mean_a, mean_b) {
                 (Some((va, _)), Some((vb, _))) => {
                     let d = vb - va;
-                    if d >= 0.0 {
+                    if d == 0.0 {
+                        "0".into()
+                    } else if d > 0.0 {
                         format!("+{}", three_digits(d))
                     } else {
                         three_digits(d)
