@@ -25,6 +25,12 @@ const INSTALLATION_COLORS: [RGBColor; 5] = [
 /// are drawn.
 const METHOD_OFFSET_SHARE: f64 = 0.006;
 
+/// How far beside its window the `index`th of `count` methods is drawn, in seconds of
+/// the window axis spanning `span_s`: the methods centred on the window, in order.
+fn method_offset_s(index: usize, count: usize, span_s: f64) -> f64 {
+    (index as f64 - 0.5 * (count as f64 - 1.0)) * METHOD_OFFSET_SHARE * span_s
+}
+
 /// How a method of the study is drawn: its look and its marker (none for the
 /// reference). `installation` counts the installation models listed before it.
 pub fn method_look(method: &str, installation: usize) -> (Look, Option<Marker>) {
@@ -97,8 +103,7 @@ pub fn installation_windows(study: &Study) -> PlotResult<Outcome> {
     let x = Scale::linear((first - pad)..(last + pad));
     // Each method's points and bars sit a little beside the window, in the order of
     // the legend, so that intervals of equal windows do not hide one another.
-    let step = METHOD_OFFSET_SHARE * (last - first);
-    let offset = |index: usize| (index as f64 - 0.5 * (methods.len() as f64 - 1.0)) * step;
+    let offset = |index: usize| method_offset_s(index, methods.len(), last - first);
     // The means decide the axis: logarithmic when they span a decade, as the blown-up
     // short windows of the paper's least squares make them, so that no calibration,
     // the paper's methods and the installation models each keep a height of their own.
@@ -175,6 +180,20 @@ pub fn installation_windows(study: &Study) -> PlotResult<Outcome> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn methods_sit_beside_their_window_centred_on_it() {
+        // Three methods over windows 50 to 400 s: 2.1 s apart, the middle one on it.
+        let offsets: Vec<f64> = (0..3).map(|i| method_offset_s(i, 3, 350.0)).collect();
+        assert!((offsets[0] + 2.1).abs() < 1e-12 && offsets[1] == 0.0);
+        assert!((offsets[2] - 2.1).abs() < 1e-12);
+        // Twelve methods: the outermost 11.55 s each side, a thirtieth of the span.
+        assert!((method_offset_s(11, 12, 350.0) - 11.55).abs() < 1e-9);
+        assert_eq!(
+            method_offset_s(0, 12, 350.0),
+            -method_offset_s(11, 12, 350.0)
+        );
+    }
 
     #[test]
     fn the_paper_methods_keep_their_looks_and_installation_models_have_their_own() {
