@@ -87,9 +87,32 @@ pub(super) fn compare_folders(first: &Path, second: &Path, out: &Path) -> Result
             out.display()
         )));
     }
-    let first = compare::read(first).map_err(input)?;
-    let second = compare::read(second).map_err(input)?;
-    let markdown = compare::render(&first, &second);
+    let markdown = match (
+        compare::installation::is_study(first),
+        compare::installation::is_study(second),
+    ) {
+        (true, true) => {
+            let first = compare::installation::read(first).map_err(input)?;
+            let second = compare::installation::read(second).map_err(input)?;
+            compare::installation::render(&first, &second)
+        }
+        (true, false) | (false, true) => {
+            let (study, run) = if compare::installation::is_study(first) {
+                (first, second)
+            } else {
+                (second, first)
+            };
+            return Err(input(compare::CompareError::StudyAndRun {
+                study: study.to_path_buf(),
+                run: run.to_path_buf(),
+            }));
+        }
+        (false, false) => {
+            let first = compare::read(first).map_err(input)?;
+            let second = compare::read(second).map_err(input)?;
+            compare::render(&first, &second)
+        }
+    };
     print!("{markdown}");
     compare::write(out, &markdown).map_err(failure)?;
     eprintln!("comparison written to {}", out.display());

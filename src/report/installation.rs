@@ -10,10 +10,12 @@
 //! (`plots::figures::installation_*`) as a run's are written.
 
 use crate::installation::rows::{NO_CALIBRATION, Study, SummaryRow, TermRow};
+use crate::installation::study::table_unit;
 use crate::report::plots::canvas::Outcome;
 use crate::report::plots::figures::{
     installation_matrix, installation_residual, installation_windows,
 };
+use crate::report::plots::scale::three_digits;
 use crate::report::plots::{Format, PlotError, Written, render, write_figures};
 use crate::report::table::{RmseValue, Signs};
 use comfy_table::{Table as MarkdownTable, presets::ASCII_MARKDOWN};
@@ -250,24 +252,65 @@ fn decimals(std: f64) -> usize {
 }
 
 /// A term's name for people and its unit, and the factor from the stored value (SI,
-/// radians, a fraction for a scale) to that unit, read from the name's suffix:
+/// radians, a fraction for a scale) to that unit, the unit as the study's tables give
+/// it ([`table_unit`]) and the name without its unit suffix:
 /// `lever_arm_x_m` → ("lever arm x", "m", 1), `bias_x_m_s` → ("bias x", "cm/s", 100),
 /// `misalignment_x_rad` → degrees, `scale_x` → %.
+pub(crate) fn readable_term(term: &str) -> (String, &'static str, f64) {
+    readable(term)
+}
+
 fn readable(term: &str) -> (String, &'static str, f64) {
-    let (stem, unit, factor) = if let Some(stem) = term.strip_suffix("_m_s") {
-        (stem, "cm/s", 100.0)
-    } else if let Some(stem) = term.strip_suffix("_rad") {
-        (stem, "deg", 180.0 / std::f64::consts::PI)
-    } else if let Some(stem) = term.strip_suffix("_m") {
-        (stem, "m", 1.0)
-    } else if let Some(stem) = term.strip_suffix("_s") {
-        (stem, "s", 1.0)
-    } else if term.starts_with("scale") {
-        (term, "%", 100.0)
-    } else {
-        (term, "", 1.0)
-    };
+    let (factor, unit) = table_unit(term);
+    let stem = ["_m_s", "_rad", "_m", "_s"]
+        .iter()
+        .find_map(|suffix| term.strip_suffix(suffix))
+        .filter(|_| !term.starts_with("scale"))
+        .unwrap_or(term);
     (stem.replace('_', " "), unit, factor)
+}
+
+/// A value of a reason in its table unit: three significant digits, trailing zeros
+/// dropped (0.136, 0.1, 1.02).
+fn reason_number(value: f64) -> String {
+    let text = three_digits(value);
+    if text.contains('.') && !text.contains('e') {
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        text
+    }
+}
+
+/// Why a term is not seen, as the bound stored it ("standard deviation 1.361e-1 above
+/// its tolerance 1.000e-1; correlated -0.969 with bias_y_m_s"), in the term's table
+/// unit and with the other terms' names for people ("standard deviation 0.136 m above
+/// its tolerance 0.1 m, correlated -0.969 with bias y"). A reason of another form is
+/// kept as it is.
+fn readable_why(term: &str, why: &str) -> String {
+    let (_, unit, factor) = readable(term);
+    let name = |other: &str| readable(other).0;
+    let reason = |reason: &str| -> Option<String> {
+        if let Some(rest) = reason.strip_prefix("standard deviation ") {
+            let (std, tolerance) = rest.split_once(" above its tolerance ")?;
+            let [std, tolerance] = [std, tolerance].map(|v| v.trim().parse::<f64>().ok());
+            return Some(format!(
+                "standard deviation {} {unit} above its tolerance {} {unit}",
+                reason_number(factor * std?),
+                reason_number(factor * tolerance?)
+            ));
+        }
+        if let Some(rest) = reason.strip_prefix("correlated ") {
+            let (correlation, other) = rest.split_once(" with ")?;
+            return Some(format!("correlated {correlation} with {}", name(other)));
+        }
+        let others = reason.strip_prefix("flat together with ")?;
+        let others: Vec<String> = others.split(", ").map(name).collect();
+        Some(format!("flat together with {}", others.join(", ")))
+    };
+    why.split("; ")
+        .map(|part| reason(part).unwrap_or_else(|| part.to_string()))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// `name (unit)`, or the name alone.
@@ -319,6 +362,13 @@ fn sections(study: &Study) -> Vec<Section> {
         return Vec::new();
     };
     let methods = methods(study);
+    let calibrations: Vec<&str> = crate::first_seen(
+        study
+            .terms
+            .iter()
+            .filter(|r| r.window_s == largest)
+            .map(|r| r.calibration.as_str()),
+    );
     let mut sections = vec![heldout_section(study, &methods, largest)];
     if windows.len() > 1 {
         sections.push(windows_section(study, &methods, &windows));
@@ -330,7 +380,20 @@ fn sections(study: &Study) -> Vec<Section> {
             .filter(|r| r.method == *method && r.window_s == largest)
             .collect();
         if !rows.is_empty() {
-            sections.push(terms_section(method, largest, &rows));
+            let mut section = terms_section(method, largest, &rows);
+            let missing: Vec<&str> = calibrations
+                .iter()
+                .copied()
+                .filter(|c| !rows.iter().any(|r| r.calibration == *c))
+                .collect();
+            if !missing.is_empty() {
+                section.table.notes.push(format!(
+                    "No estimate on {}: the fit of {method} failed there, so {} in none of its held-out means either.",
+                    missing.join(", "),
+                    if missing.len() == 1 { "it is" } else { "they are" }
+                ));
+            }
+            sections.push(section);
         }
     }
     sections
@@ -419,7 +482,7 @@ fn terms_section(method: &str, window_s: f64, rows: &[&TermRow]) -> Section {
                 Some(r) => {
                     let (name, _, factor) = readable(term);
                     if !r.unseen.is_empty() {
-                        unseen.push(format!("{name}: {}", r.unseen));
+                        unseen.push(format!("{name} ({})", readable_why(term, &r.unseen)));
                     }
                     Entry::Term {
                         value: factor * r.value,
@@ -619,7 +682,13 @@ pub(crate) mod tests {
                 term("T2", "lever_arm_x_m", -1.89, 0.017, ""),
                 term("T2", "time_offset_s", 1.51, 0.018, ""),
                 term("T2", "bias_y_m_s", 0.0078, 0.001, ""),
-                term("T12", "lever_arm_x_m", -1.72, 0.36, "σ 0.36 m > 0.1 m"),
+                term(
+                    "T12",
+                    "lever_arm_x_m",
+                    -1.72,
+                    0.36,
+                    "standard deviation 3.600e-1 above its tolerance 1.000e-1",
+                ),
                 term("T12", "time_offset_s", 0.56, 0.038, ""),
                 term("T12", "bias_y_m_s", 0.0078, 0.001, ""),
             ],
@@ -634,6 +703,50 @@ pub(crate) mod tests {
             trace: Vec::new(),
             failures: Vec::new(),
         }
+    }
+
+    #[test]
+    fn why_a_term_is_not_seen_reads_in_its_table_unit() {
+        assert_eq!(
+            readable_why(
+                "lever_arm_z_m",
+                "standard deviation 1.361e-1 above its tolerance 1.000e-1"
+            ),
+            "standard deviation 0.136 m above its tolerance 0.1 m"
+        );
+        assert_eq!(
+            readable_why(
+                "lever_arm_x_m",
+                "standard deviation 4.081e-1 above its tolerance 1.000e-1; correlated -0.969 with bias_y_m_s"
+            ),
+            "standard deviation 0.408 m above its tolerance 0.1 m, correlated -0.969 with bias y"
+        );
+        assert_eq!(
+            readable_why(
+                "bias_z_m_s",
+                "standard deviation 1.019e-2 above its tolerance 1.000e-2"
+            ),
+            "standard deviation 1.02 cm/s above its tolerance 1 cm/s"
+        );
+        assert_eq!(
+            readable_why(
+                "misalignment_x_rad",
+                "standard deviation 9.734e-3 above its tolerance 8.727e-3"
+            ),
+            "standard deviation 0.558 deg above its tolerance 0.5 deg"
+        );
+        assert_eq!(
+            readable_why("scale", "correlated -0.970 with bias_x_m_s"),
+            "correlated -0.970 with bias x"
+        );
+        assert_eq!(
+            readable_why("time_offset_s", "flat together with lever_arm_x_m, scale"),
+            "flat together with lever arm x, scale"
+        );
+        assert_eq!(
+            readable_why("time_offset_s", "the residuals do not depend on it"),
+            "the residuals do not depend on it"
+        );
     }
 
     #[test]
@@ -681,7 +794,7 @@ pub(crate) mod tests {
         has("| calibration | lever arm x (m)         | time offset (s) | bias y (cm/s) |");
         has("| T1          | -1.870 ± 0.013          | 1.4200 ± 0.0090 | 0.07 ± 0.10   |");
         has("| T12         | -1.72 ± 0.36 (not seen) | 0.560 ± 0.038   | 0.78 ± 0.10   |");
-        has("- T12, not seen: lever arm x: σ 0.36 m > 0.1 m.");
+        has("- T12, not seen: lever arm x (standard deviation 0.36 m above its tolerance 0.1 m).");
         let order: Vec<usize> = [NO_CALIBRATION, "least squares EM1", "installation"]
             .iter()
             .map(|m| text.find(&format!("| {m}")).unwrap())
@@ -734,7 +847,9 @@ pub(crate) mod tests {
         );
         assert!(text.contains("95 \\% interval"), "{text}");
         assert!(
-            text.contains("T12, not seen: lever arm x: $\\sigma$ 0.36 m $>$ 0.1 m."),
+            text.contains(
+                "T12, not seen: lever arm x (standard deviation 0.36 m above its tolerance 0.1 m)."
+            ),
             "{text}"
         );
         assert!(

@@ -9,9 +9,11 @@
 //!
 //! This module reads the two folders and writes the text; [`difference`] holds the
 //! test of two means, [`spec_keys`] the spec's keys that differ, [`pairs`] pairs the
-//! rows of A and B, and [`markdown`] sets it all as Markdown.
+//! rows of A and B, and [`markdown`] sets it all as Markdown. Two installation studies
+//! (folders holding `heldout.parquet`) are compared by [`installation`] instead.
 
 pub mod difference;
+pub mod installation;
 pub mod markdown;
 pub mod pairs;
 pub mod spec_keys;
@@ -38,6 +40,18 @@ pub enum CompareError {
         points.join(", ")
     )]
     Sweep { path: PathBuf, points: Vec<String> },
+    #[error("{}", path.display())]
+    SpecToml {
+        path: PathBuf,
+        #[source]
+        source: Box<toml::de::Error>,
+    },
+    #[error(
+        "{} is an installation study (it holds heldout.parquet) and {} a run of the paper: compare two studies or two runs",
+        study.display(),
+        run.display()
+    )]
+    StudyAndRun { study: PathBuf, run: PathBuf },
     #[error("writing {}", path.display())]
     Write {
         path: PathBuf,

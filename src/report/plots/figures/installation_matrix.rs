@@ -77,14 +77,14 @@ pub fn installation_matrix(study: &Study) -> PlotResult<Vec<(String, Outcome)>> 
             .filter(|r| r.method == method)
             .collect();
         let mean = cells.iter().map(|r| r.total_cm_s).sum::<f64>() / cells.len() as f64;
-        let caption = format!(
-            "{method}: held-out RMSE [cm/s], calibrated on the row's first {window_s} s, scored on the column (mean {})",
-            three_digits(mean)
-        );
+        let [first_line, second_line] = title_lines(method, window_s, mean);
+        let caption = format!("{first_line}, {second_line}");
         let n = trajectories.len();
         let side = 44 * n as u32 + 120;
         let svg = draw_svg((side + 170, side + 70), |root| {
-            let root = root.titled(&caption, font(PANEL_TITLE_SIZE))?;
+            // Two lines: one is wider than the figure.
+            let root = root.titled(&first_line, font(PANEL_TITLE_SIZE))?;
+            let root = root.titled(&second_line, font(PANEL_TITLE_SIZE))?;
             let (matrix, bar) = root.split_horizontally(side);
             matrix_panel(&matrix, &trajectories, &cells, &colours)?;
             colour_bar(&bar, &colours)
@@ -95,6 +95,18 @@ pub fn installation_matrix(study: &Study) -> PlotResult<Vec<(String, Outcome)>> 
         ));
     }
     Ok(figures)
+}
+
+/// The title of one method's matrix, in two lines that each fit the figure: what is
+/// shown with its mean, then what the rows and columns are.
+fn title_lines(method: &str, window_s: f64, mean_cm_s: f64) -> [String; 2] {
+    [
+        format!(
+            "{method}: held-out RMSE [cm/s], mean {}",
+            three_digits(mean_cm_s)
+        ),
+        format!("calibrated on the row's first {window_s} s, scored on the column"),
+    ]
 }
 
 /// The matrix of one method: calibration trajectories down, scored ones across, the
@@ -206,5 +218,19 @@ mod tests {
         assert_eq!(ramp(1.0), RAMP[4]);
         assert_eq!(ramp(0.125), RGBColor(255, 236, 161));
         assert_eq!(ramp(7.0), RAMP[4]);
+    }
+
+    #[test]
+    fn the_title_keeps_what_it_says_in_two_lines_that_fit() {
+        let lines = title_lines("installation lever+offset+bias+scale", 400.0, 6.123);
+        assert_eq!(
+            lines,
+            [
+                "installation lever+offset+bias+scale: held-out RMSE [cm/s], mean 6.12",
+                "calibrated on the row's first 400 s, scored on the column",
+            ]
+        );
+        // A 13-trajectory matrix is 862 pixels wide, some 85 characters of the title font.
+        assert!(lines.iter().all(|line| line.chars().count() <= 75));
     }
 }

@@ -5,7 +5,7 @@
 //! colour); each installation model has a colour of its own. In: a [`Study`]'s summary.
 //! Out: the figure, or why there is none (fewer than two windows).
 
-use crate::installation::rows::{NO_CALIBRATION, Study};
+use crate::installation::rows::{NO_CALIBRATION, Study, SummaryRow};
 use crate::report::plots::canvas::{Drawn, Outcome, draw_svg};
 use crate::report::plots::draw::*;
 use crate::report::plots::scale::Scale;
@@ -20,6 +20,16 @@ const INSTALLATION_COLORS: [RGBColor; 5] = [
     RGBColor(188, 189, 34),
     RGBColor(23, 190, 207),
 ];
+
+/// How far apart, as a share of the windows' span, the methods' points of one window
+/// are drawn.
+const METHOD_OFFSET_SHARE: f64 = 0.006;
+
+/// How far beside its window the `index`th of `count` methods is drawn, in seconds of
+/// the window axis spanning `span_s`: the methods centred on the window, in order.
+fn method_offset_s(index: usize, count: usize, span_s: f64) -> f64 {
+    (index as f64 - 0.5 * (count as f64 - 1.0)) * METHOD_OFFSET_SHARE * span_s
+}
 
 /// How a method of the study is drawn: its look and its marker (none for the
 /// reference). `installation` counts the installation models listed before it.
@@ -91,14 +101,19 @@ pub fn installation_windows(study: &Study) -> PlotResult<Outcome> {
         });
     let pad = 0.05 * (last - first);
     let x = Scale::linear((first - pad)..(last + pad));
-    let ends: Vec<f64> = study
-        .summary
-        .iter()
-        .flat_map(|r| [r.mean_cm_s - r.ci95_cm_s, r.mean_cm_s + r.ci95_cm_s])
-        .collect();
-    // From zero, so that a line's height against no calibration's reads as their ratio.
-    let high = ends.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let y = Scale::linear(0.0..1.06 * high.max(f64::MIN_POSITIVE));
+    // Each method's points and bars sit a little beside the window, in the order of
+    // the legend, so that intervals of equal windows do not hide one another.
+    let offset = |index: usize| method_offset_s(index, methods.len(), last - first);
+    // The means decide the axis: logarithmic when they span a decade, as the blown-up
+    // short windows of the paper's least squares make them, so that no calibration,
+    // the paper's methods and the installation models each keep a height of their own.
+    let means: Vec<f64> = study.summary.iter().map(|r| r.mean_cm_s).collect();
+    let y = Scale::fit_values(&means, windows.len());
+    let y_label = if y.is_log() {
+        "held-out RMSE [cm/s], log scale"
+    } else {
+        "held-out RMSE [cm/s]"
+    };
     let caption =
         "Held-out RMSE against the calibration window: mean over calibration trajectories, bars its 95 % interval"
             .to_string();
@@ -108,31 +123,43 @@ pub fn installation_windows(study: &Study) -> PlotResult<Outcome> {
         let mut chart = chart_on(&panels[0], "", 60).build_cartesian_2d(x.clone(), y.clone())?;
         mesh(&mut chart)
             .x_desc("calibration window [s]")
-            .y_desc("held-out RMSE [cm/s]")
+            .y_desc(y_label)
             .draw()?;
-        for (method, (look, marker)) in methods.iter().zip(&looks) {
+        for (index, (method, (look, marker))) in methods.iter().zip(&looks).enumerate() {
             let mut rows: Vec<_> = study
                 .summary
                 .iter()
                 .filter(|r| r.method == *method)
                 .collect();
             rows.sort_by(|a, b| a.window_s.total_cmp(&b.window_s));
-            let points: Vec<(f64, f64)> = rows.iter().map(|r| (r.window_s, r.mean_cm_s)).collect();
+            let at = |r: &SummaryRow| r.window_s + offset(index);
+            let points: Vec<(f64, f64)> =
+                rows.iter().map(|r| (at(r), y.shown(r.mean_cm_s))).collect();
             line(&mut chart, points.clone(), look.color, look.stroke)?;
             if let Some(marker) = marker {
                 marker.draw(&mut chart, &points, look.color)?;
                 chart.draw_series(rows.iter().map(|r| {
-                    PathElement::new(
-                        vec![
-                            (r.window_s, r.mean_cm_s - r.ci95_cm_s),
-                            (r.window_s, r.mean_cm_s + r.ci95_cm_s),
-                        ],
-                        look.color.stroke_width(2),
-                    )
+                    let ends = [r.mean_cm_s - r.ci95_cm_s, r.mean_cm_s + r.ci95_cm_s]
+                        .map(|v| (at(r), y.shown(v)));
+                    PathElement::new(ends.to_vec(), look.color.stroke_width(2))
                 }))?;
             }
+            for r in rows.iter().filter(|r| y.is_cut(r.mean_cm_s)) {
+                let edge = if y.is_below(r.mean_cm_s) {
+                    Edge::Bottom
+                } else {
+                    Edge::Top
+                };
+                cut_mark(
+                    &mut chart,
+                    (at(r), y.shown(r.mean_cm_s)),
+                    r.mean_cm_s,
+                    look.color,
+                    edge,
+                )?;
+            }
         }
-        let entries: Vec<(Swatch, String)> = looks
+        let mut entries: Vec<(Swatch, String)> = looks
             .iter()
             .map(|(look, marker)| {
                 let swatch = match marker {
@@ -142,6 +169,9 @@ pub fn installation_windows(study: &Study) -> PlotResult<Outcome> {
                 (swatch, look.label.clone())
             })
             .collect();
+        if means.iter().any(|mean| y.is_cut(*mean)) {
+            entries.push((Swatch::Cut, "beyond the axis".into()));
+        }
         legend(&legend_area, "method", &entries)
     })?;
     Ok(Outcome::Drawn(Drawn { caption, svg }))
@@ -150,6 +180,20 @@ pub fn installation_windows(study: &Study) -> PlotResult<Outcome> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn methods_sit_beside_their_window_centred_on_it() {
+        // Three methods over windows 50 to 400 s: 2.1 s apart, the middle one on it.
+        let offsets: Vec<f64> = (0..3).map(|i| method_offset_s(i, 3, 350.0)).collect();
+        assert!((offsets[0] + 2.1).abs() < 1e-12 && offsets[1] == 0.0);
+        assert!((offsets[2] - 2.1).abs() < 1e-12);
+        // Twelve methods: the outermost 11.55 s each side, a thirtieth of the span.
+        assert!((method_offset_s(11, 12, 350.0) - 11.55).abs() < 1e-9);
+        assert_eq!(
+            method_offset_s(0, 12, 350.0),
+            -method_offset_s(11, 12, 350.0)
+        );
+    }
 
     #[test]
     fn the_paper_methods_keep_their_looks_and_installation_models_have_their_own() {
