@@ -393,6 +393,16 @@ fn sections(study: &Study) -> Vec<Section> {
                     if missing.len() == 1 { "it is" } else { "they are" }
                 ));
             }
+            for failure in study
+                .failures
+                .iter()
+                .filter(|f| f.method == *method && f.window_s == largest)
+            {
+                section
+                    .table
+                    .notes
+                    .push(format!("{}: {}.", failure.calibration, failure.why));
+            }
             sections.push(section);
         }
     }

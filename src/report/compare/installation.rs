@@ -272,6 +272,7 @@ mod tests {
             mean_cm_s,
             ci95_cm_s,
             ratio: 1.0,
+            calibrations: 2,
         }
     }
 
@@ -300,6 +301,7 @@ mod tests {
                 terms,
                 summary,
                 trace: Vec::new(),
+                failures: Vec::new(),
             },
             spec: spec.parse().unwrap(),
         }
