@@ -19,6 +19,10 @@ use std::path::{Path, PathBuf};
 /// The fewest samples a recording may have.
 pub const MIN_SAMPLES: usize = 3;
 
+/// The largest DVL velocity component read as data, m/s: beyond it a value is a
+/// bad-velocity marker or another unit, not a vehicle's motion.
+pub const MAX_DVL_SPEED_M_S: f64 = 20.0;
+
 /// How far apart the DVL's and the reference's time stamps of one row may be, seconds.
 pub const TIME_TOLERANCE_S: f64 = 1e-3;
 
@@ -151,6 +155,16 @@ pub enum PairedError {
         time_s: f64,
         previous_line: u64,
         previous_s: f64,
+    },
+    #[error(
+        "{}:{line}: {column}: {value} m/s is beyond {MAX_DVL_SPEED_M_S} m/s, faster than any vehicle a DVL rides: a DVL's bad-velocity marker (Teledyne RDI writes -32.768) or a unit other than m/s; remove the row or mark it in the recording's own way before calibrating",
+        path.display()
+    )]
+    DvlOutOfRange {
+        path: PathBuf,
+        line: u64,
+        column: String,
+        value: f64,
     },
     #[error(
         "{}:{line}: {column}: {value} {unit} is out of range: {angle} lies in [-{limit}, {limit}] {unit}{hint}",
@@ -308,6 +322,19 @@ pub fn read(files: &PairedFiles, columns: &PairedColumns) -> Result<PairedRecord
             path: files.dvl.clone(),
             samples: dvl.len(),
         });
+    }
+    for row in 0..dvl.len() {
+        for axis in 0..3 {
+            let value = dvl.row(row)[1 + axis];
+            if value.abs() > MAX_DVL_SPEED_M_S {
+                return Err(PairedError::DvlOutOfRange {
+                    path: files.dvl.clone(),
+                    line: dvl.lines[row],
+                    column: columns.dvl[axis].clone(),
+                    value,
+                });
+            }
+        }
     }
     let to_rad = if columns.angles_in_degrees {
         1f64.to_radians()

@@ -22,8 +22,13 @@ use std::time::{Instant, SystemTime};
 
 #[derive(Debug, thiserror::Error)]
 pub enum StudyError {
-    #[error(transparent)]
-    Recording(#[from] paired::PairedError),
+    /// The reader's error says the file, line and column; the spec's key follows.
+    #[error("{error} (the spec's recordings.trajectories[{index}], {name})")]
+    Recording {
+        index: usize,
+        name: String,
+        error: paired::PairedError,
+    },
     #[error(transparent)]
     Owner(#[from] owner::OwnerError),
     #[error(
@@ -85,8 +90,13 @@ pub fn run_study(
     owner::check_study(&folder, out, spec_file, &spec.name, &spec_sha256, force)?;
     let mut segments = Vec::new();
     let mut data_files = Vec::new();
-    for (name, files) in &spec.trajectories {
-        let recording = paired::read(files, &spec.columns)?;
+    for (index, (name, files)) in spec.trajectories.iter().enumerate() {
+        let recording =
+            paired::read(files, &spec.columns).map_err(|error| StudyError::Recording {
+                index,
+                name: name.clone(),
+                error,
+            })?;
         for path in first_seen_paths([&files.dvl, &files.reference]) {
             let bytes = std::fs::read(path).map_err(|source| StudyError::Io {
                 path: path.clone(),
