@@ -216,12 +216,12 @@ fn calibrate_prints_the_terms_and_writes_the_recording_corrected() {
     );
     let printed = stdout(&output);
     assert!(output.status.success(), "{}", stderr(&output));
-    for term in ["lever_arm_x_m", "time_offset_s", "bias_x_m_s", "scale"] {
-        assert!(printed.contains(&format!("| {term}")), "{term}: {printed}");
+    for term in ["lever arm x", "time offset", "bias x", "scale"] {
+        assert!(printed.contains(&format!("| {term} ")), "{term}: {printed}");
     }
     let line = printed
         .lines()
-        .find(|l| l.starts_with("| lever_arm_x_m"))
+        .find(|l| l.starts_with("| lever arm x "))
         .unwrap();
     let value: f64 = line
         .split('|')

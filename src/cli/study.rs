@@ -13,9 +13,10 @@ use crate::installation::fit::{Fit, TIME_OFFSET_MARGIN_S, fit};
 use crate::installation::frames::Reference;
 use crate::installation::rows::Study;
 use crate::installation::spec::{self as study_spec, ObservabilityFile, TermName};
-use crate::installation::study::{table_unit, term_set};
+use crate::installation::study::term_set;
 use crate::installation::terms::{AxisRmse, score};
 use crate::pipeline::installation::{Outcome, run_study};
+use crate::report::installation::{readable_term, readable_why};
 use crate::report::plots::Format;
 use crate::spec::TomlFile;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
@@ -156,10 +157,10 @@ fn printed_calibration(
     table.load_preset(ASCII_MARKDOWN);
     table.set_header(["term", "estimate", "standard deviation", "seen"]);
     for (i, name) in bound.names.iter().enumerate() {
-        let (factor, unit) = table_unit(name);
+        let (readable, unit, factor) = readable_term(name);
         let seen = if bound.is_unseen(name) { "no" } else { "yes" };
         table.add_row([
-            name.to_string(),
+            readable,
             format!("{:.4} {unit}", bound.value[i] * factor),
             format!("{:.4} {unit}", bound.std[i] * factor),
             seen.to_string(),
@@ -176,7 +177,11 @@ fn printed_calibration(
         residual[0], residual[1], residual[2]
     ));
     for unseen in &bound.unseen {
-        text.push_str(&format!("not seen here: {}: {}\n", unseen.term, unseen.why));
+        text.push_str(&format!(
+            "not seen here: {}: {}\n",
+            readable_term(unseen.term).0,
+            readable_why(unseen.term, &unseen.why.to_string())
+        ));
     }
     let rmse = |rmse: Option<AxisRmse>| match rmse {
         Some(r) => format!(

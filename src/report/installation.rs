@@ -286,7 +286,7 @@ fn reason_number(value: f64) -> String {
 /// unit and with the other terms' names for people ("standard deviation 0.136 m above
 /// its tolerance 0.1 m, correlated -0.969 with bias y"). A reason of another form is
 /// kept as it is.
-fn readable_why(term: &str, why: &str) -> String {
+pub(crate) fn readable_why(term: &str, why: &str) -> String {
     let (_, unit, factor) = readable(term);
     let name = |other: &str| readable(other).0;
     let reason = |reason: &str| -> Option<String> {
