@@ -329,7 +329,8 @@ mod tests {
                 "heldout.parquet",
                 "terms.parquet",
                 "summary.parquet",
-                "trace.parquet"
+                "trace.parquet",
+                "failures.parquet"
             ]
         );
         write(folder.path(), &tables);
@@ -371,7 +372,18 @@ mod tests {
         );
         assert_eq!(
             names(summary_batch(&[])),
-            ["method", "window_s", "rmse_cm_s", "rmse_ci_cm_s", "ratio"]
+            [
+                "method",
+                "window_s",
+                "rmse_cm_s",
+                "rmse_ci_cm_s",
+                "ratio",
+                "calibrations"
+            ]
+        );
+        assert_eq!(
+            names(failures_batch(&[])),
+            ["method", "calibration", "window_s", "why"]
         );
         assert_eq!(names(trace_batch(&[]))[4], "before_x_cm_s");
         assert_eq!(names(terms_batch(&[]))[6], "unseen");
