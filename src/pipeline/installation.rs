@@ -97,7 +97,8 @@ pub fn run_study(
                 name: name.clone(),
                 error,
             })?;
-        for path in first_seen_paths([&files.dvl, &files.reference]) {
+        // One file may hold both the DVL and the reference.
+        for path in crate::first_seen([&files.dvl, &files.reference]) {
             let bytes = std::fs::read(path).map_err(|source| StudyError::Io {
                 path: path.clone(),
                 source,
@@ -189,11 +190,6 @@ fn no_window_without_a_fit(spec: &InstallationSpec, study: &Study) -> Result<(),
         }
     }
     Ok(())
-}
-
-/// `paths` without repeats (a recording whose DVL and reference share one file).
-fn first_seen_paths<'a>(paths: [&'a PathBuf; 2]) -> Vec<&'a PathBuf> {
-    crate::first_seen(paths)
 }
 
 /// Whether `folder` holds the results of `results_key`, every file intact.
