@@ -751,29 +751,6 @@ fn a_recording_path_in_a_loop_of_symbolic_links_is_named_a_loop() {
     );
 }
 
-/// Serves `files` (URL path → bytes) on 127.0.0.1 until the returned guard drops.
-fn serve(
-    files: Vec<(String, Vec<u8>)>,
-) -> (
-    String,
-    std::thread::JoinHandle<()>,
-    std::sync::Arc<tiny_http::Server>,
-) {
-    let server = std::sync::Arc::new(tiny_http::Server::http("127.0.0.1:0").unwrap());
-    let url = format!("http://{}", server.server_addr().to_ip().unwrap());
-    let worker = server.clone();
-    let handle = std::thread::spawn(move || {
-        for request in worker.incoming_requests() {
-            let response = match files.iter().find(|(path, _)| *path == request.url()) {
-                Some((_, bytes)) => tiny_http::Response::from_data(bytes.clone()),
-                None => tiny_http::Response::from_data(b"not found".to_vec()).with_status_code(404),
-            };
-            let _ = request.respond(response);
-        }
-    });
-    (url, handle, server)
-}
-
 #[test]
 #[ignore = "needs the Snapir recordings: dcnet-exp data fetch"]
 fn data_fetch_downloads_and_checks_the_recordings() {

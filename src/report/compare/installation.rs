@@ -8,14 +8,13 @@
 //! by side in the term's table unit.
 
 use super::CompareError;
+use super::markdown::{new_table, spec_section};
 use super::pairs::pair;
-use super::spec_keys::spec_differences;
 use crate::installation::rows::{Study, SummaryRow, TermRow};
 use crate::report::installation::readable_term;
 use crate::report::plots::scale::three_digits;
 use crate::results::installation::{HELDOUT, read_study};
 use crate::results::read::ReadError;
-use comfy_table::{Table, presets::ASCII_MARKDOWN};
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
@@ -72,35 +71,6 @@ pub fn render(a: &StoredStudy, b: &StoredStudy) -> String {
         "{marked} of {both} method and window pairs differ with 95 % intervals that do not overlap"
     );
     out
-}
-
-fn new_table(header: &[&str]) -> Table {
-    let mut table = Table::new();
-    table.load_preset(ASCII_MARKDOWN);
-    table.set_header(header.to_vec());
-    table
-}
-
-fn spec_section(a: &toml::Table, b: &toml::Table, out: &mut String) {
-    let _ = writeln!(out, "## Spec\n");
-    let differences = spec_differences(a, b);
-    if differences.is_empty() {
-        let _ = writeln!(out, "The resolved specs are the same.\n");
-        return;
-    }
-    let mut table = new_table(&["key", "A", "B"]);
-    let shown = |value: &Option<String>| value.clone().unwrap_or_else(|| "(absent)".into());
-    for difference in &differences {
-        table.add_row(vec![
-            format!("`{}`", difference.key),
-            shown(&difference.a),
-            shown(&difference.b),
-        ]);
-    }
-    let _ = writeln!(
-        out,
-        "The keys of the resolved `spec.toml` that differ, arrays of tables numbered as `--set` writes them:\n\n{table}\n"
-    );
 }
 
 /// A mean ± its 95 % half-width, or "—" for a side that lacks the row.

@@ -96,7 +96,8 @@ fn optional(value: Option<f64>, format: impl Fn(f64) -> String) -> String {
     value.map_or("—".into(), format)
 }
 
-fn new_table(header: &[&str]) -> Table {
+/// A Markdown table with `header`.
+pub(super) fn new_table(header: &[&str]) -> Table {
     let mut table = Table::new();
     table.load_preset(ASCII_MARKDOWN);
     table.set_header(header.to_vec());
@@ -144,7 +145,7 @@ pub fn render(a: &StoredRun, b: &StoredRun) -> String {
         out,
         "RMSE in cm/s, mean over the Monte Carlo runs. z = (B − A) / √(se_A² + se_B²), with se = rmse_std_cm_s / √n and n each folder's `calibration.monte_carlo_runs`; {FLAG} marks |B − A| > {STANDARD_ERRORS} √(se_A² + se_B²). Where both standard errors are 0 (deterministic estimators), any difference beyond rounding ({FLOAT_NOISE:e} of the larger mean) is marked (z ±∞); with a single run on a side there is no standard error and the cell is not tested (n/a). The rule takes A and B as independent; folders of one seed share their random draws, so for them it is conservative.\n"
     );
-    spec_section(a, b, &mut out);
+    spec_section(&spec_table(a), &spec_table(b), &mut out);
     calibration_section(a, b, &mut tally, &mut out);
     evaluation_section(a, b, &mut tally, &mut out);
     training_section(a, b, &mut out);
@@ -157,9 +158,10 @@ fn spec_table(run: &StoredRun) -> toml::Table {
     toml::Table::try_from(&run.spec).expect("a stored spec serializes")
 }
 
-fn spec_section(a: &StoredRun, b: &StoredRun, out: &mut String) {
+/// The keys of two resolved specs that differ, as a section.
+pub(super) fn spec_section(a: &toml::Table, b: &toml::Table, out: &mut String) {
     let _ = writeln!(out, "## Spec\n");
-    let differences = spec_differences(&spec_table(a), &spec_table(b));
+    let differences = spec_differences(a, b);
     if differences.is_empty() {
         let _ = writeln!(out, "The resolved specs are the same.\n");
         return;
