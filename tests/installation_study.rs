@@ -506,3 +506,66 @@ fn a_study_never_replaces_another_specs_folder_nor_a_runs() {
         "{message}"
     );
 }
+
+/// What a reviewer found accepted: `validate` passing recordings `run` refuses, a DVL's
+/// bad-velocity marker read as data, and `calibrate` taking term lists and noise the
+/// spec refuses.
+#[test]
+fn validate_reads_the_recordings_and_calibrate_refuses_what_the_spec_refuses() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_installed(&d.join("data/syn"), 2, &[], INSTALLED, 6);
+    write_spec(d, "syn", "syn", 2, "");
+    let dvl = d.join("data/syn/Trajectory1/DVL_trajectory1.csv");
+    let text = std::fs::read_to_string(&dvl).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let fields: Vec<&str> = lines[10].split(',').collect();
+    lines[10] = format!("{},-32.768,{},{}", fields[0], fields[2], fields[3]);
+    std::fs::write(&dvl, lines.join("\n") + "\n").unwrap();
+    for command in ["validate", "run"] {
+        let output = dcnet(d, &[command, "experiments/syn.toml"]);
+        let message = stderr(&output);
+        assert_eq!(output.status.code(), Some(1), "{command}: {message}");
+        assert!(
+            message.contains("DVL_trajectory1.csv:11: DVL X [m/s]: -32.768 m/s is beyond 20 m/s"),
+            "{command}: {message}"
+        );
+    }
+    let calibrate = |extra: &[&str]| {
+        let args = [
+            &[
+                "calibrate",
+                "data/syn/Trajectory2/DVL_trajectory2.csv",
+                "--reference",
+                "data/syn/Trajectory2/GT_trajectory2.csv",
+            ][..],
+            extra,
+        ]
+        .concat();
+        let output = dcnet(d, &args);
+        assert_eq!(
+            output.status.code(),
+            Some(1),
+            "{extra:?}: {}",
+            stderr(&output)
+        );
+        assert!(!d.join("calibrated").exists());
+        stderr(&output)
+    };
+    assert!(
+        calibrate(&["--terms", "scale,scale_per_axis"])
+            .contains("--terms: lists scale and scale_per_axis: give one")
+    );
+    assert!(
+        calibrate(&["--terms", "lever_arm,lever_arm"])
+            .contains("--terms: \"lever_arm\" is listed twice")
+    );
+    assert!(
+        calibrate(&["--dvl-noise-cm-s", "0"])
+            .contains("--dvl-noise-cm-s 0: give a positive number")
+    );
+    assert!(
+        calibrate(&["--window-s", "-5"])
+            .contains("--window-s -5: give a positive number of seconds")
+    );
+}

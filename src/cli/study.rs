@@ -246,7 +246,7 @@ pub(super) fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
         input(anyhow::anyhow!(
             "{}: calibrating {} on {} samples: {error}; a window too short for its terms, or terms it cannot tell apart (a scale and a bias at constant speed, say), fail this way: give a longer --window-s or fewer --terms",
             args.dvl.display(),
-            args.terms.iter().map(|t| format!("{t:?}")).collect::<Vec<_>>().join(", "),
+            args.terms.iter().map(|t| t.name()).collect::<Vec<_>>().join(", "),
             end
         ))
     })?;

@@ -30,25 +30,40 @@ pub enum TermName {
     BiasScalar,
 }
 
+impl TermName {
+    pub const ALL: [TermName; 7] = [
+        TermName::Scale,
+        TermName::ScalePerAxis,
+        TermName::Misalignment,
+        TermName::LeverArm,
+        TermName::TimeOffset,
+        TermName::Bias,
+        TermName::BiasScalar,
+    ];
+
+    /// The term's name in a spec and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            TermName::Scale => "scale",
+            TermName::ScalePerAxis => "scale_per_axis",
+            TermName::Misalignment => "misalignment",
+            TermName::LeverArm => "lever_arm",
+            TermName::TimeOffset => "time_offset",
+            TermName::Bias => "bias",
+            TermName::BiasScalar => "bias_scalar",
+        }
+    }
+}
+
 impl std::str::FromStr for TermName {
     type Err = String;
 
     fn from_str(name: &str) -> Result<Self, String> {
-        const NAMES: [(&str, TermName); 7] = [
-            ("scale", TermName::Scale),
-            ("scale_per_axis", TermName::ScalePerAxis),
-            ("misalignment", TermName::Misalignment),
-            ("lever_arm", TermName::LeverArm),
-            ("time_offset", TermName::TimeOffset),
-            ("bias", TermName::Bias),
-            ("bias_scalar", TermName::BiasScalar),
-        ];
-        NAMES
-            .iter()
-            .find(|(written, _)| *written == name)
-            .map(|(_, term)| *term)
+        TermName::ALL
+            .into_iter()
+            .find(|term| term.name() == name)
             .ok_or_else(|| {
-                let names: Vec<&str> = NAMES.iter().map(|(written, _)| *written).collect();
+                let names: Vec<&str> = TermName::ALL.iter().map(|term| term.name()).collect();
                 format!("{name:?} is not a term: give {}", names.join(", "))
             })
     }
@@ -71,7 +86,7 @@ pub fn term_list_faults(terms: &[TermName]) -> Vec<(Option<usize>, String)> {
     let mut seen = HashSet::new();
     for (j, term) in terms.iter().enumerate() {
         if !seen.insert(term) {
-            faults.push((Some(j), format!("{term:?} is listed twice")));
+            faults.push((Some(j), format!("{:?} is listed twice", term.name())));
         }
     }
     faults
