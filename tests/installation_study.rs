@@ -136,7 +136,14 @@ fn a_synthetic_installation_is_recovered_within_its_bound_and_a_straight_segment
         "{}",
         stderr(&again)
     );
+    let report = std::fs::read(folder.join("report.md")).unwrap();
+    std::fs::remove_file(folder.join("report.md")).unwrap();
     let plotted = dcnet(d, &["plot", "results/syn", "--out", "redrawn"]);
+    assert_eq!(
+        std::fs::read(folder.join("report.md")).unwrap(),
+        report,
+        "plot writes the report again to the same bytes"
+    );
     assert!(plotted.status.success(), "{}", stderr(&plotted));
     assert_png(
         &d.join("redrawn/syn/installation_residual.png"),

@@ -48,6 +48,12 @@ pub(super) fn run(target: &Target, drawing: &Drawing, force: bool) -> Result<(),
 pub(super) fn plot(results: &Path, out: &Path) -> Result<(), CliError> {
     let study = crate::results::installation::read_study(results).map_err(input)?;
     let name = results.file_name().map(PathBuf::from).unwrap_or_default();
+    for (file, bytes) in crate::pipeline::installation::reports(&study, &name.to_string_lossy()) {
+        let path = results.join(file);
+        crate::files::write_atomic(&path, &bytes)
+            .map_err(|e| failure(anyhow::Error::new(e).context(path.display().to_string())))?;
+    }
+    eprintln!("report written to {}", results.join("report.md").display());
     draw(&study, &out.join(name))
 }
 

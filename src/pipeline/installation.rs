@@ -295,6 +295,21 @@ fn trace(study: &Study, estimates: &[Estimated], segments: &[Segment]) -> Vec<Tr
         .collect()
 }
 
+/// The study's two reports, named as its folder holds them: a pure function of its
+/// tables, so `plot` writes them again to the same bytes.
+pub fn reports(study: &Study, name: &str) -> [(String, Vec<u8>); 2] {
+    [
+        (
+            "report.md".into(),
+            crate::report::installation::markdown(study).into_bytes(),
+        ),
+        (
+            "report.tex".into(),
+            crate::report::installation::latex(study, name).into_bytes(),
+        ),
+    ]
+}
+
 /// Writes the folder: the resolved spec, the tables, both reports, then the manifest
 /// with every file's SHA-256.
 fn write_folder(
@@ -314,14 +329,7 @@ fn write_folder(
     for (name, bytes) in results::installation::table_bytes(study)? {
         files.push((name.to_string(), bytes));
     }
-    files.push((
-        "report.md".into(),
-        crate::report::installation::markdown(study).into_bytes(),
-    ));
-    files.push((
-        "report.tex".into(),
-        crate::report::installation::latex(study, &spec.name).into_bytes(),
-    ));
+    files.extend(reports(study, &spec.name));
     let mut digests = std::collections::BTreeMap::new();
     for (name, bytes) in &files {
         let path = folder.join(name);
