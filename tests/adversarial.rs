@@ -1247,7 +1247,7 @@ fn kills_at_pseudo_random_moments_leave_whole_files_and_resume_to_the_same_bytes
         ("quick: ", 2, 0.002),
         ("dataset ", 4, 0.4),
         ("DCNet ", 2, 0.15),
-        ("monte carlo quick DVL1", 2, 0.1),
+        ("monte carlo quick DVL1", 3, 0.02),
         ("results written", 3, 0.4),
         ("figure training_loss", 1, 0.01),
     ];
