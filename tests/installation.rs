@@ -34,16 +34,6 @@ fn lever_time_bias() -> TermSet {
     }
 }
 
-fn every_term() -> TermSet {
-    TermSet {
-        scale: PerAxis::PerAxis,
-        misalignment: true,
-        lever_arm: true,
-        time_offset: true,
-        bias: PerAxis::PerAxis,
-    }
-}
-
 /// A vehicle's motion as functions of time: attitude (roll, pitch, yaw), its rate, and
 /// the body velocity.
 struct Motion {
@@ -184,7 +174,7 @@ fn synthetic_terms_of_every_kind_are_recovered_within_three_standard_deviations(
     let truth = truth();
     let scalar_scale = TermSet {
         scale: PerAxis::Scalar,
-        ..every_term()
+        ..TermSet::EVERY
     };
     // Lever arm, τ and bias alone cannot absorb a scale or a misalignment: their DVL
     // has none.
@@ -194,7 +184,7 @@ fn synthetic_terms_of_every_kind_are_recovered_within_three_standard_deviations(
         ..truth
     };
     let cases = [
-        ("every term", every_term(), truth),
+        ("every term", TermSet::EVERY, truth),
         ("scalar scale", scalar_scale, truth),
         ("lever, τ, bias", lever_time_bias(), installation_only),
     ];
@@ -391,13 +381,13 @@ fn every_term_set_fits_every_trajectory_and_flags_what_it_cannot_see() {
         .into_iter()
         .map(TermSet::of_error_model)
         .collect();
-    sets.extend([TermSet::NONE, every_term(), lever_time_bias()]);
+    sets.extend([TermSet::NONE, TermSet::EVERY, lever_time_bias()]);
     for n in 1..=13 {
         let recording = akit_recording(n);
         for terms in &sets {
             let (fit, bound) = fit_akit(&recording, *terms);
             assert_eq!(bound.std.len(), terms.parameter_count());
-            if n == 1 && *terms == every_term() {
+            if n == 1 && *terms == TermSet::EVERY {
                 let flagged = |a: &str, b: &str| {
                     bound.unseen.iter().any(|u| {
                         u.term == a && matches!(u.why, dcnet_exp::installation::bound::Why::Correlated { with, .. } if with == b)

@@ -79,7 +79,7 @@ pub struct TracePoint {
 }
 
 /// Everything the study computes.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct Study {
     pub heldout: Vec<HeldOutRow>,
     pub terms: Vec<TermRow>,

@@ -266,13 +266,9 @@ fn check(
             format!("{:?} must be {KIND:?} here", file.kind),
         );
     }
-    let folder_name = !file.name.is_empty()
-        && !file.name.starts_with('.')
-        && file.name.len() <= crate::spec::MAX_NAME_CHARS
-        && file
-            .name
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c));
+    // The results folder's rule, without the '/', '=' and ',' of a sweep's points.
+    let folder_name =
+        crate::spec::check::is_folder_name(&file.name) && !file.name.contains(['/', '=', ',']);
     if !folder_name {
         fault(
             "name".into(),

@@ -303,22 +303,14 @@ pub fn run(
 /// Per method and window: the mean over calibration trajectories of each one's mean
 /// held-out RMSE, its 95 % interval, and its ratio to no calibration's.
 pub fn summarize(heldout: &[HeldOutRow], windows_s: &[f64]) -> Vec<SummaryRow> {
-    let mut methods: Vec<&str> = Vec::new();
-    for row in heldout {
-        if !methods.contains(&row.method.as_str()) {
-            methods.push(&row.method);
-        }
-    }
+    let methods = crate::first_seen(heldout.iter().map(|r| r.method.as_str()));
     let per_calibration = |method: &str, window_s: f64| -> Vec<f64> {
-        let mut calibrations: Vec<&str> = Vec::new();
-        for row in heldout
-            .iter()
-            .filter(|r| r.method == method && r.window_s == window_s)
-        {
-            if !calibrations.contains(&row.calibration.as_str()) {
-                calibrations.push(&row.calibration);
-            }
-        }
+        let calibrations = crate::first_seen(
+            heldout
+                .iter()
+                .filter(|r| r.method == method && r.window_s == window_s)
+                .map(|r| r.calibration.as_str()),
+        );
         calibrations
             .iter()
             .map(|c| {

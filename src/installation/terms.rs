@@ -72,6 +72,15 @@ impl TermSet {
         bias: PerAxis::Off,
     };
 
+    /// Every term, scale and bias per axis: thirteen parameters.
+    pub const EVERY: TermSet = TermSet {
+        scale: PerAxis::PerAxis,
+        misalignment: true,
+        lever_arm: true,
+        time_offset: true,
+        bias: PerAxis::PerAxis,
+    };
+
     /// The paper's error model as a term set: scale and bias only. EM1 a scalar scale,
     /// EM2 a scale per axis, EM3 a scalar bias (the same on every axis), EM4 a bias per
     /// axis, EM5 a scale and a bias per axis.
@@ -393,16 +402,6 @@ pub fn score(
 mod tests {
     use super::*;
 
-    fn every_term() -> TermSet {
-        TermSet {
-            scale: PerAxis::PerAxis,
-            misalignment: true,
-            lever_arm: true,
-            time_offset: true,
-            bias: PerAxis::PerAxis,
-        }
-    }
-
     fn installation() -> Installation {
         Installation {
             scale: [0.01, -0.02, 0.03],
@@ -439,7 +438,7 @@ mod tests {
 
     #[test]
     fn parameters_go_in_and_out_in_the_order_of_their_names() {
-        let terms = every_term();
+        let terms = TermSet::EVERY;
         let names = terms.parameter_names();
         assert_eq!(names.len(), 13);
         assert_eq!(names[9], "time_offset_s");
@@ -505,7 +504,7 @@ mod tests {
 
     #[test]
     fn the_jacobian_is_the_predictions_derivative() {
-        let terms = every_term();
+        let terms = TermSet::EVERY;
         let at = ReferenceAt {
             velocity_body_m_s: [1.9, -0.1, 0.05],
             rate_rad_s: [0.01, -0.02, 0.2],

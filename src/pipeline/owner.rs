@@ -112,7 +112,7 @@ pub fn check_study(
         });
     }
     let held = Held::of(folder);
-    if !matches!(held, Held::Nothing | Held::Study) {
+    if held != Held::Nothing && held != Held::Study {
         return Err(OwnerError::OtherKind {
             folder: folder.to_path_buf(),
             theirs: held.words(),
@@ -162,6 +162,7 @@ fn another_spec(
 }
 
 /// What a results folder holds.
+#[derive(PartialEq)]
 enum Held {
     Nothing,
     Single,
@@ -195,13 +196,13 @@ impl Held {
 /// Refuses a single run's results in a sweep's or a study's folder, and a sweep's
 /// points in a single run's or a study's folder.
 fn check_kind(plan: &Plan, folder: &Path, spec: &Path, name: &str) -> Result<(), OwnerError> {
-    let (holder, ours, fits) = if plan.experiment.is_sweep() {
-        (folder.parent().unwrap_or(folder), Held::Sweep, Held::Sweep)
+    let (holder, ours) = if plan.experiment.is_sweep() {
+        (folder.parent().unwrap_or(folder), Held::Sweep)
     } else {
-        (folder, Held::Single, Held::Single)
+        (folder, Held::Single)
     };
     let held = Held::of(holder);
-    if matches!(held, Held::Nothing) || held.words() == fits.words() {
+    if held == Held::Nothing || held == ours {
         return Ok(());
     }
     Err(OwnerError::OtherKind {

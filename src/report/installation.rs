@@ -1067,13 +1067,7 @@ pub(crate) mod tests {
             assert_eq!(figure.files.len(), 1);
             assert!(figure.files[0].is_file());
         }
-        let empty = Study {
-            heldout: vec![],
-            terms: vec![],
-            summary: vec![],
-            trace: vec![],
-            failures: vec![],
-        };
+        let empty = Study::default();
         let written = draw_all(&empty, temporary.path(), Format::Png).unwrap();
         assert!(written.iter().all(|w| w.files.is_empty()), "{written:?}");
         assert_eq!(markdown(&empty).lines().count(), 4);

@@ -336,13 +336,7 @@ mod tests {
         write(folder.path(), &tables);
         assert_eq!(read_study(folder.path()).unwrap(), study);
         assert_eq!(table_bytes(&study).unwrap(), tables);
-        let empty = Study {
-            heldout: vec![],
-            terms: vec![],
-            summary: vec![],
-            trace: vec![],
-            failures: vec![],
-        };
+        let empty = Study::default();
         write(folder.path(), &table_bytes(&empty).unwrap());
         assert_eq!(read_study(folder.path()).unwrap(), empty);
     }

@@ -52,7 +52,7 @@ impl Limit {
 /// the points of a sweep (`<name>/<point>`) '/', '=' and ','; no part empty, longer
 /// than [`MAX_NAME_CHARS`] or starting with '.' (`.`, `..`, and the `.cache` beside the
 /// results).
-pub(super) fn is_folder_name(name: &str) -> bool {
+pub(crate) fn is_folder_name(name: &str) -> bool {
     name.split('/').all(|part| {
         !part.is_empty()
             && !part.starts_with('.')
