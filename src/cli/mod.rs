@@ -244,7 +244,7 @@ const MAX_THREADS: usize = 1024;
 fn load_target(target: &Target) -> Result<Experiment, CliError> {
     if installation_kind(&target.spec)? {
         return Err(input(anyhow::anyhow!(
-            "{}: an installation study has no tasks to plan, shard or collect, nor training to bench: `dcnet-exp run {}` runs it whole, in seconds",
+            "{}: an installation study has no training to bench nor training data to inspect: `dcnet-exp run {}` runs it, in seconds",
             target.spec.display(),
             target.spec.display()
         )));

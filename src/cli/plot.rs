@@ -16,11 +16,14 @@ pub(super) fn plot(
     format: Format,
     metric: Metric,
 ) -> Result<(), CliError> {
-    if results
-        .join(crate::results::installation::HELDOUT)
-        .is_file()
+    let study_sweep = crate::results::sweep::read_index(results)
+        .is_ok_and(|index| index.kind == crate::installation::spec::KIND);
+    if study_sweep
+        || results
+            .join(crate::results::installation::HELDOUT)
+            .is_file()
     {
-        return super::study::plot(results, out.unwrap_or(Path::new("plots")));
+        return super::study::plot(results, out.unwrap_or(Path::new("plots")), format);
     }
     if !results.join(sweep::INDEX).is_file() {
         return plot_run(results, out, format);

@@ -26,8 +26,8 @@ pub(super) fn run(
     shard: Option<&str>,
     force: bool,
 ) -> Result<(), CliError> {
-    if shard.is_none() && super::installation_kind(&target.spec)? {
-        return super::study::run(target, drawing, force);
+    if super::installation_kind(&target.spec)? {
+        return super::study::run(target, drawing, parse_shard(shard)?, force);
     }
     let experiment = load_target(target)?;
     let plan = planned(&experiment, target)?;
@@ -136,6 +136,9 @@ fn tasks(count: usize) -> String {
 
 /// Lists the tasks of a run, shard or not, with their state.
 pub(super) fn plan(target: &Target, shard: Option<&str>) -> Result<(), CliError> {
+    if super::installation_kind(&target.spec)? {
+        return super::study::plan(target, parse_shard(shard)?);
+    }
     let experiment = load_target(target)?;
     let plan = Plan::new(&experiment, &target.out).map_err(input)?;
     let shard = parse_shard(shard)?;
@@ -199,6 +202,9 @@ pub(super) fn plan(target: &Target, shard: Option<&str>) -> Result<(), CliError>
 
 /// Writes the results of a sharded run from the cache the shards filled.
 pub(super) fn collect(target: &Target, drawing: &Drawing) -> Result<(), CliError> {
+    if super::installation_kind(&target.spec)? {
+        return super::study::collect(target, drawing);
+    }
     let experiment = load_target(target)?;
     let plan = planned(&experiment, target)?;
     let to_do = plan.to_do(Mode::Collect);

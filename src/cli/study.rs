@@ -1,5 +1,6 @@
-//! The commands of an installation study: `run`, `validate` and `plot` of a spec with
-//! `kind = "installation"`, and `calibrate`, which calibrates one recording of a DVL
+//! The commands of an installation study: `run` (whole or one shard), `plan`,
+//! `collect`, `validate` and `plot` of a spec with `kind = "installation"` (a study, or
+//! a sweep of them), and `calibrate`, which calibrates one recording of a DVL
 //! beside a reference, prints the terms with their standard deviations and the terms it
 //! cannot see, and writes the recording corrected.
 //! In: the parsed arguments. Out: the results folder or the corrected recording, and
@@ -15,53 +16,203 @@ use crate::installation::rows::Study;
 use crate::installation::spec::{self as study_spec, ObservabilityFile, TermName};
 use crate::installation::study::term_set;
 use crate::installation::terms::{AxisRmse, score};
-use crate::pipeline::installation::{Outcome, run_study};
+use crate::files::Seal;
+use crate::installation::spec::InstallationSpec;
+use crate::pipeline::Shard;
+use crate::pipeline::installation::{Executed, Outcome, StudyMode, StudyPlan};
+use crate::results::study_sweep::{self, StoredStudySweep};
+use crate::spec::Experiment;
 use crate::report::installation::{readable_term, readable_why};
 use crate::report::plots::Format;
 use crate::spec::TomlFile;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 use std::path::{Path, PathBuf};
 
-/// `run` of an installation spec.
-pub(super) fn run(target: &Target, drawing: &Drawing, force: bool) -> Result<(), CliError> {
-    let spec = study_spec::load(&target.spec, &target.overrides.set).map_err(input)?;
-    let spec_file = crate::pipeline::owner::recorded(&target.spec, &target.out).unwrap_or_default();
-    match run_study(&spec, &spec_file, &target.out, force).map_err(input)? {
-        Outcome::Current(folder) => {
-            eprintln!(
-                "nothing to do: the results in {} are current",
-                folder.display()
-            );
-        }
-        Outcome::Written { folder, study } => {
-            println!("{}", printed(&study));
-            if let Some(plots) = drawing.folder() {
-                draw(&study, &plots.join(&spec.name))?;
-            }
-            eprintln!("results written to {}", folder.display());
-        }
+/// The experiment of an installation spec: the study, or the points of its sweep.
+fn load(path: &Path, set: &[String]) -> Result<Experiment<InstallationSpec>, CliError> {
+    study_spec::load_experiment(path, set).map_err(input)
+}
+
+/// `run` of an installation spec: every point not current, or one shard of its
+/// calibrations.
+pub(super) fn run(
+    target: &Target,
+    drawing: &Drawing,
+    shard: Option<Shard>,
+    force: bool,
+) -> Result<(), CliError> {
+    let experiment = load(&target.spec, &target.overrides.set)?;
+    let plan = StudyPlan::new(&experiment, &target.spec, &target.out).map_err(input)?;
+    let Some(shard) = shard else {
+        let executed = plan.execute(StudyMode::All { force }).map_err(input)?;
+        return finish(&plan, &executed, drawing);
+    };
+    let executed = plan.execute(StudyMode::Shard(shard)).map_err(input)?;
+    if executed.computed == 0 {
+        eprintln!(
+            "nothing to do: every calibration of {} shard {shard} is in the cache",
+            experiment.name
+        );
+    } else {
+        eprintln!(
+            "shard {shard}: {} done; once every shard has finished, `dcnet-exp collect {}` writes the results",
+            calibrations(executed.computed),
+            target.spec.display()
+        );
     }
     Ok(())
 }
 
-/// `plot` of an installation study's results folder: its figures and reports again.
-pub(super) fn plot(results: &Path, out: &Path) -> Result<(), CliError> {
-    let study = crate::results::installation::read_study(results).map_err(input)?;
+/// `collect` of an installation spec: every point's folder from the calibrations its
+/// shards stored.
+pub(super) fn collect(target: &Target, drawing: &Drawing) -> Result<(), CliError> {
+    let experiment = load(&target.spec, &target.overrides.set)?;
+    let plan = StudyPlan::new(&experiment, &target.spec, &target.out).map_err(input)?;
+    let executed = plan.execute(StudyMode::Collect).map_err(input)?;
+    finish(&plan, &executed, drawing)
+}
+
+/// `plan` of an installation spec: its calibrations (one shard's, with `--shard`), each
+/// with its key and whether the cache holds it.
+pub(super) fn plan(target: &Target, shard: Option<Shard>) -> Result<(), CliError> {
+    let experiment = load(&target.spec, &target.overrides.set)?;
+    let plan = StudyPlan::new(&experiment, &target.spec, &target.out).map_err(input)?;
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    table.set_header(["calibration", "key", "status"]);
+    let mut listed = 0;
+    let mut to_do = 0;
+    for (u, unit) in plan.units.iter().enumerate() {
+        if shard.is_some_and(|shard| !plan.in_shard(u, shard)) {
+            continue;
+        }
+        let status = match plan.status(u) {
+            Seal::Intact => "done",
+            Seal::Absent => "to do",
+            Seal::Damaged(_) => "to do (damaged)",
+        };
+        listed += 1;
+        to_do += usize::from(status != "done");
+        table.add_row([plan.label(u), unit.key[..16].to_string(), status.to_string()]);
+    }
+    println!("{table}");
+    let scope = match shard {
+        Some(shard) => format!("shard {shard} of {}", experiment.name),
+        None => experiment.name.clone(),
+    };
+    println!(
+        "{scope}: {}, {to_do} to do; cache in {}",
+        calibrations(listed),
+        plan.store.folder.display()
+    );
+    Ok(())
+}
+
+/// "1 calibration", "13 calibrations".
+fn calibrations(count: usize) -> String {
+    match count {
+        1 => "1 calibration".into(),
+        _ => format!("{count} calibrations"),
+    }
+}
+
+/// Says what a run or collect did, prints the headline of a single study or the table
+/// of a sweep, and draws the figures of what was written.
+fn finish(plan: &StudyPlan, executed: &Executed, drawing: &Drawing) -> Result<(), CliError> {
+    let sweep = plan.experiment.is_sweep();
+    if executed.sweep.is_none()
+        && executed.points.iter().all(|o| matches!(o, Outcome::Current(_)))
+    {
+        let folder = plan.out.join(&plan.experiment.name);
+        eprintln!("nothing to do: the results in {} are current", folder.display());
+        return Ok(());
+    }
+    for outcome in &executed.points {
+        if let Outcome::Written { folder, study } = outcome {
+            if !sweep {
+                println!("{}", printed(study));
+            }
+            if let Some(plots) = drawing.folder() {
+                let name = folder.strip_prefix(&plan.out).unwrap_or(folder);
+                draw(study, &plots.join(name), Format::Both)?;
+            }
+            eprintln!("results written to {}", folder.display());
+        }
+    }
+    if let Some(folder) = &executed.sweep {
+        let stored = study_sweep::read(folder).map_err(input)?;
+        println!("{}", printed_sweep(&stored));
+        if let Some(plots) = drawing.folder() {
+            draw_sweep(&stored, &plots.join(&plan.experiment.name), Format::Both)?;
+        }
+        eprintln!(
+            "sweep table written to {}",
+            folder.join(crate::results::sweep::TABLE).display()
+        );
+    }
+    Ok(())
+}
+
+/// `plot` of an installation study's results folder, or of a sweep of them: figures
+/// and reports again, from the tables alone.
+pub(super) fn plot(results: &Path, out: &Path, format: Format) -> Result<(), CliError> {
     let name = results.file_name().map(PathBuf::from).unwrap_or_default();
-    for (file, bytes) in crate::pipeline::installation::reports(&study, &name.to_string_lossy()) {
+    if !results.join(crate::results::sweep::INDEX).is_file() {
+        return plot_study(results, &out.join(name), format);
+    }
+    let stored = study_sweep::read(results).map_err(input)?;
+    for point in &stored.index.points {
+        plot_study(&results.join(point), &out.join(&name).join(point), format)?;
+    }
+    draw_sweep(&stored, &out.join(&name), format)
+}
+
+/// Writes the reports of one study's folder again and draws its figures into `out`.
+fn plot_study(results: &Path, out: &Path, format: Format) -> Result<(), CliError> {
+    let study = crate::results::installation::read_study(results).map_err(input)?;
+    let name = results.file_name().unwrap_or_default().to_string_lossy();
+    for (file, bytes) in crate::pipeline::installation::folder::reports(&study, &name) {
         let path = results.join(file);
         crate::files::write_atomic(&path, &bytes)
             .map_err(|e| failure(anyhow::Error::new(e).context(path.display().to_string())))?;
     }
     eprintln!("report written to {}", results.join("report.md").display());
-    draw(&study, &out.join(name))
+    draw(&study, out, format)
 }
 
-fn draw(study: &Study, folder: &Path) -> Result<(), CliError> {
-    let drawn =
-        crate::report::installation::draw_all(study, folder, Format::Both).map_err(failure)?;
+fn draw(study: &Study, folder: &Path, format: Format) -> Result<(), CliError> {
+    let drawn = crate::report::installation::draw_all(study, folder, format).map_err(failure)?;
     super::report_figures(&drawn, folder);
     Ok(())
+}
+
+fn draw_sweep(stored: &StoredStudySweep, folder: &Path, format: Format) -> Result<(), CliError> {
+    let drawn = crate::report::study_sweep::draw(stored, folder, format).map_err(failure)?;
+    super::report_figures(&drawn, folder);
+    Ok(())
+}
+
+/// A sweep's headline: each point's methods at its largest window.
+fn printed_sweep(stored: &StoredStudySweep) -> String {
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    table.set_header(["point", "method", "window (s)", "held-out RMSE (cm/s)", "95 % interval", "÷ no calibration"]);
+    for point in &stored.index.points {
+        let rows: Vec<_> = stored.rows.iter().filter(|r| &r.point == point).collect();
+        let largest = rows.iter().map(|r| r.summary.window_s).fold(f64::NAN, f64::max);
+        for row in rows.iter().filter(|r| r.summary.window_s == largest) {
+            let s = &row.summary;
+            table.add_row([
+                point.clone(),
+                s.method.clone(),
+                format!("{}", s.window_s),
+                format!("{:.2}", s.mean_cm_s),
+                format!("± {:.2}", s.ci95_cm_s),
+                format!("{:.3}", s.ratio),
+            ]);
+        }
+    }
+    format!("held-out trajectories, each point at its largest calibration window:\n{table}")
 }
 
 /// The headline: each method's mean held-out RMSE at the largest window, with its
@@ -106,14 +257,26 @@ fn printed(study: &Study) -> String {
     text
 }
 
-/// `validate` of an installation spec: its faults, or what it would compute.
+/// `validate` of an installation spec: its faults (its recordings read and checked),
+/// or what it would compute.
 pub(super) fn validate(path: &Path, set: &[String]) -> Result<(), CliError> {
-    let spec = study_spec::load(path, set).map_err(input)?;
-    for (_, files) in &spec.trajectories {
-        paired::read(files, &spec.columns).map_err(input)?;
+    let experiment = load(path, set)?;
+    let mut read = std::collections::HashSet::new();
+    for point in &experiment.points {
+        let spec = &point.spec;
+        for (_, files) in &spec.trajectories {
+            if read.insert((files.clone(), format!("{:?}", spec.columns))) {
+                paired::read(files, &spec.columns).map_err(input)?;
+            }
+        }
     }
+    let spec = &experiment.points[0].spec;
+    let points = match experiment.points.len() {
+        1 => String::new(),
+        n => format!("{n} points of a sweep over {}; the first: ", experiment.swept.join(", ")),
+    };
     println!(
-        "{}: ok (an installation study: {} trajectories, {} windows, {} methods)",
+        "{}: ok (an installation study: {points}{} trajectories, {} windows, {} methods)",
         path.display(),
         spec.trajectories.len(),
         spec.windows_s.len(),

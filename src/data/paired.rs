@@ -119,7 +119,7 @@ impl PairedColumns {
 
 /// The files of one recording: the DVL's and the reference's (the same file when both
 /// are in one).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
 pub struct PairedFiles {
     pub dvl: PathBuf,
     pub reference: PathBuf,

@@ -12,7 +12,7 @@ pub const NO_CALIBRATION: &str = "no calibration";
 
 /// The held-out RMSE of one method's terms from one calibration window, on one other
 /// trajectory, cm/s.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct HeldOutRow {
     pub method: String,
     pub calibration: String,
@@ -24,7 +24,7 @@ pub struct HeldOutRow {
 }
 
 /// One estimated term of one calibration, with its bound.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TermRow {
     pub method: String,
     pub calibration: String,
@@ -54,7 +54,7 @@ pub struct SummaryRow {
 
 /// A calibration window on which a method's fit failed, and why: that window gives
 /// the method no held-out rows and no terms.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FitFailure {
     pub method: String,
     pub calibration: String,

@@ -6,7 +6,7 @@
 //! fault placed on its line.
 
 use crate::data::paired::{PairedColumns, PairedFiles};
-use crate::spec::{Document, SpecErrors, load_document};
+use crate::spec::{Document, Experiment, SpecErrors, load_documents};
 use crate::vocab::ErrorModel;
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
@@ -242,16 +242,26 @@ pub struct InstallationSpec {
     pub resolved_toml: String,
 }
 
-/// Reads and checks the installation spec at `path`.
+/// Reads and checks the installation spec at `path`, and each point of its `[sweep]`.
+pub fn load_experiment(
+    path: &Path,
+    overrides: &[String],
+) -> Result<Experiment<InstallationSpec>, SpecErrors> {
+    load_documents(path, overrides, |document: Document<InstallationFile>| {
+        let mut faults = Vec::new();
+        let spec = check(&document, &mut faults);
+        if faults.is_empty() {
+            Ok(spec)
+        } else {
+            Err(document.faults(faults))
+        }
+    })
+}
+
+/// Reads and checks the installation spec at `path`; the first point of a sweep.
 pub fn load(path: &Path, overrides: &[String]) -> Result<InstallationSpec, SpecErrors> {
-    let document: Document<InstallationFile> = load_document(path, overrides)?;
-    let mut faults = Vec::new();
-    let spec = check(&document, &mut faults);
-    if faults.is_empty() {
-        Ok(spec)
-    } else {
-        Err(document.faults(faults))
-    }
+    let mut experiment = load_experiment(path, overrides)?;
+    Ok(experiment.points.swap_remove(0).spec)
 }
 
 fn check(
@@ -266,10 +276,9 @@ fn check(
             format!("{:?} must be {KIND:?} here", file.kind),
         );
     }
-    // The results folder's rule, without the '/', '=' and ',' of a sweep's points.
-    let folder_name =
-        crate::spec::check::is_folder_name(&file.name) && !file.name.contains(['/', '=', ',']);
-    if !folder_name {
+    // The results folder's rule ('/', '=' and ',' only in a sweep point's name, which
+    // the loader gives it).
+    if !crate::spec::check::is_folder_name(&file.name) {
         fault(
             "name".into(),
             format!(

@@ -66,7 +66,7 @@ struct Estimate {
 }
 
 /// The terms one method estimated on one calibration window.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Estimated {
     pub method: String,
     pub calibration: String,
@@ -134,32 +134,77 @@ fn reference_on_stamps(segment: &Segment, range: std::ops::Range<usize>) -> (Vec
         .unzip()
 }
 
+/// What one calibration trajectory gives, over every window and method: the held-out
+/// rows, the terms with their bound, every method's terms, and the fits that failed. The
+/// unit a run stores in its cache and a shard computes.
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub struct Calibrated {
+    pub heldout: Vec<HeldOutRow>,
+    pub terms: Vec<TermRow>,
+    pub estimated: Vec<Estimated>,
+    pub failures: Vec<FitFailure>,
+}
+
+impl Calibrated {
+    /// The rows of `parts`, one after another.
+    pub fn concat(parts: impl IntoIterator<Item = Calibrated>) -> Calibrated {
+        let mut all = Calibrated::default();
+        for part in parts {
+            all.heldout.extend(part.heldout);
+            all.terms.extend(part.terms);
+            all.estimated.extend(part.estimated);
+            all.failures.extend(part.failures);
+        }
+        all
+    }
+}
+
 /// Runs the study of `spec` over `segments` (in spec order), with `dcnet` for the DCNet
 /// methods; also gives back every method's terms on every window.
 pub fn run(
     spec: &InstallationSpec,
-    segments: &[Segment],
+    segments: &[&Segment],
     dcnet: &DcnetEstimate,
 ) -> (Study, Vec<Estimated>) {
+    let parts: Vec<Calibrated> = (0..segments.len())
+        .into_par_iter()
+        .map(|c| calibrate_on(spec, segments, c, dcnet))
+        .collect();
+    assemble(spec, parts)
+}
+
+/// The study of `spec` from what each calibration trajectory gave, in spec order.
+pub fn assemble(spec: &InstallationSpec, parts: Vec<Calibrated>) -> (Study, Vec<Estimated>) {
+    let all = Calibrated::concat(parts);
+    let summary = summarize(&all.heldout, &spec.windows_s);
+    let study = Study {
+        heldout: all.heldout,
+        terms: all.terms,
+        summary,
+        trace: Vec::new(),
+        failures: all.failures,
+    };
+    (study, all.estimated)
+}
+
+/// Calibrates on trajectory `c` of `segments` (its first w seconds for each window of
+/// `spec`) with every method, and scores each method's terms on every other trajectory.
+pub fn calibrate_on(
+    spec: &InstallationSpec,
+    segments: &[&Segment],
+    c: usize,
+    dcnet: &DcnetEstimate,
+) -> Calibrated {
     let noise = Noise {
         dvl_m_s: spec.dvl_noise_m_s,
         reference_m_s: spec.reference_noise_m_s,
     };
-    let o = &spec.observability;
-    let tolerances = o.tolerances();
-    let cases: Vec<(usize, f64)> = (0..segments.len())
-        .flat_map(|c| spec.windows_s.iter().map(move |&w| (c, w)))
-        .collect();
-    #[allow(clippy::type_complexity)]
-    let per_case: Vec<(
-        Vec<HeldOutRow>,
-        Vec<TermRow>,
-        Vec<Estimated>,
-        Vec<FitFailure>,
-    )> = cases
+    let tolerances = spec.observability.tolerances();
+    let per_window: Vec<Calibrated> = spec
+        .windows_s
         .par_iter()
-        .map(|&(c, window_s)| {
-            let calibration = &segments[c];
+        .map(|&window_s| {
+            let calibration = segments[c];
             let (range, _) = calibration.first_seconds(window_s);
             let mut heldout = Vec::new();
             let mut terms = Vec::new();
@@ -276,28 +321,15 @@ pub fn run(
                     });
                 }
             }
-            (heldout, terms, estimated, failures)
+            Calibrated {
+                heldout,
+                terms,
+                estimated,
+                failures,
+            }
         })
         .collect();
-    let mut heldout = Vec::new();
-    let mut terms = Vec::new();
-    let mut estimated = Vec::new();
-    let mut failures = Vec::new();
-    for (h, t, e, f) in per_case {
-        heldout.extend(h);
-        terms.extend(t);
-        estimated.extend(e);
-        failures.extend(f);
-    }
-    let summary = summarize(&heldout, &spec.windows_s);
-    let study = Study {
-        heldout,
-        terms,
-        summary,
-        trace: Vec::new(),
-        failures,
-    };
-    (study, estimated)
+    Calibrated::concat(per_window)
 }
 
 /// Per method and window: the mean over calibration trajectories of each one's mean

@@ -153,7 +153,7 @@ impl TermSet {
 }
 
 /// The values of every term (those not estimated are zero).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Installation {
     /// S: the DVL reads (1 + s) times the true velocity, per axis, in the DVL's axes
     /// (0.01 for 1 %).

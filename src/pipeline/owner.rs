@@ -127,6 +127,27 @@ pub fn check_study(
     another_spec(folder, out, ours, name, spec_sha256)
 }
 
+/// Refuses to write the points of a study sweep named `name` into `folder` when it
+/// holds a paper run, a paper sweep or a single study.
+pub fn check_study_sweep(folder: &Path, out: &Path, ours: &str, name: &str) -> Result<(), OwnerError> {
+    if folder.exists() && !folder.is_dir() {
+        return Err(OwnerError::NotAFolder {
+            folder: folder.to_path_buf(),
+        });
+    }
+    let held = Held::of(folder);
+    if held != Held::Nothing && held != Held::StudySweep {
+        return Err(OwnerError::OtherKind {
+            folder: folder.to_path_buf(),
+            theirs: held.words(),
+            ours: Held::StudySweep.words(),
+            spec: resolved(out, ours),
+            name: name.to_string(),
+        });
+    }
+    Ok(())
+}
+
 /// Refuses a folder whose manifest records a spec file other than `ours` that still
 /// exists (a folder from before manifests named their spec file, a run that named
 /// none, or a folder copied away from its spec file belongs to anyone).
@@ -168,6 +189,7 @@ enum Held {
     Single,
     Sweep,
     Study,
+    StudySweep,
 }
 
 impl Held {
@@ -175,7 +197,10 @@ impl Held {
         if folder.join(crate::results::installation::HELDOUT).is_file() {
             Held::Study
         } else if folder.join(sweep::INDEX).is_file() {
-            Held::Sweep
+            match sweep::read_index(folder) {
+                Ok(index) if index.kind == crate::installation::spec::KIND => Held::StudySweep,
+                _ => Held::Sweep,
+            }
         } else if folder.join(results::MANIFEST).is_file() {
             Held::Single
         } else {
@@ -189,6 +214,7 @@ impl Held {
             Held::Single => "the results of a single run",
             Held::Sweep => "the points of a sweep",
             Held::Study => "the results of an installation study",
+            Held::StudySweep => "the points of a sweep of installation studies",
         }
     }
 }

@@ -198,7 +198,7 @@ fn term_rows(batch: &Batch) -> Result<Vec<TermRow>, ColumnError> {
         .collect())
 }
 
-fn summary_rows(batch: &Batch) -> Result<Vec<SummaryRow>, ColumnError> {
+pub(super) fn summary_rows(batch: &Batch) -> Result<Vec<SummaryRow>, ColumnError> {
     let method = batch.strings("method")?;
     let window_s = batch.floats("window_s")?;
     let mean = batch.floats("rmse_cm_s")?;

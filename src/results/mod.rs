@@ -12,6 +12,7 @@ pub mod installation;
 pub mod read;
 pub mod corrected;
 pub mod sweep;
+pub mod study_sweep;
 
 use crate::data::Trajectory;
 use crate::evaluate::{CalibrationRow, EvaluationRow, ProtocolResult, RunRow};

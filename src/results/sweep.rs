@@ -36,6 +36,10 @@ pub struct SweepIndex {
     /// the table was hashed.
     #[serde(default)]
     pub table_sha256: String,
+    /// The kind of spec swept: empty for the paper's experiments, `"installation"` for
+    /// installation studies.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub kind: String,
 }
 
 impl SweepIndex {
@@ -184,7 +188,8 @@ pub fn rows(
     rows
 }
 
-fn swept(value: &toml::Value) -> Swept {
+/// A swept TOML value as the table stores it.
+pub fn swept(value: &toml::Value) -> Swept {
     match value {
         toml::Value::Integer(i) => Swept::Integer(*i),
         toml::Value::Float(f) => Swept::Number(*f),
@@ -224,6 +229,7 @@ pub fn write(
             .collect(),
         results_keys: results_keys.to_vec(),
         table_sha256: crate::files::sha256_hex(&bytes),
+        kind: String::new(),
     };
     let path = folder.join(INDEX);
     write_atomic(
@@ -235,8 +241,39 @@ pub fn write(
     .map_err(|source| ResultsError::Io { path, source })
 }
 
-/// The table: point, one column per swept key (integers as Int64, other numbers as
-/// Float64, anything else as its TOML text), then the fixed columns.
+/// The first columns of a sweep's table, one value per row: the point, then one column
+/// per swept key (integers as Int64, other numbers as Float64, anything else as its
+/// TOML text).
+pub fn point_columns(swept: &[String], rows: &[(&str, &[Swept])]) -> Vec<(String, ArrayRef)> {
+    let mut columns: Vec<(String, ArrayRef)> = vec![(
+        "point".into(),
+        Arc::new(StringArray::from_iter_values(rows.iter().map(|(point, _)| *point))),
+    )];
+    for (k, key) in swept.iter().enumerate() {
+        let all = |f: fn(&Swept) -> bool| rows.iter().all(|(_, values)| f(&values[k]));
+        let column: ArrayRef = if all(|v| matches!(v, Swept::Integer(_))) {
+            Arc::new(Int64Array::from_iter_values(rows.iter().map(
+                |(_, values)| match values[k] {
+                    Swept::Integer(i) => i,
+                    _ => unreachable!("every value is an integer"),
+                },
+            )))
+        } else if all(|v| v.number().is_some()) {
+            Arc::new(Float64Array::from_iter(
+                rows.iter().map(|(_, values)| values[k].number()),
+            ))
+        } else {
+            Arc::new(StringArray::from_iter_values(
+                rows.iter().map(|(_, values)| values[k].to_string()),
+            ))
+        };
+        columns.push((key.clone(), column));
+    }
+    columns
+}
+
+/// The table: point, one column per swept key (see [`point_columns`]), then the fixed
+/// columns.
 fn batch(swept: &[String], rows: &[SweepRow]) -> RecordBatch {
     let strings = |f: &dyn Fn(&SweepRow) -> String| -> ArrayRef {
         Arc::new(StringArray::from_iter_values(rows.iter().map(f)))
@@ -244,24 +281,13 @@ fn batch(swept: &[String], rows: &[SweepRow]) -> RecordBatch {
     let floats = |f: &dyn Fn(&SweepRow) -> Option<f64>| -> ArrayRef {
         Arc::new(Float64Array::from_iter(rows.iter().map(f)))
     };
-    let mut columns: Vec<(String, ArrayRef)> =
-        vec![("point".into(), strings(&|r| r.point.clone()))];
-    for (k, key) in swept.iter().enumerate() {
-        let all = |f: fn(&Swept) -> bool| rows.iter().all(|r| f(&r.values[k]));
-        let column: ArrayRef = if all(|v| matches!(v, Swept::Integer(_))) {
-            Arc::new(Int64Array::from_iter_values(rows.iter().map(
-                |r| match r.values[k] {
-                    Swept::Integer(i) => i,
-                    _ => unreachable!("every value is an integer"),
-                },
-            )))
-        } else if all(|v| v.number().is_some()) {
-            floats(&|r| r.values[k].number())
-        } else {
-            strings(&|r| r.values[k].to_string())
-        };
-        columns.push((key.clone(), column));
-    }
+    let mut columns = point_columns(
+        swept,
+        &rows
+            .iter()
+            .map(|r| (r.point.as_str(), &r.values[..]))
+            .collect::<Vec<_>>(),
+    );
     columns.extend([
         ("dvl".to_string(), strings(&|r| r.dvl.clone())),
         (

@@ -39,7 +39,7 @@ pub mod published;
 pub mod recordings;
 
 pub use file::SpecFile;
-pub use load::{Document, Experiment, Point, declared_kind, load, load_document, load_experiment};
+pub use load::{Document, Experiment, Point, declared_kind, load, load_documents, load_experiment};
 pub use toml_file::{SpecError, SpecErrors, TomlFile};
 pub use windows::{seconds_to_samples, window_count, window_starts};
 

@@ -19,12 +19,17 @@
 //!   train.
 //! - Monte Carlo blocks (one estimator on one DVL, every run) live in `monte_carlo/`
 //!   ([`BlockStore`]) as Parquet files of their per-run rows.
+//! - The calibrations of installation studies (one calibration trajectory, every window
+//!   and method, scored on every other trajectory) live in `installation/`
+//!   ([`CalibrationStore`]).
 
 pub mod blocks;
+pub mod calibrations;
 pub mod checkpoints;
 pub mod models;
 
 pub use blocks::BlockStore;
+pub use calibrations::CalibrationStore;
 pub use models::{ModelStore, ModelStoreError};
 
 use crate::files::sha256_hex;
@@ -41,6 +46,8 @@ const DATASET_CODE_VERSION: u32 = 1;
 const TRAINING_CODE_VERSION: u32 = 2;
 /// Bumped whenever the protocol or an estimator changes its numbers.
 const PROTOCOL_CODE_VERSION: u32 = 1;
+/// Bumped whenever an installation study's calibration changes its numbers.
+const INSTALLATION_CODE_VERSION: u32 = 1;
 /// Bumped whenever the tables put together from the blocks change (2: the bound rows
 /// and the efficiency column).
 const TABLES_CODE_VERSION: u32 = 2;
@@ -109,6 +116,30 @@ impl DataHashes {
         };
         (source.name.clone(), origin)
     }
+}
+
+/// The key of calibration trajectory `calibration` of an installation study: the study's
+/// resolved spec without its `name` (a sweep point and a single run of the same
+/// settings share it), the SHA-256 of every recording it reads (each calibration is
+/// scored on all of them), the keys of the DCNet models it applies, and the code
+/// version.
+pub fn calibration_key(
+    resolved_toml: &str,
+    data_sha256: &[&str],
+    dcnet_keys: &[&str],
+    calibration: usize,
+) -> String {
+    let mut settings: toml::Table =
+        toml::from_str(resolved_toml).expect("a resolved spec is TOML");
+    settings.remove("name");
+    hash(&(
+        "installation calibration",
+        INSTALLATION_CODE_VERSION,
+        toml::to_string(&settings).expect("a TOML table serializes"),
+        data_sha256,
+        dcnet_keys,
+        calibration,
+    ))
 }
 
 /// The SHA-256, in hex, of `inputs` as JSON.

@@ -57,6 +57,19 @@ impl Scale {
     /// A logarithmic axis over `range`, which spans a decade or more, ticked at the
     /// powers of ten when [`MIN_TICKS`] of them lie in it, and otherwise at 1, 2 and 5
     /// times them: any decade holds three of 1, 2, 5, 10, 20, 50, …
+    /// An axis of things rather than a quantity: thing `i` at `i`, labelled `names[i]`.
+    pub fn named(names: &[String]) -> Scale {
+        Scale {
+            range: -0.5..names.len() as f64 - 0.5,
+            log: false,
+            ticks: names
+                .iter()
+                .enumerate()
+                .map(|(i, name)| (i as f64, name.clone()))
+                .collect(),
+        }
+    }
+
     fn logarithmic(range: Range<f64>) -> Scale {
         let decades = log_ticks(range.start, range.end, &[1]);
         let ticks = if decades.len() >= MIN_TICKS {

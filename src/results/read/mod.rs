@@ -77,6 +77,9 @@ pub enum ReadError {
         #[source]
         source: arrow_schema::ArrowError,
     },
+    /// A file of another kind of results than the one asked for.
+    #[error("{}: {why}", path.display())]
+    OtherKind { path: PathBuf, why: String },
     #[error(transparent)]
     Altered(#[from] Box<Altered>),
     #[error("{}", path.display())]

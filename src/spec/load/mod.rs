@@ -22,30 +22,42 @@ use source::{Assigned, Source};
 use std::path::{Path, PathBuf};
 use sweep::load_sweep;
 
-/// A spec's points: the spec itself, or one per point of its `[sweep]`.
+/// A spec's points: the spec itself, or one per point of its `[sweep]`. `S` is the
+/// checked spec of its kind: the paper's [`Spec`], or another kind's (an installation
+/// study's).
 #[derive(Debug, Clone)]
-pub struct Experiment {
+pub struct Experiment<S = Spec> {
     pub name: String,
     /// The swept keys in the order `[sweep.values]` lists them; empty without a sweep.
     pub swept: Vec<String>,
-    pub points: Vec<Point>,
+    pub points: Vec<Point<S>>,
     /// Where the spec's keys are written or were set, to place later faults.
     source: Source,
     assigned: Assigned,
 }
 
 #[derive(Debug, Clone)]
-pub struct Point {
+pub struct Point<S = Spec> {
     /// One value per swept key.
     pub values: Vec<toml::Value>,
     /// The point's spec; a sweep point is named `<name>/<point>`, its results folder.
-    pub spec: Spec,
+    pub spec: S,
 }
 
-impl Experiment {
+impl<S> Experiment<S> {
     pub fn is_sweep(&self) -> bool {
         !self.swept.is_empty()
     }
+
+    /// A fault at `key` found after loading, such as the memory a point needs, placed
+    /// where the key is written or was set.
+    pub fn fault(&self, key: &str, message: impl Into<String>) -> SpecError {
+        self.source
+            .locate(&self.assigned, key.to_string(), message.into())
+    }
+}
+
+impl Experiment {
 
     /// What the spec asks that runs but says little, each placed like a fault: a test
     /// trajectory that is the calibration trajectory (its error is measured on the
@@ -75,13 +87,6 @@ impl Experiment {
         }
         warnings
     }
-
-    /// A fault at `key` found after loading, such as the memory a point needs, placed
-    /// where the key is written or was set.
-    pub fn fault(&self, key: &str, message: impl Into<String>) -> SpecError {
-        self.source
-            .locate(&self.assigned, key.to_string(), message.into())
-    }
 }
 
 /// Reads the spec at `path` with its overrides; the first point of a sweep.
@@ -93,6 +98,18 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Spec, SpecErrors> {
 /// Reads, overrides, deserializes and checks the spec at `path`, and every point of
 /// its `[sweep]`.
 pub fn load_experiment(path: &Path, overrides: &[String]) -> Result<Experiment, SpecErrors> {
+    load_points(path, overrides, |source, table, assigned| {
+        source.check(table, assigned)
+    })
+}
+
+/// Reads the spec at `path` with its overrides, and checks it with `check` (each point
+/// of its `[sweep]` when it has one, named `<name>/<point>`).
+fn load_points<S>(
+    path: &Path,
+    overrides: &[String],
+    check: impl Fn(&Source, toml::Table, &Assigned) -> Result<S, SpecErrors>,
+) -> Result<Experiment<S>, SpecErrors> {
     let text = TomlText::read(path, "cannot read the spec")?;
     let mut table = text.table()?;
     let assigned = apply_overrides(&mut table, overrides)?;
@@ -100,20 +117,23 @@ pub fn load_experiment(path: &Path, overrides: &[String]) -> Result<Experiment, 
         text,
         folder: spec_folder(path),
     };
+    let name = table
+        .get("name")
+        .and_then(toml::Value::as_str)
+        .unwrap_or_default()
+        .to_string();
     // '/', '=' and ',' name a sweep's points (`<name>/<point>`): a spec's own name with
     // them would write into a sweep's folder, or below another results folder.
-    if let Some(name) = table.get("name").and_then(toml::Value::as_str)
-        && name.contains(['/', '=', ','])
-    {
+    if name.contains(['/', '=', ',']) {
         return Err(source
-            .locate(&assigned, "name".into(), format!("{:?} must use only letters, digits, '-', '_' and '.' (it names the results folder; '/', '=' and ',' name the points of a sweep)", shown_value(name)))
+            .locate(&assigned, "name".into(), format!("{:?} must use only letters, digits, '-', '_' and '.' (it names the results folder; '/', '=' and ',' name the points of a sweep)", shown_value(&name)))
             .into());
     }
     match table.remove("sweep") {
         None => {
-            let spec = source.check(table, &assigned)?;
+            let spec = check(&source, table, &assigned)?;
             Ok(Experiment {
-                name: spec.name.clone(),
+                name,
                 swept: Vec::new(),
                 points: vec![Point {
                     values: Vec::new(),
@@ -123,7 +143,7 @@ pub fn load_experiment(path: &Path, overrides: &[String]) -> Result<Experiment, 
                 assigned,
             })
         }
-        Some(sweep) => load_sweep(source, table, sweep, assigned),
+        Some(sweep) => load_sweep(source, table, sweep, assigned, check),
     }
 }
 
@@ -176,28 +196,25 @@ impl<T> Document<T> {
     }
 }
 
-/// Reads `path` with `overrides` into `T`; a value that does not fit is a fault placed
-/// on its line or its `--set`.
-pub fn load_document<T: serde::de::DeserializeOwned>(
+/// Reads `path` with `overrides` into `T` and checks it with `check`, each point of its
+/// `[sweep]` when it has one; a value that does not fit is a fault placed on its line,
+/// its `--set` or its sweep value.
+pub fn load_documents<T: serde::de::DeserializeOwned, S>(
     path: &Path,
     overrides: &[String],
-) -> Result<Document<T>, SpecErrors> {
-    let text = TomlText::read(path, "cannot read the spec")?;
-    let mut table = text.table()?;
-    let assigned = apply_overrides(&mut table, overrides)?;
-    let source = Source {
-        text,
-        folder: spec_folder(path),
-    };
-    let resolved_toml = toml::to_string_pretty(&table).expect("a TOML table serializes");
-    let value = super::toml_file::deserialize(toml::Value::Table(table))
-        .map_err(|(key, message)| source.locate(&assigned, key, message))?;
-    Ok(Document {
-        value,
-        folder: source.folder.clone(),
-        resolved_toml,
-        source,
-        assigned,
+    check: impl Fn(Document<T>) -> Result<S, SpecErrors>,
+) -> Result<Experiment<S>, SpecErrors> {
+    load_points(path, overrides, |source, table, assigned| {
+        let resolved_toml = toml::to_string_pretty(&table).expect("a TOML table serializes");
+        let value = super::toml_file::deserialize(toml::Value::Table(table))
+            .map_err(|(key, message)| source.locate(assigned, key, message))?;
+        check(Document {
+            value,
+            folder: source.folder.clone(),
+            resolved_toml,
+            source: source.clone(),
+            assigned: assigned.clone(),
+        })
     })
 }
 

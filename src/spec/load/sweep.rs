@@ -13,12 +13,13 @@ use std::collections::HashSet;
 
 /// Every chosen point of `sweep` over `table`, each checked; the faults of all points,
 /// each once.
-pub(super) fn load_sweep(
+pub(super) fn load_sweep<S>(
     source: Source,
     table: toml::Table,
     sweep: toml::Value,
     assigned: Assigned,
-) -> Result<Experiment, SpecErrors> {
+    check: impl Fn(&Source, toml::Table, &Assigned) -> Result<S, SpecErrors>,
+) -> Result<Experiment<S>, SpecErrors> {
     let sweep: SweepFile = deserialize(sweep).map_err(|(key, message)| {
         let key = if key.is_empty() {
             "sweep".into()
@@ -52,7 +53,7 @@ pub(super) fn load_sweep(
     let mut points = SweepPoints::default();
     for index in chosen {
         let picks = picks_at(index, &axes);
-        points.add(&source, &table, &assigned, &axes, &picks, &name);
+        points.add(&source, &table, &assigned, &axes, &picks, &name, &check);
     }
     if !points.errors.is_empty() {
         return Err(SpecErrors(points.errors));
@@ -124,16 +125,26 @@ fn picks_at(index: usize, axes: &[Axis]) -> Vec<usize> {
 
 /// A sweep's points as they are checked: the good ones with their names, and the
 /// faults of all, each once (the sets make that linear in the number of faults).
-#[derive(Default)]
-struct SweepPoints {
-    points: Vec<Point>,
+struct SweepPoints<S> {
+    points: Vec<Point<S>>,
     names: HashSet<String>,
     errors: Vec<SpecError>,
     seen: HashSet<SpecError>,
 }
 
-impl SweepPoints {
-    /// Checks the point of `table` that takes value `picks[i]` of axis `i`, keeping
+impl<S> Default for SweepPoints<S> {
+    fn default() -> Self {
+        SweepPoints {
+            points: Vec::new(),
+            names: HashSet::new(),
+            errors: Vec::new(),
+            seen: HashSet::new(),
+        }
+    }
+}
+
+impl<S> SweepPoints<S> {
+    /// Checks, with `check`, the point of `table` that takes value `picks[i]` of axis `i`, keeping
     /// the point or its faults.
     fn add(
         &mut self,
@@ -143,6 +154,7 @@ impl SweepPoints {
         axes: &[Axis],
         picks: &[usize],
         name: &str,
+        check: &impl Fn(&Source, toml::Table, &Assigned) -> Result<S, SpecErrors>,
     ) {
         let values: Vec<toml::Value> = axes
             .iter()
@@ -153,7 +165,7 @@ impl SweepPoints {
         let (mut point_table, point_assigned) =
             self.place(source, table, assigned, axes, &values, &point_name);
         point_table.insert("name".into(), format!("{name}/{point_name}").into());
-        match source.check(point_table, &point_assigned) {
+        match check(source, point_table, &point_assigned) {
             Ok(spec) => {
                 if !self.names.insert(point_name.clone()) {
                     self.errors.push(SpecError {

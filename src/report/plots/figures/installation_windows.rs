@@ -91,60 +91,92 @@ pub fn installation_windows(study: &Study) -> PlotResult<Outcome> {
             if windows.len() == 1 { "" } else { "s" }
         )));
     }
-    let mut methods = crate::first_seen(study.summary.iter().map(|r| r.method.as_str()));
+    let rows: Vec<(f64, &SummaryRow)> = study.summary.iter().map(|r| (r.window_s, r)).collect();
+    rmse_figure(
+        &rows,
+        XAxis {
+            label: "calibration window [s]",
+            ticks: None,
+        },
+        "Held-out RMSE against the calibration window: mean over calibration trajectories, bars its 95 % interval".into(),
+    )
+}
+
+/// The x axis of [`rmse_figure`]: its label, and the names of the things at 0, 1, 2, …
+/// when it is a list of things rather than a quantity.
+pub struct XAxis<'a> {
+    pub label: &'a str,
+    pub ticks: Option<&'a [String]>,
+}
+
+/// Each method's mean held-out RMSE ± its 95 % interval at the x of each of its `rows`
+/// (`(x, row)`), one line per method and no calibration as a dashed reference.
+pub fn rmse_figure(
+    rows: &[(f64, &SummaryRow)],
+    x_axis: XAxis,
+    caption: String,
+) -> PlotResult<Outcome> {
+    let xs: Vec<f64> = rows.iter().map(|(x, _)| *x).collect();
+    let mut methods = crate::first_seen(rows.iter().map(|(_, r)| r.method.as_str()));
     methods.sort_by_key(|m| *m != NO_CALIBRATION);
     let looks = method_looks(&methods);
-    let (first, last) = windows
+    let (first, last) = xs
         .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), w| {
-            (lo.min(*w), hi.max(*w))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+            (lo.min(*x), hi.max(*x))
         });
-    let pad = 0.05 * (last - first);
-    let x = Scale::linear((first - pad)..(last + pad));
-    // Each method's points and bars sit a little beside the window, in the order of
-    // the legend, so that intervals of equal windows do not hide one another.
-    let offset = |index: usize| method_offset_s(index, methods.len(), last - first);
+    let x = match x_axis.ticks {
+        Some(names) => Scale::named(names),
+        None => {
+            let pad = 0.05 * (last - first);
+            Scale::linear((first - pad)..(last + pad))
+        }
+    };
+    // Each method's points and bars sit a little beside their x, in the order of the
+    // legend, so that intervals at one x do not hide one another.
+    let span = match x_axis.ticks {
+        Some(_) => (last - first).max(1.0),
+        None => last - first,
+    };
+    let offset = |index: usize| method_offset_s(index, methods.len(), span);
     // The means decide the axis: logarithmic when they span a decade, as the blown-up
     // short windows of the paper's least squares make them, so that no calibration,
     // the paper's methods and the installation models each keep a height of their own.
-    let means: Vec<f64> = study.summary.iter().map(|r| r.mean_cm_s).collect();
-    let y = Scale::fit_values(&means, windows.len());
+    let means: Vec<f64> = rows.iter().map(|(_, r)| r.mean_cm_s).collect();
+    let y = Scale::fit_values(&means, crate::first_seen(xs.iter().map(|x| x.to_bits())).len());
     let y_label = if y.is_log() {
         "held-out RMSE [cm/s], log scale"
     } else {
         "held-out RMSE [cm/s]"
     };
-    let caption =
-        "Held-out RMSE against the calibration window: mean over calibration trajectories, bars its 95 % interval"
-            .to_string();
     let width = 760 + LEGEND_WIDTH + 60;
     let svg = draw_svg((width, 560), |root| {
         let (panels, legend_area) = panels_and_legend(root, &caption, width - 60, 1)?;
         let mut chart = chart_on(&panels[0], "", 60).build_cartesian_2d(x.clone(), y.clone())?;
         mesh(&mut chart)
-            .x_desc("calibration window [s]")
+            .x_desc(x_axis.label)
             .y_desc(y_label)
             .draw()?;
         for (index, (method, (look, marker))) in methods.iter().zip(&looks).enumerate() {
-            let mut rows: Vec<_> = study
-                .summary
+            let mut mine: Vec<(f64, &SummaryRow)> = rows
                 .iter()
-                .filter(|r| r.method == *method)
+                .filter(|(_, r)| r.method == *method)
+                .map(|(x, r)| (*x, *r))
                 .collect();
-            rows.sort_by(|a, b| a.window_s.total_cmp(&b.window_s));
-            let at = |r: &SummaryRow| r.window_s + offset(index);
+            mine.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let at = |x: f64| x + offset(index);
             let points: Vec<(f64, f64)> =
-                rows.iter().map(|r| (at(r), y.shown(r.mean_cm_s))).collect();
+                mine.iter().map(|(x, r)| (at(*x), y.shown(r.mean_cm_s))).collect();
             line(&mut chart, points.clone(), look.color, look.stroke)?;
             if let Some(marker) = marker {
                 marker.draw(&mut chart, &points, look.color)?;
-                chart.draw_series(rows.iter().map(|r| {
+                chart.draw_series(mine.iter().map(|(x, r)| {
                     let ends = [r.mean_cm_s - r.ci95_cm_s, r.mean_cm_s + r.ci95_cm_s]
-                        .map(|v| (at(r), y.shown(v)));
+                        .map(|v| (at(*x), y.shown(v)));
                     PathElement::new(ends.to_vec(), look.color.stroke_width(2))
                 }))?;
             }
-            for r in rows.iter().filter(|r| y.is_cut(r.mean_cm_s)) {
+            for (x, r) in mine.iter().filter(|(_, r)| y.is_cut(r.mean_cm_s)) {
                 let edge = if y.is_below(r.mean_cm_s) {
                     Edge::Bottom
                 } else {
@@ -152,7 +184,7 @@ pub fn installation_windows(study: &Study) -> PlotResult<Outcome> {
                 };
                 cut_mark(
                     &mut chart,
-                    (at(r), y.shown(r.mean_cm_s)),
+                    (at(*x), y.shown(r.mean_cm_s)),
                     r.mean_cm_s,
                     look.color,
                     edge,

@@ -9,6 +9,7 @@ pub mod bars;
 pub mod calibration;
 pub mod installation_matrix;
 pub mod installation_residual;
+pub mod installation_sweep;
 pub mod installation_windows;
 pub mod spread;
 pub mod training_loss;

@@ -1,0 +1,133 @@
+//! The calibrations of installation studies in the cache,
+//! `OUT/.cache/installation/<key>.msgpack`: what one calibration trajectory of one
+//! study gives over every window and method (a [`Calibrated`]), keyed by
+//! [`calibration_key`](super::calibration_key). MessagePack keeps every float as its
+//! bits, an infinite standard deviation included, so a study put together from the
+//! cache has the bytes of one computed whole.
+
+use crate::files::{self, Seal};
+use crate::installation::study::Calibrated;
+use std::path::{Path, PathBuf};
+
+/// Why a stored calibration cannot be used or kept.
+#[derive(Debug, thiserror::Error)]
+pub enum CalibrationStoreError {
+    #[error("{}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{}: not a stored calibration of this version", path.display())]
+    Decode {
+        path: PathBuf,
+        #[source]
+        source: rmp_serde::decode::Error,
+    },
+}
+
+/// The calibrations of the cache.
+pub struct CalibrationStore {
+    pub folder: PathBuf,
+}
+
+impl CalibrationStore {
+    /// The store of the cache under the output folder `out`.
+    pub fn new(out: &Path) -> Self {
+        Self {
+            folder: super::root(out).join("installation"),
+        }
+    }
+
+    pub fn path(&self, key: &str) -> PathBuf {
+        self.folder.join(format!("{}.msgpack", &key[..16]))
+    }
+
+    /// Whether the calibration of `key` is there and has the bytes its seal names.
+    pub fn integrity(&self, key: &str) -> Seal {
+        files::check_seal(&self.path(key), key)
+    }
+
+    /// The calibration of `key`, when it is stored and intact.
+    pub fn load(&self, key: &str) -> Result<Option<Calibrated>, CalibrationStoreError> {
+        if self.integrity(key) != Seal::Intact {
+            return Ok(None);
+        }
+        let path = self.path(key);
+        let bytes = std::fs::read(&path).map_err(|source| CalibrationStoreError::Io {
+            path: path.clone(),
+            source,
+        })?;
+        rmp_serde::from_slice(&bytes)
+            .map(Some)
+            .map_err(|source| CalibrationStoreError::Decode { path, source })
+    }
+
+    pub fn save(&self, key: &str, calibrated: &Calibrated) -> Result<(), CalibrationStoreError> {
+        files::create_folder(&self.folder).map_err(|source| CalibrationStoreError::Io {
+            path: self.folder.clone(),
+            source,
+        })?;
+        let path = self.path(key);
+        let bytes = rmp_serde::to_vec_named(calibrated).expect("a calibration serializes");
+        files::write_sealed(&path, &bytes, key)
+            .map_err(|source| CalibrationStoreError::Io { path, source })
+    }
+
+    /// Moves a damaged calibration of `key` into the cache's `damaged/` folder, so that
+    /// it is computed again; returns what was wrong with it.
+    pub fn set_aside_damaged(&self, key: &str) -> Result<Option<String>, CalibrationStoreError> {
+        let Seal::Damaged(why) = self.integrity(key) else {
+            return Ok(None);
+        };
+        let path = self.path(key);
+        let damaged = self.folder.with_file_name("damaged");
+        files::set_aside(&path, &damaged).map_err(|source| CalibrationStoreError::Io {
+            path: path.clone(),
+            source,
+        })?;
+        Ok(Some(format!(
+            "damaged calibration {}: {why}; moved to {} and computed again",
+            path.display(),
+            damaged.display()
+        )))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::installation::rows::TermRow;
+
+    #[test]
+    fn a_stored_calibration_comes_back_bit_for_bit_and_a_damaged_one_is_not_used() {
+        let out = tempfile::tempdir().unwrap();
+        let store = CalibrationStore::new(out.path());
+        let key = "ab".repeat(32);
+        let calibrated = Calibrated {
+            terms: vec![TermRow {
+                method: "installation all".into(),
+                calibration: "T12".into(),
+                window_s: 400.0,
+                term: "lever_arm_x_m".into(),
+                value: -1.886_432_1e-1,
+                std: f64::INFINITY,
+                unseen: "flat".into(),
+            }],
+            ..Calibrated::default()
+        };
+        assert_eq!(store.load(&key).unwrap(), None);
+        store.save(&key, &calibrated).unwrap();
+        let back = store.load(&key).unwrap().unwrap();
+        assert_eq!(back, calibrated);
+        assert_eq!(back.terms[0].value.to_bits(), calibrated.terms[0].value.to_bits());
+        let mut bytes = std::fs::read(store.path(&key)).unwrap();
+        let last = bytes.len() - 1;
+        bytes[last] ^= 1;
+        std::fs::write(store.path(&key), bytes).unwrap();
+        assert_eq!(store.load(&key).unwrap(), None);
+        let said = store.set_aside_damaged(&key).unwrap().unwrap();
+        assert!(said.contains("moved to"), "{said}");
+        assert_eq!(store.integrity(&key), Seal::Absent);
+    }
+}

@@ -1,0 +1,167 @@
+//! A point's results folder: the study put together from its calibrations (the fits
+//! that failed kept beside it, and the residual figure's samples), the resolved spec,
+//! the Parquet tables, both reports, and the manifest last, each file written
+//! atomically; and whether a folder already holds the results of a key, intact.
+//! In: a point's spec, its calibrations and recordings. Out: the folder, or why not.
+
+use super::StudyError;
+use crate::Vec3;
+use crate::files::{sha256_hex, write_atomic};
+use crate::installation::rows::{NO_CALIBRATION, Study, TracePoint};
+use crate::installation::spec::InstallationSpec;
+use crate::installation::study::{Estimated, Segment};
+use crate::results::{self, Manifest};
+use std::path::Path;
+use std::time::SystemTime;
+
+/// Refuses a study in which a method fitted on no calibration trajectory at some
+/// window: it would have no row at all there. `point` opens the message in a sweep.
+pub fn no_window_without_a_fit(
+    spec: &InstallationSpec,
+    study: &Study,
+    point: &str,
+) -> Result<(), StudyError> {
+    for &window_s in &spec.windows_s {
+        for method in &spec.methods {
+            let label = method.label();
+            let fitted = study
+                .summary
+                .iter()
+                .any(|row| row.method == label && row.window_s == window_s);
+            let failure = study
+                .failures
+                .iter()
+                .find(|f| f.method == label && f.window_s == window_s);
+            if let (false, Some(failure)) = (fitted, failure) {
+                return Err(StudyError::NoFit {
+                    point: point.to_string(),
+                    method: label,
+                    window_s,
+                    why: failure.why.clone(),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Whether `folder` holds the results of `results_key`, every file intact.
+pub fn is_current(folder: &Path, results_key: &str) -> bool {
+    let Ok(bytes) = std::fs::read(folder.join(results::MANIFEST)) else {
+        return false;
+    };
+    let Ok(manifest) = serde_json::from_slice::<Manifest>(&bytes) else {
+        return false;
+    };
+    manifest.results_key == results_key && results::is_intact(folder, &manifest)
+}
+
+/// The residual figure's samples: the trajectory (other than the first, which
+/// calibrates) with the largest uncalibrated RMSE, corrected by the terms the method
+/// with the lowest mean held-out RMSE at the largest window estimated on the first
+/// trajectory over that window.
+pub fn trace(study: &Study, estimates: &[Estimated], segments: &[&Segment]) -> Vec<TracePoint> {
+    let Some(largest) = study.summary.iter().map(|s| s.window_s).reduce(f64::max) else {
+        return Vec::new();
+    };
+    let best = study
+        .summary
+        .iter()
+        .filter(|s| s.window_s == largest)
+        .min_by(|a, b| a.mean_cm_s.total_cmp(&b.mean_cm_s));
+    let calibration = &segments[0];
+    let scored = study
+        .heldout
+        .iter()
+        .filter(|r| {
+            r.method == NO_CALIBRATION && r.calibration == calibration.name && r.window_s == largest
+        })
+        .max_by(|a, b| a.total_cm_s.total_cmp(&b.total_cm_s));
+    let (Some(best), Some(scored)) = (best, scored) else {
+        return Vec::new();
+    };
+    let Some(segment) = segments.iter().find(|s| s.name == scored.scored) else {
+        return Vec::new();
+    };
+    let Some(installation) = estimates
+        .iter()
+        .find(|e| {
+            e.method == best.method && e.calibration == calibration.name && e.window_s == largest
+        })
+        .map(|e| e.installation)
+    else {
+        return Vec::new();
+    };
+    let recording = &segment.recording;
+    (0..recording.time_s.len())
+        .filter_map(|i| {
+            let t = recording.time_s[i];
+            let before = segment.reference.at(t)?;
+            let after_t = t + installation.time_offset_s;
+            let after = segment.reference.at(after_t)?;
+            let corrected = installation.correct(recording.dvl_m_s[i], after.rate_rad_s);
+            let residual =
+                |v: Vec3, r: Vec3| -> Vec3 { std::array::from_fn(|a| 100.0 * (v[a] - r[a])) };
+            Some(TracePoint {
+                trajectory: segment.name.clone(),
+                method: best.method.clone(),
+                calibration: calibration.name.clone(),
+                time_s: t,
+                before_cm_s: residual(recording.dvl_m_s[i], before.velocity_body_m_s),
+                after_cm_s: residual(corrected, after.velocity_body_m_s),
+                yaw_rate_deg_s: before.rate_rad_s[2].to_degrees(),
+            })
+        })
+        .collect()
+}
+
+/// The study's two reports, named as its folder holds them: a pure function of its
+/// tables, so `plot` writes them again to the same bytes.
+pub fn reports(study: &Study, name: &str) -> [(String, Vec<u8>); 2] {
+    [
+        (
+            "report.md".into(),
+            crate::report::installation::markdown(study).into_bytes(),
+        ),
+        (
+            "report.tex".into(),
+            crate::report::installation::latex(study, name).into_bytes(),
+        ),
+    ]
+}
+
+/// Writes the folder: the resolved spec, the tables, both reports, then the manifest
+/// with every file's SHA-256.
+pub fn write_folder(
+    spec: &InstallationSpec,
+    folder: &Path,
+    study: &Study,
+    manifest: Manifest,
+) -> Result<(), StudyError> {
+    crate::files::create_folder(folder).map_err(|source| StudyError::Io {
+        path: folder.to_path_buf(),
+        source,
+    })?;
+    let mut files: Vec<(String, Vec<u8>)> = vec![(
+        results::SPEC.to_string(),
+        spec.resolved_toml.clone().into_bytes(),
+    )];
+    for (name, bytes) in results::installation::table_bytes(study)? {
+        files.push((name.to_string(), bytes));
+    }
+    files.extend(reports(study, &spec.name));
+    let mut digests = std::collections::BTreeMap::new();
+    for (name, bytes) in &files {
+        let path = folder.join(name);
+        write_atomic(&path, bytes).map_err(|source| StudyError::Io { path, source })?;
+        digests.insert(name.clone(), sha256_hex(bytes));
+    }
+    let manifest = Manifest {
+        finished_at: humantime::format_rfc3339_seconds(SystemTime::now()).to_string(),
+        files_sha256: digests,
+        ..manifest
+    };
+    let path = folder.join(results::MANIFEST);
+    let json = serde_json::to_string_pretty(&manifest).expect("a manifest always serializes");
+    write_atomic(&path, json.as_bytes()).map_err(|source| StudyError::Io { path, source })
+}

@@ -1,0 +1,420 @@
+//! An installation study as a run, whole, one shard at a time, or collected: each
+//! point of the spec (one, or one per point of its `[sweep]`) is calibrated on every
+//! trajectory in turn, and each calibration (one trajectory, every window and method,
+//! scored on every other trajectory) is stored in the cache under its key as it
+//! finishes, so an interrupted run resumes where it stopped, `--shard K/N` computes
+//! every N-th calibration, and `collect` puts the points together from the cache. A
+//! point whose results folder is current and intact is not computed again; a folder
+//! another spec file wrote is refused unless `--force`.
+//! In: the experiment of an [`InstallationSpec`] and the output folder. Out: each
+//! point's results folder, a sweep's table and index, or why not.
+//!
+//! - this file plans the calibrations and runs them: [`StudyPlan`];
+//! - [`inputs`] reads the recordings and DCNet models the points use, each once;
+//! - [`folder`] writes a point's results folder, manifest last;
+//! - the sweep's table and index are written by [`crate::results::study_sweep`].
+
+pub mod folder;
+pub mod inputs;
+
+use super::{Shard, owner};
+use crate::data::paired;
+use crate::files::{Seal, sha256_hex};
+use crate::installation::rows::Study;
+use crate::installation::spec::InstallationSpec;
+use crate::installation::study::{self, Calibrated};
+use crate::pipeline::cache::{self, CalibrationStore, calibrations::CalibrationStoreError};
+use crate::results::{self, Manifest, StageSeconds};
+use crate::spec::Experiment;
+use crate::vocab::ErrorModel;
+use inputs::Inputs;
+use rayon::prelude::*;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::time::{Instant, SystemTime};
+
+#[derive(Debug, thiserror::Error)]
+pub enum StudyError {
+    /// The reader's error says the file, line and column; the spec's key follows.
+    #[error("{error} (the spec's recordings.trajectories[{index}], {name})")]
+    Recording {
+        index: usize,
+        name: String,
+        error: paired::PairedError,
+    },
+    #[error(transparent)]
+    Owner(#[from] owner::OwnerError),
+    #[error(
+        "{method} could not be fitted on any calibration trajectory with a window of {window_s} s ({why}); nothing is written: give calibration.window_s values that leave samples for its terms, or fewer terms"
+    )]
+    NoFit {
+        /// "point <name>: " in a sweep, else empty.
+        point: String,
+        method: String,
+        window_s: f64,
+        why: String,
+    },
+    #[error("the DCNet models of {}", spec.display())]
+    DcnetSpec {
+        spec: PathBuf,
+        #[source]
+        source: anyhow::Error,
+    },
+    #[error(
+        "the DCNet {error_model} model of {} is not trained: run `dcnet-exp run {} --out {}` first, or leave \"dcnet\" out of calibration.methods",
+        spec.display(), spec.display(), out.display()
+    )]
+    DcnetMissing {
+        spec: PathBuf,
+        out: PathBuf,
+        error_model: ErrorModel,
+    },
+    #[error("writing {}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error(transparent)]
+    Results(#[from] results::ResultsError),
+    #[error(transparent)]
+    Store(#[from] CalibrationStoreError),
+    #[error(transparent)]
+    ReadBack(#[from] results::read::ReadError),
+    #[error(
+        "{}: {} of {total} calibrations are not in the cache, such as {}: run the shards that compute them (`dcnet-exp run {} --shard K/N`), or `dcnet-exp run {}`, which computes what is missing",
+        out.display(), missing_count, missing.join("; "), spec.display(), spec.display()
+    )]
+    NotCollected {
+        out: PathBuf,
+        spec: PathBuf,
+        /// The first few missing, as "point: trajectory".
+        missing: Vec<String>,
+        missing_count: usize,
+        total: usize,
+    },
+}
+
+/// How much of a study a command does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StudyMode {
+    /// Everything not current: computes what the cache lacks, writes every folder.
+    All { force: bool },
+    /// Computes this shard's calibrations into the cache; writes no folder.
+    Shard(Shard),
+    /// Writes every folder from the cache, computing nothing.
+    Collect,
+}
+
+/// One calibration: trajectory `calibration` of point `point`, stored under `key`.
+#[derive(Debug, Clone)]
+pub struct Unit {
+    pub point: usize,
+    pub calibration: usize,
+    pub key: String,
+}
+
+/// What happened to one point's results folder.
+pub enum Outcome {
+    /// The folder was current and intact.
+    Current(PathBuf),
+    Written { folder: PathBuf, study: Study },
+}
+
+/// What a study command did.
+pub struct Executed {
+    /// The calibrations computed here (not taken from the cache).
+    pub computed: usize,
+    /// Each point's folder, in spec order; empty for a shard.
+    pub points: Vec<Outcome>,
+    /// The sweep's folder, when its table and index were written.
+    pub sweep: Option<PathBuf>,
+}
+
+/// A study's plan: its points, what they read, and their calibrations with their keys.
+pub struct StudyPlan<'a> {
+    pub experiment: &'a Experiment<InstallationSpec>,
+    pub out: PathBuf,
+    /// The spec file as a manifest records it (see [`owner::recorded`]).
+    pub spec_file: PathBuf,
+    pub recorded_spec_file: String,
+    pub inputs: Inputs,
+    /// Point by point, each point's trajectories in spec order.
+    pub units: Vec<Unit>,
+    pub store: CalibrationStore,
+    /// Each point's results key: what its folder is current for.
+    results_keys: Vec<String>,
+    load_s: f64,
+}
+
+impl<'a> StudyPlan<'a> {
+    /// Reads what the points of `experiment`, from `spec_file`, use, and keys their
+    /// calibrations.
+    pub fn new(
+        experiment: &'a Experiment<InstallationSpec>,
+        spec_file: &Path,
+        out: &Path,
+    ) -> Result<Self, StudyError> {
+        let clock = Instant::now();
+        let inputs = Inputs::read(experiment, out)?;
+        let mut units = Vec::new();
+        let mut results_keys = Vec::new();
+        for (p, point) in experiment.points.iter().enumerate() {
+            let spec = &point.spec;
+            let data: Vec<&str> = inputs.points[p]
+                .data_files
+                .iter()
+                .map(|f| f.sha256.as_str())
+                .collect();
+            let dcnets = inputs.dcnets_of(p).map(|d| d.keys()).unwrap_or_default();
+            for calibration in 0..spec.trajectories.len() {
+                units.push(Unit {
+                    point: p,
+                    calibration,
+                    key: cache::calibration_key(&spec.resolved_toml, &data, &dcnets, calibration),
+                });
+            }
+            results_keys.push(sha256_hex(
+                serde_json::to_string(&(
+                    &spec.resolved_toml,
+                    &data,
+                    &dcnets,
+                    env!("DCNET_GIT_COMMIT"),
+                ))
+                .expect("strings serialize")
+                .as_bytes(),
+            ));
+        }
+        Ok(StudyPlan {
+            experiment,
+            out: out.to_path_buf(),
+            spec_file: spec_file.to_path_buf(),
+            recorded_spec_file: owner::recorded(spec_file, out).unwrap_or_default(),
+            inputs,
+            units,
+            store: CalibrationStore::new(out),
+            results_keys,
+            load_s: clock.elapsed().as_secs_f64(),
+        })
+    }
+
+    pub fn spec(&self, p: usize) -> &InstallationSpec {
+        &self.experiment.points[p].spec
+    }
+
+    /// Point `p`'s results folder (`<out>/<name>/<point>` in a sweep).
+    pub fn folder(&self, p: usize) -> PathBuf {
+        self.out.join(&self.spec(p).name)
+    }
+
+    /// Unit `u` as a person names it: its trajectory, after its point in a sweep.
+    pub fn label(&self, u: usize) -> String {
+        let unit = &self.units[u];
+        let trajectory = &self.spec(unit.point).trajectories[unit.calibration].0;
+        if self.experiment.is_sweep() {
+            let point = crate::results::sweep::point_folder(&self.spec(unit.point).name);
+            format!("{point}: {trajectory}")
+        } else {
+            trajectory.clone()
+        }
+    }
+
+    pub fn in_shard(&self, u: usize, shard: Shard) -> bool {
+        u % shard.count == shard.index
+    }
+
+    /// Whether unit `u` is in the cache, intact.
+    pub fn status(&self, u: usize) -> Seal {
+        self.store.integrity(&self.units[u].key)
+    }
+
+    /// Whether point `p`'s folder holds its results, intact.
+    pub fn is_current(&self, p: usize) -> bool {
+        folder::is_current(&self.folder(p), &self.results_keys[p])
+    }
+
+    /// Does what `mode` asks.
+    pub fn execute(&self, mode: StudyMode) -> Result<Executed, StudyError> {
+        let clock = Instant::now();
+        let (force, collect) = match mode {
+            StudyMode::Shard(shard) => {
+                let to_do: Vec<usize> = (0..self.units.len())
+                    .filter(|&u| self.in_shard(u, shard) && self.status(u) != Seal::Intact)
+                    .collect();
+                self.compute(&to_do)?;
+                return Ok(Executed {
+                    computed: to_do.len(),
+                    points: Vec::new(),
+                    sweep: None,
+                });
+            }
+            StudyMode::All { force } => (force, false),
+            StudyMode::Collect => (false, true),
+        };
+        self.check_owners(force)?;
+        let stale: Vec<usize> = (0..self.experiment.points.len())
+            .filter(|&p| force || !self.is_current(p))
+            .collect();
+        let needed: Vec<usize> = (0..self.units.len())
+            .filter(|&u| stale.contains(&self.units[u].point))
+            .collect();
+        let missing: Vec<usize> = needed
+            .iter()
+            .copied()
+            .filter(|&u| self.status(u) != Seal::Intact)
+            .collect();
+        if collect && !missing.is_empty() {
+            return Err(StudyError::NotCollected {
+                out: self.out.clone(),
+                spec: self.spec_file.clone(),
+                missing: missing.iter().take(5).map(|&u| self.label(u)).collect(),
+                missing_count: missing.len(),
+                total: needed.len(),
+            });
+        }
+        let mut calibrated = self.compute(&missing)?;
+        for &u in &needed {
+            if !calibrated.contains_key(&u) {
+                let stored = match self.store.load(&self.units[u].key)? {
+                    Some(stored) => stored,
+                    // Damaged since it was looked at: computed again.
+                    None => self.compute(&[u])?.remove(&u).expect("computed"),
+                };
+                calibrated.insert(u, stored);
+            }
+        }
+        let protocol_s = clock.elapsed().as_secs_f64();
+        let mut studies = Vec::new();
+        for &p in &stale {
+            let parts = (0..self.units.len())
+                .filter(|&u| self.units[u].point == p)
+                .map(|u| calibrated.remove(&u).expect("every needed calibration is here"));
+            let (mut study, estimates) = study::assemble(self.spec(p), parts.collect());
+            let point = match self.experiment.is_sweep() {
+                true => format!("point {}: ", self.spec(p).name),
+                false => String::new(),
+            };
+            folder::no_window_without_a_fit(self.spec(p), &study, &point)?;
+            study.trace = folder::trace(&study, &estimates, &self.inputs.segments_of(p));
+            studies.push((p, study));
+        }
+        let mut written = HashMap::new();
+        for (p, study) in studies {
+            folder::write_folder(self.spec(p), &self.folder(p), &study, self.manifest(p, protocol_s))?;
+            written.insert(p, study);
+        }
+        let points: Vec<Outcome> = (0..self.experiment.points.len())
+            .map(|p| match written.remove(&p) {
+                Some(study) => Outcome::Written {
+                    folder: self.folder(p),
+                    study,
+                },
+                None => Outcome::Current(self.folder(p)),
+            })
+            .collect();
+        let sweep = self.write_sweep(&points)?;
+        Ok(Executed {
+            computed: missing.len(),
+            points,
+            sweep,
+        })
+    }
+
+    /// Computes units `to_do` in parallel, each stored in the cache as it finishes (a
+    /// damaged entry set aside first, and said).
+    fn compute(&self, to_do: &[usize]) -> Result<HashMap<usize, Calibrated>, StudyError> {
+        for &u in to_do {
+            if let Some(said) = self.store.set_aside_damaged(&self.units[u].key)? {
+                eprintln!("{said}");
+            }
+        }
+        to_do
+            .par_iter()
+            .map(|&u| {
+                let unit = &self.units[u];
+                let models = self.inputs.dcnets_of(unit.point);
+                let dcnet = |model: ErrorModel, dvl: &[crate::Vec3], reference: &[crate::Vec3]| {
+                    models.and_then(|m| m.estimate(model, dvl, reference))
+                };
+                let segments = self.inputs.segments_of(unit.point);
+                let calibrated =
+                    study::calibrate_on(self.spec(unit.point), &segments, unit.calibration, &dcnet);
+                self.store.save(&unit.key, &calibrated)?;
+                Ok((u, calibrated))
+            })
+            .collect()
+    }
+
+    /// Refuses, before anything is computed, folders another spec file or another kind
+    /// of run wrote (unless `force`, for the first).
+    fn check_owners(&self, force: bool) -> Result<(), StudyError> {
+        if self.experiment.is_sweep() {
+            owner::check_study_sweep(
+                &self.out.join(&self.experiment.name),
+                &self.out,
+                &self.recorded_spec_file,
+                &self.experiment.name,
+            )?;
+        }
+        for p in 0..self.experiment.points.len() {
+            let spec = self.spec(p);
+            owner::check_study(
+                &self.folder(p),
+                &self.out,
+                &self.recorded_spec_file,
+                &spec.name,
+                &sha256_hex(spec.resolved_toml.as_bytes()),
+                force,
+            )?;
+        }
+        Ok(())
+    }
+
+    /// The manifest of point `p`'s folder, but for its files and finishing time.
+    fn manifest(&self, p: usize, protocol_s: f64) -> Manifest {
+        let spec = self.spec(p);
+        Manifest {
+            name: spec.name.clone(),
+            spec_sha256: sha256_hex(spec.resolved_toml.as_bytes()),
+            git_commit: env!("DCNET_GIT_COMMIT").to_string(),
+            crate_version: env!("CARGO_PKG_VERSION").to_string(),
+            started_at: humantime::format_rfc3339_seconds(SystemTime::now()).to_string(),
+            finished_at: String::new(),
+            threads: rayon::current_num_threads(),
+            backend: String::new(),
+            host: gethostname::gethostname().to_string_lossy().into_owned(),
+            data_files: self.inputs.points[p].data_files.clone(),
+            stage_seconds: StageSeconds {
+                load: self.load_s,
+                protocol: protocol_s,
+                ..StageSeconds::default()
+            },
+            results_key: self.results_keys[p].clone(),
+            files_sha256: Default::default(),
+            spec_file: self.recorded_spec_file.clone(),
+        }
+    }
+
+    /// A sweep's table and index, written when a point was written or the index is not
+    /// that of the points' results; `None` for a single study or a current sweep.
+    fn write_sweep(&self, points: &[Outcome]) -> Result<Option<PathBuf>, StudyError> {
+        if !self.experiment.is_sweep() {
+            return Ok(None);
+        }
+        let folder = self.out.join(&self.experiment.name);
+        let wrote = points.iter().any(|o| matches!(o, Outcome::Written { .. }));
+        if !wrote && results::study_sweep::is_current(&folder, &self.results_keys) {
+            return Ok(None);
+        }
+        let mut summaries = Vec::new();
+        for (p, outcome) in points.iter().enumerate() {
+            let summary = match outcome {
+                Outcome::Written { study, .. } => study.summary.clone(),
+                Outcome::Current(folder) => results::installation::read_study(folder)?.summary,
+            };
+            summaries.push((p, summary));
+        }
+        results::study_sweep::write(&folder, self.experiment, &summaries, &self.results_keys)?;
+        Ok(Some(folder))
+    }
+}
