@@ -5,25 +5,9 @@
 
 mod common;
 
-use common::installed::{INSTALLED, write_installed};
+use common::installed::{INSTALLED, write_installed, write_study_spec as write_spec};
 use common::*;
 use std::path::Path;
-
-/// An installation spec over `count` trajectories in `data/<folder>/` of `dir`.
-fn write_spec(dir: &Path, name: &str, folder: &str, count: usize, extra: &str) {
-    let mut text = format!("name = \"{name}\"\nkind = \"installation\"\n\n[recordings]\n");
-    for n in 1..=count {
-        text.push_str(&format!(
-            "\n[[recordings.trajectories]]\nname = \"S{n}\"\ndvl = \"../data/{folder}/Trajectory{n}/DVL_trajectory{n}.csv\"\nreference = \"../data/{folder}/Trajectory{n}/GT_trajectory{n}.csv\"\n"
-        ));
-    }
-    text.push_str(
-        "\n[noise]\ndvl_cm_s = 2.0\nreference_cm_s = 0.0\n\n[calibration]\nwindow_s = [100.0, 400.0]\nmethods = [\"baseline\", \"EM5\"]\n\n[[calibration.models]]\nname = \"lever+offset+bias+scale\"\nterms = [\"lever_arm\", \"time_offset\", \"bias\", \"scale\"]\n",
-    );
-    text.push_str(extra);
-    std::fs::create_dir_all(dir.join("experiments")).unwrap();
-    std::fs::write(dir.join(format!("experiments/{name}.toml")), text).unwrap();
-}
 
 /// The rows of `terms.parquet` for `method` at `window_s`: (calibration, term, value,
 /// std, why unseen).
@@ -325,9 +309,11 @@ fn bad_recordings_and_specs_are_refused_naming_the_file_and_nothing_is_written()
         message.contains("calibration.models[0].terms[0]: unknown variant `lever`"),
         "{message}"
     );
-    let message = stderr(&dcnet(d, &["plan", "experiments/syn.toml"]));
+    let message = stderr(&dcnet(d, &["bench", "experiments/syn.toml"]));
     assert!(
-        message.contains("an installation study has no tasks to plan"),
+        message.contains(
+            "an installation study has no training data to inspect nor training to bench"
+        ),
         "{message}"
     );
     assert!(!d.join("results/syn").exists());

@@ -242,13 +242,6 @@ const MAX_THREADS: usize = 1024;
 /// as itself before it overrides `training.backend`; OUT, when it exists, must be a
 /// folder.
 fn load_target(target: &Target) -> Result<Experiment, CliError> {
-    if installation_kind(&target.spec)? {
-        return Err(input(anyhow::anyhow!(
-            "{}: an installation study has no training to bench nor training data to inspect: `dcnet-exp run {}` runs it, in seconds",
-            target.spec.display(),
-            target.spec.display()
-        )));
-    }
     let mut set = target.overrides.set.clone();
     if let Some(backend) = &target.backend {
         backend

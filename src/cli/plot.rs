@@ -90,6 +90,9 @@ pub(super) fn compare_folders(first: &Path, second: &Path, out: &Path) -> Result
             out.display()
         )));
     }
+    for folder in [first, second] {
+        compare::refuse_sweep(folder).map_err(input)?;
+    }
     let markdown = match (
         compare::installation::is_study(first),
         compare::installation::is_study(second),

@@ -9,21 +9,21 @@
 use super::args::{Drawing, Target};
 use super::{CliError, failure, input};
 use crate::data::paired::{self, PairedColumns, PairedFiles};
+use crate::files::Seal;
 use crate::installation::bound::{Noise, TermBound, bound};
 use crate::installation::fit::{Fit, TIME_OFFSET_MARGIN_S, fit};
 use crate::installation::frames::Reference;
 use crate::installation::rows::Study;
+use crate::installation::spec::InstallationSpec;
 use crate::installation::spec::{self as study_spec, ObservabilityFile, TermName};
 use crate::installation::study::term_set;
 use crate::installation::terms::{AxisRmse, score};
-use crate::files::Seal;
-use crate::installation::spec::InstallationSpec;
 use crate::pipeline::Shard;
 use crate::pipeline::installation::{Executed, Outcome, StudyMode, StudyPlan};
-use crate::results::study_sweep::{self, StoredStudySweep};
-use crate::spec::Experiment;
 use crate::report::installation::{readable_term, readable_why};
 use crate::report::plots::Format;
+use crate::results::study_sweep::{self, StoredStudySweep};
+use crate::spec::Experiment;
 use crate::spec::TomlFile;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 use std::path::{Path, PathBuf};
@@ -31,6 +31,17 @@ use std::path::{Path, PathBuf};
 /// The experiment of an installation spec: the study, or the points of its sweep.
 fn load(path: &Path, set: &[String]) -> Result<Experiment<InstallationSpec>, CliError> {
     study_spec::load_experiment(path, set).map_err(input)
+}
+
+/// The experiment a command works on; OUT, when it exists, must be a folder.
+fn load_target(target: &Target) -> Result<Experiment<InstallationSpec>, CliError> {
+    if target.out.exists() && !target.out.is_dir() {
+        return Err(input(anyhow::anyhow!(
+            "--out {}: is a file; results go into a folder",
+            target.out.display()
+        )));
+    }
+    load(&target.spec, &target.overrides.set)
 }
 
 /// `run` of an installation spec: every point not current, or one shard of its
@@ -41,7 +52,7 @@ pub(super) fn run(
     shard: Option<Shard>,
     force: bool,
 ) -> Result<(), CliError> {
-    let experiment = load(&target.spec, &target.overrides.set)?;
+    let experiment = load_target(target)?;
     let plan = StudyPlan::new(&experiment, &target.spec, &target.out).map_err(input)?;
     let Some(shard) = shard else {
         let executed = plan.execute(StudyMode::All { force }).map_err(input)?;
@@ -66,7 +77,7 @@ pub(super) fn run(
 /// `collect` of an installation spec: every point's folder from the calibrations its
 /// shards stored.
 pub(super) fn collect(target: &Target, drawing: &Drawing) -> Result<(), CliError> {
-    let experiment = load(&target.spec, &target.overrides.set)?;
+    let experiment = load_target(target)?;
     let plan = StudyPlan::new(&experiment, &target.spec, &target.out).map_err(input)?;
     let executed = plan.execute(StudyMode::Collect).map_err(input)?;
     finish(&plan, &executed, drawing)
@@ -75,7 +86,7 @@ pub(super) fn collect(target: &Target, drawing: &Drawing) -> Result<(), CliError
 /// `plan` of an installation spec: its calibrations (one shard's, with `--shard`), each
 /// with its key and whether the cache holds it.
 pub(super) fn plan(target: &Target, shard: Option<Shard>) -> Result<(), CliError> {
-    let experiment = load(&target.spec, &target.overrides.set)?;
+    let experiment = load_target(target)?;
     let plan = StudyPlan::new(&experiment, &target.spec, &target.out).map_err(input)?;
     let mut table = Table::new();
     table.load_preset(ASCII_MARKDOWN);
@@ -93,7 +104,11 @@ pub(super) fn plan(target: &Target, shard: Option<Shard>) -> Result<(), CliError
         };
         listed += 1;
         to_do += usize::from(status != "done");
-        table.add_row([plan.label(u), unit.key[..16].to_string(), status.to_string()]);
+        table.add_row([
+            plan.label(u),
+            unit.key[..16].to_string(),
+            status.to_string(),
+        ]);
     }
     println!("{table}");
     let scope = match shard {
@@ -121,10 +136,16 @@ fn calibrations(count: usize) -> String {
 fn finish(plan: &StudyPlan, executed: &Executed, drawing: &Drawing) -> Result<(), CliError> {
     let sweep = plan.experiment.is_sweep();
     if executed.sweep.is_none()
-        && executed.points.iter().all(|o| matches!(o, Outcome::Current(_)))
+        && executed
+            .points
+            .iter()
+            .all(|o| matches!(o, Outcome::Current(_)))
     {
         let folder = plan.out.join(&plan.experiment.name);
-        eprintln!("nothing to do: the results in {} are current", folder.display());
+        eprintln!(
+            "nothing to do: the results in {} are current",
+            folder.display()
+        );
         return Ok(());
     }
     for outcome in &executed.points {
@@ -196,10 +217,20 @@ fn draw_sweep(stored: &StoredStudySweep, folder: &Path, format: Format) -> Resul
 fn printed_sweep(stored: &StoredStudySweep) -> String {
     let mut table = Table::new();
     table.load_preset(ASCII_MARKDOWN);
-    table.set_header(["point", "method", "window (s)", "held-out RMSE (cm/s)", "95 % interval", "÷ no calibration"]);
+    table.set_header([
+        "point",
+        "method",
+        "window (s)",
+        "held-out RMSE (cm/s)",
+        "95 % interval",
+        "÷ no calibration",
+    ]);
     for point in &stored.index.points {
         let rows: Vec<_> = stored.rows.iter().filter(|r| &r.point == point).collect();
-        let largest = rows.iter().map(|r| r.summary.window_s).fold(f64::NAN, f64::max);
+        let largest = rows
+            .iter()
+            .map(|r| r.summary.window_s)
+            .fold(f64::NAN, f64::max);
         for row in rows.iter().filter(|r| r.summary.window_s == largest) {
             let s = &row.summary;
             table.add_row([
@@ -273,7 +304,10 @@ pub(super) fn validate(path: &Path, set: &[String]) -> Result<(), CliError> {
     let spec = &experiment.points[0].spec;
     let points = match experiment.points.len() {
         1 => String::new(),
-        n => format!("{n} points of a sweep over {}; the first: ", experiment.swept.join(", ")),
+        n => format!(
+            "{n} points of a sweep over {}; the first: ",
+            experiment.swept.join(", ")
+        ),
     };
     println!(
         "{}: ok (an installation study: {points}{} trajectories, {} windows, {} methods)",

@@ -129,7 +129,12 @@ pub fn check_study(
 
 /// Refuses to write the points of a study sweep named `name` into `folder` when it
 /// holds a paper run, a paper sweep or a single study.
-pub fn check_study_sweep(folder: &Path, out: &Path, ours: &str, name: &str) -> Result<(), OwnerError> {
+pub fn check_study_sweep(
+    folder: &Path,
+    out: &Path,
+    ours: &str,
+    name: &str,
+) -> Result<(), OwnerError> {
     if folder.exists() && !folder.is_dir() {
         return Err(OwnerError::NotAFolder {
             folder: folder.to_path_buf(),

@@ -8,7 +8,11 @@ use crate::results::study_sweep::StoredStudySweep;
 use std::path::Path;
 
 /// Draws `installation_sweep` into `folder`.
-pub fn draw(stored: &StoredStudySweep, folder: &Path, format: Format) -> Result<Vec<Written>, PlotError> {
+pub fn draw(
+    stored: &StoredStudySweep,
+    folder: &Path,
+    format: Format,
+) -> Result<Vec<Written>, PlotError> {
     render::register_font();
     let drawn = installation_sweep(stored)
         .map(|outcome| vec![("installation_sweep".to_string(), outcome)])

@@ -5,8 +5,8 @@
 //! and `sweep.json`, the index of the points (`"kind": "installation"`), written last.
 //! In: the experiment and each point's summary rows. Out: the two files.
 
-use super::sweep::{INDEX, SweepIndex, TABLE, point_columns, point_folder, read_index, swept};
 use super::read::{Batch, ReadError, read_rows};
+use super::sweep::{INDEX, SweepIndex, TABLE, point_columns, point_folder, read_index, swept};
 use super::{ResultsError, table_bytes};
 use crate::files::write_atomic;
 use crate::installation::rows::SummaryRow;

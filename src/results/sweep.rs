@@ -247,7 +247,9 @@ pub fn write(
 pub fn point_columns(swept: &[String], rows: &[(&str, &[Swept])]) -> Vec<(String, ArrayRef)> {
     let mut columns: Vec<(String, ArrayRef)> = vec![(
         "point".into(),
-        Arc::new(StringArray::from_iter_values(rows.iter().map(|(point, _)| *point))),
+        Arc::new(StringArray::from_iter_values(
+            rows.iter().map(|(point, _)| *point),
+        )),
     )];
     for (k, key) in swept.iter().enumerate() {
         let all = |f: fn(&Swept) -> bool| rows.iter().all(|(_, values)| f(&values[k]));

@@ -142,3 +142,19 @@ pub fn write_installed(
         std::fs::write(segment.join(format!("GT_trajectory{n}.csv")), reference).unwrap();
     }
 }
+
+/// An installation spec over `count` trajectories in `data/<folder>/` of `dir`.
+pub fn write_study_spec(dir: &Path, name: &str, folder: &str, count: usize, extra: &str) {
+    let mut text = format!("name = \"{name}\"\nkind = \"installation\"\n\n[recordings]\n");
+    for n in 1..=count {
+        text.push_str(&format!(
+            "\n[[recordings.trajectories]]\nname = \"S{n}\"\ndvl = \"../data/{folder}/Trajectory{n}/DVL_trajectory{n}.csv\"\nreference = \"../data/{folder}/Trajectory{n}/GT_trajectory{n}.csv\"\n"
+        ));
+    }
+    text.push_str(
+        "\n[noise]\ndvl_cm_s = 2.0\nreference_cm_s = 0.0\n\n[calibration]\nwindow_s = [100.0, 400.0]\nmethods = [\"baseline\", \"EM5\"]\n\n[[calibration.models]]\nname = \"lever+offset+bias+scale\"\nterms = [\"lever_arm\", \"time_offset\", \"bias\", \"scale\"]\n",
+    );
+    text.push_str(extra);
+    std::fs::create_dir_all(dir.join("experiments")).unwrap();
+    std::fs::write(dir.join(format!("experiments/{name}.toml")), text).unwrap();
+}

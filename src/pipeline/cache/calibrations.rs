@@ -120,7 +120,10 @@ mod tests {
         store.save(&key, &calibrated).unwrap();
         let back = store.load(&key).unwrap().unwrap();
         assert_eq!(back, calibrated);
-        assert_eq!(back.terms[0].value.to_bits(), calibrated.terms[0].value.to_bits());
+        assert_eq!(
+            back.terms[0].value.to_bits(),
+            calibrated.terms[0].value.to_bits()
+        );
         let mut bytes = std::fs::read(store.path(&key)).unwrap();
         let last = bytes.len() - 1;
         bytes[last] ^= 1;

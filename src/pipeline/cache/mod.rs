@@ -129,8 +129,7 @@ pub fn calibration_key(
     dcnet_keys: &[&str],
     calibration: usize,
 ) -> String {
-    let mut settings: toml::Table =
-        toml::from_str(resolved_toml).expect("a resolved spec is TOML");
+    let mut settings: toml::Table = toml::from_str(resolved_toml).expect("a resolved spec is TOML");
     settings.remove("name");
     hash(&(
         "installation calibration",

@@ -118,7 +118,10 @@ pub struct Unit {
 pub enum Outcome {
     /// The folder was current and intact.
     Current(PathBuf),
-    Written { folder: PathBuf, study: Study },
+    Written {
+        folder: PathBuf,
+        study: Study,
+    },
 }
 
 /// What a study command did.
@@ -288,7 +291,11 @@ impl<'a> StudyPlan<'a> {
         for &p in &stale {
             let parts = (0..self.units.len())
                 .filter(|&u| self.units[u].point == p)
-                .map(|u| calibrated.remove(&u).expect("every needed calibration is here"));
+                .map(|u| {
+                    calibrated
+                        .remove(&u)
+                        .expect("every needed calibration is here")
+                });
             let (mut study, estimates) = study::assemble(self.spec(p), parts.collect());
             let point = match self.experiment.is_sweep() {
                 true => format!("point {}: ", self.spec(p).name),
@@ -300,7 +307,12 @@ impl<'a> StudyPlan<'a> {
         }
         let mut written = HashMap::new();
         for (p, study) in studies {
-            folder::write_folder(self.spec(p), &self.folder(p), &study, self.manifest(p, protocol_s))?;
+            folder::write_folder(
+                self.spec(p),
+                &self.folder(p),
+                &study,
+                self.manifest(p, protocol_s),
+            )?;
             written.insert(p, study);
         }
         let points: Vec<Outcome> = (0..self.experiment.points.len())

@@ -61,18 +61,24 @@ pub enum CompareError {
 
 /// Reads the results folder `folder`; a sweep folder is refused with its points listed.
 pub fn read(folder: &Path) -> Result<StoredRun, CompareError> {
-    if folder.join(sweep::INDEX).is_file() {
-        let index = sweep::read_index(folder)?;
-        return Err(CompareError::Sweep {
-            path: folder.to_path_buf(),
-            points: index
-                .points
-                .iter()
-                .map(|point| folder.join(point).display().to_string())
-                .collect(),
-        });
-    }
+    refuse_sweep(folder)?;
     Ok(StoredRun::read(folder)?)
+}
+
+/// Refuses a sweep's folder (of runs or of studies), naming its points.
+pub fn refuse_sweep(folder: &Path) -> Result<(), CompareError> {
+    if !folder.join(sweep::INDEX).is_file() {
+        return Ok(());
+    }
+    let index = sweep::read_index(folder)?;
+    Err(CompareError::Sweep {
+        path: folder.to_path_buf(),
+        points: index
+            .points
+            .iter()
+            .map(|point| folder.join(point).display().to_string())
+            .collect(),
+    })
 }
 
 /// Writes the comparison to `path`, atomically, making its folder if need be.

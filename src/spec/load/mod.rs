@@ -58,7 +58,6 @@ impl<S> Experiment<S> {
 }
 
 impl Experiment {
-
     /// What the spec asks that runs but says little, each placed like a fault: a test
     /// trajectory that is the calibration trajectory (its error is measured on the
     /// samples the calibration saw).

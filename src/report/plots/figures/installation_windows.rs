@@ -143,7 +143,10 @@ pub fn rmse_figure(
     // short windows of the paper's least squares make them, so that no calibration,
     // the paper's methods and the installation models each keep a height of their own.
     let means: Vec<f64> = rows.iter().map(|(_, r)| r.mean_cm_s).collect();
-    let y = Scale::fit_values(&means, crate::first_seen(xs.iter().map(|x| x.to_bits())).len());
+    let y = Scale::fit_values(
+        &means,
+        crate::first_seen(xs.iter().map(|x| x.to_bits())).len(),
+    );
     let y_label = if y.is_log() {
         "held-out RMSE [cm/s], log scale"
     } else {
@@ -165,8 +168,10 @@ pub fn rmse_figure(
                 .collect();
             mine.sort_by(|a, b| a.0.total_cmp(&b.0));
             let at = |x: f64| x + offset(index);
-            let points: Vec<(f64, f64)> =
-                mine.iter().map(|(x, r)| (at(*x), y.shown(r.mean_cm_s))).collect();
+            let points: Vec<(f64, f64)> = mine
+                .iter()
+                .map(|(x, r)| (at(*x), y.shown(r.mean_cm_s)))
+                .collect();
             line(&mut chart, points.clone(), look.color, look.stroke)?;
             if let Some(marker) = marker {
                 marker.draw(&mut chart, &points, look.color)?;
