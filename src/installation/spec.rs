@@ -166,13 +166,22 @@ pub struct ObservabilityFile {
 }
 
 impl Default for ObservabilityFile {
+    /// [`Tolerances::default`](super::bound::Tolerances) in the file's units.
     fn default() -> Self {
+        ObservabilityFile::from(super::bound::Tolerances::default())
+    }
+}
+
+impl From<super::bound::Tolerances> for ObservabilityFile {
+    /// The tolerances in the file's units: the inverse of
+    /// [`ObservabilityFile::tolerances`].
+    fn from(tolerances: super::bound::Tolerances) -> Self {
         ObservabilityFile {
-            scale_pct: 0.5,
-            misalignment_deg: 0.5,
-            lever_arm_m: 0.1,
-            time_offset_s: 0.05,
-            bias_cm_s: 1.0,
+            scale_pct: tolerances.scale * 100.0,
+            misalignment_deg: tolerances.misalignment_rad.to_degrees(),
+            lever_arm_m: tolerances.lever_arm_m,
+            time_offset_s: tolerances.time_offset_s,
+            bias_cm_s: tolerances.bias_m_s * 100.0,
         }
     }
 }
@@ -443,5 +452,27 @@ fn check(
         observability: o.clone(),
         dcnet_spec,
         resolved_toml: document.resolved_toml.clone(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::installation::bound::Tolerances;
+
+    /// The default `[observability]` is the bound's default tolerances in the file's
+    /// units, exactly: the numbers a spec without the table resolves to, and back.
+    #[test]
+    fn default_observability_is_the_bounds_default_in_file_units() {
+        let file = ObservabilityFile::default();
+        let in_file_units = [
+            file.scale_pct,
+            file.misalignment_deg,
+            file.lever_arm_m,
+            file.time_offset_s,
+            file.bias_cm_s,
+        ];
+        assert_eq!(in_file_units, [0.5, 0.5, 0.1, 0.05, 1.0]);
+        assert_eq!(file.tolerances(), Tolerances::default());
     }
 }

@@ -1,0 +1,107 @@
+//! The section's tables as text: a [`Section`] is one table with its title, caption,
+//! the notes under it and the paragraph after it; a [`Table`] holds rows of
+//! [`Entry`]s, each written by the Markdown and the LaTeX rendering with its own signs
+//! ([`Signs`]). In: the numbers the other files of this folder pick from a study. Out:
+//! the text of each cell.
+
+use crate::report::table::{RmseValue, Signs};
+
+/// One table of the section, with its title, caption and what follows it.
+pub(super) struct Section {
+    pub(super) title: String,
+    pub(super) caption: String,
+    pub(super) table: Table,
+    pub(super) paragraph: Option<String>,
+}
+
+/// A table of text: its header and rows, and the notes set under it.
+pub(super) struct Table {
+    pub(super) header: Vec<String>,
+    pub(super) rows: Vec<Vec<Entry>>,
+    pub(super) notes: Vec<String>,
+}
+
+/// One cell, written by each rendering with its own signs.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) enum Entry {
+    Text(String),
+    /// A mean RMSE and the half-width of its 95 % interval, cm/s.
+    Rmse {
+        mean_cm_s: f64,
+        ci95_cm_s: f64,
+    },
+    Ratio(f64),
+    /// A term in its readable unit, its bound's standard deviation, whether it is seen.
+    Term {
+        value: f64,
+        std: f64,
+        seen: bool,
+    },
+    Missing,
+}
+
+impl Entry {
+    pub(super) fn text(&self, signs: &Signs) -> String {
+        match self {
+            Entry::Text(text) => text.clone(),
+            Entry::Rmse {
+                mean_cm_s,
+                ci95_cm_s,
+            } => RmseValue {
+                rmse_cm_s: *mean_cm_s,
+                ci_cm_s: Some(*ci95_cm_s),
+                detail: None,
+            }
+            .text(signs),
+            Entry::Ratio(ratio) => format!("{ratio:.2}"),
+            Entry::Term { value, std, seen } => {
+                let decimals = decimals(*std);
+                let value = format!("{value:.decimals$}");
+                let value = match value.strip_prefix('-') {
+                    Some(magnitude) => format!("{}{magnitude}", signs.minus),
+                    None => value,
+                };
+                let std = if std.is_finite() {
+                    format!("{std:.decimals$}")
+                } else {
+                    "∞".into()
+                };
+                let unseen = if *seen { "" } else { " (not seen)" };
+                format!("{value}{}{std}{unseen}", signs.plus_minus)
+            }
+            Entry::Missing => "—".into(),
+        }
+    }
+}
+
+/// The decimals that show `std` with two significant digits (0 to 4), and a value
+/// beside it to the same place; 2 when it is not a positive number.
+pub(super) fn decimals(std: f64) -> usize {
+    if !(std.is_finite() && std > 0.0) {
+        return 2;
+    }
+    (1 - std.log10().floor() as i32).clamp(0, 4) as usize
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn terms_read_with_two_significant_digits_of_the_bound() {
+        let signs = &crate::report::markdown::SIGNS;
+        let term = |value, std, seen| Entry::Term { value, std, seen }.text(signs);
+        assert_eq!(term(-1.72, 0.36, false), "-1.72 ± 0.36 (not seen)");
+        assert_eq!(term(-1.87, 0.013, true), "-1.870 ± 0.013");
+        assert_eq!(term(0.72, 0.10, true), "0.72 ± 0.10");
+        assert_eq!(term(1234.0, 56.0, true), "1234 ± 56");
+        assert_eq!(term(1.0, f64::INFINITY, false), "1.00 ± ∞ (not seen)");
+        let latex = Entry::Term {
+            value: -1.72,
+            std: 0.36,
+            seen: true,
+        }
+        .text(&crate::report::latex::SIGNS);
+        assert_eq!(latex, "$-$1.72\\,$\\pm$\\,0.36");
+    }
+}

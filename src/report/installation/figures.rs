@@ -1,0 +1,251 @@
+//! The study's figures, drawn from its tables as a run's are: the calibration × scored
+//! matrix of each method, held-out RMSE against the window, and one trajectory's
+//! residual before and after (`plots::figures::installation_*`). In: a [`Study`]. Out:
+//! the files written.
+
+use crate::installation::rows::Study;
+use crate::report::plots::canvas::Outcome;
+use crate::report::plots::figures::{
+    installation_matrix, installation_residual, installation_windows,
+};
+use crate::report::plots::{Format, PlotError, Written, render, write_figures};
+use std::path::Path;
+
+/// Draws the study's figures into `folder`, each file written atomically: the
+/// calibration × scored matrix of each method, held-out RMSE against the window, and
+/// one trajectory's residual before and after.
+pub fn draw_all(study: &Study, folder: &Path, format: Format) -> Result<Vec<Written>, PlotError> {
+    render::register_font();
+    let draw = || -> crate::report::plots::draw::PlotResult<Vec<(String, Outcome)>> {
+        let mut drawn = installation_matrix::installation_matrix(study)?;
+        drawn.push((
+            "installation_windows".into(),
+            installation_windows::installation_windows(study)?,
+        ));
+        drawn.push((
+            "installation_residual".into(),
+            installation_residual::installation_residual(study)?,
+        ));
+        Ok(drawn)
+    };
+    let drawn = draw().map_err(|source| PlotError::Draw {
+        what: "installation study's",
+        source,
+    })?;
+    write_figures(drawn, folder, format)
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::installation::rows::{HeldOutRow, NO_CALIBRATION, SummaryRow, TermRow, TracePoint};
+
+    /// A deterministic jitter in -1..1 from `seed`.
+    fn jitter(seed: u64) -> f64 {
+        let mut x = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xD1B5_4A32_D192_ED03;
+        x ^= x >> 31;
+        x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        x ^= x >> 27;
+        (x % 20_001) as f64 / 10_000.0 - 1.0
+    }
+
+    /// A study resembling the A-KIT one: 13 trajectories, three windows, no
+    /// calibration, least squares EM1 to EM5 and two installation models.
+    pub(crate) fn akit_like() -> Study {
+        let none = [
+            20.0, 13.4, 11.8, 23.1, 13.3, 10.9, 11.3, 24.2, 24.4, 14.5, 22.9, 2.9, 3.1,
+        ];
+        let ratio = [
+            0.33, 0.337, 0.33, 0.34, 0.529, 0.473, 0.332, 0.342, 0.313, 0.343, 0.421, 0.505, 0.549,
+        ];
+        let names: Vec<String> = (1..=13).map(|i| format!("T{i}")).collect();
+        let mut methods: Vec<String> = vec![NO_CALIBRATION.into()];
+        methods.extend((1..=5).map(|k| format!("least squares EM{k}")));
+        methods.extend([
+            "installation lever+offset".to_string(),
+            "installation lever+offset+bias".to_string(),
+        ]);
+        let windows = [100.0, 200.0, 400.0];
+        let mut heldout = Vec::new();
+        let mut seed = 0;
+        for &window_s in &windows {
+            for (c, calibration) in names.iter().enumerate() {
+                for (m, method) in methods.iter().enumerate() {
+                    for (s, scored) in names.iter().enumerate() {
+                        if s == c {
+                            continue;
+                        }
+                        seed += 1;
+                        let factor = match m {
+                            0 => 1.0,
+                            1..=5 => 1.0 + 0.02 * m as f64 + 0.05 * jitter(seed),
+                            _ => {
+                                let short = 400.0 / window_s;
+                                (ratio[c] * (1.0 + 0.1 * (short - 1.0)) - 0.01 * (m - 6) as f64)
+                                    * (1.0 + 0.3 * jitter(seed))
+                            }
+                        };
+                        let total = none[s] * factor;
+                        let share = [0.37, 0.82, 0.33];
+                        let norm = share.iter().map(|v: &f64| v * v).sum::<f64>().sqrt();
+                        heldout.push(HeldOutRow {
+                            method: method.clone(),
+                            calibration: calibration.clone(),
+                            window_s,
+                            scored: scored.clone(),
+                            rmse_cm_s: share.map(|v| v / norm * total),
+                            total_cm_s: total,
+                        });
+                    }
+                }
+            }
+        }
+        let mut summary = Vec::new();
+        for &window_s in &windows {
+            let per_calibration = |method: &str| -> Vec<f64> {
+                names
+                    .iter()
+                    .map(|c| {
+                        let scores: Vec<f64> = heldout
+                            .iter()
+                            .filter(|r| {
+                                r.method == method && r.window_s == window_s && r.calibration == *c
+                            })
+                            .map(|r| r.total_cm_s)
+                            .collect();
+                        scores.iter().sum::<f64>() / scores.len() as f64
+                    })
+                    .collect()
+            };
+            let (reference, _) = crate::evaluate::mean_ci95(&per_calibration(NO_CALIBRATION));
+            for method in &methods {
+                let (mean, ci) = crate::evaluate::mean_ci95(&per_calibration(method));
+                summary.push(SummaryRow {
+                    method: method.clone(),
+                    window_s,
+                    mean_cm_s: mean,
+                    ci95_cm_s: ci,
+                    ratio: mean / reference,
+                    calibrations: 13,
+                });
+            }
+        }
+        let mut terms = Vec::new();
+        for &window_s in &windows {
+            for method in &methods[6..] {
+                for (c, calibration) in names.iter().enumerate() {
+                    let straight = c >= 11;
+                    let cluster_b = [4, 5, 10, 11].contains(&c);
+                    seed += 1;
+                    let mut push = |term: &str, value: f64, std: f64, unseen: &str| {
+                        terms.push(TermRow {
+                            method: method.clone(),
+                            calibration: calibration.clone(),
+                            window_s,
+                            term: term.into(),
+                            value,
+                            std,
+                            unseen: unseen.into(),
+                        })
+                    };
+                    let lever_std = if straight { 0.36 } else { 0.013 };
+                    let why = if straight {
+                        "standard deviation 0.36 m, beyond 0.1 m"
+                    } else {
+                        ""
+                    };
+                    push("lever_arm_x_m", -1.9 + 0.08 * jitter(seed), lever_std, why);
+                    push(
+                        "lever_arm_y_m",
+                        -0.03 + 0.03 * jitter(seed + 1),
+                        lever_std,
+                        why,
+                    );
+                    push("lever_arm_z_m", 0.5 + 0.3 * jitter(seed + 2), 0.06, "");
+                    let tau = if cluster_b { 0.58 } else { 1.46 };
+                    push("time_offset_s", tau + 0.03 * jitter(seed + 3), 0.009, "");
+                    if method.ends_with("bias") {
+                        for (axis, b) in ["x", "y", "z"].iter().zip([0.005, 0.006, -0.003]) {
+                            push(
+                                &format!("bias_{axis}_m_s"),
+                                b + 0.002 * jitter(seed + 4),
+                                0.001,
+                                "",
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        let trace = (0..399)
+            .map(|i| {
+                let time_s = f64::from(i) * 400.0 / 399.0;
+                let turn = (time_s / 40.0 * std::f64::consts::TAU).sin();
+                let yaw_rate_deg_s = 15.0 * turn.powi(3);
+                let noise = |k: u64| 1.5 * jitter(10_000 + 3 * i as u64 + k);
+                TracePoint {
+                    trajectory: "T1".into(),
+                    method: "installation lever+offset+bias".into(),
+                    calibration: "T2".into(),
+                    time_s,
+                    before_cm_s: [
+                        3.0 * turn.abs() + noise(0),
+                        -1.64 * yaw_rate_deg_s.to_radians() * 100.0 + noise(1),
+                        1.0 + noise(2),
+                    ],
+                    after_cm_s: [noise(0), 0.5 * noise(1), noise(2)],
+                    yaw_rate_deg_s,
+                }
+            })
+            .collect();
+        Study {
+            heldout,
+            terms,
+            summary,
+            trace,
+            failures: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn the_figures_of_a_study_are_written_with_their_captions() {
+        // Set DCNET_INSTALLATION_FIGURES to a folder to keep the figures and look at them.
+        let kept = std::env::var_os("DCNET_INSTALLATION_FIGURES").map(std::path::PathBuf::from);
+        let temporary = tempfile::tempdir().unwrap();
+        let folder = kept.as_deref().unwrap_or(temporary.path());
+        let written = draw_all(&akit_like(), folder, Format::Png).unwrap();
+        let stems: Vec<&str> = written.iter().map(|w| w.stem.as_str()).collect();
+        assert_eq!(
+            stems,
+            [
+                "installation_matrix_no_calibration",
+                "installation_matrix_least_squares_em1",
+                "installation_matrix_least_squares_em2",
+                "installation_matrix_least_squares_em3",
+                "installation_matrix_least_squares_em4",
+                "installation_matrix_least_squares_em5",
+                "installation_matrix_installation_lever_offset",
+                "installation_matrix_installation_lever_offset_bias",
+                "installation_windows",
+                "installation_residual",
+            ]
+        );
+        for figure in &written {
+            assert!(
+                matches!(figure.caption, crate::report::plots::Caption::Drawn(_)),
+                "{figure:?}"
+            );
+            assert_eq!(figure.files.len(), 1);
+            assert!(figure.files[0].is_file());
+        }
+        let empty = Study::default();
+        let written = draw_all(&empty, temporary.path(), Format::Png).unwrap();
+        assert!(written.iter().all(|w| w.files.is_empty()), "{written:?}");
+        assert_eq!(
+            crate::report::installation::markdown(&empty)
+                .lines()
+                .count(),
+            4
+        );
+    }
+}

@@ -1,0 +1,103 @@
+//! The held-out tables: (a) each method's mean held-out RMSE at the largest window, with
+//! its 95 % interval and its ratio to no calibration, and (b) the same means for every
+//! window. In: the study's summary rows. Out: two [`Section`]s; also the order of the
+//! methods and windows the other tables follow.
+
+use super::cell::{Entry, Section, Table};
+use crate::installation::rows::{NO_CALIBRATION, Study, SummaryRow};
+
+/// The methods in the order the study lists them, no calibration first.
+pub(super) fn methods(study: &Study) -> Vec<&str> {
+    let mut methods = crate::first_seen(
+        study
+            .summary
+            .iter()
+            .map(|r| r.method.as_str())
+            .chain(study.heldout.iter().map(|r| r.method.as_str())),
+    );
+    methods.sort_by_key(|m| *m != NO_CALIBRATION);
+    methods
+}
+
+/// The windows of the summary, in increasing order.
+pub(super) fn windows(study: &Study) -> Vec<f64> {
+    let mut windows = crate::first_seen(study.summary.iter().map(|r| r.window_s));
+    windows.sort_by(f64::total_cmp);
+    windows
+}
+
+/// A window as the tables write it: `400 s`.
+pub(super) fn window_text(window_s: f64) -> String {
+    format!("{window_s} s")
+}
+
+fn summary_entry<'a>(study: &'a Study, method: &str, window_s: f64) -> Option<&'a SummaryRow> {
+    study
+        .summary
+        .iter()
+        .find(|r| r.method == method && r.window_s == window_s)
+}
+
+/// (a): each method's mean held-out RMSE at the largest window and its ratio.
+pub(super) fn heldout_section(study: &Study, methods: &[&str], window_s: f64) -> Section {
+    let rows = methods
+        .iter()
+        .map(|method| {
+            let row = summary_entry(study, method, window_s);
+            vec![
+                Entry::Text(method.to_string()),
+                row.map_or(Entry::Missing, |r| Entry::Rmse {
+                    mean_cm_s: r.mean_cm_s,
+                    ci95_cm_s: r.ci95_cm_s,
+                }),
+                row.map_or(Entry::Missing, |r| Entry::Ratio(r.ratio)),
+            ]
+        })
+        .collect();
+    Section {
+        title: format!("Held-out RMSE, window {}", window_text(window_s)),
+        caption: format!(
+            "Mean held-out RMSE in cm/s ± the half-width of its 95 % interval over calibration trajectories, calibrated on the first {} of each, and its ratio to {NO_CALIBRATION}.",
+            window_text(window_s)
+        ),
+        table: Table {
+            header: vec![
+                "method".into(),
+                "held-out RMSE (cm/s)".into(),
+                format!("ratio to {NO_CALIBRATION}"),
+            ],
+            rows,
+            notes: Vec::new(),
+        },
+        paragraph: None,
+    }
+}
+
+/// (b): the same means, one column per window.
+pub(super) fn windows_section(study: &Study, methods: &[&str], windows: &[f64]) -> Section {
+    let rows = methods
+        .iter()
+        .map(|method| {
+            std::iter::once(Entry::Text(method.to_string()))
+                .chain(windows.iter().map(|&w| {
+                    summary_entry(study, method, w).map_or(Entry::Missing, |r| Entry::Rmse {
+                        mean_cm_s: r.mean_cm_s,
+                        ci95_cm_s: r.ci95_cm_s,
+                    })
+                }))
+                .collect()
+        })
+        .collect();
+    Section {
+        title: "Held-out RMSE against the calibration window".into(),
+        caption: "Mean held-out RMSE in cm/s ± the half-width of its 95 % interval, for each calibration window (the first w seconds of each calibration trajectory).".into(),
+        table: Table {
+            header: std::iter::once("method".to_string())
+                .chain(windows.iter().map(|&w| format!("w = {}", window_text(w))))
+                .collect(),
+            rows,
+            notes: Vec::new(),
+        },
+        paragraph: None,
+    }
+}

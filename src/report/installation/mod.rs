@@ -1,0 +1,336 @@
+//! The installation study's section of the report, and its figures. In: a [`Study`]
+//! (as `results::installation` reads it back). Out: the section as Markdown
+//! ([`markdown`]) and as LaTeX ([`latex`]), both set from the same tables, and the
+//! figures ([`draw_all`]). In data-flow order:
+//!
+//! - [`cell`]: a table of text and its cells, each written with the rendering's signs;
+//! - [`heldout`]: the mean held-out RMSE of each method at the largest window with its
+//!   95 % interval and its ratio to no calibration, and the same means per window;
+//! - [`terms`]: for each installation model, the terms each calibration trajectory
+//!   estimated with the bound's standard deviation, in readable units, those the window
+//!   cannot show marked and why listed under the table;
+//! - [`agreement`]: the paragraph on where those estimates agree across calibration
+//!   trajectories within their intervals;
+//! - [`figures`]: the study's figures (`plots::figures::installation_*`), written as a
+//!   run's are;
+//! - this module: the tables in order, set as Markdown and as LaTeX.
+
+pub mod cell;
+pub mod heldout;
+pub mod terms;
+pub mod agreement;
+pub mod figures;
+
+pub use figures::draw_all;
+pub(crate) use terms::{readable_term, readable_why};
+
+use crate::installation::rows::{NO_CALIBRATION, Study, TermRow};
+use crate::report::table::Signs;
+use agreement::agreement;
+use cell::{Entry, Section, Table};
+use comfy_table::{Table as MarkdownTable, presets::ASCII_MARKDOWN};
+use heldout::{heldout_section, methods, windows, windows_section};
+use std::fmt::Write;
+use terms::terms_section;
+
+/// The section as Markdown, second-level heading first.
+pub fn markdown(study: &Study) -> String {
+    let signs = &crate::report::markdown::SIGNS;
+    let mut out = String::new();
+    let _ = writeln!(out, "## Installation study: held-out trajectories\n");
+    let _ = writeln!(out, "{}\n", introduction());
+    for section in sections(study) {
+        let _ = writeln!(out, "### {}\n", section.title);
+        let _ = writeln!(out, "{}\n", section.caption);
+        let _ = writeln!(out, "{}\n", markdown_table(&section.table, signs));
+        if !section.table.notes.is_empty() {
+            for note in &section.table.notes {
+                let _ = writeln!(out, "- {note}");
+            }
+            let _ = writeln!(out);
+        }
+        if let Some(paragraph) = &section.paragraph {
+            let _ = writeln!(out, "{paragraph}\n");
+        }
+    }
+    out
+}
+
+/// The section as LaTeX table environments and paragraphs; `name` keys the labels.
+pub fn latex(study: &Study, name: &str) -> String {
+    use crate::report::latex::{SIGNS, escape, label};
+    let mut out = String::new();
+    let _ = writeln!(out, "% The installation study's tables ({name}).");
+    let _ = writeln!(out, "{}", symbols(&escape(&introduction())));
+    for (i, section) in sections(study).iter().enumerate() {
+        let table = &section.table;
+        let _ = writeln!(out, "\n\\begin{{table}}[htbp]");
+        let _ = writeln!(out, "  \\centering\\small\\setlength{{\\tabcolsep}}{{4pt}}");
+        let _ = writeln!(
+            out,
+            "  \\caption{{{}: {}}}",
+            escape(&section.title),
+            escape(&section.caption)
+        );
+        let _ = writeln!(
+            out,
+            "  \\label{{tab:{}-installation-{}}}",
+            label(name),
+            i + 1
+        );
+        let _ = writeln!(out, "  \\makebox[\\linewidth]{{%");
+        let _ = writeln!(
+            out,
+            "  \\begin{{tabular}}{{l{}}}",
+            "r".repeat(table.header.len() - 1)
+        );
+        let _ = writeln!(out, "    \\toprule");
+        let header: Vec<String> = table.header.iter().map(|h| escape(h)).collect();
+        let _ = writeln!(out, "    {} \\\\", header.join(" & "));
+        let _ = writeln!(out, "    \\midrule");
+        for row in &table.rows {
+            let cells: Vec<String> = row
+                .iter()
+                .map(|entry| match entry {
+                    Entry::Text(text) => escape(text),
+                    other => symbols(&other.text(&SIGNS)),
+                })
+                .collect();
+            let _ = writeln!(out, "    {} \\\\", cells.join(" & "));
+        }
+        let _ = writeln!(out, "    \\bottomrule");
+        let _ = writeln!(out, "  \\end{{tabular}}}}");
+        if !table.notes.is_empty() {
+            let notes: Vec<String> = table.notes.iter().map(|n| symbols(&escape(n))).collect();
+            let _ = writeln!(out, "  \\par\\smallskip");
+            let _ = writeln!(
+                out,
+                "  {{\\footnotesize\\raggedright {}\\par}}",
+                notes.join("\\\\\n  ")
+            );
+        }
+        let _ = writeln!(out, "\\end{{table}}");
+        if let Some(paragraph) = &section.paragraph {
+            let _ = writeln!(out, "\n{}", symbols(&escape(paragraph)));
+        }
+    }
+    out
+}
+
+/// The characters of our text and of the bound's reasons that LaTeX sets in math mode
+/// (or that its default font would set as other glyphs: `<` and `>`), and how.
+const MATH: [(char, &str); 16] = [
+    ('±', "$\\pm$"),
+    ('σ', "$\\sigma$"),
+    ('τ', "$\\tau$"),
+    ('δ', "$\\delta$"),
+    ('ω', "$\\omega$"),
+    ('ρ', "$\\rho$"),
+    ('×', "$\\times$"),
+    ('∞', "$\\infty$"),
+    ('−', "$-$"),
+    ('≥', "$\\geq$"),
+    ('≤', "$\\leq$"),
+    ('>', "$>$"),
+    ('<', "$<$"),
+    ('°', "$^\\circ$"),
+    ('→', "$\\to$"),
+    ('|', "$|$"),
+];
+
+/// `text` with the characters of [`MATH`] written as LaTeX sets them.
+fn symbols(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match MATH.iter().find(|(m, _)| *m == c) {
+            Some((_, latex)) => out.push_str(latex),
+            None => out.push(c),
+        }
+    }
+    out
+}
+
+/// What the section's numbers are, above its tables.
+fn introduction() -> String {
+    format!(
+        "Every trajectory in turn is the calibration segment (its first w seconds for each window w); the terms each method estimates there correct the DVL of every other trajectory, scored against the reference in the body frame (RMSE over the three axes, cm/s). A method's held-out RMSE is the mean over calibration trajectories of each one's mean over the trajectories it corrects, ± the half-width of its 95 % interval (Student t over calibration trajectories); the ratio divides it by {NO_CALIBRATION}'s on the same pairs."
+    )
+}
+
+/// Every table of the section, in order.
+fn sections(study: &Study) -> Vec<Section> {
+    let windows = windows(study);
+    let Some(&largest) = windows.last() else {
+        return Vec::new();
+    };
+    let methods = methods(study);
+    let calibrations: Vec<&str> = crate::first_seen(
+        study
+            .terms
+            .iter()
+            .filter(|r| r.window_s == largest)
+            .map(|r| r.calibration.as_str()),
+    );
+    let mut sections = vec![heldout_section(study, &methods, largest)];
+    if windows.len() > 1 {
+        sections.push(windows_section(study, &methods, &windows));
+    }
+    for method in &methods {
+        let rows: Vec<&TermRow> = study
+            .terms
+            .iter()
+            .filter(|r| r.method == *method && r.window_s == largest)
+            .collect();
+        if !rows.is_empty() {
+            let mut section = terms_section(method, largest, &rows);
+            section.paragraph = Some(agreement(method, &rows));
+            let missing: Vec<&str> = calibrations
+                .iter()
+                .copied()
+                .filter(|c| !rows.iter().any(|r| r.calibration == *c))
+                .collect();
+            if !missing.is_empty() {
+                section.table.notes.push(format!(
+                    "No estimate on {}: the fit of {method} failed there, so {} in none of its held-out means either.",
+                    missing.join(", "),
+                    if missing.len() == 1 { "it is" } else { "they are" }
+                ));
+            }
+            for failure in study
+                .failures
+                .iter()
+                .filter(|f| f.method == *method && f.window_s == largest)
+            {
+                section
+                    .table
+                    .notes
+                    .push(format!("{}: {}.", failure.calibration, failure.why));
+            }
+            sections.push(section);
+        }
+    }
+    sections
+}
+
+/// A table as Markdown, with the figures' signs.
+fn markdown_table(table: &Table, signs: &Signs) -> MarkdownTable {
+    let mut markdown = MarkdownTable::new();
+    markdown.load_preset(ASCII_MARKDOWN);
+    markdown.set_header(table.header.clone());
+    for row in &table.rows {
+        markdown.add_row(row.iter().map(|e| e.text(signs)).collect::<Vec<_>>());
+    }
+    markdown
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::installation::rows::SummaryRow;
+
+    /// A small study: three trajectories, two windows, no calibration, least squares
+    /// EM1 and one installation model whose lever arm T12 cannot show.
+    pub(super) fn small() -> Study {
+        let summary = |method: &str, window_s, mean_cm_s, ci95_cm_s, ratio| SummaryRow {
+            method: method.into(),
+            window_s,
+            mean_cm_s,
+            ci95_cm_s,
+            ratio,
+            calibrations: 3,
+        };
+        let term = |calibration: &str, term: &str, value, std, unseen: &str| TermRow {
+            method: "installation lever+offset".into(),
+            calibration: calibration.into(),
+            window_s: 400.0,
+            term: term.into(),
+            value,
+            std,
+            unseen: unseen.into(),
+        };
+        Study {
+            heldout: Vec::new(),
+            terms: vec![
+                term("T1", "lever_arm_x_m", -1.87, 0.013, ""),
+                term("T1", "time_offset_s", 1.42, 0.009, ""),
+                term("T1", "bias_y_m_s", 0.0007, 0.001, ""),
+                term("T2", "lever_arm_x_m", -1.89, 0.017, ""),
+                term("T2", "time_offset_s", 1.51, 0.018, ""),
+                term("T2", "bias_y_m_s", 0.0078, 0.001, ""),
+                term(
+                    "T12",
+                    "lever_arm_x_m",
+                    -1.72,
+                    0.36,
+                    "standard deviation 3.600e-1 above its tolerance 1.000e-1",
+                ),
+                term("T12", "time_offset_s", 0.56, 0.038, ""),
+                term("T12", "bias_y_m_s", 0.0078, 0.001, ""),
+            ],
+            summary: vec![
+                summary("least squares EM1", 100.0, 15.2, 0.81, 1.01),
+                summary(NO_CALIBRATION, 100.0, 15.07, 0.8, 1.0),
+                summary("installation lever+offset", 100.0, 8.4, 1.2, 0.557),
+                summary("least squares EM1", 400.0, 15.08, 0.8, 1.0007),
+                summary(NO_CALIBRATION, 400.0, 15.07, 0.8, 1.0),
+                summary("installation lever+offset", 400.0, 6.0, 0.4, 0.398),
+            ],
+            trace: Vec::new(),
+            failures: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn the_markdown_section_has_each_table_in_spec_order_no_calibration_first() {
+        let text = markdown(&small());
+        let lines: Vec<&str> = text.lines().collect();
+        let has = |line: &str| {
+            assert!(lines.contains(&line), "missing {line:?} in\n{text}");
+        };
+        has("### Held-out RMSE, window 400 s");
+        has("| method                    | held-out RMSE (cm/s) | ratio to no calibration |");
+        has("| no calibration            | 15.07 ± 0.80         | 1.00                    |");
+        has("| least squares EM1         | 15.08 ± 0.80         | 1.00                    |");
+        has("| installation lever+offset | 6.00 ± 0.40          | 0.40                    |");
+        has("### Held-out RMSE against the calibration window");
+        has("| method                    | w = 100 s    | w = 400 s    |");
+        has("| installation lever+offset | 8.40 ± 1.20  | 6.00 ± 0.40  |");
+        has("### Estimated terms: installation lever+offset, window 400 s");
+        has("| calibration | lever arm x (m)         | time offset (s) | bias y (cm/s) |");
+        has("| T1          | -1.870 ± 0.013          | 1.4200 ± 0.0090 | 0.07 ± 0.10   |");
+        has("| T12         | -1.72 ± 0.36 (not seen) | 0.560 ± 0.038   | 0.78 ± 0.10   |");
+        has("- T12, not seen: lever arm x (standard deviation 0.36 m above its tolerance 0.1 m).");
+        let order: Vec<usize> = [NO_CALIBRATION, "least squares EM1", "installation"]
+            .iter()
+            .map(|m| text.find(&format!("| {m}")).unwrap())
+            .collect();
+        assert!(order.windows(2).all(|w| w[0] < w[1]), "{text}");
+    }
+
+    #[test]
+    fn the_latex_section_escapes_its_text_and_sets_each_table() {
+        let text = latex(&small(), "akit");
+        assert_eq!(text.matches("\\begin{table}").count(), 3, "{text}");
+        assert!(text.contains("\\label{tab:akit-installation-1}"), "{text}");
+        assert!(
+            text.contains("    no calibration & 15.07\\,$\\pm$\\,0.80 & 1.00 \\\\"),
+            "{text}"
+        );
+        assert!(
+            text.contains("    T12 & $-$1.72\\,$\\pm$\\,0.36 (not seen) & 0.560\\,$\\pm$\\,0.038 & 0.78\\,$\\pm$\\,0.10 \\\\"),
+            "{text}"
+        );
+        assert!(text.contains("95 \\% interval"), "{text}");
+        assert!(
+            text.contains(
+                "T12, not seen: lever arm x (standard deviation 0.36 m above its tolerance 0.1 m)."
+            ),
+            "{text}"
+        );
+        assert!(
+            text.contains("0.9 $\\times$ the median $\\sigma$ of 0.015 m"),
+            "{text}"
+        );
+        assert_eq!(symbols("ρ −0.97 ≥ 0.95"), "$\\rho$ $-$0.97 $\\geq$ 0.95");
+    }
+}
