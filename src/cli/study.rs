@@ -208,7 +208,7 @@ fn draw(study: &Study, folder: &Path, format: Format) -> Result<(), CliError> {
 }
 
 fn draw_sweep(stored: &StoredStudySweep, folder: &Path, format: Format) -> Result<(), CliError> {
-    let drawn = crate::report::study_sweep::draw(stored, folder, format).map_err(failure)?;
+    let drawn = crate::report::installation::draw_sweep(stored, folder, format).map_err(failure)?;
     super::report_figures(&drawn, folder);
     Ok(())
 }

@@ -18,7 +18,6 @@ pub mod latex;
 pub mod markdown;
 pub mod plots;
 pub mod printed;
-pub mod study_sweep;
 pub mod table;
 
 pub use markdown::FILE;

@@ -277,13 +277,13 @@ impl<'a> StudyPlan<'a> {
         }
         let mut calibrated = self.compute(&missing)?;
         for &u in &needed {
-            if !calibrated.contains_key(&u) {
+            if let std::collections::hash_map::Entry::Vacant(entry) = calibrated.entry(u) {
                 let stored = match self.store.load(&self.units[u].key)? {
                     Some(stored) => stored,
                     // Damaged since it was looked at: computed again.
                     None => self.compute(&[u])?.remove(&u).expect("computed"),
                 };
-                calibrated.insert(u, stored);
+                entry.insert(stored);
             }
         }
         let protocol_s = clock.elapsed().as_secs_f64();

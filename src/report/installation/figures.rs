@@ -1,14 +1,16 @@
 //! The study's figures, drawn from its tables as a run's are: the calibration × scored
 //! matrix of each method, held-out RMSE against the window, and one trajectory's
-//! residual before and after (`plots::figures::installation_*`). In: a [`Study`]. Out:
-//! the files written.
+//! residual before and after (`plots::figures::installation_*`); and a sweep of studies'
+//! figure, held-out RMSE at each point, drawn from the sweep's table. In: a [`Study`],
+//! or a stored sweep of studies. Out: the files written.
 
 use crate::installation::rows::Study;
 use crate::report::plots::canvas::Outcome;
 use crate::report::plots::figures::{
-    installation_matrix, installation_residual, installation_windows,
+    installation_matrix, installation_residual, installation_sweep, installation_windows,
 };
 use crate::report::plots::{Format, PlotError, Written, render, write_figures};
+use crate::results::study_sweep::StoredStudySweep;
 use std::path::Path;
 
 /// Draws the study's figures into `folder`, each file written atomically: the
@@ -32,6 +34,23 @@ pub fn draw_all(study: &Study, folder: &Path, format: Format) -> Result<Vec<Writ
         what: "installation study's",
         source,
     })?;
+    write_figures(drawn, folder, format)
+}
+
+/// Draws the figure of a sweep of studies into `folder` (each point's own figures are
+/// drawn from the point's folder by [`draw_all`]).
+pub fn draw_sweep(
+    stored: &StoredStudySweep,
+    folder: &Path,
+    format: Format,
+) -> Result<Vec<Written>, PlotError> {
+    render::register_font();
+    let drawn = installation_sweep::installation_sweep(stored)
+        .map(|outcome| vec![("installation_sweep".to_string(), outcome)])
+        .map_err(|source| PlotError::Draw {
+            what: "sweep of installation studies'",
+            source,
+        })?;
     write_figures(drawn, folder, format)
 }
 

@@ -21,7 +21,7 @@ pub mod terms;
 pub mod agreement;
 pub mod figures;
 
-pub use figures::draw_all;
+pub use figures::{draw_all, draw_sweep};
 pub(crate) use terms::{readable_term, readable_why};
 
 use crate::installation::rows::{NO_CALIBRATION, Study, TermRow};

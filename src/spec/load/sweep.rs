@@ -50,10 +50,10 @@ pub(super) fn load_sweep<S>(
         .and_then(|n| n.as_str())
         .unwrap_or_default()
         .to_string();
-    let mut points = SweepPoints::default();
+    let mut points = SweepPoints::new(&check);
     for index in chosen {
         let picks = picks_at(index, &axes);
-        points.add(&source, &table, &assigned, &axes, &picks, &name, &check);
+        points.add(&source, &table, &assigned, &axes, &picks, &name);
     }
     if !points.errors.is_empty() {
         return Err(SpecErrors(points.errors));
@@ -125,25 +125,26 @@ fn picks_at(index: usize, axes: &[Axis]) -> Vec<usize> {
 
 /// A sweep's points as they are checked: the good ones with their names, and the
 /// faults of all, each once (the sets make that linear in the number of faults).
-struct SweepPoints<S> {
+struct SweepPoints<'a, S> {
+    /// Deserializes and checks a point's table into its spec.
+    check: &'a dyn Fn(&Source, toml::Table, &Assigned) -> Result<S, SpecErrors>,
     points: Vec<Point<S>>,
     names: HashSet<String>,
     errors: Vec<SpecError>,
     seen: HashSet<SpecError>,
 }
 
-impl<S> Default for SweepPoints<S> {
-    fn default() -> Self {
+impl<'a, S> SweepPoints<'a, S> {
+    fn new(check: &'a dyn Fn(&Source, toml::Table, &Assigned) -> Result<S, SpecErrors>) -> Self {
         SweepPoints {
+            check,
             points: Vec::new(),
             names: HashSet::new(),
             errors: Vec::new(),
             seen: HashSet::new(),
         }
     }
-}
 
-impl<S> SweepPoints<S> {
     /// Checks, with `check`, the point of `table` that takes value `picks[i]` of axis `i`, keeping
     /// the point or its faults.
     fn add(
@@ -154,7 +155,6 @@ impl<S> SweepPoints<S> {
         axes: &[Axis],
         picks: &[usize],
         name: &str,
-        check: &impl Fn(&Source, toml::Table, &Assigned) -> Result<S, SpecErrors>,
     ) {
         let values: Vec<toml::Value> = axes
             .iter()
@@ -165,7 +165,7 @@ impl<S> SweepPoints<S> {
         let (mut point_table, point_assigned) =
             self.place(source, table, assigned, axes, &values, &point_name);
         point_table.insert("name".into(), format!("{name}/{point_name}").into());
-        match check(source, point_table, &point_assigned) {
+        match (self.check)(source, point_table, &point_assigned) {
             Ok(spec) => {
                 if !self.names.insert(point_name.clone()) {
                     self.errors.push(SpecError {
