@@ -333,6 +333,8 @@ fn point_name(axes: &[Axis], picks: &[usize]) -> String {
             } else {
                 short(&axis.key)
             };
+            // An index names a folder as a step: `models[0].terms` → `models.0.terms`.
+            let key = key.replace('[', ".").replace(']', "");
             let scalar = |value: &toml::Value| match value {
                 toml::Value::String(s) => Some(s.clone()),
                 toml::Value::Integer(_) | toml::Value::Float(_) | toml::Value::Boolean(_) => {
@@ -375,6 +377,22 @@ mod tests {
     fn line_containing(path: &Path, needle: &str) -> usize {
         let text = std::fs::read_to_string(path).unwrap();
         text.lines().position(|l| l.contains(needle)).unwrap() + 1
+    }
+
+    #[test]
+    fn an_indexed_key_names_its_points_with_the_index_as_a_step() {
+        let axes = [super::Axis {
+            key: "calibration.models[0].terms".into(),
+            values: vec![toml::Value::Array(vec![
+                "lever_arm".into(),
+                "time_offset".into(),
+            ])],
+            line: 1,
+        }];
+        assert_eq!(
+            super::point_name(&axes, &[0]),
+            "models.0.terms=lever_arm-time_offset"
+        );
     }
 
     #[test]
