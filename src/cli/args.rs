@@ -134,7 +134,7 @@ pub(super) enum Command {
     /// Time the dataset generation, the Monte Carlo protocol and DCNet training of a spec
     Bench {
         spec: PathBuf,
-        /// Timed repetitions of each stage
+        /// Timed repetitions of each stage (training: paired runs, ours then the peer's)
         #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
         repeat: u32,
         /// Training batches timed per model

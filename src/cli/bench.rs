@@ -64,12 +64,20 @@ pub(super) fn bench(
     );
     bench_refusal(spec_path).map_err(failure)?;
     let set = dataset::generate(&spec, &trajectories, &hidden);
-    let ours = bench_training(&spec, &set, training_batches).map_err(failure)?;
-    let peer = pytorch
-        .map(|script| bench_pytorch(&spec, script, training_batches))
-        .transpose()
-        .map_err(|e| failure(anyhow::anyhow!(e)))?;
-    print_training_bench(&spec, &ours, peer.as_ref());
+    // Paired runs: ours then the peer in each, so that both see the machine as it is
+    // at that moment; the table gives the median of each and its spread.
+    let mut ours = Vec::new();
+    let mut peers = Vec::new();
+    for _ in 0..repeat {
+        ours.push(bench_training(&spec, &set, training_batches).map_err(failure)?);
+        if let Some(script) = pytorch {
+            peers.push(
+                bench_pytorch(&spec, script, training_batches)
+                    .map_err(|e| failure(anyhow::anyhow!(e)))?,
+            );
+        }
+    }
+    print_training_bench(&spec, &ours, &peers);
     Ok(())
 }
 
@@ -270,45 +278,118 @@ fn bench_pytorch(spec: &Spec, script: &Path, batches: usize) -> Result<PeerRates
     })
 }
 
-fn print_training_bench(spec: &Spec, ours: &TrainingRates, peer: Option<&PeerRates>) {
+/// The median of `values` and their range, as a table cell: `36469 (33796-36924)`, or
+/// the one value.
+fn median_and_spread(values: &[f64], digits: usize) -> String {
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    match sorted.len() {
+        1 => format!("{median:.digits$}"),
+        _ => format!(
+            "{median:.digits$} ({:.digits$}-{:.digits$})",
+            sorted[0],
+            sorted[sorted.len() - 1]
+        ),
+    }
+}
+
+/// The training table: each arrangement's median samples/s over the paired runs with
+/// its range, and, with the peer, the median of the paired ratios on all cores.
+fn print_training_bench(spec: &Spec, ours: &[TrainingRates], peers: &[PeerRates]) {
     let threads = rayon::current_num_threads();
     let backend = spec.training.backend;
     println!(
-        "training: batch {}, {} conv channels, FC {:?}",
-        spec.training.batch_size, spec.model.conv_channels, spec.model.fc_widths
+        "training: batch {}, {} conv channels, FC {:?}; median (range) of {} run{}{}",
+        spec.training.batch_size,
+        spec.model.conv_channels,
+        spec.model.fc_widths,
+        ours.len(),
+        if ours.len() == 1 { "" } else { "s" },
+        if peers.is_empty() {
+            ""
+        } else {
+            ", each ours then PyTorch's"
+        }
     );
     let mut table = comfy_table::Table::new();
     table.load_preset(comfy_table::presets::ASCII_MARKDOWN);
-    let rate = |r: f64| format!("{r:.0}");
+    let rates = |f: &dyn Fn(&TrainingRates) -> f64| {
+        median_and_spread(&ours.iter().map(f).collect::<Vec<_>>(), 0)
+    };
+    let peer_rates = |f: &dyn Fn(&PeerRates) -> f64| {
+        median_and_spread(&peers.iter().map(f).collect::<Vec<_>>(), 0)
+    };
     let mut header = vec![
         "arrangement".to_string(),
         format!("dcnet-exp ({backend}) samples/s"),
     ];
     let mut rows = vec![
-        vec!["one model, one thread".to_string(), rate(ours.one_thread)],
+        vec![
+            "one model, one thread".to_string(),
+            rates(&|r| r.one_thread),
+        ],
         vec![
             format!("{threads} models, one per core"),
-            rate(ours.one_per_core),
+            rates(&|r| r.one_per_core),
         ],
         vec![format!("one model over {threads} threads"), "-".to_string()],
     ];
-    if let Some(peer) = peer {
-        header.push("PyTorch samples/s".to_string());
-        rows[0].push(rate(peer.rates.one_thread));
-        rows[1].push(rate(peer.rates.one_per_core));
-        rows[2].push(rate(peer.one_model_all_threads));
+    if !peers.is_empty() {
+        header.extend(["PyTorch samples/s".to_string(), "ratio".to_string()]);
+        let ratio = |f: &dyn Fn(&TrainingRates, &PeerRates) -> f64| {
+            median_and_spread(
+                &ours
+                    .iter()
+                    .zip(peers)
+                    .map(|(o, p)| f(o, p))
+                    .collect::<Vec<_>>(),
+                2,
+            )
+        };
+        rows[0].extend([
+            peer_rates(&|p| p.rates.one_thread),
+            ratio(&|o, p| o.one_thread / p.rates.one_thread),
+        ]);
+        rows[1].extend([
+            peer_rates(&|p| p.rates.one_per_core),
+            ratio(&|o, p| o.one_per_core / p.rates.one_per_core),
+        ]);
+        rows[2].extend([peer_rates(&|p| p.one_model_all_threads), "-".to_string()]);
     }
     table.set_header(header);
     for row in rows {
         table.add_row(row);
     }
     println!("{table}");
-    if let Some(peer) = peer {
-        let best_peer = peer.rates.one_per_core.max(peer.one_model_all_threads);
+    if !peers.is_empty() {
+        let ratios: Vec<f64> = ours
+            .iter()
+            .zip(peers)
+            .map(|(o, p)| o.one_per_core / p.rates.one_per_core.max(p.one_model_all_threads))
+            .collect();
         println!(
-            "on all {threads} cores: dcnet-exp {:.0} samples/s, PyTorch at its best {best_peer:.0}: {:.2}×",
-            ours.one_per_core,
-            ours.one_per_core / best_peer
+            "on all {threads} cores, against PyTorch at its best arrangement: {}× (median of {} paired runs, range in brackets)",
+            median_and_spread(&ratios, 2),
+            ratios.len()
         );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::median_and_spread;
+
+    #[test]
+    fn a_cell_is_the_median_with_the_range_of_the_runs() {
+        assert_eq!(
+            median_and_spread(&[36469.0, 33796.0, 36924.0], 0),
+            "36469 (33796-36924)"
+        );
+        assert_eq!(
+            median_and_spread(&[1.56, 0.85, 1.32], 2),
+            "1.32 (0.85-1.56)"
+        );
+        assert_eq!(median_and_spread(&[1.5], 2), "1.50");
     }
 }
