@@ -73,6 +73,11 @@ fn shards_collected_give_the_bytes_of_one_whole_run_and_collect_names_what_is_mi
 
     let again = run(d, &["run", spec, "--out", "split", "--shard", "1/2"]);
     assert!(again.contains("nothing to do"), "{again}");
+    let empty = run(d, &["run", spec, "--out", "split", "--shard", "7/9"]);
+    assert!(
+        empty.contains("shard 7/9 has no calibrations (syn has 4 calibrations"),
+        "{empty}"
+    );
     run(d, &["run", spec, "--out", "split", "--shard", "0/2"]);
     let collected = run(d, &["collect", spec, "--out", "split", "--no-plots"]);
     assert!(collected.contains("held-out trajectories"), "{collected}");
@@ -115,6 +120,50 @@ fn a_run_resumes_from_the_calibrations_stored_and_computes_a_damaged_one_again()
         "{rerun}"
     );
     assert_eq!(digests(&d.join("whole/syn")), digests(&d.join("cut/syn")));
+
+    // `--force` computes every calibration again, stored or not.
+    let stored_at = |path: &Path| std::fs::metadata(path).unwrap().modified().unwrap();
+    let before: Vec<_> = stored.iter().map(|p| stored_at(p)).collect();
+    std::thread::sleep(std::time::Duration::from_millis(20));
+    run(d, &["run", spec, "--out", "cut", "--no-plots", "--force"]);
+    for (path, before) in stored.iter().zip(before) {
+        assert!(
+            stored_at(path) > before,
+            "{} was not computed again",
+            path.display()
+        );
+    }
+    assert_eq!(digests(&d.join("whole/syn")), digests(&d.join("cut/syn")));
+}
+
+#[test]
+fn a_point_without_a_fit_is_named_and_the_other_points_are_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_installed(&d.join("data/syn"), 2, &[], INSTALLED, 11);
+    write_study_spec(
+        d,
+        "syn",
+        "syn",
+        2,
+        "\n[sweep.values]\n\"calibration.window_s\" = [[1.0], [400.0]]\n",
+    );
+    let output = dcnet(d, &["run", "experiments/syn.toml", "--no-plots"]);
+    let message = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{message}");
+    assert!(
+        message.contains(
+            "point syn/window_s=1.0: installation lever+offset+bias+scale could not be fitted"
+        ),
+        "{message}"
+    );
+    assert!(
+        message.contains("1 other point written; the sweep's table is not"),
+        "{message}"
+    );
+    assert!(d.join("results/syn/window_s=400.0/manifest.json").is_file());
+    assert!(!d.join("results/syn/window_s=1.0").exists());
+    assert!(!d.join("results/syn/sweep.json").exists());
 }
 
 #[test]
@@ -239,7 +288,7 @@ fn a_bad_sweep_value_is_placed_on_its_line_with_its_point() {
     assert_eq!(output.status.code(), Some(1), "{message}");
     assert!(
         message.contains(&format!(
-            "experiments/syn.toml:{line} (sweep point dvl_cm_s=-1.0): noise.dvl_cm_s: -1 must be a positive number"
+            "experiments/syn.toml:{line} (sweep point dvl_cm_s=-1.0): noise.dvl_cm_s: -1 must be a finite positive number"
         )),
         "{message}"
     );

@@ -163,6 +163,34 @@ pub(super) struct Target {
     pub(super) overrides: Overrides,
 }
 
+impl Target {
+    /// The command line of `verb` on this target, with its `--out`, `--backend` and
+    /// `--set` as given, for a message that tells a user what to run next.
+    pub(super) fn command(&self, verb: &str) -> String {
+        let quoted = |text: &str| {
+            if text
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || "-_./=,:".contains(c))
+            {
+                text.to_string()
+            } else {
+                format!("'{}'", text.replace('\'', r"'\''"))
+            }
+        };
+        let mut line = format!("dcnet-exp {verb} {}", quoted(&self.spec.to_string_lossy()));
+        if self.out != Path::new("results") {
+            line.push_str(&format!(" --out {}", quoted(&self.out.to_string_lossy())));
+        }
+        if let Some(backend) = &self.backend {
+            line.push_str(&format!(" --backend {}", quoted(backend)));
+        }
+        for set in &self.overrides.set {
+            line.push_str(&format!(" --set {}", quoted(set)));
+        }
+        line
+    }
+}
+
 /// Where the figures of the results a command writes go.
 #[derive(Debug, clap::Args)]
 pub(super) struct Drawing {

@@ -62,9 +62,9 @@ pub(super) fn run(
     let executed = execute(&plan, mode, &to_do).map_err(failure)?;
     if let Mode::Shard { shard, .. } = mode {
         eprintln!(
-            "shard {shard}: {} done; once every shard has finished, `dcnet-exp collect {}` writes the results",
+            "shard {shard}: {} done; once every shard has finished, `{}` writes the results",
             tasks(executed.done),
-            target.spec.display()
+            target.command("collect")
         );
     } else {
         finish(&experiment, &executed, drawing)?;

@@ -19,7 +19,7 @@ use crate::installation::spec::{self as study_spec, ObservabilityFile, TermName}
 use crate::installation::study::term_set;
 use crate::installation::terms::{AxisRmse, score};
 use crate::pipeline::Shard;
-use crate::pipeline::installation::{Executed, Outcome, StudyMode, StudyPlan};
+use crate::pipeline::installation::{Executed, Outcome, StudyError, StudyMode, StudyPlan};
 use crate::report::installation::{readable_term, readable_why};
 use crate::report::plots::Format;
 use crate::results::study_sweep::{self, StoredStudySweep};
@@ -58,6 +58,18 @@ pub(super) fn run(
         let executed = plan.execute(StudyMode::All { force }).map_err(input)?;
         return finish(&plan, &executed, drawing);
     };
+    let in_shard = (0..plan.units.len())
+        .filter(|&u| plan.in_shard(u, shard))
+        .count();
+    if in_shard == 0 {
+        eprintln!(
+            "nothing to do: shard {shard} has no calibrations ({} has {}, shared round the {} shards)",
+            experiment.name,
+            calibrations(plan.units.len()),
+            shard.count
+        );
+        return Ok(());
+    }
     let executed = plan.execute(StudyMode::Shard(shard)).map_err(input)?;
     if executed.computed == 0 {
         eprintln!(
@@ -66,9 +78,9 @@ pub(super) fn run(
         );
     } else {
         eprintln!(
-            "shard {shard}: {} done; once every shard has finished, `dcnet-exp collect {}` writes the results",
+            "shard {shard}: {} done; once every shard has finished, `{}` writes the results",
             calibrations(executed.computed),
-            target.spec.display()
+            target.command("collect")
         );
     }
     Ok(())
@@ -79,7 +91,14 @@ pub(super) fn run(
 pub(super) fn collect(target: &Target, drawing: &Drawing) -> Result<(), CliError> {
     let experiment = load_target(target)?;
     let plan = StudyPlan::new(&experiment, &target.spec, &target.out).map_err(input)?;
-    let executed = plan.execute(StudyMode::Collect).map_err(input)?;
+    let executed = plan.execute(StudyMode::Collect).map_err(|error| match error {
+        StudyError::NotCollected { .. } => input(anyhow::anyhow!(
+            "{error}: run the shards that compute them (`{} --shard K/N`), or `{}`, which computes what is missing",
+            target.command("run"),
+            target.command("run")
+        )),
+        other => input(other),
+    })?;
     finish(&plan, &executed, drawing)
 }
 
@@ -179,6 +198,11 @@ fn finish(plan: &StudyPlan, executed: &Executed, drawing: &Drawing) -> Result<()
 pub(super) fn plot(results: &Path, out: &Path, format: Format) -> Result<(), CliError> {
     let name = results.file_name().map(PathBuf::from).unwrap_or_default();
     if !results.join(crate::results::sweep::INDEX).is_file() {
+        // A sweep point's figures go where its run drew them: `<sweep>/<point>/`.
+        let name = std::fs::read(results.join(crate::results::MANIFEST))
+            .ok()
+            .and_then(|bytes| serde_json::from_slice::<crate::results::Manifest>(&bytes).ok())
+            .map_or(name, |manifest| PathBuf::from(manifest.name));
         return plot_study(results, &out.join(name), format);
     }
     let stored = study_sweep::read(results).map_err(input)?;
@@ -240,6 +264,7 @@ fn printed_sweep(stored: &StoredStudySweep) -> String {
                 format!("{:.2}", s.mean_cm_s),
                 format!("± {:.2}", s.ci95_cm_s),
                 format!("{:.3}", s.ratio),
+                s.calibrations.to_string(),
             ]);
         }
     }
@@ -309,12 +334,16 @@ pub(super) fn validate(path: &Path, set: &[String]) -> Result<(), CliError> {
             experiment.swept.join(", ")
         ),
     };
+    let count = |n: usize, what: &str| match n {
+        1 => format!("1 {what}"),
+        _ => format!("{n} {what}s"),
+    };
     println!(
-        "{}: ok (an installation study: {points}{} trajectories, {} windows, {} methods)",
+        "{}: ok (an installation study: {points}{}, {}, {})",
         path.display(),
-        spec.trajectories.len(),
-        spec.windows_s.len(),
-        spec.methods.len() + 1
+        count(spec.trajectories.len(), "trajectory").replace("trajectorys", "trajectories"),
+        count(spec.windows_s.len(), "window"),
+        count(spec.methods.len() + 1, "method")
     );
     Ok(())
 }

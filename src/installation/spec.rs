@@ -329,7 +329,7 @@ fn check(
         fault(
             "noise.dvl_cm_s".into(),
             format!(
-                "{} must be a positive number: the bound divides by it",
+                "{} must be a finite positive number: the bound divides by it",
                 noise.dvl_cm_s
             ),
         );
@@ -337,7 +337,10 @@ fn check(
     if !(noise.reference_cm_s.is_finite() && noise.reference_cm_s >= 0.0) {
         fault(
             "noise.reference_cm_s".into(),
-            format!("{} must be zero or positive", noise.reference_cm_s),
+            format!(
+                "{} must be zero or a finite positive number",
+                noise.reference_cm_s
+            ),
         );
     }
 
@@ -350,7 +353,7 @@ fn check(
         if !(w.is_finite() && w > 0.0) {
             fault(
                 format!("calibration.window_s[{i}]"),
-                format!("{w} must be a positive number of seconds"),
+                format!("{w} must be a finite positive number of seconds"),
             );
         } else if windows_s.contains(&w) {
             fault(
@@ -431,7 +434,7 @@ fn check(
             fault(
                 format!("observability.{key}"),
                 format!(
-                    "{value} must be a positive number: a term whose standard deviation is beyond it counts as not seen"
+                    "{value} must be a finite positive number: a term whose standard deviation is beyond it counts as not seen"
                 ),
             );
         }

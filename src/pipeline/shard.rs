@@ -43,7 +43,12 @@ impl Shard {
                 (index, count)
             }
         };
-        if count == 0 || index >= count {
+        if count == 0 {
+            return Err(format!(
+                "--shard {text}: N is the number of shards, at least 1"
+            ));
+        }
+        if index >= count {
             return Err(format!(
                 "--shard {text}: shard {index} of {count} does not exist: K runs from 0 to N-1"
             ));
@@ -76,6 +81,10 @@ mod tests {
         assert_eq!(
             Shard::parse("3/3", none).unwrap_err(),
             "--shard 3/3: shard 3 of 3 does not exist: K runs from 0 to N-1"
+        );
+        assert_eq!(
+            Shard::parse("0/0", none).unwrap_err(),
+            "--shard 0/0: N is the number of shards, at least 1"
         );
         assert_eq!(
             Shard::parse("4", none).unwrap_err(),

@@ -45,7 +45,7 @@ pub enum StudyError {
     #[error(transparent)]
     Owner(#[from] owner::OwnerError),
     #[error(
-        "{method} could not be fitted on any calibration trajectory with a window of {window_s} s ({why}); nothing is written: give calibration.window_s values that leave samples for its terms, or fewer terms"
+        "{point}{method} could not be fitted on any calibration trajectory with a window of {window_s} s ({why}); its results are not written: give calibration.window_s values that leave samples for its terms, or fewer terms"
     )]
     NoFit {
         /// "point <name>: " in a sweep, else empty.
@@ -77,17 +77,24 @@ pub enum StudyError {
     },
     #[error(transparent)]
     Results(#[from] results::ResultsError),
+    /// Points with a window on which a method fitted on no calibration trajectory; the
+    /// other points' folders are written.
+    #[error(
+        "{}\n{written} other point{} written; the sweep's table is not",
+        errors.join("\n"),
+        if *written == 1 { "" } else { "s" }
+    )]
+    Unfitted { errors: Vec<String>, written: usize },
     #[error(transparent)]
     Store(#[from] CalibrationStoreError),
     #[error(transparent)]
     ReadBack(#[from] results::read::ReadError),
     #[error(
-        "{}: {} of {total} calibrations are not in the cache, such as {}: run the shards that compute them (`dcnet-exp run {} --shard K/N`), or `dcnet-exp run {}`, which computes what is missing",
-        out.display(), missing_count, missing.join("; "), spec.display(), spec.display()
+        "{}: {missing_count} of {total} calibrations are not in the cache, such as {}",
+        out.display(), missing.join("; ")
     )]
     NotCollected {
         out: PathBuf,
-        spec: PathBuf,
         /// The first few missing, as "point: trajectory".
         missing: Vec<String>,
         missing_count: usize,
@@ -148,6 +155,7 @@ pub struct StudyPlan<'a> {
     /// Each point's results key: what its folder is current for.
     results_keys: Vec<String>,
     load_s: f64,
+    started_at: SystemTime,
 }
 
 impl<'a> StudyPlan<'a> {
@@ -158,6 +166,7 @@ impl<'a> StudyPlan<'a> {
         spec_file: &Path,
         out: &Path,
     ) -> Result<Self, StudyError> {
+        let started_at = SystemTime::now();
         let clock = Instant::now();
         let inputs = Inputs::read(experiment, out)?;
         let mut units = Vec::new();
@@ -198,6 +207,7 @@ impl<'a> StudyPlan<'a> {
             store: CalibrationStore::new(out),
             results_keys,
             load_s: clock.elapsed().as_secs_f64(),
+            started_at,
         })
     }
 
@@ -261,15 +271,15 @@ impl<'a> StudyPlan<'a> {
         let needed: Vec<usize> = (0..self.units.len())
             .filter(|&u| stale.contains(&self.units[u].point))
             .collect();
+        // `--force` computes every calibration again, stored or not.
         let missing: Vec<usize> = needed
             .iter()
             .copied()
-            .filter(|&u| self.status(u) != Seal::Intact)
+            .filter(|&u| force || self.status(u) != Seal::Intact)
             .collect();
         if collect && !missing.is_empty() {
             return Err(StudyError::NotCollected {
                 out: self.out.clone(),
-                spec: self.spec_file.clone(),
                 missing: missing.iter().take(5).map(|&u| self.label(u)).collect(),
                 missing_count: missing.len(),
                 total: needed.len(),
@@ -288,6 +298,7 @@ impl<'a> StudyPlan<'a> {
         }
         let protocol_s = clock.elapsed().as_secs_f64();
         let mut studies = Vec::new();
+        let mut unfitted = Vec::new();
         for &p in &stale {
             let parts = (0..self.units.len())
                 .filter(|&u| self.units[u].point == p)
@@ -301,7 +312,10 @@ impl<'a> StudyPlan<'a> {
                 true => format!("point {}: ", self.spec(p).name),
                 false => String::new(),
             };
-            folder::no_window_without_a_fit(self.spec(p), &study, &point)?;
+            if let Err(error) = folder::no_window_without_a_fit(self.spec(p), &study, &point) {
+                unfitted.push(error);
+                continue;
+            }
             study.trace = folder::trace(&study, &estimates, &self.inputs.segments_of(p));
             studies.push((p, study));
         }
@@ -314,6 +328,15 @@ impl<'a> StudyPlan<'a> {
                 self.manifest(p, protocol_s),
             )?;
             written.insert(p, study);
+        }
+        if !unfitted.is_empty() {
+            if !self.experiment.is_sweep() {
+                return Err(unfitted.remove(0));
+            }
+            return Err(StudyError::Unfitted {
+                errors: unfitted.iter().map(ToString::to_string).collect(),
+                written: written.len(),
+            });
         }
         let points: Vec<Outcome> = (0..self.experiment.points.len())
             .map(|p| match written.remove(&p) {
@@ -390,7 +413,7 @@ impl<'a> StudyPlan<'a> {
             spec_sha256: sha256_hex(spec.resolved_toml.as_bytes()),
             git_commit: env!("DCNET_GIT_COMMIT").to_string(),
             crate_version: env!("CARGO_PKG_VERSION").to_string(),
-            started_at: humantime::format_rfc3339_seconds(SystemTime::now()).to_string(),
+            started_at: humantime::format_rfc3339_seconds(self.started_at).to_string(),
             finished_at: String::new(),
             threads: rayon::current_num_threads(),
             backend: String::new(),

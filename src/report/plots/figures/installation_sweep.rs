@@ -3,7 +3,7 @@
 //! trajectories as bars, one line per method across the points in grid order. In: a
 //! stored sweep of studies. Out: the figure, or why there is none (one point).
 
-use super::installation_windows::{XAxis, rmse_figure};
+use super::installation_windows::{TICK_CHAR_PX, TICKS_WIDTH_PX, XAxis, rmse_figure};
 use crate::installation::rows::SummaryRow;
 use crate::report::plots::canvas::Outcome;
 use crate::report::plots::draw::PlotResult;
@@ -43,11 +43,30 @@ pub fn installation_sweep(stored: &StoredStudySweep) -> PlotResult<Outcome> {
                 .join(", ")
         })
         .collect();
+    // Names too long to stand side by side are numbered, and the axis says what each
+    // number is while that fits on it.
+    let longest = ticks.iter().map(|t| t.chars().count()).max().unwrap_or(0);
+    let keys = stored.index.swept.join(", ");
+    let (ticks, label) = if longest * TICK_CHAR_PX <= TICKS_WIDTH_PX / ticks.len() {
+        (ticks, keys)
+    } else {
+        let listed: Vec<String> = ticks
+            .iter()
+            .enumerate()
+            .map(|(i, t)| format!("{} = {t}", i + 1))
+            .collect();
+        let label = match format!("{keys}: {}", listed.join("; ")) {
+            label if label.chars().count() * TICK_CHAR_PX <= TICKS_WIDTH_PX + 200 => label,
+            _ => format!("{keys}: point n is the n-th of sweep.json's points"),
+        };
+        ((1..=ticks.len()).map(|n| n.to_string()).collect(), label)
+    };
     rmse_figure(
         &rows,
         XAxis {
-            label: &stored.index.swept.join(", "),
+            label: &label,
             ticks: Some(&ticks),
+            lines: stored.index.swept.len() == 1,
         },
         "Held-out RMSE at each point's largest window: mean over calibration trajectories, bars its 95 % interval".into(),
     )

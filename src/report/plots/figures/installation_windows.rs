@@ -97,6 +97,7 @@ pub fn installation_windows(study: &Study) -> PlotResult<Outcome> {
         XAxis {
             label: "calibration window [s]",
             ticks: None,
+            lines: true,
         },
         "Held-out RMSE against the calibration window: mean over calibration trajectories, bars its 95 % interval".into(),
     )
@@ -107,7 +108,17 @@ pub fn installation_windows(study: &Study) -> PlotResult<Outcome> {
 pub struct XAxis<'a> {
     pub label: &'a str,
     pub ticks: Option<&'a [String]>,
+    /// Whether a method's points are joined by a line (not where neighbours on the axis
+    /// are not neighbours in any sense, as the points of a sweep over two keys).
+    pub lines: bool,
 }
+
+/// The width of one character of a tick label, in pixels, to tell whether names fit
+/// side by side.
+pub const TICK_CHAR_PX: usize = 9;
+
+/// The width the figure's x axis gives its tick labels, in pixels.
+pub const TICKS_WIDTH_PX: usize = 700;
 
 /// Each method's mean held-out RMSE ± its 95 % interval at the x of each of its `rows`
 /// (`(x, row)`), one line per method and no calibration as a dashed reference.
@@ -172,7 +183,9 @@ pub fn rmse_figure(
                 .iter()
                 .map(|(x, r)| (at(*x), y.shown(r.mean_cm_s)))
                 .collect();
-            line(&mut chart, points.clone(), look.color, look.stroke)?;
+            if x_axis.lines || marker.is_none() {
+                line(&mut chart, points.clone(), look.color, look.stroke)?;
+            }
             if let Some(marker) = marker {
                 marker.draw(&mut chart, &points, look.color)?;
                 chart.draw_series(mine.iter().map(|(x, r)| {
