@@ -181,6 +181,26 @@ pub fn check_seal(path: &Path, key: &str) -> Seal {
     }
 }
 
+/// Moves the sealed file at `path` and its seal into `damaged` (see [`set_aside`]) when
+/// the seal says it is damaged for `key`; returns what was wrong with the `what` and
+/// where it went, or `None` when it is intact or absent.
+pub fn set_aside_if_damaged(
+    path: &Path,
+    key: &str,
+    damaged: &Path,
+    what: &str,
+) -> std::io::Result<Option<String>> {
+    let Seal::Damaged(why) = check_seal(path, key) else {
+        return Ok(None);
+    };
+    set_aside(path, damaged)?;
+    Ok(Some(format!(
+        "damaged {what} {}: {why}; moved to {} and computed again",
+        path.display(),
+        damaged.display()
+    )))
+}
+
 /// Moves `path` and its seal, where they exist, into `folder`, each name followed by
 /// the time in seconds (and a count, when an earlier copy of that second is there), and
 /// returns where the file went.

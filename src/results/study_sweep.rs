@@ -5,10 +5,11 @@
 //! and `sweep.json`, the index of the points (`"kind": "installation"`), written last.
 //! In: the experiment and each point's summary rows. Out: the two files.
 
+use super::ResultsError;
 use super::read::{Batch, ReadError, read_rows};
-use super::sweep::{INDEX, SweepIndex, TABLE, point_columns, point_folder, read_index, swept};
-use super::{ResultsError, table_bytes};
-use crate::files::write_atomic;
+use super::sweep::{
+    INDEX, SweepIndex, TABLE, point_columns, point_folder, read_index, swept, write_table_and_index,
+};
 use crate::installation::rows::SummaryRow;
 use crate::installation::spec::{InstallationSpec, KIND};
 use crate::spec::Experiment;
@@ -57,28 +58,15 @@ pub fn write(
     }
     let batch =
         RecordBatch::try_from_iter(columns).expect("columns of one table have equal lengths");
-    let table = folder.join(TABLE);
-    let bytes = table_bytes(&table, &batch)?;
-    write_atomic(&table, &bytes).map_err(|source| ResultsError::Io {
-        path: table.clone(),
-        source,
-    })?;
     let index = SweepIndex {
         name: experiment.name.clone(),
         swept: experiment.swept.clone(),
         points: points.iter().map(|(name, _)| name.to_string()).collect(),
         results_keys: results_keys.to_vec(),
-        table_sha256: crate::files::sha256_hex(&bytes),
+        table_sha256: String::new(),
         kind: KIND.to_string(),
     };
-    let path = folder.join(INDEX);
-    write_atomic(
-        &path,
-        serde_json::to_string_pretty(&index)
-            .expect("an index serializes")
-            .as_bytes(),
-    )
-    .map_err(|source| ResultsError::Io { path, source })
+    write_table_and_index(folder, &batch, index)
 }
 
 /// A stored sweep of studies: its index and each point's summary rows.

@@ -213,12 +213,6 @@ pub fn write(
     results_keys: &[String],
 ) -> Result<(), ResultsError> {
     let rows = rows(experiment, points);
-    let table = folder.join(TABLE);
-    let bytes = table_bytes(&table, &batch(&experiment.swept, &rows))?;
-    write_atomic(&table, &bytes).map_err(|source| ResultsError::Io {
-        path: table.clone(),
-        source,
-    })?;
     let index = SweepIndex {
         name: experiment.name.clone(),
         swept: experiment.swept.clone(),
@@ -228,8 +222,28 @@ pub fn write(
             .map(|p| point_folder(&p.spec.name).to_string())
             .collect(),
         results_keys: results_keys.to_vec(),
-        table_sha256: crate::files::sha256_hex(&bytes),
+        table_sha256: String::new(),
         kind: String::new(),
+    };
+    write_table_and_index(folder, &batch(&experiment.swept, &rows), index)
+}
+
+/// Writes `batch` as `sweep.parquet` into `folder`, then `index`, with the table's
+/// SHA-256, as `sweep.json`: the index last, so that it names a table that is there.
+pub fn write_table_and_index(
+    folder: &Path,
+    batch: &RecordBatch,
+    index: SweepIndex,
+) -> Result<(), ResultsError> {
+    let table = folder.join(TABLE);
+    let bytes = table_bytes(&table, batch)?;
+    write_atomic(&table, &bytes).map_err(|source| ResultsError::Io {
+        path: table.clone(),
+        source,
+    })?;
+    let index = SweepIndex {
+        table_sha256: crate::files::sha256_hex(&bytes),
+        ..index
     };
     let path = folder.join(INDEX);
     write_atomic(

@@ -33,20 +33,10 @@ impl BlockStore {
     /// Moves a damaged block of `key` into the cache's `damaged/` folder, so that it is
     /// computed again; returns what was wrong with it.
     pub fn set_aside_damaged(&self, key: &str) -> Result<Option<String>, ResultsError> {
-        let Seal::Damaged(why) = self.integrity(key) else {
-            return Ok(None);
-        };
         let path = self.path(key);
         let damaged = self.folder.with_file_name("damaged");
-        files::set_aside(&path, &damaged).map_err(|source| ResultsError::Io {
-            path: path.clone(),
-            source,
-        })?;
-        Ok(Some(format!(
-            "damaged Monte Carlo block {}: {why}; moved to {} and computed again",
-            path.display(),
-            damaged.display()
-        )))
+        files::set_aside_if_damaged(&path, key, &damaged, "Monte Carlo block")
+            .map_err(|source| ResultsError::Io { path, source })
     }
 
     pub fn save(&self, key: &str, rows: &[RunRow]) -> Result<(), ResultsError> {

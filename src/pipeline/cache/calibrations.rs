@@ -77,20 +77,10 @@ impl CalibrationStore {
     /// Moves a damaged calibration of `key` into the cache's `damaged/` folder, so that
     /// it is computed again; returns what was wrong with it.
     pub fn set_aside_damaged(&self, key: &str) -> Result<Option<String>, CalibrationStoreError> {
-        let Seal::Damaged(why) = self.integrity(key) else {
-            return Ok(None);
-        };
         let path = self.path(key);
         let damaged = self.folder.with_file_name("damaged");
-        files::set_aside(&path, &damaged).map_err(|source| CalibrationStoreError::Io {
-            path: path.clone(),
-            source,
-        })?;
-        Ok(Some(format!(
-            "damaged calibration {}: {why}; moved to {} and computed again",
-            path.display(),
-            damaged.display()
-        )))
+        files::set_aside_if_damaged(&path, key, &damaged, "calibration")
+            .map_err(|source| CalibrationStoreError::Io { path, source })
     }
 }
 
