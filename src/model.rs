@@ -5,10 +5,10 @@
 //!
 //! Every convolution runs as one matrix product over its unfolded windows: activations
 //! are rows of channels, one row per (window, time, row of the 2D head), and a layer
-//! gathers each output's taps side by side and applies a Linear layer. This is the same
-//! network as a stack of Conv1d and Conv2d, in far fewer and larger operations; only
-//! the order of the first Linear layer's inputs differs (time-major here, channel-major
-//! after burn's or PyTorch's convolutions).
+//! gathers each output's taps side by side ([`crate::kernels::unfold`]) and applies a
+//! Linear layer. This is the same network as a stack of Conv1d and Conv2d, in far fewer
+//! and larger operations; only the order of the first Linear layer's inputs differs
+//! (time-major here, channel-major after burn's or PyTorch's convolutions).
 //!
 //! Weights are drawn from a generator the caller seeds, and dropout masks too, so a
 //! model does not depend on burn's process-wide random state or on which other models
