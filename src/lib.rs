@@ -11,7 +11,8 @@
 //! 3. [`noise`]: the beam-level DVL and GNSS-RTK measurement model, and [`bound`]: the
 //!    information bound it puts on any calibration from w seconds of data;
 //! 4. [`dataset`]: the training windows over the error-term grid;
-//! 5. [`model`] and [`train`]: DCNet and its closed-loop training;
+//! 5. [`kernels`]: the network's hot operations on burn's CPU backend, [`model`] and
+//!    [`train`]: DCNet and its closed-loop training;
 //! 6. [`estimators`]: calibration methods behind one trait, DCNet among them;
 //! 7. [`evaluate`]: the Monte Carlo calibration and evaluation protocol (its runs, the
 //!    tables summed from them, the bound's efficiency), [`installation`]: a real DVL
@@ -46,6 +47,7 @@ pub mod data;
 pub mod noise;
 pub mod bound;
 pub mod dataset;
+pub mod kernels;
 pub mod model;
 pub mod train;
 pub mod estimators;

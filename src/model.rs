@@ -5,28 +5,33 @@
 //!
 //! Every convolution runs as one matrix product over its unfolded windows: activations
 //! are rows of channels, one row per (window, time, row of the 2D head), and a layer
-//! gathers each output's taps side by side and applies a Linear layer. This is the same
-//! network as a stack of Conv1d and Conv2d, in far fewer and larger operations; only
-//! the order of the first Linear layer's inputs differs (time-major here, channel-major
-//! after burn's or PyTorch's convolutions).
+//! gathers each output's taps side by side ([`crate::kernels::unfold`]) and applies a
+//! Linear layer. This is the same network as a stack of Conv1d and Conv2d, in far fewer
+//! and larger operations; only the order of the first Linear layer's inputs differs
+//! (time-major here, channel-major after burn's or PyTorch's convolutions).
 //!
 //! Weights are drawn from a generator the caller seeds, and dropout masks too, so a
 //! model does not depend on burn's process-wide random state or on which other models
 //! train at the same time.
 
 use crate::dataset::{INPUT_ROWS, TARGET_ROWS};
+use crate::kernels::unfold::{GRID_TAPS, unfold_grid, unfold_time};
 use crate::spec::ModelSpec;
 use crate::vocab::{Activation, Correction, ErrorModel};
 use burn::module::{Module, Param, ParamId};
 use burn::nn::{Initializer, Linear, LinearConfig};
 use burn::tensor::activation::{relu, sigmoid};
-use burn::tensor::{Device, Int, Tensor, TensorData};
+use burn::tensor::{Device, Tensor, TensorData};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
-/// The three convolutions of the 2D head have 2×2 kernels; the first pairs row i with
-/// row i + 3 (DVL with GNSS), the next two neighbouring rows.
-const KERNEL_2D: usize = 4;
+/// The three convolutions of the 2D head have 2×2 kernels, their taps in [`GRID_TAPS`]
+/// order; the first pairs row i with row i + 3 (DVL with GNSS), the next two neighbouring
+/// rows.
+const KERNEL_2D: usize = GRID_TAPS.len();
+
+/// The rows between the two taps of the first Conv2d: DVL row i and GNSS row i.
+const FIRST_ROW_DILATION: usize = 3;
 
 #[derive(Module, Debug)]
 pub struct Dcnet {
@@ -138,8 +143,8 @@ impl Windows {
             }
             for t in 0..time - 1 {
                 for row in 0..3 {
-                    for (row_tap, time_tap) in [(0, 0), (0, 1), (3, 0), (3, 1)] {
-                        head_2d.push(value(w, row + row_tap, t + time_tap));
+                    for (row_tap, time_tap) in GRID_TAPS {
+                        head_2d.push(value(w, row + FIRST_ROW_DILATION * row_tap, t + time_tap));
                     }
                 }
             }
@@ -226,24 +231,19 @@ impl Dcnet {
     /// time-major (all channels of one time step, then the next).
     fn features(&self, windows: &Windows, settings: &Settings) -> Tensor<2> {
         let (count, time, kernel) = (windows.count, windows.time, settings.kernel);
-        let device = windows.head_1d.device();
         let slope = settings.leaky_relu_slope;
         let layer = |linear: &Linear, x: Tensor<2>| leaky_relu(linear.forward(x), slope);
 
         // 1D head: rows (window, time), then the second conv gathers `kernel` rows.
-        let steps = time + 1 - kernel;
         let head_1d = layer(&self.conv1d[0], windows.head_1d.clone());
-        let taps = unfold_1d(count, steps, kernel, &device);
-        let steps = steps + 1 - kernel;
-        let head_1d = layer(&self.conv1d[1], gather(head_1d, taps, count * steps));
+        let head_1d = layer(&self.conv1d[1], unfold_time(head_1d, count, kernel));
 
         // 2D head: rows (window, time, row); each conv gathers a 2×2 neighbourhood.
         let mut head_2d = layer(&self.conv2d[0], windows.head_2d.clone());
         let (mut steps, mut rows) = (time - 1, 3);
         for conv in &self.conv2d[1..] {
-            let taps = unfold_2d(count, steps, rows, &device);
+            head_2d = layer(conv, unfold_grid(head_2d, count, steps, rows));
             (steps, rows) = (steps - 1, rows - 1);
-            head_2d = layer(conv, gather(head_2d, taps, count * steps * rows));
         }
         Tensor::cat(
             vec![
@@ -253,44 +253,6 @@ impl Dcnet {
             1,
         )
     }
-}
-
-/// The rows `taps` of `x` `[rows, channels]`, laid side by side `outputs` to a row:
-/// `[outputs, taps per output × channels]`.
-fn gather(x: Tensor<2>, taps: Tensor<1, Int>, outputs: usize) -> Tensor<2> {
-    x.select(0, taps).reshape([outputs as i32, -1])
-}
-
-/// For rows (window, time) with `steps` times per window: the `kernel` rows that each
-/// output (window, time < steps − kernel + 1) reads, in time order.
-fn unfold_1d(count: usize, steps: usize, kernel: usize, device: &Device) -> Tensor<1, Int> {
-    let mut taps = Vec::with_capacity(count * steps * kernel);
-    for w in 0..count {
-        for t in 0..steps + 1 - kernel {
-            taps.extend((0..kernel).map(|k| (w * steps + t + k) as i64));
-        }
-    }
-    Tensor::from_data(
-        TensorData::new(taps, [count * (steps + 1 - kernel) * kernel]),
-        device,
-    )
-}
-
-/// For rows (window, time, row) with `steps` times and `rows` rows per window: the four
-/// rows of each output's 2×2 neighbourhood, (row, time)-major as in [`Windows::head_2d`].
-fn unfold_2d(count: usize, steps: usize, rows: usize, device: &Device) -> Tensor<1, Int> {
-    let outputs = count * (steps - 1) * (rows - 1);
-    let mut taps = Vec::with_capacity(outputs * KERNEL_2D);
-    for w in 0..count {
-        for t in 0..steps - 1 {
-            for r in 0..rows - 1 {
-                for (row_tap, time_tap) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
-                    taps.push(((w * steps + t + time_tap) * rows + r + row_tap) as i64);
-                }
-            }
-        }
-    }
-    Tensor::from_data(TensorData::new(taps, [outputs * KERNEL_2D]), device)
 }
 
 /// LeakyReLU as `(1 − slope)·relu(x) + slope·x`: burn's fused relu instead of a mask.
