@@ -40,6 +40,7 @@ pub mod files;
 pub mod progress;
 pub mod rng;
 pub mod vocab;
+pub mod kernels;
 
 pub mod spec;
 pub mod data;
