@@ -303,7 +303,15 @@ fn with_values<R>(x: &FlexTensor, f: impl FnOnce(&[f32]) -> R) -> R {
 fn map_unary<F: Fn(f32) -> f32 + Copy>(x: &[f32], f: F) -> Vec<f32> {
     #[inline(always)]
     fn body<F: Fn(f32) -> f32>(x: &[f32], f: F) -> Vec<f32> {
-        x.iter().map(|&v| f(v)).collect()
+        // A plain loop rather than `collect`, whose out-of-line `from_iter` would run
+        // outside the instruction-set copies below.
+        let mut output = Vec::with_capacity(x.len());
+        for (slot, &v) in output.spare_capacity_mut().iter_mut().zip(x) {
+            slot.write(f(v));
+        }
+        // SAFETY: the loop has just written all x.len() elements.
+        unsafe { output.set_len(x.len()) };
+        output
     }
     #[cfg(target_arch = "x86_64")]
     {
@@ -332,7 +340,14 @@ fn map_unary<F: Fn(f32) -> f32 + Copy>(x: &[f32], f: F) -> Vec<f32> {
 fn map_binary<F: Fn(f32, f32) -> f32 + Copy>(x: &[f32], y: &[f32], f: F) -> Vec<f32> {
     #[inline(always)]
     fn body<F: Fn(f32, f32) -> f32>(x: &[f32], y: &[f32], f: F) -> Vec<f32> {
-        x.iter().zip(y).map(|(&u, &v)| f(u, v)).collect()
+        assert_eq!(x.len(), y.len(), "fused activation: lengths differ");
+        let mut output = Vec::with_capacity(x.len());
+        for ((slot, &u), &v) in output.spare_capacity_mut().iter_mut().zip(x).zip(y) {
+            slot.write(f(u, v));
+        }
+        // SAFETY: the loop has just written all x.len() (= y.len()) elements.
+        unsafe { output.set_len(x.len()) };
+        output
     }
     #[cfg(target_arch = "x86_64")]
     {
