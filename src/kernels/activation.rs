@@ -7,10 +7,11 @@
 //!
 //! tanh is computed without libm and without branches: |x| below atanh(½) by an odd
 //! polynomial (a least-squares fit), above it as 1 − 2/(e^{2|x|} + 1) with e^{2|x|} from a
-//! Cody–Waite range reduction and a degree-7 polynomial, the sign copied back last. Both halves are plain f32
-//! multiplies, adds and one division (no fused multiply-add), so the result is the same bits
-//! whatever vector width the loop runs at. Its error is under 2 ulps of f64 tanh (1.50 at
-//! most over every 13th f32 below 20; exactly ±1 from 9.02 on, ±0 and NaN kept).
+//! Cody–Waite range reduction and a degree-7 polynomial, the sign copied back last. Both
+//! halves are plain f32 multiplies, adds and one division (no fused multiply-add), so the
+//! result is the same bits whatever vector width the loop runs at. Its error is under 2 ulps
+//! of f64 tanh (1.50 at most over every 13th f32 below 20; exactly ±1 from 9.02 on, ±0 and
+//! NaN kept).
 
 use burn::backend::autodiff::checkpoint::base::Checkpointer;
 use burn::backend::autodiff::checkpoint::strategy::CheckpointStrategy;
