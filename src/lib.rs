@@ -41,13 +41,13 @@ pub mod files;
 pub mod progress;
 pub mod rng;
 pub mod vocab;
+pub mod kernels;
 
 pub mod spec;
 pub mod data;
 pub mod noise;
 pub mod bound;
 pub mod dataset;
-pub mod kernels;
 pub mod model;
 pub mod train;
 pub mod estimators;

@@ -20,7 +20,6 @@ use crate::spec::ModelSpec;
 use crate::vocab::{Activation, Correction, ErrorModel};
 use burn::module::{Module, Param, ParamId};
 use burn::nn::{Initializer, Linear, LinearConfig};
-use burn::tensor::activation::{relu, sigmoid};
 use burn::tensor::{Device, Tensor, TensorData};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
@@ -255,15 +254,16 @@ impl Dcnet {
     }
 }
 
-/// LeakyReLU as `(1 − slope)·relu(x) + slope·x`: burn's fused relu instead of a mask.
+/// LeakyReLU, one fused pass with its own backward on Flex (burn's composed operations on
+/// other backends).
 fn leaky_relu<const D: usize>(x: Tensor<D>, slope: f64) -> Tensor<D> {
-    relu(x.clone()) * (1.0 - slope) + x * slope
+    crate::kernels::activation::leaky_relu(x, slope)
 }
 
-/// tanh as `2σ(2x) − 1`: on burn's CPU backends this trains faster than their own tanh
-/// (libm's `tanhf`, computed again in backward, measured in `bench`).
+/// tanh, one fused pass with its own backward on Flex (burn's composed operations on other
+/// backends).
 fn tanh<const D: usize>(x: Tensor<D>) -> Tensor<D> {
-    sigmoid(x * 2.0) * 2.0 - 1.0
+    crate::kernels::activation::tanh(x)
 }
 
 /// Zeroes each element with probability `p` and scales the rest by 1/(1 − p). One

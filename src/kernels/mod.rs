@@ -1,7 +1,12 @@
 //! DCNet's hot operations as backend operations of their own, added to burn's Flex
 //! backend through its backend extension, each with a backward written by hand. In:
-//! tensors of the network's layers. Out: the same values that burn's own operations give
-//! (each module's tests compare them, forward and gradient), in fewer and cheaper passes.
+//! tensors of the network's layers. Out: the values burn's own operations give (each
+//! module's tests compare them, forward and gradient), in fewer and cheaper passes.
 //! Backends without a kernel run burn's own operations instead.
+//!
+//! - [`activation`]: tanh and LeakyReLU, one pass each;
+//! - [`unfold`]: the convolutions' taps side by side, and their gradient gathered back
+//!   without a scatter.
 
+pub mod activation;
 pub mod unfold;
