@@ -15,6 +15,8 @@
 //! train at the same time.
 
 use crate::dataset::{INPUT_ROWS, TARGET_ROWS};
+use crate::kernels;
+use crate::kernels::linear::LayerActivation;
 use crate::kernels::unfold::{GRID_TAPS, unfold_grid, unfold_time};
 use crate::spec::ModelSpec;
 use crate::vocab::{Activation, Correction, ErrorModel};
@@ -213,25 +215,31 @@ impl Dcnet {
     ) -> Tensor<2> {
         let mut x = self.features(windows, settings);
         let last = self.fc.len() - 1;
-        for linear in &self.fc[..last] {
-            x = linear.forward(x);
-            x = match settings.activation {
-                Activation::Tanh => tanh(x),
-                Activation::LeakyRelu => leaky_relu(x, settings.leaky_relu_slope),
-            };
-            if let Some(rng) = dropout_rng.as_deref_mut() {
-                x = dropout(x, settings.dropout, rng);
-            }
+        let activation = match settings.activation {
+            Activation::Tanh => LayerActivation::Tanh,
+            Activation::LeakyRelu => LayerActivation::LeakyRelu {
+                slope: settings.leaky_relu_slope,
+            },
+        };
+        for layer in &self.fc[..last] {
+            let mask = dropout_rng.as_deref_mut().and_then(|rng| {
+                let shape = [x.dims()[0], layer.weight.val().dims()[1]];
+                dropout_mask(shape, settings.dropout, rng, &x.device())
+            });
+            x = kernels::linear::linear(x, layer, activation, mask);
         }
-        self.fc[last].forward(x)
+        kernels::linear::linear(x, &self.fc[last], LayerActivation::Identity, None)
     }
 
     /// The two heads side by side, `[count, flat_1d + flat_2d]`, each flattened
     /// time-major (all channels of one time step, then the next).
     fn features(&self, windows: &Windows, settings: &Settings) -> Tensor<2> {
         let (count, time, kernel) = (windows.count, windows.time, settings.kernel);
-        let slope = settings.leaky_relu_slope;
-        let layer = |linear: &Linear, x: Tensor<2>| leaky_relu(linear.forward(x), slope);
+        let activation = LayerActivation::LeakyRelu {
+            slope: settings.leaky_relu_slope,
+        };
+        let layer =
+            |conv: &Linear, x: Tensor<2>| kernels::linear::linear(x, conv, activation, None);
 
         // 1D head: rows (window, time), then the second conv gathers `kernel` rows.
         let head_1d = layer(&self.conv1d[0], windows.head_1d.clone());
@@ -254,29 +262,21 @@ impl Dcnet {
     }
 }
 
-/// LeakyReLU, one fused pass with its own backward on Flex (burn's composed operations on
-/// other backends).
-fn leaky_relu<const D: usize>(x: Tensor<D>, slope: f64) -> Tensor<D> {
-    crate::kernels::activation::leaky_relu(x, slope)
-}
-
-/// tanh, one fused pass with its own backward on Flex (burn's composed operations on other
-/// backends).
-fn tanh<const D: usize>(x: Tensor<D>) -> Tensor<D> {
-    crate::kernels::activation::tanh(x)
-}
-
-/// Zeroes each element with probability `p` and scales the rest by 1/(1 − p). One
-/// 32-bit draw per element decides it: an element drops when its draw is below
-/// p·2³².
-fn dropout(x: Tensor<2>, p: f64, rng: &mut ChaCha8Rng) -> Tensor<2> {
+/// The dropout mask of an activation `shape`, none when `p` is 0: each element 0 with
+/// probability `p`, 1/(1 − p) elsewhere. One 32-bit draw per element decides it: an element
+/// drops when its draw is below p·2³².
+fn dropout_mask(
+    shape: [usize; 2],
+    p: f64,
+    rng: &mut ChaCha8Rng,
+    device: &Device,
+) -> Option<Tensor<2>> {
     if p == 0.0 {
-        return x;
+        return None;
     }
-    let [rows, cols] = x.dims();
     let keep = (1.0 / (1.0 - p)) as f32;
     let threshold = (p * 2f64.powi(32)) as u64;
-    let mut draws = vec![0u32; rows * cols];
+    let mut draws = vec![0u32; shape[0] * shape[1]];
     rng.fill(&mut draws[..]);
     let mask: Vec<f32> = draws
         .into_iter()
@@ -288,8 +288,7 @@ fn dropout(x: Tensor<2>, p: f64, rng: &mut ChaCha8Rng) -> Tensor<2> {
             }
         })
         .collect();
-    let mask = Tensor::from_data(TensorData::new(mask, [rows, cols]), &x.device());
-    x * mask
+    Some(Tensor::from_data(TensorData::new(mask, shape), device))
 }
 
 /// Terms `[batch, terms]` of `error_model` → per-axis scale (%) and bias (cm/s), each
@@ -471,8 +470,14 @@ mod tests {
         let device = Device::flex();
         let values = [-8.0f32, -1.5, -0.3, -1e-3, 0.0, 1e-3, 0.4, 2.0, 9.0];
         let x = Tensor::<1>::from_data(TensorData::new(values.to_vec(), [values.len()]), &device);
-        let tanh: Vec<f32> = tanh(x.clone()).into_data().try_to_vec::<f32>().unwrap();
-        let leaky: Vec<f32> = leaky_relu(x, 0.05).into_data().try_to_vec::<f32>().unwrap();
+        let tanh: Vec<f32> = crate::kernels::activation::tanh(x.clone())
+            .into_data()
+            .try_to_vec::<f32>()
+            .unwrap();
+        let leaky: Vec<f32> = crate::kernels::activation::leaky_relu(x, 0.05)
+            .into_data()
+            .try_to_vec::<f32>()
+            .unwrap();
         for (i, v) in values.iter().enumerate() {
             assert!((tanh[i] - v.tanh()).abs() < 1e-6, "tanh({v}) = {}", tanh[i]);
             let want = if *v >= 0.0 { *v } else { 0.05 * v };

@@ -170,7 +170,7 @@ impl<C: CheckpointStrategy> ActivationBackend for Autodiff<Flex, C> {
 
 /// LeakyReLU of one value; NaN stays NaN and −0 stays −0.
 #[inline(always)]
-fn leaky_relu_f32(x: f32, slope: f32) -> f32 {
+pub(super) fn leaky_relu_f32(x: f32, slope: f32) -> f32 {
     if x <= 0.0 { x * slope } else { x }
 }
 
@@ -207,7 +207,7 @@ const EXP_TAIL: [f32; 6] = [
 /// tanh of one f32, branch-free so that a loop over it vectorises. Keeps ±0, sends ±∞ to ±1
 /// and NaN to NaN.
 #[inline(always)]
-fn tanh_f32(x: f32) -> f32 {
+pub(super) fn tanh_f32(x: f32) -> f32 {
     let a = f32::from_bits(x.to_bits() & 0x7fff_ffff);
 
     // Small |x|: the odd polynomial (exact for subnormals, where a² underflows to 0).

@@ -5,8 +5,11 @@
 //! Backends without a kernel run burn's own operations instead.
 //!
 //! - [`activation`]: tanh and LeakyReLU, one pass each;
+//! - [`linear`]: a Linear layer with its activation and dropout mask, one product and one
+//!   pass forward, one backward node for input, weight and bias;
 //! - [`unfold`]: the convolutions' taps side by side, and their gradient gathered back
 //!   without a scatter.
 
 pub mod activation;
+pub mod linear;
 pub mod unfold;

@@ -1,0 +1,681 @@
+//! A Linear layer with its activation and dropout mask as one backend operation: rows `x`
+//! `[rows, inputs]`, a weight `[inputs, outputs]`, a bias `[outputs]` and optionally a mask
+//! `[rows, outputs]` come in; `act(x·W + b) ⊙ mask` `[rows, outputs]` goes out.
+//!
+//! On Flex with f32 values the product is Flex's own matrix product, and the bias, the
+//! activation and the mask follow in one pass over the product's buffer. Under autodiff one
+//! backward node serves the three parents: the pre-activation gradient `g ⊙ mask ⊙ act′` in
+//! one pass, then the input, weight and bias gradients through the very operations burn's
+//! Linear backward calls (`linear_x_backward`, `linear_weight_backward`,
+//! `linear_bias_backward`). Every float operation is the one burn's Linear, the
+//! [`activation`](super::activation) kernels and a mask multiplication perform, in the same
+//! order, so values and gradients are the same bits as those composed operations (tested).
+//! On any other backend or dtype the layer is those composed operations.
+
+use super::activation::{leaky_relu_f32, tanh_f32};
+use burn::backend::autodiff::checkpoint::base::Checkpointer;
+use burn::backend::autodiff::checkpoint::strategy::CheckpointStrategy;
+use burn::backend::autodiff::grads::Gradients;
+use burn::backend::autodiff::ops::{Backward, Ops, OpsKind};
+use burn::backend::flex::{FlexTensor, Layout};
+use burn::backend::ops::{FloatTensorOps, ModuleOps};
+use burn::backend::tensor::FloatTensor;
+use burn::backend::{Autodiff, Backend, Dispatch, Flex, backend_extension};
+use burn::nn::Linear;
+use burn::tensor::{Bytes, DType, Device, Tensor};
+
+/// The function a layer applies after its bias.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LayerActivation {
+    /// None: the layer's output is `x·W + b`.
+    Identity,
+    Tanh,
+    /// `x` where `x > 0`, `slope·x` elsewhere; `slope` ≥ 0.
+    LeakyRelu {
+        slope: f64,
+    },
+}
+
+/// `activation(x·W + b)`, times `mask` elementwise when one is given, for rows `x`
+/// `[rows, inputs]` and a Linear layer with a bias: one fused operation on Flex, burn's
+/// Linear, the activation and a multiplication elsewhere. The parameters' gradients reach
+/// `layer.weight` and `layer.bias` as through `layer.forward`.
+pub fn linear(
+    x: Tensor<2>,
+    layer: &Linear,
+    activation: LayerActivation,
+    mask: Option<Tensor<2>>,
+) -> Tensor<2> {
+    if let LayerActivation::LeakyRelu { slope } = activation {
+        assert!(slope >= 0.0, "linear: LeakyReLU slope {slope} is negative");
+    }
+    let bias = layer.bias.as_ref().map(|bias| bias.val());
+    match bias {
+        Some(bias) if fused(&x) => {
+            Tensor::from_dispatch(<Dispatch as LinearBackend>::activated_linear(
+                x.into_dispatch(),
+                layer.weight.val().into_dispatch(),
+                bias.into_dispatch(),
+                activation,
+                mask.map(Tensor::into_dispatch),
+            ))
+        }
+        _ => composed(x, layer, activation, mask),
+    }
+}
+
+/// Whether `x` takes the fused kernel: f32 values on Flex, with or without autodiff.
+fn fused(x: &Tensor<2>) -> bool {
+    x.dtype() == DType::F32 && x.device().inner() == Device::flex()
+}
+
+/// The layer as the network composed it before this kernel: burn's Linear, the activation
+/// kernel, a multiplication by the mask.
+fn composed(
+    x: Tensor<2>,
+    layer: &Linear,
+    activation: LayerActivation,
+    mask: Option<Tensor<2>>,
+) -> Tensor<2> {
+    let y = layer.forward(x);
+    let y = match activation {
+        LayerActivation::Identity => y,
+        LayerActivation::Tanh => super::activation::tanh(y),
+        LayerActivation::LeakyRelu { slope } => super::activation::leaky_relu(y, slope),
+    };
+    match mask {
+        Some(mask) => y * mask,
+        None => y,
+    }
+}
+
+/// The fused layer as a backend operation. Implemented for Flex (forward) and for
+/// `Autodiff<Flex>` (forward plus one hand-written backward); [`linear`] routes every other
+/// backend to composed operations, so nothing else implements it.
+#[backend_extension(Autodiff, Flex)]
+pub trait LinearBackend: Backend {
+    /// `activation(x·weight + bias) ⊙ mask`: `x` `[rows, inputs]`, `weight` `[inputs,
+    /// outputs]`, `bias` `[outputs]`, `mask` `[rows, outputs]`.
+    fn activated_linear(
+        x: FloatTensor<Self>,
+        weight: FloatTensor<Self>,
+        bias: FloatTensor<Self>,
+        activation: LayerActivation,
+        mask: Option<FloatTensor<Self>>,
+    ) -> FloatTensor<Self>;
+}
+
+impl LinearBackend for Flex {
+    fn activated_linear(
+        x: FlexTensor,
+        weight: FlexTensor,
+        bias: FlexTensor,
+        activation: LayerActivation,
+        mask: Option<FlexTensor>,
+    ) -> FlexTensor {
+        let (activated, masked) = forward(x, weight, &bias, activation, mask.as_ref());
+        masked.unwrap_or(activated)
+    }
+}
+
+impl<C: CheckpointStrategy> LinearBackend for Autodiff<Flex, C> {
+    fn activated_linear(
+        x: FloatTensor<Self>,
+        weight: FloatTensor<Self>,
+        bias: FloatTensor<Self>,
+        activation: LayerActivation,
+        mask: Option<FloatTensor<Self>>,
+    ) -> FloatTensor<Self> {
+        /// What the backward reads: the input (for the weight's gradient), the weight (for
+        /// the input's), the activation's output before the mask, and the mask.
+        #[derive(Debug, Clone)]
+        struct LinearState {
+            x: Option<FlexTensor>,
+            weight: Option<FlexTensor>,
+            activated: FlexTensor,
+            mask: Option<FlexTensor>,
+        }
+
+        /// Parents x, weight, bias. The pre-activation gradient g ⊙ mask ⊙ act′(y) in one
+        /// pass; then burn's Linear backward operations on it.
+        #[derive(Debug)]
+        struct LinearStep {
+            activation: LayerActivation,
+        }
+
+        impl Backward<Flex, 3> for LinearStep {
+            type State = LinearState;
+
+            fn backward(
+                self,
+                ops: Ops<Self::State, 3>,
+                grads: &mut Gradients,
+                _checkpointer: &mut Checkpointer,
+            ) {
+                let [node_x, node_weight, node_bias] = ops.parents;
+                let grad = grads.consume::<Flex>(&ops.node);
+                let state = ops.state;
+                let grad = pre_activation_grad(
+                    grad,
+                    &state.activated,
+                    state.mask.as_ref(),
+                    self.activation,
+                );
+                if let Some(node) = node_x {
+                    let weight = state.weight.expect("the weight is kept for x's gradient");
+                    let input_grad =
+                        <Flex as ModuleOps<Flex>>::linear_x_backward(weight, grad.clone());
+                    grads.register::<Flex>(node.id, input_grad);
+                }
+                if let Some(node) = node_weight {
+                    let x = state.x.expect("x is kept for the weight's gradient");
+                    let weight_grad =
+                        <Flex as ModuleOps<Flex>>::linear_weight_backward(x, grad.clone());
+                    grads.register::<Flex>(node.id, weight_grad);
+                }
+                if let Some(node) = node_bias {
+                    grads.register::<Flex>(
+                        node.id,
+                        <Flex as ModuleOps<Flex>>::linear_bias_backward(grad),
+                    );
+                }
+            }
+        }
+
+        let x_tracked = x.is_tracked();
+        let weight_tracked = weight.is_tracked();
+        let mask = mask.map(|mask| mask.into_primitive());
+        let step = LinearStep { activation };
+        match step
+            .prepare::<C>([x.node(), weight.node(), bias.node()])
+            .compute_bound()
+            .stateful()
+        {
+            OpsKind::Tracked(prep) => {
+                // x is needed only for the weight's gradient, and the weight only for x's.
+                let x = x.into_primitive();
+                let weight = weight.into_primitive();
+                let kept_x = weight_tracked.then(|| x.clone());
+                let kept_weight = x_tracked.then(|| weight.clone());
+                let (activated, masked) =
+                    forward(x, weight, bias.primitive(), activation, mask.as_ref());
+                let output = masked.unwrap_or_else(|| activated.clone());
+                let state = LinearState {
+                    x: kept_x,
+                    weight: kept_weight,
+                    activated,
+                    mask,
+                };
+                prep.finish(state, output)
+            }
+            OpsKind::UnTracked(prep) => {
+                let (activated, masked) = forward(
+                    x.into_primitive(),
+                    weight.into_primitive(),
+                    bias.primitive(),
+                    activation,
+                    mask.as_ref(),
+                );
+                prep.finish(masked.unwrap_or(activated))
+            }
+        }
+    }
+}
+
+/// `activation(x·weight + bias)`, computed in place in the product's buffer, and, given a
+/// mask, that times the mask in a fresh buffer written in the same pass.
+fn forward(
+    x: FlexTensor,
+    weight: FlexTensor,
+    bias: &FlexTensor,
+    activation: LayerActivation,
+    mask: Option<&FlexTensor>,
+) -> (FlexTensor, Option<FlexTensor>) {
+    assert_eq!(x.dtype(), DType::F32, "fused linear: f32 only");
+    let mut product = <Flex as FloatTensorOps<Flex>>::float_matmul(x, weight);
+    if product.as_slice::<f32>().is_none() {
+        product = product.to_contiguous();
+    }
+    let shape = product.layout().shape().clone();
+    let outputs = shape[1];
+    let bias = values(bias);
+    assert_eq!(bias.len(), outputs, "fused linear: bias length");
+    let mask = mask.map(values);
+    // The product is fresh from the matrix product, so this borrows it without a copy.
+    let activated = product.storage_mut::<f32>();
+    let masked = match activation {
+        LayerActivation::Identity => apply(activated, &bias, mask.as_deref(), |v| v),
+        LayerActivation::Tanh => apply(activated, &bias, mask.as_deref(), tanh_f32),
+        LayerActivation::LeakyRelu { slope } => {
+            let slope = slope as f32;
+            apply(activated, &bias, mask.as_deref(), move |v| {
+                leaky_relu_f32(v, slope)
+            })
+        }
+    };
+    let masked = masked.map(|values| f32_tensor(values, shape));
+    (product, masked)
+}
+
+/// The gradient before the activation from the output's: `g ⊙ mask ⊙ act′(y)` with `y` the
+/// activation's output (before the mask), as the mask's multiplication and the activation
+/// kernel's backward compute it one after the other.
+fn pre_activation_grad(
+    grad: FlexTensor,
+    activated: &FlexTensor,
+    mask: Option<&FlexTensor>,
+    activation: LayerActivation,
+) -> FlexTensor {
+    let shape = activated.layout().shape().clone();
+    assert_eq!(
+        &shape,
+        grad.layout().shape(),
+        "fused linear: gradient shape"
+    );
+    let grad_values = values(&grad);
+    let mask_values = mask.map(values);
+    let activated = values(activated);
+    let mask = mask_values.as_deref();
+    let output = match activation {
+        LayerActivation::Identity => match mask {
+            None => return grad,
+            Some(_) => derivative(&grad_values, &activated, mask, |_, g| g),
+        },
+        LayerActivation::Tanh => {
+            derivative(&grad_values, &activated, mask, |y, g| g * (1.0 - y * y))
+        }
+        LayerActivation::LeakyRelu { slope } => {
+            let slope = slope as f32;
+            derivative(&grad_values, &activated, mask, move |y, g| {
+                if y <= 0.0 { g * slope } else { g }
+            })
+        }
+    };
+    f32_tensor(output, shape)
+}
+
+/// The tensor's f32 values in row-major order: its storage where that is one contiguous
+/// run, a contiguous copy otherwise.
+fn values(x: &FlexTensor) -> std::borrow::Cow<'_, [f32]> {
+    assert_eq!(x.dtype(), DType::F32, "fused linear: f32 only");
+    match x.as_slice::<f32>() {
+        Some(values) => std::borrow::Cow::Borrowed(values),
+        None => std::borrow::Cow::Owned(
+            x.to_contiguous()
+                .as_slice::<f32>()
+                .expect("a contiguous copy is one run")
+                .to_vec(),
+        ),
+    }
+}
+
+/// A contiguous f32 tensor on a `Vec`'s buffer (aligned, so burn never copies it).
+fn f32_tensor(values: Vec<f32>, shape: burn::tensor::Shape) -> FlexTensor {
+    FlexTensor::new(
+        Bytes::from_elems(values),
+        Layout::contiguous(shape),
+        DType::F32,
+    )
+}
+
+/// Row by row: `values ← f(values + bias)`, and with a mask a fresh `values · mask`. The
+/// crate targets baseline x86-64, so the loop is also compiled for AVX2 and AVX-512 and
+/// chosen at run time; no fused multiply-add is enabled, so every copy computes the same
+/// bits.
+fn apply<F: Fn(f32) -> f32 + Copy>(
+    values: &mut [f32],
+    bias: &[f32],
+    mask: Option<&[f32]>,
+    f: F,
+) -> Option<Vec<f32>> {
+    #[inline(always)]
+    fn body<F: Fn(f32) -> f32 + Copy>(
+        values: &mut [f32],
+        bias: &[f32],
+        mask: Option<&[f32]>,
+        f: F,
+    ) -> Option<Vec<f32>> {
+        let width = bias.len();
+        match mask {
+            None => {
+                for row in values.chunks_exact_mut(width) {
+                    for (v, &b) in row.iter_mut().zip(bias) {
+                        *v = f(*v + b);
+                    }
+                }
+                None
+            }
+            Some(mask) => {
+                assert_eq!(mask.len(), values.len(), "fused linear: mask shape");
+                let mut masked = Vec::with_capacity(values.len());
+                let spare = &mut masked.spare_capacity_mut()[..values.len()];
+                for ((row, mask_row), out_row) in values
+                    .chunks_exact_mut(width)
+                    .zip(mask.chunks_exact(width))
+                    .zip(spare.chunks_exact_mut(width))
+                {
+                    for (((v, &b), &m), out) in row.iter_mut().zip(bias).zip(mask_row).zip(out_row)
+                    {
+                        let a = f(*v + b);
+                        *v = a;
+                        out.write(a * m);
+                    }
+                }
+                // SAFETY: the loop has just written all values.len() elements.
+                unsafe { masked.set_len(values.len()) };
+                Some(masked)
+            }
+        }
+    }
+    #[cfg(target_arch = "x86_64")]
+    {
+        #[target_feature(enable = "avx512f")]
+        fn avx512<F: Fn(f32) -> f32 + Copy>(
+            values: &mut [f32],
+            bias: &[f32],
+            mask: Option<&[f32]>,
+            f: F,
+        ) -> Option<Vec<f32>> {
+            body(values, bias, mask, f)
+        }
+        #[target_feature(enable = "avx2")]
+        fn avx2<F: Fn(f32) -> f32 + Copy>(
+            values: &mut [f32],
+            bias: &[f32],
+            mask: Option<&[f32]>,
+            f: F,
+        ) -> Option<Vec<f32>> {
+            body(values, bias, mask, f)
+        }
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU has just been found to support AVX-512F.
+            return unsafe { avx512(values, bias, mask, f) };
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has just been found to support AVX2.
+            return unsafe { avx2(values, bias, mask, f) };
+        }
+    }
+    body(values, bias, mask, f)
+}
+
+/// `f(y, g · mask)` (or `f(y, g)` without a mask) over each element, into a fresh `Vec`;
+/// compiled for each instruction set like [`apply`].
+fn derivative<F: Fn(f32, f32) -> f32 + Copy>(
+    grad: &[f32],
+    activated: &[f32],
+    mask: Option<&[f32]>,
+    f: F,
+) -> Vec<f32> {
+    #[inline(always)]
+    fn body<F: Fn(f32, f32) -> f32 + Copy>(
+        grad: &[f32],
+        activated: &[f32],
+        mask: Option<&[f32]>,
+        f: F,
+    ) -> Vec<f32> {
+        let count = grad.len();
+        assert_eq!(activated.len(), count, "fused linear: gradient shape");
+        let mut output = Vec::with_capacity(count);
+        let spare = &mut output.spare_capacity_mut()[..count];
+        match mask {
+            None => {
+                for ((out, &g), &y) in spare.iter_mut().zip(grad).zip(activated) {
+                    out.write(f(y, g));
+                }
+            }
+            Some(mask) => {
+                assert_eq!(mask.len(), count, "fused linear: mask shape");
+                for (((out, &g), &y), &m) in spare.iter_mut().zip(grad).zip(activated).zip(mask) {
+                    out.write(f(y, g * m));
+                }
+            }
+        }
+        // SAFETY: the loop has just written all `count` elements.
+        unsafe { output.set_len(count) };
+        output
+    }
+    #[cfg(target_arch = "x86_64")]
+    {
+        #[target_feature(enable = "avx512f")]
+        fn avx512<F: Fn(f32, f32) -> f32 + Copy>(
+            grad: &[f32],
+            activated: &[f32],
+            mask: Option<&[f32]>,
+            f: F,
+        ) -> Vec<f32> {
+            body(grad, activated, mask, f)
+        }
+        #[target_feature(enable = "avx2")]
+        fn avx2<F: Fn(f32, f32) -> f32 + Copy>(
+            grad: &[f32],
+            activated: &[f32],
+            mask: Option<&[f32]>,
+            f: F,
+        ) -> Vec<f32> {
+            body(grad, activated, mask, f)
+        }
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU has just been found to support AVX-512F.
+            return unsafe { avx512(grad, activated, mask, f) };
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has just been found to support AVX2.
+            return unsafe { avx2(grad, activated, mask, f) };
+        }
+    }
+    body(grad, activated, mask, f)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use burn::module::Param;
+    use burn::nn::LinearConfig;
+    use burn::tensor::TensorData;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn random<const D: usize>(
+        shape: [usize; D],
+        scale: f32,
+        rng: &mut ChaCha8Rng,
+        device: &Device,
+    ) -> Tensor<D> {
+        let count = shape.iter().product();
+        let values: Vec<f32> = (0..count)
+            .map(|_| rng.random_range(-scale..scale))
+            .collect();
+        Tensor::from_data(TensorData::new(values, shape), device)
+    }
+
+    fn bits<const D: usize>(x: Tensor<D>) -> Vec<u32> {
+        x.into_data()
+            .try_to_vec::<f32>()
+            .unwrap()
+            .iter()
+            .map(|v| v.to_bits())
+            .collect()
+    }
+
+    fn largest_difference(a: Tensor<2>, b: Tensor<2>) -> f32 {
+        let a = a.into_data().try_to_vec::<f32>().unwrap();
+        let b = b.into_data().try_to_vec::<f32>().unwrap();
+        a.iter()
+            .zip(&b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f32::max)
+    }
+
+    /// A tensor that requires its gradient on an autodiff device.
+    fn tracked<const D: usize>(tensor: Tensor<D>) -> Tensor<D> {
+        if tensor.device().is_autodiff() {
+            tensor.require_grad()
+        } else {
+            tensor
+        }
+    }
+
+    /// A Linear layer `[inputs, outputs]` with random weight and bias, tracked on an
+    /// autodiff device.
+    fn layer(inputs: usize, outputs: usize, rng: &mut ChaCha8Rng, device: &Device) -> Linear {
+        let mut layer = LinearConfig::new(inputs, outputs).init(device);
+        layer.weight = Param::from_tensor(tracked(random([inputs, outputs], 0.7, rng, device)));
+        layer.bias = Some(Param::from_tensor(tracked(random(
+            [outputs],
+            0.7,
+            rng,
+            device,
+        ))));
+        layer
+    }
+
+    /// A dropout mask: 0 with probability ¼, 4/3 elsewhere.
+    fn mask(shape: [usize; 2], rng: &mut ChaCha8Rng, device: &Device) -> Tensor<2> {
+        let values: Vec<f32> = (0..shape[0] * shape[1])
+            .map(|_| {
+                if rng.random_range(0.0..1.0) < 0.25 {
+                    0.0
+                } else {
+                    4.0 / 3.0
+                }
+            })
+            .collect();
+        Tensor::from_data(TensorData::new(values, shape), device)
+    }
+
+    type Layer = fn(Tensor<2>, &Linear, LayerActivation, Option<Tensor<2>>) -> Tensor<2>;
+
+    const ACTIVATIONS: [LayerActivation; 4] = [
+        LayerActivation::Identity,
+        LayerActivation::Tanh,
+        LayerActivation::LeakyRelu { slope: 0.05 },
+        LayerActivation::LeakyRelu { slope: 0.0 },
+    ];
+
+    /// Forward and the three gradients, under loss = Σ w·layer(x), for the fused and the
+    /// composed layer on the same values, over random shapes, every activation, with and
+    /// without a mask: the same bits (tolerance zero).
+    #[test]
+    fn forward_and_gradients_are_the_bits_of_burns_linear_activation_and_mask() {
+        let device = Device::flex().autodiff();
+        let mut rng = ChaCha8Rng::seed_from_u64(27);
+        for case in 0..24 {
+            let rows = rng.random_range(1..300);
+            let inputs = rng.random_range(1..70);
+            let outputs = rng.random_range(1..40);
+            let activation = ACTIVATIONS[case % ACTIVATIONS.len()];
+            let with_mask = case % 8 >= 4;
+            let x = random([rows, inputs], 2.0, &mut rng, &device);
+            let weights = random([rows, outputs], 1.0, &mut rng, &device);
+            let mask = with_mask.then(|| mask([rows, outputs], &mut rng, &device));
+            let layer = layer(inputs, outputs, &mut rng, &device);
+            let mut results = Vec::new();
+            for run in [linear as Layer, composed] {
+                let input = x.clone().detach().require_grad();
+                let output = run(input.clone(), &layer, activation, mask.clone());
+                let grads = (output.clone() * weights.clone()).sum().backward();
+                let weight_grad = layer.weight.val().grad(&grads).unwrap();
+                let bias_grad = layer.bias.as_ref().unwrap().val().grad(&grads).unwrap();
+                results.push([
+                    bits(output),
+                    bits(input.grad(&grads).unwrap()),
+                    bits(weight_grad),
+                    bits(bias_grad),
+                ]);
+            }
+            for (part, name) in ["output", "x gradient", "weight gradient", "bias gradient"]
+                .iter()
+                .enumerate()
+            {
+                assert_eq!(
+                    results[0][part], results[1][part],
+                    "{name}: [{rows}, {inputs}] → {outputs}, {activation:?}, mask {with_mask}"
+                );
+            }
+        }
+    }
+
+    /// The composed reference itself against burn's own activations, so that the chain ends
+    /// at burn: f32 tanh within 1e-6 of burn's, LeakyReLU exactly.
+    #[test]
+    fn composed_layer_matches_burns_linear_and_activations() {
+        let device = Device::flex();
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let x = random([50, 13], 2.0, &mut rng, &device);
+        let layer = layer(13, 9, &mut rng, &device);
+        let plain = layer.forward(x.clone());
+        let tanh = linear(x.clone(), &layer, LayerActivation::Tanh, None);
+        let burn_tanh = burn::tensor::activation::tanh(plain.clone());
+        let difference = largest_difference(tanh, burn_tanh);
+        assert!(difference <= 1e-6, "tanh: {difference}");
+        let leaky = linear(
+            x.clone(),
+            &layer,
+            LayerActivation::LeakyRelu { slope: 0.1 },
+            None,
+        );
+        let burn_leaky = burn::tensor::activation::leaky_relu(plain.clone(), 0.1);
+        let difference = largest_difference(leaky, burn_leaky);
+        assert!(difference <= 1e-6, "leaky: {difference}");
+        assert_eq!(
+            bits(linear(x, &layer, LayerActivation::Identity, None)),
+            bits(plain)
+        );
+    }
+
+    #[test]
+    fn untracked_inputs_and_plain_flex_give_the_same_values() {
+        let mut rng = ChaCha8Rng::seed_from_u64(8);
+        let plain = Device::flex();
+        let x = random([31, 17], 2.0, &mut rng, &plain);
+        let mask = mask([31, 6], &mut rng, &plain);
+        let layer = layer(17, 6, &mut rng, &plain);
+        let want = bits(composed(
+            x.clone(),
+            &layer,
+            LayerActivation::Tanh,
+            Some(mask.clone()),
+        ));
+        let got = bits(linear(
+            x.clone(),
+            &layer,
+            LayerActivation::Tanh,
+            Some(mask.clone()),
+        ));
+        assert_eq!(got, want);
+        // A transposed (non-contiguous) input.
+        let transposed = random([17, 31], 2.0, &mut rng, &plain).transpose();
+        assert_eq!(
+            bits(linear(
+                transposed.clone(),
+                &layer,
+                LayerActivation::Identity,
+                None
+            )),
+            bits(composed(
+                transposed,
+                &layer,
+                LayerActivation::Identity,
+                None
+            ))
+        );
+    }
+
+    #[test]
+    #[allow(deprecated)]
+    fn other_backends_compose_burns_operations_unchanged() {
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let ndarray = Device::ndarray();
+        for device in [ndarray.clone(), ndarray.autodiff()] {
+            let x = random([6, 9], 3.0, &mut rng, &device);
+            let layer = layer(9, 4, &mut rng, &device);
+            let mask = mask([6, 4], &mut rng, &device);
+            let activation = LayerActivation::LeakyRelu { slope: 0.05 };
+            assert_eq!(
+                bits(linear(x.clone(), &layer, activation, Some(mask.clone()))),
+                bits(composed(x, &layer, activation, Some(mask)))
+            );
+        }
+    }
+}
