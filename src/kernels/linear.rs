@@ -52,13 +52,21 @@ pub fn linear(
     let bias = layer.bias.as_ref().map(|bias| bias.val());
     match bias {
         Some(bias) if fused(&x) => {
-            Tensor::from_dispatch(<Dispatch as LinearBackend>::activated_linear(
+            let (x, weight, bias) = (
                 x.into_dispatch(),
                 layer.weight.val().into_dispatch(),
                 bias.into_dispatch(),
-                activation,
-                mask.map(Tensor::into_dispatch),
-            ))
+            );
+            Tensor::from_dispatch(match mask {
+                None => <Dispatch as LinearBackend>::activated_linear(x, weight, bias, activation),
+                Some(mask) => <Dispatch as LinearBackend>::masked_linear(
+                    x,
+                    weight,
+                    bias,
+                    activation,
+                    mask.into_dispatch(),
+                ),
+            })
         }
         _ => composed(x, layer, activation, mask),
     }
@@ -94,14 +102,22 @@ fn composed(
 /// backend to composed operations, so nothing else implements it.
 #[backend_extension(Autodiff, Flex)]
 pub trait LinearBackend: Backend {
-    /// `activation(x·weight + bias) ⊙ mask`: `x` `[rows, inputs]`, `weight` `[inputs,
-    /// outputs]`, `bias` `[outputs]`, `mask` `[rows, outputs]`.
+    /// `activation(x·weight + bias)`: `x` `[rows, inputs]`, `weight` `[inputs, outputs]`,
+    /// `bias` `[outputs]`.
     fn activated_linear(
         x: FloatTensor<Self>,
         weight: FloatTensor<Self>,
         bias: FloatTensor<Self>,
         activation: LayerActivation,
-        mask: Option<FloatTensor<Self>>,
+    ) -> FloatTensor<Self>;
+
+    /// `activation(x·weight + bias) ⊙ mask`, `mask` `[rows, outputs]`.
+    fn masked_linear(
+        x: FloatTensor<Self>,
+        weight: FloatTensor<Self>,
+        bias: FloatTensor<Self>,
+        activation: LayerActivation,
+        mask: FloatTensor<Self>,
     ) -> FloatTensor<Self>;
 }
 
@@ -111,10 +127,19 @@ impl LinearBackend for Flex {
         weight: FlexTensor,
         bias: FlexTensor,
         activation: LayerActivation,
-        mask: Option<FlexTensor>,
     ) -> FlexTensor {
-        let (activated, masked) = forward(x, weight, &bias, activation, mask.as_ref());
-        masked.unwrap_or(activated)
+        forward(x, weight, &bias, activation, None).0
+    }
+
+    fn masked_linear(
+        x: FlexTensor,
+        weight: FlexTensor,
+        bias: FlexTensor,
+        activation: LayerActivation,
+        mask: FlexTensor,
+    ) -> FlexTensor {
+        let (_, masked) = forward(x, weight, &bias, activation, Some(&mask));
+        masked.expect("a mask gives a masked output")
     }
 }
 
@@ -124,100 +149,115 @@ impl<C: CheckpointStrategy> LinearBackend for Autodiff<Flex, C> {
         weight: FloatTensor<Self>,
         bias: FloatTensor<Self>,
         activation: LayerActivation,
-        mask: Option<FloatTensor<Self>>,
     ) -> FloatTensor<Self> {
-        /// What the backward reads: the input (for the weight's gradient), the weight (for
-        /// the input's), the activation's output before the mask, and the mask.
-        #[derive(Debug, Clone)]
-        struct LinearState {
-            x: Option<FlexTensor>,
-            weight: Option<FlexTensor>,
-            activated: FlexTensor,
-            mask: Option<FlexTensor>,
-        }
+        tracked_linear::<C>(x, weight, bias, activation, None)
+    }
 
-        /// Parents x, weight, bias. The pre-activation gradient g ⊙ mask ⊙ act′(y) in one
-        /// pass; then burn's Linear backward operations on it.
-        #[derive(Debug)]
-        struct LinearStep {
-            activation: LayerActivation,
-        }
+    fn masked_linear(
+        x: FloatTensor<Self>,
+        weight: FloatTensor<Self>,
+        bias: FloatTensor<Self>,
+        activation: LayerActivation,
+        mask: FloatTensor<Self>,
+    ) -> FloatTensor<Self> {
+        tracked_linear::<C>(x, weight, bias, activation, Some(mask.into_primitive()))
+    }
+}
 
-        impl Backward<Flex, 3> for LinearStep {
-            type State = LinearState;
+/// The fused layer under autodiff: the forward of [`forward`], and one backward node whose
+/// parents are `x`, `weight` and `bias`.
+fn tracked_linear<C: CheckpointStrategy>(
+    x: FloatTensor<Autodiff<Flex, C>>,
+    weight: FloatTensor<Autodiff<Flex, C>>,
+    bias: FloatTensor<Autodiff<Flex, C>>,
+    activation: LayerActivation,
+    mask: Option<FlexTensor>,
+) -> FloatTensor<Autodiff<Flex, C>> {
+    /// What the backward reads: the input (for the weight's gradient), the weight (for
+    /// the input's), the activation's output before the mask, and the mask.
+    #[derive(Debug, Clone)]
+    struct LinearState {
+        x: Option<FlexTensor>,
+        weight: Option<FlexTensor>,
+        activated: FlexTensor,
+        mask: Option<FlexTensor>,
+    }
 
-            fn backward(
-                self,
-                ops: Ops<Self::State, 3>,
-                grads: &mut Gradients,
-                _checkpointer: &mut Checkpointer,
-            ) {
-                let [node_x, node_weight, node_bias] = ops.parents;
-                let grad = grads.consume::<Flex>(&ops.node);
-                let state = ops.state;
-                let grad = pre_activation_grad(
-                    grad,
-                    &state.activated,
-                    state.mask.as_ref(),
-                    self.activation,
+    /// Parents x, weight, bias. The pre-activation gradient g ⊙ mask ⊙ act′(y) in one
+    /// pass; then burn's Linear backward operations on it.
+    #[derive(Debug)]
+    struct LinearStep {
+        activation: LayerActivation,
+    }
+
+    impl Backward<Flex, 3> for LinearStep {
+        type State = LinearState;
+
+        fn backward(
+            self,
+            ops: Ops<Self::State, 3>,
+            grads: &mut Gradients,
+            _checkpointer: &mut Checkpointer,
+        ) {
+            let [node_x, node_weight, node_bias] = ops.parents;
+            let grad = grads.consume::<Flex>(&ops.node);
+            let state = ops.state;
+            let grad =
+                pre_activation_grad(grad, &state.activated, state.mask.as_ref(), self.activation);
+            if let Some(node) = node_x {
+                let weight = state.weight.expect("the weight is kept for x's gradient");
+                let input_grad = <Flex as ModuleOps<Flex>>::linear_x_backward(weight, grad.clone());
+                grads.register::<Flex>(node.id, input_grad);
+            }
+            if let Some(node) = node_weight {
+                let x = state.x.expect("x is kept for the weight's gradient");
+                let weight_grad =
+                    <Flex as ModuleOps<Flex>>::linear_weight_backward(x, grad.clone());
+                grads.register::<Flex>(node.id, weight_grad);
+            }
+            if let Some(node) = node_bias {
+                grads.register::<Flex>(
+                    node.id,
+                    <Flex as ModuleOps<Flex>>::linear_bias_backward(grad),
                 );
-                if let Some(node) = node_x {
-                    let weight = state.weight.expect("the weight is kept for x's gradient");
-                    let input_grad =
-                        <Flex as ModuleOps<Flex>>::linear_x_backward(weight, grad.clone());
-                    grads.register::<Flex>(node.id, input_grad);
-                }
-                if let Some(node) = node_weight {
-                    let x = state.x.expect("x is kept for the weight's gradient");
-                    let weight_grad =
-                        <Flex as ModuleOps<Flex>>::linear_weight_backward(x, grad.clone());
-                    grads.register::<Flex>(node.id, weight_grad);
-                }
-                if let Some(node) = node_bias {
-                    grads.register::<Flex>(
-                        node.id,
-                        <Flex as ModuleOps<Flex>>::linear_bias_backward(grad),
-                    );
-                }
             }
         }
+    }
 
-        let x_tracked = x.is_tracked();
-        let weight_tracked = weight.is_tracked();
-        let mask = mask.map(|mask| mask.into_primitive());
-        let step = LinearStep { activation };
-        match step
-            .prepare::<C>([x.node(), weight.node(), bias.node()])
-            .compute_bound()
-            .stateful()
-        {
-            OpsKind::Tracked(prep) => {
-                // x is needed only for the weight's gradient, and the weight only for x's.
-                let x = x.into_primitive();
-                let weight = weight.into_primitive();
-                let kept_x = weight_tracked.then(|| x.clone());
-                let kept_weight = x_tracked.then(|| weight.clone());
-                let (activated, masked) =
-                    forward(x, weight, bias.primitive(), activation, mask.as_ref());
-                let output = masked.unwrap_or_else(|| activated.clone());
-                let state = LinearState {
-                    x: kept_x,
-                    weight: kept_weight,
-                    activated,
-                    mask,
-                };
-                prep.finish(state, output)
-            }
-            OpsKind::UnTracked(prep) => {
-                let (activated, masked) = forward(
-                    x.into_primitive(),
-                    weight.into_primitive(),
-                    bias.primitive(),
-                    activation,
-                    mask.as_ref(),
-                );
-                prep.finish(masked.unwrap_or(activated))
-            }
+    let x_tracked = x.is_tracked();
+    let weight_tracked = weight.is_tracked();
+    let step = LinearStep { activation };
+    match step
+        .prepare::<C>([x.node(), weight.node(), bias.node()])
+        .compute_bound()
+        .stateful()
+    {
+        OpsKind::Tracked(prep) => {
+            // x is needed only for the weight's gradient, and the weight only for x's.
+            let x = x.into_primitive();
+            let weight = weight.into_primitive();
+            let kept_x = weight_tracked.then(|| x.clone());
+            let kept_weight = x_tracked.then(|| weight.clone());
+            let (activated, masked) =
+                forward(x, weight, bias.primitive(), activation, mask.as_ref());
+            let output = masked.unwrap_or_else(|| activated.clone());
+            let state = LinearState {
+                x: kept_x,
+                weight: kept_weight,
+                activated,
+                mask,
+            };
+            prep.finish(state, output)
+        }
+        OpsKind::UnTracked(prep) => {
+            let (activated, masked) = forward(
+                x.into_primitive(),
+                weight.into_primitive(),
+                bias.primitive(),
+                activation,
+                mask.as_ref(),
+            );
+            prep.finish(masked.unwrap_or(activated))
         }
     }
 }
@@ -567,6 +607,7 @@ mod tests {
             let activation = ACTIVATIONS[case % ACTIVATIONS.len()];
             let with_mask = case % 8 >= 4;
             let x = random([rows, inputs], 2.0, &mut rng, &device);
+            assert!(fused(&x), "autodiff on Flex takes the fused kernel");
             let weights = random([rows, outputs], 1.0, &mut rng, &device);
             let mask = with_mask.then(|| mask([rows, outputs], &mut rng, &device));
             let layer = layer(inputs, outputs, &mut rng, &device);
