@@ -2,14 +2,16 @@
 //! `[rows, inputs]`, a weight `[inputs, outputs]`, a bias `[outputs]` and optionally a mask
 //! `[rows, outputs]` come in; `act(x·W + b) ⊙ mask` `[rows, outputs]` goes out.
 //!
-//! On Flex with f32 values the product is Flex's own matrix product, and the bias, the
-//! activation and the mask follow in one pass over the product's buffer. Under autodiff one
-//! backward node serves the three parents: the pre-activation gradient `g ⊙ mask ⊙ act′` in
-//! one pass, then the input, weight and bias gradients through the very operations burn's
-//! Linear backward calls (`linear_x_backward`, `linear_weight_backward`,
-//! `linear_bias_backward`). Every float operation is the one burn's Linear, the
-//! [`activation`](super::activation) kernels and a mask multiplication perform, in the same
-//! order, so values and gradients are the same bits as those composed operations (tested).
+//! On Flex with f32 values the product is the `gemm` call Flex's matrix product makes, into
+//! an aligned buffer of our own (Flex's product fills an unaligned one, then copies it), and
+//! the bias, the activation and the mask follow in one pass over that buffer. Under autodiff
+//! one backward node serves the three parents: the pre-activation gradient `g ⊙ mask ⊙ act′`
+//! in one pass, then the input and weight gradients through the products burn's Linear
+//! backward takes (`linear_x_backward`, `linear_weight_backward`: `g·Wᵀ`, `xᵀ·g`, the same
+//! `gemm` calls) and the bias gradient through `linear_bias_backward`. Every float operation
+//! is the one burn's Linear, the [`activation`](super::activation) kernels and a mask
+//! multiplication perform, in the same order, so values and gradients are the same bits as
+//! those composed operations (tested).
 //! On any other backend or dtype the layer is those composed operations.
 
 use super::activation::{leaky_relu_f32, tanh_f32};
@@ -18,11 +20,11 @@ use burn::backend::autodiff::checkpoint::strategy::CheckpointStrategy;
 use burn::backend::autodiff::grads::Gradients;
 use burn::backend::autodiff::ops::{Backward, Ops, OpsKind};
 use burn::backend::flex::{FlexTensor, Layout};
-use burn::backend::ops::{FloatTensorOps, ModuleOps};
+use burn::backend::ops::ModuleOps;
 use burn::backend::tensor::FloatTensor;
 use burn::backend::{Autodiff, Backend, Dispatch, Flex, backend_extension};
 use burn::nn::Linear;
-use burn::tensor::{Bytes, DType, Device, Tensor};
+use burn::tensor::{Bytes, DType, Device, Shape, Tensor};
 
 /// The function a layer applies after its bias.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -205,14 +207,15 @@ fn tracked_linear<C: CheckpointStrategy>(
             let grad =
                 pre_activation_grad(grad, &state.activated, state.mask.as_ref(), self.activation);
             if let Some(node) = node_x {
+                // burn's linear_x_backward: g·Wᵀ, the transpose a view.
                 let weight = state.weight.expect("the weight is kept for x's gradient");
-                let input_grad = <Flex as ModuleOps<Flex>>::linear_x_backward(weight, grad.clone());
+                let input_grad = product(&grad, &weight.transpose(0, 1));
                 grads.register::<Flex>(node.id, input_grad);
             }
             if let Some(node) = node_weight {
+                // burn's linear_weight_backward on 2-D x: xᵀ·g, the transpose a view.
                 let x = state.x.expect("x is kept for the weight's gradient");
-                let weight_grad =
-                    <Flex as ModuleOps<Flex>>::linear_weight_backward(x, grad.clone());
+                let weight_grad = product(&x.transpose(0, 1), &grad);
                 grads.register::<Flex>(node.id, weight_grad);
             }
             if let Some(node) = node_bias {
@@ -271,30 +274,97 @@ fn forward(
     activation: LayerActivation,
     mask: Option<&FlexTensor>,
 ) -> (FlexTensor, Option<FlexTensor>) {
-    assert_eq!(x.dtype(), DType::F32, "fused linear: f32 only");
-    let mut product = <Flex as FloatTensorOps<Flex>>::float_matmul(x, weight);
-    if product.as_slice::<f32>().is_none() {
-        product = product.to_contiguous();
-    }
-    let shape = product.layout().shape().clone();
-    let outputs = shape[1];
+    let mut activated = product_values(&x, &weight);
+    let shape = Shape::new([x.layout().shape()[0], weight.layout().shape()[1]]);
     let bias = values(bias);
-    assert_eq!(bias.len(), outputs, "fused linear: bias length");
+    assert_eq!(bias.len(), shape[1], "fused linear: bias length");
     let mask = mask.map(values);
-    // The product is fresh from the matrix product, so this borrows it without a copy.
-    let activated = product.storage_mut::<f32>();
     let masked = match activation {
-        LayerActivation::Identity => apply(activated, &bias, mask.as_deref(), |v| v),
-        LayerActivation::Tanh => apply(activated, &bias, mask.as_deref(), tanh_f32),
+        LayerActivation::Identity => apply(&mut activated, &bias, mask.as_deref(), |v| v),
+        LayerActivation::Tanh => apply(&mut activated, &bias, mask.as_deref(), tanh_f32),
         LayerActivation::LeakyRelu { slope } => {
             let slope = slope as f32;
-            apply(activated, &bias, mask.as_deref(), move |v| {
+            apply(&mut activated, &bias, mask.as_deref(), move |v| {
                 leaky_relu_f32(v, slope)
             })
         }
     };
-    let masked = masked.map(|values| f32_tensor(values, shape));
-    (product, masked)
+    let masked = masked.map(|values| f32_tensor(values, shape.clone()));
+    (f32_tensor(activated, shape), masked)
+}
+
+/// Products of at least this many multiply-adds (`m·n·k`) run on the rayon pool: Flex's
+/// threshold for its matrix product.
+const PARALLEL_PRODUCT: usize = 192 * 192 * 192;
+
+/// `lhs·rhs` of two 2-D f32 tensors of any strides as a contiguous `[m, n]` tensor on an
+/// aligned buffer: the bits of Flex's `float_matmul`.
+fn product(lhs: &FlexTensor, rhs: &FlexTensor) -> FlexTensor {
+    let shape = Shape::new([lhs.layout().shape()[0], rhs.layout().shape()[1]]);
+    f32_tensor(product_values(lhs, rhs), shape)
+}
+
+/// The values of `lhs·rhs` (`[m, k]·[k, n]`, any strides) in row-major order, by the very
+/// `gemm` call Flex's 2-D matrix product makes (strides read from the layouts, `dst ←
+/// 0·dst + 1·lhs·rhs` without reading `dst`, no conjugation, rayon from
+/// [`PARALLEL_PRODUCT`] multiply-adds on) but into a zeroed `Vec` rather than Flex's
+/// byte buffer, which is realigned by a copy.
+fn product_values(lhs: &FlexTensor, rhs: &FlexTensor) -> Vec<f32> {
+    let (lhs_layout, rhs_layout) = (lhs.layout(), rhs.layout());
+    let (lhs_shape, rhs_shape) = (lhs_layout.shape(), rhs_layout.shape());
+    assert!(
+        lhs_shape.num_dims() == 2 && rhs_shape.num_dims() == 2,
+        "fused linear: 2-D products only"
+    );
+    assert!(
+        lhs.dtype() == DType::F32 && rhs.dtype() == DType::F32,
+        "fused linear: f32 only"
+    );
+    let (m, k, n) = (lhs_shape[0], lhs_shape[1], rhs_shape[1]);
+    assert_eq!(rhs_shape[0], k, "fused linear: inner dimensions");
+    let (lhs_row, lhs_column) = (lhs_layout.strides()[0], lhs_layout.strides()[1]);
+    let (rhs_row, rhs_column) = (rhs_layout.strides()[0], rhs_layout.strides()[1]);
+    let lhs_start = lhs
+        .storage::<f32>()
+        .as_ptr()
+        .wrapping_add(lhs_layout.start_offset());
+    let rhs_start = rhs
+        .storage::<f32>()
+        .as_ptr()
+        .wrapping_add(rhs_layout.start_offset());
+    let parallelism = if m.saturating_mul(n).saturating_mul(k) >= PARALLEL_PRODUCT {
+        gemm::Parallelism::Rayon(0)
+    } else {
+        gemm::Parallelism::None
+    };
+    let mut output = vec![0.0f32; m * n];
+    // SAFETY: each layout addresses elements of its tensor's storage only (Flex's
+    // invariant, which its own product relies on the same way), the storages outlive the
+    // call, and `output` holds `m·n` elements at row stride `n`, column stride 1.
+    unsafe {
+        gemm::gemm(
+            m,
+            n,
+            k,
+            output.as_mut_ptr(),
+            1,
+            n as isize,
+            false,
+            lhs_start,
+            lhs_column,
+            lhs_row,
+            rhs_start,
+            rhs_column,
+            rhs_row,
+            0.0,
+            1.0,
+            false,
+            false,
+            false,
+            parallelism,
+        );
+    }
+    output
 }
 
 /// The gradient before the activation from the output's: `g ⊙ mask ⊙ act′(y)` with `y` the
@@ -350,7 +420,7 @@ fn values(x: &FlexTensor) -> std::borrow::Cow<'_, [f32]> {
 }
 
 /// A contiguous f32 tensor on a `Vec`'s buffer (aligned, so burn never copies it).
-fn f32_tensor(values: Vec<f32>, shape: burn::tensor::Shape) -> FlexTensor {
+fn f32_tensor(values: Vec<f32>, shape: Shape) -> FlexTensor {
     FlexTensor::new(
         Bytes::from_elems(values),
         Layout::contiguous(shape),
@@ -594,47 +664,68 @@ mod tests {
     ];
 
     /// Forward and the three gradients, under loss = Σ w·layer(x), for the fused and the
-    /// composed layer on the same values, over random shapes, every activation, with and
-    /// without a mask: the same bits (tolerance zero).
+    /// composed layer on the same random values of shape `[rows, inputs] → outputs`: the
+    /// same bits (tolerance zero).
+    fn assert_same_bits(
+        [rows, inputs, outputs]: [usize; 3],
+        activation: LayerActivation,
+        with_mask: bool,
+        rng: &mut ChaCha8Rng,
+    ) {
+        let device = Device::flex().autodiff();
+        let x = random([rows, inputs], 2.0, rng, &device);
+        assert!(fused(&x), "autodiff on Flex takes the fused kernel");
+        let weights = random([rows, outputs], 1.0, rng, &device);
+        let mask = with_mask.then(|| mask([rows, outputs], rng, &device));
+        let layer = layer(inputs, outputs, rng, &device);
+        let mut results = Vec::new();
+        for run in [linear as Layer, composed] {
+            let input = x.clone().detach().require_grad();
+            let output = run(input.clone(), &layer, activation, mask.clone());
+            let grads = (output.clone() * weights.clone()).sum().backward();
+            let weight_grad = layer.weight.val().grad(&grads).unwrap();
+            let bias_grad = layer.bias.as_ref().unwrap().val().grad(&grads).unwrap();
+            results.push([
+                bits(output),
+                bits(input.grad(&grads).unwrap()),
+                bits(weight_grad),
+                bits(bias_grad),
+            ]);
+        }
+        for (part, name) in ["output", "x gradient", "weight gradient", "bias gradient"]
+            .iter()
+            .enumerate()
+        {
+            assert_eq!(
+                results[0][part], results[1][part],
+                "{name}: [{rows}, {inputs}] → {outputs}, {activation:?}, mask {with_mask}"
+            );
+        }
+    }
+
+    /// Random shapes, every activation, with and without a mask: the same bits as burn's
+    /// Linear, the activation and the mask.
     #[test]
     fn forward_and_gradients_are_the_bits_of_burns_linear_activation_and_mask() {
-        let device = Device::flex().autodiff();
         let mut rng = ChaCha8Rng::seed_from_u64(27);
         for case in 0..24 {
-            let rows = rng.random_range(1..300);
-            let inputs = rng.random_range(1..70);
-            let outputs = rng.random_range(1..40);
+            let shape = [
+                rng.random_range(1..300),
+                rng.random_range(1..70),
+                rng.random_range(1..40),
+            ];
             let activation = ACTIVATIONS[case % ACTIVATIONS.len()];
-            let with_mask = case % 8 >= 4;
-            let x = random([rows, inputs], 2.0, &mut rng, &device);
-            assert!(fused(&x), "autodiff on Flex takes the fused kernel");
-            let weights = random([rows, outputs], 1.0, &mut rng, &device);
-            let mask = with_mask.then(|| mask([rows, outputs], &mut rng, &device));
-            let layer = layer(inputs, outputs, &mut rng, &device);
-            let mut results = Vec::new();
-            for run in [linear as Layer, composed] {
-                let input = x.clone().detach().require_grad();
-                let output = run(input.clone(), &layer, activation, mask.clone());
-                let grads = (output.clone() * weights.clone()).sum().backward();
-                let weight_grad = layer.weight.val().grad(&grads).unwrap();
-                let bias_grad = layer.bias.as_ref().unwrap().val().grad(&grads).unwrap();
-                results.push([
-                    bits(output),
-                    bits(input.grad(&grads).unwrap()),
-                    bits(weight_grad),
-                    bits(bias_grad),
-                ]);
-            }
-            for (part, name) in ["output", "x gradient", "weight gradient", "bias gradient"]
-                .iter()
-                .enumerate()
-            {
-                assert_eq!(
-                    results[0][part], results[1][part],
-                    "{name}: [{rows}, {inputs}] → {outputs}, {activation:?}, mask {with_mask}"
-                );
-            }
+            assert_same_bits(shape, activation, case % 8 >= 4, &mut rng);
         }
+    }
+
+    /// Products past Flex's threshold for running on the rayon pool (forward and both
+    /// gradient products: 2000·64·60 multiply-adds each), still the same bits.
+    #[test]
+    fn large_products_on_the_rayon_pool_are_the_same_bits() {
+        let mut rng = ChaCha8Rng::seed_from_u64(270);
+        assert!(2000 * 64 * 60 >= PARALLEL_PRODUCT);
+        assert_same_bits([2000, 64, 60], LayerActivation::Tanh, true, &mut rng);
     }
 
     /// The composed reference itself against burn's own activations, so that the chain ends
