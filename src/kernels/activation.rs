@@ -298,12 +298,10 @@ fn with_values<R>(x: &FlexTensor, f: impl FnOnce(&[f32]) -> R) -> R {
     }
 }
 
-/// `f` over each element, into a fresh `Vec`. The crate targets baseline x86-64 (SSE2, 4
-/// lanes), so the loop is also compiled for AVX2 (8) and AVX-512 (16) and chosen at run time;
-/// no fused multiply-add is enabled, so every copy computes the same bits.
-fn map_unary<F: Fn(f32) -> f32 + Copy>(x: &[f32], f: F) -> Vec<f32> {
-    #[inline(always)]
-    fn body<F: Fn(f32) -> f32>(x: &[f32], f: F) -> Vec<f32> {
+per_instruction_set! {
+    /// `f` over each element, into a fresh `Vec`, at the CPU's widest vectors
+    /// (`per_instruction_set!`).
+    fn map_unary<F: [Fn(f32) -> f32]>(x: &[f32], f: F) -> Vec<f32> {
         // A plain loop rather than `collect`, whose out-of-line `from_iter` would run
         // outside the instruction-set copies below.
         let mut output = Vec::with_capacity(x.len());
@@ -314,33 +312,12 @@ fn map_unary<F: Fn(f32) -> f32 + Copy>(x: &[f32], f: F) -> Vec<f32> {
         unsafe { output.set_len(x.len()) };
         output
     }
-    #[cfg(target_arch = "x86_64")]
-    {
-        #[target_feature(enable = "avx512f")]
-        fn avx512<F: Fn(f32) -> f32>(x: &[f32], f: F) -> Vec<f32> {
-            body(x, f)
-        }
-        #[target_feature(enable = "avx2")]
-        fn avx2<F: Fn(f32) -> f32>(x: &[f32], f: F) -> Vec<f32> {
-            body(x, f)
-        }
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has just been found to support AVX-512F.
-            return unsafe { avx512(x, f) };
-        }
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has just been found to support AVX2.
-            return unsafe { avx2(x, f) };
-        }
-    }
-    body(x, f)
 }
 
-/// `f` over each pair of elements of two slices of one length, into a fresh `Vec`; compiled
-/// for each instruction set like [`map_unary`].
-fn map_binary<F: Fn(f32, f32) -> f32 + Copy>(x: &[f32], y: &[f32], f: F) -> Vec<f32> {
-    #[inline(always)]
-    fn body<F: Fn(f32, f32) -> f32>(x: &[f32], y: &[f32], f: F) -> Vec<f32> {
+per_instruction_set! {
+    /// `f` over each pair of elements of two slices of one length, into a fresh `Vec`; compiled
+    /// for each instruction set like [`map_unary`].
+    fn map_binary<F: [Fn(f32, f32) -> f32]>(x: &[f32], y: &[f32], f: F) -> Vec<f32> {
         assert_eq!(x.len(), y.len(), "fused activation: lengths differ");
         let mut output = Vec::with_capacity(x.len());
         for ((slot, &u), &v) in output.spare_capacity_mut().iter_mut().zip(x).zip(y) {
@@ -350,26 +327,6 @@ fn map_binary<F: Fn(f32, f32) -> f32 + Copy>(x: &[f32], y: &[f32], f: F) -> Vec<
         unsafe { output.set_len(x.len()) };
         output
     }
-    #[cfg(target_arch = "x86_64")]
-    {
-        #[target_feature(enable = "avx512f")]
-        fn avx512<F: Fn(f32, f32) -> f32>(x: &[f32], y: &[f32], f: F) -> Vec<f32> {
-            body(x, y, f)
-        }
-        #[target_feature(enable = "avx2")]
-        fn avx2<F: Fn(f32, f32) -> f32>(x: &[f32], y: &[f32], f: F) -> Vec<f32> {
-            body(x, y, f)
-        }
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has just been found to support AVX-512F.
-            return unsafe { avx512(x, y, f) };
-        }
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has just been found to support AVX2.
-            return unsafe { avx2(x, y, f) };
-        }
-    }
-    body(x, y, f)
 }
 
 #[cfg(test)]

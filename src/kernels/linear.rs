@@ -428,18 +428,10 @@ fn f32_tensor(values: Vec<f32>, shape: Shape) -> FlexTensor {
     )
 }
 
-/// Row by row: `values ← f(values + bias)`, and with a mask a fresh `values · mask`. The
-/// crate targets baseline x86-64, so the loop is also compiled for AVX2 and AVX-512 and
-/// chosen at run time; no fused multiply-add is enabled, so every copy computes the same
-/// bits.
-fn apply<F: Fn(f32) -> f32 + Copy>(
-    values: &mut [f32],
-    bias: &[f32],
-    mask: Option<&[f32]>,
-    f: F,
-) -> Option<Vec<f32>> {
-    #[inline(always)]
-    fn body<F: Fn(f32) -> f32 + Copy>(
+per_instruction_set! {
+    /// Row by row: `values ← f(values + bias)`, and with a mask a fresh `values · mask`, at
+    /// the CPU's widest vectors (`per_instruction_set!`).
+    fn apply<F: [Fn(f32) -> f32]>(
         values: &mut [f32],
         bias: &[f32],
         mask: Option<&[f32]>,
@@ -477,48 +469,12 @@ fn apply<F: Fn(f32) -> f32 + Copy>(
             }
         }
     }
-    #[cfg(target_arch = "x86_64")]
-    {
-        #[target_feature(enable = "avx512f")]
-        fn avx512<F: Fn(f32) -> f32 + Copy>(
-            values: &mut [f32],
-            bias: &[f32],
-            mask: Option<&[f32]>,
-            f: F,
-        ) -> Option<Vec<f32>> {
-            body(values, bias, mask, f)
-        }
-        #[target_feature(enable = "avx2")]
-        fn avx2<F: Fn(f32) -> f32 + Copy>(
-            values: &mut [f32],
-            bias: &[f32],
-            mask: Option<&[f32]>,
-            f: F,
-        ) -> Option<Vec<f32>> {
-            body(values, bias, mask, f)
-        }
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has just been found to support AVX-512F.
-            return unsafe { avx512(values, bias, mask, f) };
-        }
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has just been found to support AVX2.
-            return unsafe { avx2(values, bias, mask, f) };
-        }
-    }
-    body(values, bias, mask, f)
 }
 
-/// `f(y, g · mask)` (or `f(y, g)` without a mask) over each element, into a fresh `Vec`;
-/// compiled for each instruction set like [`apply`].
-fn derivative<F: Fn(f32, f32) -> f32 + Copy>(
-    grad: &[f32],
-    activated: &[f32],
-    mask: Option<&[f32]>,
-    f: F,
-) -> Vec<f32> {
-    #[inline(always)]
-    fn body<F: Fn(f32, f32) -> f32 + Copy>(
+per_instruction_set! {
+    /// `f(y, g · mask)` (or `f(y, g)` without a mask) over each element, into a fresh `Vec`;
+    /// compiled for each instruction set like [`apply`].
+    fn derivative<F: [Fn(f32, f32) -> f32]>(
         grad: &[f32],
         activated: &[f32],
         mask: Option<&[f32]>,
@@ -545,36 +501,6 @@ fn derivative<F: Fn(f32, f32) -> f32 + Copy>(
         unsafe { output.set_len(count) };
         output
     }
-    #[cfg(target_arch = "x86_64")]
-    {
-        #[target_feature(enable = "avx512f")]
-        fn avx512<F: Fn(f32, f32) -> f32 + Copy>(
-            grad: &[f32],
-            activated: &[f32],
-            mask: Option<&[f32]>,
-            f: F,
-        ) -> Vec<f32> {
-            body(grad, activated, mask, f)
-        }
-        #[target_feature(enable = "avx2")]
-        fn avx2<F: Fn(f32, f32) -> f32 + Copy>(
-            grad: &[f32],
-            activated: &[f32],
-            mask: Option<&[f32]>,
-            f: F,
-        ) -> Vec<f32> {
-            body(grad, activated, mask, f)
-        }
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has just been found to support AVX-512F.
-            return unsafe { avx512(grad, activated, mask, f) };
-        }
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has just been found to support AVX2.
-            return unsafe { avx2(grad, activated, mask, f) };
-        }
-    }
-    body(grad, activated, mask, f)
 }
 
 #[cfg(test)]
