@@ -791,6 +791,27 @@ fn force_on_a_current_folder_writes_it_again() {
     assert!(run_ok(d, &run).contains("nothing to do"));
 }
 
+/// The manifest and the report say on which vector instructions the matrix products
+/// ran, since models trained on machines that differ there differ in their last bits.
+#[test]
+fn the_manifest_and_the_report_name_the_products_instruction_set() {
+    let dir = project(false);
+    let d = dir.path();
+    run_ok(
+        d,
+        &args(&["run", "experiments/quick.toml", "--no-plots"], &SMALL),
+    );
+    let manifest = std::fs::read_to_string(d.join("results/quick/manifest.json")).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&manifest).unwrap();
+    let instruction_set = dcnet_exp::kernels::instruction_set();
+    assert_eq!(json["instruction_set"], instruction_set, "{manifest}");
+    let report = std::fs::read_to_string(d.join("results/quick/report.md")).unwrap();
+    assert!(
+        report.contains(&format!("matrix products on {instruction_set}")),
+        "{report}"
+    );
+}
+
 /// Two runs into one OUT at once share the work: each training and Monte Carlo block is
 /// computed by one of them while the other waits for it, and both end with the results
 /// of one run alone.

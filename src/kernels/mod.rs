@@ -49,6 +49,27 @@ macro_rules! per_instruction_set {
     };
 }
 
+/// The widest vector instructions the matrix products (the `gemm` crate, with its AVX-512
+/// micro-kernels enabled) use on this machine. Their blocking over the inner dimension
+/// follows the vector width, so products, and the models trained with them, differ in
+/// their last bits between machines that differ here; on one machine they are the same
+/// bytes at any thread count.
+pub fn instruction_set() -> &'static str {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            return "x86-64 AVX-512";
+        }
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            return "x86-64 AVX2+FMA";
+        }
+        return "x86-64 baseline";
+    }
+    #[allow(unreachable_code)]
+    std::env::consts::ARCH
+}
+
 pub mod activation;
 pub mod linear;
 pub mod unfold;

@@ -276,6 +276,7 @@ fn manifest(plan: &Plan, p: usize, started_at: SystemTime, stages: &StageSeconds
         threads: rayon::current_num_threads(),
         backend: spec.training.backend.to_string(),
         host: gethostname::gethostname().to_string_lossy().into_owned(),
+        instruction_set: crate::kernels::instruction_set().to_string(),
         data_files: plan.hashes.files_of(spec),
         stage_seconds: stages.clone(),
         results_key: plan.results_key(p),

@@ -198,9 +198,14 @@ fn provenance_section(run: &StoredRun, out: &mut String) {
         table.add_row(vec![stage.to_string(), format!("{seconds:.2}")]);
     }
     let _ = writeln!(out, "{table}\n");
+    let products = if m.instruction_set.is_empty() {
+        String::new()
+    } else {
+        format!(", matrix products on {}", m.instruction_set)
+    };
     let _ = writeln!(
         out,
-        "- backend: {}, {} threads, host {}",
+        "- backend: {}, {} threads, host {}{products}",
         m.backend, m.threads, m.host
     );
     let _ = writeln!(

@@ -57,6 +57,11 @@ pub struct Manifest {
     /// burn backend DCNet trained and ran on.
     pub backend: String,
     pub host: String,
+    /// The widest vector instructions this machine's matrix products use
+    /// ([`crate::kernels::instruction_set`]): models trained on machines with different
+    /// ones round their products differently and differ in their last bits.
+    #[serde(default)]
+    pub instruction_set: String,
     pub data_files: Vec<DataFile>,
     /// Wall time this process spent in each stage, on every point of the spec; a model
     /// or block taken from the cache adds nothing.

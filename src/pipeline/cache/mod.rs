@@ -43,7 +43,7 @@ use std::path::{Path, PathBuf};
 /// Bumped whenever the dataset generation changes its bytes.
 const DATASET_CODE_VERSION: u32 = 1;
 /// Bumped whenever training changes in a way that changes the weights.
-const TRAINING_CODE_VERSION: u32 = 3;
+const TRAINING_CODE_VERSION: u32 = 4;
 /// Bumped whenever the protocol or an estimator changes its numbers.
 const PROTOCOL_CODE_VERSION: u32 = 1;
 /// Bumped whenever an installation study's calibration changes its numbers.

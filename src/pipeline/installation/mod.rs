@@ -418,6 +418,7 @@ impl<'a> StudyPlan<'a> {
             threads: rayon::current_num_threads(),
             backend: String::new(),
             host: gethostname::gethostname().to_string_lossy().into_owned(),
+            instruction_set: crate::kernels::instruction_set().to_string(),
             data_files: self.inputs.points[p].data_files.clone(),
             stage_seconds: StageSeconds {
                 load: self.load_s,

@@ -393,6 +393,7 @@ mod tests {
             threads: 1,
             backend: String::new(),
             host: String::new(),
+            instruction_set: String::new(),
             data_files: Vec::new(),
             stage_seconds: Default::default(),
             results_key: String::new(),
