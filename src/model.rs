@@ -78,12 +78,32 @@ impl LayerShape {
     }
 }
 
+/// What the network reads and writes besides the 2D head's 6 rows: the channels of the
+/// 1D head's input (3: `v_dvl − v_gnss`; 6: and the body rate, for an installation) and
+/// the terms it outputs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct NetworkIo {
+    pub channels_1d: usize,
+    pub outputs: usize,
+}
+
+impl From<ErrorModel> for NetworkIo {
+    /// The paper's network for `error_model`.
+    fn from(error_model: ErrorModel) -> Self {
+        NetworkIo {
+            channels_1d: 3,
+            outputs: error_model.term_count(),
+        }
+    }
+}
+
 /// DCNet's layers on windows of `window` samples, in the order their weights are
 /// drawn: the two Conv1d of the 1D head, the three Conv2d of the 2D head, the four
 /// Linear. The 1D head's time shrinks by `kernel − 1` per conv; the 2D head's rows go
 /// 6 → 3 → 2 → 1 (the first conv pairs row i with row i + 3) and its time shrinks by 1
 /// per conv.
-pub fn layer_shapes(spec: &ModelSpec, error_model: ErrorModel, window: usize) -> Vec<LayerShape> {
+pub fn layer_shapes(spec: &ModelSpec, io: impl Into<NetworkIo>, window: usize) -> Vec<LayerShape> {
+    let io = io.into();
     let channels = spec.conv_channels;
     let kernel = spec.conv1d_kernel_size;
     let shape = |inputs, outputs, positions| LayerShape {
@@ -96,7 +116,7 @@ pub fn layer_shapes(spec: &ModelSpec, error_model: ErrorModel, window: usize) ->
     let flat_2d = channels * (window - 3);
     let [w1, w2, w3] = spec.fc_widths;
     vec![
-        shape(TARGET_ROWS * kernel, channels, steps_1d[0]),
+        shape(io.channels_1d * kernel, channels, steps_1d[0]),
         shape(channels * kernel, channels, steps_1d[1]),
         shape(KERNEL_2D, channels, 3 * (window - 1)),
         shape(channels * KERNEL_2D, channels, 2 * (window - 2)),
@@ -104,7 +124,7 @@ pub fn layer_shapes(spec: &ModelSpec, error_model: ErrorModel, window: usize) ->
         shape(flat_1d + flat_2d, w1, 1),
         shape(w1, w2, 1),
         shape(w2, w3, 1),
-        shape(w3, error_model.term_count(), 1),
+        shape(w3, io.outputs, 1),
     ]
 }
 
@@ -114,31 +134,43 @@ pub fn layer_shapes(spec: &ModelSpec, error_model: ErrorModel, window: usize) ->
 pub struct Windows {
     pub count: usize,
     pub time: usize,
-    /// `[count × (time − kernel + 1), 3 × kernel]`: `v_dvl − v_gnss` in cm/s at each
-    /// tap of the first Conv1d, tap-major.
+    /// `[count × (time − kernel + 1), channels × kernel]`: `v_dvl − v_gnss` in cm/s, then
+    /// the body rate in deg/s where the windows hold it, at each tap of the first
+    /// Conv1d, tap-major.
     head_1d: Tensor<2>,
     /// `[count × (time − 1) × 3, 4]`: the 2×2 taps of the first Conv2d, (row, time)-major.
     head_2d: Tensor<2>,
     /// `[count, time, 3]`: the DVL velocity in cm/s, which the loss corrects.
     pub dvl_cm_s: Tensor<3>,
+    /// `[count, time, 3]`: the body rate in rad/s, where the windows hold it.
+    pub rate_rad_s: Option<Tensor<3>>,
 }
 
 impl Windows {
-    /// `inputs` `[count, 6, time]` row-major: DVL x, y, z then GNSS x, y, z, in m/s.
-    pub fn new(inputs: &[f32], time: usize, kernel: usize, device: &Device) -> Self {
-        let count = inputs.len() / (INPUT_ROWS * time);
-        let value =
-            |window: usize, row: usize, t: usize| inputs[(window * INPUT_ROWS + row) * time + t];
+    /// `inputs` `[count, rows, time]` row-major: DVL x, y, z then GNSS (or reference)
+    /// x, y, z, in m/s, and with `rows` = 9 the body rate p, q, r in rad/s.
+    pub fn new(inputs: &[f32], rows: usize, time: usize, kernel: usize, device: &Device) -> Self {
+        assert!(rows == INPUT_ROWS || rows == INPUT_ROWS + 3, "6 or 9 rows");
+        let with_rate = rows > INPUT_ROWS;
+        let channels_1d = if with_rate { 6 } else { 3 };
+        let count = inputs.len() / (rows * time);
+        let value = |window: usize, row: usize, t: usize| inputs[(window * rows + row) * time + t];
         let steps_1d = time + 1 - kernel;
-        let mut head_1d = Vec::with_capacity(count * steps_1d * 3 * kernel);
+        let mut head_1d = Vec::with_capacity(count * steps_1d * channels_1d * kernel);
         let mut head_2d = Vec::with_capacity(count * (time - 1) * 3 * KERNEL_2D);
         let mut dvl = Vec::with_capacity(count * time * 3);
+        let mut rate = Vec::new();
         for w in 0..count {
             for t in 0..steps_1d {
                 for tap in 0..kernel {
                     for axis in 0..3 {
                         head_1d
                             .push((value(w, axis, t + tap) - value(w, axis + 3, t + tap)) * 100.0);
+                    }
+                    if with_rate {
+                        for axis in 0..3 {
+                            head_1d.push(value(w, axis + 6, t + tap).to_degrees());
+                        }
                     }
                 }
             }
@@ -154,12 +186,19 @@ impl Windows {
                     dvl.push(value(w, axis, t) * 100.0);
                 }
             }
+            if with_rate {
+                for t in 0..time {
+                    for axis in 0..3 {
+                        rate.push(value(w, axis + 6, t));
+                    }
+                }
+            }
         }
         Self {
             count,
             time,
             head_1d: Tensor::from_data(
-                TensorData::new(head_1d, [count * steps_1d, 3 * kernel]),
+                TensorData::new(head_1d, [count * steps_1d, channels_1d * kernel]),
                 device,
             ),
             head_2d: Tensor::from_data(
@@ -167,6 +206,8 @@ impl Windows {
                 device,
             ),
             dvl_cm_s: Tensor::from_data(TensorData::new(dvl, [count, time, 3]), device),
+            rate_rad_s: with_rate
+                .then(|| Tensor::from_data(TensorData::new(rate, [count, time, 3]), device)),
         }
     }
 }
@@ -187,17 +228,18 @@ pub fn truth_cm_s(targets: &[f32], time: usize, device: &Device) -> Tensor<3> {
 }
 
 impl Dcnet {
-    /// A freshly initialised DCNet for `error_model` on windows of `window` samples:
-    /// every weight and bias uniform in ±1/√fan_in (PyTorch's default), drawn from `rng`.
+    /// A freshly initialised DCNet for `io` (an error model's, or an installation's) on
+    /// windows of `window` samples: every weight and bias uniform in ±1/√fan_in
+    /// (PyTorch's default), drawn from `rng`.
     pub fn new(
         spec: &ModelSpec,
-        error_model: ErrorModel,
+        io: impl Into<NetworkIo>,
         window: usize,
         device: &Device,
         rng: &mut ChaCha8Rng,
     ) -> Self {
         let params = &mut ParamSource { rng, next_id: 0 };
-        let mut layers = layer_shapes(spec, error_model, window)
+        let mut layers = layer_shapes(spec, io, window)
             .into_iter()
             .map(|shape| linear(shape.inputs, shape.outputs, device, params));
         let mut take = |n: usize| layers.by_ref().take(n).collect::<Vec<_>>();
@@ -410,7 +452,7 @@ mod tests {
         let inputs: Vec<f32> = (0..count * INPUT_ROWS * window)
             .map(|_| rng.random_range(-2.0..2.0))
             .collect();
-        let windows = Windows::new(&inputs, window, k, &device);
+        let windows = Windows::new(&inputs, INPUT_ROWS, window, k, &device);
         let ours: Vec<f32> = model
             .features(&windows, &settings)
             .into_data()

@@ -184,7 +184,7 @@ fn batch_of(
         targets.extend_from_slice(&set.targets[i * TARGET_ROWS * w..][..TARGET_ROWS * w]);
     }
     (
-        Windows::new(&inputs, w, settings.kernel, device),
+        Windows::new(&inputs, INPUT_ROWS, w, settings.kernel, device),
         truth_cm_s(&targets, w, device),
     )
 }

@@ -39,7 +39,7 @@ impl Estimator for DcnetEstimator {
                 }
             }
         }
-        let windows = Windows::new(&input, w, self.settings.kernel, &self.device);
+        let windows = Windows::new(&input, INPUT_ROWS, w, self.settings.kernel, &self.device);
         let terms: Vec<f32> = self
             .model
             .forward(&windows, &self.settings, None)

@@ -18,3 +18,5 @@ pub mod fit;
 pub mod bound;
 pub mod rows;
 pub mod study;
+pub mod simulate;
+pub mod network;
