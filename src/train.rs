@@ -11,10 +11,10 @@
 //! without `training.replicates`) draws from the streams of (seed, error model, epoch).
 
 use crate::dataset::{INPUT_ROWS, TARGET_ROWS, TrainingSet};
-use crate::model::{Dcnet, Settings, Windows, split_terms, truth_cm_s};
+use crate::model::{Dcnet, NetworkIo, Settings, Windows, split_terms, truth_cm_s};
 use crate::progress::Progress;
 use crate::rng::task_rng;
-use crate::spec::Spec;
+use crate::spec::{ModelSpec, Spec, TrainingSpec};
 use crate::vocab::{ErrorModel, StopReason};
 use burn::module::Module;
 use burn::optim::{GradientsParams, ModuleOptimizer, RmsPropConfig};
@@ -52,18 +52,95 @@ pub struct EpochRecord {
 #[derive(Debug, thiserror::Error)]
 pub enum TrainError {
     #[error(
-        "DCNet {error_model}: the training loss became {loss} at epoch {epoch}, batch {batch}; training of {error_model} stopped (try a lower training.learning_rate.{error_model})"
+        "DCNet {model}: the training loss became {loss} at epoch {epoch}, batch {batch}; training of {model} stopped (try a lower {learning_rate_key})"
     )]
     NonFinite {
-        error_model: ErrorModel,
+        model: String,
+        learning_rate_key: String,
         epoch: usize,
         batch: usize,
         loss: f32,
     },
-    #[error(
-        "DCNet {error_model}: no training windows (is dataset.validation_fraction leaving none?)"
-    )]
-    NoData { error_model: ErrorModel },
+    #[error("DCNet {model}: no training windows (is {validation_key} leaving none?)")]
+    NoData {
+        model: String,
+        validation_key: String,
+    },
+}
+
+/// What a training needs besides its windows: the network's sizes, the training
+/// settings, the learning rate, and the name that seeds its random streams.
+pub struct Recipe<'a> {
+    pub seed: u64,
+    pub model: &'a ModelSpec,
+    pub training: &'a TrainingSpec,
+    pub learning_rate: f64,
+    /// Names the model in its random streams and its errors: the error model ("EM5")
+    /// for the paper's.
+    pub name: String,
+    /// The spec keys an error names: the learning rate, and the validation share.
+    pub learning_rate_key: String,
+    pub validation_key: String,
+}
+
+impl<'a> Recipe<'a> {
+    /// The paper's DCNet for `error_model`.
+    pub fn paper(spec: &'a Spec, error_model: ErrorModel) -> Self {
+        Recipe {
+            seed: spec.seed,
+            model: &spec.model,
+            training: &spec.training,
+            learning_rate: spec.training.learning_rate(error_model),
+            name: error_model.to_string(),
+            learning_rate_key: format!("training.learning_rate.{error_model}"),
+            validation_key: "dataset.validation_fraction".to_string(),
+        }
+    }
+}
+
+/// Windows a DCNet trains on, and its closed-loop loss on some of them.
+pub trait Windowed: Sync {
+    fn len(&self) -> usize;
+    fn is_validation(&self, window: usize) -> bool;
+    /// The loss of `model` on windows `indices`, dropout masks drawn from `dropout_rng`
+    /// when given (training).
+    fn loss(
+        &self,
+        model: &Dcnet,
+        indices: &[usize],
+        settings: &Settings,
+        device: &Device,
+        dropout_rng: Option<&mut ChaCha8Rng>,
+    ) -> Tensor<1>;
+}
+
+/// The paper's training set, for one error model.
+pub struct PaperWindows<'a> {
+    pub set: &'a TrainingSet,
+    pub error_model: ErrorModel,
+}
+
+impl Windowed for PaperWindows<'_> {
+    fn len(&self) -> usize {
+        self.set.len()
+    }
+
+    fn is_validation(&self, window: usize) -> bool {
+        self.set.is_validation[window]
+    }
+
+    fn loss(
+        &self,
+        model: &Dcnet,
+        indices: &[usize],
+        settings: &Settings,
+        device: &Device,
+        dropout_rng: Option<&mut ChaCha8Rng>,
+    ) -> Tensor<1> {
+        let (windows, truth) = batch_of(self.set, indices, settings, device);
+        let terms = model.forward(&windows, settings, dropout_rng);
+        closed_loop_loss(terms, self.error_model, windows.dvl_cm_s, truth)
+    }
 }
 
 fn is_zero(value: &usize) -> bool {
@@ -97,19 +174,20 @@ impl State {
     /// Fresh weights for replicate `replicate` of `error_model`, on the autodiff device
     /// of the spec's backend.
     pub fn new(spec: &Spec, error_model: ErrorModel, replicate: usize) -> Self {
-        let device = spec.training.backend.device().autodiff();
-        let mut rng = model_rng(spec, "dcnet-init", error_model, replicate, None);
-        let model = Dcnet::new(
-            &spec.model,
-            error_model,
-            spec.dataset.window_samples,
-            &device,
-            &mut rng,
-        );
+        let recipe = Recipe::paper(spec, error_model);
+        Self::of(&recipe, error_model, spec.dataset.window_samples, replicate)
+    }
+
+    /// Fresh weights of shape `io` on windows of `window` samples, for replicate
+    /// `replicate` of `recipe`.
+    pub fn of(recipe: &Recipe, io: impl Into<NetworkIo>, window: usize, replicate: usize) -> Self {
+        let device = recipe.training.backend.device().autodiff();
+        let mut rng = model_rng(recipe, "dcnet-init", replicate, None);
+        let model = Dcnet::new(recipe.model, io, window, &device, &mut rng);
         Self {
             replicate,
             model,
-            optimizer: optimizer(spec),
+            optimizer: optimizer(recipe.training),
             best: None,
             history: Vec::new(),
         }
@@ -120,11 +198,11 @@ impl State {
     }
 
     /// Why training is over, or `None` while epochs remain.
-    pub fn stop(&self, spec: &Spec) -> Option<StopReason> {
-        if self.history.len() >= spec.training.epochs {
+    pub fn stop(&self, training: &TrainingSpec) -> Option<StopReason> {
+        if self.history.len() >= training.epochs {
             return Some(StopReason::AllEpochs);
         }
-        let rule = spec.training.early_stopping?;
+        let rule = training.early_stopping?;
         (epochs_without_improvement(&self.history, rule.min_improvement) >= rule.patience)
             .then_some(StopReason::EarlyStopping)
     }
@@ -143,10 +221,10 @@ impl State {
     }
 }
 
-pub fn optimizer(spec: &Spec) -> ModuleOptimizer {
+pub fn optimizer(training: &TrainingSpec) -> ModuleOptimizer {
     RmsPropConfig::new()
-        .with_alpha(spec.training.rmsprop_alpha as f32)
-        .with_epsilon(spec.training.rmsprop_epsilon as f32)
+        .with_alpha(training.rmsprop_alpha as f32)
+        .with_epsilon(training.rmsprop_epsilon as f32)
         .with_momentum(0.0)
         .init()
 }
@@ -189,59 +267,48 @@ fn batch_of(
     )
 }
 
-/// Mean closed-loop loss of `model` (plain device) over `indices`, in batches.
-pub fn mean_loss(
-    spec: &Spec,
-    model: &Dcnet,
-    error_model: ErrorModel,
-    set: &TrainingSet,
-    indices: &[usize],
-) -> f64 {
-    let device = spec.training.backend.device();
-    let settings = Settings::from(&spec.model);
+/// Mean closed-loop loss of `model` (plain device) over `indices` of `data`, in batches.
+pub fn mean_loss(recipe: &Recipe, model: &Dcnet, data: &impl Windowed, indices: &[usize]) -> f64 {
+    let device = recipe.training.backend.device();
+    let settings = Settings::from(recipe.model);
     let mut total = 0.0;
-    for chunk in indices.chunks(spec.training.batch_size.max(1024)) {
-        let (windows, truth) = batch_of(set, chunk, &settings, &device);
-        let terms = model.forward(&windows, &settings, None);
-        let loss: f32 = closed_loop_loss(terms, error_model, windows.dvl_cm_s, truth).into_scalar();
+    for chunk in indices.chunks(recipe.training.batch_size.max(1024)) {
+        let loss: f32 = data
+            .loss(model, chunk, &settings, &device, None)
+            .into_scalar();
         total += f64::from(loss) * chunk.len() as f64;
     }
     total / indices.len().max(1) as f64
 }
 
 /// The generator of `stream` ("dcnet-init", "dcnet-shuffle", "dcnet-dropout") for
-/// replicate `replicate` of `error_model`'s DCNet, at `epoch` where the stream has one.
+/// replicate `replicate` of `recipe`'s DCNet, at `epoch` where the stream has one.
 /// Replicate 0 draws what a run without replicates draws.
-fn model_rng(
-    spec: &Spec,
-    stream: &str,
-    error_model: ErrorModel,
-    replicate: usize,
-    epoch: Option<usize>,
-) -> ChaCha8Rng {
-    let mut parts: Vec<&dyn std::fmt::Display> = vec![&stream, &error_model];
+fn model_rng(recipe: &Recipe, stream: &str, replicate: usize, epoch: Option<usize>) -> ChaCha8Rng {
+    let mut parts: Vec<&dyn std::fmt::Display> = vec![&stream, &recipe.name];
     if let Some(epoch) = &epoch {
         parts.push(epoch);
     }
     if replicate > 0 {
         parts.extend([&"replicate" as &dyn std::fmt::Display, &replicate]);
     }
-    task_rng(spec.seed, &parts)
+    task_rng(recipe.seed, &parts)
 }
 
-/// The training windows in the order epoch `epoch` of replicate `replicate` visits them.
+/// The training windows of `data` in the order epoch `epoch` of replicate `replicate`
+/// visits them.
 pub fn epoch_order(
-    spec: &Spec,
-    set: &TrainingSet,
-    error_model: ErrorModel,
+    recipe: &Recipe,
+    data: &impl Windowed,
     replicate: usize,
     epoch: usize,
 ) -> Vec<usize> {
-    let mut order: Vec<usize> = (0..set.len()).filter(|&i| !set.is_validation[i]).collect();
+    let mut order: Vec<usize> = (0..data.len())
+        .filter(|&i| !data.is_validation(i))
+        .collect();
     order.shuffle(&mut model_rng(
-        spec,
+        recipe,
         "dcnet-shuffle",
-        error_model,
         replicate,
         Some(epoch),
     ));
@@ -252,34 +319,25 @@ pub fn epoch_order(
 /// masks). Returns the sum of the batch losses weighted by batch size. `progress`
 /// advances by each batch's samples.
 pub fn train_pass(
-    spec: &Spec,
-    set: &TrainingSet,
-    error_model: ErrorModel,
+    recipe: &Recipe,
+    data: &impl Windowed,
     state: &mut State,
     epoch: usize,
     order: &[usize],
     progress: &Progress,
 ) -> Result<f64, TrainError> {
-    let device = spec.training.backend.device().autodiff();
-    let settings = Settings::from(&spec.model);
-    let mut dropout_rng = model_rng(
-        spec,
-        "dcnet-dropout",
-        error_model,
-        state.replicate,
-        Some(epoch),
-    );
-    let learning_rate = spec.training.learning_rate(error_model);
+    let device = recipe.training.backend.device().autodiff();
+    let settings = Settings::from(recipe.model);
+    let mut dropout_rng = model_rng(recipe, "dcnet-dropout", state.replicate, Some(epoch));
     let mut loss_sum = 0.0;
     let mut model = state.model.clone();
-    for (batch, indices) in order.chunks(spec.training.batch_size).enumerate() {
-        let (windows, truth) = batch_of(set, indices, &settings, &device);
-        let terms = model.forward(&windows, &settings, Some(&mut dropout_rng));
-        let loss = closed_loop_loss(terms, error_model, windows.dvl_cm_s, truth);
+    for (batch, indices) in order.chunks(recipe.training.batch_size).enumerate() {
+        let loss = data.loss(&model, indices, &settings, &device, Some(&mut dropout_rng));
         let value: f32 = loss.clone().into_scalar();
         if !value.is_finite() {
             return Err(TrainError::NonFinite {
-                error_model,
+                model: recipe.name.clone(),
+                learning_rate_key: recipe.learning_rate_key.clone(),
                 epoch,
                 batch: batch + 1,
                 loss: value,
@@ -288,10 +346,10 @@ pub fn train_pass(
         loss_sum += f64::from(value) * indices.len() as f64;
         progress.set_message(format!(
             "epoch {epoch}/{}, batch loss {value:.4}",
-            spec.training.epochs
+            recipe.training.epochs
         ));
         let grads = GradientsParams::from_grads(loss.backward(), &model);
-        model = state.optimizer.step(learning_rate, model, grads);
+        model = state.optimizer.step(recipe.learning_rate, model, grads);
         progress.inc(indices.len());
     }
     state.model = model;
@@ -301,25 +359,27 @@ pub fn train_pass(
 /// Runs the next epoch on `state`: training, then the validation loss, and keeps the
 /// weights if they are the best so far.
 pub fn run_epoch(
-    spec: &Spec,
-    set: &TrainingSet,
-    error_model: ErrorModel,
+    recipe: &Recipe,
+    data: &impl Windowed,
     state: &mut State,
     progress: &Progress,
 ) -> Result<(), TrainError> {
     let epoch = state.next_epoch();
     let clock = Instant::now();
-    let order = epoch_order(spec, set, error_model, state.replicate, epoch);
+    let order = epoch_order(recipe, data, state.replicate, epoch);
     if order.is_empty() {
-        return Err(TrainError::NoData { error_model });
+        return Err(TrainError::NoData {
+            model: recipe.name.clone(),
+            validation_key: recipe.validation_key.clone(),
+        });
     }
-    let loss_sum = train_pass(spec, set, error_model, state, epoch, &order, progress)?;
-    let validation: Vec<usize> = (0..set.len()).filter(|&i| set.is_validation[i]).collect();
+    let loss_sum = train_pass(recipe, data, state, epoch, &order, progress)?;
+    let validation: Vec<usize> = (0..data.len()).filter(|&i| data.is_validation(i)).collect();
     let plain = state.model.valid();
     let validation_loss = if validation.is_empty() {
         f64::NAN
     } else {
-        mean_loss(spec, &plain, error_model, set, &validation)
+        mean_loss(recipe, &plain, data, &validation)
     };
     let train_loss = loss_sum / order.len() as f64;
     let seconds = clock.elapsed().as_secs_f64();
@@ -386,11 +446,16 @@ pub fn seconds_per_batch(spec: &Spec, error_model: ErrorModel) -> Result<f64, Tr
     let order: Vec<usize> = (0..batch).collect();
     let mut state = State::new(spec, error_model, 0);
     let hidden = Progress::hidden();
+    let recipe = Recipe::paper(spec, error_model);
+    let data = PaperWindows {
+        set: &set,
+        error_model,
+    };
     one_thread_pool().install(|| {
         let mut fastest = f64::INFINITY;
         for epoch in 1..=2 {
             let clock = Instant::now();
-            train_pass(spec, &set, error_model, &mut state, epoch, &order, &hidden)?;
+            train_pass(&recipe, &data, &mut state, epoch, &order, &hidden)?;
             fastest = fastest.min(clock.elapsed().as_secs_f64());
         }
         Ok(fastest)
@@ -423,8 +488,10 @@ pub(crate) mod tests {
         state: &mut State,
         epochs: usize,
     ) {
+        let recipe = Recipe::paper(spec, error_model);
+        let data = PaperWindows { set, error_model };
         for _ in 0..epochs {
-            run_epoch(spec, set, error_model, state, &Progress::hidden()).unwrap();
+            run_epoch(&recipe, &data, state, &Progress::hidden()).unwrap();
         }
     }
     use crate::estimators::Estimator;
@@ -564,13 +631,13 @@ pub(crate) mod tests {
         ]);
         let mut state = State::new(&spec, ErrorModel::Em1, 0);
         state.history = history[..7].to_vec();
-        assert_eq!(state.stop(&spec), None);
+        assert_eq!(state.stop(&spec.training), None);
         state.history = history.clone();
-        assert_eq!(state.stop(&spec), Some(StopReason::EarlyStopping));
+        assert_eq!(state.stop(&spec.training), Some(StopReason::EarlyStopping));
         let plain = quick_spec(&["training.epochs=8"]);
-        assert_eq!(state.stop(&plain), Some(StopReason::AllEpochs));
+        assert_eq!(state.stop(&plain.training), Some(StopReason::AllEpochs));
         let longer = quick_spec(&["training.epochs=9"]);
-        assert_eq!(state.stop(&longer), None);
+        assert_eq!(state.stop(&longer.training), None);
     }
 
     #[test]
@@ -593,8 +660,13 @@ pub(crate) mod tests {
         let mut legacy_order: Vec<usize> =
             (0..set.len()).filter(|&i| !set.is_validation[i]).collect();
         legacy_order.shuffle(&mut task_rng(spec.seed, &[&"dcnet-shuffle", &em, &3]));
-        assert_eq!(epoch_order(&spec, &set, em, 0, 3), legacy_order);
-        assert_ne!(epoch_order(&spec, &set, em, 1, 3), legacy_order);
+        let recipe = Recipe::paper(&spec, em);
+        let data = PaperWindows {
+            set: &set,
+            error_model: em,
+        };
+        assert_eq!(epoch_order(&recipe, &data, 0, 3), legacy_order);
+        assert_ne!(epoch_order(&recipe, &data, 1, 3), legacy_order);
     }
 
     #[test]
@@ -654,27 +726,23 @@ pub(crate) mod tests {
         let spec = quick_spec(&["training.learning_rate.EM3=1e30"]);
         let set = training_set(&spec);
         let mut state = State::new(&spec, ErrorModel::Em3, 0);
+        let recipe = Recipe::paper(&spec, ErrorModel::Em3);
+        let data = PaperWindows {
+            set: &set,
+            error_model: ErrorModel::Em3,
+        };
         let error = (0..spec.training.epochs)
-            .find_map(|_| {
-                run_epoch(
-                    &spec,
-                    &set,
-                    ErrorModel::Em3,
-                    &mut state,
-                    &Progress::hidden(),
-                )
-                .err()
-            })
+            .find_map(|_| run_epoch(&recipe, &data, &mut state, &Progress::hidden()).err())
             .expect("a learning rate of 1e30 diverges");
         let message = error.to_string();
         assert!(
             matches!(
                 error,
                 TrainError::NonFinite {
-                    error_model: ErrorModel::Em3,
+                    ref model,
                     epoch: 1,
                     ..
-                }
+                } if model == "EM3"
             ),
             "{message}"
         );

@@ -167,12 +167,13 @@ fn bench_training(
     let run_model = |seed_offset: u64| -> Result<usize, TrainError> {
         let mut spec = spec.clone();
         spec.seed += seed_offset;
-        let order = train::epoch_order(&spec, set, error_model, 0, 1);
+        let recipe = train::Recipe::paper(&spec, error_model);
+        let data = train::PaperWindows { set, error_model };
+        let order = train::epoch_order(&recipe, &data, 0, 1);
         let order = &order[..order.len().min(batches * spec.training.batch_size)];
         let mut state = train::State::new(&spec, error_model, 0);
-        train::one_thread_pool().install(|| {
-            train::train_pass(&spec, set, error_model, &mut state, 1, order, &hidden)
-        })?;
+        train::one_thread_pool()
+            .install(|| train::train_pass(&recipe, &data, &mut state, 1, order, &hidden))?;
         Ok(order.len())
     };
     let clock = Instant::now();

@@ -181,7 +181,7 @@ impl ModelStore {
         )?;
         let optimizer_path = folder.join(format!("epoch-{epoch}.optimizer"));
         let bytes = std::fs::read(&optimizer_path).map_err(io_error(&optimizer_path))?;
-        let optimizer = train::optimizer(spec)
+        let optimizer = train::optimizer(&spec.training)
             .from_bytes(Bytes::from_bytes_vec(bytes))
             .map_err(record_error(&optimizer_path))?;
         let best = match (record.best_epoch, record.best_score) {

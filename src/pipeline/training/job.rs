@@ -80,7 +80,7 @@ impl TrainingJob {
         state: State,
         provenance: Provenance,
     ) -> Result<Self, ModelStoreError> {
-        Ok(match state.stop(spec) {
+        Ok(match state.stop(&spec.training) {
             Some(stop) => {
                 let trained = state.finish(error_model, stop);
                 store.save(&trained, key)?;
@@ -110,9 +110,13 @@ impl TrainingJob {
         else {
             return Ok(self);
         };
-        train::run_epoch(spec, set, error_model, &mut state, progress)?;
+        let recipe = train::Recipe::paper(spec, error_model);
+        let data = train::PaperWindows { set, error_model };
+        train::run_epoch(&recipe, &data, &mut state, progress)?;
         let epoch = state.history.len();
-        if epoch % spec.training.checkpoint_every_epochs == 0 && state.stop(spec).is_none() {
+        if epoch % spec.training.checkpoint_every_epochs == 0
+            && state.stop(&spec.training).is_none()
+        {
             store.save_checkpoint(&state, error_model, key)?;
         }
         Ok(Self::running(
