@@ -20,3 +20,4 @@ pub mod rows;
 pub mod study;
 pub mod simulate;
 pub mod network;
+pub mod learned;

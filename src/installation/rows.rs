@@ -86,4 +86,16 @@ pub struct Study {
     pub summary: Vec<SummaryRow>,
     pub trace: Vec<TracePoint>,
     pub failures: Vec<FitFailure>,
+    /// With `[learned]`: every method on the pairs inside a fold only, fold by fold and
+    /// over all folds, the learned models' side-by-side comparison.
+    pub folds: Vec<FoldSummaryRow>,
+}
+
+/// A summary over the (calibration, scored) pairs inside one fold, or inside any
+/// (`fold` = "all").
+#[derive(Debug, Clone, PartialEq)]
+pub struct FoldSummaryRow {
+    /// "1" to the number of folds, or "all".
+    pub fold: String,
+    pub summary: SummaryRow,
 }

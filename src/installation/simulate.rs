@@ -116,6 +116,8 @@ pub struct InstallationWindows {
     pub trajectory: Vec<String>,
     /// Each window's installation, an index into the grid's (0 for a real DVL).
     pub installation: Vec<usize>,
+    /// Whether each window is kept for validation.
+    pub validation: Vec<bool>,
 }
 
 impl InstallationWindows {
@@ -127,11 +129,35 @@ impl InstallationWindows {
         self.trajectory.is_empty()
     }
 
-    fn extend(&mut self, other: InstallationWindows) {
+    pub fn extend(&mut self, other: InstallationWindows) {
+        self.window = other.window;
+        self.step_s = other.step_s;
         self.inputs.extend(other.inputs);
         self.targets.extend(other.targets);
         self.trajectory.extend(other.trajectory);
         self.installation.extend(other.installation);
+        self.validation.extend(other.validation);
+    }
+
+    /// Keeps the last `fraction` (rounded) of the windows of each trajectory and
+    /// installation for validation, as the paper splits each grid combination's.
+    pub fn with_validation(mut self, fraction: f64) -> Self {
+        let mut start = 0;
+        while start < self.len() {
+            let same = |i: usize| {
+                self.trajectory[i] == self.trajectory[start]
+                    && self.installation[i] == self.installation[start]
+            };
+            let end = (start..self.len())
+                .find(|&i| !same(i))
+                .unwrap_or(self.len());
+            let kept = ((end - start) as f64 * fraction).round() as usize;
+            for i in start..end {
+                self.validation[i] = i >= end - kept;
+            }
+            start = end;
+        }
+        self
     }
 }
 
@@ -205,6 +231,7 @@ pub fn windows_of(
         }
         out.trajectory.push(segment.name.clone());
         out.installation.push(installation);
+        out.validation.push(false);
     }
     out
 }
@@ -384,6 +411,42 @@ pub(crate) mod tests {
             assert_eq!(target(5, span - 1), at(start + 12).rate_rad_s[2] as f32);
         }
         assert!(windows.installation.iter().all(|&i| i == 3));
+    }
+
+    #[test]
+    fn the_last_windows_of_each_trajectory_and_installation_are_kept_for_validation() {
+        let segments = [weaving("A", 60, 0.0), weaving("B", 60, 1.0)];
+        let segments: Vec<&Segment> = segments.iter().collect();
+        let windows = simulated_windows(&segments, &grid(), 0.0, 10, 5, 7).with_validation(0.25);
+        // Each of the 2 × 4 groups holds 8 windows (starts 0, 5, …, 35, all inside the
+        // reference but those whose DVL at t + 1.4 s runs past its end): count per group.
+        let mut groups: Vec<(String, usize, usize, usize)> = Vec::new();
+        for i in 0..windows.len() {
+            let key = (windows.trajectory[i].clone(), windows.installation[i]);
+            match groups.last_mut() {
+                Some(g) if (g.0.clone(), g.1) == key => {
+                    g.2 += 1;
+                    g.3 += usize::from(windows.validation[i]);
+                }
+                _ => groups.push((key.0, key.1, 1, usize::from(windows.validation[i]))),
+            }
+        }
+        assert_eq!(groups.len(), 8);
+        for (_, _, count, validation) in &groups {
+            assert_eq!(
+                *validation,
+                ((*count as f64) * 0.25).round() as usize,
+                "{groups:?}"
+            );
+        }
+        // The validation windows are each group's last.
+        for i in 1..windows.len() {
+            let same_group = windows.trajectory[i] == windows.trajectory[i - 1]
+                && windows.installation[i] == windows.installation[i - 1];
+            if same_group && windows.validation[i - 1] {
+                assert!(windows.validation[i]);
+            }
+        }
     }
 
     #[test]

@@ -104,6 +104,7 @@ pub struct InstallationFile {
     #[serde(default)]
     pub observability: ObservabilityFile,
     pub dcnet: Option<DcnetModelsFile>,
+    pub learned: Option<LearnedFile>,
 }
 
 #[derive(Debug, Clone, serde::Deserialize)]
@@ -207,6 +208,100 @@ pub struct DcnetModelsFile {
     pub spec: PathBuf,
 }
 
+/// `[learned]`: DCNets that learn the installation's terms, trained fold by fold on the
+/// trajectories outside the fold (simulated installations over their reference, or
+/// their real DVL), and scored on the trajectories inside it.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LearnedFile {
+    /// The terms the network outputs.
+    pub terms: Vec<TermName>,
+    /// Folds over the trajectories, round robin in spec order.
+    pub folds: usize,
+    /// What the models train on: "simulated" installations, the "vehicle"'s own DVL.
+    #[serde(default = "LearnedFile::default_sources")]
+    pub sources: Vec<String>,
+    /// Samples per network window.
+    #[serde(default = "LearnedFile::default_window")]
+    pub window_samples: usize,
+    /// A training window starts every this many samples.
+    #[serde(default = "LearnedFile::default_stride")]
+    pub stride_samples: usize,
+    /// The share of each trajectory's (and installation's) windows, its last ones, kept
+    /// for validation.
+    #[serde(default = "LearnedFile::default_validation")]
+    pub validation_fraction: f64,
+    #[serde(default = "LearnedFile::default_seed")]
+    pub seed: u64,
+    pub simulation: crate::installation::simulate::SimulationGrid,
+    #[serde(default)]
+    pub model: crate::spec::file::ModelFile,
+    #[serde(default)]
+    pub training: crate::spec::file::TrainingFile,
+}
+
+impl LearnedFile {
+    fn default_sources() -> Vec<String> {
+        vec!["simulated".into(), "vehicle".into()]
+    }
+    fn default_window() -> usize {
+        10
+    }
+    fn default_stride() -> usize {
+        5
+    }
+    fn default_validation() -> f64 {
+        0.2
+    }
+    fn default_seed() -> u64 {
+        2024
+    }
+}
+
+/// How the labels of `[learned]`'s methods begin.
+pub const LEARNED_LABEL: &str = "DCNet trained on ";
+
+/// What a learned model trains on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Source {
+    /// Simulated installations over the reference of the trajectories outside the fold.
+    Simulated,
+    /// The real DVL and reference of the trajectories outside the fold.
+    Vehicle,
+}
+
+impl Source {
+    pub fn name(self) -> &'static str {
+        match self {
+            Source::Simulated => "simulated",
+            Source::Vehicle => "vehicle",
+        }
+    }
+}
+
+/// `[learned]`, checked.
+#[derive(Debug, Clone)]
+pub struct LearnedSpec {
+    pub terms: Vec<TermName>,
+    pub folds: usize,
+    pub sources: Vec<Source>,
+    pub window_samples: usize,
+    pub stride_samples: usize,
+    pub validation_fraction: f64,
+    pub seed: u64,
+    pub simulation: crate::installation::simulate::SimulationGrid,
+    pub model: crate::spec::ModelSpec,
+    pub training: crate::spec::TrainingSpec,
+}
+
+impl LearnedSpec {
+    /// The fold of the trajectory at `index`: round robin in spec order.
+    pub fn fold_of(&self, index: usize) -> usize {
+        index % self.folds
+    }
+}
+
 /// A method of the study: how the terms of a calibration window are estimated.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Method {
@@ -218,6 +313,9 @@ pub enum Method {
     Installation { name: String, terms: Vec<TermName> },
     /// The paper spec's DCNet for an error model.
     Dcnet(ErrorModel),
+    /// `[learned]`'s DCNet trained on `Source`, the model of the calibration trajectory's
+    /// fold.
+    Learned(Source),
 }
 
 impl Method {
@@ -228,6 +326,8 @@ impl Method {
             Method::LeastSquares(model) => format!("least squares {model}"),
             Method::Installation { name, .. } => format!("installation {name}"),
             Method::Dcnet(model) => format!("DCNet {model}"),
+            Method::Learned(Source::Simulated) => format!("{LEARNED_LABEL}simulation"),
+            Method::Learned(Source::Vehicle) => format!("{LEARNED_LABEL}the vehicle"),
         }
     }
 }
@@ -247,6 +347,8 @@ pub struct InstallationSpec {
     pub observability: ObservabilityFile,
     /// The paper spec whose DCNet models are used, when `dcnet` is a method.
     pub dcnet_spec: Option<PathBuf>,
+    /// `[learned]`, when the spec has it.
+    pub learned: Option<LearnedSpec>,
     /// The spec with its overrides, as TOML.
     pub resolved_toml: String,
 }
@@ -422,6 +524,15 @@ fn check(
         (_, false) => None,
     };
 
+    let learned = file.learned.as_ref().map(|learned| {
+        check_learned(
+            learned,
+            file.recordings.trajectories.len(),
+            &mut methods,
+            &mut fault,
+        )
+    });
+
     let o = &file.observability;
     for (key, value) in [
         ("scale_pct", o.scale_pct),
@@ -454,14 +565,162 @@ fn check(
         methods,
         observability: o.clone(),
         dcnet_spec,
+        learned,
         resolved_toml: document.resolved_toml.clone(),
     }
 }
 
+/// Checks `[learned]` for a study of `trajectories` trajectories; its methods are added
+/// to `methods`.
+fn check_learned(
+    learned: &LearnedFile,
+    trajectories: usize,
+    methods: &mut Vec<Method>,
+    fault: &mut dyn FnMut(String, String),
+) -> LearnedSpec {
+    for (at, message) in term_list_faults(&learned.terms) {
+        let key = match at {
+            Some(j) => format!("learned.terms[{j}]"),
+            None => "learned.terms".to_string(),
+        };
+        fault(key, message);
+    }
+    if learned.folds < 2 || 2 * learned.folds > trajectories {
+        fault(
+            "learned.folds".into(),
+            format!(
+                "{} must be at least 2, and leave at least two trajectories in every fold (one to calibrate on, another to score on): at most {} for {trajectories} trajectories",
+                learned.folds,
+                trajectories / 2
+            ),
+        );
+    }
+    let mut sources = Vec::new();
+    for (i, name) in learned.sources.iter().enumerate() {
+        let key = format!("learned.sources[{i}]");
+        match name.as_str() {
+            "simulated" if !sources.contains(&Source::Simulated) => sources.push(Source::Simulated),
+            "vehicle" if !sources.contains(&Source::Vehicle) => sources.push(Source::Vehicle),
+            "simulated" | "vehicle" => fault(key, format!("{name:?} is listed twice")),
+            other => fault(
+                key,
+                format!("{other:?} is not a source: give \"simulated\" or \"vehicle\""),
+            ),
+        }
+    }
+    if learned.sources.is_empty() {
+        fault(
+            "learned.sources".into(),
+            "is empty: give \"simulated\", \"vehicle\" or both".into(),
+        );
+    }
+    if learned.window_samples < 4 {
+        fault(
+            "learned.window_samples".into(),
+            format!(
+                "{} must be at least 4 (the 2D head's three convolutions)",
+                learned.window_samples
+            ),
+        );
+    }
+    if learned.stride_samples == 0 {
+        fault(
+            "learned.stride_samples".into(),
+            "0 must be at least 1".into(),
+        );
+    }
+    let v = learned.validation_fraction;
+    if !(0.0..1.0).contains(&v) {
+        fault(
+            "learned.validation_fraction".into(),
+            format!("{v} must lie in [0, 1)"),
+        );
+    }
+    let grid = &learned.simulation;
+    for (key, values) in [
+        ("lever_arm_x_m", &grid.lever_arm_x_m),
+        ("lever_arm_y_m", &grid.lever_arm_y_m),
+        ("lever_arm_z_m", &grid.lever_arm_z_m),
+        ("time_offset_s", &grid.time_offset_s),
+        ("misalignment_z_deg", &grid.misalignment_z_deg),
+        ("scale_pct", &grid.scale_pct),
+        ("bias_cm_s", &grid.bias_cm_s),
+    ] {
+        if values.is_empty() {
+            fault(
+                format!("learned.simulation.{key}"),
+                "is empty: give at least one value".into(),
+            );
+        }
+        for (i, value) in values.iter().enumerate() {
+            if !value.is_finite() {
+                fault(
+                    format!("learned.simulation.{key}[{i}]"),
+                    format!("{value} must be a finite number"),
+                );
+            }
+        }
+    }
+    let (model, training, model_faults) = crate::spec::check::check_model_and_training(
+        learned.model.clone(),
+        learned.training.clone(),
+        learned.window_samples.max(4),
+        "learned.",
+    );
+    for (key, message) in model_faults {
+        fault(key, message);
+    }
+    if training
+        .learning_rates
+        .iter()
+        .any(|&rate| rate != training.learning_rates[0])
+    {
+        fault(
+            "learned.training.learning_rate".into(),
+            "is a table of error models: give one number, the learned model's".into(),
+        );
+    }
+    methods.extend(sources.iter().map(|&source| Method::Learned(source)));
+    LearnedSpec {
+        terms: learned.terms.clone(),
+        folds: learned.folds.max(1),
+        sources,
+        window_samples: learned.window_samples,
+        stride_samples: learned.stride_samples.max(1),
+        validation_fraction: v,
+        seed: learned.seed,
+        simulation: grid.clone(),
+        model,
+        training,
+    }
+}
+
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::installation::bound::Tolerances;
+
+    /// A study of no recordings with `learned`, its noise 2 cm/s: what code that reads
+    /// only the spec's settings needs.
+    pub(crate) fn spec_with(learned: LearnedSpec) -> InstallationSpec {
+        InstallationSpec {
+            name: "test".into(),
+            trajectories: Vec::new(),
+            columns: PairedColumns::akit(),
+            dvl_noise_m_s: 0.02,
+            reference_noise_m_s: 0.0,
+            windows_s: vec![100.0],
+            methods: learned
+                .sources
+                .iter()
+                .map(|&s| Method::Learned(s))
+                .collect(),
+            observability: ObservabilityFile::default(),
+            dcnet_spec: None,
+            learned: Some(learned),
+            resolved_toml: String::new(),
+        }
+    }
 
     /// The default `[observability]` is the bound's default tolerances in the file's
     /// units, exactly: the numbers a spec without the table resolves to, and back.

@@ -11,8 +11,10 @@
 use super::bound::{Noise, TermBound, bound};
 use super::fit::{TIME_OFFSET_MARGIN_S, fit};
 use super::frames::Reference;
-use super::rows::{FitFailure, HeldOutRow, NO_CALIBRATION, Study, SummaryRow, TermRow};
-use super::spec::{InstallationSpec, Method, TermName};
+use super::rows::{
+    FitFailure, FoldSummaryRow, HeldOutRow, NO_CALIBRATION, Study, SummaryRow, TermRow,
+};
+use super::spec::{InstallationSpec, Method, Source, TermName};
 use super::terms::{Installation, PerAxis, TermSet, score};
 use crate::Vec3;
 use crate::data::paired::PairedRecording;
@@ -78,6 +80,17 @@ pub struct Estimated {
 /// velocity on its stamps, for an error model; `None` where it cannot (no model, or a
 /// window shorter than the network's).
 pub type DcnetEstimate<'a> = dyn Fn(ErrorModel, &[Vec3], &[Vec3]) -> Option<Correction> + Sync + 'a;
+
+/// How `[learned]`'s model of a fold, trained on a source, estimates the terms from
+/// samples of a calibration segment; `None` where it cannot.
+pub type LearnedEstimate<'a> =
+    dyn Fn(Source, usize, &Segment, std::ops::Range<usize>) -> Option<Installation> + Sync + 'a;
+
+/// The learned methods' estimators.
+pub struct Estimators<'a> {
+    pub dcnet: &'a DcnetEstimate<'a>,
+    pub learned: &'a LearnedEstimate<'a>,
+}
 
 /// How a term, by its parameter name, is shown in tables: the factor from its stored
 /// unit and the unit shown (a scale in %, a misalignment in degrees, a bias in cm/s; a
@@ -159,16 +172,16 @@ impl Calibrated {
     }
 }
 
-/// Runs the study of `spec` over `segments` (in spec order), with `dcnet` for the DCNet
-/// methods; also gives back every method's terms on every window.
+/// Runs the study of `spec` over `segments` (in spec order), with `estimators` for the
+/// DCNet methods; also gives back every method's terms on every window.
 pub fn run(
     spec: &InstallationSpec,
     segments: &[&Segment],
-    dcnet: &DcnetEstimate,
+    estimators: &Estimators,
 ) -> (Study, Vec<Estimated>) {
     let parts: Vec<Calibrated> = (0..segments.len())
         .into_par_iter()
-        .map(|c| calibrate_on(spec, segments, c, dcnet))
+        .map(|c| calibrate_on(spec, segments, c, estimators))
         .collect();
     assemble(spec, parts)
 }
@@ -177,24 +190,38 @@ pub fn run(
 pub fn assemble(spec: &InstallationSpec, parts: Vec<Calibrated>) -> (Study, Vec<Estimated>) {
     let all = Calibrated::concat(parts);
     let summary = summarize(&all.heldout, &spec.windows_s);
+    let folds = match &spec.learned {
+        Some(learned) => {
+            let fold_of = |name: &str| {
+                let index = spec.trajectories.iter().position(|(n, _)| n == name);
+                learned.fold_of(index.expect("a trajectory of the spec"))
+            };
+            summarize_folds(&all.heldout, &spec.windows_s, learned.folds, fold_of)
+        }
+        None => Vec::new(),
+    };
     let study = Study {
         heldout: all.heldout,
         terms: all.terms,
         summary,
         trace: Vec::new(),
         failures: all.failures,
+        folds,
     };
     (study, all.estimated)
 }
 
 /// Calibrates on trajectory `c` of `segments` (its first w seconds for each window of
-/// `spec`) with every method, and scores each method's terms on every other trajectory.
+/// `spec`) with every method, and scores each method's terms on every other trajectory
+/// (a learned method's only on those of `c`'s fold, the trajectories its model never
+/// saw).
 pub fn calibrate_on(
     spec: &InstallationSpec,
     segments: &[&Segment],
     c: usize,
-    dcnet: &DcnetEstimate,
+    estimators: &Estimators,
 ) -> Calibrated {
+    let fold_of = |i: usize| spec.learned.as_ref().map(|learned| learned.fold_of(i));
     let noise = Noise {
         dvl_m_s: spec.dvl_noise_m_s,
         reference_m_s: spec.reference_noise_m_s,
@@ -225,15 +252,27 @@ pub fn calibrate_on(
                             Method::LeastSquares(model) => {
                                 LeastSquares(*model).estimate(&dvl, &reference)
                             }
-                            Method::Dcnet(model) => match dcnet(*model, &dvl, &reference) {
-                                Some(correction) => correction,
-                                None => continue,
-                            },
-                            Method::Installation { .. } => unreachable!(),
+                            Method::Dcnet(model) => {
+                                match (estimators.dcnet)(*model, &dvl, &reference) {
+                                    Some(correction) => correction,
+                                    None => continue,
+                                }
+                            }
+                            Method::Installation { .. } | Method::Learned(_) => unreachable!(),
                         };
                         Estimate {
                             installation: from_correction(&correction),
                             bound: None,
+                        }
+                    }
+                    Method::Learned(source) => {
+                        let Some(fold) = fold_of(c) else { continue };
+                        match (estimators.learned)(*source, fold, calibration, range.clone()) {
+                            Some(installation) => Estimate {
+                                installation,
+                                bound: None,
+                            },
+                            None => continue,
                         }
                     }
                     Method::Installation { terms, .. } => {
@@ -262,6 +301,12 @@ pub fn calibrate_on(
                 };
                 methods.push((method.label(), estimate));
             }
+            let learned_labels: Vec<String> = spec
+                .methods
+                .iter()
+                .filter(|m| matches!(m, Method::Learned(_)))
+                .map(Method::label)
+                .collect();
             let estimated = methods
                 .iter()
                 .map(|(label, estimate)| Estimated {
@@ -272,6 +317,22 @@ pub fn calibrate_on(
                 })
                 .collect();
             for (label, estimate) in &methods {
+                let learned = learned_labels.contains(label);
+                if learned && let Some(learned_spec) = &spec.learned {
+                    let set = term_set(&learned_spec.terms);
+                    let values = estimate.installation.to_parameters(&set);
+                    for (name, value) in set.parameter_names().into_iter().zip(values) {
+                        terms.push(TermRow {
+                            method: label.clone(),
+                            calibration: calibration.name.clone(),
+                            window_s,
+                            term: name.to_string(),
+                            value,
+                            std: f64::NAN,
+                            unseen: String::new(),
+                        });
+                    }
+                }
                 if let Some(bound) = &estimate.bound {
                     for (i, name) in bound.names.iter().enumerate() {
                         let unseen = bound
@@ -293,7 +354,7 @@ pub fn calibrate_on(
                     }
                 }
                 for (s, scored) in segments.iter().enumerate() {
-                    if s == c {
+                    if s == c || (learned && fold_of(s) != fold_of(c)) {
                         continue;
                     }
                     let recording = &scored.recording;
@@ -330,6 +391,47 @@ pub fn calibrate_on(
         })
         .collect();
     Calibrated::concat(per_window)
+}
+
+/// [`summarize`] on the pairs whose calibration and scored trajectories share a fold:
+/// fold by fold ("1", "2", …), then over every fold ("all"), every method on the same
+/// pairs as the learned ones.
+pub fn summarize_folds(
+    heldout: &[HeldOutRow],
+    windows_s: &[f64],
+    folds: usize,
+    fold_of: impl Fn(&str) -> usize,
+) -> Vec<FoldSummaryRow> {
+    let inside: Vec<HeldOutRow> = heldout
+        .iter()
+        .filter(|r| fold_of(&r.calibration) == fold_of(&r.scored))
+        .cloned()
+        .collect();
+    let mut rows = Vec::new();
+    for fold in 0..folds {
+        let of_fold: Vec<HeldOutRow> = inside
+            .iter()
+            .filter(|r| fold_of(&r.calibration) == fold)
+            .cloned()
+            .collect();
+        rows.extend(
+            summarize(&of_fold, windows_s)
+                .into_iter()
+                .map(|summary| FoldSummaryRow {
+                    fold: (fold + 1).to_string(),
+                    summary,
+                }),
+        );
+    }
+    rows.extend(
+        summarize(&inside, windows_s)
+            .into_iter()
+            .map(|summary| FoldSummaryRow {
+                fold: "all".to_string(),
+                summary,
+            }),
+    );
+    rows
 }
 
 /// Per method and window: the mean over calibration trajectories of each one's mean

@@ -10,7 +10,9 @@
 
 use super::read::{Batch, ColumnError, ReadError, read_rows};
 use super::{ResultsError, batch, floats, strings, table_bytes as parquet_table_bytes};
-use crate::installation::rows::{FitFailure, HeldOutRow, Study, SummaryRow, TermRow, TracePoint};
+use crate::installation::rows::{
+    FitFailure, FoldSummaryRow, HeldOutRow, Study, SummaryRow, TermRow, TracePoint,
+};
 use arrow_array::RecordBatch;
 use std::path::Path;
 
@@ -21,6 +23,8 @@ pub const TRACE: &str = "trace.parquet";
 pub const FAILURES: &str = "failures.parquet";
 /// The study's tables, in the order they are written.
 pub const TABLES: [&str; 5] = [HELDOUT, TERMS, SUMMARY, TRACE, FAILURES];
+/// With `[learned]`, written after [`TABLES`]: the summary inside the folds.
+pub const FOLDS: &str = "folds.parquet";
 
 /// Each table of `study` as (file name, Parquet bytes), in [`TABLES`] order, for the
 /// caller to write atomically before the manifest.
@@ -32,11 +36,16 @@ pub fn table_bytes(study: &Study) -> Result<Vec<(&'static str, Vec<u8>)>, Result
         trace_batch(&study.trace),
         failures_batch(&study.failures),
     ];
-    TABLES
+    let mut tables: Vec<(&'static str, Vec<u8>)> = TABLES
         .iter()
         .zip(batches)
         .map(|(name, batch)| Ok((*name, parquet_table_bytes(Path::new(name), &batch)?)))
-        .collect()
+        .collect::<Result<_, ResultsError>>()?;
+    if !study.folds.is_empty() {
+        let bytes = parquet_table_bytes(Path::new(FOLDS), &folds_batch(&study.folds))?;
+        tables.push((FOLDS, bytes));
+    }
+    Ok(tables)
 }
 
 /// Reads the study's tables from `folder`; an error names the file.
@@ -55,12 +64,20 @@ pub fn read_study(folder: &Path) -> Result<Study, ReadError> {
     let trace = read_rows(&path, &schema, trace_rows)?;
     let (path, schema) = read(FAILURES, failures_batch(&[]));
     let failures = read_rows(&path, &schema, failure_rows)?;
+    // Only a study with `[learned]` has it.
+    let (path, schema) = read(FOLDS, folds_batch(&[]));
+    let folds = if path.exists() {
+        read_rows(&path, &schema, fold_rows)?
+    } else {
+        Vec::new()
+    };
     Ok(Study {
         heldout,
         terms,
         summary,
         trace,
         failures,
+        folds,
     })
 }
 
@@ -101,6 +118,28 @@ pub fn summary_batch(rows: &[SummaryRow]) -> RecordBatch {
         ("ratio", floats(rows, |r| r.ratio)),
         ("calibrations", uints(rows, |r| r.calibrations)),
     ])
+}
+
+/// One row per fold (and "all") × method × window.
+pub fn folds_batch(rows: &[FoldSummaryRow]) -> RecordBatch {
+    batch(vec![
+        ("fold", strings(rows, |r| r.fold.clone())),
+        ("method", strings(rows, |r| r.summary.method.clone())),
+        ("window_s", floats(rows, |r| r.summary.window_s)),
+        ("rmse_cm_s", floats(rows, |r| r.summary.mean_cm_s)),
+        ("rmse_ci_cm_s", floats(rows, |r| r.summary.ci95_cm_s)),
+        ("ratio", floats(rows, |r| r.summary.ratio)),
+        ("calibrations", uints(rows, |r| r.summary.calibrations)),
+    ])
+}
+
+fn fold_rows(batch: &Batch) -> Result<Vec<FoldSummaryRow>, ColumnError> {
+    let fold = batch.strings("fold")?;
+    Ok(fold
+        .into_iter()
+        .zip(summary_rows(batch)?)
+        .map(|(fold, summary)| FoldSummaryRow { fold, summary })
+        .collect())
 }
 
 /// One row per method × calibration trajectory × window whose fit failed.

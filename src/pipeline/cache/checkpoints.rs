@@ -175,8 +175,9 @@ impl ModelStore {
         let device = spec.training.backend.device();
         let model = read_model(
             &folder.join(format!("epoch-{epoch}.model")),
-            spec,
+            &spec.model,
             error_model,
+            spec.dataset.window_samples,
             &device.clone().autodiff(),
         )?;
         let optimizer_path = folder.join(format!("epoch-{epoch}.optimizer"));
@@ -190,8 +191,9 @@ impl ModelStore {
                 score,
                 read_model(
                     &folder.join(format!("epoch-{epoch}.best")),
-                    spec,
+                    &spec.model,
                     error_model,
+                    spec.dataset.window_samples,
                     &device,
                 )?,
             )),

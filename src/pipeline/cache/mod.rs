@@ -141,6 +141,28 @@ pub fn calibration_key(
     ))
 }
 
+/// The key of `[learned]`'s model of `fold` trained on `source`: its `[learned]` table
+/// and the DVL noise of the spec `resolved_toml`, the recordings, the fold and source,
+/// and the training code.
+pub fn learned_key(resolved_toml: &str, data_sha256: &[&str], fold: usize, source: &str) -> String {
+    let settings: toml::Table = toml::from_str(resolved_toml).expect("a resolved spec is TOML");
+    let section = |name: &str| {
+        settings
+            .get(name)
+            .map(|v| v.to_string())
+            .unwrap_or_default()
+    };
+    hash(&(
+        "learned installation model",
+        TRAINING_CODE_VERSION,
+        section("learned"),
+        section("noise"),
+        data_sha256,
+        fold,
+        source,
+    ))
+}
+
 /// The SHA-256, in hex, of `inputs` as JSON.
 pub(crate) fn hash(inputs: &impl Serialize) -> String {
     sha256_hex(

@@ -7,8 +7,8 @@
 //! (`checkpoints`). In: trained models and keys. Out: the stored models.
 
 use crate::files::{self, Seal, write_atomic};
-use crate::model::Dcnet;
-use crate::spec::Spec;
+use crate::model::{Dcnet, NetworkIo};
+use crate::spec::{ModelSpec, Spec};
 use crate::train::{Trained, TrainingHistory};
 use crate::vocab::ErrorModel;
 use burn::module::Module;
@@ -165,8 +165,9 @@ impl ModelStore {
         let stem = self.stem(error_model, key);
         let model = read_model(
             &stem.with_extension("bin"),
-            spec,
+            &spec.model,
             error_model,
+            spec.dataset.window_samples,
             &spec.training.backend.device(),
         )?;
         Ok(Some(Trained {
@@ -212,7 +213,7 @@ impl ModelStore {
 }
 
 /// Writes `model`'s weights to `path`, sealed for `key`.
-pub(super) fn write_model(path: &Path, model: &Dcnet, key: &str) -> Result<(), ModelStoreError> {
+pub(crate) fn write_model(path: &Path, model: &Dcnet, key: &str) -> Result<(), ModelStoreError> {
     let bytes = model
         .clone()
         .into_record()
@@ -221,10 +222,13 @@ pub(super) fn write_model(path: &Path, model: &Dcnet, key: &str) -> Result<(), M
     files::write_sealed(path, &bytes, key).map_err(io_error(path))
 }
 
-pub(super) fn read_model(
+/// Reads the weights at `path` into a network of `model`'s sizes and shape `io` on
+/// windows of `window` samples.
+pub(crate) fn read_model(
     path: &Path,
-    spec: &Spec,
-    error_model: ErrorModel,
+    model: &ModelSpec,
+    io: impl Into<NetworkIo>,
+    window: usize,
     device: &Device,
 ) -> Result<Dcnet, ModelStoreError> {
     let bytes = std::fs::read(path).map_err(io_error(path))?;
@@ -232,13 +236,7 @@ pub(super) fn read_model(
         ModuleRecord::from_bytes(Bytes::from_bytes_vec(bytes)).map_err(record_error(path))?;
     // The skeleton's own weights are all overwritten by the record.
     let mut rng = crate::rng::task_rng(0, &[&"skeleton"]);
-    let skeleton = Dcnet::new(
-        &spec.model,
-        error_model,
-        spec.dataset.window_samples,
-        device,
-        &mut rng,
-    );
+    let skeleton = Dcnet::new(model, io, window, device, &mut rng);
     skeleton.try_load_record(record).map_err(record_error(path))
 }
 

@@ -16,6 +16,7 @@
 
 pub mod folder;
 pub mod inputs;
+pub mod learned;
 
 use super::{Shard, owner};
 use crate::data::paired;
@@ -69,6 +70,9 @@ pub enum StudyError {
         out: PathBuf,
         error_model: ErrorModel,
     },
+    /// A model of `[learned]` that could not be trained, stored or read back.
+    #[error("DCNet {model}: {why}")]
+    Learned { model: String, why: String },
     #[error("writing {}", path.display())]
     Io {
         path: PathBuf,
@@ -151,6 +155,8 @@ pub struct StudyPlan<'a> {
     pub inputs: Inputs,
     /// Point by point, each point's trajectories in spec order.
     pub units: Vec<Unit>,
+    /// Each point's models of `[learned]`, by key.
+    learned: Vec<Vec<learned::LearnedKey>>,
     pub store: CalibrationStore,
     /// Each point's results key: what its folder is current for.
     results_keys: Vec<String>,
@@ -171,6 +177,7 @@ impl<'a> StudyPlan<'a> {
         let inputs = Inputs::read(experiment, out)?;
         let mut units = Vec::new();
         let mut results_keys = Vec::new();
+        let mut learned_keys = Vec::new();
         for (p, point) in experiment.points.iter().enumerate() {
             let spec = &point.spec;
             let data: Vec<&str> = inputs.points[p]
@@ -178,7 +185,9 @@ impl<'a> StudyPlan<'a> {
                 .iter()
                 .map(|f| f.sha256.as_str())
                 .collect();
-            let dcnets = inputs.dcnets_of(p).map(|d| d.keys()).unwrap_or_default();
+            let point_learned = learned::keys(spec, &data);
+            let mut dcnets = inputs.dcnets_of(p).map(|d| d.keys()).unwrap_or_default();
+            dcnets.extend(point_learned.iter().map(|k| k.key.as_str()));
             for calibration in 0..spec.trajectories.len() {
                 units.push(Unit {
                     point: p,
@@ -196,6 +205,7 @@ impl<'a> StudyPlan<'a> {
                 .expect("strings serialize")
                 .as_bytes(),
             ));
+            learned_keys.push(point_learned);
         }
         Ok(StudyPlan {
             experiment,
@@ -204,6 +214,7 @@ impl<'a> StudyPlan<'a> {
             recorded_spec_file: owner::recorded(spec_file, out).unwrap_or_default(),
             inputs,
             units,
+            learned: learned_keys,
             store: CalibrationStore::new(out),
             results_keys,
             load_s: clock.elapsed().as_secs_f64(),
@@ -363,17 +374,44 @@ impl<'a> StudyPlan<'a> {
                 eprintln!("{said}");
             }
         }
+        let mut learned_models = HashMap::new();
+        for point in crate::first_seen(to_do.iter().map(|&u| self.units[u].point)) {
+            let spec = self.spec(point);
+            let segments = self.inputs.segments_of(point);
+            let models = learned::train_or_load(spec, &segments, &self.learned[point], &self.out)?;
+            learned_models.insert(point, models);
+        }
         to_do
             .par_iter()
             .map(|&u| {
                 let unit = &self.units[u];
+                let spec = self.spec(unit.point);
                 let models = self.inputs.dcnets_of(unit.point);
                 let dcnet = |model: ErrorModel, dvl: &[crate::Vec3], reference: &[crate::Vec3]| {
                     models.and_then(|m| m.estimate(model, dvl, reference))
                 };
+                let learned_models = &learned_models[&unit.point];
+                let learned = |source, fold, segment: &study::Segment, range| {
+                    let model = learned_models.model(fold, source)?;
+                    let learned = spec.learned.as_ref()?;
+                    crate::installation::learned::estimate(
+                        model,
+                        learned,
+                        segment,
+                        range,
+                        &learned.training.backend.device(),
+                    )
+                };
                 let segments = self.inputs.segments_of(unit.point);
-                let calibrated =
-                    study::calibrate_on(self.spec(unit.point), &segments, unit.calibration, &dcnet);
+                let calibrated = study::calibrate_on(
+                    spec,
+                    &segments,
+                    unit.calibration,
+                    &study::Estimators {
+                        dcnet: &dcnet,
+                        learned: &learned,
+                    },
+                );
                 self.store.save(&unit.key, &calibrated)?;
                 Ok((u, calibrated))
             })

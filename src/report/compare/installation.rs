@@ -272,6 +272,7 @@ mod tests {
                 summary,
                 trace: Vec::new(),
                 failures: Vec::new(),
+                folds: Vec::new(),
             },
             spec: spec.parse().unwrap(),
         }

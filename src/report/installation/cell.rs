@@ -31,6 +31,14 @@ pub(super) enum Entry {
         ci95_cm_s: f64,
     },
     Ratio(f64),
+    /// A mean RMSE with its interval, and its ratio to no calibration in brackets.
+    RmseRatio {
+        mean_cm_s: f64,
+        ci95_cm_s: f64,
+        ratio: f64,
+    },
+    /// A number in a readable unit, three decimals.
+    Value(f64),
     /// A term in its readable unit, its bound's standard deviation, whether it is seen.
     Term {
         value: f64,
@@ -54,6 +62,24 @@ impl Entry {
             }
             .text(signs),
             Entry::Ratio(ratio) => format!("{ratio:.2}"),
+            Entry::RmseRatio {
+                mean_cm_s,
+                ci95_cm_s,
+                ratio,
+            } => {
+                let rmse = Entry::Rmse {
+                    mean_cm_s: *mean_cm_s,
+                    ci95_cm_s: *ci95_cm_s,
+                };
+                format!("{} ({ratio:.2})", rmse.text(signs))
+            }
+            Entry::Value(value) => {
+                let text = format!("{value:.3}");
+                match text.strip_prefix('-') {
+                    Some(magnitude) => format!("{}{magnitude}", signs.minus),
+                    None => text,
+                }
+            }
             Entry::Term { value, std, seen } => {
                 let decimals = decimals(*std);
                 let value = format!("{value:.decimals$}");

@@ -223,6 +223,7 @@ pub(crate) mod tests {
             summary,
             trace,
             failures: Vec::new(),
+            folds: Vec::new(),
         }
     }
 

@@ -11,6 +11,8 @@
 //!   cannot show marked and why listed under the table;
 //! - [`agreement`]: the paragraph on where those estimates agree across calibration
 //!   trajectories within their intervals;
+//! - [`learned`]: with `[learned]`, every method on the pairs inside the folds, fold by
+//!   fold, and the learned terms against the installation fit of every trajectory;
 //! - [`figures`]: the study's figures (`plots::figures::installation_*`), written as a
 //!   run's are;
 //! - this module: the tables in order, set as Markdown and as LaTeX.
@@ -19,6 +21,7 @@ pub mod cell;
 pub mod heldout;
 pub mod terms;
 pub mod agreement;
+pub mod learned;
 pub mod figures;
 
 pub use figures::{draw_all, draw_sweep};
@@ -175,7 +178,13 @@ fn sections(study: &Study) -> Vec<Section> {
     if windows.len() > 1 {
         sections.push(windows_section(study, &methods, &windows));
     }
-    for method in &methods {
+    if methods.iter().any(|m| learned::is_learned(m)) {
+        sections[0].table.notes.push(
+            "The DCNets trained on simulation and on the vehicle are scored inside their folds only (trajectories their models never saw); compare them with the others on the same pairs in the tables of the folds below.".into(),
+        );
+    }
+    sections.extend(learned::learned_sections(study, &methods, &windows));
+    for method in methods.iter().filter(|m| !learned::is_learned(m)) {
         let rows: Vec<&TermRow> = study
             .terms
             .iter()
@@ -277,6 +286,7 @@ pub(crate) mod tests {
             ],
             trace: Vec::new(),
             failures: Vec::new(),
+            folds: Vec::new(),
         }
     }
 

@@ -48,6 +48,30 @@ impl Limit {
     }
 }
 
+/// Checks a `[model]` and a `[training]` table that another kind of spec holds under
+/// `prefix` (`"learned."` for `[learned.model]`), for windows of `window` samples: the
+/// checked settings, and the faults at their keys under the prefix.
+pub(crate) fn check_model_and_training(
+    model: crate::spec::file::ModelFile,
+    training: crate::spec::file::TrainingFile,
+    window: usize,
+    prefix: &str,
+) -> (
+    crate::spec::ModelSpec,
+    crate::spec::TrainingSpec,
+    Vec<Fault>,
+) {
+    let mut faults = Faults(Vec::new());
+    let model = model::check_model(model, Some(window), &mut faults);
+    let training = training::check_training(training, &mut faults);
+    let faults = faults
+        .0
+        .into_iter()
+        .map(|(key, message)| (format!("{prefix}{key}"), message))
+        .collect();
+    (model, training, faults)
+}
+
 /// Whether `name` can name a results folder: letters, digits, '-', '_', '.', and for
 /// the points of a sweep (`<name>/<point>`) '/', '=' and ','; no part empty, longer
 /// than [`MAX_NAME_CHARS`] or starting with '.' (`.`, `..`, and the `.cache` beside the

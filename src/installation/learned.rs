@@ -1,0 +1,208 @@
+//! What `[learned]` trains and how its models calibrate: for each fold and source, the
+//! training windows of the trajectories outside the fold (simulated installations over
+//! their reference, or their real DVL), and the terms a trained model reads from a
+//! calibration window of a trajectory inside it (the mean of its outputs over the
+//! window's consecutive network windows, as the paper's DCNet calibrates).
+//! In: the study's spec and segments. Out: [`InstallationWindows`] to train on, and an
+//! [`Installation`] per calibration window.
+//!
+//! No trajectory that a fold's model is scored on is seen in its training, as
+//! simulation or as reality: both sources read only the trajectories outside the fold.
+
+use super::network::{batch_of, closed_loop_loss, installation_of};
+use super::simulate::{InstallationWindows, simulated_windows, windows_of};
+use super::spec::{InstallationSpec, LearnedSpec, Source};
+use super::study::{Segment, term_set};
+use super::terms::{Installation, TermSet};
+use crate::model::{Dcnet, Settings};
+use crate::train::Windowed;
+use burn::tensor::{Device, Tensor};
+use rand_chacha::ChaCha8Rng;
+use std::ops::Range;
+
+/// The indices of the trajectories that train the model of `fold`: those outside it.
+pub fn training_trajectories(learned: &LearnedSpec, count: usize, fold: usize) -> Vec<usize> {
+    (0..count).filter(|&i| learned.fold_of(i) != fold).collect()
+}
+
+/// The windows the model of `fold` trains on, from `source`, with their validation
+/// share marked.
+pub fn training_windows(
+    spec: &InstallationSpec,
+    learned: &LearnedSpec,
+    segments: &[&Segment],
+    fold: usize,
+    source: Source,
+) -> InstallationWindows {
+    let outside: Vec<&Segment> = training_trajectories(learned, segments.len(), fold)
+        .into_iter()
+        .map(|i| segments[i])
+        .collect();
+    let (window, stride) = (learned.window_samples, learned.stride_samples);
+    let windows = match source {
+        Source::Simulated => simulated_windows(
+            &outside,
+            &learned.simulation,
+            spec.dvl_noise_m_s,
+            window,
+            stride,
+            learned.seed,
+        ),
+        Source::Vehicle => {
+            let mut all = InstallationWindows::default();
+            for segment in outside {
+                let dvl: Vec<_> = segment
+                    .recording
+                    .dvl_m_s
+                    .iter()
+                    .copied()
+                    .map(Some)
+                    .collect();
+                all.extend(windows_of(segment, &dvl, window, stride, 0));
+            }
+            all
+        }
+    };
+    windows.with_validation(learned.validation_fraction)
+}
+
+/// Training windows with the terms the network outputs: what [`crate::train`] trains on.
+pub struct LearnedWindows {
+    pub windows: InstallationWindows,
+    pub terms: TermSet,
+}
+
+impl Windowed for LearnedWindows {
+    fn len(&self) -> usize {
+        self.windows.len()
+    }
+
+    fn is_validation(&self, window: usize) -> bool {
+        self.windows.validation[window]
+    }
+
+    fn loss(
+        &self,
+        model: &Dcnet,
+        indices: &[usize],
+        settings: &Settings,
+        device: &Device,
+        dropout_rng: Option<&mut ChaCha8Rng>,
+    ) -> Tensor<1> {
+        let batch = batch_of(&self.windows, indices, settings.kernel, device);
+        let outputs = model.forward(&batch.windows, settings, dropout_rng);
+        closed_loop_loss(outputs, &self.terms, &batch)
+    }
+}
+
+/// The terms `model` reads from samples `range` of `segment` with its real DVL: the mean
+/// of its outputs over the range's consecutive network windows; `None` where the range
+/// holds none (a window needs the reference a few samples either side).
+pub fn estimate(
+    model: &Dcnet,
+    learned: &LearnedSpec,
+    segment: &Segment,
+    range: Range<usize>,
+    device: &Device,
+) -> Option<Installation> {
+    let dvl: Vec<_> = (0..segment.recording.dvl_m_s.len())
+        .map(|i| range.contains(&i).then_some(segment.recording.dvl_m_s[i]))
+        .collect();
+    let window = learned.window_samples;
+    let windows = windows_of(segment, &dvl, window, window, 0);
+    if windows.is_empty() {
+        return None;
+    }
+    let settings = Settings::from(&learned.model);
+    let indices: Vec<usize> = (0..windows.len()).collect();
+    let batch = batch_of(&windows, &indices, settings.kernel, device);
+    let outputs = model.forward(&batch.windows, &settings, None);
+    let mean: Vec<f32> = outputs
+        .mean_dim(0)
+        .into_data()
+        .try_to_vec()
+        .expect("f32 outputs");
+    Some(installation_of(&term_set(&learned.terms), &mean))
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::installation::simulate::tests::weaving;
+
+    /// A learned spec of `folds` folds over the test segments.
+    pub(crate) fn learned(folds: usize) -> LearnedSpec {
+        let file: super::super::spec::LearnedFile = toml::from_str(
+            r#"
+            terms = ["lever_arm", "time_offset"]
+            folds = 2
+            window_samples = 10
+            stride_samples = 5
+            [simulation]
+            lever_arm_x_m = [-2.0, -1.0]
+            lever_arm_y_m = [0.0]
+            lever_arm_z_m = [0.5]
+            time_offset_s = [0.0, 1.0]
+            misalignment_z_deg = [0.0]
+            scale_pct = [0.0]
+            bias_cm_s = [0.0]
+            "#,
+        )
+        .unwrap();
+        let (model, training, faults) = crate::spec::check::check_model_and_training(
+            file.model.clone(),
+            file.training.clone(),
+            10,
+            "learned.",
+        );
+        assert!(faults.is_empty(), "{faults:?}");
+        LearnedSpec {
+            terms: file.terms,
+            folds,
+            sources: vec![Source::Simulated, Source::Vehicle],
+            window_samples: 10,
+            stride_samples: 5,
+            validation_fraction: 0.2,
+            seed: 1,
+            simulation: file.simulation,
+            model,
+            training,
+        }
+    }
+
+    /// No window a fold's model trains on comes from a trajectory inside the fold, from
+    /// either source; every trajectory outside it gives some.
+    #[test]
+    fn a_folds_training_reads_only_the_trajectories_outside_it() {
+        let segments: Vec<Segment> = (0..5)
+            .map(|i| {
+                let mut segment = weaving(&format!("T{i}"), 80, i as f64);
+                // Its own DVL, so that the vehicle source has one to read.
+                segment.recording.dvl_m_s = segment.reference.velocity_body_m_s.clone();
+                segment
+            })
+            .collect();
+        let refs: Vec<&Segment> = segments.iter().collect();
+        let learned = learned(2);
+        let spec = crate::installation::spec::tests::spec_with(learned.clone());
+        for fold in 0..2 {
+            let inside: Vec<String> = (0..5)
+                .filter(|&i| learned.fold_of(i) == fold)
+                .map(|i| format!("T{i}"))
+                .collect();
+            for source in [Source::Simulated, Source::Vehicle] {
+                let windows = training_windows(&spec, &learned, &refs, fold, source);
+                assert!(!windows.is_empty());
+                for name in &windows.trajectory {
+                    assert!(
+                        !inside.contains(name),
+                        "fold {fold} {source:?} trains on {name}"
+                    );
+                }
+                for i in training_trajectories(&learned, 5, fold) {
+                    assert!(windows.trajectory.contains(&format!("T{i}")));
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,183 @@
+//! The models of a study's `[learned]`: one per fold and source, each stored in the
+//! cache under its own key (`OUT/.cache/learned/<source>-fold<k>-<key>.bin`, sealed), so
+//! a later run, a shard or another point of a sweep with the same settings loads it
+//! instead of training it. Trainings run in parallel, each on one thread.
+//! In: a point's spec, its segments and its recordings' SHA-256. Out: [`LearnedModels`].
+
+use super::StudyError;
+use crate::files::{self, Seal};
+use crate::installation::learned::{LearnedWindows, training_windows};
+use crate::installation::network::network_io;
+use crate::installation::simulate::REFERENCE_MARGIN;
+use crate::installation::spec::{InstallationSpec, LearnedSpec, Source};
+use crate::installation::study::{Segment, term_set};
+use crate::model::Dcnet;
+use crate::pipeline::cache::{self, models};
+use crate::progress::Progress;
+use crate::train::{self, Recipe, State};
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// One model of `[learned]`: its fold, what it trains on, and its cache key.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LearnedKey {
+    pub fold: usize,
+    pub source: Source,
+    pub key: String,
+}
+
+/// Every model a point's `[learned]` asks for, in fold then source order.
+pub fn keys(spec: &InstallationSpec, data_sha256: &[&str]) -> Vec<LearnedKey> {
+    let Some(learned) = &spec.learned else {
+        return Vec::new();
+    };
+    (0..learned.folds)
+        .flat_map(|fold| {
+            learned.sources.iter().map(move |&source| LearnedKey {
+                fold,
+                source,
+                key: cache::learned_key(&spec.resolved_toml, data_sha256, fold, source.name()),
+            })
+        })
+        .collect()
+}
+
+/// A point's trained models.
+pub struct LearnedModels(Vec<(LearnedKey, Dcnet)>);
+
+impl LearnedModels {
+    /// The model of `fold` trained on `source`.
+    pub fn model(&self, fold: usize, source: Source) -> Option<&Dcnet> {
+        self.0
+            .iter()
+            .find(|(key, _)| key.fold == fold && key.source == source)
+            .map(|(_, model)| model)
+    }
+}
+
+fn path(out: &Path, key: &LearnedKey) -> PathBuf {
+    out.join(".cache/learned").join(format!(
+        "{}-fold{}-{}.bin",
+        key.source.name(),
+        key.fold + 1,
+        &key.key[..16]
+    ))
+}
+
+/// The models of `keys`, each loaded from the cache under `out` or trained (and stored)
+/// there; a damaged stored model is set aside and trained again.
+pub fn train_or_load(
+    spec: &InstallationSpec,
+    segments: &[&Segment],
+    keys: &[LearnedKey],
+    out: &Path,
+) -> Result<LearnedModels, StudyError> {
+    let Some(learned) = &spec.learned else {
+        return Ok(LearnedModels(Vec::new()));
+    };
+    let store_error = |path: &Path| {
+        let path = path.to_path_buf();
+        move |error: models::ModelStoreError| StudyError::Learned {
+            model: path.display().to_string(),
+            why: error.to_string(),
+        }
+    };
+    let models: Vec<Result<(LearnedKey, Dcnet), StudyError>> = keys
+        .par_iter()
+        .map(|key| {
+            let path = path(out, key);
+            let device = learned.training.backend.device();
+            let io = network_io(&term_set(&learned.terms));
+            if let Some(said) = files::set_aside_if_damaged(
+                &path,
+                &key.key,
+                &out.join(".cache/damaged"),
+                "learned model",
+            )
+            .map_err(|source| StudyError::Io {
+                path: path.clone(),
+                source,
+            })? {
+                eprintln!("{said}");
+            }
+            if files::check_seal(&path, &key.key) == Seal::Intact {
+                let model =
+                    models::read_model(&path, &learned.model, io, learned.window_samples, &device)
+                        .map_err(store_error(&path))?;
+                return Ok((key.clone(), model));
+            }
+            let model =
+                train::one_thread_pool().install(|| train_one(spec, learned, segments, key))?;
+            files::create_folder(path.parent().expect("a folder")).map_err(|source| {
+                StudyError::Io {
+                    path: path.clone(),
+                    source,
+                }
+            })?;
+            models::write_model(&path, &model, &key.key).map_err(store_error(&path))?;
+            Ok((key.clone(), model))
+        })
+        .collect();
+    Ok(LearnedModels(models.into_iter().collect::<Result<_, _>>()?))
+}
+
+/// Trains the model of `key` on the windows of its fold and source: every epoch of
+/// `learned.training` (or until early stopping), keeping the weights of the epoch with
+/// the lowest validation loss.
+fn train_one(
+    spec: &InstallationSpec,
+    learned: &LearnedSpec,
+    segments: &[&Segment],
+    key: &LearnedKey,
+) -> Result<Dcnet, StudyError> {
+    let clock = Instant::now();
+    let windows = training_windows(spec, learned, segments, key.fold, key.source);
+    let reach_s = REFERENCE_MARGIN as f64 * windows.step_s;
+    if let Some(tau) = learned
+        .simulation
+        .time_offset_s
+        .iter()
+        .find(|t| t.abs() > reach_s)
+    {
+        return Err(StudyError::Learned {
+            model: "learned.simulation.time_offset_s".into(),
+            why: format!(
+                "{tau} s is beyond the {reach_s} s the loss can read the reference at ({REFERENCE_MARGIN} samples of {} s)",
+                windows.step_s
+            ),
+        });
+    }
+    let name = format!("installation {} fold {}", key.source.name(), key.fold + 1);
+    let recipe = Recipe {
+        seed: learned.seed,
+        model: &learned.model,
+        training: &learned.training,
+        learning_rate: learned.training.learning_rates[0],
+        name: name.clone(),
+        learning_rate_key: "learned.training.learning_rate".into(),
+        validation_key: "learned.validation_fraction".into(),
+    };
+    let data = LearnedWindows {
+        windows,
+        terms: term_set(&learned.terms),
+    };
+    let mut state = State::of(&recipe, network_io(&data.terms), learned.window_samples, 0);
+    let hidden = Progress::hidden();
+    while state.stop(&learned.training).is_none() {
+        train::run_epoch(&recipe, &data, &mut state, &hidden).map_err(|error| {
+            StudyError::Learned {
+                model: name.clone(),
+                why: error.to_string(),
+            }
+        })?;
+    }
+    let (best_epoch, best_loss, model) = state.best.expect("at least one epoch ran");
+    eprintln!(
+        "DCNet {name}: {} windows, {} epochs, best {best_epoch} (validation loss {best_loss:.3} (cm/s)²), {:.1} s",
+        data.windows.len(),
+        state.history.len(),
+        clock.elapsed().as_secs_f64()
+    );
+    Ok(model)
+}

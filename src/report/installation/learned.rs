@@ -1,0 +1,210 @@
+//! The tables of `[learned]`: (a) every method's held-out RMSE on the pairs inside the
+//! folds, over all folds, for every window; (b) the same per fold at the largest window;
+//! (c) how far each learned model's terms, and the installation fit's with the same
+//! terms, land from that fit's mean over every trajectory at the largest window, the
+//! best estimate of the installation there is. In: the study's fold summary and terms.
+//! Out: [`Section`]s.
+
+use super::cell::{Entry, Section, Table};
+use super::heldout::window_text;
+use super::terms::readable;
+use crate::installation::rows::{FoldSummaryRow, NO_CALIBRATION, Study, TermRow};
+use crate::installation::spec::LEARNED_LABEL;
+
+/// Whether `method` is one of `[learned]`'s.
+pub(super) fn is_learned(method: &str) -> bool {
+    method.starts_with(LEARNED_LABEL)
+}
+
+fn fold_entry<'a>(
+    study: &'a Study,
+    fold: &str,
+    method: &str,
+    window_s: f64,
+) -> Option<&'a FoldSummaryRow> {
+    study
+        .folds
+        .iter()
+        .find(|r| r.fold == fold && r.summary.method == method && r.summary.window_s == window_s)
+}
+
+/// The sections, none without a fold summary.
+pub(super) fn learned_sections(study: &Study, methods: &[&str], windows: &[f64]) -> Vec<Section> {
+    let Some(&largest) = windows.last() else {
+        return Vec::new();
+    };
+    if study.folds.is_empty() {
+        return Vec::new();
+    }
+    let folds = crate::first_seen(
+        study
+            .folds
+            .iter()
+            .map(|r| r.fold.as_str())
+            .filter(|f| *f != "all"),
+    );
+    let methods: Vec<&str> = methods
+        .iter()
+        .copied()
+        .filter(|m| study.folds.iter().any(|r| r.summary.method == *m))
+        .collect();
+    let mut sections = vec![Section {
+        title: "Inside the folds: learned against model-based".into(),
+        caption: format!(
+            "Every method on the same pairs only: calibration and scored trajectory in the same fold, which the fold's learned models never saw, as simulation or as reality. Mean held-out RMSE in cm/s ± its 95 % interval over calibration trajectories, and (in brackets) its ratio to {NO_CALIBRATION} on those pairs."
+        ),
+        table: Table {
+            header: std::iter::once("method".to_string())
+                .chain(windows.iter().map(|&w| window_text(w)))
+                .collect(),
+            rows: methods
+                .iter()
+                .map(|method| {
+                    std::iter::once(Entry::Text(method.to_string()))
+                        .chain(windows.iter().map(|&w| {
+                            fold_entry(study, "all", method, w).map_or(Entry::Missing, |r| {
+                                Entry::RmseRatio {
+                                    mean_cm_s: r.summary.mean_cm_s,
+                                    ci95_cm_s: r.summary.ci95_cm_s,
+                                    ratio: r.summary.ratio,
+                                }
+                            })
+                        }))
+                        .collect()
+                })
+                .collect(),
+            notes: Vec::new(),
+        },
+        paragraph: None,
+    }];
+    sections.push(Section {
+        title: format!("Fold by fold, window {}", window_text(largest)),
+        caption: format!(
+            "Mean held-out RMSE in cm/s ± its 95 % interval over each fold's calibration trajectories, calibrated on the first {}.",
+            window_text(largest)
+        ),
+        table: Table {
+            header: std::iter::once("method".to_string())
+                .chain(folds.iter().map(|f| format!("fold {f}")))
+                .collect(),
+            rows: methods
+                .iter()
+                .map(|method| {
+                    std::iter::once(Entry::Text(method.to_string()))
+                        .chain(folds.iter().map(|fold| {
+                            fold_entry(study, fold, method, largest).map_or(Entry::Missing, |r| {
+                                Entry::Rmse {
+                                    mean_cm_s: r.summary.mean_cm_s,
+                                    ci95_cm_s: r.summary.ci95_cm_s,
+                                }
+                            })
+                        }))
+                        .collect()
+                })
+                .collect(),
+            notes: Vec::new(),
+        },
+        paragraph: None,
+    });
+    sections.extend(term_errors(study, &methods, windows));
+    sections
+}
+
+/// (c): the mean absolute difference, per term and window, of each learned method's
+/// terms and the installation fit's with the same terms from that fit's mean over every
+/// calibration trajectory at the largest window.
+fn term_errors(study: &Study, methods: &[&str], windows: &[f64]) -> Option<Section> {
+    let largest = *windows.last()?;
+    let learned: Vec<&str> = methods.iter().copied().filter(|m| is_learned(m)).collect();
+    let names = |method: &str| -> Vec<&str> {
+        crate::first_seen(
+            study
+                .terms
+                .iter()
+                .filter(|r| r.method == method)
+                .map(|r| r.term.as_str()),
+        )
+    };
+    let terms = names(learned.first()?);
+    let fitted = methods
+        .iter()
+        .copied()
+        .find(|m| !is_learned(m) && names(m) == terms)?;
+    let rows_of = |method: &str, window_s: f64| -> Vec<&TermRow> {
+        study
+            .terms
+            .iter()
+            .filter(|r| r.method == method && r.window_s == window_s)
+            .collect()
+    };
+    let mean = |values: &[f64]| values.iter().sum::<f64>() / values.len().max(1) as f64;
+    let reference: Vec<f64> = terms
+        .iter()
+        .map(|term| {
+            let values: Vec<f64> = rows_of(fitted, largest)
+                .iter()
+                .filter(|r| r.term == *term)
+                .map(|r| r.value)
+                .collect();
+            mean(&values)
+        })
+        .collect();
+    let readable_terms: Vec<(String, &str, f64)> = terms.iter().map(|t| readable(t)).collect();
+    let mut rows = vec![
+        std::iter::once(Entry::Text(format!("{fitted}, mean of every trajectory")))
+            .chain(std::iter::once(Entry::Text(window_text(largest))))
+            .chain(
+                reference
+                    .iter()
+                    .zip(&readable_terms)
+                    .map(|(value, (_, _, factor))| Entry::Value(value * factor)),
+            )
+            .collect(),
+    ];
+    for method in learned.iter().copied().chain(std::iter::once(fitted)) {
+        for &window_s in windows {
+            let rows_here = rows_of(method, window_s);
+            if rows_here.is_empty() {
+                continue;
+            }
+            let mut row = vec![
+                Entry::Text(method.to_string()),
+                Entry::Text(window_text(window_s)),
+            ];
+            for ((term, value), (_, _, factor)) in terms.iter().zip(&reference).zip(&readable_terms)
+            {
+                let errors: Vec<f64> = rows_here
+                    .iter()
+                    .filter(|r| r.term == *term)
+                    .map(|r| (r.value - value).abs())
+                    .collect();
+                row.push(if errors.is_empty() {
+                    Entry::Missing
+                } else {
+                    Entry::Value(mean(&errors) * factor)
+                });
+            }
+            rows.push(row);
+        }
+    }
+    Some(Section {
+        title: "Learned terms against the fit of every trajectory".into(),
+        caption: format!(
+            "First row: the mean over calibration trajectories of {fitted}'s terms on all {} of each, the best estimate of this installation there is. Then, per method and window, the mean over calibration trajectories of each term's absolute difference from it, in the units of the header.",
+            window_text(largest)
+        ),
+        table: Table {
+            header: ["method".to_string(), "window".to_string()]
+                .into_iter()
+                .chain(
+                    readable_terms
+                        .iter()
+                        .map(|(name, unit, _)| format!("{name} ({unit})")),
+                )
+                .collect(),
+            rows,
+            notes: Vec::new(),
+        },
+        paragraph: None,
+    })
+}

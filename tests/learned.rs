@@ -1,0 +1,198 @@
+//! `[learned]` end to end on synthetic recordings of a known installation: DCNets trained
+//! fold by fold on simulated installations and on the vehicle's own DVL, scored inside
+//! their folds beside the model-based fit, stored in the cache, refused when the spec is
+//! wrong.
+
+mod common;
+
+use common::installed::{INSTALLED, write_installed, write_study_spec};
+use common::{dcnet, floats, read_parquet, stderr, strings};
+use std::path::Path;
+
+/// Four turning trajectories of [`INSTALLED`], a lever arm and time offset grid around
+/// but not on it, two folds.
+fn learned_spec(d: &Path, extra: &str) {
+    write_installed(&d.join("data/syn"), 4, &[], INSTALLED, 21);
+    let learned = format!(
+        r#"
+[[calibration.models]]
+name = "lever+offset"
+terms = ["lever_arm", "time_offset"]
+
+[learned]
+terms = ["lever_arm", "time_offset"]
+folds = 2
+window_samples = 10
+stride_samples = 2
+seed = 5
+
+[learned.simulation]
+lever_arm_x_m = [-2.5, -1.5, -0.5]
+lever_arm_y_m = [0.0]
+lever_arm_z_m = [0.4]
+time_offset_s = [0.0, 1.0]
+misalignment_z_deg = [0.0]
+scale_pct = [1.0]
+bias_cm_s = [0.0]
+
+[learned.model]
+conv_channels = 8
+fc_widths = [32, 16, 8]
+
+[learned.training]
+epochs = 12
+learning_rate = 0.002
+{extra}"#
+    );
+    write_study_spec(d, "syn", "syn", 4, &learned);
+}
+
+fn fold_of(trajectory: &str) -> usize {
+    // Round robin in spec order: S1, S3 | S2, S4.
+    (trajectory[1..].parse::<usize>().unwrap() - 1) % 2
+}
+
+#[test]
+fn learned_models_are_scored_inside_their_folds_and_come_back_from_the_cache() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    learned_spec(d, "");
+    let output = dcnet(d, &["run", "experiments/syn.toml", "--no-plots"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let log = stderr(&output);
+    for source in ["simulated", "vehicle"] {
+        for fold in [1, 2] {
+            assert!(
+                log.contains(&format!("DCNet installation {source} fold {fold}:")),
+                "{log}"
+            );
+        }
+    }
+    let folder = d.join("results/syn");
+
+    // No leak: a learned method is scored only on trajectories of its calibration's fold.
+    let heldout = read_parquet(&folder.join("heldout.parquet"));
+    let (methods, calibrations, scored) = (
+        strings(&heldout, "method"),
+        strings(&heldout, "calibration"),
+        strings(&heldout, "scored"),
+    );
+    let mut learned_rows = 0;
+    for i in 0..heldout.num_rows() {
+        let method = methods[i].as_deref().unwrap();
+        if method.starts_with("DCNet trained on ") {
+            learned_rows += 1;
+            let (c, s) = (
+                calibrations[i].as_deref().unwrap(),
+                scored[i].as_deref().unwrap(),
+            );
+            assert_eq!(
+                fold_of(c),
+                fold_of(s),
+                "{method} calibrated on {c} scored on {s}"
+            );
+        }
+    }
+    // 2 sources × 4 calibrations × 2 windows × 1 other trajectory in the fold.
+    assert_eq!(learned_rows, 16);
+
+    // The fold table: every method on the same pairs, fold by fold and over all; the
+    // simulation-trained model removes most of the installation's error.
+    let folds = read_parquet(&folder.join("folds.parquet"));
+    let (fold, method, window, rmse) = (
+        strings(&folds, "fold"),
+        strings(&folds, "method"),
+        floats(&folds, "window_s"),
+        floats(&folds, "rmse_cm_s"),
+    );
+    let cell = |f: &str, m: &str| {
+        (0..folds.num_rows())
+            .find(|&i| {
+                fold[i].as_deref() == Some(f)
+                    && method[i].as_deref() == Some(m)
+                    && window[i] == Some(400.0)
+            })
+            .map(|i| rmse[i].unwrap())
+            .unwrap_or_else(|| panic!("no row for fold {f}, {m}"))
+    };
+    for f in ["1", "2", "all"] {
+        cell(f, "no calibration");
+        cell(f, "installation lever+offset");
+    }
+    let (none, simulated) = (
+        cell("all", "no calibration"),
+        cell("all", "DCNet trained on simulation"),
+    );
+    assert!(
+        simulated < 0.5 * none,
+        "trained on simulation {simulated:.2} cm/s against {none:.2} uncalibrated"
+    );
+
+    // Its lever arm lands near the installed one.
+    let terms = read_parquet(&folder.join("terms.parquet"));
+    let (term_method, term, value, term_window) = (
+        strings(&terms, "method"),
+        strings(&terms, "term"),
+        floats(&terms, "value"),
+        floats(&terms, "window_s"),
+    );
+    let lever_x: Vec<f64> = (0..terms.num_rows())
+        .filter(|&i| {
+            term_method[i].as_deref() == Some("DCNet trained on simulation")
+                && term[i].as_deref() == Some("lever_arm_x_m")
+                && term_window[i] == Some(400.0)
+        })
+        .map(|i| value[i].unwrap())
+        .collect();
+    assert_eq!(lever_x.len(), 4);
+    for x in &lever_x {
+        assert!(
+            (x - INSTALLED.lever_arm_m[0]).abs() < 0.4,
+            "lever arm x {x}, installed -1.9"
+        );
+    }
+    let report = std::fs::read_to_string(folder.join("report.md")).unwrap();
+    assert!(
+        report.contains("Inside the folds: learned against model-based"),
+        "{report}"
+    );
+    assert!(report.contains("Learned terms against the fit of every trajectory"));
+
+    // `--force` computes every calibration again, but the models come from the cache:
+    // nothing is trained and the tables are the same bytes.
+    let first = std::fs::read(folder.join("folds.parquet")).unwrap();
+    let again = dcnet(d, &["run", "experiments/syn.toml", "--no-plots", "--force"]);
+    assert!(again.status.success(), "{}", stderr(&again));
+    assert!(
+        !stderr(&again).contains("DCNet installation"),
+        "{}",
+        stderr(&again)
+    );
+    assert_eq!(std::fs::read(folder.join("folds.parquet")).unwrap(), first);
+}
+
+#[test]
+fn a_wrong_learned_table_is_refused_naming_its_keys() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    learned_spec(d, "");
+    let spec = d.join("experiments/syn.toml");
+    let text = std::fs::read_to_string(&spec)
+        .unwrap()
+        .replace("folds = 2", "folds = 3\nsources = [\"simulated\", \"sky\"]")
+        .replace("lever_arm_y_m = [0.0]", "lever_arm_y_m = []")
+        .replace("epochs = 12", "epochs = 0");
+    std::fs::write(&spec, text).unwrap();
+    let output = dcnet(d, &["run", "experiments/syn.toml"]);
+    assert!(!output.status.success(), "{}", stderr(&output));
+    let message = stderr(&output);
+    for key in [
+        "learned.folds",
+        "learned.sources[1]",
+        "learned.simulation.lever_arm_y_m",
+        "learned.training.epochs",
+    ] {
+        assert!(message.contains(key), "{key} not named: {message}");
+    }
+    assert!(!d.join("results").exists());
+}
