@@ -347,6 +347,20 @@ mod tests {
                     yaw_rate_deg_s: -15.7 * f64::from(i),
                 })
                 .collect(),
+            folds: ["1", "all"]
+                .into_iter()
+                .map(|fold| FoldSummaryRow {
+                    fold: fold.into(),
+                    summary: SummaryRow {
+                        method: "DCNet trained on simulation".into(),
+                        window_s: 20.0,
+                        mean_cm_s: 9.02,
+                        ci95_cm_s: 2.42,
+                        ratio: 0.6,
+                        calibrations: 4,
+                    },
+                })
+                .collect(),
         }
     }
 
@@ -369,13 +383,15 @@ mod tests {
                 "terms.parquet",
                 "summary.parquet",
                 "trace.parquet",
-                "failures.parquet"
+                "failures.parquet",
+                "folds.parquet"
             ]
         );
         write(folder.path(), &tables);
         assert_eq!(read_study(folder.path()).unwrap(), study);
         assert_eq!(table_bytes(&study).unwrap(), tables);
         let empty = Study::default();
+        let folder = tempfile::tempdir().unwrap();
         write(folder.path(), &table_bytes(&empty).unwrap());
         assert_eq!(read_study(folder.path()).unwrap(), empty);
     }

@@ -150,6 +150,14 @@ pub fn write_folder(
         files.push((name.to_string(), bytes));
     }
     files.extend(reports(study, &spec.name));
+    // A study without `[learned]` leaves no fold table of an earlier one behind.
+    let folds = folder.join(results::installation::FOLDS);
+    if study.folds.is_empty() && folds.exists() {
+        std::fs::remove_file(&folds).map_err(|source| StudyError::Io {
+            path: folds.clone(),
+            source,
+        })?;
+    }
     let mut digests = std::collections::BTreeMap::new();
     for (name, bytes) in &files {
         let path = folder.join(name);
