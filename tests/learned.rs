@@ -56,7 +56,7 @@ fn fold_of(trajectory: &str) -> usize {
 fn learned_models_are_scored_inside_their_folds_and_come_back_from_the_cache() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    learned_spec(d, "");
+    learned_spec(d, "replicates = 2\n");
     let output = dcnet(d, &["run", "experiments/syn.toml", "--no-plots"]);
     assert!(output.status.success(), "{}", stderr(&output));
     let log = stderr(&output);
@@ -64,6 +64,12 @@ fn learned_models_are_scored_inside_their_folds_and_come_back_from_the_cache() {
         for fold in [1, 2] {
             assert!(
                 log.contains(&format!("DCNet installation {source} fold {fold}:")),
+                "{log}"
+            );
+            assert!(
+                log.contains(&format!(
+                    "DCNet installation {source} fold {fold} replicate 2:"
+                )),
                 "{log}"
             );
         }
@@ -93,8 +99,9 @@ fn learned_models_are_scored_inside_their_folds_and_come_back_from_the_cache() {
             );
         }
     }
-    // 2 sources × 4 calibrations × 2 windows × 1 other trajectory in the fold.
-    assert_eq!(learned_rows, 16);
+    // 2 sources × 2 replicates × 4 calibrations × 2 windows × 1 other trajectory in the
+    // fold.
+    assert_eq!(learned_rows, 32);
 
     // The fold table: every method on the same pairs, fold by fold and over all; the
     // simulation-trained model removes most of the installation's error.
@@ -122,6 +129,11 @@ fn learned_models_are_scored_inside_their_folds_and_come_back_from_the_cache() {
     let (none, simulated) = (
         cell("all", "no calibration"),
         cell("all", "DCNet trained on simulation"),
+    );
+    // The second replicate is another model, from other seeds.
+    assert_ne!(
+        simulated,
+        cell("all", "DCNet trained on simulation, replicate 2")
     );
     assert!(
         simulated < 0.5 * none,
@@ -169,6 +181,23 @@ fn learned_models_are_scored_inside_their_folds_and_come_back_from_the_cache() {
         stderr(&again)
     );
     assert_eq!(std::fs::read(folder.join("folds.parquet")).unwrap(), first);
+
+    // A third replicate trains only its own models: the first two are the same
+    // whatever the count.
+    let third = dcnet(
+        d,
+        &[
+            "run",
+            "experiments/syn.toml",
+            "--no-plots",
+            "--set",
+            "learned.training.replicates=3",
+        ],
+    );
+    assert!(third.status.success(), "{}", stderr(&third));
+    let log = stderr(&third);
+    assert_eq!(log.matches("DCNet installation").count(), 4, "{log}");
+    assert!(log.contains("simulated fold 1 replicate 3:"), "{log}");
 }
 
 #[test]

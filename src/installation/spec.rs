@@ -313,9 +313,9 @@ pub enum Method {
     Installation { name: String, terms: Vec<TermName> },
     /// The paper spec's DCNet for an error model.
     Dcnet(ErrorModel),
-    /// `[learned]`'s DCNet trained on `Source`, the model of the calibration trajectory's
-    /// fold.
-    Learned(Source),
+    /// `[learned]`'s DCNet trained on a source, replicate `replicate` (of
+    /// `learned.training.replicates`), the model of the calibration trajectory's fold.
+    Learned { source: Source, replicate: usize },
 }
 
 impl Method {
@@ -326,8 +326,16 @@ impl Method {
             Method::LeastSquares(model) => format!("least squares {model}"),
             Method::Installation { name, .. } => format!("installation {name}"),
             Method::Dcnet(model) => format!("DCNet {model}"),
-            Method::Learned(Source::Simulated) => format!("{LEARNED_LABEL}simulation"),
-            Method::Learned(Source::Vehicle) => format!("{LEARNED_LABEL}the vehicle"),
+            Method::Learned { source, replicate } => {
+                let on = match source {
+                    Source::Simulated => "simulation",
+                    Source::Vehicle => "the vehicle",
+                };
+                match replicate {
+                    0 => format!("{LEARNED_LABEL}{on}"),
+                    r => format!("{LEARNED_LABEL}{on}, replicate {}", r + 1),
+                }
+            }
         }
     }
 }
@@ -680,7 +688,11 @@ fn check_learned(
             "is a table of error models: give one number, the learned model's".into(),
         );
     }
-    methods.extend(sources.iter().map(|&source| Method::Learned(source)));
+    for &source in &sources {
+        methods.extend(
+            (0..training.replicates.max(1)).map(|replicate| Method::Learned { source, replicate }),
+        );
+    }
     LearnedSpec {
         terms: learned.terms.clone(),
         folds: learned.folds.max(1),
@@ -713,7 +725,10 @@ pub(crate) mod tests {
             methods: learned
                 .sources
                 .iter()
-                .map(|&s| Method::Learned(s))
+                .map(|&source| Method::Learned {
+                    source,
+                    replicate: 0,
+                })
                 .collect(),
             observability: ObservabilityFile::default(),
             dcnet_spec: None,

@@ -81,10 +81,18 @@ pub struct Estimated {
 /// window shorter than the network's).
 pub type DcnetEstimate<'a> = dyn Fn(ErrorModel, &[Vec3], &[Vec3]) -> Option<Correction> + Sync + 'a;
 
-/// How `[learned]`'s model of a fold, trained on a source, estimates the terms from
-/// samples of a calibration segment; `None` where it cannot.
+/// Which of `[learned]`'s models: what it trained on, which replicate, which fold.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LearnedModel {
+    pub source: Source,
+    pub replicate: usize,
+    pub fold: usize,
+}
+
+/// How one of `[learned]`'s models estimates the terms from samples of a calibration
+/// segment; `None` where it cannot.
 pub type LearnedEstimate<'a> =
-    dyn Fn(Source, usize, &Segment, std::ops::Range<usize>) -> Option<Installation> + Sync + 'a;
+    dyn Fn(LearnedModel, &Segment, std::ops::Range<usize>) -> Option<Installation> + Sync + 'a;
 
 /// The learned methods' estimators.
 pub struct Estimators<'a> {
@@ -258,16 +266,23 @@ pub fn calibrate_on(
                                     None => continue,
                                 }
                             }
-                            Method::Installation { .. } | Method::Learned(_) => unreachable!(),
+                            Method::Installation { .. } | Method::Learned { .. } => {
+                                unreachable!()
+                            }
                         };
                         Estimate {
                             installation: from_correction(&correction),
                             bound: None,
                         }
                     }
-                    Method::Learned(source) => {
+                    Method::Learned { source, replicate } => {
                         let Some(fold) = fold_of(c) else { continue };
-                        match (estimators.learned)(*source, fold, calibration, range.clone()) {
+                        let model = LearnedModel {
+                            source: *source,
+                            replicate: *replicate,
+                            fold,
+                        };
+                        match (estimators.learned)(model, calibration, range.clone()) {
                             Some(installation) => Estimate {
                                 installation,
                                 bound: None,
@@ -304,7 +319,7 @@ pub fn calibrate_on(
             let learned_labels: Vec<String> = spec
                 .methods
                 .iter()
-                .filter(|m| matches!(m, Method::Learned(_)))
+                .filter(|m| matches!(m, Method::Learned { .. }))
                 .map(Method::label)
                 .collect();
             let estimated = methods

@@ -141,11 +141,23 @@ pub fn calibration_key(
     ))
 }
 
-/// The key of `[learned]`'s model of `fold` trained on `source`: its `[learned]` table
-/// and the DVL noise of the spec `resolved_toml`, the recordings, the fold and source,
-/// and the training code.
-pub fn learned_key(resolved_toml: &str, data_sha256: &[&str], fold: usize, source: &str) -> String {
-    let settings: toml::Table = toml::from_str(resolved_toml).expect("a resolved spec is TOML");
+/// The key of one of `[learned]`'s models: its `[learned]` table and the DVL noise of
+/// the spec `resolved_toml`, the recordings, its fold, source and replicate, and the
+/// training code.
+pub fn learned_key(
+    resolved_toml: &str,
+    data_sha256: &[&str],
+    model: &crate::installation::study::LearnedModel,
+) -> String {
+    let mut settings: toml::Table = toml::from_str(resolved_toml).expect("a resolved spec is TOML");
+    // A replicate's model is the same however many replicates there are.
+    if let Some(training) = settings
+        .get_mut("learned")
+        .and_then(|learned| learned.get_mut("training"))
+        .and_then(toml::Value::as_table_mut)
+    {
+        training.remove("replicates");
+    }
     let section = |name: &str| {
         settings
             .get(name)
@@ -158,8 +170,9 @@ pub fn learned_key(resolved_toml: &str, data_sha256: &[&str], fold: usize, sourc
         section("learned"),
         section("noise"),
         data_sha256,
-        fold,
-        source,
+        model.fold,
+        model.source.name(),
+        model.replicate,
     ))
 }
 
@@ -274,4 +287,32 @@ pub fn block_key(
 /// The cache under the results folder `out`.
 pub fn root(out: &Path) -> PathBuf {
     out.join(FOLDER)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::installation::spec::Source;
+    use crate::installation::study::LearnedModel;
+
+    /// A replicate's model is the same however many replicates there are, and another
+    /// replicate, fold or setting of `[learned]` is another model.
+    #[test]
+    fn a_learned_models_key_leaves_out_the_replicate_count_only() {
+        let spec = |replicates: usize, folds: usize| {
+            format!(
+                "name = \"a\"\n[noise]\ndvl_cm_s = 2.0\n[learned]\nfolds = {folds}\n[learned.training]\nepochs = 3\nreplicates = {replicates}\n"
+            )
+        };
+        let model = |replicate, fold| LearnedModel {
+            source: Source::Simulated,
+            replicate,
+            fold,
+        };
+        let key = |text: &str, m| learned_key(text, &["abc"], &m);
+        assert_eq!(key(&spec(2, 2), model(1, 0)), key(&spec(3, 2), model(1, 0)));
+        assert_ne!(key(&spec(2, 2), model(1, 0)), key(&spec(2, 2), model(0, 0)));
+        assert_ne!(key(&spec(2, 2), model(1, 0)), key(&spec(2, 2), model(1, 1)));
+        assert_ne!(key(&spec(2, 2), model(1, 0)), key(&spec(2, 3), model(1, 0)));
+    }
 }

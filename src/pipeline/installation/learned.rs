@@ -9,8 +9,8 @@ use crate::files::{self, Seal};
 use crate::installation::learned::{LearnedWindows, training_windows};
 use crate::installation::network::network_io;
 use crate::installation::simulate::REFERENCE_MARGIN;
-use crate::installation::spec::{InstallationSpec, LearnedSpec, Source};
-use crate::installation::study::{Segment, term_set};
+use crate::installation::spec::{InstallationSpec, LearnedSpec};
+use crate::installation::study::{LearnedModel, Segment, term_set};
 use crate::model::Dcnet;
 use crate::pipeline::cache::{self, models};
 use crate::progress::Progress;
@@ -19,48 +19,56 @@ use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// One model of `[learned]`: its fold, what it trains on, and its cache key.
+/// One model of `[learned]` and its cache key.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LearnedKey {
-    pub fold: usize,
-    pub source: Source,
+    pub model: LearnedModel,
     pub key: String,
 }
 
-/// Every model a point's `[learned]` asks for, in fold then source order.
+/// Every model a point's `[learned]` asks for, in fold, source, then replicate order.
 pub fn keys(spec: &InstallationSpec, data_sha256: &[&str]) -> Vec<LearnedKey> {
     let Some(learned) = &spec.learned else {
         return Vec::new();
     };
-    (0..learned.folds)
-        .flat_map(|fold| {
-            learned.sources.iter().map(move |&source| LearnedKey {
-                fold,
-                source,
-                key: cache::learned_key(&spec.resolved_toml, data_sha256, fold, source.name()),
-            })
-        })
-        .collect()
+    let mut keys = Vec::new();
+    for fold in 0..learned.folds {
+        for &source in &learned.sources {
+            for replicate in 0..learned.training.replicates.max(1) {
+                let model = LearnedModel {
+                    source,
+                    replicate,
+                    fold,
+                };
+                keys.push(LearnedKey {
+                    model,
+                    key: cache::learned_key(&spec.resolved_toml, data_sha256, &model),
+                });
+            }
+        }
+    }
+    keys
 }
 
 /// A point's trained models.
 pub struct LearnedModels(Vec<(LearnedKey, Dcnet)>);
 
 impl LearnedModels {
-    /// The model of `fold` trained on `source`.
-    pub fn model(&self, fold: usize, source: Source) -> Option<&Dcnet> {
+    pub fn model(&self, model: LearnedModel) -> Option<&Dcnet> {
         self.0
             .iter()
-            .find(|(key, _)| key.fold == fold && key.source == source)
-            .map(|(_, model)| model)
+            .find(|(key, _)| key.model == model)
+            .map(|(_, dcnet)| dcnet)
     }
 }
 
 fn path(out: &Path, key: &LearnedKey) -> PathBuf {
+    let model = &key.model;
     out.join(".cache/learned").join(format!(
-        "{}-fold{}-{}.bin",
-        key.source.name(),
-        key.fold + 1,
+        "{}-fold{}-replicate{}-{}.bin",
+        model.source.name(),
+        model.fold + 1,
+        model.replicate + 1,
         &key.key[..16]
     ))
 }
@@ -132,7 +140,12 @@ fn train_one(
     key: &LearnedKey,
 ) -> Result<Dcnet, StudyError> {
     let clock = Instant::now();
-    let windows = training_windows(spec, learned, segments, key.fold, key.source);
+    let LearnedModel {
+        source,
+        replicate,
+        fold,
+    } = key.model;
+    let windows = training_windows(spec, learned, segments, fold, source);
     let reach_s = REFERENCE_MARGIN as f64 * windows.step_s;
     if let Some(tau) = learned
         .simulation
@@ -148,13 +161,17 @@ fn train_one(
             ),
         });
     }
-    let name = format!("installation {} fold {}", key.source.name(), key.fold + 1);
+    let name = format!("installation {} fold {}", source.name(), fold + 1);
+    let shown = match replicate {
+        0 => name.clone(),
+        r => format!("{name} replicate {}", r + 1),
+    };
     let recipe = Recipe {
         seed: learned.seed,
         model: &learned.model,
         training: &learned.training,
         learning_rate: learned.training.learning_rates[0],
-        name: name.clone(),
+        name,
         learning_rate_key: "learned.training.learning_rate".into(),
         validation_key: "learned.validation_fraction".into(),
     };
@@ -162,19 +179,25 @@ fn train_one(
         windows,
         terms: term_set(&learned.terms),
     };
-    let mut state = State::of(&recipe, network_io(&data.terms), learned.window_samples, 0);
+    // The streams are named by source and fold; the replicate seeds them as the paper's.
+    let mut state = State::of(
+        &recipe,
+        network_io(&data.terms),
+        learned.window_samples,
+        replicate,
+    );
     let hidden = Progress::hidden();
     while state.stop(&learned.training).is_none() {
         train::run_epoch(&recipe, &data, &mut state, &hidden).map_err(|error| {
             StudyError::Learned {
-                model: name.clone(),
+                model: shown.clone(),
                 why: error.to_string(),
             }
         })?;
     }
     let (best_epoch, best_loss, model) = state.best.expect("at least one epoch ran");
     eprintln!(
-        "DCNet {name}: {} windows, {} epochs, best {best_epoch} (validation loss {best_loss:.3} (cm/s)²), {:.1} s",
+        "DCNet {shown}: {} windows, {} epochs, best {best_epoch} (validation loss {best_loss:.3} (cm/s)²), {:.1} s",
         data.windows.len(),
         state.history.len(),
         clock.elapsed().as_secs_f64()

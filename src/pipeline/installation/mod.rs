@@ -391,8 +391,8 @@ impl<'a> StudyPlan<'a> {
                     models.and_then(|m| m.estimate(model, dvl, reference))
                 };
                 let learned_models = &learned_models[&unit.point];
-                let learned = |source, fold, segment: &study::Segment, range| {
-                    let model = learned_models.model(fold, source)?;
+                let learned = |which, segment: &study::Segment, range| {
+                    let model = learned_models.model(which)?;
                     let learned = spec.learned.as_ref()?;
                     crate::installation::learned::estimate(
                         model,

@@ -39,6 +39,14 @@ pub(super) enum Entry {
     },
     /// A number in a readable unit, three decimals.
     Value(f64),
+    /// A mean paired difference, cm/s, its 95 % interval, and on how many of `of` pairs
+    /// the first was lower.
+    Difference {
+        mean_cm_s: f64,
+        ci95_cm_s: f64,
+        lower: usize,
+        of: usize,
+    },
     /// A term in its readable unit, its bound's standard deviation, whether it is seen.
     Term {
         value: f64,
@@ -72,6 +80,18 @@ impl Entry {
                     ci95_cm_s: *ci95_cm_s,
                 };
                 format!("{} ({ratio:.2})", rmse.text(signs))
+            }
+            Entry::Difference {
+                mean_cm_s,
+                ci95_cm_s,
+                lower,
+                of,
+            } => {
+                let mean = format!("{mean_cm_s:+.2}").replace('-', signs.minus);
+                format!(
+                    "{mean}{}{ci95_cm_s:.2} (lower on {lower} of {of})",
+                    signs.plus_minus
+                )
             }
             Entry::Value(value) => {
                 let text = format!("{value:.3}");

@@ -1,6 +1,7 @@
 //! The tables of `[learned]`: (a) every method's held-out RMSE on the pairs inside the
 //! folds, over all folds, for every window; (b) the same per fold at the largest window;
-//! (c) how far each learned model's terms, and the installation fit's with the same
+//! (c) each learned method against the installation fit with its terms, calibration by
+//! calibration (a paired difference with its interval); (d) how far each learned model's terms, and the installation fit's with the same
 //! terms, land from that fit's mean over every trajectory at the largest window, the
 //! best estimate of the installation there is. In: the study's fold summary and terms.
 //! Out: [`Section`]s.
@@ -106,8 +107,113 @@ pub(super) fn learned_sections(study: &Study, methods: &[&str], windows: &[f64])
         },
         paragraph: None,
     });
+    sections.extend(paired(study, &methods, windows));
     sections.extend(term_errors(study, &methods, windows));
     sections
+}
+
+/// The installation fit with the learned models' terms: the model-based method whose
+/// term names are theirs.
+fn fitted_alike<'a>(study: &Study, methods: &[&'a str]) -> Option<&'a str> {
+    let names = |method: &str| -> Vec<&str> {
+        crate::first_seen(
+            study
+                .terms
+                .iter()
+                .filter(|r| r.method == method)
+                .map(|r| r.term.as_str()),
+        )
+    };
+    let learned = methods.iter().find(|m| is_learned(m))?;
+    let terms = names(learned);
+    methods
+        .iter()
+        .copied()
+        .find(|m| !is_learned(m) && names(m) == terms)
+}
+
+/// Each calibration trajectory's mean held-out RMSE of `method` at `window_s` on the
+/// pairs inside its fold (those `fold_summary` counted), by calibration.
+fn per_calibration<'a>(
+    study: &'a Study,
+    learned: &str,
+    method: &str,
+    window_s: f64,
+) -> Vec<(&'a str, f64)> {
+    // The learned method's rows name the inside-fold pairs.
+    let pairs: Vec<(&str, &str)> = study
+        .heldout
+        .iter()
+        .filter(|r| r.method == learned && r.window_s == window_s)
+        .map(|r| (r.calibration.as_str(), r.scored.as_str()))
+        .collect();
+    let calibrations = crate::first_seen(pairs.iter().map(|(c, _)| *c));
+    calibrations
+        .into_iter()
+        .filter_map(|c| {
+            let scores: Vec<f64> = study
+                .heldout
+                .iter()
+                .filter(|r| {
+                    r.method == method
+                        && r.window_s == window_s
+                        && r.calibration == c
+                        && pairs.contains(&(c, r.scored.as_str()))
+                })
+                .map(|r| r.total_cm_s)
+                .collect();
+            (!scores.is_empty()).then(|| (c, scores.iter().sum::<f64>() / scores.len() as f64))
+        })
+        .collect()
+}
+
+/// Each learned method against the installation fit with its terms, calibration by
+/// calibration on the same pairs: the mean difference of held-out RMSE with its 95 %
+/// interval, and on how many calibration trajectories the learned one is lower.
+fn paired(study: &Study, methods: &[&str], windows: &[f64]) -> Option<Section> {
+    let fitted = fitted_alike(study, methods)?;
+    let learned: Vec<&str> = methods.iter().copied().filter(|m| is_learned(m)).collect();
+    let rows = learned
+        .iter()
+        .map(|method| {
+            std::iter::once(Entry::Text(method.to_string()))
+                .chain(windows.iter().map(|&w| {
+                    let ours = per_calibration(study, method, method, w);
+                    let theirs = per_calibration(study, method, fitted, w);
+                    let differences: Vec<f64> = ours
+                        .iter()
+                        .filter_map(|(c, x)| {
+                            theirs.iter().find(|(d, _)| d == c).map(|(_, y)| x - y)
+                        })
+                        .collect();
+                    if differences.len() < 2 {
+                        return Entry::Missing;
+                    }
+                    let (mean, ci95) = crate::evaluate::statistics::mean_ci95(&differences);
+                    Entry::Difference {
+                        mean_cm_s: mean,
+                        ci95_cm_s: ci95,
+                        lower: differences.iter().filter(|d| **d < 0.0).count(),
+                        of: differences.len(),
+                    }
+                }))
+                .collect()
+        })
+        .collect();
+    Some(Section {
+        title: format!("Learned against {fitted}, calibration by calibration"),
+        caption: format!(
+            "The learned method's mean held-out RMSE minus {fitted}'s, each calibration trajectory on the same pairs inside its fold, in cm/s: the mean difference ± its 95 % interval (Student t over calibration trajectories; negative where the learned one is better), and on how many calibration trajectories the learned one is lower."
+        ),
+        table: Table {
+            header: std::iter::once("method".to_string())
+                .chain(windows.iter().map(|&w| window_text(w)))
+                .collect(),
+            rows,
+            notes: Vec::new(),
+        },
+        paragraph: None,
+    })
 }
 
 /// (c): the mean absolute difference, per term and window, of each learned method's
@@ -126,10 +232,7 @@ fn term_errors(study: &Study, methods: &[&str], windows: &[f64]) -> Option<Secti
         )
     };
     let terms = names(learned.first()?);
-    let fitted = methods
-        .iter()
-        .copied()
-        .find(|m| !is_learned(m) && names(m) == terms)?;
+    let fitted = fitted_alike(study, methods)?;
     let rows_of = |method: &str, window_s: f64| -> Vec<&TermRow> {
         study
             .terms
