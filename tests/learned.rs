@@ -57,7 +57,7 @@ fn learned_models_are_scored_inside_their_folds_and_come_back_from_the_cache() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     learned_spec(d, "replicates = 2\n");
-    let output = dcnet(d, &["run", "experiments/syn.toml", "--no-plots"]);
+    let output = dcnet(d, &["run", "experiments/syn.toml"]);
     assert!(output.status.success(), "{}", stderr(&output));
     let log = stderr(&output);
     for source in ["simulated", "vehicle"] {
@@ -75,6 +75,10 @@ fn learned_models_are_scored_inside_their_folds_and_come_back_from_the_cache() {
         }
     }
     let folder = d.join("results/syn");
+    assert!(
+        d.join("plots/syn/installation_folds.png").is_file(),
+        "{log}"
+    );
 
     // No leak: a learned method is scored only on trajectories of its calibration's fold.
     let heldout = read_parquet(&folder.join("heldout.parquet"));

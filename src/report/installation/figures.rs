@@ -1,6 +1,7 @@
 //! The study's figures, drawn from its tables as a run's are: the calibration × scored
-//! matrix of each method, held-out RMSE against the window, and one trajectory's
-//! residual before and after (`plots::figures::installation_*`); and a sweep of studies'
+//! matrix of each method, held-out RMSE against the window, one trajectory's residual
+//! before and after, and with `[learned]` the held-out RMSE inside the folds
+//! (`plots::figures::installation_*`); and a sweep of studies'
 //! figure, held-out RMSE at each point, drawn from the sweep's table. In: a [`Study`],
 //! or a stored sweep of studies. Out: the files written.
 
@@ -28,6 +29,12 @@ pub fn draw_all(study: &Study, folder: &Path, format: Format) -> Result<Vec<Writ
             "installation_residual".into(),
             installation_residual::installation_residual(study)?,
         ));
+        if !study.folds.is_empty() {
+            drawn.push((
+                "installation_folds".into(),
+                installation_windows::installation_folds(study)?,
+            ));
+        }
         Ok(drawn)
     };
     let drawn = draw().map_err(|source| PlotError::Draw {

@@ -6,6 +6,7 @@
 //! Out: the figure, or why there is none (fewer than two windows).
 
 use crate::installation::rows::{NO_CALIBRATION, Study, SummaryRow};
+use crate::installation::spec::LEARNED_LABEL;
 use crate::report::plots::canvas::{Drawn, Outcome, draw_svg};
 use crate::report::plots::draw::*;
 use crate::report::plots::scale::Scale;
@@ -65,6 +66,20 @@ pub fn method_look(method: &str, installation: usize) -> (Look, Option<Marker>) 
         let color = INSTALLATION_COLORS[installation % INSTALLATION_COLORS.len()];
         return (look(color, Stroke::Solid), Some(Marker::Diamond));
     }
+    if let Some(rest) = method.strip_prefix(LEARNED_LABEL) {
+        // Every replicate of a source in its colour; the vehicle's dashed.
+        return if rest.starts_with("simulation") {
+            (
+                look(RGBColor(214, 39, 40), Stroke::Solid),
+                Some(Marker::Ring),
+            )
+        } else {
+            (
+                look(RGBColor(44, 160, 44), Stroke::Dashed),
+                Some(Marker::Ring),
+            )
+        };
+    }
     (look(GREY, Stroke::Solid), Some(Marker::Dot))
 }
 
@@ -81,7 +96,8 @@ pub fn method_looks(methods: &[&str]) -> Vec<(Look, Option<Marker>)> {
         .collect()
 }
 
-/// Mean held-out RMSE ± its 95 % interval against the calibration window.
+/// Mean held-out RMSE ± its 95 % interval against the calibration window, every method
+/// but `[learned]`'s (scored inside their folds only, see [`installation_folds`]).
 pub fn installation_windows(study: &Study) -> PlotResult<Outcome> {
     let windows = crate::first_seen(study.summary.iter().map(|r| r.window_s));
     if windows.len() < 2 {
@@ -91,7 +107,12 @@ pub fn installation_windows(study: &Study) -> PlotResult<Outcome> {
             if windows.len() == 1 { "" } else { "s" }
         )));
     }
-    let rows: Vec<(f64, &SummaryRow)> = study.summary.iter().map(|r| (r.window_s, r)).collect();
+    let rows: Vec<(f64, &SummaryRow)> = study
+        .summary
+        .iter()
+        .filter(|r| !r.method.starts_with(LEARNED_LABEL))
+        .map(|r| (r.window_s, r))
+        .collect();
     rmse_figure(
         &rows,
         XAxis {
@@ -100,6 +121,29 @@ pub fn installation_windows(study: &Study) -> PlotResult<Outcome> {
             lines: true,
         },
         "Held-out RMSE against the calibration window: mean over calibration trajectories, bars its 95 % interval".into(),
+    )
+}
+
+/// With `[learned]`: every method on the pairs inside the folds only, mean held-out
+/// RMSE ± its 95 % interval against the calibration window.
+pub fn installation_folds(study: &Study) -> PlotResult<Outcome> {
+    let rows: Vec<(f64, &SummaryRow)> = study
+        .folds
+        .iter()
+        .filter(|r| r.fold == "all")
+        .map(|r| (r.summary.window_s, &r.summary))
+        .collect();
+    if rows.is_empty() {
+        return Ok(Outcome::NotApplicable("the study has no [learned]".into()));
+    }
+    rmse_figure(
+        &rows,
+        XAxis {
+            label: "calibration window [s]",
+            ticks: None,
+            lines: true,
+        },
+        "Inside the folds (pairs the learned models never saw): held-out RMSE against the calibration window, mean over calibration trajectories, bars its 95 % interval".into(),
     )
 }
 
