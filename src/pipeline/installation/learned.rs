@@ -1,7 +1,7 @@
 //! The models of a study's `[learned]`: one per fold and source, each stored in the
 //! cache under its own key (`OUT/.cache/learned/<source>-fold<k>-<key>.bin`, sealed), so
 //! a later run, a shard or another point of a sweep with the same settings loads it
-//! instead of training it. Trainings run in parallel, each on one thread.
+//! instead of training it. Trainings run one per core, each on one thread.
 //! In: a point's spec, its segments and its recordings' SHA-256. Out: [`LearnedModels`].
 
 use super::StudyError;
@@ -15,8 +15,9 @@ use crate::model::Dcnet;
 use crate::pipeline::cache::{self, models};
 use crate::progress::Progress;
 use crate::train::{self, Recipe, State};
-use rayon::prelude::*;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 /// One model of `[learned]` and its cache key.
@@ -91,43 +92,60 @@ pub fn train_or_load(
             why: error.to_string(),
         }
     };
-    let models: Vec<Result<(LearnedKey, Dcnet), StudyError>> = keys
-        .par_iter()
-        .map(|key| {
-            let path = path(out, key);
-            let device = learned.training.backend.device();
-            let io = network_io(&term_set(&learned.terms));
-            if let Some(said) = files::set_aside_if_damaged(
-                &path,
-                &key.key,
-                &out.join(".cache/damaged"),
-                "learned model",
-            )
-            .map_err(|source| StudyError::Io {
+    let one = |key: &LearnedKey| -> Result<Dcnet, StudyError> {
+        let path = path(out, key);
+        let device = learned.training.backend.device();
+        let io = network_io(&term_set(&learned.terms));
+        if let Some(said) = files::set_aside_if_damaged(
+            &path,
+            &key.key,
+            &out.join(".cache/damaged"),
+            "learned model",
+        )
+        .map_err(|source| StudyError::Io {
+            path: path.clone(),
+            source,
+        })? {
+            eprintln!("{said}");
+        }
+        if files::check_seal(&path, &key.key) == Seal::Intact {
+            return models::read_model(&path, &learned.model, io, learned.window_samples, &device)
+                .map_err(store_error(&path));
+        }
+        let model = train::one_thread_pool().install(|| train_one(spec, learned, segments, key))?;
+        files::create_folder(path.parent().expect("a folder")).map_err(|source| {
+            StudyError::Io {
                 path: path.clone(),
                 source,
-            })? {
-                eprintln!("{said}");
             }
-            if files::check_seal(&path, &key.key) == Seal::Intact {
-                let model =
-                    models::read_model(&path, &learned.model, io, learned.window_samples, &device)
-                        .map_err(store_error(&path))?;
-                return Ok((key.clone(), model));
-            }
-            let model =
-                train::one_thread_pool().install(|| train_one(spec, learned, segments, key))?;
-            files::create_folder(path.parent().expect("a folder")).map_err(|source| {
-                StudyError::Io {
-                    path: path.clone(),
-                    source,
+        })?;
+        models::write_model(&path, &model, &key.key).map_err(store_error(&path))?;
+        Ok(model)
+    };
+    // One worker per core takes the next model, so that no more training sets are in
+    // memory than cores train (rayon would start every training while one waits).
+    let next = AtomicUsize::new(0);
+    let done: Mutex<Vec<Option<Result<Dcnet, StudyError>>>> =
+        Mutex::new(keys.iter().map(|_| None).collect());
+    std::thread::scope(|scope| {
+        for _ in 0..rayon::current_num_threads().min(keys.len()) {
+            scope.spawn(|| {
+                loop {
+                    let k = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(key) = keys.get(k) else { break };
+                    let result = one(key);
+                    done.lock().expect("no worker panicked")[k] = Some(result);
                 }
-            })?;
-            models::write_model(&path, &model, &key.key).map_err(store_error(&path))?;
-            Ok((key.clone(), model))
-        })
-        .collect();
-    Ok(LearnedModels(models.into_iter().collect::<Result<_, _>>()?))
+            });
+        }
+    });
+    let models = keys
+        .iter()
+        .cloned()
+        .zip(done.into_inner().expect("no worker panicked"))
+        .map(|(key, result)| Ok((key, result.expect("every key taken")?)))
+        .collect::<Result<Vec<_>, StudyError>>()?;
+    Ok(LearnedModels(models))
 }
 
 /// Trains the model of `key` on the windows of its fold and source: every epoch of
