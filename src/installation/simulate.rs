@@ -14,6 +14,7 @@
 //! count.
 
 use super::frames::ReferenceAt;
+use super::spec::SimulationGrid;
 use super::study::Segment;
 use super::terms::Installation;
 use crate::Vec3;
@@ -33,50 +34,6 @@ pub const REFERENCE_MARGIN: usize = 3;
 /// How far an interval between two stamps of a window may be from the recording's median
 /// interval, as a fraction of it: windows across a gap are not cut.
 const STEP_TOLERANCE: f64 = 0.01;
-
-/// The installations a model trains on: every combination of the lists, in the spec's
-/// units (lever arm in m, time offset in s, misalignment in degrees, scale in %, bias in
-/// cm/s, one value for the three axes of a scale or a bias).
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SimulationGrid {
-    pub lever_arm_x_m: Vec<f64>,
-    pub lever_arm_y_m: Vec<f64>,
-    pub lever_arm_z_m: Vec<f64>,
-    pub time_offset_s: Vec<f64>,
-    pub misalignment_z_deg: Vec<f64>,
-    pub scale_pct: Vec<f64>,
-    pub bias_cm_s: Vec<f64>,
-}
-
-impl SimulationGrid {
-    /// Every combination, the lever arm's x outermost and the bias innermost.
-    pub fn installations(&self) -> Vec<Installation> {
-        let mut all = Vec::new();
-        for &x in &self.lever_arm_x_m {
-            for &y in &self.lever_arm_y_m {
-                for &z in &self.lever_arm_z_m {
-                    for &time_offset_s in &self.time_offset_s {
-                        for &yaw_deg in &self.misalignment_z_deg {
-                            for &scale_pct in &self.scale_pct {
-                                for &bias_cm_s in &self.bias_cm_s {
-                                    all.push(Installation {
-                                        scale: [scale_pct / 100.0; 3],
-                                        misalignment_rad: [0.0, 0.0, yaw_deg.to_radians()],
-                                        lever_arm_m: [x, y, z],
-                                        time_offset_s,
-                                        bias_m_s: [bias_cm_s / 100.0; 3],
-                                    });
-                                }
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        all
-    }
-}
 
 /// The DVL that `installation` makes read on `segment`'s stamps, with white noise of
 /// `noise_m_s` per axis from `rng`: `predict(reference at t + τ) + n`, `None` where t + τ

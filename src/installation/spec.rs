@@ -5,6 +5,7 @@
 //! seen. In: a TOML file and `--set` overrides. Out: an [`InstallationSpec`], or every
 //! fault placed on its line.
 
+use super::terms::Installation;
 use crate::data::paired::{PairedColumns, PairedFiles};
 use crate::spec::{Document, Experiment, SpecErrors, load_documents};
 use crate::vocab::ErrorModel;
@@ -233,7 +234,7 @@ pub struct LearnedFile {
     pub validation_fraction: f64,
     #[serde(default = "LearnedFile::default_seed")]
     pub seed: u64,
-    pub simulation: crate::installation::simulate::SimulationGrid,
+    pub simulation: SimulationGrid,
     #[serde(default)]
     pub model: crate::spec::file::ModelFile,
     #[serde(default)]
@@ -255,6 +256,50 @@ impl LearnedFile {
     }
     fn default_seed() -> u64 {
         2024
+    }
+}
+
+/// The installations a model trains on: every combination of the lists, in the spec's
+/// units (lever arm in m, time offset in s, misalignment in degrees, scale in %, bias in
+/// cm/s, one value for the three axes of a scale or a bias).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimulationGrid {
+    pub lever_arm_x_m: Vec<f64>,
+    pub lever_arm_y_m: Vec<f64>,
+    pub lever_arm_z_m: Vec<f64>,
+    pub time_offset_s: Vec<f64>,
+    pub misalignment_z_deg: Vec<f64>,
+    pub scale_pct: Vec<f64>,
+    pub bias_cm_s: Vec<f64>,
+}
+
+impl SimulationGrid {
+    /// Every combination, the lever arm's x outermost and the bias innermost.
+    pub fn installations(&self) -> Vec<Installation> {
+        let mut all = Vec::new();
+        for &x in &self.lever_arm_x_m {
+            for &y in &self.lever_arm_y_m {
+                for &z in &self.lever_arm_z_m {
+                    for &time_offset_s in &self.time_offset_s {
+                        for &yaw_deg in &self.misalignment_z_deg {
+                            for &scale_pct in &self.scale_pct {
+                                for &bias_cm_s in &self.bias_cm_s {
+                                    all.push(Installation {
+                                        scale: [scale_pct / 100.0; 3],
+                                        misalignment_rad: [0.0, 0.0, yaw_deg.to_radians()],
+                                        lever_arm_m: [x, y, z],
+                                        time_offset_s,
+                                        bias_m_s: [bias_cm_s / 100.0; 3],
+                                    });
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        all
     }
 }
 
@@ -290,7 +335,7 @@ pub struct LearnedSpec {
     pub stride_samples: usize,
     pub validation_fraction: f64,
     pub seed: u64,
-    pub simulation: crate::installation::simulate::SimulationGrid,
+    pub simulation: SimulationGrid,
     pub model: crate::spec::ModelSpec,
     pub training: crate::spec::TrainingSpec,
 }
