@@ -229,3 +229,39 @@ fn a_wrong_learned_table_is_refused_naming_its_keys() {
     }
     assert!(!d.join("results").exists());
 }
+
+/// A sweep over the simulated grid: each point a study of its own with its fold table,
+/// beside the sweep's table and index.
+#[test]
+fn a_sweep_over_the_simulated_grid_writes_each_points_fold_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    learned_spec(
+        d,
+        "\n[sweep.values]\n\"learned.simulation.time_offset_s\" = [[0.0, 1.0], [0.0, 0.5, 1.0]]\n",
+    );
+    let output = dcnet(d, &["run", "experiments/syn.toml", "--no-plots"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let folder = d.join("results/syn");
+    assert!(folder.join("sweep.json").is_file());
+    let table = read_parquet(&folder.join("sweep.parquet"));
+    let methods = strings(&table, "method");
+    assert!(
+        methods
+            .iter()
+            .any(|m| m.as_deref() == Some("DCNet trained on simulation"))
+    );
+    let points: Vec<_> = std::fs::read_dir(&folder)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().is_dir())
+        .collect();
+    assert_eq!(points.len(), 2);
+    for point in points {
+        assert!(
+            point.path().join("folds.parquet").is_file(),
+            "{:?}",
+            point.path()
+        );
+    }
+}
