@@ -265,3 +265,39 @@ fn a_sweep_over_the_simulated_grid_writes_each_points_fold_table() {
         );
     }
 }
+
+/// Shards of a study with `[learned]`, then `collect`, give the tables of one whole run:
+/// the models the first shard trains, the second loads.
+#[test]
+fn shards_of_a_learned_study_collect_to_the_bytes_of_one_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    learned_spec(d, "");
+    let spec = "experiments/syn.toml";
+    let run = |args: &[&str]| {
+        let output = dcnet(d, args);
+        assert!(output.status.success(), "{args:?}: {}", stderr(&output));
+        stderr(&output)
+    };
+    run(&["run", spec, "--out", "whole", "--no-plots"]);
+    let first = run(&["run", spec, "--out", "split", "--shard", "0/2"]);
+    assert!(
+        first.contains("DCNet installation simulated fold 2:"),
+        "{first}"
+    );
+    let second = run(&["run", spec, "--out", "split", "--shard", "1/2"]);
+    assert!(!second.contains("DCNet installation"), "{second}");
+    run(&["collect", spec, "--out", "split", "--no-plots"]);
+    for table in [
+        "heldout.parquet",
+        "terms.parquet",
+        "folds.parquet",
+        "report.md",
+    ] {
+        assert_eq!(
+            std::fs::read(d.join("whole/syn").join(table)).unwrap(),
+            std::fs::read(d.join("split/syn").join(table)).unwrap(),
+            "{table}"
+        );
+    }
+}

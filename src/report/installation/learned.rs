@@ -74,7 +74,11 @@ pub(super) fn learned_sections(study: &Study, methods: &[&str], windows: &[f64])
                         .collect()
                 })
                 .collect(),
-            notes: Vec::new(),
+            notes: if methods.iter().any(|m| m.contains("the vehicle")) {
+                vec!["DCNet trained on the vehicle has seen this installation, on the real DVL of the trajectories outside the fold: a prior the DCNet trained on simulation does not have.".into()]
+            } else {
+                Vec::new()
+            },
         },
         paragraph: None,
     }];
