@@ -301,3 +301,26 @@ fn shards_of_a_learned_study_collect_to_the_bytes_of_one_run() {
         );
     }
 }
+
+/// A simulated time offset beyond the window's margin of reference is refused, naming
+/// the key, before any model is trained.
+#[test]
+fn a_simulated_time_offset_beyond_the_reference_margin_is_refused_before_training() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    learned_spec(d, "");
+    let spec = d.join("experiments/syn.toml");
+    let text = std::fs::read_to_string(&spec)
+        .unwrap()
+        .replace("time_offset_s = [0.0, 1.0]", "time_offset_s = [0.0, 4.0]");
+    std::fs::write(&spec, text).unwrap();
+    let output = dcnet(d, &["run", "experiments/syn.toml", "--no-plots"]);
+    let message = stderr(&output);
+    assert!(!output.status.success(), "{message}");
+    assert!(
+        message.contains("learned.simulation.time_offset_s: 4 s is beyond"),
+        "{message}"
+    );
+    assert!(!message.contains("DCNet installation"), "{message}");
+    assert!(!d.join("results/syn").exists());
+}

@@ -194,7 +194,7 @@ pub fn windows_of(
 }
 
 /// The median spacing of `time_s`, s.
-fn sample_step(time_s: &[f64]) -> f64 {
+pub fn sample_step(time_s: &[f64]) -> f64 {
     let mut steps: Vec<f64> = time_s.windows(2).map(|w| w[1] - w[0]).collect();
     steps.sort_by(f64::total_cmp);
     steps.get(steps.len() / 2).copied().unwrap_or(1.0)

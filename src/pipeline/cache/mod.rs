@@ -141,9 +141,9 @@ pub fn calibration_key(
     ))
 }
 
-/// The key of one of `[learned]`'s models: its `[learned]` table and the DVL noise of
-/// the spec `resolved_toml`, the recordings, its fold, source and replicate, and the
-/// training code.
+/// The key of one of `[learned]`'s models: its `[learned]` table, the DVL noise, the
+/// trajectories' names (they seed the simulated noise) and columns, the recordings'
+/// SHA-256, its fold, source and replicate, and the training code.
 pub fn learned_key(
     resolved_toml: &str,
     data_sha256: &[&str],
@@ -158,17 +158,31 @@ pub fn learned_key(
     {
         training.remove("replicates");
     }
-    let section = |name: &str| {
-        settings
-            .get(name)
-            .map(|v| v.to_string())
-            .unwrap_or_default()
+    let at = |path: &[&str]| {
+        let mut value = settings.get(path[0]);
+        for key in &path[1..] {
+            value = value.and_then(|v| v.get(key));
+        }
+        value.map(|v| v.to_string()).unwrap_or_default()
     };
+    let names: Vec<String> = settings
+        .get("recordings")
+        .and_then(|r| r.get("trajectories"))
+        .and_then(toml::Value::as_array)
+        .map(|list| {
+            list.iter()
+                .map(|t| t.get("name").map(|n| n.to_string()).unwrap_or_default())
+                .collect()
+        })
+        .unwrap_or_default();
     hash(&(
         "learned installation model",
         TRAINING_CODE_VERSION,
-        section("learned"),
-        section("noise"),
+        env!("CARGO_PKG_VERSION"),
+        at(&["learned"]),
+        at(&["noise", "dvl_cm_s"]),
+        names,
+        at(&["recordings", "columns"]),
         data_sha256,
         model.fold,
         model.source.name(),
@@ -314,5 +328,23 @@ mod tests {
         assert_ne!(key(&spec(2, 2), model(1, 0)), key(&spec(2, 2), model(0, 0)));
         assert_ne!(key(&spec(2, 2), model(1, 0)), key(&spec(2, 2), model(1, 1)));
         assert_ne!(key(&spec(2, 2), model(1, 0)), key(&spec(2, 3), model(1, 0)));
+        // The trajectories' names seed the simulated noise; the reference's noise is
+        // not used in training.
+        let named = |name: &str| {
+            format!(
+                "{}[recordings]\n[[recordings.trajectories]]\nname = \"{name}\"\n",
+                spec(2, 2)
+            )
+        };
+        assert_ne!(
+            key(&named("T1"), model(1, 0)),
+            key(&named("T2"), model(1, 0))
+        );
+        let reference_noise =
+            spec(2, 2).replace("dvl_cm_s = 2.0", "dvl_cm_s = 2.0\nreference_cm_s = 0.5");
+        assert_eq!(
+            key(&spec(2, 2), model(1, 0)),
+            key(&reference_noise, model(1, 0))
+        );
     }
 }

@@ -8,8 +8,8 @@ use super::StudyError;
 use crate::files::{self, Seal};
 use crate::installation::learned::{LearnedWindows, training_windows};
 use crate::installation::network::network_io;
-use crate::installation::simulate::REFERENCE_MARGIN;
-use crate::installation::spec::{InstallationSpec, LearnedSpec};
+use crate::installation::simulate::{REFERENCE_MARGIN, sample_step};
+use crate::installation::spec::{InstallationSpec, LearnedSpec, Source};
 use crate::installation::study::{LearnedModel, Segment, term_set};
 use crate::model::Dcnet;
 use crate::pipeline::cache::{self, models};
@@ -85,6 +85,26 @@ pub fn train_or_load(
     let Some(learned) = &spec.learned else {
         return Ok(LearnedModels(Vec::new()));
     };
+    // The loss reads the reference at t + τ within the window's margin.
+    let step_s = segments
+        .iter()
+        .map(|s| sample_step(&s.recording.time_s))
+        .fold(f64::INFINITY, f64::min);
+    let reach_s = REFERENCE_MARGIN as f64 * step_s;
+    if learned.sources.contains(&Source::Simulated)
+        && let Some(tau) = learned
+            .simulation
+            .time_offset_s
+            .iter()
+            .find(|t| t.abs() > reach_s)
+    {
+        return Err(StudyError::Learned {
+            model: "learned.simulation.time_offset_s".into(),
+            why: format!(
+                "{tau} s is beyond the {reach_s} s at which the loss can read the reference ({REFERENCE_MARGIN} samples of {step_s} s): simulate time offsets within it"
+            ),
+        });
+    }
     let store_error = |path: &Path| {
         let path = path.to_path_buf();
         move |error: models::ModelStoreError| StudyError::Learned {
@@ -164,21 +184,6 @@ fn train_one(
         fold,
     } = key.model;
     let windows = training_windows(spec, learned, segments, fold, source);
-    let reach_s = REFERENCE_MARGIN as f64 * windows.step_s;
-    if let Some(tau) = learned
-        .simulation
-        .time_offset_s
-        .iter()
-        .find(|t| t.abs() > reach_s)
-    {
-        return Err(StudyError::Learned {
-            model: "learned.simulation.time_offset_s".into(),
-            why: format!(
-                "{tau} s is beyond the {reach_s} s the loss can read the reference at ({REFERENCE_MARGIN} samples of {} s)",
-                windows.step_s
-            ),
-        });
-    }
     let name = format!("installation {} fold {}", source.name(), fold + 1);
     let shown = match replicate {
         0 => name.clone(),

@@ -52,7 +52,7 @@ pub(super) fn learned_sections(study: &Study, methods: &[&str], windows: &[f64])
     let mut sections = vec![Section {
         title: "Inside the folds: learned against model-based".into(),
         caption: format!(
-            "Every method on the same pairs only: calibration and scored trajectory in the same fold, which the fold's learned models never saw, as simulation or as reality. Mean held-out RMSE in cm/s ± its 95 % interval over calibration trajectories, and (in brackets) its ratio to {NO_CALIBRATION} on those pairs."
+            "Every method on the same pairs only: calibration and scored trajectory in the same fold, which the fold's learned models never saw, as simulation or as reality, and at each window only the pairs every method scored. Mean held-out RMSE in cm/s ± its 95 % interval over calibration trajectories, and (in brackets) its ratio to {NO_CALIBRATION} on those pairs."
         ),
         table: Table {
             header: std::iter::once("method".to_string())
@@ -111,6 +111,9 @@ pub(super) fn learned_sections(study: &Study, methods: &[&str], windows: &[f64])
         },
         paragraph: None,
     });
+    if fitted_alike(study, &methods).is_none() {
+        sections[0].table.notes.push("No installation model of [[calibration.models]] has the learned models' terms: add one for the paired comparison and the terms' table.".into());
+    }
     sections.extend(paired(study, &methods, windows));
     sections.extend(term_errors(study, &methods, windows));
     sections
@@ -136,38 +139,45 @@ fn fitted_alike<'a>(study: &Study, methods: &[&'a str]) -> Option<&'a str> {
         .find(|m| !is_learned(m) && names(m) == terms)
 }
 
-/// Each calibration trajectory's mean held-out RMSE of `method` at `window_s` on the
-/// pairs inside its fold (those `fold_summary` counted), by calibration.
+/// Each calibration trajectory's mean held-out RMSE of `learned` and of `fitted` at
+/// `window_s`, both over the pairs they both scored (those inside the fold), by
+/// calibration.
 fn per_calibration<'a>(
     study: &'a Study,
     learned: &str,
-    method: &str,
+    fitted: &str,
     window_s: f64,
-) -> Vec<(&'a str, f64)> {
-    // The learned method's rows name the inside-fold pairs.
-    let pairs: Vec<(&str, &str)> = study
-        .heldout
-        .iter()
-        .filter(|r| r.method == learned && r.window_s == window_s)
-        .map(|r| (r.calibration.as_str(), r.scored.as_str()))
-        .collect();
-    let calibrations = crate::first_seen(pairs.iter().map(|(c, _)| *c));
-    calibrations
+) -> Vec<(&'a str, f64, f64)> {
+    let pairs = |method: &str| -> Vec<(&'a str, &'a str)> {
+        study
+            .heldout
+            .iter()
+            .filter(|r| r.method == method && r.window_s == window_s)
+            .map(|r| (r.calibration.as_str(), r.scored.as_str()))
+            .collect()
+    };
+    let theirs = pairs(fitted);
+    let common: Vec<(&str, &str)> = pairs(learned)
         .into_iter()
-        .filter_map(|c| {
-            let scores: Vec<f64> = study
-                .heldout
-                .iter()
-                .filter(|r| {
-                    r.method == method
-                        && r.window_s == window_s
-                        && r.calibration == c
-                        && pairs.contains(&(c, r.scored.as_str()))
-                })
-                .map(|r| r.total_cm_s)
-                .collect();
-            (!scores.is_empty()).then(|| (c, scores.iter().sum::<f64>() / scores.len() as f64))
-        })
+        .filter(|pair| theirs.contains(pair))
+        .collect();
+    let mean = |method: &str, calibration: &str| {
+        let scores: Vec<f64> = study
+            .heldout
+            .iter()
+            .filter(|r| {
+                r.method == method
+                    && r.window_s == window_s
+                    && r.calibration == calibration
+                    && common.contains(&(r.calibration.as_str(), r.scored.as_str()))
+            })
+            .map(|r| r.total_cm_s)
+            .collect();
+        scores.iter().sum::<f64>() / scores.len() as f64
+    };
+    crate::first_seen(common.iter().map(|(c, _)| *c))
+        .into_iter()
+        .map(|c| (c, mean(learned, c), mean(fitted, c)))
         .collect()
 }
 
@@ -182,13 +192,9 @@ fn paired(study: &Study, methods: &[&str], windows: &[f64]) -> Option<Section> {
         .map(|method| {
             std::iter::once(Entry::Text(method.to_string()))
                 .chain(windows.iter().map(|&w| {
-                    let ours = per_calibration(study, method, method, w);
-                    let theirs = per_calibration(study, method, fitted, w);
-                    let differences: Vec<f64> = ours
+                    let differences: Vec<f64> = per_calibration(study, method, fitted, w)
                         .iter()
-                        .filter_map(|(c, x)| {
-                            theirs.iter().find(|(d, _)| d == c).map(|(_, y)| x - y)
-                        })
+                        .map(|(_, ours, theirs)| ours - theirs)
                         .collect();
                     if differences.len() < 2 {
                         return Entry::Missing;
@@ -220,7 +226,7 @@ fn paired(study: &Study, methods: &[&str], windows: &[f64]) -> Option<Section> {
     })
 }
 
-/// (c): the mean absolute difference, per term and window, of each learned method's
+/// (d): the mean absolute difference, per term and window, of each learned method's
 /// terms and the installation fit's with the same terms from that fit's mean over every
 /// calibration trajectory at the largest window.
 fn term_errors(study: &Study, methods: &[&str], windows: &[f64]) -> Option<Section> {

@@ -180,7 +180,7 @@ fn sections(study: &Study) -> Vec<Section> {
     }
     if methods.iter().any(|m| learned::is_learned(m)) {
         sections[0].table.notes.push(
-            "The DCNets trained on simulation and on the vehicle are scored inside their folds only (trajectories their models never saw); compare them with the others on the same pairs in the tables of the folds below.".into(),
+            "The DCNets trained on simulation and on the vehicle are scored inside their folds only (trajectories their models never saw), and their ratio divides by no calibration's over every pair: compare them with the others on the same pairs in the tables of the folds below.".into(),
         );
     }
     sections.extend(learned::learned_sections(study, &methods, &windows));
