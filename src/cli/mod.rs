@@ -143,7 +143,7 @@ pub fn main() -> Result<(), CliError> {
             reference_noise_cm_s,
             out,
         } => {
-            let terms: Vec<crate::installation::spec::TermName> = terms
+            let terms: Vec<crate::installation::term_names::TermName> = terms
                 .iter()
                 .map(|term| {
                     term.parse()

@@ -15,8 +15,8 @@ use crate::installation::fit::{Fit, TIME_OFFSET_MARGIN_S, fit};
 use crate::installation::frames::Reference;
 use crate::installation::rows::Study;
 use crate::installation::spec::InstallationSpec;
-use crate::installation::spec::{self as study_spec, ObservabilityFile, TermName};
-use crate::installation::study::term_set;
+use crate::installation::spec::{self as study_spec, ObservabilityFile};
+use crate::installation::term_names::{TermName, term_list_faults, term_set};
 use crate::installation::terms::{AxisRmse, score};
 use crate::pipeline::Shard;
 use crate::pipeline::installation::{Executed, Outcome, StudyError, StudyMode, StudyPlan};
@@ -447,7 +447,7 @@ fn printed_calibration(
 /// `calibrate`: the terms of one recording, their bound, and the recording corrected.
 pub(super) fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
     let refuse = |message: String| Err(input(anyhow::anyhow!(message)));
-    if let Some((_, message)) = study_spec::term_list_faults(args.terms).first() {
+    if let Some((_, message)) = term_list_faults(args.terms).first() {
         return refuse(format!("--terms: {message}"));
     }
     if !(args.dvl_noise_cm_s.is_finite() && args.dvl_noise_cm_s > 0.0) {

@@ -9,10 +9,12 @@
 //! No trajectory that a fold's model is scored on is seen in its training, as
 //! simulation or as reality: both sources read only the trajectories outside the fold.
 
+use super::learned_spec::{LearnedSpec, Source};
 use super::network::{batch_of, closed_loop_loss, installation_of};
 use super::simulate::{InstallationWindows, simulated_windows, windows_of};
-use super::spec::{InstallationSpec, LearnedSpec, Source};
-use super::study::{Segment, term_set};
+use super::spec::InstallationSpec;
+use super::study::Segment;
+use super::term_names::term_set;
 use super::terms::{Installation, TermSet};
 use crate::model::{Dcnet, Settings};
 use crate::train::Windowed;
@@ -132,7 +134,7 @@ pub(crate) mod tests {
 
     /// A learned spec of `folds` folds over the test segments.
     pub(crate) fn learned(folds: usize) -> LearnedSpec {
-        let file: super::super::spec::LearnedFile = toml::from_str(
+        let file: super::super::learned_spec::LearnedFile = toml::from_str(
             r#"
             terms = ["lever_arm", "time_offset"]
             folds = 2

@@ -7,10 +7,16 @@
 //! reference; [`fit`] estimates the selected terms by nonlinear least squares
 //! (Levenberg–Marquardt from a scan over τ, on a fixed interior mask); [`bound`] gives
 //! their Fisher information: standard deviations, correlations and the terms a segment
-//! cannot show.
+//! cannot show; [`study`] scores every method held out. With `[learned]`
+//! ([`learned_spec`]): [`simulate`] makes DVLs of simulated installations over the real
+//! reference, [`network`] is the DCNet that outputs the terms and its loss, [`learned`]
+//! gives each fold its training windows and reads the terms a trained model finds. The
+//! spec's names of the terms are [`term_names`].
 //! In: [`PairedRecording`](crate::data::paired::PairedRecording)s. Out: terms, their
 //! bound, corrected records.
 
+pub mod term_names;
+pub mod learned_spec;
 pub mod spec;
 pub mod frames;
 pub mod terms;

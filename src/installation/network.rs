@@ -199,8 +199,8 @@ pub fn closed_loop_loss(outputs: Tensor<2>, terms: &TermSet, batch: &Batch) -> T
 mod tests {
     use super::*;
     use crate::installation::frames::cross as cross3;
+    use crate::installation::learned_spec::SimulationGrid;
     use crate::installation::simulate::simulated_windows;
-    use crate::installation::spec::SimulationGrid;
     use crate::installation::study::Segment;
     use crate::model::{Dcnet, Settings};
     use crate::spec::ModelSpec;

@@ -14,7 +14,7 @@
 //! count.
 
 use super::frames::ReferenceAt;
-use super::spec::SimulationGrid;
+use super::learned_spec::SimulationGrid;
 use super::study::Segment;
 use super::terms::Installation;
 use crate::Vec3;

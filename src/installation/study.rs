@@ -11,11 +11,13 @@
 use super::bound::{Noise, TermBound, bound};
 use super::fit::{TIME_OFFSET_MARGIN_S, fit};
 use super::frames::Reference;
+use super::learned_spec::Source;
 use super::rows::{
     FitFailure, FoldSummaryRow, HeldOutRow, NO_CALIBRATION, Study, SummaryRow, TermRow,
 };
-use super::spec::{InstallationSpec, Method, Source, TermName};
-use super::terms::{Installation, PerAxis, TermSet, score};
+use super::spec::{InstallationSpec, Method};
+use super::term_names::term_set;
+use super::terms::{Installation, score};
 use crate::Vec3;
 use crate::data::paired::PairedRecording;
 use crate::estimators::{Baseline, Estimator, LeastSquares};
@@ -114,23 +116,6 @@ pub fn table_unit(term: &str) -> (f64, &'static str) {
         (1.0, "m")
     } else {
         (1.0, "s")
-    }
-}
-
-/// The terms of a spec's term names.
-pub fn term_set(terms: &[TermName]) -> TermSet {
-    let has = |term| terms.contains(&term);
-    let either = |one, per_axis| match (has(one), has(per_axis)) {
-        (_, true) => PerAxis::PerAxis,
-        (true, false) => PerAxis::Scalar,
-        (false, false) => PerAxis::Off,
-    };
-    TermSet {
-        scale: either(TermName::Scale, TermName::ScalePerAxis),
-        misalignment: has(TermName::Misalignment),
-        lever_arm: has(TermName::LeverArm),
-        time_offset: has(TermName::TimeOffset),
-        bias: either(TermName::BiasScalar, TermName::Bias),
     }
 }
 

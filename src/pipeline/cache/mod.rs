@@ -306,7 +306,7 @@ pub fn root(out: &Path) -> PathBuf {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::installation::spec::Source;
+    use crate::installation::learned_spec::Source;
     use crate::installation::study::LearnedModel;
 
     /// A replicate's model is the same however many replicates there are, and another

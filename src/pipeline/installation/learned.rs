@@ -7,10 +7,12 @@
 use super::StudyError;
 use crate::files::{self, Seal};
 use crate::installation::learned::{LearnedWindows, training_windows};
+use crate::installation::learned_spec::{LearnedSpec, Source};
 use crate::installation::network::network_io;
 use crate::installation::simulate::{REFERENCE_MARGIN, sample_step};
-use crate::installation::spec::{InstallationSpec, LearnedSpec, Source};
-use crate::installation::study::{LearnedModel, Segment, term_set};
+use crate::installation::spec::InstallationSpec;
+use crate::installation::study::{LearnedModel, Segment};
+use crate::installation::term_names::term_set;
 use crate::model::Dcnet;
 use crate::pipeline::cache::{self, models};
 use crate::progress::Progress;

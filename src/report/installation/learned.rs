@@ -9,8 +9,8 @@
 use super::cell::{Entry, Section, Table};
 use super::heldout::window_text;
 use super::terms::readable;
+use crate::installation::learned_spec::LEARNED_LABEL;
 use crate::installation::rows::{FoldSummaryRow, NO_CALIBRATION, Study, TermRow};
-use crate::installation::spec::LEARNED_LABEL;
 
 /// Whether `method` is one of `[learned]`'s.
 pub(super) fn is_learned(method: &str) -> bool {

@@ -5,8 +5,8 @@
 //! colour); each installation model has a colour of its own. In: a [`Study`]'s summary.
 //! Out: the figure, or why there is none (fewer than two windows).
 
+use crate::installation::learned_spec::LEARNED_LABEL;
 use crate::installation::rows::{NO_CALIBRATION, Study, SummaryRow};
-use crate::installation::spec::LEARNED_LABEL;
 use crate::report::plots::canvas::{Drawn, Outcome, draw_svg};
 use crate::report::plots::draw::*;
 use crate::report::plots::scale::Scale;
