@@ -288,35 +288,13 @@ pub fn fit(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::data::paired::PairedRecording;
     use crate::installation::terms::PerAxis;
 
-    /// A vehicle weaving at up to about 11°/s with a changing speed, sampled at 1 Hz,
-    /// and its DVL as the model predicts it from the sampled reference (no noise).
+    /// The weaving vehicle of the simulation's tests, 300 s at 1 Hz, and its DVL as the
+    /// model predicts it from the sampled reference (no noise; t + τ held inside it).
     fn weaving(truth: &Installation) -> (Vec<f64>, Vec<Vec3>, Reference) {
-        let time_s: Vec<f64> = (0..300).map(f64::from).collect();
-        let yaw = |t: f64| 1.5 * (t / 8.0).sin() + 0.3 * (t / 3.0).cos();
-        let speed = |t: f64| 2.0 + 0.3 * (t / 11.0).sin();
-        let recording = PairedRecording {
-            dvl_m_s: vec![[0.0; 3]; time_s.len()],
-            time_s: time_s.clone(),
-            velocity_ned_m_s: time_s
-                .iter()
-                .map(|&t| {
-                    [
-                        speed(t) * yaw(t).cos(),
-                        speed(t) * yaw(t).sin(),
-                        0.1 * (t / 5.0).sin(),
-                    ]
-                })
-                .collect(),
-            attitude_rad: time_s
-                .iter()
-                .map(|&t| [0.02 * (t / 4.0).sin(), 0.05 * (t / 7.0).cos(), yaw(t)])
-                .collect(),
-            rate_rad_s: None,
-        };
-        let reference = Reference::new(&recording);
+        let segment = crate::installation::simulate::tests::weaving("W", 300, 0.0);
+        let (time_s, reference) = (segment.recording.time_s, segment.reference);
         let last = *time_s.last().unwrap();
         let dvl = time_s
             .iter()

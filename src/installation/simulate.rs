@@ -15,7 +15,7 @@
 
 use super::frames::ReferenceAt;
 use super::learned_spec::SimulationGrid;
-use super::study::Segment;
+use super::study::{Segment, sample_interval};
 use super::terms::Installation;
 use crate::Vec3;
 use crate::rng::task_rng;
@@ -130,7 +130,7 @@ pub fn windows_of(
     installation: usize,
 ) -> InstallationWindows {
     let time_s = &segment.recording.time_s;
-    let step_s = sample_step(time_s);
+    let step_s = sample_interval(time_s);
     let reference: Vec<Option<ReferenceAt>> =
         time_s.iter().map(|&t| segment.reference.at(t)).collect();
     let mut out = InstallationWindows {
@@ -193,13 +193,6 @@ pub fn windows_of(
     out
 }
 
-/// The median spacing of `time_s`, s.
-pub fn sample_step(time_s: &[f64]) -> f64 {
-    let mut steps: Vec<f64> = time_s.windows(2).map(|w| w[1] - w[0]).collect();
-    steps.sort_by(f64::total_cmp);
-    steps.get(steps.len() / 2).copied().unwrap_or(1.0)
-}
-
 /// The simulated training windows of every installation of `grid` on every segment of
 /// `segments`: trajectory by trajectory, installation by installation within it.
 pub fn simulated_windows(
@@ -227,7 +220,7 @@ pub fn simulated_windows(
         window,
         step_s: segments
             .first()
-            .map_or(1.0, |s| sample_step(&s.recording.time_s)),
+            .map_or(1.0, |s| sample_interval(&s.recording.time_s)),
         ..Default::default()
     };
     for part in parts {

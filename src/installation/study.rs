@@ -53,8 +53,8 @@ impl Segment {
     }
 }
 
-/// The median interval between two samples, s.
-fn sample_interval(time: &[f64]) -> f64 {
+/// The median interval between two samples, s (0 with fewer than two).
+pub fn sample_interval(time: &[f64]) -> f64 {
     let mut steps: Vec<f64> = time.windows(2).map(|w| w[1] - w[0]).collect();
     if steps.is_empty() {
         return 0.0;

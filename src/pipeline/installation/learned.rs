@@ -9,9 +9,9 @@ use crate::files::{self, Seal};
 use crate::installation::learned::{LearnedWindows, training_windows};
 use crate::installation::learned_spec::{LearnedSpec, Source};
 use crate::installation::network::network_io;
-use crate::installation::simulate::{REFERENCE_MARGIN, sample_step};
+use crate::installation::simulate::REFERENCE_MARGIN;
 use crate::installation::spec::InstallationSpec;
-use crate::installation::study::{LearnedModel, Segment};
+use crate::installation::study::{LearnedModel, Segment, sample_interval};
 use crate::installation::term_names::term_set;
 use crate::model::Dcnet;
 use crate::pipeline::cache::{self, models};
@@ -90,7 +90,7 @@ pub fn train_or_load(
     // The loss reads the reference at t + τ within the window's margin.
     let step_s = segments
         .iter()
-        .map(|s| sample_step(&s.recording.time_s))
+        .map(|s| sample_interval(&s.recording.time_s))
         .fold(f64::INFINITY, f64::min);
     let reach_s = REFERENCE_MARGIN as f64 * step_s;
     if learned.sources.contains(&Source::Simulated)
