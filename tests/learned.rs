@@ -47,6 +47,17 @@ learning_rate = 0.002
     write_study_spec(d, "syn", "syn", 4, &learned);
 }
 
+/// Replaces each `(from, to)` in the spec `learned_spec` wrote; `from` must be there.
+fn edit_spec(d: &Path, edits: &[(&str, &str)]) {
+    let spec = d.join("experiments/syn.toml");
+    let mut text = std::fs::read_to_string(&spec).unwrap();
+    for (from, to) in edits {
+        assert!(text.contains(from), "the spec has no {from:?}");
+        text = text.replace(from, to);
+    }
+    std::fs::write(&spec, text).unwrap();
+}
+
 fn fold_of(trajectory: &str) -> usize {
     // Round robin in spec order: S1, S3 | S2, S4.
     (trajectory[1..].parse::<usize>().unwrap() - 1) % 2
@@ -209,13 +220,14 @@ fn a_wrong_learned_table_is_refused_naming_its_keys() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     learned_spec(d, "");
-    let spec = d.join("experiments/syn.toml");
-    let text = std::fs::read_to_string(&spec)
-        .unwrap()
-        .replace("folds = 2", "folds = 3\nsources = [\"simulated\", \"sky\"]")
-        .replace("lever_arm_y_m = [0.0]", "lever_arm_y_m = []")
-        .replace("epochs = 12", "epochs = 0");
-    std::fs::write(&spec, text).unwrap();
+    edit_spec(
+        d,
+        &[
+            ("folds = 2", "folds = 3\nsources = [\"simulated\", \"sky\"]"),
+            ("lever_arm_y_m = [0.0]", "lever_arm_y_m = []"),
+            ("epochs = 12", "epochs = 0"),
+        ],
+    );
     let output = dcnet(d, &["run", "experiments/syn.toml"]);
     assert!(!output.status.success(), "{}", stderr(&output));
     let message = stderr(&output);
@@ -309,11 +321,10 @@ fn a_simulated_time_offset_beyond_the_reference_margin_is_refused_before_trainin
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     learned_spec(d, "");
-    let spec = d.join("experiments/syn.toml");
-    let text = std::fs::read_to_string(&spec)
-        .unwrap()
-        .replace("time_offset_s = [0.0, 1.0]", "time_offset_s = [0.0, 4.0]");
-    std::fs::write(&spec, text).unwrap();
+    edit_spec(
+        d,
+        &[("time_offset_s = [0.0, 1.0]", "time_offset_s = [0.0, 4.0]")],
+    );
     let output = dcnet(d, &["run", "experiments/syn.toml", "--no-plots"]);
     let message = stderr(&output);
     assert!(!output.status.success(), "{message}");

@@ -55,9 +55,7 @@ pub(super) fn learned_sections(study: &Study, methods: &[&str], windows: &[f64])
             "Every method on the same pairs only: calibration and scored trajectory in the same fold, which the fold's learned models never saw, as simulation or as reality, and at each window only the pairs every method scored. Mean held-out RMSE in cm/s ± its 95 % interval over calibration trajectories, and (in brackets) its ratio to {NO_CALIBRATION} on those pairs."
         ),
         table: Table {
-            header: std::iter::once("method".to_string())
-                .chain(windows.iter().map(|&w| window_text(w)))
-                .collect(),
+            header: window_header(windows),
             rows: methods
                 .iter()
                 .map(|method| {
@@ -122,21 +120,30 @@ pub(super) fn learned_sections(study: &Study, methods: &[&str], windows: &[f64])
 /// The installation fit with the learned models' terms: the model-based method whose
 /// term names are theirs.
 fn fitted_alike<'a>(study: &Study, methods: &[&'a str]) -> Option<&'a str> {
-    let names = |method: &str| -> Vec<&str> {
-        crate::first_seen(
-            study
-                .terms
-                .iter()
-                .filter(|r| r.method == method)
-                .map(|r| r.term.as_str()),
-        )
-    };
     let learned = methods.iter().find(|m| is_learned(m))?;
-    let terms = names(learned);
+    let terms = term_names(study, learned);
     methods
         .iter()
         .copied()
-        .find(|m| !is_learned(m) && names(m) == terms)
+        .find(|m| !is_learned(m) && term_names(study, m) == terms)
+}
+
+/// The names of the terms `method` estimated, in the order of its rows.
+fn term_names<'a>(study: &'a Study, method: &str) -> Vec<&'a str> {
+    crate::first_seen(
+        study
+            .terms
+            .iter()
+            .filter(|r| r.method == method)
+            .map(|r| r.term.as_str()),
+    )
+}
+
+/// A header of `method` then one column per window.
+fn window_header(windows: &[f64]) -> Vec<String> {
+    std::iter::once("method".to_string())
+        .chain(windows.iter().map(|&w| window_text(w)))
+        .collect()
 }
 
 /// Each calibration trajectory's mean held-out RMSE of `learned` and of `fitted` at
@@ -216,9 +223,7 @@ fn paired(study: &Study, methods: &[&str], windows: &[f64]) -> Option<Section> {
             "The learned method's mean held-out RMSE minus {fitted}'s, each calibration trajectory on the same pairs inside its fold, in cm/s: the mean difference ± its 95 % interval (Student t over calibration trajectories; negative where the learned one is better), and on how many calibration trajectories the learned one is lower."
         ),
         table: Table {
-            header: std::iter::once("method".to_string())
-                .chain(windows.iter().map(|&w| window_text(w)))
-                .collect(),
+            header: window_header(windows),
             rows,
             notes: Vec::new(),
         },
@@ -232,16 +237,7 @@ fn paired(study: &Study, methods: &[&str], windows: &[f64]) -> Option<Section> {
 fn term_errors(study: &Study, methods: &[&str], windows: &[f64]) -> Option<Section> {
     let largest = *windows.last()?;
     let learned: Vec<&str> = methods.iter().copied().filter(|m| is_learned(m)).collect();
-    let names = |method: &str| -> Vec<&str> {
-        crate::first_seen(
-            study
-                .terms
-                .iter()
-                .filter(|r| r.method == method)
-                .map(|r| r.term.as_str()),
-        )
-    };
-    let terms = names(learned.first()?);
+    let terms = term_names(study, learned.first()?);
     let fitted = fitted_alike(study, methods)?;
     let rows_of = |method: &str, window_s: f64| -> Vec<&TermRow> {
         study
