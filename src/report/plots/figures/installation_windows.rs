@@ -67,15 +67,13 @@ pub fn method_look(method: &str, installation: usize) -> (Look, Option<Marker>) 
         return (look(color, Stroke::Solid), Some(Marker::Diamond));
     }
     if let Some(rest) = method.strip_prefix(LEARNED_LABEL) {
-        // Every replicate of a source in its colour; the vehicle's dashed.
+        // Every replicate of a source in its colour (maroon, goldenrod: none of the paper
+        // DCNets'); the vehicle's dashed.
         return if rest.starts_with("simulation") {
-            (
-                look(RGBColor(214, 39, 40), Stroke::Solid),
-                Some(Marker::Ring),
-            )
+            (look(RGBColor(128, 0, 0), Stroke::Solid), Some(Marker::Ring))
         } else {
             (
-                look(RGBColor(44, 160, 44), Stroke::Dashed),
+                look(RGBColor(218, 165, 32), Stroke::Dashed),
                 Some(Marker::Ring),
             )
         };
@@ -143,7 +141,7 @@ pub fn installation_folds(study: &Study) -> PlotResult<Outcome> {
             ticks: None,
             lines: true,
         },
-        "Inside the folds (pairs the learned models never saw): held-out RMSE against the calibration window, mean over calibration trajectories, bars its 95 % interval".into(),
+        "Inside the folds, on pairs the learned models never saw: held-out RMSE, bars its 95 % interval".into(),
     )
 }
 
