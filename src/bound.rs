@@ -11,13 +11,15 @@
 //! efficient estimator, and that is the `bound` row set beside every estimator: the
 //! floor is the limit with perfect terms, the bound the limit with w seconds of data.
 //! In: the spec's sensors and DVLs, the trajectories' ground truth. Out: one row per
-//! DVL, calibration window and scored trajectory.
+//! DVL, calibration window and scored trajectory, and the held-out curve: one row per
+//! calibration length up to the longest window, scored on the test trajectories
+//! pooled.
 
 use crate::Vec3;
 use crate::data::Trajectory;
 use crate::noise::BeamGeometry;
 use crate::spec::Spec;
-use crate::vocab::{Phase, SensorErrors};
+use crate::vocab::{HELD_OUT, Phase, SensorErrors};
 
 /// A 2×2 matrix over θ = (s, β).
 pub type Matrix2 = [[f64; 2]; 2];
@@ -67,6 +69,32 @@ pub fn bounds(spec: &Spec, trajectories: &[Trajectory]) -> Vec<BoundRow> {
                     rmse_std_cm_s,
                 });
             }
+        }
+        let pooled: Vec<Vec3> = spec
+            .evaluation
+            .iter()
+            .flat_map(|&t| trajectories[t].ground_truth.iter().copied())
+            .collect();
+        let longest = spec
+            .calibration
+            .window_sizes
+            .iter()
+            .copied()
+            .max()
+            .unwrap_or(0);
+        for length in 1..=longest {
+            let truth = &calibration.ground_truth[..length];
+            let covariance = term_covariance(truth, &dvl.errors, &geometry, spec.gnss_noise_m_s);
+            let (rmse_cm_s, rmse_std_cm_s) =
+                expected_rmse(&covariance, &pooled, &dvl.errors, &geometry);
+            rows.push(BoundRow {
+                dvl: dvl.name.clone(),
+                window_s: length as f64 / spec.sample_rate_hz,
+                phase: Phase::HeldOut,
+                trajectory: HELD_OUT.to_string(),
+                rmse_cm_s,
+                rmse_std_cm_s,
+            });
         }
     }
     rows

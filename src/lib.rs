@@ -9,7 +9,8 @@
 //! 2. [`data`]: the trajectories (`.npy` or `.csv` recordings, or synthetic) and their
 //!    ground truth;
 //! 3. [`noise`]: the beam-level DVL and GNSS-RTK measurement model, and [`bound`]: the
-//!    information bound it puts on any calibration from w seconds of data;
+//!    information bound it puts on any calibration from w seconds of data, and
+//!    [`kalman`]: the recursive estimate of the terms, sample by sample;
 //! 4. [`dataset`]: the training windows over the error-term grid;
 //! 5. [`kernels`]: the network's hot operations on burn's CPU backend, [`model`] and
 //!    [`train`]: DCNet and its closed-loop training;
@@ -47,6 +48,7 @@ pub mod spec;
 pub mod data;
 pub mod noise;
 pub mod bound;
+pub mod kalman;
 pub mod dataset;
 pub mod model;
 pub mod train;

@@ -113,6 +113,10 @@ pub enum EstimatorKind {
     Baseline,
     LeastSquares,
     BeamWls,
+    /// A Kalman filter of an error model's terms, sample by sample.
+    Kalman,
+    /// A Kalman filter of the beam model's scale and bias.
+    KalmanBeam,
     Dcnet,
     /// The mean of the terms of `training.replicates` DCNets; it runs beside DCNet when
     /// there are several, and a spec does not list it.
@@ -122,10 +126,12 @@ pub enum EstimatorKind {
 }
 
 impl EstimatorKind {
-    pub const ALL: [EstimatorKind; 7] = [
+    pub const ALL: [EstimatorKind; 9] = [
         Self::Baseline,
         Self::LeastSquares,
         Self::BeamWls,
+        Self::Kalman,
+        Self::KalmanBeam,
         Self::Dcnet,
         Self::DcnetEnsemble,
         Self::Floor,
@@ -134,17 +140,22 @@ impl EstimatorKind {
 
     /// The kinds a spec lists in `estimators.kinds`: not the ensemble, which runs
     /// whenever DCNet has replicates, nor the bound, which is computed for every DVL.
-    pub const LISTED: [EstimatorKind; 5] = [
+    pub const LISTED: [EstimatorKind; 7] = [
         Self::Baseline,
         Self::LeastSquares,
         Self::BeamWls,
+        Self::Kalman,
+        Self::KalmanBeam,
         Self::Dcnet,
         Self::Floor,
     ];
 
     /// Whether the method is run once per error model.
     pub fn takes_error_model(self) -> bool {
-        matches!(self, Self::LeastSquares | Self::Dcnet | Self::DcnetEnsemble)
+        matches!(
+            self,
+            Self::LeastSquares | Self::Kalman | Self::Dcnet | Self::DcnetEnsemble
+        )
     }
 
     /// The label of this method with `error_model`: "DCNet EM5", or "baseline".
@@ -161,6 +172,8 @@ impl EstimatorKind {
             Self::Baseline => "baseline",
             Self::LeastSquares => "least squares",
             Self::BeamWls => "beam-model WLS",
+            Self::Kalman => "Kalman filter",
+            Self::KalmanBeam => "beam-model Kalman filter",
             Self::Dcnet => "DCNet",
             Self::DcnetEnsemble => "DCNet ensemble",
             Self::Floor => "floor (true terms)",
@@ -175,6 +188,8 @@ impl fmt::Display for EstimatorKind {
             Self::Baseline => "baseline",
             Self::LeastSquares => "least_squares",
             Self::BeamWls => "beam_wls",
+            Self::Kalman => "kalman",
+            Self::KalmanBeam => "kalman_beam",
             Self::Dcnet => "dcnet",
             Self::DcnetEnsemble => "dcnet_ensemble",
             Self::Floor => "floor",
@@ -306,11 +321,16 @@ impl FromStr for StopReason {
     }
 }
 
+/// The trajectory name of a [`Phase::HeldOut`] row: the test trajectories pooled.
+pub const HELD_OUT: &str = "test trajectories";
+
 /// Which phase a Monte Carlo row belongs to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Phase {
     Calibration,
     Evaluation,
+    /// The test trajectories pooled, scored with terms from every calibration length.
+    HeldOut,
 }
 
 impl Phase {
@@ -318,6 +338,7 @@ impl Phase {
         match self {
             Phase::Calibration => "calibration",
             Phase::Evaluation => "evaluation",
+            Phase::HeldOut => "held_out",
         }
     }
 }
@@ -325,10 +346,12 @@ impl Phase {
 impl std::str::FromStr for Phase {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        [Phase::Calibration, Phase::Evaluation]
+        [Phase::Calibration, Phase::Evaluation, Phase::HeldOut]
             .into_iter()
             .find(|p| p.as_str() == s)
-            .ok_or_else(|| format!("unknown phase {s:?}: expected calibration or evaluation"))
+            .ok_or_else(|| {
+                format!("unknown phase {s:?}: expected calibration, evaluation or held_out")
+            })
     }
 }
 

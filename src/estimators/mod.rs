@@ -10,6 +10,7 @@ mod beam_wls;
 mod dcnet;
 mod ensemble;
 mod floor;
+mod kalman;
 mod least_squares;
 
 pub use baseline::Baseline;
@@ -17,9 +18,11 @@ pub use beam_wls::BeamWls;
 pub use dcnet::DcnetEstimator;
 pub use ensemble::Ensemble;
 pub use floor::Floor;
+pub use kalman::KalmanFilter;
 pub use least_squares::LeastSquares;
 
 use crate::Vec3;
+use crate::kalman::ScaleBiasModel;
 use crate::model::Settings;
 use crate::noise::BeamGeometry;
 use crate::spec::{Dvl, Spec};
@@ -29,6 +32,15 @@ use crate::vocab::{Correction, ErrorModel, EstimatorKind};
 pub trait Estimator: Send + Sync {
     /// Estimates the terms from matching DVL and GNSS-RTK samples of one window.
     fn estimate(&self, dvl: &[Vec3], gnss: &[Vec3]) -> Correction;
+
+    /// The terms estimated from the first n samples, for each n of `lengths`. A
+    /// recursive method gives them all in one pass.
+    fn estimate_prefixes(&self, dvl: &[Vec3], gnss: &[Vec3], lengths: &[usize]) -> Vec<Correction> {
+        lengths
+            .iter()
+            .map(|&n| self.estimate(&dvl[..n], &gnss[..n]))
+            .collect()
+    }
 }
 
 /// A method as the protocol runs it on one DVL.
@@ -92,6 +104,16 @@ pub fn set_up(spec: &Spec, dvl: &Dvl, dcnets: &[Trained]) -> Vec<DvlEstimator> {
         settings: Settings::from(&spec.model),
         device: spec.training.backend.device(),
     };
+    let kalman = |model| {
+        KalmanFilter::new(
+            model,
+            &spec.kalman,
+            &dvl.errors,
+            &geometry,
+            spec.gnss_noise_m_s,
+            spec.sample_rate_hz,
+        )
+    };
     let mut entries = Vec::new();
     for Requested {
         kind,
@@ -123,11 +145,16 @@ pub fn set_up(spec: &Spec, dvl: &Dvl, dcnets: &[Trained]) -> Vec<DvlEstimator> {
                 Box::new(Ensemble { members })
             }
             (
-                EstimatorKind::LeastSquares | EstimatorKind::Dcnet | EstimatorKind::DcnetEnsemble,
+                EstimatorKind::LeastSquares
+                | EstimatorKind::Kalman
+                | EstimatorKind::Dcnet
+                | EstimatorKind::DcnetEnsemble,
                 None,
             ) => {
                 unreachable!("{kind} always has an error model")
             }
+            (EstimatorKind::Kalman, Some(model)) => Box::new(kalman(ScaleBiasModel::Paper(model))),
+            (EstimatorKind::KalmanBeam, _) => Box::new(kalman(ScaleBiasModel::Beam)),
             (EstimatorKind::BeamWls, _) => {
                 Box::new(BeamWls::new(&dvl.errors, &geometry, spec.gnss_noise_m_s))
             }

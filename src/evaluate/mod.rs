@@ -22,12 +22,17 @@
 //! - [`protocol`]: the Monte Carlo runs of every estimator on one DVL, and their score;
 //! - [`summary`]: the per-run rows summed into the tables: means over runs, replicates
 //!   combined, the bound and every estimator's efficiency against it;
-//! - [`statistics`]: the mean, standard deviation and confidence interval they use.
+//! - [`calibration_time`]: the held-out RMSE against the calibration length, and each
+//!   method's calibration time beside its T_conv;
+//! - [`statistics`]: the mean, standard deviation and confidence interval they use;
+//! - [`terms_in_time`]: the Kalman filters' terms, sample by sample, on the first run.
 
+pub mod calibration_time;
 pub mod protocol;
 pub mod rows;
 pub mod statistics;
 pub mod summary;
+pub mod terms_in_time;
 
 pub use protocol::{rmse_cm_s, run_on_dvl, run_protocol};
 pub use rows::{CalibrationRow, EvaluationRow, ProtocolResult, RunRow};

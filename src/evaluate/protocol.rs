@@ -1,13 +1,17 @@
 //! The Monte Carlo runs of the protocol: each run measures the calibration trajectory
 //! of one DVL with fresh noise, every estimator estimates its terms from the first w
 //! seconds for every window size w, and the RMSE of the corrected remainder is taken;
-//! each estimator's T_conv terms then correct freshly measured test trajectories. In:
-//! the spec, the trajectories, the DVL and its estimators. Out: per-run rows, one list
-//! per estimator.
+//! each estimator's T_conv terms then correct freshly measured test trajectories, and
+//! its terms from every calibration length of its held-out curve
+//! ([`calibration_time`](super::calibration_time)) correct the same measurements,
+//! pooled. In: the spec, the trajectories, the DVL and its estimators. Out: per-run
+//! rows, one list per estimator.
 
+use super::calibration_time::{HeldOutScore, curve_lengths};
 use super::rows::{ProtocolResult, RunRow};
 use super::statistics::mean_std;
 use super::summary::t_conv_index;
+use super::terms_in_time::terms_in_time;
 use crate::Vec3;
 use crate::bound::bounds;
 use crate::data::Trajectory;
@@ -17,7 +21,7 @@ use crate::progress::Progress;
 use crate::rng::task_rng;
 use crate::spec::{Dvl, Spec};
 use crate::train::Trained;
-use crate::vocab::{Correction, Phase};
+use crate::vocab::{Correction, HELD_OUT, Phase};
 use rayon::prelude::*;
 
 /// Runs the protocol for every DVL and estimator; `progress` advances once per run and
@@ -37,7 +41,14 @@ pub fn run_protocol(
         })
         .flatten()
         .collect();
-    ProtocolResult::from_runs(runs, &bounds(spec, trajectories))
+    ProtocolResult {
+        terms_in_time: terms_in_time(spec, trajectories),
+        ..ProtocolResult::from_runs(
+            runs,
+            &bounds(spec, trajectories),
+            spec.calibration.time_tolerance,
+        )
+    }
 }
 
 /// The protocol of `entries` on one DVL, every Monte Carlo run: one list of rows per
@@ -75,8 +86,15 @@ pub fn run_on_dvl(
 /// Calibration results: [run][entry][window] → (rmse, terms).
 type Calibrated = Vec<Vec<Vec<(f64, Correction)>>>;
 
-/// Evaluation results with each run's T_conv terms: [run][trajectory][entry] → rmse.
-type Evaluated = Vec<Vec<Vec<f64>>>;
+/// One run's evaluation: the RMSE of each entry's T_conv terms, [trajectory][entry],
+/// and each entry's held-out curve, [entry] → (length in samples, RMSE, terms).
+struct RunEvaluation {
+    trajectories: Vec<Vec<f64>>,
+    curves: Vec<Vec<(usize, f64, Correction)>>,
+}
+
+/// Every run's evaluation.
+type Evaluated = Vec<RunEvaluation>;
 
 /// What every stage of [`run_on_dvl`] reads: the spec, the DVL and its estimators.
 struct ProtocolInputs<'a> {
@@ -153,18 +171,21 @@ impl ProtocolInputs<'_> {
     }
 
     /// Every entry's T_conv terms of each run scored on that run's measurements of every
-    /// evaluation trajectory; `progress` advances once a run.
+    /// evaluation trajectory, and its held-out curve on them pooled; `progress`
+    /// advances once a run.
     fn evaluate_runs(&self, calibrated: &Calibrated, t_conv: &[usize]) -> Evaluated {
         (0..self.spec.calibration.monte_carlo_runs)
             .into_par_iter()
             .map(|run| {
-                let per_trajectory = self
+                let mut pooled = HeldOutScore::default();
+                let trajectories = self
                     .spec
                     .evaluation
                     .iter()
                     .map(|&t| {
                         let trajectory = &self.trajectories[t];
                         let measured = self.measure(run, trajectory);
+                        pooled.add(&measured.dvl, &trajectory.ground_truth);
                         (0..self.entries.len())
                             .map(|e| {
                                 rmse_cm_s(
@@ -176,14 +197,50 @@ impl ProtocolInputs<'_> {
                             .collect()
                     })
                     .collect();
+                let curves = self.held_out_curves(run, &calibrated[run], &pooled);
                 self.progress.inc(1);
-                per_trajectory
+                RunEvaluation {
+                    trajectories,
+                    curves,
+                }
             })
             .collect()
     }
 
-    /// Entry `e`'s rows, calibration (run, window) then evaluation (run, trajectory) at
-    /// its T_conv window `t_conv`.
+    /// Each entry's terms of run `run` from every length of its held-out curve, scored
+    /// on `pooled`: DCNet's are those of its calibration windows, the others' are
+    /// estimated again from each first n samples of the run's calibration measurement.
+    fn held_out_curves(
+        &self,
+        run: usize,
+        calibrated: &[Vec<(f64, Correction)>],
+        pooled: &HeldOutScore,
+    ) -> Vec<Vec<(usize, f64, Correction)>> {
+        let windows = &self.spec.calibration.window_sizes;
+        let measured = self.measure(run, self.calibration());
+        self.entries
+            .iter()
+            .zip(calibrated)
+            .map(|(entry, per_window)| {
+                let lengths = curve_lengths(entry.kind, windows);
+                let corrections: Vec<Correction> = if lengths == *windows {
+                    per_window.iter().map(|(_, c)| *c).collect()
+                } else {
+                    entry
+                        .estimator
+                        .estimate_prefixes(&measured.dvl, &measured.gnss, &lengths)
+                };
+                lengths
+                    .into_iter()
+                    .zip(corrections)
+                    .map(|(n, c)| (n, pooled.rmse_cm_s(&c), c))
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Entry `e`'s rows, calibration (run, window), evaluation (run, trajectory) at its
+    /// T_conv window `t_conv`, then held out (run, length).
     fn entry_rows(
         &self,
         e: usize,
@@ -208,7 +265,7 @@ impl ProtocolInputs<'_> {
                 ));
             }
         }
-        for (run, per_trajectory) in evaluated.iter().enumerate() {
+        for (run, evaluation) in evaluated.iter().enumerate() {
             for (i, &t) in self.spec.evaluation.iter().enumerate() {
                 rows.push(row(
                     run,
@@ -217,8 +274,22 @@ impl ProtocolInputs<'_> {
                     Phase::Evaluation,
                     self.seconds(windows[t_conv]),
                     &self.trajectories[t].name,
-                    per_trajectory[i][e],
+                    evaluation.trajectories[i][e],
                     calibrated[run][e][t_conv].1,
+                ));
+            }
+        }
+        for (run, evaluation) in evaluated.iter().enumerate() {
+            for &(length, rmse_cm_s, correction) in &evaluation.curves[e] {
+                rows.push(row(
+                    run,
+                    self.dvl,
+                    entry,
+                    Phase::HeldOut,
+                    self.seconds(length),
+                    HELD_OUT,
+                    rmse_cm_s,
+                    correction,
                 ));
             }
         }

@@ -3,10 +3,13 @@
 //! ([`CalibrationRow`], [`EvaluationRow`]), all three in a [`ProtocolResult`]. In:
 //! nothing. Out: the types that `results` writes as Parquet and `report` reads back.
 
+use super::calibration_time::{CalibrationTimeRow, HeldOutRow};
+use super::terms_in_time::TermInTimeRow;
 use crate::vocab::{Correction, ErrorModel, EstimatorKind, Phase};
 
-/// One estimator's result in one run, on one window (calibration) or trajectory
-/// (evaluation at T_conv).
+/// One estimator's result in one run, on one window (calibration), trajectory
+/// (evaluation at T_conv), or calibration length (held out: `window_s` is the length,
+/// `trajectory` the pooled test trajectories).
 #[derive(Debug, Clone, PartialEq)]
 pub struct RunRow {
     pub run: usize,
@@ -62,4 +65,8 @@ pub struct ProtocolResult {
     pub runs: Vec<RunRow>,
     pub calibration: Vec<CalibrationRow>,
     pub evaluation: Vec<EvaluationRow>,
+    pub held_out: Vec<HeldOutRow>,
+    pub calibration_time: Vec<CalibrationTimeRow>,
+    /// The Kalman filters' terms on the first run; not from the runs' rows.
+    pub terms_in_time: Vec<TermInTimeRow>,
 }

@@ -6,6 +6,7 @@
 //! improvement over the baseline. In: per-run rows and the bounds. Out: a
 //! [`ProtocolResult`].
 
+use super::calibration_time::{calibration_times, held_out_curves};
 use super::rows::{CalibrationRow, EvaluationRow, ProtocolResult, RunRow};
 use super::statistics::{mean_ci95, mean_std};
 use crate::bound::BoundRow;
@@ -36,7 +37,11 @@ impl ProtocolResult {
     /// and standard deviations over runs, summed in run order, and T_conv. The rows of
     /// DCNet replicates become one series: see `combine_replicates`. Each DVL's
     /// `bounds` follow its estimators, and every estimator gets its efficiency.
-    pub fn from_runs(runs: Vec<RunRow>, bounds: &[BoundRow]) -> ProtocolResult {
+    pub fn from_runs(
+        runs: Vec<RunRow>,
+        bounds: &[BoundRow],
+        time_tolerance: f64,
+    ) -> ProtocolResult {
         let mut result = ProtocolResult::default();
         let same = |a: &RunRow, b: &RunRow| {
             a.dvl == b.dvl && a.estimator == b.estimator && a.error_model == b.error_model
@@ -72,6 +77,9 @@ impl ProtocolResult {
         }
         add_bounds(&mut result, bounds);
         add_improvements(&mut result.evaluation);
+        result.held_out = held_out_curves(&runs, bounds);
+        result.calibration_time =
+            calibration_times(&result.held_out, &result.calibration, time_tolerance);
         result.runs = runs;
         result
     }
@@ -367,7 +375,7 @@ mod tests {
             bound(40.0, Phase::Calibration, 1.0),
             bound(40.0, Phase::Evaluation, 1.4),
         ];
-        let result = ProtocolResult::from_runs(runs, &bounds);
+        let result = ProtocolResult::from_runs(runs, &bounds, 0.1);
         let estimator = |r: &&CalibrationRow| r.estimator == EstimatorKind::Dcnet;
         let calibration: Vec<&CalibrationRow> =
             result.calibration.iter().filter(estimator).collect();
@@ -395,7 +403,7 @@ mod tests {
     fn a_single_model_has_no_confidence_interval() {
         let mut rows = vec![dcnet_row(0, 0, Phase::Calibration, 20.0, 1.0)];
         rows[0].replicate = None;
-        let result = ProtocolResult::from_runs(rows, &[]);
+        let result = ProtocolResult::from_runs(rows, &[], 0.1);
         assert_eq!(result.calibration[0].rmse_ci_cm_s, None);
     }
 }

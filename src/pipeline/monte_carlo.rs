@@ -6,11 +6,12 @@ use super::plan::{Plan, Task};
 use super::{ExecuteError, Executed};
 use crate::bound::bounds;
 use crate::estimators::set_up;
+use crate::evaluate::terms_in_time::terms_in_time;
 use crate::evaluate::{ProtocolResult, RunRow, run_on_dvl};
 use crate::progress::Progress;
 use crate::spec::Spec;
 use crate::train::{Trained, TrainingHistory};
-use crate::vocab::EstimatorKind;
+use crate::vocab::{EstimatorKind, Phase};
 
 /// Computes the blocks `blocks` asks for, those of one DVL of one point together (they
 /// share the measurements), and stores each as soon as its DVL is done. Blocks of a
@@ -51,7 +52,14 @@ pub(super) fn run(
         let rows = run_on_dvl(spec, &plan.trajectories[p], dvl, &estimators, &progress);
         progress.finish();
         for (b, mut rows) in estimator_blocks.into_iter().zip(rows) {
-            if let Some(row) = rows.iter().find(|row| !row.rmse_cm_s.is_finite()) {
+            // A held-out curve may start where a method cannot yet estimate (one sample
+            // for a scale and a bias); the tables' own rows must be finite.
+            let tabled = |row: &&RunRow| row.phase != Phase::HeldOut;
+            if let Some(row) = rows
+                .iter()
+                .filter(tabled)
+                .find(|row| !row.rmse_cm_s.is_finite())
+            {
                 return Err(ExecuteError::NonFinite(describe(spec, row)));
             }
             // A block does not name its replicate (gather does), so replicate 0 shares
@@ -166,5 +174,10 @@ pub(super) fn gather(
         );
     }
     let bounds = bounds(plan.spec(p), &plan.trajectories[p]);
-    Ok((ProtocolResult::from_runs(rows, &bounds), models))
+    let spec = plan.spec(p);
+    let result = ProtocolResult {
+        terms_in_time: terms_in_time(spec, &plan.trajectories[p]),
+        ..ProtocolResult::from_runs(rows, &bounds, spec.calibration.time_tolerance)
+    };
+    Ok((result, models))
 }

@@ -54,6 +54,11 @@ pub(super) fn render(run: &StoredRun, tables: &ReportTables) -> String {
     if let Some(efficiency) = &tables.efficiency {
         table(&mut out, efficiency, &captions.bound(), &tag("bound"), None);
     }
+    let timing = crate::report::calibration_time::sections(run);
+    out.push_str(&crate::report::section::latex(
+        &timing,
+        &format!("{label}-calibration-time"),
+    ));
     out
 }
 

@@ -80,6 +80,11 @@ pub(super) fn render(run: &StoredRun, tables: &ReportTables, figures: &[Written]
             markdown_table(efficiency)
         );
     }
+    let timing = crate::report::calibration_time::sections(run);
+    if !timing.is_empty() {
+        let _ = writeln!(out, "## How long to calibrate\n");
+        let _ = writeln!(out, "{}", crate::report::section::markdown(&timing));
+    }
     if run.published.is_some() {
         let tally = tables.tally();
         let _ = writeln!(

@@ -10,14 +10,19 @@
 //!   than the spec's tolerance flagged, our extra estimators and the bound) and set by
 //!   two renderers: as Markdown in [`markdown`], with the training summary, wall time per
 //!   stage, provenance from the manifest and the figures, and as LaTeX in [`latex`];
+//! - [`section`]: tables of text set as Markdown and LaTeX alike, for the sections
+//!   beyond the paper's tables: [`calibration_time`] (how long each method needs to
+//!   calibrate) and the installation study's;
 //! - [`compare`]: two results folders side by side.
 
+pub mod calibration_time;
 pub mod compare;
 pub mod installation;
 pub mod latex;
 pub mod markdown;
 pub mod plots;
 pub mod printed;
+pub mod section;
 pub mod table;
 
 pub use markdown::FILE;

@@ -8,6 +8,7 @@
 //! training histories. Out: the folder; [`read`] reads it back, and [`sweep`] writes
 //! and reads the table that sets a sweep's points side by side.
 
+pub mod calibration_time;
 pub mod installation;
 pub mod read;
 pub mod corrected;
@@ -97,10 +98,13 @@ pub struct DataFile {
 }
 
 /// The Parquet tables of a results folder, in the order they are written.
-pub const TABLES: [&str; 5] = [
+pub const TABLES: [&str; 8] = [
     "monte_carlo.parquet",
     "calibration.parquet",
     "evaluation.parquet",
+    calibration_time::HELD_OUT,
+    calibration_time::CALIBRATION_TIME,
+    calibration_time::TERMS_IN_TIME,
     "training.parquet",
     "trajectories.parquet",
 ];
@@ -124,6 +128,9 @@ pub fn write_run(
         monte_carlo_batch(&result.runs),
         calibration_batch(&result.calibration),
         evaluation_batch(&result.evaluation),
+        calibration_time::held_out_batch(&result.held_out),
+        calibration_time::calibration_time_batch(&result.calibration_time),
+        calibration_time::terms_in_time_batch(&result.terms_in_time),
         training_batch(dcnets),
         trajectories_batch(
             &trajectories

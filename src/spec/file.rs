@@ -196,6 +196,14 @@ pub struct CalibrationFile {
     pub trajectory: String,
     pub window_sizes_s: Vec<f64>,
     pub monte_carlo_runs: usize,
+    /// A method's calibration time is the shortest calibration after which its
+    /// held-out RMSE stays within this of its value at the longest window, %.
+    #[serde(default = "default_time_tolerance_pct")]
+    pub time_tolerance_pct: f64,
+}
+
+fn default_time_tolerance_pct() -> f64 {
+    10.0
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -212,21 +220,59 @@ pub struct EvaluationFile {
     expecting = "a table with `kinds` and `error_models`"
 )]
 pub struct EstimatorsFile {
-    /// Any of `baseline`, `least_squares`, `dcnet`, `floor`.
+    /// Any of `baseline`, `least_squares`, `beam_wls`, `kalman`, `kalman_beam`,
+    /// `dcnet`, `floor`.
     pub kinds: Vec<String>,
     /// Any of `EM1` .. `EM5`, for the kinds that take an error model.
     pub error_models: Vec<String>,
+    /// The prior and random walk of the Kalman filters' terms.
+    pub kalman: KalmanFile,
+}
+
+/// The Kalman filters' terms: their prior standard deviation about zero, and the
+/// random walk each may take, per √s (zero: constant terms).
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(
+    deny_unknown_fields,
+    default,
+    expecting = "a table of the Kalman filters' prior and random walk"
+)]
+pub struct KalmanFile {
+    pub prior_scale_pct: f64,
+    pub prior_bias_cm_s: f64,
+    pub scale_random_walk_pct_per_sqrt_s: f64,
+    pub bias_random_walk_cm_s_per_sqrt_s: f64,
+}
+
+impl Default for KalmanFile {
+    fn default() -> Self {
+        Self {
+            prior_scale_pct: 10.0,
+            prior_bias_cm_s: 10.0,
+            scale_random_walk_pct_per_sqrt_s: 0.0,
+            bias_random_walk_cm_s_per_sqrt_s: 0.0,
+        }
+    }
 }
 
 impl Default for EstimatorsFile {
     fn default() -> Self {
         Self {
-            kinds: ["baseline", "least_squares", "beam_wls", "dcnet", "floor"]
-                .map(String::from)
-                .to_vec(),
+            kinds: [
+                "baseline",
+                "least_squares",
+                "beam_wls",
+                "kalman",
+                "kalman_beam",
+                "dcnet",
+                "floor",
+            ]
+            .map(String::from)
+            .to_vec(),
             error_models: ["EM1", "EM2", "EM3", "EM4", "EM5"]
                 .map(String::from)
                 .to_vec(),
+            kalman: KalmanFile::default(),
         }
     }
 }

@@ -81,6 +81,7 @@ pub struct Spec {
     pub evaluation: Vec<usize>,
     pub kinds: Vec<EstimatorKind>,
     pub error_models: Vec<ErrorModel>,
+    pub kalman: KalmanSpec,
     pub model: ModelSpec,
     pub training: TrainingSpec,
     pub report: ReportSpec,
@@ -211,6 +212,17 @@ pub struct CalibrationSpec {
     /// Window sizes in samples.
     pub window_sizes: Vec<usize>,
     pub monte_carlo_runs: usize,
+    /// The calibration time's tolerance, a fraction (0.1 for 10 %).
+    pub time_tolerance: f64,
+}
+
+/// The Kalman filters' prior and random walk, as fractions and m/s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct KalmanSpec {
+    /// The terms' prior standard deviation about zero.
+    pub prior: crate::kalman::TermSettings,
+    /// The random walk's standard deviation per √s.
+    pub random_walk: crate::kalman::TermSettings,
 }
 
 /// DCNet's sizes, checked.
@@ -298,7 +310,7 @@ impl SpecFile {
         let dvls = check_dvls(&dvl, &mut faults);
         let calibration = check_calibration(calibration, sources, rate, &mut faults);
         let evaluation = check_evaluation(evaluation, sources, &mut faults);
-        let (kinds, error_models) = check_estimators(estimators, &mut faults);
+        let (kinds, error_models, kalman) = check_estimators(estimators, &mut faults);
         if kinds.contains(&EstimatorKind::Dcnet) {
             check_dcnet_windows(window, &calibration.window_sizes, rate, &mut faults);
         }
@@ -331,6 +343,7 @@ impl SpecFile {
             evaluation,
             kinds,
             error_models,
+            kalman,
             model,
             training,
             report,

@@ -44,13 +44,14 @@ use std::path::{Path, PathBuf};
 const DATASET_CODE_VERSION: u32 = 1;
 /// Bumped whenever training changes in a way that changes the weights.
 const TRAINING_CODE_VERSION: u32 = 4;
-/// Bumped whenever the protocol or an estimator changes its numbers.
-const PROTOCOL_CODE_VERSION: u32 = 1;
+/// Bumped whenever the protocol or an estimator changes its numbers (2: the held-out
+/// rows of the calibration time).
+const PROTOCOL_CODE_VERSION: u32 = 2;
 /// Bumped whenever an installation study's calibration changes its numbers.
 const INSTALLATION_CODE_VERSION: u32 = 1;
 /// Bumped whenever the tables put together from the blocks change (2: the bound rows
-/// and the efficiency column).
-const TABLES_CODE_VERSION: u32 = 2;
+/// and the efficiency column; 3: the held-out curves and the calibration time).
+const TABLES_CODE_VERSION: u32 = 3;
 
 /// The folder of the cache under a results folder.
 pub const FOLDER: &str = ".cache";
@@ -295,6 +296,8 @@ pub fn block_key(
             .collect::<Vec<_>>(),
         (estimator.to_string(), error_model.map(|m| m.to_string())),
         model_key,
+        matches!(estimator, EstimatorKind::Kalman | EstimatorKind::KalmanBeam)
+            .then_some(&r.estimators.kalman),
     ))
 }
 

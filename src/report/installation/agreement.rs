@@ -3,9 +3,9 @@
 //! where they do not, and where a term is not seen. In: the study's term rows of one
 //! method. Out: the paragraph's text.
 
-use super::cell::decimals;
 use super::terms::readable;
 use crate::installation::rows::TermRow;
+use crate::report::section::decimals;
 
 /// The z-value of a two-sided 95 % interval: estimates agree across calibration
 /// trajectories when their spread is at most this many times the median bound.

@@ -3,8 +3,8 @@
 //! window. In: the study's summary rows. Out: two [`Section`]s; also the order of the
 //! methods and windows the other tables follow.
 
-use super::cell::{Entry, Section, Table};
 use crate::installation::rows::{NO_CALIBRATION, Study, SummaryRow};
+use crate::report::section::{Entry, Section, Table};
 
 /// The methods in the order the study lists them, no calibration first.
 pub(super) fn methods(study: &Study) -> Vec<&str> {

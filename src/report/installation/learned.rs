@@ -6,11 +6,11 @@
 //! best estimate of the installation there is. In: the study's fold summary and terms.
 //! Out: [`Section`]s.
 
-use super::cell::{Entry, Section, Table};
 use super::heldout::window_text;
 use super::terms::readable;
 use crate::installation::learned_spec::LEARNED_LABEL;
 use crate::installation::rows::{FoldSummaryRow, NO_CALIBRATION, Study, TermRow};
+use crate::report::section::{Entry, Section, Table};
 
 /// Whether `method` is one of `[learned]`'s.
 pub(super) fn is_learned(method: &str) -> bool {

@@ -3,7 +3,6 @@
 //! ([`markdown`]) and as LaTeX ([`latex`]), both set from the same tables, and the
 //! figures ([`draw_all`]). In data-flow order:
 //!
-//! - [`cell`]: a table of text and its cells, each written with the rendering's signs;
 //! - [`heldout`]: the mean held-out RMSE of each method at the largest window with its
 //!   95 % interval and its ratio to no calibration, and the same means per window;
 //! - [`terms`]: for each installation model, the terms each calibration trajectory
@@ -17,7 +16,6 @@
 //!   run's are;
 //! - this module: the tables in order, set as Markdown and as LaTeX.
 
-pub mod cell;
 pub mod heldout;
 pub mod terms;
 pub mod agreement;
@@ -28,128 +26,29 @@ pub use figures::{draw_all, draw_sweep};
 pub(crate) use terms::{readable_term, readable_why};
 
 use crate::installation::rows::{NO_CALIBRATION, Study, TermRow};
-use crate::report::table::Signs;
+use crate::report::section::{self, Section};
 use agreement::agreement;
-use cell::{Entry, Section, Table};
-use comfy_table::{Table as MarkdownTable, presets::ASCII_MARKDOWN};
 use heldout::{heldout_section, methods, windows, windows_section};
 use std::fmt::Write;
 use terms::terms_section;
 
 /// The section as Markdown, second-level heading first.
 pub fn markdown(study: &Study) -> String {
-    let signs = &crate::report::markdown::SIGNS;
     let mut out = String::new();
     let _ = writeln!(out, "## Installation study: held-out trajectories\n");
     let _ = writeln!(out, "{}\n", introduction());
-    for section in sections(study) {
-        let _ = writeln!(out, "### {}\n", section.title);
-        let _ = writeln!(out, "{}\n", section.caption);
-        let _ = writeln!(out, "{}\n", markdown_table(&section.table, signs));
-        if !section.table.notes.is_empty() {
-            for note in &section.table.notes {
-                let _ = writeln!(out, "- {note}");
-            }
-            let _ = writeln!(out);
-        }
-        if let Some(paragraph) = &section.paragraph {
-            let _ = writeln!(out, "{paragraph}\n");
-        }
-    }
+    out.push_str(&section::markdown(&sections(study)));
     out
 }
 
 /// The section as LaTeX table environments and paragraphs; `name` keys the labels.
 pub fn latex(study: &Study, name: &str) -> String {
-    use crate::report::latex::{SIGNS, escape, label};
+    use crate::report::latex::escape;
     let mut out = String::new();
     let _ = writeln!(out, "% The installation study's tables ({name}).");
-    let _ = writeln!(out, "{}", symbols(&escape(&introduction())));
-    for (i, section) in sections(study).iter().enumerate() {
-        let table = &section.table;
-        let _ = writeln!(out, "\n\\begin{{table}}[htbp]");
-        let _ = writeln!(out, "  \\centering\\small\\setlength{{\\tabcolsep}}{{4pt}}");
-        let _ = writeln!(
-            out,
-            "  \\caption{{{}: {}}}",
-            escape(&section.title),
-            escape(&section.caption)
-        );
-        let _ = writeln!(
-            out,
-            "  \\label{{tab:{}-installation-{}}}",
-            label(name),
-            i + 1
-        );
-        let _ = writeln!(out, "  \\makebox[\\linewidth]{{%");
-        let _ = writeln!(
-            out,
-            "  \\begin{{tabular}}{{l{}}}",
-            "r".repeat(table.header.len() - 1)
-        );
-        let _ = writeln!(out, "    \\toprule");
-        let header: Vec<String> = table.header.iter().map(|h| escape(h)).collect();
-        let _ = writeln!(out, "    {} \\\\", header.join(" & "));
-        let _ = writeln!(out, "    \\midrule");
-        for row in &table.rows {
-            let cells: Vec<String> = row
-                .iter()
-                .map(|entry| match entry {
-                    Entry::Text(text) => escape(text),
-                    other => symbols(&other.text(&SIGNS)),
-                })
-                .collect();
-            let _ = writeln!(out, "    {} \\\\", cells.join(" & "));
-        }
-        let _ = writeln!(out, "    \\bottomrule");
-        let _ = writeln!(out, "  \\end{{tabular}}}}");
-        if !table.notes.is_empty() {
-            let notes: Vec<String> = table.notes.iter().map(|n| symbols(&escape(n))).collect();
-            let _ = writeln!(out, "  \\par\\smallskip");
-            let _ = writeln!(
-                out,
-                "  {{\\footnotesize\\raggedright {}\\par}}",
-                notes.join("\\\\\n  ")
-            );
-        }
-        let _ = writeln!(out, "\\end{{table}}");
-        if let Some(paragraph) = &section.paragraph {
-            let _ = writeln!(out, "\n{}", symbols(&escape(paragraph)));
-        }
-    }
-    out
-}
-
-/// The characters of our text and of the bound's reasons that LaTeX sets in math mode
-/// (or that its default font would set as other glyphs: `<` and `>`), and how.
-const MATH: [(char, &str); 16] = [
-    ('±', "$\\pm$"),
-    ('σ', "$\\sigma$"),
-    ('τ', "$\\tau$"),
-    ('δ', "$\\delta$"),
-    ('ω', "$\\omega$"),
-    ('ρ', "$\\rho$"),
-    ('×', "$\\times$"),
-    ('∞', "$\\infty$"),
-    ('−', "$-$"),
-    ('≥', "$\\geq$"),
-    ('≤', "$\\leq$"),
-    ('>', "$>$"),
-    ('<', "$<$"),
-    ('°', "$^\\circ$"),
-    ('→', "$\\to$"),
-    ('|', "$|$"),
-];
-
-/// `text` with the characters of [`MATH`] written as LaTeX sets them.
-fn symbols(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        match MATH.iter().find(|(m, _)| *m == c) {
-            Some((_, latex)) => out.push_str(latex),
-            None => out.push(c),
-        }
-    }
+    let _ = writeln!(out, "{}", section::symbols(&escape(&introduction())));
+    let key = format!("{}-installation", crate::report::latex::label(name));
+    out.push_str(&section::latex(&sections(study), &key));
     out
 }
 
@@ -219,17 +118,6 @@ fn sections(study: &Study) -> Vec<Section> {
         }
     }
     sections
-}
-
-/// A table as Markdown, with the figures' signs.
-fn markdown_table(table: &Table, signs: &Signs) -> MarkdownTable {
-    let mut markdown = MarkdownTable::new();
-    markdown.load_preset(ASCII_MARKDOWN);
-    markdown.set_header(table.header.clone());
-    for row in &table.rows {
-        markdown.add_row(row.iter().map(|e| e.text(signs)).collect::<Vec<_>>());
-    }
-    markdown
 }
 
 #[cfg(test)]
@@ -341,6 +229,9 @@ pub(crate) mod tests {
             text.contains("0.9 $\\times$ the median $\\sigma$ of 0.015 m"),
             "{text}"
         );
-        assert_eq!(symbols("ρ −0.97 ≥ 0.95"), "$\\rho$ $-$0.97 $\\geq$ 0.95");
+        assert_eq!(
+            section::symbols("ρ −0.97 ≥ 0.95"),
+            "$\\rho$ $-$0.97 $\\geq$ 0.95"
+        );
     }
 }

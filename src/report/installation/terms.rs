@@ -4,11 +4,11 @@
 //! in %), those the window cannot show marked and why listed under the table
 //! ([`readable_why`]). In: the study's term rows of one method. Out: a [`Section`].
 
-use super::cell::{Entry, Section, Table};
 use super::heldout::window_text;
 use crate::installation::rows::TermRow;
 use crate::installation::study::table_unit;
 use crate::report::plots::scale::three_digits;
+use crate::report::section::{Entry, Section, Table};
 
 /// A term's name for people and its unit, and the factor from the stored value (SI,
 /// radians, a fraction for a scale) to that unit, the unit as the study's tables give

@@ -107,8 +107,9 @@ const MODEL_COLORS: [RGBColor; 5] = [
     RGBColor(148, 103, 189),
 ];
 
-/// Colour by error model, stroke by estimator: DCNet solid, least squares dashed; the
-/// baseline black, the beam-model WLS brown and dashed, the floor grey and dotted, the
+/// Colour by error model, stroke by estimator: DCNet solid, least squares dashed, the
+/// Kalman filter dotted; the baseline black, the beam-model WLS brown and dashed, its
+/// Kalman filter olive and dotted, the floor grey and dotted, the
 /// bound black and dotted.
 pub fn series_look(estimator: EstimatorKind, error_model: Option<ErrorModel>) -> Look {
     let label = estimator.label_with(error_model);
@@ -116,12 +117,13 @@ pub fn series_look(estimator: EstimatorKind, error_model: Option<ErrorModel>) ->
         (EstimatorKind::Floor, _) => (GREY, Stroke::Dotted),
         (EstimatorKind::Bound, _) => (BLACK, Stroke::Dotted),
         (EstimatorKind::BeamWls, _) => (estimator_color(estimator), Stroke::Dashed),
+        (EstimatorKind::KalmanBeam, _) => (estimator_color(estimator), Stroke::Dotted),
         (_, None) => (BLACK, Stroke::Solid),
         (estimator, Some(model)) => (
             MODEL_COLORS[model as usize % MODEL_COLORS.len()],
             match estimator {
                 EstimatorKind::LeastSquares => Stroke::Dashed,
-                EstimatorKind::DcnetEnsemble => Stroke::Dotted,
+                EstimatorKind::Kalman | EstimatorKind::DcnetEnsemble => Stroke::Dotted,
                 _ => Stroke::Solid,
             },
         ),
@@ -150,6 +152,8 @@ pub fn estimator_color(estimator: EstimatorKind) -> RGBColor {
         EstimatorKind::Baseline => RGBColor(90, 90, 90),
         EstimatorKind::LeastSquares => RGBColor(31, 119, 180),
         EstimatorKind::BeamWls => RGBColor(140, 86, 75),
+        EstimatorKind::Kalman => RGBColor(23, 190, 207),
+        EstimatorKind::KalmanBeam => RGBColor(188, 189, 34),
         EstimatorKind::Dcnet => RGBColor(214, 39, 40),
         EstimatorKind::DcnetEnsemble => RGBColor(148, 103, 189),
         EstimatorKind::Floor => GREY,
@@ -200,6 +204,8 @@ pub enum Marker {
     Square,
     Diamond,
     Cross,
+    /// A filled triangle, point up.
+    Triangle,
     /// A small filled circle.
     Dot,
 }
@@ -239,6 +245,11 @@ impl Marker {
                     .iter()
                     .map(|p| at(p) + Cross::new((0, 0), 4, color.stroke_width(2))),
             )?,
+            Marker::Triangle => chart.draw_series(
+                points
+                    .iter()
+                    .map(|p| at(p) + Polygon::new(TRIANGLE.to_vec(), color.filled())),
+            )?,
             Marker::Dot => chart.draw_series(
                 points
                     .iter()
@@ -261,6 +272,9 @@ impl Marker {
                 area.draw(&(origin + Polygon::new(DIAMOND.to_vec(), color.filled())))
             }
             Marker::Cross => area.draw(&(origin + Cross::new((0, 0), 4, color.stroke_width(2)))),
+            Marker::Triangle => {
+                area.draw(&(origin + Polygon::new(TRIANGLE.to_vec(), color.filled())))
+            }
             Marker::Dot => area.draw(&(origin + Circle::new((0, 0), 2, color.filled()))),
         }
     }
@@ -268,6 +282,8 @@ impl Marker {
 
 /// The corners of [`Marker::Diamond`] around its centre, in pixels.
 const DIAMOND: [(i32, i32); 4] = [(0, -5), (5, 0), (0, 5), (-5, 0)];
+/// The corners of [`Marker::Triangle`] around its centre, in pixels.
+const TRIANGLE: [(i32, i32); 3] = [(0, -5), (5, 4), (-5, 4)];
 
 /// A column of legend entries, top to bottom.
 pub fn legend(area: &Area, title: &str, entries: &[(Swatch, String)]) -> PlotResult {

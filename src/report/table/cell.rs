@@ -87,6 +87,7 @@ impl Cell {
             detail: match phase {
                 Phase::Calibration => cell.t_conv_s.map(Detail::TConv),
                 Phase::Evaluation => cell.improvement_pct.map(Detail::Improvement),
+                Phase::HeldOut => None,
             },
         });
         let flagged = paper.as_ref().is_some_and(|paper| {

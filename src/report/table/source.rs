@@ -421,6 +421,9 @@ mod tests {
                 ],
             }),
             runs: Vec::new(),
+            held_out: Vec::new(),
+            calibration_time: Vec::new(),
+            terms_in_time: Vec::new(),
             calibration: vec![
                 calibration("DVL1", Baseline, None, 20.0, 7.0, false),
                 baseline_at_100,

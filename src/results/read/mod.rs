@@ -17,10 +17,16 @@ pub(crate) use columns::Batch;
 pub use columns::ColumnError;
 pub use rows::{StoredEpoch, StoredTrajectory};
 
+use super::calibration_time::{
+    CALIBRATION_TIME, HELD_OUT, TERMS_IN_TIME, calibration_time_batch, calibration_time_rows,
+    held_out_batch, held_out_rows, terms_in_time_batch, terms_in_time_rows,
+};
 use super::{
     MANIFEST, Manifest, PUBLISHED, SPEC, TABLES, calibration_batch, evaluation_batch,
     monte_carlo_batch, training_batch, trajectories_batch,
 };
+use crate::evaluate::calibration_time::{CalibrationTimeRow, HeldOutRow};
+use crate::evaluate::terms_in_time::TermInTimeRow;
 use crate::evaluate::{CalibrationRow, EvaluationRow, RunRow};
 use crate::spec::published::Published;
 use crate::spec::{SpecErrors, SpecFile, TomlFile};
@@ -121,6 +127,9 @@ pub struct StoredRun {
     pub runs: Vec<RunRow>,
     pub calibration: Vec<CalibrationRow>,
     pub evaluation: Vec<EvaluationRow>,
+    pub held_out: Vec<HeldOutRow>,
+    pub calibration_time: Vec<CalibrationTimeRow>,
+    pub terms_in_time: Vec<TermInTimeRow>,
     pub training: Vec<StoredEpoch>,
     pub trajectories: Vec<StoredTrajectory>,
 }
@@ -180,7 +189,16 @@ impl StoredRun {
         } else {
             None
         };
-        let [runs, calibration, evaluation, training, trajectories] = TABLES;
+        let [
+            runs,
+            calibration,
+            evaluation,
+            held_out,
+            calibration_time,
+            terms_in_time,
+            training,
+            trajectories,
+        ] = TABLES;
         Ok(StoredRun {
             folder: folder.to_path_buf(),
             spec,
@@ -189,6 +207,9 @@ impl StoredRun {
             runs: table(folder, runs, run_rows)?,
             calibration: table(folder, calibration, calibration_rows)?,
             evaluation: table(folder, evaluation, evaluation_rows)?,
+            held_out: table(folder, held_out, held_out_rows)?,
+            calibration_time: table(folder, calibration_time, calibration_time_rows)?,
+            terms_in_time: table(folder, terms_in_time, terms_in_time_rows)?,
             training: table(folder, training, epoch_rows)?,
             trajectories: gather_trajectories(table(folder, trajectories, trajectory_rows)?),
         })
@@ -288,6 +309,9 @@ fn expected_schema(file: &str) -> std::sync::Arc<Schema> {
         "monte_carlo.parquet" => monte_carlo_batch(&[]),
         "calibration.parquet" => calibration_batch(&[]),
         "evaluation.parquet" => evaluation_batch(&[]),
+        HELD_OUT => held_out_batch(&[]),
+        CALIBRATION_TIME => calibration_time_batch(&[]),
+        TERMS_IN_TIME => terms_in_time_batch(&[]),
         "training.parquet" => training_batch(&[]),
         "trajectories.parquet" => trajectories_batch(&[], 1.0),
         other => unreachable!("{other} is not a results table"),

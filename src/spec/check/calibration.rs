@@ -22,7 +22,14 @@ pub(in crate::spec) fn check_calibration(
         trajectory,
         window_sizes_s,
         monte_carlo_runs,
+        time_tolerance_pct,
     } = calibration;
+    if !(time_tolerance_pct.is_finite() && time_tolerance_pct > 0.0) {
+        faults.add(
+            "calibration.time_tolerance_pct",
+            format!("{time_tolerance_pct} must be a finite number above zero"),
+        );
+    }
     let index = sources.lookup("calibration.trajectory", &trajectory, faults);
     let segment = index.and_then(|i| sources[i].known_len());
     if window_sizes_s.is_empty() {
@@ -69,6 +76,7 @@ pub(in crate::spec) fn check_calibration(
         trajectory: index.unwrap_or_default(),
         window_sizes,
         monte_carlo_runs,
+        time_tolerance: time_tolerance_pct / 100.0,
     }
 }
 

@@ -1,19 +1,23 @@
-//! Checks `[estimators]`. In: the kinds of estimator and the error models by name.
-//! Out: each parsed, known and listed once; the bound and the DCNet ensemble, which a
-//! spec does not list, refused with the reason.
+//! Checks `[estimators]`. In: the kinds of estimator and the error models by name, and
+//! the Kalman filters' prior and random walk. Out: each parsed, known and listed once;
+//! the bound and the DCNet ensemble, which a spec does not list, refused with the
+//! reason; the prior positive and the random walk not negative, as fractions and m/s.
 
 use super::Faults;
-use crate::spec::file;
+use crate::kalman::TermSettings;
+use crate::spec::{KalmanSpec, file};
 use crate::vocab::{ErrorModel, EstimatorKind};
 
-/// Checks `[estimators]`: kinds and error models known, each listed once.
+/// Checks `[estimators]`: kinds and error models known, each listed once, and the
+/// Kalman filters' settings.
 pub(in crate::spec) fn check_estimators(
     estimators: file::EstimatorsFile,
     faults: &mut Faults,
-) -> (Vec<EstimatorKind>, Vec<ErrorModel>) {
+) -> (Vec<EstimatorKind>, Vec<ErrorModel>, KalmanSpec) {
     let file::EstimatorsFile {
         kinds,
         error_models,
+        kalman,
     } = estimators;
     let names = kinds;
     let mut kinds = parse_names("estimators.kinds", &names, faults);
@@ -35,7 +39,48 @@ pub(in crate::spec) fn check_estimators(
     }
     kinds.retain(|k| !matches!(k, EstimatorKind::Bound | EstimatorKind::DcnetEnsemble));
     let error_models = parse_names("estimators.error_models", &error_models, faults);
-    (kinds, error_models)
+    (kinds, error_models, check_kalman(kalman, faults))
+}
+
+/// Checks `[estimators.kalman]`: a positive finite prior, a finite random walk not
+/// below zero.
+fn check_kalman(kalman: file::KalmanFile, faults: &mut Faults) -> KalmanSpec {
+    let file::KalmanFile {
+        prior_scale_pct,
+        prior_bias_cm_s,
+        scale_random_walk_pct_per_sqrt_s,
+        bias_random_walk_cm_s_per_sqrt_s,
+    } = kalman;
+    let mut value = |name: &str, value: f64, zero_allowed: bool| {
+        let key = format!("estimators.kalman.{name}");
+        if !value.is_finite() || value < 0.0 || (value == 0.0 && !zero_allowed) {
+            let rule = if zero_allowed {
+                "zero or more"
+            } else {
+                "above zero"
+            };
+            faults.add(key, format!("{value} must be finite and {rule}"));
+        }
+        value / 100.0
+    };
+    KalmanSpec {
+        prior: TermSettings {
+            scale: value("prior_scale_pct", prior_scale_pct, false),
+            bias_m_s: value("prior_bias_cm_s", prior_bias_cm_s, false),
+        },
+        random_walk: TermSettings {
+            scale: value(
+                "scale_random_walk_pct_per_sqrt_s",
+                scale_random_walk_pct_per_sqrt_s,
+                true,
+            ),
+            bias_m_s: value(
+                "bias_random_walk_cm_s_per_sqrt_s",
+                bias_random_walk_cm_s_per_sqrt_s,
+                true,
+            ),
+        },
+    }
 }
 
 fn parse_names<T: std::str::FromStr<Err = String> + PartialEq>(
@@ -62,6 +107,24 @@ fn parse_names<T: std::str::FromStr<Err = String> + PartialEq>(
 #[cfg(test)]
 mod tests {
     use crate::spec::fixture::quick_faults;
+
+    #[test]
+    fn a_kalman_prior_must_be_positive_and_a_random_walk_not_negative() {
+        let faults = quick_faults(&[
+            "estimators.kalman.prior_scale_pct=0",
+            "estimators.kalman.bias_random_walk_cm_s_per_sqrt_s=-1",
+        ]);
+        assert!(
+            faults.contains("estimators.kalman.prior_scale_pct: 0 must be finite and above zero"),
+            "{faults}"
+        );
+        assert!(
+            faults.contains(
+                "estimators.kalman.bias_random_walk_cm_s_per_sqrt_s: -1 must be finite and zero or more"
+            ),
+            "{faults}"
+        );
+    }
 
     #[test]
     fn the_bound_is_not_listed() {

@@ -102,6 +102,7 @@ fn marker_of(estimator: EstimatorKind) -> Marker {
         EstimatorKind::Baseline => Marker::Square,
         EstimatorKind::LeastSquares => Marker::Cross,
         EstimatorKind::BeamWls => Marker::Diamond,
+        EstimatorKind::Kalman | EstimatorKind::KalmanBeam => Marker::Triangle,
         EstimatorKind::Dcnet => Marker::Circle,
         EstimatorKind::DcnetEnsemble => Marker::Ring,
         EstimatorKind::Floor | EstimatorKind::Bound => Marker::Dot,

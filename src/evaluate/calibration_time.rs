@@ -1,0 +1,286 @@
+//! How long to calibrate. In every Monte Carlo run, each method's terms from the first
+//! n samples of the calibration trajectory correct that run's measurements of the test
+//! trajectories, all of them pooled: the held-out RMSE against n, at every sample up
+//! to the longest calibration window for the methods whose estimate is cheap, at the
+//! calibration windows for DCNet. Its mean over runs is the method's held-out curve;
+//! the bound's is the expected RMSE of an efficient estimator from the same samples.
+//! A method's calibration time is the shortest length after which its curve stays
+//! within the spec's tolerance of its value at the longest window, and is set beside
+//! its T_conv. In: per-run rows of [`Phase::HeldOut`], the bound's curve, the
+//! calibration table. Out: the held-out curves and the calibration-time table.
+
+use super::rows::{CalibrationRow, RunRow};
+use super::statistics::mean_std;
+use crate::Vec3;
+use crate::bound::BoundRow;
+use crate::first_seen;
+use crate::vocab::{Correction, ErrorModel, EstimatorKind, Phase};
+
+/// The calibration lengths, in samples, at which a method's held-out curve is taken:
+/// the calibration windows for DCNet, whose estimate is a network pass per window;
+/// every sample up to the longest window for the others; none for the floor, which
+/// does not calibrate.
+pub fn curve_lengths(kind: EstimatorKind, windows: &[usize]) -> Vec<usize> {
+    match kind {
+        EstimatorKind::Dcnet | EstimatorKind::DcnetEnsemble => windows.to_vec(),
+        EstimatorKind::Floor | EstimatorKind::Bound => Vec::new(),
+        _ => (1..=windows.iter().copied().max().unwrap_or(0)).collect(),
+    }
+}
+
+/// What scores any scale-and-bias correction on fixed samples in a few operations:
+/// per axis, with e = d − t the DVL's error and t the truth, the count and the sums
+/// of e, e², t, t² and e·t. The corrected error `(d − b)/(1 + k) − t` is
+/// `(e − b − k·t)/(1 + k)`, whose square sums from them.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct HeldOutScore {
+    count: f64,
+    sums: [[f64; 5]; 3],
+}
+
+impl HeldOutScore {
+    /// Adds the samples `dvl` of the truth `truth`.
+    pub fn add(&mut self, dvl: &[Vec3], truth: &[Vec3]) {
+        for (d, t) in dvl.iter().zip(truth) {
+            self.count += 1.0;
+            for (a, sums) in self.sums.iter_mut().enumerate() {
+                let e = d[a] - t[a];
+                for (sum, value) in sums.iter_mut().zip([e, e * e, t[a], t[a] * t[a], e * t[a]]) {
+                    *sum += value;
+                }
+            }
+        }
+    }
+
+    /// `sqrt(mean_t Σ_xyz (truth − corrected)²)` of the samples added, cm/s: what
+    /// `protocol::rmse_cm_s` gives on them.
+    pub fn rmse_cm_s(&self, correction: &Correction) -> f64 {
+        let squares: f64 = (0..3)
+            .map(|a| {
+                let [e, ee, t, tt, et] = self.sums[a];
+                let (k, b) = (correction.scale[a], correction.bias_m_s[a]);
+                (ee + self.count * b * b + k * k * tt - 2.0 * b * e - 2.0 * k * et
+                    + 2.0 * b * k * t)
+                    / (1.0 + k).powi(2)
+            })
+            .sum();
+        100.0 * (squares.max(0.0) / self.count).sqrt()
+    }
+}
+
+/// One point of a held-out curve: the mean and spread over runs (and DCNet replicates)
+/// of the RMSE on the test trajectories of terms from `length_s` of calibration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeldOutRow {
+    pub dvl: String,
+    pub estimator: EstimatorKind,
+    pub error_model: Option<ErrorModel>,
+    pub length_s: f64,
+    pub rmse_cm_s: f64,
+    pub rmse_std_cm_s: f64,
+}
+
+/// A method's calibration time beside its T_conv.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrationTimeRow {
+    pub dvl: String,
+    pub estimator: EstimatorKind,
+    pub error_model: Option<ErrorModel>,
+    /// The paper's T_conv: the window of lowest mean RMSE on the rest of the
+    /// calibration trajectory.
+    pub t_conv_s: f64,
+    /// The shortest calibration after which the held-out RMSE stays within the
+    /// tolerance of its value at the longest window; `None` where even that value is
+    /// not finite.
+    pub calibration_time_s: Option<f64>,
+    /// The held-out RMSE at the calibration time and at the longest window, cm/s.
+    pub rmse_at_time_cm_s: f64,
+    pub long_window_rmse_cm_s: f64,
+    pub long_window_s: f64,
+    pub tolerance_pct: f64,
+}
+
+/// The shortest length of `curve` (length, mean RMSE, in increasing length) from which
+/// every later point is within `tolerance` (a fraction) of the last point's RMSE; its
+/// index. `None` when the last point is not finite.
+pub fn calibration_time_index(curve: &[(f64, f64)], tolerance: f64) -> Option<usize> {
+    let &(_, long) = curve.last()?;
+    if !long.is_finite() {
+        return None;
+    }
+    let limit = long * (1.0 + tolerance);
+    let outside = curve.iter().rposition(|&(_, rmse)| !(rmse <= limit));
+    Some(outside.map_or(0, |i| i + 1))
+}
+
+/// The held-out curve of every series of `runs` (replicates pooled with runs) and of
+/// every DVL's bound (`bounds` of [`Phase::HeldOut`]), in that order.
+pub fn held_out_curves(runs: &[RunRow], bounds: &[BoundRow]) -> Vec<HeldOutRow> {
+    let held_out: Vec<&RunRow> = runs.iter().filter(|r| r.phase == Phase::HeldOut).collect();
+    let series = first_seen(
+        held_out
+            .iter()
+            .map(|r| (r.dvl.as_str(), r.estimator, r.error_model)),
+    );
+    let mut rows = Vec::new();
+    for (dvl, estimator, error_model) in series {
+        let of_series: Vec<&&RunRow> = held_out
+            .iter()
+            .filter(|r| r.dvl == dvl && r.estimator == estimator && r.error_model == error_model)
+            .collect();
+        let mut lengths = first_seen(of_series.iter().map(|r| r.window_s));
+        lengths.sort_by(f64::total_cmp);
+        for length_s in lengths {
+            let (rmse_cm_s, rmse_std_cm_s) = mean_std(
+                of_series
+                    .iter()
+                    .filter(|r| r.window_s == length_s)
+                    .map(|r| r.rmse_cm_s),
+            );
+            rows.push(HeldOutRow {
+                dvl: dvl.to_string(),
+                estimator,
+                error_model,
+                length_s,
+                rmse_cm_s,
+                rmse_std_cm_s,
+            });
+        }
+    }
+    rows.extend(
+        bounds
+            .iter()
+            .filter(|b| b.phase == Phase::HeldOut)
+            .map(|b| HeldOutRow {
+                dvl: b.dvl.clone(),
+                estimator: EstimatorKind::Bound,
+                error_model: None,
+                length_s: b.window_s,
+                rmse_cm_s: b.rmse_cm_s,
+                rmse_std_cm_s: b.rmse_std_cm_s,
+            }),
+    );
+    rows
+}
+
+/// The calibration time of every curve of `curves`, with the T_conv the calibration
+/// table gives the same method; each DVL's curves are cut at its longest calibration
+/// window, the same for every method.
+pub fn calibration_times(
+    curves: &[HeldOutRow],
+    calibration: &[CalibrationRow],
+    tolerance: f64,
+) -> Vec<CalibrationTimeRow> {
+    let series = first_seen(
+        curves
+            .iter()
+            .map(|r| (r.dvl.as_str(), r.estimator, r.error_model)),
+    );
+    series
+        .into_iter()
+        .filter_map(|(dvl, estimator, error_model)| {
+            let long_window_s = calibration
+                .iter()
+                .filter(|r| r.dvl == dvl)
+                .map(|r| r.window_s)
+                .fold(f64::NEG_INFINITY, f64::max);
+            let curve: Vec<(f64, f64)> = curves
+                .iter()
+                .filter(|r| {
+                    r.dvl == dvl
+                        && r.estimator == estimator
+                        && r.error_model == error_model
+                        && r.length_s <= long_window_s
+                })
+                .map(|r| (r.length_s, r.rmse_cm_s))
+                .collect();
+            let t_conv_s = calibration
+                .iter()
+                .find(|r| {
+                    r.dvl == dvl
+                        && r.estimator == estimator
+                        && r.error_model == error_model
+                        && r.is_t_conv
+                })?
+                .window_s;
+            let &(long_s, long) = curve.last()?;
+            let index = calibration_time_index(&curve, tolerance);
+            Some(CalibrationTimeRow {
+                dvl: dvl.to_string(),
+                estimator,
+                error_model,
+                t_conv_s,
+                calibration_time_s: index.map(|i| curve[i].0),
+                rmse_at_time_cm_s: index.map_or(f64::NAN, |i| curve[i].1),
+                long_window_rmse_cm_s: long,
+                long_window_s: long_s,
+                tolerance_pct: 100.0 * tolerance,
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::evaluate::rmse_cm_s;
+
+    #[test]
+    fn the_score_from_sums_is_the_rmse_of_the_samples() {
+        let truth: Vec<Vec3> = (0..50)
+            .map(|t| t as f64)
+            .map(|t| {
+                [
+                    1.5 + 0.2 * (t / 7.0).sin(),
+                    0.3 * (t / 5.0).cos(),
+                    0.02 * t.sin(),
+                ]
+            })
+            .collect();
+        let dvl: Vec<Vec3> = truth
+            .iter()
+            .enumerate()
+            .map(|(i, v)| {
+                let wobble = 0.01 * ((i * 7919) % 13) as f64 / 13.0;
+                [
+                    1.01 * v[0] + wobble,
+                    1.01 * v[1] - wobble,
+                    1.01 * v[2] + 0.007,
+                ]
+            })
+            .collect();
+        let mut score = HeldOutScore::default();
+        score.add(&dvl[..20], &truth[..20]);
+        score.add(&dvl[20..], &truth[20..]);
+        for correction in [
+            Correction::NONE,
+            Correction {
+                scale: [0.01, 0.012, -0.003],
+                bias_m_s: [0.001, -0.002, 0.007],
+            },
+        ] {
+            let direct = rmse_cm_s(&correction, &dvl, &truth);
+            assert!((score.rmse_cm_s(&correction) - direct).abs() < 1e-10 * direct);
+        }
+    }
+
+    #[test]
+    fn the_calibration_time_is_where_the_curve_stays_within_the_tolerance() {
+        // Last point 1.0: within 10 % means at most 1.1.
+        let curve = [
+            (1.0, 5.0),
+            (2.0, 1.05),
+            (3.0, 1.2),
+            (4.0, 1.09),
+            (5.0, 1.1),
+            (6.0, 1.0),
+        ];
+        assert_eq!(calibration_time_index(&curve, 0.1), Some(3));
+        assert_eq!(calibration_time_index(&curve, 0.25), Some(1));
+        assert_eq!(calibration_time_index(&curve, 5.0), Some(0));
+        // A point that cannot be scored (NaN) is not within.
+        let gap = [(1.0, 1.0), (2.0, f64::NAN), (3.0, 1.0)];
+        assert_eq!(calibration_time_index(&gap, 0.1), Some(2));
+        assert_eq!(calibration_time_index(&[(1.0, f64::INFINITY)], 0.1), None);
+    }
+}

@@ -1,0 +1,191 @@
+//! The report's section on how long to calibrate: per DVL, every method's calibration
+//! time (the shortest calibration after which its held-out RMSE stays within the
+//! spec's tolerance of its value at the longest window) beside the paper's T_conv, the
+//! held-out RMSE there and at the longest window, the bound's among them; then the
+//! paper's claim of a calibration 80 % shorter than the baseline's, checked for every
+//! error model against the baseline and against the Kalman filter of the same model.
+//! In: a [`StoredRun`]'s calibration-time and held-out tables. Out: [`Section`]s, set
+//! as Markdown and LaTeX by [`section`](super::section).
+
+use super::section::{Entry, Section, Table};
+use crate::evaluate::calibration_time::{CalibrationTimeRow, HeldOutRow};
+use crate::results::read::StoredRun;
+use crate::vocab::{ErrorModel, EstimatorKind};
+
+/// The section's tables: one per DVL, then the claim's; none when the run has no
+/// held-out curves.
+pub(crate) fn sections(run: &StoredRun) -> Vec<Section> {
+    let rows = &run.calibration_time;
+    let Some(first) = rows.first() else {
+        return Vec::new();
+    };
+    let tolerance = first.tolerance_pct;
+    let mut sections: Vec<Section> = run
+        .dvls()
+        .iter()
+        .filter(|dvl| rows.iter().any(|r| &r.dvl == *dvl))
+        .map(|dvl| dvl_section(dvl, rows, tolerance))
+        .collect();
+    if let Some(claim) = claim_section(run) {
+        sections.push(claim);
+    }
+    sections
+}
+
+/// A length in seconds, or "—" where there is none.
+fn seconds(value: Option<f64>) -> Entry {
+    match value {
+        Some(s) => Entry::Text(format!("{s:.0}")),
+        None => Entry::Missing,
+    }
+}
+
+fn rmse(value: f64) -> Entry {
+    if value.is_finite() {
+        Entry::Text(format!("{value:.2}"))
+    } else {
+        Entry::Missing
+    }
+}
+
+fn dvl_section(dvl: &str, rows: &[CalibrationTimeRow], tolerance: f64) -> Section {
+    let of_dvl: Vec<&CalibrationTimeRow> = rows.iter().filter(|r| r.dvl == dvl).collect();
+    let long_s = of_dvl.first().map_or(0.0, |r| r.long_window_s);
+    let table = Table {
+        header: [
+            "method",
+            "T_conv (s)",
+            "calibration time (s)",
+            "RMSE there",
+            &format!("RMSE at {long_s:.0} s"),
+        ]
+        .map(String::from)
+        .to_vec(),
+        rows: of_dvl
+            .iter()
+            .map(|r| {
+                vec![
+                    Entry::Text(r.estimator.label_with(r.error_model)),
+                    seconds(Some(r.t_conv_s)),
+                    seconds(r.calibration_time_s),
+                    rmse(r.rmse_at_time_cm_s),
+                    rmse(r.long_window_rmse_cm_s),
+                ]
+            })
+            .collect(),
+        notes: vec![
+            "DCNet's terms are estimated at the calibration windows only, so its calibration time is one of them; the other methods are scored after every sample.".into(),
+        ],
+    };
+    Section {
+        title: format!("How long to calibrate {dvl}"),
+        caption: format!(
+            "Held-out RMSE (cm/s) on the test trajectories pooled, mean over runs. A method's calibration time is the shortest calibration after which its RMSE stays within {tolerance:.0} % of its own value at the longest window ({long_s:.0} s); T_conv is the paper's: the window of lowest RMSE on the rest of the calibration trajectory. The bound's row is an efficient estimator's."
+        ),
+        table,
+        paragraph: None,
+    }
+}
+
+/// The held-out RMSE of a method after `length_s` of calibration, when its curve holds
+/// that length.
+fn held_out_at(
+    curves: &[HeldOutRow],
+    dvl: &str,
+    estimator: EstimatorKind,
+    error_model: Option<ErrorModel>,
+    length_s: f64,
+) -> Option<f64> {
+    curves
+        .iter()
+        .find(|r| {
+            r.dvl == dvl
+                && r.estimator == estimator
+                && r.error_model == error_model
+                && r.length_s == length_s
+        })
+        .map(|r| r.rmse_cm_s)
+}
+
+/// `1 − shorter / longer` in %, as the paper counts an improvement in calibration time.
+fn shorter_by(ours: Option<f64>, theirs: Option<f64>) -> Entry {
+    match (ours, theirs) {
+        (Some(ours), Some(theirs)) if theirs > 0.0 => {
+            Entry::Text(format!("{:.0} %", 100.0 * (1.0 - ours / theirs)))
+        }
+        _ => Entry::Missing,
+    }
+}
+
+/// The paper's claim, "80 % shorter calibration than the baseline", for DCNet of every
+/// error model: by T_conv and by calibration time against the baseline, and by
+/// calibration time against the Kalman filter of the same model, with the filter's
+/// held-out RMSE after DCNet's calibration time beside DCNet's own.
+fn claim_section(run: &StoredRun) -> Option<Section> {
+    let rows = &run.calibration_time;
+    let find = |dvl: &str, estimator, error_model| {
+        rows.iter()
+            .find(|r| r.dvl == dvl && r.estimator == estimator && r.error_model == error_model)
+    };
+    let mut table_rows = Vec::new();
+    for r in rows.iter().filter(|r| r.estimator == EstimatorKind::Dcnet) {
+        let baseline = find(&r.dvl, EstimatorKind::Baseline, None);
+        let kalman = find(&r.dvl, EstimatorKind::Kalman, r.error_model);
+        let kalman_there = r.calibration_time_s.and_then(|length| {
+            held_out_at(
+                &run.held_out,
+                &r.dvl,
+                EstimatorKind::Kalman,
+                r.error_model,
+                length,
+            )
+        });
+        table_rows.push(vec![
+            Entry::Text(r.dvl.clone()),
+            Entry::Text(r.error_model.map_or(String::new(), |m| m.to_string())),
+            seconds(Some(r.t_conv_s)),
+            seconds(baseline.map(|b| b.t_conv_s)),
+            shorter_by(Some(r.t_conv_s), baseline.map(|b| b.t_conv_s)),
+            seconds(r.calibration_time_s),
+            seconds(baseline.and_then(|b| b.calibration_time_s)),
+            shorter_by(
+                r.calibration_time_s,
+                baseline.and_then(|b| b.calibration_time_s),
+            ),
+            seconds(kalman.and_then(|k| k.calibration_time_s)),
+            shorter_by(
+                r.calibration_time_s,
+                kalman.and_then(|k| k.calibration_time_s),
+            ),
+            rmse(r.rmse_at_time_cm_s),
+            kalman_there.map_or(Entry::Missing, rmse),
+        ]);
+    }
+    if table_rows.is_empty() {
+        return None;
+    }
+    let header = [
+        "DVL",
+        "model",
+        "DCNet T_conv",
+        "baseline T_conv",
+        "shorter",
+        "DCNet time",
+        "baseline time",
+        "shorter",
+        "Kalman time",
+        "shorter",
+        "DCNet RMSE",
+        "Kalman RMSE",
+    ];
+    Some(Section {
+        title: "The paper's claim: an 80 % shorter calibration".into(),
+        caption: "DCNet's calibration against the baseline's (the paper's comparison) and against the Kalman filter of the same error model, by T_conv and by calibration time (s); \"shorter\" is 1 − DCNet's / the other's. The last two columns give the held-out RMSE (cm/s) of DCNet and of the Kalman filter after DCNet's calibration time.".into(),
+        table: Table {
+            header: header.map(String::from).to_vec(),
+            rows: table_rows,
+            notes: Vec::new(),
+        },
+        paragraph: None,
+    })
+}
