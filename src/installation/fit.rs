@@ -79,6 +79,37 @@ pub enum FitError {
     TimeOffsetBeyondMargin { time_offset_s: f64, margin_s: f64 },
 }
 
+/// The reference at `time_s`, held at its ends when a τ reaches beyond them (LM's
+/// fit then fails with [`FitError::TimeOffsetBeyondMargin`]).
+pub fn reference_held(reference: &Reference, time_s: f64) -> ReferenceAt {
+    let first = reference.time_s[0];
+    let last = reference.time_s[reference.time_s.len() - 1];
+    reference
+        .at(time_s.clamp(first, last))
+        .expect("a time inside the reference")
+}
+
+/// The time derivative of the reference at `time_s`: a central difference of the
+/// linear interpolation, [`SLOPE_STEP_S`] each side, held at its ends.
+pub fn slope_held(reference: &Reference, time_s: f64) -> ReferenceAt {
+    let first = reference.time_s[0];
+    let last = reference.time_s[reference.time_s.len() - 1];
+    let (before, after) = (
+        (time_s - SLOPE_STEP_S).clamp(first, last),
+        (time_s + SLOPE_STEP_S).clamp(first, last),
+    );
+    let (a, b) = (
+        reference_held(reference, before),
+        reference_held(reference, after),
+    );
+    let span = after - before;
+    let rate = |x: Vec3, y: Vec3| [0, 1, 2].map(|k| (y[k] - x[k]) / span);
+    ReferenceAt {
+        velocity_body_m_s: rate(a.velocity_body_m_s, b.velocity_body_m_s),
+        rate_rad_s: rate(a.rate_rad_s, b.rate_rad_s),
+    }
+}
+
 /// The least-squares problem LM solves: `terms` are free, the rest of `base` is held.
 struct Problem<'a> {
     time_s: &'a [f64],
@@ -95,30 +126,12 @@ impl Problem<'_> {
             .with_parameters(&self.terms, self.parameters.as_slice())
     }
 
-    /// The reference at `time_s`, held at its ends when LM tries a τ beyond the
-    /// margin (the fit then fails with [`FitError::TimeOffsetBeyondMargin`]).
     fn reference_at(&self, time_s: f64) -> ReferenceAt {
-        let first = self.reference.time_s[0];
-        let last = self.reference.time_s[self.reference.time_s.len() - 1];
-        self.reference
-            .at(time_s.clamp(first, last))
-            .expect("a time inside the reference")
+        reference_held(self.reference, time_s)
     }
 
     fn slope_at(&self, time_s: f64) -> ReferenceAt {
-        let first = self.reference.time_s[0];
-        let last = self.reference.time_s[self.reference.time_s.len() - 1];
-        let (before, after) = (
-            (time_s - SLOPE_STEP_S).clamp(first, last),
-            (time_s + SLOPE_STEP_S).clamp(first, last),
-        );
-        let (a, b) = (self.reference_at(before), self.reference_at(after));
-        let span = after - before;
-        let rate = |x: Vec3, y: Vec3| [0, 1, 2].map(|k| (y[k] - x[k]) / span);
-        ReferenceAt {
-            velocity_body_m_s: rate(a.velocity_body_m_s, b.velocity_body_m_s),
-            rate_rad_s: rate(a.rate_rad_s, b.rate_rad_s),
-        }
+        slope_held(self.reference, time_s)
     }
 
     fn residual_vector(&self) -> DVector<f64> {

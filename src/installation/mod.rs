@@ -7,23 +7,29 @@
 //! reference; [`fit`] estimates the selected terms by nonlinear least squares
 //! (Levenberg–Marquardt from a scan over τ, on a fixed interior mask); [`bound`] gives
 //! their Fisher information: standard deviations, correlations and the terms a segment
-//! cannot show; [`study`] scores every method held out. With `[learned]`
+//! cannot show; [`filter`] estimates them sample by sample (an extended Kalman filter)
+//! with the bound of the samples so far; [`study`] scores every method held out, and
+//! [`calibration_time`] finds how long each needs. With `[learned]`
 //! ([`learned_spec`]): [`simulate`] makes DVLs of simulated installations over the real
 //! reference, [`network`] is the DCNet that outputs the terms and its loss, [`learned`]
 //! gives each fold its training windows and reads the terms a trained model finds. The
-//! spec's names of the terms are [`term_names`].
+//! spec's names of the terms are [`term_names`]; `[calibration.kalman]`, the filter's
+//! settings, is [`filter_spec`].
 //! In: [`PairedRecording`](crate::data::paired::PairedRecording)s. Out: terms, their
 //! bound, corrected records.
 
 pub mod term_names;
 pub mod learned_spec;
+pub mod filter_spec;
 pub mod spec;
 pub mod frames;
 pub mod terms;
 pub mod fit;
 pub mod bound;
+pub mod filter;
 pub mod rows;
 pub mod study;
+pub mod calibration_time;
 pub mod simulate;
 pub mod network;
 pub mod learned;

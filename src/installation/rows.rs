@@ -78,6 +78,36 @@ pub struct TracePoint {
     pub yaw_rate_deg_s: f64,
 }
 
+/// A method's calibration time on one calibration trajectory, beside its T_conv.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StudyTimeRow {
+    pub method: String,
+    pub calibration: String,
+    /// The window of lowest held-out RMSE.
+    pub t_conv_s: f64,
+    /// The shortest window after which the held-out RMSE stays within the tolerance of
+    /// its value at the longest window.
+    pub calibration_time_s: Option<f64>,
+    pub rmse_at_time_cm_s: f64,
+    pub long_window_rmse_cm_s: f64,
+    pub tolerance_pct: f64,
+}
+
+/// One term of a Kalman filter after one sample of a calibration trajectory, in the
+/// term's stored unit.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct FilterPoint {
+    pub method: String,
+    pub calibration: String,
+    /// From the first sample of the calibration trajectory, s.
+    pub time_s: f64,
+    pub term: String,
+    pub value: f64,
+    pub std: f64,
+    /// The bound's standard deviation from a batch of the samples so far.
+    pub bound_std: f64,
+}
+
 /// Everything the study computes.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Study {
@@ -89,6 +119,10 @@ pub struct Study {
     /// With `[learned]`: every method on the pairs inside a fold only, fold by fold and
     /// over all folds, the learned models' side-by-side comparison.
     pub folds: Vec<FoldSummaryRow>,
+    /// The Kalman filters' terms after every sample of every calibration trajectory.
+    pub filtered: Vec<FilterPoint>,
+    /// Every method's calibration time on every calibration trajectory.
+    pub calibration_time: Vec<StudyTimeRow>,
 }
 
 /// A summary over the (calibration, scored) pairs inside one fold, or inside any

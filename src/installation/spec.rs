@@ -5,6 +5,8 @@
 //! seen. In: a TOML file and `--set` overrides. Out: an [`InstallationSpec`], or every
 //! fault placed on its line.
 
+use super::filter::FilterSettings;
+use super::filter_spec::{KalmanFile, check_kalman};
 use super::learned_spec::{LEARNED_LABEL, LearnedFile, LearnedSpec, Source, check_learned};
 use super::term_names::{TermName, term_list_faults};
 use crate::data::paired::{PairedColumns, PairedFiles};
@@ -69,6 +71,19 @@ pub struct StudyCalibrationFile {
     /// Named term sets of the installation model, fitted by nonlinear least squares.
     #[serde(default)]
     pub models: Vec<TermSetFile>,
+    /// The models the extended Kalman filter runs too, and its prior.
+    #[serde(default)]
+    pub kalman: KalmanFile,
+    /// A method's calibration time is the shortest window after which its held-out
+    /// RMSE stays within this of its value at the longest window, %.
+    #[serde(default = "StudyCalibrationFile::default_time_tolerance_pct")]
+    pub time_tolerance_pct: f64,
+}
+
+impl StudyCalibrationFile {
+    fn default_time_tolerance_pct() -> f64 {
+        10.0
+    }
 }
 
 #[derive(Debug, Clone, serde::Deserialize)]
@@ -141,6 +156,8 @@ pub enum Method {
     LeastSquares(ErrorModel),
     /// A named term set of the installation model, by nonlinear least squares.
     Installation { name: String, terms: Vec<TermName> },
+    /// The same, by the extended Kalman filter.
+    Filter { name: String, terms: Vec<TermName> },
     /// The paper spec's DCNet for an error model.
     Dcnet(ErrorModel),
     /// `[learned]`'s DCNet trained on a source, replicate `replicate` (of
@@ -155,6 +172,7 @@ impl Method {
             Method::Baseline => "baseline".into(),
             Method::LeastSquares(model) => format!("least squares {model}"),
             Method::Installation { name, .. } => format!("installation {name}"),
+            Method::Filter { name, .. } => format!("Kalman filter {name}"),
             Method::Dcnet(model) => format!("DCNet {model}"),
             Method::Learned { source, replicate } => {
                 let on = match source {
@@ -182,6 +200,10 @@ pub struct InstallationSpec {
     /// In increasing order.
     pub windows_s: Vec<f64>,
     pub methods: Vec<Method>,
+    /// The extended Kalman filter's prior and random walk.
+    pub filter: FilterSettings,
+    /// The calibration time's tolerance, a fraction (0.1 for 10 %).
+    pub time_tolerance: f64,
     pub observability: ObservabilityFile,
     /// The paper spec whose DCNet models are used, when `dcnet` is a method.
     pub dcnet_spec: Option<PathBuf>,
@@ -350,6 +372,23 @@ fn check(
             terms: model.terms.clone(),
         });
     }
+    let names: Vec<&str> = calibration.models.iter().map(|m| m.name.as_str()).collect();
+    let filter = check_kalman(&calibration.kalman, &names, &mut fault);
+    for name in &calibration.kalman.models {
+        if let Some(model) = calibration.models.iter().find(|m| &m.name == name) {
+            methods.push(Method::Filter {
+                name: model.name.clone(),
+                terms: model.terms.clone(),
+            });
+        }
+    }
+    let tolerance_pct = calibration.time_tolerance_pct;
+    if !(tolerance_pct.is_finite() && tolerance_pct > 0.0) {
+        fault(
+            "calibration.time_tolerance_pct".into(),
+            format!("{tolerance_pct} must be a finite number above zero"),
+        );
+    }
     let dcnet_spec = match (&file.dcnet, wants_dcnet) {
         (Some(dcnet), true) => {
             methods.extend(ErrorModel::ALL.map(Method::Dcnet));
@@ -403,6 +442,8 @@ fn check(
         reference_noise_m_s: noise.reference_cm_s / 100.0,
         windows_s,
         methods,
+        filter,
+        time_tolerance: tolerance_pct / 100.0,
         observability: o.clone(),
         dcnet_spec,
         learned,
@@ -425,6 +466,8 @@ pub(crate) mod tests {
             dvl_noise_m_s: 0.02,
             reference_noise_m_s: 0.0,
             windows_s: vec![100.0],
+            filter: check_kalman(&KalmanFile::default(), &[], &mut |_, _| {}),
+            time_tolerance: 0.1,
             methods: learned
                 .sources
                 .iter()

@@ -9,15 +9,17 @@
 //! estimated terms with their bound, and the summary per method.
 
 use super::bound::{Noise, TermBound, bound};
+use super::calibration_time::calibration_times;
+use super::filter::{FilterStep, run_filter};
 use super::fit::{TIME_OFFSET_MARGIN_S, fit};
 use super::frames::Reference;
 use super::learned_spec::Source;
 use super::rows::{
-    FitFailure, FoldSummaryRow, HeldOutRow, NO_CALIBRATION, Study, SummaryRow, TermRow,
+    FilterPoint, FitFailure, FoldSummaryRow, HeldOutRow, NO_CALIBRATION, Study, SummaryRow, TermRow,
 };
 use super::spec::{InstallationSpec, Method};
 use super::term_names::term_set;
-use super::terms::{Installation, score};
+use super::terms::{Installation, TermSet, score};
 use crate::Vec3;
 use crate::data::paired::PairedRecording;
 use crate::estimators::{Baseline, Estimator, LeastSquares};
@@ -67,6 +69,8 @@ pub fn sample_interval(time: &[f64]) -> f64 {
 struct Estimate {
     installation: Installation,
     bound: Option<TermBound>,
+    /// A filter's terms: each parameter's name, value and standard deviation.
+    filtered: Option<Vec<(&'static str, f64, f64)>>,
 }
 
 /// The terms one method estimated on one calibration window.
@@ -149,6 +153,7 @@ pub struct Calibrated {
     pub terms: Vec<TermRow>,
     pub estimated: Vec<Estimated>,
     pub failures: Vec<FitFailure>,
+    pub filtered: Vec<FilterPoint>,
 }
 
 impl Calibrated {
@@ -160,6 +165,7 @@ impl Calibrated {
             all.terms.extend(part.terms);
             all.estimated.extend(part.estimated);
             all.failures.extend(part.failures);
+            all.filtered.extend(part.filtered);
         }
         all
     }
@@ -200,6 +206,12 @@ pub fn assemble(spec: &InstallationSpec, parts: Vec<Calibrated>) -> (Study, Vec<
         trace: Vec::new(),
         failures: all.failures,
         folds,
+        filtered: all.filtered,
+        calibration_time: Vec::new(),
+    };
+    let study = Study {
+        calibration_time: calibration_times(&study.heldout, spec.time_tolerance),
+        ..study
     };
     (study, all.estimated)
 }
@@ -220,11 +232,33 @@ pub fn calibrate_on(
         reference_m_s: spec.reference_noise_m_s,
     };
     let tolerances = spec.observability.tolerances();
+    let calibration = segments[c];
+    // Each filter runs once over the whole trajectory; a window takes its state after
+    // the window's last sample.
+    let filters: Vec<(String, TermSet, Vec<FilterStep>)> = spec
+        .methods
+        .iter()
+        .filter_map(|method| match method {
+            Method::Filter { terms, .. } => {
+                let recording = &calibration.recording;
+                let set = term_set(terms);
+                let steps = run_filter(
+                    &recording.time_s,
+                    &recording.dvl_m_s,
+                    &calibration.reference,
+                    set,
+                    &spec.filter,
+                    noise,
+                );
+                Some((method.label(), set, steps))
+            }
+            _ => None,
+        })
+        .collect();
     let per_window: Vec<Calibrated> = spec
         .windows_s
         .par_iter()
         .map(|&window_s| {
-            let calibration = segments[c];
             let (range, _) = calibration.first_seconds(window_s);
             let mut heldout = Vec::new();
             let mut terms = Vec::new();
@@ -234,6 +268,7 @@ pub fn calibrate_on(
                 Estimate {
                     installation: Installation::default(),
                     bound: None,
+                    filtered: None,
                 },
             )];
             for method in &spec.methods {
@@ -251,13 +286,39 @@ pub fn calibrate_on(
                                     None => continue,
                                 }
                             }
-                            Method::Installation { .. } | Method::Learned { .. } => {
+                            Method::Installation { .. }
+                            | Method::Filter { .. }
+                            | Method::Learned { .. } => {
                                 unreachable!()
                             }
                         };
                         Estimate {
                             installation: from_correction(&correction),
                             bound: None,
+                            filtered: None,
+                        }
+                    }
+                    Method::Filter { .. } => {
+                        let label = method.label();
+                        let (_, set, steps) = filters
+                            .iter()
+                            .find(|(l, _, _)| *l == label)
+                            .expect("every filter ran");
+                        let Some(step) = steps.iter().take_while(|s| s.sample < range.end).last()
+                        else {
+                            continue;
+                        };
+                        Estimate {
+                            installation: step.installation,
+                            bound: None,
+                            filtered: Some(
+                                set.parameter_names()
+                                    .into_iter()
+                                    .zip(step.installation.to_parameters(set))
+                                    .zip(&step.std)
+                                    .map(|((name, value), &std)| (name, value, std))
+                                    .collect(),
+                            ),
                         }
                     }
                     Method::Learned { source, replicate } => {
@@ -271,6 +332,7 @@ pub fn calibrate_on(
                             Some(installation) => Estimate {
                                 installation,
                                 bound: None,
+                                filtered: None,
                             },
                             None => continue,
                         }
@@ -286,6 +348,7 @@ pub fn calibrate_on(
                             Ok(fitted) => Estimate {
                                 installation: fitted.installation,
                                 bound: Some(bound(&fitted, noise, &tolerances)),
+                                filtered: None,
                             },
                             Err(why) => {
                                 failures.push(FitFailure {
@@ -329,6 +392,19 @@ pub fn calibrate_on(
                             term: name.to_string(),
                             value,
                             std: f64::NAN,
+                            unseen: String::new(),
+                        });
+                    }
+                }
+                if let Some(filtered) = &estimate.filtered {
+                    for &(name, value, std) in filtered {
+                        terms.push(TermRow {
+                            method: label.clone(),
+                            calibration: calibration.name.clone(),
+                            window_s,
+                            term: name.to_string(),
+                            value,
+                            std,
                             unseen: String::new(),
                         });
                     }
@@ -387,10 +463,28 @@ pub fn calibrate_on(
                 terms,
                 estimated,
                 failures,
+                filtered: Vec::new(),
             }
         })
         .collect();
-    Calibrated::concat(per_window)
+    let mut calibrated = Calibrated::concat(per_window);
+    for (label, set, steps) in &filters {
+        for step in steps {
+            let values = step.installation.to_parameters(set);
+            for (p, name) in set.parameter_names().into_iter().enumerate() {
+                calibrated.filtered.push(FilterPoint {
+                    method: label.clone(),
+                    calibration: calibration.name.clone(),
+                    time_s: step.time_s,
+                    term: name.to_string(),
+                    value: values[p],
+                    std: step.std[p],
+                    bound_std: step.bound_std[p],
+                });
+            }
+        }
+    }
+    calibrated
 }
 
 /// [`summarize`] on the pairs whose calibration and scored trajectories share a fold,

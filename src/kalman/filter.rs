@@ -68,6 +68,27 @@ impl Filter {
 
     /// Takes in one sample's measurement.
     pub fn update(&mut self, measurement: &Measurement) {
+        self.update_about(measurement, &self.estimate.clone());
+    }
+
+    /// Takes in one sample's measurement of a nonlinear h by the iterated extended
+    /// filter: `measure(θ)` linearises h at θ (its Jacobian and `y − h(θ)`), and the
+    /// update is taken again about each new estimate, `iterations` times in all (Gauss–
+    /// Newton on the sample and the prior). Where h is linear every pass gives the plain
+    /// update.
+    pub fn update_iterated(&mut self, iterations: usize, measure: impl Fn(&[f64]) -> Measurement) {
+        let prior = self.clone();
+        let mut about = self.estimate.clone();
+        for _ in 0..iterations.max(1) {
+            *self = prior.clone();
+            self.update_about(&measure(about.as_slice()), &about);
+            about = self.estimate.clone();
+        }
+    }
+
+    /// The update with `measurement` linearised about `about`: its innovation
+    /// `y − h(about)` moved to the current estimate, `− H·(θ̂ − about)`.
+    fn update_about(&mut self, measurement: &Measurement, about: &DVector<f64>) {
         let n = self.estimate.len();
         let m = measurement.rows.len();
         let h = DMatrix::from_fn(m, n, |r, c| measurement.rows[r][c]);
@@ -79,7 +100,9 @@ impl Filter {
             return;
         };
         let gain = ph * inverse;
-        self.estimate += &gain * DVector::from_column_slice(&measurement.innovation);
+        let innovation =
+            DVector::from_column_slice(&measurement.innovation) - &h * (&self.estimate - about);
+        self.estimate += &gain * innovation;
         let keep = DMatrix::identity(n, n) - &gain * &h;
         self.covariance =
             &keep * &self.covariance * keep.transpose() + &gain * noise * gain.transpose();

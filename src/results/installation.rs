@@ -11,7 +11,8 @@
 use super::read::{Batch, ColumnError, ReadError, read_rows};
 use super::{ResultsError, batch, floats, strings, table_bytes as parquet_table_bytes};
 use crate::installation::rows::{
-    FitFailure, FoldSummaryRow, HeldOutRow, Study, SummaryRow, TermRow, TracePoint,
+    FilterPoint, FitFailure, FoldSummaryRow, HeldOutRow, Study, StudyTimeRow, SummaryRow, TermRow,
+    TracePoint,
 };
 use arrow_array::RecordBatch;
 use std::path::Path;
@@ -21,8 +22,18 @@ pub const TERMS: &str = "terms.parquet";
 pub const SUMMARY: &str = "summary.parquet";
 pub const TRACE: &str = "trace.parquet";
 pub const FAILURES: &str = "failures.parquet";
+pub const TERMS_IN_TIME: &str = "terms_in_time.parquet";
+pub const CALIBRATION_TIME: &str = "calibration_time.parquet";
 /// The study's tables, in the order they are written.
-pub const TABLES: [&str; 5] = [HELDOUT, TERMS, SUMMARY, TRACE, FAILURES];
+pub const TABLES: [&str; 7] = [
+    HELDOUT,
+    TERMS,
+    SUMMARY,
+    TRACE,
+    FAILURES,
+    TERMS_IN_TIME,
+    CALIBRATION_TIME,
+];
 /// With `[learned]`, written after [`TABLES`]: the summary inside the folds.
 pub const FOLDS: &str = "folds.parquet";
 
@@ -35,6 +46,8 @@ pub fn table_bytes(study: &Study) -> Result<Vec<(&'static str, Vec<u8>)>, Result
         summary_batch(&study.summary),
         trace_batch(&study.trace),
         failures_batch(&study.failures),
+        filtered_batch(&study.filtered),
+        time_batch(&study.calibration_time),
     ];
     let mut tables: Vec<(&'static str, Vec<u8>)> = TABLES
         .iter()
@@ -64,6 +77,10 @@ pub fn read_study(folder: &Path) -> Result<Study, ReadError> {
     let trace = read_rows(&path, &schema, trace_rows)?;
     let (path, schema) = read(FAILURES, failures_batch(&[]));
     let failures = read_rows(&path, &schema, failure_rows)?;
+    let (path, schema) = read(TERMS_IN_TIME, filtered_batch(&[]));
+    let filtered = read_rows(&path, &schema, filtered_rows)?;
+    let (path, schema) = read(CALIBRATION_TIME, time_batch(&[]));
+    let calibration_time = read_rows(&path, &schema, time_rows)?;
     // Only a study with `[learned]` has it.
     let (path, schema) = read(FOLDS, folds_batch(&[]));
     let folds = if path.exists() {
@@ -78,7 +95,84 @@ pub fn read_study(folder: &Path) -> Result<Study, ReadError> {
         trace,
         failures,
         folds,
+        filtered,
+        calibration_time,
     })
+}
+
+/// One row per method × calibration trajectory.
+pub fn time_batch(rows: &[StudyTimeRow]) -> RecordBatch {
+    batch(vec![
+        ("method", strings(rows, |r| r.method.clone())),
+        ("calibration", strings(rows, |r| r.calibration.clone())),
+        ("t_conv_s", floats(rows, |r| r.t_conv_s)),
+        (
+            "calibration_time_s",
+            super::optional_floats(rows, |r| r.calibration_time_s),
+        ),
+        ("rmse_at_time_cm_s", floats(rows, |r| r.rmse_at_time_cm_s)),
+        (
+            "long_window_rmse_cm_s",
+            floats(rows, |r| r.long_window_rmse_cm_s),
+        ),
+        ("tolerance_pct", floats(rows, |r| r.tolerance_pct)),
+    ])
+}
+
+fn time_rows(batch: &Batch) -> Result<Vec<StudyTimeRow>, ColumnError> {
+    let method = batch.strings("method")?;
+    let calibration = batch.strings("calibration")?;
+    let t_conv_s = batch.floats("t_conv_s")?;
+    let time_s = batch.optional_floats("calibration_time_s");
+    let at_time = batch.floats("rmse_at_time_cm_s")?;
+    let long = batch.floats("long_window_rmse_cm_s")?;
+    let tolerance = batch.floats("tolerance_pct")?;
+    Ok((0..method.len())
+        .map(|i| StudyTimeRow {
+            method: method[i].clone(),
+            calibration: calibration[i].clone(),
+            t_conv_s: t_conv_s[i],
+            calibration_time_s: time_s[i],
+            rmse_at_time_cm_s: at_time[i],
+            long_window_rmse_cm_s: long[i],
+            tolerance_pct: tolerance[i],
+        })
+        .collect())
+}
+
+/// One row per Kalman filter × calibration trajectory × sample × term, in the term's
+/// stored unit.
+pub fn filtered_batch(rows: &[FilterPoint]) -> RecordBatch {
+    batch(vec![
+        ("method", strings(rows, |r| r.method.clone())),
+        ("calibration", strings(rows, |r| r.calibration.clone())),
+        ("time_s", floats(rows, |r| r.time_s)),
+        ("term", strings(rows, |r| r.term.clone())),
+        ("value", floats(rows, |r| r.value)),
+        ("std", floats(rows, |r| r.std)),
+        ("bound_std", floats(rows, |r| r.bound_std)),
+    ])
+}
+
+fn filtered_rows(batch: &Batch) -> Result<Vec<FilterPoint>, ColumnError> {
+    let method = batch.strings("method")?;
+    let calibration = batch.strings("calibration")?;
+    let time_s = batch.floats("time_s")?;
+    let term = batch.strings("term")?;
+    let value = batch.floats("value")?;
+    let std = batch.floats("std")?;
+    let bound_std = batch.floats("bound_std")?;
+    Ok((0..method.len())
+        .map(|i| FilterPoint {
+            method: method[i].clone(),
+            calibration: calibration[i].clone(),
+            time_s: time_s[i],
+            term: term[i].clone(),
+            value: value[i],
+            std: std[i],
+            bound_std: bound_std[i],
+        })
+        .collect())
 }
 
 /// One row per method × calibration trajectory × window × scored trajectory.
@@ -361,6 +455,26 @@ mod tests {
                     },
                 })
                 .collect(),
+            filtered: (0..2)
+                .map(|i| FilterPoint {
+                    method: "Kalman filter lever+offset".into(),
+                    calibration: "T1".into(),
+                    time_s: f64::from(i),
+                    term: "time_offset_s".into(),
+                    value: 1.0 / 3.0,
+                    std: f64::from(i) * 0.5,
+                    bound_std: f64::INFINITY,
+                })
+                .collect(),
+            calibration_time: vec![StudyTimeRow {
+                method: "Kalman filter lever+offset".into(),
+                calibration: "T1".into(),
+                t_conv_s: 400.0,
+                calibration_time_s: None,
+                rmse_at_time_cm_s: 6.5,
+                long_window_rmse_cm_s: f64::INFINITY,
+                tolerance_pct: 10.0,
+            }],
         }
     }
 
@@ -384,6 +498,8 @@ mod tests {
                 "summary.parquet",
                 "trace.parquet",
                 "failures.parquet",
+                "terms_in_time.parquet",
+                "calibration_time.parquet",
                 "folds.parquet"
             ]
         );

@@ -47,8 +47,9 @@ const TRAINING_CODE_VERSION: u32 = 4;
 /// Bumped whenever the protocol or an estimator changes its numbers (2: the held-out
 /// rows of the calibration time).
 const PROTOCOL_CODE_VERSION: u32 = 2;
-/// Bumped whenever an installation study's calibration changes its numbers.
-const INSTALLATION_CODE_VERSION: u32 = 1;
+/// Bumped whenever an installation study's calibration changes its numbers (2: the
+/// Kalman filters' terms against time).
+const INSTALLATION_CODE_VERSION: u32 = 2;
 /// Bumped whenever the tables put together from the blocks change (2: the bound rows
 /// and the efficiency column; 3: the held-out curves and the calibration time).
 const TABLES_CODE_VERSION: u32 = 3;
@@ -121,7 +122,7 @@ impl DataHashes {
 
 /// The key of calibration trajectory `calibration` of an installation study: the study's
 /// resolved spec without its `name` (a sweep point and a single run of the same
-/// settings share it), the SHA-256 of every recording it reads (each calibration is
+/// settings share it) and the calibration time's tolerance, the SHA-256 of every recording it reads (each calibration is
 /// scored on all of them), the keys of the DCNet models it applies, and the code
 /// version.
 pub fn calibration_key(
@@ -132,6 +133,10 @@ pub fn calibration_key(
 ) -> String {
     let mut settings: toml::Table = toml::from_str(resolved_toml).expect("a resolved spec is TOML");
     settings.remove("name");
+    // The report's tolerance changes no calibration.
+    if let Some(toml::Value::Table(calibration)) = settings.get_mut("calibration") {
+        calibration.remove("time_tolerance_pct");
+    }
     hash(&(
         "installation calibration",
         INSTALLATION_CODE_VERSION,

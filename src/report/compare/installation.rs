@@ -273,6 +273,8 @@ mod tests {
                 trace: Vec::new(),
                 failures: Vec::new(),
                 folds: Vec::new(),
+                filtered: Vec::new(),
+                calibration_time: Vec::new(),
             },
             spec: spec.parse().unwrap(),
         }

@@ -9,6 +9,7 @@ use crate::installation::rows::Study;
 use crate::report::plots::canvas::Outcome;
 use crate::report::plots::figures::{
     installation_matrix, installation_residual, installation_sweep, installation_windows,
+    terms_in_time,
 };
 use crate::report::plots::{Format, PlotError, Written, render, write_figures};
 use crate::results::study_sweep::StoredStudySweep;
@@ -28,6 +29,10 @@ pub fn draw_all(study: &Study, folder: &Path, format: Format) -> Result<Vec<Writ
         drawn.push((
             "installation_residual".into(),
             installation_residual::installation_residual(study)?,
+        ));
+        drawn.push((
+            "installation_kalman_terms".into(),
+            terms_in_time::installation_kalman_terms(study)?,
         ));
         if !study.folds.is_empty() {
             drawn.push((
@@ -64,7 +69,9 @@ pub fn draw_sweep(
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::installation::rows::{HeldOutRow, NO_CALIBRATION, SummaryRow, TermRow, TracePoint};
+    use crate::installation::rows::{
+        FilterPoint, HeldOutRow, NO_CALIBRATION, SummaryRow, TermRow, TracePoint,
+    };
 
     /// A deterministic jitter in -1..1 from `seed`.
     fn jitter(seed: u64) -> f64 {
@@ -203,7 +210,7 @@ pub(crate) mod tests {
                 }
             }
         }
-        let trace = (0..399)
+        let trace = (0..399u32)
             .map(|i| {
                 let time_s = f64::from(i) * 400.0 / 399.0;
                 let turn = (time_s / 40.0 * std::f64::consts::TAU).sin();
@@ -231,6 +238,30 @@ pub(crate) mod tests {
             trace,
             failures: Vec::new(),
             folds: Vec::new(),
+            // A filter settling on T1 (well seen) and T2 (poorly seen).
+            filtered: ["T1", "T2"]
+                .into_iter()
+                .flat_map(|calibration| {
+                    let spread = if calibration == "T1" { 0.05 } else { 0.5 };
+                    (1..=100).flat_map(move |i| {
+                        let t = f64::from(i);
+                        [
+                            ("lever_arm_x_m", -1.9, spread),
+                            ("time_offset_s", 1.2, 0.02),
+                        ]
+                        .map(|(term, value, scale)| FilterPoint {
+                            method: "Kalman filter lever+offset".into(),
+                            calibration: calibration.into(),
+                            time_s: t,
+                            term: term.into(),
+                            value: value + scale * (t / 7.0).sin() / t.sqrt(),
+                            std: scale / t.sqrt(),
+                            bound_std: 0.8 * scale / t.sqrt(),
+                        })
+                    })
+                })
+                .collect(),
+            calibration_time: Vec::new(),
         }
     }
 
@@ -255,6 +286,7 @@ pub(crate) mod tests {
                 "installation_matrix_installation_lever_offset_bias",
                 "installation_windows",
                 "installation_residual",
+                "installation_kalman_terms",
             ]
         );
         for figure in &written {

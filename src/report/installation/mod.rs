@@ -12,6 +12,7 @@
 //!   trajectories within their intervals;
 //! - [`learned`]: with `[learned]`, every method on the pairs inside the folds, fold by
 //!   fold, and the learned terms against the installation fit of every trajectory;
+//! - [`timing`]: each method's calibration time on each calibration trajectory;
 //! - [`figures`]: the study's figures (`plots::figures::installation_*`), written as a
 //!   run's are;
 //! - this module: the tables in order, set as Markdown and as LaTeX.
@@ -20,6 +21,7 @@ pub mod heldout;
 pub mod terms;
 pub mod agreement;
 pub mod learned;
+pub mod timing;
 pub mod figures;
 
 pub use figures::{draw_all, draw_sweep};
@@ -83,6 +85,7 @@ fn sections(study: &Study) -> Vec<Section> {
         );
     }
     sections.extend(learned::learned_sections(study, &methods, &windows));
+    sections.extend(timing::timing_section(study, &methods, &windows));
     for method in methods.iter().filter(|m| !learned::is_learned(m)) {
         let rows: Vec<&TermRow> = study
             .terms
@@ -175,6 +178,8 @@ pub(crate) mod tests {
             trace: Vec::new(),
             failures: Vec::new(),
             folds: Vec::new(),
+            filtered: Vec::new(),
+            calibration_time: Vec::new(),
         }
     }
 

@@ -1,7 +1,8 @@
-//! The six figures of a run, each drawn from a [`StoredRun`] into SVG text, one file
+//! The seven figures of a run, each drawn from a [`StoredRun`] into SVG text, one file
 //! per figure or family of figures: [`velocity`], [`calibration`], the bar figures
 //! ([`bars`]: RMSE at the first window, improvement with EM5), the Monte Carlo
-//! [`spread`] and the [`training_loss`]. A figure whose data the run does not hold (no
+//! [`spread`], the [`training_loss`] and the Kalman filter's terms against time
+//! ([`terms_in_time`], whose panels the installation study draws too). A figure whose data the run does not hold (no
 //! DCNet, no baseline, no EM5) is [`Outcome::NotApplicable`], with why. To add a
 //! figure, write its file here and list it in [`all`].
 
@@ -12,6 +13,7 @@ pub mod installation_residual;
 pub mod installation_sweep;
 pub mod installation_windows;
 pub mod spread;
+pub mod terms_in_time;
 pub mod training_loss;
 pub mod velocity;
 
@@ -22,13 +24,14 @@ use crate::results::read::StoredRun;
 
 /// Every figure of a run, in the order the report shows them.
 pub fn all(run: &StoredRun) -> PlotResult<Vec<(String, Outcome)>> {
-    let figures: [(&str, Outcome); 6] = [
+    let figures: [(&str, Outcome); 7] = [
         ("velocity", velocity::velocity(run)?),
         ("calibration", calibration::calibration(run)?),
         ("rmse_first_window", bars::rmse_first_window(run)?),
         ("improvement_em5", bars::improvement_em5(run)?),
         ("monte_carlo_spread", spread::monte_carlo_spread(run)?),
         ("training_loss", training_loss::training_loss(run)?),
+        ("kalman_terms", terms_in_time::kalman_terms(run)?),
     ];
     Ok(figures
         .into_iter()

@@ -1,0 +1,102 @@
+//! How long each method needs to calibrate on each calibration trajectory of a study:
+//! its held-out curve is the mean, over the trajectories it corrects, of their RMSE
+//! with the terms from each calibration window; its calibration time the shortest
+//! window after which that curve stays within the tolerance of its value at the
+//! longest window, set beside its T_conv (the window of lowest held-out RMSE). In: the
+//! study's held-out rows and the spec's tolerance. Out: one row per method and
+//! calibration trajectory.
+
+use super::rows::{HeldOutRow, StudyTimeRow};
+use crate::evaluate::calibration_time::calibration_time_index;
+use crate::first_seen;
+
+/// Every method's calibration time on every calibration trajectory of `heldout`.
+pub fn calibration_times(heldout: &[HeldOutRow], tolerance: f64) -> Vec<StudyTimeRow> {
+    let pairs = first_seen(
+        heldout
+            .iter()
+            .map(|r| (r.method.as_str(), r.calibration.as_str())),
+    );
+    pairs
+        .into_iter()
+        .filter_map(|(method, calibration)| {
+            let rows: Vec<&HeldOutRow> = heldout
+                .iter()
+                .filter(|r| r.method == method && r.calibration == calibration)
+                .collect();
+            let mut windows = first_seen(rows.iter().map(|r| r.window_s));
+            windows.sort_by(f64::total_cmp);
+            let curve: Vec<(f64, f64)> = windows
+                .iter()
+                .map(|&w| {
+                    let at: Vec<f64> = rows
+                        .iter()
+                        .filter(|r| r.window_s == w)
+                        .map(|r| r.total_cm_s)
+                        .collect();
+                    (w, at.iter().sum::<f64>() / at.len() as f64)
+                })
+                .collect();
+            let &(_, long) = curve.last()?;
+            let t_conv =
+                (0..curve.len()).fold(
+                    0,
+                    |best, i| {
+                        if curve[i].1 < curve[best].1 { i } else { best }
+                    },
+                );
+            let index = calibration_time_index(&curve, tolerance);
+            Some(StudyTimeRow {
+                method: method.to_string(),
+                calibration: calibration.to_string(),
+                t_conv_s: curve[t_conv].0,
+                calibration_time_s: index.map(|i| curve[i].0),
+                rmse_at_time_cm_s: index.map_or(f64::NAN, |i| curve[i].1),
+                long_window_rmse_cm_s: long,
+                tolerance_pct: 100.0 * tolerance,
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(method: &str, window_s: f64, scored: &str, total_cm_s: f64) -> HeldOutRow {
+        HeldOutRow {
+            method: method.into(),
+            calibration: "T1".into(),
+            window_s,
+            scored: scored.into(),
+            rmse_cm_s: [0.0; 3],
+            total_cm_s,
+        }
+    }
+
+    #[test]
+    fn the_curve_is_the_mean_over_the_scored_trajectories() {
+        // Means: 20 s → 12, 50 s → 6.5, 100 s → 7, 400 s → 6.
+        let rows = [
+            row("fit", 400.0, "T2", 5.0),
+            row("fit", 400.0, "T3", 7.0),
+            row("fit", 20.0, "T2", 10.0),
+            row("fit", 20.0, "T3", 14.0),
+            row("fit", 50.0, "T2", 6.0),
+            row("fit", 50.0, "T3", 7.0),
+            row("fit", 100.0, "T2", 7.0),
+            row("fit", 100.0, "T3", 7.0),
+        ];
+        let times = calibration_times(&rows, 0.1);
+        assert_eq!(times.len(), 1);
+        // 7 is beyond 6.6, so the curve stays within 10 % only from 400 s; within 20 %
+        // (7.2) from 50 s.
+        assert_eq!(times[0].calibration_time_s, Some(400.0));
+        assert_eq!(times[0].t_conv_s, 400.0);
+        assert_eq!(times[0].long_window_rmse_cm_s, 6.0);
+        assert_eq!(
+            calibration_times(&rows, 0.2)[0].calibration_time_s,
+            Some(50.0)
+        );
+    }
+}
