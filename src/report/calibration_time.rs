@@ -164,6 +164,27 @@ fn claim_section(run: &StoredRun) -> Option<Section> {
     if table_rows.is_empty() {
         return None;
     }
+    // The DVL's own model and the bound, beside the error models' filters.
+    let notes = run
+        .dvls()
+        .iter()
+        .filter_map(|dvl| {
+            let time = |estimator| {
+                find(dvl, estimator, None)
+                    .and_then(|r| r.calibration_time_s)
+                    .map(|s| format!("{s:.0} s"))
+            };
+            let beam = time(EstimatorKind::KalmanBeam);
+            let bound = time(EstimatorKind::Bound);
+            (beam.is_some() || bound.is_some()).then(|| {
+                format!(
+                    "{dvl}: the beam-model Kalman filter (the DVL's own model) needs {}, the bound {}.",
+                    beam.unwrap_or_else(|| "—".into()),
+                    bound.unwrap_or_else(|| "—".into())
+                )
+            })
+        })
+        .collect();
     let header = [
         "DVL",
         "model",
@@ -184,7 +205,7 @@ fn claim_section(run: &StoredRun) -> Option<Section> {
         table: Table {
             header: header.map(String::from).to_vec(),
             rows: table_rows,
-            notes: Vec::new(),
+            notes,
         },
         paragraph: None,
     })
