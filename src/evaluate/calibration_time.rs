@@ -6,15 +6,17 @@
 //! the bound's is the expected RMSE of an efficient estimator from the same samples.
 //! A method's calibration time is the shortest length after which its curve stays
 //! within the spec's tolerance of its value at the longest window, and is set beside
-//! its T_conv. In: per-run rows of [`Phase::HeldOut`], the bound's curve, the
+//! its T_conv; its time to the bound, the shortest after which it stays within the
+//! tolerance of the bound's value there (a target common to every method, which a
+//! method that converges to a worse value never reaches). In: per-run rows of [`Phase::HeldOut`], the bound's curve, the
 //! calibration table. Out: the held-out curves and the calibration-time table.
 
-use super::rows::{CalibrationRow, RunRow};
+use super::rows::{CalibrationRow, CalibrationTimeRow, HeldOutRow, RunRow};
 use super::statistics::mean_std;
 use crate::Vec3;
 use crate::bound::BoundRow;
 use crate::first_seen;
-use crate::vocab::{Correction, ErrorModel, EstimatorKind, Phase};
+use crate::vocab::{Correction, EstimatorKind, Phase};
 
 /// The calibration lengths, in samples, at which a method's held-out curve is taken:
 /// the calibration windows for DCNet, whose estimate is a network pass per window;
@@ -68,49 +70,23 @@ impl HeldOutScore {
     }
 }
 
-/// One point of a held-out curve: the mean and spread over runs (and DCNet replicates)
-/// of the RMSE on the test trajectories of terms from `length_s` of calibration.
-#[derive(Debug, Clone, PartialEq)]
-pub struct HeldOutRow {
-    pub dvl: String,
-    pub estimator: EstimatorKind,
-    pub error_model: Option<ErrorModel>,
-    pub length_s: f64,
-    pub rmse_cm_s: f64,
-    pub rmse_std_cm_s: f64,
-}
-
-/// A method's calibration time beside its T_conv.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CalibrationTimeRow {
-    pub dvl: String,
-    pub estimator: EstimatorKind,
-    pub error_model: Option<ErrorModel>,
-    /// The paper's T_conv: the window of lowest mean RMSE on the rest of the
-    /// calibration trajectory.
-    pub t_conv_s: f64,
-    /// The shortest calibration after which the held-out RMSE stays within the
-    /// tolerance of its value at the longest window; `None` where even that value is
-    /// not finite.
-    pub calibration_time_s: Option<f64>,
-    /// The held-out RMSE at the calibration time and at the longest window, cm/s.
-    pub rmse_at_time_cm_s: f64,
-    pub long_window_rmse_cm_s: f64,
-    pub long_window_s: f64,
-    pub tolerance_pct: f64,
-}
-
 /// The shortest length of `curve` (length, mean RMSE, in increasing length) from which
 /// every later point is within `tolerance` (a fraction) of the last point's RMSE; its
 /// index. `None` when the last point is not finite.
 pub fn calibration_time_index(curve: &[(f64, f64)], tolerance: f64) -> Option<usize> {
     let &(_, long) = curve.last()?;
-    if !long.is_finite() {
-        return None;
-    }
-    let limit = long * (1.0 + tolerance);
+    index_within(curve, long * (1.0 + tolerance))
+}
+
+/// The shortest length of `curve` from which every later point is at most `limit`; its
+/// index. `None` when the last point is beyond it (or not finite).
+pub fn index_within(curve: &[(f64, f64)], limit: f64) -> Option<usize> {
     let outside = curve.iter().rposition(|&(_, rmse)| !(rmse <= limit));
-    Some(outside.map_or(0, |i| i + 1))
+    match outside {
+        None => Some(0),
+        Some(i) if i + 1 < curve.len() => Some(i + 1),
+        Some(_) => None,
+    }
 }
 
 /// The held-out curve of every series of `runs` (replicates pooled with runs) and of
@@ -205,12 +181,24 @@ pub fn calibration_times(
                 .window_s;
             let &(long_s, long) = curve.last()?;
             let index = calibration_time_index(&curve, tolerance);
+            // The bound's own curve ends at the same longest window.
+            let bound = curves
+                .iter()
+                .filter(|r| {
+                    r.dvl == dvl
+                        && r.estimator == EstimatorKind::Bound
+                        && r.length_s <= long_window_s
+                })
+                .max_by(|a, b| a.length_s.total_cmp(&b.length_s));
+            let to_bound =
+                bound.and_then(|b| index_within(&curve, b.rmse_cm_s * (1.0 + tolerance)));
             Some(CalibrationTimeRow {
                 dvl: dvl.to_string(),
                 estimator,
                 error_model,
                 t_conv_s,
                 calibration_time_s: index.map(|i| curve[i].0),
+                time_to_bound_s: to_bound.map(|i| curve[i].0),
                 rmse_at_time_cm_s: index.map_or(f64::NAN, |i| curve[i].1),
                 long_window_rmse_cm_s: long,
                 long_window_s: long_s,
@@ -282,5 +270,8 @@ mod tests {
         let gap = [(1.0, 1.0), (2.0, f64::NAN), (3.0, 1.0)];
         assert_eq!(calibration_time_index(&gap, 0.1), Some(2));
         assert_eq!(calibration_time_index(&[(1.0, f64::INFINITY)], 0.1), None);
+        // Against a common target: never, when the curve ends above it.
+        assert_eq!(index_within(&curve, 1.05), None);
+        assert_eq!(index_within(&curve, 1.2), Some(3));
     }
 }

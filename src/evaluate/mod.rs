@@ -35,5 +35,7 @@ pub mod summary;
 pub mod terms_in_time;
 
 pub use protocol::{rmse_cm_s, run_on_dvl, run_protocol};
-pub use rows::{CalibrationRow, EvaluationRow, ProtocolResult, RunRow};
+pub use rows::{
+    CalibrationRow, CalibrationTimeRow, EvaluationRow, HeldOutRow, ProtocolResult, RunRow,
+};
 pub use statistics::{mean_ci95, mean_std};

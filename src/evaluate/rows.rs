@@ -3,7 +3,6 @@
 //! ([`CalibrationRow`], [`EvaluationRow`]), all three in a [`ProtocolResult`]. In:
 //! nothing. Out: the types that `results` writes as Parquet and `report` reads back.
 
-use super::calibration_time::{CalibrationTimeRow, HeldOutRow};
 use super::terms_in_time::TermInTimeRow;
 use crate::vocab::{Correction, ErrorModel, EstimatorKind, Phase};
 
@@ -58,6 +57,41 @@ pub struct EvaluationRow {
     /// The bound at this T_conv on this trajectory over this RMSE; absent for the floor
     /// and the bound.
     pub efficiency: Option<f64>,
+}
+
+/// One point of a held-out curve: the mean and spread over runs (and DCNet replicates)
+/// of the RMSE on the test trajectories of terms from `length_s` of calibration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeldOutRow {
+    pub dvl: String,
+    pub estimator: EstimatorKind,
+    pub error_model: Option<ErrorModel>,
+    pub length_s: f64,
+    pub rmse_cm_s: f64,
+    pub rmse_std_cm_s: f64,
+}
+
+/// A method's calibration time beside its T_conv.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrationTimeRow {
+    pub dvl: String,
+    pub estimator: EstimatorKind,
+    pub error_model: Option<ErrorModel>,
+    /// The paper's T_conv: the window of lowest mean RMSE on the rest of the
+    /// calibration trajectory.
+    pub t_conv_s: f64,
+    /// The shortest calibration after which the held-out RMSE stays within the
+    /// tolerance of its value at the longest window; `None` where even that value is
+    /// not finite.
+    pub calibration_time_s: Option<f64>,
+    /// The shortest calibration after which the held-out RMSE stays within the
+    /// tolerance of the bound's at the longest window; `None` where it never does.
+    pub time_to_bound_s: Option<f64>,
+    /// The held-out RMSE at the calibration time and at the longest window, cm/s.
+    pub rmse_at_time_cm_s: f64,
+    pub long_window_rmse_cm_s: f64,
+    pub long_window_s: f64,
+    pub tolerance_pct: f64,
 }
 
 #[derive(Debug, Clone, PartialEq, Default)]

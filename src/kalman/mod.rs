@@ -11,4 +11,4 @@ pub mod filter;
 pub mod scale_bias;
 
 pub use filter::{Filter, Measurement, Prior, batch_least_squares};
-pub use scale_bias::{ScaleBiasModel, TermSettings};
+pub use scale_bias::ScaleBiasModel;

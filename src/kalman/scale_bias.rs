@@ -11,6 +11,7 @@
 use super::filter::{Filter, Measurement, Prior};
 use crate::Vec3;
 use crate::noise::BeamGeometry;
+use crate::spec::TermSettings;
 use crate::vocab::{Correction, ErrorModel, SensorErrors};
 
 /// A model the filter estimates.
@@ -134,14 +135,6 @@ impl ScaleBiasModel {
         let same = |a: Vec3, b: Vec3| (0..3).all(|k| (a[k] - b[k]).abs() < 1e-12);
         (same(held.scale, truth.scale) && same(held.bias_m_s, truth.bias_m_s)).then_some(terms)
     }
-}
-
-/// A scale and a bias setting (a prior's standard deviation, or a random walk's per
-/// √s): a fraction, and m/s.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TermSettings {
-    pub scale: f64,
-    pub bias_m_s: f64,
 }
 
 /// The noise variance per axis of `d − g`: the DVL's velocity noise through the beam

@@ -4,6 +4,7 @@
 //! they need (booktabs). Each DVL's row holds our values, the row below it the
 //! published ones in italics; a flagged cell carries a dagger explained under its table.
 
+use crate::report::section::{Entry, Section, symbols};
 use crate::report::table::{Cell, ReportTable, ReportTables, Row, Signs, replicates_note};
 use crate::results::read::StoredRun;
 use std::fmt::Write;
@@ -55,10 +56,7 @@ pub(super) fn render(run: &StoredRun, tables: &ReportTables) -> String {
         table(&mut out, efficiency, &captions.bound(), &tag("bound"), None);
     }
     let timing = crate::report::calibration_time::sections(run);
-    out.push_str(&crate::report::section::latex(
-        &timing,
-        &format!("{label}-calibration-time"),
-    ));
+    out.push_str(&sections(&timing, &format!("{label}-calibration-time")));
     out
 }
 
@@ -309,6 +307,60 @@ pub(crate) fn label(name: &str) -> String {
     name.chars()
         .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
         .collect()
+}
+
+/// `sections` as LaTeX table environments, each followed by its paragraph; the i-th
+/// table is labelled `tab:<key>-<i>`.
+pub(crate) fn sections(sections: &[Section], key: &str) -> String {
+    let mut out = String::new();
+    for (i, section) in sections.iter().enumerate() {
+        let table = &section.table;
+        let _ = writeln!(out, "\n\\begin{{table}}[htbp]");
+        let _ = writeln!(out, "  \\centering\\small\\setlength{{\\tabcolsep}}{{4pt}}");
+        let _ = writeln!(
+            out,
+            "  \\caption{{{}: {}}}",
+            escape(&section.title),
+            symbols(&escape(&section.caption))
+        );
+        let _ = writeln!(out, "  \\label{{tab:{key}-{}}}", i + 1);
+        let _ = writeln!(out, "  \\makebox[\\linewidth]{{%");
+        let _ = writeln!(
+            out,
+            "  \\begin{{tabular}}{{l{}}}",
+            "r".repeat(table.header.len() - 1)
+        );
+        let _ = writeln!(out, "    \\toprule");
+        let header: Vec<String> = table.header.iter().map(|h| symbols(&escape(h))).collect();
+        let _ = writeln!(out, "    {} \\\\", header.join(" & "));
+        let _ = writeln!(out, "    \\midrule");
+        for row in &table.rows {
+            let cells: Vec<String> = row
+                .iter()
+                .map(|entry| match entry {
+                    Entry::Text(text) => escape(text),
+                    other => symbols(&other.text(&SIGNS)),
+                })
+                .collect();
+            let _ = writeln!(out, "    {} \\\\", cells.join(" & "));
+        }
+        let _ = writeln!(out, "    \\bottomrule");
+        let _ = writeln!(out, "  \\end{{tabular}}}}");
+        if !table.notes.is_empty() {
+            let notes: Vec<String> = table.notes.iter().map(|n| symbols(&escape(n))).collect();
+            let _ = writeln!(out, "  \\par\\smallskip");
+            let _ = writeln!(
+                out,
+                "  {{\\footnotesize\\raggedright {}\\par}}",
+                notes.join("\\\\\n  ")
+            );
+        }
+        let _ = writeln!(out, "\\end{{table}}");
+        if let Some(paragraph) = &section.paragraph {
+            let _ = writeln!(out, "\n{}", symbols(&escape(paragraph)));
+        }
+    }
+    out
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@
 //! the figures drawn. Out: the Markdown text; a cell reads `ours · paper`, flagged ⚠.
 
 use crate::report::plots::{Caption, Written};
+use crate::report::section::{Section, Table as SectionTable};
 use crate::report::table::{Cell, ReportTable, ReportTables, Signs, replicates_note};
 use crate::results::read::StoredRun;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
@@ -83,7 +84,7 @@ pub(super) fn render(run: &StoredRun, tables: &ReportTables, figures: &[Written]
     let timing = crate::report::calibration_time::sections(run);
     if !timing.is_empty() {
         let _ = writeln!(out, "## How long to calibrate\n");
-        let _ = writeln!(out, "{}", crate::report::section::markdown(&timing));
+        let _ = writeln!(out, "{}", sections(&timing));
     }
     if run.published.is_some() {
         let tally = tables.tally();
@@ -285,6 +286,38 @@ pub(super) fn path_from(folder: &Path, file: &Path) -> Option<PathBuf> {
 /// `path` made absolute through its links, or as it is when it cannot be.
 fn absolute(path: &Path) -> PathBuf {
     std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())
+}
+
+/// `sections` as Markdown, each under a third-level heading.
+pub(crate) fn sections(sections: &[Section]) -> String {
+    let signs = &SIGNS;
+    let mut out = String::new();
+    for section in sections {
+        let _ = writeln!(out, "### {}\n", section.title);
+        let _ = writeln!(out, "{}\n", section.caption);
+        let _ = writeln!(out, "{}\n", section_table(&section.table, signs));
+        if !section.table.notes.is_empty() {
+            for note in &section.table.notes {
+                let _ = writeln!(out, "- {note}");
+            }
+            let _ = writeln!(out);
+        }
+        if let Some(paragraph) = &section.paragraph {
+            let _ = writeln!(out, "{paragraph}\n");
+        }
+    }
+    out
+}
+
+/// A table as Markdown, with the figures' signs.
+fn section_table(table: &SectionTable, signs: &Signs) -> Table {
+    let mut markdown = Table::new();
+    markdown.load_preset(ASCII_MARKDOWN);
+    markdown.set_header(table.header.clone());
+    for row in &table.rows {
+        markdown.add_row(row.iter().map(|e| e.text(signs)).collect::<Vec<_>>());
+    }
+    markdown
 }
 
 #[cfg(test)]

@@ -2,12 +2,10 @@
 //! [`Section`] is one table with its title, caption, the notes under it and the
 //! paragraph after it; a [`Table`] holds rows of [`Entry`]s, each written by the
 //! Markdown and the LaTeX rendering with its own signs ([`Signs`]). In: the numbers a
-//! report picks from its results. Out: the sections as Markdown ([`markdown`]) and as
-//! LaTeX table environments ([`latex`]).
+//! report picks from its results. Out: the text of each cell; `markdown::sections` and
+//! `latex::sections` set whole sections.
 
 use crate::report::table::{RmseValue, Signs};
-use comfy_table::{Table as MarkdownTable, presets::ASCII_MARKDOWN};
-use std::fmt::Write;
 
 /// One table of the section, with its title, caption and what follows it.
 pub(crate) struct Section {
@@ -123,93 +121,6 @@ impl Entry {
     }
 }
 
-/// `sections` as Markdown, each under a third-level heading.
-pub(crate) fn markdown(sections: &[Section]) -> String {
-    let signs = &crate::report::markdown::SIGNS;
-    let mut out = String::new();
-    for section in sections {
-        let _ = writeln!(out, "### {}\n", section.title);
-        let _ = writeln!(out, "{}\n", section.caption);
-        let _ = writeln!(out, "{}\n", markdown_table(&section.table, signs));
-        if !section.table.notes.is_empty() {
-            for note in &section.table.notes {
-                let _ = writeln!(out, "- {note}");
-            }
-            let _ = writeln!(out);
-        }
-        if let Some(paragraph) = &section.paragraph {
-            let _ = writeln!(out, "{paragraph}\n");
-        }
-    }
-    out
-}
-
-/// A table as Markdown, with the figures' signs.
-fn markdown_table(table: &Table, signs: &Signs) -> MarkdownTable {
-    let mut markdown = MarkdownTable::new();
-    markdown.load_preset(ASCII_MARKDOWN);
-    markdown.set_header(table.header.clone());
-    for row in &table.rows {
-        markdown.add_row(row.iter().map(|e| e.text(signs)).collect::<Vec<_>>());
-    }
-    markdown
-}
-
-/// `sections` as LaTeX table environments, each followed by its paragraph; the i-th
-/// table is labelled `tab:<key>-<i>`.
-pub(crate) fn latex(sections: &[Section], key: &str) -> String {
-    use crate::report::latex::{SIGNS, escape};
-    let mut out = String::new();
-    for (i, section) in sections.iter().enumerate() {
-        let table = &section.table;
-        let _ = writeln!(out, "\n\\begin{{table}}[htbp]");
-        let _ = writeln!(out, "  \\centering\\small\\setlength{{\\tabcolsep}}{{4pt}}");
-        let _ = writeln!(
-            out,
-            "  \\caption{{{}: {}}}",
-            escape(&section.title),
-            symbols(&escape(&section.caption))
-        );
-        let _ = writeln!(out, "  \\label{{tab:{key}-{}}}", i + 1);
-        let _ = writeln!(out, "  \\makebox[\\linewidth]{{%");
-        let _ = writeln!(
-            out,
-            "  \\begin{{tabular}}{{l{}}}",
-            "r".repeat(table.header.len() - 1)
-        );
-        let _ = writeln!(out, "    \\toprule");
-        let header: Vec<String> = table.header.iter().map(|h| symbols(&escape(h))).collect();
-        let _ = writeln!(out, "    {} \\\\", header.join(" & "));
-        let _ = writeln!(out, "    \\midrule");
-        for row in &table.rows {
-            let cells: Vec<String> = row
-                .iter()
-                .map(|entry| match entry {
-                    Entry::Text(text) => escape(text),
-                    other => symbols(&other.text(&SIGNS)),
-                })
-                .collect();
-            let _ = writeln!(out, "    {} \\\\", cells.join(" & "));
-        }
-        let _ = writeln!(out, "    \\bottomrule");
-        let _ = writeln!(out, "  \\end{{tabular}}}}");
-        if !table.notes.is_empty() {
-            let notes: Vec<String> = table.notes.iter().map(|n| symbols(&escape(n))).collect();
-            let _ = writeln!(out, "  \\par\\smallskip");
-            let _ = writeln!(
-                out,
-                "  {{\\footnotesize\\raggedright {}\\par}}",
-                notes.join("\\\\\n  ")
-            );
-        }
-        let _ = writeln!(out, "\\end{{table}}");
-        if let Some(paragraph) = &section.paragraph {
-            let _ = writeln!(out, "\n{}", symbols(&escape(paragraph)));
-        }
-    }
-    out
-}
-
 /// The characters of our text and of the bound's reasons that LaTeX sets in math mode
 /// (or that its default font would set as other glyphs: `<` and `>`), and how.
 const MATH: [(char, &str); 16] = [
@@ -250,27 +161,4 @@ pub(crate) fn decimals(std: f64) -> usize {
         return 2;
     }
     (1 - std.log10().floor() as i32).clamp(0, 4) as usize
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn terms_read_with_two_significant_digits_of_the_bound() {
-        let signs = &crate::report::markdown::SIGNS;
-        let term = |value, std, seen| Entry::Term { value, std, seen }.text(signs);
-        assert_eq!(term(-1.72, 0.36, false), "-1.72 ± 0.36 (not seen)");
-        assert_eq!(term(-1.87, 0.013, true), "-1.870 ± 0.013");
-        assert_eq!(term(0.72, 0.10, true), "0.72 ± 0.10");
-        assert_eq!(term(1234.0, 56.0, true), "1234 ± 56");
-        assert_eq!(term(1.0, f64::INFINITY, false), "1.00 ± ∞ (not seen)");
-        let latex = Entry::Term {
-            value: -1.72,
-            std: 0.36,
-            seen: true,
-        }
-        .text(&crate::report::latex::SIGNS);
-        assert_eq!(latex, "$-$1.72\\,$\\pm$\\,0.36");
-    }
 }

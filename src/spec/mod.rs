@@ -220,9 +220,17 @@ pub struct CalibrationSpec {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct KalmanSpec {
     /// The terms' prior standard deviation about zero.
-    pub prior: crate::kalman::TermSettings,
+    pub prior: TermSettings,
     /// The random walk's standard deviation per √s.
-    pub random_walk: crate::kalman::TermSettings,
+    pub random_walk: TermSettings,
+}
+
+/// A scale and a bias setting (a prior's standard deviation, or a random walk's per
+/// √s): a fraction, and m/s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TermSettings {
+    pub scale: f64,
+    pub bias_m_s: f64,
 }
 
 /// DCNet's sizes, checked.

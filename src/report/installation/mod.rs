@@ -28,7 +28,7 @@ pub use figures::{draw_all, draw_sweep};
 pub(crate) use terms::{readable_term, readable_why};
 
 use crate::installation::rows::{NO_CALIBRATION, Study, TermRow};
-use crate::report::section::{self, Section};
+use crate::report::section::{Section, symbols};
 use agreement::agreement;
 use heldout::{heldout_section, methods, windows, windows_section};
 use std::fmt::Write;
@@ -39,7 +39,7 @@ pub fn markdown(study: &Study) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "## Installation study: held-out trajectories\n");
     let _ = writeln!(out, "{}\n", introduction());
-    out.push_str(&section::markdown(&sections(study)));
+    out.push_str(&crate::report::markdown::sections(&sections(study)));
     out
 }
 
@@ -48,9 +48,9 @@ pub fn latex(study: &Study, name: &str) -> String {
     use crate::report::latex::escape;
     let mut out = String::new();
     let _ = writeln!(out, "% The installation study's tables ({name}).");
-    let _ = writeln!(out, "{}", section::symbols(&escape(&introduction())));
+    let _ = writeln!(out, "{}", symbols(&escape(&introduction())));
     let key = format!("{}-installation", crate::report::latex::label(name));
-    out.push_str(&section::latex(&sections(study), &key));
+    out.push_str(&crate::report::latex::sections(&sections(study), &key));
     out
 }
 
@@ -234,9 +234,6 @@ pub(crate) mod tests {
             text.contains("0.9 $\\times$ the median $\\sigma$ of 0.015 m"),
             "{text}"
         );
-        assert_eq!(
-            section::symbols("ρ −0.97 ≥ 0.95"),
-            "$\\rho$ $-$0.97 $\\geq$ 0.95"
-        );
+        assert_eq!(symbols("ρ −0.97 ≥ 0.95"), "$\\rho$ $-$0.97 $\\geq$ 0.95");
     }
 }

@@ -197,4 +197,22 @@ mod tests {
         assert_eq!((name.as_str(), unit), ("misalignment z", "deg"));
         assert!((factor * std::f64::consts::PI - 180.0).abs() < 1e-12);
     }
+
+    #[test]
+    fn terms_read_with_two_significant_digits_of_the_bound() {
+        let signs = &crate::report::markdown::SIGNS;
+        let term = |value, std, seen| Entry::Term { value, std, seen }.text(signs);
+        assert_eq!(term(-1.72, 0.36, false), "-1.72 ± 0.36 (not seen)");
+        assert_eq!(term(-1.87, 0.013, true), "-1.870 ± 0.013");
+        assert_eq!(term(0.72, 0.10, true), "0.72 ± 0.10");
+        assert_eq!(term(1234.0, 56.0, true), "1234 ± 56");
+        assert_eq!(term(1.0, f64::INFINITY, false), "1.00 ± ∞ (not seen)");
+        let latex = Entry::Term {
+            value: -1.72,
+            std: 0.36,
+            seen: true,
+        }
+        .text(&crate::report::latex::SIGNS);
+        assert_eq!(latex, "$-$1.72\\,$\\pm$\\,0.36");
+    }
 }

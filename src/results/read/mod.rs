@@ -18,14 +18,14 @@ pub use columns::ColumnError;
 pub use rows::{StoredEpoch, StoredTrajectory};
 
 use super::calibration_time::{
-    CALIBRATION_TIME, HELD_OUT, TERMS_IN_TIME, calibration_time_batch, calibration_time_rows,
-    held_out_batch, held_out_rows, terms_in_time_batch, terms_in_time_rows,
+    CALIBRATION_TIME, HELD_OUT, TERMS_IN_TIME, calibration_time_batch, held_out_batch,
+    terms_in_time_batch,
 };
 use super::{
     MANIFEST, Manifest, PUBLISHED, SPEC, TABLES, calibration_batch, evaluation_batch,
     monte_carlo_batch, training_batch, trajectories_batch,
 };
-use crate::evaluate::calibration_time::{CalibrationTimeRow, HeldOutRow};
+use crate::evaluate::rows::{CalibrationTimeRow, HeldOutRow};
 use crate::evaluate::terms_in_time::TermInTimeRow;
 use crate::evaluate::{CalibrationRow, EvaluationRow, RunRow};
 use crate::spec::published::Published;
@@ -35,7 +35,8 @@ use arrow_schema::Schema;
 use columns::check_schema;
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 use rows::{
-    calibration_rows, epoch_rows, evaluation_rows, gather_trajectories, run_rows, trajectory_rows,
+    calibration_rows, calibration_time_rows, epoch_rows, evaluation_rows, gather_trajectories,
+    held_out_rows, run_rows, terms_in_time_rows, trajectory_rows,
 };
 use std::path::{Path, PathBuf};
 

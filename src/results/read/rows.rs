@@ -7,7 +7,8 @@
 
 use super::columns::{Batch, ColumnError};
 use crate::Vec3;
-use crate::evaluate::{CalibrationRow, EvaluationRow, RunRow};
+use crate::evaluate::terms_in_time::TermInTimeRow;
+use crate::evaluate::{CalibrationRow, CalibrationTimeRow, EvaluationRow, HeldOutRow, RunRow};
 use crate::results::{REPLICATE, RMSE_CI};
 use crate::train::EpochRecord;
 use crate::vocab::{Correction, ErrorModel, Phase, StopReason};
@@ -256,4 +257,75 @@ pub(super) mod tests {
             "{error}"
         );
     }
+}
+
+pub(super) fn held_out_rows(batch: &Batch) -> Result<Vec<HeldOutRow>, ColumnError> {
+    let length_s = batch.floats("length_s")?;
+    let rmse = batch.floats("rmse_cm_s")?;
+    let std = batch.floats("rmse_std_cm_s")?;
+    Ok(batch
+        .row_keys()?
+        .into_iter()
+        .enumerate()
+        .map(|(i, key)| HeldOutRow {
+            dvl: key.dvl,
+            estimator: key.estimator,
+            error_model: key.error_model,
+            length_s: length_s[i],
+            rmse_cm_s: rmse[i],
+            rmse_std_cm_s: std[i],
+        })
+        .collect())
+}
+
+pub(super) fn calibration_time_rows(batch: &Batch) -> Result<Vec<CalibrationTimeRow>, ColumnError> {
+    let t_conv_s = batch.floats("t_conv_s")?;
+    let time_s = batch.optional_floats("calibration_time_s");
+    let to_bound = batch.optional_floats("time_to_bound_s");
+    let at_time = batch.floats("rmse_at_time_cm_s")?;
+    let long_s = batch.floats("long_window_s")?;
+    let long = batch.floats("long_window_rmse_cm_s")?;
+    let tolerance = batch.floats("tolerance_pct")?;
+    Ok(batch
+        .row_keys()?
+        .into_iter()
+        .enumerate()
+        .map(|(i, key)| CalibrationTimeRow {
+            dvl: key.dvl,
+            estimator: key.estimator,
+            error_model: key.error_model,
+            t_conv_s: t_conv_s[i],
+            calibration_time_s: time_s[i],
+            time_to_bound_s: to_bound[i],
+            rmse_at_time_cm_s: at_time[i],
+            long_window_rmse_cm_s: long[i],
+            long_window_s: long_s[i],
+            tolerance_pct: tolerance[i],
+        })
+        .collect())
+}
+
+pub(super) fn terms_in_time_rows(batch: &Batch) -> Result<Vec<TermInTimeRow>, ColumnError> {
+    let time_s = batch.floats("time_s")?;
+    let term = batch.strings("term")?;
+    let estimate = batch.floats("estimate")?;
+    let std = batch.floats("std")?;
+    let true_value = batch.optional_floats("true_value");
+    let bound_std = batch.floats("bound_std")?;
+    Ok(batch
+        .row_keys()?
+        .into_iter()
+        .enumerate()
+        .map(|(i, key)| TermInTimeRow {
+            dvl: key.dvl,
+            estimator: key.estimator,
+            error_model: key.error_model,
+            time_s: time_s[i],
+            term: term[i].clone(),
+            estimate: estimate[i],
+            std: std[i],
+            true_value: true_value[i],
+            bound_std: bound_std[i],
+        })
+        .collect())
 }

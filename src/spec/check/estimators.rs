@@ -4,8 +4,7 @@
 //! reason; the prior positive and the random walk not negative, as fractions and m/s.
 
 use super::Faults;
-use crate::kalman::TermSettings;
-use crate::spec::{KalmanSpec, file};
+use crate::spec::{KalmanSpec, TermSettings, file};
 use crate::vocab::{ErrorModel, EstimatorKind};
 
 /// Checks `[estimators]`: kinds and error models known, each listed once, and the
