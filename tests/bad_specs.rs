@@ -376,7 +376,7 @@ const RULES: &[(&str, &str, &str)] = &[
     (
         "estimators.kinds=[\"magic\"]",
         "estimators.kinds[0]",
-        "unknown estimator \"magic\"; expected one of baseline, least_squares, beam_wls, dcnet, floor",
+        "unknown estimator \"magic\"; expected one of baseline, least_squares, beam_wls, kalman, kalman_beam, dcnet, floor",
     ),
     (
         "estimators.kinds=[\"baseline\", \"baseline\"]",

@@ -72,18 +72,21 @@ fn quick_run_prints_and_stores_both_tables() {
         text.contains("Calibration on SCal: RMSE in cm/s at T_conv, mean ± std over 3 runs"),
         "{text}"
     );
-    assert!(text.contains("| DVL2 | floor (true terms) |"), "{text}");
+    assert!(text.contains("| DVL2 | floor (true terms)  "), "{text}");
     let results = project.path().join("results/quick");
     let runs = read_parquet(&results.join("monte_carlo.parquet"));
-    // 3 runs × 2 DVLs × 13 estimators (baseline, 5 least squares, beam-model WLS,
-    // 5 DCNet, floor) × (5 windows + 2 test trajectories); the bound is computed.
-    assert_eq!(runs.num_rows(), 3 * 2 * 13 * (5 + 2));
-    // The tables add the bound's row to the 13 estimators' rows.
+    // 3 runs × 2 DVLs × 19 estimators (baseline, 5 least squares, beam-model WLS, 5
+    // Kalman filters, the beam-model one, 5 DCNet, floor) × (5 windows + 2 test
+    // trajectories), and the held-out curves: every second up to 100 s for the 13
+    // closed-form methods and filters, the 5 windows for each DCNet, none for the
+    // floor; the bound is computed.
+    assert_eq!(runs.num_rows(), 3 * 2 * (19 * (5 + 2) + 13 * 100 + 5 * 5));
+    // The tables add the bound's row to the 19 estimators' rows.
     let calibration = calibration_rows(&results);
-    assert_eq!(calibration.len(), 2 * 14 * 5);
-    assert_eq!(calibration.iter().filter(|r| r.selected).count(), 2 * 14);
+    assert_eq!(calibration.len(), 2 * 20 * 5);
+    assert_eq!(calibration.iter().filter(|r| r.selected).count(), 2 * 20);
     let evaluation = evaluation_rows(&results);
-    assert_eq!(evaluation.len(), 2 * 14 * 2);
+    assert_eq!(evaluation.len(), 2 * 20 * 2);
     // DCNet EM5 clearly beats the baseline on the low-noise DVL.
     for trajectory in ["S3", "S4"] {
         let em5 = evaluation

@@ -62,11 +62,12 @@ fn two_folders_of_one_spec_differ_in_no_key_and_no_cell_and_the_file_is_what_is_
         markdown.contains("## Spec\n\nThe resolved specs are the same.\n"),
         "{markdown}"
     );
-    // 2 DVLs × (baseline, beam-model WLS, floor, bound, least squares and DCNet with
-    // EM1-EM5) = 28 series, at 5 windows and on 2 test trajectories.
+    // 2 DVLs × (baseline, beam-model WLS, its Kalman filter, floor, bound, least
+    // squares, Kalman filter and DCNet with EM1-EM5) = 40 series, at 5 windows and on
+    // 2 test trajectories.
     let calibration = section_rows(&markdown, "Calibration");
     let evaluation = section_rows(&markdown, "Evaluation");
-    assert_eq!((calibration.len(), evaluation.len()), (140, 56));
+    assert_eq!((calibration.len(), evaluation.len()), (200, 80));
     for row in calibration.iter().chain(&evaluation) {
         let at = if row.len() == 9 { 6 } else { 8 };
         assert_eq!(row[at], "+0.0000", "{row:?}");
@@ -83,7 +84,7 @@ fn two_folders_of_one_spec_differ_in_no_key_and_no_cell_and_the_file_is_what_is_
     );
     assert_eq!(
         markdown.lines().last().unwrap(),
-        "0 of 196 cells differ beyond 2 combined standard errors"
+        "0 of 280 cells differ beyond 2 combined standard errors"
     );
 }
 

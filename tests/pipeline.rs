@@ -97,7 +97,7 @@ fn plan_lists_every_task_and_changes_nothing() {
     assert!(!dir.join("results").exists(), "plan wrote something");
     let rows = plan_rows(&text);
     let labels: Vec<&str> = rows.iter().map(|(label, _)| label.as_str()).collect();
-    assert_eq!(labels.len(), 1 + 5 + 2 * 13 + 1, "{text}");
+    assert_eq!(labels.len(), 1 + 5 + 2 * 19 + 1, "{text}");
     assert_eq!(labels[0], "generate dataset");
     assert_eq!(
         labels[1..6],
@@ -112,23 +112,25 @@ fn plan_lists_every_task_and_changes_nothing() {
     assert_eq!(labels[6], "monte carlo DVL1 baseline");
     assert_eq!(labels[7], "monte carlo DVL1 least_squares EM1");
     assert_eq!(labels[12], "monte carlo DVL1 beam_wls");
-    assert_eq!(labels[31], "monte carlo DVL2 floor");
-    assert_eq!(labels[32], "write results/quick");
+    assert_eq!(labels[13], "monte carlo DVL1 kalman EM1");
+    assert_eq!(labels[18], "monte carlo DVL1 kalman_beam");
+    assert_eq!(labels[43], "monte carlo DVL2 floor");
+    assert_eq!(labels[44], "write results/quick");
     assert!(rows.iter().all(|(_, status)| status == "to do"), "{text}");
-    assert!(text.contains("quick: 33 tasks, 33 to do"), "{text}");
+    assert!(text.contains("quick: 45 tasks, 45 to do"), "{text}");
 
     run_ok(
         dir,
         &args(&["run", "experiments/quick.toml", "--no-plots"], &SMALL),
     );
     let text = plan(&[]);
-    assert!(text.contains("quick: 33 tasks, 0 to do"), "{text}");
+    assert!(text.contains("quick: 45 tasks, 0 to do"), "{text}");
     assert!(text.contains("| generate dataset "), "{text}");
     assert!(text.contains("not needed"), "{text}");
 
     // A Monte Carlo setting leaves the models done and the blocks to do.
     let text = plan(&["--set", "calibration.monte_carlo_runs=5"]);
-    assert!(text.contains("quick: 33 tasks, 27 to do"), "{text}");
+    assert!(text.contains("quick: 45 tasks, 39 to do"), "{text}");
     assert_eq!(text.matches("| train DCNet").count(), 5);
     assert!(
         !text
@@ -148,7 +150,7 @@ fn plan_lists_every_task_and_changes_nothing() {
         );
     }
     seen.sort();
-    let mut all: Vec<String> = labels[1..32].iter().map(|l| l.to_string()).collect();
+    let mut all: Vec<String> = labels[1..44].iter().map(|l| l.to_string()).collect();
     all.sort();
     assert_eq!(seen, all);
 }
@@ -187,7 +189,7 @@ fn a_second_run_does_nothing_and_a_monte_carlo_change_trains_nothing() {
     assert!(!third.contains("DCNet"), "{third}");
     assert!(!third.contains("dataset"), "{third}");
     assert!(
-        third.contains("monte carlo quick DVL1: 13 estimators × 4 runs stored"),
+        third.contains("monte carlo quick DVL1: 19 estimators × 4 runs stored"),
         "{third}"
     );
     assert!(
@@ -195,7 +197,9 @@ fn a_second_run_does_nothing_and_a_monte_carlo_change_trains_nothing() {
         "a model was touched"
     );
     let runs = read_parquet(&dir.join("results/quick/monte_carlo.parquet"));
-    assert_eq!(runs.num_rows(), 4 * 2 * 13 * (5 + 2));
+    // 4 runs × 2 DVLs × (19 estimators at 5 windows and on 2 test trajectories, and
+    // the held-out curves: 13 methods at every second to 100 s, 5 DCNets at 5 windows).
+    assert_eq!(runs.num_rows(), 4 * 2 * (19 * (5 + 2) + 13 * 100 + 5 * 5));
 
     // A report setting rewrites the results folder and computes nothing.
     let report = run(&[
@@ -205,7 +209,7 @@ fn a_second_run_does_nothing_and_a_monte_carlo_change_trains_nothing() {
         "report.tolerance_pct=5",
     ]);
     assert!(
-        report.contains("quick: 1 task to do (33 in the plan)"),
+        report.contains("quick: 1 task to do (45 in the plan)"),
         "{report}"
     );
     assert!(
@@ -470,8 +474,8 @@ fn a_sweep_over_two_keys_runs_every_point_and_tabulates_them() {
     assert!(svg.contains("<path") && !svg.contains("<text"), "{svg}");
 
     let sweep = read_parquet(&folder.join("sweep.parquet"));
-    // 4 points × 2 DVLs × (13 estimators and the bound).
-    assert_eq!(sweep.num_rows(), 4 * 2 * 14);
+    // 4 points × 2 DVLs × (19 estimators and the bound).
+    assert_eq!(sweep.num_rows(), 4 * 2 * 20);
     let point = strings(&sweep, "point");
     let rate = floats(&sweep, "training.learning_rate");
     let channels = integers(&sweep, "model.conv_channels");
@@ -486,7 +490,7 @@ fn a_sweep_over_two_keys_runs_every_point_and_tabulates_them() {
         let rows: Vec<usize> = (0..sweep.num_rows())
             .filter(|&i| point[i].as_deref() == Some(name))
             .collect();
-        assert_eq!(rows.len(), 28);
+        assert_eq!(rows.len(), 40);
         let expected_rate = [5e-4, 5e-4, 2e-3, 2e-3][p];
         let expected_channels = [8, 16, 8, 16][p];
         assert!(
@@ -839,9 +843,9 @@ fn two_concurrent_runs_compute_each_task_once() {
         .map(|l| l.split(": ").nth(1).unwrap().split(' ').next().unwrap())
         .map(|n| n.parse::<usize>().unwrap())
         .sum();
-    // Per DVL: the baseline, least squares and DCNet per model, the beam-model WLS
-    // and the floor.
-    let blocks = 2 * (1 + 2 * models + 2);
+    // Per DVL: the baseline, least squares, the Kalman filter and DCNet per model, the
+    // beam-model WLS and its Kalman filter, and the floor.
+    let blocks = 2 * (1 + 3 * models + 3);
     assert_eq!(stored, blocks, "each block computed once:\n{logs}");
     assert_same_results(
         &alone.path().join("results/quick"),

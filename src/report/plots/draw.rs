@@ -204,7 +204,7 @@ pub enum Marker {
     Square,
     Diamond,
     Cross,
-    /// A filled triangle, point up.
+    /// A filled triangle, point down (point up is the mark of a value cut at the edge).
     Triangle,
     /// A small filled circle.
     Dot,
@@ -283,7 +283,7 @@ impl Marker {
 /// The corners of [`Marker::Diamond`] around its centre, in pixels.
 const DIAMOND: [(i32, i32); 4] = [(0, -5), (5, 0), (0, 5), (-5, 0)];
 /// The corners of [`Marker::Triangle`] around its centre, in pixels.
-const TRIANGLE: [(i32, i32); 3] = [(0, -5), (5, 4), (-5, 4)];
+const TRIANGLE: [(i32, i32); 3] = [(0, 5), (5, -4), (-5, -4)];
 
 /// A column of legend entries, top to bottom.
 pub fn legend(area: &Area, title: &str, entries: &[(Swatch, String)]) -> PlotResult {

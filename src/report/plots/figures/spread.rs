@@ -82,7 +82,7 @@ fn spread_panel(
 ) -> PlotResult {
     let values: Vec<f64> = samples.iter().flatten().copied().collect();
     let x = Scale::fit_values(&values, 1);
-    let mut chart = chart_on(area, dvl, 150)
+    let mut chart = chart_on(area, dvl, 175)
         .build_cartesian_2d(x.clone(), -0.5..(series.len() as f64 - 0.5))?;
     mesh(&mut chart)
         .disable_y_mesh()
