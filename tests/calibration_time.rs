@@ -123,16 +123,17 @@ fn a_sweep_over_the_tolerance_reuses_every_block_and_the_random_walk_only_the_fi
     assert!(output.status.success(), "{}", stderr(&output));
     let blocks = std::fs::read_dir(d.join("results/.cache/monte_carlo"))
         .unwrap()
+        .filter(|entry| entry.as_ref().unwrap().path().extension() == Some("parquet".as_ref()))
         .count();
     // 2 DVLs × (baseline, 5 least squares, beam WLS, 5 + 1 filters, 5 DCNets, floor) =
     // 38 blocks at the first walk, and the 12 filter blocks again at the second.
     assert_eq!(blocks, 38 + 12);
     let point = |name: &str| d.join("results/quick-sweep").join(name);
     let wide = times(&point(
-        "calibration.time_tolerance_pct=10,estimators.kalman.bias_random_walk_cm_s_per_sqrt_s=0",
+        "time_tolerance_pct=10.0,kalman.bias_random_walk_cm_s_per_sqrt_s=0.0",
     ));
     let tight = times(&point(
-        "calibration.time_tolerance_pct=1,estimators.kalman.bias_random_walk_cm_s_per_sqrt_s=0",
+        "time_tolerance_pct=1.0,kalman.bias_random_walk_cm_s_per_sqrt_s=0.0",
     ));
     let mut longer = 0;
     for (w, t) in wide.iter().zip(&tight) {

@@ -74,6 +74,14 @@ fn two_folders_of_one_spec_differ_in_no_key_and_no_cell_and_the_file_is_what_is_
         assert_eq!(row[at + 1], "+0.0", "{row:?}");
     }
     assert!(marked(&calibration, 8).is_empty() && marked(&evaluation, 10).is_empty());
+    // The calibration times side by side, the same in both: per DVL every series but
+    // the floor, which does not calibrate (18), and the bound.
+    let times = section_rows(&markdown, "Calibration time");
+    assert_eq!(times.len(), 2 * 19);
+    assert!(
+        times.iter().all(|row| row[3] == row[4] && row[5] == row[6]),
+        "{times:?}"
+    );
     let training = section_rows(&markdown, "DCNet training");
     assert_eq!(
         training

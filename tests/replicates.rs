@@ -274,7 +274,11 @@ fn a_shard_holds_every_replicate_of_its_models_and_their_ensemble() {
     // 10 trainings; per DVL the baseline, least squares and the Kalman filter per
     // model, DCNet's 2 replicates and ensemble per model, the beam-model WLS and its
     // Kalman filter, and the floor.
-    assert_eq!(count, 10 + 2 * (1 + 5 + 5 + 5 * 3 + 3), "every task in a shard");
+    assert_eq!(
+        count,
+        10 + 2 * (1 + 5 + 5 + 5 * 3 + 3),
+        "every task in a shard"
+    );
 }
 
 #[test]

@@ -148,6 +148,7 @@ pub fn render(a: &StoredRun, b: &StoredRun) -> String {
     spec_section(&spec_table(a), &spec_table(b), &mut out);
     calibration_section(a, b, &mut tally, &mut out);
     evaluation_section(a, b, &mut tally, &mut out);
+    super::calibration_time::calibration_time_section(a, b, &mut out);
     training_section(a, b, &mut out);
     stage_section(a, b, &mut out);
     let _ = writeln!(out, "{}", tally.summary());

@@ -4,7 +4,8 @@
 //! the resolved `spec.toml` that differ, every calibration cell (DVL, estimator, error
 //! model, window) and evaluation cell (DVL, estimator, error model, trajectory) with
 //! A, B and B − A, each RMSE difference marked when it exceeds twice the combined Monte
-//! Carlo standard error, then the DCNet training times and the wall time per stage side
+//! Carlo standard error, each method's calibration time ([`calibration_time`]), then
+//! the DCNet training times and the wall time per stage side
 //! by side, and a count of the marked cells.
 //!
 //! This module reads the two folders and writes the text; [`difference`] holds the
@@ -12,6 +13,7 @@
 //! rows of A and B, and [`markdown`] sets it all as Markdown. Two installation studies
 //! (folders holding `heldout.parquet`) are compared by [`installation`] instead.
 
+pub mod calibration_time;
 pub mod difference;
 pub mod installation;
 pub mod markdown;
