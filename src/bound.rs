@@ -73,6 +73,7 @@ pub fn bounds(spec: &Spec, trajectories: &[Trajectory]) -> Vec<BoundRow> {
         let pooled: Vec<Vec3> = spec
             .evaluation
             .iter()
+            .filter(|&&t| t != spec.calibration.trajectory)
             .flat_map(|&t| trajectories[t].ground_truth.iter().copied())
             .collect();
         let longest = spec

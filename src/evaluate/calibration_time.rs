@@ -4,8 +4,9 @@
 //! to the longest calibration window for the methods whose estimate is cheap, at the
 //! calibration windows for DCNet. Its mean over runs is the method's held-out curve;
 //! the bound's is the expected RMSE of an efficient estimator from the same samples.
-//! A method's calibration time is the shortest length after which its curve stays
-//! within the spec's tolerance of its value at the longest window, and is set beside
+//! (The calibration trajectory is never among the held-out data, even where a spec
+//! tests on it too.) A method's calibration time is the shortest length after which
+//! its curve stays within the spec's tolerance of its value at the longest window, and is set beside
 //! its T_conv; its time to the bound, the shortest after which it stays within the
 //! tolerance of the bound's value there (a target common to every method, which a
 //! method that converges to a worse value never reaches). In: per-run rows of [`Phase::HeldOut`], the bound's curve, the
@@ -66,22 +67,33 @@ impl HeldOutScore {
                     / (1.0 + k).powi(2)
             })
             .sum();
-        100.0 * (squares.max(0.0) / self.count).sqrt()
+        // Rounding may leave a tiny negative sum; a NaN term stays NaN.
+        let squares = if squares < 0.0 { 0.0 } else { squares };
+        100.0 * (squares / self.count).sqrt()
     }
 }
 
 /// The shortest length of `curve` (length, mean RMSE, in increasing length) from which
-/// every later point is within `tolerance` (a fraction) of the last point's RMSE; its
-/// index. `None` when the last point is not finite.
+/// every later point is within `tolerance` (a fraction) of the last point's RMSE, above
+/// or below it; its index. `None` when the last point is not finite.
 pub fn calibration_time_index(curve: &[(f64, f64)], tolerance: f64) -> Option<usize> {
     let &(_, long) = curve.last()?;
-    index_within(curve, long * (1.0 + tolerance))
+    if !long.is_finite() {
+        return None;
+    }
+    first_of_last_run(curve, |rmse| (rmse - long).abs() <= tolerance * long)
 }
 
 /// The shortest length of `curve` from which every later point is at most `limit`; its
 /// index. `None` when the last point is beyond it (or not finite).
 pub fn index_within(curve: &[(f64, f64)], limit: f64) -> Option<usize> {
-    let outside = curve.iter().rposition(|&(_, rmse)| !(rmse <= limit));
+    first_of_last_run(curve, |rmse| rmse <= limit)
+}
+
+/// The index from which every point of `curve` holds `inside`; `None` when the last
+/// does not.
+fn first_of_last_run(curve: &[(f64, f64)], inside: impl Fn(f64) -> bool) -> Option<usize> {
+    let outside = curve.iter().rposition(|&(_, rmse)| !inside(rmse));
     match outside {
         None => Some(0),
         Some(i) if i + 1 < curve.len() => Some(i + 1),
@@ -188,6 +200,7 @@ pub fn calibration_times(
                     r.dvl == dvl
                         && r.estimator == EstimatorKind::Bound
                         && r.length_s <= long_window_s
+                        && r.rmse_cm_s.is_finite()
                 })
                 .max_by(|a, b| a.length_s.total_cmp(&b.length_s));
             let to_bound =
@@ -250,28 +263,39 @@ mod tests {
             let direct = rmse_cm_s(&correction, &dvl, &truth);
             assert!((score.rmse_cm_s(&correction) - direct).abs() < 1e-10 * direct);
         }
+        let broken = Correction {
+            scale: [f64::NAN; 3],
+            bias_m_s: [0.0; 3],
+        };
+        assert!(
+            score.rmse_cm_s(&broken).is_nan(),
+            "a NaN term scores NaN, not 0"
+        );
     }
 
     #[test]
     fn the_calibration_time_is_where_the_curve_stays_within_the_tolerance() {
-        // Last point 1.0: within 10 % means at most 1.1.
+        // Last point 1.0: within 10 % means from 0.9 to 1.1.
         let curve = [
             (1.0, 5.0),
             (2.0, 1.05),
             (3.0, 1.2),
             (4.0, 1.09),
-            (5.0, 1.1),
+            (5.0, 1.08),
             (6.0, 1.0),
         ];
         assert_eq!(calibration_time_index(&curve, 0.1), Some(3));
         assert_eq!(calibration_time_index(&curve, 0.25), Some(1));
         assert_eq!(calibration_time_index(&curve, 5.0), Some(0));
+        // A curve that rises to its last value is within only once it is near it.
+        let rising = [(1.0, 0.5), (2.0, 0.95), (3.0, 1.0)];
+        assert_eq!(calibration_time_index(&rising, 0.1), Some(1));
         // A point that cannot be scored (NaN) is not within.
         let gap = [(1.0, 1.0), (2.0, f64::NAN), (3.0, 1.0)];
         assert_eq!(calibration_time_index(&gap, 0.1), Some(2));
         assert_eq!(calibration_time_index(&[(1.0, f64::INFINITY)], 0.1), None);
         // Against a common target: never, when the curve ends above it.
-        assert_eq!(index_within(&curve, 1.05), None);
-        assert_eq!(index_within(&curve, 1.2), Some(3));
+        assert_eq!(index_within(&curve, 0.95), None);
+        assert_eq!(index_within(&curve, 1.2), Some(1));
     }
 }

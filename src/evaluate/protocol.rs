@@ -185,7 +185,11 @@ impl ProtocolInputs<'_> {
                     .map(|&t| {
                         let trajectory = &self.trajectories[t];
                         let measured = self.measure(run, trajectory);
-                        pooled.add(&measured.dvl, &trajectory.ground_truth);
+                        // The calibration trajectory, when a spec tests on it too, is
+                        // not held out.
+                        if t != self.spec.calibration.trajectory {
+                            pooled.add(&measured.dvl, &trajectory.ground_truth);
+                        }
                         (0..self.entries.len())
                             .map(|e| {
                                 rmse_cm_s(

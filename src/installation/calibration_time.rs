@@ -2,8 +2,9 @@
 //! its held-out curve is the mean, over the trajectories it corrects, of their RMSE
 //! with the terms from each calibration window; its calibration time the shortest
 //! window after which that curve stays within the tolerance of its value at the
-//! longest window, set beside its T_conv (the window of lowest held-out RMSE). In: the
-//! study's held-out rows and the spec's tolerance. Out: one row per method and
+//! longest window (above or below it), set beside its T_conv (the window of lowest
+//! held-out RMSE); a window where it has no estimate (a fit that failed) counts as not
+//! within. In: the study's held-out rows and the spec's tolerance. Out: one row per method and
 //! calibration trajectory.
 
 use super::rows::{HeldOutRow, StudyTimeRow};
@@ -17,6 +18,10 @@ pub fn calibration_times(heldout: &[HeldOutRow], tolerance: f64) -> Vec<StudyTim
             .iter()
             .map(|r| (r.method.as_str(), r.calibration.as_str())),
     );
+    // Every window of the study: a method with no row at one (a fit that failed) has
+    // no value there, which counts as not within.
+    let mut windows = first_seen(heldout.iter().map(|r| r.window_s));
+    windows.sort_by(f64::total_cmp);
     pairs
         .into_iter()
         .filter_map(|(method, calibration)| {
@@ -24,8 +29,6 @@ pub fn calibration_times(heldout: &[HeldOutRow], tolerance: f64) -> Vec<StudyTim
                 .iter()
                 .filter(|r| r.method == method && r.calibration == calibration)
                 .collect();
-            let mut windows = first_seen(rows.iter().map(|r| r.window_s));
-            windows.sort_by(f64::total_cmp);
             let curve: Vec<(f64, f64)> = windows
                 .iter()
                 .map(|&w| {
@@ -38,13 +41,10 @@ pub fn calibration_times(heldout: &[HeldOutRow], tolerance: f64) -> Vec<StudyTim
                 })
                 .collect();
             let &(_, long) = curve.last()?;
-            let t_conv =
-                (0..curve.len()).fold(
-                    0,
-                    |best, i| {
-                        if curve[i].1 < curve[best].1 { i } else { best }
-                    },
-                );
+            // The lowest finite mean, the first of equals.
+            let t_conv = (0..curve.len())
+                .filter(|&i| curve[i].1.is_finite())
+                .reduce(|best, i| if curve[i].1 < curve[best].1 { i } else { best })?;
             let index = calibration_time_index(&curve, tolerance);
             Some(StudyTimeRow {
                 method: method.to_string(),
@@ -90,7 +90,7 @@ mod tests {
         let times = calibration_times(&rows, 0.1);
         assert_eq!(times.len(), 1);
         // 7 is beyond 6.6, so the curve stays within 10 % only from 400 s; within 20 %
-        // (7.2) from 50 s.
+        // (4.8 to 7.2) from 50 s.
         assert_eq!(times[0].calibration_time_s, Some(400.0));
         assert_eq!(times[0].t_conv_s, 400.0);
         assert_eq!(times[0].long_window_rmse_cm_s, 6.0);
@@ -98,5 +98,15 @@ mod tests {
             calibration_times(&rows, 0.2)[0].calibration_time_s,
             Some(50.0)
         );
+        // A failed fit at 100 s leaves the curve without a value there: within 20 % only
+        // from 400 s.
+        let failed: Vec<HeldOutRow> = rows
+            .iter()
+            .cloned()
+            .chain([row("other", 100.0, "T2", 6.0)])
+            .filter(|r| !(r.method == "fit" && r.window_s == 100.0))
+            .collect();
+        let fit = calibration_times(&failed, 0.2);
+        assert_eq!(fit[0].calibration_time_s, Some(400.0));
     }
 }

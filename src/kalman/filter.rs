@@ -87,25 +87,27 @@ impl Filter {
     }
 
     /// The update with `measurement` linearised about `about`: its innovation
-    /// `y − h(about)` moved to the current estimate, `− H·(θ̂ − about)`.
+    /// `y − h(about)` moved to the current estimate, `− H·(θ̂ − about)`. With R
+    /// diagonal, the components are taken in one at a time, which is the joint update
+    /// and needs no matrix inverse: a component that neither its noise nor the terms'
+    /// uncertainty can move (`hPhᵀ + r = 0`) tells nothing and is passed over.
     fn update_about(&mut self, measurement: &Measurement, about: &DVector<f64>) {
         let n = self.estimate.len();
-        let m = measurement.rows.len();
-        let h = DMatrix::from_fn(m, n, |r, c| measurement.rows[r][c]);
-        let noise =
-            DMatrix::from_diagonal(&DVector::from_column_slice(&measurement.noise_variance));
-        let ph = &self.covariance * h.transpose();
-        let innovation_covariance = &h * &ph + &noise;
-        let Some(inverse) = innovation_covariance.try_inverse() else {
-            return;
-        };
-        let gain = ph * inverse;
-        let innovation =
-            DVector::from_column_slice(&measurement.innovation) - &h * (&self.estimate - about);
-        self.estimate += &gain * innovation;
-        let keep = DMatrix::identity(n, n) - &gain * &h;
-        self.covariance =
-            &keep * &self.covariance * keep.transpose() + &gain * noise * gain.transpose();
+        for (r, row) in measurement.rows.iter().enumerate() {
+            let h = DVector::from_column_slice(row);
+            let noise = measurement.noise_variance[r];
+            let ph = &self.covariance * &h;
+            let spread = h.dot(&ph) + noise;
+            if !(spread > 0.0) {
+                continue;
+            }
+            let gain = ph / spread;
+            let innovation = measurement.innovation[r] - h.dot(&(&self.estimate - about));
+            self.estimate += &gain * innovation;
+            let keep = DMatrix::identity(n, n) - &gain * h.transpose();
+            self.covariance =
+                &keep * &self.covariance * keep.transpose() + &gain * gain.transpose() * noise;
+        }
     }
 
     /// The standard deviation of each term.

@@ -305,8 +305,9 @@ mod tests {
         }
     }
 
-    /// Noise-free samples of a DVL the model holds: every model that can hold the truth
-    /// recovers it, and the others say they cannot.
+    /// Noise-free samples of a DVL the model holds, the filter told there is no noise
+    /// at all: every model that can hold the truth recovers it, and the others say
+    /// they cannot.
     #[test]
     fn noise_free_samples_give_the_true_terms_of_every_model_that_holds_them() {
         let geometry = BeamGeometry::janus_x(20.0);
@@ -326,7 +327,7 @@ mod tests {
                 let history = run(
                     model,
                     &model.prior(wide, still),
-                    [1e-4; 3],
+                    [0.0; 3],
                     1.0,
                     &measured.dvl,
                     &measured.gnss,

@@ -85,7 +85,7 @@ fn dvl_section(dvl: &str, rows: &[CalibrationTimeRow], tolerance: f64) -> Sectio
     Section {
         title: format!("How long to calibrate {dvl}"),
         caption: format!(
-            "Held-out RMSE (cm/s) on the test trajectories pooled, mean over runs. A method's calibration time is the shortest calibration after which its RMSE stays within {tolerance:.0} % of its own value at the longest window ({long_s:.0} s); T_conv is the paper's: the window of lowest RMSE on the rest of the calibration trajectory. The time to the bound is the shortest calibration after which the RMSE stays within {tolerance:.0} % of the bound's at the longest window, a target common to every method (\"never\": not within {long_s:.0} s). The bound's row is an efficient estimator's."
+            "Held-out RMSE (cm/s) on the test trajectories pooled, mean over runs. A method's calibration time is the shortest calibration after which its RMSE stays within {tolerance} % of its own value at the longest window ({long_s:.0} s), above or below it; T_conv is the paper's: the window of lowest RMSE on the rest of the calibration trajectory. The time to the bound is the shortest calibration after which the RMSE stays below the bound's at the longest window plus {tolerance} %, a target common to every method (\"never\": not by {long_s:.0} s). The bound's row is an efficient estimator's."
         ),
         table,
         paragraph: None,

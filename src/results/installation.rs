@@ -77,10 +77,19 @@ pub fn read_study(folder: &Path) -> Result<Study, ReadError> {
     let trace = read_rows(&path, &schema, trace_rows)?;
     let (path, schema) = read(FAILURES, failures_batch(&[]));
     let failures = read_rows(&path, &schema, failure_rows)?;
+    // Folders written before the Kalman filter lack these two.
     let (path, schema) = read(TERMS_IN_TIME, filtered_batch(&[]));
-    let filtered = read_rows(&path, &schema, filtered_rows)?;
+    let filtered = if path.exists() {
+        read_rows(&path, &schema, filtered_rows)?
+    } else {
+        Vec::new()
+    };
     let (path, schema) = read(CALIBRATION_TIME, time_batch(&[]));
-    let calibration_time = read_rows(&path, &schema, time_rows)?;
+    let calibration_time = if path.exists() {
+        read_rows(&path, &schema, time_rows)?
+    } else {
+        Vec::new()
+    };
     // Only a study with `[learned]` has it.
     let (path, schema) = read(FOLDS, folds_batch(&[]));
     let folds = if path.exists() {

@@ -63,7 +63,7 @@ pub(super) fn timing_section(study: &Study, methods: &[&str], windows: &[f64]) -
     Some(Section {
         title: "How long to calibrate".into(),
         caption: format!(
-            "Each method's calibration time on each calibration trajectory, s: the shortest window after which its held-out RMSE (the mean over the trajectories it corrects) stays within {:.0} % of its value at the longest window ({:.0} s); in brackets its T_conv, the window of lowest held-out RMSE. The windows are those of the study, so a time is one of them.",
+            "Each method's calibration time on each calibration trajectory, s: the shortest window after which its held-out RMSE (the mean over the trajectories it corrects) stays within {} % of its value at the longest window ({:.0} s), above or below it; in brackets its T_conv, the window of lowest held-out RMSE. The windows are those of the study, so a time is one of them.",
             first.tolerance_pct,
             windows.last().copied().unwrap_or(0.0)
         ),

@@ -208,9 +208,9 @@ impl StoredRun {
             runs: table(folder, runs, run_rows)?,
             calibration: table(folder, calibration, calibration_rows)?,
             evaluation: table(folder, evaluation, evaluation_rows)?,
-            held_out: table(folder, held_out, held_out_rows)?,
-            calibration_time: table(folder, calibration_time, calibration_time_rows)?,
-            terms_in_time: table(folder, terms_in_time, terms_in_time_rows)?,
+            held_out: later_table(folder, held_out, held_out_rows)?,
+            calibration_time: later_table(folder, calibration_time, calibration_time_rows)?,
+            terms_in_time: later_table(folder, terms_in_time, terms_in_time_rows)?,
             training: table(folder, training, epoch_rows)?,
             trajectories: gather_trajectories(table(folder, trajectories, trajectory_rows)?),
         })
@@ -255,6 +255,20 @@ fn table<T>(
     rows: fn(&Batch) -> Result<Vec<T>, ColumnError>,
 ) -> Result<Vec<T>, ReadError> {
     table_at(&folder.join(file), file, rows)
+}
+
+/// Like [`table`], for a table that folders written before it lack: none of its rows
+/// there.
+fn later_table<T>(
+    folder: &Path,
+    file: &str,
+    rows: fn(&Batch) -> Result<Vec<T>, ColumnError>,
+) -> Result<Vec<T>, ReadError> {
+    if folder.join(file).exists() {
+        table(folder, file, rows)
+    } else {
+        Ok(Vec::new())
+    }
 }
 
 /// Reads `path` as the results table `file`.
