@@ -179,14 +179,19 @@ fn claim_section(run: &StoredRun) -> Option<Section> {
                     .map(|r| of(r).map_or("never".to_string(), |s| format!("{s:.0} s")))
             };
             let own = |r: &CalibrationTimeRow| r.calibration_time_s;
-            let to_bound = |r: &CalibrationTimeRow| r.time_to_bound_s;
             let beam = time(EstimatorKind::KalmanBeam, None, own)?;
+            let within = |estimator, model| match find(dvl, estimator, model) {
+                Some(r) => match r.time_to_bound_s {
+                    Some(s) => format!("comes within it in {s:.0} s"),
+                    None => "never comes within it".into(),
+                },
+                None => "is not in the run".into(),
+            };
             Some(format!(
-                "{dvl}: the beam-model Kalman filter (the DVL's own model) needs {beam} ({} to the bound), the bound itself {}; DCNet EM5 reaches the bound in {}.",
-                time(EstimatorKind::KalmanBeam, None, to_bound).unwrap_or_default(),
+                "{dvl}: the beam-model Kalman filter (the DVL's own model) settles in {beam}, the bound in {}; of the bound's RMSE at the longest window plus the tolerance, the filter {}, DCNet EM5 {}.",
                 time(EstimatorKind::Bound, None, own).unwrap_or_else(|| "—".into()),
-                time(EstimatorKind::Dcnet, Some(ErrorModel::Em5), to_bound)
-                    .unwrap_or_else(|| "—".into()),
+                within(EstimatorKind::KalmanBeam, None),
+                within(EstimatorKind::Dcnet, Some(ErrorModel::Em5)),
             ))
         })
         .collect();
