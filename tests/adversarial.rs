@@ -1540,7 +1540,7 @@ fn a_full_disk_fails_with_exit_2_naming_the_file_and_resumes_to_the_same_bytes()
     let size = footprint(&reference.out());
     // Shares of the reference's footprint; with a checkpoint every epoch, training
     // needs more room than the finished run.
-    let cases: [(f64, &[&str]); 10] = [
+    let cases: [(f64, &[&str]); 11] = [
         (0.04, &[]),
         (0.15, &[]),
         (0.26, &[]),
@@ -1549,8 +1549,9 @@ fn a_full_disk_fails_with_exit_2_naming_the_file_and_resumes_to_the_same_bytes()
         (0.45, &[]),
         (0.7, &[]),
         (0.9, &[]),
-        (0.3, &EVERY_EPOCH),
-        (0.7, &EVERY_EPOCH),
+        (0.05, &EVERY_EPOCH),
+        (0.1, &EVERY_EPOCH),
+        (0.2, &EVERY_EPOCH),
     ];
     let mut tally = Tally::default();
     let mut stages: BTreeMap<&str, usize> = BTreeMap::new();

@@ -13,7 +13,7 @@
 //! deviation and is flagged, naming the others that share it.
 
 use super::fit::Fit;
-use super::terms::TermKind;
+use super::terms::PerKind;
 use nalgebra::{DMatrix, SymmetricEigen};
 use std::fmt;
 
@@ -38,45 +38,21 @@ pub struct Noise {
 }
 
 /// The standard deviation beyond which a term means nothing, per kind of term.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Tolerances {
-    /// A fraction (0.005 for 0.5 %).
-    pub scale: f64,
-    pub misalignment_rad: f64,
-    pub lever_arm_m: f64,
-    pub time_offset_s: f64,
-    pub bias_m_s: f64,
-}
+pub type Tolerances = PerKind;
 
-impl Default for Tolerances {
-    /// Each one is the uncertainty that makes about 1 cm/s of velocity error (half
-    /// A-KIT's specified DVL noise) on a vehicle at 2 m/s: a scale of 0.5 % and a
-    /// misalignment of 0.5° (0.0087 × 2 m/s = 1.7 cm/s) at 2 m/s; a lever arm of
-    /// 0.1 m at 6°/s of turn; a time offset of 0.05 s at 0.2 m/s² of acceleration
-    /// (a 15°/s turn at 2 m/s is 0.5 m/s²); a bias of 1 cm/s.
-    fn default() -> Self {
-        Tolerances {
-            scale: 0.005,
-            misalignment_rad: 0.5f64.to_radians(),
-            lever_arm_m: 0.1,
-            time_offset_s: 0.05,
-            bias_m_s: 0.01,
-        }
-    }
-}
-
-impl Tolerances {
-    /// The tolerance of a term of this kind.
-    pub fn of(&self, kind: TermKind) -> f64 {
-        match kind {
-            TermKind::Scale => self.scale,
-            TermKind::Misalignment => self.misalignment_rad,
-            TermKind::LeverArm => self.lever_arm_m,
-            TermKind::TimeOffset => self.time_offset_s,
-            TermKind::Bias => self.bias_m_s,
-        }
-    }
-}
+/// The tolerances by default. Each one is the uncertainty that makes about 1 cm/s of
+/// velocity error (half A-KIT's specified DVL noise) on a vehicle at 2 m/s: a scale of
+/// 0.5 % and a misalignment of 0.5° (0.0087 × 2 m/s = 1.7 cm/s) at 2 m/s; a lever arm
+/// of 0.1 m at 6°/s of turn; a time offset of 0.05 s at 0.2 m/s² of acceleration (a
+/// 15°/s turn at 2 m/s is 0.5 m/s²); a bias of 1 cm/s.
+pub const DEFAULT_TOLERANCES: Tolerances = PerKind {
+    scale: 0.005,
+    // 0.5°, as `to_radians` computes it.
+    misalignment_rad: 0.5 * (std::f64::consts::PI / 180.0),
+    lever_arm_m: 0.1,
+    time_offset_s: 0.05,
+    bias_m_s: 0.01,
+};
 
 /// Why a term cannot be seen on a window.
 #[derive(Debug, Clone, PartialEq)]
@@ -284,7 +260,7 @@ mod tests {
                     .collect()
             })
             .collect();
-        let bound = bound(&fit_with(terms, &columns), NOISE, &Tolerances::default());
+        let bound = bound(&fit_with(terms, &columns), NOISE, &DEFAULT_TOLERANCES);
         for std in &bound.std {
             assert!((std - 0.02 / 300f64.sqrt()).abs() < 1e-15);
         }
@@ -295,7 +271,7 @@ mod tests {
             dvl_m_s: 0.03,
             reference_m_s: 0.04,
         };
-        let wider = super::bound(&fit_with(terms, &columns), both, &Tolerances::default());
+        let wider = super::bound(&fit_with(terms, &columns), both, &DEFAULT_TOLERANCES);
         assert!((wider.std[0] - 0.05 / 300f64.sqrt()).abs() < 1e-15);
     }
 
@@ -308,7 +284,7 @@ mod tests {
             ..TermSet::NONE
         };
         let columns = vec![vec![-2.0; 30], vec![-1.0; 30]];
-        let bound = bound(&fit_with(terms, &columns), NOISE, &Tolerances::default());
+        let bound = bound(&fit_with(terms, &columns), NOISE, &DEFAULT_TOLERANCES);
         assert!(bound.std.iter().all(|s| s.is_infinite()));
         assert_eq!(
             bound.unseen,
@@ -346,7 +322,7 @@ mod tests {
         let bound = bound(
             &fit_with(terms, &[vec![0.0; 60], ramp, near]),
             NOISE,
-            &Tolerances::default(),
+            &DEFAULT_TOLERANCES,
         );
         assert!(bound.std[0].is_infinite());
         assert_eq!(
@@ -379,7 +355,7 @@ mod tests {
         let bound = bound(
             &fit_with(terms, &[vec![0.01; 30]]),
             NOISE,
-            &Tolerances::default(),
+            &DEFAULT_TOLERANCES,
         );
         let expected = 0.02 / (0.01 * 30f64.sqrt());
         assert!((bound.std[0] - expected).abs() < 1e-12);

@@ -13,7 +13,7 @@
 use super::bound::Noise;
 use super::fit::{TIME_OFFSET_MARGIN_S, reference_held, slope_held};
 use super::frames::Reference;
-use super::terms::{Installation, TermKind, TermSet};
+use super::terms::{Installation, PerKind, TermSet};
 use crate::Vec3;
 use crate::kalman::{Filter, Measurement, Prior};
 use nalgebra::DMatrix;
@@ -22,29 +22,6 @@ use nalgebra::DMatrix;
 /// iterated extended filter): enough for τ and the misalignment, which enter
 /// nonlinearly, to settle within a sample.
 const ITERATIONS: usize = 5;
-
-/// A setting per kind of term, in the stored units (a fraction, radians, metres,
-/// seconds, m/s).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PerKind {
-    pub scale: f64,
-    pub misalignment_rad: f64,
-    pub lever_arm_m: f64,
-    pub time_offset_s: f64,
-    pub bias_m_s: f64,
-}
-
-impl PerKind {
-    fn of(&self, kind: TermKind) -> f64 {
-        match kind {
-            TermKind::Scale => self.scale,
-            TermKind::Misalignment => self.misalignment_rad,
-            TermKind::LeverArm => self.lever_arm_m,
-            TermKind::TimeOffset => self.time_offset_s,
-            TermKind::Bias => self.bias_m_s,
-        }
-    }
-}
 
 /// The filter's prior standard deviation about zero and random walk per √s, per kind.
 #[derive(Debug, Clone, Copy, PartialEq)]

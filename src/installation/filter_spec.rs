@@ -4,7 +4,8 @@
 //! walk a scale and a bias may take. In: the table as written and the models' names.
 //! Out: the filter's settings, or every fault at its key.
 
-use super::filter::{FilterSettings, PerKind};
+use super::filter::FilterSettings;
+use super::terms::PerKind;
 
 /// `[calibration.kalman]` as written.
 #[derive(Debug, Clone, serde::Deserialize)]

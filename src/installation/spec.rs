@@ -106,9 +106,9 @@ pub struct ObservabilityFile {
 }
 
 impl Default for ObservabilityFile {
-    /// [`Tolerances::default`](super::bound::Tolerances) in the file's units.
+    /// [`DEFAULT_TOLERANCES`](super::bound::DEFAULT_TOLERANCES) in the file's units.
     fn default() -> Self {
-        ObservabilityFile::from(super::bound::Tolerances::default())
+        ObservabilityFile::from(super::bound::DEFAULT_TOLERANCES)
     }
 }
 
@@ -454,7 +454,7 @@ fn check(
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::installation::bound::Tolerances;
+    use crate::installation::bound::DEFAULT_TOLERANCES;
 
     /// A study of no recordings with `learned`, its noise 2 cm/s: what code that reads
     /// only the spec's settings needs.
@@ -496,6 +496,6 @@ pub(crate) mod tests {
             file.bias_cm_s,
         ];
         assert_eq!(in_file_units, [0.5, 0.5, 0.1, 0.05, 1.0]);
-        assert_eq!(file.tolerances(), Tolerances::default());
+        assert_eq!(file.tolerances(), DEFAULT_TOLERANCES);
     }
 }

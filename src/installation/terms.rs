@@ -52,6 +52,31 @@ pub enum TermKind {
     Bias,
 }
 
+/// A value for each kind of term, in its stored unit: a tolerance, a prior's standard
+/// deviation, a random walk's per √s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PerKind {
+    /// A fraction (0.005 for 0.5 %).
+    pub scale: f64,
+    pub misalignment_rad: f64,
+    pub lever_arm_m: f64,
+    pub time_offset_s: f64,
+    pub bias_m_s: f64,
+}
+
+impl PerKind {
+    /// The value for a term of this kind.
+    pub fn of(&self, kind: TermKind) -> f64 {
+        match kind {
+            TermKind::Scale => self.scale,
+            TermKind::Misalignment => self.misalignment_rad,
+            TermKind::LeverArm => self.lever_arm_m,
+            TermKind::TimeOffset => self.time_offset_s,
+            TermKind::Bias => self.bias_m_s,
+        }
+    }
+}
+
 /// The terms a calibration estimates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct TermSet {
