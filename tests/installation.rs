@@ -8,7 +8,7 @@ mod common;
 
 use dcnet_exp::Vec3;
 use dcnet_exp::data::paired::{PairedColumns, PairedFiles, PairedRecording};
-use dcnet_exp::installation::bound::{Noise, TermBound, Tolerances, bound};
+use dcnet_exp::installation::bound::{DEFAULT_TOLERANCES, Noise, TermBound, bound};
 use dcnet_exp::installation::fit::{Fit, TIME_OFFSET_MARGIN_S, fit};
 use dcnet_exp::installation::frames::{
     Reference, ReferenceAt, apply, body_rate, body_to_ned, transpose,
@@ -196,7 +196,7 @@ fn synthetic_terms_of_every_kind_are_recovered_within_three_standard_deviations(
         for (label, terms, truth) in cases {
             let (time_s, dvl, reference) = synthetic(&TURNING, &truth, seed);
             let fit = fit(&time_s, &dvl, &reference, terms).unwrap();
-            let bound = bound(&fit, NOISE, &Tolerances::default());
+            let bound = bound(&fit, NOISE, &DEFAULT_TOLERANCES);
             let normalized =
                 assert_within_three_std(&fit, &bound, &truth, &format!("seed {seed}, {label}"));
             squares.extend(normalized.iter().map(|z| z * z));
@@ -237,7 +237,7 @@ fn on_a_straight_synthetic_segment_the_lever_arm_is_flagged_and_the_bias_is_not(
     };
     let (time_s, dvl, reference) = synthetic(&STRAIGHT, &truth, 7);
     let fit = fit(&time_s, &dvl, &reference, lever_time_bias()).unwrap();
-    let bound = bound(&fit, NOISE, &Tolerances::default());
+    let bound = bound(&fit, NOISE, &DEFAULT_TOLERANCES);
     for name in ["lever_arm_x_m", "lever_arm_y_m", "lever_arm_z_m"] {
         assert!(bound.is_unseen(name), "{name}: {:?}", bound.unseen);
     }
@@ -293,7 +293,7 @@ fn held_out(installation: &Installation, recording: &PairedRecording) -> AxisRms
 fn fit_akit(recording: &PairedRecording, terms: TermSet) -> (Fit, TermBound) {
     let reference = Reference::new(recording);
     let fit = fit(&recording.time_s, &recording.dvl_m_s, &reference, terms).unwrap();
-    let bound = bound(&fit, NOISE, &Tolerances::default());
+    let bound = bound(&fit, NOISE, &DEFAULT_TOLERANCES);
     (fit, bound)
 }
 
