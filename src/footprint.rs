@@ -9,6 +9,7 @@
 
 use crate::dataset::{DatasetSize, TrainingSet};
 use crate::evaluate::RunRow;
+use crate::evaluate::calibration_time::curve_lengths;
 use crate::model::layer_shapes;
 use crate::spec::{Origin, Spec};
 use crate::vocab::{ErrorModel, EstimatorKind};
@@ -171,23 +172,28 @@ fn training(spec: &Spec, threads: usize) -> [Part; 2] {
     ]
 }
 
-/// One row per run, DVL, estimator and calibration window or test trajectory.
+/// One row per run, DVL, estimator and calibration window, test trajectory or length of
+/// its held-out curve.
 fn monte_carlo_rows(spec: &Spec) -> Part {
-    let estimators = spec
+    let windows = &spec.calibration.window_sizes;
+    let rows_per_run: usize = spec
         .kinds
         .iter()
-        .map(|kind| match kind {
-            // Each replicate, and their ensemble when there are several.
-            EstimatorKind::Dcnet if spec.training.replicates > 1 => {
-                spec.error_models.len() * (spec.training.replicates + 1)
-            }
-            kind if kind.takes_error_model() => spec.error_models.len(),
-            _ => 1,
+        .map(|&kind| {
+            let entries = match kind {
+                // Each replicate, and their ensemble when there are several.
+                EstimatorKind::Dcnet if spec.training.replicates > 1 => {
+                    spec.error_models.len() * (spec.training.replicates + 1)
+                }
+                kind if kind.takes_error_model() => spec.error_models.len(),
+                _ => 1,
+            };
+            let places = windows.len() + spec.evaluation.len() + curve_lengths(kind, windows).len();
+            entries * places
         })
-        .sum::<usize>() as f64;
-    let places = (spec.calibration.window_sizes.len() + spec.evaluation.len()) as f64;
+        .sum();
     let rows =
-        spec.calibration.monte_carlo_runs as f64 * spec.dvls.len() as f64 * estimators * places;
+        spec.calibration.monte_carlo_runs as f64 * spec.dvls.len() as f64 * rows_per_run as f64;
     let row_bytes = std::mem::size_of::<RunRow>() as f64 + ROW_NAME_BYTES;
     Part {
         what: "Monte Carlo rows",
@@ -308,6 +314,16 @@ mod tests {
             let footprint = Footprint::of(&wide, &lengths(&wide), 2);
             assert_eq!(footprint.refusal(1 << 20).unwrap().0, key, "{widths}");
         }
+    }
+
+    /// The quick spec's rows, as `tests/cli.rs` counts them in `monte_carlo.parquet`.
+    #[test]
+    fn the_monte_carlo_rows_are_those_a_run_writes() {
+        let spec = quick_spec(&["calibration.monte_carlo_runs=3"]);
+        let part = monte_carlo_rows(&spec);
+        let row_bytes = std::mem::size_of::<RunRow>() as f64 + ROW_NAME_BYTES;
+        let rows = part.bytes / (row_bytes * ROW_COPIES);
+        assert_eq!(rows, (3 * 2 * (19 * (5 + 2) + 13 * 100 + 5 * 5)) as f64);
     }
 
     #[test]
