@@ -8,8 +8,9 @@
 //! (Levenberg–Marquardt from a scan over τ, on a fixed interior mask); [`bound`] gives
 //! their Fisher information: standard deviations, correlations and the terms a segment
 //! cannot show; [`filter`] estimates them sample by sample (an extended Kalman filter)
-//! with the bound of the samples so far; [`study`] scores every method held out, and
-//! [`calibration_time`] finds how long each needs. With `[learned]`
+//! with the bound of the samples so far; [`study`] scores every method held out (its
+//! filters' passes in [`study_filters`]), and [`calibration_time`] finds how long each
+//! needs. With `[learned]`
 //! ([`learned_spec`]): [`simulate`] makes DVLs of simulated installations over the real
 //! reference, [`network`] is the DCNet that outputs the terms and its loss, [`learned`]
 //! gives each fold its training windows and reads the terms a trained model finds. The
@@ -29,6 +30,7 @@ pub mod bound;
 pub mod filter;
 pub mod rows;
 pub mod study;
+pub mod study_filters;
 pub mod calibration_time;
 pub mod simulate;
 pub mod network;

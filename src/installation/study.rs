@@ -10,7 +10,6 @@
 
 use super::bound::{Noise, TermBound, bound};
 use super::calibration_time::calibration_times;
-use super::filter::{FilterStep, run_filter};
 use super::fit::{TIME_OFFSET_MARGIN_S, fit};
 use super::frames::Reference;
 use super::learned_spec::Source;
@@ -18,8 +17,9 @@ use super::rows::{
     FilterPoint, FitFailure, FoldSummaryRow, HeldOutRow, NO_CALIBRATION, Study, SummaryRow, TermRow,
 };
 use super::spec::{InstallationSpec, Method};
+use super::study_filters::run_filters;
 use super::term_names::term_set;
-use super::terms::{Installation, TermSet, score};
+use super::terms::{Installation, score};
 use crate::Vec3;
 use crate::data::paired::PairedRecording;
 use crate::estimators::{Baseline, Estimator, LeastSquares};
@@ -233,28 +233,7 @@ pub fn calibrate_on(
     };
     let tolerances = spec.observability.tolerances();
     let calibration = segments[c];
-    // Each filter runs once over the whole trajectory; a window takes its state after
-    // the window's last sample.
-    let filters: Vec<(String, TermSet, Vec<FilterStep>)> = spec
-        .methods
-        .iter()
-        .filter_map(|method| match method {
-            Method::Filter { terms, .. } => {
-                let recording = &calibration.recording;
-                let set = term_set(terms);
-                let steps = run_filter(
-                    &recording.time_s,
-                    &recording.dvl_m_s,
-                    &calibration.reference,
-                    set,
-                    &spec.filter,
-                    noise,
-                );
-                Some((method.label(), set, steps))
-            }
-            _ => None,
-        })
-        .collect();
+    let filters = run_filters(spec, &calibration.recording, &calibration.reference, noise);
     let per_window: Vec<Calibrated> = spec
         .windows_s
         .par_iter()
@@ -300,25 +279,17 @@ pub fn calibrate_on(
                     }
                     Method::Filter { .. } => {
                         let label = method.label();
-                        let (_, set, steps) = filters
+                        let run = filters
                             .iter()
-                            .find(|(l, _, _)| *l == label)
+                            .find(|run| run.label == label)
                             .expect("every filter ran");
-                        let Some(step) = steps.iter().take_while(|s| s.sample < range.end).last()
-                        else {
+                        let Some((installation, terms)) = run.at_window(range.end) else {
                             continue;
                         };
                         Estimate {
-                            installation: step.installation,
+                            installation,
                             bound: None,
-                            filtered: Some(
-                                set.parameter_names()
-                                    .into_iter()
-                                    .zip(step.installation.to_parameters(set))
-                                    .zip(&step.std)
-                                    .map(|((name, value), &std)| (name, value, std))
-                                    .collect(),
-                            ),
+                            filtered: Some(terms),
                         }
                     }
                     Method::Learned { source, replicate } => {
@@ -468,21 +439,8 @@ pub fn calibrate_on(
         })
         .collect();
     let mut calibrated = Calibrated::concat(per_window);
-    for (label, set, steps) in &filters {
-        for step in steps {
-            let values = step.installation.to_parameters(set);
-            for (p, name) in set.parameter_names().into_iter().enumerate() {
-                calibrated.filtered.push(FilterPoint {
-                    method: label.clone(),
-                    calibration: calibration.name.clone(),
-                    time_s: step.time_s,
-                    term: name.to_string(),
-                    value: values[p],
-                    std: step.std[p],
-                    bound_std: step.bound_std[p],
-                });
-            }
-        }
+    for run in &filters {
+        calibrated.filtered.extend(run.points(&calibration.name));
     }
     calibrated
 }
