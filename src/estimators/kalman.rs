@@ -10,8 +10,8 @@ use crate::Vec3;
 use crate::kalman::Prior;
 use crate::kalman::scale_bias::{ScaleBiasModel, axis_noise, run};
 use crate::noise::BeamGeometry;
-use crate::spec::KalmanSpec;
-use crate::vocab::{Correction, SensorErrors};
+use crate::spec::{Dvl, Spec};
+use crate::vocab::Correction;
 
 pub struct KalmanFilter {
     pub model: ScaleBiasModel,
@@ -22,20 +22,20 @@ pub struct KalmanFilter {
 }
 
 impl KalmanFilter {
-    pub fn new(
-        model: ScaleBiasModel,
-        settings: &KalmanSpec,
-        errors: &SensorErrors,
-        geometry: &BeamGeometry,
-        gnss_noise_m_s: f64,
-        sample_rate_hz: f64,
-    ) -> Self {
+    /// The filter of `model` for `dvl`, with the spec's prior, random walk, GNSS-RTK
+    /// noise and sample rate.
+    pub fn new(model: ScaleBiasModel, spec: &Spec, dvl: &Dvl, geometry: &BeamGeometry) -> Self {
         KalmanFilter {
             model,
-            prior: model.prior(settings.prior, settings.random_walk),
-            noise: axis_noise(errors, geometry, gnss_noise_m_s),
-            sample_period_s: 1.0 / sample_rate_hz,
+            prior: model.prior(spec.kalman.prior, spec.kalman.random_walk),
+            noise: axis_noise(&dvl.errors, geometry, spec.gnss_noise_m_s),
+            sample_period_s: 1.0 / spec.sample_rate_hz,
         }
+    }
+
+    /// The noise variance per axis of `d − g` the filter weighs the axes by, m²/s².
+    pub fn noise(&self) -> Vec3 {
+        self.noise
     }
 
     /// The estimate and the standard deviations of the terms after every sample.

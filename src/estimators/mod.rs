@@ -104,16 +104,7 @@ pub fn set_up(spec: &Spec, dvl: &Dvl, dcnets: &[Trained]) -> Vec<DvlEstimator> {
         settings: Settings::from(&spec.model),
         device: spec.training.backend.device(),
     };
-    let kalman = |model| {
-        KalmanFilter::new(
-            model,
-            &spec.kalman,
-            &dvl.errors,
-            &geometry,
-            spec.gnss_noise_m_s,
-            spec.sample_rate_hz,
-        )
-    };
+    let kalman = |model| KalmanFilter::new(model, spec, dvl, &geometry);
     let mut entries = Vec::new();
     for Requested {
         kind,

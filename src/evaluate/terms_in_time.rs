@@ -7,7 +7,7 @@
 
 use crate::data::Trajectory;
 use crate::estimators::KalmanFilter;
-use crate::kalman::scale_bias::{ScaleBiasModel, axis_noise, bound_history};
+use crate::kalman::scale_bias::{ScaleBiasModel, bound_history};
 use crate::noise::{BeamGeometry, measure_trajectory};
 use crate::rng::task_rng;
 use crate::spec::Spec;
@@ -66,18 +66,10 @@ pub fn terms_in_time(spec: &Spec, trajectories: &[Trajectory]) -> Vec<TermInTime
             spec.gnss_noise_m_s,
             &mut rng,
         );
-        let noise = axis_noise(&dvl.errors, &geometry, spec.gnss_noise_m_s);
         for (kind, error_model, model) in filters(spec) {
-            let filter = KalmanFilter::new(
-                model,
-                &spec.kalman,
-                &dvl.errors,
-                &geometry,
-                spec.gnss_noise_m_s,
-                spec.sample_rate_hz,
-            );
+            let filter = KalmanFilter::new(model, spec, dvl, &geometry);
             let history = filter.history(&measured.dvl, &measured.gnss);
-            let bound = bound_history(model, &calibration.ground_truth, noise);
+            let bound = bound_history(model, &calibration.ground_truth, filter.noise());
             let truth = model.true_terms(&dvl.errors, &geometry);
             let names = model.term_names();
             for (i, ((estimate, std), bound)) in history.iter().zip(&bound).enumerate() {

@@ -352,33 +352,27 @@ pub fn calibrate_on(
                 .collect();
             for (label, estimate) in &methods {
                 let learned = learned_labels.contains(label);
-                if learned && let Some(learned_spec) = &spec.learned {
-                    let set = term_set(&learned_spec.terms);
+                // A learned method's terms (no standard deviation), or a filter's.
+                let learned_terms = spec.learned.as_ref().filter(|_| learned).map(|l| {
+                    let set = term_set(&l.terms);
                     let values = estimate.installation.to_parameters(&set);
-                    for (name, value) in set.parameter_names().into_iter().zip(values) {
-                        terms.push(TermRow {
-                            method: label.clone(),
-                            calibration: calibration.name.clone(),
-                            window_s,
-                            term: name.to_string(),
-                            value,
-                            std: f64::NAN,
-                            unseen: String::new(),
-                        });
-                    }
-                }
-                if let Some(filtered) = &estimate.filtered {
-                    for &(name, value, std) in filtered {
-                        terms.push(TermRow {
-                            method: label.clone(),
-                            calibration: calibration.name.clone(),
-                            window_s,
-                            term: name.to_string(),
-                            value,
-                            std,
-                            unseen: String::new(),
-                        });
-                    }
+                    let names = set.parameter_names().into_iter();
+                    names
+                        .zip(values)
+                        .map(|(name, value)| (name, value, f64::NAN))
+                        .collect()
+                });
+                for &(name, value, std) in learned_terms.iter().chain(&estimate.filtered).flatten()
+                {
+                    terms.push(TermRow {
+                        method: label.clone(),
+                        calibration: calibration.name.clone(),
+                        window_s,
+                        term: name.to_string(),
+                        value,
+                        std,
+                        unseen: String::new(),
+                    });
                 }
                 if let Some(bound) = &estimate.bound {
                     for (i, name) in bound.names.iter().enumerate() {

@@ -214,6 +214,12 @@ mod tests {
             .collect()
     }
 
+    /// Constant terms: no random walk.
+    const STILL: TermSettings = TermSettings {
+        scale: 0.0,
+        bias_m_s: 0.0,
+    };
+
     fn every_model() -> Vec<ScaleBiasModel> {
         ErrorModel::ALL
             .map(ScaleBiasModel::Paper)
@@ -235,16 +241,12 @@ mod tests {
             scale: 1e4,
             bias_m_s: 1e4,
         };
-        let still = TermSettings {
-            scale: 0.0,
-            bias_m_s: 0.0,
-        };
         for model in [ErrorModel::Em2, ErrorModel::Em4, ErrorModel::Em5] {
             let filtered = ScaleBiasModel::Paper(model);
             // Per-axis models: the weights of the axes do not matter.
             let history = run(
                 filtered,
-                &filtered.prior(wide, still),
+                &filtered.prior(wide, STILL),
                 [1.0; 3],
                 1.0,
                 &measured.dvl,
@@ -279,14 +281,10 @@ mod tests {
             scale: 1e2,
             bias_m_s: 1e2,
         };
-        let still = TermSettings {
-            scale: 0.0,
-            bias_m_s: 0.0,
-        };
         let model = ScaleBiasModel::Beam;
         let history = run(
             model,
-            &model.prior(flat, still),
+            &model.prior(flat, STILL),
             noise,
             1.0,
             &measured.dvl,
@@ -311,10 +309,6 @@ mod tests {
     #[test]
     fn noise_free_samples_give_the_true_terms_of_every_model_that_holds_them() {
         let geometry = BeamGeometry::janus_x(20.0);
-        let still = TermSettings {
-            scale: 0.0,
-            bias_m_s: 0.0,
-        };
         let wide = TermSettings {
             scale: 1e3,
             bias_m_s: 1e3,
@@ -326,7 +320,7 @@ mod tests {
             for model in every_model() {
                 let history = run(
                     model,
-                    &model.prior(wide, still),
+                    &model.prior(wide, STILL),
                     [0.0; 3],
                     1.0,
                     &measured.dvl,
