@@ -223,6 +223,11 @@ fn calibrate_prints_the_terms_and_writes_the_recording_corrected() {
         .parse()
         .unwrap();
     assert!((value - INSTALLED.lever_arm_m[0]).abs() < 0.05, "{line}");
+    check_the_filter(
+        &printed,
+        &d.join("fixed/DVL_trajectory1-terms-in-time.parquet"),
+        value,
+    );
     let csv = d.join("fixed/DVL_trajectory1-corrected.csv");
     let text = std::fs::read_to_string(&csv).unwrap();
     assert!(
@@ -241,6 +246,99 @@ fn calibrate_prints_the_terms_and_writes_the_recording_corrected() {
     assert!(
         (second[1] - second[0] - INSTALLED.time_offset_s).abs() < 0.05,
         "{second:?}"
+    );
+}
+
+/// What `calibrate` says of its Kalman filter, against its fit: with every sample the
+/// filter leaves the RMSE the fit leaves (within 2 %); the length the recording needed
+/// lies inside it; the terms after every sample are stored in `terms_in_time`, and the
+/// lever arm's x after the last is `fitted_lever_x_m`, the fit's, within 2 cm.
+fn check_the_filter(printed: &str, terms_in_time: &Path, fitted_lever_x_m: f64) {
+    let fitted_rmse: f64 = printed
+        .lines()
+        .find(|l| l.starts_with("RMSE against the reference"))
+        .and_then(|l| l.rsplit("before, ").next())
+        .and_then(|after| after.split(" cm/s").next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    let filtered = printed
+        .lines()
+        .find(|l| l.starts_with("| RMSE on the recording (cm/s) "))
+        .unwrap();
+    let last: f64 = filtered
+        .trim_end_matches('|')
+        .rsplit('|')
+        .next()
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap();
+    assert!(
+        (last - fitted_rmse).abs() <= 0.02 * fitted_rmse,
+        "{printed}"
+    );
+    let needed: f64 = printed
+        .split("after ")
+        .find_map(|rest| rest.split_once(" s the filter's terms leave"))
+        .map(|(seconds, _)| seconds)
+        .unwrap()
+        .parse()
+        .unwrap();
+    let batch = read_parquet(terms_in_time);
+    let times = floats(&batch, "time_s");
+    let end = times.iter().map(|t| t.unwrap()).fold(0.0, f64::max);
+    assert!(
+        needed > 1.0 && needed < end,
+        "needed {needed} s of {end}: {printed}"
+    );
+    let lever_x: Vec<(f64, f64)> = strings(&batch, "term")
+        .into_iter()
+        .zip(times)
+        .zip(floats(&batch, "value"))
+        .filter(|((term, _), _)| term.as_deref() == Some("lever_arm_x_m"))
+        .map(|((_, t), v)| (t.unwrap(), v.unwrap()))
+        .collect();
+    assert!(lever_x.len() > 100, "{}", lever_x.len());
+    let (_, at_end) = lever_x.last().unwrap();
+    assert!(
+        (at_end - fitted_lever_x_m).abs() < 0.02,
+        "{at_end} against the fit's {fitted_lever_x_m}"
+    );
+}
+
+/// `calibrate` on the turning A-KIT T1: the filter reaches the fit, and says how long
+/// the segment needed.
+#[test]
+#[ignore = "needs the A-KIT recordings: dcnet-exp data fetch akit"]
+fn calibrate_on_a_real_segment_says_how_long_it_needed() {
+    let dir = tempfile::tempdir().unwrap();
+    let segment = akit().join("Trajectory1");
+    let output = dcnet(
+        dir.path(),
+        &[
+            "calibrate",
+            segment.join("DVL_trajectory1.csv").to_str().unwrap(),
+            "--reference",
+            segment.join("GT_trajectory1.csv").to_str().unwrap(),
+        ],
+    );
+    let printed = stdout(&output);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let fitted_lever_x: f64 = printed
+        .lines()
+        .find(|l| l.starts_with("| lever arm x "))
+        .and_then(|l| l.split('|').nth(2))
+        .unwrap()
+        .trim()
+        .trim_end_matches(" m")
+        .parse()
+        .unwrap();
+    check_the_filter(
+        &printed,
+        &dir.path()
+            .join("calibrated/DVL_trajectory1-terms-in-time.parquet"),
+        fitted_lever_x,
     );
 }
 
@@ -560,5 +658,9 @@ fn validate_reads_the_recordings_and_calibrate_refuses_what_the_spec_refuses() {
     assert!(
         calibrate(&["--window-s", "-5"])
             .contains("--window-s -5: give a positive number of seconds")
+    );
+    assert!(
+        calibrate(&["--tolerance-pct", "0"])
+            .contains("--tolerance-pct 0: give a positive percentage")
     );
 }

@@ -92,8 +92,9 @@ pub(super) enum Command {
         overrides: Overrides,
     },
     /// Calibrate one recording of a DVL beside a reference with attitude: print the
-    /// terms with their standard deviations and those the recording cannot show, and
-    /// write the recording corrected (CSV and Parquet)
+    /// terms with their standard deviations and those the recording cannot show, run
+    /// the Kalman filter over it to say how long a recording like it needs, and write
+    /// the recording corrected (CSV and Parquet)
     Calibrate {
         /// The DVL's CSV file (A-KIT's columns unless --columns names others)
         dvl: PathBuf,
@@ -122,7 +123,11 @@ pub(super) enum Command {
         /// The reference velocity's white noise per axis, cm/s, for the bound
         #[arg(long, default_value_t = 0.5)]
         reference_noise_cm_s: f64,
-        /// Folder the corrected recording goes to
+        /// How close to its value with the whole recording the Kalman filter's RMSE must
+        /// stay, %, for the length the recording needed
+        #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
+        tolerance_pct: f64,
+        /// Folder the corrected recording and the filter's terms against time go to
         #[arg(long, default_value = "calibrated")]
         out: PathBuf,
     },

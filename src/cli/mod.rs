@@ -11,6 +11,7 @@
 
 mod args;
 mod bench;
+mod calibrate;
 mod inspect;
 mod plot;
 mod run;
@@ -141,6 +142,7 @@ pub fn main() -> Result<(), CliError> {
             window_s,
             dvl_noise_cm_s,
             reference_noise_cm_s,
+            tolerance_pct,
             out,
         } => {
             let terms: Vec<crate::installation::term_names::TermName> = terms
@@ -150,7 +152,7 @@ pub fn main() -> Result<(), CliError> {
                         .map_err(|message| input(anyhow::anyhow!("--terms {term}: {message}")))
                 })
                 .collect::<Result<_, _>>()?;
-            study::calibrate(&study::CalibrateArgs {
+            calibrate::calibrate(&calibrate::CalibrateArgs {
                 dvl: &dvl,
                 reference: reference.as_deref(),
                 columns: columns.as_deref(),
@@ -158,6 +160,7 @@ pub fn main() -> Result<(), CliError> {
                 window_s,
                 dvl_noise_cm_s,
                 reference_noise_cm_s,
+                tolerance: tolerance_pct / 100.0,
                 out: &out,
             })
         }

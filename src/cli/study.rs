@@ -1,30 +1,20 @@
 //! The commands of an installation study: `run` (whole or one shard), `plan`,
 //! `collect`, `validate` and `plot` of a spec with `kind = "installation"` (a study, or
-//! a sweep of them), and `calibrate`, which calibrates one recording of a DVL
-//! beside a reference, prints the terms with their standard deviations and the terms it
-//! cannot see, and writes the recording corrected.
-//! In: the parsed arguments. Out: the results folder or the corrected recording, and
-//! what is printed.
+//! a sweep of them). In: the parsed arguments. Out: the results folder and what is
+//! printed.
 
 use super::args::{Drawing, Target};
 use super::{CliError, failure, input};
-use crate::data::paired::{self, PairedColumns, PairedFiles};
+use crate::data::paired;
 use crate::files::Seal;
-use crate::installation::bound::{Noise, TermBound, bound};
-use crate::installation::fit::{Fit, TIME_OFFSET_MARGIN_S, fit};
-use crate::installation::frames::Reference;
 use crate::installation::rows::Study;
+use crate::installation::spec as study_spec;
 use crate::installation::spec::InstallationSpec;
-use crate::installation::spec::{self as study_spec, ObservabilityFile};
-use crate::installation::term_names::{TermName, term_list_faults, term_set};
-use crate::installation::terms::{AxisRmse, score};
 use crate::pipeline::Shard;
 use crate::pipeline::installation::{Executed, Outcome, StudyError, StudyMode, StudyPlan};
-use crate::report::installation::{readable_term, readable_why};
 use crate::report::plots::Format;
 use crate::results::study_sweep::{self, StoredStudySweep};
 use crate::spec::Experiment;
-use crate::spec::TomlFile;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 use std::path::{Path, PathBuf};
 
@@ -356,183 +346,5 @@ pub(super) fn validate(path: &Path, set: &[String]) -> Result<(), CliError> {
         count(spec.windows_s.len(), "window"),
         count(spec.methods.len() + 1, "method")
     );
-    Ok(())
-}
-
-/// What `calibrate` is asked.
-pub(super) struct CalibrateArgs<'a> {
-    pub dvl: &'a Path,
-    pub reference: Option<&'a Path>,
-    pub columns: Option<&'a Path>,
-    pub terms: &'a [TermName],
-    pub window_s: Option<f64>,
-    pub dvl_noise_cm_s: f64,
-    pub reference_noise_cm_s: f64,
-    pub out: &'a Path,
-}
-
-/// The columns of `path`'s `[columns]` table, or A-KIT's.
-fn columns(path: Option<&Path>) -> Result<PairedColumns, CliError> {
-    #[derive(serde::Deserialize)]
-    #[serde(deny_unknown_fields)]
-    struct ColumnsFile {
-        columns: PairedColumns,
-    }
-    match path {
-        None => Ok(PairedColumns::akit()),
-        Some(path) => TomlFile::<ColumnsFile>::read(path)
-            .map(|file| file.value.columns)
-            .map_err(|fault| input(anyhow::anyhow!("{fault}"))),
-    }
-}
-
-/// The terms of a calibration with their standard deviations, the terms the window
-/// cannot show and why, and the RMSE against the reference before and after.
-fn printed_calibration(
-    bound: &TermBound,
-    fitted: &Fit,
-    (scored, recorded): (usize, usize),
-    before: Option<AxisRmse>,
-    after: Option<AxisRmse>,
-    noise: Noise,
-) -> String {
-    let mut table = Table::new();
-    table.load_preset(ASCII_MARKDOWN);
-    table.set_header(["term", "estimate", "standard deviation", "seen"]);
-    for (i, name) in bound.names.iter().enumerate() {
-        let (readable, unit, factor) = readable_term(name);
-        let seen = if bound.is_unseen(name) { "no" } else { "yes" };
-        table.add_row([
-            readable,
-            format!("{:.4} {unit}", bound.value[i] * factor),
-            format!("{:.4} {unit}", bound.std[i] * factor),
-            seen.to_string(),
-        ]);
-    }
-    let residual = fitted.residual_rms_m_s.map(|r| 100.0 * r);
-    let assumed = 100.0 * (noise.dvl_m_s.powi(2) + noise.reference_m_s.powi(2)).sqrt();
-    let mut text = format!(
-        "calibrated on {} samples (those {TIME_OFFSET_MARGIN_S} s inside the reference)\n{table}\n",
-        fitted.sample_count
-    );
-    text.push_str(&format!(
-        "the standard deviations assume white noise of {assumed:.2} cm/s per axis; the fit leaves {:.2}, {:.2}, {:.2} cm/s (x, y, z): where the two differ, or the noise is not white, they are off by about as much\n",
-        residual[0], residual[1], residual[2]
-    ));
-    for unseen in &bound.unseen {
-        text.push_str(&format!(
-            "not seen here: {}: {}\n",
-            readable_term(unseen.term).0,
-            readable_why(unseen.term, &unseen.why.to_string())
-        ));
-    }
-    let rmse = |rmse: Option<AxisRmse>| match rmse {
-        Some(r) => format!(
-            "{:.2} cm/s (x {:.2}, y {:.2}, z {:.2})",
-            100.0 * r.total_m_s,
-            100.0 * r.x_m_s,
-            100.0 * r.y_m_s,
-            100.0 * r.z_m_s
-        ),
-        None => "no sample inside the reference".into(),
-    };
-    text.push_str(&format!(
-        "RMSE against the reference, body frame, on the {scored} of {recorded} samples {TIME_OFFSET_MARGIN_S} s inside it: {} before, {} after",
-        rmse(before),
-        rmse(after)
-    ));
-    text
-}
-
-/// `calibrate`: the terms of one recording, their bound, and the recording corrected.
-pub(super) fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
-    let refuse = |message: String| Err(input(anyhow::anyhow!(message)));
-    if let Some((_, message)) = term_list_faults(args.terms).first() {
-        return refuse(format!("--terms: {message}"));
-    }
-    if !(args.dvl_noise_cm_s.is_finite() && args.dvl_noise_cm_s > 0.0) {
-        return refuse(format!(
-            "--dvl-noise-cm-s {}: give a positive number: the bound divides by it",
-            args.dvl_noise_cm_s
-        ));
-    }
-    if !(args.reference_noise_cm_s.is_finite() && args.reference_noise_cm_s >= 0.0) {
-        return refuse(format!(
-            "--reference-noise-cm-s {}: give zero or a positive number",
-            args.reference_noise_cm_s
-        ));
-    }
-    if let Some(w) = args.window_s
-        && !(w.is_finite() && w > 0.0)
-    {
-        return refuse(format!("--window-s {w}: give a positive number of seconds"));
-    }
-    let files = PairedFiles {
-        dvl: args.dvl.to_path_buf(),
-        reference: args.reference.unwrap_or(args.dvl).to_path_buf(),
-    };
-    let recording = paired::read(&files, &columns(args.columns)?).map_err(input)?;
-    let reference = Reference::new(&recording);
-    let start = recording.time_s[0];
-    let end = match args.window_s {
-        Some(w) => recording.time_s.partition_point(|&t| t - start < w),
-        None => recording.time_s.len(),
-    };
-    let terms = term_set(args.terms);
-    let fitted = fit(
-        &recording.time_s[..end],
-        &recording.dvl_m_s[..end],
-        &reference,
-        terms,
-    )
-    .map_err(|error| {
-        input(anyhow::anyhow!(
-            "{}: calibrating {} on {} samples: {error}; a window too short for its terms, or terms it cannot tell apart (a scale and a bias at constant speed, say), fail this way: give a longer --window-s or fewer --terms",
-            args.dvl.display(),
-            args.terms.iter().map(|t| t.name()).collect::<Vec<_>>().join(", "),
-            end
-        ))
-    })?;
-    let tolerances = ObservabilityFile::default().tolerances();
-    let noise = Noise {
-        dvl_m_s: args.dvl_noise_cm_s / 100.0,
-        reference_m_s: args.reference_noise_cm_s / 100.0,
-    };
-    let bounded = bound(&fitted, noise, &tolerances);
-    let all = reference.interior(&recording.time_s, TIME_OFFSET_MARGIN_S);
-    let all_samples = (all.len(), recording.time_s.len());
-    let before = score(
-        &Default::default(),
-        &recording.time_s,
-        &recording.dvl_m_s,
-        &reference,
-        all.clone(),
-    );
-    let after = score(
-        &fitted.installation,
-        &recording.time_s,
-        &recording.dvl_m_s,
-        &reference,
-        all,
-    );
-    println!(
-        "{}",
-        printed_calibration(&bounded, &fitted, all_samples, before, after, noise)
-    );
-    let corrected = crate::results::corrected::corrected_samples(
-        &fitted.installation,
-        &recording.time_s,
-        &recording.dvl_m_s,
-        &reference,
-    );
-    let stem = args
-        .dvl
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "recording".into());
-    let written = crate::results::corrected::write(args.out, &stem, &corrected).map_err(failure)?;
-    for path in written {
-        eprintln!("corrected recording written to {}", path.display());
-    }
     Ok(())
 }

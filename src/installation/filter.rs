@@ -111,7 +111,7 @@ pub fn run_filter(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::installation::simulate::simulate_dvl;
     use crate::installation::simulate::tests::weaving;
@@ -120,7 +120,7 @@ mod tests {
 
     /// The weaving vehicle of the simulation's tests, 300 s at 1 Hz, and the DVL of
     /// `truth` on it with white noise of `noise_m_s` (t + τ held inside the reference).
-    fn weaving_segment(
+    pub fn weaving_segment(
         truth: &Installation,
         noise_m_s: f64,
         seed: u64,
@@ -143,7 +143,7 @@ mod tests {
         (time_s, dvl, segment.reference)
     }
 
-    fn settings() -> FilterSettings {
+    pub fn settings() -> FilterSettings {
         let wide = PerKind {
             scale: 0.05,
             misalignment_rad: 5f64.to_radians(),

@@ -10,7 +10,7 @@
 //! cannot show; [`filter`] estimates them sample by sample (an extended Kalman filter)
 //! with the bound of the samples so far; [`study`] scores every method held out (its
 //! filters' passes in [`study_filters`]), and [`calibration_time`] finds how long each
-//! needs. With `[learned]`
+//! needs; [`settling`] finds it for a single recording (`calibrate`). With `[learned]`
 //! ([`learned_spec`]): [`simulate`] makes DVLs of simulated installations over the real
 //! reference, [`network`] is the DCNet that outputs the terms and its loss, [`learned`]
 //! gives each fold its training windows and reads the terms a trained model finds. The
@@ -32,6 +32,7 @@ pub mod rows;
 pub mod study;
 pub mod study_filters;
 pub mod calibration_time;
+pub mod settling;
 pub mod simulate;
 pub mod network;
 pub mod learned;

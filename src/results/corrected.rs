@@ -3,13 +3,17 @@
 //! at (the stamp plus the time offset), and the corrected body-frame velocity in the
 //! columns a CSV recording is read from by default ([`crate::VELOCITY_COLUMNS`]), so the
 //! corrected file can be named in a spec as it is.
-//! In: the corrected samples. Out: `<stem>-corrected.csv` and `.parquet`.
+//! Beside it, the Kalman filter's terms after every sample of the recording.
+//! In: the corrected samples and the filter's terms. Out: `<stem>-corrected.csv` and
+//! `.parquet`, and `<stem>-terms-in-time.parquet`.
 
 use super::{batch, floats, parquet_bytes};
 use crate::Vec3;
 use crate::files::write_atomic;
 use crate::installation::frames::Reference;
+use crate::installation::rows::FilterPoint;
 use crate::installation::terms::Installation;
+use arrow_array::RecordBatch;
 use std::path::{Path, PathBuf};
 
 /// One corrected sample.
@@ -102,15 +106,33 @@ pub fn write(
         (z, floats(samples, |s| s.velocity_m_s[2])),
     ]);
     let parquet = out.join(format!("{stem}-corrected.parquet"));
-    let bytes = parquet_bytes(&table).map_err(|source| CorrectedError::Parquet {
-        path: parquet.clone(),
-        source,
-    })?;
-    write_atomic(&parquet, &bytes).map_err(|source| CorrectedError::Io {
-        path: parquet.clone(),
-        source,
-    })?;
+    write_parquet(&parquet, &table)?;
     Ok(vec![csv, parquet])
+}
+
+/// Writes the Kalman filter's terms after every sample to
+/// `out/<stem>-terms-in-time.parquet`, the columns of a study's `terms_in_time.parquet`;
+/// returns its path.
+pub fn write_terms_in_time(
+    out: &Path,
+    stem: &str,
+    points: &[FilterPoint],
+) -> Result<PathBuf, CorrectedError> {
+    let path = out.join(format!("{stem}-terms-in-time.parquet"));
+    write_parquet(&path, &super::installation::filtered_batch(points))?;
+    Ok(path)
+}
+
+/// Writes `table` to `path` atomically.
+fn write_parquet(path: &Path, table: &RecordBatch) -> Result<(), CorrectedError> {
+    let bytes = parquet_bytes(table).map_err(|source| CorrectedError::Parquet {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    write_atomic(path, &bytes).map_err(|source| CorrectedError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 #[cfg(test)]

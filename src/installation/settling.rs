@@ -1,0 +1,147 @@
+//! How long one recording needs to calibrate, the question an operator with a single
+//! recording asks: the installation's Kalman filter runs over it, and the terms it holds
+//! after each whole second are scored on every sample of the recording. The settling
+//! time is the shortest length after which that score stays within a tolerance of its
+//! value after the last sample, the rule of a study's calibration time; it is scored on
+//! the recording that calibrates, since there is no other. In: the filter's steps and
+//! how to score an installation. Out: the curve and the settling time.
+
+use super::filter::FilterStep;
+use super::terms::Installation;
+use crate::evaluate::calibration_time::calibration_time_index;
+
+/// The filter after the samples of the first `length_s` seconds, and the RMSE its terms
+/// leave on the whole recording.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SettlingPoint<'a> {
+    pub length_s: f64,
+    pub step: &'a FilterStep,
+    pub rmse_cm_s: f64,
+}
+
+/// The filter's state after 1, 2, 3, … s of the recording, up to the length that holds
+/// every step, each with `score_cm_s` of its terms (NaN where there is no score). A
+/// length holds the steps whose time from the first sample is below it, as a study's
+/// window of that length does.
+pub fn settling_curve(
+    steps: &[FilterStep],
+    score_cm_s: impl Fn(&Installation) -> f64,
+) -> Vec<SettlingPoint<'_>> {
+    let Some(last) = steps.last() else {
+        return Vec::new();
+    };
+    let longest = last.time_s.floor() as usize + 1;
+    let mut taken = 0;
+    (1..=longest)
+        .filter_map(|seconds| {
+            let length_s = seconds as f64;
+            taken += steps[taken..]
+                .iter()
+                .take_while(|s| s.time_s < length_s)
+                .count();
+            let step = steps[..taken].last()?;
+            Some((length_s, step))
+        })
+        .map(|(length_s, step)| SettlingPoint {
+            length_s,
+            step,
+            rmse_cm_s: score_cm_s(&step.installation),
+        })
+        .collect()
+}
+
+/// The shortest length of `curve` after which its RMSE stays within `tolerance` (a
+/// fraction) of its last value; `None` when the last value is not finite.
+pub fn settling_time<'a, 'b>(
+    curve: &'b [SettlingPoint<'a>],
+    tolerance: f64,
+) -> Option<&'b SettlingPoint<'a>> {
+    let points: Vec<(f64, f64)> = curve.iter().map(|p| (p.length_s, p.rmse_cm_s)).collect();
+    calibration_time_index(&points, tolerance).map(|i| &curve[i])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::installation::bound::Noise;
+    use crate::installation::filter::run_filter;
+    use crate::installation::filter::tests::{settings, weaving_segment};
+    use crate::installation::fit::{TIME_OFFSET_MARGIN_S, fit};
+    use crate::installation::term_names::{TermName, term_set};
+    use crate::installation::terms::score;
+
+    fn step(time_s: f64, lever_x: f64) -> FilterStep {
+        let mut installation = Installation::default();
+        installation.lever_arm_m[0] = lever_x;
+        FilterStep {
+            sample: 0,
+            time_s,
+            installation,
+            std: Vec::new(),
+            bound_std: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn each_length_holds_the_steps_below_it_and_the_last_holds_them_all() {
+        // Samples at 0, 0.5, 1.0, 2.5 s: 1 s holds two, 2 s three, 3 s all four.
+        let steps = [
+            step(0.0, 1.0),
+            step(0.5, 2.0),
+            step(1.0, 3.0),
+            step(2.5, 4.0),
+        ];
+        let curve = settling_curve(&steps, |i| i.lever_arm_m[0]);
+        let seen: Vec<(f64, f64)> = curve.iter().map(|p| (p.length_s, p.rmse_cm_s)).collect();
+        assert_eq!(seen, [(1.0, 2.0), (2.0, 3.0), (3.0, 4.0)]);
+        assert!(settling_curve(&[], |_| 0.0).is_empty());
+    }
+
+    #[test]
+    fn the_settling_time_is_where_the_curve_stays_within_the_tolerance_of_its_end() {
+        // RMSE 30, 12, 9.5, 11.5, 10 after 1 to 5 s: within 10 % of the last only at
+        // 5 s, since 11.5 at 4 s leaves it after 9.5 at 3 s came in; within 16 % from 3 s.
+        let steps: Vec<FilterStep> = [30.0, 12.0, 9.5, 11.5, 10.0]
+            .iter()
+            .enumerate()
+            .map(|(i, &rmse)| step(i as f64, rmse))
+            .collect();
+        let curve = settling_curve(&steps, |i| i.lever_arm_m[0]);
+        assert_eq!(settling_time(&curve, 0.10).unwrap().length_s, 5.0);
+        assert_eq!(settling_time(&curve, 0.16).unwrap().length_s, 3.0);
+        let unscored = settling_curve(&steps, |_| f64::NAN);
+        assert!(settling_time(&unscored, 0.10).is_none());
+    }
+
+    /// On a simulated recording the filter's last terms score as the fit of every sample
+    /// does, and the curve settles before its end.
+    #[test]
+    fn a_simulated_recording_settles_to_the_fits_score() {
+        let truth = Installation {
+            lever_arm_m: [0.8, -0.3, 0.5],
+            time_offset_s: 0.2,
+            bias_m_s: [0.02, -0.01, 0.015],
+            ..Installation::default()
+        };
+        let (time_s, dvl, reference) = weaving_segment(&truth, 0.02, 4);
+        let noise = Noise {
+            dvl_m_s: 0.02,
+            reference_m_s: 0.0,
+        };
+        let terms = term_set(&[TermName::LeverArm, TermName::TimeOffset, TermName::Bias]);
+        let steps = run_filter(&time_s, &dvl, &reference, terms, &settings(), noise);
+        let all = reference.interior(&time_s, TIME_OFFSET_MARGIN_S);
+        let rmse = |installation: &Installation| {
+            score(installation, &time_s, &dvl, &reference, all.clone())
+                .map_or(f64::NAN, |r| 100.0 * r.total_m_s)
+        };
+        let curve = settling_curve(&steps, rmse);
+        let fitted = fit(&time_s, &dvl, &reference, terms).unwrap();
+        let end = curve.last().unwrap().rmse_cm_s;
+        let best = rmse(&fitted.installation);
+        assert!((end - best).abs() < 0.01 * best, "{end} against {best}");
+        let settled = settling_time(&curve, 0.10).unwrap();
+        assert!(settled.length_s < 200.0, "{}", settled.length_s);
+        assert!(curve[0].rmse_cm_s > 1.1 * end, "{}", curve[0].rmse_cm_s);
+    }
+}
