@@ -8,13 +8,13 @@
 use super::{CliError, failure, input};
 use crate::data::paired::{self, PairedColumns, PairedFiles};
 use crate::installation::bound::{Noise, TermBound, bound};
-use crate::installation::filter::{FilterSettings, FilterStep, run_filter};
+use crate::installation::filter::{FilterSettings, run_filter};
 use crate::installation::filter_spec::{KalmanFile, check_kalman};
 use crate::installation::fit::{Fit, TIME_OFFSET_MARGIN_S, fit};
 use crate::installation::frames::Reference;
-use crate::installation::rows::FilterPoint;
 use crate::installation::settling::{SettlingPoint, settling_curve, settling_time};
 use crate::installation::spec::ObservabilityFile;
+use crate::installation::study_filters::FilterRun;
 use crate::installation::term_names::{TermName, term_list_faults, term_set};
 use crate::installation::terms::{AxisRmse, Installation, TermSet, score};
 use crate::report::installation::readable_term;
@@ -197,15 +197,19 @@ pub(super) fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
         printed_calibration(&bounded, &fitted, all_samples, before, after, noise)
     );
     let settings = default_filter();
-    let steps = run_filter(
-        &recording.time_s[..end],
-        &recording.dvl_m_s[..end],
-        &reference,
+    let filter = FilterRun {
+        label: "Kalman filter".into(),
         terms,
-        &settings,
-        noise,
-    );
-    let curve = settling_curve(&steps, |installation| {
+        steps: run_filter(
+            &recording.time_s[..end],
+            &recording.dvl_m_s[..end],
+            &reference,
+            terms,
+            &settings,
+            noise,
+        ),
+    };
+    let curve = settling_curve(&filter.steps, |installation| {
         score_all(installation).map_or(f64::NAN, |rmse| 100.0 * rmse.total_m_s)
     });
     println!(
@@ -227,7 +231,7 @@ pub(super) fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
     for path in written {
         eprintln!("corrected recording written to {}", path.display());
     }
-    let points = filter_points(&steps, terms, &stem);
+    let points = filter.points(&stem);
     let path = crate::results::corrected::write_terms_in_time(args.out, &stem, &points)
         .map_err(failure)?;
     eprintln!(
@@ -243,26 +247,6 @@ fn default_filter() -> FilterSettings {
     check_kalman(&KalmanFile::default(), &[], &mut |key, fault| {
         unreachable!("the default [calibration.kalman] is refused at {key}: {fault}")
     })
-}
-
-/// Every step's terms, as the study's terms against time.
-fn filter_points(steps: &[FilterStep], terms: TermSet, recording: &str) -> Vec<FilterPoint> {
-    let names = terms.parameter_names();
-    steps
-        .iter()
-        .flat_map(|step| {
-            let values = step.installation.to_parameters(&terms);
-            names.iter().enumerate().map(move |(p, name)| FilterPoint {
-                method: "Kalman filter".into(),
-                calibration: recording.to_string(),
-                time_s: step.time_s,
-                term: name.to_string(),
-                value: values[p],
-                std: step.std[p],
-                bound_std: step.bound_std[p],
-            })
-        })
-        .collect()
 }
 
 /// The lengths the printed table shows: round ones below the recording's, the settling
