@@ -959,8 +959,8 @@ impl Bench {
         }
         // Nothing already computed is lost: every entry the damage did not touch is
         // the same file as before, and a damaged checkpoint leaves the other to resume.
-        // A killed writer's temporary file (the checkpointed fixture may hold one) is
-        // not computed work: the next run removes it.
+        // A killed writer's temporary file (the checkpointed fixture always holds one)
+        // is not computed work: the next run removes it.
         let affected: Vec<String> = damaged
             .iter()
             .map(|(p, _)| entry_prefix(&p.strip_prefix(&out).unwrap().to_string_lossy()))

@@ -252,8 +252,9 @@ fn calibrate_prints_the_terms_and_writes_the_recording_corrected() {
 /// What `calibrate` says of its Kalman filter, against its fit: with every sample the
 /// filter leaves the RMSE the fit leaves (within 2 %); the length the recording needed
 /// lies inside it; the terms after every sample are stored in `terms_in_time`, and the
-/// lever arm's x after the last is `fitted_lever_x_m`, the fit's, within 2 cm.
-fn check_the_filter(printed: &str, terms_in_time: &Path, fitted_lever_x_m: f64) {
+/// lever arm's x after the last is `fitted_lever_x_m`, the fit's, within 2 cm. Returns
+/// the length needed, s.
+fn check_the_filter(printed: &str, terms_in_time: &Path, fitted_lever_x_m: f64) -> f64 {
     let fitted_rmse: f64 = printed
         .lines()
         .find(|l| l.starts_with("RMSE against the reference"))
@@ -279,8 +280,9 @@ fn check_the_filter(printed: &str, terms_in_time: &Path, fitted_lever_x_m: f64) 
         "{printed}"
     );
     let needed: f64 = printed
-        .split("after ")
-        .find_map(|rest| rest.split_once(" s the filter's terms leave"))
+        .lines()
+        .find_map(|l| l.strip_prefix("after "))
+        .and_then(|rest| rest.split_once(" s the filter's terms leave"))
         .map(|(seconds, _)| seconds)
         .unwrap()
         .parse()
@@ -305,6 +307,7 @@ fn check_the_filter(printed: &str, terms_in_time: &Path, fitted_lever_x_m: f64) 
         (at_end - fitted_lever_x_m).abs() < 0.02,
         "{at_end} against the fit's {fitted_lever_x_m}"
     );
+    needed
 }
 
 /// `calibrate` on the turning A-KIT T1: the filter reaches the fit, and says how long
@@ -334,11 +337,35 @@ fn calibrate_on_a_real_segment_says_how_long_it_needed() {
         .trim_end_matches(" m")
         .parse()
         .unwrap();
-    check_the_filter(
+    let needed = check_the_filter(
         &printed,
         &dir.path()
             .join("calibrated/DVL_trajectory1-terms-in-time.parquet"),
         fitted_lever_x,
+    );
+    // 69 s when measured; the turning T1 shows its terms within the first two minutes.
+    assert!((40.0..=120.0).contains(&needed), "{printed}");
+    // On a window, the last column and the sentence name the window, not the recording.
+    let output = dcnet(
+        dir.path(),
+        &[
+            "calibrate",
+            segment.join("DVL_trajectory1.csv").to_str().unwrap(),
+            "--reference",
+            segment.join("GT_trajectory1.csv").to_str().unwrap(),
+            "--window-s",
+            "100",
+            "--tolerance-pct",
+            "7",
+        ],
+    );
+    let printed = stdout(&output);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(printed.contains(" s (window) |"), "{printed}");
+    assert!(printed.contains(" within 7 % of the "), "{printed}");
+    assert!(
+        printed.contains(" of the window, and stay there"),
+        "{printed}"
     );
 }
 

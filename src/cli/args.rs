@@ -93,8 +93,8 @@ pub(super) enum Command {
     },
     /// Calibrate one recording of a DVL beside a reference with attitude: print the
     /// terms with their standard deviations and those the recording cannot show, run
-    /// the Kalman filter over it to say how long a recording like it needs, and write
-    /// the recording corrected (CSV and Parquet)
+    /// the Kalman filter over it to say how much of the recording its terms needed, and
+    /// write the recording corrected (CSV and Parquet)
     Calibrate {
         /// The DVL's CSV file (A-KIT's columns unless --columns names others)
         dvl: PathBuf,

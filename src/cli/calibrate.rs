@@ -1,7 +1,7 @@
 //! `calibrate`: one recording of a DVL beside a reference with attitude. The fit of the
 //! terms asked for prints them with their standard deviations and the terms the
-//! recording cannot show; the Kalman filter over the same samples says how long a
-//! recording like this one needs ([`crate::installation::settling`]); the recording is
+//! recording cannot show; the Kalman filter over the same samples says how much of the
+//! recording its terms needed ([`crate::installation::settling`]); the recording is
 //! written corrected. In: the parsed arguments. Out: what is printed, the corrected
 //! recording and the filter's terms against time.
 
@@ -32,8 +32,8 @@ pub(super) struct CalibrateArgs<'a> {
     pub window_s: Option<f64>,
     pub dvl_noise_cm_s: f64,
     pub reference_noise_cm_s: f64,
-    /// How close to its value with every sample the filter's RMSE must stay, a fraction.
-    pub tolerance: f64,
+    /// How close to its value after every sample the filter's RMSE must stay, %.
+    pub tolerance_pct: f64,
     pub out: &'a Path,
 }
 
@@ -132,10 +132,10 @@ fn refused(args: &CalibrateArgs) -> Option<String> {
     {
         return Some(format!("--window-s {w}: give a positive number of seconds"));
     }
-    if !(args.tolerance.is_finite() && args.tolerance > 0.0) {
+    if !(args.tolerance_pct.is_finite() && args.tolerance_pct > 0.0) {
         return Some(format!(
             "--tolerance-pct {}: give a positive percentage",
-            100.0 * args.tolerance
+            args.tolerance_pct
         ));
     }
     None
@@ -214,7 +214,13 @@ pub(super) fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
     });
     println!(
         "\n{}",
-        printed_settling(&curve, terms, &settings, args.tolerance)
+        printed_settling(
+            &curve,
+            terms,
+            &settings,
+            args.tolerance_pct,
+            args.window_s.is_some()
+        )
     );
     let corrected = crate::results::corrected::corrected_samples(
         &fitted.installation,
@@ -253,19 +259,21 @@ fn default_filter() -> FilterSettings {
 /// time and the whole recording.
 const SHOWN_LENGTHS_S: [f64; 9] = [5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0, 2000.0];
 
-/// The filter's terms after a few lengths of the recording, each ± its standard
-/// deviation, and the RMSE they leave on the whole recording; then how long the
-/// recording needed.
+/// The filter's terms after a few lengths of the recording (of its first `window`
+/// seconds where that was asked), each ± its standard deviation, and the RMSE they leave
+/// on the whole recording; then how long the recording needed.
 fn printed_settling(
     curve: &[SettlingPoint],
     terms: TermSet,
     settings: &FilterSettings,
-    tolerance: f64,
+    tolerance_pct: f64,
+    window: bool,
 ) -> String {
     let Some(all) = curve.last() else {
         return "the Kalman filter took no sample: none lies inside the reference".into();
     };
-    let settled = settling_time(curve, tolerance);
+    let settled = settling_time(curve, tolerance_pct / 100.0);
+    let calibrated_on = if window { "window" } else { "all" };
     let mut shown: Vec<&SettlingPoint> = curve
         .iter()
         .filter(|p| {
@@ -273,13 +281,21 @@ fn printed_settling(
                 || settled.is_some_and(|s| s.length_s == p.length_s)
         })
         .collect();
-    if shown.last() != Some(&all) {
+    if shown.last().is_none_or(|p| p.length_s != all.length_s) {
         shown.push(all);
     }
     let mut table = Table::new();
     table.load_preset(ASCII_MARKDOWN);
     let mut header = vec!["after".to_string()];
-    header.extend(shown.iter().map(|p| format!("{} s", p.length_s)));
+    header.extend(shown.iter().map(|p| {
+        if p.length_s == all.length_s {
+            format!("{} s ({calibrated_on})", p.length_s)
+        } else if settled.is_some_and(|s| s.length_s == p.length_s) {
+            format!("{} s (settled)", p.length_s)
+        } else {
+            format!("{} s", p.length_s)
+        }
+    }));
     table.set_header(header);
     for (i, name) in terms.parameter_names().iter().enumerate() {
         let (readable, unit, factor) = readable_term(name);
@@ -306,14 +322,18 @@ fn printed_settling(
         "the Kalman filter over the same samples, its terms constant, starting at zero with standard deviations {}; its terms after each length, ± its standard deviation:\n{table}\n",
         prior.join(", ")
     );
-    let within = 100.0 * tolerance;
+    let of = if window {
+        "of the window"
+    } else {
+        "of the recording"
+    };
     text.push_str(&match settled {
         Some(point) => format!(
-            "after {} s the filter's terms leave an RMSE on the whole recording within {within} % of the {:.2} cm/s they leave after all {} s, and stay there: on this recording, {} s calibrate about as well as all of it",
-            point.length_s, all.rmse_cm_s, all.length_s, point.length_s
+            "after {} s the filter's terms leave an RMSE on the whole recording within {tolerance_pct} % of the {:.2} cm/s they leave after all {} s {of}, and stay there: more of it moves the RMSE by less than {tolerance_pct} %, though a term whose ± is still wide then is not pinned down (scored on this recording, not on another dive)",
+            point.length_s, all.rmse_cm_s, all.length_s
         ),
         None => format!(
-            "the filter's terms leave no RMSE on the recording after {} s: no sample lies inside the reference",
+            "the filter's terms after all {} s {of} leave no finite RMSE on the recording: the filter diverged",
             all.length_s
         ),
     });

@@ -160,7 +160,7 @@ pub fn main() -> Result<(), CliError> {
                 window_s,
                 dvl_noise_cm_s,
                 reference_noise_cm_s,
-                tolerance: tolerance_pct / 100.0,
+                tolerance_pct,
                 out: &out,
             })
         }
