@@ -210,23 +210,11 @@ fn calibrate_prints_the_terms_and_writes_the_recording_corrected() {
     for term in ["lever arm x", "time offset", "bias x", "scale"] {
         assert!(printed.contains(&format!("| {term} ")), "{term}: {printed}");
     }
-    let line = printed
-        .lines()
-        .find(|l| l.starts_with("| lever arm x "))
-        .unwrap();
-    let value: f64 = line
-        .split('|')
-        .nth(2)
-        .unwrap()
-        .trim()
-        .trim_end_matches(" m")
-        .parse()
-        .unwrap();
-    assert!((value - INSTALLED.lever_arm_m[0]).abs() < 0.05, "{line}");
+    let value = fitted_lever_x_m(&printed);
+    assert!((value - INSTALLED.lever_arm_m[0]).abs() < 0.05, "{printed}");
     check_the_filter(
         &printed,
         &d.join("fixed/DVL_trajectory1-terms-in-time.parquet"),
-        value,
     );
     let csv = d.join("fixed/DVL_trajectory1-corrected.csv");
     let text = std::fs::read_to_string(&csv).unwrap();
@@ -249,12 +237,25 @@ fn calibrate_prints_the_terms_and_writes_the_recording_corrected() {
     );
 }
 
+/// The lever arm's x that `calibrate` printed for its fit, m.
+fn fitted_lever_x_m(printed: &str) -> f64 {
+    printed
+        .lines()
+        .find(|l| l.starts_with("| lever arm x "))
+        .and_then(|l| l.split('|').nth(2))
+        .unwrap()
+        .trim()
+        .trim_end_matches(" m")
+        .parse()
+        .unwrap()
+}
+
 /// What `calibrate` says of its Kalman filter, against its fit: with every sample the
 /// filter leaves the RMSE the fit leaves (within 2 %); the length the recording needed
 /// lies inside it; the terms after every sample are stored in `terms_in_time`, and the
-/// lever arm's x after the last is `fitted_lever_x_m`, the fit's, within 2 cm. Returns
-/// the length needed, s.
-fn check_the_filter(printed: &str, terms_in_time: &Path, fitted_lever_x_m: f64) -> f64 {
+/// lever arm's x after the last is the fit's within 2 cm. Returns the length needed, s.
+fn check_the_filter(printed: &str, terms_in_time: &Path) -> f64 {
+    let fitted_lever_x_m = fitted_lever_x_m(printed);
     let fitted_rmse: f64 = printed
         .lines()
         .find(|l| l.starts_with("RMSE against the reference"))
@@ -317,50 +318,33 @@ fn check_the_filter(printed: &str, terms_in_time: &Path, fitted_lever_x_m: f64) 
 fn calibrate_on_a_real_segment_says_how_long_it_needed() {
     let dir = tempfile::tempdir().unwrap();
     let segment = akit().join("Trajectory1");
-    let output = dcnet(
-        dir.path(),
-        &[
-            "calibrate",
-            segment.join("DVL_trajectory1.csv").to_str().unwrap(),
-            "--reference",
-            segment.join("GT_trajectory1.csv").to_str().unwrap(),
-        ],
-    );
-    let printed = stdout(&output);
-    assert!(output.status.success(), "{}", stderr(&output));
-    let fitted_lever_x: f64 = printed
-        .lines()
-        .find(|l| l.starts_with("| lever arm x "))
-        .and_then(|l| l.split('|').nth(2))
-        .unwrap()
-        .trim()
-        .trim_end_matches(" m")
-        .parse()
-        .unwrap();
+    let calibrate = |extra: &[&str]| {
+        let dvl = segment.join("DVL_trajectory1.csv");
+        let reference = segment.join("GT_trajectory1.csv");
+        let args = [
+            &[
+                "calibrate",
+                dvl.to_str().unwrap(),
+                "--reference",
+                reference.to_str().unwrap(),
+            ][..],
+            extra,
+        ]
+        .concat();
+        let output = dcnet(dir.path(), &args);
+        assert!(output.status.success(), "{}", stderr(&output));
+        stdout(&output)
+    };
+    let printed = calibrate(&[]);
     let needed = check_the_filter(
         &printed,
         &dir.path()
             .join("calibrated/DVL_trajectory1-terms-in-time.parquet"),
-        fitted_lever_x,
     );
     // 69 s when measured; the turning T1 shows its terms within the first two minutes.
     assert!((40.0..=120.0).contains(&needed), "{printed}");
     // On a window, the last column and the sentence name the window, not the recording.
-    let output = dcnet(
-        dir.path(),
-        &[
-            "calibrate",
-            segment.join("DVL_trajectory1.csv").to_str().unwrap(),
-            "--reference",
-            segment.join("GT_trajectory1.csv").to_str().unwrap(),
-            "--window-s",
-            "100",
-            "--tolerance-pct",
-            "7",
-        ],
-    );
-    let printed = stdout(&output);
-    assert!(output.status.success(), "{}", stderr(&output));
+    let printed = calibrate(&["--window-s", "100", "--tolerance-pct", "7"]);
     assert!(printed.contains(" s (window) |"), "{printed}");
     assert!(printed.contains(" within 7 % of the "), "{printed}");
     assert!(
