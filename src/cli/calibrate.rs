@@ -153,15 +153,12 @@ pub(super) fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
     };
     let recording = paired::read(&files, &columns(args.columns)?).map_err(input)?;
     let reference = Reference::new(&recording);
-    let start = recording.time_s[0];
-    let end = match args.window_s {
-        Some(w) => recording.time_s.partition_point(|&t| t - start < w),
-        None => recording.time_s.len(),
-    };
+    let window = args.window_s.map(|w| recording.first_seconds(w));
+    let calibrating = window.as_ref().unwrap_or(&recording);
     let terms = term_set(args.terms);
     let fitted = fit(
-        &recording.time_s[..end],
-        &recording.dvl_m_s[..end],
+        &calibrating.time_s,
+        &calibrating.dvl_m_s,
         &reference,
         terms,
     )
@@ -170,7 +167,7 @@ pub(super) fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
             "{}: calibrating {} on {} samples: {error}; a window too short for its terms, or terms it cannot tell apart (a scale and a bias at constant speed, say), fail this way: give a longer --window-s or fewer --terms",
             args.dvl.display(),
             args.terms.iter().map(|t| t.name()).collect::<Vec<_>>().join(", "),
-            end
+            calibrating.time_s.len()
         ))
     })?;
     let tolerances = ObservabilityFile::default().tolerances();
@@ -201,8 +198,8 @@ pub(super) fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
         label: "Kalman filter".into(),
         terms,
         steps: run_filter(
-            &recording.time_s[..end],
-            &recording.dvl_m_s[..end],
+            &calibrating.time_s,
+            &calibrating.dvl_m_s,
             &reference,
             terms,
             &settings,

@@ -7,13 +7,12 @@
 //! In: the corrected samples and the filter's terms. Out: `<stem>-corrected.csv` and
 //! `.parquet`, and `<stem>-terms-in-time.parquet`.
 
-use super::{batch, floats, parquet_bytes};
+use super::{ResultsError, batch, floats, io, write_table};
 use crate::Vec3;
 use crate::files::write_atomic;
 use crate::installation::frames::Reference;
 use crate::installation::rows::FilterPoint;
 use crate::installation::terms::Installation;
-use arrow_array::RecordBatch;
 use std::path::{Path, PathBuf};
 
 /// One corrected sample.
@@ -55,22 +54,6 @@ pub fn corrected_samples(
 const TIME: &str = "time_s";
 const VALID_AT: &str = "valid_at_s";
 
-#[derive(Debug, thiserror::Error)]
-pub enum CorrectedError {
-    #[error("writing {}", path.display())]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
-    #[error("writing {} as Parquet", path.display())]
-    Parquet {
-        path: PathBuf,
-        #[source]
-        source: parquet::errors::ParquetError,
-    },
-}
-
 /// The CSV text of `samples`, every number with all its digits.
 pub fn csv_text(samples: &[CorrectedSample]) -> String {
     let [x, y, z] = crate::VELOCITY_COLUMNS;
@@ -87,16 +70,10 @@ pub fn write(
     out: &Path,
     stem: &str,
     samples: &[CorrectedSample],
-) -> Result<Vec<PathBuf>, CorrectedError> {
-    crate::files::create_folder(out).map_err(|source| CorrectedError::Io {
-        path: out.to_path_buf(),
-        source,
-    })?;
+) -> Result<Vec<PathBuf>, ResultsError> {
+    crate::files::create_folder(out).map_err(io(out))?;
     let csv = out.join(format!("{stem}-corrected.csv"));
-    write_atomic(&csv, csv_text(samples).as_bytes()).map_err(|source| CorrectedError::Io {
-        path: csv.clone(),
-        source,
-    })?;
+    write_atomic(&csv, csv_text(samples).as_bytes()).map_err(io(&csv))?;
     let [x, y, z] = crate::VELOCITY_COLUMNS;
     let table = batch(vec![
         (TIME, floats(samples, |s| s.time_s)),
@@ -106,7 +83,7 @@ pub fn write(
         (z, floats(samples, |s| s.velocity_m_s[2])),
     ]);
     let parquet = out.join(format!("{stem}-corrected.parquet"));
-    write_parquet(&parquet, &table)?;
+    write_table(&parquet, &table)?;
     Ok(vec![csv, parquet])
 }
 
@@ -117,22 +94,10 @@ pub fn write_terms_in_time(
     out: &Path,
     stem: &str,
     points: &[FilterPoint],
-) -> Result<PathBuf, CorrectedError> {
+) -> Result<PathBuf, ResultsError> {
     let path = out.join(format!("{stem}-terms-in-time.parquet"));
-    write_parquet(&path, &super::installation::filtered_batch(points))?;
+    write_table(&path, &super::installation::filtered_batch(points))?;
     Ok(path)
-}
-
-/// Writes `table` to `path` atomically.
-fn write_parquet(path: &Path, table: &RecordBatch) -> Result<(), CorrectedError> {
-    let bytes = parquet_bytes(table).map_err(|source| CorrectedError::Parquet {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    write_atomic(path, &bytes).map_err(|source| CorrectedError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
 }
 
 #[cfg(test)]
