@@ -15,7 +15,7 @@ mod calibrate;
 mod inspect;
 mod plot;
 mod run;
-mod study;
+mod installation;
 
 pub use args::Cli;
 
@@ -131,7 +131,7 @@ pub fn main() -> Result<(), CliError> {
         } => plot::plot(&results, Some(&out), format, metric),
         Command::Compare { first, second, out } => plot::compare_folders(&first, &second, &out),
         Command::Validate { spec, overrides } => match installation_kind(&spec)? {
-            true => study::validate(&spec, &overrides.set),
+            true => installation::validate(&spec, &overrides.set),
             false => inspect::validate(&spec, &overrides.set),
         },
         Command::Calibrate {

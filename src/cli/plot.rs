@@ -16,14 +16,14 @@ pub(super) fn plot(
     format: Format,
     metric: Metric,
 ) -> Result<(), CliError> {
-    let study_sweep = crate::results::sweep::read_index(results)
+    let installation_sweep = crate::results::sweep::read_index(results)
         .is_ok_and(|index| index.kind == crate::installation::spec::KIND);
-    if study_sweep
+    if installation_sweep
         || results
             .join(crate::results::installation::HELDOUT)
             .is_file()
     {
-        return super::study::plot(results, out.unwrap_or(Path::new("plots")), format);
+        return super::installation::plot(results, out.unwrap_or(Path::new("plots")), format);
     }
     if !results.join(sweep::INDEX).is_file() {
         return plot_run(results, out, format);
@@ -94,8 +94,8 @@ pub(super) fn compare_folders(first: &Path, second: &Path, out: &Path) -> Result
         compare::refuse_sweep(folder).map_err(input)?;
     }
     let markdown = match (
-        compare::installation::is_study(first),
-        compare::installation::is_study(second),
+        compare::installation::is_installation(first),
+        compare::installation::is_installation(second),
     ) {
         (true, true) => {
             let first = compare::installation::read(first).map_err(input)?;
@@ -103,12 +103,12 @@ pub(super) fn compare_folders(first: &Path, second: &Path, out: &Path) -> Result
             compare::installation::render(&first, &second)
         }
         (true, false) | (false, true) => {
-            let (study, run) = if compare::installation::is_study(first) {
+            let (study, run) = if compare::installation::is_installation(first) {
                 (first, second)
             } else {
                 (second, first)
             };
-            return Err(input(compare::CompareError::StudyAndRun {
+            return Err(input(compare::CompareError::InstallationAndRun {
                 study: study.to_path_buf(),
                 run: run.to_path_buf(),
             }));

@@ -27,7 +27,7 @@ pub(super) fn run(
     force: bool,
 ) -> Result<(), CliError> {
     if super::installation_kind(&target.spec)? {
-        return super::study::run(target, drawing, parse_shard(shard)?, force);
+        return super::installation::run(target, drawing, parse_shard(shard)?, force);
     }
     let experiment = load_target(target)?;
     let plan = planned(&experiment, target)?;
@@ -137,7 +137,7 @@ fn tasks(count: usize) -> String {
 /// Lists the tasks of a run, shard or not, with their state.
 pub(super) fn plan(target: &Target, shard: Option<&str>) -> Result<(), CliError> {
     if super::installation_kind(&target.spec)? {
-        return super::study::plan(target, parse_shard(shard)?);
+        return super::installation::plan(target, parse_shard(shard)?);
     }
     let experiment = load_target(target)?;
     let plan = Plan::new(&experiment, &target.out).map_err(input)?;
@@ -203,7 +203,7 @@ pub(super) fn plan(target: &Target, shard: Option<&str>) -> Result<(), CliError>
 /// Writes the results of a sharded run from the cache the shards filled.
 pub(super) fn collect(target: &Target, drawing: &Drawing) -> Result<(), CliError> {
     if super::installation_kind(&target.spec)? {
-        return super::study::collect(target, drawing);
+        return super::installation::collect(target, drawing);
     }
     let experiment = load_target(target)?;
     let plan = planned(&experiment, target)?;

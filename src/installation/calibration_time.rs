@@ -7,12 +7,12 @@
 //! within. In: the study's held-out rows and the spec's tolerance. Out: one row per method and
 //! calibration trajectory.
 
-use super::rows::{HeldOutRow, StudyTimeRow};
+use super::rows::{InstallationTimeRow, TransferRow};
 use crate::evaluate::calibration_time::calibration_time_index;
 use crate::first_seen;
 
 /// Every method's calibration time on every calibration trajectory of `heldout`.
-pub fn calibration_times(heldout: &[HeldOutRow], tolerance: f64) -> Vec<StudyTimeRow> {
+pub fn calibration_times(heldout: &[TransferRow], tolerance: f64) -> Vec<InstallationTimeRow> {
     let pairs = first_seen(
         heldout
             .iter()
@@ -25,7 +25,7 @@ pub fn calibration_times(heldout: &[HeldOutRow], tolerance: f64) -> Vec<StudyTim
     pairs
         .into_iter()
         .filter_map(|(method, calibration)| {
-            let rows: Vec<&HeldOutRow> = heldout
+            let rows: Vec<&TransferRow> = heldout
                 .iter()
                 .filter(|r| r.method == method && r.calibration == calibration)
                 .collect();
@@ -46,7 +46,7 @@ pub fn calibration_times(heldout: &[HeldOutRow], tolerance: f64) -> Vec<StudyTim
                 .filter(|&i| curve[i].1.is_finite())
                 .reduce(|best, i| if curve[i].1 < curve[best].1 { i } else { best })?;
             let index = calibration_time_index(&curve, tolerance);
-            Some(StudyTimeRow {
+            Some(InstallationTimeRow {
                 method: method.to_string(),
                 calibration: calibration.to_string(),
                 t_conv_s: curve[t_conv].0,
@@ -63,8 +63,8 @@ pub fn calibration_times(heldout: &[HeldOutRow], tolerance: f64) -> Vec<StudyTim
 mod tests {
     use super::*;
 
-    fn row(method: &str, window_s: f64, scored: &str, total_cm_s: f64) -> HeldOutRow {
-        HeldOutRow {
+    fn row(method: &str, window_s: f64, scored: &str, total_cm_s: f64) -> TransferRow {
+        TransferRow {
             method: method.into(),
             calibration: "T1".into(),
             window_s,
@@ -100,7 +100,7 @@ mod tests {
         );
         // A failed fit at 100 s leaves the curve without a value there: within 20 % only
         // from 400 s.
-        let failed: Vec<HeldOutRow> = rows
+        let failed: Vec<TransferRow> = rows
             .iter()
             .cloned()
             .chain([row("other", 100.0, "T2", 6.0)])

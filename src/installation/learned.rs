@@ -9,11 +9,11 @@
 //! No trajectory that a fold's model is scored on is seen in its training, as
 //! simulation or as reality: both sources read only the trajectories outside the fold.
 
-use super::learned_spec::{LearnedSpec, Source};
+use super::learned_spec::{LearnedSpec, TrainingSource};
 use super::network::{batch_of, closed_loop_loss, installation_of};
+use super::protocol::Segment;
 use super::simulate::{InstallationWindows, simulated_windows, windows_of};
 use super::spec::InstallationSpec;
-use super::study::Segment;
 use super::term_names::term_set;
 use super::terms::{Installation, TermSet};
 use crate::model::{Dcnet, Settings};
@@ -34,7 +34,7 @@ pub fn training_windows(
     learned: &LearnedSpec,
     segments: &[&Segment],
     fold: usize,
-    source: Source,
+    source: TrainingSource,
 ) -> InstallationWindows {
     let outside: Vec<&Segment> = training_trajectories(learned, segments.len(), fold)
         .into_iter()
@@ -42,7 +42,7 @@ pub fn training_windows(
         .collect();
     let (window, stride) = (learned.window_samples, learned.stride_samples);
     let windows = match source {
-        Source::Simulated => simulated_windows(
+        TrainingSource::Simulated => simulated_windows(
             &outside,
             &learned.simulation,
             spec.dvl_noise_m_s,
@@ -50,7 +50,7 @@ pub fn training_windows(
             stride,
             learned.seed,
         ),
-        Source::Vehicle => {
+        TrainingSource::Vehicle => {
             let mut all = InstallationWindows::default();
             for segment in outside {
                 let dvl: Vec<_> = segment
@@ -161,7 +161,7 @@ pub(crate) mod tests {
         LearnedSpec {
             terms: file.terms,
             folds,
-            sources: vec![Source::Simulated, Source::Vehicle],
+            sources: vec![TrainingSource::Simulated, TrainingSource::Vehicle],
             window_samples: 10,
             stride_samples: 5,
             validation_fraction: 0.2,
@@ -192,7 +192,7 @@ pub(crate) mod tests {
                 .filter(|&i| learned.fold_of(i) == fold)
                 .map(|i| format!("T{i}"))
                 .collect();
-            for source in [Source::Simulated, Source::Vehicle] {
+            for source in [TrainingSource::Simulated, TrainingSource::Vehicle] {
                 let windows = training_windows(&spec, &learned, &refs, fold, source);
                 assert!(!windows.is_empty());
                 for name in &windows.trajectory {

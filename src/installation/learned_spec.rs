@@ -106,18 +106,18 @@ pub const LEARNED_LABEL: &str = "DCNet trained on ";
 /// What a learned model trains on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Source {
+pub enum TrainingSource {
     /// Simulated installations over the reference of the trajectories outside the fold.
     Simulated,
     /// The real DVL and reference of the trajectories outside the fold.
     Vehicle,
 }
 
-impl Source {
+impl TrainingSource {
     pub fn name(self) -> &'static str {
         match self {
-            Source::Simulated => "simulated",
-            Source::Vehicle => "vehicle",
+            TrainingSource::Simulated => "simulated",
+            TrainingSource::Vehicle => "vehicle",
         }
     }
 }
@@ -127,7 +127,7 @@ impl Source {
 pub struct LearnedSpec {
     pub terms: Vec<TermName>,
     pub folds: usize,
-    pub sources: Vec<Source>,
+    pub sources: Vec<TrainingSource>,
     pub window_samples: usize,
     pub stride_samples: usize,
     pub validation_fraction: f64,
@@ -171,8 +171,12 @@ pub fn check_learned(
     for (i, name) in learned.sources.iter().enumerate() {
         let key = format!("learned.sources[{i}]");
         match name.as_str() {
-            "simulated" if !sources.contains(&Source::Simulated) => sources.push(Source::Simulated),
-            "vehicle" if !sources.contains(&Source::Vehicle) => sources.push(Source::Vehicle),
+            "simulated" if !sources.contains(&TrainingSource::Simulated) => {
+                sources.push(TrainingSource::Simulated)
+            }
+            "vehicle" if !sources.contains(&TrainingSource::Vehicle) => {
+                sources.push(TrainingSource::Vehicle)
+            }
             "simulated" | "vehicle" => fault(key, format!("{name:?} is listed twice")),
             other => fault(
                 key,

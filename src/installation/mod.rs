@@ -9,7 +9,7 @@
 //! their Fisher information: standard deviations, correlations and the terms a segment
 //! cannot show; [`filter`] estimates them sample by sample (an extended Kalman filter)
 //! with the bound of the samples so far; [`study`] scores every method held out (its
-//! filters' passes in [`study_filters`]), and [`calibration_time`] finds how long each
+//! filters' passes in [`protocol_filters`]), and [`calibration_time`] finds how long each
 //! needs; [`settling`] finds it for a single recording (`calibrate`). With `[learned]`
 //! ([`learned_spec`]): [`simulate`] makes DVLs of simulated installations over the real
 //! reference, [`network`] is the DCNet that outputs the terms and its loss, [`learned`]
@@ -29,8 +29,8 @@ pub mod fit;
 pub mod bound;
 pub mod filter;
 pub mod rows;
-pub mod study;
-pub mod study_filters;
+pub mod protocol;
+pub mod protocol_filters;
 pub mod calibration_time;
 pub mod settling;
 pub mod simulate;

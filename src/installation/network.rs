@@ -60,7 +60,7 @@ pub fn outputs_of(terms: &TermSet, installation: &Installation) -> Vec<f32> {
 }
 
 /// A batch as the network and the loss take it.
-pub struct Batch {
+pub struct WindowBatch {
     pub windows: Windows,
     /// `[count, time + 2 · REFERENCE_MARGIN, 3]`: the reference's body velocity, cm/s,
     /// from [`REFERENCE_MARGIN`] samples before the window to as many after it.
@@ -77,7 +77,7 @@ pub fn batch_of(
     indices: &[usize],
     kernel: usize,
     device: &Device,
-) -> Batch {
+) -> WindowBatch {
     let w = set.window;
     let span = w + 2 * REFERENCE_MARGIN;
     let mut inputs = Vec::with_capacity(indices.len() * INPUT_ROWS * w);
@@ -96,7 +96,7 @@ pub fn batch_of(
     let count = indices.len();
     let tensor =
         |values: Vec<f32>| Tensor::from_data(TensorData::new(values, [count, span, 3]), device);
-    Batch {
+    WindowBatch {
         windows: Windows::new(&inputs, INPUT_ROWS, w, kernel, device),
         reference_cm_s: tensor(reference),
         rate_rad_s: tensor(rate),
@@ -136,7 +136,7 @@ fn cross(a: Tensor<3>, b: Tensor<3>) -> Tensor<3> {
 
 /// The closed-loop loss, (cm/s)², of `outputs` `[batch, parameters]` (network units,
 /// `terms`' order) on `batch`.
-pub fn closed_loop_loss(outputs: Tensor<2>, terms: &TermSet, batch: &Batch) -> Tensor<1> {
+pub fn closed_loop_loss(outputs: Tensor<2>, terms: &TermSet, batch: &WindowBatch) -> Tensor<1> {
     let [count, time, _] = batch.windows.dvl_cm_s.dims();
     let mut next = 0;
     // The next `n` outputs, each window's value repeated over its samples, `[count,
@@ -200,8 +200,8 @@ mod tests {
     use super::*;
     use crate::installation::frames::cross as cross3;
     use crate::installation::learned_spec::SimulationGrid;
+    use crate::installation::protocol::Segment;
     use crate::installation::simulate::simulated_windows;
-    use crate::installation::study::Segment;
     use crate::model::{Dcnet, Settings};
     use crate::spec::ModelSpec;
     use crate::vocab::Activation;

@@ -2,7 +2,7 @@
 //! them: each method's held-out RMSE per calibration window and scored trajectory, the
 //! terms each calibration estimated with their bound, the mean per method and window,
 //! and the samples of the residual figure. In: nothing (data types only). Out: the
-//! [`Study`] that `study` fills, `results::installation` writes and reads, and
+//! [`InstallationResults`] that `study` fills, `results::installation` writes and reads, and
 //! `report::installation` sets as tables and figures.
 
 use crate::Vec3;
@@ -13,7 +13,7 @@ pub const NO_CALIBRATION: &str = "no calibration";
 /// The held-out RMSE of one method's terms from one calibration window, on one other
 /// trajectory, cm/s.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct HeldOutRow {
+pub struct TransferRow {
     pub method: String,
     pub calibration: String,
     /// The window as the spec gives it, s.
@@ -48,7 +48,7 @@ pub struct SummaryRow {
     /// The mean divided by no calibration's on the same pairs.
     pub ratio: f64,
     /// How many calibration trajectories the mean is over: fewer than the study's
-    /// where a fit failed (see [`Study::failures`]).
+    /// where a fit failed (see [`InstallationResults::failures`]).
     pub calibrations: usize,
 }
 
@@ -80,7 +80,7 @@ pub struct TracePoint {
 
 /// A method's calibration time on one calibration trajectory, beside its T_conv.
 #[derive(Debug, Clone, PartialEq)]
-pub struct StudyTimeRow {
+pub struct InstallationTimeRow {
     pub method: String,
     pub calibration: String,
     /// The window of lowest held-out RMSE.
@@ -110,8 +110,8 @@ pub struct FilterPoint {
 
 /// Everything the study computes.
 #[derive(Debug, Clone, PartialEq, Default)]
-pub struct Study {
-    pub heldout: Vec<HeldOutRow>,
+pub struct InstallationResults {
+    pub heldout: Vec<TransferRow>,
     pub terms: Vec<TermRow>,
     pub summary: Vec<SummaryRow>,
     pub trace: Vec<TracePoint>,
@@ -122,7 +122,7 @@ pub struct Study {
     /// The Kalman filters' terms after every sample of every calibration trajectory.
     pub filtered: Vec<FilterPoint>,
     /// Every method's calibration time on every calibration trajectory.
-    pub calibration_time: Vec<StudyTimeRow>,
+    pub calibration_time: Vec<InstallationTimeRow>,
 }
 
 /// A summary over the (calibration, scored) pairs inside one fold, or inside any

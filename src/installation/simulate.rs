@@ -15,7 +15,7 @@
 
 use super::frames::ReferenceAt;
 use super::learned_spec::SimulationGrid;
-use super::study::{Segment, sample_interval};
+use super::protocol::{Segment, sample_interval};
 use super::terms::Installation;
 use crate::Vec3;
 use crate::rng::task_rng;

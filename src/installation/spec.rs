@@ -7,7 +7,7 @@
 
 use super::filter::FilterSettings;
 use super::filter_spec::{KalmanFile, check_kalman};
-use super::learned_spec::{LEARNED_LABEL, LearnedFile, LearnedSpec, Source, check_learned};
+use super::learned_spec::{LEARNED_LABEL, LearnedFile, LearnedSpec, TrainingSource, check_learned};
 use super::term_names::{TermName, term_list_faults};
 use crate::data::paired::{PairedColumns, PairedFiles};
 use crate::spec::{Document, Experiment, SpecErrors, load_documents};
@@ -26,7 +26,7 @@ pub struct InstallationFile {
     pub kind: String,
     pub recordings: RecordingsFile,
     pub noise: NoiseFile,
-    pub calibration: StudyCalibrationFile,
+    pub calibration: InstallationCalibrationFile,
     #[serde(default)]
     pub observability: ObservabilityFile,
     pub dcnet: Option<DcnetModelsFile>,
@@ -62,7 +62,7 @@ pub struct NoiseFile {
 
 #[derive(Debug, Clone, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct StudyCalibrationFile {
+pub struct InstallationCalibrationFile {
     /// Calibration windows: the first w seconds of the calibration trajectory; a w at
     /// least its length takes all of it.
     pub window_s: Vec<f64>,
@@ -76,11 +76,11 @@ pub struct StudyCalibrationFile {
     pub kalman: KalmanFile,
     /// A method's calibration time is the shortest window after which its held-out
     /// RMSE stays within this of its value at the longest window, %.
-    #[serde(default = "StudyCalibrationFile::default_time_tolerance_pct")]
+    #[serde(default = "InstallationCalibrationFile::default_time_tolerance_pct")]
     pub time_tolerance_pct: f64,
 }
 
-impl StudyCalibrationFile {
+impl InstallationCalibrationFile {
     fn default_time_tolerance_pct() -> f64 {
         10.0
     }
@@ -162,7 +162,10 @@ pub enum Method {
     Dcnet(ErrorModel),
     /// `[learned]`'s DCNet trained on a source, replicate `replicate` (of
     /// `learned.training.replicates`), the model of the calibration trajectory's fold.
-    Learned { source: Source, replicate: usize },
+    Learned {
+        source: TrainingSource,
+        replicate: usize,
+    },
 }
 
 impl Method {
@@ -176,8 +179,8 @@ impl Method {
             Method::Dcnet(model) => format!("DCNet {model}"),
             Method::Learned { source, replicate } => {
                 let on = match source {
-                    Source::Simulated => "simulation",
-                    Source::Vehicle => "the vehicle",
+                    TrainingSource::Simulated => "simulation",
+                    TrainingSource::Vehicle => "the vehicle",
                 };
                 match replicate {
                     0 => format!("{LEARNED_LABEL}{on}"),

@@ -98,7 +98,7 @@ pub fn check(plan: &Plan, p: usize, force: bool) -> Result<(), OwnerError> {
 /// Refuses, unless `force`, to write an installation study named `name` from the spec
 /// file `ours` (as [`recorded`] gives it) into `folder` when another spec file's study
 /// is there; and, `force` or not, when a paper run or a sweep is.
-pub fn check_study(
+pub fn check_installation(
     folder: &Path,
     out: &Path,
     ours: &str,
@@ -112,11 +112,11 @@ pub fn check_study(
         });
     }
     let held = Held::of(folder);
-    if held != Held::Nothing && held != Held::Study {
+    if held != Held::Nothing && held != Held::InstallationResults {
         return Err(OwnerError::OtherKind {
             folder: folder.to_path_buf(),
             theirs: held.words(),
-            ours: Held::Study.words(),
+            ours: Held::InstallationResults.words(),
             spec: resolved(out, ours),
             name: name.to_string(),
         });
@@ -129,7 +129,7 @@ pub fn check_study(
 
 /// Refuses to write the points of a study sweep named `name` into `folder` when it
 /// holds a paper run, a paper sweep or a single study.
-pub fn check_study_sweep(
+pub fn check_installation_sweep(
     folder: &Path,
     out: &Path,
     ours: &str,
@@ -141,11 +141,11 @@ pub fn check_study_sweep(
         });
     }
     let held = Held::of(folder);
-    if held != Held::Nothing && held != Held::StudySweep {
+    if held != Held::Nothing && held != Held::InstallationSweep {
         return Err(OwnerError::OtherKind {
             folder: folder.to_path_buf(),
             theirs: held.words(),
-            ours: Held::StudySweep.words(),
+            ours: Held::InstallationSweep.words(),
             spec: resolved(out, ours),
             name: name.to_string(),
         });
@@ -193,17 +193,19 @@ enum Held {
     Nothing,
     Single,
     Sweep,
-    Study,
-    StudySweep,
+    InstallationResults,
+    InstallationSweep,
 }
 
 impl Held {
     fn of(folder: &Path) -> Held {
         if folder.join(crate::results::installation::HELDOUT).is_file() {
-            Held::Study
+            Held::InstallationResults
         } else if folder.join(sweep::INDEX).is_file() {
             match sweep::read_index(folder) {
-                Ok(index) if index.kind == crate::installation::spec::KIND => Held::StudySweep,
+                Ok(index) if index.kind == crate::installation::spec::KIND => {
+                    Held::InstallationSweep
+                }
                 _ => Held::Sweep,
             }
         } else if folder.join(results::MANIFEST).is_file() {
@@ -218,8 +220,8 @@ impl Held {
             Held::Nothing => "nothing",
             Held::Single => "the results of a single run",
             Held::Sweep => "the points of a sweep",
-            Held::Study => "the results of an installation study",
-            Held::StudySweep => "the points of a sweep of installation studies",
+            Held::InstallationResults => "the results of an installation study",
+            Held::InstallationSweep => "the points of a sweep of installation studies",
         }
     }
 }

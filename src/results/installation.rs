@@ -4,15 +4,15 @@
 //! calibration estimated, with the bound's standard deviation and why a term is not
 //! seen), `summary.parquet` (the mean per method and window with its 95 % interval and
 //! its ratio to no calibration) and `trace.parquet` (one trajectory's residual before
-//! and after, with the yaw rate). In: a [`Study`]. Out: each table's bytes, written with
+//! and after, with the yaw rate). In: a [`InstallationResults`]. Out: each table's bytes, written with
 //! the fixed settings of every results table so the same study gives the same bytes;
-//! [`read_study`] reads them back into the same [`Study`].
+//! [`read_installation`] reads them back into the same [`InstallationResults`].
 
 use super::read::{Batch, ColumnError, ReadError, read_rows};
 use super::{ResultsError, batch, floats, strings, table_bytes as parquet_table_bytes};
 use crate::installation::rows::{
-    FilterPoint, FitFailure, FoldSummaryRow, HeldOutRow, Study, StudyTimeRow, SummaryRow, TermRow,
-    TracePoint,
+    FilterPoint, FitFailure, FoldSummaryRow, InstallationResults, InstallationTimeRow, SummaryRow,
+    TermRow, TracePoint, TransferRow,
 };
 use arrow_array::RecordBatch;
 use std::path::Path;
@@ -39,7 +39,9 @@ pub const FOLDS: &str = "folds.parquet";
 
 /// Each table of `study` as (file name, Parquet bytes), in [`TABLES`] order, for the
 /// caller to write atomically before the manifest.
-pub fn table_bytes(study: &Study) -> Result<Vec<(&'static str, Vec<u8>)>, ResultsError> {
+pub fn table_bytes(
+    study: &InstallationResults,
+) -> Result<Vec<(&'static str, Vec<u8>)>, ResultsError> {
     let batches = [
         heldout_batch(&study.heldout),
         terms_batch(&study.terms),
@@ -62,7 +64,7 @@ pub fn table_bytes(study: &Study) -> Result<Vec<(&'static str, Vec<u8>)>, Result
 }
 
 /// Reads the study's tables from `folder`; an error names the file.
-pub fn read_study(folder: &Path) -> Result<Study, ReadError> {
+pub fn read_installation(folder: &Path) -> Result<InstallationResults, ReadError> {
     let read = |name: &str, empty: RecordBatch| {
         let path = folder.join(name);
         (path, empty.schema())
@@ -97,7 +99,7 @@ pub fn read_study(folder: &Path) -> Result<Study, ReadError> {
     } else {
         Vec::new()
     };
-    Ok(Study {
+    Ok(InstallationResults {
         heldout,
         terms,
         summary,
@@ -110,7 +112,7 @@ pub fn read_study(folder: &Path) -> Result<Study, ReadError> {
 }
 
 /// One row per method × calibration trajectory.
-pub fn time_batch(rows: &[StudyTimeRow]) -> RecordBatch {
+pub fn time_batch(rows: &[InstallationTimeRow]) -> RecordBatch {
     batch(vec![
         ("method", strings(rows, |r| r.method.clone())),
         ("calibration", strings(rows, |r| r.calibration.clone())),
@@ -128,7 +130,7 @@ pub fn time_batch(rows: &[StudyTimeRow]) -> RecordBatch {
     ])
 }
 
-fn time_rows(batch: &Batch) -> Result<Vec<StudyTimeRow>, ColumnError> {
+fn time_rows(batch: &Batch) -> Result<Vec<InstallationTimeRow>, ColumnError> {
     let method = batch.strings("method")?;
     let calibration = batch.strings("calibration")?;
     let t_conv_s = batch.floats("t_conv_s")?;
@@ -137,7 +139,7 @@ fn time_rows(batch: &Batch) -> Result<Vec<StudyTimeRow>, ColumnError> {
     let long = batch.floats("long_window_rmse_cm_s")?;
     let tolerance = batch.floats("tolerance_pct")?;
     Ok((0..method.len())
-        .map(|i| StudyTimeRow {
+        .map(|i| InstallationTimeRow {
             method: method[i].clone(),
             calibration: calibration[i].clone(),
             t_conv_s: t_conv_s[i],
@@ -185,7 +187,7 @@ fn filtered_rows(batch: &Batch) -> Result<Vec<FilterPoint>, ColumnError> {
 }
 
 /// One row per method × calibration trajectory × window × scored trajectory.
-pub fn heldout_batch(rows: &[HeldOutRow]) -> RecordBatch {
+pub fn heldout_batch(rows: &[TransferRow]) -> RecordBatch {
     batch(vec![
         ("method", strings(rows, |r| r.method.clone())),
         ("calibration", strings(rows, |r| r.calibration.clone())),
@@ -300,7 +302,7 @@ fn vectors(batch: &Batch, prefix: &str) -> Result<Vec<crate::Vec3>, ColumnError>
     Ok((0..x.len()).map(|i| [x[i], y[i], z[i]]).collect())
 }
 
-fn heldout_rows(batch: &Batch) -> Result<Vec<HeldOutRow>, ColumnError> {
+fn heldout_rows(batch: &Batch) -> Result<Vec<TransferRow>, ColumnError> {
     let method = batch.strings("method")?;
     let calibration = batch.strings("calibration")?;
     let window_s = batch.floats("window_s")?;
@@ -308,7 +310,7 @@ fn heldout_rows(batch: &Batch) -> Result<Vec<HeldOutRow>, ColumnError> {
     let rmse = vectors(batch, "rmse")?;
     let total = batch.floats("rmse_cm_s")?;
     Ok((0..method.len())
-        .map(|i| HeldOutRow {
+        .map(|i| TransferRow {
             method: method[i].clone(),
             calibration: calibration[i].clone(),
             window_s: window_s[i],
@@ -385,10 +387,10 @@ mod tests {
     use super::*;
 
     /// A study of two trajectories with every kind of row, awkward values included.
-    fn study() -> Study {
-        Study {
+    fn study() -> InstallationResults {
+        InstallationResults {
             heldout: vec![
-                HeldOutRow {
+                TransferRow {
                     method: "no calibration".into(),
                     calibration: "T1".into(),
                     window_s: 400.0,
@@ -396,7 +398,7 @@ mod tests {
                     rmse_cm_s: [4.0, 12.6, 2.4],
                     total_cm_s: 13.4,
                 },
-                HeldOutRow {
+                TransferRow {
                     method: "installation lever+offset".into(),
                     calibration: "T2".into(),
                     window_s: 100.5,
@@ -475,7 +477,7 @@ mod tests {
                     bound_std: f64::INFINITY,
                 })
                 .collect(),
-            calibration_time: vec![StudyTimeRow {
+            calibration_time: vec![InstallationTimeRow {
                 method: "Kalman filter lever+offset".into(),
                 calibration: "T1".into(),
                 t_conv_s: 400.0,
@@ -513,12 +515,12 @@ mod tests {
             ]
         );
         write(folder.path(), &tables);
-        assert_eq!(read_study(folder.path()).unwrap(), study);
+        assert_eq!(read_installation(folder.path()).unwrap(), study);
         assert_eq!(table_bytes(&study).unwrap(), tables);
-        let empty = Study::default();
+        let empty = InstallationResults::default();
         let folder = tempfile::tempdir().unwrap();
         write(folder.path(), &table_bytes(&empty).unwrap());
-        assert_eq!(read_study(folder.path()).unwrap(), empty);
+        assert_eq!(read_installation(folder.path()).unwrap(), empty);
     }
 
     #[test]
@@ -568,7 +570,7 @@ mod tests {
         let folder = tempfile::tempdir().unwrap();
         let tables = table_bytes(&study()).unwrap();
         write(folder.path(), &tables[..3]);
-        let error = read_study(folder.path()).unwrap_err();
+        let error = read_installation(folder.path()).unwrap_err();
         let trace = folder.path().join(TRACE);
         assert!(
             matches!(&error, ReadError::Missing { path } if *path == trace),
@@ -576,7 +578,7 @@ mod tests {
         );
         // The summary's bytes under the name of the held-out table.
         std::fs::write(folder.path().join(HELDOUT), &tables[2].1).unwrap();
-        let error = read_study(folder.path()).unwrap_err();
+        let error = read_installation(folder.path()).unwrap_err();
         assert_eq!(
             error.to_string(),
             format!(

@@ -13,7 +13,7 @@ pub mod installation;
 pub mod read;
 pub mod corrected;
 pub mod sweep;
-pub mod study_sweep;
+pub mod installation_sweep;
 
 use crate::data::Trajectory;
 use crate::evaluate::{CalibrationRow, EvaluationRow, ProtocolResult, RunRow};

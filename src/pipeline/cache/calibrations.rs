@@ -6,7 +6,7 @@
 //! cache has the bytes of one computed whole.
 
 use crate::files::{self, Seal};
-use crate::installation::study::Calibrated;
+use crate::installation::protocol::Calibrated;
 use std::path::{Path, PathBuf};
 
 /// Why a stored calibration cannot be used or kept.

@@ -153,7 +153,7 @@ pub fn calibration_key(
 pub fn learned_key(
     resolved_toml: &str,
     data_sha256: &[&str],
-    model: &crate::installation::study::LearnedModel,
+    model: &crate::installation::protocol::LearnedModel,
 ) -> String {
     let mut settings: toml::Table = toml::from_str(resolved_toml).expect("a resolved spec is TOML");
     // A replicate's model is the same however many replicates there are.
@@ -314,8 +314,8 @@ pub fn root(out: &Path) -> PathBuf {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::installation::learned_spec::Source;
-    use crate::installation::study::LearnedModel;
+    use crate::installation::learned_spec::TrainingSource;
+    use crate::installation::protocol::LearnedModel;
 
     /// A replicate's model is the same however many replicates there are, and another
     /// replicate, fold or setting of `[learned]` is another model.
@@ -327,7 +327,7 @@ mod tests {
             )
         };
         let model = |replicate, fold| LearnedModel {
-            source: Source::Simulated,
+            source: TrainingSource::Simulated,
             replicate,
             fold,
         };

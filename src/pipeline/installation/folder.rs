@@ -4,12 +4,12 @@
 //! atomically; and whether a folder already holds the results of a key, intact.
 //! In: a point's spec, its calibrations and recordings. Out: the folder, or why not.
 
-use super::StudyError;
+use super::InstallationError;
 use crate::Vec3;
 use crate::files::{sha256_hex, write_atomic};
-use crate::installation::rows::{NO_CALIBRATION, Study, TracePoint};
+use crate::installation::protocol::{Estimated, Segment};
+use crate::installation::rows::{InstallationResults, NO_CALIBRATION, TracePoint};
 use crate::installation::spec::InstallationSpec;
-use crate::installation::study::{Estimated, Segment};
 use crate::results::{self, Manifest};
 use std::path::Path;
 use std::time::SystemTime;
@@ -18,9 +18,9 @@ use std::time::SystemTime;
 /// window: it would have no row at all there. `point` opens the message in a sweep.
 pub fn no_window_without_a_fit(
     spec: &InstallationSpec,
-    study: &Study,
+    study: &InstallationResults,
     point: &str,
-) -> Result<(), StudyError> {
+) -> Result<(), InstallationError> {
     for &window_s in &spec.windows_s {
         for method in &spec.methods {
             let label = method.label();
@@ -33,7 +33,7 @@ pub fn no_window_without_a_fit(
                 .iter()
                 .find(|f| f.method == label && f.window_s == window_s);
             if let (false, Some(failure)) = (fitted, failure) {
-                return Err(StudyError::NoFit {
+                return Err(InstallationError::NoFit {
                     point: point.to_string(),
                     method: label,
                     window_s,
@@ -60,7 +60,11 @@ pub fn is_current(folder: &Path, results_key: &str) -> bool {
 /// calibrates) with the largest uncalibrated RMSE, corrected by the terms the method
 /// with the lowest mean held-out RMSE at the largest window estimated on the first
 /// trajectory over that window.
-pub fn trace(study: &Study, estimates: &[Estimated], segments: &[&Segment]) -> Vec<TracePoint> {
+pub fn trace(
+    study: &InstallationResults,
+    estimates: &[Estimated],
+    segments: &[&Segment],
+) -> Vec<TracePoint> {
     let Some(largest) = study.summary.iter().map(|s| s.window_s).reduce(f64::max) else {
         return Vec::new();
     };
@@ -117,7 +121,7 @@ pub fn trace(study: &Study, estimates: &[Estimated], segments: &[&Segment]) -> V
 
 /// The study's two reports, named as its folder holds them: a pure function of its
 /// tables, so `plot` writes them again to the same bytes.
-pub fn reports(study: &Study, name: &str) -> [(String, Vec<u8>); 2] {
+pub fn reports(study: &InstallationResults, name: &str) -> [(String, Vec<u8>); 2] {
     [
         (
             "report.md".into(),
@@ -135,10 +139,10 @@ pub fn reports(study: &Study, name: &str) -> [(String, Vec<u8>); 2] {
 pub fn write_folder(
     spec: &InstallationSpec,
     folder: &Path,
-    study: &Study,
+    study: &InstallationResults,
     manifest: Manifest,
-) -> Result<(), StudyError> {
-    crate::files::create_folder(folder).map_err(|source| StudyError::Io {
+) -> Result<(), InstallationError> {
+    crate::files::create_folder(folder).map_err(|source| InstallationError::Io {
         path: folder.to_path_buf(),
         source,
     })?;
@@ -153,7 +157,7 @@ pub fn write_folder(
     // A study without `[learned]` leaves no fold table of an earlier one behind.
     let folds = folder.join(results::installation::FOLDS);
     if study.folds.is_empty() && folds.exists() {
-        std::fs::remove_file(&folds).map_err(|source| StudyError::Io {
+        std::fs::remove_file(&folds).map_err(|source| InstallationError::Io {
             path: folds.clone(),
             source,
         })?;
@@ -161,7 +165,7 @@ pub fn write_folder(
     let mut digests = std::collections::BTreeMap::new();
     for (name, bytes) in &files {
         let path = folder.join(name);
-        write_atomic(&path, bytes).map_err(|source| StudyError::Io { path, source })?;
+        write_atomic(&path, bytes).map_err(|source| InstallationError::Io { path, source })?;
         digests.insert(name.clone(), sha256_hex(bytes));
     }
     let manifest = Manifest {
@@ -171,5 +175,5 @@ pub fn write_folder(
     };
     let path = folder.join(results::MANIFEST);
     let json = serde_json::to_string_pretty(&manifest).expect("a manifest always serializes");
-    write_atomic(&path, json.as_bytes()).map_err(|source| StudyError::Io { path, source })
+    write_atomic(&path, json.as_bytes()).map_err(|source| InstallationError::Io { path, source })
 }

@@ -4,14 +4,14 @@
 //! instead of training it. Trainings run one per core, each on one thread.
 //! In: a point's spec, its segments and its recordings' SHA-256. Out: [`LearnedModels`].
 
-use super::StudyError;
+use super::InstallationError;
 use crate::files::{self, Seal};
 use crate::installation::learned::{LearnedWindows, training_windows};
-use crate::installation::learned_spec::{LearnedSpec, Source};
+use crate::installation::learned_spec::{LearnedSpec, TrainingSource};
 use crate::installation::network::network_io;
+use crate::installation::protocol::{LearnedModel, Segment, sample_interval};
 use crate::installation::simulate::REFERENCE_MARGIN;
 use crate::installation::spec::InstallationSpec;
-use crate::installation::study::{LearnedModel, Segment, sample_interval};
 use crate::installation::term_names::term_set;
 use crate::model::Dcnet;
 use crate::pipeline::cache::{self, models};
@@ -83,7 +83,7 @@ pub fn train_or_load(
     segments: &[&Segment],
     keys: &[LearnedKey],
     out: &Path,
-) -> Result<LearnedModels, StudyError> {
+) -> Result<LearnedModels, InstallationError> {
     let Some(learned) = &spec.learned else {
         return Ok(LearnedModels(Vec::new()));
     };
@@ -93,14 +93,14 @@ pub fn train_or_load(
         .map(|s| sample_interval(&s.recording.time_s))
         .fold(f64::INFINITY, f64::min);
     let reach_s = REFERENCE_MARGIN as f64 * step_s;
-    if learned.sources.contains(&Source::Simulated)
+    if learned.sources.contains(&TrainingSource::Simulated)
         && let Some(tau) = learned
             .simulation
             .time_offset_s
             .iter()
             .find(|t| t.abs() > reach_s)
     {
-        return Err(StudyError::Learned {
+        return Err(InstallationError::Learned {
             model: "learned.simulation.time_offset_s".into(),
             why: format!(
                 "{tau} s is beyond the {reach_s} s at which the loss can read the reference ({REFERENCE_MARGIN} samples of {step_s} s): simulate time offsets within it"
@@ -109,12 +109,12 @@ pub fn train_or_load(
     }
     let store_error = |path: &Path| {
         let path = path.to_path_buf();
-        move |error: models::ModelStoreError| StudyError::Learned {
+        move |error: models::ModelStoreError| InstallationError::Learned {
             model: path.display().to_string(),
             why: error.to_string(),
         }
     };
-    let one = |key: &LearnedKey| -> Result<Dcnet, StudyError> {
+    let one = |key: &LearnedKey| -> Result<Dcnet, InstallationError> {
         let path = path(out, key);
         let device = learned.training.backend.device();
         let io = network_io(&term_set(&learned.terms));
@@ -124,7 +124,7 @@ pub fn train_or_load(
             &out.join(".cache/damaged"),
             "learned model",
         )
-        .map_err(|source| StudyError::Io {
+        .map_err(|source| InstallationError::Io {
             path: path.clone(),
             source,
         })? {
@@ -136,7 +136,7 @@ pub fn train_or_load(
         }
         let model = train::one_thread_pool().install(|| train_one(spec, learned, segments, key))?;
         files::create_folder(path.parent().expect("a folder")).map_err(|source| {
-            StudyError::Io {
+            InstallationError::Io {
                 path: path.clone(),
                 source,
             }
@@ -147,7 +147,7 @@ pub fn train_or_load(
     // One worker per core takes the next model, so that no more training sets are in
     // memory than cores train (rayon would start every training while one waits).
     let next = AtomicUsize::new(0);
-    let done: Mutex<Vec<Option<Result<Dcnet, StudyError>>>> =
+    let done: Mutex<Vec<Option<Result<Dcnet, InstallationError>>>> =
         Mutex::new(keys.iter().map(|_| None).collect());
     std::thread::scope(|scope| {
         for _ in 0..rayon::current_num_threads().min(keys.len()) {
@@ -166,7 +166,7 @@ pub fn train_or_load(
         .cloned()
         .zip(done.into_inner().expect("no worker panicked"))
         .map(|(key, result)| Ok((key, result.expect("every key taken")?)))
-        .collect::<Result<Vec<_>, StudyError>>()?;
+        .collect::<Result<Vec<_>, InstallationError>>()?;
     Ok(LearnedModels(models))
 }
 
@@ -178,7 +178,7 @@ fn train_one(
     learned: &LearnedSpec,
     segments: &[&Segment],
     key: &LearnedKey,
-) -> Result<Dcnet, StudyError> {
+) -> Result<Dcnet, InstallationError> {
     let clock = Instant::now();
     let LearnedModel {
         source,
@@ -214,7 +214,7 @@ fn train_one(
     let hidden = Progress::hidden();
     while state.stop(&learned.training).is_none() {
         train::run_epoch(&recipe, &data, &mut state, &hidden).map_err(|error| {
-            StudyError::Learned {
+            InstallationError::Learned {
                 model: shown.clone(),
                 why: error.to_string(),
             }

@@ -9,10 +9,10 @@
 //! In: the experiment of an [`InstallationSpec`] and the output folder. Out: each
 //! point's results folder, a sweep's table and index, or why not.
 //!
-//! - this file plans the calibrations and runs them: [`StudyPlan`];
+//! - this file plans the calibrations and runs them: [`InstallationPlan`];
 //! - [`inputs`] reads the recordings and DCNet models the points use, each once;
 //! - [`folder`] writes a point's results folder, manifest last;
-//! - the sweep's table and index are written by [`crate::results::study_sweep`].
+//! - the sweep's table and index are written by [`crate::results::installation_sweep`].
 
 pub mod folder;
 pub mod inputs;
@@ -21,9 +21,9 @@ pub mod learned;
 use super::{Shard, owner};
 use crate::data::paired;
 use crate::files::{Seal, sha256_hex};
-use crate::installation::rows::Study;
+use crate::installation::protocol::{self, Calibrated};
+use crate::installation::rows::InstallationResults;
 use crate::installation::spec::InstallationSpec;
-use crate::installation::study::{self, Calibrated};
 use crate::pipeline::cache::{self, CalibrationStore, calibrations::CalibrationStoreError};
 use crate::results::{self, Manifest, StageSeconds};
 use crate::spec::Experiment;
@@ -35,7 +35,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Instant, SystemTime};
 
 #[derive(Debug, thiserror::Error)]
-pub enum StudyError {
+pub enum InstallationError {
     /// The reader's error says the file, line and column; the spec's key follows.
     #[error("{error} (the spec's recordings.trajectories[{index}], {name})")]
     Recording {
@@ -108,7 +108,7 @@ pub enum StudyError {
 
 /// How much of a study a command does.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum StudyMode {
+pub enum InstallationMode {
     /// Everything not current: computes what the cache lacks, writes every folder.
     All { force: bool },
     /// Computes this shard's calibrations into the cache; writes no folder.
@@ -131,7 +131,7 @@ pub enum Outcome {
     Current(PathBuf),
     Written {
         folder: PathBuf,
-        study: Study,
+        study: InstallationResults,
     },
 }
 
@@ -146,7 +146,7 @@ pub struct Executed {
 }
 
 /// A study's plan: its points, what they read, and their calibrations with their keys.
-pub struct StudyPlan<'a> {
+pub struct InstallationPlan<'a> {
     pub experiment: &'a Experiment<InstallationSpec>,
     pub out: PathBuf,
     /// The spec file as a manifest records it (see [`owner::recorded`]).
@@ -164,14 +164,14 @@ pub struct StudyPlan<'a> {
     started_at: SystemTime,
 }
 
-impl<'a> StudyPlan<'a> {
+impl<'a> InstallationPlan<'a> {
     /// Reads what the points of `experiment`, from `spec_file`, use, and keys their
     /// calibrations.
     pub fn new(
         experiment: &'a Experiment<InstallationSpec>,
         spec_file: &Path,
         out: &Path,
-    ) -> Result<Self, StudyError> {
+    ) -> Result<Self, InstallationError> {
         let started_at = SystemTime::now();
         let clock = Instant::now();
         let inputs = Inputs::read(experiment, out)?;
@@ -207,7 +207,7 @@ impl<'a> StudyPlan<'a> {
             ));
             learned_keys.push(point_learned);
         }
-        Ok(StudyPlan {
+        Ok(InstallationPlan {
             experiment,
             out: out.to_path_buf(),
             spec_file: spec_file.to_path_buf(),
@@ -258,10 +258,10 @@ impl<'a> StudyPlan<'a> {
     }
 
     /// Does what `mode` asks.
-    pub fn execute(&self, mode: StudyMode) -> Result<Executed, StudyError> {
+    pub fn execute(&self, mode: InstallationMode) -> Result<Executed, InstallationError> {
         let clock = Instant::now();
         let (force, collect) = match mode {
-            StudyMode::Shard(shard) => {
+            InstallationMode::Shard(shard) => {
                 let to_do: Vec<usize> = (0..self.units.len())
                     .filter(|&u| self.in_shard(u, shard) && self.status(u) != Seal::Intact)
                     .collect();
@@ -272,8 +272,8 @@ impl<'a> StudyPlan<'a> {
                     sweep: None,
                 });
             }
-            StudyMode::All { force } => (force, false),
-            StudyMode::Collect => (false, true),
+            InstallationMode::All { force } => (force, false),
+            InstallationMode::Collect => (false, true),
         };
         self.check_owners(force)?;
         let stale: Vec<usize> = (0..self.experiment.points.len())
@@ -289,7 +289,7 @@ impl<'a> StudyPlan<'a> {
             .filter(|&u| force || self.status(u) != Seal::Intact)
             .collect();
         if collect && !missing.is_empty() {
-            return Err(StudyError::NotCollected {
+            return Err(InstallationError::NotCollected {
                 out: self.out.clone(),
                 missing: missing.iter().take(5).map(|&u| self.label(u)).collect(),
                 missing_count: missing.len(),
@@ -318,7 +318,7 @@ impl<'a> StudyPlan<'a> {
                         .remove(&u)
                         .expect("every needed calibration is here")
                 });
-            let (mut study, estimates) = study::assemble(self.spec(p), parts.collect());
+            let (mut study, estimates) = protocol::assemble(self.spec(p), parts.collect());
             let point = match self.experiment.is_sweep() {
                 true => format!("point {}: ", self.spec(p).name),
                 false => String::new(),
@@ -344,7 +344,7 @@ impl<'a> StudyPlan<'a> {
             if !self.experiment.is_sweep() {
                 return Err(unfitted.remove(0));
             }
-            return Err(StudyError::Unfitted {
+            return Err(InstallationError::Unfitted {
                 errors: unfitted.iter().map(ToString::to_string).collect(),
                 written: written.len(),
             });
@@ -368,7 +368,7 @@ impl<'a> StudyPlan<'a> {
 
     /// Computes units `to_do` in parallel, each stored in the cache as it finishes (a
     /// damaged entry set aside first, and said).
-    fn compute(&self, to_do: &[usize]) -> Result<HashMap<usize, Calibrated>, StudyError> {
+    fn compute(&self, to_do: &[usize]) -> Result<HashMap<usize, Calibrated>, InstallationError> {
         for &u in to_do {
             if let Some(said) = self.store.set_aside_damaged(&self.units[u].key)? {
                 eprintln!("{said}");
@@ -391,7 +391,7 @@ impl<'a> StudyPlan<'a> {
                     models.and_then(|m| m.estimate(model, dvl, reference))
                 };
                 let learned_models = &learned_models[&unit.point];
-                let learned = |which, segment: &study::Segment, range| {
+                let learned = |which, segment: &protocol::Segment, range| {
                     let model = learned_models.model(which)?;
                     let learned = spec.learned.as_ref()?;
                     crate::installation::learned::estimate(
@@ -403,11 +403,11 @@ impl<'a> StudyPlan<'a> {
                     )
                 };
                 let segments = self.inputs.segments_of(unit.point);
-                let calibrated = study::calibrate_on(
+                let calibrated = protocol::calibrate_on(
                     spec,
                     &segments,
                     unit.calibration,
-                    &study::Estimators {
+                    &protocol::Estimators {
                         dcnet: &dcnet,
                         learned: &learned,
                     },
@@ -420,9 +420,9 @@ impl<'a> StudyPlan<'a> {
 
     /// Refuses, before anything is computed, folders another spec file or another kind
     /// of run wrote (unless `force`, for the first).
-    fn check_owners(&self, force: bool) -> Result<(), StudyError> {
+    fn check_owners(&self, force: bool) -> Result<(), InstallationError> {
         if self.experiment.is_sweep() {
-            owner::check_study_sweep(
+            owner::check_installation_sweep(
                 &self.out.join(&self.experiment.name),
                 &self.out,
                 &self.recorded_spec_file,
@@ -431,7 +431,7 @@ impl<'a> StudyPlan<'a> {
         }
         for p in 0..self.experiment.points.len() {
             let spec = self.spec(p);
-            owner::check_study(
+            owner::check_installation(
                 &self.folder(p),
                 &self.out,
                 &self.recorded_spec_file,
@@ -471,24 +471,31 @@ impl<'a> StudyPlan<'a> {
 
     /// A sweep's table and index, written when a point was written or the index is not
     /// that of the points' results; `None` for a single study or a current sweep.
-    fn write_sweep(&self, points: &[Outcome]) -> Result<Option<PathBuf>, StudyError> {
+    fn write_sweep(&self, points: &[Outcome]) -> Result<Option<PathBuf>, InstallationError> {
         if !self.experiment.is_sweep() {
             return Ok(None);
         }
         let folder = self.out.join(&self.experiment.name);
         let wrote = points.iter().any(|o| matches!(o, Outcome::Written { .. }));
-        if !wrote && results::study_sweep::is_current(&folder, &self.results_keys) {
+        if !wrote && results::installation_sweep::is_current(&folder, &self.results_keys) {
             return Ok(None);
         }
         let mut summaries = Vec::new();
         for (p, outcome) in points.iter().enumerate() {
             let summary = match outcome {
                 Outcome::Written { study, .. } => study.summary.clone(),
-                Outcome::Current(folder) => results::installation::read_study(folder)?.summary,
+                Outcome::Current(folder) => {
+                    results::installation::read_installation(folder)?.summary
+                }
             };
             summaries.push((p, summary));
         }
-        results::study_sweep::write(&folder, self.experiment, &summaries, &self.results_keys)?;
+        results::installation_sweep::write(
+            &folder,
+            self.experiment,
+            &summaries,
+            &self.results_keys,
+        )?;
         Ok(Some(folder))
     }
 }

@@ -1,6 +1,6 @@
 //! `dcnet-exp compare A B` of two installation studies. In: two results folders of an
 //! installation study, each holding `heldout.parquet` and its siblings (read back by
-//! `results::installation::read_study`) and the `spec.toml` it ran. Out: one Markdown
+//! `results::installation::read_installation`) and the `spec.toml` it ran. Out: one Markdown
 //! text: both folders named, the spec keys that differ, each method's mean held-out
 //! RMSE per calibration window in A and B with each one's 95 % interval and B − A,
 //! marked ⚠ where the two intervals do not overlap, and for each installation model
@@ -10,10 +10,10 @@
 use super::CompareError;
 use super::markdown::{new_table, spec_section};
 use super::pairs::pair;
-use crate::installation::rows::{Study, SummaryRow, TermRow};
+use crate::installation::rows::{InstallationResults, SummaryRow, TermRow};
 use crate::report::installation::readable_term;
 use crate::report::plots::scale::three_digits;
-use crate::results::installation::{HELDOUT, read_study};
+use crate::results::installation::{HELDOUT, read_installation};
 use crate::results::read::ReadError;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -23,20 +23,20 @@ const FLAG: &str = "⚠";
 
 /// One installation study read back: its folder, tables and resolved spec.
 #[derive(Debug, Clone)]
-pub struct StoredStudy {
+pub struct StoredInstallation {
     pub folder: PathBuf,
-    pub study: Study,
+    pub study: InstallationResults,
     pub spec: toml::Table,
 }
 
 /// Whether `folder` holds an installation study rather than a run of the paper.
-pub fn is_study(folder: &Path) -> bool {
+pub fn is_installation(folder: &Path) -> bool {
     folder.join(HELDOUT).is_file()
 }
 
 /// Reads the installation study in `folder`: its tables and its `spec.toml`.
-pub fn read(folder: &Path) -> Result<StoredStudy, CompareError> {
-    let study = read_study(folder)?;
+pub fn read(folder: &Path) -> Result<StoredInstallation, CompareError> {
+    let study = read_installation(folder)?;
     let path = folder.join(crate::results::SPEC);
     let text = std::fs::read_to_string(&path).map_err(|source| {
         CompareError::Read(ReadError::Io {
@@ -50,7 +50,7 @@ pub fn read(folder: &Path) -> Result<StoredStudy, CompareError> {
             path: path.clone(),
             source: Box::new(source),
         })?;
-    Ok(StoredStudy {
+    Ok(StoredInstallation {
         folder: folder.to_path_buf(),
         study,
         spec,
@@ -58,7 +58,7 @@ pub fn read(folder: &Path) -> Result<StoredStudy, CompareError> {
 }
 
 /// The comparison of study `a` with study `b` as Markdown.
-pub fn render(a: &StoredStudy, b: &StoredStudy) -> String {
+pub fn render(a: &StoredInstallation, b: &StoredInstallation) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "# Comparison of two installation studies\n");
     let _ = writeln!(out, "- A: `{}`", a.folder.display());
@@ -263,10 +263,10 @@ mod tests {
         spec: &str,
         summary: Vec<SummaryRow>,
         terms: Vec<TermRow>,
-    ) -> StoredStudy {
-        StoredStudy {
+    ) -> StoredInstallation {
+        StoredInstallation {
             folder: folder.into(),
-            study: Study {
+            study: InstallationResults {
                 heldout: Vec::new(),
                 terms,
                 summary,

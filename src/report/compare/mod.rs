@@ -53,7 +53,7 @@ pub enum CompareError {
         study.display(),
         run.display()
     )]
-    StudyAndRun { study: PathBuf, run: PathBuf },
+    InstallationAndRun { study: PathBuf, run: PathBuf },
     #[error("writing {}", path.display())]
     Write {
         path: PathBuf,

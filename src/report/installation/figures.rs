@@ -2,23 +2,27 @@
 //! matrix of each method, held-out RMSE against the window, one trajectory's residual
 //! before and after, and with `[learned]` the held-out RMSE inside the folds
 //! (`plots::figures::installation_*`); and a sweep of studies'
-//! figure, held-out RMSE at each point, drawn from the sweep's table. In: a [`Study`],
+//! figure, held-out RMSE at each point, drawn from the sweep's table. In: a [`InstallationResults`],
 //! or a stored sweep of studies. Out: the files written.
 
-use crate::installation::rows::Study;
+use crate::installation::rows::InstallationResults;
 use crate::report::plots::canvas::Outcome;
 use crate::report::plots::figures::{
     installation_matrix, installation_residual, installation_sweep, installation_windows,
     terms_in_time,
 };
 use crate::report::plots::{Format, PlotError, Written, render, write_figures};
-use crate::results::study_sweep::StoredStudySweep;
+use crate::results::installation_sweep::StoredInstallationSweep;
 use std::path::Path;
 
 /// Draws the study's figures into `folder`, each file written atomically: the
 /// calibration × scored matrix of each method, held-out RMSE against the window, and
 /// one trajectory's residual before and after.
-pub fn draw_all(study: &Study, folder: &Path, format: Format) -> Result<Vec<Written>, PlotError> {
+pub fn draw_all(
+    study: &InstallationResults,
+    folder: &Path,
+    format: Format,
+) -> Result<Vec<Written>, PlotError> {
     render::register_font();
     let draw = || -> crate::report::plots::draw::PlotResult<Vec<(String, Outcome)>> {
         let mut drawn = installation_matrix::installation_matrix(study)?;
@@ -52,7 +56,7 @@ pub fn draw_all(study: &Study, folder: &Path, format: Format) -> Result<Vec<Writ
 /// Draws the figure of a sweep of studies into `folder` (each point's own figures are
 /// drawn from the point's folder by [`draw_all`]).
 pub fn draw_sweep(
-    stored: &StoredStudySweep,
+    stored: &StoredInstallationSweep,
     folder: &Path,
     format: Format,
 ) -> Result<Vec<Written>, PlotError> {
@@ -70,7 +74,7 @@ pub fn draw_sweep(
 pub(crate) mod tests {
     use super::*;
     use crate::installation::rows::{
-        FilterPoint, HeldOutRow, NO_CALIBRATION, SummaryRow, TermRow, TracePoint,
+        FilterPoint, NO_CALIBRATION, SummaryRow, TermRow, TracePoint, TransferRow,
     };
 
     /// A deterministic jitter in -1..1 from `seed`.
@@ -84,7 +88,7 @@ pub(crate) mod tests {
 
     /// A study resembling the A-KIT one: 13 trajectories, three windows, no
     /// calibration, least squares EM1 to EM5 and two installation models.
-    pub(crate) fn akit_like() -> Study {
+    pub(crate) fn akit_like() -> InstallationResults {
         let none = [
             20.0, 13.4, 11.8, 23.1, 13.3, 10.9, 11.3, 24.2, 24.4, 14.5, 22.9, 2.9, 3.1,
         ];
@@ -121,7 +125,7 @@ pub(crate) mod tests {
                         let total = none[s] * factor;
                         let share = [0.37, 0.82, 0.33];
                         let norm = share.iter().map(|v: &f64| v * v).sum::<f64>().sqrt();
-                        heldout.push(HeldOutRow {
+                        heldout.push(TransferRow {
                             method: method.clone(),
                             calibration: calibration.clone(),
                             window_s,
@@ -231,7 +235,7 @@ pub(crate) mod tests {
                 }
             })
             .collect();
-        Study {
+        InstallationResults {
             heldout,
             terms,
             summary,
@@ -297,7 +301,7 @@ pub(crate) mod tests {
             assert_eq!(figure.files.len(), 1);
             assert!(figure.files[0].is_file());
         }
-        let empty = Study::default();
+        let empty = InstallationResults::default();
         let written = draw_all(&empty, temporary.path(), Format::Png).unwrap();
         assert!(written.iter().all(|w| w.files.is_empty()), "{written:?}");
         assert_eq!(

@@ -3,11 +3,11 @@
 //! window. In: the study's summary rows. Out: two [`Section`]s; also the order of the
 //! methods and windows the other tables follow.
 
-use crate::installation::rows::{NO_CALIBRATION, Study, SummaryRow};
+use crate::installation::rows::{InstallationResults, NO_CALIBRATION, SummaryRow};
 use crate::report::section::{Entry, Section, Table};
 
 /// The methods in the order the study lists them, no calibration first.
-pub(super) fn methods(study: &Study) -> Vec<&str> {
+pub(super) fn methods(study: &InstallationResults) -> Vec<&str> {
     let mut methods = crate::first_seen(
         study
             .summary
@@ -20,7 +20,7 @@ pub(super) fn methods(study: &Study) -> Vec<&str> {
 }
 
 /// The windows of the summary, in increasing order.
-pub(super) fn windows(study: &Study) -> Vec<f64> {
+pub(super) fn windows(study: &InstallationResults) -> Vec<f64> {
     let mut windows = crate::first_seen(study.summary.iter().map(|r| r.window_s));
     windows.sort_by(f64::total_cmp);
     windows
@@ -31,7 +31,11 @@ pub(super) fn window_text(window_s: f64) -> String {
     format!("{window_s} s")
 }
 
-fn summary_entry<'a>(study: &'a Study, method: &str, window_s: f64) -> Option<&'a SummaryRow> {
+fn summary_entry<'a>(
+    study: &'a InstallationResults,
+    method: &str,
+    window_s: f64,
+) -> Option<&'a SummaryRow> {
     study
         .summary
         .iter()
@@ -39,7 +43,11 @@ fn summary_entry<'a>(study: &'a Study, method: &str, window_s: f64) -> Option<&'
 }
 
 /// (a): each method's mean held-out RMSE at the largest window and its ratio.
-pub(super) fn heldout_section(study: &Study, methods: &[&str], window_s: f64) -> Section {
+pub(super) fn heldout_section(
+    study: &InstallationResults,
+    methods: &[&str],
+    window_s: f64,
+) -> Section {
     let rows = methods
         .iter()
         .map(|method| {
@@ -74,7 +82,11 @@ pub(super) fn heldout_section(study: &Study, methods: &[&str], window_s: f64) ->
 }
 
 /// (b): the same means, one column per window.
-pub(super) fn windows_section(study: &Study, methods: &[&str], windows: &[f64]) -> Section {
+pub(super) fn windows_section(
+    study: &InstallationResults,
+    methods: &[&str],
+    windows: &[f64],
+) -> Section {
     let rows = methods
         .iter()
         .map(|method| {

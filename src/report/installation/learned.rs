@@ -9,7 +9,7 @@
 use super::heldout::window_text;
 use super::terms::readable;
 use crate::installation::learned_spec::LEARNED_LABEL;
-use crate::installation::rows::{FoldSummaryRow, NO_CALIBRATION, Study, TermRow};
+use crate::installation::rows::{FoldSummaryRow, InstallationResults, NO_CALIBRATION, TermRow};
 use crate::report::section::{Entry, Section, Table};
 
 /// Whether `method` is one of `[learned]`'s.
@@ -18,7 +18,7 @@ pub(super) fn is_learned(method: &str) -> bool {
 }
 
 fn fold_entry<'a>(
-    study: &'a Study,
+    study: &'a InstallationResults,
     fold: &str,
     method: &str,
     window_s: f64,
@@ -30,7 +30,11 @@ fn fold_entry<'a>(
 }
 
 /// The sections, none without a fold summary.
-pub(super) fn learned_sections(study: &Study, methods: &[&str], windows: &[f64]) -> Vec<Section> {
+pub(super) fn learned_sections(
+    study: &InstallationResults,
+    methods: &[&str],
+    windows: &[f64],
+) -> Vec<Section> {
     let Some(&largest) = windows.last() else {
         return Vec::new();
     };
@@ -119,7 +123,7 @@ pub(super) fn learned_sections(study: &Study, methods: &[&str], windows: &[f64])
 
 /// The installation fit with the learned models' terms: the model-based method whose
 /// term names are theirs.
-fn fitted_alike<'a>(study: &Study, methods: &[&'a str]) -> Option<&'a str> {
+fn fitted_alike<'a>(study: &InstallationResults, methods: &[&'a str]) -> Option<&'a str> {
     let learned = methods.iter().find(|m| is_learned(m))?;
     let terms = term_names(study, learned);
     methods
@@ -129,7 +133,7 @@ fn fitted_alike<'a>(study: &Study, methods: &[&'a str]) -> Option<&'a str> {
 }
 
 /// The names of the terms `method` estimated, in the order of its rows.
-fn term_names<'a>(study: &'a Study, method: &str) -> Vec<&'a str> {
+fn term_names<'a>(study: &'a InstallationResults, method: &str) -> Vec<&'a str> {
     crate::first_seen(
         study
             .terms
@@ -150,7 +154,7 @@ fn window_header(windows: &[f64]) -> Vec<String> {
 /// `window_s`, both over the pairs they both scored (those inside the fold), by
 /// calibration.
 fn per_calibration<'a>(
-    study: &'a Study,
+    study: &'a InstallationResults,
     learned: &str,
     fitted: &str,
     window_s: f64,
@@ -191,7 +195,7 @@ fn per_calibration<'a>(
 /// Each learned method against the installation fit with its terms, calibration by
 /// calibration on the same pairs: the mean difference of held-out RMSE with its 95 %
 /// interval, and on how many calibration trajectories the learned one is lower.
-fn paired(study: &Study, methods: &[&str], windows: &[f64]) -> Option<Section> {
+fn paired(study: &InstallationResults, methods: &[&str], windows: &[f64]) -> Option<Section> {
     let fitted = fitted_alike(study, methods)?;
     let learned: Vec<&str> = methods.iter().copied().filter(|m| is_learned(m)).collect();
     let rows = learned
@@ -234,7 +238,7 @@ fn paired(study: &Study, methods: &[&str], windows: &[f64]) -> Option<Section> {
 /// (d): the mean absolute difference, per term and window, of each learned method's
 /// terms and the installation fit's with the same terms from that fit's mean over every
 /// calibration trajectory at the largest window.
-fn term_errors(study: &Study, methods: &[&str], windows: &[f64]) -> Option<Section> {
+fn term_errors(study: &InstallationResults, methods: &[&str], windows: &[f64]) -> Option<Section> {
     let largest = *windows.last()?;
     let learned: Vec<&str> = methods.iter().copied().filter(|m| is_learned(m)).collect();
     let terms = term_names(study, learned.first()?);

@@ -1,4 +1,4 @@
-//! The installation study's section of the report, and its figures. In: a [`Study`]
+//! The installation study's section of the report, and its figures. In: a [`InstallationResults`]
 //! (as `results::installation` reads it back). Out: the section as Markdown
 //! ([`markdown`]) and as LaTeX ([`latex`]), both set from the same tables, and the
 //! figures ([`draw_all`]). In data-flow order:
@@ -27,7 +27,7 @@ pub mod figures;
 pub use figures::{draw_all, draw_sweep};
 pub(crate) use terms::{readable_term, readable_why};
 
-use crate::installation::rows::{NO_CALIBRATION, Study, TermRow};
+use crate::installation::rows::{InstallationResults, NO_CALIBRATION, TermRow};
 use crate::report::section::{Section, symbols};
 use agreement::agreement;
 use heldout::{heldout_section, methods, windows, windows_section};
@@ -35,7 +35,7 @@ use std::fmt::Write;
 use terms::terms_section;
 
 /// The section as Markdown, second-level heading first.
-pub fn markdown(study: &Study) -> String {
+pub fn markdown(study: &InstallationResults) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "## Installation study: held-out trajectories\n");
     let _ = writeln!(out, "{}\n", introduction());
@@ -44,7 +44,7 @@ pub fn markdown(study: &Study) -> String {
 }
 
 /// The section as LaTeX table environments and paragraphs; `name` keys the labels.
-pub fn latex(study: &Study, name: &str) -> String {
+pub fn latex(study: &InstallationResults, name: &str) -> String {
     use crate::report::latex::escape;
     let mut out = String::new();
     let _ = writeln!(out, "% The installation study's tables ({name}).");
@@ -62,7 +62,7 @@ fn introduction() -> String {
 }
 
 /// Every table of the section, in order.
-fn sections(study: &Study) -> Vec<Section> {
+fn sections(study: &InstallationResults) -> Vec<Section> {
     let windows = windows(study);
     let Some(&largest) = windows.last() else {
         return Vec::new();
@@ -130,7 +130,7 @@ pub(crate) mod tests {
 
     /// A small study: three trajectories, two windows, no calibration, least squares
     /// EM1 and one installation model whose lever arm T12 cannot show.
-    pub(super) fn small() -> Study {
+    pub(super) fn small() -> InstallationResults {
         let summary = |method: &str, window_s, mean_cm_s, ci95_cm_s, ratio| SummaryRow {
             method: method.into(),
             window_s,
@@ -148,7 +148,7 @@ pub(crate) mod tests {
             std,
             unseen: unseen.into(),
         };
-        Study {
+        InstallationResults {
             heldout: Vec::new(),
             terms: vec![
                 term("T1", "lever_arm_x_m", -1.87, 0.013, ""),

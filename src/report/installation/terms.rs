@@ -5,8 +5,8 @@
 //! ([`readable_why`]). In: the study's term rows of one method. Out: a [`Section`].
 
 use super::heldout::window_text;
+use crate::installation::protocol::table_unit;
 use crate::installation::rows::TermRow;
-use crate::installation::study::table_unit;
 use crate::report::plots::scale::three_digits;
 use crate::report::section::{Entry, Section, Table};
 

@@ -3,7 +3,7 @@
 //! and the median over calibration trajectories. In: the study's calibration-time
 //! rows. Out: a [`Section`], or none when the study has one window only.
 
-use crate::installation::rows::{Study, StudyTimeRow};
+use crate::installation::rows::{InstallationResults, InstallationTimeRow};
 use crate::report::section::{Entry, Section, Table};
 
 /// The median of `values`; `None` when there are none.
@@ -21,14 +21,18 @@ fn median(mut values: Vec<f64>) -> Option<f64> {
 }
 
 /// The section, methods in the order given.
-pub(super) fn timing_section(study: &Study, methods: &[&str], windows: &[f64]) -> Option<Section> {
+pub(super) fn timing_section(
+    study: &InstallationResults,
+    methods: &[&str],
+    windows: &[f64],
+) -> Option<Section> {
     let rows = &study.calibration_time;
     let first = rows.first()?;
     if windows.len() < 2 {
         return None;
     }
     let calibrations = crate::first_seen(rows.iter().map(|r| r.calibration.as_str()));
-    let find = |method: &str, calibration: &str| -> Option<&StudyTimeRow> {
+    let find = |method: &str, calibration: &str| -> Option<&InstallationTimeRow> {
         rows.iter()
             .find(|r| r.method == method && r.calibration == calibration)
     };

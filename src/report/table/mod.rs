@@ -13,7 +13,7 @@ pub(crate) use cell::{Cell, Detail, RmseValue, Signs, Tally};
 
 use crate::results::read::StoredRun;
 use crate::vocab::EstimatorKind;
-use source::Source;
+use source::TableSource;
 
 /// The report's tables, each cell computed once for both renderings.
 pub struct ReportTables {
@@ -51,7 +51,7 @@ pub struct Row {
 impl ReportTables {
     /// Every table of `run`'s report.
     pub(crate) fn of(run: &StoredRun) -> ReportTables {
-        let source = Source::of(run);
+        let source = TableSource::of(run);
         let calibration = source.calibration_table();
         let evaluation = source.evaluation_table(
             "Baseline",

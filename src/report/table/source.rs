@@ -11,7 +11,7 @@ use crate::vocab::{ErrorModel, EstimatorKind, Phase};
 
 /// What the tables are built from: the run, its tolerance, and the error models, DVLs
 /// and test trajectories that give their columns and rows.
-pub(super) struct Source<'a> {
+pub(super) struct TableSource<'a> {
     run: &'a StoredRun,
     tolerance: f64,
     models: Vec<ErrorModel>,
@@ -23,10 +23,10 @@ pub(super) struct Source<'a> {
 /// that of the error-model columns.
 type CalibrationKinds = (String, Option<EstimatorKind>, Option<EstimatorKind>);
 
-impl<'a> Source<'a> {
+impl<'a> TableSource<'a> {
     /// The error models, DVLs and test trajectories of `run`.
-    pub(super) fn of(run: &'a StoredRun) -> Source<'a> {
-        Source {
+    pub(super) fn of(run: &'a StoredRun) -> TableSource<'a> {
+        TableSource {
             run,
             tolerance: run.spec.report.tolerance_pct,
             models: crate::report::printed::models_in(

@@ -18,7 +18,7 @@ pub mod sweep;
 use super::Spec;
 use super::toml_file::{SpecError, SpecErrors, TomlText, shown_value};
 use overrides::apply_overrides;
-use source::{Assigned, Source};
+use source::{Assigned, SpecSource};
 use std::path::{Path, PathBuf};
 use sweep::load_sweep;
 
@@ -32,7 +32,7 @@ pub struct Experiment<S = Spec> {
     pub swept: Vec<String>,
     pub points: Vec<Point<S>>,
     /// Where the spec's keys are written or were set, to place later faults.
-    source: Source,
+    source: SpecSource,
     assigned: Assigned,
 }
 
@@ -107,12 +107,12 @@ pub fn load_experiment(path: &Path, overrides: &[String]) -> Result<Experiment, 
 fn load_points<S>(
     path: &Path,
     overrides: &[String],
-    check: impl Fn(&Source, toml::Table, &Assigned) -> Result<S, SpecErrors>,
+    check: impl Fn(&SpecSource, toml::Table, &Assigned) -> Result<S, SpecErrors>,
 ) -> Result<Experiment<S>, SpecErrors> {
     let text = TomlText::read(path, "cannot read the spec")?;
     let mut table = text.table()?;
     let assigned = apply_overrides(&mut table, overrides)?;
-    let source = Source {
+    let source = SpecSource {
         text,
         folder: spec_folder(path),
     };
@@ -173,7 +173,7 @@ pub struct Document<T> {
     pub folder: PathBuf,
     /// The document with its overrides, as TOML: stored beside its results.
     pub resolved_toml: String,
-    source: Source,
+    source: SpecSource,
     assigned: Assigned,
 }
 

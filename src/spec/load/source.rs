@@ -41,12 +41,12 @@ impl Assigned {
 
 /// The spec's text and the folder its relative paths start from.
 #[derive(Debug, Clone)]
-pub(super) struct Source {
+pub(super) struct SpecSource {
     pub(super) text: TomlText,
     pub(super) folder: PathBuf,
 }
 
-impl Source {
+impl SpecSource {
     /// A fault at `key`, placed where its value came from: the `--set` or sweep value
     /// that assigned it (or, for a key the file does not write, one below it, such as
     /// an unknown table), or its line.
@@ -54,7 +54,7 @@ impl Source {
         Self::place(&self.text.placer(), assigned, key, message)
     }
 
-    /// [`Source::locate`] with the text parsed once, for many faults.
+    /// [`SpecSource::locate`] with the text parsed once, for many faults.
     fn place(placer: &Placer<'_>, assigned: &Assigned, key: String, message: String) -> SpecError {
         let origin = assigned.origin(&key).or_else(|| {
             // The key, or the deepest table above it that the file does not write

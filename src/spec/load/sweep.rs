@@ -5,7 +5,7 @@
 //! all points, each once and placed on the line of the sweep value that caused it.
 
 use super::overrides::set_in;
-use super::source::{Assigned, Source};
+use super::source::{Assigned, SpecSource};
 use super::{Experiment, Point};
 use crate::spec::file::SweepFile;
 use crate::spec::toml_file::{SpecError, SpecErrors, TomlText, deserialize, steps};
@@ -14,11 +14,11 @@ use std::collections::HashSet;
 /// Every chosen point of `sweep` over `table`, each checked; the faults of all points,
 /// each once.
 pub(super) fn load_sweep<S>(
-    source: Source,
+    source: SpecSource,
     table: toml::Table,
     sweep: toml::Value,
     assigned: Assigned,
-    check: impl Fn(&Source, toml::Table, &Assigned) -> Result<S, SpecErrors>,
+    check: impl Fn(&SpecSource, toml::Table, &Assigned) -> Result<S, SpecErrors>,
 ) -> Result<Experiment<S>, SpecErrors> {
     let sweep: SweepFile = deserialize(sweep).map_err(|(key, message)| {
         let key = if key.is_empty() {
@@ -127,7 +127,7 @@ fn picks_at(index: usize, axes: &[Axis]) -> Vec<usize> {
 /// faults of all, each once (the sets make that linear in the number of faults).
 struct SweepPoints<'a, S> {
     /// Deserializes and checks a point's table into its spec.
-    check: &'a dyn Fn(&Source, toml::Table, &Assigned) -> Result<S, SpecErrors>,
+    check: &'a dyn Fn(&SpecSource, toml::Table, &Assigned) -> Result<S, SpecErrors>,
     points: Vec<Point<S>>,
     names: HashSet<String>,
     errors: Vec<SpecError>,
@@ -135,7 +135,9 @@ struct SweepPoints<'a, S> {
 }
 
 impl<'a, S> SweepPoints<'a, S> {
-    fn new(check: &'a dyn Fn(&Source, toml::Table, &Assigned) -> Result<S, SpecErrors>) -> Self {
+    fn new(
+        check: &'a dyn Fn(&SpecSource, toml::Table, &Assigned) -> Result<S, SpecErrors>,
+    ) -> Self {
         SweepPoints {
             check,
             points: Vec::new(),
@@ -149,7 +151,7 @@ impl<'a, S> SweepPoints<'a, S> {
     /// the point or its faults.
     fn add(
         &mut self,
-        source: &Source,
+        source: &SpecSource,
         table: &toml::Table,
         assigned: &Assigned,
         axes: &[Axis],
@@ -190,7 +192,7 @@ impl<'a, S> SweepPoints<'a, S> {
     /// key set placed on its axis's line; a key that cannot be set is a fault.
     fn place(
         &mut self,
-        source: &Source,
+        source: &SpecSource,
         table: &toml::Table,
         assigned: &Assigned,
         axes: &[Axis],

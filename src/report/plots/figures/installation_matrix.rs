@@ -2,10 +2,10 @@
 //! calibration trajectory (rows) on every scored trajectory (columns) at the largest
 //! window, as a heatmap with the number in each cell. One colour scale serves every
 //! method's figure, so that a cell reads the same in each; its bar is the legend. In: a
-//! [`Study`]'s held-out rows. Out: one figure per method, named by its slug
+//! [`InstallationResults`]'s held-out rows. Out: one figure per method, named by its slug
 //! (`installation_matrix_least_squares_em1`), or why there is none.
 
-use crate::installation::rows::{HeldOutRow, Study};
+use crate::installation::rows::{InstallationResults, TransferRow};
 use crate::report::plots::canvas::{Drawn, Outcome, draw_svg};
 use crate::report::plots::draw::*;
 use crate::report::plots::scale::{Scale, three_digits};
@@ -48,14 +48,14 @@ pub fn slug(method: &str) -> String {
 }
 
 /// One matrix figure per method at the largest window, all on one colour scale.
-pub fn installation_matrix(study: &Study) -> PlotResult<Vec<(String, Outcome)>> {
+pub fn installation_matrix(study: &InstallationResults) -> PlotResult<Vec<(String, Outcome)>> {
     let Some(window_s) = study.heldout.iter().map(|r| r.window_s).reduce(f64::max) else {
         return Ok(vec![(
             STEM.to_string(),
             Outcome::NotApplicable("the study holds no held-out rows".into()),
         )]);
     };
-    let rows: Vec<&HeldOutRow> = study
+    let rows: Vec<&TransferRow> = study
         .heldout
         .iter()
         .filter(|r| r.window_s == window_s)
@@ -71,7 +71,7 @@ pub fn installation_matrix(study: &Study) -> PlotResult<Vec<(String, Outcome)>> 
     let methods = crate::first_seen(rows.iter().map(|r| r.method.as_str()));
     let mut figures = Vec::new();
     for method in methods {
-        let cells: Vec<&HeldOutRow> = rows
+        let cells: Vec<&TransferRow> = rows
             .iter()
             .copied()
             .filter(|r| r.method == method)
@@ -114,7 +114,7 @@ fn title_lines(method: &str, window_s: f64, mean_cm_s: f64) -> [String; 2] {
 fn matrix_panel(
     area: &Area,
     trajectories: &[String],
-    cells: &[&HeldOutRow],
+    cells: &[&TransferRow],
     colours: &Scale,
 ) -> PlotResult {
     let n = trajectories.len();

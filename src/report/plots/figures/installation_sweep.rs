@@ -7,9 +7,9 @@ use super::installation_windows::{TICK_CHAR_PX, TICKS_WIDTH_PX, XAxis, rmse_figu
 use crate::installation::rows::SummaryRow;
 use crate::report::plots::canvas::Outcome;
 use crate::report::plots::draw::PlotResult;
-use crate::results::study_sweep::StoredStudySweep;
+use crate::results::installation_sweep::StoredInstallationSweep;
 
-pub fn installation_sweep(stored: &StoredStudySweep) -> PlotResult<Outcome> {
+pub fn installation_sweep(stored: &StoredInstallationSweep) -> PlotResult<Outcome> {
     let points = &stored.index.points;
     if points.len() < 2 {
         return Ok(Outcome::NotApplicable(format!(

@@ -2,11 +2,11 @@
 //! calibration window, its 95 % interval over calibration trajectories as bars, one
 //! line per method and no calibration as a dashed reference. The paper's methods keep
 //! the look they have in a run's figures (least squares dashed in its error model's
-//! colour); each installation model has a colour of its own. In: a [`Study`]'s summary.
+//! colour); each installation model has a colour of its own. In: a [`InstallationResults`]'s summary.
 //! Out: the figure, or why there is none (fewer than two windows).
 
 use crate::installation::learned_spec::LEARNED_LABEL;
-use crate::installation::rows::{NO_CALIBRATION, Study, SummaryRow};
+use crate::installation::rows::{InstallationResults, NO_CALIBRATION, SummaryRow};
 use crate::report::plots::canvas::{Drawn, Outcome, draw_svg};
 use crate::report::plots::draw::*;
 use crate::report::plots::scale::Scale;
@@ -96,7 +96,7 @@ pub fn method_looks(methods: &[&str]) -> Vec<(Look, Option<Marker>)> {
 
 /// Mean held-out RMSE ± its 95 % interval against the calibration window, every method
 /// but `[learned]`'s (scored inside their folds only, see [`installation_folds`]).
-pub fn installation_windows(study: &Study) -> PlotResult<Outcome> {
+pub fn installation_windows(study: &InstallationResults) -> PlotResult<Outcome> {
     let windows = crate::first_seen(study.summary.iter().map(|r| r.window_s));
     if windows.len() < 2 {
         return Ok(Outcome::NotApplicable(format!(
@@ -124,7 +124,7 @@ pub fn installation_windows(study: &Study) -> PlotResult<Outcome> {
 
 /// With `[learned]`: every method on the pairs inside the folds only, mean held-out
 /// RMSE ± its 95 % interval against the calibration window.
-pub fn installation_folds(study: &Study) -> PlotResult<Outcome> {
+pub fn installation_folds(study: &InstallationResults) -> PlotResult<Outcome> {
     let rows: Vec<(f64, &SummaryRow)> = study
         .folds
         .iter()

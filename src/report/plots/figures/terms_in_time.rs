@@ -7,7 +7,7 @@
 //! for each DVL. In: a [`StoredRun`]'s `terms_in_time` table, or the installation
 //! study's. Out: the figure, or why the run has none.
 
-use crate::installation::rows::{FilterPoint, Study};
+use crate::installation::rows::{FilterPoint, InstallationResults};
 use crate::report::installation::readable_term;
 use crate::report::plots::canvas::{Drawn, Outcome, draw_svg};
 use crate::report::plots::draw::*;
@@ -193,7 +193,7 @@ pub fn kalman_terms(run: &StoredRun) -> PlotResult<Outcome> {
 /// trajectories: the one whose turns show the lever arm best (the smallest bound on
 /// it after the whole trajectory) and the one that shows it least, each term beside
 /// the mean of every trajectory's fit of the same model at the longest window.
-pub fn installation_kalman_terms(study: &Study) -> PlotResult<Outcome> {
+pub fn installation_kalman_terms(study: &InstallationResults) -> PlotResult<Outcome> {
     let Some(method) = study.filtered.first().map(|p| p.method.clone()) else {
         return Ok(Outcome::NotApplicable(
             "the study runs no Kalman filter ([calibration.kalman] models)".into(),

@@ -7,20 +7,22 @@ use super::args::{Drawing, Target};
 use super::{CliError, failure, input};
 use crate::data::paired;
 use crate::files::Seal;
-use crate::installation::rows::Study;
-use crate::installation::spec as study_spec;
+use crate::installation::rows::InstallationResults;
+use crate::installation::spec as installation_spec;
 use crate::installation::spec::InstallationSpec;
 use crate::pipeline::Shard;
-use crate::pipeline::installation::{Executed, Outcome, StudyError, StudyMode, StudyPlan};
+use crate::pipeline::installation::{
+    Executed, InstallationError, InstallationMode, InstallationPlan, Outcome,
+};
 use crate::report::plots::Format;
-use crate::results::study_sweep::{self, StoredStudySweep};
+use crate::results::installation_sweep::{self, StoredInstallationSweep};
 use crate::spec::Experiment;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 use std::path::{Path, PathBuf};
 
 /// The experiment of an installation spec: the study, or the points of its sweep.
 fn load(path: &Path, set: &[String]) -> Result<Experiment<InstallationSpec>, CliError> {
-    study_spec::load_experiment(path, set).map_err(input)
+    installation_spec::load_experiment(path, set).map_err(input)
 }
 
 /// The experiment a command works on; OUT, when it exists, must be a folder.
@@ -43,9 +45,11 @@ pub(super) fn run(
     force: bool,
 ) -> Result<(), CliError> {
     let experiment = load_target(target)?;
-    let plan = StudyPlan::new(&experiment, &target.spec, &target.out).map_err(input)?;
+    let plan = InstallationPlan::new(&experiment, &target.spec, &target.out).map_err(input)?;
     let Some(shard) = shard else {
-        let executed = plan.execute(StudyMode::All { force }).map_err(input)?;
+        let executed = plan
+            .execute(InstallationMode::All { force })
+            .map_err(input)?;
         return finish(&plan, &executed, drawing);
     };
     let in_shard = (0..plan.units.len())
@@ -60,7 +64,9 @@ pub(super) fn run(
         );
         return Ok(());
     }
-    let executed = plan.execute(StudyMode::Shard(shard)).map_err(input)?;
+    let executed = plan
+        .execute(InstallationMode::Shard(shard))
+        .map_err(input)?;
     if executed.computed == 0 {
         eprintln!(
             "nothing to do: every calibration of {} shard {shard} is in the cache",
@@ -80,9 +86,9 @@ pub(super) fn run(
 /// shards stored.
 pub(super) fn collect(target: &Target, drawing: &Drawing) -> Result<(), CliError> {
     let experiment = load_target(target)?;
-    let plan = StudyPlan::new(&experiment, &target.spec, &target.out).map_err(input)?;
-    let executed = plan.execute(StudyMode::Collect).map_err(|error| match error {
-        StudyError::NotCollected { .. } => input(anyhow::anyhow!(
+    let plan = InstallationPlan::new(&experiment, &target.spec, &target.out).map_err(input)?;
+    let executed = plan.execute(InstallationMode::Collect).map_err(|error| match error {
+        InstallationError::NotCollected { .. } => input(anyhow::anyhow!(
             "{error}: run the shards that compute them (`{} --shard K/N`), or `{}`, which computes what is missing",
             target.command("run"),
             target.command("run")
@@ -96,7 +102,7 @@ pub(super) fn collect(target: &Target, drawing: &Drawing) -> Result<(), CliError
 /// with its key and whether the cache holds it.
 pub(super) fn plan(target: &Target, shard: Option<Shard>) -> Result<(), CliError> {
     let experiment = load_target(target)?;
-    let plan = StudyPlan::new(&experiment, &target.spec, &target.out).map_err(input)?;
+    let plan = InstallationPlan::new(&experiment, &target.spec, &target.out).map_err(input)?;
     let mut table = Table::new();
     table.load_preset(ASCII_MARKDOWN);
     table.set_header(["calibration", "key", "status"]);
@@ -142,7 +148,7 @@ fn calibrations(count: usize) -> String {
 
 /// Says what a run or collect did, prints the headline of a single study or the table
 /// of a sweep, and draws the figures of what was written.
-fn finish(plan: &StudyPlan, executed: &Executed, drawing: &Drawing) -> Result<(), CliError> {
+fn finish(plan: &InstallationPlan, executed: &Executed, drawing: &Drawing) -> Result<(), CliError> {
     let sweep = plan.experiment.is_sweep();
     if executed.sweep.is_none()
         && executed
@@ -170,7 +176,7 @@ fn finish(plan: &StudyPlan, executed: &Executed, drawing: &Drawing) -> Result<()
         }
     }
     if let Some(folder) = &executed.sweep {
-        let stored = study_sweep::read(folder).map_err(input)?;
+        let stored = installation_sweep::read(folder).map_err(input)?;
         println!("{}", printed_sweep(&stored));
         if let Some(plots) = drawing.folder() {
             draw_sweep(&stored, &plots.join(&plan.experiment.name), Format::Both)?;
@@ -193,18 +199,18 @@ pub(super) fn plot(results: &Path, out: &Path, format: Format) -> Result<(), Cli
             .ok()
             .and_then(|bytes| serde_json::from_slice::<crate::results::Manifest>(&bytes).ok())
             .map_or(name, |manifest| PathBuf::from(manifest.name));
-        return plot_study(results, &out.join(name), format);
+        return plot_installation(results, &out.join(name), format);
     }
-    let stored = study_sweep::read(results).map_err(input)?;
+    let stored = installation_sweep::read(results).map_err(input)?;
     for point in &stored.index.points {
-        plot_study(&results.join(point), &out.join(&name).join(point), format)?;
+        plot_installation(&results.join(point), &out.join(&name).join(point), format)?;
     }
     draw_sweep(&stored, &out.join(&name), format)
 }
 
 /// Writes the reports of one study's folder again and draws its figures into `out`.
-fn plot_study(results: &Path, out: &Path, format: Format) -> Result<(), CliError> {
-    let study = crate::results::installation::read_study(results).map_err(input)?;
+fn plot_installation(results: &Path, out: &Path, format: Format) -> Result<(), CliError> {
+    let study = crate::results::installation::read_installation(results).map_err(input)?;
     let name = results.file_name().unwrap_or_default().to_string_lossy();
     for (file, bytes) in crate::pipeline::installation::folder::reports(&study, &name) {
         let path = results.join(file);
@@ -215,20 +221,24 @@ fn plot_study(results: &Path, out: &Path, format: Format) -> Result<(), CliError
     draw(&study, out, format)
 }
 
-fn draw(study: &Study, folder: &Path, format: Format) -> Result<(), CliError> {
+fn draw(study: &InstallationResults, folder: &Path, format: Format) -> Result<(), CliError> {
     let drawn = crate::report::installation::draw_all(study, folder, format).map_err(failure)?;
     super::report_figures(&drawn, folder);
     Ok(())
 }
 
-fn draw_sweep(stored: &StoredStudySweep, folder: &Path, format: Format) -> Result<(), CliError> {
+fn draw_sweep(
+    stored: &StoredInstallationSweep,
+    folder: &Path,
+    format: Format,
+) -> Result<(), CliError> {
     let drawn = crate::report::installation::draw_sweep(stored, folder, format).map_err(failure)?;
     super::report_figures(&drawn, folder);
     Ok(())
 }
 
 /// A sweep's headline: each point's methods at its largest window.
-fn printed_sweep(stored: &StoredStudySweep) -> String {
+fn printed_sweep(stored: &StoredInstallationSweep) -> String {
     let mut table = Table::new();
     table.load_preset(ASCII_MARKDOWN);
     table.set_header([
@@ -264,7 +274,7 @@ fn printed_sweep(stored: &StoredStudySweep) -> String {
 /// The headline: each method's mean held-out RMSE at the largest window, with its
 /// 95 % interval and its ratio to no calibration; with `[learned]`, on the pairs inside
 /// the folds, where every method is scored on the same pairs as the learned ones.
-fn printed(study: &Study) -> String {
+fn printed(study: &InstallationResults) -> String {
     let inside_folds: Vec<_> = study
         .folds
         .iter()

@@ -71,21 +71,21 @@ pub fn write(
 
 /// A stored sweep of studies: its index and each point's summary rows.
 #[derive(Debug, Clone)]
-pub struct StoredStudySweep {
+pub struct StoredInstallationSweep {
     pub index: SweepIndex,
-    pub rows: Vec<StudySweepRow>,
+    pub rows: Vec<InstallationSweepRow>,
 }
 
 /// One row of a study sweep's table: a point's summary row.
 #[derive(Debug, Clone, PartialEq)]
-pub struct StudySweepRow {
+pub struct InstallationSweepRow {
     /// The point's folder name.
     pub point: String,
     pub summary: SummaryRow,
 }
 
 /// Reads the sweep of studies stored in `folder`; a paper sweep's index is refused.
-pub fn read(folder: &Path) -> Result<StoredStudySweep, ReadError> {
+pub fn read(folder: &Path) -> Result<StoredInstallationSweep, ReadError> {
     let index = read_index(folder)?;
     if index.kind != KIND {
         return Err(ReadError::OtherKind {
@@ -108,8 +108,8 @@ pub fn read(folder: &Path) -> Result<StoredStudySweep, ReadError> {
         Ok(point
             .into_iter()
             .zip(summary)
-            .map(|(point, summary)| StudySweepRow { point, summary })
+            .map(|(point, summary)| InstallationSweepRow { point, summary })
             .collect())
     })?;
-    Ok(StoredStudySweep { index, rows })
+    Ok(StoredInstallationSweep { index, rows })
 }

@@ -5,19 +5,20 @@
 //! methods (baseline, least squares EM1 to EM5, DCNet) estimate a scale and a bias from
 //! the DVL and the reference's body velocity on the same time stamps; the installation
 //! models fit their term sets by nonlinear least squares, with their Fisher bound.
-//! In: an [`InstallationSpec`] and its recordings. Out: a [`Study`]: held-out rows,
+//! In: an [`InstallationSpec`] and its recordings. Out: a [`InstallationResults`]: held-out rows,
 //! estimated terms with their bound, and the summary per method.
 
 use super::bound::{Noise, TermBound, bound};
 use super::calibration_time::calibration_times;
 use super::fit::{TIME_OFFSET_MARGIN_S, fit};
 use super::frames::Reference;
-use super::learned_spec::Source;
+use super::learned_spec::TrainingSource;
+use super::protocol_filters::run_filters;
 use super::rows::{
-    FilterPoint, FitFailure, FoldSummaryRow, HeldOutRow, NO_CALIBRATION, Study, SummaryRow, TermRow,
+    FilterPoint, FitFailure, FoldSummaryRow, InstallationResults, NO_CALIBRATION, SummaryRow,
+    TermRow, TransferRow,
 };
 use super::spec::{InstallationSpec, Method};
-use super::study_filters::run_filters;
 use super::term_names::term_set;
 use super::terms::{Installation, score};
 use crate::Vec3;
@@ -90,7 +91,7 @@ pub type DcnetEstimate<'a> = dyn Fn(ErrorModel, &[Vec3], &[Vec3]) -> Option<Corr
 /// Which of `[learned]`'s models: what it trained on, which replicate, which fold.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LearnedModel {
-    pub source: Source,
+    pub source: TrainingSource,
     pub replicate: usize,
     pub fold: usize,
 }
@@ -149,7 +150,7 @@ fn reference_on_stamps(segment: &Segment, range: std::ops::Range<usize>) -> (Vec
 /// unit a run stores in its cache and a shard computes.
 #[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Calibrated {
-    pub heldout: Vec<HeldOutRow>,
+    pub heldout: Vec<TransferRow>,
     pub terms: Vec<TermRow>,
     pub estimated: Vec<Estimated>,
     pub failures: Vec<FitFailure>,
@@ -177,7 +178,7 @@ pub fn run(
     spec: &InstallationSpec,
     segments: &[&Segment],
     estimators: &Estimators,
-) -> (Study, Vec<Estimated>) {
+) -> (InstallationResults, Vec<Estimated>) {
     let parts: Vec<Calibrated> = (0..segments.len())
         .into_par_iter()
         .map(|c| calibrate_on(spec, segments, c, estimators))
@@ -186,7 +187,10 @@ pub fn run(
 }
 
 /// The study of `spec` from what each calibration trajectory gave, in spec order.
-pub fn assemble(spec: &InstallationSpec, parts: Vec<Calibrated>) -> (Study, Vec<Estimated>) {
+pub fn assemble(
+    spec: &InstallationSpec,
+    parts: Vec<Calibrated>,
+) -> (InstallationResults, Vec<Estimated>) {
     let all = Calibrated::concat(parts);
     let summary = summarize(&all.heldout, &spec.windows_s);
     let folds = match &spec.learned {
@@ -199,7 +203,7 @@ pub fn assemble(spec: &InstallationSpec, parts: Vec<Calibrated>) -> (Study, Vec<
         }
         None => Vec::new(),
     };
-    let study = Study {
+    let study = InstallationResults {
         heldout: all.heldout,
         terms: all.terms,
         summary,
@@ -209,7 +213,7 @@ pub fn assemble(spec: &InstallationSpec, parts: Vec<Calibrated>) -> (Study, Vec<
         filtered: all.filtered,
         calibration_time: Vec::new(),
     };
-    let study = Study {
+    let study = InstallationResults {
         calibration_time: calibration_times(&study.heldout, spec.time_tolerance),
         ..study
     };
@@ -413,7 +417,7 @@ pub fn calibrate_on(
                     ) else {
                         continue;
                     };
-                    heldout.push(HeldOutRow {
+                    heldout.push(TransferRow {
                         method: label.clone(),
                         calibration: calibration.name.clone(),
                         window_s,
@@ -444,14 +448,14 @@ pub fn calibrate_on(
 /// window too short for a network, leaves the pair out for every method): fold by fold
 /// ("1", "2", …), then over every fold ("all"), every method on the same pairs.
 pub fn summarize_folds(
-    heldout: &[HeldOutRow],
+    heldout: &[TransferRow],
     windows_s: &[f64],
     folds: usize,
     fold_of: impl Fn(&str) -> usize,
 ) -> Vec<FoldSummaryRow> {
     let mut inside = Vec::new();
     for &window_s in windows_s {
-        let rows: Vec<&HeldOutRow> = heldout
+        let rows: Vec<&TransferRow> = heldout
             .iter()
             .filter(|r| r.window_s == window_s && fold_of(&r.calibration) == fold_of(&r.scored))
             .collect();
@@ -474,7 +478,7 @@ pub fn summarize_folds(
     }
     let mut rows = Vec::new();
     for fold in 0..folds {
-        let of_fold: Vec<HeldOutRow> = inside
+        let of_fold: Vec<TransferRow> = inside
             .iter()
             .filter(|r| fold_of(&r.calibration) == fold)
             .cloned()
@@ -501,7 +505,7 @@ pub fn summarize_folds(
 
 /// Per method and window: the mean over calibration trajectories of each one's mean
 /// held-out RMSE, its 95 % interval, and its ratio to no calibration's.
-pub fn summarize(heldout: &[HeldOutRow], windows_s: &[f64]) -> Vec<SummaryRow> {
+pub fn summarize(heldout: &[TransferRow], windows_s: &[f64]) -> Vec<SummaryRow> {
     let methods = crate::first_seen(heldout.iter().map(|r| r.method.as_str()));
     let per_calibration = |method: &str, window_s: f64| -> Vec<f64> {
         let calibrations = crate::first_seen(
@@ -552,8 +556,8 @@ pub fn summarize(heldout: &[HeldOutRow], windows_s: &[f64]) -> Vec<SummaryRow> {
 mod tests {
     use super::*;
 
-    fn row(method: &str, calibration: &str, scored: &str, total_cm_s: f64) -> HeldOutRow {
-        HeldOutRow {
+    fn row(method: &str, calibration: &str, scored: &str, total_cm_s: f64) -> TransferRow {
+        TransferRow {
             method: method.into(),
             calibration: calibration.into(),
             window_s: 100.0,
