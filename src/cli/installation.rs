@@ -10,10 +10,7 @@ use crate::files::Seal;
 use crate::installation::rows::InstallationResults;
 use crate::installation::spec as installation_spec;
 use crate::installation::spec::InstallationSpec;
-use crate::pipeline::Shard;
-use crate::pipeline::installation::{
-    Executed, InstallationError, InstallationMode, InstallationPlan, Outcome,
-};
+use crate::pipeline::{ExecuteError, Executed, InstallationPlan, Mode, Planned, Shard, execute};
 use crate::report::plots::Format;
 use crate::results::installation_sweep::{self, StoredInstallationSweep};
 use crate::spec::Experiment;
@@ -38,18 +35,11 @@ fn load_target(target: &Target) -> Result<Experiment<InstallationSpec>, CliError
 
 /// `run` of an installation spec: every point not current, or one shard of its
 /// calibrations.
-pub(super) fn run(
-    target: &Target,
-    drawing: &Drawing,
-    shard: Option<Shard>,
-    force: bool,
-) -> Result<(), CliError> {
+pub(super) fn run(target: &Target, drawing: &Drawing, mode: Mode) -> Result<(), CliError> {
     let experiment = load_target(target)?;
     let plan = InstallationPlan::new(&experiment, &target.spec, &target.out).map_err(input)?;
-    let Some(shard) = shard else {
-        let executed = plan
-            .execute(InstallationMode::All { force })
-            .map_err(input)?;
+    let Mode::Shard { shard, .. } = mode else {
+        let executed = execute(&Planned::Installation(&plan), mode).map_err(input)?;
         return finish(&plan, &executed, drawing);
     };
     let in_shard = (0..plan.units.len())
@@ -64,10 +54,8 @@ pub(super) fn run(
         );
         return Ok(());
     }
-    let executed = plan
-        .execute(InstallationMode::Shard(shard))
-        .map_err(input)?;
-    if executed.computed == 0 {
+    let executed = execute(&Planned::Installation(&plan), mode).map_err(input)?;
+    if executed.done == 0 {
         eprintln!(
             "nothing to do: every calibration of {} shard {shard} is in the cache",
             experiment.name
@@ -75,7 +63,7 @@ pub(super) fn run(
     } else {
         eprintln!(
             "shard {shard}: {} done; once every shard has finished, `{}` writes the results",
-            calibrations(executed.computed),
+            calibrations(executed.done),
             target.command("collect")
         );
     }
@@ -87,14 +75,15 @@ pub(super) fn run(
 pub(super) fn collect(target: &Target, drawing: &Drawing) -> Result<(), CliError> {
     let experiment = load_target(target)?;
     let plan = InstallationPlan::new(&experiment, &target.spec, &target.out).map_err(input)?;
-    let executed = plan.execute(InstallationMode::Collect).map_err(|error| match error {
-        InstallationError::NotCollected { .. } => input(anyhow::anyhow!(
-            "{error}: run the shards that compute them (`{} --shard K/N`), or `{}`, which computes what is missing",
-            target.command("run"),
-            target.command("run")
-        )),
-        other => input(other),
-    })?;
+    let executed =
+        execute(&Planned::Installation(&plan), Mode::Collect).map_err(|error| match error {
+            ExecuteError::NotCollected { .. } => input(anyhow::anyhow!(
+                "{error}: run the shards that compute them (`{} --shard K/N`), or `{}`, which computes what is missing",
+                target.command("run"),
+                target.command("run")
+            )),
+            other => input(other),
+        })?;
     finish(&plan, &executed, drawing)
 }
 
@@ -149,13 +138,7 @@ fn calibrations(count: usize) -> String {
 /// Says what a run or collect did, prints the headline of a single study or the table
 /// of a sweep, and draws the figures of what was written.
 fn finish(plan: &InstallationPlan, executed: &Executed, drawing: &Drawing) -> Result<(), CliError> {
-    let sweep = plan.experiment.is_sweep();
-    if executed.sweep.is_none()
-        && executed
-            .points
-            .iter()
-            .all(|o| matches!(o, Outcome::Current(_)))
-    {
+    if executed.sweep.is_none() && executed.written.is_empty() {
         let folder = plan.out.join(&plan.experiment.name);
         eprintln!(
             "nothing to do: the results in {} are current",
@@ -163,17 +146,16 @@ fn finish(plan: &InstallationPlan, executed: &Executed, drawing: &Drawing) -> Re
         );
         return Ok(());
     }
-    for outcome in &executed.points {
-        if let Outcome::Written { folder, study } = outcome {
-            if !sweep {
-                println!("{}", printed(study));
-            }
-            if let Some(plots) = drawing.folder() {
-                let name = folder.strip_prefix(&plan.out).unwrap_or(folder);
-                draw(study, &plots.join(name), Format::Both)?;
-            }
-            eprintln!("results written to {}", folder.display());
+    for folder in &executed.written {
+        let results = crate::results::installation::read_installation(folder).map_err(failure)?;
+        if !plan.experiment.is_sweep() {
+            println!("{}", printed(&results));
         }
+        if let Some(plots) = drawing.folder() {
+            let name = folder.strip_prefix(&plan.out).unwrap_or(folder);
+            draw(&results, &plots.join(name), Format::Both)?;
+        }
+        eprintln!("results written to {}", folder.display());
     }
     if let Some(folder) = &executed.sweep {
         let stored = installation_sweep::read(folder).map_err(input)?;

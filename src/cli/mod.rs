@@ -21,9 +21,10 @@ pub use args::Cli;
 
 use crate::data;
 use crate::footprint::{self, Footprint};
+use crate::pipeline::{Mode, Shard};
 use crate::spec::{Experiment, Spec, SpecErrors, TrajectorySource, load, load_experiment};
 use crate::vocab::ErrorModel;
-use args::{Command, DataCommand, Target};
+use args::{Command, DataCommand, Drawing, Target};
 use clap::Parser;
 use std::path::Path;
 
@@ -120,9 +121,17 @@ pub fn main() -> Result<(), CliError> {
             drawing,
             shard,
             force,
-        } => run::run(&target, &drawing, shard.as_deref(), force),
-        Command::Plan { target, shard } => run::plan(&target, shard.as_deref()),
-        Command::Collect { target, drawing } => run::collect(&target, &drawing),
+        } => {
+            let mode = match run::parse_shard(shard.as_deref())? {
+                Some(shard) => Mode::Shard { shard, force },
+                None => Mode::All { force },
+            };
+            kind_of(&target.spec)?.run(&target, &drawing, mode)
+        }
+        Command::Plan { target, shard } => {
+            kind_of(&target.spec)?.plan(&target, run::parse_shard(shard.as_deref())?)
+        }
+        Command::Collect { target, drawing } => kind_of(&target.spec)?.collect(&target, &drawing),
         Command::Plot {
             results,
             out,
@@ -130,10 +139,7 @@ pub fn main() -> Result<(), CliError> {
             metric,
         } => plot::plot(&results, Some(&out), format, metric),
         Command::Compare { first, second, out } => plot::compare_folders(&first, &second, &out),
-        Command::Validate { spec, overrides } => match installation_kind(&spec)? {
-            true => installation::validate(&spec, &overrides.set),
-            false => inspect::validate(&spec, &overrides.set),
-        },
+        Command::Validate { spec, overrides } => kind_of(&spec)?.validate(&spec, &overrides.set),
         Command::Calibrate {
             dvl,
             reference,
@@ -212,12 +218,58 @@ fn report_figures(figures: &[crate::report::plots::Written], folder: &Path) {
     }
 }
 
-/// Whether the spec at `path` declares `kind = "installation"`; another kind is refused.
-fn installation_kind(path: &Path) -> Result<bool, CliError> {
+/// The commands that take a spec, as one kind of spec does them: the paper's
+/// experiment or the study of a real installation. The spec's `kind` is read once, by
+/// [`kind_of`], and the command handed to its kind.
+trait SpecKind {
+    fn run(&self, target: &Target, drawing: &Drawing, mode: Mode) -> Result<(), CliError>;
+    fn plan(&self, target: &Target, shard: Option<Shard>) -> Result<(), CliError>;
+    fn collect(&self, target: &Target, drawing: &Drawing) -> Result<(), CliError>;
+    fn validate(&self, spec: &Path, set: &[String]) -> Result<(), CliError>;
+}
+
+/// A spec without `kind`: the paper's experiment, or a sweep of it.
+struct PaperKind;
+
+impl SpecKind for PaperKind {
+    fn run(&self, target: &Target, drawing: &Drawing, mode: Mode) -> Result<(), CliError> {
+        run::run(target, drawing, mode)
+    }
+    fn plan(&self, target: &Target, shard: Option<Shard>) -> Result<(), CliError> {
+        run::plan(target, shard)
+    }
+    fn collect(&self, target: &Target, drawing: &Drawing) -> Result<(), CliError> {
+        run::collect(target, drawing)
+    }
+    fn validate(&self, spec: &Path, set: &[String]) -> Result<(), CliError> {
+        inspect::validate(spec, set)
+    }
+}
+
+/// A spec with `kind = "installation"`: a study of a real installation, or a sweep of it.
+struct InstallationKind;
+
+impl SpecKind for InstallationKind {
+    fn run(&self, target: &Target, drawing: &Drawing, mode: Mode) -> Result<(), CliError> {
+        installation::run(target, drawing, mode)
+    }
+    fn plan(&self, target: &Target, shard: Option<Shard>) -> Result<(), CliError> {
+        installation::plan(target, shard)
+    }
+    fn collect(&self, target: &Target, drawing: &Drawing) -> Result<(), CliError> {
+        installation::collect(target, drawing)
+    }
+    fn validate(&self, spec: &Path, set: &[String]) -> Result<(), CliError> {
+        installation::validate(spec, set)
+    }
+}
+
+/// The kind of the spec at `path`, from its `kind` key; another kind is refused.
+fn kind_of(path: &Path) -> Result<&'static dyn SpecKind, CliError> {
     use crate::installation::spec::KIND;
     match crate::spec::declared_kind(path).map_err(input)? {
-        None => Ok(false),
-        Some(kind) if kind == KIND => Ok(true),
+        None => Ok(&PaperKind),
+        Some(kind) if kind == KIND => Ok(&InstallationKind),
         Some(kind) => Err(input(anyhow::anyhow!(
             "{}: kind: {kind:?} is not a kind of spec: leave it out for the paper's experiments, or give {KIND:?} for a study of a real installation",
             path.display()
@@ -225,8 +277,11 @@ fn installation_kind(path: &Path) -> Result<bool, CliError> {
     }
 }
 
+/// The paper spec at `path` with `set`, for the commands that only a paper spec has
+/// (its training data, its training bench).
 fn load_spec(path: &Path, set: &[String]) -> Result<Spec, CliError> {
-    if installation_kind(path)? {
+    if crate::spec::declared_kind(path).map_err(input)?.is_some() {
+        kind_of(path)?;
         return Err(input(anyhow::anyhow!(
             "{}: an installation study has no training data to inspect nor training to bench: `dcnet-exp validate` checks it, `dcnet-exp run` runs it",
             path.display()

@@ -5,7 +5,7 @@ use super::args::{Drawing, Target};
 use super::plot::{plot_run, plot_sweep};
 use super::{CliError, about, failure, input, load_target, training_seconds};
 use crate::pipeline::{
-    Executed, Mode, Plan, Shard, Task, execute, owner, remove_spent_checkpoints,
+    Executed, Mode, Plan, Planned, Shard, Task, execute, owner, remove_spent_checkpoints,
 };
 use crate::report::plots::{Format, Metric};
 use crate::report::printed;
@@ -13,31 +13,21 @@ use crate::results::read::StoredRun;
 use crate::results::sweep;
 use crate::spec::Experiment;
 
-fn parse_shard(shard: Option<&str>) -> Result<Option<Shard>, CliError> {
+/// `--shard K/N` as typed, or from the variables it names.
+pub(super) fn parse_shard(shard: Option<&str>) -> Result<Option<Shard>, CliError> {
     shard
         .map(|text| Shard::parse(text, |variable| std::env::var(variable).ok()))
         .transpose()
         .map_err(|message| input(anyhow::anyhow!(message)))
 }
 
-pub(super) fn run(
-    target: &Target,
-    drawing: &Drawing,
-    shard: Option<&str>,
-    force: bool,
-) -> Result<(), CliError> {
-    if super::installation_kind(&target.spec)? {
-        return super::installation::run(target, drawing, parse_shard(shard)?, force);
-    }
+/// `run` of a paper spec: every task left, or one shard's share.
+pub(super) fn run(target: &Target, drawing: &Drawing, mode: Mode) -> Result<(), CliError> {
     let experiment = load_target(target)?;
     let plan = planned(&experiment, target)?;
-    let mode = match parse_shard(shard)? {
-        Some(shard) => Mode::Shard { shard, force },
-        None => Mode::All { force },
-    };
     remove_spent_checkpoints(&plan).map_err(failure)?;
     let to_do = plan.to_do(mode);
-    check_owners(&plan, &to_do, force)?;
+    check_owners(&plan, &to_do, mode.force())?;
     let total = plan.tasks().len();
     let folder = target.out.join(&experiment.name);
     let whose = match mode {
@@ -59,7 +49,7 @@ pub(super) fn run(
         tasks(to_do.len())
     );
     say_how_long(&plan, &to_do)?;
-    let executed = execute(&plan, mode, &to_do).map_err(failure)?;
+    let executed = execute(&Planned::Paper(&plan), mode).map_err(failure)?;
     if let Mode::Shard { shard, .. } = mode {
         eprintln!(
             "shard {shard}: {} done; once every shard has finished, `{}` writes the results",
@@ -134,14 +124,10 @@ fn tasks(count: usize) -> String {
     }
 }
 
-/// Lists the tasks of a run, shard or not, with their state.
-pub(super) fn plan(target: &Target, shard: Option<&str>) -> Result<(), CliError> {
-    if super::installation_kind(&target.spec)? {
-        return super::installation::plan(target, parse_shard(shard)?);
-    }
+/// Lists the tasks of a paper spec's run, shard or not, with their state.
+pub(super) fn plan(target: &Target, shard: Option<Shard>) -> Result<(), CliError> {
     let experiment = load_target(target)?;
     let plan = Plan::new(&experiment, &target.out).map_err(input)?;
-    let shard = parse_shard(shard)?;
     let mut table = comfy_table::Table::new();
     table.load_preset(comfy_table::presets::ASCII_MARKDOWN);
     let mut header = vec!["task", "key", "status"];
@@ -202,14 +188,11 @@ pub(super) fn plan(target: &Target, shard: Option<&str>) -> Result<(), CliError>
 
 /// Writes the results of a sharded run from the cache the shards filled.
 pub(super) fn collect(target: &Target, drawing: &Drawing) -> Result<(), CliError> {
-    if super::installation_kind(&target.spec)? {
-        return super::installation::collect(target, drawing);
-    }
     let experiment = load_target(target)?;
     let plan = planned(&experiment, target)?;
     let to_do = plan.to_do(Mode::Collect);
     check_owners(&plan, &to_do, false)?;
-    let executed = execute(&plan, Mode::Collect, &to_do).map_err(failure)?;
+    let executed = execute(&Planned::Paper(&plan), Mode::Collect).map_err(failure)?;
     if executed.done == 0 {
         eprintln!(
             "nothing to do: the results in {} are current",

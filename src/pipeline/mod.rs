@@ -1,26 +1,31 @@
-//! An experiment as a list of tasks: for every point of the spec (one, or one per
-//! sweep point), a dataset, one DCNet training per error model, one Monte Carlo block
-//! per DVL × estimator, and the results folder put together from them. In: a checked
-//! [`Experiment`](crate::spec::Experiment) and a results folder. Out: the results
-//! folders, every intermediate kept in the [`cache`].
+//! The one front door of a run, for either kind of spec: a spec is [`Planned`] as its
+//! kind plans it, and [`execute`] does what a [`Mode`] asks of it (everything not
+//! current, one shard's share, or `collect`), each result computed once into the
+//! content-addressed [`cache`], then the results folders written, with one
+//! [`Executed`] and one [`ExecuteError`] for both kinds. In: a checked experiment and an
+//! output folder. Out: the results folders, every intermediate kept in the cache.
 //!
-//! - [`plan`]: the tasks, deduplicated by their cache key so that sweep points that
-//!   share a model train it once, and the state of each without touching anything;
-//! - [`shard`]: one machine's share of them (`--shard K/N`);
-//! - [`execute`] does what is left: all of it, one shard's part, or only the putting
-//!   together (`collect`), training in [`training`] (each model's
-//!   [`TrainingJob`](training::job::TrainingJob) interleaved epoch by epoch) and running the
-//!   protocol in [`monte_carlo`];
-//! - [`cache`]: the content-addressed store of models and Monte Carlo blocks;
-//! - [`claim`]: the locks that keep processes sharing a folder from computing the same
-//!   task.
+//! - The paper's experiment: [`plan`] lists its tasks (for every point of the spec, a
+//!   dataset, one DCNet training per error model, one Monte Carlo block per DVL ×
+//!   estimator, the results folder), deduplicated by their cache key so that sweep
+//!   points that share a model train it once; [`training`] trains the models (each
+//!   model's [`TrainingJob`](training::job::TrainingJob) interleaved epoch by epoch) and
+//!   [`monte_carlo`] runs the protocol.
+//! - The installation study: [`installation`] plans one calibration per point and
+//!   trajectory and runs them.
+//! - Shared by both: [`shard`], one machine's share (`--shard K/N`); [`cache`], the
+//!   store of models, Monte Carlo blocks and calibrations; [`claim`], the locks that
+//!   keep processes sharing a folder from computing the same task; [`owner`], whose a
+//!   results folder is.
 //!
-//! A shard takes whole groups: a training with every block that runs its model, or a
-//! block that needs no model. Groups are dealt out round-robin in plan order, trainings
-//! first, so shards need nothing from each other and each writes its own cache files.
+//! A shard of the paper's experiment takes whole groups: a training with every block
+//! that runs its model, or a block that needs no model. Groups are dealt out
+//! round-robin in plan order, trainings first, so shards need nothing from each other
+//! and each writes its own cache files.
 
 pub mod cache;
 pub mod claim;
+pub mod error;
 pub mod installation;
 pub mod monte_carlo;
 pub mod owner;
@@ -28,6 +33,8 @@ pub mod plan;
 pub mod training;
 pub mod shard;
 
+pub use error::ExecuteError;
+pub use installation::InstallationPlan;
 pub use plan::{Mode, Plan, Status, Task};
 pub use shard::Shard;
 
@@ -35,35 +42,40 @@ use crate::results::{self, Manifest, StageSeconds, sweep};
 use std::path::PathBuf;
 use std::time::{Instant, SystemTime};
 
+/// A spec of either kind, planned: what goes through the one front door, [`execute`].
+pub enum Planned<'a> {
+    /// The paper's Monte Carlo experiment: datasets, DCNet trainings, Monte Carlo blocks
+    /// and the results folders put together from them.
+    Paper(&'a Plan<'a>),
+    /// The study of a real installation: a calibration on every paired recording, each
+    /// scored on the others, and the results folders put together from them.
+    Installation(&'a InstallationPlan<'a>),
+}
+
 /// What [`execute`] did.
 #[derive(Debug, Default)]
 pub struct Executed {
-    /// Tasks computed or written.
+    /// Tasks computed or written (for an installation study: the calibrations computed
+    /// here, not taken from the cache).
     pub done: usize,
-    /// The results folders written.
+    /// The results folders written, in spec order.
     pub written: Vec<PathBuf>,
-    /// The sweep folder, when its `sweep.parquet` was written.
+    /// The sweep folder, when its table was written.
     pub sweep: Option<PathBuf>,
 }
 
-#[derive(Debug, thiserror::Error)]
-pub enum ExecuteError {
-    #[error(transparent)]
-    Results(#[from] results::ResultsError),
-    #[error(transparent)]
-    Read(#[from] results::read::ReadError),
-    #[error(transparent)]
-    Models(#[from] cache::ModelStoreError),
-    #[error("{0} is not a finite number; nothing of it is stored")]
-    NonFinite(String),
-    #[error(transparent)]
-    Owner(#[from] owner::OwnerError),
-    #[error("{count} tasks are not done yet, so there is nothing to collect:\n{list}")]
-    Incomplete { count: usize, list: String },
+/// Does what `mode` asks of a planned spec of either kind: computes what the cache
+/// lacks (all of it, or one shard's share), then writes the results folders that are
+/// not current (not for a shard).
+pub fn execute(planned: &Planned, mode: Mode) -> Result<Executed, ExecuteError> {
+    match planned {
+        Planned::Paper(plan) => execute_tasks(plan, mode, &plan.to_do(mode)),
+        Planned::Installation(plan) => plan.execute(mode),
+    }
 }
 
 /// Does `to_do`, the tasks [`Plan::to_do`] gives for `mode`.
-pub fn execute(plan: &Plan, mode: Mode, to_do: &[Task]) -> Result<Executed, ExecuteError> {
+fn execute_tasks(plan: &Plan, mode: Mode, to_do: &[Task]) -> Result<Executed, ExecuteError> {
     let started_at = SystemTime::now();
     if !matches!(mode, Mode::Shard { .. }) {
         // Shards may be writing beside each other on other machines; a whole run or

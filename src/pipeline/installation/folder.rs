@@ -4,7 +4,7 @@
 //! atomically; and whether a folder already holds the results of a key, intact.
 //! In: a point's spec, its calibrations and recordings. Out: the folder, or why not.
 
-use super::InstallationError;
+use super::ExecuteError;
 use crate::Vec3;
 use crate::files::{sha256_hex, write_atomic};
 use crate::installation::protocol::{Estimated, Segment};
@@ -20,7 +20,7 @@ pub fn no_window_without_a_fit(
     spec: &InstallationSpec,
     study: &InstallationResults,
     point: &str,
-) -> Result<(), InstallationError> {
+) -> Result<(), ExecuteError> {
     for &window_s in &spec.windows_s {
         for method in &spec.methods {
             let label = method.label();
@@ -33,7 +33,7 @@ pub fn no_window_without_a_fit(
                 .iter()
                 .find(|f| f.method == label && f.window_s == window_s);
             if let (false, Some(failure)) = (fitted, failure) {
-                return Err(InstallationError::NoFit {
+                return Err(ExecuteError::NoFit {
                     point: point.to_string(),
                     method: label,
                     window_s,
@@ -141,8 +141,8 @@ pub fn write_folder(
     folder: &Path,
     study: &InstallationResults,
     manifest: Manifest,
-) -> Result<(), InstallationError> {
-    crate::files::create_folder(folder).map_err(|source| InstallationError::Io {
+) -> Result<(), ExecuteError> {
+    crate::files::create_folder(folder).map_err(|source| ExecuteError::Io {
         path: folder.to_path_buf(),
         source,
     })?;
@@ -157,7 +157,7 @@ pub fn write_folder(
     // A study without `[learned]` leaves no fold table of an earlier one behind.
     let folds = folder.join(results::installation::FOLDS);
     if study.folds.is_empty() && folds.exists() {
-        std::fs::remove_file(&folds).map_err(|source| InstallationError::Io {
+        std::fs::remove_file(&folds).map_err(|source| ExecuteError::Io {
             path: folds.clone(),
             source,
         })?;
@@ -165,7 +165,7 @@ pub fn write_folder(
     let mut digests = std::collections::BTreeMap::new();
     for (name, bytes) in &files {
         let path = folder.join(name);
-        write_atomic(&path, bytes).map_err(|source| InstallationError::Io { path, source })?;
+        write_atomic(&path, bytes).map_err(|source| ExecuteError::Io { path, source })?;
         digests.insert(name.clone(), sha256_hex(bytes));
     }
     let manifest = Manifest {
@@ -175,5 +175,5 @@ pub fn write_folder(
     };
     let path = folder.join(results::MANIFEST);
     let json = serde_json::to_string_pretty(&manifest).expect("a manifest always serializes");
-    write_atomic(&path, json.as_bytes()).map_err(|source| InstallationError::Io { path, source })
+    write_atomic(&path, json.as_bytes()).map_err(|source| ExecuteError::Io { path, source })
 }

@@ -4,7 +4,6 @@
 //! output folder whose cache holds the models. Out: [`Inputs`], or the first recording
 //! or model that cannot be had.
 
-use super::InstallationError;
 use crate::Vec3;
 use crate::data::paired::{self, PairedFiles};
 use crate::estimators::{DcnetEstimator, Estimator};
@@ -13,6 +12,7 @@ use crate::installation::protocol::Segment;
 use crate::installation::spec::InstallationSpec;
 use crate::model::Settings;
 use crate::pipeline::Plan;
+use crate::pipeline::error::{DcnetSpecError, ExecuteError};
 use crate::results::DataFile;
 use crate::spec::Experiment;
 use crate::vocab::{Correction, ErrorModel};
@@ -61,7 +61,7 @@ impl Inputs {
     pub fn read(
         experiment: &Experiment<InstallationSpec>,
         out: &Path,
-    ) -> Result<Inputs, InstallationError> {
+    ) -> Result<Inputs, ExecuteError> {
         let mut segments = Vec::new();
         let mut segment_of: HashMap<(PairedFiles, String), usize> = HashMap::new();
         let mut hashes: HashMap<PathBuf, String> = HashMap::new();
@@ -78,7 +78,7 @@ impl Inputs {
                     Some(&s) => s,
                     None => {
                         let recording = paired::read(files, &spec.columns).map_err(|error| {
-                            InstallationError::Recording {
+                            ExecuteError::Recording {
                                 index,
                                 name: name.clone(),
                                 error,
@@ -95,11 +95,10 @@ impl Inputs {
                     let sha256 = match hashes.get(path) {
                         Some(sha256) => sha256.clone(),
                         None => {
-                            let bytes =
-                                std::fs::read(path).map_err(|source| InstallationError::Io {
-                                    path: path.clone(),
-                                    source,
-                                })?;
+                            let bytes = std::fs::read(path).map_err(|source| ExecuteError::Io {
+                                path: path.clone(),
+                                source,
+                            })?;
                             let sha256 = sha256_hex(&bytes);
                             hashes.insert(path.clone(), sha256.clone());
                             sha256
@@ -152,8 +151,8 @@ impl Inputs {
 
 /// The paper spec's DCNet models (replicate 0 of each error model), set up to estimate,
 /// each with its cache key.
-fn dcnet_models(paper: &Path, out: &Path) -> Result<DcnetModels, InstallationError> {
-    let dcnet_error = |source: anyhow::Error| InstallationError::DcnetSpec {
+fn dcnet_models(paper: &Path, out: &Path) -> Result<DcnetModels, ExecuteError> {
+    let dcnet_error = |source: DcnetSpecError| ExecuteError::DcnetSpec {
         spec: paper.to_path_buf(),
         source,
     };
@@ -166,7 +165,7 @@ fn dcnet_models(paper: &Path, out: &Path) -> Result<DcnetModels, InstallationErr
             .models
             .load(spec, training.error_model, &training.key)
             .map_err(|e| dcnet_error(e.into()))?
-            .ok_or_else(|| InstallationError::DcnetMissing {
+            .ok_or_else(|| ExecuteError::DcnetMissing {
                 spec: paper.to_path_buf(),
                 out: out.to_path_buf(),
                 error_model: training.error_model,

@@ -4,7 +4,7 @@
 //! instead of training it. Trainings run one per core, each on one thread.
 //! In: a point's spec, its segments and its recordings' SHA-256. Out: [`LearnedModels`].
 
-use super::InstallationError;
+use super::ExecuteError;
 use crate::files::{self, Seal};
 use crate::installation::learned::{LearnedWindows, training_windows};
 use crate::installation::learned_spec::{LearnedSpec, TrainingSource};
@@ -83,7 +83,7 @@ pub fn train_or_load(
     segments: &[&Segment],
     keys: &[LearnedKey],
     out: &Path,
-) -> Result<LearnedModels, InstallationError> {
+) -> Result<LearnedModels, ExecuteError> {
     let Some(learned) = &spec.learned else {
         return Ok(LearnedModels(Vec::new()));
     };
@@ -100,7 +100,7 @@ pub fn train_or_load(
             .iter()
             .find(|t| t.abs() > reach_s)
     {
-        return Err(InstallationError::Learned {
+        return Err(ExecuteError::Learned {
             model: "learned.simulation.time_offset_s".into(),
             why: format!(
                 "{tau} s is beyond the {reach_s} s at which the loss can read the reference ({REFERENCE_MARGIN} samples of {step_s} s): simulate time offsets within it"
@@ -109,12 +109,12 @@ pub fn train_or_load(
     }
     let store_error = |path: &Path| {
         let path = path.to_path_buf();
-        move |error: models::ModelStoreError| InstallationError::Learned {
+        move |error: models::ModelStoreError| ExecuteError::Learned {
             model: path.display().to_string(),
             why: error.to_string(),
         }
     };
-    let one = |key: &LearnedKey| -> Result<Dcnet, InstallationError> {
+    let one = |key: &LearnedKey| -> Result<Dcnet, ExecuteError> {
         let path = path(out, key);
         let device = learned.training.backend.device();
         let io = network_io(&term_set(&learned.terms));
@@ -124,7 +124,7 @@ pub fn train_or_load(
             &out.join(".cache/damaged"),
             "learned model",
         )
-        .map_err(|source| InstallationError::Io {
+        .map_err(|source| ExecuteError::Io {
             path: path.clone(),
             source,
         })? {
@@ -136,7 +136,7 @@ pub fn train_or_load(
         }
         let model = train::one_thread_pool().install(|| train_one(spec, learned, segments, key))?;
         files::create_folder(path.parent().expect("a folder")).map_err(|source| {
-            InstallationError::Io {
+            ExecuteError::Io {
                 path: path.clone(),
                 source,
             }
@@ -147,7 +147,7 @@ pub fn train_or_load(
     // One worker per core takes the next model, so that no more training sets are in
     // memory than cores train (rayon would start every training while one waits).
     let next = AtomicUsize::new(0);
-    let done: Mutex<Vec<Option<Result<Dcnet, InstallationError>>>> =
+    let done: Mutex<Vec<Option<Result<Dcnet, ExecuteError>>>> =
         Mutex::new(keys.iter().map(|_| None).collect());
     std::thread::scope(|scope| {
         for _ in 0..rayon::current_num_threads().min(keys.len()) {
@@ -166,7 +166,7 @@ pub fn train_or_load(
         .cloned()
         .zip(done.into_inner().expect("no worker panicked"))
         .map(|(key, result)| Ok((key, result.expect("every key taken")?)))
-        .collect::<Result<Vec<_>, InstallationError>>()?;
+        .collect::<Result<Vec<_>, ExecuteError>>()?;
     Ok(LearnedModels(models))
 }
 
@@ -178,7 +178,7 @@ fn train_one(
     learned: &LearnedSpec,
     segments: &[&Segment],
     key: &LearnedKey,
-) -> Result<Dcnet, InstallationError> {
+) -> Result<Dcnet, ExecuteError> {
     let clock = Instant::now();
     let LearnedModel {
         source,
@@ -214,7 +214,7 @@ fn train_one(
     let hidden = Progress::hidden();
     while state.stop(&learned.training).is_none() {
         train::run_epoch(&recipe, &data, &mut state, &hidden).map_err(|error| {
-            InstallationError::Learned {
+            ExecuteError::Learned {
                 model: shown.clone(),
                 why: error.to_string(),
             }

@@ -18,13 +18,12 @@ pub mod folder;
 pub mod inputs;
 pub mod learned;
 
-use super::{Shard, owner};
-use crate::data::paired;
+use super::{ExecuteError, Executed, Mode, Shard, owner};
 use crate::files::{Seal, sha256_hex};
 use crate::installation::protocol::{self, Calibrated};
 use crate::installation::rows::InstallationResults;
 use crate::installation::spec::InstallationSpec;
-use crate::pipeline::cache::{self, CalibrationStore, calibrations::CalibrationStoreError};
+use crate::pipeline::cache::{self, CalibrationStore};
 use crate::results::{self, Manifest, StageSeconds};
 use crate::spec::Experiment;
 use crate::vocab::ErrorModel;
@@ -34,115 +33,12 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::{Instant, SystemTime};
 
-#[derive(Debug, thiserror::Error)]
-pub enum InstallationError {
-    /// The reader's error says the file, line and column; the spec's key follows.
-    #[error("{error} (the spec's recordings.trajectories[{index}], {name})")]
-    Recording {
-        index: usize,
-        name: String,
-        error: paired::PairedError,
-    },
-    #[error(transparent)]
-    Owner(#[from] owner::OwnerError),
-    #[error(
-        "{point}{method} could not be fitted on any calibration trajectory with a window of {window_s} s ({why}); its results are not written: give calibration.window_s values that leave samples for its terms, or fewer terms"
-    )]
-    NoFit {
-        /// "point <name>: " in a sweep, else empty.
-        point: String,
-        method: String,
-        window_s: f64,
-        why: String,
-    },
-    #[error("the DCNet models of {}", spec.display())]
-    DcnetSpec {
-        spec: PathBuf,
-        #[source]
-        source: anyhow::Error,
-    },
-    #[error(
-        "the DCNet {error_model} model of {} is not trained: run `dcnet-exp run {} --out {}` first, or leave \"dcnet\" out of calibration.methods",
-        spec.display(), spec.display(), out.display()
-    )]
-    DcnetMissing {
-        spec: PathBuf,
-        out: PathBuf,
-        error_model: ErrorModel,
-    },
-    /// A model of `[learned]` that could not be trained, stored or read back.
-    #[error("DCNet {model}: {why}")]
-    Learned { model: String, why: String },
-    #[error("writing {}", path.display())]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
-    #[error(transparent)]
-    Results(#[from] results::ResultsError),
-    /// Points with a window on which a method fitted on no calibration trajectory; the
-    /// other points' folders are written.
-    #[error(
-        "{}\n{written} other point{} written; the sweep's table is not",
-        errors.join("\n"),
-        if *written == 1 { "" } else { "s" }
-    )]
-    Unfitted { errors: Vec<String>, written: usize },
-    #[error(transparent)]
-    Store(#[from] CalibrationStoreError),
-    #[error(transparent)]
-    ReadBack(#[from] results::read::ReadError),
-    #[error(
-        "{}: {missing_count} of {total} calibrations are not in the cache, such as {}",
-        out.display(), missing.join("; ")
-    )]
-    NotCollected {
-        out: PathBuf,
-        /// The first few missing, as "point: trajectory".
-        missing: Vec<String>,
-        missing_count: usize,
-        total: usize,
-    },
-}
-
-/// How much of a study a command does.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum InstallationMode {
-    /// Everything not current: computes what the cache lacks, writes every folder.
-    All { force: bool },
-    /// Computes this shard's calibrations into the cache; writes no folder.
-    Shard(Shard),
-    /// Writes every folder from the cache, computing nothing.
-    Collect,
-}
-
 /// One calibration: trajectory `calibration` of point `point`, stored under `key`.
 #[derive(Debug, Clone)]
 pub struct Unit {
     pub point: usize,
     pub calibration: usize,
     pub key: String,
-}
-
-/// What happened to one point's results folder.
-pub enum Outcome {
-    /// The folder was current and intact.
-    Current(PathBuf),
-    Written {
-        folder: PathBuf,
-        study: InstallationResults,
-    },
-}
-
-/// What a study command did.
-pub struct Executed {
-    /// The calibrations computed here (not taken from the cache).
-    pub computed: usize,
-    /// Each point's folder, in spec order; empty for a shard.
-    pub points: Vec<Outcome>,
-    /// The sweep's folder, when its table and index were written.
-    pub sweep: Option<PathBuf>,
 }
 
 /// A study's plan: its points, what they read, and their calibrations with their keys.
@@ -171,7 +67,7 @@ impl<'a> InstallationPlan<'a> {
         experiment: &'a Experiment<InstallationSpec>,
         spec_file: &Path,
         out: &Path,
-    ) -> Result<Self, InstallationError> {
+    ) -> Result<Self, ExecuteError> {
         let started_at = SystemTime::now();
         let clock = Instant::now();
         let inputs = Inputs::read(experiment, out)?;
@@ -257,39 +153,81 @@ impl<'a> InstallationPlan<'a> {
         folder::is_current(&self.folder(p), &self.results_keys[p])
     }
 
-    /// Does what `mode` asks.
-    pub fn execute(&self, mode: InstallationMode) -> Result<Executed, InstallationError> {
+    /// Does what `mode` asks: one shard's calibrations into the cache, or every point
+    /// whose folder is not current (all with `force`) put together and written, from
+    /// the cache and, but for `collect`, what it lacks computed here.
+    pub fn execute(&self, mode: Mode) -> Result<Executed, ExecuteError> {
         let clock = Instant::now();
-        let (force, collect) = match mode {
-            InstallationMode::Shard(shard) => {
-                let to_do: Vec<usize> = (0..self.units.len())
-                    .filter(|&u| self.in_shard(u, shard) && self.status(u) != Seal::Intact)
-                    .collect();
-                self.compute(&to_do)?;
-                return Ok(Executed {
-                    computed: to_do.len(),
-                    points: Vec::new(),
-                    sweep: None,
-                });
-            }
-            InstallationMode::All { force } => (force, false),
-            InstallationMode::Collect => (false, true),
+        let force = match mode {
+            Mode::Shard { shard, .. } => return self.execute_shard(shard),
+            Mode::All { force } => force,
+            Mode::Collect => false,
         };
         self.check_owners(force)?;
         let stale: Vec<usize> = (0..self.experiment.points.len())
             .filter(|&p| force || !self.is_current(p))
             .collect();
+        let (calibrated, computed) = self.calibrations(&stale, force, mode == Mode::Collect)?;
+        let protocol_s = clock.elapsed().as_secs_f64();
+        let (results, mut unfitted) = self.assemble(&stale, calibrated);
+        let mut written = Vec::new();
+        for (p, results) in results {
+            folder::write_folder(
+                self.spec(p),
+                &self.folder(p),
+                &results,
+                self.manifest(p, protocol_s),
+            )?;
+            written.push((p, results));
+        }
+        if !unfitted.is_empty() {
+            if !self.experiment.is_sweep() {
+                return Err(unfitted.remove(0));
+            }
+            return Err(ExecuteError::Unfitted {
+                errors: unfitted.iter().map(ToString::to_string).collect(),
+                written: written.len(),
+            });
+        }
+        let sweep = self.write_sweep(&written)?;
+        Ok(Executed {
+            done: computed,
+            written: written.iter().map(|(p, _)| self.folder(*p)).collect(),
+            sweep,
+        })
+    }
+
+    /// Computes the calibrations of `shard` that the cache lacks, and writes nothing.
+    fn execute_shard(&self, shard: Shard) -> Result<Executed, ExecuteError> {
+        let to_do: Vec<usize> = (0..self.units.len())
+            .filter(|&u| self.in_shard(u, shard) && self.status(u) != Seal::Intact)
+            .collect();
+        self.compute(&to_do)?;
+        Ok(Executed {
+            done: to_do.len(),
+            ..Executed::default()
+        })
+    }
+
+    /// Every calibration of the points `stale`, from the cache or computed (all of them
+    /// with `force`; none, for `collect`, which refuses when the cache lacks one), and
+    /// how many were computed.
+    fn calibrations(
+        &self,
+        stale: &[usize],
+        force: bool,
+        collect: bool,
+    ) -> Result<(HashMap<usize, Calibrated>, usize), ExecuteError> {
         let needed: Vec<usize> = (0..self.units.len())
             .filter(|&u| stale.contains(&self.units[u].point))
             .collect();
-        // `--force` computes every calibration again, stored or not.
         let missing: Vec<usize> = needed
             .iter()
             .copied()
             .filter(|&u| force || self.status(u) != Seal::Intact)
             .collect();
         if collect && !missing.is_empty() {
-            return Err(InstallationError::NotCollected {
+            return Err(ExecuteError::NotCollected {
                 out: self.out.clone(),
                 missing: missing.iter().take(5).map(|&u| self.label(u)).collect(),
                 missing_count: missing.len(),
@@ -307,10 +245,19 @@ impl<'a> InstallationPlan<'a> {
                 entry.insert(stored);
             }
         }
-        let protocol_s = clock.elapsed().as_secs_f64();
-        let mut studies = Vec::new();
+        Ok((calibrated, missing.len()))
+    }
+
+    /// The results of each point of `stale` put together from its calibrations, and
+    /// the refusals of those in which a method fitted at no window.
+    fn assemble(
+        &self,
+        stale: &[usize],
+        mut calibrated: HashMap<usize, Calibrated>,
+    ) -> (Vec<(usize, InstallationResults)>, Vec<ExecuteError>) {
+        let mut assembled = Vec::new();
         let mut unfitted = Vec::new();
-        for &p in &stale {
+        for &p in stale {
             let parts = (0..self.units.len())
                 .filter(|&u| self.units[u].point == p)
                 .map(|u| {
@@ -318,57 +265,24 @@ impl<'a> InstallationPlan<'a> {
                         .remove(&u)
                         .expect("every needed calibration is here")
                 });
-            let (mut study, estimates) = protocol::assemble(self.spec(p), parts.collect());
+            let (mut results, estimates) = protocol::assemble(self.spec(p), parts.collect());
             let point = match self.experiment.is_sweep() {
                 true => format!("point {}: ", self.spec(p).name),
                 false => String::new(),
             };
-            if let Err(error) = folder::no_window_without_a_fit(self.spec(p), &study, &point) {
+            if let Err(error) = folder::no_window_without_a_fit(self.spec(p), &results, &point) {
                 unfitted.push(error);
                 continue;
             }
-            study.trace = folder::trace(&study, &estimates, &self.inputs.segments_of(p));
-            studies.push((p, study));
+            results.trace = folder::trace(&results, &estimates, &self.inputs.segments_of(p));
+            assembled.push((p, results));
         }
-        let mut written = HashMap::new();
-        for (p, study) in studies {
-            folder::write_folder(
-                self.spec(p),
-                &self.folder(p),
-                &study,
-                self.manifest(p, protocol_s),
-            )?;
-            written.insert(p, study);
-        }
-        if !unfitted.is_empty() {
-            if !self.experiment.is_sweep() {
-                return Err(unfitted.remove(0));
-            }
-            return Err(InstallationError::Unfitted {
-                errors: unfitted.iter().map(ToString::to_string).collect(),
-                written: written.len(),
-            });
-        }
-        let points: Vec<Outcome> = (0..self.experiment.points.len())
-            .map(|p| match written.remove(&p) {
-                Some(study) => Outcome::Written {
-                    folder: self.folder(p),
-                    study,
-                },
-                None => Outcome::Current(self.folder(p)),
-            })
-            .collect();
-        let sweep = self.write_sweep(&points)?;
-        Ok(Executed {
-            computed: missing.len(),
-            points,
-            sweep,
-        })
+        (assembled, unfitted)
     }
 
     /// Computes units `to_do` in parallel, each stored in the cache as it finishes (a
     /// damaged entry set aside first, and said).
-    fn compute(&self, to_do: &[usize]) -> Result<HashMap<usize, Calibrated>, InstallationError> {
+    fn compute(&self, to_do: &[usize]) -> Result<HashMap<usize, Calibrated>, ExecuteError> {
         for &u in to_do {
             if let Some(said) = self.store.set_aside_damaged(&self.units[u].key)? {
                 eprintln!("{said}");
@@ -420,7 +334,7 @@ impl<'a> InstallationPlan<'a> {
 
     /// Refuses, before anything is computed, folders another spec file or another kind
     /// of run wrote (unless `force`, for the first).
-    fn check_owners(&self, force: bool) -> Result<(), InstallationError> {
+    fn check_owners(&self, force: bool) -> Result<(), ExecuteError> {
         if self.experiment.is_sweep() {
             owner::check_installation_sweep(
                 &self.out.join(&self.experiment.name),
@@ -471,22 +385,24 @@ impl<'a> InstallationPlan<'a> {
 
     /// A sweep's table and index, written when a point was written or the index is not
     /// that of the points' results; `None` for a single study or a current sweep.
-    fn write_sweep(&self, points: &[Outcome]) -> Result<Option<PathBuf>, InstallationError> {
+    fn write_sweep(
+        &self,
+        written: &[(usize, InstallationResults)],
+    ) -> Result<Option<PathBuf>, ExecuteError> {
         if !self.experiment.is_sweep() {
             return Ok(None);
         }
         let folder = self.out.join(&self.experiment.name);
-        let wrote = points.iter().any(|o| matches!(o, Outcome::Written { .. }));
-        if !wrote && results::installation_sweep::is_current(&folder, &self.results_keys) {
+        if written.is_empty()
+            && results::installation_sweep::is_current(&folder, &self.results_keys)
+        {
             return Ok(None);
         }
         let mut summaries = Vec::new();
-        for (p, outcome) in points.iter().enumerate() {
-            let summary = match outcome {
-                Outcome::Written { study, .. } => study.summary.clone(),
-                Outcome::Current(folder) => {
-                    results::installation::read_installation(folder)?.summary
-                }
+        for p in 0..self.experiment.points.len() {
+            let summary = match written.iter().find(|(w, _)| *w == p) {
+                Some((_, results)) => results.summary.clone(),
+                None => results::installation::read_installation(&self.folder(p))?.summary,
             };
             summaries.push((p, summary));
         }
