@@ -83,6 +83,30 @@ fn check_log_every_variable() -> Result<(), CliError> {
     }
 }
 
+/// `--threads` and `--log-every`, checked and set for the whole process.
+fn apply_global_flags(threads: Option<usize>, log_every: Option<f64>) -> Result<(), CliError> {
+    if let Some(threads) = threads {
+        if !(1..=MAX_THREADS).contains(&threads) {
+            return Err(input(anyhow::anyhow!(
+                "--threads {threads}: give 1 to {MAX_THREADS}"
+            )));
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build_global()
+            .map_err(failure)?;
+    }
+    if let Some(seconds) = log_every {
+        if !(0.0..=MAX_LOG_EVERY_S).contains(&seconds) {
+            return Err(input(anyhow::anyhow!(
+                "--log-every {seconds} (or DCNET_LOG_EVERY): give 0 to {MAX_LOG_EVERY_S} seconds"
+            )));
+        }
+        crate::progress::set_log_every(std::time::Duration::from_secs_f64(seconds));
+    }
+    Ok(())
+}
+
 pub fn main() -> Result<(), CliError> {
     check_log_every_variable()?;
     let cli = match Cli::try_parse() {
@@ -96,25 +120,7 @@ pub fn main() -> Result<(), CliError> {
             std::process::exit(1);
         }
     };
-    if let Some(threads) = cli.threads {
-        if !(1..=MAX_THREADS).contains(&threads) {
-            return Err(input(anyhow::anyhow!(
-                "--threads {threads}: give 1 to {MAX_THREADS}"
-            )));
-        }
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build_global()
-            .map_err(failure)?;
-    }
-    if let Some(seconds) = cli.log_every {
-        if !(0.0..=MAX_LOG_EVERY_S).contains(&seconds) {
-            return Err(input(anyhow::anyhow!(
-                "--log-every {seconds} (or DCNET_LOG_EVERY): give 0 to {MAX_LOG_EVERY_S} seconds"
-            )));
-        }
-        crate::progress::set_log_every(std::time::Duration::from_secs_f64(seconds));
-    }
+    apply_global_flags(cli.threads, cli.log_every)?;
     match cli.command {
         Command::Run {
             target,
@@ -150,41 +156,18 @@ pub fn main() -> Result<(), CliError> {
             reference_noise_cm_s,
             tolerance_pct,
             out,
-        } => {
-            let terms: Vec<crate::installation::term_names::TermName> = terms
-                .iter()
-                .map(|term| {
-                    term.parse()
-                        .map_err(|message| input(anyhow::anyhow!("--terms {term}: {message}")))
-                })
-                .collect::<Result<_, _>>()?;
-            calibrate::calibrate(&calibrate::CalibrateArgs {
-                dvl: &dvl,
-                reference: reference.as_deref(),
-                columns: columns.as_deref(),
-                terms: &terms,
-                window_s,
-                dvl_noise_cm_s,
-                reference_noise_cm_s,
-                tolerance_pct,
-                out: &out,
-            })
-        }
-        Command::Data {
-            command: DataCommand::Info { spec, overrides },
-        } => inspect::info(&spec, &overrides.set),
-        Command::Data {
-            command:
-                DataCommand::Fetch {
-                    dataset,
-                    dest,
-                    base_url,
-                },
-        } => inspect::fetch_data(
-            dataset,
-            dest.as_deref().unwrap_or(Path::new(dataset.default_dest())),
-            base_url.as_deref().unwrap_or(dataset.default_base_url()),
-        ),
+        } => calibrate::calibrate(&calibrate::CalibrateArgs {
+            dvl: &dvl,
+            reference: reference.as_deref(),
+            columns: columns.as_deref(),
+            terms: &parse_terms(&terms)?,
+            window_s,
+            dvl_noise_cm_s,
+            reference_noise_cm_s,
+            tolerance_pct,
+            out: &out,
+        }),
+        Command::Data { command } => data_command(command),
         Command::Bench {
             spec,
             repeat,
@@ -197,6 +180,35 @@ pub fn main() -> Result<(), CliError> {
             training_batches as usize,
             pytorch.as_deref(),
             &overrides.set,
+        ),
+    }
+}
+
+/// `--terms` as typed, each a term's name.
+fn parse_terms(
+    terms: &[String],
+) -> Result<Vec<crate::installation::term_names::TermName>, CliError> {
+    terms
+        .iter()
+        .map(|term| {
+            term.parse()
+                .map_err(|message| input(anyhow::anyhow!("--terms {term}: {message}")))
+        })
+        .collect()
+}
+
+/// `data info` and `data fetch`.
+fn data_command(command: DataCommand) -> Result<(), CliError> {
+    match command {
+        DataCommand::Info { spec, overrides } => inspect::info(&spec, &overrides.set),
+        DataCommand::Fetch {
+            dataset,
+            dest,
+            base_url,
+        } => inspect::fetch_data(
+            dataset,
+            dest.as_deref().unwrap_or(Path::new(dataset.default_dest())),
+            base_url.as_deref().unwrap_or(dataset.default_base_url()),
         ),
     }
 }
