@@ -1,13 +1,22 @@
-//! dcnet-exp reproduces the experiments of "DCNet: A Data-Driven Framework for DVL
-//! Calibration" (Yampolsky & Klein). One experiment flows through the modules in this
-//! order, and each imports only modules above it in this list:
+//! dcnet-exp does two jobs, each from a TOML spec. It reproduces the experiments of
+//! "DCNet: A Data-Driven Framework for DVL Calibration" (Yampolsky & Klein): noisy
+//! training sets from AUV recordings, one DCNet trained per error model, every
+//! calibration method through the paper's Monte Carlo protocol. And it calibrates a
+//! real DVL installation (scale, misalignment, lever arm, time offset, bias) against a
+//! reference with attitude: an installation study (`kind = "installation"`) calibrates
+//! on each paired recording in turn and scores the terms on the others, with the
+//! model-based fit, Kalman filters, the paper's methods and DCNets that learn the
+//! installation (`[learned]`); `calibrate` does it for one recording. Both go through
+//! one pipeline (docs/architecture.md). The modules, in data-flow order, each importing
+//! only modules above it in this list:
 //!
 //! 1. [`spec`]: the TOML experiment spec, read, overridden and swept
 //!    ([`spec::load`](mod@spec::load)), checked section by section ([`spec::check`]),
 //!    with the [`spec::published`] values it is compared with and the
 //!    [`spec::recordings`] it may name;
 //! 2. [`data`]: the trajectories (`.npy` or `.csv` recordings, or synthetic) and their
-//!    ground truth;
+//!    ground truth, and the paired recordings of a DVL beside a reference
+//!    ([`data::paired`]);
 //! 3. [`noise`]: the beam-level DVL and GNSS-RTK measurement model, and [`bound`]: the
 //!    information bound it puts on any calibration from w seconds of data, and
 //!    [`kalman`]: the recursive estimate of the terms, sample by sample;
@@ -15,21 +24,22 @@
 //! 5. [`kernels`]: the network's hot operations on burn's CPU backend, [`model`] and
 //!    [`train`]: DCNet and its closed-loop training;
 //! 6. [`estimators`]: calibration methods behind one trait, DCNet among them;
-//! 7. [`evaluate`]: the Monte Carlo calibration and evaluation protocol (its runs, the
-//!    tables summed from them, the bound's efficiency), [`installation`]: a real DVL
-//!    installation (scale, misalignment, lever arm, time offset, bias) calibrated
-//!    against a reference with attitude, with its bound, and [`footprint`]: the memory
-//!    and time a spec asks for, known before it runs;
-//! 8. [`results`]: the Parquet files and manifest of a run, and a sweep's table;
+//! 7. [`evaluate`]: the paper's Monte Carlo calibration and evaluation protocol (its
+//!    runs, the tables summed from them, the bound's efficiency); [`installation`]: a
+//!    real installation's spec, its terms, their fit, bound and Kalman filter, the
+//!    held-out protocol of a study and the DCNets of `[learned]`; and [`footprint`]:
+//!    the memory and time a spec asks for, known before it runs;
+//! 8. [`results`]: the results folders of both kinds (Parquet tables and manifest,
+//!    written atomically), the corrected recording of `calibrate`, and a sweep's table;
 //! 9. [`report`]: what is drawn from results folders alone: the printed tables
 //!    ([`report::printed`]), the figures ([`report::plots`], one file per figure), one
 //!    table model of the report ([`report::table`]) set by two renderers
-//!    ([`report::markdown`], [`report::latex`]), and two folders compared
-//!    ([`report::compare`]);
-//! 10. [`pipeline`]: the stages as tasks, planned, cached by content (datasets, models,
-//!     Monte Carlo blocks), resumable (each model a training job), and shared out over
-//!     shards;
-//! 11. [`cli`]: the subcommands.
+//!    ([`report::markdown`], [`report::latex`]), the installation study's sections
+//!    ([`report::installation`]), and two folders compared ([`report::compare`]);
+//! 10. [`pipeline`]: the one front door of a run of either kind, planned, cached by
+//!     content (datasets, models, Monte Carlo blocks, calibrations), resumable, and
+//!     shared out over shards;
+//! 11. [`cli`]: the subcommands, which read a spec's kind once.
 //!
 //! Beneath them all, importing no other module: [`vocab`], the words every stage
 //! shares (a DVL's error terms, error models, methods, corrections, activation,
@@ -42,7 +52,6 @@ pub mod files;
 pub mod progress;
 pub mod rng;
 pub mod vocab;
-pub mod kernels;
 
 pub mod spec;
 pub mod data;
@@ -50,6 +59,7 @@ pub mod noise;
 pub mod bound;
 pub mod kalman;
 pub mod dataset;
+pub mod kernels;
 pub mod model;
 pub mod train;
 pub mod estimators;
