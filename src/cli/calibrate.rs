@@ -9,12 +9,11 @@ use super::{CliError, failure, input};
 use crate::data::paired::{self, PairedColumns, PairedFiles};
 use crate::installation::bound::{Noise, TermBound, bound};
 use crate::installation::filter::{FilterSettings, run_filter};
-use crate::installation::filter_spec::{KalmanFile, check_kalman};
 use crate::installation::fit::{Fit, TIME_OFFSET_MARGIN_S, fit};
 use crate::installation::frames::Reference;
 use crate::installation::protocol_filters::FilterRun;
 use crate::installation::settling::{SettlingPoint, settling_curve, settling_time};
-use crate::installation::spec::ObservabilityFile;
+use crate::installation::spec::{ObservabilityFile, default_filter_settings};
 use crate::installation::term_names::{TermName, term_list_faults, term_set};
 use crate::installation::terms::{AxisRmse, Installation, TermSet, score};
 use crate::report::installation::readable_term;
@@ -247,9 +246,7 @@ pub(super) fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
 /// The filter of an installation spec's `[calibration.kalman]` as it comes: wide priors
 /// about zero, constant terms.
 fn default_filter() -> FilterSettings {
-    check_kalman(&KalmanFile::default(), &[], &mut |key, fault| {
-        unreachable!("the default [calibration.kalman] is refused at {key}: {fault}")
-    })
+    default_filter_settings()
 }
 
 /// The lengths the printed table shows: round ones below the recording's, the settling

@@ -1,9 +1,10 @@
 //! `[learned]` of an installation spec: DCNets that learn the installation's terms, the
-//! installations they train on when simulated, what they train on, and the check of it
-//! all. In: the table as written. Out: a [`LearnedSpec`], or every fault at its key.
+//! installations they train on when simulated, and what they train on. In: the table as
+//! written ([`LearnedFile`]). Out: its checked form, [`LearnedSpec`], which the check
+//! of the section (`installation/spec/check/learned.rs`) makes, or every fault at its
+//! key.
 
 use super::term_names::TermName;
-use super::term_names::term_list_faults;
 use super::terms::Installation;
 
 /// `[learned]`: DCNets that learn the installation's terms, trained fold by fold on the
@@ -141,131 +142,5 @@ impl LearnedSpec {
     /// The fold of the trajectory at `index`: round robin in spec order.
     pub fn fold_of(&self, index: usize) -> usize {
         index % self.folds
-    }
-}
-
-/// Checks `[learned]` for a study of `trajectories` trajectories, each fault at its key.
-pub fn check_learned(
-    learned: &LearnedFile,
-    trajectories: usize,
-    fault: &mut dyn FnMut(String, String),
-) -> LearnedSpec {
-    for (at, message) in term_list_faults(&learned.terms) {
-        let key = match at {
-            Some(j) => format!("learned.terms[{j}]"),
-            None => "learned.terms".to_string(),
-        };
-        fault(key, message);
-    }
-    if learned.folds < 2 || 2 * learned.folds > trajectories {
-        fault(
-            "learned.folds".into(),
-            format!(
-                "{} must be at least 2, and leave at least two trajectories in every fold (one to calibrate on, another to score on): at most {} for {trajectories} trajectories",
-                learned.folds,
-                trajectories / 2
-            ),
-        );
-    }
-    let mut sources = Vec::new();
-    for (i, name) in learned.sources.iter().enumerate() {
-        let key = format!("learned.sources[{i}]");
-        match name.as_str() {
-            "simulated" if !sources.contains(&TrainingSource::Simulated) => {
-                sources.push(TrainingSource::Simulated)
-            }
-            "vehicle" if !sources.contains(&TrainingSource::Vehicle) => {
-                sources.push(TrainingSource::Vehicle)
-            }
-            "simulated" | "vehicle" => fault(key, format!("{name:?} is listed twice")),
-            other => fault(
-                key,
-                format!("{other:?} is not a source: give \"simulated\" or \"vehicle\""),
-            ),
-        }
-    }
-    if learned.sources.is_empty() {
-        fault(
-            "learned.sources".into(),
-            "is empty: give \"simulated\", \"vehicle\" or both".into(),
-        );
-    }
-    if learned.window_samples < 4 {
-        fault(
-            "learned.window_samples".into(),
-            format!(
-                "{} must be at least 4 (the 2D head's three convolutions)",
-                learned.window_samples
-            ),
-        );
-    }
-    if learned.stride_samples == 0 {
-        fault(
-            "learned.stride_samples".into(),
-            "0 must be at least 1".into(),
-        );
-    }
-    let v = learned.validation_fraction;
-    if !(0.0..1.0).contains(&v) {
-        fault(
-            "learned.validation_fraction".into(),
-            format!("{v} must lie in [0, 1)"),
-        );
-    }
-    let grid = &learned.simulation;
-    for (key, values) in [
-        ("lever_arm_x_m", &grid.lever_arm_x_m),
-        ("lever_arm_y_m", &grid.lever_arm_y_m),
-        ("lever_arm_z_m", &grid.lever_arm_z_m),
-        ("time_offset_s", &grid.time_offset_s),
-        ("misalignment_z_deg", &grid.misalignment_z_deg),
-        ("scale_pct", &grid.scale_pct),
-        ("bias_cm_s", &grid.bias_cm_s),
-    ] {
-        if values.is_empty() {
-            fault(
-                format!("learned.simulation.{key}"),
-                "is empty: give at least one value".into(),
-            );
-        }
-        for (i, value) in values.iter().enumerate() {
-            if !value.is_finite() {
-                fault(
-                    format!("learned.simulation.{key}[{i}]"),
-                    format!("{value} must be a finite number"),
-                );
-            }
-        }
-    }
-    let (model, training, model_faults) = crate::spec::check::check_model_and_training(
-        learned.model.clone(),
-        learned.training.clone(),
-        learned.window_samples.max(4),
-        "learned.",
-    );
-    for (key, message) in model_faults {
-        fault(key, message);
-    }
-    if training
-        .learning_rates
-        .iter()
-        .any(|&rate| rate != training.learning_rates[0])
-    {
-        fault(
-            "learned.training.learning_rate".into(),
-            "is a table of error models: give one number, the learned model's".into(),
-        );
-    }
-    LearnedSpec {
-        terms: learned.terms.clone(),
-        folds: learned.folds.max(1),
-        sources,
-        window_samples: learned.window_samples,
-        stride_samples: learned.stride_samples.max(1),
-        validation_fraction: v,
-        seed: learned.seed,
-        simulation: grid.clone(),
-        model,
-        training,
     }
 }

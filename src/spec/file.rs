@@ -226,25 +226,29 @@ pub struct EstimatorsFile {
     /// Any of `EM1` .. `EM5`, for the kinds that take an error model.
     pub error_models: Vec<String>,
     /// The prior and random walk of the Kalman filters' terms.
-    pub kalman: KalmanFile,
+    pub kalman: ScaleBiasKalmanFile,
 }
 
-/// The Kalman filters' terms: their prior standard deviation about zero, and the
-/// random walk each may take, per √s (zero: constant terms).
+/// `[estimators.kalman]`: the terms of the paper's Kalman filters (`kalman`,
+/// `kalman_beam`), which estimate only the scale and bias of a simulated DVL's error
+/// model: their prior standard deviation about zero (10 % and 10 cm/s by default,
+/// wide over the grid's errors), and the random walk each may take, per √s (zero:
+/// constant terms). Not an installation's `[calibration.kalman]`, whose filter
+/// estimates five kinds of term with other keys and a 5 % scale prior.
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(
     deny_unknown_fields,
     default,
     expecting = "a table of the Kalman filters' prior and random walk"
 )]
-pub struct KalmanFile {
+pub struct ScaleBiasKalmanFile {
     pub prior_scale_pct: f64,
     pub prior_bias_cm_s: f64,
     pub scale_random_walk_pct_per_sqrt_s: f64,
     pub bias_random_walk_cm_s_per_sqrt_s: f64,
 }
 
-impl Default for KalmanFile {
+impl Default for ScaleBiasKalmanFile {
     fn default() -> Self {
         Self {
             prior_scale_pct: 10.0,
@@ -272,7 +276,7 @@ impl Default for EstimatorsFile {
             error_models: ["EM1", "EM2", "EM3", "EM4", "EM5"]
                 .map(String::from)
                 .to_vec(),
-            kalman: KalmanFile::default(),
+            kalman: ScaleBiasKalmanFile::default(),
         }
     }
 }

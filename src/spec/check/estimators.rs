@@ -43,8 +43,8 @@ pub(in crate::spec) fn check_estimators(
 
 /// Checks `[estimators.kalman]`: a positive finite prior, a finite random walk not
 /// below zero.
-fn check_kalman(kalman: file::KalmanFile, faults: &mut Faults) -> KalmanSpec {
-    let file::KalmanFile {
+fn check_kalman(kalman: file::ScaleBiasKalmanFile, faults: &mut Faults) -> KalmanSpec {
+    let file::ScaleBiasKalmanFile {
         prior_scale_pct,
         prior_bias_cm_s,
         scale_random_walk_pct_per_sqrt_s,

@@ -6,7 +6,10 @@
 //! This file holds what the sections share: `Faults`, a trajectory looked up by name,
 //! seconds as a positive number of samples, the rules of an error term and of a
 //! results folder's name, and `Limit::check`, which adds a fault for a value beyond
-//! its [`Limit`]. A new key's rule goes in its section's file, beside its tests.
+//! its [`Limit`]. A new key's rule goes in its section's file, beside its tests. The
+//! installation spec's checks, one file a section in `installation/spec/check/`,
+//! collect their faults in the same `Faults` and check `[learned.model]` and
+//! `[learned.training]` with `check_model_and_training`.
 //!
 //! [`SpecFile`]: crate::spec::SpecFile
 //! [`SpecFile::check`]: crate::spec::SpecFile::check
@@ -27,14 +30,15 @@ use crate::spec::{MAX_NAME_CHARS, TrajectorySource, seconds_to_samples};
 use std::collections::HashMap;
 
 /// A key path such as `data.trajectories[2].samples`, and what is wrong there.
-pub(super) type Fault = (String, String);
+pub(crate) type Fault = (String, String);
 
-/// Collects faults while checking, keyed by their path in the spec.
+/// Collects faults while checking, keyed by their path in the spec; the installation
+/// spec's checks collect theirs in it too.
 #[derive(Default)]
-pub(super) struct Faults(pub(super) Vec<Fault>);
+pub(crate) struct Faults(pub(crate) Vec<Fault>);
 
 impl Faults {
-    pub(super) fn add(&mut self, key: impl Into<String>, message: impl Into<String>) {
+    pub(crate) fn add(&mut self, key: impl Into<String>, message: impl Into<String>) {
         self.0.push((key.into(), message.into()));
     }
 }

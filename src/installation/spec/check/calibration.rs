@@ -1,0 +1,142 @@
+//! Checks `[calibration]`. In: the calibration windows, the paper's methods by name,
+//! the named term sets of `[[calibration.models]]`, `[calibration.kalman]` and the
+//! calibration time's tolerance, as written. Out: the windows in increasing order, the
+//! methods in the order the tables show them (the paper's, then each term set's fit,
+//! then its Kalman filter), whether "dcnet" is listed, the filter's settings and the
+//! tolerance as a fraction.
+
+use super::check_terms;
+use super::kalman::check_kalman;
+use crate::installation::filter::FilterSettings;
+use crate::installation::spec::Method;
+use crate::installation::spec::file::{InstallationCalibrationFile, TermSetFile};
+use crate::spec::check::Faults;
+use crate::vocab::ErrorModel;
+use std::collections::HashSet;
+
+/// `[calibration]`, checked.
+pub(in crate::installation::spec) struct CheckedCalibration {
+    /// In increasing order.
+    pub windows_s: Vec<f64>,
+    /// The paper's methods, then the fit of each term set, then their filters; DCNet's
+    /// come after, from `[dcnet]`.
+    pub methods: Vec<Method>,
+    /// Whether "dcnet" is among the methods.
+    pub wants_dcnet: bool,
+    pub filter: FilterSettings,
+    /// A fraction (0.1 for 10 %).
+    pub time_tolerance: f64,
+}
+
+/// Checks `[calibration]`: windows, methods, models and the filter's table.
+pub(in crate::installation::spec) fn check_calibration(
+    calibration: InstallationCalibrationFile,
+    faults: &mut Faults,
+) -> CheckedCalibration {
+    let InstallationCalibrationFile {
+        window_s,
+        methods: names,
+        models,
+        kalman,
+        time_tolerance_pct,
+    } = calibration;
+    let windows_s = check_windows(&window_s, faults);
+    let (mut methods, wants_dcnet) = check_methods(&names, faults);
+    check_models(&models, faults);
+    methods.extend(models.iter().map(|model| Method::Installation {
+        name: model.name.clone(),
+        terms: model.terms.clone(),
+    }));
+    let model_names: Vec<&str> = models.iter().map(|m| m.name.as_str()).collect();
+    let filtered = kalman.models.clone();
+    let filter = check_kalman(kalman, &model_names, faults);
+    for name in &filtered {
+        if let Some(model) = models.iter().find(|m| &m.name == name) {
+            methods.push(Method::Filter {
+                name: model.name.clone(),
+                terms: model.terms.clone(),
+            });
+        }
+    }
+    if !(time_tolerance_pct.is_finite() && time_tolerance_pct > 0.0) {
+        faults.add(
+            "calibration.time_tolerance_pct",
+            format!("{time_tolerance_pct} must be a finite number above zero"),
+        );
+    }
+    CheckedCalibration {
+        windows_s,
+        methods,
+        wants_dcnet,
+        filter,
+        time_tolerance: time_tolerance_pct / 100.0,
+    }
+}
+
+/// `calibration.window_s`: at least one, each finite, positive and listed once; in
+/// increasing order.
+fn check_windows(window_s: &[f64], faults: &mut Faults) -> Vec<f64> {
+    if window_s.is_empty() {
+        faults.add("calibration.window_s", "is empty: give at least one window, in seconds (one at least a trajectory's length takes all of it)");
+    }
+    let mut windows_s = Vec::new();
+    for (i, &w) in window_s.iter().enumerate() {
+        if !(w.is_finite() && w > 0.0) {
+            faults.add(
+                format!("calibration.window_s[{i}]"),
+                format!("{w} must be a finite positive number of seconds"),
+            );
+        } else if windows_s.contains(&w) {
+            faults.add(
+                format!("calibration.window_s[{i}]"),
+                format!("{w} is listed twice"),
+            );
+        } else {
+            windows_s.push(w);
+        }
+    }
+    windows_s.sort_by(f64::total_cmp);
+    windows_s
+}
+
+/// `calibration.methods`: the paper's methods, each listed once, and whether "dcnet"
+/// is among them.
+fn check_methods(names: &[String], faults: &mut Faults) -> (Vec<Method>, bool) {
+    let mut methods = Vec::new();
+    let mut listed = HashSet::new();
+    let mut wants_dcnet = false;
+    for (i, method) in names.iter().enumerate() {
+        let key = format!("calibration.methods[{i}]");
+        if !listed.insert(method.as_str()) {
+            faults.add(key, format!("{method:?} is listed twice"));
+            continue;
+        }
+        match method.as_str() {
+            "baseline" => methods.push(Method::Baseline),
+            "dcnet" => wants_dcnet = true,
+            other => match other.parse::<ErrorModel>() {
+                Ok(model) => methods.push(Method::LeastSquares(model)),
+                Err(_) => faults.add(
+                    key,
+                    format!(
+                        "{other:?} is not a method: give \"baseline\", \"EM1\" to \"EM5\" (the paper's least squares) or \"dcnet\"; term sets of the installation model go in [[calibration.models]]"
+                    ),
+                ),
+            },
+        }
+    }
+    (methods, wants_dcnet)
+}
+
+/// `[[calibration.models]]`: each name defined once, each list of terms sound.
+fn check_models(models: &[TermSetFile], faults: &mut Faults) {
+    let mut names = HashSet::new();
+    for (i, model) in models.iter().enumerate() {
+        let TermSetFile { name, terms } = model;
+        let key = format!("calibration.models[{i}]");
+        if !names.insert(name.as_str()) {
+            faults.add(format!("{key}.name"), format!("{name:?} is defined twice"));
+        }
+        check_terms(&format!("{key}.terms"), terms, faults);
+    }
+}

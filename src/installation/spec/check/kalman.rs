@@ -1,0 +1,147 @@
+//! Checks `[calibration.kalman]`. In: the table as written
+//! ([`InstallationKalmanFile`]) and the names of `[[calibration.models]]`. Out: the
+//! extended Kalman filter's [`FilterSettings`] in stored units (fractions, radians,
+//! m/s): the models it names defined and listed once, every prior above zero, every
+//! random walk zero or more.
+
+use crate::installation::filter::FilterSettings;
+use crate::installation::filter_spec::InstallationKalmanFile;
+use crate::installation::terms::PerKind;
+use crate::spec::check::Faults;
+
+/// Checks `[calibration.kalman]` against the models defined (`model_names`): the models
+/// it names, a positive prior and a random walk not below zero, in stored units.
+pub(in crate::installation::spec) fn check_kalman(
+    kalman: InstallationKalmanFile,
+    model_names: &[&str],
+    faults: &mut Faults,
+) -> FilterSettings {
+    let InstallationKalmanFile {
+        models,
+        prior_scale_pct,
+        prior_misalignment_deg,
+        prior_lever_arm_m,
+        prior_time_offset_s,
+        prior_bias_cm_s,
+        scale_random_walk_pct_per_sqrt_s,
+        bias_random_walk_cm_s_per_sqrt_s,
+    } = kalman;
+    for (i, name) in models.iter().enumerate() {
+        if !model_names.contains(&name.as_str()) {
+            faults.add(
+                format!("calibration.kalman.models[{i}]"),
+                format!(
+                    "{name:?} is not a model of [[calibration.models]]; defined: {}",
+                    model_names.join(", ")
+                ),
+            );
+        } else if models[..i].contains(name) {
+            faults.add(
+                format!("calibration.kalman.models[{i}]"),
+                format!("{name:?} is listed twice"),
+            );
+        }
+    }
+    let mut value = |key: &str, value: f64, zero_allowed: bool| {
+        if !value.is_finite() || value < 0.0 || (value == 0.0 && !zero_allowed) {
+            let rule = if zero_allowed {
+                "zero or more"
+            } else {
+                "above zero"
+            };
+            faults.add(
+                format!("calibration.kalman.{key}"),
+                format!("{value} must be finite and {rule}"),
+            );
+        }
+        value
+    };
+    let prior = PerKind {
+        scale: value("prior_scale_pct", prior_scale_pct, false) / 100.0,
+        misalignment_rad: value("prior_misalignment_deg", prior_misalignment_deg, false)
+            .to_radians(),
+        lever_arm_m: value("prior_lever_arm_m", prior_lever_arm_m, false),
+        time_offset_s: value("prior_time_offset_s", prior_time_offset_s, false),
+        bias_m_s: value("prior_bias_cm_s", prior_bias_cm_s, false) / 100.0,
+    };
+    let random_walk = PerKind {
+        scale: value(
+            "scale_random_walk_pct_per_sqrt_s",
+            scale_random_walk_pct_per_sqrt_s,
+            true,
+        ) / 100.0,
+        misalignment_rad: 0.0,
+        lever_arm_m: 0.0,
+        time_offset_s: 0.0,
+        bias_m_s: value(
+            "bias_random_walk_cm_s_per_sqrt_s",
+            bias_random_walk_cm_s_per_sqrt_s,
+            true,
+        ) / 100.0,
+    };
+    FilterSettings { prior, random_walk }
+}
+
+/// The filter of a spec whose `[calibration.kalman]` is left out
+/// ([`InstallationKalmanFile::default`]): wide priors about zero, constant terms.
+pub fn default_filter_settings() -> FilterSettings {
+    let mut faults = Faults::default();
+    let settings = check_kalman(InstallationKalmanFile::default(), &[], &mut faults);
+    assert!(
+        faults.0.is_empty(),
+        "the default [calibration.kalman] is refused: {:?}",
+        faults.0
+    );
+    settings
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The defaults in stored units: 5 % of scale, 5° of misalignment, 2 m of lever
+    /// arm, 1 s of time offset, 10 cm/s of bias, no random walk.
+    #[test]
+    fn the_default_filter_is_the_documented_priors_in_stored_units() {
+        let settings = default_filter_settings();
+        let prior = settings.prior;
+        assert_eq!(prior.scale, 0.05);
+        assert_eq!(prior.misalignment_rad, 5.0_f64.to_radians());
+        assert_eq!(prior.lever_arm_m, 2.0);
+        assert_eq!(prior.time_offset_s, 1.0);
+        assert_eq!(prior.bias_m_s, 0.1);
+        assert_eq!(settings.random_walk.scale, 0.0);
+        assert_eq!(settings.random_walk.bias_m_s, 0.0);
+    }
+
+    /// A model named twice, one not defined, a zero prior and a negative random walk:
+    /// each fault at its key, in the table's order.
+    #[test]
+    fn each_fault_of_the_table_is_at_its_key() {
+        let kalman = InstallationKalmanFile {
+            models: vec!["a".into(), "b".into(), "a".into()],
+            prior_lever_arm_m: 0.0,
+            bias_random_walk_cm_s_per_sqrt_s: -1.0,
+            ..InstallationKalmanFile::default()
+        };
+        let mut faults = Faults::default();
+        check_kalman(kalman, &["a"], &mut faults);
+        let expected = [
+            (
+                "calibration.kalman.models[1]",
+                "\"b\" is not a model of [[calibration.models]]; defined: a",
+            ),
+            ("calibration.kalman.models[2]", "\"a\" is listed twice"),
+            (
+                "calibration.kalman.prior_lever_arm_m",
+                "0 must be finite and above zero",
+            ),
+            (
+                "calibration.kalman.bias_random_walk_cm_s_per_sqrt_s",
+                "-1 must be finite and zero or more",
+            ),
+        ]
+        .map(|(key, message)| (key.to_string(), message.to_string()));
+        assert_eq!(faults.0, expected);
+    }
+}
