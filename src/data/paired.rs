@@ -255,6 +255,31 @@ fn degrees_hint(value: f64, degrees: bool) -> &'static str {
 /// Reads and checks one recording: the DVL's columns from `files.dvl`, the
 /// reference's from `files.reference` (one read when they are the same file).
 pub fn read(files: &PairedFiles, columns: &PairedColumns) -> Result<PairedRecording, PairedError> {
+    let (dvl, reference, reference_start) = read_rows(files, columns)?;
+    check_increasing(&files.dvl, &columns.time, &dvl)?;
+    if files.dvl != files.reference {
+        check_increasing(&files.reference, &columns.time, &reference)?;
+    }
+    check_attitude(files, columns, &reference, reference_start + 3)?;
+    check_stamps(files, columns, &dvl, &reference)?;
+    if dvl.len() < MIN_SAMPLES {
+        return Err(PairedError::TooShort {
+            path: files.dvl.clone(),
+            samples: dvl.len(),
+        });
+    }
+    check_dvl_speed(files, columns, &dvl)?;
+    Ok(recording(columns, &dvl, &reference, reference_start))
+}
+
+/// The rows of the DVL (time, then its three) and of the reference (time, NED
+/// velocity, attitude, and the rate where it is recorded), and where the reference's
+/// values start in its rows: after the time, or, in one file, after the time and the
+/// DVL's three.
+fn read_rows(
+    files: &PairedFiles,
+    columns: &PairedColumns,
+) -> Result<(Rows, Rows, usize), PairedError> {
     let time = Column {
         name: &columns.time,
         holds: Quantity::Time,
@@ -275,26 +300,29 @@ pub fn read(files: &PairedFiles, columns: &PairedColumns) -> Result<PairedRecord
                 .flat_map(|rate| triple(rate, Quantity::AngularRate)),
         )
         .collect();
-    // Where the reference's values start in a row: after the time, or, in one file,
-    // after the time and the DVL's three.
-    let (dvl, reference, reference_start) = if files.dvl == files.reference {
+    if files.dvl == files.reference {
         let all: Vec<Column> = dvl_columns
             .iter()
             .chain(&reference_columns[1..])
             .copied()
             .collect();
         let rows = table::read_columns(&files.dvl, &all)?;
-        (rows.clone(), rows, 4)
+        Ok((rows.clone(), rows, 4))
     } else {
         let dvl = table::read_columns(&files.dvl, &dvl_columns)?;
         let reference = table::read_columns(&files.reference, &reference_columns)?;
-        (dvl, reference, 1)
-    };
-    check_increasing(&files.dvl, &columns.time, &dvl)?;
-    if files.dvl != files.reference {
-        check_increasing(&files.reference, &columns.time, &reference)?;
+        Ok((dvl, reference, 1))
     }
-    check_attitude(files, columns, &reference, reference_start + 3)?;
+}
+
+/// The DVL and the reference on the same time stamps: as many rows, each pair within
+/// [`TIME_TOLERANCE_S`].
+fn check_stamps(
+    files: &PairedFiles,
+    columns: &PairedColumns,
+    dvl: &Rows,
+    reference: &Rows,
+) -> Result<(), PairedError> {
     if dvl.len() != reference.len() {
         return Err(PairedError::Lengths {
             dvl: files.dvl.clone(),
@@ -317,12 +345,15 @@ pub fn read(files: &PairedFiles, columns: &PairedColumns) -> Result<PairedRecord
             });
         }
     }
-    if dvl.len() < MIN_SAMPLES {
-        return Err(PairedError::TooShort {
-            path: files.dvl.clone(),
-            samples: dvl.len(),
-        });
-    }
+    Ok(())
+}
+
+/// Every DVL velocity component within [`MAX_DVL_SPEED_M_S`].
+fn check_dvl_speed(
+    files: &PairedFiles,
+    columns: &PairedColumns,
+    dvl: &Rows,
+) -> Result<(), PairedError> {
     for row in 0..dvl.len() {
         for axis in 0..3 {
             let value = dvl.row(row)[1 + axis];
@@ -336,6 +367,17 @@ pub fn read(files: &PairedFiles, columns: &PairedColumns) -> Result<PairedRecord
             }
         }
     }
+    Ok(())
+}
+
+/// The recording of checked rows, the reference's values from `reference_start`,
+/// angles (and the rate) in radians.
+fn recording(
+    columns: &PairedColumns,
+    dvl: &Rows,
+    reference: &Rows,
+    reference_start: usize,
+) -> PairedRecording {
     let to_rad = if columns.angles_in_degrees {
         1f64.to_radians()
     } else {
@@ -349,16 +391,16 @@ pub fn read(files: &PairedFiles, columns: &PairedColumns) -> Result<PairedRecord
             })
             .collect()
     };
-    Ok(PairedRecording {
+    PairedRecording {
         time_s: dvl.column(0).collect(),
-        dvl_m_s: triples(&dvl, 1, 1.0),
-        velocity_ned_m_s: triples(&reference, reference_start, 1.0),
-        attitude_rad: triples(&reference, reference_start + 3, to_rad),
+        dvl_m_s: triples(dvl, 1, 1.0),
+        velocity_ned_m_s: triples(reference, reference_start, 1.0),
+        attitude_rad: triples(reference, reference_start + 3, to_rad),
         rate_rad_s: columns
             .rate
             .as_ref()
-            .map(|_| triples(&reference, reference_start + 6, to_rad)),
-    })
+            .map(|_| triples(reference, reference_start + 6, to_rad)),
+    }
 }
 
 /// Every time stamp of `rows` (their first value) after the one before it.

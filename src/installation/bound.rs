@@ -122,25 +122,67 @@ impl TermBound {
 pub fn bound(fit: &Fit, noise: Noise, tolerances: &Tolerances) -> TermBound {
     let names = fit.terms.parameter_names();
     let kinds = fit.terms.parameter_kinds();
-    let n = names.len();
     let sigma_m_s = (noise.dvl_m_s.powi(2) + noise.reference_m_s.powi(2)).sqrt();
-    // JᵀJ, scaled to a unit diagonal: D⁻¹ JᵀJ D⁻¹ with D = √diag(JᵀJ).
-    let normal = fit.jacobian.transpose() * &fit.jacobian;
-    let scale: Vec<f64> = (0..n).map(|k| normal[(k, k)].sqrt()).collect();
-    let felt: Vec<usize> = (0..n).filter(|&k| scale[k] > 0.0).collect();
-    let unit = DMatrix::from_fn(felt.len(), felt.len(), |a, b| {
-        normal[(felt[a], felt[b])] / (scale[felt[a]] * scale[felt[b]])
+    let information = UnitInformation::of(fit, names.len());
+    let (inverse, flat_with) = information.pseudo_inverse(&names);
+    let std = information.standard_deviations(&inverse, &flat_with, sigma_m_s);
+    let correlation = information.correlations(&inverse, &std);
+    let unseen = unseen(&names, &flat_with, &std, &correlation, |k| {
+        tolerances.of(kinds[k])
     });
+    TermBound {
+        names,
+        value: fit.parameters.clone(),
+        std,
+        correlation,
+        unseen,
+    }
+}
 
-    // Some(others) for a term on a flat direction; a term the residuals ignore is
-    // flat alone.
-    let mut flat_with: Vec<Option<Vec<&'static str>>> = (0..n)
-        .map(|k| (!felt.contains(&k)).then(Vec::new))
-        .collect();
-    // The pseudo-inverse of the unit-diagonal matrix, over its non-flat directions.
-    let mut inverse = DMatrix::<f64>::zeros(felt.len(), felt.len());
-    if !felt.is_empty() {
-        let eigen = SymmetricEigen::new(unit);
+/// For each term, `Some(the others)` when it lies on a flat direction (a term the
+/// residuals ignore is flat alone), `None` otherwise.
+type FlatWith = Vec<Option<Vec<&'static str>>>;
+
+/// The information JᵀJ scaled to a unit diagonal, D⁻¹ JᵀJ D⁻¹ with D = √diag(JᵀJ), over
+/// the terms the residuals feel.
+struct UnitInformation {
+    /// √diag(JᵀJ), one per term.
+    scale: Vec<f64>,
+    /// The terms whose diagonal is not zero, in order.
+    felt: Vec<usize>,
+    /// `[felt, felt]`.
+    unit: DMatrix<f64>,
+}
+
+impl UnitInformation {
+    /// Of `fit`'s `n` terms.
+    fn of(fit: &Fit, n: usize) -> UnitInformation {
+        let normal = fit.jacobian.transpose() * &fit.jacobian;
+        let scale: Vec<f64> = (0..n).map(|k| normal[(k, k)].sqrt()).collect();
+        let felt: Vec<usize> = (0..n).filter(|&k| scale[k] > 0.0).collect();
+        let unit = DMatrix::from_fn(felt.len(), felt.len(), |a, b| {
+            normal[(felt[a], felt[b])] / (scale[felt[a]] * scale[felt[b]])
+        });
+        UnitInformation { scale, felt, unit }
+    }
+
+    /// Where term `k` is among the felt ones.
+    fn position(&self, k: usize) -> Option<usize> {
+        self.felt.iter().position(|&f| f == k)
+    }
+
+    /// The pseudo-inverse of the unit-diagonal matrix over its non-flat directions, and
+    /// the terms on each flat one (`names` names the terms).
+    fn pseudo_inverse(&self, names: &[&'static str]) -> (DMatrix<f64>, FlatWith) {
+        let felt = &self.felt;
+        let mut flat_with: FlatWith = (0..self.scale.len())
+            .map(|k| (!felt.contains(&k)).then(Vec::new))
+            .collect();
+        let mut inverse = DMatrix::<f64>::zeros(felt.len(), felt.len());
+        if felt.is_empty() {
+            return (inverse, flat_with);
+        }
+        let eigen = SymmetricEigen::new(self.unit.clone());
         let largest = eigen.eigenvalues.max();
         for (index, &eigenvalue) in eigen.eigenvalues.iter().enumerate() {
             let vector = eigen.eigenvectors.column(index);
@@ -160,31 +202,59 @@ pub fn bound(fit: &Fit, noise: Noise, tolerances: &Tolerances) -> TermBound {
                 }
             }
         }
+        (inverse, flat_with)
     }
-    let position = |k: usize| felt.iter().position(|&f| f == k);
-    let std: Vec<f64> = (0..n)
-        .map(|k| match (position(k), &flat_with[k]) {
-            (Some(a), None) => sigma_m_s * inverse[(a, a)].sqrt() / scale[k],
-            _ => f64::INFINITY,
-        })
-        .collect();
-    let correlation: Vec<Vec<f64>> = (0..n)
-        .map(|j| {
-            (0..n)
-                .map(|k| {
-                    if j == k {
-                        1.0
-                    } else if !std[j].is_finite() || !std[k].is_finite() {
-                        f64::NAN
-                    } else {
-                        let (a, b) = (position(j).unwrap(), position(k).unwrap());
-                        inverse[(a, b)] / (inverse[(a, a)] * inverse[(b, b)]).sqrt()
-                    }
-                })
-                .collect()
-        })
-        .collect();
 
+    /// Each term's standard deviation under white noise `sigma_m_s`: infinite on a
+    /// flat direction.
+    fn standard_deviations(
+        &self,
+        inverse: &DMatrix<f64>,
+        flat_with: &FlatWith,
+        sigma_m_s: f64,
+    ) -> Vec<f64> {
+        (0..self.scale.len())
+            .map(|k| match (self.position(k), &flat_with[k]) {
+                (Some(a), None) => sigma_m_s * inverse[(a, a)].sqrt() / self.scale[k],
+                _ => f64::INFINITY,
+            })
+            .collect()
+    }
+
+    /// The correlation of every pair of terms: 1 on the diagonal, NaN with a term of
+    /// infinite standard deviation.
+    fn correlations(&self, inverse: &DMatrix<f64>, std: &[f64]) -> Vec<Vec<f64>> {
+        let n = std.len();
+        (0..n)
+            .map(|j| {
+                (0..n)
+                    .map(|k| {
+                        if j == k {
+                            1.0
+                        } else if !std[j].is_finite() || !std[k].is_finite() {
+                            f64::NAN
+                        } else {
+                            let (a, b) = (self.position(j).unwrap(), self.position(k).unwrap());
+                            inverse[(a, b)] / (inverse[(a, a)] * inverse[(b, b)]).sqrt()
+                        }
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+}
+
+/// Every reason each term cannot be seen, term by term: on a flat direction; or a
+/// standard deviation beyond its `tolerance`, and each term it is correlated with
+/// beyond [`CORRELATION_LIMIT`].
+fn unseen(
+    names: &[&'static str],
+    flat_with: &FlatWith,
+    std: &[f64],
+    correlation: &[Vec<f64>],
+    tolerance: impl Fn(usize) -> f64,
+) -> Vec<Unseen> {
+    let n = names.len();
     let mut unseen = Vec::new();
     for k in 0..n {
         if let Some(with) = &flat_with[k] {
@@ -194,7 +264,7 @@ pub fn bound(fit: &Fit, noise: Noise, tolerances: &Tolerances) -> TermBound {
             });
             continue;
         }
-        let tolerance = tolerances.of(kinds[k]);
+        let tolerance = tolerance(k);
         if std[k] > tolerance {
             unseen.push(Unseen {
                 term: names[k],
@@ -216,13 +286,7 @@ pub fn bound(fit: &Fit, noise: Noise, tolerances: &Tolerances) -> TermBound {
             }
         }
     }
-    TermBound {
-        names,
-        value: fit.parameters.clone(),
-        std,
-        correlation,
-        unseen,
-    }
+    unseen
 }
 
 #[cfg(test)]

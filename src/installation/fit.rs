@@ -244,29 +244,7 @@ pub fn fit(
     let (solved, termination) = if parameter_count == 0 {
         (problem(terms, Installation::default()), "none".to_string())
     } else if terms.time_offset {
-        // The scan: τ held at each step, the other terms solved from zero.
-        let others = TermSet {
-            time_offset: false,
-            ..terms
-        };
-        let steps = (TIME_OFFSET_MARGIN_S / TIME_OFFSET_SCAN_STEP_S).round() as i64;
-        let mut best: Option<(f64, Installation)> = None;
-        for step in -steps..=steps {
-            let held = Installation {
-                time_offset_s: step as f64 * TIME_OFFSET_SCAN_STEP_S,
-                ..Installation::default()
-            };
-            let candidate = if others.parameter_count() == 0 {
-                problem(others, held)
-            } else {
-                minimize(problem(others, held))?.0
-            };
-            let cost = candidate.cost();
-            if best.as_ref().is_none_or(|(lowest, _)| cost < *lowest) {
-                best = Some((cost, candidate.installation()));
-            }
-        }
-        let start = best.expect("the scan has steps").1;
+        let start = scan_time_offset(&problem, terms)?;
         minimize(problem(terms, start))?
     } else {
         minimize(problem(terms, Installation::default()))?
@@ -279,22 +257,57 @@ pub fn fit(
             margin_s: TIME_OFFSET_MARGIN_S,
         });
     }
-    let residuals = solved.residual_vector();
     let sample_count = mask.len();
-    let residual_rms_m_s = [0, 1, 2].map(|k| {
-        let sum: f64 = (0..sample_count)
-            .map(|i| residuals[3 * i + k].powi(2))
-            .sum();
-        (sum / sample_count as f64).sqrt()
-    });
     Ok(Fit {
         terms,
         installation,
         parameters: installation.to_parameters(&terms),
         jacobian: solved.jacobian_matrix(),
-        residual_rms_m_s,
+        residual_rms_m_s: residual_rms(&solved.residual_vector(), sample_count),
         sample_count,
         termination,
+    })
+}
+
+/// The start of LM when τ is fitted: τ held at each step of the scan over
+/// ±[`TIME_OFFSET_MARGIN_S`], the other terms of `terms` solved from zero, and the
+/// installation of the lowest cost kept. `problem` makes the problem of free terms and
+/// held ones.
+fn scan_time_offset<'a>(
+    problem: &impl Fn(TermSet, Installation) -> Problem<'a>,
+    terms: TermSet,
+) -> Result<Installation, FitError> {
+    let others = TermSet {
+        time_offset: false,
+        ..terms
+    };
+    let steps = (TIME_OFFSET_MARGIN_S / TIME_OFFSET_SCAN_STEP_S).round() as i64;
+    let mut best: Option<(f64, Installation)> = None;
+    for step in -steps..=steps {
+        let held = Installation {
+            time_offset_s: step as f64 * TIME_OFFSET_SCAN_STEP_S,
+            ..Installation::default()
+        };
+        let candidate = if others.parameter_count() == 0 {
+            problem(others, held)
+        } else {
+            minimize(problem(others, held))?.0
+        };
+        let cost = candidate.cost();
+        if best.as_ref().is_none_or(|(lowest, _)| cost < *lowest) {
+            best = Some((cost, candidate.installation()));
+        }
+    }
+    Ok(best.expect("the scan has steps").1)
+}
+
+/// The RMS per axis of `residuals` (x, y, z of each of `sample_count` samples).
+fn residual_rms(residuals: &DVector<f64>, sample_count: usize) -> Vec3 {
+    [0, 1, 2].map(|k| {
+        let sum: f64 = (0..sample_count)
+            .map(|i| residuals[3 * i + k].powi(2))
+            .sum();
+        (sum / sample_count as f64).sqrt()
     })
 }
 

@@ -8,18 +8,18 @@
 //! In: an [`InstallationSpec`] and its recordings. Out: a [`InstallationResults`]: held-out rows,
 //! estimated terms with their bound, and the summary per method.
 
-use super::bound::{Noise, TermBound, bound};
+use super::bound::{Noise, TermBound, Tolerances, bound};
 use super::calibration_time::calibration_times;
 use super::fit::{TIME_OFFSET_MARGIN_S, fit};
 use super::frames::Reference;
 use super::learned_spec::TrainingSource;
-use super::protocol_filters::run_filters;
+use super::protocol_filters::{FilterRun, run_filters};
 use super::rows::{
     FilterPoint, FitFailure, FoldSummaryRow, InstallationResults, NO_CALIBRATION, SummaryRow,
     TermRow, TransferRow,
 };
 use super::spec::{InstallationSpec, Method};
-use super::term_names::term_set;
+use super::term_names::{TermName, term_set};
 use super::terms::{Installation, score};
 use crate::Vec3;
 use crate::data::paired::PairedRecording;
@@ -27,6 +27,7 @@ use crate::estimators::{Baseline, Estimator, LeastSquares};
 use crate::evaluate::statistics::{mean_ci95, mean_std};
 use crate::vocab::{Correction, ErrorModel};
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// One recording with its reference in the body frame.
 pub struct Segment {
@@ -230,217 +231,286 @@ pub fn calibrate_on(
     c: usize,
     estimators: &Estimators,
 ) -> Calibrated {
-    let fold_of = |i: usize| spec.learned.as_ref().map(|learned| learned.fold_of(i));
     let noise = Noise {
         dvl_m_s: spec.dvl_noise_m_s,
         reference_m_s: spec.reference_noise_m_s,
     };
-    let tolerances = spec.observability.tolerances();
     let calibration = segments[c];
-    let filters = run_filters(spec, &calibration.recording, &calibration.reference, noise);
+    let on = OnTrajectory {
+        spec,
+        segments,
+        c,
+        estimators,
+        noise,
+        tolerances: spec.observability.tolerances(),
+        filters: run_filters(spec, &calibration.recording, &calibration.reference, noise),
+    };
     let per_window: Vec<Calibrated> = spec
         .windows_s
         .par_iter()
-        .map(|&window_s| {
-            let (range, _) = calibration.first_seconds(window_s);
-            let mut heldout = Vec::new();
-            let mut terms = Vec::new();
-            let mut failures = Vec::new();
-            let mut methods: Vec<(String, Estimate)> = vec![(
-                NO_CALIBRATION.to_string(),
-                Estimate {
-                    installation: Installation::default(),
-                    bound: None,
-                    filtered: None,
-                },
-            )];
-            for method in &spec.methods {
-                let estimate = match method {
-                    Method::Baseline | Method::LeastSquares(_) | Method::Dcnet(_) => {
-                        let (dvl, reference) = reference_on_stamps(calibration, range.clone());
-                        let correction = match method {
-                            Method::Baseline => Baseline.estimate(&dvl, &reference),
-                            Method::LeastSquares(model) => {
-                                LeastSquares(*model).estimate(&dvl, &reference)
-                            }
-                            Method::Dcnet(model) => {
-                                match (estimators.dcnet)(*model, &dvl, &reference) {
-                                    Some(correction) => correction,
-                                    None => continue,
-                                }
-                            }
-                            Method::Installation { .. }
-                            | Method::Filter { .. }
-                            | Method::Learned { .. } => {
-                                unreachable!()
-                            }
-                        };
-                        Estimate {
-                            installation: from_correction(&correction),
-                            bound: None,
-                            filtered: None,
-                        }
-                    }
-                    Method::Filter { .. } => {
-                        let label = method.label();
-                        let run = filters
-                            .iter()
-                            .find(|run| run.label == label)
-                            .expect("every filter ran");
-                        let Some((installation, terms)) = run.at_window(range.end) else {
-                            continue;
-                        };
-                        Estimate {
-                            installation,
-                            bound: None,
-                            filtered: Some(terms),
-                        }
-                    }
-                    Method::Learned { source, replicate } => {
-                        let Some(fold) = fold_of(c) else { continue };
-                        let model = LearnedModel {
-                            source: *source,
-                            replicate: *replicate,
-                            fold,
-                        };
-                        match (estimators.learned)(model, calibration, range.clone()) {
-                            Some(installation) => Estimate {
-                                installation,
-                                bound: None,
-                                filtered: None,
-                            },
-                            None => continue,
-                        }
-                    }
-                    Method::Installation { terms, .. } => {
-                        let recording = &calibration.recording;
-                        match fit(
-                            &recording.time_s[range.clone()],
-                            &recording.dvl_m_s[range.clone()],
-                            &calibration.reference,
-                            term_set(terms),
-                        ) {
-                            Ok(fitted) => Estimate {
-                                installation: fitted.installation,
-                                bound: Some(bound(&fitted, noise, &tolerances)),
-                                filtered: None,
-                            },
-                            Err(why) => {
-                                failures.push(FitFailure {
-                                    method: method.label(),
-                                    calibration: calibration.name.clone(),
-                                    window_s,
-                                    why: why.to_string(),
-                                });
-                                continue;
-                            }
-                        }
-                    }
-                };
-                methods.push((method.label(), estimate));
-            }
-            let learned_labels: Vec<String> = spec
-                .methods
-                .iter()
-                .filter(|m| matches!(m, Method::Learned { .. }))
-                .map(Method::label)
-                .collect();
-            let estimated = methods
-                .iter()
-                .map(|(label, estimate)| Estimated {
-                    method: label.clone(),
-                    calibration: calibration.name.clone(),
-                    window_s,
-                    installation: estimate.installation,
-                })
-                .collect();
-            for (label, estimate) in &methods {
-                let learned = learned_labels.contains(label);
-                // A learned method's terms (no standard deviation), or a filter's.
-                let learned_terms = spec.learned.as_ref().filter(|_| learned).map(|l| {
-                    let set = term_set(&l.terms);
-                    let values = estimate.installation.to_parameters(&set);
-                    let names = set.parameter_names().into_iter();
-                    names
-                        .zip(values)
-                        .map(|(name, value)| (name, value, f64::NAN))
-                        .collect()
-                });
-                for &(name, value, std) in learned_terms.iter().chain(&estimate.filtered).flatten()
-                {
-                    terms.push(TermRow {
-                        method: label.clone(),
-                        calibration: calibration.name.clone(),
-                        window_s,
-                        term: name.to_string(),
-                        value,
-                        std,
-                        unseen: String::new(),
-                    });
-                }
-                if let Some(bound) = &estimate.bound {
-                    for (i, name) in bound.names.iter().enumerate() {
-                        let unseen = bound
-                            .unseen
-                            .iter()
-                            .filter(|u| u.term == *name)
-                            .map(|u| u.why.to_string())
-                            .collect::<Vec<_>>()
-                            .join("; ");
-                        terms.push(TermRow {
-                            method: label.clone(),
-                            calibration: calibration.name.clone(),
-                            window_s,
-                            term: name.to_string(),
-                            value: bound.value[i],
-                            std: bound.std[i],
-                            unseen,
-                        });
-                    }
-                }
-                for (s, scored) in segments.iter().enumerate() {
-                    if s == c || (learned && fold_of(s) != fold_of(c)) {
-                        continue;
-                    }
-                    let recording = &scored.recording;
-                    // Every method is scored on the same samples, those inside the
-                    // reference whatever the time offset.
-                    let samples = scored
-                        .reference
-                        .interior(&recording.time_s, TIME_OFFSET_MARGIN_S);
-                    let Some(rmse) = score(
-                        &estimate.installation,
-                        &recording.time_s,
-                        &recording.dvl_m_s,
-                        &scored.reference,
-                        samples,
-                    ) else {
-                        continue;
-                    };
-                    heldout.push(TransferRow {
-                        method: label.clone(),
-                        calibration: calibration.name.clone(),
-                        window_s,
-                        scored: scored.name.clone(),
-                        rmse_cm_s: [100.0 * rmse.x_m_s, 100.0 * rmse.y_m_s, 100.0 * rmse.z_m_s],
-                        total_cm_s: 100.0 * rmse.total_m_s,
-                    });
-                }
-            }
-            Calibrated {
-                heldout,
-                terms,
-                estimated,
-                failures,
-                filtered: Vec::new(),
-            }
-        })
+        .map(|&window_s| on.window(window_s))
         .collect();
     let mut calibrated = Calibrated::concat(per_window);
-    for run in &filters {
+    for run in &on.filters {
         calibrated.filtered.extend(run.points(&calibration.name));
     }
     calibrated
+}
+
+impl Estimate {
+    /// Terms with neither a bound nor a filter's standard deviations.
+    fn bare(installation: Installation) -> Estimate {
+        Estimate {
+            installation,
+            bound: None,
+            filtered: None,
+        }
+    }
+}
+
+/// What every window of one calibration trajectory shares: the study, the trajectories,
+/// which one calibrates, the estimators, the noise and tolerances of the bound, and the
+/// filters' runs over the whole trajectory.
+struct OnTrajectory<'a> {
+    spec: &'a InstallationSpec,
+    segments: &'a [&'a Segment],
+    c: usize,
+    estimators: &'a Estimators<'a>,
+    noise: Noise,
+    tolerances: Tolerances,
+    filters: Vec<FilterRun>,
+}
+
+impl OnTrajectory<'_> {
+    fn calibration(&self) -> &Segment {
+        self.segments[self.c]
+    }
+
+    /// The fold of trajectory `i` under `[learned]`, where there is one.
+    fn fold_of(&self, i: usize) -> Option<usize> {
+        self.spec.learned.as_ref().map(|learned| learned.fold_of(i))
+    }
+
+    /// Every method on the first `window_s` seconds: its terms (no calibration first),
+    /// their rows, and their scores on the other trajectories.
+    fn window(&self, window_s: f64) -> Calibrated {
+        let (range, _) = self.calibration().first_seconds(window_s);
+        let mut failures = Vec::new();
+        let mut methods: Vec<(String, Estimate)> = vec![(
+            NO_CALIBRATION.to_string(),
+            Estimate::bare(Installation::default()),
+        )];
+        for method in &self.spec.methods {
+            match self.estimate(method, range.clone(), window_s) {
+                Ok(Some(estimate)) => methods.push((method.label(), estimate)),
+                Ok(None) => {}
+                Err(failure) => failures.push(failure),
+            }
+        }
+        let learned_labels: Vec<String> = self
+            .spec
+            .methods
+            .iter()
+            .filter(|m| matches!(m, Method::Learned { .. }))
+            .map(Method::label)
+            .collect();
+        let estimated = methods
+            .iter()
+            .map(|(label, estimate)| Estimated {
+                method: label.clone(),
+                calibration: self.calibration().name.clone(),
+                window_s,
+                installation: estimate.installation,
+            })
+            .collect();
+        let (mut terms, mut heldout) = (Vec::new(), Vec::new());
+        for (label, estimate) in &methods {
+            let learned = learned_labels.contains(label);
+            terms.extend(self.term_rows(label, estimate, learned, window_s));
+            heldout.extend(self.transfer_rows(label, estimate, learned, window_s));
+        }
+        Calibrated {
+            heldout,
+            terms,
+            estimated,
+            failures,
+            filtered: Vec::new(),
+        }
+    }
+
+    /// What `method` estimates on the samples `range`: `None` where it cannot (no
+    /// network, a window too short for it, a filter that took no sample), and the
+    /// failure of a fit.
+    fn estimate(
+        &self,
+        method: &Method,
+        range: Range<usize>,
+        window_s: f64,
+    ) -> Result<Option<Estimate>, FitFailure> {
+        Ok(match method {
+            Method::Baseline | Method::LeastSquares(_) | Method::Dcnet(_) => {
+                self.corrected(method, range)
+            }
+            Method::Filter { .. } => {
+                let label = method.label();
+                let run = self
+                    .filters
+                    .iter()
+                    .find(|run| run.label == label)
+                    .expect("every filter ran");
+                run.at_window(range.end)
+                    .map(|(installation, terms)| Estimate {
+                        installation,
+                        bound: None,
+                        filtered: Some(terms),
+                    })
+            }
+            Method::Learned { source, replicate } => self.fold_of(self.c).and_then(|fold| {
+                let model = LearnedModel {
+                    source: *source,
+                    replicate: *replicate,
+                    fold,
+                };
+                (self.estimators.learned)(model, self.calibration(), range).map(Estimate::bare)
+            }),
+            Method::Installation { terms, .. } => {
+                Some(self.fitted(method, terms, range, window_s)?)
+            }
+        })
+    }
+
+    /// The scale-and-bias correction of one of the paper's methods, from the DVL and the
+    /// reference's body velocity on the same stamps.
+    fn corrected(&self, method: &Method, range: Range<usize>) -> Option<Estimate> {
+        let (dvl, reference) = reference_on_stamps(self.calibration(), range);
+        let correction = match method {
+            Method::Baseline => Baseline.estimate(&dvl, &reference),
+            Method::LeastSquares(model) => LeastSquares(*model).estimate(&dvl, &reference),
+            Method::Dcnet(model) => (self.estimators.dcnet)(*model, &dvl, &reference)?,
+            Method::Installation { .. } | Method::Filter { .. } | Method::Learned { .. } => {
+                unreachable!()
+            }
+        };
+        Some(Estimate::bare(from_correction(&correction)))
+    }
+
+    /// The fit of an installation model's `terms` on the samples `range`, with its bound.
+    fn fitted(
+        &self,
+        method: &Method,
+        terms: &[TermName],
+        range: Range<usize>,
+        window_s: f64,
+    ) -> Result<Estimate, FitFailure> {
+        let calibration = self.calibration();
+        let recording = &calibration.recording;
+        match fit(
+            &recording.time_s[range.clone()],
+            &recording.dvl_m_s[range],
+            &calibration.reference,
+            term_set(terms),
+        ) {
+            Ok(fitted) => Ok(Estimate {
+                installation: fitted.installation,
+                bound: Some(bound(&fitted, self.noise, &self.tolerances)),
+                filtered: None,
+            }),
+            Err(why) => Err(FitFailure {
+                method: method.label(),
+                calibration: calibration.name.clone(),
+                window_s,
+                why: why.to_string(),
+            }),
+        }
+    }
+
+    /// The rows of one method's terms: a learned method's (no standard deviation), a
+    /// filter's, and a fit's with its bound and why a term cannot be seen.
+    fn term_rows(
+        &self,
+        label: &str,
+        estimate: &Estimate,
+        learned: bool,
+        window_s: f64,
+    ) -> Vec<TermRow> {
+        let row = |term: &str, value: f64, std: f64, unseen: String| TermRow {
+            method: label.to_string(),
+            calibration: self.calibration().name.clone(),
+            window_s,
+            term: term.to_string(),
+            value,
+            std,
+            unseen,
+        };
+        let mut rows = Vec::new();
+        // A learned method's terms (no standard deviation), or a filter's.
+        let learned_terms = self.spec.learned.as_ref().filter(|_| learned).map(|l| {
+            let set = term_set(&l.terms);
+            let values = estimate.installation.to_parameters(&set);
+            let names = set.parameter_names().into_iter();
+            names
+                .zip(values)
+                .map(|(name, value)| (name, value, f64::NAN))
+                .collect()
+        });
+        for &(name, value, std) in learned_terms.iter().chain(&estimate.filtered).flatten() {
+            rows.push(row(name, value, std, String::new()));
+        }
+        if let Some(bound) = &estimate.bound {
+            for (i, name) in bound.names.iter().enumerate() {
+                let unseen = bound
+                    .unseen
+                    .iter()
+                    .filter(|u| u.term == *name)
+                    .map(|u| u.why.to_string())
+                    .collect::<Vec<_>>()
+                    .join("; ");
+                rows.push(row(name, bound.value[i], bound.std[i], unseen));
+            }
+        }
+        rows
+    }
+
+    /// One method's RMSE on every other trajectory (a learned method's on those of the
+    /// calibration's fold only), each on its samples inside the reference.
+    fn transfer_rows(
+        &self,
+        label: &str,
+        estimate: &Estimate,
+        learned: bool,
+        window_s: f64,
+    ) -> Vec<TransferRow> {
+        let (c, mut rows) = (self.c, Vec::new());
+        for (s, scored) in self.segments.iter().enumerate() {
+            if s == c || (learned && self.fold_of(s) != self.fold_of(c)) {
+                continue;
+            }
+            let recording = &scored.recording;
+            // Every method is scored on the same samples, those inside the
+            // reference whatever the time offset.
+            let samples = scored
+                .reference
+                .interior(&recording.time_s, TIME_OFFSET_MARGIN_S);
+            let Some(rmse) = score(
+                &estimate.installation,
+                &recording.time_s,
+                &recording.dvl_m_s,
+                &scored.reference,
+                samples,
+            ) else {
+                continue;
+            };
+            rows.push(TransferRow {
+                method: label.to_string(),
+                calibration: self.calibration().name.clone(),
+                window_s,
+                scored: scored.name.clone(),
+                rmse_cm_s: [100.0 * rmse.x_m_s, 100.0 * rmse.y_m_s, 100.0 * rmse.z_m_s],
+                total_cm_s: 100.0 * rmse.total_m_s,
+            });
+        }
+        rows
+    }
 }
 
 /// [`summarize`] on the pairs whose calibration and scored trajectories share a fold,

@@ -10,12 +10,12 @@ use super::filter::FilterStep;
 use super::terms::Installation;
 use crate::evaluate::calibration_time::calibration_time_index;
 
-/// The filter after the samples of the first `length_s` seconds, and the RMSE its terms
-/// leave on the whole recording.
+/// The filter after the samples of the first `length_s` seconds (its step, copied, so a
+/// curve outlives the filter's run), and the RMSE its terms leave on the whole recording.
 #[derive(Debug, Clone, PartialEq)]
-pub struct SettlingPoint<'a> {
+pub struct SettlingPoint {
     pub length_s: f64,
-    pub step: &'a FilterStep,
+    pub step: FilterStep,
     pub rmse_cm_s: f64,
 }
 
@@ -26,7 +26,7 @@ pub struct SettlingPoint<'a> {
 pub fn settling_curve(
     steps: &[FilterStep],
     score_cm_s: impl Fn(&Installation) -> f64,
-) -> Vec<SettlingPoint<'_>> {
+) -> Vec<SettlingPoint> {
     let Some(last) = steps.last() else {
         return Vec::new();
     };
@@ -44,7 +44,7 @@ pub fn settling_curve(
         })
         .map(|(length_s, step)| SettlingPoint {
             length_s,
-            step,
+            step: step.clone(),
             rmse_cm_s: score_cm_s(&step.installation),
         })
         .collect()
@@ -52,10 +52,7 @@ pub fn settling_curve(
 
 /// The shortest length of `curve` after which its RMSE stays within `tolerance` (a
 /// fraction) of its last value; `None` when the last value is not finite.
-pub fn settling_time<'a, 'b>(
-    curve: &'b [SettlingPoint<'a>],
-    tolerance: f64,
-) -> Option<&'b SettlingPoint<'a>> {
+pub fn settling_time(curve: &[SettlingPoint], tolerance: f64) -> Option<&SettlingPoint> {
     let points: Vec<(f64, f64)> = curve.iter().map(|p| (p.length_s, p.rmse_cm_s)).collect();
     calibration_time_index(&points, tolerance).map(|i| &curve[i])
 }

@@ -166,6 +166,58 @@ impl<C: CheckpointStrategy> LinearBackend for Autodiff<Flex, C> {
     }
 }
 
+/// What the backward reads: the input (for the weight's gradient), the weight (for
+/// the input's), the activation's output before the mask, and the mask.
+#[derive(Debug, Clone)]
+struct LinearState {
+    x: Option<FlexTensor>,
+    weight: Option<FlexTensor>,
+    activated: FlexTensor,
+    mask: Option<FlexTensor>,
+}
+
+/// Parents x, weight, bias. The pre-activation gradient g ⊙ mask ⊙ act′(y) in one
+/// pass; then burn's Linear backward operations on it.
+#[derive(Debug)]
+struct LinearStep {
+    activation: LayerActivation,
+}
+
+impl Backward<Flex, 3> for LinearStep {
+    type State = LinearState;
+
+    fn backward(
+        self,
+        ops: Ops<Self::State, 3>,
+        grads: &mut Gradients,
+        _checkpointer: &mut Checkpointer,
+    ) {
+        let [node_x, node_weight, node_bias] = ops.parents;
+        let grad = grads.consume::<Flex>(&ops.node);
+        let state = ops.state;
+        let grad =
+            pre_activation_grad(grad, &state.activated, state.mask.as_ref(), self.activation);
+        if let Some(node) = node_x {
+            // burn's linear_x_backward: g·Wᵀ, the transpose a view.
+            let weight = state.weight.expect("the weight is kept for x's gradient");
+            let input_grad = product(&grad, &weight.transpose(0, 1));
+            grads.register::<Flex>(node.id, input_grad);
+        }
+        if let Some(node) = node_weight {
+            // burn's linear_weight_backward on 2-D x: xᵀ·g, the transpose a view.
+            let x = state.x.expect("x is kept for the weight's gradient");
+            let weight_grad = product(&x.transpose(0, 1), &grad);
+            grads.register::<Flex>(node.id, weight_grad);
+        }
+        if let Some(node) = node_bias {
+            grads.register::<Flex>(
+                node.id,
+                <Flex as ModuleOps<Flex>>::linear_bias_backward(grad),
+            );
+        }
+    }
+}
+
 /// The fused layer under autodiff: the forward of [`forward`], and one backward node whose
 /// parents are `x`, `weight` and `bias`.
 fn tracked_linear<C: CheckpointStrategy>(
@@ -175,58 +227,6 @@ fn tracked_linear<C: CheckpointStrategy>(
     activation: LayerActivation,
     mask: Option<FlexTensor>,
 ) -> FloatTensor<Autodiff<Flex, C>> {
-    /// What the backward reads: the input (for the weight's gradient), the weight (for
-    /// the input's), the activation's output before the mask, and the mask.
-    #[derive(Debug, Clone)]
-    struct LinearState {
-        x: Option<FlexTensor>,
-        weight: Option<FlexTensor>,
-        activated: FlexTensor,
-        mask: Option<FlexTensor>,
-    }
-
-    /// Parents x, weight, bias. The pre-activation gradient g ⊙ mask ⊙ act′(y) in one
-    /// pass; then burn's Linear backward operations on it.
-    #[derive(Debug)]
-    struct LinearStep {
-        activation: LayerActivation,
-    }
-
-    impl Backward<Flex, 3> for LinearStep {
-        type State = LinearState;
-
-        fn backward(
-            self,
-            ops: Ops<Self::State, 3>,
-            grads: &mut Gradients,
-            _checkpointer: &mut Checkpointer,
-        ) {
-            let [node_x, node_weight, node_bias] = ops.parents;
-            let grad = grads.consume::<Flex>(&ops.node);
-            let state = ops.state;
-            let grad =
-                pre_activation_grad(grad, &state.activated, state.mask.as_ref(), self.activation);
-            if let Some(node) = node_x {
-                // burn's linear_x_backward: g·Wᵀ, the transpose a view.
-                let weight = state.weight.expect("the weight is kept for x's gradient");
-                let input_grad = product(&grad, &weight.transpose(0, 1));
-                grads.register::<Flex>(node.id, input_grad);
-            }
-            if let Some(node) = node_weight {
-                // burn's linear_weight_backward on 2-D x: xᵀ·g, the transpose a view.
-                let x = state.x.expect("x is kept for the weight's gradient");
-                let weight_grad = product(&x.transpose(0, 1), &grad);
-                grads.register::<Flex>(node.id, weight_grad);
-            }
-            if let Some(node) = node_bias {
-                grads.register::<Flex>(
-                    node.id,
-                    <Flex as ModuleOps<Flex>>::linear_bias_backward(grad),
-                );
-            }
-        }
-    }
-
     let x_tracked = x.is_tracked();
     let weight_tracked = weight.is_tracked();
     let step = LinearStep { activation };

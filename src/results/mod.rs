@@ -12,6 +12,7 @@ pub mod calibration_time;
 pub mod installation;
 pub mod read;
 pub mod corrected;
+pub mod calibrate;
 pub mod sweep;
 pub mod installation_sweep;
 

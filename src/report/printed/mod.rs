@@ -1,6 +1,8 @@
 //! The calibration and evaluation tables printed at the end of a run, in the paper's
 //! layout: error models across, DVLs and estimators down, `mean ± std (T_conv)` cells.
 
+pub mod calibrate;
+
 use crate::evaluate::{CalibrationRow, EvaluationRow};
 use crate::first_seen;
 use crate::vocab::ErrorModel;

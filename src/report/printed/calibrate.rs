@@ -1,0 +1,197 @@
+//! What `calibrate` prints on stdout: the fit's terms with their standard deviations,
+//! the terms the recording cannot show and the RMSE before and after; then the Kalman
+//! filter's terms after a few lengths of the recording and how long it needed.
+//! In: a [`Calibration`]. Out: the text.
+
+use crate::installation::fit::TIME_OFFSET_MARGIN_S;
+use crate::installation::settling::SettlingPoint;
+use crate::installation::terms::AxisRmse;
+use crate::report::installation::{readable_term, readable_why};
+use crate::results::calibrate::Calibration;
+use comfy_table::{Table, presets::ASCII_MARKDOWN};
+
+/// Everything `calibrate` prints: the fit, a blank line, the filter; ends in a newline.
+pub fn calibration_text(calibration: &Calibration) -> String {
+    format!(
+        "{}\n\n{}\n",
+        printed_fit(calibration),
+        printed_settling(calibration)
+    )
+}
+
+/// The terms of a calibration with their standard deviations, the terms the window
+/// cannot show and why, and the RMSE against the reference before and after.
+fn printed_fit(calibration: &Calibration) -> String {
+    let Calibration {
+        bound,
+        fitted,
+        noise,
+        ..
+    } = calibration;
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    table.set_header(["term", "estimate", "standard deviation", "seen"]);
+    for (i, name) in bound.names.iter().enumerate() {
+        let (readable, unit, factor) = readable_term(name);
+        let seen = if bound.is_unseen(name) { "no" } else { "yes" };
+        table.add_row([
+            readable,
+            format!("{:.4} {unit}", bound.value[i] * factor),
+            format!("{:.4} {unit}", bound.std[i] * factor),
+            seen.to_string(),
+        ]);
+    }
+    let residual = fitted.residual_rms_m_s.map(|r| 100.0 * r);
+    let assumed = 100.0 * (noise.dvl_m_s.powi(2) + noise.reference_m_s.powi(2)).sqrt();
+    let mut text = format!(
+        "calibrated on {} samples (those {TIME_OFFSET_MARGIN_S} s inside the reference)\n{table}\n",
+        fitted.sample_count
+    );
+    text.push_str(&format!(
+        "the standard deviations assume white noise of {assumed:.2} cm/s per axis; the fit leaves {:.2}, {:.2}, {:.2} cm/s (x, y, z): where the two differ, or the noise is not white, they are off by about as much\n",
+        residual[0], residual[1], residual[2]
+    ));
+    for unseen in &bound.unseen {
+        text.push_str(&format!(
+            "not seen here: {}: {}\n",
+            readable_term(unseen.term).0,
+            readable_why(unseen.term, &unseen.why.to_string())
+        ));
+    }
+    text.push_str(&format!(
+        "RMSE against the reference, body frame, on the {} of {} samples {TIME_OFFSET_MARGIN_S} s inside it: {} before, {} after",
+        calibration.scored,
+        calibration.recorded,
+        printed_rmse(calibration.before),
+        printed_rmse(calibration.after)
+    ));
+    text
+}
+
+/// An RMSE in cm/s, its total and each axis.
+fn printed_rmse(rmse: Option<AxisRmse>) -> String {
+    match rmse {
+        Some(r) => format!(
+            "{:.2} cm/s (x {:.2}, y {:.2}, z {:.2})",
+            100.0 * r.total_m_s,
+            100.0 * r.x_m_s,
+            100.0 * r.y_m_s,
+            100.0 * r.z_m_s
+        ),
+        None => "no sample inside the reference".into(),
+    }
+}
+
+/// The lengths the printed table shows: round ones below the recording's, the settling
+/// time and the whole recording.
+const SHOWN_LENGTHS_S: [f64; 9] = [5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0, 2000.0];
+
+/// The filter's terms after a few lengths of the recording (of its first `window`
+/// seconds where that was asked), each ± its standard deviation, and the RMSE they leave
+/// on the whole recording; then how long the recording needed.
+fn printed_settling(calibration: &Calibration) -> String {
+    let Some(all) = calibration.curve.last() else {
+        return "the Kalman filter took no sample: none lies inside the reference".into();
+    };
+    let shown = shown_points(calibration, all);
+    let mut text = format!(
+        "the Kalman filter over the same samples, its terms constant, starting at zero with standard deviations {}; its terms after each length, ± its standard deviation:\n{}\n",
+        priors(calibration).join(", "),
+        settling_table(calibration, &shown, all)
+    );
+    text.push_str(&verdict(calibration, all));
+    text
+}
+
+/// The points of the curve the table shows: those at [`SHOWN_LENGTHS_S`], the settling
+/// time, and the last.
+fn shown_points<'a>(
+    calibration: &'a Calibration,
+    all: &'a SettlingPoint,
+) -> Vec<&'a SettlingPoint> {
+    let settled = calibration.settled_s;
+    let mut shown: Vec<&SettlingPoint> = calibration
+        .curve
+        .iter()
+        .filter(|p| SHOWN_LENGTHS_S.contains(&p.length_s) || settled == Some(p.length_s))
+        .collect();
+    if shown.last().is_none_or(|p| p.length_s != all.length_s) {
+        shown.push(all);
+    }
+    shown
+}
+
+/// One column per shown length, one row per term, and the RMSE each leaves.
+fn settling_table(
+    calibration: &Calibration,
+    shown: &[&SettlingPoint],
+    all: &SettlingPoint,
+) -> Table {
+    let calibrated_on = if calibration.window_s.is_some() {
+        "window"
+    } else {
+        "all"
+    };
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    let mut header = vec!["after".to_string()];
+    header.extend(shown.iter().map(|p| {
+        if p.length_s == all.length_s {
+            format!("{} s ({calibrated_on})", p.length_s)
+        } else if calibration.settled_s == Some(p.length_s) {
+            format!("{} s (settled)", p.length_s)
+        } else {
+            format!("{} s", p.length_s)
+        }
+    }));
+    table.set_header(header);
+    let terms = calibration.filter.terms;
+    for (i, name) in terms.parameter_names().iter().enumerate() {
+        let (readable, unit, factor) = readable_term(name);
+        let mut row = vec![format!("{readable} ({unit})")];
+        row.extend(shown.iter().map(|p| {
+            let value = p.step.installation.to_parameters(&terms)[i];
+            format!("{:.3} ± {:.3}", value * factor, p.step.std[i] * factor)
+        }));
+        table.add_row(row);
+    }
+    let mut rmse = vec!["RMSE on the recording (cm/s)".to_string()];
+    rmse.extend(shown.iter().map(|p| format!("{:.2}", p.rmse_cm_s)));
+    table.add_row(rmse);
+    table
+}
+
+/// Each prior of the filter's terms once, with its unit: the lever arm's three
+/// components share one.
+fn priors(calibration: &Calibration) -> Vec<String> {
+    let terms = calibration.filter.terms;
+    let mut prior: Vec<String> = Vec::new();
+    for (&kind, name) in terms.parameter_kinds().iter().zip(terms.parameter_names()) {
+        let (_, unit, factor) = readable_term(name);
+        let std = format!("{} {unit}", calibration.settings.prior.of(kind) * factor);
+        if !prior.contains(&std) {
+            prior.push(std);
+        }
+    }
+    prior
+}
+
+/// How long the recording (or its window) needed, or that the filter diverged.
+fn verdict(calibration: &Calibration, all: &SettlingPoint) -> String {
+    let tolerance_pct = calibration.tolerance_pct;
+    let of = if calibration.window_s.is_some() {
+        "of the window"
+    } else {
+        "of the recording"
+    };
+    match calibration.settled_s {
+        Some(length_s) => format!(
+            "after {length_s} s the filter's terms leave an RMSE on the whole recording within {tolerance_pct} % of the {:.2} cm/s they leave after all {} s {of}, and stay there: more of it moves the RMSE by less than {tolerance_pct} %, though a term whose ± is still wide then is not pinned down (scored on this recording, not on another dive)",
+            all.rmse_cm_s, all.length_s
+        ),
+        None => format!(
+            "the filter's terms after all {} s {of} leave no finite RMSE on the recording: the filter diverged",
+            all.length_s
+        ),
+    }
+}

@@ -1,0 +1,403 @@
+//! `calibrate` as one library call: one recording of a DVL beside a reference with
+//! attitude is read, the terms asked for are fitted (on its first `window_s` seconds
+//! where that is asked) and bounded, scored on every sample before and after, the
+//! installation's Kalman filter runs over the same samples and says how much of the
+//! recording its terms needed ([`crate::installation::settling`]), and the recording is
+//! written corrected beside the filter's terms against time ([`super::corrected`]).
+//! In: [`CalibrateArgs`]. Out: a [`Calibration`], everything the command prints, or a
+//! [`CalibrateError`] that names the argument, file or step at fault.
+
+use super::ResultsError;
+use super::corrected::{corrected_samples, write, write_terms_in_time};
+use crate::data::paired::{self, PairedColumns, PairedError, PairedFiles, PairedRecording};
+use crate::installation::bound::{Noise, TermBound, bound};
+use crate::installation::filter::{FilterSettings, run_filter};
+use crate::installation::fit::{Fit, FitError, TIME_OFFSET_MARGIN_S, fit};
+use crate::installation::frames::Reference;
+use crate::installation::protocol_filters::FilterRun;
+use crate::installation::settling::{SettlingPoint, settling_curve, settling_time};
+use crate::installation::spec::{ObservabilityFile, default_filter_settings};
+use crate::installation::term_names::{TermName, term_list_faults, term_set};
+use crate::installation::terms::{AxisRmse, Installation, TermSet, score};
+use crate::spec::{SpecError, TomlFile};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+/// What `calibrate` is asked.
+pub struct CalibrateArgs<'a> {
+    pub dvl: &'a Path,
+    /// The reference's file; the DVL's own when `None`.
+    pub reference: Option<&'a Path>,
+    /// A TOML file whose `[columns]` table names the columns; A-KIT's when `None`.
+    pub columns: Option<&'a Path>,
+    pub terms: &'a [TermName],
+    /// Calibrate on the first this many seconds only.
+    pub window_s: Option<f64>,
+    pub dvl_noise_cm_s: f64,
+    pub reference_noise_cm_s: f64,
+    /// How close to its value after every sample the filter's RMSE must stay, %.
+    pub tolerance_pct: f64,
+    /// The folder the corrected recording and the terms against time go to.
+    pub out: &'a Path,
+}
+
+/// Why `calibrate` did not finish: an argument, the columns file, the recording or the
+/// fit at fault (bad input), or a file that could not be written (a failure while
+/// running, [`CalibrateError::Write`]).
+#[derive(Debug, thiserror::Error)]
+pub enum CalibrateError {
+    #[error("--terms: {0}")]
+    Terms(String),
+    #[error("--dvl-noise-cm-s {0}: give a positive number: the bound divides by it")]
+    DvlNoise(f64),
+    #[error("--reference-noise-cm-s {0}: give zero or a positive number")]
+    ReferenceNoise(f64),
+    #[error("--window-s {0}: give a positive number of seconds")]
+    Window(f64),
+    #[error("--tolerance-pct {0}: give a positive percentage")]
+    Tolerance(f64),
+    /// The `--columns` file, placed at its line and key.
+    #[error("{0}")]
+    Columns(SpecError),
+    #[error(transparent)]
+    Read(#[from] PairedError),
+    /// The fit failed; its fault is kept, and shown inside the message (not as a source,
+    /// which would print it twice).
+    #[error(
+        "{}: calibrating {terms} on {samples} samples: {fault}; a window too short for its terms, or terms it cannot tell apart (a scale and a bias at constant speed, say), fail this way: give a longer --window-s or fewer --terms",
+        dvl.display()
+    )]
+    Fit {
+        dvl: PathBuf,
+        /// The terms asked for, comma-separated.
+        terms: String,
+        samples: usize,
+        fault: FitError,
+    },
+    #[error(transparent)]
+    Write(#[from] ResultsError),
+}
+
+impl CalibrateError {
+    /// Whether the fault lies in what was given (arguments, files, recording) rather
+    /// than in writing the results.
+    pub fn is_input(&self) -> bool {
+        !matches!(self, CalibrateError::Write(_))
+    }
+}
+
+/// Everything `calibrate` found and wrote.
+pub struct Calibration {
+    /// The fit of the terms asked for, and its bound under `noise`.
+    pub fitted: Fit,
+    pub bound: TermBound,
+    pub noise: Noise,
+    /// The samples scored (those [`TIME_OFFSET_MARGIN_S`] inside the reference) and
+    /// those recorded.
+    pub scored: usize,
+    pub recorded: usize,
+    /// The RMSE against the reference on the scored samples with no terms and with the
+    /// fit's; `None` with no sample to score.
+    pub before: Option<AxisRmse>,
+    pub after: Option<AxisRmse>,
+    /// The Kalman filter, its run over the samples fitted, and its settling curve
+    /// (scored on every sample) with the length after which it settles.
+    pub settings: FilterSettings,
+    pub filter: FilterRun,
+    pub curve: Vec<SettlingPoint>,
+    pub settled_s: Option<f64>,
+    /// As asked: the tolerance of the settling time, %, and the window, s.
+    pub tolerance_pct: f64,
+    pub window_s: Option<f64>,
+    /// The corrected recording's CSV and Parquet files, and the filter's terms
+    /// against time.
+    pub corrected: Vec<PathBuf>,
+    pub terms_in_time: PathBuf,
+}
+
+/// The recording read, its reference, the samples scored (those
+/// [`TIME_OFFSET_MARGIN_S`] inside the reference) and the samples calibrated on (the
+/// first `window_s` seconds, or all).
+struct Read {
+    recording: PairedRecording,
+    reference: Reference,
+    scored: Range<usize>,
+    window: Option<PairedRecording>,
+}
+
+impl Read {
+    fn calibrating(&self) -> &PairedRecording {
+        self.window.as_ref().unwrap_or(&self.recording)
+    }
+
+    /// The RMSE `installation` leaves on the samples scored.
+    fn score(&self, installation: &Installation) -> Option<AxisRmse> {
+        let recording = &self.recording;
+        score(
+            installation,
+            &recording.time_s,
+            &recording.dvl_m_s,
+            &self.reference,
+            self.scored.clone(),
+        )
+    }
+}
+
+/// `calibrate`: the terms of one recording, their bound, how long the recording needed,
+/// and the recording corrected.
+pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
+    refused(args)?;
+    let read = read(args)?;
+    let terms = term_set(args.terms);
+    let fitted = fit_terms(args, &read, terms)?;
+    let noise = Noise {
+        dvl_m_s: args.dvl_noise_cm_s / 100.0,
+        reference_m_s: args.reference_noise_cm_s / 100.0,
+    };
+    let bounded = bound(&fitted, noise, &ObservabilityFile::default().tolerances());
+    let before = read.score(&Installation::default());
+    let after = read.score(&fitted.installation);
+    let (settings, filter, curve) = settle(&read, terms, noise);
+    let settled_s = settling_time(&curve, args.tolerance_pct / 100.0).map(|p| p.length_s);
+    let (corrected, terms_in_time) = write_files(args, &read, &fitted, &filter)?;
+    Ok(Calibration {
+        fitted,
+        bound: bounded,
+        noise,
+        scored: read.scored.len(),
+        recorded: read.recording.time_s.len(),
+        before,
+        after,
+        settings,
+        filter,
+        curve,
+        settled_s,
+        tolerance_pct: args.tolerance_pct,
+        window_s: args.window_s,
+        corrected,
+        terms_in_time,
+    })
+}
+
+/// The first argument of `args` at fault, where one is.
+fn refused(args: &CalibrateArgs) -> Result<(), CalibrateError> {
+    if let Some((_, message)) = term_list_faults(args.terms).first() {
+        return Err(CalibrateError::Terms(message.clone()));
+    }
+    if !(args.dvl_noise_cm_s.is_finite() && args.dvl_noise_cm_s > 0.0) {
+        return Err(CalibrateError::DvlNoise(args.dvl_noise_cm_s));
+    }
+    if !(args.reference_noise_cm_s.is_finite() && args.reference_noise_cm_s >= 0.0) {
+        return Err(CalibrateError::ReferenceNoise(args.reference_noise_cm_s));
+    }
+    if let Some(w) = args.window_s
+        && !(w.is_finite() && w > 0.0)
+    {
+        return Err(CalibrateError::Window(w));
+    }
+    if !(args.tolerance_pct.is_finite() && args.tolerance_pct > 0.0) {
+        return Err(CalibrateError::Tolerance(args.tolerance_pct));
+    }
+    Ok(())
+}
+
+/// The columns of `path`'s `[columns]` table, or A-KIT's.
+fn columns(path: Option<&Path>) -> Result<PairedColumns, CalibrateError> {
+    #[derive(serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct ColumnsFile {
+        columns: PairedColumns,
+    }
+    match path {
+        None => Ok(PairedColumns::akit()),
+        Some(path) => TomlFile::<ColumnsFile>::read(path)
+            .map(|file| file.value.columns)
+            .map_err(CalibrateError::Columns),
+    }
+}
+
+/// The recording of `args`, its reference, and its window where one is asked.
+fn read(args: &CalibrateArgs) -> Result<Read, CalibrateError> {
+    let files = PairedFiles {
+        dvl: args.dvl.to_path_buf(),
+        reference: args.reference.unwrap_or(args.dvl).to_path_buf(),
+    };
+    let recording = paired::read(&files, &columns(args.columns)?)?;
+    let reference = Reference::new(&recording);
+    let scored = reference.interior(&recording.time_s, TIME_OFFSET_MARGIN_S);
+    let window = args.window_s.map(|w| recording.first_seconds(w));
+    Ok(Read {
+        recording,
+        reference,
+        scored,
+        window,
+    })
+}
+
+/// The fit of `terms` on the samples calibrated on.
+fn fit_terms(args: &CalibrateArgs, read: &Read, terms: TermSet) -> Result<Fit, CalibrateError> {
+    let calibrating = read.calibrating();
+    fit(
+        &calibrating.time_s,
+        &calibrating.dvl_m_s,
+        &read.reference,
+        terms,
+    )
+    .map_err(|fault| CalibrateError::Fit {
+        dvl: args.dvl.to_path_buf(),
+        terms: args
+            .terms
+            .iter()
+            .map(|t| t.name())
+            .collect::<Vec<_>>()
+            .join(", "),
+        samples: calibrating.time_s.len(),
+        fault,
+    })
+}
+
+/// The filter of an installation spec's `[calibration.kalman]` as it comes, run over the
+/// samples calibrated on, and its settling curve scored on every sample.
+fn settle(
+    read: &Read,
+    terms: TermSet,
+    noise: Noise,
+) -> (FilterSettings, FilterRun, Vec<SettlingPoint>) {
+    let settings = default_filter_settings();
+    let calibrating = read.calibrating();
+    let filter = FilterRun {
+        label: "Kalman filter".into(),
+        terms,
+        steps: run_filter(
+            &calibrating.time_s,
+            &calibrating.dvl_m_s,
+            &read.reference,
+            terms,
+            &settings,
+            noise,
+        ),
+    };
+    let curve = settling_curve(&filter.steps, |installation| {
+        read.score(installation)
+            .map_or(f64::NAN, |rmse| 100.0 * rmse.total_m_s)
+    });
+    (settings, filter, curve)
+}
+
+/// Writes the recording corrected by the fit and the filter's terms against time,
+/// named after the DVL's file; the corrected files' paths, and the terms'.
+fn write_files(
+    args: &CalibrateArgs,
+    read: &Read,
+    fitted: &Fit,
+    filter: &FilterRun,
+) -> Result<(Vec<PathBuf>, PathBuf), CalibrateError> {
+    let corrected = corrected_samples(
+        &fitted.installation,
+        &read.recording.time_s,
+        &read.recording.dvl_m_s,
+        &read.reference,
+    );
+    let stem = args
+        .dvl
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "recording".into());
+    let written = write(args.out, &stem, &corrected)?;
+    let terms_in_time = write_terms_in_time(args.out, &stem, &filter.points(&stem))?;
+    Ok((written, terms_in_time))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A straight, level recording of 300 s at 1 Hz in A-KIT's two files, the vehicle
+    /// heading north at a varying speed, its DVL off by `bias_m_s`; the DVL file's path.
+    fn straight_recording(folder: &Path, bias_m_s: [f64; 3]) -> PathBuf {
+        let mut dvl = String::from("Time [s],DVL X [m/s],DVL Y [m/s],DVL Z [m/s]\n");
+        let mut reference = String::from(
+            "Time [s],V North [m/s],V East [m/s],V Down [m/s],Roll [rad],Pitch [rad],Yaw [rad]\n",
+        );
+        for i in 0..300 {
+            let t = i as f64;
+            let speed = 1.0 + 0.2 * (t / 20.0).sin();
+            let [bx, by, bz] = bias_m_s;
+            dvl.push_str(&format!("{t},{},{by},{bz}\n", speed + bx));
+            reference.push_str(&format!("{t},{speed},0,0,0,0,0\n"));
+        }
+        std::fs::write(folder.join("GT.csv"), reference).unwrap();
+        std::fs::write(folder.join("DVL.csv"), dvl).unwrap();
+        folder.join("DVL.csv")
+    }
+
+    fn args<'a>(
+        dvl: &'a Path,
+        reference: &'a Path,
+        out: &'a Path,
+        terms: &'a [TermName],
+    ) -> CalibrateArgs<'a> {
+        CalibrateArgs {
+            dvl,
+            reference: Some(reference),
+            columns: None,
+            terms,
+            window_s: None,
+            dvl_noise_cm_s: 2.0,
+            reference_noise_cm_s: 0.0,
+            tolerance_pct: 10.0,
+            out,
+        }
+    }
+
+    /// The one call recovers a known bias, settles, and names the three files it wrote.
+    #[test]
+    fn one_call_fits_settles_and_writes() {
+        let folder = tempfile::tempdir().unwrap();
+        let bias = [0.03, -0.02, 0.01];
+        let dvl = straight_recording(folder.path(), bias);
+        let (reference, out) = (folder.path().join("GT.csv"), folder.path().join("out"));
+        let terms = [TermName::Bias];
+        let calibration = calibrate(&args(&dvl, &reference, &out, &terms)).unwrap();
+        for k in 0..3 {
+            assert!((calibration.fitted.installation.bias_m_s[k] - bias[k]).abs() < 1e-9);
+        }
+        assert_eq!((calibration.scored, calibration.recorded), (294, 300));
+        assert!(calibration.after.unwrap().total_m_s < 1e-9);
+        // The filter takes the samples 3 s inside the reference, the last at 296 s.
+        assert_eq!(calibration.curve.last().unwrap().length_s, 297.0);
+        assert!(calibration.settled_s.is_some_and(|s| s < 300.0));
+        assert_eq!(
+            calibration.corrected,
+            [
+                out.join("DVL-corrected.csv"),
+                out.join("DVL-corrected.parquet")
+            ]
+        );
+        assert_eq!(
+            calibration.terms_in_time,
+            out.join("DVL-terms-in-time.parquet")
+        );
+        assert!(calibration.corrected.iter().all(|p| p.is_file()));
+        assert!(calibration.terms_in_time.is_file());
+    }
+
+    /// A bad argument is bad input and writes nothing; a folder that cannot be made is a
+    /// failure while running.
+    #[test]
+    fn a_bad_argument_is_input_and_an_unwritable_folder_a_failure() {
+        let folder = tempfile::tempdir().unwrap();
+        let dvl = straight_recording(folder.path(), [0.0; 3]);
+        let reference = folder.path().join("GT.csv");
+        let out = folder.path().join("out");
+        let refused = calibrate(&args(&dvl, &reference, &out, &[])).err().unwrap();
+        assert!(matches!(refused, CalibrateError::Terms(_)) && refused.is_input());
+        assert!(!out.exists());
+        let below_a_file = dvl.join("out");
+        let terms = [TermName::Bias];
+        let failed = calibrate(&args(&dvl, &reference, &below_a_file, &terms))
+            .err()
+            .unwrap();
+        assert!(matches!(failed, CalibrateError::Write(_)) && !failed.is_input());
+    }
+}
