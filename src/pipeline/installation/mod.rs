@@ -70,9 +70,18 @@ pub enum InstallationError {
         out: PathBuf,
         error_model: ErrorModel,
     },
-    /// A model of `[learned]` that could not be trained, stored or read back.
+    /// A `[learned]` setting that no model can train with.
     #[error("DCNet {model}: {why}")]
     Learned { model: String, why: String },
+    /// A model of `[learned]` that could not be trained or stored.
+    #[error("DCNet {model}")]
+    Training {
+        model: String,
+        #[source]
+        source: crate::pipeline::training::job::TrainingJobError,
+    },
+    #[error(transparent)]
+    Models(#[from] cache::ModelStoreError),
     #[error("writing {}", path.display())]
     Io {
         path: PathBuf,
