@@ -1,13 +1,14 @@
 //! `[learned]` end to end on synthetic recordings of a known installation: DCNets trained
 //! fold by fold on simulated installations and on the vehicle's own DVL, scored inside
-//! their folds beside the model-based fit, stored in the cache, refused when the spec is
-//! wrong.
+//! their folds beside the model-based fit, stored in the cache, listed by `plan`,
+//! resumed from their checkpoints after a kill, refused when the spec is wrong.
 
 mod common;
 
 use common::installed::{INSTALLED, write_installed, write_study_spec};
-use common::{dcnet, floats, read_parquet, stderr, strings};
+use common::{dcnet, floats, read_parquet, spawn, stderr, stdout, strings, tree};
 use std::path::Path;
+use std::time::{Duration, Instant};
 
 /// Four turning trajectories of [`INSTALLED`], a lever arm and time offset grid around
 /// but not on it, two folds.
@@ -334,4 +335,109 @@ fn a_simulated_time_offset_beyond_the_reference_margin_is_refused_before_trainin
     );
     assert!(!message.contains("DCNet installation"), "{message}");
     assert!(!d.join("results/syn").exists());
+}
+
+/// The weights of every stored `[learned]` model under `out`, by file name.
+fn learned_weights(out: &Path) -> Vec<(String, Vec<u8>)> {
+    tree(&out.join(".cache/learned"))
+        .into_iter()
+        .filter(|(rel, _)| rel.ends_with(".bin") && !rel.contains(".checkpoint/"))
+        .map(|(rel, path)| (rel, std::fs::read(path).unwrap()))
+        .collect()
+}
+
+/// A run killed with SIGKILL once a learned model has written a checkpoint resumes it
+/// (`plan` lists it as resumable) and ends with the models and tables of a run never
+/// interrupted, byte for byte; `plan` lists every model fold by fold, done.
+#[test]
+fn a_learned_training_killed_mid_way_resumes_to_the_bytes_of_an_uninterrupted_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    learned_spec(d, "checkpoint_every_epochs = 1\n");
+    let spec = "experiments/syn.toml";
+    let whole = dcnet(d, &["run", spec, "--out", "whole", "--no-plots"]);
+    assert!(whole.status.success(), "{}", stderr(&whole));
+
+    let killed = d.join("killed");
+    let checkpointed = || {
+        tree(&killed.join(".cache/learned"))
+            .keys()
+            .any(|rel| rel.ends_with(".checkpoint/state.json"))
+    };
+    let plan = || {
+        let output = dcnet(d, &["plan", spec, "--out", "killed"]);
+        assert!(output.status.success(), "{}", stderr(&output));
+        stdout(&output)
+    };
+    let mut caught = None;
+    for _ in 0..30 {
+        let _ = std::fs::remove_dir_all(&killed);
+        let mut child = spawn(d, &["run", spec, "--out", "killed", "--no-plots"]);
+        let started = Instant::now();
+        while !checkpointed()
+            && child.try_wait().unwrap().is_none()
+            && started.elapsed() < Duration::from_secs(60)
+        {
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        let _ = child.kill();
+        child.wait().unwrap();
+        let planned = plan();
+        if planned.contains("to do (resumes after epoch") && !planned.contains("damaged") {
+            caught = Some(planned);
+            break;
+        }
+    }
+    let planned = caught.expect("no run was caught with a learned checkpoint written");
+    assert!(!killed.join("syn").exists(), "{planned}");
+
+    let resumed = dcnet(d, &["run", spec, "--out", "killed", "--no-plots"]);
+    let log = stderr(&resumed);
+    assert!(resumed.status.success(), "{log}");
+    assert!(log.contains(", resumed after epoch "), "{log}");
+    let (ours, theirs) = (learned_weights(&killed), learned_weights(&d.join("whole")));
+    assert_eq!(ours.len(), 4, "{ours:?}");
+    assert!(
+        ours == theirs,
+        "the resumed models differ from the uninterrupted ones"
+    );
+    for table in ["heldout.parquet", "terms.parquet", "folds.parquet"] {
+        assert_eq!(
+            std::fs::read(killed.join("syn").join(table)).unwrap(),
+            std::fs::read(d.join("whole/syn").join(table)).unwrap(),
+            "{table}"
+        );
+    }
+    assert!(
+        !tree(&killed.join(".cache/learned"))
+            .keys()
+            .any(|rel| rel.contains(".checkpoint/")),
+        "a checkpoint is left after the run ended"
+    );
+
+    // `plan` lists each model fold by fold, done.
+    let planned = plan();
+    let models: Vec<&str> = planned
+        .lines()
+        .filter(|l| l.contains("train DCNet installation"))
+        .collect();
+    let labels: Vec<String> = models
+        .iter()
+        .map(|l| l.split('|').nth(1).unwrap().trim().to_string())
+        .collect();
+    assert_eq!(
+        labels,
+        [
+            "train DCNet installation simulated fold 1",
+            "train DCNet installation vehicle fold 1",
+            "train DCNet installation simulated fold 2",
+            "train DCNet installation vehicle fold 2",
+        ],
+        "{planned}"
+    );
+    assert!(models.iter().all(|l| l.contains("| done")), "{planned}");
+    assert!(
+        planned.contains("syn: 4 learned models, 0 to do; 4 calibrations, 0 to do"),
+        "{planned}"
+    );
 }

@@ -92,6 +92,16 @@ pub(super) fn collect(target: &Target, drawing: &Drawing) -> Result<(), CliError
 pub(super) fn plan(target: &Target, shard: Option<Shard>) -> Result<(), CliError> {
     let experiment = load_target(target)?;
     let plan = InstallationPlan::new(&experiment, &target.spec, &target.out).map_err(input)?;
+    let models = plan.learned_rows(shard);
+    if !models.is_empty() {
+        let mut table = Table::new();
+        table.load_preset(ASCII_MARKDOWN);
+        table.set_header(["learned model", "key", "status"]);
+        for row in &models {
+            table.add_row([&row.label, &row.key[..16], &row.status.to_string()]);
+        }
+        println!("{table}");
+    }
     let mut table = Table::new();
     table.load_preset(ASCII_MARKDOWN);
     table.set_header(["calibration", "key", "status"]);
@@ -119,8 +129,18 @@ pub(super) fn plan(target: &Target, shard: Option<Shard>) -> Result<(), CliError
         Some(shard) => format!("shard {shard} of {}", experiment.name),
         None => experiment.name.clone(),
     };
+    let models = match models.len() {
+        0 => String::new(),
+        n => {
+            let to_do = models.iter().filter(|m| !m.status.is_settled()).count();
+            format!(
+                "{n} learned model{}, {to_do} to do; ",
+                if n == 1 { "" } else { "s" }
+            )
+        }
+    };
     println!(
-        "{scope}: {}, {to_do} to do; cache in {}",
+        "{scope}: {models}{}, {to_do} to do; cache in {}",
         calibrations(listed),
         plan.store.folder.display()
     );

@@ -5,6 +5,7 @@
 use super::cache::{ModelStoreError, calibrations::CalibrationStoreError};
 use super::owner::OwnerError;
 use super::plan::PlanError;
+use super::training::job::TrainingJobError;
 use crate::data::paired::PairedError;
 use crate::results::{ResultsError, read::ReadError};
 use crate::spec::SpecErrors;
@@ -58,9 +59,16 @@ pub enum ExecuteError {
         out: PathBuf,
         error_model: ErrorModel,
     },
-    /// A model of `[learned]` that could not be trained, stored or read back.
+    /// A `[learned]` setting that no model can train with.
     #[error("DCNet {model}: {why}")]
     Learned { model: String, why: String },
+    /// A model of `[learned]` that could not be trained or stored.
+    #[error("DCNet {model}")]
+    Training {
+        model: String,
+        #[source]
+        source: TrainingJobError,
+    },
     /// Points of an installation sweep with a window on which a method fitted on no
     /// calibration trajectory; the other points' folders are written.
     #[error(

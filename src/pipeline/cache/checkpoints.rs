@@ -1,15 +1,15 @@
-//! The checkpoints of models in training, `OUT/.cache/models/<EM>-<key>.checkpoint/`:
+//! The checkpoints of models in training, `<id>-<key>.checkpoint/` beside the model
+//! (`OUT/.cache/models/EM5-<key>.checkpoint/`, `OUT/.cache/learned/…`):
 //! every few epochs the weights, the optimizer's state and the best epoch's weights
 //! (`epoch-<n>.model`, `.optimizer`, `.best`, each sealed) and a `state.json` sealed
 //! inline that names the epoch, so that an interrupted training resumes where it
 //! stopped. A checkpoint that fails its seal is set aside and the model trains from the
 //! start. In: a training's state. Out: the state to resume from.
 
-use super::models::{ModelStore, ModelStoreError, io_error, read_model, record_error, write_model};
+use super::identity::ModelId;
+use super::models::{Blueprint, ModelStore, ModelStoreError, io_error, record_error, write_model};
 use crate::files::{self, Seal, write_atomic};
-use crate::spec::Spec;
 use crate::train::{self, EpochRecord, State};
-use crate::vocab::ErrorModel;
 use burn::tensor::Bytes;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -29,42 +29,40 @@ impl ModelStore {
     /// and as a kill between the two leaves undone; returns whether there was one.
     pub fn remove_spent_checkpoint(
         &self,
-        error_model: ErrorModel,
+        id: impl Into<ModelId>,
         key: &str,
     ) -> Result<bool, ModelStoreError> {
-        if !self.has_spent_checkpoint(error_model, key) {
+        let id = id.into();
+        if !self.has_spent_checkpoint(id, key) {
             return Ok(false);
         }
-        let checkpoint = self.stem(error_model, key).with_extension("checkpoint");
+        let checkpoint = self.stem(id, key).with_extension("checkpoint");
         std::fs::remove_dir_all(&checkpoint).map_err(io_error(&checkpoint))?;
         Ok(true)
     }
 
     /// Whether a checkpoint of `key` is left beside its model, stored whole.
-    pub fn has_spent_checkpoint(&self, error_model: ErrorModel, key: &str) -> bool {
-        let checkpoint = self.stem(error_model, key).with_extension("checkpoint");
-        checkpoint.is_dir() && self.integrity(error_model, key) == Seal::Intact
+    pub fn has_spent_checkpoint(&self, id: impl Into<ModelId>, key: &str) -> bool {
+        let id = id.into();
+        let checkpoint = self.stem(id, key).with_extension("checkpoint");
+        checkpoint.is_dir() && self.integrity(id, key) == Seal::Intact
     }
 
     /// The last epoch of the checkpoint of `key`, if one is waiting to be resumed, or
     /// what is wrong with it.
     pub fn checkpoint_epoch(
         &self,
-        error_model: ErrorModel,
+        id: impl Into<ModelId>,
         key: &str,
     ) -> Result<Option<usize>, String> {
-        Ok(self.checkpoint(error_model, key)?.map(|state| state.epoch))
+        Ok(self.checkpoint(id.into(), key)?.map(|state| state.epoch))
     }
 
     /// The `state.json` of the checkpoint of `key`, with every file of its last epoch
     /// checked against its seal: none when there is no checkpoint, or what is wrong
     /// with it.
-    fn checkpoint(
-        &self,
-        error_model: ErrorModel,
-        key: &str,
-    ) -> Result<Option<CheckpointState>, String> {
-        let folder = self.stem(error_model, key).with_extension("checkpoint");
+    fn checkpoint(&self, id: ModelId, key: &str) -> Result<Option<CheckpointState>, String> {
+        let folder = self.stem(id, key).with_extension("checkpoint");
         let state_path = folder.join("state.json");
         let damaged =
             |path: &Path, why: &dyn std::fmt::Display| format!("{}: {why}", path.display());
@@ -103,10 +101,10 @@ impl ModelStore {
     pub fn save_checkpoint(
         &self,
         state: &State,
-        error_model: ErrorModel,
+        id: impl Into<ModelId>,
         key: &str,
     ) -> Result<(), ModelStoreError> {
-        let folder = self.stem(error_model, key).with_extension("checkpoint");
+        let folder = self.stem(id, key).with_extension("checkpoint");
         crate::files::create_folder(&folder).map_err(io_error(&folder))?;
         let epoch = state.history.len();
         write_model(
@@ -148,54 +146,46 @@ impl ModelStore {
         Ok(())
     }
 
-    /// The training state of the checkpoint of `key`, or a fresh one for replicate
-    /// `replicate`.
+    /// The training state of the checkpoint of `key`, or a fresh one of `blueprint`
+    /// for replicate `replicate`.
     pub fn resume(
         &self,
-        spec: &Spec,
-        error_model: ErrorModel,
+        blueprint: &Blueprint,
+        id: impl Into<ModelId>,
         replicate: usize,
         key: &str,
     ) -> Result<State, ModelStoreError> {
-        let folder = self.stem(error_model, key).with_extension("checkpoint");
-        let record = match self.checkpoint(error_model, key) {
+        let id = id.into();
+        let folder = self.stem(id, key).with_extension("checkpoint");
+        let record = match self.checkpoint(id, key) {
             Ok(Some(record)) => record,
-            Ok(None) => return Ok(State::new(spec, error_model, replicate)),
+            Ok(None) => return Ok(blueprint.fresh(replicate)),
             Err(why) => {
-                let damaged = self.folder.with_file_name("damaged");
+                let damaged = self.damaged_folder();
                 files::set_aside(&folder, &damaged).map_err(io_error(&folder))?;
                 eprintln!(
-                    "DCNet {error_model}: damaged checkpoint {why}; moved to {} and trained from the start",
+                    "DCNet {id}: damaged checkpoint {why}; moved to {} and trained from the start",
                     damaged.display()
                 );
-                return Ok(State::new(spec, error_model, replicate));
+                return Ok(blueprint.fresh(replicate));
             }
         };
         let epoch = record.epoch;
-        let device = spec.training.backend.device();
-        let model = read_model(
+        let device = blueprint.device();
+        let model = blueprint.read(
             &folder.join(format!("epoch-{epoch}.model")),
-            &spec.model,
-            error_model,
-            spec.dataset.window_samples,
             &device.clone().autodiff(),
         )?;
         let optimizer_path = folder.join(format!("epoch-{epoch}.optimizer"));
         let bytes = std::fs::read(&optimizer_path).map_err(io_error(&optimizer_path))?;
-        let optimizer = train::optimizer(&spec.training)
+        let optimizer = train::optimizer(blueprint.recipe.training)
             .from_bytes(Bytes::from_bytes_vec(bytes))
             .map_err(record_error(&optimizer_path))?;
         let best = match (record.best_epoch, record.best_score) {
             (Some(best_epoch), Some(score)) => Some((
                 best_epoch,
                 score,
-                read_model(
-                    &folder.join(format!("epoch-{epoch}.best")),
-                    &spec.model,
-                    error_model,
-                    spec.dataset.window_samples,
-                    &device,
-                )?,
+                blueprint.read(&folder.join(format!("epoch-{epoch}.best")), &device)?,
             )),
             _ => None,
         };
@@ -216,6 +206,7 @@ mod tests {
     use crate::spec::quick_spec;
     use crate::train::Trained;
     use crate::train::tests::{run_epochs, training_set, weights};
+    use crate::vocab::ErrorModel;
 
     #[test]
     fn a_training_resumed_from_a_checkpoint_ends_as_an_uninterrupted_one() {
@@ -228,13 +219,15 @@ mod tests {
         let uninterrupted = state.finish(em, crate::vocab::StopReason::AllEpochs);
 
         let dir = tempfile::tempdir().unwrap();
-        let store = ModelStore::new(dir.path().to_path_buf());
+        let store = ModelStore::new(dir.path().join("models"));
         let key = key(&spec, em);
         let mut state = State::new(&spec, em, 0);
         run_epochs(&spec, &set, em, &mut state, 2);
         store.save_checkpoint(&state, em, &key).unwrap();
         drop(state);
-        let mut resumed = store.resume(&spec, em, 0, &key).unwrap();
+        let mut resumed = store
+            .resume(&Blueprint::paper(&spec, em), em, 0, &key)
+            .unwrap();
         assert_eq!(resumed.next_epoch(), 3);
         run_epochs(&spec, &set, em, &mut resumed, 2);
         let resumed = resumed.finish(em, crate::vocab::StopReason::AllEpochs);
@@ -276,7 +269,9 @@ mod tests {
         assert!(
             matches!(store.checkpoint_epoch(em, &key), Err(why) if why.contains("epoch-2.optimizer"))
         );
-        let fresh = store.resume(&spec, em, 0, &key).unwrap();
+        let fresh = store
+            .resume(&Blueprint::paper(&spec, em), em, 0, &key)
+            .unwrap();
         assert_eq!(fresh.next_epoch(), 1, "training starts again");
         assert!(!store.stem(em, &key).with_extension("checkpoint").exists());
         assert_eq!(

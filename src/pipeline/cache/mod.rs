@@ -15,8 +15,9 @@
 //!   fsynced write of them takes 1 s and reading them back would save at most 0.1 s.
 //!   The points of a sweep that share a dataset share it in memory, and a run whose
 //!   models are all stored generates none.
-//! - Models live in `models/` ([`ModelStore`]), with their [`checkpoints`] while they
-//!   train.
+//! - Models live in `models/` (the paper's) and `learned/` (an installation study's
+//!   `[learned]`), both in one [`ModelStore`] that tells them apart by their
+//!   [`ModelId`], with their [`checkpoints`] while they train.
 //! - Monte Carlo blocks (one estimator on one DVL, every run) live in `monte_carlo/`
 //!   ([`BlockStore`]) as Parquet files of their per-run rows.
 //! - The calibrations of installation studies (one calibration trajectory, every window
@@ -26,11 +27,13 @@
 pub mod blocks;
 pub mod calibrations;
 pub mod checkpoints;
+pub mod identity;
 pub mod models;
 
 pub use blocks::BlockStore;
 pub use calibrations::CalibrationStore;
-pub use models::{ModelStore, ModelStoreError};
+pub use identity::ModelId;
+pub use models::{Blueprint, ModelStore, ModelStoreError, StoredModel};
 
 use crate::files::sha256_hex;
 use crate::results;

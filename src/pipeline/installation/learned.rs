@@ -1,11 +1,16 @@
-//! The models of a study's `[learned]`: one per fold and source, each stored in the
-//! cache under its own key (`OUT/.cache/learned/<source>-fold<k>-<key>.bin`, sealed), so
-//! a later run, a shard or another point of a sweep with the same settings loads it
-//! instead of training it. Trainings run one per core, each on one thread.
+//! The models of a study's `[learned]`: one per fold, source and replicate, each stored
+//! in the [`ModelStore`] beside the paper's models under its own key
+//! (`OUT/.cache/learned/<source>-fold<k>-replicate<r>-<key>.bin` and `.json`, sealed),
+//! so that a later run, a shard or another point of a sweep with the same settings
+//! loads it instead of training it. Those not stored train through the paper's
+//! scheduler ([`crate::pipeline::training`]): the windows of a few (fold, source) pairs
+//! at a time, their models interleaved epoch by epoch over the cores, each epoch on one
+//! thread, checkpointed every `learned.training.checkpoint_every_epochs` so that a
+//! killed run resumes them. `plan` lists them with their status ([`ModelRow`]).
 //! In: a point's spec, its segments and its recordings' SHA-256. Out: [`LearnedModels`].
 
-use super::ExecuteError;
-use crate::files::{self, Seal};
+use super::InstallationPlan;
+use crate::pipeline::ExecuteError;
 use crate::installation::learned::{LearnedWindows, training_windows};
 use crate::installation::learned_spec::{LearnedSpec, TrainingSource};
 use crate::installation::network::network_io;
@@ -14,12 +19,15 @@ use crate::installation::simulate::REFERENCE_MARGIN;
 use crate::installation::spec::InstallationSpec;
 use crate::installation::term_names::term_set;
 use crate::model::Dcnet;
-use crate::pipeline::cache::{self, models};
+use crate::pipeline::Shard;
+use crate::pipeline::cache::{self, Blueprint, ModelId, ModelStore};
+use crate::pipeline::plan::status::{Status, model_status};
+use crate::pipeline::training::job::{ModelTask, Provenance, TrainingJob, TrainingJobError};
+use crate::pipeline::training::{Ended, in_batches, interleave_epochs};
 use crate::progress::Progress;
-use crate::train::{self, Recipe, State};
-use std::path::{Path, PathBuf};
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use crate::train::Recipe;
+use rayon::prelude::*;
+use std::path::Path;
 use std::time::Instant;
 
 /// One model of `[learned]` and its cache key.
@@ -65,19 +73,37 @@ impl LearnedModels {
     }
 }
 
-fn path(out: &Path, key: &LearnedKey) -> PathBuf {
-    let model = &key.model;
-    out.join(".cache/learned").join(format!(
-        "{}-fold{}-replicate{}-{}.bin",
-        model.source.name(),
-        model.fold + 1,
-        model.replicate + 1,
-        &key.key[..16]
-    ))
+/// The store of the models under `out`: `[learned]`'s are in `.cache/learned/`.
+pub fn store(out: &Path) -> ModelStore {
+    ModelStore::new(cache::root(out).join("models"))
 }
 
-/// The models of `keys`, each loaded from the cache under `out` or trained (and stored)
-/// there; a damaged stored model is set aside and trained again.
+/// How `model` of `learned` trains: the paper's loop on the network of
+/// `learned.terms`, its streams named by source and fold (the replicate seeds them as
+/// the paper's).
+fn blueprint(learned: &LearnedSpec, model: LearnedModel) -> Blueprint<'_> {
+    Blueprint {
+        recipe: Recipe {
+            seed: learned.seed,
+            model: &learned.model,
+            training: &learned.training,
+            learning_rate: learned.training.learning_rates[0],
+            name: format!(
+                "installation {} fold {}",
+                model.source.name(),
+                model.fold + 1
+            ),
+            learning_rate_key: "learned.training.learning_rate".into(),
+            validation_key: "learned.validation_fraction".into(),
+        },
+        io: network_io(&term_set(&learned.terms)),
+        window: learned.window_samples,
+    }
+}
+
+/// The models of `keys`, each loaded from the store under `out` or trained (and stored)
+/// there, resumed from its checkpoint where a killed run left one; a damaged stored
+/// model or checkpoint is set aside and trained again.
 pub fn train_or_load(
     spec: &InstallationSpec,
     segments: &[&Segment],
@@ -87,7 +113,54 @@ pub fn train_or_load(
     let Some(learned) = &spec.learned else {
         return Ok(LearnedModels(Vec::new()));
     };
-    // The loss reads the reference at t + τ within the window's margin.
+    within_reach(learned, segments)?;
+    let store = store(out);
+    let task = |k: usize| ModelTask {
+        blueprint: blueprint(learned, keys[k].model),
+        id: keys[k].model.into(),
+        replicate: keys[k].model.replicate,
+        key: &keys[k].key,
+        store: &store,
+    };
+    let mut models = Vec::with_capacity(keys.len());
+    for k in 0..keys.len() {
+        let task = task(k);
+        if let Some(damage) = store.set_aside_damaged(task.id, task.key)? {
+            eprintln!("DCNet {}: {damage}", task.id);
+        }
+        models.push(store.load_model(&task.blueprint, task.id, task.key)?);
+    }
+    let to_train: Vec<usize> = (0..keys.len()).filter(|&k| models[k].is_none()).collect();
+    // Source by source, so that the models that train together have sets of a size
+    // (a simulated set is hundreds of times a vehicle's) and end together.
+    let mut sets = crate::first_seen(
+        to_train
+            .iter()
+            .map(|&k| (keys[k].model.fold, keys[k].model.source)),
+    );
+    sets.sort_by_key(|&(fold, source)| (learned.sources.iter().position(|&s| s == source), fold));
+    let sets = sets.into_iter().map(|set| {
+        let mine = to_train.iter().copied();
+        let mine = mine.filter(|&k| (keys[k].model.fold, keys[k].model.source) == set);
+        (set, mine.collect())
+    });
+    for batch in in_batches(sets) {
+        for (k, ended) in train_batch(spec, learned, segments, &batch, &task) {
+            let (stored, _) = ended.map_err(|source| ExecuteError::Training {
+                model: ModelId::from(keys[k].model).to_string(),
+                source,
+            })?;
+            models[k] = Some(*stored);
+        }
+    }
+    let models = keys.iter().cloned().zip(models);
+    let models = models.map(|(key, stored)| (key, stored.expect("loaded or trained").model));
+    Ok(LearnedModels(models.collect()))
+}
+
+/// Refuses a simulated time offset beyond the reach of the loss: it reads the
+/// reference at t + τ within the window's margin.
+fn within_reach(learned: &LearnedSpec, segments: &[&Segment]) -> Result<(), ExecuteError> {
     let step_s = segments
         .iter()
         .map(|s| sample_interval(&s.recording.time_s))
@@ -107,125 +180,136 @@ pub fn train_or_load(
             ),
         });
     }
-    let store_error = |path: &Path| {
-        let path = path.to_path_buf();
-        move |error: models::ModelStoreError| ExecuteError::Learned {
-            model: path.display().to_string(),
-            why: error.to_string(),
-        }
-    };
-    let one = |key: &LearnedKey| -> Result<Dcnet, ExecuteError> {
-        let path = path(out, key);
-        let device = learned.training.backend.device();
-        let io = network_io(&term_set(&learned.terms));
-        if let Some(said) = files::set_aside_if_damaged(
-            &path,
-            &key.key,
-            &out.join(".cache/damaged"),
-            "learned model",
-        )
-        .map_err(|source| ExecuteError::Io {
-            path: path.clone(),
-            source,
-        })? {
-            eprintln!("{said}");
-        }
-        if files::check_seal(&path, &key.key) == Seal::Intact {
-            return models::read_model(&path, &learned.model, io, learned.window_samples, &device)
-                .map_err(store_error(&path));
-        }
-        let model = train::one_thread_pool().install(|| train_one(spec, learned, segments, key))?;
-        files::create_folder(path.parent().expect("a folder")).map_err(|source| {
-            ExecuteError::Io {
-                path: path.clone(),
-                source,
-            }
-        })?;
-        models::write_model(&path, &model, &key.key).map_err(store_error(&path))?;
-        Ok(model)
-    };
-    // One worker per core takes the next model, so that no more training sets are in
-    // memory than cores train (rayon would start every training while one waits).
-    let next = AtomicUsize::new(0);
-    let done: Mutex<Vec<Option<Result<Dcnet, ExecuteError>>>> =
-        Mutex::new(keys.iter().map(|_| None).collect());
-    std::thread::scope(|scope| {
-        for _ in 0..rayon::current_num_threads().min(keys.len()) {
-            scope.spawn(|| {
-                loop {
-                    let k = next.fetch_add(1, Ordering::Relaxed);
-                    let Some(key) = keys.get(k) else { break };
-                    let result = one(key);
-                    done.lock().expect("no worker panicked")[k] = Some(result);
-                }
-            });
-        }
-    });
-    let models = keys
-        .iter()
-        .cloned()
-        .zip(done.into_inner().expect("no worker panicked"))
-        .map(|(key, result)| Ok((key, result.expect("every key taken")?)))
-        .collect::<Result<Vec<_>, ExecuteError>>()?;
-    Ok(LearnedModels(models))
+    Ok(())
 }
 
-/// Trains the model of `key` on the windows of its fold and source: every epoch of
-/// `learned.training` (or until early stopping), keeping the weights of the epoch with
-/// the lowest validation loss.
-fn train_one(
+/// Trains the models of `batch` (each (fold, source) with the keys that train on its
+/// windows) together, epoch by epoch; says how each trained one ended.
+fn train_batch<'a>(
     spec: &InstallationSpec,
     learned: &LearnedSpec,
     segments: &[&Segment],
-    key: &LearnedKey,
-) -> Result<Dcnet, ExecuteError> {
+    batch: &[((usize, TrainingSource), Vec<usize>)],
+    task: &(dyn Fn(usize) -> ModelTask<'a> + Sync),
+) -> Vec<(usize, Ended)> {
     let clock = Instant::now();
-    let LearnedModel {
-        source,
-        replicate,
-        fold,
-    } = key.model;
-    let windows = training_windows(spec, learned, segments, fold, source);
-    let name = format!("installation {} fold {}", source.name(), fold + 1);
-    let shown = match replicate {
-        0 => name.clone(),
-        r => format!("{name} replicate {}", r + 1),
+    let sets: Vec<LearnedWindows> = batch
+        .par_iter()
+        .map(|&((fold, source), _)| LearnedWindows {
+            windows: training_windows(spec, learned, segments, fold, source),
+            terms: term_set(&learned.terms),
+        })
+        .collect();
+    let set_of = |k: usize| {
+        let i = batch.iter().position(|(_, mine)| mine.contains(&k));
+        &sets[i.expect("every key has its set")]
     };
-    let recipe = Recipe {
-        seed: learned.seed,
-        model: &learned.model,
-        training: &learned.training,
-        learning_rate: learned.training.learning_rates[0],
-        name,
-        learning_rate_key: "learned.training.learning_rate".into(),
-        validation_key: "learned.validation_fraction".into(),
+    let ids: Vec<usize> = batch
+        .iter()
+        .flat_map(|(_, mine)| mine.iter().copied())
+        .collect();
+    let bars = indicatif::MultiProgress::new();
+    let announce = |k: usize, ended: &Ended| {
+        if let Some(line) = describe(task(k).id, set_of(k).windows.len(), ended, clock) {
+            eprintln!("{line}");
+        }
     };
-    let data = LearnedWindows {
-        windows,
-        terms: term_set(&learned.terms),
+    interleave_epochs(&ids, announce, |k| {
+        let task = task(k);
+        let data = set_of(k);
+        let samples_per_epoch = (0..data.windows.len())
+            .filter(|&w| !data.windows.validation[w])
+            .count();
+        let epochs = task.blueprint.recipe.training.epochs;
+        let progress = Progress::new(
+            format!("train {}", task.id),
+            epochs * samples_per_epoch,
+            "samples",
+        )
+        .shown_in(&bars);
+        let job = TrainingJob::start(&task, false).map_err(TrainingJobError::from);
+        if let Ok(job) = &job {
+            progress.set_position(job.epochs_done() * samples_per_epoch);
+        }
+        let run = move |job: TrainingJob, progress: &Progress| job.epoch(&task, data, progress);
+        (job, run, progress)
+    })
+}
+
+/// The line that says how model `id`, trained on `windows` windows, ended: none for a
+/// model another run stored meanwhile, nor for a failure (the run stops with it).
+fn describe(id: ModelId, windows: usize, ended: &Ended, clock: Instant) -> Option<String> {
+    let (stored, provenance) = ended.as_ref().ok()?;
+    let resumed = match provenance {
+        Provenance::Reused => return None,
+        Provenance::Trained => String::new(),
+        Provenance::Resumed(epoch) => format!(", resumed after epoch {epoch}"),
     };
-    // The streams are named by source and fold; the replicate seeds them as the paper's.
-    let mut state = State::of(
-        &recipe,
-        network_io(&data.terms),
-        learned.window_samples,
-        replicate,
-    );
-    let hidden = Progress::hidden();
-    while state.stop(&learned.training).is_none() {
-        train::run_epoch(&recipe, &data, &mut state, &hidden).map_err(|error| {
-            ExecuteError::Learned {
-                model: shown.clone(),
-                why: error.to_string(),
-            }
-        })?;
-    }
-    let (best_epoch, best_loss, model) = state.best.expect("at least one epoch ran");
-    eprintln!(
-        "DCNet {shown}: {} windows, {} epochs, best {best_epoch} (validation loss {best_loss:.3} (cm/s)²), {:.1} s",
-        data.windows.len(),
-        state.history.len(),
+    let best = &stored.history[stored.best_epoch - 1];
+    Some(format!(
+        "DCNet {id}: {windows} windows, {} epochs, best {} (validation loss {:.3} (cm/s)²){resumed}, {:.1} s",
+        stored.history.len(),
+        stored.best_epoch,
+        best.validation_loss,
         clock.elapsed().as_secs_f64()
-    );
-    Ok(model)
+    ))
+}
+
+/// One model of `[learned]` as `plan` lists it.
+pub struct ModelRow {
+    /// "train DCNet installation simulated fold 1", "… replicate 2/3", after its point
+    /// in a sweep.
+    pub label: String,
+    pub key: String,
+    pub status: Status,
+}
+
+impl InstallationPlan<'_> {
+    /// The models of `[learned]` that the points with a calibration in `shard` (every
+    /// point without one) train, each once, fold by fold, with their status.
+    pub fn learned_rows(&self, shard: Option<Shard>) -> Vec<ModelRow> {
+        let points = crate::first_seen(
+            (0..self.units.len())
+                .filter(|&u| shard.is_none_or(|shard| self.in_shard(u, shard)))
+                .map(|u| self.units[u].point),
+        );
+        let store = store(&self.out);
+        let mut rows: Vec<ModelRow> = Vec::new();
+        for p in points {
+            let replicates = self
+                .spec(p)
+                .learned
+                .as_ref()
+                .map_or(1, |l| l.training.replicates);
+            for key in &self.learned[p] {
+                if rows.iter().any(|row| row.key == key.key) {
+                    continue;
+                }
+                let LearnedModel {
+                    source,
+                    replicate,
+                    fold,
+                } = key.model;
+                let mut label = format!(
+                    "train DCNet installation {} fold {}",
+                    source.name(),
+                    fold + 1
+                );
+                if replicates > 1 {
+                    label += &format!(" replicate {}/{replicates}", replicate + 1);
+                }
+                if self.experiment.is_sweep() {
+                    let point = crate::results::sweep::point_folder(&self.spec(p).name);
+                    label = format!("{point}: {label}");
+                }
+                let status = model_status(&store, key.model, &key.key);
+                rows.push(ModelRow {
+                    label,
+                    key: key.key.clone(),
+                    status,
+                });
+            }
+        }
+        rows
+    }
 }

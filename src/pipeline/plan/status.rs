@@ -1,11 +1,12 @@
 //! The state of each task as the cache on disk tells it: a stored model or block and
 //! its seal, a failure record, a checkpoint to resume, a results folder made from the
 //! plan's blocks. In: a plan. Out: a [`Status`] per task; nothing is written.
+//! [`model_status`] also tells the state of an installation study's `[learned]` models.
 
 use super::Plan;
 use super::task::Task;
 use crate::files::Seal;
-use crate::pipeline::cache;
+use crate::pipeline::cache::{self, ModelId, ModelStore};
 use crate::results::{self, Manifest, sweep};
 use std::path::Path;
 
@@ -105,20 +106,7 @@ impl Plan<'_> {
     /// to resume, or nothing yet.
     fn training_status(&self, t: usize) -> Status {
         let training = &self.trainings[t];
-        let (model, key) = (training.error_model, &training.key);
-        match self.models.integrity(model, key) {
-            Seal::Intact => return Status::Done,
-            Seal::Damaged(_) => return Status::Damaged,
-            Seal::Absent => {}
-        }
-        if self.models.failure(model, key).is_some() {
-            return Status::Failed;
-        }
-        match self.models.checkpoint_epoch(model, key) {
-            Ok(Some(epoch)) => Status::Resumable(epoch),
-            Ok(None) => Status::ToDo,
-            Err(_) => Status::Damaged,
-        }
+        model_status(&self.models, training.error_model, &training.key)
     }
 
     /// The results key point `p`'s folder has when it is current: the plan's, marked
@@ -143,6 +131,26 @@ impl Plan<'_> {
             .trainings
             .iter()
             .any(|&t| self.training_status(t) == Status::Failed)
+    }
+}
+
+/// The state of the model of `id` with this key in `store`: stored, its failure
+/// recorded, a checkpoint to resume, or nothing yet. The paper's trainings and an
+/// installation study's `[learned]` models are told alike.
+pub fn model_status(store: &ModelStore, id: impl Into<ModelId>, key: &str) -> Status {
+    let id = id.into();
+    match store.integrity(id, key) {
+        Seal::Intact => return Status::Done,
+        Seal::Damaged(_) => return Status::Damaged,
+        Seal::Absent => {}
+    }
+    if store.failure(id, key).is_some() {
+        return Status::Failed;
+    }
+    match store.checkpoint_epoch(id, key) {
+        Ok(Some(epoch)) => Status::Resumable(epoch),
+        Ok(None) => Status::ToDo,
+        Err(_) => Status::Damaged,
     }
 }
 

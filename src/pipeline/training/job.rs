@@ -1,13 +1,13 @@
 //! One model's training job: its stored model loaded, or its checkpoint resumed, or
 //! its training started, then one epoch at a time (checkpointed every few epochs) until
-//! it ends and its model is stored, so that the scheduler can interleave the epochs of
-//! many models. In: the spec, the training set, the model store. Out: a trained model
-//! and where it came from ([`Provenance`]).
+//! it ends and its model is stored, so that a scheduler can interleave the epochs of
+//! many models. The paper's DCNets and an installation study's `[learned]` models go
+//! through the same job; a [`ModelTask`] says which model and how it trains.
+//! In: the task, its training windows, the model store. Out: a stored model and where
+//! it came from ([`Provenance`]).
 
-use crate::pipeline::cache::{ModelStore, ModelStoreError};
-use crate::spec::Spec;
-use crate::train::{self, State, Trained};
-use crate::vocab::ErrorModel;
+use crate::pipeline::cache::{Blueprint, ModelId, ModelStore, ModelStoreError, StoredModel};
+use crate::train::{self, State, Windowed};
 
 /// How a model came to be.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -28,6 +28,16 @@ pub enum TrainingJobError {
     Store(#[from] ModelStoreError),
 }
 
+/// One model to train: which it is, its key, how it trains, and the store it goes to.
+pub struct ModelTask<'a> {
+    pub blueprint: Blueprint<'a>,
+    pub id: ModelId,
+    /// Which of `training.replicates` it is; it seeds the streams.
+    pub replicate: usize,
+    pub key: &'a str,
+    pub store: &'a ModelStore,
+}
+
 /// One model's way through training, one epoch at a time, so that a scheduler can
 /// interleave the epochs of several models: [`TrainingJob::start`] loads the stored model
 /// or resumes its checkpoint, [`TrainingJob::epoch`] trains one epoch and checkpoints
@@ -37,54 +47,44 @@ pub enum TrainingJob {
         state: Box<State>,
         provenance: Provenance,
     },
-    Done(Box<Trained>, Provenance),
+    Done(Box<StoredModel>, Provenance),
 }
 
 impl TrainingJob {
-    /// `error_model`'s stored model under `key`, or the training of its replicate
-    /// `replicate` from the checkpoint if there is one. `fresh` trains from scratch
-    /// whatever is stored.
-    pub fn start(
-        spec: &Spec,
-        error_model: ErrorModel,
-        replicate: usize,
-        key: &str,
-        store: &ModelStore,
-        fresh: bool,
-    ) -> Result<Self, ModelStoreError> {
-        if let Some(damage) = store.set_aside_damaged(error_model, key)? {
-            eprintln!("DCNet {error_model}: {damage}");
+    /// The stored model of `task`, or its training from the checkpoint if there is
+    /// one. `fresh` trains from scratch whatever is stored.
+    pub fn start(task: &ModelTask, fresh: bool) -> Result<Self, ModelStoreError> {
+        let (id, key, store) = (task.id, task.key, task.store);
+        if let Some(damage) = store.set_aside_damaged(id, key)? {
+            eprintln!("DCNet {id}: {damage}");
         }
-        if !fresh && let Some(trained) = store.load(spec, error_model, key)? {
-            store.remove_spent_checkpoint(error_model, key)?;
-            return Ok(Self::Done(Box::new(trained), Provenance::Reused));
+        if !fresh && let Some(stored) = store.load_model(&task.blueprint, id, key)? {
+            store.remove_spent_checkpoint(id, key)?;
+            return Ok(Self::Done(Box::new(stored), Provenance::Reused));
         }
         let state = if fresh {
-            State::new(spec, error_model, replicate)
+            task.blueprint.fresh(task.replicate)
         } else {
-            store.resume(spec, error_model, replicate, key)?
+            store.resume(&task.blueprint, id, task.replicate, key)?
         };
         let provenance = match state.history.len() {
             0 => Provenance::Trained,
             epoch => Provenance::Resumed(epoch),
         };
-        Self::running(spec, error_model, key, store, state, provenance)
+        Self::running(task, state, provenance)
     }
 
     /// `state` as a running training, or as done (and stored) if it has ended.
     fn running(
-        spec: &Spec,
-        error_model: ErrorModel,
-        key: &str,
-        store: &ModelStore,
+        task: &ModelTask,
         state: State,
         provenance: Provenance,
     ) -> Result<Self, ModelStoreError> {
-        Ok(match state.stop(&spec.training) {
+        Ok(match state.stop(task.blueprint.recipe.training) {
             Some(stop) => {
-                let trained = state.finish(error_model, stop);
-                store.save(&trained, key)?;
-                Self::Done(Box::new(trained), provenance)
+                let stored = StoredModel::finish(state, task.id, stop);
+                task.store.save(&stored, task.key)?;
+                Self::Done(Box::new(stored), provenance)
             }
             None => Self::Running {
                 state: Box::new(state),
@@ -93,14 +93,12 @@ impl TrainingJob {
         })
     }
 
-    /// Trains the next epoch of a running training; a done one is returned as it is.
+    /// Trains the next epoch of a running training on `data`; a done one is returned as
+    /// it is.
     pub fn epoch(
         self,
-        spec: &Spec,
-        set: &crate::dataset::TrainingSet,
-        error_model: ErrorModel,
-        key: &str,
-        store: &ModelStore,
+        task: &ModelTask,
+        data: &impl Windowed,
         progress: &crate::progress::Progress,
     ) -> Result<Self, TrainingJobError> {
         let Self::Running {
@@ -110,30 +108,20 @@ impl TrainingJob {
         else {
             return Ok(self);
         };
-        let recipe = train::Recipe::paper(spec, error_model);
-        let data = train::PaperWindows { set, error_model };
-        train::run_epoch(&recipe, &data, &mut state, progress)?;
+        let training = task.blueprint.recipe.training;
+        train::run_epoch(&task.blueprint.recipe, data, &mut state, progress)?;
         let epoch = state.history.len();
-        if epoch % spec.training.checkpoint_every_epochs == 0
-            && state.stop(&spec.training).is_none()
-        {
-            store.save_checkpoint(&state, error_model, key)?;
+        if epoch % training.checkpoint_every_epochs == 0 && state.stop(training).is_none() {
+            task.store.save_checkpoint(&state, task.id, task.key)?;
         }
-        Ok(Self::running(
-            spec,
-            error_model,
-            key,
-            store,
-            *state,
-            provenance,
-        )?)
+        Ok(Self::running(task, *state, provenance)?)
     }
 
     /// Epochs trained so far.
     pub fn epochs_done(&self) -> usize {
         match self {
             Self::Running { state, .. } => state.history.len(),
-            Self::Done(trained, _) => trained.history.len(),
+            Self::Done(stored, _) => stored.history.len(),
         }
     }
 }
@@ -143,8 +131,9 @@ mod tests {
     use super::*;
     use crate::pipeline::cache::models::tests::key;
     use crate::progress::Progress;
-    use crate::spec::quick_spec;
+    use crate::spec::{Spec, quick_spec};
     use crate::train::tests::{training_set, weights};
+    use crate::vocab::ErrorModel;
 
     /// Loads `error_model`'s stored model under `key`, or trains it to the end on this
     /// thread (see [`TrainingJob`]).
@@ -156,14 +145,20 @@ mod tests {
         store: &ModelStore,
         fresh: bool,
         progress: &crate::progress::Progress,
-    ) -> Result<(Trained, Provenance), TrainingJobError> {
-        let mut training = TrainingJob::start(spec, error_model, 0, key, store, fresh)?;
+    ) -> Result<(StoredModel, Provenance), TrainingJobError> {
+        let task = ModelTask {
+            blueprint: Blueprint::paper(spec, error_model),
+            id: error_model.into(),
+            replicate: 0,
+            key,
+            store,
+        };
+        let data = train::PaperWindows { set, error_model };
+        let mut training = TrainingJob::start(&task, fresh)?;
         loop {
             match training {
                 TrainingJob::Done(trained, provenance) => return Ok((*trained, provenance)),
-                running => {
-                    training = running.epoch(spec, set, error_model, key, store, progress)?
-                }
+                running => training = running.epoch(&task, &data, progress)?,
             }
         }
     }
@@ -173,7 +168,7 @@ mod tests {
         let spec = quick_spec(&["training.epochs=2"]);
         let set = training_set(&spec);
         let dir = tempfile::tempdir().unwrap();
-        let store = ModelStore::new(dir.path().to_path_buf());
+        let store = ModelStore::new(dir.path().join("models"));
         let hidden = Progress::hidden();
         let em4 = key(&spec, ErrorModel::Em4);
         let (first, provenance) =

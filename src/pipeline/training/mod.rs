@@ -1,17 +1,20 @@
 //! The training scheduler: datasets generated a few at a time, and the models that
 //! train on them interleaved epoch by epoch over the cores, each on a one-thread pool so
-//! that its bytes do not depend on the thread count.
+//! that its bytes do not depend on the thread count. The paper's models train here
+//! ([`train`]); an installation study's `[learned]` models go through the same
+//! [`in_batches`] and [`interleave_epochs`] (`pipeline/installation/learned.rs`).
 
 pub mod job;
 
 use crate::dataset::{self, TrainingSet};
+use crate::pipeline::cache::{Blueprint, StoredModel};
 use crate::pipeline::plan::Plan;
 use crate::pipeline::{ExecuteError, Executed};
 use crate::progress::Progress;
 use crate::results::StageSeconds;
-use crate::train::{self, Trained};
+use crate::train;
 use crate::vocab::{ErrorModel, StopReason};
-use job::{Provenance, TrainingJob, TrainingJobError};
+use job::{ModelTask, Provenance, TrainingJob, TrainingJobError};
 use std::time::Instant;
 
 /// Trains the models `trainings` asks for; a model whose training fails is recorded as
@@ -54,25 +57,20 @@ pub(super) fn train(
                 "samples",
             )
             .shown_in(&bars);
-            let run = move |job: TrainingJob, progress: &Progress| {
-                job.epoch(
-                    spec,
-                    set,
-                    training.error_model,
-                    &training.key,
-                    &plan.models,
-                    progress,
-                )
+            let task = ModelTask {
+                blueprint: Blueprint::paper(spec, training.error_model),
+                id: training.error_model.into(),
+                replicate: training.replicate,
+                key: &training.key,
+                store: &plan.models,
             };
-            let job = TrainingJob::start(
-                spec,
-                training.error_model,
-                training.replicate,
-                &training.key,
-                &plan.models,
-                force,
-            )
-            .map_err(TrainingJobError::from);
+            let job = TrainingJob::start(&task, force).map_err(TrainingJobError::from);
+            let data = train::PaperWindows {
+                set,
+                error_model: training.error_model,
+            };
+            let run =
+                move |job: TrainingJob, progress: &Progress| job.epoch(&task, &data, progress);
             if let Ok(job) = &job {
                 progress.set_position(job.epochs_done() * samples_per_epoch);
             }
@@ -88,21 +86,33 @@ pub(super) fn train(
 /// just enough models that every thread has one to train. A group lists each dataset
 /// with its trainings.
 fn dataset_batches(plan: &Plan, trainings: &[usize]) -> Vec<Vec<(usize, Vec<usize>)>> {
-    let mut batches: Vec<Vec<(usize, Vec<usize>)>> = vec![Vec::new()];
-    for d in 0..plan.datasets.len() {
+    in_batches((0..plan.datasets.len()).map(|d| {
         let mine: Vec<usize> = trainings
             .iter()
             .copied()
             .filter(|&t| plan.trainings[t].dataset == d)
             .collect();
+        (d, mine)
+    }))
+}
+
+/// `sets`, each a training set with the models that train on it, in groups that train
+/// together: each group has just enough models that every thread has one to train,
+/// so that no more sets are in memory than the threads need. Sets without models are
+/// left out.
+pub(crate) fn in_batches<D>(
+    sets: impl IntoIterator<Item = (D, Vec<usize>)>,
+) -> Vec<Vec<(D, Vec<usize>)>> {
+    let mut batches: Vec<Vec<(D, Vec<usize>)>> = vec![Vec::new()];
+    for (set, mine) in sets {
         if mine.is_empty() {
             continue;
         }
         let last = batches.last_mut().expect("never empty");
         if last.iter().map(|(_, m)| m.len()).sum::<usize>() >= rayon::current_num_threads() {
-            batches.push(vec![(d, mine)]);
+            batches.push(vec![(set, mine)]);
         } else {
-            last.push((d, mine));
+            last.push((set, mine));
         }
     }
     batches.retain(|batch| !batch.is_empty());
@@ -172,7 +182,7 @@ fn describe(plan: &Plan, t: usize, ended: &Ended) -> String {
 }
 
 /// How one training ended: its model and where it came from, or the error that ended it.
-type Ended = Result<(Box<Trained>, Provenance), TrainingJobError>;
+pub(crate) type Ended = Result<(Box<StoredModel>, Provenance), TrainingJobError>;
 
 /// One training's next epoch: its job in, the job one epoch on out.
 type EpochStep<'a> =
@@ -187,7 +197,7 @@ type EpochStep<'a> =
 /// model computes the same bytes whichever worker, and however many, train it.
 /// `announce` is told of each training as it ends. Returns each id's trained model or
 /// the error that ended it.
-fn interleave_epochs<'a, F, S>(
+pub(crate) fn interleave_epochs<'a, F, S>(
     ids: &[usize],
     announce: impl Fn(usize, &Ended) + Sync,
     start: S,
