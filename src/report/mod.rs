@@ -13,7 +13,9 @@
 //! - [`section`]: tables of text set as Markdown and LaTeX alike, for the sections
 //!   beyond the paper's tables: [`calibration_time`] (how long each method needs to
 //!   calibrate) and the installation study's;
-//! - [`compare`]: two results folders side by side.
+//! - [`compare`]: two results folders side by side;
+//! - [`readable`]: error terms in the units people read, below the tables, figures and
+//!   printed lines that show them.
 
 pub mod calibration_time;
 pub mod compare;
@@ -22,6 +24,7 @@ pub mod latex;
 pub mod markdown;
 pub mod plots;
 pub mod printed;
+pub mod readable;
 pub mod section;
 pub mod table;
 

@@ -7,9 +7,9 @@
 //! Out: [`Section`]s.
 
 use super::heldout::window_text;
-use super::terms::readable;
 use crate::installation::learned_spec::LEARNED_LABEL;
 use crate::installation::rows::{FoldSummaryRow, InstallationResults, NO_CALIBRATION, TermRow};
+use crate::report::readable::readable_term;
 use crate::report::section::{Entry, Section, Table};
 
 /// Whether `method` is one of `[learned]`'s.
@@ -262,7 +262,7 @@ fn term_errors(study: &InstallationResults, methods: &[&str], windows: &[f64]) -
             mean(&values)
         })
         .collect();
-    let readable_terms: Vec<(String, &str, f64)> = terms.iter().map(|t| readable(t)).collect();
+    let readable_terms: Vec<(String, &str, f64)> = terms.iter().map(|t| readable_term(t)).collect();
     let mut rows = vec![
         std::iter::once(Entry::Text(format!("{fitted}, mean of every trajectory")))
             .chain(std::iter::once(Entry::Text(window_text(largest))))

@@ -8,10 +8,10 @@
 //! study's. Out: the figure, or why the run has none.
 
 use crate::installation::rows::{FilterPoint, InstallationResults};
-use crate::report::installation::readable_term;
 use crate::report::plots::canvas::{Drawn, Outcome, draw_svg};
 use crate::report::plots::draw::*;
 use crate::report::plots::scale::Scale;
+use crate::report::readable::readable_term;
 use crate::results::read::StoredRun;
 use crate::vocab::{ErrorModel, EstimatorKind};
 use plotters::prelude::*;
