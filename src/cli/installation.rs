@@ -237,7 +237,7 @@ fn draw_sweep(
     Ok(())
 }
 
-/// A sweep's headline: each point's methods at its largest window.
+/// A sweep's headline: each point's methods at its largest window, a column per cell.
 fn printed_sweep(stored: &StoredInstallationSweep) -> String {
     let mut table = Table::new();
     table.load_preset(ASCII_MARKDOWN);
@@ -248,6 +248,7 @@ fn printed_sweep(stored: &StoredInstallationSweep) -> String {
         "held-out RMSE (cm/s)",
         "95 % interval",
         "÷ no calibration",
+        "calibrations",
     ]);
     for point in &stored.index.points {
         let rows: Vec<_> = stored.rows.iter().filter(|r| &r.point == point).collect();
