@@ -215,11 +215,13 @@ pub(super) fn plot(results: &Path, out: &Path, format: Format) -> Result<(), Cli
 fn plot_installation(results: &Path, out: &Path, format: Format) -> Result<(), CliError> {
     let study = crate::results::installation::read_installation(results).map_err(input)?;
     let name = results.file_name().unwrap_or_default().to_string_lossy();
-    for (file, bytes) in crate::pipeline::installation::folder::reports(&study, &name) {
-        let path = results.join(file);
-        crate::files::write_atomic(&path, &bytes)
-            .map_err(|e| failure(anyhow::Error::new(e).context(path.display().to_string())))?;
-    }
+    let reported = crate::report::Reported::Installation {
+        study: &study,
+        name: &name,
+        folder: results,
+    };
+    crate::report::write(&reported)
+        .map_err(|e| failure(anyhow::Error::new(e).context(results.display().to_string())))?;
     eprintln!("report written to {}", results.join("report.md").display());
     draw(&study, out, format)
 }
