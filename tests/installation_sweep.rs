@@ -269,6 +269,52 @@ fn a_sweep_of_studies_writes_each_point_beside_its_table_index_and_figure() {
     assert!(message.contains("a sweep folder"), "{message}");
 }
 
+/// The sweep's printed table names a column for every cell of its rows: the header
+/// and each row have as many columns, the calibrations among them.
+#[test]
+fn a_sweep_of_studies_prints_a_table_whose_header_has_a_column_per_cell() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_installed(&d.join("data/syn"), 3, &[], INSTALLED, 12);
+    write_study_spec(
+        d,
+        "syn",
+        "syn",
+        3,
+        "\n[sweep.values]\n\"noise.dvl_cm_s\" = [1.0, 2.0]\n",
+    );
+    let output = dcnet(d, &["run", "experiments/syn.toml", "--no-plots"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let printed = stdout(&output);
+    let table: Vec<&str> = printed
+        .lines()
+        .skip_while(|l| !l.starts_with("held-out trajectories, each point"))
+        .skip(1)
+        .take_while(|l| l.starts_with('|'))
+        .collect();
+    let columns = |line: &str| line.matches('|').count() - 1;
+    let [header, rule, rows @ ..] = &table[..] else {
+        panic!("no sweep table in\n{printed}");
+    };
+    assert_eq!(columns(header), 7, "{header}");
+    assert!(header.contains("calibrations"), "{header}");
+    assert_eq!(columns(rule), 7, "{rule}");
+    assert!(rows.len() >= 2, "{printed}");
+    for row in rows {
+        assert_eq!(columns(row), columns(header), "{row}\n{printed}");
+        let last = row
+            .trim_end()
+            .trim_end_matches('|')
+            .rsplit('|')
+            .next()
+            .unwrap();
+        assert_eq!(last.trim().parse::<usize>().ok(), Some(3), "{row}");
+    }
+    for point in ["dvl_cm_s=1.0", "dvl_cm_s=2.0"] {
+        assert!(rows.iter().any(|r| r.contains(point)), "{point}: {printed}");
+    }
+}
+
 #[test]
 fn a_bad_sweep_value_is_placed_on_its_line_with_its_point() {
     let dir = tempfile::tempdir().unwrap();

@@ -169,7 +169,7 @@ fn finish(plan: &InstallationPlan, executed: &Executed, drawing: &Drawing) -> Re
     for folder in &executed.written {
         let results = crate::results::installation::read_installation(folder).map_err(failure)?;
         if !plan.experiment.is_sweep() {
-            println!("{}", printed(&results));
+            println!("{}", crate::report::printed::installation::headline(&results));
         }
         if let Some(plots) = drawing.folder() {
             let name = folder.strip_prefix(&plan.out).unwrap_or(folder);
@@ -179,7 +179,10 @@ fn finish(plan: &InstallationPlan, executed: &Executed, drawing: &Drawing) -> Re
     }
     if let Some(folder) = &executed.sweep {
         let stored = installation_sweep::read(folder).map_err(input)?;
-        println!("{}", printed_sweep(&stored));
+        println!(
+            "{}",
+            crate::report::printed::installation::sweep_table(&stored)
+        );
         if let Some(plots) = drawing.folder() {
             draw_sweep(&stored, &plots.join(&plan.experiment.name), Format::Both)?;
         }
@@ -214,11 +217,13 @@ pub(super) fn plot(results: &Path, out: &Path, format: Format) -> Result<(), Cli
 fn plot_installation(results: &Path, out: &Path, format: Format) -> Result<(), CliError> {
     let study = crate::results::installation::read_installation(results).map_err(input)?;
     let name = results.file_name().unwrap_or_default().to_string_lossy();
-    for (file, bytes) in crate::pipeline::installation::folder::reports(&study, &name) {
-        let path = results.join(file);
-        crate::files::write_atomic(&path, &bytes)
-            .map_err(|e| failure(anyhow::Error::new(e).context(path.display().to_string())))?;
-    }
+    let reported = crate::report::Reported::Installation {
+        study: &study,
+        name: &name,
+        folder: results,
+    };
+    crate::report::write(&reported)
+        .map_err(|e| failure(anyhow::Error::new(e).context(results.display().to_string())))?;
     eprintln!("report written to {}", results.join("report.md").display());
     draw(&study, out, format)
 }
@@ -237,93 +242,6 @@ fn draw_sweep(
     let drawn = crate::report::installation::draw_sweep(stored, folder, format).map_err(failure)?;
     super::report_figures(&drawn, folder);
     Ok(())
-}
-
-/// A sweep's headline: each point's methods at its largest window.
-fn printed_sweep(stored: &StoredInstallationSweep) -> String {
-    let mut table = Table::new();
-    table.load_preset(ASCII_MARKDOWN);
-    table.set_header([
-        "point",
-        "method",
-        "window (s)",
-        "held-out RMSE (cm/s)",
-        "95 % interval",
-        "÷ no calibration",
-    ]);
-    for point in &stored.index.points {
-        let rows: Vec<_> = stored.rows.iter().filter(|r| &r.point == point).collect();
-        let largest = rows
-            .iter()
-            .map(|r| r.summary.window_s)
-            .fold(f64::NAN, f64::max);
-        for row in rows.iter().filter(|r| r.summary.window_s == largest) {
-            let s = &row.summary;
-            table.add_row([
-                point.clone(),
-                s.method.clone(),
-                format!("{}", s.window_s),
-                format!("{:.2}", s.mean_cm_s),
-                format!("± {:.2}", s.ci95_cm_s),
-                format!("{:.3}", s.ratio),
-                s.calibrations.to_string(),
-            ]);
-        }
-    }
-    format!("held-out trajectories, each point at its largest calibration window:\n{table}")
-}
-
-/// The headline: each method's mean held-out RMSE at the largest window, with its
-/// 95 % interval and its ratio to no calibration; with `[learned]`, on the pairs inside
-/// the folds, where every method is scored on the same pairs as the learned ones.
-fn printed(study: &InstallationResults) -> String {
-    let inside_folds: Vec<_> = study
-        .folds
-        .iter()
-        .filter(|r| r.fold == "all")
-        .map(|r| r.summary.clone())
-        .collect();
-    let (summary, which) = if inside_folds.is_empty() {
-        (&study.summary, "held-out trajectories")
-    } else {
-        (
-            &inside_folds,
-            "held-out trajectories inside the folds (every method on the pairs the learned models never saw)",
-        )
-    };
-    let largest = summary.iter().map(|s| s.window_s).fold(f64::NAN, f64::max);
-    let mut table = Table::new();
-    table.load_preset(ASCII_MARKDOWN);
-    table.set_header([
-        "method",
-        "held-out RMSE (cm/s)",
-        "95 % interval",
-        "÷ no calibration",
-        "calibrations",
-    ]);
-    for row in summary.iter().filter(|s| s.window_s == largest) {
-        table.add_row([
-            row.method.clone(),
-            format!("{:.2}", row.mean_cm_s),
-            format!("± {:.2}", row.ci95_cm_s),
-            format!("{:.3}", row.ratio),
-            row.calibrations.to_string(),
-        ]);
-    }
-    let mut text = format!("{which}, calibration windows of {largest} s:\n{table}");
-    if !study.failures.is_empty() {
-        text.push_str(&format!(
-            "\n{} fits failed, each leaving its method one calibration trajectory fewer at its window (failures.parquet; report.md lists them), such as:",
-            study.failures.len()
-        ));
-        for failure in study.failures.iter().take(3) {
-            text.push_str(&format!(
-                "\n  {} on {} at {} s: {}",
-                failure.method, failure.calibration, failure.window_s, failure.why
-            ));
-        }
-    }
-    text
 }
 
 /// `validate` of an installation spec: its faults (its recordings read and checked),

@@ -50,7 +50,11 @@ pub(super) fn plot_run(results: &Path, out: Option<&Path>, format: Format) -> Re
         }
         None => Vec::new(),
     };
-    let [markdown, tex] = report::write(&stored, &figures).map_err(failure)?;
+    let reported = report::Reported::Run {
+        run: &stored,
+        figures: &figures,
+    };
+    let [markdown, tex] = report::write(&reported).map_err(failure)?;
     eprintln!(
         "report written to {} and {}",
         markdown.display(),
@@ -90,35 +94,7 @@ pub(super) fn compare_folders(first: &Path, second: &Path, out: &Path) -> Result
             out.display()
         )));
     }
-    for folder in [first, second] {
-        compare::refuse_sweep(folder).map_err(input)?;
-    }
-    let markdown = match (
-        compare::installation::is_installation(first),
-        compare::installation::is_installation(second),
-    ) {
-        (true, true) => {
-            let first = compare::installation::read(first).map_err(input)?;
-            let second = compare::installation::read(second).map_err(input)?;
-            compare::installation::render(&first, &second)
-        }
-        (true, false) | (false, true) => {
-            let (study, run) = if compare::installation::is_installation(first) {
-                (first, second)
-            } else {
-                (second, first)
-            };
-            return Err(input(compare::CompareError::InstallationAndRun {
-                study: study.to_path_buf(),
-                run: run.to_path_buf(),
-            }));
-        }
-        (false, false) => {
-            let first = compare::read(first).map_err(input)?;
-            let second = compare::read(second).map_err(input)?;
-            compare::render(&first, &second)
-        }
-    };
+    let markdown = compare::folders(first, second).map_err(input)?;
     print!("{markdown}");
     compare::write(out, &markdown).map_err(failure)?;
     eprintln!("comparison written to {}", out.display());

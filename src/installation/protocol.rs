@@ -108,23 +108,6 @@ pub struct Estimators<'a> {
     pub learned: &'a LearnedEstimate<'a>,
 }
 
-/// How a term, by its parameter name, is shown in tables: the factor from its stored
-/// unit and the unit shown (a scale in %, a misalignment in degrees, a bias in cm/s; a
-/// lever arm in m and a time offset in s as stored).
-pub fn table_unit(term: &str) -> (f64, &'static str) {
-    if term.starts_with("scale") {
-        (100.0, "%")
-    } else if term.ends_with("_rad") {
-        (180.0 / std::f64::consts::PI, "deg")
-    } else if term.ends_with("_m_s") {
-        (100.0, "cm/s")
-    } else if term.ends_with("_m") {
-        (1.0, "m")
-    } else {
-        (1.0, "s")
-    }
-}
-
 /// A scale-and-bias correction as installation terms: `(v − b) ⊘ (1 + k)` is the
 /// installation's correction with no misalignment, lever arm or time offset.
 pub fn from_correction(correction: &Correction) -> Installation {

@@ -169,32 +169,7 @@ fn claim_section(run: &StoredRun) -> Option<Section> {
     if table_rows.is_empty() {
         return None;
     }
-    // The DVL's own model and the bound, beside the error models' filters.
-    let notes = run
-        .dvls()
-        .iter()
-        .filter_map(|dvl| {
-            let time = |estimator, model, of: fn(&CalibrationTimeRow) -> Option<f64>| {
-                find(dvl, estimator, model)
-                    .map(|r| of(r).map_or("never".to_string(), |s| format!("{s:.0} s")))
-            };
-            let own = |r: &CalibrationTimeRow| r.calibration_time_s;
-            let beam = time(EstimatorKind::KalmanBeam, None, own)?;
-            let within = |estimator, model| match find(dvl, estimator, model) {
-                Some(r) => match r.time_to_bound_s {
-                    Some(s) => format!("comes within it in {s:.0} s"),
-                    None => "never comes within it".into(),
-                },
-                None => "is not in the run".into(),
-            };
-            Some(format!(
-                "{dvl}: the beam-model Kalman filter (the DVL's own model) settles in {beam}, the bound in {}; of the bound's RMSE at the longest window plus the tolerance, the filter {}, DCNet EM5 {}.",
-                time(EstimatorKind::Bound, None, own).unwrap_or_else(|| "—".into()),
-                within(EstimatorKind::KalmanBeam, None),
-                within(EstimatorKind::Dcnet, Some(ErrorModel::Em5)),
-            ))
-        })
-        .collect();
+    let notes = claim_notes(run);
     let header = [
         "DVL",
         "model",
@@ -219,4 +194,39 @@ fn claim_section(run: &StoredRun) -> Option<Section> {
         },
         paragraph: None,
     })
+}
+
+/// Under the claim's table, per DVL: the DVL's own model and the bound, beside the
+/// error models' filters.
+fn claim_notes(run: &StoredRun) -> Vec<String> {
+    let rows = &run.calibration_time;
+    let find = |dvl: &str, estimator, error_model| {
+        rows.iter()
+            .find(|r| r.dvl == dvl && r.estimator == estimator && r.error_model == error_model)
+    };
+    run
+        .dvls()
+        .iter()
+        .filter_map(|dvl| {
+            let time = |estimator, model, of: fn(&CalibrationTimeRow) -> Option<f64>| {
+                find(dvl, estimator, model)
+                    .map(|r| of(r).map_or("never".to_string(), |s| format!("{s:.0} s")))
+            };
+            let own = |r: &CalibrationTimeRow| r.calibration_time_s;
+            let beam = time(EstimatorKind::KalmanBeam, None, own)?;
+            let within = |estimator, model| match find(dvl, estimator, model) {
+                Some(r) => match r.time_to_bound_s {
+                    Some(s) => format!("comes within it in {s:.0} s"),
+                    None => "never comes within it".into(),
+                },
+                None => "is not in the run".into(),
+            };
+            Some(format!(
+                "{dvl}: the beam-model Kalman filter (the DVL's own model) settles in {beam}, the bound in {}; of the bound's RMSE at the longest window plus the tolerance, the filter {}, DCNet EM5 {}.",
+                time(EstimatorKind::Bound, None, own).unwrap_or_else(|| "—".into()),
+                within(EstimatorKind::KalmanBeam, None),
+                within(EstimatorKind::Dcnet, Some(ErrorModel::Em5)),
+            ))
+        })
+        .collect()
 }

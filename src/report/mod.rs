@@ -4,7 +4,9 @@
 //!
 //! - [`printed`]: the calibration and evaluation tables that `run` prints;
 //! - [`plots`]: the figures of a run and of a sweep;
-//! - this module: `results/<name>/report.md` and `report.tex`, written and sealed. The
+//! - this module: `results/<name>/report.md` and `report.tex` of every kind, from one
+//!   entry ([`documents`], [`write`]): a paper run's written by `plot` and sealed, an
+//!   installation study's written by its pipeline with its manifest. The paper's
 //!   report's tables are built once from the run ([`table`]: the paper's two tables in its
 //!   layout with our value beside the published one in every cell, cells off by more
 //!   than the spec's tolerance flagged, our extra estimators and the bound) and set by
@@ -13,7 +15,9 @@
 //! - [`section`]: tables of text set as Markdown and LaTeX alike, for the sections
 //!   beyond the paper's tables: [`calibration_time`] (how long each method needs to
 //!   calibrate) and the installation study's;
-//! - [`compare`]: two results folders side by side.
+//! - [`compare`]: two results folders side by side;
+//! - [`readable`]: error terms in the units people read, below the tables, figures and
+//!   printed lines that show them.
 
 pub mod calibration_time;
 pub mod compare;
@@ -22,11 +26,13 @@ pub mod latex;
 pub mod markdown;
 pub mod plots;
 pub mod printed;
+pub mod readable;
 pub mod section;
 pub mod table;
 
 pub use markdown::FILE;
 
+use crate::installation::rows::InstallationResults;
 use crate::report::plots::Written;
 use crate::results::read::StoredRun;
 use std::fmt::Write;
@@ -38,20 +44,64 @@ use table::ReportTables;
 /// `<sha256>  <path from the results folder>` line each (`sha256sum -c` reads it).
 pub const SEAL: &str = "report.sha256";
 
-/// Writes `report.md` and `report.tex` into the results folder, then [`SEAL`], each
-/// atomically; returns the reports' paths.
-pub fn write(run: &StoredRun, figures: &[Written]) -> std::io::Result<[PathBuf; 2]> {
-    let tables = ReportTables::of(run);
-    let markdown_file = run.folder.join(FILE);
-    let text = markdown::render(run, &tables, figures);
-    crate::files::write_atomic(&markdown_file, text.as_bytes())?;
-    let tex_file = run.folder.join(latex::FILE);
-    crate::files::write_atomic(&tex_file, latex::render(run, &tables).as_bytes())?;
-    let mut sealed = vec![
-        run.folder.join(crate::results::MANIFEST),
-        markdown_file.clone(),
-        tex_file.clone(),
-    ];
+/// What a results folder's reports are written from, one variant per kind of run.
+pub enum Reported<'a> {
+    /// A paper run read back, and the figures drawn for it (none with `--no-plots`).
+    Run {
+        run: &'a StoredRun,
+        figures: &'a [Written],
+    },
+    /// An installation study's tables, in `folder`; `name` keys its LaTeX labels.
+    Installation {
+        study: &'a InstallationResults,
+        name: &'a str,
+        folder: &'a Path,
+    },
+}
+
+/// A results folder's two reports, `report.md` then `report.tex`, each with its file
+/// name: a pure function of what is reported, so `plot` writes them again to the same
+/// bytes.
+pub fn documents(reported: &Reported) -> [(&'static str, String); 2] {
+    let (markdown, tex) = match reported {
+        Reported::Run { run, figures } => {
+            let tables = ReportTables::of(run);
+            (
+                markdown::render(run, &tables, figures),
+                latex::render(run, &tables),
+            )
+        }
+        Reported::Installation { study, name, .. } => (
+            installation::markdown(study),
+            installation::latex(study, name),
+        ),
+    };
+    [(FILE, markdown), (latex::FILE, tex)]
+}
+
+/// Writes a results folder's [`documents`] into it, each atomically, and returns their
+/// paths. A paper run's are then sealed with its manifest and figures ([`SEAL`]); an
+/// installation study's are recorded in its manifest, which its pipeline writes with
+/// the same [`documents`].
+pub fn write(reported: &Reported) -> std::io::Result<[PathBuf; 2]> {
+    let folder = match reported {
+        Reported::Run { run, .. } => &run.folder,
+        Reported::Installation { folder, .. } => *folder,
+    };
+    let [markdown, tex] = documents(reported).map(|(name, text)| (folder.join(name), text));
+    for (path, text) in [&markdown, &tex] {
+        crate::files::write_atomic(path, text.as_bytes())?;
+    }
+    if let Reported::Run { run, figures } = reported {
+        seal(run, figures, [&markdown.0, &tex.0])?;
+    }
+    Ok([markdown.0, tex.0])
+}
+
+/// Writes [`SEAL`]: the SHA-256 of the run's manifest, its reports and every figure.
+fn seal(run: &StoredRun, figures: &[Written], reports: [&PathBuf; 2]) -> std::io::Result<()> {
+    let mut sealed = vec![run.folder.join(crate::results::MANIFEST)];
+    sealed.extend(reports.map(PathBuf::clone));
     sealed.extend(figures.iter().flat_map(|f| f.files.iter().cloned()));
     let mut seal = String::new();
     for path in sealed {
@@ -64,8 +114,7 @@ pub fn write(run: &StoredRun, figures: &[Written]) -> std::io::Result<[PathBuf; 
             shown.display()
         );
     }
-    crate::files::write_atomic(&run.folder.join(SEAL), seal.as_bytes())?;
-    Ok([markdown_file, tex_file])
+    crate::files::write_atomic(&run.folder.join(SEAL), seal.as_bytes())
 }
 
 /// Whether `folder` holds everything a finished run promises beyond its tables, with

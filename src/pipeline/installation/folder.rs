@@ -119,21 +119,6 @@ pub fn trace(
         .collect()
 }
 
-/// The study's two reports, named as its folder holds them: a pure function of its
-/// tables, so `plot` writes them again to the same bytes.
-pub fn reports(study: &InstallationResults, name: &str) -> [(String, Vec<u8>); 2] {
-    [
-        (
-            "report.md".into(),
-            crate::report::installation::markdown(study).into_bytes(),
-        ),
-        (
-            "report.tex".into(),
-            crate::report::installation::latex(study, name).into_bytes(),
-        ),
-    ]
-}
-
 /// Writes the folder: the resolved spec, the tables, both reports, then the manifest
 /// with every file's SHA-256.
 pub fn write_folder(
@@ -153,7 +138,15 @@ pub fn write_folder(
     for (name, bytes) in results::installation::table_bytes(study)? {
         files.push((name.to_string(), bytes));
     }
-    files.extend(reports(study, &spec.name));
+    let reported = crate::report::Reported::Installation {
+        study,
+        name: &spec.name,
+        folder,
+    };
+    files.extend(
+        crate::report::documents(&reported)
+            .map(|(name, text)| (name.to_string(), text.into_bytes())),
+    );
     // A study without `[learned]` leaves no fold table of an earlier one behind.
     let folds = folder.join(results::installation::FOLDS);
     if study.folds.is_empty() && folds.exists() {

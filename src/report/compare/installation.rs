@@ -11,8 +11,8 @@ use super::CompareError;
 use super::markdown::{new_table, spec_section};
 use super::pairs::pair;
 use crate::installation::rows::{InstallationResults, SummaryRow, TermRow};
-use crate::report::installation::readable_term;
 use crate::report::plots::scale::three_digits;
+use crate::report::readable::readable_term;
 use crate::results::installation::{HELDOUT, read_installation};
 use crate::results::read::ReadError;
 use std::fmt::Write;
@@ -148,6 +148,24 @@ fn largest_window(rows: &[TermRow], method: &str) -> Option<f64> {
         .max_by(f64::total_cmp)
 }
 
+/// B − A of two sides' means, signed, three significant digits; `—` where a side has
+/// none.
+fn difference_text(mean_a: Option<(f64, usize)>, mean_b: Option<(f64, usize)>) -> String {
+    match (mean_a, mean_b) {
+        (Some((va, _)), Some((vb, _))) => {
+            let d = vb - va;
+            if d == 0.0 {
+                "0".into()
+            } else if d > 0.0 {
+                format!("+{}", three_digits(d))
+            } else {
+                three_digits(d)
+            }
+        }
+        _ => "—".into(),
+    }
+}
+
 fn terms_section(a: &[TermRow], b: &[TermRow], out: &mut String) {
     let methods = crate::first_seen(a.iter().chain(b).map(|r| r.method.as_str()));
     if methods.is_empty() {
@@ -192,19 +210,7 @@ fn terms_section(a: &[TermRow], b: &[TermRow], out: &mut String) {
                 })
             };
             let ((value_a, seen_a), (value_b, seen_b)) = (value(mean_a), value(mean_b));
-            let difference = match (mean_a, mean_b) {
-                (Some((va, _)), Some((vb, _))) => {
-                    let d = vb - va;
-                    if d == 0.0 {
-                        "0".into()
-                    } else if d > 0.0 {
-                        format!("+{}", three_digits(d))
-                    } else {
-                        three_digits(d)
-                    }
-                }
-                _ => "—".into(),
-            };
+            let difference = difference_text(mean_a, mean_b);
             table.add_row(vec![
                 format!("{name} ({unit})"),
                 value_a,

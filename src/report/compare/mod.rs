@@ -11,7 +11,9 @@
 //! This module reads the two folders and writes the text; [`difference`] holds the
 //! test of two means, [`spec_keys`] the spec's keys that differ, [`pairs`] pairs the
 //! rows of A and B, and [`markdown`] sets it all as Markdown. Two installation studies
-//! (folders holding `heldout.parquet`) are compared by [`installation`] instead.
+//! (folders holding `heldout.parquet`) are compared by [`installation`] instead;
+//! [`folders`] is the one entry, which reads the kind of the two folders and
+//! dispatches.
 
 pub mod calibration_time;
 pub mod difference;
@@ -81,6 +83,33 @@ pub fn refuse_sweep(folder: &Path) -> Result<(), CompareError> {
             .map(|point| folder.join(point).display().to_string())
             .collect(),
     })
+}
+
+/// The comparison of two results folders as Markdown, by their kind: two runs of the
+/// paper ([`render`]) or two installation studies ([`installation::render`]); a sweep's
+/// folder, or one folder of each kind, is refused.
+pub fn folders(first: &Path, second: &Path) -> Result<String, CompareError> {
+    for folder in [first, second] {
+        refuse_sweep(folder)?;
+    }
+    match (
+        installation::is_installation(first),
+        installation::is_installation(second),
+    ) {
+        (true, true) => Ok(installation::render(
+            &installation::read(first)?,
+            &installation::read(second)?,
+        )),
+        (true, false) => Err(CompareError::InstallationAndRun {
+            study: first.to_path_buf(),
+            run: second.to_path_buf(),
+        }),
+        (false, true) => Err(CompareError::InstallationAndRun {
+            study: second.to_path_buf(),
+            run: first.to_path_buf(),
+        }),
+        (false, false) => Ok(render(&read(first)?, &read(second)?)),
+    }
 }
 
 /// Writes the comparison to `path`, atomically, making its folder if need be.

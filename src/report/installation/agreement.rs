@@ -3,8 +3,8 @@
 //! where they do not, and where a term is not seen. In: the study's term rows of one
 //! method. Out: the paragraph's text.
 
-use super::terms::readable;
 use crate::installation::rows::TermRow;
+use crate::report::readable::readable_term;
 use crate::report::section::decimals;
 
 /// The z-value of a two-sided 95 % interval: estimates agree across calibration
@@ -26,7 +26,7 @@ struct Agreement {
 
 impl Agreement {
     fn of(term: &str, rows: &[&TermRow]) -> Agreement {
-        let (name, unit, factor) = readable(term);
+        let (name, unit, factor) = readable_term(term);
         let seen: Vec<&&TermRow> = rows
             .iter()
             .filter(|r| r.term == term && r.unseen.is_empty())
@@ -123,7 +123,7 @@ pub(super) fn agreement(method: &str, rows: &[&TermRow]) -> String {
                 .filter(|r| r.term == *term && !r.unseen.is_empty())
                 .map(|r| r.calibration.as_str())
                 .collect();
-            (!on.is_empty()).then(|| format!("{} on {}", readable(term).0, on.join(", ")))
+            (!on.is_empty()).then(|| format!("{} on {}", readable_term(term).0, on.join(", ")))
         })
         .collect();
     if !unseen.is_empty() {

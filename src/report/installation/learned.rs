@@ -7,9 +7,9 @@
 //! Out: [`Section`]s.
 
 use super::heldout::window_text;
-use super::terms::readable;
 use crate::installation::learned_spec::LEARNED_LABEL;
 use crate::installation::rows::{FoldSummaryRow, InstallationResults, NO_CALIBRATION, TermRow};
+use crate::report::readable::readable_term;
 use crate::report::section::{Entry, Section, Table};
 
 /// Whether `method` is one of `[learned]`'s.
@@ -53,7 +53,21 @@ pub(super) fn learned_sections(
         .copied()
         .filter(|m| study.folds.iter().any(|r| r.summary.method == *m))
         .collect();
-    let mut sections = vec![Section {
+    let mut sections = vec![
+        inside_folds_section(study, &methods, windows),
+        fold_by_fold_section(study, &methods, &folds, largest),
+    ];
+    if fitted_alike(study, &methods).is_none() {
+        sections[0].table.notes.push("No installation model of [[calibration.models]] has the learned models' terms: add one for the paired comparison and the terms' table.".into());
+    }
+    sections.extend(paired(study, &methods, windows));
+    sections.extend(term_errors(study, &methods, windows));
+    sections
+}
+
+/// Every method on the pairs inside the folds, window by window.
+fn inside_folds_section(study: &InstallationResults, methods: &[&str], windows: &[f64]) -> Section {
+    Section {
         title: "Inside the folds: learned against model-based".into(),
         caption: format!(
             "Every method on the same pairs only: calibration and scored trajectory in the same fold, which the fold's learned models never saw, as simulation or as reality, and at each window only the pairs every method scored. Mean held-out RMSE in cm/s ± its 95 % interval over calibration trajectories, and (in brackets) its ratio to {NO_CALIBRATION} on those pairs."
@@ -83,8 +97,17 @@ pub(super) fn learned_sections(
             },
         },
         paragraph: None,
-    }];
-    sections.push(Section {
+    }
+}
+
+/// Every method fold by fold at the largest window.
+fn fold_by_fold_section(
+    study: &InstallationResults,
+    methods: &[&str],
+    folds: &[&str],
+    largest: f64,
+) -> Section {
+    Section {
         title: format!("Fold by fold, window {}", window_text(largest)),
         caption: format!(
             "Mean held-out RMSE in cm/s ± its 95 % interval over each fold's calibration trajectories, calibrated on the first {}.",
@@ -112,13 +135,7 @@ pub(super) fn learned_sections(
             notes: Vec::new(),
         },
         paragraph: None,
-    });
-    if fitted_alike(study, &methods).is_none() {
-        sections[0].table.notes.push("No installation model of [[calibration.models]] has the learned models' terms: add one for the paired comparison and the terms' table.".into());
     }
-    sections.extend(paired(study, &methods, windows));
-    sections.extend(term_errors(study, &methods, windows));
-    sections
 }
 
 /// The installation fit with the learned models' terms: the model-based method whose
@@ -262,7 +279,7 @@ fn term_errors(study: &InstallationResults, methods: &[&str], windows: &[f64]) -
             mean(&values)
         })
         .collect();
-    let readable_terms: Vec<(String, &str, f64)> = terms.iter().map(|t| readable(t)).collect();
+    let readable_terms: Vec<(String, &str, f64)> = terms.iter().map(|t| readable_term(t)).collect();
     let mut rows = vec![
         std::iter::once(Entry::Text(format!("{fitted}, mean of every trajectory")))
             .chain(std::iter::once(Entry::Text(window_text(largest))))
@@ -284,19 +301,12 @@ fn term_errors(study: &InstallationResults, methods: &[&str], windows: &[f64]) -
                 Entry::Text(method.to_string()),
                 Entry::Text(window_text(window_s)),
             ];
-            for ((term, value), (_, _, factor)) in terms.iter().zip(&reference).zip(&readable_terms)
-            {
-                let errors: Vec<f64> = rows_here
-                    .iter()
-                    .filter(|r| r.term == *term)
-                    .map(|r| (r.value - value).abs())
-                    .collect();
-                row.push(if errors.is_empty() {
-                    Entry::Missing
-                } else {
-                    Entry::Value(mean(&errors) * factor)
-                });
-            }
+            row.extend(term_error_cells(
+                &rows_here,
+                &terms,
+                &reference,
+                &readable_terms,
+            ));
             rows.push(row);
         }
     }
@@ -320,4 +330,29 @@ fn term_errors(study: &InstallationResults, methods: &[&str], windows: &[f64]) -
         },
         paragraph: None,
     })
+}
+
+/// One method's mean absolute difference from `reference`, term by term, in the
+/// readable unit; `—` for a term it has no row of.
+fn term_error_cells(
+    rows: &[&TermRow],
+    terms: &[&str],
+    reference: &[f64],
+    readable_terms: &[(String, &str, f64)],
+) -> Vec<Entry> {
+    let mean = |values: &[f64]| values.iter().sum::<f64>() / values.len().max(1) as f64;
+    let mut cells = Vec::new();
+    for ((term, value), (_, _, factor)) in terms.iter().zip(reference).zip(readable_terms) {
+        let errors: Vec<f64> = rows
+            .iter()
+            .filter(|r| r.term == *term)
+            .map(|r| (r.value - value).abs())
+            .collect();
+        cells.push(if errors.is_empty() {
+            Entry::Missing
+        } else {
+            Entry::Value(mean(&errors) * factor)
+        });
+    }
+    cells
 }

@@ -25,7 +25,8 @@ pub mod timing;
 pub mod figures;
 
 pub use figures::{draw_all, draw_sweep};
-pub(crate) use terms::{readable_term, readable_why};
+// Where `cli/calibrate.rs` has always found them; they live below the report.
+pub(crate) use crate::report::readable::{readable_term, readable_why};
 
 use crate::installation::rows::{InstallationResults, NO_CALIBRATION, TermRow};
 use crate::report::section::{Section, symbols};

@@ -1,5 +1,9 @@
-//! The calibration and evaluation tables printed at the end of a run, in the paper's
-//! layout: error models across, DVLs and estimators down, `mean ± std (T_conv)` cells.
+//! The tables printed at the end of a run, of every kind. In: a run's rows. Out: text.
+//! This module holds the paper's calibration and evaluation tables, in its layout:
+//! error models across, DVLs and estimators down, `mean ± std (T_conv)` cells;
+//! [`installation`] the installation study's headline and a sweep of studies' table.
+
+pub mod installation;
 
 pub mod calibrate;
 

@@ -162,6 +162,42 @@ pub const TICK_CHAR_PX: usize = 9;
 /// The width the figure's x axis gives its tick labels, in pixels.
 pub const TICKS_WIDTH_PX: usize = 700;
 
+/// The x axis from `first` to `last`: the ticks' names, or padded numbers; and the
+/// span that sets how far each method's points and bars sit beside their x, in the
+/// order of the legend, so that intervals at one x do not hide one another.
+fn x_scale(x_axis: &XAxis, first: f64, last: f64) -> (Scale, f64) {
+    let x = match x_axis.ticks {
+        Some(names) => Scale::named(names),
+        None => {
+            let pad = 0.05 * (last - first);
+            Scale::linear((first - pad)..(last + pad))
+        }
+    };
+    let span = match x_axis.ticks {
+        Some(_) => (last - first).max(1.0),
+        None => last - first,
+    };
+    (x, span)
+}
+
+/// The legend: a swatch per method, and the cut mark's where a mean is off the axis.
+fn legend_entries(looks: &[(Look, Option<Marker>)], cut: bool) -> Vec<(Swatch, String)> {
+    let mut entries: Vec<(Swatch, String)> = looks
+        .iter()
+        .map(|(look, marker)| {
+            let swatch = match marker {
+                Some(marker) => Swatch::Marked(look.color, look.stroke, *marker),
+                None => Swatch::Line(look.color, look.stroke),
+            };
+            (swatch, look.label.clone())
+        })
+        .collect();
+    if cut {
+        entries.push((Swatch::Cut, "beyond the axis".into()));
+    }
+    entries
+}
+
 /// Each method's mean held-out RMSE ± its 95 % interval at the x of each of its `rows`
 /// (`(x, row)`), one line per method and no calibration as a dashed reference.
 pub fn rmse_figure(
@@ -178,19 +214,7 @@ pub fn rmse_figure(
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
             (lo.min(*x), hi.max(*x))
         });
-    let x = match x_axis.ticks {
-        Some(names) => Scale::named(names),
-        None => {
-            let pad = 0.05 * (last - first);
-            Scale::linear((first - pad)..(last + pad))
-        }
-    };
-    // Each method's points and bars sit a little beside their x, in the order of the
-    // legend, so that intervals at one x do not hide one another.
-    let span = match x_axis.ticks {
-        Some(_) => (last - first).max(1.0),
-        None => last - first,
-    };
+    let (x, span) = x_scale(&x_axis, first, last);
     let offset = |index: usize| method_offset_s(index, methods.len(), span);
     // The means decide the axis: logarithmic when they span a decade, as the blown-up
     // short windows of the paper's least squares make them, so that no calibration,
@@ -251,20 +275,8 @@ pub fn rmse_figure(
                 )?;
             }
         }
-        let mut entries: Vec<(Swatch, String)> = looks
-            .iter()
-            .map(|(look, marker)| {
-                let swatch = match marker {
-                    Some(marker) => Swatch::Marked(look.color, look.stroke, *marker),
-                    None => Swatch::Line(look.color, look.stroke),
-                };
-                (swatch, look.label.clone())
-            })
-            .collect();
-        if means.iter().any(|mean| y.is_cut(*mean)) {
-            entries.push((Swatch::Cut, "beyond the axis".into()));
-        }
-        legend(&legend_area, "method", &entries)
+        let cut = means.iter().any(|mean| y.is_cut(*mean));
+        legend(&legend_area, "method", &legend_entries(&looks, cut))
     })?;
     Ok(Outcome::Drawn(Drawn { caption, svg }))
 }

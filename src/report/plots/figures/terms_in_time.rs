@@ -8,10 +8,10 @@
 //! study's. Out: the figure, or why the run has none.
 
 use crate::installation::rows::{FilterPoint, InstallationResults};
-use crate::report::installation::readable_term;
 use crate::report::plots::canvas::{Drawn, Outcome, draw_svg};
 use crate::report::plots::draw::*;
 use crate::report::plots::scale::Scale;
+use crate::report::readable::readable_term;
 use crate::results::read::StoredRun;
 use crate::vocab::{ErrorModel, EstimatorKind};
 use plotters::prelude::*;
@@ -189,6 +189,25 @@ pub fn kalman_terms(run: &StoredRun) -> PlotResult<Outcome> {
     Ok(Outcome::Drawn(Drawn { caption, svg }))
 }
 
+/// The mean of every trajectory's fit of `term` at the longest window, by the
+/// installation model with the terms of filter `method`; none where it has no fit.
+fn fitted_mean(study: &InstallationResults, method: &str, term: &str) -> Option<f64> {
+    let fitted = method.replacen("Kalman filter", "installation", 1);
+    let longest = study
+        .terms
+        .iter()
+        .filter(|r| r.method == fitted)
+        .map(|r| r.window_s)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let values: Vec<f64> = study
+        .terms
+        .iter()
+        .filter(|r| r.method == fitted && r.window_s == longest && r.term == term)
+        .map(|r| r.value)
+        .collect();
+    (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
+}
+
 /// The installation study's first Kalman filter against time on two calibration
 /// trajectories: the one whose turns show the lever arm best (the smallest bound on
 /// it after the whole trajectory) and the one that shows it least, each term beside
@@ -225,23 +244,7 @@ pub fn installation_kalman_terms(study: &InstallationResults) -> PlotResult<Outc
     ) else {
         return Ok(Outcome::NotApplicable("the filter kept no sample".into()));
     };
-    // The mean of every trajectory's fit of the same terms at the longest window.
-    let fitted = method.replacen("Kalman filter", "installation", 1);
-    let longest = study
-        .terms
-        .iter()
-        .filter(|r| r.method == fitted)
-        .map(|r| r.window_s)
-        .fold(f64::NEG_INFINITY, f64::max);
-    let reference = |term: &str| {
-        let values: Vec<f64> = study
-            .terms
-            .iter()
-            .filter(|r| r.method == fitted && r.window_s == longest && r.term == term)
-            .map(|r| r.value)
-            .collect();
-        (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
-    };
+    let reference = |term: &str| fitted_mean(study, &method, term);
     let grid: Vec<(String, Vec<TermPanel>)> = [turning.0, straight.0]
         .iter()
         .map(|&calibration| {
