@@ -123,7 +123,6 @@ pub fn write_run(
     dcnets: &[TrainingHistory],
     manifest: &Manifest,
 ) -> Result<(), ResultsError> {
-    crate::files::create_folder(folder).map_err(io(folder))?;
     let batches = [
         monte_carlo_batch(&result.runs),
         calibration_batch(&result.calibration),
@@ -141,37 +140,48 @@ pub fn write_run(
             spec.sample_rate_hz,
         ),
     ];
-    // Each file's SHA-256 goes into the manifest, written last.
+    let mut files = Vec::new();
+    for (file, batch) in TABLES.iter().zip(batches) {
+        files.push((file.to_string(), table_bytes(&folder.join(file), &batch)?));
+    }
+    let published_path = folder.join(PUBLISHED);
+    match &spec.resolved.report.published {
+        Some(source) => files.push((
+            PUBLISHED.to_string(),
+            std::fs::read(source).map_err(io(source))?,
+        )),
+        None => match std::fs::remove_file(&published_path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(io(&published_path)(e));
+            }
+            _ => {}
+        },
+    }
+    files.push((SPEC.to_string(), spec.resolved_toml().into_bytes()));
+    write_folder(folder, &files, manifest.clone())
+}
+
+/// Writes a results folder of any kind: creates `folder`, writes each of `files`
+/// (name, bytes) atomically in turn, then `manifest`, last, with the SHA-256 of each.
+pub fn write_folder(
+    folder: &Path,
+    files: &[(String, Vec<u8>)],
+    manifest: Manifest,
+) -> Result<(), ResultsError> {
+    crate::files::create_folder(folder).map_err(io(folder))?;
     let mut files_sha256 = BTreeMap::new();
-    let mut write = |name: &str, bytes: &[u8]| {
+    for (name, bytes) in files {
         let path = folder.join(name);
         write_atomic(&path, bytes).map_err(io(&path))?;
-        files_sha256.insert(name.to_string(), sha256_hex(bytes));
-        Ok::<(), ResultsError>(())
-    };
-    for (file, batch) in TABLES.iter().zip(batches) {
-        write(file, &table_bytes(&folder.join(file), &batch)?)?;
+        files_sha256.insert(name.clone(), sha256_hex(bytes));
     }
-    match &spec.resolved.report.published {
-        Some(source) => write(PUBLISHED, &std::fs::read(source).map_err(io(source))?)?,
-        None => {
-            let published_path = folder.join(PUBLISHED);
-            match std::fs::remove_file(&published_path) {
-                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                    return Err(io(&published_path)(e));
-                }
-                _ => {}
-            }
-        }
-    }
-    write(SPEC, spec.resolved_toml().as_bytes())?;
     let manifest = Manifest {
         files_sha256,
-        ..manifest.clone()
+        ..manifest
     };
-    let manifest_path = folder.join(MANIFEST);
+    let path = folder.join(MANIFEST);
     let json = serde_json::to_string_pretty(&manifest).expect("a manifest always serializes");
-    write_atomic(&manifest_path, json.as_bytes()).map_err(io(&manifest_path))
+    write_atomic(&path, json.as_bytes()).map_err(io(&path))
 }
 
 /// Whether every file `manifest` names in `folder` still has the SHA-256 it was written
