@@ -6,7 +6,9 @@
 //! In: the experiment and each point's summary rows. Out: the two files.
 
 use super::ResultsError;
-use super::read::{Batch, ReadError, read_rows};
+use super::installation::SummaryRecord;
+use super::read::{Batch, ReadError, read_rows, records};
+use super::record::Record;
 use super::sweep::{
     INDEX, SweepIndex, TABLE, point_columns, point_folder, read_index, swept, write_table_and_index,
 };
@@ -69,6 +71,14 @@ pub fn write(
     write_table_and_index(folder, &batch, index)
 }
 
+/// The point of a row of the sweep's table, read beside its [`SummaryRecord`].
+#[derive(serde::Serialize, serde::Deserialize)]
+struct PointRecord {
+    point: String,
+}
+
+impl Record for PointRecord {}
+
 /// A stored sweep of studies: its index and each point's summary rows.
 #[derive(Debug, Clone)]
 pub struct StoredInstallationSweep {
@@ -103,11 +113,11 @@ pub fn read(folder: &Path) -> Result<StoredInstallationSweep, ReadError> {
         .expect("empty columns of one table")
         .schema();
     let rows = read_rows(&folder.join(TABLE), &expected, |batch: &Batch| {
-        let point = batch.strings("point")?;
-        let summary = super::installation::summary_rows(batch)?;
-        Ok(point
+        let points = records(batch, |r: PointRecord| Ok(r.point))?;
+        let summaries = records(batch, |r: SummaryRecord| Ok(SummaryRow::from(r)))?;
+        Ok(points
             .into_iter()
-            .zip(summary)
+            .zip(summaries)
             .map(|(point, summary)| InstallationSweepRow { point, summary })
             .collect())
     })?;

@@ -33,6 +33,22 @@ pub enum ColumnError {
     SweptMissing { column: String, index: &'static str },
     #[error("column `{column}` holds {found}, expected Int64, Float64 or Utf8")]
     SweptType { column: String, found: DataType },
+    /// Columns of the checked types and without empty values that still do not decode
+    /// into the table's records.
+    #[error("its rows do not decode")]
+    Decode(#[source] DecodeFault),
+}
+
+/// What serde_arrow said of rows it could not decode; two faults are equal when they
+/// are the same one.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error(transparent)]
+pub struct DecodeFault(pub std::sync::Arc<serde_arrow::Error>);
+
+impl PartialEq for DecodeFault {
+    fn eq(&self, other: &Self) -> bool {
+        std::sync::Arc::ptr_eq(&self.0, &other.0)
+    }
 }
 
 /// Columns added after the first results folders were written: a folder that lacks

@@ -31,6 +31,7 @@ use crate::evaluate::{CalibrationRow, EvaluationRow, RunRow};
 use crate::spec::published::Published;
 use crate::spec::{SpecErrors, SpecFile, TomlFile};
 use crate::vocab::ErrorModel;
+use super::record::{self, Record};
 use arrow_schema::Schema;
 use columns::check_schema;
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
@@ -316,6 +317,24 @@ pub(crate) fn read_rows<T>(
         out.extend(rows(&Batch(&batch)).map_err(invalid)?);
     }
     Ok(out)
+}
+
+/// Reads the Parquet file at `path` as a table of records `R`, checked against `R`'s
+/// columns (those it writes only sometimes may be missing), each turned into a row by
+/// `row`.
+pub(crate) fn read_records<R: Record, T>(
+    path: &Path,
+    row: impl Fn(R) -> Result<T, ColumnError>,
+) -> Result<Vec<T>, ReadError> {
+    read_rows(path, &record::expected::<R>(), |batch| records(batch, &row))
+}
+
+/// The records `R` of a checked `batch`, each turned into a row by `row`.
+pub(crate) fn records<R: Record, T>(
+    batch: &Batch,
+    row: impl FnMut(R) -> Result<T, ColumnError>,
+) -> Result<Vec<T>, ColumnError> {
+    record::decode::<R>(batch.0)?.into_iter().map(row).collect()
 }
 
 /// The schema the writer gives `file`.
