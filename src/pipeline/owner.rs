@@ -294,7 +294,12 @@ mod tests {
         std::fs::create_dir_all(&study).unwrap();
         std::fs::write(study.join(results::installation::HELDOUT), "").unwrap();
         let refused = |folder: &Path, writing| match check(&writer(folder, writing, true)) {
-            Err(OwnerError::OtherKind { folder, theirs, ours, .. }) => Some((folder, theirs, ours)),
+            Err(OwnerError::OtherKind {
+                folder,
+                theirs,
+                ours,
+                ..
+            }) => Some((folder, theirs, ours)),
             _ => None,
         };
         let study_words = "the results of an installation study";

@@ -322,7 +322,11 @@ impl From<TraceRecord> for TracePoint {
                 record.before_y_cm_s,
                 record.before_z_cm_s,
             ],
-            after_cm_s: [record.after_x_cm_s, record.after_y_cm_s, record.after_z_cm_s],
+            after_cm_s: [
+                record.after_x_cm_s,
+                record.after_y_cm_s,
+                record.after_z_cm_s,
+            ],
             yaw_rate_deg_s: record.yaw_rate_deg_s,
         }
     }

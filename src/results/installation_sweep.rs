@@ -8,9 +8,9 @@
 use super::ResultsError;
 use super::installation::SummaryRecord;
 use super::read::{Batch, ReadError, read_rows, records};
-use super::record::Record;
 use super::sweep::{
-    INDEX, SweepIndex, TABLE, point_columns, point_folder, read_index, swept, write_table_and_index,
+    INDEX, PointRecord, SweepIndex, TABLE, point_columns, point_folder, read_index, swept,
+    write_table_and_index,
 };
 use crate::installation::rows::SummaryRow;
 use crate::installation::spec::{InstallationSpec, KIND};
@@ -70,14 +70,6 @@ pub fn write(
     };
     write_table_and_index(folder, &batch, index)
 }
-
-/// The point of a row of the sweep's table, read beside its [`SummaryRecord`].
-#[derive(serde::Serialize, serde::Deserialize)]
-struct PointRecord {
-    point: String,
-}
-
-impl Record for PointRecord {}
 
 /// A stored sweep of studies: its index and each point's summary rows.
 #[derive(Debug, Clone)]

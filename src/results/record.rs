@@ -5,14 +5,54 @@
 //! batch the Parquet writer takes (each column nullable only where a value is empty,
 //! as the tables have always been written), or the records, a fault naming its column.
 
-use super::read::ColumnError;
-use super::read::columns::DecodeFault;
 use arrow_array::{Array, ArrayRef, RecordBatch};
-use arrow_schema::{FieldRef, Schema};
+use arrow_schema::{DataType, FieldRef, Schema};
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 use serde_arrow::schema::{SchemaLike, TracingOptions};
 use std::sync::Arc;
+
+/// What is wrong with one column of a stored table: the fault itself, shown after the
+/// file's path by `ReadError::Column`.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ColumnError {
+    #[error("column `{column}` is missing: this is not the schema dcnet-exp writes")]
+    Missing { column: String },
+    #[error(
+        "column `{column}` holds {found}, expected {expected}: this is not the schema dcnet-exp writes"
+    )]
+    Type {
+        column: String,
+        found: DataType,
+        expected: DataType,
+    },
+    #[error("column `{column}` has empty values")]
+    Empty { column: String },
+    /// A name that does not parse; `problem` is what the name's type says of it.
+    #[error("column `{column}`: {problem}")]
+    Value { column: String, problem: String },
+    /// A swept key of the sweep's index that the sweep table lacks.
+    #[error("column `{column}`, a swept key of {index}, is missing")]
+    SweptMissing { column: String, index: &'static str },
+    #[error("column `{column}` holds {found}, expected Int64, Float64 or Utf8")]
+    SweptType { column: String, found: DataType },
+    /// Columns of the checked types and without empty values that still do not decode
+    /// into the table's records.
+    #[error("its rows do not decode")]
+    Decode(#[source] DecodeFault),
+}
+
+/// What serde_arrow said of rows it could not decode; two faults are equal when they
+/// are the same one.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error(transparent)]
+pub struct DecodeFault(pub std::sync::Arc<serde_arrow::Error>);
+
+impl PartialEq for DecodeFault {
+    fn eq(&self, other: &Self) -> bool {
+        std::sync::Arc::ptr_eq(&self.0, &other.0)
+    }
+}
 
 /// The record of one row of a results table.
 pub trait Record: Serialize + DeserializeOwned {
@@ -31,7 +71,11 @@ pub fn fields<R: Record>() -> Vec<FieldRef> {
 /// written only sometimes.
 pub fn expected<R: Record>() -> Schema {
     let fields = fields::<R>().into_iter();
-    Schema::new(fields.filter(|f| !R::SOMETIMES.contains(&f.name().as_str())).collect::<Vec<_>>())
+    Schema::new(
+        fields
+            .filter(|f| !R::SOMETIMES.contains(&f.name().as_str()))
+            .collect::<Vec<_>>(),
+    )
 }
 
 /// `rows` as one batch; a sometimes-column where every row is empty is left out.

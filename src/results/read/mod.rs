@@ -7,8 +7,9 @@
 //!
 //! - this module: [`StoredRun`], the folder read whole, and [`ReadError`], which puts
 //!   the path of the file in front of whatever went wrong with it;
-//! - [`columns`]: the schema check and typed access to a table's columns (`Batch`);
-//! - [`rows`]: one decoder per table, from its columns to the rows the run computed.
+//! - [`columns`]: the schema check, and `Batch`, a batch that passed it;
+//! - [`rows`]: one decoder per table, from its records to the rows the run computed;
+//!   [`read_records`] and [`records`] decode a checked batch into a table's records.
 
 pub mod columns;
 pub mod rows;
@@ -21,6 +22,7 @@ use super::calibration_time::{
     CALIBRATION_TIME, HELD_OUT, TERMS_IN_TIME, calibration_time_batch, held_out_batch,
     terms_in_time_batch,
 };
+use super::record::{self, Record};
 use super::{
     MANIFEST, Manifest, PUBLISHED, SPEC, TABLES, calibration_batch, evaluation_batch,
     monte_carlo_batch, training_batch, trajectories_batch,
@@ -31,7 +33,6 @@ use crate::evaluate::{CalibrationRow, EvaluationRow, RunRow};
 use crate::spec::published::Published;
 use crate::spec::{SpecErrors, SpecFile, TomlFile};
 use crate::vocab::ErrorModel;
-use super::record::{self, Record};
 use arrow_schema::Schema;
 use columns::check_schema;
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
