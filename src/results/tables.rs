@@ -361,7 +361,7 @@ mod tests {
     fn the_replicate_column_is_written_only_with_replicates_and_rows_read_back() {
         let folder = tempfile::tempdir().unwrap();
         let path = folder.path().join("monte_carlo.parquet");
-        let single = vec![run(EstimatorKind::Baseline, None)];
+        let single = vec![run(EstimatorKind::LeastSquares, Some(ErrorModel::Em5))];
         let batch = monte_carlo_batch(&single);
         assert!(!names(&batch).contains(&REPLICATE.to_string()));
         assert!(!nullable(&batch, "error_model"));
@@ -369,6 +369,7 @@ mod tests {
         assert_eq!(run_rows_at(&path).unwrap(), single);
 
         let mut replicated = single.clone();
+        replicated.push(run(EstimatorKind::Baseline, None));
         replicated.push(RunRow {
             replicate: Some(1),
             ..run(EstimatorKind::Dcnet, Some(ErrorModel::Em5))
