@@ -75,7 +75,7 @@ fn planned<'a>(experiment: &'a Experiment, target: &Target) -> Result<Plan<'a>, 
 fn check_owners(plan: &Plan, to_do: &[Task], force: bool) -> Result<(), CliError> {
     for task in to_do {
         if let Task::Results(p) = *task {
-            owner::check(plan, p, force).map_err(input)?;
+            owner::check(&owner::Writer::point(plan, p, force)).map_err(input)?;
         }
     }
     Ok(())

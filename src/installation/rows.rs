@@ -79,7 +79,7 @@ pub struct TracePoint {
 }
 
 /// A method's calibration time on one calibration trajectory, beside its T_conv.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct InstallationTimeRow {
     pub method: String,
     pub calibration: String,

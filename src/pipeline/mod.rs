@@ -240,7 +240,7 @@ fn write_results(
         // when it is this one's, refused when another spec wrote it.
         let _claim = claim::claim(&plan.out, &owner::folder_key(plan, p)).map_err(lock_error)?;
         if results_to_do {
-            owner::check(plan, p, force)?;
+            owner::check(&owner::Writer::point(plan, p, force))?;
         }
         if results_to_do && !force && plan.status(Task::Results(p)) == Status::Done {
             eprintln!(

@@ -4,7 +4,9 @@
 //! to no file, belongs to anyone). A run replaces a folder written from its own spec file (an
 //! edited spec, other `--set` values), but never, without `--force`, one that another
 //! spec file with the same `name` wrote; a single run, a sweep and an installation
-//! study never write into a folder that holds another of them. In: a plan and one of its points. Out:
+//! study never write into a folder that holds another of them. One check serves every
+//! kind of run. In: a [`Writer`]: the folder, the output folder, the recorded spec
+//! file, the spec's name and hash, the kind of run writing and `--force`. Out:
 //! nothing, or an [`OwnerError`] naming both.
 
 use super::{Plan, cache};
@@ -77,97 +79,110 @@ fn resolved(out: &Path, recorded: &str) -> PathBuf {
     path
 }
 
-/// Refuses to write point `p`'s folder, unless `force`, when another spec wrote it.
-pub fn check(plan: &Plan, p: usize, force: bool) -> Result<(), OwnerError> {
-    let folder = &plan.points[p].folder;
+/// The kind of run that writes a folder, which a folder holding another kind refuses.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Writing {
+    /// A paper run's results folder.
+    Single,
+    /// A point of a paper sweep: the sweep's folder, the point's parent, is the one
+    /// that must hold nothing of another kind.
+    SweepPoint,
+    /// An installation study's folder, alone or a point of a sweep.
+    Installation,
+    /// The folder of a sweep of installation studies: its points' folders are checked
+    /// each, so only the kind is checked here.
+    InstallationSweep,
+}
+
+impl Writing {
+    fn held(self) -> Held {
+        match self {
+            Writing::Single => Held::Single,
+            Writing::SweepPoint => Held::Sweep,
+            Writing::Installation => Held::InstallationResults,
+            Writing::InstallationSweep => Held::InstallationSweep,
+        }
+    }
+}
+
+/// What the owner check needs to know of a folder about to be written.
+#[derive(Debug, Clone)]
+pub struct Writer<'a> {
+    pub folder: &'a Path,
+    /// The output folder the spec file is recorded from.
+    pub out: &'a Path,
+    /// The spec file as [`recorded`] gives it (empty when the run names none).
+    pub spec_file: &'a str,
+    /// The spec's `name`.
+    pub name: &'a str,
+    /// The SHA-256 of the resolved spec, in hex.
+    pub spec_sha256: String,
+    pub writing: Writing,
+    /// Replace another spec file's results (never another kind's).
+    pub force: bool,
+}
+
+impl<'a> Writer<'a> {
+    /// The writer of paper point `p`'s folder.
+    pub fn point(plan: &'a Plan, p: usize, force: bool) -> Writer<'a> {
+        let spec = plan.spec(p);
+        Writer {
+            folder: &plan.points[p].folder,
+            out: &plan.out,
+            spec_file: plan.spec_file.as_deref().unwrap_or_default(),
+            name: &spec.name,
+            spec_sha256: crate::files::sha256_hex(spec.resolved_toml().as_bytes()),
+            writing: if plan.experiment.is_sweep() {
+                Writing::SweepPoint
+            } else {
+                Writing::Single
+            },
+            force,
+        }
+    }
+}
+
+/// Refuses to write `writer.folder` when it is a file, or (`force` or not) when it,
+/// or a sweep point's sweep folder, holds another kind of run; and, unless `force`,
+/// when another spec file wrote it.
+pub fn check(writer: &Writer) -> Result<(), OwnerError> {
+    let folder = writer.folder;
     if folder.exists() && !folder.is_dir() {
         return Err(OwnerError::NotAFolder {
-            folder: folder.clone(),
+            folder: folder.to_path_buf(),
         });
     }
-    let spec = plan.spec(p);
-    let ours = plan.spec_file.clone().unwrap_or_default();
-    check_kind(plan, folder, &resolved(&plan.out, &ours), &spec.name)?;
-    if force {
+    let holder = match writer.writing {
+        Writing::SweepPoint => folder.parent().unwrap_or(folder),
+        _ => folder,
+    };
+    let held = Held::of(holder);
+    let ours = writer.writing.held();
+    if held != Held::Nothing && held != ours {
+        return Err(OwnerError::OtherKind {
+            folder: holder.to_path_buf(),
+            theirs: held.words(),
+            ours: ours.words(),
+            spec: resolved(writer.out, writer.spec_file),
+            name: writer.name.to_string(),
+        });
+    }
+    if writer.force || writer.writing == Writing::InstallationSweep {
         return Ok(());
     }
-    let our_hash = crate::files::sha256_hex(spec.resolved_toml().as_bytes());
-    another_spec(folder, &plan.out, &ours, &spec.name, &our_hash)
+    another_spec(writer)
 }
 
-/// Refuses, unless `force`, to write an installation study named `name` from the spec
-/// file `ours` (as [`recorded`] gives it) into `folder` when another spec file's study
-/// is there; and, `force` or not, when a paper run or a sweep is.
-pub fn check_installation(
-    folder: &Path,
-    out: &Path,
-    ours: &str,
-    name: &str,
-    spec_sha256: &str,
-    force: bool,
-) -> Result<(), OwnerError> {
-    if folder.exists() && !folder.is_dir() {
-        return Err(OwnerError::NotAFolder {
-            folder: folder.to_path_buf(),
-        });
-    }
-    let held = Held::of(folder);
-    if held != Held::Nothing && held != Held::InstallationResults {
-        return Err(OwnerError::OtherKind {
-            folder: folder.to_path_buf(),
-            theirs: held.words(),
-            ours: Held::InstallationResults.words(),
-            spec: resolved(out, ours),
-            name: name.to_string(),
-        });
-    }
-    if force {
-        return Ok(());
-    }
-    another_spec(folder, out, ours, name, spec_sha256)
-}
-
-/// Refuses to write the points of a study sweep named `name` into `folder` when it
-/// holds a paper run, a paper sweep or a single study.
-pub fn check_installation_sweep(
-    folder: &Path,
-    out: &Path,
-    ours: &str,
-    name: &str,
-) -> Result<(), OwnerError> {
-    if folder.exists() && !folder.is_dir() {
-        return Err(OwnerError::NotAFolder {
-            folder: folder.to_path_buf(),
-        });
-    }
-    let held = Held::of(folder);
-    if held != Held::Nothing && held != Held::InstallationSweep {
-        return Err(OwnerError::OtherKind {
-            folder: folder.to_path_buf(),
-            theirs: held.words(),
-            ours: Held::InstallationSweep.words(),
-            spec: resolved(out, ours),
-            name: name.to_string(),
-        });
-    }
-    Ok(())
-}
-
-/// Refuses a folder whose manifest records a spec file other than `ours` that still
-/// exists (a folder from before manifests named their spec file, a run that named
-/// none, or a folder copied away from its spec file belongs to anyone).
-fn another_spec(
-    folder: &Path,
-    out: &Path,
-    ours: &str,
-    our_name: &str,
-    our_hash: &str,
-) -> Result<(), OwnerError> {
-    let Some(manifest) = read_manifest(folder) else {
+/// Refuses a folder whose manifest records a spec file other than the writer's that
+/// still exists (a folder from before manifests named their spec file, a run that
+/// named none, or a folder copied away from its spec file belongs to anyone).
+fn another_spec(writer: &Writer) -> Result<(), OwnerError> {
+    let Some(manifest) = read_manifest(writer.folder) else {
         return Ok(());
     };
-    let theirs = resolved(out, &manifest.spec_file);
-    let our_path = resolved(out, ours);
+    let ours = writer.spec_file;
+    let theirs = resolved(writer.out, &manifest.spec_file);
+    let our_path = resolved(writer.out, ours);
     if manifest.spec_file.is_empty()
         || ours.is_empty()
         || manifest.spec_file == ours
@@ -177,18 +192,18 @@ fn another_spec(
         return Ok(());
     }
     Err(OwnerError::AnotherSpec {
-        folder: folder.to_path_buf(),
+        folder: writer.folder.to_path_buf(),
         theirs,
         their_name: manifest.name,
         their_hash: short(&manifest.spec_sha256),
         ours: our_path,
-        our_name: our_name.to_string(),
-        our_hash: short(our_hash),
+        our_name: writer.name.to_string(),
+        our_hash: short(&writer.spec_sha256),
     })
 }
 
 /// What a results folder holds.
-#[derive(PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 enum Held {
     Nothing,
     Single,
@@ -226,27 +241,6 @@ impl Held {
     }
 }
 
-/// Refuses a single run's results in a sweep's or a study's folder, and a sweep's
-/// points in a single run's or a study's folder.
-fn check_kind(plan: &Plan, folder: &Path, spec: &Path, name: &str) -> Result<(), OwnerError> {
-    let (holder, ours) = if plan.experiment.is_sweep() {
-        (folder.parent().unwrap_or(folder), Held::Sweep)
-    } else {
-        (folder, Held::Single)
-    };
-    let held = Held::of(holder);
-    if held == Held::Nothing || held == ours {
-        return Ok(());
-    }
-    Err(OwnerError::OtherKind {
-        folder: holder.to_path_buf(),
-        theirs: held.words(),
-        ours: ours.words(),
-        spec: spec.to_path_buf(),
-        name: name.to_string(),
-    })
-}
-
 fn same_file(a: &Path, b: &Path) -> bool {
     match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
         (Ok(a), Ok(b)) => a == b,
@@ -278,6 +272,58 @@ mod tests {
             resolved(Path::new("/p/results"), "./a.toml"),
             PathBuf::from("/p/results/a.toml")
         );
+    }
+
+    /// A writer of `writing` into `folder`, under the output folder `/p/results`.
+    fn writer(folder: &Path, writing: Writing, force: bool) -> Writer<'_> {
+        Writer {
+            folder,
+            out: Path::new("/p/results"),
+            spec_file: "../experiments/a.toml",
+            name: "a",
+            spec_sha256: "0".repeat(64),
+            writing,
+            force,
+        }
+    }
+
+    #[test]
+    fn one_check_refuses_every_kind_in_a_folder_of_another_even_with_force() {
+        let out = tempfile::tempdir().unwrap();
+        let study = out.path().join("study");
+        std::fs::create_dir_all(&study).unwrap();
+        std::fs::write(study.join(results::installation::HELDOUT), "").unwrap();
+        let refused = |folder: &Path, writing| match check(&writer(folder, writing, true)) {
+            Err(OwnerError::OtherKind {
+                folder,
+                theirs,
+                ours,
+                ..
+            }) => Some((folder, theirs, ours)),
+            _ => None,
+        };
+        let study_words = "the results of an installation study";
+        assert_eq!(
+            refused(&study, Writing::Single),
+            Some((study.clone(), study_words, "the results of a single run"))
+        );
+        // A sweep point is refused at its sweep's folder, its parent.
+        assert_eq!(
+            refused(&study.join("lr=1"), Writing::SweepPoint),
+            Some((study.clone(), study_words, "the points of a sweep"))
+        );
+        assert_eq!(refused(&study, Writing::Installation), None);
+        let sweep = "the points of a sweep of installation studies";
+        assert_eq!(
+            refused(&study, Writing::InstallationSweep),
+            Some((study.clone(), study_words, sweep))
+        );
+        let file = out.path().join("file");
+        std::fs::write(&file, "").unwrap();
+        assert!(matches!(
+            check(&writer(&file, Writing::Installation, true)),
+            Err(OwnerError::NotAFolder { .. })
+        ));
     }
 
     #[test]

@@ -7,7 +7,8 @@
 //! In: the corrected samples and the filter's terms. Out: `<stem>-corrected.csv` and
 //! `.parquet`, and `<stem>-terms-in-time.parquet`.
 
-use super::{ResultsError, batch, floats, io, write_table};
+use super::record::{Record, encode};
+use super::{ResultsError, io, write_table};
 use crate::Vec3;
 use crate::files::write_atomic;
 use crate::installation::frames::Reference;
@@ -54,6 +55,19 @@ pub fn corrected_samples(
 const TIME: &str = "time_s";
 const VALID_AT: &str = "valid_at_s";
 
+/// A row of `<stem>-corrected.parquet`: the columns of the CSV file, the velocity's
+/// named as [`crate::VELOCITY_COLUMNS`] names them.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct CorrectedRecord {
+    time_s: f64,
+    valid_at_s: f64,
+    vx_m_s: f64,
+    vy_m_s: f64,
+    vz_m_s: f64,
+}
+
+impl Record for CorrectedRecord {}
+
 /// The CSV text of `samples`, every number with all its digits.
 pub fn csv_text(samples: &[CorrectedSample]) -> String {
     let [x, y, z] = crate::VELOCITY_COLUMNS;
@@ -74,14 +88,17 @@ pub fn write(
     crate::files::create_folder(out).map_err(io(out))?;
     let csv = out.join(format!("{stem}-corrected.csv"));
     write_atomic(&csv, csv_text(samples).as_bytes()).map_err(io(&csv))?;
-    let [x, y, z] = crate::VELOCITY_COLUMNS;
-    let table = batch(vec![
-        (TIME, floats(samples, |s| s.time_s)),
-        (VALID_AT, floats(samples, |s| s.valid_at_s)),
-        (x, floats(samples, |s| s.velocity_m_s[0])),
-        (y, floats(samples, |s| s.velocity_m_s[1])),
-        (z, floats(samples, |s| s.velocity_m_s[2])),
-    ]);
+    let records: Vec<CorrectedRecord> = samples
+        .iter()
+        .map(|s| CorrectedRecord {
+            time_s: s.time_s,
+            valid_at_s: s.valid_at_s,
+            vx_m_s: s.velocity_m_s[0],
+            vy_m_s: s.velocity_m_s[1],
+            vz_m_s: s.velocity_m_s[2],
+        })
+        .collect();
+    let table = encode(&records);
     let parquet = out.join(format!("{stem}-corrected.parquet"));
     write_table(&parquet, &table)?;
     Ok(vec![csv, parquet])
@@ -129,5 +146,13 @@ mod tests {
             Some("time_s,valid_at_s,vx_m_s,vy_m_s,vz_m_s")
         );
         assert!(written[1].is_file());
+        let names: Vec<String> = crate::results::record::fields::<CorrectedRecord>()
+            .iter()
+            .map(|f| f.name().clone())
+            .collect();
+        assert_eq!(
+            names,
+            ["time_s", "valid_at_s", "vx_m_s", "vy_m_s", "vz_m_s"]
+        );
     }
 }

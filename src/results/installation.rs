@@ -5,16 +5,19 @@
 //! seen), `summary.parquet` (the mean per method and window with its 95 % interval and
 //! its ratio to no calibration) and `trace.parquet` (one trajectory's residual before
 //! and after, with the yaw rate). In: a [`InstallationResults`]. Out: each table's bytes, written with
-//! the fixed settings of every results table so the same study gives the same bytes;
-//! [`read_installation`] reads them back into the same [`InstallationResults`].
+//! the fixed settings of every results table so the same study gives the same bytes,
+//! from one flat record per row (the rows themselves where their fields are the
+//! columns); [`read_installation`] reads them back into the same [`InstallationResults`].
 
-use super::read::{Batch, ColumnError, ReadError, read_rows};
-use super::{ResultsError, batch, floats, strings, table_bytes as parquet_table_bytes};
+use super::read::{ReadError, read_records};
+use super::record::{Record, encode};
+use super::{ResultsError, table_bytes as parquet_table_bytes};
 use crate::installation::rows::{
     FilterPoint, FitFailure, FoldSummaryRow, InstallationResults, InstallationTimeRow, SummaryRow,
     TermRow, TracePoint, TransferRow,
 };
 use arrow_array::RecordBatch;
+use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 pub const HELDOUT: &str = "heldout.parquet";
@@ -65,321 +68,273 @@ pub fn table_bytes(
 
 /// Reads the study's tables from `folder`; an error names the file.
 pub fn read_installation(folder: &Path) -> Result<InstallationResults, ReadError> {
-    let read = |name: &str, empty: RecordBatch| {
-        let path = folder.join(name);
-        (path, empty.schema())
-    };
-    let (path, schema) = read(HELDOUT, heldout_batch(&[]));
-    let heldout = read_rows(&path, &schema, heldout_rows)?;
-    let (path, schema) = read(TERMS, terms_batch(&[]));
-    let terms = read_rows(&path, &schema, term_rows)?;
-    let (path, schema) = read(SUMMARY, summary_batch(&[]));
-    let summary = read_rows(&path, &schema, summary_rows)?;
-    let (path, schema) = read(TRACE, trace_batch(&[]));
-    let trace = read_rows(&path, &schema, trace_rows)?;
-    let (path, schema) = read(FAILURES, failures_batch(&[]));
-    let failures = read_rows(&path, &schema, failure_rows)?;
-    // Folders written before the Kalman filter lack these two.
-    let (path, schema) = read(TERMS_IN_TIME, filtered_batch(&[]));
-    let filtered = if path.exists() {
-        read_rows(&path, &schema, filtered_rows)?
-    } else {
-        Vec::new()
-    };
-    let (path, schema) = read(CALIBRATION_TIME, time_batch(&[]));
-    let calibration_time = if path.exists() {
-        read_rows(&path, &schema, time_rows)?
-    } else {
-        Vec::new()
-    };
-    // Only a study with `[learned]` has it.
-    let (path, schema) = read(FOLDS, folds_batch(&[]));
-    let folds = if path.exists() {
-        read_rows(&path, &schema, fold_rows)?
-    } else {
-        Vec::new()
-    };
+    let path = |name: &str| folder.join(name);
+    // Folders written before the Kalman filter lack two tables; only a study with
+    // `[learned]` has the folds.
+    let later = |name: &str| path(name).exists();
     Ok(InstallationResults {
-        heldout,
-        terms,
-        summary,
-        trace,
-        failures,
-        folds,
-        filtered,
-        calibration_time,
+        heldout: read_records(&path(HELDOUT), |r: TransferRecord| Ok(r.into()))?,
+        terms: read_records(&path(TERMS), Ok)?,
+        summary: read_records(&path(SUMMARY), |r: SummaryRecord| Ok(r.into()))?,
+        trace: read_records(&path(TRACE), |r: TraceRecord| Ok(r.into()))?,
+        failures: read_records(&path(FAILURES), Ok)?,
+        filtered: match later(TERMS_IN_TIME) {
+            true => read_records(&path(TERMS_IN_TIME), Ok)?,
+            false => Vec::new(),
+        },
+        calibration_time: match later(CALIBRATION_TIME) {
+            true => read_records(&path(CALIBRATION_TIME), Ok)?,
+            false => Vec::new(),
+        },
+        folds: match later(FOLDS) {
+            true => read_records(&path(FOLDS), |r: FoldRecord| Ok(r.into()))?,
+            false => Vec::new(),
+        },
     })
 }
 
+impl Record for TermRow {}
+impl Record for FitFailure {}
+impl Record for FilterPoint {}
+impl Record for InstallationTimeRow {}
+
 /// One row per method × calibration trajectory.
 pub fn time_batch(rows: &[InstallationTimeRow]) -> RecordBatch {
-    batch(vec![
-        ("method", strings(rows, |r| r.method.clone())),
-        ("calibration", strings(rows, |r| r.calibration.clone())),
-        ("t_conv_s", floats(rows, |r| r.t_conv_s)),
-        (
-            "calibration_time_s",
-            super::optional_floats(rows, |r| r.calibration_time_s),
-        ),
-        ("rmse_at_time_cm_s", floats(rows, |r| r.rmse_at_time_cm_s)),
-        (
-            "long_window_rmse_cm_s",
-            floats(rows, |r| r.long_window_rmse_cm_s),
-        ),
-        ("tolerance_pct", floats(rows, |r| r.tolerance_pct)),
-    ])
-}
-
-fn time_rows(batch: &Batch) -> Result<Vec<InstallationTimeRow>, ColumnError> {
-    let method = batch.strings("method")?;
-    let calibration = batch.strings("calibration")?;
-    let t_conv_s = batch.floats("t_conv_s")?;
-    let time_s = batch.optional_floats("calibration_time_s");
-    let at_time = batch.floats("rmse_at_time_cm_s")?;
-    let long = batch.floats("long_window_rmse_cm_s")?;
-    let tolerance = batch.floats("tolerance_pct")?;
-    Ok((0..method.len())
-        .map(|i| InstallationTimeRow {
-            method: method[i].clone(),
-            calibration: calibration[i].clone(),
-            t_conv_s: t_conv_s[i],
-            calibration_time_s: time_s[i],
-            rmse_at_time_cm_s: at_time[i],
-            long_window_rmse_cm_s: long[i],
-            tolerance_pct: tolerance[i],
-        })
-        .collect())
+    encode(rows)
 }
 
 /// One row per Kalman filter × calibration trajectory × sample × term, in the term's
 /// stored unit.
 pub fn filtered_batch(rows: &[FilterPoint]) -> RecordBatch {
-    batch(vec![
-        ("method", strings(rows, |r| r.method.clone())),
-        ("calibration", strings(rows, |r| r.calibration.clone())),
-        ("time_s", floats(rows, |r| r.time_s)),
-        ("term", strings(rows, |r| r.term.clone())),
-        ("value", floats(rows, |r| r.value)),
-        ("std", floats(rows, |r| r.std)),
-        ("bound_std", floats(rows, |r| r.bound_std)),
-    ])
-}
-
-fn filtered_rows(batch: &Batch) -> Result<Vec<FilterPoint>, ColumnError> {
-    let method = batch.strings("method")?;
-    let calibration = batch.strings("calibration")?;
-    let time_s = batch.floats("time_s")?;
-    let term = batch.strings("term")?;
-    let value = batch.floats("value")?;
-    let std = batch.floats("std")?;
-    let bound_std = batch.floats("bound_std")?;
-    Ok((0..method.len())
-        .map(|i| FilterPoint {
-            method: method[i].clone(),
-            calibration: calibration[i].clone(),
-            time_s: time_s[i],
-            term: term[i].clone(),
-            value: value[i],
-            std: std[i],
-            bound_std: bound_std[i],
-        })
-        .collect())
-}
-
-/// One row per method × calibration trajectory × window × scored trajectory.
-pub fn heldout_batch(rows: &[TransferRow]) -> RecordBatch {
-    batch(vec![
-        ("method", strings(rows, |r| r.method.clone())),
-        ("calibration", strings(rows, |r| r.calibration.clone())),
-        ("window_s", floats(rows, |r| r.window_s)),
-        ("scored", strings(rows, |r| r.scored.clone())),
-        ("rmse_x_cm_s", floats(rows, |r| r.rmse_cm_s[0])),
-        ("rmse_y_cm_s", floats(rows, |r| r.rmse_cm_s[1])),
-        ("rmse_z_cm_s", floats(rows, |r| r.rmse_cm_s[2])),
-        ("rmse_cm_s", floats(rows, |r| r.total_cm_s)),
-    ])
+    encode(rows)
 }
 
 /// One row per method × calibration trajectory × window × estimated term.
 pub fn terms_batch(rows: &[TermRow]) -> RecordBatch {
-    batch(vec![
-        ("method", strings(rows, |r| r.method.clone())),
-        ("calibration", strings(rows, |r| r.calibration.clone())),
-        ("window_s", floats(rows, |r| r.window_s)),
-        ("term", strings(rows, |r| r.term.clone())),
-        ("value", floats(rows, |r| r.value)),
-        ("std", floats(rows, |r| r.std)),
-        ("unseen", strings(rows, |r| r.unseen.clone())),
-    ])
-}
-
-/// One row per method × window.
-pub fn summary_batch(rows: &[SummaryRow]) -> RecordBatch {
-    batch(vec![
-        ("method", strings(rows, |r| r.method.clone())),
-        ("window_s", floats(rows, |r| r.window_s)),
-        ("rmse_cm_s", floats(rows, |r| r.mean_cm_s)),
-        ("rmse_ci_cm_s", floats(rows, |r| r.ci95_cm_s)),
-        ("ratio", floats(rows, |r| r.ratio)),
-        ("calibrations", uints(rows, |r| r.calibrations)),
-    ])
-}
-
-/// One row per fold (and "all") × method × window.
-pub fn folds_batch(rows: &[FoldSummaryRow]) -> RecordBatch {
-    batch(vec![
-        ("fold", strings(rows, |r| r.fold.clone())),
-        ("method", strings(rows, |r| r.summary.method.clone())),
-        ("window_s", floats(rows, |r| r.summary.window_s)),
-        ("rmse_cm_s", floats(rows, |r| r.summary.mean_cm_s)),
-        ("rmse_ci_cm_s", floats(rows, |r| r.summary.ci95_cm_s)),
-        ("ratio", floats(rows, |r| r.summary.ratio)),
-        ("calibrations", uints(rows, |r| r.summary.calibrations)),
-    ])
-}
-
-fn fold_rows(batch: &Batch) -> Result<Vec<FoldSummaryRow>, ColumnError> {
-    let fold = batch.strings("fold")?;
-    Ok(fold
-        .into_iter()
-        .zip(summary_rows(batch)?)
-        .map(|(fold, summary)| FoldSummaryRow { fold, summary })
-        .collect())
+    encode(rows)
 }
 
 /// One row per method × calibration trajectory × window whose fit failed.
 pub fn failures_batch(rows: &[FitFailure]) -> RecordBatch {
-    batch(vec![
-        ("method", strings(rows, |r| r.method.clone())),
-        ("calibration", strings(rows, |r| r.calibration.clone())),
-        ("window_s", floats(rows, |r| r.window_s)),
-        ("why", strings(rows, |r| r.why.clone())),
-    ])
+    encode(rows)
 }
 
-fn uints<T>(rows: &[T], f: impl Fn(&T) -> usize) -> arrow_array::ArrayRef {
-    std::sync::Arc::new(arrow_array::UInt32Array::from_iter_values(
-        rows.iter().map(|r| f(r) as u32),
-    ))
+/// A row of `heldout.parquet`: a [`TransferRow`], its RMSE per axis as three columns.
+#[derive(Serialize, Deserialize)]
+struct TransferRecord {
+    method: String,
+    calibration: String,
+    window_s: f64,
+    scored: String,
+    rmse_x_cm_s: f64,
+    rmse_y_cm_s: f64,
+    rmse_z_cm_s: f64,
+    rmse_cm_s: f64,
 }
 
-fn failure_rows(batch: &Batch) -> Result<Vec<FitFailure>, ColumnError> {
-    let method = batch.strings("method")?;
-    let calibration = batch.strings("calibration")?;
-    let window_s = batch.floats("window_s")?;
-    let why = batch.strings("why")?;
-    Ok((0..method.len())
-        .map(|i| FitFailure {
-            method: method[i].clone(),
-            calibration: calibration[i].clone(),
-            window_s: window_s[i],
-            why: why[i].clone(),
-        })
-        .collect())
+impl Record for TransferRecord {}
+
+impl From<&TransferRow> for TransferRecord {
+    fn from(row: &TransferRow) -> Self {
+        let [rmse_x_cm_s, rmse_y_cm_s, rmse_z_cm_s] = row.rmse_cm_s;
+        TransferRecord {
+            method: row.method.clone(),
+            calibration: row.calibration.clone(),
+            window_s: row.window_s,
+            scored: row.scored.clone(),
+            rmse_x_cm_s,
+            rmse_y_cm_s,
+            rmse_z_cm_s,
+            rmse_cm_s: row.total_cm_s,
+        }
+    }
+}
+
+impl From<TransferRecord> for TransferRow {
+    fn from(record: TransferRecord) -> Self {
+        TransferRow {
+            method: record.method,
+            calibration: record.calibration,
+            window_s: record.window_s,
+            scored: record.scored,
+            rmse_cm_s: [record.rmse_x_cm_s, record.rmse_y_cm_s, record.rmse_z_cm_s],
+            total_cm_s: record.rmse_cm_s,
+        }
+    }
+}
+
+/// One row per method × calibration trajectory × window × scored trajectory.
+pub fn heldout_batch(rows: &[TransferRow]) -> RecordBatch {
+    encode(&rows.iter().map(TransferRecord::from).collect::<Vec<_>>())
+}
+
+/// A row of `summary.parquet`, and of a study sweep's table after its point columns:
+/// a [`SummaryRow`] under the names the results document gives its columns.
+#[derive(Serialize, Deserialize)]
+pub(super) struct SummaryRecord {
+    method: String,
+    window_s: f64,
+    rmse_cm_s: f64,
+    rmse_ci_cm_s: f64,
+    ratio: f64,
+    calibrations: u32,
+}
+
+impl Record for SummaryRecord {}
+
+impl From<&SummaryRow> for SummaryRecord {
+    fn from(row: &SummaryRow) -> Self {
+        SummaryRecord {
+            method: row.method.clone(),
+            window_s: row.window_s,
+            rmse_cm_s: row.mean_cm_s,
+            rmse_ci_cm_s: row.ci95_cm_s,
+            ratio: row.ratio,
+            calibrations: row.calibrations as u32,
+        }
+    }
+}
+
+impl From<SummaryRecord> for SummaryRow {
+    fn from(record: SummaryRecord) -> Self {
+        SummaryRow {
+            method: record.method,
+            window_s: record.window_s,
+            mean_cm_s: record.rmse_cm_s,
+            ci95_cm_s: record.rmse_ci_cm_s,
+            ratio: record.ratio,
+            calibrations: record.calibrations as usize,
+        }
+    }
+}
+
+/// One row per method × window.
+pub fn summary_batch(rows: &[SummaryRow]) -> RecordBatch {
+    encode(&rows.iter().map(SummaryRecord::from).collect::<Vec<_>>())
+}
+
+/// A row of `folds.parquet`: a [`FoldSummaryRow`], its fold before the summary's
+/// columns.
+#[derive(Serialize, Deserialize)]
+struct FoldRecord {
+    fold: String,
+    method: String,
+    window_s: f64,
+    rmse_cm_s: f64,
+    rmse_ci_cm_s: f64,
+    ratio: f64,
+    calibrations: u32,
+}
+
+impl Record for FoldRecord {}
+
+impl From<&FoldSummaryRow> for FoldRecord {
+    fn from(row: &FoldSummaryRow) -> Self {
+        let SummaryRecord {
+            method,
+            window_s,
+            rmse_cm_s,
+            rmse_ci_cm_s,
+            ratio,
+            calibrations,
+        } = SummaryRecord::from(&row.summary);
+        FoldRecord {
+            fold: row.fold.clone(),
+            method,
+            window_s,
+            rmse_cm_s,
+            rmse_ci_cm_s,
+            ratio,
+            calibrations,
+        }
+    }
+}
+
+impl From<FoldRecord> for FoldSummaryRow {
+    fn from(record: FoldRecord) -> Self {
+        let summary = SummaryRecord {
+            method: record.method,
+            window_s: record.window_s,
+            rmse_cm_s: record.rmse_cm_s,
+            rmse_ci_cm_s: record.rmse_ci_cm_s,
+            ratio: record.ratio,
+            calibrations: record.calibrations,
+        };
+        FoldSummaryRow {
+            fold: record.fold,
+            summary: summary.into(),
+        }
+    }
+}
+
+/// One row per fold (and "all") × method × window.
+pub fn folds_batch(rows: &[FoldSummaryRow]) -> RecordBatch {
+    encode(&rows.iter().map(FoldRecord::from).collect::<Vec<_>>())
+}
+
+/// A row of `trace.parquet`: a [`TracePoint`], each residual as three columns.
+#[derive(Serialize, Deserialize)]
+struct TraceRecord {
+    trajectory: String,
+    method: String,
+    calibration: String,
+    time_s: f64,
+    before_x_cm_s: f64,
+    before_y_cm_s: f64,
+    before_z_cm_s: f64,
+    after_x_cm_s: f64,
+    after_y_cm_s: f64,
+    after_z_cm_s: f64,
+    yaw_rate_deg_s: f64,
+}
+
+impl Record for TraceRecord {}
+
+impl From<&TracePoint> for TraceRecord {
+    fn from(point: &TracePoint) -> Self {
+        let [before_x_cm_s, before_y_cm_s, before_z_cm_s] = point.before_cm_s;
+        let [after_x_cm_s, after_y_cm_s, after_z_cm_s] = point.after_cm_s;
+        TraceRecord {
+            trajectory: point.trajectory.clone(),
+            method: point.method.clone(),
+            calibration: point.calibration.clone(),
+            time_s: point.time_s,
+            before_x_cm_s,
+            before_y_cm_s,
+            before_z_cm_s,
+            after_x_cm_s,
+            after_y_cm_s,
+            after_z_cm_s,
+            yaw_rate_deg_s: point.yaw_rate_deg_s,
+        }
+    }
+}
+
+impl From<TraceRecord> for TracePoint {
+    fn from(record: TraceRecord) -> Self {
+        TracePoint {
+            trajectory: record.trajectory,
+            method: record.method,
+            calibration: record.calibration,
+            time_s: record.time_s,
+            before_cm_s: [
+                record.before_x_cm_s,
+                record.before_y_cm_s,
+                record.before_z_cm_s,
+            ],
+            after_cm_s: [
+                record.after_x_cm_s,
+                record.after_y_cm_s,
+                record.after_z_cm_s,
+            ],
+            yaw_rate_deg_s: record.yaw_rate_deg_s,
+        }
+    }
 }
 
 /// One row per sample of the trajectory the residual figure draws.
 pub fn trace_batch(rows: &[TracePoint]) -> RecordBatch {
-    batch(vec![
-        ("trajectory", strings(rows, |r| r.trajectory.clone())),
-        ("method", strings(rows, |r| r.method.clone())),
-        ("calibration", strings(rows, |r| r.calibration.clone())),
-        ("time_s", floats(rows, |r| r.time_s)),
-        ("before_x_cm_s", floats(rows, |r| r.before_cm_s[0])),
-        ("before_y_cm_s", floats(rows, |r| r.before_cm_s[1])),
-        ("before_z_cm_s", floats(rows, |r| r.before_cm_s[2])),
-        ("after_x_cm_s", floats(rows, |r| r.after_cm_s[0])),
-        ("after_y_cm_s", floats(rows, |r| r.after_cm_s[1])),
-        ("after_z_cm_s", floats(rows, |r| r.after_cm_s[2])),
-        ("yaw_rate_deg_s", floats(rows, |r| r.yaw_rate_deg_s)),
-    ])
-}
-
-/// The x, y, z columns `prefix_x_cm_s`, … of `batch`, as vectors.
-fn vectors(batch: &Batch, prefix: &str) -> Result<Vec<crate::Vec3>, ColumnError> {
-    let [x, y, z] = ["x", "y", "z"].map(|axis| batch.floats(&format!("{prefix}_{axis}_cm_s")));
-    let (x, y, z) = (x?, y?, z?);
-    Ok((0..x.len()).map(|i| [x[i], y[i], z[i]]).collect())
-}
-
-fn heldout_rows(batch: &Batch) -> Result<Vec<TransferRow>, ColumnError> {
-    let method = batch.strings("method")?;
-    let calibration = batch.strings("calibration")?;
-    let window_s = batch.floats("window_s")?;
-    let scored = batch.strings("scored")?;
-    let rmse = vectors(batch, "rmse")?;
-    let total = batch.floats("rmse_cm_s")?;
-    Ok((0..method.len())
-        .map(|i| TransferRow {
-            method: method[i].clone(),
-            calibration: calibration[i].clone(),
-            window_s: window_s[i],
-            scored: scored[i].clone(),
-            rmse_cm_s: rmse[i],
-            total_cm_s: total[i],
-        })
-        .collect())
-}
-
-fn term_rows(batch: &Batch) -> Result<Vec<TermRow>, ColumnError> {
-    let method = batch.strings("method")?;
-    let calibration = batch.strings("calibration")?;
-    let window_s = batch.floats("window_s")?;
-    let term = batch.strings("term")?;
-    let value = batch.floats("value")?;
-    let std = batch.floats("std")?;
-    let unseen = batch.strings("unseen")?;
-    Ok((0..method.len())
-        .map(|i| TermRow {
-            method: method[i].clone(),
-            calibration: calibration[i].clone(),
-            window_s: window_s[i],
-            term: term[i].clone(),
-            value: value[i],
-            std: std[i],
-            unseen: unseen[i].clone(),
-        })
-        .collect())
-}
-
-pub(super) fn summary_rows(batch: &Batch) -> Result<Vec<SummaryRow>, ColumnError> {
-    let method = batch.strings("method")?;
-    let window_s = batch.floats("window_s")?;
-    let mean = batch.floats("rmse_cm_s")?;
-    let ci95 = batch.floats("rmse_ci_cm_s")?;
-    let ratio = batch.floats("ratio")?;
-    let calibrations = batch.uints("calibrations")?;
-    Ok((0..method.len())
-        .map(|i| SummaryRow {
-            method: method[i].clone(),
-            window_s: window_s[i],
-            mean_cm_s: mean[i],
-            ci95_cm_s: ci95[i],
-            ratio: ratio[i],
-            calibrations: calibrations[i],
-        })
-        .collect())
-}
-
-fn trace_rows(batch: &Batch) -> Result<Vec<TracePoint>, ColumnError> {
-    let trajectory = batch.strings("trajectory")?;
-    let method = batch.strings("method")?;
-    let calibration = batch.strings("calibration")?;
-    let time_s = batch.floats("time_s")?;
-    let before = vectors(batch, "before")?;
-    let after = vectors(batch, "after")?;
-    let yaw_rate = batch.floats("yaw_rate_deg_s")?;
-    Ok((0..trajectory.len())
-        .map(|i| TracePoint {
-            trajectory: trajectory[i].clone(),
-            method: method[i].clone(),
-            calibration: calibration[i].clone(),
-            time_s: time_s[i],
-            before_cm_s: before[i],
-            after_cm_s: after[i],
-            yaw_rate_deg_s: yaw_rate[i],
-        })
-        .collect())
+    encode(&rows.iter().map(TraceRecord::from).collect::<Vec<_>>())
 }
 
 #[cfg(test)]

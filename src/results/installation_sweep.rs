@@ -6,9 +6,11 @@
 //! In: the experiment and each point's summary rows. Out: the two files.
 
 use super::ResultsError;
-use super::read::{Batch, ReadError, read_rows};
+use super::installation::SummaryRecord;
+use super::read::{Batch, ReadError, read_rows, records};
 use super::sweep::{
-    INDEX, SweepIndex, TABLE, point_columns, point_folder, read_index, swept, write_table_and_index,
+    INDEX, PointRecord, SweepIndex, TABLE, point_columns, point_folder, read_index, swept,
+    write_table_and_index,
 };
 use crate::installation::rows::SummaryRow;
 use crate::installation::spec::{InstallationSpec, KIND};
@@ -103,11 +105,11 @@ pub fn read(folder: &Path) -> Result<StoredInstallationSweep, ReadError> {
         .expect("empty columns of one table")
         .schema();
     let rows = read_rows(&folder.join(TABLE), &expected, |batch: &Batch| {
-        let point = batch.strings("point")?;
-        let summary = super::installation::summary_rows(batch)?;
-        Ok(point
+        let points = records(batch, |r: PointRecord| Ok(r.point))?;
+        let summaries = records(batch, |r: SummaryRecord| Ok(SummaryRow::from(r)))?;
+        Ok(points
             .into_iter()
-            .zip(summary)
+            .zip(summaries)
             .map(|(point, summary)| InstallationSweepRow { point, summary })
             .collect())
     })?;

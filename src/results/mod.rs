@@ -9,28 +9,31 @@
 //! and reads the table that sets a sweep's points side by side.
 
 pub mod calibration_time;
+pub mod record;
 pub mod installation;
 pub mod read;
 pub mod corrected;
 pub mod calibrate;
 pub mod sweep;
+pub mod tables;
 pub mod installation_sweep;
 
 use crate::data::Trajectory;
-use crate::evaluate::{CalibrationRow, EvaluationRow, ProtocolResult, RunRow};
+use crate::evaluate::ProtocolResult;
 use crate::files::{sha256_hex, write_atomic};
 use crate::spec::Spec;
-use crate::train::EpochRecord;
 use crate::train::TrainingHistory;
-use crate::vocab::{Correction, ErrorModel};
-use arrow_array::{ArrayRef, BooleanArray, Float64Array, RecordBatch, StringArray, UInt32Array};
+use arrow_array::RecordBatch;
 use parquet::arrow::ArrowWriter;
 use parquet::basic::Compression;
 use parquet::file::properties::WriterProperties;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
+pub use tables::{
+    REPLICATE, RMSE_CI, calibration_batch, evaluation_batch, monte_carlo_batch, training_batch,
+    trajectories_batch,
+};
 
 #[derive(Debug, thiserror::Error)]
 pub enum ResultsError {
@@ -124,7 +127,6 @@ pub fn write_run(
     dcnets: &[TrainingHistory],
     manifest: &Manifest,
 ) -> Result<(), ResultsError> {
-    crate::files::create_folder(folder).map_err(io(folder))?;
     let batches = [
         monte_carlo_batch(&result.runs),
         calibration_batch(&result.calibration),
@@ -142,37 +144,48 @@ pub fn write_run(
             spec.sample_rate_hz,
         ),
     ];
-    // Each file's SHA-256 goes into the manifest, written last.
+    let mut files = Vec::new();
+    for (file, batch) in TABLES.iter().zip(batches) {
+        files.push((file.to_string(), table_bytes(&folder.join(file), &batch)?));
+    }
+    let published_path = folder.join(PUBLISHED);
+    match &spec.resolved.report.published {
+        Some(source) => files.push((
+            PUBLISHED.to_string(),
+            std::fs::read(source).map_err(io(source))?,
+        )),
+        None => match std::fs::remove_file(&published_path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(io(&published_path)(e));
+            }
+            _ => {}
+        },
+    }
+    files.push((SPEC.to_string(), spec.resolved_toml().into_bytes()));
+    write_folder(folder, &files, manifest.clone())
+}
+
+/// Writes a results folder of any kind: creates `folder`, writes each of `files`
+/// (name, bytes) atomically in turn, then `manifest`, last, with the SHA-256 of each.
+pub fn write_folder(
+    folder: &Path,
+    files: &[(String, Vec<u8>)],
+    manifest: Manifest,
+) -> Result<(), ResultsError> {
+    crate::files::create_folder(folder).map_err(io(folder))?;
     let mut files_sha256 = BTreeMap::new();
-    let mut write = |name: &str, bytes: &[u8]| {
+    for (name, bytes) in files {
         let path = folder.join(name);
         write_atomic(&path, bytes).map_err(io(&path))?;
-        files_sha256.insert(name.to_string(), sha256_hex(bytes));
-        Ok::<(), ResultsError>(())
-    };
-    for (file, batch) in TABLES.iter().zip(batches) {
-        write(file, &table_bytes(&folder.join(file), &batch)?)?;
+        files_sha256.insert(name.clone(), sha256_hex(bytes));
     }
-    match &spec.resolved.report.published {
-        Some(source) => write(PUBLISHED, &std::fs::read(source).map_err(io(source))?)?,
-        None => {
-            let published_path = folder.join(PUBLISHED);
-            match std::fs::remove_file(&published_path) {
-                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                    return Err(io(&published_path)(e));
-                }
-                _ => {}
-            }
-        }
-    }
-    write(SPEC, spec.resolved_toml().as_bytes())?;
     let manifest = Manifest {
         files_sha256,
-        ..manifest.clone()
+        ..manifest
     };
-    let manifest_path = folder.join(MANIFEST);
+    let path = folder.join(MANIFEST);
     let json = serde_json::to_string_pretty(&manifest).expect("a manifest always serializes");
-    write_atomic(&manifest_path, json.as_bytes()).map_err(io(&manifest_path))
+    write_atomic(&path, json.as_bytes()).map_err(io(&path))
 }
 
 /// Whether every file `manifest` names in `folder` still has the SHA-256 it was written
@@ -229,186 +242,4 @@ fn parquet_bytes(batch: &RecordBatch) -> Result<Vec<u8>, parquet::errors::Parque
     writer.write(batch)?;
     writer.close()?;
     Ok(bytes)
-}
-
-fn strings<T>(rows: &[T], f: impl Fn(&T) -> String) -> ArrayRef {
-    Arc::new(StringArray::from_iter_values(rows.iter().map(f)))
-}
-fn error_models<T>(rows: &[T], f: impl Fn(&T) -> Option<ErrorModel>) -> ArrayRef {
-    Arc::new(StringArray::from_iter(
-        rows.iter().map(|r| f(r).map(|m| m.to_string())),
-    ))
-}
-fn floats<T>(rows: &[T], f: impl Fn(&T) -> f64) -> ArrayRef {
-    Arc::new(Float64Array::from_iter_values(rows.iter().map(f)))
-}
-
-fn optional_floats<T>(rows: &[T], f: impl Fn(&T) -> Option<f64>) -> ArrayRef {
-    Arc::new(Float64Array::from_iter(rows.iter().map(f)))
-}
-
-fn batch(columns: Vec<(&str, ArrayRef)>) -> RecordBatch {
-    RecordBatch::try_from_iter(columns).expect("columns of one table have equal lengths")
-}
-
-/// One row per run × DVL × estimator × error model × (window or trajectory), and a
-/// `replicate` column (empty but for DCNet) when DCNet has several replicates.
-pub fn monte_carlo_batch(rows: &[RunRow]) -> RecordBatch {
-    let term = |f: fn(&Correction) -> f64| floats(rows, move |r| f(&r.correction));
-    let mut columns: Vec<(&str, ArrayRef)> = vec![
-        (
-            "run",
-            Arc::new(UInt32Array::from_iter_values(
-                rows.iter().map(|r| r.run as u32),
-            )),
-        ),
-        ("dvl", strings(rows, |r| r.dvl.clone())),
-        ("estimator", strings(rows, |r| r.estimator.to_string())),
-        ("error_model", error_models(rows, |r| r.error_model)),
-        ("phase", strings(rows, |r| r.phase.as_str().to_string())),
-        ("window_s", floats(rows, |r| r.window_s)),
-        ("trajectory", strings(rows, |r| r.trajectory.clone())),
-        ("rmse_cm_s", floats(rows, |r| r.rmse_cm_s)),
-        ("scale_x_pct", term(|c| 100.0 * c.scale[0])),
-        ("scale_y_pct", term(|c| 100.0 * c.scale[1])),
-        ("scale_z_pct", term(|c| 100.0 * c.scale[2])),
-        ("bias_x_cm_s", term(|c| 100.0 * c.bias_m_s[0])),
-        ("bias_y_cm_s", term(|c| 100.0 * c.bias_m_s[1])),
-        ("bias_z_cm_s", term(|c| 100.0 * c.bias_m_s[2])),
-    ];
-    if rows.iter().any(|r| r.replicate.is_some()) {
-        let replicate = rows.iter().map(|r| r.replicate.map(|r| r as u32));
-        columns.push((
-            REPLICATE,
-            Arc::new(UInt32Array::from_iter(replicate)) as ArrayRef,
-        ));
-    }
-    batch(columns)
-}
-
-/// The column of a DCNet row's replicate, in `monte_carlo.parquet` and
-/// `training.parquet` when there are several.
-pub const REPLICATE: &str = "replicate";
-
-/// The column of the 95 % confidence interval over DCNet replicates, in the
-/// calibration and evaluation tables when there are several.
-pub const RMSE_CI: &str = "rmse_ci_cm_s";
-
-/// `columns`, with the confidence interval column when a row has one.
-fn with_ci<T>(
-    mut columns: Vec<(&'static str, ArrayRef)>,
-    rows: &[T],
-    ci: impl Fn(&T) -> Option<f64>,
-) -> RecordBatch {
-    if rows.iter().any(|r| ci(r).is_some()) {
-        columns.push((RMSE_CI, optional_floats(rows, ci)));
-    }
-    batch(columns)
-}
-
-pub fn calibration_batch(rows: &[CalibrationRow]) -> RecordBatch {
-    let columns: Vec<(&'static str, ArrayRef)> = vec![
-        ("dvl", strings(rows, |r| r.dvl.clone())),
-        ("estimator", strings(rows, |r| r.estimator.to_string())),
-        ("error_model", error_models(rows, |r| r.error_model)),
-        ("window_s", floats(rows, |r| r.window_s)),
-        ("rmse_cm_s", floats(rows, |r| r.rmse_cm_s)),
-        ("rmse_std_cm_s", floats(rows, |r| r.rmse_std_cm_s)),
-        (
-            "is_t_conv",
-            Arc::new(BooleanArray::from_iter(
-                rows.iter().map(|r| Some(r.is_t_conv)),
-            )),
-        ),
-        ("efficiency", optional_floats(rows, |r| r.efficiency)),
-    ];
-    with_ci(columns, rows, |r| r.rmse_ci_cm_s)
-}
-
-pub fn evaluation_batch(rows: &[EvaluationRow]) -> RecordBatch {
-    let columns: Vec<(&'static str, ArrayRef)> = vec![
-        ("dvl", strings(rows, |r| r.dvl.clone())),
-        ("estimator", strings(rows, |r| r.estimator.to_string())),
-        ("error_model", error_models(rows, |r| r.error_model)),
-        ("trajectory", strings(rows, |r| r.trajectory.clone())),
-        ("t_conv_s", floats(rows, |r| r.t_conv_s)),
-        ("rmse_cm_s", floats(rows, |r| r.rmse_cm_s)),
-        ("rmse_std_cm_s", floats(rows, |r| r.rmse_std_cm_s)),
-        (
-            "improvement_pct",
-            optional_floats(rows, |r| r.improvement_pct),
-        ),
-        ("efficiency", optional_floats(rows, |r| r.efficiency)),
-    ];
-    with_ci(columns, rows, |r| r.rmse_ci_cm_s)
-}
-
-/// One row per error model × epoch of DCNet training, and a `replicate` column when
-/// DCNet has several replicates.
-pub fn training_batch(dcnets: &[TrainingHistory]) -> RecordBatch {
-    let rows: Vec<(&TrainingHistory, &EpochRecord)> = dcnets
-        .iter()
-        .flat_map(|t| t.history.iter().map(move |epoch| (t, epoch)))
-        .collect();
-    let mut columns: Vec<(&str, ArrayRef)> = vec![
-        (
-            "error_model",
-            strings(&rows, |(t, _)| t.error_model.to_string()),
-        ),
-        (
-            "epoch",
-            Arc::new(UInt32Array::from_iter_values(
-                rows.iter().map(|(_, e)| e.epoch as u32),
-            )),
-        ),
-        ("train_loss", floats(&rows, |(_, e)| e.train_loss)),
-        ("validation_loss", floats(&rows, |(_, e)| e.validation_loss)),
-        ("seconds", floats(&rows, |(_, e)| e.seconds)),
-        ("samples_per_s", floats(&rows, |(_, e)| e.samples_per_s)),
-        (
-            "is_best",
-            Arc::new(BooleanArray::from_iter(
-                rows.iter().map(|(t, e)| Some(e.epoch == t.best_epoch)),
-            )),
-        ),
-        ("stop_reason", strings(&rows, |(t, _)| t.stop.to_string())),
-    ];
-    if dcnets.iter().any(|t| t.replicate > 0) {
-        let replicate = rows.iter().map(|(t, _)| t.replicate as u32);
-        columns.push((
-            REPLICATE,
-            Arc::new(UInt32Array::from_iter_values(replicate)),
-        ));
-    }
-    batch(columns)
-}
-
-/// The GT velocity of each trajectory, one row per sample, with what the trajectory is
-/// used for ("train,test", say).
-pub fn trajectories_batch(
-    trajectories: &[(&Trajectory, String)],
-    sample_rate_hz: f64,
-) -> RecordBatch {
-    let rows: Vec<(&str, &str, usize, &crate::Vec3)> = trajectories
-        .iter()
-        .flat_map(|(t, roles)| {
-            t.ground_truth
-                .iter()
-                .enumerate()
-                .map(move |(i, v)| (t.name.as_str(), roles.as_str(), i, v))
-        })
-        .collect();
-    let axis = |a: usize| floats(&rows, move |(.., v)| v[a]);
-    let [vx, vy, vz] = crate::VELOCITY_COLUMNS;
-    batch(vec![
-        ("trajectory", strings(&rows, |(name, ..)| name.to_string())),
-        ("roles", strings(&rows, |(_, roles, ..)| roles.to_string())),
-        (
-            "time_s",
-            floats(&rows, |(_, _, i, _)| *i as f64 / sample_rate_hz),
-        ),
-        (vx, axis(0)),
-        (vy, axis(1)),
-        (vz, axis(2)),
-    ])
 }

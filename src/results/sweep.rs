@@ -2,19 +2,20 @@
 //! one row per point × DVL × estimator × error model with the swept values as columns
 //! and the numbers a sweep is read by (calibration RMSE and T_conv, evaluation RMSE,
 //! training time; with DCNet replicates, the 95 % confidence intervals of DCNet's RMSEs
-//! across them), and `sweep.json`, the index of the points, written last.
+//! across them), and `sweep.json`, the index of the points, written last. The point
+//! and swept columns are built by hand (their names are the swept keys); the fixed
+//! columns are one flat record per row.
 
 use crate::evaluate::{ProtocolResult, mean_ci95};
 use crate::files::write_atomic;
-use crate::results::read::{Batch, ColumnError, ReadError, read_rows};
+use crate::results::read::{Batch, ColumnError, ReadError, read_rows, records};
+use crate::results::record::{self, Record, encode, optional, parsed};
 use crate::results::{ResultsError, table_bytes};
 use crate::spec::Experiment;
 use crate::train::TrainingHistory;
 use crate::vocab::{ErrorModel, EstimatorKind, Phase};
 use arrow_array::types::{Float64Type, Int64Type};
-use arrow_array::{
-    Array, ArrayRef, Float64Array, Int64Array, RecordBatch, StringArray, cast::AsArray,
-};
+use arrow_array::{ArrayRef, Float64Array, Int64Array, RecordBatch, StringArray, cast::AsArray};
 use arrow_schema::DataType;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -288,15 +289,73 @@ pub fn point_columns(swept: &[String], rows: &[(&str, &[Swept])]) -> Vec<(String
     columns
 }
 
+/// A row of `sweep.parquet` after its point columns: a [`SweepRow`]'s fixed columns.
+#[derive(Serialize, Deserialize)]
+struct SweepRecord {
+    dvl: String,
+    estimator: String,
+    error_model: Option<String>,
+    t_conv_s: f64,
+    calibration_rmse_cm_s: f64,
+    evaluation_rmse_cm_s: f64,
+    evaluation_improvement_pct: Option<f64>,
+    training_s: Option<f64>,
+    calibration_rmse_ci_cm_s: Option<f64>,
+    evaluation_rmse_ci_cm_s: Option<f64>,
+}
+
+impl Record for SweepRecord {
+    const SOMETIMES: &'static [&'static str] = &[CALIBRATION_CI, EVALUATION_CI];
+}
+
+impl From<&SweepRow> for SweepRecord {
+    fn from(row: &SweepRow) -> Self {
+        SweepRecord {
+            dvl: row.dvl.clone(),
+            estimator: row.estimator.to_string(),
+            error_model: row.error_model.map(|m| m.to_string()),
+            t_conv_s: row.t_conv_s,
+            calibration_rmse_cm_s: row.calibration_rmse_cm_s,
+            evaluation_rmse_cm_s: row.evaluation_rmse_cm_s,
+            evaluation_improvement_pct: row.evaluation_improvement_pct,
+            training_s: row.training_s,
+            calibration_rmse_ci_cm_s: row.calibration_rmse_ci_cm_s,
+            evaluation_rmse_ci_cm_s: row.evaluation_rmse_ci_cm_s,
+        }
+    }
+}
+
+impl SweepRecord {
+    /// The row of `point` with the swept `values`.
+    fn row(self, point: String, values: Vec<Swept>) -> Result<SweepRow, ColumnError> {
+        Ok(SweepRow {
+            point,
+            values,
+            dvl: self.dvl,
+            estimator: parsed("estimator", &self.estimator)?,
+            error_model: optional("error_model", self.error_model.as_deref())?,
+            t_conv_s: self.t_conv_s,
+            calibration_rmse_cm_s: self.calibration_rmse_cm_s,
+            evaluation_rmse_cm_s: self.evaluation_rmse_cm_s,
+            evaluation_improvement_pct: self.evaluation_improvement_pct,
+            training_s: self.training_s,
+            calibration_rmse_ci_cm_s: self.calibration_rmse_ci_cm_s,
+            evaluation_rmse_ci_cm_s: self.evaluation_rmse_ci_cm_s,
+        })
+    }
+}
+
+/// The point of a row of a sweep's table, its first column.
+#[derive(Serialize, Deserialize)]
+pub(super) struct PointRecord {
+    pub(super) point: String,
+}
+
+impl Record for PointRecord {}
+
 /// The table: point, one column per swept key (see [`point_columns`]), then the fixed
-/// columns.
+/// columns, the confidence intervals' when DCNet has replicates.
 fn batch(swept: &[String], rows: &[SweepRow]) -> RecordBatch {
-    let strings = |f: &dyn Fn(&SweepRow) -> String| -> ArrayRef {
-        Arc::new(StringArray::from_iter_values(rows.iter().map(f)))
-    };
-    let floats = |f: &dyn Fn(&SweepRow) -> Option<f64>| -> ArrayRef {
-        Arc::new(Float64Array::from_iter(rows.iter().map(f)))
-    };
     let mut columns = point_columns(
         swept,
         &rows
@@ -304,46 +363,9 @@ fn batch(swept: &[String], rows: &[SweepRow]) -> RecordBatch {
             .map(|r| (r.point.as_str(), &r.values[..]))
             .collect::<Vec<_>>(),
     );
-    columns.extend([
-        ("dvl".to_string(), strings(&|r| r.dvl.clone())),
-        (
-            "estimator".to_string(),
-            strings(&|r| r.estimator.to_string()),
-        ),
-        (
-            "error_model".to_string(),
-            Arc::new(StringArray::from_iter(
-                rows.iter().map(|r| r.error_model.map(|m| m.to_string())),
-            )) as ArrayRef,
-        ),
-        ("t_conv_s".to_string(), floats(&|r| Some(r.t_conv_s))),
-        (
-            "calibration_rmse_cm_s".to_string(),
-            floats(&|r| Some(r.calibration_rmse_cm_s)),
-        ),
-        (
-            "evaluation_rmse_cm_s".to_string(),
-            floats(&|r| Some(r.evaluation_rmse_cm_s)),
-        ),
-        (
-            "evaluation_improvement_pct".to_string(),
-            floats(&|r| r.evaluation_improvement_pct),
-        ),
-        ("training_s".to_string(), floats(&|r| r.training_s)),
-    ]);
-    if rows.iter().any(|r| r.calibration_rmse_ci_cm_s.is_some()) {
-        columns.extend([
-            (
-                CALIBRATION_CI.to_string(),
-                floats(&|r| r.calibration_rmse_ci_cm_s),
-            ),
-            (
-                EVALUATION_CI.to_string(),
-                floats(&|r| r.evaluation_rmse_ci_cm_s),
-            ),
-        ]);
-    }
-    RecordBatch::try_from_iter(columns).expect("columns of one table have equal lengths")
+    let fixed = encode(&rows.iter().map(SweepRecord::from).collect::<Vec<_>>());
+    columns.extend(record::columns(&fixed));
+    record::batch(columns)
 }
 
 /// The confidence interval columns, in the table when DCNet has replicates.
@@ -369,68 +391,50 @@ pub fn read(folder: &Path) -> Result<StoredSweep, ReadError> {
 }
 
 fn sweep_rows(batch: &Batch, swept: &[String]) -> Result<Vec<SweepRow>, ColumnError> {
-    let point = batch.strings("point")?;
-    let row_keys = batch.row_keys()?;
-    let t_conv = batch.floats("t_conv_s")?;
-    let calibration = batch.floats("calibration_rmse_cm_s")?;
-    let evaluation = batch.floats("evaluation_rmse_cm_s")?;
-    let improvement = batch.optional_floats("evaluation_improvement_pct");
-    let training = batch.optional_floats("training_s");
-    let calibration_ci = batch.optional_float_column(CALIBRATION_CI);
-    let evaluation_ci = batch.optional_float_column(EVALUATION_CI);
-    let mut values: Vec<Vec<Swept>> = vec![Vec::new(); point.len()];
+    let points = records(batch, |r: PointRecord| Ok(r.point))?;
+    let mut values: Vec<Vec<Swept>> = vec![Vec::new(); points.len()];
     for key in swept {
-        let column = batch
-            .0
-            .column_by_name(key)
-            .ok_or_else(|| ColumnError::SweptMissing {
-                column: key.clone(),
-                index: INDEX,
-            })?;
-        let column: Vec<Swept> = match column.data_type() {
-            DataType::Int64 => column
-                .as_primitive::<Int64Type>()
-                .iter()
-                .map(|v| Swept::Integer(v.unwrap_or_default()))
-                .collect(),
-            DataType::Float64 => column
-                .as_primitive::<Float64Type>()
-                .iter()
-                .map(|v| Swept::Number(v.unwrap_or(f64::NAN)))
-                .collect(),
-            DataType::Utf8 => column
-                .as_string::<i32>()
-                .iter()
-                .map(|v| Swept::Text(v.unwrap_or_default().to_string()))
-                .collect(),
-            other => {
-                return Err(ColumnError::SweptType {
-                    column: key.clone(),
-                    found: other.clone(),
-                });
-            }
-        };
-        for (row, value) in values.iter_mut().zip(column) {
+        for (row, value) in values.iter_mut().zip(swept_column(batch, key)?) {
             row.push(value);
         }
     }
-    Ok(row_keys
-        .into_iter()
-        .zip(values)
-        .enumerate()
-        .map(|(i, (series, values))| SweepRow {
-            point: point[i].clone(),
-            values,
-            dvl: series.dvl,
-            estimator: series.estimator,
-            error_model: series.error_model,
-            t_conv_s: t_conv[i],
-            calibration_rmse_cm_s: calibration[i],
-            evaluation_rmse_cm_s: evaluation[i],
-            evaluation_improvement_pct: improvement[i],
-            training_s: training[i],
-            calibration_rmse_ci_cm_s: calibration_ci[i],
-            evaluation_rmse_ci_cm_s: evaluation_ci[i],
-        })
-        .collect())
+    let mut rows = points.into_iter().zip(values);
+    records(batch, |record: SweepRecord| {
+        let (point, values) = rows.next().expect("one point per row");
+        record.row(point, values)
+    })
+}
+
+/// The values of the swept key `key`, by their column's type.
+fn swept_column(batch: &Batch, key: &str) -> Result<Vec<Swept>, ColumnError> {
+    let column = batch
+        .0
+        .column_by_name(key)
+        .ok_or_else(|| ColumnError::SweptMissing {
+            column: key.to_string(),
+            index: INDEX,
+        })?;
+    Ok(match column.data_type() {
+        DataType::Int64 => column
+            .as_primitive::<Int64Type>()
+            .iter()
+            .map(|v| Swept::Integer(v.unwrap_or_default()))
+            .collect(),
+        DataType::Float64 => column
+            .as_primitive::<Float64Type>()
+            .iter()
+            .map(|v| Swept::Number(v.unwrap_or(f64::NAN)))
+            .collect(),
+        DataType::Utf8 => column
+            .as_string::<i32>()
+            .iter()
+            .map(|v| Swept::Text(v.unwrap_or_default().to_string()))
+            .collect(),
+        other => {
+            return Err(ColumnError::SweptType {
+                column: key.to_string(),
+                found: other.clone(),
+            });
+        }
+    })
 }

@@ -1,12 +1,12 @@
 //! A point's results folder: the study put together from its calibrations (the fits
 //! that failed kept beside it, and the residual figure's samples), the resolved spec,
-//! the Parquet tables, both reports, and the manifest last, each file written
-//! atomically; and whether a folder already holds the results of a key, intact.
+//! the Parquet tables and both reports, handed to the one writer of results folders
+//! (`results::write_folder`: each file atomically, the manifest last); and whether a
+//! folder already holds the results of a key, intact.
 //! In: a point's spec, its calibrations and recordings. Out: the folder, or why not.
 
 use super::ExecuteError;
 use crate::Vec3;
-use crate::files::{sha256_hex, write_atomic};
 use crate::installation::protocol::{Estimated, Segment};
 use crate::installation::rows::{InstallationResults, NO_CALIBRATION, TracePoint};
 use crate::installation::spec::InstallationSpec;
@@ -119,18 +119,14 @@ pub fn trace(
         .collect()
 }
 
-/// Writes the folder: the resolved spec, the tables, both reports, then the manifest
-/// with every file's SHA-256.
+/// Writes the folder through [`results::write_folder`]: the resolved spec, the
+/// tables, both reports, then the manifest with every file's SHA-256.
 pub fn write_folder(
     spec: &InstallationSpec,
     folder: &Path,
     study: &InstallationResults,
     manifest: Manifest,
 ) -> Result<(), ExecuteError> {
-    crate::files::create_folder(folder).map_err(|source| ExecuteError::Io {
-        path: folder.to_path_buf(),
-        source,
-    })?;
     let mut files: Vec<(String, Vec<u8>)> = vec![(
         results::SPEC.to_string(),
         spec.resolved_toml.clone().into_bytes(),
@@ -155,18 +151,9 @@ pub fn write_folder(
             source,
         })?;
     }
-    let mut digests = std::collections::BTreeMap::new();
-    for (name, bytes) in &files {
-        let path = folder.join(name);
-        write_atomic(&path, bytes).map_err(|source| ExecuteError::Io { path, source })?;
-        digests.insert(name.clone(), sha256_hex(bytes));
-    }
     let manifest = Manifest {
         finished_at: humantime::format_rfc3339_seconds(SystemTime::now()).to_string(),
-        files_sha256: digests,
         ..manifest
     };
-    let path = folder.join(results::MANIFEST);
-    let json = serde_json::to_string_pretty(&manifest).expect("a manifest always serializes");
-    write_atomic(&path, json.as_bytes()).map_err(|source| ExecuteError::Io { path, source })
+    Ok(results::write_folder(folder, &files, manifest)?)
 }

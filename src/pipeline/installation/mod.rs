@@ -336,23 +336,27 @@ impl<'a> InstallationPlan<'a> {
     /// of run wrote (unless `force`, for the first).
     fn check_owners(&self, force: bool) -> Result<(), ExecuteError> {
         if self.experiment.is_sweep() {
-            owner::check_installation_sweep(
-                &self.out.join(&self.experiment.name),
-                &self.out,
-                &self.recorded_spec_file,
-                &self.experiment.name,
-            )?;
+            owner::check(&owner::Writer {
+                folder: &self.out.join(&self.experiment.name),
+                out: &self.out,
+                spec_file: &self.recorded_spec_file,
+                name: &self.experiment.name,
+                spec_sha256: String::new(),
+                writing: owner::Writing::InstallationSweep,
+                force,
+            })?;
         }
         for p in 0..self.experiment.points.len() {
             let spec = self.spec(p);
-            owner::check_installation(
-                &self.folder(p),
-                &self.out,
-                &self.recorded_spec_file,
-                &spec.name,
-                &sha256_hex(spec.resolved_toml.as_bytes()),
+            owner::check(&owner::Writer {
+                folder: &self.folder(p),
+                out: &self.out,
+                spec_file: &self.recorded_spec_file,
+                name: &spec.name,
+                spec_sha256: sha256_hex(spec.resolved_toml.as_bytes()),
+                writing: owner::Writing::Installation,
                 force,
-            )?;
+            })?;
         }
         Ok(())
     }

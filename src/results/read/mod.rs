@@ -7,8 +7,9 @@
 //!
 //! - this module: [`StoredRun`], the folder read whole, and [`ReadError`], which puts
 //!   the path of the file in front of whatever went wrong with it;
-//! - [`columns`]: the schema check and typed access to a table's columns (`Batch`);
-//! - [`rows`]: one decoder per table, from its columns to the rows the run computed.
+//! - [`columns`]: the schema check, and `Batch`, a batch that passed it;
+//! - [`rows`]: one decoder per table, from its records to the rows the run computed;
+//!   [`read_records`] and [`records`] decode a checked batch into a table's records.
 
 pub mod columns;
 pub mod rows;
@@ -21,6 +22,7 @@ use super::calibration_time::{
     CALIBRATION_TIME, HELD_OUT, TERMS_IN_TIME, calibration_time_batch, held_out_batch,
     terms_in_time_batch,
 };
+use super::record::{self, Record};
 use super::{
     MANIFEST, Manifest, PUBLISHED, SPEC, TABLES, calibration_batch, evaluation_batch,
     monte_carlo_batch, training_batch, trajectories_batch,
@@ -316,6 +318,24 @@ pub(crate) fn read_rows<T>(
         out.extend(rows(&Batch(&batch)).map_err(invalid)?);
     }
     Ok(out)
+}
+
+/// Reads the Parquet file at `path` as a table of records `R`, checked against `R`'s
+/// columns (those it writes only sometimes may be missing), each turned into a row by
+/// `row`.
+pub(crate) fn read_records<R: Record, T>(
+    path: &Path,
+    row: impl Fn(R) -> Result<T, ColumnError>,
+) -> Result<Vec<T>, ReadError> {
+    read_rows(path, &record::expected::<R>(), |batch| records(batch, &row))
+}
+
+/// The records `R` of a checked `batch`, each turned into a row by `row`.
+pub(crate) fn records<R: Record, T>(
+    batch: &Batch,
+    row: impl FnMut(R) -> Result<T, ColumnError>,
+) -> Result<Vec<T>, ColumnError> {
+    record::decode::<R>(batch.0)?.into_iter().map(row).collect()
 }
 
 /// The schema the writer gives `file`.
