@@ -169,7 +169,10 @@ fn finish(plan: &InstallationPlan, executed: &Executed, drawing: &Drawing) -> Re
     for folder in &executed.written {
         let results = crate::results::installation::read_installation(folder).map_err(failure)?;
         if !plan.experiment.is_sweep() {
-            println!("{}", crate::report::printed::installation::headline(&results));
+            println!(
+                "{}",
+                crate::report::printed::installation::headline(&results)
+            );
         }
         if let Some(plots) = drawing.folder() {
             let name = folder.strip_prefix(&plan.out).unwrap_or(folder);

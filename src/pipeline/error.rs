@@ -77,12 +77,6 @@ pub enum ExecuteError {
         if *written == 1 { "" } else { "s" }
     )]
     Unfitted { errors: Vec<String>, written: usize },
-    #[error("writing {}", path.display())]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
     #[error(transparent)]
     Calibrations(#[from] CalibrationStoreError),
     #[error(

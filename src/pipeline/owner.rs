@@ -99,7 +99,7 @@ impl Writing {
         match self {
             Writing::Single => Held::Single,
             Writing::SweepPoint => Held::Sweep,
-            Writing::Installation => Held::InstallationResults,
+            Writing::Installation => Held::Installation,
             Writing::InstallationSweep => Held::InstallationSweep,
         }
     }
@@ -208,14 +208,14 @@ enum Held {
     Nothing,
     Single,
     Sweep,
-    InstallationResults,
+    Installation,
     InstallationSweep,
 }
 
 impl Held {
     fn of(folder: &Path) -> Held {
         if folder.join(crate::results::installation::HELDOUT).is_file() {
-            Held::InstallationResults
+            Held::Installation
         } else if folder.join(sweep::INDEX).is_file() {
             match sweep::read_index(folder) {
                 Ok(index) if index.kind == crate::installation::spec::KIND => {
@@ -235,7 +235,7 @@ impl Held {
             Held::Nothing => "nothing",
             Held::Single => "the results of a single run",
             Held::Sweep => "the points of a sweep",
-            Held::InstallationResults => "the results of an installation study",
+            Held::Installation => "the results of an installation study",
             Held::InstallationSweep => "the points of a sweep of installation studies",
         }
     }

@@ -146,7 +146,7 @@ pub fn write_folder(
     // A study without `[learned]` leaves no fold table of an earlier one behind.
     let folds = folder.join(results::installation::FOLDS);
     if study.folds.is_empty() && folds.exists() {
-        std::fs::remove_file(&folds).map_err(|source| ExecuteError::Io {
+        std::fs::remove_file(&folds).map_err(|source| crate::results::ResultsError::Io {
             path: folds.clone(),
             source,
         })?;

@@ -95,9 +95,11 @@ impl Inputs {
                     let sha256 = match hashes.get(path) {
                         Some(sha256) => sha256.clone(),
                         None => {
-                            let bytes = std::fs::read(path).map_err(|source| ExecuteError::Io {
-                                path: path.clone(),
-                                source,
+                            let bytes = std::fs::read(path).map_err(|source| {
+                                crate::results::ResultsError::Io {
+                                    path: path.clone(),
+                                    source,
+                                }
                             })?;
                             let sha256 = sha256_hex(&bytes);
                             hashes.insert(path.clone(), sha256.clone());

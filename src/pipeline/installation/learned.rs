@@ -10,7 +10,6 @@
 //! In: a point's spec, its segments and its recordings' SHA-256. Out: [`LearnedModels`].
 
 use super::InstallationPlan;
-use crate::pipeline::ExecuteError;
 use crate::installation::learned::{LearnedWindows, training_windows};
 use crate::installation::learned_spec::{LearnedSpec, TrainingSource};
 use crate::installation::network::network_io;
@@ -19,6 +18,7 @@ use crate::installation::simulate::REFERENCE_MARGIN;
 use crate::installation::spec::InstallationSpec;
 use crate::installation::term_names::term_set;
 use crate::model::Dcnet;
+use crate::pipeline::ExecuteError;
 use crate::pipeline::Shard;
 use crate::pipeline::cache::{self, Blueprint, ModelId, ModelStore};
 use crate::pipeline::plan::status::{Status, model_status};
