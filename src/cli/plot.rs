@@ -4,6 +4,7 @@
 use super::{CliError, failure, input, report_figures};
 use crate::report::plots::{self, Format, Metric};
 use crate::report::{self, compare};
+use crate::results::held::Held;
 use crate::results::read::StoredRun;
 use crate::results::sweep;
 use std::path::Path;
@@ -16,17 +17,12 @@ pub(super) fn plot(
     format: Format,
     metric: Metric,
 ) -> Result<(), CliError> {
-    let installation_sweep = crate::results::sweep::read_index(results)
-        .is_ok_and(|index| index.kind == crate::installation::spec::KIND);
-    if installation_sweep
-        || results
-            .join(crate::results::installation::HELDOUT)
-            .is_file()
-    {
-        return super::installation::plot(results, out.unwrap_or(Path::new("plots")), format);
-    }
-    if !results.join(sweep::INDEX).is_file() {
-        return plot_run(results, out, format);
+    match Held::of(results) {
+        held if held.is_installation() => {
+            return super::installation::plot(results, out.unwrap_or(Path::new("plots")), format);
+        }
+        Held::Sweep => {}
+        _ => return plot_run(results, out, format),
     }
     let index = sweep::read_index(results).map_err(input)?;
     for point in &index.points {

@@ -10,7 +10,8 @@
 //! nothing, or an [`OwnerError`] naming both.
 
 use super::{Plan, cache};
-use crate::results::{self, Manifest, sweep};
+use crate::results::held::Held;
+use crate::results::{self, Manifest};
 use std::path::{Component, Path, PathBuf};
 
 /// A results folder that belongs to another spec.
@@ -200,45 +201,6 @@ fn another_spec(writer: &Writer) -> Result<(), OwnerError> {
         our_name: writer.name.to_string(),
         our_hash: short(&writer.spec_sha256),
     })
-}
-
-/// What a results folder holds.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Held {
-    Nothing,
-    Single,
-    Sweep,
-    Installation,
-    InstallationSweep,
-}
-
-impl Held {
-    fn of(folder: &Path) -> Held {
-        if folder.join(crate::results::installation::HELDOUT).is_file() {
-            Held::Installation
-        } else if folder.join(sweep::INDEX).is_file() {
-            match sweep::read_index(folder) {
-                Ok(index) if index.kind == crate::installation::spec::KIND => {
-                    Held::InstallationSweep
-                }
-                _ => Held::Sweep,
-            }
-        } else if folder.join(results::MANIFEST).is_file() {
-            Held::Single
-        } else {
-            Held::Nothing
-        }
-    }
-
-    fn words(&self) -> &'static str {
-        match self {
-            Held::Nothing => "nothing",
-            Held::Single => "the results of a single run",
-            Held::Sweep => "the points of a sweep",
-            Held::Installation => "the results of an installation study",
-            Held::InstallationSweep => "the points of a sweep of installation studies",
-        }
-    }
 }
 
 fn same_file(a: &Path, b: &Path) -> bool {

@@ -9,6 +9,7 @@
 //! and reads the table that sets a sweep's points side by side.
 
 pub mod calibration_time;
+pub mod held;
 pub mod record;
 pub mod installation;
 pub mod read;

@@ -13,7 +13,7 @@ use super::pairs::pair;
 use crate::installation::rows::{InstallationResults, SummaryRow, TermRow};
 use crate::report::plots::scale::three_digits;
 use crate::report::readable::readable_term;
-use crate::results::installation::{HELDOUT, read_installation};
+use crate::results::installation::read_installation;
 use crate::results::read::ReadError;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -27,11 +27,6 @@ pub struct StoredInstallation {
     pub folder: PathBuf,
     pub study: InstallationResults,
     pub spec: toml::Table,
-}
-
-/// Whether `folder` holds an installation study rather than a run of the paper.
-pub fn is_installation(folder: &Path) -> bool {
-    folder.join(HELDOUT).is_file()
 }
 
 /// Reads the installation study in `folder`: its tables and its `spec.toml`.

@@ -27,6 +27,7 @@ pub use markdown::render;
 pub use spec_keys::{KeyDifference, flatten, spec_differences};
 
 use crate::files::write_atomic;
+use crate::results::held::Held;
 use crate::results::read::{ReadError, StoredRun};
 use crate::results::sweep;
 use std::path::{Path, PathBuf};
@@ -93,8 +94,8 @@ pub fn folders(first: &Path, second: &Path) -> Result<String, CompareError> {
         refuse_sweep(folder)?;
     }
     match (
-        installation::is_installation(first),
-        installation::is_installation(second),
+        Held::of(first) == Held::Installation,
+        Held::of(second) == Held::Installation,
     ) {
         (true, true) => Ok(installation::render(
             &installation::read(first)?,

@@ -1,0 +1,51 @@
+//! What a results folder holds, told from its files alone: nothing, a single run of the
+//! paper's experiment, a sweep of them, an installation study, or a sweep of studies.
+//! The one place that tells a folder's kind, for `plot`, `compare` and the owner
+//! check. In: a folder. Out: [`Held`].
+
+use super::{MANIFEST, installation::HELDOUT, sweep};
+use std::path::Path;
+
+/// What a results folder holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Held {
+    Nothing,
+    Single,
+    Sweep,
+    Installation,
+    InstallationSweep,
+}
+
+impl Held {
+    pub fn of(folder: &Path) -> Held {
+        if folder.join(HELDOUT).is_file() {
+            Held::Installation
+        } else if folder.join(sweep::INDEX).is_file() {
+            match sweep::read_index(folder) {
+                Ok(index) if index.kind == crate::installation::spec::KIND => {
+                    Held::InstallationSweep
+                }
+                _ => Held::Sweep,
+            }
+        } else if folder.join(MANIFEST).is_file() {
+            Held::Single
+        } else {
+            Held::Nothing
+        }
+    }
+
+    /// Whether the folder holds an installation study or a sweep of them.
+    pub fn is_installation(self) -> bool {
+        matches!(self, Held::Installation | Held::InstallationSweep)
+    }
+
+    pub fn words(self) -> &'static str {
+        match self {
+            Held::Nothing => "nothing",
+            Held::Single => "the results of a single run",
+            Held::Sweep => "the points of a sweep",
+            Held::Installation => "the results of an installation study",
+            Held::InstallationSweep => "the points of a sweep of installation studies",
+        }
+    }
+}
