@@ -238,6 +238,8 @@ trait SpecKind {
     fn plan(&self, target: &Target, shard: Option<Shard>) -> Result<(), CliError>;
     fn collect(&self, target: &Target, drawing: &Drawing) -> Result<(), CliError>;
     fn validate(&self, spec: &Path, set: &[String]) -> Result<(), CliError>;
+    /// The spec as the paper's, for `data info` and `bench`, which only it has.
+    fn paper_spec(&self, spec: &Path, set: &[String]) -> Result<Spec, CliError>;
 }
 
 /// A spec without `kind`: the paper's experiment, or a sweep of it.
@@ -255,6 +257,9 @@ impl SpecKind for PaperKind {
     }
     fn validate(&self, spec: &Path, set: &[String]) -> Result<(), CliError> {
         inspect::validate(spec, set)
+    }
+    fn paper_spec(&self, spec: &Path, set: &[String]) -> Result<Spec, CliError> {
+        load(spec, set).map_err(input)
     }
 }
 
@@ -274,6 +279,12 @@ impl SpecKind for InstallationKind {
     fn validate(&self, spec: &Path, set: &[String]) -> Result<(), CliError> {
         installation::validate(spec, set)
     }
+    fn paper_spec(&self, spec: &Path, _set: &[String]) -> Result<Spec, CliError> {
+        Err(input(anyhow::anyhow!(
+            "{}: an installation study has no training data to inspect nor training to bench: `dcnet-exp validate` checks it, `dcnet-exp run` runs it",
+            spec.display()
+        )))
+    }
 }
 
 /// The kind of the spec at `path`, from its `kind` key; another kind is refused.
@@ -292,14 +303,7 @@ fn kind_of(path: &Path) -> Result<&'static dyn SpecKind, CliError> {
 /// The paper spec at `path` with `set`, for the commands that only a paper spec has
 /// (its training data, its training bench).
 fn load_spec(path: &Path, set: &[String]) -> Result<Spec, CliError> {
-    if crate::spec::declared_kind(path).map_err(input)?.is_some() {
-        kind_of(path)?;
-        return Err(input(anyhow::anyhow!(
-            "{}: an installation study has no training data to inspect nor training to bench: `dcnet-exp validate` checks it, `dcnet-exp run` runs it",
-            path.display()
-        )));
-    }
-    load(path, set).map_err(input)
+    kind_of(path)?.paper_spec(path, set)
 }
 
 /// The longest interval `--log-every` may ask for: a day.

@@ -49,7 +49,14 @@ pub(super) fn run(target: &Target, drawing: &Drawing, mode: Mode) -> Result<(), 
         tasks(to_do.len())
     );
     say_how_long(&plan, &to_do)?;
-    let executed = execute(&Planned::Paper(&plan), mode).map_err(failure)?;
+    let executed = execute(
+        &Planned::Paper {
+            plan: &plan,
+            to_do: &to_do,
+        },
+        mode,
+    )
+    .map_err(failure)?;
     if let Mode::Shard { shard, .. } = mode {
         eprintln!(
             "shard {shard}: {} done; once every shard has finished, `{}` writes the results",
@@ -192,7 +199,14 @@ pub(super) fn collect(target: &Target, drawing: &Drawing) -> Result<(), CliError
     let plan = planned(&experiment, target)?;
     let to_do = plan.to_do(Mode::Collect);
     check_owners(&plan, &to_do, false)?;
-    let executed = execute(&Planned::Paper(&plan), Mode::Collect).map_err(failure)?;
+    let executed = execute(
+        &Planned::Paper {
+            plan: &plan,
+            to_do: &to_do,
+        },
+        Mode::Collect,
+    )
+    .map_err(failure)?;
     if executed.done == 0 {
         eprintln!(
             "nothing to do: the results in {} are current",

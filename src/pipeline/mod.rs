@@ -45,8 +45,13 @@ use std::time::{Instant, SystemTime};
 /// A spec of either kind, planned: what goes through the one front door, [`execute`].
 pub enum Planned<'a> {
     /// The paper's Monte Carlo experiment: datasets, DCNet trainings, Monte Carlo blocks
-    /// and the results folders put together from them.
-    Paper(&'a Plan<'a>),
+    /// and the results folders put together from them; `to_do` is what
+    /// [`Plan::to_do`] gave for the mode, as the caller announced it (its status read
+    /// once, each seal hashed once).
+    Paper {
+        plan: &'a Plan<'a>,
+        to_do: &'a [Task],
+    },
     /// The study of a real installation: a calibration on every paired recording, each
     /// scored on the others, and the results folders put together from them.
     Installation(&'a InstallationPlan<'a>),
@@ -69,7 +74,7 @@ pub struct Executed {
 /// not current (not for a shard).
 pub fn execute(planned: &Planned, mode: Mode) -> Result<Executed, ExecuteError> {
     match planned {
-        Planned::Paper(plan) => execute_tasks(plan, mode, &plan.to_do(mode)),
+        Planned::Paper { plan, to_do } => execute_tasks(plan, mode, to_do),
         Planned::Installation(plan) => plan.execute(mode),
     }
 }
