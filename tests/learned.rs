@@ -441,3 +441,73 @@ fn a_learned_training_killed_mid_way_resumes_to_the_bytes_of_an_uninterrupted_on
         "{planned}"
     );
 }
+
+/// A learned model is trained under its claim, as the paper's are: while another
+/// process holds it (here the test, holding its lock file), a run waits for it, then,
+/// the holder gone with the model untrained, trains it itself.
+#[test]
+fn a_learned_model_another_process_holds_is_waited_for_then_trained() {
+    use std::io::{BufRead, BufReader};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    learned_spec(d, "");
+    let spec = "experiments/syn.toml";
+    let planned = dcnet(d, &["plan", spec]);
+    assert!(planned.status.success(), "{}", stderr(&planned));
+    let planned = stdout(&planned);
+    // | train DCNet installation vehicle fold 2 | <key, 16 characters> | to do |
+    let held = planned
+        .lines()
+        .find(|l| l.contains("train DCNet installation vehicle fold 2"))
+        .and_then(|l| l.split('|').nth(2))
+        .map(|key| key.trim().to_string())
+        .unwrap_or_else(|| panic!("plan lists no vehicle fold 2 model: {planned}"));
+    let locks = d.join("results/.cache/locks");
+    std::fs::create_dir_all(&locks).unwrap();
+    let lock = std::fs::File::create(locks.join(format!("{held}.lock"))).unwrap();
+    lock.lock().unwrap();
+
+    let mut child = spawn(d, &["run", spec, "--no-plots"]);
+    let (lines, received) = std::sync::mpsc::channel();
+    let stderr_pipe = child.stderr.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        for line in BufReader::new(stderr_pipe).lines().map_while(Result::ok) {
+            let _ = lines.send(line);
+        }
+    });
+    let mut log = Vec::new();
+    let waited = loop {
+        match received.recv_timeout(Duration::from_secs(300)) {
+            Ok(line) => {
+                let waiting = line.contains("waiting for another process");
+                log.push(line);
+                if waiting {
+                    break true;
+                }
+            }
+            Err(_) => break false,
+        }
+    };
+    drop(lock);
+    let status = child.wait().unwrap();
+    reader.join().unwrap();
+    log.extend(received.try_iter());
+    let log = log.join("\n");
+    assert!(waited, "the run did not wait for the held model: {log}");
+    assert!(status.success(), "{log}");
+    assert!(
+        log.contains(
+            "waiting for another process computing 1 of these tasks (DCNet installation vehicle fold 2)"
+        ),
+        "{log}"
+    );
+    assert!(
+        log.contains("the other process did 0 of them; 1 left to do here"),
+        "{log}"
+    );
+    assert!(
+        log.contains("DCNet installation vehicle fold 2:"),
+        "the run trained the model it waited for: {log}"
+    );
+    assert_eq!(learned_weights(&d.join("results")).len(), 4);
+}

@@ -174,10 +174,7 @@ fn finish(plan: &InstallationPlan, executed: &Executed, drawing: &Drawing) -> Re
                 crate::report::printed::installation::headline(&results)
             );
         }
-        if let Some(plots) = drawing.folder() {
-            let name = folder.strip_prefix(&plan.out).unwrap_or(folder);
-            draw(&results, &plots.join(name), Format::Both)?;
-        }
+        report(folder, &results, drawing.folder(), Format::Both)?;
         eprintln!("results written to {}", folder.display());
     }
     if let Some(folder) = &executed.sweep {
@@ -200,41 +197,71 @@ fn finish(plan: &InstallationPlan, executed: &Executed, drawing: &Drawing) -> Re
 /// `plot` of an installation study's results folder, or of a sweep of them: figures
 /// and reports again, from the tables alone.
 pub(super) fn plot(results: &Path, out: &Path, format: Format) -> Result<(), CliError> {
-    let name = results.file_name().map(PathBuf::from).unwrap_or_default();
     if !results.join(crate::results::sweep::INDEX).is_file() {
-        // A sweep point's figures go where its run drew them: `<sweep>/<point>/`.
-        let name = std::fs::read(results.join(crate::results::MANIFEST))
-            .ok()
-            .and_then(|bytes| serde_json::from_slice::<crate::results::Manifest>(&bytes).ok())
-            .map_or(name, |manifest| PathBuf::from(manifest.name));
-        return plot_installation(results, &out.join(name), format);
+        return plot_installation(results, out, format);
     }
     let stored = installation_sweep::read(results).map_err(input)?;
     for point in &stored.index.points {
-        plot_installation(&results.join(point), &out.join(&name).join(point), format)?;
+        plot_installation(&results.join(point), out, format)?;
     }
+    let name = results.file_name().map(PathBuf::from).unwrap_or_default();
     draw_sweep(&stored, &out.join(&name), format)
 }
 
-/// Writes the reports of one study's folder again and draws its figures into `out`.
+/// Reads one study's folder back and reports it again, its figures drawn into `out`.
 fn plot_installation(results: &Path, out: &Path, format: Format) -> Result<(), CliError> {
     let study = crate::results::installation::read_installation(results).map_err(input)?;
-    let name = results.file_name().unwrap_or_default().to_string_lossy();
-    let reported = crate::report::Reported::Installation {
-        study: &study,
-        name: &name,
-        folder: results,
-    };
-    crate::report::write(&reported)
-        .map_err(|e| failure(anyhow::Error::new(e).context(results.display().to_string())))?;
+    report(results, &study, Some(out), format)?;
     eprintln!("report written to {}", results.join("report.md").display());
-    draw(&study, out, format)
+    Ok(())
 }
 
-fn draw(study: &InstallationResults, folder: &Path, format: Format) -> Result<(), CliError> {
+/// Draws the figures of the study in `folder` into `<plots>/<its name>` (none without
+/// `plots`), then writes its reports and seals them with its manifest and figures, as
+/// a paper run's are. Its name, which keys the LaTeX labels, is its manifest's: a sweep
+/// point's is `<sweep>/<point>`.
+fn report(
+    folder: &Path,
+    study: &InstallationResults,
+    plots: Option<&Path>,
+    format: Format,
+) -> Result<(), CliError> {
+    let name = std::fs::read(folder.join(crate::results::MANIFEST))
+        .ok()
+        .and_then(|bytes| serde_json::from_slice::<crate::results::Manifest>(&bytes).ok())
+        .map_or_else(
+            || {
+                folder
+                    .file_name()
+                    .unwrap_or_default()
+                    .to_string_lossy()
+                    .into_owned()
+            },
+            |manifest| manifest.name,
+        );
+    let figures = match plots {
+        Some(plots) => draw(study, &plots.join(&name), format)?,
+        None => Vec::new(),
+    };
+    let reported = crate::report::Reported::Installation {
+        study,
+        name: &name,
+        folder,
+        figures: &figures,
+    };
+    crate::report::write(&reported)
+        .map_err(|e| failure(anyhow::Error::new(e).context(folder.display().to_string())))?;
+    Ok(())
+}
+
+fn draw(
+    study: &InstallationResults,
+    folder: &Path,
+    format: Format,
+) -> Result<Vec<crate::report::plots::Written>, CliError> {
     let drawn = crate::report::installation::draw_all(study, folder, format).map_err(failure)?;
     super::report_figures(&drawn, folder);
-    Ok(())
+    Ok(drawn)
 }
 
 fn draw_sweep(

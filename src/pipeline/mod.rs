@@ -110,11 +110,11 @@ fn execute_tasks(plan: &Plan, mode: Mode, to_do: &[Task]) -> Result<Executed, Ex
     // Each stage does the tasks it can claim, then those another process held that it
     // left undone; blocks start once every model they need is settled.
     let force = mode.force();
-    claimed_then_left(plan, &trainings, Task::Training, |ids| {
+    plan_claimed_then_left(plan, &trainings, Task::Training, |ids| {
         training::train(plan, ids, force, &mut stages, &mut executed)
     })?;
     let clock = Instant::now();
-    claimed_then_left(plan, &blocks, Task::Block, |ids| {
+    plan_claimed_then_left(plan, &blocks, Task::Block, |ids| {
         monte_carlo::run(plan, ids, &mut executed)
     })?;
     stages.protocol = clock.elapsed().as_secs_f64();
@@ -139,37 +139,56 @@ pub fn remove_spent_checkpoints(plan: &Plan) -> Result<(), ExecuteError> {
     Ok(())
 }
 
-/// Does `work` on the tasks of `ids` in two passes, each holding the claims of its
-/// tasks: first those it can claim at once, then those another process held, each
-/// waited for and done only when that process left it unsettled.
-fn claimed_then_left(
+/// [`claimed_then_left`] on the tasks `task` makes of `ids`, keyed, named and settled
+/// as `plan` has them.
+fn plan_claimed_then_left(
     plan: &Plan,
     ids: &[usize],
     task: fn(usize) -> Task,
-    mut work: impl FnMut(&[usize]) -> Result<(), ExecuteError>,
+    work: impl FnMut(&[usize]) -> Result<(), ExecuteError>,
 ) -> Result<(), ExecuteError> {
     let key = |id: usize| {
         plan.key(task(id))
             .expect("computed tasks have keys")
             .to_string()
     };
-    let (claimed, busy) = claim::split(&plan.out, ids, key).map_err(lock_error)?;
+    let label = |id: usize| plan.label(task(id));
+    let settled = |id: usize| plan.status(task(id)).is_settled();
+    claimed_then_left(&plan.out, ids, (key, label, settled), work)
+}
+
+/// Does `work` on `ids` in two passes, each holding the claims (under `out`) of its
+/// tasks: first those it can claim at once, then those another process held, each
+/// waited for and done only when that process left it unsettled. `(key, label,
+/// settled)` give a task's claim key, its name for people, and whether it is settled.
+pub(crate) fn claimed_then_left<K, L, S>(
+    out: &std::path::Path,
+    ids: &[usize],
+    (key, label, settled): (K, L, S),
+    mut work: impl FnMut(&[usize]) -> Result<(), ExecuteError>,
+) -> Result<(), ExecuteError>
+where
+    K: Fn(usize) -> String,
+    L: Fn(usize) -> String,
+    S: Fn(usize) -> bool,
+{
+    let (claimed, busy) = claim::split(out, ids, &key).map_err(lock_error)?;
     let (now, claims): (Vec<usize>, Vec<claim::Claim>) = claimed.into_iter().unzip();
     work(&now)?;
     drop(claims);
     if busy.is_empty() {
         return Ok(());
     }
-    let first = plan.label(task(busy[0]));
     eprintln!(
-        "waiting for another process computing {} of these tasks ({first}{})",
+        "waiting for another process computing {} of these tasks ({}{})",
         busy.len(),
+        label(busy[0]),
         if busy.len() > 1 { ", …" } else { "" }
     );
     let (mut left, mut claims) = (Vec::new(), Vec::new());
     for &id in &busy {
-        let held = claim::claim(&plan.out, &key(id)).map_err(lock_error)?;
-        if !plan.status(task(id)).is_settled() {
+        let held = claim::claim(out, &key(id)).map_err(lock_error)?;
+        if !settled(id) {
             left.push(id);
             claims.push(held);
         }

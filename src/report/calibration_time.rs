@@ -7,7 +7,7 @@
 //! In: a [`StoredRun`]'s calibration-time and held-out tables. Out: [`Section`]s, set
 //! as Markdown and LaTeX by [`section`](super::section).
 
-use super::section::{Entry, Section, Table};
+use super::table::{Entry, Section, Table};
 use crate::evaluate::rows::{CalibrationTimeRow, HeldOutRow};
 use crate::results::read::StoredRun;
 use crate::vocab::{ErrorModel, EstimatorKind};
@@ -62,7 +62,8 @@ fn dvl_section(dvl: &str, rows: &[CalibrationTimeRow], tolerance: f64) -> Sectio
         ]
         .map(String::from)
         .to_vec(),
-        rows: of_dvl
+        label_columns: 1,
+        groups: vec![of_dvl
             .iter()
             .map(|r| {
                 vec![
@@ -77,7 +78,7 @@ fn dvl_section(dvl: &str, rows: &[CalibrationTimeRow], tolerance: f64) -> Sectio
                     },
                 ]
             })
-            .collect(),
+            .collect()],
         notes: vec![
             "DCNet's terms are estimated at the calibration windows only, so its calibration time is one of them; the other methods are scored after every sample.".into(),
         ],
@@ -189,7 +190,8 @@ fn claim_section(run: &StoredRun) -> Option<Section> {
         caption: "DCNet's calibration against the baseline's (the paper's comparison) and against the Kalman filter of the same error model, by T_conv and by calibration time (s); \"shorter\" is 1 − DCNet's / the other's. The last two columns give the held-out RMSE (cm/s) of DCNet and of the Kalman filter after DCNet's calibration time.".into(),
         table: Table {
             header: header.map(String::from).to_vec(),
-            rows: table_rows,
+            label_columns: 1,
+            groups: vec![table_rows],
             notes,
         },
         paragraph: None,

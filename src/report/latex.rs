@@ -4,8 +4,9 @@
 //! they need (booktabs). Each DVL's row holds our values, the row below it the
 //! published ones in italics; a flagged cell carries a dagger explained under its table.
 
-use crate::report::section::{Entry, Section, symbols};
-use crate::report::table::{Cell, ReportTable, ReportTables, Row, Signs, replicates_note};
+use crate::report::table::{
+    Cell, Entry, ReportTables, Section, Signs, Table, replicates_note, symbols,
+};
 use crate::results::read::StoredRun;
 use std::fmt::Write;
 
@@ -24,24 +25,24 @@ pub(super) fn render(run: &StoredRun, tables: &ReportTables) -> String {
     let captions = Captions::of(run);
     let label = label(&run.spec.name);
     let tag = |table: &str| format!("tab:{label}-{table}");
+    let calibration_note =
+        captions.note(&tables.calibration, ", or another T\\textsubscript{conv}");
     table(
         &mut out,
         &tables.calibration,
         &captions.calibration(&tables.calibration),
         &tag("calibration"),
-        captions
-            .note(&tables.calibration, ", or another T\\textsubscript{conv}")
-            .as_deref(),
+        calibration_note.as_slice(),
     );
     table(
         &mut out,
         &tables.evaluation,
         &captions.evaluation(&tables.evaluation),
         &tag("evaluation"),
-        captions.note(&tables.evaluation, "").as_deref(),
+        captions.note(&tables.evaluation, "").as_slice(),
     );
     if let Some(beyond) = &tables.beyond {
-        table(&mut out, beyond, &captions.beyond(), &tag("beyond"), None);
+        table(&mut out, beyond, &captions.beyond(), &tag("beyond"), &[]);
     }
     if let Some(ensemble) = &tables.ensemble {
         table(
@@ -49,11 +50,11 @@ pub(super) fn render(run: &StoredRun, tables: &ReportTables) -> String {
             ensemble,
             &captions.ensemble(),
             &tag("ensemble"),
-            None,
+            &[],
         );
     }
     if let Some(efficiency) = &tables.efficiency {
-        table(&mut out, efficiency, &captions.bound(), &tag("bound"), None);
+        table(&mut out, efficiency, &captions.bound(), &tag("bound"), &[]);
     }
     let timing = crate::report::calibration_time::sections(run);
     out.push_str(&sections(&timing, &format!("{label}-calibration-time")));
@@ -105,8 +106,8 @@ impl<'a> Captions<'a> {
     }
 
     /// In the caption of a table with published values.
-    fn below(table: &ReportTable) -> &'static str {
-        if table.tally.compared > 0 {
+    fn below(table: &Table) -> &'static str {
+        if table.tally().compared > 0 {
             "; the published value in italics in the row below ours"
         } else {
             ""
@@ -114,21 +115,22 @@ impl<'a> Captions<'a> {
     }
 
     /// Under a table with published values: what its daggers mean, and their count.
-    fn note(&self, table: &ReportTable, what: &str) -> Option<String> {
+    fn note(&self, table: &Table, what: &str) -> Option<String> {
         let spec = &self.run.spec;
         let published = self.run.published.as_ref()?;
-        (table.tally.compared > 0).then(|| {
+        let tally = table.tally();
+        (tally.compared > 0).then(|| {
             format!(
                 "\\dag{{}} flags an RMSE more than {}\\,\\% off the published one{what} ({} of {} cells). Published values: {}.",
                 spec.report.tolerance_pct,
-                table.tally.flagged,
-                table.tally.compared,
+                tally.flagged,
+                tally.compared,
                 escape(&published.source)
             )
         })
     }
 
-    fn calibration(&self, table: &ReportTable) -> String {
+    fn calibration(&self, table: &Table) -> String {
         let Captions {
             run,
             name,
@@ -142,7 +144,7 @@ impl<'a> Captions<'a> {
         )
     }
 
-    fn evaluation(&self, table: &ReportTable) -> String {
+    fn evaluation(&self, table: &Table) -> String {
         let Captions {
             name,
             runs,
@@ -184,10 +186,12 @@ impl<'a> Captions<'a> {
     }
 }
 
-/// One table environment: a row per row of `table`, the published values' row below
-/// it where it has any, a rule between DVLs, and `note` under the table.
-fn table(out: &mut String, table: &ReportTable, caption: &str, label: &str, note: Option<&str>) {
-    let labels = table.labels.len();
+/// One table environment of `table` under `caption` and `label` (both LaTeX): a rule
+/// before each group of rows, below a row with published values the row of those values
+/// in italics, the first label left empty under its group's first row where the rows
+/// have several labels (the DVL is named once), and `notes` (LaTeX) under the table.
+fn table(out: &mut String, table: &Table, caption: &str, label: &str, notes: &[String]) {
+    let labels = table.label_columns;
     let _ = writeln!(out, "\n\\begin{{table}}[htbp]");
     let _ = writeln!(out, "  \\centering\\small\\setlength{{\\tabcolsep}}{{4pt}}");
     let _ = writeln!(out, "  \\caption{{{caption}}}");
@@ -198,76 +202,72 @@ fn table(out: &mut String, table: &ReportTable, caption: &str, label: &str, note
         out,
         "  \\begin{{tabular}}{{{}{}}}",
         "l".repeat(labels),
-        "r".repeat(table.columns.len())
+        "r".repeat(table.header.len() - labels)
     );
     let _ = writeln!(out, "    \\toprule");
-    let header: Vec<String> = table
-        .labels
-        .iter()
-        .map(|l| escape(l))
-        .chain(table.columns.iter().map(|c| escape(c)))
-        .collect();
+    let header: Vec<String> = table.header.iter().map(|h| symbols(&escape(h))).collect();
     row(out, &header);
-    for (g, group) in table.groups.iter().enumerate() {
+    for group in &table.groups {
         let _ = writeln!(out, "    \\midrule");
         for (r, line) in group.iter().enumerate() {
-            // The DVL is named on its group's first row only.
-            row(out, &our_cells(line, r > 0 && labels > 1));
-            if line
-                .cells
+            let named_above = r > 0 && labels > 1;
+            let ours: Vec<String> = line
                 .iter()
-                .flatten()
-                .any(|entry| entry.paper.is_some())
-            {
-                row(out, &paper_cells(line, labels));
+                .enumerate()
+                .map(|(i, entry)| {
+                    if i == 0 && named_above {
+                        String::new()
+                    } else {
+                        entry_text(entry)
+                    }
+                })
+                .collect();
+            row(out, &ours);
+            if let Some(published) = published_cells(line, labels) {
+                row(out, &published);
             }
         }
-        if g + 1 == table.groups.len() {
-            let _ = writeln!(out, "    \\bottomrule");
-        }
     }
+    let _ = writeln!(out, "    \\bottomrule");
     let _ = writeln!(out, "  \\end{{tabular}}}}");
-    if let Some(note) = note {
+    if !notes.is_empty() {
         let _ = writeln!(out, "  \\par\\smallskip");
-        let _ = writeln!(out, "  {{\\footnotesize\\raggedright {note}\\par}}");
+        let _ = writeln!(
+            out,
+            "  {{\\footnotesize\\raggedright {}\\par}}",
+            notes.join("\\\\\n  ")
+        );
     }
     let _ = writeln!(out, "\\end{{table}}");
 }
 
-/// The cells of our row of `line`: its labels, the first (the DVL) left empty where
-/// `dvl_named_above`, then our values.
-fn our_cells(line: &Row, dvl_named_above: bool) -> Vec<String> {
-    let mut cells: Vec<String> = line
-        .labels
-        .iter()
-        .enumerate()
-        .map(|(i, l)| {
-            if i == 0 && dvl_named_above {
-                String::new()
-            } else {
-                escape(l)
-            }
-        })
-        .collect();
-    cells.extend(line.cells.iter().map(|cell| match cell {
-        Some(entry) => ours(entry),
-        None => "---".into(),
-    }));
-    cells
+/// One cell as LaTeX: a label as text, a paper's cell as ours with a dagger where the
+/// Markdown report has its ⚠, `---` where there is no value.
+fn entry_text(entry: &Entry) -> String {
+    match entry {
+        Entry::Text(text) => escape(text),
+        Entry::Published(cell) => ours(cell),
+        Entry::Missing => "---".into(),
+        other => symbols(&other.text(&SIGNS)),
+    }
 }
 
-/// The cells of the row below `line`: `paper` in its last label column, then the
-/// published values in italics, empty where there is none.
-fn paper_cells(line: &Row, labels: usize) -> Vec<String> {
-    let mut cells = vec![String::new(); labels - 1];
-    cells.push("\\quad\\textit{paper}".into());
-    cells.extend(line.cells.iter().map(|cell| {
-        match cell.as_ref().and_then(|entry| entry.paper.as_ref()) {
-            Some(paper) => format!("\\textit{{{}}}", paper.text(&SIGNS)),
+/// The row below `line` where it has published values: `paper` in its last label
+/// column, then those values in italics, empty where there is none.
+fn published_cells(line: &[Entry], labels: usize) -> Option<Vec<String>> {
+    let paper = |entry: &Entry| match entry {
+        Entry::Published(cell) => cell.paper.as_ref().map(|p| p.text(&SIGNS)),
+        _ => None,
+    };
+    line.iter().any(|entry| paper(entry).is_some()).then(|| {
+        let mut cells = vec![String::new(); labels - 1];
+        cells.push("\\quad\\textit{paper}".into());
+        cells.extend(line[labels..].iter().map(|entry| match paper(entry) {
+            Some(text) => format!("\\textit{{{text}}}"),
             None => String::new(),
-        }
-    }));
-    cells
+        }));
+        cells
+    })
 }
 
 fn row(out: &mut String, cells: &[String]) {
@@ -314,48 +314,19 @@ pub(crate) fn label(name: &str) -> String {
 pub(crate) fn sections(sections: &[Section], key: &str) -> String {
     let mut out = String::new();
     for (i, section) in sections.iter().enumerate() {
-        let table = &section.table;
-        let _ = writeln!(out, "\n\\begin{{table}}[htbp]");
-        let _ = writeln!(out, "  \\centering\\small\\setlength{{\\tabcolsep}}{{4pt}}");
-        let _ = writeln!(
-            out,
-            "  \\caption{{{}: {}}}",
+        let caption = format!(
+            "{}: {}",
             escape(&section.title),
             symbols(&escape(&section.caption))
         );
-        let _ = writeln!(out, "  \\label{{tab:{key}-{}}}", i + 1);
-        let _ = writeln!(out, "  \\makebox[\\linewidth]{{%");
-        let _ = writeln!(
-            out,
-            "  \\begin{{tabular}}{{l{}}}",
-            "r".repeat(table.header.len() - 1)
-        );
-        let _ = writeln!(out, "    \\toprule");
-        let header: Vec<String> = table.header.iter().map(|h| symbols(&escape(h))).collect();
-        let _ = writeln!(out, "    {} \\\\", header.join(" & "));
-        let _ = writeln!(out, "    \\midrule");
-        for row in &table.rows {
-            let cells: Vec<String> = row
-                .iter()
-                .map(|entry| match entry {
-                    Entry::Text(text) => escape(text),
-                    other => symbols(&other.text(&SIGNS)),
-                })
-                .collect();
-            let _ = writeln!(out, "    {} \\\\", cells.join(" & "));
-        }
-        let _ = writeln!(out, "    \\bottomrule");
-        let _ = writeln!(out, "  \\end{{tabular}}}}");
-        if !table.notes.is_empty() {
-            let notes: Vec<String> = table.notes.iter().map(|n| symbols(&escape(n))).collect();
-            let _ = writeln!(out, "  \\par\\smallskip");
-            let _ = writeln!(
-                out,
-                "  {{\\footnotesize\\raggedright {}\\par}}",
-                notes.join("\\\\\n  ")
-            );
-        }
-        let _ = writeln!(out, "\\end{{table}}");
+        let notes: Vec<String> = section
+            .table
+            .notes
+            .iter()
+            .map(|note| symbols(&escape(note)))
+            .collect();
+        let label = format!("tab:{key}-{}", i + 1);
+        table(&mut out, &section.table, &caption, &label, &notes);
         if let Some(paragraph) = &section.paragraph {
             let _ = writeln!(out, "\n{}", symbols(&escape(paragraph)));
         }

@@ -4,10 +4,9 @@
 //! the figures drawn. Out: the Markdown text; a cell reads `ours · paper`, flagged ⚠.
 
 use crate::report::plots::{Caption, Written};
-use crate::report::section::{Section, Table as SectionTable};
-use crate::report::table::{Cell, ReportTable, ReportTables, Signs, replicates_note};
+use crate::report::table::{Cell, Entry, ReportTables, Section, Signs, Table, replicates_note};
 use crate::results::read::StoredRun;
-use comfy_table::{Table, presets::ASCII_MARKDOWN};
+use comfy_table::presets::ASCII_MARKDOWN;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
@@ -54,15 +53,15 @@ pub(super) fn render(run: &StoredRun, tables: &ReportTables, figures: &[Written]
     let _ = writeln!(
         out,
         "The DVL rows hold the baseline and DCNet, as in the paper. The floor corrects with the true terms, which no estimator can beat; the bound is the best mean RMSE any unbiased estimator can reach from the window's data (see \"Against the information bound\").\n\n{}\n",
-        markdown_table(&tables.calibration)
+        table(&tables.calibration)
     );
     let _ = writeln!(out, "## Evaluation with the T_conv terms\n");
-    let _ = writeln!(out, "{}\n", markdown_table(&tables.evaluation));
+    let _ = writeln!(out, "{}\n", table(&tables.evaluation));
     if let Some(beyond) = &tables.beyond {
         let _ = writeln!(
             out,
             "Beyond the paper: least squares on the same data, and the floor.\n\n{}\n",
-            markdown_table(beyond)
+            table(beyond)
         );
     }
     if let Some(ensemble) = &tables.ensemble {
@@ -70,7 +69,7 @@ pub(super) fn render(run: &StoredRun, tables: &ReportTables, figures: &[Written]
             out,
             "The DCNet ensemble: the mean of the {} replicates' terms in each calibration window.\n\n{}\n",
             spec.training.replicates,
-            markdown_table(ensemble)
+            table(ensemble)
         );
     }
     if let Some(efficiency) = &tables.efficiency {
@@ -78,7 +77,7 @@ pub(super) fn render(run: &StoredRun, tables: &ReportTables, figures: &[Written]
         let _ = writeln!(
             out,
             "The bound is the mean RMSE of an efficient estimator of the DVL's scale and bias from the calibration window (the Cramér–Rao bound on the terms, propagated to the corrected velocity): no unbiased calibration from that much data does better on average. The floor is the limit with perfect terms; the bound, the limit with w seconds of data. In brackets, each estimator's efficiency: the bound at its T_conv over its RMSE.\n\n{}\n",
-            markdown_table(efficiency)
+            table(efficiency)
         );
     }
     let timing = crate::report::calibration_time::sections(run);
@@ -101,25 +100,24 @@ pub(super) fn render(run: &StoredRun, tables: &ReportTables, figures: &[Written]
     out
 }
 
-/// A report table as Markdown, `—` where a cell has no value.
-fn markdown_table(table: &ReportTable) -> Table {
-    let mut markdown = Table::new();
+/// A report's table as Markdown, its groups run together, `—` where a cell has no
+/// value.
+fn table(table: &Table) -> comfy_table::Table {
+    let mut markdown = comfy_table::Table::new();
     markdown.load_preset(ASCII_MARKDOWN);
-    let header: Vec<String> = table
-        .labels
-        .iter()
-        .map(ToString::to_string)
-        .chain(table.columns.iter().cloned())
-        .collect();
-    markdown.set_header(header);
+    markdown.set_header(table.header.clone());
     for row in table.groups.iter().flatten() {
-        let cells = row
-            .cells
-            .iter()
-            .map(|cell| cell.as_ref().map_or_else(|| "—".to_string(), cell_text));
-        markdown.add_row(row.labels.iter().cloned().chain(cells).collect::<Vec<_>>());
+        markdown.add_row(row.iter().map(entry_text).collect::<Vec<_>>());
     }
     markdown
+}
+
+/// One cell as Markdown; a paper's cell with its published value beside it.
+fn entry_text(entry: &Entry) -> String {
+    match entry {
+        Entry::Published(cell) => cell_text(cell),
+        other => other.text(&SIGNS),
+    }
 }
 
 /// Our value, then the published one beside it, flagged where they disagree.
@@ -144,7 +142,7 @@ fn training_section(run: &StoredRun, out: &mut String) {
         out,
         "## DCNet training\n\nEpoch times are those of the run that trained each model; a model taken from the cache costs this run no training time.\n"
     );
-    let mut table = Table::new();
+    let mut table = comfy_table::Table::new();
     table.load_preset(ASCII_MARKDOWN);
     table.set_header([
         "EM",
@@ -191,7 +189,7 @@ fn provenance_section(run: &StoredRun, out: &mut String) {
         out,
         "## Run\n\nWall time of the process that wrote this folder, over every point of its spec; work taken from the cache counts nothing.\n"
     );
-    let mut table = Table::new();
+    let mut table = comfy_table::Table::new();
     table.load_preset(ASCII_MARKDOWN);
     table.set_header(["stage", "wall time s"]);
     for (stage, seconds) in [
@@ -290,12 +288,11 @@ fn absolute(path: &Path) -> PathBuf {
 
 /// `sections` as Markdown, each under a third-level heading.
 pub(crate) fn sections(sections: &[Section]) -> String {
-    let signs = &SIGNS;
     let mut out = String::new();
     for section in sections {
         let _ = writeln!(out, "### {}\n", section.title);
         let _ = writeln!(out, "{}\n", section.caption);
-        let _ = writeln!(out, "{}\n", section_table(&section.table, signs));
+        let _ = writeln!(out, "{}\n", table(&section.table));
         if !section.table.notes.is_empty() {
             for note in &section.table.notes {
                 let _ = writeln!(out, "- {note}");
@@ -309,21 +306,10 @@ pub(crate) fn sections(sections: &[Section]) -> String {
     out
 }
 
-/// A table as Markdown, with the figures' signs.
-fn section_table(table: &SectionTable, signs: &Signs) -> Table {
-    let mut markdown = Table::new();
-    markdown.load_preset(ASCII_MARKDOWN);
-    markdown.set_header(table.header.clone());
-    for row in &table.rows {
-        markdown.add_row(row.iter().map(|e| e.text(signs)).collect::<Vec<_>>());
-    }
-    markdown
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::report::table::{Detail, RmseValue, Row, Tally};
+    use crate::report::table::{Detail, RmseValue};
 
     fn value(rmse_cm_s: f64, t_conv_s: f64) -> RmseValue {
         RmseValue {
@@ -340,17 +326,18 @@ mod tests {
             paper: Some(value(5.0, 100.0)),
             flagged: true,
         };
-        let table = ReportTable {
-            labels: vec!["DVL"],
-            columns: vec!["Baseline".into(), "EM5".into()],
-            groups: vec![vec![Row {
-                labels: vec!["DVL1".into()],
-                cells: vec![None, Some(flagged)],
-            }]],
-            tally: Tally::default(),
+        let report_table = Table {
+            header: vec!["DVL".into(), "Baseline".into(), "EM5".into()],
+            label_columns: 1,
+            groups: vec![vec![vec![
+                Entry::Text("DVL1".into()),
+                Entry::Missing,
+                Entry::Published(flagged),
+            ]]],
+            notes: Vec::new(),
         };
         assert_eq!(
-            markdown_table(&table).to_string(),
+            table(&report_table).to_string(),
             "| DVL  | Baseline | EM5                            |\n\
              |------|----------|--------------------------------|\n\
              | DVL1 | —        | 5.00 (20) · paper 5.00 (100) ⚠ |"

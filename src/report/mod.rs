@@ -4,17 +4,18 @@
 //!
 //! - [`printed`]: the calibration and evaluation tables that `run` prints;
 //! - [`plots`]: the figures of a run and of a sweep;
+//! - [`table`]: the one model of a report's tables (a header, label columns, rows of
+//!   cells in groups, notes; a section around a table), the paper's tables built from a
+//!   run in its layout, our value beside the published one and cells off by more than
+//!   the spec's tolerance flagged; [`calibration_time`] (how long each method needs to
+//!   calibrate) and the installation study's sections ([`installation`]) build theirs
+//!   in the same model;
+//! - [`markdown`] and [`latex`]: any such table set as Markdown and as LaTeX; the
+//!   paper's report.md adds the training summary, wall time per stage, provenance from
+//!   the manifest and the figures;
 //! - this module: `results/<name>/report.md` and `report.tex` of every kind, from one
-//!   entry ([`documents`], [`write`]): a paper run's written by `plot` and sealed, an
-//!   installation study's written by its pipeline with its manifest. The paper's
-//!   report's tables are built once from the run ([`table`]: the paper's two tables in its
-//!   layout with our value beside the published one in every cell, cells off by more
-//!   than the spec's tolerance flagged, our extra estimators and the bound) and set by
-//!   two renderers: as Markdown in [`markdown`], with the training summary, wall time per
-//!   stage, provenance from the manifest and the figures, and as LaTeX in [`latex`];
-//! - [`section`]: tables of text set as Markdown and LaTeX alike, for the sections
-//!   beyond the paper's tables: [`calibration_time`] (how long each method needs to
-//!   calibrate) and the installation study's;
+//!   entry ([`documents`], [`write`]), written once the run's folder is and sealed with
+//!   its manifest and figures ([`SEAL`], [`is_complete`]);
 //! - [`compare`]: two results folders side by side;
 //! - [`readable`]: error terms in the units people read, below the tables, figures and
 //!   printed lines that show them.
@@ -27,7 +28,6 @@ pub mod markdown;
 pub mod plots;
 pub mod printed;
 pub mod readable;
-pub mod section;
 pub mod table;
 
 pub use markdown::FILE;
@@ -51,11 +51,13 @@ pub enum Reported<'a> {
         run: &'a StoredRun,
         figures: &'a [Written],
     },
-    /// An installation study's tables, in `folder`; `name` keys its LaTeX labels.
+    /// An installation study's tables, in `folder`; `name` keys its LaTeX labels; and
+    /// the figures drawn for it.
     Installation {
         study: &'a InstallationResults,
         name: &'a str,
         folder: &'a Path,
+        figures: &'a [Written],
     },
 }
 
@@ -79,34 +81,33 @@ pub fn documents(reported: &Reported) -> [(&'static str, String); 2] {
     [(FILE, markdown), (latex::FILE, tex)]
 }
 
-/// Writes a results folder's [`documents`] into it, each atomically, and returns their
-/// paths. A paper run's are then sealed with its manifest and figures ([`SEAL`]); an
-/// installation study's are recorded in its manifest, which its pipeline writes with
-/// the same [`documents`].
+/// Writes a results folder's [`documents`] into it, each atomically, then seals them
+/// with its manifest and figures ([`SEAL`]), whatever the kind; returns their paths.
 pub fn write(reported: &Reported) -> std::io::Result<[PathBuf; 2]> {
-    let folder = match reported {
-        Reported::Run { run, .. } => &run.folder,
-        Reported::Installation { folder, .. } => *folder,
+    let (folder, figures) = match reported {
+        Reported::Run { run, figures } => (run.folder.as_path(), *figures),
+        Reported::Installation {
+            folder, figures, ..
+        } => (*folder, *figures),
     };
     let [markdown, tex] = documents(reported).map(|(name, text)| (folder.join(name), text));
     for (path, text) in [&markdown, &tex] {
         crate::files::write_atomic(path, text.as_bytes())?;
     }
-    if let Reported::Run { run, figures } = reported {
-        seal(run, figures, [&markdown.0, &tex.0])?;
-    }
+    seal(folder, figures, [&markdown.0, &tex.0])?;
     Ok([markdown.0, tex.0])
 }
 
-/// Writes [`SEAL`]: the SHA-256 of the run's manifest, its reports and every figure.
-fn seal(run: &StoredRun, figures: &[Written], reports: [&PathBuf; 2]) -> std::io::Result<()> {
-    let mut sealed = vec![run.folder.join(crate::results::MANIFEST)];
+/// Writes [`SEAL`] in `folder`: the SHA-256 of its manifest, its reports and every
+/// figure.
+fn seal(folder: &Path, figures: &[Written], reports: [&PathBuf; 2]) -> std::io::Result<()> {
+    let mut sealed = vec![folder.join(crate::results::MANIFEST)];
     sealed.extend(reports.map(PathBuf::clone));
     sealed.extend(figures.iter().flat_map(|f| f.files.iter().cloned()));
     let mut seal = String::new();
     for path in sealed {
         let bytes = std::fs::read(&path)?;
-        let shown = markdown::path_from(&run.folder, &path).unwrap_or(path);
+        let shown = markdown::path_from(folder, &path).unwrap_or(path);
         let _ = writeln!(
             seal,
             "{}  {}",
@@ -114,7 +115,7 @@ fn seal(run: &StoredRun, figures: &[Written], reports: [&PathBuf; 2]) -> std::io
             shown.display()
         );
     }
-    crate::files::write_atomic(&run.folder.join(SEAL), seal.as_bytes())
+    crate::files::write_atomic(&folder.join(SEAL), seal.as_bytes())
 }
 
 /// Whether `folder` holds everything a finished run promises beyond its tables, with

@@ -53,6 +53,9 @@ const PROTOCOL_CODE_VERSION: u32 = 2;
 /// Bumped whenever an installation study's calibration changes its numbers (2: the
 /// Kalman filters' terms against time).
 const INSTALLATION_CODE_VERSION: u32 = 2;
+/// Bumped whenever the tables put together from an installation study's calibrations
+/// change.
+const INSTALLATION_TABLES_CODE_VERSION: u32 = 1;
 /// Bumped whenever the tables put together from the blocks change (2: the bound rows
 /// and the efficiency column; 3: the held-out curves and the calibration time).
 const TABLES_CODE_VERSION: u32 = 3;
@@ -264,6 +267,16 @@ pub fn results_key(spec: &Spec, block_keys: &[&str]) -> String {
         ("results", TABLES_CODE_VERSION),
         spec.resolved_toml(),
         block_keys,
+    ))
+}
+
+/// The key of an installation study's results folder: its resolved spec and the keys
+/// of the calibrations it is put together from (which name its recordings and models).
+pub fn installation_results_key(resolved_toml: &str, calibration_keys: &[&str]) -> String {
+    hash(&(
+        ("installation results", INSTALLATION_TABLES_CODE_VERSION),
+        resolved_toml,
+        calibration_keys,
     ))
 }
 

@@ -1,8 +1,9 @@
 //! A point's results folder: the study put together from its calibrations (the fits
 //! that failed kept beside it, and the residual figure's samples), the resolved spec,
-//! the Parquet tables and both reports, handed to the one writer of results folders
-//! (`results::write_folder`: each file atomically, the manifest last); and whether a
-//! folder already holds the results of a key, intact.
+//! and the Parquet tables, handed to the one writer of results folders
+//! (`results::write_folder`: each file atomically, the manifest last), whose reports
+//! are then written and sealed as a paper run's are; and whether a folder already holds
+//! the results of a key, intact and reported.
 //! In: a point's spec, its calibrations and recordings. Out: the folder, or why not.
 
 use super::ExecuteError;
@@ -45,7 +46,8 @@ pub fn no_window_without_a_fit(
     Ok(())
 }
 
-/// Whether `folder` holds the results of `results_key`, every file intact.
+/// Whether `folder` holds the results of `results_key`, every file intact, and its
+/// reports sealed (`report::is_complete`).
 pub fn is_current(folder: &Path, results_key: &str) -> bool {
     let Ok(bytes) = std::fs::read(folder.join(results::MANIFEST)) else {
         return false;
@@ -53,7 +55,9 @@ pub fn is_current(folder: &Path, results_key: &str) -> bool {
     let Ok(manifest) = serde_json::from_slice::<Manifest>(&bytes) else {
         return false;
     };
-    manifest.results_key == results_key && results::is_intact(folder, &manifest)
+    manifest.results_key == results_key
+        && results::is_intact(folder, &manifest)
+        && crate::report::is_complete(folder)
 }
 
 /// The residual figure's samples: the trajectory (other than the first, which
@@ -120,7 +124,7 @@ pub fn trace(
 }
 
 /// Writes the folder through [`results::write_folder`]: the resolved spec, the
-/// tables, both reports, then the manifest with every file's SHA-256.
+/// tables, then the manifest with every file's SHA-256.
 pub fn write_folder(
     spec: &InstallationSpec,
     folder: &Path,
@@ -134,15 +138,6 @@ pub fn write_folder(
     for (name, bytes) in results::installation::table_bytes(study)? {
         files.push((name.to_string(), bytes));
     }
-    let reported = crate::report::Reported::Installation {
-        study,
-        name: &spec.name,
-        folder,
-    };
-    files.extend(
-        crate::report::documents(&reported)
-            .map(|(name, text)| (name.to_string(), text.into_bytes())),
-    );
     // A study without `[learned]` leaves no fold table of an earlier one behind.
     let folds = folder.join(results::installation::FOLDS);
     if study.folds.is_empty() && folds.exists() {

@@ -10,6 +10,7 @@
 //! In: a point's spec, its segments and its recordings' SHA-256. Out: [`LearnedModels`].
 
 use super::InstallationPlan;
+use crate::files::Seal;
 use crate::installation::learned::{LearnedWindows, training_windows};
 use crate::installation::learned_spec::{LearnedSpec, TrainingSource};
 use crate::installation::network::network_io;
@@ -131,31 +132,54 @@ pub fn train_or_load(
         models.push(store.load_model(&task.blueprint, task.id, task.key)?);
     }
     let to_train: Vec<usize> = (0..keys.len()).filter(|&k| models[k].is_none()).collect();
-    // Source by source, so that the models that train together have sets of a size
-    // (a simulated set is hundreds of times a vehicle's) and end together.
-    let mut sets = crate::first_seen(
-        to_train
-            .iter()
-            .map(|&k| (keys[k].model.fold, keys[k].model.source)),
-    );
-    sets.sort_by_key(|&(fold, source)| (learned.sources.iter().position(|&s| s == source), fold));
-    let sets = sets.into_iter().map(|set| {
-        let mine = to_train.iter().copied();
-        let mine = mine.filter(|&k| (keys[k].model.fold, keys[k].model.source) == set);
-        (set, mine.collect())
-    });
-    for batch in in_batches(sets) {
-        for (k, ended) in train_batch(spec, learned, segments, &batch, &task) {
-            let (stored, _) = ended.map_err(|source| ExecuteError::Training {
-                model: ModelId::from(keys[k].model).to_string(),
-                source,
-            })?;
-            models[k] = Some(*stored);
+    // Each model trained under its claim, as the paper's are: one that another process
+    // sharing OUT is training is waited for and taken from the store.
+    let key = |k: usize| keys[k].key.clone();
+    let label = |k: usize| format!("DCNet {}", ModelId::from(keys[k].model));
+    let settled = |k: usize| store.integrity(task(k).id, task(k).key) == Seal::Intact;
+    crate::pipeline::claimed_then_left(out, &to_train, (key, label, settled), |ids| {
+        for batch in in_batches(sets(learned, keys, ids)) {
+            for (k, ended) in train_batch(spec, learned, segments, &batch, &task) {
+                let (stored, _) = ended.map_err(|source| ExecuteError::Training {
+                    model: ModelId::from(keys[k].model).to_string(),
+                    source,
+                })?;
+                models[k] = Some(*stored);
+            }
+        }
+        Ok(())
+    })?;
+    for k in to_train {
+        if models[k].is_none() {
+            let task = task(k);
+            models[k] = store.load_model(&task.blueprint, task.id, task.key)?;
         }
     }
     let models = keys.iter().cloned().zip(models);
     let models = models.map(|(key, stored)| (key, stored.expect("loaded or trained").model));
     Ok(LearnedModels(models.collect()))
+}
+
+/// The models of `ids` in the sets they train on, source by source, so that the models
+/// that train together have sets of a size (a simulated set is hundreds of times a
+/// vehicle's) and end together.
+fn sets(
+    learned: &LearnedSpec,
+    keys: &[LearnedKey],
+    ids: &[usize],
+) -> Vec<((usize, TrainingSource), Vec<usize>)> {
+    let mut sets = crate::first_seen(
+        ids.iter()
+            .map(|&k| (keys[k].model.fold, keys[k].model.source)),
+    );
+    sets.sort_by_key(|&(fold, source)| (learned.sources.iter().position(|&s| s == source), fold));
+    sets.into_iter()
+        .map(|set| {
+            let mine = ids.iter().copied();
+            let mine = mine.filter(|&k| (keys[k].model.fold, keys[k].model.source) == set);
+            (set, mine.collect())
+        })
+        .collect()
 }
 
 /// Refuses a simulated time offset beyond the reach of the loss: it reads the

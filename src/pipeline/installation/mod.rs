@@ -91,15 +91,13 @@ impl<'a> InstallationPlan<'a> {
                     key: cache::calibration_key(&spec.resolved_toml, &data, &dcnets, calibration),
                 });
             }
-            results_keys.push(sha256_hex(
-                serde_json::to_string(&(
-                    &spec.resolved_toml,
-                    &data,
-                    &dcnets,
-                    env!("DCNET_GIT_COMMIT"),
-                ))
-                .expect("strings serialize")
-                .as_bytes(),
+            let calibrations: Vec<&str> = units[units.len() - spec.trajectories.len()..]
+                .iter()
+                .map(|unit| unit.key.as_str())
+                .collect();
+            results_keys.push(cache::installation_results_key(
+                &spec.resolved_toml,
+                &calibrations,
             ));
             learned_keys.push(point_learned);
         }

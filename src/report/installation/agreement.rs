@@ -5,7 +5,7 @@
 
 use crate::installation::rows::TermRow;
 use crate::report::readable::readable_term;
-use crate::report::section::decimals;
+use crate::report::table::decimals;
 
 /// The z-value of a two-sided 95 % interval: estimates agree across calibration
 /// trajectories when their spread is at most this many times the median bound.

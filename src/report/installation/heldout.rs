@@ -4,7 +4,7 @@
 //! methods and windows the other tables follow.
 
 use crate::installation::rows::{InstallationResults, NO_CALIBRATION, SummaryRow};
-use crate::report::section::{Entry, Section, Table};
+use crate::report::table::{Entry, Section, Table};
 
 /// The methods in the order the study lists them, no calibration first.
 pub(super) fn methods(study: &InstallationResults) -> Vec<&str> {
@@ -74,7 +74,8 @@ pub(super) fn heldout_section(
                 "held-out RMSE (cm/s)".into(),
                 format!("ratio to {NO_CALIBRATION}"),
             ],
-            rows,
+            label_columns: 1,
+            groups: vec![rows],
             notes: Vec::new(),
         },
         paragraph: None,
@@ -107,7 +108,8 @@ pub(super) fn windows_section(
             header: std::iter::once("method".to_string())
                 .chain(windows.iter().map(|&w| format!("w = {}", window_text(w))))
                 .collect(),
-            rows,
+            label_columns: 1,
+            groups: vec![rows],
             notes: Vec::new(),
         },
         paragraph: None,

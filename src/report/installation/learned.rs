@@ -10,7 +10,7 @@ use super::heldout::window_text;
 use crate::installation::learned_spec::LEARNED_LABEL;
 use crate::installation::rows::{FoldSummaryRow, InstallationResults, NO_CALIBRATION, TermRow};
 use crate::report::readable::readable_term;
-use crate::report::section::{Entry, Section, Table};
+use crate::report::table::{Entry, Section, Table};
 
 /// Whether `method` is one of `[learned]`'s.
 pub(super) fn is_learned(method: &str) -> bool {
@@ -74,22 +74,25 @@ fn inside_folds_section(study: &InstallationResults, methods: &[&str], windows: 
         ),
         table: Table {
             header: window_header(windows),
-            rows: methods
-                .iter()
-                .map(|method| {
-                    std::iter::once(Entry::Text(method.to_string()))
-                        .chain(windows.iter().map(|&w| {
-                            fold_entry(study, "all", method, w).map_or(Entry::Missing, |r| {
-                                Entry::RmseRatio {
-                                    mean_cm_s: r.summary.mean_cm_s,
-                                    ci95_cm_s: r.summary.ci95_cm_s,
-                                    ratio: r.summary.ratio,
-                                }
-                            })
-                        }))
-                        .collect()
-                })
-                .collect(),
+            label_columns: 1,
+            groups: vec![
+                methods
+                    .iter()
+                    .map(|method| {
+                        std::iter::once(Entry::Text(method.to_string()))
+                            .chain(windows.iter().map(|&w| {
+                                fold_entry(study, "all", method, w).map_or(Entry::Missing, |r| {
+                                    Entry::RmseRatio {
+                                        mean_cm_s: r.summary.mean_cm_s,
+                                        ci95_cm_s: r.summary.ci95_cm_s,
+                                        ratio: r.summary.ratio,
+                                    }
+                                })
+                            }))
+                            .collect()
+                    })
+                    .collect(),
+            ],
             notes: if methods.iter().any(|m| m.contains("the vehicle")) {
                 vec!["DCNet trained on the vehicle has seen this installation, on the real DVL of the trajectories outside the fold: a prior the DCNet trained on simulation does not have.".into()]
             } else {
@@ -117,21 +120,25 @@ fn fold_by_fold_section(
             header: std::iter::once("method".to_string())
                 .chain(folds.iter().map(|f| format!("fold {f}")))
                 .collect(),
-            rows: methods
-                .iter()
-                .map(|method| {
-                    std::iter::once(Entry::Text(method.to_string()))
-                        .chain(folds.iter().map(|fold| {
-                            fold_entry(study, fold, method, largest).map_or(Entry::Missing, |r| {
-                                Entry::Rmse {
-                                    mean_cm_s: r.summary.mean_cm_s,
-                                    ci95_cm_s: r.summary.ci95_cm_s,
-                                }
-                            })
-                        }))
-                        .collect()
-                })
-                .collect(),
+            label_columns: 1,
+            groups: vec![
+                methods
+                    .iter()
+                    .map(|method| {
+                        std::iter::once(Entry::Text(method.to_string()))
+                            .chain(folds.iter().map(|fold| {
+                                fold_entry(study, fold, method, largest).map_or(
+                                    Entry::Missing,
+                                    |r| Entry::Rmse {
+                                        mean_cm_s: r.summary.mean_cm_s,
+                                        ci95_cm_s: r.summary.ci95_cm_s,
+                                    },
+                                )
+                            }))
+                            .collect()
+                    })
+                    .collect(),
+            ],
             notes: Vec::new(),
         },
         paragraph: None,
@@ -245,7 +252,8 @@ fn paired(study: &InstallationResults, methods: &[&str], windows: &[f64]) -> Opt
         ),
         table: Table {
             header: window_header(windows),
-            rows,
+            label_columns: 1,
+            groups: vec![rows],
             notes: Vec::new(),
         },
         paragraph: None,
@@ -325,7 +333,8 @@ fn term_errors(study: &InstallationResults, methods: &[&str], windows: &[f64]) -
                         .map(|(name, unit, _)| format!("{name} ({unit})")),
                 )
                 .collect(),
-            rows,
+            label_columns: 1,
+            groups: vec![rows],
             notes: Vec::new(),
         },
         paragraph: None,

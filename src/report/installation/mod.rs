@@ -29,7 +29,7 @@ pub use figures::{draw_all, draw_sweep};
 pub(crate) use crate::report::readable::{readable_term, readable_why};
 
 use crate::installation::rows::{InstallationResults, NO_CALIBRATION, TermRow};
-use crate::report::section::{Section, symbols};
+use crate::report::table::{Section, symbols};
 use agreement::agreement;
 use heldout::{heldout_section, methods, windows, windows_section};
 use std::fmt::Write;

@@ -7,7 +7,7 @@
 use super::heldout::window_text;
 use crate::installation::rows::TermRow;
 use crate::report::readable::{readable_term, readable_why};
-use crate::report::section::{Entry, Section, Table};
+use crate::report::table::{Entry, Section, Table};
 
 /// `name (unit)`, or the name alone.
 fn with_unit(term: &str) -> String {
@@ -68,7 +68,8 @@ pub(super) fn terms_section(method: &str, window_s: f64, rows: &[&TermRow]) -> S
             header: std::iter::once("calibration".to_string())
                 .chain(terms.iter().map(|t| with_unit(t)))
                 .collect(),
-            rows: table_rows,
+            label_columns: 1,
+            groups: vec![table_rows],
             notes,
         },
         paragraph: None,

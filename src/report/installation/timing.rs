@@ -4,7 +4,7 @@
 //! rows. Out: a [`Section`], or none when the study has one window only.
 
 use crate::installation::rows::{InstallationResults, InstallationTimeRow};
-use crate::report::section::{Entry, Section, Table};
+use crate::report::table::{Entry, Section, Table};
 
 /// The median of `values`; `None` when there are none.
 fn median(mut values: Vec<f64>) -> Option<f64> {
@@ -73,7 +73,8 @@ pub(super) fn timing_section(
         ),
         table: Table {
             header,
-            rows: table_rows,
+            label_columns: 1,
+            groups: vec![table_rows],
             notes: Vec::new(),
         },
         paragraph: None,

@@ -45,6 +45,19 @@ pub struct Signs {
     pub(crate) plus_minus: &'static str,
 }
 
+impl Tally {
+    /// Of `cells`: those with a published value, and those flagged.
+    pub(crate) fn of<'a>(cells: impl IntoIterator<Item = &'a Cell>) -> Tally {
+        cells.into_iter().filter(|cell| cell.paper.is_some()).fold(
+            Tally::default(),
+            |tally, cell| Tally {
+                compared: tally.compared + 1,
+                flagged: tally.flagged + usize::from(cell.flagged),
+            },
+        )
+    }
+}
+
 impl RmseValue {
     /// `5.93 (100)` with T_conv, `0.86 (+12 %)` with the improvement, `0.17 (94 %)`
     /// with the efficiency, `0.74` alone; `0.09 ± 0.01 (20)` with a confidence interval.
@@ -79,7 +92,6 @@ impl Cell {
         published: Option<&PublishedCell>,
         phase: Phase,
         tolerance_pct: f64,
-        tally: &mut Tally,
     ) -> Cell {
         let paper = published.map(|cell| RmseValue {
             rmse_cm_s: cell.rmse_cm_s,
@@ -99,10 +111,6 @@ impl Cell {
             );
             off || other_t_conv
         });
-        if paper.is_some() {
-            tally.compared += 1;
-            tally.flagged += usize::from(flagged);
-        }
         Cell {
             ours,
             paper,
@@ -192,29 +200,25 @@ mod tests {
 
     #[test]
     fn a_cell_more_than_the_tolerance_off_the_published_value_is_flagged() {
-        let mut tally = Tally::default();
+        let mut cells = Vec::new();
         // 10 % of 1.00 is 0.10: 1.09 is within it, 1.11 beyond, on either side.
         let paper = published(1.0, None, Some(20.0));
-        let cell = |rmse, tally: &mut Tally| {
-            Cell::new(
-                value(rmse, None),
-                Some(&paper),
-                Phase::Evaluation,
-                10.0,
-                tally,
-            )
+        let mut cell = |rmse| {
+            let cell = Cell::new(value(rmse, None), Some(&paper), Phase::Evaluation, 10.0);
+            cells.push(cell.clone());
+            cell
         };
-        assert!(!cell(1.09, &mut tally).flagged);
-        assert!(cell(1.11, &mut tally).flagged);
-        assert!(cell(0.89, &mut tally).flagged);
-        let within = cell(0.91, &mut tally);
+        assert!(!cell(1.09).flagged);
+        assert!(cell(1.11).flagged);
+        assert!(cell(0.89).flagged);
+        let within = cell(0.91);
         assert!(!within.flagged);
         assert_eq!(
             within.paper,
             Some(value(1.0, Some(Detail::Improvement(20.0))))
         );
         assert_eq!(
-            tally,
+            Tally::of(&cells),
             Tally {
                 compared: 4,
                 flagged: 2
@@ -224,14 +228,12 @@ mod tests {
 
     #[test]
     fn another_t_conv_is_flagged_in_calibration_only() {
-        let mut tally = Tally::default();
         let paper = published(5.0, Some(100.0), Some(3.0));
         let same = Cell::new(
             value(5.0, Some(Detail::TConv(100.0))),
             Some(&paper),
             Phase::Calibration,
             10.0,
-            &mut tally,
         );
         assert!(!same.flagged);
         assert_eq!(same.paper, Some(value(5.0, Some(Detail::TConv(100.0)))));
@@ -240,7 +242,6 @@ mod tests {
             Some(&paper),
             Phase::Calibration,
             10.0,
-            &mut tally,
         );
         assert!(other.flagged);
         // A published cell without T_conv leaves the window untested.
@@ -250,12 +251,11 @@ mod tests {
             Some(&untimed),
             Phase::Calibration,
             10.0,
-            &mut tally,
         );
         assert!(!cell.flagged);
         assert_eq!(cell.paper, Some(value(5.0, None)));
         assert_eq!(
-            tally,
+            Tally::of([&same, &other, &cell]),
             Tally {
                 compared: 3,
                 flagged: 1
@@ -265,15 +265,13 @@ mod tests {
 
     #[test]
     fn a_cell_without_a_published_value_is_neither_compared_nor_flagged() {
-        let mut tally = Tally::default();
         let cell = Cell::new(
             value(9.0, Some(Detail::TConv(20.0))),
             None,
             Phase::Calibration,
             10.0,
-            &mut tally,
         );
         assert_eq!(cell, Cell::alone(value(9.0, Some(Detail::TConv(20.0)))));
-        assert_eq!(tally, Tally::default());
+        assert_eq!(Tally::of([&cell]), Tally::default());
     }
 }

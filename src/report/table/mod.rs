@@ -1,112 +1,55 @@
-//! The report's tables as data, built once from a [`StoredRun`] for both renderings
-//! (`report.md` in `markdown`, `report.tex` in `latex`). In: the run's calibration and
-//! evaluation rows and the published values it names. Out: [`ReportTables`], the
-//! paper's two tables in its layout with our value beside the published one in every
-//! cell and cells off by more than the spec's tolerance flagged, then the tables of our
-//! extra estimators and the bound. [`source`] finds each cell's rows; [`cell`] holds a
-//! cell and the rule that flags it.
+//! The one model of a report's tables, for every kind of run and both renderings
+//! (`report.md` in `markdown`, `report.tex` in `latex`). In: the numbers a report picks
+//! from its results. Out: [`Table`]s of [`Entry`]s and the [`Section`]s around them.
+//!
+//! - [`entry`]: one cell, and how each rendering writes it;
+//! - [`cell`]: an RMSE of the paper's layout beside its published value, and the rule
+//!   that flags the two apart;
+//! - [`source`] and [`paper`]: the paper's tables of a run ([`ReportTables`]), each
+//!   cell found once among its rows;
+//! - this module: a table (header, label columns, rows in groups, notes) and a section
+//!   (a table with its title, caption and the paragraph after it).
 
 pub mod cell;
+pub mod entry;
+pub mod paper;
 pub mod source;
 
 pub(crate) use cell::{Cell, Detail, RmseValue, Signs, Tally};
+pub(crate) use entry::{Entry, decimals, symbols};
+pub use paper::ReportTables;
+pub(crate) use paper::replicates_note;
 
-use crate::results::read::StoredRun;
-use crate::vocab::EstimatorKind;
-use source::TableSource;
-
-/// The report's tables, each cell computed once for both renderings.
-pub struct ReportTables {
-    /// Calibration at T_conv: DVL rows with the baseline and DCNet, then least squares
-    /// and the floor.
-    pub(crate) calibration: ReportTable,
-    /// Evaluation with the T_conv terms: DVL × trajectory rows, baseline and DCNet.
-    pub(crate) evaluation: ReportTable,
-    /// The same for the floor and least squares, when the run has either.
-    pub(crate) beyond: Option<ReportTable>,
-    /// The same for the ensemble of DCNet replicates, when the run has several.
-    pub(crate) ensemble: Option<ReportTable>,
-    /// Every estimator against the information bound, when the run has one.
-    pub(crate) efficiency: Option<ReportTable>,
+/// A table: its header, its first columns labels of the rows (set left, the values
+/// right), its rows in groups set apart by a rule, and the notes set under it.
+pub(crate) struct Table {
+    pub(crate) header: Vec<String>,
+    /// How many of the first columns label the rows.
+    pub(crate) label_columns: usize,
+    pub(crate) groups: Vec<Vec<Vec<Entry>>>,
+    pub(crate) notes: Vec<String>,
 }
 
-/// A table of label columns, a first value column and one column per error model, its
-/// rows in one group per DVL.
-pub struct ReportTable {
-    /// Headers of the label columns: "DVL", and "trajectory" in the evaluation.
-    pub(crate) labels: Vec<&'static str>,
-    /// Headers of the value columns.
-    pub(crate) columns: Vec<String>,
-    pub(crate) groups: Vec<Vec<Row>>,
+impl Table {
     /// Its cells compared with a published value, and those flagged.
-    pub(crate) tally: Tally,
-}
-
-pub struct Row {
-    pub(crate) labels: Vec<String>,
-    /// One per value column; `None` where the run has no such value.
-    pub(crate) cells: Vec<Option<Cell>>,
-}
-
-impl ReportTables {
-    /// Every table of `run`'s report.
-    pub(crate) fn of(run: &StoredRun) -> ReportTables {
-        let source = TableSource::of(run);
-        let calibration = source.calibration_table();
-        let evaluation = source.evaluation_table(
-            "Baseline",
-            EstimatorKind::Baseline,
-            EstimatorKind::Dcnet,
-            true,
-        );
-        let beyond = (source.has(EstimatorKind::LeastSquares) || source.has(EstimatorKind::Floor))
-            .then(|| {
-                source.evaluation_table(
-                    "floor (true terms)",
-                    EstimatorKind::Floor,
-                    EstimatorKind::LeastSquares,
-                    false,
-                )
-            });
-        let ensemble = source.has(EstimatorKind::DcnetEnsemble).then(|| {
-            source.evaluation_table(
-                "Baseline",
-                EstimatorKind::Baseline,
-                EstimatorKind::DcnetEnsemble,
-                false,
-            )
-        });
-        let efficiency = source
-            .has(EstimatorKind::Bound)
-            .then(|| source.efficiency_table());
-        ReportTables {
-            calibration,
-            evaluation,
-            beyond,
-            ensemble,
-            efficiency,
-        }
-    }
-
-    /// The cells compared with a published value and those flagged, in every table.
     pub(crate) fn tally(&self) -> Tally {
-        let tables = [&self.calibration, &self.evaluation]
-            .into_iter()
-            .chain(self.beyond.as_ref())
-            .chain(self.ensemble.as_ref())
-            .chain(self.efficiency.as_ref());
-        tables.fold(Tally::default(), |sum, table| Tally {
-            compared: sum.compared + table.tally.compared,
-            flagged: sum.flagged + table.tally.flagged,
-        })
+        Tally::of(
+            self.groups
+                .iter()
+                .flatten()
+                .flatten()
+                .filter_map(|entry| match entry {
+                    Entry::Published(cell) => Some(cell),
+                    _ => None,
+                }),
+        )
     }
 }
 
-/// What a DCNet cell holds when there are several replicates, for the captions.
-pub(crate) fn replicates_note(replicates: usize) -> Option<String> {
-    (replicates > 1).then(|| {
-        format!(
-            "DCNet cells give the mean over {replicates} replicates (models trained from independent seeds) ± the half-width of its 95 % confidence interval across them (Student t); their T_conv is that of the mean curve in calibration, the mean of the replicates' in evaluation."
-        )
-    })
+/// One table of a report's section, with its title, caption and what follows it.
+pub(crate) struct Section {
+    pub(crate) title: String,
+    pub(crate) caption: String,
+    pub(crate) table: Table,
+    pub(crate) paragraph: Option<String>,
 }

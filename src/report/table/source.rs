@@ -1,9 +1,9 @@
 //! Where each cell of the report's tables comes from. In: a [`StoredRun`]. Out: each
-//! [`ReportTable`], its rows in the paper's layout: a DVL's estimators down, error
+//! [`Table`], its rows in the paper's layout: a DVL's estimators down, error
 //! models across, every cell found once among the run's calibration rows at T_conv or
 //! its evaluation rows, and set beside its published value.
 
-use super::{Cell, Detail, ReportTable, RmseValue, Row, Tally};
+use super::{Cell, Detail, Entry, RmseValue, Table};
 use crate::evaluate::{CalibrationRow, EvaluationRow};
 use crate::results::read::StoredRun;
 use crate::spec::published::PublishedCell;
@@ -56,9 +56,13 @@ impl<'a> TableSource<'a> {
             .and_then(|p| p.find(dvl, kind, model, trajectory))
     }
 
-    /// The value columns' headers: `first`, then each error model.
-    fn columns(&self, first: &str) -> Vec<String> {
-        std::iter::once(first.to_string())
+    /// The header of `labels` columns, then the value columns: `first`, then each
+    /// error model.
+    fn header(&self, labels: &[&str], first: &str) -> Vec<String> {
+        labels
+            .iter()
+            .map(ToString::to_string)
+            .chain(std::iter::once(first.to_string()))
             .chain(self.models.iter().map(ToString::to_string))
             .collect()
     }
@@ -71,18 +75,17 @@ impl<'a> TableSource<'a> {
         first: Option<EstimatorKind>,
         per_model: Option<EstimatorKind>,
         mut cell: impl FnMut(EstimatorKind, Option<ErrorModel>) -> Option<Cell>,
-    ) -> Row {
+    ) -> Vec<Entry> {
         let mut cells = vec![first.and_then(|kind| cell(kind, None))];
         for model in &self.models {
             cells.push(per_model.and_then(|kind| cell(kind, Some(*model))));
         }
-        Row { labels, cells }
+        labelled(labels, cells)
     }
 
     /// Calibration, the paper's layout: DVL rows with the baseline and DCNet, then
     /// least squares and the floor.
-    pub(super) fn calibration_table(&self) -> ReportTable {
-        let mut tally = Tally::default();
+    pub(super) fn calibration_table(&self) -> Table {
         let groups = self
             .dvls
             .iter()
@@ -91,17 +94,17 @@ impl<'a> TableSource<'a> {
                     .into_iter()
                     .map(|(label, first, per_model)| {
                         self.row(vec![label], first, per_model, |kind, model| {
-                            self.calibration_cell(dvl, kind, model, &mut tally)
+                            self.calibration_cell(dvl, kind, model)
                         })
                     })
                     .collect()
             })
             .collect();
-        ReportTable {
-            labels: vec!["DVL"],
-            columns: self.columns("Baseline"),
+        Table {
+            header: self.header(&["DVL"], "Baseline"),
+            label_columns: 1,
             groups,
-            tally,
+            notes: Vec::new(),
         }
     }
 
@@ -143,7 +146,7 @@ impl<'a> TableSource<'a> {
     /// efficiency (bound / RMSE) in brackets, calibrating at the estimator's T_conv on
     /// the rest of the calibration trajectory, then on each test trajectory with the
     /// T_conv terms.
-    pub(super) fn efficiency_table(&self) -> ReportTable {
+    pub(super) fn efficiency_table(&self) -> Table {
         let cell = |rmse_cm_s: f64, ci_cm_s: Option<f64>, efficiency: Option<f64>| {
             Cell::alone(RmseValue {
                 rmse_cm_s,
@@ -175,21 +178,22 @@ impl<'a> TableSource<'a> {
                                 .map(|r| cell(r.rmse_cm_s, r.rmse_ci_cm_s, r.efficiency))
                         }));
                         let t_conv = at_t_conv.map_or(String::new(), |r| r.window_s.to_string());
-                        Row {
-                            labels: vec![dvl.clone(), label, t_conv],
-                            cells,
-                        }
+                        labelled(vec![dvl.clone(), label, t_conv], cells)
                     })
                     .collect()
             })
             .collect();
-        ReportTable {
-            labels: vec!["DVL", "estimator", "T_conv s"],
-            columns: std::iter::once(format!("{} rest", self.run.spec.calibration.trajectory))
+        let labels = ["DVL", "estimator", "T_conv s"].map(String::from);
+        let rest = format!("{} rest", self.run.spec.calibration.trajectory);
+        Table {
+            header: labels
+                .into_iter()
+                .chain(std::iter::once(rest))
                 .chain(self.trajectories.iter().cloned())
                 .collect(),
+            label_columns: 3,
             groups,
-            tally: Tally::default(),
+            notes: Vec::new(),
         }
     }
 
@@ -229,7 +233,6 @@ impl<'a> TableSource<'a> {
         dvl: &str,
         kind: EstimatorKind,
         model: Option<ErrorModel>,
-        tally: &mut Tally,
     ) -> Option<Cell> {
         self.at_t_conv(dvl, kind, model).map(|r| {
             let ours = RmseValue {
@@ -238,7 +241,7 @@ impl<'a> TableSource<'a> {
                 detail: Some(Detail::TConv(r.window_s)),
             };
             let paper = self.published(dvl, kind, model, None);
-            Cell::new(ours, paper, Phase::Calibration, self.tolerance, tally)
+            Cell::new(ours, paper, Phase::Calibration, self.tolerance)
         })
     }
 
@@ -251,8 +254,7 @@ impl<'a> TableSource<'a> {
         first: EstimatorKind,
         per_model: EstimatorKind,
         with_paper: bool,
-    ) -> ReportTable {
-        let mut tally = Tally::default();
+    ) -> Table {
         let groups = self
             .dvls
             .iter()
@@ -262,19 +264,17 @@ impl<'a> TableSource<'a> {
                     .map(|trajectory| {
                         let labels = vec![dvl.clone(), trajectory.clone()];
                         self.row(labels, Some(first), Some(per_model), |kind, model| {
-                            self.evaluation_cell(
-                                dvl, trajectory, kind, model, with_paper, &mut tally,
-                            )
+                            self.evaluation_cell(dvl, trajectory, kind, model, with_paper)
                         })
                     })
                     .collect()
             })
             .collect();
-        ReportTable {
-            labels: vec!["DVL", "trajectory"],
-            columns: self.columns(first_label),
+        Table {
+            header: self.header(&["DVL", "trajectory"], first_label),
+            label_columns: 2,
             groups,
-            tally,
+            notes: Vec::new(),
         }
     }
 
@@ -287,7 +287,6 @@ impl<'a> TableSource<'a> {
         kind: EstimatorKind,
         model: Option<ErrorModel>,
         with_paper: bool,
-        tally: &mut Tally,
     ) -> Option<Cell> {
         self.evaluated(dvl, trajectory, kind, model).map(|r| {
             let ours = RmseValue {
@@ -301,14 +300,23 @@ impl<'a> TableSource<'a> {
             let paper = self
                 .published(dvl, kind, model, Some(trajectory))
                 .filter(|_| with_paper);
-            Cell::new(ours, paper, Phase::Evaluation, self.tolerance, tally)
+            Cell::new(ours, paper, Phase::Evaluation, self.tolerance)
         })
     }
 }
 
+/// A row of `labels`, then `cells`, missing where there is none.
+fn labelled(labels: Vec<String>, cells: Vec<Option<Cell>>) -> Vec<Entry> {
+    let labels = labels.into_iter().map(Entry::Text);
+    let cells = cells
+        .into_iter()
+        .map(|cell| cell.map_or(Entry::Missing, Entry::Published));
+    labels.chain(cells).collect()
+}
+
 #[cfg(test)]
 mod tests {
-    use super::super::ReportTables;
+    use super::super::{ReportTables, Tally};
     use super::*;
     use crate::results::Manifest;
     use crate::spec::file::SpecFile;
@@ -441,7 +449,7 @@ mod tests {
         }
     }
 
-    fn texts(table: &ReportTable) -> Vec<Vec<String>> {
+    fn texts(table: &Table) -> Vec<Vec<String>> {
         const SIGNS: super::super::Signs = super::super::Signs {
             percent: " %",
             minus: "-",
@@ -453,12 +461,10 @@ mod tests {
             .iter()
             .flatten()
             .map(|row| {
-                row.labels
-                    .iter()
-                    .cloned()
-                    .chain(row.cells.iter().map(|cell| match cell {
-                        None => "—".into(),
-                        Some(cell) => {
+                row.iter()
+                    .map(|entry| match entry {
+                        Entry::Text(label) => label.clone(),
+                        Entry::Published(cell) => {
                             let paper = cell.paper.as_ref().map(text);
                             format!(
                                 "{}{}{}",
@@ -467,7 +473,8 @@ mod tests {
                                 if cell.flagged { " !" } else { "" }
                             )
                         }
-                    }))
+                        _ => "—".into(),
+                    })
                     .collect()
             })
             .collect()
@@ -477,8 +484,8 @@ mod tests {
     fn the_calibration_table_sets_each_t_conv_cell_beside_the_published_one() {
         let tables = ReportTables::of(&run());
         let table = &tables.calibration;
-        assert_eq!(table.labels, ["DVL"]);
-        assert_eq!(table.columns, ["Baseline", "EM5"]);
+        assert_eq!(table.header[..table.label_columns], ["DVL"]);
+        assert_eq!(table.header[table.label_columns..], ["Baseline", "EM5"]);
         assert_eq!(
             texts(table),
             [
@@ -497,7 +504,7 @@ mod tests {
             ]
         );
         assert_eq!(
-            table.tally,
+            table.tally(),
             Tally {
                 compared: 2,
                 flagged: 1
@@ -509,7 +516,7 @@ mod tests {
     fn the_evaluation_table_flags_an_rmse_beyond_the_tolerance() {
         let tables = ReportTables::of(&run());
         let table = &tables.evaluation;
-        assert_eq!(table.labels, ["DVL", "trajectory"]);
+        assert_eq!(table.header[..table.label_columns], ["DVL", "trajectory"]);
         assert_eq!(
             texts(table),
             [
@@ -532,12 +539,21 @@ mod tests {
         let tables = ReportTables::of(&run());
         // The floor without least squares: the floor's column, no published values.
         let beyond = tables.beyond.as_ref().expect("the run has the floor");
-        assert_eq!(beyond.columns, ["floor (true terms)", "EM5"]);
-        assert_eq!(beyond.tally, Tally::default());
+        assert_eq!(
+            beyond.header[beyond.label_columns..],
+            ["floor (true terms)", "EM5"]
+        );
+        assert_eq!(beyond.tally(), Tally::default());
         assert!(tables.ensemble.is_none());
         let efficiency = tables.efficiency.as_ref().expect("the run has the bound");
-        assert_eq!(efficiency.labels, ["DVL", "estimator", "T_conv s"]);
-        assert_eq!(efficiency.columns, ["SCal rest", "S3"]);
+        assert_eq!(
+            efficiency.header[..efficiency.label_columns],
+            ["DVL", "estimator", "T_conv s"]
+        );
+        assert_eq!(
+            efficiency.header[efficiency.label_columns..],
+            ["SCal rest", "S3"]
+        );
         assert_eq!(
             texts(efficiency),
             [

@@ -1,26 +1,8 @@
-//! Tables of text, for the report sections beyond the paper's two tables: a
-//! [`Section`] is one table with its title, caption, the notes under it and the
-//! paragraph after it; a [`Table`] holds rows of [`Entry`]s, each written by the
-//! Markdown and the LaTeX rendering with its own signs ([`Signs`]). In: the numbers a
-//! report picks from its results. Out: the text of each cell; `markdown::sections` and
-//! `latex::sections` set whole sections.
+//! One cell of a report's tables ([`Entry`]), written by the Markdown and the LaTeX
+//! rendering each with its own signs ([`Signs`]), and the characters LaTeX sets in math
+//! mode. In: a number a report picks from its results. Out: the text of the cell.
 
-use crate::report::table::{RmseValue, Signs};
-
-/// One table of the section, with its title, caption and what follows it.
-pub(crate) struct Section {
-    pub(crate) title: String,
-    pub(crate) caption: String,
-    pub(crate) table: Table,
-    pub(crate) paragraph: Option<String>,
-}
-
-/// A table of text: its header and rows, and the notes set under it.
-pub(crate) struct Table {
-    pub(crate) header: Vec<String>,
-    pub(crate) rows: Vec<Vec<Entry>>,
-    pub(crate) notes: Vec<String>,
-}
+use super::{Cell, RmseValue, Signs};
 
 /// One cell, written by each rendering with its own signs.
 #[derive(Debug, Clone, PartialEq)]
@@ -54,6 +36,8 @@ pub(crate) enum Entry {
         std: f64,
         seen: bool,
     },
+    /// An RMSE of the paper's layout, beside its published value where there is one.
+    Published(Cell),
     Missing,
 }
 
@@ -116,6 +100,7 @@ impl Entry {
                 let unseen = if *seen { "" } else { " (not seen)" };
                 format!("{value}{}{std}{unseen}", signs.plus_minus)
             }
+            Entry::Published(cell) => cell.ours.text(signs),
             Entry::Missing => "—".into(),
         }
     }
