@@ -675,3 +675,96 @@ fn validate_reads_the_recordings_and_calibrate_refuses_what_the_spec_refuses() {
             .contains("--tolerance-pct 0: give a positive percentage")
     );
 }
+
+/// `calibrate` never writes over a file it reads, nor over another recording's results
+/// in the same `--out`: refused before anything is computed, naming both files, the
+/// input untouched. The same recording again writes its files again.
+#[test]
+fn calibrate_never_writes_over_an_input_or_another_recordings_results() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_installed(&d.join("data/syn"), 2, &[], INSTALLED, 3);
+    let trajectory =
+        |n: usize, file: &str| d.join(format!("data/syn/Trajectory{n}/{file}_trajectory{n}.csv"));
+    std::fs::copy(trajectory(1, "DVL"), d.join("dvl.csv")).unwrap();
+    std::fs::copy(trajectory(1, "GT"), d.join("dvl-corrected.csv")).unwrap();
+    let reference = std::fs::read(d.join("dvl-corrected.csv")).unwrap();
+    let refused = dcnet(
+        d,
+        &[
+            "calibrate",
+            "dvl.csv",
+            "--reference",
+            "dvl-corrected.csv",
+            "--out",
+            ".",
+        ],
+    );
+    assert_eq!(refused.status.code(), Some(1), "{}", stderr(&refused));
+    assert!(
+        stderr(&refused).contains("dvl-corrected.csv: calibrate would write over its input"),
+        "{}",
+        stderr(&refused)
+    );
+    assert_eq!(
+        std::fs::read(d.join("dvl-corrected.csv")).unwrap(),
+        reference
+    );
+    // A columns file where the terms against time would go.
+    std::fs::copy(trajectory(1, "GT"), d.join("gt.csv")).unwrap();
+    std::fs::write(d.join("dvl-terms-in-time.parquet"), "[columns]\n").unwrap();
+    let refused = dcnet(
+        d,
+        &[
+            "calibrate",
+            "dvl.csv",
+            "--reference",
+            "gt.csv",
+            "--columns",
+            "dvl-terms-in-time.parquet",
+            "--out",
+            ".",
+        ],
+    );
+    assert_eq!(refused.status.code(), Some(1), "{}", stderr(&refused));
+    assert!(
+        stderr(&refused)
+            .contains("dvl-terms-in-time.parquet: calibrate would write over its input"),
+        "{}",
+        stderr(&refused)
+    );
+
+    // Two dives whose DVL files share a name, into one folder.
+    for (dive, n) in [("dive1", 1), ("dive2", 2)] {
+        std::fs::create_dir_all(d.join(dive)).unwrap();
+        std::fs::copy(trajectory(n, "DVL"), d.join(dive).join("dvl.csv")).unwrap();
+        std::fs::copy(trajectory(n, "GT"), d.join(dive).join("gt.csv")).unwrap();
+    }
+    let calibrate = |dive: &str| {
+        let dvl = format!("{dive}/dvl.csv");
+        let gt = format!("{dive}/gt.csv");
+        dcnet(d, &["calibrate", &dvl, "--reference", &gt, "--out", "both"])
+    };
+    let first = calibrate("dive1");
+    assert!(first.status.success(), "{}", stderr(&first));
+    let written = std::fs::read(d.join("both/dvl-corrected.csv")).unwrap();
+    let second = calibrate("dive2");
+    assert_eq!(second.status.code(), Some(1), "{}", stderr(&second));
+    assert!(
+        stderr(&second)
+            .contains("both/dvl-corrected.parquet: holds the results of another recording")
+            && stderr(&second).contains("which dive2/dvl.csv would replace"),
+        "{}",
+        stderr(&second)
+    );
+    assert_eq!(
+        std::fs::read(d.join("both/dvl-corrected.csv")).unwrap(),
+        written
+    );
+    let again = calibrate("dive1");
+    assert!(again.status.success(), "{}", stderr(&again));
+    assert_eq!(
+        std::fs::read(d.join("both/dvl-corrected.csv")).unwrap(),
+        written
+    );
+}

@@ -8,7 +8,7 @@
 //! [`CalibrateError`] that names the argument, file or step at fault.
 
 use super::ResultsError;
-use super::corrected::{corrected_samples, write, write_terms_in_time};
+use super::corrected::{Outputs, corrected_samples, write, write_terms_in_time};
 use crate::data::paired::{self, PairedColumns, PairedError, PairedFiles, PairedRecording};
 use crate::installation::bound::{Noise, TermBound, bound};
 use crate::installation::filter::{FilterSettings, run_filter};
@@ -73,6 +73,25 @@ pub enum CalibrateError {
         terms: String,
         samples: usize,
         fault: FitError,
+    },
+    /// An output would replace a file `calibrate` reads.
+    #[error(
+        "{}: calibrate would write over its input {}: give another --out, or rename the file",
+        output.display(),
+        input.display()
+    )]
+    OverInput { output: PathBuf, input: PathBuf },
+    /// An output already there holds another recording's results.
+    #[error(
+        "{}: holds the results of another recording (SHA-256 {}…), which {} would replace: give another --out, or remove the file",
+        output.display(),
+        &theirs[..theirs.len().min(12)],
+        dvl.display()
+    )]
+    OtherRecording {
+        output: PathBuf,
+        theirs: String,
+        dvl: PathBuf,
     },
     #[error(transparent)]
     Write(#[from] ResultsError),
@@ -147,7 +166,10 @@ impl Read {
 /// and the recording corrected.
 pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     refused(args)?;
+    let outputs = outputs(args);
+    not_over_an_input(args, &outputs)?;
     let read = read(args)?;
+    let recording_sha256 = not_over_another_recording(args, &outputs)?;
     let terms = term_set(args.terms);
     let fitted = fit_terms(args, &read, terms)?;
     let noise = Noise {
@@ -159,7 +181,8 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     let after = read.score(&fitted.installation);
     let (settings, filter, curve) = settle(&read, terms, noise);
     let settled_s = settling_time(&curve, args.tolerance_pct / 100.0).map(|p| p.length_s);
-    let (corrected, terms_in_time) = write_files(args, &read, &fitted, &filter)?;
+    let (corrected, terms_in_time) =
+        write_files(&outputs, &recording_sha256, &read, &fitted, &filter)?;
     Ok(Calibration {
         fitted,
         bound: bounded,
@@ -199,6 +222,65 @@ fn refused(args: &CalibrateArgs) -> Result<(), CalibrateError> {
         return Err(CalibrateError::Tolerance(args.tolerance_pct));
     }
     Ok(())
+}
+
+/// The files written for `args`, named after the DVL's file.
+fn outputs(args: &CalibrateArgs) -> Outputs {
+    let stem = args
+        .dvl
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "recording".into());
+    Outputs::of(args.out, &stem)
+}
+
+/// Refuses, before anything is read, outputs that would replace an input of `args`.
+fn not_over_an_input(args: &CalibrateArgs, outputs: &Outputs) -> Result<(), CalibrateError> {
+    let inputs = [Some(args.dvl), args.reference, args.columns];
+    // A file's identity: its path with the folder's links resolved.
+    let identity = |path: &Path| -> Option<PathBuf> {
+        let folder = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        Some(std::fs::canonicalize(folder).ok()?.join(path.file_name()?))
+    };
+    for output in outputs.all() {
+        let same = |input: &&&Path| {
+            identity(input).is_some_and(|i| identity(output).is_some_and(|o| o == i))
+                || std::fs::canonicalize(input)
+                    .ok()
+                    .is_some_and(|i| std::fs::canonicalize(output).is_ok_and(|o| o == i))
+        };
+        if let Some(input) = inputs.iter().flatten().find(same) {
+            return Err(CalibrateError::OverInput {
+                output: output.to_path_buf(),
+                input: input.to_path_buf(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Refuses, before anything is computed, outputs already there that hold another
+/// recording's results; the SHA-256 of the DVL file, which the outputs record.
+fn not_over_another_recording(
+    args: &CalibrateArgs,
+    outputs: &Outputs,
+) -> Result<String, CalibrateError> {
+    let bytes = std::fs::read(args.dvl).map_err(|source| ResultsError::Io {
+        path: args.dvl.to_path_buf(),
+        source,
+    })?;
+    let ours = crate::files::sha256_hex(&bytes);
+    match outputs.recording_sha256() {
+        Some((output, theirs)) if theirs != ours => Err(CalibrateError::OtherRecording {
+            output: output.to_path_buf(),
+            theirs,
+            dvl: args.dvl.to_path_buf(),
+        }),
+        _ => Ok(ours),
+    }
 }
 
 /// The columns of `path`'s `[columns]` table, or A-KIT's.
@@ -284,10 +366,12 @@ fn settle(
     (settings, filter, curve)
 }
 
-/// Writes the recording corrected by the fit and the filter's terms against time,
-/// named after the DVL's file; the corrected files' paths, and the terms'.
+/// Writes the recording corrected by the fit and the filter's terms against time into
+/// `outputs`, each recording `recording_sha256`; the corrected files' paths, and the
+/// terms'.
 fn write_files(
-    args: &CalibrateArgs,
+    outputs: &Outputs,
+    recording_sha256: &str,
     read: &Read,
     fitted: &Fit,
     filter: &FilterRun,
@@ -298,13 +382,18 @@ fn write_files(
         &read.recording.dvl_m_s,
         &read.reference,
     );
-    let stem = args
-        .dvl
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "recording".into());
-    let written = write(args.out, &stem, &corrected)?;
-    let terms_in_time = write_terms_in_time(args.out, &stem, &filter.points(&stem))?;
+    let written = write(outputs, &corrected, recording_sha256)?;
+    let stem = outputs
+        .csv
+        .file_name()
+        .map(|name| {
+            name.to_string_lossy()
+                .trim_end_matches("-corrected.csv")
+                .to_string()
+        })
+        .unwrap_or_default();
+    let points = filter.points(&stem);
+    let terms_in_time = write_terms_in_time(outputs, &points, recording_sha256)?;
     Ok((written, terms_in_time))
 }
 

@@ -4,8 +4,10 @@
 //! columns a CSV recording is read from by default ([`crate::VELOCITY_COLUMNS`]), so the
 //! corrected file can be named in a spec as it is.
 //! Beside it, the Kalman filter's terms after every sample of the recording.
+//! Both Parquet files record the SHA-256 of the DVL file they come from, so that a
+//! later `calibrate` into the same folder never replaces another recording's.
 //! In: the corrected samples and the filter's terms. Out: `<stem>-corrected.csv` and
-//! `.parquet`, and `<stem>-terms-in-time.parquet`.
+//! `.parquet`, and `<stem>-terms-in-time.parquet` ([`Outputs`]).
 
 use super::record::{Record, encode};
 use super::{ResultsError, io, write_table};
@@ -14,6 +16,7 @@ use crate::files::write_atomic;
 use crate::installation::frames::Reference;
 use crate::installation::rows::FilterPoint;
 use crate::installation::terms::Installation;
+use arrow_array::RecordBatch;
 use std::path::{Path, PathBuf};
 
 /// One corrected sample.
@@ -79,14 +82,67 @@ pub fn csv_text(samples: &[CorrectedSample]) -> String {
     text
 }
 
-/// Writes `out/<stem>-corrected.csv` and `.parquet`, each atomically; their paths.
+/// The files `calibrate` writes for a DVL file of stem `stem` into `out`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Outputs {
+    pub csv: PathBuf,
+    pub parquet: PathBuf,
+    pub terms_in_time: PathBuf,
+}
+
+/// The key of the Parquet files' metadata that holds the SHA-256 of the DVL file they
+/// were computed from.
+pub const RECORDING_SHA256: &str = "dcnet.recording_sha256";
+
+impl Outputs {
+    pub fn of(out: &Path, stem: &str) -> Outputs {
+        Outputs {
+            csv: out.join(format!("{stem}-corrected.csv")),
+            parquet: out.join(format!("{stem}-corrected.parquet")),
+            terms_in_time: out.join(format!("{stem}-terms-in-time.parquet")),
+        }
+    }
+
+    pub fn all(&self) -> [&Path; 3] {
+        [&self.csv, &self.parquet, &self.terms_in_time]
+    }
+
+    /// The SHA-256 of the recording the Parquet files already there were computed
+    /// from, where one records it.
+    pub fn recording_sha256(&self) -> Option<(&Path, String)> {
+        [&self.parquet, &self.terms_in_time]
+            .into_iter()
+            .find_map(|path| {
+                let file = std::fs::File::open(path).ok()?;
+                let reader =
+                    parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(file)
+                        .ok()?;
+                let sha256 = reader.schema().metadata().get(RECORDING_SHA256)?.clone();
+                Some((path.as_path(), sha256))
+            })
+    }
+}
+
+/// `batch` with the SHA-256 of its recording in its schema's metadata.
+fn of_recording(batch: RecordBatch, recording_sha256: &str) -> RecordBatch {
+    let metadata = arrow_schema::Metadata::default().with(RECORDING_SHA256, recording_sha256);
+    let schema = batch.schema().as_ref().clone().with_metadata(metadata);
+    batch
+        .with_schema(std::sync::Arc::new(schema))
+        .expect("only the metadata changes")
+}
+
+/// Writes the CSV and Parquet files of `outputs`, each atomically, the latter recording
+/// `recording_sha256`; their paths.
 pub fn write(
-    out: &Path,
-    stem: &str,
+    outputs: &Outputs,
     samples: &[CorrectedSample],
+    recording_sha256: &str,
 ) -> Result<Vec<PathBuf>, ResultsError> {
-    crate::files::create_folder(out).map_err(io(out))?;
-    let csv = out.join(format!("{stem}-corrected.csv"));
+    let csv = outputs.csv.clone();
+    if let Some(out) = csv.parent().filter(|p| !p.as_os_str().is_empty()) {
+        crate::files::create_folder(out).map_err(io(out))?;
+    }
     write_atomic(&csv, csv_text(samples).as_bytes()).map_err(io(&csv))?;
     let records: Vec<CorrectedRecord> = samples
         .iter()
@@ -98,22 +154,26 @@ pub fn write(
             vz_m_s: s.velocity_m_s[2],
         })
         .collect();
-    let table = encode(&records);
-    let parquet = out.join(format!("{stem}-corrected.parquet"));
+    let table = of_recording(encode(&records), recording_sha256);
+    let parquet = outputs.parquet.clone();
     write_table(&parquet, &table)?;
     Ok(vec![csv, parquet])
 }
 
-/// Writes the Kalman filter's terms after every sample to
-/// `out/<stem>-terms-in-time.parquet`, the columns of a study's `terms_in_time.parquet`;
+/// Writes the Kalman filter's terms after every sample to the terms file of `outputs`,
+/// the columns of a study's `terms_in_time.parquet`, recording `recording_sha256`;
 /// returns its path.
 pub fn write_terms_in_time(
-    out: &Path,
-    stem: &str,
+    outputs: &Outputs,
     points: &[FilterPoint],
+    recording_sha256: &str,
 ) -> Result<PathBuf, ResultsError> {
-    let path = out.join(format!("{stem}-terms-in-time.parquet"));
-    write_table(&path, &super::installation::filtered_batch(points))?;
+    let path = outputs.terms_in_time.clone();
+    let batch = of_recording(
+        super::installation::filtered_batch(points),
+        recording_sha256,
+    );
+    write_table(&path, &batch)?;
     Ok(path)
 }
 
@@ -136,7 +196,8 @@ mod tests {
             },
         ];
         let folder = tempfile::tempdir().unwrap();
-        let written = write(folder.path(), "dvl", &samples).unwrap();
+        let outputs = Outputs::of(folder.path(), "dvl");
+        let written = write(&outputs, &samples, "ab12").unwrap();
         assert_eq!(written[0], folder.path().join("dvl-corrected.csv"));
         let columns = crate::VELOCITY_COLUMNS.map(String::from);
         let read = crate::data::csv::read_velocities(&written[0], &columns).unwrap();
@@ -146,6 +207,10 @@ mod tests {
             Some("time_s,valid_at_s,vx_m_s,vy_m_s,vz_m_s")
         );
         assert!(written[1].is_file());
+        assert_eq!(
+            outputs.recording_sha256(),
+            Some((outputs.parquet.as_path(), "ab12".to_string()))
+        );
         let names: Vec<String> = crate::results::record::fields::<CorrectedRecord>()
             .iter()
             .map(|f| f.name().clone())
