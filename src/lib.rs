@@ -78,6 +78,23 @@ pub type Vec3 = [f64; 3];
 /// columns read from a `.csv` recording whose spec names none.
 pub const VELOCITY_COLUMNS: [&str; 3] = ["vx_m_s", "vy_m_s", "vz_m_s"];
 
+/// A number as a message shows it: as Rust writes it, but in scientific notation
+/// where that would run to more than 15 digits or start with more than four zeros
+/// (`1e200`, not two hundred digits).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Shown(pub f64);
+
+impl std::fmt::Display for Shown {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let magnitude = self.0.abs();
+        if magnitude == 0.0 || !magnitude.is_finite() || (1e-4..1e15).contains(&magnitude) {
+            write!(f, "{}", self.0)
+        } else {
+            write!(f, "{:e}", self.0)
+        }
+    }
+}
+
 /// The distinct values of `values`, in the order they first appear.
 pub fn first_seen<T: PartialEq>(values: impl IntoIterator<Item = T>) -> Vec<T> {
     let mut seen = Vec::new();

@@ -768,3 +768,44 @@ fn calibrate_never_writes_over_an_input_or_another_recordings_results() {
         written
     );
 }
+
+/// A DVL that reads no motion fits a scale of −100 %, whose correction divides by
+/// zero: refused, exit 1, nothing written, where it once wrote NaN rows with exit 0.
+#[test]
+fn calibrate_refuses_a_dvl_that_reads_no_motion() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_installed(&d.join("data/syn"), 1, &[], INSTALLED, 3);
+    let dvl = d.join("data/syn/Trajectory1/DVL_trajectory1.csv");
+    let text = std::fs::read_to_string(&dvl).unwrap();
+    let zeros: String = text
+        .lines()
+        .enumerate()
+        .map(|(i, line)| match (i, line.split_once(',')) {
+            (0, _) | (_, None) => format!("{line}\n"),
+            (_, Some((time, _))) => format!("{time},0,0,0\n"),
+        })
+        .collect();
+    std::fs::write(d.join("zeros.csv"), zeros).unwrap();
+    let output = dcnet(
+        d,
+        &[
+            "calibrate",
+            "zeros.csv",
+            "--reference",
+            "data/syn/Trajectory1/GT_trajectory1.csv",
+            "--terms",
+            "scale",
+            "--out",
+            "zeros",
+        ],
+    );
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(
+        stderr(&output)
+            .contains("the fitted scale x is -100, beyond the ±50 % any installation is off by"),
+        "{}",
+        stderr(&output)
+    );
+    assert!(!d.join("zeros").exists());
+}

@@ -3,8 +3,10 @@
 //! (optionally its body angular rate), read from one or two CSV files whose columns the
 //! spec names (the A-KIT names by default, [`PairedColumns::akit`]). Every row is
 //! checked: a field that is missing, empty, not a number or not finite (as
-//! [`super::csv`] checks it), time stamps that go back or repeat, attitude out of
-//! range, a DVL and a reference of other lengths or times, fewer than 3 samples: each
+//! [`super::csv`] checks it), time stamps that go back or repeat, roll or pitch out of
+//! range, a velocity beyond a vehicle's, a body rate or an attitude jump beyond a
+//! vehicle's turn, a DVL and a reference of other lengths or times, fewer than 3
+//! samples: each
 //! is an error naming the file, the line (the header is line 1) and the column, and
 //! nothing is returned.
 //! In: the file paths and column names. Out: a [`PairedRecording`], angles in radians.
@@ -23,6 +25,11 @@ pub const MIN_SAMPLES: usize = 3;
 /// bad-velocity marker or another unit, not a vehicle's motion.
 pub const MAX_DVL_SPEED_M_S: f64 = 20.0;
 
+/// The fastest turn read as data, rad/s (115 °/s): a recorded body rate beyond it, or
+/// an attitude that changes faster between two samples, is a glitch or another unit,
+/// not a vehicle's motion.
+pub const MAX_BODY_RATE_RAD_S: f64 = 2.0;
+
 /// How far apart the DVL's and the reference's time stamps of one row may be, seconds.
 pub const TIME_TOLERANCE_S: f64 = 1e-3;
 
@@ -35,7 +42,7 @@ pub struct PairedRecording {
     pub dvl_m_s: Vec<Vec3>,
     /// The reference's velocity, north, east, down, m/s.
     pub velocity_ned_m_s: Vec<Vec3>,
-    /// Roll, pitch, yaw in radians, as recorded (yaw may wrap at ±π).
+    /// Roll, pitch, yaw in radians, as recorded (yaw may wrap at ±π, or run on unwrapped).
     pub attitude_rad: Vec<Vec3>,
     /// The reference's body angular rate (p, q, r) in rad/s, when recorded.
     pub rate_rad_s: Option<Vec<Vec3>>,
@@ -157,14 +164,63 @@ pub enum PairedError {
         previous_s: f64,
     },
     #[error(
-        "{}:{line}: {column}: {value} m/s is beyond {MAX_DVL_SPEED_M_S} m/s, faster than any vehicle a DVL rides: a DVL's bad-velocity marker (Teledyne RDI writes -32.768) or a unit other than m/s; remove the row or mark it in the recording's own way before calibrating",
-        path.display()
+        "{}:{line}: {column}: {} m/s is beyond {MAX_DVL_SPEED_M_S} m/s, faster than any vehicle a DVL rides: a DVL's bad-velocity marker (Teledyne RDI writes -32.768) or a unit other than m/s; remove the row or mark it in the recording's own way before calibrating",
+        path.display(),
+        crate::Shown(*value)
     )]
     DvlOutOfRange {
         path: PathBuf,
         line: u64,
         column: String,
         value: f64,
+    },
+    #[error(
+        "{}:{line}: {column}: {} m/s is beyond {MAX_DVL_SPEED_M_S} m/s, faster than any vehicle a DVL rides: a bad value or a unit other than m/s; remove the row before calibrating",
+        path.display(),
+        crate::Shown(*value)
+    )]
+    ReferenceOutOfRange {
+        path: PathBuf,
+        line: u64,
+        column: String,
+        value: f64,
+    },
+    #[error(
+        "{}:{line}: {column}: {} rad/s is beyond {MAX_BODY_RATE_RAD_S} rad/s, faster than any vehicle a DVL rides turns: a bad value or a unit other than rad/s",
+        path.display(),
+        crate::Shown(*value)
+    )]
+    RateOutOfRange {
+        path: PathBuf,
+        line: u64,
+        column: String,
+        value: f64,
+    },
+    #[error(
+        "{}:{line}: {column}: {} {unit} after {} {unit} on line {previous_line}, {dt_s} s before: a turn of {rate_rad_s:.3} rad/s, beyond the {MAX_BODY_RATE_RAD_S} rad/s any vehicle a DVL rides turns: a glitch in the attitude; remove the row before calibrating{hint}",
+        path.display(),
+        crate::Shown(*value),
+        crate::Shown(*previous),
+        unit = if *.degrees { "deg" } else { "rad" },
+        hint = if !*.degrees
+            && value.abs().max(previous.abs()) > 2.0 * PI
+            && rate_rad_s.to_radians() <= MAX_BODY_RATE_RAD_S
+        {
+            "; if the file's angles are in degrees, set angles_in_degrees = true"
+        } else {
+            ""
+        },
+    )]
+    AttitudeJump {
+        path: PathBuf,
+        line: u64,
+        previous_line: u64,
+        column: String,
+        value: f64,
+        previous: f64,
+        dt_s: f64,
+        rate_rad_s: f64,
+        degrees: bool,
     },
     #[error(
         "{}:{line}: {column}: {value} {unit} is out of range: {angle} lies in [-{limit}, {limit}] {unit}{hint}",
@@ -261,6 +317,7 @@ pub fn read(files: &PairedFiles, columns: &PairedColumns) -> Result<PairedRecord
         check_increasing(&files.reference, &columns.time, &reference)?;
     }
     check_attitude(files, columns, &reference, reference_start + 3)?;
+    check_reference_motion(files, columns, &reference, reference_start)?;
     check_stamps(files, columns, &dvl, &reference)?;
     if dvl.len() < MIN_SAMPLES {
         return Err(PairedError::TooShort {
@@ -421,9 +478,80 @@ fn check_increasing(path: &Path, column: &str, rows: &Rows) -> Result<(), Paired
     Ok(())
 }
 
-/// Roll, pitch and yaw (the three values of each row of `reference` from `start`)
-/// within their ranges: [-π, π], [-π/2, π/2], [-2π, 2π] in radians, or the same in
-/// degrees.
+/// The reference's velocity (its three values of each row from `start`) within
+/// [`MAX_DVL_SPEED_M_S`], its recorded body rate within [`MAX_BODY_RATE_RAD_S`], and
+/// its attitude turning no faster than that between two samples (each angle's change
+/// taken the short way round).
+fn check_reference_motion(
+    files: &PairedFiles,
+    columns: &PairedColumns,
+    reference: &Rows,
+    start: usize,
+) -> Result<(), PairedError> {
+    let path = || files.reference.clone();
+    let to_rad = if columns.angles_in_degrees {
+        1f64.to_radians()
+    } else {
+        1.0
+    };
+    for row in 0..reference.len() {
+        let values = reference.row(row);
+        let line = reference.lines[row];
+        for axis in 0..3 {
+            let value = values[start + axis];
+            if value.abs() > MAX_DVL_SPEED_M_S {
+                let column = columns.velocity_ned[axis].clone();
+                let path = path();
+                return Err(PairedError::ReferenceOutOfRange {
+                    path,
+                    line,
+                    column,
+                    value,
+                });
+            }
+            if let Some(rate) = &columns.rate
+                && (values[start + 6 + axis] * to_rad).abs() > MAX_BODY_RATE_RAD_S
+            {
+                let (column, value) = (rate[axis].clone(), values[start + 6 + axis]);
+                return Err(PairedError::RateOutOfRange {
+                    path: path(),
+                    line,
+                    column,
+                    value,
+                });
+            }
+        }
+        if row == 0 {
+            continue;
+        }
+        let before = reference.row(row - 1);
+        let dt_s = values[0] - before[0];
+        for axis in 0..3 {
+            let (value, previous) = (values[start + 3 + axis], before[start + 3 + axis]);
+            let change = ((value - previous) * to_rad + PI).rem_euclid(2.0 * PI) - PI;
+            let rate_rad_s = change.abs() / dt_s;
+            if rate_rad_s > MAX_BODY_RATE_RAD_S {
+                return Err(PairedError::AttitudeJump {
+                    path: path(),
+                    line,
+                    previous_line: reference.lines[row - 1],
+                    column: columns.attitude[axis].clone(),
+                    value,
+                    previous,
+                    dt_s,
+                    rate_rad_s,
+                    degrees: columns.angles_in_degrees,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Roll and pitch (the first two values of each row of `reference` from `start`)
+/// within their ranges, [-π, π] and [-π/2, π/2] in radians, or the same in degrees; yaw
+/// may run on beyond a turn (an unwrapped heading), its jumps are checked with the
+/// reference's motion.
 fn check_attitude(
     files: &PairedFiles,
     columns: &PairedColumns,
@@ -432,7 +560,7 @@ fn check_attitude(
 ) -> Result<(), PairedError> {
     let degrees = columns.angles_in_degrees;
     for row in 0..reference.len() {
-        let angles = &reference.row(row)[start..start + 3];
+        let angles = &reference.row(row)[start..start + 2];
         for (angle, &value) in angles.iter().enumerate() {
             let bound = if degrees {
                 [180.0, 90.0, 360.0][angle]
@@ -546,11 +674,12 @@ mod tests {
         let mut columns = short_columns();
         columns.rate = Some(["p", "q", "r"].map(String::from));
         columns.angles_in_degrees = true;
+        // Seconds apart, so that no angle turns faster than a vehicle between them.
         let text = "t,u,v,w,n,e,d,roll,pitch,yaw,p,q,r\n\
                     0,1,2,3,4,5,6,180,-90,-360,0,0,90\n\
-                    0.5,1,2,3,4,5,6,0,45,270,0,0,-180\n\
-                    1,1,2,3,4,5,6,0,0,0,0,0,0\n\
-                    1.5,1,2,3,4,5,6,0,0,0,0,0,0\n";
+                    5,1,2,3,4,5,6,0,45,270,0,0,-90\n\
+                    6,1,2,3,4,5,6,0,0,0,0,0,0\n\
+                    7,1,2,3,4,5,6,0,0,0,0,0,0\n";
         let recording = read_one(text, &columns).unwrap();
         assert_eq!(recording.dvl_m_s[0], [1.0, 2.0, 3.0]);
         assert_eq!(recording.velocity_ned_m_s[0], [4.0, 5.0, 6.0]);
@@ -558,13 +687,13 @@ mod tests {
         assert_close(recording.attitude_rad[1], [0.0, PI / 4.0, 1.5 * PI]);
         let rate = recording.rate_rad_s.as_ref().unwrap();
         assert_close(rate[0], [0.0, 0.0, PI / 2.0]);
-        assert_close(rate[1], [0.0, 0.0, -PI]);
-        let first = recording.first_seconds(1.0);
-        assert_eq!(first.time_s, vec![0.0, 0.5]);
+        assert_close(rate[1], [0.0, 0.0, -PI / 2.0]);
+        let first = recording.first_seconds(6.0);
+        assert_eq!(first.time_s, vec![0.0, 5.0]);
         assert_eq!(first.rate_rad_s.as_ref().unwrap().len(), 2);
         assert_eq!(recording.first_seconds(100.0), recording);
         let middle = recording.slice(1..3);
-        assert_eq!(middle.time_s, vec![0.5, 1.0]);
+        assert_eq!(middle.time_s, vec![5.0, 6.0]);
         assert_eq!(middle.attitude_rad[0], recording.attitude_rad[1]);
     }
 
@@ -673,6 +802,47 @@ mod tests {
         );
     }
 
+    /// A velocity, a recorded rate or a turn between two samples beyond a vehicle's is
+    /// refused at its line; a heading that runs on beyond a turn is not.
+    #[test]
+    fn motion_beyond_a_vehicles_is_refused_at_its_line() {
+        let dvl = file(DVL_HEADER, DVL_ROWS, 4);
+        let gt = file(GT_HEADER, GT_ROWS, 4);
+        for (gt, expected) in [
+            (
+                gt.replace(",-2.9,", ",1e200,"),
+                "GT:3: V North [m/s]: 1e200 m/s is beyond 20 m/s, faster than any vehicle a DVL rides: a bad value or a unit other than m/s; remove the row before calibrating",
+            ),
+            (
+                gt.replace(",-2\r\n", ",1\r\n"),
+                "GT:4: Yaw [rad]: 1 rad after -2.5 rad on line 3, 0.5 s before: a turn of 5.566 rad/s, beyond the 2 rad/s any vehicle a DVL rides turns: a glitch in the attitude; remove the row before calibrating",
+            ),
+            (
+                gt.replace(",-2\r\n", ",120\r\n"),
+                "GT:4: Yaw [rad]: 120 rad after -2.5 rad on line 3, 0.5 s before: a turn of 6.239 rad/s, beyond the 2 rad/s any vehicle a DVL rides turns: a glitch in the attitude; remove the row before calibrating; if the file's angles are in degrees, set angles_in_degrees = true",
+            ),
+        ] {
+            assert_eq!(read_two(&dvl, &gt).unwrap_err(), expected);
+        }
+        // Yaw unwrapped beyond 2π, turning at 1 rad/s.
+        let unwrapped = gt
+            .replace(",-3\r\n", ",6\r\n")
+            .replace(",-2.5\r\n", ",6.5\r\n")
+            .replace(",-2\r\n", ",7\r\n")
+            .replace(",-1.5\r\n", ",7.5\r\n");
+        assert!(read_two(&dvl, &unwrapped).is_ok());
+        let mut columns = short_columns();
+        columns.rate = Some(["p", "q", "r"].map(String::from));
+        assert_eq!(
+            read_one(
+                "t,u,v,w,n,e,d,roll,pitch,yaw,p,q,r\n0,1,2,3,4,5,6,0,0,0,0,0,0\n1,1,2,3,4,5,6,0,0,0,0,1e6,0\n2,1,2,3,4,5,6,0,0,0,0,0,0\n",
+                &columns
+            )
+            .unwrap_err(),
+            "FILE:3: q: 1000000 rad/s is beyond 2 rad/s, faster than any vehicle a DVL rides turns: a bad value or a unit other than rad/s"
+        );
+    }
+
     #[test]
     fn attitude_out_of_range_names_the_angle_and_its_range() {
         let dvl = file(DVL_HEADER, DVL_ROWS, 3);
@@ -690,16 +860,6 @@ mod tests {
                 format!(
                     "GT:2: Pitch [rad]: -1.6 rad is out of range: pitch lies in [-π/2, π/2] rad{hint}"
                 ),
-            ),
-            (
-                gt.replace(",-2\r\n", ",6.3\r\n"),
-                format!(
-                    "GT:4: Yaw [rad]: 6.3 rad is out of range: yaw lies in [-2π, 2π] rad{hint}"
-                ),
-            ),
-            (
-                gt.replace(",-2\r\n", ",400\r\n"),
-                "GT:4: Yaw [rad]: 400 rad is out of range: yaw lies in [-2π, 2π] rad".to_string(),
             ),
         ] {
             assert_eq!(read_two(&dvl, &gt).unwrap_err(), expected);

@@ -77,6 +77,71 @@ pub enum FitError {
          outside what the window can show"
     )]
     TimeOffsetBeyondMargin { time_offset_s: f64, margin_s: f64 },
+    /// A term fitted beyond what any DVL installation is off by: the recording does not
+    /// show the installation (a DVL that reads no motion fits a scale of −100 %).
+    #[error(
+        "the fitted {term} is {value}, beyond the {limit} any installation is off by: the recording does not show it{}",
+        if term.starts_with("scale") { " (a DVL that reads no motion, all zeros, fits a scale of -100 %)" } else { "" }
+    )]
+    Unphysical {
+        term: String,
+        /// With its unit.
+        value: String,
+        limit: String,
+    },
+}
+
+impl FitError {
+    /// What to try instead, for a fit that failed on a window too short or terms it
+    /// cannot tell apart; none where the recording itself is at fault.
+    pub fn advice(&self) -> &'static str {
+        match self {
+            FitError::Unphysical { .. } => "",
+            _ => {
+                "; a window too short for its terms, or terms it cannot tell apart (a scale and a bias at constant speed, say), fail this way: give a longer --window-s or fewer --terms"
+            }
+        }
+    }
+}
+
+/// The largest scale error a fit may find, as a fraction: beyond it, a DVL does not
+/// measure the motion it rides.
+pub const MAX_SCALE: f64 = 0.5;
+
+/// The largest lever arm a fit may find, per axis, m.
+pub const MAX_LEVER_ARM_M: f64 = 100.0;
+
+/// The first term of `installation` beyond what an installation is off by, or not
+/// finite.
+fn unphysical(installation: &Installation) -> Option<FitError> {
+    let axes = ["x", "y", "z"];
+    for k in 0..3 {
+        let scale = installation.scale[k];
+        if !(scale.abs() < MAX_SCALE) {
+            return Some(FitError::Unphysical {
+                term: format!("scale {}", axes[k]),
+                value: format!("{} %", crate::Shown(100.0 * scale)),
+                limit: format!("±{} %", 100.0 * MAX_SCALE),
+            });
+        }
+        let lever = installation.lever_arm_m[k];
+        if !(lever.abs() <= MAX_LEVER_ARM_M) {
+            return Some(FitError::Unphysical {
+                term: format!("lever arm {}", axes[k]),
+                value: format!("{} m", crate::Shown(lever)),
+                limit: format!("±{MAX_LEVER_ARM_M} m"),
+            });
+        }
+        let other = [installation.misalignment_rad[k], installation.bias_m_s[k]];
+        if other.iter().any(|v| !v.is_finite()) {
+            return Some(FitError::Unphysical {
+                term: format!("misalignment or bias {}", axes[k]),
+                value: "not a number".into(),
+                limit: "finite value".into(),
+            });
+        }
+    }
+    None
 }
 
 /// The reference at `time_s`, held at its ends when a τ reaches beyond them (LM's
@@ -256,6 +321,9 @@ pub fn fit(
             time_offset_s: installation.time_offset_s,
             margin_s: TIME_OFFSET_MARGIN_S,
         });
+    }
+    if let Some(fault) = unphysical(&installation) {
+        return Err(fault);
     }
     let sample_count = mask.len();
     Ok(Fit {

@@ -64,8 +64,9 @@ pub enum CalibrateError {
     /// The fit failed; its fault is kept, and shown inside the message (not as a source,
     /// which would print it twice).
     #[error(
-        "{}: calibrating {terms} on {samples} samples: {fault}; a window too short for its terms, or terms it cannot tell apart (a scale and a bias at constant speed, say), fail this way: give a longer --window-s or fewer --terms",
-        dvl.display()
+        "{}: calibrating {terms} on {samples} samples: {fault}{}",
+        dvl.display(),
+        fault.advice()
     )]
     Fit {
         dvl: PathBuf,
