@@ -2,10 +2,12 @@
 //! ([`InstallationKalmanFile`]) and the names of `[[calibration.models]]`. Out: the
 //! extended Kalman filter's [`FilterSettings`] in stored units (fractions, radians,
 //! m/s): the models it names defined and listed once, every prior above zero, every
-//! random walk zero or more.
+//! random walk zero or more, and none beyond what an installation is off by.
 
+use crate::data::paired::MAX_DVL_SPEED_M_S;
 use crate::installation::filter::FilterSettings;
 use crate::installation::filter_spec::InstallationKalmanFile;
+use crate::installation::fit::{MAX_LEVER_ARM_M, MAX_SCALE, TIME_OFFSET_MARGIN_S};
 use crate::installation::terms::PerKind;
 use crate::spec::check::Faults;
 
@@ -42,7 +44,9 @@ pub(in crate::installation::spec) fn check_kalman(
             );
         }
     }
-    let mut value = |key: &str, value: f64, zero_allowed: bool| {
+    // A prior or a random walk beyond what an installation is off by says nothing the
+    // filter can use, and a huge one overflows its covariance.
+    let mut value = |key: &str, value: f64, zero_allowed: bool, (most, what): (f64, &str)| {
         if !value.is_finite() || value < 0.0 || (value == 0.0 && !zero_allowed) {
             let rule = if zero_allowed {
                 "zero or more"
@@ -51,24 +55,50 @@ pub(in crate::installation::spec) fn check_kalman(
             };
             faults.add(
                 format!("calibration.kalman.{key}"),
-                format!("{value} must be finite and {rule}"),
+                format!("{} must be finite and {rule}", crate::Shown(value)),
+            );
+        } else if value > most {
+            faults.add(
+                format!("calibration.kalman.{key}"),
+                format!(
+                    "{} is beyond {most}, {what}: the filter's covariance would overflow or say nothing",
+                    crate::Shown(value)
+                ),
             );
         }
         value
     };
+    let scale_pct = (100.0 * MAX_SCALE, "the largest scale error a DVL has");
+    let bias_cm_s = (100.0 * MAX_DVL_SPEED_M_S, "a vehicle's top speed");
     let prior = PerKind {
-        scale: value("prior_scale_pct", prior_scale_pct, false) / 100.0,
-        misalignment_rad: value("prior_misalignment_deg", prior_misalignment_deg, false)
-            .to_radians(),
-        lever_arm_m: value("prior_lever_arm_m", prior_lever_arm_m, false),
-        time_offset_s: value("prior_time_offset_s", prior_time_offset_s, false),
-        bias_m_s: value("prior_bias_cm_s", prior_bias_cm_s, false) / 100.0,
+        scale: value("prior_scale_pct", prior_scale_pct, false, scale_pct) / 100.0,
+        misalignment_rad: value(
+            "prior_misalignment_deg",
+            prior_misalignment_deg,
+            false,
+            (180.0, "half a turn"),
+        )
+        .to_radians(),
+        lever_arm_m: value(
+            "prior_lever_arm_m",
+            prior_lever_arm_m,
+            false,
+            (MAX_LEVER_ARM_M, "the largest lever arm a fit may find"),
+        ),
+        time_offset_s: value(
+            "prior_time_offset_s",
+            prior_time_offset_s,
+            false,
+            (TIME_OFFSET_MARGIN_S, "the time offsets a fit scans"),
+        ),
+        bias_m_s: value("prior_bias_cm_s", prior_bias_cm_s, false, bias_cm_s) / 100.0,
     };
     let random_walk = PerKind {
         scale: value(
             "scale_random_walk_pct_per_sqrt_s",
             scale_random_walk_pct_per_sqrt_s,
             true,
+            scale_pct,
         ) / 100.0,
         misalignment_rad: 0.0,
         lever_arm_m: 0.0,
@@ -77,6 +107,7 @@ pub(in crate::installation::spec) fn check_kalman(
             "bias_random_walk_cm_s_per_sqrt_s",
             bias_random_walk_cm_s_per_sqrt_s,
             true,
+            bias_cm_s,
         ) / 100.0,
     };
     FilterSettings { prior, random_walk }
@@ -112,6 +143,31 @@ mod tests {
         assert_eq!(prior.bias_m_s, 0.1);
         assert_eq!(settings.random_walk.scale, 0.0);
         assert_eq!(settings.random_walk.bias_m_s, 0.0);
+    }
+
+    /// A prior or a random walk of 1e300 overflowed the filter's covariance and every
+    /// Kalman row then read as no calibration, exit 0: refused at its key.
+    #[test]
+    fn a_prior_or_random_walk_beyond_an_installation_is_refused() {
+        let kalman = InstallationKalmanFile {
+            prior_lever_arm_m: 1e300,
+            bias_random_walk_cm_s_per_sqrt_s: 1e300,
+            ..InstallationKalmanFile::default()
+        };
+        let mut faults = Faults::default();
+        check_kalman(kalman, &[], &mut faults);
+        let expected = [
+            (
+                "calibration.kalman.prior_lever_arm_m",
+                "1e300 is beyond 100, the largest lever arm a fit may find: the filter's covariance would overflow or say nothing",
+            ),
+            (
+                "calibration.kalman.bias_random_walk_cm_s_per_sqrt_s",
+                "1e300 is beyond 2000, a vehicle's top speed: the filter's covariance would overflow or say nothing",
+            ),
+        ]
+        .map(|(key, message)| (key.to_string(), message.to_string()));
+        assert_eq!(faults.0, expected);
     }
 
     /// A model named twice, one not defined, a zero prior and a negative random walk:
