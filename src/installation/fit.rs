@@ -31,6 +31,11 @@ pub const TIME_OFFSET_SCAN_STEP_S: f64 = 0.25;
 /// Half the step of the central difference that gives the reference's slope, s.
 pub const SLOPE_STEP_S: f64 = 1e-4;
 
+/// The most samples the scan over τ fits at each of its steps: a longer recording is
+/// scanned on every few of its samples, evenly spread (36,000 is ten hours at 1 Hz, six
+/// minutes at 100 Hz).
+const SCAN_SAMPLES: usize = 36_000;
+
 /// LM's patience: it gives up after this many times (parameters + 1) evaluations. A
 /// pair of terms a window hardly tells apart (a scale and a bias at constant speed)
 /// makes a long, flat valley, which LM's default of 100 does not always cross.
@@ -309,7 +314,28 @@ pub fn fit(
     let (solved, termination) = if parameter_count == 0 {
         (problem(terms, Installation::default()), "none".to_string())
     } else if terms.time_offset {
-        let start = scan_time_offset(&problem, terms)?;
+        // The scan only finds LM's start: on a long recording, every few samples of it
+        // (at most SCAN_SAMPLES), so that its steps cost no more than a short one's.
+        let stride = mask.len().div_ceil(SCAN_SAMPLES);
+        let scan_time_s: Vec<f64> = time_s[mask.clone()]
+            .iter()
+            .copied()
+            .step_by(stride)
+            .collect();
+        let scan_dvl_m_s: Vec<Vec3> = dvl_m_s[mask.clone()]
+            .iter()
+            .copied()
+            .step_by(stride)
+            .collect();
+        let scanned = |terms: TermSet, base: Installation| Problem {
+            time_s: &scan_time_s,
+            dvl_m_s: &scan_dvl_m_s,
+            reference,
+            terms,
+            base,
+            parameters: DVector::from_vec(base.to_parameters(&terms)),
+        };
+        let start = scan_time_offset(&scanned, terms)?;
         minimize(problem(terms, start))?
     } else {
         minimize(problem(terms, Installation::default()))?

@@ -1,6 +1,8 @@
 //! How long one recording needs to calibrate, the question an operator with a single
 //! recording asks: the installation's Kalman filter runs over it, and the terms it holds
-//! after each whole second are scored on every sample of the recording. The settling
+//! after each whole second (at most [`MAX_LENGTHS`] of them, spread in ratio over a long
+//! recording, so the cost stays linear in its length) are scored on every sample of the
+//! recording. The settling
 //! time is the shortest length after which that score stays within a tolerance of its
 //! value after the last sample, the rule of a study's calibration time; it is scored on
 //! the recording that calibrates, since there is no other. In: the filter's steps and
@@ -19,10 +21,33 @@ pub struct SettlingPoint {
     pub rmse_cm_s: f64,
 }
 
-/// The filter's state after 1, 2, 3, … s of the recording, up to the length that holds
-/// every step, each with `score_cm_s` of its terms (NaN where there is no score). A
-/// length holds the steps whose time from the first sample is below it, as a study's
-/// window of that length does.
+/// The most lengths a curve scores. Each is scored on every sample, so a curve costs
+/// at most this many scorings of the recording: linear in its length.
+pub const MAX_LENGTHS: usize = 400;
+
+/// The lengths a curve scores, whole seconds up to `longest`: every one where there are
+/// at most [`MAX_LENGTHS`], or else that many spread evenly in ratio from 1 s to
+/// `longest` (each a fixed fraction longer than the one before, as a settling time is
+/// read), the longest always among them.
+pub fn curve_lengths(longest: usize) -> Vec<usize> {
+    if longest <= MAX_LENGTHS {
+        return (1..=longest).collect();
+    }
+    let step = (longest as f64).ln() / (MAX_LENGTHS - 1) as f64;
+    let mut lengths: Vec<usize> = (0..MAX_LENGTHS)
+        .map(|i| ((i as f64 * step).exp().round() as usize).clamp(1, longest))
+        .collect();
+    lengths.dedup();
+    if lengths.last() != Some(&longest) {
+        lengths.push(longest);
+    }
+    lengths
+}
+
+/// The filter's state after 1, 2, 3, … s of the recording ([`curve_lengths`]), up to
+/// the length that holds every step, each with `score_cm_s` of its terms (NaN where
+/// there is no score). A length holds the steps whose time from the first sample is
+/// below it, as a study's window of that length does.
 pub fn settling_curve(
     steps: &[FilterStep],
     score_cm_s: impl Fn(&Installation) -> f64,
@@ -32,7 +57,8 @@ pub fn settling_curve(
     };
     let longest = last.time_s.floor() as usize + 1;
     let mut taken = 0;
-    (1..=longest)
+    curve_lengths(longest)
+        .into_iter()
         .filter_map(|seconds| {
             let length_s = seconds as f64;
             taken += steps[taken..]
@@ -66,6 +92,30 @@ mod tests {
     use crate::installation::fit::{TIME_OFFSET_MARGIN_S, fit};
     use crate::installation::term_names::{TermName, term_set};
     use crate::installation::terms::score;
+
+    /// A ten-hour recording at 1 Hz is scored at most [`MAX_LENGTHS`] times, where it
+    /// was once scored after every second (36,000 times its 36,000 samples); a short
+    /// one after every second still.
+    #[test]
+    fn a_long_recording_is_scored_a_bounded_number_of_times() {
+        let steps: Vec<FilterStep> = (0..36_000).map(|i| step(i as f64, 0.0)).collect();
+        let scorings = std::cell::Cell::new(0);
+        let curve = settling_curve(&steps, |_| {
+            scorings.set(scorings.get() + 1);
+            1.0
+        });
+        assert!(scorings.get() <= MAX_LENGTHS, "{}", scorings.get());
+        assert_eq!(scorings.get(), curve.len());
+        assert_eq!(curve.last().unwrap().length_s, 36_000.0);
+        let lengths: Vec<f64> = curve.iter().map(|p| p.length_s).collect();
+        assert!(lengths.windows(2).all(|w| w[0] < w[1]));
+        // Each length at most 3 % and a second longer than the one before.
+        assert!(
+            lengths.windows(2).all(|w| w[1] <= w[0] * 1.03 + 1.0),
+            "{lengths:?}"
+        );
+        assert_eq!(curve_lengths(400), (1..=400).collect::<Vec<_>>());
+    }
 
     fn step(time_s: f64, lever_x: f64) -> FilterStep {
         let mut installation = Installation::default();

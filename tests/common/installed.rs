@@ -97,6 +97,18 @@ pub fn write_installed(
     installed: Installed,
     seed: u64,
 ) {
+    write_installed_sampled(folder, count, straight, installed, seed, (400, 1.0));
+}
+
+/// [`write_installed`] with `(rows, step_s)`: that many samples, that far apart.
+pub fn write_installed_sampled(
+    folder: &Path,
+    count: usize,
+    straight: &[usize],
+    installed: Installed,
+    seed: u64,
+    (rows, step_s): (usize, f64),
+) {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let noise = Normal::new(0.0, installed.noise_m_s).unwrap();
     for n in 1..=count {
@@ -107,8 +119,8 @@ pub fn write_installed(
         let mut reference = String::from(
             "Time [s],Longitude [rad],Latitude [rad],Altitude [m],V North [m/s],V East [m/s],V Down [m/s],Roll [rad],Pitch [rad],Yaw [rad]\n",
         );
-        for i in 0..400 {
-            let t = i as f64;
+        for i in 0..rows {
+            let t = i as f64 * step_s;
             let (angles, _) = attitude(t, n, turning);
             let c = body_to_ned(angles);
             let v_b = body_velocity(t, n);
