@@ -10,6 +10,7 @@
 use crate::dataset::{DatasetSize, TrainingSet};
 use crate::evaluate::RunRow;
 use crate::evaluate::calibration_time::curve_lengths;
+use crate::installation::spec::InstallationSpec;
 use crate::model::layer_shapes;
 use crate::spec::{Origin, Spec};
 use crate::vocab::{ErrorModel, EstimatorKind};
@@ -99,6 +100,68 @@ pub fn machine_memory() -> u64 {
     system
         .cgroup_limits()
         .map_or(total, |limits| total.min(limits.total_memory))
+}
+
+/// The memory of an installation study's `[learned]` training at its peak, for
+/// trajectories of `lengths` samples with `threads` models training side by side: the
+/// installations of its simulated grid, and the windows of the sets that train together
+/// (each counted as every trajectory's windows under every installation, an upper bound
+/// since a fold's set leaves its own trajectories out, and twice, while a set is put
+/// together from its parts). `None` without `[learned]`.
+pub fn learned(spec: &InstallationSpec, lengths: &[usize], threads: usize) -> Option<Footprint> {
+    use crate::installation::learned_spec::TrainingSource;
+    use crate::installation::simulate::{INPUT_ROWS, REFERENCE_MARGIN, TARGET_ROWS};
+    let learned = spec.learned.as_ref()?;
+    let grid = &learned.simulation;
+    let lists = [
+        ("lever_arm_x_m", grid.lever_arm_x_m.len()),
+        ("lever_arm_y_m", grid.lever_arm_y_m.len()),
+        ("lever_arm_z_m", grid.lever_arm_z_m.len()),
+        ("time_offset_s", grid.time_offset_s.len()),
+        ("misalignment_z_deg", grid.misalignment_z_deg.len()),
+        ("scale_pct", grid.scale_pct.len()),
+        ("bias_cm_s", grid.bias_cm_s.len()),
+    ];
+    let installations: f64 = lists.iter().map(|&(_, n)| n as f64).product();
+    let longest_list = lists.iter().max_by_key(|&&(_, n)| n).expect("lists").0;
+    let key = format!("learned.simulation.{longest_list}");
+    let (window, stride) = (learned.window_samples, learned.stride_samples.max(1));
+    let span = window + 2 * REFERENCE_MARGIN;
+    let windows: f64 = lengths
+        .iter()
+        .map(|&len| {
+            if len < span {
+                0.0
+            } else {
+                ((len - span) / stride + 1) as f64
+            }
+        })
+        .sum();
+    let window_bytes = FLOAT_BYTES * (INPUT_ROWS * window + TARGET_ROWS * span) as f64
+        + (std::mem::size_of::<String>() + std::mem::size_of::<usize>() + 1) as f64
+        + ROW_NAME_BYTES;
+    let simulated = learned.sources.contains(&TrainingSource::Simulated);
+    let per_set = if simulated { installations } else { 1.0 };
+    let replicates = learned.training.replicates.max(1);
+    let sets_together = threads.div_ceil(replicates).clamp(1, learned.folds.max(1)) as f64;
+    let mut parts = vec![Part {
+        what: "training windows of the sets that train together",
+        bytes: 2.0 * sets_together * per_set * windows * window_bytes,
+        key: if simulated {
+            key.clone()
+        } else {
+            "learned.stride_samples".into()
+        },
+    }];
+    if simulated {
+        parts.push(Part {
+            what: "simulated installations",
+            bytes: installations
+                * std::mem::size_of::<crate::installation::terms::Installation>() as f64,
+            key,
+        });
+    }
+    Some(Footprint { parts })
 }
 
 /// The recorded velocities and their ground truth, for every trajectory.

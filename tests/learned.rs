@@ -511,3 +511,55 @@ fn a_learned_model_another_process_holds_is_waited_for_then_trained() {
     );
     assert_eq!(learned_weights(&d.join("results")).len(), 4);
 }
+
+/// A simulated grid too large for memory aborted `run` with a failed allocation where
+/// `validate` said ok: both refuse it at its key, saying how much it needs, and
+/// `validate` says what a grid that fits needs.
+#[test]
+fn a_learned_grid_beyond_memory_is_refused_by_validate_and_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    learned_spec(d, "");
+    let spec = "experiments/syn.toml";
+    let fits = dcnet(d, &["validate", spec]);
+    assert!(fits.status.success(), "{}", stderr(&fits));
+    assert!(
+        stdout(&fits).contains("[learned] training needs at most about "),
+        "{}",
+        stdout(&fits)
+    );
+    let values: Vec<String> = (0..40).map(|i| format!("{:.1}", 0.1 * i as f64)).collect();
+    let list = format!("[{}]", values.join(", "));
+    let keys = [
+        "lever_arm_x_m",
+        "lever_arm_y_m",
+        "lever_arm_z_m",
+        "time_offset_s",
+        "misalignment_z_deg",
+        "scale_pct",
+        "bias_cm_s",
+    ];
+    let sets: Vec<String> = keys
+        .iter()
+        .map(|key| format!("learned.simulation.{key}={list}"))
+        .collect();
+    for command in ["validate", "run"] {
+        let mut args = vec![command, spec];
+        for set in &sets {
+            args.extend(["--set", set.as_str()]);
+        }
+        let output = dcnet(d, &args);
+        assert_eq!(
+            output.status.code(),
+            Some(1),
+            "{command}: {}",
+            stderr(&output)
+        );
+        let text = stderr(&output);
+        assert!(
+            text.contains("learned.simulation.") && text.contains("of memory and this machine has"),
+            "{command}: {text}"
+        );
+    }
+    assert!(!d.join("results/syn").exists());
+}

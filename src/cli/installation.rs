@@ -38,6 +38,14 @@ fn load_target(target: &Target) -> Result<Experiment<InstallationSpec>, CliError
 pub(super) fn run(target: &Target, drawing: &Drawing, mode: Mode) -> Result<(), CliError> {
     let experiment = load_target(target)?;
     let plan = InstallationPlan::new(&experiment, &target.spec, &target.out).map_err(input)?;
+    let lengths = (0..experiment.points.len()).map(|p| {
+        let segments = &plan.inputs.points[p].segments;
+        segments
+            .iter()
+            .map(|&s| plan.inputs.segments[s].recording.time_s.len())
+            .collect()
+    });
+    learned_memory(&experiment, lengths.collect())?;
     let Mode::Shard { shard, .. } = mode else {
         let executed = execute(&Planned::Installation(&plan), mode).map_err(input)?;
         return finish(&plan, &executed, drawing);
@@ -274,18 +282,58 @@ fn draw_sweep(
     Ok(())
 }
 
+/// The memory of the largest point's `[learned]` training, whose trajectories are
+/// `lengths` samples long; bad input, placed at the key of its largest part, where it
+/// is beyond this machine's.
+fn learned_memory(
+    experiment: &Experiment<InstallationSpec>,
+    lengths: Vec<Vec<usize>>,
+) -> Result<Option<crate::footprint::Bytes>, CliError> {
+    let memory = crate::footprint::machine_memory();
+    let threads = rayon::current_num_threads();
+    let mut largest: Option<f64> = None;
+    for (point, lengths) in experiment.points.iter().zip(lengths) {
+        let Some(footprint) = crate::footprint::learned(&point.spec, &lengths, threads) else {
+            continue;
+        };
+        if let Some((key, message)) = footprint.refusal(memory) {
+            let message = match experiment.is_sweep() {
+                true => format!("point {}: {message}", point.spec.name),
+                false => message,
+            };
+            let fault = experiment.fault(&key, message);
+            return Err(input(crate::spec::SpecErrors::from(fault)));
+        }
+        largest = Some(largest.unwrap_or(0.0).max(footprint.bytes()));
+    }
+    Ok(largest.map(crate::footprint::Bytes))
+}
+
 /// `validate` of an installation spec: its faults (its recordings read and checked),
 /// or what it would compute.
 pub(super) fn validate(path: &Path, set: &[String]) -> Result<(), CliError> {
     let experiment = load(path, set)?;
-    let mut read = std::collections::HashSet::new();
+    let mut read = std::collections::HashMap::new();
+    let mut lengths = Vec::new();
     for point in &experiment.points {
         let spec = &point.spec;
+        let mut point_lengths = Vec::new();
         for (_, files) in &spec.trajectories {
-            if read.insert((files.clone(), format!("{:?}", spec.columns))) {
-                paired::read(files, &spec.columns).map_err(input)?;
-            }
+            let key = (files.clone(), format!("{:?}", spec.columns));
+            let length = match read.get(&key) {
+                Some(&length) => length,
+                None => {
+                    let recording = paired::read(files, &spec.columns).map_err(input)?;
+                    read.insert(key, recording.time_s.len());
+                    recording.time_s.len()
+                }
+            };
+            point_lengths.push(length);
         }
+        lengths.push(point_lengths);
+    }
+    if let Some(memory) = learned_memory(&experiment, lengths)? {
+        println!("[learned] training needs at most about {memory} of memory at its peak");
     }
     let spec = &experiment.points[0].spec;
     let points = match experiment.points.len() {
