@@ -809,3 +809,80 @@ fn calibrate_refuses_a_dvl_that_reads_no_motion() {
     );
     assert!(!d.join("zeros").exists());
 }
+
+/// Input that once ran to a poor answer: a column named for two quantities, one
+/// recording listed twice, a device as a recording, a tolerance of 1e308 % and a
+/// negative noise (which clap took for a flag). Each is refused, exit 1, naming its
+/// key or flag.
+#[test]
+fn doubtful_input_is_refused_naming_its_key_or_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_installed(&d.join("data/syn"), 2, &[], INSTALLED, 6);
+    let columns = "[recordings.columns]\ntime = \"Time [s]\"\ndvl = [\"DVL X [m/s]\", \"DVL Y [m/s]\", \"DVL Z [m/s]\"]\nvelocity_ned = [\"V North [m/s]\", \"V North [m/s]\", \"V Down [m/s]\"]\nattitude = [\"Roll [rad]\", \"Pitch [rad]\", \"Yaw [rad]\"]\n";
+    write_spec(d, "syn", "syn", 2, columns);
+    let output = dcnet(d, &["validate", "experiments/syn.toml"]);
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("recordings.columns.velocity_ned[1]: \"V North [m/s]\" is named for another quantity too"),
+        "{}",
+        stderr(&output)
+    );
+    let spec = d.join("experiments/syn.toml");
+    let text = std::fs::read_to_string(&spec).unwrap();
+    std::fs::write(
+        &spec,
+        text.replace(columns, "")
+            .replace("Trajectory2/DVL_trajectory2", "Trajectory1/DVL_trajectory1")
+            .replace("Trajectory2/GT_trajectory2", "Trajectory1/GT_trajectory1"),
+    )
+    .unwrap();
+    let output = dcnet(d, &["validate", "experiments/syn.toml"]);
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("reads the same files as a trajectory before it"),
+        "{}",
+        stderr(&output)
+    );
+
+    let calibrate = |extra: &[&str]| {
+        let mut args = vec![
+            "calibrate",
+            "data/syn/Trajectory1/DVL_trajectory1.csv",
+            "--reference",
+            "data/syn/Trajectory1/GT_trajectory1.csv",
+        ];
+        args.extend(extra);
+        let output = dcnet(d, &args);
+        assert_eq!(
+            output.status.code(),
+            Some(1),
+            "{extra:?}: {}",
+            stderr(&output)
+        );
+        stderr(&output)
+    };
+    assert!(
+        calibrate(&["--tolerance-pct", "1e308"])
+            .contains("--tolerance-pct 1e308: give a positive percentage, at most 100"),
+    );
+    assert!(
+        calibrate(&["--dvl-noise-cm-s", "-1"])
+            .contains("--dvl-noise-cm-s -1: give a positive number")
+    );
+    let device = dcnet(
+        d,
+        &[
+            "calibrate",
+            "/dev/zero",
+            "--reference",
+            "data/syn/Trajectory1/GT_trajectory1.csv",
+        ],
+    );
+    assert_eq!(device.status.code(), Some(1), "{}", stderr(&device));
+    assert!(
+        stderr(&device).contains("/dev/zero: not a regular file"),
+        "{}",
+        stderr(&device)
+    );
+}

@@ -335,6 +335,37 @@ fn a_simulated_time_offset_beyond_the_reference_margin_is_refused_before_trainin
     );
     assert!(!message.contains("DCNet installation"), "{message}");
     assert!(!d.join("results/syn").exists());
+    // `validate` refuses it too, where it said ok.
+    let validated = dcnet(d, &["validate", "experiments/syn.toml"]);
+    assert_eq!(validated.status.code(), Some(1), "{}", stderr(&validated));
+    assert!(
+        stderr(&validated).contains("learned.simulation.time_offset_s: 4 s is beyond"),
+        "{}",
+        stderr(&validated)
+    );
+}
+
+/// A window, with its margins, longer than a trajectory: `validate` and `run` refuse
+/// it at `learned.window_samples`, naming the trajectory, where `run` blamed
+/// `validation_fraction`.
+#[test]
+fn a_learned_window_longer_than_a_trajectory_is_refused_at_its_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    learned_spec(d, "");
+    edit_spec(d, &[("window_samples = 10", "window_samples = 1000")]);
+    for command in ["validate", "run"] {
+        let output = dcnet(
+            d,
+            &[command, "experiments/syn.toml", "--no-plots"][..2 + usize::from(command == "run")],
+        );
+        let message = stderr(&output);
+        assert_eq!(output.status.code(), Some(1), "{command}: {message}");
+        assert!(
+            message.contains("learned.window_samples: 1000 samples, with the 3 of margin each side, are longer than trajectory \"S1\"'s 400"),
+            "{command}: {message}"
+        );
+    }
 }
 
 /// The weights of every stored `[learned]` model under `out`, by file name.

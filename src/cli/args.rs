@@ -118,10 +118,10 @@ pub(super) enum Command {
         #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
         window_s: Option<f64>,
         /// The DVL's white noise per axis, cm/s, for the bound
-        #[arg(long, default_value_t = 2.0)]
+        #[arg(long, default_value_t = 2.0, allow_negative_numbers = true)]
         dvl_noise_cm_s: f64,
         /// The reference velocity's white noise per axis, cm/s, for the bound
-        #[arg(long, default_value_t = 0.5)]
+        #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
         reference_noise_cm_s: f64,
         /// How close to its value with the whole recording the Kalman filter's RMSE must
         /// stay, %, for the length the recording needed

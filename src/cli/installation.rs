@@ -313,24 +313,38 @@ fn learned_memory(
 /// or what it would compute.
 pub(super) fn validate(path: &Path, set: &[String]) -> Result<(), CliError> {
     let experiment = load(path, set)?;
-    let mut read = std::collections::HashMap::new();
+    // Each recording read once, its time stamps kept.
+    let mut read: std::collections::HashMap<_, std::rc::Rc<Vec<f64>>> =
+        std::collections::HashMap::new();
     let mut lengths = Vec::new();
     for point in &experiment.points {
         let spec = &point.spec;
-        let mut point_lengths = Vec::new();
-        for (_, files) in &spec.trajectories {
+        let mut times = Vec::new();
+        for (name, files) in &spec.trajectories {
             let key = (files.clone(), format!("{:?}", spec.columns));
-            let length = match read.get(&key) {
-                Some(&length) => length,
+            let time_s = match read.get(&key) {
+                Some(time_s) => time_s.clone(),
                 None => {
                     let recording = paired::read(files, &spec.columns).map_err(input)?;
-                    read.insert(key, recording.time_s.len());
-                    recording.time_s.len()
+                    let time_s = std::rc::Rc::new(recording.time_s);
+                    read.insert(key, time_s.clone());
+                    time_s
                 }
             };
-            point_lengths.push(length);
+            times.push((name.as_str(), time_s));
         }
-        lengths.push(point_lengths);
+        let recordings: Vec<(&str, &[f64])> = times
+            .iter()
+            .map(|(name, t)| (*name, t.as_slice()))
+            .collect();
+        if let Some(learned) = &spec.learned
+            && let Some((key, message)) =
+                crate::installation::learned::beyond_the_recordings(learned, &recordings)
+        {
+            let fault = experiment.fault(&key, message);
+            return Err(input(crate::spec::SpecErrors::from(fault)));
+        }
+        lengths.push(recordings.iter().map(|(_, time_s)| time_s.len()).collect());
     }
     if let Some(memory) = learned_memory(&experiment, lengths)? {
         println!("[learned] training needs at most about {memory} of memory at its peak");

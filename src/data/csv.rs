@@ -14,6 +14,8 @@ use std::path::{Path, PathBuf};
 pub enum CsvError {
     #[error("{}: file not found", path.display())]
     Missing { path: PathBuf },
+    #[error("{}: not a regular file (a device, a pipe or a folder): a recording is a CSV file", path.display())]
+    NotAFile { path: PathBuf },
     #[error("{}: cannot read as CSV", path.display())]
     Read {
         path: PathBuf,
@@ -209,6 +211,7 @@ pub fn read_columns(path: &Path, columns: &[Column]) -> Result<Rows, CsvError> {
 /// upper bound of its samples, known before it is read.
 pub fn row_count(path: &Path) -> Result<usize, CsvError> {
     use std::io::BufRead;
+    regular(path)?;
     let file = std::fs::File::open(path).map_err(|source| io_error(path, source))?;
     let mut lines = 0;
     for chunk in std::io::BufReader::new(file).split(b'\n') {
@@ -221,9 +224,23 @@ pub fn row_count(path: &Path) -> Result<usize, CsvError> {
     Ok(lines.saturating_sub(1))
 }
 
-/// The bytes of `path`; a missing file is [`CsvError::Missing`].
+/// The bytes of `path`; a missing file is [`CsvError::Missing`], a device or a pipe
+/// (`/dev/zero` would be read until memory runs out) [`CsvError::NotAFile`].
 fn read_bytes(path: &Path) -> Result<Vec<u8>, CsvError> {
+    regular(path)?;
     std::fs::read(path).map_err(|source| io_error(path, source))
+}
+
+/// Refuses a `path` that is not a regular file (followed through its links).
+fn regular(path: &Path) -> Result<(), CsvError> {
+    let metadata = std::fs::metadata(path).map_err(|source| io_error(path, source))?;
+    if metadata.is_file() {
+        Ok(())
+    } else {
+        Err(CsvError::NotAFile {
+            path: path.to_path_buf(),
+        })
+    }
 }
 
 /// `source`, met opening or reading `path`: [`CsvError::Missing`] where the file is

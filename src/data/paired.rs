@@ -107,6 +107,29 @@ pub struct PairedColumns {
 }
 
 impl PairedColumns {
+    /// The first column named for two quantities, as `(key, name)` of the second
+    /// (`velocity_ned[1]`, say): a recording cannot hold both in one column.
+    pub fn named_twice(&self) -> Option<(String, String)> {
+        let mut named: Vec<(String, &String)> = vec![("time".into(), &self.time)];
+        let triples = [
+            ("dvl", Some(&self.dvl)),
+            ("velocity_ned", Some(&self.velocity_ned)),
+            ("attitude", Some(&self.attitude)),
+            ("rate", self.rate.as_ref()),
+        ];
+        for (key, names) in triples {
+            for (i, name) in names.into_iter().flatten().enumerate() {
+                named.push((format!("{key}[{i}]"), name));
+            }
+        }
+        named.iter().enumerate().find_map(|(i, (key, name))| {
+            named[..i]
+                .iter()
+                .any(|(_, earlier)| earlier == name)
+                .then(|| (key.clone(), (*name).clone()))
+        })
+    }
+
     /// The columns of the A-KIT recordings, as their headers spell them: the DVL file's
     /// `Time [s], DVL X [m/s], DVL Y [m/s], DVL Z [m/s]`, the reference (GT) file's
     /// `Time [s], V North [m/s], V East [m/s], V Down [m/s], Roll [rad], Pitch [rad],

@@ -22,6 +22,47 @@ use burn::tensor::{Device, Tensor};
 use rand_chacha::ChaCha8Rng;
 use std::ops::Range;
 
+/// What `[learned]` asks that the recordings (each trajectory's name and time stamps)
+/// cannot give, as `(key, message)`: a simulated time offset beyond the reach of the
+/// loss (it reads the reference at t + τ within the window's margin), or a window, with
+/// its margins, longer than a trajectory. `validate` and `run` refuse it alike.
+pub fn beyond_the_recordings(
+    learned: &LearnedSpec,
+    recordings: &[(&str, &[f64])],
+) -> Option<(String, String)> {
+    use super::protocol::sample_interval;
+    use super::simulate::REFERENCE_MARGIN;
+    let span = learned.window_samples + 2 * REFERENCE_MARGIN;
+    if let Some((name, time_s)) = recordings.iter().find(|(_, time_s)| time_s.len() < span) {
+        return Some((
+            "learned.window_samples".into(),
+            format!(
+                "{} samples, with the {REFERENCE_MARGIN} of margin each side, are longer than trajectory {name:?}'s {}: give a shorter window",
+                learned.window_samples,
+                time_s.len()
+            ),
+        ));
+    }
+    let step_s = recordings
+        .iter()
+        .map(|(_, time_s)| sample_interval(time_s))
+        .fold(f64::INFINITY, f64::min);
+    let reach_s = REFERENCE_MARGIN as f64 * step_s;
+    let tau = learned
+        .simulation
+        .time_offset_s
+        .iter()
+        .find(|t| t.abs() > reach_s)?;
+    learned.sources.contains(&TrainingSource::Simulated).then(|| {
+        (
+            "learned.simulation.time_offset_s".into(),
+            format!(
+                "{tau} s is beyond the {reach_s} s at which the loss can read the reference ({REFERENCE_MARGIN} samples of {step_s} s): simulate time offsets within it"
+            ),
+        )
+    })
+}
+
 /// The indices of the trajectories that train the model of `fold`: those outside it.
 pub fn training_trajectories(learned: &LearnedSpec, count: usize, fold: usize) -> Vec<usize> {
     (0..count).filter(|&i| learned.fold_of(i) != fold).collect()

@@ -48,13 +48,16 @@ pub struct CalibrateArgs<'a> {
 pub enum CalibrateError {
     #[error("--terms: {0}")]
     Terms(String),
-    #[error("--dvl-noise-cm-s {0}: give a positive number: the bound divides by it")]
+    #[error("--dvl-noise-cm-s {}: give a positive number: the bound divides by it", crate::Shown(*.0))]
     DvlNoise(f64),
-    #[error("--reference-noise-cm-s {0}: give zero or a positive number")]
+    #[error("--reference-noise-cm-s {}: give zero or a positive number", crate::Shown(*.0))]
     ReferenceNoise(f64),
-    #[error("--window-s {0}: give a positive number of seconds")]
+    #[error("--window-s {}: give a positive number of seconds", crate::Shown(*.0))]
     Window(f64),
-    #[error("--tolerance-pct {0}: give a positive percentage")]
+    #[error(
+        "--tolerance-pct {}: give a positive percentage, at most 100 (how close to its last value the filter's RMSE must stay)",
+        crate::Shown(*.0)
+    )]
     Tolerance(f64),
     /// The `--columns` file, placed at its line and key.
     #[error("{0}")]
@@ -219,7 +222,7 @@ fn refused(args: &CalibrateArgs) -> Result<(), CalibrateError> {
     {
         return Err(CalibrateError::Window(w));
     }
-    if !(args.tolerance_pct.is_finite() && args.tolerance_pct > 0.0) {
+    if !(args.tolerance_pct > 0.0 && args.tolerance_pct <= 100.0) {
         return Err(CalibrateError::Tolerance(args.tolerance_pct));
     }
     Ok(())
@@ -291,12 +294,19 @@ fn columns(path: Option<&Path>) -> Result<PairedColumns, CalibrateError> {
     struct ColumnsFile {
         columns: PairedColumns,
     }
-    match path {
-        None => Ok(PairedColumns::akit()),
-        Some(path) => TomlFile::<ColumnsFile>::read(path)
-            .map(|file| file.value.columns)
-            .map_err(CalibrateError::Columns),
+    let Some(path) = path else {
+        return Ok(PairedColumns::akit());
+    };
+    let file = TomlFile::<ColumnsFile>::read(path).map_err(CalibrateError::Columns)?;
+    if let Some((key, name)) = file.value.columns.named_twice() {
+        let message = format!(
+            "{name:?} is named for another quantity too: each quantity needs a column of its own"
+        );
+        return Err(CalibrateError::Columns(
+            file.fault(&format!("columns.{key}"), message),
+        ));
     }
+    Ok(file.value.columns)
 }
 
 /// The recording of `args`, its reference, and its window where one is asked.

@@ -11,11 +11,10 @@
 
 use super::InstallationPlan;
 use crate::files::Seal;
-use crate::installation::learned::{LearnedWindows, training_windows};
+use crate::installation::learned::{LearnedWindows, beyond_the_recordings, training_windows};
 use crate::installation::learned_spec::{LearnedSpec, TrainingSource};
 use crate::installation::network::network_io;
-use crate::installation::protocol::{LearnedModel, Segment, sample_interval};
-use crate::installation::simulate::REFERENCE_MARGIN;
+use crate::installation::protocol::{LearnedModel, Segment};
 use crate::installation::spec::InstallationSpec;
 use crate::installation::term_names::term_set;
 use crate::model::Dcnet;
@@ -182,29 +181,17 @@ fn sets(
         .collect()
 }
 
-/// Refuses a simulated time offset beyond the reach of the loss: it reads the
-/// reference at t + τ within the window's margin.
+/// Refuses what `[learned]` asks that the recordings cannot give
+/// ([`beyond_the_recordings`]).
 fn within_reach(learned: &LearnedSpec, segments: &[&Segment]) -> Result<(), ExecuteError> {
-    let step_s = segments
+    let recordings: Vec<(&str, &[f64])> = segments
         .iter()
-        .map(|s| sample_interval(&s.recording.time_s))
-        .fold(f64::INFINITY, f64::min);
-    let reach_s = REFERENCE_MARGIN as f64 * step_s;
-    if learned.sources.contains(&TrainingSource::Simulated)
-        && let Some(tau) = learned
-            .simulation
-            .time_offset_s
-            .iter()
-            .find(|t| t.abs() > reach_s)
-    {
-        return Err(ExecuteError::Learned {
-            model: "learned.simulation.time_offset_s".into(),
-            why: format!(
-                "{tau} s is beyond the {reach_s} s at which the loss can read the reference ({REFERENCE_MARGIN} samples of {step_s} s): simulate time offsets within it"
-            ),
-        });
+        .map(|s| (s.name.as_str(), s.recording.time_s.as_slice()))
+        .collect();
+    match beyond_the_recordings(learned, &recordings) {
+        Some((model, why)) => Err(ExecuteError::Learned { model, why }),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// Trains the models of `batch` (each (fold, source) with the keys that train on its

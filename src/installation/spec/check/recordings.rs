@@ -1,7 +1,7 @@
 //! Checks `[recordings]`. In: the trajectories' names and files as written, relative to
 //! the spec's folder, and the column names when they are not A-KIT's. Out: each
 //! trajectory's name and files, and the columns; at least two trajectories, each name
-//! once.
+//! and each pair of files once, each column named for one quantity.
 
 use crate::data::paired::{PairedColumns, PairedFiles};
 use crate::installation::spec::file::{PairedTrajectoryFile, RecordingsFile};
@@ -47,5 +47,23 @@ pub(in crate::installation::spec) fn check_recordings(
             ),
         );
     }
-    (trajectories, columns.unwrap_or_else(PairedColumns::akit))
+    let mut files = HashSet::new();
+    for (i, (name, paired)) in trajectories.iter().enumerate() {
+        if !files.insert(paired.clone()) {
+            faults.add(
+                format!("recordings.trajectories[{i}].dvl"),
+                format!(
+                    "{name:?} reads the same files as a trajectory before it: a study would score a recording on itself"
+                ),
+            );
+        }
+    }
+    let columns = columns.unwrap_or_else(PairedColumns::akit);
+    if let Some((key, name)) = columns.named_twice() {
+        faults.add(
+            format!("recordings.columns.{key}"),
+            format!("{name:?} is named for another quantity too: each quantity needs a column of its own"),
+        );
+    }
+    (trajectories, columns)
 }
