@@ -114,6 +114,9 @@ pub struct Calibration {
     /// The fit of the terms asked for, and its bound under `noise`.
     pub fitted: Fit,
     pub bound: TermBound,
+    /// The fit's terms with those the recording cannot show (the bound's unseen) at
+    /// zero: what the RMSE after and the corrected recording apply.
+    pub applied: Installation,
     pub noise: Noise,
     /// The samples scored (those [`TIME_OFFSET_MARGIN_S`] inside the reference) and
     /// those recorded.
@@ -181,15 +184,17 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
         reference_m_s: args.reference_noise_cm_s / 100.0,
     };
     let bounded = bound(&fitted, noise, &ObservabilityFile::default().tolerances());
+    let applied = seen_terms(&fitted, &bounded);
     let before = read.score(&Installation::default());
-    let after = read.score(&fitted.installation);
+    let after = read.score(&applied);
     let (settings, filter, curve) = settle(&read, terms, noise);
     let settled_s = settling_time(&curve, args.tolerance_pct / 100.0).map(|p| p.length_s);
     let (corrected, terms_in_time) =
-        write_files(&outputs, &recording_sha256, &read, &fitted, &filter)?;
+        write_files(&outputs, &recording_sha256, &read, &applied, &filter)?;
     Ok(Calibration {
         fitted,
         bound: bounded,
+        applied,
         noise,
         scored: read.scored.len(),
         recorded: read.recording.time_s.len(),
@@ -226,6 +231,18 @@ fn refused(args: &CalibrateArgs) -> Result<(), CalibrateError> {
         return Err(CalibrateError::Tolerance(args.tolerance_pct));
     }
     Ok(())
+}
+
+/// The terms of `fitted` that `bounded` says the recording shows; those it cannot show
+/// at zero, since an unseen term's value is noise, not the installation's.
+fn seen_terms(fitted: &Fit, bounded: &TermBound) -> Installation {
+    let parameters: Vec<f64> = fitted
+        .parameters
+        .iter()
+        .zip(&bounded.names)
+        .map(|(&value, name)| if bounded.is_unseen(name) { 0.0 } else { value })
+        .collect();
+    Installation::from_parameters(&fitted.terms, &parameters)
 }
 
 /// The files written for `args`, named after the DVL's file.
@@ -377,18 +394,18 @@ fn settle(
     (settings, filter, curve)
 }
 
-/// Writes the recording corrected by the fit and the filter's terms against time into
+/// Writes the recording corrected by the terms applied and the filter's terms against time into
 /// `outputs`, each recording `recording_sha256`; the corrected files' paths, and the
 /// terms'.
 fn write_files(
     outputs: &Outputs,
     recording_sha256: &str,
     read: &Read,
-    fitted: &Fit,
+    applied: &Installation,
     filter: &FilterRun,
 ) -> Result<(Vec<PathBuf>, PathBuf), CalibrateError> {
     let corrected = corrected_samples(
-        &fitted.installation,
+        applied,
         &read.recording.time_s,
         &read.recording.dvl_m_s,
         &read.reference,
@@ -480,6 +497,37 @@ mod tests {
         );
         assert!(calibration.corrected.iter().all(|p| p.is_file()));
         assert!(calibration.terms_in_time.is_file());
+    }
+
+    /// On a straight line the time offset cannot be seen: it is printed as not seen and
+    /// neither scored nor applied, where the fit's value (noise) once shifted every
+    /// corrected sample's `valid_at_s`.
+    #[test]
+    fn a_term_the_recording_cannot_show_is_not_applied() {
+        let folder = tempfile::tempdir().unwrap();
+        let bias = [0.03, -0.02, 0.01];
+        let dvl = straight_recording(folder.path(), bias);
+        let (reference, out) = (folder.path().join("GT.csv"), folder.path().join("out"));
+        let terms = [TermName::TimeOffset, TermName::Bias];
+        let calibration = calibrate(&args(&dvl, &reference, &out, &terms)).unwrap();
+        assert!(
+            calibration.bound.is_unseen("time_offset_s"),
+            "{:?}",
+            calibration.bound.unseen
+        );
+        assert_eq!(calibration.applied.time_offset_s, 0.0);
+        assert_eq!(
+            calibration.applied.bias_m_s,
+            calibration.fitted.installation.bias_m_s
+        );
+        let csv = std::fs::read_to_string(&calibration.corrected[0]).unwrap();
+        for line in csv.lines().skip(1) {
+            let fields: Vec<&str> = line.split(',').collect();
+            assert_eq!(
+                fields[0], fields[1],
+                "valid_at_s moved by an unseen τ: {line}"
+            );
+        }
     }
 
     /// A bad argument is bad input and writes nothing; a folder that cannot be made is a

@@ -33,7 +33,11 @@ fn printed_fit(calibration: &Calibration) -> String {
     table.set_header(["term", "estimate", "standard deviation", "seen"]);
     for (i, name) in bound.names.iter().enumerate() {
         let (readable, unit, factor) = readable_term(name);
-        let seen = if bound.is_unseen(name) { "no" } else { "yes" };
+        let seen = if bound.is_unseen(name) {
+            "no, not applied"
+        } else {
+            "yes"
+        };
         table.add_row([
             readable,
             format!("{:.4} {unit}", bound.value[i] * factor),
