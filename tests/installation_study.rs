@@ -145,6 +145,33 @@ fn a_synthetic_installation_is_recovered_within_its_bound_and_a_straight_segment
     ] {
         assert!(folder.join(file).is_file(), "{file}");
     }
+
+    // `plot` of altered or missing tables refuses them, naming the file, and writes no
+    // report of them (it once rewrote the report with NaN, or said "unknown field").
+    let report = std::fs::read(folder.join("report.md")).unwrap();
+    let summary = std::fs::read(folder.join("summary.parquet")).unwrap();
+    std::fs::write(
+        folder.join("summary.parquet"),
+        &summary[..summary.len() / 2],
+    )
+    .unwrap();
+    let altered = dcnet(d, &["plot", "results/syn", "--out", "redrawn"]);
+    assert_eq!(altered.status.code(), Some(1), "{}", stderr(&altered));
+    assert!(
+        stderr(&altered).contains("summary.parquet"),
+        "{}",
+        stderr(&altered)
+    );
+    std::fs::write(folder.join("summary.parquet"), &summary).unwrap();
+    std::fs::remove_file(folder.join("heldout.parquet")).unwrap();
+    let missing = dcnet(d, &["plot", "results/syn", "--out", "redrawn"]);
+    assert_eq!(missing.status.code(), Some(1), "{}", stderr(&missing));
+    assert!(
+        stderr(&missing).contains("heldout.parquet"),
+        "{}",
+        stderr(&missing)
+    );
+    assert_eq!(std::fs::read(folder.join("report.md")).unwrap(), report);
 }
 
 #[test]

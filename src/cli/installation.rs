@@ -218,7 +218,7 @@ pub(super) fn plot(results: &Path, out: &Path, format: Format) -> Result<(), Cli
 
 /// Reads one study's folder back and reports it again, its figures drawn into `out`.
 fn plot_installation(results: &Path, out: &Path, format: Format) -> Result<(), CliError> {
-    let study = crate::results::installation::read_installation(results).map_err(input)?;
+    let study = crate::results::installation::read_checked(results).map_err(input)?;
     report(results, &study, Some(out), format)?;
     eprintln!("report written to {}", results.join("report.md").display());
     Ok(())

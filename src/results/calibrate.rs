@@ -10,7 +10,7 @@
 use super::ResultsError;
 use super::corrected::{Outputs, corrected_samples, write, write_terms_in_time};
 use crate::data::paired::{self, PairedColumns, PairedError, PairedFiles, PairedRecording};
-use crate::installation::bound::{Noise, TermBound, bound};
+use crate::installation::bound::{Noise, TermBound, Why, bound};
 use crate::installation::filter::{FilterSettings, run_filter};
 use crate::installation::fit::{Fit, FitError, TIME_OFFSET_MARGIN_S, fit};
 use crate::installation::frames::Reference;
@@ -114,8 +114,8 @@ pub struct Calibration {
     /// The fit of the terms asked for, and its bound under `noise`.
     pub fitted: Fit,
     pub bound: TermBound,
-    /// The fit's terms with those the recording cannot show (the bound's unseen) at
-    /// zero: what the RMSE after and the corrected recording apply.
+    /// The fit's terms with those the residuals do not depend on at all at zero: what
+    /// the RMSE after and the corrected recording apply.
     pub applied: Installation,
     pub noise: Noise,
     /// The samples scored (those [`TIME_OFFSET_MARGIN_S`] inside the reference) and
@@ -233,16 +233,27 @@ fn refused(args: &CalibrateArgs) -> Result<(), CalibrateError> {
     Ok(())
 }
 
-/// The terms of `fitted` that `bounded` says the recording shows; those it cannot show
-/// at zero, since an unseen term's value is noise, not the installation's.
+/// The terms of `fitted`, those on which the residuals do not depend at all (their
+/// value is noise, not the installation's) at zero. A term correlated with another, or
+/// known only loosely, is applied: together with the others it still corrects.
 fn seen_terms(fitted: &Fit, bounded: &TermBound) -> Installation {
     let parameters: Vec<f64> = fitted
         .parameters
         .iter()
         .zip(&bounded.names)
-        .map(|(&value, name)| if bounded.is_unseen(name) { 0.0 } else { value })
+        .map(|(&value, name)| match is_noise(bounded, name) {
+            true => 0.0,
+            false => value,
+        })
         .collect();
     Installation::from_parameters(&fitted.terms, &parameters)
+}
+
+/// Whether the residuals do not depend on term `name` at all.
+pub fn is_noise(bounded: &TermBound, name: &str) -> bool {
+    bounded.unseen.iter().any(|unseen| {
+        unseen.term == name && matches!(&unseen.why, Why::Flat { with } if with.is_empty())
+    })
 }
 
 /// The files written for `args`, named after the DVL's file.

@@ -3,7 +3,7 @@
 //! The one place that tells a folder's kind, for `plot`, `compare` and the owner
 //! check. In: a folder. Out: [`Held`].
 
-use super::{MANIFEST, installation::HELDOUT, sweep};
+use super::{MANIFEST, SPEC, installation::HELDOUT, sweep};
 use std::path::Path;
 
 /// What a results folder holds.
@@ -18,7 +18,7 @@ pub enum Held {
 
 impl Held {
     pub fn of(folder: &Path) -> Held {
-        if folder.join(HELDOUT).is_file() {
+        if folder.join(HELDOUT).is_file() || is_installation_spec(folder) {
             Held::Installation
         } else if folder.join(sweep::INDEX).is_file() {
             match sweep::read_index(folder) {
@@ -48,4 +48,14 @@ impl Held {
             Held::InstallationSweep => "the points of a sweep of installation studies",
         }
     }
+}
+
+/// Whether `folder`'s resolved spec is an installation study's (its `kind`), so that a
+/// study whose tables are damaged or missing is still told as one.
+fn is_installation_spec(folder: &Path) -> bool {
+    std::fs::read_to_string(folder.join(SPEC))
+        .ok()
+        .and_then(|text| text.parse::<toml::Table>().ok())
+        .and_then(|spec| spec.get("kind")?.as_str().map(String::from))
+        .is_some_and(|kind| kind == crate::installation::spec::KIND)
 }

@@ -67,6 +67,16 @@ pub fn table_bytes(
 }
 
 /// Reads the study's tables from `folder`; an error names the file.
+/// [`read_installation`] of a folder whose manifest is there and whose every file has
+/// the bytes the manifest records: what `plot` reports again, so that it never writes
+/// a report of altered or missing tables.
+pub fn read_checked(folder: &Path) -> Result<InstallationResults, ReadError> {
+    let manifest = super::read::manifest(folder)?;
+    let names: Vec<&str> = manifest.files_sha256.keys().map(String::as_str).collect();
+    super::read::check_files(folder, &manifest, &names)?;
+    read_installation(folder)
+}
+
 pub fn read_installation(folder: &Path) -> Result<InstallationResults, ReadError> {
     let path = |name: &str| folder.join(name);
     // Folders written before the Kalman filter lack two tables; only a study with

@@ -33,8 +33,10 @@ fn printed_fit(calibration: &Calibration) -> String {
     table.set_header(["term", "estimate", "standard deviation", "seen"]);
     for (i, name) in bound.names.iter().enumerate() {
         let (readable, unit, factor) = readable_term(name);
-        let seen = if bound.is_unseen(name) {
+        let seen = if crate::results::calibrate::is_noise(bound, name) {
             "no, not applied"
+        } else if bound.is_unseen(name) {
+            "no"
         } else {
             "yes"
         };

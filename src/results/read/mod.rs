@@ -143,26 +143,7 @@ impl StoredRun {
     /// published values may be edited (`plot` then compares with the new ones); a
     /// manifest from before digests records none and is not checked.
     pub fn check_tables(&self) -> Result<(), ReadError> {
-        let recorded = TABLES
-            .iter()
-            .filter_map(|name| Some((name, self.manifest.files_sha256.get(*name)?)));
-        for (name, recorded) in recorded {
-            let path = self.folder.join(name);
-            let bytes = std::fs::read(&path).map_err(|source| ReadError::Io {
-                path: path.clone(),
-                source,
-            })?;
-            let found = crate::files::sha256_hex(&bytes);
-            if &found != recorded {
-                return Err(Box::new(Altered {
-                    path,
-                    found,
-                    recorded: recorded.clone(),
-                })
-                .into());
-            }
-        }
-        Ok(())
+        check_files(&self.folder, &self.manifest, &TABLES)
     }
 
     pub fn read(folder: &Path) -> Result<StoredRun, ReadError> {
@@ -173,14 +154,7 @@ impl StoredRun {
                 source: SpecErrors(vec![e]),
             })?
             .value;
-        let manifest_path = existing(&folder.join(MANIFEST))?;
-        let manifest = std::fs::read(&manifest_path)
-            .map_err(ManifestError::from)
-            .and_then(|bytes| Ok(serde_json::from_slice(&bytes)?))
-            .map_err(|source| ReadError::Manifest {
-                path: manifest_path.clone(),
-                source,
-            })?;
+        let manifest = manifest(folder)?;
         let published_path = folder.join(PUBLISHED);
         let published = if published_path.exists() {
             Some(
@@ -233,6 +207,43 @@ impl StoredRun {
         models.dedup();
         models
     }
+}
+
+/// The manifest of `folder`, named where it is missing or cannot be read.
+pub fn manifest(folder: &Path) -> Result<Manifest, ReadError> {
+    let manifest_path = existing(&folder.join(MANIFEST))?;
+    std::fs::read(&manifest_path)
+        .map_err(ManifestError::from)
+        .and_then(|bytes| Ok(serde_json::from_slice(&bytes)?))
+        .map_err(|source| ReadError::Manifest {
+            path: manifest_path.clone(),
+            source,
+        })
+}
+
+/// Each of `names` that `manifest` records in `folder` with the bytes it recorded:
+/// the first altered one named, with both digests.
+pub fn check_files(folder: &Path, manifest: &Manifest, names: &[&str]) -> Result<(), ReadError> {
+    let recorded = names
+        .iter()
+        .filter_map(|name| Some((name, manifest.files_sha256.get(*name)?)));
+    for (name, recorded) in recorded {
+        let path = folder.join(name);
+        let bytes = std::fs::read(&path).map_err(|source| ReadError::Io {
+            path: path.clone(),
+            source,
+        })?;
+        let found = crate::files::sha256_hex(&bytes);
+        if &found != recorded {
+            return Err(Box::new(Altered {
+                path,
+                found,
+                recorded: recorded.clone(),
+            })
+            .into());
+        }
+    }
+    Ok(())
 }
 
 fn existing(path: &Path) -> Result<PathBuf, ReadError> {
