@@ -897,6 +897,32 @@ fn doubtful_input_is_refused_naming_its_key_or_flag() {
         calibrate(&["--dvl-noise-cm-s", "-1"])
             .contains("--dvl-noise-cm-s -1: give a positive number")
     );
+    // A [dcnet] spec that names a study, not a paper spec.
+    write_spec(
+        d,
+        "with-dcnet",
+        "syn",
+        2,
+        "\n[dcnet]\nspec = \"syn.toml\"\n",
+    );
+    let spec = d.join("experiments/with-dcnet.toml");
+    let text = std::fs::read_to_string(&spec).unwrap();
+    std::fs::write(
+        &spec,
+        text.replace(
+            "methods = [\"baseline\", \"EM5\"]",
+            "methods = [\"baseline\", \"dcnet\"]",
+        ),
+    )
+    .unwrap();
+    let output = dcnet(d, &["validate", "experiments/with-dcnet.toml"]);
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("dcnet.spec: ")
+            && stderr(&output).contains("is a spec of kind \"installation\""),
+        "{}",
+        stderr(&output)
+    );
     let device = dcnet(
         d,
         &[

@@ -15,7 +15,20 @@ pub(in crate::installation::spec) fn check_dcnet(
     faults: &mut Faults,
 ) -> Option<PathBuf> {
     match (dcnet, wants_dcnet) {
-        (Some(DcnetModelsFile { spec }), true) => Some(folder.join(spec)),
+        (Some(DcnetModelsFile { spec }), true) => {
+            let path = folder.join(spec);
+            // A study's spec has no models: the paper spec is the one without a kind.
+            if let Ok(Some(kind)) = crate::spec::declared_kind(&path) {
+                faults.add(
+                    "dcnet.spec",
+                    format!(
+                        "{} is a spec of kind {kind:?}: [dcnet] names the paper spec whose trained DCNet models the study applies",
+                        path.display()
+                    ),
+                );
+            }
+            Some(path)
+        }
         (None, true) => {
             faults.add("dcnet", "is missing: the method \"dcnet\" needs [dcnet] spec = \"<paper spec>\", whose trained models it applies");
             None
