@@ -939,3 +939,27 @@ fn doubtful_input_is_refused_naming_its_key_or_flag() {
         stderr(&device)
     );
 }
+
+/// The same recordings at another path are the same calibrations: a study whose data
+/// moved takes every calibration from the cache (the key holds the recordings' bytes,
+/// not their paths), where it once computed them all again.
+#[test]
+fn recordings_moved_to_another_path_are_taken_from_the_cache() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_installed(&d.join("data/syn"), 2, &[], INSTALLED, 8);
+    write_spec(d, "syn", "syn", 2, "");
+    let first = dcnet(d, &["run", "experiments/syn.toml", "--no-plots"]);
+    assert!(first.status.success(), "{}", stderr(&first));
+    std::fs::rename(d.join("data/syn"), d.join("data/moved")).unwrap();
+    let spec = d.join("experiments/syn.toml");
+    let text = std::fs::read_to_string(&spec).unwrap();
+    std::fs::write(&spec, text.replace("/syn/", "/moved/")).unwrap();
+    let planned = dcnet(d, &["plan", "experiments/syn.toml"]);
+    assert!(planned.status.success(), "{}", stderr(&planned));
+    assert!(
+        stdout(&planned).contains("syn: 2 calibrations, 0 to do"),
+        "{}",
+        stdout(&planned)
+    );
+}

@@ -128,7 +128,7 @@ impl DataHashes {
 
 /// The key of calibration trajectory `calibration` of an installation study: the study's
 /// resolved spec without its `name` (a sweep point and a single run of the same
-/// settings share it) and the calibration time's tolerance, the SHA-256 of every recording it reads (each calibration is
+/// settings share it), the calibration time's tolerance and the recordings' paths, the SHA-256 of every recording it reads (each calibration is
 /// scored on all of them), the keys of the DCNet models it applies, and the code
 /// version.
 pub fn calibration_key(
@@ -142,6 +142,16 @@ pub fn calibration_key(
     // The report's tolerance changes no calibration.
     if let Some(toml::Value::Table(calibration)) = settings.get_mut("calibration") {
         calibration.remove("time_tolerance_pct");
+    }
+    // The recordings count by their bytes (`data_sha256`), not where they lie: the same
+    // recordings at another path are the same calibration.
+    if let Some(toml::Value::Table(recordings)) = settings.get_mut("recordings")
+        && let Some(toml::Value::Array(trajectories)) = recordings.get_mut("trajectories")
+    {
+        for trajectory in trajectories.iter_mut().filter_map(toml::Value::as_table_mut) {
+            trajectory.remove("dvl");
+            trajectory.remove("reference");
+        }
     }
     hash(&(
         "installation calibration",
