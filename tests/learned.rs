@@ -226,12 +226,17 @@ fn a_wrong_learned_table_is_refused_naming_its_keys() {
         &[
             ("folds = 2", "folds = 3\nsources = [\"simulated\", \"sky\"]"),
             ("lever_arm_y_m = [0.0]", "lever_arm_y_m = []"),
+            ("lever_arm_z_m = [0.4]", "lever_arm_z_m = [1e300]"),
             ("epochs = 12", "epochs = 0"),
         ],
     );
     let output = dcnet(d, &["run", "experiments/syn.toml"]);
     assert!(!output.status.success(), "{}", stderr(&output));
     let message = stderr(&output);
+    assert!(
+        message.contains("learned.simulation.lever_arm_z_m[0]: 1e300 is beyond ±100 m"),
+        "{message}"
+    );
     for key in [
         "learned.folds",
         "learned.sources[1]",
@@ -559,7 +564,7 @@ fn a_learned_grid_beyond_memory_is_refused_by_validate_and_run() {
         "{}",
         stdout(&fits)
     );
-    let values: Vec<String> = (0..40).map(|i| format!("{:.1}", 0.1 * i as f64)).collect();
+    let values: Vec<String> = (0..40).map(|i| format!("{:.2}", 0.01 * i as f64)).collect();
     let list = format!("[{}]", values.join(", "));
     let keys = [
         "lever_arm_x_m",

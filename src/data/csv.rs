@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 pub enum CsvError {
     #[error("{}: file not found", path.display())]
     Missing { path: PathBuf },
-    #[error("{}: not a regular file (a device, a pipe or a folder): a recording is a CSV file", path.display())]
+    #[error("{}: not a regular file (a device or a pipe): a recording is a CSV file", path.display())]
     NotAFile { path: PathBuf },
     #[error("{}: cannot read as CSV", path.display())]
     Read {
@@ -231,10 +231,11 @@ fn read_bytes(path: &Path) -> Result<Vec<u8>, CsvError> {
     std::fs::read(path).map_err(|source| io_error(path, source))
 }
 
-/// Refuses a `path` that is not a regular file (followed through its links).
+/// Refuses a `path` that is a device or a pipe (followed through its links); a folder
+/// is left to the read, whose error says so.
 fn regular(path: &Path) -> Result<(), CsvError> {
     let metadata = std::fs::metadata(path).map_err(|source| io_error(path, source))?;
-    if metadata.is_file() {
+    if metadata.is_file() || metadata.is_dir() {
         Ok(())
     } else {
         Err(CsvError::NotAFile {

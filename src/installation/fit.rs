@@ -117,8 +117,10 @@ pub const MAX_SCALE: f64 = 0.5;
 pub const MAX_LEVER_ARM_M: f64 = 100.0;
 
 /// The first term of `installation` beyond what an installation is off by, or not
-/// finite.
-fn unphysical(installation: &Installation) -> Option<FitError> {
+/// finite. A fit may find such a value for a term the window cannot show (the bound
+/// flags it); one applied to a recording would correct it into nonsense (a scale of
+/// −100 % divides by zero).
+pub fn beyond_any_installation(installation: &Installation) -> Option<FitError> {
     let axes = ["x", "y", "z"];
     for k in 0..3 {
         let scale = installation.scale[k];
@@ -347,9 +349,6 @@ pub fn fit(
             time_offset_s: installation.time_offset_s,
             margin_s: TIME_OFFSET_MARGIN_S,
         });
-    }
-    if let Some(fault) = unphysical(&installation) {
-        return Err(fault);
     }
     let sample_count = mask.len();
     Ok(Fit {

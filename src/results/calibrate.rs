@@ -12,7 +12,7 @@ use super::corrected::{Outputs, corrected_samples, write, write_terms_in_time};
 use crate::data::paired::{self, PairedColumns, PairedError, PairedFiles, PairedRecording};
 use crate::installation::bound::{Noise, TermBound, Why, bound};
 use crate::installation::filter::{FilterSettings, run_filter};
-use crate::installation::fit::{Fit, FitError, TIME_OFFSET_MARGIN_S, fit};
+use crate::installation::fit::{Fit, FitError, TIME_OFFSET_MARGIN_S, beyond_any_installation, fit};
 use crate::installation::frames::Reference;
 use crate::installation::protocol_filters::FilterRun;
 use crate::installation::settling::{SettlingPoint, settling_curve, settling_time};
@@ -185,6 +185,9 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     };
     let bounded = bound(&fitted, noise, &ObservabilityFile::default().tolerances());
     let applied = seen_terms(&fitted, &bounded);
+    if let Some(fault) = beyond_any_installation(&applied) {
+        return Err(fit_error(args, &read, fault));
+    }
     let before = read.score(&Installation::default());
     let after = read.score(&applied);
     let (settings, filter, curve) = settle(&read, terms, noise);
@@ -364,7 +367,12 @@ fn fit_terms(args: &CalibrateArgs, read: &Read, terms: TermSet) -> Result<Fit, C
         &read.reference,
         terms,
     )
-    .map_err(|fault| CalibrateError::Fit {
+    .map_err(|fault| fit_error(args, read, fault))
+}
+
+/// The fit of `args` on the samples of `read` failed with `fault`.
+fn fit_error(args: &CalibrateArgs, read: &Read, fault: FitError) -> CalibrateError {
+    CalibrateError::Fit {
         dvl: args.dvl.to_path_buf(),
         terms: args
             .terms
@@ -372,9 +380,9 @@ fn fit_terms(args: &CalibrateArgs, read: &Read, terms: TermSet) -> Result<Fit, C
             .map(|t| t.name())
             .collect::<Vec<_>>()
             .join(", "),
-        samples: calibrating.time_s.len(),
+        samples: read.calibrating().time_s.len(),
         fault,
-    })
+    }
 }
 
 /// The filter of an installation spec's `[calibration.kalman]` as it comes, run over the

@@ -148,7 +148,10 @@ pub fn calibration_key(
     if let Some(toml::Value::Table(recordings)) = settings.get_mut("recordings")
         && let Some(toml::Value::Array(trajectories)) = recordings.get_mut("trajectories")
     {
-        for trajectory in trajectories.iter_mut().filter_map(toml::Value::as_table_mut) {
+        for trajectory in trajectories
+            .iter_mut()
+            .filter_map(toml::Value::as_table_mut)
+        {
             trajectory.remove("dvl");
             trajectory.remove("reference");
         }

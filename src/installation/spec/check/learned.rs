@@ -108,7 +108,8 @@ fn check_windows(
     }
 }
 
-/// `[learned.simulation]`: every list of at least one finite value.
+/// `[learned.simulation]`: every list of at least one finite value, none beyond what
+/// an installation is off by (a lever arm of 1e300 m once ran to a failed training).
 fn check_simulation(simulation: SimulationGrid, faults: &mut Faults) -> SimulationGrid {
     let SimulationGrid {
         lever_arm_x_m,
@@ -119,14 +120,30 @@ fn check_simulation(simulation: SimulationGrid, faults: &mut Faults) -> Simulati
         scale_pct,
         bias_cm_s,
     } = &simulation;
-    for (key, values) in [
-        ("lever_arm_x_m", lever_arm_x_m),
-        ("lever_arm_y_m", lever_arm_y_m),
-        ("lever_arm_z_m", lever_arm_z_m),
-        ("time_offset_s", time_offset_s),
-        ("misalignment_z_deg", misalignment_z_deg),
-        ("scale_pct", scale_pct),
-        ("bias_cm_s", bias_cm_s),
+    use crate::data::paired::MAX_DVL_SPEED_M_S;
+    use crate::installation::fit::{MAX_LEVER_ARM_M, MAX_SCALE};
+    let lever = (MAX_LEVER_ARM_M, "m, the largest lever arm a fit may find");
+    for (key, values, (most, what)) in [
+        ("lever_arm_x_m", lever_arm_x_m, lever),
+        ("lever_arm_y_m", lever_arm_y_m, lever),
+        ("lever_arm_z_m", lever_arm_z_m, lever),
+        // Checked against the recordings' reach (`beyond_the_recordings`).
+        ("time_offset_s", time_offset_s, (f64::INFINITY, "s")),
+        (
+            "misalignment_z_deg",
+            misalignment_z_deg,
+            (180.0, "°, half a turn"),
+        ),
+        (
+            "scale_pct",
+            scale_pct,
+            (100.0 * MAX_SCALE, "%, the largest scale error a DVL has"),
+        ),
+        (
+            "bias_cm_s",
+            bias_cm_s,
+            (100.0 * MAX_DVL_SPEED_M_S, "cm/s, a vehicle's top speed"),
+        ),
     ] {
         if values.is_empty() {
             faults.add(
@@ -139,6 +156,11 @@ fn check_simulation(simulation: SimulationGrid, faults: &mut Faults) -> Simulati
                 faults.add(
                     format!("learned.simulation.{key}[{i}]"),
                     format!("{value} must be a finite number"),
+                );
+            } else if value.abs() > most {
+                faults.add(
+                    format!("learned.simulation.{key}[{i}]"),
+                    format!("{} is beyond ±{most} {what}", crate::Shown(*value)),
                 );
             }
         }
