@@ -28,45 +28,9 @@ pub(in crate::installation::spec) fn check_kalman(
         scale_random_walk_pct_per_sqrt_s,
         bias_random_walk_cm_s_per_sqrt_s,
     } = kalman;
-    for (i, name) in models.iter().enumerate() {
-        if !model_names.contains(&name.as_str()) {
-            faults.add(
-                format!("calibration.kalman.models[{i}]"),
-                format!(
-                    "{name:?} is not a model of [[calibration.models]]; defined: {}",
-                    model_names.join(", ")
-                ),
-            );
-        } else if models[..i].contains(name) {
-            faults.add(
-                format!("calibration.kalman.models[{i}]"),
-                format!("{name:?} is listed twice"),
-            );
-        }
-    }
-    // A prior or a random walk beyond what an installation is off by says nothing the
-    // filter can use, and a huge one overflows its covariance.
-    let mut value = |key: &str, value: f64, zero_allowed: bool, (most, what): (f64, &str)| {
-        if !value.is_finite() || value < 0.0 || (value == 0.0 && !zero_allowed) {
-            let rule = if zero_allowed {
-                "zero or more"
-            } else {
-                "above zero"
-            };
-            faults.add(
-                format!("calibration.kalman.{key}"),
-                format!("{} must be finite and {rule}", crate::Shown(value)),
-            );
-        } else if value > most {
-            faults.add(
-                format!("calibration.kalman.{key}"),
-                format!(
-                    "{} is beyond {most}, {what}: the filter's covariance would overflow or say nothing",
-                    crate::Shown(value)
-                ),
-            );
-        }
-        value
+    check_models(&models, model_names, faults);
+    let mut value = |key: &str, value: f64, zero_allowed: bool, most: (f64, &str)| {
+        check_value(key, value, zero_allowed, most, faults)
     };
     let scale_pct = (100.0 * MAX_SCALE, "the largest scale error a DVL has");
     let bias_cm_s = (100.0 * MAX_DVL_SPEED_M_S, "a vehicle's top speed");
@@ -111,6 +75,58 @@ pub(in crate::installation::spec) fn check_kalman(
         ) / 100.0,
     };
     FilterSettings { prior, random_walk }
+}
+
+/// Each model `models` names defined in `model_names`, and listed once.
+fn check_models(models: &[String], model_names: &[&str], faults: &mut Faults) {
+    for (i, name) in models.iter().enumerate() {
+        if !model_names.contains(&name.as_str()) {
+            faults.add(
+                format!("calibration.kalman.models[{i}]"),
+                format!(
+                    "{name:?} is not a model of [[calibration.models]]; defined: {}",
+                    model_names.join(", ")
+                ),
+            );
+        } else if models[..i].contains(name) {
+            faults.add(
+                format!("calibration.kalman.models[{i}]"),
+                format!("{name:?} is listed twice"),
+            );
+        }
+    }
+}
+
+/// `value` of `key` finite and above zero (or zero, where `zero_allowed`), and at most
+/// `most`, `what` saying why: a prior or a random walk beyond what an installation is
+/// off by says nothing the filter can use, and a huge one overflows its covariance.
+fn check_value(
+    key: &str,
+    value: f64,
+    zero_allowed: bool,
+    (most, what): (f64, &str),
+    faults: &mut Faults,
+) -> f64 {
+    if !value.is_finite() || value < 0.0 || (value == 0.0 && !zero_allowed) {
+        let rule = if zero_allowed {
+            "zero or more"
+        } else {
+            "above zero"
+        };
+        faults.add(
+            format!("calibration.kalman.{key}"),
+            format!("{} must be finite and {rule}", crate::Shown(value)),
+        );
+    } else if value > most {
+        faults.add(
+            format!("calibration.kalman.{key}"),
+            format!(
+                "{} is beyond {most}, {what}: the filter's covariance would overflow or say nothing",
+                crate::Shown(value)
+            ),
+        );
+    }
+    value
 }
 
 /// The filter of a spec whose `[calibration.kalman]` is left out
