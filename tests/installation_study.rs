@@ -963,3 +963,30 @@ fn recordings_moved_to_another_path_are_taken_from_the_cache() {
         stdout(&planned)
     );
 }
+
+/// A study that cannot write its folder (here a table's place taken by a folder, as a
+/// full disk would stop it) is a failure while running, exit 2, not bad input: its
+/// calibrations stay in the cache and a run once the cause is gone resumes.
+#[test]
+fn a_study_that_cannot_write_is_a_failure_not_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_installed(&d.join("data/syn"), 2, &[], INSTALLED, 9);
+    write_spec(d, "syn", "syn", 2, "");
+    let first = dcnet(d, &["run", "experiments/syn.toml", "--no-plots"]);
+    assert!(first.status.success(), "{}", stderr(&first));
+    let table = d.join("results/syn/heldout.parquet");
+    std::fs::remove_file(&table).unwrap();
+    std::fs::create_dir_all(table.join("in the way")).unwrap();
+    let stopped = dcnet(d, &["run", "experiments/syn.toml", "--no-plots"]);
+    assert_eq!(stopped.status.code(), Some(2), "{}", stderr(&stopped));
+    assert!(
+        stderr(&stopped).contains("heldout.parquet"),
+        "{}",
+        stderr(&stopped)
+    );
+    std::fs::remove_dir_all(&table).unwrap();
+    let resumed = dcnet(d, &["run", "experiments/syn.toml", "--no-plots"]);
+    assert!(resumed.status.success(), "{}", stderr(&resumed));
+    assert!(table.is_file());
+}

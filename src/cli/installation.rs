@@ -22,6 +22,14 @@ fn load(path: &Path, set: &[String]) -> Result<Experiment<InstallationSpec>, Cli
     installation_spec::load_experiment(path, set).map_err(input)
 }
 
+/// A run that stopped: bad input (exit 1), or a failure while running (exit 2).
+fn stopped(error: ExecuteError) -> CliError {
+    match error.is_input() {
+        true => input(error),
+        false => failure(error),
+    }
+}
+
 /// The experiment a command works on; OUT, when it exists, must be a folder.
 fn load_target(target: &Target) -> Result<Experiment<InstallationSpec>, CliError> {
     if target.out.exists() && !target.out.is_dir() {
@@ -47,7 +55,7 @@ pub(super) fn run(target: &Target, drawing: &Drawing, mode: Mode) -> Result<(), 
     });
     learned_memory(&experiment, lengths.collect())?;
     let Mode::Shard { shard, .. } = mode else {
-        let executed = execute(&Planned::Installation(&plan), mode).map_err(input)?;
+        let executed = execute(&Planned::Installation(&plan), mode).map_err(stopped)?;
         return finish(&plan, &executed, drawing);
     };
     let in_shard = (0..plan.units.len())
@@ -62,7 +70,7 @@ pub(super) fn run(target: &Target, drawing: &Drawing, mode: Mode) -> Result<(), 
         );
         return Ok(());
     }
-    let executed = execute(&Planned::Installation(&plan), mode).map_err(input)?;
+    let executed = execute(&Planned::Installation(&plan), mode).map_err(stopped)?;
     if executed.done == 0 {
         eprintln!(
             "nothing to do: every calibration of {} shard {shard} is in the cache",
@@ -90,7 +98,7 @@ pub(super) fn collect(target: &Target, drawing: &Drawing) -> Result<(), CliError
                 target.command("run"),
                 target.command("run")
             )),
-            other => input(other),
+            other => stopped(other),
         })?;
     finish(&plan, &executed, drawing)
 }

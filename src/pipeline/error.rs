@@ -92,6 +92,21 @@ pub enum ExecuteError {
     },
 }
 
+impl ExecuteError {
+    /// Whether the fault lies in what was given (the spec, its recordings, its models)
+    /// rather than in writing or storing while running (a full disk, say), which is a
+    /// failure: the run can be resumed once the cause is gone.
+    pub fn is_input(&self) -> bool {
+        !matches!(
+            self,
+            ExecuteError::Results(_)
+                | ExecuteError::Models(_)
+                | ExecuteError::Training { .. }
+                | ExecuteError::Calibrations(CalibrationStoreError::Io { .. })
+        )
+    }
+}
+
 /// Why the paper spec whose DCNet models an installation study applies gave none.
 #[derive(Debug, thiserror::Error)]
 pub enum DcnetSpecError {
