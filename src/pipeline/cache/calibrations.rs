@@ -18,12 +18,6 @@ pub enum CalibrationStoreError {
         #[source]
         source: std::io::Error,
     },
-    #[error("{}: not a stored calibration of this version", path.display())]
-    Decode {
-        path: PathBuf,
-        #[source]
-        source: rmp_serde::decode::Error,
-    },
 }
 
 /// The calibrations of the cache.
@@ -48,7 +42,9 @@ impl CalibrationStore {
         files::check_seal(&self.path(key), key)
     }
 
-    /// The calibration of `key`, when it is stored and intact.
+    /// The calibration of `key`, when it is stored and intact. One whose seal holds but
+    /// whose bytes are no calibration of this version (forged, or written by another
+    /// build) is set aside as a damaged one is, said so, and computed again.
     pub fn load(&self, key: &str) -> Result<Option<Calibrated>, CalibrationStoreError> {
         if self.integrity(key) != Seal::Intact {
             return Ok(None);
@@ -58,9 +54,24 @@ impl CalibrationStore {
             path: path.clone(),
             source,
         })?;
-        rmp_serde::from_slice(&bytes)
-            .map(Some)
-            .map_err(|source| CalibrationStoreError::Decode { path, source })
+        match rmp_serde::from_slice(&bytes) {
+            Ok(calibrated) => Ok(Some(calibrated)),
+            Err(source) => {
+                let damaged = self.folder.with_file_name("damaged");
+                let moved = files::set_aside(&path, &damaged).map_err(|source| {
+                    CalibrationStoreError::Io {
+                        path: path.clone(),
+                        source,
+                    }
+                })?;
+                eprintln!(
+                    "calibration {}: sealed, but not a calibration of this version ({source}); moved to {} and computed again",
+                    path.display(),
+                    moved.display()
+                );
+                Ok(None)
+            }
+        }
     }
 
     pub fn save(&self, key: &str, calibrated: &Calibrated) -> Result<(), CalibrationStoreError> {
@@ -122,5 +133,18 @@ mod tests {
         let said = store.set_aside_damaged(&key).unwrap().unwrap();
         assert!(said.contains("moved to"), "{said}");
         assert_eq!(store.integrity(&key), Seal::Absent);
+        // Bytes that are no calibration under a seal that holds: set aside, not used.
+        files::write_sealed(&store.path(&key), b"not a calibration", &key).unwrap();
+        assert_eq!(store.integrity(&key), Seal::Intact);
+        assert_eq!(store.load(&key).unwrap(), None);
+        assert_eq!(store.integrity(&key), Seal::Absent);
+        assert!(
+            out.path()
+                .join(".cache/damaged")
+                .read_dir()
+                .unwrap()
+                .count()
+                >= 2
+        );
     }
 }
