@@ -599,3 +599,33 @@ fn a_learned_grid_beyond_memory_is_refused_by_validate_and_run() {
     }
     assert!(!d.join("results/syn").exists());
 }
+
+/// With no validation windows the training loss chooses the best epoch, and the line
+/// that reports a model says so, where it called it the validation loss.
+#[test]
+fn without_validation_windows_the_training_loss_is_named_as_such() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    learned_spec(d, "");
+    edit_spec(
+        d,
+        &[
+            ("seed = 5", "seed = 5\nvalidation_fraction = 0.0"),
+            ("epochs = 12", "epochs = 2"),
+        ],
+    );
+    let output = dcnet(d, &["run", "experiments/syn.toml", "--no-plots"]);
+    let log = stderr(&output);
+    assert!(output.status.success(), "{log}");
+    let lines: Vec<&str> = log
+        .lines()
+        .filter(|l| l.starts_with("DCNet installation"))
+        .collect();
+    assert_eq!(lines.len(), 4, "{log}");
+    assert!(
+        lines
+            .iter()
+            .all(|l| l.contains("(training loss ") && !l.contains("validation loss")),
+        "{log}"
+    );
+}

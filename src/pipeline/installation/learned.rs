@@ -257,11 +257,15 @@ fn describe(id: ModelId, windows: usize, ended: &Ended, clock: Instant) -> Optio
         Provenance::Resumed(epoch) => format!(", resumed after epoch {epoch}"),
     };
     let best = &stored.history[stored.best_epoch - 1];
+    // Without validation windows the training loss chose the best epoch.
+    let (which, loss) = match best.validation_loss.is_nan() {
+        true => ("training", best.train_loss),
+        false => ("validation", best.validation_loss),
+    };
     Some(format!(
-        "DCNet {id}: {windows} windows, {} epochs, best {} (validation loss {:.3} (cm/s)²){resumed}, {:.1} s",
+        "DCNet {id}: {windows} windows, {} epochs, best {} ({which} loss {loss:.3} (cm/s)²){resumed}, {:.1} s",
         stored.history.len(),
         stored.best_epoch,
-        best.validation_loss,
         clock.elapsed().as_secs_f64()
     ))
 }
