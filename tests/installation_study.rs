@@ -990,3 +990,27 @@ fn a_study_that_cannot_write_is_a_failure_not_bad_input() {
     assert!(resumed.status.success(), "{}", stderr(&resumed));
     assert!(table.is_file());
 }
+
+/// A DVL 5 s off its reference, beyond the ±3 s the fit scans: refused, exit 1, with a
+/// message that names the scan's reach, where it once said only `Numerical("jacobian")`.
+#[test]
+fn a_time_offset_beyond_the_scan_is_refused_naming_the_scan() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let late = common::installed::Installed {
+        time_offset_s: 5.0,
+        ..INSTALLED
+    };
+    write_installed(&d.join("data/syn"), 1, &[], late, 4);
+    let output = dcnet(
+        d,
+        &[
+            "calibrate",
+            "data/syn/Trajectory1/DVL_trajectory1.csv",
+            "--reference",
+            "data/syn/Trajectory1/GT_trajectory1.csv",
+        ],
+    );
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(stderr(&output).contains("±3 s"), "{}", stderr(&output));
+}

@@ -103,7 +103,7 @@ impl FitError {
         match self {
             FitError::Unphysical { .. } => "",
             _ => {
-                "; a window too short for its terms, or terms it cannot tell apart (a scale and a bias at constant speed, say), fail this way: give a longer --window-s or fewer --terms"
+                "; a window too short for its terms, terms it cannot tell apart (a scale and a bias at constant speed, say), or a time offset beyond the ±3 s the fit scans fail this way: give a longer --window-s or fewer --terms, or line up the recordings' clocks to within 3 s"
             }
         }
     }
