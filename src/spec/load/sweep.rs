@@ -204,10 +204,12 @@ impl<'a, S> SweepPoints<'a, S> {
         for (axis, value) in axes.iter().zip(values) {
             let path = steps(&axis.key).expect("sweep keys were checked");
             let placed = set_in(&mut point_table, &path, value.clone());
-            let location = format!(
-                "{} (sweep point {point_name})",
-                source.text.at_line(axis.line)
-            );
+            // Values given with `--set` are placed there, not on a line of the file.
+            let written = source.text.at_line(axis.line);
+            let origin = assigned
+                .origin(&format!("sweep.values.{}", axis.key))
+                .map_or(written, str::to_string);
+            let location = format!("{origin} (sweep point {point_name})");
             if let Err(message) = placed {
                 self.errors.push(SpecError {
                     location,
@@ -472,6 +474,23 @@ mod tests {
         let error = sampled("sample = 10").unwrap_err().to_string();
         assert!(
             error.ends_with("sweep.sample: 10 points: choose between 1 and the grid's 9"),
+            "{error}"
+        );
+    }
+
+    /// A bad value of a sweep given with `--set` is placed on that `--set`, where it
+    /// once pointed at the file's first line.
+    #[test]
+    fn a_bad_value_of_a_sweep_set_on_the_command_line_is_placed_there() {
+        let (_dir, path) = quick_plus("");
+        let set = r#"sweep.values={"model.dropout"=[0.1, 2.0]}"#.to_string();
+        let error = load_experiment(&path, std::slice::from_ref(&set))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            error.starts_with(&format!(
+                "--set {set} (sweep point dropout=2.0): model.dropout:"
+            )),
             "{error}"
         );
     }
