@@ -237,6 +237,23 @@ fn a_wrong_learned_table_is_refused_naming_its_keys() {
         message.contains("learned.simulation.lever_arm_z_m[0]: 1e300 is beyond ±100 m"),
         "{message}"
     );
+    // The learned model's one learning rate, refused once at its own key, where it was
+    // refused once per error model of the paper.
+    let rate = dcnet(
+        d,
+        &[
+            "validate",
+            "experiments/syn.toml",
+            "--set",
+            "learned.training.learning_rate=0",
+        ],
+    );
+    let said = stderr(&rate);
+    assert_eq!(said.matches("learning_rate").count(), 2, "{said}");
+    assert!(
+        said.contains("learned.training.learning_rate: 0 must be a positive number"),
+        "{said}"
+    );
     for key in [
         "learned.folds",
         "learned.sources[1]",

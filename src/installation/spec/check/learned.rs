@@ -178,7 +178,19 @@ fn check_network(
 ) -> (ModelSpec, TrainingSpec) {
     let (model, training, model_faults) =
         check_model_and_training(model, training, window_samples.max(4), "learned.");
-    faults.0.extend(model_faults);
+    // The paper's rules check a learning rate per error model; the learned model has
+    // one, so its fault is said once, at its own key.
+    let rate = "learned.training.learning_rate";
+    let mut rate_said = false;
+    for (key, message) in model_faults {
+        if key.starts_with(&format!("{rate}.")) {
+            if !std::mem::replace(&mut rate_said, true) {
+                faults.add(rate, message);
+            }
+        } else {
+            faults.add(key, message);
+        }
+    }
     if training
         .learning_rates
         .iter()
