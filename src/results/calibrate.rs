@@ -78,6 +78,19 @@ pub enum CalibrateError {
         samples: usize,
         fault: FitError,
     },
+    /// The recording needs more memory than this machine has.
+    #[error(
+        "{}: {rows} rows need about {} of memory to calibrate and this machine has {}: calibrate a part of it, a file of fewer rows",
+        dvl.display(),
+        crate::footprint::Bytes(*need),
+        crate::footprint::Bytes(*have)
+    )]
+    Memory {
+        dvl: PathBuf,
+        rows: usize,
+        need: f64,
+        have: f64,
+    },
     /// An output would replace a file `calibrate` reads.
     #[error(
         "{}: calibrate would write over its input {}: give another --out, or rename the file",
@@ -175,6 +188,7 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     refused(args)?;
     let outputs = outputs(args);
     not_over_an_input(args, &outputs)?;
+    fits_in_memory(args)?;
     let read = read(args)?;
     let recording_sha256 = not_over_another_recording(args, &outputs)?;
     let terms = term_set(args.terms);
@@ -267,6 +281,34 @@ fn outputs(args: &CalibrateArgs) -> Outputs {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "recording".into());
     Outputs::of(args.out, &stem)
+}
+
+/// Peak memory per row of a recording calibrated whole, bytes: the rows read, the
+/// filter's state after each sample and its terms against time (11.2 GB for 3.6 million
+/// rows, `cargo bench --bench calibrate -- --long`), rounded up.
+const BYTES_PER_ROW: f64 = 3_200.0;
+
+/// Refuses, before it is read, a recording whose calibration needs more memory than
+/// this machine has (it once aborted on a failed allocation).
+fn fits_in_memory(args: &CalibrateArgs) -> Result<(), CalibrateError> {
+    let rows = crate::data::csv::row_count(args.dvl).map_err(PairedError::from)?;
+    let have = crate::footprint::machine_memory() as f64;
+    match beyond_memory(args.dvl, rows, have) {
+        Some(refusal) => Err(refusal),
+        None => Ok(()),
+    }
+}
+
+/// The refusal of a recording at `dvl` of `rows` rows on a machine of `have` bytes,
+/// where its calibration needs more.
+fn beyond_memory(dvl: &Path, rows: usize, have: f64) -> Option<CalibrateError> {
+    let need = rows as f64 * BYTES_PER_ROW;
+    (need > have).then(|| CalibrateError::Memory {
+        dvl: dvl.to_path_buf(),
+        rows,
+        need,
+        have,
+    })
 }
 
 /// Refuses, before anything is read, outputs that would replace an input of `args`.
@@ -547,6 +589,21 @@ mod tests {
                 "valid_at_s moved by an unseen τ: {line}"
             );
         }
+    }
+
+    /// Ten million rows under a 2.5 GiB limit aborted on a failed allocation: refused
+    /// before the recording is read, saying how much it needs.
+    #[test]
+    fn a_recording_beyond_the_machines_memory_is_refused_before_it_is_read() {
+        let dvl = Path::new("dive.csv");
+        let limit = 2.5 * 1024.0 * 1024.0 * 1024.0;
+        let refused = beyond_memory(dvl, 10_000_000, limit).expect("refused");
+        assert!(refused.is_input());
+        assert_eq!(
+            refused.to_string(),
+            "dive.csv: 10000000 rows need about 29.8 GiB of memory to calibrate and this machine has 2.5 GiB: calibrate a part of it, a file of fewer rows"
+        );
+        assert!(beyond_memory(dvl, 400, limit).is_none());
     }
 
     /// A bad argument is bad input and writes nothing; a folder that cannot be made is a
