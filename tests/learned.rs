@@ -646,3 +646,45 @@ fn without_validation_windows_the_training_loss_is_named_as_such() {
         "{log}"
     );
 }
+
+/// A stored learned model whose seals hold but whose history is no model's (forged, or
+/// another build's) stopped every run, naming its path twice: it is set aside, said so,
+/// and trained again, to the bytes of the model it replaced.
+#[test]
+fn a_sealed_model_that_is_no_model_is_set_aside_and_trained_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    learned_spec(d, "");
+    edit_spec(d, &[("epochs = 12", "epochs = 2")]);
+    let first = dcnet(d, &["run", "experiments/syn.toml", "--no-plots"]);
+    assert!(first.status.success(), "{}", stderr(&first));
+    let weights = learned_weights(&d.join("results"));
+    let history = tree(&d.join("results/.cache/learned"))
+        .into_iter()
+        .map(|(_, path)| path)
+        .find(|path| path.extension().is_some_and(|e| e == "json"))
+        .expect("a stored history");
+    let mut seal_path = history.clone().into_os_string();
+    seal_path.push(".sha256");
+    let seal = std::fs::read_to_string(&seal_path).unwrap();
+    let key = seal.split_whitespace().next().unwrap().to_string();
+    let forged = b"{\"not\": \"a model\"}";
+    let digest: String = {
+        use sha2::Digest;
+        sha2::Sha256::digest(forged)
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect()
+    };
+    std::fs::write(&history, forged).unwrap();
+    std::fs::write(&seal_path, format!("{key} {digest}\n")).unwrap();
+    let again = dcnet(d, &["run", "experiments/syn.toml", "--no-plots", "--force"]);
+    let log = stderr(&again);
+    assert!(again.status.success(), "{log}");
+    assert!(
+        log.contains("sealed, but not a model of this version"),
+        "{log}"
+    );
+    assert!(log.contains("and trained again"), "{log}");
+    assert_eq!(learned_weights(&d.join("results")), weights);
+}

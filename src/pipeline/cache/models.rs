@@ -313,6 +313,35 @@ impl ModelStore {
         }))
     }
 
+    /// [`ModelStore::load_model`], but a stored model whose seals hold and whose bytes
+    /// are no model of `blueprint` (forged, or written by another build) is set aside
+    /// as a damaged one is, said so, and not returned, so that it is trained again.
+    pub fn load_or_set_aside(
+        &self,
+        blueprint: &Blueprint,
+        id: ModelId,
+        key: &str,
+    ) -> Result<Option<StoredModel>, ModelStoreError> {
+        match self.load_model(blueprint, id, key) {
+            Err(error @ (ModelStoreError::Json { .. } | ModelStoreError::Record { .. })) => {
+                let damaged = self.damaged_folder();
+                let stem = self.stem(id, key);
+                for ext in ["bin", "json"] {
+                    let path = stem.with_extension(ext);
+                    files::set_aside(&path, &damaged).map_err(io_error(&path))?;
+                }
+                let cause = std::error::Error::source(&error).map(ToString::to_string);
+                eprintln!(
+                    "DCNet {id}: sealed, but not a model of this version ({}); moved to {} and trained again",
+                    cause.unwrap_or_default(),
+                    damaged.display()
+                );
+                Ok(None)
+            }
+            other => other,
+        }
+    }
+
     /// Stores a finished model and removes its checkpoint and any failure record.
     pub fn save(&self, trained: &StoredModel, key: &str) -> Result<(), ModelStoreError> {
         let stem = self.stem(trained.id, key);

@@ -128,7 +128,7 @@ pub fn train_or_load(
         if let Some(damage) = store.set_aside_damaged(task.id, task.key)? {
             eprintln!("DCNet {}: {damage}", task.id);
         }
-        models.push(store.load_model(&task.blueprint, task.id, task.key)?);
+        models.push(store.load_or_set_aside(&task.blueprint, task.id, task.key)?);
     }
     let to_train: Vec<usize> = (0..keys.len()).filter(|&k| models[k].is_none()).collect();
     // Each model trained under its claim, as the paper's are: one that another process
