@@ -242,19 +242,16 @@ fn report(
     plots: Option<&Path>,
     format: Format,
 ) -> Result<(), CliError> {
-    let name = std::fs::read(folder.join(crate::results::MANIFEST))
-        .ok()
-        .and_then(|bytes| serde_json::from_slice::<crate::results::Manifest>(&bytes).ok())
-        .map_or_else(
-            || {
-                folder
-                    .file_name()
-                    .unwrap_or_default()
-                    .to_string_lossy()
-                    .into_owned()
-            },
-            |manifest| manifest.name,
-        );
+    let name = crate::results::read::manifest(folder).ok().map_or_else(
+        || {
+            folder
+                .file_name()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .into_owned()
+        },
+        |manifest| manifest.name,
+    );
     let figures = match plots {
         Some(plots) => draw(study, &plots.join(&name), format)?,
         None => Vec::new(),
@@ -304,14 +301,7 @@ fn learned_memory(
         let Some(footprint) = crate::footprint::learned(&point.spec, &lengths, threads) else {
             continue;
         };
-        if let Some((key, message)) = footprint.refusal(memory) {
-            let message = match experiment.is_sweep() {
-                true => format!("point {}: {message}", point.spec.name),
-                false => message,
-            };
-            let fault = experiment.fault(&key, message);
-            return Err(input(crate::spec::SpecErrors::from(fault)));
-        }
+        super::beyond_memory(experiment, &point.spec.name, &footprint, memory)?;
         largest = Some(largest.unwrap_or(0.0).max(footprint.bytes()));
     }
     Ok(largest.map(crate::footprint::Bytes))

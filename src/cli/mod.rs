@@ -373,6 +373,24 @@ fn about(seconds: f64) -> String {
     humantime::format_duration(std::time::Duration::from_secs_f64(whole)).to_string()
 }
 
+/// Refuses a point of `experiment` (named `point` in a sweep) whose `footprint` is
+/// beyond this machine's `memory`: bad input, placed at the key of its largest part.
+fn beyond_memory<S>(
+    experiment: &Experiment<S>,
+    point: &str,
+    footprint: &Footprint,
+    memory: u64,
+) -> Result<(), CliError> {
+    let Some((key, message)) = footprint.refusal(memory) else {
+        return Ok(());
+    };
+    let message = match experiment.is_sweep() {
+        true => format!("point {point}: {message}"),
+        false => message,
+    };
+    Err(input(SpecErrors::from(experiment.fault(&key, message))))
+}
+
 /// What each point of `experiment` asks of this machine, and its trajectories'
 /// lengths, known before anything is allocated; a point beyond this machine's memory is bad input, placed at the key of
 /// its largest part.
@@ -392,14 +410,7 @@ fn footprints(experiment: &Experiment) -> Result<Vec<(Footprint, Vec<usize>)>, C
             _ => data::lengths(spec).map_err(input)?,
         };
         let footprint = Footprint::of(spec, &lengths, threads);
-        if let Some((key, message)) = footprint.refusal(memory) {
-            let message = if experiment.is_sweep() {
-                format!("point {}: {message}", spec.name)
-            } else {
-                message
-            };
-            return Err(input(SpecErrors::from(experiment.fault(&key, message))));
-        }
+        beyond_memory(experiment, &spec.name, &footprint, memory)?;
         known = Some((&spec.trajectories, lengths.clone()));
         footprints.push((footprint, lengths));
     }

@@ -107,8 +107,9 @@ pub struct PairedColumns {
 }
 
 impl PairedColumns {
-    /// The first column named for two quantities, as `(key, name)` of the second
-    /// (`velocity_ned[1]`, say): a recording cannot hold both in one column.
+    /// The first column named for two quantities, as the key of the second
+    /// (`velocity_ned[1]`, say) and what is wrong with it: a recording cannot hold both
+    /// in one column.
     pub fn named_twice(&self) -> Option<(String, String)> {
         let mut named: Vec<(String, &String)> = vec![("time".into(), &self.time)];
         let triples = [
@@ -126,7 +127,10 @@ impl PairedColumns {
             named[..i]
                 .iter()
                 .any(|(_, earlier)| earlier == name)
-                .then(|| (key.clone(), (*name).clone()))
+                .then(|| {
+                    let why = format!("{name:?} is named for another quantity too: each quantity needs a column of its own");
+                    (key.clone(), why)
+                })
         })
     }
 

@@ -51,8 +51,8 @@ fn rmse(value: f64) -> Entry {
 fn dvl_section(dvl: &str, rows: &[CalibrationTimeRow], tolerance: f64) -> Section {
     let of_dvl: Vec<&CalibrationTimeRow> = rows.iter().filter(|r| r.dvl == dvl).collect();
     let long_s = of_dvl.first().map_or(0.0, |r| r.long_window_s);
-    let table = Table {
-        header: [
+    let table = Table::new(
+        [
             "method",
             "T_conv (s)",
             "calibration time (s)",
@@ -62,8 +62,7 @@ fn dvl_section(dvl: &str, rows: &[CalibrationTimeRow], tolerance: f64) -> Sectio
         ]
         .map(String::from)
         .to_vec(),
-        label_columns: 1,
-        groups: vec![of_dvl
+        of_dvl
             .iter()
             .map(|r| {
                 vec![
@@ -78,11 +77,11 @@ fn dvl_section(dvl: &str, rows: &[CalibrationTimeRow], tolerance: f64) -> Sectio
                     },
                 ]
             })
-            .collect()],
-        notes: vec![
+            .collect(),
+        vec![
             "DCNet's terms are estimated at the calibration windows only, so its calibration time is one of them; the other methods are scored after every sample.".into(),
         ],
-    };
+    );
     Section {
         title: format!("How long to calibrate {dvl}"),
         caption: format!(
@@ -188,12 +187,11 @@ fn claim_section(run: &StoredRun) -> Option<Section> {
     Some(Section {
         title: "The paper's claim: an 80 % shorter calibration".into(),
         caption: "DCNet's calibration against the baseline's (the paper's comparison) and against the Kalman filter of the same error model, by T_conv and by calibration time (s); \"shorter\" is 1 − DCNet's / the other's. The last two columns give the held-out RMSE (cm/s) of DCNet and of the Kalman filter after DCNet's calibration time.".into(),
-        table: Table {
-            header: header.map(String::from).to_vec(),
-            label_columns: 1,
-            groups: vec![table_rows],
+        table: Table::new(
+            header.map(String::from).to_vec(),
+            table_rows,
             notes,
-        },
+        ),
         paragraph: None,
     })
 }

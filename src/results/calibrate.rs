@@ -371,13 +371,9 @@ fn columns(path: Option<&Path>) -> Result<PairedColumns, CalibrateError> {
         return Ok(PairedColumns::akit());
     };
     let file = TomlFile::<ColumnsFile>::read(path).map_err(CalibrateError::Columns)?;
-    if let Some((key, name)) = file.value.columns.named_twice() {
-        let message = format!(
-            "{name:?} is named for another quantity too: each quantity needs a column of its own"
-        );
-        return Err(CalibrateError::Columns(
-            file.fault(&format!("columns.{key}"), message),
-        ));
+    if let Some((key, why)) = file.value.columns.named_twice() {
+        let fault = file.fault(&format!("columns.{key}"), why);
+        return Err(CalibrateError::Columns(fault));
     }
     Ok(file.value.columns)
 }
@@ -472,16 +468,7 @@ fn write_files(
         &read.reference,
     );
     let written = write(outputs, &corrected, recording_sha256)?;
-    let stem = outputs
-        .csv
-        .file_name()
-        .map(|name| {
-            name.to_string_lossy()
-                .trim_end_matches("-corrected.csv")
-                .to_string()
-        })
-        .unwrap_or_default();
-    let points = filter.points(&stem);
+    let points = filter.points(&outputs.stem);
     let terms_in_time = write_terms_in_time(outputs, &points, recording_sha256)?;
     Ok((written, terms_in_time))
 }

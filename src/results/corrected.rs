@@ -85,6 +85,8 @@ pub fn csv_text(samples: &[CorrectedSample]) -> String {
 /// The files `calibrate` writes for a DVL file of stem `stem` into `out`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Outputs {
+    /// The DVL file's stem, which names the three files and the terms' trajectory.
+    pub stem: String,
     pub csv: PathBuf,
     pub parquet: PathBuf,
     pub terms_in_time: PathBuf,
@@ -97,6 +99,7 @@ pub const RECORDING_SHA256: &str = "dcnet.recording_sha256";
 impl Outputs {
     pub fn of(out: &Path, stem: &str) -> Outputs {
         Outputs {
+            stem: stem.to_string(),
             csv: out.join(format!("{stem}-corrected.csv")),
             parquet: out.join(format!("{stem}-corrected.parquet")),
             terms_in_time: out.join(format!("{stem}-terms-in-time.parquet")),

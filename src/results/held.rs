@@ -53,9 +53,8 @@ impl Held {
 /// Whether `folder`'s resolved spec is an installation study's (its `kind`), so that a
 /// study whose tables are damaged or missing is still told as one.
 fn is_installation_spec(folder: &Path) -> bool {
-    std::fs::read_to_string(folder.join(SPEC))
+    crate::spec::declared_kind(&folder.join(SPEC))
         .ok()
-        .and_then(|text| text.parse::<toml::Table>().ok())
-        .and_then(|spec| spec.get("kind")?.as_str().map(String::from))
+        .flatten()
         .is_some_and(|kind| kind == crate::installation::spec::KIND)
 }

@@ -57,7 +57,7 @@ impl CalibrationStore {
         match rmp_serde::from_slice(&bytes) {
             Ok(calibrated) => Ok(Some(calibrated)),
             Err(source) => {
-                let damaged = self.folder.with_file_name("damaged");
+                let damaged = self.damaged_folder();
                 let moved = files::set_aside(&path, &damaged).map_err(|source| {
                     CalibrationStoreError::Io {
                         path: path.clone(),
@@ -85,11 +85,16 @@ impl CalibrationStore {
             .map_err(|source| CalibrationStoreError::Io { path, source })
     }
 
+    /// The cache's `damaged/` folder, where entries that cannot be used are set aside.
+    fn damaged_folder(&self) -> PathBuf {
+        self.folder.with_file_name("damaged")
+    }
+
     /// Moves a damaged calibration of `key` into the cache's `damaged/` folder, so that
     /// it is computed again; returns what was wrong with it.
     pub fn set_aside_damaged(&self, key: &str) -> Result<Option<String>, CalibrationStoreError> {
         let path = self.path(key);
-        let damaged = self.folder.with_file_name("damaged");
+        let damaged = self.damaged_folder();
         files::set_aside_if_damaged(&path, key, &damaged, "calibration")
             .map_err(|source| CalibrationStoreError::Io { path, source })
     }

@@ -217,16 +217,23 @@ impl ModelStore {
         let Seal::Damaged(why) = self.integrity(id, key) else {
             return Ok(None);
         };
+        let damaged = self.move_to_damaged(id, key)?;
+        Ok(Some(format!(
+            "damaged model {why}; moved to {} and trained again",
+            damaged.display()
+        )))
+    }
+
+    /// Moves the stored model of `id` and `key`, weights and history with their seals,
+    /// into the cache's `damaged/` folder; that folder.
+    fn move_to_damaged(&self, id: ModelId, key: &str) -> Result<PathBuf, ModelStoreError> {
         let damaged = self.damaged_folder();
         let stem = self.stem(id, key);
         for ext in ["bin", "json"] {
             let path = stem.with_extension(ext);
             files::set_aside(&path, &damaged).map_err(io_error(&path))?;
         }
-        Ok(Some(format!(
-            "damaged model {why}; moved to {} and trained again",
-            damaged.display()
-        )))
+        Ok(damaged)
     }
 
     /// How the paper's stored model with this key trained, if there is one and it is
@@ -324,12 +331,7 @@ impl ModelStore {
     ) -> Result<Option<StoredModel>, ModelStoreError> {
         match self.load_model(blueprint, id, key) {
             Err(error @ (ModelStoreError::Json { .. } | ModelStoreError::Record { .. })) => {
-                let damaged = self.damaged_folder();
-                let stem = self.stem(id, key);
-                for ext in ["bin", "json"] {
-                    let path = stem.with_extension(ext);
-                    files::set_aside(&path, &damaged).map_err(io_error(&path))?;
-                }
+                let damaged = self.move_to_damaged(id, key)?;
                 let cause = std::error::Error::source(&error).map(ToString::to_string);
                 eprintln!(
                     "DCNet {id}: sealed, but not a model of this version ({}); moved to {} and trained again",

@@ -49,10 +49,7 @@ pub fn no_window_without_a_fit(
 /// Whether `folder` holds the results of `results_key`, every file intact, and its
 /// reports sealed (`report::is_complete`).
 pub fn is_current(folder: &Path, results_key: &str) -> bool {
-    let Ok(bytes) = std::fs::read(folder.join(results::MANIFEST)) else {
-        return false;
-    };
-    let Ok(manifest) = serde_json::from_slice::<Manifest>(&bytes) else {
+    let Ok(manifest) = results::read::manifest(folder) else {
         return false;
     };
     manifest.results_key == results_key

@@ -68,16 +68,15 @@ pub(super) fn heldout_section(
             "Mean held-out RMSE in cm/s ± the half-width of its 95 % interval over calibration trajectories, calibrated on the first {} of each, and its ratio to {NO_CALIBRATION}.",
             window_text(window_s)
         ),
-        table: Table {
-            header: vec![
+        table: Table::new(
+            vec![
                 "method".into(),
                 "held-out RMSE (cm/s)".into(),
                 format!("ratio to {NO_CALIBRATION}"),
             ],
-            label_columns: 1,
-            groups: vec![rows],
-            notes: Vec::new(),
-        },
+            rows,
+            Vec::new(),
+        ),
         paragraph: None,
     }
 }
@@ -104,14 +103,13 @@ pub(super) fn windows_section(
     Section {
         title: "Held-out RMSE against the calibration window".into(),
         caption: "Mean held-out RMSE in cm/s ± the half-width of its 95 % interval, for each calibration window (the first w seconds of each calibration trajectory).".into(),
-        table: Table {
-            header: std::iter::once("method".to_string())
+        table: Table::new(
+            std::iter::once("method".to_string())
                 .chain(windows.iter().map(|&w| format!("w = {}", window_text(w))))
                 .collect(),
-            label_columns: 1,
-            groups: vec![rows],
-            notes: Vec::new(),
-        },
+            rows,
+            Vec::new(),
+        ),
         paragraph: None,
     }
 }

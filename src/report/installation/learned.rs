@@ -72,33 +72,30 @@ fn inside_folds_section(study: &InstallationResults, methods: &[&str], windows: 
         caption: format!(
             "Every method on the same pairs only: calibration and scored trajectory in the same fold, which the fold's learned models never saw, as simulation or as reality, and at each window only the pairs every method scored. Mean held-out RMSE in cm/s ± its 95 % interval over calibration trajectories, and (in brackets) its ratio to {NO_CALIBRATION} on those pairs."
         ),
-        table: Table {
-            header: window_header(windows),
-            label_columns: 1,
-            groups: vec![
-                methods
-                    .iter()
-                    .map(|method| {
-                        std::iter::once(Entry::Text(method.to_string()))
-                            .chain(windows.iter().map(|&w| {
-                                fold_entry(study, "all", method, w).map_or(Entry::Missing, |r| {
-                                    Entry::RmseRatio {
-                                        mean_cm_s: r.summary.mean_cm_s,
-                                        ci95_cm_s: r.summary.ci95_cm_s,
-                                        ratio: r.summary.ratio,
-                                    }
-                                })
-                            }))
-                            .collect()
-                    })
-                    .collect(),
-            ],
-            notes: if methods.iter().any(|m| m.contains("the vehicle")) {
+        table: Table::new(
+            window_header(windows),
+            methods
+                .iter()
+                .map(|method| {
+                    std::iter::once(Entry::Text(method.to_string()))
+                        .chain(windows.iter().map(|&w| {
+                            fold_entry(study, "all", method, w).map_or(Entry::Missing, |r| {
+                                Entry::RmseRatio {
+                                    mean_cm_s: r.summary.mean_cm_s,
+                                    ci95_cm_s: r.summary.ci95_cm_s,
+                                    ratio: r.summary.ratio,
+                                }
+                            })
+                        }))
+                        .collect()
+                })
+                .collect(),
+            if methods.iter().any(|m| m.contains("the vehicle")) {
                 vec!["DCNet trained on the vehicle has seen this installation, on the real DVL of the trajectories outside the fold: a prior the DCNet trained on simulation does not have.".into()]
             } else {
                 Vec::new()
             },
-        },
+        ),
         paragraph: None,
     }
 }
@@ -116,31 +113,27 @@ fn fold_by_fold_section(
             "Mean held-out RMSE in cm/s ± its 95 % interval over each fold's calibration trajectories, calibrated on the first {}.",
             window_text(largest)
         ),
-        table: Table {
-            header: std::iter::once("method".to_string())
+        table: Table::new(
+            std::iter::once("method".to_string())
                 .chain(folds.iter().map(|f| format!("fold {f}")))
                 .collect(),
-            label_columns: 1,
-            groups: vec![
-                methods
-                    .iter()
-                    .map(|method| {
-                        std::iter::once(Entry::Text(method.to_string()))
-                            .chain(folds.iter().map(|fold| {
-                                fold_entry(study, fold, method, largest).map_or(
-                                    Entry::Missing,
-                                    |r| Entry::Rmse {
-                                        mean_cm_s: r.summary.mean_cm_s,
-                                        ci95_cm_s: r.summary.ci95_cm_s,
-                                    },
-                                )
-                            }))
-                            .collect()
-                    })
-                    .collect(),
-            ],
-            notes: Vec::new(),
-        },
+            methods
+                .iter()
+                .map(|method| {
+                    std::iter::once(Entry::Text(method.to_string()))
+                        .chain(folds.iter().map(|fold| {
+                            fold_entry(study, fold, method, largest).map_or(Entry::Missing, |r| {
+                                Entry::Rmse {
+                                    mean_cm_s: r.summary.mean_cm_s,
+                                    ci95_cm_s: r.summary.ci95_cm_s,
+                                }
+                            })
+                        }))
+                        .collect()
+                })
+                .collect(),
+            Vec::new(),
+        ),
         paragraph: None,
     }
 }
@@ -250,12 +243,7 @@ fn paired(study: &InstallationResults, methods: &[&str], windows: &[f64]) -> Opt
         caption: format!(
             "The learned method's mean held-out RMSE minus {fitted}'s, each calibration trajectory on the same pairs inside its fold, in cm/s: the mean difference ± its 95 % interval (Student t over calibration trajectories; negative where the learned one is better), and on how many calibration trajectories the learned one is lower."
         ),
-        table: Table {
-            header: window_header(windows),
-            label_columns: 1,
-            groups: vec![rows],
-            notes: Vec::new(),
-        },
+        table: Table::new(window_header(windows), rows, Vec::new()),
         paragraph: None,
     })
 }
@@ -324,8 +312,8 @@ fn term_errors(study: &InstallationResults, methods: &[&str], windows: &[f64]) -
             "First row: the mean over calibration trajectories of {fitted}'s terms on all {} of each, the best estimate of this installation there is. Then, per method and window, the mean over calibration trajectories of each term's absolute difference from it, in the units of the header.",
             window_text(largest)
         ),
-        table: Table {
-            header: ["method".to_string(), "window".to_string()]
+        table: Table::new(
+            ["method".to_string(), "window".to_string()]
                 .into_iter()
                 .chain(
                     readable_terms
@@ -333,10 +321,9 @@ fn term_errors(study: &InstallationResults, methods: &[&str], windows: &[f64]) -
                         .map(|(name, unit, _)| format!("{name} ({unit})")),
                 )
                 .collect(),
-            label_columns: 1,
-            groups: vec![rows],
-            notes: Vec::new(),
-        },
+            rows,
+            Vec::new(),
+        ),
         paragraph: None,
     })
 }

@@ -64,14 +64,13 @@ pub(super) fn terms_section(method: &str, window_s: f64, rows: &[&TermRow]) -> S
             "The terms {method} estimated on the first {} of each calibration trajectory, ± the standard deviation of the Fisher bound; (not seen) marks a term the window cannot show.",
             window_text(window_s)
         ),
-        table: Table {
-            header: std::iter::once("calibration".to_string())
+        table: Table::new(
+            std::iter::once("calibration".to_string())
                 .chain(terms.iter().map(|t| with_unit(t)))
                 .collect(),
-            label_columns: 1,
-            groups: vec![table_rows],
+            table_rows,
             notes,
-        },
+        ),
         paragraph: None,
     }
 }

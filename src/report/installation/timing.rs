@@ -71,12 +71,7 @@ pub(super) fn timing_section(
             first.tolerance_pct,
             windows.last().copied().unwrap_or(0.0)
         ),
-        table: Table {
-            header,
-            label_columns: 1,
-            groups: vec![table_rows],
-            notes: Vec::new(),
-        },
+        table: Table::new(header, table_rows, Vec::new()),
         paragraph: None,
     })
 }

@@ -31,6 +31,16 @@ pub(crate) struct Table {
 }
 
 impl Table {
+    /// A table of one label column and one group of `rows`, as a section's is.
+    pub(crate) fn new(header: Vec<String>, rows: Vec<Vec<Entry>>, notes: Vec<String>) -> Table {
+        Table {
+            header,
+            label_columns: 1,
+            groups: vec![rows],
+            notes,
+        }
+    }
+
     /// Its cells compared with a published value, and those flagged.
     pub(crate) fn tally(&self) -> Tally {
         Tally::of(

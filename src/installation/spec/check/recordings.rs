@@ -59,11 +59,8 @@ pub(in crate::installation::spec) fn check_recordings(
         }
     }
     let columns = columns.unwrap_or_else(PairedColumns::akit);
-    if let Some((key, name)) = columns.named_twice() {
-        faults.add(
-            format!("recordings.columns.{key}"),
-            format!("{name:?} is named for another quantity too: each quantity needs a column of its own"),
-        );
+    if let Some((key, why)) = columns.named_twice() {
+        faults.add(format!("recordings.columns.{key}"), why);
     }
     (trajectories, columns)
 }
