@@ -1,7 +1,9 @@
 //! `cargo bench --bench calibrate`: `calibrate` (fit, bound, Kalman filter, settling
 //! curve, corrected files) on synthetic recordings at 100 Hz of 36,000 and 360,000 rows,
-//! and with `-- --long` 3,600,000 (ten hours). Prints the seconds of each and the
-//! seconds per 100,000 rows, which stays flat where the cost is linear in the
+//! and with `-- --long` 3,600,000 (ten hours); beside it, the installation study
+//! (`run --no-plots` of two such recordings, each calibrated and scored on the other,
+//! its least squares and Kalman filter) on the same lengths. Prints the seconds of each
+//! and the seconds per 100,000 rows, which stays flat where the cost is linear in the
 //! recording's length.
 
 #[allow(dead_code)]
@@ -24,19 +26,21 @@ fn main() {
         TermName::Bias,
         TermName::Scale,
     ];
-    println!("| rows (100 Hz) | hours | calibrate s | s per 100,000 rows |");
-    println!("|---|---|---|---|");
+    println!(
+        "| rows (100 Hz) | hours | calibrate s | s per 100,000 rows | study of two such recordings s | s per 100,000 rows |"
+    );
+    println!("|---|---|---|---|---|---|");
     for rows in rows {
         let dir = tempfile::tempdir().unwrap();
         installed::write_installed_sampled(
-            dir.path(),
-            1,
+            &dir.path().join("data/long"),
+            2,
             &[],
             installed::INSTALLED,
             7,
             (rows, 0.01),
         );
-        let segment = dir.path().join("Trajectory1");
+        let segment = dir.path().join("data/long/Trajectory1");
         let dvl = segment.join("DVL_trajectory1.csv");
         let reference = segment.join("GT_trajectory1.csv");
         let out = dir.path().join("out");
@@ -55,10 +59,40 @@ fn main() {
         let calibration = calibrate(&args).expect("the synthetic recording calibrates");
         let seconds = clock.elapsed().as_secs_f64();
         assert_eq!(calibration.recorded, rows);
+        let study = study_seconds(dir.path());
+        let per = |s: f64| s / rows as f64 * 100_000.0;
         println!(
-            "| {rows} | {:.1} | {seconds:.1} | {:.2} |",
+            "| {rows} | {:.1} | {seconds:.1} | {:.2} | {study:.1} | {:.2} |",
             rows as f64 / 360_000.0,
-            seconds / rows as f64 * 100_000.0
+            per(seconds),
+            per(study)
         );
     }
+}
+
+/// Seconds of `dcnet-exp run --no-plots` of a study over the two recordings in
+/// `dir/data/long`: calibrated on the first 100 s and on all of each, its Kalman filter
+/// beside its least squares, each scored on the other.
+fn study_seconds(dir: &std::path::Path) -> f64 {
+    installed::write_study_spec(
+        dir,
+        "long",
+        "long",
+        2,
+        "\n[calibration.kalman]\nmodels = [\"lever+offset+bias+scale\"]\n",
+    );
+    let clock = Instant::now();
+    let output = std::process::Command::new(env!("CARGO_BIN_EXE_dcnet-exp"))
+        .args(["run", "experiments/long.toml", "--no-plots"])
+        .current_dir(dir)
+        .output()
+        .expect("dcnet-exp runs");
+    let seconds = clock.elapsed().as_secs_f64();
+    let log = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        output.status.success(),
+        "the study of the synthetic recordings failed: {}",
+        log.lines().last().unwrap_or_default()
+    );
+    seconds
 }

@@ -718,6 +718,53 @@ fn a_damaged_cache_entry_is_set_aside_and_computed_again() {
     assert!(run_ok(d, &run).contains("nothing to do"));
 }
 
+/// A stored model whose seals hold but whose weights are no model (forged, or another
+/// build's) stopped every run that needed it: it is set aside, said so, and trained
+/// again, to the bytes it had.
+#[test]
+fn a_sealed_model_that_is_no_model_is_set_aside_and_trained_again() {
+    let dir = project(false);
+    let d = dir.path();
+    let run = args(&["run", "experiments/quick.toml", "--no-plots"], &SMALL);
+    run_ok(d, &run);
+    let cache = d.join("results/.cache");
+    let weights = files_with(&cache.join("models"), "bin")
+        .into_iter()
+        .find(|path| {
+            path.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("EM3-")
+        })
+        .unwrap();
+    let good_weights = std::fs::read(&weights).unwrap();
+    let mut seal_path = weights.clone().into_os_string();
+    seal_path.push(".sha256");
+    let seal = std::fs::read_to_string(&seal_path).unwrap();
+    let key = seal.split_whitespace().next().unwrap().to_string();
+    let forged = b"not a model";
+    let digest: String = {
+        use sha2::Digest;
+        sha2::Sha256::digest(forged)
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect()
+    };
+    std::fs::write(&weights, forged).unwrap();
+    std::fs::write(&seal_path, format!("{key} {digest}\n")).unwrap();
+    // The blocks gone, so that the run needs the model.
+    std::fs::remove_dir_all(cache.join("monte_carlo")).unwrap();
+
+    let log = run_ok(d, &run);
+    assert!(
+        log.contains("DCNet EM3: sealed, but not a model of this version"),
+        "{log}"
+    );
+    assert!(log.contains("and trained again"), "{log}");
+    assert_eq!(std::fs::read(&weights).unwrap(), good_weights);
+    assert!(run_ok(d, &run).contains("nothing to do"));
+}
+
 /// A results folder is done only with its report and every figure it links to: a run
 /// whose figures cannot be written fails (exit 2) and leaves the folder to do, keeping
 /// what it computed, and a figure lost later is drawn again.

@@ -4,9 +4,7 @@
 use super::args::{Drawing, Target};
 use super::plot::{plot_run, plot_sweep};
 use super::{CliError, about, failure, input, load_target, training_seconds};
-use crate::pipeline::{
-    Executed, Mode, Plan, Planned, Shard, Task, execute, owner, remove_spent_checkpoints,
-};
+use crate::pipeline::{Executed, Mode, Plan, Planned, Shard, Task, execute, owner, tidy_models};
 use crate::report::plots::{Format, Metric};
 use crate::report::printed;
 use crate::results::read::StoredRun;
@@ -25,7 +23,7 @@ pub(super) fn parse_shard(shard: Option<&str>) -> Result<Option<Shard>, CliError
 pub(super) fn run(target: &Target, drawing: &Drawing, mode: Mode) -> Result<(), CliError> {
     let experiment = load_target(target)?;
     let plan = planned(&experiment, target)?;
-    remove_spent_checkpoints(&plan).map_err(failure)?;
+    tidy_models(&plan).map_err(failure)?;
     let to_do = plan.to_do(mode);
     check_owners(&plan, &to_do, mode.force())?;
     let total = plan.tasks().len();

@@ -39,6 +39,7 @@ pub use plan::{Mode, Plan, Status, Task};
 pub use shard::Shard;
 
 use crate::results::{self, Manifest, StageSeconds, sweep};
+use cache::Blueprint;
 use std::path::PathBuf;
 use std::time::{Instant, SystemTime};
 
@@ -124,16 +125,29 @@ fn execute_tasks(plan: &Plan, mode: Mode, to_do: &[Task]) -> Result<Executed, Ex
     Ok(executed)
 }
 
-/// Removes the checkpoints that kills left beside stored models, each under its
-/// training's claim (a process holding it is finishing that model, and removes it).
-pub fn remove_spent_checkpoints(plan: &Plan) -> Result<(), ExecuteError> {
+/// Tidies the stored models before a plan's tasks are told, each under its training's
+/// claim (a process holding it is finishing that model): removes the checkpoints that
+/// kills left beside stored models, and sets aside a stored model whose seals hold but
+/// whose bytes are no model of its spec (forged, or another build's), so that the plan
+/// trains it again where it would stop the first block that runs it.
+pub fn tidy_models(plan: &Plan) -> Result<(), ExecuteError> {
     for training in &plan.trainings {
         let (error_model, key) = (training.error_model, &training.key);
-        if !plan.models.has_spent_checkpoint(error_model, key) {
+        let spent = plan.models.has_spent_checkpoint(error_model, key);
+        let stored = plan.models.integrity(error_model, key) == crate::files::Seal::Intact;
+        if !spent && !stored {
             continue;
         }
-        if let Some(_claim) = claim::try_claim(&plan.out, key).map_err(lock_error)? {
+        let Some(_claim) = claim::try_claim(&plan.out, key).map_err(lock_error)? else {
+            continue;
+        };
+        if spent {
             plan.models.remove_spent_checkpoint(error_model, key)?;
+        }
+        if stored {
+            let blueprint = Blueprint::paper(plan.spec(training.point), error_model);
+            plan.models
+                .load_or_set_aside(&blueprint, error_model.into(), key)?;
         }
     }
     Ok(())

@@ -292,6 +292,13 @@ fn collect_axes<'a>(
             .written_line(&[&["sweep", "values"], &names[..]].concat())
             .unwrap_or_else(|| sweep_line(text));
         match value {
+            _ if key.split(['.', '[']).next() == Some("sweep") => faults.push((
+                key,
+                line,
+                "a sweep cannot sweep its own keys: list every swept key in the one \
+                 [sweep.values] (the points are their product)"
+                    .into(),
+            )),
             toml::Value::Array(list) if list.is_empty() => {
                 faults.push((key, line, "is empty: list at least one value".into()))
             }
@@ -490,6 +497,34 @@ mod tests {
         assert!(
             error.starts_with(&format!(
                 "--set {set} (sweep point dropout=2.0): model.dropout:"
+            )),
+            "{error}"
+        );
+    }
+
+    /// A sweep that sweeps its own keys was refused once per point as "unknown field
+    /// `sweep`": it is refused once, on its `--set` or line, saying why.
+    #[test]
+    fn a_sweep_inside_a_sweep_is_refused_once_where_it_was_written() {
+        let (_dir, path) = quick_plus("");
+        let set = r#"sweep.values={"sweep.values" = [1, 2]}"#.to_string();
+        let error = load_experiment(&path, std::slice::from_ref(&set))
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            error,
+            format!(
+                "--set {set}: sweep.values.sweep.values: a sweep cannot sweep its own keys: \
+                 list every swept key in the one [sweep.values] (the points are their product)"
+            )
+        );
+        let (_dir, path) = quick_plus("[sweep.values]\n\"sweep.sample\" = [1, 2]\n");
+        let line = line_containing(&path, "\"sweep.sample\" = [1, 2]");
+        let error = load_experiment(&path, &[]).unwrap_err().to_string();
+        assert!(
+            error.starts_with(&format!(
+                "{}:{line}: sweep.values.sweep.sample: a sweep cannot sweep its own keys",
+                path.display()
             )),
             "{error}"
         );
