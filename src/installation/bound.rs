@@ -1,18 +1,21 @@
-//! The Fisher information of the selected terms on a calibration window, from the DVL
-//! and reference noise: each term's standard deviation, their correlation matrix, and
-//! the terms that window cannot show (a standard deviation beyond its tolerance, a
-//! pair correlated beyond [`CORRELATION_LIMIT`], or a direction the residuals do not
-//! feel at all).
-//! In: a [`Fit`] (its Jacobian at the solution). Out: a [`TermBound`].
+//! The standard deviations of a fit's terms, their correlation matrix, and the terms a
+//! calibration window cannot show (a standard deviation beyond its tolerance, a pair
+//! correlated beyond [`CORRELATION_LIMIT`], or a direction the residuals do not feel at
+//! all).
+//! In: a [`Fit`] (its Jacobian and residuals at the solution). Out: a [`TermBound`].
 //!
-//! With white noise of standard deviation σ on every component of every residual,
-//! σ² = σ_dvl² + σ_reference², the information is `JᵀJ / σ²` and the covariance its
-//! inverse. The inverse is taken on the information scaled to a unit diagonal, by its
-//! eigenvalues: a direction whose eigenvalue is below [`FLAT_EIGENVALUE`] times the
-//! largest is flat, and every term with a weight in it has an infinite standard
-//! deviation and is flagged, naming the others that share it.
+//! Two standard deviations per term. The Fisher bound: white noise of standard
+//! deviation σ on every component, σ² = σ_dvl² + σ_reference² (the specified noises),
+//! gives the covariance σ²(JᵀJ)⁻¹, the best the window could do. The honest one: the
+//! noise the residuals show ([`ResidualNoise`]: level and correlation in time, per axis)
+//! gives the sandwich (JᵀJ)⁻¹ JᵀΣJ (JᵀJ)⁻¹, what this window did; the flags and the
+//! correlations come from it. The inverse is taken on the information scaled to a
+//! unit diagonal, by its eigenvalues: a direction whose eigenvalue is below
+//! [`FLAT_EIGENVALUE`] times the largest is flat, and every term with a weight in it has
+//! an infinite standard deviation and is flagged, naming the others that share it.
 
 use super::fit::Fit;
+use super::residual_noise::ResidualNoise;
 use super::terms::PerKind;
 use nalgebra::{DMatrix, SymmetricEigen};
 use std::fmt;
@@ -98,17 +101,24 @@ pub struct Unseen {
     pub why: Why,
 }
 
-/// The bound of a fit's terms, in the order of its parameters.
+/// The standard deviations of a fit's terms, in the order of its parameters.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TermBound {
     pub names: Vec<&'static str>,
     pub value: Vec<f64>,
-    /// Standard deviations, in each term's unit; infinite on a flat direction.
+    /// Standard deviations under the noise the fit's residuals show, in each term's
+    /// unit; infinite on a flat direction.
     pub std: Vec<f64>,
-    /// Correlation coefficients, `[term][term]`; NaN with a term of infinite std.
+    /// The Fisher bound's: under the specified white noise.
+    pub bound_std: Vec<f64>,
+    /// Correlation coefficients of the estimates, `[term][term]`; NaN with a term of
+    /// infinite std.
     pub correlation: Vec<Vec<f64>>,
-    /// Every reason each term cannot be seen (a term may appear more than once).
+    /// Every reason each term cannot be seen (a term may appear more than once), from
+    /// `std` and `correlation`.
     pub unseen: Vec<Unseen>,
+    /// The noise the residuals show.
+    pub residual_noise: ResidualNoise,
 }
 
 impl TermBound {
@@ -118,15 +128,38 @@ impl TermBound {
     }
 }
 
-/// The bound of `fit`'s terms under `noise`, with the terms beyond `tolerances`.
+/// The standard deviations of `fit`'s terms under the noise its residuals show and
+/// under the specified `noise`, with the terms beyond `tolerances`.
 pub fn bound(fit: &Fit, noise: Noise, tolerances: &Tolerances) -> TermBound {
     let names = fit.terms.parameter_names();
     let kinds = fit.terms.parameter_kinds();
     let sigma_m_s = (noise.dvl_m_s.powi(2) + noise.reference_m_s.powi(2)).sqrt();
     let information = UnitInformation::of(fit, names.len());
     let (inverse, flat_with) = information.pseudo_inverse(&names);
-    let std = information.standard_deviations(&inverse, &flat_with, sigma_m_s);
-    let correlation = information.correlations(&inverse, &std);
+    let residual_noise = ResidualNoise::of(&fit.residuals, names.len());
+    let modelled = information.sandwich(
+        &inverse,
+        &residual_noise.weighted_information(&fit.jacobian),
+    );
+    let unmodelled = information.sandwich(
+        &inverse,
+        &super::residual_noise::batch_means_information(&fit.jacobian, &fit.residuals),
+    );
+    let widening = residual_noise.widening();
+    let std: Vec<f64> = information
+        .standard_deviations(&modelled, &flat_with)
+        .into_iter()
+        .zip(information.standard_deviations(&unmodelled, &flat_with))
+        .map(|(modelled, unmodelled)| widening * modelled.max(unmodelled))
+        .collect();
+    let bound_std = information.standard_deviations(&(sigma_m_s.powi(2) * &inverse), &flat_with);
+    // Residuals of zero (a noise-free recording) leave the shape of the bound's.
+    let shape = if residual_noise.std_m_s == [0.0; 3] {
+        &inverse
+    } else {
+        &modelled
+    };
+    let correlation = information.correlations(shape, &std);
     let unseen = unseen(&names, &flat_with, &std, &correlation, |k| {
         tolerances.of(kinds[k])
     });
@@ -134,8 +167,10 @@ pub fn bound(fit: &Fit, noise: Noise, tolerances: &Tolerances) -> TermBound {
         names,
         value: fit.parameters.clone(),
         std,
+        bound_std,
         correlation,
         unseen,
+        residual_noise,
     }
 }
 
@@ -205,25 +240,31 @@ impl UnitInformation {
         (inverse, flat_with)
     }
 
-    /// Each term's standard deviation under white noise `sigma_m_s`: infinite on a
-    /// flat direction.
-    fn standard_deviations(
-        &self,
-        inverse: &DMatrix<f64>,
-        flat_with: &FlatWith,
-        sigma_m_s: f64,
-    ) -> Vec<f64> {
+    /// The covariance, in the unit-diagonal scaling, of estimates whose information is
+    /// `self` and whose noise weights it to `weighted` (JᵀΣJ over every term):
+    /// `inverse` · D⁻¹ JᵀΣJ D⁻¹ · `inverse`.
+    fn sandwich(&self, inverse: &DMatrix<f64>, weighted: &DMatrix<f64>) -> DMatrix<f64> {
+        let felt = &self.felt;
+        let middle = DMatrix::from_fn(felt.len(), felt.len(), |a, b| {
+            weighted[(felt[a], felt[b])] / (self.scale[felt[a]] * self.scale[felt[b]])
+        });
+        inverse * middle * inverse
+    }
+
+    /// Each term's standard deviation from `covariance` (in the unit-diagonal scaling):
+    /// infinite on a flat direction.
+    fn standard_deviations(&self, covariance: &DMatrix<f64>, flat_with: &FlatWith) -> Vec<f64> {
         (0..self.scale.len())
             .map(|k| match (self.position(k), &flat_with[k]) {
-                (Some(a), None) => sigma_m_s * inverse[(a, a)].sqrt() / self.scale[k],
+                (Some(a), None) => covariance[(a, a)].max(0.0).sqrt() / self.scale[k],
                 _ => f64::INFINITY,
             })
             .collect()
     }
 
-    /// The correlation of every pair of terms: 1 on the diagonal, NaN with a term of
-    /// infinite standard deviation.
-    fn correlations(&self, inverse: &DMatrix<f64>, std: &[f64]) -> Vec<Vec<f64>> {
+    /// The correlation of every pair of terms from `covariance` (in the unit-diagonal
+    /// scaling): 1 on the diagonal, NaN with a term of infinite standard deviation.
+    fn correlations(&self, covariance: &DMatrix<f64>, std: &[f64]) -> Vec<Vec<f64>> {
         let n = std.len();
         (0..n)
             .map(|j| {
@@ -235,7 +276,7 @@ impl UnitInformation {
                             f64::NAN
                         } else {
                             let (a, b) = (self.position(j).unwrap(), self.position(k).unwrap());
-                            inverse[(a, b)] / (inverse[(a, a)] * inverse[(b, b)]).sqrt()
+                            covariance[(a, b)] / (covariance[(a, a)] * covariance[(b, b)]).sqrt()
                         }
                     })
                     .collect()
@@ -294,14 +335,21 @@ mod tests {
     use super::*;
     use crate::installation::terms::{Installation, PerAxis, TermSet};
 
-    /// A fit whose Jacobian is `columns` (each a column of residual derivatives).
+    /// A fit whose Jacobian is `columns` (each a column of residual derivatives), with
+    /// residuals of zero.
     fn fit_with(terms: TermSet, columns: &[Vec<f64>]) -> Fit {
+        fit_leaving(terms, columns, vec![0.0; columns[0].len()])
+    }
+
+    /// [`fit_with`], leaving `residuals`.
+    fn fit_leaving(terms: TermSet, columns: &[Vec<f64>], residuals: Vec<f64>) -> Fit {
         let rows = columns[0].len();
         Fit {
             terms,
             installation: Installation::default(),
             parameters: vec![0.0; columns.len()],
             jacobian: DMatrix::from_fn(rows, columns.len(), |r, c| columns[c][r]),
+            residuals: nalgebra::DVector::from_vec(residuals),
             residual_rms_m_s: [0.0; 3],
             sample_count: rows / 3,
             termination: "test".into(),
@@ -325,7 +373,7 @@ mod tests {
             })
             .collect();
         let bound = bound(&fit_with(terms, &columns), NOISE, &DEFAULT_TOLERANCES);
-        for std in &bound.std {
+        for std in &bound.bound_std {
             assert!((std - 0.02 / 300f64.sqrt()).abs() < 1e-15);
         }
         assert!(bound.unseen.is_empty());
@@ -336,7 +384,7 @@ mod tests {
             reference_m_s: 0.04,
         };
         let wider = super::bound(&fit_with(terms, &columns), both, &DEFAULT_TOLERANCES);
-        assert!((wider.std[0] - 0.05 / 300f64.sqrt()).abs() < 1e-15);
+        assert!((wider.bound_std[0] - 0.05 / 300f64.sqrt()).abs() < 1e-15);
     }
 
     #[test]
@@ -409,20 +457,32 @@ mod tests {
         assert!(bound.is_unseen("lever_arm_z_m"));
     }
 
+    /// Residuals that read as white: 1, 1, −1, −1, … times `level` on every axis (their
+    /// lag-one correlation is about 1/n).
+    fn white(samples: usize, level: f64) -> Vec<f64> {
+        (0..3 * samples)
+            .map(|r| level * if (r / 3) % 4 < 2 { 1.0 } else { -1.0 })
+            .collect()
+    }
+
     #[test]
-    fn a_term_beyond_its_tolerance_is_flagged_with_its_std() {
-        // One time offset column, tiny: std = 0.02 / (0.01 · √30) ≈ 0.37 s.
+    fn a_term_beyond_its_tolerance_is_flagged_with_its_honest_std() {
+        // One time offset column, tiny, over 40 samples (120 rows), with residuals of
+        // 2 cm/s: std ≈ 0.02 / (0.01 · √120) ≈ 0.18 s, the Fisher bound's at the
+        // residuals' level.
         let terms = TermSet {
             time_offset: true,
             ..TermSet::NONE
         };
-        let bound = bound(
-            &fit_with(terms, &[vec![0.01; 30]]),
-            NOISE,
-            &DEFAULT_TOLERANCES,
+        let fit = fit_leaving(terms, &[vec![0.01; 120]], white(40, 0.02));
+        let bound = bound(&fit, NOISE, &DEFAULT_TOLERANCES);
+        let expected = 0.02 / (0.01 * 120f64.sqrt());
+        assert!((bound.bound_std[0] - expected).abs() < 1e-12);
+        assert!(
+            (1.0..1.5).contains(&(bound.std[0] / expected)),
+            "{}",
+            bound.std[0]
         );
-        let expected = 0.02 / (0.01 * 30f64.sqrt());
-        assert!((bound.std[0] - expected).abs() < 1e-12);
         assert_eq!(
             bound.unseen,
             vec![Unseen {
@@ -432,6 +492,72 @@ mod tests {
                     tolerance: 0.05
                 }
             }]
+        );
+        // The same column with no residual left: the honest std is zero, and seen.
+        let exact = super::bound(
+            &fit_with(terms, &[vec![0.01; 120]]),
+            NOISE,
+            &DEFAULT_TOLERANCES,
+        );
+        assert_eq!(exact.std, [0.0]);
+        assert!(exact.unseen.is_empty());
+    }
+
+    /// Residuals correlated in time widen a bias's standard deviation by the AR(1)
+    /// factor, √(Σᵢⱼ ρ^|i−j| / n), where the Fisher bound does not move; residuals at a
+    /// tenth of the specified noise shrink it tenfold.
+    #[test]
+    fn correlated_residuals_widen_the_honest_std_and_the_bound_stays() {
+        let terms = TermSet::of_error_model(crate::vocab::ErrorModel::Em4);
+        let samples = 400;
+        let columns: Vec<Vec<f64>> = (0..3)
+            .map(|axis| {
+                (0..3 * samples)
+                    .map(|row| if row % 3 == axis { -1.0 } else { 0.0 })
+                    .collect()
+            })
+            .collect();
+        // An AR(1) path of correlation 0.8, the same on each axis.
+        let mut path = vec![0.0; samples];
+        for i in 0..samples {
+            let shock = ((i * 7919) % 1000) as f64 / 1000.0 - 0.5;
+            path[i] = shock + if i > 0 { 0.8 * path[i - 1] } else { 0.0 };
+        }
+        let residuals: Vec<f64> = (0..3 * samples).map(|r| path[r / 3]).collect();
+        let fit = fit_leaving(terms, &columns, residuals.clone());
+        let bound = bound(&fit, NOISE, &DEFAULT_TOLERANCES);
+        let noise = ResidualNoise::of(&nalgebra::DVector::from_vec(residuals), 3);
+        let rho = noise.lag_one[0];
+        assert!((rho - 0.8).abs() < 0.1, "{rho}");
+        let n = samples as f64;
+        let sum: f64 = n + 2.0
+            * (1..samples)
+                .map(|l| (n - l as f64) * rho.powi(l as i32))
+                .sum::<f64>();
+        let expected = noise.std_m_s[0] * sum.sqrt() / n;
+        // The AR(1) sandwich, widened for its estimated correlation, or the batch means'
+        // where they read wider.
+        let widened = bound.residual_noise.widening() * expected;
+        for k in 0..3 {
+            let ratio = bound.std[k] / widened;
+            assert!(
+                (1.0 - 1e-9..1.3).contains(&ratio),
+                "{} against {widened}",
+                bound.std[k]
+            );
+            assert!((bound.bound_std[k] - 0.02 / n.sqrt()).abs() < 1e-15);
+        }
+        assert!(
+            bound.std[0] > 2.5 * noise.std_m_s[0] / n.sqrt(),
+            "about 3 times wider"
+        );
+
+        let quiet = fit_leaving(terms, &columns, white(samples, 0.002));
+        let quiet = super::bound(&quiet, NOISE, &DEFAULT_TOLERANCES);
+        assert!(
+            (quiet.std[0] / (quiet.bound_std[0] / 10.0) - 1.0).abs() < 0.05,
+            "{}",
+            quiet.std[0]
         );
     }
 }

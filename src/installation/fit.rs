@@ -54,6 +54,9 @@ pub struct Fit {
     /// ∂(v_dvl − predict)/∂θ at the solution, `[3 · sample_count, parameters]`, rows
     /// sample by sample, x, y, z within a sample.
     pub jacobian: DMatrix<f64>,
+    /// The residuals v_dvl − predict at the solution, x, y, z of each sample in order,
+    /// m/s.
+    pub residuals: DVector<f64>,
     /// The RMS of the residual v_dvl − predict per DVL axis, m/s.
     pub residual_rms_m_s: Vec3,
     /// How many DVL samples were fitted (those inside the fixed mask).
@@ -351,12 +354,14 @@ pub fn fit(
         });
     }
     let sample_count = mask.len();
+    let residuals = solved.residual_vector();
     Ok(Fit {
         terms,
         installation,
         parameters: installation.to_parameters(&terms),
         jacobian: solved.jacobian_matrix(),
-        residual_rms_m_s: residual_rms(&solved.residual_vector(), sample_count),
+        residual_rms_m_s: residual_rms(&residuals, sample_count),
+        residuals,
         sample_count,
         termination,
     })

@@ -5,9 +5,10 @@
 //! time (rotation, body rate); [`terms`] holds which terms are estimated, their values,
 //! the model's prediction, the correction of a DVL record and its score against the
 //! reference; [`fit`] estimates the selected terms by nonlinear least squares
-//! (Levenberg–Marquardt from a scan over τ, on a fixed interior mask); [`bound`] gives
-//! their Fisher information: standard deviations, correlations and the terms a segment
-//! cannot show; [`filter`] estimates them sample by sample (an extended Kalman filter)
+//! (Levenberg–Marquardt from a scan over τ, on a fixed interior mask); [`residual_noise`]
+//! reads the noise its residuals show (level and correlation in time); [`bound`] gives
+//! the terms' standard deviations, from that noise and from the specified one (the
+//! Fisher bound), their correlations and the terms a segment cannot show; [`filter`] estimates them sample by sample (an extended Kalman filter)
 //! with the bound of the samples so far; [`study`] scores every method held out (its
 //! filters' passes in [`protocol_filters`]), and [`calibration_time`] finds how long each
 //! needs; [`settling`] finds it for a single recording (`calibrate`). With `[learned]`
@@ -26,6 +27,7 @@ pub mod spec;
 pub mod frames;
 pub mod terms;
 pub mod fit;
+pub mod residual_noise;
 pub mod bound;
 pub mod filter;
 pub mod rows;

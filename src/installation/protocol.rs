@@ -72,7 +72,7 @@ struct Estimate {
     installation: Installation,
     bound: Option<TermBound>,
     /// A filter's terms: each parameter's name, value and standard deviation.
-    filtered: Option<Vec<(&'static str, f64, f64)>>,
+    filtered: Option<Vec<(&'static str, f64, f64, f64)>>,
 }
 
 /// The terms one method estimated on one calibration window.
@@ -416,13 +416,14 @@ impl OnTrajectory<'_> {
         learned: bool,
         window_s: f64,
     ) -> Vec<TermRow> {
-        let row = |term: &str, value: f64, std: f64, unseen: String| TermRow {
+        let row = |term: &str, value: f64, (std, bound_std): (f64, f64), unseen: String| TermRow {
             method: label.to_string(),
             calibration: self.calibration().name.clone(),
             window_s,
             term: term.to_string(),
             value,
             std,
+            bound_std,
             unseen,
         };
         let mut rows = Vec::new();
@@ -433,11 +434,13 @@ impl OnTrajectory<'_> {
             let names = set.parameter_names().into_iter();
             names
                 .zip(values)
-                .map(|(name, value)| (name, value, f64::NAN))
+                .map(|(name, value)| (name, value, f64::NAN, f64::NAN))
                 .collect()
         });
-        for &(name, value, std) in learned_terms.iter().chain(&estimate.filtered).flatten() {
-            rows.push(row(name, value, std, String::new()));
+        for &(name, value, std, bound_std) in
+            learned_terms.iter().chain(&estimate.filtered).flatten()
+        {
+            rows.push(row(name, value, (std, bound_std), String::new()));
         }
         if let Some(bound) = &estimate.bound {
             for (i, name) in bound.names.iter().enumerate() {
@@ -448,7 +451,12 @@ impl OnTrajectory<'_> {
                     .map(|u| u.why.to_string())
                     .collect::<Vec<_>>()
                     .join("; ");
-                rows.push(row(name, bound.value[i], bound.std[i], unseen));
+                rows.push(row(
+                    name,
+                    bound.value[i],
+                    (bound.std[i], bound.bound_std[i]),
+                    unseen,
+                ));
             }
         }
         rows

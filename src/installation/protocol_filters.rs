@@ -22,8 +22,8 @@ pub struct FilterRun {
 }
 
 /// The terms a filter holds at the end of a window: the installation, and each
-/// parameter's name, value and standard deviation.
-pub type WindowTerms = (Installation, Vec<(&'static str, f64, f64)>);
+/// parameter's name, value, standard deviation and the bound's.
+pub type WindowTerms = (Installation, Vec<(&'static str, f64, f64, f64)>);
 
 /// Every filter of `spec` run over the calibration trajectory's `recording`, beside its
 /// `reference`.
@@ -67,8 +67,8 @@ impl FilterRun {
             .parameter_names()
             .into_iter()
             .zip(step.installation.to_parameters(&self.terms))
-            .zip(&step.std)
-            .map(|((name, value), &std)| (name, value, std))
+            .zip(step.std.iter().zip(&step.bound_std))
+            .map(|((name, value), (&std, &bound_std))| (name, value, std, bound_std))
             .collect();
         Some((step.installation, terms))
     }

@@ -23,7 +23,7 @@ pub struct TransferRow {
     pub total_cm_s: f64,
 }
 
-/// One estimated term of one calibration, with its bound.
+/// One estimated term of one calibration, with its standard deviations.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TermRow {
     pub method: String,
@@ -32,8 +32,12 @@ pub struct TermRow {
     /// Such as `lever_arm_x_m`.
     pub term: String,
     pub value: f64,
-    /// The bound's standard deviation, in the term's unit.
+    /// The standard deviation, in the term's unit: a fit's from the noise its residuals
+    /// show, a filter's its own; NaN for a learned method's.
     pub std: f64,
+    /// The Fisher bound's, under the specified white noise (a filter's: of the samples
+    /// it took).
+    pub bound_std: f64,
     /// Why the window cannot show the term; empty when it can.
     pub unseen: String,
 }

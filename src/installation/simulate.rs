@@ -44,15 +44,38 @@ pub fn simulate_dvl(
     noise_m_s: f64,
     rng: &mut impl Rng,
 ) -> Vec<Option<Vec3>> {
+    simulate_dvl_correlated(segment, installation, (noise_m_s, 0.0), rng)
+}
+
+/// [`simulate_dvl`] with noise correlated in time: per axis a stationary first-order
+/// autoregression of standard deviation `noise_m_s` whose correlation between samples
+/// one second apart is `correlation_at_1_s` (between samples Δt apart, its power Δt);
+/// at 0, white noise of the same draws as [`simulate_dvl`]'s.
+pub fn simulate_dvl_correlated(
+    segment: &Segment,
+    installation: &Installation,
+    (noise_m_s, correlation_at_1_s): (f64, f64),
+    rng: &mut impl Rng,
+) -> Vec<Option<Vec3>> {
     let noise = Normal::new(0.0, noise_m_s).expect("a finite, non-negative noise");
-    segment
-        .recording
-        .time_s
+    let time_s = &segment.recording.time_s;
+    let mut last: Option<(f64, Vec3)> = None;
+    time_s
         .iter()
         .map(|&t| {
             let at = segment.reference.at(t + installation.time_offset_s)?;
             let clean = installation.predict(at);
-            Some(clean.map(|v| v + noise.sample(rng)))
+            let drawn = [0, 1, 2].map(|_| noise.sample(rng));
+            let n = match last {
+                Some((before, previous)) if correlation_at_1_s != 0.0 => {
+                    let rho = correlation_at_1_s.powf(t - before);
+                    let fresh = (1.0 - rho * rho).sqrt();
+                    [0, 1, 2].map(|k| rho * previous[k] + fresh * drawn[k])
+                }
+                _ => drawn,
+            };
+            last = Some((t, n));
+            Some([0, 1, 2].map(|k| clean[k] + n[k]))
         })
         .collect()
 }

@@ -480,13 +480,19 @@ mod tests {
     /// A straight, level recording of 300 s at 1 Hz in A-KIT's two files, the vehicle
     /// heading north at a varying speed, its DVL off by `bias_m_s`; the DVL file's path.
     fn straight_recording(folder: &Path, bias_m_s: [f64; 3]) -> PathBuf {
+        straight_recording_swinging(folder, bias_m_s, 0.2)
+    }
+
+    /// [`straight_recording`] whose speed swings by `swing_m_s` about 1 m/s (at 0, a
+    /// constant speed, where nothing shows a time offset).
+    fn straight_recording_swinging(folder: &Path, bias_m_s: [f64; 3], swing_m_s: f64) -> PathBuf {
         let mut dvl = String::from("Time [s],DVL X [m/s],DVL Y [m/s],DVL Z [m/s]\n");
         let mut reference = String::from(
             "Time [s],V North [m/s],V East [m/s],V Down [m/s],Roll [rad],Pitch [rad],Yaw [rad]\n",
         );
         for i in 0..300 {
             let t = i as f64;
-            let speed = 1.0 + 0.2 * (t / 20.0).sin();
+            let speed = 1.0 + swing_m_s * (t / 20.0).sin();
             let [bx, by, bz] = bias_m_s;
             dvl.push_str(&format!("{t},{},{by},{bz}\n", speed + bx));
             reference.push_str(&format!("{t},{speed},0,0,0,0,0\n"));
@@ -547,14 +553,14 @@ mod tests {
         assert!(calibration.terms_in_time.is_file());
     }
 
-    /// On a straight line the time offset cannot be seen: it is printed as not seen and
-    /// neither scored nor applied, where the fit's value (noise) once shifted every
-    /// corrected sample's `valid_at_s`.
+    /// On a straight line at constant speed the time offset cannot be seen: it is
+    /// printed as not seen and neither scored nor applied, where the fit's value (noise)
+    /// once shifted every corrected sample's `valid_at_s`.
     #[test]
     fn a_term_the_recording_cannot_show_is_not_applied() {
         let folder = tempfile::tempdir().unwrap();
         let bias = [0.03, -0.02, 0.01];
-        let dvl = straight_recording(folder.path(), bias);
+        let dvl = straight_recording_swinging(folder.path(), bias, 0.0);
         let (reference, out) = (folder.path().join("GT.csv"), folder.path().join("out"));
         let terms = [TermName::TimeOffset, TermName::Bias];
         let calibration = calibrate(&args(&dvl, &reference, &out, &terms)).unwrap();

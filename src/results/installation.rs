@@ -380,6 +380,7 @@ mod tests {
                     term: "lever_arm_x_m".into(),
                     value: -1.89,
                     std: 0.017,
+                    bound_std: 0.012,
                     unseen: String::new(),
                 },
                 TermRow {
@@ -389,6 +390,7 @@ mod tests {
                     term: "time_offset_s".into(),
                     value: 1.51,
                     std: f64::INFINITY,
+                    bound_std: f64::INFINITY,
                     unseen: "standard deviation 1e9 s; correlated −0.97 with bias_y_m_s".into(),
                 },
             ],
@@ -527,7 +529,7 @@ mod tests {
             ["method", "calibration", "window_s", "why"]
         );
         assert_eq!(names(trace_batch(&[]))[4], "before_x_cm_s");
-        assert_eq!(names(terms_batch(&[]))[6], "unseen");
+        assert_eq!(names(terms_batch(&[]))[5..], ["std", "bound_std", "unseen"]);
     }
 
     #[test]

@@ -118,6 +118,7 @@ mod tests {
                 term: "lever_arm_x_m".into(),
                 value: -1.886_432_1e-1,
                 std: f64::INFINITY,
+                bound_std: f64::INFINITY,
                 unseen: "flat".into(),
             }],
             ..Calibrated::default()

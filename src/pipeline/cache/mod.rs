@@ -51,8 +51,9 @@ const TRAINING_CODE_VERSION: u32 = 4;
 /// rows of the calibration time).
 const PROTOCOL_CODE_VERSION: u32 = 2;
 /// Bumped whenever an installation study's calibration changes its numbers (2: the
-/// Kalman filters' terms against time).
-const INSTALLATION_CODE_VERSION: u32 = 2;
+/// Kalman filters' terms against time; 3: standard deviations from the residuals'
+/// noise beside the bound's).
+const INSTALLATION_CODE_VERSION: u32 = 3;
 /// Bumped whenever the tables put together from an installation study's calibrations
 /// change.
 const INSTALLATION_TABLES_CODE_VERSION: u32 = 1;

@@ -255,6 +255,7 @@ mod tests {
             term: term.into(),
             value,
             std: 0.01,
+            bound_std: 0.01,
             unseen: unseen.into(),
         }
     }

@@ -20,7 +20,7 @@ struct Agreement {
     seen: usize,
     /// The sample standard deviation of their estimates, in the readable unit.
     spread: f64,
-    /// The median of their bound's standard deviations.
+    /// The median of their standard deviations.
     median_std: f64,
 }
 
@@ -99,7 +99,7 @@ pub(super) fn agreement(method: &str, rows: &[&TermRow]) -> String {
         .map(|a| a.name.clone())
         .collect();
     let mut text = format!(
-        "Across the {} calibration trajectories, {method}'s estimates of a term agree within their intervals when the standard deviation of the estimates where the term is seen (the spread) is at most {AGREEMENT_Z} times the median of their bound's standard deviations (σ).",
+        "Across the {} calibration trajectories, {method}'s estimates of a term agree within their intervals when the standard deviation of the estimates where the term is seen (the spread) is at most {AGREEMENT_Z} times the median of their standard deviations (σ, a fit's from the noise its residuals show, level and correlation in time; a filter's its own).",
         calibrations.len()
     );
     text += &match agree.is_empty() {

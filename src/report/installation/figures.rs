@@ -182,6 +182,7 @@ pub(crate) mod tests {
                             term: term.into(),
                             value,
                             std,
+                            bound_std: std,
                             unseen: unseen.into(),
                         })
                     };

@@ -6,7 +6,7 @@
 //! - [`heldout`]: the mean held-out RMSE of each method at the largest window with its
 //!   95 % interval and its ratio to no calibration, and the same means per window;
 //! - [`terms`]: for each installation model, the terms each calibration trajectory
-//!   estimated with the bound's standard deviation, in readable units, those the window
+//!   estimated with their standard deviations, in readable units, those the window
 //!   cannot show marked and why listed under the table;
 //! - [`agreement`]: the paragraph on where those estimates agree across calibration
 //!   trajectories within their intervals;
@@ -147,6 +147,7 @@ pub(crate) mod tests {
             term: term.into(),
             value,
             std,
+            bound_std: std,
             unseen: unseen.into(),
         };
         InstallationResults {

@@ -1,5 +1,5 @@
 //! The terms table of one installation model: the terms each calibration trajectory
-//! estimated at the largest window, ± the bound's standard deviation, in units people
+//! estimated at the largest window, ± their standard deviation, in units people
 //! read ([`readable_term`]: lever arm in m, bias in cm/s, misalignment in degrees, scale
 //! in %), those the window cannot show marked and why listed under the table
 //! ([`readable_why`]). In: the study's term rows of one method. Out: a [`Section`].
@@ -61,7 +61,7 @@ pub(super) fn terms_section(method: &str, window_s: f64, rows: &[&TermRow]) -> S
             window_text(window_s)
         ),
         caption: format!(
-            "The terms {method} estimated on the first {} of each calibration trajectory, ± the standard deviation of the Fisher bound; (not seen) marks a term the window cannot show.",
+            "The terms {method} estimated on the first {} of each calibration trajectory, ± its standard deviation (a fit's from the noise its residuals leave, their level and their correlation in time; a Kalman filter's its own; the Fisher bound at the specified noise is `bound_std` in terms.parquet); (not seen) marks a term the window cannot show.",
             window_text(window_s)
         ),
         table: Table::new(

@@ -30,7 +30,13 @@ fn printed_fit(calibration: &Calibration) -> String {
     } = calibration;
     let mut table = Table::new();
     table.load_preset(ASCII_MARKDOWN);
-    table.set_header(["term", "estimate", "standard deviation", "seen"]);
+    table.set_header([
+        "term",
+        "estimate",
+        "standard deviation",
+        "bound (specified noise)",
+        "seen",
+    ]);
     for (i, name) in bound.names.iter().enumerate() {
         let (readable, unit, factor) = readable_term(name);
         let seen = if crate::results::calibrate::is_noise(bound, name) {
@@ -44,18 +50,24 @@ fn printed_fit(calibration: &Calibration) -> String {
             readable,
             format!("{:.4} {unit}", bound.value[i] * factor),
             format!("{:.4} {unit}", bound.std[i] * factor),
+            format!("{:.4} {unit}", bound.bound_std[i] * factor),
             seen.to_string(),
         ]);
     }
-    let residual = fitted.residual_rms_m_s.map(|r| 100.0 * r);
+    let shown = bound.residual_noise;
     let assumed = 100.0 * (noise.dvl_m_s.powi(2) + noise.reference_m_s.powi(2)).sqrt();
     let mut text = format!(
         "calibrated on {} samples (those {TIME_OFFSET_MARGIN_S} s inside the reference)\n{table}\n",
         fitted.sample_count
     );
     text.push_str(&format!(
-        "the standard deviations assume white noise of {assumed:.2} cm/s per axis; the fit leaves {:.2}, {:.2}, {:.2} cm/s (x, y, z): where the two differ, or the noise is not white, they are off by about as much\n",
-        residual[0], residual[1], residual[2]
+        "standard deviation: from the noise the fit leaves, per axis x, y, z {:.2}, {:.2}, {:.2} cm/s with a correlation of {:.2}, {:.2}, {:.2} from one sample to the next (an AR(1) noise); bound: from the specified white noise of {assumed:.2} cm/s per axis, the best these samples could give\n",
+        100.0 * shown.std_m_s[0],
+        100.0 * shown.std_m_s[1],
+        100.0 * shown.std_m_s[2],
+        shown.lag_one[0],
+        shown.lag_one[1],
+        shown.lag_one[2],
     ));
     for unseen in &bound.unseen {
         text.push_str(&format!(

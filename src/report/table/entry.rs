@@ -30,7 +30,7 @@ pub(crate) enum Entry {
         lower: usize,
         of: usize,
     },
-    /// A term in its readable unit, its bound's standard deviation, whether it is seen.
+    /// A term in its readable unit, its standard deviation, whether it is seen.
     Term {
         value: f64,
         std: f64,
