@@ -5,12 +5,16 @@
 //! calibration windows for DCNet. Its mean over runs is the method's held-out curve;
 //! the bound's is the expected RMSE of an efficient estimator from the same samples.
 //! (The calibration trajectory is never among the held-out data, even where a spec
-//! tests on it too.) A method's calibration time is the shortest length after which
-//! its curve stays within the spec's tolerance of its value at the longest window, and is set beside
-//! its T_conv; its time to the bound, the shortest after which it stays within the
-//! tolerance of the bound's value there (a target common to every method, which a
-//! method that converges to a worse value never reaches). In: per-run rows of [`Phase::HeldOut`], the bound's curve, the
-//! calibration table. Out: the held-out curves and the calibration-time table.
+//! tests on it too.) Read at the calibration windows, where every method has its curve:
+//! a method's time to the bound is the shortest length after which it stays within the
+//! tolerance of the bound's value at the longest window (a target common to every
+//! method, which a method that converges to a worse value never reaches); its
+//! calibration time, for a method that reaches the bound, the shortest length after
+//! which its curve stays within the tolerance, of what calibration changes over the
+//! windows (from its RMSE at the shortest down to the bound's at the longest), of its
+//! own value at the longest window, set beside its T_conv. In: per-run rows of
+//! [`Phase::HeldOut`], the bound's curve, the calibration table. Out: the held-out
+//! curves and the calibration-time table.
 
 use super::rows::{CalibrationRow, CalibrationTimeRow, HeldOutRow, RunRow};
 use super::statistics::mean_std;
@@ -74,14 +78,22 @@ impl HeldOutScore {
 }
 
 /// The shortest length of `curve` (length, mean RMSE, in increasing length) from which
-/// every later point is within `tolerance` (a fraction) of the last point's RMSE, above
-/// or below it; its index. `None` when the last point is not finite.
-pub fn calibration_time_index(curve: &[(f64, f64)], tolerance: f64) -> Option<usize> {
+/// every later point is within `band_cm_s` of the last point's RMSE, above or below it;
+/// its index. `None` when the last point is not finite.
+pub fn calibration_time_index(curve: &[(f64, f64)], band_cm_s: f64) -> Option<usize> {
     let &(_, long) = curve.last()?;
     if !long.is_finite() {
         return None;
     }
-    first_of_last_run(curve, |rmse| (rmse - long).abs() <= tolerance * long)
+    first_of_last_run(curve, |rmse| (rmse - long).abs() <= band_cm_s)
+}
+
+/// The band of a calibration time: `tolerance` (a fraction) of what calibration can
+/// change, the RMSE from `worst` (with no calibration, where known) down to `floor`
+/// (what no calibration removes: noise). A band of the whole RMSE let a method whose
+/// curve sits on a high floor "settle" at once.
+pub fn tolerance_band(tolerance: f64, worst_cm_s: f64, floor_cm_s: f64) -> f64 {
+    tolerance * (worst_cm_s - floor_cm_s).max(0.0)
 }
 
 /// The shortest length of `curve` from which every later point is at most `limit`; its
@@ -172,13 +184,20 @@ pub fn calibration_times(
                 .filter(|r| r.dvl == dvl)
                 .map(|r| r.window_s)
                 .fold(f64::NEG_INFINITY, f64::max);
+            // Read at the calibration windows, the lengths at which every method (DCNet,
+            // whose estimate is a pass of the network per window, too) has its curve.
+            let windows: Vec<f64> = calibration
+                .iter()
+                .filter(|r| r.dvl == dvl)
+                .map(|r| r.window_s)
+                .collect();
             let curve: Vec<(f64, f64)> = curves
                 .iter()
                 .filter(|r| {
                     r.dvl == dvl
                         && r.estimator == estimator
                         && r.error_model == error_model
-                        && r.length_s <= long_window_s
+                        && windows.contains(&r.length_s)
                 })
                 .map(|r| (r.length_s, r.rmse_cm_s))
                 .collect();
@@ -192,7 +211,6 @@ pub fn calibration_times(
                 })?
                 .window_s;
             let &(long_s, long) = curve.last()?;
-            let index = calibration_time_index(&curve, tolerance);
             // The bound's own curve ends at the same longest window.
             let bound = curves
                 .iter()
@@ -203,8 +221,17 @@ pub fn calibration_times(
                         && r.rmse_cm_s.is_finite()
                 })
                 .max_by(|a, b| a.length_s.total_cmp(&b.length_s));
+            // The protocol scores no uncorrected DVL: the band is of what calibration
+            // changes over the windows, from the method's RMSE at the shortest (or the
+            // longest, where higher) down to what the bound leaves at the longest.
+            let floor = bound.map_or(0.0, |b| b.rmse_cm_s.min(long));
+            let worst = curve[0].1.max(long);
+            let index = calibration_time_index(&curve, tolerance_band(tolerance, worst, floor));
             let to_bound =
                 bound.and_then(|b| index_within(&curve, b.rmse_cm_s * (1.0 + tolerance)));
+            // A method that never comes within the tolerance of the bound has settled on
+            // a value worse than the data allow: no calibration time.
+            let index = index.filter(|_| bound.is_none() || to_bound.is_some());
             Some(CalibrationTimeRow {
                 dvl: dvl.to_string(),
                 estimator,
@@ -275,7 +302,10 @@ mod tests {
 
     #[test]
     fn the_calibration_time_is_where_the_curve_stays_within_the_tolerance() {
-        // Last point 1.0: within 10 % means from 0.9 to 1.1.
+        // Last point 1.0: within 10 % of it means from 0.9 to 1.1.
+        let within = |curve: &[(f64, f64)], tolerance: f64| {
+            calibration_time_index(curve, tolerance_band(tolerance, 1.0, 0.0))
+        };
         let curve = [
             (1.0, 5.0),
             (2.0, 1.05),
@@ -284,16 +314,22 @@ mod tests {
             (5.0, 1.08),
             (6.0, 1.0),
         ];
-        assert_eq!(calibration_time_index(&curve, 0.1), Some(3));
-        assert_eq!(calibration_time_index(&curve, 0.25), Some(1));
-        assert_eq!(calibration_time_index(&curve, 5.0), Some(0));
+        assert_eq!(within(&curve, 0.1), Some(3));
+        assert_eq!(within(&curve, 0.25), Some(1));
+        assert_eq!(within(&curve, 5.0), Some(0));
         // A curve that rises to its last value is within only once it is near it.
         let rising = [(1.0, 0.5), (2.0, 0.95), (3.0, 1.0)];
-        assert_eq!(calibration_time_index(&rising, 0.1), Some(1));
+        assert_eq!(within(&rising, 0.1), Some(1));
         // A point that cannot be scored (NaN) is not within.
         let gap = [(1.0, 1.0), (2.0, f64::NAN), (3.0, 1.0)];
-        assert_eq!(calibration_time_index(&gap, 0.1), Some(2));
-        assert_eq!(calibration_time_index(&[(1.0, f64::INFINITY)], 0.1), None);
+        assert_eq!(within(&gap, 0.1), Some(2));
+        assert_eq!(within(&[(1.0, f64::INFINITY)], 0.1), None);
+        // On a floor of 0.95 a tolerance of 10 % is of the 0.05 above it: within
+        // 0.995 to 1.005, only at the last point.
+        assert_eq!(
+            calibration_time_index(&curve, tolerance_band(0.1, 1.0, 0.95)),
+            Some(5)
+        );
         // Against a common target: never, when the curve ends above it.
         assert_eq!(index_within(&curve, 0.95), None);
         assert_eq!(index_within(&curve, 1.2), Some(1));

@@ -198,7 +198,11 @@ pub fn assemble(
         calibration_time: Vec::new(),
     };
     let study = InstallationResults {
-        calibration_time: calibration_times(&study.heldout, spec.time_tolerance),
+        calibration_time: calibration_times(
+            &study.heldout,
+            spec.time_tolerance,
+            100.0 * (3.0 * (spec.dvl_noise_m_s.powi(2) + spec.reference_noise_m_s.powi(2))).sqrt(),
+        ),
         ..study
     };
     (study, all.estimated)

@@ -89,12 +89,15 @@ pub struct InstallationTimeRow {
     pub calibration: String,
     /// The window of lowest held-out RMSE.
     pub t_conv_s: f64,
-    /// The shortest window after which the held-out RMSE stays within the tolerance of
-    /// its value at the longest window.
+    /// The shortest window after which the held-out RMSE stays within the tolerance
+    /// (of what calibration can change) of its value at the longest window; `None`:
+    /// never, or no better than no calibration.
     pub calibration_time_s: Option<f64>,
     pub rmse_at_time_cm_s: f64,
     pub long_window_rmse_cm_s: f64,
     pub tolerance_pct: f64,
+    /// What perfect terms leave: the specified noise, total over three axes, cm/s.
+    pub noise_floor_cm_s: f64,
 }
 
 /// One term of a Kalman filter after one sample of a calibration trajectory, in the

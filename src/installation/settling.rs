@@ -10,7 +10,7 @@
 
 use super::filter::FilterStep;
 use super::terms::Installation;
-use crate::evaluate::calibration_time::calibration_time_index;
+use crate::evaluate::calibration_time::{calibration_time_index, tolerance_band};
 
 /// The filter after the samples of the first `length_s` seconds (its step, copied, so a
 /// curve outlives the filter's run), and the RMSE its terms leave on the whole recording.
@@ -77,10 +77,17 @@ pub fn settling_curve(
 }
 
 /// The shortest length of `curve` after which its RMSE stays within `tolerance` (a
-/// fraction) of its last value; `None` when the last value is not finite.
-pub fn settling_time(curve: &[SettlingPoint], tolerance: f64) -> Option<&SettlingPoint> {
+/// fraction) of what calibration changes on the recording, from `before_cm_s` (no
+/// calibration) down to `floor_cm_s` (the batch fit's), of its last value; `None`
+/// when the last value is not finite.
+pub fn settling_time(
+    curve: &[SettlingPoint],
+    tolerance: f64,
+    (before_cm_s, floor_cm_s): (f64, f64),
+) -> Option<&SettlingPoint> {
     let points: Vec<(f64, f64)> = curve.iter().map(|p| (p.length_s, p.rmse_cm_s)).collect();
-    calibration_time_index(&points, tolerance).map(|i| &curve[i])
+    let band = tolerance_band(tolerance, before_cm_s, floor_cm_s);
+    calibration_time_index(&points, band).map(|i| &curve[i])
 }
 
 #[cfg(test)]
@@ -146,18 +153,30 @@ mod tests {
 
     #[test]
     fn the_settling_time_is_where_the_curve_stays_within_the_tolerance_of_its_end() {
-        // RMSE 30, 12, 9.5, 11.5, 10 after 1 to 5 s: within 10 % of the last only at
-        // 5 s, since 11.5 at 4 s leaves it after 9.5 at 3 s came in; within 16 % from 3 s.
+        // RMSE 30, 12, 9.5, 11.5, 10 after 1 to 5 s, 20 before calibration and 0 after
+        // the fit: the band is 9 % or 16 % of 20. Within 1.8 of the last from 3 s;
+        // within 3.2 from 2 s.
         let steps: Vec<FilterStep> = [30.0, 12.0, 9.5, 11.5, 10.0]
             .iter()
             .enumerate()
             .map(|(i, &rmse)| step(i as f64, rmse))
             .collect();
         let curve = settling_curve(&steps, |i| i.lever_arm_m[0]);
-        assert_eq!(settling_time(&curve, 0.10).unwrap().length_s, 5.0);
-        assert_eq!(settling_time(&curve, 0.16).unwrap().length_s, 3.0);
+        assert_eq!(
+            settling_time(&curve, 0.09, (20.0, 0.0)).unwrap().length_s,
+            3.0
+        );
+        assert_eq!(
+            settling_time(&curve, 0.16, (20.0, 0.0)).unwrap().length_s,
+            2.0
+        );
+        // With the fit at 9: a band of 1.1, within from 5 s only.
+        assert_eq!(
+            settling_time(&curve, 0.10, (20.0, 9.0)).unwrap().length_s,
+            5.0
+        );
         let unscored = settling_curve(&steps, |_| f64::NAN);
-        assert!(settling_time(&unscored, 0.10).is_none());
+        assert!(settling_time(&unscored, 0.10, (20.0, 0.0)).is_none());
     }
 
     /// On a simulated recording the filter's last terms score as the fit of every sample
@@ -187,7 +206,8 @@ mod tests {
         let end = curve.last().unwrap().rmse_cm_s;
         let best = rmse(&fitted.installation);
         assert!((end - best).abs() < 0.01 * best, "{end} against {best}");
-        let settled = settling_time(&curve, 0.10).unwrap();
+        let before = rmse(&Installation::default());
+        let settled = settling_time(&curve, 0.10, (before, best)).unwrap();
         assert!(settled.length_s < 200.0, "{}", settled.length_s);
         assert!(curve[0].rmse_cm_s > 1.1 * end, "{}", curve[0].rmse_cm_s);
     }

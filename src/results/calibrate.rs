@@ -205,7 +205,11 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     let before = read.score(&Installation::default());
     let after = read.score(&applied);
     let (settings, filter, curve) = settle(&read, terms, noise);
-    let settled_s = settling_time(&curve, args.tolerance_pct / 100.0).map(|p| p.length_s);
+    let change = (
+        before.map_or(f64::NAN, |r| 100.0 * r.total_m_s),
+        after.map_or(f64::NAN, |r| 100.0 * r.total_m_s),
+    );
+    let settled_s = settling_time(&curve, args.tolerance_pct / 100.0, change).map(|p| p.length_s);
     let (corrected, terms_in_time) =
         write_files(&outputs, &recording_sha256, &read, &applied, &filter)?;
     Ok(Calibration {

@@ -452,6 +452,7 @@ mod tests {
                 rmse_at_time_cm_s: 6.5,
                 long_window_rmse_cm_s: f64::INFINITY,
                 tolerance_pct: 10.0,
+                noise_floor_cm_s: 3.57,
             }],
         }
     }

@@ -55,11 +55,13 @@ const PROTOCOL_CODE_VERSION: u32 = 2;
 /// noise beside the bound's).
 const INSTALLATION_CODE_VERSION: u32 = 3;
 /// Bumped whenever the tables put together from an installation study's calibrations
-/// change.
-const INSTALLATION_TABLES_CODE_VERSION: u32 = 1;
+/// change (2: the calibration time's band of what calibration can change).
+const INSTALLATION_TABLES_CODE_VERSION: u32 = 2;
 /// Bumped whenever the tables put together from the blocks change (2: the bound rows
-/// and the efficiency column; 3: the held-out curves and the calibration time).
-const TABLES_CODE_VERSION: u32 = 3;
+/// and the efficiency column; 3: the held-out curves and the calibration time; 4: the
+/// calibration time read at the calibration windows, its band of the excess over the
+/// bound).
+const TABLES_CODE_VERSION: u32 = 4;
 
 /// The folder of the cache under a results folder.
 pub const FOLDER: &str = ".cache";

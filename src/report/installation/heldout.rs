@@ -1,5 +1,5 @@
-//! The held-out tables: (a) each method's mean held-out RMSE at the largest window, with
-//! its 95 % interval and its ratio to no calibration, and (b) the same means for every
+//! The held-out tables: (a) each method's mean held-out RMSE at the largest window, total
+//! and per axis, with its 95 % interval and its ratio to no calibration, and (b) the same means for every
 //! window. In: the study's summary rows. Out: two [`Section`]s; also the order of the
 //! methods and windows the other tables follow.
 
@@ -58,6 +58,10 @@ pub(super) fn heldout_section(
                     mean_cm_s: r.mean_cm_s,
                     ci95_cm_s: r.ci95_cm_s,
                 }),
+                row.map_or(Entry::Missing, |r| Entry::Rmse {
+                    mean_cm_s: r.mean_cm_s / 3f64.sqrt(),
+                    ci95_cm_s: r.ci95_cm_s / 3f64.sqrt(),
+                }),
                 row.map_or(Entry::Missing, |r| Entry::Ratio(r.ratio)),
             ]
         })
@@ -65,13 +69,14 @@ pub(super) fn heldout_section(
     Section {
         title: format!("Held-out RMSE, window {}", window_text(window_s)),
         caption: format!(
-            "Mean held-out RMSE in cm/s ± the half-width of its 95 % interval over calibration trajectories, calibrated on the first {} of each, and its ratio to {NO_CALIBRATION}.",
+            "Mean held-out RMSE in cm/s ± the half-width of its 95 % interval over calibration trajectories, calibrated on the first {} of each, and its ratio to {NO_CALIBRATION}. Total: the three axes together, the root of the sum of their squares; per axis: the root mean square over x, y and z (the total divided by the square root of 3), the figure to hold against a DVL's per-axis noise specification.",
             window_text(window_s)
         ),
         table: Table::new(
             vec![
                 "method".into(),
-                "held-out RMSE (cm/s)".into(),
+                "held-out RMSE, total (cm/s)".into(),
+                "per axis (cm/s)".into(),
                 format!("ratio to {NO_CALIBRATION}"),
             ],
             rows,
@@ -102,7 +107,7 @@ pub(super) fn windows_section(
         .collect();
     Section {
         title: "Held-out RMSE against the calibration window".into(),
-        caption: "Mean held-out RMSE in cm/s ± the half-width of its 95 % interval, for each calibration window (the first w seconds of each calibration trajectory).".into(),
+        caption: "Mean held-out RMSE in cm/s, total over the three axes (per axis is the total divided by the square root of 3), ± the half-width of its 95 % interval, for each calibration window (the first w seconds of each calibration trajectory).".into(),
         table: Table::new(
             std::iter::once("method".to_string())
                 .chain(windows.iter().map(|&w| format!("w = {}", window_text(w))))

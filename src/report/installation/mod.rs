@@ -193,10 +193,18 @@ pub(crate) mod tests {
             assert!(lines.contains(&line), "missing {line:?} in\n{text}");
         };
         has("### Held-out RMSE, window 400 s");
-        has("| method                    | held-out RMSE (cm/s) | ratio to no calibration |");
-        has("| no calibration            | 15.07 ± 0.80         | 1.00                    |");
-        has("| least squares EM1         | 15.08 ± 0.80         | 1.00                    |");
-        has("| installation lever+offset | 6.00 ± 0.40          | 0.40                    |");
+        has(
+            "| method                    | held-out RMSE, total (cm/s) | per axis (cm/s) | ratio to no calibration |",
+        );
+        has(
+            "| no calibration            | 15.07 ± 0.80                | 8.70 ± 0.46     | 1.00                    |",
+        );
+        has(
+            "| least squares EM1         | 15.08 ± 0.80                | 8.71 ± 0.46     | 1.00                    |",
+        );
+        has(
+            "| installation lever+offset | 6.00 ± 0.40                 | 3.46 ± 0.23     | 0.40                    |",
+        );
         has("### Held-out RMSE against the calibration window");
         has("| method                    | w = 100 s    | w = 400 s    |");
         has("| installation lever+offset | 8.40 ± 1.20  | 6.00 ± 0.40  |");
@@ -218,7 +226,9 @@ pub(crate) mod tests {
         assert_eq!(text.matches("\\begin{table}").count(), 3, "{text}");
         assert!(text.contains("\\label{tab:akit-installation-1}"), "{text}");
         assert!(
-            text.contains("    no calibration & 15.07\\,$\\pm$\\,0.80 & 1.00 \\\\"),
+            text.contains(
+                "    no calibration & 15.07\\,$\\pm$\\,0.80 & 8.70\\,$\\pm$\\,0.46 & 1.00 \\\\"
+            ),
             "{text}"
         );
         assert!(

@@ -1,6 +1,6 @@
 //! The study's table of how long each method needs to calibrate: per method (row) and
 //! calibration trajectory (column), its calibration time with its T_conv in brackets,
-//! and the median over calibration trajectories. In: the study's calibration-time
+//! and the median over calibration trajectories that have one. In: the study's calibration-time
 //! rows. Out: a [`Section`], or none when the study has one window only.
 
 use crate::installation::rows::{InstallationResults, InstallationTimeRow};
@@ -50,13 +50,15 @@ pub(super) fn timing_section(
                         }
                         let time = r
                             .calibration_time_s
-                            .map_or("—".to_string(), |t| format!("{t:.0}"));
+                            .map_or("never".to_string(), |t| format!("{t:.0}"));
                         Entry::Text(format!("{time} ({:.0})", r.t_conv_s))
                     }
                     None => Entry::Missing,
                 });
             }
-            cells.push(median(times).map_or(Entry::Missing, |m| Entry::Text(format!("{m:.0}"))));
+            cells.push(median(times).map_or(Entry::Text("never".into()), |m| {
+                Entry::Text(format!("{m:.0}"))
+            }));
             cells
         })
         .collect();
@@ -67,8 +69,9 @@ pub(super) fn timing_section(
     Some(Section {
         title: "How long to calibrate".into(),
         caption: format!(
-            "Each method's calibration time on each calibration trajectory, s: the shortest window after which its held-out RMSE (the mean over the trajectories it corrects) stays within {} % of its value at the longest window ({:.0} s), above or below it; in brackets its T_conv, the window of lowest held-out RMSE. The windows are those of the study, so a time is one of them.",
+            "Each method's calibration time on each calibration trajectory, s: the shortest window after which its held-out RMSE (the mean over the trajectories it corrects) stays within {} % of what calibration can change there (from no calibration's RMSE down to the specified noise's, {:.2} cm/s in total) of its value at the longest window ({:.0} s), above or below it; \"never\" for a method no better than no calibration by that much. In brackets its T_conv, the window of lowest held-out RMSE. The windows are those of the study, so a time is one of them; the median is over the calibrations that have one.",
             first.tolerance_pct,
+            first.noise_floor_cm_s,
             windows.last().copied().unwrap_or(0.0)
         ),
         table: Table::new(header, table_rows, Vec::new()),

@@ -204,8 +204,11 @@ fn verdict(calibration: &Calibration, all: &SettlingPoint) -> String {
     };
     match calibration.settled_s {
         Some(length_s) => format!(
-            "after {length_s} s the filter's terms leave an RMSE on the whole recording within {tolerance_pct} % of the {:.2} cm/s they leave after all {} s {of}, and stay there: more of it moves the RMSE by less than {tolerance_pct} %, though a term whose ± is still wide then is not pinned down (scored on this recording, not on another dive)",
-            all.rmse_cm_s, all.length_s
+            "after {length_s} s the filter's terms leave an RMSE on the whole recording within {tolerance_pct} % of what calibration changes here ({:.2} cm/s before it, {:.2} after the fit of all of it) of the {:.2} cm/s they leave after all {} s {of}, and stay there, though a term whose ± is still wide then is not pinned down (scored on this recording, not on another dive)",
+            calibration.before.map_or(f64::NAN, |r| 100.0 * r.total_m_s),
+            calibration.after.map_or(f64::NAN, |r| 100.0 * r.total_m_s),
+            all.rmse_cm_s,
+            all.length_s
         ),
         None => format!(
             "the filter's terms after all {} s {of} leave no finite RMSE on the recording: the filter diverged",
