@@ -512,6 +512,18 @@ fn the_akit_study_removes_two_thirds_of_the_error_from_a_turning_segment() {
     // T12's residuals (0.3–0.6 cm/s) let its small rate changes show the longitudinal
     // lever arm; T13's do not.
     assert!(!seen("T13").is_empty(), "T13 shows the lever arm");
+    // The terms left out that the residuals still follow: the time offset, where only
+    // the lever arm is fitted; a scale on the straight T12, where lever arm, time
+    // offset and bias are.
+    let report = std::fs::read_to_string(folder.join("report.md")).unwrap();
+    assert!(
+        report.contains("- T1, the residuals still follow a term left out (score test, p < 0.001): time_offset χ² "),
+        "{report}"
+    );
+    assert!(
+        report.contains("- T12, the residuals still follow a term left out (score test, p < 0.001): scale χ² 79.4;"),
+        "{report}"
+    );
 }
 
 /// DCNet as the paper would use it: the models a paper spec trained (here the quick

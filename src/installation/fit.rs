@@ -367,6 +367,28 @@ pub fn fit(
     })
 }
 
+/// The Jacobian of `terms` at `installation` over the samples a fit of this record
+/// fits (the fixed mask), rows as [`Fit::jacobian`]'s: what the residuals of a fit
+/// would feel of terms it left out.
+pub fn jacobian_at(
+    time_s: &[f64],
+    dvl_m_s: &[Vec3],
+    reference: &Reference,
+    terms: TermSet,
+    installation: Installation,
+) -> DMatrix<f64> {
+    let mask = reference.interior(time_s, TIME_OFFSET_MARGIN_S);
+    Problem {
+        time_s: &time_s[mask.clone()],
+        dvl_m_s: &dvl_m_s[mask],
+        reference,
+        terms,
+        base: installation,
+        parameters: DVector::from_vec(installation.to_parameters(&terms)),
+    }
+    .jacobian_matrix()
+}
+
 /// The start of LM when τ is fitted: τ held at each step of the scan over
 /// ±[`TIME_OFFSET_MARGIN_S`], the other terms of `terms` solved from zero, and the
 /// installation of the lowest cost kept. `problem` makes the problem of free terms and

@@ -29,6 +29,7 @@ pub mod terms;
 pub mod fit;
 pub mod residual_noise;
 pub mod bound;
+pub mod missing;
 pub mod filter;
 pub mod rows;
 pub mod protocol;

@@ -13,6 +13,7 @@ use super::calibration_time::calibration_times;
 use super::fit::{TIME_OFFSET_MARGIN_S, fit};
 use super::frames::Reference;
 use super::learned_spec::TrainingSource;
+use super::missing::{Asked, asked_for};
 use super::protocol_filters::{FilterRun, run_filters};
 use super::rows::{
     FilterPoint, FitFailure, FoldSummaryRow, InstallationResults, NO_CALIBRATION, SummaryRow,
@@ -71,6 +72,8 @@ pub fn sample_interval(time: &[f64]) -> f64 {
 struct Estimate {
     installation: Installation,
     bound: Option<TermBound>,
+    /// A fit's left-out terms that its residuals still follow.
+    asked: Vec<Asked>,
     /// A filter's terms: each parameter's name, value and standard deviation.
     filtered: Option<Vec<(&'static str, f64, f64, f64)>>,
 }
@@ -250,6 +253,7 @@ impl Estimate {
         Estimate {
             installation,
             bound: None,
+            asked: Vec::new(),
             filtered: None,
         }
     }
@@ -349,6 +353,7 @@ impl OnTrajectory<'_> {
                     .map(|(installation, terms)| Estimate {
                         installation,
                         bound: None,
+                        asked: Vec::new(),
                         filtered: Some(terms),
                     })
             }
@@ -391,17 +396,22 @@ impl OnTrajectory<'_> {
     ) -> Result<Estimate, FitFailure> {
         let calibration = self.calibration();
         let recording = &calibration.recording;
-        match fit(
-            &recording.time_s[range.clone()],
-            &recording.dvl_m_s[range],
-            &calibration.reference,
-            term_set(terms),
-        ) {
-            Ok(fitted) => Ok(Estimate {
-                installation: fitted.installation,
-                bound: Some(bound(&fitted, self.noise, &self.tolerances)),
-                filtered: None,
-            }),
+        let window = (&recording.time_s[range.clone()], &recording.dvl_m_s[range]);
+        match fit(window.0, window.1, &calibration.reference, term_set(terms)) {
+            Ok(fitted) => {
+                let bounded = bound(&fitted, self.noise, &self.tolerances);
+                Ok(Estimate {
+                    installation: fitted.installation,
+                    asked: asked_for(
+                        &fitted,
+                        window,
+                        &calibration.reference,
+                        &bounded.residual_noise,
+                    ),
+                    bound: Some(bounded),
+                    filtered: None,
+                })
+            }
             Err(why) => Err(FitFailure {
                 method: method.label(),
                 calibration: calibration.name.clone(),
@@ -420,6 +430,12 @@ impl OnTrajectory<'_> {
         learned: bool,
         window_s: f64,
     ) -> Vec<TermRow> {
+        let asked = estimate
+            .asked
+            .iter()
+            .map(|a| format!("{} χ² {:.1}", a.term, a.statistic))
+            .collect::<Vec<_>>()
+            .join("; ");
         let row = |term: &str, value: f64, (std, bound_std): (f64, f64), unseen: String| TermRow {
             method: label.to_string(),
             calibration: self.calibration().name.clone(),
@@ -429,6 +445,7 @@ impl OnTrajectory<'_> {
             std,
             bound_std,
             unseen,
+            asked: asked.clone(),
         };
         let mut rows = Vec::new();
         // A learned method's terms (no standard deviation), or a filter's.

@@ -40,6 +40,10 @@ pub struct TermRow {
     pub bound_std: f64,
     /// Why the window cannot show the term; empty when it can.
     pub unseen: String,
+    /// The terms the fit left out that its residuals still follow, with their score
+    /// test's χ² (`scale χ² 48.1`, `; `-separated), the same on each term of a fit;
+    /// empty when none, or for a method that is not a fit.
+    pub asked: String,
 }
 
 /// A method's mean held-out RMSE over calibration trajectories, with its 95 % interval.

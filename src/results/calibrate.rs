@@ -14,6 +14,7 @@ use crate::installation::bound::{Noise, TermBound, Why, bound};
 use crate::installation::filter::{FilterSettings, run_filter};
 use crate::installation::fit::{Fit, FitError, TIME_OFFSET_MARGIN_S, beyond_any_installation, fit};
 use crate::installation::frames::Reference;
+use crate::installation::missing::{Asked, asked_for};
 use crate::installation::protocol_filters::FilterRun;
 use crate::installation::settling::{SettlingPoint, settling_curve, settling_time};
 use crate::installation::spec::{ObservabilityFile, default_filter_settings};
@@ -127,6 +128,8 @@ pub struct Calibration {
     /// The fit of the terms asked for, and its bound under `noise`.
     pub fitted: Fit,
     pub bound: TermBound,
+    /// The kinds of term the fit left out that its residuals still follow.
+    pub asked: Vec<Asked>,
     /// The fit's terms with those the residuals do not depend on at all at zero: what
     /// the RMSE after and the corrected recording apply.
     pub applied: Installation,
@@ -202,6 +205,13 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     if let Some(fault) = beyond_any_installation(&applied) {
         return Err(fit_error(args, &read, fault));
     }
+    let calibrating = read.calibrating();
+    let asked = asked_for(
+        &fitted,
+        (&calibrating.time_s, &calibrating.dvl_m_s),
+        &read.reference,
+        &bounded.residual_noise,
+    );
     let before = read.score(&Installation::default());
     let after = read.score(&applied);
     let (settings, filter, curve) = settle(&read, terms, noise);
@@ -215,6 +225,7 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     Ok(Calibration {
         fitted,
         bound: bounded,
+        asked,
         applied,
         noise,
         scored: read.scored.len(),

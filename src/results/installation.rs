@@ -382,6 +382,7 @@ mod tests {
                     std: 0.017,
                     bound_std: 0.012,
                     unseen: String::new(),
+                    asked: "scale χ² 48.1".into(),
                 },
                 TermRow {
                     method: "installation lever+offset".into(),
@@ -392,6 +393,7 @@ mod tests {
                     std: f64::INFINITY,
                     bound_std: f64::INFINITY,
                     unseen: "standard deviation 1e9 s; correlated −0.97 with bias_y_m_s".into(),
+                    asked: String::new(),
                 },
             ],
             summary: vec![SummaryRow {
@@ -530,7 +532,10 @@ mod tests {
             ["method", "calibration", "window_s", "why"]
         );
         assert_eq!(names(trace_batch(&[]))[4], "before_x_cm_s");
-        assert_eq!(names(terms_batch(&[]))[5..], ["std", "bound_std", "unseen"]);
+        assert_eq!(
+            names(terms_batch(&[]))[5..],
+            ["std", "bound_std", "unseen", "asked"]
+        );
     }
 
     #[test]

@@ -120,6 +120,7 @@ mod tests {
                 std: f64::INFINITY,
                 bound_std: f64::INFINITY,
                 unseen: "flat".into(),
+                asked: String::new(),
             }],
             ..Calibrated::default()
         };

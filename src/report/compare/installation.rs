@@ -257,6 +257,7 @@ mod tests {
             std: 0.01,
             bound_std: 0.01,
             unseen: unseen.into(),
+            asked: String::new(),
         }
     }
 

@@ -184,6 +184,7 @@ pub(crate) mod tests {
                             std,
                             bound_std: std,
                             unseen: unseen.into(),
+                            asked: String::new(),
                         })
                     };
                     let lever_std = if straight { 0.36 } else { 0.013 };

@@ -149,6 +149,7 @@ pub(crate) mod tests {
             std,
             bound_std: std,
             unseen: unseen.into(),
+            asked: String::new(),
         };
         InstallationResults {
             heldout: Vec::new(),

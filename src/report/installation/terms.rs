@@ -2,7 +2,7 @@
 //! estimated at the largest window, ± their standard deviation, in units people
 //! read ([`readable_term`]: lever arm in m, bias in cm/s, misalignment in degrees, scale
 //! in %), those the window cannot show marked and why listed under the table
-//! ([`readable_why`]). In: the study's term rows of one method. Out: a [`Section`].
+//! ([`readable_why`]), and the terms left out that a fit's residuals still follow. In: the study's term rows of one method. Out: a [`Section`].
 
 use super::heldout::window_text;
 use crate::installation::rows::TermRow;
@@ -52,6 +52,15 @@ pub(super) fn terms_section(method: &str, window_s: f64, rows: &[&TermRow]) -> S
         }
         if !unseen.is_empty() {
             notes.push(format!("{calibration}, not seen: {}.", unseen.join("; ")));
+        }
+        if let Some(r) = rows
+            .iter()
+            .find(|r| r.calibration == *calibration && !r.asked.is_empty())
+        {
+            notes.push(format!(
+                "{calibration}, the residuals still follow a term left out (score test, p < 0.001): {}; the terms above may be absorbing it.",
+                r.asked
+            ));
         }
         table_rows.push(row);
     }

@@ -69,6 +69,16 @@ fn printed_fit(calibration: &Calibration) -> String {
         shown.lag_one[1],
         shown.lag_one[2],
     ));
+    for asked in &calibration.asked {
+        text.push_str(&format!(
+            "the residuals still follow a term left out: {} (score test χ² {:.1} on {} degree{} of freedom, p {}): the terms fitted without it may be absorbing it, and their intervals cannot show that; add it with --terms\n",
+            asked.term,
+            asked.statistic,
+            asked.freedom,
+            if asked.freedom == 1 { "" } else { "s" },
+            if asked.p_value < 1e-6 { "< 1e-6".to_string() } else { format!("{:.1e}", asked.p_value) },
+        ));
+    }
     for unseen in &bound.unseen {
         text.push_str(&format!(
             "not seen here: {}: {}\n",

@@ -1,0 +1,181 @@
+//! Whether the residuals of a fit still follow a term it left out: for each kind of
+//! term the fitted set leaves out (scale, misalignment, lever arm, time offset, bias),
+//! the score (Lagrange multiplier) test of adding it, under the noise the residuals
+//! show. A term the data ask for and the model lacks is absorbed by the terms it has
+//! (a bias takes up a scale × speed it cannot tell from it on a window of near constant
+//! speed), which their intervals cannot show. In: a fit, its record and reference, the
+//! residuals' noise. Out: the kinds the data ask for, with their statistic.
+//!
+//! With J the fit's Jacobian, r its residuals and J_a the left-out term's columns at the
+//! estimate, the score is s = J_aᵀ r (Jᵀ r = 0 at the solution) and its covariance under
+//! the noise Σ is J̃_aᵀ Σ J̃_a, J̃_a = J_a − J (JᵀJ)⁺ Jᵀ J_a the part of J_a the fitted
+//! terms cannot move; sᵀ (J̃_aᵀ Σ J̃_a)⁺ s is χ² with as many degrees of freedom as
+//! columns (Breusch and Pagan, 1980; Engle, 1984).
+
+use super::fit::{Fit, jacobian_at};
+use super::frames::Reference;
+use super::residual_noise::ResidualNoise;
+use super::terms::{PerAxis, TermSet};
+use crate::Vec3;
+use nalgebra::DMatrix;
+use statrs::distribution::{ChiSquared, ContinuousCDF};
+
+/// The p-value below which a left-out term is asked for.
+pub const ASKED_P_VALUE: f64 = 1e-3;
+
+/// A kind of term the residuals of a fit follow though the fit left it out.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Asked {
+    /// As a spec names it: `scale`, `misalignment`, `lever_arm`, `time_offset`, `bias`.
+    pub term: &'static str,
+    /// The score test's χ².
+    pub statistic: f64,
+    pub freedom: usize,
+    pub p_value: f64,
+}
+
+/// The kinds of term `fit` left out whose score test rejects their absence at
+/// [`ASKED_P_VALUE`], in the order scale, misalignment, lever arm, time offset, bias.
+pub fn asked_for(
+    fit: &Fit,
+    (time_s, dvl_m_s): (&[f64], &[Vec3]),
+    reference: &Reference,
+    noise: &ResidualNoise,
+) -> Vec<Asked> {
+    let terms = fit.terms;
+    let candidates = [
+        (
+            "scale",
+            terms.scale == PerAxis::Off,
+            TermSet {
+                scale: PerAxis::Scalar,
+                ..terms
+            },
+        ),
+        (
+            "misalignment",
+            !terms.misalignment,
+            TermSet {
+                misalignment: true,
+                ..terms
+            },
+        ),
+        (
+            "lever_arm",
+            !terms.lever_arm,
+            TermSet {
+                lever_arm: true,
+                ..terms
+            },
+        ),
+        (
+            "time_offset",
+            !terms.time_offset,
+            TermSet {
+                time_offset: true,
+                ..terms
+            },
+        ),
+        (
+            "bias",
+            terms.bias == PerAxis::Off,
+            TermSet {
+                bias: PerAxis::PerAxis,
+                ..terms
+            },
+        ),
+    ];
+    let fitted_names = terms.parameter_names();
+    let normal = fit.jacobian.transpose() * &fit.jacobian;
+    let size = normal.nrows();
+    let tolerance = 1e-12 * normal.norm();
+    let inverse = normal
+        .pseudo_inverse(tolerance)
+        .unwrap_or_else(|_| DMatrix::zeros(size, size));
+    let mut asked = Vec::new();
+    for (term, left_out, extended) in candidates {
+        if !left_out {
+            continue;
+        }
+        let full = jacobian_at(time_s, dvl_m_s, reference, extended, fit.installation);
+        let added: Vec<usize> = extended
+            .parameter_names()
+            .iter()
+            .enumerate()
+            .filter(|(_, name)| !fitted_names.contains(name))
+            .map(|(k, _)| k)
+            .collect();
+        let columns = DMatrix::from_fn(full.nrows(), added.len(), |r, c| full[(r, added[c])]);
+        let apart = if fit.jacobian.ncols() == 0 {
+            columns.clone()
+        } else {
+            &columns - &fit.jacobian * (&inverse * (fit.jacobian.transpose() * &columns))
+        };
+        let score = columns.transpose() * &fit.residuals;
+        let covariance = noise.weighted_information(&apart);
+        let Ok(spread) = covariance
+            .clone()
+            .pseudo_inverse(1e-12 * covariance.norm().max(f64::MIN_POSITIVE))
+        else {
+            continue;
+        };
+        let statistic = (score.transpose() * spread * &score)[(0, 0)];
+        let freedom = added.len();
+        let p_value = ChiSquared::new(freedom as f64)
+            .map(|chi| 1.0 - chi.cdf(statistic))
+            .unwrap_or(f64::NAN);
+        if p_value < ASKED_P_VALUE {
+            asked.push(Asked {
+                term,
+                statistic,
+                freedom,
+                p_value,
+            });
+        }
+    }
+    asked
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::installation::filter::tests::weaving_segment;
+    use crate::installation::fit::fit;
+    use crate::installation::terms::Installation;
+
+    /// A DVL with a 2 % scale fitted without one: its bias takes up what it can, and the
+    /// score test asks for the scale; fitted with it, nothing is asked for.
+    #[test]
+    fn a_scale_left_out_is_asked_for_and_none_once_fitted() {
+        let truth = Installation {
+            scale: [0.02; 3],
+            lever_arm_m: [-1.9, 0.05, 0.4],
+            time_offset_s: 0.6,
+            bias_m_s: [0.01, -0.005, 0.003],
+            ..Installation::default()
+        };
+        let (time_s, dvl, reference) = weaving_segment(&truth, 0.01, 3);
+        let without = TermSet {
+            lever_arm: true,
+            time_offset: true,
+            bias: PerAxis::PerAxis,
+            ..TermSet::NONE
+        };
+        let fitted = fit(&time_s, &dvl, &reference, without).unwrap();
+        let noise = ResidualNoise::of(&fitted.residuals, fitted.parameters.len());
+        let asked = asked_for(&fitted, (&time_s, &dvl), &reference, &noise);
+        assert_eq!(
+            asked.iter().map(|a| a.term).collect::<Vec<_>>(),
+            ["scale"],
+            "{asked:?}"
+        );
+        let with = TermSet {
+            scale: PerAxis::Scalar,
+            ..without
+        };
+        let fitted = fit(&time_s, &dvl, &reference, with).unwrap();
+        let noise = ResidualNoise::of(&fitted.residuals, fitted.parameters.len());
+        let asked = asked_for(&fitted, (&time_s, &dvl), &reference, &noise);
+        assert!(asked.is_empty(), "{asked:?}");
+    }
+}
