@@ -42,98 +42,105 @@ pub fn asked_for(
     reference: &Reference,
     noise: &ResidualNoise,
 ) -> Vec<Asked> {
-    let terms = fit.terms;
-    let candidates = [
-        (
+    let fitted_names = fit.terms.parameter_names();
+    let normal = fit.jacobian.transpose() * &fit.jacobian;
+    let size = normal.nrows();
+    let inverse = normal
+        .clone()
+        .pseudo_inverse(1e-12 * normal.norm())
+        .unwrap_or_else(|_| DMatrix::zeros(size, size));
+    left_out(fit.terms)
+        .into_iter()
+        .filter_map(|(term, extended)| {
+            let full = jacobian_at(time_s, dvl_m_s, reference, extended, fit.installation);
+            let added: Vec<usize> = (0..extended.parameter_count())
+                .filter(|&k| !fitted_names.contains(&extended.parameter_names()[k]))
+                .collect();
+            let columns = DMatrix::from_fn(full.nrows(), added.len(), |r, c| full[(r, added[c])]);
+            let (statistic, p_value) = score_test(fit, &columns, &inverse, noise)?;
+            (p_value < ASKED_P_VALUE).then_some(Asked {
+                term,
+                statistic,
+                freedom: added.len(),
+                p_value,
+            })
+        })
+        .collect()
+}
+
+/// Each kind of term `terms` leaves out, named as a spec names it, with `terms` and it.
+fn left_out(terms: TermSet) -> Vec<(&'static str, TermSet)> {
+    let mut kinds = Vec::new();
+    if terms.scale == PerAxis::Off {
+        kinds.push((
             "scale",
-            terms.scale == PerAxis::Off,
             TermSet {
                 scale: PerAxis::Scalar,
                 ..terms
             },
-        ),
-        (
+        ));
+    }
+    if !terms.misalignment {
+        kinds.push((
             "misalignment",
-            !terms.misalignment,
             TermSet {
                 misalignment: true,
                 ..terms
             },
-        ),
-        (
+        ));
+    }
+    if !terms.lever_arm {
+        kinds.push((
             "lever_arm",
-            !terms.lever_arm,
             TermSet {
                 lever_arm: true,
                 ..terms
             },
-        ),
-        (
+        ));
+    }
+    if !terms.time_offset {
+        kinds.push((
             "time_offset",
-            !terms.time_offset,
             TermSet {
                 time_offset: true,
                 ..terms
             },
-        ),
-        (
+        ));
+    }
+    if terms.bias == PerAxis::Off {
+        kinds.push((
             "bias",
-            terms.bias == PerAxis::Off,
             TermSet {
                 bias: PerAxis::PerAxis,
                 ..terms
             },
-        ),
-    ];
-    let fitted_names = terms.parameter_names();
-    let normal = fit.jacobian.transpose() * &fit.jacobian;
-    let size = normal.nrows();
-    let tolerance = 1e-12 * normal.norm();
-    let inverse = normal
-        .pseudo_inverse(tolerance)
-        .unwrap_or_else(|_| DMatrix::zeros(size, size));
-    let mut asked = Vec::new();
-    for (term, left_out, extended) in candidates {
-        if !left_out {
-            continue;
-        }
-        let full = jacobian_at(time_s, dvl_m_s, reference, extended, fit.installation);
-        let added: Vec<usize> = extended
-            .parameter_names()
-            .iter()
-            .enumerate()
-            .filter(|(_, name)| !fitted_names.contains(name))
-            .map(|(k, _)| k)
-            .collect();
-        let columns = DMatrix::from_fn(full.nrows(), added.len(), |r, c| full[(r, added[c])]);
-        let apart = if fit.jacobian.ncols() == 0 {
-            columns.clone()
-        } else {
-            &columns - &fit.jacobian * (&inverse * (fit.jacobian.transpose() * &columns))
-        };
-        let score = columns.transpose() * &fit.residuals;
-        let covariance = noise.weighted_information(&apart);
-        let Ok(spread) = covariance
-            .clone()
-            .pseudo_inverse(1e-12 * covariance.norm().max(f64::MIN_POSITIVE))
-        else {
-            continue;
-        };
-        let statistic = (score.transpose() * spread * &score)[(0, 0)];
-        let freedom = added.len();
-        let p_value = ChiSquared::new(freedom as f64)
-            .map(|chi| 1.0 - chi.cdf(statistic))
-            .unwrap_or(f64::NAN);
-        if p_value < ASKED_P_VALUE {
-            asked.push(Asked {
-                term,
-                statistic,
-                freedom,
-                p_value,
-            });
-        }
+        ));
     }
-    asked
+    kinds
+}
+
+/// The score test of adding `columns` to `fit` (whose (JᵀJ)⁺ is `inverse`) under
+/// `noise`: its χ² and p-value; `None` where their covariance cannot be inverted.
+fn score_test(
+    fit: &Fit,
+    columns: &DMatrix<f64>,
+    inverse: &DMatrix<f64>,
+    noise: &ResidualNoise,
+) -> Option<(f64, f64)> {
+    let apart = if fit.jacobian.ncols() == 0 {
+        columns.clone()
+    } else {
+        columns - &fit.jacobian * (inverse * (fit.jacobian.transpose() * columns))
+    };
+    let score = columns.transpose() * &fit.residuals;
+    let covariance = noise.weighted_information(&apart);
+    let tolerance = 1e-12 * covariance.norm().max(f64::MIN_POSITIVE);
+    let spread = covariance.pseudo_inverse(tolerance).ok()?;
+    let statistic = (score.transpose() * spread * &score)[(0, 0)];
+    let p_value = ChiSquared::new(columns.ncols() as f64)
+        .map(|chi| 1.0 - chi.cdf(statistic))
+        .unwrap_or(f64::NAN);
+    Some((statistic, p_value))
 }
 
 #[cfg(test)]
