@@ -6,7 +6,7 @@
 mod common;
 
 use common::installed::{INSTALLED, write_installed, write_study_spec};
-use common::{dcnet, floats, read_parquet, spawn, stderr, stdout, strings, tree};
+use common::{dcnet, floats, forge_sealed, read_parquet, spawn, stderr, stdout, strings, tree};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -664,20 +664,7 @@ fn a_sealed_model_that_is_no_model_is_set_aside_and_trained_again() {
         .map(|(_, path)| path)
         .find(|path| path.extension().is_some_and(|e| e == "json"))
         .expect("a stored history");
-    let mut seal_path = history.clone().into_os_string();
-    seal_path.push(".sha256");
-    let seal = std::fs::read_to_string(&seal_path).unwrap();
-    let key = seal.split_whitespace().next().unwrap().to_string();
-    let forged = b"{\"not\": \"a model\"}";
-    let digest: String = {
-        use sha2::Digest;
-        sha2::Sha256::digest(forged)
-            .iter()
-            .map(|b| format!("{b:02x}"))
-            .collect()
-    };
-    std::fs::write(&history, forged).unwrap();
-    std::fs::write(&seal_path, format!("{key} {digest}\n")).unwrap();
+    forge_sealed(&history, b"{\"not\": \"a model\"}");
     let again = dcnet(d, &["run", "experiments/syn.toml", "--no-plots", "--force"]);
     let log = stderr(&again);
     assert!(again.status.success(), "{log}");

@@ -640,6 +640,19 @@ fn a_sweep_point_holds_what_a_plain_run_of_its_values_holds() {
     assert!(!dir.join("figures/grid/sweep_parallel.svg").exists());
 }
 
+/// The stored weights of the quick run's EM3 model in `cache`.
+fn em3_weights(cache: &Path) -> PathBuf {
+    files_with(&cache.join("models"), "bin")
+        .into_iter()
+        .find(|path| {
+            path.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("EM3-")
+        })
+        .unwrap()
+}
+
 /// The files of `folder` whose extension is `extension`, sorted.
 fn files_with(folder: &Path, extension: &str) -> Vec<PathBuf> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(folder)
@@ -659,15 +672,7 @@ fn a_damaged_cache_entry_is_set_aside_and_computed_again() {
     run_ok(d, &run);
     let cache = d.join("results/.cache");
     // One flipped byte in EM3's weights, and one Monte Carlo block copied over another.
-    let weights = files_with(&cache.join("models"), "bin")
-        .into_iter()
-        .find(|path| {
-            path.file_name()
-                .unwrap()
-                .to_string_lossy()
-                .starts_with("EM3-")
-        })
-        .unwrap();
+    let weights = em3_weights(&cache);
     let good_weights = std::fs::read(&weights).unwrap();
     let mut flipped = good_weights.clone();
     let middle = flipped.len() / 2;
@@ -728,30 +733,9 @@ fn a_sealed_model_that_is_no_model_is_set_aside_and_trained_again() {
     let run = args(&["run", "experiments/quick.toml", "--no-plots"], &SMALL);
     run_ok(d, &run);
     let cache = d.join("results/.cache");
-    let weights = files_with(&cache.join("models"), "bin")
-        .into_iter()
-        .find(|path| {
-            path.file_name()
-                .unwrap()
-                .to_string_lossy()
-                .starts_with("EM3-")
-        })
-        .unwrap();
+    let weights = em3_weights(&cache);
     let good_weights = std::fs::read(&weights).unwrap();
-    let mut seal_path = weights.clone().into_os_string();
-    seal_path.push(".sha256");
-    let seal = std::fs::read_to_string(&seal_path).unwrap();
-    let key = seal.split_whitespace().next().unwrap().to_string();
-    let forged = b"not a model";
-    let digest: String = {
-        use sha2::Digest;
-        sha2::Sha256::digest(forged)
-            .iter()
-            .map(|b| format!("{b:02x}"))
-            .collect()
-    };
-    std::fs::write(&weights, forged).unwrap();
-    std::fs::write(&seal_path, format!("{key} {digest}\n")).unwrap();
+    forge_sealed(&weights, b"not a model");
     // The blocks gone, so that the run needs the model.
     std::fs::remove_dir_all(cache.join("monte_carlo")).unwrap();
 

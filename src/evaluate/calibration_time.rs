@@ -211,16 +211,7 @@ pub fn calibration_times(
                 })?
                 .window_s;
             let &(long_s, long) = curve.last()?;
-            // The bound's own curve ends at the same longest window.
-            let bound = curves
-                .iter()
-                .filter(|r| {
-                    r.dvl == dvl
-                        && r.estimator == EstimatorKind::Bound
-                        && r.length_s <= long_window_s
-                        && r.rmse_cm_s.is_finite()
-                })
-                .max_by(|a, b| a.length_s.total_cmp(&b.length_s));
+            let bound = bound_at_longest(curves, dvl, long_window_s);
             // The protocol scores no uncorrected DVL: the band is of what calibration
             // changes over the windows, from the method's RMSE at the shortest (or the
             // longest, where higher) down to what the bound leaves at the longest.
@@ -246,6 +237,24 @@ pub fn calibration_times(
             })
         })
         .collect()
+}
+
+/// The last point of `dvl`'s bound curve up to the longest window `long_window_s`, where
+/// every method's curve ends.
+fn bound_at_longest<'a>(
+    curves: &'a [HeldOutRow],
+    dvl: &str,
+    long_window_s: f64,
+) -> Option<&'a HeldOutRow> {
+    curves
+        .iter()
+        .filter(|r| {
+            r.dvl == dvl
+                && r.estimator == EstimatorKind::Bound
+                && r.length_s <= long_window_s
+                && r.rmse_cm_s.is_finite()
+        })
+        .max_by(|a, b| a.length_s.total_cmp(&b.length_s))
 }
 
 #[cfg(test)]

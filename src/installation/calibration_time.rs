@@ -47,14 +47,22 @@ pub fn calibration_times(
             })
             .collect()
     };
+    // No calibration's RMSE at the longest window, once per calibration trajectory.
+    let uncalibrated: std::collections::HashMap<&str, Option<f64>> =
+        first_seen(pairs.iter().map(|&(_, calibration)| calibration))
+            .into_iter()
+            .map(|calibration| {
+                let last = curve_of(NO_CALIBRATION, calibration)
+                    .last()
+                    .map(|&(_, rmse)| rmse);
+                (calibration, last.filter(|rmse| rmse.is_finite()))
+            })
+            .collect();
     pairs
         .into_iter()
         .filter_map(|(method, calibration)| {
             let curve = curve_of(method, calibration);
-            let uncalibrated = curve_of(NO_CALIBRATION, calibration)
-                .last()
-                .map(|&(_, rmse)| rmse)
-                .filter(|rmse| rmse.is_finite());
+            let uncalibrated = uncalibrated[calibration];
             let &(_, long) = curve.last()?;
             // The lowest finite mean, the first of equals.
             let t_conv = (0..curve.len())

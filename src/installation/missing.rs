@@ -53,8 +53,12 @@ pub fn asked_for(
         .into_iter()
         .filter_map(|(term, extended)| {
             let full = jacobian_at(time_s, dvl_m_s, reference, extended, fit.installation);
-            let added: Vec<usize> = (0..extended.parameter_count())
-                .filter(|&k| !fitted_names.contains(&extended.parameter_names()[k]))
+            let added: Vec<usize> = extended
+                .parameter_names()
+                .iter()
+                .enumerate()
+                .filter(|(_, name)| !fitted_names.contains(name))
+                .map(|(k, _)| k)
                 .collect();
             let columns = DMatrix::from_fn(full.nrows(), added.len(), |r, c| full[(r, added[c])]);
             let (statistic, p_value) = score_test(fit, &columns, &inverse, noise)?;
