@@ -20,6 +20,17 @@ use nalgebra::{DMatrix, DVector};
 /// of about one in two hundred.
 pub const MAX_LAG_ONE: f64 = 0.99;
 
+/// Per DVL axis, a fit's residuals' sum of squares and sum of products of neighbours.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ResidualSums {
+    /// Σ rᵢ², m²/s².
+    pub power: Vec3,
+    /// Σ rᵢ rᵢ₋₁, m²/s².
+    pub lagged: Vec3,
+    /// How many samples.
+    pub samples: usize,
+}
+
 /// The noise of a fit's residuals, per DVL axis.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ResidualNoise {
@@ -36,17 +47,31 @@ impl ResidualNoise {
     /// Of `residuals` (x, y, z of each sample, in order) after fitting `parameters`.
     pub fn of(residuals: &DVector<f64>, parameters: usize) -> ResidualNoise {
         let samples = residuals.len() / 3;
+        let axis = |k: usize| (0..samples).map(move |i| residuals[3 * i + k]);
+        let mut sums = ResidualSums {
+            power: [0.0; 3],
+            lagged: [0.0; 3],
+            samples,
+        };
+        for k in 0..3 {
+            sums.power[k] = axis(k).map(|r| r * r).sum();
+            sums.lagged[k] = axis(k).zip(axis(k).skip(1)).map(|(a, b)| a * b).sum();
+        }
+        ResidualNoise::of_sums(&sums, parameters)
+    }
+
+    /// Of the residuals' sums, after fitting `parameters`.
+    pub fn of_sums(sums: &ResidualSums, parameters: usize) -> ResidualNoise {
+        let samples = sums.samples;
         let freedom = (3 * samples).saturating_sub(parameters).max(1) as f64;
         let inflation = (3 * samples) as f64 / freedom;
-        let axis = |k: usize| (0..samples).map(move |i| residuals[3 * i + k]);
         let mut noise = ResidualNoise {
             std_m_s: [0.0; 3],
             lag_one: [0.0; 3],
             samples,
         };
         for k in 0..3 {
-            let power: f64 = axis(k).map(|r| r * r).sum();
-            let lagged: f64 = axis(k).zip(axis(k).skip(1)).map(|(a, b)| a * b).sum();
+            let (power, lagged) = (sums.power[k], sums.lagged[k]);
             noise.std_m_s[k] = (power / samples.max(1) as f64 * inflation).sqrt();
             // The lag-one estimate's bias taken back: −(1 + 3ρ)/n for a series whose mean
             // is estimated (Marriott and Pope, 1954), and about −(1 + ρ)/n more for each
