@@ -33,7 +33,7 @@ pub struct TermRow {
     pub term: String,
     pub value: f64,
     /// The standard deviation, in the term's unit: a fit's from the noise its residuals
-    /// show, a filter's its own; NaN for a learned method's.
+    /// show, a Kalman filter's likewise (read as it runs); NaN for a learned method's.
     pub std: f64,
     /// The Fisher bound's, under the specified white noise (a filter's: of the samples
     /// it took).

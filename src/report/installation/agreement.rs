@@ -99,7 +99,7 @@ pub(super) fn agreement(method: &str, rows: &[&TermRow]) -> String {
         .map(|a| a.name.clone())
         .collect();
     let mut text = format!(
-        "Across the {} calibration trajectories, {method}'s estimates of a term agree within their intervals when the standard deviation of the estimates where the term is seen (the spread) is at most {AGREEMENT_Z} times the median of their standard deviations (σ, a fit's from the noise its residuals show, level and correlation in time; a filter's its own).",
+        "Across the {} calibration trajectories, {method}'s estimates of a term agree within their intervals when the standard deviation of the estimates where the term is seen (the spread) is at most {AGREEMENT_Z} times the median of their standard deviations (σ, a fit's from the noise its residuals show, level and correlation in time, a Kalman filter's likewise, read as it runs).",
         calibrations.len()
     );
     text += &match agree.is_empty() {

@@ -70,7 +70,7 @@ pub(super) fn terms_section(method: &str, window_s: f64, rows: &[&TermRow]) -> S
             window_text(window_s)
         ),
         caption: format!(
-            "The terms {method} estimated on the first {} of each calibration trajectory, ± its standard deviation (a fit's from the noise its residuals leave, their level and their correlation in time; a Kalman filter's its own; the Fisher bound at the specified noise is `bound_std` in terms.parquet); (not seen) marks a term the window cannot show.",
+            "The terms {method} estimated on the first {} of each calibration trajectory, ± its standard deviation (a fit's from the noise its residuals leave, their level and their correlation in time, a Kalman filter's likewise, read as it runs; the Fisher bound at the specified noise is `bound_std` in terms.parquet); (not seen) marks a term the window cannot show.",
             window_text(window_s)
         ),
         table: Table::new(

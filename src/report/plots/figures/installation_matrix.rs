@@ -5,6 +5,7 @@
 //! [`InstallationResults`]'s held-out rows. Out: one figure per method, named by its slug
 //! (`installation_matrix_least_squares_em1`), or why there is none.
 
+use crate::installation::protocol::summarize;
 use crate::installation::rows::{InstallationResults, TransferRow};
 use crate::report::plots::canvas::{Drawn, Outcome, draw_svg};
 use crate::report::plots::draw::*;
@@ -65,9 +66,7 @@ pub fn installation_matrix(study: &InstallationResults) -> PlotResult<Vec<(Strin
             .flat_map(|r| [r.calibration.clone(), r.scored.clone()]),
     );
     let values: Vec<f64> = rows.iter().map(|r| r.total_cm_s).collect();
-    let low = values.iter().copied().fold(f64::INFINITY, f64::min);
-    let high = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let colours = Scale::fit(low, high);
+    let (colours, clipped_at) = colour_scale(&values);
     let methods = crate::first_seen(rows.iter().map(|r| r.method.as_str()));
     let mut figures = Vec::new();
     for method in methods {
@@ -76,18 +75,20 @@ pub fn installation_matrix(study: &InstallationResults) -> PlotResult<Vec<(Strin
             .copied()
             .filter(|r| r.method == method)
             .collect();
-        let mean = cells.iter().map(|r| r.total_cm_s).sum::<f64>() / cells.len() as f64;
-        let [first_line, second_line] = title_lines(method, window_s, mean);
-        let caption = format!("{first_line}, {second_line}");
+        let owned: Vec<TransferRow> = cells.iter().map(|&r| r.clone()).collect();
+        let mean = summarize(&owned, &[window_s])[0].mean_cm_s;
+        let lines = title_lines(method, window_s, mean);
+        let caption = lines.join(", ");
         let n = trajectories.len();
         let side = 44 * n as u32 + 120;
         let svg = draw_svg((side + 170, side + 70), |root| {
-            // Two lines: one is wider than the figure.
-            let root = root.titled(&first_line, font(PANEL_TITLE_SIZE))?;
-            let root = root.titled(&second_line, font(PANEL_TITLE_SIZE))?;
+            // Three lines: one is wider than the figure.
+            let root = lines.iter().try_fold(root.clone(), |root, line| {
+                root.titled(line, font(PANEL_TITLE_SIZE))
+            })?;
             let (matrix, bar) = root.split_horizontally(side);
             matrix_panel(&matrix, &trajectories, &cells, &colours)?;
-            colour_bar(&bar, &colours)
+            colour_bar(&bar, &colours, clipped_at)
         })?;
         figures.push((
             format!("{STEM}_{}", slug(method)),
@@ -97,15 +98,39 @@ pub fn installation_matrix(study: &InstallationResults) -> PlotResult<Vec<(Strin
     Ok(figures)
 }
 
-/// The title of one method's matrix, in two lines that each fit the figure: what is
-/// shown with its mean, then what the rows and columns are.
-fn title_lines(method: &str, window_s: f64, mean_cm_s: f64) -> [String; 2] {
+/// The share of every cell below which the colour scale ends where the highest cell
+/// is more than twice that: the cells above it, a method far off, take the darkest
+/// colour, so that the colours tell apart the
+/// few cm/s that separate the methods that work.
+const CLIP_QUANTILE: f64 = 0.9;
+
+/// The colour scale of every method's matrix: from the smallest cell to the
+/// [`CLIP_QUANTILE`] of all of them where the highest is more than twice that, else to
+/// the highest (logarithmic where that spans a decade), and the value it is clipped
+/// at, if it is.
+fn colour_scale(values: &[f64]) -> (Scale, Option<f64>) {
+    let mut sorted: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
+    sorted.sort_by(f64::total_cmp);
+    let Some((&low, &high)) = sorted.first().zip(sorted.last()) else {
+        return (Scale::fit(f64::NAN, f64::NAN), None);
+    };
+    let at = ((sorted.len() - 1) as f64 * CLIP_QUANTILE).round() as usize;
+    let top = sorted[at];
+    let clipped = (high > 2.0 * top && top > low).then_some(top);
+    (Scale::fit(low, clipped.unwrap_or(high)), clipped)
+}
+
+/// The title of one method's matrix, in three lines that each fit the figure: what
+/// is shown, what the rows and columns are, and its mean (the summary table's: over
+/// calibration trajectories, of each one's mean over the trajectories it is scored on).
+fn title_lines(method: &str, window_s: f64, mean_cm_s: f64) -> [String; 3] {
     [
+        format!("{method}: held-out RMSE [cm/s]"),
+        format!("calibrated on the row's first {window_s} s, scored on the column"),
         format!(
-            "{method}: held-out RMSE [cm/s], mean {}",
+            "mean over the rows of each row's mean: {} cm/s",
             three_digits(mean_cm_s)
         ),
-        format!("calibrated on the row's first {window_s} s, scored on the column"),
     ]
 }
 
@@ -168,15 +193,26 @@ fn matrix_panel(
     Ok(())
 }
 
-/// The colour scale's bar, its ticks those of `colours`.
-fn colour_bar(area: &Area, colours: &Scale) -> PlotResult {
+/// The colour scale's bar, its ticks those of `colours`, saying whether it is
+/// logarithmic and where it is clipped.
+fn colour_bar(area: &Area, colours: &Scale, clipped_at: Option<f64>) -> PlotResult {
     let range = colours.range();
+    let kind = if colours.is_log() { ", log" } else { "" };
+    let (bar, note) = area.split_vertically(area.dim_in_pixel().1 as i32 - 60);
+    if let Some(top) = clipped_at {
+        note.draw(&Text::new(
+            format!("darkest: ≥ {}", three_digits(top)),
+            (0, 10),
+            font(LABEL_SIZE),
+        ))?;
+    }
+    let area = &bar;
     let mut chart = ChartBuilder::on(area)
         .margin_top(40)
-        .margin_bottom(70)
+        .margin_bottom(20)
         .margin_right(40)
         .y_label_area_size(60)
-        .caption("RMSE [cm/s]", font(LABEL_SIZE))
+        .caption(format!("RMSE [cm/s]{kind}"), font(LABEL_SIZE))
         .build_cartesian_2d(0.0..1.0, colours.clone())?;
     mesh(&mut chart)
         .disable_x_mesh()
@@ -220,14 +256,33 @@ mod tests {
         assert_eq!(ramp(7.0), RAMP[4]);
     }
 
+    /// A method far off (one cell of 300 cm/s among 1–20) does not wash out the rest:
+    /// the scale ends at the cells' 90 % quantile, logarithmic over its decade, and the
+    /// far cell takes the darkest colour.
     #[test]
-    fn the_title_keeps_what_it_says_in_two_lines_that_fit() {
+    fn the_colour_scale_is_clipped_where_a_few_cells_are_far_above_the_rest() {
+        let mut values: Vec<f64> = (1..=20).map(f64::from).collect();
+        values.push(300.0);
+        let (scale, clipped_at) = colour_scale(&values);
+        assert_eq!(clipped_at, Some(19.0));
+        assert!(scale.is_log());
+        assert!(scale.range().end < 25.0, "{:?}", scale.range());
+        assert_eq!(ramp(scale.fraction(300.0)), RAMP[4]);
+        assert!(scale.fraction(10.0) > 0.6 && scale.fraction(10.0) < 0.9);
+        // Nothing far above: no clipping.
+        let (_, none) = colour_scale(&values[..20]);
+        assert_eq!(none, None);
+    }
+
+    #[test]
+    fn the_title_keeps_what_it_says_in_three_lines_that_fit() {
         let lines = title_lines("installation lever+offset+bias+scale", 400.0, 6.123);
         assert_eq!(
             lines,
             [
-                "installation lever+offset+bias+scale: held-out RMSE [cm/s], mean 6.12",
+                "installation lever+offset+bias+scale: held-out RMSE [cm/s]",
                 "calibrated on the row's first 400 s, scored on the column",
+                "mean over the rows of each row's mean: 6.12 cm/s",
             ]
         );
         // A 13-trajectory matrix is 862 pixels wide, some 85 characters of the title font.

@@ -22,19 +22,14 @@ const INSTALLATION_COLORS: [RGBColor; 5] = [
     RGBColor(23, 190, 207),
 ];
 
-/// How far apart, as a share of the windows' span, the methods' points of one window
-/// are drawn.
-const METHOD_OFFSET_SHARE: f64 = 0.006;
-
-/// How far beside its window the `index`th of `count` methods is drawn, in seconds of
-/// the window axis spanning `span_s`: the methods centred on the window, in order.
-fn method_offset_s(index: usize, count: usize, span_s: f64) -> f64 {
-    (index as f64 - 0.5 * (count as f64 - 1.0)) * METHOD_OFFSET_SHARE * span_s
-}
-
 /// How a method of the study is drawn: its look and its marker (none for the
-/// reference). `installation` counts the installation models listed before it.
-pub fn method_look(method: &str, installation: usize) -> (Look, Option<Marker>) {
+/// reference). `installation` counts the installation models listed before it;
+/// `filtered`, for a Kalman filter, is the index among them of the model it filters.
+pub fn method_look(
+    method: &str,
+    installation: usize,
+    filtered: Option<usize>,
+) -> (Look, Option<Marker>) {
     let paper = |estimator: EstimatorKind, rest: &str| {
         rest.trim()
             .parse::<ErrorModel>()
@@ -66,6 +61,11 @@ pub fn method_look(method: &str, installation: usize) -> (Look, Option<Marker>) 
         let color = INSTALLATION_COLORS[installation % INSTALLATION_COLORS.len()];
         return (look(color, Stroke::Solid), Some(Marker::Diamond));
     }
+    if let Some(index) = filtered {
+        // A Kalman filter in its installation model's colour, dotted.
+        let color = INSTALLATION_COLORS[index % INSTALLATION_COLORS.len()];
+        return (look(color, Stroke::Dotted), Some(Marker::Dot));
+    }
     if let Some(rest) = method.strip_prefix(LEARNED_LABEL) {
         // Every replicate of a source in its colour (maroon, goldenrod: none of the paper
         // DCNets'); the vehicle's dashed.
@@ -83,11 +83,18 @@ pub fn method_look(method: &str, installation: usize) -> (Look, Option<Marker>) 
 
 /// The looks of `methods`, in order.
 pub fn method_looks(methods: &[&str]) -> Vec<(Look, Option<Marker>)> {
+    let models: Vec<&str> = methods
+        .iter()
+        .filter_map(|m| m.strip_prefix("installation"))
+        .collect();
     let mut installation = 0;
     methods
         .iter()
         .map(|method| {
-            let look = method_look(method, installation);
+            let filtered = method
+                .strip_prefix("Kalman filter")
+                .and_then(|rest| models.iter().position(|m| *m == rest));
+            let look = method_look(method, installation, filtered);
             installation += usize::from(method.starts_with("installation"));
             look
         })
@@ -162,22 +169,15 @@ pub const TICK_CHAR_PX: usize = 9;
 /// The width the figure's x axis gives its tick labels, in pixels.
 pub const TICKS_WIDTH_PX: usize = 700;
 
-/// The x axis from `first` to `last`: the ticks' names, or padded numbers; and the
-/// span that sets how far each method's points and bars sit beside their x, in the
-/// order of the legend, so that intervals at one x do not hide one another.
-fn x_scale(x_axis: &XAxis, first: f64, last: f64) -> (Scale, f64) {
-    let x = match x_axis.ticks {
+/// The x axis from `first` to `last`: the ticks' names, or padded numbers.
+fn x_scale(x_axis: &XAxis, first: f64, last: f64) -> Scale {
+    match x_axis.ticks {
         Some(names) => Scale::named(names),
         None => {
             let pad = 0.05 * (last - first);
             Scale::linear((first - pad)..(last + pad))
         }
-    };
-    let span = match x_axis.ticks {
-        Some(_) => (last - first).max(1.0),
-        None => last - first,
-    };
-    (x, span)
+    }
 }
 
 /// The legend: a swatch per method, and the cut mark's where a mean is off the axis.
@@ -214,8 +214,7 @@ pub fn rmse_figure(
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
             (lo.min(*x), hi.max(*x))
         });
-    let (x, span) = x_scale(&x_axis, first, last);
-    let offset = |index: usize| method_offset_s(index, methods.len(), span);
+    let x = x_scale(&x_axis, first, last);
     // The means decide the axis: logarithmic when they span a decade, as the blown-up
     // short windows of the paper's least squares make them, so that no calibration,
     // the paper's methods and the installation models each keep a height of their own.
@@ -237,17 +236,16 @@ pub fn rmse_figure(
             .x_desc(x_axis.label)
             .y_desc(y_label)
             .draw()?;
-        for (index, (method, (look, marker))) in methods.iter().zip(&looks).enumerate() {
+        for (method, (look, marker)) in methods.iter().zip(&looks) {
             let mut mine: Vec<(f64, &SummaryRow)> = rows
                 .iter()
                 .filter(|(_, r)| r.method == *method)
                 .map(|(x, r)| (*x, *r))
                 .collect();
             mine.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let at = |x: f64| x + offset(index);
             let points: Vec<(f64, f64)> = mine
                 .iter()
-                .map(|(x, r)| (at(*x), y.shown(r.mean_cm_s)))
+                .map(|(x, r)| (*x, y.shown(r.mean_cm_s)))
                 .collect();
             if x_axis.lines || marker.is_none() {
                 line(&mut chart, points.clone(), look.color, look.stroke)?;
@@ -256,7 +254,7 @@ pub fn rmse_figure(
                 marker.draw(&mut chart, &points, look.color)?;
                 chart.draw_series(mine.iter().map(|(x, r)| {
                     let ends = [r.mean_cm_s - r.ci95_cm_s, r.mean_cm_s + r.ci95_cm_s]
-                        .map(|v| (at(*x), y.shown(v)));
+                        .map(|v| (*x, y.shown(v)));
                     PathElement::new(ends.to_vec(), look.color.stroke_width(2))
                 }))?;
             }
@@ -268,7 +266,7 @@ pub fn rmse_figure(
                 };
                 cut_mark(
                     &mut chart,
-                    (at(*x), y.shown(r.mean_cm_s)),
+                    (*x, y.shown(r.mean_cm_s)),
                     r.mean_cm_s,
                     look.color,
                     edge,
@@ -286,21 +284,8 @@ mod tests {
     use super::*;
 
     #[test]
-    fn methods_sit_beside_their_window_centred_on_it() {
-        // Three methods over windows 50 to 400 s: 2.1 s apart, the middle one on it.
-        let offsets: Vec<f64> = (0..3).map(|i| method_offset_s(i, 3, 350.0)).collect();
-        assert!((offsets[0] + 2.1).abs() < 1e-12 && offsets[1] == 0.0);
-        assert!((offsets[2] - 2.1).abs() < 1e-12);
-        // Twelve methods: the outermost 11.55 s each side, a thirtieth of the span.
-        assert!((method_offset_s(11, 12, 350.0) - 11.55).abs() < 1e-9);
-        assert_eq!(
-            method_offset_s(0, 12, 350.0),
-            -method_offset_s(11, 12, 350.0)
-        );
-    }
-
-    #[test]
-    fn the_paper_methods_keep_their_looks_and_installation_models_have_their_own() {
+    fn the_paper_methods_keep_their_looks_and_installation_models_and_their_filters_have_their_own()
+    {
         let methods = [
             NO_CALIBRATION,
             "baseline",
@@ -308,6 +293,8 @@ mod tests {
             "installation lever+offset",
             "DCNet EM5",
             "installation lever+offset+bias",
+            "Kalman filter lever+offset+bias",
+            "Kalman filter lever+offset",
         ];
         let looks = method_looks(&methods);
         assert_eq!(looks[0].1, None);
@@ -322,5 +309,11 @@ mod tests {
         let dcnet = series_look(EstimatorKind::Dcnet, Some(ErrorModel::Em5));
         assert_eq!(looks[4].0.color, dcnet.color);
         assert_eq!(looks[5].0.label, "installation lever+offset+bias");
+        // Each filter in its model's colour, dotted: two filters tell apart.
+        assert_eq!(
+            (looks[6].0.color, looks[6].0.stroke),
+            (INSTALLATION_COLORS[1], Stroke::Dotted)
+        );
+        assert_eq!(looks[7].0.color, INSTALLATION_COLORS[0]);
     }
 }

@@ -1,6 +1,6 @@
 //! The terms against time: one panel per term of a Kalman filter, its estimate after
 //! every sample with a ±σ band, the reference value (the true term of a simulated DVL,
-//! or the estimate from every trajectory of a real one) dashed, and that value ± the
+//! or the trajectory's own batch fit of a real one) dashed, and that value ± the
 //! bound's σ for a batch of the samples so far dotted: where the band meets the dotted
 //! lines, the filter knows the term as well as the data allow. [`draw_panels`] draws
 //! any such grid; [`kalman_terms`] a run's, the beam-model filter's terms (or EM5's)
@@ -189,29 +189,29 @@ pub fn kalman_terms(run: &StoredRun) -> PlotResult<Outcome> {
     Ok(Outcome::Drawn(Drawn { caption, svg }))
 }
 
-/// The mean of every trajectory's fit of `term` at the longest window, by the
+/// Trajectory `calibration`'s own fit of `term` at its longest window, by the
 /// installation model with the terms of filter `method`; none where it has no fit.
-fn fitted_mean(study: &InstallationResults, method: &str, term: &str) -> Option<f64> {
+/// (Segments of one vehicle need not share a term, a time offset least: a mean over
+/// them could sit where no segment is.)
+fn own_fit(
+    study: &InstallationResults,
+    method: &str,
+    calibration: &str,
+    term: &str,
+) -> Option<f64> {
     let fitted = method.replacen("Kalman filter", "installation", 1);
-    let longest = study
+    study
         .terms
         .iter()
-        .filter(|r| r.method == fitted)
-        .map(|r| r.window_s)
-        .fold(f64::NEG_INFINITY, f64::max);
-    let values: Vec<f64> = study
-        .terms
-        .iter()
-        .filter(|r| r.method == fitted && r.window_s == longest && r.term == term)
+        .filter(|r| r.method == fitted && r.calibration == calibration && r.term == term)
+        .max_by(|a, b| a.window_s.total_cmp(&b.window_s))
         .map(|r| r.value)
-        .collect();
-    (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
 }
 
 /// The installation study's first Kalman filter against time on two calibration
 /// trajectories: the one whose turns show the lever arm best (the smallest bound on
 /// it after the whole trajectory) and the one that shows it least, each term beside
-/// the mean of every trajectory's fit of the same model at the longest window.
+/// that trajectory's own fit of the same model at its longest window.
 pub fn installation_kalman_terms(study: &InstallationResults) -> PlotResult<Outcome> {
     let Some(method) = study.filtered.first().map(|p| p.method.clone()) else {
         return Ok(Outcome::NotApplicable(
@@ -244,7 +244,6 @@ pub fn installation_kalman_terms(study: &InstallationResults) -> PlotResult<Outc
     ) else {
         return Ok(Outcome::NotApplicable("the filter kept no sample".into()));
     };
-    let reference = |term: &str| fitted_mean(study, &method, term);
     let grid: Vec<(String, Vec<TermPanel>)> = [turning.0, straight.0]
         .iter()
         .map(|&calibration| {
@@ -263,7 +262,7 @@ pub fn installation_kalman_terms(study: &InstallationResults) -> PlotResult<Outc
                             .iter()
                             .map(|p| (p.time_s, factor * p.value, factor * p.std))
                             .collect(),
-                        reference: reference(term).map(|v| factor * v),
+                        reference: own_fit(study, &method, calibration, term).map(|v| factor * v),
                         bound_std: samples.iter().map(|p| factor * p.bound_std).collect(),
                     }
                 })
@@ -277,6 +276,6 @@ pub fn installation_kalman_terms(study: &InstallationResults) -> PlotResult<Outc
         readable_term(shown_term).0,
         straight.0
     );
-    let svg = draw_panels(&caption, &grid, "mean of every trajectory's fit")?;
+    let svg = draw_panels(&caption, &grid, "the trajectory's own fit")?;
     Ok(Outcome::Drawn(Drawn { caption, svg }))
 }
