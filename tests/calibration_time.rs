@@ -54,7 +54,9 @@ fn curve(folder: &Path, dvl: &str, estimator: &str, model: Option<&str>) -> Vec<
 /// gives by the definition: read at the windows, the shortest length after which it
 /// stays within 10 % of what it changes (from its first window's value down to the
 /// bound's at the longest) of its own value there, above or below, for a method that
-/// comes within 10 % of the bound (none otherwise); the filters' curves are taken after every sample, DCNet's at the
+/// ends within 10 % of the bound's own drop over the windows above the bound (none
+/// otherwise: on DVL1's floor of 5.9 cm/s, 10 % of the whole RMSE let every method
+/// through); the filters' curves are taken after every sample, DCNet's at the
 /// windows; the report and the figure have them.
 #[test]
 fn every_method_has_the_calibration_time_its_held_out_curve_gives() {
@@ -81,14 +83,20 @@ fn every_method_has_the_calibration_time_its_held_out_curve_gives() {
             .copied()
             .filter(|(length, _)| windows.contains(length))
             .collect();
-        let bound = self::curve(&folder, dvl, "bound", None).last().unwrap().1;
+        let bound_curve = self::curve(&folder, dvl, "bound", None);
+        let bound = bound_curve.last().unwrap().1;
+        let bound_first = bound_curve
+            .iter()
+            .rfind(|(length, _)| *length <= windows[0])
+            .unwrap()
+            .1;
         let stays = |within: &dyn Fn(f64) -> bool| {
             (0..at.len())
                 .find(|&i| at[i..].iter().all(|&(_, rmse)| within(rmse)))
                 .map(|i| at[i].0)
         };
         let band = 0.1 * (at[0].1.max(*long) - bound.min(*long));
-        let reaches_the_bound = stays(&|rmse| rmse <= 1.1 * bound).is_some();
+        let reaches_the_bound = *long <= bound + 0.1 * (bound_first - bound);
         let expected = stays(&|rmse| (rmse - long).abs() <= band).filter(|_| reaches_the_bound);
         assert_eq!(*time, expected, "{dvl} {estimator} {model:?}");
         never += usize::from(time.is_none());

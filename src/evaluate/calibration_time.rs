@@ -9,10 +9,11 @@
 //! a method's time to the bound is the shortest length after which it stays within the
 //! tolerance of the bound's value at the longest window (a target common to every
 //! method, which a method that converges to a worse value never reaches); its
-//! calibration time, for a method that reaches the bound, the shortest length after
-//! which its curve stays within the tolerance, of what calibration changes over the
-//! windows (from its RMSE at the shortest down to the bound's at the longest), of its
-//! own value at the longest window, set beside its T_conv. In: per-run rows of
+//! calibration time the shortest length after which its curve stays within the
+//! tolerance, of what calibration changes over the windows (from its RMSE at the
+//! shortest down to the bound's at the longest), of its own value at the longest
+//! window, set beside its T_conv: none for a method whose value there is further above
+//! the bound's than the tolerance of the bound's own drop over the windows. In: per-run rows of
 //! [`Phase::HeldOut`], the bound's curve, the calibration table. Out: the held-out
 //! curves and the calibration-time table.
 
@@ -211,7 +212,7 @@ pub fn calibration_times(
                 })?
                 .window_s;
             let &(long_s, long) = curve.last()?;
-            let bound = bound_at_longest(curves, dvl, long_window_s);
+            let bound = bound_at(curves, dvl, long_window_s);
             // The protocol scores no uncorrected DVL: the band is of what calibration
             // changes over the windows, from the method's RMSE at the shortest (or the
             // longest, where higher) down to what the bound leaves at the longest.
@@ -220,9 +221,18 @@ pub fn calibration_times(
             let index = calibration_time_index(&curve, tolerance_band(tolerance, worst, floor));
             let to_bound =
                 bound.and_then(|b| index_within(&curve, b.rmse_cm_s * (1.0 + tolerance)));
-            // A method that never comes within the tolerance of the bound has settled on
-            // a value worse than the data allow: no calibration time.
-            let index = index.filter(|_| bound.is_none() || to_bound.is_some());
+            // A method that ends further above the bound than the tolerance of what an
+            // efficient calibration changes over the windows (the bound's own drop from
+            // the shortest window to the longest, the same for every method of the DVL,
+            // not the whole RMSE, floor included) has settled on a value worse than the
+            // data allow: no calibration time.
+            let shortest_s = windows.iter().copied().fold(f64::INFINITY, f64::min);
+            let reaches = bound.is_none_or(|b| {
+                let drop =
+                    bound_at(curves, dvl, shortest_s).map_or(0.0, |s| s.rmse_cm_s - b.rmse_cm_s);
+                long <= b.rmse_cm_s + tolerance_band(tolerance, b.rmse_cm_s + drop, b.rmse_cm_s)
+            });
+            let index = index.filter(|_| reaches);
             Some(CalibrationTimeRow {
                 dvl: dvl.to_string(),
                 estimator,
@@ -239,19 +249,15 @@ pub fn calibration_times(
         .collect()
 }
 
-/// The last point of `dvl`'s bound curve up to the longest window `long_window_s`, where
-/// every method's curve ends.
-fn bound_at_longest<'a>(
-    curves: &'a [HeldOutRow],
-    dvl: &str,
-    long_window_s: f64,
-) -> Option<&'a HeldOutRow> {
+/// The last point of `dvl`'s bound curve up to `length_s` (the longest window, where
+/// every method's curve ends, or the shortest).
+fn bound_at<'a>(curves: &'a [HeldOutRow], dvl: &str, length_s: f64) -> Option<&'a HeldOutRow> {
     curves
         .iter()
         .filter(|r| {
             r.dvl == dvl
                 && r.estimator == EstimatorKind::Bound
-                && r.length_s <= long_window_s
+                && r.length_s <= length_s
                 && r.rmse_cm_s.is_finite()
         })
         .max_by(|a, b| a.length_s.total_cmp(&b.length_s))

@@ -123,7 +123,7 @@ fn printed_settling(calibration: &Calibration) -> String {
     };
     let shown = shown_points(calibration, all);
     let mut text = format!(
-        "the Kalman filter over the same samples, its terms constant, starting at zero with standard deviations {}; its terms after each length, ± its standard deviation:\n{}\n",
+        "the Kalman filter over the same samples, its terms constant, starting at zero with standard deviations {}; its terms after each length, ± its standard deviation (from the noise its residuals show so far, as the fit's):\n{}\n",
         priors(calibration).join(", "),
         settling_table(calibration, &shown, all)
     );
