@@ -196,7 +196,8 @@ fn a_sweep_over_the_tolerance_reuses_every_block_and_the_random_walk_only_the_fi
 /// The installation study's Kalman filter on four synthetic recordings of a known
 /// installation: its terms after 400 s are within four of their standard deviations of
 /// the truth on the turning segments, its rows stand beside the fit's in every table,
-/// the terms against time and the calibration times are stored, and the figure drawn.
+/// the terms against time and the calibration times are stored, and the figure drawn;
+/// with a shorter longest window the filter runs up to it only.
 #[test]
 fn the_installation_filter_recovers_a_known_installation_and_reports_its_calibration_time() {
     let dir = tempfile::tempdir().unwrap();
@@ -257,6 +258,29 @@ fn the_installation_filter_recovers_a_known_installation_and_reports_its_calibra
     let report = std::fs::read_to_string(folder.join("report.md")).unwrap();
     assert!(report.contains("### How long to calibrate"), "{report}");
     assert!(d.join("plots/syn/installation_kalman_terms.png").is_file());
+
+    // Calibrated on the first 100 s only, the filter stops there: samples 3 to 99 of
+    // each segment (inside the 3-s margin), and nothing after.
+    let output = dcnet(
+        d,
+        &[
+            "run",
+            "experiments/syn.toml",
+            "--set",
+            "calibration.window_s=[100.0]",
+            "--out",
+            "short",
+            "--no-plots",
+        ],
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let filtered = read_parquet(&d.join("short/syn/terms_in_time.parquet"));
+    assert_eq!(filtered.num_rows(), 4 * 97 * 8);
+    let last = floats(&filtered, "time_s")
+        .into_iter()
+        .flatten()
+        .fold(0.0, f64::max);
+    assert!(last < 100.0, "{last}");
 }
 
 #[test]

@@ -226,6 +226,7 @@ pub fn calibrate_on(
         reference_m_s: spec.reference_noise_m_s,
     };
     let calibration = segments[c];
+    let longest_s = spec.windows_s.iter().copied().fold(0.0, f64::max);
     let on = OnTrajectory {
         spec,
         segments,
@@ -233,7 +234,15 @@ pub fn calibrate_on(
         estimators,
         noise,
         tolerances: spec.observability.tolerances(),
-        filters: run_filters(spec, &calibration.recording, &calibration.reference, noise),
+        filters: run_filters(
+            spec,
+            (
+                &calibration.recording,
+                calibration.first_seconds(longest_s).0,
+            ),
+            &calibration.reference,
+            noise,
+        ),
     };
     let per_window: Vec<Calibrated> = spec
         .windows_s
@@ -261,7 +270,7 @@ impl Estimate {
 
 /// What every window of one calibration trajectory shares: the study, the trajectories,
 /// which one calibrates, the estimators, the noise and tolerances of the bound, and the
-/// filters' runs over the whole trajectory.
+/// filters' runs over it up to the longest window.
 struct OnTrajectory<'a> {
     spec: &'a InstallationSpec,
     segments: &'a [&'a Segment],

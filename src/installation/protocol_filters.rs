@@ -1,5 +1,5 @@
 //! The study's Kalman filters on one calibration trajectory: each filter of the spec
-//! runs once over the whole trajectory; a window takes the filter's state after the
+//! runs once over the trajectory up to the study's longest window; a window takes the filter's state after the
 //! window's last sample, and every sample's terms become the rows of the terms against
 //! time. In: the spec, the calibration segment and the noise. Out: each filter's run,
 //! its terms at a window, and its [`FilterPoint`]s.
@@ -12,6 +12,7 @@ use super::spec::{InstallationSpec, Method};
 use super::term_names::term_set;
 use super::terms::{Installation, TermSet};
 use crate::data::paired::PairedRecording;
+use std::ops::Range;
 
 /// One filter's pass over a calibration trajectory.
 pub struct FilterRun {
@@ -25,11 +26,13 @@ pub struct FilterRun {
 /// parameter's name, value, standard deviation and the bound's.
 pub type WindowTerms = (Installation, Vec<(&'static str, f64, f64, f64)>);
 
-/// Every filter of `spec` run over the calibration trajectory's `recording`, beside its
-/// `reference`.
+/// Every filter of `spec` run over `samples` of the calibration trajectory's
+/// `recording`, beside its `reference`: those up to the study's longest window, as no
+/// window reads a later one (a recording of hours calibrated on minutes keeps only
+/// those minutes' steps).
 pub fn run_filters(
     spec: &InstallationSpec,
-    recording: &PairedRecording,
+    (recording, samples): (&PairedRecording, Range<usize>),
     reference: &Reference,
     noise: Noise,
 ) -> Vec<FilterRun> {
@@ -39,8 +42,8 @@ pub fn run_filters(
             Method::Filter { terms, .. } => {
                 let terms = term_set(terms);
                 let steps = run_filter(
-                    &recording.time_s,
-                    &recording.dvl_m_s,
+                    &recording.time_s[samples.clone()],
+                    &recording.dvl_m_s[samples.clone()],
                     reference,
                     terms,
                     &spec.filter,
