@@ -180,11 +180,6 @@ pub fn calibration_times(
     series
         .into_iter()
         .filter_map(|(dvl, estimator, error_model)| {
-            let long_window_s = calibration
-                .iter()
-                .filter(|r| r.dvl == dvl)
-                .map(|r| r.window_s)
-                .fold(f64::NEG_INFINITY, f64::max);
             // Read at the calibration windows, the lengths at which every method (DCNet,
             // whose estimate is a pass of the network per window, too) has its curve.
             let windows: Vec<f64> = calibration
@@ -192,6 +187,7 @@ pub fn calibration_times(
                 .filter(|r| r.dvl == dvl)
                 .map(|r| r.window_s)
                 .collect();
+            let long_window_s = windows.iter().copied().fold(f64::NEG_INFINITY, f64::max);
             let curve: Vec<(f64, f64)> = curves
                 .iter()
                 .filter(|r| {
@@ -221,18 +217,7 @@ pub fn calibration_times(
             let index = calibration_time_index(&curve, tolerance_band(tolerance, worst, floor));
             let to_bound =
                 bound.and_then(|b| index_within(&curve, b.rmse_cm_s * (1.0 + tolerance)));
-            // A method that ends further above the bound than the tolerance of what an
-            // efficient calibration changes over the windows (the bound's own drop from
-            // the shortest window to the longest, the same for every method of the DVL,
-            // not the whole RMSE, floor included) has settled on a value worse than the
-            // data allow: no calibration time.
-            let shortest_s = windows.iter().copied().fold(f64::INFINITY, f64::min);
-            let reaches = bound.is_none_or(|b| {
-                let drop =
-                    bound_at(curves, dvl, shortest_s).map_or(0.0, |s| s.rmse_cm_s - b.rmse_cm_s);
-                long <= b.rmse_cm_s + tolerance_band(tolerance, b.rmse_cm_s + drop, b.rmse_cm_s)
-            });
-            let index = index.filter(|_| reaches);
+            let index = index.filter(|_| ends_at_the_bound(curves, dvl, &windows, long, tolerance));
             Some(CalibrationTimeRow {
                 dvl: dvl.to_string(),
                 estimator,
@@ -247,6 +232,32 @@ pub fn calibration_times(
             })
         })
         .collect()
+}
+
+/// Whether a method of `dvl` whose curve ends at `long` ends within `tolerance` of what
+/// an efficient calibration changes over the `windows` (the bound's own drop from the
+/// shortest to the longest, the same for every method of the DVL, not the whole RMSE,
+/// floor included) above the bound; one that does not has settled on a value worse than
+/// the data allow, and has no calibration time. True where there is no bound.
+fn ends_at_the_bound(
+    curves: &[HeldOutRow],
+    dvl: &str,
+    windows: &[f64],
+    long: f64,
+    tolerance: f64,
+) -> bool {
+    let shortest_s = windows.iter().copied().fold(f64::INFINITY, f64::min);
+    let longest_s = windows.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    match (
+        bound_at(curves, dvl, shortest_s),
+        bound_at(curves, dvl, longest_s),
+    ) {
+        (Some(first), Some(last)) => {
+            long <= last.rmse_cm_s + tolerance_band(tolerance, first.rmse_cm_s, last.rmse_cm_s)
+        }
+        (_, None) => true,
+        (None, Some(last)) => long <= last.rmse_cm_s,
+    }
 }
 
 /// The last point of `dvl`'s bound curve up to `length_s` (the longest window, where

@@ -113,6 +113,12 @@ impl OnlineNoise {
         }
     }
 
+    /// Σ HᵀH over the samples so far and the three axes: the Fisher information of
+    /// white noise of unit variance.
+    pub fn gram(&self) -> DMatrix<f64> {
+        self.axes.iter().map(|axis| &axis.squares.0).sum()
+    }
+
     /// The noise of the residuals at `estimate`, and JᵀΣJ under it (Σ the AR(1) of each
     /// axis), for a filter whose covariance is `covariance` when its samples weigh
     /// 1 / `variance` each. The level counts what the terms took of the noise: a

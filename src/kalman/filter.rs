@@ -91,7 +91,7 @@ impl Filter {
     /// diagonal, the components are taken in one at a time, which is the joint update
     /// and needs no matrix inverse: a component that neither its noise nor the terms'
     /// uncertainty can move (`hPhᵀ + r = 0`) tells nothing and is passed over.
-    fn update_about(&mut self, measurement: &Measurement, about: &DVector<f64>) {
+    pub fn update_about(&mut self, measurement: &Measurement, about: &DVector<f64>) {
         let n = self.estimate.len();
         for (r, row) in measurement.rows.iter().enumerate() {
             let h = DVector::from_column_slice(row);
