@@ -58,6 +58,26 @@ struct Coverage {
     bound_at_twice: Vec<f64>,
 }
 
+/// A DVL of `installation` simulated on `segment` with [`NOISE_M_S`] of noise of
+/// correlation `correlation_at_1_s`: the stamps whose t + τ falls inside the reference,
+/// and their samples.
+fn simulated(
+    segment: &Segment,
+    installation: &Installation,
+    correlation_at_1_s: f64,
+    rng: &mut rand_chacha::ChaCha8Rng,
+) -> (Vec<f64>, Vec<[f64; 3]>) {
+    let simulated =
+        simulate_dvl_correlated(segment, installation, (NOISE_M_S, correlation_at_1_s), rng);
+    segment
+        .recording
+        .time_s
+        .iter()
+        .zip(simulated)
+        .filter_map(|(&t, d)| d.map(|d| (t, d)))
+        .unzip()
+}
+
 /// One fit per seed of a DVL simulated on `segments[seed % len]` with noise of
 /// correlation `correlation_at_1_s`.
 fn coverage(segments: &[Segment], correlation_at_1_s: f64, seeds: u64) -> Coverage {
@@ -69,16 +89,7 @@ fn coverage(segments: &[Segment], correlation_at_1_s: f64, seeds: u64) -> Covera
         .map(|seed| {
             let segment = &segments[seed as usize % segments.len()];
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-            let simulated =
-                simulate_dvl_correlated(segment, &TRUTH, (NOISE_M_S, correlation_at_1_s), &mut rng);
-            // The stamps whose t + τ falls inside the reference.
-            let (time_s, dvl): (Vec<f64>, Vec<[f64; 3]>) = segment
-                .recording
-                .time_s
-                .iter()
-                .zip(simulated)
-                .filter_map(|(&t, d)| d.map(|d| (t, d)))
-                .unzip();
+            let (time_s, dvl) = simulated(segment, &TRUTH, correlation_at_1_s, &mut rng);
             let fitted = fit(&time_s, &dvl, &segment.reference, EVERY_TERM).expect("a fit");
             let at = |level: f64| {
                 bound(
@@ -287,19 +298,7 @@ fn filter_check(
                 })
                 .collect();
             let installation = Installation::from_parameters(&EVERY_TERM, &truth);
-            let simulated = simulate_dvl_correlated(
-                segment,
-                &installation,
-                (NOISE_M_S, correlation_at_1_s),
-                &mut rng,
-            );
-            let (time_s, dvl): (Vec<f64>, Vec<[f64; 3]>) = segment
-                .recording
-                .time_s
-                .iter()
-                .zip(simulated)
-                .filter_map(|(&t, d)| d.map(|d| (t, d)))
-                .unzip();
+            let (time_s, dvl) = simulated(segment, &installation, correlation_at_1_s, &mut rng);
             let mut checks = Vec::new();
             run_filter_observed(
                 (&time_s, &dvl, &segment.reference),

@@ -217,7 +217,9 @@ pub fn calibration_times(
             let index = calibration_time_index(&curve, tolerance_band(tolerance, worst, floor));
             let to_bound =
                 bound.and_then(|b| index_within(&curve, b.rmse_cm_s * (1.0 + tolerance)));
-            let index = index.filter(|_| ends_at_the_bound(curves, dvl, &windows, long, tolerance));
+            let shortest_s = windows.iter().copied().fold(f64::INFINITY, f64::min);
+            let index = index
+                .filter(|_| ends_at_the_bound(curves, dvl, (shortest_s, bound), long, tolerance));
             Some(CalibrationTimeRow {
                 dvl: dvl.to_string(),
                 estimator,
@@ -235,29 +237,23 @@ pub fn calibration_times(
 }
 
 /// Whether a method of `dvl` whose curve ends at `long` ends within `tolerance` of what
-/// an efficient calibration changes over the `windows` (the bound's own drop from the
-/// shortest to the longest, the same for every method of the DVL, not the whole RMSE,
-/// floor included) above the bound; one that does not has settled on a value worse than
-/// the data allow, and has no calibration time. True where there is no bound.
+/// an efficient calibration changes over the windows (the bound's own drop from the
+/// shortest window, `shortest_s`, to its value at the longest, `bound`: the same for
+/// every method of the DVL, not the whole RMSE, floor included) above the bound; one
+/// that does not has settled on a value worse than the data allow, and has no
+/// calibration time. True where there is no bound.
 fn ends_at_the_bound(
     curves: &[HeldOutRow],
     dvl: &str,
-    windows: &[f64],
+    (shortest_s, bound): (f64, Option<&HeldOutRow>),
     long: f64,
     tolerance: f64,
 ) -> bool {
-    let shortest_s = windows.iter().copied().fold(f64::INFINITY, f64::min);
-    let longest_s = windows.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    match (
-        bound_at(curves, dvl, shortest_s),
-        bound_at(curves, dvl, longest_s),
-    ) {
-        (Some(first), Some(last)) => {
-            long <= last.rmse_cm_s + tolerance_band(tolerance, first.rmse_cm_s, last.rmse_cm_s)
-        }
-        (_, None) => true,
-        (None, Some(last)) => long <= last.rmse_cm_s,
-    }
+    let Some(last) = bound else {
+        return true;
+    };
+    let first = bound_at(curves, dvl, shortest_s).map_or(last.rmse_cm_s, |b| b.rmse_cm_s);
+    long <= last.rmse_cm_s + tolerance_band(tolerance, first, last.rmse_cm_s)
 }
 
 /// The last point of `dvl`'s bound curve up to `length_s` (the longest window, where

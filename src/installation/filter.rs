@@ -171,20 +171,25 @@ fn relinearised(
     estimate: DVector<f64>,
     variance: f64,
 ) -> (Filter, OnlineNoise) {
-    let mut about = estimate;
-    let mut filter = Filter::new(prior);
-    for _ in 0..RELINEARISING_PASSES {
-        filter = Filter::new(prior);
+    // One Gauss–Newton pass: the filter from its prior over the samples, each
+    // linearised about `about`.
+    let pass = |about: &DVector<f64>| {
+        let mut filter = Filter::new(prior);
         for &(j, elapsed_s, _) in early {
             filter.predict(elapsed_s);
-            filter.update_about(&measure(j, about.as_slice()), &about);
+            filter.update_about(&measure(j, about.as_slice()), about);
         }
-        about = filter.estimate.clone();
+        filter
+    };
+    let mut filter = pass(&estimate);
+    for _ in 1..RELINEARISING_PASSES {
+        filter = pass(&filter.estimate.clone());
     }
+    let about = &filter.estimate;
     let mut shown = OnlineNoise::new(prior.mean.len(), variance);
     for &(j, _, neighbour) in early {
         let at = measure(j, about.as_slice());
-        shown.add(&at.rows, &at.innovation, &about, neighbour);
+        shown.add(&at.rows, &at.innovation, about, neighbour);
     }
     (filter, shown)
 }

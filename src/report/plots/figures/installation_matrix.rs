@@ -5,7 +5,6 @@
 //! [`InstallationResults`]'s held-out rows. Out: one figure per method, named by its slug
 //! (`installation_matrix_least_squares_em1`), or why there is none.
 
-use crate::installation::protocol::summarize;
 use crate::installation::rows::{InstallationResults, TransferRow};
 use crate::report::plots::canvas::{Drawn, Outcome, draw_svg};
 use crate::report::plots::draw::*;
@@ -75,8 +74,13 @@ pub fn installation_matrix(study: &InstallationResults) -> PlotResult<Vec<(Strin
             .copied()
             .filter(|r| r.method == method)
             .collect();
-        let owned: Vec<TransferRow> = cells.iter().map(|&r| r.clone()).collect();
-        let mean = summarize(&owned, &[window_s])[0].mean_cm_s;
+        // The summary table's mean, the same cells: over calibration trajectories, of
+        // each one's mean.
+        let mean = study
+            .summary
+            .iter()
+            .find(|r| r.method == method && r.window_s == window_s)
+            .map_or(f64::NAN, |r| r.mean_cm_s);
         let lines = title_lines(method, window_s, mean);
         let caption = lines.join(", ");
         let n = trajectories.len();
