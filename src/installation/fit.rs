@@ -292,6 +292,21 @@ pub fn fit(
     reference: &Reference,
     terms: TermSet,
 ) -> Result<Fit, FitError> {
+    fit_about(time_s, dvl_m_s, reference, terms, Installation::default())
+}
+
+/// Fits the terms of `terms`, every other term held at its value in `base` (the terms
+/// a calibration carries to a dive): the free terms start from `base`'s values, τ (when
+/// free) from the best of the scan over `base`'s τ ± [`TIME_OFFSET_MARGIN_S`], and it
+/// must end within that margin; the fixed mask is the samples whose t + τ lies inside
+/// the reference for every τ of the scan.
+pub fn fit_about(
+    time_s: &[f64],
+    dvl_m_s: &[Vec3],
+    reference: &Reference,
+    terms: TermSet,
+    base: Installation,
+) -> Result<Fit, FitError> {
     if time_s.len() != dvl_m_s.len() {
         return Err(FitError::LengthMismatch {
             time: time_s.len(),
@@ -299,7 +314,9 @@ pub fn fit(
         });
     }
     let parameter_count = terms.parameter_count();
-    let mask = reference.interior(time_s, TIME_OFFSET_MARGIN_S);
+    let centre_s = base.time_offset_s;
+    let shifted: Vec<f64> = time_s.iter().map(|t| t + centre_s).collect();
+    let mask = reference.interior(&shifted, TIME_OFFSET_MARGIN_S);
     if 3 * mask.len() <= parameter_count || mask.is_empty() {
         return Err(FitError::TooFewSamples {
             usable: mask.len(),
@@ -317,7 +334,7 @@ pub fn fit(
     };
 
     let (solved, termination) = if parameter_count == 0 {
-        (problem(terms, Installation::default()), "none".to_string())
+        (problem(terms, base), "none".to_string())
     } else if terms.time_offset {
         // The scan only finds LM's start: on a long recording, every few samples of it
         // (at most SCAN_SAMPLES), so that its steps cost no more than a short one's.
@@ -340,14 +357,14 @@ pub fn fit(
             base,
             parameters: DVector::from_vec(base.to_parameters(&terms)),
         };
-        let start = scan_time_offset(&scanned, terms)?;
+        let start = scan_time_offset(&scanned, terms, base)?;
         minimize(problem(terms, start))?
     } else {
-        minimize(problem(terms, Installation::default()))?
+        minimize(problem(terms, base))?
     };
 
     let installation = solved.installation();
-    if installation.time_offset_s.abs() > TIME_OFFSET_MARGIN_S {
+    if (installation.time_offset_s - centre_s).abs() > TIME_OFFSET_MARGIN_S {
         return Err(FitError::TimeOffsetBeyondMargin {
             time_offset_s: installation.time_offset_s,
             margin_s: TIME_OFFSET_MARGIN_S,
@@ -389,13 +406,14 @@ pub fn jacobian_at(
     .jacobian_matrix()
 }
 
-/// The start of LM when τ is fitted: τ held at each step of the scan over
-/// ±[`TIME_OFFSET_MARGIN_S`], the other terms of `terms` solved from zero, and the
-/// installation of the lowest cost kept. `problem` makes the problem of free terms and
-/// held ones.
+/// The start of LM when τ is fitted: τ held at each step of the scan over `base`'s τ
+/// ± [`TIME_OFFSET_MARGIN_S`], the other terms of `terms` solved from `base`'s values,
+/// and the installation of the lowest cost kept. `problem` makes the problem of free
+/// terms and held ones.
 fn scan_time_offset<'a>(
     problem: &impl Fn(TermSet, Installation) -> Problem<'a>,
     terms: TermSet,
+    base: Installation,
 ) -> Result<Installation, FitError> {
     let others = TermSet {
         time_offset: false,
@@ -405,8 +423,8 @@ fn scan_time_offset<'a>(
     let mut best: Option<(f64, Installation)> = None;
     for step in -steps..=steps {
         let held = Installation {
-            time_offset_s: step as f64 * TIME_OFFSET_SCAN_STEP_S,
-            ..Installation::default()
+            time_offset_s: base.time_offset_s + step as f64 * TIME_OFFSET_SCAN_STEP_S,
+            ..base
         };
         let candidate = if others.parameter_count() == 0 {
             problem(others, held)

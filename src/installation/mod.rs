@@ -30,6 +30,7 @@ pub mod fit;
 pub mod residual_noise;
 pub mod bound;
 pub mod missing;
+pub mod clock;
 pub mod filter_noise;
 pub mod filter;
 pub mod rows;

@@ -10,6 +10,7 @@
 
 use super::bound::{Noise, TermBound, Tolerances, bound};
 use super::calibration_time::calibration_times;
+use super::clock::refind;
 use super::fit::{TIME_OFFSET_MARGIN_S, fit};
 use super::frames::Reference;
 use super::learned_spec::TrainingSource;
@@ -328,6 +329,9 @@ impl OnTrajectory<'_> {
             let learned = learned_labels.contains(label);
             terms.extend(self.term_rows(label, estimate, learned, window_s));
             heldout.extend(self.transfer_rows(label, estimate, learned, window_s));
+            let (refound, unfound) = self.refound_rows(label, estimate, learned, window_s);
+            heldout.extend(refound);
+            failures.extend(unfound);
         }
         Calibrated {
             heldout,
@@ -492,6 +496,102 @@ impl OnTrajectory<'_> {
         rows
     }
 
+    /// The trajectories one method's terms are scored on: every other one (a learned
+    /// method's, those of the calibration's fold only).
+    fn scored(&self, learned: bool) -> impl Iterator<Item = &Segment> {
+        let c = self.c;
+        self.segments
+            .iter()
+            .enumerate()
+            .filter(move |&(s, _)| s != c && !(learned && self.fold_of(s) != self.fold_of(c)))
+            .map(|(_, scored)| *scored)
+    }
+
+    /// With `[calibration.dive]`, one method's RMSE on every trajectory it is scored on
+    /// with the dive's terms found again, for each of the dive's windows w: from the
+    /// trajectory's first w seconds with the method's other terms carried, scored on its
+    /// samples after them. Labelled "<method>, clock re-found in <w> s". Where the clock
+    /// cannot be found, the calibration's is kept and the failure says so.
+    fn refound_rows(
+        &self,
+        label: &str,
+        estimate: &Estimate,
+        learned: bool,
+        window_s: f64,
+    ) -> (Vec<TransferRow>, Vec<FitFailure>) {
+        let Some(dive) = &self.spec.dive else {
+            return (Vec::new(), Vec::new());
+        };
+        let (mut rows, mut failures) = (Vec::new(), Vec::new());
+        for &dive_s in &dive.windows_s {
+            let method = refound_label(label, dive_s);
+            for scored in self.scored(learned) {
+                let recording = &scored.recording;
+                let (first, _) = scored.first_seconds(dive_s);
+                let inside = scored
+                    .reference
+                    .interior(&recording.time_s, TIME_OFFSET_MARGIN_S);
+                let after = first.end.max(inside.start)..inside.end;
+                let window = (&recording.time_s[first.clone()], &recording.dvl_m_s[first]);
+                let found = refind(
+                    window,
+                    &scored.reference,
+                    estimate.installation,
+                    dive.search,
+                    (self.noise, &self.tolerances),
+                );
+                let installation = match found {
+                    Ok(clock) => clock.installation,
+                    Err(why) => {
+                        failures.push(FitFailure {
+                            method: method.clone(),
+                            calibration: self.calibration().name.clone(),
+                            window_s,
+                            why: format!(
+                                "on {}: {why}; its terms are scored with the calibration's clock",
+                                scored.name
+                            ),
+                        });
+                        estimate.installation
+                    }
+                };
+                if let Some(row) =
+                    self.transfer_row(&method, &installation, scored, after, window_s)
+                {
+                    rows.push(row);
+                }
+            }
+        }
+        (rows, failures)
+    }
+
+    /// The row of `installation` scored on `samples` of `scored`.
+    fn transfer_row(
+        &self,
+        method: &str,
+        installation: &Installation,
+        scored: &Segment,
+        samples: Range<usize>,
+        window_s: f64,
+    ) -> Option<TransferRow> {
+        let recording = &scored.recording;
+        let rmse = score(
+            installation,
+            &recording.time_s,
+            &recording.dvl_m_s,
+            &scored.reference,
+            samples,
+        )?;
+        Some(TransferRow {
+            method: method.to_string(),
+            calibration: self.calibration().name.clone(),
+            window_s,
+            scored: scored.name.clone(),
+            rmse_cm_s: [100.0 * rmse.x_m_s, 100.0 * rmse.y_m_s, 100.0 * rmse.z_m_s],
+            total_cm_s: 100.0 * rmse.total_m_s,
+        })
+    }
+
     /// One method's RMSE on every other trajectory (a learned method's on those of the
     /// calibration's fold only), each on its samples inside the reference.
     fn transfer_rows(
@@ -501,37 +601,23 @@ impl OnTrajectory<'_> {
         learned: bool,
         window_s: f64,
     ) -> Vec<TransferRow> {
-        let (c, mut rows) = (self.c, Vec::new());
-        for (s, scored) in self.segments.iter().enumerate() {
-            if s == c || (learned && self.fold_of(s) != self.fold_of(c)) {
-                continue;
-            }
-            let recording = &scored.recording;
-            // Every method is scored on the same samples, those inside the
-            // reference whatever the time offset.
-            let samples = scored
-                .reference
-                .interior(&recording.time_s, TIME_OFFSET_MARGIN_S);
-            let Some(rmse) = score(
-                &estimate.installation,
-                &recording.time_s,
-                &recording.dvl_m_s,
-                &scored.reference,
-                samples,
-            ) else {
-                continue;
-            };
-            rows.push(TransferRow {
-                method: label.to_string(),
-                calibration: self.calibration().name.clone(),
-                window_s,
-                scored: scored.name.clone(),
-                rmse_cm_s: [100.0 * rmse.x_m_s, 100.0 * rmse.y_m_s, 100.0 * rmse.z_m_s],
-                total_cm_s: 100.0 * rmse.total_m_s,
-            });
-        }
-        rows
+        self.scored(learned)
+            .filter_map(|scored| {
+                // Every method is scored on the same samples, those inside the
+                // reference whatever the time offset.
+                let samples = scored
+                    .reference
+                    .interior(&scored.recording.time_s, TIME_OFFSET_MARGIN_S);
+                self.transfer_row(label, &estimate.installation, scored, samples, window_s)
+            })
+            .collect()
     }
+}
+
+/// The label of a method's rows with the dive's clock found again from its first
+/// `dive_s` seconds.
+pub fn refound_label(method: &str, dive_s: f64) -> String {
+    format!("{method}, clock re-found in {dive_s} s")
 }
 
 /// [`summarize`] on the pairs whose calibration and scored trajectories share a fold,

@@ -72,6 +72,35 @@ pub struct InstallationCalibrationFile {
     /// RMSE stays within this of its value at the longest window, %.
     #[serde(default = "InstallationCalibrationFile::default_time_tolerance_pct")]
     pub time_tolerance_pct: f64,
+    /// The terms of the dive, found again on each scored trajectory; none when absent.
+    pub dive: Option<DiveFile>,
+}
+
+/// `[calibration.dive]`: which terms belong to the dive (its clock, and the bias where
+/// it is listed) and are found again at the start of each scored trajectory, over how
+/// many seconds, and how far the search for its time offset looks.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DiveFile {
+    /// "time_offset", and "bias" or "bias_scalar" where the bias is the dive's too.
+    #[serde(default = "DiveFile::default_terms")]
+    pub terms: Vec<TermName>,
+    /// The first w seconds of a scored trajectory the dive's terms are found from; the
+    /// trajectory is scored after them.
+    pub window_s: Vec<f64>,
+    /// How far from the carried time offset the search looks, s.
+    #[serde(default = "DiveFile::default_search_s")]
+    pub search_s: f64,
+}
+
+impl DiveFile {
+    fn default_terms() -> Vec<TermName> {
+        vec![TermName::TimeOffset]
+    }
+
+    fn default_search_s() -> f64 {
+        crate::installation::clock::DEFAULT_SEARCH_S
+    }
 }
 
 impl InstallationCalibrationFile {

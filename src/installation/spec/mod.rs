@@ -21,6 +21,7 @@ pub use file::{
     PairedTrajectoryFile, RecordingsFile, TermSetFile,
 };
 
+use super::clock::ClockSearch;
 use super::filter::FilterSettings;
 use super::learned_spec::{LEARNED_LABEL, LearnedSpec, TrainingSource};
 use super::term_names::TermName;
@@ -83,6 +84,15 @@ impl Method {
     }
 }
 
+/// `[calibration.dive]`, checked: the dive's terms and the search for its clock, and
+/// the windows (the first w seconds of a scored trajectory, increasing) they are found
+/// from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DiveSpec {
+    pub search: ClockSearch,
+    pub windows_s: Vec<f64>,
+}
+
 /// The checked spec.
 #[derive(Debug, Clone)]
 pub struct InstallationSpec {
@@ -104,6 +114,9 @@ pub struct InstallationSpec {
     pub dcnet_spec: Option<PathBuf>,
     /// `[learned]`, when the spec has it.
     pub learned: Option<LearnedSpec>,
+    /// `[calibration.dive]`, when the spec has it: every method's terms are also scored
+    /// with the dive's terms found again on each scored trajectory.
+    pub dive: Option<DiveSpec>,
     /// The spec with its overrides, as TOML.
     pub resolved_toml: String,
 }
@@ -186,6 +199,7 @@ fn check(document: &Document<InstallationFile>) -> Result<InstallationSpec, Vec<
         observability,
         dcnet_spec,
         learned,
+        dive: calibration.dive,
         resolved_toml: document.resolved_toml.clone(),
     })
 }
@@ -217,6 +231,7 @@ pub(crate) mod tests {
             observability: ObservabilityFile::default(),
             dcnet_spec: None,
             learned: Some(learned),
+            dive: None,
             resolved_toml: String::new(),
         }
     }

@@ -7,9 +7,12 @@
 
 use super::check_terms;
 use super::kalman::check_kalman;
+use crate::installation::clock::ClockSearch;
 use crate::installation::filter::FilterSettings;
+use crate::installation::spec::DiveSpec;
 use crate::installation::spec::Method;
-use crate::installation::spec::file::{InstallationCalibrationFile, TermSetFile};
+use crate::installation::spec::file::{DiveFile, InstallationCalibrationFile, TermSetFile};
+use crate::installation::term_names::{TermName, term_set};
 use crate::spec::check::Faults;
 use crate::vocab::ErrorModel;
 use std::collections::HashSet;
@@ -26,6 +29,7 @@ pub(in crate::installation::spec) struct CheckedCalibration {
     pub filter: FilterSettings,
     /// A fraction (0.1 for 10 %).
     pub time_tolerance: f64,
+    pub dive: Option<DiveSpec>,
 }
 
 /// Checks `[calibration]`: windows, methods, models and the filter's table.
@@ -39,8 +43,9 @@ pub(in crate::installation::spec) fn check_calibration(
         models,
         kalman,
         time_tolerance_pct,
+        dive,
     } = calibration;
-    let windows_s = check_windows(&window_s, faults);
+    let windows_s = check_windows("calibration.window_s", &window_s, faults);
     let (mut methods, wants_dcnet) = check_methods(&names, faults);
     check_models(&models, faults);
     methods.extend(models.iter().map(|model| Method::Installation {
@@ -70,27 +75,67 @@ pub(in crate::installation::spec) fn check_calibration(
         wants_dcnet,
         filter,
         time_tolerance: time_tolerance_pct / 100.0,
+        dive: dive.map(|dive| check_dive(dive, faults)),
     }
 }
 
-/// `calibration.window_s`: at least one, each finite, positive and listed once; in
+/// `[calibration.dive]`: the time offset among its terms, the rest a bias; its windows
+/// as the calibration's; a search range above zero and within an hour.
+fn check_dive(dive: DiveFile, faults: &mut Faults) -> DiveSpec {
+    let DiveFile {
+        terms,
+        window_s,
+        search_s,
+    } = dive;
+    check_terms("calibration.dive.terms", &terms, faults);
+    if !terms.contains(&TermName::TimeOffset) {
+        faults.add(
+            "calibration.dive.terms",
+            "must hold \"time_offset\": the clock is what a dive sets again",
+        );
+    }
+    for (j, term) in terms.iter().enumerate() {
+        if !matches!(
+            term,
+            TermName::TimeOffset | TermName::Bias | TermName::BiasScalar
+        ) {
+            faults.add(
+                format!("calibration.dive.terms[{j}]"),
+                format!("{:?} belongs to the vehicle, not the dive: a dive's terms are \"time_offset\", and \"bias\" or \"bias_scalar\"", term.name()),
+            );
+        }
+    }
+    let windows_s = check_windows("calibration.dive.window_s", &window_s, faults);
+    if !(search_s.is_finite() && search_s > 0.0 && search_s <= 3600.0) {
+        faults.add(
+            "calibration.dive.search_s",
+            format!("{search_s} must be a number of seconds above zero and at most 3600"),
+        );
+    }
+    DiveSpec {
+        search: ClockSearch {
+            dive_terms: term_set(&terms),
+            search_s,
+        },
+        windows_s,
+    }
+}
+
+/// A list of windows at `key`: at least one, each finite, positive and listed once; in
 /// increasing order.
-fn check_windows(window_s: &[f64], faults: &mut Faults) -> Vec<f64> {
+fn check_windows(key: &str, window_s: &[f64], faults: &mut Faults) -> Vec<f64> {
     if window_s.is_empty() {
-        faults.add("calibration.window_s", "is empty: give at least one window, in seconds (one at least a trajectory's length takes all of it)");
+        faults.add(key, "is empty: give at least one window, in seconds (one at least a trajectory's length takes all of it)");
     }
     let mut windows_s = Vec::new();
     for (i, &w) in window_s.iter().enumerate() {
         if !(w.is_finite() && w > 0.0) {
             faults.add(
-                format!("calibration.window_s[{i}]"),
+                format!("{key}[{i}]"),
                 format!("{w} must be a finite positive number of seconds"),
             );
         } else if windows_s.contains(&w) {
-            faults.add(
-                format!("calibration.window_s[{i}]"),
-                format!("{w} is listed twice"),
-            );
+            faults.add(format!("{key}[{i}]"), format!("{w} is listed twice"));
         } else {
             windows_s.push(w);
         }

@@ -1,0 +1,287 @@
+//! A dive's clock found again. The geometry of an installation (scale, misalignment,
+//! lever arm, and the bias where it is carried) belongs to the vehicle; its time offset,
+//! and the bias where the spec says so, belong to the dive: the DVL's and the
+//! reference's clocks are set again between dives. On a dive, the carried terms are
+//! held and the dive's terms are estimated from its first w seconds:
+//! 1. τ from a search over ± a search range (30 s by default), on a grid finer than
+//!    half a sample: the carried installation's prediction from the reference at t + τ
+//!    against the DVL ([`search_offset`]). The speed alone, which needs no geometry,
+//!    does not do: most A-KIT segments hold their speed within 1–4 cm/s, and their
+//!    clock shows only in the turns, through the lever arm;
+//! 2. the least squares of the dive's terms with the carried ones held
+//!    ([`fit_about`]), from its scan of τ ± 3 s about the search's;
+//! 3. their standard deviations from the bound, and a flag where the window cannot
+//!    show τ (constant speed, no turn).
+//!
+//! In: the dive's first w seconds, its reference, the carried installation. Out: a
+//! [`Clock`], or why the window cannot show it ([`ClockError`]).
+
+use super::bound::{Noise, TermBound, Tolerances, bound};
+use super::fit::{Fit, FitError, TIME_OFFSET_SCAN_STEP_S, fit_about};
+use super::frames::Reference;
+use super::protocol::sample_interval;
+use super::terms::{Installation, TermSet};
+use crate::Vec3;
+
+/// How far the search looks for τ by default, s: a dive whose clocks are 5 or 20 s
+/// apart is found.
+pub const DEFAULT_SEARCH_S: f64 = 30.0;
+
+/// The DVL velocity's standard deviation over the window (three axes), in units of the
+/// DVL's noise per axis, below which the window shows no clock: √3, what the noise
+/// alone varies by. Above it, whether the window shows τ is the bound's to say.
+pub const FLAT_MOTION_NOISES: f64 = 1.732_050_807_568_877_2;
+
+/// The smallest share of the window's samples whose t + τ must lie inside the reference
+/// for a step of the search to count.
+const SEARCH_COVERAGE: f64 = 0.5;
+
+/// What a dive's clock is re-found from: which terms belong to the dive (τ always,
+/// a bias where the spec says so), and how far the search looks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ClockSearch {
+    pub dive_terms: TermSet,
+    pub search_s: f64,
+}
+
+/// A dive's terms found again, with the carried ones.
+#[derive(Debug, Clone)]
+pub struct Clock {
+    /// The carried terms with the dive's replaced.
+    pub installation: Installation,
+    /// The search's τ, s, and the RMS of the DVL against the carried prediction there,
+    /// m/s (all three axes).
+    pub searched_offset_s: f64,
+    pub searched_rms_m_s: f64,
+    /// The least squares of the dive's terms, and their bound.
+    pub fit: Fit,
+    pub bound: TermBound,
+}
+
+impl Clock {
+    /// The time offset's standard deviation (from the noise the residuals show), s.
+    pub fn time_offset_std_s(&self) -> f64 {
+        let index = self.bound.names.iter().position(|n| *n == "time_offset_s");
+        index.map_or(f64::NAN, |i| self.bound.std[i])
+    }
+
+    /// Whether the window cannot show the time offset (its standard deviation beyond the
+    /// tolerance, or one with another term).
+    pub fn time_offset_unseen(&self) -> bool {
+        self.bound.is_unseen("time_offset_s")
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ClockError {
+    #[error(
+        "the DVL's velocity over the first {window_s} s varies by {std_cm_s:.2} cm/s \
+         (standard deviation, three axes), under the √3 times the DVL's noise of \
+         {noise_cm_s} cm/s per axis: a dive at constant velocity shows no clock; give a longer \
+         window, one with a turn or a change of speed, or the clock's terms"
+    )]
+    FlatMotion {
+        window_s: f64,
+        std_cm_s: f64,
+        noise_cm_s: f64,
+    },
+    #[error(
+        "no step of the ±{search_s} s search finds the DVL's samples inside the reference: \
+         the two recordings do not overlap in time"
+    )]
+    NoOverlap { search_s: f64 },
+    #[error("the least squares of the dive's terms failed: {0}")]
+    Fit(#[from] FitError),
+}
+
+/// The τ (s) at which the carried installation's prediction from the reference at
+/// t + τ is closest to the DVL (least RMS over the window), and that RMS (m/s): every step
+/// of a grid over ±`search_s`, no coarser than [`TIME_OFFSET_SCAN_STEP_S`] nor than half
+/// the DVL's sample interval; a step counts when at least half the samples land inside
+/// the reference. `None` where no step does.
+pub fn search_offset(
+    (time_s, dvl_m_s): (&[f64], &[Vec3]),
+    reference: &Reference,
+    carried: Installation,
+    search_s: f64,
+) -> Option<(f64, f64)> {
+    let step_s = TIME_OFFSET_SCAN_STEP_S.min(sample_interval(time_s) / 2.0);
+    let steps = (search_s / step_s).ceil() as i64;
+    let mut best: Option<(f64, f64)> = None;
+    for k in -steps..=steps {
+        let offset_s = carried.time_offset_s + k as f64 * step_s;
+        let (mut sum, mut count) = (0.0, 0usize);
+        for (&t, dvl) in time_s.iter().zip(dvl_m_s) {
+            if let Some(at) = reference.at(t + offset_s) {
+                let predicted = carried.predict(at);
+                sum += (0..3).map(|a| (dvl[a] - predicted[a]).powi(2)).sum::<f64>();
+                count += 1;
+            }
+        }
+        if (count as f64) < SEARCH_COVERAGE * time_s.len() as f64 || count == 0 {
+            continue;
+        }
+        let rms = (sum / count as f64).sqrt();
+        if best.is_none_or(|(_, lowest)| rms < lowest) {
+            best = Some((offset_s, rms));
+        }
+    }
+    best
+}
+
+/// The standard deviation of the DVL's velocity over the window, the three axes'
+/// variances summed, m/s: how much the motion changes.
+fn motion_std(dvl_m_s: &[Vec3]) -> f64 {
+    let n = dvl_m_s.len().max(1) as f64;
+    (0..3)
+        .map(|a| {
+            let mean = dvl_m_s.iter().map(|v| v[a]).sum::<f64>() / n;
+            dvl_m_s.iter().map(|v| (v[a] - mean).powi(2)).sum::<f64>() / n
+        })
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// Re-finds the dive's terms of `search` on a dive's first seconds (`time_s`,
+/// `dvl_m_s`, the caller's window) with the other terms held at `carried`'s values; the
+/// bound from `noise`, the flag from `tolerances`.
+pub fn refind(
+    (time_s, dvl_m_s): (&[f64], &[Vec3]),
+    reference: &Reference,
+    carried: Installation,
+    search: ClockSearch,
+    (noise, tolerances): (Noise, &Tolerances),
+) -> Result<Clock, ClockError> {
+    let window_s = time_s
+        .last()
+        .zip(time_s.first())
+        .map_or(0.0, |(l, f)| l - f)
+        + sample_interval(time_s);
+    let std = motion_std(dvl_m_s);
+    if !(std >= FLAT_MOTION_NOISES * noise.dvl_m_s) {
+        return Err(ClockError::FlatMotion {
+            window_s: (window_s * 10.0).round() / 10.0,
+            std_cm_s: 100.0 * std,
+            noise_cm_s: 100.0 * noise.dvl_m_s,
+        });
+    }
+    let (searched_offset_s, searched_rms_m_s) =
+        search_offset((time_s, dvl_m_s), reference, carried, search.search_s).ok_or(
+            ClockError::NoOverlap {
+                search_s: search.search_s,
+            },
+        )?;
+    let start = Installation {
+        time_offset_s: searched_offset_s,
+        ..carried
+    };
+    let fit = fit_about(time_s, dvl_m_s, reference, search.dive_terms, start)?;
+    let bound = bound(&fit, noise, tolerances);
+    Ok(Clock {
+        installation: fit.installation,
+        searched_offset_s,
+        searched_rms_m_s,
+        fit,
+        bound,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::installation::bound::DEFAULT_TOLERANCES;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+
+    /// A reference of 500 s at 1 Hz with speed changes and turns (analytic, so the
+    /// reference at t + τ is exact at every stamp), and the DVL that `truth` makes read
+    /// on the stamps of its first 400 s with white noise of `noise_m_s` per axis.
+    pub(crate) fn turning_dive(
+        truth: &Installation,
+        noise_m_s: f64,
+        seed: u64,
+    ) -> (Vec<f64>, Vec<Vec3>, Reference) {
+        use std::f64::consts::TAU;
+        let motion = |t: f64| {
+            let velocity = [
+                1.8 + 0.3 * (TAU * t / 75.0).sin(),
+                0.1 * (TAU * t / 40.0).sin(),
+                0.05 * (t / 13.0).sin(),
+            ];
+            let rate = [
+                0.01 * (TAU * t / 20.0).cos(),
+                0.0,
+                0.15 * (TAU * t / 60.0).cos(),
+            ];
+            super::super::frames::ReferenceAt {
+                velocity_body_m_s: velocity,
+                rate_rad_s: rate,
+            }
+        };
+        let time_s: Vec<f64> = (0..500).map(f64::from).collect();
+        let reference = Reference {
+            velocity_body_m_s: time_s
+                .iter()
+                .map(|&t| motion(t).velocity_body_m_s)
+                .collect(),
+            rate_rad_s: time_s.iter().map(|&t| motion(t).rate_rad_s).collect(),
+            time_s: time_s.clone(),
+        };
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let noise = Normal::new(0.0, noise_m_s).unwrap();
+        let stamps: Vec<f64> = time_s[..400].to_vec();
+        let dvl = stamps
+            .iter()
+            .map(|&t| {
+                let clean = truth.predict(motion(t + truth.time_offset_s));
+                [0, 1, 2].map(|k| clean[k] + noise.sample(&mut rng))
+            })
+            .collect();
+        (stamps, dvl, reference)
+    }
+
+    #[test]
+    fn a_clock_twenty_seconds_off_is_found_again_with_the_geometry_carried() {
+        let truth = Installation {
+            lever_arm_m: [-1.9, 0.1, 0.4],
+            misalignment_rad: [0.0, 0.0, 0.02],
+            time_offset_s: 20.3,
+            ..Installation::default()
+        };
+        let (time_s, dvl_m_s, reference) = turning_dive(&truth, 0.01, 7);
+        let window = time_s.partition_point(|&t| t - time_s[0] < 60.0);
+        let noise = Noise {
+            dvl_m_s: 0.01,
+            reference_m_s: 0.0,
+        };
+        let search = ClockSearch {
+            dive_terms: TermSet {
+                time_offset: true,
+                ..TermSet::NONE
+            },
+            search_s: DEFAULT_SEARCH_S,
+        };
+        let carried = Installation {
+            time_offset_s: 0.0,
+            ..truth
+        };
+        let clock = refind(
+            (&time_s[..window], &dvl_m_s[..window]),
+            &reference,
+            carried,
+            search,
+            (noise, &DEFAULT_TOLERANCES),
+        )
+        .unwrap();
+        let std = clock.time_offset_std_s();
+        assert!(std > 0.0 && std < 0.05, "{std}");
+        let error = clock.installation.time_offset_s - truth.time_offset_s;
+        assert!(error.abs() < 4.0 * std, "{error} against {std}");
+        assert_eq!(clock.installation.lever_arm_m, truth.lever_arm_m);
+        assert!(
+            (clock.searched_offset_s - 20.3).abs() < 0.5,
+            "{}",
+            clock.searched_offset_s
+        );
+    }
+}
