@@ -187,7 +187,7 @@ pub fn refind(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::installation::bound::DEFAULT_TOLERANCES;
     use rand::SeedableRng;
@@ -196,7 +196,7 @@ mod tests {
     /// A reference of 500 s at 1 Hz with speed changes and turns (analytic, so the
     /// reference at t + τ is exact at every stamp), and the DVL that `truth` makes read
     /// on the stamps of its first 400 s with white noise of `noise_m_s` per axis.
-    pub(crate) fn turning_dive(
+    pub fn turning_dive(
         truth: &Installation,
         noise_m_s: f64,
         seed: u64,

@@ -315,8 +315,7 @@ pub fn fit_about(
     }
     let parameter_count = terms.parameter_count();
     let centre_s = base.time_offset_s;
-    let shifted: Vec<f64> = time_s.iter().map(|t| t + centre_s).collect();
-    let mask = reference.interior(&shifted, TIME_OFFSET_MARGIN_S);
+    let mask = mask_about(time_s, reference, centre_s);
     if 3 * mask.len() <= parameter_count || mask.is_empty() {
         return Err(FitError::TooFewSamples {
             usable: mask.len(),
@@ -382,6 +381,34 @@ pub fn fit_about(
         sample_count,
         termination,
     })
+}
+
+/// The residuals v_dvl − predict of `installation` on every sample of the record (x,
+/// y, z of each in order, m/s) and their Jacobian in `terms`, rows as
+/// [`Fit::jacobian`]'s: one step of a fit the caller runs, on the samples it chose.
+pub fn linearised(
+    time_s: &[f64],
+    dvl_m_s: &[Vec3],
+    reference: &Reference,
+    terms: TermSet,
+    installation: Installation,
+) -> (DVector<f64>, DMatrix<f64>) {
+    let problem = Problem {
+        time_s,
+        dvl_m_s,
+        reference,
+        terms,
+        base: installation,
+        parameters: DVector::from_vec(installation.to_parameters(&terms)),
+    };
+    (problem.residual_vector(), problem.jacobian_matrix())
+}
+
+/// The samples a fit about a time offset of `centre_s` fits: those whose t + τ lies
+/// inside the reference for every τ within [`TIME_OFFSET_MARGIN_S`] of it.
+pub fn mask_about(time_s: &[f64], reference: &Reference, centre_s: f64) -> std::ops::Range<usize> {
+    let shifted: Vec<f64> = time_s.iter().map(|t| t + centre_s).collect();
+    reference.interior(&shifted, TIME_OFFSET_MARGIN_S)
 }
 
 /// The Jacobian of `terms` at `installation` over the samples a fit of this record

@@ -31,6 +31,7 @@ pub mod residual_noise;
 pub mod bound;
 pub mod missing;
 pub mod clock;
+pub mod joint;
 pub mod filter_noise;
 pub mod filter;
 pub mod rows;

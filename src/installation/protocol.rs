@@ -11,8 +11,10 @@
 use super::bound::{Noise, TermBound, Tolerances, bound};
 use super::calibration_time::calibration_times;
 use super::clock::refind;
+use super::fit::FitError;
 use super::fit::{TIME_OFFSET_MARGIN_S, fit};
 use super::frames::Reference;
+use super::joint::{self, JointRecording, joint_fit};
 use super::learned_spec::TrainingSource;
 use super::missing::{Asked, asked_for};
 use super::protocol_filters::{FilterRun, run_filters};
@@ -22,6 +24,7 @@ use super::rows::{
 };
 use super::spec::{InstallationSpec, Method};
 use super::term_names::{TermName, term_set};
+use super::terms::TermSet;
 use super::terms::{Installation, score};
 use crate::Vec3;
 use crate::data::paired::PairedRecording;
@@ -228,7 +231,27 @@ pub fn calibrate_on(
     };
     let calibration = segments[c];
     let longest_s = spec.windows_s.iter().copied().fold(0.0, f64::max);
+    let whole = calibration.first_seconds(longest_s).0;
+    let recording = &calibration.recording;
+    let alone = spec
+        .methods
+        .iter()
+        .filter_map(|method| match method {
+            Method::Installation { terms, .. } => Some(term_set(terms)),
+            _ => None,
+        })
+        .map(|terms| {
+            let fitted = fit(
+                &recording.time_s[whole.clone()],
+                &recording.dvl_m_s[whole.clone()],
+                &calibration.reference,
+                terms,
+            );
+            (terms, fitted.map(|fitted| fitted.installation))
+        })
+        .collect();
     let on = OnTrajectory {
+        alone,
         spec,
         segments,
         c,
@@ -280,6 +303,9 @@ struct OnTrajectory<'a> {
     noise: Noise,
     tolerances: Tolerances,
     filters: Vec<FilterRun>,
+    /// Each installation model's fit of this trajectory on its longest window: where
+    /// the joint fits over the others start, at every window.
+    alone: Vec<(TermSet, Result<Installation, FitError>)>,
 }
 
 impl OnTrajectory<'_> {
@@ -325,21 +351,120 @@ impl OnTrajectory<'_> {
             })
             .collect();
         let (mut terms, mut heldout) = (Vec::new(), Vec::new());
+        let calibration = self.calibration().name.clone();
         for (label, estimate) in &methods {
             let learned = learned_labels.contains(label);
             terms.extend(self.term_rows(label, estimate, learned, window_s));
-            heldout.extend(self.transfer_rows(label, estimate, learned, window_s));
-            let (refound, unfound) = self.refound_rows(label, estimate, learned, window_s);
+            let scored = self.scored(learned);
+            let on = (calibration.as_str(), window_s);
+            heldout.extend(self.transfer_rows(label, &estimate.installation, &scored, on));
+            let (refound, unfound) = self.refound_rows(label, &estimate.installation, &scored, on);
             heldout.extend(refound);
             failures.extend(unfound);
         }
-        Calibrated {
+        let mut calibrated = Calibrated {
             heldout,
             terms,
             estimated,
             failures,
             filtered: Vec::new(),
+        };
+        for method in &self.spec.methods {
+            if let Method::Installation { terms, .. } = method {
+                self.jointly(method, term_set(terms), window_s, &mut calibrated);
+            }
         }
+        calibrated
+    }
+
+    /// The joint calibration of `method`'s `terms` over the first `window_s` seconds of
+    /// every trajectory but this one (one clock each, and one bias each where the bias
+    /// is the dive's), scored on this one: its terms' rows and its held-out rows, as
+    /// "<method>, joint", calibrated on "all but <trajectory>".
+    fn jointly(&self, method: &Method, terms: TermSet, window_s: f64, into: &mut Calibrated) {
+        let others: Vec<&Segment> = self.scored(false);
+        if others.len() < 2 {
+            return;
+        }
+        let ranges: Vec<Range<usize>> =
+            others.iter().map(|s| s.first_seconds(window_s).0).collect();
+        let recordings = joint_recordings(&others, &ranges);
+        let dive = self.spec.dive.as_ref().map_or(
+            TermSet {
+                time_offset: true,
+                ..TermSet::NONE
+            },
+            |dive| dive.search.dive_terms,
+        );
+        let label = joint_label(&method.label());
+        let calibration = format!("all but {}", self.calibration().name);
+        let (_, starts) = self
+            .alone
+            .iter()
+            .find(|(set, _)| *set == terms)
+            .expect("every model fitted alone");
+        let joint = match starts {
+            Ok(start) => {
+                let starts = joint::starts_from(&recordings, *start);
+                joint_fit(
+                    &recordings,
+                    &starts,
+                    (terms, dive),
+                    (self.noise, &self.tolerances),
+                )
+                .map_err(|why| why.to_string())
+            }
+            Err(why) => Err(format!(
+                "its start, {} fitted alone: {why}",
+                self.calibration().name
+            )),
+        };
+        let joint = match joint {
+            Ok(joint) => joint,
+            Err(why) => {
+                into.failures.push(FitFailure {
+                    method: label,
+                    calibration,
+                    window_s,
+                    why,
+                });
+                return;
+            }
+        };
+        // Without a dive of its own, this trajectory takes the mean of the others'
+        // dive terms.
+        let dive_count = joint.dive_terms.parameter_count();
+        let mean_dive: Vec<f64> = (0..dive_count)
+            .map(|k| {
+                let values = joint
+                    .dives
+                    .iter()
+                    .map(|d| d.to_parameters(&joint.dive_terms)[k]);
+                values.sum::<f64>() / joint.dives.len() as f64
+            })
+            .collect();
+        let carried = joint.vehicle.with_parameters(&joint.dive_terms, &mean_dive);
+        let estimate = Estimate {
+            installation: carried,
+            bound: Some(joint.bound.clone()),
+            asked: Vec::new(),
+            filtered: None,
+        };
+        into.terms.extend(
+            self.term_rows(&label, &estimate, false, window_s)
+                .into_iter()
+                .map(|row| TermRow {
+                    calibration: calibration.clone(),
+                    ..row
+                }),
+        );
+        let here = [self.calibration()];
+        let on = (calibration.as_str(), window_s);
+        into.heldout
+            .extend(self.transfer_rows(&label, &carried, &here, on));
+        let (refound, unfound) = self.refound_rows(&label, &carried, &here, on);
+        into.heldout.extend(refound);
+        into.failures.extend(unfound);
     }
 
     /// What `method` estimates on the samples `range`: `None` where it cannot (no
@@ -498,13 +623,14 @@ impl OnTrajectory<'_> {
 
     /// The trajectories one method's terms are scored on: every other one (a learned
     /// method's, those of the calibration's fold only).
-    fn scored(&self, learned: bool) -> impl Iterator<Item = &Segment> {
+    fn scored(&self, learned: bool) -> Vec<&Segment> {
         let c = self.c;
         self.segments
             .iter()
             .enumerate()
-            .filter(move |&(s, _)| s != c && !(learned && self.fold_of(s) != self.fold_of(c)))
+            .filter(|&(s, _)| s != c && !(learned && self.fold_of(s) != self.fold_of(c)))
             .map(|(_, scored)| *scored)
+            .collect()
     }
 
     /// With `[calibration.dive]`, one method's RMSE on every trajectory it is scored on
@@ -515,9 +641,9 @@ impl OnTrajectory<'_> {
     fn refound_rows(
         &self,
         label: &str,
-        estimate: &Estimate,
-        learned: bool,
-        window_s: f64,
+        carried: &Installation,
+        scored: &[&Segment],
+        (calibration, window_s): (&str, f64),
     ) -> (Vec<TransferRow>, Vec<FitFailure>) {
         let Some(dive) = &self.spec.dive else {
             return (Vec::new(), Vec::new());
@@ -525,7 +651,7 @@ impl OnTrajectory<'_> {
         let (mut rows, mut failures) = (Vec::new(), Vec::new());
         for &dive_s in &dive.windows_s {
             let method = refound_label(label, dive_s);
-            for scored in self.scored(learned) {
+            for scored in scored {
                 let recording = &scored.recording;
                 let (first, _) = scored.first_seconds(dive_s);
                 let inside = scored
@@ -536,7 +662,7 @@ impl OnTrajectory<'_> {
                 let found = refind(
                     window,
                     &scored.reference,
-                    estimate.installation,
+                    *carried,
                     dive.search,
                     (self.noise, &self.tolerances),
                 );
@@ -545,19 +671,18 @@ impl OnTrajectory<'_> {
                     Err(why) => {
                         failures.push(FitFailure {
                             method: method.clone(),
-                            calibration: self.calibration().name.clone(),
+                            calibration: calibration.to_string(),
                             window_s,
                             why: format!(
                                 "on {}: {why}; its terms are scored with the calibration's clock",
                                 scored.name
                             ),
                         });
-                        estimate.installation
+                        *carried
                     }
                 };
-                if let Some(row) =
-                    self.transfer_row(&method, &installation, scored, after, window_s)
-                {
+                let on = (calibration, window_s);
+                if let Some(row) = transfer_row(&method, &installation, scored, after, on) {
                     rows.push(row);
                 }
             }
@@ -565,53 +690,75 @@ impl OnTrajectory<'_> {
         (rows, failures)
     }
 
-    /// The row of `installation` scored on `samples` of `scored`.
-    fn transfer_row(
-        &self,
-        method: &str,
-        installation: &Installation,
-        scored: &Segment,
-        samples: Range<usize>,
-        window_s: f64,
-    ) -> Option<TransferRow> {
-        let recording = &scored.recording;
-        let rmse = score(
-            installation,
-            &recording.time_s,
-            &recording.dvl_m_s,
-            &scored.reference,
-            samples,
-        )?;
-        Some(TransferRow {
-            method: method.to_string(),
-            calibration: self.calibration().name.clone(),
-            window_s,
-            scored: scored.name.clone(),
-            rmse_cm_s: [100.0 * rmse.x_m_s, 100.0 * rmse.y_m_s, 100.0 * rmse.z_m_s],
-            total_cm_s: 100.0 * rmse.total_m_s,
-        })
-    }
-
-    /// One method's RMSE on every other trajectory (a learned method's on those of the
-    /// calibration's fold only), each on its samples inside the reference.
+    /// One method's RMSE on each trajectory of `scored`, on its samples inside the
+    /// reference.
     fn transfer_rows(
         &self,
         label: &str,
-        estimate: &Estimate,
-        learned: bool,
-        window_s: f64,
+        installation: &Installation,
+        scored: &[&Segment],
+        on: (&str, f64),
     ) -> Vec<TransferRow> {
-        self.scored(learned)
+        scored
+            .iter()
             .filter_map(|scored| {
                 // Every method is scored on the same samples, those inside the
                 // reference whatever the time offset.
                 let samples = scored
                     .reference
                     .interior(&scored.recording.time_s, TIME_OFFSET_MARGIN_S);
-                self.transfer_row(label, &estimate.installation, scored, samples, window_s)
+                transfer_row(label, installation, scored, samples, on)
             })
             .collect()
     }
+}
+
+/// The row of `installation` scored on `samples` of `scored`, calibrated on
+/// `calibration`'s first `window_s` seconds.
+fn transfer_row(
+    method: &str,
+    installation: &Installation,
+    scored: &Segment,
+    samples: Range<usize>,
+    (calibration, window_s): (&str, f64),
+) -> Option<TransferRow> {
+    let recording = &scored.recording;
+    let rmse = score(
+        installation,
+        &recording.time_s,
+        &recording.dvl_m_s,
+        &scored.reference,
+        samples,
+    )?;
+    Some(TransferRow {
+        method: method.to_string(),
+        calibration: calibration.to_string(),
+        window_s,
+        scored: scored.name.clone(),
+        rmse_cm_s: [100.0 * rmse.x_m_s, 100.0 * rmse.y_m_s, 100.0 * rmse.z_m_s],
+        total_cm_s: 100.0 * rmse.total_m_s,
+    })
+}
+
+/// The samples `ranges` of `segments`, as a joint fit takes them.
+fn joint_recordings<'a>(
+    segments: &[&'a Segment],
+    ranges: &[Range<usize>],
+) -> Vec<JointRecording<'a>> {
+    segments
+        .iter()
+        .zip(ranges)
+        .map(|(s, range)| JointRecording {
+            time_s: &s.recording.time_s[range.clone()],
+            dvl_m_s: &s.recording.dvl_m_s[range.clone()],
+            reference: &s.reference,
+        })
+        .collect()
+}
+
+/// The label of a method's joint calibration over the other trajectories.
+pub fn joint_label(method: &str) -> String {
+    format!("{method}, joint")
 }
 
 /// The label of a method's rows with the dive's clock found again from its first
