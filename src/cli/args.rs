@@ -96,11 +96,15 @@ pub(super) enum Command {
     /// the Kalman filter over it to say how much of the recording its terms needed, and
     /// write the recording corrected (CSV and Parquet)
     Calibrate {
-        /// The DVL's CSV file (A-KIT's columns unless --columns names others)
-        dvl: PathBuf,
-        /// The reference's CSV file, when it is not the DVL's
+        /// The DVL's CSV file (A-KIT's columns unless --columns names others); several
+        /// recordings of the same vehicle are calibrated jointly: the vehicle's terms
+        /// shared, each recording's --dive-terms its own
+        #[arg(required = true, num_args = 1..)]
+        dvl: Vec<PathBuf>,
+        /// The reference's CSV file, when it is not the DVL's; once per DVL file, in the
+        /// same order, when there are several
         #[arg(long)]
-        reference: Option<PathBuf>,
+        reference: Vec<PathBuf>,
         /// A TOML file whose [columns] table names the columns (time, dvl, velocity_ned,
         /// attitude, rate, angles_in_degrees), as an installation spec's
         /// [recordings.columns] does
@@ -129,6 +133,49 @@ pub(super) enum Command {
         tolerance_pct: f64,
         /// Folder the corrected recording and the filter's terms against time go to
         #[arg(long, default_value = "calibrated")]
+        out: PathBuf,
+        /// Save the installation found (terms, standard deviations, correlations) to
+        /// this TOML file, for `correct` to apply to other dives
+        #[arg(long, value_name = "FILE")]
+        save: Option<PathBuf>,
+        /// Which of the terms belong to the dive and are found again on each dive by
+        /// `correct` (the rest, the vehicle's, are carried), and with several recordings
+        /// are each recording's own: time_offset, bias, bias_scalar
+        #[arg(long, value_delimiter = ',', default_value = "time_offset")]
+        dive_terms: Vec<String>,
+    },
+    /// Apply an installation that `calibrate --save` found to another dive: find the
+    /// dive's clock again from its first seconds against its reference, write the dive
+    /// corrected (CSV and Parquet), and say how well the carried installation fits it
+    Correct {
+        /// The dive's DVL CSV file
+        dvl: PathBuf,
+        /// The installation file `calibrate --save` wrote
+        #[arg(long, value_name = "FILE")]
+        installation: PathBuf,
+        /// The reference's CSV file, when it is not the DVL's (its body rate corrects
+        /// the lever arm; its velocity finds the clock)
+        #[arg(long)]
+        reference: Option<PathBuf>,
+        /// A TOML file whose [columns] table names the columns, as for calibrate
+        #[arg(long)]
+        columns: Option<PathBuf>,
+        /// The first SECONDS of the dive that find its clock again; scored after them
+        #[arg(
+            long,
+            value_name = "SECONDS",
+            default_value_t = 60.0,
+            allow_negative_numbers = true
+        )]
+        window_s: f64,
+        /// How far from the calibration's time offset the search for the clock looks, s
+        #[arg(long, default_value_t = crate::installation::clock::DEFAULT_SEARCH_S, allow_negative_numbers = true)]
+        search_s: f64,
+        /// The dive's time offset, s, where it is known: no search
+        #[arg(long, allow_negative_numbers = true)]
+        time_offset_s: Option<f64>,
+        /// Folder the corrected dive goes to
+        #[arg(long, default_value = "corrected")]
         out: PathBuf,
     },
     /// Inspect or download the data

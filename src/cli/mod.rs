@@ -154,17 +154,74 @@ pub fn main() -> Result<(), CliError> {
             window_s,
             dvl_noise_cm_s,
             reference_noise_cm_s,
-            tolerance_pct,
+            tolerance_pct: _,
             out,
-        } => calibrate::calibrate(&calibrate::CalibrateArgs {
-            dvl: &dvl,
-            reference: reference.as_deref(),
-            columns: columns.as_deref(),
-            terms: &parse_terms(&terms)?,
+            save,
+            dive_terms,
+        } if dvl.len() > 1 => {
+            calibrate::calibrate_joint(&crate::results::calibrate_joint::JointArgs {
+                dvls: &dvl,
+                references: &reference,
+                columns: columns.as_deref(),
+                terms: &parse_terms(("--terms", &terms))?,
+                dive_terms: &parse_terms(("--dive-terms", &dive_terms))?,
+                window_s,
+                dvl_noise_cm_s,
+                reference_noise_cm_s,
+                out: &out,
+                save: save.as_deref(),
+            })
+        }
+        Command::Calibrate {
+            dvl,
+            reference,
+            columns,
+            terms,
             window_s,
             dvl_noise_cm_s,
             reference_noise_cm_s,
             tolerance_pct,
+            out,
+            save,
+            dive_terms,
+        } => {
+            if reference.len() > 1 {
+                return Err(input(anyhow::anyhow!(
+                    "--reference: {} files for one DVL file: give one",
+                    reference.len()
+                )));
+            }
+            calibrate::calibrate(&calibrate::CalibrateArgs {
+                dvl: &dvl[0],
+                reference: reference.first().map(std::path::PathBuf::as_path),
+                columns: columns.as_deref(),
+                terms: &parse_terms(("--terms", &terms))?,
+                window_s,
+                dvl_noise_cm_s,
+                reference_noise_cm_s,
+                tolerance_pct,
+                out: &out,
+                save: save.as_deref(),
+                dive_terms: &parse_terms(("--dive-terms", &dive_terms))?,
+            })
+        }
+        Command::Correct {
+            dvl,
+            installation,
+            reference,
+            columns,
+            window_s,
+            search_s,
+            time_offset_s,
+            out,
+        } => calibrate::correct(&crate::results::correct::CorrectArgs {
+            dvl: &dvl,
+            reference: reference.as_deref(),
+            columns: columns.as_deref(),
+            installation: &installation,
+            window_s,
+            search_s,
+            time_offset_s,
             out: &out,
         }),
         Command::Data { command } => data_command(command),
@@ -186,13 +243,13 @@ pub fn main() -> Result<(), CliError> {
 
 /// `--terms` as typed, each a term's name.
 fn parse_terms(
-    terms: &[String],
+    (flag, terms): (&str, &[String]),
 ) -> Result<Vec<crate::installation::term_names::TermName>, CliError> {
     terms
         .iter()
         .map(|term| {
             term.parse()
-                .map_err(|message| input(anyhow::anyhow!("--terms {term}: {message}")))
+                .map_err(|message| input(anyhow::anyhow!("{flag} {term}: {message}")))
         })
         .collect()
 }

@@ -33,6 +33,16 @@ pub const MAX_BODY_RATE_RAD_S: f64 = 2.0;
 /// How far apart the DVL's and the reference's time stamps of one row may be, seconds.
 pub const TIME_TOLERANCE_S: f64 = 1e-3;
 
+/// The median interval between two samples, s (0 with fewer than two).
+pub fn sample_interval(time: &[f64]) -> f64 {
+    let mut steps: Vec<f64> = time.windows(2).map(|w| w[1] - w[0]).collect();
+    if steps.is_empty() {
+        return 0.0;
+    }
+    steps.sort_by(f64::total_cmp);
+    steps[steps.len() / 2]
+}
+
 /// One recording: the DVL as measured and the reference, on the same time stamps.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PairedRecording {

@@ -19,9 +19,9 @@
 use super::bound::{Noise, TermBound, Tolerances, bound};
 use super::fit::{Fit, FitError, TIME_OFFSET_SCAN_STEP_S, fit_about};
 use super::frames::Reference;
-use super::protocol::sample_interval;
 use super::terms::{Installation, TermSet};
 use crate::Vec3;
+use crate::data::paired::sample_interval;
 
 /// How far the search looks for τ by default, s: a dive whose clocks are 5 or 20 s
 /// apart is found.

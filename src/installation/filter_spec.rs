@@ -1,7 +1,7 @@
 //! `[calibration.kalman]` of an installation spec as written: which named term sets of
 //! `[[calibration.models]]` the extended Kalman filter runs besides their fit, the
 //! filter's prior standard deviation of each of the installation's five kinds of term
-//! about zero, and the random walk a scale and a bias may take. In: the TOML table.
+//! about zero, and the random walk a scale, a bias and the time offset (a drifting clock) may take. In: the TOML table.
 //! Out: an [`InstallationKalmanFile`], defaults filled in; its check is
 //! `installation/spec/check/kalman.rs`.
 //!
@@ -24,6 +24,8 @@ pub struct InstallationKalmanFile {
     pub prior_bias_cm_s: f64,
     pub scale_random_walk_pct_per_sqrt_s: f64,
     pub bias_random_walk_cm_s_per_sqrt_s: f64,
+    /// A clock that drifts within a dive: the time offset's random walk, s per √s.
+    pub time_offset_random_walk_s_per_sqrt_s: f64,
 }
 
 impl Default for InstallationKalmanFile {
@@ -39,6 +41,7 @@ impl Default for InstallationKalmanFile {
             prior_bias_cm_s: 10.0,
             scale_random_walk_pct_per_sqrt_s: 0.0,
             bias_random_walk_cm_s_per_sqrt_s: 0.0,
+            time_offset_random_walk_s_per_sqrt_s: 0.0,
         }
     }
 }

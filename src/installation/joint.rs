@@ -4,7 +4,7 @@
 //!
 //! It starts from one installation (a recording's fit alone): the vehicle's terms as
 //! it has them, each recording's clock from the search of [`search_offset`] about its
-//! time offset with them held ([`starts_from`]). Then Levenberg–Marquardt on the normal equations, whose
+//! time offset with them held, as far as a dive's clock may be ([`starts_from`]). Then Levenberg–Marquardt on the normal equations, whose
 //! structure is known: the vehicle's block A and each recording's block B_k, so the
 //! recordings' terms are eliminated by a Schur complement,
 //! `S = Σ_k A_kᵀ A_k − A_kᵀ B_k (B_kᵀ B_k)⁻¹ B_kᵀ A_k`, and K recordings cost K times one.
@@ -94,17 +94,18 @@ pub fn split(terms: TermSet, dive: TermSet) -> (TermSet, TermSet) {
 }
 
 /// The starts of a joint fit from `installation`: its terms, with each recording's time
-/// offset the best of the search within ±[`TIME_OFFSET_MARGIN_S`] of its own.
-pub fn starts_from(recordings: &[JointRecording], installation: Installation) -> Vec<Installation> {
+/// offset the best of the search within ±`search_s` of its own (each recording's clock
+/// may be far from it).
+pub fn starts_from(
+    recordings: &[JointRecording],
+    installation: Installation,
+    search_s: f64,
+) -> Vec<Installation> {
     recordings
         .iter()
         .map(|r| {
-            let searched = search_offset(
-                (r.time_s, r.dvl_m_s),
-                r.reference,
-                installation,
-                TIME_OFFSET_MARGIN_S,
-            );
+            let searched =
+                search_offset((r.time_s, r.dvl_m_s), r.reference, installation, search_s);
             Installation {
                 time_offset_s: searched.map_or(installation.time_offset_s, |(tau, _)| tau),
                 ..installation
@@ -408,7 +409,7 @@ mod tests {
         };
         let (time_s, dvl_m_s, reference) = &dives[0];
         let first = crate::installation::fit::fit(time_s, dvl_m_s, reference, terms).unwrap();
-        let starts = starts_from(&recordings, first.installation);
+        let starts = starts_from(&recordings, first.installation, 30.0);
         let joint = joint_fit(
             &recordings,
             &starts,

@@ -30,8 +30,8 @@ pub fn beyond_the_recordings(
     learned: &LearnedSpec,
     recordings: &[(&str, &[f64])],
 ) -> Option<(String, String)> {
-    use super::protocol::sample_interval;
     use super::simulate::REFERENCE_MARGIN;
+    use crate::data::paired::sample_interval;
     let span = learned.window_samples + 2 * REFERENCE_MARGIN;
     if let Some((name, time_s)) = recordings.iter().find(|(_, time_s)| time_s.len() < span) {
         return Some((

@@ -10,7 +10,7 @@
 
 use super::bound::{Noise, TermBound, Tolerances, bound};
 use super::calibration_time::calibration_times;
-use super::clock::refind;
+use super::clock::{DEFAULT_SEARCH_S, refind};
 use super::fit::FitError;
 use super::fit::{TIME_OFFSET_MARGIN_S, fit};
 use super::frames::Reference;
@@ -28,6 +28,7 @@ use super::terms::TermSet;
 use super::terms::{Installation, score};
 use crate::Vec3;
 use crate::data::paired::PairedRecording;
+use crate::data::paired::sample_interval;
 use crate::estimators::{Baseline, Estimator, LeastSquares};
 use crate::evaluate::statistics::{mean_ci95, mean_std};
 use crate::vocab::{Correction, ErrorModel};
@@ -60,16 +61,6 @@ impl Segment {
         let span = time[end - 1] - start + sample_interval(time);
         (0..end, span.min(window_s))
     }
-}
-
-/// The median interval between two samples, s (0 with fewer than two).
-pub fn sample_interval(time: &[f64]) -> f64 {
-    let mut steps: Vec<f64> = time.windows(2).map(|w| w[1] - w[0]).collect();
-    if steps.is_empty() {
-        return 0.0;
-    }
-    steps.sort_by(f64::total_cmp);
-    steps[steps.len() / 2]
 }
 
 /// What a method estimated on one window.
@@ -233,11 +224,12 @@ pub fn calibrate_on(
     let longest_s = spec.windows_s.iter().copied().fold(0.0, f64::max);
     let whole = calibration.first_seconds(longest_s).0;
     let recording = &calibration.recording;
+    // The starts of the joint fits, which only `[calibration.dive]` asks for.
     let alone = spec
         .methods
         .iter()
         .filter_map(|method| match method {
-            Method::Installation { terms, .. } => Some(term_set(terms)),
+            Method::Installation { terms, .. } if spec.dive.is_some() => Some(term_set(terms)),
             _ => None,
         })
         .map(|terms| {
@@ -369,19 +361,33 @@ impl OnTrajectory<'_> {
             failures,
             filtered: Vec::new(),
         };
-        for method in &self.spec.methods {
-            if let Method::Installation { terms, .. } = method {
-                self.jointly(method, term_set(terms), window_s, &mut calibrated);
+        if let Some(dive) = &self.spec.dive {
+            for method in &self.spec.methods {
+                if let Method::Installation { terms, .. } = method {
+                    let terms = term_set(terms);
+                    self.jointly(
+                        method,
+                        (terms, dive.search.dive_terms),
+                        window_s,
+                        &mut calibrated,
+                    );
+                }
             }
         }
         calibrated
     }
 
-    /// The joint calibration of `method`'s `terms` over the first `window_s` seconds of
-    /// every trajectory but this one (one clock each, and one bias each where the bias
-    /// is the dive's), scored on this one: its terms' rows and its held-out rows, as
+    /// With `[calibration.dive]`, the joint calibration of `method`'s `terms` over the
+    /// first `window_s` seconds of every trajectory but this one (the `dive` terms one
+    /// set each), scored on this one: its terms' rows and its held-out rows, as
     /// "<method>, joint", calibrated on "all but <trajectory>".
-    fn jointly(&self, method: &Method, terms: TermSet, window_s: f64, into: &mut Calibrated) {
+    fn jointly(
+        &self,
+        method: &Method,
+        (terms, dive): (TermSet, TermSet),
+        window_s: f64,
+        into: &mut Calibrated,
+    ) {
         let others: Vec<&Segment> = self.scored(false);
         if others.len() < 2 {
             return;
@@ -389,13 +395,6 @@ impl OnTrajectory<'_> {
         let ranges: Vec<Range<usize>> =
             others.iter().map(|s| s.first_seconds(window_s).0).collect();
         let recordings = joint_recordings(&others, &ranges);
-        let dive = self.spec.dive.as_ref().map_or(
-            TermSet {
-                time_offset: true,
-                ..TermSet::NONE
-            },
-            |dive| dive.search.dive_terms,
-        );
         let label = joint_label(&method.label());
         let calibration = format!("all but {}", self.calibration().name);
         let (_, starts) = self
@@ -405,7 +404,12 @@ impl OnTrajectory<'_> {
             .expect("every model fitted alone");
         let joint = match starts {
             Ok(start) => {
-                let starts = joint::starts_from(&recordings, *start);
+                let search_s = self
+                    .spec
+                    .dive
+                    .as_ref()
+                    .map_or(DEFAULT_SEARCH_S, |d| d.search.search_s);
+                let starts = joint::starts_from(&recordings, *start, search_s);
                 joint_fit(
                     &recordings,
                     &starts,
@@ -758,13 +762,25 @@ fn joint_recordings<'a>(
 
 /// The label of a method's joint calibration over the other trajectories.
 pub fn joint_label(method: &str) -> String {
-    format!("{method}, joint")
+    format!("{method}{JOINT}")
 }
+
+/// What a method's label says after its name when it is a joint fit.
+pub const JOINT: &str = ", joint";
+
+/// Whether `method` is a joint fit's, its clock re-found or not.
+pub fn is_joint(method: &str) -> bool {
+    method.contains(JOINT)
+}
+
+/// What a method's label says after its name when its rows have the dive's clock found
+/// again, before the seconds that found it.
+pub const CLOCK_REFOUND: &str = ", clock re-found in ";
 
 /// The label of a method's rows with the dive's clock found again from its first
 /// `dive_s` seconds.
 pub fn refound_label(method: &str, dive_s: f64) -> String {
-    format!("{method}, clock re-found in {dive_s} s")
+    format!("{method}{CLOCK_REFOUND}{dive_s} s")
 }
 
 /// [`summarize`] on the pairs whose calibration and scored trajectories share a fold,

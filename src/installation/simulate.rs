@@ -15,9 +15,10 @@
 
 use super::frames::ReferenceAt;
 use super::learned_spec::SimulationGrid;
-use super::protocol::{Segment, sample_interval};
+use super::protocol::Segment;
 use super::terms::Installation;
 use crate::Vec3;
+use crate::data::paired::sample_interval;
 use crate::rng::task_rng;
 use rand::Rng;
 use rand_distr::{Distribution, Normal};

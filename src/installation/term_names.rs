@@ -7,7 +7,7 @@ use super::terms::{PerAxis, TermSet};
 use std::collections::HashSet;
 
 /// One term of the installation model, as a spec names it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum TermName {
     /// One scale for all axes.

@@ -9,6 +9,7 @@
 
 use super::ResultsError;
 use super::corrected::{Outputs, corrected_samples, write, write_terms_in_time};
+use super::installation_file::SavedInstallation;
 use crate::data::paired::{self, PairedColumns, PairedError, PairedFiles, PairedRecording};
 use crate::installation::bound::{Noise, TermBound, Why, bound};
 use crate::installation::filter::{FilterSettings, run_filter};
@@ -40,6 +41,10 @@ pub struct CalibrateArgs<'a> {
     pub tolerance_pct: f64,
     /// The folder the corrected recording and the terms against time go to.
     pub out: &'a Path,
+    /// Where the installation is saved for `correct`, with the terms of `terms` that
+    /// are the dive's (found again on each dive), the rest the vehicle's.
+    pub save: Option<&'a Path>,
+    pub dive_terms: &'a [TermName],
 }
 
 /// Why `calibrate` did not finish: an argument, the columns file, the recording or the
@@ -49,6 +54,8 @@ pub struct CalibrateArgs<'a> {
 pub enum CalibrateError {
     #[error("--terms: {0}")]
     Terms(String),
+    #[error("--dive-terms: {0}")]
+    DiveTerms(String),
     #[error("--dvl-noise-cm-s {}: give a positive number: the bound divides by it", crate::Shown(*.0))]
     DvlNoise(f64),
     #[error("--reference-noise-cm-s {}: give zero or a positive number", crate::Shown(*.0))]
@@ -190,7 +197,11 @@ impl Read {
 pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     refused(args)?;
     let outputs = outputs(args);
-    not_over_an_input(args, &outputs)?;
+    let written: Vec<&Path> = outputs.all().into_iter().chain(args.save).collect();
+    let inputs = [Some(args.dvl), args.reference, args.columns];
+    if let Some((output, input)) = not_over_an_input(&inputs, &written) {
+        return Err(CalibrateError::OverInput { output, input });
+    }
     fits_in_memory(args)?;
     let read = read(args)?;
     let recording_sha256 = not_over_another_recording(args, &outputs)?;
@@ -222,6 +233,19 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     let settled_s = settling_time(&curve, args.tolerance_pct / 100.0, change).map(|p| p.length_s);
     let (corrected, terms_in_time) =
         write_files(&outputs, &recording_sha256, &read, &applied, &filter)?;
+    if let Some(path) = args.save {
+        let saved = SavedInstallation::of(
+            &bounded,
+            (args.terms, args.dive_terms),
+            (args.dvl, &recording_sha256),
+            (args.dvl_noise_cm_s, args.reference_noise_cm_s),
+            fitted.residual_rms_m_s,
+        );
+        saved.write(path).map_err(|source| ResultsError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    }
     Ok(Calibration {
         fitted,
         bound: bounded,
@@ -261,6 +285,17 @@ fn refused(args: &CalibrateArgs) -> Result<(), CalibrateError> {
     }
     if !(args.tolerance_pct > 0.0 && args.tolerance_pct <= 100.0) {
         return Err(CalibrateError::Tolerance(args.tolerance_pct));
+    }
+    if let Some(term) = args.dive_terms.iter().find(|t| {
+        !matches!(
+            t,
+            TermName::TimeOffset | TermName::Bias | TermName::BiasScalar
+        )
+    }) {
+        return Err(CalibrateError::DiveTerms(format!(
+            "{:?} belongs to the vehicle, not the dive: give time_offset, and bias or bias_scalar",
+            term.name()
+        )));
     }
     Ok(())
 }
@@ -326,9 +361,11 @@ fn beyond_memory(dvl: &Path, rows: usize, have: f64) -> Option<CalibrateError> {
     })
 }
 
-/// Refuses, before anything is read, outputs that would replace an input of `args`.
-fn not_over_an_input(args: &CalibrateArgs, outputs: &Outputs) -> Result<(), CalibrateError> {
-    let inputs = [Some(args.dvl), args.reference, args.columns];
+/// The first of `outputs` that would replace one of `inputs`, and that input.
+pub(super) fn not_over_an_input(
+    inputs: &[Option<&Path>],
+    outputs: &[&Path],
+) -> Option<(PathBuf, PathBuf)> {
     // A file's identity: its path with the folder's links resolved.
     let identity = |path: &Path| -> Option<PathBuf> {
         let folder = match path.parent() {
@@ -337,7 +374,7 @@ fn not_over_an_input(args: &CalibrateArgs, outputs: &Outputs) -> Result<(), Cali
         };
         Some(std::fs::canonicalize(folder).ok()?.join(path.file_name()?))
     };
-    for output in outputs.all() {
+    for output in outputs {
         let same = |input: &&&Path| {
             identity(input).is_some_and(|i| identity(output).is_some_and(|o| o == i))
                 || std::fs::canonicalize(input)
@@ -345,13 +382,10 @@ fn not_over_an_input(args: &CalibrateArgs, outputs: &Outputs) -> Result<(), Cali
                     .is_some_and(|i| std::fs::canonicalize(output).is_ok_and(|o| o == i))
         };
         if let Some(input) = inputs.iter().flatten().find(same) {
-            return Err(CalibrateError::OverInput {
-                output: output.to_path_buf(),
-                input: input.to_path_buf(),
-            });
+            return Some((output.to_path_buf(), input.to_path_buf()));
         }
     }
-    Ok(())
+    None
 }
 
 /// Refuses, before anything is computed, outputs already there that hold another
@@ -376,7 +410,7 @@ fn not_over_another_recording(
 }
 
 /// The columns of `path`'s `[columns]` table, or A-KIT's.
-fn columns(path: Option<&Path>) -> Result<PairedColumns, CalibrateError> {
+pub(super) fn columns(path: Option<&Path>) -> Result<PairedColumns, CalibrateError> {
     #[derive(serde::Deserialize)]
     #[serde(deny_unknown_fields)]
     struct ColumnsFile {
@@ -533,6 +567,8 @@ mod tests {
             reference_noise_cm_s: 0.0,
             tolerance_pct: 10.0,
             out,
+            save: None,
+            dive_terms: &[TermName::TimeOffset],
         }
     }
 

@@ -31,6 +31,10 @@ pub fn draw_all(
             installation_windows::installation_windows(study)?,
         ));
         drawn.push((
+            "installation_dive".into(),
+            installation_windows::installation_dive(study)?,
+        ));
+        drawn.push((
             "installation_residual".into(),
             installation_residual::installation_residual(study)?,
         ));
@@ -167,6 +171,24 @@ pub(crate) mod tests {
                 });
             }
         }
+        // The clock found again from the first 30, 60 and 120 s of each trajectory, and
+        // a joint fit's.
+        for (k, dive_s) in [30.0, 60.0, 120.0].into_iter().enumerate() {
+            for (method, mean) in [
+                (NO_CALIBRATION, 14.0),
+                ("installation lever+offset+bias", 4.1),
+                ("installation lever+offset+bias, joint", 3.5),
+            ] {
+                summary.push(SummaryRow {
+                    method: format!("{method}, clock re-found in {dive_s} s"),
+                    window_s: 400.0,
+                    mean_cm_s: mean * (1.0 - 0.02 * k as f64),
+                    ci95_cm_s: 0.6,
+                    ratio: mean / 15.0,
+                    calibrations: 13,
+                });
+            }
+        }
         let mut terms = Vec::new();
         for &window_s in &windows {
             for method in &methods[6..] {
@@ -291,6 +313,7 @@ pub(crate) mod tests {
                 "installation_matrix_installation_lever_offset",
                 "installation_matrix_installation_lever_offset_bias",
                 "installation_windows",
+                "installation_dive",
                 "installation_residual",
                 "installation_kalman_terms",
             ]

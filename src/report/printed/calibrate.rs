@@ -1,13 +1,16 @@
 //! What `calibrate` prints on stdout: the fit's terms with their standard deviations,
 //! the terms the recording cannot show and the RMSE before and after; then the Kalman
-//! filter's terms after a few lengths of the recording and how long it needed.
-//! In: a [`Calibration`]. Out: the text.
+//! filter's terms after a few lengths of the recording and how long it needed; and of a
+//! joint calibration, the vehicle's terms, their agreement across the recordings and
+//! each recording's clock.
+//! In: a [`Calibration`] or a [`JointCalibration`]. Out: the text.
 
 use crate::installation::fit::TIME_OFFSET_MARGIN_S;
 use crate::installation::settling::SettlingPoint;
 use crate::installation::terms::AxisRmse;
 use crate::report::installation::{readable_term, readable_why};
 use crate::results::calibrate::Calibration;
+use crate::results::calibrate_joint::{AGREEMENT_P_VALUE, JointCalibration};
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 
 /// Everything `calibrate` prints: the fit, a blank line, the filter; ends in a newline.
@@ -225,4 +228,99 @@ fn verdict(calibration: &Calibration, all: &SettlingPoint) -> String {
             all.length_s
         ),
     }
+}
+
+/// What a joint `calibrate` prints: the vehicle's terms over every recording with their
+/// standard deviations and bound, beside the spread of the recordings fitted alone and
+/// whether they agree; then each recording's own terms (its clock) and residual.
+pub fn joint_text(calibration: &JointCalibration) -> String {
+    let JointCalibration {
+        joint,
+        agreement,
+        names,
+        noise,
+        ..
+    } = calibration;
+    let bound = &joint.bound;
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    table.set_header([
+        "vehicle term",
+        "joint estimate",
+        "standard deviation",
+        "bound (specified noise)",
+        "alone: spread",
+        "alone: χ² (p)",
+    ]);
+    for (i, name) in bound.names.iter().enumerate() {
+        let (readable, unit, factor) = readable_term(name);
+        let agree = &agreement[i];
+        let mark = if agree.p_value < AGREEMENT_P_VALUE {
+            ", disagree"
+        } else {
+            ""
+        };
+        table.add_row([
+            readable,
+            format!("{:.4} {unit}", bound.value[i] * factor),
+            format!("{:.4} {unit}", bound.std[i] * factor),
+            format!("{:.4} {unit}", bound.bound_std[i] * factor),
+            format!("{:.4} {unit}", agree.spread * factor),
+            format!("{:.1} ({:.1e}{mark})", agree.chi_square, agree.p_value),
+        ]);
+    }
+    let samples: usize = joint.sample_counts.iter().sum();
+    let mut text = format!(
+        "calibrated jointly on {} recordings, {samples} samples (those {TIME_OFFSET_MARGIN_S} s inside each reference): the vehicle's terms shared, each recording's {} its own\n{table}\n",
+        names.len(),
+        joint.dive_terms.parameter_names().join(", ")
+    );
+    let shown = bound.residual_noise;
+    let specified = 100.0 * (noise.dvl_m_s.powi(2) + noise.reference_m_s.powi(2)).sqrt();
+    let level = (shown.std_m_s.iter().map(|s| s * s).sum::<f64>() / 3.0).sqrt() * 100.0;
+    text.push_str(&format!(
+        "residuals: {:.2}, {:.2}, {:.2} cm/s per axis x, y, z (correlation {:.2}, {:.2}, {:.2} from one sample to the next) against the specified {specified:.2} cm/s per axis: {}; the standard deviations are from the noise the residuals show, the bound's from the specified noise\n",
+        100.0 * shown.std_m_s[0],
+        100.0 * shown.std_m_s[1],
+        100.0 * shown.std_m_s[2],
+        shown.lag_one[0],
+        shown.lag_one[1],
+        shown.lag_one[2],
+        if level <= 1.2 * specified { "consistent with the noise" } else { "above the noise: the model leaves something out, or the noise is larger than specified" }
+    ));
+    text.push_str(&format!(
+        "alone: each recording fitted by itself; spread, the standard deviation of their estimates; χ², Σ ((alone − joint) / its standard deviation)² over the {} recordings, and its p-value on {} degrees of freedom (under {AGREEMENT_P_VALUE}: the recordings disagree beyond their intervals)\n",
+        names.len(),
+        names.len() - 1
+    ));
+    let mut dives = Table::new();
+    dives.load_preset(ASCII_MARKDOWN);
+    let dive_names = joint.dive_terms.parameter_names();
+    let mut header = vec!["recording".to_string()];
+    header.extend(dive_names.iter().map(|n| {
+        let (readable, unit, _) = readable_term(n);
+        format!("{readable} ({unit})")
+    }));
+    header.push("residual, total (cm/s)".into());
+    dives.set_header(header);
+    for (k, name) in names.iter().enumerate() {
+        let values = joint.dives[k].to_parameters(&joint.dive_terms);
+        let mut row = vec![name.clone()];
+        row.extend(dive_names.iter().enumerate().map(|(j, n)| {
+            let (_, _, factor) = readable_term(n);
+            format!(
+                "{:.4} ± {:.4}",
+                values[j] * factor,
+                joint.dive_std[k][j] * factor
+            )
+        }));
+        let r = joint.residual_rms_m_s[k];
+        row.push(format!(
+            "{:.2}",
+            100.0 * (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt()
+        ));
+        dives.add_row(row);
+    }
+    text.push_str(&format!("{dives}\n"));
+    text
 }

@@ -7,6 +7,8 @@ pub mod installation;
 
 pub mod calibrate;
 
+pub mod correct;
+
 use crate::evaluate::{CalibrationRow, EvaluationRow};
 use crate::first_seen;
 use crate::vocab::ErrorModel;

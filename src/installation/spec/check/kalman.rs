@@ -27,6 +27,7 @@ pub(in crate::installation::spec) fn check_kalman(
         prior_bias_cm_s,
         scale_random_walk_pct_per_sqrt_s,
         bias_random_walk_cm_s_per_sqrt_s,
+        time_offset_random_walk_s_per_sqrt_s,
     } = kalman;
     check_models(&models, model_names, faults);
     let mut value = |key: &str, value: f64, zero_allowed: bool, most: (f64, &str)| {
@@ -66,7 +67,12 @@ pub(in crate::installation::spec) fn check_kalman(
         ) / 100.0,
         misalignment_rad: 0.0,
         lever_arm_m: 0.0,
-        time_offset_s: 0.0,
+        time_offset_s: value(
+            "time_offset_random_walk_s_per_sqrt_s",
+            time_offset_random_walk_s_per_sqrt_s,
+            true,
+            (TIME_OFFSET_MARGIN_S, "the time offsets a fit scans"),
+        ),
         bias_m_s: value(
             "bias_random_walk_cm_s_per_sqrt_s",
             bias_random_walk_cm_s_per_sqrt_s,

@@ -5,6 +5,7 @@
 //! [`InstallationResults`]'s held-out rows. Out: one figure per method, named by its slug
 //! (`installation_matrix_least_squares_em1`), or why there is none.
 
+use crate::installation::protocol::is_joint;
 use crate::installation::rows::{InstallationResults, TransferRow};
 use crate::report::plots::canvas::{Drawn, Outcome, draw_svg};
 use crate::report::plots::draw::*;
@@ -58,7 +59,8 @@ pub fn installation_matrix(study: &InstallationResults) -> PlotResult<Vec<(Strin
     let rows: Vec<&TransferRow> = study
         .heldout
         .iter()
-        .filter(|r| r.window_s == window_s)
+        // A joint fit scores only the trajectory it left out: no matrix.
+        .filter(|r| r.window_s == window_s && !is_joint(&r.method))
         .collect();
     let trajectories: Vec<String> = crate::first_seen(
         rows.iter()

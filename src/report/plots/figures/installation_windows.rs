@@ -2,10 +2,13 @@
 //! calibration window, its 95 % interval over calibration trajectories as bars, one
 //! line per method and no calibration as a dashed reference. The paper's methods keep
 //! the look they have in a run's figures (least squares dashed in its error model's
-//! colour); each installation model has a colour of its own. In: a [`InstallationResults`]'s summary.
+//! colour); each installation model has a colour of its own, its joint fit dashed and its
+//! Kalman filter dotted in it. Beside it, with `[calibration.dive]`, the figure of the
+//! held-out RMSE against the seconds that find each trajectory's clock again. In: a [`InstallationResults`]'s summary.
 //! Out: the figure, or why there is none (fewer than two windows).
 
 use crate::installation::learned_spec::LEARNED_LABEL;
+use crate::installation::protocol::{CLOCK_REFOUND, JOINT};
 use crate::installation::rows::{InstallationResults, NO_CALIBRATION, SummaryRow};
 use crate::report::plots::canvas::{Drawn, Outcome, draw_svg};
 use crate::report::plots::draw::*;
@@ -59,7 +62,11 @@ pub fn method_look(
     }
     if method.starts_with("installation") {
         let color = INSTALLATION_COLORS[installation % INSTALLATION_COLORS.len()];
-        return (look(color, Stroke::Solid), Some(Marker::Diamond));
+        return match method.ends_with(JOINT) {
+            // A joint fit in its model's colour, dashed.
+            true => (look(color, Stroke::Dashed), Some(Marker::Ring)),
+            false => (look(color, Stroke::Solid), Some(Marker::Diamond)),
+        };
     }
     if let Some(index) = filtered {
         // A Kalman filter in its installation model's colour, dotted.
@@ -81,24 +88,34 @@ pub fn method_look(
     (look(GREY, Stroke::Solid), Some(Marker::Dot))
 }
 
-/// The looks of `methods`, in order.
+/// The looks of `methods`, in order: a model's joint fit and its Kalman filter in the
+/// model's colour.
 pub fn method_looks(methods: &[&str]) -> Vec<(Look, Option<Marker>)> {
-    let models: Vec<&str> = methods
-        .iter()
-        .filter_map(|m| m.strip_prefix("installation"))
-        .collect();
-    let mut installation = 0;
+    let models: Vec<&str> = crate::first_seen(
+        methods
+            .iter()
+            .filter_map(|m| m.strip_prefix("installation"))
+            .map(|m| m.strip_suffix(JOINT).unwrap_or(m)),
+    );
     methods
         .iter()
         .map(|method| {
-            let filtered = method
-                .strip_prefix("Kalman filter")
-                .and_then(|rest| models.iter().position(|m| *m == rest));
-            let look = method_look(method, installation, filtered);
-            installation += usize::from(method.starts_with("installation"));
-            look
+            let model = |rest: &str| models.iter().position(|m| *m == rest);
+            let filtered = method.strip_prefix("Kalman filter").and_then(model);
+            let installation = method
+                .strip_prefix("installation")
+                .map(|m| m.strip_suffix(JOINT).unwrap_or(m))
+                .and_then(model)
+                .unwrap_or(0);
+            method_look(method, installation, filtered)
         })
         .collect()
+}
+
+/// Whether a summary row is one of the study's main methods, calibrated on one
+/// trajectory with its clock: not a joint fit nor one with its clock re-found.
+fn is_main(method: &str) -> bool {
+    !method.ends_with(JOINT) && !method.contains(CLOCK_REFOUND)
 }
 
 /// Mean held-out RMSE ± its 95 % interval against the calibration window, every method
@@ -115,7 +132,7 @@ pub fn installation_windows(study: &InstallationResults) -> PlotResult<Outcome> 
     let rows: Vec<(f64, &SummaryRow)> = study
         .summary
         .iter()
-        .filter(|r| !r.method.starts_with(LEARNED_LABEL))
+        .filter(|r| !r.method.starts_with(LEARNED_LABEL) && is_main(&r.method))
         .map(|r| (r.window_s, r))
         .collect();
     rmse_figure(
@@ -126,6 +143,54 @@ pub fn installation_windows(study: &InstallationResults) -> PlotResult<Outcome> 
             lines: true,
         },
         "Held-out RMSE against the calibration window: mean over calibration trajectories, bars its 95 % interval".into(),
+    )
+}
+
+/// With `[calibration.dive]`: held-out RMSE against the dive's window w, the first w
+/// seconds of each scored trajectory that found its clock again (scored after them),
+/// calibrated on the longest window; no calibration, each installation model, its joint
+/// fit over the other trajectories (dashed) and its Kalman filter (dotted).
+pub fn installation_dive(study: &InstallationResults) -> PlotResult<Outcome> {
+    let longest = study
+        .summary
+        .iter()
+        .map(|r| r.window_s)
+        .fold(f64::NAN, f64::max);
+    let rows: Vec<(f64, SummaryRow)> = study
+        .summary
+        .iter()
+        .filter(|r| r.window_s == longest)
+        .filter_map(|r| {
+            let (method, rest) = r.method.split_once(CLOCK_REFOUND)?;
+            let dive_s: f64 = rest.strip_suffix(" s")?.parse().ok()?;
+            let shown = method == NO_CALIBRATION
+                || method.starts_with("installation")
+                || method.starts_with("Kalman filter");
+            shown.then(|| {
+                let row = SummaryRow {
+                    method: method.to_string(),
+                    ..r.clone()
+                };
+                (dive_s, row)
+            })
+        })
+        .collect();
+    if crate::first_seen(rows.iter().map(|(x, _)| x.to_bits())).len() < 2 {
+        return Ok(Outcome::NotApplicable(
+            "the study has fewer than two [calibration.dive] windows".into(),
+        ));
+    }
+    let rows: Vec<(f64, &SummaryRow)> = rows.iter().map(|(x, r)| (*x, r)).collect();
+    rmse_figure(
+        &rows,
+        XAxis {
+            label: "seconds of each scored trajectory that find its clock again, w [s]",
+            ticks: None,
+            lines: true,
+        },
+        format!(
+            "The clock found again on each trajectory from its first w s, scored after them (calibrated on {longest} s; joint: over every other trajectory): mean held-out RMSE, bars its 95 % interval"
+        ),
     )
 }
 

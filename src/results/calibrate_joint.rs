@@ -1,0 +1,296 @@
+//! `calibrate A.csv B.csv …`: one calibration over several recordings of the same
+//! vehicle ([`crate::installation::joint`]), the vehicle's terms shared and each
+//! recording's clock (and bias, where it is the dive's) its own. Beside it, each
+//! recording fitted alone, and whether their terms agree with the joint ones within
+//! their standard deviations (a χ² over the recordings); whether the joint fit's
+//! residuals are at the specified noise (else the noise they show is what the standard
+//! deviations use). Each recording is written corrected with its own clock, and the
+//! installation saved where asked.
+//! In: [`JointArgs`]. Out: a [`JointCalibration`], or the [`CalibrateError`] of the
+//! recording at fault.
+
+use super::ResultsError;
+use super::calibrate::{CalibrateError, columns, not_over_an_input};
+use super::corrected::{Outputs, corrected_samples, write};
+use super::installation_file::{SavedInstallation, SavedTerm};
+use crate::data::paired::{self, PairedFiles, PairedRecording};
+use crate::installation::bound::{DEFAULT_TOLERANCES, Noise, TermBound, bound};
+use crate::installation::clock::DEFAULT_SEARCH_S;
+use crate::installation::fit::fit;
+use crate::installation::frames::Reference;
+use crate::installation::joint::{JointFit, JointRecording, joint_fit, starts_from};
+use crate::installation::term_names::{TermName, term_set};
+use std::path::{Path, PathBuf};
+
+/// What a joint `calibrate` is asked.
+pub struct JointArgs<'a> {
+    pub dvls: &'a [PathBuf],
+    /// One per DVL file, or none where each DVL file holds its reference.
+    pub references: &'a [PathBuf],
+    pub columns: Option<&'a Path>,
+    pub terms: &'a [TermName],
+    pub dive_terms: &'a [TermName],
+    pub window_s: Option<f64>,
+    pub dvl_noise_cm_s: f64,
+    pub reference_noise_cm_s: f64,
+    pub out: &'a Path,
+    pub save: Option<&'a Path>,
+}
+
+/// How far one term's estimates from each recording alone lie from the joint one.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Agreement {
+    pub term: &'static str,
+    /// Σ ((θ_k − θ) / σ_k)² over the recordings, and its p-value under χ²(K − 1).
+    pub chi_square: f64,
+    pub p_value: f64,
+    /// The standard deviation of the recordings' estimates, in the term's unit.
+    pub spread: f64,
+}
+
+/// Everything a joint `calibrate` found and wrote.
+pub struct JointCalibration {
+    pub names: Vec<String>,
+    pub joint: JointFit,
+    /// Each recording alone: its fit's bound.
+    pub alone: Vec<TermBound>,
+    pub agreement: Vec<Agreement>,
+    pub noise: Noise,
+    pub written: Vec<PathBuf>,
+}
+
+/// The p-value under which the recordings' terms are said not to agree.
+pub const AGREEMENT_P_VALUE: f64 = 1e-3;
+
+/// The joint calibration of `args`.
+pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateError> {
+    if !args.references.is_empty() && args.references.len() != args.dvls.len() {
+        return Err(CalibrateError::Terms(format!(
+            "{} DVL files and {} --reference files: give one --reference per DVL file, in the same order, or none",
+            args.dvls.len(),
+            args.references.len()
+        )));
+    }
+    let noise = Noise {
+        dvl_m_s: args.dvl_noise_cm_s / 100.0,
+        reference_m_s: args.reference_noise_cm_s / 100.0,
+    };
+    let columns = columns(args.columns)?;
+    let stems: Vec<String> = args.dvls.iter().map(|d| stem(d)).collect();
+    let outputs: Vec<Outputs> = stems.iter().map(|s| Outputs::of(args.out, s)).collect();
+    let written_paths: Vec<&Path> = outputs
+        .iter()
+        .flat_map(|o| o.all())
+        .chain(args.save)
+        .collect();
+    let inputs: Vec<Option<&Path>> = args
+        .dvls
+        .iter()
+        .chain(args.references)
+        .map(|p| Some(p.as_path()))
+        .chain([args.columns])
+        .collect();
+    if let Some((output, input)) = not_over_an_input(&inputs, &written_paths) {
+        return Err(CalibrateError::OverInput { output, input });
+    }
+    let mut recordings = Vec::new();
+    for (k, dvl) in args.dvls.iter().enumerate() {
+        let files = PairedFiles {
+            dvl: dvl.clone(),
+            reference: args.references.get(k).unwrap_or(dvl).clone(),
+        };
+        let recording = paired::read(&files, &columns)?;
+        let reference = Reference::new(&recording);
+        let window = args.window_s.map(|w| recording.first_seconds(w));
+        recordings.push((recording, reference, window));
+    }
+    let calibrating: Vec<JointRecording> = recordings
+        .iter()
+        .map(|(recording, reference, window)| {
+            let r: &PairedRecording = window.as_ref().unwrap_or(recording);
+            JointRecording {
+                time_s: &r.time_s,
+                dvl_m_s: &r.dvl_m_s,
+                reference,
+            }
+        })
+        .collect();
+    let terms = term_set(args.terms);
+    let fault = |k: usize, fault| CalibrateError::Fit {
+        dvl: args.dvls[k].clone(),
+        terms: args
+            .terms
+            .iter()
+            .map(|t| t.name())
+            .collect::<Vec<_>>()
+            .join(", "),
+        samples: calibrating[k].time_s.len(),
+        fault,
+    };
+    let mut alone = Vec::new();
+    for (k, r) in calibrating.iter().enumerate() {
+        let fitted = fit(r.time_s, r.dvl_m_s, r.reference, terms).map_err(|f| fault(k, f))?;
+        alone.push((
+            fitted.installation,
+            bound(&fitted, noise, &DEFAULT_TOLERANCES),
+        ));
+    }
+    let starts = starts_from(&calibrating, alone[0].0, DEFAULT_SEARCH_S);
+    let joint = joint_fit(
+        &calibrating,
+        &starts,
+        (terms, term_set(args.dive_terms)),
+        (noise, &DEFAULT_TOLERANCES),
+    )
+    .map_err(|f| fault(0, f))?;
+    let alone: Vec<TermBound> = alone.into_iter().map(|(_, b)| b).collect();
+    let agreement = agreement(&joint, &alone);
+    let mut written = Vec::new();
+    let mut shas = Vec::new();
+    for (k, (recording, reference, _)) in recordings.iter().enumerate() {
+        let bytes = std::fs::read(&args.dvls[k]).map_err(|source| ResultsError::Io {
+            path: args.dvls[k].clone(),
+            source,
+        })?;
+        let sha = crate::files::sha256_hex(&bytes);
+        let samples = corrected_samples(
+            &joint.dives[k],
+            &recording.time_s,
+            &recording.dvl_m_s,
+            reference,
+        );
+        written.extend(write(&outputs[k], &samples, &sha)?);
+        shas.push(sha);
+    }
+    if let Some(path) = args.save {
+        let saved = saved(args, &joint, shas);
+        saved.write(path).map_err(|source| ResultsError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    }
+    Ok(JointCalibration {
+        names: stems,
+        joint,
+        alone,
+        agreement,
+        noise,
+        written,
+    })
+}
+
+/// A DVL file's name without its extension.
+fn stem(dvl: &Path) -> String {
+    dvl.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "recording".into())
+}
+
+/// Each vehicle term's recordings alone against the joint estimate.
+fn agreement(joint: &JointFit, alone: &[TermBound]) -> Vec<Agreement> {
+    use statrs::distribution::{ChiSquared, ContinuousCDF};
+    let count = alone.len();
+    joint
+        .bound
+        .names
+        .iter()
+        .enumerate()
+        .map(|(k, &term)| {
+            let mine: Vec<(f64, f64)> = alone
+                .iter()
+                .filter_map(|b| {
+                    let i = b.names.iter().position(|n| *n == term)?;
+                    Some((b.value[i], b.std[i]))
+                })
+                .collect();
+            let value = joint.bound.value[k];
+            let chi_square: f64 = mine.iter().map(|(v, s)| ((v - value) / s).powi(2)).sum();
+            let freedom = (count.max(2) - 1) as f64;
+            let p_value = ChiSquared::new(freedom).map_or(f64::NAN, |d| 1.0 - d.cdf(chi_square));
+            let mean = mine.iter().map(|(v, _)| v).sum::<f64>() / mine.len().max(1) as f64;
+            let spread = (mine.iter().map(|(v, _)| (v - mean).powi(2)).sum::<f64>()
+                / (mine.len().max(2) - 1) as f64)
+                .sqrt();
+            Agreement {
+                term,
+                chi_square,
+                p_value,
+                spread,
+            }
+        })
+        .collect()
+}
+
+/// The installation file of a joint calibration: the vehicle's terms with their bound;
+/// each dive term at its mean over the recordings, its standard deviation their spread
+/// (it is found again on each dive).
+fn saved(args: &JointArgs, joint: &JointFit, shas: Vec<String>) -> SavedInstallation {
+    let every = term_set(args.terms);
+    let names = every.parameter_names();
+    let vehicle = &joint.bound;
+    let per_dive: Vec<Vec<f64>> = joint
+        .dives
+        .iter()
+        .map(|d| d.to_parameters(&every))
+        .collect();
+    let terms: Vec<SavedTerm> = names
+        .iter()
+        .enumerate()
+        .map(
+            |(k, name)| match vehicle.names.iter().position(|n| n == name) {
+                Some(i) => SavedTerm {
+                    name: name.to_string(),
+                    value: vehicle.value[i],
+                    std: vehicle.std[i],
+                },
+                None => {
+                    let values: Vec<f64> = per_dive.iter().map(|p| p[k]).collect();
+                    let mean = values.iter().sum::<f64>() / values.len() as f64;
+                    let spread = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>()
+                        / (values.len().max(2) - 1) as f64)
+                        .sqrt();
+                    SavedTerm {
+                        name: name.to_string(),
+                        value: mean,
+                        std: spread,
+                    }
+                }
+            },
+        )
+        .collect();
+    let correlation: Vec<Vec<f64>> = names
+        .iter()
+        .map(|a| {
+            names
+                .iter()
+                .map(|b| {
+                    let (i, j) = (
+                        vehicle.names.iter().position(|n| n == a),
+                        vehicle.names.iter().position(|n| n == b),
+                    );
+                    match (i, j) {
+                        (Some(i), Some(j)) => vehicle.correlation[i][j],
+                        _ if a == b => 1.0,
+                        _ => 0.0,
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let residual = joint.residual_rms_m_s.iter().fold([0.0; 3], |sum, r| {
+        [0, 1, 2].map(|k| sum[k] + r[k] * r[k] / joint.residual_rms_m_s.len() as f64)
+    });
+    let recording = args
+        .dvls
+        .iter()
+        .map(|d| d.display().to_string())
+        .collect::<Vec<_>>()
+        .join(", ");
+    SavedInstallation::of_terms(
+        (terms, correlation),
+        (args.terms, args.dive_terms),
+        (recording, shas.join(", ")),
+        (args.dvl_noise_cm_s, args.reference_noise_cm_s),
+        residual.map(f64::sqrt),
+    )
+}
