@@ -16,7 +16,7 @@ use super::installation_file::{SavedInstallation, SavedTerm};
 use crate::data::paired::{self, PairedFiles, PairedRecording};
 use crate::installation::bound::{DEFAULT_TOLERANCES, Noise, TermBound, bound};
 use crate::installation::clock::DEFAULT_SEARCH_S;
-use crate::installation::fit::fit;
+use crate::installation::fit::{fit, fit_about};
 use crate::installation::frames::Reference;
 use crate::installation::joint::{JointFit, JointRecording, joint_fit, starts_from};
 use crate::installation::term_names::{TermName, term_set};
@@ -76,7 +76,15 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
         reference_m_s: args.reference_noise_cm_s / 100.0,
     };
     let columns = columns(args.columns)?;
-    let stems: Vec<String> = args.dvls.iter().map(|d| stem(d)).collect();
+    let mut stems: Vec<String> = args.dvls.iter().map(|d| stem(d)).collect();
+    // Files of one name (the same layout in several folders) are told apart by place.
+    if crate::first_seen(stems.iter().map(String::as_str)).len() < stems.len() {
+        stems = stems
+            .iter()
+            .enumerate()
+            .map(|(k, s)| format!("{}-{s}", k + 1))
+            .collect();
+    }
     let outputs: Vec<Outputs> = stems.iter().map(|s| Outputs::of(args.out, s)).collect();
     let written_paths: Vec<&Path> = outputs
         .iter()
@@ -127,15 +135,22 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
         samples: calibrating[k].time_s.len(),
         fault,
     };
-    let mut alone = Vec::new();
-    for (k, r) in calibrating.iter().enumerate() {
-        let fitted = fit(r.time_s, r.dvl_m_s, r.reference, terms).map_err(|f| fault(k, f))?;
-        alone.push((
-            fitted.installation,
-            bound(&fitted, noise, &DEFAULT_TOLERANCES),
-        ));
+    // The first recording alone gives the start; each other is fitted alone from its
+    // clock found by the search, for the agreement.
+    let first = fit(
+        calibrating[0].time_s,
+        calibrating[0].dvl_m_s,
+        calibrating[0].reference,
+        terms,
+    )
+    .map_err(|f| fault(0, f))?;
+    let starts = starts_from(&calibrating, first.installation, DEFAULT_SEARCH_S);
+    let mut alone = vec![bound(&first, noise, &DEFAULT_TOLERANCES)];
+    for (k, r) in calibrating.iter().enumerate().skip(1) {
+        let fitted = fit_about(r.time_s, r.dvl_m_s, r.reference, terms, starts[k])
+            .map_err(|f| fault(k, f))?;
+        alone.push(bound(&fitted, noise, &DEFAULT_TOLERANCES));
     }
-    let starts = starts_from(&calibrating, alone[0].0, DEFAULT_SEARCH_S);
     let joint = joint_fit(
         &calibrating,
         &starts,
@@ -143,7 +158,6 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
         (noise, &DEFAULT_TOLERANCES),
     )
     .map_err(|f| fault(0, f))?;
-    let alone: Vec<TermBound> = alone.into_iter().map(|(_, b)| b).collect();
     let agreement = agreement(&joint, &alone);
     let mut written = Vec::new();
     let mut shas = Vec::new();

@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 
 /// How far above the residual at calibration (and above the specified noise) the
 /// dive's residual, whole or in a block, must be to be warned of.
-pub const WARNING_RATIO: f64 = 2.0;
+pub const WARNING_RATIO: f64 = 1.5;
 
 /// What `correct` is asked.
 pub struct CorrectArgs<'a> {
@@ -128,11 +128,15 @@ impl Correction {
             .is_some_and(|r| 100.0 * r.total_m_s > self.warning_cm_s())
     }
 
-    /// The first block whose residual is far above the noise and the calibration's.
-    pub fn first_bad_block(&self) -> Option<&Stretch> {
-        self.blocks
-            .iter()
-            .find(|b| 100.0 * b.rmse.total_m_s > self.warning_cm_s())
+    /// The first block whose residual is far above the noise and the calibration's,
+    /// where the first block after the clock was found is not: the fit that held at the
+    /// dive's start broke later.
+    pub fn jumped(&self) -> Option<&Stretch> {
+        let bad = |b: &&Stretch| 100.0 * b.rmse.total_m_s > self.warning_cm_s();
+        match self.blocks.first() {
+            Some(first) if !bad(&first) => self.blocks.iter().find(bad),
+            _ => None,
+        }
     }
 }
 

@@ -75,13 +75,16 @@ pub fn correction_text(correction: &Correction) -> String {
                     "warning: the installation fits this dive far worse than the calibration (over {:.2} cm/s): a DVL remounted, another vehicle, or a clock that moved; calibrate this dive\n",
                     correction.warning_cm_s()
                 ));
-            } else if let Some(block) = correction.first_bad_block() {
+            }
+            if let Some(block) = correction.jumped() {
                 text.push_str(&format!(
-                    "warning: from {:.0} s to {:.0} s the residual rises to {:.2} cm/s (over {:.2}): a clock that jumped mid-dive or a DVL disturbed; correct the dive in parts\n",
+                    "warning: from {:.0} s to {:.0} s the residual rises to {:.2} cm/s (over {:.2}, where the first {:.0} s after the clock was found left {:.2}): a clock that jumped mid-dive or a DVL disturbed; correct the dive in parts\n",
                     block.from_s,
                     block.to_s,
                     100.0 * block.rmse.total_m_s,
-                    correction.warning_cm_s()
+                    correction.warning_cm_s(),
+                    correction.window_s,
+                    100.0 * correction.blocks[0].rmse.total_m_s,
                 ));
             }
         }

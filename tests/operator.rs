@@ -1,0 +1,346 @@
+//! The operator's workflow from the command line: `calibrate --save` on one dive,
+//! `correct` of another dive of the same vehicle whose clock differs (its clock found
+//! again, the dive left at the DVL's noise), a warning where the installation no longer
+//! fits (a DVL remounted, a clock that jumped mid-dive), a joint calibration of several
+//! dives, and what is refused (exit 1, the file named, nothing written).
+
+mod common;
+
+use common::installed::{INSTALLED, Installed, write_installed};
+use common::{dcnet, stderr, stdout};
+use std::path::{Path, PathBuf};
+
+/// Dive `name` of [`INSTALLED`] with its own clock, in `dir/name/`: its DVL and
+/// reference files.
+fn dive(dir: &Path, name: &str, installed: Installed, seed: u64) -> (PathBuf, PathBuf) {
+    let folder = dir.join(name);
+    write_installed(&folder, 1, &[], installed, seed);
+    let at = folder.join("Trajectory1");
+    (
+        at.join("DVL_trajectory1.csv"),
+        at.join("GT_trajectory1.csv"),
+    )
+}
+
+fn clocked(time_offset_s: f64) -> Installed {
+    Installed {
+        time_offset_s,
+        ..INSTALLED
+    }
+}
+
+/// The number after `prefix` in `text`.
+fn number_after(text: &str, prefix: &str) -> f64 {
+    let at = text
+        .find(prefix)
+        .unwrap_or_else(|| panic!("no {prefix:?} in\n{text}"));
+    let rest = &text[at + prefix.len()..];
+    let end = rest
+        .find(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-'))
+        .unwrap_or(rest.len());
+    rest[..end].parse().unwrap()
+}
+
+/// `calibrate --save` of a dive whose clock is 0.6 s, then `correct` of dives whose
+/// clocks are 7.3 s and −18.2 s: each clock found again, each dive left at the noise.
+#[test]
+fn an_installation_saved_from_one_dive_corrects_another_whose_clock_differs() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (dvl, reference) = dive(d, "first", clocked(0.6), 1);
+    let path = |p: &Path| p.to_str().unwrap().to_string();
+    let saved = dcnet(
+        d,
+        &[
+            "calibrate",
+            &path(&dvl),
+            "--reference",
+            &path(&reference),
+            "--terms",
+            "lever_arm,time_offset,bias,scale",
+            "--save",
+            "installation.toml",
+        ],
+    );
+    assert!(saved.status.success(), "{}", stderr(&saved));
+    assert!(stderr(&saved).contains("installation saved to installation.toml"));
+    for (name, clock) in [("second", 7.3), ("third", -18.2)] {
+        let (dvl, reference) = dive(d, name, clocked(clock), 2);
+        let out = d.join(format!("corrected-{name}"));
+        let corrected = dcnet(
+            d,
+            &[
+                "correct",
+                &path(&dvl),
+                "--reference",
+                &path(&reference),
+                "--installation",
+                "installation.toml",
+                "--out",
+                &path(&out),
+            ],
+        );
+        assert!(corrected.status.success(), "{}", stderr(&corrected));
+        let printed = stdout(&corrected);
+        let found = number_after(&printed, "least squares at ");
+        let std = number_after(&printed, &format!("least squares at {found:.4} s ± "));
+        assert!(
+            (found - clock).abs() < 3.0 * std,
+            "{name}: {found} ± {std} against {clock}\n{printed}"
+        );
+        // 2 cm/s per axis: 3.46 cm/s in total.
+        let residual = number_after(&printed, "s: ");
+        assert!(
+            (residual / 3.46 - 1.0).abs() < 0.15,
+            "{name}: {residual}\n{printed}"
+        );
+        assert!(!printed.contains("warning"), "{printed}");
+        assert!(out.join("DVL_trajectory1-corrected.csv").is_file());
+        assert!(out.join("DVL_trajectory1-corrected.parquet").is_file());
+    }
+}
+
+/// A DVL remounted 1.9 m further forward fits far worse than at calibration: warned.
+/// A clock that jumps by 3 s halfway through a dive: the block after the jump warned.
+#[test]
+fn a_remounted_dvl_and_a_clock_that_jumped_are_warned_of() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let path = |p: &Path| p.to_str().unwrap().to_string();
+    let (dvl, reference) = dive(d, "first", clocked(0.6), 1);
+    let saved = dcnet(
+        d,
+        &[
+            "calibrate",
+            &path(&dvl),
+            "--reference",
+            &path(&reference),
+            "--save",
+            "installation.toml",
+        ],
+    );
+    assert!(saved.status.success(), "{}", stderr(&saved));
+    let remounted = Installed {
+        lever_arm_m: [0.0, 0.05, 0.4],
+        ..clocked(2.0)
+    };
+    let (dvl, reference) = dive(d, "remounted", remounted, 3);
+    let output = dcnet(
+        d,
+        &[
+            "correct",
+            &path(&dvl),
+            "--reference",
+            &path(&reference),
+            "--installation",
+            "installation.toml",
+            "--out",
+            "remounted",
+        ],
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let printed = stdout(&output);
+    assert!(
+        printed.contains("warning: the installation fits this dive far worse"),
+        "{printed}"
+    );
+    assert!(
+        !printed.contains("the residual rises"),
+        "bad from its start, not mid-dive: {printed}"
+    );
+    // The same dive with its clock 0.6 s for 200 s, then 3.6 s.
+    let (early, reference) = dive(d, "early", clocked(0.6), 4);
+    let (late, _) = dive(d, "late", clocked(3.6), 4);
+    let (early, late) = (
+        std::fs::read_to_string(early).unwrap(),
+        std::fs::read_to_string(late).unwrap(),
+    );
+    let mut jumped: Vec<&str> = early.lines().take(201).collect();
+    jumped.extend(late.lines().skip(201));
+    let jumped_path = d.join("jumped.csv");
+    std::fs::write(&jumped_path, jumped.join("\n") + "\n").unwrap();
+    let output = dcnet(
+        d,
+        &[
+            "correct",
+            &path(&jumped_path),
+            "--reference",
+            &path(&reference),
+            "--installation",
+            "installation.toml",
+            "--out",
+            "jumped",
+        ],
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let printed = stdout(&output);
+    assert!(printed.contains("the residual rises"), "{printed}");
+    let from = number_after(&printed, "warning: from ");
+    assert!((170.0..=210.0).contains(&from), "{printed}");
+}
+
+/// Three dives with clocks 0.6, 4.1 and −2.3 s calibrated jointly: each clock its own,
+/// the vehicle's terms shared and agreeing with each dive's alone; the installation
+/// saved corrects a fourth dive.
+#[test]
+fn dives_calibrated_jointly_share_the_vehicles_terms_and_keep_their_clocks() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let path = |p: &Path| p.to_str().unwrap().to_string();
+    let clocks = [0.6, 4.1, -2.3];
+    let files: Vec<(PathBuf, PathBuf)> = clocks
+        .iter()
+        .enumerate()
+        .map(|(k, &c)| dive(d, &format!("dive{k}"), clocked(c), 10 + k as u64))
+        .collect();
+    let mut args: Vec<String> = vec!["calibrate".into()];
+    args.extend(files.iter().map(|(dvl, _)| path(dvl)));
+    for (_, reference) in &files {
+        args.extend(["--reference".into(), path(reference)]);
+    }
+    // The dives' DVL reads 1 % fast: the scale is among the terms.
+    let terms = ["--terms", "lever_arm,time_offset,bias,scale"];
+    args.extend(
+        ["--save", "joint.toml", "--out", "joint"]
+            .into_iter()
+            .chain(terms)
+            .map(String::from),
+    );
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let output = dcnet(d, &args);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let printed = stdout(&output);
+    assert!(
+        printed.contains("calibrated jointly on 3 recordings"),
+        "{printed}"
+    );
+    assert!(!printed.contains(", disagree)"), "{printed}");
+    // A row's cells, trimmed.
+    let cells = |start: &str| -> Vec<String> {
+        let line = printed
+            .lines()
+            .find(|l| l.starts_with(start))
+            .unwrap_or_else(|| panic!("{start}: {printed}"));
+        line.split('|').map(|c| c.trim().to_string()).collect()
+    };
+    let first = |cell: &str| -> f64 { cell.split(' ').next().unwrap().parse().unwrap() };
+    let lever = cells("| lever arm x");
+    let (lever_x, lever_std) = (first(&lever[2]), first(&lever[3]));
+    assert!(
+        (lever_x + 1.9).abs() < 3.0 * lever_std,
+        "{lever_x} ± {lever_std}\n{printed}"
+    );
+    // Three files of one name: each recording's outputs named by its place.
+    for (k, clock) in clocks.iter().enumerate() {
+        let row = cells(&format!("| {}-DVL_trajectory1", k + 1));
+        let (found, std) = (first(&row[2]), number_after(&row[2], "± "));
+        assert!((found - clock).abs() < 3.0 * std, "{row:?}");
+        assert!(
+            d.join(format!("joint/{}-DVL_trajectory1-corrected.csv", k + 1))
+                .is_file()
+        );
+    }
+    let (dvl, reference) = dive(d, "fourth", clocked(-9.0), 20);
+    let output = dcnet(
+        d,
+        &[
+            "correct",
+            &path(&dvl),
+            "--reference",
+            &path(&reference),
+            "--installation",
+            "joint.toml",
+        ],
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(!stdout(&output).contains("warning"), "{}", stdout(&output));
+}
+
+/// An installation edited by hand, a dive shorter than the seconds that find its
+/// clock, and a dive whose DVL reads a constant velocity: each refused, exit 1, the
+/// file named, nothing written.
+#[test]
+fn an_edited_installation_a_short_dive_and_a_dive_with_no_clock_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let path = |p: &Path| p.to_str().unwrap().to_string();
+    let (dvl, reference) = dive(d, "first", clocked(0.6), 1);
+    let saved = dcnet(
+        d,
+        &[
+            "calibrate",
+            &path(&dvl),
+            "--reference",
+            &path(&reference),
+            "--save",
+            "installation.toml",
+        ],
+    );
+    assert!(saved.status.success(), "{}", stderr(&saved));
+    let text = std::fs::read_to_string(d.join("installation.toml")).unwrap();
+    let refused = |args: &[&str], says: &str| {
+        let output = dcnet(d, args);
+        assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+        let message = stderr(&output);
+        assert!(message.contains(says), "{message}");
+        assert!(!d.join("out").exists(), "written despite: {message}");
+        message
+    };
+    std::fs::write(
+        d.join("edited.toml"),
+        text.replacen("value = ", "value = 1", 1),
+    )
+    .unwrap();
+    let correct = |installation: &str, extra: &[&str]| -> Vec<String> {
+        let mut args = vec![
+            "correct".to_string(),
+            path(&dvl),
+            "--reference".into(),
+            path(&reference),
+            "--installation".into(),
+            installation.into(),
+            "--out".into(),
+            "out".into(),
+        ];
+        args.extend(extra.iter().map(|s| s.to_string()));
+        args
+    };
+    let args = correct("edited.toml", &[]);
+    let message = refused(
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+        "edited.toml: its checksum does not match",
+    );
+    assert!(message.contains("calibrate --save"), "{message}");
+    let args = correct("installation.toml", &["--window-s", "500"]);
+    refused(
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+        "the dive lasts 399.0 s, not more than the 500 s",
+    );
+    // A DVL that reads a constant velocity.
+    let flat_dvl = d.join("flat.csv");
+    let mut flat = String::from("Time [s],DVL X [m/s],DVL Y [m/s],DVL Z [m/s]\n");
+    for i in 0..400 {
+        flat.push_str(&format!("{i},1.8,0.0,0.0\n"));
+    }
+    std::fs::write(&flat_dvl, flat).unwrap();
+    let args = [
+        "correct",
+        &path(&flat_dvl),
+        "--reference",
+        &path(&reference),
+        "--installation",
+        "installation.toml",
+        "--out",
+        "out",
+    ];
+    let message = refused(
+        &args,
+        "flat.csv: its clock cannot be found from its first 60 s",
+    );
+    assert!(message.contains("--time-offset-s"), "{message}");
+    // Its clock given instead: corrected.
+    let mut given = args.to_vec();
+    given.extend(["--time-offset-s", "0.6"]);
+    let output = dcnet(d, &given);
+    assert!(output.status.success(), "{}", stderr(&output));
+}
