@@ -54,6 +54,8 @@ fn main() {
             reference_noise_cm_s: 0.5,
             tolerance_pct: 10.0,
             out: &out,
+            save: None,
+            dive_terms: &[TermName::TimeOffset],
         };
         let clock = Instant::now();
         let calibration = calibrate(&args).expect("the synthetic recording calibrates");

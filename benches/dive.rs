@@ -1,0 +1,145 @@
+//! `cargo bench --bench dive`: the operator's two costs beside the recording's length.
+//! `correct` of a dive at 10 Hz of a quarter, a half and a whole hour with an
+//! installation saved from a 400-s calibration (its clock found again from the first
+//! 60 s, the dive corrected and written, CSV and Parquet); and the joint calibration of
+//! 10, 30 and 100 synthetic segments of 400 s at 1 Hz, each with its own clock (the
+//! vehicle's lever arm, scale and bias shared). Prints the seconds of each, and per
+//! 100,000 rows or per segment, which stay flat where the cost is linear.
+
+#[allow(dead_code)]
+#[path = "../tests/common/installed.rs"]
+mod installed;
+
+use dcnet_exp::data::paired::{PairedColumns, PairedFiles, read};
+use dcnet_exp::installation::bound::{DEFAULT_TOLERANCES, Noise};
+use dcnet_exp::installation::fit::fit;
+use dcnet_exp::installation::frames::Reference;
+use dcnet_exp::installation::joint::{JointRecording, joint_fit, starts_from};
+use dcnet_exp::installation::term_names::TermName;
+use dcnet_exp::installation::terms::{PerAxis, TermSet};
+use dcnet_exp::results::calibrate::{CalibrateArgs, calibrate};
+use dcnet_exp::results::correct::{CorrectArgs, correct};
+use std::time::Instant;
+
+fn main() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // The installation, saved from 400 s at 1 Hz.
+    installed::write_installed(&d.join("calibration"), 1, &[], installed::INSTALLED, 1);
+    let at = d.join("calibration/Trajectory1");
+    let (dvl, reference) = (
+        at.join("DVL_trajectory1.csv"),
+        at.join("GT_trajectory1.csv"),
+    );
+    let terms = [
+        TermName::LeverArm,
+        TermName::TimeOffset,
+        TermName::Bias,
+        TermName::Scale,
+    ];
+    let saved = d.join("installation.toml");
+    calibrate(&CalibrateArgs {
+        dvl: &dvl,
+        reference: Some(&reference),
+        columns: None,
+        terms: &terms,
+        window_s: None,
+        dvl_noise_cm_s: 2.0,
+        reference_noise_cm_s: 0.5,
+        tolerance_pct: 10.0,
+        out: &d.join("calibrated"),
+        save: Some(&saved),
+        dive_terms: &[TermName::TimeOffset],
+    })
+    .expect("the synthetic recording calibrates");
+    println!("| dive at 10 Hz | rows | correct s | s per 100,000 rows |");
+    println!("|---|---|---|---|");
+    for minutes in [15, 30, 60] {
+        let rows = minutes * 600;
+        let dive = d.join(format!("dive{minutes}"));
+        let clocked = installed::Installed {
+            time_offset_s: 7.3,
+            ..installed::INSTALLED
+        };
+        installed::write_installed_sampled(&dive, 1, &[], clocked, 2, (rows, 0.1));
+        let at = dive.join("Trajectory1");
+        let (dvl, reference) = (
+            at.join("DVL_trajectory1.csv"),
+            at.join("GT_trajectory1.csv"),
+        );
+        let clock = Instant::now();
+        let corrected = correct(&CorrectArgs {
+            dvl: &dvl,
+            reference: Some(&reference),
+            columns: None,
+            installation: &saved,
+            window_s: 60.0,
+            search_s: 30.0,
+            time_offset_s: None,
+            out: &dive.join("out"),
+        })
+        .expect("the dive is corrected");
+        let seconds = clock.elapsed().as_secs_f64();
+        let found = corrected.applied.time_offset_s;
+        assert!((found - 7.3).abs() < 0.1, "the clock found again: {found}");
+        println!(
+            "| {minutes} min | {rows} | {seconds:.2} | {:.2} |",
+            seconds / rows as f64 * 1e5
+        );
+    }
+    println!();
+    println!("| segments of 400 s at 1 Hz | joint fit s | s per segment |");
+    println!("|---|---|---|");
+    let noise = Noise {
+        dvl_m_s: 0.02,
+        reference_m_s: 0.005,
+    };
+    let set = TermSet {
+        scale: PerAxis::Scalar,
+        lever_arm: true,
+        time_offset: true,
+        bias: PerAxis::PerAxis,
+        ..TermSet::NONE
+    };
+    let clock_only = TermSet {
+        time_offset: true,
+        ..TermSet::NONE
+    };
+    for count in [10, 30, 100] {
+        let folder = d.join(format!("segments{count}"));
+        let recordings: Vec<_> = (0..count)
+            .map(|k| {
+                let installed = installed::Installed {
+                    time_offset_s: -2.0 + 4.0 * k as f64 / count as f64,
+                    ..installed::INSTALLED
+                };
+                let at = folder.join(format!("s{k}"));
+                installed::write_installed(&at, 1, &[], installed, 100 + k as u64);
+                let recording = read(&PairedFiles::akit(&at, 1), &PairedColumns::akit()).unwrap();
+                let reference = Reference::new(&recording);
+                (recording, reference)
+            })
+            .collect();
+        let joint: Vec<JointRecording> = recordings
+            .iter()
+            .map(|(r, reference)| JointRecording {
+                time_s: &r.time_s,
+                dvl_m_s: &r.dvl_m_s,
+                reference,
+            })
+            .collect();
+        let clock = Instant::now();
+        let first = fit(joint[0].time_s, joint[0].dvl_m_s, joint[0].reference, set).unwrap();
+        let starts = starts_from(&joint, first.installation, 30.0);
+        let fitted = joint_fit(
+            &joint,
+            &starts,
+            (set, clock_only),
+            (noise, &DEFAULT_TOLERANCES),
+        )
+        .expect("the segments calibrate jointly");
+        let seconds = clock.elapsed().as_secs_f64();
+        assert_eq!(fitted.dives.len(), count);
+        println!("| {count} | {seconds:.2} | {:.3} |", seconds / count as f64);
+    }
+}
