@@ -189,7 +189,7 @@ pub fn installation_dive(study: &InstallationResults) -> PlotResult<Outcome> {
             lines: true,
         },
         format!(
-            "The clock found again on each trajectory from its first w s, scored after them (calibrated on {longest} s; joint: over every other trajectory): mean held-out RMSE, bars its 95 % interval"
+            "Clock found again from each scored trajectory's first w s (calibrated on {longest} s): held-out RMSE, 95 % bars"
         ),
     )
 }
