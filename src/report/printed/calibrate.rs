@@ -250,6 +250,7 @@ pub fn joint_text(calibration: &JointCalibration) -> String {
         "standard deviation",
         "bound (specified noise)",
         "alone: spread",
+        "spread / √K",
         "alone: χ² (p)",
     ]);
     for (i, name) in bound.names.iter().enumerate() {
@@ -266,6 +267,7 @@ pub fn joint_text(calibration: &JointCalibration) -> String {
             format!("{:.4} {unit}", bound.std[i] * factor),
             format!("{:.4} {unit}", bound.bound_std[i] * factor),
             format!("{:.4} {unit}", agree.spread * factor),
+            format!("{:.4} {unit}", agree.spread * factor / (names.len() as f64).sqrt()),
             format!("{:.1} ({:.1e}{mark})", agree.chi_square, agree.p_value),
         ]);
     }
@@ -289,7 +291,7 @@ pub fn joint_text(calibration: &JointCalibration) -> String {
         if level <= 1.2 * specified { "consistent with the noise" } else { "above the noise: the model leaves something out, or the noise is larger than specified" }
     ));
     text.push_str(&format!(
-        "alone: each recording fitted by itself; spread, the standard deviation of their estimates; χ², Σ ((alone − joint) / its standard deviation)² over the {} recordings, and its p-value on {} degrees of freedom (under {AGREEMENT_P_VALUE}: the recordings disagree beyond their intervals)\n",
+        "alone: each recording fitted by itself; spread, the standard deviation of their estimates, and spread / √K the standard error of their mean over the K recordings (where they disagree, the joint term's uncertainty is nearer this than its own standard deviation); χ², Σ ((alone − joint) / its standard deviation)² over the {} recordings, and its p-value on {} degrees of freedom (under {AGREEMENT_P_VALUE}: the recordings disagree beyond their intervals)\n",
         names.len(),
         names.len() - 1
     ));

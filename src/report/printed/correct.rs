@@ -78,12 +78,13 @@ pub fn correction_text(correction: &Correction) -> String {
             }
             if let Some(block) = correction.jumped() {
                 text.push_str(&format!(
-                    "warning: from {:.0} s to {:.0} s the residual rises to {:.2} cm/s (over {:.2}, where the first {:.0} s after the clock was found left {:.2}): a clock that jumped mid-dive or a DVL disturbed; correct the dive in parts\n",
+                    "warning: from {:.0} s to {:.0} s the residual rises to {:.2} cm/s (over {:.2}, where {:.0} to {:.0} s left {:.2}): a clock that jumped mid-dive or a DVL disturbed; correct the dive in parts\n",
                     block.from_s,
                     block.to_s,
                     100.0 * block.rmse.total_m_s,
                     correction.warning_cm_s(),
-                    correction.window_s,
+                    correction.blocks[0].from_s,
+                    correction.blocks[0].to_s,
                     100.0 * correction.blocks[0].rmse.total_m_s,
                 ));
             }
