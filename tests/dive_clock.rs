@@ -11,7 +11,7 @@ mod common;
 use common::installed::{INSTALLED, Installed, write_installed, write_study_spec};
 use dcnet_exp::data::paired::{PairedColumns, PairedFiles, read};
 use dcnet_exp::installation::bound::{DEFAULT_TOLERANCES, Noise, bound};
-use dcnet_exp::installation::clock::{ClockError, ClockSearch, DEFAULT_SEARCH_S, refind};
+use dcnet_exp::installation::clock::{Carried, ClockError, ClockSearch, DEFAULT_SEARCH_S, refind};
 use dcnet_exp::installation::fit::{TIME_OFFSET_MARGIN_S, fit};
 use dcnet_exp::installation::protocol::Segment;
 use dcnet_exp::installation::terms::{Installation, PerAxis, TermSet, score};

@@ -10,18 +10,20 @@
 //!    clock shows only in the turns, through the lever arm;
 //! 2. the least squares of the dive's terms with the carried ones held
 //!    ([`fit_about`]), from its scan of τ ± 3 s about the search's;
-//! 3. their standard deviations from the bound, and a flag where the window cannot
-//!    show τ (constant speed, no turn).
+//! 3. their standard deviations from the bound, given the carried terms, plus what the
+//!    carried terms' own uncertainty passes on to them ([`Carried`]); and a flag where
+//!    the window cannot show τ (constant speed, no turn).
 //!
 //! In: the dive's first w seconds, its reference, the carried installation. Out: a
 //! [`Clock`], or why the window cannot show it ([`ClockError`]).
 
 use super::bound::{Noise, TermBound, Tolerances, bound};
-use super::fit::{Fit, FitError, TIME_OFFSET_SCAN_STEP_S, fit_about};
+use super::fit::{Fit, FitError, TIME_OFFSET_SCAN_STEP_S, fit_about, linearised, mask_about};
 use super::frames::Reference;
-use super::terms::{Installation, TermSet};
+use super::terms::{Installation, PerAxis, TermSet};
 use crate::Vec3;
 use crate::data::paired::sample_interval;
+use nalgebra::DMatrix;
 
 /// How far the search looks for τ by default, s: a dive whose clocks are 5 or 20 s
 /// apart is found.
@@ -44,6 +46,50 @@ pub struct ClockSearch {
     pub search_s: f64,
 }
 
+/// The terms a dive carries: their values, and where they were estimated their
+/// covariance (over the parameters of `terms`, in its order), which the dive's terms
+/// found again inherit through the samples that find them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Carried {
+    pub installation: Installation,
+    pub uncertainty: Option<(TermSet, DMatrix<f64>)>,
+}
+
+impl Carried {
+    /// Terms known exactly, or whose uncertainty is not known.
+    pub fn exact(installation: Installation) -> Carried {
+        Carried {
+            installation,
+            uncertainty: None,
+        }
+    }
+
+    /// Terms with the standard deviations and correlations of `names` (those of
+    /// `terms`, in order); a standard deviation that is not finite (a term its
+    /// calibration could not see at all, left out of the correction) counts as zero.
+    pub fn with(
+        installation: Installation,
+        terms: TermSet,
+        std: &[f64],
+        correlation: &[Vec<f64>],
+    ) -> Carried {
+        let n = std.len();
+        let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
+        let covariance = DMatrix::from_fn(n, n, |i, j| {
+            let rho = if i == j {
+                1.0
+            } else {
+                finite(correlation[i][j])
+            };
+            rho * finite(std[i]) * finite(std[j])
+        });
+        Carried {
+            installation,
+            uncertainty: Some((terms, covariance)),
+        }
+    }
+}
+
 /// A dive's terms found again, with the carried ones.
 #[derive(Debug, Clone)]
 pub struct Clock {
@@ -53,16 +99,20 @@ pub struct Clock {
     /// m/s (all three axes).
     pub searched_offset_s: f64,
     pub searched_rms_m_s: f64,
-    /// The least squares of the dive's terms, and their bound.
+    /// The least squares of the dive's terms, and their bound given the carried terms.
     pub fit: Fit,
     pub bound: TermBound,
+    /// The dive's terms' standard deviations, the carried terms' uncertainty included,
+    /// in the order of the bound's names.
+    pub std: Vec<f64>,
 }
 
 impl Clock {
-    /// The time offset's standard deviation (from the noise the residuals show), s.
+    /// The time offset's standard deviation (from the noise the residuals show, the
+    /// carried terms' uncertainty included), s.
     pub fn time_offset_std_s(&self) -> f64 {
         let index = self.bound.names.iter().position(|n| *n == "time_offset_s");
-        index.map_or(f64::NAN, |i| self.bound.std[i])
+        index.map_or(f64::NAN, |i| self.std[i])
     }
 
     /// Whether the window cannot show the time offset (its standard deviation beyond the
@@ -148,7 +198,7 @@ fn motion_std(dvl_m_s: &[Vec3]) -> f64 {
 pub fn refind(
     (time_s, dvl_m_s): (&[f64], &[Vec3]),
     reference: &Reference,
-    carried: Installation,
+    carried: &Carried,
     search: ClockSearch,
     (noise, tolerances): (Noise, &Tolerances),
 ) -> Result<Clock, ClockError> {
@@ -165,25 +215,84 @@ pub fn refind(
             noise_cm_s: 100.0 * noise.dvl_m_s,
         });
     }
-    let (searched_offset_s, searched_rms_m_s) =
-        search_offset((time_s, dvl_m_s), reference, carried, search.search_s).ok_or(
-            ClockError::NoOverlap {
-                search_s: search.search_s,
-            },
-        )?;
+    let (searched_offset_s, searched_rms_m_s) = search_offset(
+        (time_s, dvl_m_s),
+        reference,
+        carried.installation,
+        search.search_s,
+    )
+    .ok_or(ClockError::NoOverlap {
+        search_s: search.search_s,
+    })?;
     let start = Installation {
         time_offset_s: searched_offset_s,
-        ..carried
+        ..carried.installation
     };
     let fit = fit_about(time_s, dvl_m_s, reference, search.dive_terms, start)?;
     let bound = bound(&fit, noise, tolerances);
+    let inherited = match &carried.uncertainty {
+        Some(uncertainty) => {
+            let samples = mask_about(time_s, reference, searched_offset_s);
+            let window = (&time_s[samples.clone()], &dvl_m_s[samples]);
+            inherited_variance(&fit, (window, reference), uncertainty)
+        }
+        None => vec![0.0; bound.std.len()],
+    };
+    let std = bound
+        .std
+        .iter()
+        .zip(&inherited)
+        .map(|(std, more)| (std * std + more).sqrt())
+        .collect();
     Ok(Clock {
         installation: fit.installation,
         searched_offset_s,
         searched_rms_m_s,
         fit,
         bound,
+        std,
     })
+}
+
+/// The variance each of `fit`'s dive terms inherits from the carried terms'
+/// covariance: `G C Gᵀ` with `G = (BᵀB)⁻¹ BᵀA`, B the dive terms' Jacobian and A the
+/// carried terms' (those that are not the dive's) on the same samples.
+fn inherited_variance(
+    fit: &Fit,
+    ((time_s, dvl_m_s), reference): ((&[f64], &[Vec3]), &Reference),
+    (terms, covariance): &(TermSet, DMatrix<f64>),
+) -> Vec<f64> {
+    let dive = fit.terms.parameter_names();
+    let names = terms.parameter_names();
+    let kept: Vec<usize> = (0..names.len())
+        .filter(|&i| !dive.contains(&names[i]))
+        .collect();
+    let carried_terms = TermSet {
+        time_offset: terms.time_offset && !fit.terms.time_offset,
+        bias: match fit.terms.bias {
+            PerAxis::Off => terms.bias,
+            _ => PerAxis::Off,
+        },
+        ..*terms
+    };
+    let zero = vec![0.0; dive.len()];
+    if kept.is_empty() || carried_terms.parameter_names().len() != kept.len() {
+        return zero;
+    }
+    let (_, a) = linearised(time_s, dvl_m_s, reference, carried_terms, fit.installation);
+    let b = &fit.jacobian;
+    if a.nrows() != b.nrows() {
+        return zero;
+    }
+    let Some(inverse) = (b.transpose() * b).try_inverse() else {
+        return zero;
+    };
+    let gain = inverse * (b.transpose() * a);
+    let kept_covariance = DMatrix::from_fn(kept.len(), kept.len(), |i, j| {
+        covariance[(kept[i], kept[j])]
+    });
+    let carried = &gain * kept_covariance * gain.transpose();
+    (0..dive.len()).map(|k| carried[(k, k)].max(0.0)).collect()
 }
 
 #[cfg(test)]
@@ -268,7 +377,7 @@ pub(crate) mod tests {
         let clock = refind(
             (&time_s[..window], &dvl_m_s[..window]),
             &reference,
-            carried,
+            &Carried::exact(carried),
             search,
             (noise, &DEFAULT_TOLERANCES),
         )

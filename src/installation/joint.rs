@@ -13,8 +13,9 @@
 //! The vehicle's standard deviations are the single fit's [`bound`] applied to the
 //! stacked Jacobian with the dive's terms projected out, `Ã_k = A_k − B_k (B_kᵀB_k)⁻¹
 //! B_kᵀ A_k` (ÃᵀÃ is S): the same sandwich over the residuals' noise, read from all the
-//! recordings. Each clock's is its own block's, given the vehicle's, plus the vehicle's
-//! uncertainty carried through `(B_kᵀB_k)⁻¹ B_kᵀA_k`.
+//! recordings. Each clock's is its own block's given the vehicle's (the same sandwich,
+//! on its own residuals), plus the vehicle's uncertainty carried through
+//! `(B_kᵀB_k)⁻¹ B_kᵀA_k`.
 //! In: the recordings and their references, the vehicle's and the dive's terms. Out: a
 //! [`JointFit`].
 
@@ -226,7 +227,7 @@ pub fn joint_fit(
         termination: "joint".into(),
     };
     let bound = bound(&stacked, noise, tolerances);
-    let dive_std = dive_standard_deviations(&current, &bound, noise);
+    let dive_std = dive_standard_deviations(&current, &bound, dive_terms, (noise, tolerances));
     Ok(JointFit {
         vehicle_terms,
         dive_terms,
@@ -325,33 +326,46 @@ fn projected(blocks: &[Blocks]) -> (DMatrix<f64>, DVector<f64>) {
     (jacobian, residuals)
 }
 
-/// Each recording's dive terms' standard deviations: its own block's, at the white
-/// level its residuals show (at least the specified noise's), given the vehicle's
-/// terms, plus the vehicle's covariance carried through (B_kᵀB_k)⁻¹ B_kᵀA_k.
-fn dive_standard_deviations(blocks: &[Blocks], vehicle: &TermBound, noise: Noise) -> Vec<Vec<f64>> {
+/// Each recording's dive terms' standard deviations: its own block's given the
+/// vehicle's terms (the single fit's [`bound`] on its residuals, their correlation in
+/// time included), plus the vehicle's covariance carried through (B_kᵀB_k)⁻¹ B_kᵀA_k.
+fn dive_standard_deviations(
+    blocks: &[Blocks],
+    vehicle: &TermBound,
+    dive_terms: TermSet,
+    (noise, tolerances): (Noise, &Tolerances),
+) -> Vec<Vec<f64>> {
     let p = vehicle.std.len();
+    let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
     let covariance = DMatrix::from_fn(p, p, |i, j| {
         let rho = if i == j {
             1.0
         } else {
-            vehicle.correlation[i][j]
+            finite(vehicle.correlation[i][j])
         };
-        let rho = if rho.is_finite() { rho } else { 0.0 };
-        rho * vehicle.std[i] * vehicle.std[j]
+        rho * finite(vehicle.std[i]) * finite(vehicle.std[j])
     });
-    let specified = noise.dvl_m_s.powi(2) + noise.reference_m_s.powi(2);
     blocks
         .iter()
         .map(|b| {
             let Some(inverse) = (b.dive.transpose() * &b.dive).try_inverse() else {
                 return vec![f64::INFINITY; b.dive.ncols()];
             };
-            let n = b.residuals.len().max(1) as f64;
-            let level = (b.residuals.norm_squared() / n).max(specified);
+            let own = Fit {
+                terms: dive_terms,
+                installation: Installation::default(),
+                parameters: vec![0.0; b.dive.ncols()],
+                residual_rms_m_s: [0.0; 3],
+                sample_count: b.residuals.len() / 3,
+                jacobian: b.dive.clone(),
+                residuals: b.residuals.clone(),
+                termination: "joint".into(),
+            };
+            let given = bound(&own, noise, tolerances).std;
             let gain = &inverse * (b.dive.transpose() * &b.vehicle);
             let carried = &gain * &covariance * gain.transpose();
             (0..b.dive.ncols())
-                .map(|k| (level * inverse[(k, k)] + carried[(k, k)]).sqrt())
+                .map(|k| (given[k].powi(2) + carried[(k, k)]).sqrt())
                 .collect()
         })
         .collect()

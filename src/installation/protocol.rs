@@ -10,7 +10,7 @@
 
 use super::bound::{Noise, TermBound, Tolerances, bound};
 use super::calibration_time::calibration_times;
-use super::clock::{DEFAULT_SEARCH_S, refind};
+use super::clock::{Carried, DEFAULT_SEARCH_S, refind};
 use super::fit::FitError;
 use super::fit::{TIME_OFFSET_MARGIN_S, fit};
 use super::frames::Reference;
@@ -32,6 +32,7 @@ use crate::data::paired::sample_interval;
 use crate::estimators::{Baseline, Estimator, LeastSquares};
 use crate::evaluate::statistics::{mean_ci95, mean_std};
 use crate::vocab::{Correction, ErrorModel};
+use nalgebra::DMatrix;
 use rayon::prelude::*;
 use std::ops::Range;
 
@@ -71,6 +72,9 @@ struct Estimate {
     asked: Vec<Asked>,
     /// A filter's terms: each parameter's name, value and standard deviation.
     filtered: Option<Vec<(&'static str, f64, f64, f64)>>,
+    /// The terms a fit or a filter estimated, with their covariance: what a dive that
+    /// carries them inherits.
+    uncertainty: Option<(TermSet, DMatrix<f64>)>,
 }
 
 /// The terms one method estimated on one calibration window.
@@ -280,6 +284,15 @@ impl Estimate {
             bound: None,
             asked: Vec::new(),
             filtered: None,
+            uncertainty: None,
+        }
+    }
+
+    /// The terms as a dive carries them.
+    fn carried(&self) -> Carried {
+        Carried {
+            installation: self.installation,
+            uncertainty: self.uncertainty.clone(),
         }
     }
 }
@@ -350,7 +363,7 @@ impl OnTrajectory<'_> {
             let scored = self.scored(learned);
             let on = (calibration.as_str(), window_s);
             heldout.extend(self.transfer_rows(label, &estimate.installation, &scored, on));
-            let (refound, unfound) = self.refound_rows(label, &estimate.installation, &scored, on);
+            let (refound, unfound) = self.refound_rows(label, &estimate.carried(), &scored, on);
             heldout.extend(refound);
             failures.extend(unfound);
         }
@@ -448,11 +461,19 @@ impl OnTrajectory<'_> {
             })
             .collect();
         let carried = joint.vehicle.with_parameters(&joint.dive_terms, &mean_dive);
+        let uncertainty = Carried::with(
+            carried,
+            joint.vehicle_terms,
+            &joint.bound.std,
+            &joint.bound.correlation,
+        )
+        .uncertainty;
         let estimate = Estimate {
             installation: carried,
             bound: Some(joint.bound.clone()),
             asked: Vec::new(),
             filtered: None,
+            uncertainty,
         };
         into.terms.extend(
             self.term_rows(&label, &estimate, false, window_s)
@@ -466,7 +487,7 @@ impl OnTrajectory<'_> {
         let on = (calibration.as_str(), window_s);
         into.heldout
             .extend(self.transfer_rows(&label, &carried, &here, on));
-        let (refound, unfound) = self.refound_rows(&label, &carried, &here, on);
+        let (refound, unfound) = self.refound_rows(&label, &estimate.carried(), &here, on);
         into.heldout.extend(refound);
         into.failures.extend(unfound);
     }
@@ -491,13 +512,27 @@ impl OnTrajectory<'_> {
                     .iter()
                     .find(|run| run.label == label)
                     .expect("every filter ran");
-                run.at_window(range.end)
-                    .map(|(installation, terms)| Estimate {
+                run.at_window(range.end).map(|(installation, terms)| {
+                    // Its standard deviations, uncorrelated: the filter keeps no
+                    // correlations in its steps.
+                    let std: Vec<f64> = terms.iter().map(|t| t.2).collect();
+                    let identity: Vec<Vec<f64>> = (0..std.len())
+                        .map(|i| {
+                            (0..std.len())
+                                .map(|j| f64::from(u8::from(i == j)))
+                                .collect()
+                        })
+                        .collect();
+                    let uncertainty =
+                        Carried::with(installation, run.terms, &std, &identity).uncertainty;
+                    Estimate {
                         installation,
                         bound: None,
                         asked: Vec::new(),
                         filtered: Some(terms),
-                    })
+                        uncertainty,
+                    }
+                })
             }
             Method::Learned { source, replicate } => self.fold_of(self.c).and_then(|fold| {
                 let model = LearnedModel {
@@ -550,6 +585,13 @@ impl OnTrajectory<'_> {
                         &calibration.reference,
                         &bounded.residual_noise,
                     ),
+                    uncertainty: Carried::with(
+                        fitted.installation,
+                        fitted.terms,
+                        &bounded.std,
+                        &bounded.correlation,
+                    )
+                    .uncertainty,
                     bound: Some(bounded),
                     filtered: None,
                 })
@@ -645,7 +687,7 @@ impl OnTrajectory<'_> {
     fn refound_rows(
         &self,
         label: &str,
-        carried: &Installation,
+        carried: &Carried,
         scored: &[&Segment],
         (calibration, window_s): (&str, f64),
     ) -> (Vec<TransferRow>, Vec<FitFailure>) {
@@ -666,7 +708,7 @@ impl OnTrajectory<'_> {
                 let found = refind(
                     window,
                     &scored.reference,
-                    *carried,
+                    carried,
                     dive.search,
                     (self.noise, &self.tolerances),
                 );
@@ -682,7 +724,7 @@ impl OnTrajectory<'_> {
                                 scored.name
                             ),
                         });
-                        *carried
+                        carried.installation
                     }
                 };
                 let on = (calibration, window_s);

@@ -15,7 +15,7 @@ use super::corrected::{Outputs, corrected_samples, write};
 use super::installation_file::{InstallationFileError, SavedInstallation};
 use crate::data::paired::{self, PairedError, PairedFiles, PairedRecording};
 use crate::installation::bound::{DEFAULT_TOLERANCES, Noise};
-use crate::installation::clock::{Clock, ClockError, ClockSearch, refind};
+use crate::installation::clock::{Carried, Clock, ClockError, ClockSearch, refind};
 use crate::installation::fit::TIME_OFFSET_MARGIN_S;
 use crate::installation::frames::Reference;
 use crate::installation::terms::{AxisRmse, Installation, score};
@@ -253,10 +253,17 @@ fn find_clock(
         dive_terms: saved.dive_term_set(),
         search_s: args.search_s,
     };
+    let std: Vec<f64> = saved.terms.iter().map(|t| t.std).collect();
+    let carried = Carried::with(
+        saved.installation(),
+        saved.term_set(),
+        &std,
+        &saved.correlation,
+    );
     refind(
         (&recording.time_s[..end], &recording.dvl_m_s[..end]),
         reference,
-        saved.installation(),
+        &carried,
         search,
         (noise, &DEFAULT_TOLERANCES),
     )

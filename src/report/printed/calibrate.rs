@@ -267,7 +267,10 @@ pub fn joint_text(calibration: &JointCalibration) -> String {
             format!("{:.4} {unit}", bound.std[i] * factor),
             format!("{:.4} {unit}", bound.bound_std[i] * factor),
             format!("{:.4} {unit}", agree.spread * factor),
-            format!("{:.4} {unit}", agree.spread * factor / (names.len() as f64).sqrt()),
+            format!(
+                "{:.4} {unit}",
+                agree.spread * factor / (names.len() as f64).sqrt()
+            ),
             format!("{:.1} ({:.1e}{mark})", agree.chi_square, agree.p_value),
         ]);
     }
