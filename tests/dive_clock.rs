@@ -102,10 +102,11 @@ fn the_vehicles_terms_carry_to_dives_whose_clocks_differ_and_each_clock_is_found
             &recording.time_s[first.clone()],
             &recording.dvl_m_s[first.clone()],
         );
+        let carried = Carried::with(fitted.installation, terms, &bounded.std, &bounded.correlation);
         let clock = refind(
             window,
             &scored.reference,
-            fitted.installation,
+            &carried,
             search,
             (NOISE, &DEFAULT_TOLERANCES),
         )
@@ -179,7 +180,7 @@ fn a_dive_at_constant_velocity_has_no_clock_to_find() {
     let error = refind(
         (&recording.time_s[..60], &flat[..60]),
         &straight.reference,
-        carried,
+        &Carried::exact(carried),
         search,
         (NOISE, &DEFAULT_TOLERANCES),
     )
@@ -297,7 +298,7 @@ fn on_akit_the_clock_found_again_leaves_the_dvls_noise_from_a_turning_segment() 
             let installation = refind(
                 window,
                 &scored.reference,
-                fitted.installation,
+                &Carried::exact(fitted.installation),
                 search,
                 (noise, &DEFAULT_TOLERANCES),
             )
