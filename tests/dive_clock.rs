@@ -102,7 +102,12 @@ fn the_vehicles_terms_carry_to_dives_whose_clocks_differ_and_each_clock_is_found
             &recording.time_s[first.clone()],
             &recording.dvl_m_s[first.clone()],
         );
-        let carried = Carried::with(fitted.installation, terms, &bounded.std, &bounded.correlation);
+        let carried = Carried::with(
+            fitted.installation,
+            terms,
+            &bounded.std,
+            &bounded.correlation,
+        );
         let clock = refind(
             window,
             &scored.reference,

@@ -216,6 +216,55 @@ fn learned_models_are_scored_inside_their_folds_and_come_back_from_the_cache() {
     assert!(log.contains("simulated fold 1 replicate 3:"), "{log}");
 }
 
+/// With `[calibration.dive]`, the learned models' rows with the clock re-found are
+/// scored inside their folds too, and the joint fits (calibrated on every other
+/// trajectory, inside no fold) stay out of the fold table.
+#[test]
+fn the_clock_found_again_keeps_the_learned_rows_inside_their_folds() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    learned_spec(d, "\n[calibration.dive]\nwindow_s = [60.0]\n");
+    let output = dcnet(d, &["run", "experiments/syn.toml", "--no-plots"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let folder = d.join("results/syn");
+    let heldout = read_parquet(&folder.join("heldout.parquet"));
+    let (methods, calibrations, scored) = (
+        strings(&heldout, "method"),
+        strings(&heldout, "calibration"),
+        strings(&heldout, "scored"),
+    );
+    let (mut refound, mut joint) = (0, 0);
+    for i in 0..heldout.num_rows() {
+        let method = methods[i].as_deref().unwrap();
+        let (c, s) = (
+            calibrations[i].as_deref().unwrap(),
+            scored[i].as_deref().unwrap(),
+        );
+        if method.starts_with("DCNet trained on ") && method.ends_with(", clock re-found in 60 s") {
+            refound += 1;
+            assert_eq!(
+                fold_of(c),
+                fold_of(s),
+                "{method} calibrated on {c} scored on {s}"
+            );
+        }
+        if method.contains(", joint") {
+            joint += 1;
+            assert_eq!(c, format!("all but {s}"), "{method}");
+        }
+    }
+    // 2 sources × 4 calibrations × 2 windows × 1 other trajectory in the fold.
+    assert_eq!(refound, 16);
+    // The two models' joint fits, carried and re-found, × 4 left out × 2 windows.
+    assert_eq!(joint, 32);
+    let folds = read_parquet(&folder.join("folds.parquet"));
+    assert!(
+        strings(&folds, "method")
+            .iter()
+            .all(|m| !m.as_deref().unwrap().contains(", joint"))
+    );
+}
+
 #[test]
 fn a_wrong_learned_table_is_refused_naming_its_keys() {
     let dir = tempfile::tempdir().unwrap();

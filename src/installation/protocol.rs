@@ -185,7 +185,14 @@ pub fn assemble(
                 let index = spec.trajectories.iter().position(|(n, _)| n == name);
                 learned.fold_of(index.expect("a trajectory of the spec"))
             };
-            summarize_folds(&all.heldout, &spec.windows_s, learned.folds, fold_of)
+            // A joint fit is calibrated on every other trajectory, inside no fold.
+            let single: Vec<TransferRow> = all
+                .heldout
+                .iter()
+                .filter(|r| !is_joint(&r.method))
+                .cloned()
+                .collect();
+            summarize_folds(&single, &spec.windows_s, learned.folds, fold_of)
         }
         None => Vec::new(),
     };
