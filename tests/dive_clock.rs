@@ -431,3 +431,33 @@ fn a_drifting_clock_is_tracked_by_the_filter_with_the_time_offset_as_a_random_wa
         "the constant filter claims to know a clock it does not"
     );
 }
+
+/// A `[calibration.dive]` that names a vehicle's term, leaves out the clock, gives no
+/// window or a search of zero, and a negative random walk of the clock: each refused at
+/// its key, exit 1, nothing written.
+#[test]
+fn a_wrong_dive_table_is_refused_naming_its_keys() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_installed(&d.join("data/syn"), 2, &[], INSTALLED, 3);
+    write_study_spec(
+        d,
+        "syn",
+        "syn",
+        2,
+        "\n[calibration.dive]\nterms = [\"bias\", \"lever_arm\"]\nwindow_s = []\nsearch_s = 0.0\n\n[calibration.kalman]\ntime_offset_random_walk_s_per_sqrt_s = -0.1\n",
+    );
+    let output = common::dcnet(d, &["run", "experiments/syn.toml"]);
+    assert_eq!(output.status.code(), Some(1));
+    let text = common::stderr(&output);
+    for expected in [
+        "calibration.dive.terms: must hold \"time_offset\"",
+        "calibration.dive.terms[1]: \"lever_arm\" belongs to the vehicle, not the dive",
+        "calibration.dive.window_s: is empty",
+        "calibration.dive.search_s: 0 must be a number of seconds above zero and at most 3600",
+        "calibration.kalman.time_offset_random_walk_s_per_sqrt_s: -0.1 must be finite and zero or more",
+    ] {
+        assert!(text.contains(expected), "no {expected:?} in\n{text}");
+    }
+    assert!(!d.join("results").exists());
+}
