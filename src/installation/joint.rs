@@ -115,9 +115,104 @@ pub fn starts_from(
         .collect()
 }
 
+/// The problem a joint fit solves: the recordings, each one's fixed samples (its fit's
+/// mask about its start's clock), and which terms are the vehicle's and the dive's.
+struct Problem<'a> {
+    recordings: &'a [JointRecording<'a>],
+    masks: Vec<std::ops::Range<usize>>,
+    vehicle_terms: TermSet,
+    dive_terms: TermSet,
+}
+
+/// The parameters of a joint fit: the vehicle's, and each recording's dive terms.
+#[derive(Clone)]
+struct Parameters {
+    vehicle: DVector<f64>,
+    dives: Vec<DVector<f64>>,
+}
+
+impl Problem<'_> {
+    /// The installation of one recording: the vehicle's terms with its own.
+    fn installation(&self, vehicle: &DVector<f64>, dive: &DVector<f64>) -> Installation {
+        Installation::default()
+            .with_parameters(&self.vehicle_terms, vehicle.as_slice())
+            .with_parameters(&self.dive_terms, dive.as_slice())
+    }
+
+    /// Each recording's residuals and Jacobian blocks at `at`.
+    fn blocks(&self, at: &Parameters) -> Vec<Blocks> {
+        self.recordings
+            .iter()
+            .zip(&self.masks)
+            .zip(&at.dives)
+            .map(|((r, mask), dive)| {
+                let installation = self.installation(&at.vehicle, dive);
+                let (time_s, dvl_m_s) = (&r.time_s[mask.clone()], &r.dvl_m_s[mask.clone()]);
+                let (residuals, vehicle) = linearised(
+                    time_s,
+                    dvl_m_s,
+                    r.reference,
+                    self.vehicle_terms,
+                    installation,
+                );
+                let (_, dive) =
+                    linearised(time_s, dvl_m_s, r.reference, self.dive_terms, installation);
+                Blocks {
+                    residuals,
+                    vehicle,
+                    dive,
+                }
+            })
+            .collect()
+    }
+
+    /// Levenberg–Marquardt from `start`, each step through [`schur_step`]: the
+    /// parameters at the least cost and their blocks.
+    fn minimise(&self, start: Parameters) -> (Parameters, Vec<Blocks>) {
+        let cost = |blocks: &[Blocks]| {
+            blocks
+                .iter()
+                .map(|b| b.residuals.norm_squared())
+                .sum::<f64>()
+        };
+        let (mut at, mut current) = (start.clone(), self.blocks(&start));
+        let mut damping = 1e-3;
+        for _ in 0..ITERATIONS {
+            let before = cost(&current);
+            let Some((step, dive_steps)) = schur_step(&current, damping) else {
+                break;
+            };
+            let trial = Parameters {
+                vehicle: &at.vehicle + &step,
+                dives: at
+                    .dives
+                    .iter()
+                    .zip(&dive_steps)
+                    .map(|(d, s)| d + s)
+                    .collect(),
+            };
+            let blocks = self.blocks(&trial);
+            let after = cost(&blocks);
+            if after <= before {
+                (at, current) = (trial, blocks);
+                damping = (damping / 3.0).max(1e-12);
+                if before - after <= TOLERANCE * before {
+                    break;
+                }
+            } else {
+                damping *= 4.0;
+                if damping > 1e12 {
+                    break;
+                }
+            }
+        }
+        (at, current)
+    }
+}
+
 /// Fits `terms` over every recording jointly, those of `dive` one set per recording,
-/// from `starts` (one installation per recording, [`starts_from`]'s); the bound from
-/// `noise`, the flags from `tolerances`.
+/// from `starts` (one installation per recording, [`starts_from`]'s: the vehicle's
+/// terms start at their mean); the bound from `noise`, the flags from `tolerances`.
 pub fn joint_fit(
     recordings: &[JointRecording],
     starts: &[Installation],
@@ -130,128 +225,74 @@ pub fn joint_fit(
         .zip(starts)
         .map(|(r, start)| mask_about(r.time_s, r.reference, start.time_offset_s))
         .collect();
+    let parameters = dive_terms.parameter_count();
     if let Some(usable) = masks
         .iter()
         .map(|m| m.len())
-        .find(|&n| 3 * n <= dive_terms.parameter_count() + 1)
+        .find(|&n| 3 * n <= parameters + 1)
     {
         return Err(FitError::TooFewSamples {
             usable,
-            parameters: dive_terms.parameter_count(),
+            parameters,
             margin_s: TIME_OFFSET_MARGIN_S,
         });
     }
-    let count = starts.len() as f64;
-    let mean_vehicle: Vec<f64> = (0..vehicle_terms.parameter_count())
-        .map(|k| {
-            starts
-                .iter()
-                .map(|start| start.to_parameters(&vehicle_terms)[k])
-                .sum::<f64>()
-                / count
-        })
-        .collect();
-    let mut vehicle = DVector::from_vec(mean_vehicle);
-    let mut dives: Vec<DVector<f64>> = starts
-        .iter()
-        .map(|start| DVector::from_vec(start.to_parameters(&dive_terms)))
-        .collect();
-    let installation = |vehicle: &DVector<f64>, dive: &DVector<f64>| {
-        Installation::default()
-            .with_parameters(&vehicle_terms, vehicle.as_slice())
-            .with_parameters(&dive_terms, dive.as_slice())
+    let problem = Problem {
+        recordings,
+        masks,
+        vehicle_terms,
+        dive_terms,
     };
-    let blocks = |vehicle: &DVector<f64>, dives: &[DVector<f64>]| -> Vec<Blocks> {
-        recordings
+    let of = |start: &Installation| DVector::from_vec(start.to_parameters(&vehicle_terms));
+    let start = Parameters {
+        vehicle: starts.iter().map(of).sum::<DVector<f64>>() / starts.len() as f64,
+        dives: starts
             .iter()
-            .zip(&masks)
-            .zip(dives)
-            .map(|((r, mask), dive)| {
-                let at = installation(vehicle, dive);
-                let window = (&r.time_s[mask.clone()], &r.dvl_m_s[mask.clone()]);
-                let (residuals, vehicle) =
-                    linearised(window.0, window.1, r.reference, vehicle_terms, at);
-                let (_, dive) = linearised(window.0, window.1, r.reference, dive_terms, at);
-                Blocks {
-                    residuals,
-                    vehicle,
-                    dive,
-                }
-            })
-            .collect()
+            .map(|start| DVector::from_vec(start.to_parameters(&dive_terms)))
+            .collect(),
     };
-    let cost = |blocks: &[Blocks]| {
-        blocks
-            .iter()
-            .map(|b| b.residuals.norm_squared())
-            .sum::<f64>()
-    };
-
-    let mut current = blocks(&vehicle, &dives);
-    let mut damping = 1e-3;
-    for _ in 0..ITERATIONS {
-        let before = cost(&current);
-        let Some((step, dive_steps)) = schur_step(&current, damping) else {
-            break;
-        };
-        let trial_vehicle = &vehicle + &step;
-        let trial_dives: Vec<DVector<f64>> =
-            dives.iter().zip(&dive_steps).map(|(d, s)| d + s).collect();
-        let trial = blocks(&trial_vehicle, &trial_dives);
-        let after = cost(&trial);
-        if after <= before {
-            (vehicle, dives, current) = (trial_vehicle, trial_dives, trial);
-            damping = (damping / 3.0).max(1e-12);
-            if before - after <= TOLERANCE * before {
-                break;
-            }
-        } else {
-            damping *= 4.0;
-            if damping > 1e12 {
-                break;
-            }
-        }
-    }
-
-    let (stacked_jacobian, stacked_residuals) = projected(&current);
-    let vehicle_installation =
-        installation(&vehicle, &DVector::zeros(dive_terms.parameter_count()));
+    let (solution, blocks) = problem.minimise(start);
+    let vehicle = problem.installation(&solution.vehicle, &DVector::zeros(parameters));
+    let (jacobian, residuals) = projected(&blocks);
     let stacked = Fit {
         terms: vehicle_terms,
-        installation: vehicle_installation,
-        parameters: vehicle.as_slice().to_vec(),
+        installation: vehicle,
+        parameters: solution.vehicle.as_slice().to_vec(),
         residual_rms_m_s: [0.0; 3],
-        sample_count: stacked_residuals.len() / 3,
-        jacobian: stacked_jacobian,
-        residuals: stacked_residuals,
+        sample_count: residuals.len() / 3,
+        jacobian,
+        residuals,
         termination: "joint".into(),
     };
     let bound = bound(&stacked, noise, tolerances);
-    let dive_std = dive_standard_deviations(&current, &bound, dive_terms, (noise, tolerances));
     Ok(JointFit {
         vehicle_terms,
         dive_terms,
-        vehicle: vehicle_installation,
-        dives: dives.iter().map(|d| installation(&vehicle, d)).collect(),
-        bound,
-        dive_std,
-        residual_rms_m_s: current
+        vehicle,
+        dives: solution
+            .dives
             .iter()
-            .map(|b| {
-                let n = (b.residuals.len() / 3).max(1) as f64;
-                [0, 1, 2].map(|k| {
-                    (b.residuals
-                        .iter()
-                        .skip(k)
-                        .step_by(3)
-                        .map(|r| r * r)
-                        .sum::<f64>()
-                        / n)
-                        .sqrt()
-                })
-            })
+            .map(|d| problem.installation(&solution.vehicle, d))
             .collect(),
-        sample_counts: current.iter().map(|b| b.residuals.len() / 3).collect(),
+        dive_std: dive_standard_deviations(&blocks, &bound, dive_terms, (noise, tolerances)),
+        bound,
+        residual_rms_m_s: blocks.iter().map(|b| residual_rms(&b.residuals)).collect(),
+        sample_counts: blocks.iter().map(|b| b.residuals.len() / 3).collect(),
+    })
+}
+
+/// The RMS per axis of residuals laid out x, y, z of each sample, m/s.
+fn residual_rms(residuals: &DVector<f64>) -> Vec3 {
+    let n = (residuals.len() / 3).max(1) as f64;
+    [0, 1, 2].map(|k| {
+        (residuals
+            .iter()
+            .skip(k)
+            .step_by(3)
+            .map(|r| r * r)
+            .sum::<f64>()
+            / n)
+            .sqrt()
     })
 }
 

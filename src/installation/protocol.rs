@@ -404,47 +404,17 @@ impl OnTrajectory<'_> {
     fn jointly(
         &self,
         method: &Method,
-        (terms, dive): (TermSet, TermSet),
+        terms: (TermSet, TermSet),
         window_s: f64,
         into: &mut Calibrated,
     ) {
-        let others: Vec<&Segment> = self.scored(false);
-        if others.len() < 2 {
+        if self.scored(false).len() < 2 {
             return;
         }
-        let ranges: Vec<Range<usize>> =
-            others.iter().map(|s| s.first_seconds(window_s).0).collect();
-        let recordings = joint_recordings(&others, &ranges);
         let label = joint_label(&method.label());
         let calibration = format!("all but {}", self.calibration().name);
-        let (_, starts) = self
-            .alone
-            .iter()
-            .find(|(set, _)| *set == terms)
-            .expect("every model fitted alone");
-        let joint = match starts {
-            Ok(start) => {
-                let search_s = self
-                    .spec
-                    .dive
-                    .as_ref()
-                    .map_or(DEFAULT_SEARCH_S, |d| d.search.search_s);
-                let starts = joint::starts_from(&recordings, *start, search_s);
-                joint_fit(
-                    &recordings,
-                    &starts,
-                    (terms, dive),
-                    (self.noise, &self.tolerances),
-                )
-                .map_err(|why| why.to_string())
-            }
-            Err(why) => Err(format!(
-                "its start, {} fitted alone: {why}",
-                self.calibration().name
-            )),
-        };
-        let joint = match joint {
-            Ok(joint) => joint,
+        let estimate = match self.joint_estimate(terms, window_s) {
+            Ok(estimate) => estimate,
             Err(why) => {
                 into.failures.push(FitFailure {
                     method: label,
@@ -454,33 +424,6 @@ impl OnTrajectory<'_> {
                 });
                 return;
             }
-        };
-        // Without a dive of its own, this trajectory takes the mean of the others'
-        // dive terms.
-        let dive_count = joint.dive_terms.parameter_count();
-        let mean_dive: Vec<f64> = (0..dive_count)
-            .map(|k| {
-                let values = joint
-                    .dives
-                    .iter()
-                    .map(|d| d.to_parameters(&joint.dive_terms)[k]);
-                values.sum::<f64>() / joint.dives.len() as f64
-            })
-            .collect();
-        let carried = joint.vehicle.with_parameters(&joint.dive_terms, &mean_dive);
-        let uncertainty = Carried::with(
-            carried,
-            joint.vehicle_terms,
-            &joint.bound.std,
-            &joint.bound.correlation,
-        )
-        .uncertainty;
-        let estimate = Estimate {
-            installation: carried,
-            bound: Some(joint.bound.clone()),
-            asked: Vec::new(),
-            filtered: None,
-            uncertainty,
         };
         into.terms.extend(
             self.term_rows(&label, &estimate, false, window_s)
@@ -493,10 +436,70 @@ impl OnTrajectory<'_> {
         let here = [self.calibration()];
         let on = (calibration.as_str(), window_s);
         into.heldout
-            .extend(self.transfer_rows(&label, &carried, &here, on));
+            .extend(self.transfer_rows(&label, &estimate.installation, &here, on));
         let (refound, unfound) = self.refound_rows(&label, &estimate.carried(), &here, on);
         into.heldout.extend(refound);
         into.failures.extend(unfound);
+    }
+
+    /// The joint fit of `terms` (the vehicle's and the dive's) over the first
+    /// `window_s` seconds of every other trajectory, started from this one's fit alone,
+    /// as the terms this trajectory carries: the vehicle's, and the mean of the others'
+    /// dive terms (it has none of its own); or why it failed.
+    fn joint_estimate(
+        &self,
+        (terms, dive): (TermSet, TermSet),
+        window_s: f64,
+    ) -> Result<Estimate, String> {
+        let others = self.scored(false);
+        let ranges: Vec<Range<usize>> =
+            others.iter().map(|s| s.first_seconds(window_s).0).collect();
+        let recordings = joint_recordings(&others, &ranges);
+        let (_, start) = self
+            .alone
+            .iter()
+            .find(|(set, _)| *set == terms)
+            .expect("every model fitted alone");
+        let start = start
+            .as_ref()
+            .map_err(|why| format!("its start, {} fitted alone: {why}", self.calibration().name))?;
+        let search_s = self
+            .spec
+            .dive
+            .as_ref()
+            .map_or(DEFAULT_SEARCH_S, |d| d.search.search_s);
+        let starts = joint::starts_from(&recordings, *start, search_s);
+        let joint = joint_fit(
+            &recordings,
+            &starts,
+            (terms, dive),
+            (self.noise, &self.tolerances),
+        )
+        .map_err(|why| why.to_string())?;
+        let mean_dive: Vec<f64> = (0..joint.dive_terms.parameter_count())
+            .map(|k| {
+                let values = joint
+                    .dives
+                    .iter()
+                    .map(|d| d.to_parameters(&joint.dive_terms)[k]);
+                values.sum::<f64>() / joint.dives.len() as f64
+            })
+            .collect();
+        let installation = joint.vehicle.with_parameters(&joint.dive_terms, &mean_dive);
+        let bound = &joint.bound;
+        let carried = Carried::with(
+            installation,
+            joint.vehicle_terms,
+            &bound.std,
+            &bound.correlation,
+        );
+        Ok(Estimate {
+            installation,
+            bound: Some(joint.bound),
+            asked: Vec::new(),
+            filtered: None,
+            uncertainty: carried.uncertainty,
+        })
     }
 
     /// What `method` estimates on the samples `range`: `None` where it cannot (no

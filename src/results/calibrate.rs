@@ -56,6 +56,10 @@ pub enum CalibrateError {
     Terms(String),
     #[error("--dive-terms: {0}")]
     DiveTerms(String),
+    #[error(
+        "--reference: {references} files for {dvls} DVL files: give one --reference per DVL file, in the same order, or none where each DVL file holds its reference"
+    )]
+    References { dvls: usize, references: usize },
     #[error("--dvl-noise-cm-s {}: give a positive number: the bound divides by it", crate::Shown(*.0))]
     DvlNoise(f64),
     #[error("--reference-noise-cm-s {}: give zero or a positive number", crate::Shown(*.0))]

@@ -65,53 +65,30 @@ pub const AGREEMENT_P_VALUE: f64 = 1e-3;
 /// The joint calibration of `args`.
 pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateError> {
     if !args.references.is_empty() && args.references.len() != args.dvls.len() {
-        return Err(CalibrateError::Terms(format!(
-            "{} DVL files and {} --reference files: give one --reference per DVL file, in the same order, or none",
-            args.dvls.len(),
-            args.references.len()
-        )));
+        return Err(CalibrateError::References {
+            dvls: args.dvls.len(),
+            references: args.references.len(),
+        });
     }
     let noise = Noise {
         dvl_m_s: args.dvl_noise_cm_s / 100.0,
         reference_m_s: args.reference_noise_cm_s / 100.0,
     };
-    let columns = columns(args.columns)?;
-    let mut stems: Vec<String> = args.dvls.iter().map(|d| stem(d)).collect();
-    // Files of one name (the same layout in several folders) are told apart by place.
-    if crate::first_seen(stems.iter().map(String::as_str)).len() < stems.len() {
-        stems = stems
-            .iter()
-            .enumerate()
-            .map(|(k, s)| format!("{}-{s}", k + 1))
-            .collect();
-    }
-    let outputs: Vec<Outputs> = stems.iter().map(|s| Outputs::of(args.out, s)).collect();
-    let written_paths: Vec<&Path> = outputs
+    let names = names(args.dvls);
+    let outputs: Vec<Outputs> = names.iter().map(|s| Outputs::of(args.out, s)).collect();
+    let written: Vec<&Path> = outputs
         .iter()
         .flat_map(|o| o.all())
         .chain(args.save)
         .collect();
-    let inputs: Vec<Option<&Path>> = args
-        .dvls
-        .iter()
-        .chain(args.references)
+    let inputs: Vec<Option<&Path>> = (args.dvls.iter().chain(args.references))
         .map(|p| Some(p.as_path()))
         .chain([args.columns])
         .collect();
-    if let Some((output, input)) = not_over_an_input(&inputs, &written_paths) {
+    if let Some((output, input)) = not_over_an_input(&inputs, &written) {
         return Err(CalibrateError::OverInput { output, input });
     }
-    let mut recordings = Vec::new();
-    for (k, dvl) in args.dvls.iter().enumerate() {
-        let files = PairedFiles {
-            dvl: dvl.clone(),
-            reference: args.references.get(k).unwrap_or(dvl).clone(),
-        };
-        let recording = paired::read(&files, &columns)?;
-        let reference = Reference::new(&recording);
-        let window = args.window_s.map(|w| recording.first_seconds(w));
-        recordings.push((recording, reference, window));
-    }
+    let recordings = read_all(args)?;
     let calibrating: Vec<JointRecording> = recordings
         .iter()
         .map(|(recording, reference, window)| {
@@ -123,6 +100,78 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
             }
         })
         .collect();
+    let (joint, alone) = fitted(args, &calibrating, noise)?;
+    let mut written = Vec::new();
+    let mut shas = Vec::new();
+    for (k, (recording, reference, _)) in recordings.iter().enumerate() {
+        let bytes = std::fs::read(&args.dvls[k]).map_err(|source| ResultsError::Io {
+            path: args.dvls[k].clone(),
+            source,
+        })?;
+        shas.push(crate::files::sha256_hex(&bytes));
+        let (time_s, dvl_m_s) = (&recording.time_s, &recording.dvl_m_s);
+        let samples = corrected_samples(&joint.dives[k], time_s, dvl_m_s, reference);
+        written.extend(write(&outputs[k], &samples, &shas[k])?);
+    }
+    if let Some(path) = args.save {
+        saved(args, &joint, shas)
+            .write(path)
+            .map_err(|source| ResultsError::Io {
+                path: path.to_path_buf(),
+                source,
+            })?;
+    }
+    Ok(JointCalibration {
+        agreement: agreement(&joint, &alone),
+        names,
+        joint,
+        alone,
+        noise,
+        written,
+    })
+}
+
+/// Each recording's name in the outputs and the table: its DVL file's stem, numbered
+/// by its place where two files share one (the same layout in several folders).
+fn names(dvls: &[std::path::PathBuf]) -> Vec<String> {
+    let stems: Vec<String> = dvls.iter().map(|d| stem(d)).collect();
+    if crate::first_seen(stems.iter().map(String::as_str)).len() == stems.len() {
+        return stems;
+    }
+    stems
+        .iter()
+        .enumerate()
+        .map(|(k, s)| format!("{}-{s}", k + 1))
+        .collect()
+}
+
+/// Each recording of `args`, its reference, and its window where one is asked.
+fn read_all(
+    args: &JointArgs,
+) -> Result<Vec<(PairedRecording, Reference, Option<PairedRecording>)>, CalibrateError> {
+    let columns = columns(args.columns)?;
+    let mut recordings = Vec::new();
+    for (k, dvl) in args.dvls.iter().enumerate() {
+        let files = PairedFiles {
+            dvl: dvl.clone(),
+            reference: args.references.get(k).unwrap_or(dvl).clone(),
+        };
+        let recording = paired::read(&files, &columns)?;
+        let reference = Reference::new(&recording);
+        let window = args.window_s.map(|w| recording.first_seconds(w));
+        recordings.push((recording, reference, window));
+    }
+    Ok(recordings)
+}
+
+/// The joint fit of `calibrating`, from the first recording's fit alone and each
+/// clock's search; beside it each recording fitted alone from its clock, for the
+/// agreement.
+fn fitted(
+    args: &JointArgs,
+    calibrating: &[JointRecording],
+    noise: Noise,
+) -> Result<(JointFit, Vec<TermBound>), CalibrateError> {
     let terms = term_set(args.terms);
     let fault = |k: usize, fault| CalibrateError::Fit {
         dvl: args.dvls[k].clone(),
@@ -135,62 +184,24 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
         samples: calibrating[k].time_s.len(),
         fault,
     };
-    // The first recording alone gives the start; each other is fitted alone from its
-    // clock found by the search, for the agreement.
-    let first = fit(
-        calibrating[0].time_s,
-        calibrating[0].dvl_m_s,
-        calibrating[0].reference,
-        terms,
-    )
-    .map_err(|f| fault(0, f))?;
-    let starts = starts_from(&calibrating, first.installation, DEFAULT_SEARCH_S);
+    let r = &calibrating[0];
+    let first = fit(r.time_s, r.dvl_m_s, r.reference, terms).map_err(|f| fault(0, f))?;
+    let starts = starts_from(calibrating, first.installation, DEFAULT_SEARCH_S);
     let mut alone = vec![bound(&first, noise, &DEFAULT_TOLERANCES)];
     for (k, r) in calibrating.iter().enumerate().skip(1) {
         let fitted = fit_about(r.time_s, r.dvl_m_s, r.reference, terms, starts[k])
             .map_err(|f| fault(k, f))?;
         alone.push(bound(&fitted, noise, &DEFAULT_TOLERANCES));
     }
+    let dive = term_set(args.dive_terms);
     let joint = joint_fit(
-        &calibrating,
+        calibrating,
         &starts,
-        (terms, term_set(args.dive_terms)),
+        (terms, dive),
         (noise, &DEFAULT_TOLERANCES),
     )
     .map_err(|f| fault(0, f))?;
-    let agreement = agreement(&joint, &alone);
-    let mut written = Vec::new();
-    let mut shas = Vec::new();
-    for (k, (recording, reference, _)) in recordings.iter().enumerate() {
-        let bytes = std::fs::read(&args.dvls[k]).map_err(|source| ResultsError::Io {
-            path: args.dvls[k].clone(),
-            source,
-        })?;
-        let sha = crate::files::sha256_hex(&bytes);
-        let samples = corrected_samples(
-            &joint.dives[k],
-            &recording.time_s,
-            &recording.dvl_m_s,
-            reference,
-        );
-        written.extend(write(&outputs[k], &samples, &sha)?);
-        shas.push(sha);
-    }
-    if let Some(path) = args.save {
-        let saved = saved(args, &joint, shas);
-        saved.write(path).map_err(|source| ResultsError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-    }
-    Ok(JointCalibration {
-        names: stems,
-        joint,
-        alone,
-        agreement,
-        noise,
-        written,
-    })
+    Ok((joint, alone))
 }
 
 /// A DVL file's name without its extension.

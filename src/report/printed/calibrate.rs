@@ -236,13 +236,46 @@ fn verdict(calibration: &Calibration, all: &SettlingPoint) -> String {
 pub fn joint_text(calibration: &JointCalibration) -> String {
     let JointCalibration {
         joint,
-        agreement,
         names,
         noise,
         ..
     } = calibration;
     let bound = &joint.bound;
+    let table = vehicle_table(calibration);
+    let samples: usize = joint.sample_counts.iter().sum();
+    let mut text = format!(
+        "calibrated jointly on {} recordings, {samples} samples (those {TIME_OFFSET_MARGIN_S} s inside each reference): the vehicle's terms shared, each recording's {} its own\n{table}\n",
+        names.len(),
+        joint.dive_terms.parameter_names().join(", ")
+    );
+    let shown = bound.residual_noise;
+    let specified = 100.0 * (noise.dvl_m_s.powi(2) + noise.reference_m_s.powi(2)).sqrt();
+    let level = (shown.std_m_s.iter().map(|s| s * s).sum::<f64>() / 3.0).sqrt() * 100.0;
+    text.push_str(&format!(
+        "residuals: {:.2}, {:.2}, {:.2} cm/s per axis x, y, z (correlation {:.2}, {:.2}, {:.2} from one sample to the next) against the specified {specified:.2} cm/s per axis: {}; the standard deviations are from the noise the residuals show, the bound's from the specified noise\n",
+        100.0 * shown.std_m_s[0],
+        100.0 * shown.std_m_s[1],
+        100.0 * shown.std_m_s[2],
+        shown.lag_one[0],
+        shown.lag_one[1],
+        shown.lag_one[2],
+        if level <= 1.2 * specified { "consistent with the noise" } else { "above the noise: the model leaves something out, or the noise is larger than specified" }
+    ));
+    text.push_str(&format!(
+        "alone: each recording fitted by itself; spread, the standard deviation of their estimates, and spread / √K the standard error of their mean over the K recordings (where they disagree, the joint term's uncertainty is nearer this than its own standard deviation); χ², Σ ((alone − joint) / its standard deviation)² over the {} recordings, and its p-value on {} degrees of freedom (under {AGREEMENT_P_VALUE}: the recordings disagree beyond their intervals)\n",
+        names.len(),
+        names.len() - 1
+    ));
+    text.push_str(&format!("{}\n", dives_table(calibration)));
+    text
+}
+
+/// The vehicle's terms of a joint calibration, beside the recordings fitted alone.
+fn vehicle_table(calibration: &JointCalibration) -> Table {
+    let (bound, names) = (&calibration.joint.bound, &calibration.names);
+    let agreement = &calibration.agreement;
     let mut table = Table::new();
+
     table.load_preset(ASCII_MARKDOWN);
     table.set_header([
         "vehicle term",
@@ -274,30 +307,13 @@ pub fn joint_text(calibration: &JointCalibration) -> String {
             format!("{:.1} ({:.1e}{mark})", agree.chi_square, agree.p_value),
         ]);
     }
-    let samples: usize = joint.sample_counts.iter().sum();
-    let mut text = format!(
-        "calibrated jointly on {} recordings, {samples} samples (those {TIME_OFFSET_MARGIN_S} s inside each reference): the vehicle's terms shared, each recording's {} its own\n{table}\n",
-        names.len(),
-        joint.dive_terms.parameter_names().join(", ")
-    );
-    let shown = bound.residual_noise;
-    let specified = 100.0 * (noise.dvl_m_s.powi(2) + noise.reference_m_s.powi(2)).sqrt();
-    let level = (shown.std_m_s.iter().map(|s| s * s).sum::<f64>() / 3.0).sqrt() * 100.0;
-    text.push_str(&format!(
-        "residuals: {:.2}, {:.2}, {:.2} cm/s per axis x, y, z (correlation {:.2}, {:.2}, {:.2} from one sample to the next) against the specified {specified:.2} cm/s per axis: {}; the standard deviations are from the noise the residuals show, the bound's from the specified noise\n",
-        100.0 * shown.std_m_s[0],
-        100.0 * shown.std_m_s[1],
-        100.0 * shown.std_m_s[2],
-        shown.lag_one[0],
-        shown.lag_one[1],
-        shown.lag_one[2],
-        if level <= 1.2 * specified { "consistent with the noise" } else { "above the noise: the model leaves something out, or the noise is larger than specified" }
-    ));
-    text.push_str(&format!(
-        "alone: each recording fitted by itself; spread, the standard deviation of their estimates, and spread / √K the standard error of their mean over the K recordings (where they disagree, the joint term's uncertainty is nearer this than its own standard deviation); χ², Σ ((alone − joint) / its standard deviation)² over the {} recordings, and its p-value on {} degrees of freedom (under {AGREEMENT_P_VALUE}: the recordings disagree beyond their intervals)\n",
-        names.len(),
-        names.len() - 1
-    ));
+    table
+}
+
+/// Each recording's own terms (its clock) with their standard deviations, and the
+/// residual it leaves.
+fn dives_table(calibration: &JointCalibration) -> Table {
+    let JointCalibration { joint, names, .. } = calibration;
     let mut dives = Table::new();
     dives.load_preset(ASCII_MARKDOWN);
     let dive_names = joint.dive_terms.parameter_names();
@@ -326,6 +342,5 @@ pub fn joint_text(calibration: &JointCalibration) -> String {
         ));
         dives.add_row(row);
     }
-    text.push_str(&format!("{dives}\n"));
-    text
+    dives
 }

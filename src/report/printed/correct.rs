@@ -11,37 +11,7 @@ use comfy_table::{Table, presets::ASCII_MARKDOWN};
 /// Everything `correct` prints; ends in a newline.
 pub fn correction_text(correction: &Correction) -> String {
     let saved = &correction.saved;
-    let mut table = Table::new();
-    table.load_preset(ASCII_MARKDOWN);
-    table.set_header(["term", "value", "standard deviation", "from"]);
-    let dive = saved.dive_term_set().parameter_names();
-    let applied = correction.applied.to_parameters(&saved.term_set());
-    for (k, term) in saved.terms.iter().enumerate() {
-        let (readable, unit, factor) = readable_term(&term.name);
-        let found = correction
-            .clock
-            .as_ref()
-            .filter(|_| dive.contains(&term.name.as_str()))
-            .and_then(|clock| {
-                let i = clock.bound.names.iter().position(|n| *n == term.name)?;
-                Some(clock.bound.std[i])
-            });
-        let (std, from) = match (dive.contains(&term.name.as_str()), found) {
-            (true, Some(std)) => (std, format!("this dive's first {} s", correction.window_s)),
-            (true, None) => (f64::NAN, "given".to_string()),
-            (false, _) => (term.std, "carried".to_string()),
-        };
-        let std = match std.is_nan() {
-            true => "-".to_string(),
-            false => format!("{:.4} {unit}", std * factor),
-        };
-        table.add_row([
-            readable,
-            format!("{:.4} {unit}", applied[k] * factor),
-            std,
-            from,
-        ]);
-    }
+    let table = applied_table(correction);
     let mut text = format!(
         "installation of {} (calibrated on {}) applied\n{table}\n",
         correction.installation_file.display(),
@@ -92,4 +62,42 @@ pub fn correction_text(correction: &Correction) -> String {
         None => text.push_str("no sample after the first seconds to score the installation on\n"),
     }
     text
+}
+
+/// Each term applied: its value, its standard deviation, and whether it was carried,
+/// found again on this dive or given.
+fn applied_table(correction: &Correction) -> Table {
+    let saved = &correction.saved;
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    table.set_header(["term", "value", "standard deviation", "from"]);
+    let dive = saved.dive_term_set().parameter_names();
+    let applied = correction.applied.to_parameters(&saved.term_set());
+    for (k, term) in saved.terms.iter().enumerate() {
+        let (readable, unit, factor) = readable_term(&term.name);
+        let found = correction
+            .clock
+            .as_ref()
+            .filter(|_| dive.contains(&term.name.as_str()))
+            .and_then(|clock| {
+                let i = clock.bound.names.iter().position(|n| *n == term.name)?;
+                Some(clock.bound.std[i])
+            });
+        let (std, from) = match (dive.contains(&term.name.as_str()), found) {
+            (true, Some(std)) => (std, format!("this dive's first {} s", correction.window_s)),
+            (true, None) => (f64::NAN, "given".to_string()),
+            (false, _) => (term.std, "carried".to_string()),
+        };
+        let std = match std.is_nan() {
+            true => "-".to_string(),
+            false => format!("{:.4} {unit}", std * factor),
+        };
+        table.add_row([
+            readable,
+            format!("{:.4} {unit}", applied[k] * factor),
+            std,
+            from,
+        ]);
+    }
+    table
 }
