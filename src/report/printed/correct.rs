@@ -81,7 +81,7 @@ fn applied_table(correction: &Correction) -> Table {
             .filter(|_| dive.contains(&term.name.as_str()))
             .and_then(|clock| {
                 let i = clock.bound.names.iter().position(|n| *n == term.name)?;
-                Some(clock.bound.std[i])
+                Some(clock.std[i])
             });
         let (std, from) = match (dive.contains(&term.name.as_str()), found) {
             (true, Some(std)) => (std, format!("this dive's first {} s", correction.window_s)),
