@@ -344,3 +344,99 @@ fn an_edited_installation_a_short_dive_and_a_dive_with_no_clock_are_refused() {
     let output = dcnet(d, &given);
     assert!(output.status.success(), "{}", stderr(&output));
 }
+
+/// What `calibrate --save` and a joint `calibrate` refuse before anything is written,
+/// exit 1: dive terms that leave out the clock or are not fitted, a `--save` that is a
+/// folder or the corrected recording's own path, the same recording twice; and
+/// `correct` with a clock that puts the dive outside its reference.
+#[test]
+fn a_save_that_cannot_be_a_dive_terms_outside_the_fit_and_a_recording_twice_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let path = |p: &Path| p.to_str().unwrap().to_string();
+    let (dvl, reference) = dive(d, "first", clocked(0.6), 1);
+    let (dvl, reference) = (path(&dvl), path(&reference));
+    let refused = |args: &[&str], says: &str| {
+        let output = dcnet(d, args);
+        assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+        let message = stderr(&output);
+        assert!(message.contains(says), "no {says:?} in {message}");
+        assert!(!d.join("out").exists(), "written despite: {message}");
+    };
+    let calibrate = ["calibrate", &dvl, "--reference", &reference, "--out", "out"];
+    let with = |extra: &[&str]| -> Vec<String> {
+        calibrate
+            .iter()
+            .chain(extra)
+            .map(|s| s.to_string())
+            .collect()
+    };
+    let run = |extra: &[&str], says: &str| {
+        let args = with(extra);
+        refused(&args.iter().map(String::as_str).collect::<Vec<_>>(), says);
+    };
+    run(
+        &["--dive-terms", "bias", "--save", "x.toml"],
+        "--dive-terms: must hold time_offset",
+    );
+    run(
+        &[
+            "--dive-terms",
+            "time_offset,bias_scalar",
+            "--save",
+            "x.toml",
+        ],
+        "\"bias_scalar\" is not among --terms",
+    );
+    std::fs::create_dir(d.join("folder")).unwrap();
+    std::fs::write(d.join("installation.toml"), "a file\n").unwrap();
+    run(&["--save", "folder"], "--save folder: is a folder");
+    run(
+        &["--save", "installation.toml/i.toml"],
+        "is under a file, not a folder",
+    );
+    run(
+        &["--save", "out/DVL_trajectory1-corrected.csv"],
+        "is also where the corrected recording goes",
+    );
+    let twice = [
+        "calibrate",
+        &dvl,
+        &dvl,
+        "--reference",
+        &reference,
+        "--reference",
+        &reference,
+        "--out",
+        "out",
+    ];
+    refused(&twice, "hold the same recording (the same SHA-256)");
+    // A --save in folders not there yet: made.
+    let saved = dcnet(
+        d,
+        &[
+            "calibrate",
+            &dvl,
+            "--reference",
+            &reference,
+            "--save",
+            "saved/here/installation.toml",
+            "--out",
+            "calibrated",
+        ],
+    );
+    assert!(saved.status.success(), "{}", stderr(&saved));
+    let far = [
+        "correct",
+        &dvl,
+        "--reference",
+        &reference,
+        "--installation",
+        "saved/here/installation.toml",
+        "--time-offset-s",
+        "1e9",
+        "--out",
+        "out",
+    ];
+    refused(&far, "no sample of the dive lies inside its reference");
+}

@@ -142,6 +142,10 @@ pub enum ClockError {
     NoOverlap { search_s: f64 },
     #[error("the least squares of the dive's terms failed: {0}")]
     Fit(#[from] FitError),
+    #[error(
+        "its time offset is known only to ±{std_s} s, beyond the ±{search_s} s searched: these seconds do not show the clock"
+    )]
+    NotShown { std_s: f64, search_s: f64 },
 }
 
 /// The τ (s) at which the carried installation's prediction from the reference at
@@ -244,14 +248,22 @@ pub fn refind(
         .zip(&inherited)
         .map(|(std, more)| (std * std + more).sqrt())
         .collect();
-    Ok(Clock {
+    let clock = Clock {
         installation: fit.installation,
         searched_offset_s,
         searched_rms_m_s,
         fit,
         bound,
         std,
-    })
+    };
+    let std_s = clock.time_offset_std_s();
+    if !(std_s <= search.search_s) {
+        return Err(ClockError::NotShown {
+            std_s,
+            search_s: search.search_s,
+        });
+    }
+    Ok(clock)
 }
 
 /// The variance each of `fit`'s dive terms inherits from the carried terms'

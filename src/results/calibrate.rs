@@ -56,6 +56,12 @@ pub enum CalibrateError {
     Terms(String),
     #[error("--dive-terms: {0}")]
     DiveTerms(String),
+    #[error("--save {}: {why}: give the path of a file", path.display())]
+    Save { path: PathBuf, why: &'static str },
+    #[error("--save {}: is also where the corrected recording goes: give another --save", path.display())]
+    SaveOverOutput { path: PathBuf },
+    #[error("{} and {} hold the same recording (the same SHA-256): a joint calibration counts each recording once", first.display(), again.display())]
+    Duplicate { first: PathBuf, again: PathBuf },
     #[error(
         "--reference: {references} files for {dvls} DVL files: give one --reference per DVL file, in the same order, or none where each DVL file holds its reference"
     )]
@@ -206,6 +212,15 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     if let Some((output, input)) = not_over_an_input(&inputs, &written) {
         return Err(CalibrateError::OverInput { output, input });
     }
+    if let Some(save) = args.save {
+        let same = outputs.all().iter().any(|o| *o == save)
+            || not_over_an_input(&[Some(save)], &outputs.all()).is_some();
+        if same {
+            return Err(CalibrateError::SaveOverOutput {
+                path: save.to_path_buf(),
+            });
+        }
+    }
     fits_in_memory(args)?;
     let read = read(args)?;
     let recording_sha256 = not_over_another_recording(args, &outputs)?;
@@ -290,18 +305,64 @@ fn refused(args: &CalibrateArgs) -> Result<(), CalibrateError> {
     if !(args.tolerance_pct > 0.0 && args.tolerance_pct <= 100.0) {
         return Err(CalibrateError::Tolerance(args.tolerance_pct));
     }
-    if let Some(term) = args.dive_terms.iter().find(|t| {
+    dive_terms_refused(args.terms, args.dive_terms, args.save.is_some())
+        .map_err(CalibrateError::DiveTerms)?;
+    if let Some(path) = args.save {
+        save_refused(path)?;
+    }
+    Ok(())
+}
+
+/// What is wrong with `dive` as the dive's terms of a calibration of `terms`: each
+/// must be a dive's kind of term (the time offset or a bias); and where the
+/// installation is saved for `correct`, which finds each dive's clock again, the time
+/// offset must be among them and each must be among `terms`.
+pub(super) fn dive_terms_refused(
+    terms: &[TermName],
+    dive: &[TermName],
+    saving: bool,
+) -> Result<(), String> {
+    if let Some(term) = dive.iter().find(|t| {
         !matches!(
             t,
             TermName::TimeOffset | TermName::Bias | TermName::BiasScalar
         )
     }) {
-        return Err(CalibrateError::DiveTerms(format!(
+        return Err(format!(
             "{:?} belongs to the vehicle, not the dive: give time_offset, and bias or bias_scalar",
             term.name()
-        )));
+        ));
+    }
+    if !saving {
+        return Ok(());
+    }
+    if !dive.contains(&TermName::TimeOffset) {
+        return Err("must hold time_offset: the clock is what a dive sets again".into());
+    }
+    if let Some(term) = dive.iter().find(|t| !terms.contains(t)) {
+        return Err(format!(
+            "{:?} is not among --terms: a saved dive's term must be one the calibration fits",
+            term.name()
+        ));
     }
     Ok(())
+}
+
+/// Refuses, before anything is read, a `--save` path that cannot be a file: a folder,
+/// or one under a file (its missing folders are made when it is written).
+pub(super) fn save_refused(path: &Path) -> Result<(), CalibrateError> {
+    let under_a_file = path.ancestors().skip(1).any(|a| a.is_file());
+    let why = if path.is_dir() {
+        "is a folder"
+    } else if under_a_file {
+        "is under a file, not a folder"
+    } else {
+        return Ok(());
+    };
+    Err(CalibrateError::Save {
+        path: path.to_path_buf(),
+        why,
+    })
 }
 
 /// The terms of `fitted`, those on which the residuals do not depend at all (their

@@ -10,7 +10,9 @@
 //! recording at fault.
 
 use super::ResultsError;
-use super::calibrate::{CalibrateError, columns, not_over_an_input};
+use super::calibrate::{
+    CalibrateError, columns, dive_terms_refused, not_over_an_input, save_refused,
+};
 use super::corrected::{Outputs, corrected_samples, write};
 use super::installation_file::{SavedInstallation, SavedTerm};
 use crate::data::paired::{self, PairedFiles, PairedRecording};
@@ -70,6 +72,11 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
             references: args.references.len(),
         });
     }
+    dive_terms_refused(args.terms, args.dive_terms, args.save.is_some())
+        .map_err(CalibrateError::DiveTerms)?;
+    if let Some(path) = args.save {
+        save_refused(path)?;
+    }
     let noise = Noise {
         dvl_m_s: args.dvl_noise_cm_s / 100.0,
         reference_m_s: args.reference_noise_cm_s / 100.0,
@@ -88,6 +95,31 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
     if let Some((output, input)) = not_over_an_input(&inputs, &written) {
         return Err(CalibrateError::OverInput { output, input });
     }
+    if let Some(save) = args.save
+        && outputs.iter().flat_map(|o| o.all()).any(|o| o == save)
+    {
+        return Err(CalibrateError::SaveOverOutput {
+            path: save.to_path_buf(),
+        });
+    }
+    let shas = args
+        .dvls
+        .iter()
+        .map(|dvl| {
+            let bytes = std::fs::read(dvl).map_err(|source| ResultsError::Io {
+                path: dvl.clone(),
+                source,
+            })?;
+            Ok(crate::files::sha256_hex(&bytes))
+        })
+        .collect::<Result<Vec<String>, CalibrateError>>()?;
+    if let Some(k) = (1..shas.len()).find(|&k| shas[..k].contains(&shas[k])) {
+        let first = shas.iter().position(|s| *s == shas[k]).expect("seen");
+        return Err(CalibrateError::Duplicate {
+            first: args.dvls[first].clone(),
+            again: args.dvls[k].clone(),
+        });
+    }
     let recordings = read_all(args)?;
     let calibrating: Vec<JointRecording> = recordings
         .iter()
@@ -102,13 +134,7 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
         .collect();
     let (joint, alone) = fitted(args, &calibrating, noise)?;
     let mut written = Vec::new();
-    let mut shas = Vec::new();
     for (k, (recording, reference, _)) in recordings.iter().enumerate() {
-        let bytes = std::fs::read(&args.dvls[k]).map_err(|source| ResultsError::Io {
-            path: args.dvls[k].clone(),
-            source,
-        })?;
-        shas.push(crate::files::sha256_hex(&bytes));
         let (time_s, dvl_m_s) = (&recording.time_s, &recording.dvl_m_s);
         let samples = corrected_samples(&joint.dives[k], time_s, dvl_m_s, reference);
         written.extend(write(&outputs[k], &samples, &shas[k])?);

@@ -72,6 +72,11 @@ pub enum CorrectError {
         fault: ClockError,
     },
     #[error(
+        "{}: with a time offset of {time_offset_s} s, no sample of the dive lies inside its reference: give the dive's clock (--time-offset-s) in seconds, or let correct find it",
+        dvl.display()
+    )]
+    NoOverlap { dvl: PathBuf, time_offset_s: f64 },
+    #[error(
         "{}: correct would write over its input {}: give another --out, or rename the file",
         output.display(),
         input.display()
@@ -203,6 +208,12 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
         source,
     })?;
     let samples = corrected_samples(&applied, &recording.time_s, &recording.dvl_m_s, &reference);
+    if samples.is_empty() {
+        return Err(CorrectError::NoOverlap {
+            dvl: args.dvl.to_path_buf(),
+            time_offset_s: applied.time_offset_s,
+        });
+    }
     let written = write(&outputs, &samples, &crate::files::sha256_hex(&bytes))?;
     let total = |v: crate::Vec3| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
     Ok(Correction {

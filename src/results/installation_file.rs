@@ -179,8 +179,11 @@ impl SavedInstallation {
         )
     }
 
-    /// Writes the file at `path`, atomically.
+    /// Writes the file at `path`, atomically, its folder made where it is missing.
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        if let Some(folder) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(folder)?;
+        }
         crate::files::write_atomic(path, self.to_text().as_bytes())
     }
 
@@ -246,6 +249,57 @@ impl SavedInstallation {
                 ),
             });
         }
+        let malformed = |message: String| InstallationFileError::Malformed {
+            path: path.to_path_buf(),
+            message,
+        };
+        if let Some(term) = self
+            .dive_terms
+            .iter()
+            .find(|t| self.vehicle_terms.contains(t))
+        {
+            return Err(malformed(format!(
+                "{:?} is both a vehicle's and a dive's term",
+                term.name()
+            )));
+        }
+        if !self.dive_terms.contains(&TermName::TimeOffset) {
+            return Err(malformed(
+                "its dive_terms do not hold \"time_offset\"".into(),
+            ));
+        }
+        let n = expected.len();
+        if self.correlation.len() != n || self.correlation.iter().any(|row| row.len() != n) {
+            return Err(malformed(format!(
+                "its correlation is not a {n} × {n} matrix, one row and column per term"
+            )));
+        }
+        if self
+            .correlation
+            .iter()
+            .flatten()
+            .any(|r| r.abs() > 1.0 + 1e-9)
+        {
+            return Err(malformed("a correlation beyond ±1".into()));
+        }
+        if !(self.dvl_noise_cm_s.is_finite() && self.dvl_noise_cm_s > 0.0)
+            || !(self.reference_noise_cm_s.is_finite() && self.reference_noise_cm_s >= 0.0)
+        {
+            return Err(malformed(format!(
+                "its noise ({} and {} cm/s) is not a positive DVL noise and a reference noise of zero or more",
+                self.dvl_noise_cm_s, self.reference_noise_cm_s
+            )));
+        }
+        if self
+            .residual_cm_s
+            .iter()
+            .any(|r| !(r.is_finite() && *r >= 0.0))
+        {
+            return Err(malformed(format!(
+                "its residual_cm_s {:?} is not three finite values of zero or more",
+                self.residual_cm_s
+            )));
+        }
         for (index, (term, name)) in self.terms.iter().zip(&expected).enumerate() {
             if term.name != *name {
                 return Err(bad(index, &term.name, format!("expected {name} here")));
@@ -294,7 +348,9 @@ mod tests {
                 std: 0.01,
             })
             .collect(),
-            correlation: vec![vec![1.0; 4]; 4],
+            correlation: (0..4)
+                .map(|i| (0..4).map(|j| f64::from(u8::from(i == j))).collect())
+                .collect(),
         }
     }
 
@@ -334,5 +390,16 @@ mod tests {
             "{message}"
         );
         assert!(message.contains("installation.toml"), "{message}");
+        // A correlation of the wrong size, a negative noise, a term both the
+        // vehicle's and the dive's: each with a checksum that matches.
+        let mut small = saved();
+        small.correlation = vec![vec![1.0]];
+        assert!(refusal(&small.to_text()).contains("not a 4 × 4 matrix"));
+        let mut negative = saved();
+        negative.dvl_noise_cm_s = -2.0;
+        assert!(refusal(&negative.to_text()).contains("is not a positive DVL noise"));
+        let mut both = saved();
+        both.vehicle_terms.push(TermName::TimeOffset);
+        assert!(refusal(&both.to_text()).contains("is both a vehicle's and a dive's term"));
     }
 }
