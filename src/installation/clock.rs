@@ -73,21 +73,27 @@ impl Carried {
         std: &[f64],
         correlation: &[Vec<f64>],
     ) -> Carried {
-        let n = std.len();
-        let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
-        let covariance = DMatrix::from_fn(n, n, |i, j| {
-            let rho = if i == j {
-                1.0
-            } else {
-                finite(correlation[i][j])
-            };
-            rho * finite(std[i]) * finite(std[j])
-        });
         Carried {
             installation,
-            uncertainty: Some((terms, covariance)),
+            uncertainty: Some((terms, covariance(std, correlation))),
         }
     }
+}
+
+/// The covariance of standard deviations `std` and correlations `correlation`; a
+/// standard deviation or correlation that is not finite (a term its calibration could
+/// not see at all) counts as zero.
+pub fn covariance(std: &[f64], correlation: &[Vec<f64>]) -> DMatrix<f64> {
+    let n = std.len();
+    let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
+    DMatrix::from_fn(n, n, |i, j| {
+        let rho = if i == j {
+            1.0
+        } else {
+            finite(correlation[i][j])
+        };
+        rho * finite(std[i]) * finite(std[j])
+    })
 }
 
 /// A dive's terms found again, with the carried ones.

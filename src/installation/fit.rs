@@ -467,7 +467,7 @@ fn scan_time_offset<'a>(
 }
 
 /// The RMS per axis of `residuals` (x, y, z of each of `sample_count` samples).
-fn residual_rms(residuals: &DVector<f64>, sample_count: usize) -> Vec3 {
+pub fn residual_rms(residuals: &DVector<f64>, sample_count: usize) -> Vec3 {
     [0, 1, 2].map(|k| {
         let sum: f64 = (0..sample_count)
             .map(|i| residuals[3 * i + k].powi(2))

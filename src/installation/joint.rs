@@ -20,8 +20,8 @@
 //! [`JointFit`].
 
 use super::bound::{Noise, TermBound, Tolerances, bound};
-use super::clock::search_offset;
-use super::fit::{Fit, FitError, TIME_OFFSET_MARGIN_S, linearised, mask_about};
+use super::clock::{covariance, search_offset};
+use super::fit::{Fit, FitError, TIME_OFFSET_MARGIN_S, linearised, mask_about, residual_rms};
 use super::frames::Reference;
 use super::terms::{Installation, TermSet};
 use crate::Vec3;
@@ -58,6 +58,22 @@ pub struct JointFit {
     /// Each recording's residual RMS per DVL axis, m/s, and samples fitted.
     pub residual_rms_m_s: Vec<Vec3>,
     pub sample_counts: Vec<usize>,
+}
+
+impl JointFit {
+    /// The mean over the recordings of their dive terms, in the order of
+    /// [`TermSet::parameter_names`] of `dive_terms`: what a recording with no clock of
+    /// its own carries.
+    pub fn mean_dive(&self) -> Vec<f64> {
+        let per_dive: Vec<Vec<f64>> = self
+            .dives
+            .iter()
+            .map(|d| d.to_parameters(&self.dive_terms))
+            .collect();
+        (0..self.dive_terms.parameter_count())
+            .map(|k| per_dive.iter().map(|p| p[k]).sum::<f64>() / per_dive.len() as f64)
+            .collect()
+    }
 }
 
 /// Each recording's blocks at the current terms: residuals r, the vehicle's columns A
@@ -276,23 +292,11 @@ pub fn joint_fit(
             .collect(),
         dive_std: dive_standard_deviations(&blocks, &bound, dive_terms, (noise, tolerances)),
         bound,
-        residual_rms_m_s: blocks.iter().map(|b| residual_rms(&b.residuals)).collect(),
-        sample_counts: blocks.iter().map(|b| b.residuals.len() / 3).collect(),
-    })
-}
-
-/// The RMS per axis of residuals laid out x, y, z of each sample, m/s.
-fn residual_rms(residuals: &DVector<f64>) -> Vec3 {
-    let n = (residuals.len() / 3).max(1) as f64;
-    [0, 1, 2].map(|k| {
-        (residuals
+        residual_rms_m_s: blocks
             .iter()
-            .skip(k)
-            .step_by(3)
-            .map(|r| r * r)
-            .sum::<f64>()
-            / n)
-            .sqrt()
+            .map(|b| residual_rms(&b.residuals, b.residuals.len() / 3))
+            .collect(),
+        sample_counts: blocks.iter().map(|b| b.residuals.len() / 3).collect(),
     })
 }
 
@@ -376,16 +380,7 @@ fn dive_standard_deviations(
     dive_terms: TermSet,
     (noise, tolerances): (Noise, &Tolerances),
 ) -> Vec<Vec<f64>> {
-    let p = vehicle.std.len();
-    let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
-    let covariance = DMatrix::from_fn(p, p, |i, j| {
-        let rho = if i == j {
-            1.0
-        } else {
-            finite(vehicle.correlation[i][j])
-        };
-        rho * finite(vehicle.std[i]) * finite(vehicle.std[j])
-    });
+    let covariance = covariance(&vehicle.std, &vehicle.correlation);
     blocks
         .iter()
         .map(|b| {

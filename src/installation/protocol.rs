@@ -476,16 +476,9 @@ impl OnTrajectory<'_> {
             (self.noise, &self.tolerances),
         )
         .map_err(|why| why.to_string())?;
-        let mean_dive: Vec<f64> = (0..joint.dive_terms.parameter_count())
-            .map(|k| {
-                let values = joint
-                    .dives
-                    .iter()
-                    .map(|d| d.to_parameters(&joint.dive_terms)[k]);
-                values.sum::<f64>() / joint.dives.len() as f64
-            })
-            .collect();
-        let installation = joint.vehicle.with_parameters(&joint.dive_terms, &mean_dive);
+        let installation = joint
+            .vehicle
+            .with_parameters(&joint.dive_terms, &joint.mean_dive());
         let bound = &joint.bound;
         let carried = Carried::with(
             installation,

@@ -8,7 +8,7 @@
 //! [`CalibrateError`] that names the argument, file or step at fault.
 
 use super::ResultsError;
-use super::corrected::{Outputs, corrected_samples, write, write_terms_in_time};
+use super::corrected::{Outputs, corrected_samples, stem, write, write_terms_in_time};
 use super::installation_file::SavedInstallation;
 use crate::data::paired::{self, PairedColumns, PairedError, PairedFiles, PairedRecording};
 use crate::installation::bound::{Noise, TermBound, Why, bound};
@@ -390,12 +390,7 @@ pub fn is_noise(bounded: &TermBound, name: &str) -> bool {
 
 /// The files written for `args`, named after the DVL's file.
 fn outputs(args: &CalibrateArgs) -> Outputs {
-    let stem = args
-        .dvl
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "recording".into());
-    Outputs::of(args.out, &stem)
+    Outputs::of(args.out, &stem(args.dvl))
 }
 
 /// Peak memory per row of a recording calibrated whole, bytes: the rows read, the
@@ -522,16 +517,20 @@ fn fit_terms(args: &CalibrateArgs, read: &Read, terms: TermSet) -> Result<Fit, C
     .map_err(|fault| fit_error(args, read, fault))
 }
 
+/// The names of `terms`, comma-separated, as a message gives them.
+pub(super) fn named(terms: &[TermName]) -> String {
+    terms
+        .iter()
+        .map(|t| t.name())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// The fit of `args` on the samples of `read` failed with `fault`.
 fn fit_error(args: &CalibrateArgs, read: &Read, fault: FitError) -> CalibrateError {
     CalibrateError::Fit {
         dvl: args.dvl.to_path_buf(),
-        terms: args
-            .terms
-            .iter()
-            .map(|t| t.name())
-            .collect::<Vec<_>>()
-            .join(", "),
+        terms: named(args.terms),
         samples: read.calibrating().time_s.len(),
         fault,
     }

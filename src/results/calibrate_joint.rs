@@ -11,11 +11,12 @@
 
 use super::ResultsError;
 use super::calibrate::{
-    CalibrateError, columns, dive_terms_refused, not_over_an_input, save_refused,
+    CalibrateError, columns, dive_terms_refused, named, not_over_an_input, save_refused,
 };
-use super::corrected::{Outputs, corrected_samples, write};
+use super::corrected::{Outputs, corrected_samples, stem, write};
 use super::installation_file::{SavedInstallation, SavedTerm};
 use crate::data::paired::{self, PairedFiles, PairedRecording};
+use crate::evaluate::statistics::mean_std;
 use crate::installation::bound::{DEFAULT_TOLERANCES, Noise, TermBound, bound};
 use crate::installation::clock::DEFAULT_SEARCH_S;
 use crate::installation::fit::{fit, fit_about};
@@ -201,12 +202,7 @@ fn fitted(
     let terms = term_set(args.terms);
     let fault = |k: usize, fault| CalibrateError::Fit {
         dvl: args.dvls[k].clone(),
-        terms: args
-            .terms
-            .iter()
-            .map(|t| t.name())
-            .collect::<Vec<_>>()
-            .join(", "),
+        terms: named(args.terms),
         samples: calibrating[k].time_s.len(),
         fault,
     };
@@ -230,13 +226,6 @@ fn fitted(
     Ok((joint, alone))
 }
 
-/// A DVL file's name without its extension.
-fn stem(dvl: &Path) -> String {
-    dvl.file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "recording".into())
-}
-
 /// Each vehicle term's recordings alone against the joint estimate.
 fn agreement(joint: &JointFit, alone: &[TermBound]) -> Vec<Agreement> {
     use statrs::distribution::{ChiSquared, ContinuousCDF};
@@ -258,10 +247,7 @@ fn agreement(joint: &JointFit, alone: &[TermBound]) -> Vec<Agreement> {
             let chi_square: f64 = mine.iter().map(|(v, s)| ((v - value) / s).powi(2)).sum();
             let freedom = (count.max(2) - 1) as f64;
             let p_value = ChiSquared::new(freedom).map_or(f64::NAN, |d| 1.0 - d.cdf(chi_square));
-            let mean = mine.iter().map(|(v, _)| v).sum::<f64>() / mine.len().max(1) as f64;
-            let spread = (mine.iter().map(|(v, _)| (v - mean).powi(2)).sum::<f64>()
-                / (mine.len().max(2) - 1) as f64)
-                .sqrt();
+            let (_, spread) = mean_std(mine.iter().map(|(v, _)| *v));
             Agreement {
                 term,
                 chi_square,
@@ -295,11 +281,7 @@ fn saved(args: &JointArgs, joint: &JointFit, shas: Vec<String>) -> SavedInstalla
                     std: vehicle.std[i],
                 },
                 None => {
-                    let values: Vec<f64> = per_dive.iter().map(|p| p[k]).collect();
-                    let mean = values.iter().sum::<f64>() / values.len() as f64;
-                    let spread = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>()
-                        / (values.len().max(2) - 1) as f64)
-                        .sqrt();
+                    let (mean, spread) = mean_std(per_dive.iter().map(|p| p[k]));
                     SavedTerm {
                         name: name.to_string(),
                         value: mean,

@@ -11,7 +11,7 @@
 
 use super::ResultsError;
 use super::calibrate::{columns, not_over_an_input};
-use super::corrected::{Outputs, corrected_samples, write};
+use super::corrected::{Outputs, corrected_samples, stem, write};
 use super::installation_file::{InstallationFileError, SavedInstallation};
 use crate::data::paired::{self, PairedError, PairedFiles, PairedRecording};
 use crate::installation::bound::{DEFAULT_TOLERANCES, Noise};
@@ -149,12 +149,7 @@ impl Correction {
 pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
     refused(args)?;
     let saved = SavedInstallation::read(args.installation)?;
-    let stem = args
-        .dvl
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "recording".into());
-    let outputs = Outputs::of(args.out, &stem);
+    let outputs = Outputs::of(args.out, &stem(args.dvl));
     let inputs = [
         Some(args.dvl),
         args.reference,

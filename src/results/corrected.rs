@@ -96,6 +96,13 @@ pub struct Outputs {
 /// were computed from.
 pub const RECORDING_SHA256: &str = "dcnet.recording_sha256";
 
+/// A DVL file's name without its extension: what its outputs are named after.
+pub fn stem(dvl: &Path) -> String {
+    dvl.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "recording".into())
+}
+
 impl Outputs {
     pub fn of(out: &Path, stem: &str) -> Outputs {
         Outputs {
