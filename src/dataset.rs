@@ -136,6 +136,8 @@ pub fn generate(spec: &Spec, trajectories: &[Trajectory], progress: &Progress) -
     let (per_combination, total) = (size.per_combination, size.windows());
     let mut inputs = vec![0f32; total * INPUT_ROWS * window];
     let mut targets = vec![0f32; total * TARGET_ROWS * window];
+    crate::memory::prefer_huge_pages(&mut inputs);
+    crate::memory::prefer_huge_pages(&mut targets);
     let mut is_validation = vec![false; total];
     let validation_count = size.validation_per_combination;
 

@@ -21,8 +21,8 @@
 //!    information bound it puts on any calibration from w seconds of data, and
 //!    [`kalman`]: the recursive estimate of the terms, sample by sample;
 //! 4. [`dataset`]: the training windows over the error-term grid;
-//! 5. [`kernels`]: the network's hot operations on burn's CPU backend, [`model`] and
-//!    [`train`]: DCNet and its closed-loop training;
+//! 5. [`kernels`]: the network's hot operations on burn's CPU backend, [`model`],
+//!    [`rmsprop`] and [`train`]: DCNet, its optimizer and its closed-loop training;
 //! 6. [`estimators`]: calibration methods behind one trait, DCNet among them;
 //! 7. [`evaluate`]: the paper's Monte Carlo calibration and evaluation protocol (its
 //!    runs, the tables summed from them, the bound's efficiency); [`installation`]: a
@@ -43,12 +43,14 @@
 //!
 //! Beneath them all, importing no other module: [`vocab`], the words every stage
 //! shares (a DVL's error terms, error models, methods, corrections, activation,
-//! backend, stop reason, phase); [`files`], atomic writes and content hashes; [`rng`],
-//! the seeded streams; and [`progress`], the progress bars. The modules are declared
+//! backend, stop reason, phase); [`files`], atomic writes and content hashes; [`memory`],
+//! the allocator's settings and counts; [`rng`], the seeded streams; and [`progress`],
+//! the progress bars. The modules are declared
 //! below in this order, and `tests/layering.rs` fails on an import that points up it or
 //! on any import cycle in `src/`.
 
 pub mod files;
+pub mod memory;
 pub mod progress;
 pub mod rng;
 pub mod vocab;
@@ -61,6 +63,7 @@ pub mod kalman;
 pub mod dataset;
 pub mod kernels;
 pub mod model;
+pub mod rmsprop;
 pub mod train;
 pub mod estimators;
 pub mod evaluate;

@@ -248,12 +248,49 @@ impl Dcnet {
     }
 
     /// `windows` → terms `[count, terms]`. Dropout is applied when `dropout_rng` is
-    /// given (training), with masks drawn from it.
+    /// given (training), with masks drawn from it, layer by layer. On Flex the whole
+    /// network is one operation over fixed slices of the batch
+    /// ([`kernels::network`]); elsewhere it is composed of burn's operations.
     pub fn forward(
         &self,
         windows: &Windows,
         settings: &Settings,
-        mut dropout_rng: Option<&mut ChaCha8Rng>,
+        dropout_rng: Option<&mut ChaCha8Rng>,
+    ) -> Tensor<2> {
+        let dropout =
+            dropout_rng
+                .filter(|_| settings.dropout > 0.0)
+                .map(|rng| kernels::network::Dropout {
+                    p: settings.dropout,
+                    seed: rng.random(),
+                });
+        if kernels::network::runs_on(&windows.head_1d) {
+            let shape = kernels::network::NetworkShape {
+                time: windows.time,
+                kernel: settings.kernel,
+                head_slope: settings.leaky_relu_slope as f32,
+                fc_leaky_slope: match settings.activation {
+                    Activation::Tanh => None,
+                    Activation::LeakyRelu => Some(settings.leaky_relu_slope as f32),
+                },
+            };
+            let layers = || self.conv1d.iter().chain(&self.conv2d).chain(&self.fc);
+            let weights = layers().map(|layer| layer.weight.val()).collect();
+            let biases = layers()
+                .map(|layer| layer.bias.as_ref().expect("every layer has a bias").val())
+                .collect();
+            let (head_1d, head_2d) = (windows.head_1d.clone(), windows.head_2d.clone());
+            return kernels::network::dcnet(weights, biases, head_1d, head_2d, dropout, shape);
+        }
+        self.composed(windows, settings, dropout)
+    }
+
+    /// [`Dcnet::forward`] composed of burn's operations, layer by layer.
+    fn composed(
+        &self,
+        windows: &Windows,
+        settings: &Settings,
+        dropout: Option<kernels::network::Dropout>,
     ) -> Tensor<2> {
         let mut x = self.features(windows, settings);
         let last = self.fc.len() - 1;
@@ -263,10 +300,11 @@ impl Dcnet {
                 slope: settings.leaky_relu_slope,
             },
         };
-        for layer in &self.fc[..last] {
-            let mask = dropout_rng.as_deref_mut().and_then(|rng| {
-                let shape = [x.dims()[0], layer.weight.val().dims()[1]];
-                dropout_mask(shape, settings.dropout, rng, &x.device())
+        for (i, layer) in self.fc[..last].iter().enumerate() {
+            let mask = dropout.map(|dropout| {
+                let shape = [windows.count, layer.weight.val().dims()[1]];
+                let values = dropout.mask(i, shape[0], shape[1]);
+                Tensor::from_data(TensorData::new(values, shape), &x.device())
             });
             x = kernels::linear::linear(x, layer, activation, mask);
         }
@@ -302,35 +340,6 @@ impl Dcnet {
             1,
         )
     }
-}
-
-/// The dropout mask of an activation `shape`, none when `p` is 0: each element 0 with
-/// probability `p`, 1/(1 − p) elsewhere. One 32-bit draw per element decides it: an element
-/// drops when its draw is below p·2³².
-fn dropout_mask(
-    shape: [usize; 2],
-    p: f64,
-    rng: &mut ChaCha8Rng,
-    device: &Device,
-) -> Option<Tensor<2>> {
-    if p == 0.0 {
-        return None;
-    }
-    let keep = (1.0 / (1.0 - p)) as f32;
-    let threshold = (p * 2f64.powi(32)) as u64;
-    let mut draws = vec![0u32; shape[0] * shape[1]];
-    rng.fill(&mut draws[..]);
-    let mask: Vec<f32> = draws
-        .into_iter()
-        .map(|draw| {
-            if u64::from(draw) < threshold {
-                0.0
-            } else {
-                keep
-            }
-        })
-        .collect();
-    Some(Tensor::from_data(TensorData::new(mask, shape), device))
 }
 
 /// Terms `[batch, terms]` of `error_model` → per-axis scale (%) and bias (cm/s), each
@@ -505,6 +514,119 @@ mod tests {
                 "feature {i}: {a} vs {b}"
             );
         }
+    }
+
+    /// The parameters' gradients of `sum(terms ⊙ weights)`, layer by layer, weight then
+    /// bias, as f32 values.
+    fn gradients(model: &Dcnet, terms: Tensor<2>, weights: Tensor<2>) -> Vec<Vec<f32>> {
+        let grads = (terms * weights).sum().backward();
+        let layers = model.conv1d.iter().chain(&model.conv2d).chain(&model.fc);
+        layers
+            .flat_map(|layer| {
+                let bias = layer.bias.as_ref().unwrap();
+                [
+                    layer.weight.grad(&grads).unwrap().into_data(),
+                    bias.grad(&grads).unwrap().into_data(),
+                ]
+            })
+            .map(|data| data.try_to_vec::<f32>().unwrap())
+            .collect()
+    }
+
+    /// The one-operation network on Flex against the same network composed of burn's
+    /// operations, layer by layer: the terms and every parameter's gradient, with dropout,
+    /// on a batch that the slices do not divide evenly, for tanh and LeakyReLU Linear
+    /// layers and a 1D head with the body rate.
+    #[test]
+    fn the_network_operation_matches_the_composed_layers() {
+        for (overrides, rows, io) in [
+            (vec![], INPUT_ROWS, NetworkIo::from(ErrorModel::Em5)),
+            (
+                vec![
+                    "model.activation=\"leaky_relu\"",
+                    "model.conv1d_kernel_size=3",
+                ],
+                INPUT_ROWS + 3,
+                NetworkIo {
+                    channels_1d: 6,
+                    outputs: 4,
+                },
+            ),
+        ] {
+            let spec = quick_spec(&overrides);
+            let device = Device::flex().autodiff();
+            let mut rng = ChaCha8Rng::seed_from_u64(11);
+            let window = spec.dataset.window_samples;
+            let model = Dcnet::new(&spec.model, io, window, &device, &mut rng);
+            let settings = Settings::from(&spec.model);
+            assert!(settings.dropout > 0.0);
+            let count = 37;
+            let inputs: Vec<f32> = (0..count * rows * window)
+                .map(|_| rng.random_range(-2.0..2.0))
+                .collect();
+            let windows = Windows::new(&inputs, rows, window, settings.kernel, &device);
+            let weights: Vec<f32> = (0..count * io.outputs)
+                .map(|_| rng.random_range(-1.0..1.0))
+                .collect();
+            let weights =
+                Tensor::<2>::from_data(TensorData::new(weights, [count, io.outputs]), &device);
+            let one_op =
+                model.forward(&windows, &settings, Some(&mut ChaCha8Rng::seed_from_u64(5)));
+            let dropout = kernels::network::Dropout {
+                p: settings.dropout,
+                seed: ChaCha8Rng::seed_from_u64(5).random(),
+            };
+            let composed = model.composed(&windows, &settings, Some(dropout));
+            let close = |a: &[f32], b: &[f32], what: &str| {
+                assert_eq!(a.len(), b.len(), "{what}");
+                let scale = b.iter().fold(0f32, |m, v| m.max(v.abs()));
+                for (i, (x, y)) in a.iter().zip(b).enumerate() {
+                    assert!(
+                        (x - y).abs() <= 1e-5 * (1.0 + scale),
+                        "{what} {i}: {x} vs {y}"
+                    );
+                }
+            };
+            let values = |t: &Tensor<2>| t.clone().into_data().try_to_vec::<f32>().unwrap();
+            close(&values(&one_op), &values(&composed), "terms");
+            let ours = gradients(&model, one_op, weights.clone());
+            let theirs = gradients(&model, composed, weights);
+            for (p, (a, b)) in ours.iter().zip(&theirs).enumerate() {
+                close(a, b, &format!("parameter {p}"));
+            }
+        }
+    }
+
+    /// One model's terms and gradients are the same bits on one thread and on three.
+    #[test]
+    fn the_network_operation_gives_the_same_bits_on_any_thread_count() {
+        let spec = quick_spec(&[]);
+        let device = Device::flex().autodiff();
+        let mut rng = ChaCha8Rng::seed_from_u64(2);
+        let window = spec.dataset.window_samples;
+        let model = Dcnet::new(&spec.model, ErrorModel::Em5, window, &device, &mut rng);
+        let settings = Settings::from(&spec.model);
+        let count = 203;
+        let inputs: Vec<f32> = (0..count * INPUT_ROWS * window)
+            .map(|_| rng.random_range(-2.0..2.0))
+            .collect();
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let windows = Windows::new(&inputs, INPUT_ROWS, window, settings.kernel, &device);
+                let weights = Tensor::<2>::ones([count, 6], &device);
+                let terms =
+                    model.forward(&windows, &settings, Some(&mut ChaCha8Rng::seed_from_u64(1)));
+                let bits = |v: Vec<f32>| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                let mut all = vec![bits(terms.clone().into_data().try_to_vec::<f32>().unwrap())];
+                all.extend(gradients(&model, terms, weights).into_iter().map(bits));
+                all
+            })
+        };
+        assert!(run(1) == run(3), "the bits depend on the thread count");
     }
 
     #[test]

@@ -13,11 +13,11 @@
 use crate::dataset::{INPUT_ROWS, TARGET_ROWS, TrainingSet};
 use crate::model::{Dcnet, NetworkIo, Settings, Windows, split_terms, truth_cm_s};
 use crate::progress::Progress;
+use crate::rmsprop::RmsProp;
 use crate::rng::task_rng;
 use crate::spec::{ModelSpec, Spec, TrainingSpec};
 use crate::vocab::{ErrorModel, StopReason};
 use burn::module::Module;
-use burn::optim::{GradientsParams, ModuleOptimizer, RmsPropConfig};
 use burn::tensor::{Device, Tensor};
 use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
@@ -165,7 +165,7 @@ pub struct State {
     /// Which of `training.replicates` this training is; it seeds the streams.
     pub replicate: usize,
     pub model: Dcnet,
-    pub optimizer: ModuleOptimizer,
+    pub optimizer: RmsProp,
     pub best: Option<(usize, f64, Dcnet)>,
     pub history: Vec<EpochRecord>,
 }
@@ -221,12 +221,11 @@ impl State {
     }
 }
 
-pub fn optimizer(training: &TrainingSpec) -> ModuleOptimizer {
-    RmsPropConfig::new()
-        .with_alpha(training.rmsprop_alpha as f32)
-        .with_epsilon(training.rmsprop_epsilon as f32)
-        .with_momentum(0.0)
-        .init()
+pub fn optimizer(training: &TrainingSpec) -> RmsProp {
+    RmsProp::new(
+        training.rmsprop_alpha as f32,
+        training.rmsprop_epsilon as f32,
+    )
 }
 
 /// The closed-loop loss of `terms` `[batch, n]` on windows whose DVL velocity is
@@ -348,8 +347,8 @@ pub fn train_pass(
             "epoch {epoch}/{}, batch loss {value:.4}",
             recipe.training.epochs
         ));
-        let grads = GradientsParams::from_grads(loss.backward(), &model);
-        model = state.optimizer.step(recipe.learning_rate, model, grads);
+        let grads = loss.backward();
+        model = state.optimizer.step(recipe.learning_rate, model, &grads);
         progress.inc(indices.len());
     }
     state.model = model;
@@ -426,10 +425,6 @@ pub fn epochs_without_improvement(history: &[EpochRecord], min_improvement: f64)
     since
 }
 
-/// The pool a training's epochs run on: one thread, so that flex's inner parallelism
-/// stays on the core that runs the model (it barely speeds up one model of this size: a
-/// lone paper-size training ran an epoch in 6.7 s on two threads, 6.9 s on one),
-/// and the model's bytes do not depend on how many threads there are.
 /// The seconds one training batch of `error_model` takes on one thread of this
 /// machine, as `run` trains: the faster of two steps over a batch of windows at rest
 /// (a step's time does not depend on the values).
@@ -451,7 +446,7 @@ pub fn seconds_per_batch(spec: &Spec, error_model: ErrorModel) -> Result<f64, Tr
         set: &set,
         error_model,
     };
-    one_thread_pool().install(|| {
+    pool(1).install(|| {
         let mut fastest = f64::INFINITY;
         for epoch in 1..=2 {
             let clock = Instant::now();
@@ -462,11 +457,13 @@ pub fn seconds_per_batch(spec: &Spec, error_model: ErrorModel) -> Result<f64, Tr
     })
 }
 
-pub fn one_thread_pool() -> rayon::ThreadPool {
+/// A pool of `threads` threads for one training: the slices of its batches
+/// ([`crate::kernels::network`]) run on them, and its bytes are the same on any number.
+pub fn pool(threads: usize) -> rayon::ThreadPool {
     rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
+        .num_threads(threads.max(1))
         .build()
-        .expect("a pool of one thread")
+        .expect("a thread pool")
 }
 
 #[cfg(test)]

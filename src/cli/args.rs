@@ -196,6 +196,10 @@ pub(super) enum Command {
         /// in the same arrangements, side by side
         #[arg(long, value_name = "SCRIPT")]
         pytorch: Option<PathBuf>,
+        /// Times training on 1, 2, 4, … cores up to all of them (--threads), in each
+        /// arrangement, rather than on all of them only
+        #[arg(long)]
+        scaling: bool,
         #[command(flatten)]
         overrides: Overrides,
     },

@@ -1,6 +1,8 @@
 //! `bench`: times the dataset generation, the Monte Carlo protocol and DCNet training
 //! of a spec, and, given the PyTorch peer script, the same network in PyTorch in the
-//! same arrangements, side by side.
+//! same arrangements, side by side: several models one per core, or one model over
+//! several cores; with `--scaling`, on 1, 2, 4, … cores up to all of them. It prints the
+//! page faults and allocator calls of a warm training step too.
 
 use super::{CliError, failure, input, load_spec};
 use crate::data::load_trajectories;
@@ -17,6 +19,7 @@ pub(super) fn bench(
     repeat: usize,
     training_batches: usize,
     pytorch: Option<&Path>,
+    scaling: bool,
     set: &[String],
 ) -> Result<(), CliError> {
     let spec = load_spec(spec_path, set)?;
@@ -64,20 +67,14 @@ pub(super) fn bench(
     );
     bench_refusal(spec_path).map_err(failure)?;
     let set = dataset::generate(&spec, &trajectories, &hidden);
-    // Paired runs: ours then the peer in each, so that both see the machine as it is
-    // at that moment; the table gives the median of each and its spread.
-    let mut ours = Vec::new();
-    let mut peers = Vec::new();
-    for _ in 0..repeat {
-        ours.push(bench_training(&spec, &set, training_batches).map_err(failure)?);
-        if let Some(script) = pytorch {
-            peers.push(
-                bench_pytorch(&spec, script, training_batches)
-                    .map_err(|e| failure(anyhow::anyhow!(e)))?,
-            );
-        }
-    }
-    print_training_bench(&spec, &ours, &peers);
+    print_step_counts(&spec, &set).map_err(failure)?;
+    let counts = if scaling {
+        core_counts(rayon::current_num_threads())
+    } else {
+        vec![rayon::current_num_threads()]
+    };
+    let table = TrainingTable::measure(&spec, &set, training_batches, pytorch, repeat, &counts)?;
+    table.print(&spec);
     Ok(())
 }
 
@@ -140,58 +137,134 @@ fn with_first_value(text: &str, key: &str, values: &str) -> Option<String> {
     Some(lines.join("\n"))
 }
 
-/// Training samples/s in the two arrangements both tools can take: one model on one
-/// thread, and one model per core, all training at once (as `run` trains).
-struct TrainingRates {
-    one_thread: f64,
-    one_per_core: f64,
+/// How a tool trains on some cores: `models` models at once, each over `threads`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Arrangement {
+    models: usize,
+    threads: usize,
 }
 
-/// The PyTorch peer's samples/s: its two arrangements of [`TrainingRates`], and one
-/// process spreading one model over every core.
-struct PeerRates {
-    rates: TrainingRates,
-    one_model_all_threads: f64,
+impl Arrangement {
+    /// The arrangements of `cores`: one model per core, and one model over them all
+    /// (the same on one core).
+    fn on(cores: usize) -> Vec<Arrangement> {
+        let mut all = vec![Arrangement {
+            models: cores,
+            threads: 1,
+        }];
+        if cores > 1 {
+            all.push(Arrangement {
+                models: 1,
+                threads: cores,
+            });
+        }
+        all
+    }
+
+    fn describe(&self) -> String {
+        match (self.models, self.threads) {
+            (1, 1) => "one model, one thread".to_string(),
+            (models, 1) => format!("{models} models, one per core"),
+            (1, threads) => format!("one model over {threads} threads"),
+            (models, threads) => format!("{models} models over {threads} threads each"),
+        }
+    }
 }
 
-/// Training samples/s of the spec's model and batch size on its backend, each model on
-/// a pool of one thread, as `run` trains.
-fn bench_training(
+/// 1, 2, 4, … up to `cores`, and `cores` itself.
+fn core_counts(cores: usize) -> Vec<usize> {
+    let mut counts: Vec<usize> = std::iter::successors(Some(1), |n| Some(n * 2))
+        .take_while(|&n| n < cores)
+        .collect();
+    counts.push(cores);
+    counts
+}
+
+/// Training batches each model trains before it is timed, as the peer script does.
+const WARM_UP_BATCHES: usize = 10;
+
+/// Training samples/s of the spec's model and batch size on its backend in
+/// `arrangement`: each model times its own batches after [`WARM_UP_BATCHES`], and the
+/// rates are summed, as the peer script sums its processes'.
+fn training_rate(
     spec: &Spec,
     set: &TrainingSet,
     batches: usize,
-) -> Result<TrainingRates, TrainError> {
-    let threads = rayon::current_num_threads();
+    arrangement: Arrangement,
+) -> Result<f64, TrainError> {
     let error_model = *spec.error_models.last().unwrap_or(&ErrorModel::Em5);
     let hidden = crate::progress::Progress::hidden();
-    let run_model = |seed_offset: u64| -> Result<usize, TrainError> {
+    let batch = spec.training.batch_size;
+    let run_model = |seed_offset: u64| -> Result<f64, TrainError> {
         let mut spec = spec.clone();
         spec.seed += seed_offset;
         let recipe = train::Recipe::paper(&spec, error_model);
         let data = train::PaperWindows { set, error_model };
         let order = train::epoch_order(&recipe, &data, 0, 1);
-        let order = &order[..order.len().min(batches * spec.training.batch_size)];
+        let (warm_up, timed) = order.split_at((WARM_UP_BATCHES * batch).min(order.len()));
+        let timed = &timed[..timed.len().min(batches * batch)];
         let mut state = train::State::new(&spec, error_model, 0);
-        train::one_thread_pool()
-            .install(|| train::train_pass(&recipe, &data, &mut state, 1, order, &hidden))?;
-        Ok(order.len())
+        train::pool(arrangement.threads).install(|| {
+            train::train_pass(&recipe, &data, &mut state, 1, warm_up, &hidden)?;
+            let clock = Instant::now();
+            train::train_pass(&recipe, &data, &mut state, 1, timed, &hidden)?;
+            Ok(timed.len() as f64 / clock.elapsed().as_secs_f64())
+        })
     };
-    let clock = Instant::now();
-    let one_thread = run_model(0)? as f64 / clock.elapsed().as_secs_f64();
-    let clock = Instant::now();
-    let done = std::thread::scope(|scope| {
-        let handles: Vec<_> = (0..threads as u64)
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..arrangement.models as u64)
             .map(|i| scope.spawn(move || run_model(i)))
             .collect();
         handles
             .into_iter()
             .map(|h| h.join().expect("a training thread panicked"))
-            .sum::<Result<usize, _>>()
-    })?;
-    Ok(TrainingRates {
-        one_thread,
-        one_per_core: done as f64 / clock.elapsed().as_secs_f64(),
+            .sum()
     })
+}
+
+/// Prints the minor page faults and allocator calls of one warm training step, for one
+/// model on one thread and over every thread.
+fn print_step_counts(spec: &Spec, set: &TrainingSet) -> Result<(), TrainError> {
+    let error_model = *spec.error_models.last().unwrap_or(&ErrorModel::Em5);
+    let recipe = train::Recipe::paper(spec, error_model);
+    let data = train::PaperWindows { set, error_model };
+    let order = train::epoch_order(&recipe, &data, 0, 1);
+    let batch = spec.training.batch_size;
+    let steps = 50.min(order.len() / batch / 2).max(1);
+    let (warm_up, counted) = order.split_at((steps * batch).min(order.len()));
+    let counted = &counted[..counted.len().min(steps * batch)];
+    let hidden = crate::progress::Progress::hidden();
+    let all = rayon::current_num_threads();
+    let mut lines = Vec::new();
+    for threads in if all > 1 { vec![1, all] } else { vec![1] } {
+        let mut state = train::State::new(spec, error_model, 0);
+        let pool = train::pool(threads);
+        pool.install(|| train::train_pass(&recipe, &data, &mut state, 1, warm_up, &hidden))?;
+        let faults = crate::memory::minor_page_faults();
+        let (passed, calls) = crate::memory::count_allocations(|| {
+            pool.install(|| train::train_pass(&recipe, &data, &mut state, 1, counted, &hidden))
+        });
+        passed?;
+        let faults = faults
+            .zip(crate::memory::minor_page_faults())
+            .map(|(a, b)| b - a);
+        let per_step = |count: Option<u64>| {
+            count.map_or("-".to_string(), |c| {
+                format!("{:.1}", c as f64 / steps as f64)
+            })
+        };
+        lines.push(format!(
+            "{} minor page faults and {} allocator calls per step on {threads} thread{}",
+            per_step(faults),
+            per_step(calls),
+            if threads == 1 { "" } else { "s" }
+        ));
+    }
+    println!(
+        "training step (batch {batch}), warm, mean over {steps} steps: {}",
+        lines.join("; ")
+    );
+    Ok(())
 }
 
 /// Whether the PyTorch peer can run before anything is timed: the script is there,
@@ -232,51 +305,47 @@ fn pytorch_ready(spec: &Spec, script: &Path) -> Result<(), String> {
     Ok(())
 }
 
-/// Runs the PyTorch peer `script` with the spec's sizes in each arrangement.
-fn bench_pytorch(spec: &Spec, script: &Path, batches: usize) -> Result<PeerRates, String> {
-    let threads = rayon::current_num_threads();
-    let run = |processes: usize, threads_each: usize| -> Result<f64, String> {
-        let output = std::process::Command::new("python3")
-            .arg(script)
-            .args(["--processes", &processes.to_string()])
-            .args(["--threads", &threads_each.to_string()])
-            .args(["--batches", &batches.to_string()])
-            .args(["--batch", &spec.training.batch_size.to_string()])
-            .args(["--channels", &spec.model.conv_channels.to_string()])
-            .args(["--width", &spec.model.fc_widths[0].to_string()])
-            .output()
-            .map_err(|e| format!("python3 {}: {e}", script.display()))?;
-        let stdout = String::from_utf8_lossy(&output.stdout);
-        if !output.status.success() {
-            return Err(format!(
-                "python3 {} failed ({}):\n{}{}",
+/// The PyTorch peer `script`'s samples/s with the spec's sizes in `arrangement`: its
+/// models in processes of their own.
+fn peer_rate(
+    spec: &Spec,
+    script: &Path,
+    batches: usize,
+    arrangement: Arrangement,
+) -> Result<f64, String> {
+    let output = std::process::Command::new("python3")
+        .arg(script)
+        .args(["--processes", &arrangement.models.to_string()])
+        .args(["--threads", &arrangement.threads.to_string()])
+        .args(["--batches", &batches.to_string()])
+        .args(["--batch", &spec.training.batch_size.to_string()])
+        .args(["--channels", &spec.model.conv_channels.to_string()])
+        .args(["--width", &spec.model.fc_widths[0].to_string()])
+        .output()
+        .map_err(|e| format!("python3 {}: {e}", script.display()))?;
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    if !output.status.success() {
+        return Err(format!(
+            "python3 {} failed ({}):\n{}{}",
+            script.display(),
+            output.status,
+            stdout,
+            String::from_utf8_lossy(&output.stderr)
+        ));
+    }
+    stdout
+        .lines()
+        .find_map(|line| line.strip_prefix("pytorch: "))
+        .and_then(|rest| rest.split_whitespace().next())
+        .and_then(|rate| rate.parse().ok())
+        .ok_or_else(|| {
+            format!(
+                "python3 {} printed no samples/s:\n{}{}",
                 script.display(),
-                output.status,
                 stdout,
                 String::from_utf8_lossy(&output.stderr)
-            ));
-        }
-        stdout
-            .lines()
-            .find_map(|line| line.strip_prefix("pytorch: "))
-            .and_then(|rest| rest.split_whitespace().next())
-            .and_then(|rate| rate.parse().ok())
-            .ok_or_else(|| {
-                format!(
-                    "python3 {} printed no samples/s:\n{}{}",
-                    script.display(),
-                    stdout,
-                    String::from_utf8_lossy(&output.stderr)
-                )
-            })
-    };
-    Ok(PeerRates {
-        rates: TrainingRates {
-            one_thread: run(1, 1)?,
-            one_per_core: run(threads, 1)?,
-        },
-        one_model_all_threads: run(1, threads)?,
-    })
+            )
+        })
 }
 
 /// The median of `values` and their range, as a table cell: `36469 (33796-36924)`, or
@@ -295,85 +364,123 @@ fn median_and_spread(values: &[f64], digits: usize) -> String {
     }
 }
 
-/// The training table: each arrangement's median samples/s over the paired runs with
-/// its range, and, with the peer, the median of the paired ratios on all cores.
-fn print_training_bench(spec: &Spec, ours: &[TrainingRates], peers: &[PeerRates]) {
-    let threads = rayon::current_num_threads();
-    let backend = spec.training.backend;
-    println!(
-        "training: batch {}, {} conv channels, FC {:?}; median (range) of {} run{}{}",
-        spec.training.batch_size,
-        spec.model.conv_channels,
-        spec.model.fc_widths,
-        ours.len(),
-        if ours.len() == 1 { "" } else { "s" },
-        if peers.is_empty() {
-            ""
-        } else {
-            ", each ours then PyTorch's"
-        }
-    );
-    let mut table = comfy_table::Table::new();
-    table.load_preset(comfy_table::presets::ASCII_MARKDOWN);
-    let rates = |f: &dyn Fn(&TrainingRates) -> f64| {
-        median_and_spread(&ours.iter().map(f).collect::<Vec<_>>(), 0)
-    };
-    let peer_rates = |f: &dyn Fn(&PeerRates) -> f64| {
-        median_and_spread(&peers.iter().map(f).collect::<Vec<_>>(), 0)
-    };
-    let mut header = vec![
-        "arrangement".to_string(),
-        format!("dcnet-exp ({backend}) samples/s"),
-    ];
-    let mut rows = vec![
-        vec![
-            "one model, one thread".to_string(),
-            rates(&|r| r.one_thread),
-        ],
-        vec![
-            format!("{threads} models, one per core"),
-            rates(&|r| r.one_per_core),
-        ],
-        vec![format!("one model over {threads} threads"), "-".to_string()],
-    ];
-    if !peers.is_empty() {
-        header.extend(["PyTorch samples/s".to_string(), "ratio".to_string()]);
-        let ratio = |f: &dyn Fn(&TrainingRates, &PeerRates) -> f64| {
-            median_and_spread(
-                &ours
-                    .iter()
-                    .zip(peers)
-                    .map(|(o, p)| f(o, p))
-                    .collect::<Vec<_>>(),
-                2,
-            )
-        };
-        rows[0].extend([
-            peer_rates(&|p| p.rates.one_thread),
-            ratio(&|o, p| o.one_thread / p.rates.one_thread),
-        ]);
-        rows[1].extend([
-            peer_rates(&|p| p.rates.one_per_core),
-            ratio(&|o, p| o.one_per_core / p.rates.one_per_core),
-        ]);
-        rows[2].extend([peer_rates(&|p| p.one_model_all_threads), "-".to_string()]);
-    }
-    table.set_header(header);
-    for row in rows {
-        table.add_row(row);
-    }
-    println!("{table}");
-    if !peers.is_empty() {
-        let ratios: Vec<f64> = ours
+/// Training samples/s on each core count, in each arrangement, over paired runs: ours,
+/// and with the peer script the peer's right after it in the same arrangement.
+struct TrainingTable {
+    /// Per core count, per arrangement: our rates and the peer's, one per run.
+    cells: Vec<(usize, Vec<(Arrangement, Vec<f64>, Vec<f64>)>)>,
+    runs: usize,
+}
+
+impl TrainingTable {
+    fn measure(
+        spec: &Spec,
+        set: &TrainingSet,
+        batches: usize,
+        pytorch: Option<&Path>,
+        runs: usize,
+        counts: &[usize],
+    ) -> Result<Self, CliError> {
+        let mut cells: Vec<(usize, Vec<(Arrangement, Vec<f64>, Vec<f64>)>)> = counts
             .iter()
-            .zip(peers)
-            .map(|(o, p)| o.one_per_core / p.rates.one_per_core.max(p.one_model_all_threads))
+            .map(|&n| {
+                let arrangements = Arrangement::on(n).into_iter();
+                (
+                    n,
+                    arrangements.map(|a| (a, Vec::new(), Vec::new())).collect(),
+                )
+            })
             .collect();
+        for _ in 0..runs {
+            for (_, arrangements) in &mut cells {
+                for (arrangement, ours, peers) in arrangements {
+                    ours.push(training_rate(spec, set, batches, *arrangement).map_err(failure)?);
+                    if let Some(script) = pytorch {
+                        peers.push(
+                            peer_rate(spec, script, batches, *arrangement)
+                                .map_err(|e| failure(anyhow::anyhow!(e)))?,
+                        );
+                    }
+                }
+            }
+        }
+        Ok(Self { cells, runs })
+    }
+
+    /// One row per core count and arrangement: samples/s in all and per model, median
+    /// (range) over the runs, and with the peer its figures and the median of the paired
+    /// ratios; then, per core count, each tool at its best arrangement.
+    fn print(&self, spec: &Spec) {
+        let with_peer = self
+            .cells
+            .iter()
+            .any(|(_, a)| a.iter().any(|c| !c.2.is_empty()));
         println!(
-            "on all {threads} cores, against PyTorch at its best arrangement: {}× (median of {} paired runs, range in brackets)",
-            median_and_spread(&ratios, 2),
-            ratios.len()
+            "training: batch {}, {} conv channels, FC {:?}, {} backend; samples/s, median (range) of {} run{}{}",
+            spec.training.batch_size,
+            spec.model.conv_channels,
+            spec.model.fc_widths,
+            spec.training.backend,
+            self.runs,
+            if self.runs == 1 { "" } else { "s" },
+            if with_peer {
+                ", each ours then PyTorch's in the same arrangement (its models in processes of their own)"
+            } else {
+                ""
+            }
         );
+        let mut table = comfy_table::Table::new();
+        table.load_preset(comfy_table::presets::ASCII_MARKDOWN);
+        let mut header = vec!["cores", "arrangement", "dcnet-exp", "per model"];
+        if with_peer {
+            header.extend(["PyTorch", "per model", "ratio"]);
+        }
+        table.set_header(header);
+        let per_model = |rates: &[f64], a: &Arrangement| {
+            let each: Vec<f64> = rates.iter().map(|r| r / a.models as f64).collect();
+            median_and_spread(&each, 0)
+        };
+        let mut best = Vec::new();
+        for (cores, arrangements) in &self.cells {
+            for (arrangement, ours, peers) in arrangements {
+                let mut row = vec![
+                    cores.to_string(),
+                    arrangement.describe(),
+                    median_and_spread(ours, 0),
+                    per_model(ours, arrangement),
+                ];
+                if with_peer {
+                    let ratios: Vec<f64> = ours.iter().zip(peers).map(|(o, p)| o / p).collect();
+                    row.extend([
+                        median_and_spread(peers, 0),
+                        per_model(peers, arrangement),
+                        median_and_spread(&ratios, 2),
+                    ]);
+                }
+                table.add_row(row);
+            }
+            if with_peer {
+                // Each run: each tool's best arrangement on these cores.
+                let best_of = |pick: fn(&(Arrangement, Vec<f64>, Vec<f64>)) -> &Vec<f64>, run| {
+                    arrangements
+                        .iter()
+                        .map(|c| pick(c)[run])
+                        .fold(0.0, f64::max)
+                };
+                let ratios: Vec<f64> = (0..self.runs)
+                    .map(|run| best_of(|c| &c.1, run) / best_of(|c| &c.2, run))
+                    .collect();
+                best.push(format!("{cores}: {}×", median_and_spread(&ratios, 2)));
+            }
+        }
+        println!("{table}");
+        if with_peer {
+            println!(
+                "each at its best arrangement, against PyTorch, by cores (median of {} paired runs, range in brackets): {}",
+                self.runs,
+                best.join(", ")
+            );
+        }
     }
 }
 

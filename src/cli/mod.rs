@@ -230,12 +230,14 @@ pub fn main() -> Result<(), CliError> {
             repeat,
             training_batches,
             pytorch,
+            scaling,
             overrides,
         } => bench::bench(
             &spec,
             repeat as usize,
             training_batches as usize,
             pytorch.as_deref(),
+            scaling,
             &overrides.set,
         ),
     }

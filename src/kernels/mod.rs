@@ -72,4 +72,5 @@ pub fn instruction_set() -> &'static str {
 
 pub mod activation;
 pub mod linear;
+pub mod network;
 pub mod unfold;

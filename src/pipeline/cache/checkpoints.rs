@@ -9,8 +9,9 @@
 use super::identity::ModelId;
 use super::models::{Blueprint, ModelStore, ModelStoreError, io_error, record_error, write_model};
 use crate::files::{self, Seal, write_atomic};
-use crate::train::{self, EpochRecord, State};
-use burn::tensor::Bytes;
+use crate::rmsprop::RmsProp;
+use crate::train::{EpochRecord, State};
+use burn::store::RecordError;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -113,10 +114,7 @@ impl ModelStore {
             key,
         )?;
         let optimizer_path = folder.join(format!("epoch-{epoch}.optimizer"));
-        let bytes = state
-            .optimizer
-            .into_bytes()
-            .map_err(record_error(&optimizer_path))?;
+        let bytes = state.optimizer.to_bytes();
         files::write_sealed(&optimizer_path, &bytes, key).map_err(io_error(&optimizer_path))?;
         if let Some((_, _, best)) = &state.best {
             write_model(&folder.join(format!("epoch-{epoch}.best")), best, key)?;
@@ -178,9 +176,10 @@ impl ModelStore {
         )?;
         let optimizer_path = folder.join(format!("epoch-{epoch}.optimizer"));
         let bytes = std::fs::read(&optimizer_path).map_err(io_error(&optimizer_path))?;
-        let optimizer = train::optimizer(blueprint.recipe.training)
-            .from_bytes(Bytes::from_bytes_vec(bytes))
-            .map_err(record_error(&optimizer_path))?;
+        let training = blueprint.recipe.training;
+        let alpha = training.rmsprop_alpha as f32;
+        let optimizer = RmsProp::from_bytes(alpha, training.rmsprop_epsilon as f32, &bytes)
+            .map_err(|why| record_error(&optimizer_path)(RecordError::Io(why)))?;
         let best = match (record.best_epoch, record.best_score) {
             (Some(best_epoch), Some(score)) => Some((
                 best_epoch,

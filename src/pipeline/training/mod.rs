@@ -1,6 +1,6 @@
 //! The training scheduler: datasets generated a few at a time, and the models that
-//! train on them interleaved epoch by epoch over the cores, each on a one-thread pool so
-//! that its bytes do not depend on the thread count. The paper's models train here
+//! train on them interleaved epoch by epoch over the cores, each worker on a pool of its
+//! share of the cores (a model's bytes do not depend on how many). The paper's models train here
 //! ([`train`]); an installation study's `[learned]` models go through the same
 //! [`in_batches`] and [`interleave_epochs`] (`pipeline/installation/learned.rs`).
 
@@ -192,9 +192,12 @@ type EpochStep<'a> =
 /// `rayon::current_num_threads()` workers. `start` gives each id its job, the
 /// step that trains one epoch, and its progress bar. A worker takes the training at
 /// the head of the queue, trains its next epoch and puts it back at the tail, so that
-/// every core trains while at least as many trainings as cores are left, and the models
-/// advance together. Each worker runs its epochs on [`train::one_thread_pool`], so a
-/// model computes the same bytes whichever worker, and however many, train it.
+/// the models advance together. There are as many workers as trainings, up to one per
+/// core, and the cores are shared out among them: each worker runs its epochs on a
+/// [`train::pool`] of its share, one thread where trainings outnumber cores, several
+/// where they do not (five models on 16 cores: pools of 4, 3, 3, 3, 3), so every core
+/// trains. A model computes the same bytes whichever worker, and however many threads,
+/// train it.
 /// `announce` is told of each training as it ends. Returns each id's trained model or
 /// the error that ended it.
 pub(crate) fn interleave_epochs<'a, F, S>(
@@ -230,11 +233,15 @@ where
         let (job, step, progress) = start(id);
         place(id, job, Box::new(step), progress);
     }
-    let workers = rayon::current_num_threads().min(ids.len()).max(1);
+    let cores = rayon::current_num_threads();
+    let trainings = queue.lock().expect("no worker panics").len();
+    let workers = cores.min(trainings).max(1);
     std::thread::scope(|scope| {
-        for _ in 0..workers {
-            scope.spawn(|| {
-                let pool = train::one_thread_pool();
+        for worker in 0..workers {
+            let threads = cores / workers + usize::from(worker < cores % workers);
+            let (queue, place) = (&queue, &place);
+            scope.spawn(move || {
+                let pool = train::pool(threads);
                 // The queue only shrinks while this worker is away: every training
                 // not in it is held by a worker that will carry on with it.
                 loop {
