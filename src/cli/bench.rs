@@ -68,11 +68,9 @@ pub(super) fn bench(
     bench_refusal(spec_path).map_err(failure)?;
     let set = dataset::generate(&spec, &trajectories, &hidden);
     print_step_counts(&spec, &set).map_err(failure)?;
-    let counts = if scaling {
-        core_counts(rayon::current_num_threads())
-    } else {
-        vec![rayon::current_num_threads()]
-    };
+    let cores = rayon::current_num_threads();
+    let mut counts = if scaling { core_counts(cores) } else { vec![1, cores] };
+    counts.dedup();
     let table = TrainingTable::measure(&spec, &set, training_batches, pytorch, repeat, &counts)?;
     table.print(&spec);
     Ok(())

@@ -1,7 +1,7 @@
 //! The whole DCNet, both heads and the four Linear layers, as one backend operation over
 //! fixed slices of the batch. In: the network's 18 parameters, the two heads' unfolded
-//! inputs ([`Windows`](crate::model::Windows)) and the dropout masks. Out: the terms
-//! `[windows, outputs]`; backward, the gradient of every parameter.
+//! inputs and the dropout's seed. Out: the terms `[windows, outputs]`; backward, the
+//! gradient of every parameter.
 //!
 //! The batch is cut into [`SLICES`] runs of consecutive windows, as even as the count
 //! allows, whatever the number of threads. Each slice runs forward and backward on its own
@@ -13,8 +13,8 @@
 //! live in a [`Workspace`] that the thread running the step keeps between steps: once the
 //! largest batch has been seen, a step allocates nothing but the tensors burn hands back
 //! (the terms and one gradient per parameter). Every layer is a `gemm` product into a buffer
-//! followed by one pass for the bias, the activation and the mask, the layer order and
-//! arithmetic those of [`model`](crate::model)'s composed form (tested against it).
+//! followed by one pass for the bias, the activation and the mask, in the layer order of
+//! the network composed of burn's operations (the model's tests compare the two).
 
 use super::activation::{leaky_relu_f32, tanh_f32};
 use super::unfold::GRID_TAPS;
@@ -140,24 +140,57 @@ enum Activation {
 }
 
 impl Activation {
-    fn apply(self, v: f32) -> f32 {
+    /// `values ← act(values + bias)`, row by row, at the CPU's widest vectors.
+    fn forward(self, values: &mut [f32], bias: &[f32]) {
         match self {
-            Activation::Identity => v,
-            Activation::Tanh => tanh_f32(v),
-            Activation::Leaky(slope) => leaky_relu_f32(v, slope),
+            Activation::Identity => add_bias_then(values, bias, |v| v),
+            Activation::Tanh => add_bias_then(values, bias, tanh_f32),
+            Activation::Leaky(slope) => {
+                add_bias_then(values, bias, move |v| leaky_relu_f32(v, slope))
+            }
         }
     }
 
-    /// The derivative times `g`, from the activation's output `y`.
-    fn backward(self, y: f32, g: f32) -> f32 {
+    /// `grad ← act′ · grad ⊙ mask` in place, from the activation's output `activated`.
+    fn backward(self, grad: &mut [f32], activated: &[f32], mask: Option<&[f32]>) {
         match self {
-            Activation::Identity => g,
-            Activation::Tanh => g * (1.0 - y * y),
-            Activation::Leaky(slope) => {
-                if y <= 0.0 {
-                    g * slope
-                } else {
-                    g
+            Activation::Identity => times_derivative(grad, activated, mask, |_, g| g),
+            Activation::Tanh => times_derivative(grad, activated, mask, |y, g| g * (1.0 - y * y)),
+            Activation::Leaky(slope) => times_derivative(grad, activated, mask, move |y, g| {
+                if y <= 0.0 { g * slope } else { g }
+            }),
+        }
+    }
+}
+
+per_instruction_set! {
+    /// `values ← f(values + bias)`, row by row.
+    fn add_bias_then<F: [Fn(f32) -> f32]>(values: &mut [f32], bias: &[f32], f: F) -> () {
+        for row in values.chunks_exact_mut(bias.len()) {
+            for (v, &b) in row.iter_mut().zip(bias) {
+                *v = f(*v + b);
+            }
+        }
+    }
+}
+
+per_instruction_set! {
+    /// `grad ← f(y, grad · mask)` (or `f(y, grad)` without a mask), element by element.
+    fn times_derivative<F: [Fn(f32, f32) -> f32]>(
+        grad: &mut [f32],
+        activated: &[f32],
+        mask: Option<&[f32]>,
+        f: F,
+    ) -> () {
+        match mask {
+            Some(mask) => {
+                for ((g, &y), &m) in grad.iter_mut().zip(activated).zip(mask) {
+                    *g = f(y, *g * m);
+                }
+            }
+            None => {
+                for (g, &y) in grad.iter_mut().zip(activated) {
+                    *g = f(y, *g);
                 }
             }
         }
@@ -486,7 +519,7 @@ impl Inputs {
             Operand::plain(x, layer.inputs),
             Operand::plain(self.param(2 * i), layer.outputs),
         );
-        activate(activated, self.param(2 * i + 1), layer.activation);
+        layer.activation.forward(activated, self.param(2 * i + 1));
         if let (Some(mask), Some(masked)) = (mask, masked) {
             resize(masked, activated.len());
             for ((out, &a), &m) in masked.iter_mut().zip(activated.iter()).zip(mask) {
@@ -691,18 +724,7 @@ impl Inputs {
     ) {
         let layer = self.layers[i];
         let rows = count * layer.positions;
-        match mask {
-            Some(mask) => {
-                for ((g, &y), &m) in grad.iter_mut().zip(activated).zip(mask) {
-                    *g = layer.activation.backward(y, *g * m);
-                }
-            }
-            None => {
-                for (g, &y) in grad.iter_mut().zip(activated) {
-                    *g = layer.activation.backward(y, *g);
-                }
-            }
-        }
+        layer.activation.backward(grad, activated, mask);
         product(
             weight_grad,
             [layer.inputs, layer.outputs, rows],
@@ -785,15 +807,6 @@ impl Workspace {
 /// values are overwritten by the caller.
 fn resize(buffer: &mut Vec<f32>, len: usize) {
     buffer.resize(len, 0.0);
-}
-
-/// `values ← act(values + bias)`, row by row.
-fn activate(values: &mut [f32], bias: &[f32], activation: Activation) {
-    for row in values.chunks_exact_mut(bias.len()) {
-        for (v, &b) in row.iter_mut().zip(bias) {
-            *v = activation.apply(*v + b);
-        }
-    }
 }
 
 /// A matrix operand of [`product`]: its values and its row and column strides.
