@@ -16,12 +16,12 @@
 
 use crate::dataset::{INPUT_ROWS, TARGET_ROWS};
 use crate::kernels;
-use crate::kernels::linear::LayerActivation;
 use crate::kernels::unfold::{GRID_TAPS, unfold_grid, unfold_time};
 use crate::spec::ModelSpec;
 use crate::vocab::{Activation, Correction, ErrorModel};
 use burn::module::{Module, Param, ParamId};
 use burn::nn::{Initializer, Linear, LinearConfig};
+use burn::tensor::activation::{leaky_relu, tanh};
 use burn::tensor::{Device, Tensor, TensorData};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
@@ -294,32 +294,26 @@ impl Dcnet {
     ) -> Tensor<2> {
         let mut x = self.features(windows, settings);
         let last = self.fc.len() - 1;
-        let activation = match settings.activation {
-            Activation::Tanh => LayerActivation::Tanh,
-            Activation::LeakyRelu => LayerActivation::LeakyRelu {
-                slope: settings.leaky_relu_slope,
-            },
-        };
         for (i, layer) in self.fc[..last].iter().enumerate() {
-            let mask = dropout.map(|dropout| {
-                let shape = [windows.count, layer.weight.val().dims()[1]];
-                let values = dropout.mask(i, shape[0], shape[1]);
-                Tensor::from_data(TensorData::new(values, shape), &x.device())
-            });
-            x = kernels::linear::linear(x, layer, activation, mask);
+            x = match settings.activation {
+                Activation::Tanh => tanh(layer.forward(x)),
+                Activation::LeakyRelu => leaky_relu(layer.forward(x), settings.leaky_relu_slope),
+            };
+            if let Some(dropout) = dropout {
+                let shape = x.dims();
+                let mask = dropout.mask(i, shape[0], shape[1]);
+                x = x * Tensor::from_data(TensorData::new(mask, shape), &windows.head_1d.device());
+            }
         }
-        kernels::linear::linear(x, &self.fc[last], LayerActivation::Identity, None)
+        self.fc[last].forward(x)
     }
 
     /// The two heads side by side, `[count, flat_1d + flat_2d]`, each flattened
     /// time-major (all channels of one time step, then the next).
     fn features(&self, windows: &Windows, settings: &Settings) -> Tensor<2> {
         let (count, time, kernel) = (windows.count, windows.time, settings.kernel);
-        let activation = LayerActivation::LeakyRelu {
-            slope: settings.leaky_relu_slope,
-        };
-        let layer =
-            |conv: &Linear, x: Tensor<2>| kernels::linear::linear(x, conv, activation, None);
+        let slope = settings.leaky_relu_slope;
+        let layer = |conv: &Linear, x: Tensor<2>| leaky_relu(conv.forward(x), slope);
 
         // 1D head: rows (window, time), then the second conv gathers `kernel` rows.
         let head_1d = layer(&self.conv1d[0], windows.head_1d.clone());
@@ -627,29 +621,5 @@ mod tests {
             })
         };
         assert!(run(1) == run(3), "the bits depend on the thread count");
-    }
-
-    #[test]
-    fn tanh_and_leaky_relu_match_their_definitions() {
-        let device = Device::flex();
-        let values = [-8.0f32, -1.5, -0.3, -1e-3, 0.0, 1e-3, 0.4, 2.0, 9.0];
-        let x = Tensor::<1>::from_data(TensorData::new(values.to_vec(), [values.len()]), &device);
-        let tanh: Vec<f32> = crate::kernels::activation::tanh(x.clone())
-            .into_data()
-            .try_to_vec::<f32>()
-            .unwrap();
-        let leaky: Vec<f32> = crate::kernels::activation::leaky_relu(x, 0.05)
-            .into_data()
-            .try_to_vec::<f32>()
-            .unwrap();
-        for (i, v) in values.iter().enumerate() {
-            assert!((tanh[i] - v.tanh()).abs() < 1e-6, "tanh({v}) = {}", tanh[i]);
-            let want = if *v >= 0.0 { *v } else { 0.05 * v };
-            assert!(
-                (leaky[i] - want).abs() <= 1e-6 * (1.0 + v.abs()),
-                "leaky({v}) = {}",
-                leaky[i]
-            );
-        }
     }
 }

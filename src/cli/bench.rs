@@ -69,7 +69,11 @@ pub(super) fn bench(
     let set = dataset::generate(&spec, &trajectories, &hidden);
     print_step_counts(&spec, &set).map_err(failure)?;
     let cores = rayon::current_num_threads();
-    let mut counts = if scaling { core_counts(cores) } else { vec![1, cores] };
+    let mut counts = if scaling {
+        core_counts(cores)
+    } else {
+        vec![1, cores]
+    };
     counts.dedup();
     let table = TrainingTable::measure(&spec, &set, training_batches, pytorch, repeat, &counts)?;
     table.print(&spec);
@@ -365,9 +369,16 @@ fn median_and_spread(values: &[f64], digits: usize) -> String {
 /// Training samples/s on each core count, in each arrangement, over paired runs: ours,
 /// and with the peer script the peer's right after it in the same arrangement.
 struct TrainingTable {
-    /// Per core count, per arrangement: our rates and the peer's, one per run.
-    cells: Vec<(usize, Vec<(Arrangement, Vec<f64>, Vec<f64>)>)>,
+    /// Per core count, its arrangements.
+    cells: Vec<(usize, Vec<Cell>)>,
     runs: usize,
+}
+
+/// One arrangement's rates, one per run: ours and the peer's.
+struct Cell {
+    arrangement: Arrangement,
+    ours: Vec<f64>,
+    peers: Vec<f64>,
 }
 
 impl TrainingTable {
@@ -379,26 +390,26 @@ impl TrainingTable {
         runs: usize,
         counts: &[usize],
     ) -> Result<Self, CliError> {
-        let mut cells: Vec<(usize, Vec<(Arrangement, Vec<f64>, Vec<f64>)>)> = counts
+        let mut cells: Vec<(usize, Vec<Cell>)> = counts
             .iter()
             .map(|&n| {
-                let arrangements = Arrangement::on(n).into_iter();
-                (
-                    n,
-                    arrangements.map(|a| (a, Vec::new(), Vec::new())).collect(),
-                )
+                let cells = Arrangement::on(n).into_iter().map(|arrangement| Cell {
+                    arrangement,
+                    ours: Vec::new(),
+                    peers: Vec::new(),
+                });
+                (n, cells.collect())
             })
             .collect();
         for _ in 0..runs {
-            for (_, arrangements) in &mut cells {
-                for (arrangement, ours, peers) in arrangements {
-                    ours.push(training_rate(spec, set, batches, *arrangement).map_err(failure)?);
-                    if let Some(script) = pytorch {
-                        peers.push(
-                            peer_rate(spec, script, batches, *arrangement)
-                                .map_err(|e| failure(anyhow::anyhow!(e)))?,
-                        );
-                    }
+            for cell in cells.iter_mut().flat_map(|(_, cells)| cells) {
+                let arrangement = cell.arrangement;
+                let ours = training_rate(spec, set, batches, arrangement).map_err(failure)?;
+                cell.ours.push(ours);
+                if let Some(script) = pytorch {
+                    let peer = peer_rate(spec, script, batches, arrangement)
+                        .map_err(|e| failure(anyhow::anyhow!(e)))?;
+                    cell.peers.push(peer);
                 }
             }
         }
@@ -412,7 +423,7 @@ impl TrainingTable {
         let with_peer = self
             .cells
             .iter()
-            .any(|(_, a)| a.iter().any(|c| !c.2.is_empty()));
+            .any(|(_, cells)| cells.iter().any(|c| !c.peers.is_empty()));
         println!(
             "training: batch {}, {} conv channels, FC {:?}, {} backend; samples/s, median (range) of {} run{}{}",
             spec.training.batch_size,
@@ -439,8 +450,13 @@ impl TrainingTable {
             median_and_spread(&each, 0)
         };
         let mut best = Vec::new();
-        for (cores, arrangements) in &self.cells {
-            for (arrangement, ours, peers) in arrangements {
+        for (cores, cells) in &self.cells {
+            for Cell {
+                arrangement,
+                ours,
+                peers,
+            } in cells
+            {
                 let mut row = vec![
                     cores.to_string(),
                     arrangement.describe(),
@@ -459,14 +475,11 @@ impl TrainingTable {
             }
             if with_peer {
                 // Each run: each tool's best arrangement on these cores.
-                let best_of = |pick: fn(&(Arrangement, Vec<f64>, Vec<f64>)) -> &Vec<f64>, run| {
-                    arrangements
-                        .iter()
-                        .map(|c| pick(c)[run])
-                        .fold(0.0, f64::max)
+                let best_of = |pick: fn(&Cell) -> &Vec<f64>, run| {
+                    cells.iter().map(|c| pick(c)[run]).fold(0.0, f64::max)
                 };
                 let ratios: Vec<f64> = (0..self.runs)
-                    .map(|run| best_of(|c| &c.1, run) / best_of(|c| &c.2, run))
+                    .map(|run| best_of(|c| &c.ours, run) / best_of(|c| &c.peers, run))
                     .collect();
                 best.push(format!("{cores}: {}×", median_and_spread(&ratios, 2)));
             }

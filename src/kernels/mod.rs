@@ -1,14 +1,13 @@
-//! DCNet's hot operations as backend operations of their own, added to burn's Flex
-//! backend through its backend extension, each with a backward written by hand. In:
-//! tensors of the network's layers. Out: the values burn's own operations give (each
-//! module's tests compare them, forward and gradient), in fewer and cheaper passes.
-//! Backends without a kernel run burn's own operations instead.
+//! DCNet on burn's Flex backend as one operation of its own ([`network`]): both heads and
+//! the four Linear layers, forward and a backward written by hand, over fixed slices of
+//! the batch that run on the model's cores. In: the network's parameters and windows.
+//! Out: its terms, and every parameter's gradient; the same values as the network
+//! composed of burn's operations (`model`'s tests compare the two).
 //!
-//! - [`activation`]: tanh and LeakyReLU, one pass each;
-//! - [`linear`]: a Linear layer with its activation and dropout mask, one product and one
-//!   pass forward, one backward node for input, weight and bias;
-//! - [`unfold`]: the convolutions' taps side by side, and their gradient gathered back
-//!   without a scatter.
+//! - [`network`]: the operation, its slices, buffers and dropout;
+//! - [`activation`]: tanh and LeakyReLU on one value, tanh without libm;
+//! - [`unfold`]: the convolutions' taps side by side as burn's `select`, for the composed
+//!   network.
 
 /// A loop function compiled three times, for baseline x86-64 (SSE2, 4 lanes), AVX2 (8) and
 /// AVX-512 (16), the widest the CPU has chosen at run time. The crate targets baseline
@@ -71,6 +70,5 @@ pub fn instruction_set() -> &'static str {
 }
 
 pub mod activation;
-pub mod linear;
 pub mod network;
 pub mod unfold;

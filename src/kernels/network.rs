@@ -156,9 +156,16 @@ impl Activation {
         match self {
             Activation::Identity => times_derivative(grad, activated, mask, |_, g| g),
             Activation::Tanh => times_derivative(grad, activated, mask, |y, g| g * (1.0 - y * y)),
-            Activation::Leaky(slope) => times_derivative(grad, activated, mask, move |y, g| {
-                if y <= 0.0 { g * slope } else { g }
-            }),
+            Activation::Leaky(slope) => {
+                times_derivative(
+                    grad,
+                    activated,
+                    mask,
+                    move |y, g| {
+                        if y <= 0.0 { g * slope } else { g }
+                    },
+                )
+            }
         }
     }
 }
@@ -244,9 +251,9 @@ pub fn runs_on(x: &Tensor<2>) -> bool {
 }
 
 /// The terms `[windows, outputs]` of the windows whose heads' inputs are `head_1d`
-/// `[windows × (time − kernel + 1), channels × kernel]` and `head_2d` `[windows × (time −
-/// 1) × 3, 4]`, for the layers' `weights` `[inputs, outputs]` and `biases` `[outputs]` in
-/// layer order, with `dropout` where training applies it. On an autodiff device, one
+/// `[windows × (time − kernel + 1), channels × kernel]` and `head_2d`
+/// `[windows × (time − 1) × 3, 4]`, for the layers' `weights` `[inputs, outputs]` and
+/// `biases` `[outputs]` in layer order, with `dropout` where training applies it. On an autodiff device, one
 /// backward node gives every parameter's gradient.
 pub fn dcnet(
     weights: Vec<Tensor<2>>,
@@ -531,11 +538,22 @@ impl Inputs {
     /// The number of values of parameter `p`.
     fn param_size(&self, p: usize) -> usize {
         let layer = self.layers[p / 2];
-        if p % 2 == 0 {
+        if p.is_multiple_of(2) {
             layer.inputs * layer.outputs
         } else {
             layer.outputs
         }
+    }
+
+    /// `grads`, one slice's parameter gradients, cut into each parameter's part.
+    fn param_parts<'a>(&self, grads: &'a mut [f32]) -> [&'a mut [f32]; PARAMETERS] {
+        let mut parts: [&mut [f32]; PARAMETERS] = Default::default();
+        let mut rest = grads;
+        for (p, part) in parts.iter_mut().enumerate() {
+            let (head, tail) = std::mem::take(&mut rest).split_at_mut(self.param_size(p));
+            (*part, rest) = (head, tail);
+        }
+        parts
     }
 
     /// The parameters' gradients, `(values, shape)` in parameter order, from the terms'
@@ -604,20 +622,13 @@ impl Inputs {
             grad_head,
             param_grads,
         } = buffers;
-        // Each parameter's part of `param_grads`, handed to its layer's backward.
-        let mut parts: [&mut [f32]; PARAMETERS] = Default::default();
-        let mut rest = &mut param_grads[..];
-        for (p, part) in parts.iter_mut().enumerate() {
-            let (head, tail) = std::mem::take(&mut rest).split_at_mut(self.param_size(p));
-            (*part, rest) = (head, tail);
-        }
+        let mut parts = self.param_parts(param_grads);
         let mut param = |i: usize| {
             (
                 std::mem::take(&mut parts[2 * i]),
                 std::mem::take(&mut parts[2 * i + 1]),
             )
         };
-        let time = self.shape.time;
         // The Linear layers, last to first; `grad_out` holds the gradient of each layer's
         // (masked) output.
         grad_out.clear();
@@ -650,61 +661,46 @@ impl Inputs {
             grad_in[w * flat_1d..][..flat_1d].copy_from_slice(&row[..flat_1d]);
             grad_head[w * flat_2d..][..flat_2d].copy_from_slice(&row[flat_1d..]);
         }
-        // 1D head: layer 1 from `grad_in`, its input's gradient unfolded back for layer 0.
-        self.layer_backward(
-            1,
-            &unfolded[0],
-            count,
-            &activated[1],
-            None,
-            grad_in,
-            Some(&mut *grad_out),
-            param(1),
-        );
-        fold_time(grad_out, count, rows(0), self.shape.kernel, grad_in);
-        self.layer_backward(
-            0,
-            head_1d,
-            count,
-            &activated[0],
-            None,
-            grad_in,
-            None,
-            param(0),
-        );
-        // 2D head: layers 4, 3, 2 from `grad_head`.
-        self.layer_backward(
-            4,
-            &unfolded[2],
-            count,
-            &activated[4],
-            None,
-            grad_head,
-            Some(&mut *grad_out),
-            param(4),
-        );
-        fold_grid(grad_out, count, time - 2, 2, grad_head);
-        self.layer_backward(
-            3,
-            &unfolded[1],
-            count,
-            &activated[3],
-            None,
-            grad_head,
-            Some(&mut *grad_out),
-            param(3),
-        );
-        fold_grid(grad_out, count, time - 1, 3, grad_head);
-        self.layer_backward(
-            2,
-            head_2d,
-            count,
-            &activated[2],
-            None,
-            grad_head,
-            None,
-            param(2),
-        );
+        // 1D head: layers 1 and 0 from `grad_in`, the input's gradient of layer 1 folded
+        // back into the output's of layer 0.
+        for (i, input) in [(1, &unfolded[0][..]), (0, head_1d)] {
+            let fold = (i == 1).then_some(&mut *grad_out);
+            self.layer_backward(
+                i,
+                input,
+                count,
+                &activated[i],
+                None,
+                grad_in,
+                fold,
+                param(i),
+            );
+            if i == 1 {
+                fold_time(grad_out, count, rows(0), self.shape.kernel, grad_in);
+            }
+        }
+        // 2D head: layers 4, 3 and 2 from `grad_head`, folded back the same way.
+        let time = self.shape.time;
+        for (i, input, grid) in [
+            (4, &unfolded[2][..], Some((time - 2, 2))),
+            (3, &unfolded[1][..], Some((time - 1, 3))),
+            (2, head_2d, None),
+        ] {
+            let fold = grid.is_some().then_some(&mut *grad_out);
+            self.layer_backward(
+                i,
+                input,
+                count,
+                &activated[i],
+                None,
+                grad_head,
+                fold,
+                param(i),
+            );
+            if let Some((steps, rows)) = grid {
+                fold_grid(grad_out, count, steps, rows, grad_head);
+            }
+        }
     }
 
     /// Layer `i`'s backward: `grad` (of its masked output) becomes the pre-activation
@@ -969,4 +965,71 @@ fn f32_tensor(values: Vec<f32>, shape: Shape) -> FlexTensor {
         Layout::contiguous(shape),
         DType::F32,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The vectorised passes (AVX-512 or AVX2 where the CPU has them) give the bits of the
+    /// scalar functions, over lengths whose vector loops and scalar tails both run.
+    #[test]
+    fn every_instruction_set_gives_the_same_bits() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let bias: Vec<f32> = (0..17).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let values: Vec<f32> = (0..17 * 59)
+            .map(|_| rng.random_range(-12.0..12.0))
+            .collect();
+        for activation in [Activation::Tanh, Activation::Leaky(0.05)] {
+            let mut vectorised = values.clone();
+            activation.forward(&mut vectorised, &bias);
+            let mut grad = values.clone();
+            activation.backward(&mut grad, &vectorised, Some(&bias.repeat(59)));
+            for (i, (x, &y)) in values.iter().zip(&vectorised).enumerate() {
+                let z = x + bias[i % 17];
+                let scalar = match activation {
+                    Activation::Tanh => tanh_f32(z),
+                    _ => leaky_relu_f32(z, 0.05),
+                };
+                assert_eq!(scalar.to_bits(), y.to_bits(), "{activation:?}({z})");
+                let g = x * bias[i % 17];
+                let derivative = match activation {
+                    Activation::Tanh => g * (1.0 - y * y),
+                    _ if y <= 0.0 => g * 0.05,
+                    _ => g,
+                };
+                assert_eq!(
+                    derivative.to_bits(),
+                    grad[i].to_bits(),
+                    "{activation:?}′ at {y}"
+                );
+            }
+        }
+    }
+
+    /// The slices cover the batch in order, as even as the count allows, and the batch's
+    /// mask is its slices' masks one after the other.
+    #[test]
+    fn slices_cover_the_batch_and_the_mask_follows_them() {
+        for windows in [0, 1, 7, 8, 9, 203] {
+            let ranges: Vec<_> = (0..SLICES).map(|s| slice_windows(windows, s)).collect();
+            assert_eq!(ranges[0].start, 0);
+            assert_eq!(ranges[SLICES - 1].end, windows);
+            for pair in ranges.windows(2) {
+                assert_eq!(pair[0].end, pair[1].start);
+                assert!(pair[0].len() >= pair[1].len() && pair[0].len() <= pair[1].len() + 1);
+            }
+        }
+        let dropout = Dropout { p: 0.3, seed: 9 };
+        let mask = dropout.mask(1, 203, 5);
+        let mut part = Vec::new();
+        dropout.slice_mask(1, 3, slice_windows(203, 3).len(), 5, &mut part);
+        assert_eq!(
+            mask[slice_windows(203, 3).start * 5..][..part.len()],
+            part[..]
+        );
+        let dropped = mask.iter().filter(|&&m| m == 0.0).count() as f64 / mask.len() as f64;
+        assert!((dropped - 0.3).abs() < 0.05, "{dropped} dropped");
+        assert!(mask.iter().all(|&m| m == 0.0 || m == (1.0f64 / 0.7) as f32));
+    }
 }
