@@ -431,26 +431,44 @@ impl Inputs {
             .par_iter_mut()
             .enumerate()
             .for_each(|(s, buffers)| {
-                let windows = self.slice_windows(s);
-                if !windows.is_empty() {
-                    self.slice_forward(windows, buffers);
+                if !self.slice_windows(s).is_empty() {
+                    self.slice_forward(s, buffers);
                 }
             });
+        // An empty slice (a batch of fewer windows than slices) keeps an older step's
+        // buffers, so each slice gives its own windows' rows only.
         let outputs = self.layers[LAYERS - 1].outputs;
         let mut terms = Vec::with_capacity(self.windows * outputs);
-        for buffers in &workspace.slices {
-            terms.extend_from_slice(&buffers.activated[LAYERS - 1]);
+        for (s, buffers) in workspace.slices.iter().enumerate() {
+            let rows = self.slice_windows(s).len() * outputs;
+            terms.extend_from_slice(&buffers.activated[LAYERS - 1][..rows]);
         }
+        assert_eq!(
+            terms.len(),
+            self.windows * outputs,
+            "dcnet: one row of terms a window"
+        );
         f32_tensor(terms, Shape::new([self.windows, outputs]))
     }
 
-    fn slice_forward(&self, windows: std::ops::Range<usize>, buffers: &mut SliceBuffers) {
+    /// The rows of `input`, the first layer's input of a head starting at `layer`, that
+    /// `windows` read.
+    fn head_rows<'a>(
+        &self,
+        input: &'a FlexTensor,
+        layer: usize,
+        windows: &std::ops::Range<usize>,
+    ) -> &'a [f32] {
+        let per_window = self.layers[layer].positions * self.layers[layer].inputs;
+        &values(input)[windows.start * per_window..windows.end * per_window]
+    }
+
+    fn slice_forward(&self, slice: usize, buffers: &mut SliceBuffers) {
+        let windows = self.slice_windows(slice);
         let count = windows.len();
         let rows = |layer: usize| self.layers[layer].positions;
-        let head_1d = &values(&self.head_1d)[windows.start * rows(0) * self.layers[0].inputs..]
-            [..count * rows(0) * self.layers[0].inputs];
-        let head_2d = &values(&self.head_2d)[windows.start * rows(2) * self.layers[2].inputs..]
-            [..count * rows(2) * self.layers[2].inputs];
+        let head_1d = self.head_rows(&self.head_1d, 0, &windows);
+        let head_2d = self.head_rows(&self.head_2d, 2, &windows);
         let SliceBuffers {
             activated,
             masks,
@@ -461,9 +479,6 @@ impl Inputs {
         } = buffers;
         let (time, kernel) = (self.shape.time, self.shape.kernel);
         if let Some(dropout) = &self.dropout {
-            let slice = (0..SLICES)
-                .find(|&s| self.slice_windows(s) == windows)
-                .expect("a slice's windows");
             for (i, mask) in masks.iter_mut().enumerate() {
                 dropout.slice_mask(i, slice, count, self.layers[5 + i].outputs, mask);
             }
@@ -488,14 +503,8 @@ impl Inputs {
             features.extend_from_slice(&activated[4][w * flat_2d..][..flat_2d]);
         }
         // The Linear layers: each reads the previous one's masked output.
-        let (before, after) = activated.split_at_mut(5);
-        let _ = before;
-        let [a5, a6, a7, a8] = after else {
-            unreachable!("four Linear layers")
-        };
-        let [m5, m6, m7] = &mut masked[..] else {
-            unreachable!("three masked layers")
-        };
+        let [_, _, _, _, _, a5, a6, a7, a8] = activated;
+        let [m5, m6, m7] = masked;
         let dropped = self.dropout.is_some();
         self.layer_forward(5, features, count, a5, mask(0), Some(m5));
         let x6 = if dropped { &*m5 } else { &*a5 };
@@ -572,7 +581,7 @@ impl Inputs {
                     buffers.param_grads.fill(0.0);
                 } else {
                     let grad = &grad[windows.start * outputs..][..windows.len() * outputs];
-                    self.slice_backward(windows, grad, buffers);
+                    self.slice_backward(s, grad, buffers);
                 }
             });
         // Each value's sum over the slices, in slice order; chunks of values in parallel.
@@ -599,18 +608,12 @@ impl Inputs {
         grads
     }
 
-    fn slice_backward(
-        &self,
-        windows: std::ops::Range<usize>,
-        grad: &[f32],
-        buffers: &mut SliceBuffers,
-    ) {
+    fn slice_backward(&self, slice: usize, grad: &[f32], buffers: &mut SliceBuffers) {
+        let windows = self.slice_windows(slice);
         let count = windows.len();
         let rows = |layer: usize| self.layers[layer].positions;
-        let head_1d = &values(&self.head_1d)[windows.start * rows(0) * self.layers[0].inputs..]
-            [..count * rows(0) * self.layers[0].inputs];
-        let head_2d = &values(&self.head_2d)[windows.start * rows(2) * self.layers[2].inputs..]
-            [..count * rows(2) * self.layers[2].inputs];
+        let head_1d = self.head_rows(&self.head_1d, 0, &windows);
+        let head_2d = self.head_rows(&self.head_2d, 2, &windows);
         let SliceBuffers {
             activated,
             masks,
