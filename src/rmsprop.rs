@@ -49,14 +49,10 @@ impl RmsProp {
         rmp_serde::to_vec(&self.square_avg).expect("a list of f32 lists serialises")
     }
 
-    /// The optimizer of these settings with the means `bytes` saved.
-    pub fn from_bytes(alpha: f32, epsilon: f32, bytes: &[u8]) -> Result<Self, String> {
+    /// This optimizer with the means of `bytes`, as [`RmsProp::to_bytes`] saved them.
+    pub fn with_bytes(self, bytes: &[u8]) -> Result<Self, String> {
         let square_avg = rmp_serde::from_slice(bytes).map_err(|e| e.to_string())?;
-        Ok(Self {
-            alpha,
-            epsilon,
-            square_avg,
-        })
+        Ok(Self { square_avg, ..self })
     }
 }
 
@@ -185,7 +181,9 @@ mod tests {
         let mut optimizer = RmsProp::new(alpha, epsilon);
         for step in 0..5 {
             if step == 3 {
-                optimizer = RmsProp::from_bytes(alpha, epsilon, &optimizer.to_bytes()).unwrap();
+                optimizer = RmsProp::new(alpha, epsilon)
+                    .with_bytes(&optimizer.to_bytes())
+                    .unwrap();
             }
             ours = optimizer.step(lr, ours.clone(), &loss(&ours).backward());
             let grads = GradientsParams::from_grads(loss(&theirs).backward(), &theirs);

@@ -185,6 +185,51 @@ fn core_counts(cores: usize) -> Vec<usize> {
 /// Training batches each model trains before it is timed, as the peer script does.
 const WARM_UP_BATCHES: usize = 10;
 
+/// A fresh model of the spec's last error model (EM5 by default) on its own pool of
+/// threads, training the windows of its first epoch in order, batch by batch.
+struct BenchModel<'a> {
+    recipe: train::Recipe<'a>,
+    data: train::PaperWindows<'a>,
+    state: train::State,
+    pool: rayon::ThreadPool,
+    order: Vec<usize>,
+    done: usize,
+}
+
+impl<'a> BenchModel<'a> {
+    /// The model whose seeds are the spec's plus `seed_offset`, on `threads` threads.
+    fn new(spec: &'a Spec, set: &'a TrainingSet, seed_offset: u64, threads: usize) -> Self {
+        let error_model = *spec.error_models.last().unwrap_or(&ErrorModel::Em5);
+        let mut recipe = train::Recipe::paper(spec, error_model);
+        recipe.seed += seed_offset;
+        let data = train::PaperWindows { set, error_model };
+        let order = train::epoch_order(&recipe, &data, 0, 1);
+        let state = train::State::of(&recipe, error_model, spec.dataset.window_samples, 0);
+        Self {
+            recipe,
+            data,
+            state,
+            pool: train::pool(threads),
+            order,
+            done: 0,
+        }
+    }
+
+    /// Trains the next `batches` batches (fewer where the epoch ends); returns their
+    /// windows.
+    fn train(&mut self, batches: usize) -> Result<usize, TrainError> {
+        let batch = self.recipe.training.batch_size;
+        let start = self.done.min(self.order.len());
+        let windows = &self.order[start..(start + batches * batch).min(self.order.len())];
+        let (recipe, data, state) = (&self.recipe, &self.data, &mut self.state);
+        let hidden = crate::progress::Progress::hidden();
+        self.pool
+            .install(|| train::train_pass(recipe, data, state, 1, windows, &hidden))?;
+        self.done = start + windows.len();
+        Ok(windows.len())
+    }
+}
+
 /// Training samples/s of the spec's model and batch size on its backend in
 /// `arrangement`: each model times its own batches after [`WARM_UP_BATCHES`], and the
 /// rates are summed, as the peer script sums its processes'.
@@ -194,24 +239,12 @@ fn training_rate(
     batches: usize,
     arrangement: Arrangement,
 ) -> Result<f64, TrainError> {
-    let error_model = *spec.error_models.last().unwrap_or(&ErrorModel::Em5);
-    let hidden = crate::progress::Progress::hidden();
-    let batch = spec.training.batch_size;
     let run_model = |seed_offset: u64| -> Result<f64, TrainError> {
-        let mut spec = spec.clone();
-        spec.seed += seed_offset;
-        let recipe = train::Recipe::paper(&spec, error_model);
-        let data = train::PaperWindows { set, error_model };
-        let order = train::epoch_order(&recipe, &data, 0, 1);
-        let (warm_up, timed) = order.split_at((WARM_UP_BATCHES * batch).min(order.len()));
-        let timed = &timed[..timed.len().min(batches * batch)];
-        let mut state = train::State::new(&spec, error_model, 0);
-        train::pool(arrangement.threads).install(|| {
-            train::train_pass(&recipe, &data, &mut state, 1, warm_up, &hidden)?;
-            let clock = Instant::now();
-            train::train_pass(&recipe, &data, &mut state, 1, timed, &hidden)?;
-            Ok(timed.len() as f64 / clock.elapsed().as_secs_f64())
-        })
+        let mut model = BenchModel::new(spec, set, seed_offset, arrangement.threads);
+        model.train(WARM_UP_BATCHES)?;
+        let clock = Instant::now();
+        let windows = model.train(batches)?;
+        Ok(windows as f64 / clock.elapsed().as_secs_f64())
     };
     std::thread::scope(|scope| {
         let handles: Vec<_> = (0..arrangement.models as u64)
@@ -227,25 +260,15 @@ fn training_rate(
 /// Prints the minor page faults and allocator calls of one warm training step, for one
 /// model on one thread and over every thread.
 fn print_step_counts(spec: &Spec, set: &TrainingSet) -> Result<(), TrainError> {
-    let error_model = *spec.error_models.last().unwrap_or(&ErrorModel::Em5);
-    let recipe = train::Recipe::paper(spec, error_model);
-    let data = train::PaperWindows { set, error_model };
-    let order = train::epoch_order(&recipe, &data, 0, 1);
     let batch = spec.training.batch_size;
-    let steps = 50.min(order.len() / batch / 2).max(1);
-    let (warm_up, counted) = order.split_at((steps * batch).min(order.len()));
-    let counted = &counted[..counted.len().min(steps * batch)];
-    let hidden = crate::progress::Progress::hidden();
+    let steps = 50.min(set.training_len() / batch / 2).max(1);
     let all = rayon::current_num_threads();
     let mut lines = Vec::new();
     for threads in if all > 1 { vec![1, all] } else { vec![1] } {
-        let mut state = train::State::new(spec, error_model, 0);
-        let pool = train::pool(threads);
-        pool.install(|| train::train_pass(&recipe, &data, &mut state, 1, warm_up, &hidden))?;
+        let mut model = BenchModel::new(spec, set, 0, threads);
+        model.train(steps)?;
         let faults = crate::memory::minor_page_faults();
-        let (passed, calls) = crate::memory::count_allocations(|| {
-            pool.install(|| train::train_pass(&recipe, &data, &mut state, 1, counted, &hidden))
-        });
+        let (passed, calls) = crate::memory::count_allocations(|| model.train(steps));
         passed?;
         let faults = faults
             .zip(crate::memory::minor_page_faults())

@@ -451,24 +451,22 @@ impl Inputs {
         f32_tensor(terms, Shape::new([self.windows, outputs]))
     }
 
-    /// The rows of `input`, the first layer's input of a head starting at `layer`, that
-    /// `windows` read.
-    fn head_rows<'a>(
-        &self,
-        input: &'a FlexTensor,
-        layer: usize,
-        windows: &std::ops::Range<usize>,
-    ) -> &'a [f32] {
-        let per_window = self.layers[layer].positions * self.layers[layer].inputs;
-        &values(input)[windows.start * per_window..windows.end * per_window]
+    /// Slice `slice`'s windows, and the rows of the two heads' inputs that they read.
+    fn slice_inputs(&self, slice: usize) -> (std::ops::Range<usize>, &[f32], &[f32]) {
+        let windows = slice_windows(self.windows, slice);
+        let rows = |input, layer: usize| {
+            let per_window = self.layers[layer].positions * self.layers[layer].inputs;
+            &values(input)[windows.start * per_window..windows.end * per_window]
+        };
+        let head_1d = rows(&self.head_1d, 0);
+        let head_2d = rows(&self.head_2d, 2);
+        (windows, head_1d, head_2d)
     }
 
     fn slice_forward(&self, slice: usize, buffers: &mut SliceBuffers) {
-        let windows = self.slice_windows(slice);
+        let (windows, head_1d, head_2d) = self.slice_inputs(slice);
         let count = windows.len();
         let rows = |layer: usize| self.layers[layer].positions;
-        let head_1d = self.head_rows(&self.head_1d, 0, &windows);
-        let head_2d = self.head_rows(&self.head_2d, 2, &windows);
         let SliceBuffers {
             activated,
             masks,
@@ -609,11 +607,9 @@ impl Inputs {
     }
 
     fn slice_backward(&self, slice: usize, grad: &[f32], buffers: &mut SliceBuffers) {
-        let windows = self.slice_windows(slice);
+        let (windows, head_1d, head_2d) = self.slice_inputs(slice);
         let count = windows.len();
         let rows = |layer: usize| self.layers[layer].positions;
-        let head_1d = self.head_rows(&self.head_1d, 0, &windows);
-        let head_2d = self.head_rows(&self.head_2d, 2, &windows);
         let SliceBuffers {
             activated,
             masks,

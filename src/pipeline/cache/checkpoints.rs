@@ -9,8 +9,7 @@
 use super::identity::ModelId;
 use super::models::{Blueprint, ModelStore, ModelStoreError, io_error, record_error, write_model};
 use crate::files::{self, Seal, write_atomic};
-use crate::rmsprop::RmsProp;
-use crate::train::{EpochRecord, State};
+use crate::train::{self, EpochRecord, State};
 use burn::store::RecordError;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -176,9 +175,8 @@ impl ModelStore {
         )?;
         let optimizer_path = folder.join(format!("epoch-{epoch}.optimizer"));
         let bytes = std::fs::read(&optimizer_path).map_err(io_error(&optimizer_path))?;
-        let training = blueprint.recipe.training;
-        let alpha = training.rmsprop_alpha as f32;
-        let optimizer = RmsProp::from_bytes(alpha, training.rmsprop_epsilon as f32, &bytes)
+        let optimizer = train::optimizer(blueprint.recipe.training)
+            .with_bytes(&bytes)
             .map_err(|why| record_error(&optimizer_path)(RecordError::Io(why)))?;
         let best = match (record.best_epoch, record.best_score) {
             (Some(best_epoch), Some(score)) => Some((
