@@ -354,6 +354,23 @@ pub fn split_terms(terms: Tensor<2>, error_model: ErrorModel) -> (Tensor<2>, Ten
     }
 }
 
+/// The columns of `error_model`'s terms that [`split_terms`] reads for each axis's scale
+/// factor and bias.
+pub fn term_columns(error_model: ErrorModel) -> kernels::loss::TermColumns {
+    let (every, none) = ([0, 1, 2].map(Some), [None; 3]);
+    let (scale_pct, bias_cm_s) = match error_model {
+        ErrorModel::Em1 => ([Some(0); 3], none),
+        ErrorModel::Em2 => (every, none),
+        ErrorModel::Em3 => (none, [Some(0); 3]),
+        ErrorModel::Em4 => (none, every),
+        ErrorModel::Em5 => (every, [3, 4, 5].map(Some)),
+    };
+    kernels::loss::TermColumns {
+        scale_pct,
+        bias_cm_s,
+    }
+}
+
 /// The correction that one row of network output stands for.
 pub fn correction(terms: &[f32], error_model: ErrorModel) -> Correction {
     let t = |i: usize| f64::from(terms[i]) / 100.0;

@@ -91,13 +91,12 @@ impl ModuleMapper for Step<'_> {
         );
         let updated = with_values(tensor.inner(), |weights| {
             with_values(grad, |grad| {
-                let values = weights.iter().zip(grad).zip(mean.iter_mut());
-                values
-                    .map(|((&w, &g), s)| {
-                        *s = *s * alpha + g * g * (1.0 - alpha);
-                        w - g / (s.sqrt() + epsilon) * lr
-                    })
-                    .collect::<Vec<f32>>()
+                let mut updated = vec![0.0; weights.len()];
+                step_values(weights, grad, mean, &mut updated, |w, g, s| {
+                    *s = *s * alpha + g * g * (1.0 - alpha);
+                    w - g / (s.sqrt() + epsilon) * lr
+                });
+                updated
             })
         });
         let updated = on_device(updated, shape, &device);
@@ -107,6 +106,23 @@ impl ModuleMapper for Step<'_> {
             updated
         };
         Param::from_mapped_value(id, updated, mapper)
+    }
+}
+
+crate::kernels::per_instruction_set! {
+    /// `updated ← step(weights, grad, mean)` value by value, `step` updating the mean.
+    fn step_values<F: [Fn(f32, f32, &mut f32) -> f32]>(
+        weights: &[f32],
+        grad: &[f32],
+        mean: &mut [f32],
+        updated: &mut [f32],
+        step: F,
+    ) -> () {
+        let n = updated.len();
+        let (weights, grad, mean) = (&weights[..n], &grad[..n], &mut mean[..n]);
+        for i in 0..n {
+            updated[i] = step(weights[i], grad[i], &mut mean[i]);
+        }
     }
 }
 

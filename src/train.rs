@@ -11,7 +11,8 @@
 //! without `training.replicates`) draws from the streams of (seed, error model, epoch).
 
 use crate::dataset::{INPUT_ROWS, TARGET_ROWS, TrainingSet};
-use crate::model::{Dcnet, NetworkIo, Settings, Windows, split_terms, truth_cm_s};
+use crate::kernels;
+use crate::model::{Dcnet, NetworkIo, Settings, Windows, split_terms, term_columns, truth_cm_s};
 use crate::progress::Progress;
 use crate::rmsprop::RmsProp;
 use crate::rng::task_rng;
@@ -232,6 +233,20 @@ pub fn optimizer(training: &TrainingSpec) -> RmsProp {
 /// `dvl_cm_s` `[batch, time, 3]` and ground truth `truth_cm_s` `[batch, time, 3]`, in
 /// (cm/s)².
 pub fn closed_loop_loss(
+    terms: Tensor<2>,
+    error_model: ErrorModel,
+    dvl_cm_s: Tensor<3>,
+    truth_cm_s: Tensor<3>,
+) -> Tensor<1> {
+    if kernels::network::runs_on(&terms) {
+        let columns = term_columns(error_model);
+        return kernels::loss::closed_loop_loss(terms, columns, dvl_cm_s, truth_cm_s);
+    }
+    composed_closed_loop_loss(terms, error_model, dvl_cm_s, truth_cm_s)
+}
+
+/// [`closed_loop_loss`] composed of burn's operations.
+fn composed_closed_loop_loss(
     terms: Tensor<2>,
     error_model: ErrorModel,
     dvl_cm_s: Tensor<3>,
@@ -493,6 +508,54 @@ pub(crate) mod tests {
     }
     use crate::estimators::Estimator;
     use burn::tensor::TensorData;
+
+    /// On Flex the loss is one operation: its value and the terms' gradient are those of
+    /// the loss composed of burn's operations, for every error model, on 7 windows of 5
+    /// samples.
+    #[test]
+    fn the_loss_operation_matches_the_composed_loss() {
+        use burn::tensor::TensorData;
+        use rand::{RngExt, SeedableRng};
+        let device = Device::flex().autodiff();
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut random = |shape: Vec<usize>, spread: f32| {
+            let count = shape.iter().product();
+            let values: Vec<f32> = (0..count).map(|_| rng.random_range(-spread..spread)).collect();
+            TensorData::new(values, shape)
+        };
+        let dvl = Tensor::<3>::from_data(random(vec![7, 5, 3], 150.0), &device);
+        let truth = dvl.clone() * 0.97 + Tensor::from_data(random(vec![7, 5, 3], 2.0), &device);
+        for error_model in ErrorModel::ALL {
+            let outputs = error_model.term_count();
+            let terms = random(vec![7, outputs], 4.0);
+            let loss_and_gradient = |fused: bool| {
+                let terms = Tensor::<2>::from_data(terms.clone(), &device).require_grad();
+                let (dvl, truth) = (dvl.clone(), truth.clone());
+                let loss = if fused {
+                    closed_loop_loss(terms.clone(), error_model, dvl, truth)
+                } else {
+                    composed_closed_loop_loss(terms.clone(), error_model, dvl, truth)
+                };
+                let gradient = terms.grad(&loss.backward()).expect("a gradient");
+                let value: f32 = loss.into_scalar();
+                (value, gradient.into_data().try_to_vec::<f32>().unwrap())
+            };
+            let ((fused, fused_gradient), (composed, composed_gradient)) =
+                (loss_and_gradient(true), loss_and_gradient(false));
+            assert!(
+                (fused - composed).abs() <= 1e-5 * composed,
+                "{error_model:?}: loss {fused} against {composed}"
+            );
+            let largest = composed_gradient.iter().fold(0f32, |m, g| m.max(g.abs()));
+            assert!(largest > 0.0, "{error_model:?}: a zero gradient tests nothing");
+            for (i, (x, y)) in fused_gradient.iter().zip(&composed_gradient).enumerate() {
+                assert!(
+                    (x - y).abs() <= 1e-5 * largest,
+                    "{error_model:?}, gradient {i}: {x} against {y}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn closed_loop_loss_matches_a_hand_computed_value() {

@@ -2,9 +2,11 @@
 //! the four Linear layers, forward and a backward written by hand, over fixed slices of
 //! the batch that run on the model's cores. In: the network's parameters and windows.
 //! Out: its terms, and every parameter's gradient; the same values as the network
-//! composed of burn's operations (`model`'s tests compare the two).
+//! composed of burn's operations (`model`'s tests compare the two). The paper's loss on
+//! those terms is one operation too ([`loss`]).
 //!
 //! - [`network`]: the operation, its slices, buffers and dropout;
+//! - [`loss`]: the paper's closed-loop loss as one operation, forward and backward;
 //! - [`activation`]: tanh and LeakyReLU on one value, tanh without libm;
 //! - [`unfold`]: the convolutions' taps side by side as burn's `select`, for the composed
 //!   network.
@@ -47,6 +49,7 @@ macro_rules! per_instruction_set {
         }
     };
 }
+pub(crate) use per_instruction_set;
 
 /// The widest vector instructions the matrix products (the `gemm` crate, with its AVX-512
 /// micro-kernels enabled) use on this machine. Their blocking over the inner dimension
@@ -70,5 +73,24 @@ pub fn instruction_set() -> &'static str {
 }
 
 pub mod activation;
+pub mod loss;
 pub mod network;
 pub mod unfold;
+
+use burn::backend::flex::{FlexTensor, Layout};
+use burn::tensor::{Bytes, DType, Shape};
+
+/// The values of a contiguous f32 tensor.
+fn values(x: &FlexTensor) -> &[f32] {
+    x.as_slice::<f32>()
+        .expect("kernels: contiguous f32 tensors")
+}
+
+/// A contiguous f32 tensor owning `values`.
+fn f32_tensor(values: Vec<f32>, shape: Shape) -> FlexTensor {
+    FlexTensor::new(
+        Bytes::from_elems(values),
+        Layout::contiguous(shape),
+        DType::F32,
+    )
+}

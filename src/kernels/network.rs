@@ -18,14 +18,15 @@
 
 use super::activation::{leaky_relu_f32, tanh_f32};
 use super::unfold::GRID_TAPS;
+use super::{f32_tensor, values};
 use burn::backend::autodiff::checkpoint::base::Checkpointer;
 use burn::backend::autodiff::checkpoint::strategy::NoCheckpointing;
 use burn::backend::autodiff::grads::Gradients;
 use burn::backend::autodiff::ops::{Backward, Ops, OpsKind};
-use burn::backend::flex::{FlexTensor, Layout};
+use burn::backend::flex::FlexTensor;
 use burn::backend::tensor::FloatTensor;
 use burn::backend::{Autodiff, Flex, TensorMetadata};
-use burn::tensor::{Bytes, DType, Device, Shape, Tensor};
+use burn::tensor::{DType, Device, Shape, Tensor};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -950,20 +951,6 @@ fn add(row: &mut [f32], block: &[f32]) {
     for (sum, value) in row.iter_mut().zip(block) {
         *sum += value;
     }
-}
-
-/// The values of a contiguous f32 tensor.
-fn values(x: &FlexTensor) -> &[f32] {
-    x.as_slice::<f32>().expect("dcnet: contiguous f32 tensors")
-}
-
-/// A contiguous f32 tensor owning `values`.
-fn f32_tensor(values: Vec<f32>, shape: Shape) -> FlexTensor {
-    FlexTensor::new(
-        Bytes::from_elems(values),
-        Layout::contiguous(shape),
-        DType::F32,
-    )
 }
 
 #[cfg(test)]
