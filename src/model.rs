@@ -25,6 +25,7 @@ use burn::tensor::activation::{leaky_relu, tanh};
 use burn::tensor::{Device, Tensor, TensorData};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 
 /// The three convolutions of the 2D head have 2×2 kernels, their taps in [`GRID_TAPS`]
 /// order; the first pairs row i with row i + 3 (DVL with GNSS), the next two neighbouring
@@ -150,50 +151,82 @@ impl Windows {
     /// `inputs` `[count, rows, time]` row-major: DVL x, y, z then GNSS (or reference)
     /// x, y, z, in m/s, and with `rows` = 9 the body rate p, q, r in rad/s.
     pub fn new(inputs: &[f32], rows: usize, time: usize, kernel: usize, device: &Device) -> Self {
+        let windows: Vec<&[f32]> = inputs.chunks_exact(rows * time).collect();
+        Self::of(&windows, rows, time, kernel, device)
+    }
+
+    /// [`Windows::new`] of windows that lie apart, each `[rows, time]` row-major: a
+    /// batch read straight from a training set. Chunks of windows fill their rows in
+    /// parallel.
+    pub fn of(
+        windows: &[&[f32]],
+        rows: usize,
+        time: usize,
+        kernel: usize,
+        device: &Device,
+    ) -> Self {
         assert!(rows == INPUT_ROWS || rows == INPUT_ROWS + 3, "6 or 9 rows");
         let with_rate = rows > INPUT_ROWS;
         let channels_1d = if with_rate { 6 } else { 3 };
-        let count = inputs.len() / (rows * time);
-        let value = |window: usize, row: usize, t: usize| inputs[(window * rows + row) * time + t];
+        let count = windows.len();
         let steps_1d = time + 1 - kernel;
-        let mut head_1d = Vec::with_capacity(count * steps_1d * channels_1d * kernel);
-        let mut head_2d = Vec::with_capacity(count * (time - 1) * 3 * KERNEL_2D);
-        let mut dvl = Vec::with_capacity(count * time * 3);
-        let mut rate = Vec::new();
-        for w in 0..count {
-            for t in 0..steps_1d {
-                for tap in 0..kernel {
-                    for axis in 0..3 {
-                        head_1d
-                            .push((value(w, axis, t + tap) - value(w, axis + 3, t + tap)) * 100.0);
+        let sizes = [
+            steps_1d * channels_1d * kernel,
+            (time - 1) * 3 * KERNEL_2D,
+            time * 3,
+        ];
+        let [mut head_1d, mut head_2d, mut dvl] = sizes.map(|size| vec![0.0f32; count * size]);
+        let task = |size: usize| size * WINDOWS_PER_TASK;
+        head_1d
+            .par_chunks_mut(task(sizes[0]))
+            .zip(head_2d.par_chunks_mut(task(sizes[1])))
+            .zip(dvl.par_chunks_mut(task(sizes[2])))
+            .zip(windows.par_chunks(WINDOWS_PER_TASK))
+            .for_each(|(((head_1d, head_2d), dvl), windows)| {
+                windows.iter().for_each(|window| touch(window));
+                let outputs = head_1d
+                    .chunks_mut(sizes[0])
+                    .zip(head_2d.chunks_mut(sizes[1]));
+                let outputs = outputs.zip(dvl.chunks_mut(sizes[2]));
+                for (((head_1d, head_2d), dvl), window) in outputs.zip(windows) {
+                    let value = |row: usize, t: usize| window[row * time + t];
+                    let mut head_1d = head_1d.iter_mut();
+                    for t in 0..steps_1d {
+                        for tap in 0..kernel {
+                            for axis in 0..3 {
+                                let difference = value(axis, t + tap) - value(axis + 3, t + tap);
+                                *head_1d.next().unwrap() = difference * 100.0;
+                            }
+                            if with_rate {
+                                for axis in 0..3 {
+                                    *head_1d.next().unwrap() =
+                                        value(axis + 6, t + tap).to_degrees();
+                                }
+                            }
+                        }
                     }
-                    if with_rate {
-                        for axis in 0..3 {
-                            head_1d.push(value(w, axis + 6, t + tap).to_degrees());
+                    let mut head_2d = head_2d.iter_mut();
+                    for t in 0..time - 1 {
+                        for row in 0..3 {
+                            for (row_tap, time_tap) in GRID_TAPS {
+                                *head_2d.next().unwrap() =
+                                    value(row + FIRST_ROW_DILATION * row_tap, t + time_tap);
+                            }
+                        }
+                    }
+                    for (t, sample) in dvl.chunks_exact_mut(3).enumerate() {
+                        for (axis, value_cm_s) in sample.iter_mut().enumerate() {
+                            *value_cm_s = value(axis, t) * 100.0;
                         }
                     }
                 }
-            }
-            for t in 0..time - 1 {
-                for row in 0..3 {
-                    for (row_tap, time_tap) in GRID_TAPS {
-                        head_2d.push(value(w, row + FIRST_ROW_DILATION * row_tap, t + time_tap));
-                    }
-                }
-            }
-            for t in 0..time {
-                for axis in 0..3 {
-                    dvl.push(value(w, axis, t) * 100.0);
-                }
-            }
-            if with_rate {
-                for t in 0..time {
-                    for axis in 0..3 {
-                        rate.push(value(w, axis + 6, t));
-                    }
-                }
-            }
-        }
+            });
+        let rate = with_rate.then(|| {
+            let rate = windows.iter().flat_map(|window| {
+                (0..time).flat_map(move |t| (6..9).map(move |row| window[row * time + t]))
+            });
+            Tensor::from_data(TensorData::new(rate.collect(), [count, time, 3]), device)
+        });
         Self {
             count,
             time,
@@ -206,24 +239,44 @@ impl Windows {
                 device,
             ),
             dvl_cm_s: Tensor::from_data(TensorData::new(dvl, [count, time, 3]), device),
-            rate_rad_s: with_rate
-                .then(|| Tensor::from_data(TensorData::new(rate, [count, time, 3]), device)),
+            rate_rad_s: rate,
         }
     }
 }
 
-/// Targets `[count, 3, time]` row-major in m/s → `[count, time, 3]` in cm/s, the layout
-/// of [`Windows::dvl_cm_s`].
-pub fn truth_cm_s(targets: &[f32], time: usize, device: &Device) -> Tensor<3> {
-    let count = targets.len() / (TARGET_ROWS * time);
-    let mut truth = Vec::with_capacity(targets.len());
-    for w in 0..count {
-        for t in 0..time {
-            for axis in 0..TARGET_ROWS {
-                truth.push(targets[(w * TARGET_ROWS + axis) * time + t] * 100.0);
-            }
-        }
+/// Windows filled per task of the pool in [`Windows::of`] and [`truth_cm_s`].
+const WINDOWS_PER_TASK: usize = 16;
+
+/// Reads one value in each cache line of `values`. A batch's windows lie at random in a
+/// training set of hundreds of MB, and read one after the other each waits for memory
+/// in turn; these reads do not depend on each other, so their waits overlap, and the
+/// windows are in cache when they are read.
+fn touch(values: &[f32]) {
+    const PER_LINE: usize = 64 / std::mem::size_of::<f32>();
+    for value in values.iter().step_by(PER_LINE).chain(values.last()) {
+        std::hint::black_box(*value);
     }
+}
+
+/// Targets of each window `[3, time]` row-major in m/s → `[count, time, 3]` in cm/s, the
+/// layout of [`Windows::dvl_cm_s`].
+pub fn truth_cm_s(windows: &[&[f32]], time: usize, device: &Device) -> Tensor<3> {
+    let count = windows.len();
+    let mut truth = vec![0.0f32; count * time * TARGET_ROWS];
+    let size = time * TARGET_ROWS;
+    truth
+        .par_chunks_mut(size * WINDOWS_PER_TASK)
+        .zip(windows.par_chunks(WINDOWS_PER_TASK))
+        .for_each(|(truth, windows)| {
+            windows.iter().for_each(|window| touch(window));
+            for (truth, targets) in truth.chunks_mut(size).zip(windows) {
+                for (t, sample) in truth.chunks_exact_mut(TARGET_ROWS).enumerate() {
+                    for (axis, value_cm_s) in sample.iter_mut().enumerate() {
+                        *value_cm_s = targets[axis * time + t] * 100.0;
+                    }
+                }
+            }
+        });
     Tensor::from_data(TensorData::new(truth, [count, time, TARGET_ROWS]), device)
 }
 

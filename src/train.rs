@@ -22,6 +22,7 @@ use burn::module::Module;
 use burn::tensor::{Device, Tensor};
 use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// How one model trained: its cache key, every epoch's losses, the epoch whose
@@ -269,14 +270,16 @@ fn batch_of(
     device: &Device,
 ) -> (Windows, Tensor<3>) {
     let w = set.window;
-    let mut inputs = Vec::with_capacity(indices.len() * INPUT_ROWS * w);
-    let mut targets = Vec::with_capacity(indices.len() * TARGET_ROWS * w);
-    for &i in indices {
-        inputs.extend_from_slice(&set.inputs[i * INPUT_ROWS * w..][..INPUT_ROWS * w]);
-        targets.extend_from_slice(&set.targets[i * TARGET_ROWS * w..][..TARGET_ROWS * w]);
-    }
+    let inputs: Vec<&[f32]> = indices
+        .iter()
+        .map(|&i| &set.inputs[i * INPUT_ROWS * w..][..INPUT_ROWS * w])
+        .collect();
+    let targets: Vec<&[f32]> = indices
+        .iter()
+        .map(|&i| &set.targets[i * TARGET_ROWS * w..][..TARGET_ROWS * w])
+        .collect();
     (
-        Windows::new(&inputs, INPUT_ROWS, w, settings.kernel, device),
+        Windows::of(&inputs, INPUT_ROWS, w, settings.kernel, device),
         truth_cm_s(&targets, w, device),
     )
 }
@@ -344,28 +347,31 @@ pub fn train_pass(
     let settings = Settings::from(recipe.model);
     let mut dropout_rng = model_rng(recipe, "dcnet-dropout", state.replicate, Some(epoch));
     let mut loss_sum = 0.0;
-    let mut model = state.model.clone();
-    for (batch, indices) in order.chunks(recipe.training.batch_size).enumerate() {
-        let loss = data.loss(&model, indices, &settings, &device, Some(&mut dropout_rng));
-        let value: f32 = loss.clone().into_scalar();
-        if !value.is_finite() {
-            return Err(TrainError::NonFinite {
-                model: recipe.name.clone(),
-                learning_rate_key: recipe.learning_rate_key.clone(),
-                epoch,
-                batch: batch + 1,
-                loss: value,
-            });
+    let model = with_pool_awake(|| {
+        let mut model = state.model.clone();
+        for (batch, indices) in order.chunks(recipe.training.batch_size).enumerate() {
+            let loss = data.loss(&model, indices, &settings, &device, Some(&mut dropout_rng));
+            let value: f32 = loss.clone().into_scalar();
+            if !value.is_finite() {
+                return Err(TrainError::NonFinite {
+                    model: recipe.name.clone(),
+                    learning_rate_key: recipe.learning_rate_key.clone(),
+                    epoch,
+                    batch: batch + 1,
+                    loss: value,
+                });
+            }
+            loss_sum += f64::from(value) * indices.len() as f64;
+            progress.set_message(format!(
+                "epoch {epoch}/{}, batch loss {value:.4}",
+                recipe.training.epochs
+            ));
+            let grads = loss.backward();
+            model = state.optimizer.step(recipe.learning_rate, model, &grads);
+            progress.inc(indices.len());
         }
-        loss_sum += f64::from(value) * indices.len() as f64;
-        progress.set_message(format!(
-            "epoch {epoch}/{}, batch loss {value:.4}",
-            recipe.training.epochs
-        ));
-        let grads = loss.backward();
-        model = state.optimizer.step(recipe.learning_rate, model, &grads);
-        progress.inc(indices.len());
-    }
+        Ok(model)
+    })?;
     state.model = model;
     Ok(loss_sum)
 }
@@ -481,6 +487,51 @@ pub fn pool(threads: usize) -> rayon::ThreadPool {
         .expect("a thread pool")
 }
 
+/// Runs `f` with the other threads of the current rayon pool kept awake: each runs the
+/// pool's jobs as they come instead of going to sleep between them. A training step's
+/// parallel sections (the slices forward, backward, their sum) are a few hundred
+/// microseconds apart, longer than a rayon thread waits before it sleeps, and waking one
+/// costs tens of microseconds on a virtual machine: most of a step's loss to a second
+/// core. The threads stay busy while `f` runs, so call it only on a pool whose cores
+/// are the model's own.
+pub fn with_pool_awake<R>(f: impl FnOnce() -> R) -> R {
+    let helpers = rayon::current_num_threads() - 1;
+    let Some(owner) = rayon::current_thread_index().filter(|_| helpers > 0) else {
+        return f();
+    };
+    thread_local! {
+        static SPINNING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    }
+    /// Ends the helpers' loops however `f` ends, a panic included.
+    struct Done<'a>(&'a AtomicBool);
+    impl Drop for Done<'_> {
+        fn drop(&mut self) {
+            self.0.store(true, Ordering::Release);
+        }
+    }
+    let done = AtomicBool::new(false);
+    rayon::in_place_scope(|scope| {
+        for _ in 0..helpers {
+            scope.spawn(|_| {
+                // The owner (taking back a helper job no other thread took) and a thread
+                // already helping return at once.
+                if rayon::current_thread_index() == Some(owner) || SPINNING.get() {
+                    return;
+                }
+                SPINNING.set(true);
+                while !done.load(Ordering::Acquire) {
+                    if rayon::yield_now() == Some(rayon::Yield::Idle) {
+                        std::hint::spin_loop();
+                    }
+                }
+                SPINNING.set(false);
+            });
+        }
+        let _done = Done(&done);
+        f()
+    })
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
@@ -509,6 +560,32 @@ pub(crate) mod tests {
     use crate::estimators::Estimator;
     use burn::tensor::TensorData;
 
+    /// With the pool kept awake, `f`'s parallel work runs on every thread of the pool and
+    /// its result comes back; a panic in `f` comes out of it too, instead of leaving the
+    /// helpers waiting; on one thread, and outside a pool, `f` just runs.
+    #[test]
+    fn a_pool_kept_awake_runs_the_work_and_lets_go_of_its_threads() {
+        use rayon::prelude::*;
+        let pool = pool(3);
+        let threads = pool.install(|| {
+            with_pool_awake(|| {
+                let threads = (0..64).into_par_iter().map(|_| {
+                    std::thread::sleep(std::time::Duration::from_millis(2));
+                    rayon::current_thread_index()
+                });
+                threads.collect::<std::collections::BTreeSet<_>>()
+            })
+        });
+        assert_eq!(threads.len(), 3, "threads used: {threads:?}");
+        let panicked = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            pool.install(|| with_pool_awake(|| panic!("inside")))
+        }));
+        assert!(panicked.is_err());
+        assert_eq!(pool.install(|| with_pool_awake(|| 7)), 7);
+        assert_eq!(super::pool(1).install(|| with_pool_awake(|| 8)), 8);
+        assert_eq!(with_pool_awake(|| 9), 9);
+    }
+
     /// On Flex the loss is one operation: its value and the terms' gradient are those of
     /// the loss composed of burn's operations, for every error model, on 7 windows of 5
     /// samples.
@@ -520,7 +597,9 @@ pub(crate) mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         let mut random = |shape: Vec<usize>, spread: f32| {
             let count = shape.iter().product();
-            let values: Vec<f32> = (0..count).map(|_| rng.random_range(-spread..spread)).collect();
+            let values: Vec<f32> = (0..count)
+                .map(|_| rng.random_range(-spread..spread))
+                .collect();
             TensorData::new(values, shape)
         };
         let dvl = Tensor::<3>::from_data(random(vec![7, 5, 3], 150.0), &device);
@@ -547,7 +626,10 @@ pub(crate) mod tests {
                 "{error_model:?}: loss {fused} against {composed}"
             );
             let largest = composed_gradient.iter().fold(0f32, |m, g| m.max(g.abs()));
-            assert!(largest > 0.0, "{error_model:?}: a zero gradient tests nothing");
+            assert!(
+                largest > 0.0,
+                "{error_model:?}: a zero gradient tests nothing"
+            );
             for (i, (x, y)) in fused_gradient.iter().zip(&composed_gradient).enumerate() {
                 assert!(
                     (x - y).abs() <= 1e-5 * largest,

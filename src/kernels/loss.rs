@@ -9,11 +9,11 @@
 //! each way. The composed loss (`train::closed_loop_loss` on other backends) is the
 //! reference that the tests compare this one with.
 
+use super::{f32_tensor, values};
 use burn::backend::autodiff::checkpoint::base::Checkpointer;
 use burn::backend::autodiff::checkpoint::strategy::NoCheckpointing;
 use burn::backend::autodiff::grads::Gradients;
 use burn::backend::autodiff::ops::{Backward, Ops, OpsKind};
-use super::{f32_tensor, values};
 use burn::backend::flex::FlexTensor;
 use burn::backend::tensor::FloatTensor;
 use burn::backend::{Autodiff, Flex, TensorMetadata};
@@ -128,7 +128,11 @@ impl Batch {
     fn new(columns: TermColumns, dvl: FlexTensor, truth: FlexTensor) -> Self {
         let (dvl, truth) = (dvl.to_contiguous(), truth.to_contiguous());
         let shape = dvl.shape();
-        assert_eq!(shape, truth.shape(), "closed_loop_loss: DVL and truth shapes");
+        assert_eq!(
+            shape,
+            truth.shape(),
+            "closed_loop_loss: DVL and truth shapes"
+        );
         assert_eq!(shape[2], 3, "closed_loop_loss: three axes");
         Self {
             columns,

@@ -205,6 +205,15 @@ per_instruction_set! {
     }
 }
 
+per_instruction_set! {
+    /// `sum ← f(sum, values)`, element by element.
+    fn combine<F: [Fn(f32, f32) -> f32]>(sum: &mut [f32], values: &[f32], f: F) -> () {
+        for (s, &v) in sum.iter_mut().zip(values) {
+            *s = f(*s, v);
+        }
+    }
+}
+
 /// The nine layers of a network with these parameters, in parameter order.
 fn layers(shape: &NetworkShape, params: &[&[f32]; PARAMETERS]) -> [Layer; LAYERS] {
     let (time, kernel) = (shape.time, shape.kernel);
@@ -583,28 +592,37 @@ impl Inputs {
                     self.slice_backward(s, grad, buffers);
                 }
             });
-        // Each value's sum over the slices, in slice order; chunks of values in parallel.
-        let mut sum = std::mem::take(&mut workspace.sum);
-        resize(&mut sum, total);
-        sum.par_chunks_mut(SUM_CHUNK)
-            .enumerate()
-            .for_each(|(c, chunk)| {
-                let range = c * SUM_CHUNK..c * SUM_CHUNK + chunk.len();
-                chunk.copy_from_slice(&workspace.slices[0].param_grads[range.clone()]);
-                for buffers in &workspace.slices[1..] {
-                    add(chunk, &buffers.param_grads[range.clone()]);
+        // Each value's sum over the slices, in slice order, into its parameter's own
+        // buffer; chunks of values in parallel.
+        let mut grads: Vec<Vec<f32>> = (0..PARAMETERS)
+            .map(|p| vec![0.0; self.param_size(p)])
+            .collect();
+        let starts = (0..PARAMETERS).scan(0, |start, p| {
+            let this = *start;
+            *start += self.param_size(p);
+            Some(this)
+        });
+        let starts: Vec<usize> = starts.collect();
+        let slices = &workspace.slices;
+        grads
+            .par_iter_mut()
+            .zip(starts)
+            .flat_map(|(grad, start)| {
+                let chunks = grad.par_chunks_mut(SUM_CHUNK).enumerate();
+                chunks.map(move |(c, chunk)| (start + c * SUM_CHUNK, chunk))
+            })
+            .for_each(|(start, chunk)| {
+                let range = start..start + chunk.len();
+                chunk.copy_from_slice(&slices[0].param_grads[range.clone()]);
+                for buffers in &slices[1..] {
+                    combine(chunk, &buffers.param_grads[range.clone()], |a, b| a + b);
                 }
             });
-        let mut offset = 0;
-        let grads = (0..PARAMETERS)
-            .map(|p| {
-                let range = offset..offset + self.param_size(p);
-                offset = range.end;
-                (sum[range].to_vec(), self.params[p].shape())
-            })
-            .collect();
-        workspace.sum = sum;
         grads
+            .into_iter()
+            .zip(&self.params)
+            .map(|(grad, param)| (grad, param.shape()))
+            .collect()
     }
 
     fn slice_backward(&self, slice: usize, grad: &[f32], buffers: &mut SliceBuffers) {
@@ -745,14 +763,13 @@ impl Inputs {
     }
 }
 
-/// A step's buffers: one set per slice, and the parameters' gradients summed.
+/// A step's buffers: one set per slice.
 #[derive(Debug)]
 struct Workspace {
     slices: Vec<SliceBuffers>,
-    sum: Vec<f32>,
 }
 
-/// Values summed over the slices per task of the pool.
+/// Values of a parameter summed over the slices per task of the pool.
 const SUM_CHUNK: usize = 4096;
 
 /// One slice's activations and gradients, grown to the largest slice seen and reused.
@@ -788,7 +805,6 @@ impl Workspace {
             .unwrap_or_else(|| {
                 Box::new(Workspace {
                     slices: (0..SLICES).map(|_| SliceBuffers::default()).collect(),
-                    sum: Vec::new(),
                 })
             })
     }

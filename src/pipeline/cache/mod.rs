@@ -46,7 +46,7 @@ use std::path::{Path, PathBuf};
 /// Bumped whenever the dataset generation changes its bytes.
 const DATASET_CODE_VERSION: u32 = 1;
 /// Bumped whenever training changes in a way that changes the weights.
-const TRAINING_CODE_VERSION: u32 = 5;
+const TRAINING_CODE_VERSION: u32 = 6;
 /// Bumped whenever the protocol or an estimator changes its numbers (2: the held-out
 /// rows of the calibration time).
 const PROTOCOL_CODE_VERSION: u32 = 2;
