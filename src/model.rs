@@ -189,43 +189,17 @@ impl Windows {
                     .zip(head_2d.chunks_mut(sizes[1]));
                 let outputs = outputs.zip(dvl.chunks_mut(sizes[2]));
                 for (((head_1d, head_2d), dvl), window) in outputs.zip(windows) {
-                    let value = |row: usize, t: usize| window[row * time + t];
-                    let mut head_1d = head_1d.iter_mut();
-                    for t in 0..steps_1d {
-                        for tap in 0..kernel {
-                            for axis in 0..3 {
-                                let difference = value(axis, t + tap) - value(axis + 3, t + tap);
-                                *head_1d.next().unwrap() = difference * 100.0;
-                            }
-                            if with_rate {
-                                for axis in 0..3 {
-                                    *head_1d.next().unwrap() =
-                                        value(axis + 6, t + tap).to_degrees();
-                                }
-                            }
-                        }
-                    }
-                    let mut head_2d = head_2d.iter_mut();
-                    for t in 0..time - 1 {
-                        for row in 0..3 {
-                            for (row_tap, time_tap) in GRID_TAPS {
-                                *head_2d.next().unwrap() =
-                                    value(row + FIRST_ROW_DILATION * row_tap, t + time_tap);
-                            }
-                        }
-                    }
-                    for (t, sample) in dvl.chunks_exact_mut(3).enumerate() {
-                        for (axis, value_cm_s) in sample.iter_mut().enumerate() {
-                            *value_cm_s = value(axis, t) * 100.0;
-                        }
-                    }
+                    head_1d_taps(window, time, kernel, with_rate, head_1d);
+                    head_2d_taps(window, time, head_2d);
+                    samples(window, time, 0, 100.0, dvl);
                 }
             });
         let rate = with_rate.then(|| {
-            let rate = windows.iter().flat_map(|window| {
-                (0..time).flat_map(move |t| (6..9).map(move |row| window[row * time + t]))
-            });
-            Tensor::from_data(TensorData::new(rate.collect(), [count, time, 3]), device)
+            let mut rate = vec![0.0f32; count * time * 3];
+            for (rate, window) in rate.chunks_mut(time * 3).zip(windows) {
+                samples(window, time, 6, 1.0, rate);
+            }
+            Tensor::from_data(TensorData::new(rate, [count, time, 3]), device)
         });
         Self {
             count,
@@ -262,22 +236,64 @@ fn touch(values: &[f32]) {
 /// layout of [`Windows::dvl_cm_s`].
 pub fn truth_cm_s(windows: &[&[f32]], time: usize, device: &Device) -> Tensor<3> {
     let count = windows.len();
-    let mut truth = vec![0.0f32; count * time * TARGET_ROWS];
     let size = time * TARGET_ROWS;
+    let mut truth = vec![0.0f32; count * size];
     truth
         .par_chunks_mut(size * WINDOWS_PER_TASK)
         .zip(windows.par_chunks(WINDOWS_PER_TASK))
         .for_each(|(truth, windows)| {
             windows.iter().for_each(|window| touch(window));
             for (truth, targets) in truth.chunks_mut(size).zip(windows) {
-                for (t, sample) in truth.chunks_exact_mut(TARGET_ROWS).enumerate() {
-                    for (axis, value_cm_s) in sample.iter_mut().enumerate() {
-                        *value_cm_s = targets[axis * time + t] * 100.0;
-                    }
-                }
+                samples(targets, time, 0, 100.0, truth);
             }
         });
     Tensor::from_data(TensorData::new(truth, [count, time, TARGET_ROWS]), device)
+}
+
+/// The first Conv1d's taps of `window` (`[rows, time]` row-major, m/s and rad/s) into
+/// `out`, `[time − kernel + 1, channels × kernel]`: `v_dvl − v_gnss` in cm/s, then the body
+/// rate in deg/s `with_rate`, tap-major.
+fn head_1d_taps(window: &[f32], time: usize, kernel: usize, with_rate: bool, out: &mut [f32]) {
+    let value = |row: usize, t: usize| window[row * time + t];
+    let mut out = out.iter_mut();
+    for t in 0..time + 1 - kernel {
+        for tap in 0..kernel {
+            for axis in 0..3 {
+                let difference = value(axis, t + tap) - value(axis + 3, t + tap);
+                *out.next().expect("sized to the taps") = difference * 100.0;
+            }
+            if with_rate {
+                for axis in 0..3 {
+                    let rate = value(axis + 6, t + tap).to_degrees();
+                    *out.next().expect("sized to the taps") = rate;
+                }
+            }
+        }
+    }
+}
+
+/// The first Conv2d's 2×2 taps of `window`'s six velocity rows into `out`,
+/// `[(time − 1) × 3, 4]`, (row, time)-major, in m/s.
+fn head_2d_taps(window: &[f32], time: usize, out: &mut [f32]) {
+    let mut out = out.iter_mut();
+    for t in 0..time - 1 {
+        for row in 0..3 {
+            for (row_tap, time_tap) in GRID_TAPS {
+                let row = row + FIRST_ROW_DILATION * row_tap;
+                *out.next().expect("sized to the taps") = window[row * time + t + time_tap];
+            }
+        }
+    }
+}
+
+/// Rows `first..first + 3` of `window` (`[rows, time]` row-major) times `scale`, sample by
+/// sample, into `out`, `[time, 3]`.
+fn samples(window: &[f32], time: usize, first: usize, scale: f32, out: &mut [f32]) {
+    for (t, sample) in out.chunks_exact_mut(3).enumerate() {
+        for (axis, value) in sample.iter_mut().enumerate() {
+            *value = window[(first + axis) * time + t] * scale;
+        }
+    }
 }
 
 impl Dcnet {
