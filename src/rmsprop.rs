@@ -13,6 +13,7 @@ use burn::backend::Flex;
 use burn::backend::flex::{FlexTensor, Layout};
 use burn::module::{Module, ModuleMapper, Param};
 use burn::tensor::{Bytes, DType, Device, Gradients, Shape, Tensor, TensorData};
+use rayon::prelude::*;
 
 /// The optimizer of one model: its settings and each parameter's mean of squared
 /// gradients, in the order [`Module::map`] visits the parameters.
@@ -56,6 +57,9 @@ impl RmsProp {
     }
 }
 
+/// Values of a parameter updated per task of the pool.
+const VALUES_PER_TASK: usize = 8192;
+
 /// One step over a module's parameters, in visiting order.
 struct Step<'a> {
     optimizer: &'a mut RmsProp,
@@ -92,10 +96,18 @@ impl ModuleMapper for Step<'_> {
         let updated = with_values(tensor.inner(), |weights| {
             with_values(grad, |grad| {
                 let mut updated = vec![0.0; weights.len()];
-                step_values(weights, grad, mean, &mut updated, |w, g, s| {
-                    *s = *s * alpha + g * g * (1.0 - alpha);
-                    w - g / (s.sqrt() + epsilon) * lr
-                });
+                // Chunks of values in parallel, on the model's pool.
+                let chunks = updated.par_chunks_mut(VALUES_PER_TASK);
+                let chunks = chunks.zip(weights.par_chunks(VALUES_PER_TASK));
+                let chunks = chunks.zip(grad.par_chunks(VALUES_PER_TASK));
+                chunks.zip(mean.par_chunks_mut(VALUES_PER_TASK)).for_each(
+                    |(((updated, weights), grad), mean)| {
+                        step_values(weights, grad, mean, updated, |w, g, s| {
+                            *s = *s * alpha + g * g * (1.0 - alpha);
+                            w - g / (s.sqrt() + epsilon) * lr
+                        });
+                    },
+                );
                 updated
             })
         });

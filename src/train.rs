@@ -488,12 +488,12 @@ pub fn pool(threads: usize) -> rayon::ThreadPool {
 }
 
 /// Runs `f` with the other threads of the current rayon pool kept awake: each runs the
-/// pool's jobs as they come instead of going to sleep between them. A training step's
-/// parallel sections (the slices forward, backward, their sum) are a few hundred
-/// microseconds apart, longer than a rayon thread waits before it sleeps, and waking one
-/// costs tens of microseconds on a virtual machine: most of a step's loss to a second
-/// core. The threads stay busy while `f` runs, so call it only on a pool whose cores
-/// are the model's own.
+/// pool's jobs as they come instead of going to sleep between them. A training step has
+/// four parallel sections (the batch's windows, the slices forward and backward, their
+/// gradients' sum) with serial work between them, and a rayon thread that finds no work
+/// sleeps after a few dozen yields; waking it took tens of microseconds on a virtual
+/// machine, at the start and the end of each section. The threads stay busy while `f`
+/// runs, so call it only on a pool whose cores are the model's own.
 pub fn with_pool_awake<R>(f: impl FnOnce() -> R) -> R {
     let helpers = rayon::current_num_threads() - 1;
     let Some(owner) = rayon::current_thread_index().filter(|_| helpers > 0) else {
