@@ -489,18 +489,20 @@ pub fn pool(threads: usize) -> rayon::ThreadPool {
 
 /// Runs `f` with the other threads of the current rayon pool kept awake: each runs the
 /// pool's jobs as they come instead of going to sleep between them. A training step has
-/// four parallel sections (the batch's windows, the slices forward and backward, their
-/// gradients' sum) with serial work between them, and a rayon thread that finds no work
-/// sleeps after a few dozen yields; waking it took tens of microseconds on a virtual
-/// machine, at the start and the end of each section. The threads stay busy while `f`
-/// runs, so call it only on a pool whose cores are the model's own.
+/// several parallel sections (the batch's windows, the slices forward and backward, their
+/// gradients' sum, RMSProp's chunks) with serial work between them, and a rayon thread
+/// that finds no work sleeps after a few dozen yields; waking it took tens of
+/// microseconds on a virtual machine, at the start and the end of each section. The
+/// threads stay busy while `f` runs, so call it only on a pool whose cores are the
+/// model's own, from the thread that entered the pool (`install`), one call at a time.
+/// Outside a pool, on a pool of one thread, and inside a job that a kept-awake thread
+/// runs, `f` just runs.
 pub fn with_pool_awake<R>(f: impl FnOnce() -> R) -> R {
-    let helpers = rayon::current_num_threads() - 1;
-    let Some(owner) = rayon::current_thread_index().filter(|_| helpers > 0) else {
+    let Some(owner) = rayon::current_thread_index() else {
         return f();
     };
-    thread_local! {
-        static SPINNING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    if rayon::current_num_threads() == 1 || HELPING.get() {
+        return f();
     }
     /// Ends the helpers' loops however `f` ends, a panic included.
     struct Done<'a>(&'a AtomicBool);
@@ -511,25 +513,27 @@ pub fn with_pool_awake<R>(f: impl FnOnce() -> R) -> R {
     }
     let done = AtomicBool::new(false);
     rayon::in_place_scope(|scope| {
-        for _ in 0..helpers {
-            scope.spawn(|_| {
-                // The owner (taking back a helper job no other thread took) and a thread
-                // already helping return at once.
-                if rayon::current_thread_index() == Some(owner) || SPINNING.get() {
-                    return;
+        // One job on every thread of the pool; the owner's returns at once.
+        scope.spawn_broadcast(|_, context| {
+            if context.index() == owner {
+                return;
+            }
+            HELPING.set(true);
+            while !done.load(Ordering::Acquire) {
+                if rayon::yield_now() == Some(rayon::Yield::Idle) {
+                    std::hint::spin_loop();
                 }
-                SPINNING.set(true);
-                while !done.load(Ordering::Acquire) {
-                    if rayon::yield_now() == Some(rayon::Yield::Idle) {
-                        std::hint::spin_loop();
-                    }
-                }
-                SPINNING.set(false);
-            });
-        }
+            }
+            HELPING.set(false);
+        });
         let _done = Done(&done);
         f()
     })
+}
+
+thread_local! {
+    /// Whether this thread is kept awake by [`with_pool_awake`] for another thread.
+    static HELPING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
 }
 
 #[cfg(test)]
@@ -584,6 +588,30 @@ pub(crate) mod tests {
         assert_eq!(pool.install(|| with_pool_awake(|| 7)), 7);
         assert_eq!(super::pool(1).install(|| with_pool_awake(|| 8)), 8);
         assert_eq!(with_pool_awake(|| 9), 9);
+    }
+
+    /// Every other thread of a pool of four is kept awake: the jobs of `f` that run on
+    /// them run from the helpers' loop. (Helper jobs queued on the owner's deque were
+    /// all taken by the first thread to wake, which left the others asleep.)
+    #[test]
+    fn every_other_thread_of_the_pool_is_kept_awake() {
+        use rayon::prelude::*;
+        let helped = pool(4).install(|| {
+            with_pool_awake(|| {
+                let deadline = Instant::now() + std::time::Duration::from_secs(20);
+                let mut helped = std::collections::BTreeSet::new();
+                while helped.len() < 3 && Instant::now() < deadline {
+                    let jobs = (0..64).into_par_iter().map(|_| {
+                        std::thread::sleep(std::time::Duration::from_micros(50));
+                        (rayon::current_thread_index(), HELPING.get())
+                    });
+                    let jobs: Vec<_> = jobs.collect();
+                    helped.extend(jobs.into_iter().filter(|job| job.1).map(|job| job.0));
+                }
+                helped
+            })
+        });
+        assert_eq!(helped.len(), 3, "threads kept awake: {helped:?}");
     }
 
     /// On Flex the loss is one operation: its value and the terms' gradient are those of

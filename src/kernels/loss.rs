@@ -6,7 +6,7 @@
 //! Composed of burn's operations the loss is about a dozen tensors and as many autodiff
 //! nodes for a batch of a few thousand values: a tenth of a training step on one thread,
 //! all of it serial while a model's other cores wait. Here it is one pass over the batch
-//! each way. The composed loss (`train::closed_loop_loss` on other backends) is the
+//! each way. The loss composed of burn's operations (`train`, on other backends) is the
 //! reference that the tests compare this one with.
 
 use super::{f32_tensor, values};
@@ -41,6 +41,17 @@ pub fn closed_loop_loss(
     assert!(
         super::network::runs_on(&terms),
         "closed_loop_loss: f32 tensors on Flex only"
+    );
+    let [windows, outputs] = terms.dims();
+    assert_eq!(
+        windows,
+        dvl_cm_s.dims()[0],
+        "closed_loop_loss: a row of terms a window"
+    );
+    let read = columns.scale_pct.iter().chain(&columns.bias_cm_s).flatten();
+    assert!(
+        read.max().is_none_or(|&c| c < outputs),
+        "closed_loop_loss: columns {columns:?} beyond {outputs} terms"
     );
     if terms.device().is_autodiff() {
         type Tracked = Autodiff<Flex>;
@@ -104,11 +115,11 @@ impl Backward<Flex, 1> for LossStep {
         _checkpointer: &mut Checkpointer,
     ) {
         let grad = grads.consume::<Flex>(&ops.node).to_contiguous();
-        let scale = values(&grad)[0];
+        let upstream = values(&grad)[0];
         let [parent] = ops.parents;
         if let Some(node) = parent {
             let terms = &ops.state.terms;
-            let gradient = ops.state.batch.gradient(values(terms), scale);
+            let gradient = ops.state.batch.gradient(values(terms), upstream);
             grads.register::<Flex>(node.id, f32_tensor(gradient, terms.shape()));
         }
     }
@@ -178,11 +189,11 @@ impl Batch {
         (sum / (self.windows * self.time) as f64) as f32
     }
 
-    /// The gradient of `scale` × the loss with respect to `terms`, `[windows, outputs]`.
-    fn gradient(&self, terms: &[f32], scale: f32) -> Vec<f32> {
+    /// The gradient of `upstream` × the loss with respect to `terms`, `[windows, outputs]`.
+    fn gradient(&self, terms: &[f32], upstream: f32) -> Vec<f32> {
         let outputs = terms.len() / self.windows.max(1);
         let mut gradient = vec![0.0f32; terms.len()];
-        let per_value = 2.0 * scale / (self.windows * self.time) as f32;
+        let per_value = 2.0 * upstream / (self.windows * self.time) as f32;
         for w in 0..self.windows {
             let (factor, bias) = self.correction(&terms[w * outputs..][..outputs]);
             // d loss / d (dvl − bias) and d loss / d factor, summed over the window's samples.
