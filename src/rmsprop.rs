@@ -10,9 +10,8 @@
 //! the gradient where they lie and writes the new weights and the mean.
 
 use burn::backend::Flex;
-use burn::backend::flex::{FlexTensor, Layout};
 use burn::module::{Module, ModuleMapper, Param};
-use burn::tensor::{Bytes, DType, Device, Gradients, Shape, Tensor, TensorData};
+use burn::tensor::{Device, Gradients, Shape, Tensor, TensorData};
 use rayon::prelude::*;
 
 /// The optimizer of one model: its settings and each parameter's mean of squared
@@ -156,12 +155,7 @@ fn with_values<const D: usize, R>(tensor: Tensor<D>, f: impl FnOnce(&[f32]) -> R
 fn on_device<const D: usize>(values: Vec<f32>, shape: Shape, device: &Device) -> Tensor<D> {
     let inner = device.clone().inner();
     if inner == Device::flex() {
-        let primitive = FlexTensor::new(
-            Bytes::from_elems(values),
-            Layout::contiguous(shape),
-            DType::F32,
-        );
-        return Tensor::from_primitive::<Flex>(primitive);
+        return Tensor::from_primitive::<Flex>(crate::kernels::f32_tensor(values, shape));
     }
     Tensor::from_data(TensorData::new(values, shape), &inner)
 }

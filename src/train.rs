@@ -263,24 +263,30 @@ fn composed_closed_loop_loss(
 }
 
 /// Windows `indices` of `set`, ready for the network, and their ground truth.
-fn batch_of(
-    set: &TrainingSet,
+fn batch_of<'a>(
+    set: &'a TrainingSet,
     indices: &[usize],
     settings: &Settings,
     device: &Device,
 ) -> (Windows, Tensor<3>) {
     let w = set.window;
-    let inputs: Vec<&[f32]> = indices
-        .iter()
-        .map(|&i| &set.inputs[i * INPUT_ROWS * w..][..INPUT_ROWS * w])
-        .collect();
-    let targets: Vec<&[f32]> = indices
-        .iter()
-        .map(|&i| &set.targets[i * TARGET_ROWS * w..][..TARGET_ROWS * w])
-        .collect();
+    // Each window's `rows × w` values of `values`, where they lie.
+    let windows = |values: &'a [f32], rows: usize| -> Vec<&'a [f32]> {
+        let size = rows * w;
+        indices
+            .iter()
+            .map(|&i| &values[i * size..][..size])
+            .collect()
+    };
     (
-        Windows::of(&inputs, INPUT_ROWS, w, settings.kernel, device),
-        truth_cm_s(&targets, w, device),
+        Windows::of(
+            &windows(&set.inputs, INPUT_ROWS),
+            INPUT_ROWS,
+            w,
+            settings.kernel,
+            device,
+        ),
+        truth_cm_s(&windows(&set.targets, TARGET_ROWS), w, device),
     )
 }
 

@@ -87,7 +87,7 @@ fn values(x: &FlexTensor) -> &[f32] {
 }
 
 /// A contiguous f32 tensor owning `values`.
-fn f32_tensor(values: Vec<f32>, shape: Shape) -> FlexTensor {
+pub(crate) fn f32_tensor(values: Vec<f32>, shape: Shape) -> FlexTensor {
     FlexTensor::new(
         Bytes::from_elems(values),
         Layout::contiguous(shape),
