@@ -152,18 +152,27 @@ impl Windows {
     /// x, y, z, in m/s, and with `rows` = 9 the body rate p, q, r in rad/s.
     pub fn new(inputs: &[f32], rows: usize, time: usize, kernel: usize, device: &Device) -> Self {
         let windows: Vec<&[f32]> = inputs.chunks_exact(rows * time).collect();
-        Self::of(&windows, rows, time, kernel, device)
+        Self::of(
+            &windows,
+            rows,
+            time,
+            kernel,
+            device,
+            &mut BatchBuffers::default(),
+        )
     }
 
     /// [`Windows::new`] of windows that lie apart, each `[rows, time]` row-major: a
-    /// batch read straight from a training set. Chunks of windows fill their rows in
-    /// parallel.
+    /// batch read straight from a training set, into `buffers` (where a training step's
+    /// batch is made each step, so that it writes no new buffer). Chunks of windows fill
+    /// their rows in parallel.
     pub fn of(
         windows: &[&[f32]],
         rows: usize,
         time: usize,
         kernel: usize,
         device: &Device,
+        buffers: &mut BatchBuffers,
     ) -> Self {
         assert!(rows == INPUT_ROWS || rows == INPUT_ROWS + 3, "6 or 9 rows");
         let with_rate = rows > INPUT_ROWS;
@@ -175,7 +184,13 @@ impl Windows {
             (time - 1) * 3 * KERNEL_2D,
             time * 3,
         ];
-        let [mut head_1d, mut head_2d, mut dvl] = sizes.map(|size| vec![0.0f32; count * size]);
+        let head_1d = buffers
+            .head_1d
+            .values_mut([count * steps_1d, channels_1d * kernel].into());
+        let head_2d = buffers
+            .head_2d
+            .values_mut([count * (time - 1) * 3, KERNEL_2D].into());
+        let dvl = buffers.dvl.values_mut([count, time, 3].into());
         let task = |size: usize| size * WINDOWS_PER_TASK;
         head_1d
             .par_chunks_mut(task(sizes[0]))
@@ -194,28 +209,33 @@ impl Windows {
                     samples(window, time, 0, 100.0, dvl);
                 }
             });
-        let rate = with_rate.then(|| {
-            let mut rate = vec![0.0f32; count * time * 3];
+        let rate_rad_s = with_rate.then(|| {
+            let rate = buffers.rate.values_mut([count, time, 3].into());
             for (rate, window) in rate.chunks_mut(time * 3).zip(windows) {
                 samples(window, time, 6, 1.0, rate);
             }
-            Tensor::from_data(TensorData::new(rate, [count, time, 3]), device)
+            buffers.rate.tensor_on(device)
         });
         Self {
             count,
             time,
-            head_1d: Tensor::from_data(
-                TensorData::new(head_1d, [count * steps_1d, channels_1d * kernel]),
-                device,
-            ),
-            head_2d: Tensor::from_data(
-                TensorData::new(head_2d, [count * (time - 1) * 3, KERNEL_2D]),
-                device,
-            ),
-            dvl_cm_s: Tensor::from_data(TensorData::new(dvl, [count, time, 3]), device),
-            rate_rad_s: rate,
+            head_1d: buffers.head_1d.tensor_on(device),
+            head_2d: buffers.head_2d.tensor_on(device),
+            dvl_cm_s: buffers.dvl.tensor_on(device),
+            rate_rad_s,
         }
     }
+}
+
+/// The buffers a batch of [`Windows::of`] and its [`truth_cm_s`] are written to: each
+/// reused from the last batch once its tensors are dropped.
+#[derive(Debug, Default)]
+pub struct BatchBuffers {
+    head_1d: kernels::Reused,
+    head_2d: kernels::Reused,
+    dvl: kernels::Reused,
+    rate: kernels::Reused,
+    truth: kernels::Reused,
 }
 
 /// Windows filled per task of the pool in [`Windows::of`] and [`truth_cm_s`].
@@ -234,11 +254,17 @@ fn touch(values: &[f32]) {
 
 /// Targets of each window `[3, time]` row-major in m/s → `[count, time, 3]` in cm/s, the
 /// layout of [`Windows::dvl_cm_s`].
-pub fn truth_cm_s(windows: &[&[f32]], time: usize, device: &Device) -> Tensor<3> {
+pub fn truth_cm_s(
+    windows: &[&[f32]],
+    time: usize,
+    device: &Device,
+    buffers: &mut BatchBuffers,
+) -> Tensor<3> {
     let count = windows.len();
     let size = time * TARGET_ROWS;
-    let mut truth = vec![0.0f32; count * size];
-    truth
+    buffers
+        .truth
+        .values_mut([count, time, TARGET_ROWS].into())
         .par_chunks_mut(size * WINDOWS_PER_TASK)
         .zip(windows.par_chunks(WINDOWS_PER_TASK))
         .for_each(|(truth, windows)| {
@@ -247,7 +273,7 @@ pub fn truth_cm_s(windows: &[&[f32]], time: usize, device: &Device) -> Tensor<3>
                 samples(targets, time, 0, 100.0, truth);
             }
         });
-    Tensor::from_data(TensorData::new(truth, [count, time, TARGET_ROWS]), device)
+    buffers.truth.tensor_on(device)
 }
 
 /// The first Conv1d's taps of `window` (`[rows, time]` row-major, m/s and rad/s) into

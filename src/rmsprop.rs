@@ -11,7 +11,7 @@
 
 use burn::backend::Flex;
 use burn::module::{Module, ModuleMapper, Param};
-use burn::tensor::{Device, Gradients, Shape, Tensor, TensorData};
+use burn::tensor::{Gradients, Tensor, TensorData};
 use rayon::prelude::*;
 
 /// The optimizer of one model: its settings and each parameter's mean of squared
@@ -75,42 +75,34 @@ impl ModuleMapper for Step<'_> {
         let Some(grad) = tensor.grad(self.grads) else {
             return Param::from_mapped_value(id, tensor, mapper);
         };
-        let (device, shape) = (tensor.device(), tensor.shape());
-        let tracked = device.is_autodiff();
+        let tracked = tensor.device().is_autodiff();
+        let size = tensor.shape().num_elements();
         let means = &mut self.optimizer.square_avg;
         if means.len() == index {
-            means.push(vec![0.0; shape.num_elements()]);
+            means.push(vec![0.0; size]);
         }
         let mean = &mut means[index];
-        assert_eq!(
-            mean.len(),
-            shape.num_elements(),
-            "RMSProp: parameter {index} changed size"
-        );
+        assert_eq!(mean.len(), size, "RMSProp: parameter {index} changed size");
         let (alpha, epsilon, lr) = (
             self.optimizer.alpha,
             self.optimizer.epsilon,
             self.learning_rate,
         );
-        let updated = with_values(tensor.inner(), |weights| {
-            with_values(grad, |grad| {
-                let mut updated = vec![0.0; weights.len()];
+        let updated = with_values(grad, |grad| {
+            updated(tensor.inner(), |weights| {
                 // Chunks of values in parallel, on the model's pool.
-                let chunks = updated.par_chunks_mut(VALUES_PER_TASK);
-                let chunks = chunks.zip(weights.par_chunks(VALUES_PER_TASK));
+                let chunks = weights.par_chunks_mut(VALUES_PER_TASK);
                 let chunks = chunks.zip(grad.par_chunks(VALUES_PER_TASK));
                 chunks.zip(mean.par_chunks_mut(VALUES_PER_TASK)).for_each(
-                    |(((updated, weights), grad), mean)| {
-                        step_values(weights, grad, mean, updated, |w, g, s| {
+                    |((weights, grad), mean)| {
+                        step_values(weights, grad, mean, |w, g, s| {
                             *s = *s * alpha + g * g * (1.0 - alpha);
                             w - g / (s.sqrt() + epsilon) * lr
                         });
                     },
                 );
-                updated
             })
         });
-        let updated = on_device(updated, shape, &device);
         let updated = if tracked {
             Tensor::from_inner(updated).require_grad()
         } else {
@@ -121,18 +113,17 @@ impl ModuleMapper for Step<'_> {
 }
 
 crate::kernels::per_instruction_set! {
-    /// `updated ← step(weights, grad, mean)` value by value, `step` updating the mean.
+    /// `weights ← step(weights, grad, mean)` value by value, `step` updating the mean.
     fn step_values<F: [Fn(f32, f32, &mut f32) -> f32]>(
-        weights: &[f32],
+        weights: &mut [f32],
         grad: &[f32],
         mean: &mut [f32],
-        updated: &mut [f32],
         step: F,
     ) -> () {
-        let n = updated.len();
-        let (weights, grad, mean) = (&weights[..n], &grad[..n], &mut mean[..n]);
+        let n = weights.len();
+        let (grad, mean) = (&grad[..n], &mut mean[..n]);
         for i in 0..n {
-            updated[i] = step(weights[i], grad[i], &mut mean[i]);
+            weights[i] = step(weights[i], grad[i], &mut mean[i]);
         }
     }
 }
@@ -150,14 +141,18 @@ fn with_values<const D: usize, R>(tensor: Tensor<D>, f: impl FnOnce(&[f32]) -> R
         .expect("f32 tensors"))
 }
 
-/// `values` as a tensor of `shape` on the plain (no autodiff) backend of `device`: on
-/// Flex, on their own buffer with no copy.
-fn on_device<const D: usize>(values: Vec<f32>, shape: Shape, device: &Device) -> Tensor<D> {
-    let inner = device.clone().inner();
-    if inner == Device::flex() {
-        return Tensor::from_primitive::<Flex>(crate::kernels::f32_tensor(values, shape));
-    }
-    Tensor::from_data(TensorData::new(values, shape), &inner)
+/// `tensor` (on a plain device) after `f` has changed its f32 values. A tensor that
+/// nothing else holds, as a model's weights between steps, hands its buffer over on Flex,
+/// so the step writes the new values where the old lay and allocates nothing; a shared
+/// one is copied first, and its other holders keep the old values.
+fn updated<const D: usize>(tensor: Tensor<D>, f: impl FnOnce(&mut [f32])) -> Tensor<D> {
+    let (device, shape) = (tensor.device(), tensor.shape());
+    let mut values = tensor
+        .into_data()
+        .try_into_vec::<f32>()
+        .expect("f32 tensors");
+    f(&mut values);
+    Tensor::from_data(TensorData::new(values, shape), &device)
 }
 
 #[cfg(test)]
@@ -180,6 +175,38 @@ mod tests {
                 .unwrap(),
         );
         values
+    }
+
+    /// The address of `layer`'s weight values.
+    fn weight_address(layer: &Linear) -> usize {
+        let weight = layer.weight.val().inner();
+        let weight = weight.try_into_primitive::<Flex>().unwrap();
+        weight.as_slice::<f32>().unwrap().as_ptr() as usize
+    }
+
+    /// A step writes the new weights over the old where nothing else holds them; where a
+    /// clone of the model still does, it writes them to a copy, the same values, and the
+    /// clone keeps its own.
+    #[test]
+    fn a_step_writes_in_place_unless_the_weights_are_shared() {
+        let device = Device::flex().autodiff();
+        let layer = LinearConfig::new(7, 3).init(&device);
+        let x = Tensor::<2>::from_data(
+            TensorData::new((0..35).map(|i| (i as f32 * 0.37).cos()).collect(), [5, 7]),
+            &device,
+        );
+        let grads = (layer.forward(x) - 0.5).powi_scalar(2).sum().backward();
+        let step = |layer: Linear| RmsProp::new(0.99, 1e-8).step(5e-3, layer, &grads);
+        let (before, address) = (weights(&layer), weight_address(&layer));
+        let kept = layer.clone();
+        let on_copy = step(layer.clone());
+        assert_eq!(weights(&kept), before, "the clone keeps its weights");
+        assert_ne!(weight_address(&on_copy), address);
+        drop(kept);
+        let in_place = step(layer);
+        assert_eq!(weight_address(&in_place), address, "stepped in place");
+        assert_eq!(weights(&in_place), weights(&on_copy));
+        assert_ne!(weights(&in_place), before);
     }
 
     /// Five steps of ours and of burn's RMSProp (no momentum, not centred) on the same

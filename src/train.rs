@@ -12,7 +12,9 @@
 
 use crate::dataset::{INPUT_ROWS, TARGET_ROWS, TrainingSet};
 use crate::kernels;
-use crate::model::{Dcnet, NetworkIo, Settings, Windows, split_terms, term_columns, truth_cm_s};
+use crate::model::{
+    BatchBuffers, Dcnet, NetworkIo, Settings, Windows, split_terms, term_columns, truth_cm_s,
+};
 use crate::progress::Progress;
 use crate::rmsprop::RmsProp;
 use crate::rng::task_rng;
@@ -22,6 +24,7 @@ use burn::module::Module;
 use burn::tensor::{Device, Tensor};
 use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
+use std::cell::RefCell;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -278,16 +281,25 @@ fn batch_of<'a>(
             .map(|&i| &values[i * size..][..size])
             .collect()
     };
-    (
-        Windows::of(
-            &windows(&set.inputs, INPUT_ROWS),
-            INPUT_ROWS,
-            w,
-            settings.kernel,
-            device,
-        ),
-        truth_cm_s(&windows(&set.targets, TARGET_ROWS), w, device),
-    )
+    BATCH_BUFFERS.with_borrow_mut(|buffers| {
+        (
+            Windows::of(
+                &windows(&set.inputs, INPUT_ROWS),
+                INPUT_ROWS,
+                w,
+                settings.kernel,
+                device,
+                buffers,
+            ),
+            truth_cm_s(&windows(&set.targets, TARGET_ROWS), w, device, buffers),
+        )
+    })
+}
+
+thread_local! {
+    /// The buffers of the last batch this thread made: a model's steps run on one thread,
+    /// so each step's batch reuses the last one's.
+    static BATCH_BUFFERS: RefCell<BatchBuffers> = RefCell::default();
 }
 
 /// Mean closed-loop loss of `model` (plain device) over `indices` of `data`, in batches.

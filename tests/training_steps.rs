@@ -1,9 +1,8 @@
 //! A warm training step touches no fresh memory and allocates nothing per window: after a
 //! warm-up, most rounds of 100 steps take no minor page fault at all, on one thread or
-//! two (what is left are rare bursts of a few dozen, when the C allocator grows its heap
-//! past fragments), and the allocator calls of a step (about 1,300, burn's tensors and
-//! autodiff nodes and the matrix products' scratch) do not grow with the batch. Counts,
-//! not times; this file is its own test binary, so nothing else runs while it counts.
+//! two, and the allocator calls of a step (about 870, burn's tensors and autodiff nodes
+//! and the matrix products' scratch) do not grow with the batch. Counts, not times; this
+//! file is its own test binary, so nothing else runs while it counts.
 
 use dcnet_exp::memory::{
     CountingAllocator, count_allocations, keep_freed_memory, minor_page_faults,

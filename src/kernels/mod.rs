@@ -78,7 +78,8 @@ pub mod network;
 pub mod unfold;
 
 use burn::backend::flex::{FlexTensor, Layout};
-use burn::tensor::{Bytes, DType, Shape};
+use burn::backend::{Flex, TensorMetadata};
+use burn::tensor::{Bytes, DType, Device, Shape, Tensor};
 
 /// The values of a contiguous f32 tensor.
 fn values(x: &FlexTensor) -> &[f32] {
@@ -93,4 +94,78 @@ pub(crate) fn f32_tensor(values: Vec<f32>, shape: Shape) -> FlexTensor {
         Layout::contiguous(shape),
         DType::F32,
     )
+}
+
+/// A tensor that a kernel writes anew at each step and hands to burn, on one buffer kept
+/// from step to step: its values are written in place once burn has dropped the last
+/// step's tensor (the usual case), and on a fresh buffer while it still holds it.
+#[derive(Debug, Default)]
+pub(crate) struct Reused(Option<FlexTensor>);
+
+impl Reused {
+    /// The values of a tensor of `shape`, for the caller to overwrite, every one.
+    pub(crate) fn values_mut(&mut self, shape: Shape) -> &mut [f32] {
+        let reusable = self
+            .0
+            .as_ref()
+            .is_some_and(|tensor| tensor.shape() == shape && tensor.is_unique());
+        if !reusable {
+            self.0 = Some(f32_tensor(vec![0.0; shape.num_elements()], shape));
+        }
+        let tensor = self.0.as_mut().expect("a tensor was just made");
+        tensor
+            .try_storage_mut::<f32>()
+            .expect("a tensor held here alone")
+    }
+
+    /// The tensor of the values last written, sharing their buffer.
+    pub(crate) fn tensor(&self) -> FlexTensor {
+        self.0.clone().expect("values written first")
+    }
+
+    /// [`Reused::tensor`] on `device`: on Flex (with or without autodiff) sharing the
+    /// buffer, elsewhere a copy.
+    pub(crate) fn tensor_on<const D: usize>(&self, device: &Device) -> Tensor<D> {
+        let tensor = self.tensor();
+        let inner = device.clone().inner();
+        if inner != Device::flex() {
+            return Tensor::from_data(tensor.into_data(), device);
+        }
+        let tensor = Tensor::from_primitive::<Flex>(tensor);
+        if device.is_autodiff() {
+            Tensor::from_inner(tensor)
+        } else {
+            tensor
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A buffer is written again in place once its last tensor is dropped, and never
+    /// while a tensor still reads it: that one keeps its values.
+    #[test]
+    fn a_reused_buffer_is_rewritten_only_once_its_tensor_is_dropped() {
+        let shape = || Shape::new([2, 3]);
+        let mut reused = Reused::default();
+        reused.values_mut(shape()).fill(1.0);
+        let first = reused.tensor();
+        let address = values(&first).as_ptr();
+        drop(first);
+        reused.values_mut(shape()).fill(2.0);
+        let second = reused.tensor();
+        assert_eq!(
+            values(&second).as_ptr(),
+            address,
+            "the dropped buffer is reused"
+        );
+        reused.values_mut(shape()).fill(3.0);
+        assert_eq!(values(&second), [2.0; 6], "a held tensor keeps its values");
+        assert_ne!(values(&reused.tensor()).as_ptr(), address);
+        assert_eq!(values(&reused.tensor()), [3.0; 6]);
+        let other = reused.values_mut(Shape::new([4])).len();
+        assert_eq!(other, 4, "another shape gets a buffer of its own size");
+    }
 }

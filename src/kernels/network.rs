@@ -18,7 +18,7 @@
 
 use super::activation::{leaky_relu_f32, tanh_f32};
 use super::unfold::GRID_TAPS;
-use super::{f32_tensor, values};
+use super::{Reused, f32_tensor, values};
 use burn::backend::autodiff::checkpoint::base::Checkpointer;
 use burn::backend::autodiff::checkpoint::strategy::NoCheckpointing;
 use burn::backend::autodiff::grads::Gradients;
@@ -372,9 +372,9 @@ impl Backward<Flex, PARAMETERS> for NetworkStep {
             .expect("one backward per forward");
         let param_grads = ops.state.inputs.backward(grad, &mut workspace);
         Workspace::give_back(workspace);
-        for (node, (values, shape)) in ops.parents.into_iter().zip(param_grads) {
+        for (node, grad) in ops.parents.into_iter().zip(param_grads) {
             if let Some(node) = node {
-                grads.register::<Flex>(node.id, f32_tensor(values, shape));
+                grads.register::<Flex>(node.id, grad);
             }
         }
     }
@@ -573,9 +573,9 @@ impl Inputs {
         parts
     }
 
-    /// The parameters' gradients, `(values, shape)` in parameter order, from the terms'
-    /// `grad` `[windows, outputs]`: each slice's, summed in slice order.
-    fn backward(&self, grad: &[f32], workspace: &mut Workspace) -> Vec<(Vec<f32>, Shape)> {
+    /// The parameters' gradients in parameter order, from the terms' `grad` `[windows,
+    /// outputs]`: each slice's, summed in slice order, on the workspace's buffers.
+    fn backward(&self, grad: &[f32], workspace: &mut Workspace) -> Vec<FlexTensor> {
         let total: usize = (0..PARAMETERS).map(|p| self.param_size(p)).sum();
         let outputs = self.layers[LAYERS - 1].outputs;
         workspace
@@ -594,8 +594,11 @@ impl Inputs {
             });
         // Each value's sum over the slices, in slice order, into its parameter's own
         // buffer; chunks of values in parallel.
-        let mut grads: Vec<Vec<f32>> = (0..PARAMETERS)
-            .map(|p| vec![0.0; self.param_size(p)])
+        let Workspace { slices, grads } = workspace;
+        let mut sums: Vec<&mut [f32]> = grads
+            .iter_mut()
+            .zip(&self.params)
+            .map(|(grad, param)| grad.values_mut(param.shape()))
             .collect();
         let starts = (0..PARAMETERS).scan(0, |start, p| {
             let this = *start;
@@ -603,9 +606,7 @@ impl Inputs {
             Some(this)
         });
         let starts: Vec<usize> = starts.collect();
-        let slices = &workspace.slices;
-        grads
-            .par_iter_mut()
+        sums.par_iter_mut()
             .zip(starts)
             .flat_map(|(grad, start)| {
                 let chunks = grad.par_chunks_mut(SUM_CHUNK).enumerate();
@@ -618,11 +619,7 @@ impl Inputs {
                     combine(chunk, &buffers.param_grads[range.clone()], |a, b| a + b);
                 }
             });
-        grads
-            .into_iter()
-            .zip(&self.params)
-            .map(|(grad, param)| (grad, param.shape()))
-            .collect()
+        grads.iter().map(Reused::tensor).collect()
     }
 
     fn slice_backward(&self, slice: usize, grad: &[f32], buffers: &mut SliceBuffers) {
@@ -767,6 +764,8 @@ impl Inputs {
 #[derive(Debug)]
 struct Workspace {
     slices: Vec<SliceBuffers>,
+    /// Each parameter's gradient, the slices' summed.
+    grads: [Reused; PARAMETERS],
 }
 
 /// Values of a parameter summed over the slices per task of the pool.
@@ -805,6 +804,7 @@ impl Workspace {
             .unwrap_or_else(|| {
                 Box::new(Workspace {
                     slices: (0..SLICES).map(|_| SliceBuffers::default()).collect(),
+                    grads: Default::default(),
                 })
             })
     }
