@@ -11,7 +11,7 @@
 
 use burn::backend::Flex;
 use burn::module::{Module, ModuleMapper, Param};
-use burn::tensor::{Gradients, Tensor, TensorData};
+use burn::tensor::{Device, Gradients, Tensor, TensorData};
 use rayon::prelude::*;
 
 /// The optimizer of one model: its settings and each parameter's mean of squared
@@ -141,16 +141,27 @@ fn with_values<const D: usize, R>(tensor: Tensor<D>, f: impl FnOnce(&[f32]) -> R
         .expect("f32 tensors"))
 }
 
-/// `tensor` (on a plain device) after `f` has changed its f32 values. A tensor that
-/// nothing else holds, as a model's weights between steps, hands its buffer over on Flex,
-/// so the step writes the new values where the old lay and allocates nothing; a shared
-/// one is copied first, and its other holders keep the old values.
+/// `tensor` (on a plain device) after `f` has changed its f32 values: in place on Flex
+/// where nothing else holds its buffer, as with a model's weights between steps, so that
+/// a step writes no new buffer; else on a copy, and the other holders keep the old values.
 fn updated<const D: usize>(tensor: Tensor<D>, f: impl FnOnce(&mut [f32])) -> Tensor<D> {
     let (device, shape) = (tensor.device(), tensor.shape());
-    let mut values = tensor
-        .into_data()
-        .try_into_vec::<f32>()
-        .expect("f32 tensors");
+    let data = if device == Device::flex() {
+        let mut primitive = tensor
+            .try_into_primitive::<Flex>()
+            .expect("a tensor on Flex");
+        let whole = primitive
+            .as_slice::<f32>()
+            .is_some_and(|values| values.len() == primitive.storage::<f32>().len());
+        if whole && let Some(values) = primitive.try_storage_mut::<f32>() {
+            f(values);
+            return Tensor::from_primitive::<Flex>(primitive);
+        }
+        primitive.into_data()
+    } else {
+        tensor.into_data()
+    };
+    let mut values = data.try_into_vec::<f32>().expect("f32 tensors");
     f(&mut values);
     Tensor::from_data(TensorData::new(values, shape), &device)
 }
@@ -160,7 +171,6 @@ mod tests {
     use super::*;
     use burn::nn::{Linear, LinearConfig};
     use burn::optim::{GradientsParams, RmsPropConfig};
-    use burn::tensor::Device;
 
     fn weights(layer: &Linear) -> Vec<f32> {
         let mut values = layer.weight.val().into_data().try_to_vec::<f32>().unwrap();

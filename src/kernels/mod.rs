@@ -105,10 +105,9 @@ pub(crate) struct Reused(Option<FlexTensor>);
 impl Reused {
     /// The values of a tensor of `shape`, for the caller to overwrite, every one.
     pub(crate) fn values_mut(&mut self, shape: Shape) -> &mut [f32] {
-        let reusable = self
-            .0
-            .as_ref()
-            .is_some_and(|tensor| tensor.shape() == shape && tensor.is_unique());
+        let reusable = self.0.as_mut().is_some_and(|tensor| {
+            tensor.shape() == shape && tensor.try_storage_mut::<f32>().is_some()
+        });
         if !reusable {
             self.0 = Some(f32_tensor(vec![0.0; shape.num_elements()], shape));
         }
