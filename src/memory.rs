@@ -11,7 +11,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 /// (`mi_option_purge_delay` in its header; the crate does not name it).
 const PURGE_DELAY: libmimalloc_sys::mi_option_t = 15;
 
-/// Tells the allocator to keep what is freed. A training step still makes some hundred
+/// Tells the allocator to keep what is freed. A training step still makes about 850
 /// short-lived allocations that are not ours (burn's tensors and autodiff nodes, the
 /// matrix products' scratch). glibc's allocator served them among the step's
 /// longer-lived buffers from a heap that crept up by a few fresh pages now and then for
