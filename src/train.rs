@@ -858,7 +858,7 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn one_and_two_threads_train_identical_weights() {
+    fn one_two_and_three_threads_train_identical_weights() {
         let spec = quick_spec(&["training.epochs=2", "training.batch_size=256"]);
         let set = training_set(&spec);
         let train_with = |threads| {
@@ -880,9 +880,13 @@ pub(crate) mod tests {
             })
         };
         let (one, history_one) = train_with(1);
-        let (two, history_two) = train_with(2);
-        assert!(one == two, "weights differ between 1 and 2 threads");
-        assert_eq!(history_one, history_two);
+        for threads in [2, 3] {
+            // Three threads share the slices unevenly, and take the parameters'
+            // gradients of a slice apart from its input's.
+            let (other, history_other) = train_with(threads);
+            assert!(one == other, "weights differ between 1 and {threads} threads");
+            assert_eq!(history_one, history_other);
+        }
         // And training moved the weights away from their initial values.
         assert!(weights(&State::new(&spec, ErrorModel::Em5, 0).model) != one);
     }

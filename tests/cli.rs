@@ -348,6 +348,46 @@ fn bench_refuses_a_pytorch_peer_it_cannot_run_before_timing_anything() {
 }
 
 #[test]
+fn bench_times_the_models_of_a_run_on_the_cores_they_do_not_fill_one_per_core() {
+    let project = project(false);
+    let bench = |error_models: &str| {
+        let set = format!("estimators.error_models={error_models}");
+        let args = [
+            "--threads",
+            "3",
+            "bench",
+            "experiments/quick.toml",
+            "--set",
+            &set,
+            "--repeat",
+            "2",
+            "--training-batches",
+            "2",
+        ];
+        let output = dcnet(project.path(), &args);
+        assert!(output.status.success(), "{}", stderr(&output));
+        stdout(&output)
+    };
+    let run_line = |out: &str| {
+        out.lines()
+            .find(|l| l.starts_with("training as `run` trains"))
+            .map(str::to_string)
+    };
+    // Two models on three cores: one model per core, then one of them over two.
+    let two = bench(r#"["EM1", "EM5"]"#);
+    let line = run_line(&two).expect("a line for the run's models");
+    assert!(
+        line.contains("the spec's 2 models at once")
+            && line.contains("on 2 cores, one model each")
+            && line.contains("on all 3 cores, on 2, 1 threads")
+            && line.contains("(median of 2 paired runs"),
+        "{line}"
+    );
+    // Three models fill the three cores one per core: nothing more to time.
+    assert_eq!(run_line(&bench(r#"["EM1", "EM3", "EM5"]"#)), None);
+}
+
+#[test]
 fn a_diverging_model_is_reported_and_the_others_are_kept() {
     let project = project(false);
     let dir = project.path();

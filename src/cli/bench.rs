@@ -1,13 +1,16 @@
 //! `bench`: times the dataset generation, the Monte Carlo protocol and DCNet training
 //! of a spec, and, given the PyTorch peer script, the same network in PyTorch in the
 //! same arrangements, side by side: several models one per core, or one model over
-//! several cores; with `--scaling`, on 1, 2, 4, … cores up to all of them. It prints the
-//! page faults and allocator calls of a warm training step too.
+//! several cores; with `--scaling`, on 1, 2, 4, … cores up to all of them; and where the
+//! spec trains fewer models than there are cores, those models as `run` trains them, one
+//! per core and then on all the cores. It prints the page faults and allocator calls of a
+//! warm training step too.
 
 use super::{CliError, failure, input, load_spec};
 use crate::data::load_trajectories;
 use crate::dataset::{self, DatasetSize, TrainingSet};
 use crate::evaluate::run_protocol;
+use crate::pipeline::training::first_loans;
 use crate::spec::Spec;
 use crate::train::{self, TrainError};
 use crate::vocab::{ErrorModel, EstimatorKind};
@@ -163,6 +166,11 @@ impl Arrangement {
         all
     }
 
+    /// Each model's threads.
+    fn threads_each(&self) -> Vec<usize> {
+        vec![self.threads; self.models]
+    }
+
     fn describe(&self) -> String {
         match (self.models, self.threads) {
             (1, 1) => "one model, one thread".to_string(),
@@ -230,25 +238,26 @@ impl<'a> BenchModel<'a> {
     }
 }
 
-/// Training samples/s of the spec's model and batch size on its backend in
-/// `arrangement`: each model times its own batches after [`WARM_UP_BATCHES`], and the
-/// rates are summed, as the peer script sums its processes'.
+/// Training samples/s of the spec's model and batch size on its backend, one model at
+/// once on each of `threads_each` threads: each model times its own batches after
+/// [`WARM_UP_BATCHES`], and the rates are summed, as the peer script sums its processes'.
 fn training_rate(
     spec: &Spec,
     set: &TrainingSet,
     batches: usize,
-    arrangement: Arrangement,
+    threads_each: &[usize],
 ) -> Result<f64, TrainError> {
-    let run_model = |seed_offset: u64| -> Result<f64, TrainError> {
-        let mut model = BenchModel::new(spec, set, seed_offset, arrangement.threads);
+    let run_model = |seed_offset: u64, threads: usize| -> Result<f64, TrainError> {
+        let mut model = BenchModel::new(spec, set, seed_offset, threads);
         model.train(WARM_UP_BATCHES)?;
         let clock = Instant::now();
         let windows = model.train(batches)?;
         Ok(windows as f64 / clock.elapsed().as_secs_f64())
     };
     std::thread::scope(|scope| {
-        let handles: Vec<_> = (0..arrangement.models as u64)
-            .map(|i| scope.spawn(move || run_model(i)))
+        let handles: Vec<_> = (0u64..)
+            .zip(threads_each)
+            .map(|(i, &threads)| scope.spawn(move || run_model(i, threads)))
             .collect();
         handles
             .into_iter()
@@ -394,7 +403,58 @@ fn median_and_spread(values: &[f64], digits: usize) -> String {
 struct TrainingTable {
     /// Per core count, its arrangements.
     cells: Vec<(usize, Vec<Cell>)>,
+    /// The spec's models as `run` trains them, where they are fewer than the cores.
+    run: Option<RunTraining>,
     runs: usize,
+}
+
+/// The spec's models trained at once as `run` trains them, on as many cores as models
+/// (one each), then on all the cores (each on the threads `run` first lends it): what
+/// training gains from the cores a run does not fill one model per core.
+struct RunTraining {
+    cores: usize,
+    loans: Vec<usize>,
+    /// Samples/s per run, one model per core.
+    one_per_core: Vec<f64>,
+    /// Samples/s per run, on all the cores.
+    on_all: Vec<f64>,
+}
+
+impl RunTraining {
+    fn measure(&mut self, spec: &Spec, set: &TrainingSet, batches: usize) -> Result<(), CliError> {
+        let one_each = vec![1; self.loans.len()];
+        let one_per_core = training_rate(spec, set, batches, &one_each).map_err(failure)?;
+        self.one_per_core.push(one_per_core);
+        let on_all = training_rate(spec, set, batches, &self.loans).map_err(failure)?;
+        self.on_all.push(on_all);
+        Ok(())
+    }
+
+    fn print(&self) {
+        let models = self.loans.len();
+        let ratios: Vec<f64> = self
+            .on_all
+            .iter()
+            .zip(&self.one_per_core)
+            .map(|(all, one)| all / one)
+            .collect();
+        let loans: Vec<String> = self.loans.iter().map(ToString::to_string).collect();
+        let count = |n: usize, thing: &str| match n {
+            1 => format!("1 {thing}"),
+            n => format!("{n} {thing}s"),
+        };
+        println!(
+            "training as `run` trains the spec's {} at once, samples/s in all: on {}, one model each, {}; on all {} cores, on {} threads, {}; {}× (median of {} paired runs, range in brackets)",
+            count(models, "model"),
+            count(models, "core"),
+            median_and_spread(&self.one_per_core, 0),
+            self.cores,
+            loans.join(", "),
+            median_and_spread(&self.on_all, 0),
+            median_and_spread(&ratios, 2),
+            ratios.len()
+        );
+    }
 }
 
 /// One arrangement's rates, one per run: ours and the peer's.
@@ -424,10 +484,21 @@ impl TrainingTable {
                 (n, cells.collect())
             })
             .collect();
+        let (models, cores) = (spec.model_count(), rayon::current_num_threads());
+        let mut run = (models < cores).then(|| RunTraining {
+            cores,
+            loans: first_loans(cores, models),
+            one_per_core: Vec::new(),
+            on_all: Vec::new(),
+        });
         for _ in 0..runs {
+            if let Some(run) = &mut run {
+                run.measure(spec, set, batches)?;
+            }
             for cell in cells.iter_mut().flat_map(|(_, cells)| cells) {
                 let arrangement = cell.arrangement;
-                let ours = training_rate(spec, set, batches, arrangement).map_err(failure)?;
+                let ours = training_rate(spec, set, batches, &arrangement.threads_each())
+                    .map_err(failure)?;
                 cell.ours.push(ours);
                 if let Some(script) = pytorch {
                     let peer = peer_rate(spec, script, batches, arrangement)
@@ -436,7 +507,7 @@ impl TrainingTable {
                 }
             }
         }
-        Ok(Self { cells, runs })
+        Ok(Self { cells, run, runs })
     }
 
     /// One row per core count and arrangement: samples/s in all and per model, median
@@ -508,6 +579,9 @@ impl TrainingTable {
             }
         }
         println!("{table}");
+        if let Some(run) = &self.run {
+            run.print();
+        }
         if with_peer {
             println!(
                 "each at its best arrangement, against PyTorch, by cores (median of {} paired runs, range in brackets): {}",

@@ -1,12 +1,13 @@
 //! The training scheduler: datasets generated a few at a time, and the models that
-//! train on them interleaved epoch by epoch over the cores, each worker on a pool of its
-//! share of the cores (a model's bytes do not depend on how many). The paper's models train here
+//! train on them interleaved epoch by epoch over the cores, each epoch on a pool of the
+//! cores lent to its worker (a model's bytes do not depend on how many). The paper's models train here
 //! ([`train`]); an installation study's `[learned]` models go through the same
 //! [`in_batches`] and [`interleave_epochs`] (`pipeline/installation/learned.rs`).
 
 pub mod job;
 
 use crate::dataset::{self, TrainingSet};
+use crate::kernels::network::SLICES;
 use crate::pipeline::cache::{Blueprint, StoredModel};
 use crate::pipeline::plan::Plan;
 use crate::pipeline::{ExecuteError, Executed};
@@ -189,15 +190,16 @@ type EpochStep<'a> =
     Box<dyn Fn(TrainingJob, &Progress) -> Result<TrainingJob, TrainingJobError> + Send + Sync + 'a>;
 
 /// Runs every training of `ids` to its end, epoch by epoch, on
-/// `rayon::current_num_threads()` workers. `start` gives each id its job, the
+/// `rayon::current_num_threads()` cores. `start` gives each id its job, the
 /// step that trains one epoch, and its progress bar. A worker takes the training at
 /// the head of the queue, trains its next epoch and puts it back at the tail, so that
 /// the models advance together. There are as many workers as trainings, up to one per
-/// core, and the cores are shared out among them: each worker runs its epochs on a
-/// [`train::pool`] of its share, one thread where trainings outnumber cores, several
-/// where they do not (five models on 16 cores: pools of 4, 3, 3, 3, 3), so every core
-/// trains. A model computes the same bytes whichever worker, and however many threads,
-/// train it.
+/// core, and each epoch runs on a [`train::pool`] of the cores [`Cores`] lends the
+/// worker for it: one thread where trainings outnumber cores, several where they do not
+/// (five models on 16 cores: 4, 3, 3, 3 and 3); the cores of a training that has ended
+/// go to the others at their next epoch, so no core that a model could use is idle
+/// until the last one ends. A model computes the same bytes whichever worker, and
+/// however many threads, train it.
 /// `announce` is told of each training as it ends. Returns each id's trained model or
 /// the error that ended it.
 pub(crate) fn interleave_epochs<'a, F, S>(
@@ -236,20 +238,27 @@ where
     let cores = rayon::current_num_threads();
     let trainings = queue.lock().expect("no worker panics").len();
     let workers = cores.min(trainings).max(1);
+    let lender = Cores::new(cores, workers);
     std::thread::scope(|scope| {
-        for worker in 0..workers {
-            let threads = cores / workers + usize::from(worker < cores % workers);
-            let (queue, place) = (&queue, &place);
+        for _ in 0..workers {
+            let (queue, place, lender) = (&queue, &place, &lender);
             scope.spawn(move || {
-                let pool = train::pool(threads);
+                // A pool of each size this worker has been lent, kept for its epochs.
+                let mut pools = std::collections::BTreeMap::new();
                 // The queue only shrinks while this worker is away: every training
                 // not in it is held by a worker that will carry on with it.
                 loop {
                     let next = queue.lock().expect("no worker panics").pop_front();
                     let Some((id, job, step, progress)) = next else {
+                        lender.leave();
                         break;
                     };
+                    let threads = lender.lend();
+                    let pool = pools
+                        .entry(threads)
+                        .or_insert_with(|| train::pool(threads));
                     let stepped = pool.install(|| step(job, &progress));
+                    lender.repay(threads);
                     place(id, stepped, step, progress);
                 }
             });
@@ -258,6 +267,79 @@ where
     let mut finished = finished.into_inner().expect("no worker panics");
     finished.sort_by_key(|(id, _)| *id);
     finished
+}
+
+/// The threads of the first epochs of `trainings` trainings on `cores` cores, one per
+/// worker, as [`interleave_epochs`] lends them (`bench` times a run's arrangement with them).
+pub(crate) fn first_loans(cores: usize, trainings: usize) -> Vec<usize> {
+    let workers = cores.min(trainings).max(1);
+    let lender = Cores::new(cores.max(1), workers);
+    (0..workers).map(|_| lender.lend()).collect()
+}
+
+/// The cores lent to the workers of [`interleave_epochs`], one epoch at a time. A
+/// worker waiting for its next epoch is lent its share of the free cores (shared among
+/// the waiting workers), at most its share of all of them (shared among the workers
+/// still training) and no more than a batch has slices, and at least one: the loans
+/// never add up to more than the cores, and the cores a worker gives back, or leaves
+/// behind when its trainings have ended, go to the next workers to start an epoch.
+#[derive(Debug)]
+struct Cores {
+    cores: usize,
+    loans: std::sync::Mutex<Loans>,
+}
+
+/// Where the cores are: free, or lent to the workers not waiting.
+#[derive(Debug)]
+struct Loans {
+    free: usize,
+    /// Workers between two epochs (each will take at least one core, or leave).
+    waiting: usize,
+    /// Workers that have not left.
+    workers: usize,
+}
+
+impl Cores {
+    /// `workers` workers, all waiting, on `cores` cores (at least as many).
+    fn new(cores: usize, workers: usize) -> Self {
+        assert!((1..=cores).contains(&workers), "one to `cores` workers");
+        let loans = Loans {
+            free: cores,
+            waiting: workers,
+            workers,
+        };
+        Self {
+            cores,
+            loans: std::sync::Mutex::new(loans),
+        }
+    }
+
+    /// The threads of a waiting worker's next epoch. The free cores never fall below the
+    /// waiting workers: `⌈free / waiting⌉ ≤ free − (waiting − 1)`.
+    fn lend(&self) -> usize {
+        let mut loans = self.loans.lock().expect("no worker panics");
+        let share_of_free = loans.free.div_ceil(loans.waiting);
+        let share = self.cores.div_ceil(loans.workers).min(SLICES);
+        let threads = share_of_free.min(share);
+        loans.free -= threads;
+        loans.waiting -= 1;
+        debug_assert!(threads >= 1 && loans.free >= loans.waiting);
+        threads
+    }
+
+    /// `threads` cores back from a worker's epoch; it waits for its next.
+    fn repay(&self, threads: usize) {
+        let mut loans = self.loans.lock().expect("no worker panics");
+        loans.free += threads;
+        loans.waiting += 1;
+    }
+
+    /// A waiting worker finds no training left and leaves.
+    fn leave(&self) {
+        let mut loans = self.loans.lock().expect("no worker panics");
+        loans.waiting -= 1;
+        loans.workers -= 1;
+    }
 }
 
 /// Generates dataset `d` from the spec of its first point.
@@ -280,4 +362,94 @@ fn generate_dataset(plan: &Plan, d: usize, stages: &mut StageSeconds) -> Trainin
         clock.elapsed().as_secs_f64()
     );
     set
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+
+    #[test]
+    fn five_models_on_16_cores_get_4_3_3_3_3_and_the_cores_of_one_that_ends() {
+        assert_eq!(first_loans(16, 5), [4, 3, 3, 3, 3]);
+        assert_eq!(first_loans(2, 5), [1, 1]);
+        let lender = Cores::new(16, 5);
+        let first: Vec<usize> = (0..5).map(|_| lender.lend()).collect();
+        assert_eq!(first, [4, 3, 3, 3, 3]);
+        // The first model ends: its worker gives its cores back and leaves.
+        lender.repay(4);
+        lender.leave();
+        // The other four, at their next epochs, take a quarter of the cores each.
+        let next: Vec<usize> = (0..4)
+            .map(|_| {
+                lender.repay(3);
+                lender.lend()
+            })
+            .collect();
+        assert_eq!(next, [4, 4, 4, 4]);
+        // The last model left trains on as many cores as a batch has slices.
+        for _ in 0..3 {
+            lender.repay(4);
+            lender.leave();
+        }
+        lender.repay(4);
+        assert_eq!(lender.lend(), SLICES);
+    }
+
+    /// Workers that start, end and leave in a random order: a loan is never empty, the
+    /// loans never exceed the cores, and once every worker has started an epoch since
+    /// the last one left, no core is idle that a worker could use.
+    #[test]
+    fn loans_never_exceed_the_cores_and_leave_none_idle() {
+        #[derive(Clone, Copy, PartialEq)]
+        enum Worker {
+            Waiting,
+            Training(usize),
+            Left,
+        }
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(40);
+        for _ in 0..500 {
+            let cores = rng.random_range(1..=3 * SLICES);
+            let mut workers = vec![Worker::Waiting; rng.random_range(1..=cores)];
+            let lender = Cores::new(cores, workers.len());
+            let mut started_since_a_leave = vec![false; workers.len()];
+            for _ in 0..200 {
+                let w = rng.random_range(0..workers.len());
+                match workers[w] {
+                    Worker::Waiting if rng.random_bool(0.05) => {
+                        lender.leave();
+                        workers[w] = Worker::Left;
+                        started_since_a_leave.fill(false);
+                    }
+                    Worker::Waiting => {
+                        let threads = lender.lend();
+                        assert!(threads >= 1);
+                        workers[w] = Worker::Training(threads);
+                        started_since_a_leave[w] = true;
+                    }
+                    Worker::Training(threads) => {
+                        lender.repay(threads);
+                        workers[w] = Worker::Waiting;
+                    }
+                    Worker::Left => continue,
+                }
+                let lent: usize = workers
+                    .iter()
+                    .map(|w| match w {
+                        Worker::Training(threads) => *threads,
+                        _ => 0,
+                    })
+                    .sum();
+                assert!(lent <= cores, "{lent} threads lent on {cores} cores");
+                let all_started = workers.iter().zip(&started_since_a_leave).all(
+                    |(worker, &started)| *worker == Worker::Left || (started && *worker != Worker::Waiting),
+                );
+                let training = workers.iter().filter(|w| **w != Worker::Left).count();
+                if all_started && training > 0 {
+                    let usable = cores.min(training * SLICES);
+                    assert_eq!(lent, usable, "every worker training, yet cores idle");
+                }
+            }
+        }
+    }
 }
