@@ -881,8 +881,7 @@ pub(crate) mod tests {
         };
         let (one, history_one) = train_with(1);
         for threads in [2, 3] {
-            // Three threads share the slices unevenly, and take the parameters'
-            // gradients of a slice apart from its input's.
+            // Three threads share the 8 slices unevenly.
             let (other, history_other) = train_with(threads);
             assert!(one == other, "weights differ between 1 and {threads} threads");
             assert_eq!(history_one, history_other);

@@ -350,8 +350,8 @@ fn bench_refuses_a_pytorch_peer_it_cannot_run_before_timing_anything() {
 #[test]
 fn bench_times_the_models_of_a_run_on_the_cores_they_do_not_fill_one_per_core() {
     let project = project(false);
-    let bench = |error_models: &str| {
-        let set = format!("estimators.error_models={error_models}");
+    let bench_with = |key: &str, value: &str| {
+        let set = format!("estimators.{key}={value}");
         let args = [
             "--threads",
             "3",
@@ -368,6 +368,7 @@ fn bench_times_the_models_of_a_run_on_the_cores_they_do_not_fill_one_per_core() 
         assert!(output.status.success(), "{}", stderr(&output));
         stdout(&output)
     };
+    let bench = |error_models: &str| bench_with("error_models", error_models);
     let run_line = |out: &str| {
         out.lines()
             .find(|l| l.starts_with("training as `run` trains"))
@@ -383,8 +384,10 @@ fn bench_times_the_models_of_a_run_on_the_cores_they_do_not_fill_one_per_core() 
             && line.contains("(median of 2 paired runs"),
         "{line}"
     );
-    // Three models fill the three cores one per core: nothing more to time.
+    // Three models fill the three cores one per core, and a spec without DCNet trains
+    // none: nothing more to time.
     assert_eq!(run_line(&bench(r#"["EM1", "EM3", "EM5"]"#)), None);
+    assert_eq!(run_line(&bench_with("kinds", r#"["baseline"]"#)), None);
 }
 
 #[test]

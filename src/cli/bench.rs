@@ -403,7 +403,7 @@ fn median_and_spread(values: &[f64], digits: usize) -> String {
 struct TrainingTable {
     /// Per core count, its arrangements.
     cells: Vec<(usize, Vec<Cell>)>,
-    /// The spec's models as `run` trains them, where they are fewer than the cores.
+    /// The spec's models as `run` trains them, where it trains some, fewer than the cores.
     run: Option<RunTraining>,
     runs: usize,
 }
@@ -444,7 +444,7 @@ impl RunTraining {
             n => format!("{n} {thing}s"),
         };
         println!(
-            "training as `run` trains the spec's {} at once, samples/s in all: on {}, one model each, {}; on all {} cores, on {} threads, {}; {}× (median of {} paired runs, range in brackets)",
+            "training as `run` trains the spec's {} at once, samples/s in all: on {}, one model each, {}; on all {} cores, on {} threads, {}; {}× ({})",
             count(models, "model"),
             count(models, "core"),
             median_and_spread(&self.one_per_core, 0),
@@ -452,7 +452,10 @@ impl RunTraining {
             loans.join(", "),
             median_and_spread(&self.on_all, 0),
             median_and_spread(&ratios, 2),
-            ratios.len()
+            match ratios.len() {
+                1 => "one paired run".to_string(),
+                runs => format!("median of {runs} paired runs, range in brackets"),
+            }
         );
     }
 }
@@ -485,7 +488,7 @@ impl TrainingTable {
             })
             .collect();
         let (models, cores) = (spec.model_count(), rayon::current_num_threads());
-        let mut run = (models < cores).then(|| RunTraining {
+        let mut run = (1..cores).contains(&models).then(|| RunTraining {
             cores,
             loans: first_loans(cores, models),
             one_per_core: Vec::new(),

@@ -493,22 +493,16 @@ impl Inputs {
         }
         let mask = |i: usize| self.dropout.is_some().then(|| &masks[i][..]);
 
-        // The two heads, each on its own buffers: the second can run on a thread that
-        // has no slice left.
-        let ([a0, a1, a2, a3, a4, ..], [u0, u1, u2]) = (&mut *activated, &mut *unfolded);
-        let forward_1d = || {
-            self.layer_forward(0, head_1d, count, a0, None, None);
-            unfold_time(a0, count, rows(0), kernel, u0);
-            self.layer_forward(1, u0, count, a1, None, None);
-        };
-        let forward_2d = || {
-            self.layer_forward(2, head_2d, count, a2, None, None);
-            unfold_grid(a2, count, time - 1, 3, u1);
-            self.layer_forward(3, u1, count, a3, None, None);
-            unfold_grid(a3, count, time - 2, 2, u2);
-            self.layer_forward(4, u2, count, a4, None, None);
-        };
-        rayon::join(forward_1d, forward_2d);
+        // 1D head.
+        self.layer_forward(0, head_1d, count, &mut activated[0], None, None);
+        unfold_time(&activated[0], count, rows(0), kernel, &mut unfolded[0]);
+        self.layer_forward(1, &unfolded[0], count, &mut activated[1], None, None);
+        // 2D head.
+        self.layer_forward(2, head_2d, count, &mut activated[2], None, None);
+        unfold_grid(&activated[2], count, time - 1, 3, &mut unfolded[1]);
+        self.layer_forward(3, &unfolded[1], count, &mut activated[3], None, None);
+        unfold_grid(&activated[3], count, time - 2, 2, &mut unfolded[2]);
+        self.layer_forward(4, &unfolded[2], count, &mut activated[4], None, None);
         // The heads side by side, each window's rows time-major.
         let (flat_1d, flat_2d) = (activated[1].len() / count, activated[4].len() / count);
         features.clear();
@@ -742,35 +736,27 @@ impl Inputs {
         let layer = self.layers[i];
         let rows = count * layer.positions;
         layer.activation.backward(grad, activated, mask);
-        let grad = &*grad;
-        let param_grads = || {
+        product(
+            weight_grad,
+            [layer.inputs, layer.outputs, rows],
+            Operand::transposed(x, layer.inputs),
+            Operand::plain(grad, layer.outputs),
+        );
+        bias_grad.fill(0.0);
+        for row in grad.chunks_exact(layer.outputs) {
+            for (b, &g) in bias_grad.iter_mut().zip(row) {
+                *b += g;
+            }
+        }
+        if let Some(grad_input) = grad_input {
+            resize(grad_input, rows * layer.inputs);
             product(
-                weight_grad,
-                [layer.inputs, layer.outputs, rows],
-                Operand::transposed(x, layer.inputs),
+                grad_input,
+                [rows, layer.inputs, layer.outputs],
                 Operand::plain(grad, layer.outputs),
+                Operand::transposed(self.param(2 * i), layer.outputs),
             );
-            bias_grad.fill(0.0);
-            for row in grad.chunks_exact(layer.outputs) {
-                for (b, &g) in bias_grad.iter_mut().zip(row) {
-                    *b += g;
-                }
-            }
-        };
-        let input_grad = || {
-            if let Some(grad_input) = grad_input {
-                resize(grad_input, rows * layer.inputs);
-                product(
-                    grad_input,
-                    [rows, layer.inputs, layer.outputs],
-                    Operand::plain(grad, layer.outputs),
-                    Operand::transposed(self.param(2 * i), layer.outputs),
-                );
-            }
-        };
-        // The input's gradient carries the slice's backward on; the parameters' can run
-        // on a thread that has no slice left (8 slices on 3 threads take 3, 3 and 2).
-        rayon::join(input_grad, param_grads);
+        }
     }
 }
 

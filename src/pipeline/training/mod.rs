@@ -197,9 +197,8 @@ type EpochStep<'a> =
 /// core, and each epoch runs on a [`train::pool`] of the cores [`Cores`] lends the
 /// worker for it: one thread where trainings outnumber cores, several where they do not
 /// (five models on 16 cores: 4, 3, 3, 3 and 3); the cores of a training that has ended
-/// go to the others at their next epoch, so no core that a model could use is idle
-/// until the last one ends. A model computes the same bytes whichever worker, and
-/// however many threads, train it.
+/// go to the others as each starts its next epoch. A model computes the same bytes
+/// whichever worker, and however many threads, train it.
 /// `announce` is told of each training as it ends. Returns each id's trained model or
 /// the error that ended it.
 pub(crate) fn interleave_epochs<'a, F, S>(
@@ -243,8 +242,8 @@ where
         for _ in 0..workers {
             let (queue, place, lender) = (&queue, &place, &lender);
             scope.spawn(move || {
-                // A pool of each size this worker has been lent, kept for its epochs.
-                let mut pools = std::collections::BTreeMap::new();
+                // The pool of the last loan, kept while the loans stay that size.
+                let mut pool: Option<rayon::ThreadPool> = None;
                 // The queue only shrinks while this worker is away: every training
                 // not in it is held by a worker that will carry on with it.
                 loop {
@@ -254,9 +253,10 @@ where
                         break;
                     };
                     let threads = lender.lend();
-                    let pool = pools
-                        .entry(threads)
-                        .or_insert_with(|| train::pool(threads));
+                    if pool.as_ref().is_none_or(|p| p.current_num_threads() != threads) {
+                        pool = Some(train::pool(threads));
+                    }
+                    let pool = pool.as_ref().expect("made for this loan");
                     let stepped = pool.install(|| step(job, &progress));
                     lender.repay(threads);
                     place(id, stepped, step, progress);
@@ -280,7 +280,8 @@ pub(crate) fn first_loans(cores: usize, trainings: usize) -> Vec<usize> {
 /// The cores lent to the workers of [`interleave_epochs`], one epoch at a time. A
 /// worker waiting for its next epoch is lent its share of the free cores (shared among
 /// the waiting workers), at most its share of all of them (shared among the workers
-/// still training) and no more than a batch has slices, and at least one: the loans
+/// still training) and no more than a batch has slices (a slice runs on one thread),
+/// and at least one: the loans
 /// never add up to more than the cores, and the cores a worker gives back, or leaves
 /// behind when its trainings have ended, go to the next workers to start an epoch.
 #[derive(Debug)]
