@@ -883,7 +883,10 @@ pub(crate) mod tests {
         for threads in [2, 3] {
             // Three threads share the 8 slices unevenly.
             let (other, history_other) = train_with(threads);
-            assert!(one == other, "weights differ between 1 and {threads} threads");
+            assert!(
+                one == other,
+                "weights differ between 1 and {threads} threads"
+            );
             assert_eq!(history_one, history_other);
         }
         // And training moved the weights away from their initial values.

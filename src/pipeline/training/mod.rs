@@ -253,7 +253,10 @@ where
                         break;
                     };
                     let threads = lender.lend();
-                    if pool.as_ref().is_none_or(|p| p.current_num_threads() != threads) {
+                    if pool
+                        .as_ref()
+                        .is_none_or(|p| p.current_num_threads() != threads)
+                    {
                         pool = Some(train::pool(threads));
                     }
                     let pool = pool.as_ref().expect("made for this loan");
@@ -442,9 +445,13 @@ mod tests {
                     })
                     .sum();
                 assert!(lent <= cores, "{lent} threads lent on {cores} cores");
-                let all_started = workers.iter().zip(&started_since_a_leave).all(
-                    |(worker, &started)| *worker == Worker::Left || (started && *worker != Worker::Waiting),
-                );
+                let all_started =
+                    workers
+                        .iter()
+                        .zip(&started_since_a_leave)
+                        .all(|(worker, &started)| {
+                            *worker == Worker::Left || (started && *worker != Worker::Waiting)
+                        });
                 let training = workers.iter().filter(|w| **w != Worker::Left).count();
                 if all_started && training > 0 {
                     let usable = cores.min(training * SLICES);
