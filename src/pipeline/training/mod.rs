@@ -1,8 +1,8 @@
 //! The training scheduler: datasets generated a few at a time, and the models that
 //! train on them interleaved epoch by epoch over the cores, each epoch on a pool of the
-//! cores lent to its worker (a model's bytes do not depend on how many). The paper's models train here
-//! ([`train`]); an installation study's `[learned]` models go through the same
-//! [`in_batches`] and [`interleave_epochs`] (`pipeline/installation/learned.rs`).
+//! cores lent to its worker (a model's bytes do not depend on how many). The paper's
+//! models train here ([`train`]); an installation study's `[learned]` models go through
+//! the same [`in_batches`] and [`interleave_epochs`] (`pipeline/installation/learned.rs`).
 
 pub mod job;
 
@@ -234,12 +234,10 @@ where
         let (job, step, progress) = start(id);
         place(id, job, Box::new(step), progress);
     }
-    let cores = rayon::current_num_threads();
     let trainings = queue.lock().expect("no worker panics").len();
-    let workers = cores.min(trainings).max(1);
-    let lender = Cores::new(cores, workers);
+    let lender = Cores::new(rayon::current_num_threads(), trainings);
     std::thread::scope(|scope| {
-        for _ in 0..workers {
+        for _ in 0..lender.workers() {
             let (queue, place, lender) = (&queue, &place, &lender);
             scope.spawn(move || {
                 // The pool of the last loan, kept while the loans stay that size.
@@ -275,18 +273,17 @@ where
 /// The threads of the first epochs of `trainings` trainings on `cores` cores, one per
 /// worker, as [`interleave_epochs`] lends them (`bench` times a run's arrangement with them).
 pub(crate) fn first_loans(cores: usize, trainings: usize) -> Vec<usize> {
-    let workers = cores.min(trainings).max(1);
-    let lender = Cores::new(cores.max(1), workers);
-    (0..workers).map(|_| lender.lend()).collect()
+    let lender = Cores::new(cores, trainings);
+    (0..lender.workers()).map(|_| lender.lend()).collect()
 }
 
 /// The cores lent to the workers of [`interleave_epochs`], one epoch at a time. A
 /// worker waiting for its next epoch is lent its share of the free cores (shared among
 /// the waiting workers), at most its share of all of them (shared among the workers
 /// still training) and no more than a batch has slices (a slice runs on one thread),
-/// and at least one: the loans
-/// never add up to more than the cores, and the cores a worker gives back, or leaves
-/// behind when its trainings have ended, go to the next workers to start an epoch.
+/// and at least one: the loans never add up to more than the cores, and the cores a
+/// worker gives back, or leaves behind when its trainings have ended, go to the next
+/// workers to start an epoch.
 #[derive(Debug)]
 struct Cores {
     cores: usize,
@@ -304,9 +301,11 @@ struct Loans {
 }
 
 impl Cores {
-    /// `workers` workers, all waiting, on `cores` cores (at least as many).
-    fn new(cores: usize, workers: usize) -> Self {
-        assert!((1..=cores).contains(&workers), "one to `cores` workers");
+    /// The workers of `trainings` trainings on `cores` cores (at least one): as many as
+    /// trainings, up to one per core, and at least one; all waiting.
+    fn new(cores: usize, trainings: usize) -> Self {
+        assert!(cores >= 1, "at least one core");
+        let workers = cores.min(trainings).max(1);
         let loans = Loans {
             free: cores,
             waiting: workers,
@@ -316,6 +315,11 @@ impl Cores {
             cores,
             loans: std::sync::Mutex::new(loans),
         }
+    }
+
+    /// The workers that have not left.
+    fn workers(&self) -> usize {
+        self.loans.lock().expect("no worker panics").workers
     }
 
     /// The threads of a waiting worker's next epoch. The free cores never fall below the
