@@ -562,15 +562,15 @@ impl Inputs {
         }
     }
 
-    /// `grads`, one slice's parameter gradients, cut into each parameter's part.
-    fn param_parts<'a>(&self, grads: &'a mut [f32]) -> [&'a mut [f32]; PARAMETERS] {
-        let mut parts: [&mut [f32]; PARAMETERS] = Default::default();
+    /// `grads`, one slice's parameter gradients, cut into each layer's weight and bias.
+    fn layer_parts<'a>(&self, grads: &'a mut [f32]) -> [(&'a mut [f32], &'a mut [f32]); LAYERS] {
         let mut rest = grads;
-        for (p, part) in parts.iter_mut().enumerate() {
+        let mut take = |p: usize| {
             let (head, tail) = std::mem::take(&mut rest).split_at_mut(self.param_size(p));
-            (*part, rest) = (head, tail);
-        }
-        parts
+            rest = tail;
+            head
+        };
+        std::array::from_fn(|i| (take(2 * i), take(2 * i + 1)))
     }
 
     /// The parameters' gradients in parameter order, from the terms' `grad` `[windows,
@@ -622,123 +622,126 @@ impl Inputs {
         grads.iter().map(Reused::tensor).collect()
     }
 
+    /// Slice `slice`'s backward from the gradient of its terms `grad`: each layer's
+    /// pre-activation gradient in `buffers.grads`, the parameters' gradients in
+    /// `buffers.param_grads`. Past the small Linear layers, each layer's products run beside
+    /// the rest of the backward, and the two heads beside each other, so that the pool's
+    /// other threads can take over part of a slice when they have none left to start.
     fn slice_backward(&self, slice: usize, grad: &[f32], buffers: &mut SliceBuffers) {
         let (windows, head_1d, head_2d) = self.slice_inputs(slice);
         let count = windows.len();
-        let rows = |layer: usize| self.layers[layer].positions;
         let SliceBuffers {
             activated,
             masks,
             masked,
             unfolded,
             features,
-            grad_out,
-            grad_in,
-            grad_head,
+            grads,
+            features_grad,
+            folded: [folded_1d, folded_2d],
             param_grads,
         } = buffers;
-        let mut parts = self.param_parts(param_grads);
-        let mut param = |i: usize| {
-            (
-                std::mem::take(&mut parts[2 * i]),
-                std::mem::take(&mut parts[2 * i + 1]),
-            )
+        let (activated, unfolded, features) = (&*activated, &*unfolded, &*features);
+        let mut parts = self.layer_parts(param_grads);
+        // `grad ← act′ · grad ⊙ mask`: the gradient of layer `i`'s (masked) output made
+        // its pre-activation gradient.
+        let pre_activation = |i: usize, grad: &mut [f32]| {
+            let mask = (5..8).contains(&i) && self.dropout.is_some();
+            let mask = mask.then(|| &masks[i - 5][..]);
+            self.layers[i]
+                .activation
+                .backward(grad, &activated[i], mask);
         };
-        // The Linear layers, last to first; `grad_out` holds the gradient of each layer's
-        // (masked) output.
-        grad_out.clear();
-        grad_out.extend_from_slice(grad);
-        for i in (5..LAYERS).rev() {
-            let input: &[f32] = match i {
-                5 => features,
-                _ if self.dropout.is_none() => &activated[i - 1],
-                _ => &masked[i - 6],
+        // Linear 4, 3 and 2, whose products are small, one after the other.
+        resize(&mut grads[LAYERS - 1], grad.len());
+        grads[LAYERS - 1].copy_from_slice(grad);
+        for i in (6..LAYERS).rev() {
+            let (below, from_i) = grads.split_at_mut(i);
+            pre_activation(i, &mut from_i[0]);
+            let input = if self.dropout.is_some() {
+                &masked[i - 6]
+            } else {
+                &activated[i - 1]
             };
-            let m = (i < 8 && self.dropout.is_some()).then(|| &masks[i - 5][..]);
-            self.layer_backward(
-                i,
-                input,
-                count,
-                &activated[i],
-                m,
-                grad_out,
-                Some(&mut *grad_in),
-                param(i),
-            );
-            std::mem::swap(grad_out, grad_in);
+            self.param_grads(i, input, count, &from_i[0], std::mem::take(&mut parts[i]));
+            self.input_grad(i, &from_i[0], count, &mut below[i - 1]);
         }
-        // `grad_out` is the features' gradient: split it back into the two heads'.
-        let (flat_1d, flat_2d) = (activated[1].len() / count, activated[4].len() / count);
-        resize(grad_in, activated[1].len());
-        resize(grad_head, activated[4].len());
-        for w in 0..count {
-            let row = &grad_out[w * (flat_1d + flat_2d)..][..flat_1d + flat_2d];
-            grad_in[w * flat_1d..][..flat_1d].copy_from_slice(&row[..flat_1d]);
-            grad_head[w * flat_2d..][..flat_2d].copy_from_slice(&row[flat_1d..]);
-        }
-        // 1D head: layers 1 and 0 from `grad_in`, the input's gradient of layer 1 folded
-        // back into the output's of layer 0.
-        for (i, input) in [(1, &unfolded[0][..]), (0, head_1d)] {
-            let fold = (i == 1).then_some(&mut *grad_out);
-            self.layer_backward(
-                i,
-                input,
-                count,
-                &activated[i],
-                None,
-                grad_in,
-                fold,
-                param(i),
-            );
-            if i == 1 {
-                fold_time(grad_out, count, rows(0), self.shape.kernel, grad_in);
+        let [g0, g1, g2, g3, g4, g5, ..] = grads;
+        let [p0, p1, p2, p3, p4, p5, ..] = parts;
+        let (time, kernel) = (self.shape.time, self.shape.kernel);
+        pre_activation(5, g5);
+        self.products_beside(5, features, count, g5, p5, |g5| {
+            // The features' gradient split back into the two heads' outputs'.
+            self.input_grad(5, g5, count, features_grad);
+            let (flat_1d, flat_2d) = (activated[1].len() / count, activated[4].len() / count);
+            resize(g1, activated[1].len());
+            resize(g4, activated[4].len());
+            for w in 0..count {
+                let row = &features_grad[w * (flat_1d + flat_2d)..][..flat_1d + flat_2d];
+                g1[w * flat_1d..][..flat_1d].copy_from_slice(&row[..flat_1d]);
+                g4[w * flat_2d..][..flat_2d].copy_from_slice(&row[flat_1d..]);
             }
-        }
-        // 2D head: layers 4, 3 and 2 from `grad_head`, folded back the same way.
-        let time = self.shape.time;
-        for (i, input, grid) in [
-            (4, &unfolded[2][..], Some((time - 2, 2))),
-            (3, &unfolded[1][..], Some((time - 1, 3))),
-            (2, head_2d, None),
-        ] {
-            let fold = grid.is_some().then_some(&mut *grad_out);
-            self.layer_backward(
-                i,
-                input,
-                count,
-                &activated[i],
-                None,
-                grad_head,
-                fold,
-                param(i),
-            );
-            if let Some((steps, rows)) = grid {
-                fold_grid(grad_out, count, steps, rows, grad_head);
-            }
-        }
+            // 2D head: layers 4, 3 and 2, each input's gradient folded back into the
+            // output's of the layer before.
+            let head_2d_backward = || {
+                pre_activation(4, g4);
+                self.products_beside(4, &unfolded[2], count, g4, p4, |g4| {
+                    self.input_grad(4, g4, count, folded_2d);
+                    fold_grid(folded_2d, count, time - 2, 2, g3);
+                    pre_activation(3, g3);
+                    self.products_beside(3, &unfolded[1], count, g3, p3, |g3| {
+                        self.input_grad(3, g3, count, folded_2d);
+                        fold_grid(folded_2d, count, time - 1, 3, g2);
+                        pre_activation(2, g2);
+                        self.param_grads(2, head_2d, count, g2, p2);
+                    })
+                })
+            };
+            // 1D head: layers 1 and 0, folded back the same way.
+            let head_1d_backward = || {
+                pre_activation(1, g1);
+                self.products_beside(1, &unfolded[0], count, g1, p1, |g1| {
+                    self.input_grad(1, g1, count, folded_1d);
+                    fold_time(folded_1d, count, self.layers[0].positions, kernel, g0);
+                    pre_activation(0, g0);
+                    self.param_grads(0, head_1d, count, g0, p0);
+                })
+            };
+            rayon::join(head_2d_backward, head_1d_backward);
+        });
     }
 
-    /// Layer `i`'s backward: `grad` (of its masked output) becomes the pre-activation
-    /// gradient in place; the weight's gradient `xᵀ·g` and the bias's (column sums) are
-    /// written, and the input's `g·Wᵀ` where `grad_input` is given.
+    /// Layer `i`'s parameters' gradients from its input `x` and its pre-activation
+    /// gradient `grad`, beside `rest`, the backward further down, which reads `grad` too.
+    /// This thread computes the products; `rest` is offered to the pool's other threads
+    /// (and run here after the products if none takes it).
     #[allow(clippy::too_many_arguments)]
-    fn layer_backward(
+    fn products_beside<R: Send>(
         &self,
         i: usize,
         x: &[f32],
         count: usize,
-        activated: &[f32],
-        mask: Option<&[f32]>,
-        grad: &mut [f32],
-        grad_input: Option<&mut Vec<f32>>,
+        grad: &[f32],
+        param: (&mut [f32], &mut [f32]),
+        rest: impl FnOnce(&[f32]) -> R + Send,
+    ) -> R {
+        rayon::join(|| self.param_grads(i, x, count, grad, param), || rest(grad)).1
+    }
+
+    /// Layer `i`'s weight gradient `xᵀ·g` and bias gradient (column sums of `g`), from its
+    /// input `x` (`count` windows) and its pre-activation gradient `grad`.
+    fn param_grads(
+        &self,
+        i: usize,
+        x: &[f32],
+        count: usize,
+        grad: &[f32],
         (weight_grad, bias_grad): (&mut [f32], &mut [f32]),
     ) {
         let layer = self.layers[i];
-        let rows = count * layer.positions;
-        layer.activation.backward(grad, activated, mask);
         product(
             weight_grad,
-            [layer.inputs, layer.outputs, rows],
+            [layer.inputs, layer.outputs, count * layer.positions],
             Operand::transposed(x, layer.inputs),
             Operand::plain(grad, layer.outputs),
         );
@@ -748,15 +751,20 @@ impl Inputs {
                 *b += g;
             }
         }
-        if let Some(grad_input) = grad_input {
-            resize(grad_input, rows * layer.inputs);
-            product(
-                grad_input,
-                [rows, layer.inputs, layer.outputs],
-                Operand::plain(grad, layer.outputs),
-                Operand::transposed(self.param(2 * i), layer.outputs),
-            );
-        }
+    }
+
+    /// Layer `i`'s input gradient `g·Wᵀ` into `grad_input`, from its pre-activation
+    /// gradient `grad` (`count` windows).
+    fn input_grad(&self, i: usize, grad: &[f32], count: usize, grad_input: &mut Vec<f32>) {
+        let layer = self.layers[i];
+        let rows = count * layer.positions;
+        resize(grad_input, rows * layer.inputs);
+        product(
+            grad_input,
+            [rows, layer.inputs, layer.outputs],
+            Operand::plain(grad, layer.outputs),
+            Operand::transposed(self.param(2 * i), layer.outputs),
+        );
     }
 }
 
@@ -784,9 +792,12 @@ struct SliceBuffers {
     unfolded: [Vec<f32>; 3],
     /// The two heads side by side, the first Linear layer's input.
     features: Vec<f32>,
-    grad_out: Vec<f32>,
-    grad_in: Vec<f32>,
-    grad_head: Vec<f32>,
+    /// Each layer's pre-activation gradient.
+    grads: [Vec<f32>; LAYERS],
+    /// The gradient of the features.
+    features_grad: Vec<f32>,
+    /// The gradient of the 1D and the 2D head's unfolded inputs, before folding.
+    folded: [Vec<f32>; 2],
     /// Every parameter's gradient from this slice, in parameter order.
     param_grads: Vec<f32>,
 }
