@@ -26,7 +26,7 @@ use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
 use std::cell::RefCell;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// How one model trained: its cache key, every epoch's losses, the epoch whose
 /// weights it kept and why it stopped; the `.json` beside a stored model.
@@ -537,9 +537,13 @@ pub fn with_pool_awake<R>(f: impl FnOnce() -> R) -> R {
                 return;
             }
             HELPING.set(true);
+            let mut idle = Idle::default();
             while !done.load(Ordering::Acquire) {
-                if rayon::yield_now() == Some(rayon::Yield::Idle) {
-                    std::hint::spin_loop();
+                let worked = rayon::yield_now() == Some(rayon::Yield::Executed);
+                match idle.after(worked, Instant::now()) {
+                    Wait::None => {}
+                    Wait::Spin => std::hint::spin_loop(),
+                    Wait::Yield => std::thread::yield_now(),
                 }
             }
             HELPING.set(false);
@@ -547,6 +551,47 @@ pub fn with_pool_awake<R>(f: impl FnOnce() -> R) -> R {
         let _done = Done(&done);
         f()
     })
+}
+
+/// How long a kept-awake thread finds no work before it offers its core to the
+/// operating system's other threads between its looks for work: far longer than the
+/// serial parts of a step (tens of microseconds), so that a training with cores of its
+/// own keeps them, but short enough that where threads outnumber the cores (more
+/// `--threads` than cores, or other programs busy) the thread that holds the step is not
+/// kept off a core by one that waits for it.
+const SPIN_BEFORE_YIELD: Duration = Duration::from_micros(200);
+
+/// What a kept-awake thread does before it looks for work again.
+#[derive(Debug, PartialEq, Eq)]
+enum Wait {
+    /// Look again at once: it has just run a job.
+    None,
+    /// Spin a moment: it has been idle less than [`SPIN_BEFORE_YIELD`].
+    Spin,
+    /// Offer its core to the operating system's other threads.
+    Yield,
+}
+
+/// How long a kept-awake thread has found no work.
+#[derive(Debug, Default)]
+struct Idle {
+    since: Option<Instant>,
+}
+
+impl Idle {
+    /// The wait after a look for work at `now` that ran a job (`worked`) or found none.
+    fn after(&mut self, worked: bool, now: Instant) -> Wait {
+        if worked {
+            self.since = None;
+            return Wait::None;
+        }
+        let since = *self.since.get_or_insert(now);
+        if now - since < SPIN_BEFORE_YIELD {
+            Wait::Spin
+        } else {
+            Wait::Yield
+        }
+    }
 }
 
 thread_local! {
@@ -630,6 +675,27 @@ pub(crate) mod tests {
             })
         });
         assert_eq!(helped.len(), 3, "threads kept awake: {helped:?}");
+    }
+
+    /// A kept-awake thread spins while it has been idle less than 200 µs, then offers its
+    /// core between its looks for work, and spins again once it has run a job.
+    #[test]
+    fn an_idle_helper_spins_then_offers_its_core_until_it_works_again() {
+        let start = Instant::now();
+        let at = |us: u64| start + Duration::from_micros(us);
+        let mut idle = Idle::default();
+        assert_eq!(idle.after(true, at(0)), Wait::None);
+        assert_eq!(idle.after(false, at(10)), Wait::Spin);
+        assert_eq!(idle.after(false, at(209)), Wait::Spin, "idle since 10 µs");
+        assert_eq!(idle.after(false, at(210)), Wait::Yield);
+        assert_eq!(idle.after(false, at(5_000)), Wait::Yield);
+        assert_eq!(idle.after(true, at(5_001)), Wait::None);
+        assert_eq!(
+            idle.after(false, at(5_100)),
+            Wait::Spin,
+            "idle anew since 5,100 µs"
+        );
+        assert_eq!(idle.after(false, at(5_300)), Wait::Yield);
     }
 
     /// On Flex the loss is one operation: its value and the terms' gradient are those of

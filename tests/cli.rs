@@ -391,6 +391,34 @@ fn bench_times_the_models_of_a_run_on_the_cores_they_do_not_fill_one_per_core() 
 }
 
 #[test]
+fn more_threads_than_cores_are_run_with_a_warning() {
+    let project = project(false);
+    let cores = std::thread::available_parallelism().unwrap().get();
+    let threads = (cores + 1).to_string();
+    let output = dcnet(
+        project.path(),
+        &["--threads", &threads, "plan", "experiments/quick.toml"],
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let warning = format!("warning: --threads {threads} is more than the {cores} cores");
+    assert!(stderr(&output).contains(&warning), "{}", stderr(&output));
+    let output = dcnet(
+        project.path(),
+        &[
+            "--threads",
+            &cores.to_string(),
+            "plan",
+            "experiments/quick.toml",
+        ],
+    );
+    assert!(
+        !stderr(&output).contains("warning: --threads"),
+        "{}",
+        stderr(&output)
+    );
+}
+
+#[test]
 fn a_diverging_model_is_reported_and_the_others_are_kept() {
     let project = project(false);
     let dir = project.path();
