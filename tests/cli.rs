@@ -411,6 +411,7 @@ fn more_threads_than_cores_are_run_with_a_warning() {
             "experiments/quick.toml",
         ],
     );
+    assert!(output.status.success(), "{}", stderr(&output));
     assert!(
         !stderr(&output).contains("warning: --threads"),
         "{}",

@@ -95,8 +95,10 @@ fn apply_global_flags(threads: Option<usize>, log_every: Option<f64>) -> Result<
             .num_threads(threads)
             .build_global()
             .map_err(failure)?;
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-        if threads > cores {
+        let cores = std::thread::available_parallelism().map(|n| n.get());
+        if let Ok(cores) = cores
+            && threads > cores
+        {
             eprintln!(
                 "warning: --threads {threads} is more than the {cores} cores this process may \
                  use: threads that wait for each other then share cores, and training runs \

@@ -564,13 +564,14 @@ impl Inputs {
 
     /// `grads`, one slice's parameter gradients, cut into each layer's weight and bias.
     fn layer_parts<'a>(&self, grads: &'a mut [f32]) -> [(&'a mut [f32], &'a mut [f32]); LAYERS] {
+        let mut parts: [(&mut [f32], &mut [f32]); LAYERS] = Default::default();
         let mut rest = grads;
-        let mut take = |p: usize| {
-            let (head, tail) = std::mem::take(&mut rest).split_at_mut(self.param_size(p));
-            rest = tail;
-            head
-        };
-        std::array::from_fn(|i| (take(2 * i), take(2 * i + 1)))
+        for (i, (weight, bias)) in parts.iter_mut().enumerate() {
+            let (w, tail) = std::mem::take(&mut rest).split_at_mut(self.param_size(2 * i));
+            let (b, tail) = tail.split_at_mut(self.param_size(2 * i + 1));
+            (*weight, *bias, rest) = (w, b, tail);
+        }
+        parts
     }
 
     /// The parameters' gradients in parameter order, from the terms' `grad` `[windows,
