@@ -6,7 +6,7 @@
 //! per core and then on all the cores. It prints the page faults and allocator calls of a
 //! warm training step too.
 
-use super::{CliError, failure, input, load_spec};
+use super::{CliError, count, failure, input, load_spec};
 use crate::data::load_trajectories;
 use crate::dataset::{self, DatasetSize, TrainingSet};
 use crate::evaluate::run_protocol;
@@ -288,10 +288,10 @@ fn print_step_counts(spec: &Spec, set: &TrainingSet) -> Result<(), TrainError> {
             })
         };
         lines.push(format!(
-            "{} minor page faults and {} allocator calls per step on {threads} thread{}",
+            "{} minor page faults and {} allocator calls per step on {}",
             per_step(faults),
             per_step(calls),
-            if threads == 1 { "" } else { "s" }
+            count(threads, "thread")
         ));
     }
     println!(
@@ -439,10 +439,6 @@ impl RunTraining {
             .map(|(all, one)| all / one)
             .collect();
         let loans: Vec<String> = self.loans.iter().map(ToString::to_string).collect();
-        let count = |n: usize, thing: &str| match n {
-            1 => format!("1 {thing}"),
-            n => format!("{n} {thing}s"),
-        };
         println!(
             "training as `run` trains the spec's {} at once, samples/s in all: on {}, one model each, {}; on all {} cores, on {} threads, {}; {}× ({})",
             count(models, "model"),
@@ -522,13 +518,12 @@ impl TrainingTable {
             .iter()
             .any(|(_, cells)| cells.iter().any(|c| !c.peers.is_empty()));
         println!(
-            "training: batch {}, {} conv channels, FC {:?}, {} backend; samples/s, median (range) of {} run{}{}",
+            "training: batch {}, {} conv channels, FC {:?}, {} backend; samples/s, median (range) of {}{}",
             spec.training.batch_size,
             spec.model.conv_channels,
             spec.model.fc_widths,
             spec.training.backend,
-            self.runs,
-            if self.runs == 1 { "" } else { "s" },
+            count(self.runs, "run"),
             if with_peer {
                 ", each ours then PyTorch's in the same arrangement (its models in processes of their own)"
             } else {

@@ -4,7 +4,7 @@
 //! printed.
 
 use super::args::{Drawing, Target};
-use super::{CliError, failure, input};
+use super::{CliError, count, failure, input};
 use crate::data::paired;
 use crate::files::Seal;
 use crate::installation::rows::InstallationResults;
@@ -65,7 +65,7 @@ pub(super) fn run(target: &Target, drawing: &Drawing, mode: Mode) -> Result<(), 
         eprintln!(
             "nothing to do: shard {shard} has no calibrations ({} has {}, shared round the {} shards)",
             experiment.name,
-            calibrations(plan.units.len()),
+            count(plan.units.len(), "calibration"),
             shard.count
         );
         return Ok(());
@@ -79,7 +79,7 @@ pub(super) fn run(target: &Target, drawing: &Drawing, mode: Mode) -> Result<(), 
     } else {
         eprintln!(
             "shard {shard}: {} done; once every shard has finished, `{}` writes the results",
-            calibrations(executed.done),
+            count(executed.done, "calibration"),
             target.command("collect")
         );
     }
@@ -149,26 +149,15 @@ pub(super) fn plan(target: &Target, shard: Option<Shard>) -> Result<(), CliError
         0 => String::new(),
         n => {
             let to_do = models.iter().filter(|m| !m.status.is_settled()).count();
-            format!(
-                "{n} learned model{}, {to_do} to do; ",
-                if n == 1 { "" } else { "s" }
-            )
+            format!("{}, {to_do} to do; ", count(n, "learned model"))
         }
     };
     println!(
         "{scope}: {models}{}, {to_do} to do; cache in {}",
-        calibrations(listed),
+        count(listed, "calibration"),
         plan.store.folder.display()
     );
     Ok(())
-}
-
-/// "1 calibration", "13 calibrations".
-fn calibrations(count: usize) -> String {
-    match count {
-        1 => "1 calibration".into(),
-        _ => format!("{count} calibrations"),
-    }
 }
 
 /// Says what a run or collect did, prints the headline of a single study or the table
@@ -354,10 +343,6 @@ pub(super) fn validate(path: &Path, set: &[String]) -> Result<(), CliError> {
             "{n} points of a sweep over {}; the first: ",
             experiment.swept.join(", ")
         ),
-    };
-    let count = |n: usize, what: &str| match n {
-        1 => format!("1 {what}"),
-        _ => format!("{n} {what}s"),
     };
     println!(
         "{}: ok (an installation study: {points}{}, {}, {})",

@@ -442,6 +442,14 @@ fn about(seconds: f64) -> String {
     humantime::format_duration(std::time::Duration::from_secs_f64(whole)).to_string()
 }
 
+/// `n` of `what`, with a plural `s` where `n` is not 1: `1 model`, `5 models`.
+fn count(n: usize, what: &str) -> String {
+    match n {
+        1 => format!("1 {what}"),
+        _ => format!("{n} {what}s"),
+    }
+}
+
 /// Refuses a point of `experiment` (named `point` in a sweep) whose `footprint` is
 /// beyond this machine's `memory`: bad input, placed at the key of its largest part.
 fn beyond_memory<S>(
