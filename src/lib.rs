@@ -98,6 +98,14 @@ impl std::fmt::Display for Shown {
     }
 }
 
+/// `n` of `what`, with a plural `s` where `n` is not 1: `1 model`, `5 models`.
+pub fn count(n: usize, what: &str) -> String {
+    match n {
+        1 => format!("1 {what}"),
+        _ => format!("{n} {what}s"),
+    }
+}
+
 /// The distinct values of `values`, in the order they first appear.
 pub fn first_seen<T: PartialEq>(values: impl IntoIterator<Item = T>) -> Vec<T> {
     let mut seen = Vec::new();

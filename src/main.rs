@@ -7,6 +7,12 @@ use std::process::ExitCode;
 static ALLOCATOR: dcnet_exp::memory::CountingAllocator = dcnet_exp::memory::CountingAllocator;
 
 fn main() -> ExitCode {
+    // Output piped into a reader that stops early (`plan … | head`) ends the process
+    // quietly, as it ends any Unix tool, rather than panicking at the next line.
+    // SAFETY: restoring the default action of a signal, before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     dcnet_exp::memory::keep_freed_memory();
     match dcnet_exp::cli::main() {
         Ok(()) => ExitCode::SUCCESS,

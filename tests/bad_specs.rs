@@ -884,3 +884,35 @@ fn evaluating_on_the_calibration_trajectory_is_accepted_with_a_warning() {
         "{error}"
     );
 }
+
+#[test]
+fn training_on_a_test_or_the_calibration_trajectory_is_accepted_with_a_warning() {
+    let dir = project(false);
+    let d = dir.path();
+    let evaluation = "evaluation.trajectories=[\"S1\", \"S3\"]";
+    let dataset = "dataset.trajectories=[\"S1\", \"SCal\"]";
+    let output = dcnet(
+        d,
+        &[
+            "validate",
+            "experiments/quick.toml",
+            "--set",
+            evaluation,
+            "--set",
+            dataset,
+        ],
+    );
+    let error = stderr(&output);
+    assert_eq!(output.status.code(), Some(0), "{error}");
+    assert!(
+        error.contains(&format!("warning: --set {dataset}: dataset.trajectories[0]: \"S1\" is also an evaluation trajectory: the networks have trained on the trajectory they are tested on")),
+        "{error}"
+    );
+    assert!(
+        error.contains(&format!("warning: --set {dataset}: dataset.trajectories[1]: \"SCal\" is also calibration.trajectory: the networks have trained on the trajectory they calibrate")),
+        "{error}"
+    );
+    // The spec as written warns of nothing.
+    let output = dcnet(d, &["validate", "experiments/quick.toml"]);
+    assert!(!stderr(&output).contains("warning"), "{}", stderr(&output));
+}

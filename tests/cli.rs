@@ -420,6 +420,29 @@ fn more_threads_than_cores_are_run_with_a_warning() {
 }
 
 #[test]
+fn output_piped_into_a_reader_that_stopped_ends_the_command_quietly() {
+    use std::os::unix::process::ExitStatusExt;
+    let project = project(false);
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_dcnet-exp"))
+        .current_dir(project.path())
+        .args(["plan", "experiments/quick.toml"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The reader goes before the plan is read and printed: its first line finds no one.
+    drop(child.stdout.take());
+    let output = child.wait_with_output().unwrap();
+    assert!(!stderr(&output).contains("panicked"), "{}", stderr(&output));
+    assert_eq!(
+        output.status.signal(),
+        Some(libc::SIGPIPE),
+        "{:?}",
+        output.status
+    );
+}
+
+#[test]
 fn a_diverging_model_is_reported_and_the_others_are_kept() {
     let project = project(false);
     let dir = project.path();

@@ -249,6 +249,20 @@ fn a_study_scores_every_method_with_the_clock_found_again_after_the_window_that_
     // one left out with its clock found again.
     let joint = row(&format!("{model}, joint, clock re-found in 60 s"));
     assert!((joint / 3.46 - 1.0).abs() < 0.1, "{joint}");
+    // A re-found or joint method scores best, yet fits nothing on the first dive alone:
+    // the residual figure draws the best method that did, and no table says that a fit
+    // failed where the other kind of calibration has its rows.
+    let trace = common::read_parquet(&d.join("results/dives/trace.parquet"));
+    let drawn = common::strings(&trace, "method");
+    assert!(!drawn.is_empty(), "no residual trace");
+    assert!(
+        drawn
+            .iter()
+            .flatten()
+            .all(|m| !m.contains("joint") && !m.contains("re-found")),
+        "{drawn:?}"
+    );
+    assert!(!report.contains("failed there"), "{report}");
 }
 
 /// (`cargo test --release --test dive_clock -- --ignored --nocapture akit`) Each A-KIT

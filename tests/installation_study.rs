@@ -375,11 +375,11 @@ fn calibrate_on_a_real_segment_says_how_long_it_needed() {
     let printed = calibrate(&["--window-s", "100", "--tolerance-pct", "7"]);
     assert!(printed.contains(" s (window) |"), "{printed}");
     assert!(
-        printed.contains(" within 7 % of what calibration changes here "),
+        printed.contains(" of the window (7 % of what calibration changes here: "),
         "{printed}"
     );
     assert!(
-        printed.contains(" of the window, and stay there"),
+        printed.contains(" after the fit of all of it), and stay there,"),
         "{printed}"
     );
 }
@@ -807,6 +807,66 @@ fn calibrate_never_writes_over_an_input_or_another_recordings_results() {
     );
     let again = calibrate("dive1");
     assert!(again.status.success(), "{}", stderr(&again));
+    assert_eq!(
+        std::fs::read(d.join("both/dvl-corrected.csv")).unwrap(),
+        written
+    );
+
+    // `correct` keeps to the same rule, and a `--save` over an input is named as such.
+    let saved = dcnet(
+        d,
+        &[
+            "calibrate",
+            "dive1/dvl.csv",
+            "--reference",
+            "dive1/gt.csv",
+            "--out",
+            "saving",
+            "--save",
+            "dive1/gt.csv",
+        ],
+    );
+    assert_eq!(saved.status.code(), Some(1), "{}", stderr(&saved));
+    assert!(
+        stderr(&saved).contains("give another --save, or rename the file"),
+        "{}",
+        stderr(&saved)
+    );
+    let saved = dcnet(
+        d,
+        &[
+            "calibrate",
+            "dive1/dvl.csv",
+            "--reference",
+            "dive1/gt.csv",
+            "--out",
+            "saving",
+            "--save",
+            "installation.toml",
+        ],
+    );
+    assert!(saved.status.success(), "{}", stderr(&saved));
+    let correct = dcnet(
+        d,
+        &[
+            "correct",
+            "dive2/dvl.csv",
+            "--reference",
+            "dive2/gt.csv",
+            "--installation",
+            "installation.toml",
+            "--out",
+            "both",
+        ],
+    );
+    assert_eq!(correct.status.code(), Some(1), "{}", stderr(&correct));
+    assert!(
+        stderr(&correct)
+            .contains("both/dvl-corrected.parquet: holds the results of another recording")
+            && stderr(&correct).contains("which dive2/dvl.csv would replace"),
+        "{}",
+        stderr(&correct)
+    );
     assert_eq!(
         std::fs::read(d.join("both/dvl-corrected.csv")).unwrap(),
         written

@@ -330,7 +330,7 @@ fn the_example_spec_reads_its_recording() {
     assert_eq!(
         lines.next(),
         Some(
-            "experiments/own-recording.toml: ok (5 trajectories, 3180 training windows, 1 DVLs, 20 Monte Carlo runs)"
+            "experiments/own-recording.toml: ok (5 trajectories, 3180 training windows, 1 DVL, 20 Monte Carlo runs)"
         )
     );
     // Then the memory it needs and how long its training takes here.

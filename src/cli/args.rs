@@ -127,8 +127,9 @@ pub(super) enum Command {
         /// The reference velocity's white noise per axis, cm/s, for the bound
         #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
         reference_noise_cm_s: f64,
-        /// How close to its value with the whole recording the Kalman filter's RMSE must
-        /// stay, %, for the length the recording needed
+        /// How close the Kalman filter's RMSE must stay to its value with the whole
+        /// recording, for the length the recording needed: within this % of what
+        /// calibration changes (the RMSE before it less that after the fit of all of it)
         #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
         tolerance_pct: f64,
         /// Folder the corrected recording and the filter's terms against time go to

@@ -6,7 +6,8 @@
 //! per core and then on all the cores. It prints the page faults and allocator calls of a
 //! warm training step too.
 
-use super::{CliError, count, failure, input, load_spec};
+use super::{CliError, failure, input, load_spec};
+use crate::count;
 use crate::data::load_trajectories;
 use crate::dataset::{self, DatasetSize, TrainingSet};
 use crate::evaluate::run_protocol;
@@ -62,11 +63,12 @@ pub(super) fn bench(
         std::hint::black_box(run_protocol(&spec, &trajectories, &[], &hidden));
     });
     println!(
-        "protocol: {} runs × {} DVLs, estimators {}, best {best:.3} s, median {median:.3} s over {repeat} runs, {} threads",
-        spec.calibration.monte_carlo_runs,
-        spec.dvls.len(),
+        "protocol: {} × {}, estimators {}, best {best:.3} s, median {median:.3} s over {}, {}",
+        count(spec.calibration.monte_carlo_runs, "run"),
+        count(spec.dvls.len(), "DVL"),
         kinds.join(", "),
-        rayon::current_num_threads()
+        count(repeat, "run"),
+        count(rayon::current_num_threads(), "thread")
     );
     bench_refusal(spec_path).map_err(failure)?;
     let set = dataset::generate(&spec, &trajectories, &hidden);

@@ -16,15 +16,16 @@ pub(super) fn validate(spec_path: &Path, set: &[String]) -> Result<(), CliError>
         let trajectories = load_trajectories(spec).map_err(input)?;
         let windows = DatasetSize::of(spec, &trajectories).windows();
         println!(
-            "{}: ok ({} trajectories, {windows} training windows, {} DVLs, {} Monte Carlo runs)",
+            "{}: ok ({} trajectories, {}, {}, {})",
             if experiment.is_sweep() {
                 format!("{} point {}", spec_path.display(), spec.name)
             } else {
                 spec_path.display().to_string()
             },
             trajectories.len(),
-            spec.dvls.len(),
-            spec.calibration.monte_carlo_runs
+            crate::count(windows, "training window"),
+            crate::count(spec.dvls.len(), "DVL"),
+            crate::count(spec.calibration.monte_carlo_runs, "Monte Carlo run")
         );
         let largest = footprint.largest();
         println!(
@@ -38,10 +39,10 @@ pub(super) fn validate(spec_path: &Path, set: &[String]) -> Result<(), CliError>
             .collect();
         if !trainings.is_empty() {
             println!(
-                "  training: {} models, about {} on {} threads (from one batch timed here; cached models take none)",
-                trainings.len(),
+                "  training: {}, about {} on {} (from one batch timed here; cached models take none)",
+                crate::count(trainings.len(), "model"),
                 about(training_seconds(&trainings)?),
-                rayon::current_num_threads()
+                crate::count(rayon::current_num_threads(), "thread")
             );
         }
     }

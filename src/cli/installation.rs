@@ -4,7 +4,8 @@
 //! printed.
 
 use super::args::{Drawing, Target};
-use super::{CliError, count, failure, input};
+use super::{CliError, failure, input};
+use crate::count;
 use crate::data::paired;
 use crate::files::Seal;
 use crate::installation::rows::InstallationResults;

@@ -19,6 +19,7 @@ mod installation;
 
 pub use args::Cli;
 
+use crate::count;
 use crate::data;
 use crate::footprint::{self, Footprint};
 use crate::pipeline::{Mode, Shard};
@@ -287,9 +288,9 @@ fn report_figures(figures: &[crate::report::plots::Written], folder: &Path) {
     for figure in figures {
         match &figure.caption {
             crate::report::plots::Caption::Drawn(_) => eprintln!(
-                "figure {}: {} files in {}",
+                "figure {}: {} in {}",
                 figure.stem,
-                figure.files.len(),
+                count(figure.files.len(), "file"),
                 folder.display()
             ),
             crate::report::plots::Caption::NotApplicable(why) => {
@@ -440,14 +441,6 @@ fn about(seconds: f64) -> String {
         (seconds / 60.0).round() * 60.0
     };
     humantime::format_duration(std::time::Duration::from_secs_f64(whole)).to_string()
-}
-
-/// `n` of `what`, with a plural `s` where `n` is not 1: `1 model`, `5 models`.
-fn count(n: usize, what: &str) -> String {
-    match n {
-        1 => format!("1 {what}"),
-        _ => format!("{n} {what}s"),
-    }
 }
 
 /// Refuses a point of `experiment` (named `point` in a sweep) whose `footprint` is

@@ -111,10 +111,10 @@ fn say_how_long(plan: &Plan, to_do: &[Task]) -> Result<(), CliError> {
     let seconds = training_seconds(&trainings)?;
     if seconds > LONG_TRAINING_S {
         eprintln!(
-            "training {} models will take about {} on {} threads (from one batch timed here)",
-            trainings.len(),
+            "training {} will take about {} on {} (from one batch timed here)",
+            crate::count(trainings.len(), "model"),
             about(seconds),
-            rayon::current_num_threads()
+            crate::count(rayon::current_num_threads(), "thread")
         );
     }
     Ok(())

@@ -718,15 +718,8 @@ impl OnTrajectory<'_> {
                 let installation = match found {
                     Ok(clock) => clock.installation,
                     Err(why) => {
-                        failures.push(FitFailure {
-                            method: method.clone(),
-                            calibration: calibration.to_string(),
-                            window_s,
-                            why: format!(
-                                "on {}: {why}; its terms are scored with the calibration's clock",
-                                scored.name
-                            ),
-                        });
+                        let on = (calibration, window_s);
+                        failures.push(clock_kept(&method, on, &scored.name, &why.to_string()));
                         carried.installation
                     }
                 };
@@ -826,6 +819,34 @@ pub const CLOCK_REFOUND: &str = ", clock re-found in ";
 /// `dive_s` seconds.
 pub fn refound_label(method: &str, dive_s: f64) -> String {
     format!("{method}{CLOCK_REFOUND}{dive_s} s")
+}
+
+/// Where the clock of `scored` could not be found again for `method` (a re-found
+/// label), calibrated on `calibration` over `window_s`: its row is scored with the
+/// calibration's clock, and this entry of the failures says so and why.
+fn clock_kept(
+    method: &str,
+    (calibration, window_s): (&str, f64),
+    scored: &str,
+    why: &str,
+) -> FitFailure {
+    FitFailure {
+        method: method.to_string(),
+        calibration: calibration.to_string(),
+        window_s,
+        why: format!("on {scored}: {why}; its terms are scored with the calibration's clock"),
+    }
+}
+
+/// The scored trajectory of a failures entry that is no failed fit but a clock kept
+/// ([`clock_kept`]: a re-found method fits nothing of its own); `None` for a fit that
+/// failed.
+pub fn clock_kept_on(failure: &FitFailure) -> Option<&str> {
+    if !failure.method.contains(CLOCK_REFOUND) {
+        return None;
+    }
+    let (scored, _) = failure.why.strip_prefix("on ")?.split_once(": ")?;
+    Some(scored)
 }
 
 /// [`summarize`] on the pairs whose calibration and scored trajectories share a fold,
@@ -988,5 +1009,20 @@ mod tests {
         // Over all folds: A 5, B 3, D 5.
         assert_eq!(mean("all", "learned"), ((5.0 + 3.0 + 5.0) / 3.0, 3));
         assert_eq!(mean("all", NO_CALIBRATION), (12.0, 3));
+    }
+
+    #[test]
+    fn a_clock_kept_is_told_from_a_failed_fit_and_names_its_scored_trajectory() {
+        let method = refound_label("installation lever", 60.0);
+        let kept = clock_kept(&method, ("T1", 400.0), "T12", "a: b");
+        assert_eq!(clock_kept_on(&kept), Some("T12"));
+        assert!(kept.why.starts_with("on T12: a: b;"), "{}", kept.why);
+        let failed = FitFailure {
+            method: "installation lever".into(),
+            calibration: "T1".into(),
+            window_s: 400.0,
+            why: "on T12: it failed".into(),
+        };
+        assert_eq!(clock_kept_on(&failed), None);
     }
 }

@@ -71,9 +71,9 @@ pub(super) fn run(
             executed.done += 1;
         }
         eprintln!(
-            "{task}: {} estimators × {} runs stored",
-            estimators.len(),
-            spec.calibration.monte_carlo_runs
+            "{task}: {} × {} stored",
+            crate::count(estimators.len(), "estimator"),
+            crate::count(spec.calibration.monte_carlo_runs, "run")
         );
     }
     Ok(())

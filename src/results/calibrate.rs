@@ -8,7 +8,9 @@
 //! [`CalibrateError`] that names the argument, file or step at fault.
 
 use super::ResultsError;
-use super::corrected::{Outputs, corrected_samples, stem, write, write_terms_in_time};
+use super::corrected::{
+    OtherRecording, Outputs, corrected_samples, stem, write, write_terms_in_time,
+};
 use super::installation_file::SavedInstallation;
 use crate::data::paired::{self, PairedColumns, PairedError, PairedFiles, PairedRecording};
 use crate::installation::bound::{Noise, TermBound, Why, bound};
@@ -109,25 +111,19 @@ pub enum CalibrateError {
         need: f64,
         have: f64,
     },
-    /// An output would replace a file `calibrate` reads.
+    /// An output (of `--out`, or `--save`) would replace a file `calibrate` reads.
     #[error(
-        "{}: calibrate would write over its input {}: give another --out, or rename the file",
+        "{}: calibrate would write over its input {}: give another {flag}, or rename the file",
         output.display(),
         input.display()
     )]
-    OverInput { output: PathBuf, input: PathBuf },
-    /// An output already there holds another recording's results.
-    #[error(
-        "{}: holds the results of another recording (SHA-256 {}…), which {} would replace: give another --out, or remove the file",
-        output.display(),
-        &theirs[..theirs.len().min(12)],
-        dvl.display()
-    )]
-    OtherRecording {
+    OverInput {
         output: PathBuf,
-        theirs: String,
-        dvl: PathBuf,
+        input: PathBuf,
+        flag: &'static str,
     },
+    #[error(transparent)]
+    OtherRecording(#[from] OtherRecording),
     #[error(transparent)]
     Write(#[from] ResultsError),
 }
@@ -137,6 +133,21 @@ impl CalibrateError {
     /// than in writing the results.
     pub fn is_input(&self) -> bool {
         !matches!(self, CalibrateError::Write(_))
+    }
+
+    /// An output that would replace an input: `--save`'s where it is that file,
+    /// otherwise one under `--out`.
+    pub(super) fn over_input((output, input): (PathBuf, PathBuf), save: Option<&Path>) -> Self {
+        let flag = if save == Some(output.as_path()) {
+            "--save"
+        } else {
+            "--out"
+        };
+        CalibrateError::OverInput {
+            output,
+            input,
+            flag,
+        }
     }
 }
 
@@ -209,8 +220,8 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     let outputs = outputs(args);
     let written: Vec<&Path> = outputs.all().into_iter().chain(args.save).collect();
     let inputs = [Some(args.dvl), args.reference, args.columns];
-    if let Some((output, input)) = not_over_an_input(&inputs, &written) {
-        return Err(CalibrateError::OverInput { output, input });
+    if let Some(over) = not_over_an_input(&inputs, &written) {
+        return Err(CalibrateError::over_input(over, args.save));
     }
     if let Some(save) = args.save {
         let same = outputs.all().iter().any(|o| *o == save)
@@ -459,14 +470,8 @@ fn not_over_another_recording(
         source,
     })?;
     let ours = crate::files::sha256_hex(&bytes);
-    match outputs.recording_sha256() {
-        Some((output, theirs)) if theirs != ours => Err(CalibrateError::OtherRecording {
-            output: output.to_path_buf(),
-            theirs,
-            dvl: args.dvl.to_path_buf(),
-        }),
-        _ => Ok(ours),
-    }
+    outputs.not_another_recordings(args.dvl, &ours)?;
+    Ok(ours)
 }
 
 /// The columns of `path`'s `[columns]` table, or A-KIT's.

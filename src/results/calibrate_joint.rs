@@ -93,8 +93,8 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
         .map(|p| Some(p.as_path()))
         .chain([args.columns])
         .collect();
-    if let Some((output, input)) = not_over_an_input(&inputs, &written) {
-        return Err(CalibrateError::OverInput { output, input });
+    if let Some(over) = not_over_an_input(&inputs, &written) {
+        return Err(CalibrateError::over_input(over, args.save));
     }
     if let Some(save) = args.save
         && outputs.iter().flat_map(|o| o.all()).any(|o| o == save)
@@ -114,6 +114,9 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
             Ok(crate::files::sha256_hex(&bytes))
         })
         .collect::<Result<Vec<String>, CalibrateError>>()?;
+    for ((dvl, ours), outputs) in args.dvls.iter().zip(&shas).zip(&outputs) {
+        outputs.not_another_recordings(dvl, ours)?;
+    }
     if let Some(k) = (1..shas.len()).find(|&k| shas[..k].contains(&shas[k])) {
         let first = shas.iter().position(|s| *s == shas[k]).expect("seen");
         return Err(CalibrateError::Duplicate {

@@ -11,7 +11,7 @@
 
 use super::ResultsError;
 use super::calibrate::{columns, not_over_an_input};
-use super::corrected::{Outputs, corrected_samples, stem, write};
+use super::corrected::{OtherRecording, Outputs, corrected_samples, stem, write};
 use super::installation_file::{InstallationFileError, SavedInstallation};
 use crate::data::paired::{self, PairedError, PairedFiles, PairedRecording};
 use crate::installation::bound::{DEFAULT_TOLERANCES, Noise};
@@ -82,6 +82,8 @@ pub enum CorrectError {
         input.display()
     )]
     OverInput { output: PathBuf, input: PathBuf },
+    #[error(transparent)]
+    OtherRecording(#[from] OtherRecording),
     #[error(transparent)]
     Write(#[from] ResultsError),
 }
@@ -159,6 +161,12 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
     if let Some((output, input)) = not_over_an_input(&inputs, &outputs.all()) {
         return Err(CorrectError::OverInput { output, input });
     }
+    let bytes = std::fs::read(args.dvl).map_err(|source| ResultsError::Io {
+        path: args.dvl.to_path_buf(),
+        source,
+    })?;
+    let recording_sha256 = crate::files::sha256_hex(&bytes);
+    outputs.not_another_recordings(args.dvl, &recording_sha256)?;
     let files = PairedFiles {
         dvl: args.dvl.to_path_buf(),
         reference: args.reference.unwrap_or(args.dvl).to_path_buf(),
@@ -198,10 +206,6 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
         }
     };
     let (after, blocks) = fit_after(args, &recording, &reference, &applied);
-    let bytes = std::fs::read(args.dvl).map_err(|source| ResultsError::Io {
-        path: args.dvl.to_path_buf(),
-        source,
-    })?;
     let samples = corrected_samples(&applied, &recording.time_s, &recording.dvl_m_s, &reference);
     if samples.is_empty() {
         return Err(CorrectError::NoOverlap {
@@ -209,7 +213,7 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
             time_offset_s: applied.time_offset_s,
         });
     }
-    let written = write(&outputs, &samples, &crate::files::sha256_hex(&bytes))?;
+    let written = write(&outputs, &samples, &recording_sha256)?;
     let total = |v: crate::Vec3| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
     Ok(Correction {
         noise_cm_s: 3f64.sqrt()

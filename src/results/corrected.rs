@@ -5,7 +5,7 @@
 //! corrected file can be named in a spec as it is.
 //! Beside it, the Kalman filter's terms after every sample of the recording.
 //! Both Parquet files record the SHA-256 of the DVL file they come from, so that a
-//! later `calibrate` into the same folder never replaces another recording's.
+//! later `calibrate` or `correct` into the same folder never replaces another recording's.
 //! In: the corrected samples and the filter's terms. Out: `<stem>-corrected.csv` and
 //! `.parquet`, and `<stem>-terms-in-time.parquet` ([`Outputs`]).
 
@@ -117,9 +117,22 @@ impl Outputs {
         [&self.csv, &self.parquet, &self.terms_in_time]
     }
 
+    /// Refuses outputs already there that hold the results of another recording than
+    /// `dvl`, whose file's SHA-256 is `ours`.
+    pub fn not_another_recordings(&self, dvl: &Path, ours: &str) -> Result<(), OtherRecording> {
+        match self.recording_sha256() {
+            Some((output, theirs)) if theirs != ours => Err(OtherRecording {
+                output: output.to_path_buf(),
+                theirs,
+                dvl: dvl.to_path_buf(),
+            }),
+            _ => Ok(()),
+        }
+    }
+
     /// The SHA-256 of the recording the Parquet files already there were computed
     /// from, where one records it.
-    pub fn recording_sha256(&self) -> Option<(&Path, String)> {
+    fn recording_sha256(&self) -> Option<(&Path, String)> {
         [&self.parquet, &self.terms_in_time]
             .into_iter()
             .find_map(|path| {
@@ -131,6 +144,20 @@ impl Outputs {
                 Some((path.as_path(), sha256))
             })
     }
+}
+
+/// An output already there holds another recording's results.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "{}: holds the results of another recording (SHA-256 {}…), which {} would replace: give another --out, or remove the file",
+    output.display(),
+    &theirs[..theirs.len().min(12)],
+    dvl.display()
+)]
+pub struct OtherRecording {
+    pub output: PathBuf,
+    pub theirs: String,
+    pub dvl: PathBuf,
 }
 
 /// `batch` with the SHA-256 of its recording in its schema's metadata.

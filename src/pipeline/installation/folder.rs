@@ -58,9 +58,10 @@ pub fn is_current(folder: &Path, results_key: &str) -> bool {
 }
 
 /// The residual figure's samples: the trajectory (other than the first, which
-/// calibrates) with the largest uncalibrated RMSE, corrected by the terms the method
-/// with the lowest mean held-out RMSE at the largest window estimated on the first
-/// trajectory over that window.
+/// calibrates) with the largest uncalibrated RMSE, corrected by the terms estimated on
+/// the first trajectory over the largest window by the method with the lowest mean
+/// held-out RMSE there, among those that calibrate on one trajectory (a joint fit's
+/// terms come from all but one, a re-found clock's rows from no fit of their own).
 pub fn trace(
     study: &InstallationResults,
     estimates: &[Estimated],
@@ -69,12 +70,17 @@ pub fn trace(
     let Some(largest) = study.summary.iter().map(|s| s.window_s).reduce(f64::max) else {
         return Vec::new();
     };
+    let calibration = &segments[0];
+    let estimate_of = |method: &str| {
+        estimates.iter().find(|e| {
+            e.method == method && e.calibration == calibration.name && e.window_s == largest
+        })
+    };
     let best = study
         .summary
         .iter()
-        .filter(|s| s.window_s == largest)
+        .filter(|s| s.window_s == largest && estimate_of(&s.method).is_some())
         .min_by(|a, b| a.mean_cm_s.total_cmp(&b.mean_cm_s));
-    let calibration = &segments[0];
     let scored = study
         .heldout
         .iter()
@@ -88,13 +94,7 @@ pub fn trace(
     let Some(segment) = segments.iter().find(|s| s.name == scored.scored) else {
         return Vec::new();
     };
-    let Some(installation) = estimates
-        .iter()
-        .find(|e| {
-            e.method == best.method && e.calibration == calibration.name && e.window_s == largest
-        })
-        .map(|e| e.installation)
-    else {
+    let Some(installation) = estimate_of(&best.method).map(|e| e.installation) else {
         return Vec::new();
     };
     let recording = &segment.recording;

@@ -1,8 +1,10 @@
 //! The held-out tables: (a) each method's mean held-out RMSE at the largest window, total
 //! and per axis, with its 95 % interval and its ratio to no calibration, and (b) the same means for every
 //! window. In: the study's summary rows. Out: two [`Section`]s; also the order of the
-//! methods and windows the other tables follow.
+//! methods and windows the other tables follow, and the sentence on the scorings whose
+//! clock could not be found again.
 
+use crate::installation::protocol::{CLOCK_REFOUND, clock_kept_on};
 use crate::installation::rows::{InstallationResults, NO_CALIBRATION, SummaryRow};
 use crate::report::table::{Entry, Section, Table};
 
@@ -40,6 +42,41 @@ fn summary_entry<'a>(
         .summary
         .iter()
         .find(|r| r.method == method && r.window_s == window_s)
+}
+
+/// With the clock re-found: how many of the scorings (at `window_s`, or at every
+/// window) kept the calibration's clock, since the scored trajectory's first seconds
+/// did not show its own, and on which trajectories, most first; `None` where none did.
+pub fn clocks_kept(study: &InstallationResults, window_s: Option<f64>) -> Option<String> {
+    let at = |w: f64| window_s.is_none_or(|window_s| w == window_s);
+    let kept: Vec<&str> = study
+        .failures
+        .iter()
+        .filter(|f| at(f.window_s))
+        .filter_map(clock_kept_on)
+        .collect();
+    if kept.is_empty() {
+        return None;
+    }
+    let scorings = study
+        .heldout
+        .iter()
+        .filter(|r| at(r.window_s) && r.method.contains(CLOCK_REFOUND))
+        .count();
+    let mut on: Vec<(&str, usize)> = crate::first_seen(kept.iter().copied())
+        .into_iter()
+        .map(|scored| (scored, kept.iter().filter(|k| **k == scored).count()))
+        .collect();
+    on.sort_by(|a, b| b.1.cmp(&a.1));
+    let on: Vec<String> = on
+        .iter()
+        .map(|(scored, n)| format!("{scored} {n}"))
+        .collect();
+    Some(format!(
+        "{} of the {scorings} scorings with the clock re-found kept the calibration's clock, since the scored trajectory's first seconds did not show its own (failures.parquet says why): on {}.",
+        kept.len(),
+        on.join(", ")
+    ))
 }
 
 /// (a): each method's mean held-out RMSE at the largest window and its ratio.

@@ -28,10 +28,11 @@ pub use figures::{draw_all, draw_sweep};
 // Where `cli/calibrate.rs` has always found them; they live below the report.
 pub(crate) use crate::report::readable::{readable_term, readable_why};
 
+use crate::installation::protocol::is_joint;
 use crate::installation::rows::{InstallationResults, NO_CALIBRATION, TermRow};
 use crate::report::table::{Section, symbols};
 use agreement::agreement;
-use heldout::{heldout_section, methods, windows, windows_section};
+use heldout::{clocks_kept, heldout_section, methods, windows, windows_section};
 use std::fmt::Write;
 use terms::terms_section;
 
@@ -69,14 +70,23 @@ fn sections(study: &InstallationResults) -> Vec<Section> {
         return Vec::new();
     };
     let methods = methods(study);
-    let calibrations: Vec<&str> = crate::first_seen(
-        study
-            .terms
-            .iter()
-            .filter(|r| r.window_s == largest)
-            .map(|r| r.calibration.as_str()),
-    );
+    // The calibrations a method fits on: one trajectory each, or all but one for a
+    // joint fit.
+    let calibrations = |joint: bool| -> Vec<&str> {
+        crate::first_seen(
+            study
+                .terms
+                .iter()
+                .filter(|r| r.window_s == largest && is_joint(&r.method) == joint)
+                .map(|r| r.calibration.as_str()),
+        )
+    };
+    let calibrations = [calibrations(false), calibrations(true)];
     let mut sections = vec![heldout_section(study, &methods, largest)];
+    sections[0]
+        .table
+        .notes
+        .extend(clocks_kept(study, Some(largest)));
     if windows.len() > 1 {
         sections.push(windows_section(study, &methods, &windows));
     }
@@ -96,7 +106,7 @@ fn sections(study: &InstallationResults) -> Vec<Section> {
         if !rows.is_empty() {
             let mut section = terms_section(method, largest, &rows);
             section.paragraph = Some(agreement(method, &rows));
-            let missing: Vec<&str> = calibrations
+            let missing: Vec<&str> = calibrations[usize::from(is_joint(method))]
                 .iter()
                 .copied()
                 .filter(|c| !rows.iter().any(|r| r.calibration == *c))
@@ -184,6 +194,63 @@ pub(crate) mod tests {
             filtered: Vec::new(),
             calibration_time: Vec::new(),
         }
+    }
+
+    #[test]
+    fn a_clock_kept_is_counted_apart_from_failed_fits_and_a_joint_calibration_is_no_failure() {
+        use crate::installation::protocol::{joint_label, refound_label};
+        use crate::installation::rows::{FitFailure, TransferRow};
+        let mut study = small();
+        let single = "installation lever+offset";
+        let joint = joint_label(single);
+        let refound = refound_label(single, 60.0);
+        let joint_term = TermRow {
+            method: joint.clone(),
+            calibration: "all but T1".into(),
+            ..study.terms[0].clone()
+        };
+        study.terms.push(joint_term);
+        study.summary.push(SummaryRow {
+            method: refound.clone(),
+            ..study.summary[5].clone()
+        });
+        for scored in ["T2", "T12"] {
+            study.heldout.push(TransferRow {
+                method: refound.clone(),
+                calibration: "T1".into(),
+                window_s: 400.0,
+                scored: scored.into(),
+                rmse_cm_s: [3.0; 3],
+                total_cm_s: 5.2,
+            });
+        }
+        let failure = |method: &str, why: &str| FitFailure {
+            method: method.into(),
+            calibration: "T2".into(),
+            window_s: 400.0,
+            why: why.into(),
+        };
+        study.failures = vec![
+            failure(
+                &refound,
+                "on T12: flat; its terms are scored with the calibration's clock",
+            ),
+            failure(single, "the fit did not converge"),
+        ];
+        let text = markdown(&study);
+        assert!(
+            text.contains("1 of the 2 scorings with the clock re-found kept the calibration's clock, since the scored trajectory's first seconds did not show its own (failures.parquet says why): on T12 1."),
+            "{text}"
+        );
+        // The single fit's section names T2's failure only, not the joint calibration.
+        assert!(text.contains("T2: the fit did not converge."), "{text}");
+        assert!(!text.contains("No estimate on all but T1"), "{text}");
+        let printed = crate::report::printed::installation::headline(&study);
+        assert!(
+            printed.contains("\n1 fit failed, each leaving"),
+            "{printed}"
+        );
+        assert!(printed.contains("\n1 of the 2 scorings"), "{printed}");
     }
 
     #[test]

@@ -5,6 +5,7 @@
 //! each recording's clock.
 //! In: a [`Calibration`] or a [`JointCalibration`]. Out: the text.
 
+use crate::evaluate::calibration_time::tolerance_band;
 use crate::installation::fit::TIME_OFFSET_MARGIN_S;
 use crate::installation::settling::SettlingPoint;
 use crate::installation::terms::AxisRmse;
@@ -215,13 +216,13 @@ fn verdict(calibration: &Calibration, all: &SettlingPoint) -> String {
     } else {
         "of the recording"
     };
+    let before_cm_s = calibration.before.map_or(f64::NAN, |r| 100.0 * r.total_m_s);
+    let after_cm_s = calibration.after.map_or(f64::NAN, |r| 100.0 * r.total_m_s);
+    let band_cm_s = tolerance_band(tolerance_pct / 100.0, before_cm_s, after_cm_s);
     match calibration.settled_s {
         Some(length_s) => format!(
-            "after {length_s} s the filter's terms leave an RMSE on the whole recording within {tolerance_pct} % of what calibration changes here ({:.2} cm/s before it, {:.2} after the fit of all of it) of the {:.2} cm/s they leave after all {} s {of}, and stay there, though a term whose ± is still wide then is not pinned down (scored on this recording, not on another dive)",
-            calibration.before.map_or(f64::NAN, |r| 100.0 * r.total_m_s),
-            calibration.after.map_or(f64::NAN, |r| 100.0 * r.total_m_s),
-            all.rmse_cm_s,
-            all.length_s
+            "after {length_s} s the filter's terms leave an RMSE on the whole recording within ±{band_cm_s:.2} cm/s of the {:.2} cm/s they leave after all {} s {of} ({tolerance_pct} % of what calibration changes here: {before_cm_s:.2} cm/s before it, {after_cm_s:.2} after the fit of all of it), and stay there, though a term whose ± is still wide then is not pinned down (scored on this recording, not on another dive)",
+            all.rmse_cm_s, all.length_s,
         ),
         None => format!(
             "the filter's terms after all {} s {of} leave no finite RMSE on the recording: the filter diverged",

@@ -5,7 +5,9 @@
 //! tables, or the sweep's as `results::installation_sweep` reads them. Out: the text
 //! printed.
 
+use crate::installation::protocol::clock_kept_on;
 use crate::installation::rows::InstallationResults;
+use crate::report::installation::heldout::clocks_kept;
 use crate::results::installation_sweep::StoredInstallationSweep;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 use std::fmt::Write;
@@ -52,22 +54,30 @@ pub fn headline(study: &InstallationResults) -> String {
     text
 }
 
-/// Under the headline: how many fits failed, and the first three.
+/// Under the headline: how many fits failed, and the first three; then how many
+/// scorings kept the calibration's clock.
 fn failed_fits(study: &InstallationResults, text: &mut String) {
-    if study.failures.is_empty() {
-        return;
+    let failed: Vec<_> = study
+        .failures
+        .iter()
+        .filter(|f| clock_kept_on(f).is_none())
+        .collect();
+    if !failed.is_empty() {
+        let _ = write!(
+            text,
+            "\n{} failed, each leaving its method one calibration trajectory fewer at its window (failures.parquet lists them all), such as:",
+            crate::count(failed.len(), "fit")
+        );
     }
-    let _ = write!(
-        text,
-        "\n{} fits failed, each leaving its method one calibration trajectory fewer at its window (failures.parquet; report.md lists them), such as:",
-        study.failures.len()
-    );
-    for failure in study.failures.iter().take(3) {
+    for failure in failed.iter().take(3) {
         let _ = write!(
             text,
             "\n  {} on {} at {} s: {}",
             failure.method, failure.calibration, failure.window_s, failure.why
         );
+    }
+    if let Some(kept) = clocks_kept(study, None) {
+        let _ = write!(text, "\n{kept}");
     }
 }
 

@@ -60,25 +60,42 @@ impl<S> Experiment<S> {
 impl Experiment {
     /// What the spec asks that runs but says little, each placed like a fault: a test
     /// trajectory that is the calibration trajectory (its error is measured on the
-    /// samples the calibration saw).
+    /// samples the calibration saw), and a training trajectory that is the calibration
+    /// trajectory or a test one (the networks have learnt the samples they are then
+    /// given).
     pub fn warnings(&self) -> Vec<SpecError> {
         let mut warnings: Vec<SpecError> = Vec::new();
         for point in &self.points {
             let spec = &point.spec;
             let calibration = spec.calibration.trajectory;
-            for (i, _) in spec
-                .evaluation
-                .iter()
-                .enumerate()
-                .filter(|&(_, &t)| t == calibration)
-            {
-                let warning = self.fault(
-                    &format!("evaluation.trajectories[{i}]"),
-                    format!(
-                        "{:?} is also calibration.trajectory: it is evaluated on the trajectory it was calibrated on, so its RMSE says little of another dive",
-                        spec.trajectories[calibration].name
-                    ),
-                );
+            let name = |t: usize| &spec.trajectories[t].name;
+            let mut found = Vec::new();
+            for (i, &t) in spec.evaluation.iter().enumerate() {
+                if t == calibration {
+                    found.push((
+                        format!("evaluation.trajectories[{i}]"),
+                        format!(
+                            "{:?} is also calibration.trajectory: it is evaluated on the trajectory it was calibrated on, so its RMSE says little of another dive",
+                            name(t)
+                        ),
+                    ));
+                }
+            }
+            for (i, &t) in spec.dataset.trajectories.iter().enumerate() {
+                let also = if t == calibration {
+                    "calibration.trajectory: the networks have trained on the trajectory they calibrate"
+                } else if spec.evaluation.contains(&t) {
+                    "an evaluation trajectory: the networks have trained on the trajectory they are tested on, so its RMSE is not held out"
+                } else {
+                    continue;
+                };
+                found.push((
+                    format!("dataset.trajectories[{i}]"),
+                    format!("{:?} is also {also}", name(t)),
+                ));
+            }
+            for (key, message) in found {
+                let warning = self.fault(&key, message);
                 if !warnings.contains(&warning) {
                     warnings.push(warning);
                 }
