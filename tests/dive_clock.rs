@@ -296,6 +296,7 @@ fn on_akit_the_clock_found_again_leaves_the_dvls_noise_from_a_turning_segment() 
         search_s: DEFAULT_SEARCH_S,
     };
     let (mut carried_means, mut refound_means) = (Vec::new(), Vec::new());
+    let mut kept = Vec::new();
     for (c, calibration) in segments.iter().enumerate() {
         let r = &calibration.recording;
         let fitted = fit(&r.time_s, &r.dvl_m_s, &calibration.reference, terms).unwrap();
@@ -314,14 +315,17 @@ fn on_akit_the_clock_found_again_leaves_the_dvls_noise_from_a_turning_segment() 
             let after = first.end.max(inside.start)..inside.end;
             let window = (&recording.time_s[first.clone()], &recording.dvl_m_s[first]);
             // Where the minute cannot show the clock, the calibration's is kept.
-            let installation = refind(
+            let found = refind(
                 window,
                 &scored.reference,
                 &Carried::exact(fitted.installation),
                 search,
                 (noise, &DEFAULT_TOLERANCES),
-            )
-            .map_or(fitted.installation, |clock| clock.installation);
+            );
+            if let Err(why) = &found {
+                kept.push(format!("{} → {}: {why}", calibration.name, scored.name));
+            }
+            let installation = found.map_or(fitted.installation, |clock| clock.installation);
             let rmse_cm_s = |installation: &Installation| {
                 100.0
                     * score(
@@ -359,6 +363,10 @@ fn on_akit_the_clock_found_again_leaves_the_dvls_noise_from_a_turning_segment() 
         assert!(refound_means[n - 1] < 3.8, "T{n}: {}", refound_means[n - 1]);
     }
     assert!(mean(&refound_means) < 0.75 * mean(&carried_means));
+    // Every minute shows its clock, T12's and T13's too: this DVL is quieter than its
+    // specified 2 cm/s, and the straight segments' gentle changes of speed show it
+    // against the noise of their residuals, though not against the specification's.
+    assert!(kept.is_empty(), "{kept:#?}");
 }
 
 /// A clock that drifts within a dive, by 0.5 s over 400 s, tracked by the installation's

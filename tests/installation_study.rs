@@ -813,38 +813,21 @@ fn calibrate_never_writes_over_an_input_or_another_recordings_results() {
     );
 
     // `correct` keeps to the same rule, and a `--save` over an input is named as such.
-    let saved = dcnet(
-        d,
-        &[
-            "calibrate",
-            "dive1/dvl.csv",
-            "--reference",
-            "dive1/gt.csv",
-            "--out",
-            "saving",
-            "--save",
-            "dive1/gt.csv",
-        ],
-    );
+    let save = |to: &str| {
+        let dvl = ["dive1/dvl.csv", "--reference", "dive1/gt.csv"];
+        dcnet(
+            d,
+            &[&["calibrate"], &dvl[..], &["--out", "saving", "--save", to]].concat(),
+        )
+    };
+    let saved = save("dive1/gt.csv");
     assert_eq!(saved.status.code(), Some(1), "{}", stderr(&saved));
     assert!(
         stderr(&saved).contains("give another --save, or rename the file"),
         "{}",
         stderr(&saved)
     );
-    let saved = dcnet(
-        d,
-        &[
-            "calibrate",
-            "dive1/dvl.csv",
-            "--reference",
-            "dive1/gt.csv",
-            "--out",
-            "saving",
-            "--save",
-            "installation.toml",
-        ],
-    );
+    let saved = save("installation.toml");
     assert!(saved.status.success(), "{}", stderr(&saved));
     let correct = dcnet(
         d,

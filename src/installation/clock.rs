@@ -9,7 +9,8 @@
 //!    does not do: most A-KIT segments hold their speed within 1–4 cm/s, and their
 //!    clock shows only in the turns, through the lever arm;
 //! 2. the least squares of the dive's terms with the carried ones held
-//!    ([`fit_about`]), from its scan of τ ± 3 s about the search's;
+//!    ([`fit_about`]), from its scan of τ ± 3 s about the search's; a window whose DVL
+//!    moves no more than the noise of the fit's residuals is refused (no clock to show);
 //! 3. their standard deviations from the bound, given the carried terms, plus what the
 //!    carried terms' own uncertainty passes on to them ([`Carried`]); and a flag where
 //!    the window cannot show τ (constant speed, no turn).
@@ -20,6 +21,7 @@
 use super::bound::{Noise, TermBound, Tolerances, bound};
 use super::fit::{Fit, FitError, TIME_OFFSET_SCAN_STEP_S, fit_about, linearised, mask_about};
 use super::frames::Reference;
+use super::residual_noise::ResidualNoise;
 use super::terms::{Installation, PerAxis, TermSet};
 use crate::Vec3;
 use crate::data::paired::sample_interval;
@@ -28,11 +30,6 @@ use nalgebra::DMatrix;
 /// How far the search looks for τ by default, s: a dive whose clocks are 5 or 20 s
 /// apart is found.
 pub const DEFAULT_SEARCH_S: f64 = 30.0;
-
-/// The DVL velocity's standard deviation over the window (three axes), in units of the
-/// DVL's noise per axis, below which the window shows no clock: √3, what the noise
-/// alone varies by. Above it, whether the window shows τ is the bound's to say.
-pub const FLAT_MOTION_NOISES: f64 = 1.732_050_807_568_877_2;
 
 /// The smallest share of the window's samples whose t + τ must lie inside the reference
 /// for a step of the search to count.
@@ -132,9 +129,9 @@ impl Clock {
 pub enum ClockError {
     #[error(
         "the DVL's velocity over the first {window_s} s varies by {std_cm_s:.2} cm/s \
-         (standard deviation, three axes), under the √3 times the DVL's noise of \
-         {noise_cm_s} cm/s per axis: a dive at constant velocity shows no clock; give a longer \
-         window, one with a turn or a change of speed, or the clock's terms"
+         (standard deviation, three axes), no more than the {noise_cm_s:.2} cm/s of noise \
+         its fit's residuals show (three axes): a dive at constant velocity shows no clock; \
+         a window with a turn or a change of speed does"
     )]
     FlatMotion {
         window_s: f64,
@@ -217,14 +214,6 @@ pub fn refind(
         .zip(time_s.first())
         .map_or(0.0, |(l, f)| l - f)
         + sample_interval(time_s);
-    let std = motion_std(dvl_m_s);
-    if !(std >= FLAT_MOTION_NOISES * noise.dvl_m_s) {
-        return Err(ClockError::FlatMotion {
-            window_s: (window_s * 10.0).round() / 10.0,
-            std_cm_s: 100.0 * std,
-            noise_cm_s: 100.0 * noise.dvl_m_s,
-        });
-    }
     let (searched_offset_s, searched_rms_m_s) = search_offset(
         (time_s, dvl_m_s),
         reference,
@@ -239,6 +228,20 @@ pub fn refind(
         ..carried.installation
     };
     let fit = fit_about(time_s, dvl_m_s, reference, search.dive_terms, start)?;
+    // A window whose DVL moves no more than the noise its residuals show has no clock
+    // to show; above it, whether the window shows τ is the bound's to say. The noise
+    // is the window's own, not the DVL's specification: a quieter DVL shows its clock
+    // in gentler motion.
+    let shown = ResidualNoise::of(&fit.residuals, fit.terms.parameter_names().len()).std_m_s;
+    let noise_shown_m_s = shown.iter().map(|s| s * s).sum::<f64>().sqrt();
+    let motion_m_s = motion_std(dvl_m_s);
+    if !(motion_m_s > noise_shown_m_s) {
+        return Err(ClockError::FlatMotion {
+            window_s: (window_s * 10.0).round() / 10.0,
+            std_cm_s: 100.0 * motion_m_s,
+            noise_cm_s: 100.0 * noise_shown_m_s,
+        });
+    }
     let bound = bound(&fit, noise, tolerances);
     let inherited = match &carried.uncertainty {
         Some(uncertainty) => {

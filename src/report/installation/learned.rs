@@ -7,6 +7,7 @@
 //! Out: [`Section`]s.
 
 use super::heldout::window_text;
+use crate::installation::protocol::CLOCK_REFOUND;
 use crate::installation::learned_spec::LEARNED_LABEL;
 use crate::installation::rows::{FoldSummaryRow, InstallationResults, NO_CALIBRATION, TermRow};
 use crate::report::readable::readable_term;
@@ -210,17 +211,20 @@ fn per_calibration<'a>(
 }
 
 /// Each learned method against the installation fit with its terms, calibration by
-/// calibration on the same pairs: the mean difference of held-out RMSE with its 95 %
-/// interval, and on how many calibration trajectories the learned one is lower.
+/// calibration on the same pairs, each with the same clock (carried, or re-found from
+/// the same seconds): the mean difference of held-out RMSE with its 95 % interval, and
+/// on how many calibration trajectories the learned one is lower.
 fn paired(study: &InstallationResults, methods: &[&str], windows: &[f64]) -> Option<Section> {
     let fitted = fitted_alike(study, methods)?;
     let learned: Vec<&str> = methods.iter().copied().filter(|m| is_learned(m)).collect();
     let rows = learned
         .iter()
         .map(|method| {
+            let clock = method.find(CLOCK_REFOUND).map_or("", |at| &method[at..]);
+            let against = format!("{fitted}{clock}");
             std::iter::once(Entry::Text(method.to_string()))
                 .chain(windows.iter().map(|&w| {
-                    let differences: Vec<f64> = per_calibration(study, method, fitted, w)
+                    let differences: Vec<f64> = per_calibration(study, method, &against, w)
                         .iter()
                         .map(|(_, ours, theirs)| ours - theirs)
                         .collect();
@@ -241,7 +245,7 @@ fn paired(study: &InstallationResults, methods: &[&str], windows: &[f64]) -> Opt
     Some(Section {
         title: format!("Learned against {fitted}, calibration by calibration"),
         caption: format!(
-            "The learned method's mean held-out RMSE minus {fitted}'s, each calibration trajectory on the same pairs inside its fold, in cm/s: the mean difference ± its 95 % interval (Student t over calibration trajectories; negative where the learned one is better), and on how many calibration trajectories the learned one is lower."
+            "The learned method's mean held-out RMSE minus {fitted}'s with the same clock (carried, or re-found from the same seconds), each calibration trajectory on the same pairs inside its fold, in cm/s: the mean difference ± its 95 % interval (Student t over calibration trajectories; negative where the learned one is better), and on how many calibration trajectories the learned one is lower."
         ),
         table: Table::new(window_header(windows), rows, Vec::new()),
         paragraph: None,
@@ -351,4 +355,57 @@ fn term_error_cells(
         });
     }
     cells
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::installation::rows::TransferRow;
+
+    #[test]
+    fn a_learned_method_is_set_against_the_fit_with_the_same_clock() {
+        let fit = "installation lever";
+        let learned = "DCNet trained on the vehicle";
+        let refound = |method: &str| format!("{method}, clock re-found in 60 s");
+        let term = |method: &str, calibration: &str| TermRow {
+            method: method.into(),
+            calibration: calibration.into(),
+            window_s: 400.0,
+            term: "lever_arm_x_m".into(),
+            value: -1.9,
+            std: 0.01,
+            bound_std: 0.01,
+            unseen: String::new(),
+            asked: String::new(),
+        };
+        let score = |method: &str, calibration: &str, total_cm_s| TransferRow {
+            method: method.into(),
+            calibration: calibration.into(),
+            window_s: 400.0,
+            scored: "C".into(),
+            rmse_cm_s: [total_cm_s; 3],
+            total_cm_s,
+        };
+        let mut study = InstallationResults::default();
+        for calibration in ["A", "B"] {
+            study.terms.extend([term(fit, calibration), term(learned, calibration)]);
+            study.heldout.extend([
+                score(fit, calibration, 6.0),
+                score(&refound(fit), calibration, 3.0),
+                score(learned, calibration, 5.0),
+                score(&refound(learned), calibration, 4.0),
+            ]);
+        }
+        let (fit_refound, learned_refound) = (refound(fit), refound(learned));
+        let methods = [fit, fit_refound.as_str(), learned, learned_refound.as_str()];
+        let section = paired(&study, &methods, &[400.0]).unwrap();
+        let difference = |row: &[Entry]| match row[1] {
+            Entry::Difference { mean_cm_s, lower, .. } => (mean_cm_s, lower),
+            ref other => panic!("{other:?}"),
+        };
+        let rows = &section.table.groups[0];
+        // Carried against carried: 5 − 6; re-found against re-found: 4 − 3, not 4 − 6.
+        assert_eq!(difference(&rows[0]), (-1.0, 2));
+        assert_eq!(difference(&rows[1]), (1.0, 0));
+    }
 }
