@@ -7,8 +7,8 @@
 //! Out: [`Section`]s.
 
 use super::heldout::window_text;
-use crate::installation::protocol::CLOCK_REFOUND;
 use crate::installation::learned_spec::LEARNED_LABEL;
+use crate::installation::protocol::CLOCK_REFOUND;
 use crate::installation::rows::{FoldSummaryRow, InstallationResults, NO_CALIBRATION, TermRow};
 use crate::report::readable::readable_term;
 use crate::report::table::{Entry, Section, Table};
@@ -388,7 +388,9 @@ mod tests {
         };
         let mut study = InstallationResults::default();
         for calibration in ["A", "B"] {
-            study.terms.extend([term(fit, calibration), term(learned, calibration)]);
+            study
+                .terms
+                .extend([term(fit, calibration), term(learned, calibration)]);
             study.heldout.extend([
                 score(fit, calibration, 6.0),
                 score(&refound(fit), calibration, 3.0),
@@ -400,7 +402,9 @@ mod tests {
         let methods = [fit, fit_refound.as_str(), learned, learned_refound.as_str()];
         let section = paired(&study, &methods, &[400.0]).unwrap();
         let difference = |row: &[Entry]| match row[1] {
-            Entry::Difference { mean_cm_s, lower, .. } => (mean_cm_s, lower),
+            Entry::Difference {
+                mean_cm_s, lower, ..
+            } => (mean_cm_s, lower),
             ref other => panic!("{other:?}"),
         };
         let rows = &section.table.groups[0];
