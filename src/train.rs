@@ -381,7 +381,7 @@ pub fn train_pass(
             }
             loss_sum += f64::from(value) * indices.len() as f64;
             progress.set_message(format!(
-                "epoch {epoch}/{}, batch loss {value:.4}",
+                "epoch {epoch}/{}, batch loss {value:.4} (cm/s)²",
                 recipe.training.epochs
             ));
             let grads = loss.backward();

@@ -1871,3 +1871,27 @@ fn a_bad_log_every_variable_is_named() {
     assert!(message.contains("DCNET_LOG_EVERY=abc"), "{message}");
     assert!(!message.contains("'--log-every"), "{message}");
 }
+
+/// `RAYON_NUM_THREADS` that is not a count of threads is refused naming the variable,
+/// where rayon would ignore it and use every core; a typed `--threads` wins.
+#[test]
+fn a_bad_thread_count_variable_is_named() {
+    let project = project(false);
+    let validate = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_dcnet-exp"))
+            .current_dir(project.path())
+            .args(args)
+            .env("RAYON_NUM_THREADS", "abc")
+            .output()
+            .unwrap()
+    };
+    let output = validate(&["validate", SPEC]);
+    let message = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{message}");
+    assert!(
+        message.contains("RAYON_NUM_THREADS=abc: not a number of threads"),
+        "{message}"
+    );
+    let typed = validate(&["--threads", "1", "validate", SPEC]);
+    assert!(typed.status.success(), "{}", stderr(&typed));
+}

@@ -171,7 +171,7 @@ fn a_run_logged_to_a_file_says_how_far_each_task_is_and_when_it_ends() {
         &[&small[..], &["--log-every", "0"]].concat(),
     ));
     let lines: Vec<&str> = log.lines().collect();
-    // "DCNet EM1 0123456789abcdef: epoch 2/3, batch loss 0.4321, 3200/4752 samples,
+    // "DCNet EM1 0123456789abcdef: epoch 2/3, batch loss 0.4321 (cm/s)², 3200/4752 samples,
     // 31000 samples/s, ETA 1s"
     for model in ["EM1", "EM2", "EM3", "EM4", "EM5"] {
         let task = format!("DCNet {model} ");
@@ -184,6 +184,7 @@ fn a_run_logged_to_a_file_says_how_far_each_task_is_and_when_it_ends() {
             assert_eq!(name.len(), task.len() + 16, "{}", lines[i]);
             assert!(rest.starts_with("epoch "), "{}", lines[i]);
             assert!(rest.contains("/3, batch loss "), "{}", lines[i]);
+            assert!(rest.contains(" (cm/s)², "), "{}", lines[i]);
         }
         let last = lines[*progress.last().unwrap()];
         let done = last.split(", ").nth(2).unwrap();

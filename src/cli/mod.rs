@@ -84,6 +84,28 @@ fn check_log_every_variable() -> Result<(), CliError> {
     }
 }
 
+/// Refuses a `RAYON_NUM_THREADS` that is not a count of threads, naming the variable
+/// (rayon would ignore it and use every core). A typed `--threads` wins.
+fn check_threads_variable() -> Result<(), CliError> {
+    const VARIABLE: &str = "RAYON_NUM_THREADS";
+    let typed = std::env::args_os().any(|arg| arg.to_string_lossy().starts_with("--threads"));
+    match std::env::var_os(VARIABLE) {
+        Some(value)
+            if !typed
+                && !value
+                    .to_string_lossy()
+                    .parse::<usize>()
+                    .is_ok_and(|n| n <= MAX_THREADS) =>
+        {
+            Err(input(anyhow::anyhow!(
+                "{VARIABLE}={}: not a number of threads; give 1 to {MAX_THREADS} (0: every core)",
+                value.to_string_lossy()
+            )))
+        }
+        _ => Ok(()),
+    }
+}
+
 /// `--threads` and `--log-every`, checked and set for the whole process.
 fn apply_global_flags(threads: Option<usize>, log_every: Option<f64>) -> Result<(), CliError> {
     if let Some(threads) = threads {
@@ -120,6 +142,7 @@ fn apply_global_flags(threads: Option<usize>, log_every: Option<f64>) -> Result<
 
 pub fn main() -> Result<(), CliError> {
     check_log_every_variable()?;
+    check_threads_variable()?;
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) if !e.use_stderr() => {
