@@ -69,39 +69,36 @@ fn failure(error: impl Into<anyhow::Error>) -> CliError {
 /// The variable that gives `--log-every` when the flag is not typed.
 const LOG_EVERY_VARIABLE: &str = "DCNET_LOG_EVERY";
 
-/// Refuses a `DCNET_LOG_EVERY` that is not a number, naming the variable (clap would
-/// name the `--log-every` flag, which the user never typed). A typed flag wins.
-fn check_log_every_variable() -> Result<(), CliError> {
-    let typed = std::env::args_os().any(|arg| arg.to_string_lossy().starts_with("--log-every"));
-    match std::env::var_os(LOG_EVERY_VARIABLE) {
-        Some(value) if !typed && value.to_string_lossy().parse::<f64>().is_err() => {
-            Err(input(anyhow::anyhow!(
-                "{LOG_EVERY_VARIABLE}={}: not a number of seconds; give 0 to {MAX_LOG_EVERY_S}",
-                value.to_string_lossy()
-            )))
-        }
-        _ => Ok(()),
-    }
+/// Refuses environment variables that stand for a flag the user did not type, naming
+/// the variable: a `DCNET_LOG_EVERY` that is not a number (clap would name the
+/// `--log-every` flag), a `RAYON_NUM_THREADS` that is not a count of threads (rayon
+/// would ignore it and use every core).
+fn check_flag_variables() -> Result<(), CliError> {
+    refuse_variable(
+        (LOG_EVERY_VARIABLE, "--log-every"),
+        |value| value.parse::<f64>().is_ok(),
+        &format!("not a number of seconds; give 0 to {MAX_LOG_EVERY_S}"),
+    )?;
+    refuse_variable(
+        ("RAYON_NUM_THREADS", "--threads"),
+        |value| value.parse::<usize>().is_ok_and(|n| n <= MAX_THREADS),
+        &format!("not a number of threads; give 1 to {MAX_THREADS} (0: every core)"),
+    )
 }
 
-/// Refuses a `RAYON_NUM_THREADS` that is not a count of threads, naming the variable
-/// (rayon would ignore it and use every core). A typed `--threads` wins.
-fn check_threads_variable() -> Result<(), CliError> {
-    const VARIABLE: &str = "RAYON_NUM_THREADS";
-    let typed = std::env::args_os().any(|arg| arg.to_string_lossy().starts_with("--threads"));
-    match std::env::var_os(VARIABLE) {
-        Some(value)
-            if !typed
-                && !value
-                    .to_string_lossy()
-                    .parse::<usize>()
-                    .is_ok_and(|n| n <= MAX_THREADS) =>
-        {
-            Err(input(anyhow::anyhow!(
-                "{VARIABLE}={}: not a number of threads; give 1 to {MAX_THREADS} (0: every core)",
-                value.to_string_lossy()
-            )))
-        }
+/// Refuses `variable`'s value where `accepts` does not, saying `expected`; a typed
+/// `flag` wins over the variable.
+fn refuse_variable(
+    (variable, flag): (&str, &str),
+    accepts: fn(&str) -> bool,
+    expected: &str,
+) -> Result<(), CliError> {
+    let typed = std::env::args_os().any(|arg| arg.to_string_lossy().starts_with(flag));
+    match std::env::var_os(variable) {
+        Some(value) if !typed && !accepts(&value.to_string_lossy()) => Err(input(anyhow::anyhow!(
+            "{variable}={}: {expected}",
+            value.to_string_lossy()
+        ))),
         _ => Ok(()),
     }
 }
@@ -141,8 +138,7 @@ fn apply_global_flags(threads: Option<usize>, log_every: Option<f64>) -> Result<
 }
 
 pub fn main() -> Result<(), CliError> {
-    check_log_every_variable()?;
-    check_threads_variable()?;
+    check_flag_variables()?;
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) if !e.use_stderr() => {

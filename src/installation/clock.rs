@@ -21,7 +21,6 @@
 use super::bound::{Noise, TermBound, Tolerances, bound};
 use super::fit::{Fit, FitError, TIME_OFFSET_SCAN_STEP_S, fit_about, linearised, mask_about};
 use super::frames::Reference;
-use super::residual_noise::ResidualNoise;
 use super::terms::{Installation, PerAxis, TermSet};
 use crate::Vec3;
 use crate::data::paired::sample_interval;
@@ -228,11 +227,12 @@ pub fn refind(
         ..carried.installation
     };
     let fit = fit_about(time_s, dvl_m_s, reference, search.dive_terms, start)?;
+    let bound = bound(&fit, noise, tolerances);
     // A window whose DVL moves no more than the noise its residuals show has no clock
     // to show; above it, whether the window shows τ is the bound's to say. The noise
     // is the window's own, not the DVL's specification: a quieter DVL shows its clock
     // in gentler motion.
-    let shown = ResidualNoise::of(&fit.residuals, fit.terms.parameter_names().len()).std_m_s;
+    let shown = bound.residual_noise.std_m_s;
     let noise_shown_m_s = shown.iter().map(|s| s * s).sum::<f64>().sqrt();
     let motion_m_s = motion_std(dvl_m_s);
     if !(motion_m_s > noise_shown_m_s) {
@@ -242,7 +242,6 @@ pub fn refind(
             noise_cm_s: 100.0 * noise_shown_m_s,
         });
     }
-    let bound = bound(&fit, noise, tolerances);
     let inherited = match &carried.uncertainty {
         Some(uncertainty) => {
             let samples = mask_about(time_s, reference, searched_offset_s);

@@ -815,6 +815,11 @@ pub fn is_joint(method: &str) -> bool {
 /// again, before the seconds that found it.
 pub const CLOCK_REFOUND: &str = ", clock re-found in ";
 
+/// Whether `method` is the label of rows with the dive's clock found again.
+pub fn is_refound(method: &str) -> bool {
+    method.contains(CLOCK_REFOUND)
+}
+
 /// The label of a method's rows with the dive's clock found again from its first
 /// `dive_s` seconds.
 pub fn refound_label(method: &str, dive_s: f64) -> String {
@@ -842,7 +847,7 @@ fn clock_kept(
 /// ([`clock_kept`]: a re-found method fits nothing of its own); `None` for a fit that
 /// failed.
 pub fn clock_kept_on(failure: &FitFailure) -> Option<&str> {
-    if !failure.method.contains(CLOCK_REFOUND) {
+    if !is_refound(&failure.method) {
         return None;
     }
     let (scored, _) = failure.why.strip_prefix("on ")?.split_once(": ")?;

@@ -9,7 +9,7 @@
 
 use super::ResultsError;
 use super::corrected::{
-    OtherRecording, Outputs, corrected_samples, stem, write, write_terms_in_time,
+    OtherRecording, Outputs, corrected_samples, dvl_sha256, stem, write, write_terms_in_time,
 };
 use super::installation_file::SavedInstallation;
 use crate::data::paired::{self, PairedColumns, PairedError, PairedFiles, PairedRecording};
@@ -234,7 +234,8 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     }
     fits_in_memory(args)?;
     let read = read(args)?;
-    let recording_sha256 = not_over_another_recording(args, &outputs)?;
+    let recording_sha256 = dvl_sha256(args.dvl)?;
+    outputs.not_another_recordings(args.dvl, &recording_sha256)?;
     let terms = term_set(args.terms);
     let fitted = fit_terms(args, &read, terms)?;
     let noise = Noise {
@@ -457,21 +458,6 @@ pub(super) fn not_over_an_input(
         }
     }
     None
-}
-
-/// Refuses, before anything is computed, outputs already there that hold another
-/// recording's results; the SHA-256 of the DVL file, which the outputs record.
-fn not_over_another_recording(
-    args: &CalibrateArgs,
-    outputs: &Outputs,
-) -> Result<String, CalibrateError> {
-    let bytes = std::fs::read(args.dvl).map_err(|source| ResultsError::Io {
-        path: args.dvl.to_path_buf(),
-        source,
-    })?;
-    let ours = crate::files::sha256_hex(&bytes);
-    outputs.not_another_recordings(args.dvl, &ours)?;
-    Ok(ours)
 }
 
 /// The columns of `path`'s `[columns]` table, or A-KIT's.

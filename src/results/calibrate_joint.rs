@@ -13,7 +13,7 @@ use super::ResultsError;
 use super::calibrate::{
     CalibrateError, columns, dive_terms_refused, named, not_over_an_input, save_refused,
 };
-use super::corrected::{Outputs, corrected_samples, stem, write};
+use super::corrected::{Outputs, corrected_samples, dvl_sha256, stem, write};
 use super::installation_file::{SavedInstallation, SavedTerm};
 use crate::data::paired::{self, PairedFiles, PairedRecording};
 use crate::evaluate::statistics::mean_std;
@@ -106,14 +106,8 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
     let shas = args
         .dvls
         .iter()
-        .map(|dvl| {
-            let bytes = std::fs::read(dvl).map_err(|source| ResultsError::Io {
-                path: dvl.clone(),
-                source,
-            })?;
-            Ok(crate::files::sha256_hex(&bytes))
-        })
-        .collect::<Result<Vec<String>, CalibrateError>>()?;
+        .map(|dvl| dvl_sha256(dvl))
+        .collect::<Result<Vec<String>, ResultsError>>()?;
     for ((dvl, ours), outputs) in args.dvls.iter().zip(&shas).zip(&outputs) {
         outputs.not_another_recordings(dvl, ours)?;
     }

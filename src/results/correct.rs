@@ -11,7 +11,7 @@
 
 use super::ResultsError;
 use super::calibrate::{columns, not_over_an_input};
-use super::corrected::{OtherRecording, Outputs, corrected_samples, stem, write};
+use super::corrected::{OtherRecording, Outputs, corrected_samples, dvl_sha256, stem, write};
 use super::installation_file::{InstallationFileError, SavedInstallation};
 use crate::data::paired::{self, PairedError, PairedFiles, PairedRecording};
 use crate::installation::bound::{DEFAULT_TOLERANCES, Noise};
@@ -161,11 +161,7 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
     if let Some((output, input)) = not_over_an_input(&inputs, &outputs.all()) {
         return Err(CorrectError::OverInput { output, input });
     }
-    let bytes = std::fs::read(args.dvl).map_err(|source| ResultsError::Io {
-        path: args.dvl.to_path_buf(),
-        source,
-    })?;
-    let recording_sha256 = crate::files::sha256_hex(&bytes);
+    let recording_sha256 = dvl_sha256(args.dvl)?;
     outputs.not_another_recordings(args.dvl, &recording_sha256)?;
     let files = PairedFiles {
         dvl: args.dvl.to_path_buf(),

@@ -4,7 +4,7 @@
 //! methods and windows the other tables follow, and the sentence on the scorings whose
 //! clock could not be found again.
 
-use crate::installation::protocol::{CLOCK_REFOUND, clock_kept_on};
+use crate::installation::protocol::{clock_kept_on, is_refound};
 use crate::installation::rows::{InstallationResults, NO_CALIBRATION, SummaryRow};
 use crate::report::table::{Entry, Section, Table};
 
@@ -61,13 +61,13 @@ pub fn clocks_kept(study: &InstallationResults, window_s: Option<f64>) -> Option
     let scorings = study
         .heldout
         .iter()
-        .filter(|r| at(r.window_s) && r.method.contains(CLOCK_REFOUND))
+        .filter(|r| at(r.window_s) && is_refound(&r.method))
         .count();
     let mut on: Vec<(&str, usize)> = crate::first_seen(kept.iter().copied())
         .into_iter()
         .map(|scored| (scored, kept.iter().filter(|k| **k == scored).count()))
         .collect();
-    on.sort_by(|a, b| b.1.cmp(&a.1));
+    on.sort_by_key(|&(_, n)| std::cmp::Reverse(n));
     let on: Vec<String> = on
         .iter()
         .map(|(scored, n)| format!("{scored} {n}"))

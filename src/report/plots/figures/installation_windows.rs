@@ -8,7 +8,7 @@
 //! Out: the figure, or why there is none (fewer than two windows).
 
 use crate::installation::learned_spec::LEARNED_LABEL;
-use crate::installation::protocol::{CLOCK_REFOUND, JOINT};
+use crate::installation::protocol::{CLOCK_REFOUND, JOINT, is_joint, is_refound};
 use crate::installation::rows::{InstallationResults, NO_CALIBRATION, SummaryRow};
 use crate::report::plots::canvas::{Drawn, Outcome, draw_svg};
 use crate::report::plots::draw::*;
@@ -115,7 +115,7 @@ pub fn method_looks(methods: &[&str]) -> Vec<(Look, Option<Marker>)> {
 /// Whether a summary row is one of the study's main methods, calibrated on one
 /// trajectory with its clock: not a joint fit nor one with its clock re-found.
 fn is_main(method: &str) -> bool {
-    !method.ends_with(JOINT) && !method.contains(CLOCK_REFOUND)
+    !is_joint(method) && !is_refound(method)
 }
 
 /// Mean held-out RMSE ± its 95 % interval against the calibration window, every method
