@@ -10,8 +10,8 @@
 #[path = "../tests/common/installed.rs"]
 mod installed;
 
-use dcnet_exp::installation::term_names::TermName;
-use dcnet_exp::results::calibrate::{CalibrateArgs, calibrate};
+use dcnet_exp::installation::terms::names::TermName;
+use dcnet_exp::operator::calibrate::{CalibrateArgs, calibrate};
 use std::time::Instant;
 
 fn main() {

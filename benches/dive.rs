@@ -11,14 +11,14 @@
 mod installed;
 
 use dcnet_exp::data::paired::{PairedColumns, PairedFiles, read};
-use dcnet_exp::installation::bound::{DEFAULT_TOLERANCES, Noise};
-use dcnet_exp::installation::fit::fit;
+use dcnet_exp::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise};
+use dcnet_exp::installation::estimate::fit::fit;
+use dcnet_exp::installation::estimate::joint::{JointRecording, joint_fit, starts_from};
 use dcnet_exp::installation::frames::Reference;
-use dcnet_exp::installation::joint::{JointRecording, joint_fit, starts_from};
-use dcnet_exp::installation::term_names::TermName;
+use dcnet_exp::installation::terms::names::TermName;
 use dcnet_exp::installation::terms::{PerAxis, TermSet};
-use dcnet_exp::results::calibrate::{CalibrateArgs, calibrate};
-use dcnet_exp::results::correct::{CorrectArgs, correct};
+use dcnet_exp::operator::calibrate::{CalibrateArgs, calibrate};
+use dcnet_exp::operator::correct::{CorrectArgs, correct};
 use std::time::Instant;
 
 fn main() {

@@ -10,7 +10,7 @@
 use crate::dataset::{DatasetSize, TrainingSet};
 use crate::evaluate::RunRow;
 use crate::evaluate::calibration_time::curve_lengths;
-use crate::installation::spec::InstallationSpec;
+use crate::installation::study::spec::StudySpec;
 use crate::model::layer_shapes;
 use crate::spec::{Origin, Spec};
 use crate::vocab::{ErrorModel, EstimatorKind};
@@ -108,9 +108,9 @@ pub fn machine_memory() -> u64 {
 /// (each counted as every trajectory's windows under every installation, an upper bound
 /// since a fold's set leaves its own trajectories out, and twice, while a set is put
 /// together from its parts). `None` without `[learned]`.
-pub fn learned(spec: &InstallationSpec, lengths: &[usize], threads: usize) -> Option<Footprint> {
-    use crate::installation::learned_spec::TrainingSource;
-    use crate::installation::simulate::{INPUT_ROWS, REFERENCE_MARGIN, TARGET_ROWS};
+pub fn learned(spec: &StudySpec, lengths: &[usize], threads: usize) -> Option<Footprint> {
+    use crate::installation::learned::simulate::{INPUT_ROWS, REFERENCE_MARGIN, TARGET_ROWS};
+    use crate::installation::learned::spec::TrainingSource;
     let learned = spec.learned.as_ref()?;
     let grid = &learned.simulation;
     let lists = [

@@ -26,11 +26,15 @@
 //! 6. [`estimators`]: calibration methods behind one trait, DCNet among them;
 //! 7. [`evaluate`]: the paper's Monte Carlo calibration and evaluation protocol (its
 //!    runs, the tables summed from them, the bound's efficiency); [`installation`]: a
-//!    real installation's spec, its terms, their fit, bound and Kalman filter, the
-//!    held-out protocol of a study and the DCNets of `[learned]`; and [`footprint`]:
+//!    real installation's terms ([`installation::terms`]), their estimates
+//!    ([`installation::estimate`]: fit, bound, clock, joint fit, Kalman filter), the
+//!    study of an installation ([`installation::study`]: its spec and held-out
+//!    protocol) and the DCNets of `[learned]` ([`installation::learned`]); and [`footprint`]:
 //!    the memory and time a spec asks for, known before it runs;
 //! 8. [`results`]: the results folders of both kinds (Parquet tables and manifest,
 //!    written atomically), the corrected recording of `calibrate`, and a sweep's table;
+//!    [`operator`]: the operator's commands on recordings of their own (`calibrate`,
+//!    its joint form, the saved installation file, `correct`);
 //! 9. [`report`]: what is drawn from results folders alone: the printed tables
 //!    ([`report::printed`]), the figures ([`report::plots`], one file per figure), one
 //!    table model of the report ([`report::table`]) set by two renderers
@@ -70,6 +74,7 @@ pub mod evaluate;
 pub mod installation;
 pub mod footprint;
 pub mod results;
+pub mod operator;
 pub mod report;
 pub mod pipeline;
 pub mod cli;

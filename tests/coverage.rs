@@ -12,11 +12,11 @@ mod common;
 
 use common::installed;
 use dcnet_exp::data::paired::{PairedColumns, PairedFiles, read};
-use dcnet_exp::installation::bound::{DEFAULT_TOLERANCES, Noise, bound};
-use dcnet_exp::installation::filter::{FilterSettings, run_filter_observed};
-use dcnet_exp::installation::fit::fit;
-use dcnet_exp::installation::protocol::Segment;
-use dcnet_exp::installation::simulate::simulate_dvl_correlated;
+use dcnet_exp::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise, bound};
+use dcnet_exp::installation::estimate::filter::{FilterSettings, run_filter_observed};
+use dcnet_exp::installation::estimate::fit::fit;
+use dcnet_exp::installation::learned::simulate::simulate_dvl_correlated;
+use dcnet_exp::installation::study::Segment;
 use dcnet_exp::installation::terms::{Installation, PerAxis, PerKind, TermSet};
 use nalgebra::DVector;
 use rand::SeedableRng;
@@ -440,7 +440,7 @@ fn covered(
 /// 93–99 %.
 #[test]
 fn the_clock_found_again_covers_the_dives_true_time_offset() {
-    use dcnet_exp::installation::clock::{Carried, ClockSearch, refind};
+    use dcnet_exp::installation::estimate::clock::{Carried, ClockSearch, refind};
     let dir = tempfile::tempdir().unwrap();
     installed::write_installed(dir.path(), 4, &[], installed::INSTALLED, 1);
     let files: Vec<PairedFiles> = (1..=4).map(|n| PairedFiles::akit(dir.path(), n)).collect();
@@ -516,7 +516,7 @@ fn the_clock_found_again_covers_the_dives_true_time_offset() {
 /// each took the sandwich of its own residuals.
 #[test]
 fn the_joint_fit_covers_the_vehicles_terms_and_every_clock() {
-    use dcnet_exp::installation::joint::{JointRecording, joint_fit, starts_from};
+    use dcnet_exp::installation::estimate::joint::{JointRecording, joint_fit, starts_from};
     let dir = tempfile::tempdir().unwrap();
     installed::write_installed(dir.path(), 4, &[], installed::INSTALLED, 1);
     let files: Vec<PairedFiles> = (1..=4).map(|n| PairedFiles::akit(dir.path(), n)).collect();

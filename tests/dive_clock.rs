@@ -10,10 +10,12 @@ mod common;
 
 use common::installed::{INSTALLED, Installed, write_installed, write_study_spec};
 use dcnet_exp::data::paired::{PairedColumns, PairedFiles, read};
-use dcnet_exp::installation::bound::{DEFAULT_TOLERANCES, Noise, bound};
-use dcnet_exp::installation::clock::{Carried, ClockError, ClockSearch, DEFAULT_SEARCH_S, refind};
-use dcnet_exp::installation::fit::{TIME_OFFSET_MARGIN_S, fit};
-use dcnet_exp::installation::protocol::Segment;
+use dcnet_exp::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise, bound};
+use dcnet_exp::installation::estimate::clock::{
+    Carried, ClockError, ClockSearch, DEFAULT_SEARCH_S, refind,
+};
+use dcnet_exp::installation::estimate::fit::{TIME_OFFSET_MARGIN_S, fit};
+use dcnet_exp::installation::study::Segment;
 use dcnet_exp::installation::terms::{Installation, PerAxis, TermSet, score};
 use std::path::Path;
 
@@ -377,8 +379,8 @@ fn on_akit_the_clock_found_again_leaves_the_dvls_noise_from_a_turning_segment() 
 /// quarter of the steps or more).
 #[test]
 fn a_drifting_clock_is_tracked_by_the_filter_with_the_time_offset_as_a_random_walk() {
-    use dcnet_exp::installation::filter::run_filter;
-    use dcnet_exp::installation::spec::default_filter_settings;
+    use dcnet_exp::installation::estimate::filter::run_filter;
+    use dcnet_exp::installation::study::spec::default_filter_settings;
     use rand::SeedableRng;
     use rand_distr::{Distribution, Normal};
     let dir = tempfile::tempdir().unwrap();

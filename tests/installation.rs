@@ -8,8 +8,8 @@ mod common;
 
 use dcnet_exp::Vec3;
 use dcnet_exp::data::paired::{PairedColumns, PairedFiles, PairedRecording};
-use dcnet_exp::installation::bound::{DEFAULT_TOLERANCES, Noise, TermBound, bound};
-use dcnet_exp::installation::fit::{Fit, TIME_OFFSET_MARGIN_S, fit};
+use dcnet_exp::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise, TermBound, bound};
+use dcnet_exp::installation::estimate::fit::{Fit, TIME_OFFSET_MARGIN_S, fit};
 use dcnet_exp::installation::frames::{
     Reference, ReferenceAt, apply, body_rate, body_to_ned, transpose,
 };
@@ -400,7 +400,7 @@ fn every_term_set_fits_every_trajectory_and_flags_what_it_cannot_see() {
             if n == 1 && *terms == TermSet::EVERY {
                 let flagged = |a: &str, b: &str| {
                     bound.unseen.iter().any(|u| {
-                        u.term == a && matches!(u.why, dcnet_exp::installation::bound::Why::Correlated { with, .. } if with == b)
+                        u.term == a && matches!(u.why, dcnet_exp::installation::estimate::bound::Why::Correlated { with, .. } if with == b)
                     })
                 };
                 eprintln!("T1, every term: {:?}", bound.unseen);

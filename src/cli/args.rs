@@ -170,7 +170,7 @@ pub(super) enum Command {
         )]
         window_s: f64,
         /// How far from the calibration's time offset the search for the clock looks, s
-        #[arg(long, default_value_t = crate::installation::clock::DEFAULT_SEARCH_S, allow_negative_numbers = true)]
+        #[arg(long, default_value_t = crate::installation::estimate::clock::DEFAULT_SEARCH_S, allow_negative_numbers = true)]
         search_s: f64,
         /// The dive's time offset, s, where it is known: no search
         #[arg(long, allow_negative_numbers = true)]

@@ -1,18 +1,18 @@
 //! `calibrate`: one recording of a DVL beside a reference with attitude, calibrated by
-//! one library call ([`crate::results::calibrate`]) and printed
+//! one library call ([`crate::operator::calibrate`]) and printed
 //! ([`crate::report::printed::calibrate`]); and `correct`, its installation applied to
-//! another dive ([`crate::results::correct`], printed by
+//! another dive ([`crate::operator::correct`], printed by
 //! [`crate::report::printed::correct`]). In: the parsed arguments. Out: what they
 //! found on stdout, the files written named on stderr.
 
 use super::{CliError, failure, input};
+use crate::operator::calibrate::calibrate as calibrated;
+use crate::operator::calibrate_joint::{JointArgs, calibrate_joint as calibrated_jointly};
+use crate::operator::correct::{CorrectArgs, correct as corrected};
 use crate::report::printed::calibrate::{calibration_text, joint_text};
 use crate::report::printed::correct::correction_text;
-use crate::results::calibrate::calibrate as calibrated;
-use crate::results::calibrate_joint::{JointArgs, calibrate_joint as calibrated_jointly};
-use crate::results::correct::{CorrectArgs, correct as corrected};
 
-pub(super) use crate::results::calibrate::CalibrateArgs;
+pub(super) use crate::operator::calibrate::CalibrateArgs;
 
 /// `calibrate`: the terms of one recording, their bound, how long the recording needed,
 /// and the recording corrected.

@@ -15,7 +15,7 @@ mod calibrate;
 mod inspect;
 mod plot;
 mod run;
-mod installation;
+mod study;
 
 pub use args::Cli;
 
@@ -189,7 +189,7 @@ pub fn main() -> Result<(), CliError> {
             save,
             dive_terms,
         } if dvl.len() > 1 => {
-            calibrate::calibrate_joint(&crate::results::calibrate_joint::JointArgs {
+            calibrate::calibrate_joint(&crate::operator::calibrate_joint::JointArgs {
                 dvls: &dvl,
                 references: &reference,
                 columns: columns.as_deref(),
@@ -244,7 +244,7 @@ pub fn main() -> Result<(), CliError> {
             search_s,
             time_offset_s,
             out,
-        } => calibrate::correct(&crate::results::correct::CorrectArgs {
+        } => calibrate::correct(&crate::operator::correct::CorrectArgs {
             dvl: &dvl,
             reference: reference.as_deref(),
             columns: columns.as_deref(),
@@ -276,7 +276,7 @@ pub fn main() -> Result<(), CliError> {
 /// `--terms` as typed, each a term's name.
 fn parse_terms(
     (flag, terms): (&str, &[String]),
-) -> Result<Vec<crate::installation::term_names::TermName>, CliError> {
+) -> Result<Vec<crate::installation::terms::names::TermName>, CliError> {
     terms
         .iter()
         .map(|term| {
@@ -353,20 +353,20 @@ impl SpecKind for PaperKind {
 }
 
 /// A spec with `kind = "installation"`: a study of a real installation, or a sweep of it.
-struct InstallationKind;
+struct StudyKind;
 
-impl SpecKind for InstallationKind {
+impl SpecKind for StudyKind {
     fn run(&self, target: &Target, drawing: &Drawing, mode: Mode) -> Result<(), CliError> {
-        installation::run(target, drawing, mode)
+        study::run(target, drawing, mode)
     }
     fn plan(&self, target: &Target, shard: Option<Shard>) -> Result<(), CliError> {
-        installation::plan(target, shard)
+        study::plan(target, shard)
     }
     fn collect(&self, target: &Target, drawing: &Drawing) -> Result<(), CliError> {
-        installation::collect(target, drawing)
+        study::collect(target, drawing)
     }
     fn validate(&self, spec: &Path, set: &[String]) -> Result<(), CliError> {
-        installation::validate(spec, set)
+        study::validate(spec, set)
     }
     fn paper_spec(&self, spec: &Path, _set: &[String]) -> Result<Spec, CliError> {
         Err(input(anyhow::anyhow!(
@@ -378,10 +378,10 @@ impl SpecKind for InstallationKind {
 
 /// The kind of the spec at `path`, from its `kind` key; another kind is refused.
 fn kind_of(path: &Path) -> Result<&'static dyn SpecKind, CliError> {
-    use crate::installation::spec::KIND;
+    use crate::installation::study::spec::KIND;
     match crate::spec::declared_kind(path).map_err(input)? {
         None => Ok(&PaperKind),
-        Some(kind) if kind == KIND => Ok(&InstallationKind),
+        Some(kind) if kind == KIND => Ok(&StudyKind),
         Some(kind) => Err(input(anyhow::anyhow!(
             "{}: kind: {kind:?} is not a kind of spec: leave it out for the paper's experiments, or give {KIND:?} for a study of a real installation",
             path.display()

@@ -18,8 +18,8 @@ pub(super) fn plot(
     metric: Metric,
 ) -> Result<(), CliError> {
     match Held::of(results) {
-        held if held.is_installation() => {
-            return super::installation::plot(results, out.unwrap_or(Path::new("plots")), format);
+        held if held.is_study() => {
+            return super::study::plot(results, out.unwrap_or(Path::new("plots")), format);
         }
         Held::Sweep => {}
         _ => return plot_run(results, out, format),

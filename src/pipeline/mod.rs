@@ -26,7 +26,7 @@
 pub mod cache;
 pub mod claim;
 pub mod error;
-pub mod installation;
+pub mod study;
 pub mod monte_carlo;
 pub mod owner;
 pub mod plan;
@@ -34,9 +34,9 @@ pub mod training;
 pub mod shard;
 
 pub use error::ExecuteError;
-pub use installation::InstallationPlan;
 pub use plan::{Mode, Plan, Status, Task};
 pub use shard::Shard;
+pub use study::StudyPlan;
 
 use crate::results::{self, Manifest, StageSeconds, sweep};
 use cache::Blueprint;
@@ -55,7 +55,7 @@ pub enum Planned<'a> {
     },
     /// The study of a real installation: a calibration on every paired recording, each
     /// scored on the others, and the results folders put together from them.
-    Installation(&'a InstallationPlan<'a>),
+    Study(&'a StudyPlan<'a>),
 }
 
 /// What [`execute`] did.
@@ -76,7 +76,7 @@ pub struct Executed {
 pub fn execute(planned: &Planned, mode: Mode) -> Result<Executed, ExecuteError> {
     match planned {
         Planned::Paper { plan, to_do } => execute_tasks(plan, mode, to_do),
-        Planned::Installation(plan) => plan.execute(mode),
+        Planned::Study(plan) => plan.execute(mode),
     }
 }
 

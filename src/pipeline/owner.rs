@@ -89,10 +89,10 @@ pub enum Writing {
     /// that must hold nothing of another kind.
     SweepPoint,
     /// An installation study's folder, alone or a point of a sweep.
-    Installation,
+    Study,
     /// The folder of a sweep of installation studies: its points' folders are checked
     /// each, so only the kind is checked here.
-    InstallationSweep,
+    StudySweep,
 }
 
 impl Writing {
@@ -100,8 +100,8 @@ impl Writing {
         match self {
             Writing::Single => Held::Single,
             Writing::SweepPoint => Held::Sweep,
-            Writing::Installation => Held::Installation,
-            Writing::InstallationSweep => Held::InstallationSweep,
+            Writing::Study => Held::Study,
+            Writing::StudySweep => Held::StudySweep,
         }
     }
 }
@@ -168,7 +168,7 @@ pub fn check(writer: &Writer) -> Result<(), OwnerError> {
             name: writer.name.to_string(),
         });
     }
-    if writer.force || writer.writing == Writing::InstallationSweep {
+    if writer.force || writer.writing == Writing::StudySweep {
         return Ok(());
     }
     another_spec(writer)
@@ -254,7 +254,7 @@ mod tests {
         let out = tempfile::tempdir().unwrap();
         let study = out.path().join("study");
         std::fs::create_dir_all(&study).unwrap();
-        std::fs::write(study.join(results::installation::HELDOUT), "").unwrap();
+        std::fs::write(study.join(results::study::HELDOUT), "").unwrap();
         let refused = |folder: &Path, writing| match check(&writer(folder, writing, true)) {
             Err(OwnerError::OtherKind {
                 folder,
@@ -274,16 +274,16 @@ mod tests {
             refused(&study.join("lr=1"), Writing::SweepPoint),
             Some((study.clone(), study_words, "the points of a sweep"))
         );
-        assert_eq!(refused(&study, Writing::Installation), None);
+        assert_eq!(refused(&study, Writing::Study), None);
         let sweep = "the points of a sweep of installation studies";
         assert_eq!(
-            refused(&study, Writing::InstallationSweep),
+            refused(&study, Writing::StudySweep),
             Some((study.clone(), study_words, sweep))
         );
         let file = out.path().join("file");
         std::fs::write(&file, "").unwrap();
         assert!(matches!(
-            check(&writer(&file, Writing::Installation, true)),
+            check(&writer(&file, Writing::Study, true)),
             Err(OwnerError::NotAFolder { .. })
         ));
     }

@@ -32,7 +32,7 @@ pub mod table;
 
 pub use markdown::FILE;
 
-use crate::installation::rows::InstallationResults;
+use crate::installation::study::rows::StudyResults;
 use crate::report::plots::Written;
 use crate::results::read::StoredRun;
 use std::fmt::Write;
@@ -53,8 +53,8 @@ pub enum Reported<'a> {
     },
     /// An installation study's tables, in `folder`; `name` keys its LaTeX labels; and
     /// the figures drawn for it.
-    Installation {
-        study: &'a InstallationResults,
+    Study {
+        study: &'a StudyResults,
         name: &'a str,
         folder: &'a Path,
         figures: &'a [Written],
@@ -73,7 +73,7 @@ pub fn documents(reported: &Reported) -> [(&'static str, String); 2] {
                 latex::render(run, &tables),
             )
         }
-        Reported::Installation { study, name, .. } => (
+        Reported::Study { study, name, .. } => (
             installation::markdown(study),
             installation::latex(study, name),
         ),
@@ -86,7 +86,7 @@ pub fn documents(reported: &Reported) -> [(&'static str, String); 2] {
 pub fn write(reported: &Reported) -> std::io::Result<[PathBuf; 2]> {
     let (folder, figures) = match reported {
         Reported::Run { run, figures } => (run.folder.as_path(), *figures),
-        Reported::Installation {
+        Reported::Study {
             folder, figures, ..
         } => (*folder, *figures),
     };

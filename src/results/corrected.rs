@@ -14,7 +14,7 @@ use super::{ResultsError, io, write_table};
 use crate::Vec3;
 use crate::files::write_atomic;
 use crate::installation::frames::Reference;
-use crate::installation::rows::FilterPoint;
+use crate::installation::study::rows::FilterPoint;
 use crate::installation::terms::Installation;
 use arrow_array::RecordBatch;
 use std::path::{Path, PathBuf};
@@ -215,10 +215,7 @@ pub fn write_terms_in_time(
     recording_sha256: &str,
 ) -> Result<PathBuf, ResultsError> {
     let path = outputs.terms_in_time.clone();
-    let batch = of_recording(
-        super::installation::filtered_batch(points),
-        recording_sha256,
-    );
+    let batch = of_recording(super::study::filtered_batch(points), recording_sha256);
     write_table(&path, &batch)?;
     Ok(path)
 }

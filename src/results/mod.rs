@@ -11,16 +11,12 @@
 pub mod calibration_time;
 pub mod held;
 pub mod record;
-pub mod installation;
+pub mod study;
 pub mod read;
 pub mod corrected;
-pub mod calibrate;
-pub mod installation_file;
-pub mod correct;
-pub mod calibrate_joint;
 pub mod sweep;
 pub mod tables;
-pub mod installation_sweep;
+pub mod study_sweep;
 
 use crate::data::Trajectory;
 use crate::evaluate::ProtocolResult;

@@ -6,7 +6,7 @@
 //! cache has the bytes of one computed whole.
 
 use crate::files::{self, Seal};
-use crate::installation::protocol::Calibrated;
+use crate::installation::study::Calibrated;
 use std::path::{Path, PathBuf};
 
 /// Why a stored calibration cannot be used or kept.
@@ -103,7 +103,7 @@ impl CalibrationStore {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::installation::rows::TermRow;
+    use crate::installation::study::rows::TermRow;
 
     #[test]
     fn a_stored_calibration_comes_back_bit_for_bit_and_a_damaged_one_is_not_used() {

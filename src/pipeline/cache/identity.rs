@@ -4,7 +4,7 @@
 //! start of its files' names, and how the log calls it; the key alone says which
 //! inputs made it. In: an error model or a learned model. Out: names.
 
-use crate::installation::protocol::LearnedModel;
+use crate::installation::study::LearnedModel;
 use crate::vocab::ErrorModel;
 
 /// Which model the store holds under a key.
@@ -79,7 +79,7 @@ impl std::fmt::Display for ModelId {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::installation::learned_spec::TrainingSource;
+    use crate::installation::learned::spec::TrainingSource;
 
     /// A learned model's files keep the names they had before the store was shared.
     #[test]

@@ -179,7 +179,7 @@ pub fn calibration_key(
 pub fn learned_key(
     resolved_toml: &str,
     data_sha256: &[&str],
-    model: &crate::installation::protocol::LearnedModel,
+    model: &crate::installation::study::LearnedModel,
 ) -> String {
     let mut settings: toml::Table = toml::from_str(resolved_toml).expect("a resolved spec is TOML");
     // A replicate's model is the same however many replicates there are.
@@ -292,7 +292,7 @@ pub fn results_key(spec: &Spec, block_keys: &[&str]) -> String {
 
 /// The key of an installation study's results folder: its resolved spec and the keys
 /// of the calibrations it is put together from (which name its recordings and models).
-pub fn installation_results_key(resolved_toml: &str, calibration_keys: &[&str]) -> String {
+pub fn study_results_key(resolved_toml: &str, calibration_keys: &[&str]) -> String {
     hash(&(
         ("installation results", INSTALLATION_TABLES_CODE_VERSION),
         resolved_toml,
@@ -350,8 +350,8 @@ pub fn root(out: &Path) -> PathBuf {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::installation::learned_spec::TrainingSource;
-    use crate::installation::protocol::LearnedModel;
+    use crate::installation::learned::spec::TrainingSource;
+    use crate::installation::study::LearnedModel;
 
     /// A replicate's model is the same however many replicates there are, and another
     /// replicate, fold or setting of `[learned]` is another model.

@@ -1,6 +1,6 @@
 //! `dcnet-exp compare A B` of two installation studies. In: two results folders of an
 //! installation study, each holding `heldout.parquet` and its siblings (read back by
-//! `results::installation::read_installation`) and the `spec.toml` it ran. Out: one Markdown
+//! `results::installation::read_study`) and the `spec.toml` it ran. Out: one Markdown
 //! text: both folders named, the spec keys that differ, each method's mean held-out
 //! RMSE per calibration window in A and B with each one's 95 % interval and B − A,
 //! marked ⚠ where the two intervals do not overlap, and for each installation model
@@ -10,11 +10,11 @@
 use super::CompareError;
 use super::markdown::{new_table, spec_section};
 use super::pairs::pair;
-use crate::installation::rows::{InstallationResults, SummaryRow, TermRow};
+use crate::installation::study::rows::{StudyResults, SummaryRow, TermRow};
 use crate::report::plots::scale::three_digits;
 use crate::report::readable::readable_term;
-use crate::results::installation::read_installation;
 use crate::results::read::ReadError;
+use crate::results::study::read_study;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
@@ -25,13 +25,13 @@ const FLAG: &str = "⚠";
 #[derive(Debug, Clone)]
 pub struct StoredInstallation {
     pub folder: PathBuf,
-    pub study: InstallationResults,
+    pub study: StudyResults,
     pub spec: toml::Table,
 }
 
 /// Reads the installation study in `folder`: its tables and its `spec.toml`.
 pub fn read(folder: &Path) -> Result<StoredInstallation, CompareError> {
-    let study = read_installation(folder)?;
+    let study = read_study(folder)?;
     let path = folder.join(crate::results::SPEC);
     let text = std::fs::read_to_string(&path).map_err(|source| {
         CompareError::Read(ReadError::Io {
@@ -269,7 +269,7 @@ mod tests {
     ) -> StoredInstallation {
         StoredInstallation {
             folder: folder.into(),
-            study: InstallationResults {
+            study: StudyResults {
                 heldout: Vec::new(),
                 terms,
                 summary,

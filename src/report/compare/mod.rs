@@ -94,8 +94,8 @@ pub fn folders(first: &Path, second: &Path) -> Result<String, CompareError> {
         refuse_sweep(folder)?;
     }
     match (
-        Held::of(first) == Held::Installation,
-        Held::of(second) == Held::Installation,
+        Held::of(first) == Held::Study,
+        Held::of(second) == Held::Study,
     ) {
         (true, true) => Ok(installation::render(
             &installation::read(first)?,

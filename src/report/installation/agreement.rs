@@ -3,7 +3,7 @@
 //! where they do not, and where a term is not seen. In: the study's term rows of one
 //! method. Out: the paragraph's text.
 
-use crate::installation::rows::TermRow;
+use crate::installation::study::rows::TermRow;
 use crate::report::readable::readable_term;
 use crate::report::table::decimals;
 

@@ -2,24 +2,24 @@
 //! matrix of each method, held-out RMSE against the window, one trajectory's residual
 //! before and after, and with `[learned]` the held-out RMSE inside the folds
 //! (`plots::figures::installation_*`); and a sweep of studies'
-//! figure, held-out RMSE at each point, drawn from the sweep's table. In: a [`InstallationResults`],
+//! figure, held-out RMSE at each point, drawn from the sweep's table. In: a [`StudyResults`],
 //! or a stored sweep of studies. Out: the files written.
 
-use crate::installation::rows::InstallationResults;
+use crate::installation::study::rows::StudyResults;
 use crate::report::plots::canvas::Outcome;
 use crate::report::plots::figures::{
     installation_matrix, installation_residual, installation_sweep, installation_windows,
     terms_in_time,
 };
 use crate::report::plots::{Format, PlotError, Written, render, write_figures};
-use crate::results::installation_sweep::StoredInstallationSweep;
+use crate::results::study_sweep::StoredStudySweep;
 use std::path::Path;
 
 /// Draws the study's figures into `folder`, each file written atomically: the
 /// calibration × scored matrix of each method, held-out RMSE against the window, and
 /// one trajectory's residual before and after.
 pub fn draw_all(
-    study: &InstallationResults,
+    study: &StudyResults,
     folder: &Path,
     format: Format,
 ) -> Result<Vec<Written>, PlotError> {
@@ -60,7 +60,7 @@ pub fn draw_all(
 /// Draws the figure of a sweep of studies into `folder` (each point's own figures are
 /// drawn from the point's folder by [`draw_all`]).
 pub fn draw_sweep(
-    stored: &StoredInstallationSweep,
+    stored: &StoredStudySweep,
     folder: &Path,
     format: Format,
 ) -> Result<Vec<Written>, PlotError> {
@@ -77,7 +77,7 @@ pub fn draw_sweep(
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::installation::rows::{
+    use crate::installation::study::rows::{
         FilterPoint, NO_CALIBRATION, SummaryRow, TermRow, TracePoint, TransferRow,
     };
 
@@ -92,7 +92,7 @@ pub(crate) mod tests {
 
     /// A study resembling the A-KIT one: 13 trajectories, three windows, no
     /// calibration, least squares EM1 to EM5 and two installation models.
-    pub(crate) fn akit_like() -> InstallationResults {
+    pub(crate) fn akit_like() -> StudyResults {
         let none = [
             20.0, 13.4, 11.8, 23.1, 13.3, 10.9, 11.3, 24.2, 24.4, 14.5, 22.9, 2.9, 3.1,
         ];
@@ -259,7 +259,7 @@ pub(crate) mod tests {
                 }
             })
             .collect();
-        InstallationResults {
+        StudyResults {
             heldout,
             terms,
             summary,
@@ -326,7 +326,7 @@ pub(crate) mod tests {
             assert_eq!(figure.files.len(), 1);
             assert!(figure.files[0].is_file());
         }
-        let empty = InstallationResults::default();
+        let empty = StudyResults::default();
         let written = draw_all(&empty, temporary.path(), Format::Png).unwrap();
         assert!(written.iter().all(|w| w.files.is_empty()), "{written:?}");
         assert_eq!(

@@ -4,12 +4,12 @@
 //! methods and windows the other tables follow, and the sentence on the scorings whose
 //! clock could not be found again.
 
-use crate::installation::protocol::{clock_kept_on, is_refound};
-use crate::installation::rows::{InstallationResults, NO_CALIBRATION, SummaryRow};
+use crate::installation::study::rows::{NO_CALIBRATION, StudyResults, SummaryRow};
+use crate::installation::study::{clock_kept_on, is_refound};
 use crate::report::table::{Entry, Section, Table};
 
 /// The methods in the order the study lists them, no calibration first.
-pub(super) fn methods(study: &InstallationResults) -> Vec<&str> {
+pub(super) fn methods(study: &StudyResults) -> Vec<&str> {
     let mut methods = crate::first_seen(
         study
             .summary
@@ -22,7 +22,7 @@ pub(super) fn methods(study: &InstallationResults) -> Vec<&str> {
 }
 
 /// The windows of the summary, in increasing order.
-pub(super) fn windows(study: &InstallationResults) -> Vec<f64> {
+pub(super) fn windows(study: &StudyResults) -> Vec<f64> {
     let mut windows = crate::first_seen(study.summary.iter().map(|r| r.window_s));
     windows.sort_by(f64::total_cmp);
     windows
@@ -34,7 +34,7 @@ pub(super) fn window_text(window_s: f64) -> String {
 }
 
 fn summary_entry<'a>(
-    study: &'a InstallationResults,
+    study: &'a StudyResults,
     method: &str,
     window_s: f64,
 ) -> Option<&'a SummaryRow> {
@@ -47,7 +47,7 @@ fn summary_entry<'a>(
 /// With the clock re-found: how many of the scorings (at `window_s`, or at every
 /// window) kept the calibration's clock, since the scored trajectory's first seconds
 /// did not show its own, and on which trajectories, most first; `None` where none did.
-pub fn clocks_kept(study: &InstallationResults, window_s: Option<f64>) -> Option<String> {
+pub fn clocks_kept(study: &StudyResults, window_s: Option<f64>) -> Option<String> {
     let at = |w: f64| window_s.is_none_or(|window_s| w == window_s);
     let kept: Vec<&str> = study
         .failures
@@ -80,11 +80,7 @@ pub fn clocks_kept(study: &InstallationResults, window_s: Option<f64>) -> Option
 }
 
 /// (a): each method's mean held-out RMSE at the largest window and its ratio.
-pub(super) fn heldout_section(
-    study: &InstallationResults,
-    methods: &[&str],
-    window_s: f64,
-) -> Section {
+pub(super) fn heldout_section(study: &StudyResults, methods: &[&str], window_s: f64) -> Section {
     let rows = methods
         .iter()
         .map(|method| {
@@ -124,11 +120,7 @@ pub(super) fn heldout_section(
 }
 
 /// (b): the same means, one column per window.
-pub(super) fn windows_section(
-    study: &InstallationResults,
-    methods: &[&str],
-    windows: &[f64],
-) -> Section {
+pub(super) fn windows_section(study: &StudyResults, methods: &[&str], windows: &[f64]) -> Section {
     let rows = methods
         .iter()
         .map(|method| {

@@ -7,9 +7,9 @@
 //! Out: [`Section`]s.
 
 use super::heldout::window_text;
-use crate::installation::learned_spec::LEARNED_LABEL;
-use crate::installation::protocol::CLOCK_REFOUND;
-use crate::installation::rows::{FoldSummaryRow, InstallationResults, NO_CALIBRATION, TermRow};
+use crate::installation::learned::spec::LEARNED_LABEL;
+use crate::installation::study::CLOCK_REFOUND;
+use crate::installation::study::rows::{FoldSummaryRow, NO_CALIBRATION, StudyResults, TermRow};
 use crate::report::readable::readable_term;
 use crate::report::table::{Entry, Section, Table};
 
@@ -19,7 +19,7 @@ pub(super) fn is_learned(method: &str) -> bool {
 }
 
 fn fold_entry<'a>(
-    study: &'a InstallationResults,
+    study: &'a StudyResults,
     fold: &str,
     method: &str,
     window_s: f64,
@@ -32,7 +32,7 @@ fn fold_entry<'a>(
 
 /// The sections, none without a fold summary.
 pub(super) fn learned_sections(
-    study: &InstallationResults,
+    study: &StudyResults,
     methods: &[&str],
     windows: &[f64],
 ) -> Vec<Section> {
@@ -67,7 +67,7 @@ pub(super) fn learned_sections(
 }
 
 /// Every method on the pairs inside the folds, window by window.
-fn inside_folds_section(study: &InstallationResults, methods: &[&str], windows: &[f64]) -> Section {
+fn inside_folds_section(study: &StudyResults, methods: &[&str], windows: &[f64]) -> Section {
     Section {
         title: "Inside the folds: learned against model-based".into(),
         caption: format!(
@@ -103,7 +103,7 @@ fn inside_folds_section(study: &InstallationResults, methods: &[&str], windows: 
 
 /// Every method fold by fold at the largest window.
 fn fold_by_fold_section(
-    study: &InstallationResults,
+    study: &StudyResults,
     methods: &[&str],
     folds: &[&str],
     largest: f64,
@@ -141,7 +141,7 @@ fn fold_by_fold_section(
 
 /// The installation fit with the learned models' terms: the model-based method whose
 /// term names are theirs.
-fn fitted_alike<'a>(study: &InstallationResults, methods: &[&'a str]) -> Option<&'a str> {
+fn fitted_alike<'a>(study: &StudyResults, methods: &[&'a str]) -> Option<&'a str> {
     let learned = methods.iter().find(|m| is_learned(m))?;
     let terms = term_names(study, learned);
     methods
@@ -151,7 +151,7 @@ fn fitted_alike<'a>(study: &InstallationResults, methods: &[&'a str]) -> Option<
 }
 
 /// The names of the terms `method` estimated, in the order of its rows.
-fn term_names<'a>(study: &'a InstallationResults, method: &str) -> Vec<&'a str> {
+fn term_names<'a>(study: &'a StudyResults, method: &str) -> Vec<&'a str> {
     crate::first_seen(
         study
             .terms
@@ -172,7 +172,7 @@ fn window_header(windows: &[f64]) -> Vec<String> {
 /// `window_s`, both over the pairs they both scored (those inside the fold), by
 /// calibration.
 fn per_calibration<'a>(
-    study: &'a InstallationResults,
+    study: &'a StudyResults,
     learned: &str,
     fitted: &str,
     window_s: f64,
@@ -214,7 +214,7 @@ fn per_calibration<'a>(
 /// calibration on the same pairs, each with the same clock (carried, or re-found from
 /// the same seconds): the mean difference of held-out RMSE with its 95 % interval, and
 /// on how many calibration trajectories the learned one is lower.
-fn paired(study: &InstallationResults, methods: &[&str], windows: &[f64]) -> Option<Section> {
+fn paired(study: &StudyResults, methods: &[&str], windows: &[f64]) -> Option<Section> {
     let fitted = fitted_alike(study, methods)?;
     let learned: Vec<&str> = methods.iter().copied().filter(|m| is_learned(m)).collect();
     let rows = learned
@@ -255,7 +255,7 @@ fn paired(study: &InstallationResults, methods: &[&str], windows: &[f64]) -> Opt
 /// (d): the mean absolute difference, per term and window, of each learned method's
 /// terms and the installation fit's with the same terms from that fit's mean over every
 /// calibration trajectory at the largest window.
-fn term_errors(study: &InstallationResults, methods: &[&str], windows: &[f64]) -> Option<Section> {
+fn term_errors(study: &StudyResults, methods: &[&str], windows: &[f64]) -> Option<Section> {
     let largest = *windows.last()?;
     let learned: Vec<&str> = methods.iter().copied().filter(|m| is_learned(m)).collect();
     let terms = term_names(study, learned.first()?);
@@ -360,7 +360,7 @@ fn term_error_cells(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::installation::rows::TransferRow;
+    use crate::installation::study::rows::TransferRow;
 
     #[test]
     fn a_learned_method_is_set_against_the_fit_with_the_same_clock() {
@@ -386,7 +386,7 @@ mod tests {
             rmse_cm_s: [total_cm_s; 3],
             total_cm_s,
         };
-        let mut study = InstallationResults::default();
+        let mut study = StudyResults::default();
         for calibration in ["A", "B"] {
             study
                 .terms

@@ -1,4 +1,4 @@
-//! The installation study's section of the report, and its figures. In: a [`InstallationResults`]
+//! The installation study's section of the report, and its figures. In: a [`StudyResults`]
 //! (as `results::installation` reads it back). Out: the section as Markdown
 //! ([`markdown`]) and as LaTeX ([`latex`]), both set from the same tables, and the
 //! figures ([`draw_all`]). In data-flow order:
@@ -28,8 +28,8 @@ pub use figures::{draw_all, draw_sweep};
 // Where `cli/calibrate.rs` has always found them; they live below the report.
 pub(crate) use crate::report::readable::{readable_term, readable_why};
 
-use crate::installation::protocol::is_joint;
-use crate::installation::rows::{InstallationResults, NO_CALIBRATION, TermRow};
+use crate::installation::study::is_joint;
+use crate::installation::study::rows::{NO_CALIBRATION, StudyResults, TermRow};
 use crate::report::table::{Section, symbols};
 use agreement::agreement;
 use heldout::{clocks_kept, heldout_section, methods, windows, windows_section};
@@ -37,7 +37,7 @@ use std::fmt::Write;
 use terms::terms_section;
 
 /// The section as Markdown, second-level heading first.
-pub fn markdown(study: &InstallationResults) -> String {
+pub fn markdown(study: &StudyResults) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "## Installation study: held-out trajectories\n");
     let _ = writeln!(out, "{}\n", introduction());
@@ -46,7 +46,7 @@ pub fn markdown(study: &InstallationResults) -> String {
 }
 
 /// The section as LaTeX table environments and paragraphs; `name` keys the labels.
-pub fn latex(study: &InstallationResults, name: &str) -> String {
+pub fn latex(study: &StudyResults, name: &str) -> String {
     use crate::report::latex::escape;
     let mut out = String::new();
     let _ = writeln!(out, "% The installation study's tables ({name}).");
@@ -64,7 +64,7 @@ fn introduction() -> String {
 }
 
 /// Every table of the section, in order.
-fn sections(study: &InstallationResults) -> Vec<Section> {
+fn sections(study: &StudyResults) -> Vec<Section> {
     let windows = windows(study);
     let Some(&largest) = windows.last() else {
         return Vec::new();
@@ -137,11 +137,11 @@ fn sections(study: &InstallationResults) -> Vec<Section> {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::installation::rows::SummaryRow;
+    use crate::installation::study::rows::SummaryRow;
 
     /// A small study: three trajectories, two windows, no calibration, least squares
     /// EM1 and one installation model whose lever arm T12 cannot show.
-    pub(super) fn small() -> InstallationResults {
+    pub(super) fn small() -> StudyResults {
         let summary = |method: &str, window_s, mean_cm_s, ci95_cm_s, ratio| SummaryRow {
             method: method.into(),
             window_s,
@@ -161,7 +161,7 @@ pub(crate) mod tests {
             unseen: unseen.into(),
             asked: String::new(),
         };
-        InstallationResults {
+        StudyResults {
             heldout: Vec::new(),
             terms: vec![
                 term("T1", "lever_arm_x_m", -1.87, 0.013, ""),
@@ -198,8 +198,8 @@ pub(crate) mod tests {
 
     #[test]
     fn a_clock_kept_is_counted_apart_from_failed_fits_and_a_joint_calibration_is_no_failure() {
-        use crate::installation::protocol::{joint_label, refound_label};
-        use crate::installation::rows::{FitFailure, TransferRow};
+        use crate::installation::study::rows::{FitFailure, TransferRow};
+        use crate::installation::study::{joint_label, refound_label};
         let mut study = small();
         let single = "installation lever+offset";
         let joint = joint_label(single);

@@ -5,7 +5,7 @@
 //! ([`readable_why`]), and the terms left out that a fit's residuals still follow. In: the study's term rows of one method. Out: a [`Section`].
 
 use super::heldout::window_text;
-use crate::installation::rows::TermRow;
+use crate::installation::study::rows::TermRow;
 use crate::report::readable::{readable_term, readable_why};
 use crate::report::table::{Entry, Section, Table};
 

@@ -3,7 +3,7 @@
 //! and the median over calibration trajectories that have one. In: the study's calibration-time
 //! rows. Out: a [`Section`], or none when the study has one window only.
 
-use crate::installation::rows::{InstallationResults, InstallationTimeRow};
+use crate::installation::study::rows::{StudyResults, StudyTimeRow};
 use crate::report::table::{Entry, Section, Table};
 
 /// The median of `values`; `None` when there are none.
@@ -22,7 +22,7 @@ fn median(mut values: Vec<f64>) -> Option<f64> {
 
 /// The section, methods in the order given.
 pub(super) fn timing_section(
-    study: &InstallationResults,
+    study: &StudyResults,
     methods: &[&str],
     windows: &[f64],
 ) -> Option<Section> {
@@ -32,7 +32,7 @@ pub(super) fn timing_section(
         return None;
     }
     let calibrations = crate::first_seen(rows.iter().map(|r| r.calibration.as_str()));
-    let find = |method: &str, calibration: &str| -> Option<&InstallationTimeRow> {
+    let find = |method: &str, calibration: &str| -> Option<&StudyTimeRow> {
         rows.iter()
             .find(|r| r.method == method && r.calibration == calibration)
     };

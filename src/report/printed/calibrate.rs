@@ -6,12 +6,12 @@
 //! In: a [`Calibration`] or a [`JointCalibration`]. Out: the text.
 
 use crate::evaluate::calibration_time::tolerance_band;
-use crate::installation::fit::TIME_OFFSET_MARGIN_S;
-use crate::installation::settling::SettlingPoint;
+use crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S;
+use crate::installation::estimate::settling::SettlingPoint;
 use crate::installation::terms::AxisRmse;
+use crate::operator::calibrate::Calibration;
+use crate::operator::calibrate_joint::{AGREEMENT_P_VALUE, JointCalibration};
 use crate::report::installation::{readable_term, readable_why};
-use crate::results::calibrate::Calibration;
-use crate::results::calibrate_joint::{AGREEMENT_P_VALUE, JointCalibration};
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 
 /// Everything `calibrate` prints: the fit, a blank line, the filter; ends in a newline.
@@ -43,7 +43,7 @@ fn printed_fit(calibration: &Calibration) -> String {
     ]);
     for (i, name) in bound.names.iter().enumerate() {
         let (readable, unit, factor) = readable_term(name);
-        let seen = if crate::results::calibrate::is_noise(bound, name) {
+        let seen = if crate::operator::calibrate::is_noise(bound, name) {
             "no, not applied"
         } else if bound.is_unseen(name) {
             "no"

@@ -4,8 +4,8 @@
 //! and the residual at calibration, with a warning where it fits far worse.
 //! In: a [`Correction`]. Out: the text.
 
+use crate::operator::correct::Correction;
 use crate::report::readable::readable_term;
-use crate::results::correct::Correction;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 
 /// Everything `correct` prints; ends in a newline.

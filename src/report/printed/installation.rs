@@ -5,17 +5,17 @@
 //! tables, or the sweep's as `results::installation_sweep` reads them. Out: the text
 //! printed.
 
-use crate::installation::protocol::clock_kept_on;
-use crate::installation::rows::InstallationResults;
+use crate::installation::study::clock_kept_on;
+use crate::installation::study::rows::StudyResults;
 use crate::report::installation::heldout::clocks_kept;
-use crate::results::installation_sweep::StoredInstallationSweep;
+use crate::results::study_sweep::StoredStudySweep;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 use std::fmt::Write;
 
 /// The headline: each method's mean held-out RMSE at the largest window, with its
 /// 95 % interval and its ratio to no calibration; with `[learned]`, on the pairs inside
 /// the folds, where every method is scored on the same pairs as the learned ones.
-pub fn headline(study: &InstallationResults) -> String {
+pub fn headline(study: &StudyResults) -> String {
     let inside_folds: Vec<_> = study
         .folds
         .iter()
@@ -56,7 +56,7 @@ pub fn headline(study: &InstallationResults) -> String {
 
 /// Under the headline: how many fits failed, and the first three; then how many
 /// scorings kept the calibration's clock.
-fn failed_fits(study: &InstallationResults, text: &mut String) {
+fn failed_fits(study: &StudyResults, text: &mut String) {
     let failed: Vec<_> = study
         .failures
         .iter()
@@ -82,7 +82,7 @@ fn failed_fits(study: &InstallationResults, text: &mut String) {
 }
 
 /// A sweep's headline: each point's methods at its largest window, a column per cell.
-pub fn sweep_table(stored: &StoredInstallationSweep) -> String {
+pub fn sweep_table(stored: &StoredStudySweep) -> String {
     let mut table = Table::new();
     table.load_preset(ASCII_MARKDOWN);
     table.set_header([

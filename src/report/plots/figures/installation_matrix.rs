@@ -2,11 +2,11 @@
 //! calibration trajectory (rows) on every scored trajectory (columns) at the largest
 //! window, as a heatmap with the number in each cell. One colour scale serves every
 //! method's figure, so that a cell reads the same in each; its bar is the legend. In: a
-//! [`InstallationResults`]'s held-out rows. Out: one figure per method, named by its slug
+//! [`StudyResults`]'s held-out rows. Out: one figure per method, named by its slug
 //! (`installation_matrix_least_squares_em1`), or why there is none.
 
-use crate::installation::protocol::is_joint;
-use crate::installation::rows::{InstallationResults, TransferRow};
+use crate::installation::study::is_joint;
+use crate::installation::study::rows::{StudyResults, TransferRow};
 use crate::report::plots::canvas::{Drawn, Outcome, draw_svg};
 use crate::report::plots::draw::*;
 use crate::report::plots::scale::{Scale, three_digits};
@@ -49,7 +49,7 @@ pub fn slug(method: &str) -> String {
 }
 
 /// One matrix figure per method at the largest window, all on one colour scale.
-pub fn installation_matrix(study: &InstallationResults) -> PlotResult<Vec<(String, Outcome)>> {
+pub fn installation_matrix(study: &StudyResults) -> PlotResult<Vec<(String, Outcome)>> {
     let Some(window_s) = study.heldout.iter().map(|r| r.window_s).reduce(f64::max) else {
         return Ok(vec![(
             STEM.to_string(),

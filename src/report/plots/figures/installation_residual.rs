@@ -1,10 +1,10 @@
 //! The installation study's residual figure: one held-out trajectory's DVL minus the
 //! reference in the body frame against time, before the correction (grey) and after
 //! it (in colour), one panel per axis, and the yaw rate in a panel under them, so that
-//! a residual that follows the turns shows as such. In: a [`InstallationResults`]'s trace. Out: the
+//! a residual that follows the turns shows as such. In: a [`StudyResults`]'s trace. Out: the
 //! figure, or why the study holds no trace.
 
-use crate::installation::rows::{InstallationResults, TracePoint};
+use crate::installation::study::rows::{StudyResults, TracePoint};
 use crate::report::plots::canvas::{Drawn, Outcome, draw_svg};
 use crate::report::plots::draw::*;
 use crate::report::plots::scale::Scale;
@@ -32,7 +32,7 @@ fn padded(values: impl Iterator<Item = f64>) -> Scale {
 }
 
 /// One trajectory's residual before and after, per axis, with the yaw rate under it.
-pub fn installation_residual(study: &InstallationResults) -> PlotResult<Outcome> {
+pub fn installation_residual(study: &StudyResults) -> PlotResult<Outcome> {
     let Some(first) = study.trace.first() else {
         return Ok(Outcome::NotApplicable(
             "the study holds no residual trace".into(),

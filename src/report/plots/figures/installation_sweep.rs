@@ -4,12 +4,12 @@
 //! stored sweep of studies. Out: the figure, or why there is none (one point).
 
 use super::installation_windows::{TICK_CHAR_PX, TICKS_WIDTH_PX, XAxis, rmse_figure};
-use crate::installation::rows::SummaryRow;
+use crate::installation::study::rows::SummaryRow;
 use crate::report::plots::canvas::Outcome;
 use crate::report::plots::draw::PlotResult;
-use crate::results::installation_sweep::StoredInstallationSweep;
+use crate::results::study_sweep::StoredStudySweep;
 
-pub fn installation_sweep(stored: &StoredInstallationSweep) -> PlotResult<Outcome> {
+pub fn installation_sweep(stored: &StoredStudySweep) -> PlotResult<Outcome> {
     let points = &stored.index.points;
     if points.len() < 2 {
         return Ok(Outcome::NotApplicable(format!(

@@ -4,12 +4,12 @@
 //! the look they have in a run's figures (least squares dashed in its error model's
 //! colour); each installation model has a colour of its own, its joint fit dashed and its
 //! Kalman filter dotted in it. Beside it, with `[calibration.dive]`, the figure of the
-//! held-out RMSE against the seconds that find each trajectory's clock again. In: a [`InstallationResults`]'s summary.
+//! held-out RMSE against the seconds that find each trajectory's clock again. In: a [`StudyResults`]'s summary.
 //! Out: the figure, or why there is none (fewer than two windows).
 
-use crate::installation::learned_spec::LEARNED_LABEL;
-use crate::installation::protocol::{CLOCK_REFOUND, JOINT, is_joint, is_refound};
-use crate::installation::rows::{InstallationResults, NO_CALIBRATION, SummaryRow};
+use crate::installation::learned::spec::LEARNED_LABEL;
+use crate::installation::study::rows::{NO_CALIBRATION, StudyResults, SummaryRow};
+use crate::installation::study::{CLOCK_REFOUND, JOINT, is_joint, is_refound};
 use crate::report::plots::canvas::{Drawn, Outcome, draw_svg};
 use crate::report::plots::draw::*;
 use crate::report::plots::scale::Scale;
@@ -120,7 +120,7 @@ fn is_main(method: &str) -> bool {
 
 /// Mean held-out RMSE ± its 95 % interval against the calibration window, every method
 /// but `[learned]`'s (scored inside their folds only, see [`installation_folds`]).
-pub fn installation_windows(study: &InstallationResults) -> PlotResult<Outcome> {
+pub fn installation_windows(study: &StudyResults) -> PlotResult<Outcome> {
     let windows = crate::first_seen(study.summary.iter().map(|r| r.window_s));
     if windows.len() < 2 {
         return Ok(Outcome::NotApplicable(format!(
@@ -150,7 +150,7 @@ pub fn installation_windows(study: &InstallationResults) -> PlotResult<Outcome> 
 /// seconds of each scored trajectory that found its clock again (scored after them),
 /// calibrated on the longest window; no calibration, each installation model, its joint
 /// fit over the other trajectories (dashed) and its Kalman filter (dotted).
-pub fn installation_dive(study: &InstallationResults) -> PlotResult<Outcome> {
+pub fn installation_dive(study: &StudyResults) -> PlotResult<Outcome> {
     let longest = study
         .summary
         .iter()
@@ -196,7 +196,7 @@ pub fn installation_dive(study: &InstallationResults) -> PlotResult<Outcome> {
 
 /// With `[learned]`: every method on the pairs inside the folds only, mean held-out
 /// RMSE ± its 95 % interval against the calibration window.
-pub fn installation_folds(study: &InstallationResults) -> PlotResult<Outcome> {
+pub fn installation_folds(study: &StudyResults) -> PlotResult<Outcome> {
     let rows: Vec<(f64, &SummaryRow)> = study
         .folds
         .iter()

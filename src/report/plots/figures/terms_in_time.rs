@@ -7,7 +7,7 @@
 //! for each DVL. In: a [`StoredRun`]'s `terms_in_time` table, or the installation
 //! study's. Out: the figure, or why the run has none.
 
-use crate::installation::rows::{FilterPoint, InstallationResults};
+use crate::installation::study::rows::{FilterPoint, StudyResults};
 use crate::report::plots::canvas::{Drawn, Outcome, draw_svg};
 use crate::report::plots::draw::*;
 use crate::report::plots::scale::Scale;
@@ -193,12 +193,7 @@ pub fn kalman_terms(run: &StoredRun) -> PlotResult<Outcome> {
 /// installation model with the terms of filter `method`; none where it has no fit.
 /// (Segments of one vehicle need not share a term, a time offset least: a mean over
 /// them could sit where no segment is.)
-fn own_fit(
-    study: &InstallationResults,
-    method: &str,
-    calibration: &str,
-    term: &str,
-) -> Option<f64> {
+fn own_fit(study: &StudyResults, method: &str, calibration: &str, term: &str) -> Option<f64> {
     let fitted = method.replacen("Kalman filter", "installation", 1);
     study
         .terms
@@ -212,7 +207,7 @@ fn own_fit(
 /// trajectories: the one whose turns show the lever arm best (the smallest bound on
 /// it after the whole trajectory) and the one that shows it least, each term beside
 /// that trajectory's own fit of the same model at its longest window.
-pub fn installation_kalman_terms(study: &InstallationResults) -> PlotResult<Outcome> {
+pub fn installation_kalman_terms(study: &StudyResults) -> PlotResult<Outcome> {
     let Some(method) = study.filtered.first().map(|p| p.method.clone()) else {
         return Ok(Outcome::NotApplicable(
             "the study runs no Kalman filter ([calibration.kalman] models)".into(),

@@ -1,0 +1,418 @@
+//! A dive's clock found again. The geometry of an installation (scale, misalignment,
+//! lever arm, and the bias where it is carried) belongs to the vehicle; its time offset,
+//! and the bias where the spec says so, belong to the dive: the DVL's and the
+//! reference's clocks are set again between dives. On a dive, the carried terms are
+//! held and the dive's terms are estimated from its first w seconds:
+//! 1. τ from a search over ± a search range (30 s by default), on a grid finer than
+//!    half a sample: the carried installation's prediction from the reference at t + τ
+//!    against the DVL ([`search_offset`]). The speed alone, which needs no geometry,
+//!    does not do: most A-KIT segments hold their speed within 1–4 cm/s, and their
+//!    clock shows only in the turns, through the lever arm;
+//! 2. the least squares of the dive's terms with the carried ones held
+//!    ([`fit_about`]), from its scan of τ ± 3 s about the search's; a window whose DVL
+//!    moves no more than the noise of the fit's residuals is refused (no clock to show);
+//! 3. their standard deviations from the bound, given the carried terms, plus what the
+//!    carried terms' own uncertainty passes on to them ([`Carried`]); and a flag where
+//!    the window cannot show τ (constant speed, no turn).
+//!
+//! In: the dive's first w seconds, its reference, the carried installation. Out: a
+//! [`Clock`], or why the window cannot show it ([`ClockError`]).
+
+use crate::Vec3;
+use crate::data::paired::sample_interval;
+use crate::installation::estimate::bound::{Noise, TermBound, Tolerances, bound};
+use crate::installation::estimate::fit::{
+    Fit, FitError, TIME_OFFSET_SCAN_STEP_S, fit_about, linearised, mask_about,
+};
+use crate::installation::frames::Reference;
+use crate::installation::terms::{Installation, PerAxis, TermSet};
+use nalgebra::DMatrix;
+
+/// How far the search looks for τ by default, s: a dive whose clocks are 5 or 20 s
+/// apart is found.
+pub const DEFAULT_SEARCH_S: f64 = 30.0;
+
+/// The smallest share of the window's samples whose t + τ must lie inside the reference
+/// for a step of the search to count.
+const SEARCH_COVERAGE: f64 = 0.5;
+
+/// What a dive's clock is re-found from: which terms belong to the dive (τ always,
+/// a bias where the spec says so), and how far the search looks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ClockSearch {
+    pub dive_terms: TermSet,
+    pub search_s: f64,
+}
+
+/// The terms a dive carries: their values, and where they were estimated their
+/// covariance (over the parameters of `terms`, in its order), which the dive's terms
+/// found again inherit through the samples that find them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Carried {
+    pub installation: Installation,
+    pub uncertainty: Option<(TermSet, DMatrix<f64>)>,
+}
+
+impl Carried {
+    /// Terms known exactly, or whose uncertainty is not known.
+    pub fn exact(installation: Installation) -> Carried {
+        Carried {
+            installation,
+            uncertainty: None,
+        }
+    }
+
+    /// Terms with the standard deviations and correlations of `names` (those of
+    /// `terms`, in order); a standard deviation that is not finite (a term its
+    /// calibration could not see at all, left out of the correction) counts as zero.
+    pub fn with(
+        installation: Installation,
+        terms: TermSet,
+        std: &[f64],
+        correlation: &[Vec<f64>],
+    ) -> Carried {
+        Carried {
+            installation,
+            uncertainty: Some((terms, covariance(std, correlation))),
+        }
+    }
+}
+
+/// The covariance of standard deviations `std` and correlations `correlation`; a
+/// standard deviation or correlation that is not finite (a term its calibration could
+/// not see at all) counts as zero.
+pub fn covariance(std: &[f64], correlation: &[Vec<f64>]) -> DMatrix<f64> {
+    let n = std.len();
+    let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
+    DMatrix::from_fn(n, n, |i, j| {
+        let rho = if i == j {
+            1.0
+        } else {
+            finite(correlation[i][j])
+        };
+        rho * finite(std[i]) * finite(std[j])
+    })
+}
+
+/// A dive's terms found again, with the carried ones.
+#[derive(Debug, Clone)]
+pub struct Clock {
+    /// The carried terms with the dive's replaced.
+    pub installation: Installation,
+    /// The search's τ, s, and the RMS of the DVL against the carried prediction there,
+    /// m/s (all three axes).
+    pub searched_offset_s: f64,
+    pub searched_rms_m_s: f64,
+    /// The least squares of the dive's terms, and their bound given the carried terms.
+    pub fit: Fit,
+    pub bound: TermBound,
+    /// The dive's terms' standard deviations, the carried terms' uncertainty included,
+    /// in the order of the bound's names.
+    pub std: Vec<f64>,
+}
+
+impl Clock {
+    /// The time offset's standard deviation (from the noise the residuals show, the
+    /// carried terms' uncertainty included), s.
+    pub fn time_offset_std_s(&self) -> f64 {
+        let index = self.bound.names.iter().position(|n| *n == "time_offset_s");
+        index.map_or(f64::NAN, |i| self.std[i])
+    }
+
+    /// Whether the window cannot show the time offset (its standard deviation beyond the
+    /// tolerance, or one with another term).
+    pub fn time_offset_unseen(&self) -> bool {
+        self.bound.is_unseen("time_offset_s")
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ClockError {
+    #[error(
+        "the DVL's velocity over the first {window_s} s varies by {std_cm_s:.2} cm/s \
+         (standard deviation, three axes), no more than the {noise_cm_s:.2} cm/s of noise \
+         its fit's residuals show (three axes): a dive at constant velocity shows no clock; \
+         a window with a turn or a change of speed does"
+    )]
+    FlatMotion {
+        window_s: f64,
+        std_cm_s: f64,
+        noise_cm_s: f64,
+    },
+    #[error(
+        "no step of the ±{search_s} s search finds the DVL's samples inside the reference: \
+         the two recordings do not overlap in time"
+    )]
+    NoOverlap { search_s: f64 },
+    #[error("the least squares of the dive's terms failed: {0}")]
+    Fit(#[from] FitError),
+    #[error(
+        "its time offset is known only to ±{std_s} s, beyond the ±{search_s} s searched: these seconds do not show the clock"
+    )]
+    NotShown { std_s: f64, search_s: f64 },
+}
+
+/// The τ (s) at which the carried installation's prediction from the reference at
+/// t + τ is closest to the DVL (least RMS over the window), and that RMS (m/s): every step
+/// of a grid over ±`search_s`, no coarser than [`TIME_OFFSET_SCAN_STEP_S`] nor than half
+/// the DVL's sample interval; a step counts when at least half the samples land inside
+/// the reference. `None` where no step does.
+pub fn search_offset(
+    (time_s, dvl_m_s): (&[f64], &[Vec3]),
+    reference: &Reference,
+    carried: Installation,
+    search_s: f64,
+) -> Option<(f64, f64)> {
+    let step_s = TIME_OFFSET_SCAN_STEP_S.min(sample_interval(time_s) / 2.0);
+    let steps = (search_s / step_s).ceil() as i64;
+    let mut best: Option<(f64, f64)> = None;
+    for k in -steps..=steps {
+        let offset_s = carried.time_offset_s + k as f64 * step_s;
+        let (mut sum, mut count) = (0.0, 0usize);
+        for (&t, dvl) in time_s.iter().zip(dvl_m_s) {
+            if let Some(at) = reference.at(t + offset_s) {
+                let predicted = carried.predict(at);
+                sum += (0..3).map(|a| (dvl[a] - predicted[a]).powi(2)).sum::<f64>();
+                count += 1;
+            }
+        }
+        if (count as f64) < SEARCH_COVERAGE * time_s.len() as f64 || count == 0 {
+            continue;
+        }
+        let rms = (sum / count as f64).sqrt();
+        if best.is_none_or(|(_, lowest)| rms < lowest) {
+            best = Some((offset_s, rms));
+        }
+    }
+    best
+}
+
+/// The standard deviation of the DVL's velocity over the window, the three axes'
+/// variances summed, m/s: how much the motion changes.
+fn motion_std(dvl_m_s: &[Vec3]) -> f64 {
+    let n = dvl_m_s.len().max(1) as f64;
+    (0..3)
+        .map(|a| {
+            let mean = dvl_m_s.iter().map(|v| v[a]).sum::<f64>() / n;
+            dvl_m_s.iter().map(|v| (v[a] - mean).powi(2)).sum::<f64>() / n
+        })
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// Re-finds the dive's terms of `search` on a dive's first seconds (`time_s`,
+/// `dvl_m_s`, the caller's window) with the other terms held at `carried`'s values; the
+/// bound from `noise`, the flag from `tolerances`.
+pub fn refind(
+    (time_s, dvl_m_s): (&[f64], &[Vec3]),
+    reference: &Reference,
+    carried: &Carried,
+    search: ClockSearch,
+    (noise, tolerances): (Noise, &Tolerances),
+) -> Result<Clock, ClockError> {
+    let window_s = time_s
+        .last()
+        .zip(time_s.first())
+        .map_or(0.0, |(l, f)| l - f)
+        + sample_interval(time_s);
+    let (searched_offset_s, searched_rms_m_s) = search_offset(
+        (time_s, dvl_m_s),
+        reference,
+        carried.installation,
+        search.search_s,
+    )
+    .ok_or(ClockError::NoOverlap {
+        search_s: search.search_s,
+    })?;
+    let start = Installation {
+        time_offset_s: searched_offset_s,
+        ..carried.installation
+    };
+    let fit = fit_about(time_s, dvl_m_s, reference, search.dive_terms, start)?;
+    let bound = bound(&fit, noise, tolerances);
+    // A window whose DVL moves no more than the noise its residuals show has no clock
+    // to show; above it, whether the window shows τ is the bound's to say. The noise
+    // is the window's own, not the DVL's specification: a quieter DVL shows its clock
+    // in gentler motion.
+    let shown = bound.residual_noise.std_m_s;
+    let noise_shown_m_s = shown.iter().map(|s| s * s).sum::<f64>().sqrt();
+    let motion_m_s = motion_std(dvl_m_s);
+    if !(motion_m_s > noise_shown_m_s) {
+        return Err(ClockError::FlatMotion {
+            window_s: (window_s * 10.0).round() / 10.0,
+            std_cm_s: 100.0 * motion_m_s,
+            noise_cm_s: 100.0 * noise_shown_m_s,
+        });
+    }
+    let inherited = match &carried.uncertainty {
+        Some(uncertainty) => {
+            let samples = mask_about(time_s, reference, searched_offset_s);
+            let window = (&time_s[samples.clone()], &dvl_m_s[samples]);
+            inherited_variance(&fit, (window, reference), uncertainty)
+        }
+        None => vec![0.0; bound.std.len()],
+    };
+    let std = bound
+        .std
+        .iter()
+        .zip(&inherited)
+        .map(|(std, more)| (std * std + more).sqrt())
+        .collect();
+    let clock = Clock {
+        installation: fit.installation,
+        searched_offset_s,
+        searched_rms_m_s,
+        fit,
+        bound,
+        std,
+    };
+    let std_s = clock.time_offset_std_s();
+    if !(std_s <= search.search_s) {
+        return Err(ClockError::NotShown {
+            std_s,
+            search_s: search.search_s,
+        });
+    }
+    Ok(clock)
+}
+
+/// The variance each of `fit`'s dive terms inherits from the carried terms'
+/// covariance: `G C Gᵀ` with `G = (BᵀB)⁻¹ BᵀA`, B the dive terms' Jacobian and A the
+/// carried terms' (those that are not the dive's) on the same samples.
+fn inherited_variance(
+    fit: &Fit,
+    ((time_s, dvl_m_s), reference): ((&[f64], &[Vec3]), &Reference),
+    (terms, covariance): &(TermSet, DMatrix<f64>),
+) -> Vec<f64> {
+    let dive = fit.terms.parameter_names();
+    let names = terms.parameter_names();
+    let kept: Vec<usize> = (0..names.len())
+        .filter(|&i| !dive.contains(&names[i]))
+        .collect();
+    let carried_terms = TermSet {
+        time_offset: terms.time_offset && !fit.terms.time_offset,
+        bias: match fit.terms.bias {
+            PerAxis::Off => terms.bias,
+            _ => PerAxis::Off,
+        },
+        ..*terms
+    };
+    let zero = vec![0.0; dive.len()];
+    if kept.is_empty() || carried_terms.parameter_names().len() != kept.len() {
+        return zero;
+    }
+    let (_, a) = linearised(time_s, dvl_m_s, reference, carried_terms, fit.installation);
+    let b = &fit.jacobian;
+    if a.nrows() != b.nrows() {
+        return zero;
+    }
+    let Some(inverse) = (b.transpose() * b).try_inverse() else {
+        return zero;
+    };
+    let gain = inverse * (b.transpose() * a);
+    let kept_covariance = DMatrix::from_fn(kept.len(), kept.len(), |i, j| {
+        covariance[(kept[i], kept[j])]
+    });
+    let carried = &gain * kept_covariance * gain.transpose();
+    (0..dive.len()).map(|k| carried[(k, k)].max(0.0)).collect()
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::installation::estimate::bound::DEFAULT_TOLERANCES;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+
+    /// A reference of 500 s at 1 Hz with speed changes and turns (analytic, so the
+    /// reference at t + τ is exact at every stamp), and the DVL that `truth` makes read
+    /// on the stamps of its first 400 s with white noise of `noise_m_s` per axis.
+    pub fn turning_dive(
+        truth: &Installation,
+        noise_m_s: f64,
+        seed: u64,
+    ) -> (Vec<f64>, Vec<Vec3>, Reference) {
+        use std::f64::consts::TAU;
+        let motion = |t: f64| {
+            let velocity = [
+                1.8 + 0.3 * (TAU * t / 75.0).sin(),
+                0.1 * (TAU * t / 40.0).sin(),
+                0.05 * (t / 13.0).sin(),
+            ];
+            let rate = [
+                0.01 * (TAU * t / 20.0).cos(),
+                0.0,
+                0.15 * (TAU * t / 60.0).cos(),
+            ];
+            crate::installation::frames::ReferenceAt {
+                velocity_body_m_s: velocity,
+                rate_rad_s: rate,
+            }
+        };
+        let time_s: Vec<f64> = (0..500).map(f64::from).collect();
+        let reference = Reference {
+            velocity_body_m_s: time_s
+                .iter()
+                .map(|&t| motion(t).velocity_body_m_s)
+                .collect(),
+            rate_rad_s: time_s.iter().map(|&t| motion(t).rate_rad_s).collect(),
+            time_s: time_s.clone(),
+        };
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let noise = Normal::new(0.0, noise_m_s).unwrap();
+        let stamps: Vec<f64> = time_s[..400].to_vec();
+        let dvl = stamps
+            .iter()
+            .map(|&t| {
+                let clean = truth.predict(motion(t + truth.time_offset_s));
+                [0, 1, 2].map(|k| clean[k] + noise.sample(&mut rng))
+            })
+            .collect();
+        (stamps, dvl, reference)
+    }
+
+    #[test]
+    fn a_clock_twenty_seconds_off_is_found_again_with_the_geometry_carried() {
+        let truth = Installation {
+            lever_arm_m: [-1.9, 0.1, 0.4],
+            misalignment_rad: [0.0, 0.0, 0.02],
+            time_offset_s: 20.3,
+            ..Installation::default()
+        };
+        let (time_s, dvl_m_s, reference) = turning_dive(&truth, 0.01, 7);
+        let window = time_s.partition_point(|&t| t - time_s[0] < 60.0);
+        let noise = Noise {
+            dvl_m_s: 0.01,
+            reference_m_s: 0.0,
+        };
+        let search = ClockSearch {
+            dive_terms: TermSet {
+                time_offset: true,
+                ..TermSet::NONE
+            },
+            search_s: DEFAULT_SEARCH_S,
+        };
+        let carried = Installation {
+            time_offset_s: 0.0,
+            ..truth
+        };
+        let clock = refind(
+            (&time_s[..window], &dvl_m_s[..window]),
+            &reference,
+            &Carried::exact(carried),
+            search,
+            (noise, &DEFAULT_TOLERANCES),
+        )
+        .unwrap();
+        let std = clock.time_offset_std_s();
+        assert!(std > 0.0 && std < 0.05, "{std}");
+        let error = clock.installation.time_offset_s - truth.time_offset_s;
+        assert!(error.abs() < 4.0 * std, "{error} against {std}");
+        assert_eq!(clock.installation.lever_arm_m, truth.lever_arm_m);
+        assert!(
+            (clock.searched_offset_s - 20.3).abs() < 0.5,
+            "{}",
+            clock.searched_offset_s
+        );
+    }
+}

@@ -1,0 +1,506 @@
+//! One calibration over several recordings of the same vehicle: the vehicle's terms
+//! (scale, misalignment, lever arm, and the bias unless it is the dive's) shared, the
+//! dive's terms (its time offset, and the bias where asked) one set per recording.
+//!
+//! It starts from one installation (a recording's fit alone): the vehicle's terms as
+//! it has them, each recording's clock from the search of [`search_offset`] about its
+//! time offset with them held, as far as a dive's clock may be ([`starts_from`]). Then Levenberg–Marquardt on the normal equations, whose
+//! structure is known: the vehicle's block A and each recording's block B_k, so the
+//! recordings' terms are eliminated by a Schur complement,
+//! `S = Σ_k A_kᵀ A_k − A_kᵀ B_k (B_kᵀ B_k)⁻¹ B_kᵀ A_k`, and K recordings cost K times one.
+//! Each recording's samples are those of its own fit's fixed mask.
+//!
+//! The vehicle's standard deviations are the single fit's [`bound`] applied to the
+//! stacked Jacobian with the dive's terms projected out, `Ã_k = A_k − B_k (B_kᵀB_k)⁻¹
+//! B_kᵀ A_k` (ÃᵀÃ is S): the same sandwich over the residuals' noise, read from all the
+//! recordings. Each clock's is its own block's given the vehicle's (the same sandwich,
+//! on its own residuals), plus the vehicle's uncertainty carried through
+//! `(B_kᵀB_k)⁻¹ B_kᵀA_k`.
+//! In: the recordings and their references, the vehicle's and the dive's terms. Out: a
+//! [`JointFit`].
+
+use crate::Vec3;
+use crate::installation::estimate::bound::{Noise, TermBound, Tolerances, bound};
+use crate::installation::estimate::clock::{covariance, search_offset};
+use crate::installation::estimate::fit::{
+    Fit, FitError, TIME_OFFSET_MARGIN_S, linearised, mask_about, residual_rms,
+};
+use crate::installation::frames::Reference;
+use crate::installation::terms::{Installation, TermSet};
+use nalgebra::{DMatrix, DVector};
+
+/// One recording of a joint calibration.
+#[derive(Debug, Clone, Copy)]
+pub struct JointRecording<'a> {
+    pub time_s: &'a [f64],
+    pub dvl_m_s: &'a [Vec3],
+    pub reference: &'a Reference,
+}
+
+/// The most iterations of Levenberg–Marquardt.
+const ITERATIONS: usize = 200;
+
+/// The relative change of the cost under which the iterations stop.
+const TOLERANCE: f64 = 1e-12;
+
+/// A joint calibration.
+#[derive(Debug, Clone)]
+pub struct JointFit {
+    pub vehicle_terms: TermSet,
+    pub dive_terms: TermSet,
+    /// The vehicle's terms (the dive's zero).
+    pub vehicle: Installation,
+    /// Each recording's installation: the vehicle's terms with its own dive terms.
+    pub dives: Vec<Installation>,
+    /// The vehicle's terms' standard deviations, correlations, what cannot be seen.
+    pub bound: TermBound,
+    /// Each recording's dive terms' standard deviations, in the order of
+    /// [`TermSet::parameter_names`] of `dive_terms`.
+    pub dive_std: Vec<Vec<f64>>,
+    /// Each recording's residual RMS per DVL axis, m/s, and samples fitted.
+    pub residual_rms_m_s: Vec<Vec3>,
+    pub sample_counts: Vec<usize>,
+}
+
+impl JointFit {
+    /// The mean over the recordings of their dive terms, in the order of
+    /// [`TermSet::parameter_names`] of `dive_terms`: what a recording with no clock of
+    /// its own carries.
+    pub fn mean_dive(&self) -> Vec<f64> {
+        let per_dive: Vec<Vec<f64>> = self
+            .dives
+            .iter()
+            .map(|d| d.to_parameters(&self.dive_terms))
+            .collect();
+        (0..self.dive_terms.parameter_count())
+            .map(|k| per_dive.iter().map(|p| p[k]).sum::<f64>() / per_dive.len() as f64)
+            .collect()
+    }
+}
+
+/// Each recording's blocks at the current terms: residuals r, the vehicle's columns A
+/// and the dive's B.
+struct Blocks {
+    residuals: DVector<f64>,
+    vehicle: DMatrix<f64>,
+    dive: DMatrix<f64>,
+}
+
+/// The vehicle's and the dive's terms of `terms`: the dive's are `dive`'s that `terms`
+/// holds.
+pub fn split(terms: TermSet, dive: TermSet) -> (TermSet, TermSet) {
+    let dive_terms = TermSet {
+        scale: crate::installation::terms::PerAxis::Off,
+        misalignment: false,
+        lever_arm: false,
+        time_offset: terms.time_offset && dive.time_offset,
+        bias: if dive.bias != crate::installation::terms::PerAxis::Off {
+            terms.bias
+        } else {
+            crate::installation::terms::PerAxis::Off
+        },
+    };
+    let vehicle_terms = TermSet {
+        time_offset: terms.time_offset && !dive_terms.time_offset,
+        bias: if dive_terms.bias == crate::installation::terms::PerAxis::Off {
+            terms.bias
+        } else {
+            crate::installation::terms::PerAxis::Off
+        },
+        ..terms
+    };
+    (vehicle_terms, dive_terms)
+}
+
+/// The starts of a joint fit from `installation`: its terms, with each recording's time
+/// offset the best of the search within ±`search_s` of its own (each recording's clock
+/// may be far from it).
+pub fn starts_from(
+    recordings: &[JointRecording],
+    installation: Installation,
+    search_s: f64,
+) -> Vec<Installation> {
+    recordings
+        .iter()
+        .map(|r| {
+            let searched =
+                search_offset((r.time_s, r.dvl_m_s), r.reference, installation, search_s);
+            Installation {
+                time_offset_s: searched.map_or(installation.time_offset_s, |(tau, _)| tau),
+                ..installation
+            }
+        })
+        .collect()
+}
+
+/// The problem a joint fit solves: the recordings, each one's fixed samples (its fit's
+/// mask about its start's clock), and which terms are the vehicle's and the dive's.
+struct Problem<'a> {
+    recordings: &'a [JointRecording<'a>],
+    masks: Vec<std::ops::Range<usize>>,
+    vehicle_terms: TermSet,
+    dive_terms: TermSet,
+}
+
+/// The parameters of a joint fit: the vehicle's, and each recording's dive terms.
+#[derive(Clone)]
+struct Parameters {
+    vehicle: DVector<f64>,
+    dives: Vec<DVector<f64>>,
+}
+
+impl Problem<'_> {
+    /// The installation of one recording: the vehicle's terms with its own.
+    fn installation(&self, vehicle: &DVector<f64>, dive: &DVector<f64>) -> Installation {
+        Installation::default()
+            .with_parameters(&self.vehicle_terms, vehicle.as_slice())
+            .with_parameters(&self.dive_terms, dive.as_slice())
+    }
+
+    /// Each recording's residuals and Jacobian blocks at `at`.
+    fn blocks(&self, at: &Parameters) -> Vec<Blocks> {
+        self.recordings
+            .iter()
+            .zip(&self.masks)
+            .zip(&at.dives)
+            .map(|((r, mask), dive)| {
+                let installation = self.installation(&at.vehicle, dive);
+                let (time_s, dvl_m_s) = (&r.time_s[mask.clone()], &r.dvl_m_s[mask.clone()]);
+                let (residuals, vehicle) = linearised(
+                    time_s,
+                    dvl_m_s,
+                    r.reference,
+                    self.vehicle_terms,
+                    installation,
+                );
+                let (_, dive) =
+                    linearised(time_s, dvl_m_s, r.reference, self.dive_terms, installation);
+                Blocks {
+                    residuals,
+                    vehicle,
+                    dive,
+                }
+            })
+            .collect()
+    }
+
+    /// Levenberg–Marquardt from `start`, each step through [`schur_step`]: the
+    /// parameters at the least cost and their blocks.
+    fn minimise(&self, start: Parameters) -> (Parameters, Vec<Blocks>) {
+        let cost = |blocks: &[Blocks]| {
+            blocks
+                .iter()
+                .map(|b| b.residuals.norm_squared())
+                .sum::<f64>()
+        };
+        let (mut at, mut current) = (start.clone(), self.blocks(&start));
+        let mut damping = 1e-3;
+        for _ in 0..ITERATIONS {
+            let before = cost(&current);
+            let Some((step, dive_steps)) = schur_step(&current, damping) else {
+                break;
+            };
+            let trial = Parameters {
+                vehicle: &at.vehicle + &step,
+                dives: at
+                    .dives
+                    .iter()
+                    .zip(&dive_steps)
+                    .map(|(d, s)| d + s)
+                    .collect(),
+            };
+            let blocks = self.blocks(&trial);
+            let after = cost(&blocks);
+            if after <= before {
+                (at, current) = (trial, blocks);
+                damping = (damping / 3.0).max(1e-12);
+                if before - after <= TOLERANCE * before {
+                    break;
+                }
+            } else {
+                damping *= 4.0;
+                if damping > 1e12 {
+                    break;
+                }
+            }
+        }
+        (at, current)
+    }
+}
+
+/// Fits `terms` over every recording jointly, those of `dive` one set per recording,
+/// from `starts` (one installation per recording, [`starts_from`]'s: the vehicle's
+/// terms start at their mean); the bound from `noise`, the flags from `tolerances`.
+pub fn joint_fit(
+    recordings: &[JointRecording],
+    starts: &[Installation],
+    (terms, dive): (TermSet, TermSet),
+    (noise, tolerances): (Noise, &Tolerances),
+) -> Result<JointFit, FitError> {
+    let (vehicle_terms, dive_terms) = split(terms, dive);
+    let masks: Vec<_> = recordings
+        .iter()
+        .zip(starts)
+        .map(|(r, start)| mask_about(r.time_s, r.reference, start.time_offset_s))
+        .collect();
+    let parameters = dive_terms.parameter_count();
+    if let Some(usable) = masks
+        .iter()
+        .map(|m| m.len())
+        .find(|&n| 3 * n <= parameters + 1)
+    {
+        return Err(FitError::TooFewSamples {
+            usable,
+            parameters,
+            margin_s: TIME_OFFSET_MARGIN_S,
+        });
+    }
+    let problem = Problem {
+        recordings,
+        masks,
+        vehicle_terms,
+        dive_terms,
+    };
+    let of = |start: &Installation| DVector::from_vec(start.to_parameters(&vehicle_terms));
+    let start = Parameters {
+        vehicle: starts.iter().map(of).sum::<DVector<f64>>() / starts.len() as f64,
+        dives: starts
+            .iter()
+            .map(|start| DVector::from_vec(start.to_parameters(&dive_terms)))
+            .collect(),
+    };
+    let (solution, blocks) = problem.minimise(start);
+    let vehicle = problem.installation(&solution.vehicle, &DVector::zeros(parameters));
+    let (jacobian, residuals) = projected(&blocks);
+    let stacked = Fit {
+        terms: vehicle_terms,
+        installation: vehicle,
+        parameters: solution.vehicle.as_slice().to_vec(),
+        residual_rms_m_s: [0.0; 3],
+        sample_count: residuals.len() / 3,
+        jacobian,
+        residuals,
+        termination: "joint".into(),
+    };
+    let bound = bound(&stacked, noise, tolerances);
+    Ok(JointFit {
+        vehicle_terms,
+        dive_terms,
+        vehicle,
+        dives: solution
+            .dives
+            .iter()
+            .map(|d| problem.installation(&solution.vehicle, d))
+            .collect(),
+        dive_std: dive_standard_deviations(&blocks, &bound, dive_terms, (noise, tolerances)),
+        bound,
+        residual_rms_m_s: blocks
+            .iter()
+            .map(|b| residual_rms(&b.residuals, b.residuals.len() / 3))
+            .collect(),
+        sample_counts: blocks.iter().map(|b| b.residuals.len() / 3).collect(),
+    })
+}
+
+/// (B_kᵀB_k + λ diag)⁻¹ for each recording; `None` where one is singular.
+fn dive_inverses(blocks: &[Blocks], damping: f64) -> Option<Vec<DMatrix<f64>>> {
+    blocks
+        .iter()
+        .map(|b| {
+            let mut normal = b.dive.transpose() * &b.dive;
+            for k in 0..normal.nrows() {
+                normal[(k, k)] *= 1.0 + damping;
+            }
+            normal.try_inverse()
+        })
+        .collect()
+}
+
+/// One damped Gauss–Newton step, the dive's blocks eliminated: the vehicle's step and
+/// each recording's.
+fn schur_step(blocks: &[Blocks], damping: f64) -> Option<(DVector<f64>, Vec<DVector<f64>>)> {
+    let inverses = dive_inverses(blocks, damping)?;
+    let p = blocks[0].vehicle.ncols();
+    let mut schur = DMatrix::<f64>::zeros(p, p);
+    let mut gradient = DVector::<f64>::zeros(p);
+    for (b, inverse) in blocks.iter().zip(&inverses) {
+        let cross = b.vehicle.transpose() * &b.dive;
+        let dive_gradient = b.dive.transpose() * &b.residuals;
+        schur += b.vehicle.transpose() * &b.vehicle - &cross * inverse * cross.transpose();
+        gradient += b.vehicle.transpose() * &b.residuals - &cross * inverse * &dive_gradient;
+    }
+    for k in 0..p {
+        schur[(k, k)] *= 1.0 + damping;
+    }
+    // The residual is v_dvl − predict and the Jacobian its derivative: the step is
+    // −(JᵀJ)⁻¹ Jᵀ r.
+    let step = match p {
+        0 => DVector::zeros(0),
+        _ => -schur.cholesky()?.solve(&gradient),
+    };
+    let dive_steps = blocks
+        .iter()
+        .zip(&inverses)
+        .map(|(b, inverse)| {
+            let right = b.dive.transpose() * (&b.residuals + &b.vehicle * &step);
+            -(inverse * right)
+        })
+        .collect();
+    Some((step, dive_steps))
+}
+
+/// The vehicle's Jacobian with each recording's dive terms projected out, stacked, and
+/// the residuals stacked likewise.
+fn projected(blocks: &[Blocks]) -> (DMatrix<f64>, DVector<f64>) {
+    let inverses = dive_inverses(blocks, 0.0).unwrap_or_default();
+    let rows: usize = blocks.iter().map(|b| b.residuals.len()).sum();
+    let p = blocks.first().map_or(0, |b| b.vehicle.ncols());
+    let mut jacobian = DMatrix::zeros(rows, p);
+    let mut residuals = DVector::zeros(rows);
+    let mut at = 0;
+    for (k, b) in blocks.iter().enumerate() {
+        let n = b.residuals.len();
+        let part = match inverses.get(k) {
+            Some(inverse) if b.dive.ncols() > 0 => {
+                &b.vehicle - &b.dive * (inverse * (b.dive.transpose() * &b.vehicle))
+            }
+            _ => b.vehicle.clone(),
+        };
+        jacobian.rows_mut(at, n).copy_from(&part);
+        residuals.rows_mut(at, n).copy_from(&b.residuals);
+        at += n;
+    }
+    (jacobian, residuals)
+}
+
+/// Each recording's dive terms' standard deviations: its own block's given the
+/// vehicle's terms (the single fit's [`bound`] on its residuals, their correlation in
+/// time included), plus the vehicle's covariance carried through (B_kᵀB_k)⁻¹ B_kᵀA_k.
+fn dive_standard_deviations(
+    blocks: &[Blocks],
+    vehicle: &TermBound,
+    dive_terms: TermSet,
+    (noise, tolerances): (Noise, &Tolerances),
+) -> Vec<Vec<f64>> {
+    let covariance = covariance(&vehicle.std, &vehicle.correlation);
+    blocks
+        .iter()
+        .map(|b| {
+            let Some(inverse) = (b.dive.transpose() * &b.dive).try_inverse() else {
+                return vec![f64::INFINITY; b.dive.ncols()];
+            };
+            let own = Fit {
+                terms: dive_terms,
+                installation: Installation::default(),
+                parameters: vec![0.0; b.dive.ncols()],
+                residual_rms_m_s: [0.0; 3],
+                sample_count: b.residuals.len() / 3,
+                jacobian: b.dive.clone(),
+                residuals: b.residuals.clone(),
+                termination: "joint".into(),
+            };
+            let given = bound(&own, noise, tolerances).std;
+            let gain = &inverse * (b.dive.transpose() * &b.vehicle);
+            let carried = &gain * &covariance * gain.transpose();
+            (0..b.dive.ncols())
+                .map(|k| (given[k].powi(2) + carried[(k, k)]).sqrt())
+                .collect()
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::installation::estimate::bound::DEFAULT_TOLERANCES;
+    use crate::installation::estimate::clock::tests::turning_dive;
+    use crate::installation::terms::PerAxis;
+
+    #[test]
+    fn the_joint_fit_recovers_the_shared_terms_and_every_clock() {
+        let geometry = Installation {
+            scale: [0.01; 3],
+            lever_arm_m: [-1.9, 0.05, 0.4],
+            bias_m_s: [0.01, -0.005, 0.003],
+            ..Installation::default()
+        };
+        let clocks = [0.6, -1.2, 2.1, 0.2];
+        let dives: Vec<_> = clocks
+            .iter()
+            .enumerate()
+            .map(|(k, &tau)| {
+                let truth = Installation {
+                    time_offset_s: tau,
+                    ..geometry
+                };
+                turning_dive(&truth, 0.01, 30 + k as u64)
+            })
+            .collect();
+        let recordings: Vec<JointRecording> = dives
+            .iter()
+            .map(|(time_s, dvl_m_s, reference)| JointRecording {
+                time_s,
+                dvl_m_s,
+                reference,
+            })
+            .collect();
+        let terms = TermSet {
+            scale: PerAxis::Scalar,
+            lever_arm: true,
+            time_offset: true,
+            bias: PerAxis::PerAxis,
+            ..TermSet::NONE
+        };
+        let clock = TermSet {
+            time_offset: true,
+            ..TermSet::NONE
+        };
+        let noise = Noise {
+            dvl_m_s: 0.01,
+            reference_m_s: 0.0,
+        };
+        let (time_s, dvl_m_s, reference) = &dives[0];
+        let first =
+            crate::installation::estimate::fit::fit(time_s, dvl_m_s, reference, terms).unwrap();
+        let starts = starts_from(&recordings, first.installation, 30.0);
+        let joint = joint_fit(
+            &recordings,
+            &starts,
+            (terms, clock),
+            (noise, &DEFAULT_TOLERANCES),
+        )
+        .unwrap();
+        let truth = geometry.to_parameters(&joint.vehicle_terms);
+        for (k, name) in joint.bound.names.iter().enumerate() {
+            let error = joint.bound.value[k] - truth[k];
+            assert!(
+                error.abs() < 3.0 * joint.bound.std[k],
+                "{name}: {error} ± {}",
+                joint.bound.std[k]
+            );
+        }
+        for (k, &tau) in clocks.iter().enumerate() {
+            let error = joint.dives[k].time_offset_s - tau;
+            assert!(
+                error.abs() < 3.0 * joint.dive_std[k][0],
+                "clock {k}: {error} ± {}",
+                joint.dive_std[k][0]
+            );
+        }
+        // Four recordings hold four times one's information: half its deviation.
+        let alone = bound(&first, noise, &DEFAULT_TOLERANCES);
+        let lever_x = joint
+            .bound
+            .names
+            .iter()
+            .position(|n| *n == "lever_arm_x_m")
+            .unwrap();
+        let alone_x = alone
+            .names
+            .iter()
+            .position(|n| *n == "lever_arm_x_m")
+            .unwrap();
+        let ratio = joint.bound.bound_std[lever_x] / alone.bound_std[alone_x];
+        assert!((0.4..0.6).contains(&ratio), "{ratio}");
+    }
+}

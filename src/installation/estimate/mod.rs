@@ -1,0 +1,20 @@
+//! The terms estimated from a paired recording, in data-flow order: [`fit`] fits the
+//! selected terms by nonlinear least squares; [`residual_noise`] reads the noise its
+//! residuals show; [`bound`] gives their standard deviations and the Fisher bound, and
+//! the terms a recording cannot show; [`missing`] the terms left out that the residuals
+//! still ask for; [`clock`] finds a dive's clock again with the rest carried; [`joint`]
+//! fits several recordings at once; [`filter`] estimates the terms sample by sample
+//! (an extended Kalman filter) with the noise [`filter_noise`] reads as it runs; and
+//! [`settling`] says how much of a recording the filter needed.
+//! In: a [`Reference`](crate::installation::frames::Reference) and DVL samples. Out:
+//! terms with their standard deviations.
+
+pub mod fit;
+pub mod residual_noise;
+pub mod bound;
+pub mod missing;
+pub mod clock;
+pub mod joint;
+pub mod filter_noise;
+pub mod filter;
+pub mod settling;

@@ -1,0 +1,146 @@
+//! The rows of an installation study, as the study computes them and its tables store
+//! them: each method's held-out RMSE per calibration window and scored trajectory, the
+//! terms each calibration estimated with their bound, the mean per method and window,
+//! and the samples of the residual figure. In: nothing (data types only). Out: the
+//! [`StudyResults`] that `study` fills, `results::installation` writes and reads, and
+//! `report::installation` sets as tables and figures.
+
+use crate::Vec3;
+
+/// The label of the row that corrects nothing.
+pub const NO_CALIBRATION: &str = "no calibration";
+
+/// The held-out RMSE of one method's terms from one calibration window, on one other
+/// trajectory, cm/s.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TransferRow {
+    pub method: String,
+    pub calibration: String,
+    /// The window as the spec gives it, s.
+    pub window_s: f64,
+    pub scored: String,
+    pub rmse_cm_s: Vec3,
+    pub total_cm_s: f64,
+}
+
+/// One estimated term of one calibration, with its standard deviations.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TermRow {
+    pub method: String,
+    pub calibration: String,
+    pub window_s: f64,
+    /// Such as `lever_arm_x_m`.
+    pub term: String,
+    pub value: f64,
+    /// The standard deviation, in the term's unit: a fit's from the noise its residuals
+    /// show, a Kalman filter's likewise (read as it runs); NaN for a learned method's.
+    pub std: f64,
+    /// The Fisher bound's, under the specified white noise (a filter's: of the samples
+    /// it took).
+    pub bound_std: f64,
+    /// Why the window cannot show the term; empty when it can.
+    pub unseen: String,
+    /// The terms the fit left out that its residuals still follow, with their score
+    /// test's χ² (`scale χ² 48.1`, `; `-separated), the same on each term of a fit;
+    /// empty when none, or for a method that is not a fit.
+    pub asked: String,
+}
+
+/// A method's mean held-out RMSE over calibration trajectories, with its 95 % interval.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SummaryRow {
+    pub method: String,
+    pub window_s: f64,
+    pub mean_cm_s: f64,
+    pub ci95_cm_s: f64,
+    /// The mean divided by no calibration's on the same pairs.
+    pub ratio: f64,
+    /// How many calibration trajectories the mean is over: fewer than the study's
+    /// where a fit failed (see [`StudyResults::failures`]).
+    pub calibrations: usize,
+}
+
+/// A calibration window on which a method's fit failed, and why: that window gives
+/// the method no held-out rows and no terms.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct FitFailure {
+    pub method: String,
+    pub calibration: String,
+    pub window_s: f64,
+    pub why: String,
+}
+
+/// One sample of the residual figure: a held-out trajectory's DVL against the
+/// reference in the body frame, before and after the best method's correction, with the
+/// yaw rate under it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TracePoint {
+    /// The trajectory drawn.
+    pub trajectory: String,
+    /// The method whose correction is drawn, and the trajectory it calibrated on.
+    pub method: String,
+    pub calibration: String,
+    pub time_s: f64,
+    pub before_cm_s: Vec3,
+    pub after_cm_s: Vec3,
+    pub yaw_rate_deg_s: f64,
+}
+
+/// A method's calibration time on one calibration trajectory, beside its T_conv.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct StudyTimeRow {
+    pub method: String,
+    pub calibration: String,
+    /// The window of lowest held-out RMSE.
+    pub t_conv_s: f64,
+    /// The shortest window after which the held-out RMSE stays within the tolerance
+    /// (of what calibration can change) of its value at the longest window; `None`:
+    /// never, or no better than no calibration.
+    pub calibration_time_s: Option<f64>,
+    pub rmse_at_time_cm_s: f64,
+    pub long_window_rmse_cm_s: f64,
+    pub tolerance_pct: f64,
+    /// What perfect terms leave: the specified noise, total over three axes, cm/s.
+    pub noise_floor_cm_s: f64,
+}
+
+/// One term of a Kalman filter after one sample of a calibration trajectory, in the
+/// term's stored unit.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct FilterPoint {
+    pub method: String,
+    pub calibration: String,
+    /// From the first sample of the calibration trajectory, s.
+    pub time_s: f64,
+    pub term: String,
+    pub value: f64,
+    pub std: f64,
+    /// The bound's standard deviation from a batch of the samples so far.
+    pub bound_std: f64,
+}
+
+/// Everything the study computes.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct StudyResults {
+    pub heldout: Vec<TransferRow>,
+    pub terms: Vec<TermRow>,
+    pub summary: Vec<SummaryRow>,
+    pub trace: Vec<TracePoint>,
+    pub failures: Vec<FitFailure>,
+    /// With `[learned]`: every method on the pairs inside a fold only, fold by fold and
+    /// over all folds, the learned models' side-by-side comparison.
+    pub folds: Vec<FoldSummaryRow>,
+    /// The Kalman filters' terms after every sample of every calibration trajectory.
+    pub filtered: Vec<FilterPoint>,
+    /// Every method's calibration time on every calibration trajectory.
+    pub calibration_time: Vec<StudyTimeRow>,
+}
+
+/// A summary over the (calibration, scored) pairs inside one fold, or inside any
+/// (`fold` = "all").
+#[derive(Debug, Clone, PartialEq)]
+pub struct FoldSummaryRow {
+    /// "1" to the number of folds, or "all".
+    pub fold: String,
+    pub summary: SummaryRow,
+}

@@ -1,0 +1,187 @@
+//! Checks `[calibration]`. In: the calibration windows, the paper's methods by name,
+//! the named term sets of `[[calibration.models]]`, `[calibration.kalman]` and the
+//! calibration time's tolerance, as written. Out: the windows in increasing order, the
+//! methods in the order the tables show them (the paper's, then each term set's fit,
+//! then its Kalman filter), whether "dcnet" is listed, the filter's settings and the
+//! tolerance as a fraction.
+
+use crate::installation::estimate::clock::ClockSearch;
+use crate::installation::estimate::filter::FilterSettings;
+use crate::installation::study::spec::DiveSpec;
+use crate::installation::study::spec::Method;
+use crate::installation::study::spec::check::check_terms;
+use crate::installation::study::spec::check::kalman::check_kalman;
+use crate::installation::study::spec::file::{DiveFile, StudyCalibrationFile, TermSetFile};
+use crate::installation::terms::names::{TermName, term_set};
+use crate::spec::check::Faults;
+use crate::vocab::ErrorModel;
+use std::collections::HashSet;
+
+/// `[calibration]`, checked.
+pub(in crate::installation::study::spec) struct CheckedCalibration {
+    /// In increasing order.
+    pub windows_s: Vec<f64>,
+    /// The paper's methods, then the fit of each term set, then their filters; DCNet's
+    /// come after, from `[dcnet]`.
+    pub methods: Vec<Method>,
+    /// Whether "dcnet" is among the methods.
+    pub wants_dcnet: bool,
+    pub filter: FilterSettings,
+    /// A fraction (0.1 for 10 %).
+    pub time_tolerance: f64,
+    pub dive: Option<DiveSpec>,
+}
+
+/// Checks `[calibration]`: windows, methods, models and the filter's table.
+pub(in crate::installation::study::spec) fn check_calibration(
+    calibration: StudyCalibrationFile,
+    faults: &mut Faults,
+) -> CheckedCalibration {
+    let StudyCalibrationFile {
+        window_s,
+        methods: names,
+        models,
+        kalman,
+        time_tolerance_pct,
+        dive,
+    } = calibration;
+    let windows_s = check_windows("calibration.window_s", &window_s, faults);
+    let (mut methods, wants_dcnet) = check_methods(&names, faults);
+    check_models(&models, faults);
+    methods.extend(models.iter().map(|model| Method::Installation {
+        name: model.name.clone(),
+        terms: model.terms.clone(),
+    }));
+    let model_names: Vec<&str> = models.iter().map(|m| m.name.as_str()).collect();
+    let filtered = kalman.models.clone();
+    let filter = check_kalman(kalman, &model_names, faults);
+    for name in &filtered {
+        if let Some(model) = models.iter().find(|m| &m.name == name) {
+            methods.push(Method::Filter {
+                name: model.name.clone(),
+                terms: model.terms.clone(),
+            });
+        }
+    }
+    if !(time_tolerance_pct.is_finite() && time_tolerance_pct > 0.0) {
+        faults.add(
+            "calibration.time_tolerance_pct",
+            format!("{time_tolerance_pct} must be a finite number above zero"),
+        );
+    }
+    CheckedCalibration {
+        windows_s,
+        methods,
+        wants_dcnet,
+        filter,
+        time_tolerance: time_tolerance_pct / 100.0,
+        dive: dive.map(|dive| check_dive(dive, faults)),
+    }
+}
+
+/// `[calibration.dive]`: the time offset among its terms, the rest a bias; its windows
+/// as the calibration's; a search range above zero and within an hour.
+fn check_dive(dive: DiveFile, faults: &mut Faults) -> DiveSpec {
+    let DiveFile {
+        terms,
+        window_s,
+        search_s,
+    } = dive;
+    check_terms("calibration.dive.terms", &terms, faults);
+    if !terms.contains(&TermName::TimeOffset) {
+        faults.add(
+            "calibration.dive.terms",
+            "must hold \"time_offset\": the clock is what a dive sets again",
+        );
+    }
+    for (j, term) in terms.iter().enumerate() {
+        if !matches!(
+            term,
+            TermName::TimeOffset | TermName::Bias | TermName::BiasScalar
+        ) {
+            faults.add(
+                format!("calibration.dive.terms[{j}]"),
+                format!("{:?} belongs to the vehicle, not the dive: a dive's terms are \"time_offset\", and \"bias\" or \"bias_scalar\"", term.name()),
+            );
+        }
+    }
+    let windows_s = check_windows("calibration.dive.window_s", &window_s, faults);
+    if !(search_s.is_finite() && search_s > 0.0 && search_s <= 3600.0) {
+        faults.add(
+            "calibration.dive.search_s",
+            format!("{search_s} must be a number of seconds above zero and at most 3600"),
+        );
+    }
+    DiveSpec {
+        search: ClockSearch {
+            dive_terms: term_set(&terms),
+            search_s,
+        },
+        windows_s,
+    }
+}
+
+/// A list of windows at `key`: at least one, each finite, positive and listed once; in
+/// increasing order.
+fn check_windows(key: &str, window_s: &[f64], faults: &mut Faults) -> Vec<f64> {
+    if window_s.is_empty() {
+        faults.add(key, "is empty: give at least one window, in seconds (one at least a trajectory's length takes all of it)");
+    }
+    let mut windows_s = Vec::new();
+    for (i, &w) in window_s.iter().enumerate() {
+        if !(w.is_finite() && w > 0.0) {
+            faults.add(
+                format!("{key}[{i}]"),
+                format!("{w} must be a finite positive number of seconds"),
+            );
+        } else if windows_s.contains(&w) {
+            faults.add(format!("{key}[{i}]"), format!("{w} is listed twice"));
+        } else {
+            windows_s.push(w);
+        }
+    }
+    windows_s.sort_by(f64::total_cmp);
+    windows_s
+}
+
+/// `calibration.methods`: the paper's methods, each listed once, and whether "dcnet"
+/// is among them.
+fn check_methods(names: &[String], faults: &mut Faults) -> (Vec<Method>, bool) {
+    let mut methods = Vec::new();
+    let mut listed = HashSet::new();
+    let mut wants_dcnet = false;
+    for (i, method) in names.iter().enumerate() {
+        let key = format!("calibration.methods[{i}]");
+        if !listed.insert(method.as_str()) {
+            faults.add(key, format!("{method:?} is listed twice"));
+            continue;
+        }
+        match method.as_str() {
+            "baseline" => methods.push(Method::Baseline),
+            "dcnet" => wants_dcnet = true,
+            other => match other.parse::<ErrorModel>() {
+                Ok(model) => methods.push(Method::LeastSquares(model)),
+                Err(_) => faults.add(
+                    key,
+                    format!(
+                        "{other:?} is not a method: give \"baseline\", \"EM1\" to \"EM5\" (the paper's least squares) or \"dcnet\"; term sets of the installation model go in [[calibration.models]]"
+                    ),
+                ),
+            },
+        }
+    }
+    (methods, wants_dcnet)
+}
+
+/// `[[calibration.models]]`: each name defined once, each list of terms sound.
+fn check_models(models: &[TermSetFile], faults: &mut Faults) {
+    let mut names = HashSet::new();
+    for (i, model) in models.iter().enumerate() {
+        let TermSetFile { name, terms } = model;
+        let key = format!("calibration.models[{i}]");
+        if !names.insert(name.as_str()) {
+            faults.add(format!("{key}.name"), format!("{name:?} is defined twice"));
+        }
+        check_terms(&format!("{key}.terms"), terms, faults);
+    }
+}

@@ -1,0 +1,66 @@
+//! Checks `[recordings]`. In: the trajectories' names and files as written, relative to
+//! the spec's folder, and the column names when they are not A-KIT's. Out: each
+//! trajectory's name and files, and the columns; at least two trajectories, each name
+//! and each pair of files once, each column named for one quantity.
+
+use crate::data::paired::{PairedColumns, PairedFiles};
+use crate::installation::study::spec::file::{PairedTrajectoryFile, RecordingsFile};
+use crate::spec::check::Faults;
+use std::collections::HashSet;
+use std::path::Path;
+
+/// Checks `[recordings]`, its files found from `folder`: names defined once, at least
+/// two trajectories (one to calibrate on, another to score on).
+pub(in crate::installation::study::spec) fn check_recordings(
+    recordings: RecordingsFile,
+    folder: &Path,
+    faults: &mut Faults,
+) -> (Vec<(String, PairedFiles)>, PairedColumns) {
+    let RecordingsFile {
+        columns,
+        trajectories: listed,
+    } = recordings;
+    let mut names = HashSet::new();
+    let mut trajectories = Vec::new();
+    for (i, trajectory) in listed.into_iter().enumerate() {
+        let PairedTrajectoryFile {
+            name,
+            dvl,
+            reference,
+        } = trajectory;
+        if !names.insert(name.clone()) {
+            faults.add(
+                format!("recordings.trajectories[{i}].name"),
+                format!("{name:?} is defined twice"),
+            );
+        }
+        let dvl = folder.join(dvl);
+        let reference = reference.map_or_else(|| dvl.clone(), |r| folder.join(r));
+        trajectories.push((name, PairedFiles { dvl, reference }));
+    }
+    if trajectories.len() < 2 {
+        faults.add(
+            "recordings.trajectories",
+            format!(
+                "has {} trajectories: held-out scores need at least two (one to calibrate on, another to score on)",
+                trajectories.len()
+            ),
+        );
+    }
+    let mut files = HashSet::new();
+    for (i, (name, paired)) in trajectories.iter().enumerate() {
+        if !files.insert(paired.clone()) {
+            faults.add(
+                format!("recordings.trajectories[{i}].dvl"),
+                format!(
+                    "{name:?} reads the same files as a trajectory before it: a study would score a recording on itself"
+                ),
+            );
+        }
+    }
+    let columns = columns.unwrap_or_else(PairedColumns::akit);
+    if let Some((key, why)) = columns.named_twice() {
+        faults.add(format!("recordings.columns.{key}"), why);
+    }
+    (trajectories, columns)
+}

@@ -1,0 +1,193 @@
+//! An installation spec as written in TOML: plain serde types, every struct closed to
+//! unknown keys, defaults filled in. Nothing here is checked beyond its type; the
+//! checks in `check/`, one file a section, turn an [`StudyFile`] into the
+//! checked `StudySpec`. `[calibration.kalman]` is
+//! [`StudyKalmanFile`] and `[learned]` is [`LearnedFile`], beside the types they
+//! share with the rest of the installation.
+
+use crate::data::paired::PairedColumns;
+use crate::installation::estimate::bound::{DEFAULT_TOLERANCES, Tolerances};
+use crate::installation::learned::spec::LearnedFile;
+use crate::installation::study::spec::kalman::StudyKalmanFile;
+use crate::installation::terms::names::TermName;
+use std::path::PathBuf;
+
+/// The file as written.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StudyFile {
+    pub name: String,
+    pub kind: String,
+    pub recordings: RecordingsFile,
+    pub noise: NoiseFile,
+    pub calibration: StudyCalibrationFile,
+    #[serde(default)]
+    pub observability: ObservabilityFile,
+    pub dcnet: Option<DcnetModelsFile>,
+    pub learned: Option<LearnedFile>,
+}
+
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecordingsFile {
+    /// The column names, when they are not A-KIT's.
+    pub columns: Option<PairedColumns>,
+    pub trajectories: Vec<PairedTrajectoryFile>,
+}
+
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PairedTrajectoryFile {
+    pub name: String,
+    /// The DVL's CSV file, relative to the spec.
+    pub dvl: PathBuf,
+    /// The reference's CSV file; the DVL's when it holds both.
+    pub reference: Option<PathBuf>,
+}
+
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NoiseFile {
+    /// The DVL's white noise per axis, cm/s.
+    pub dvl_cm_s: f64,
+    /// The reference velocity's white noise per axis, cm/s.
+    pub reference_cm_s: f64,
+}
+
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StudyCalibrationFile {
+    /// Calibration windows: the first w seconds of the calibration trajectory; a w at
+    /// least its length takes all of it.
+    pub window_s: Vec<f64>,
+    /// The paper's methods: "baseline", "EM1" to "EM5" (least squares), "dcnet".
+    pub methods: Vec<String>,
+    /// Named term sets of the installation model, fitted by nonlinear least squares.
+    #[serde(default)]
+    pub models: Vec<TermSetFile>,
+    /// The models the extended Kalman filter runs too, and its prior.
+    #[serde(default)]
+    pub kalman: StudyKalmanFile,
+    /// A method's calibration time is the shortest window after which its held-out
+    /// RMSE stays within this of its value at the longest window, %.
+    #[serde(default = "StudyCalibrationFile::default_time_tolerance_pct")]
+    pub time_tolerance_pct: f64,
+    /// The terms of the dive, found again on each scored trajectory; none when absent.
+    pub dive: Option<DiveFile>,
+}
+
+/// `[calibration.dive]`: which terms belong to the dive (its clock, and the bias where
+/// it is listed) and are found again at the start of each scored trajectory, over how
+/// many seconds, and how far the search for its time offset looks.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DiveFile {
+    /// "time_offset", and "bias" or "bias_scalar" where the bias is the dive's too.
+    #[serde(default = "DiveFile::default_terms")]
+    pub terms: Vec<TermName>,
+    /// The first w seconds of a scored trajectory the dive's terms are found from; the
+    /// trajectory is scored after them.
+    pub window_s: Vec<f64>,
+    /// How far from the carried time offset the search looks, s.
+    #[serde(default = "DiveFile::default_search_s")]
+    pub search_s: f64,
+}
+
+impl DiveFile {
+    fn default_terms() -> Vec<TermName> {
+        vec![TermName::TimeOffset]
+    }
+
+    fn default_search_s() -> f64 {
+        crate::installation::estimate::clock::DEFAULT_SEARCH_S
+    }
+}
+
+impl StudyCalibrationFile {
+    fn default_time_tolerance_pct() -> f64 {
+        10.0
+    }
+}
+
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TermSetFile {
+    pub name: String,
+    pub terms: Vec<TermName>,
+}
+
+/// The standard deviation past which a term counts as not seen (a pair correlated
+/// beyond [`CORRELATION_LIMIT`](crate::installation::estimate::bound::CORRELATION_LIMIT) is not
+/// seen either).
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ObservabilityFile {
+    pub scale_pct: f64,
+    pub misalignment_deg: f64,
+    pub lever_arm_m: f64,
+    pub time_offset_s: f64,
+    pub bias_cm_s: f64,
+}
+
+impl Default for ObservabilityFile {
+    /// [`DEFAULT_TOLERANCES`] in the file's units.
+    fn default() -> Self {
+        ObservabilityFile::from(DEFAULT_TOLERANCES)
+    }
+}
+
+impl From<Tolerances> for ObservabilityFile {
+    /// The tolerances in the file's units: the inverse of
+    /// [`ObservabilityFile::tolerances`].
+    fn from(tolerances: Tolerances) -> Self {
+        ObservabilityFile {
+            scale_pct: tolerances.scale * 100.0,
+            misalignment_deg: tolerances.misalignment_rad.to_degrees(),
+            lever_arm_m: tolerances.lever_arm_m,
+            time_offset_s: tolerances.time_offset_s,
+            bias_cm_s: tolerances.bias_m_s * 100.0,
+        }
+    }
+}
+
+impl ObservabilityFile {
+    /// The tolerances in the bound's units.
+    pub fn tolerances(&self) -> Tolerances {
+        Tolerances {
+            scale: self.scale_pct / 100.0,
+            misalignment_rad: self.misalignment_deg.to_radians(),
+            lever_arm_m: self.lever_arm_m,
+            time_offset_s: self.time_offset_s,
+            bias_m_s: self.bias_cm_s / 100.0,
+        }
+    }
+}
+
+/// The DCNet models a paper spec trained, applied to these recordings.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DcnetModelsFile {
+    /// The paper spec whose models are used, relative to this spec.
+    pub spec: PathBuf,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The default `[observability]` is the bound's default tolerances in the file's
+    /// units, exactly: the numbers a spec without the table resolves to, and back.
+    #[test]
+    fn default_observability_is_the_bounds_default_in_file_units() {
+        let file = ObservabilityFile::default();
+        let in_file_units = [
+            file.scale_pct,
+            file.misalignment_deg,
+            file.lever_arm_m,
+            file.time_offset_s,
+            file.bias_cm_s,
+        ];
+        assert_eq!(in_file_units, [0.5, 0.5, 0.1, 0.05, 1.0]);
+        assert_eq!(file.tolerances(), DEFAULT_TOLERANCES);
+    }
+}

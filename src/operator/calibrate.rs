@@ -1,0 +1,728 @@
+//! `calibrate` as one library call: one recording of a DVL beside a reference with
+//! attitude is read, the terms asked for are fitted (on its first `window_s` seconds
+//! where that is asked) and bounded, scored on every sample before and after, the
+//! installation's Kalman filter runs over the same samples and says how much of the
+//! recording its terms needed ([`crate::installation::estimate::settling`]), and the recording is
+//! written corrected beside the filter's terms against time ([`crate::results::corrected`]).
+//! In: [`CalibrateArgs`]. Out: a [`Calibration`], everything the command prints, or a
+//! [`CalibrateError`] that names the argument, file or step at fault.
+
+use crate::data::paired::{self, PairedColumns, PairedError, PairedFiles, PairedRecording};
+use crate::installation::estimate::bound::{Noise, TermBound, Why, bound};
+use crate::installation::estimate::filter::{FilterSettings, run_filter};
+use crate::installation::estimate::fit::{
+    Fit, FitError, TIME_OFFSET_MARGIN_S, beyond_any_installation, fit,
+};
+use crate::installation::estimate::missing::{Asked, asked_for};
+use crate::installation::estimate::settling::{SettlingPoint, settling_curve, settling_time};
+use crate::installation::frames::Reference;
+use crate::installation::study::filters::FilterRun;
+use crate::installation::study::spec::{ObservabilityFile, default_filter_settings};
+use crate::installation::terms::names::{TermName, term_list_faults, term_set};
+use crate::installation::terms::{AxisRmse, Installation, TermSet, score};
+use crate::operator::installation_file::SavedInstallation;
+use crate::results::ResultsError;
+use crate::results::corrected::{
+    OtherRecording, Outputs, corrected_samples, dvl_sha256, stem, write, write_terms_in_time,
+};
+use crate::spec::{SpecError, TomlFile};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+/// What `calibrate` is asked.
+pub struct CalibrateArgs<'a> {
+    pub dvl: &'a Path,
+    /// The reference's file; the DVL's own when `None`.
+    pub reference: Option<&'a Path>,
+    /// A TOML file whose `[columns]` table names the columns; A-KIT's when `None`.
+    pub columns: Option<&'a Path>,
+    pub terms: &'a [TermName],
+    /// Calibrate on the first this many seconds only.
+    pub window_s: Option<f64>,
+    pub dvl_noise_cm_s: f64,
+    pub reference_noise_cm_s: f64,
+    /// How close to its value after every sample the filter's RMSE must stay, %.
+    pub tolerance_pct: f64,
+    /// The folder the corrected recording and the terms against time go to.
+    pub out: &'a Path,
+    /// Where the installation is saved for `correct`, with the terms of `terms` that
+    /// are the dive's (found again on each dive), the rest the vehicle's.
+    pub save: Option<&'a Path>,
+    pub dive_terms: &'a [TermName],
+}
+
+/// Why `calibrate` did not finish: an argument, the columns file, the recording or the
+/// fit at fault (bad input), or a file that could not be written (a failure while
+/// running, [`CalibrateError::Write`]).
+#[derive(Debug, thiserror::Error)]
+pub enum CalibrateError {
+    #[error("--terms: {0}")]
+    Terms(String),
+    #[error("--dive-terms: {0}")]
+    DiveTerms(String),
+    #[error("--save {}: {why}: give the path of a file", path.display())]
+    Save { path: PathBuf, why: &'static str },
+    #[error("--save {}: is also where the corrected recording goes: give another --save", path.display())]
+    SaveOverOutput { path: PathBuf },
+    #[error("{} and {} hold the same recording (the same SHA-256): a joint calibration counts each recording once", first.display(), again.display())]
+    Duplicate { first: PathBuf, again: PathBuf },
+    #[error(
+        "--reference: {references} files for {dvls} DVL files: give one --reference per DVL file, in the same order, or none where each DVL file holds its reference"
+    )]
+    References { dvls: usize, references: usize },
+    #[error("--dvl-noise-cm-s {}: give a positive number: the bound divides by it", crate::Shown(*.0))]
+    DvlNoise(f64),
+    #[error("--reference-noise-cm-s {}: give zero or a positive number", crate::Shown(*.0))]
+    ReferenceNoise(f64),
+    #[error("--window-s {}: give a positive number of seconds", crate::Shown(*.0))]
+    Window(f64),
+    #[error(
+        "--tolerance-pct {}: give a positive percentage, at most 100 (how close to its last value the filter's RMSE must stay)",
+        crate::Shown(*.0)
+    )]
+    Tolerance(f64),
+    /// The `--columns` file, placed at its line and key.
+    #[error("{0}")]
+    Columns(SpecError),
+    #[error(transparent)]
+    Read(#[from] PairedError),
+    /// The fit failed; its fault is kept, and shown inside the message (not as a source,
+    /// which would print it twice).
+    #[error(
+        "{}: calibrating {terms} on {samples} samples: {fault}{}",
+        dvl.display(),
+        fault.advice()
+    )]
+    Fit {
+        dvl: PathBuf,
+        /// The terms asked for, comma-separated.
+        terms: String,
+        samples: usize,
+        fault: FitError,
+    },
+    /// The recording needs more memory than this machine has.
+    #[error(
+        "{}: {rows} rows need about {} of memory to calibrate and this machine has {}: calibrate a part of it, a file of fewer rows",
+        dvl.display(),
+        crate::footprint::Bytes(*need),
+        crate::footprint::Bytes(*have)
+    )]
+    Memory {
+        dvl: PathBuf,
+        rows: usize,
+        need: f64,
+        have: f64,
+    },
+    /// An output (of `--out`, or `--save`) would replace a file `calibrate` reads.
+    #[error(
+        "{}: calibrate would write over its input {}: give another {flag}, or rename the file",
+        output.display(),
+        input.display()
+    )]
+    OverInput {
+        output: PathBuf,
+        input: PathBuf,
+        flag: &'static str,
+    },
+    #[error(transparent)]
+    OtherRecording(#[from] OtherRecording),
+    #[error(transparent)]
+    Write(#[from] ResultsError),
+}
+
+impl CalibrateError {
+    /// Whether the fault lies in what was given (arguments, files, recording) rather
+    /// than in writing the results.
+    pub fn is_input(&self) -> bool {
+        !matches!(self, CalibrateError::Write(_))
+    }
+
+    /// An output that would replace an input: `--save`'s where it is that file,
+    /// otherwise one under `--out`.
+    pub(super) fn over_input((output, input): (PathBuf, PathBuf), save: Option<&Path>) -> Self {
+        let flag = if save == Some(output.as_path()) {
+            "--save"
+        } else {
+            "--out"
+        };
+        CalibrateError::OverInput {
+            output,
+            input,
+            flag,
+        }
+    }
+}
+
+/// Everything `calibrate` found and wrote.
+pub struct Calibration {
+    /// The fit of the terms asked for, and its bound under `noise`.
+    pub fitted: Fit,
+    pub bound: TermBound,
+    /// The kinds of term the fit left out that its residuals still follow.
+    pub asked: Vec<Asked>,
+    /// The fit's terms with those the residuals do not depend on at all at zero: what
+    /// the RMSE after and the corrected recording apply.
+    pub applied: Installation,
+    pub noise: Noise,
+    /// The samples scored (those [`TIME_OFFSET_MARGIN_S`] inside the reference) and
+    /// those recorded.
+    pub scored: usize,
+    pub recorded: usize,
+    /// The RMSE against the reference on the scored samples with no terms and with the
+    /// fit's; `None` with no sample to score.
+    pub before: Option<AxisRmse>,
+    pub after: Option<AxisRmse>,
+    /// The Kalman filter, its run over the samples fitted, and its settling curve
+    /// (scored on every sample) with the length after which it settles.
+    pub settings: FilterSettings,
+    pub filter: FilterRun,
+    pub curve: Vec<SettlingPoint>,
+    pub settled_s: Option<f64>,
+    /// As asked: the tolerance of the settling time, %, and the window, s.
+    pub tolerance_pct: f64,
+    pub window_s: Option<f64>,
+    /// The corrected recording's CSV and Parquet files, and the filter's terms
+    /// against time.
+    pub corrected: Vec<PathBuf>,
+    pub terms_in_time: PathBuf,
+}
+
+/// The recording read, its reference, the samples scored (those
+/// [`TIME_OFFSET_MARGIN_S`] inside the reference) and the samples calibrated on (the
+/// first `window_s` seconds, or all).
+struct Read {
+    recording: PairedRecording,
+    reference: Reference,
+    scored: Range<usize>,
+    window: Option<PairedRecording>,
+}
+
+impl Read {
+    fn calibrating(&self) -> &PairedRecording {
+        self.window.as_ref().unwrap_or(&self.recording)
+    }
+
+    /// The RMSE `installation` leaves on the samples scored.
+    fn score(&self, installation: &Installation) -> Option<AxisRmse> {
+        let recording = &self.recording;
+        score(
+            installation,
+            &recording.time_s,
+            &recording.dvl_m_s,
+            &self.reference,
+            self.scored.clone(),
+        )
+    }
+}
+
+/// `calibrate`: the terms of one recording, their bound, how long the recording needed,
+/// and the recording corrected.
+pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
+    refused(args)?;
+    let outputs = outputs(args);
+    let written: Vec<&Path> = outputs.all().into_iter().chain(args.save).collect();
+    let inputs = [Some(args.dvl), args.reference, args.columns];
+    if let Some(over) = not_over_an_input(&inputs, &written) {
+        return Err(CalibrateError::over_input(over, args.save));
+    }
+    if let Some(save) = args.save {
+        let same = outputs.all().iter().any(|o| *o == save)
+            || not_over_an_input(&[Some(save)], &outputs.all()).is_some();
+        if same {
+            return Err(CalibrateError::SaveOverOutput {
+                path: save.to_path_buf(),
+            });
+        }
+    }
+    fits_in_memory(args)?;
+    let read = read(args)?;
+    let recording_sha256 = dvl_sha256(args.dvl)?;
+    outputs.not_another_recordings(args.dvl, &recording_sha256)?;
+    let terms = term_set(args.terms);
+    let fitted = fit_terms(args, &read, terms)?;
+    let noise = Noise {
+        dvl_m_s: args.dvl_noise_cm_s / 100.0,
+        reference_m_s: args.reference_noise_cm_s / 100.0,
+    };
+    let bounded = bound(&fitted, noise, &ObservabilityFile::default().tolerances());
+    let applied = seen_terms(&fitted, &bounded);
+    if let Some(fault) = beyond_any_installation(&applied) {
+        return Err(fit_error(args, &read, fault));
+    }
+    let calibrating = read.calibrating();
+    let asked = asked_for(
+        &fitted,
+        (&calibrating.time_s, &calibrating.dvl_m_s),
+        &read.reference,
+        &bounded.residual_noise,
+    );
+    let before = read.score(&Installation::default());
+    let after = read.score(&applied);
+    let (settings, filter, curve) = settle(&read, terms, noise);
+    let change = (
+        before.map_or(f64::NAN, |r| 100.0 * r.total_m_s),
+        after.map_or(f64::NAN, |r| 100.0 * r.total_m_s),
+    );
+    let settled_s = settling_time(&curve, args.tolerance_pct / 100.0, change).map(|p| p.length_s);
+    let (corrected, terms_in_time) =
+        write_files(&outputs, &recording_sha256, &read, &applied, &filter)?;
+    if let Some(path) = args.save {
+        let saved = SavedInstallation::of(
+            &bounded,
+            (args.terms, args.dive_terms),
+            (args.dvl, &recording_sha256),
+            (args.dvl_noise_cm_s, args.reference_noise_cm_s),
+            fitted.residual_rms_m_s,
+        );
+        saved.write(path).map_err(|source| ResultsError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    }
+    Ok(Calibration {
+        fitted,
+        bound: bounded,
+        asked,
+        applied,
+        noise,
+        scored: read.scored.len(),
+        recorded: read.recording.time_s.len(),
+        before,
+        after,
+        settings,
+        filter,
+        curve,
+        settled_s,
+        tolerance_pct: args.tolerance_pct,
+        window_s: args.window_s,
+        corrected,
+        terms_in_time,
+    })
+}
+
+/// The first argument of `args` at fault, where one is.
+fn refused(args: &CalibrateArgs) -> Result<(), CalibrateError> {
+    if let Some((_, message)) = term_list_faults(args.terms).first() {
+        return Err(CalibrateError::Terms(message.clone()));
+    }
+    if !(args.dvl_noise_cm_s.is_finite() && args.dvl_noise_cm_s > 0.0) {
+        return Err(CalibrateError::DvlNoise(args.dvl_noise_cm_s));
+    }
+    if !(args.reference_noise_cm_s.is_finite() && args.reference_noise_cm_s >= 0.0) {
+        return Err(CalibrateError::ReferenceNoise(args.reference_noise_cm_s));
+    }
+    if let Some(w) = args.window_s
+        && !(w.is_finite() && w > 0.0)
+    {
+        return Err(CalibrateError::Window(w));
+    }
+    if !(args.tolerance_pct > 0.0 && args.tolerance_pct <= 100.0) {
+        return Err(CalibrateError::Tolerance(args.tolerance_pct));
+    }
+    dive_terms_refused(args.terms, args.dive_terms, args.save.is_some())
+        .map_err(CalibrateError::DiveTerms)?;
+    if let Some(path) = args.save {
+        save_refused(path)?;
+    }
+    Ok(())
+}
+
+/// What is wrong with `dive` as the dive's terms of a calibration of `terms`: each
+/// must be a dive's kind of term (the time offset or a bias); and where the
+/// installation is saved for `correct`, which finds each dive's clock again, the time
+/// offset must be among them and each must be among `terms`.
+pub(super) fn dive_terms_refused(
+    terms: &[TermName],
+    dive: &[TermName],
+    saving: bool,
+) -> Result<(), String> {
+    if let Some(term) = dive.iter().find(|t| {
+        !matches!(
+            t,
+            TermName::TimeOffset | TermName::Bias | TermName::BiasScalar
+        )
+    }) {
+        return Err(format!(
+            "{:?} belongs to the vehicle, not the dive: give time_offset, and bias or bias_scalar",
+            term.name()
+        ));
+    }
+    if !saving {
+        return Ok(());
+    }
+    if !dive.contains(&TermName::TimeOffset) {
+        return Err("must hold time_offset: the clock is what a dive sets again".into());
+    }
+    if let Some(term) = dive.iter().find(|t| !terms.contains(t)) {
+        return Err(format!(
+            "{:?} is not among --terms: a saved dive's term must be one the calibration fits",
+            term.name()
+        ));
+    }
+    Ok(())
+}
+
+/// Refuses, before anything is read, a `--save` path that cannot be a file: a folder,
+/// or one under a file (its missing folders are made when it is written).
+pub(super) fn save_refused(path: &Path) -> Result<(), CalibrateError> {
+    let under_a_file = path.ancestors().skip(1).any(|a| a.is_file());
+    let why = if path.is_dir() {
+        "is a folder"
+    } else if under_a_file {
+        "is under a file, not a folder"
+    } else {
+        return Ok(());
+    };
+    Err(CalibrateError::Save {
+        path: path.to_path_buf(),
+        why,
+    })
+}
+
+/// The terms of `fitted`, those on which the residuals do not depend at all (their
+/// value is noise, not the installation's) at zero. A term correlated with another, or
+/// known only loosely, is applied: together with the others it still corrects.
+fn seen_terms(fitted: &Fit, bounded: &TermBound) -> Installation {
+    let parameters: Vec<f64> = fitted
+        .parameters
+        .iter()
+        .zip(&bounded.names)
+        .map(|(&value, name)| match is_noise(bounded, name) {
+            true => 0.0,
+            false => value,
+        })
+        .collect();
+    Installation::from_parameters(&fitted.terms, &parameters)
+}
+
+/// Whether the residuals do not depend on term `name` at all.
+pub fn is_noise(bounded: &TermBound, name: &str) -> bool {
+    bounded.unseen.iter().any(|unseen| {
+        unseen.term == name && matches!(&unseen.why, Why::Flat { with } if with.is_empty())
+    })
+}
+
+/// The files written for `args`, named after the DVL's file.
+fn outputs(args: &CalibrateArgs) -> Outputs {
+    Outputs::of(args.out, &stem(args.dvl))
+}
+
+/// Peak memory per row of a recording calibrated whole, bytes: the rows read, the
+/// filter's state after each sample and its terms against time (11.2 GB for 3.6 million
+/// rows, `cargo bench --bench calibrate -- --long`), rounded up.
+const BYTES_PER_ROW: f64 = 3_200.0;
+
+/// Refuses, before it is read, a recording whose calibration needs more memory than
+/// this machine has (it once aborted on a failed allocation).
+fn fits_in_memory(args: &CalibrateArgs) -> Result<(), CalibrateError> {
+    let rows = crate::data::csv::row_count(args.dvl).map_err(PairedError::from)?;
+    let have = crate::footprint::machine_memory() as f64;
+    match beyond_memory(args.dvl, rows, have) {
+        Some(refusal) => Err(refusal),
+        None => Ok(()),
+    }
+}
+
+/// The refusal of a recording at `dvl` of `rows` rows on a machine of `have` bytes,
+/// where its calibration needs more.
+fn beyond_memory(dvl: &Path, rows: usize, have: f64) -> Option<CalibrateError> {
+    let need = rows as f64 * BYTES_PER_ROW;
+    (need > have).then(|| CalibrateError::Memory {
+        dvl: dvl.to_path_buf(),
+        rows,
+        need,
+        have,
+    })
+}
+
+/// The first of `outputs` that would replace one of `inputs`, and that input.
+pub(super) fn not_over_an_input(
+    inputs: &[Option<&Path>],
+    outputs: &[&Path],
+) -> Option<(PathBuf, PathBuf)> {
+    // A file's identity: its path with the folder's links resolved.
+    let identity = |path: &Path| -> Option<PathBuf> {
+        let folder = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        Some(std::fs::canonicalize(folder).ok()?.join(path.file_name()?))
+    };
+    for output in outputs {
+        let same = |input: &&&Path| {
+            identity(input).is_some_and(|i| identity(output).is_some_and(|o| o == i))
+                || std::fs::canonicalize(input)
+                    .ok()
+                    .is_some_and(|i| std::fs::canonicalize(output).is_ok_and(|o| o == i))
+        };
+        if let Some(input) = inputs.iter().flatten().find(same) {
+            return Some((output.to_path_buf(), input.to_path_buf()));
+        }
+    }
+    None
+}
+
+/// The columns of `path`'s `[columns]` table, or A-KIT's.
+pub(super) fn columns(path: Option<&Path>) -> Result<PairedColumns, CalibrateError> {
+    #[derive(serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct ColumnsFile {
+        columns: PairedColumns,
+    }
+    let Some(path) = path else {
+        return Ok(PairedColumns::akit());
+    };
+    let file = TomlFile::<ColumnsFile>::read(path).map_err(CalibrateError::Columns)?;
+    if let Some((key, why)) = file.value.columns.named_twice() {
+        let fault = file.fault(&format!("columns.{key}"), why);
+        return Err(CalibrateError::Columns(fault));
+    }
+    Ok(file.value.columns)
+}
+
+/// The recording of `args`, its reference, and its window where one is asked.
+fn read(args: &CalibrateArgs) -> Result<Read, CalibrateError> {
+    let files = PairedFiles {
+        dvl: args.dvl.to_path_buf(),
+        reference: args.reference.unwrap_or(args.dvl).to_path_buf(),
+    };
+    let recording = paired::read(&files, &columns(args.columns)?)?;
+    let reference = Reference::new(&recording);
+    let scored = reference.interior(&recording.time_s, TIME_OFFSET_MARGIN_S);
+    let window = args.window_s.map(|w| recording.first_seconds(w));
+    Ok(Read {
+        recording,
+        reference,
+        scored,
+        window,
+    })
+}
+
+/// The fit of `terms` on the samples calibrated on.
+fn fit_terms(args: &CalibrateArgs, read: &Read, terms: TermSet) -> Result<Fit, CalibrateError> {
+    let calibrating = read.calibrating();
+    fit(
+        &calibrating.time_s,
+        &calibrating.dvl_m_s,
+        &read.reference,
+        terms,
+    )
+    .map_err(|fault| fit_error(args, read, fault))
+}
+
+/// The names of `terms`, comma-separated, as a message gives them.
+pub(super) fn named(terms: &[TermName]) -> String {
+    terms
+        .iter()
+        .map(|t| t.name())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The fit of `args` on the samples of `read` failed with `fault`.
+fn fit_error(args: &CalibrateArgs, read: &Read, fault: FitError) -> CalibrateError {
+    CalibrateError::Fit {
+        dvl: args.dvl.to_path_buf(),
+        terms: named(args.terms),
+        samples: read.calibrating().time_s.len(),
+        fault,
+    }
+}
+
+/// The filter of an installation spec's `[calibration.kalman]` as it comes, run over the
+/// samples calibrated on, and its settling curve scored on every sample.
+fn settle(
+    read: &Read,
+    terms: TermSet,
+    noise: Noise,
+) -> (FilterSettings, FilterRun, Vec<SettlingPoint>) {
+    let settings = default_filter_settings();
+    let calibrating = read.calibrating();
+    let filter = FilterRun {
+        label: "Kalman filter".into(),
+        terms,
+        steps: run_filter(
+            &calibrating.time_s,
+            &calibrating.dvl_m_s,
+            &read.reference,
+            terms,
+            &settings,
+            noise,
+        ),
+    };
+    let curve = settling_curve(&filter.steps, |installation| {
+        read.score(installation)
+            .map_or(f64::NAN, |rmse| 100.0 * rmse.total_m_s)
+    });
+    (settings, filter, curve)
+}
+
+/// Writes the recording corrected by the terms applied and the filter's terms against time into
+/// `outputs`, each recording `recording_sha256`; the corrected files' paths, and the
+/// terms'.
+fn write_files(
+    outputs: &Outputs,
+    recording_sha256: &str,
+    read: &Read,
+    applied: &Installation,
+    filter: &FilterRun,
+) -> Result<(Vec<PathBuf>, PathBuf), CalibrateError> {
+    let corrected = corrected_samples(
+        applied,
+        &read.recording.time_s,
+        &read.recording.dvl_m_s,
+        &read.reference,
+    );
+    let written = write(outputs, &corrected, recording_sha256)?;
+    let points = filter.points(&outputs.stem);
+    let terms_in_time = write_terms_in_time(outputs, &points, recording_sha256)?;
+    Ok((written, terms_in_time))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A straight, level recording of 300 s at 1 Hz in A-KIT's two files, the vehicle
+    /// heading north at a varying speed, its DVL off by `bias_m_s`; the DVL file's path.
+    fn straight_recording(folder: &Path, bias_m_s: [f64; 3]) -> PathBuf {
+        straight_recording_swinging(folder, bias_m_s, 0.2)
+    }
+
+    /// [`straight_recording`] whose speed swings by `swing_m_s` about 1 m/s (at 0, a
+    /// constant speed, where nothing shows a time offset).
+    fn straight_recording_swinging(folder: &Path, bias_m_s: [f64; 3], swing_m_s: f64) -> PathBuf {
+        let mut dvl = String::from("Time [s],DVL X [m/s],DVL Y [m/s],DVL Z [m/s]\n");
+        let mut reference = String::from(
+            "Time [s],V North [m/s],V East [m/s],V Down [m/s],Roll [rad],Pitch [rad],Yaw [rad]\n",
+        );
+        for i in 0..300 {
+            let t = i as f64;
+            let speed = 1.0 + swing_m_s * (t / 20.0).sin();
+            let [bx, by, bz] = bias_m_s;
+            dvl.push_str(&format!("{t},{},{by},{bz}\n", speed + bx));
+            reference.push_str(&format!("{t},{speed},0,0,0,0,0\n"));
+        }
+        std::fs::write(folder.join("GT.csv"), reference).unwrap();
+        std::fs::write(folder.join("DVL.csv"), dvl).unwrap();
+        folder.join("DVL.csv")
+    }
+
+    fn args<'a>(
+        dvl: &'a Path,
+        reference: &'a Path,
+        out: &'a Path,
+        terms: &'a [TermName],
+    ) -> CalibrateArgs<'a> {
+        CalibrateArgs {
+            dvl,
+            reference: Some(reference),
+            columns: None,
+            terms,
+            window_s: None,
+            dvl_noise_cm_s: 2.0,
+            reference_noise_cm_s: 0.0,
+            tolerance_pct: 10.0,
+            out,
+            save: None,
+            dive_terms: &[TermName::TimeOffset],
+        }
+    }
+
+    /// The one call recovers a known bias, settles, and names the three files it wrote.
+    #[test]
+    fn one_call_fits_settles_and_writes() {
+        let folder = tempfile::tempdir().unwrap();
+        let bias = [0.03, -0.02, 0.01];
+        let dvl = straight_recording(folder.path(), bias);
+        let (reference, out) = (folder.path().join("GT.csv"), folder.path().join("out"));
+        let terms = [TermName::Bias];
+        let calibration = calibrate(&args(&dvl, &reference, &out, &terms)).unwrap();
+        for k in 0..3 {
+            assert!((calibration.fitted.installation.bias_m_s[k] - bias[k]).abs() < 1e-9);
+        }
+        assert_eq!((calibration.scored, calibration.recorded), (294, 300));
+        assert!(calibration.after.unwrap().total_m_s < 1e-9);
+        // The filter takes the samples 3 s inside the reference, the last at 296 s.
+        assert_eq!(calibration.curve.last().unwrap().length_s, 297.0);
+        assert!(calibration.settled_s.is_some_and(|s| s < 300.0));
+        assert_eq!(
+            calibration.corrected,
+            [
+                out.join("DVL-corrected.csv"),
+                out.join("DVL-corrected.parquet")
+            ]
+        );
+        assert_eq!(
+            calibration.terms_in_time,
+            out.join("DVL-terms-in-time.parquet")
+        );
+        assert!(calibration.corrected.iter().all(|p| p.is_file()));
+        assert!(calibration.terms_in_time.is_file());
+    }
+
+    /// On a straight line at constant speed the time offset cannot be seen: it is
+    /// printed as not seen and neither scored nor applied, where the fit's value (noise)
+    /// once shifted every corrected sample's `valid_at_s`.
+    #[test]
+    fn a_term_the_recording_cannot_show_is_not_applied() {
+        let folder = tempfile::tempdir().unwrap();
+        let bias = [0.03, -0.02, 0.01];
+        let dvl = straight_recording_swinging(folder.path(), bias, 0.0);
+        let (reference, out) = (folder.path().join("GT.csv"), folder.path().join("out"));
+        let terms = [TermName::TimeOffset, TermName::Bias];
+        let calibration = calibrate(&args(&dvl, &reference, &out, &terms)).unwrap();
+        assert!(
+            calibration.bound.is_unseen("time_offset_s"),
+            "{:?}",
+            calibration.bound.unseen
+        );
+        assert_eq!(calibration.applied.time_offset_s, 0.0);
+        assert_eq!(
+            calibration.applied.bias_m_s,
+            calibration.fitted.installation.bias_m_s
+        );
+        let csv = std::fs::read_to_string(&calibration.corrected[0]).unwrap();
+        for line in csv.lines().skip(1) {
+            let fields: Vec<&str> = line.split(',').collect();
+            assert_eq!(
+                fields[0], fields[1],
+                "valid_at_s moved by an unseen τ: {line}"
+            );
+        }
+    }
+
+    /// Ten million rows under a 2.5 GiB limit aborted on a failed allocation: refused
+    /// before the recording is read, saying how much it needs.
+    #[test]
+    fn a_recording_beyond_the_machines_memory_is_refused_before_it_is_read() {
+        let dvl = Path::new("dive.csv");
+        let limit = 2.5 * 1024.0 * 1024.0 * 1024.0;
+        let refused = beyond_memory(dvl, 10_000_000, limit).expect("refused");
+        assert!(refused.is_input());
+        assert_eq!(
+            refused.to_string(),
+            "dive.csv: 10000000 rows need about 29.8 GiB of memory to calibrate and this machine has 2.5 GiB: calibrate a part of it, a file of fewer rows"
+        );
+        assert!(beyond_memory(dvl, 400, limit).is_none());
+    }
+
+    /// A bad argument is bad input and writes nothing; a folder that cannot be made is a
+    /// failure while running.
+    #[test]
+    fn a_bad_argument_is_input_and_an_unwritable_folder_a_failure() {
+        let folder = tempfile::tempdir().unwrap();
+        let dvl = straight_recording(folder.path(), [0.0; 3]);
+        let reference = folder.path().join("GT.csv");
+        let out = folder.path().join("out");
+        let refused = calibrate(&args(&dvl, &reference, &out, &[])).err().unwrap();
+        assert!(matches!(refused, CalibrateError::Terms(_)) && refused.is_input());
+        assert!(!out.exists());
+        let below_a_file = dvl.join("out");
+        let terms = [TermName::Bias];
+        let failed = calibrate(&args(&dvl, &reference, &below_a_file, &terms))
+            .err()
+            .unwrap();
+        assert!(matches!(failed, CalibrateError::Write(_)) && !failed.is_input());
+    }
+}

@@ -1,0 +1,326 @@
+//! `calibrate A.csv B.csv …`: one calibration over several recordings of the same
+//! vehicle ([`crate::installation::estimate::joint`]), the vehicle's terms shared and each
+//! recording's clock (and bias, where it is the dive's) its own. Beside it, each
+//! recording fitted alone, and whether their terms agree with the joint ones within
+//! their standard deviations (a χ² over the recordings); whether the joint fit's
+//! residuals are at the specified noise (else the noise they show is what the standard
+//! deviations use). Each recording is written corrected with its own clock, and the
+//! installation saved where asked.
+//! In: [`JointArgs`]. Out: a [`JointCalibration`], or the [`CalibrateError`] of the
+//! recording at fault.
+
+use crate::data::paired::{self, PairedFiles, PairedRecording};
+use crate::evaluate::statistics::mean_std;
+use crate::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise, TermBound, bound};
+use crate::installation::estimate::clock::DEFAULT_SEARCH_S;
+use crate::installation::estimate::fit::{fit, fit_about};
+use crate::installation::estimate::joint::{JointFit, JointRecording, joint_fit, starts_from};
+use crate::installation::frames::Reference;
+use crate::installation::terms::names::{TermName, term_set};
+use crate::operator::calibrate::{
+    CalibrateError, columns, dive_terms_refused, named, not_over_an_input, save_refused,
+};
+use crate::operator::installation_file::{SavedInstallation, SavedTerm};
+use crate::results::ResultsError;
+use crate::results::corrected::{Outputs, corrected_samples, dvl_sha256, stem, write};
+use std::path::{Path, PathBuf};
+
+/// What a joint `calibrate` is asked.
+pub struct JointArgs<'a> {
+    pub dvls: &'a [PathBuf],
+    /// One per DVL file, or none where each DVL file holds its reference.
+    pub references: &'a [PathBuf],
+    pub columns: Option<&'a Path>,
+    pub terms: &'a [TermName],
+    pub dive_terms: &'a [TermName],
+    pub window_s: Option<f64>,
+    pub dvl_noise_cm_s: f64,
+    pub reference_noise_cm_s: f64,
+    pub out: &'a Path,
+    pub save: Option<&'a Path>,
+}
+
+/// How far one term's estimates from each recording alone lie from the joint one.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Agreement {
+    pub term: &'static str,
+    /// Σ ((θ_k − θ) / σ_k)² over the recordings, and its p-value under χ²(K − 1).
+    pub chi_square: f64,
+    pub p_value: f64,
+    /// The standard deviation of the recordings' estimates, in the term's unit.
+    pub spread: f64,
+}
+
+/// Everything a joint `calibrate` found and wrote.
+pub struct JointCalibration {
+    pub names: Vec<String>,
+    pub joint: JointFit,
+    /// Each recording alone: its fit's bound.
+    pub alone: Vec<TermBound>,
+    pub agreement: Vec<Agreement>,
+    pub noise: Noise,
+    pub written: Vec<PathBuf>,
+}
+
+/// The p-value under which the recordings' terms are said not to agree.
+pub const AGREEMENT_P_VALUE: f64 = 1e-3;
+
+/// The joint calibration of `args`.
+pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateError> {
+    if !args.references.is_empty() && args.references.len() != args.dvls.len() {
+        return Err(CalibrateError::References {
+            dvls: args.dvls.len(),
+            references: args.references.len(),
+        });
+    }
+    dive_terms_refused(args.terms, args.dive_terms, args.save.is_some())
+        .map_err(CalibrateError::DiveTerms)?;
+    if let Some(path) = args.save {
+        save_refused(path)?;
+    }
+    let noise = Noise {
+        dvl_m_s: args.dvl_noise_cm_s / 100.0,
+        reference_m_s: args.reference_noise_cm_s / 100.0,
+    };
+    let names = names(args.dvls);
+    let outputs: Vec<Outputs> = names.iter().map(|s| Outputs::of(args.out, s)).collect();
+    let written: Vec<&Path> = outputs
+        .iter()
+        .flat_map(|o| o.all())
+        .chain(args.save)
+        .collect();
+    let inputs: Vec<Option<&Path>> = (args.dvls.iter().chain(args.references))
+        .map(|p| Some(p.as_path()))
+        .chain([args.columns])
+        .collect();
+    if let Some(over) = not_over_an_input(&inputs, &written) {
+        return Err(CalibrateError::over_input(over, args.save));
+    }
+    if let Some(save) = args.save
+        && outputs.iter().flat_map(|o| o.all()).any(|o| o == save)
+    {
+        return Err(CalibrateError::SaveOverOutput {
+            path: save.to_path_buf(),
+        });
+    }
+    let shas = args
+        .dvls
+        .iter()
+        .map(|dvl| dvl_sha256(dvl))
+        .collect::<Result<Vec<String>, ResultsError>>()?;
+    for ((dvl, ours), outputs) in args.dvls.iter().zip(&shas).zip(&outputs) {
+        outputs.not_another_recordings(dvl, ours)?;
+    }
+    if let Some(k) = (1..shas.len()).find(|&k| shas[..k].contains(&shas[k])) {
+        let first = shas.iter().position(|s| *s == shas[k]).expect("seen");
+        return Err(CalibrateError::Duplicate {
+            first: args.dvls[first].clone(),
+            again: args.dvls[k].clone(),
+        });
+    }
+    let recordings = read_all(args)?;
+    let calibrating: Vec<JointRecording> = recordings
+        .iter()
+        .map(|(recording, reference, window)| {
+            let r: &PairedRecording = window.as_ref().unwrap_or(recording);
+            JointRecording {
+                time_s: &r.time_s,
+                dvl_m_s: &r.dvl_m_s,
+                reference,
+            }
+        })
+        .collect();
+    let (joint, alone) = fitted(args, &calibrating, noise)?;
+    let mut written = Vec::new();
+    for (k, (recording, reference, _)) in recordings.iter().enumerate() {
+        let (time_s, dvl_m_s) = (&recording.time_s, &recording.dvl_m_s);
+        let samples = corrected_samples(&joint.dives[k], time_s, dvl_m_s, reference);
+        written.extend(write(&outputs[k], &samples, &shas[k])?);
+    }
+    if let Some(path) = args.save {
+        saved(args, &joint, shas)
+            .write(path)
+            .map_err(|source| ResultsError::Io {
+                path: path.to_path_buf(),
+                source,
+            })?;
+    }
+    Ok(JointCalibration {
+        agreement: agreement(&joint, &alone),
+        names,
+        joint,
+        alone,
+        noise,
+        written,
+    })
+}
+
+/// Each recording's name in the outputs and the table: its DVL file's stem, numbered
+/// by its place where two files share one (the same layout in several folders).
+fn names(dvls: &[std::path::PathBuf]) -> Vec<String> {
+    let stems: Vec<String> = dvls.iter().map(|d| stem(d)).collect();
+    if crate::first_seen(stems.iter().map(String::as_str)).len() == stems.len() {
+        return stems;
+    }
+    stems
+        .iter()
+        .enumerate()
+        .map(|(k, s)| format!("{}-{s}", k + 1))
+        .collect()
+}
+
+/// Each recording of `args`, its reference, and its window where one is asked.
+fn read_all(
+    args: &JointArgs,
+) -> Result<Vec<(PairedRecording, Reference, Option<PairedRecording>)>, CalibrateError> {
+    let columns = columns(args.columns)?;
+    let mut recordings = Vec::new();
+    for (k, dvl) in args.dvls.iter().enumerate() {
+        let files = PairedFiles {
+            dvl: dvl.clone(),
+            reference: args.references.get(k).unwrap_or(dvl).clone(),
+        };
+        let recording = paired::read(&files, &columns)?;
+        let reference = Reference::new(&recording);
+        let window = args.window_s.map(|w| recording.first_seconds(w));
+        recordings.push((recording, reference, window));
+    }
+    Ok(recordings)
+}
+
+/// The joint fit of `calibrating`, from the first recording's fit alone and each
+/// clock's search; beside it each recording fitted alone from its clock, for the
+/// agreement.
+fn fitted(
+    args: &JointArgs,
+    calibrating: &[JointRecording],
+    noise: Noise,
+) -> Result<(JointFit, Vec<TermBound>), CalibrateError> {
+    let terms = term_set(args.terms);
+    let fault = |k: usize, fault| CalibrateError::Fit {
+        dvl: args.dvls[k].clone(),
+        terms: named(args.terms),
+        samples: calibrating[k].time_s.len(),
+        fault,
+    };
+    let r = &calibrating[0];
+    let first = fit(r.time_s, r.dvl_m_s, r.reference, terms).map_err(|f| fault(0, f))?;
+    let starts = starts_from(calibrating, first.installation, DEFAULT_SEARCH_S);
+    let mut alone = vec![bound(&first, noise, &DEFAULT_TOLERANCES)];
+    for (k, r) in calibrating.iter().enumerate().skip(1) {
+        let fitted = fit_about(r.time_s, r.dvl_m_s, r.reference, terms, starts[k])
+            .map_err(|f| fault(k, f))?;
+        alone.push(bound(&fitted, noise, &DEFAULT_TOLERANCES));
+    }
+    let dive = term_set(args.dive_terms);
+    let joint = joint_fit(
+        calibrating,
+        &starts,
+        (terms, dive),
+        (noise, &DEFAULT_TOLERANCES),
+    )
+    .map_err(|f| fault(0, f))?;
+    Ok((joint, alone))
+}
+
+/// Each vehicle term's recordings alone against the joint estimate.
+fn agreement(joint: &JointFit, alone: &[TermBound]) -> Vec<Agreement> {
+    use statrs::distribution::{ChiSquared, ContinuousCDF};
+    let count = alone.len();
+    joint
+        .bound
+        .names
+        .iter()
+        .enumerate()
+        .map(|(k, &term)| {
+            let mine: Vec<(f64, f64)> = alone
+                .iter()
+                .filter_map(|b| {
+                    let i = b.names.iter().position(|n| *n == term)?;
+                    Some((b.value[i], b.std[i]))
+                })
+                .collect();
+            let value = joint.bound.value[k];
+            let chi_square: f64 = mine.iter().map(|(v, s)| ((v - value) / s).powi(2)).sum();
+            let freedom = (count.max(2) - 1) as f64;
+            let p_value = ChiSquared::new(freedom).map_or(f64::NAN, |d| 1.0 - d.cdf(chi_square));
+            let (_, spread) = mean_std(mine.iter().map(|(v, _)| *v));
+            Agreement {
+                term,
+                chi_square,
+                p_value,
+                spread,
+            }
+        })
+        .collect()
+}
+
+/// The installation file of a joint calibration: the vehicle's terms with their bound;
+/// each dive term at its mean over the recordings, its standard deviation their spread
+/// (it is found again on each dive).
+fn saved(args: &JointArgs, joint: &JointFit, shas: Vec<String>) -> SavedInstallation {
+    let every = term_set(args.terms);
+    let names = every.parameter_names();
+    let vehicle = &joint.bound;
+    let per_dive: Vec<Vec<f64>> = joint
+        .dives
+        .iter()
+        .map(|d| d.to_parameters(&every))
+        .collect();
+    let terms: Vec<SavedTerm> = names
+        .iter()
+        .enumerate()
+        .map(
+            |(k, name)| match vehicle.names.iter().position(|n| n == name) {
+                Some(i) => SavedTerm {
+                    name: name.to_string(),
+                    value: vehicle.value[i],
+                    std: vehicle.std[i],
+                },
+                None => {
+                    let (mean, spread) = mean_std(per_dive.iter().map(|p| p[k]));
+                    SavedTerm {
+                        name: name.to_string(),
+                        value: mean,
+                        std: spread,
+                    }
+                }
+            },
+        )
+        .collect();
+    let correlation: Vec<Vec<f64>> = names
+        .iter()
+        .map(|a| {
+            names
+                .iter()
+                .map(|b| {
+                    let (i, j) = (
+                        vehicle.names.iter().position(|n| n == a),
+                        vehicle.names.iter().position(|n| n == b),
+                    );
+                    match (i, j) {
+                        (Some(i), Some(j)) => vehicle.correlation[i][j],
+                        _ if a == b => 1.0,
+                        _ => 0.0,
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let residual = joint.residual_rms_m_s.iter().fold([0.0; 3], |sum, r| {
+        [0, 1, 2].map(|k| sum[k] + r[k] * r[k] / joint.residual_rms_m_s.len() as f64)
+    });
+    let recording = args
+        .dvls
+        .iter()
+        .map(|d| d.display().to_string())
+        .collect::<Vec<_>>()
+        .join(", ");
+    SavedInstallation::of_terms(
+        (terms, correlation),
+        (args.terms, args.dive_terms),
+        (recording, shas.join(", ")),
+        (args.dvl_noise_cm_s, args.reference_noise_cm_s),
+        residual.map(f64::sqrt),
+    )
+}

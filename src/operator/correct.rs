@@ -1,0 +1,321 @@
+//! `correct` as one library call: an installation file that `calibrate --save` wrote
+//! is applied to another dive. The vehicle's terms are carried; the dive's (its clock,
+//! and the bias where the file says so) are found again from the dive's first w
+//! seconds against its reference ([`crate::installation::estimate::clock`]), or taken as given.
+//! The dive is written corrected (CSV and Parquet, as `calibrate` writes), and how well
+//! the carried installation fits it is measured after those w seconds, whole and in
+//! blocks of w seconds, against the specified noise and the residual at calibration:
+//! a DVL remounted or a clock that jumped mid-dive shows as a residual far above them.
+//! In: [`CorrectArgs`]. Out: a [`Correction`], or a [`CorrectError`] naming the file
+//! and what to do; nothing is written unless everything before the writing succeeded.
+
+use crate::data::paired::{self, PairedError, PairedFiles, PairedRecording};
+use crate::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise};
+use crate::installation::estimate::clock::{Carried, Clock, ClockError, ClockSearch, refind};
+use crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S;
+use crate::installation::frames::Reference;
+use crate::installation::terms::{AxisRmse, Installation, score};
+use crate::operator::calibrate::{columns, not_over_an_input};
+use crate::operator::installation_file::{InstallationFileError, SavedInstallation};
+use crate::results::ResultsError;
+use crate::results::corrected::{
+    OtherRecording, Outputs, corrected_samples, dvl_sha256, stem, write,
+};
+use crate::spec::SpecError;
+use std::path::{Path, PathBuf};
+
+/// How far above the residual at calibration (and above the specified noise) the
+/// dive's residual, whole or in a block, must be to be warned of.
+pub const WARNING_RATIO: f64 = 1.5;
+
+/// What `correct` is asked.
+pub struct CorrectArgs<'a> {
+    pub dvl: &'a Path,
+    /// The reference's file; the DVL's own when `None`.
+    pub reference: Option<&'a Path>,
+    pub columns: Option<&'a Path>,
+    pub installation: &'a Path,
+    /// The first seconds of the dive that find its clock again.
+    pub window_s: f64,
+    /// How far from the calibration's time offset the search looks, s.
+    pub search_s: f64,
+    /// The dive's time offset, s, where it is known: no search.
+    pub time_offset_s: Option<f64>,
+    pub out: &'a Path,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum CorrectError {
+    #[error(transparent)]
+    Installation(#[from] InstallationFileError),
+    #[error("--window-s {}: give a positive number of seconds", crate::Shown(*.0))]
+    Window(f64),
+    #[error("--search-s {}: give a positive number of seconds, at most 3600", crate::Shown(*.0))]
+    Search(f64),
+    #[error("--time-offset-s {}: give a finite number of seconds", crate::Shown(*.0))]
+    TimeOffset(f64),
+    #[error("{0}")]
+    Columns(SpecError),
+    #[error(transparent)]
+    Read(#[from] PairedError),
+    #[error(
+        "{}: the dive lasts {duration_s:.1} s, not more than the {window_s} s that find its clock: give a shorter --window-s, or its clock with --time-offset-s",
+        dvl.display()
+    )]
+    TooShort {
+        dvl: PathBuf,
+        duration_s: f64,
+        window_s: f64,
+    },
+    #[error("{}: its clock cannot be found from its first {window_s} s: {fault}; give a longer --window-s, or its clock with --time-offset-s", dvl.display())]
+    Clock {
+        dvl: PathBuf,
+        window_s: f64,
+        fault: ClockError,
+    },
+    #[error(
+        "{}: with a time offset of {time_offset_s} s, no sample of the dive lies inside its reference: give the dive's clock (--time-offset-s) in seconds, or let correct find it",
+        dvl.display()
+    )]
+    NoOverlap { dvl: PathBuf, time_offset_s: f64 },
+    #[error(
+        "{}: correct would write over its input {}: give another --out, or rename the file",
+        output.display(),
+        input.display()
+    )]
+    OverInput { output: PathBuf, input: PathBuf },
+    #[error(transparent)]
+    OtherRecording(#[from] OtherRecording),
+    #[error(transparent)]
+    Write(#[from] ResultsError),
+}
+
+impl CorrectError {
+    /// Whether the fault lies in what was given rather than in writing the results.
+    pub fn is_input(&self) -> bool {
+        !matches!(self, CorrectError::Write(_))
+    }
+}
+
+/// The residual of the carried installation over one stretch of the dive.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stretch {
+    pub from_s: f64,
+    pub to_s: f64,
+    pub rmse: AxisRmse,
+}
+
+/// Everything `correct` found and wrote.
+pub struct Correction {
+    pub saved: SavedInstallation,
+    /// The clock found again, where it was searched.
+    pub clock: Option<Clock>,
+    /// The installation applied: the carried terms with the dive's.
+    pub applied: Installation,
+    /// The residual after the first w seconds, whole and in blocks of w seconds; the
+    /// totals it is held against, cm/s: the specified noise's and the calibration's.
+    pub after: Option<AxisRmse>,
+    pub blocks: Vec<Stretch>,
+    pub noise_cm_s: f64,
+    pub calibration_cm_s: f64,
+    pub window_s: f64,
+    pub search_s: f64,
+    pub installation_file: PathBuf,
+    pub written: Vec<PathBuf>,
+}
+
+impl Correction {
+    /// The total, cm/s, above which a residual is warned of.
+    pub fn warning_cm_s(&self) -> f64 {
+        WARNING_RATIO * self.noise_cm_s.max(self.calibration_cm_s)
+    }
+
+    /// Whether the dive's residual after its first w seconds is far above the noise and
+    /// the calibration's.
+    pub fn fits_far_worse(&self) -> bool {
+        self.after
+            .is_some_and(|r| 100.0 * r.total_m_s > self.warning_cm_s())
+    }
+
+    /// The first block whose residual is far above the noise and the calibration's,
+    /// where the first block after the clock was found is not: the fit that held at the
+    /// dive's start broke later.
+    pub fn jumped(&self) -> Option<&Stretch> {
+        let bad = |b: &&Stretch| 100.0 * b.rmse.total_m_s > self.warning_cm_s();
+        match self.blocks.first() {
+            Some(first) if !bad(&first) => self.blocks.iter().find(bad),
+            _ => None,
+        }
+    }
+}
+
+/// `correct`: the installation file applied to the dive of `args`.
+pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
+    refused(args)?;
+    let saved = SavedInstallation::read(args.installation)?;
+    let outputs = Outputs::of(args.out, &stem(args.dvl));
+    let inputs = [
+        Some(args.dvl),
+        args.reference,
+        args.columns,
+        Some(args.installation),
+    ];
+    if let Some((output, input)) = not_over_an_input(&inputs, &outputs.all()) {
+        return Err(CorrectError::OverInput { output, input });
+    }
+    let recording_sha256 = dvl_sha256(args.dvl)?;
+    outputs.not_another_recordings(args.dvl, &recording_sha256)?;
+    let files = PairedFiles {
+        dvl: args.dvl.to_path_buf(),
+        reference: args.reference.unwrap_or(args.dvl).to_path_buf(),
+    };
+    let recording = paired::read(
+        &files,
+        &columns(args.columns).map_err(|e| match e {
+            crate::operator::calibrate::CalibrateError::Columns(error) => {
+                CorrectError::Columns(error)
+            }
+            other => unreachable!("columns fails only on its file: {other}"),
+        })?,
+    )?;
+    let reference = Reference::new(&recording);
+    let duration_s = recording.duration_s();
+    if args.time_offset_s.is_none() && duration_s <= args.window_s {
+        return Err(CorrectError::TooShort {
+            dvl: args.dvl.to_path_buf(),
+            duration_s,
+            window_s: args.window_s,
+        });
+    }
+    let noise = Noise {
+        dvl_m_s: saved.dvl_noise_cm_s / 100.0,
+        reference_m_s: saved.reference_noise_cm_s / 100.0,
+    };
+    let carried = saved.installation();
+    let (applied, clock) = match args.time_offset_s {
+        Some(time_offset_s) => (
+            Installation {
+                time_offset_s,
+                ..carried
+            },
+            None,
+        ),
+        None => {
+            let clock = find_clock(args, &saved, (&recording, &reference), noise)?;
+            (clock.installation, Some(clock))
+        }
+    };
+    let (after, blocks) = fit_after(args, &recording, &reference, &applied);
+    let samples = corrected_samples(&applied, &recording.time_s, &recording.dvl_m_s, &reference);
+    if samples.is_empty() {
+        return Err(CorrectError::NoOverlap {
+            dvl: args.dvl.to_path_buf(),
+            time_offset_s: applied.time_offset_s,
+        });
+    }
+    let written = write(&outputs, &samples, &recording_sha256)?;
+    let total = |v: crate::Vec3| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    Ok(Correction {
+        noise_cm_s: 3f64.sqrt()
+            * 100.0
+            * (noise.dvl_m_s.powi(2) + noise.reference_m_s.powi(2)).sqrt(),
+        calibration_cm_s: total(saved.residual_cm_s),
+        saved,
+        clock,
+        applied,
+        after,
+        blocks,
+        window_s: args.window_s,
+        search_s: args.search_s,
+        installation_file: args.installation.to_path_buf(),
+        written,
+    })
+}
+
+/// The first argument of `args` at fault, where one is.
+fn refused(args: &CorrectArgs) -> Result<(), CorrectError> {
+    if !(args.window_s.is_finite() && args.window_s > 0.0) {
+        return Err(CorrectError::Window(args.window_s));
+    }
+    if !(args.search_s.is_finite() && args.search_s > 0.0 && args.search_s <= 3600.0) {
+        return Err(CorrectError::Search(args.search_s));
+    }
+    if let Some(tau) = args.time_offset_s
+        && !tau.is_finite()
+    {
+        return Err(CorrectError::TimeOffset(tau));
+    }
+    Ok(())
+}
+
+/// The dive's terms found again from its first `args.window_s` seconds.
+fn find_clock(
+    args: &CorrectArgs,
+    saved: &SavedInstallation,
+    (recording, reference): (&PairedRecording, &Reference),
+    noise: Noise,
+) -> Result<Clock, CorrectError> {
+    let start = recording.time_s[0];
+    let end = recording
+        .time_s
+        .partition_point(|&t| t - start < args.window_s);
+    let search = ClockSearch {
+        dive_terms: saved.dive_term_set(),
+        search_s: args.search_s,
+    };
+    let std: Vec<f64> = saved.terms.iter().map(|t| t.std).collect();
+    let carried = Carried::with(
+        saved.installation(),
+        saved.term_set(),
+        &std,
+        &saved.correlation,
+    );
+    refind(
+        (&recording.time_s[..end], &recording.dvl_m_s[..end]),
+        reference,
+        &carried,
+        search,
+        (noise, &DEFAULT_TOLERANCES),
+    )
+    .map_err(|fault| CorrectError::Clock {
+        dvl: args.dvl.to_path_buf(),
+        window_s: args.window_s,
+        fault,
+    })
+}
+
+/// The residual of `applied` after the first `args.window_s` seconds, whole and in
+/// blocks of that length (a last block shorter than half of it joins the one before).
+fn fit_after(
+    args: &CorrectArgs,
+    recording: &PairedRecording,
+    reference: &Reference,
+    applied: &Installation,
+) -> (Option<AxisRmse>, Vec<Stretch>) {
+    let time = &recording.time_s;
+    let inside = reference.interior(time, TIME_OFFSET_MARGIN_S);
+    let index = |seconds: f64| time.partition_point(|&t| t - time[0] < seconds);
+    let begin = index(args.window_s).max(inside.start);
+    let rmse =
+        |range: std::ops::Range<usize>| score(applied, time, &recording.dvl_m_s, reference, range);
+    let after = rmse(begin..inside.end);
+    let mut blocks = Vec::new();
+    let mut from = begin;
+    while from < inside.end {
+        let mut to = index(time[from] - time[0] + args.window_s)
+            .min(inside.end)
+            .max(from + 1);
+        if to < inside.end && time[inside.end - 1] - time[to] < args.window_s / 2.0 {
+            to = inside.end;
+        }
+        if let Some(r) = rmse(from..to) {
+            blocks.push(Stretch {
+                from_s: time[from] - time[0],
+                to_s: time[to - 1] - time[0],
+                rmse: r,
+            });
+        }
+        from = to;
+    }
+    (after, blocks)
+}

@@ -1,0 +1,405 @@
+//! The installation file: what `calibrate --save` found, for `correct` to apply to
+//! another dive. TOML a person can read: the terms with their standard deviations and
+//! correlations, which are the vehicle's (carried to every dive) and which the dive's
+//! (found again on each), the noise they were bounded with and the residual they left,
+//! the recording's SHA-256 and the tool's version; its first line the SHA-256 of the
+//! rest, so that a file damaged or edited by hand is refused rather than applied.
+//! In: a calibration's terms. Out: the file, or its terms read back and checked.
+
+use crate::Vec3;
+use crate::installation::estimate::bound::TermBound;
+use crate::installation::terms::names::{TermName, term_set};
+use crate::installation::terms::{Installation, TermSet};
+use std::path::{Path, PathBuf};
+
+/// The first line's key: the SHA-256 of every line after it.
+const CHECKSUM_KEY: &str = "checksum_sha256";
+
+/// The tool that writes and reads installation files, and its version.
+const TOOL: &str = "dcnet-exp";
+pub const TOOL_VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// An installation file's contents.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SavedInstallation {
+    pub tool: String,
+    pub version: String,
+    /// The DVL file calibrated on, as given, and its SHA-256.
+    pub recording: String,
+    pub recording_sha256: String,
+    /// The noise the bound was taken at, per axis, cm/s.
+    pub dvl_noise_cm_s: f64,
+    pub reference_noise_cm_s: f64,
+    /// The RMS of the residual per DVL axis at calibration, cm/s: what a dive the
+    /// installation fits as well leaves.
+    pub residual_cm_s: Vec3,
+    /// The terms carried to every dive, and those found again on each.
+    pub vehicle_terms: Vec<TermName>,
+    pub dive_terms: Vec<TermName>,
+    /// Each estimated parameter by name (`lever_arm_x_m`), its value, its standard
+    /// deviation, in the unit its name says (a scale as a fraction, angles in radians).
+    pub terms: Vec<SavedTerm>,
+    /// The correlation coefficients of the terms, in their order.
+    pub correlation: Vec<Vec<f64>>,
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SavedTerm {
+    pub name: String,
+    pub value: f64,
+    pub std: f64,
+}
+
+/// Why an installation file cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum InstallationFileError {
+    #[error("{}: cannot be read ({source}): give the file `calibrate --save` wrote", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{}: its first line is not `{CHECKSUM_KEY} = \"…\"`: not an installation file, or damaged; write it again with `calibrate --save`", path.display())]
+    NoChecksum { path: PathBuf },
+    #[error("{}: its checksum does not match its contents: the file was edited or damaged after `calibrate --save` wrote it; write it again with `calibrate --save` (an installation is not edited by hand)", path.display())]
+    Edited { path: PathBuf },
+    #[error("{}: {message}; write it again with `calibrate --save`", path.display())]
+    Malformed { path: PathBuf, message: String },
+    #[error("{}: written by {tool} {version}, and this is {TOOL} {TOOL_VERSION}: calibrate again with this version (`calibrate --save`)", path.display())]
+    OtherVersion {
+        path: PathBuf,
+        tool: String,
+        version: String,
+    },
+    #[error("{}: terms[{index}] ({name}): {what}: calibrate again with `calibrate --save`", path.display())]
+    BadTerm {
+        path: PathBuf,
+        index: usize,
+        name: String,
+        what: String,
+    },
+}
+
+impl SavedInstallation {
+    /// The installation of a calibration: `terms` fitted, with `bound`'s values,
+    /// standard deviations and correlations, those of `dive_terms` the dive's, the rest
+    /// the vehicle's.
+    pub fn of(
+        bound: &TermBound,
+        terms: (&[TermName], &[TermName]),
+        recording: (&Path, &str),
+        noise_cm_s: (f64, f64),
+        residual_m_s: Vec3,
+    ) -> SavedInstallation {
+        let saved = bound
+            .names
+            .iter()
+            .enumerate()
+            .map(|(i, name)| SavedTerm {
+                name: name.to_string(),
+                value: bound.value[i],
+                std: bound.std[i],
+            })
+            .collect();
+        let recording = (recording.0.display().to_string(), recording.1.to_string());
+        Self::of_terms(
+            (saved, bound.correlation.clone()),
+            terms,
+            recording,
+            noise_cm_s,
+            residual_m_s,
+        )
+    }
+
+    /// [`Self::of`] from the terms and their correlations as saved; `recording` the
+    /// file (or files) calibrated on and its SHA-256 (theirs).
+    pub fn of_terms(
+        (saved, correlation): (Vec<SavedTerm>, Vec<Vec<f64>>),
+        (terms, dive_terms): (&[TermName], &[TermName]),
+        (recording, recording_sha256): (String, String),
+        (dvl_noise_cm_s, reference_noise_cm_s): (f64, f64),
+        residual_m_s: Vec3,
+    ) -> SavedInstallation {
+        let vehicle_terms = terms
+            .iter()
+            .copied()
+            .filter(|t| !dive_terms.contains(t))
+            .collect();
+        SavedInstallation {
+            tool: TOOL.into(),
+            version: TOOL_VERSION.into(),
+            recording,
+            recording_sha256,
+            dvl_noise_cm_s,
+            reference_noise_cm_s,
+            residual_cm_s: residual_m_s.map(|r| 100.0 * r),
+            vehicle_terms,
+            dive_terms: dive_terms
+                .iter()
+                .copied()
+                .filter(|t| terms.contains(t))
+                .collect(),
+            terms: saved,
+            correlation,
+        }
+    }
+
+    /// Every term, vehicle's and dive's.
+    pub fn term_set(&self) -> TermSet {
+        let all: Vec<TermName> = self
+            .vehicle_terms
+            .iter()
+            .chain(&self.dive_terms)
+            .copied()
+            .collect();
+        term_set(&all)
+    }
+
+    /// The dive's terms, found again on each dive.
+    pub fn dive_term_set(&self) -> TermSet {
+        term_set(&self.dive_terms)
+    }
+
+    /// The terms' values as an installation.
+    pub fn installation(&self) -> Installation {
+        let values: Vec<f64> = self.terms.iter().map(|t| t.value).collect();
+        Installation::from_parameters(&self.term_set(), &values)
+    }
+
+    /// The file's text: the checksum line, then the contents.
+    pub fn to_text(&self) -> String {
+        let body = toml::to_string(self).expect("an installation serialises");
+        let body = format!(
+            "# The installation `dcnet-exp calibrate --save` found, for `dcnet-exp correct`.\n# Edited by hand, it is refused: calibrate again instead.\n{body}"
+        );
+        format!(
+            "{CHECKSUM_KEY} = \"{}\"\n{body}",
+            crate::files::sha256_hex(body.as_bytes())
+        )
+    }
+
+    /// Writes the file at `path`, atomically, its folder made where it is missing.
+    pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        if let Some(folder) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(folder)?;
+        }
+        crate::files::write_atomic(path, self.to_text().as_bytes())
+    }
+
+    /// Reads and checks the file at `path`: its checksum, the tool's version, every
+    /// term known, finite and in the order of its terms, standard deviations not
+    /// negative.
+    pub fn read(path: &Path) -> Result<SavedInstallation, InstallationFileError> {
+        let text = std::fs::read_to_string(path).map_err(|source| InstallationFileError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let no_checksum = || InstallationFileError::NoChecksum {
+            path: path.to_path_buf(),
+        };
+        let (first, body) = text.split_once('\n').ok_or_else(no_checksum)?;
+        let written = first
+            .strip_prefix(&format!("{CHECKSUM_KEY} = \""))
+            .and_then(|rest| rest.strip_suffix('"'))
+            .ok_or_else(no_checksum)?;
+        if crate::files::sha256_hex(body.as_bytes()) != written {
+            return Err(InstallationFileError::Edited {
+                path: path.to_path_buf(),
+            });
+        }
+        let saved: SavedInstallation =
+            toml::from_str(body).map_err(|error| InstallationFileError::Malformed {
+                path: path.to_path_buf(),
+                message: error.message().to_string(),
+            })?;
+        if saved.tool != TOOL || saved.version != TOOL_VERSION {
+            return Err(InstallationFileError::OtherVersion {
+                path: path.to_path_buf(),
+                tool: saved.tool,
+                version: saved.version,
+            });
+        }
+        saved.check(path)?;
+        Ok(saved)
+    }
+
+    /// The terms of the file: the names its term lists give, in their order, each
+    /// value finite and each standard deviation zero or more.
+    fn check(&self, path: &Path) -> Result<(), InstallationFileError> {
+        let expected = self.term_set().parameter_names();
+        let bad = |index: usize, name: &str, what: String| InstallationFileError::BadTerm {
+            path: path.to_path_buf(),
+            index,
+            name: name.to_string(),
+            what,
+        };
+        if self.terms.len() != expected.len() {
+            return Err(InstallationFileError::Malformed {
+                path: path.to_path_buf(),
+                message: format!(
+                    "{} terms for the {} parameters of {:?}",
+                    self.terms.len(),
+                    expected.len(),
+                    self.vehicle_terms
+                        .iter()
+                        .chain(&self.dive_terms)
+                        .map(|t| t.name())
+                        .collect::<Vec<_>>()
+                ),
+            });
+        }
+        let malformed = |message: String| InstallationFileError::Malformed {
+            path: path.to_path_buf(),
+            message,
+        };
+        if let Some(term) = self
+            .dive_terms
+            .iter()
+            .find(|t| self.vehicle_terms.contains(t))
+        {
+            return Err(malformed(format!(
+                "{:?} is both a vehicle's and a dive's term",
+                term.name()
+            )));
+        }
+        if !self.dive_terms.contains(&TermName::TimeOffset) {
+            return Err(malformed(
+                "its dive_terms do not hold \"time_offset\"".into(),
+            ));
+        }
+        let n = expected.len();
+        if self.correlation.len() != n || self.correlation.iter().any(|row| row.len() != n) {
+            return Err(malformed(format!(
+                "its correlation is not a {n} × {n} matrix, one row and column per term"
+            )));
+        }
+        if self
+            .correlation
+            .iter()
+            .flatten()
+            .any(|r| r.abs() > 1.0 + 1e-9)
+        {
+            return Err(malformed("a correlation beyond ±1".into()));
+        }
+        if !(self.dvl_noise_cm_s.is_finite() && self.dvl_noise_cm_s > 0.0)
+            || !(self.reference_noise_cm_s.is_finite() && self.reference_noise_cm_s >= 0.0)
+        {
+            return Err(malformed(format!(
+                "its noise ({} and {} cm/s) is not a positive DVL noise and a reference noise of zero or more",
+                self.dvl_noise_cm_s, self.reference_noise_cm_s
+            )));
+        }
+        if self
+            .residual_cm_s
+            .iter()
+            .any(|r| !(r.is_finite() && *r >= 0.0))
+        {
+            return Err(malformed(format!(
+                "its residual_cm_s {:?} is not three finite values of zero or more",
+                self.residual_cm_s
+            )));
+        }
+        for (index, (term, name)) in self.terms.iter().zip(&expected).enumerate() {
+            if term.name != *name {
+                return Err(bad(index, &term.name, format!("expected {name} here")));
+            }
+            if !term.value.is_finite() {
+                return Err(bad(index, name, format!("its value is {}", term.value)));
+            }
+            if !(term.std >= 0.0) {
+                return Err(bad(
+                    index,
+                    name,
+                    format!("its standard deviation is {}", term.std),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn saved() -> SavedInstallation {
+        SavedInstallation {
+            tool: TOOL.into(),
+            version: TOOL_VERSION.into(),
+            recording: "DVL_trajectory1.csv".into(),
+            recording_sha256: "ab".repeat(32),
+            dvl_noise_cm_s: 2.0,
+            reference_noise_cm_s: 0.5,
+            residual_cm_s: [1.0, 2.0, 0.5],
+            vehicle_terms: vec![TermName::LeverArm],
+            dive_terms: vec![TermName::TimeOffset],
+            terms: [
+                "lever_arm_x_m",
+                "lever_arm_y_m",
+                "lever_arm_z_m",
+                "time_offset_s",
+            ]
+            .iter()
+            .zip([-1.9, 0.05, 0.4, 1.45])
+            .map(|(name, value)| SavedTerm {
+                name: name.to_string(),
+                value,
+                std: 0.01,
+            })
+            .collect(),
+            correlation: (0..4)
+                .map(|i| (0..4).map(|j| f64::from(u8::from(i == j))).collect())
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn a_file_reads_back_as_written_and_an_edited_damaged_foreign_or_nan_one_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("installation.toml");
+        saved().write(&path).unwrap();
+        let read = SavedInstallation::read(&path).unwrap();
+        assert_eq!(read, saved());
+        assert_eq!(read.installation().lever_arm_m, [-1.9, 0.05, 0.4]);
+        assert_eq!(read.installation().time_offset_s, 1.45);
+        let text = std::fs::read_to_string(&path).unwrap();
+        let refusal = |text: &str| {
+            std::fs::write(&path, text).unwrap();
+            SavedInstallation::read(&path).unwrap_err().to_string()
+        };
+        // Edited by hand.
+        let edited = refusal(&text.replace("-1.9", "-2.1"));
+        assert!(edited.contains("edited or damaged"), "{edited}");
+        // Damaged: cut short.
+        let cut = refusal(&text[..text.len() / 2]);
+        assert!(cut.contains("edited or damaged"), "{cut}");
+        // Not an installation file.
+        let foreign = refusal("name = \"paper\"\n");
+        assert!(foreign.contains("not an installation file"), "{foreign}");
+        // Another version, and a NaN, each with a checksum that matches.
+        let mut other = saved();
+        other.version = "0.0.1".into();
+        let message = refusal(&other.to_text());
+        assert!(message.contains("written by dcnet-exp 0.0.1"), "{message}");
+        let mut nan = saved();
+        nan.terms[3].value = f64::NAN;
+        let message = refusal(&nan.to_text());
+        assert!(
+            message.contains("terms[3] (time_offset_s): its value is NaN"),
+            "{message}"
+        );
+        assert!(message.contains("installation.toml"), "{message}");
+        // A correlation of the wrong size, a negative noise, a term both the
+        // vehicle's and the dive's: each with a checksum that matches.
+        let mut small = saved();
+        small.correlation = vec![vec![1.0]];
+        assert!(refusal(&small.to_text()).contains("not a 4 × 4 matrix"));
+        let mut negative = saved();
+        negative.dvl_noise_cm_s = -2.0;
+        assert!(refusal(&negative.to_text()).contains("is not a positive DVL noise"));
+        let mut both = saved();
+        both.vehicle_terms.push(TermName::TimeOffset);
+        assert!(refusal(&both.to_text()).contains("is both a vehicle's and a dive's term"));
+    }
+}

@@ -1,0 +1,182 @@
+//! What the points of an installation study read: every paired recording (each file
+//! read and hashed once, however many points name it) and the DCNet models of each
+//! paper spec the points apply (loaded once per spec). In: the experiment and the
+//! output folder whose cache holds the models. Out: [`Inputs`], or the first recording
+//! or model that cannot be had.
+
+use crate::Vec3;
+use crate::data::paired::{self, PairedFiles};
+use crate::estimators::{DcnetEstimator, Estimator};
+use crate::files::sha256_hex;
+use crate::installation::study::Segment;
+use crate::installation::study::spec::StudySpec;
+use crate::model::Settings;
+use crate::pipeline::Plan;
+use crate::pipeline::error::{DcnetSpecError, ExecuteError};
+use crate::results::DataFile;
+use crate::spec::Experiment;
+use crate::vocab::{Correction, ErrorModel};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// The DCNet models of one paper spec, each with its cache key.
+pub struct DcnetModels(Vec<(DcnetEstimator, String)>);
+
+impl DcnetModels {
+    /// The models' cache keys, in error-model order.
+    pub fn keys(&self) -> Vec<&str> {
+        self.0.iter().map(|(_, key)| key.as_str()).collect()
+    }
+
+    /// The scale and bias the model of `error_model` estimates from a DVL window and
+    /// the reference's body velocity on its stamps; `None` without such a model or
+    /// where the window is shorter than the network's.
+    pub fn estimate(
+        &self,
+        error_model: ErrorModel,
+        dvl: &[Vec3],
+        reference: &[Vec3],
+    ) -> Option<Correction> {
+        let (estimator, _) = self.0.iter().find(|(e, _)| e.error_model == error_model)?;
+        (dvl.len() >= estimator.window).then(|| estimator.estimate(dvl, reference))
+    }
+}
+
+/// What one point reads: its trajectories (indices into [`Inputs::segments`]), the
+/// files with their SHA-256, and its DCNet models (an index into [`Inputs::dcnets`]).
+pub struct PointInputs {
+    pub segments: Vec<usize>,
+    pub data_files: Vec<DataFile>,
+    pub dcnets: Option<usize>,
+}
+
+/// Every recording and model the points of an experiment read.
+pub struct Inputs {
+    pub segments: Vec<Segment>,
+    pub dcnets: Vec<DcnetModels>,
+    pub points: Vec<PointInputs>,
+}
+
+impl Inputs {
+    pub fn read(experiment: &Experiment<StudySpec>, out: &Path) -> Result<Inputs, ExecuteError> {
+        let mut segments = Vec::new();
+        let mut segment_of: HashMap<(PairedFiles, String), usize> = HashMap::new();
+        let mut hashes: HashMap<PathBuf, String> = HashMap::new();
+        let mut dcnets = Vec::new();
+        let mut dcnets_of: HashMap<PathBuf, usize> = HashMap::new();
+        let mut points = Vec::new();
+        for point in &experiment.points {
+            let spec = &point.spec;
+            let mut point_segments = Vec::new();
+            let mut data_files = Vec::new();
+            for (index, (name, files)) in spec.trajectories.iter().enumerate() {
+                let read_as = (files.clone(), format!("{name}\u{0}{:?}", spec.columns));
+                let s = match segment_of.get(&read_as) {
+                    Some(&s) => s,
+                    None => {
+                        let recording = paired::read(files, &spec.columns).map_err(|error| {
+                            ExecuteError::Recording {
+                                index,
+                                name: name.clone(),
+                                error,
+                            }
+                        })?;
+                        segments.push(Segment::new(name.clone(), recording));
+                        segment_of.insert(read_as, segments.len() - 1);
+                        segments.len() - 1
+                    }
+                };
+                point_segments.push(s);
+                // One file may hold both the DVL and the reference.
+                for path in crate::first_seen([&files.dvl, &files.reference]) {
+                    let sha256 = match hashes.get(path) {
+                        Some(sha256) => sha256.clone(),
+                        None => {
+                            let bytes = std::fs::read(path).map_err(|source| {
+                                crate::results::ResultsError::Io {
+                                    path: path.clone(),
+                                    source,
+                                }
+                            })?;
+                            let sha256 = sha256_hex(&bytes);
+                            hashes.insert(path.clone(), sha256.clone());
+                            sha256
+                        }
+                    };
+                    data_files.push(DataFile {
+                        path: path.clone(),
+                        sha256,
+                    });
+                }
+            }
+            let point_dcnets = match &spec.dcnet_spec {
+                None => None,
+                Some(paper) => Some(match dcnets_of.get(paper) {
+                    Some(&d) => d,
+                    None => {
+                        dcnets.push(dcnet_models(paper, out)?);
+                        dcnets_of.insert(paper.clone(), dcnets.len() - 1);
+                        dcnets.len() - 1
+                    }
+                }),
+            };
+            points.push(PointInputs {
+                segments: point_segments,
+                data_files,
+                dcnets: point_dcnets,
+            });
+        }
+        Ok(Inputs {
+            segments,
+            dcnets,
+            points,
+        })
+    }
+
+    /// The trajectories of point `p`, in spec order.
+    pub fn segments_of(&self, p: usize) -> Vec<&Segment> {
+        self.points[p]
+            .segments
+            .iter()
+            .map(|&s| &self.segments[s])
+            .collect()
+    }
+
+    /// The DCNet models point `p` applies, if any.
+    pub fn dcnets_of(&self, p: usize) -> Option<&DcnetModels> {
+        self.points[p].dcnets.map(|d| &self.dcnets[d])
+    }
+}
+
+/// The paper spec's DCNet models (replicate 0 of each error model), set up to estimate,
+/// each with its cache key.
+fn dcnet_models(paper: &Path, out: &Path) -> Result<DcnetModels, ExecuteError> {
+    let dcnet_error = |source: DcnetSpecError| ExecuteError::DcnetSpec {
+        spec: paper.to_path_buf(),
+        source,
+    };
+    let experiment = crate::spec::load_experiment(paper, &[]).map_err(|e| dcnet_error(e.into()))?;
+    let plan = Plan::new(&experiment, out).map_err(|e| dcnet_error(e.into()))?;
+    let spec = plan.spec(0);
+    let mut models = Vec::new();
+    for training in plan.trainings.iter().filter(|t| t.replicate == 0) {
+        let trained = plan
+            .models
+            .load(spec, training.error_model, &training.key)
+            .map_err(|e| dcnet_error(e.into()))?
+            .ok_or_else(|| ExecuteError::DcnetMissing {
+                spec: paper.to_path_buf(),
+                out: out.to_path_buf(),
+                error_model: training.error_model,
+            })?;
+        let estimator = DcnetEstimator {
+            model: trained.model,
+            error_model: training.error_model,
+            window: spec.dataset.window_samples,
+            settings: Settings::from(&spec.model),
+            device: spec.training.backend.device(),
+        };
+        models.push((estimator, training.key.clone()));
+    }
+    Ok(DcnetModels(models))
+}
