@@ -20,10 +20,10 @@
 macro_rules! per_instruction_set {
     (
         $(#[$meta:meta])*
-        fn $name:ident<F: [$($bound:tt)*]>($($arg:ident: $ty:ty),* $(,)?) -> $ret:ty $body:block
+        $vis:vis fn $name:ident<F: [$($bound:tt)*]>($($arg:ident: $ty:ty),* $(,)?) -> $ret:ty $body:block
     ) => {
         $(#[$meta])*
-        fn $name<F: $($bound)* + Copy>($($arg: $ty),*) -> $ret {
+        $vis fn $name<F: $($bound)* + Copy>($($arg: $ty),*) -> $ret {
             #[inline(always)]
             fn body<F: $($bound)*>($($arg: $ty),*) -> $ret $body
             #[cfg(target_arch = "x86_64")]
