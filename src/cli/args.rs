@@ -30,180 +30,216 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub(super) enum Command {
     /// Run an experiment, or every point of its sweep, doing only what is not done yet
-    Run {
-        #[command(flatten)]
-        target: Target,
-        #[command(flatten)]
-        drawing: Drawing,
-        /// Run only shard K of N (0 ≤ K < N) of the tasks and no results; `--shard N`
-        /// takes K from SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX
-        #[arg(long, value_name = "K/N")]
-        shard: Option<String>,
-        /// Recompute every task, cached or not
-        #[arg(long)]
-        force: bool,
-    },
+    Run(RunArgs),
     /// List every task a run would do, each marked done or to do; changes nothing
-    Plan {
-        #[command(flatten)]
-        target: Target,
-        /// List only the tasks of shard K of N
-        #[arg(long, value_name = "K/N")]
-        shard: Option<String>,
-    },
+    Plan(PlanArgs),
     /// Write the results of a sharded run once every shard has finished
-    Collect {
-        #[command(flatten)]
-        target: Target,
-        #[command(flatten)]
-        drawing: Drawing,
-    },
+    Collect(CollectArgs),
     /// Draw the figures and write report.md and report.tex from a results folder, re-running nothing
-    Plot {
-        /// A results folder written by `run`, such as results/paper, or a sweep's
-        results: PathBuf,
-        /// Figures go to OUT/<name>/
-        #[arg(long, default_value = "plots")]
-        out: PathBuf,
-        /// Write each figure as PNG, SVG or both
-        #[arg(long, value_enum, default_value_t = Format::Both)]
-        format: Format,
-        /// What a sweep's figures plot against each swept value
-        #[arg(long, value_enum, default_value_t = Metric::EvaluationRmse)]
-        metric: Metric,
-    },
+    Plot(PlotArgs),
     /// Compare two results folders (or two sweep points) as Markdown: the spec keys that
     /// differ, every cell with A, B and B − A, differences beyond 2 standard errors marked
-    Compare {
-        /// The first results folder, such as results/quick or results/<sweep>/<point>
-        #[arg(value_name = "A")]
-        first: PathBuf,
-        /// The second results folder
-        #[arg(value_name = "B")]
-        second: PathBuf,
-        /// Also write the Markdown to FILE
-        #[arg(long, value_name = "FILE", default_value = compare::DEFAULT_FILE)]
-        out: PathBuf,
-    },
+    Compare(CompareArgs),
     /// Check a spec (every point of its sweep) and its data files without running anything
-    Validate {
-        spec: PathBuf,
-        #[command(flatten)]
-        overrides: Overrides,
-    },
+    Validate(ValidateArgs),
     /// Calibrate one recording of a DVL beside a reference with attitude: print the
     /// terms with their standard deviations and those the recording cannot show, run
     /// the Kalman filter over it to say how much of the recording its terms needed, and
     /// write the recording corrected (CSV and Parquet)
-    Calibrate {
-        /// The DVL's CSV file (A-KIT's columns unless --columns names others); several
-        /// recordings of the same vehicle are calibrated jointly: the vehicle's terms
-        /// shared, each recording's --dive-terms its own
-        #[arg(required = true, num_args = 1..)]
-        dvl: Vec<PathBuf>,
-        /// The reference's CSV file, when it is not the DVL's; once per DVL file, in the
-        /// same order, when there are several
-        #[arg(long)]
-        reference: Vec<PathBuf>,
-        /// A TOML file whose [columns] table names the columns (time, dvl, velocity_ned,
-        /// attitude, rate, angles_in_degrees), as an installation spec's
-        /// [recordings.columns] does
-        #[arg(long)]
-        columns: Option<PathBuf>,
-        /// The terms to estimate: scale, scale_per_axis, misalignment, lever_arm,
-        /// time_offset, bias, bias_scalar
-        #[arg(
-            long,
-            value_delimiter = ',',
-            default_value = "lever_arm,time_offset,bias"
-        )]
-        terms: Vec<String>,
-        /// Calibrate on the first SECONDS of the recording [default: all of it]
-        #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
-        window_s: Option<f64>,
-        /// The DVL's white noise per axis, cm/s, for the bound
-        #[arg(long, default_value_t = 2.0, allow_negative_numbers = true)]
-        dvl_noise_cm_s: f64,
-        /// The reference velocity's white noise per axis, cm/s, for the bound
-        #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
-        reference_noise_cm_s: f64,
-        /// How close the Kalman filter's RMSE must stay to its value with the whole
-        /// recording, for the length the recording needed: within this % of what
-        /// calibration changes (the RMSE before it less that after the fit of all of it)
-        #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
-        tolerance_pct: f64,
-        /// Folder the corrected recording and the filter's terms against time go to
-        #[arg(long, default_value = "calibrated")]
-        out: PathBuf,
-        /// Save the installation found (terms, standard deviations, correlations) to
-        /// this TOML file, for `correct` to apply to other dives
-        #[arg(long, value_name = "FILE")]
-        save: Option<PathBuf>,
-        /// Which of the terms belong to the dive and are found again on each dive by
-        /// `correct` (the rest, the vehicle's, are carried), and with several recordings
-        /// are each recording's own: time_offset, bias, bias_scalar
-        #[arg(long, value_delimiter = ',', default_value = "time_offset")]
-        dive_terms: Vec<String>,
-    },
+    Calibrate(CalibrateArgs),
     /// Apply an installation that `calibrate --save` found to another dive: find the
     /// dive's clock again from its first seconds against its reference, write the dive
     /// corrected (CSV and Parquet), and say how well the carried installation fits it
-    Correct {
-        /// The dive's DVL CSV file
-        dvl: PathBuf,
-        /// The installation file `calibrate --save` wrote
-        #[arg(long, value_name = "FILE")]
-        installation: PathBuf,
-        /// The reference's CSV file, when it is not the DVL's (its body rate corrects
-        /// the lever arm; its velocity finds the clock)
-        #[arg(long)]
-        reference: Option<PathBuf>,
-        /// A TOML file whose [columns] table names the columns, as for calibrate
-        #[arg(long)]
-        columns: Option<PathBuf>,
-        /// The first SECONDS of the dive that find its clock again; scored after them
-        #[arg(
-            long,
-            value_name = "SECONDS",
-            default_value_t = 60.0,
-            allow_negative_numbers = true
-        )]
-        window_s: f64,
-        /// How far from the calibration's time offset the search for the clock looks, s
-        #[arg(long, default_value_t = crate::installation::estimate::clock::DEFAULT_SEARCH_S, allow_negative_numbers = true)]
-        search_s: f64,
-        /// The dive's time offset, s, where it is known: no search
-        #[arg(long, allow_negative_numbers = true)]
-        time_offset_s: Option<f64>,
-        /// Folder the corrected dive goes to
-        #[arg(long, default_value = "corrected")]
-        out: PathBuf,
-    },
+    Correct(CorrectArgs),
     /// Inspect or download the data
     Data {
         #[command(subcommand)]
         command: DataCommand,
     },
     /// Time the dataset generation, the Monte Carlo protocol and DCNet training of a spec
-    Bench {
-        spec: PathBuf,
-        /// Timed repetitions of each stage (training: paired runs, ours then the peer's)
-        #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
-        repeat: u32,
-        /// Training batches timed per model
-        #[arg(long, default_value_t = 40, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
-        training_batches: u32,
-        /// The PyTorch peer script (torch_dcnet.py): times the same network in PyTorch
-        /// in the same arrangements, side by side
-        #[arg(long, value_name = "SCRIPT")]
-        pytorch: Option<PathBuf>,
-        /// Times training on 1, 2, 4, … cores up to all of them (--threads), in each
-        /// arrangement, rather than on all of them only
-        #[arg(long)]
-        scaling: bool,
-        #[command(flatten)]
-        overrides: Overrides,
-    },
+    Bench(BenchArgs),
+}
+
+/// The arguments of `run`.
+#[derive(Debug, clap::Args)]
+pub(super) struct RunArgs {
+    #[command(flatten)]
+    pub(super) target: Target,
+    #[command(flatten)]
+    pub(super) drawing: Drawing,
+    /// Run only shard K of N (0 ≤ K < N) of the tasks and no results; `--shard N`
+    /// takes K from SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX
+    #[arg(long, value_name = "K/N")]
+    pub(super) shard: Option<String>,
+    /// Recompute every task, cached or not
+    #[arg(long)]
+    pub(super) force: bool,
+}
+
+/// The arguments of `plan`.
+#[derive(Debug, clap::Args)]
+pub(super) struct PlanArgs {
+    #[command(flatten)]
+    pub(super) target: Target,
+    /// List only the tasks of shard K of N
+    #[arg(long, value_name = "K/N")]
+    pub(super) shard: Option<String>,
+}
+
+/// The arguments of `collect`.
+#[derive(Debug, clap::Args)]
+pub(super) struct CollectArgs {
+    #[command(flatten)]
+    pub(super) target: Target,
+    #[command(flatten)]
+    pub(super) drawing: Drawing,
+}
+
+/// The arguments of `plot`.
+#[derive(Debug, clap::Args)]
+pub(super) struct PlotArgs {
+    /// A results folder written by `run`, such as results/paper, or a sweep's
+    pub(super) results: PathBuf,
+    /// Figures go to OUT/<name>/
+    #[arg(long, default_value = "plots")]
+    pub(super) out: PathBuf,
+    /// Write each figure as PNG, SVG or both
+    #[arg(long, value_enum, default_value_t = Format::Both)]
+    pub(super) format: Format,
+    /// What a sweep's figures plot against each swept value
+    #[arg(long, value_enum, default_value_t = Metric::EvaluationRmse)]
+    pub(super) metric: Metric,
+}
+
+/// The arguments of `compare`.
+#[derive(Debug, clap::Args)]
+pub(super) struct CompareArgs {
+    /// The first results folder, such as results/quick or results/<sweep>/<point>
+    #[arg(value_name = "A")]
+    pub(super) first: PathBuf,
+    /// The second results folder
+    #[arg(value_name = "B")]
+    pub(super) second: PathBuf,
+    /// Also write the Markdown to FILE
+    #[arg(long, value_name = "FILE", default_value = compare::DEFAULT_FILE)]
+    pub(super) out: PathBuf,
+}
+
+/// The arguments of `validate`.
+#[derive(Debug, clap::Args)]
+pub(super) struct ValidateArgs {
+    pub(super) spec: PathBuf,
+    #[command(flatten)]
+    pub(super) overrides: Overrides,
+}
+
+/// The arguments of `calibrate`.
+#[derive(Debug, clap::Args)]
+pub(super) struct CalibrateArgs {
+    /// The DVL's CSV file (A-KIT's columns unless --columns names others); several
+    /// recordings of the same vehicle are calibrated jointly: the vehicle's terms
+    /// shared, each recording's --dive-terms its own
+    #[arg(required = true, num_args = 1..)]
+    pub(super) dvl: Vec<PathBuf>,
+    /// The reference's CSV file, when it is not the DVL's; once per DVL file, in the
+    /// same order, when there are several
+    #[arg(long)]
+    pub(super) reference: Vec<PathBuf>,
+    /// A TOML file whose [columns] table names the columns (time, dvl, velocity_ned,
+    /// attitude, rate, angles_in_degrees), as an installation spec's
+    /// [recordings.columns] does
+    #[arg(long)]
+    pub(super) columns: Option<PathBuf>,
+    /// The terms to estimate: scale, scale_per_axis, misalignment, lever_arm,
+    /// time_offset, bias, bias_scalar
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "lever_arm,time_offset,bias"
+    )]
+    pub(super) terms: Vec<String>,
+    /// Calibrate on the first SECONDS of the recording [default: all of it]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    pub(super) window_s: Option<f64>,
+    /// The DVL's white noise per axis, cm/s, for the bound
+    #[arg(long, default_value_t = 2.0, allow_negative_numbers = true)]
+    pub(super) dvl_noise_cm_s: f64,
+    /// The reference velocity's white noise per axis, cm/s, for the bound
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
+    pub(super) reference_noise_cm_s: f64,
+    /// How close the Kalman filter's RMSE must stay to its value with the whole
+    /// recording, for the length the recording needed: within this % of what
+    /// calibration changes (the RMSE before it less that after the fit of all of it)
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
+    pub(super) tolerance_pct: f64,
+    /// Folder the corrected recording and the filter's terms against time go to
+    #[arg(long, default_value = "calibrated")]
+    pub(super) out: PathBuf,
+    /// Save the installation found (terms, standard deviations, correlations) to
+    /// this TOML file, for `correct` to apply to other dives
+    #[arg(long, value_name = "FILE")]
+    pub(super) save: Option<PathBuf>,
+    /// Which of the terms belong to the dive and are found again on each dive by
+    /// `correct` (the rest, the vehicle's, are carried), and with several recordings
+    /// are each recording's own: time_offset, bias, bias_scalar
+    #[arg(long, value_delimiter = ',', default_value = "time_offset")]
+    pub(super) dive_terms: Vec<String>,
+}
+
+/// The arguments of `correct`.
+#[derive(Debug, clap::Args)]
+pub(super) struct CorrectArgs {
+    /// The dive's DVL CSV file
+    pub(super) dvl: PathBuf,
+    /// The installation file `calibrate --save` wrote
+    #[arg(long, value_name = "FILE")]
+    pub(super) installation: PathBuf,
+    /// The reference's CSV file, when it is not the DVL's (its body rate corrects
+    /// the lever arm; its velocity finds the clock)
+    #[arg(long)]
+    pub(super) reference: Option<PathBuf>,
+    /// A TOML file whose [columns] table names the columns, as for calibrate
+    #[arg(long)]
+    pub(super) columns: Option<PathBuf>,
+    /// The first SECONDS of the dive that find its clock again; scored after them
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        default_value_t = 60.0,
+        allow_negative_numbers = true
+    )]
+    pub(super) window_s: f64,
+    /// How far from the calibration's time offset the search for the clock looks, s
+    #[arg(long, default_value_t = crate::installation::estimate::clock::DEFAULT_SEARCH_S, allow_negative_numbers = true)]
+    pub(super) search_s: f64,
+    /// The dive's time offset, s, where it is known: no search
+    #[arg(long, allow_negative_numbers = true)]
+    pub(super) time_offset_s: Option<f64>,
+    /// Folder the corrected dive goes to
+    #[arg(long, default_value = "corrected")]
+    pub(super) out: PathBuf,
+}
+
+/// The arguments of `bench`.
+#[derive(Debug, clap::Args)]
+pub(super) struct BenchArgs {
+    pub(super) spec: PathBuf,
+    /// Timed repetitions of each stage (training: paired runs, ours then the peer's)
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub(super) repeat: u32,
+    /// Training batches timed per model
+    #[arg(long, default_value_t = 40, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    pub(super) training_batches: u32,
+    /// The PyTorch peer script (torch_dcnet.py): times the same network in PyTorch
+    /// in the same arrangements, side by side
+    #[arg(long, value_name = "SCRIPT")]
+    pub(super) pytorch: Option<PathBuf>,
+    /// Times training on 1, 2, 4, … cores up to all of them (--threads), in each
+    /// arrangement, rather than on all of them only
+    #[arg(long)]
+    pub(super) scaling: bool,
+    #[command(flatten)]
+    pub(super) overrides: Overrides,
 }
 
 /// The spec a command works on and where its results go.

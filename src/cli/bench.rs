@@ -6,6 +6,7 @@
 //! per core and then on all the cores. It prints the page faults and allocator calls of a
 //! warm training step too.
 
+use super::args::BenchArgs;
 use super::{CliError, failure, input, load_spec};
 use crate::count;
 use crate::data::load_trajectories;
@@ -17,6 +18,18 @@ use crate::train::{self, TrainError};
 use crate::vocab::{ErrorModel, EstimatorKind};
 use std::path::Path;
 use std::time::Instant;
+
+/// `bench`, as typed.
+pub(super) fn bench_command(args: &BenchArgs) -> Result<(), CliError> {
+    bench(
+        &args.spec,
+        args.repeat as usize,
+        args.training_batches as usize,
+        args.pytorch.as_deref(),
+        args.scaling,
+        &args.overrides.set,
+    )
+}
 
 pub(super) fn bench(
     spec_path: &Path,

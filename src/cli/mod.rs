@@ -137,153 +137,44 @@ fn apply_global_flags(threads: Option<usize>, log_every: Option<f64>) -> Result<
     Ok(())
 }
 
+/// Parses the command line, then hands each command to the module that does it, one
+/// line a command.
 pub fn main() -> Result<(), CliError> {
     check_flag_variables()?;
-    let cli = match Cli::try_parse() {
-        Ok(cli) => cli,
+    let Some(cli) = parsed()? else {
+        return Ok(());
+    };
+    apply_global_flags(cli.threads, cli.log_every)?;
+    match cli.command {
+        Command::Run(args) => run::run_command(&args),
+        Command::Plan(args) => {
+            kind_of(&args.target.spec)?.plan(&args.target, run::parse_shard(args.shard.as_deref())?)
+        }
+        Command::Collect(args) => kind_of(&args.target.spec)?.collect(&args.target, &args.drawing),
+        Command::Plot(args) => plot::plot(&args.results, Some(&args.out), args.format, args.metric),
+        Command::Compare(args) => plot::compare_folders(&args.first, &args.second, &args.out),
+        Command::Validate(args) => kind_of(&args.spec)?.validate(&args.spec, &args.overrides.set),
+        Command::Calibrate(args) => calibrate::calibrate_command(&args),
+        Command::Correct(args) => calibrate::correct_command(&args),
+        Command::Data { command } => data_command(command),
+        Command::Bench(args) => bench::bench_command(&args),
+    }
+}
+
+/// The command line, or `None` where clap printed what was asked (`--help`,
+/// `--version`); a command line clap refuses ends the process with exit code 1.
+fn parsed() -> Result<Option<Cli>, CliError> {
+    match Cli::try_parse() {
+        Ok(cli) => Ok(Some(cli)),
         Err(e) if !e.use_stderr() => {
             e.print().map_err(failure)?;
-            return Ok(());
+            Ok(None)
         }
         Err(e) => {
             let _ = e.print();
             std::process::exit(1);
         }
-    };
-    apply_global_flags(cli.threads, cli.log_every)?;
-    match cli.command {
-        Command::Run {
-            target,
-            drawing,
-            shard,
-            force,
-        } => {
-            let mode = match run::parse_shard(shard.as_deref())? {
-                Some(shard) => Mode::Shard { shard, force },
-                None => Mode::All { force },
-            };
-            kind_of(&target.spec)?.run(&target, &drawing, mode)
-        }
-        Command::Plan { target, shard } => {
-            kind_of(&target.spec)?.plan(&target, run::parse_shard(shard.as_deref())?)
-        }
-        Command::Collect { target, drawing } => kind_of(&target.spec)?.collect(&target, &drawing),
-        Command::Plot {
-            results,
-            out,
-            format,
-            metric,
-        } => plot::plot(&results, Some(&out), format, metric),
-        Command::Compare { first, second, out } => plot::compare_folders(&first, &second, &out),
-        Command::Validate { spec, overrides } => kind_of(&spec)?.validate(&spec, &overrides.set),
-        Command::Calibrate {
-            dvl,
-            reference,
-            columns,
-            terms,
-            window_s,
-            dvl_noise_cm_s,
-            reference_noise_cm_s,
-            tolerance_pct: _,
-            out,
-            save,
-            dive_terms,
-        } if dvl.len() > 1 => {
-            calibrate::calibrate_joint(&crate::operator::calibrate_joint::JointArgs {
-                dvls: &dvl,
-                references: &reference,
-                columns: columns.as_deref(),
-                terms: &parse_terms(("--terms", &terms))?,
-                dive_terms: &parse_terms(("--dive-terms", &dive_terms))?,
-                window_s,
-                dvl_noise_cm_s,
-                reference_noise_cm_s,
-                out: &out,
-                save: save.as_deref(),
-            })
-        }
-        Command::Calibrate {
-            dvl,
-            reference,
-            columns,
-            terms,
-            window_s,
-            dvl_noise_cm_s,
-            reference_noise_cm_s,
-            tolerance_pct,
-            out,
-            save,
-            dive_terms,
-        } => {
-            if reference.len() > 1 {
-                return Err(input(anyhow::anyhow!(
-                    "--reference: {} files for one DVL file: give one",
-                    reference.len()
-                )));
-            }
-            calibrate::calibrate(&calibrate::CalibrateArgs {
-                dvl: &dvl[0],
-                reference: reference.first().map(std::path::PathBuf::as_path),
-                columns: columns.as_deref(),
-                terms: &parse_terms(("--terms", &terms))?,
-                window_s,
-                dvl_noise_cm_s,
-                reference_noise_cm_s,
-                tolerance_pct,
-                out: &out,
-                save: save.as_deref(),
-                dive_terms: &parse_terms(("--dive-terms", &dive_terms))?,
-            })
-        }
-        Command::Correct {
-            dvl,
-            installation,
-            reference,
-            columns,
-            window_s,
-            search_s,
-            time_offset_s,
-            out,
-        } => calibrate::correct(&crate::operator::correct::CorrectArgs {
-            dvl: &dvl,
-            reference: reference.as_deref(),
-            columns: columns.as_deref(),
-            installation: &installation,
-            window_s,
-            search_s,
-            time_offset_s,
-            out: &out,
-        }),
-        Command::Data { command } => data_command(command),
-        Command::Bench {
-            spec,
-            repeat,
-            training_batches,
-            pytorch,
-            scaling,
-            overrides,
-        } => bench::bench(
-            &spec,
-            repeat as usize,
-            training_batches as usize,
-            pytorch.as_deref(),
-            scaling,
-            &overrides.set,
-        ),
     }
-}
-
-/// `--terms` as typed, each a term's name.
-fn parse_terms(
-    (flag, terms): (&str, &[String]),
-) -> Result<Vec<crate::installation::terms::names::TermName>, CliError> {
-    terms
-        .iter()
-        .map(|term| {
-            term.parse()
-                .map_err(|message| input(anyhow::anyhow!("{flag} {term}: {message}")))
-        })
-        .collect()
 }
 
 /// `data info` and `data fetch`.

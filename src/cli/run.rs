@@ -1,6 +1,7 @@
 //! `run`, `plan` and `collect`: an experiment's plan, shown or done, whole or one
 //! shard at a time, and what a run wrote, printed and drawn.
 
+use super::args::RunArgs;
 use super::args::{Drawing, Target};
 use super::plot::{plot_run, plot_sweep};
 use super::{CliError, about, failure, input, load_target, training_seconds};
@@ -10,6 +11,16 @@ use crate::report::printed;
 use crate::results::read::StoredRun;
 use crate::results::sweep;
 use crate::spec::Experiment;
+
+/// `run`: the spec's kind runs it, all of it or one shard.
+pub(super) fn run_command(args: &RunArgs) -> Result<(), CliError> {
+    let force = args.force;
+    let mode = match parse_shard(args.shard.as_deref())? {
+        Some(shard) => Mode::Shard { shard, force },
+        None => Mode::All { force },
+    };
+    super::kind_of(&args.target.spec)?.run(&args.target, &args.drawing, mode)
+}
 
 /// `--shard K/N` as typed, or from the variables it names.
 pub(super) fn parse_shard(shard: Option<&str>) -> Result<Option<Shard>, CliError> {
