@@ -19,10 +19,11 @@ const CHECKSUM_KEY: &str = "checksum_sha256";
 const TOOL: &str = "dcnet-exp";
 pub const TOOL_VERSION: &str = env!("CARGO_PKG_VERSION");
 
-/// An installation file's contents.
+/// An installation file's contents as its TOML holds them, unchecked: what is
+/// written, and what [`InstallationFile::check`] turns into a [`SavedInstallation`].
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct SavedInstallation {
+pub struct InstallationFile {
     pub tool: String,
     pub version: String,
     /// The DVL file calibrated on, as given, and its SHA-256.
@@ -42,6 +43,24 @@ pub struct SavedInstallation {
     pub terms: Vec<SavedTerm>,
     /// The correlation coefficients of the terms, in their order.
     pub correlation: Vec<Vec<f64>>,
+}
+
+/// An installation, checked: its terms named in the order of its term lists, each
+/// value finite and each standard deviation zero or more, its correlations a square
+/// matrix within ±1, its noise positive. Only a calibration ([`SavedInstallation::of`])
+/// or a file that passes [`InstallationFile::check`] makes one; its contents are read
+/// through [`InstallationFile`]'s fields.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SavedInstallation {
+    file: InstallationFile,
+}
+
+impl std::ops::Deref for SavedInstallation {
+    type Target = InstallationFile;
+
+    fn deref(&self) -> &InstallationFile {
+        &self.file
+    }
 }
 
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -126,7 +145,7 @@ impl SavedInstallation {
             .copied()
             .filter(|t| !dive_terms.contains(t))
             .collect();
-        SavedInstallation {
+        let file = InstallationFile {
             tool: TOOL.into(),
             version: TOOL_VERSION.into(),
             recording,
@@ -142,7 +161,8 @@ impl SavedInstallation {
                 .collect(),
             terms: saved,
             correlation,
-        }
+        };
+        SavedInstallation { file }
     }
 
     /// Every term, vehicle's and dive's.
@@ -167,24 +187,9 @@ impl SavedInstallation {
         Installation::from_parameters(&self.term_set(), &values)
     }
 
-    /// The file's text: the checksum line, then the contents.
-    pub fn to_text(&self) -> String {
-        let body = toml::to_string(self).expect("an installation serialises");
-        let body = format!(
-            "# The installation `dcnet-exp calibrate --save` found, for `dcnet-exp correct`.\n# Edited by hand, it is refused: calibrate again instead.\n{body}"
-        );
-        format!(
-            "{CHECKSUM_KEY} = \"{}\"\n{body}",
-            crate::files::sha256_hex(body.as_bytes())
-        )
-    }
-
     /// Writes the file at `path`, atomically, its folder made where it is missing.
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
-        if let Some(folder) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
-            std::fs::create_dir_all(folder)?;
-        }
-        crate::files::write_atomic(path, self.to_text().as_bytes())
+        self.file.write(path)
     }
 
     /// Reads and checks the file at `path`: its checksum, the tool's version, every
@@ -208,71 +213,105 @@ impl SavedInstallation {
                 path: path.to_path_buf(),
             });
         }
-        let saved: SavedInstallation =
+        let file: InstallationFile =
             toml::from_str(body).map_err(|error| InstallationFileError::Malformed {
                 path: path.to_path_buf(),
                 message: error.message().to_string(),
             })?;
-        if saved.tool != TOOL || saved.version != TOOL_VERSION {
+        if file.tool != TOOL || file.version != TOOL_VERSION {
             return Err(InstallationFileError::OtherVersion {
                 path: path.to_path_buf(),
-                tool: saved.tool,
-                version: saved.version,
+                tool: file.tool,
+                version: file.version,
             });
         }
-        saved.check(path)?;
-        Ok(saved)
+        file.check(path)
+    }
+}
+
+impl InstallationFile {
+    /// The file's text: the checksum line, then the contents.
+    pub fn to_text(&self) -> String {
+        let body = toml::to_string(self).expect("an installation serialises");
+        let body = format!(
+            "# The installation `dcnet-exp calibrate --save` found, for `dcnet-exp correct`.\n# Edited by hand, it is refused: calibrate again instead.\n{body}"
+        );
+        format!(
+            "{CHECKSUM_KEY} = \"{}\"\n{body}",
+            crate::files::sha256_hex(body.as_bytes())
+        )
     }
 
-    /// The terms of the file: the names its term lists give, in their order, each
-    /// value finite and each standard deviation zero or more.
-    fn check(&self, path: &Path) -> Result<(), InstallationFileError> {
-        let expected = self.term_set().parameter_names();
-        let bad = |index: usize, name: &str, what: String| InstallationFileError::BadTerm {
-            path: path.to_path_buf(),
-            index,
-            name: name.to_string(),
-            what,
-        };
-        if self.terms.len() != expected.len() {
-            return Err(InstallationFileError::Malformed {
-                path: path.to_path_buf(),
-                message: format!(
-                    "{} terms for the {} parameters of {:?}",
-                    self.terms.len(),
-                    expected.len(),
-                    self.vehicle_terms
-                        .iter()
-                        .chain(&self.dive_terms)
-                        .map(|t| t.name())
-                        .collect::<Vec<_>>()
-                ),
-            });
+    /// Writes the file at `path`, atomically, its folder made where it is missing.
+    pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        if let Some(folder) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(folder)?;
         }
+        crate::files::write_atomic(path, self.to_text().as_bytes())
+    }
+
+    /// The file's contents as a [`SavedInstallation`], where they hold one: the names
+    /// its term lists give, in their order, each value finite and each standard
+    /// deviation zero or more; the file at `path` named where they do not.
+    pub fn check(self, path: &Path) -> Result<SavedInstallation, InstallationFileError> {
         let malformed = |message: String| InstallationFileError::Malformed {
             path: path.to_path_buf(),
             message,
         };
+        let names: Vec<TermName> = self
+            .vehicle_terms
+            .iter()
+            .chain(&self.dive_terms)
+            .copied()
+            .collect();
+        let expected = term_set(&names).parameter_names();
+        if self.terms.len() != expected.len() {
+            return Err(malformed(format!(
+                "{} terms for the {} parameters of {:?}",
+                self.terms.len(),
+                expected.len(),
+                names.iter().map(|t| t.name()).collect::<Vec<_>>()
+            )));
+        }
+        self.check_lists().map_err(malformed)?;
+        self.check_numbers(expected.len()).map_err(malformed)?;
+        for (index, (term, name)) in self.terms.iter().zip(&expected).enumerate() {
+            term.check(name)
+                .map_err(|(name, what)| InstallationFileError::BadTerm {
+                    path: path.to_path_buf(),
+                    index,
+                    name,
+                    what,
+                })?;
+        }
+        Ok(SavedInstallation { file: self })
+    }
+
+    /// No term both the vehicle's and the dive's, and the time offset the dive's.
+    fn check_lists(&self) -> Result<(), String> {
         if let Some(term) = self
             .dive_terms
             .iter()
             .find(|t| self.vehicle_terms.contains(t))
         {
-            return Err(malformed(format!(
+            return Err(format!(
                 "{:?} is both a vehicle's and a dive's term",
                 term.name()
-            )));
-        }
-        if !self.dive_terms.contains(&TermName::TimeOffset) {
-            return Err(malformed(
-                "its dive_terms do not hold \"time_offset\"".into(),
             ));
         }
-        let n = expected.len();
+        if !self.dive_terms.contains(&TermName::TimeOffset) {
+            return Err("its dive_terms do not hold \"time_offset\"".into());
+        }
+        Ok(())
+    }
+
+    /// The correlations an `n × n` matrix within ±1, the noise positive (the
+    /// reference's zero or more), the residual finite and zero or more.
+    fn check_numbers(&self, n: usize) -> Result<(), String> {
         if self.correlation.len() != n || self.correlation.iter().any(|row| row.len() != n) {
-            return Err(malformed(format!(
+            return Err(format!(
                 "its correlation is not a {n} × {n} matrix, one row and column per term"
-            )));
+            ));
         }
         if self
             .correlation
@@ -280,40 +319,45 @@ impl SavedInstallation {
             .flatten()
             .any(|r| r.abs() > 1.0 + 1e-9)
         {
-            return Err(malformed("a correlation beyond ±1".into()));
+            return Err("a correlation beyond ±1".into());
         }
         if !(self.dvl_noise_cm_s.is_finite() && self.dvl_noise_cm_s > 0.0)
             || !(self.reference_noise_cm_s.is_finite() && self.reference_noise_cm_s >= 0.0)
         {
-            return Err(malformed(format!(
+            return Err(format!(
                 "its noise ({} and {} cm/s) is not a positive DVL noise and a reference noise of zero or more",
                 self.dvl_noise_cm_s, self.reference_noise_cm_s
-            )));
+            ));
         }
         if self
             .residual_cm_s
             .iter()
             .any(|r| !(r.is_finite() && *r >= 0.0))
         {
-            return Err(malformed(format!(
+            return Err(format!(
                 "its residual_cm_s {:?} is not three finite values of zero or more",
                 self.residual_cm_s
-            )));
+            ));
         }
-        for (index, (term, name)) in self.terms.iter().zip(&expected).enumerate() {
-            if term.name != *name {
-                return Err(bad(index, &term.name, format!("expected {name} here")));
-            }
-            if !term.value.is_finite() {
-                return Err(bad(index, name, format!("its value is {}", term.value)));
-            }
-            if !(term.std >= 0.0) {
-                return Err(bad(
-                    index,
-                    name,
-                    format!("its standard deviation is {}", term.std),
-                ));
-            }
+        Ok(())
+    }
+}
+
+impl SavedTerm {
+    /// The term named `name`, its value finite, its standard deviation zero or more;
+    /// else the name it has and what is wrong.
+    fn check(&self, name: &str) -> Result<(), (String, String)> {
+        if self.name != *name {
+            return Err((self.name.clone(), format!("expected {name} here")));
+        }
+        if !self.value.is_finite() {
+            return Err((name.to_string(), format!("its value is {}", self.value)));
+        }
+        if !(self.std >= 0.0) {
+            return Err((
+                name.to_string(),
+                format!("its standard deviation is {}", self.std),
+            ));
         }
         Ok(())
     }
@@ -323,8 +367,8 @@ impl SavedInstallation {
 mod tests {
     use super::*;
 
-    fn saved() -> SavedInstallation {
-        SavedInstallation {
+    fn file() -> InstallationFile {
+        InstallationFile {
             tool: TOOL.into(),
             version: TOOL_VERSION.into(),
             recording: "DVL_trajectory1.csv".into(),
@@ -354,6 +398,10 @@ mod tests {
         }
     }
 
+    fn saved() -> SavedInstallation {
+        SavedInstallation { file: file() }
+    }
+
     #[test]
     fn a_file_reads_back_as_written_and_an_edited_damaged_foreign_or_nan_one_is_refused() {
         let dir = tempfile::tempdir().unwrap();
@@ -378,11 +426,11 @@ mod tests {
         let foreign = refusal("name = \"paper\"\n");
         assert!(foreign.contains("not an installation file"), "{foreign}");
         // Another version, and a NaN, each with a checksum that matches.
-        let mut other = saved();
+        let mut other = file();
         other.version = "0.0.1".into();
         let message = refusal(&other.to_text());
         assert!(message.contains("written by dcnet-exp 0.0.1"), "{message}");
-        let mut nan = saved();
+        let mut nan = file();
         nan.terms[3].value = f64::NAN;
         let message = refusal(&nan.to_text());
         assert!(
@@ -392,13 +440,13 @@ mod tests {
         assert!(message.contains("installation.toml"), "{message}");
         // A correlation of the wrong size, a negative noise, a term both the
         // vehicle's and the dive's: each with a checksum that matches.
-        let mut small = saved();
+        let mut small = file();
         small.correlation = vec![vec![1.0]];
         assert!(refusal(&small.to_text()).contains("not a 4 × 4 matrix"));
-        let mut negative = saved();
+        let mut negative = file();
         negative.dvl_noise_cm_s = -2.0;
         assert!(refusal(&negative.to_text()).contains("is not a positive DVL noise"));
-        let mut both = saved();
+        let mut both = file();
         both.vehicle_terms.push(TermName::TimeOffset);
         assert!(refusal(&both.to_text()).contains("is both a vehicle's and a dive's term"));
     }
