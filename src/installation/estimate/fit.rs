@@ -335,28 +335,12 @@ pub fn fit_about(
     let (solved, termination) = if parameter_count == 0 {
         (problem(terms, base), "none".to_string())
     } else if terms.time_offset {
-        // The scan only finds LM's start: on a long recording, every few samples of it
-        // (at most SCAN_SAMPLES), so that its steps cost no more than a short one's.
-        let stride = mask.len().div_ceil(SCAN_SAMPLES);
-        let scan_time_s: Vec<f64> = time_s[mask.clone()]
-            .iter()
-            .copied()
-            .step_by(stride)
-            .collect();
-        let scan_dvl_m_s: Vec<Vec3> = dvl_m_s[mask.clone()]
-            .iter()
-            .copied()
-            .step_by(stride)
-            .collect();
-        let scanned = |terms: TermSet, base: Installation| Problem {
-            time_s: &scan_time_s,
-            dvl_m_s: &scan_dvl_m_s,
+        let start = scan_start(
+            (&time_s[mask.clone()], &dvl_m_s[mask.clone()]),
             reference,
             terms,
             base,
-            parameters: DVector::from_vec(base.to_parameters(&terms)),
-        };
-        let start = scan_time_offset(&scanned, terms, base)?;
+        )?;
         minimize(problem(terms, start))?
     } else {
         minimize(problem(terms, base))?
@@ -381,6 +365,30 @@ pub fn fit_about(
         sample_count,
         termination,
     })
+}
+
+/// Where Levenberg–Marquardt starts when τ is free: the best of the scan over `base`'s
+/// τ ± [`TIME_OFFSET_MARGIN_S`]. On a long recording the scan reads every few samples
+/// of the fitted ones `(time_s, dvl_m_s)` (at most SCAN_SAMPLES), so that its steps
+/// cost no more than a short one's.
+fn scan_start(
+    (time_s, dvl_m_s): (&[f64], &[Vec3]),
+    reference: &Reference,
+    terms: TermSet,
+    base: Installation,
+) -> Result<Installation, FitError> {
+    let stride = time_s.len().div_ceil(SCAN_SAMPLES);
+    let scan_time_s: Vec<f64> = time_s.iter().copied().step_by(stride).collect();
+    let scan_dvl_m_s: Vec<Vec3> = dvl_m_s.iter().copied().step_by(stride).collect();
+    let scanned = |terms: TermSet, base: Installation| Problem {
+        time_s: &scan_time_s,
+        dvl_m_s: &scan_dvl_m_s,
+        reference,
+        terms,
+        base,
+        parameters: DVector::from_vec(base.to_parameters(&terms)),
+    };
+    scan_time_offset(&scanned, terms, base)
 }
 
 /// The residuals v_dvl − predict of `installation` on every sample of the record (x,
