@@ -1,13 +1,13 @@
 //! `calibrate`: one recording of a DVL beside a reference with attitude, calibrated by
 //! one library call ([`crate::results::calibrate`]) and printed
-//! ([`crate::report::printed::calibrate`]); and `correct`, its installation applied to
+//! ([`crate::report::operator::calibrate`]); and `correct`, its installation applied to
 //! another dive ([`crate::results::correct`], printed by
-//! [`crate::report::printed::correct`]). In: the parsed arguments. Out: what they
+//! [`crate::report::operator::correct`]). In: the parsed arguments. Out: what they
 //! found on stdout, the files written named on stderr.
 
 use super::{CliError, failure, input};
-use crate::report::printed::calibrate::{calibration_text, joint_text};
-use crate::report::printed::correct::correction_text;
+use crate::report::operator::calibrate::{calibration_text, joint_text};
+use crate::report::operator::correct::correction_text;
 use crate::results::calibrate::calibrate as calibrated;
 use crate::results::calibrate_joint::{JointArgs, calibrate_joint as calibrated_jointly};
 use crate::results::correct::{CorrectArgs, correct as corrected};

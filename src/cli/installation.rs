@@ -12,7 +12,7 @@ use crate::installation::rows::InstallationResults;
 use crate::installation::spec as installation_spec;
 use crate::installation::spec::InstallationSpec;
 use crate::pipeline::{ExecuteError, Executed, InstallationPlan, Mode, Planned, Shard, execute};
-use crate::report::plots::Format;
+use crate::report::kit::plots::Format;
 use crate::results::installation_sweep::{self, StoredInstallationSweep};
 use crate::spec::Experiment;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
@@ -175,20 +175,14 @@ fn finish(plan: &InstallationPlan, executed: &Executed, drawing: &Drawing) -> Re
     for folder in &executed.written {
         let results = crate::results::installation::read_installation(folder).map_err(failure)?;
         if !plan.experiment.is_sweep() {
-            println!(
-                "{}",
-                crate::report::printed::installation::headline(&results)
-            );
+            println!("{}", crate::report::study::printed::headline(&results));
         }
         report(folder, &results, drawing.folder(), Format::Both)?;
         eprintln!("results written to {}", folder.display());
     }
     if let Some(folder) = &executed.sweep {
         let stored = installation_sweep::read(folder).map_err(input)?;
-        println!(
-            "{}",
-            crate::report::printed::installation::sweep_table(&stored)
-        );
+        println!("{}", crate::report::study::printed::sweep_table(&stored));
         if let Some(plots) = drawing.folder() {
             draw_sweep(&stored, &plots.join(&plan.experiment.name), Format::Both)?;
         }
@@ -246,7 +240,7 @@ fn report(
         Some(plots) => draw(study, &plots.join(&name), format)?,
         None => Vec::new(),
     };
-    let reported = crate::report::Reported::Installation {
+    let reported = crate::report::Reported::Study {
         study,
         name: &name,
         folder,
@@ -261,8 +255,8 @@ fn draw(
     study: &InstallationResults,
     folder: &Path,
     format: Format,
-) -> Result<Vec<crate::report::plots::Written>, CliError> {
-    let drawn = crate::report::installation::draw_all(study, folder, format).map_err(failure)?;
+) -> Result<Vec<crate::report::kit::plots::Written>, CliError> {
+    let drawn = crate::report::study::draw_all(study, folder, format).map_err(failure)?;
     super::report_figures(&drawn, folder);
     Ok(drawn)
 }
@@ -272,7 +266,7 @@ fn draw_sweep(
     folder: &Path,
     format: Format,
 ) -> Result<(), CliError> {
-    let drawn = crate::report::installation::draw_sweep(stored, folder, format).map_err(failure)?;
+    let drawn = crate::report::study::draw_sweep(stored, folder, format).map_err(failure)?;
     super::report_figures(&drawn, folder);
     Ok(())
 }

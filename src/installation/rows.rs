@@ -3,7 +3,7 @@
 //! terms each calibration estimated with their bound, the mean per method and window,
 //! and the samples of the residual figure. In: nothing (data types only). Out: the
 //! [`InstallationResults`] that `study` fills, `results::installation` writes and reads, and
-//! `report::installation` sets as tables and figures.
+//! `report::study` sets as tables and figures.
 
 use crate::Vec3;
 
