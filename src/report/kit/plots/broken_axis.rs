@@ -8,6 +8,7 @@
 //! through which the lines that cross it still run. Otherwise the axis is the one
 //! [`Scale::fit`] chooses, linear or logarithmic. Like [`Scale`], a [`BrokenAxis`] is a
 //! plotters coordinate that labels its own ticks.
+//! In: a panel's values. Out: its axis.
 
 use super::scale::{Scale, cut_above, pixel_at};
 use plotters::coord::ranged1d::{KeyPointHint, NoDefaultFormatting, Ranged, ValueFormatter};

@@ -2,6 +2,7 @@
 //! data (a stored run or sweep), draws on the white SVG canvas of [`draw_svg`], and
 //! returns an [`Outcome`]: the [`Drawn`] figure, or why the data hold nothing it could
 //! show. A failure while drawing is an `Err` of [`PlotResult`], never an outcome.
+//! In: a figure's size and its drawing. Out: the SVG text.
 
 use super::draw::{Area, PlotResult};
 use plotters::prelude::*;

@@ -1,6 +1,8 @@
 //! Drawing pieces the figures share: the look of each estimator and error model, the
 //! panels beside the legend column and the legend's entries, category axes, values cut
 //! at a panel's edge with their number, bars and box plots.
+//! In: a plotters drawing area or chart and what to draw on it. Out: the drawing, or
+//! a [`DrawError`].
 
 use super::render::FAMILY;
 use super::scale::Scale;

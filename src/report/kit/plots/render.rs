@@ -2,6 +2,7 @@
 //! the embedded DejaVu Sans (its metrics), and usvg then turns every glyph of that font
 //! into a path: the SVG needs no font on the reader's machine, and resvg rasterises the
 //! same tree into an anti-aliased PNG. No system font is ever looked up.
+//! In: a figure's SVG text. Out: PNG bytes, or SVG text with its glyphs as paths.
 
 use resvg::usvg;
 use std::sync::{Arc, OnceLock};

@@ -7,6 +7,7 @@
 //! others keep the panel, and the figure draws such a value at the edge with its
 //! number written on it ([`three_digits`]). A [`Scale`] is a plotters coordinate:
 //! charts use it as an axis directly, and it labels its own ticks.
+//! In: a panel's values. Out: its axis and ticks.
 
 use crate::report::kit::numbers::three_digits;
 use plotters::coord::ranged1d::{KeyPointHint, NoDefaultFormatting, Ranged, ValueFormatter};

@@ -2,6 +2,8 @@
 //! line, its description, its value in a row of `sweep.parquet` and its axis label.
 //! Both sweep figures (the metric against each key, and the parallel coordinates) read
 //! it.
+//! In: a row of `sweep.parquet`, or the command line's name. Out: the metric, its
+//! value and its label.
 
 use crate::results::sweep::SweepRow;
 

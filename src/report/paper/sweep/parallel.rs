@@ -5,6 +5,7 @@
 //! DVL is the mean over its DCNet rows (the error models) of `sweep.parquet` on that
 //! DVL, one panel per DVL. Numeric keys get a numeric axis ([`Scale`]); any other key
 //! (a TOML array or string) gets its values as evenly spaced categories.
+//! In: a stored sweep and a metric. Out: the figure.
 
 use super::metric::Metric;
 use crate::first_seen;
