@@ -33,13 +33,12 @@
 //!    the memory and time a spec asks for, known before it runs;
 //! 8. [`results`]: the results folders of both kinds (Parquet tables and manifest,
 //!    written atomically), the corrected recording of `calibrate`, and a sweep's table;
-//!    [`operator`]: the operator's commands on recordings of their own (`calibrate`,
-//!    its joint form, the saved installation file, `correct`);
-//! 9. [`report`]: what is drawn from results folders alone: the printed tables
-//!    ([`report::printed`]), the figures ([`report::plots`], one file per figure), one
-//!    table model of the report ([`report::table`]) set by two renderers
-//!    ([`report::markdown`], [`report::latex`]), the installation study's sections
-//!    ([`report::installation`]), and two folders compared ([`report::compare`]);
+//! 9. [`report`]: what is drawn from results folders alone: a rendering kit
+//!    ([`report::kit`]: one table model of the report set as Markdown and as LaTeX, the
+//!    drawing kit of the figures, how numbers and terms are written), then one room per
+//!    content, each with its tables, printed text and figures: the paper's experiment
+//!    ([`report::paper`]), the installation study ([`report::study`]), the operator's
+//!    commands ([`report::operator`]), and two folders compared ([`report::compare`]);
 //! 10. [`pipeline`]: the one front door of a run of either kind, planned, cached by
 //!     content (datasets, models, Monte Carlo blocks, calibrations), resumable, and
 //!     shared out over shards;

@@ -4,7 +4,8 @@
 
 use crate::data::fetch::Dataset;
 use crate::report::compare;
-use crate::report::plots::{Format, Metric};
+use crate::report::kit::plots::Format;
+use crate::report::paper::sweep::Metric;
 use clap::builder::PossibleValue;
 use clap::{Parser, Subcommand};
 use std::path::{Path, PathBuf};

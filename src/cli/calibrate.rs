@@ -1,8 +1,8 @@
 //! `calibrate`: one recording of a DVL beside a reference with attitude, calibrated by
 //! one library call ([`crate::operator::calibrate`]) and printed
-//! ([`crate::report::printed::calibrate`]); and `correct`, its installation applied to
+//! ([`crate::report::operator::calibrate`]); and `correct`, its installation applied to
 //! another dive ([`crate::operator::correct`], printed by
-//! [`crate::report::printed::correct`]). In: the parsed arguments. Out: what they
+//! [`crate::report::operator::correct`]). In: the parsed arguments. Out: what they
 //! found on stdout, the files written named on stderr.
 
 use super::args;
@@ -11,8 +11,8 @@ use crate::installation::terms::names::TermName;
 use crate::operator::calibrate::{CalibrateArgs, calibrate as calibrated};
 use crate::operator::calibrate_joint::{JointArgs, calibrate_joint as calibrated_jointly};
 use crate::operator::correct::{CorrectArgs, correct as corrected};
-use crate::report::printed::calibrate::{calibration_text, joint_text};
-use crate::report::printed::correct::correction_text;
+use crate::report::operator::calibrate::{calibration_text, joint_text};
+use crate::report::operator::correct::correction_text;
 
 /// `calibrate` as typed: one recording, or several calibrated jointly.
 pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliError> {

@@ -194,16 +194,16 @@ fn data_command(command: DataCommand) -> Result<(), CliError> {
 }
 
 /// Says, for each figure, where its files went or why it was not drawn.
-fn report_figures(figures: &[crate::report::plots::Written], folder: &Path) {
+fn report_figures(figures: &[crate::report::kit::plots::Written], folder: &Path) {
     for figure in figures {
         match &figure.caption {
-            crate::report::plots::Caption::Drawn(_) => eprintln!(
+            crate::report::kit::plots::Caption::Drawn(_) => eprintln!(
                 "figure {}: {} in {}",
                 figure.stem,
                 count(figure.files.len(), "file"),
                 folder.display()
             ),
-            crate::report::plots::Caption::NotApplicable(why) => {
+            crate::report::kit::plots::Caption::NotApplicable(why) => {
                 eprintln!("figure {}: not drawn, {why}", figure.stem)
             }
         }

@@ -2,7 +2,9 @@
 //! folders set side by side; nothing is re-run.
 
 use super::{CliError, failure, input, report_figures};
-use crate::report::plots::{self, Format, Metric};
+use crate::report::kit::plots::Format;
+use crate::report::paper::figures::write_all;
+use crate::report::paper::sweep::{Metric, write_sweep};
 use crate::report::{self, compare};
 use crate::results::held::Held;
 use crate::results::read::StoredRun;
@@ -40,7 +42,7 @@ pub(super) fn plot_run(results: &Path, out: Option<&Path>, format: Format) -> Re
         Some(out) => {
             let folder = out.join(&stored.spec.name);
             remove_stale_partials(&folder)?;
-            let figures = plots::write_all(&stored, &folder, format).map_err(failure)?;
+            let figures = write_all(&stored, &folder, format).map_err(failure)?;
             report_figures(&figures, &folder);
             figures
         }
@@ -70,7 +72,7 @@ pub(super) fn plot_sweep(
     let stored = sweep::read(results).map_err(input)?;
     let folder = out.join(&stored.index.name);
     remove_stale_partials(&folder)?;
-    let figures = plots::write_sweep(&stored, metric, &folder, format).map_err(failure)?;
+    let figures = write_sweep(&stored, metric, &folder, format).map_err(failure)?;
     report_figures(&figures, &folder);
     Ok(())
 }

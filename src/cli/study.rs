@@ -12,7 +12,7 @@ use crate::installation::study::rows::StudyResults;
 use crate::installation::study::spec as study_spec;
 use crate::installation::study::spec::StudySpec;
 use crate::pipeline::{ExecuteError, Executed, Mode, Planned, Shard, StudyPlan, execute};
-use crate::report::plots::Format;
+use crate::report::kit::plots::Format;
 use crate::results::study_sweep::{self, StoredStudySweep};
 use crate::spec::Experiment;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
@@ -175,20 +175,14 @@ fn finish(plan: &StudyPlan, executed: &Executed, drawing: &Drawing) -> Result<()
     for folder in &executed.written {
         let results = crate::results::study::read_study(folder).map_err(failure)?;
         if !plan.experiment.is_sweep() {
-            println!(
-                "{}",
-                crate::report::printed::installation::headline(&results)
-            );
+            println!("{}", crate::report::study::printed::headline(&results));
         }
         report(folder, &results, drawing.folder(), Format::Both)?;
         eprintln!("results written to {}", folder.display());
     }
     if let Some(folder) = &executed.sweep {
         let stored = study_sweep::read(folder).map_err(input)?;
-        println!(
-            "{}",
-            crate::report::printed::installation::sweep_table(&stored)
-        );
+        println!("{}", crate::report::study::printed::sweep_table(&stored));
         if let Some(plots) = drawing.folder() {
             draw_sweep(&stored, &plots.join(&plan.experiment.name), Format::Both)?;
         }
@@ -261,15 +255,15 @@ fn draw(
     study: &StudyResults,
     folder: &Path,
     format: Format,
-) -> Result<Vec<crate::report::plots::Written>, CliError> {
-    let drawn = crate::report::installation::draw_all(study, folder, format).map_err(failure)?;
-    crate::cli::report_figures(&drawn, folder);
+) -> Result<Vec<crate::report::kit::plots::Written>, CliError> {
+    let drawn = crate::report::study::draw_all(study, folder, format).map_err(failure)?;
+    super::report_figures(&drawn, folder);
     Ok(drawn)
 }
 
 fn draw_sweep(stored: &StoredStudySweep, folder: &Path, format: Format) -> Result<(), CliError> {
-    let drawn = crate::report::installation::draw_sweep(stored, folder, format).map_err(failure)?;
-    crate::cli::report_figures(&drawn, folder);
+    let drawn = crate::report::study::draw_sweep(stored, folder, format).map_err(failure)?;
+    super::report_figures(&drawn, folder);
     Ok(())
 }
 

@@ -1,43 +1,38 @@
 //! Everything drawn from results folders alone, never from a run's memory, so that it
-//! can be redrawn without re-running. In: a [`StoredRun`] (or a sweep's table, or two
-//! folders). Out: text and files for people.
+//! can be redrawn without re-running. In: a [`StoredRun`] (or a study's tables, a
+//! sweep's table, a calibration, two folders). Out: text and files for people. A kit
+//! that every content uses, then one room per content:
 //!
-//! - [`printed`]: the calibration and evaluation tables that `run` prints;
-//! - [`plots`]: the figures of a run and of a sweep;
-//! - [`table`]: the one model of a report's tables (a header, label columns, rows of
-//!   cells in groups, notes; a section around a table), the paper's tables built from a
-//!   run in its layout, our value beside the published one and cells off by more than
-//!   the spec's tolerance flagged; [`calibration_time`] (how long each method needs to
-//!   calibrate) and the installation study's sections ([`installation`]) build theirs
-//!   in the same model;
-//! - [`markdown`] and [`latex`]: any such table set as Markdown and as LaTeX; the
-//!   paper's report.md adds the training summary, wall time per stage, provenance from
-//!   the manifest and the figures;
+//! - [`kit`]: the one model of a report's tables (a header, label columns, rows of
+//!   cells in groups, notes; a section around a table) and its two renderings, Markdown
+//!   and LaTeX; the drawing kit of the figures (canvas, axes, looks, legends, term
+//!   panels, the PNG and SVG files); how a number and an error term are written. It
+//!   imports no room;
+//! - [`paper`]: the paper's experiment: its tables beside the published ones, how long
+//!   to calibrate, `report.md` and `report.tex` of a run, the tables `run` prints, the
+//!   figures of a run and of a sweep;
+//! - [`study`]: the installation study: its sections, its printed headline and sweep
+//!   table, its figures;
+//! - [`operator`]: what `calibrate` and `correct` print;
+//! - [`compare`]: two results folders side by side;
 //! - this module: `results/<name>/report.md` and `report.tex` of every kind, from one
 //!   entry ([`documents`], [`write`]), written once the run's folder is and sealed with
-//!   its manifest and figures ([`SEAL`], [`is_complete`]);
-//! - [`compare`]: two results folders side by side;
-//! - [`readable`]: error terms in the units people read, below the tables, figures and
-//!   printed lines that show them.
+//!   its manifest and figures ([`SEAL`], [`is_complete`]).
 
-pub mod calibration_time;
+pub mod kit;
+pub mod paper;
+pub mod study;
+pub mod operator;
 pub mod compare;
-pub mod installation;
-pub mod latex;
-pub mod markdown;
-pub mod plots;
-pub mod printed;
-pub mod readable;
-pub mod table;
 
-pub use markdown::FILE;
+pub use kit::markdown::FILE;
 
 use crate::installation::study::rows::StudyResults;
-use crate::report::plots::Written;
 use crate::results::read::StoredRun;
+use kit::plots::Written;
+use paper::ReportTables;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
-use table::ReportTables;
 
 /// The seal of what a finished run promises beyond its tables, written last: the
 /// SHA-256 of `manifest.json`, both reports and every figure drawn, one
@@ -69,16 +64,13 @@ pub fn documents(reported: &Reported) -> [(&'static str, String); 2] {
         Reported::Run { run, figures } => {
             let tables = ReportTables::of(run);
             (
-                markdown::render(run, &tables, figures),
-                latex::render(run, &tables),
+                paper::markdown::render(run, &tables, figures),
+                paper::latex::render(run, &tables),
             )
         }
-        Reported::Study { study, name, .. } => (
-            installation::markdown(study),
-            installation::latex(study, name),
-        ),
+        Reported::Study { study, name, .. } => (study::markdown(study), study::latex(study, name)),
     };
-    [(FILE, markdown), (latex::FILE, tex)]
+    [(FILE, markdown), (kit::latex::FILE, tex)]
 }
 
 /// Writes a results folder's [`documents`] into it, each atomically, then seals them
@@ -107,7 +99,7 @@ fn seal(folder: &Path, figures: &[Written], reports: [&PathBuf; 2]) -> std::io::
     let mut seal = String::new();
     for path in sealed {
         let bytes = std::fs::read(&path)?;
-        let shown = markdown::path_from(folder, &path).unwrap_or(path);
+        let shown = kit::markdown::path_from(folder, &path).unwrap_or(path);
         let _ = writeln!(
             seal,
             "{}  {}",
@@ -134,7 +126,7 @@ pub fn is_complete(folder: &Path) -> bool {
         return false;
     };
     crate::results::files_intact(folder, named.iter().copied())
-        && [crate::results::MANIFEST, FILE, latex::FILE]
+        && [crate::results::MANIFEST, FILE, kit::latex::FILE]
             .iter()
             .all(|required| named.iter().any(|(path, _)| path == required))
 }

@@ -2,8 +2,8 @@
 //! them: each method's held-out RMSE per calibration window and scored trajectory, the
 //! terms each calibration estimated with their bound, the mean per method and window,
 //! and the samples of the residual figure. In: nothing (data types only). Out: the
-//! [`StudyResults`] that `study` fills, `results::installation` writes and reads, and
-//! `report::installation` sets as tables and figures.
+//! [`StudyResults`] that `study` fills, `results::study` writes and reads, and
+//! `report::study` sets as tables and figures.
 
 use crate::Vec3;
 

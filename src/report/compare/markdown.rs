@@ -289,7 +289,7 @@ fn training_of(run: &StoredRun, model: ErrorModel) -> Option<(usize, f64, f64)> 
 
 fn training_section(a: &StoredRun, b: &StoredRun, out: &mut String) {
     let _ = writeln!(out, "## DCNet training\n");
-    let models = crate::report::printed::models_in(
+    let models = crate::report::paper::printed::models_in(
         a.training
             .iter()
             .chain(&b.training)

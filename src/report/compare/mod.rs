@@ -17,7 +17,7 @@
 
 pub mod calibration_time;
 pub mod difference;
-pub mod installation;
+pub mod study;
 pub mod markdown;
 pub mod pairs;
 pub mod spec_keys;
@@ -87,7 +87,7 @@ pub fn refuse_sweep(folder: &Path) -> Result<(), CompareError> {
 }
 
 /// The comparison of two results folders as Markdown, by their kind: two runs of the
-/// paper ([`render`]) or two installation studies ([`installation::render`]); a sweep's
+/// paper ([`render`]) or two installation studies ([`study::render`]); a sweep's
 /// folder, or one folder of each kind, is refused.
 pub fn folders(first: &Path, second: &Path) -> Result<String, CompareError> {
     for folder in [first, second] {
@@ -97,10 +97,7 @@ pub fn folders(first: &Path, second: &Path) -> Result<String, CompareError> {
         Held::of(first) == Held::Study,
         Held::of(second) == Held::Study,
     ) {
-        (true, true) => Ok(installation::render(
-            &installation::read(first)?,
-            &installation::read(second)?,
-        )),
+        (true, true) => Ok(study::render(&study::read(first)?, &study::read(second)?)),
         (true, false) => Err(CompareError::InstallationAndRun {
             study: first.to_path_buf(),
             run: second.to_path_buf(),

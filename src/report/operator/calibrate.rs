@@ -1,0 +1,347 @@
+//! What `calibrate` prints on stdout: the fit's terms with their standard deviations,
+//! the terms the recording cannot show and the RMSE before and after; then the Kalman
+//! filter's terms after a few lengths of the recording and how long it needed; and of a
+//! joint calibration, the vehicle's terms, their agreement across the recordings and
+//! each recording's clock.
+//! In: a [`Calibration`] or a [`JointCalibration`]. Out: the text.
+
+use crate::evaluate::calibration_time::tolerance_band;
+use crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S;
+use crate::installation::estimate::settling::SettlingPoint;
+use crate::installation::terms::AxisRmse;
+use crate::operator::calibrate::Calibration;
+use crate::operator::calibrate_joint::{AGREEMENT_P_VALUE, JointCalibration};
+use crate::report::kit::readable::{readable_term, readable_why};
+use comfy_table::{Table, presets::ASCII_MARKDOWN};
+
+/// Everything `calibrate` prints: the fit, a blank line, the filter; ends in a newline.
+pub fn calibration_text(calibration: &Calibration) -> String {
+    format!(
+        "{}\n\n{}\n",
+        printed_fit(calibration),
+        printed_settling(calibration)
+    )
+}
+
+/// The terms of a calibration with their standard deviations, the terms the window
+/// cannot show and why, and the RMSE against the reference before and after.
+fn printed_fit(calibration: &Calibration) -> String {
+    let Calibration {
+        bound,
+        fitted,
+        noise,
+        ..
+    } = calibration;
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    table.set_header([
+        "term",
+        "estimate",
+        "standard deviation",
+        "bound (specified noise)",
+        "seen",
+    ]);
+    for (i, name) in bound.names.iter().enumerate() {
+        let (readable, unit, factor) = readable_term(name);
+        let seen = if crate::operator::calibrate::is_noise(bound, name) {
+            "no, not applied"
+        } else if bound.is_unseen(name) {
+            "no"
+        } else {
+            "yes"
+        };
+        table.add_row([
+            readable,
+            format!("{:.4} {unit}", bound.value[i] * factor),
+            format!("{:.4} {unit}", bound.std[i] * factor),
+            format!("{:.4} {unit}", bound.bound_std[i] * factor),
+            seen.to_string(),
+        ]);
+    }
+    let shown = bound.residual_noise;
+    let assumed = 100.0 * (noise.dvl_m_s.powi(2) + noise.reference_m_s.powi(2)).sqrt();
+    let mut text = format!(
+        "calibrated on {} samples (those {TIME_OFFSET_MARGIN_S} s inside the reference)\n{table}\n",
+        fitted.sample_count
+    );
+    text.push_str(&format!(
+        "standard deviation: from the noise the fit leaves, per axis x, y, z {:.2}, {:.2}, {:.2} cm/s with a correlation of {:.2}, {:.2}, {:.2} from one sample to the next (an AR(1) noise); bound: from the specified white noise of {assumed:.2} cm/s per axis, the best these samples could give\n",
+        100.0 * shown.std_m_s[0],
+        100.0 * shown.std_m_s[1],
+        100.0 * shown.std_m_s[2],
+        shown.lag_one[0],
+        shown.lag_one[1],
+        shown.lag_one[2],
+    ));
+    for asked in &calibration.asked {
+        text.push_str(&format!(
+            "the residuals still follow a term left out: {} (score test χ² {:.1} on {} degree{} of freedom, p {}): the terms fitted without it may be absorbing it, and their intervals cannot show that; add it with --terms\n",
+            asked.term,
+            asked.statistic,
+            asked.freedom,
+            if asked.freedom == 1 { "" } else { "s" },
+            if asked.p_value < 1e-6 { "< 1e-6".to_string() } else { format!("{:.1e}", asked.p_value) },
+        ));
+    }
+    for unseen in &bound.unseen {
+        text.push_str(&format!(
+            "not seen here: {}: {}\n",
+            readable_term(unseen.term).0,
+            readable_why(unseen.term, &unseen.why.to_string())
+        ));
+    }
+    text.push_str(&format!(
+        "RMSE against the reference, body frame, on the {} of {} samples {TIME_OFFSET_MARGIN_S} s inside it: {} before, {} after",
+        calibration.scored,
+        calibration.recorded,
+        printed_rmse(calibration.before),
+        printed_rmse(calibration.after)
+    ));
+    text
+}
+
+/// An RMSE in cm/s, its total and each axis.
+fn printed_rmse(rmse: Option<AxisRmse>) -> String {
+    match rmse {
+        Some(r) => format!(
+            "{:.2} cm/s (x {:.2}, y {:.2}, z {:.2})",
+            100.0 * r.total_m_s,
+            100.0 * r.x_m_s,
+            100.0 * r.y_m_s,
+            100.0 * r.z_m_s
+        ),
+        None => "no sample inside the reference".into(),
+    }
+}
+
+/// The lengths the printed table shows: round ones below the recording's, the settling
+/// time and the whole recording.
+const SHOWN_LENGTHS_S: [f64; 9] = [5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0, 2000.0];
+
+/// The filter's terms after a few lengths of the recording (of its first `window`
+/// seconds where that was asked), each ± its standard deviation, and the RMSE they leave
+/// on the whole recording; then how long the recording needed.
+fn printed_settling(calibration: &Calibration) -> String {
+    let Some(all) = calibration.curve.last() else {
+        return "the Kalman filter took no sample: none lies inside the reference".into();
+    };
+    let shown = shown_points(calibration, all);
+    let mut text = format!(
+        "the Kalman filter over the same samples, its terms constant, starting at zero with standard deviations {}; its terms after each length, ± its standard deviation (from the noise its residuals show so far, as the fit's):\n{}\n",
+        priors(calibration).join(", "),
+        settling_table(calibration, &shown, all)
+    );
+    text.push_str(&verdict(calibration, all));
+    text
+}
+
+/// The points of the curve the table shows: those at [`SHOWN_LENGTHS_S`], the settling
+/// time, and the last.
+fn shown_points<'a>(
+    calibration: &'a Calibration,
+    all: &'a SettlingPoint,
+) -> Vec<&'a SettlingPoint> {
+    let settled = calibration.settled_s;
+    let mut shown: Vec<&SettlingPoint> = calibration
+        .curve
+        .iter()
+        .filter(|p| SHOWN_LENGTHS_S.contains(&p.length_s) || settled == Some(p.length_s))
+        .collect();
+    if shown.last().is_none_or(|p| p.length_s != all.length_s) {
+        shown.push(all);
+    }
+    shown
+}
+
+/// One column per shown length, one row per term, and the RMSE each leaves.
+fn settling_table(
+    calibration: &Calibration,
+    shown: &[&SettlingPoint],
+    all: &SettlingPoint,
+) -> Table {
+    let calibrated_on = if calibration.window_s.is_some() {
+        "window"
+    } else {
+        "all"
+    };
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    let mut header = vec!["after".to_string()];
+    header.extend(shown.iter().map(|p| {
+        if p.length_s == all.length_s {
+            format!("{} s ({calibrated_on})", p.length_s)
+        } else if calibration.settled_s == Some(p.length_s) {
+            format!("{} s (settled)", p.length_s)
+        } else {
+            format!("{} s", p.length_s)
+        }
+    }));
+    table.set_header(header);
+    let terms = calibration.filter.terms;
+    for (i, name) in terms.parameter_names().iter().enumerate() {
+        let (readable, unit, factor) = readable_term(name);
+        let mut row = vec![format!("{readable} ({unit})")];
+        row.extend(shown.iter().map(|p| {
+            let value = p.step.installation.to_parameters(&terms)[i];
+            format!("{:.3} ± {:.3}", value * factor, p.step.std[i] * factor)
+        }));
+        table.add_row(row);
+    }
+    let mut rmse = vec!["RMSE on the recording (cm/s)".to_string()];
+    rmse.extend(shown.iter().map(|p| format!("{:.2}", p.rmse_cm_s)));
+    table.add_row(rmse);
+    table
+}
+
+/// Each prior of the filter's terms once, with its unit: the lever arm's three
+/// components share one.
+fn priors(calibration: &Calibration) -> Vec<String> {
+    let terms = calibration.filter.terms;
+    let mut prior: Vec<String> = Vec::new();
+    for (&kind, name) in terms.parameter_kinds().iter().zip(terms.parameter_names()) {
+        let (_, unit, factor) = readable_term(name);
+        let std = format!("{} {unit}", calibration.settings.prior.of(kind) * factor);
+        if !prior.contains(&std) {
+            prior.push(std);
+        }
+    }
+    prior
+}
+
+/// How long the recording (or its window) needed, or that the filter diverged.
+fn verdict(calibration: &Calibration, all: &SettlingPoint) -> String {
+    let tolerance_pct = calibration.tolerance_pct;
+    let of = if calibration.window_s.is_some() {
+        "of the window"
+    } else {
+        "of the recording"
+    };
+    let before_cm_s = calibration.before.map_or(f64::NAN, |r| 100.0 * r.total_m_s);
+    let after_cm_s = calibration.after.map_or(f64::NAN, |r| 100.0 * r.total_m_s);
+    let band_cm_s = tolerance_band(tolerance_pct / 100.0, before_cm_s, after_cm_s);
+    match calibration.settled_s {
+        Some(length_s) => format!(
+            "after {length_s} s the filter's terms leave an RMSE on the whole recording within ±{band_cm_s:.2} cm/s of the {:.2} cm/s they leave after all {} s {of} ({tolerance_pct} % of what calibration changes here: {before_cm_s:.2} cm/s before it, {after_cm_s:.2} after the fit of all of it), and stay there, though a term whose ± is still wide then is not pinned down (scored on this recording, not on another dive)",
+            all.rmse_cm_s, all.length_s,
+        ),
+        None => format!(
+            "the filter's terms after all {} s {of} leave no finite RMSE on the recording: the filter diverged",
+            all.length_s
+        ),
+    }
+}
+
+/// What a joint `calibrate` prints: the vehicle's terms over every recording with their
+/// standard deviations and bound, beside the spread of the recordings fitted alone and
+/// whether they agree; then each recording's own terms (its clock) and residual.
+pub fn joint_text(calibration: &JointCalibration) -> String {
+    let JointCalibration {
+        joint,
+        names,
+        noise,
+        ..
+    } = calibration;
+    let bound = &joint.bound;
+    let table = vehicle_table(calibration);
+    let samples: usize = joint.sample_counts.iter().sum();
+    let mut text = format!(
+        "calibrated jointly on {} recordings, {samples} samples (those {TIME_OFFSET_MARGIN_S} s inside each reference): the vehicle's terms shared, each recording's {} its own\n{table}\n",
+        names.len(),
+        joint.dive_terms.parameter_names().join(", ")
+    );
+    let shown = bound.residual_noise;
+    let specified = 100.0 * (noise.dvl_m_s.powi(2) + noise.reference_m_s.powi(2)).sqrt();
+    let level = (shown.std_m_s.iter().map(|s| s * s).sum::<f64>() / 3.0).sqrt() * 100.0;
+    text.push_str(&format!(
+        "residuals: {:.2}, {:.2}, {:.2} cm/s per axis x, y, z (correlation {:.2}, {:.2}, {:.2} from one sample to the next) against the specified {specified:.2} cm/s per axis: {}; the standard deviations are from the noise the residuals show, the bound's from the specified noise\n",
+        100.0 * shown.std_m_s[0],
+        100.0 * shown.std_m_s[1],
+        100.0 * shown.std_m_s[2],
+        shown.lag_one[0],
+        shown.lag_one[1],
+        shown.lag_one[2],
+        if level <= 1.2 * specified { "consistent with the noise" } else { "above the noise: the model leaves something out, or the noise is larger than specified" }
+    ));
+    text.push_str(&format!(
+        "alone: each recording fitted by itself; spread, the standard deviation of their estimates, and spread / √K the standard error of their mean over the K recordings (where they disagree, the joint term's uncertainty is nearer this than its own standard deviation); χ², Σ ((alone − joint) / its standard deviation)² over the {} recordings, and its p-value on {} degrees of freedom (under {AGREEMENT_P_VALUE}: the recordings disagree beyond their intervals)\n",
+        names.len(),
+        names.len() - 1
+    ));
+    text.push_str(&format!("{}\n", dives_table(calibration)));
+    text
+}
+
+/// The vehicle's terms of a joint calibration, beside the recordings fitted alone.
+fn vehicle_table(calibration: &JointCalibration) -> Table {
+    let (bound, names) = (&calibration.joint.bound, &calibration.names);
+    let agreement = &calibration.agreement;
+    let mut table = Table::new();
+
+    table.load_preset(ASCII_MARKDOWN);
+    table.set_header([
+        "vehicle term",
+        "joint estimate",
+        "standard deviation",
+        "bound (specified noise)",
+        "alone: spread",
+        "spread / √K",
+        "alone: χ² (p)",
+    ]);
+    for (i, name) in bound.names.iter().enumerate() {
+        let (readable, unit, factor) = readable_term(name);
+        let agree = &agreement[i];
+        let mark = if agree.p_value < AGREEMENT_P_VALUE {
+            ", disagree"
+        } else {
+            ""
+        };
+        table.add_row([
+            readable,
+            format!("{:.4} {unit}", bound.value[i] * factor),
+            format!("{:.4} {unit}", bound.std[i] * factor),
+            format!("{:.4} {unit}", bound.bound_std[i] * factor),
+            format!("{:.4} {unit}", agree.spread * factor),
+            format!(
+                "{:.4} {unit}",
+                agree.spread * factor / (names.len() as f64).sqrt()
+            ),
+            format!("{:.1} ({:.1e}{mark})", agree.chi_square, agree.p_value),
+        ]);
+    }
+    table
+}
+
+/// Each recording's own terms (its clock) with their standard deviations, and the
+/// residual it leaves.
+fn dives_table(calibration: &JointCalibration) -> Table {
+    let JointCalibration { joint, names, .. } = calibration;
+    let mut dives = Table::new();
+    dives.load_preset(ASCII_MARKDOWN);
+    let dive_names = joint.dive_terms.parameter_names();
+    let mut header = vec!["recording".to_string()];
+    header.extend(dive_names.iter().map(|n| {
+        let (readable, unit, _) = readable_term(n);
+        format!("{readable} ({unit})")
+    }));
+    header.push("residual, total (cm/s)".into());
+    dives.set_header(header);
+    for (k, name) in names.iter().enumerate() {
+        let values = joint.dives[k].to_parameters(&joint.dive_terms);
+        let mut row = vec![name.clone()];
+        row.extend(dive_names.iter().enumerate().map(|(j, n)| {
+            let (_, _, factor) = readable_term(n);
+            format!(
+                "{:.4} ± {:.4}",
+                values[j] * factor,
+                joint.dive_std[k][j] * factor
+            )
+        }));
+        let r = joint.residual_rms_m_s[k];
+        row.push(format!(
+            "{:.2}",
+            100.0 * (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt()
+        ));
+        dives.add_row(row);
+    }
+    dives
+}

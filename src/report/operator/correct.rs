@@ -1,0 +1,103 @@
+//! What `correct` prints on stdout: the installation applied (the vehicle's terms
+//! carried, the dive's found again with their standard deviations), then how well it
+//! fits the dive after the seconds that found its clock, against the specified noise
+//! and the residual at calibration, with a warning where it fits far worse.
+//! In: a [`Correction`]. Out: the text.
+
+use crate::operator::correct::Correction;
+use crate::report::kit::readable::readable_term;
+use comfy_table::{Table, presets::ASCII_MARKDOWN};
+
+/// Everything `correct` prints; ends in a newline.
+pub fn correction_text(correction: &Correction) -> String {
+    let saved = &correction.saved;
+    let table = applied_table(correction);
+    let mut text = format!(
+        "installation of {} (calibrated on {}) applied\n{table}\n",
+        correction.installation_file.display(),
+        saved.recording
+    );
+    if let Some(clock) = &correction.clock {
+        text.push_str(&format!(
+            "clock found again: the search over ±{} s put the time offset at {:.2} s, least squares at {:.4} s ± {:.4} s{}\n",
+            correction.search_s,
+            clock.searched_offset_s,
+            clock.installation.time_offset_s,
+            clock.time_offset_std_s(),
+            if clock.time_offset_unseen() { " (not seen: its standard deviation is beyond the 0.05 s a clock is held to, or it is tied to another term: these seconds show the clock poorly, and a longer --window-s shows it better)" } else { "" }
+        ));
+    }
+    match correction.after {
+        Some(after) => {
+            text.push_str(&format!(
+                "residual after the first {} s: {:.2} cm/s in total (x {:.2}, y {:.2}, z {:.2} cm/s, body axes, over {} samples); the specified noise leaves {:.2}, the calibration left {:.2}\n",
+                correction.window_s,
+                100.0 * after.total_m_s,
+                100.0 * after.x_m_s,
+                100.0 * after.y_m_s,
+                100.0 * after.z_m_s,
+                after.sample_count,
+                correction.noise_cm_s,
+                correction.calibration_cm_s,
+            ));
+            if correction.fits_far_worse() {
+                text.push_str(&format!(
+                    "warning: the installation fits this dive far worse than the calibration (over {:.2} cm/s): a DVL remounted, another vehicle, or a clock that moved; calibrate this dive\n",
+                    correction.warning_cm_s()
+                ));
+            }
+            if let Some(block) = correction.jumped() {
+                text.push_str(&format!(
+                    "warning: from {:.0} s to {:.0} s the residual rises to {:.2} cm/s (over {:.2}, where {:.0} to {:.0} s left {:.2}): a clock that jumped mid-dive or a DVL disturbed; correct the dive in parts\n",
+                    block.from_s,
+                    block.to_s,
+                    100.0 * block.rmse.total_m_s,
+                    correction.warning_cm_s(),
+                    correction.blocks[0].from_s,
+                    correction.blocks[0].to_s,
+                    100.0 * correction.blocks[0].rmse.total_m_s,
+                ));
+            }
+        }
+        None => text.push_str("no sample after the first seconds to score the installation on\n"),
+    }
+    text
+}
+
+/// Each term applied: its value, its standard deviation, and whether it was carried,
+/// found again on this dive or given.
+fn applied_table(correction: &Correction) -> Table {
+    let saved = &correction.saved;
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    table.set_header(["term", "value", "standard deviation", "from"]);
+    let dive = saved.dive_term_set().parameter_names();
+    let applied = correction.applied.to_parameters(&saved.term_set());
+    for (k, term) in saved.terms.iter().enumerate() {
+        let (readable, unit, factor) = readable_term(&term.name);
+        let found = correction
+            .clock
+            .as_ref()
+            .filter(|_| dive.contains(&term.name.as_str()))
+            .and_then(|clock| {
+                let i = clock.bound.names.iter().position(|n| *n == term.name)?;
+                Some(clock.std[i])
+            });
+        let (std, from) = match (dive.contains(&term.name.as_str()), found) {
+            (true, Some(std)) => (std, format!("this dive's first {} s", correction.window_s)),
+            (true, None) => (f64::NAN, "given".to_string()),
+            (false, _) => (term.std, "carried".to_string()),
+        };
+        let std = match std.is_nan() {
+            true => "-".to_string(),
+            false => format!("{:.4} {unit}", std * factor),
+        };
+        table.add_row([
+            readable,
+            format!("{:.4} {unit}", applied[k] * factor),
+            std,
+            from,
+        ]);
+    }
+    table
+}
