@@ -6,8 +6,8 @@
 //!
 //! Tests that need the recordings carry
 //! `#[ignore = "needs the Snapir recordings: dcnet-exp data fetch"]`, so a fresh clone
-//! reports them as ignored; `cargo test --release -- --include-ignored` runs them, and
-//! then a missing recording fails the test with the places searched.
+//! reports them as ignored; `cargo test --release -- --ignored` runs them (only them),
+//! and then a missing recording fails the test with the places searched.
 
 #![allow(dead_code)]
 
@@ -474,9 +474,10 @@ pub fn snapshot_name(text: &str) -> String {
 }
 
 /// Stores `error`, the stderr of `command` run in the temporary folder `dir`, whole as
-/// the insta snapshot `name` of the calling test file (`tests/snapshots/<test
-/// file>__<name>.snap`), [`redact`]ed, with `command` as its description. Where CI is
-/// set, insta writes nothing and a message that differs from its snapshot fails.
+/// the insta snapshot `name` of the calling test module (`snapshots/<test
+/// binary>__<module>__<name>.snap` beside its file), [`redact`]ed, with `command` as
+/// its description. Where CI is set, insta writes nothing and a message that differs
+/// from its snapshot fails.
 #[allow(unused_macros)]
 macro_rules! assert_error_snapshot {
     ($name:expr, $command:expr, $error:expr, $dir:expr $(,)?) => {{

@@ -3,7 +3,7 @@
 //! the A-KIT recordings (ignored without them), `calibrate` of one recording, `plot`
 //! of a stored study, and bad input refused with the file, line and column named.
 
-mod common;
+use crate::common;
 
 use common::installed::{INSTALLED, write_installed, write_study_spec as write_spec};
 use common::*;

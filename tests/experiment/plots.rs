@@ -3,7 +3,7 @@
 //! the Parquet files alone; the report's numbers are the Parquet numbers beside the
 //! published ones; a broken results folder is refused with exit code 1.
 
-mod common;
+use crate::common;
 
 use common::*;
 use std::path::Path;

@@ -4,7 +4,7 @@
 //! over two keys and over one, with their figures. Each compares with an uninterrupted
 //! single process byte for byte.
 
-mod common;
+use crate::common;
 use common::*;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};

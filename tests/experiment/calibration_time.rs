@@ -4,7 +4,7 @@
 //! synthetic recordings of a known installation, and bad `[estimators.kalman]` and
 //! `[calibration.kalman]` keys refused at their line.
 
-mod common;
+use crate::common;
 
 use common::installed::{INSTALLED, write_installed, write_study_spec};
 use common::*;

@@ -3,7 +3,7 @@
 //! going from 2 to 3 trains only the third, and the tables name the replicates and
 //! carry the confidence interval.
 
-mod common;
+use crate::common;
 use arrow_array::{Array, UInt32Array};
 use common::*;
 use std::path::Path;

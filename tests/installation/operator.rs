@@ -4,7 +4,7 @@
 //! fits (a DVL remounted, a clock that jumped mid-dive), a joint calibration of several
 //! dives, and what is refused (exit 1, the file named, nothing written).
 
-mod common;
+use crate::common;
 
 use common::installed::{INSTALLED, Installed, write_installed};
 use common::{dcnet, stderr, stdout};

@@ -3,7 +3,7 @@
 //! calibration window, compared; and a study beside a run refused, naming which is
 //! which.
 
-mod common;
+use crate::common;
 
 use common::installed::{INSTALLED, write_installed};
 use common::*;

@@ -3,7 +3,7 @@
 //! computed again), and swept over its settings, each point a study of its own beside
 //! the sweep's table, index and figure. All on synthetic recordings with known terms.
 
-mod common;
+use crate::common;
 
 use common::installed::{INSTALLED, write_installed, write_study_spec};
 use common::*;

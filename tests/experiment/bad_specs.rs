@@ -3,12 +3,13 @@
 //! key and what is wrong, before anything runs; a few are written into the spec file
 //! instead and named by its path, line and key. A results folder and cache computed
 //! before are left as they were, byte for byte and modification time. Each refusal's
-//! whole stderr is an insta snapshot in `tests/snapshots/` (`bad_specs__<the --set,
-//! lowercase, other characters as _>.snap`, `bad_specs__file_<key>.snap`), so a change
-//! of wording shows in review; `INSTA_UPDATE=always cargo test --release --test
-//! bad_specs` rewrites them after a deliberate change.
+//! whole stderr is an insta snapshot in `tests/experiment/snapshots/`
+//! (`experiment__bad_specs__<the --set, lowercase, other characters as _>.snap`,
+//! `experiment__bad_specs__file_<key>.snap`), so a change of wording shows in review;
+//! `INSTA_UPDATE=always cargo test --release --test experiment bad_specs::` rewrites
+//! them after a deliberate change.
 
-mod common;
+use crate::common;
 
 use common::{
     assert_error_snapshot, dcnet, project, small_quick_run, snapshot, snapshot_name, stderr,

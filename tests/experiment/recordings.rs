@@ -3,7 +3,7 @@
 //! bad row or header is refused with exit code 1, naming the file, line and column,
 //! before anything is written.
 
-mod common;
+use crate::common;
 
 use common::*;
 use std::path::Path;
@@ -103,7 +103,7 @@ batch_size = 16
 
 /// Runs `args` in `dir` and expects exit code 1 with exactly `expected` on stderr, and
 /// no results written; the message is the snapshot `name`
-/// (`tests/snapshots/recordings__<name>.snap`).
+/// (`tests/experiment/snapshots/experiment__recordings__<name>.snap`).
 fn assert_refused(dir: &Path, name: &str, args: &[&str], expected: &str) {
     let output = dcnet(dir, args);
     assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));

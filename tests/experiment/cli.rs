@@ -1,7 +1,7 @@
 //! The command line as a user meets it: quick runs, thread-count independence,
 //! overrides, bad specs, and `data fetch` against a local server.
 
-mod common;
+use crate::common;
 use common::*;
 use std::path::Path;
 
@@ -515,7 +515,7 @@ fn quick_with(dir: &Path, from: &str, to: &str) -> usize {
 }
 
 /// Runs `run spec.toml` and checks exit code 1, the message, and an untouched `results/`;
-/// the whole message is the snapshot `name` (`tests/snapshots/cli__<name>.snap`).
+/// the whole message is the snapshot `name` (`tests/experiment/snapshots/experiment__cli__<name>.snap`).
 fn assert_rejected(dir: &Path, name: &str, extra: &[&str], expected: &str) {
     let mut args = vec!["run", "spec.toml"];
     args.extend(extra);

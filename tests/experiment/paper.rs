@@ -1,8 +1,8 @@
 //! paper.toml on the real Snapir recordings: the baseline column of the paper, the
 //! floor, and the training set counts. Ignored unless asked for
-//! (`cargo test --release -- --include-ignored`), since a fresh clone has no recordings.
+//! (`cargo test --release -- --ignored`), since a fresh clone has no recordings.
 
-mod common;
+use crate::common;
 use common::*;
 
 #[test]

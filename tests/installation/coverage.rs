@@ -8,7 +8,7 @@
 //! noise is the truth's and white. Beside them, the time offset of a noise-free DVL of
 //! the true continuous motion, read through the interpolated 1-Hz reference.
 
-mod common;
+use crate::common;
 
 use common::installed;
 use dcnet_exp::data::paired::{PairedColumns, PairedFiles, read};

@@ -6,7 +6,7 @@
 //! A-KIT recordings, the study's rows with the clock re-found hold the independent
 //! finding: from a turning segment, the other segments are left at about the DVL's noise.
 
-mod common;
+use crate::common;
 
 use common::installed::{INSTALLED, Installed, write_installed, write_study_spec};
 use dcnet_exp::data::paired::{PairedColumns, PairedFiles, read};
@@ -267,7 +267,8 @@ fn a_study_scores_every_method_with_the_clock_found_again_after_the_window_that_
     assert!(!report.contains("failed there"), "{report}");
 }
 
-/// (`cargo test --release --test dive_clock -- --ignored --nocapture akit`) Each A-KIT
+/// (`cargo test --release --test installation -- --ignored --nocapture dive_clock::`)
+/// Each A-KIT
 /// segment calibrates lever arm, time offset and bias on all of its 400 s; each other
 /// segment is scored after its first minute, with the calibration's clock and with its
 /// own found again from that minute.

@@ -3,7 +3,7 @@
 //! their folds beside the model-based fit, stored in the cache, listed by `plan`,
 //! resumed from their checkpoints after a kill, refused when the spec is wrong.
 
-mod common;
+use crate::common;
 
 use common::installed::{INSTALLED, write_installed, write_study_spec};
 use common::{dcnet, floats, forge_sealed, read_parquet, spawn, stderr, stdout, strings, tree};

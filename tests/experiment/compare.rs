@@ -3,7 +3,7 @@
 //! cell; what is printed is what is written, to `compare.md` by default; a folder that
 //! is not a results folder, or a sweep folder, is refused with exit code 1, naming it.
 
-mod common;
+use crate::common;
 
 use common::*;
 

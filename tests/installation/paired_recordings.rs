@@ -3,7 +3,7 @@
 //! `dcnet-exp data fetch akit` against a local server: the files land where the reader
 //! looks for them, byte for byte, and bytes with another hash are refused.
 
-mod common;
+use crate::common;
 use common::*;
 use dcnet_exp::data::fetch::{AKIT_FILES, AKIT_SEGMENTS};
 use dcnet_exp::data::paired::{PairedColumns, PairedFiles, PairedRecording, read};

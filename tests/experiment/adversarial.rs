@@ -13,10 +13,10 @@
 //! resumed run must keep what was stored and end with the reference's bytes. Last, as
 //! root, OUT is a small tmpfs that fills up at each stage: exit 2 naming the file and
 //! "No space left", nothing half-written, and a resume elsewhere to the reference.
-//! `cargo test --release --test adversarial -- --nocapture` prints the count
-//! of cases tried and held per category.
+//! `cargo test --release --test experiment adversarial:: -- --nocapture` prints the
+//! count of cases tried and held per category.
 
-mod common;
+use crate::common;
 use arrow_array::RecordBatch;
 use common::*;
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;

@@ -4,7 +4,7 @@
 //! convention is the data's, and lever arm, time offset and bias fitted on a turning
 //! segment hold on the others.
 
-mod common;
+use crate::common;
 
 use dcnet_exp::Vec3;
 use dcnet_exp::data::paired::{PairedColumns, PairedFiles, PairedRecording};
@@ -379,7 +379,8 @@ fn the_lever_arm_is_flagged_on_the_straight_segments_and_not_on_a_turning_one() 
 
 /// Prints, for every trajectory, lever arm, time offset and bias with their standard
 /// deviations and flags, and the held-out score of each on the other twelve
-/// (`cargo test --release --test installation -- --ignored --nocapture akit_table`).
+/// (`cargo test --release --test installation -- --ignored --nocapture
+/// installation::every_term_set`).
 /// Every term set fits every trajectory: flat and nearly flat directions are flagged,
 /// never an error. With all 13 terms, the pairs a constant forward speed cannot tell
 /// apart (x scale and x bias, yaw misalignment and y bias) are flagged on T1.
