@@ -379,7 +379,7 @@ mod tests {
         }
     }
 
-    /// The quick spec's rows, as `tests/cli.rs` counts them in `monte_carlo.parquet`.
+    /// The quick spec's rows, as `tests/experiment/cli.rs` counts them in `monte_carlo.parquet`.
     #[test]
     fn the_monte_carlo_rows_are_those_a_run_writes() {
         let spec = quick_spec(&["calibration.monte_carlo_runs=3"]);

@@ -10,7 +10,7 @@
 //! (what the model leaves out follows the manoeuvres) widen it by as much as they
 //! cost. This is the covariance of ordinary least squares under AR(1) errors (Greene,
 //! *Econometric Analysis*, 8th ed., §20.5), the errors' parameters estimated from the
-//! residuals; `tests/coverage.rs` checks that its intervals cover the truth.
+//! residuals; `tests/installation/coverage.rs` checks that its intervals cover the truth.
 
 use crate::Vec3;
 use nalgebra::{DMatrix, DVector};
@@ -76,7 +76,7 @@ impl ResidualNoise {
             // The lag-one estimate's bias taken back: −(1 + 3ρ)/n for a series whose mean
             // is estimated (Marriott and Pope, 1954), and about −(1 + ρ)/n more for each
             // other parameter fitted on the axis (its share of them), which the residuals
-            // of a fit lose; `tests/coverage.rs` checks the sum.
+            // of a fit lose; `tests/installation/coverage.rs` checks the sum.
             noise.lag_one[k] = if power > 0.0 {
                 let read = lagged / power;
                 let per_axis = parameters as f64 / 3.0;
