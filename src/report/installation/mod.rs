@@ -28,7 +28,7 @@ pub use figures::{draw_all, draw_sweep};
 // Where `cli/calibrate.rs` has always found them; they live below the report.
 pub(crate) use crate::report::readable::{readable_term, readable_why};
 
-use crate::installation::study::is_joint;
+use crate::installation::study::method::Method;
 use crate::installation::study::rows::{NO_CALIBRATION, StudyResults, TermRow};
 use crate::report::table::{Section, symbols};
 use agreement::agreement;
@@ -77,7 +77,7 @@ fn sections(study: &StudyResults) -> Vec<Section> {
             study
                 .terms
                 .iter()
-                .filter(|r| r.window_s == largest && is_joint(&r.method) == joint)
+                .filter(|r| r.window_s == largest && Method::parse(&r.method).is_joint() == joint)
                 .map(|r| r.calibration.as_str()),
         )
     };
@@ -106,7 +106,7 @@ fn sections(study: &StudyResults) -> Vec<Section> {
         if !rows.is_empty() {
             let mut section = terms_section(method, largest, &rows);
             section.paragraph = Some(agreement(method, &rows));
-            let missing: Vec<&str> = calibrations[usize::from(is_joint(method))]
+            let missing: Vec<&str> = calibrations[usize::from(Method::parse(method).is_joint())]
                 .iter()
                 .copied()
                 .filter(|c| !rows.iter().any(|r| r.calibration == *c))
@@ -199,11 +199,11 @@ pub(crate) mod tests {
     #[test]
     fn a_clock_kept_is_counted_apart_from_failed_fits_and_a_joint_calibration_is_no_failure() {
         use crate::installation::study::rows::{FitFailure, TransferRow};
-        use crate::installation::study::{joint_label, refound_label};
+
         let mut study = small();
         let single = "installation lever+offset";
-        let joint = joint_label(single);
-        let refound = refound_label(single, 60.0);
+        let joint = Method::single(single).jointly().to_string();
+        let refound = Method::single(single).refound(60.0).to_string();
         let joint_term = TermRow {
             method: joint.clone(),
             calibration: "all but T1".into(),
