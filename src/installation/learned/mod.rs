@@ -67,8 +67,8 @@ pub fn beyond_the_recordings(
     })
 }
 
-/// The indices of the trajectories that train the model of `fold`: those outside it.
-pub fn training_trajectories(learned: &LearnedSpec, count: usize, fold: usize) -> Vec<usize> {
+/// The indices of the recordings that train the model of `fold`: those outside it.
+pub fn training_recordings(learned: &LearnedSpec, count: usize, fold: usize) -> Vec<usize> {
     (0..count).filter(|&i| learned.fold_of(i) != fold).collect()
 }
 
@@ -81,7 +81,7 @@ pub fn training_windows(
     fold: usize,
     source: TrainingSource,
 ) -> InstallationWindows {
-    let outside: Vec<&Recording> = training_trajectories(learned, recordings.len(), fold)
+    let outside: Vec<&Recording> = training_recordings(learned, recordings.len(), fold)
         .into_iter()
         .map(|i| recordings[i])
         .collect();
@@ -246,7 +246,7 @@ pub(crate) mod tests {
                         "fold {fold} {source:?} trains on {name}"
                     );
                 }
-                for i in training_trajectories(&learned, 5, fold) {
+                for i in training_recordings(&learned, 5, fold) {
                     assert!(windows.trajectory.contains(&format!("T{i}")));
                 }
             }

@@ -199,7 +199,6 @@ pub(crate) mod tests {
     #[test]
     fn a_clock_kept_is_counted_apart_from_failed_fits_and_a_joint_calibration_is_no_failure() {
         use crate::installation::study::rows::{FitFailure, TransferRow};
-
         let mut study = small();
         let single = "installation lever+offset";
         let joint = Method::single(single).jointly().to_string();
