@@ -6,7 +6,7 @@
 //! found on stdout, the files written named on stderr.
 
 use super::args;
-use super::{CliError, failure, input};
+use super::{CliError, input, stopped};
 use crate::installation::terms::names::TermName;
 use crate::operator::calibrate::{CalibrateArgs, calibrate as calibrated};
 use crate::operator::calibrate_joint::{JointArgs, calibrate_joint as calibrated_jointly};
@@ -83,10 +83,7 @@ fn parse_terms((flag, terms): (&str, &[String])) -> Result<Vec<TermName>, CliErr
 /// `calibrate`: the terms of one recording, their bound, how long the recording needed,
 /// and the recording corrected.
 fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
-    let calibration = calibrated(args).map_err(|error| match error.is_input() {
-        true => input(error),
-        false => failure(error),
-    })?;
+    let calibration = calibrated(args).map_err(stopped)?;
     print!("{}", calibration_text(&calibration));
     for path in &calibration.corrected {
         eprintln!("corrected recording written to {}", path.display());
@@ -107,10 +104,7 @@ fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
 /// `correct`: the installation of `--installation` applied to the dive, its clock found
 /// again, and how well it fits.
 fn correct(args: &CorrectArgs) -> Result<(), CliError> {
-    let correction = corrected(args).map_err(|error| match error.is_input() {
-        true => input(error),
-        false => failure(error),
-    })?;
+    let correction = corrected(args).map_err(stopped)?;
     print!("{}", correction_text(&correction));
     for path in &correction.written {
         eprintln!("corrected dive written to {}", path.display());
@@ -121,10 +115,7 @@ fn correct(args: &CorrectArgs) -> Result<(), CliError> {
 /// `calibrate A.csv B.csv …`: the vehicle's terms over every recording, each one's clock
 /// its own, whether they agree, and each recording corrected.
 fn calibrate_joint(args: &JointArgs) -> Result<(), CliError> {
-    let calibration = calibrated_jointly(args).map_err(|error| match error.is_input() {
-        true => input(error),
-        false => failure(error),
-    })?;
+    let calibration = calibrated_jointly(args).map_err(stopped)?;
     print!("{}", joint_text(&calibration));
     for path in &calibration.written {
         eprintln!("corrected recording written to {}", path.display());

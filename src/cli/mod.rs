@@ -66,6 +66,37 @@ fn failure(error: impl Into<anyhow::Error>) -> CliError {
     CliError::Failure(error.into())
 }
 
+/// An error that tells a fault in what was given from a failure while running.
+trait Fault: Into<anyhow::Error> {
+    fn is_input(&self) -> bool;
+}
+
+impl Fault for crate::pipeline::ExecuteError {
+    fn is_input(&self) -> bool {
+        crate::pipeline::ExecuteError::is_input(self)
+    }
+}
+
+impl Fault for crate::operator::calibrate::CalibrateError {
+    fn is_input(&self) -> bool {
+        crate::operator::calibrate::CalibrateError::is_input(self)
+    }
+}
+
+impl Fault for crate::operator::correct::CorrectError {
+    fn is_input(&self) -> bool {
+        crate::operator::correct::CorrectError::is_input(self)
+    }
+}
+
+/// A command that stopped: bad input (exit 1), or a failure while running (exit 2).
+fn stopped(error: impl Fault) -> CliError {
+    match error.is_input() {
+        true => input(error),
+        false => failure(error),
+    }
+}
+
 /// The variable that gives `--log-every` when the flag is not typed.
 const LOG_EVERY_VARIABLE: &str = "DCNET_LOG_EVERY";
 

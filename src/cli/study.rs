@@ -4,7 +4,7 @@
 //! printed.
 
 use crate::cli::args::{Drawing, Target};
-use crate::cli::{CliError, failure, input};
+use crate::cli::{CliError, failure, input, stopped};
 use crate::count;
 use crate::data::paired;
 use crate::files::Seal;
@@ -21,14 +21,6 @@ use std::path::{Path, PathBuf};
 /// The experiment of an installation spec: the study, or the points of its sweep.
 fn load(path: &Path, set: &[String]) -> Result<Experiment<StudySpec>, CliError> {
     study_spec::load_experiment(path, set).map_err(input)
-}
-
-/// A run that stopped: bad input (exit 1), or a failure while running (exit 2).
-fn stopped(error: ExecuteError) -> CliError {
-    match error.is_input() {
-        true => input(error),
-        false => failure(error),
-    }
 }
 
 /// The experiment a command works on; OUT, when it exists, must be a folder.

@@ -216,9 +216,7 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
     let written = write(&outputs, &samples, &recording_sha256)?;
     let total = |v: crate::Vec3| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
     Ok(Correction {
-        noise_cm_s: 3f64.sqrt()
-            * 100.0
-            * (noise.dvl_m_s.powi(2) + noise.reference_m_s.powi(2)).sqrt(),
+        noise_cm_s: 3f64.sqrt() * 100.0 * noise.per_axis_m_s(),
         calibration_cm_s: total(saved.residual_cm_s),
         saved,
         clock,

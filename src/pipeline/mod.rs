@@ -38,7 +38,7 @@ pub use plan::{Mode, Plan, Status, Task};
 pub use shard::Shard;
 pub use study::StudyPlan;
 
-use crate::results::{self, Manifest, StageSeconds, sweep};
+use crate::results::{self, Manifest, RunRecord, StageSeconds, sweep};
 use cache::Blueprint;
 use std::path::PathBuf;
 use std::time::{Instant, SystemTime};
@@ -316,21 +316,15 @@ fn write_results(
 /// The manifest of point `p`'s results folder.
 fn manifest(plan: &Plan, p: usize, started_at: SystemTime, stages: &StageSeconds) -> Manifest {
     let spec = plan.spec(p);
-    Manifest {
+    Manifest::of_run(RunRecord {
         name: spec.name.clone(),
-        spec_sha256: crate::files::sha256_hex(spec.resolved_toml().as_bytes()),
-        git_commit: env!("DCNET_GIT_COMMIT").to_string(),
-        crate_version: env!("CARGO_PKG_VERSION").to_string(),
-        started_at: humantime::format_rfc3339_seconds(started_at).to_string(),
-        finished_at: humantime::format_rfc3339_seconds(SystemTime::now()).to_string(),
-        threads: rayon::current_num_threads(),
+        resolved_toml: &spec.resolved_toml(),
+        started_at,
         backend: spec.training.backend.to_string(),
-        host: gethostname::gethostname().to_string_lossy().into_owned(),
-        instruction_set: crate::kernels::instruction_set().to_string(),
         data_files: plan.hashes.files_of(spec),
         stage_seconds: stages.clone(),
         results_key: plan.results_key(p),
-        files_sha256: Default::default(),
         spec_file: plan.spec_file.clone().unwrap_or_default(),
-    }
+    })
+    .finished_now()
 }

@@ -30,6 +30,7 @@ use parquet::file::properties::WriterProperties;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::time::SystemTime;
 pub use tables::{
     REPLICATE, RMSE_CI, calibration_batch, evaluation_batch, monte_carlo_batch, training_batch,
     trajectories_batch,
@@ -84,6 +85,62 @@ pub struct Manifest {
     /// unless `--force`.
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub spec_file: String,
+}
+
+/// What a manifest records of one run: the rest is this process's and this machine's.
+pub struct RunRecord<'a> {
+    pub name: String,
+    /// The resolved spec, whose SHA-256 the manifest holds.
+    pub resolved_toml: &'a str,
+    pub started_at: SystemTime,
+    pub backend: String,
+    pub data_files: Vec<DataFile>,
+    pub stage_seconds: StageSeconds,
+    pub results_key: String,
+    pub spec_file: String,
+}
+
+impl Manifest {
+    /// The manifest of `run`, with this build's commit and version, the threads, the
+    /// host and its instruction set; no files yet, and not finished (see
+    /// [`Manifest::finished_now`]).
+    pub fn of_run(run: RunRecord) -> Manifest {
+        let RunRecord {
+            name,
+            resolved_toml,
+            started_at,
+            backend,
+            data_files,
+            stage_seconds,
+            results_key,
+            spec_file,
+        } = run;
+        Manifest {
+            name,
+            spec_sha256: sha256_hex(resolved_toml.as_bytes()),
+            git_commit: env!("DCNET_GIT_COMMIT").to_string(),
+            crate_version: env!("CARGO_PKG_VERSION").to_string(),
+            started_at: humantime::format_rfc3339_seconds(started_at).to_string(),
+            finished_at: String::new(),
+            threads: rayon::current_num_threads(),
+            backend,
+            host: gethostname::gethostname().to_string_lossy().into_owned(),
+            instruction_set: crate::kernels::instruction_set().to_string(),
+            data_files,
+            stage_seconds,
+            results_key,
+            files_sha256: Default::default(),
+            spec_file,
+        }
+    }
+
+    /// The same manifest, finished now.
+    pub fn finished_now(self) -> Manifest {
+        Manifest {
+            finished_at: humantime::format_rfc3339_seconds(SystemTime::now()).to_string(),
+            ..self
+        }
+    }
 }
 
 /// Wall time of each stage of a run.

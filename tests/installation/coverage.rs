@@ -16,7 +16,7 @@ use dcnet_exp::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise, bound}
 use dcnet_exp::installation::estimate::filter::{FilterSettings, run_filter_observed};
 use dcnet_exp::installation::estimate::fit::fit;
 use dcnet_exp::installation::learned::simulate::simulate_dvl_correlated;
-use dcnet_exp::installation::study::Segment;
+use dcnet_exp::installation::study::Recording;
 use dcnet_exp::installation::terms::{Installation, PerAxis, PerKind, TermSet};
 use nalgebra::DVector;
 use rand::SeedableRng;
@@ -62,7 +62,7 @@ struct Coverage {
 /// correlation `correlation_at_1_s`: the stamps whose t + τ falls inside the reference,
 /// and their samples.
 fn simulated(
-    segment: &Segment,
+    segment: &Recording,
     installation: &Installation,
     correlation_at_1_s: f64,
     rng: &mut rand_chacha::ChaCha8Rng,
@@ -80,7 +80,7 @@ fn simulated(
 
 /// One fit per seed of a DVL simulated on `segments[seed % len]` with noise of
 /// correlation `correlation_at_1_s`.
-fn coverage(segments: &[Segment], correlation_at_1_s: f64, seeds: u64) -> Coverage {
+fn coverage(segments: &[Recording], correlation_at_1_s: f64, seeds: u64) -> Coverage {
     let names = EVERY_TERM.parameter_names();
     let truth = TRUTH.to_parameters(&EVERY_TERM);
     let covered = |value: f64, std: f64, k: usize| (value - truth[k]).abs() <= 1.96 * std;
@@ -129,19 +129,19 @@ fn coverage(segments: &[Segment], correlation_at_1_s: f64, seeds: u64) -> Covera
 }
 
 /// The segments of `files`, read as A-KIT files.
-fn segments(files: &[PairedFiles]) -> Vec<Segment> {
+fn segments(files: &[PairedFiles]) -> Vec<Recording> {
     files
         .iter()
         .enumerate()
         .map(|(n, f)| {
             let recording = read(f, &PairedColumns::akit()).expect("a readable recording");
-            Segment::new(format!("T{}", n + 1), recording)
+            Recording::new(format!("T{}", n + 1), recording)
         })
         .collect()
 }
 
 /// Prints the tables and checks that the honest intervals cover in 93–97 % of seeds.
-fn check(label: &str, segments: &[Segment], seeds: u64) {
+fn check(label: &str, segments: &[Recording], seeds: u64) {
     let mut outside = Vec::new();
     for (kind, correlation) in [("white", 0.0), ("AR(1) 0.8 at 1 s", 0.8)] {
         let c = coverage(segments, correlation, seeds);
@@ -267,7 +267,7 @@ struct FilterCheck {
 /// [`FILTER_PRIOR`] and noise of correlation `correlation_at_1_s`, the filter told the
 /// noise is `specified_m_s`.
 fn filter_check(
-    segments: &[Segment],
+    segments: &[Recording],
     correlation_at_1_s: f64,
     specified_m_s: f64,
     seeds: u64,
@@ -359,7 +359,7 @@ fn filter_check(
 /// NEES is within 20 % of the terms' count (a standard deviation within 10 % of the
 /// spread). The χ² band itself is tighter than a noise read from the record can meet
 /// on a short one; the table shows where the filter stands against it.
-fn check_filter(label: &str, segments: &[Segment], seeds: u64) {
+fn check_filter(label: &str, segments: &[Recording], seeds: u64) {
     use statrs::distribution::{ChiSquared, ContinuousCDF};
     let names = EVERY_TERM.parameter_names();
     let terms = names.len() as f64;
@@ -534,7 +534,7 @@ fn the_joint_fit_covers_the_vehicles_terms_and_every_clock() {
     for correlation in [0.0, 0.8] {
         let coverage = covered(400, |seed| {
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-            let simulated: Vec<(Vec<f64>, Vec<[f64; 3]>, &Segment)> = clocks
+            let simulated: Vec<(Vec<f64>, Vec<[f64; 3]>, &Recording)> = clocks
                 .iter()
                 .enumerate()
                 .map(|(k, &clock_s)| {

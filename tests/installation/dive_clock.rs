@@ -14,8 +14,8 @@ use dcnet_exp::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise, bound}
 use dcnet_exp::installation::estimate::clock::{
     Carried, ClockError, ClockSearch, DEFAULT_SEARCH_S, refind,
 };
-use dcnet_exp::installation::estimate::fit::{TIME_OFFSET_MARGIN_S, fit};
-use dcnet_exp::installation::study::Segment;
+use dcnet_exp::installation::estimate::fit::fit;
+use dcnet_exp::installation::study::{Recording, RefoundClock, refind_clock};
 use dcnet_exp::installation::terms::{Installation, PerAxis, TermSet, score};
 use std::path::Path;
 
@@ -33,7 +33,7 @@ const CLOCK_ONLY: TermSet = TermSet {
 };
 
 /// Dive `k` (1-based) of [`INSTALLED`] with its own clock, written into `folder`.
-fn dive(folder: &Path, k: usize, time_offset_s: f64, straight: bool) -> Segment {
+fn dive(folder: &Path, k: usize, time_offset_s: f64, straight: bool) -> Recording {
     let installed = Installed {
         time_offset_s,
         ..INSTALLED
@@ -47,13 +47,13 @@ fn dive(folder: &Path, k: usize, time_offset_s: f64, straight: bool) -> Segment 
         100 + k as u64,
     );
     let recording = read(&PairedFiles::akit(&at, 1), &PairedColumns::akit()).unwrap();
-    Segment::new(format!("D{k}"), recording)
+    Recording::new(format!("D{k}"), recording)
 }
 
 #[test]
 fn the_vehicles_terms_carry_to_dives_whose_clocks_differ_and_each_clock_is_found_again() {
     let dir = tempfile::tempdir().unwrap();
-    let dives: Vec<Segment> = CLOCKS_S
+    let dives: Vec<Recording> = CLOCKS_S
         .iter()
         .enumerate()
         .map(|(k, &clock)| dive(dir.path(), k + 1, clock, false))
@@ -99,25 +99,16 @@ fn the_vehicles_terms_carry_to_dives_whose_clocks_differ_and_each_clock_is_found
     };
     for (scored, &clock_s) in dives.iter().zip(&CLOCKS_S).skip(1) {
         let recording = &scored.recording;
-        let (first, _) = scored.first_seconds(60.0);
-        let window = (
-            &recording.time_s[first.clone()],
-            &recording.dvl_m_s[first.clone()],
-        );
         let carried = Carried::with(
             fitted.installation,
             terms,
             &bounded.std,
             &bounded.correlation,
         );
-        let clock = refind(
-            window,
-            &scored.reference,
-            &carried,
-            search,
-            (NOISE, &DEFAULT_TOLERANCES),
-        )
-        .unwrap();
+        // The study's own clock loop: the first minute, then the samples after it.
+        let RefoundClock { found, after } =
+            refind_clock(scored, 60.0, &carried, search, (NOISE, &DEFAULT_TOLERANCES));
+        let clock = found.unwrap();
         let std = clock.time_offset_std_s();
         let error = clock.installation.time_offset_s - clock_s;
         assert!(
@@ -132,10 +123,6 @@ fn the_vehicles_terms_carry_to_dives_whose_clocks_differ_and_each_clock_is_found
             scored.name
         );
         // Scored after the minute that found it; the noise alone leaves 2√3 cm/s.
-        let inside = scored
-            .reference
-            .interior(&recording.time_s, TIME_OFFSET_MARGIN_S);
-        let after = first.end.max(inside.start)..inside.end;
         let rmse = score(
             &clock.installation,
             &recording.time_s,
@@ -275,10 +262,10 @@ fn a_study_scores_every_method_with_the_clock_found_again_after_the_window_that_
 #[test]
 #[ignore = "needs the A-KIT recordings: dcnet-exp data fetch akit"]
 fn on_akit_the_clock_found_again_leaves_the_dvls_noise_from_a_turning_segment() {
-    let segments: Vec<Segment> = (1..=13)
+    let segments: Vec<Recording> = (1..=13)
         .map(|n| {
             let files = PairedFiles::akit(&common::akit(), n);
-            Segment::new(
+            Recording::new(
                 format!("T{n}"),
                 read(&files, &PairedColumns::akit()).unwrap(),
             )
@@ -311,16 +298,11 @@ fn on_akit_the_clock_found_again_leaves_the_dvls_noise_from_a_turning_segment() 
             .map(|(_, s)| s)
         {
             let recording = &scored.recording;
-            let (first, _) = scored.first_seconds(60.0);
-            let inside = scored
-                .reference
-                .interior(&recording.time_s, TIME_OFFSET_MARGIN_S);
-            let after = first.end.max(inside.start)..inside.end;
-            let window = (&recording.time_s[first.clone()], &recording.dvl_m_s[first]);
-            // Where the minute cannot show the clock, the calibration's is kept.
-            let found = refind(
-                window,
-                &scored.reference,
+            // The study's own clock loop; where the minute cannot show the clock, the
+            // calibration's is kept.
+            let RefoundClock { found, after } = refind_clock(
+                scored,
+                60.0,
                 &Carried::exact(fitted.installation),
                 search,
                 (noise, &DEFAULT_TOLERANCES),

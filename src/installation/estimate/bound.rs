@@ -40,6 +40,20 @@ pub struct Noise {
     pub reference_m_s: f64,
 }
 
+impl Noise {
+    /// The variance of the difference of the two on each component, (m/s)²: the DVL's
+    /// and the reference's added.
+    pub fn variance_m2_s2(&self) -> f64 {
+        self.dvl_m_s.powi(2) + self.reference_m_s.powi(2)
+    }
+
+    /// The standard deviation of the difference of the two on each component, m/s:
+    /// √(dvl² + reference²).
+    pub fn per_axis_m_s(&self) -> f64 {
+        self.variance_m2_s2().sqrt()
+    }
+}
+
 /// The standard deviation beyond which a term means nothing, per kind of term.
 pub type Tolerances = PerKind;
 
@@ -133,7 +147,7 @@ impl TermBound {
 pub fn bound(fit: &Fit, noise: Noise, tolerances: &Tolerances) -> TermBound {
     let names = fit.terms.parameter_names();
     let kinds = fit.terms.parameter_kinds();
-    let sigma_m_s = (noise.dvl_m_s.powi(2) + noise.reference_m_s.powi(2)).sqrt();
+    let sigma_m_s = noise.per_axis_m_s();
     let information = UnitInformation::of(fit, names.len());
     let (inverse, flat_with) = information.pseudo_inverse(&names);
     let residual_noise = ResidualNoise::of(&fit.residuals, names.len());

@@ -103,7 +103,7 @@ pub fn run_filter_observed(
         .iter()
         .all(|&k| settings.random_walk.of(k) == 0.0)
         .then(|| DMatrix::from_diagonal(&filter.covariance.diagonal().map(|v| 1.0 / v)));
-    let variance = noise.dvl_m_s.powi(2) + noise.reference_m_s.powi(2);
+    let variance = noise.variance_m2_s2();
     // Sample `j`'s measurement linearised about the terms θ.
     let measure = |j: usize, parameters: &[f64]| {
         let installation = Installation::from_parameters(&terms, parameters);
@@ -314,7 +314,7 @@ pub(crate) mod tests {
             reference_m_s: 0.005,
         };
         let steps = run_filter(&time, &dvl, &reference, terms, &settings(), noise);
-        let variance = noise.dvl_m_s.powi(2) + noise.reference_m_s.powi(2);
+        let variance = noise.variance_m2_s2();
         let kinds = terms.parameter_kinds();
         let prior = Prior {
             mean: vec![0.0; kinds.len()],

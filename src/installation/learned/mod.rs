@@ -3,7 +3,7 @@
 //! their reference, or their real DVL), and the terms a trained model reads from a
 //! calibration window of a trajectory inside it (the mean of its outputs over the
 //! window's consecutive network windows, as the paper's DCNet calibrates).
-//! In: the study's spec and segments. Out: [`InstallationWindows`] to train on, and an
+//! In: the study's spec and recordings. Out: [`InstallationWindows`] to train on, and an
 //! [`Installation`] per calibration window.
 //!
 //! No trajectory that a fold's model is scored on is seen in its training, as
@@ -16,7 +16,7 @@ pub mod network;
 use crate::installation::learned::network::{batch_of, closed_loop_loss, installation_of};
 use crate::installation::learned::simulate::{InstallationWindows, simulated_windows, windows_of};
 use crate::installation::learned::spec::{LearnedSpec, TrainingSource};
-use crate::installation::study::Segment;
+use crate::installation::study::Recording;
 use crate::installation::study::spec::StudySpec;
 use crate::installation::terms::names::term_set;
 use crate::installation::terms::{Installation, TermSet};
@@ -67,8 +67,8 @@ pub fn beyond_the_recordings(
     })
 }
 
-/// The indices of the trajectories that train the model of `fold`: those outside it.
-pub fn training_trajectories(learned: &LearnedSpec, count: usize, fold: usize) -> Vec<usize> {
+/// The indices of the recordings that train the model of `fold`: those outside it.
+pub fn training_recordings(learned: &LearnedSpec, count: usize, fold: usize) -> Vec<usize> {
     (0..count).filter(|&i| learned.fold_of(i) != fold).collect()
 }
 
@@ -77,13 +77,13 @@ pub fn training_trajectories(learned: &LearnedSpec, count: usize, fold: usize) -
 pub fn training_windows(
     spec: &StudySpec,
     learned: &LearnedSpec,
-    segments: &[&Segment],
+    recordings: &[&Recording],
     fold: usize,
     source: TrainingSource,
 ) -> InstallationWindows {
-    let outside: Vec<&Segment> = training_trajectories(learned, segments.len(), fold)
+    let outside: Vec<&Recording> = training_recordings(learned, recordings.len(), fold)
         .into_iter()
-        .map(|i| segments[i])
+        .map(|i| recordings[i])
         .collect();
     let (window, stride) = (learned.window_samples, learned.stride_samples);
     let windows = match source {
@@ -97,15 +97,15 @@ pub fn training_windows(
         ),
         TrainingSource::Vehicle => {
             let mut all = InstallationWindows::default();
-            for segment in outside {
-                let dvl: Vec<_> = segment
+            for recording in outside {
+                let dvl: Vec<_> = recording
                     .recording
                     .dvl_m_s
                     .iter()
                     .copied()
                     .map(Some)
                     .collect();
-                all.extend(windows_of(segment, &dvl, window, stride, 0));
+                all.extend(windows_of(recording, &dvl, window, stride, 0));
             }
             all
         }
@@ -142,21 +142,21 @@ impl Windowed for LearnedWindows {
     }
 }
 
-/// The terms `model` reads from samples `range` of `segment` with its real DVL: the mean
+/// The terms `model` reads from samples `range` of `recording` with its real DVL: the mean
 /// of its outputs over the range's consecutive network windows; `None` where the range
 /// holds none (a window needs the reference a few samples either side).
 pub fn estimate(
     model: &Dcnet,
     learned: &LearnedSpec,
-    segment: &Segment,
+    recording: &Recording,
     range: Range<usize>,
     device: &Device,
 ) -> Option<Installation> {
-    let dvl: Vec<_> = (0..segment.recording.dvl_m_s.len())
-        .map(|i| range.contains(&i).then_some(segment.recording.dvl_m_s[i]))
+    let dvl: Vec<_> = (0..recording.recording.dvl_m_s.len())
+        .map(|i| range.contains(&i).then_some(recording.recording.dvl_m_s[i]))
         .collect();
     let window = learned.window_samples;
-    let windows = windows_of(segment, &dvl, window, window, 0);
+    let windows = windows_of(recording, &dvl, window, window, 0);
     if windows.is_empty() {
         return None;
     }
@@ -177,7 +177,7 @@ pub(crate) mod tests {
     use super::*;
     use crate::installation::learned::simulate::tests::weaving;
 
-    /// A learned spec of `folds` folds over the test segments.
+    /// A learned spec of `folds` folds over the test recordings.
     pub(crate) fn learned(folds: usize) -> LearnedSpec {
         let file: crate::installation::learned::spec::LearnedFile = toml::from_str(
             r#"
@@ -221,15 +221,15 @@ pub(crate) mod tests {
     /// either source; every trajectory outside it gives some.
     #[test]
     fn a_folds_training_reads_only_the_trajectories_outside_it() {
-        let segments: Vec<Segment> = (0..5)
+        let recordings: Vec<Recording> = (0..5)
             .map(|i| {
-                let mut segment = weaving(&format!("T{i}"), 80, i as f64);
+                let mut recording = weaving(&format!("T{i}"), 80, i as f64);
                 // Its own DVL, so that the vehicle source has one to read.
-                segment.recording.dvl_m_s = segment.reference.velocity_body_m_s.clone();
-                segment
+                recording.recording.dvl_m_s = recording.reference.velocity_body_m_s.clone();
+                recording
             })
             .collect();
-        let refs: Vec<&Segment> = segments.iter().collect();
+        let refs: Vec<&Recording> = recordings.iter().collect();
         let learned = learned(2);
         let spec = crate::installation::study::spec::tests::spec_with(learned.clone());
         for fold in 0..2 {
@@ -246,7 +246,7 @@ pub(crate) mod tests {
                         "fold {fold} {source:?} trains on {name}"
                     );
                 }
-                for i in training_trajectories(&learned, 5, fold) {
+                for i in training_recordings(&learned, 5, fold) {
                     assert!(windows.trajectory.contains(&format!("T{i}")));
                 }
             }

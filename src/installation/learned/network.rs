@@ -203,7 +203,7 @@ mod tests {
     use crate::installation::frames::cross as cross3;
     use crate::installation::learned::simulate::simulated_windows;
     use crate::installation::learned::spec::SimulationGrid;
-    use crate::installation::study::Segment;
+    use crate::installation::study::Recording;
     use crate::model::{Dcnet, Settings};
     use crate::spec::ModelSpec;
     use crate::vocab::Activation;
@@ -214,7 +214,7 @@ mod tests {
         Device::flex()
     }
 
-    fn segments() -> Vec<Segment> {
+    fn recordings() -> Vec<Recording> {
         vec![
             crate::installation::learned::simulate::tests::weaving("A", 120, 0.0),
             crate::installation::learned::simulate::tests::weaving("B", 120, 2.0),
@@ -276,10 +276,10 @@ mod tests {
     /// noise-free DVL, time offset included, and above zero at any other.
     #[test]
     fn the_loss_vanishes_at_the_true_terms_of_a_noise_free_dvl() {
-        let segments = segments();
-        let segments: Vec<&Segment> = segments.iter().collect();
+        let recordings = recordings();
+        let recordings: Vec<&Recording> = recordings.iter().collect();
         let truth = [-1.9, 0.1, 0.7, 1.4, 0.0, 1.5, 0.8];
-        let set = simulated_windows(&segments, &one(&truth), 0.0, 10, 4, 3);
+        let set = simulated_windows(&recordings, &one(&truth), 0.0, 10, 4, 3);
         let terms = TermSet {
             scale: PerAxis::Scalar,
             lever_arm: true,
@@ -305,10 +305,10 @@ mod tests {
     /// here in f64 from the windows' rows.
     #[test]
     fn the_loss_is_the_linearised_correction_error_computed_by_hand() {
-        let segments = segments();
-        let segments: Vec<&Segment> = segments.iter().collect();
+        let recordings = recordings();
+        let recordings: Vec<&Recording> = recordings.iter().collect();
         let simulated = [-1.9, 0.0, 0.6, 1.4, 2.0, -1.0, 0.5];
-        let set = simulated_windows(&segments, &one(&simulated), 0.02, 10, 7, 5);
+        let set = simulated_windows(&recordings, &one(&simulated), 0.02, 10, 7, 5);
         let guess = Installation {
             scale: [0.004, 0.006, -0.002],
             misalignment_rad: [0.01, -0.02, 0.03],
@@ -358,10 +358,10 @@ mod tests {
     /// simulated a noise-free DVL.
     #[test]
     fn descending_the_loss_over_the_terms_finds_the_simulated_installation() {
-        let segments = segments();
-        let segments: Vec<&Segment> = segments.iter().collect();
+        let recordings = recordings();
+        let recordings: Vec<&Recording> = recordings.iter().collect();
         let simulated = [-1.9, 0.0, 0.6, 1.4, 0.0, 0.0, 0.0];
-        let set = simulated_windows(&segments, &one(&simulated), 0.0, 10, 2, 9);
+        let set = simulated_windows(&recordings, &one(&simulated), 0.0, 10, 2, 9);
         let terms = TermSet {
             lever_arm: true,
             time_offset: true,
@@ -400,10 +400,10 @@ mod tests {
 
     #[test]
     fn a_dcnet_for_an_installation_reads_the_body_rate_and_outputs_its_terms() {
-        let segments = segments();
-        let segments: Vec<&Segment> = segments.iter().collect();
+        let recordings = recordings();
+        let recordings: Vec<&Recording> = recordings.iter().collect();
         let set = simulated_windows(
-            &segments,
+            &recordings,
             &one(&[-1.9, 0.0, 0.6, 1.4, 1.0, 1.0, 0.5]),
             0.02,
             10,

@@ -3,7 +3,7 @@
 //! trains on. The reference's own motion (its body velocity and rate at the DVL's
 //! stamps) is real; only the DVL is simulated, by the model of [`terms`](crate::installation::terms)
 //! plus white noise per axis.
-//! In: [`Segment`]s, a [`SimulationGrid`], the DVL noise, a seed. Out: [`InstallationWindows`]:
+//! In: [`Recording`]s, a [`SimulationGrid`], the DVL noise, a seed. Out: [`InstallationWindows`]:
 //! per window `[9, time]` inputs (DVL, reference body velocity, body rate) and `[6,
 //! time + 6]` targets (reference body velocity and body rate, with three samples either
 //! side so that the loss can read them at t + τ), f32, SI units.
@@ -17,7 +17,7 @@ use crate::Vec3;
 use crate::data::paired::sample_interval;
 use crate::installation::frames::ReferenceAt;
 use crate::installation::learned::spec::SimulationGrid;
-use crate::installation::study::Segment;
+use crate::installation::study::Recording;
 use crate::installation::terms::Installation;
 use crate::rng::task_rng;
 use rand::Rng;
@@ -36,16 +36,16 @@ pub const REFERENCE_MARGIN: usize = 3;
 /// interval, as a fraction of it: windows across a gap are not cut.
 const STEP_TOLERANCE: f64 = 0.01;
 
-/// The DVL that `installation` makes read on `segment`'s stamps, with white noise of
+/// The DVL that `installation` makes read on `recording`'s stamps, with white noise of
 /// `noise_m_s` per axis from `rng`: `predict(reference at t + τ) + n`, `None` where t + τ
 /// falls outside the reference.
 pub fn simulate_dvl(
-    segment: &Segment,
+    recording: &Recording,
     installation: &Installation,
     noise_m_s: f64,
     rng: &mut impl Rng,
 ) -> Vec<Option<Vec3>> {
-    simulate_dvl_correlated(segment, installation, (noise_m_s, 0.0), rng)
+    simulate_dvl_correlated(recording, installation, (noise_m_s, 0.0), rng)
 }
 
 /// [`simulate_dvl`] with noise correlated in time: per axis a stationary first-order
@@ -53,18 +53,18 @@ pub fn simulate_dvl(
 /// one second apart is `correlation_at_1_s` (between samples Δt apart, its power Δt);
 /// at 0, white noise of the same draws as [`simulate_dvl`]'s.
 pub fn simulate_dvl_correlated(
-    segment: &Segment,
+    recording: &Recording,
     installation: &Installation,
     (noise_m_s, correlation_at_1_s): (f64, f64),
     rng: &mut impl Rng,
 ) -> Vec<Option<Vec3>> {
     let noise = Normal::new(0.0, noise_m_s).expect("a finite, non-negative noise");
-    let time_s = &segment.recording.time_s;
+    let time_s = &recording.recording.time_s;
     let mut last: Option<(f64, Vec3)> = None;
     time_s
         .iter()
         .map(|&t| {
-            let at = segment.reference.at(t + installation.time_offset_s)?;
+            let at = recording.reference.at(t + installation.time_offset_s)?;
             let clean = installation.predict(at);
             let drawn = [0, 1, 2].map(|_| noise.sample(rng));
             let n = match last {
@@ -142,21 +142,21 @@ impl InstallationWindows {
     }
 }
 
-/// The windows of `window` samples, every `stride` samples, of `segment` with the DVL
+/// The windows of `window` samples, every `stride` samples, of `recording` with the DVL
 /// `dvl` on its stamps; a window is kept where every sample has a DVL value, the reference
 /// is there on every stamp from [`REFERENCE_MARGIN`] samples before it to as many after,
 /// and those stamps are evenly spaced.
 pub fn windows_of(
-    segment: &Segment,
+    recording: &Recording,
     dvl: &[Option<Vec3>],
     window: usize,
     stride: usize,
     installation: usize,
 ) -> InstallationWindows {
-    let time_s = &segment.recording.time_s;
+    let time_s = &recording.recording.time_s;
     let step_s = sample_interval(time_s);
     let reference: Vec<Option<ReferenceAt>> =
-        time_s.iter().map(|&t| segment.reference.at(t)).collect();
+        time_s.iter().map(|&t| recording.reference.at(t)).collect();
     let mut out = InstallationWindows {
         window,
         step_s,
@@ -210,17 +210,17 @@ pub fn windows_of(
         for k in 0..3 {
             row(&mut out.targets, &mut at.iter().map(|a| a.rate_rad_s[k]));
         }
-        out.trajectory.push(segment.name.clone());
+        out.trajectory.push(recording.name.clone());
         out.installation.push(installation);
         out.validation.push(false);
     }
     out
 }
 
-/// The simulated training windows of every installation of `grid` on every segment of
-/// `segments`: trajectory by trajectory, installation by installation within it.
+/// The simulated training windows of every installation of `grid` on every recording of
+/// `recordings`: trajectory by trajectory, installation by installation within it.
 pub fn simulated_windows(
-    segments: &[&Segment],
+    recordings: &[&Recording],
     grid: &SimulationGrid,
     noise_m_s: f64,
     window: usize,
@@ -228,21 +228,21 @@ pub fn simulated_windows(
     seed: u64,
 ) -> InstallationWindows {
     let installations = grid.installations();
-    let tasks: Vec<(usize, usize)> = (0..segments.len())
+    let tasks: Vec<(usize, usize)> = (0..recordings.len())
         .flat_map(|s| (0..installations.len()).map(move |i| (s, i)))
         .collect();
     let parts: Vec<InstallationWindows> = tasks
         .par_iter()
         .map(|&(s, i)| {
-            let segment = segments[s];
-            let mut rng = task_rng(seed, &[&"installation-dvl", &segment.name, &i]);
-            let dvl = simulate_dvl(segment, &installations[i], noise_m_s, &mut rng);
-            windows_of(segment, &dvl, window, stride, i)
+            let recording = recordings[s];
+            let mut rng = task_rng(seed, &[&"installation-dvl", &recording.name, &i]);
+            let dvl = simulate_dvl(recording, &installations[i], noise_m_s, &mut rng);
+            windows_of(recording, &dvl, window, stride, i)
         })
         .collect();
     let mut all = InstallationWindows {
         window,
-        step_s: segments
+        step_s: recordings
             .first()
             .map_or(1.0, |s| sample_interval(&s.recording.time_s)),
         ..Default::default()
@@ -264,7 +264,7 @@ pub(crate) mod tests {
 
     /// A vehicle weaving at up to about 11°/s with a changing speed, 1 Hz, its DVL
     /// column empty.
-    pub(crate) fn weaving(name: &str, seconds: usize, phase: f64) -> Segment {
+    pub(crate) fn weaving(name: &str, seconds: usize, phase: f64) -> Recording {
         let time_s: Vec<f64> = (0..seconds).map(|t| t as f64).collect();
         let yaw = |t: f64| 1.5 * (t / 8.0 + phase).sin() + 0.3 * (t / 3.0).cos();
         let speed = |t: f64| 2.0 + 0.3 * (t / 11.0 + phase).sin();
@@ -287,7 +287,7 @@ pub(crate) mod tests {
             time_s,
             rate_rad_s: None,
         };
-        Segment::new(name.to_string(), recording)
+        Recording::new(name.to_string(), recording)
     }
 
     fn grid() -> SimulationGrid {
@@ -317,7 +317,7 @@ pub(crate) mod tests {
     /// t + τ, and the installation model's fit finds the terms that simulated the DVL.
     #[test]
     fn a_noise_free_simulation_is_undone_by_its_terms_and_fitted_back() {
-        let segment = weaving("W", 300, 0.0);
+        let recording = weaving("W", 300, 0.0);
         let truth = Installation {
             scale: [0.01, -0.005, 0.002],
             misalignment_rad: [0.0, 0.0, 2f64.to_radians()],
@@ -326,11 +326,11 @@ pub(crate) mod tests {
             bias_m_s: [0.006, -0.002, 0.001],
         };
         let mut rng = ChaCha8Rng::seed_from_u64(1);
-        let dvl = simulate_dvl(&segment, &truth, 0.0, &mut rng);
-        let time_s = &segment.recording.time_s;
+        let dvl = simulate_dvl(&recording, &truth, 0.0, &mut rng);
+        let time_s = &recording.recording.time_s;
         for (&t, dvl) in time_s.iter().zip(&dvl) {
             let Some(dvl) = dvl else { continue };
-            let at = segment.reference.at(t + truth.time_offset_s).unwrap();
+            let at = recording.reference.at(t + truth.time_offset_s).unwrap();
             let corrected = truth.correct(*dvl, at.rate_rad_s);
             for k in 0..3 {
                 assert!((corrected[k] - at.velocity_body_m_s[k]).abs() < 1e-12);
@@ -344,7 +344,7 @@ pub(crate) mod tests {
         let fitted = fit(
             &kept.iter().map(|&i| time_s[i]).collect::<Vec<_>>(),
             &kept.iter().map(|&i| dvl[i].unwrap()).collect::<Vec<_>>(),
-            &segment.reference,
+            &recording.reference,
             TermSet::EVERY,
         )
         .unwrap();
@@ -356,12 +356,12 @@ pub(crate) mod tests {
 
     #[test]
     fn windows_hold_the_rows_in_order_and_skip_samples_without_a_dvl() {
-        let segment = weaving("W", 40, 0.0);
+        let recording = weaving("W", 40, 0.0);
         let truth = grid().installations()[3];
         let mut rng = ChaCha8Rng::seed_from_u64(2);
-        let mut dvl = simulate_dvl(&segment, &truth, 0.01, &mut rng);
+        let mut dvl = simulate_dvl(&recording, &truth, 0.01, &mut rng);
         dvl[20] = None;
-        let windows = windows_of(&segment, &dvl, 10, 5, 3);
+        let windows = windows_of(&recording, &dvl, 10, 5, 3);
         // Samples 0 to 37 have a DVL but for 20 (38 and 39 none: t + 1.4 s is past the
         // reference's end), and 3 samples of reference either side: windows start at 3
         // to 27, by 5 from the first sample at 0 that can lead a window's margin: 3, 8,
@@ -373,7 +373,12 @@ pub(crate) mod tests {
         for (w, &start) in starts.iter().enumerate() {
             let input = |row: usize, t: usize| windows.inputs[(w * INPUT_ROWS + row) * 10 + t];
             let target = |row: usize, t: usize| windows.targets[(w * TARGET_ROWS + row) * span + t];
-            let at = |i: usize| segment.reference.at(segment.recording.time_s[i]).unwrap();
+            let at = |i: usize| {
+                recording
+                    .reference
+                    .at(recording.recording.time_s[i])
+                    .unwrap()
+            };
             assert_eq!(input(1, 3), dvl[start + 3].unwrap()[1] as f32);
             assert_eq!(input(4, 3), at(start + 3).velocity_body_m_s[1] as f32);
             assert_eq!(input(8, 3), at(start + 3).rate_rad_s[2] as f32);
@@ -389,9 +394,9 @@ pub(crate) mod tests {
 
     #[test]
     fn the_last_windows_of_each_trajectory_and_installation_are_kept_for_validation() {
-        let segments = [weaving("A", 60, 0.0), weaving("B", 60, 1.0)];
-        let segments: Vec<&Segment> = segments.iter().collect();
-        let windows = simulated_windows(&segments, &grid(), 0.0, 10, 5, 7).with_validation(0.25);
+        let recordings = [weaving("A", 60, 0.0), weaving("B", 60, 1.0)];
+        let recordings: Vec<&Recording> = recordings.iter().collect();
+        let windows = simulated_windows(&recordings, &grid(), 0.0, 10, 5, 7).with_validation(0.25);
         // Each of the 2 × 4 groups holds 8 windows (starts 0, 5, …, 35, all inside the
         // reference but those whose DVL at t + 1.4 s runs past its end): count per group.
         let mut groups: Vec<(String, usize, usize, usize)> = Vec::new();
@@ -425,21 +430,21 @@ pub(crate) mod tests {
 
     #[test]
     fn simulated_windows_are_the_same_bytes_on_one_thread_or_two() {
-        let segments = [weaving("A", 60, 0.0), weaving("B", 60, 1.0)];
-        let segments: Vec<&Segment> = segments.iter().collect();
+        let recordings = [weaving("A", 60, 0.0), weaving("B", 60, 1.0)];
+        let recordings: Vec<&Recording> = recordings.iter().collect();
         let on = |threads: usize| {
             rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
                 .unwrap()
-                .install(|| simulated_windows(&segments, &grid(), 0.02, 10, 3, 7))
+                .install(|| simulated_windows(&recordings, &grid(), 0.02, 10, 3, 7))
         };
         let (one, two) = (on(1), on(2));
         assert_eq!(one, two);
         assert_eq!(one.trajectory[0], "A");
         assert_eq!(one.trajectory.last().unwrap(), "B");
         // A different seed draws other noise.
-        let other = simulated_windows(&segments, &grid(), 0.02, 10, 3, 8);
+        let other = simulated_windows(&recordings, &grid(), 0.02, 10, 3, 8);
         assert_ne!(one.inputs, other.inputs);
         assert_eq!(one.targets, other.targets);
     }

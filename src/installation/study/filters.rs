@@ -9,7 +9,7 @@ use crate::installation::estimate::bound::Noise;
 use crate::installation::estimate::filter::{FilterStep, run_filter};
 use crate::installation::frames::Reference;
 use crate::installation::study::rows::FilterPoint;
-use crate::installation::study::spec::{Method, StudySpec};
+use crate::installation::study::spec::{Model, StudySpec};
 use crate::installation::terms::names::term_set;
 use crate::installation::terms::{Installation, TermSet};
 use std::ops::Range;
@@ -39,7 +39,7 @@ pub fn run_filters(
     spec.methods
         .iter()
         .filter_map(|method| match method {
-            Method::Filter { terms, .. } => {
+            Model::Filter { terms, .. } => {
                 let terms = term_set(terms);
                 let steps = run_filter(
                     &recording.time_s[samples.clone()],

@@ -1,11 +1,14 @@
 //! The rows of an installation study, as the study computes them and its tables store
 //! them: each method's held-out RMSE per calibration window and scored trajectory, the
 //! terms each calibration estimated with their bound, the mean per method and window,
-//! and the samples of the residual figure. In: nothing (data types only). Out: the
-//! [`StudyResults`] that `study` fills, `results::study` writes and reads, and
-//! `report::study` sets as tables and figures.
+//! and the samples of the residual figure; and what one calibration recording gives
+//! ([`Calibrated`], the unit a run caches), every method's terms among it. In: nothing
+//! (data types only). Out: the [`StudyResults`] that `study` fills,
+//! `results::study` writes and reads, and `report::study` sets as tables
+//! and figures.
 
 use crate::Vec3;
+use crate::installation::terms::Installation;
 
 /// The label of the row that corrects nothing.
 pub const NO_CALIBRATION: &str = "no calibration";
@@ -143,4 +146,40 @@ pub struct FoldSummaryRow {
     /// "1" to the number of folds, or "all".
     pub fold: String,
     pub summary: SummaryRow,
+}
+
+/// The terms one method estimated on one calibration window.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Estimated {
+    pub method: String,
+    pub calibration: String,
+    pub window_s: f64,
+    pub installation: Installation,
+}
+
+/// What one calibration trajectory gives, over every window and method: the held-out
+/// rows, the terms with their bound, every method's terms, and the fits that failed. The
+/// unit a run stores in its cache and a shard computes.
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub struct Calibrated {
+    pub heldout: Vec<TransferRow>,
+    pub terms: Vec<TermRow>,
+    pub estimated: Vec<Estimated>,
+    pub failures: Vec<FitFailure>,
+    pub filtered: Vec<FilterPoint>,
+}
+
+impl Calibrated {
+    /// The rows of `parts`, one after another.
+    pub fn concat(parts: impl IntoIterator<Item = Calibrated>) -> Calibrated {
+        let mut all = Calibrated::default();
+        for part in parts {
+            all.heldout.extend(part.heldout);
+            all.terms.extend(part.terms);
+            all.estimated.extend(part.estimated);
+            all.failures.extend(part.failures);
+            all.filtered.extend(part.filtered);
+        }
+        all
+    }
 }

@@ -9,11 +9,10 @@
 use crate::Vec3;
 use crate::installation::study::rows::{NO_CALIBRATION, StudyResults, TracePoint};
 use crate::installation::study::spec::StudySpec;
-use crate::installation::study::{Estimated, Segment};
+use crate::installation::study::{Estimated, Recording};
 use crate::pipeline::study::ExecuteError;
 use crate::results::{self, Manifest};
 use std::path::Path;
-use std::time::SystemTime;
 
 /// Refuses a study in which a method fitted on no calibration trajectory at some
 /// window: it would have no row at all there. `point` opens the message in a sweep.
@@ -65,12 +64,12 @@ pub fn is_current(folder: &Path, results_key: &str) -> bool {
 pub fn trace(
     study: &StudyResults,
     estimates: &[Estimated],
-    segments: &[&Segment],
+    recordings: &[&Recording],
 ) -> Vec<TracePoint> {
     let Some(largest) = study.summary.iter().map(|s| s.window_s).reduce(f64::max) else {
         return Vec::new();
     };
-    let calibration = &segments[0];
+    let calibration = &recordings[0];
     let estimate_of = |method: &str| {
         estimates.iter().find(|e| {
             e.method == method && e.calibration == calibration.name && e.window_s == largest
@@ -91,24 +90,24 @@ pub fn trace(
     let (Some(best), Some(scored)) = (best, scored) else {
         return Vec::new();
     };
-    let Some(segment) = segments.iter().find(|s| s.name == scored.scored) else {
+    let Some(drawn) = recordings.iter().find(|s| s.name == scored.scored) else {
         return Vec::new();
     };
     let Some(installation) = estimate_of(&best.method).map(|e| e.installation) else {
         return Vec::new();
     };
-    let recording = &segment.recording;
+    let recording = &drawn.recording;
     (0..recording.time_s.len())
         .filter_map(|i| {
             let t = recording.time_s[i];
-            let before = segment.reference.at(t)?;
+            let before = drawn.reference.at(t)?;
             let after_t = t + installation.time_offset_s;
-            let after = segment.reference.at(after_t)?;
+            let after = drawn.reference.at(after_t)?;
             let corrected = installation.correct(recording.dvl_m_s[i], after.rate_rad_s);
             let residual =
                 |v: Vec3, r: Vec3| -> Vec3 { std::array::from_fn(|a| 100.0 * (v[a] - r[a])) };
             Some(TracePoint {
-                trajectory: segment.name.clone(),
+                trajectory: drawn.name.clone(),
                 method: best.method.clone(),
                 calibration: calibration.name.clone(),
                 time_s: t,
@@ -143,9 +142,9 @@ pub fn write_folder(
             source,
         })?;
     }
-    let manifest = Manifest {
-        finished_at: humantime::format_rfc3339_seconds(SystemTime::now()).to_string(),
-        ..manifest
-    };
-    Ok(results::write_folder(folder, &files, manifest)?)
+    Ok(results::write_folder(
+        folder,
+        &files,
+        manifest.finished_now(),
+    )?)
 }

@@ -8,7 +8,7 @@ use crate::Vec3;
 use crate::data::paired::{self, PairedFiles};
 use crate::estimators::{DcnetEstimator, Estimator};
 use crate::files::sha256_hex;
-use crate::installation::study::Segment;
+use crate::installation::study::Recording;
 use crate::installation::study::spec::StudySpec;
 use crate::model::Settings;
 use crate::pipeline::Plan;
@@ -52,7 +52,7 @@ pub struct PointInputs {
 
 /// Every recording and model the points of an experiment read.
 pub struct Inputs {
-    pub segments: Vec<Segment>,
+    pub segments: Vec<Recording>,
     pub dcnets: Vec<DcnetModels>,
     pub points: Vec<PointInputs>,
 }
@@ -81,7 +81,7 @@ impl Inputs {
                                 error,
                             }
                         })?;
-                        segments.push(Segment::new(name.clone(), recording));
+                        segments.push(Recording::new(name.clone(), recording));
                         segment_of.insert(read_as, segments.len() - 1);
                         segments.len() - 1
                     }
@@ -134,7 +134,7 @@ impl Inputs {
     }
 
     /// The trajectories of point `p`, in spec order.
-    pub fn segments_of(&self, p: usize) -> Vec<&Segment> {
+    pub fn segments_of(&self, p: usize) -> Vec<&Recording> {
         self.points[p]
             .segments
             .iter()

@@ -7,14 +7,14 @@
 //! at a time, their models interleaved epoch by epoch over the cores, each epoch on one
 //! thread, checkpointed every `learned.training.checkpoint_every_epochs` so that a
 //! killed run resumes them. `plan` lists them with their status ([`ModelRow`]).
-//! In: a point's spec, its segments and its recordings' SHA-256. Out: [`LearnedModels`].
+//! In: a point's spec, its recordings and their SHA-256. Out: [`LearnedModels`].
 
 use crate::files::Seal;
 use crate::installation::learned::network::network_io;
 use crate::installation::learned::spec::{LearnedSpec, TrainingSource};
 use crate::installation::learned::{LearnedWindows, beyond_the_recordings, training_windows};
 use crate::installation::study::spec::StudySpec;
-use crate::installation::study::{LearnedModel, Segment};
+use crate::installation::study::{LearnedModel, Recording};
 use crate::installation::terms::names::term_set;
 use crate::model::Dcnet;
 use crate::pipeline::ExecuteError;
@@ -106,14 +106,14 @@ fn blueprint(learned: &LearnedSpec, model: LearnedModel) -> Blueprint<'_> {
 /// model or checkpoint is set aside and trained again.
 pub fn train_or_load(
     spec: &StudySpec,
-    segments: &[&Segment],
+    recordings: &[&Recording],
     keys: &[LearnedKey],
     out: &Path,
 ) -> Result<LearnedModels, ExecuteError> {
     let Some(learned) = &spec.learned else {
         return Ok(LearnedModels(Vec::new()));
     };
-    within_reach(learned, segments)?;
+    within_reach(learned, recordings)?;
     let store = store(out);
     let task = |k: usize| ModelTask {
         blueprint: blueprint(learned, keys[k].model),
@@ -138,7 +138,7 @@ pub fn train_or_load(
     let settled = |k: usize| store.integrity(task(k).id, task(k).key) == Seal::Intact;
     crate::pipeline::claimed_then_left(out, &to_train, (key, label, settled), |ids| {
         for batch in in_batches(sets(learned, keys, ids)) {
-            for (k, ended) in train_batch(spec, learned, segments, &batch, &task) {
+            for (k, ended) in train_batch(spec, learned, recordings, &batch, &task) {
                 let (stored, _) = ended.map_err(|source| ExecuteError::Training {
                     model: ModelId::from(keys[k].model).to_string(),
                     source,
@@ -183,8 +183,8 @@ fn sets(
 
 /// Refuses what `[learned]` asks that the recordings cannot give
 /// ([`beyond_the_recordings`]).
-fn within_reach(learned: &LearnedSpec, segments: &[&Segment]) -> Result<(), ExecuteError> {
-    let recordings: Vec<(&str, &[f64])> = segments
+fn within_reach(learned: &LearnedSpec, recordings: &[&Recording]) -> Result<(), ExecuteError> {
+    let recordings: Vec<(&str, &[f64])> = recordings
         .iter()
         .map(|s| (s.name.as_str(), s.recording.time_s.as_slice()))
         .collect();
@@ -199,7 +199,7 @@ fn within_reach(learned: &LearnedSpec, segments: &[&Segment]) -> Result<(), Exec
 fn train_batch<'a>(
     spec: &StudySpec,
     learned: &LearnedSpec,
-    segments: &[&Segment],
+    recordings: &[&Recording],
     batch: &[((usize, TrainingSource), Vec<usize>)],
     task: &(dyn Fn(usize) -> ModelTask<'a> + Sync),
 ) -> Vec<(usize, Ended)> {
@@ -207,7 +207,7 @@ fn train_batch<'a>(
     let sets: Vec<LearnedWindows> = batch
         .par_iter()
         .map(|&((fold, source), _)| LearnedWindows {
-            windows: training_windows(spec, learned, segments, fold, source),
+            windows: training_windows(spec, learned, recordings, fold, source),
             terms: term_set(&learned.terms),
         })
         .collect();

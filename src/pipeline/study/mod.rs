@@ -24,7 +24,7 @@ use crate::installation::study::spec::StudySpec;
 use crate::installation::study::{self, Calibrated};
 use crate::pipeline::cache::{self, CalibrationStore};
 use crate::pipeline::{ExecuteError, Executed, Mode, Shard, owner};
-use crate::results::{self, Manifest, StageSeconds};
+use crate::results::{self, Manifest, RunRecord, StageSeconds};
 use crate::spec::Experiment;
 use crate::vocab::ErrorModel;
 use inputs::Inputs;
@@ -286,8 +286,9 @@ impl<'a> StudyPlan<'a> {
         let mut learned_models = HashMap::new();
         for point in crate::first_seen(to_do.iter().map(|&u| self.units[u].point)) {
             let spec = self.spec(point);
-            let segments = self.inputs.segments_of(point);
-            let models = learned::train_or_load(spec, &segments, &self.learned[point], &self.out)?;
+            let recordings = self.inputs.segments_of(point);
+            let models =
+                learned::train_or_load(spec, &recordings, &self.learned[point], &self.out)?;
             learned_models.insert(point, models);
         }
         to_do
@@ -300,21 +301,21 @@ impl<'a> StudyPlan<'a> {
                     models.and_then(|m| m.estimate(model, dvl, reference))
                 };
                 let learned_models = &learned_models[&unit.point];
-                let learned = |which, segment: &study::Segment, range| {
+                let learned = |which, recording: &study::Recording, range| {
                     let model = learned_models.model(which)?;
                     let learned = spec.learned.as_ref()?;
                     crate::installation::learned::estimate(
                         model,
                         learned,
-                        segment,
+                        recording,
                         range,
                         &learned.training.backend.device(),
                     )
                 };
-                let segments = self.inputs.segments_of(unit.point);
+                let recordings = self.inputs.segments_of(unit.point);
                 let calibrated = study::calibrate_on(
                     spec,
-                    &segments,
+                    &recordings,
                     unit.calibration,
                     &study::Estimators {
                         dcnet: &dcnet,
@@ -359,17 +360,11 @@ impl<'a> StudyPlan<'a> {
     /// The manifest of point `p`'s folder, but for its files and finishing time.
     fn manifest(&self, p: usize, protocol_s: f64) -> Manifest {
         let spec = self.spec(p);
-        Manifest {
+        Manifest::of_run(RunRecord {
             name: spec.name.clone(),
-            spec_sha256: sha256_hex(spec.resolved_toml.as_bytes()),
-            git_commit: env!("DCNET_GIT_COMMIT").to_string(),
-            crate_version: env!("CARGO_PKG_VERSION").to_string(),
-            started_at: humantime::format_rfc3339_seconds(self.started_at).to_string(),
-            finished_at: String::new(),
-            threads: rayon::current_num_threads(),
+            resolved_toml: &spec.resolved_toml,
+            started_at: self.started_at,
             backend: String::new(),
-            host: gethostname::gethostname().to_string_lossy().into_owned(),
-            instruction_set: crate::kernels::instruction_set().to_string(),
             data_files: self.inputs.points[p].data_files.clone(),
             stage_seconds: StageSeconds {
                 load: self.load_s,
@@ -377,9 +372,8 @@ impl<'a> StudyPlan<'a> {
                 ..StageSeconds::default()
             },
             results_key: self.results_keys[p].clone(),
-            files_sha256: Default::default(),
             spec_file: self.recorded_spec_file.clone(),
-        }
+        })
     }
 
     /// A sweep's table and index, written when a point was written or the index is not

@@ -7,6 +7,7 @@
 
 use crate::evaluate::calibration_time::tolerance_band;
 use crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S;
+use crate::installation::estimate::residual_noise::ResidualNoise;
 use crate::installation::estimate::settling::SettlingPoint;
 use crate::installation::terms::AxisRmse;
 use crate::operator::calibrate::Calibration;
@@ -59,19 +60,14 @@ fn printed_fit(calibration: &Calibration) -> String {
         ]);
     }
     let shown = bound.residual_noise;
-    let assumed = 100.0 * (noise.dvl_m_s.powi(2) + noise.reference_m_s.powi(2)).sqrt();
+    let assumed = 100.0 * noise.per_axis_m_s();
     let mut text = format!(
         "calibrated on {} samples (those {TIME_OFFSET_MARGIN_S} s inside the reference)\n{table}\n",
         fitted.sample_count
     );
+    let (level, correlation) = residual_noise(&shown);
     text.push_str(&format!(
-        "standard deviation: from the noise the fit leaves, per axis x, y, z {:.2}, {:.2}, {:.2} cm/s with a correlation of {:.2}, {:.2}, {:.2} from one sample to the next (an AR(1) noise); bound: from the specified white noise of {assumed:.2} cm/s per axis, the best these samples could give\n",
-        100.0 * shown.std_m_s[0],
-        100.0 * shown.std_m_s[1],
-        100.0 * shown.std_m_s[2],
-        shown.lag_one[0],
-        shown.lag_one[1],
-        shown.lag_one[2],
+        "standard deviation: from the noise the fit leaves, per axis x, y, z {level} cm/s with a correlation of {correlation} from one sample to the next (an AR(1) noise); bound: from the specified white noise of {assumed:.2} cm/s per axis, the best these samples could give\n",
     ));
     for asked in &calibration.asked {
         text.push_str(&format!(
@@ -250,16 +246,11 @@ pub fn joint_text(calibration: &JointCalibration) -> String {
         joint.dive_terms.parameter_names().join(", ")
     );
     let shown = bound.residual_noise;
-    let specified = 100.0 * (noise.dvl_m_s.powi(2) + noise.reference_m_s.powi(2)).sqrt();
+    let specified = 100.0 * noise.per_axis_m_s();
     let level = (shown.std_m_s.iter().map(|s| s * s).sum::<f64>() / 3.0).sqrt() * 100.0;
+    let (per_axis, correlation) = residual_noise(&shown);
     text.push_str(&format!(
-        "residuals: {:.2}, {:.2}, {:.2} cm/s per axis x, y, z (correlation {:.2}, {:.2}, {:.2} from one sample to the next) against the specified {specified:.2} cm/s per axis: {}; the standard deviations are from the noise the residuals show, the bound's from the specified noise\n",
-        100.0 * shown.std_m_s[0],
-        100.0 * shown.std_m_s[1],
-        100.0 * shown.std_m_s[2],
-        shown.lag_one[0],
-        shown.lag_one[1],
-        shown.lag_one[2],
+        "residuals: {per_axis} cm/s per axis x, y, z (correlation {correlation} from one sample to the next) against the specified {specified:.2} cm/s per axis: {}; the standard deviations are from the noise the residuals show, the bound's from the specified noise\n",
         if level <= 1.2 * specified { "consistent with the noise" } else { "above the noise: the model leaves something out, or the noise is larger than specified" }
     ));
     text.push_str(&format!(
@@ -269,6 +260,17 @@ pub fn joint_text(calibration: &JointCalibration) -> String {
     ));
     text.push_str(&format!("{}\n", dives_table(calibration)));
     text
+}
+
+/// The noise a fit's residuals show, as both calibrations print it: its level per axis
+/// x, y, z in cm/s, and its correlation from one sample to the next, each "a, b, c".
+fn residual_noise(shown: &ResidualNoise) -> (String, String) {
+    let [x, y, z] = shown.std_m_s.map(|s| 100.0 * s);
+    let [rx, ry, rz] = shown.lag_one;
+    (
+        format!("{x:.2}, {y:.2}, {z:.2}"),
+        format!("{rx:.2}, {ry:.2}, {rz:.2}"),
+    )
 }
 
 /// The vehicle's terms of a joint calibration, beside the recordings fitted alone.

@@ -4,8 +4,9 @@
 //! methods and windows the other tables follow, and the sentence on the scorings whose
 //! clock could not be found again.
 
+use crate::installation::study::clock_kept_on;
+use crate::installation::study::method::Method;
 use crate::installation::study::rows::{NO_CALIBRATION, StudyResults, SummaryRow};
-use crate::installation::study::{clock_kept_on, is_refound};
 use crate::report::kit::table::{Entry, Section, Table};
 
 /// The methods in the order the study lists them, no calibration first.
@@ -61,7 +62,7 @@ pub fn clocks_kept(study: &StudyResults, window_s: Option<f64>) -> Option<String
     let scorings = study
         .heldout
         .iter()
-        .filter(|r| at(r.window_s) && is_refound(&r.method))
+        .filter(|r| at(r.window_s) && Method::parse(&r.method).is_refound())
         .count();
     let mut on: Vec<(&str, usize)> = crate::first_seen(kept.iter().copied())
         .into_iter()

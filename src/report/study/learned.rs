@@ -8,7 +8,7 @@
 
 use super::heldout::window_text;
 use crate::installation::learned::spec::LEARNED_LABEL;
-use crate::installation::study::CLOCK_REFOUND;
+use crate::installation::study::method::Method;
 use crate::installation::study::rows::{FoldSummaryRow, NO_CALIBRATION, StudyResults, TermRow};
 use crate::report::kit::readable::readable_term;
 use crate::report::kit::table::{Entry, Section, Table};
@@ -220,8 +220,12 @@ fn paired(study: &StudyResults, methods: &[&str], windows: &[f64]) -> Option<Sec
     let rows = learned
         .iter()
         .map(|method| {
-            let clock = method.find(CLOCK_REFOUND).map_or("", |at| &method[at..]);
-            let against = format!("{fitted}{clock}");
+            // The fit's method with the learned one's variant.
+            let against = Method {
+                model: fitted.to_string(),
+                ..Method::parse(method)
+            }
+            .to_string();
             std::iter::once(Entry::Text(method.to_string()))
                 .chain(windows.iter().map(|&w| {
                     let differences: Vec<f64> = per_calibration(study, method, &against, w)
@@ -366,7 +370,7 @@ mod tests {
     fn a_learned_method_is_set_against_the_fit_with_the_same_clock() {
         let fit = "installation lever";
         let learned = "DCNet trained on the vehicle";
-        let refound = |method: &str| format!("{method}, clock re-found in 60 s");
+        let refound = |method: &str| Method::single(method).refound(60.0).to_string();
         let term = |method: &str, calibration: &str| TermRow {
             method: method.into(),
             calibration: calibration.into(),

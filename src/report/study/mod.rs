@@ -30,7 +30,7 @@ pub mod figures;
 
 pub use figures::{draw_all, draw_sweep};
 
-use crate::installation::study::is_joint;
+use crate::installation::study::method::Method;
 use crate::installation::study::rows::{NO_CALIBRATION, StudyResults, TermRow};
 use crate::report::kit::table::{Section, symbols};
 use agreement::agreement;
@@ -79,7 +79,7 @@ fn sections(study: &StudyResults) -> Vec<Section> {
             study
                 .terms
                 .iter()
-                .filter(|r| r.window_s == largest && is_joint(&r.method) == joint)
+                .filter(|r| r.window_s == largest && Method::parse(&r.method).is_joint() == joint)
                 .map(|r| r.calibration.as_str()),
         )
     };
@@ -108,7 +108,7 @@ fn sections(study: &StudyResults) -> Vec<Section> {
         if !rows.is_empty() {
             let mut section = terms_section(method, largest, &rows);
             section.paragraph = Some(agreement(method, &rows));
-            let missing: Vec<&str> = calibrations[usize::from(is_joint(method))]
+            let missing: Vec<&str> = calibrations[usize::from(Method::parse(method).is_joint())]
                 .iter()
                 .copied()
                 .filter(|c| !rows.iter().any(|r| r.calibration == *c))
@@ -201,11 +201,10 @@ pub(crate) mod tests {
     #[test]
     fn a_clock_kept_is_counted_apart_from_failed_fits_and_a_joint_calibration_is_no_failure() {
         use crate::installation::study::rows::{FitFailure, TransferRow};
-        use crate::installation::study::{joint_label, refound_label};
         let mut study = small();
         let single = "installation lever+offset";
-        let joint = joint_label(single);
-        let refound = refound_label(single, 60.0);
+        let joint = Method::single(single).jointly().to_string();
+        let refound = Method::single(single).refound(60.0).to_string();
         let joint_term = TermRow {
             method: joint.clone(),
             calibration: "all but T1".into(),

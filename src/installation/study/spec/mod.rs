@@ -23,6 +23,7 @@ pub use file::{
 };
 
 use crate::data::paired::{PairedColumns, PairedFiles};
+use crate::installation::estimate::bound::Noise;
 use crate::installation::estimate::clock::ClockSearch;
 use crate::installation::estimate::filter::FilterSettings;
 use crate::installation::learned::spec::{LEARNED_LABEL, LearnedSpec, TrainingSource};
@@ -41,9 +42,11 @@ use std::path::{Path, PathBuf};
 /// The value of `kind` that makes a spec an installation study.
 pub const KIND: &str = "installation";
 
-/// A method of the study: how the terms of a calibration window are estimated.
+/// The model of a method of the study: how the terms of a calibration window are
+/// estimated. Its label is the model of the study's methods (`study::method`), which
+/// add how it is calibrated (alone or jointly) and with which clock it is scored.
 #[derive(Debug, Clone, PartialEq)]
-pub enum Method {
+pub enum Model {
     /// The paper's baseline: a scalar scale from speed ratios.
     Baseline,
     /// The paper's closed-form least squares of an error model.
@@ -62,16 +65,16 @@ pub enum Method {
     },
 }
 
-impl Method {
-    /// How the method is labelled in tables and figures.
+impl Model {
+    /// How the model is labelled in tables and figures, alone or before its variant.
     pub fn label(&self) -> String {
         match self {
-            Method::Baseline => "baseline".into(),
-            Method::LeastSquares(model) => format!("least squares {model}"),
-            Method::Installation { name, .. } => format!("installation {name}"),
-            Method::Filter { name, .. } => format!("Kalman filter {name}"),
-            Method::Dcnet(model) => format!("DCNet {model}"),
-            Method::Learned { source, replicate } => {
+            Model::Baseline => "baseline".into(),
+            Model::LeastSquares(model) => format!("least squares {model}"),
+            Model::Installation { name, .. } => format!("installation {name}"),
+            Model::Filter { name, .. } => format!("Kalman filter {name}"),
+            Model::Dcnet(model) => format!("DCNet {model}"),
+            Model::Learned { source, replicate } => {
                 let on = match source {
                     TrainingSource::Simulated => "simulation",
                     TrainingSource::Vehicle => "the vehicle",
@@ -105,7 +108,8 @@ pub struct StudySpec {
     pub reference_noise_m_s: f64,
     /// In increasing order.
     pub windows_s: Vec<f64>,
-    pub methods: Vec<Method>,
+    /// The model of each method, in the order of the tables.
+    pub methods: Vec<Model>,
     /// The extended Kalman filter's prior and random walk.
     pub filter: FilterSettings,
     /// The calibration time's tolerance, a fraction (0.1 for 10 %).
@@ -120,6 +124,17 @@ pub struct StudySpec {
     pub dive: Option<DiveSpec>,
     /// The spec with its overrides, as TOML.
     pub resolved_toml: String,
+}
+
+impl StudySpec {
+    /// The noise the bound assumes on each velocity component: the DVL's and the
+    /// reference's.
+    pub fn noise(&self) -> Noise {
+        Noise {
+            dvl_m_s: self.dvl_noise_m_s,
+            reference_m_s: self.reference_noise_m_s,
+        }
+    }
 }
 
 /// Reads and checks the installation spec at `path`, and each point of its `[sweep]`.
@@ -172,14 +187,14 @@ fn check(document: &Document<StudyFile>) -> Result<StudySpec, Vec<(String, Strin
         &mut faults,
     );
     if dcnet_spec.is_some() {
-        methods.extend(ErrorModel::ALL.map(Method::Dcnet));
+        methods.extend(ErrorModel::ALL.map(Model::Dcnet));
     }
     let learned = learned.map(|learned| check_learned(learned, listed, &mut faults));
     if let Some(learned) = &learned {
         for &source in &learned.sources {
             methods.extend(
                 (0..learned.training.replicates.max(1))
-                    .map(|replicate| Method::Learned { source, replicate }),
+                    .map(|replicate| Model::Learned { source, replicate }),
             );
         }
     }
@@ -224,7 +239,7 @@ pub(crate) mod tests {
             methods: learned
                 .sources
                 .iter()
-                .map(|&source| Method::Learned {
+                .map(|&source| Model::Learned {
                     source,
                     replicate: 0,
                 })

@@ -5,7 +5,7 @@
 //! [`StudyResults`]'s held-out rows. Out: one figure per method, named by its slug
 //! (`installation_matrix_least_squares_em1`), or why there is none.
 
-use crate::installation::study::is_joint;
+use crate::installation::study::method::Method;
 use crate::installation::study::rows::{StudyResults, TransferRow};
 use crate::report::kit::numbers::three_digits;
 use crate::report::kit::plots::canvas::{Drawn, Outcome, draw_svg};
@@ -61,7 +61,7 @@ pub fn matrix(study: &StudyResults) -> PlotResult<Vec<(String, Outcome)>> {
         .heldout
         .iter()
         // A joint fit scores only the trajectory it left out: no matrix.
-        .filter(|r| r.window_s == window_s && !is_joint(&r.method))
+        .filter(|r| r.window_s == window_s && !Method::parse(&r.method).is_joint())
         .collect();
     let trajectories: Vec<String> = crate::first_seen(
         rows.iter()

@@ -70,6 +70,7 @@ pub fn draw_sweep(
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use crate::installation::study::method::Method;
     use crate::installation::study::rows::{
         FilterPoint, NO_CALIBRATION, SummaryRow, TermRow, TracePoint, TransferRow,
     };
@@ -173,7 +174,7 @@ pub(crate) mod tests {
                 ("installation lever+offset+bias, joint", 3.5),
             ] {
                 summary.push(SummaryRow {
-                    method: format!("{method}, clock re-found in {dive_s} s"),
+                    method: Method::parse(method).refound(dive_s).to_string(),
                     window_s: 400.0,
                     mean_cm_s: mean * (1.0 - 0.02 * k as f64),
                     ci95_cm_s: 0.6,

@@ -8,8 +8,8 @@
 //! Out: the figure, or why there is none (fewer than two windows).
 
 use crate::installation::learned::spec::LEARNED_LABEL;
+use crate::installation::study::method::{Clock, Method};
 use crate::installation::study::rows::{NO_CALIBRATION, StudyResults, SummaryRow};
-use crate::installation::study::{CLOCK_REFOUND, JOINT, is_joint, is_refound};
 use crate::report::kit::plots::canvas::{Drawn, Outcome, draw_svg};
 use crate::report::kit::plots::draw::*;
 use crate::report::kit::plots::scale::Scale;
@@ -62,7 +62,8 @@ pub fn method_look(
     }
     if method.starts_with("installation") {
         let color = INSTALLATION_COLORS[installation % INSTALLATION_COLORS.len()];
-        return match method.ends_with(JOINT) {
+        let parsed = Method::parse(method);
+        return match parsed.is_joint() && !parsed.is_refound() {
             // A joint fit in its model's colour, dashed.
             true => (look(color, Stroke::Dashed), Some(Marker::Ring)),
             false => (look(color, Stroke::Solid), Some(Marker::Diamond)),
@@ -91,31 +92,37 @@ pub fn method_look(
 /// The looks of `methods`, in order: a model's joint fit and its Kalman filter in the
 /// model's colour.
 pub fn method_looks(methods: &[&str]) -> Vec<(Look, Option<Marker>)> {
-    let models: Vec<&str> = crate::first_seen(
-        methods
-            .iter()
-            .filter_map(|m| m.strip_prefix("installation"))
-            .map(|m| m.strip_suffix(JOINT).unwrap_or(m)),
-    );
+    let models: Vec<String> =
+        crate::first_seen(methods.iter().filter_map(|m| installation_model(m)));
     methods
         .iter()
         .map(|method| {
-            let model = |rest: &str| models.iter().position(|m| *m == rest);
+            let model = |rest: &str| models.iter().position(|m| m == rest);
             let filtered = method.strip_prefix("Kalman filter").and_then(model);
-            let installation = method
-                .strip_prefix("installation")
-                .map(|m| m.strip_suffix(JOINT).unwrap_or(m))
-                .and_then(model)
+            let installation = installation_model(method)
+                .and_then(|m| model(&m))
                 .unwrap_or(0);
             method_look(method, installation, filtered)
         })
         .collect()
 }
 
+/// What follows "installation" in the label of an installation model's method, a joint
+/// fit with its clock carried named by its model's: the key of the model's colour.
+fn installation_model(method: &str) -> Option<String> {
+    let parsed = Method::parse(method);
+    let shown = match parsed.is_joint() && !parsed.is_refound() {
+        true => parsed.model,
+        false => method.to_string(),
+    };
+    shown.strip_prefix("installation").map(str::to_string)
+}
+
 /// Whether a summary row is one of the study's main methods, calibrated on one
 /// trajectory with its clock: not a joint fit nor one with its clock re-found.
 fn is_main(method: &str) -> bool {
-    !is_joint(method) && !is_refound(method)
+    let method = Method::parse(method);
+    !method.is_joint() && !method.is_refound()
 }
 
 /// Mean held-out RMSE ± its 95 % interval against the calibration window, every method
@@ -161,14 +168,17 @@ pub fn dive(study: &StudyResults) -> PlotResult<Outcome> {
         .iter()
         .filter(|r| r.window_s == longest)
         .filter_map(|r| {
-            let (method, rest) = r.method.split_once(CLOCK_REFOUND)?;
-            let dive_s: f64 = rest.strip_suffix(" s")?.parse().ok()?;
+            let parsed = Method::parse(&r.method);
+            let Clock::Refound { dive_s } = parsed.variant.clock else {
+                return None;
+            };
+            let method = parsed.with_clock(Clock::Carried).to_string();
             let shown = method == NO_CALIBRATION
                 || method.starts_with("installation")
                 || method.starts_with("Kalman filter");
             shown.then(|| {
                 let row = SummaryRow {
-                    method: method.to_string(),
+                    method: method.clone(),
                     ..r.clone()
                 };
                 (dive_s, row)

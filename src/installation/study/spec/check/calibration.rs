@@ -8,7 +8,7 @@
 use crate::installation::estimate::clock::ClockSearch;
 use crate::installation::estimate::filter::FilterSettings;
 use crate::installation::study::spec::DiveSpec;
-use crate::installation::study::spec::Method;
+use crate::installation::study::spec::Model;
 use crate::installation::study::spec::check::check_terms;
 use crate::installation::study::spec::check::kalman::check_kalman;
 use crate::installation::study::spec::file::{DiveFile, StudyCalibrationFile, TermSetFile};
@@ -23,7 +23,7 @@ pub(in crate::installation::study::spec) struct CheckedCalibration {
     pub windows_s: Vec<f64>,
     /// The paper's methods, then the fit of each term set, then their filters; DCNet's
     /// come after, from `[dcnet]`.
-    pub methods: Vec<Method>,
+    pub methods: Vec<Model>,
     /// Whether "dcnet" is among the methods.
     pub wants_dcnet: bool,
     pub filter: FilterSettings,
@@ -48,7 +48,7 @@ pub(in crate::installation::study::spec) fn check_calibration(
     let windows_s = check_windows("calibration.window_s", &window_s, faults);
     let (mut methods, wants_dcnet) = check_methods(&names, faults);
     check_models(&models, faults);
-    methods.extend(models.iter().map(|model| Method::Installation {
+    methods.extend(models.iter().map(|model| Model::Installation {
         name: model.name.clone(),
         terms: model.terms.clone(),
     }));
@@ -57,7 +57,7 @@ pub(in crate::installation::study::spec) fn check_calibration(
     let filter = check_kalman(kalman, &model_names, faults);
     for name in &filtered {
         if let Some(model) = models.iter().find(|m| &m.name == name) {
-            methods.push(Method::Filter {
+            methods.push(Model::Filter {
                 name: model.name.clone(),
                 terms: model.terms.clone(),
             });
@@ -146,7 +146,7 @@ fn check_windows(key: &str, window_s: &[f64], faults: &mut Faults) -> Vec<f64> {
 
 /// `calibration.methods`: the paper's methods, each listed once, and whether "dcnet"
 /// is among them.
-fn check_methods(names: &[String], faults: &mut Faults) -> (Vec<Method>, bool) {
+fn check_methods(names: &[String], faults: &mut Faults) -> (Vec<Model>, bool) {
     let mut methods = Vec::new();
     let mut listed = HashSet::new();
     let mut wants_dcnet = false;
@@ -157,10 +157,10 @@ fn check_methods(names: &[String], faults: &mut Faults) -> (Vec<Method>, bool) {
             continue;
         }
         match method.as_str() {
-            "baseline" => methods.push(Method::Baseline),
+            "baseline" => methods.push(Model::Baseline),
             "dcnet" => wants_dcnet = true,
             other => match other.parse::<ErrorModel>() {
-                Ok(model) => methods.push(Method::LeastSquares(model)),
+                Ok(model) => methods.push(Model::LeastSquares(model)),
                 Err(_) => faults.add(
                     key,
                     format!(
