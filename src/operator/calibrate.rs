@@ -336,12 +336,7 @@ pub(super) fn dive_terms_refused(
     dive: &[TermName],
     saving: bool,
 ) -> Result<(), String> {
-    if let Some(term) = dive.iter().find(|t| {
-        !matches!(
-            t,
-            TermName::TimeOffset | TermName::Bias | TermName::BiasScalar
-        )
-    }) {
+    if let Some(term) = dive.iter().find(|t| !t.may_be_the_dives()) {
         return Err(format!(
             "{:?} belongs to the vehicle, not the dive: give time_offset, and bias or bias_scalar",
             term.name()

@@ -45,6 +45,15 @@ impl TermName {
             TermName::BiasScalar => "bias_scalar",
         }
     }
+
+    /// Whether the term may be a dive's, found again on each dive (the clock, and the
+    /// bias), rather than the vehicle's, carried from one dive to the next.
+    pub fn may_be_the_dives(self) -> bool {
+        matches!(
+            self,
+            TermName::TimeOffset | TermName::Bias | TermName::BiasScalar
+        )
+    }
 }
 
 impl std::str::FromStr for TermName {

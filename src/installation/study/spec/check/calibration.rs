@@ -95,10 +95,7 @@ fn check_dive(dive: DiveFile, faults: &mut Faults) -> DiveSpec {
         );
     }
     for (j, term) in terms.iter().enumerate() {
-        if !matches!(
-            term,
-            TermName::TimeOffset | TermName::Bias | TermName::BiasScalar
-        ) {
+        if !term.may_be_the_dives() {
             faults.add(
                 format!("calibration.dive.terms[{j}]"),
                 format!("{:?} belongs to the vehicle, not the dive: a dive's terms are \"time_offset\", and \"bias\" or \"bias_scalar\"", term.name()),
