@@ -494,19 +494,9 @@ pub(super) fn columns(path: Option<&Path>) -> Result<PairedColumns, CalibrateErr
     Ok(file.value.columns)
 }
 
-/// The CSV recording of the DVL's file `dvl` beside the reference's (the DVL's own
-/// when `None`), with `columns`.
-pub(super) fn csv_source(dvl: &Path, reference: Option<&Path>, columns: PairedColumns) -> Source {
-    Source::Csv {
-        dvl: dvl.to_path_buf(),
-        reference: reference.unwrap_or(dvl).to_path_buf(),
-        columns,
-    }
-}
-
 /// The recording of `args`, its reference, and its window where one is asked.
 fn read(args: &CalibrateArgs) -> Result<Read, CalibrateError> {
-    let source = csv_source(args.dvl, args.reference, columns(args.columns)?);
+    let source = Source::csv(args.dvl, args.reference, columns(args.columns)?);
     let read = source.read()?;
     let dvl_sha256 = read.dvl_sha256().to_string();
     let recording = read.recording;

@@ -18,7 +18,7 @@ use crate::installation::estimate::joint::{JointFit, JointRecording, joint_fit, 
 use crate::installation::frames::Reference;
 use crate::installation::terms::names::{TermName, term_set};
 use crate::operator::calibrate::{
-    CalibrateError, columns, csv_source, dive_terms_refused, named, not_over_an_input, save_refused,
+    CalibrateError, columns, dive_terms_refused, named, not_over_an_input, save_refused,
 };
 use crate::operator::installation_file::{SavedInstallation, SavedTerm};
 use crate::results::ResultsError;
@@ -161,7 +161,7 @@ fn sources(args: &JointArgs) -> Result<Vec<Source>, CalibrateError> {
     let columns = columns(args.columns)?;
     let source = |(k, dvl): (usize, &PathBuf)| {
         let reference = args.references.get(k).map(|r| r.as_path());
-        csv_source(dvl, reference, columns.clone())
+        Source::csv(dvl, reference, columns.clone())
     };
     Ok(args.dvls.iter().enumerate().map(source).collect())
 }

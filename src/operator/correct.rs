@@ -9,13 +9,13 @@
 //! In: [`CorrectArgs`]. Out: a [`Correction`], or a [`CorrectError`] naming the file
 //! and what to do; nothing is written unless everything before the writing succeeded.
 
-use crate::data::paired::{PairedError, PairedRecording};
+use crate::data::paired::{PairedError, PairedRecording, Source};
 use crate::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise};
 use crate::installation::estimate::clock::{Carried, Clock, ClockError, ClockSearch, refind};
 use crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S;
 use crate::installation::frames::Reference;
 use crate::installation::terms::{AxisRmse, Installation, score};
-use crate::operator::calibrate::{columns, csv_source, not_over_an_input};
+use crate::operator::calibrate::{columns, not_over_an_input};
 use crate::operator::installation_file::{InstallationFileError, SavedInstallation};
 use crate::results::ResultsError;
 use crate::results::corrected::{OtherRecording, Outputs, corrected_samples, stem, write};
@@ -165,7 +165,7 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
         crate::operator::calibrate::CalibrateError::Columns(error) => CorrectError::Columns(error),
         other => unreachable!("columns fails only on its file: {other}"),
     })?;
-    let source = csv_source(args.dvl, args.reference, columns);
+    let source = Source::csv(args.dvl, args.reference, columns);
     let loaded = source.load()?;
     let recording_sha256 = loaded.dvl_sha256().to_string();
     outputs.not_another_recordings(args.dvl, &recording_sha256)?;

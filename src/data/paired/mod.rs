@@ -107,7 +107,7 @@ impl PairedRecording {
 /// The checked samples of the CSV files `files` with `columns`: a shorthand of
 /// [`Source::read`] for a caller that wants neither the files' hashes nor a cache.
 pub fn read(files: &PairedFiles, columns: &PairedColumns) -> Result<PairedRecording, PairedError> {
-    Source::csv(files, columns)
+    Source::csv(&files.dvl, Some(&files.reference), columns.clone())
         .read()
         .map(|read| read.recording)
 }

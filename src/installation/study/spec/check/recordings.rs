@@ -36,14 +36,8 @@ pub(in crate::installation::study::spec) fn check_recordings(
                 format!("{name:?} is defined twice"),
             );
         }
-        let dvl = folder.join(dvl);
-        let reference = reference.map_or_else(|| dvl.clone(), |r| folder.join(r));
-        let columns = columns.clone();
-        let source = Source::Csv {
-            dvl,
-            reference,
-            columns,
-        };
+        let reference = reference.map(|r| folder.join(r));
+        let source = Source::csv(&folder.join(dvl), reference.as_deref(), columns.clone());
         trajectories.push((name, source));
     }
     if trajectories.len() < 2 {
