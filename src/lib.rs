@@ -15,8 +15,11 @@
 //!    with the [`spec::published`] values it is compared with and the
 //!    [`spec::recordings`] it may name;
 //! 2. [`data`]: the trajectories (`.npy` or `.csv` recordings, or synthetic) and their
-//!    ground truth, and the paired recordings of a DVL beside a reference
-//!    ([`data::paired`]);
+//!    ground truth, the paired recordings of a DVL beside a reference
+//!    ([`data::paired`]: one way in, a [`data::paired::Source`] read into a
+//!    [`data::paired::ReadRecording`] with its files' SHA-256, checked whatever its
+//!    format), and the published recordings ([`data::catalogue`]) and their download
+//!    ([`data::fetch`]);
 //! 3. [`noise`]: the beam-level DVL and GNSS-RTK measurement model, and [`bound`]: the
 //!    information bound it puts on any calibration from w seconds of data, and
 //!    [`kalman`]: the recursive estimate of the terms, sample by sample;

@@ -2,7 +2,7 @@
 //! they accept. The plotting code's own types name the figure formats and sweep
 //! metrics; this module tells clap how they are spelled.
 
-use crate::data::fetch::Dataset;
+use crate::data::catalogue::Dataset;
 use crate::report::compare;
 use crate::report::kit::plots::Format;
 use crate::report::paper::sweep::Metric;

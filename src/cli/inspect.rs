@@ -136,7 +136,7 @@ fn file_name(path: &Path) -> String {
 }
 
 pub(super) fn fetch_data(
-    dataset: fetch::Dataset,
+    dataset: crate::data::catalogue::Dataset,
     dest: &Path,
     base_url: &str,
 ) -> Result<(), CliError> {

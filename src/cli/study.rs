@@ -6,7 +6,7 @@
 use crate::cli::args::{Drawing, Target};
 use crate::cli::{CliError, failure, input, stopped};
 use crate::count;
-use crate::data::paired;
+use crate::data::paired::Recordings;
 use crate::files::Seal;
 use crate::installation::study::rows::StudyResults;
 use crate::installation::study::spec as study_spec;
@@ -283,29 +283,17 @@ fn learned_memory(
 /// or what it would compute.
 pub(super) fn validate(path: &Path, set: &[String]) -> Result<(), CliError> {
     let experiment = load(path, set)?;
-    // Each recording read once, its time stamps kept.
-    let mut read: std::collections::HashMap<_, std::rc::Rc<Vec<f64>>> =
-        std::collections::HashMap::new();
+    let mut read = Recordings::default();
     let mut lengths = Vec::new();
     for point in &experiment.points {
         let spec = &point.spec;
         let mut times = Vec::new();
-        for (name, files) in &spec.trajectories {
-            let key = (files.clone(), format!("{:?}", spec.columns));
-            let time_s = match read.get(&key) {
-                Some(time_s) => time_s.clone(),
-                None => {
-                    let recording = paired::read(files, &spec.columns).map_err(input)?;
-                    let time_s = std::rc::Rc::new(recording.time_s);
-                    read.insert(key, time_s.clone());
-                    time_s
-                }
-            };
-            times.push((name.as_str(), time_s));
+        for (name, source) in &spec.trajectories {
+            times.push((name.as_str(), read.read(source).map_err(input)?));
         }
         let recordings: Vec<(&str, &[f64])> = times
             .iter()
-            .map(|(name, t)| (*name, t.as_slice()))
+            .map(|&(name, at)| (name, read.get(at).recording.time_s.as_slice()))
             .collect();
         if let Some(learned) = &spec.learned
             && let Some((key, message)) =

@@ -169,7 +169,12 @@ pub fn read_velocities(path: &Path, columns: &[String; 3]) -> Result<Vec<Vec3>, 
 /// in the columns asked for, a finite number; a blank line between rows is an error.
 /// A file with a header and no rows gives no rows.
 pub fn read_columns(path: &Path, columns: &[Column]) -> Result<Rows, CsvError> {
-    let bytes = read_bytes(path)?;
+    parse_columns(path, &read_bytes(path)?, columns)
+}
+
+/// The `columns` of `bytes`, the contents of `path` already read (by [`read_bytes`]),
+/// checked as [`read_columns`] checks them.
+pub fn parse_columns(path: &Path, bytes: &[u8], columns: &[Column]) -> Result<Rows, CsvError> {
     let read_error = |source| CsvError::Read {
         path: path.to_path_buf(),
         source,
@@ -177,7 +182,7 @@ pub fn read_columns(path: &Path, columns: &[Column]) -> Result<Rows, CsvError> {
     let mut reader = ::csv::ReaderBuilder::new()
         .flexible(true)
         .trim(::csv::Trim::All)
-        .from_reader(&bytes[..]);
+        .from_reader(bytes);
     let header: Vec<String> = reader
         .headers()
         .map_err(read_error)?
@@ -194,7 +199,7 @@ pub fn read_columns(path: &Path, columns: &[Column]) -> Result<Rows, CsvError> {
         let record = record.map_err(read_error)?;
         let (line, first_blank) = record
             .position()
-            .map_or((0, None), |position| record_lines(&bytes, position));
+            .map_or((0, None), |position| record_lines(bytes, position));
         if let Some(line) = first_blank {
             return Err(CsvError::BlankLine {
                 path: path.to_path_buf(),
@@ -226,7 +231,7 @@ pub fn row_count(path: &Path) -> Result<usize, CsvError> {
 
 /// The bytes of `path`; a missing file is [`CsvError::Missing`], a device or a pipe
 /// (`/dev/zero` would be read until memory runs out) [`CsvError::NotAFile`].
-fn read_bytes(path: &Path) -> Result<Vec<u8>, CsvError> {
+pub fn read_bytes(path: &Path) -> Result<Vec<u8>, CsvError> {
     regular(path)?;
     std::fs::read(path).map_err(|source| io_error(path, source))
 }

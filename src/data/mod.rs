@@ -1,9 +1,11 @@
 //! Trajectories: the recorded velocities named in the spec, read from `.npy` or `.csv`
 //! files or generated, each with its ground truth (a forward moving average, docs/paper.md);
-//! and [`paired`]: a DVL recorded beside a reference with attitude.
+//! and [`paired`]: a DVL recorded beside a reference with attitude. [`catalogue`] lists
+//! the published recordings (Snapir, A-KIT) and [`fetch`] downloads them.
 //! In: a checked [`Spec`]. Out: one [`Trajectory`] per `data.trajectories` entry, in
 //! spec order.
 
+pub mod catalogue;
 pub mod csv;
 pub mod fetch;
 pub mod npy;

@@ -7,7 +7,7 @@
 //! In: [`CalibrateArgs`]. Out: a [`Calibration`], everything the command prints, or a
 //! [`CalibrateError`] that names the argument, file or step at fault.
 
-use crate::data::paired::{self, PairedColumns, PairedError, PairedFiles, PairedRecording};
+use crate::data::paired::{PairedColumns, PairedError, PairedRecording, Source};
 use crate::installation::estimate::bound::{Noise, TermBound, Why, bound};
 use crate::installation::estimate::filter::{FilterSettings, run_filter};
 use crate::installation::estimate::fit::{
@@ -23,7 +23,7 @@ use crate::installation::terms::{AxisRmse, Installation, TermSet, score};
 use crate::operator::installation_file::SavedInstallation;
 use crate::results::ResultsError;
 use crate::results::corrected::{
-    OtherRecording, Outputs, corrected_samples, dvl_sha256, stem, write, write_terms_in_time,
+    OtherRecording, Outputs, corrected_samples, stem, write, write_terms_in_time,
 };
 use crate::spec::{SpecError, TomlFile};
 use std::ops::Range;
@@ -192,6 +192,8 @@ pub struct Calibration {
 /// first `window_s` seconds, or all).
 struct Read {
     recording: PairedRecording,
+    /// The SHA-256 of the DVL's file, as read.
+    dvl_sha256: String,
     reference: Reference,
     scored: Range<usize>,
     window: Option<PairedRecording>,
@@ -236,7 +238,7 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     }
     fits_in_memory(args)?;
     let read = read(args)?;
-    let recording_sha256 = dvl_sha256(args.dvl)?;
+    let recording_sha256 = read.dvl_sha256.clone();
     outputs.not_another_recordings(args.dvl, &recording_sha256)?;
     let terms = term_set(args.terms);
     let fitted = fit_terms(args, &read, terms)?;
@@ -267,17 +269,7 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     let (corrected, terms_in_time) =
         write_files(&outputs, &recording_sha256, &read, &applied, &filter)?;
     if let Some(path) = args.save {
-        let saved = SavedInstallation::of(
-            &bounded,
-            (args.terms, args.dive_terms),
-            (args.dvl, &recording_sha256),
-            (args.dvl_noise_cm_s, args.reference_noise_cm_s),
-            fitted.residual_rms_m_s,
-        );
-        saved.write(path).map_err(|source| ResultsError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        save(path, args, (&fitted, &bounded), &recording_sha256)?;
     }
     Ok(Calibration {
         fitted,
@@ -397,6 +389,28 @@ pub fn is_noise(bounded: &TermBound, name: &str) -> bool {
     })
 }
 
+/// Writes the installation file of `fitted` and its bound, from the DVL file whose
+/// SHA-256 is `recording_sha256`, to `path`.
+fn save(
+    path: &Path,
+    args: &CalibrateArgs,
+    (fitted, bounded): (&Fit, &TermBound),
+    recording_sha256: &str,
+) -> Result<(), CalibrateError> {
+    let saved = SavedInstallation::of(
+        bounded,
+        (args.terms, args.dive_terms),
+        (args.dvl, recording_sha256),
+        (args.dvl_noise_cm_s, args.reference_noise_cm_s),
+        fitted.residual_rms_m_s,
+    );
+    saved.write(path).map_err(|source| ResultsError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    Ok(())
+}
+
 /// The files written for `args`, named after the DVL's file.
 fn outputs(args: &CalibrateArgs) -> Outputs {
     Outputs::of(args.out, &stem(args.dvl))
@@ -477,16 +491,16 @@ pub(super) fn columns(path: Option<&Path>) -> Result<PairedColumns, CalibrateErr
 
 /// The recording of `args`, its reference, and its window where one is asked.
 fn read(args: &CalibrateArgs) -> Result<Read, CalibrateError> {
-    let files = PairedFiles {
-        dvl: args.dvl.to_path_buf(),
-        reference: args.reference.unwrap_or(args.dvl).to_path_buf(),
-    };
-    let recording = paired::read(&files, &columns(args.columns)?)?;
+    let source = Source::csv(args.dvl, args.reference, columns(args.columns)?);
+    let read = source.read()?;
+    let dvl_sha256 = read.dvl_sha256().to_string();
+    let recording = read.recording;
     let reference = Reference::new(&recording);
     let scored = reference.interior(&recording.time_s, TIME_OFFSET_MARGIN_S);
     let window = args.window_s.map(|w| recording.first_seconds(w));
     Ok(Read {
         recording,
+        dvl_sha256,
         reference,
         scored,
         window,

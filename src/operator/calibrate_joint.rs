@@ -9,7 +9,7 @@
 //! In: [`JointArgs`]. Out: a [`JointCalibration`], or the [`CalibrateError`] of the
 //! recording at fault.
 
-use crate::data::paired::{self, PairedFiles, PairedRecording};
+use crate::data::paired::{Loaded, PairedRecording, Source};
 use crate::evaluate::statistics::mean_std;
 use crate::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise, TermBound, bound};
 use crate::installation::estimate::clock::DEFAULT_SEARCH_S;
@@ -22,7 +22,7 @@ use crate::operator::calibrate::{
 };
 use crate::operator::installation_file::{SavedInstallation, SavedTerm};
 use crate::results::ResultsError;
-use crate::results::corrected::{Outputs, corrected_samples, dvl_sha256, stem, write};
+use crate::results::corrected::{Outputs, corrected_samples, stem, write};
 use std::path::{Path, PathBuf};
 
 /// What a joint `calibrate` is asked.
@@ -103,22 +103,9 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
             path: save.to_path_buf(),
         });
     }
-    let shas = args
-        .dvls
-        .iter()
-        .map(|dvl| dvl_sha256(dvl))
-        .collect::<Result<Vec<String>, ResultsError>>()?;
-    for ((dvl, ours), outputs) in args.dvls.iter().zip(&shas).zip(&outputs) {
-        outputs.not_another_recordings(dvl, ours)?;
-    }
-    if let Some(k) = (1..shas.len()).find(|&k| shas[..k].contains(&shas[k])) {
-        let first = shas.iter().position(|s| *s == shas[k]).expect("seen");
-        return Err(CalibrateError::Duplicate {
-            first: args.dvls[first].clone(),
-            again: args.dvls[k].clone(),
-        });
-    }
-    let recordings = read_all(args)?;
+    let sources = sources(args)?;
+    let (loaded, shas) = load(args, &sources, &outputs)?;
+    let recordings = read_all(args, loaded)?;
     let calibrating: Vec<JointRecording> = recordings
         .iter()
         .map(|(recording, reference, window)| {
@@ -169,18 +156,51 @@ fn names(dvls: &[std::path::PathBuf]) -> Vec<String> {
         .collect()
 }
 
-/// Each recording of `args`, its reference, and its window where one is asked.
+/// Each recording of `args`: its DVL's file beside its reference's, or the DVL's own.
+fn sources(args: &JointArgs) -> Result<Vec<Source>, CalibrateError> {
+    let columns = columns(args.columns)?;
+    let source = |(k, dvl): (usize, &PathBuf)| {
+        let reference = args.references.get(k).map(|r| r.as_path());
+        Source::csv(dvl, reference, columns.clone())
+    };
+    Ok(args.dvls.iter().enumerate().map(source).collect())
+}
+
+/// The files of each of `sources` read from disk and hashed, and each DVL file's
+/// SHA-256; refused where `outputs` already there hold another recording's results, or
+/// where two DVL files are the same recording.
+fn load<'a>(
+    args: &JointArgs,
+    sources: &'a [Source],
+    outputs: &[Outputs],
+) -> Result<(Vec<Loaded<'a>>, Vec<String>), CalibrateError> {
+    let loaded = sources
+        .iter()
+        .map(Source::load)
+        .collect::<Result<Vec<Loaded>, _>>()?;
+    let shas: Vec<String> = loaded.iter().map(|l| l.dvl_sha256().to_string()).collect();
+    for ((dvl, ours), outputs) in args.dvls.iter().zip(&shas).zip(outputs) {
+        outputs.not_another_recordings(dvl, ours)?;
+    }
+    if let Some(k) = (1..shas.len()).find(|&k| shas[..k].contains(&shas[k])) {
+        let first = shas.iter().position(|s| *s == shas[k]).expect("seen");
+        return Err(CalibrateError::Duplicate {
+            first: args.dvls[first].clone(),
+            again: args.dvls[k].clone(),
+        });
+    }
+    Ok((loaded, shas))
+}
+
+/// Each recording of `args`, parsed from the files `loaded` read, its reference, and
+/// its window where one is asked.
 fn read_all(
     args: &JointArgs,
+    loaded: Vec<Loaded>,
 ) -> Result<Vec<(PairedRecording, Reference, Option<PairedRecording>)>, CalibrateError> {
-    let columns = columns(args.columns)?;
     let mut recordings = Vec::new();
-    for (k, dvl) in args.dvls.iter().enumerate() {
-        let files = PairedFiles {
-            dvl: dvl.clone(),
-            reference: args.references.get(k).unwrap_or(dvl).clone(),
-        };
-        let recording = paired::read(&files, &columns)?;
+    for loaded in loaded {
+        let recording = loaded.parse()?.recording;
         let reference = Reference::new(&recording);
         let window = args.window_s.map(|w| recording.first_seconds(w));
         recordings.push((recording, reference, window));

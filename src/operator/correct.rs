@@ -9,7 +9,7 @@
 //! In: [`CorrectArgs`]. Out: a [`Correction`], or a [`CorrectError`] naming the file
 //! and what to do; nothing is written unless everything before the writing succeeded.
 
-use crate::data::paired::{self, PairedError, PairedFiles, PairedRecording};
+use crate::data::paired::{PairedError, PairedRecording, Source};
 use crate::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise};
 use crate::installation::estimate::clock::{Carried, Clock, ClockError, ClockSearch, refind};
 use crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S;
@@ -18,9 +18,7 @@ use crate::installation::terms::{AxisRmse, Installation, score};
 use crate::operator::calibrate::{columns, not_over_an_input};
 use crate::operator::installation_file::{InstallationFileError, SavedInstallation};
 use crate::results::ResultsError;
-use crate::results::corrected::{
-    OtherRecording, Outputs, corrected_samples, dvl_sha256, stem, write,
-};
+use crate::results::corrected::{OtherRecording, Outputs, corrected_samples, stem, write};
 use crate::spec::SpecError;
 use std::path::{Path, PathBuf};
 
@@ -163,21 +161,15 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
     if let Some((output, input)) = not_over_an_input(&inputs, &outputs.all()) {
         return Err(CorrectError::OverInput { output, input });
     }
-    let recording_sha256 = dvl_sha256(args.dvl)?;
+    let columns = columns(args.columns).map_err(|e| match e {
+        crate::operator::calibrate::CalibrateError::Columns(error) => CorrectError::Columns(error),
+        other => unreachable!("columns fails only on its file: {other}"),
+    })?;
+    let source = Source::csv(args.dvl, args.reference, columns);
+    let loaded = source.load()?;
+    let recording_sha256 = loaded.dvl_sha256().to_string();
     outputs.not_another_recordings(args.dvl, &recording_sha256)?;
-    let files = PairedFiles {
-        dvl: args.dvl.to_path_buf(),
-        reference: args.reference.unwrap_or(args.dvl).to_path_buf(),
-    };
-    let recording = paired::read(
-        &files,
-        &columns(args.columns).map_err(|e| match e {
-            crate::operator::calibrate::CalibrateError::Columns(error) => {
-                CorrectError::Columns(error)
-            }
-            other => unreachable!("columns fails only on its file: {other}"),
-        })?,
-    )?;
+    let recording = loaded.parse()?.recording;
     let reference = Reference::new(&recording);
     let duration_s = recording.duration_s();
     if args.time_offset_s.is_none() && duration_s <= args.window_s {

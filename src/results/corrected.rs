@@ -146,15 +146,6 @@ impl Outputs {
     }
 }
 
-/// The SHA-256 of the DVL file `dvl`, which the Parquet outputs record.
-pub fn dvl_sha256(dvl: &Path) -> Result<String, ResultsError> {
-    let bytes = std::fs::read(dvl).map_err(|source| ResultsError::Io {
-        path: dvl.to_path_buf(),
-        source,
-    })?;
-    Ok(crate::files::sha256_hex(&bytes))
-}
-
 /// An output already there holds another recording's results.
 #[derive(Debug, thiserror::Error)]
 #[error(

@@ -5,7 +5,7 @@
 
 use crate::common;
 use common::*;
-use dcnet_exp::data::fetch::{AKIT_FILES, AKIT_SEGMENTS};
+use dcnet_exp::data::catalogue::{AKIT_FILES, AKIT_SEGMENTS};
 use dcnet_exp::data::paired::{PairedColumns, PairedFiles, PairedRecording, read};
 use std::f64::consts::PI;
 use std::path::Path;

@@ -1,13 +1,13 @@
-//! What the points of an installation study read: every paired recording (each file
-//! read and hashed once, however many points name it) and the DCNet models of each
+//! What the points of an installation study read: every paired recording (each read
+//! and its files hashed once, however many points name it, through
+//! [`Recordings`]) and the DCNet models of each
 //! paper spec the points apply (loaded once per spec). In: the experiment and the
 //! output folder whose cache holds the models. Out: [`Inputs`], or the first recording
 //! or model that cannot be had.
 
 use crate::Vec3;
-use crate::data::paired::{self, PairedFiles};
+use crate::data::paired::Recordings;
 use crate::estimators::{DcnetEstimator, Estimator};
-use crate::files::sha256_hex;
 use crate::installation::study::Recording;
 use crate::installation::study::spec::StudySpec;
 use crate::model::Settings;
@@ -59,9 +59,11 @@ pub struct Inputs {
 
 impl Inputs {
     pub fn read(experiment: &Experiment<StudySpec>, out: &Path) -> Result<Inputs, ExecuteError> {
+        let mut recordings = Recordings::default();
         let mut segments = Vec::new();
-        let mut segment_of: HashMap<(PairedFiles, String), usize> = HashMap::new();
-        let mut hashes: HashMap<PathBuf, String> = HashMap::new();
+        // A segment per recording and name: the same files may be named otherwise in
+        // another point.
+        let mut segment_of: HashMap<(usize, &str), usize> = HashMap::new();
         let mut dcnets = Vec::new();
         let mut dcnets_of: HashMap<PathBuf, usize> = HashMap::new();
         let mut points = Vec::new();
@@ -69,45 +71,24 @@ impl Inputs {
             let spec = &point.spec;
             let mut point_segments = Vec::new();
             let mut data_files = Vec::new();
-            for (index, (name, files)) in spec.trajectories.iter().enumerate() {
-                let read_as = (files.clone(), format!("{name}\u{0}{:?}", spec.columns));
-                let s = match segment_of.get(&read_as) {
-                    Some(&s) => s,
-                    None => {
-                        let recording = paired::read(files, &spec.columns).map_err(|error| {
-                            ExecuteError::Recording {
-                                index,
-                                name: name.clone(),
-                                error,
-                            }
-                        })?;
-                        segments.push(Recording::new(name.clone(), recording));
-                        segment_of.insert(read_as, segments.len() - 1);
-                        segments.len() - 1
-                    }
-                };
+            for (index, (name, source)) in spec.trajectories.iter().enumerate() {
+                let read = recordings
+                    .read(source)
+                    .map_err(|error| ExecuteError::Recording {
+                        index,
+                        name: name.clone(),
+                        error,
+                    })?;
+                let recording = recordings.get(read);
+                let s = *segment_of.entry((read, name)).or_insert_with(|| {
+                    segments.push(Recording::new(name.clone(), recording.recording.clone()));
+                    segments.len() - 1
+                });
                 point_segments.push(s);
-                // One file may hold both the DVL and the reference.
-                for path in crate::first_seen([&files.dvl, &files.reference]) {
-                    let sha256 = match hashes.get(path) {
-                        Some(sha256) => sha256.clone(),
-                        None => {
-                            let bytes = std::fs::read(path).map_err(|source| {
-                                crate::results::ResultsError::Io {
-                                    path: path.clone(),
-                                    source,
-                                }
-                            })?;
-                            let sha256 = sha256_hex(&bytes);
-                            hashes.insert(path.clone(), sha256.clone());
-                            sha256
-                        }
-                    };
-                    data_files.push(DataFile {
-                        path: path.clone(),
-                        sha256,
-                    });
-                }
+                data_files.extend(recording.files.iter().map(|file| DataFile {
+                    path: file.path.clone(),
+                    sha256: file.sha256.clone(),
+                }));
             }
             let point_dcnets = match &spec.dcnet_spec {
                 None => None,

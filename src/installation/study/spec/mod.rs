@@ -22,7 +22,7 @@ pub use file::{
     StudyCalibrationFile, StudyFile, TermSetFile,
 };
 
-use crate::data::paired::{PairedColumns, PairedFiles};
+use crate::data::paired::Source;
 use crate::installation::estimate::bound::Noise;
 use crate::installation::estimate::clock::ClockSearch;
 use crate::installation::estimate::filter::FilterSettings;
@@ -101,9 +101,8 @@ pub struct DiveSpec {
 #[derive(Debug, Clone)]
 pub struct StudySpec {
     pub name: String,
-    /// Each trajectory's name and files.
-    pub trajectories: Vec<(String, PairedFiles)>,
-    pub columns: PairedColumns,
+    /// Each trajectory's name and where its recording is.
+    pub trajectories: Vec<(String, Source)>,
     pub dvl_noise_m_s: f64,
     pub reference_noise_m_s: f64,
     /// In increasing order.
@@ -176,7 +175,7 @@ fn check(document: &Document<StudyFile>) -> Result<StudySpec, Vec<(String, Strin
         faults.add("name", format!("{name:?} must be non-empty, at most {MAX_NAME_CHARS} characters, use only letters, digits, '-', '_' and '.', and not start with '.' (it names the results folder)"));
     }
     let listed = recordings.trajectories.len();
-    let (trajectories, columns) = check_recordings(recordings, &document.folder, &mut faults);
+    let trajectories = check_recordings(recordings, &document.folder, &mut faults);
     let (dvl_noise_m_s, reference_noise_m_s) = check_noise(noise, &mut faults);
     let calibration = check_calibration(calibration, &mut faults);
     let mut methods = calibration.methods;
@@ -205,7 +204,6 @@ fn check(document: &Document<StudyFile>) -> Result<StudySpec, Vec<(String, Strin
     Ok(StudySpec {
         name,
         trajectories,
-        columns,
         dvl_noise_m_s,
         reference_noise_m_s,
         windows_s: calibration.windows_s,
@@ -230,7 +228,6 @@ pub(crate) mod tests {
         StudySpec {
             name: "test".into(),
             trajectories: Vec::new(),
-            columns: PairedColumns::akit(),
             dvl_noise_m_s: 0.02,
             reference_noise_m_s: 0.0,
             windows_s: vec![100.0],

@@ -1,9 +1,10 @@
 //! Checks `[recordings]`. In: the trajectories' names and files as written, relative to
 //! the spec's folder, and the column names when they are not A-KIT's. Out: each
-//! trajectory's name and files, and the columns; at least two trajectories, each name
-//! and each pair of files once, each column named for one quantity.
+//! trajectory's name and [`Source`] (its files, read with the columns); at least two
+//! trajectories, each name and each pair of files once, each column named for one
+//! quantity.
 
-use crate::data::paired::{PairedColumns, PairedFiles};
+use crate::data::paired::{PairedColumns, Source};
 use crate::installation::study::spec::file::{PairedTrajectoryFile, RecordingsFile};
 use crate::spec::check::Faults;
 use std::collections::HashSet;
@@ -15,11 +16,12 @@ pub(in crate::installation::study::spec) fn check_recordings(
     recordings: RecordingsFile,
     folder: &Path,
     faults: &mut Faults,
-) -> (Vec<(String, PairedFiles)>, PairedColumns) {
+) -> Vec<(String, Source)> {
     let RecordingsFile {
         columns,
         trajectories: listed,
     } = recordings;
+    let columns = columns.unwrap_or_else(PairedColumns::akit);
     let mut names = HashSet::new();
     let mut trajectories = Vec::new();
     for (i, trajectory) in listed.into_iter().enumerate() {
@@ -34,9 +36,9 @@ pub(in crate::installation::study::spec) fn check_recordings(
                 format!("{name:?} is defined twice"),
             );
         }
-        let dvl = folder.join(dvl);
-        let reference = reference.map_or_else(|| dvl.clone(), |r| folder.join(r));
-        trajectories.push((name, PairedFiles { dvl, reference }));
+        let reference = reference.map(|r| folder.join(r));
+        let source = Source::csv(&folder.join(dvl), reference.as_deref(), columns.clone());
+        trajectories.push((name, source));
     }
     if trajectories.len() < 2 {
         faults.add(
@@ -47,9 +49,9 @@ pub(in crate::installation::study::spec) fn check_recordings(
             ),
         );
     }
-    let mut files = HashSet::new();
-    for (i, (name, paired)) in trajectories.iter().enumerate() {
-        if !files.insert(paired.clone()) {
+    let mut sources = HashSet::new();
+    for (i, (name, source)) in trajectories.iter().enumerate() {
+        if !sources.insert(source) {
             faults.add(
                 format!("recordings.trajectories[{i}].dvl"),
                 format!(
@@ -58,9 +60,8 @@ pub(in crate::installation::study::spec) fn check_recordings(
             );
         }
     }
-    let columns = columns.unwrap_or_else(PairedColumns::akit);
     if let Some((key, why)) = columns.named_twice() {
         faults.add(format!("recordings.columns.{key}"), why);
     }
-    (trajectories, columns)
+    trajectories
 }

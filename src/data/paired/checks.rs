@@ -1,0 +1,315 @@
+//! The plausibility checks of a paired recording, whatever its format: time stamps
+//! that go back or repeat, roll or pitch out of range, a velocity beyond a vehicle's, a
+//! body rate or an attitude jump beyond a vehicle's turn, a DVL and a reference of other
+//! lengths or times, fewer than [`MIN_SAMPLES`] samples. They run on the samples a
+//! format read, and name where a faulty sample came from through a [`Locator`] (a CSV
+//! file's line today).
+//! In: the [`Unchecked`] samples and their [`Locator`]. Out: the [`PairedRecording`],
+//! angles in radians, or the first fault as a [`PairedError`].
+
+use super::{
+    MAX_BODY_RATE_RAD_S, MAX_DVL_SPEED_M_S, MIN_SAMPLES, PairedColumns, PairedError,
+    PairedRecording, TIME_TOLERANCE_S,
+};
+use crate::Vec3;
+use std::f64::consts::PI;
+use std::path::{Path, PathBuf};
+
+/// The samples as a format gives them, before any check: the DVL's and the
+/// reference's, each on its own time stamps (their counts may differ), the angles (and
+/// the rate) in the unit recorded.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Unchecked {
+    pub dvl_time_s: Vec<f64>,
+    /// The DVL's body-frame velocity, m/s.
+    pub dvl_m_s: Vec<Vec3>,
+    pub reference_time_s: Vec<f64>,
+    /// The reference's north, east, down velocity, m/s.
+    pub velocity_ned_m_s: Vec<Vec3>,
+    /// Roll, pitch, yaw, in degrees where `angles_in_degrees`, radians otherwise.
+    pub attitude: Vec<Vec3>,
+    /// The body angular rate, in deg/s where `angles_in_degrees`, rad/s otherwise.
+    pub rate: Option<Vec<Vec3>>,
+    pub angles_in_degrees: bool,
+}
+
+impl Unchecked {
+    /// The factor from the recorded angle unit to radians.
+    fn to_rad(&self) -> f64 {
+        if self.angles_in_degrees {
+            1f64.to_radians()
+        } else {
+            1.0
+        }
+    }
+
+    /// The recording, angles (and the rate) in radians, on the DVL's time stamps.
+    fn into_recording(self) -> PairedRecording {
+        let to_rad = self.to_rad();
+        let scaled = |values: Vec<Vec3>| -> Vec<Vec3> {
+            values
+                .into_iter()
+                .map(|[a, b, c]| [a * to_rad, b * to_rad, c * to_rad])
+                .collect()
+        };
+        PairedRecording {
+            time_s: self.dvl_time_s,
+            dvl_m_s: self.dvl_m_s,
+            velocity_ned_m_s: self.velocity_ned_m_s,
+            attitude_rad: scaled(self.attitude),
+            rate_rad_s: self.rate.map(scaled),
+        }
+    }
+}
+
+/// Where each sample came from: the DVL's file and the reference's (one path when one
+/// file holds both), each sample's line there (a CSV file's line, the header line 1;
+/// another format would give its message's place), and the name each quantity has
+/// there.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Locator {
+    pub dvl: PathBuf,
+    pub reference: PathBuf,
+    pub dvl_lines: Vec<u64>,
+    pub reference_lines: Vec<u64>,
+    pub names: PairedColumns,
+}
+
+/// Checks `samples`, each fault placed by `at`, and gives the recording they make.
+pub fn check(samples: Unchecked, at: &Locator) -> Result<PairedRecording, PairedError> {
+    let time = &at.names.time;
+    check_increasing(&at.dvl, time, &samples.dvl_time_s, &at.dvl_lines)?;
+    // In one file the reference's stamps are the DVL's, already checked.
+    check_increasing(
+        &at.reference,
+        time,
+        &samples.reference_time_s,
+        &at.reference_lines,
+    )?;
+    check_attitude(&samples, at)?;
+    check_reference_motion(&samples, at)?;
+    check_stamps(&samples, at)?;
+    if samples.dvl_time_s.len() < MIN_SAMPLES {
+        return Err(PairedError::TooShort {
+            path: at.dvl.clone(),
+            samples: samples.dvl_time_s.len(),
+        });
+    }
+    check_dvl_speed(&samples, at)?;
+    Ok(samples.into_recording())
+}
+
+/// Every time stamp of `time_s` after the one before it.
+fn check_increasing(
+    path: &Path,
+    column: &str,
+    time_s: &[f64],
+    lines: &[u64],
+) -> Result<(), PairedError> {
+    for row in 1..time_s.len() {
+        let (previous_s, now_s) = (time_s[row - 1], time_s[row]);
+        if now_s <= previous_s {
+            return Err(PairedError::TimeNotIncreasing {
+                path: path.to_path_buf(),
+                line: lines[row],
+                column: column.to_string(),
+                time_s: now_s,
+                previous_line: lines[row - 1],
+                previous_s,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Roll and pitch within their ranges, [-π, π] and [-π/2, π/2] in radians, or the same
+/// in degrees; yaw may run on beyond a turn (an unwrapped heading), its jumps are
+/// checked with the reference's motion.
+fn check_attitude(samples: &Unchecked, at: &Locator) -> Result<(), PairedError> {
+    let degrees = samples.angles_in_degrees;
+    for (row, angles) in samples.attitude.iter().enumerate() {
+        for (angle, &value) in angles[..2].iter().enumerate() {
+            let bound = if degrees {
+                [180.0, 90.0, 360.0][angle]
+            } else {
+                [PI, PI / 2.0, 2.0 * PI][angle]
+            };
+            if value.abs() > bound {
+                return Err(PairedError::AttitudeOutOfRange {
+                    path: at.reference.clone(),
+                    line: at.reference_lines[row],
+                    column: at.names.attitude[angle].clone(),
+                    angle,
+                    value,
+                    degrees,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The reference's velocity within [`MAX_DVL_SPEED_M_S`], its recorded body rate
+/// within [`MAX_BODY_RATE_RAD_S`], and its attitude turning no faster than that between
+/// two samples (each angle's change taken the short way round).
+fn check_reference_motion(samples: &Unchecked, at: &Locator) -> Result<(), PairedError> {
+    let to_rad = samples.to_rad();
+    let path = || at.reference.clone();
+    for row in 0..samples.reference_time_s.len() {
+        let line = at.reference_lines[row];
+        for axis in 0..3 {
+            let value = samples.velocity_ned_m_s[row][axis];
+            if value.abs() > MAX_DVL_SPEED_M_S {
+                return Err(PairedError::ReferenceOutOfRange {
+                    path: path(),
+                    line,
+                    column: at.names.velocity_ned[axis].clone(),
+                    value,
+                });
+            }
+            if let (Some(rate), Some(names)) = (&samples.rate, &at.names.rate)
+                && (rate[row][axis] * to_rad).abs() > MAX_BODY_RATE_RAD_S
+            {
+                return Err(PairedError::RateOutOfRange {
+                    path: path(),
+                    line,
+                    column: names[axis].clone(),
+                    value: rate[row][axis],
+                });
+            }
+        }
+        if row > 0 {
+            check_turn(samples, at, row)?;
+        }
+    }
+    Ok(())
+}
+
+/// The attitude of sample `row` against the one before it: no angle turning faster
+/// than [`MAX_BODY_RATE_RAD_S`] between them, taken the short way round.
+fn check_turn(samples: &Unchecked, at: &Locator, row: usize) -> Result<(), PairedError> {
+    let to_rad = samples.to_rad();
+    let time_s = &samples.reference_time_s;
+    let dt_s = time_s[row] - time_s[row - 1];
+    let (now, before) = (samples.attitude[row], samples.attitude[row - 1]);
+    for axis in 0..3 {
+        let (value, previous) = (now[axis], before[axis]);
+        let change = ((value - previous) * to_rad + PI).rem_euclid(2.0 * PI) - PI;
+        let rate_rad_s = change.abs() / dt_s;
+        if rate_rad_s > MAX_BODY_RATE_RAD_S {
+            return Err(PairedError::AttitudeJump {
+                path: at.reference.clone(),
+                line: at.reference_lines[row],
+                previous_line: at.reference_lines[row - 1],
+                column: at.names.attitude[axis].clone(),
+                value,
+                previous,
+                dt_s,
+                rate_rad_s,
+                degrees: samples.angles_in_degrees,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The DVL and the reference on the same time stamps: as many samples, each pair
+/// within [`TIME_TOLERANCE_S`].
+fn check_stamps(samples: &Unchecked, at: &Locator) -> Result<(), PairedError> {
+    let (dvl, reference) = (&samples.dvl_time_s, &samples.reference_time_s);
+    if dvl.len() != reference.len() {
+        return Err(PairedError::Lengths {
+            dvl: at.dvl.clone(),
+            dvl_samples: dvl.len(),
+            reference: at.reference.clone(),
+            reference_samples: reference.len(),
+        });
+    }
+    for (row, (&dvl_s, &reference_s)) in dvl.iter().zip(reference).enumerate() {
+        if (dvl_s - reference_s).abs() > TIME_TOLERANCE_S {
+            return Err(PairedError::Times {
+                dvl: at.dvl.clone(),
+                dvl_line: at.dvl_lines[row],
+                reference: at.reference.clone(),
+                reference_line: at.reference_lines[row],
+                column: at.names.time.clone(),
+                dvl_s,
+                reference_s,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Every DVL velocity component within [`MAX_DVL_SPEED_M_S`].
+fn check_dvl_speed(samples: &Unchecked, at: &Locator) -> Result<(), PairedError> {
+    for (row, velocity) in samples.dvl_m_s.iter().enumerate() {
+        for (axis, &value) in velocity.iter().enumerate() {
+            if value.abs() > MAX_DVL_SPEED_M_S {
+                return Err(PairedError::DvlOutOfRange {
+                    path: at.dvl.clone(),
+                    line: at.dvl_lines[row],
+                    column: at.names.dvl[axis].clone(),
+                    value,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Three samples of a recording in no file, placed at made-up lines.
+    fn samples() -> (Unchecked, Locator) {
+        let samples = Unchecked {
+            dvl_time_s: vec![0.0, 1.0, 2.0],
+            dvl_m_s: vec![[1.0, 0.0, 0.0]; 3],
+            reference_time_s: vec![0.0, 1.0, 2.0],
+            velocity_ned_m_s: vec![[1.0, 0.0, 0.0]; 3],
+            attitude: vec![[0.0, 0.0, 90.0], [0.0, 0.0, 100.0], [0.0, 0.0, 110.0]],
+            rate: None,
+            angles_in_degrees: true,
+        };
+        let names = |names: [&str; 3]| names.map(String::from);
+        let at = Locator {
+            dvl: "message.bag".into(),
+            reference: "message.bag".into(),
+            dvl_lines: vec![10, 20, 30],
+            reference_lines: vec![11, 21, 31],
+            names: PairedColumns {
+                time: "stamp".into(),
+                dvl: names(["vx", "vy", "vz"]),
+                velocity_ned: names(["n", "e", "d"]),
+                attitude: names(["roll", "pitch", "heading"]),
+                rate: None,
+                angles_in_degrees: true,
+            },
+        };
+        (samples, at)
+    }
+
+    /// The checks place a fault through the locator alone, whatever the samples came
+    /// from; angles come out in radians.
+    #[test]
+    fn a_fault_is_placed_by_the_locator_and_angles_come_out_in_radians() {
+        let (good, at) = samples();
+        let recording = check(good.clone(), &at).unwrap();
+        assert_eq!(recording.attitude_rad[1][2], 100.0 * 1f64.to_radians());
+        assert_eq!(recording.time_s, good.dvl_time_s);
+        let mut fast = good.clone();
+        fast.dvl_m_s[2][1] = 25.0;
+        assert_eq!(
+            check(fast, &at).unwrap_err().to_string(),
+            "message.bag:30: vy: 25 m/s is beyond 20 m/s, faster than any vehicle a DVL rides: a DVL's bad-velocity marker (Teledyne RDI writes -32.768) or a unit other than m/s; remove the row or mark it in the recording's own way before calibrating"
+        );
+        let mut back = good;
+        back.reference_time_s[2] = 0.5;
+        assert_eq!(
+            check(back, &at).unwrap_err().to_string(),
+            "message.bag:31: stamp: 0.5 s follows 1 s of line 21: time stamps must increase"
+        );
+    }
+}

@@ -1,0 +1,89 @@
+//! A paired recording from CSV: the DVL's columns from its file, the reference's from
+//! its own (or both from one file), each field checked as [`crate::data::csv`] checks
+//! it (there, not a number, finite), each sample's line kept for the plausibility
+//! checks' messages.
+//! In: the bytes of the DVL's file and, when it is another, the reference's, and the
+//! [`PairedColumns`]. Out: the [`Unchecked`] samples and the [`Locator`] of their lines.
+
+use super::checks::{Locator, Unchecked};
+use super::{PairedColumns, PairedError};
+use crate::Vec3;
+use crate::data::csv::{Column, Quantity, Rows, parse_columns};
+use std::path::Path;
+
+/// The samples of `dvl` (a path and its bytes) and, where the reference is in another
+/// file, of `reference`, with `columns`.
+pub fn parse(
+    dvl: (&Path, &[u8]),
+    reference: Option<(&Path, &[u8])>,
+    columns: &PairedColumns,
+) -> Result<(Unchecked, Locator), PairedError> {
+    let time = Column {
+        name: &columns.time,
+        holds: Quantity::Time,
+    };
+    fn triple(names: &[String; 3], holds: Quantity) -> Vec<Column<'_>> {
+        names.iter().map(|name| Column { name, holds }).collect()
+    }
+    let dvl_columns: Vec<Column> = std::iter::once(time)
+        .chain(triple(&columns.dvl, Quantity::Velocity))
+        .collect();
+    let reference_columns: Vec<Column> = std::iter::once(time)
+        .chain(triple(&columns.velocity_ned, Quantity::Velocity))
+        .chain(triple(&columns.attitude, Quantity::Angle))
+        .chain(
+            columns
+                .rate
+                .iter()
+                .flat_map(|rate| triple(rate, Quantity::AngularRate)),
+        )
+        .collect();
+    // The reference's values start after the time, or, in one file, after the time
+    // and the DVL's three.
+    let (dvl_rows, reference_rows, start, reference_path) = match reference {
+        None => {
+            let all: Vec<Column> = dvl_columns
+                .iter()
+                .chain(&reference_columns[1..])
+                .copied()
+                .collect();
+            let rows = parse_columns(dvl.0, dvl.1, &all)?;
+            (rows.clone(), rows, 4, dvl.0)
+        }
+        Some((path, bytes)) => {
+            let dvl_rows = parse_columns(dvl.0, dvl.1, &dvl_columns)?;
+            let reference_rows = parse_columns(path, bytes, &reference_columns)?;
+            (dvl_rows, reference_rows, 1, path)
+        }
+    };
+    let samples = Unchecked {
+        dvl_time_s: dvl_rows.column(0).collect(),
+        dvl_m_s: triples(&dvl_rows, 1),
+        reference_time_s: reference_rows.column(0).collect(),
+        velocity_ned_m_s: triples(&reference_rows, start),
+        attitude: triples(&reference_rows, start + 3),
+        rate: columns
+            .rate
+            .as_ref()
+            .map(|_| triples(&reference_rows, start + 6)),
+        angles_in_degrees: columns.angles_in_degrees,
+    };
+    let at = Locator {
+        dvl: dvl.0.to_path_buf(),
+        reference: reference_path.to_path_buf(),
+        dvl_lines: dvl_rows.lines,
+        reference_lines: reference_rows.lines,
+        names: columns.clone(),
+    };
+    Ok((samples, at))
+}
+
+/// The three values of each row from `start`.
+fn triples(rows: &Rows, start: usize) -> Vec<Vec3> {
+    (0..rows.len())
+        .map(|row| {
+            let values = &rows.row(row)[start..start + 3];
+            [values[0], values[1], values[2]]
+        })
+        .collect()
+}

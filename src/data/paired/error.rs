@@ -1,0 +1,173 @@
+//! The faults of a paired recording: a file or column that is not there, a field that
+//! is not a finite number, and every plausibility check's refusal, each naming the
+//! file, the line (the header is line 1) and the column. In: what a check found. Out:
+//! the message.
+
+use super::{MAX_BODY_RATE_RAD_S, MAX_DVL_SPEED_M_S, MIN_SAMPLES, TIME_TOLERANCE_S};
+use crate::data::catalogue;
+use crate::data::csv::CsvError;
+use std::f64::consts::PI;
+use std::path::PathBuf;
+
+#[derive(Debug, thiserror::Error)]
+pub enum PairedError {
+    #[error("{}: file not found{hint}", path.display())]
+    Missing { path: PathBuf, hint: String },
+    #[error(transparent)]
+    Csv(CsvError),
+    #[error(
+        "{}:{line}: {column}: {time_s} s follows {previous_s} s of line {previous_line}: time stamps must increase",
+        path.display()
+    )]
+    TimeNotIncreasing {
+        path: PathBuf,
+        line: u64,
+        column: String,
+        time_s: f64,
+        previous_line: u64,
+        previous_s: f64,
+    },
+    #[error(
+        "{}:{line}: {column}: {} m/s is beyond {MAX_DVL_SPEED_M_S} m/s, faster than any vehicle a DVL rides: a DVL's bad-velocity marker (Teledyne RDI writes -32.768) or a unit other than m/s; remove the row or mark it in the recording's own way before calibrating",
+        path.display(),
+        crate::Shown(*value)
+    )]
+    DvlOutOfRange {
+        path: PathBuf,
+        line: u64,
+        column: String,
+        value: f64,
+    },
+    #[error(
+        "{}:{line}: {column}: {} m/s is beyond {MAX_DVL_SPEED_M_S} m/s, faster than any vehicle a DVL rides: a bad value or a unit other than m/s; remove the row before calibrating",
+        path.display(),
+        crate::Shown(*value)
+    )]
+    ReferenceOutOfRange {
+        path: PathBuf,
+        line: u64,
+        column: String,
+        value: f64,
+    },
+    #[error(
+        "{}:{line}: {column}: {} rad/s is beyond {MAX_BODY_RATE_RAD_S} rad/s, faster than any vehicle a DVL rides turns: a bad value or a unit other than rad/s",
+        path.display(),
+        crate::Shown(*value)
+    )]
+    RateOutOfRange {
+        path: PathBuf,
+        line: u64,
+        column: String,
+        value: f64,
+    },
+    #[error(
+        "{}:{line}: {column}: {} {unit} after {} {unit} on line {previous_line}, {dt_s} s before: a turn of {rate_rad_s:.3} rad/s, beyond the {MAX_BODY_RATE_RAD_S} rad/s any vehicle a DVL rides turns: a glitch in the attitude; remove the row before calibrating{hint}",
+        path.display(),
+        crate::Shown(*value),
+        crate::Shown(*previous),
+        unit = if *.degrees { "deg" } else { "rad" },
+        hint = if !*.degrees
+            && value.abs().max(previous.abs()) > 2.0 * PI
+            && rate_rad_s.to_radians() <= MAX_BODY_RATE_RAD_S
+        {
+            "; if the file's angles are in degrees, set angles_in_degrees = true"
+        } else {
+            ""
+        },
+    )]
+    AttitudeJump {
+        path: PathBuf,
+        line: u64,
+        previous_line: u64,
+        column: String,
+        value: f64,
+        previous: f64,
+        dt_s: f64,
+        rate_rad_s: f64,
+        degrees: bool,
+    },
+    #[error(
+        "{}:{line}: {column}: {value} {unit} is out of range: {angle} lies in [-{limit}, {limit}] {unit}{hint}",
+        path.display(),
+        unit = if *.degrees { "deg" } else { "rad" },
+        limit = angle_limit(*.angle, *.degrees).1,
+        angle = angle_limit(*.angle, *.degrees).0,
+        hint = degrees_hint(*.value, *.degrees),
+    )]
+    AttitudeOutOfRange {
+        path: PathBuf,
+        line: u64,
+        column: String,
+        /// 0 roll, 1 pitch, 2 yaw.
+        angle: usize,
+        value: f64,
+        degrees: bool,
+    },
+    #[error(
+        "{}: {dvl_samples} samples (lines 2 to {}), but {}: {reference_samples} (lines 2 to {}): the DVL and the reference need one row per time stamp each",
+        dvl.display(),
+        dvl_samples + 1,
+        reference.display(),
+        reference_samples + 1
+    )]
+    Lengths {
+        dvl: PathBuf,
+        dvl_samples: usize,
+        reference: PathBuf,
+        reference_samples: usize,
+    },
+    #[error(
+        "{}:{dvl_line}: {column}: {dvl_s} s, but {}:{reference_line} has {reference_s} s: the DVL and the reference must be on the same time stamps (within {} s)",
+        dvl.display(),
+        reference.display(),
+        TIME_TOLERANCE_S
+    )]
+    Times {
+        dvl: PathBuf,
+        dvl_line: u64,
+        reference: PathBuf,
+        reference_line: u64,
+        column: String,
+        dvl_s: f64,
+        reference_s: f64,
+    },
+    #[error(
+        "{}: {samples} samples below the header: a recording of a DVL beside a reference needs at least {MIN_SAMPLES}",
+        path.display()
+    )]
+    TooShort { path: PathBuf, samples: usize },
+}
+
+impl From<CsvError> for PairedError {
+    fn from(error: CsvError) -> PairedError {
+        match error {
+            CsvError::Missing { path } => PairedError::Missing {
+                hint: catalogue::akit_hint(&path),
+                path,
+            },
+            error => PairedError::Csv(error),
+        }
+    }
+}
+
+/// The name of angle `angle` (0 roll, 1 pitch, 2 yaw) and the bound of its range, in
+/// degrees or radians.
+fn angle_limit(angle: usize, degrees: bool) -> (&'static str, &'static str) {
+    match (angle, degrees) {
+        (0, false) => ("roll", "π"),
+        (1, false) => ("pitch", "π/2"),
+        (_, false) => ("yaw", "2π"),
+        (0, true) => ("roll", "180"),
+        (1, true) => ("pitch", "90"),
+        (_, true) => ("yaw", "360"),
+    }
+}
+
+/// A hint for an angle out of range in radians that would be in range in degrees.
+fn degrees_hint(value: f64, degrees: bool) -> &'static str {
+    if !degrees && value.abs() <= 360.0 {
+        "; if the file's angles are in degrees, set angles_in_degrees = true"
+    } else {
+        ""
+    }
+}

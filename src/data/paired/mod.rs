@@ -1,0 +1,455 @@
+//! A DVL recorded beside a reference with attitude: per sample, the time, the DVL's
+//! velocity in its body frame, and the reference's NED velocity, roll, pitch and yaw
+//! (optionally its body angular rate). A recording is read through one way in, a
+//! [`Source`] (`source.rs`): today one or two CSV files whose columns the spec names
+//! (`columns.rs`, the A-KIT names by default, [`PairedColumns::akit`]), parsed by
+//! `csv.rs`; each file is read from disk once and hashed as it is read. Every sample is
+//! checked, whatever the format (`checks.rs`): a field that is missing, empty, not a
+//! number or not finite (as [`crate::data::csv`] checks it), time stamps that go back
+//! or repeat, roll or pitch out of range, a velocity beyond a vehicle's, a body rate or
+//! an attitude jump beyond a vehicle's turn, a DVL and a reference of other lengths or
+//! times, fewer than 3 samples: each is an error (`error.rs`) naming the file, the line
+//! (the header is line 1) and the column, and nothing is returned.
+//! In: a [`Source`]. Out: a [`ReadRecording`]: the [`PairedRecording`], angles in
+//! radians, and the SHA-256 of each of its files.
+
+mod checks;
+mod columns;
+mod csv;
+mod error;
+mod source;
+
+pub use columns::{PairedColumns, PairedFiles};
+pub use error::PairedError;
+pub use source::{Loaded, ReadRecording, Recordings, Source, SourceFile};
+
+use crate::Vec3;
+use std::ops::Range;
+
+/// The fewest samples a recording may have.
+pub const MIN_SAMPLES: usize = 3;
+
+/// The largest DVL velocity component read as data, m/s: beyond it a value is a
+/// bad-velocity marker or another unit, not a vehicle's motion.
+pub const MAX_DVL_SPEED_M_S: f64 = 20.0;
+
+/// The fastest turn read as data, rad/s (115 °/s): a recorded body rate beyond it, or
+/// an attitude that changes faster between two samples, is a glitch or another unit,
+/// not a vehicle's motion.
+pub const MAX_BODY_RATE_RAD_S: f64 = 2.0;
+
+/// How far apart the DVL's and the reference's time stamps of one row may be, seconds.
+pub const TIME_TOLERANCE_S: f64 = 1e-3;
+
+/// The median interval between two samples, s (0 with fewer than two).
+pub fn sample_interval(time: &[f64]) -> f64 {
+    let mut steps: Vec<f64> = time.windows(2).map(|w| w[1] - w[0]).collect();
+    if steps.is_empty() {
+        return 0.0;
+    }
+    steps.sort_by(f64::total_cmp);
+    steps[steps.len() / 2]
+}
+
+/// One recording: the DVL as measured and the reference, on the same time stamps.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PairedRecording {
+    /// Seconds, strictly increasing (the DVL file's).
+    pub time_s: Vec<f64>,
+    /// The DVL's velocity in its body frame (x forward, y starboard, z down), m/s.
+    pub dvl_m_s: Vec<Vec3>,
+    /// The reference's velocity, north, east, down, m/s.
+    pub velocity_ned_m_s: Vec<Vec3>,
+    /// Roll, pitch, yaw in radians, as recorded (yaw may wrap at ±π, or run on unwrapped).
+    pub attitude_rad: Vec<Vec3>,
+    /// The reference's body angular rate (p, q, r) in rad/s, when recorded.
+    pub rate_rad_s: Option<Vec<Vec3>>,
+}
+
+impl PairedRecording {
+    /// How many samples it has.
+    pub fn len(&self) -> usize {
+        self.time_s.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.time_s.is_empty()
+    }
+
+    /// From its first time stamp to its last, seconds.
+    pub fn duration_s(&self) -> f64 {
+        match (self.time_s.first(), self.time_s.last()) {
+            (Some(first), Some(last)) => last - first,
+            _ => 0.0,
+        }
+    }
+
+    /// The samples of `range`, which must lie within the recording (as for a slice).
+    pub fn slice(&self, range: Range<usize>) -> PairedRecording {
+        PairedRecording {
+            time_s: self.time_s[range.clone()].to_vec(),
+            dvl_m_s: self.dvl_m_s[range.clone()].to_vec(),
+            velocity_ned_m_s: self.velocity_ned_m_s[range.clone()].to_vec(),
+            attitude_rad: self.attitude_rad[range.clone()].to_vec(),
+            rate_rad_s: self.rate_rad_s.as_ref().map(|rate| rate[range].to_vec()),
+        }
+    }
+
+    /// The samples stamped less than `window_s` after the first: the first
+    /// `window_s` seconds (all of it where the recording is shorter).
+    pub fn first_seconds(&self, window_s: f64) -> PairedRecording {
+        let start = self.time_s.first().copied().unwrap_or_default();
+        let end = self.time_s.partition_point(|t| t - start < window_s);
+        self.slice(0..end)
+    }
+}
+
+/// The checked samples of the CSV files `files` with `columns`: a shorthand of
+/// [`Source::read`] for a caller that wants neither the files' hashes nor a cache.
+pub fn read(files: &PairedFiles, columns: &PairedColumns) -> Result<PairedRecording, PairedError> {
+    Source::csv(&files.dvl, Some(&files.reference), columns.clone())
+        .read()
+        .map(|read| read.recording)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::catalogue;
+    use std::f64::consts::PI;
+    use std::path::{Path, PathBuf};
+
+    /// Columns of a small recording in one file: `t, u, v, w, n, e, d, roll, pitch, yaw`.
+    fn short_columns() -> PairedColumns {
+        let names = |names: [&str; 3]| names.map(String::from);
+        PairedColumns {
+            time: "t".into(),
+            dvl: names(["u", "v", "w"]),
+            velocity_ned: names(["n", "e", "d"]),
+            attitude: names(["roll", "pitch", "yaw"]),
+            rate: None,
+            angles_in_degrees: false,
+        }
+    }
+
+    const DVL_HEADER: &str = "Time [s],DVL X [m/s],DVL Y [m/s],DVL Z [m/s]\r\n";
+    const GT_HEADER: &str = "Time [s],Longitude [rad],Latitude [rad],Altitude [m],V North [m/s],V East [m/s],V Down [m/s],Roll [rad],Pitch [rad],Yaw [rad]\r\n";
+
+    /// Four rows of an A-KIT DVL file, half a second apart.
+    const DVL_ROWS: &str = "0,1.5,0.1,-0.01\r\n\
+                            0.5,2.5,0.1,-0.01\r\n\
+                            1,3.5,0.1,-0.01\r\n\
+                            1.5,4.5,0.1,-0.01\r\n";
+
+    /// Four rows of an A-KIT reference (GT) file, on the time stamps of [`DVL_ROWS`].
+    const GT_ROWS: &str = "0,0.6,0.57,-19.8,-1.9,-0.6,0.01,0.01,-0.02,-3\r\n\
+                           0.5,0.6,0.57,-19.8,-2.9,-0.6,0.01,0.01,-0.02,-2.5\r\n\
+                           1,0.6,0.57,-19.8,-3.9,-0.6,0.01,0.01,-0.02,-2\r\n\
+                           1.5,0.6,0.57,-19.8,-4.9,-0.6,0.01,0.01,-0.02,-1.5\r\n";
+
+    /// `header` and the first `count` lines of `rows`.
+    fn file(header: &str, rows: &str, count: usize) -> String {
+        let rows: String = rows.split_inclusive('\n').take(count).collect();
+        format!("{header}{rows}")
+    }
+
+    fn assert_close(actual: Vec3, expected: Vec3) {
+        for (a, e) in actual.iter().zip(expected) {
+            assert!((a - e).abs() < 1e-12, "{actual:?} against {expected:?}");
+        }
+    }
+    /// Reads `dvl` and `gt` as the two files of an A-KIT segment; errors with the
+    /// files' paths shown as DVL and GT.
+    fn read_two(dvl: &str, gt: &str) -> Result<PairedRecording, String> {
+        let dir = tempfile::tempdir().unwrap();
+        let files = PairedFiles {
+            dvl: dir.path().join("dvl.csv"),
+            reference: dir.path().join("gt.csv"),
+        };
+        std::fs::write(&files.dvl, dvl).unwrap();
+        std::fs::write(&files.reference, gt).unwrap();
+        read(&files, &PairedColumns::akit()).map_err(|e| {
+            e.to_string()
+                .replace(&files.dvl.display().to_string(), "DVL")
+                .replace(&files.reference.display().to_string(), "GT")
+        })
+    }
+
+    /// Reads `text` as one file holding the DVL and the reference, with `columns`;
+    /// errors with the file's path shown as FILE.
+    fn read_one(text: &str, columns: &PairedColumns) -> Result<PairedRecording, String> {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("both.csv");
+        std::fs::write(&path, text).unwrap();
+        let files = PairedFiles {
+            dvl: path.clone(),
+            reference: path.clone(),
+        };
+        read(&files, columns)
+            .map_err(|e| e.to_string().replace(&path.display().to_string(), "FILE"))
+    }
+
+    #[test]
+    fn reads_the_akit_layout_from_two_files() {
+        let recording =
+            read_two(&file(DVL_HEADER, DVL_ROWS, 3), &file(GT_HEADER, GT_ROWS, 3)).unwrap();
+        assert_eq!(recording.time_s, vec![0.0, 0.5, 1.0]);
+        assert_eq!(recording.dvl_m_s[2], [3.5, 0.1, -0.01]);
+        assert_eq!(recording.velocity_ned_m_s[1], [-2.9, -0.6, 0.01]);
+        assert_eq!(recording.attitude_rad[2], [0.01, -0.02, -2.0]);
+        assert_eq!(recording.rate_rad_s, None);
+        assert_eq!(recording.len(), 3);
+        assert_eq!(recording.duration_s(), 1.0);
+    }
+
+    #[test]
+    fn reads_one_file_in_degrees_with_a_rate_and_cuts_it() {
+        let mut columns = short_columns();
+        columns.rate = Some(["p", "q", "r"].map(String::from));
+        columns.angles_in_degrees = true;
+        // Seconds apart, so that no angle turns faster than a vehicle between them.
+        let text = "t,u,v,w,n,e,d,roll,pitch,yaw,p,q,r\n\
+                    0,1,2,3,4,5,6,180,-90,-360,0,0,90\n\
+                    5,1,2,3,4,5,6,0,45,270,0,0,-90\n\
+                    6,1,2,3,4,5,6,0,0,0,0,0,0\n\
+                    7,1,2,3,4,5,6,0,0,0,0,0,0\n";
+        let recording = read_one(text, &columns).unwrap();
+        assert_eq!(recording.dvl_m_s[0], [1.0, 2.0, 3.0]);
+        assert_eq!(recording.velocity_ned_m_s[0], [4.0, 5.0, 6.0]);
+        assert_close(recording.attitude_rad[0], [PI, -PI / 2.0, -2.0 * PI]);
+        assert_close(recording.attitude_rad[1], [0.0, PI / 4.0, 1.5 * PI]);
+        let rate = recording.rate_rad_s.as_ref().unwrap();
+        assert_close(rate[0], [0.0, 0.0, PI / 2.0]);
+        assert_close(rate[1], [0.0, 0.0, -PI / 2.0]);
+        let first = recording.first_seconds(6.0);
+        assert_eq!(first.time_s, vec![0.0, 5.0]);
+        assert_eq!(first.rate_rad_s.as_ref().unwrap().len(), 2);
+        assert_eq!(recording.first_seconds(100.0), recording);
+        let middle = recording.slice(1..3);
+        assert_eq!(middle.time_s, vec![5.0, 6.0]);
+        assert_eq!(middle.attitude_rad[0], recording.attitude_rad[1]);
+    }
+
+    #[test]
+    fn a_missing_file_or_column_is_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let files = PairedFiles::akit(dir.path(), 4);
+        let error = read(&files, &PairedColumns::akit())
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            error,
+            format!(
+                "{}: file not found; run `dcnet-exp data fetch akit --dest {}` to download the A-KIT recordings there",
+                files.dvl.display(),
+                dir.path().display()
+            )
+        );
+        let files = PairedFiles {
+            dvl: dir.path().join("mine.csv"),
+            reference: dir.path().join("mine.csv"),
+        };
+        assert_eq!(
+            read(&files, &PairedColumns::akit())
+                .unwrap_err()
+                .to_string(),
+            format!("{}: file not found", files.dvl.display())
+        );
+        // The reference is missing where the DVL is there.
+        let dvl_only = tempfile::tempdir().unwrap();
+        let files = PairedFiles::akit(dvl_only.path(), 12);
+        std::fs::create_dir(files.dvl.parent().unwrap()).unwrap();
+        std::fs::write(&files.dvl, file(DVL_HEADER, DVL_ROWS, 4)).unwrap();
+        assert!(
+            read(&files, &PairedColumns::akit())
+                .unwrap_err()
+                .to_string()
+                .starts_with(&format!(
+                    "{}: file not found; run",
+                    files.reference.display()
+                ))
+        );
+        let gt = GT_HEADER.replace(",Pitch [rad]", ",Pitch[rad]");
+        assert_eq!(
+            read_two(&file(DVL_HEADER, DVL_ROWS, 3), &file(&gt, GT_ROWS, 3)).unwrap_err(),
+            "GT:1: Pitch [rad]: not in the header, which has Time [s], Longitude [rad], Latitude [rad], Altitude [m], V North [m/s], V East [m/s], V Down [m/s], Roll [rad], Pitch[rad], Yaw [rad]"
+        );
+    }
+
+    #[test]
+    fn a_bad_field_names_the_line_the_column_and_what_it_holds() {
+        let dvl = file(DVL_HEADER, DVL_ROWS, 4);
+        let gt = file(GT_HEADER, GT_ROWS, 4);
+        for (dvl, gt, expected) in [
+            (
+                dvl.replace("\r\n1,", "\r\n,"),
+                gt.clone(),
+                "DVL:4: Time [s]: empty: every row needs a time stamp",
+            ),
+            (
+                dvl.replace(",2.5,", ",fast,"),
+                gt.clone(),
+                "DVL:3: DVL X [m/s]: \"fast\" is not a number",
+            ),
+            (
+                dvl.clone(),
+                gt.replace(",-2.9,", ",inf,"),
+                "GT:3: V North [m/s]: \"inf\" is not finite: every velocity must be a finite number",
+            ),
+            (
+                dvl.clone(),
+                gt.replace(",-2.5\r\n", ",NaN\r\n"),
+                "GT:3: Yaw [rad]: \"NaN\" is not finite: every angle must be a finite number",
+            ),
+            (
+                dvl.clone(),
+                gt.replace(",-0.02,-2.5\r\n", ",,-2.5\r\n"),
+                "GT:3: Pitch [rad]: empty: every row needs an angle",
+            ),
+        ] {
+            assert_eq!(read_two(&dvl, &gt).unwrap_err(), expected);
+        }
+        let mut columns = short_columns();
+        columns.rate = Some(["p", "q", "r"].map(String::from));
+        assert_eq!(
+            read_one(
+                "t,u,v,w,n,e,d,roll,pitch,yaw,p,q,r\n0,1,2,3,4,5,6,0,0,0,0,-inf,0\n",
+                &columns
+            )
+            .unwrap_err(),
+            "FILE:2: q: \"-inf\" is not finite: every angular rate must be a finite number"
+        );
+    }
+
+    #[test]
+    fn time_stamps_that_go_back_or_repeat_name_both_lines() {
+        let dvl = file(DVL_HEADER, DVL_ROWS, 4);
+        let gt = file(GT_HEADER, GT_ROWS, 4);
+        assert_eq!(
+            read_two(&dvl.replace("\r\n1,", "\r\n0.5,"), &gt).unwrap_err(),
+            "DVL:4: Time [s]: 0.5 s follows 0.5 s of line 3: time stamps must increase"
+        );
+        assert_eq!(
+            read_two(&dvl, &gt.replace("\r\n1.5,", "\r\n0.25,")).unwrap_err(),
+            "GT:5: Time [s]: 0.25 s follows 1 s of line 4: time stamps must increase"
+        );
+    }
+
+    /// A velocity, a recorded rate or a turn between two samples beyond a vehicle's is
+    /// refused at its line; a heading that runs on beyond a turn is not.
+    #[test]
+    fn motion_beyond_a_vehicles_is_refused_at_its_line() {
+        let dvl = file(DVL_HEADER, DVL_ROWS, 4);
+        let gt = file(GT_HEADER, GT_ROWS, 4);
+        for (gt, expected) in [
+            (
+                gt.replace(",-2.9,", ",1e200,"),
+                "GT:3: V North [m/s]: 1e200 m/s is beyond 20 m/s, faster than any vehicle a DVL rides: a bad value or a unit other than m/s; remove the row before calibrating",
+            ),
+            (
+                gt.replace(",-2\r\n", ",1\r\n"),
+                "GT:4: Yaw [rad]: 1 rad after -2.5 rad on line 3, 0.5 s before: a turn of 5.566 rad/s, beyond the 2 rad/s any vehicle a DVL rides turns: a glitch in the attitude; remove the row before calibrating",
+            ),
+            (
+                gt.replace(",-2\r\n", ",120\r\n"),
+                "GT:4: Yaw [rad]: 120 rad after -2.5 rad on line 3, 0.5 s before: a turn of 6.239 rad/s, beyond the 2 rad/s any vehicle a DVL rides turns: a glitch in the attitude; remove the row before calibrating; if the file's angles are in degrees, set angles_in_degrees = true",
+            ),
+        ] {
+            assert_eq!(read_two(&dvl, &gt).unwrap_err(), expected);
+        }
+        // Yaw unwrapped beyond 2π, turning at 1 rad/s.
+        let unwrapped = gt
+            .replace(",-3\r\n", ",6\r\n")
+            .replace(",-2.5\r\n", ",6.5\r\n")
+            .replace(",-2\r\n", ",7\r\n")
+            .replace(",-1.5\r\n", ",7.5\r\n");
+        assert!(read_two(&dvl, &unwrapped).is_ok());
+        let mut columns = short_columns();
+        columns.rate = Some(["p", "q", "r"].map(String::from));
+        assert_eq!(
+            read_one(
+                "t,u,v,w,n,e,d,roll,pitch,yaw,p,q,r\n0,1,2,3,4,5,6,0,0,0,0,0,0\n1,1,2,3,4,5,6,0,0,0,0,1e6,0\n2,1,2,3,4,5,6,0,0,0,0,0,0\n",
+                &columns
+            )
+            .unwrap_err(),
+            "FILE:3: q: 1000000 rad/s is beyond 2 rad/s, faster than any vehicle a DVL rides turns: a bad value or a unit other than rad/s"
+        );
+    }
+
+    #[test]
+    fn attitude_out_of_range_names_the_angle_and_its_range() {
+        let dvl = file(DVL_HEADER, DVL_ROWS, 3);
+        let gt = file(GT_HEADER, GT_ROWS, 3);
+        let hint = "; if the file's angles are in degrees, set angles_in_degrees = true";
+        for (gt, expected) in [
+            (
+                gt.replace("0.01,-0.02,-2.5", "3.2,-0.02,-2.5"),
+                format!(
+                    "GT:3: Roll [rad]: 3.2 rad is out of range: roll lies in [-π, π] rad{hint}"
+                ),
+            ),
+            (
+                gt.replace("-0.02,-3\r\n", "-1.6,-3\r\n"),
+                format!(
+                    "GT:2: Pitch [rad]: -1.6 rad is out of range: pitch lies in [-π/2, π/2] rad{hint}"
+                ),
+            ),
+        ] {
+            assert_eq!(read_two(&dvl, &gt).unwrap_err(), expected);
+        }
+        let mut columns = short_columns();
+        columns.angles_in_degrees = true;
+        assert_eq!(
+            read_one(
+                "t,u,v,w,n,e,d,roll,pitch,yaw\n0,1,2,3,4,5,6,0,90.5,0\n",
+                &columns
+            )
+            .unwrap_err(),
+            "FILE:2: pitch: 90.5 deg is out of range: pitch lies in [-90, 90] deg"
+        );
+    }
+
+    #[test]
+    fn a_dvl_and_a_reference_of_other_lengths_or_times_are_refused() {
+        let dvl = file(DVL_HEADER, DVL_ROWS, 4);
+        let gt = file(GT_HEADER, GT_ROWS, 4);
+        assert_eq!(
+            read_two(&dvl, &file(GT_HEADER, GT_ROWS, 3)).unwrap_err(),
+            "DVL: 4 samples (lines 2 to 5), but GT: 3 (lines 2 to 4): the DVL and the reference need one row per time stamp each"
+        );
+        // Within 1 ms is the same time stamp; 2 ms apart is not.
+        assert!(read_two(&dvl, &gt.replace("\r\n1,", "\r\n1.0009,")).is_ok());
+        assert_eq!(
+            read_two(&dvl, &gt.replace("\r\n1,", "\r\n1.002,")).unwrap_err(),
+            "DVL:4: Time [s]: 1 s, but GT:4 has 1.002 s: the DVL and the reference must be on the same time stamps (within 0.001 s)"
+        );
+    }
+
+    #[test]
+    fn a_recording_of_fewer_than_three_samples_is_refused() {
+        assert_eq!(
+            read_two(&file(DVL_HEADER, DVL_ROWS, 2), &file(GT_HEADER, GT_ROWS, 2)).unwrap_err(),
+            "DVL: 2 samples below the header: a recording of a DVL beside a reference needs at least 3"
+        );
+        assert_eq!(
+            read_one("t,u,v,w,n,e,d,roll,pitch,yaw\n", &short_columns()).unwrap_err(),
+            "FILE: 0 samples below the header: a recording of a DVL beside a reference needs at least 3"
+        );
+    }
+
+    #[test]
+    fn the_akit_files_are_the_ones_fetched() {
+        let root = Path::new("data/akit");
+        let fetched: Vec<PathBuf> = catalogue::AKIT_FILES
+            .iter()
+            .map(|file| root.join(file.name))
+            .collect();
+        let read: Vec<PathBuf> = (1..=catalogue::AKIT_SEGMENTS)
+            .flat_map(|segment| {
+                let files = PairedFiles::akit(root, segment);
+                [files.dvl, files.reference]
+            })
+            .collect();
+        assert_eq!(fetched, read);
+    }
+}

@@ -1,0 +1,237 @@
+//! One way in for a paired recording: a [`Source`] (one variant per format; CSV
+//! today) is read into a [`ReadRecording`]. Each of its files is read from disk once,
+//! hashed as it is read and parsed from memory ([`Source::load`], then
+//! [`Loaded::parse`]), and its samples go through the plausibility checks of
+//! `checks.rs`, whatever the format. [`Recordings`] reads each source once,
+//! however many times it is asked for.
+//! In: a [`Source`]. Out: the checked [`PairedRecording`] with the SHA-256 of each of
+//! its files, or the first [`PairedError`].
+
+use super::{PairedColumns, PairedError, PairedRecording, checks};
+use crate::data::csv::read_bytes;
+use crate::files::sha256_hex;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// Where a recording is, and how to read it.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub enum Source {
+    /// The DVL's columns from the CSV file `dvl`, the reference's from `reference`
+    /// (the same path when one file holds both), named by `columns`.
+    Csv {
+        dvl: PathBuf,
+        reference: PathBuf,
+        columns: PairedColumns,
+    },
+}
+
+impl Source {
+    /// The CSV file `dvl` beside the reference's, the DVL's own where `reference` is
+    /// `None`, read with `columns`.
+    pub fn csv(dvl: &Path, reference: Option<&Path>, columns: PairedColumns) -> Source {
+        Source::Csv {
+            dvl: dvl.to_path_buf(),
+            reference: reference.unwrap_or(dvl).to_path_buf(),
+            columns,
+        }
+    }
+
+    /// The DVL's file: the one a recording's outputs are named after.
+    pub fn dvl(&self) -> &Path {
+        match self {
+            Source::Csv { dvl, .. } => dvl,
+        }
+    }
+
+    /// Its files, each once, the DVL's first.
+    pub fn files(&self) -> Vec<&Path> {
+        match self {
+            Source::Csv { dvl, reference, .. } if dvl == reference => vec![dvl],
+            Source::Csv { dvl, reference, .. } => vec![dvl, reference],
+        }
+    }
+
+    /// Reads each of its files from disk, once, and hashes it; nothing is parsed yet.
+    pub fn load(&self) -> Result<Loaded<'_>, PairedError> {
+        let mut files = Vec::new();
+        let mut bytes = Vec::new();
+        for path in self.files() {
+            let read = read_bytes(path)?;
+            files.push(SourceFile {
+                path: path.to_path_buf(),
+                sha256: sha256_hex(&read),
+            });
+            bytes.push(read);
+        }
+        Ok(Loaded {
+            source: self,
+            files,
+            bytes,
+        })
+    }
+
+    /// Reads, parses and checks the recording.
+    pub fn read(&self) -> Result<ReadRecording, PairedError> {
+        self.load()?.parse()
+    }
+}
+
+/// A file a recording was read from, and the SHA-256 of its bytes as read.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SourceFile {
+    pub path: PathBuf,
+    pub sha256: String,
+}
+
+/// A source's files read and hashed, not yet parsed: what lets a caller refuse a
+/// recording by its hash before its samples are read.
+pub struct Loaded<'a> {
+    source: &'a Source,
+    files: Vec<SourceFile>,
+    /// The bytes of each of `files`.
+    bytes: Vec<Vec<u8>>,
+}
+
+impl Loaded<'_> {
+    /// The SHA-256 of the DVL's file.
+    pub fn dvl_sha256(&self) -> &str {
+        &self.files[0].sha256
+    }
+
+    /// The samples of the files, parsed from the bytes read and checked.
+    pub fn parse(self) -> Result<ReadRecording, PairedError> {
+        let (samples, at) = match self.source {
+            Source::Csv { columns, .. } => {
+                let file = |k: usize| (self.files[k].path.as_path(), &self.bytes[k][..]);
+                super::csv::parse(file(0), (self.files.len() > 1).then(|| file(1)), columns)?
+            }
+        };
+        Ok(ReadRecording {
+            recording: checks::check(samples, &at)?,
+            files: self.files,
+        })
+    }
+}
+
+/// A recording as read: its samples, checked, and the files they came from, the DVL's
+/// first, each with its SHA-256.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReadRecording {
+    pub recording: PairedRecording,
+    pub files: Vec<SourceFile>,
+}
+
+impl ReadRecording {
+    /// The SHA-256 of the DVL's file, which the outputs computed from it record.
+    pub fn dvl_sha256(&self) -> &str {
+        &self.files[0].sha256
+    }
+}
+
+/// Recordings read once each, however many times their source is asked for.
+#[derive(Debug, Default)]
+pub struct Recordings {
+    read: Vec<ReadRecording>,
+    index: HashMap<Source, usize>,
+}
+
+impl Recordings {
+    /// The place of `source`'s recording among those read, reading it the first time.
+    pub fn read(&mut self, source: &Source) -> Result<usize, PairedError> {
+        if let Some(&at) = self.index.get(source) {
+            return Ok(at);
+        }
+        self.read.push(source.read()?);
+        self.index.insert(source.clone(), self.read.len() - 1);
+        Ok(self.read.len() - 1)
+    }
+
+    /// The recording at `at`, as [`Recordings::read`] placed it.
+    pub fn get(&self, at: usize) -> &ReadRecording {
+        &self.read[at]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const BOTH: &str = "t,u,v,w,n,e,d,roll,pitch,yaw\n\
+                        0,1,0,0,1,0,0,0,0,0\n\
+                        1,1,0,0,1,0,0,0,0,0\n\
+                        2,1,0,0,1,0,0,0,0,0\n";
+
+    fn columns() -> PairedColumns {
+        let names = |names: [&str; 3]| names.map(String::from);
+        PairedColumns {
+            time: "t".into(),
+            dvl: names(["u", "v", "w"]),
+            velocity_ned: names(["n", "e", "d"]),
+            attitude: names(["roll", "pitch", "yaw"]),
+            rate: None,
+            angles_in_degrees: false,
+        }
+    }
+
+    /// The SHA-256 of each file is that of its bytes, one file listed once; the
+    /// recording is the one the files hold.
+    #[test]
+    fn a_read_gives_the_sha256_of_each_file_it_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("both.csv");
+        std::fs::write(&path, BOTH).unwrap();
+        let source = Source::csv(&path, None, columns());
+        assert_eq!(source.files(), vec![path.as_path()]);
+        let read = source.read().unwrap();
+        let sha256 = sha256_hex(BOTH.as_bytes());
+        assert_eq!(
+            read.files,
+            vec![SourceFile {
+                path: path.clone(),
+                sha256: sha256.clone()
+            }]
+        );
+        assert_eq!(read.dvl_sha256(), sha256);
+        assert_eq!(read.recording.time_s, vec![0.0, 1.0, 2.0]);
+        assert_eq!(source.load().unwrap().dvl_sha256(), sha256);
+        // Two files: the DVL's first.
+        let reference = dir.path().join("reference.csv");
+        std::fs::write(&reference, BOTH).unwrap();
+        let two = Source::Csv {
+            dvl: path.clone(),
+            reference: reference.clone(),
+            columns: columns(),
+        };
+        let paths: Vec<PathBuf> = two
+            .read()
+            .unwrap()
+            .files
+            .into_iter()
+            .map(|f| f.path)
+            .collect();
+        assert_eq!(paths, vec![path, reference]);
+    }
+
+    /// A source asked for again is not read again: its file may be gone by then.
+    #[test]
+    fn recordings_read_each_source_once() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("both.csv");
+        std::fs::write(&path, BOTH).unwrap();
+        let source = |columns| Source::Csv {
+            dvl: path.clone(),
+            reference: path.clone(),
+            columns,
+        };
+        let mut recordings = Recordings::default();
+        let first = recordings.read(&source(columns())).unwrap();
+        std::fs::remove_file(&path).unwrap();
+        assert_eq!(recordings.read(&source(columns())).unwrap(), first);
+        assert_eq!(recordings.get(first).recording.len(), 3);
+        // Other columns are another source.
+        let mut other = columns();
+        other.angles_in_degrees = true;
+        let error = recordings.read(&source(other)).unwrap_err().to_string();
+        assert_eq!(error, format!("{}: file not found", path.display()));
+    }
+}
