@@ -40,10 +40,10 @@ pub(super) fn run(target: &Target, drawing: &Drawing, mode: Mode) -> Result<(), 
     let experiment = load_target(target)?;
     let plan = StudyPlan::new(&experiment, &target.spec, &target.out).map_err(input)?;
     let lengths = (0..experiment.points.len()).map(|p| {
-        let segments = &plan.inputs.points[p].segments;
-        segments
+        let recordings = &plan.inputs.points[p].recordings;
+        recordings
             .iter()
-            .map(|&s| plan.inputs.segments[s].recording.time_s.len())
+            .map(|&s| plan.inputs.recordings[s].recording.time_s.len())
             .collect()
     });
     learned_memory(&experiment, lengths.collect())?;

@@ -42,49 +42,49 @@ impl DcnetModels {
     }
 }
 
-/// What one point reads: its trajectories (indices into [`Inputs::segments`]), the
+/// What one point reads: its trajectories (indices into [`Inputs::recordings`]), the
 /// files with their SHA-256, and its DCNet models (an index into [`Inputs::dcnets`]).
 pub struct PointInputs {
-    pub segments: Vec<usize>,
+    pub recordings: Vec<usize>,
     pub data_files: Vec<DataFile>,
     pub dcnets: Option<usize>,
 }
 
 /// Every recording and model the points of an experiment read.
 pub struct Inputs {
-    pub segments: Vec<Recording>,
+    pub recordings: Vec<Recording>,
     pub dcnets: Vec<DcnetModels>,
     pub points: Vec<PointInputs>,
 }
 
 impl Inputs {
     pub fn read(experiment: &Experiment<StudySpec>, out: &Path) -> Result<Inputs, ExecuteError> {
-        let mut recordings = Recordings::default();
-        let mut segments = Vec::new();
-        // A segment per recording and name: the same files may be named otherwise in
+        let mut read_once = Recordings::default();
+        let mut recordings = Vec::new();
+        // A recording per file read and name: the same files may be named otherwise in
         // another point.
-        let mut segment_of: HashMap<(usize, &str), usize> = HashMap::new();
+        let mut recording_of: HashMap<(usize, &str), usize> = HashMap::new();
         let mut dcnets = Vec::new();
         let mut dcnets_of: HashMap<PathBuf, usize> = HashMap::new();
         let mut points = Vec::new();
         for point in &experiment.points {
             let spec = &point.spec;
-            let mut point_segments = Vec::new();
+            let mut point_recordings = Vec::new();
             let mut data_files = Vec::new();
             for (index, (name, source)) in spec.trajectories.iter().enumerate() {
-                let read = recordings
+                let read = read_once
                     .read(source)
                     .map_err(|error| ExecuteError::Recording {
                         index,
                         name: name.clone(),
                         error,
                     })?;
-                let recording = recordings.get(read);
-                let s = *segment_of.entry((read, name)).or_insert_with(|| {
-                    segments.push(Recording::new(name.clone(), recording.recording.clone()));
-                    segments.len() - 1
+                let recording = read_once.get(read);
+                let s = *recording_of.entry((read, name)).or_insert_with(|| {
+                    recordings.push(Recording::new(name.clone(), recording.recording.clone()));
+                    recordings.len() - 1
                 });
-                point_segments.push(s);
+                point_recordings.push(s);
                 data_files.extend(recording.files.iter().map(|file| DataFile {
                     path: file.path.clone(),
                     sha256: file.sha256.clone(),
@@ -102,24 +102,24 @@ impl Inputs {
                 }),
             };
             points.push(PointInputs {
-                segments: point_segments,
+                recordings: point_recordings,
                 data_files,
                 dcnets: point_dcnets,
             });
         }
         Ok(Inputs {
-            segments,
+            recordings,
             dcnets,
             points,
         })
     }
 
     /// The trajectories of point `p`, in spec order.
-    pub fn segments_of(&self, p: usize) -> Vec<&Recording> {
+    pub fn recordings_of(&self, p: usize) -> Vec<&Recording> {
         self.points[p]
-            .segments
+            .recordings
             .iter()
-            .map(|&s| &self.segments[s])
+            .map(|&s| &self.recordings[s])
             .collect()
     }
 

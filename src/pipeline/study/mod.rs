@@ -269,7 +269,7 @@ impl<'a> StudyPlan<'a> {
                 unfitted.push(error);
                 continue;
             }
-            results.trace = folder::trace(&results, &estimates, &self.inputs.segments_of(p));
+            results.trace = folder::trace(&results, &estimates, &self.inputs.recordings_of(p));
             assembled.push((p, results));
         }
         (assembled, unfitted)
@@ -286,7 +286,7 @@ impl<'a> StudyPlan<'a> {
         let mut learned_models = HashMap::new();
         for point in crate::first_seen(to_do.iter().map(|&u| self.units[u].point)) {
             let spec = self.spec(point);
-            let recordings = self.inputs.segments_of(point);
+            let recordings = self.inputs.recordings_of(point);
             let models =
                 learned::train_or_load(spec, &recordings, &self.learned[point], &self.out)?;
             learned_models.insert(point, models);
@@ -312,7 +312,7 @@ impl<'a> StudyPlan<'a> {
                         &learned.training.backend.device(),
                     )
                 };
-                let recordings = self.inputs.segments_of(unit.point);
+                let recordings = self.inputs.recordings_of(unit.point);
                 let calibrated = study::calibrate_on(
                     spec,
                     &recordings,
