@@ -7,7 +7,7 @@
 //! In: [`CalibrateArgs`]. Out: a [`Calibration`], everything the command prints, or a
 //! [`CalibrateError`] that names the argument, file or step at fault.
 
-use crate::data::paired::{PairedColumns, PairedError, PairedRecording, Source};
+use crate::data::paired::{PairedError, PairedRecording, Source};
 use crate::installation::estimate::bound::{Noise, TermBound, Why, bound};
 use crate::installation::estimate::filter::{FilterSettings, run_filter};
 use crate::installation::estimate::fit::{
@@ -20,12 +20,13 @@ use crate::installation::study::filters::FilterRun;
 use crate::installation::study::spec::{ObservabilityFile, default_filter_settings};
 use crate::installation::terms::names::{TermName, term_list_faults, term_set};
 use crate::installation::terms::{AxisRmse, Installation, TermSet, score};
+use crate::operator::inputs::{columns, not_over_an_input};
 use crate::operator::installation_file::SavedInstallation;
 use crate::results::ResultsError;
 use crate::results::corrected::{
     OtherRecording, Outputs, corrected_samples, stem, write, write_terms_in_time,
 };
-use crate::spec::{SpecError, TomlFile};
+use crate::spec::SpecError;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
@@ -444,54 +445,10 @@ fn beyond_memory(dvl: &Path, rows: usize, have: f64) -> Option<CalibrateError> {
     })
 }
 
-/// The first of `outputs` that would replace one of `inputs`, and that input.
-pub(super) fn not_over_an_input(
-    inputs: &[Option<&Path>],
-    outputs: &[&Path],
-) -> Option<(PathBuf, PathBuf)> {
-    // A file's identity: its path with the folder's links resolved.
-    let identity = |path: &Path| -> Option<PathBuf> {
-        let folder = match path.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
-        };
-        Some(std::fs::canonicalize(folder).ok()?.join(path.file_name()?))
-    };
-    for output in outputs {
-        let same = |input: &&&Path| {
-            identity(input).is_some_and(|i| identity(output).is_some_and(|o| o == i))
-                || std::fs::canonicalize(input)
-                    .ok()
-                    .is_some_and(|i| std::fs::canonicalize(output).is_ok_and(|o| o == i))
-        };
-        if let Some(input) = inputs.iter().flatten().find(same) {
-            return Some((output.to_path_buf(), input.to_path_buf()));
-        }
-    }
-    None
-}
-
-/// The columns of `path`'s `[columns]` table, or A-KIT's.
-pub(super) fn columns(path: Option<&Path>) -> Result<PairedColumns, CalibrateError> {
-    #[derive(serde::Deserialize)]
-    #[serde(deny_unknown_fields)]
-    struct ColumnsFile {
-        columns: PairedColumns,
-    }
-    let Some(path) = path else {
-        return Ok(PairedColumns::akit());
-    };
-    let file = TomlFile::<ColumnsFile>::read(path).map_err(CalibrateError::Columns)?;
-    if let Some((key, why)) = file.value.columns.named_twice() {
-        let fault = file.fault(&format!("columns.{key}"), why);
-        return Err(CalibrateError::Columns(fault));
-    }
-    Ok(file.value.columns)
-}
-
 /// The recording of `args`, its reference, and its window where one is asked.
 fn read(args: &CalibrateArgs) -> Result<Read, CalibrateError> {
-    let source = Source::csv(args.dvl, args.reference, columns(args.columns)?);
+    let columns = columns(args.columns).map_err(CalibrateError::Columns)?;
+    let source = Source::csv(args.dvl, args.reference, columns);
     let read = source.read()?;
     let dvl_sha256 = read.dvl_sha256().to_string();
     let recording = read.recording;

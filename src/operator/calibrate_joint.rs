@@ -17,9 +17,8 @@ use crate::installation::estimate::fit::{fit, fit_about};
 use crate::installation::estimate::joint::{JointFit, JointRecording, joint_fit, starts_from};
 use crate::installation::frames::Reference;
 use crate::installation::terms::names::{TermName, term_set};
-use crate::operator::calibrate::{
-    CalibrateError, columns, dive_terms_refused, named, not_over_an_input, save_refused,
-};
+use crate::operator::calibrate::{CalibrateError, dive_terms_refused, named, save_refused};
+use crate::operator::inputs::{columns, not_over_an_input};
 use crate::operator::installation_file::{SavedInstallation, SavedTerm};
 use crate::results::ResultsError;
 use crate::results::corrected::{Outputs, corrected_samples, stem, write};
@@ -158,7 +157,7 @@ fn names(dvls: &[std::path::PathBuf]) -> Vec<String> {
 
 /// Each recording of `args`: its DVL's file beside its reference's, or the DVL's own.
 fn sources(args: &JointArgs) -> Result<Vec<Source>, CalibrateError> {
-    let columns = columns(args.columns)?;
+    let columns = columns(args.columns).map_err(CalibrateError::Columns)?;
     let source = |(k, dvl): (usize, &PathBuf)| {
         let reference = args.references.get(k).map(|r| r.as_path());
         Source::csv(dvl, reference, columns.clone())

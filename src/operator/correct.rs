@@ -15,7 +15,7 @@ use crate::installation::estimate::clock::{Carried, Clock, ClockError, ClockSear
 use crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S;
 use crate::installation::frames::Reference;
 use crate::installation::terms::{AxisRmse, Installation, score};
-use crate::operator::calibrate::{columns, not_over_an_input};
+use crate::operator::inputs::{columns, not_over_an_input};
 use crate::operator::installation_file::{InstallationFileError, SavedInstallation};
 use crate::results::ResultsError;
 use crate::results::corrected::{OtherRecording, Outputs, corrected_samples, stem, write};
@@ -161,10 +161,7 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
     if let Some((output, input)) = not_over_an_input(&inputs, &outputs.all()) {
         return Err(CorrectError::OverInput { output, input });
     }
-    let columns = columns(args.columns).map_err(|e| match e {
-        crate::operator::calibrate::CalibrateError::Columns(error) => CorrectError::Columns(error),
-        other => unreachable!("columns fails only on its file: {other}"),
-    })?;
+    let columns = columns(args.columns).map_err(CorrectError::Columns)?;
     let source = Source::csv(args.dvl, args.reference, columns);
     let loaded = source.load()?;
     let recording_sha256 = loaded.dvl_sha256().to_string();
