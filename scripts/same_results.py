@@ -5,12 +5,17 @@
 
 A and B are folders that dcnet-exp wrote for one spec (a results folder, or an OUT
 folder with its plots), for example by one process and by the shards of a job array
-and `collect`. Every file must be in both and hold the same bytes, except where
-dcnet-exp records the process that wrote it: wall-clock times, the thread count, the
-host. Those files are compared without those fields:
+and `collect`, or by the binaries of two commits. Every file must be in both and hold
+the same bytes, except where dcnet-exp records the process that wrote it: wall-clock
+times, the thread count, the host, the commit it was built from. Those files are
+compared without those fields:
 
-- manifest.json: without started_at, finished_at, stage_seconds, threads, host and the
-  digests of training.parquet;
+- manifest.json: without git_commit, started_at, finished_at, stage_seconds, threads,
+  host and the digests of training.parquet;
+- a cached model's record (.cache/models/*.json, .cache/learned/*.json): without the
+  seconds and samples per second of each epoch; its seal (.json.sha256), which holds
+  the record's digest, without that digest (the weights, .bin, and their seals are
+  compared byte for byte);
 - training.parquet and sweep.parquet: without their columns of seconds (needs pyarrow);
 - sweep.json: without the digest of sweep.parquet;
 - report.md: without its "Run" section and the "training s" column of its DCNet
@@ -24,7 +29,14 @@ import json
 import sys
 from pathlib import Path
 
-WALL_CLOCK_MANIFEST_KEYS = ["started_at", "finished_at", "stage_seconds", "threads", "host"]
+WALL_CLOCK_MANIFEST_KEYS = [
+    "git_commit",
+    "started_at",
+    "finished_at",
+    "stage_seconds",
+    "threads",
+    "host",
+]
 WALL_CLOCK_COLUMNS = ["seconds", "samples_per_s", "training_s"]
 
 
@@ -34,6 +46,19 @@ def manifest(path):
         document.pop(key, None)
     document.get("files_sha256", {}).pop("training.parquet", None)
     return document
+
+
+def model_record(path):
+    document = json.loads(path.read_text())
+    for epoch in document.get("history", []):
+        for key in WALL_CLOCK_COLUMNS:
+            epoch.pop(key, None)
+    return document
+
+
+def model_seal(path):
+    # `<key> <digest of the record>`: the key only.
+    return path.read_text().split()[:1]
 
 
 def sweep(path):
@@ -102,6 +127,10 @@ def main(a, b):
             identical.append(path)
             continue
         compare = WITHOUT_WALL_CLOCK.get(path.name)
+        if ".cache" in path.parts and path.name.endswith(".json"):
+            compare = model_record
+        elif ".cache" in path.parts and path.name.endswith(".json.sha256"):
+            compare = model_seal
         if compare is None:
             problems.append(f"differs: {path}")
         elif compare(a / path) == compare(b / path):
