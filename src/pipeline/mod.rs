@@ -11,7 +11,7 @@
 //!   points that share a model train it once; [`training`] trains the models (each
 //!   model's [`TrainingJob`](training::job::TrainingJob) interleaved epoch by epoch) and
 //!   [`monte_carlo`] runs the protocol.
-//! - The installation study: [`installation`] plans one calibration per point and
+//! - The installation study: [`study`] plans one calibration per point and
 //!   trajectory and runs them.
 //! - Shared by both: [`shard`], one machine's share (`--shard K/N`); [`cache`], the
 //!   store of models, Monte Carlo blocks and calibrations; [`claim`], the locks that

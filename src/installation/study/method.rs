@@ -3,9 +3,9 @@
 //! lever+offset" or "DCNet trained on the vehicle", or no calibration) and its variant:
 //! calibrated on one trajectory or jointly over every other, and scored with the
 //! calibration's clock carried or with each scored trajectory's clock re-found from its
-//! first w seconds. A method becomes its label in one place (`Display`: "<model>",
-//! "<model>, joint", "<model>, clock re-found in <w> s", "<model>, joint, clock re-found
-//! in <w> s"), the text the tables, figures and reports hold, and is read back from a
+//! first w seconds. A method becomes its label in one place (`Display`: `"<model>"`,
+//! `"<model>, joint"`, `"<model>, clock re-found in <w> s"`, `"<model>, joint, clock
+//! re-found in <w> s"`), the text the tables, figures and reports hold, and is read back from a
 //! label in one (`FromStr`, and [`Method::parse`] on it). In: a model's label, or a
 //! row's method. Out: a [`Method`], and its label.
 

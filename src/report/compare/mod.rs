@@ -11,7 +11,7 @@
 //! This module reads the two folders and writes the text; [`difference`] holds the
 //! test of two means, [`spec_keys`] the spec's keys that differ, [`pairs`] pairs the
 //! rows of A and B, and [`markdown`] sets it all as Markdown. Two installation studies
-//! (folders holding `heldout.parquet`) are compared by [`installation`] instead;
+//! (folders holding `heldout.parquet`) are compared by [`study`] instead;
 //! [`folders`] is the one entry, which reads the kind of the two folders and
 //! dispatches.
 

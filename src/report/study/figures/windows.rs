@@ -126,7 +126,7 @@ fn is_main(method: &str) -> bool {
 }
 
 /// Mean held-out RMSE ± its 95 % interval against the calibration window, every method
-/// but `[learned]`'s (scored inside their folds only, see [`installation_folds`]).
+/// but `[learned]`'s (scored inside their folds only, see [`folds`]).
 pub fn windows(study: &StudyResults) -> PlotResult<Outcome> {
     let windows = crate::first_seen(study.summary.iter().map(|r| r.window_s));
     if windows.len() < 2 {
