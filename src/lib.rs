@@ -35,17 +35,20 @@
 //!    protocol) and the DCNets of `[learned]` ([`installation::learned`]); and [`footprint`]:
 //!    the memory and time a spec asks for, known before it runs;
 //! 8. [`results`]: the results folders of both kinds (Parquet tables and manifest,
-//!    written atomically), the corrected recording of `calibrate`, and a sweep's table;
-//! 9. [`report`]: what is drawn from results folders alone: a rendering kit
+//!    written atomically), the corrected recording of `calibrate` and `correct`, and a
+//!    sweep's table;
+//! 9. [`operator`]: the operator's commands on recordings of their own: `calibrate`
+//!    (one recording, or several jointly), the saved installation file, and `correct`;
+//! 10. [`report`]: what is drawn from results folders alone: a rendering kit
 //!    ([`report::kit`]: one table model of the report set as Markdown and as LaTeX, the
 //!    drawing kit of the figures, how numbers and terms are written), then one room per
 //!    content, each with its tables, printed text and figures: the paper's experiment
 //!    ([`report::paper`]), the installation study ([`report::study`]), the operator's
 //!    commands ([`report::operator`]), and two folders compared ([`report::compare`]);
-//! 10. [`pipeline`]: the one front door of a run of either kind, planned, cached by
-//!     content (datasets, models, Monte Carlo blocks, calibrations), resumable, and
-//!     shared out over shards;
-//! 11. [`cli`]: the subcommands, which read a spec's kind once.
+//! 11. [`pipeline`]: the one front door of a run of either kind, planned, keyed by
+//!     content (datasets) and cached by content (models, Monte Carlo blocks,
+//!     calibrations), resumable, and shared out over shards;
+//! 12. [`cli`]: the subcommands, which read a spec's kind once.
 //!
 //! Beneath them all, importing no other module: [`vocab`], the words every stage
 //! shares (a DVL's error terms, error models, methods, corrections, activation,
