@@ -16,9 +16,15 @@ use crate::report::operator::correct::correction_text;
 
 /// `calibrate` as typed: one recording, or several calibrated jointly.
 pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliError> {
+    if args.dvl.len() == 1 && args.reference.len() > 1 {
+        return Err(input(anyhow::anyhow!(
+            "--reference: {} files for one DVL file: give one",
+            args.reference.len()
+        )));
+    }
+    let terms = parse_terms(("--terms", &args.terms))?;
+    let dive_terms = parse_terms(("--dive-terms", &args.dive_terms))?;
     if args.dvl.len() > 1 {
-        let terms = parse_terms(("--terms", &args.terms))?;
-        let dive_terms = parse_terms(("--dive-terms", &args.dive_terms))?;
         return calibrate_joint(&JointArgs {
             dvls: &args.dvl,
             references: &args.reference,
@@ -32,14 +38,6 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
             save: args.save.as_deref(),
         });
     }
-    if args.reference.len() > 1 {
-        return Err(input(anyhow::anyhow!(
-            "--reference: {} files for one DVL file: give one",
-            args.reference.len()
-        )));
-    }
-    let terms = parse_terms(("--terms", &args.terms))?;
-    let dive_terms = parse_terms(("--dive-terms", &args.dive_terms))?;
     calibrate(&CalibrateArgs {
         dvl: &args.dvl[0],
         reference: args.reference.first().map(std::path::PathBuf::as_path),

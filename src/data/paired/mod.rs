@@ -120,7 +120,7 @@ mod tests {
     use std::path::{Path, PathBuf};
 
     /// Columns of a small recording in one file: `t, u, v, w, n, e, d, roll, pitch, yaw`.
-    fn short_columns() -> PairedColumns {
+    pub(super) fn short_columns() -> PairedColumns {
         let names = |names: [&str; 3]| names.map(String::from);
         PairedColumns {
             time: "t".into(),

@@ -36,13 +36,6 @@ impl Source {
         }
     }
 
-    /// The DVL's file: the one a recording's outputs are named after.
-    pub fn dvl(&self) -> &Path {
-        match self {
-            Source::Csv { dvl, .. } => dvl,
-        }
-    }
-
     /// Its files, each once, the DVL's first.
     pub fn files(&self) -> Vec<&Path> {
         match self {
@@ -155,23 +148,12 @@ impl Recordings {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::data::paired::tests::short_columns as columns;
 
     const BOTH: &str = "t,u,v,w,n,e,d,roll,pitch,yaw\n\
                         0,1,0,0,1,0,0,0,0,0\n\
                         1,1,0,0,1,0,0,0,0,0\n\
                         2,1,0,0,1,0,0,0,0,0\n";
-
-    fn columns() -> PairedColumns {
-        let names = |names: [&str; 3]| names.map(String::from);
-        PairedColumns {
-            time: "t".into(),
-            dvl: names(["u", "v", "w"]),
-            velocity_ned: names(["n", "e", "d"]),
-            attitude: names(["roll", "pitch", "yaw"]),
-            rate: None,
-            angles_in_degrees: false,
-        }
-    }
 
     /// The SHA-256 of each file is that of its bytes, one file listed once; the
     /// recording is the one the files hold.
