@@ -31,13 +31,9 @@ pub fn network_io(terms: &TermSet) -> NetworkIo {
     }
 }
 
-/// The factor from a term's SI value to the network's unit.
+/// The factor from a term's SI value to the network's unit, the unit it is shown in.
 fn network_unit(kind: TermKind) -> f64 {
-    match kind {
-        TermKind::Scale | TermKind::Bias => 100.0,
-        TermKind::Misalignment => 180.0 / std::f64::consts::PI,
-        TermKind::LeverArm | TermKind::TimeOffset => 1.0,
-    }
+    kind.table().unit.factor()
 }
 
 /// The installation of one window's outputs, in [`TermSet::parameter_names`] order.

@@ -12,14 +12,20 @@
 //! `v_corr = R(δ)ᵀ · (I + S)⁻¹ · (v_dvl − b) − ω_b(t+τ) × l`, an estimate of v_b at
 //! t + τ.
 
+mod bias;
+pub mod kind;
+mod lever_arm;
+mod misalignment;
 pub mod names;
+mod scale;
+mod time_offset;
+
+pub use kind::{KindOfTerm, ShownUnit, TermKind};
 
 use crate::Vec3;
-use crate::installation::frames::{
-    Mat3, Reference, ReferenceAt, apply, body_to_ned, cross, multiply,
-};
-use crate::installation::frames::{rotation_x, rotation_y, rotation_z, transpose};
+use crate::installation::frames::{Mat3, Reference, ReferenceAt, apply, body_to_ned, cross};
 use crate::vocab::ErrorModel;
+use misalignment::misalignment_matrix;
 use std::ops::Range;
 
 /// How a scale or a bias is estimated: not at all, one for all axes, or one per axis.
@@ -31,29 +37,17 @@ pub enum PerAxis {
     PerAxis,
 }
 
-impl PerAxis {
-    fn count(self) -> usize {
+impl TermKind {
+    /// The kind's row.
+    pub fn table(self) -> &'static KindOfTerm {
         match self {
-            Self::Off => 0,
-            Self::Scalar => 1,
-            Self::PerAxis => 3,
+            TermKind::Scale => &scale::TERM,
+            TermKind::Misalignment => &misalignment::TERM,
+            TermKind::LeverArm => &lever_arm::TERM,
+            TermKind::TimeOffset => &time_offset::TERM,
+            TermKind::Bias => &bias::TERM,
         }
     }
-}
-
-/// What kind of term a parameter belongs to (its unit and its tolerance follow).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum TermKind {
-    /// A fraction: 0.01 is 1 %.
-    Scale,
-    /// Radians.
-    Misalignment,
-    /// Metres.
-    LeverArm,
-    /// Seconds.
-    TimeOffset,
-    /// m/s.
-    Bias,
 }
 
 /// A value for each kind of term, in its stored unit: a tolerance, a prior's standard
@@ -69,6 +63,17 @@ pub struct PerKind {
 }
 
 impl PerKind {
+    /// The value of each kind, from `value`.
+    pub fn from_fn(value: impl Fn(TermKind) -> f64) -> Self {
+        PerKind {
+            scale: value(TermKind::Scale),
+            misalignment_rad: value(TermKind::Misalignment),
+            lever_arm_m: value(TermKind::LeverArm),
+            time_offset_s: value(TermKind::TimeOffset),
+            bias_m_s: value(TermKind::Bias),
+        }
+    }
+
     /// The value for a term of this kind.
     pub fn of(&self, kind: TermKind) -> f64 {
         match kind {
@@ -133,51 +138,49 @@ impl TermSet {
         self.parameter_kinds().len()
     }
 
+    /// How many parameters of `kind` the set estimates: none, one for all axes, or
+    /// one per axis (a misalignment and a lever arm are per axis, a time offset one).
+    pub fn of(&self, kind: TermKind) -> PerAxis {
+        let on = |estimated: bool, form: PerAxis| if estimated { form } else { PerAxis::Off };
+        match kind {
+            TermKind::Scale => self.scale,
+            TermKind::Misalignment => on(self.misalignment, PerAxis::PerAxis),
+            TermKind::LeverArm => on(self.lever_arm, PerAxis::PerAxis),
+            TermKind::TimeOffset => on(self.time_offset, PerAxis::Scalar),
+            TermKind::Bias => self.bias,
+        }
+    }
+
+    /// The estimated parameters, in the order of a parameter vector (the order of
+    /// [`TermKind::ALL`]): each one's kind and axis (`None` for one value on all axes).
+    fn parameters(&self) -> impl Iterator<Item = (&'static KindOfTerm, Option<usize>)> + '_ {
+        TermKind::ALL.into_iter().flat_map(|kind| {
+            let axes: &[Option<usize>] = match self.of(kind) {
+                PerAxis::Off => &[],
+                PerAxis::Scalar => &[None],
+                PerAxis::PerAxis => &[Some(0), Some(1), Some(2)],
+            };
+            axes.iter().map(move |&axis| (kind.table(), axis))
+        })
+    }
+
     /// The estimated parameters' names, in the order of a parameter vector: scale,
     /// misalignment, lever arm, time offset, bias; such as `lever_arm_x_m` or
     /// `time_offset_s`. A scalar scale or bias has no axis in its name.
     pub fn parameter_names(&self) -> Vec<&'static str> {
-        let mut names = Vec::new();
-        match self.scale {
-            PerAxis::Off => {}
-            PerAxis::Scalar => names.push("scale"),
-            PerAxis::PerAxis => names.extend(["scale_x", "scale_y", "scale_z"]),
-        }
-        if self.misalignment {
-            names.extend([
-                "misalignment_x_rad",
-                "misalignment_y_rad",
-                "misalignment_z_rad",
-            ]);
-        }
-        if self.lever_arm {
-            names.extend(["lever_arm_x_m", "lever_arm_y_m", "lever_arm_z_m"]);
-        }
-        if self.time_offset {
-            names.push("time_offset_s");
-        }
-        match self.bias {
-            PerAxis::Off => {}
-            PerAxis::Scalar => names.push("bias_m_s"),
-            PerAxis::PerAxis => names.extend(["bias_x_m_s", "bias_y_m_s", "bias_z_m_s"]),
-        }
-        names
+        self.parameters()
+            .map(|(term, axis)| match axis {
+                None => term
+                    .one_name
+                    .expect("a kind estimated once has a name for it"),
+                Some(axis) => term.axis_names.expect("a kind per axis names its axes")[axis],
+            })
+            .collect()
     }
 
     /// The kind of each estimated parameter, in the order of [`Self::parameter_names`].
     pub fn parameter_kinds(&self) -> Vec<TermKind> {
-        let mut kinds = vec![TermKind::Scale; self.scale.count()];
-        if self.misalignment {
-            kinds.extend([TermKind::Misalignment; 3]);
-        }
-        if self.lever_arm {
-            kinds.extend([TermKind::LeverArm; 3]);
-        }
-        if self.time_offset {
-            kinds.push(TermKind::TimeOffset);
-        }
-        kinds.extend(vec![TermKind::Bias; self.bias.count()]);
-        kinds
+        self.parameters().map(|(term, _)| term.kind).collect()
     }
 }
 
@@ -201,31 +204,6 @@ pub struct Installation {
     pub bias_m_s: Vec3,
 }
 
-/// R(δ) = (Rz(δ_z) · Ry(δ_y) · Rx(δ_x))ᵀ: body axes into the DVL's axes.
-pub fn misalignment_matrix(misalignment_rad: Vec3) -> Mat3 {
-    transpose(&body_to_ned(misalignment_rad))
-}
-
-/// ∂R(δ)/∂δ_axis.
-fn misalignment_derivative(misalignment_rad: Vec3, axis: usize) -> Mat3 {
-    let [x, y, z] = misalignment_rad;
-    let derivative = |angle: f64, which: usize| -> Mat3 {
-        let (s, c) = angle.sin_cos();
-        match which {
-            0 => [[0.0, 0.0, 0.0], [0.0, -s, -c], [0.0, c, -s]],
-            1 => [[-s, 0.0, c], [0.0, 0.0, 0.0], [-c, 0.0, -s]],
-            _ => [[-s, -c, 0.0], [c, -s, 0.0], [0.0, 0.0, 0.0]],
-        }
-    };
-    let (mut rx, mut ry, mut rz) = (rotation_x(x), rotation_y(y), rotation_z(z));
-    match axis {
-        0 => rx = derivative(x, 0),
-        1 => ry = derivative(y, 1),
-        _ => rz = derivative(z, 2),
-    }
-    transpose(&multiply(&multiply(&rz, &ry), &rx))
-}
-
 impl Installation {
     /// The installation with the parameters of `terms` from `parameters` (in the
     /// order of [`TermSet::parameter_names`]) and every other term zero.
@@ -244,25 +222,14 @@ impl Installation {
     pub fn with_parameters(mut self, terms: &TermSet, parameters: &[f64]) -> Self {
         assert_eq!(parameters.len(), terms.parameter_count(), "parameter count");
         let mut next = parameters.iter().copied();
-        let mut take = || next.next().unwrap_or(0.0);
-        match terms.scale {
-            PerAxis::Off => {}
-            PerAxis::Scalar => self.scale = [take(); 3],
-            PerAxis::PerAxis => self.scale = [take(), take(), take()],
-        }
-        if terms.misalignment {
-            self.misalignment_rad = [take(), take(), take()];
-        }
-        if terms.lever_arm {
-            self.lever_arm_m = [take(), take(), take()];
-        }
-        if terms.time_offset {
-            self.time_offset_s = take();
-        }
-        match terms.bias {
-            PerAxis::Off => {}
-            PerAxis::Scalar => self.bias_m_s = [take(); 3],
-            PerAxis::PerAxis => self.bias_m_s = [take(), take(), take()],
+        for kind in TermKind::ALL {
+            let term = kind.table();
+            let mut take = || next.next().unwrap_or(0.0);
+            match terms.of(kind) {
+                PerAxis::Off => {}
+                PerAxis::Scalar => (term.set)(&mut self, [take(); 3]),
+                PerAxis::PerAxis => (term.set)(&mut self, [take(), take(), take()]),
+            }
         }
         self
     }
@@ -270,27 +237,10 @@ impl Installation {
     /// The parameters of `terms`, in the order of [`TermSet::parameter_names`]; a scalar
     /// scale or bias is read from the x axis.
     pub fn to_parameters(&self, terms: &TermSet) -> Vec<f64> {
-        let mut parameters = Vec::with_capacity(terms.parameter_count());
-        match terms.scale {
-            PerAxis::Off => {}
-            PerAxis::Scalar => parameters.push(self.scale[0]),
-            PerAxis::PerAxis => parameters.extend(self.scale),
-        }
-        if terms.misalignment {
-            parameters.extend(self.misalignment_rad);
-        }
-        if terms.lever_arm {
-            parameters.extend(self.lever_arm_m);
-        }
-        if terms.time_offset {
-            parameters.push(self.time_offset_s);
-        }
-        match terms.bias {
-            PerAxis::Off => {}
-            PerAxis::Scalar => parameters.push(self.bias_m_s[0]),
-            PerAxis::PerAxis => parameters.extend(self.bias_m_s),
-        }
-        parameters
+        terms
+            .parameters()
+            .map(|(term, axis)| (term.values)(self)[axis.unwrap_or(0)])
+            .collect()
     }
 
     /// The DVL velocity predicted from the reference at t + τ (the caller reads the
@@ -321,44 +271,18 @@ impl Installation {
     ) -> Vec<Vec3> {
         let rotation = misalignment_matrix(self.misalignment_rad);
         let point = self.dvl_point_velocity(at);
-        let rotated = apply(&rotation, point);
-        let scaled = |v: Vec3| [0, 1, 2].map(|k| (1.0 + self.scale[k]) * v[k]);
-        let mut columns = Vec::with_capacity(terms.parameter_count());
-        match terms.scale {
-            PerAxis::Off => {}
-            PerAxis::Scalar => columns.push(rotated),
-            PerAxis::PerAxis => {
-                for axis in 0..3 {
-                    let mut column = [0.0; 3];
-                    column[axis] = rotated[axis];
-                    columns.push(column);
-                }
-            }
-        }
-        if terms.misalignment {
-            for axis in 0..3 {
-                let derivative = misalignment_derivative(self.misalignment_rad, axis);
-                columns.push(scaled(apply(&derivative, point)));
-            }
-        }
-        if terms.lever_arm {
-            for axis in 0..3 {
-                let mut unit = [0.0; 3];
-                unit[axis] = 1.0;
-                columns.push(scaled(apply(&rotation, cross(at.rate_rad_s, unit))));
-            }
-        }
-        if terms.time_offset {
-            let turning = cross(slope.rate_rad_s, self.lever_arm_m);
-            let change = [0, 1, 2].map(|k| slope.velocity_body_m_s[k] + turning[k]);
-            columns.push(scaled(apply(&rotation, change)));
-        }
-        match terms.bias {
-            PerAxis::Off => {}
-            PerAxis::Scalar => columns.push([1.0; 3]),
-            PerAxis::PerAxis => columns.extend([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]),
-        }
-        columns
+        let linearisation = Linearisation {
+            installation: self,
+            at,
+            slope,
+            rotation,
+            point,
+            rotated: apply(&rotation, point),
+        };
+        terms
+            .parameters()
+            .map(|(term, axis)| (term.column)(&linearisation, axis))
+            .collect()
     }
 
     /// The DVL sample corrected: `R(δ)ᵀ · (I + S)⁻¹ · (v_dvl − b) − ω_b × l`, the
@@ -369,6 +293,29 @@ impl Installation {
         let body = apply(&body_to_ned(self.misalignment_rad), unscaled);
         let turning = cross(rate_at_t_plus_tau_rad_s, self.lever_arm_m);
         [0, 1, 2].map(|k| body[k] - turning[k])
+    }
+}
+
+/// The prediction at one sample, in the parts every kind's Jacobian column is built
+/// from.
+struct Linearisation<'a> {
+    installation: &'a Installation,
+    /// The reference at t + τ.
+    at: ReferenceAt,
+    /// Its time derivative.
+    slope: ReferenceAt,
+    /// R(δ).
+    rotation: Mat3,
+    /// v_b + ω_b × l, body axes.
+    point: Vec3,
+    /// R(δ) · (v_b + ω_b × l), the DVL's axes.
+    rotated: Vec3,
+}
+
+impl Linearisation<'_> {
+    /// (I + S) · v.
+    fn scaled(&self, v: Vec3) -> Vec3 {
+        [0, 1, 2].map(|k| (1.0 + self.installation.scale[k]) * v[k])
     }
 }
 

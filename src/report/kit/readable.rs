@@ -1,44 +1,29 @@
 //! Error terms in units people read, for every table, figure and printed line that
 //! shows them: a term's stored name (`lever_arm_x_m`, `bias_x_m_s`,
 //! `misalignment_x_rad`, `scale_x`) to a name without its unit suffix, the unit shown
-//! and the factor from the stored value ([`readable_term`], built on [`table_unit`]),
+//! and the factor from the stored value ([`readable_term`], from the terms' own table),
 //! and why the bound finds a term not seen, in that unit ([`readable_why`]). In: a
 //! term's name (and the bound's reason). Out: text. It imports only the kit's number
-//! format ([`super::numbers`]), so the report's tables, its figures and the printed
+//! format ([`super::numbers`]) and the terms' table, so the report's tables, its figures and the printed
 //! tables of every room all stand above it.
 
+use crate::installation::terms::TermKind;
 use crate::report::kit::numbers::three_digits;
 
-/// How a term, by its parameter name, is shown in tables: the factor from its stored
-/// unit and the unit shown (a scale in %, a misalignment in degrees, a bias in cm/s; a
-/// lever arm in m and a time offset in s as stored).
-pub fn table_unit(term: &str) -> (f64, &'static str) {
-    if term.starts_with("scale") {
-        (100.0, "%")
-    } else if term.ends_with("_rad") {
-        (180.0 / std::f64::consts::PI, "deg")
-    } else if term.ends_with("_m_s") {
-        (100.0, "cm/s")
-    } else if term.ends_with("_m") {
-        (1.0, "m")
-    } else {
-        (1.0, "s")
-    }
-}
-
 /// A term's name for people and its unit, and the factor from the stored value (SI,
-/// radians, a fraction for a scale) to that unit, the unit as the study's tables give
-/// it ([`table_unit`]) and the name without its unit suffix:
-/// `lever_arm_x_m` → ("lever arm x", "m", 1), `bias_x_m_s` → ("bias x", "cm/s", 100),
-/// `misalignment_x_rad` → degrees, `scale_x` → %.
+/// radians, a fraction for a scale) to that unit, as its kind's row gives them
+/// ([`TermKind::of_parameter`]): `lever_arm_x_m` → ("lever arm x", "m", 1),
+/// `bias_x_m_s` → ("bias x", "cm/s", 100), `misalignment_x_rad` → degrees, `scale_x` →
+/// %. A name no kind gives is shown as it is, with no unit.
 pub fn readable_term(term: &str) -> (String, &'static str, f64) {
-    let (factor, unit) = table_unit(term);
-    let stem = ["_m_s", "_rad", "_m", "_s"]
-        .iter()
-        .find_map(|suffix| term.strip_suffix(suffix))
-        .filter(|_| !term.starts_with("scale"))
-        .unwrap_or(term);
-    (stem.replace('_', " "), unit, factor)
+    match TermKind::of_parameter(term) {
+        Some((kind, axis)) => (
+            kind.readable_name(axis),
+            kind.unit.symbol(),
+            kind.unit.factor(),
+        ),
+        None => (term.replace('_', " "), "", 1.0),
+    }
 }
 
 /// A value of a reason in its table unit: three significant digits, trailing zeros

@@ -9,6 +9,7 @@ use crate::data::paired::PairedColumns;
 use crate::installation::estimate::bound::{DEFAULT_TOLERANCES, Tolerances};
 use crate::installation::learned::spec::LearnedFile;
 use crate::installation::study::spec::kalman::StudyKalmanFile;
+use crate::installation::terms::TermKind;
 use crate::installation::terms::names::TermName;
 use std::path::PathBuf;
 
@@ -140,26 +141,33 @@ impl From<Tolerances> for ObservabilityFile {
     /// The tolerances in the file's units: the inverse of
     /// [`ObservabilityFile::tolerances`].
     fn from(tolerances: Tolerances) -> Self {
+        let shown = |kind: TermKind| tolerances.of(kind) * kind.table().unit.factor();
         ObservabilityFile {
-            scale_pct: tolerances.scale * 100.0,
-            misalignment_deg: tolerances.misalignment_rad.to_degrees(),
-            lever_arm_m: tolerances.lever_arm_m,
-            time_offset_s: tolerances.time_offset_s,
-            bias_cm_s: tolerances.bias_m_s * 100.0,
+            scale_pct: shown(TermKind::Scale),
+            misalignment_deg: shown(TermKind::Misalignment),
+            lever_arm_m: shown(TermKind::LeverArm),
+            time_offset_s: shown(TermKind::TimeOffset),
+            bias_cm_s: shown(TermKind::Bias),
         }
     }
 }
 
 impl ObservabilityFile {
+    /// The tolerance of a kind of term as the file gives it, in the kind's shown unit
+    /// (under the key [`KindOfTerm::spec_key`](crate::installation::terms::KindOfTerm::spec_key) gives).
+    pub fn of(&self, kind: TermKind) -> f64 {
+        match kind {
+            TermKind::Scale => self.scale_pct,
+            TermKind::Misalignment => self.misalignment_deg,
+            TermKind::LeverArm => self.lever_arm_m,
+            TermKind::TimeOffset => self.time_offset_s,
+            TermKind::Bias => self.bias_cm_s,
+        }
+    }
+
     /// The tolerances in the bound's units.
     pub fn tolerances(&self) -> Tolerances {
-        Tolerances {
-            scale: self.scale_pct / 100.0,
-            misalignment_rad: self.misalignment_deg.to_radians(),
-            lever_arm_m: self.lever_arm_m,
-            time_offset_s: self.time_offset_s,
-            bias_m_s: self.bias_cm_s / 100.0,
-        }
+        Tolerances::from_fn(|kind| kind.table().unit.to_stored(self.of(kind)))
     }
 }
 

@@ -3,6 +3,7 @@
 //! above zero.
 
 use crate::installation::study::spec::file::ObservabilityFile;
+use crate::installation::terms::TermKind;
 use crate::spec::check::Faults;
 
 /// Checks `[observability]`: every tolerance finite and above zero.
@@ -10,34 +11,16 @@ pub(in crate::installation::study::spec) fn check_observability(
     observability: ObservabilityFile,
     faults: &mut Faults,
 ) -> ObservabilityFile {
-    let ObservabilityFile {
-        scale_pct,
-        misalignment_deg,
-        lever_arm_m,
-        time_offset_s,
-        bias_cm_s,
-    } = observability;
-    for (key, value) in [
-        ("scale_pct", scale_pct),
-        ("misalignment_deg", misalignment_deg),
-        ("lever_arm_m", lever_arm_m),
-        ("time_offset_s", time_offset_s),
-        ("bias_cm_s", bias_cm_s),
-    ] {
+    for kind in TermKind::ALL {
+        let value = observability.of(kind);
         if !(value.is_finite() && value > 0.0) {
             faults.add(
-                format!("observability.{key}"),
+                format!("observability.{}", kind.table().spec_key("")),
                 format!(
                     "{value} must be a finite positive number: a term whose standard deviation is beyond it counts as not seen"
                 ),
             );
         }
     }
-    ObservabilityFile {
-        scale_pct,
-        misalignment_deg,
-        lever_arm_m,
-        time_offset_s,
-        bias_cm_s,
-    }
+    observability
 }
