@@ -64,6 +64,10 @@ pub enum FieldProblem {
     Empty(Quantity),
     #[error("{0:?} is not a number")]
     NotANumber(String),
+    #[error(
+        "{0:?} is not a validity flag: give 1 or true for a valid sample, 0 or false for one that is not"
+    )]
+    NotAFlag(String),
     #[error("{0:?} is not finite: every {noun} must be a finite number", noun = .1.noun())]
     NonFinite(String, Quantity),
 }
@@ -73,8 +77,14 @@ pub enum FieldProblem {
 pub enum Quantity {
     Time,
     Velocity,
+    /// A DVL's velocity, which is missing where the DVL lost bottom lock: an empty or
+    /// NaN field is read as NaN, for the recording's checks to leave the sample out and
+    /// count it.
+    MeasuredVelocity,
     Angle,
     AngularRate,
+    /// A sample's validity: 1 or `true` valid, 0 or `false` not (read as 1 or 0).
+    Validity,
 }
 
 impl Quantity {
@@ -82,9 +92,10 @@ impl Quantity {
     pub fn noun(self) -> &'static str {
         match self {
             Quantity::Time => "time stamp",
-            Quantity::Velocity => "velocity",
+            Quantity::Velocity | Quantity::MeasuredVelocity => "velocity",
             Quantity::Angle => "angle",
             Quantity::AngularRate => "angular rate",
+            Quantity::Validity => "validity flag",
         }
     }
 
@@ -92,9 +103,10 @@ impl Quantity {
     pub fn with_article(self) -> &'static str {
         match self {
             Quantity::Time => "a time stamp",
-            Quantity::Velocity => "a velocity",
+            Quantity::Velocity | Quantity::MeasuredVelocity => "a velocity",
             Quantity::Angle => "an angle",
             Quantity::AngularRate => "an angular rate",
+            Quantity::Validity => "a validity flag (1, 0, true or false)",
         }
     }
 }
@@ -358,10 +370,22 @@ fn read_row(
     Ok(())
 }
 
-/// One field, which holds `holds`, as a finite number.
+/// One field, which holds `holds`, as a finite number; a DVL's velocity that is empty
+/// or NaN as NaN, a validity flag as 1 or 0.
 fn parse(text: &str, holds: Quantity) -> Result<f64, FieldProblem> {
+    let missing = text.is_empty() || text.eq_ignore_ascii_case("nan");
+    if holds == Quantity::MeasuredVelocity && missing {
+        return Ok(f64::NAN);
+    }
     if text.is_empty() {
         return Err(FieldProblem::Empty(holds));
+    }
+    if holds == Quantity::Validity {
+        return match text.to_ascii_lowercase().as_str() {
+            "1" | "true" => Ok(1.0),
+            "0" | "false" => Ok(0.0),
+            _ => Err(FieldProblem::NotAFlag(text.to_string())),
+        };
     }
     match text.parse::<f64>() {
         Ok(value) if value.is_finite() => Ok(value),

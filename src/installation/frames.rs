@@ -9,7 +9,7 @@
 //! body-frame vector into NED, and C_n^b = (C_b^n)ᵀ takes it back.
 
 use crate::Vec3;
-use crate::data::paired::PairedRecording;
+use crate::data::paired::{PairedRecording, REFERENCE_GAP_INTERVALS, sample_interval};
 use std::f64::consts::PI;
 use std::ops::Range;
 
@@ -133,6 +133,9 @@ pub struct Reference {
     pub velocity_body_m_s: Vec<Vec3>,
     /// ω_b = (p, q, r), rad/s, body axes: recorded, or derived from the attitude.
     pub rate_rad_s: Vec<Vec3>,
+    /// The longest interval between two samples read across, s: inside a longer gap
+    /// the reference is not read ([`REFERENCE_GAP_INTERVALS`] of its median interval).
+    pub max_gap_s: f64,
 }
 
 /// The reference's body velocity and body rate at one time.
@@ -164,7 +167,7 @@ impl Reference {
                     .zip(unwrap(&yaw))
                     .map(|(a, yaw)| [a[0], a[1], yaw])
                     .collect();
-                let attitude_rate = derivative(&recording.time_s, &attitude);
+                let attitude_rate = derivative(&recording.reference_time_s, &attitude);
                 attitude
                     .iter()
                     .zip(&attitude_rate)
@@ -173,15 +176,29 @@ impl Reference {
             }
         };
         Reference {
-            time_s: recording.time_s.clone(),
+            max_gap_s: REFERENCE_GAP_INTERVALS * sample_interval(&recording.reference_time_s),
+            time_s: recording.reference_time_s.clone(),
             velocity_body_m_s,
             rate_rad_s,
         }
     }
 
     /// The reference at `time_s`, linearly interpolated between the two samples around
-    /// it (exact at a sample); `None` outside [t₀, t_N] or when not finite.
+    /// it (exact at a sample); `None` outside [t₀, t_N], inside a gap longer than
+    /// [`Self::max_gap_s`], or when not finite.
     pub fn at(&self, time_s: f64) -> Option<ReferenceAt> {
+        self.read(time_s, self.max_gap_s)
+    }
+
+    /// The reference at `time_s` as [`Self::at`] reads it, but across any gap: for a
+    /// least-squares fit's trial time offsets, which may step beyond the margin that
+    /// keeps its samples clear of the gaps (a fit that ends there fails).
+    pub fn across_gaps(&self, time_s: f64) -> Option<ReferenceAt> {
+        self.read(time_s, f64::INFINITY)
+    }
+
+    /// The reference at `time_s`, read across gaps up to `max_gap_s`.
+    fn read(&self, time_s: f64, max_gap_s: f64) -> Option<ReferenceAt> {
         let (&first, &last) = (self.time_s.first()?, self.time_s.last()?);
         if !(first..=last).contains(&time_s) {
             return None;
@@ -195,6 +212,9 @@ impl Reference {
             });
         }
         let before = after - 1;
+        if self.time_s[after] - self.time_s[before] > max_gap_s {
+            return None;
+        }
         let weight = (time_s - self.time_s[before]) / (self.time_s[after] - self.time_s[before]);
         let blend = |a: Vec3, b: Vec3| [0, 1, 2].map(|k| a[k] + weight * (b[k] - a[k]));
         Some(ReferenceAt {
@@ -234,6 +254,8 @@ mod tests {
     ) -> PairedRecording {
         PairedRecording {
             dvl_m_s: vec![[0.0; 3]; time_s.len()],
+            left_out: Vec::new(),
+            reference_time_s: time_s.clone(),
             time_s,
             velocity_ned_m_s,
             attitude_rad,

@@ -7,7 +7,7 @@
 //! In: [`CalibrateArgs`]. Out: a [`Calibration`], everything the command prints, or a
 //! [`CalibrateError`] that names the argument, file or step at fault.
 
-use crate::data::paired::{PairedError, PairedRecording, Source};
+use crate::data::paired::{LeftOutWhy, PairedError, PairedRecording, Source};
 use crate::installation::estimate::bound::{Noise, TermBound, Why, bound};
 use crate::installation::estimate::filter::{FilterSettings, run_filter};
 use crate::installation::estimate::fit::{
@@ -169,6 +169,10 @@ pub struct Calibration {
     /// those recorded.
     pub scored: usize,
     pub recorded: usize,
+    /// The DVL samples left out of the recording as it was read, per reason, and the
+    /// reference's samples (on its own stamps).
+    pub left_out: Vec<(LeftOutWhy, usize)>,
+    pub reference_samples: usize,
     /// The RMSE against the reference on the scored samples with no terms and with the
     /// fit's; `None` with no sample to score.
     pub before: Option<AxisRmse>,
@@ -280,6 +284,8 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
         noise,
         scored: read.scored.len(),
         recorded: read.recording.time_s.len(),
+        left_out: read.recording.left_out_counts(),
+        reference_samples: read.recording.reference_time_s.len(),
         before,
         after,
         settings,

@@ -114,7 +114,9 @@ fn synthetic(motion: &Motion, truth: &Installation, seed: u64) -> (Vec<f64>, Vec
             .zip(&attitude)
             .map(|(&t, &a)| apply(&body_to_ned(a), (motion.velocity_body_m_s)(t)))
             .collect(),
-        time_s: reference_time_s,
+        time_s: reference_time_s.clone(),
+        left_out: Vec::new(),
+        reference_time_s,
         attitude_rad: attitude,
         rate_rad_s: None,
     };
@@ -415,4 +417,96 @@ fn every_term_set_fits_every_trajectory_and_flags_what_it_cannot_see() {
             }
         }
     }
+}
+
+/// `TURNING` written as a vehicle logs it, into `folder`: the reference (A-KIT's GT
+/// columns) at `reference_hz` on its own clock, and the DVL at `dvl_hz` on a clock
+/// `dvl_clock_s` ahead, its stamps jittered by up to a tenth of its interval, reading
+/// `truth`'s prediction of the exact motion plus white noise. Both from one continuous
+/// motion: no sample of either is resampled from the other.
+fn logged(
+    folder: &std::path::Path,
+    (dvl_hz, reference_hz): (f64, f64),
+    dvl_clock_s: f64,
+    truth: &Installation,
+    seed: u64,
+) -> PairedFiles {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let noise = Normal::new(0.0, NOISE.dvl_m_s).unwrap();
+    let jitter = rand_distr::Uniform::new(-0.1 / dvl_hz, 0.1 / dvl_hz).unwrap();
+    let mut gt = String::from(
+        "Time [s],Longitude [rad],Latitude [rad],Altitude [m],V North [m/s],V East [m/s],V Down [m/s],Roll [rad],Pitch [rad],Yaw [rad]\n",
+    );
+    for i in 0..=(400.0 * reference_hz) as usize {
+        let t = i as f64 / reference_hz;
+        let [roll, pitch, yaw] = (TURNING.attitude_rad)(t);
+        let wrapped = (yaw + PI).rem_euclid(2.0 * PI) - PI;
+        let [n, e, d] = apply(
+            &body_to_ned([roll, pitch, yaw]),
+            (TURNING.velocity_body_m_s)(t),
+        );
+        gt.push_str(&format!("{t},0,0,0,{n},{e},{d},{roll},{pitch},{wrapped}\n"));
+    }
+    let mut dvl = String::from("Time [s],DVL X [m/s],DVL Y [m/s],DVL Z [m/s]\n");
+    for i in 1..(400.0 * dvl_hz) as usize {
+        let true_s = i as f64 / dvl_hz + jitter.sample(&mut rng);
+        let [x, y, z] = truth
+            .predict(TURNING.at(true_s + truth.time_offset_s))
+            .map(|v| v + noise.sample(&mut rng));
+        dvl.push_str(&format!("{},{x},{y},{z}\n", true_s + dvl_clock_s));
+    }
+    let files = PairedFiles {
+        dvl: folder.join("dvl.csv"),
+        reference: folder.join("gt.csv"),
+    };
+    std::fs::write(&files.dvl, dvl).unwrap();
+    std::fs::write(&files.reference, gt).unwrap();
+    files
+}
+
+#[test]
+fn a_dvl_and_a_reference_at_their_own_rates_on_their_own_clocks_give_the_terms_back() {
+    let truth = Installation {
+        scale: [0.0; 3],
+        misalignment_rad: [0.0; 3],
+        ..truth()
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let mut seed = 20;
+    // Seeds 41 to 49, one a pair of rates: 63 checks at three standard deviations,
+    // each failing once in 370 by chance; the errors over all of them are N(0, 1),
+    // as checked below.
+    let mut seed = 40;
+    let mut squares = Vec::new();
+    for dvl_hz in [1.0, 5.0, 10.0] {
+        for reference_hz in [1.0, 10.0, 100.0] {
+            seed += 1;
+            let files = logged(dir.path(), (dvl_hz, reference_hz), 0.25, &truth, seed);
+            let recording = dcnet_exp::data::paired::read(&files, &PairedColumns::akit()).unwrap();
+            assert!(recording.left_out.is_empty());
+            let reference = Reference::new(&recording);
+            let fitted = fit(
+                &recording.time_s,
+                &recording.dvl_m_s,
+                &reference,
+                lever_time_bias(),
+            )
+            .unwrap();
+            let bound = bound(&fitted, NOISE, &DEFAULT_TOLERANCES);
+            let clocked = Installation {
+                time_offset_s: truth.time_offset_s - 0.25,
+                ..truth
+            };
+            let label = format!("DVL {dvl_hz} Hz, reference {reference_hz} Hz");
+            let normalized = assert_within_three_std(&fitted, &bound, &clocked, &label);
+            squares.extend(normalized.iter().map(|z| z * z));
+        }
+    }
+    // The standard deviations are the spread: the mean squared error in them is 1
+    // (its own spread, for 63 errors, about 0.18).
+    let mean_square = squares.iter().sum::<f64>() / squares.len() as f64;
+    assert!(
+        (0.6..1.5).contains(&mean_square),
+        "mean square {mean_square}"
+    );
 }

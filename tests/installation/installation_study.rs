@@ -887,6 +887,35 @@ fn calibrate_refuses_a_dvl_that_reads_no_motion() {
             "zeros",
         ],
     );
+    // 0, 0, 0 is what a DVL without bottom lock sends: every sample is left out.
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("zeros.csv: 0 valid DVL samples, ")
+            && stderr(&output).contains(" of exactly 0, 0, 0: a calibration needs at least 3"),
+        "{}",
+        stderr(&output)
+    );
+    // Said to be a reading (a vehicle that truly stops), it fits a scale of −100 %.
+    std::fs::write(
+        d.join("zero-is-valid.toml"),
+        "[columns]\ntime = \"Time [s]\"\ndvl = [\"DVL X [m/s]\", \"DVL Y [m/s]\", \"DVL Z [m/s]\"]\nvelocity_ned = [\"V North [m/s]\", \"V East [m/s]\", \"V Down [m/s]\"]\nattitude = [\"Roll [rad]\", \"Pitch [rad]\", \"Yaw [rad]\"]\nzero_is_valid = true\n",
+    )
+    .unwrap();
+    let output = dcnet(
+        d,
+        &[
+            "calibrate",
+            "zeros.csv",
+            "--reference",
+            "data/syn/Trajectory1/GT_trajectory1.csv",
+            "--columns",
+            "zero-is-valid.toml",
+            "--terms",
+            "scale",
+            "--out",
+            "zeros",
+        ],
+    );
     assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
     assert!(
         stderr(&output).contains("the fitted scale x is -")

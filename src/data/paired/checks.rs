@@ -1,15 +1,18 @@
 //! The plausibility checks of a paired recording, whatever its format: time stamps
-//! that go back or repeat, roll or pitch out of range, a velocity beyond a vehicle's, a
-//! body rate or an attitude jump beyond a vehicle's turn, a DVL and a reference of other
-//! lengths or times, fewer than [`MIN_SAMPLES`] samples. They run on the samples a
-//! format read, and name where a faulty sample came from through a [`Locator`] (a CSV
-//! file's line today).
+//! that go back or repeat in either stream, roll or pitch out of range, a velocity
+//! beyond a vehicle's, a body rate or an attitude jump beyond a vehicle's turn, a DVL
+//! and a reference that never overlap in time, fewer than [`MIN_SAMPLES`] valid DVL
+//! samples. The DVL's samples it did not measure (lost bottom lock: no velocity, the
+//! invalid marker, 0, 0, 0, or its validity flag down) are left out, each with its
+//! reason, never repaired. They run on the samples a format read, and name where a
+//! faulty sample came from through a [`Locator`] (a CSV file's line today).
 //! In: the [`Unchecked`] samples and their [`Locator`]. Out: the [`PairedRecording`],
 //! angles in radians, or the first fault as a [`PairedError`].
 
 use super::{
-    MAX_BODY_RATE_RAD_S, MAX_DVL_SPEED_M_S, MIN_SAMPLES, PairedColumns, PairedError,
-    PairedRecording, TIME_TOLERANCE_S,
+    GAP_MARGIN_S, INVALID_MARKER_M_S, LeftOut, LeftOutWhy, MAX_BODY_RATE_RAD_S, MAX_DVL_SPEED_M_S,
+    MIN_SAMPLES, PairedColumns, PairedError, PairedRecording, REFERENCE_GAP_INTERVALS,
+    sample_interval,
 };
 use crate::Vec3;
 use std::f64::consts::PI;
@@ -21,8 +24,10 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, PartialEq)]
 pub struct Unchecked {
     pub dvl_time_s: Vec<f64>,
-    /// The DVL's body-frame velocity, m/s.
+    /// The DVL's body-frame velocity, m/s; NaN where it has none.
     pub dvl_m_s: Vec<Vec3>,
+    /// The DVL's validity flag per sample, where the recording has one.
+    pub dvl_valid: Option<Vec<bool>>,
     pub reference_time_s: Vec<f64>,
     /// The reference's north, east, down velocity, m/s.
     pub velocity_ned_m_s: Vec<Vec3>,
@@ -43,9 +48,51 @@ impl Unchecked {
         }
     }
 
-    /// The recording, angles (and the rate) in radians, on the DVL's time stamps.
-    fn into_recording(self) -> PairedRecording {
+    /// Why the DVL sample `row` is left out, if it is: its validity flag down, no
+    /// velocity, the invalid marker on an axis, or exactly 0, 0, 0 (unless zero is a
+    /// valid reading here).
+    fn invalid(&self, row: usize, zero_is_valid: bool) -> Option<LeftOutWhy> {
+        let velocity = self.dvl_m_s[row];
+        if self.dvl_valid.as_ref().is_some_and(|valid| !valid[row]) {
+            Some(LeftOutWhy::Flagged)
+        } else if velocity.iter().any(|v| v.is_nan()) {
+            Some(LeftOutWhy::NoVelocity)
+        } else if velocity.contains(&INVALID_MARKER_M_S) {
+            Some(LeftOutWhy::Marker)
+        } else if !zero_is_valid && velocity == [0.0; 3] {
+            Some(LeftOutWhy::AllZero)
+        } else {
+            None
+        }
+    }
+
+    /// The recording, angles (and the rate) in radians: the DVL's valid samples on its
+    /// stamps, the reference on its own, and the DVL's invalid samples left out, each
+    /// with its stamp, its line and why.
+    fn into_recording(self, at: &Locator) -> PairedRecording {
         let to_rad = self.to_rad();
+        let (mut time_s, mut dvl_m_s, mut left_out) = (Vec::new(), Vec::new(), Vec::new());
+        let longest_gap_s = REFERENCE_GAP_INTERVALS * sample_interval(&self.reference_time_s);
+        for row in 0..self.dvl_time_s.len() {
+            let stamp = self.dvl_time_s[row];
+            match self.invalid(row, at.names.zero_is_valid) {
+                Some(why) => left_out.push(LeftOut {
+                    time_s: stamp,
+                    line: at.dvl_lines[row],
+                    why,
+                }),
+                None if beside_a_gap(&self.reference_time_s, longest_gap_s, stamp) => left_out
+                    .push(LeftOut {
+                        time_s: stamp,
+                        line: at.dvl_lines[row],
+                        why: LeftOutWhy::ReferenceGap,
+                    }),
+                None => {
+                    time_s.push(stamp);
+                    dvl_m_s.push(self.dvl_m_s[row]);
+                }
+            }
+        }
         let scaled = |values: Vec<Vec3>| -> Vec<Vec3> {
             values
                 .into_iter()
@@ -53,13 +100,29 @@ impl Unchecked {
                 .collect()
         };
         PairedRecording {
-            time_s: self.dvl_time_s,
-            dvl_m_s: self.dvl_m_s,
+            time_s,
+            dvl_m_s,
+            left_out,
+            reference_time_s: self.reference_time_s,
             velocity_ned_m_s: self.velocity_ned_m_s,
             attitude_rad: scaled(self.attitude),
             rate_rad_s: self.rate.map(scaled),
         }
     }
+}
+
+/// Whether `stamp_s` lies within [`GAP_MARGIN_S`] of a gap longer than `longest_s`
+/// in the reference stamped `reference_s`.
+fn beside_a_gap(reference_s: &[f64], longest_s: f64, stamp_s: f64) -> bool {
+    // The reference samples up to GAP_MARGIN_S either side of the stamp.
+    let first = reference_s.partition_point(|&t| t < stamp_s - GAP_MARGIN_S);
+    let last = reference_s.partition_point(|&t| t <= stamp_s + GAP_MARGIN_S);
+    let (from, to) = (first.saturating_sub(1), (last + 1).min(reference_s.len()));
+    reference_s[from..to].windows(2).any(|pair| {
+        pair[1] - pair[0] > longest_s
+            && pair[0] < stamp_s + GAP_MARGIN_S
+            && pair[1] > stamp_s - GAP_MARGIN_S
+    })
 }
 
 /// Where each sample came from: the DVL's file and the reference's (one path when one
@@ -88,15 +151,28 @@ pub fn check(samples: Unchecked, at: &Locator) -> Result<PairedRecording, Paired
     )?;
     check_attitude(&samples, at)?;
     check_reference_motion(&samples, at)?;
-    check_stamps(&samples, at)?;
-    if samples.dvl_time_s.len() < MIN_SAMPLES {
-        return Err(PairedError::TooShort {
+    for (path, samples) in [
+        (&at.dvl, samples.dvl_time_s.len()),
+        (&at.reference, samples.reference_time_s.len()),
+    ] {
+        if samples < MIN_SAMPLES {
+            return Err(PairedError::TooShort {
+                path: path.clone(),
+                samples,
+            });
+        }
+    }
+    check_overlap(&samples, at)?;
+    check_dvl_speed(&samples, at)?;
+    let recording = samples.into_recording(at);
+    if recording.len() < MIN_SAMPLES {
+        return Err(PairedError::TooFewValid {
             path: at.dvl.clone(),
-            samples: samples.dvl_time_s.len(),
+            valid: recording.len(),
+            left_out: recording.left_out_counts(),
         });
     }
-    check_dvl_speed(&samples, at)?;
-    Ok(samples.into_recording())
+    Ok(recording)
 }
 
 /// Every time stamp of `time_s` after the one before it.
@@ -213,39 +289,30 @@ fn check_turn(samples: &Unchecked, at: &Locator, row: usize) -> Result<(), Paire
     Ok(())
 }
 
-/// The DVL and the reference on the same time stamps: as many samples, each pair
-/// within [`TIME_TOLERANCE_S`].
-fn check_stamps(samples: &Unchecked, at: &Locator) -> Result<(), PairedError> {
+/// The DVL's stamps and the reference's overlapping in time: each stream is on its own
+/// clock and at its own rate, but a DVL whose samples all lie outside the reference's
+/// span has nothing to be calibrated against.
+fn check_overlap(samples: &Unchecked, at: &Locator) -> Result<(), PairedError> {
     let (dvl, reference) = (&samples.dvl_time_s, &samples.reference_time_s);
-    if dvl.len() != reference.len() {
-        return Err(PairedError::Lengths {
+    let span = |time: &[f64]| (time[0], time[time.len() - 1]);
+    let (dvl_span, reference_span) = (span(dvl), span(reference));
+    if dvl_span.1 < reference_span.0 || reference_span.1 < dvl_span.0 {
+        return Err(PairedError::NoOverlap {
             dvl: at.dvl.clone(),
-            dvl_samples: dvl.len(),
+            dvl_span_s: dvl_span,
             reference: at.reference.clone(),
-            reference_samples: reference.len(),
+            reference_span_s: reference_span,
         });
-    }
-    for (row, (&dvl_s, &reference_s)) in dvl.iter().zip(reference).enumerate() {
-        if (dvl_s - reference_s).abs() > TIME_TOLERANCE_S {
-            return Err(PairedError::Times {
-                dvl: at.dvl.clone(),
-                dvl_line: at.dvl_lines[row],
-                reference: at.reference.clone(),
-                reference_line: at.reference_lines[row],
-                column: at.names.time.clone(),
-                dvl_s,
-                reference_s,
-            });
-        }
     }
     Ok(())
 }
 
-/// Every DVL velocity component within [`MAX_DVL_SPEED_M_S`].
+/// Every DVL velocity component within [`MAX_DVL_SPEED_M_S`], but for the invalid
+/// marker and a missing velocity, which leave their sample out.
 fn check_dvl_speed(samples: &Unchecked, at: &Locator) -> Result<(), PairedError> {
     for (row, velocity) in samples.dvl_m_s.iter().enumerate() {
         for (axis, &value) in velocity.iter().enumerate() {
-            if value.abs() > MAX_DVL_SPEED_M_S {
+            if value.abs() > MAX_DVL_SPEED_M_S && value != INVALID_MARKER_M_S {
                 return Err(PairedError::DvlOutOfRange {
                     path: at.dvl.clone(),
                     line: at.dvl_lines[row],
@@ -267,6 +334,7 @@ mod tests {
         let samples = Unchecked {
             dvl_time_s: vec![0.0, 1.0, 2.0],
             dvl_m_s: vec![[1.0, 0.0, 0.0]; 3],
+            dvl_valid: None,
             reference_time_s: vec![0.0, 1.0, 2.0],
             velocity_ned_m_s: vec![[1.0, 0.0, 0.0]; 3],
             attitude: vec![[0.0, 0.0, 90.0], [0.0, 0.0, 100.0], [0.0, 0.0, 110.0]],
@@ -286,6 +354,8 @@ mod tests {
                 attitude: names(["roll", "pitch", "heading"]),
                 rate: None,
                 angles_in_degrees: true,
+                valid: None,
+                zero_is_valid: false,
             },
         };
         (samples, at)

@@ -23,6 +23,14 @@ pub struct PairedColumns {
     pub rate: Option<[String; 3]>,
     #[serde(default)]
     pub angles_in_degrees: bool,
+    /// The DVL's validity column, when it has one: 1 or `true` where the sample is
+    /// valid, 0 or `false` where it is not (lost bottom lock).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub valid: Option<String>,
+    /// Whether a DVL sample of exactly 0, 0, 0 is a vehicle at rest rather than a lost
+    /// bottom lock (what many DVLs and drivers send): off by default.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub zero_is_valid: bool,
 }
 
 impl PairedColumns {
@@ -41,6 +49,9 @@ impl PairedColumns {
             for (i, name) in names.into_iter().flatten().enumerate() {
                 named.push((format!("{key}[{i}]"), name));
             }
+        }
+        if let Some(valid) = &self.valid {
+            named.push(("valid".into(), valid));
         }
         named.iter().enumerate().find_map(|(i, (key, name))| {
             named[..i]
@@ -66,6 +77,8 @@ impl PairedColumns {
             attitude: names(["Roll [rad]", "Pitch [rad]", "Yaw [rad]"]),
             rate: None,
             angles_in_degrees: false,
+            valid: None,
+            zero_is_valid: false,
         }
     }
 }

@@ -25,8 +25,12 @@ pub fn parse(
     fn triple(names: &[String; 3], holds: Quantity) -> Vec<Column<'_>> {
         names.iter().map(|name| Column { name, holds }).collect()
     }
+    let validity = columns.valid.as_deref().map(|name| Column {
+        name,
+        holds: Quantity::Validity,
+    });
     let dvl_columns: Vec<Column> = std::iter::once(time)
-        .chain(triple(&columns.dvl, Quantity::Velocity))
+        .chain(triple(&columns.dvl, Quantity::MeasuredVelocity))
         .collect();
     let reference_columns: Vec<Column> = std::iter::once(time)
         .chain(triple(&columns.velocity_ned, Quantity::Velocity))
@@ -39,26 +43,30 @@ pub fn parse(
         )
         .collect();
     // The reference's values start after the time, or, in one file, after the time
-    // and the DVL's three.
+    // and the DVL's three; the DVL's validity flag, where there is one, is the last.
     let (dvl_rows, reference_rows, start, reference_path) = match reference {
         None => {
             let all: Vec<Column> = dvl_columns
                 .iter()
                 .chain(&reference_columns[1..])
+                .chain(&validity)
                 .copied()
                 .collect();
             let rows = parse_columns(dvl.0, dvl.1, &all)?;
             (rows.clone(), rows, 4, dvl.0)
         }
         Some((path, bytes)) => {
-            let dvl_rows = parse_columns(dvl.0, dvl.1, &dvl_columns)?;
+            let dvl_with_flag: Vec<Column> = dvl_columns.iter().chain(&validity).copied().collect();
+            let dvl_rows = parse_columns(dvl.0, dvl.1, &dvl_with_flag)?;
             let reference_rows = parse_columns(path, bytes, &reference_columns)?;
             (dvl_rows, reference_rows, 1, path)
         }
     };
+    let flag = dvl_rows.width - 1;
     let samples = Unchecked {
         dvl_time_s: dvl_rows.column(0).collect(),
         dvl_m_s: triples(&dvl_rows, 1),
+        dvl_valid: validity.map(|_| dvl_rows.column(flag).map(|v| v != 0.0).collect()),
         reference_time_s: reference_rows.column(0).collect(),
         velocity_ned_m_s: triples(&reference_rows, start),
         attitude: triples(&reference_rows, start + 3),

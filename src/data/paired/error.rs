@@ -3,7 +3,7 @@
 //! file, the line (the header is line 1) and the column. In: what a check found. Out:
 //! the message.
 
-use super::{MAX_BODY_RATE_RAD_S, MAX_DVL_SPEED_M_S, MIN_SAMPLES, TIME_TOLERANCE_S};
+use super::{LeftOutWhy, MAX_BODY_RATE_RAD_S, MAX_DVL_SPEED_M_S, MIN_SAMPLES};
 use crate::data::catalogue;
 use crate::data::csv::CsvError;
 use std::f64::consts::PI;
@@ -104,32 +104,29 @@ pub enum PairedError {
         degrees: bool,
     },
     #[error(
-        "{}: {dvl_samples} samples (lines 2 to {}), but {}: {reference_samples} (lines 2 to {}): the DVL and the reference need one row per time stamp each",
+        "{}: the DVL's stamps run from {} s to {} s, but {}: the reference's from {} s to {} s: they never overlap, so there is nothing to calibrate against (is one file's clock in other units, or the wrong file given?)",
         dvl.display(),
-        dvl_samples + 1,
+        dvl_span_s.0,
+        dvl_span_s.1,
         reference.display(),
-        reference_samples + 1
+        reference_span_s.0,
+        reference_span_s.1
     )]
-    Lengths {
+    NoOverlap {
         dvl: PathBuf,
-        dvl_samples: usize,
+        dvl_span_s: (f64, f64),
         reference: PathBuf,
-        reference_samples: usize,
+        reference_span_s: (f64, f64),
     },
     #[error(
-        "{}:{dvl_line}: {column}: {dvl_s} s, but {}:{reference_line} has {reference_s} s: the DVL and the reference must be on the same time stamps (within {} s)",
-        dvl.display(),
-        reference.display(),
-        TIME_TOLERANCE_S
+        "{}: {valid} valid DVL samples, {}: a calibration needs at least {MIN_SAMPLES} (the DVL lost bottom lock, or its validity column or zero_is_valid is set wrongly)",
+        path.display(),
+        left_out_words(left_out)
     )]
-    Times {
-        dvl: PathBuf,
-        dvl_line: u64,
-        reference: PathBuf,
-        reference_line: u64,
-        column: String,
-        dvl_s: f64,
-        reference_s: f64,
+    TooFewValid {
+        path: PathBuf,
+        valid: usize,
+        left_out: Vec<(LeftOutWhy, usize)>,
     },
     #[error(
         "{}: {samples} samples below the header: a recording of a DVL beside a reference needs at least {MIN_SAMPLES}",
@@ -170,4 +167,18 @@ fn degrees_hint(value: f64, degrees: bool) -> &'static str {
     } else {
         ""
     }
+}
+
+/// The DVL samples left out, in words: "4 left out: 3 with no velocity, 1 of exactly
+/// 0, 0, 0", or "none left out".
+pub fn left_out_words(counts: &[(LeftOutWhy, usize)]) -> String {
+    let total: usize = counts.iter().map(|(_, count)| count).sum();
+    if total == 0 {
+        return "none left out".to_string();
+    }
+    let each: Vec<String> = counts
+        .iter()
+        .map(|(why, count)| format!("{count} {}", why.words()))
+        .collect();
+    format!("{total} left out: {}", each.join(", "))
 }

@@ -20,11 +20,10 @@ mod error;
 mod source;
 
 pub use columns::{PairedColumns, PairedFiles};
-pub use error::PairedError;
+pub use error::{PairedError, left_out_words};
 pub use source::{Loaded, ReadRecording, Recordings, Source, SourceFile};
 
 use crate::Vec3;
-use std::ops::Range;
 
 /// The fewest samples a recording may have.
 pub const MIN_SAMPLES: usize = 3;
@@ -38,8 +37,68 @@ pub const MAX_DVL_SPEED_M_S: f64 = 20.0;
 /// not a vehicle's motion.
 pub const MAX_BODY_RATE_RAD_S: f64 = 2.0;
 
-/// How far apart the DVL's and the reference's time stamps of one row may be, seconds.
-pub const TIME_TOLERANCE_S: f64 = 1e-3;
+/// A gap in the reference longer than this many of its median sample intervals is not
+/// read across.
+pub const REFERENCE_GAP_INTERVALS: f64 = 3.0;
+
+/// How far from a reference gap a DVL sample is left out, s: the largest time offset a
+/// fit considers, so that no t + τ it tries falls in the gap.
+pub const GAP_MARGIN_S: f64 = 3.0;
+
+/// The velocity a Teledyne RDI DVL (PD0) sends for an axis it did not measure, m/s
+/// (−32768 mm/s).
+pub const INVALID_MARKER_M_S: f64 = -32.768;
+
+/// Why a DVL sample is left out of the recording, counted, never repaired: the DVL did
+/// not measure it (it lost bottom lock, mostly), or the reference has a gap where it
+/// would be read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum LeftOutWhy {
+    /// Its validity column says so.
+    Flagged,
+    /// A velocity cell empty or NaN.
+    NoVelocity,
+    /// The invalid marker, [`INVALID_MARKER_M_S`], on an axis.
+    Marker,
+    /// Exactly 0, 0, 0: what many DVLs and drivers send without bottom lock (unless
+    /// the recording says zero is a valid reading).
+    AllZero,
+    /// Stamped within [`GAP_MARGIN_S`] of a gap in the reference longer than
+    /// [`REFERENCE_GAP_INTERVALS`] of its median sample intervals: its t + τ may fall in
+    /// the gap, where the reference is not read.
+    ReferenceGap,
+}
+
+impl LeftOutWhy {
+    /// Every reason, in the order they are tested and reported.
+    pub const ALL: [LeftOutWhy; 5] = [
+        LeftOutWhy::Flagged,
+        LeftOutWhy::NoVelocity,
+        LeftOutWhy::Marker,
+        LeftOutWhy::AllZero,
+        LeftOutWhy::ReferenceGap,
+    ];
+
+    /// The reason in words, as a count of them reads it ("3 flagged invalid").
+    pub fn words(self) -> &'static str {
+        match self {
+            LeftOutWhy::Flagged => "flagged invalid",
+            LeftOutWhy::NoVelocity => "with no velocity",
+            LeftOutWhy::Marker => "with the invalid marker -32.768 m/s",
+            LeftOutWhy::AllZero => "of exactly 0, 0, 0",
+            LeftOutWhy::ReferenceGap => "beside a gap in the reference",
+        }
+    }
+}
+
+/// A DVL sample left out of a recording: its stamp, the line (or message) it came from,
+/// and why.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LeftOut {
+    pub time_s: f64,
+    pub line: u64,
+    pub why: LeftOutWhy,
+}
 
 /// The median interval between two samples, s (0 with fewer than two).
 pub fn sample_interval(time: &[f64]) -> f64 {
@@ -51,13 +110,21 @@ pub fn sample_interval(time: &[f64]) -> f64 {
     steps[steps.len() / 2]
 }
 
-/// One recording: the DVL as measured and the reference, on the same time stamps.
+/// One recording: the DVL as measured, on its own clock and at its own rate, and the
+/// reference, on its own.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PairedRecording {
-    /// Seconds, strictly increasing (the DVL file's).
+    /// The DVL's valid samples' stamps, seconds on its clock, strictly increasing.
     pub time_s: Vec<f64>,
-    /// The DVL's velocity in its body frame (x forward, y starboard, z down), m/s.
+    /// The DVL's velocity in its body frame (x forward, y starboard, z down), m/s, at
+    /// `time_s`.
     pub dvl_m_s: Vec<Vec3>,
+    /// The DVL's samples it did not measure, left out of `time_s` and `dvl_m_s`, in
+    /// the order of their stamps.
+    pub left_out: Vec<LeftOut>,
+    /// The reference's stamps, seconds on its clock, strictly increasing; the fields
+    /// below are on them.
+    pub reference_time_s: Vec<f64>,
     /// The reference's velocity, north, east, down, m/s.
     pub velocity_ned_m_s: Vec<Vec3>,
     /// Roll, pitch, yaw in radians, as recorded (yaw may wrap at ±π, or run on unwrapped).
@@ -84,23 +151,39 @@ impl PairedRecording {
         }
     }
 
-    /// The samples of `range`, which must lie within the recording (as for a slice).
-    pub fn slice(&self, range: Range<usize>) -> PairedRecording {
-        PairedRecording {
-            time_s: self.time_s[range.clone()].to_vec(),
-            dvl_m_s: self.dvl_m_s[range.clone()].to_vec(),
-            velocity_ned_m_s: self.velocity_ned_m_s[range.clone()].to_vec(),
-            attitude_rad: self.attitude_rad[range.clone()].to_vec(),
-            rate_rad_s: self.rate_rad_s.as_ref().map(|rate| rate[range].to_vec()),
-        }
+    /// How many DVL samples were left out for each reason, in [`LeftOutWhy::ALL`]'s order
+    /// (the reasons with none left out are not listed).
+    pub fn left_out_counts(&self) -> Vec<(LeftOutWhy, usize)> {
+        LeftOutWhy::ALL
+            .into_iter()
+            .map(|why| (why, self.left_out.iter().filter(|l| l.why == why).count()))
+            .filter(|&(_, count)| count > 0)
+            .collect()
     }
 
-    /// The samples stamped less than `window_s` after the first: the first
-    /// `window_s` seconds (all of it where the recording is shorter).
+    /// The samples, of the DVL and of the reference, stamped less than `window_s`
+    /// after the DVL's first valid sample: the first `window_s` seconds (all of it
+    /// where the recording is shorter).
     pub fn first_seconds(&self, window_s: f64) -> PairedRecording {
         let start = self.time_s.first().copied().unwrap_or_default();
-        let end = self.time_s.partition_point(|t| t - start < window_s);
-        self.slice(0..end)
+        let within = |time: &[f64]| time.partition_point(|t| t - start < window_s);
+        let (dvl_end, reference_end) = (within(&self.time_s), within(&self.reference_time_s));
+        let reference = 0..reference_end;
+        PairedRecording {
+            time_s: self.time_s[..dvl_end].to_vec(),
+            dvl_m_s: self.dvl_m_s[..dvl_end].to_vec(),
+            left_out: (self.left_out.iter())
+                .filter(|l| l.time_s - start < window_s)
+                .copied()
+                .collect(),
+            reference_time_s: self.reference_time_s[reference.clone()].to_vec(),
+            velocity_ned_m_s: self.velocity_ned_m_s[reference.clone()].to_vec(),
+            attitude_rad: self.attitude_rad[reference.clone()].to_vec(),
+            rate_rad_s: self
+                .rate_rad_s
+                .as_ref()
+                .map(|rate| rate[reference].to_vec()),
+        }
     }
 }
 
@@ -129,6 +212,8 @@ mod tests {
             attitude: names(["roll", "pitch", "yaw"]),
             rate: None,
             angles_in_degrees: false,
+            valid: None,
+            zero_is_valid: false,
         }
     }
 
@@ -211,8 +296,8 @@ mod tests {
         let text = "t,u,v,w,n,e,d,roll,pitch,yaw,p,q,r\n\
                     0,1,2,3,4,5,6,180,-90,-360,0,0,90\n\
                     5,1,2,3,4,5,6,0,45,270,0,0,-90\n\
-                    6,1,2,3,4,5,6,0,0,0,0,0,0\n\
-                    7,1,2,3,4,5,6,0,0,0,0,0,0\n";
+                    10,1,2,3,4,5,6,0,0,0,0,0,0\n\
+                    15,1,2,3,4,5,6,0,0,0,0,0,0\n";
         let recording = read_one(text, &columns).unwrap();
         assert_eq!(recording.dvl_m_s[0], [1.0, 2.0, 3.0]);
         assert_eq!(recording.velocity_ned_m_s[0], [4.0, 5.0, 6.0]);
@@ -225,9 +310,6 @@ mod tests {
         assert_eq!(first.time_s, vec![0.0, 5.0]);
         assert_eq!(first.rate_rad_s.as_ref().unwrap().len(), 2);
         assert_eq!(recording.first_seconds(100.0), recording);
-        let middle = recording.slice(1..3);
-        assert_eq!(middle.time_s, vec![5.0, 6.0]);
-        assert_eq!(middle.attitude_rad[0], recording.attitude_rad[1]);
     }
 
     #[test]
@@ -410,19 +492,117 @@ mod tests {
     }
 
     #[test]
-    fn a_dvl_and_a_reference_of_other_lengths_or_times_are_refused() {
-        let dvl = file(DVL_HEADER, DVL_ROWS, 4);
-        let gt = file(GT_HEADER, GT_ROWS, 4);
+    fn a_dvl_and_a_reference_each_on_its_own_stamps_and_rate_are_read_as_they_are() {
+        // The DVL at half the reference's rate, its clock 0.25 s off.
+        let dvl = "Time [s],DVL X [m/s],DVL Y [m/s],DVL Z [m/s]\n\
+                   0.25,1.5,0.1,-0.01\n1.25,2.5,0.1,-0.01\n2.25,3.5,0.1,-0.01\n";
+        let gt: String = (0..8)
+            .map(|i| {
+                format!(
+                    "{},0.6,0.57,-19.8,-1.9,-0.6,0.01,0.01,-0.02,{}\r\n",
+                    0.5 * f64::from(i),
+                    -3.0 + 0.1 * f64::from(i)
+                )
+            })
+            .collect();
+        let recording = read_two(dvl, &format!("{GT_HEADER}{gt}")).unwrap();
+        assert_eq!(recording.time_s, [0.25, 1.25, 2.25]);
+        assert_eq!(recording.reference_time_s.len(), 8);
+        assert_eq!(recording.reference_time_s[7], 3.5);
+        assert!(recording.left_out.is_empty());
+        // Never overlapping in time: refused, naming both spans.
+        let late = dvl
+            .replace("\n0.25,", "\n100.25,")
+            .replace("\n1.25,", "\n101.25,")
+            .replace("\n2.25,", "\n102.25,");
         assert_eq!(
-            read_two(&dvl, &file(GT_HEADER, GT_ROWS, 3)).unwrap_err(),
-            "DVL: 4 samples (lines 2 to 5), but GT: 3 (lines 2 to 4): the DVL and the reference need one row per time stamp each"
+            read_two(&late, &format!("{GT_HEADER}{gt}")).unwrap_err(),
+            "DVL: the DVL's stamps run from 100.25 s to 102.25 s, but GT: the reference's from 0 s to 3.5 s: they never overlap, so there is nothing to calibrate against (is one file's clock in other units, or the wrong file given?)"
         );
-        // Within 1 ms is the same time stamp; 2 ms apart is not.
-        assert!(read_two(&dvl, &gt.replace("\r\n1,", "\r\n1.0009,")).is_ok());
+    }
+
+    #[test]
+    fn the_samples_a_dvl_did_not_measure_are_left_out_each_with_its_line_and_reason() {
+        let mut columns = short_columns();
+        columns.valid = Some("ok".into());
+        let row = |t: u32, dvl: &str, ok: &str| format!("{t},{dvl},2,0,0,0,0,{}.0,{ok}\n", t);
+        let text = format!(
+            "t,u,v,w,n,e,d,roll,pitch,yaw,ok\n{}{}{}{}{}{}{}{}",
+            row(0, "2,0,0.1", "1"),
+            row(1, ",0,0.1", "1"),
+            row(2, "NaN,0,0.1", "true"),
+            row(3, "-32.768,0,0.1", "1"),
+            row(4, "0,0,0", "1"),
+            row(5, "2,0,0.1", "0"),
+            row(6, "2,0,0.1", "1"),
+            row(7, "2,0,0.1", "1"),
+        );
+        let recording = read_one(&text, &columns).unwrap();
+        assert_eq!(recording.time_s, [0.0, 6.0, 7.0]);
+        let left: Vec<(f64, u64, LeftOutWhy)> = recording
+            .left_out
+            .iter()
+            .map(|l| (l.time_s, l.line, l.why))
+            .collect();
         assert_eq!(
-            read_two(&dvl, &gt.replace("\r\n1,", "\r\n1.002,")).unwrap_err(),
-            "DVL:4: Time [s]: 1 s, but GT:4 has 1.002 s: the DVL and the reference must be on the same time stamps (within 0.001 s)"
+            left,
+            [
+                (1.0, 3, LeftOutWhy::NoVelocity),
+                (2.0, 4, LeftOutWhy::NoVelocity),
+                (3.0, 5, LeftOutWhy::Marker),
+                (4.0, 6, LeftOutWhy::AllZero),
+                (5.0, 7, LeftOutWhy::Flagged),
+            ]
         );
+        // The reference keeps every row: only the DVL lost its samples.
+        assert_eq!(recording.reference_time_s.len(), 8);
+        assert_eq!(
+            left_out_words(&recording.left_out_counts()),
+            "5 left out: 1 flagged invalid, 2 with no velocity, 1 with the invalid marker -32.768 m/s, 1 of exactly 0, 0, 0"
+        );
+        // A vehicle that truly stops: 0, 0, 0 is a reading.
+        columns.zero_is_valid = true;
+        assert_eq!(
+            read_one(&text, &columns).unwrap().time_s,
+            [0.0, 4.0, 6.0, 7.0]
+        );
+        // A flag that is not one, and too few valid samples, are refused.
+        assert_eq!(
+            read_one(&text.replace(",1\n", ",yes\n"), &columns).unwrap_err(),
+            "FILE:2: ok: \"yes\" is not a validity flag: give 1 or true for a valid sample, 0 or false for one that is not"
+        );
+        let dead = text.replace(",1\n", ",0\n");
+        assert_eq!(
+            read_one(&dead, &columns).unwrap_err(),
+            "FILE: 0 valid DVL samples, 8 left out: 7 flagged invalid, 1 with no velocity: a calibration needs at least 3 (the DVL lost bottom lock, or its validity column or zero_is_valid is set wrongly)"
+        );
+    }
+
+    #[test]
+    fn a_gap_in_the_reference_leaves_out_the_dvl_samples_beside_it() {
+        // The reference at 1 Hz with 10 s missing (from 20 s to 30 s); the DVL at 1 Hz
+        // throughout: the samples within 3 s of the gap (17 s to 33 s) are left out.
+        let gt: String = (0..60)
+            .filter(|t| !(21..30).contains(t))
+            .map(|t| {
+                format!(
+                    "{t},0.6,0.57,-19.8,-1.9,-0.6,0.01,0.01,-0.02,{}\r\n",
+                    -3.0 + 0.01 * f64::from(t)
+                )
+            })
+            .collect();
+        let dvl: String = (0..60).map(|t| format!("{t},1.5,0.1,-0.01\r\n")).collect();
+        let recording =
+            read_two(&format!("{DVL_HEADER}{dvl}"), &format!("{GT_HEADER}{gt}")).unwrap();
+        let left: Vec<f64> = recording.left_out.iter().map(|l| l.time_s).collect();
+        assert_eq!(left, (18..33).map(f64::from).collect::<Vec<_>>());
+        assert!(
+            recording
+                .left_out
+                .iter()
+                .all(|l| l.why == LeftOutWhy::ReferenceGap)
+        );
+        assert_eq!(recording.len(), 60 - 15);
     }
 
     #[test]

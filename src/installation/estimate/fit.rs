@@ -21,8 +21,9 @@ use nalgebra::storage::Owned;
 use nalgebra::{DMatrix, DVector, Dyn};
 
 /// The largest time offset a fit considers, s; also the margin of the fixed mask: the
-/// samples stamped within it of either end of the reference are not fitted.
-pub const TIME_OFFSET_MARGIN_S: f64 = 3.0;
+/// samples stamped within it of either end of the reference are not fitted (nor, as
+/// the recording is read, those within it of a gap in the reference).
+pub const TIME_OFFSET_MARGIN_S: f64 = crate::data::paired::GAP_MARGIN_S;
 
 /// The step of the scan over τ that gives LM its start, s: a quarter of A-KIT's 1 s
 /// sample period, so the scan's best lies in the basin of the best minimum.
@@ -160,7 +161,7 @@ pub fn reference_held(reference: &Reference, time_s: f64) -> ReferenceAt {
     let first = reference.time_s[0];
     let last = reference.time_s[reference.time_s.len() - 1];
     reference
-        .at(time_s.clamp(first, last))
+        .across_gaps(time_s.clamp(first, last))
         .expect("a time inside the reference")
 }
 

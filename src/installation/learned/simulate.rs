@@ -270,6 +270,8 @@ pub(crate) mod tests {
         let speed = |t: f64| 2.0 + 0.3 * (t / 11.0 + phase).sin();
         let recording = PairedRecording {
             dvl_m_s: vec![[0.0; 3]; time_s.len()],
+            left_out: Vec::new(),
+            reference_time_s: time_s.clone(),
             velocity_ned_m_s: time_s
                 .iter()
                 .map(|&t| {

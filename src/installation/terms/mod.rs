@@ -528,6 +528,8 @@ mod tests {
         let recording = PairedRecording {
             dvl_m_s: vec![[0.0; 3]; 50],
             time_s: time_s.clone(),
+            left_out: Vec::new(),
+            reference_time_s: time_s.clone(),
             velocity_ned_m_s: time_s
                 .iter()
                 .map(|t| [2.0 * (0.1 * t).cos(), 2.0 * (0.1 * t).sin(), 0.0])

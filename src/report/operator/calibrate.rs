@@ -5,6 +5,7 @@
 //! each recording's clock.
 //! In: a [`Calibration`] or a [`JointCalibration`]. Out: the text.
 
+use crate::data::paired::left_out_words;
 use crate::evaluate::calibration_time::tolerance_band;
 use crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S;
 use crate::installation::estimate::residual_noise::ResidualNoise;
@@ -61,8 +62,12 @@ fn printed_fit(calibration: &Calibration) -> String {
     }
     let shown = bound.residual_noise;
     let assumed = 100.0 * noise.per_axis_m_s();
+    let read = calibration.recorded + calibration.left_out.iter().map(|(_, n)| n).sum::<usize>();
     let mut text = format!(
-        "calibrated on {} samples (those {TIME_OFFSET_MARGIN_S} s inside the reference)\n{table}\n",
+        "read: the DVL's {read} samples, {} kept ({}), beside the reference's {} on its own stamps\ncalibrated on {} samples (those {TIME_OFFSET_MARGIN_S} s inside the reference)\n{table}\n",
+        calibration.recorded,
+        left_out_words(&calibration.left_out),
+        calibration.reference_samples,
         fitted.sample_count
     );
     let (level, correlation) = residual_noise(&shown);
