@@ -165,8 +165,8 @@ pub struct Calibration {
     /// the RMSE after and the corrected recording apply.
     pub applied: Installation,
     pub noise: Noise,
-    /// The samples scored (those [`TIME_OFFSET_MARGIN_S`] inside the reference) and
-    /// those recorded.
+    /// The samples scored (those [`TIME_OFFSET_MARGIN_S`] inside the reference, the
+    /// fit's outliers aside) and those recorded.
     pub scored: usize,
     pub recorded: usize,
     /// The DVL samples left out of the recording as it was read, per reason, and the
@@ -201,6 +201,9 @@ struct Read {
     dvl_sha256: String,
     reference: Reference,
     scored: Range<usize>,
+    /// The samples of `scored` the fit found outliers (see [`Read::without_outliers`]),
+    /// which no score counts.
+    outliers: Vec<usize>,
     window: Option<PairedRecording>,
 }
 
@@ -209,16 +212,41 @@ impl Read {
         self.window.as_ref().unwrap_or(&self.recording)
     }
 
-    /// The RMSE `installation` leaves on the samples scored.
+    /// The RMSE `installation` leaves on the samples scored, outliers aside.
     fn score(&self, installation: &Installation) -> Option<AxisRmse> {
         let recording = &self.recording;
+        let kept = self
+            .scored
+            .clone()
+            .filter(|i| self.outliers.binary_search(i).is_err());
         score(
             installation,
             &recording.time_s,
             &recording.dvl_m_s,
             &self.reference,
-            self.scored.clone(),
+            kept,
         )
+    }
+
+    /// This read with the samples scored whose residual under `fitted`'s terms is an
+    /// outlier by its robust loss set aside.
+    fn without_outliers(mut self, fitted: &Fit) -> Read {
+        let Some(robust) = fitted.robust else {
+            return self;
+        };
+        let recording = &self.recording;
+        self.outliers = self
+            .scored
+            .clone()
+            .filter(|&i| {
+                let t = recording.time_s[i] + fitted.installation.time_offset_s;
+                self.reference.at(t).is_some_and(|at| {
+                    let predicted = fitted.installation.predict(at);
+                    robust.is_outlier([0, 1, 2].map(|k| recording.dvl_m_s[i][k] - predicted[k]))
+                })
+            })
+            .collect();
+        self
     }
 }
 
@@ -247,6 +275,7 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     outputs.not_another_recordings(args.dvl, &recording_sha256)?;
     let terms = term_set(args.terms);
     let fitted = fit_terms(args, &read, terms)?;
+    let read = read.without_outliers(&fitted);
     let noise = Noise {
         dvl_m_s: args.dvl_noise_cm_s / 100.0,
         reference_m_s: args.reference_noise_cm_s / 100.0,
@@ -282,7 +311,7 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
         asked,
         applied,
         noise,
-        scored: read.scored.len(),
+        scored: read.scored.len() - read.outliers.len(),
         recorded: read.recording.time_s.len(),
         left_out: read.recording.left_out_counts(),
         reference_samples: read.recording.reference_time_s.len(),
@@ -466,6 +495,7 @@ fn read(args: &CalibrateArgs) -> Result<Read, CalibrateError> {
         dvl_sha256,
         reference,
         scored,
+        outliers: Vec::new(),
         window,
     })
 }

@@ -1,7 +1,8 @@
 //! Intervals that cover the truth. A DVL of a known installation is simulated over a
 //! reference (the synthetic trajectories of `common::installed` on any clone, the
 //! A-KIT references where the recordings are), with white noise and with AR(1) noise
-//! of correlation 0.8 at 1 s, fitted once per seed with every term; each term's 95 %
+//! of correlation 0.8 at 1 s, each also with 3 % of its samples spiked by 50 cm/s on
+//! one axis (the robust loss's case), fitted once per seed with every term; each term's 95 %
 //! interval, ±1.96 of the standard deviation the fit reports from its residuals, must
 //! hold the truth in 93–97 % of the seeds. The Fisher bound at the specified noise,
 //! given the true level and twice it, is counted beside it: it covers only where its
@@ -78,9 +79,38 @@ fn simulated(
         .unzip()
 }
 
+/// The gross outliers of a coverage case: a share of the samples with a spike of
+/// ±[`OUTLIER_M_S`] on one axis (acoustic multipath).
+const OUTLIER_M_S: f64 = 0.5;
+
+/// `dvl` with each sample, at the chance `share`, spiked by ±[`OUTLIER_M_S`] on one
+/// axis drawn at random.
+fn with_outliers(
+    mut dvl: Vec<[f64; 3]>,
+    share: f64,
+    rng: &mut rand_chacha::ChaCha8Rng,
+) -> Vec<[f64; 3]> {
+    use rand::RngExt;
+    for sample in &mut dvl {
+        if rng.random::<f64>() < share {
+            let axis = rng.random_range(0..3);
+            sample[axis] += if rng.random::<bool>() {
+                OUTLIER_M_S
+            } else {
+                -OUTLIER_M_S
+            };
+        }
+    }
+    dvl
+}
+
 /// One fit per seed of a DVL simulated on `segments[seed % len]` with noise of
-/// correlation `correlation_at_1_s`.
-fn coverage(segments: &[Recording], correlation_at_1_s: f64, seeds: u64) -> Coverage {
+/// correlation `correlation_at_1_s`, a share `outliers` of its samples spiked.
+fn coverage(
+    segments: &[Recording],
+    (correlation_at_1_s, outliers): (f64, f64),
+    seeds: u64,
+) -> Coverage {
     let names = EVERY_TERM.parameter_names();
     let truth = TRUTH.to_parameters(&EVERY_TERM);
     let covered = |value: f64, std: f64, k: usize| (value - truth[k]).abs() <= 1.96 * std;
@@ -90,6 +120,7 @@ fn coverage(segments: &[Recording], correlation_at_1_s: f64, seeds: u64) -> Cove
             let segment = &segments[seed as usize % segments.len()];
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
             let (time_s, dvl) = simulated(segment, &TRUTH, correlation_at_1_s, &mut rng);
+            let dvl = with_outliers(dvl, outliers, &mut rng);
             let fitted = fit(&time_s, &dvl, &segment.reference, EVERY_TERM).expect("a fit");
             let at = |level: f64| {
                 bound(
@@ -140,11 +171,25 @@ fn segments(files: &[PairedFiles]) -> Vec<Recording> {
         .collect()
 }
 
-/// Prints the tables and checks that the honest intervals cover in 93–97 % of seeds.
-fn check(label: &str, segments: &[Recording], seeds: u64) {
+/// The noise of each coverage case: its name, the AR(1) correlation at 1 s and the
+/// share of samples spiked.
+const NOISES: [(&str, (f64, f64)); 2] = [("white", (0.0, 0.0)), ("AR(1) 0.8 at 1 s", (0.8, 0.0))];
+
+/// [`NOISES`] with 3 % of the samples spiked by 50 cm/s: the robust loss's cases.
+const SPIKED: [(&str, (f64, f64)); 2] = [
+    ("white, 3 % of samples spiked by 50 cm/s", (0.0, 0.03)),
+    (
+        "AR(1) 0.8 at 1 s, 3 % of samples spiked by 50 cm/s",
+        (0.8, 0.03),
+    ),
+];
+
+/// Prints the tables and checks that the honest intervals cover in 93–97 % of seeds,
+/// for each of `noises`.
+fn check(label: &str, segments: &[Recording], seeds: u64, noises: &[(&str, (f64, f64))]) {
     let mut outside = Vec::new();
-    for (kind, correlation) in [("white", 0.0), ("AR(1) 0.8 at 1 s", 0.8)] {
-        let c = coverage(segments, correlation, seeds);
+    for &(kind, noise) in noises {
+        let c = coverage(segments, noise, seeds);
         println!("{label}, {kind} noise of {NOISE_M_S} m/s, {seeds} seeds:");
         println!("| term | honest σ | bound at the true noise | bound at twice it |");
         println!("|---|---|---|---|");
@@ -170,7 +215,8 @@ fn honest_intervals_cover_the_truth_on_synthetic_trajectories() {
     let dir = tempfile::tempdir().unwrap();
     installed::write_installed(dir.path(), 4, &[], installed::INSTALLED, 1);
     let files: Vec<PairedFiles> = (1..=4).map(|n| PairedFiles::akit(dir.path(), n)).collect();
-    check("synthetic trajectories", &segments(&files), SEEDS);
+    let every: Vec<_> = NOISES.into_iter().chain(SPIKED).collect();
+    check("synthetic trajectories", &segments(&files), SEEDS, &every);
 }
 
 #[test]
@@ -182,7 +228,7 @@ fn honest_intervals_cover_the_truth_over_the_akit_references() {
     let files: Vec<PairedFiles> = (1..=11)
         .map(|n| PairedFiles::akit(Path::new(&akit), n))
         .collect();
-    check("A-KIT references", &segments(&files), SEEDS);
+    check("A-KIT references", &segments(&files), SEEDS, &NOISES);
 }
 
 /// The time offset of a DVL that reads the true continuous motion (the synthetic

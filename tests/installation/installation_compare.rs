@@ -94,7 +94,7 @@ fn two_studies_differing_in_noise_and_a_window_are_compared_side_by_side() {
     // show, which the specified noise does not change (it moves the bound only).
     has("| term            | A      | seen on | B      | seen on | B − A |");
     has("| lever arm x (m) | -1.89  | 3       | -1.89  | 3       | 0     |");
-    has("| time offset (s) | 0.644  | 1       | 0.644  | 1       | 0     |");
+    has("| time offset (s) | 0.643  | 1       | 0.643  | 1       | 0     |");
     has("0 of 4 method and window pairs differ with 95 % intervals that do not overlap");
 }
 

@@ -373,7 +373,7 @@ mod tests {
         fast.dvl_m_s[2][1] = 25.0;
         assert_eq!(
             check(fast, &at).unwrap_err().to_string(),
-            "message.bag:30: vy: 25 m/s is beyond 20 m/s, faster than any vehicle a DVL rides: a DVL's bad-velocity marker (Teledyne RDI writes -32.768) or a unit other than m/s; remove the row or mark it in the recording's own way before calibrating"
+            "message.bag:30: vy: 25 m/s is beyond 20 m/s, faster than any vehicle a DVL rides: another vendor's bad-velocity marker or a unit other than m/s; mark the sample invalid (an empty cell, or the validity column) or give the velocity in m/s"
         );
         let mut back = good;
         back.reference_time_s[2] = 0.5;

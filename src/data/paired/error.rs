@@ -28,7 +28,7 @@ pub enum PairedError {
         previous_s: f64,
     },
     #[error(
-        "{}:{line}: {column}: {} m/s is beyond {MAX_DVL_SPEED_M_S} m/s, faster than any vehicle a DVL rides: a DVL's bad-velocity marker (Teledyne RDI writes -32.768) or a unit other than m/s; remove the row or mark it in the recording's own way before calibrating",
+        "{}:{line}: {column}: {} m/s is beyond {MAX_DVL_SPEED_M_S} m/s, faster than any vehicle a DVL rides: another vendor's bad-velocity marker or a unit other than m/s; mark the sample invalid (an empty cell, or the validity column) or give the velocity in m/s",
         path.display(),
         crate::Shown(*value)
     )]

@@ -209,7 +209,7 @@ struct UnitInformation {
 impl UnitInformation {
     /// Of `fit`'s `n` terms.
     fn of(fit: &Fit, n: usize) -> UnitInformation {
-        let normal = fit.jacobian.transpose() * &fit.jacobian;
+        let normal = fit.information();
         let scale: Vec<f64> = (0..n).map(|k| normal[(k, k)].sqrt()).collect();
         let felt: Vec<usize> = (0..n).filter(|&k| scale[k] > 0.0).collect();
         let unit = DMatrix::from_fn(felt.len(), felt.len(), |a, b| {
@@ -367,6 +367,9 @@ mod tests {
             parameters: vec![0.0; columns.len()],
             jacobian: DMatrix::from_fn(rows, columns.len(), |r, c| columns[c][r]),
             residuals: nalgebra::DVector::from_vec(residuals),
+            curvature: None,
+            robust: None,
+            outliers: 0,
             residual_rms_m_s: [0.0; 3],
             sample_count: rows / 3,
             termination: "test".into(),

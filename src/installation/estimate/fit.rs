@@ -11,9 +11,13 @@
 //! from the best of a scan over ±[`TIME_OFFSET_MARGIN_S`] in steps of
 //! [`TIME_OFFSET_SCAN_STEP_S`], with the other terms solved at each step. The Jacobian
 //! is analytic; its τ column is the reference's slope (a central difference of the
-//! linear interpolation, [`SLOPE_STEP_S`] each side).
+//! linear interpolation, [`SLOPE_STEP_S`] each side). From the least-squares solution,
+//! the fit goes on under a robust loss ([`super::robust`]: Huber's, then Tukey's), so
+//! that outliers pull nothing; its residuals are then the M-estimator's
+//! pseudo-residuals and its `curvature` the bread's weights.
 
 use crate::Vec3;
+use crate::installation::estimate::robust::{Loss, Robust, scales};
 use crate::installation::frames::{Reference, ReferenceAt};
 use crate::installation::terms::{Installation, TermSet};
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
@@ -56,14 +60,42 @@ pub struct Fit {
     /// sample by sample, x, y, z within a sample.
     pub jacobian: DMatrix<f64>,
     /// The residuals v_dvl − predict at the solution, x, y, z of each sample in order,
-    /// m/s.
+    /// m/s; under a robust loss, its pseudo-residuals σ · ψ(r / σ) (an outlier's is
+    /// zero), whose spread is the meat of the sandwich.
     pub residuals: DVector<f64>,
+    /// Under a robust loss, ψ′ of each residual: the weights D of the information
+    /// JᵀDJ ([`Fit::information`]); `None` for least squares (every weight 1).
+    pub curvature: Option<DVector<f64>>,
+    /// Under a robust loss, its loss and each axis's scale, m/s.
+    pub robust: Option<Robust>,
+    /// The samples with a residual component the robust loss rejected (beyond
+    /// [`TUKEY_C`](super::robust::TUKEY_C) scales): the outliers.
+    pub outliers: usize,
     /// The RMS of the residual v_dvl − predict per DVL axis, m/s.
     pub residual_rms_m_s: Vec3,
     /// How many DVL samples were fitted (those inside the fixed mask).
     pub sample_count: usize,
     /// How LM stopped ("none" when nothing was estimated).
     pub termination: String,
+}
+
+impl Fit {
+    /// The information JᵀDJ of the fitted terms: the bread of the sandwich (JᵀJ for
+    /// least squares).
+    pub fn information(&self) -> DMatrix<f64> {
+        self.jacobian.transpose() * self.curved(&self.jacobian)
+    }
+
+    /// D · `rows` (rows as the Jacobian's), D the robust loss's curvature (`rows`
+    /// itself for least squares).
+    pub fn curved(&self, rows: &DMatrix<f64>) -> DMatrix<f64> {
+        match &self.curvature {
+            None => rows.clone(),
+            Some(weights) => {
+                DMatrix::from_fn(rows.nrows(), rows.ncols(), |i, j| weights[i] * rows[(i, j)])
+            }
+        }
+    }
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -79,6 +111,11 @@ pub enum FitError {
         parameters: usize,
         margin_s: f64,
     },
+    #[error(
+        "{outliers} of the {samples} samples fitted have a residual beyond {} scales of the rest: more than a quarter are outliers, so the recording does not show its installation (a DVL reading another vehicle's motion, or the wrong reference)",
+        super::robust::TUKEY_C
+    )]
+    Outliers { outliers: usize, samples: usize },
     #[error("the fit did not converge: {termination}")]
     NotConverged { termination: String },
     #[error(
@@ -194,6 +231,8 @@ struct Problem<'a> {
     terms: TermSet,
     base: Installation,
     parameters: DVector<f64>,
+    /// The robust loss minimised, where not least squares.
+    robust: Option<Robust>,
 }
 
 impl Problem<'_> {
@@ -210,7 +249,23 @@ impl Problem<'_> {
         slope_held(self.reference, time_s)
     }
 
+    /// The residuals LM minimises: v_dvl − predict, or under a robust loss their
+    /// transform whose squares sum to 2 Σ ρ.
     fn residual_vector(&self) -> DVector<f64> {
+        let raw = self.raw_residuals();
+        match self.robust {
+            None => raw,
+            Some(robust) => DVector::from_fn(raw.len(), |i, _| {
+                let axis = i % 3;
+                robust
+                    .loss
+                    .residual(robust.scaled(raw[i], axis), robust.scale_m_s[axis])
+            }),
+        }
+    }
+
+    /// v_dvl − predict, x, y, z of each sample in order, m/s.
+    fn raw_residuals(&self) -> DVector<f64> {
         let installation = self.installation();
         let mut residuals = DVector::zeros(3 * self.time_s.len());
         for (i, (&t, dvl)) in self.time_s.iter().zip(self.dvl_m_s).enumerate() {
@@ -222,7 +277,20 @@ impl Problem<'_> {
         residuals
     }
 
+    /// The Jacobian of [`Self::residual_vector`].
     fn jacobian_matrix(&self) -> DMatrix<f64> {
+        let mut jacobian = self.raw_jacobian();
+        if let Some(robust) = self.robust {
+            let raw = self.raw_residuals();
+            for (i, mut row) in jacobian.row_iter_mut().enumerate() {
+                row *= robust.loss.slope(robust.scaled(raw[i], i % 3));
+            }
+        }
+        jacobian
+    }
+
+    /// ∂(v_dvl − predict)/∂θ, rows as [`Fit::jacobian`]'s.
+    fn raw_jacobian(&self) -> DMatrix<f64> {
         let installation = self.installation();
         let mut jacobian = DMatrix::zeros(3 * self.time_s.len(), self.terms.parameter_count());
         for (i, &t) in self.time_s.iter().enumerate() {
@@ -331,6 +399,7 @@ pub fn fit_about(
         terms,
         base,
         parameters: DVector::from_vec(base.to_parameters(&terms)),
+        robust: None,
     };
 
     let (solved, termination) = if parameter_count == 0 {
@@ -342,9 +411,9 @@ pub fn fit_about(
             terms,
             base,
         )?;
-        minimize(problem(terms, start))?
+        robustly(minimize(problem(terms, start))?)?
     } else {
-        minimize(problem(terms, base))?
+        robustly(minimize(problem(terms, base))?)?
     };
 
     let installation = solved.installation();
@@ -354,18 +423,65 @@ pub fn fit_about(
             margin_s: TIME_OFFSET_MARGIN_S,
         });
     }
-    let sample_count = mask.len();
-    let residuals = solved.residual_vector();
+    solution(solved, termination, mask.len())
+}
+
+/// The fit of the solved `problem` over its `sample_count` samples: its raw residuals'
+/// RMS, and under a robust loss its pseudo-residuals, curvature and outliers (more
+/// than a quarter of them refused).
+fn solution(
+    solved: Problem<'_>,
+    termination: String,
+    sample_count: usize,
+) -> Result<Fit, FitError> {
+    let (terms, installation) = (solved.terms, solved.installation());
+    let raw = solved.raw_residuals();
+    let residual_rms_m_s = residual_rms(&raw, sample_count);
+    let (residuals, curvature, outliers) = match solved.robust {
+        None => (raw, None, 0),
+        Some(robust) => (
+            robust.pseudo_residuals(&raw),
+            Some(robust.curvature(&raw)),
+            robust.outliers(&raw),
+        ),
+    };
+    if 4 * outliers > sample_count {
+        return Err(FitError::Outliers {
+            outliers,
+            samples: sample_count,
+        });
+    }
     Ok(Fit {
         terms,
         installation,
         parameters: installation.to_parameters(&terms),
-        jacobian: solved.jacobian_matrix(),
-        residual_rms_m_s: residual_rms(&residuals, sample_count),
+        jacobian: solved.raw_jacobian(),
+        residual_rms_m_s,
         residuals,
+        curvature,
+        robust: solved.robust,
+        outliers,
         sample_count,
         termination,
     })
+}
+
+/// From the least-squares solution `(solved, termination)`, LM under Huber's loss,
+/// then under Tukey's from there, each with the scales of the residuals it starts
+/// from; least squares where the residuals have no scale (a noise-free record).
+fn robustly(
+    (solved, termination): (Problem<'_>, String),
+) -> Result<(Problem<'_>, String), FitError> {
+    let mut current = (solved, termination);
+    for loss in [Loss::Huber, Loss::Tukey] {
+        let Some(scale_m_s) = scales(&current.0.raw_residuals()) else {
+            return Ok(current);
+        };
+        let mut next = current.0;
+        next.robust = Some(Robust { loss, scale_m_s });
+        current = minimize(next)?;
+    }
+    Ok(current)
 }
 
 /// Where Levenberg–Marquardt starts when τ is free: the best of the scan over `base`'s
@@ -388,6 +504,7 @@ fn scan_start(
         terms,
         base,
         parameters: DVector::from_vec(base.to_parameters(&terms)),
+        robust: None,
     };
     scan_time_offset(&scanned, terms, base)
 }
@@ -409,6 +526,7 @@ pub fn linearised(
         terms,
         base: installation,
         parameters: DVector::from_vec(installation.to_parameters(&terms)),
+        robust: None,
     };
     (problem.residual_vector(), problem.jacobian_matrix())
 }
@@ -438,6 +556,7 @@ pub fn jacobian_at(
         terms,
         base: installation,
         parameters: DVector::from_vec(installation.to_parameters(&terms)),
+        robust: None,
     }
     .jacobian_matrix()
 }

@@ -280,6 +280,9 @@ pub fn joint_fit(
         sample_count: residuals.len() / 3,
         jacobian,
         residuals,
+        curvature: None,
+        robust: None,
+        outliers: 0,
         termination: "joint".into(),
     };
     let bound = bound(&stacked, noise, tolerances);
@@ -397,6 +400,9 @@ fn dive_standard_deviations(
                 sample_count: b.residuals.len() / 3,
                 jacobian: b.dive.clone(),
                 residuals: b.residuals.clone(),
+                curvature: None,
+                robust: None,
+                outliers: 0,
                 termination: "joint".into(),
             };
             let given = bound(&own, noise, tolerances).std;

@@ -43,7 +43,7 @@ pub fn asked_for(
     noise: &ResidualNoise,
 ) -> Vec<Asked> {
     let fitted_names = fit.terms.parameter_names();
-    let normal = fit.jacobian.transpose() * &fit.jacobian;
+    let normal = fit.information();
     let size = normal.nrows();
     let inverse = normal
         .clone()
@@ -123,8 +123,10 @@ fn left_out(terms: TermSet) -> Vec<(&'static str, TermSet)> {
     kinds
 }
 
-/// The score test of adding `columns` to `fit` (whose (JᵀJ)⁺ is `inverse`) under
-/// `noise`: its χ² and p-value; `None` where their covariance cannot be inverted.
+/// The score test of adding `columns` to `fit` (whose (JᵀDJ)⁺ is `inverse`, D its
+/// robust loss's curvature) under `noise`: its χ² and p-value; `None` where their
+/// covariance cannot be inverted. The columns are taken apart from the fitted ones by
+/// the D-weighted projection, the score from the fit's (pseudo-)residuals.
 fn score_test(
     fit: &Fit,
     columns: &DMatrix<f64>,
@@ -134,7 +136,7 @@ fn score_test(
     let apart = if fit.jacobian.ncols() == 0 {
         columns.clone()
     } else {
-        columns - &fit.jacobian * (inverse * (fit.jacobian.transpose() * columns))
+        columns - &fit.jacobian * (inverse * (fit.jacobian.transpose() * fit.curved(columns)))
     };
     let score = columns.transpose() * &fit.residuals;
     let covariance = noise.weighted_information(&apart);

@@ -1,5 +1,5 @@
 //! The terms estimated from a paired recording, in data-flow order: [`fit`] fits the
-//! selected terms by nonlinear least squares; [`residual_noise`] reads the noise its
+//! selected terms by nonlinear least squares, then under [`robust`]'s loss; [`residual_noise`] reads the noise its
 //! residuals show; [`bound`] gives their standard deviations and the Fisher bound, and
 //! the terms a recording cannot show; [`missing`] the terms left out that the residuals
 //! still ask for; [`clock`] finds a dive's clock again with the rest carried; [`joint`]
@@ -10,6 +10,7 @@
 //! terms with their standard deviations.
 
 pub mod fit;
+pub mod robust;
 pub mod residual_noise;
 pub mod bound;
 pub mod missing;

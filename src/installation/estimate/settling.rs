@@ -133,6 +133,7 @@ mod tests {
             installation,
             std: Vec::new(),
             bound_std: Vec::new(),
+            gated: false,
         }
     }
 

@@ -26,7 +26,6 @@ use crate::Vec3;
 use crate::installation::frames::{Mat3, Reference, ReferenceAt, apply, body_to_ned, cross};
 use crate::vocab::ErrorModel;
 use misalignment::misalignment_matrix;
-use std::ops::Range;
 
 /// How a scale or a bias is estimated: not at all, one for all axes, or one per axis.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -365,9 +364,9 @@ pub fn score(
     time_s: &[f64],
     dvl_m_s: &[Vec3],
     reference: &Reference,
-    samples: Range<usize>,
+    samples: impl IntoIterator<Item = usize>,
 ) -> Option<AxisRmse> {
-    AxisRmse::of_errors(samples.filter_map(|i| {
+    AxisRmse::of_errors(samples.into_iter().filter_map(|i| {
         let at = reference.at(time_s[i] + installation.time_offset_s)?;
         let corrected = installation.correct(dvl_m_s[i], at.rate_rad_s);
         Some([0, 1, 2].map(|k| corrected[k] - at.velocity_body_m_s[k]))

@@ -7,8 +7,10 @@
 
 use crate::data::paired::left_out_words;
 use crate::evaluate::calibration_time::tolerance_band;
+use crate::installation::estimate::filter::GATE_CHI2;
 use crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S;
 use crate::installation::estimate::residual_noise::ResidualNoise;
+use crate::installation::estimate::robust::TUKEY_C;
 use crate::installation::estimate::settling::SettlingPoint;
 use crate::installation::terms::AxisRmse;
 use crate::operator::calibrate::Calibration;
@@ -64,11 +66,12 @@ fn printed_fit(calibration: &Calibration) -> String {
     let assumed = 100.0 * noise.per_axis_m_s();
     let read = calibration.recorded + calibration.left_out.iter().map(|(_, n)| n).sum::<usize>();
     let mut text = format!(
-        "read: the DVL's {read} samples, {} kept ({}), beside the reference's {} on its own stamps\ncalibrated on {} samples (those {TIME_OFFSET_MARGIN_S} s inside the reference)\n{table}\n",
+        "read: the DVL's {read} samples, {} kept ({}), beside the reference's {} on its own stamps\ncalibrated on {} samples (those {TIME_OFFSET_MARGIN_S} s inside the reference), {} of them outliers (a residual component beyond {TUKEY_C} scales of the rest), given no weight\n{table}\n",
         calibration.recorded,
         left_out_words(&calibration.left_out),
         calibration.reference_samples,
-        fitted.sample_count
+        fitted.sample_count,
+        fitted.outliers
     );
     let (level, correlation) = residual_noise(&shown);
     text.push_str(&format!(
@@ -92,7 +95,7 @@ fn printed_fit(calibration: &Calibration) -> String {
         ));
     }
     text.push_str(&format!(
-        "RMSE against the reference, body frame, on the {} of {} samples {TIME_OFFSET_MARGIN_S} s inside it: {} before, {} after",
+        "RMSE against the reference, body frame, on the {} of {} samples {TIME_OFFSET_MARGIN_S} s inside it, outliers aside: {} before, {} after",
         calibration.scored,
         calibration.recorded,
         printed_rmse(calibration.before),
@@ -127,9 +130,11 @@ fn printed_settling(calibration: &Calibration) -> String {
         return "the Kalman filter took no sample: none lies inside the reference".into();
     };
     let shown = shown_points(calibration, all);
+    let gated = calibration.filter.steps.iter().filter(|s| s.gated).count();
     let mut text = format!(
-        "the Kalman filter over the same samples, its terms constant, starting at zero with standard deviations {}; its terms after each length, ± its standard deviation (from the noise its residuals show so far, as the fit's):\n{}\n",
+        "the Kalman filter over the same samples, its terms constant, starting at zero with standard deviations {}, {gated} of {} samples gated as outliers (innovation beyond χ²₃ {GATE_CHI2} at the specified noise); its terms after each length, ± its standard deviation (from the noise its residuals show so far, as the fit's):\n{}\n",
         priors(calibration).join(", "),
+        calibration.filter.steps.len(),
         settling_table(calibration, &shown, all)
     );
     text.push_str(&verdict(calibration, all));
