@@ -147,10 +147,15 @@ pub(super) struct CalibrateArgs {
     #[arg(long)]
     pub(super) reference: Vec<PathBuf>,
     /// A TOML file whose [columns] table names the columns (time, dvl, velocity_ned,
-    /// attitude, rate, angles_in_degrees), as an installation spec's
+    /// attitude, rate, angles_in_degrees, valid, zero_is_valid), as an installation spec's
     /// [recordings.columns] does
     #[arg(long)]
     pub(super) columns: Option<PathBuf>,
+    /// The DVL's validity column, where it has one: 1 or true for a valid sample, 0 or
+    /// false for one it did not measure (left out and counted); as `valid` in the
+    /// --columns table
+    #[arg(long, value_name = "NAME")]
+    pub(super) valid_column: Option<String>,
     /// The terms to estimate: scale, scale_per_axis, misalignment, lever_arm,
     /// time_offset, bias, bias_scalar
     #[arg(
@@ -202,6 +207,9 @@ pub(super) struct CorrectArgs {
     /// A TOML file whose [columns] table names the columns, as for calibrate
     #[arg(long)]
     pub(super) columns: Option<PathBuf>,
+    /// The DVL's validity column, where it has one, as for calibrate
+    #[arg(long, value_name = "NAME")]
+    pub(super) valid_column: Option<String>,
     /// The first SECONDS of the dive that find its clock again; scored after them
     #[arg(
         long,

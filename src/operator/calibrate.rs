@@ -7,7 +7,7 @@
 //! In: [`CalibrateArgs`]. Out: a [`Calibration`], everything the command prints, or a
 //! [`CalibrateError`] that names the argument, file or step at fault.
 
-use crate::data::paired::{LeftOutWhy, PairedError, PairedRecording, Source};
+use crate::data::paired::{PairedError, PairedRecording, ReadCounts, Source};
 use crate::installation::estimate::bound::{Noise, TermBound, Why, bound};
 use crate::installation::estimate::filter::{FilterSettings, run_filter};
 use crate::installation::estimate::fit::{
@@ -37,6 +37,9 @@ pub struct CalibrateArgs<'a> {
     pub reference: Option<&'a Path>,
     /// A TOML file whose `[columns]` table names the columns; A-KIT's when `None`.
     pub columns: Option<&'a Path>,
+    /// The DVL's validity column, where the command line names one (over the
+    /// columns file's `valid`).
+    pub valid_column: Option<&'a str>,
     pub terms: &'a [TermName],
     /// Calibrate on the first this many seconds only.
     pub window_s: Option<f64>,
@@ -169,10 +172,8 @@ pub struct Calibration {
     /// fit's outliers aside) and those recorded.
     pub scored: usize,
     pub recorded: usize,
-    /// The DVL samples left out of the recording as it was read, per reason, and the
-    /// reference's samples (on its own stamps).
-    pub left_out: Vec<(LeftOutWhy, usize)>,
-    pub reference_samples: usize,
+    /// How many samples the recording read, kept and left out.
+    pub read: ReadCounts,
     /// The RMSE against the reference on the scored samples with no terms and with the
     /// fit's; `None` with no sample to score.
     pub before: Option<AxisRmse>,
@@ -313,8 +314,7 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
         noise,
         scored: read.scored.len() - read.outliers.len(),
         recorded: read.recording.time_s.len(),
-        left_out: read.recording.left_out_counts(),
-        reference_samples: read.recording.reference_time_s.len(),
+        read: read.recording.counts(),
         before,
         after,
         settings,
@@ -482,7 +482,7 @@ fn beyond_memory(dvl: &Path, rows: usize, have: f64) -> Option<CalibrateError> {
 
 /// The recording of `args`, its reference, and its window where one is asked.
 fn read(args: &CalibrateArgs) -> Result<Read, CalibrateError> {
-    let columns = columns(args.columns).map_err(CalibrateError::Columns)?;
+    let columns = columns(args.columns, args.valid_column).map_err(CalibrateError::Columns)?;
     let source = Source::csv(args.dvl, args.reference, columns);
     let read = source.read()?;
     let dvl_sha256 = read.dvl_sha256().to_string();
@@ -620,6 +620,7 @@ mod tests {
             dvl,
             reference: Some(reference),
             columns: None,
+            valid_column: None,
             terms,
             window_s: None,
             dvl_noise_cm_s: 2.0,

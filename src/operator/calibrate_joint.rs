@@ -9,7 +9,7 @@
 //! In: [`JointArgs`]. Out: a [`JointCalibration`], or the [`CalibrateError`] of the
 //! recording at fault.
 
-use crate::data::paired::{Loaded, PairedRecording, Source};
+use crate::data::paired::{Loaded, PairedRecording, ReadCounts, Source};
 use crate::evaluate::statistics::mean_std;
 use crate::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise, TermBound, bound};
 use crate::installation::estimate::clock::DEFAULT_SEARCH_S;
@@ -30,6 +30,9 @@ pub struct JointArgs<'a> {
     /// One per DVL file, or none where each DVL file holds its reference.
     pub references: &'a [PathBuf],
     pub columns: Option<&'a Path>,
+    /// The DVL's validity column, where the command line names one (over the
+    /// columns file's `valid`).
+    pub valid_column: Option<&'a str>,
     pub terms: &'a [TermName],
     pub dive_terms: &'a [TermName],
     pub window_s: Option<f64>,
@@ -53,6 +56,8 @@ pub struct Agreement {
 /// Everything a joint `calibrate` found and wrote.
 pub struct JointCalibration {
     pub names: Vec<String>,
+    /// How many samples each recording read, kept and left out.
+    pub reads: Vec<ReadCounts>,
     pub joint: JointFit,
     /// Each recording alone: its fit's bound.
     pub alone: Vec<TermBound>,
@@ -132,6 +137,10 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
             })?;
     }
     Ok(JointCalibration {
+        reads: recordings
+            .iter()
+            .map(|(recording, ..)| recording.counts())
+            .collect(),
         agreement: agreement(&joint, &alone),
         names,
         joint,
@@ -157,7 +166,7 @@ fn names(dvls: &[std::path::PathBuf]) -> Vec<String> {
 
 /// Each recording of `args`: its DVL's file beside its reference's, or the DVL's own.
 fn sources(args: &JointArgs) -> Result<Vec<Source>, CalibrateError> {
-    let columns = columns(args.columns).map_err(CalibrateError::Columns)?;
+    let columns = columns(args.columns, args.valid_column).map_err(CalibrateError::Columns)?;
     let source = |(k, dvl): (usize, &PathBuf)| {
         let reference = args.references.get(k).map(|r| r.as_path());
         Source::csv(dvl, reference, columns.clone())

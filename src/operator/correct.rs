@@ -9,7 +9,7 @@
 //! In: [`CorrectArgs`]. Out: a [`Correction`], or a [`CorrectError`] naming the file
 //! and what to do; nothing is written unless everything before the writing succeeded.
 
-use crate::data::paired::{PairedError, PairedRecording, Source};
+use crate::data::paired::{PairedError, PairedRecording, ReadCounts, Source};
 use crate::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise};
 use crate::installation::estimate::clock::{Carried, Clock, ClockError, ClockSearch, refind};
 use crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S;
@@ -32,6 +32,9 @@ pub struct CorrectArgs<'a> {
     /// The reference's file; the DVL's own when `None`.
     pub reference: Option<&'a Path>,
     pub columns: Option<&'a Path>,
+    /// The DVL's validity column, where the command line names one (over the
+    /// columns file's `valid`).
+    pub valid_column: Option<&'a str>,
     pub installation: &'a Path,
     /// The first seconds of the dive that find its clock again.
     pub window_s: f64,
@@ -120,6 +123,8 @@ pub struct Correction {
     pub search_s: f64,
     pub installation_file: PathBuf,
     pub written: Vec<PathBuf>,
+    /// How many samples the dive read, kept and left out.
+    pub read: ReadCounts,
 }
 
 impl Correction {
@@ -161,7 +166,7 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
     if let Some((output, input)) = not_over_an_input(&inputs, &outputs.all()) {
         return Err(CorrectError::OverInput { output, input });
     }
-    let columns = columns(args.columns).map_err(CorrectError::Columns)?;
+    let columns = columns(args.columns, args.valid_column).map_err(CorrectError::Columns)?;
     let source = Source::csv(args.dvl, args.reference, columns);
     let loaded = source.load()?;
     let recording_sha256 = loaded.dvl_sha256().to_string();
@@ -216,6 +221,7 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
         search_s: args.search_s,
         installation_file: args.installation.to_path_buf(),
         written,
+        read: recording.counts(),
     })
 }
 

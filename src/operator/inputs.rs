@@ -34,17 +34,30 @@ pub fn not_over_an_input(
     None
 }
 
-/// The columns of `path`'s `[columns]` table, or A-KIT's.
-pub fn columns(path: Option<&Path>) -> Result<PairedColumns, SpecError> {
+/// The columns of `path`'s `[columns]` table, or A-KIT's, with the DVL's validity
+/// column `valid` where the command line names one (`--valid-column`).
+pub fn columns(path: Option<&Path>, valid: Option<&str>) -> Result<PairedColumns, SpecError> {
     #[derive(serde::Deserialize)]
     #[serde(deny_unknown_fields)]
     struct ColumnsFile {
         columns: PairedColumns,
     }
     let Some(path) = path else {
-        return Ok(PairedColumns::akit());
+        let mut columns = PairedColumns::akit();
+        columns.valid = valid.map(String::from);
+        return match columns.named_twice() {
+            Some((_, why)) => Err(SpecError {
+                location: "--valid-column".into(),
+                key: String::new(),
+                message: why,
+            }),
+            None => Ok(columns),
+        };
     };
-    let file = TomlFile::<ColumnsFile>::read(path)?;
+    let mut file = TomlFile::<ColumnsFile>::read(path)?;
+    if let Some(valid) = valid {
+        file.value.columns.valid = Some(valid.to_string());
+    }
     if let Some((key, why)) = file.value.columns.named_twice() {
         let fault = file.fault(&format!("columns.{key}"), why);
         return Err(fault);

@@ -1110,3 +1110,63 @@ fn a_time_offset_beyond_the_scan_is_refused_naming_the_scan() {
     assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
     assert!(stderr(&output).contains("±3 s"), "{}", stderr(&output));
 }
+
+/// A DVL's own validity column, named on the command line: the samples it flags are
+/// left out and counted, the rest calibrated; a column named for two quantities is
+/// refused.
+#[test]
+fn calibrate_leaves_out_what_the_dvls_validity_column_flags_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_installed(&d.join("data/syn"), 1, &[], INSTALLED, 3);
+    let dvl = d.join("data/syn/Trajectory1/DVL_trajectory1.csv");
+    let text = std::fs::read_to_string(&dvl).unwrap();
+    let flagged: String = text
+        .lines()
+        .enumerate()
+        .map(|(i, line)| match i {
+            0 => format!("{line},ok\n"),
+            // Rows 101 to 110 flagged: a lost bottom lock whose velocity the DVL still
+            // sent, garbage.
+            101..=110 => {
+                let time = line.split(',').next().unwrap();
+                format!("{time},9,9,9,0\n")
+            }
+            _ => format!("{line},1\n"),
+        })
+        .collect();
+    std::fs::write(d.join("flagged.csv"), flagged).unwrap();
+    let calibrate = |valid: &str, out: &str| {
+        dcnet(
+            d,
+            &[
+                "calibrate",
+                "flagged.csv",
+                "--reference",
+                "data/syn/Trajectory1/GT_trajectory1.csv",
+                "--valid-column",
+                valid,
+                "--out",
+                out,
+            ],
+        )
+    };
+    let output = calibrate("ok", "flagged");
+    assert!(output.status.success(), "{}", stderr(&output));
+    let printed = stdout(&output);
+    assert!(
+        printed.contains("read: the DVL's 400 samples, 390 kept (10 left out: 10 flagged invalid)"),
+        "{printed}"
+    );
+    // The garbage rows left out, the fit is the clean one's: no outlier among the rest.
+    assert!(printed.contains(", 0 of them outliers"), "{printed}");
+    let output = calibrate("DVL X [m/s]", "twice");
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(
+        stderr(&output)
+            .contains("--valid-column: \"DVL X [m/s]\" is named for another quantity too"),
+        "{}",
+        stderr(&output)
+    );
+    assert!(!d.join("twice").exists());
+}

@@ -91,6 +91,29 @@ impl LeftOutWhy {
     }
 }
 
+/// How many samples a recording read: the DVL's kept, those left out per reason, and
+/// the reference's. Shown as `the DVL's 400 samples, 370 kept (30 left out: 30 with no
+/// velocity), beside the reference's 4000 on its own stamps`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReadCounts {
+    pub kept: usize,
+    pub left_out: Vec<(LeftOutWhy, usize)>,
+    pub reference: usize,
+}
+
+impl std::fmt::Display for ReadCounts {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let read = self.kept + self.left_out.iter().map(|(_, n)| n).sum::<usize>();
+        write!(
+            f,
+            "the DVL's {read} samples, {} kept ({}), beside the reference's {} on its own stamps",
+            self.kept,
+            left_out_words(&self.left_out),
+            self.reference
+        )
+    }
+}
+
 /// A DVL sample left out of a recording: its stamp, the line (or message) it came from,
 /// and why.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -148,6 +171,15 @@ impl PairedRecording {
         match (self.time_s.first(), self.time_s.last()) {
             (Some(first), Some(last)) => last - first,
             _ => 0.0,
+        }
+    }
+
+    /// How many samples it read, kept and left out.
+    pub fn counts(&self) -> ReadCounts {
+        ReadCounts {
+            kept: self.len(),
+            left_out: self.left_out_counts(),
+            reference: self.reference_time_s.len(),
         }
     }
 

@@ -5,7 +5,6 @@
 //! each recording's clock.
 //! In: a [`Calibration`] or a [`JointCalibration`]. Out: the text.
 
-use crate::data::paired::left_out_words;
 use crate::evaluate::calibration_time::tolerance_band;
 use crate::installation::estimate::filter::GATE_CHI2;
 use crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S;
@@ -64,14 +63,9 @@ fn printed_fit(calibration: &Calibration) -> String {
     }
     let shown = bound.residual_noise;
     let assumed = 100.0 * noise.per_axis_m_s();
-    let read = calibration.recorded + calibration.left_out.iter().map(|(_, n)| n).sum::<usize>();
     let mut text = format!(
-        "read: the DVL's {read} samples, {} kept ({}), beside the reference's {} on its own stamps\ncalibrated on {} samples (those {TIME_OFFSET_MARGIN_S} s inside the reference), {} of them outliers (a residual component beyond {TUKEY_C} scales of the rest), given no weight\n{table}\n",
-        calibration.recorded,
-        left_out_words(&calibration.left_out),
-        calibration.reference_samples,
-        fitted.sample_count,
-        fitted.outliers
+        "read: {}\ncalibrated on {} samples (those {TIME_OFFSET_MARGIN_S} s inside the reference), {} of them outliers (a residual component beyond {TUKEY_C} scales of the rest), given no weight\n{table}\n",
+        calibration.read, fitted.sample_count, fitted.outliers
     );
     let (level, correlation) = residual_noise(&shown);
     text.push_str(&format!(
@@ -250,7 +244,12 @@ pub fn joint_text(calibration: &JointCalibration) -> String {
     let bound = &joint.bound;
     let table = vehicle_table(calibration);
     let samples: usize = joint.sample_counts.iter().sum();
-    let mut text = format!(
+    let mut text: String = names
+        .iter()
+        .zip(&calibration.reads)
+        .map(|(name, read)| format!("read {name}: {read}\n"))
+        .collect();
+    text += &format!(
         "calibrated jointly on {} recordings, {samples} samples (those {TIME_OFFSET_MARGIN_S} s inside each reference): the vehicle's terms shared, each recording's {} its own\n{table}\n",
         names.len(),
         joint.dive_terms.parameter_names().join(", ")

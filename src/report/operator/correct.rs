@@ -13,7 +13,8 @@ pub fn correction_text(correction: &Correction) -> String {
     let saved = &correction.saved;
     let table = applied_table(correction);
     let mut text = format!(
-        "installation of {} (calibrated on {}) applied\n{table}\n",
+        "read: {}\ninstallation of {} (calibrated on {}) applied\n{table}\n",
+        correction.read,
         correction.installation_file.display(),
         saved.recording
     );
