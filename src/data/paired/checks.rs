@@ -11,8 +11,8 @@
 
 use super::{
     GAP_MARGIN_S, INVALID_MARKER_M_S, LeftOut, LeftOutWhy, MAX_BODY_RATE_RAD_S, MAX_DVL_SPEED_M_S,
-    MIN_SAMPLES, PairedColumns, PairedError, PairedRecording, REFERENCE_GAP_INTERVALS,
-    sample_interval,
+    MIN_KEPT_SHARE, MIN_SAMPLES, PairedColumns, PairedError, PairedRecording,
+    REFERENCE_GAP_INTERVALS, sample_interval,
 };
 use crate::Vec3;
 use std::f64::consts::PI;
@@ -165,10 +165,19 @@ pub fn check(samples: Unchecked, at: &Locator) -> Result<PairedRecording, Paired
     check_overlap(&samples, at)?;
     check_dvl_speed(&samples, at)?;
     let recording = samples.into_recording(at);
+    let read = recording.len() + recording.left_out.len();
     if recording.len() < MIN_SAMPLES {
         return Err(PairedError::TooFewValid {
             path: at.dvl.clone(),
             valid: recording.len(),
+            left_out: recording.left_out_counts(),
+        });
+    }
+    if (recording.len() as f64) < MIN_KEPT_SHARE * read as f64 {
+        return Err(PairedError::MostlyLeftOut {
+            path: at.dvl.clone(),
+            kept: recording.len(),
+            read,
             left_out: recording.left_out_counts(),
         });
     }

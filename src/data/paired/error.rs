@@ -129,6 +129,17 @@ pub enum PairedError {
         left_out: Vec<(LeftOutWhy, usize)>,
     },
     #[error(
+        "{}: {kept} of the DVL's {read} samples kept, {}: under a quarter, so what is left does not stand for the dive; check the validity column and zero_is_valid, or cut the recording to where the DVL held bottom lock",
+        path.display(),
+        left_out_words(left_out)
+    )]
+    MostlyLeftOut {
+        path: PathBuf,
+        kept: usize,
+        read: usize,
+        left_out: Vec<(LeftOutWhy, usize)>,
+    },
+    #[error(
         "{}: {samples} samples below the header: a recording of a DVL beside a reference needs at least {MIN_SAMPLES}",
         path.display()
     )]

@@ -37,6 +37,11 @@ pub const MAX_DVL_SPEED_M_S: f64 = 20.0;
 /// not a vehicle's motion.
 pub const MAX_BODY_RATE_RAD_S: f64 = 2.0;
 
+/// The smallest share of a DVL's samples a recording must keep: below it the DVL
+/// mostly did not measure (or its validity column, or `zero_is_valid`, is read wrongly),
+/// and what is left does not stand for the dive.
+pub const MIN_KEPT_SHARE: f64 = 0.25;
+
 /// A gap in the reference longer than this many of its median sample intervals is not
 /// read across.
 pub const REFERENCE_GAP_INTERVALS: f64 = 3.0;
@@ -602,6 +607,18 @@ mod tests {
         assert_eq!(
             read_one(&text.replace(",1\n", ",yes\n"), &columns).unwrap_err(),
             "FILE:2: ok: \"yes\" is not a validity flag: give 1 or true for a valid sample, 0 or false for one that is not"
+        );
+        // Three of thirteen kept: under a quarter is refused, with what to check.
+        let mostly: String = (0..13)
+            .map(|t| row(t, "2,0,0.1", if t < 2 || t == 12 { "1" } else { "0" }))
+            .collect();
+        assert_eq!(
+            read_one(
+                &format!("t,u,v,w,n,e,d,roll,pitch,yaw,ok\n{mostly}"),
+                &columns
+            )
+            .unwrap_err(),
+            "FILE: 3 of the DVL's 13 samples kept, 10 left out: 10 flagged invalid: under a quarter, so what is left does not stand for the dive; check the validity column and zero_is_valid, or cut the recording to where the DVL held bottom lock"
         );
         let dead = text.replace(",1\n", ",0\n");
         assert_eq!(
