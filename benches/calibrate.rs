@@ -48,6 +48,7 @@ fn main() {
             dvl: &dvl,
             reference: Some(&reference),
             columns: None,
+            valid_column: None,
             terms: &terms,
             window_s: None,
             dvl_noise_cm_s: 2.0,
