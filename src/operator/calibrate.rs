@@ -232,7 +232,7 @@ impl Read {
     /// This read with the samples scored whose residual under `fitted`'s terms is an
     /// outlier by its robust loss set aside.
     fn without_outliers(mut self, fitted: &Fit) -> Read {
-        let Some(robust) = fitted.robust else {
+        let Some(robust) = fitted.robust.as_ref().map(|r| r.loss) else {
             return self;
         };
         let recording = &self.recording;

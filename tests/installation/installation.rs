@@ -472,7 +472,6 @@ fn a_dvl_and_a_reference_at_their_own_rates_on_their_own_clocks_give_the_terms_b
         ..truth()
     };
     let dir = tempfile::tempdir().unwrap();
-    let mut seed = 20;
     // Seeds 41 to 49, one a pair of rates: 63 checks at three standard deviations,
     // each failing once in 370 by chance; the errors over all of them are N(0, 1),
     // as checked below.

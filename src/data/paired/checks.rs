@@ -75,18 +75,16 @@ impl Unchecked {
         let longest_gap_s = REFERENCE_GAP_INTERVALS * sample_interval(&self.reference_time_s);
         for row in 0..self.dvl_time_s.len() {
             let stamp = self.dvl_time_s[row];
-            match self.invalid(row, at.names.zero_is_valid) {
+            let why = self.invalid(row, at.names.zero_is_valid).or_else(|| {
+                beside_a_gap(&self.reference_time_s, longest_gap_s, stamp)
+                    .then_some(LeftOutWhy::ReferenceGap)
+            });
+            match why {
                 Some(why) => left_out.push(LeftOut {
                     time_s: stamp,
                     line: at.dvl_lines[row],
                     why,
                 }),
-                None if beside_a_gap(&self.reference_time_s, longest_gap_s, stamp) => left_out
-                    .push(LeftOut {
-                        time_s: stamp,
-                        line: at.dvl_lines[row],
-                        why: LeftOutWhy::ReferenceGap,
-                    }),
                 None => {
                     time_s.push(stamp);
                     dvl_m_s.push(self.dvl_m_s[row]);
@@ -165,20 +163,17 @@ pub fn check(samples: Unchecked, at: &Locator) -> Result<PairedRecording, Paired
     check_overlap(&samples, at)?;
     check_dvl_speed(&samples, at)?;
     let recording = samples.into_recording(at);
-    let read = recording.len() + recording.left_out.len();
-    if recording.len() < MIN_SAMPLES {
+    let counts = recording.counts();
+    if counts.kept < MIN_SAMPLES {
         return Err(PairedError::TooFewValid {
             path: at.dvl.clone(),
-            valid: recording.len(),
-            left_out: recording.left_out_counts(),
+            counts,
         });
     }
-    if (recording.len() as f64) < MIN_KEPT_SHARE * read as f64 {
+    if (counts.kept as f64) < MIN_KEPT_SHARE * counts.read() as f64 {
         return Err(PairedError::MostlyLeftOut {
             path: at.dvl.clone(),
-            kept: recording.len(),
-            read,
-            left_out: recording.left_out_counts(),
+            counts,
         });
     }
     Ok(recording)

@@ -3,7 +3,7 @@
 //! file, the line (the header is line 1) and the column. In: what a check found. Out:
 //! the message.
 
-use super::{LeftOutWhy, MAX_BODY_RATE_RAD_S, MAX_DVL_SPEED_M_S, MIN_SAMPLES};
+use super::{LeftOutWhy, MAX_BODY_RATE_RAD_S, MAX_DVL_SPEED_M_S, MIN_SAMPLES, ReadCounts};
 use crate::data::catalogue;
 use crate::data::csv::CsvError;
 use std::f64::consts::PI;
@@ -119,26 +119,20 @@ pub enum PairedError {
         reference_span_s: (f64, f64),
     },
     #[error(
-        "{}: {valid} valid DVL samples, {}: a calibration needs at least {MIN_SAMPLES} (the DVL lost bottom lock, or its validity column or zero_is_valid is set wrongly)",
+        "{}: {} valid DVL samples, {}: a calibration needs at least {MIN_SAMPLES} (the DVL lost bottom lock, or its validity column or zero_is_valid is set wrongly)",
         path.display(),
-        left_out_words(left_out)
+        counts.kept,
+        left_out_words(&counts.left_out)
     )]
-    TooFewValid {
-        path: PathBuf,
-        valid: usize,
-        left_out: Vec<(LeftOutWhy, usize)>,
-    },
+    TooFewValid { path: PathBuf, counts: ReadCounts },
     #[error(
-        "{}: {kept} of the DVL's {read} samples kept, {}: under a quarter, so what is left does not stand for the dive; check the validity column and zero_is_valid, or cut the recording to where the DVL held bottom lock",
+        "{}: {} of the DVL's {} samples kept, {}: under a quarter, so what is left does not stand for the dive; check the validity column and zero_is_valid, or cut the recording to where the DVL held bottom lock",
         path.display(),
-        left_out_words(left_out)
+        counts.kept,
+        counts.read(),
+        left_out_words(&counts.left_out)
     )]
-    MostlyLeftOut {
-        path: PathBuf,
-        kept: usize,
-        read: usize,
-        left_out: Vec<(LeftOutWhy, usize)>,
-    },
+    MostlyLeftOut { path: PathBuf, counts: ReadCounts },
     #[error(
         "{}: {samples} samples below the header: a recording of a DVL beside a reference needs at least {MIN_SAMPLES}",
         path.display()

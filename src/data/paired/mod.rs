@@ -106,12 +106,19 @@ pub struct ReadCounts {
     pub reference: usize,
 }
 
+impl ReadCounts {
+    /// How many DVL samples were read: those kept and those left out.
+    pub fn read(&self) -> usize {
+        self.kept + self.left_out.iter().map(|(_, n)| n).sum::<usize>()
+    }
+}
+
 impl std::fmt::Display for ReadCounts {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let read = self.kept + self.left_out.iter().map(|(_, n)| n).sum::<usize>();
         write!(
             f,
-            "the DVL's {read} samples, {} kept ({}), beside the reference's {} on its own stamps",
+            "the DVL's {} samples, {} kept ({}), beside the reference's {} on its own stamps",
+            self.read(),
             self.kept,
             left_out_words(&self.left_out),
             self.reference

@@ -17,7 +17,7 @@
 //! pseudo-residuals and its `curvature` the bread's weights.
 
 use crate::Vec3;
-use crate::installation::estimate::robust::{Loss, Robust, scales};
+use crate::installation::estimate::robust::{Loss, Robust, RobustFit, scales};
 use crate::installation::frames::{Reference, ReferenceAt};
 use crate::installation::terms::{Installation, TermSet};
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
@@ -63,14 +63,10 @@ pub struct Fit {
     /// m/s; under a robust loss, its pseudo-residuals σ · ψ(r / σ) (an outlier's is
     /// zero), whose spread is the meat of the sandwich.
     pub residuals: DVector<f64>,
-    /// Under a robust loss, ψ′ of each residual: the weights D of the information
-    /// JᵀDJ ([`Fit::information`]); `None` for least squares (every weight 1).
-    pub curvature: Option<DVector<f64>>,
-    /// Under a robust loss, its loss and each axis's scale, m/s.
-    pub robust: Option<Robust>,
-    /// The samples with a residual component the robust loss rejected (beyond
-    /// [`TUKEY_C`](super::robust::TUKEY_C) scales): the outliers.
-    pub outliers: usize,
+    /// Under a robust loss, the loss and what it made of the residuals: the weights D
+    /// of the information JᵀDJ ([`Fit::information`]) and the outliers; `None` for
+    /// least squares (every weight 1, no outlier).
+    pub robust: Option<RobustFit>,
     /// The RMS of the residual v_dvl − predict per DVL axis, m/s.
     pub residual_rms_m_s: Vec3,
     /// How many DVL samples were fitted (those inside the fixed mask).
@@ -89,12 +85,17 @@ impl Fit {
     /// D · `rows` (rows as the Jacobian's), D the robust loss's curvature (`rows`
     /// itself for least squares).
     pub fn curved(&self, rows: &DMatrix<f64>) -> DMatrix<f64> {
-        match &self.curvature {
+        match &self.robust {
             None => rows.clone(),
-            Some(weights) => {
-                DMatrix::from_fn(rows.nrows(), rows.ncols(), |i, j| weights[i] * rows[(i, j)])
-            }
+            Some(robust) => DMatrix::from_fn(rows.nrows(), rows.ncols(), |i, j| {
+                robust.curvature[i] * rows[(i, j)]
+            }),
         }
+    }
+
+    /// The samples the robust loss rejected as outliers (none for least squares).
+    pub fn outliers(&self) -> usize {
+        self.robust.as_ref().map_or(0, |r| r.outliers)
     }
 }
 
@@ -279,9 +280,8 @@ impl Problem<'_> {
 
     /// The Jacobian of [`Self::residual_vector`].
     fn jacobian_matrix(&self) -> DMatrix<f64> {
-        let mut jacobian = self.raw_jacobian();
+        let (raw, mut jacobian) = self.raw_linearised();
         if let Some(robust) = self.robust {
-            let raw = self.raw_residuals();
             for (i, mut row) in jacobian.row_iter_mut().enumerate() {
                 row *= robust.loss.slope(robust.scaled(raw[i], i % 3));
             }
@@ -289,24 +289,28 @@ impl Problem<'_> {
         jacobian
     }
 
-    /// ∂(v_dvl − predict)/∂θ, rows as [`Fit::jacobian`]'s.
-    fn raw_jacobian(&self) -> DMatrix<f64> {
+    /// v_dvl − predict (as [`Self::raw_residuals`]) and its Jacobian ∂(v_dvl −
+    /// predict)/∂θ (rows as [`Fit::jacobian`]'s), from one reading of the reference
+    /// per sample.
+    fn raw_linearised(&self) -> (DVector<f64>, DMatrix<f64>) {
         let installation = self.installation();
+        let mut residuals = DVector::zeros(3 * self.time_s.len());
         let mut jacobian = DMatrix::zeros(3 * self.time_s.len(), self.terms.parameter_count());
-        for (i, &t) in self.time_s.iter().enumerate() {
+        for (i, (&t, dvl)) in self.time_s.iter().zip(self.dvl_m_s).enumerate() {
             let time_s = t + installation.time_offset_s;
-            let columns = installation.predict_jacobian(
-                &self.terms,
-                self.reference_at(time_s),
-                self.slope_at(time_s),
-            );
+            let at = self.reference_at(time_s);
+            let columns = installation.predict_jacobian(&self.terms, at, self.slope_at(time_s));
+            let predicted = installation.predict(at);
+            for k in 0..3 {
+                residuals[3 * i + k] = dvl[k] - predicted[k];
+            }
             for (column, derivative) in columns.iter().enumerate() {
                 for k in 0..3 {
                     jacobian[(3 * i + k, column)] = -derivative[k];
                 }
             }
         }
-        jacobian
+        (residuals, jacobian)
     }
 
     fn cost(&self) -> f64 {
@@ -435,16 +439,14 @@ fn solution(
     sample_count: usize,
 ) -> Result<Fit, FitError> {
     let (terms, installation) = (solved.terms, solved.installation());
-    let raw = solved.raw_residuals();
+    let (raw, jacobian) = solved.raw_linearised();
     let residual_rms_m_s = residual_rms(&raw, sample_count);
-    let (residuals, curvature, outliers) = match solved.robust {
-        None => (raw, None, 0),
-        Some(robust) => (
-            robust.pseudo_residuals(&raw),
-            Some(robust.curvature(&raw)),
-            robust.outliers(&raw),
-        ),
+    let robust = solved.robust.map(|loss| loss.fitted(&raw));
+    let residuals = match solved.robust {
+        None => raw,
+        Some(loss) => loss.pseudo_residuals(&raw),
     };
+    let outliers = robust.as_ref().map_or(0, |r| r.outliers);
     if 4 * outliers > sample_count {
         return Err(FitError::Outliers {
             outliers,
@@ -455,12 +457,10 @@ fn solution(
         terms,
         installation,
         parameters: installation.to_parameters(&terms),
-        jacobian: solved.raw_jacobian(),
+        jacobian,
         residual_rms_m_s,
         residuals,
-        curvature,
-        robust: solved.robust,
-        outliers,
+        robust,
         sample_count,
         termination,
     })
@@ -528,7 +528,7 @@ pub fn linearised(
         parameters: DVector::from_vec(installation.to_parameters(&terms)),
         robust: None,
     };
-    (problem.residual_vector(), problem.jacobian_matrix())
+    problem.raw_linearised()
 }
 
 /// The samples a fit about a time offset of `centre_s` fits: those whose t + τ lies

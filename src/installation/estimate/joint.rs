@@ -280,9 +280,7 @@ pub fn joint_fit(
         sample_count: residuals.len() / 3,
         jacobian,
         residuals,
-        curvature: None,
         robust: None,
-        outliers: 0,
         termination: "joint".into(),
     };
     let bound = bound(&stacked, noise, tolerances);
@@ -400,9 +398,7 @@ fn dive_standard_deviations(
                 sample_count: b.residuals.len() / 3,
                 jacobian: b.dive.clone(),
                 residuals: b.residuals.clone(),
-                curvature: None,
                 robust: None,
-                outliers: 0,
                 termination: "joint".into(),
             };
             let given = bound(&own, noise, tolerances).std;

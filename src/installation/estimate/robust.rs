@@ -90,6 +90,16 @@ impl Loss {
     }
 }
 
+/// What a fit under a robust loss keeps of it: the loss with its scales, ψ′ of each
+/// residual (the weights D of the information JᵀDJ, x, y, z of each sample), and how
+/// many samples are outliers.
+#[derive(Debug, Clone)]
+pub struct RobustFit {
+    pub loss: Robust,
+    pub curvature: DVector<f64>,
+    pub outliers: usize,
+}
+
 /// A robust loss with each axis's scale, m/s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Robust {
@@ -109,6 +119,16 @@ impl Robust {
         r / self.scale_m_s[axis]
     }
 
+    /// What this loss makes of a fit's `residuals` (x, y, z of each sample): their
+    /// curvature and outliers.
+    pub fn fitted(&self, residuals: &DVector<f64>) -> RobustFit {
+        RobustFit {
+            loss: *self,
+            curvature: self.curvature(residuals),
+            outliers: self.outliers(residuals),
+        }
+    }
+
     /// The pseudo-residuals σ · ψ(u) of `residuals` (x, y, z of each sample).
     pub fn pseudo_residuals(&self, residuals: &DVector<f64>) -> DVector<f64> {
         DVector::from_fn(residuals.len(), |i, _| {
@@ -118,7 +138,7 @@ impl Robust {
     }
 
     /// ψ′(u) of each of `residuals`: the bread's weights.
-    pub fn curvature(&self, residuals: &DVector<f64>) -> DVector<f64> {
+    fn curvature(&self, residuals: &DVector<f64>) -> DVector<f64> {
         DVector::from_fn(residuals.len(), |i, _| {
             self.loss.psi_prime(self.scaled(residuals[i], i % 3))
         })
@@ -126,7 +146,7 @@ impl Robust {
 
     /// How many samples have a residual component beyond [`TUKEY_C`] scales: the
     /// outliers, which pull nothing under Tukey's loss.
-    pub fn outliers(&self, residuals: &DVector<f64>) -> usize {
+    fn outliers(&self, residuals: &DVector<f64>) -> usize {
         (0..residuals.len() / 3)
             .filter(|&s| self.is_outlier([0, 1, 2].map(|k| residuals[3 * s + k])))
             .count()

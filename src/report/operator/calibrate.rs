@@ -65,7 +65,9 @@ fn printed_fit(calibration: &Calibration) -> String {
     let assumed = 100.0 * noise.per_axis_m_s();
     let mut text = format!(
         "read: {}\ncalibrated on {} samples (those {TIME_OFFSET_MARGIN_S} s inside the reference), {} of them outliers (a residual component beyond {TUKEY_C} scales of the rest), given no weight\n{table}\n",
-        calibration.read, fitted.sample_count, fitted.outliers
+        calibration.read,
+        fitted.sample_count,
+        fitted.outliers()
     );
     let (level, correlation) = residual_noise(&shown);
     text.push_str(&format!(
