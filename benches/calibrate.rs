@@ -4,7 +4,10 @@
 //! (`run --no-plots` of two such recordings, each calibrated and scored on the other,
 //! its least squares and Kalman filter) on the same lengths. Prints the seconds of each
 //! and the seconds per 100,000 rows, which stays flat where the cost is linear in the
-//! recording's length.
+//! recording's length. With `-- --rates`, a case of its own instead: a ten-hour dive
+//! with the DVL at 10 Hz (360,000 samples) beside a reference at 100 Hz (3,600,000
+//! rows) in two files, `calibrate` alone, with the process's peak resident memory
+//! (Linux's VmHWM, which counts the synthetic files' writing too).
 
 #[allow(dead_code)]
 #[path = "../tests/common/installed.rs"]
@@ -12,20 +15,18 @@ mod installed;
 
 use dcnet_exp::installation::terms::names::TermName;
 use dcnet_exp::operator::calibrate::{CalibrateArgs, calibrate};
+use dcnet_exp::operator::inputs::Reading;
 use std::time::Instant;
 
 fn main() {
+    if std::env::args().any(|a| a == "--rates") {
+        return rates();
+    }
     let long = std::env::args().any(|a| a == "--long");
     let mut rows = vec![36_000, 360_000];
     if long {
         rows.push(3_600_000);
     }
-    let terms = [
-        TermName::LeverArm,
-        TermName::TimeOffset,
-        TermName::Bias,
-        TermName::Scale,
-    ];
     println!(
         "| rows (100 Hz) | hours | calibrate s | s per 100,000 rows | study of two such recordings s | s per 100,000 rows |"
     );
@@ -43,25 +44,8 @@ fn main() {
         let segment = dir.path().join("data/long/Trajectory1");
         let dvl = segment.join("DVL_trajectory1.csv");
         let reference = segment.join("GT_trajectory1.csv");
-        let out = dir.path().join("out");
-        let args = CalibrateArgs {
-            dvl: &dvl,
-            reference: Some(&reference),
-            columns: None,
-            valid_column: None,
-            terms: &terms,
-            window_s: None,
-            dvl_noise_cm_s: 2.0,
-            reference_noise_cm_s: 0.5,
-            tolerance_pct: 10.0,
-            out: &out,
-            save: None,
-            dive_terms: &[TermName::TimeOffset],
-        };
-        let clock = Instant::now();
-        let calibration = calibrate(&args).expect("the synthetic recording calibrates");
-        let seconds = clock.elapsed().as_secs_f64();
-        assert_eq!(calibration.recorded, rows);
+        let (seconds, recorded) = calibrate_seconds(&dvl, &reference, &dir.path().join("out"));
+        assert_eq!(recorded, rows);
         let study = study_seconds(dir.path());
         let per = |s: f64| s / rows as f64 * 100_000.0;
         println!(
@@ -71,6 +55,74 @@ fn main() {
             per(study)
         );
     }
+}
+
+/// The terms calibrated: lever arm, time offset, bias and scale.
+const TERMS: [TermName; 4] = [
+    TermName::LeverArm,
+    TermName::TimeOffset,
+    TermName::Bias,
+    TermName::Scale,
+];
+
+/// Seconds of `calibrate` of the DVL file `dvl` beside `reference` into `out`, and the
+/// DVL samples it read.
+fn calibrate_seconds(
+    dvl: &std::path::Path,
+    reference: &std::path::Path,
+    out: &std::path::Path,
+) -> (f64, usize) {
+    let args = CalibrateArgs {
+        dvl,
+        reference: Some(reference),
+        columns: None,
+        reading: Reading::default(),
+        terms: &TERMS,
+        window_s: None,
+        dvl_noise_cm_s: 2.0,
+        reference_noise_cm_s: 0.5,
+        tolerance_pct: 10.0,
+        out,
+        save: None,
+        dive_terms: &[TermName::TimeOffset],
+    };
+    let clock = Instant::now();
+    let calibration = calibrate(&args).expect("the synthetic recording calibrates");
+    (clock.elapsed().as_secs_f64(), calibration.recorded)
+}
+
+/// The `--rates` case: ten hours, the DVL at 10 Hz beside the reference at 100 Hz.
+fn rates() {
+    let dir = tempfile::tempdir().unwrap();
+    let (rows, dvl_every) = (3_600_000, 10);
+    installed::write_installed_at_rates(
+        &dir.path().join("data/rates"),
+        1,
+        &[],
+        installed::INSTALLED,
+        7,
+        (rows, 0.01),
+        dvl_every,
+    );
+    let segment = dir.path().join("data/rates/Trajectory1");
+    let (seconds, recorded) = calibrate_seconds(
+        &segment.join("DVL_trajectory1.csv"),
+        &segment.join("GT_trajectory1.csv"),
+        &dir.path().join("out"),
+    );
+    assert_eq!(recorded, rows / dvl_every);
+    let peak = std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            let line = s.lines().find(|l| l.starts_with("VmHWM:"))?.to_string();
+            Some(line.trim_start_matches("VmHWM:").trim().to_string())
+        })
+        .unwrap_or_else(|| "not measured (no /proc/self/status)".into());
+    println!(
+        "| hours | DVL samples (10 Hz) | reference rows (100 Hz) | calibrate s | peak resident memory |"
+    );
+    println!("|---|---|---|---|---|");
+    println!("| 10 | {recorded} | {rows} | {seconds:.1} | {peak} |");
 }
 
 /// Seconds of `dcnet-exp run --no-plots` of a study over the two recordings in

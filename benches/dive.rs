@@ -19,6 +19,7 @@ use dcnet_exp::installation::terms::names::TermName;
 use dcnet_exp::installation::terms::{PerAxis, TermSet};
 use dcnet_exp::operator::calibrate::{CalibrateArgs, calibrate};
 use dcnet_exp::operator::correct::{CorrectArgs, correct};
+use dcnet_exp::operator::inputs::Reading;
 use std::time::Instant;
 
 fn main() {
@@ -42,7 +43,7 @@ fn main() {
         dvl: &dvl,
         reference: Some(&reference),
         columns: None,
-        valid_column: None,
+        reading: Reading::default(),
         terms: &terms,
         window_s: None,
         dvl_noise_cm_s: 2.0,
@@ -73,7 +74,7 @@ fn main() {
             dvl: &dvl,
             reference: Some(&reference),
             columns: None,
-            valid_column: None,
+            reading: Reading::default(),
             installation: &saved,
             window_s: 60.0,
             search_s: 30.0,

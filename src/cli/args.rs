@@ -147,15 +147,12 @@ pub(super) struct CalibrateArgs {
     #[arg(long)]
     pub(super) reference: Vec<PathBuf>,
     /// A TOML file whose [columns] table names the columns (time, dvl, velocity_ned,
-    /// attitude, rate, angles_in_degrees, valid, zero_is_valid), as an installation spec's
+    /// attitude, rate, angles_in_degrees, valid, zero_is_valid, gap_limit_s), as an installation spec's
     /// [recordings.columns] does
     #[arg(long)]
     pub(super) columns: Option<PathBuf>,
-    /// The DVL's validity column, where it has one: 1 or true for a valid sample, 0 or
-    /// false for one it did not measure (left out and counted); as `valid` in the
-    /// --columns table
-    #[arg(long, value_name = "NAME")]
-    pub(super) valid_column: Option<String>,
+    #[command(flatten)]
+    pub(super) reading: ReadingArgs,
     /// The terms to estimate: scale, scale_per_axis, misalignment, lever_arm,
     /// time_offset, bias, bias_scalar
     #[arg(
@@ -192,6 +189,32 @@ pub(super) struct CalibrateArgs {
     pub(super) dive_terms: Vec<String>,
 }
 
+/// How `calibrate` and `correct` read a recording beyond its columns.
+#[derive(Debug, clap::Args)]
+pub(super) struct ReadingArgs {
+    /// The DVL's validity column, where it has one: 1 or true for a valid sample, 0 or
+    /// false for one it did not measure (left out and counted); as `valid` in the
+    /// --columns table
+    #[arg(long, value_name = "NAME")]
+    pub(super) valid_column: Option<String>,
+    /// The longest step between two of the DVL's valid samples, s, that does not cut
+    /// the recording into pieces (the filter's and the noise's correlation in time are
+    /// not read across a longer one) [default: three of the DVL's sample intervals]; as
+    /// `gap_limit_s` in the --columns table
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    pub(super) gap_limit_s: Option<f64>,
+}
+
+impl ReadingArgs {
+    /// As the operator's commands take it.
+    pub(super) fn reading(&self) -> crate::operator::inputs::Reading<'_> {
+        crate::operator::inputs::Reading {
+            valid_column: self.valid_column.as_deref(),
+            gap_limit_s: self.gap_limit_s,
+        }
+    }
+}
+
 /// The arguments of `correct`.
 #[derive(Debug, clap::Args)]
 pub(super) struct CorrectArgs {
@@ -207,9 +230,8 @@ pub(super) struct CorrectArgs {
     /// A TOML file whose [columns] table names the columns, as for calibrate
     #[arg(long)]
     pub(super) columns: Option<PathBuf>,
-    /// The DVL's validity column, where it has one, as for calibrate
-    #[arg(long, value_name = "NAME")]
-    pub(super) valid_column: Option<String>,
+    #[command(flatten)]
+    pub(super) reading: ReadingArgs,
     /// The first SECONDS of the dive that find its clock again; scored after them
     #[arg(
         long,

@@ -136,6 +136,9 @@ pub struct Reference {
     /// The longest interval between two samples read across, s: inside a longer gap
     /// the reference is not read ([`REFERENCE_GAP_INTERVALS`] of its median interval).
     pub max_gap_s: f64,
+    /// The recording's gap limit, s: two DVL samples read beside this reference further
+    /// apart lie in different pieces ([`PairedRecording::gap_limit_s`]).
+    pub dvl_gap_limit_s: f64,
 }
 
 /// The reference's body velocity and body rate at one time.
@@ -177,6 +180,7 @@ impl Reference {
         };
         Reference {
             max_gap_s: REFERENCE_GAP_INTERVALS * sample_interval(&recording.reference_time_s),
+            dvl_gap_limit_s: recording.gap_limit_s,
             time_s: recording.reference_time_s.clone(),
             velocity_body_m_s,
             rate_rad_s,
@@ -226,6 +230,15 @@ impl Reference {
         })
     }
 
+    /// Whether each sample of a DVL record stamped `time_s` follows the one before it
+    /// within a piece (no step beyond the recording's gap limit; the first follows
+    /// none): where noise correlated in time is read, and not across a gap.
+    pub fn follows(&self, time_s: &[f64]) -> Vec<bool> {
+        (0..time_s.len())
+            .map(|i| i > 0 && time_s[i] - time_s[i - 1] <= self.dvl_gap_limit_s)
+            .collect()
+    }
+
     /// The samples of a record stamped `time_s` whose t + τ lies inside the reference
     /// for every |τ| ≤ `margin_s`: a fixed mask, the same whatever τ, so costs at
     /// different τ compare. Empty when there is none.
@@ -260,6 +273,7 @@ mod tests {
             velocity_ned_m_s,
             attitude_rad,
             rate_rad_s: None,
+            gap_limit_s: 3.0,
         }
     }
 

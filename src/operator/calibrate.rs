@@ -20,7 +20,7 @@ use crate::installation::study::filters::FilterRun;
 use crate::installation::study::spec::{ObservabilityFile, default_filter_settings};
 use crate::installation::terms::names::{TermName, term_list_faults, term_set};
 use crate::installation::terms::{AxisRmse, Installation, TermSet, score};
-use crate::operator::inputs::{columns, not_over_an_input};
+use crate::operator::inputs::{Reading, columns, not_over_an_input};
 use crate::operator::installation_file::SavedInstallation;
 use crate::results::ResultsError;
 use crate::results::corrected::{
@@ -37,9 +37,8 @@ pub struct CalibrateArgs<'a> {
     pub reference: Option<&'a Path>,
     /// A TOML file whose `[columns]` table names the columns; A-KIT's when `None`.
     pub columns: Option<&'a Path>,
-    /// The DVL's validity column, where the command line names one (over the
-    /// columns file's `valid`).
-    pub valid_column: Option<&'a str>,
+    /// How to read the recordings beyond their columns (over the columns file).
+    pub reading: Reading<'a>,
     pub terms: &'a [TermName],
     /// Calibrate on the first this many seconds only.
     pub window_s: Option<f64>,
@@ -482,7 +481,7 @@ fn beyond_memory(dvl: &Path, rows: usize, have: f64) -> Option<CalibrateError> {
 
 /// The recording of `args`, its reference, and its window where one is asked.
 fn read(args: &CalibrateArgs) -> Result<Read, CalibrateError> {
-    let columns = columns(args.columns, args.valid_column).map_err(CalibrateError::Columns)?;
+    let columns = columns(args.columns, args.reading).map_err(CalibrateError::Columns)?;
     let source = Source::csv(args.dvl, args.reference, columns);
     let read = source.read()?;
     let dvl_sha256 = read.dvl_sha256().to_string();
@@ -569,12 +568,7 @@ fn write_files(
     applied: &Installation,
     filter: &FilterRun,
 ) -> Result<(Vec<PathBuf>, PathBuf), CalibrateError> {
-    let corrected = corrected_samples(
-        applied,
-        &read.recording.time_s,
-        &read.recording.dvl_m_s,
-        &read.reference,
-    );
+    let corrected = corrected_samples(applied, &read.recording, &read.reference);
     let written = write(outputs, &corrected, recording_sha256)?;
     let points = filter.points(&outputs.stem);
     let terms_in_time = write_terms_in_time(outputs, &points, recording_sha256)?;
@@ -620,7 +614,7 @@ mod tests {
             dvl,
             reference: Some(reference),
             columns: None,
-            valid_column: None,
+            reading: Reading::default(),
             terms,
             window_s: None,
             dvl_noise_cm_s: 2.0,

@@ -18,7 +18,7 @@ use crate::installation::estimate::joint::{JointFit, JointRecording, joint_fit, 
 use crate::installation::frames::Reference;
 use crate::installation::terms::names::{TermName, term_set};
 use crate::operator::calibrate::{CalibrateError, dive_terms_refused, named, save_refused};
-use crate::operator::inputs::{columns, not_over_an_input};
+use crate::operator::inputs::{Reading, columns, not_over_an_input};
 use crate::operator::installation_file::{SavedInstallation, SavedTerm};
 use crate::results::ResultsError;
 use crate::results::corrected::{Outputs, corrected_samples, stem, write};
@@ -30,9 +30,8 @@ pub struct JointArgs<'a> {
     /// One per DVL file, or none where each DVL file holds its reference.
     pub references: &'a [PathBuf],
     pub columns: Option<&'a Path>,
-    /// The DVL's validity column, where the command line names one (over the
-    /// columns file's `valid`).
-    pub valid_column: Option<&'a str>,
+    /// How to read the recordings beyond their columns (over the columns file).
+    pub reading: Reading<'a>,
     pub terms: &'a [TermName],
     pub dive_terms: &'a [TermName],
     pub window_s: Option<f64>,
@@ -124,8 +123,7 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
     let (joint, alone) = fitted(args, &calibrating, noise)?;
     let mut written = Vec::new();
     for (k, (recording, reference, _)) in recordings.iter().enumerate() {
-        let (time_s, dvl_m_s) = (&recording.time_s, &recording.dvl_m_s);
-        let samples = corrected_samples(&joint.dives[k], time_s, dvl_m_s, reference);
+        let samples = corrected_samples(&joint.dives[k], recording, reference);
         written.extend(write(&outputs[k], &samples, &shas[k])?);
     }
     if let Some(path) = args.save {
@@ -166,7 +164,7 @@ fn names(dvls: &[std::path::PathBuf]) -> Vec<String> {
 
 /// Each recording of `args`: its DVL's file beside its reference's, or the DVL's own.
 fn sources(args: &JointArgs) -> Result<Vec<Source>, CalibrateError> {
-    let columns = columns(args.columns, args.valid_column).map_err(CalibrateError::Columns)?;
+    let columns = columns(args.columns, args.reading).map_err(CalibrateError::Columns)?;
     let source = |(k, dvl): (usize, &PathBuf)| {
         let reference = args.references.get(k).map(|r| r.as_path());
         Source::csv(dvl, reference, columns.clone())

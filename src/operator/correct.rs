@@ -9,13 +9,15 @@
 //! In: [`CorrectArgs`]. Out: a [`Correction`], or a [`CorrectError`] naming the file
 //! and what to do; nothing is written unless everything before the writing succeeded.
 
+use crate::Vec3;
 use crate::data::paired::{PairedError, PairedRecording, ReadCounts, Source};
 use crate::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise};
 use crate::installation::estimate::clock::{Carried, Clock, ClockError, ClockSearch, refind};
 use crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S;
+use crate::installation::estimate::robust::outliers_among;
 use crate::installation::frames::Reference;
-use crate::installation::terms::{AxisRmse, Installation, score};
-use crate::operator::inputs::{columns, not_over_an_input};
+use crate::installation::terms::{AxisRmse, Installation};
+use crate::operator::inputs::{Reading, columns, not_over_an_input};
 use crate::operator::installation_file::{InstallationFileError, SavedInstallation};
 use crate::results::ResultsError;
 use crate::results::corrected::{OtherRecording, Outputs, corrected_samples, stem, write};
@@ -32,9 +34,8 @@ pub struct CorrectArgs<'a> {
     /// The reference's file; the DVL's own when `None`.
     pub reference: Option<&'a Path>,
     pub columns: Option<&'a Path>,
-    /// The DVL's validity column, where the command line names one (over the
-    /// columns file's `valid`).
-    pub valid_column: Option<&'a str>,
+    /// How to read the recordings beyond their columns (over the columns file).
+    pub reading: Reading<'a>,
     pub installation: &'a Path,
     /// The first seconds of the dive that find its clock again.
     pub window_s: f64,
@@ -117,6 +118,9 @@ pub struct Correction {
     /// totals it is held against, cm/s: the specified noise's and the calibration's.
     pub after: Option<AxisRmse>,
     pub blocks: Vec<Stretch>,
+    /// The samples after the first w seconds left out of `after` and `blocks` as
+    /// outliers.
+    pub outliers: usize,
     pub noise_cm_s: f64,
     pub calibration_cm_s: f64,
     pub window_s: f64,
@@ -166,7 +170,7 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
     if let Some((output, input)) = not_over_an_input(&inputs, &outputs.all()) {
         return Err(CorrectError::OverInput { output, input });
     }
-    let columns = columns(args.columns, args.valid_column).map_err(CorrectError::Columns)?;
+    let columns = columns(args.columns, args.reading).map_err(CorrectError::Columns)?;
     let source = Source::csv(args.dvl, args.reference, columns);
     let loaded = source.load()?;
     let recording_sha256 = loaded.dvl_sha256().to_string();
@@ -199,9 +203,9 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
             (clock.installation, Some(clock))
         }
     };
-    let (after, blocks) = fit_after(args, &recording, &reference, &applied);
-    let samples = corrected_samples(&applied, &recording.time_s, &recording.dvl_m_s, &reference);
-    if samples.is_empty() {
+    let (after, blocks, outliers) = fit_after(args, &recording, &reference, &applied);
+    let samples = corrected_samples(&applied, &recording, &reference);
+    if samples.iter().all(|s| s.velocity_m_s.is_err()) {
         return Err(CorrectError::NoOverlap {
             dvl: args.dvl.to_path_buf(),
             time_offset_s: applied.time_offset_s,
@@ -217,6 +221,7 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
         applied,
         after,
         blocks,
+        outliers,
         window_s: args.window_s,
         search_s: args.search_s,
         installation_file: args.installation.to_path_buf(),
@@ -278,20 +283,35 @@ fn find_clock(
 }
 
 /// The residual of `applied` after the first `args.window_s` seconds, whole and in
-/// blocks of that length (a last block shorter than half of it joins the one before).
+/// blocks of that length (a last block shorter than half of it joins the one before),
+/// the outliers among those samples aside (a component beyond the fits' `TUKEY_C`
+/// scales of the rest): a spike is not a DVL that fits worse. Also how many there were.
 fn fit_after(
     args: &CorrectArgs,
     recording: &PairedRecording,
     reference: &Reference,
     applied: &Installation,
-) -> (Option<AxisRmse>, Vec<Stretch>) {
+) -> (Option<AxisRmse>, Vec<Stretch>, usize) {
     let time = &recording.time_s;
     let inside = reference.interior(time, TIME_OFFSET_MARGIN_S);
     let index = |seconds: f64| time.partition_point(|&t| t - time[0] < seconds);
     let begin = index(args.window_s).max(inside.start);
+    let errors: Vec<Option<Vec3>> = (begin..inside.end.max(begin))
+        .map(|i| {
+            let at = reference.at(time[i] + applied.time_offset_s)?;
+            let corrected = applied.correct(recording.dvl_m_s[i], at.rate_rad_s);
+            Some([0, 1, 2].map(|k| corrected[k] - at.velocity_body_m_s[k]))
+        })
+        .collect();
+    let scored: Vec<Vec3> = errors.iter().flatten().copied().collect();
+    let mut flags = outliers_among(&scored).into_iter();
+    let kept: Vec<Option<Vec3>> = (errors.iter())
+        .map(|e| e.filter(|_| !flags.next().expect("a flag per error")))
+        .collect();
+    let outliers = scored.len() - kept.iter().flatten().count();
     let rmse =
-        |range: std::ops::Range<usize>| score(applied, time, &recording.dvl_m_s, reference, range);
-    let after = rmse(begin..inside.end);
+        |range: std::ops::Range<usize>| AxisRmse::of_errors(range.filter_map(|i| kept[i - begin]));
+    let after = rmse(begin..inside.end.max(begin));
     let mut blocks = Vec::new();
     let mut from = begin;
     while from < inside.end {
@@ -310,5 +330,5 @@ fn fit_after(
         }
         from = to;
     }
-    (after, blocks)
+    (after, blocks, outliers)
 }

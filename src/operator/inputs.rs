@@ -3,7 +3,7 @@
 //! it reads.
 //! In: the paths given on the command line. Out: the columns, or the file at fault.
 
-use crate::data::paired::PairedColumns;
+use crate::data::paired::{GapLimit, PairedColumns};
 use crate::spec::{SpecError, TomlFile};
 use std::path::{Path, PathBuf};
 
@@ -34,9 +34,24 @@ pub fn not_over_an_input(
     None
 }
 
-/// The columns of `path`'s `[columns]` table, or A-KIT's, with the DVL's validity
-/// column `valid` where the command line names one (`--valid-column`).
-pub fn columns(path: Option<&Path>, valid: Option<&str>) -> Result<PairedColumns, SpecError> {
+/// What the command line says of how to read a recording, beyond its columns: each
+/// as the `[columns]` table's key of the same name, and over it.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Reading<'a> {
+    /// The DVL's validity column (`--valid-column`, the table's `valid`).
+    pub valid_column: Option<&'a str>,
+    /// The gap limit, s (`--gap-limit-s`, the table's `gap_limit_s`).
+    pub gap_limit_s: Option<f64>,
+}
+
+/// The columns of `path`'s `[columns]` table, or A-KIT's, with what the command line
+/// says of the `reading` over them.
+pub fn columns(path: Option<&Path>, reading: Reading) -> Result<PairedColumns, SpecError> {
+    let Reading {
+        valid_column: valid,
+        gap_limit_s,
+    } = reading;
+    let gap_limit_s = gap_limit_s.map(GapLimit);
     #[derive(serde::Deserialize)]
     #[serde(deny_unknown_fields)]
     struct ColumnsFile {
@@ -45,6 +60,7 @@ pub fn columns(path: Option<&Path>, valid: Option<&str>) -> Result<PairedColumns
     let Some(path) = path else {
         let mut columns = PairedColumns::akit();
         columns.valid = valid.map(String::from);
+        columns.gap_limit_s = gap_limit_s;
         return match columns.named_twice() {
             Some((_, why)) => Err(SpecError {
                 location: "--valid-column".into(),
@@ -57,6 +73,9 @@ pub fn columns(path: Option<&Path>, valid: Option<&str>) -> Result<PairedColumns
     let mut file = TomlFile::<ColumnsFile>::read(path)?;
     if let Some(valid) = valid {
         file.value.columns.valid = Some(valid.to_string());
+    }
+    if gap_limit_s.is_some() {
+        file.value.columns.gap_limit_s = gap_limit_s;
     }
     if let Some((key, why)) = file.value.columns.named_twice() {
         let fault = file.fault(&format!("columns.{key}"), why);

@@ -1,8 +1,13 @@
 //! A DVL recording corrected by its calibration's terms, written as CSV and as Parquet with the
 //! same columns: the sample's own time stamp, the time the corrected velocity is valid
-//! at (the stamp plus the time offset), and the corrected body-frame velocity in the
+//! at (the stamp plus the time offset), the corrected body-frame velocity in the
 //! columns a CSV recording is read from by default ([`crate::VELOCITY_COLUMNS`]), so the
-//! corrected file can be named in a spec as it is.
+//! corrected file can be named as a recording's DVL as it is, and `left_out`. Every
+//! sample the DVL file held is a row, in the order of their stamps: one left out as the
+//! recording was read, or whose t + τ lies outside the reference (its correction needs
+//! the body rate there), has no velocity (empty cells, Parquet nulls; read again, it is
+//! left out again) and says why in `left_out` ([`NotCorrected::key`]); nothing is
+//! invented for it.
 //! Beside it, the Kalman filter's terms after every sample of the recording.
 //! Both Parquet files record the SHA-256 of the DVL file they come from, so that a
 //! later `calibrate` or `correct` into the same folder never replaces another recording's.
@@ -12,6 +17,7 @@
 use super::record::{Record, encode};
 use super::{ResultsError, io, write_table};
 use crate::Vec3;
+use crate::data::paired::{LeftOutWhy, PairedRecording};
 use crate::files::write_atomic;
 use crate::installation::frames::Reference;
 use crate::installation::study::rows::FilterPoint;
@@ -19,44 +25,74 @@ use crate::installation::terms::Installation;
 use arrow_array::RecordBatch;
 use std::path::{Path, PathBuf};
 
-/// One corrected sample.
+/// One sample of the DVL file, corrected where it can be.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CorrectedSample {
     /// The DVL sample's own stamp, s.
     pub time_s: f64,
     /// When the corrected velocity is valid: the stamp plus the time offset, s.
     pub valid_at_s: f64,
-    /// The corrected velocity, body frame, m/s.
-    pub velocity_m_s: Vec3,
+    /// The corrected velocity, body frame, m/s, or why there is none.
+    pub velocity_m_s: Result<Vec3, NotCorrected>,
 }
 
-/// The samples of a DVL record (`time_s`, `dvl_m_s`) corrected by `installation`,
-/// each valid at its stamp plus the time offset; a sample whose t + τ lies outside the
-/// reference is left out, since its correction needs the body rate there.
+/// Why a sample of the DVL file has no corrected velocity.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NotCorrected {
+    /// Left out as the recording was read.
+    LeftOut(LeftOutWhy),
+    /// Its t + τ lies outside the reference, or in a gap of it.
+    OutsideReference,
+}
+
+impl NotCorrected {
+    /// What the `left_out` column says.
+    pub fn key(self) -> &'static str {
+        match self {
+            NotCorrected::LeftOut(why) => why.key(),
+            NotCorrected::OutsideReference => "outside_reference",
+        }
+    }
+}
+
+/// Every sample of `recording`'s DVL, kept and left out, in the order of their stamps,
+/// each kept one corrected by `installation` and valid at its stamp plus the time
+/// offset where t + τ lies inside the `reference`.
 pub fn corrected_samples(
     installation: &Installation,
-    time_s: &[f64],
-    dvl_m_s: &[Vec3],
+    recording: &PairedRecording,
     reference: &Reference,
 ) -> Vec<CorrectedSample> {
-    time_s
+    let tau = installation.time_offset_s;
+    let kept = recording
+        .time_s
         .iter()
-        .zip(dvl_m_s)
-        .filter_map(|(&t, &dvl)| {
-            let valid_at_s = t + installation.time_offset_s;
-            let at = reference.at(valid_at_s)?;
-            Some(CorrectedSample {
+        .zip(&recording.dvl_m_s)
+        .map(|(&t, &dvl)| {
+            let velocity_m_s = reference
+                .at(t + tau)
+                .map(|at| installation.correct(dvl, at.rate_rad_s))
+                .ok_or(NotCorrected::OutsideReference);
+            CorrectedSample {
                 time_s: t,
-                valid_at_s,
-                velocity_m_s: installation.correct(dvl, at.rate_rad_s),
-            })
-        })
-        .collect()
+                valid_at_s: t + tau,
+                velocity_m_s,
+            }
+        });
+    let left_out = recording.left_out.iter().map(|l| CorrectedSample {
+        time_s: l.time_s,
+        valid_at_s: l.time_s + tau,
+        velocity_m_s: Err(NotCorrected::LeftOut(l.why)),
+    });
+    let mut samples: Vec<CorrectedSample> = kept.chain(left_out).collect();
+    samples.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+    samples
 }
 
 /// The column names, in order.
 const TIME: &str = "time_s";
 const VALID_AT: &str = "valid_at_s";
+const LEFT_OUT: &str = "left_out";
 
 /// A row of `<stem>-corrected.parquet`: the columns of the CSV file, the velocity's
 /// named as [`crate::VELOCITY_COLUMNS`] names them.
@@ -64,9 +100,10 @@ const VALID_AT: &str = "valid_at_s";
 struct CorrectedRecord {
     time_s: f64,
     valid_at_s: f64,
-    vx_m_s: f64,
-    vy_m_s: f64,
-    vz_m_s: f64,
+    vx_m_s: Option<f64>,
+    vy_m_s: Option<f64>,
+    vz_m_s: Option<f64>,
+    left_out: String,
 }
 
 impl Record for CorrectedRecord {}
@@ -74,10 +111,13 @@ impl Record for CorrectedRecord {}
 /// The CSV text of `samples`, every number with all its digits.
 pub fn csv_text(samples: &[CorrectedSample]) -> String {
     let [x, y, z] = crate::VELOCITY_COLUMNS;
-    let mut text = format!("{TIME},{VALID_AT},{x},{y},{z}\n");
+    let mut text = format!("{TIME},{VALID_AT},{x},{y},{z},{LEFT_OUT}\n");
     for s in samples {
-        let [vx, vy, vz] = s.velocity_m_s;
-        text.push_str(&format!("{},{},{vx},{vy},{vz}\n", s.time_s, s.valid_at_s));
+        let velocity = match s.velocity_m_s {
+            Ok([vx, vy, vz]) => format!("{vx},{vy},{vz},"),
+            Err(why) => format!(",,,{}", why.key()),
+        };
+        text.push_str(&format!("{},{},{velocity}\n", s.time_s, s.valid_at_s));
     }
     text
 }
@@ -183,12 +223,16 @@ pub fn write(
     write_atomic(&csv, csv_text(samples).as_bytes()).map_err(io(&csv))?;
     let records: Vec<CorrectedRecord> = samples
         .iter()
-        .map(|s| CorrectedRecord {
-            time_s: s.time_s,
-            valid_at_s: s.valid_at_s,
-            vx_m_s: s.velocity_m_s[0],
-            vy_m_s: s.velocity_m_s[1],
-            vz_m_s: s.velocity_m_s[2],
+        .map(|s| {
+            let velocity = s.velocity_m_s.ok();
+            CorrectedRecord {
+                time_s: s.time_s,
+                valid_at_s: s.valid_at_s,
+                vx_m_s: velocity.map(|v| v[0]),
+                vy_m_s: velocity.map(|v| v[1]),
+                vz_m_s: velocity.map(|v| v[2]),
+                left_out: s.velocity_m_s.err().map_or("", NotCorrected::key).into(),
+            }
         })
         .collect();
     let table = of_recording(encode(&records), recording_sha256);
@@ -216,42 +260,90 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_csv_reads_back_as_a_recording_of_the_corrected_velocity() {
+    fn every_sample_is_a_row_and_one_left_out_has_no_velocity_but_its_reason() {
+        let sample = |time_s: f64, velocity_m_s| CorrectedSample {
+            time_s,
+            valid_at_s: time_s + 1.5,
+            velocity_m_s,
+        };
         let samples = [
-            CorrectedSample {
-                time_s: 0.0,
-                valid_at_s: 1.5,
-                velocity_m_s: [1.25, -0.5, 0.0625],
-            },
-            CorrectedSample {
-                time_s: 1.0,
-                valid_at_s: 2.5,
-                velocity_m_s: [1.5, 0.1, -0.2],
-            },
+            sample(0.0, Ok([1.25, -0.5, 0.0625])),
+            sample(1.0, Err(NotCorrected::LeftOut(LeftOutWhy::AllZero))),
+            sample(2.0, Ok([1.5, 0.1, -0.2])),
+            sample(3.0, Err(NotCorrected::OutsideReference)),
         ];
         let folder = tempfile::tempdir().unwrap();
         let outputs = Outputs::of(folder.path(), "dvl");
         let written = write(&outputs, &samples, "ab12").unwrap();
         assert_eq!(written[0], folder.path().join("dvl-corrected.csv"));
-        let columns = crate::VELOCITY_COLUMNS.map(String::from);
-        let read = crate::data::csv::read_velocities(&written[0], &columns).unwrap();
-        assert_eq!(read, vec![samples[0].velocity_m_s, samples[1].velocity_m_s]);
         assert_eq!(
-            std::fs::read_to_string(&written[0]).unwrap().lines().next(),
-            Some("time_s,valid_at_s,vx_m_s,vy_m_s,vz_m_s")
+            std::fs::read_to_string(&written[0]).unwrap(),
+            "time_s,valid_at_s,vx_m_s,vy_m_s,vz_m_s,left_out\n\
+             0,1.5,1.25,-0.5,0.0625,\n\
+             1,2.5,,,,all_zero\n\
+             2,3.5,1.5,0.1,-0.2,\n\
+             3,4.5,,,,outside_reference\n"
         );
-        assert!(written[1].is_file());
+        // The Parquet file holds the same rows, the velocity null where there is none.
+        let file = std::fs::File::open(&written[1]).unwrap();
+        let batch = parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(file)
+            .unwrap()
+            .build()
+            .unwrap()
+            .next()
+            .unwrap()
+            .unwrap();
+        let records: Vec<CorrectedRecord> = crate::results::record::decode(&batch).unwrap();
+        let vx: Vec<Option<f64>> = records.iter().map(|r| r.vx_m_s).collect();
+        assert_eq!(vx, [Some(1.25), None, Some(1.5), None]);
+        let why: Vec<&str> = records.iter().map(|r| r.left_out.as_str()).collect();
+        assert_eq!(why, ["", "all_zero", "", "outside_reference"]);
         assert_eq!(
             outputs.recording_sha256(),
             Some((outputs.parquet.as_path(), "ab12".to_string()))
         );
-        let names: Vec<String> = crate::results::record::fields::<CorrectedRecord>()
+    }
+
+    #[test]
+    fn the_samples_left_out_are_put_back_in_their_place_uncorrected() {
+        use crate::data::paired::LeftOut;
+        let time_s: Vec<f64> = (0..20).map(f64::from).collect();
+        let recording = PairedRecording {
+            time_s: time_s.iter().copied().filter(|&t| t != 5.0).collect(),
+            dvl_m_s: vec![[1.0, 0.0, 0.0]; 19],
+            left_out: vec![LeftOut {
+                time_s: 5.0,
+                line: 7,
+                why: LeftOutWhy::NoVelocity,
+            }],
+            reference_time_s: time_s.clone(),
+            velocity_ned_m_s: vec![[1.0, 0.0, 0.0]; 20],
+            attitude_rad: vec![[0.0; 3]; 20],
+            rate_rad_s: None,
+            gap_limit_s: 3.0,
+        };
+        let installation = Installation {
+            time_offset_s: 2.0,
+            bias_m_s: [0.25, 0.0, 0.0],
+            ..Installation::default()
+        };
+        let samples = corrected_samples(&installation, &recording, &Reference::new(&recording));
+        assert_eq!(samples.len(), 20);
+        let why: Vec<(f64, &str)> = samples
             .iter()
-            .map(|f| f.name().clone())
+            .filter_map(|s| s.velocity_m_s.err().map(|why| (s.time_s, why.key())))
             .collect();
+        // Sample 5 left out as read; 18 and 19 valid at 20 s and 21 s, past the
+        // reference's last sample, 19 s.
         assert_eq!(
-            names,
-            ["time_s", "valid_at_s", "vx_m_s", "vy_m_s", "vz_m_s"]
+            why,
+            [
+                (5.0, "no_velocity"),
+                (18.0, "outside_reference"),
+                (19.0, "outside_reference")
+            ]
         );
+        assert_eq!(samples[0].velocity_m_s, Ok([0.75, 0.0, 0.0]));
+        assert_eq!(samples[0].valid_at_s, 2.0);
     }
 }

@@ -10,8 +10,8 @@
 //! columns); [`read_study`] reads them back into the same [`StudyResults`].
 
 use crate::installation::study::rows::{
-    FilterPoint, FitFailure, FoldSummaryRow, StudyResults, StudyTimeRow, SummaryRow, TermRow,
-    TracePoint, TransferRow,
+    FilterPoint, FitFailure, FoldSummaryRow, RecordingRow, StudyResults, StudyTimeRow, SummaryRow,
+    TermRow, TracePoint, TransferRow,
 };
 use crate::results::read::{ReadError, read_records};
 use crate::results::record::{Record, encode};
@@ -27,8 +27,9 @@ pub const TRACE: &str = "trace.parquet";
 pub const FAILURES: &str = "failures.parquet";
 pub const TERMS_IN_TIME: &str = "terms_in_time.parquet";
 pub const CALIBRATION_TIME: &str = "calibration_time.parquet";
+pub const RECORDINGS: &str = "recordings.parquet";
 /// The study's tables, in the order they are written.
-pub const TABLES: [&str; 7] = [
+pub const TABLES: [&str; 8] = [
     HELDOUT,
     TERMS,
     SUMMARY,
@@ -36,6 +37,7 @@ pub const TABLES: [&str; 7] = [
     FAILURES,
     TERMS_IN_TIME,
     CALIBRATION_TIME,
+    RECORDINGS,
 ];
 /// With `[learned]`, written after [`TABLES`]: the summary inside the folds.
 pub const FOLDS: &str = "folds.parquet";
@@ -51,6 +53,7 @@ pub fn table_bytes(study: &StudyResults) -> Result<Vec<(&'static str, Vec<u8>)>,
         failures_batch(&study.failures),
         filtered_batch(&study.filtered),
         time_batch(&study.calibration_time),
+        encode(&study.recordings),
     ];
     let mut tables: Vec<(&'static str, Vec<u8>)> = TABLES
         .iter()
@@ -77,8 +80,8 @@ pub fn read_checked(folder: &Path) -> Result<StudyResults, ReadError> {
 
 pub fn read_study(folder: &Path) -> Result<StudyResults, ReadError> {
     let path = |name: &str| folder.join(name);
-    // Folders written before the Kalman filter lack two tables; only a study with
-    // `[learned]` has the folds.
+    // Folders written before the Kalman filter lack two tables, before the recordings'
+    // reading was counted one more; only a study with `[learned]` has the folds.
     let later = |name: &str| path(name).exists();
     Ok(StudyResults {
         heldout: read_records(&path(HELDOUT), |r: TransferRecord| Ok(r.into()))?,
@@ -94,6 +97,10 @@ pub fn read_study(folder: &Path) -> Result<StudyResults, ReadError> {
             true => read_records(&path(CALIBRATION_TIME), Ok)?,
             false => Vec::new(),
         },
+        recordings: match later(RECORDINGS) {
+            true => read_records(&path(RECORDINGS), Ok)?,
+            false => Vec::new(),
+        },
         folds: match later(FOLDS) {
             true => read_records(&path(FOLDS), |r: FoldRecord| Ok(r.into()))?,
             false => Vec::new(),
@@ -105,6 +112,7 @@ impl Record for TermRow {}
 impl Record for FitFailure {}
 impl Record for FilterPoint {}
 impl Record for StudyTimeRow {}
+impl Record for RecordingRow {}
 
 /// One row per method × calibration trajectory.
 pub fn time_batch(rows: &[StudyTimeRow]) -> RecordBatch {
@@ -454,6 +462,20 @@ mod tests {
                 tolerance_pct: 10.0,
                 noise_floor_cm_s: 3.57,
             }],
+            recordings: vec![RecordingRow {
+                recording: "T1".into(),
+                dvl_samples: 400,
+                kept: 370,
+                left_out_flagged: 0,
+                left_out_no_velocity: 25,
+                left_out_invalid_marker: 0,
+                left_out_all_zero: 5,
+                left_out_reference_gap: 0,
+                reference_samples: 4000,
+                pieces: 3,
+                gap_limit_s: 3.0,
+                longest_loss_s: 1.0 / 3.0,
+            }],
         }
     }
 
@@ -479,6 +501,7 @@ mod tests {
                 "failures.parquet",
                 "terms_in_time.parquet",
                 "calibration_time.parquet",
+                "recordings.parquet",
                 "folds.parquet"
             ]
         );

@@ -107,7 +107,21 @@ pub fn write_installed_sampled(
     straight: &[usize],
     installed: Installed,
     seed: u64,
+    sampling: (usize, f64),
+) {
+    write_installed_at_rates(folder, count, straight, installed, seed, sampling, 1);
+}
+
+/// [`write_installed_sampled`] with the DVL at every `dvl_every`-th of the reference's
+/// `rows` only: the reference at 1 / `step_s` Hz, the DVL at a `dvl_every`-th of it.
+pub fn write_installed_at_rates(
+    folder: &Path,
+    count: usize,
+    straight: &[usize],
+    installed: Installed,
+    seed: u64,
     (rows, step_s): (usize, f64),
+    dvl_every: usize,
 ) {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let noise = Normal::new(0.0, installed.noise_m_s).unwrap();
@@ -136,6 +150,9 @@ pub fn write_installed_sampled(
                 v_n[0], v_n[1], v_n[2], angles[0], angles[1]
             )
             .unwrap();
+            if i % dvl_every != 0 {
+                continue;
+            }
             let later = t + installed.time_offset_s;
             let (angles, rates) = attitude(later, n, turning);
             let omega = body_rate(angles, rates);

@@ -246,7 +246,7 @@ fn calibrate_prints_the_terms_and_writes_the_recording_corrected() {
     let csv = d.join("fixed/DVL_trajectory1-corrected.csv");
     let text = std::fs::read_to_string(&csv).unwrap();
     assert!(
-        text.starts_with("time_s,valid_at_s,vx_m_s,vy_m_s,vz_m_s\n"),
+        text.starts_with("time_s,valid_at_s,vx_m_s,vy_m_s,vz_m_s,left_out\n"),
         "{text}"
     );
     assert!(d.join("fixed/DVL_trajectory1-corrected.parquet").is_file());
@@ -256,6 +256,7 @@ fn calibrate_prints_the_terms_and_writes_the_recording_corrected() {
         .nth(2)
         .unwrap()
         .split(',')
+        .take(5)
         .map(|f| f.parse().unwrap())
         .collect();
     assert!(
@@ -1136,22 +1137,19 @@ fn calibrate_leaves_out_what_the_dvls_validity_column_flags_and_says_so() {
         })
         .collect();
     std::fs::write(d.join("flagged.csv"), flagged).unwrap();
-    let calibrate = |valid: &str, out: &str| {
-        dcnet(
-            d,
-            &[
-                "calibrate",
-                "flagged.csv",
-                "--reference",
-                "data/syn/Trajectory1/GT_trajectory1.csv",
-                "--valid-column",
-                valid,
-                "--out",
-                out,
-            ],
-        )
+    let calibrate = |extra: &[&str], out: &str| {
+        let mut args = vec![
+            "calibrate",
+            "flagged.csv",
+            "--reference",
+            "data/syn/Trajectory1/GT_trajectory1.csv",
+            "--out",
+            out,
+        ];
+        args.extend(extra);
+        dcnet(d, &args)
     };
-    let output = calibrate("ok", "flagged");
+    let output = calibrate(&["--valid-column", "ok"], "flagged");
     assert!(output.status.success(), "{}", stderr(&output));
     let printed = stdout(&output);
     assert!(
@@ -1160,7 +1158,45 @@ fn calibrate_leaves_out_what_the_dvls_validity_column_flags_and_says_so() {
     );
     // The garbage rows left out, the fit is the clean one's: no outlier among the rest.
     assert!(printed.contains(", 0 of them outliers"), "{printed}");
-    let output = calibrate("DVL X [m/s]", "twice");
+    // The 11 s from 99 s to 110 s without a sample cut the recording in two.
+    assert!(
+        printed.contains(
+            "on its own stamps; 2 pieces (gaps over 3.00 s cut it), the longest loss 11.00 s\n"
+        ),
+        "{printed}"
+    );
+    // The corrected recording keeps the flagged samples in their place, with no
+    // velocity and why.
+    let corrected = std::fs::read_to_string(d.join("flagged/flagged-corrected.csv")).unwrap();
+    let rows: Vec<&str> = corrected.lines().collect();
+    assert_eq!(rows.len(), 401);
+    assert_eq!(rows[0], "time_s,valid_at_s,vx_m_s,vy_m_s,vz_m_s,left_out");
+    for row in &rows[101..=110] {
+        assert!(row.ends_with(",,,,flagged"), "{row}");
+    }
+    assert!(rows[100].ends_with(','), "{}", rows[100]);
+    // A gap limit of the command line's: 20 s cuts nothing; zero is refused, and
+    // nothing is written.
+    let limited =
+        |limit: &str, out: &str| calibrate(&["--valid-column", "ok", "--gap-limit-s", limit], out);
+    let output = limited("20", "limited");
+    assert!(
+        stdout(&output)
+            .contains("; one piece (gaps over 20.00 s cut it), the longest loss 11.00 s"),
+        "{}",
+        stdout(&output)
+    );
+    let output = limited("0", "zero");
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains(
+            "flagged.csv: gap_limit_s = 0: a gap limit must be a positive number of seconds"
+        ),
+        "{}",
+        stderr(&output)
+    );
+    assert!(!d.join("zero").exists());
+    let output = calibrate(&["--valid-column", "DVL X [m/s]"], "twice");
     assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
     assert!(
         stderr(&output)

@@ -29,6 +29,26 @@ fn clocked(time_offset_s: f64) -> Installed {
     }
 }
 
+/// `calibrate --save installation.toml` in `dir` of a dive whose clock is 0.6 s, with
+/// the default terms: its DVL and reference files.
+fn save_first_dive(dir: &Path) -> (PathBuf, PathBuf) {
+    let (dvl, reference) = dive(dir, "first", clocked(0.6), 1);
+    let path = |p: &Path| p.to_str().unwrap().to_string();
+    let saved = dcnet(
+        dir,
+        &[
+            "calibrate",
+            &path(&dvl),
+            "--reference",
+            &path(&reference),
+            "--save",
+            "installation.toml",
+        ],
+    );
+    assert!(saved.status.success(), "{}", stderr(&saved));
+    (dvl, reference)
+}
+
 /// The number after `prefix` in `text`.
 fn number_after(text: &str, prefix: &str) -> f64 {
     let at = text
@@ -100,6 +120,60 @@ fn an_installation_saved_from_one_dive_corrects_another_whose_clock_differs() {
     }
 }
 
+/// Spikes of 1 m/s on 3 % of the next dive's samples: `correct` scores the dive with
+/// them aside, counts them, and warns of nothing (the DVL fits as well as it did); the
+/// corrected file keeps them, corrected as they are.
+#[test]
+fn spikes_on_the_next_dive_are_counted_not_warned_of() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let path = |p: &Path| p.to_str().unwrap().to_string();
+    save_first_dive(d);
+    let (dvl, reference) = dive(d, "second", clocked(7.3), 2);
+    let text = std::fs::read_to_string(&dvl).unwrap();
+    let mut spiked = 0;
+    let lines: Vec<String> = (text.lines().enumerate())
+        .map(|(n, line)| {
+            // Every 33rd sample after the first 60 s that find the clock, and before
+            // its last 7.3 s, whose t + τ is past the reference.
+            if n > 70 && n < 380 && n % 33 == 0 {
+                spiked += 1;
+                let mut fields: Vec<String> = line.split(',').map(String::from).collect();
+                let x: f64 = fields[1].parse().unwrap();
+                fields[1] = (x + 1.0).to_string();
+                fields.join(",")
+            } else {
+                line.to_string()
+            }
+        })
+        .collect();
+    std::fs::write(&dvl, lines.join("\n") + "\n").unwrap();
+    let corrected = dcnet(
+        d,
+        &[
+            "correct",
+            &path(&dvl),
+            "--reference",
+            &path(&reference),
+            "--installation",
+            "installation.toml",
+        ],
+    );
+    assert!(corrected.status.success(), "{}", stderr(&corrected));
+    let printed = stdout(&corrected);
+    assert!(!printed.contains("warning"), "{printed}");
+    let residual_line = (printed.lines())
+        .find(|l| l.starts_with("residual after"))
+        .unwrap();
+    let outliers = number_after(residual_line, "samples, ");
+    assert_eq!(outliers, f64::from(spiked), "{printed}");
+    let residual = number_after(&printed, "s: ");
+    assert!(
+        (residual / 3.46 - 1.0).abs() < 0.15,
+        "{residual}\n{printed}"
+    );
+}
+
 /// A DVL remounted 1.9 m further forward fits far worse than at calibration: warned.
 /// A clock that jumps by 3 s halfway through a dive: the block after the jump warned.
 #[test]
@@ -107,19 +181,7 @@ fn a_remounted_dvl_and_a_clock_that_jumped_are_warned_of() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let path = |p: &Path| p.to_str().unwrap().to_string();
-    let (dvl, reference) = dive(d, "first", clocked(0.6), 1);
-    let saved = dcnet(
-        d,
-        &[
-            "calibrate",
-            &path(&dvl),
-            "--reference",
-            &path(&reference),
-            "--save",
-            "installation.toml",
-        ],
-    );
-    assert!(saved.status.success(), "{}", stderr(&saved));
+    save_first_dive(d);
     let remounted = Installed {
         lever_arm_m: [0.0, 0.05, 0.4],
         ..clocked(2.0)
@@ -264,19 +326,7 @@ fn an_edited_installation_a_short_dive_and_a_dive_with_no_clock_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let path = |p: &Path| p.to_str().unwrap().to_string();
-    let (dvl, reference) = dive(d, "first", clocked(0.6), 1);
-    let saved = dcnet(
-        d,
-        &[
-            "calibrate",
-            &path(&dvl),
-            "--reference",
-            &path(&reference),
-            "--save",
-            "installation.toml",
-        ],
-    );
-    assert!(saved.status.success(), "{}", stderr(&saved));
+    let (dvl, reference) = save_first_dive(d);
     let text = std::fs::read_to_string(d.join("installation.toml")).unwrap();
     let refused = |args: &[&str], says: &str| {
         let output = dcnet(d, args);

@@ -10,9 +10,9 @@
 //! angles in radians, or the first fault as a [`PairedError`].
 
 use super::{
-    GAP_MARGIN_S, INVALID_MARKER_M_S, LeftOut, LeftOutWhy, MAX_BODY_RATE_RAD_S, MAX_DVL_SPEED_M_S,
-    MIN_KEPT_SHARE, MIN_SAMPLES, PairedColumns, PairedError, PairedRecording,
-    REFERENCE_GAP_INTERVALS, sample_interval,
+    GAP_MARGIN_S, GapLimit, INVALID_MARKER_M_S, LeftOut, LeftOutWhy, MAX_BODY_RATE_RAD_S,
+    MAX_DVL_SPEED_M_S, MIN_KEPT_SHARE, MIN_SAMPLES, PairedColumns, PairedError, PairedRecording,
+    REFERENCE_GAP_INTERVALS, default_gap_limit_s, sample_interval,
 };
 use crate::Vec3;
 use std::f64::consts::PI;
@@ -105,6 +105,8 @@ impl Unchecked {
             velocity_ned_m_s: self.velocity_ned_m_s,
             attitude_rad: scaled(self.attitude),
             rate_rad_s: self.rate.map(scaled),
+            gap_limit_s: (at.names.gap_limit_s)
+                .map_or_else(|| default_gap_limit_s(&self.dvl_time_s), |limit| limit.0),
         }
     }
 }
@@ -138,6 +140,14 @@ pub struct Locator {
 
 /// Checks `samples`, each fault placed by `at`, and gives the recording they make.
 pub fn check(samples: Unchecked, at: &Locator) -> Result<PairedRecording, PairedError> {
+    if let Some(GapLimit(limit_s)) = at.names.gap_limit_s
+        && !(limit_s > 0.0 && limit_s.is_finite())
+    {
+        return Err(PairedError::GapLimit {
+            path: at.dvl.clone(),
+            limit_s,
+        });
+    }
     let time = &at.names.time;
     check_increasing(&at.dvl, time, &samples.dvl_time_s, &at.dvl_lines)?;
     // In one file the reference's stamps are the DVL's, already checked.
@@ -360,6 +370,7 @@ mod tests {
                 angles_in_degrees: true,
                 valid: None,
                 zero_is_valid: false,
+                gap_limit_s: None,
             },
         };
         (samples, at)

@@ -31,6 +31,25 @@ pub struct PairedColumns {
     /// bottom lock (what many DVLs and drivers send): off by default.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub zero_is_valid: bool,
+    /// The longest step between two of the DVL's valid samples that does not cut the
+    /// recording into pieces, s, where the recording sets it: by default
+    /// [`DVL_GAP_INTERVALS`](super::DVL_GAP_INTERVALS) of the DVL's median interval.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gap_limit_s: Option<GapLimit>,
+}
+
+/// A gap limit in seconds, as a recording's reading sets it: compared and hashed by its
+/// bits, so that the columns stay a key of the read recordings.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(transparent)]
+pub struct GapLimit(pub f64);
+
+impl Eq for GapLimit {}
+
+impl std::hash::Hash for GapLimit {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        self.0.to_bits().hash(state);
+    }
 }
 
 impl PairedColumns {
@@ -79,6 +98,7 @@ impl PairedColumns {
             angles_in_degrees: false,
             valid: None,
             zero_is_valid: false,
+            gap_limit_s: None,
         }
     }
 }

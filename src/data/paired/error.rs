@@ -138,6 +138,11 @@ pub enum PairedError {
         path.display()
     )]
     TooShort { path: PathBuf, samples: usize },
+    #[error(
+        "{}: gap_limit_s = {limit_s}: a gap limit must be a positive number of seconds (the longest step between two DVL samples that does not cut the recording into pieces; by default three of the DVL's sample intervals)",
+        path.display()
+    )]
+    GapLimit { path: PathBuf, limit_s: f64 },
 }
 
 impl From<CsvError> for PairedError {

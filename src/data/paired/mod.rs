@@ -19,11 +19,12 @@ mod csv;
 mod error;
 mod source;
 
-pub use columns::{PairedColumns, PairedFiles};
+pub use columns::{GapLimit, PairedColumns, PairedFiles};
 pub use error::{PairedError, left_out_words};
 pub use source::{Loaded, ReadRecording, Recordings, Source, SourceFile};
 
 use crate::Vec3;
+use std::ops::Range;
 
 /// The fewest samples a recording may have.
 pub const MIN_SAMPLES: usize = 3;
@@ -45,6 +46,11 @@ pub const MIN_KEPT_SHARE: f64 = 0.25;
 /// A gap in the reference longer than this many of its median sample intervals is not
 /// read across.
 pub const REFERENCE_GAP_INTERVALS: f64 = 3.0;
+
+/// A step between two of the DVL's valid samples longer than this many of its median
+/// sample intervals cuts the recording into pieces (where the recording sets no gap
+/// limit of its own): a few missed pings are noise, a longer silence a lost bottom lock.
+pub const DVL_GAP_INTERVALS: f64 = 3.0;
 
 /// How far from a reference gap a DVL sample is left out, s: the largest time offset a
 /// fit considers, so that no t + τ it tries falls in the gap.
@@ -84,6 +90,17 @@ impl LeftOutWhy {
         LeftOutWhy::ReferenceGap,
     ];
 
+    /// The reason as a key, the corrected recording's `left_out` column.
+    pub fn key(self) -> &'static str {
+        match self {
+            LeftOutWhy::Flagged => "flagged",
+            LeftOutWhy::NoVelocity => "no_velocity",
+            LeftOutWhy::Marker => "invalid_marker",
+            LeftOutWhy::AllZero => "all_zero",
+            LeftOutWhy::ReferenceGap => "reference_gap",
+        }
+    }
+
     /// The reason in words, as a count of them reads it ("3 flagged invalid").
     pub fn words(self) -> &'static str {
         match self {
@@ -97,13 +114,18 @@ impl LeftOutWhy {
 }
 
 /// How many samples a recording read: the DVL's kept, those left out per reason, and
-/// the reference's. Shown as `the DVL's 400 samples, 370 kept (30 left out: 30 with no
-/// velocity), beside the reference's 4000 on its own stamps`.
+/// the reference's; and the pieces its gaps cut it into. Shown as `the DVL's 400
+/// samples, 370 kept (30 left out: 30 with no velocity), beside the reference's 4000 on
+/// its own stamps; 2 pieces (gaps over 3.00 s cut it), the longest loss 31.00 s`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReadCounts {
     pub kept: usize,
     pub left_out: Vec<(LeftOutWhy, usize)>,
     pub reference: usize,
+    pub pieces: usize,
+    pub gap_limit_s: f64,
+    /// The longest step between two kept DVL samples, s.
+    pub longest_loss_s: f64,
 }
 
 impl ReadCounts {
@@ -117,11 +139,17 @@ impl std::fmt::Display for ReadCounts {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "the DVL's {} samples, {} kept ({}), beside the reference's {} on its own stamps",
+            "the DVL's {} samples, {} kept ({}), beside the reference's {} on its own stamps; {} (gaps over {:.2} s cut it), the longest loss {:.2} s",
             self.read(),
             self.kept,
             left_out_words(&self.left_out),
-            self.reference
+            self.reference,
+            match self.pieces {
+                1 => "one piece".to_string(),
+                n => format!("{n} pieces"),
+            },
+            self.gap_limit_s,
+            self.longest_loss_s,
         )
     }
 }
@@ -145,6 +173,27 @@ pub fn sample_interval(time: &[f64]) -> f64 {
     steps[steps.len() / 2]
 }
 
+/// Where the DVL record stamped `time_s` (strictly increasing) is cut into pieces: the
+/// ranges of its samples between steps longer than `gap_limit_s`, in order (none for
+/// an empty record).
+pub fn pieces(time_s: &[f64], gap_limit_s: f64) -> Vec<Range<usize>> {
+    let mut pieces = Vec::new();
+    let mut start = 0;
+    for i in 1..=time_s.len() {
+        if i == time_s.len() || time_s[i] - time_s[i - 1] > gap_limit_s {
+            pieces.push(start..i);
+            start = i;
+        }
+    }
+    pieces
+}
+
+/// The gap limit of a DVL stamped `time_s` (all its samples, kept or not) that sets
+/// none of its own: [`DVL_GAP_INTERVALS`] of its median interval.
+pub fn default_gap_limit_s(time_s: &[f64]) -> f64 {
+    DVL_GAP_INTERVALS * sample_interval(time_s)
+}
+
 /// One recording: the DVL as measured, on its own clock and at its own rate, and the
 /// reference, on its own.
 #[derive(Debug, Clone, PartialEq)]
@@ -166,6 +215,9 @@ pub struct PairedRecording {
     pub attitude_rad: Vec<Vec3>,
     /// The reference's body angular rate (p, q, r) in rad/s, when recorded.
     pub rate_rad_s: Option<Vec<Vec3>>,
+    /// The longest step between two kept DVL samples of one piece, s: everything that
+    /// runs in time runs within pieces ([`pieces`]).
+    pub gap_limit_s: f64,
 }
 
 impl PairedRecording {
@@ -186,13 +238,23 @@ impl PairedRecording {
         }
     }
 
-    /// How many samples it read, kept and left out.
+    /// How many samples it read, kept and left out, and its pieces.
     pub fn counts(&self) -> ReadCounts {
         ReadCounts {
             kept: self.len(),
             left_out: self.left_out_counts(),
             reference: self.reference_time_s.len(),
+            pieces: self.pieces().len(),
+            gap_limit_s: self.gap_limit_s,
+            longest_loss_s: (self.time_s.windows(2))
+                .map(|pair| pair[1] - pair[0])
+                .fold(0.0, f64::max),
         }
+    }
+
+    /// Its kept DVL samples cut at every step longer than its gap limit.
+    pub fn pieces(&self) -> Vec<Range<usize>> {
+        pieces(&self.time_s, self.gap_limit_s)
     }
 
     /// How many DVL samples were left out for each reason, in [`LeftOutWhy::ALL`]'s order
@@ -227,6 +289,7 @@ impl PairedRecording {
                 .rate_rad_s
                 .as_ref()
                 .map(|rate| rate[reference].to_vec()),
+            gap_limit_s: self.gap_limit_s,
         }
     }
 }
@@ -258,6 +321,7 @@ mod tests {
             angles_in_degrees: false,
             valid: None,
             zero_is_valid: false,
+            gap_limit_s: None,
         }
     }
 
@@ -632,6 +696,51 @@ mod tests {
             read_one(&dead, &columns).unwrap_err(),
             "FILE: 0 valid DVL samples, 8 left out: 7 flagged invalid, 1 with no velocity: a calibration needs at least 3 (the DVL lost bottom lock, or its validity column or zero_is_valid is set wrongly)"
         );
+    }
+
+    #[test]
+    fn lost_bottom_lock_cuts_the_recording_into_pieces_at_the_gap_limit() {
+        // A 1 Hz DVL that loses its samples from 10 s to 14 s (empty cells) and from
+        // 30 s to 31 s: 3 s of silence is three intervals, the default limit, and
+        // cuts nothing; 6 s cuts.
+        let row = |t: u32| {
+            let dvl = if (10..15).contains(&t) || (30..32).contains(&t) {
+                ",,"
+            } else {
+                "2,0,0.1"
+            };
+            format!("{t},{dvl},2,0,0,0,0,{}\n", f64::from(t) / 100.0)
+        };
+        let text: String = (0..40).map(row).collect();
+        let text = format!("t,u,v,w,n,e,d,roll,pitch,yaw\n{text}");
+        let mut columns = short_columns();
+        let recording = read_one(&text, &columns).unwrap();
+        assert_eq!(recording.gap_limit_s, 3.0);
+        assert_eq!(recording.pieces(), [0..10, 10..33]);
+        let counts = recording.counts();
+        assert_eq!((counts.pieces, counts.longest_loss_s), (2, 6.0));
+        assert_eq!(
+            counts.to_string(),
+            "the DVL's 40 samples, 33 kept (7 left out: 7 with no velocity), beside the reference's 40 on its own stamps; 2 pieces (gaps over 3.00 s cut it), the longest loss 6.00 s"
+        );
+        // A limit of the recording's own: 2 s cuts the second gap too, 10 s neither.
+        for (limit_s, expected) in [
+            (2.0, vec![0..10, 10..25, 25..33]),
+            (10.0, Vec::from([0..33])),
+        ] {
+            columns.gap_limit_s = Some(GapLimit(limit_s));
+            assert_eq!(read_one(&text, &columns).unwrap().pieces(), expected);
+        }
+        for limit_s in [0.0, -1.0, f64::NAN] {
+            columns.gap_limit_s = Some(GapLimit(limit_s));
+            assert_eq!(
+                read_one(&text, &columns).unwrap_err(),
+                format!(
+                    "FILE: gap_limit_s = {limit_s}: a gap limit must be a positive number of seconds (the longest step between two DVL samples that does not cut the recording into pieces; by default three of the DVL's sample intervals)"
+                )
+            );
+        }
+        assert_eq!(pieces(&[], 1.0), Vec::<Range<usize>>::new());
     }
 
     #[test]

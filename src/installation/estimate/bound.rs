@@ -150,10 +150,10 @@ pub fn bound(fit: &Fit, noise: Noise, tolerances: &Tolerances) -> TermBound {
     let sigma_m_s = noise.per_axis_m_s();
     let information = UnitInformation::of(fit, names.len());
     let (inverse, flat_with) = information.pseudo_inverse(&names);
-    let residual_noise = ResidualNoise::of(&fit.residuals, names.len());
+    let residual_noise = fit.residual_noise();
     let modelled = information.sandwich(
         &inverse,
-        &residual_noise.weighted_information(&fit.jacobian),
+        &residual_noise.weighted_information(&fit.jacobian, &fit.follows),
     );
     let unmodelled = information.sandwich(
         &inverse,
@@ -370,6 +370,7 @@ mod tests {
             robust: None,
             residual_rms_m_s: [0.0; 3],
             sample_count: rows / 3,
+            follows: (0..rows / 3).map(|i| i > 0).collect(),
             termination: "test".into(),
         }
     }
@@ -544,7 +545,7 @@ mod tests {
         let residuals: Vec<f64> = (0..3 * samples).map(|r| path[r / 3]).collect();
         let fit = fit_leaving(terms, &columns, residuals.clone());
         let bound = bound(&fit, NOISE, &DEFAULT_TOLERANCES);
-        let noise = ResidualNoise::of(&nalgebra::DVector::from_vec(residuals), 3);
+        let noise = fit.residual_noise();
         let rho = noise.lag_one[0];
         assert!((rho - 0.8).abs() < 0.1, "{rho}");
         let n = samples as f64;

@@ -358,6 +358,7 @@ pub(crate) mod tests {
             rate_rad_s: time_s.iter().map(|&t| motion(t).rate_rad_s).collect(),
             time_s: time_s.clone(),
             max_gap_s: 3.0,
+            dvl_gap_limit_s: 3.0,
         };
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
         let noise = Normal::new(0.0, noise_m_s).unwrap();

@@ -149,16 +149,13 @@ pub fn run_filter_observed(
     // previous one, whether it is its neighbour).
     let mut early: Vec<(usize, f64, bool)> = Vec::new();
     let mut previous: Option<f64> = None;
-    let mut step_s = f64::INFINITY;
     for i in reference.interior(time_s, TIME_OFFSET_MARGIN_S) {
         let t = time_s[i];
         let elapsed_s = previous.map_or(0.0, |p| t - p);
+        // Across a gap the terms carry on (the installation is the same; a random walk
+        // grows by the gap's length), but the noise's correlation is not read across it.
         filter.predict(elapsed_s);
-        // Whether this sample follows the previous one by the record's step (no gap).
-        let neighbour = previous.is_some_and(|p| t - p <= 1.5 * step_s);
-        if let Some(p) = previous {
-            step_s = step_s.min(t - p);
-        }
+        let neighbour = previous.is_some() && elapsed_s <= reference.dvl_gap_limit_s;
         previous = Some(t);
         let is_gated = gated(&measure(i, filter.estimate.as_slice()), &filter.covariance);
         if !is_gated {

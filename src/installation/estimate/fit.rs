@@ -17,6 +17,7 @@
 //! pseudo-residuals and its `curvature` the bread's weights.
 
 use crate::Vec3;
+use crate::installation::estimate::residual_noise::ResidualNoise;
 use crate::installation::estimate::robust::{Loss, Robust, RobustFit, scales};
 use crate::installation::frames::{Reference, ReferenceAt};
 use crate::installation::terms::{Installation, TermSet};
@@ -71,6 +72,9 @@ pub struct Fit {
     pub residual_rms_m_s: Vec3,
     /// How many DVL samples were fitted (those inside the fixed mask).
     pub sample_count: usize,
+    /// Whether each fitted sample follows the one before it within a piece
+    /// ([`Reference::follows`]): the noise's correlation in time is read within pieces.
+    pub follows: Vec<bool>,
     /// How LM stopped ("none" when nothing was estimated).
     pub termination: String,
 }
@@ -91,6 +95,11 @@ impl Fit {
                 robust.curvature[i] * rows[(i, j)]
             }),
         }
+    }
+
+    /// The noise its residuals show, read within pieces.
+    pub fn residual_noise(&self) -> ResidualNoise {
+        ResidualNoise::of(&self.residuals, self.parameters.len(), &self.follows)
     }
 
     /// The samples the robust loss rejected as outliers (none for least squares).
@@ -439,6 +448,7 @@ fn solution(
     sample_count: usize,
 ) -> Result<Fit, FitError> {
     let (terms, installation) = (solved.terms, solved.installation());
+    let follows = solved.reference.follows(solved.time_s);
     let (raw, jacobian) = solved.raw_linearised();
     let residual_rms_m_s = residual_rms(&raw, sample_count);
     let robust = solved.robust.map(|loss| loss.fitted(&raw));
@@ -462,6 +472,7 @@ fn solution(
         residuals,
         robust,
         sample_count,
+        follows,
         termination,
     })
 }

@@ -8,14 +8,20 @@
 //! structure is known: the vehicle's block A and each recording's block B_k, so the
 //! recordings' terms are eliminated by a Schur complement,
 //! `S = Σ_k A_kᵀ A_k − A_kᵀ B_k (B_kᵀ B_k)⁻¹ B_kᵀ A_k`, and K recordings cost K times one.
-//! Each recording's samples are those of its own fit's fixed mask.
+//! Each recording's samples are those of its own fit's fixed mask. As the single fit
+//! does, it goes on from the least-squares solution under Huber's loss, then Tukey's
+//! ([`super::robust`]), their scales per axis from the residuals of all the recordings
+//! (one DVL): each residual and its Jacobian rows go through the loss's transform, so
+//! the same Schur step minimises the robust cost.
 //!
 //! The vehicle's standard deviations are the single fit's [`bound`] applied to the
 //! stacked Jacobian with the dive's terms projected out, `Ã_k = A_k − B_k (B_kᵀB_k)⁻¹
 //! B_kᵀ A_k` (ÃᵀÃ is S): the same sandwich over the residuals' noise, read from all the
 //! recordings. Each clock's is its own block's given the vehicle's (the same sandwich,
 //! on its own residuals), plus the vehicle's uncertainty carried through
-//! `(B_kᵀB_k)⁻¹ B_kᵀA_k`.
+//! `(B_kᵀB_k)⁻¹ B_kᵀA_k`. Under the robust loss every product carries its weights D,
+//! the bread's: `Ã_k = A_k − B_k (B_kᵀDB_k)⁻¹ B_kᵀDA_k`, the residuals the
+//! pseudo-residuals.
 //! In: the recordings and their references, the vehicle's and the dive's terms. Out: a
 //! [`JointFit`].
 
@@ -25,6 +31,7 @@ use crate::installation::estimate::clock::{covariance, search_offset};
 use crate::installation::estimate::fit::{
     Fit, FitError, TIME_OFFSET_MARGIN_S, linearised, mask_about, residual_rms,
 };
+use crate::installation::estimate::robust::{Loss, Robust, RobustFit, scales};
 use crate::installation::frames::Reference;
 use crate::installation::terms::{Installation, TermSet};
 use nalgebra::{DMatrix, DVector};
@@ -60,6 +67,8 @@ pub struct JointFit {
     /// Each recording's residual RMS per DVL axis, m/s, and samples fitted.
     pub residual_rms_m_s: Vec<Vec3>,
     pub sample_counts: Vec<usize>,
+    /// Each recording's samples the robust loss rejected as outliers.
+    pub outliers: Vec<usize>,
 }
 
 impl JointFit {
@@ -79,11 +88,29 @@ impl JointFit {
 }
 
 /// Each recording's blocks at the current terms: residuals r, the vehicle's columns A
-/// and the dive's B.
+/// and the dive's B, through the robust loss's transform where there is one.
 struct Blocks {
+    /// v_dvl − predict, m/s, before any transform.
+    raw: DVector<f64>,
     residuals: DVector<f64>,
     vehicle: DMatrix<f64>,
     dive: DMatrix<f64>,
+    /// Whether each sample follows the one before it within a piece.
+    follows: Vec<bool>,
+}
+
+impl Blocks {
+    /// The residuals and Jacobian rows under `robust`'s loss: each residual its
+    /// transform, each row times the transform's slope (as the single fit's).
+    fn transform(&mut self, robust: Robust) {
+        for (i, &r) in self.raw.iter().enumerate() {
+            let (axis, u) = (i % 3, robust.scaled(r, i % 3));
+            self.residuals[i] = robust.loss.residual(u, robust.scale_m_s[axis]);
+            let slope = robust.loss.slope(u);
+            self.vehicle.row_mut(i).scale_mut(slope);
+            self.dive.row_mut(i).scale_mut(slope);
+        }
+    }
 }
 
 /// The vehicle's and the dive's terms of `terms`: the dive's are `dive`'s that `terms`
@@ -140,6 +167,8 @@ struct Problem<'a> {
     masks: Vec<std::ops::Range<usize>>,
     vehicle_terms: TermSet,
     dive_terms: TermSet,
+    /// The robust loss minimised, where not least squares.
+    robust: Option<Robust>,
 }
 
 /// The parameters of a joint fit: the vehicle's, and each recording's dive terms.
@@ -175,13 +204,36 @@ impl Problem<'_> {
                 );
                 let (_, dive) =
                     linearised(time_s, dvl_m_s, r.reference, self.dive_terms, installation);
-                Blocks {
+                let mut blocks = Blocks {
+                    raw: residuals.clone(),
                     residuals,
                     vehicle,
                     dive,
+                    follows: r.reference.follows(time_s),
+                };
+                if let Some(robust) = self.robust {
+                    blocks.transform(robust);
                 }
+                blocks
             })
             .collect()
+    }
+
+    /// The least-squares solution from `start`, then, as the single fit's, the
+    /// solution under Huber's loss and Tukey's from it, each with the scales of the
+    /// residuals it starts from (all the recordings': one DVL); `self.robust` is left
+    /// at the last loss (none where the residuals have no scale).
+    fn solve(&mut self, start: Parameters) -> Parameters {
+        let (mut solution, mut blocks) = self.minimise(start);
+        for loss in [Loss::Huber, Loss::Tukey] {
+            let raw = stack(blocks.iter().map(|b| &b.raw));
+            let Some(scale_m_s) = scales(&raw) else {
+                break;
+            };
+            self.robust = Some(Robust { loss, scale_m_s });
+            (solution, blocks) = self.minimise(solution);
+        }
+        solution
     }
 
     /// Levenberg–Marquardt from `start`, each step through [`schur_step`]: the
@@ -255,11 +307,12 @@ pub fn joint_fit(
             margin_s: TIME_OFFSET_MARGIN_S,
         });
     }
-    let problem = Problem {
+    let mut problem = Problem {
         recordings,
         masks,
         vehicle_terms,
         dive_terms,
+        robust: None,
     };
     let of = |start: &Installation| DVector::from_vec(start.to_parameters(&vehicle_terms));
     let start = Parameters {
@@ -269,38 +322,143 @@ pub fn joint_fit(
             .map(|start| DVector::from_vec(start.to_parameters(&dive_terms)))
             .collect(),
     };
-    let (solution, blocks) = problem.minimise(start);
+    let solution = problem.solve(start);
+    // The bound reads the raw Jacobian blocks, the loss's weights D apart.
+    let robust = problem.robust.take();
+    let blocks = problem.blocks(&solution);
+    let (fitted, outliers) = robust_fits(&blocks, robust)?;
+    let all_outliers = outliers.iter().sum::<usize>();
+    let weighed: Vec<Weighed> = blocks
+        .iter()
+        .zip(&fitted)
+        .map(|(b, f)| Weighed::of(b, f.as_ref()))
+        .collect();
     let vehicle = problem.installation(&solution.vehicle, &DVector::zeros(parameters));
-    let (jacobian, residuals) = projected(&blocks);
-    let stacked = Fit {
-        terms: vehicle_terms,
-        installation: vehicle,
-        parameters: solution.vehicle.as_slice().to_vec(),
-        residual_rms_m_s: [0.0; 3],
-        sample_count: residuals.len() / 3,
-        jacobian,
-        residuals,
-        robust: None,
-        termination: "joint".into(),
-    };
+    let stacked = stacked_fit(&weighed, vehicle_terms, vehicle, robust, all_outliers);
     let bound = bound(&stacked, noise, tolerances);
     Ok(JointFit {
         vehicle_terms,
         dive_terms,
         vehicle,
-        dives: solution
-            .dives
-            .iter()
+        dives: (solution.dives.iter())
             .map(|d| problem.installation(&solution.vehicle, d))
             .collect(),
-        dive_std: dive_standard_deviations(&blocks, &bound, dive_terms, (noise, tolerances)),
+        dive_std: dive_standard_deviations(
+            &weighed,
+            &fitted,
+            &bound,
+            dive_terms,
+            (noise, tolerances),
+        ),
         bound,
-        residual_rms_m_s: blocks
-            .iter()
-            .map(|b| residual_rms(&b.residuals, b.residuals.len() / 3))
+        residual_rms_m_s: (blocks.iter())
+            .map(|b| residual_rms(&b.raw, b.raw.len() / 3))
             .collect(),
-        sample_counts: blocks.iter().map(|b| b.residuals.len() / 3).collect(),
+        sample_counts: blocks.iter().map(|b| b.raw.len() / 3).collect(),
+        outliers,
     })
+}
+
+/// What `robust`'s loss makes of each recording's raw residuals (none under least
+/// squares), and each one's outliers; refused where more than a quarter of all the
+/// samples are outliers.
+fn robust_fits(
+    blocks: &[Blocks],
+    robust: Option<Robust>,
+) -> Result<(Vec<Option<RobustFit>>, Vec<usize>), FitError> {
+    let fitted: Vec<Option<RobustFit>> = (blocks.iter())
+        .map(|b| robust.map(|r| r.fitted(&b.raw)))
+        .collect();
+    let outliers: Vec<usize> = (fitted.iter())
+        .map(|f| f.as_ref().map_or(0, |f| f.outliers))
+        .collect();
+    let samples: usize = blocks.iter().map(|b| b.raw.len() / 3).sum();
+    let all = outliers.iter().sum::<usize>();
+    if 4 * all > samples {
+        return Err(FitError::Outliers {
+            outliers: all,
+            samples,
+        });
+    }
+    Ok((fitted, outliers))
+}
+
+/// The vehicle's terms `vehicle` as one fit over every recording's samples, for the
+/// single fit's [`bound`]: the stacked Jacobian with the dive's terms projected out,
+/// the meat's residuals, and under a robust loss its weights D and `outliers`.
+fn stacked_fit(
+    weighed: &[Weighed],
+    terms: TermSet,
+    vehicle: Installation,
+    robust: Option<Robust>,
+    outliers: usize,
+) -> Fit {
+    let (jacobian, residuals, follows) = projected(weighed);
+    Fit {
+        terms,
+        installation: vehicle,
+        parameters: vehicle.to_parameters(&terms),
+        residual_rms_m_s: [0.0; 3],
+        sample_count: residuals.len() / 3,
+        jacobian,
+        residuals,
+        robust: robust.map(|loss| RobustFit {
+            loss,
+            curvature: stack(weighed.iter().map(|w| &w.curvature)),
+            outliers,
+        }),
+        follows,
+        termination: "joint".into(),
+    }
+}
+
+/// One recording's raw blocks as the bound reads them under a loss: its bread's
+/// weights D, its residuals as the meat reads them (the pseudo-residuals), and the
+/// dive's normal matrix BᵀDB inverted (`None` where singular).
+struct Weighed<'a> {
+    blocks: &'a Blocks,
+    curvature: DVector<f64>,
+    meat: DVector<f64>,
+    dive_inverse: Option<DMatrix<f64>>,
+}
+
+impl<'a> Weighed<'a> {
+    fn of(blocks: &'a Blocks, fitted: Option<&RobustFit>) -> Weighed<'a> {
+        let curvature = fitted.map_or_else(
+            || DVector::from_element(blocks.raw.len(), 1.0),
+            |f| f.curvature.clone(),
+        );
+        let meat = fitted.map_or_else(
+            || blocks.raw.clone(),
+            |f| f.loss.pseudo_residuals(&blocks.raw),
+        );
+        let dive_inverse =
+            (blocks.dive.transpose() * weighted(&curvature, &blocks.dive)).try_inverse();
+        Weighed {
+            blocks,
+            curvature,
+            meat,
+            dive_inverse,
+        }
+    }
+
+    /// (BᵀDB)⁻¹ BᵀDA: how the dive's terms follow the vehicle's.
+    fn gain(&self) -> Option<DMatrix<f64>> {
+        let b = self.blocks;
+        let inverse = self.dive_inverse.as_ref()?;
+        Some(inverse * (b.dive.transpose() * weighted(&self.curvature, &b.vehicle)))
+    }
+}
+
+/// diag(`d`) · `m`: each row of `m` times its weight.
+fn weighted(d: &DVector<f64>, m: &DMatrix<f64>) -> DMatrix<f64> {
+    DMatrix::from_fn(m.nrows(), m.ncols(), |i, j| d[i] * m[(i, j)])
+}
+
+/// `parts` one after another.
+fn stack<'a>(parts: impl Iterator<Item = &'a DVector<f64>> + Clone) -> DVector<f64> {
+    let rows = parts.clone().map(|p| p.len()).sum();
+    DVector::from_iterator(rows, parts.flat_map(|p| p.iter().copied()))
 }
 
 /// (B_kᵀB_k + λ diag)⁻¹ for each recording; `None` where one is singular.
@@ -350,44 +508,50 @@ fn schur_step(blocks: &[Blocks], damping: f64) -> Option<(DVector<f64>, Vec<DVec
     Some((step, dive_steps))
 }
 
-/// The vehicle's Jacobian with each recording's dive terms projected out, stacked, and
-/// the residuals stacked likewise.
-fn projected(blocks: &[Blocks]) -> (DMatrix<f64>, DVector<f64>) {
-    let inverses = dive_inverses(blocks, 0.0).unwrap_or_default();
-    let rows: usize = blocks.iter().map(|b| b.residuals.len()).sum();
-    let p = blocks.first().map_or(0, |b| b.vehicle.ncols());
+/// The vehicle's Jacobian with each recording's dive terms projected out (in the
+/// D-metric), stacked, and the meat's residuals and the pieces' neighbours stacked
+/// likewise (no recording follows another).
+fn projected(weighed: &[Weighed]) -> (DMatrix<f64>, DVector<f64>, Vec<bool>) {
+    let rows: usize = weighed.iter().map(|w| w.meat.len()).sum();
+    let p = weighed.first().map_or(0, |w| w.blocks.vehicle.ncols());
     let mut jacobian = DMatrix::zeros(rows, p);
-    let mut residuals = DVector::zeros(rows);
     let mut at = 0;
-    for (k, b) in blocks.iter().enumerate() {
-        let n = b.residuals.len();
-        let part = match inverses.get(k) {
-            Some(inverse) if b.dive.ncols() > 0 => {
-                &b.vehicle - &b.dive * (inverse * (b.dive.transpose() * &b.vehicle))
-            }
+    for w in weighed {
+        let b = w.blocks;
+        let n = b.raw.len();
+        let part = match w.gain() {
+            Some(gain) if b.dive.ncols() > 0 => &b.vehicle - &b.dive * gain,
             _ => b.vehicle.clone(),
         };
         jacobian.rows_mut(at, n).copy_from(&part);
-        residuals.rows_mut(at, n).copy_from(&b.residuals);
         at += n;
     }
-    (jacobian, residuals)
+    let residuals = stack(weighed.iter().map(|w| &w.meat));
+    let follows = weighed
+        .iter()
+        .flat_map(|w| w.blocks.follows.clone())
+        .collect();
+    (jacobian, residuals, follows)
 }
 
 /// Each recording's dive terms' standard deviations: its own block's given the
 /// vehicle's terms (the single fit's [`bound`] on its residuals, their correlation in
-/// time included), plus the vehicle's covariance carried through (B_kᵀB_k)⁻¹ B_kᵀA_k.
+/// time included, under the loss's weights), plus the vehicle's covariance carried
+/// through (B_kᵀDB_k)⁻¹ B_kᵀDA_k.
 fn dive_standard_deviations(
-    blocks: &[Blocks],
+    weighed: &[Weighed],
+    fitted: &[Option<RobustFit>],
     vehicle: &TermBound,
     dive_terms: TermSet,
     (noise, tolerances): (Noise, &Tolerances),
 ) -> Vec<Vec<f64>> {
     let covariance = covariance(&vehicle.std, &vehicle.correlation);
-    blocks
+    weighed
         .iter()
-        .map(|b| {
-            let Some(inverse) = (b.dive.transpose() * &b.dive).try_inverse() else {
+        .zip(fitted)
+        .map(|(w, fitted)| {
+            let b = w.blocks;
+            let Some(gain) = w.gain() else {
                 return vec![f64::INFINITY; b.dive.ncols()];
             };
             let own = Fit {
@@ -395,14 +559,14 @@ fn dive_standard_deviations(
                 installation: Installation::default(),
                 parameters: vec![0.0; b.dive.ncols()],
                 residual_rms_m_s: [0.0; 3],
-                sample_count: b.residuals.len() / 3,
+                sample_count: b.raw.len() / 3,
                 jacobian: b.dive.clone(),
-                residuals: b.residuals.clone(),
-                robust: None,
+                residuals: w.meat.clone(),
+                robust: fitted.clone(),
+                follows: b.follows.clone(),
                 termination: "joint".into(),
             };
             let given = bound(&own, noise, tolerances).std;
-            let gain = &inverse * (b.dive.transpose() * &b.vehicle);
             let carried = &gain * &covariance * gain.transpose();
             (0..b.dive.ncols())
                 .map(|k| (given[k].powi(2) + carried[(k, k)]).sqrt())
@@ -418,26 +582,17 @@ mod tests {
     use crate::installation::estimate::clock::tests::turning_dive;
     use crate::installation::terms::PerAxis;
 
-    #[test]
-    fn the_joint_fit_recovers_the_shared_terms_and_every_clock() {
-        let geometry = Installation {
-            scale: [0.01; 3],
-            lever_arm_m: [-1.9, 0.05, 0.4],
-            bias_m_s: [0.01, -0.005, 0.003],
-            ..Installation::default()
-        };
-        let clocks = [0.6, -1.2, 2.1, 0.2];
-        let dives: Vec<_> = clocks
-            .iter()
-            .enumerate()
-            .map(|(k, &tau)| {
-                let truth = Installation {
-                    time_offset_s: tau,
-                    ..geometry
-                };
-                turning_dive(&truth, 0.01, 30 + k as u64)
-            })
-            .collect();
+    type Dive = (Vec<f64>, Vec<Vec3>, Reference);
+
+    /// The noise of [`turning_dive`]'s DVL here, 1 cm/s per axis.
+    const NOISE: Noise = Noise {
+        dvl_m_s: 0.01,
+        reference_m_s: 0.0,
+    };
+
+    /// `dives` of one vehicle fitted jointly in `terms`, each with its own clock, from
+    /// the first one's fit alone; that fit beside it.
+    fn fitted_jointly(dives: &[Dive], terms: TermSet) -> (JointFit, Fit) {
         let recordings: Vec<JointRecording> = dives
             .iter()
             .map(|(time_s, dvl_m_s, reference)| JointRecording {
@@ -446,20 +601,9 @@ mod tests {
                 reference,
             })
             .collect();
-        let terms = TermSet {
-            scale: PerAxis::Scalar,
-            lever_arm: true,
-            time_offset: true,
-            bias: PerAxis::PerAxis,
-            ..TermSet::NONE
-        };
         let clock = TermSet {
             time_offset: true,
             ..TermSet::NONE
-        };
-        let noise = Noise {
-            dvl_m_s: 0.01,
-            reference_m_s: 0.0,
         };
         let (time_s, dvl_m_s, reference) = &dives[0];
         let first =
@@ -469,9 +613,15 @@ mod tests {
             &recordings,
             &starts,
             (terms, clock),
-            (noise, &DEFAULT_TOLERANCES),
+            (NOISE, &DEFAULT_TOLERANCES),
         )
         .unwrap();
+        (joint, first)
+    }
+
+    /// Every vehicle term of `joint` within three standard deviations of `geometry`'s,
+    /// and every clock of those of `clocks`.
+    fn assert_covers(joint: &JointFit, geometry: &Installation, clocks: &[f64]) {
         let truth = geometry.to_parameters(&joint.vehicle_terms);
         for (k, name) in joint.bound.names.iter().enumerate() {
             let error = joint.bound.value[k] - truth[k];
@@ -489,20 +639,91 @@ mod tests {
                 joint.dive_std[k][0]
             );
         }
+    }
+
+    const GEOMETRY: Installation = Installation {
+        scale: [0.0; 3],
+        misalignment_rad: [0.0; 3],
+        lever_arm_m: [-1.9, 0.05, 0.4],
+        time_offset_s: 0.0,
+        bias_m_s: [0.01, -0.005, 0.003],
+    };
+
+    const LEVER_OFFSET_BIAS: TermSet = TermSet {
+        lever_arm: true,
+        time_offset: true,
+        bias: PerAxis::PerAxis,
+        ..TermSet::NONE
+    };
+
+    #[test]
+    fn the_joint_fit_recovers_the_shared_terms_and_every_clock() {
+        let geometry = Installation {
+            scale: [0.01; 3],
+            ..GEOMETRY
+        };
+        let clocks = [0.6, -1.2, 2.1, 0.2];
+        let dives: Vec<Dive> = (clocks.iter().enumerate())
+            .map(|(k, &tau)| {
+                let truth = Installation {
+                    time_offset_s: tau,
+                    ..geometry
+                };
+                turning_dive(&truth, 0.01, 30 + k as u64)
+            })
+            .collect();
+        let terms = TermSet {
+            scale: PerAxis::Scalar,
+            ..LEVER_OFFSET_BIAS
+        };
+        let (joint, first) = fitted_jointly(&dives, terms);
+        assert_covers(&joint, &geometry, &clocks);
         // Four recordings hold four times one's information: half its deviation.
-        let alone = bound(&first, noise, &DEFAULT_TOLERANCES);
-        let lever_x = joint
-            .bound
-            .names
-            .iter()
-            .position(|n| *n == "lever_arm_x_m")
-            .unwrap();
-        let alone_x = alone
-            .names
-            .iter()
-            .position(|n| *n == "lever_arm_x_m")
-            .unwrap();
-        let ratio = joint.bound.bound_std[lever_x] / alone.bound_std[alone_x];
+        let alone = bound(&first, NOISE, &DEFAULT_TOLERANCES);
+        let lever_x = |names: &[&str]| names.iter().position(|n| *n == "lever_arm_x_m").unwrap();
+        let ratio = joint.bound.bound_std[lever_x(&joint.bound.names)]
+            / alone.bound_std[lever_x(&alone.names)];
         assert!((0.4..0.6).contains(&ratio), "{ratio}");
+    }
+
+    #[test]
+    fn spikes_in_every_recording_pull_nothing_and_are_counted() {
+        // Three dives, 3 % of each one's samples with a 0.5 to 2 m/s spike on one axis.
+        let clocks = [0.6, -1.2, 2.1];
+        let mut spiked = Vec::new();
+        let dives: Vec<Dive> = (clocks.iter().enumerate())
+            .map(|(k, &tau)| {
+                let truth = Installation {
+                    time_offset_s: tau,
+                    ..GEOMETRY
+                };
+                let (time_s, mut dvl, reference) = turning_dive(&truth, 0.01, 40 + k as u64);
+                let mut count = 0;
+                for i in (7..dvl.len()).step_by(33) {
+                    dvl[i][i % 3] += 0.5 + 1.5 * ((i * 37) % 100) as f64 / 100.0;
+                    count += 1;
+                }
+                spiked.push(count);
+                (time_s, dvl, reference)
+            })
+            .collect();
+        let (joint, _) = fitted_jointly(&dives, LEVER_OFFSET_BIAS);
+        // Every spike is one of the fit's outliers (the samples its mask fits may lose a
+        // spike at either end).
+        for (k, (&outliers, &count)) in joint.outliers.iter().zip(&spiked).enumerate() {
+            assert!(
+                (count - 1..=count).contains(&outliers),
+                "dive {k}: {outliers} of {count}"
+            );
+        }
+        assert_covers(&joint, &GEOMETRY, &clocks);
+        // The spikes cost nothing: each standard deviation within 1.5 of the noise's
+        // bound.
+        for (k, name) in joint.bound.names.iter().enumerate() {
+            assert!(
+                joint.bound.std[k] < 1.5 * joint.bound.bound_std[k],
+                "{name}"
+            );
+        }
     }
 }

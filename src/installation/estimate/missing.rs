@@ -139,7 +139,7 @@ fn score_test(
         columns - &fit.jacobian * (inverse * (fit.jacobian.transpose() * fit.curved(columns)))
     };
     let score = columns.transpose() * &fit.residuals;
-    let covariance = noise.weighted_information(&apart);
+    let covariance = noise.weighted_information(&apart, &fit.follows);
     let tolerance = 1e-12 * covariance.norm().max(f64::MIN_POSITIVE);
     let spread = covariance.pseudo_inverse(tolerance).ok()?;
     let statistic = (score.transpose() * spread * &score)[(0, 0)];
@@ -175,7 +175,7 @@ mod tests {
             ..TermSet::NONE
         };
         let fitted = fit(&time_s, &dvl, &reference, without).unwrap();
-        let noise = ResidualNoise::of(&fitted.residuals, fitted.parameters.len());
+        let noise = fitted.residual_noise();
         let asked = asked_for(&fitted, (&time_s, &dvl), &reference, &noise);
         assert_eq!(
             asked.iter().map(|a| a.term).collect::<Vec<_>>(),
@@ -187,7 +187,7 @@ mod tests {
             ..without
         };
         let fitted = fit(&time_s, &dvl, &reference, with).unwrap();
-        let noise = ResidualNoise::of(&fitted.residuals, fitted.parameters.len());
+        let noise = fitted.residual_noise();
         let asked = asked_for(&fitted, (&time_s, &dvl), &reference, &noise);
         assert!(asked.is_empty(), "{asked:?}");
     }

@@ -44,18 +44,23 @@ pub struct ResidualNoise {
 }
 
 impl ResidualNoise {
-    /// Of `residuals` (x, y, z of each sample, in order) after fitting `parameters`.
-    pub fn of(residuals: &DVector<f64>, parameters: usize) -> ResidualNoise {
+    /// Of `residuals` (x, y, z of each sample, in order) after fitting `parameters`;
+    /// `follows` says of each sample whether it follows the one before it within a
+    /// piece (the products of neighbours are summed within pieces only).
+    pub fn of(residuals: &DVector<f64>, parameters: usize, follows: &[bool]) -> ResidualNoise {
         let samples = residuals.len() / 3;
-        let axis = |k: usize| (0..samples).map(move |i| residuals[3 * i + k]);
         let mut sums = ResidualSums {
             power: [0.0; 3],
             lagged: [0.0; 3],
             samples,
         };
         for k in 0..3 {
-            sums.power[k] = axis(k).map(|r| r * r).sum();
-            sums.lagged[k] = axis(k).zip(axis(k).skip(1)).map(|(a, b)| a * b).sum();
+            let r = |i: usize| residuals[3 * i + k];
+            sums.power[k] = (0..samples).map(|i| r(i) * r(i)).sum();
+            sums.lagged[k] = (1..samples)
+                .filter(|&i| follows[i])
+                .map(|i| r(i) * r(i - 1))
+                .sum();
         }
         ResidualNoise::of_sums(&sums, parameters)
     }
@@ -105,10 +110,11 @@ impl ResidualNoise {
     }
 
     /// JᵀΣJ for a Jacobian whose rows are x, y, z of each sample in order: per axis, Σ's
-    /// entry for samples i and j is σ² ρ^|i−j|. With the running sum fᵢ = Jᵢ + ρ fᵢ₋₁
-    /// and A = Σ Jᵢ fᵢᵀ (the pairs j ≤ i), it is σ² (A + Aᵀ − Σ JᵢJᵢᵀ): one pass over
-    /// the rows.
-    pub fn weighted_information(&self, jacobian: &DMatrix<f64>) -> DMatrix<f64> {
+    /// entry for samples i and j of one piece is σ² ρ^|i−j|, for samples of two pieces
+    /// zero (`follows` as [`Self::of`]'s). With the running sum fᵢ = Jᵢ + ρ fᵢ₋₁ (fᵢ =
+    /// Jᵢ where a piece starts) and A = Σ Jᵢ fᵢᵀ (the pairs j ≤ i), it is σ² (A + Aᵀ −
+    /// Σ JᵢJᵢᵀ): one pass over the rows.
+    pub fn weighted_information(&self, jacobian: &DMatrix<f64>, follows: &[bool]) -> DMatrix<f64> {
         let (rows, n) = jacobian.shape();
         let samples = rows / 3;
         let mut information = DMatrix::zeros(n, n);
@@ -117,9 +123,9 @@ impl ResidualNoise {
             let mut running = DVector::<f64>::zeros(n);
             let mut pairs = DMatrix::<f64>::zeros(n, n);
             let mut diagonal = DMatrix::<f64>::zeros(n, n);
-            for i in 0..samples {
+            for (i, &follows) in follows.iter().enumerate().take(samples) {
                 let row = jacobian.row(3 * i + k).transpose();
-                running *= rho;
+                running *= if follows { rho } else { 0.0 };
                 running += &row;
                 pairs += &row * running.transpose();
                 diagonal += &row * row.transpose();
@@ -182,29 +188,56 @@ mod tests {
             1 => 2.0,
             _ => 0.0,
         });
-        let noise = ResidualNoise::of(&residuals, 0);
+        let follows: Vec<bool> = (0..samples).map(|i| i > 0).collect();
+        let noise = ResidualNoise::of(&residuals, 0, &follows);
         assert_eq!(noise.std_m_s, [1.0, 2.0, 0.0]);
         assert_eq!(noise.lag_one, [-MAX_LAG_ONE, MAX_LAG_ONE, 0.0]);
         // With 6 parameters fitted, the variance counts 3 · 200 − 6 degrees of freedom.
-        let fitted = ResidualNoise::of(&residuals, 6);
+        let fitted = ResidualNoise::of(&residuals, 6, &follows);
         assert!((fitted.std_m_s[1] - 2.0 * (600.0f64 / 594.0).sqrt()).abs() < 1e-12);
     }
 
     #[test]
+    fn neighbours_are_not_read_across_a_gap() {
+        // Pieces of two samples each, +1, +1, then −1, −1, and so on: within a piece
+        // neighbours agree (Σ rᵢrᵢ₋₁ = 100 of Σ rᵢ² = 200), across a gap they would
+        // disagree (99 more products of −1).
+        let samples = 200;
+        let residuals = DVector::from_fn(
+            3 * samples,
+            |r, _| if (r / 6) % 2 == 0 { 1.0 } else { -1.0 },
+        );
+        let in_pairs: Vec<bool> = (0..samples).map(|i| i % 2 == 1).collect();
+        let bridged: Vec<bool> = (0..samples).map(|i| i > 0).collect();
+        // Read 100/200 and 1/200, each with its bias (1 + 3ρ)/n taken back.
+        let expected = [0.5 + 2.5 / 200.0, 0.005 + 1.015 / 200.0];
+        for (follows, expected) in [in_pairs, bridged].iter().zip(expected) {
+            let noise = ResidualNoise::of(&residuals, 0, follows);
+            assert!((noise.lag_one[0] - expected).abs() < 1e-12, "{noise:?}");
+        }
+    }
+
+    #[test]
     fn the_weighted_information_is_the_dense_sum() {
-        // A random-looking Jacobian of 3 columns over 40 samples, against the O(N²) sum.
+        // A random-looking Jacobian of 3 columns over 40 samples, against the O(N²) sum,
+        // with a gap before sample 25: no correlation across it.
         let samples = 40;
+        let gap_before = 25;
+        let follows: Vec<bool> = (0..samples).map(|i| i > 0 && i != gap_before).collect();
         let jacobian = DMatrix::from_fn(3 * samples, 3, |r, c| ((r * 7 + c * 13) as f64).sin());
         let noise = ResidualNoise {
             std_m_s: [0.5, 1.0, 2.0],
             lag_one: [0.8, 0.0, -0.3],
             samples,
         };
-        let fast = noise.weighted_information(&jacobian);
+        let fast = noise.weighted_information(&jacobian, &follows);
         let mut dense = DMatrix::<f64>::zeros(3, 3);
         for k in 0..3 {
             for i in 0..samples {
                 for j in 0..samples {
+                    if (i < gap_before) != (j < gap_before) {
+                        continue;
+                    }
                     let weight = noise.std_m_s[k].powi(2)
                         * noise.lag_one[k].powi((i as i32 - j as i32).abs());
                     dense += weight * jacobian.row(3 * i + k).transpose() * jacobian.row(3 * j + k);

@@ -182,6 +182,24 @@ pub fn scales(residuals: &DVector<f64>) -> Option<Vec3> {
         .then_some(scale)
 }
 
+/// Whether each of `residuals` (x, y, z per sample, in any unit) is an outlier by the
+/// fits' test, a component beyond [`TUKEY_C`] scales of the rest (each axis's MAD): for
+/// residuals no fit weighed (a calibration applied to another dive, a figure's). None
+/// is where an axis has no scale.
+pub fn outliers_among(residuals: &[Vec3]) -> Vec<bool> {
+    let flat = DVector::from_iterator(3 * residuals.len(), residuals.iter().flatten().copied());
+    match scales(&flat) {
+        Some(scale_m_s) => {
+            let tukey = Robust {
+                loss: Loss::Tukey,
+                scale_m_s,
+            };
+            residuals.iter().map(|r| tukey.is_outlier(*r)).collect()
+        }
+        None => vec![false; residuals.len()],
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -86,6 +86,7 @@ pub fn assemble(spec: &StudySpec, parts: Vec<Calibrated>) -> (StudyResults, Vec<
         folds,
         filtered: all.filtered,
         calibration_time: Vec::new(),
+        recordings: Vec::new(),
     };
     let study = StudyResults {
         calibration_time: calibration_times(

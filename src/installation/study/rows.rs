@@ -8,6 +8,7 @@
 //! and figures.
 
 use crate::Vec3;
+use crate::data::paired::{LeftOutWhy, ReadCounts};
 use crate::installation::terms::Installation;
 
 /// The label of the row that corrects nothing.
@@ -71,6 +72,75 @@ pub struct FitFailure {
     pub calibration: String,
     pub window_s: f64,
     pub why: String,
+}
+
+/// How one recording of the study was read: the DVL's samples, those kept and those
+/// left out per reason (a column per [`LeftOutWhy`]), the reference's samples, and
+/// the pieces its gaps cut it into.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RecordingRow {
+    pub recording: String,
+    pub dvl_samples: u64,
+    pub kept: u64,
+    pub left_out_flagged: u64,
+    pub left_out_no_velocity: u64,
+    pub left_out_invalid_marker: u64,
+    pub left_out_all_zero: u64,
+    pub left_out_reference_gap: u64,
+    pub reference_samples: u64,
+    pub pieces: u64,
+    pub gap_limit_s: f64,
+    pub longest_loss_s: f64,
+}
+
+impl RecordingRow {
+    /// The row of `counts`, the recording `recording` as read.
+    pub fn of(recording: &str, counts: &ReadCounts) -> RecordingRow {
+        let left_out = |why: LeftOutWhy| {
+            let found = counts.left_out.iter().find(|(w, _)| *w == why);
+            found.map_or(0, |&(_, count)| count as u64)
+        };
+        RecordingRow {
+            recording: recording.to_string(),
+            dvl_samples: counts.read() as u64,
+            kept: counts.kept as u64,
+            left_out_flagged: left_out(LeftOutWhy::Flagged),
+            left_out_no_velocity: left_out(LeftOutWhy::NoVelocity),
+            left_out_invalid_marker: left_out(LeftOutWhy::Marker),
+            left_out_all_zero: left_out(LeftOutWhy::AllZero),
+            left_out_reference_gap: left_out(LeftOutWhy::ReferenceGap),
+            reference_samples: counts.reference as u64,
+            pieces: counts.pieces as u64,
+            gap_limit_s: counts.gap_limit_s,
+            longest_loss_s: counts.longest_loss_s,
+        }
+    }
+
+    /// The samples left out for reason `why`.
+    fn left_out_for(&self, why: LeftOutWhy) -> u64 {
+        match why {
+            LeftOutWhy::Flagged => self.left_out_flagged,
+            LeftOutWhy::NoVelocity => self.left_out_no_velocity,
+            LeftOutWhy::Marker => self.left_out_invalid_marker,
+            LeftOutWhy::AllZero => self.left_out_all_zero,
+            LeftOutWhy::ReferenceGap => self.left_out_reference_gap,
+        }
+    }
+
+    /// The counts it holds, as the recording's reading gave them.
+    pub fn counts(&self) -> ReadCounts {
+        ReadCounts {
+            kept: self.kept as usize,
+            left_out: (LeftOutWhy::ALL.into_iter())
+                .map(|why| (why, self.left_out_for(why) as usize))
+                .filter(|&(_, count)| count > 0)
+                .collect(),
+            reference: self.reference_samples as usize,
+            pieces: self.pieces as usize,
+            gap_limit_s: self.gap_limit_s,
+            longest_loss_s: self.longest_loss_s,
+        }
+    }
 }
 
 /// One sample of the residual figure: a held-out trajectory's DVL against the
@@ -137,6 +207,8 @@ pub struct StudyResults {
     pub filtered: Vec<FilterPoint>,
     /// Every method's calibration time on every calibration trajectory.
     pub calibration_time: Vec<StudyTimeRow>,
+    /// How each recording was read.
+    pub recordings: Vec<RecordingRow>,
 }
 
 /// A summary over the (calibration, scored) pairs inside one fold, or inside any

@@ -535,6 +535,7 @@ mod tests {
                 .collect(),
             attitude_rad: time_s.iter().map(|t| [0.0, 0.0, 0.1 * t]).collect(),
             rate_rad_s: None,
+            gap_limit_s: 3.0,
         };
         let reference = Reference::new(&recording);
         let truth = Installation {

@@ -19,7 +19,7 @@ pub mod inputs;
 pub mod learned;
 
 use crate::files::{Seal, sha256_hex};
-use crate::installation::study::rows::StudyResults;
+use crate::installation::study::rows::{RecordingRow, StudyResults};
 use crate::installation::study::spec::StudySpec;
 use crate::installation::study::{self, Calibrated};
 use crate::pipeline::cache::{self, CalibrationStore};
@@ -269,7 +269,11 @@ impl<'a> StudyPlan<'a> {
                 unfitted.push(error);
                 continue;
             }
-            results.trace = folder::trace(&results, &estimates, &self.inputs.recordings_of(p));
+            let recordings = self.inputs.recordings_of(p);
+            results.trace = folder::trace(&results, &estimates, &recordings);
+            results.recordings = (recordings.iter())
+                .map(|r| RecordingRow::of(&r.name, &r.recording.counts()))
+                .collect();
             assembled.push((p, results));
         }
         (assembled, unfitted)

@@ -278,6 +278,7 @@ mod tests {
                 folds: Vec::new(),
                 filtered: Vec::new(),
                 calibration_time: Vec::new(),
+                recordings: Vec::new(),
             },
             spec: spec.parse().unwrap(),
         }

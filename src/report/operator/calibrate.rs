@@ -252,8 +252,15 @@ pub fn joint_text(calibration: &JointCalibration) -> String {
         .map(|(name, read)| format!("read {name}: {read}\n"))
         .collect();
     text += &format!(
-        "calibrated jointly on {} recordings, {samples} samples (those {TIME_OFFSET_MARGIN_S} s inside each reference): the vehicle's terms shared, each recording's {} its own\n{table}\n",
+        "calibrated jointly on {} recordings, {samples} samples (those {TIME_OFFSET_MARGIN_S} s inside each reference), {} of them outliers (a residual component beyond {TUKEY_C} scales of the rest; {} per recording), given no weight: the vehicle's terms shared, each recording's {} its own\n{table}\n",
         names.len(),
+        joint.outliers.iter().sum::<usize>(),
+        joint
+            .outliers
+            .iter()
+            .map(usize::to_string)
+            .collect::<Vec<_>>()
+            .join(", "),
         joint.dive_terms.parameter_names().join(", ")
     );
     let shown = bound.residual_noise;

@@ -4,6 +4,7 @@
 //! and the residual at calibration, with a warning where it fits far worse.
 //! In: a [`Correction`]. Out: the text.
 
+use crate::installation::estimate::robust::TUKEY_C;
 use crate::operator::correct::Correction;
 use crate::report::kit::readable::readable_term;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
@@ -31,13 +32,14 @@ pub fn correction_text(correction: &Correction) -> String {
     match correction.after {
         Some(after) => {
             text.push_str(&format!(
-                "residual after the first {} s: {:.2} cm/s in total (x {:.2}, y {:.2}, z {:.2} cm/s, body axes, over {} samples); the specified noise leaves {:.2}, the calibration left {:.2}\n",
+                "residual after the first {} s: {:.2} cm/s in total (x {:.2}, y {:.2}, z {:.2} cm/s, body axes, over {} samples, {} outliers aside: a component beyond {TUKEY_C} scales of the rest); the specified noise leaves {:.2}, the calibration left {:.2}\n",
                 correction.window_s,
                 100.0 * after.total_m_s,
                 100.0 * after.x_m_s,
                 100.0 * after.y_m_s,
                 100.0 * after.z_m_s,
                 after.sample_count,
+                correction.outliers,
                 correction.noise_cm_s,
                 correction.calibration_cm_s,
             ));

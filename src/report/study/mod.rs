@@ -195,6 +195,7 @@ pub(crate) mod tests {
             folds: Vec::new(),
             filtered: Vec::new(),
             calibration_time: Vec::new(),
+            recordings: Vec::new(),
         }
     }
 
@@ -252,6 +253,35 @@ pub(crate) mod tests {
             "{printed}"
         );
         assert!(printed.contains("\n1 of the 2 scorings"), "{printed}");
+    }
+
+    #[test]
+    fn a_recording_with_samples_left_out_or_gaps_is_said_under_the_headline() {
+        use crate::data::paired::{LeftOutWhy, ReadCounts};
+        use crate::installation::study::rows::RecordingRow;
+        let counts = |left_out: Vec<(LeftOutWhy, usize)>, pieces| ReadCounts {
+            kept: 370,
+            left_out,
+            reference: 4000,
+            pieces,
+            gap_limit_s: 3.0,
+            longest_loss_s: 16.0,
+        };
+        let mut study = small();
+        study.recordings = vec![
+            RecordingRow::of("T1", &counts(Vec::new(), 1)),
+            RecordingRow::of("T2", &counts(vec![(LeftOutWhy::NoVelocity, 30)], 4)),
+        ];
+        assert_eq!(
+            study.recordings[1].counts(),
+            counts(vec![(LeftOutWhy::NoVelocity, 30)], 4)
+        );
+        let printed = crate::report::study::printed::headline(&study);
+        assert!(
+            printed.ends_with("\nT2 read: the DVL's 400 samples, 370 kept (30 left out: 30 with no velocity), beside the reference's 4000 on its own stamps; 4 pieces (gaps over 3.00 s cut it), the longest loss 16.00 s"),
+            "{printed}"
+        );
+        assert!(!printed.contains("T1 read"), "{printed}");
     }
 
     #[test]

@@ -51,7 +51,19 @@ pub fn headline(study: &StudyResults) -> String {
     }
     let mut text = format!("{which}, calibration windows of {largest} s:\n{table}");
     failed_fits(study, &mut text);
+    gaps_and_losses(study, &mut text);
     text
+}
+
+/// Under the headline: each recording that had DVL samples left out or was cut into
+/// pieces, as it was read.
+fn gaps_and_losses(study: &StudyResults, text: &mut String) {
+    for row in &study.recordings {
+        let counts = row.counts();
+        if counts.kept < counts.read() || counts.pieces > 1 {
+            let _ = write!(text, "\n{} read: {counts}", row.recording);
+        }
+    }
 }
 
 /// Under the headline: how many fits failed, and the first three; then how many

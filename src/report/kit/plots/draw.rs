@@ -192,6 +192,8 @@ pub enum Swatch {
     Line(RGBColor, Stroke),
     /// A line with its marker in the middle.
     Marked(RGBColor, Stroke, Marker),
+    /// A marker alone.
+    Mark(RGBColor, Marker),
     Bar(RGBColor),
     Ring,
     Dot(RGBColor),
@@ -325,6 +327,7 @@ fn legend_from(
                 legend_line(area, (x0, x1, y), *color, *stroke)?;
                 marker.draw_on(area, (28, y), *color)?;
             }
+            Swatch::Mark(color, marker) => marker.draw_on(area, (28, y), *color)?,
             Swatch::Bar(color) => area.draw(&Rectangle::new(
                 [(x0 + 6, y - 7), (x1 - 6, y + 7)],
                 color.filled(),

@@ -284,6 +284,7 @@ pub(crate) mod tests {
                 })
                 .collect(),
             calibration_time: Vec::new(),
+            recordings: Vec::new(),
         }
     }
 
