@@ -111,13 +111,7 @@ fn rates() {
         &dir.path().join("out"),
     );
     assert_eq!(recorded, rows / dvl_every);
-    let peak = std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            let line = s.lines().find(|l| l.starts_with("VmHWM:"))?.to_string();
-            Some(line.trim_start_matches("VmHWM:").trim().to_string())
-        })
-        .unwrap_or_else(|| "not measured (no /proc/self/status)".into());
+    let peak = installed::peak_resident_memory();
     println!(
         "| hours | DVL samples (10 Hz) | reference rows (100 Hz) | calibrate s | peak resident memory |"
     );

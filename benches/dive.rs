@@ -4,7 +4,10 @@
 //! 60 s, the dive corrected and written, CSV and Parquet); and the joint calibration of
 //! 10, 30 and 100 synthetic segments of 400 s at 1 Hz, each with its own clock (the
 //! vehicle's lever arm, scale and bias shared). Prints the seconds of each, and per
-//! 100,000 rows or per segment, which stay flat where the cost is linear.
+//! 100,000 rows or per segment, which stay flat where the cost is linear. With
+//! `-- --hour correct` or `-- --hour joint`, a case of its own instead: `correct` of an
+//! hour's dive at 100 Hz (360,000 rows, its clock found again from the first 60 s), or
+//! the joint `calibrate` of two such dives, with the process's peak resident memory.
 
 #[allow(dead_code)]
 #[path = "../tests/common/installed.rs"]
@@ -18,11 +21,16 @@ use dcnet_exp::installation::frames::Reference;
 use dcnet_exp::installation::terms::names::TermName;
 use dcnet_exp::installation::terms::{PerAxis, TermSet};
 use dcnet_exp::operator::calibrate::{CalibrateArgs, calibrate};
+use dcnet_exp::operator::calibrate_joint::{JointArgs, calibrate_joint};
 use dcnet_exp::operator::correct::{CorrectArgs, correct};
 use dcnet_exp::operator::inputs::Reading;
 use std::time::Instant;
 
 fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    if let Some(at) = args.iter().position(|a| a == "--hour") {
+        return hour(args.get(at + 1).map(String::as_str));
+    }
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     // The installation, saved from 400 s at 1 Hz.
@@ -145,4 +153,103 @@ fn main() {
         assert_eq!(fitted.dives.len(), count);
         println!("| {count} | {seconds:.2} | {:.3} |", seconds / count as f64);
     }
+}
+
+/// The `--hour` case: `correct` (`which` = "correct") or the joint `calibrate` ("joint")
+/// of dives of an hour at 100 Hz, each on its own clock.
+fn hour(which: Option<&str>) {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let rows = 360_000;
+    // The first within the ±3 s a fit alone scans (a joint calibration starts from its
+    // fit), the second's clock found by the search.
+    let dives: Vec<_> = [1.3, 7.3]
+        .iter()
+        .enumerate()
+        .map(|(k, &time_offset_s)| {
+            let at = d.join(format!("dive{k}"));
+            let clocked = installed::Installed {
+                time_offset_s,
+                ..installed::INSTALLED
+            };
+            installed::write_installed_sampled(&at, 1, &[], clocked, 3 + k as u64, (rows, 0.01));
+            let at = at.join("Trajectory1");
+            (
+                at.join("DVL_trajectory1.csv"),
+                at.join("GT_trajectory1.csv"),
+            )
+        })
+        .collect();
+    let terms = [TermName::LeverArm, TermName::TimeOffset, TermName::Bias];
+    let clock = Instant::now();
+    match which {
+        Some("correct") => {
+            installed::write_installed(&d.join("calibration"), 1, &[], installed::INSTALLED, 1);
+            let at = d.join("calibration/Trajectory1");
+            let saved = d.join("installation.toml");
+            calibrate(&CalibrateArgs {
+                dvl: &at.join("DVL_trajectory1.csv"),
+                reference: Some(&at.join("GT_trajectory1.csv")),
+                columns: None,
+                reading: Reading::default(),
+                terms: &terms,
+                window_s: None,
+                dvl_noise_cm_s: 2.0,
+                reference_noise_cm_s: 0.5,
+                tolerance_pct: 10.0,
+                out: &d.join("calibrated"),
+                save: Some(&saved),
+                dive_terms: &[TermName::TimeOffset],
+            })
+            .expect("the calibration recording calibrates");
+            let clock = Instant::now();
+            let corrected = correct(&CorrectArgs {
+                dvl: &dives[1].0,
+                reference: Some(&dives[1].1),
+                columns: None,
+                reading: Reading::default(),
+                installation: &saved,
+                window_s: 60.0,
+                search_s: 30.0,
+                time_offset_s: None,
+                out: &d.join("out"),
+            })
+            .expect("the dive is corrected");
+            let found = corrected.applied.time_offset_s;
+            assert!((found - 7.3).abs() < 0.1, "the clock found again: {found}");
+            report("correct", clock.elapsed().as_secs_f64());
+        }
+        Some("joint") => {
+            let (dvls, references): (Vec<_>, Vec<_>) = dives.into_iter().unzip();
+            let joint = calibrate_joint(&JointArgs {
+                dvls: &dvls,
+                references: &references,
+                columns: None,
+                reading: Reading::default(),
+                terms: &terms,
+                dive_terms: &[TermName::TimeOffset],
+                window_s: None,
+                dvl_noise_cm_s: 2.0,
+                reference_noise_cm_s: 0.5,
+                tolerance_pct: 10.0,
+                out: &d.join("joint"),
+                save: None,
+            })
+            .expect("the dives calibrate jointly");
+            let found = joint.joint.dives[1].time_offset_s;
+            assert!((found - 7.3).abs() < 0.1, "the second clock: {found}");
+            report("joint calibrate", clock.elapsed().as_secs_f64());
+        }
+        _ => panic!("--hour takes correct or joint"),
+    }
+}
+
+/// Prints the `--hour` case's line.
+fn report(what: &str, seconds: f64) {
+    println!("| an hour at 100 Hz (360,000 rows) | s | peak resident memory |");
+    println!("|---|---|---|");
+    println!(
+        "| {what} | {seconds:.1} | {} |",
+        installed::peak_resident_memory()
+    );
 }

@@ -35,6 +35,7 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
             window_s: args.window_s,
             dvl_noise_cm_s: args.dvl_noise_cm_s,
             reference_noise_cm_s: args.reference_noise_cm_s,
+            tolerance_pct: args.tolerance_pct,
             out: &args.out,
             save: args.save.as_deref(),
         });

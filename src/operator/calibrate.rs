@@ -253,7 +253,7 @@ impl Read {
 /// `calibrate`: the terms of one recording, their bound, how long the recording needed,
 /// and the recording corrected.
 pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
-    refused(args)?;
+    refused(args.request())?;
     let outputs = outputs(args);
     let written: Vec<&Path> = outputs.all().into_iter().chain(args.save).collect();
     let inputs = [Some(args.dvl), args.reference, args.columns];
@@ -261,9 +261,7 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
         return Err(CalibrateError::over_input(over, args.save));
     }
     if let Some(save) = args.save {
-        let same = outputs.all().iter().any(|o| *o == save)
-            || not_over_an_input(&[Some(save)], &outputs.all()).is_some();
-        if same {
+        if not_over_an_input(&[Some(save)], &outputs.all()).is_some() {
             return Err(CalibrateError::SaveOverOutput {
                 path: save.to_path_buf(),
             });
@@ -327,8 +325,34 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     })
 }
 
+/// What a calibration is asked beyond its files, one recording's or several's: what
+/// [`refused`] checks, the same for both.
+pub(super) struct Request<'a> {
+    pub(super) terms: &'a [TermName],
+    pub(super) dive_terms: &'a [TermName],
+    pub(super) window_s: Option<f64>,
+    pub(super) dvl_noise_cm_s: f64,
+    pub(super) reference_noise_cm_s: f64,
+    pub(super) tolerance_pct: f64,
+    pub(super) save: Option<&'a Path>,
+}
+
+impl CalibrateArgs<'_> {
+    fn request(&self) -> Request<'_> {
+        Request {
+            terms: self.terms,
+            dive_terms: self.dive_terms,
+            window_s: self.window_s,
+            dvl_noise_cm_s: self.dvl_noise_cm_s,
+            reference_noise_cm_s: self.reference_noise_cm_s,
+            tolerance_pct: self.tolerance_pct,
+            save: self.save,
+        }
+    }
+}
+
 /// The first argument of `args` at fault, where one is.
-fn refused(args: &CalibrateArgs) -> Result<(), CalibrateError> {
+pub(super) fn refused(args: Request) -> Result<(), CalibrateError> {
     if let Some((_, message)) = term_list_faults(args.terms).first() {
         return Err(CalibrateError::Terms(message.clone()));
     }
@@ -358,11 +382,7 @@ fn refused(args: &CalibrateArgs) -> Result<(), CalibrateError> {
 /// must be a dive's kind of term (the time offset or a bias); and where the
 /// installation is saved for `correct`, which finds each dive's clock again, the time
 /// offset must be among them and each must be among `terms`.
-pub(super) fn dive_terms_refused(
-    terms: &[TermName],
-    dive: &[TermName],
-    saving: bool,
-) -> Result<(), String> {
+fn dive_terms_refused(terms: &[TermName], dive: &[TermName], saving: bool) -> Result<(), String> {
     if let Some(term) = dive.iter().find(|t| !t.may_be_the_dives()) {
         return Err(format!(
             "{:?} belongs to the vehicle, not the dive: give time_offset, and bias or bias_scalar",
@@ -386,7 +406,7 @@ pub(super) fn dive_terms_refused(
 
 /// Refuses, before anything is read, a `--save` path that cannot be a file: a folder,
 /// or one under a file (its missing folders are made when it is written).
-pub(super) fn save_refused(path: &Path) -> Result<(), CalibrateError> {
+fn save_refused(path: &Path) -> Result<(), CalibrateError> {
     let under_a_file = path.ancestors().skip(1).any(|a| a.is_file());
     let why = if path.is_dir() {
         "is a folder"

@@ -17,7 +17,7 @@ use crate::installation::estimate::fit::{fit, fit_about};
 use crate::installation::estimate::joint::{JointFit, JointRecording, joint_fit, starts_from};
 use crate::installation::frames::Reference;
 use crate::installation::terms::names::{TermName, term_set};
-use crate::operator::calibrate::{CalibrateError, dive_terms_refused, named, save_refused};
+use crate::operator::calibrate::{CalibrateError, Request, named, refused};
 use crate::operator::inputs::{Reading, columns, not_over_an_input};
 use crate::operator::installation_file::{SavedInstallation, SavedTerm};
 use crate::results::ResultsError;
@@ -37,6 +37,8 @@ pub struct JointArgs<'a> {
     pub window_s: Option<f64>,
     pub dvl_noise_cm_s: f64,
     pub reference_noise_cm_s: f64,
+    /// As single `calibrate`'s (checked the same, though no filter runs here).
+    pub tolerance_pct: f64,
     pub out: &'a Path,
     pub save: Option<&'a Path>,
 }
@@ -76,11 +78,15 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
             references: args.references.len(),
         });
     }
-    dive_terms_refused(args.terms, args.dive_terms, args.save.is_some())
-        .map_err(CalibrateError::DiveTerms)?;
-    if let Some(path) = args.save {
-        save_refused(path)?;
-    }
+    refused(Request {
+        terms: args.terms,
+        dive_terms: args.dive_terms,
+        window_s: args.window_s,
+        dvl_noise_cm_s: args.dvl_noise_cm_s,
+        reference_noise_cm_s: args.reference_noise_cm_s,
+        tolerance_pct: args.tolerance_pct,
+        save: args.save,
+    })?;
     let noise = Noise {
         dvl_m_s: args.dvl_noise_cm_s / 100.0,
         reference_m_s: args.reference_noise_cm_s / 100.0,
@@ -99,8 +105,9 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
     if let Some(over) = not_over_an_input(&inputs, &written) {
         return Err(CalibrateError::over_input(over, args.save));
     }
+    let corrected: Vec<&Path> = outputs.iter().flat_map(|o| o.all()).collect();
     if let Some(save) = args.save
-        && outputs.iter().flat_map(|o| o.all()).any(|o| o == save)
+        && not_over_an_input(&[Some(save)], &corrected).is_some()
     {
         return Err(CalibrateError::SaveOverOutput {
             path: save.to_path_buf(),

@@ -69,7 +69,7 @@ pub enum CorrectError {
         duration_s: f64,
         window_s: f64,
     },
-    #[error("{}: its clock cannot be found from its first {window_s} s: {fault}; give a longer --window-s, or its clock with --time-offset-s", dvl.display())]
+    #[error("{}: its clock cannot be found from its first {} s: {fault}; give a longer --window-s, or its clock with --time-offset-s", dvl.display(), crate::Shown(*window_s))]
     Clock {
         dvl: PathBuf,
         window_s: f64,

@@ -7,31 +7,53 @@ use crate::data::paired::{GapLimit, PairedColumns};
 use crate::spec::{SpecError, TomlFile};
 use std::path::{Path, PathBuf};
 
-/// The first of `outputs` that would replace one of `inputs`, and that input.
+/// The first of `outputs` that would replace one of `inputs`, and that input: the same
+/// file by [`identity`], however each is spelled.
 pub fn not_over_an_input(
     inputs: &[Option<&Path>],
     outputs: &[&Path],
 ) -> Option<(PathBuf, PathBuf)> {
-    // A file's identity: its path with the folder's links resolved.
-    let identity = |path: &Path| -> Option<PathBuf> {
-        let folder = match path.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
-        };
-        Some(std::fs::canonicalize(folder).ok()?.join(path.file_name()?))
-    };
     for output in outputs {
-        let same = |input: &&&Path| {
-            identity(input).is_some_and(|i| identity(output).is_some_and(|o| o == i))
-                || std::fs::canonicalize(input)
-                    .ok()
-                    .is_some_and(|i| std::fs::canonicalize(output).is_ok_and(|o| o == i))
-        };
-        if let Some(input) = inputs.iter().flatten().find(same) {
+        let written = identity(output);
+        if let Some(input) = inputs.iter().flatten().find(|i| identity(i) == written) {
             return Some((output.to_path_buf(), input.to_path_buf()));
         }
     }
     None
+}
+
+/// A file's identity, whether it exists yet or not: the deepest folder or file of its
+/// path that exists, with its links resolved (its canonical path), then the rest of the
+/// path as written, `.` dropped and `..` taken back (no link can lie in what does not
+/// exist yet). `./out/a.csv`, `out/../out/a.csv` and `out/a.csv` are one file.
+pub fn identity(path: &Path) -> PathBuf {
+    use std::path::Component;
+    let absolute = match std::env::current_dir() {
+        Ok(here) if path.is_relative() => here.join(path),
+        _ => path.to_path_buf(),
+    };
+    let mut existing = absolute.as_path();
+    let mut rest = Vec::new();
+    while !existing.exists() {
+        match (existing.parent(), existing.components().next_back()) {
+            (Some(parent), Some(last)) => {
+                rest.push(last);
+                existing = parent;
+            }
+            _ => break,
+        }
+    }
+    let mut identity = std::fs::canonicalize(existing).unwrap_or_else(|_| existing.to_path_buf());
+    for component in rest.into_iter().rev() {
+        match component {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                identity.pop();
+            }
+            other => identity.push(other),
+        }
+    }
+    identity
 }
 
 /// What the command line says of how to read a recording, beyond its columns: each
@@ -82,4 +104,36 @@ pub fn columns(path: Option<&Path>, reading: Reading) -> Result<PairedColumns, S
         return Err(fault);
     }
     Ok(file.value.columns)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_file_is_the_same_however_spelled_there_or_not_yet() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::create_dir(d.join("here")).unwrap();
+        #[cfg(unix)]
+        std::os::unix::fs::symlink(d.join("here"), d.join("link")).unwrap();
+        let one = identity(&d.join("here/out/a.csv"));
+        for spelled in [
+            "here/./out/a.csv",
+            "here/out/../out/a.csv",
+            "here/x/../out/./a.csv",
+        ] {
+            assert_eq!(identity(&d.join(spelled)), one, "{spelled}");
+        }
+        #[cfg(unix)]
+        assert_eq!(identity(&d.join("link/out/a.csv")), one);
+        assert_ne!(identity(&d.join("here/out/b.csv")), one);
+        let inputs = [Some(d.join("here/in.csv"))];
+        let inputs: Vec<Option<&Path>> = inputs.iter().map(|p| p.as_deref()).collect();
+        let over = d.join("here/./in.csv");
+        assert_eq!(
+            not_over_an_input(&inputs, &[over.as_path()]),
+            Some((over.clone(), d.join("here/in.csv")))
+        );
+    }
 }

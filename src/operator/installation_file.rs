@@ -8,12 +8,16 @@
 
 use crate::Vec3;
 use crate::installation::estimate::bound::TermBound;
-use crate::installation::terms::names::{TermName, term_set};
+use crate::installation::terms::names::{TermName, term_list_faults, term_set};
 use crate::installation::terms::{Installation, TermSet};
 use std::path::{Path, PathBuf};
 
 /// The first line's key: the SHA-256 of every line after it.
 const CHECKSUM_KEY: &str = "checksum_sha256";
+
+/// The largest installation file read, bytes: one of every term with its correlations
+/// is a few kB; a larger file (or a device that never ends) is not one.
+const MAX_FILE_BYTES: u64 = 1 << 20;
 
 /// The tool that writes and reads installation files, and its version.
 const TOOL: &str = "dcnet-exp";
@@ -79,6 +83,12 @@ pub enum InstallationFileError {
         path: PathBuf,
         source: std::io::Error,
     },
+    #[error(
+        "{}: {}: not an installation file, which is a regular file of a few kB; give the file `calibrate --save` wrote",
+        path.display(),
+        match bytes { Some(bytes) => format!("{bytes} bytes"), None => "not a regular file".to_string() }
+    )]
+    NotOne { path: PathBuf, bytes: Option<u64> },
     #[error("{}: its first line is not `{CHECKSUM_KEY} = \"…\"`: not an installation file, or damaged; write it again with `calibrate --save`", path.display())]
     NoChecksum { path: PathBuf },
     #[error("{}: its checksum does not match its contents: the file was edited or damaged after `calibrate --save` wrote it; write it again with `calibrate --save` (an installation is not edited by hand)", path.display())]
@@ -196,6 +206,17 @@ impl SavedInstallation {
     /// term known, finite and in the order of its terms, standard deviations not
     /// negative.
     pub fn read(path: &Path) -> Result<SavedInstallation, InstallationFileError> {
+        let io = |source| InstallationFileError::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        let metadata = std::fs::metadata(path).map_err(io)?;
+        if !metadata.is_file() || metadata.len() > MAX_FILE_BYTES {
+            return Err(InstallationFileError::NotOne {
+                path: path.to_path_buf(),
+                bytes: metadata.is_file().then_some(metadata.len()),
+            });
+        }
         let text = std::fs::read_to_string(path).map_err(|source| InstallationFileError::Io {
             path: path.to_path_buf(),
             source,
@@ -264,6 +285,7 @@ impl InstallationFile {
             .chain(&self.dive_terms)
             .copied()
             .collect();
+        self.check_lists().map_err(malformed)?;
         let expected = term_set(&names).parameter_names();
         if self.terms.len() != expected.len() {
             return Err(malformed(format!(
@@ -273,7 +295,6 @@ impl InstallationFile {
                 names.iter().map(|t| t.name()).collect::<Vec<_>>()
             )));
         }
-        self.check_lists().map_err(malformed)?;
         self.check_numbers(expected.len()).map_err(malformed)?;
         for (index, (term, name)) in self.terms.iter().zip(&expected).enumerate() {
             term.check(name)
@@ -287,7 +308,9 @@ impl InstallationFile {
         Ok(SavedInstallation { file: self })
     }
 
-    /// No term both the vehicle's and the dive's, and the time offset the dive's.
+    /// The lists `calibrate` could have written: no term twice, nor a term with its
+    /// per-axis form, no term both the vehicle's and the dive's, each of the dive's a
+    /// dive's kind (the time offset or a bias), and the time offset among them.
     fn check_lists(&self) -> Result<(), String> {
         if let Some(term) = self
             .dive_terms
@@ -296,6 +319,19 @@ impl InstallationFile {
         {
             return Err(format!(
                 "{:?} is both a vehicle's and a dive's term",
+                term.name()
+            ));
+        }
+        let all: Vec<TermName> = (self.vehicle_terms.iter())
+            .chain(&self.dive_terms)
+            .copied()
+            .collect();
+        if let Some((_, fault)) = term_list_faults(&all).first() {
+            return Err(format!("vehicle_terms and dive_terms together: {fault}"));
+        }
+        if let Some(term) = self.dive_terms.iter().find(|t| !t.may_be_the_dives()) {
+            return Err(format!(
+                "dive_terms: {:?} belongs to the vehicle, not the dive",
                 term.name()
             ));
         }
@@ -449,5 +485,41 @@ mod tests {
         let mut both = file();
         both.vehicle_terms.push(TermName::TimeOffset);
         assert!(refusal(&both.to_text()).contains("is both a vehicle's and a dive's term"));
+        // Lists `calibrate` could not have written, named by their key.
+        let mut twice = file();
+        twice.dive_terms.push(TermName::TimeOffset);
+        let message = refusal(&twice.to_text());
+        assert!(
+            message
+                .contains("vehicle_terms and dive_terms together: \"time_offset\" is listed twice"),
+            "{message}"
+        );
+        let mut both_biases = file();
+        both_biases.vehicle_terms.push(TermName::Bias);
+        both_biases.dive_terms.push(TermName::BiasScalar);
+        let message = refusal(&both_biases.to_text());
+        assert!(message.contains("lists bias and bias_scalar"), "{message}");
+        let mut lever = file();
+        lever.vehicle_terms.retain(|t| *t != TermName::LeverArm);
+        lever.dive_terms.push(TermName::LeverArm);
+        let message = refusal(&lever.to_text());
+        assert!(
+            message.contains("dive_terms: \"lever_arm\" belongs to the vehicle, not the dive"),
+            "{message}"
+        );
+        // Not a file, or far too large for one.
+        let not_one = SavedInstallation::read(Path::new("/dev/zero"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            not_one.contains("/dev/zero: not a regular file"),
+            "{not_one}"
+        );
+        std::fs::write(&path, vec![b'#'; 2 << 20]).unwrap();
+        let large = SavedInstallation::read(&path).unwrap_err().to_string();
+        assert!(
+            large.contains(": 2097152 bytes: not an installation file"),
+            "{large}"
+        );
     }
 }

@@ -187,3 +187,18 @@ pub fn write_study_spec(dir: &Path, name: &str, folder: &str, count: usize, extr
     std::fs::create_dir_all(dir.join("experiments")).unwrap();
     std::fs::write(dir.join(format!("experiments/{name}.toml")), text).unwrap();
 }
+
+/// This process's peak resident memory so far, as Linux's `VmHWM` gives it ("1571248
+/// kB"), for a benchmark to state; what it says where there is no `/proc`.
+pub fn peak_resident_memory() -> String {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|status| {
+            let line = status
+                .lines()
+                .find(|l| l.starts_with("VmHWM:"))?
+                .to_string();
+            Some(line.trim_start_matches("VmHWM:").trim().to_string())
+        })
+        .unwrap_or_else(|| "not measured (no /proc/self/status)".into())
+}

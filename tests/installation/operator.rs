@@ -319,8 +319,8 @@ fn dives_calibrated_jointly_share_the_vehicles_terms_and_keep_their_clocks() {
 }
 
 /// An installation edited by hand, a dive shorter than the seconds that find its
-/// clock, and a dive whose DVL reads a constant velocity: each refused, exit 1, the
-/// file named, nothing written.
+/// clock, a window of one sample, and a dive whose DVL reads a constant velocity: each
+/// refused, exit 1, the file named, nothing written.
 #[test]
 fn an_edited_installation_a_short_dive_and_a_dive_with_no_clock_are_refused() {
     let dir = tempfile::tempdir().unwrap();
@@ -366,6 +366,17 @@ fn an_edited_installation_a_short_dive_and_a_dive_with_no_clock_are_refused() {
         &args.iter().map(String::as_str).collect::<Vec<_>>(),
         "the dive lasts 399.0 s, not more than the 500 s",
     );
+    // A window of one sample, or of none: refused at once (its search's grid had a step
+    // of zero and never ended).
+    for window in ["1", "1e-300"] {
+        let args = correct("installation.toml", &["--window-s", window]);
+        refused(
+            &args.iter().map(String::as_str).collect::<Vec<_>>(),
+            &format!(
+                "its clock cannot be found from its first {window} s: the least squares of the dive's terms failed: 0 DVL samples lie more than 3 s inside the reference"
+            ),
+        );
+    }
     // A DVL that reads a constant velocity.
     let flat_dvl = d.join("flat.csv");
     let mut flat = String::from("Time [s],DVL X [m/s],DVL Y [m/s],DVL Z [m/s]\n");
@@ -445,10 +456,32 @@ fn a_save_that_cannot_be_a_dive_terms_outside_the_fit_and_a_recording_twice_are_
         &["--save", "installation.toml/i.toml"],
         "is under a file, not a folder",
     );
-    run(
-        &["--save", "out/DVL_trajectory1-corrected.csv"],
-        "is also where the corrected recording goes",
-    );
+    // However it is spelled, the folder not there yet.
+    for spelled in [
+        "out/DVL_trajectory1-corrected.csv",
+        "./out/DVL_trajectory1-corrected.parquet",
+        "out/../out/./DVL_trajectory1-terms-in-time.parquet",
+    ] {
+        run(
+            &["--save", spelled],
+            "is also where the corrected recording goes",
+        );
+    }
+    // Jointly too.
+    let joint = [
+        "calibrate",
+        &dvl,
+        &dvl,
+        "--reference",
+        &reference,
+        "--reference",
+        &reference,
+        "--out",
+        "out",
+        "--save",
+        "./out/1-DVL_trajectory1-corrected.csv",
+    ];
+    refused(&joint, "is also where the corrected recording goes");
     let twice = [
         "calibrate",
         &dvl,
@@ -461,6 +494,81 @@ fn a_save_that_cannot_be_a_dive_terms_outside_the_fit_and_a_recording_twice_are_
         "out",
     ];
     refused(&twice, "hold the same recording (the same SHA-256)");
+    // Jointly, what a single calibrate refuses (the joint calibration took each).
+    let (second, second_reference) = dive(d, "second", clocked(-1.2), 2);
+    let (second, second_reference) = (path(&second), path(&second_reference));
+    for (extra, says) in [
+        (
+            &["--dvl-noise-cm-s", "0"][..],
+            "--dvl-noise-cm-s 0: give a positive number",
+        ),
+        (
+            &["--dvl-noise-cm-s", "NaN"],
+            "--dvl-noise-cm-s NaN: give a positive number",
+        ),
+        (
+            &["--reference-noise-cm-s", "-0.5"],
+            "--reference-noise-cm-s -0.5: give zero",
+        ),
+        (
+            &["--terms", "lever_arm,time_offset,lever_arm"],
+            "\"lever_arm\" is listed twice",
+        ),
+        (
+            &["--terms", "bias,bias_scalar,time_offset"],
+            "lists bias and bias_scalar",
+        ),
+        (
+            &["--terms", "scale,scale_per_axis,time_offset"],
+            "lists scale and scale_per_axis",
+        ),
+        (&["--tolerance-pct", "-3"], "--tolerance-pct"),
+    ] {
+        let mut args = vec![
+            "calibrate",
+            &dvl,
+            &second,
+            "--reference",
+            &reference,
+            "--reference",
+            &second_reference,
+            "--out",
+            "out",
+        ];
+        args.extend(extra);
+        refused(&args, says);
+    }
+    // Two DVLs of zeros said to be readings fit a scale of -100 %: refused jointly too.
+    let zeros = d.join("zeros.csv");
+    let mut text = String::from("Time [s],DVL X [m/s],DVL Y [m/s],DVL Z [m/s]\n");
+    for i in 0..400 {
+        text.push_str(&format!("{i},0,0,0\n"));
+    }
+    std::fs::write(&zeros, &text).unwrap();
+    std::fs::write(d.join("zeros2.csv"), text.replace(",0,0,0", ",0,0,0.0")).unwrap();
+    std::fs::write(
+        d.join("zero.toml"),
+        "[columns]\ntime = \"Time [s]\"\ndvl = [\"DVL X [m/s]\", \"DVL Y [m/s]\", \"DVL Z [m/s]\"]\nvelocity_ned = [\"V North [m/s]\", \"V East [m/s]\", \"V Down [m/s]\"]\nattitude = [\"Roll [rad]\", \"Pitch [rad]\", \"Yaw [rad]\"]\nzero_is_valid = true\n",
+    )
+    .unwrap();
+    refused(
+        &[
+            "calibrate",
+            "zeros.csv",
+            "zeros2.csv",
+            "--reference",
+            &reference,
+            "--reference",
+            &second_reference,
+            "--columns",
+            "zero.toml",
+            "--terms",
+            "scale,time_offset",
+            "--out",
+            "out",
+        ],
+        "beyond the ±50 % any installation is off by",
+    );
     // A --save in folders not there yet: made.
     let saved = dcnet(
         d,

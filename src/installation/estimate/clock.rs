@@ -152,39 +152,76 @@ pub enum ClockError {
     NotShown { std_s: f64, search_s: f64 },
 }
 
+/// The most window samples each step of the search reads: a longer window is read on
+/// every few of its samples, evenly spread (an hour at 1 Hz, a minute at 60 Hz), so that
+/// a step costs no more than a short window's.
+const SEARCH_SAMPLES: usize = 3_600;
+
+/// The most samples the coarse grid reads over all its steps (steps × samples): a
+/// search range of an hour reads fewer samples per step, so that no search costs more
+/// than about this many predictions.
+const SEARCH_BUDGET: usize = 10_000_000;
+
+/// The finest step of the search's fine grid, s: half a sample of a 500-Hz DVL.
+const FINEST_STEP_S: f64 = 0.001;
+
 /// The τ (s) at which the carried installation's prediction from the reference at
-/// t + τ is closest to the DVL (least RMS over the window), and that RMS (m/s): every step
-/// of a grid over ±`search_s`, no coarser than [`TIME_OFFSET_SCAN_STEP_S`] nor than half
-/// the DVL's sample interval; a step counts when at least half the samples land inside
-/// the reference. `None` where no step does.
+/// t + τ is closest to the DVL (least RMS over the window), and that RMS (m/s): first
+/// every [`TIME_OFFSET_SCAN_STEP_S`] over ±`search_s`, then within one such step of the
+/// best at half the DVL's sample interval (where that is finer; never finer than
+/// [`FINEST_STEP_S`]); each step on at most [`SEARCH_SAMPLES`] of the window's samples
+/// evenly spread, and the coarse grid on no more than [`SEARCH_BUDGET`] in all. A step
+/// counts when at least half the samples land inside the reference. `None` where no
+/// step does.
 pub fn search_offset(
     (time_s, dvl_m_s): (&[f64], &[Vec3]),
     reference: &Reference,
     carried: Installation,
     search_s: f64,
 ) -> Option<(f64, f64)> {
-    let step_s = TIME_OFFSET_SCAN_STEP_S.min(sample_interval(time_s) / 2.0);
-    let steps = (search_s / step_s).ceil() as i64;
-    let mut best: Option<(f64, f64)> = None;
-    for k in -steps..=steps {
-        let offset_s = carried.time_offset_s + k as f64 * step_s;
+    let coarse_steps = (search_s / TIME_OFFSET_SCAN_STEP_S).ceil() as usize;
+    let most = SEARCH_SAMPLES
+        .min(SEARCH_BUDGET / (2 * coarse_steps + 1))
+        .max(1);
+    let stride = time_s.len().div_ceil(most).max(1);
+    let read: Vec<(f64, Vec3)> = (time_s.iter().zip(dvl_m_s))
+        .step_by(stride)
+        .map(|(&t, &v)| (t, v))
+        .collect();
+    // The RMS of the DVL against the carried prediction at `offset_s`, where enough of
+    // the samples read land inside the reference.
+    let rms_at = |offset_s: f64| {
         let (mut sum, mut count) = (0.0, 0usize);
-        for (&t, dvl) in time_s.iter().zip(dvl_m_s) {
+        for (t, dvl) in &read {
             if let Some(at) = reference.at(t + offset_s) {
                 let predicted = carried.predict(at);
                 sum += (0..3).map(|a| (dvl[a] - predicted[a]).powi(2)).sum::<f64>();
                 count += 1;
             }
         }
-        if (count as f64) < SEARCH_COVERAGE * time_s.len() as f64 || count == 0 {
-            continue;
+        let enough = count > 0 && count as f64 >= SEARCH_COVERAGE * read.len() as f64;
+        enough.then(|| (sum / count as f64).sqrt())
+    };
+    let best_of = |offsets: &mut dyn Iterator<Item = f64>, mut best: Option<(f64, f64)>| {
+        for offset_s in offsets {
+            if let Some(rms) = rms_at(offset_s)
+                && best.is_none_or(|(_, lowest)| rms < lowest)
+            {
+                best = Some((offset_s, rms));
+            }
         }
-        let rms = (sum / count as f64).sqrt();
-        if best.is_none_or(|(_, lowest)| rms < lowest) {
-            best = Some((offset_s, rms));
-        }
-    }
-    best
+        best
+    };
+    let steps = coarse_steps as i64;
+    let coarse =
+        (-steps..=steps).map(|k| carried.time_offset_s + k as f64 * TIME_OFFSET_SCAN_STEP_S);
+    let (centre_s, rms) = best_of(&mut coarse.into_iter(), None)?;
+    let fine_s = (sample_interval(time_s) / 2.0).clamp(FINEST_STEP_S, TIME_OFFSET_SCAN_STEP_S);
+    let fine_steps = (TIME_OFFSET_SCAN_STEP_S / fine_s).ceil() as i64;
+    let mut fine = (-fine_steps..=fine_steps)
+        .filter(|&k| k != 0)
+        .map(|k| centre_s + k as f64 * fine_s);
+    best_of(&mut fine, Some((centre_s, rms)))
 }
 
 /// The standard deviation of the DVL's velocity over the window, the three axes'
@@ -371,6 +408,30 @@ pub(crate) mod tests {
             })
             .collect();
         (stamps, dvl, reference)
+    }
+
+    #[test]
+    fn the_search_is_bounded_whatever_the_window_and_the_range() {
+        let truth = Installation {
+            lever_arm_m: [-1.9, 0.1, 0.4],
+            time_offset_s: 7.3,
+            ..Installation::default()
+        };
+        let (time_s, dvl, reference) = turning_dive(&truth, 0.01, 5);
+        let carried = Installation {
+            time_offset_s: 0.0,
+            ..truth
+        };
+        // One sample: a fine step of half its interval would be zero.
+        let one = search_offset((&time_s[..1], &dvl[..1]), &reference, carried, 30.0);
+        assert!(one.is_some());
+        // A range of an hour over the whole dive: the grid reads fewer samples a step,
+        // and still finds the clock within a coarse step.
+        let (found, _) = search_offset((&time_s, &dvl), &reference, carried, 3600.0).unwrap();
+        assert!((found - 7.3).abs() <= 0.25, "{found}");
+        // The default range finds it on the fine grid (a 1-Hz DVL's: the coarse one).
+        let (found, _) = search_offset((&time_s, &dvl), &reference, carried, 30.0).unwrap();
+        assert!((found - 7.3).abs() <= 0.125, "{found}");
     }
 
     #[test]

@@ -29,7 +29,8 @@ use crate::Vec3;
 use crate::installation::estimate::bound::{Noise, TermBound, Tolerances, bound};
 use crate::installation::estimate::clock::{covariance, search_offset};
 use crate::installation::estimate::fit::{
-    Fit, FitError, TIME_OFFSET_MARGIN_S, linearised, mask_about, residual_rms,
+    Fit, FitError, TIME_OFFSET_MARGIN_S, beyond_any_installation, linearised, mask_about,
+    residual_rms,
 };
 use crate::installation::estimate::robust::{Loss, Robust, RobustFit, scales};
 use crate::installation::frames::Reference;
@@ -334,15 +335,19 @@ pub fn joint_fit(
         .map(|(b, f)| Weighed::of(b, f.as_ref()))
         .collect();
     let vehicle = problem.installation(&solution.vehicle, &DVector::zeros(parameters));
+    let dives: Vec<Installation> = (solution.dives.iter())
+        .map(|d| problem.installation(&solution.vehicle, d))
+        .collect();
+    if let Some(fault) = dives.iter().find_map(beyond_any_installation) {
+        return Err(fault);
+    }
     let stacked = stacked_fit(&weighed, vehicle_terms, vehicle, robust, all_outliers);
     let bound = bound(&stacked, noise, tolerances);
     Ok(JointFit {
         vehicle_terms,
         dive_terms,
         vehicle,
-        dives: (solution.dives.iter())
-            .map(|d| problem.installation(&solution.vehicle, d))
-            .collect(),
+        dives,
         dive_std: dive_standard_deviations(
             &weighed,
             &fitted,
