@@ -33,35 +33,7 @@ fn main() {
     }
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    // The installation, saved from 400 s at 1 Hz.
-    installed::write_installed(&d.join("calibration"), 1, &[], installed::INSTALLED, 1);
-    let at = d.join("calibration/Trajectory1");
-    let (dvl, reference) = (
-        at.join("DVL_trajectory1.csv"),
-        at.join("GT_trajectory1.csv"),
-    );
-    let terms = [
-        TermName::LeverArm,
-        TermName::TimeOffset,
-        TermName::Bias,
-        TermName::Scale,
-    ];
-    let saved = d.join("installation.toml");
-    calibrate(&CalibrateArgs {
-        dvl: &dvl,
-        reference: Some(&reference),
-        columns: None,
-        reading: Reading::default(),
-        terms: &terms,
-        window_s: None,
-        dvl_noise_cm_s: 2.0,
-        reference_noise_cm_s: 0.5,
-        tolerance_pct: 10.0,
-        out: &d.join("calibrated"),
-        save: Some(&saved),
-        dive_terms: &[TermName::TimeOffset],
-    })
-    .expect("the synthetic recording calibrates");
+    let saved = saved_installation(d);
     println!("| dive at 10 Hz | rows | correct s | s per 100,000 rows |");
     println!("|---|---|---|---|");
     for minutes in [15, 30, 60] {
@@ -78,18 +50,7 @@ fn main() {
             at.join("GT_trajectory1.csv"),
         );
         let clock = Instant::now();
-        let corrected = correct(&CorrectArgs {
-            dvl: &dvl,
-            reference: Some(&reference),
-            columns: None,
-            reading: Reading::default(),
-            installation: &saved,
-            window_s: 60.0,
-            search_s: 30.0,
-            time_offset_s: None,
-            out: &dive.join("out"),
-        })
-        .expect("the dive is corrected");
+        let corrected = corrected((&dvl, &reference), &saved, &dive.join("out"));
         let seconds = clock.elapsed().as_secs_f64();
         let found = corrected.applied.time_offset_s;
         assert!((found - 7.3).abs() < 0.1, "the clock found again: {found}");
@@ -184,37 +145,9 @@ fn hour(which: Option<&str>) {
     let clock = Instant::now();
     match which {
         Some("correct") => {
-            installed::write_installed(&d.join("calibration"), 1, &[], installed::INSTALLED, 1);
-            let at = d.join("calibration/Trajectory1");
-            let saved = d.join("installation.toml");
-            calibrate(&CalibrateArgs {
-                dvl: &at.join("DVL_trajectory1.csv"),
-                reference: Some(&at.join("GT_trajectory1.csv")),
-                columns: None,
-                reading: Reading::default(),
-                terms: &terms,
-                window_s: None,
-                dvl_noise_cm_s: 2.0,
-                reference_noise_cm_s: 0.5,
-                tolerance_pct: 10.0,
-                out: &d.join("calibrated"),
-                save: Some(&saved),
-                dive_terms: &[TermName::TimeOffset],
-            })
-            .expect("the calibration recording calibrates");
+            let saved = saved_installation(d);
             let clock = Instant::now();
-            let corrected = correct(&CorrectArgs {
-                dvl: &dives[1].0,
-                reference: Some(&dives[1].1),
-                columns: None,
-                reading: Reading::default(),
-                installation: &saved,
-                window_s: 60.0,
-                search_s: 30.0,
-                time_offset_s: None,
-                out: &d.join("out"),
-            })
-            .expect("the dive is corrected");
+            let corrected = corrected((&dives[1].0, &dives[1].1), &saved, &d.join("out"));
             let found = corrected.applied.time_offset_s;
             assert!((found - 7.3).abs() < 0.1, "the clock found again: {found}");
             report("correct", clock.elapsed().as_secs_f64());
@@ -252,4 +185,54 @@ fn report(what: &str, seconds: f64) {
         "| {what} | {seconds:.1} | {} |",
         installed::peak_resident_memory()
     );
+}
+
+/// The installation `calibrate --save` finds on 400 s at 1 Hz (lever arm, time offset,
+/// bias, scale), saved in `d`: its path.
+fn saved_installation(d: &std::path::Path) -> std::path::PathBuf {
+    installed::write_installed(&d.join("calibration"), 1, &[], installed::INSTALLED, 1);
+    let at = d.join("calibration/Trajectory1");
+    let saved = d.join("installation.toml");
+    calibrate(&CalibrateArgs {
+        dvl: &at.join("DVL_trajectory1.csv"),
+        reference: Some(&at.join("GT_trajectory1.csv")),
+        columns: None,
+        reading: Reading::default(),
+        terms: &[
+            TermName::LeverArm,
+            TermName::TimeOffset,
+            TermName::Bias,
+            TermName::Scale,
+        ],
+        window_s: None,
+        dvl_noise_cm_s: 2.0,
+        reference_noise_cm_s: 0.5,
+        tolerance_pct: 10.0,
+        out: &d.join("calibrated"),
+        save: Some(&saved),
+        dive_terms: &[TermName::TimeOffset],
+    })
+    .expect("the synthetic recording calibrates");
+    saved
+}
+
+/// `correct` of the dive (`dvl`, `reference`) with the installation `saved`, its clock
+/// found again from the first 60 s, into `out`.
+fn corrected(
+    (dvl, reference): (&std::path::Path, &std::path::Path),
+    saved: &std::path::Path,
+    out: &std::path::Path,
+) -> dcnet_exp::operator::correct::Correction {
+    correct(&CorrectArgs {
+        dvl,
+        reference: Some(reference),
+        columns: None,
+        reading: Reading::default(),
+        installation: saved,
+        window_s: 60.0,
+        search_s: 30.0,
+        time_offset_s: None,
+        out,
+    })
+    .expect("the dive is corrected")
 }

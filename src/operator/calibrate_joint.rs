@@ -43,6 +43,21 @@ pub struct JointArgs<'a> {
     pub save: Option<&'a Path>,
 }
 
+impl JointArgs<'_> {
+    /// What is asked beyond the files, checked as one recording's calibration is.
+    fn request(&self) -> Request<'_> {
+        Request {
+            terms: self.terms,
+            dive_terms: self.dive_terms,
+            window_s: self.window_s,
+            dvl_noise_cm_s: self.dvl_noise_cm_s,
+            reference_noise_cm_s: self.reference_noise_cm_s,
+            tolerance_pct: self.tolerance_pct,
+            save: self.save,
+        }
+    }
+}
+
 /// How far one term's estimates from each recording alone lie from the joint one.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Agreement {
@@ -78,15 +93,7 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
             references: args.references.len(),
         });
     }
-    refused(Request {
-        terms: args.terms,
-        dive_terms: args.dive_terms,
-        window_s: args.window_s,
-        dvl_noise_cm_s: args.dvl_noise_cm_s,
-        reference_noise_cm_s: args.reference_noise_cm_s,
-        tolerance_pct: args.tolerance_pct,
-        save: args.save,
-    })?;
+    refused(args.request())?;
     let noise = Noise {
         dvl_m_s: args.dvl_noise_cm_s / 100.0,
         reference_m_s: args.reference_noise_cm_s / 100.0,

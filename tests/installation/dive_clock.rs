@@ -183,10 +183,9 @@ fn a_dive_at_constant_velocity_has_no_clock_to_find() {
     assert!(error.to_string().contains("shows no clock"), "{error}");
 }
 
-#[test]
-fn a_study_scores_every_method_with_the_clock_found_again_after_the_window_that_found_it() {
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
+/// A study in `d` of the first three dives of [`CLOCKS_S`], each clock re-found in the
+/// windows `dive_windows_s` (a TOML list).
+fn write_dives_study(d: &Path, dive_windows_s: &str) {
     for (k, &clock) in CLOCKS_S.iter().take(3).enumerate() {
         let installed = Installed {
             time_offset_s: clock,
@@ -208,8 +207,42 @@ fn a_study_scores_every_method_with_the_clock_found_again_after_the_window_that_
         "dives",
         "dives",
         3,
-        "\n[calibration.dive]\nwindow_s = [60.0]\n",
+        &format!("\n[calibration.dive]\nwindow_s = {dive_windows_s}\n"),
     );
+}
+
+/// A dive window of one sample: no clock found in it, every scoring keeps the
+/// calibration's, said (its search's step was zero, and the study never ended).
+#[test]
+fn a_dive_window_of_one_sample_keeps_every_clock_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_dives_study(d, "[1.0]");
+    let output = common::dcnet(
+        d,
+        &[
+            "run",
+            "experiments/dives.toml",
+            "--out",
+            "results",
+            "--no-plots",
+        ],
+    );
+    assert!(output.status.success(), "{}", common::stderr(&output));
+    let printed = common::stdout(&output);
+    let kept = printed
+        .lines()
+        .find(|l| l.contains("scorings with the clock re-found kept the calibration's clock"))
+        .unwrap_or_else(|| panic!("{printed}"));
+    let (first, rest) = kept.split_once(" of the ").unwrap();
+    assert!(rest.starts_with(&format!("{first} scorings")), "{kept}");
+}
+
+#[test]
+fn a_study_scores_every_method_with_the_clock_found_again_after_the_window_that_found_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_dives_study(d, "[60.0]");
     let output = common::dcnet(d, &["run", "experiments/dives.toml", "--out", "results"]);
     assert!(output.status.success(), "{}", common::stderr(&output));
     let report = std::fs::read_to_string(d.join("results/dives/report.md")).unwrap();

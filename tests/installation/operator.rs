@@ -467,21 +467,6 @@ fn a_save_that_cannot_be_a_dive_terms_outside_the_fit_and_a_recording_twice_are_
             "is also where the corrected recording goes",
         );
     }
-    // Jointly too.
-    let joint = [
-        "calibrate",
-        &dvl,
-        &dvl,
-        "--reference",
-        &reference,
-        "--reference",
-        &reference,
-        "--out",
-        "out",
-        "--save",
-        "./out/1-DVL_trajectory1-corrected.csv",
-    ];
-    refused(&joint, "is also where the corrected recording goes");
     let twice = [
         "calibrate",
         &dvl,
@@ -494,6 +479,13 @@ fn a_save_that_cannot_be_a_dive_terms_outside_the_fit_and_a_recording_twice_are_
         "out",
     ];
     refused(&twice, "hold the same recording (the same SHA-256)");
+    // Jointly too, however spelled.
+    let joint = [
+        &twice[..],
+        &["--save", "./out/1-DVL_trajectory1-corrected.csv"],
+    ]
+    .concat();
+    refused(&joint, "is also where the corrected recording goes");
     // Jointly, what a single calibrate refuses (the joint calibration took each).
     let (second, second_reference) = dive(d, "second", clocked(-1.2), 2);
     let (second, second_reference) = (path(&second), path(&second_reference));
