@@ -167,7 +167,8 @@ const FINEST_STEP_S: f64 = 0.001;
 
 /// The τ (s) at which the carried installation's prediction from the reference at
 /// t + τ is closest to the DVL (least RMS over the window), and that RMS (m/s): first
-/// every [`TIME_OFFSET_SCAN_STEP_S`] over ±`search_s`, then within one such step of the
+/// every [`TIME_OFFSET_SCAN_STEP_S`] over ±`search_s` (its ends included, nothing beyond
+/// them), then within one such step of the
 /// best at half the DVL's sample interval (where that is finer; never finer than
 /// [`FINEST_STEP_S`]); each step on at most [`SEARCH_SAMPLES`] of the window's samples
 /// evenly spread, and the coarse grid on no more than [`SEARCH_BUDGET`] in all. A step
@@ -212,15 +213,22 @@ pub fn search_offset(
         }
         best
     };
+    // Every step within ±search_s of the carried τ, its ends included.
+    let (lowest_s, highest_s) = (
+        carried.time_offset_s - search_s,
+        carried.time_offset_s + search_s,
+    );
     let steps = coarse_steps as i64;
-    let coarse =
-        (-steps..=steps).map(|k| carried.time_offset_s + k as f64 * TIME_OFFSET_SCAN_STEP_S);
-    let (centre_s, rms) = best_of(&mut coarse.into_iter(), None)?;
+    let mut coarse = (-steps..=steps).map(|k| {
+        (carried.time_offset_s + k as f64 * TIME_OFFSET_SCAN_STEP_S).clamp(lowest_s, highest_s)
+    });
+    let (centre_s, rms) = best_of(&mut coarse, None)?;
     let fine_s = (sample_interval(time_s) / 2.0).clamp(FINEST_STEP_S, TIME_OFFSET_SCAN_STEP_S);
     let fine_steps = (TIME_OFFSET_SCAN_STEP_S / fine_s).ceil() as i64;
     let mut fine = (-fine_steps..=fine_steps)
         .filter(|&k| k != 0)
-        .map(|k| centre_s + k as f64 * fine_s);
+        .map(|k| centre_s + k as f64 * fine_s)
+        .filter(|offset_s| (lowest_s..=highest_s).contains(offset_s));
     best_of(&mut fine, Some((centre_s, rms)))
 }
 
@@ -429,6 +437,10 @@ pub(crate) mod tests {
         // and still finds the clock within a coarse step.
         let (found, _) = search_offset((&time_s, &dvl), &reference, carried, 3600.0).unwrap();
         assert!((found - 7.3).abs() <= 0.25, "{found}");
+        // Nothing beyond the range asked for: ±0.1 s about 0 stays within it, its
+        // nearer end the best.
+        let (found, _) = search_offset((&time_s, &dvl), &reference, carried, 0.1).unwrap();
+        assert_eq!(found, 0.1);
         // The default range finds it on the fine grid (a 1-Hz DVL's: the coarse one).
         let (found, _) = search_offset((&time_s, &dvl), &reference, carried, 30.0).unwrap();
         assert!((found - 7.3).abs() <= 0.125, "{found}");

@@ -49,6 +49,8 @@ pub struct OnlineNoise {
     specified_variance: f64,
     axes: [AxisSums; 3],
     samples: usize,
+    /// How many samples followed a neighbour.
+    pairs: usize,
 }
 
 impl OnlineNoise {
@@ -80,11 +82,12 @@ impl OnlineNoise {
             specified_variance,
             axes: [empty.clone(), empty.clone(), empty],
             samples: 0,
+            pairs: 0,
         }
     }
 
     /// Adds a sample: its three rows and innovations linearised about `estimate`;
-    /// `neighbour` is whether it follows the previous one by the record's step (no gap).
+    /// `neighbour` is whether it follows the previous one within a piece (no gap).
     pub fn add(
         &mut self,
         rows: &[Vec<f64>],
@@ -92,6 +95,9 @@ impl OnlineNoise {
         estimate: &DVector<f64>,
         neighbour: bool,
     ) {
+        if neighbour && self.samples > 0 {
+            self.pairs += 1;
+        }
         self.samples += 1;
         for (k, axis) in self.axes.iter_mut().enumerate() {
             let h = DVector::from_column_slice(&rows[k]);
@@ -136,6 +142,7 @@ impl OnlineNoise {
             power: [0.0; 3],
             lagged: [0.0; 3],
             samples: self.samples,
+            pairs: self.pairs,
         };
         for (k, axis) in self.axes.iter().enumerate() {
             let (a, b, c) = &axis.squares;

@@ -113,8 +113,9 @@ pub enum FitError {
     #[error("{time} time stamps but {dvl} DVL samples")]
     LengthMismatch { time: usize, dvl: usize },
     #[error(
-        "{usable} DVL samples lie more than {margin_s} s inside the reference, \
-         too few for {parameters} parameters"
+        "{} more than {margin_s} s inside the reference, too few for {}",
+        match usable { 1 => "1 DVL sample lies".to_string(), n => format!("{n} DVL samples lie") },
+        crate::count(*parameters, "parameter")
     )]
     TooFewSamples {
         usable: usize,

@@ -25,10 +25,13 @@ pub const MAX_LAG_ONE: f64 = 0.99;
 pub struct ResidualSums {
     /// Σ rᵢ², m²/s².
     pub power: Vec3,
-    /// Σ rᵢ rᵢ₋₁, m²/s².
+    /// Σ rᵢ rᵢ₋₁ over the neighbours of one piece, m²/s².
     pub lagged: Vec3,
     /// How many samples.
     pub samples: usize,
+    /// How many pairs of neighbours `lagged` sums over: one fewer than the samples in
+    /// one piece, one fewer per piece in several.
+    pub pairs: usize,
 }
 
 /// The noise of a fit's residuals, per DVL axis.
@@ -53,6 +56,7 @@ impl ResidualNoise {
             power: [0.0; 3],
             lagged: [0.0; 3],
             samples,
+            pairs: (1..samples).filter(|&i| follows[i]).count(),
         };
         for k in 0..3 {
             let r = |i: usize| residuals[3 * i + k];
@@ -82,8 +86,10 @@ impl ResidualNoise {
             // is estimated (Marriott and Pope, 1954), and about −(1 + ρ)/n more for each
             // other parameter fitted on the axis (its share of them), which the residuals
             // of a fit lose; `tests/installation/coverage.rs` checks the sum.
-            noise.lag_one[k] = if power > 0.0 {
-                let read = lagged / power;
+            // The mean product of neighbours over the mean square: with every sample
+            // in one piece, Σ rᵢ rᵢ₋₁ / Σ rᵢ² as ever; no pairs, no correlation read.
+            noise.lag_one[k] = if power > 0.0 && sums.pairs > 0 {
+                let read = lagged / power * (samples - 1) as f64 / sums.pairs as f64;
                 let per_axis = parameters as f64 / 3.0;
                 let bias = (1.0 + 3.0 * read + per_axis * (1.0 + read)) / samples as f64;
                 (read + bias).clamp(-MAX_LAG_ONE, MAX_LAG_ONE)
@@ -200,8 +206,8 @@ mod tests {
     #[test]
     fn neighbours_are_not_read_across_a_gap() {
         // Pieces of two samples each, +1, +1, then −1, −1, and so on: within a piece
-        // neighbours agree (Σ rᵢrᵢ₋₁ = 100 of Σ rᵢ² = 200), across a gap they would
-        // disagree (99 more products of −1).
+        // neighbours agree (each of the 100 pairs' products is 1, as each square),
+        // across a gap they would disagree (99 more products of −1).
         let samples = 200;
         let residuals = DVector::from_fn(
             3 * samples,
@@ -209,8 +215,9 @@ mod tests {
         );
         let in_pairs: Vec<bool> = (0..samples).map(|i| i % 2 == 1).collect();
         let bridged: Vec<bool> = (0..samples).map(|i| i > 0).collect();
-        // Read 100/200 and 1/200, each with its bias (1 + 3ρ)/n taken back.
-        let expected = [0.5 + 2.5 / 200.0, 0.005 + 1.015 / 200.0];
+        // Read 100/200 · 199/100 (the mean product over the mean square), clamped,
+        // and 1/200, with its bias (1 + 3ρ)/n taken back.
+        let expected = [MAX_LAG_ONE, 0.005 + 1.015 / 200.0];
         for (follows, expected) in [in_pairs, bridged].iter().zip(expected) {
             let noise = ResidualNoise::of(&residuals, 0, follows);
             assert!((noise.lag_one[0] - expected).abs() < 1e-12, "{noise:?}");
