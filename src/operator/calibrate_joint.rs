@@ -218,9 +218,18 @@ fn read_all(
     args: &JointArgs,
     loaded: Vec<Loaded>,
 ) -> Result<Vec<(PairedRecording, Reference, Option<PairedRecording>)>, CalibrateError> {
-    let mut recordings = Vec::new();
-    for loaded in loaded {
+    let mut recordings: Vec<(PairedRecording, Reference, Option<PairedRecording>)> = Vec::new();
+    for (k, loaded) in loaded.into_iter().enumerate() {
         let recording = loaded.parse()?.recording;
+        let same = |(earlier, _, _): &(PairedRecording, _, _)| {
+            earlier.time_s == recording.time_s && earlier.dvl_m_s == recording.dvl_m_s
+        };
+        if let Some(first) = recordings.iter().position(same) {
+            return Err(CalibrateError::SameSamples {
+                first: args.dvls[first].clone(),
+                again: args.dvls[k].clone(),
+            });
+        }
         let reference = Reference::new(&recording);
         let window = args.window_s.map(|w| recording.first_seconds(w));
         recordings.push((recording, reference, window));

@@ -479,6 +479,24 @@ fn a_save_that_cannot_be_a_dive_terms_outside_the_fit_and_a_recording_twice_are_
         "out",
     ];
     refused(&twice, "hold the same recording (the same SHA-256)");
+    // The same samples in other bytes (CRLF line endings): counted once, refused too.
+    let text = std::fs::read_to_string(d.join(&dvl)).unwrap();
+    std::fs::write(d.join("crlf.csv"), text.replace('\n', "\r\n")).unwrap();
+    let crlf = [
+        "calibrate",
+        &dvl,
+        "crlf.csv",
+        "--reference",
+        &reference,
+        "--reference",
+        &reference,
+        "--out",
+        "out",
+    ];
+    refused(
+        &crlf,
+        "crlf.csv hold the same DVL samples (the same stamps and velocities, though not the same bytes",
+    );
     // Jointly too, however spelled.
     let joint = [
         &twice[..],
@@ -537,7 +555,8 @@ fn a_save_that_cannot_be_a_dive_terms_outside_the_fit_and_a_recording_twice_are_
         text.push_str(&format!("{i},0,0,0\n"));
     }
     std::fs::write(&zeros, &text).unwrap();
-    std::fs::write(d.join("zeros2.csv"), text.replace(",0,0,0", ",0,0,0.0")).unwrap();
+    // The second on stamps half a second later: another recording.
+    std::fs::write(d.join("zeros2.csv"), text.replace(",0,0,0", ".5,0,0,0")).unwrap();
     std::fs::write(
         d.join("zero.toml"),
         "[columns]\ntime = \"Time [s]\"\ndvl = [\"DVL X [m/s]\", \"DVL Y [m/s]\", \"DVL Z [m/s]\"]\nvelocity_ned = [\"V North [m/s]\", \"V East [m/s]\", \"V Down [m/s]\"]\nattitude = [\"Roll [rad]\", \"Pitch [rad]\", \"Yaw [rad]\"]\nzero_is_valid = true\n",
