@@ -16,7 +16,7 @@ use crate::installation::estimate::clock::{Carried, Clock, ClockError, ClockSear
 use crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S;
 use crate::installation::estimate::robust::outliers_among;
 use crate::installation::frames::Reference;
-use crate::installation::terms::{AxisRmse, Installation};
+use crate::installation::terms::{AxisRmse, Installation, corrected_error};
 use crate::operator::inputs::{Reading, columns, not_over_an_input};
 use crate::operator::installation_file::{InstallationFileError, SavedInstallation};
 use crate::results::ResultsError;
@@ -296,12 +296,9 @@ fn fit_after(
     let inside = reference.interior(time, TIME_OFFSET_MARGIN_S);
     let index = |seconds: f64| time.partition_point(|&t| t - time[0] < seconds);
     let begin = index(args.window_s).max(inside.start);
+    let record = (time.as_slice(), recording.dvl_m_s.as_slice());
     let errors: Vec<Option<Vec3>> = (begin..inside.end.max(begin))
-        .map(|i| {
-            let at = reference.at(time[i] + applied.time_offset_s)?;
-            let corrected = applied.correct(recording.dvl_m_s[i], at.rate_rad_s);
-            Some([0, 1, 2].map(|k| corrected[k] - at.velocity_body_m_s[k]))
-        })
+        .map(|i| corrected_error(applied, record, reference, i))
         .collect();
     let scored: Vec<Vec3> = errors.iter().flatten().copied().collect();
     let mut flags = outliers_among(&scored).into_iter();

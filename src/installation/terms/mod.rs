@@ -366,11 +366,24 @@ pub fn score(
     reference: &Reference,
     samples: impl IntoIterator<Item = usize>,
 ) -> Option<AxisRmse> {
-    AxisRmse::of_errors(samples.into_iter().filter_map(|i| {
-        let at = reference.at(time_s[i] + installation.time_offset_s)?;
-        let corrected = installation.correct(dvl_m_s[i], at.rate_rad_s);
-        Some([0, 1, 2].map(|k| corrected[k] - at.velocity_body_m_s[k]))
-    }))
+    AxisRmse::of_errors(
+        (samples.into_iter())
+            .filter_map(|i| corrected_error(installation, (time_s, dvl_m_s), reference, i)),
+    )
+}
+
+/// What [`score`] scores of sample `i` of the record (`time_s`, `dvl_m_s`): the
+/// corrected DVL less the reference at t_i + τ, m/s per body axis; `None` where t_i + τ
+/// lies outside the reference.
+pub fn corrected_error(
+    installation: &Installation,
+    (time_s, dvl_m_s): (&[f64], &[Vec3]),
+    reference: &Reference,
+    i: usize,
+) -> Option<Vec3> {
+    let at = reference.at(time_s[i] + installation.time_offset_s)?;
+    let corrected = installation.correct(dvl_m_s[i], at.rate_rad_s);
+    Some([0, 1, 2].map(|k| corrected[k] - at.velocity_body_m_s[k]))
 }
 
 #[cfg(test)]
