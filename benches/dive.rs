@@ -8,6 +8,9 @@
 //! `-- --hour correct` or `-- --hour joint`, a case of its own instead: `correct` of an
 //! hour's dive at 100 Hz (360,000 rows, its clock found again from the first 60 s), or
 //! the joint `calibrate` of two such dives, with the process's peak resident memory.
+//! With `-- --memory`: each command's peak resident memory, run as the binary on dives
+//! of one and five hours, beside the estimate with which it refuses a recording beyond
+//! the machine's memory before reading it.
 
 #[allow(dead_code)]
 #[path = "../tests/common/installed.rs"]
@@ -30,6 +33,9 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     if let Some(at) = args.iter().position(|a| a == "--hour") {
         return hour(args.get(at + 1).map(String::as_str));
+    }
+    if args.iter().any(|a| a == "--memory") {
+        return memory();
     }
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
@@ -175,6 +181,110 @@ fn hour(which: Option<&str>) {
         }
         _ => panic!("--hour takes correct or joint"),
     }
+}
+
+/// The `--memory` case: each command run as the binary, on dives of one and five hours
+/// at 100 Hz (the DVL at 100 Hz, and at 10 Hz beside the reference at 100 Hz), its peak
+/// resident memory beside the estimate that refuses it up front
+/// ([`dcnet_exp::operator::cost`]).
+fn memory() {
+    use dcnet_exp::operator::cost::{CALIBRATE, CORRECT, Cost, JOINT, PerRow};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let saved = saved_installation(d);
+    // (name, rows at 100 Hz, the DVL at every n-th, its clock): the clock within the
+    // ±3 s a fit alone scans, as a joint calibration's first recording needs.
+    let dives = [
+        ("1 h, DVL 100 Hz", 360_000, 1, 1.3),
+        ("1 h, DVL 10 Hz", 360_000, 10, 1.3),
+        ("5 h, DVL 100 Hz", 1_800_000, 1, 1.3),
+    ];
+    let files: Vec<(String, std::path::PathBuf, std::path::PathBuf)> = dives
+        .iter()
+        .enumerate()
+        .map(|(k, &(name, rows, every, time_offset_s))| {
+            let at = d.join(format!("dive{k}"));
+            let clocked = installed::Installed {
+                time_offset_s,
+                ..installed::INSTALLED
+            };
+            installed::write_installed_at_rates(&at, 1, &[], clocked, 3, (rows, 0.01), every);
+            let at = at.join("Trajectory1");
+            let dvl = at.join("DVL_trajectory1.csv");
+            (name.to_string(), dvl, at.join("GT_trajectory1.csv"))
+        })
+        .collect();
+    println!("| command | recordings | rows | peak resident memory | estimate | bytes per row |");
+    println!("|---|---|---|---|---|---|");
+    let run = |per_row: PerRow, chosen: &[usize], extra: &[&str]| {
+        let paths = |k: usize| (files[k].1.as_path(), Some(files[k].2.as_path()));
+        let cost = Cost::of(
+            per_row,
+            &chosen.iter().map(|&k| paths(k)).collect::<Vec<_>>(),
+        )
+        .unwrap();
+        let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_dcnet-exp"));
+        command.arg(if per_row == CORRECT {
+            "correct"
+        } else {
+            "calibrate"
+        });
+        command.args(chosen.iter().map(|&k| &files[k].1));
+        for &k in chosen {
+            command.arg("--reference").arg(&files[k].2);
+        }
+        let out = format!("out-{}-{}", per_row.command, chosen.len() * 10 + chosen[0]);
+        command
+            .args(extra)
+            .arg("--out")
+            .arg(d.join(out.replace(' ', "-")));
+        let peak = peak_of(command);
+        let names: Vec<&str> = chosen.iter().map(|&k| files[k].0.as_str()).collect();
+        println!(
+            "| {} | {} | {} | {:.0} MB | {:.0} MB | {:.0} |",
+            per_row.command,
+            names.join(" + "),
+            cost.rows(),
+            peak / 1e6,
+            cost.need / 1e6,
+            peak / cost.rows() as f64
+        );
+    };
+    let installation = ["--installation", saved.to_str().unwrap()];
+    for k in 0..dives.len() {
+        run(CALIBRATE, &[k], &[]);
+        run(CORRECT, &[k], &installation);
+    }
+    run(JOINT, &[0, 1], &[]);
+    run(JOINT, &[2, 0], &[]);
+}
+
+/// Runs `command` to its end (it must succeed): its peak resident memory, bytes, as the
+/// kernel counted it for the child.
+fn peak_of(mut command: std::process::Command) -> f64 {
+    // The child starts on this process's pages, and its peak starts at this process's
+    // peak: hand the freed pages (the dives written) back, and start the peak again
+    // (Linux's clear_refs "5").
+    // SAFETY: malloc_trim only returns free memory of glibc's heap to the kernel.
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    unsafe {
+        libc::malloc_trim(0);
+    }
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+    let child = command
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let (mut status, mut usage) = (0, unsafe { std::mem::zeroed::<libc::rusage>() });
+    // SAFETY: waits for the child just spawned, writing its status and usage.
+    let waited = unsafe { libc::wait4(child.id() as i32, &mut status, 0, &mut usage) };
+    assert_eq!(waited, child.id() as i32);
+    assert!(
+        libc::WIFEXITED(status) && libc::WEXITSTATUS(status) == 0,
+        "{command:?} failed"
+    );
+    usage.ru_maxrss as f64 * 1024.0
 }
 
 /// Prints the `--hour` case's line.

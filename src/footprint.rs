@@ -91,15 +91,33 @@ impl Footprint {
     }
 }
 
-/// The memory this process may use: the machine's, or its control group's limit when
-/// that is lower.
+/// The memory this process may use: the machine's, or its control group's limit or its
+/// address-space limit (`ulimit -v`) when that is lower.
 pub fn machine_memory() -> u64 {
     let mut system = sysinfo::System::new();
     system.refresh_memory();
     let total = system.total_memory();
-    system
+    let grouped = system
         .cgroup_limits()
-        .map_or(total, |limits| total.min(limits.total_memory))
+        .map_or(total, |limits| total.min(limits.total_memory));
+    grouped.min(address_space_limit())
+}
+
+/// The process's address-space limit, bytes; `u64::MAX` where there is none.
+fn address_space_limit() -> u64 {
+    #[cfg(unix)]
+    {
+        let mut limit = libc::rlimit {
+            rlim_cur: 0,
+            rlim_max: 0,
+        };
+        // SAFETY: getrlimit writes one rlimit, which `limit` is.
+        let read = unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut limit) };
+        if read == 0 && limit.rlim_cur != libc::RLIM_INFINITY {
+            return limit.rlim_cur;
+        }
+    }
+    u64::MAX
 }
 
 /// The memory of an installation study's `[learned]` training at its peak, for

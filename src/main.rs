@@ -9,9 +9,13 @@ static ALLOCATOR: dcnet_exp::memory::CountingAllocator = dcnet_exp::memory::Coun
 fn main() -> ExitCode {
     // Output piped into a reader that stops early (`plan … | head`) ends the process
     // quietly, as it ends any Unix tool, rather than panicking at the next line.
-    // SAFETY: restoring the default action of a signal, before any thread starts.
+    // A file-size limit (`ulimit -f`) makes the write that passes it fail, named with
+    // its file and exit 2, rather than killing the process with SIGXFSZ.
+    // SAFETY: restoring the default action of a signal, and ignoring another, before
+    // any thread starts.
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+        libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
     }
     dcnet_exp::memory::keep_freed_memory();
     match dcnet_exp::cli::main() {

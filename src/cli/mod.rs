@@ -157,6 +157,12 @@ fn apply_global_flags(threads: Option<usize>, log_every: Option<f64>) -> Result<
             );
         }
     }
+    if threads.is_none() && std::env::var_os("RAYON_NUM_THREADS").is_some_and(|v| v == "0") {
+        eprintln!(
+            "RAYON_NUM_THREADS=0: every core, {} threads",
+            rayon::current_num_threads()
+        );
+    }
     if let Some(seconds) = log_every {
         if !(0.0..=MAX_LOG_EVERY_S).contains(&seconds) {
             return Err(input(anyhow::anyhow!(

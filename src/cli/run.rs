@@ -20,7 +20,39 @@ pub(super) fn run_command(args: &RunArgs) -> Result<(), CliError> {
         Some(shard) => Mode::Shard { shard, force },
         None => Mode::All { force },
     };
+    if let Some(plots) = args.drawing.folder() {
+        writable(plots)?;
+    }
     super::kind_of(&args.target.spec)?.run(&args.target, &args.drawing, mode)
+}
+
+/// Refuses a `--plots` folder that cannot be written, before the run rather than after
+/// it: the deepest of its folders that exists takes a file (made and removed at once),
+/// and none of its parts is a file.
+fn writable(plots: &std::path::Path) -> Result<(), CliError> {
+    let refused = |why: String| {
+        input(anyhow::anyhow!(
+            "--plots {}: {why}; give a folder that can be written, or --no-plots",
+            plots.display()
+        ))
+    };
+    let deepest = plots
+        .ancestors()
+        .map(|p| {
+            if p.as_os_str().is_empty() {
+                std::path::Path::new(".")
+            } else {
+                p
+            }
+        })
+        .find(|p| p.exists())
+        .unwrap_or(std::path::Path::new("."));
+    if !deepest.is_dir() {
+        return Err(refused(format!("{} is not a folder", deepest.display())));
+    }
+    tempfile::tempfile_in(deepest)
+        .map(drop)
+        .map_err(|e| refused(format!("{} cannot be written ({e})", deepest.display())))
 }
 
 /// `--shard K/N` as typed, or from the variables it names.

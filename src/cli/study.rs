@@ -39,14 +39,15 @@ fn load_target(target: &Target) -> Result<Experiment<StudySpec>, CliError> {
 pub(super) fn run(target: &Target, drawing: &Drawing, mode: Mode) -> Result<(), CliError> {
     let experiment = load_target(target)?;
     let plan = StudyPlan::new(&experiment, &target.spec, &target.out).map_err(input)?;
-    let lengths = (0..experiment.points.len()).map(|p| {
-        let recordings = &plan.inputs.points[p].recordings;
-        recordings
-            .iter()
-            .map(|&s| plan.inputs.recordings[s].recording.time_s.len())
-            .collect()
-    });
-    learned_memory(&experiment, lengths.collect())?;
+    let mut lengths = Vec::new();
+    for (p, point) in experiment.points.iter().enumerate() {
+        let recordings: Vec<(&str, &[f64])> = (plan.inputs.recordings_of(p).into_iter())
+            .map(|r| (r.name.as_str(), r.recording.time_s.as_slice()))
+            .collect();
+        within_the_recordings(&experiment, &point.spec, &recordings)?;
+        lengths.push(recordings.iter().map(|(_, time_s)| time_s.len()).collect());
+    }
+    learned_memory(&experiment, lengths)?;
     let Mode::Shard { shard, .. } = mode else {
         let executed = execute(&Planned::Study(&plan), mode).map_err(stopped)?;
         return finish(&plan, &executed, drawing);
@@ -279,6 +280,27 @@ fn learned_memory(
     Ok(largest.map(crate::footprint::Bytes))
 }
 
+/// Refuses, at its key, what `spec` (a point of `experiment`) asks that its recordings
+/// (each trajectory's name and time stamps) cannot give: a `[learned]` window or time
+/// offset beyond them, a `[calibration.dive]` window that no trajectory outlasts.
+fn within_the_recordings(
+    experiment: &Experiment<StudySpec>,
+    spec: &StudySpec,
+    recordings: &[(&str, &[f64])],
+) -> Result<(), CliError> {
+    let learned = (spec.learned.as_ref())
+        .and_then(|l| crate::installation::learned::beyond_the_recordings(l, recordings));
+    let dive = (spec.dive.as_ref())
+        .and_then(|d| crate::installation::study::dive::beyond_the_recordings(d, recordings));
+    match learned.or(dive) {
+        Some((key, message)) => {
+            let fault = experiment.fault(&key, message);
+            Err(input(crate::spec::SpecErrors::from(fault)))
+        }
+        None => Ok(()),
+    }
+}
+
 /// `validate` of an installation spec: its faults (its recordings read and checked),
 /// or what it would compute.
 pub(super) fn validate(path: &Path, set: &[String]) -> Result<(), CliError> {
@@ -295,13 +317,7 @@ pub(super) fn validate(path: &Path, set: &[String]) -> Result<(), CliError> {
             .iter()
             .map(|&(name, at)| (name, read.get(at).recording.time_s.as_slice()))
             .collect();
-        if let Some(learned) = &spec.learned
-            && let Some((key, message)) =
-                crate::installation::learned::beyond_the_recordings(learned, &recordings)
-        {
-            let fault = experiment.fault(&key, message);
-            return Err(input(crate::spec::SpecErrors::from(fault)));
-        }
+        within_the_recordings(&experiment, spec, &recordings)?;
         lengths.push(recordings.iter().map(|(_, time_s)| time_s.len()).collect());
     }
     if let Some(memory) = learned_memory(&experiment, lengths)? {

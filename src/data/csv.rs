@@ -227,17 +227,29 @@ pub fn parse_columns(path: &Path, bytes: &[u8], columns: &[Column]) -> Result<Ro
 /// How many rows below the header `path` holds, counted without parsing them: an
 /// upper bound of its samples, known before it is read.
 pub fn row_count(path: &Path) -> Result<usize, CsvError> {
-    use std::io::BufRead;
+    use std::io::Read;
     regular(path)?;
-    let file = std::fs::File::open(path).map_err(|source| io_error(path, source))?;
-    let mut lines = 0;
-    for chunk in std::io::BufReader::new(file).split(b'\n') {
-        let chunk = chunk.map_err(|source| CsvError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        lines += usize::from(!chunk.is_empty());
+    let mut file = std::fs::File::open(path).map_err(|source| io_error(path, source))?;
+    let mut buffer = vec![0u8; 1 << 20];
+    // Lines that hold something: each newline after another byte than a newline, and a
+    // last line without one.
+    let (mut lines, mut previous) = (0, b'\n');
+    loop {
+        let read = file
+            .read(&mut buffer)
+            .map_err(|source| io_error(path, source))?;
+        let Some(&last) = buffer[..read].last() else {
+            break;
+        };
+        let chunk = &buffer[..read];
+        lines += usize::from(chunk[0] == b'\n' && previous != b'\n');
+        lines += chunk
+            .windows(2)
+            .filter(|pair| pair[1] == b'\n' && pair[0] != b'\n')
+            .count();
+        previous = last;
     }
+    lines += usize::from(previous != b'\n');
     Ok(lines.saturating_sub(1))
 }
 
@@ -397,6 +409,25 @@ fn parse(text: &str, holds: Quantity) -> Result<f64, FieldProblem> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Rows below the header, blank lines not counted, whether the last row ends in a
+    /// newline or not, with CRLF endings, and across the counting's 1 MiB reads.
+    #[test]
+    fn rows_are_counted_without_blank_lines() {
+        let folder = tempfile::tempdir().unwrap();
+        let counted = |text: &str| {
+            let path = folder.path().join("rows.csv");
+            std::fs::write(&path, text).unwrap();
+            row_count(&path).unwrap()
+        };
+        assert_eq!(counted("t,v\n1,2\n\n3,4\n"), 2);
+        assert_eq!(counted("t,v\r\n1,2\r\n3,4"), 2);
+        assert_eq!(counted("\n\nt,v\n\n"), 0);
+        assert_eq!(counted(""), 0);
+        let long = "t,v\n".to_string() + &"12345.678,0.25\n\n".repeat(200_000);
+        assert!(long.len() > 2 << 20);
+        assert_eq!(counted(&long), 200_000);
+    }
 
     fn columns() -> [String; 3] {
         crate::VELOCITY_COLUMNS.map(String::from)

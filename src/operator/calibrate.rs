@@ -20,6 +20,7 @@ use crate::installation::study::filters::FilterRun;
 use crate::installation::study::spec::{ObservabilityFile, default_filter_settings};
 use crate::installation::terms::names::{TermName, term_list_faults, term_set};
 use crate::installation::terms::{AxisRmse, Installation, TermSet, score};
+use crate::operator::cost::{BeyondMemory, CALIBRATE, Cost};
 use crate::operator::inputs::{Reading, columns, not_over_an_input};
 use crate::operator::installation_file::SavedInstallation;
 use crate::results::ResultsError;
@@ -105,19 +106,8 @@ pub enum CalibrateError {
         samples: usize,
         fault: FitError,
     },
-    /// The recording needs more memory than this machine has.
-    #[error(
-        "{}: {rows} rows need about {} of memory to calibrate and this machine has {}: calibrate a part of it, a file of fewer rows",
-        dvl.display(),
-        crate::footprint::Bytes(*need),
-        crate::footprint::Bytes(*have)
-    )]
-    Memory {
-        dvl: PathBuf,
-        rows: usize,
-        need: f64,
-        have: f64,
-    },
+    #[error(transparent)]
+    Memory(#[from] BeyondMemory),
     /// An output (of `--out`, or `--save`) would replace a file `calibrate` reads.
     #[error(
         "{}: calibrate would write over its input {}: give another {flag}, or rename the file",
@@ -269,7 +259,7 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
             });
         }
     }
-    fits_in_memory(args)?;
+    args.cost()?.refused()?;
     let read = read(args)?;
     let recording_sha256 = read.dvl_sha256.clone();
     outputs.not_another_recordings(args.dvl, &recording_sha256)?;
@@ -340,6 +330,12 @@ pub(super) struct Request<'a> {
 }
 
 impl CalibrateArgs<'_> {
+    /// What calibrating the recording will ask of this machine.
+    pub fn cost(&self) -> Result<Cost, CalibrateError> {
+        Cost::of(CALIBRATE, &[(self.dvl, self.reference)])
+            .map_err(|fault| CalibrateError::Read(PairedError::from(fault)))
+    }
+
     fn request(&self) -> Request<'_> {
         Request {
             terms: self.terms,
@@ -473,34 +469,6 @@ fn outputs(args: &CalibrateArgs) -> Outputs {
     Outputs::of(args.out, &stem(args.dvl))
 }
 
-/// Peak memory per row of a recording calibrated whole, bytes: the rows read, the
-/// filter's state after each sample and its terms against time (11.2 GB for 3.6 million
-/// rows, `cargo bench --bench calibrate -- --long`), rounded up.
-const BYTES_PER_ROW: f64 = 3_200.0;
-
-/// Refuses, before it is read, a recording whose calibration needs more memory than
-/// this machine has (it once aborted on a failed allocation).
-fn fits_in_memory(args: &CalibrateArgs) -> Result<(), CalibrateError> {
-    let rows = crate::data::csv::row_count(args.dvl).map_err(PairedError::from)?;
-    let have = crate::footprint::machine_memory() as f64;
-    match beyond_memory(args.dvl, rows, have) {
-        Some(refusal) => Err(refusal),
-        None => Ok(()),
-    }
-}
-
-/// The refusal of a recording at `dvl` of `rows` rows on a machine of `have` bytes,
-/// where its calibration needs more.
-fn beyond_memory(dvl: &Path, rows: usize, have: f64) -> Option<CalibrateError> {
-    let need = rows as f64 * BYTES_PER_ROW;
-    (need > have).then(|| CalibrateError::Memory {
-        dvl: dvl.to_path_buf(),
-        rows,
-        need,
-        have,
-    })
-}
-
 /// The recording of `args`, its reference, and its window where one is asked.
 fn read(args: &CalibrateArgs) -> Result<Read, CalibrateError> {
     let columns = columns(args.columns, args.reading).map_err(CalibrateError::Columns)?;
@@ -600,6 +568,7 @@ fn write_files(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::operator::cost::Rows;
 
     /// A straight, level recording of 300 s at 1 Hz in A-KIT's two files, the vehicle
     /// heading north at a varying speed, its DVL off by `bias_m_s`; the DVL file's path.
@@ -715,15 +684,25 @@ mod tests {
     /// before the recording is read, saying how much it needs.
     #[test]
     fn a_recording_beyond_the_machines_memory_is_refused_before_it_is_read() {
-        let dvl = Path::new("dive.csv");
         let limit = 2.5 * 1024.0 * 1024.0 * 1024.0;
-        let refused = beyond_memory(dvl, 10_000_000, limit).expect("refused");
-        assert!(refused.is_input());
+        let rows = |dvl_rows| Rows {
+            dvl: PathBuf::from("dive.csv"),
+            dvl_rows,
+            reference: None,
+        };
+        let refused = Cost::on(CALIBRATE, vec![rows(10_000_000)], limit)
+            .refused()
+            .expect_err("refused");
+        assert!(CalibrateError::from(refused.clone()).is_input());
         assert_eq!(
             refused.to_string(),
-            "dive.csv: 10000000 rows need about 29.8 GiB of memory to calibrate and this machine has 2.5 GiB: calibrate a part of it, a file of fewer rows"
+            "dive.csv: 10000000 rows need about 33.5 GiB of memory to calibrate and this process may use 2.5 GiB: calibrate a part of it, a file of fewer rows"
         );
-        assert!(beyond_memory(dvl, 400, limit).is_none());
+        assert!(
+            Cost::on(CALIBRATE, vec![rows(400)], limit)
+                .refused()
+                .is_ok()
+        );
     }
 
     /// A bad argument is bad input and writes nothing; a folder that cannot be made is a

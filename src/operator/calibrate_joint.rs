@@ -9,7 +9,7 @@
 //! In: [`JointArgs`]. Out: a [`JointCalibration`], or the [`CalibrateError`] of the
 //! recording at fault.
 
-use crate::data::paired::{Loaded, PairedRecording, ReadCounts, Source};
+use crate::data::paired::{Loaded, PairedError, PairedRecording, ReadCounts, Source};
 use crate::evaluate::statistics::mean_std;
 use crate::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise, TermBound, bound};
 use crate::installation::estimate::clock::DEFAULT_SEARCH_S;
@@ -18,6 +18,7 @@ use crate::installation::estimate::joint::{JointFit, JointRecording, joint_fit, 
 use crate::installation::frames::Reference;
 use crate::installation::terms::names::{TermName, term_set};
 use crate::operator::calibrate::{CalibrateError, Request, named, refused};
+use crate::operator::cost::{Cost, JOINT};
 use crate::operator::inputs::{Reading, columns, not_over_an_input};
 use crate::operator::installation_file::{SavedInstallation, SavedTerm};
 use crate::results::ResultsError;
@@ -44,6 +45,14 @@ pub struct JointArgs<'a> {
 }
 
 impl JointArgs<'_> {
+    /// What calibrating the recordings jointly will ask of this machine.
+    pub fn cost(&self) -> Result<Cost, CalibrateError> {
+        let files: Vec<(&Path, Option<&Path>)> = (self.dvls.iter().enumerate())
+            .map(|(k, dvl)| (dvl.as_path(), self.references.get(k).map(PathBuf::as_path)))
+            .collect();
+        Cost::of(JOINT, &files).map_err(|fault| CalibrateError::Read(PairedError::from(fault)))
+    }
+
     /// What is asked beyond the files, checked as one recording's calibration is.
     fn request(&self) -> Request<'_> {
         Request {
@@ -120,6 +129,7 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
             path: save.to_path_buf(),
         });
     }
+    args.cost()?.refused()?;
     let sources = sources(args)?;
     let (loaded, shas) = load(args, &sources, &outputs)?;
     let recordings = read_all(args, loaded)?;

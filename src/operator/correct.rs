@@ -17,6 +17,7 @@ use crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S;
 use crate::installation::estimate::robust::outliers_among;
 use crate::installation::frames::Reference;
 use crate::installation::terms::{AxisRmse, Installation, corrected_error};
+use crate::operator::cost::{BeyondMemory, CORRECT, Cost};
 use crate::operator::inputs::{Reading, columns, not_over_an_input};
 use crate::operator::installation_file::{InstallationFileError, SavedInstallation};
 use crate::results::ResultsError;
@@ -44,6 +45,14 @@ pub struct CorrectArgs<'a> {
     /// The dive's time offset, s, where it is known: no search.
     pub time_offset_s: Option<f64>,
     pub out: &'a Path,
+}
+
+impl CorrectArgs<'_> {
+    /// What correcting the dive will ask of this machine.
+    pub fn cost(&self) -> Result<Cost, CorrectError> {
+        Cost::of(CORRECT, &[(self.dvl, self.reference)])
+            .map_err(|fault| CorrectError::Read(PairedError::from(fault)))
+    }
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -86,6 +95,8 @@ pub enum CorrectError {
         input.display()
     )]
     OverInput { output: PathBuf, input: PathBuf },
+    #[error(transparent)]
+    Memory(#[from] BeyondMemory),
     #[error(transparent)]
     OtherRecording(#[from] OtherRecording),
     #[error(transparent)]
@@ -170,6 +181,7 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
     if let Some((output, input)) = not_over_an_input(&inputs, &outputs.all()) {
         return Err(CorrectError::OverInput { output, input });
     }
+    args.cost()?.refused()?;
     let columns = columns(args.columns, args.reading).map_err(CorrectError::Columns)?;
     let source = Source::csv(args.dvl, args.reference, columns);
     let loaded = source.load()?;

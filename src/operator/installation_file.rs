@@ -8,6 +8,7 @@
 
 use crate::Vec3;
 use crate::installation::estimate::bound::TermBound;
+use crate::installation::estimate::fit::beyond_any_installation;
 use crate::installation::terms::names::{TermName, term_list_faults, term_set};
 use crate::installation::terms::{Installation, TermSet};
 use std::path::{Path, PathBuf};
@@ -305,7 +306,12 @@ impl InstallationFile {
                     what,
                 })?;
         }
-        Ok(SavedInstallation { file: self })
+        let saved = SavedInstallation { file: self };
+        match beyond_any_installation(&saved.installation()) {
+            // A file `calibrate` could not have written: it refuses such a fit.
+            Some(fault) => Err(malformed(fault.to_string())),
+            None => Ok(saved),
+        }
     }
 
     /// The lists `calibrate` could have written: no term twice, nor a term with its
@@ -505,6 +511,14 @@ mod tests {
         let message = refusal(&lever.to_text());
         assert!(
             message.contains("dive_terms: \"lever_arm\" belongs to the vehicle, not the dive"),
+            "{message}"
+        );
+        // A term beyond any installation, which `calibrate` refuses to fit.
+        let mut far = file();
+        far.terms[0].value = -1e6;
+        let message = refusal(&far.to_text());
+        assert!(
+            message.contains("the fitted lever arm x is -1000000 m, beyond the ±100 m"),
             "{message}"
         );
         // Not a file, or far too large for one.

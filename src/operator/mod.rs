@@ -1,11 +1,13 @@
 //! The operator's commands on recordings named on the command line: [`calibrate`] one
 //! recording, [`calibrate_joint`] several at once, the [`installation_file`] that
 //! `calibrate --save` writes, and [`correct`], which carries a saved installation to
-//! the next dive and finds its clock again; what they share about their [`inputs`].
+//! the next dive and finds its clock again; what they share about their [`inputs`], and
+//! what each will [`cost`] this machine.
 //! In: the command's arguments. Out: what each command prints, and the corrected
 //! recordings written through [`crate::results::corrected`].
 
 pub mod inputs;
+pub mod cost;
 pub mod calibrate;
 pub mod installation_file;
 pub mod correct;

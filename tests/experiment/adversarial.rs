@@ -1873,18 +1873,27 @@ fn a_bad_log_every_variable_is_named() {
 }
 
 /// `RAYON_NUM_THREADS` that is not a count of threads is refused naming the variable,
-/// where rayon would ignore it and use every core; a typed `--threads` wins.
+/// where rayon would ignore it and use every core; a typed `--threads` wins; 0, every
+/// core, is said.
 #[test]
 fn a_bad_thread_count_variable_is_named() {
     let project = project(false);
-    let validate = |args: &[&str]| {
+    let with_threads = |value: &str, args: &[&str]| {
         Command::new(env!("CARGO_BIN_EXE_dcnet-exp"))
             .current_dir(project.path())
             .args(args)
-            .env("RAYON_NUM_THREADS", "abc")
+            .env("RAYON_NUM_THREADS", value)
             .output()
             .unwrap()
     };
+    let validate = |args: &[&str]| with_threads("abc", args);
+    let every_core = with_threads("0", &["validate", SPEC]);
+    assert!(every_core.status.success(), "{}", stderr(&every_core));
+    assert!(
+        stderr(&every_core).contains("RAYON_NUM_THREADS=0: every core, "),
+        "{}",
+        stderr(&every_core)
+    );
     let output = validate(&["validate", SPEC]);
     let message = stderr(&output);
     assert_eq!(output.status.code(), Some(1), "{message}");
@@ -1894,4 +1903,27 @@ fn a_bad_thread_count_variable_is_named() {
     );
     let typed = validate(&["--threads", "1", "validate", SPEC]);
     assert!(typed.status.success(), "{}", stderr(&typed));
+}
+
+/// A `--plots` folder that cannot be written (under a file, or read-only) is refused
+/// before the run, exit 1, naming the flag; the run once found it only after computing
+/// everything.
+#[test]
+fn an_unwritable_plots_folder_is_refused_before_the_run() {
+    let project = project(false);
+    let d = project.path();
+    std::fs::write(d.join("a-file"), "").unwrap();
+    let mut args: Vec<String> = ["run", SPEC, "--out", "results", "--plots", "a-file/plots"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    args.extend(SMALL.iter().map(|s| s.to_string()));
+    let under_a_file = exe(d, &args);
+    let message = stderr(&under_a_file);
+    assert_eq!(under_a_file.status.code(), Some(1), "{message}");
+    assert!(
+        message.contains("--plots a-file/plots: a-file is not a folder; give a folder that can be written, or --no-plots"),
+        "{message}"
+    );
+    assert!(!d.join("results").exists(), "{message}");
 }

@@ -238,6 +238,37 @@ fn a_dive_window_of_one_sample_keeps_every_clock_and_says_so() {
     assert!(rest.starts_with(&format!("{first} scorings")), "{kept}");
 }
 
+/// A dive window that no trajectory outlasts (500 s on segments of 400 s, or 1e308)
+/// would score nothing: `validate` and `run` refuse it at its key, naming the longest
+/// trajectory, where the study ran and said nothing.
+#[test]
+fn a_dive_window_longer_than_every_trajectory_is_refused_at_its_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for window in ["[60.0, 500.0]", "[1e308]"] {
+        write_dives_study(d, window);
+        let validate = ["validate", "experiments/dives.toml"];
+        let run = ["run", "experiments/dives.toml", "--out", "results"];
+        for args in [&validate[..], &run[..]] {
+            let command = args[0];
+            let output = common::dcnet(d, args);
+            let message = common::stderr(&output);
+            assert_eq!(
+                output.status.code(),
+                Some(1),
+                "{command} {window}: {message}"
+            );
+            assert!(
+                message.contains("calibration.dive.window_s")
+                    && message.contains("s is not shorter than any trajectory (the longest, ")
+                    && message.contains("lasts 399.0 s)"),
+                "{command} {window}: {message}"
+            );
+            assert!(!d.join("results/dives").exists(), "{command} {window}");
+        }
+    }
+}
+
 #[test]
 fn a_study_scores_every_method_with_the_clock_found_again_after_the_window_that_found_it() {
     let dir = tempfile::tempdir().unwrap();

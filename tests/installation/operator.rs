@@ -609,3 +609,161 @@ fn a_save_that_cannot_be_a_dive_terms_outside_the_fit_and_a_recording_twice_are_
     ];
     refused(&far, "no sample of the dive lies inside its reference");
 }
+
+/// `dcnet-exp` in `cwd` with `args`, under the shell limits `limits` (`ulimit -v …`).
+fn dcnet_limited(cwd: &Path, limits: &str, args: &[&str]) -> std::process::Output {
+    std::process::Command::new("bash")
+        .current_dir(cwd)
+        .arg("-c")
+        .arg(format!("{limits}; exec \"$0\" \"$@\""))
+        .arg(env!("CARGO_BIN_EXE_dcnet-exp"))
+        .args(args)
+        .env_remove("DCNET_LOG_EVERY")
+        .output()
+        .expect("bash runs")
+}
+
+/// Each command says what it will cost before it starts (its rows, their memory, the
+/// clock search's grid); a dive, or recordings calibrated jointly, beyond the memory
+/// this process may use (`ulimit -v`) are refused before they are read, exit 1, where
+/// `correct` aborted with a backtrace; a file-size limit (`ulimit -f`) ends `correct`
+/// with exit 2 naming the file it could not write, where SIGXFSZ killed it, and leaves
+/// no file behind.
+#[test]
+fn costs_are_stated_and_memory_and_file_size_limits_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let path = |p: &Path| p.to_str().unwrap().to_string();
+    let (first_dvl, first_reference) = save_first_dive(d);
+    let (dvl, reference) = dive(d, "second", clocked(7.3), 2);
+    let correct = |dvl: &Path, out: &str| {
+        vec![
+            "correct".to_string(),
+            path(dvl),
+            "--reference".into(),
+            path(&reference),
+            "--installation".into(),
+            "installation.toml".into(),
+            "--out".into(),
+            out.into(),
+        ]
+    };
+    let strs = |args: &[String]| {
+        args.iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let args = correct(&dvl, "out");
+    let output = dcnet(d, &args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(output.status.success(), "{}", stderr(&output));
+    let said = stderr(&output);
+    assert!(
+        said.contains("correct: 800 rows (")
+            && said.contains("DVL_trajectory1.csv and 1 other file), about "),
+        "{said}"
+    );
+    assert!(
+        said.contains("the clock search: 241 offsets 0.25 s apart over ±30 s, then at most 500 within 0.25 s of the best, each on at most 3600 of the window's samples"),
+        "{said}"
+    );
+    // Four million rows (their values never read): more than 1.5 GiB to correct.
+    let long = d.join("long.csv");
+    let rows = "1,0.1,0.2,0.3\n".repeat(4_000_000);
+    std::fs::write(
+        &long,
+        format!("Time [s],DVL X [m/s],DVL Y [m/s],DVL Z [m/s]\n{rows}"),
+    )
+    .unwrap();
+    let limit = "ulimit -v 1500000";
+    let args = correct(&long, "long-out");
+    let output = dcnet_limited(
+        d,
+        limit,
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+    );
+    let message = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{}: {message}", strs(&args));
+    assert!(
+        message.contains("long.csv and 1 other file: 4000400 rows need about")
+            && message.contains("of memory to correct and this process may use 1.4 GiB: correct it in parts, files of fewer rows"),
+        "{message}"
+    );
+    let joint = [
+        "calibrate",
+        &path(&long),
+        &path(&first_dvl),
+        "--reference",
+        &path(&reference),
+        "--reference",
+        &path(&first_reference),
+        "--out",
+        "long-out",
+    ];
+    let output = dcnet_limited(d, limit, &joint);
+    let message = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{message}");
+    assert!(
+        message.contains("long.csv and 3 other files: 4001200 rows need about")
+            && message.contains("of memory to calibrate jointly and this process may use 1.4 GiB"),
+        "{message}"
+    );
+    assert!(!d.join("long-out").exists());
+    // A file-size limit of 4 KiB, below the corrected CSV's size.
+    let args = correct(&dvl, "small-out");
+    let output = dcnet_limited(
+        d,
+        "ulimit -f 4",
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+    );
+    let message = stderr(&output);
+    assert_eq!(output.status.code(), Some(2), "{message}");
+    assert!(message.contains("small-out/DVL_trajectory1"), "{message}");
+    let left: Vec<_> = std::fs::read_dir(d.join("small-out"))
+        .map(|entries| entries.map(|e| e.unwrap().file_name()).collect())
+        .unwrap_or_default();
+    assert!(left.is_empty(), "left behind: {left:?}");
+}
+
+/// A dive whose clock lies beyond the search (35.6 s against the installation's 0.6 s,
+/// searched over ±30 s) is refused, exit 1, saying that the best offset lies at the
+/// search's edge, where the installation was applied with exit 0 and a warning that it
+/// fitted far worse; a search wide enough finds the clock.
+#[test]
+fn a_clock_beyond_the_search_is_refused_and_a_wider_search_finds_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let path = |p: &Path| p.to_str().unwrap().to_string();
+    save_first_dive(d);
+    let (dvl, reference) = dive(d, "late", clocked(35.6), 3);
+    let correct = |search_s: &str| {
+        let (dvl, reference) = (path(&dvl), path(&reference));
+        let args = [
+            "correct",
+            &dvl,
+            "--reference",
+            &reference,
+            "--installation",
+            "installation.toml",
+            "--search-s",
+            search_s,
+            "--out",
+            "out",
+        ];
+        dcnet(d, &args)
+    };
+    let refused = correct("30");
+    let message = stderr(&refused);
+    assert_eq!(refused.status.code(), Some(1), "{message}");
+    assert!(
+        message.contains("lies at the edge of the ±30 s searched about the installation's"),
+        "{message}"
+    );
+    assert!(!d.join("out").exists());
+    let found = correct("60");
+    assert!(found.status.success(), "{}", stderr(&found));
+    let printed = stdout(&found);
+    let clock = number_after(&printed, "least squares at ");
+    let std = number_after(&printed, &format!("least squares at {clock:.4} s ± "));
+    assert!((clock - 35.6).abs() < 3.0 * std, "{printed}");
+}

@@ -144,6 +144,16 @@ pub enum ClockError {
          the two recordings do not overlap in time"
     )]
     NoOverlap { search_s: f64 },
+    #[error(
+        "the best time offset, {found_s:.2} s, lies at the edge of the ±{} s searched about the installation's {carried_s:.2} s: \
+         the clock may lie beyond the search, and a wider one may find it",
+        crate::Shown(*search_s)
+    )]
+    AtEdge {
+        found_s: f64,
+        carried_s: f64,
+        search_s: f64,
+    },
     #[error("the least squares of the dive's terms failed: {0}")]
     Fit(#[from] FitError),
     #[error(
@@ -165,6 +175,52 @@ const SEARCH_BUDGET: usize = 10_000_000;
 /// The finest step of the search's fine grid, s: half a sample of a 500-Hz DVL.
 const FINEST_STEP_S: f64 = 0.001;
 
+/// The grid of a clock search over ±`search_s`, known before the dive is read: how many
+/// offsets it tries and on how many of the window's samples at most, which bound its
+/// cost whatever the window and the DVL's rate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SearchGrid {
+    pub search_s: f64,
+    /// Offsets [`TIME_OFFSET_SCAN_STEP_S`] apart over ±`search_s`, its ends included.
+    pub coarse: usize,
+    /// The most offsets within one coarse step of the best.
+    pub fine: usize,
+    /// The most window samples each offset is read on.
+    pub samples: usize,
+}
+
+impl SearchGrid {
+    pub fn of(search_s: f64) -> SearchGrid {
+        let coarse = 2 * (search_s / TIME_OFFSET_SCAN_STEP_S).ceil() as usize + 1;
+        SearchGrid {
+            search_s,
+            coarse,
+            fine: 2 * (TIME_OFFSET_SCAN_STEP_S / FINEST_STEP_S).ceil() as usize,
+            samples: SEARCH_SAMPLES.min(SEARCH_BUDGET / coarse).max(1),
+        }
+    }
+
+    /// The most predictions the search makes: offsets × samples.
+    pub fn predictions(&self) -> usize {
+        (self.coarse + self.fine) * self.samples
+    }
+}
+
+impl std::fmt::Display for SearchGrid {
+    /// `the clock search: 241 offsets 0.25 s apart over ±30 s, then at most 500 within
+    /// 0.25 s of the best, each on at most 3600 of the window's samples`
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the clock search: {} offsets {TIME_OFFSET_SCAN_STEP_S} s apart over ±{} s, then at most {} within {TIME_OFFSET_SCAN_STEP_S} s of the best, each on at most {} of the window's samples",
+            self.coarse,
+            crate::Shown(self.search_s),
+            self.fine,
+            self.samples
+        )
+    }
+}
+
 /// The τ (s) at which the carried installation's prediction from the reference at
 /// t + τ is closest to the DVL (least RMS over the window), and that RMS (m/s): first
 /// every [`TIME_OFFSET_SCAN_STEP_S`] over ±`search_s` (its ends included, nothing beyond
@@ -180,11 +236,8 @@ pub fn search_offset(
     carried: Installation,
     search_s: f64,
 ) -> Option<(f64, f64)> {
-    let coarse_steps = (search_s / TIME_OFFSET_SCAN_STEP_S).ceil() as usize;
-    let most = SEARCH_SAMPLES
-        .min(SEARCH_BUDGET / (2 * coarse_steps + 1))
-        .max(1);
-    let stride = time_s.len().div_ceil(most).max(1);
+    let grid = SearchGrid::of(search_s);
+    let stride = time_s.len().div_ceil(grid.samples).max(1);
     let read: Vec<(f64, Vec3)> = (time_s.iter().zip(dvl_m_s))
         .step_by(stride)
         .map(|(&t, &v)| (t, v))
@@ -218,7 +271,7 @@ pub fn search_offset(
         carried.time_offset_s - search_s,
         carried.time_offset_s + search_s,
     );
-    let steps = coarse_steps as i64;
+    let steps = grid.coarse as i64 / 2;
     let mut coarse = (-steps..=steps).map(|k| {
         (carried.time_offset_s + k as f64 * TIME_OFFSET_SCAN_STEP_S).clamp(lowest_s, highest_s)
     });
@@ -269,6 +322,15 @@ pub fn refind(
     .ok_or(ClockError::NoOverlap {
         search_s: search.search_s,
     })?;
+    // The best at an end of the search: the search did not bracket it.
+    let carried_s = carried.installation.time_offset_s;
+    if (searched_offset_s - carried_s).abs() >= search.search_s * (1.0 - 1e-12) {
+        return Err(ClockError::AtEdge {
+            found_s: searched_offset_s,
+            carried_s,
+            search_s: search.search_s,
+        });
+    }
     let start = Installation {
         time_offset_s: searched_offset_s,
         ..carried.installation

@@ -18,9 +18,37 @@ use crate::installation::study::method::Method;
 use crate::installation::study::on_recording::OnRecording;
 use crate::installation::study::recording::Recording;
 use crate::installation::study::rows::{Calibrated, FitFailure, TermRow, TransferRow};
-use crate::installation::study::spec::Model;
+use crate::installation::study::spec::{DiveSpec, Model};
 use crate::installation::terms::TermSet;
 use std::ops::Range;
+
+/// A `[calibration.dive]` window that no trajectory outlasts (each trajectory's name and
+/// time stamps, s), as `(key, message)`: no clock would be found from it and nothing
+/// scored after it, where the study would run and say nothing. `validate` and `run`
+/// refuse it alike.
+pub fn beyond_the_recordings(
+    dive: &DiveSpec,
+    recordings: &[(&str, &[f64])],
+) -> Option<(String, String)> {
+    let (name, longest_s) = recordings
+        .iter()
+        .map(|&(name, time_s)| {
+            let span = time_s
+                .first()
+                .zip(time_s.last())
+                .map_or(0.0, |(a, b)| b - a);
+            (name, span)
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1))?;
+    let window_s = dive.windows_s.iter().find(|&&w| w >= longest_s)?;
+    Some((
+        "calibration.dive.window_s".into(),
+        format!(
+            "{} s is not shorter than any trajectory (the longest, {name:?}, lasts {longest_s:.1} s): no dive's clock would be found from it and nothing scored after it; give a shorter window",
+            crate::Shown(*window_s)
+        ),
+    ))
+}
 
 /// A scored recording's clock re-found from its first seconds, and the samples it is
 /// scored on after them.

@@ -1,0 +1,191 @@
+//! What an operator's command will ask of this machine, known before it reads a
+//! recording: the rows of the files it reads, counted, and the memory they need at the
+//! command's measured bytes per row, beside the memory this process may use. Each
+//! command states its cost on stderr before it starts, and refuses up front where the
+//! memory is beyond the machine's (a recording too long once aborted on a failed
+//! allocation, with a backtrace). In: the command's files and its [`PerRow`]. Out: a
+//! [`Cost`], or the [`BeyondMemory`] that refuses it.
+
+use crate::data::csv::{CsvError, row_count};
+use crate::footprint::{Bytes, machine_memory};
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A command's peak resident memory per row of the files it reads, bytes: a DVL row and
+/// a row of the reference beside it (a file that holds both counts both). Read off the
+/// peaks of synthetic dives of one and five hours at 100 Hz, the DVL at 100 and 10 Hz
+/// (`cargo bench --bench dive -- --memory` prints each beside its estimate), and
+/// rounded up: the estimate lies above every peak measured.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PerRow {
+    /// The command, as the refusal says it ("calibrate").
+    pub command: &'static str,
+    pub dvl: f64,
+    pub reference: f64,
+    /// What to do instead, as the refusal says it.
+    pub instead: &'static str,
+}
+
+/// `calibrate` of one recording: the rows read, the filter's state after each sample
+/// and its terms against time.
+pub const CALIBRATE: PerRow = PerRow {
+    command: "calibrate",
+    dvl: 3_200.0,
+    reference: 400.0,
+    instead: "calibrate a part of it, a file of fewer rows",
+};
+
+/// `correct` of a dive: the rows read, the dive corrected, and its files written.
+pub const CORRECT: PerRow = PerRow {
+    command: "correct",
+    dvl: 450.0,
+    reference: 500.0,
+    instead: "correct it in parts, files of fewer rows",
+};
+
+/// A joint `calibrate`: every recording's rows, its fit alone and the joint fit's
+/// stacked Jacobian.
+pub const JOINT: PerRow = PerRow {
+    command: "calibrate jointly",
+    dvl: 1_200.0,
+    reference: 450.0,
+    instead: "calibrate fewer recordings jointly, or parts of them",
+};
+
+/// The rows of one recording's files.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Rows {
+    pub dvl: PathBuf,
+    pub dvl_rows: usize,
+    /// The reference's own file and its rows; `None` where the DVL's file holds it.
+    pub reference: Option<(PathBuf, usize)>,
+}
+
+impl Rows {
+    /// The rows of `dvl` and of `reference` where it is a file of its own.
+    pub fn count(dvl: &Path, reference: Option<&Path>) -> Result<Rows, CsvError> {
+        Ok(Rows {
+            dvl: dvl.to_path_buf(),
+            dvl_rows: row_count(dvl)?,
+            reference: match reference {
+                Some(path) => Some((path.to_path_buf(), row_count(path)?)),
+                None => None,
+            },
+        })
+    }
+
+    /// Every row read.
+    fn all(&self) -> usize {
+        self.dvl_rows + self.reference.as_ref().map_or(0, |(_, rows)| *rows)
+    }
+
+    /// The memory of these rows at `per_row`, bytes.
+    fn bytes(&self, per_row: PerRow) -> f64 {
+        match &self.reference {
+            Some((_, rows)) => {
+                self.dvl_rows as f64 * per_row.dvl + *rows as f64 * per_row.reference
+            }
+            None => self.dvl_rows as f64 * (per_row.dvl + per_row.reference),
+        }
+    }
+}
+
+/// What a command will ask: its recordings' rows and the memory they need, beside what
+/// this process may use.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cost {
+    pub per_row: PerRow,
+    pub recordings: Vec<Rows>,
+    /// Bytes: needed at the peak, and what this process may use.
+    pub need: f64,
+    pub have: f64,
+}
+
+impl Cost {
+    /// The cost of `per_row`'s command over `recordings`, each a DVL file and its
+    /// reference's where it is a file of its own, on this machine.
+    pub fn of(per_row: PerRow, recordings: &[(&Path, Option<&Path>)]) -> Result<Cost, CsvError> {
+        let recordings = recordings
+            .iter()
+            .map(|&(dvl, reference)| Rows::count(dvl, reference))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Cost::on(per_row, recordings, machine_memory() as f64))
+    }
+
+    /// The cost of `recordings` on a machine of `have` bytes.
+    pub fn on(per_row: PerRow, recordings: Vec<Rows>, have: f64) -> Cost {
+        let need = recordings.iter().map(|r| r.bytes(per_row)).sum();
+        Cost {
+            per_row,
+            recordings,
+            need,
+            have,
+        }
+    }
+
+    /// Every row the command reads.
+    pub fn rows(&self) -> usize {
+        self.recordings.iter().map(Rows::all).sum()
+    }
+
+    /// The refusal of a cost beyond this machine's memory.
+    pub fn refused(&self) -> Result<(), BeyondMemory> {
+        if self.need <= self.have {
+            return Ok(());
+        }
+        Err(BeyondMemory {
+            files: self.files(),
+            rows: self.rows(),
+            need: self.need,
+            have: self.have,
+            per_row: self.per_row,
+        })
+    }
+
+    /// The files read, as a message names them: the first DVL's, and how many others.
+    fn files(&self) -> String {
+        let first = self.recordings[0].dvl.display();
+        let files: usize = (self.recordings.iter())
+            .map(|r| 1 + usize::from(r.reference.is_some()))
+            .sum();
+        let others = files - 1;
+        match others {
+            0 => first.to_string(),
+            1 => format!("{first} and 1 other file"),
+            n => format!("{first} and {n} other files"),
+        }
+    }
+}
+
+impl fmt::Display for Cost {
+    /// `calibrate: 36000 rows (dive.csv and 1 other file), about 12.1 MiB of memory of the 23.4 GiB this process may use`
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{}: {} rows ({}), about {} of memory of the {} this process may use",
+            self.per_row.command,
+            self.rows(),
+            self.files(),
+            Bytes(self.need),
+            Bytes(self.have)
+        )
+    }
+}
+
+/// A command refused before it reads its recordings: they need more memory than this
+/// process may use.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error(
+    "{files}: {rows} rows need about {} of memory to {} and this process may use {}: {}",
+    Bytes(*need),
+    per_row.command,
+    Bytes(*have),
+    per_row.instead
+)]
+pub struct BeyondMemory {
+    pub files: String,
+    pub rows: usize,
+    pub need: f64,
+    pub have: f64,
+    pub per_row: PerRow,
+}
