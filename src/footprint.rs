@@ -103,7 +103,9 @@ pub fn machine_memory() -> u64 {
     grouped.min(address_space_limit())
 }
 
-/// The process's address-space limit, bytes; `u64::MAX` where there is none.
+/// What the process's address-space limit leaves of it, bytes: the limit less the
+/// address space it already holds (its libraries, thread stacks, allocator arenas);
+/// `u64::MAX` where there is no limit.
 fn address_space_limit() -> u64 {
     #[cfg(unix)]
     {
@@ -114,10 +116,21 @@ fn address_space_limit() -> u64 {
         // SAFETY: getrlimit writes one rlimit, which `limit` is.
         let read = unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut limit) };
         if read == 0 && limit.rlim_cur != libc::RLIM_INFINITY {
-            return limit.rlim_cur;
+            return limit.rlim_cur.saturating_sub(address_space_held());
         }
     }
     u64::MAX
+}
+
+/// The address space this process holds, bytes (the first field of Linux's
+/// `/proc/self/statm`, in pages); 0 where it cannot be read.
+fn address_space_held() -> u64 {
+    let pages = std::fs::read_to_string("/proc/self/statm")
+        .ok()
+        .and_then(|statm| statm.split_whitespace().next()?.parse::<u64>().ok());
+    // SAFETY: sysconf only reads a configuration value.
+    let page = unsafe { libc::sysconf(libc::_SC_PAGESIZE) };
+    pages.map_or(0, |pages| pages * page.max(0) as u64)
 }
 
 /// The memory of an installation study's `[learned]` training at its peak, for

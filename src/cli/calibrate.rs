@@ -8,7 +8,7 @@
 
 use super::args;
 use super::{CliError, input, stopped};
-use crate::installation::estimate::clock::SearchGrid;
+use crate::installation::estimate::clock::{MAX_SEARCH_S, SearchGrid};
 use crate::installation::terms::names::TermName;
 use crate::operator::calibrate::{CalibrateArgs, calibrate as calibrated};
 use crate::operator::calibrate_joint::{JointArgs, calibrate_joint as calibrated_jointly};
@@ -114,7 +114,7 @@ fn correct(args: &CorrectArgs) -> Result<(), CliError> {
     if let Ok(cost) = args.cost() {
         eprintln!("{cost}");
     }
-    if args.time_offset_s.is_none() {
+    if args.time_offset_s.is_none() && (0.0..=MAX_SEARCH_S).contains(&args.search_s) {
         eprintln!("{}", SearchGrid::of(args.search_s));
     }
     let correction = corrected(args).map_err(stopped)?;

@@ -20,7 +20,7 @@ pub(super) fn run_command(args: &RunArgs) -> Result<(), CliError> {
         Some(shard) => Mode::Shard { shard, force },
         None => Mode::All { force },
     };
-    if let Some(plots) = args.drawing.folder() {
+    if let (Mode::All { .. }, Some(plots)) = (&mode, args.drawing.folder()) {
         writable(plots)?;
     }
     super::kind_of(&args.target.spec)?.run(&args.target, &args.drawing, mode)

@@ -235,9 +235,10 @@ pub fn row_count(path: &Path) -> Result<usize, CsvError> {
     // last line without one.
     let (mut lines, mut previous) = (0, b'\n');
     loop {
-        let read = file
-            .read(&mut buffer)
-            .map_err(|source| io_error(path, source))?;
+        let read = match file.read(&mut buffer) {
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            read => read.map_err(|source| io_error(path, source))?,
+        };
         let Some(&last) = buffer[..read].last() else {
             break;
         };

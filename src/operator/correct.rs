@@ -12,7 +12,9 @@
 use crate::Vec3;
 use crate::data::paired::{PairedError, PairedRecording, ReadCounts, Source};
 use crate::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise};
-use crate::installation::estimate::clock::{Carried, Clock, ClockError, ClockSearch, refind};
+use crate::installation::estimate::clock::{
+    Carried, Clock, ClockError, ClockSearch, MAX_SEARCH_S, refind,
+};
 use crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S;
 use crate::installation::estimate::robust::outliers_among;
 use crate::installation::frames::Reference;
@@ -61,7 +63,7 @@ pub enum CorrectError {
     Installation(#[from] InstallationFileError),
     #[error("--window-s {}: give a positive number of seconds", crate::Shown(*.0))]
     Window(f64),
-    #[error("--search-s {}: give a positive number of seconds, at most 3600", crate::Shown(*.0))]
+    #[error("--search-s {}: give a positive number of seconds, at most {MAX_SEARCH_S}", crate::Shown(*.0))]
     Search(f64),
     #[error("--time-offset-s {}: give a finite number of seconds", crate::Shown(*.0))]
     TimeOffset(f64),
@@ -181,8 +183,8 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
     if let Some((output, input)) = not_over_an_input(&inputs, &outputs.all()) {
         return Err(CorrectError::OverInput { output, input });
     }
-    args.cost()?.refused()?;
     let columns = columns(args.columns, args.reading).map_err(CorrectError::Columns)?;
+    args.cost()?.refused()?;
     let source = Source::csv(args.dvl, args.reference, columns);
     let loaded = source.load()?;
     let recording_sha256 = loaded.dvl_sha256().to_string();
@@ -247,7 +249,7 @@ fn refused(args: &CorrectArgs) -> Result<(), CorrectError> {
     if !(args.window_s.is_finite() && args.window_s > 0.0) {
         return Err(CorrectError::Window(args.window_s));
     }
-    if !(args.search_s.is_finite() && args.search_s > 0.0 && args.search_s <= 3600.0) {
+    if !(args.search_s > 0.0 && args.search_s <= MAX_SEARCH_S) {
         return Err(CorrectError::Search(args.search_s));
     }
     if let Some(tau) = args.time_offset_s

@@ -158,7 +158,7 @@ impl Cost {
 }
 
 impl fmt::Display for Cost {
-    /// `calibrate: 36000 rows (dive.csv and 1 other file), about 12.1 MiB of memory of the 23.4 GiB this process may use`
+    /// `calibrate: 800 rows (dive.csv and 1 other file), about 1.4 MiB of memory of the 23.4 GiB this process may use`
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,

@@ -32,6 +32,9 @@ use nalgebra::DMatrix;
 /// apart is found.
 pub const DEFAULT_SEARCH_S: f64 = 30.0;
 
+/// The widest search `correct` takes, s: an hour.
+pub const MAX_SEARCH_S: f64 = 3_600.0;
+
 /// The smallest share of the window's samples whose t + τ must lie inside the reference
 /// for a step of the search to count.
 const SEARCH_COVERAGE: f64 = 0.5;
@@ -322,9 +325,12 @@ pub fn refind(
     .ok_or(ClockError::NoOverlap {
         search_s: search.search_s,
     })?;
-    // The best at an end of the search: the search did not bracket it.
+    // The best at an end of the search (the very bounds the grid is clamped to): the
+    // search did not bracket it. A search within one coarse step has no inside.
     let carried_s = carried.installation.time_offset_s;
-    if (searched_offset_s - carried_s).abs() >= search.search_s * (1.0 - 1e-12) {
+    let at_an_end = searched_offset_s <= carried_s - search.search_s
+        || searched_offset_s >= carried_s + search.search_s;
+    if at_an_end && search.search_s > TIME_OFFSET_SCAN_STEP_S {
         return Err(ClockError::AtEdge {
             found_s: searched_offset_s,
             carried_s,
