@@ -51,18 +51,29 @@ pub fn remove_stale_partials(folder: &Path) -> std::io::Result<usize> {
 /// Makes the folder `path` and its parents, like `create_dir_all`, but where a file
 /// stands in the place of one of them the error names that file.
 pub fn create_folder(path: &Path) -> std::io::Result<()> {
-    for ancestor in path.ancestors() {
-        if ancestor.exists() && !ancestor.is_dir() {
-            return Err(std::io::Error::new(
-                std::io::ErrorKind::AlreadyExists,
-                format!(
-                    "{} is a file, where a folder is needed; move or remove it",
-                    ancestor.display()
-                ),
-            ));
-        }
+    if let Err(file) = deepest_folder(path) {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::AlreadyExists,
+            format!(
+                "{} is a file, where a folder is needed; move or remove it",
+                file.display()
+            ),
+        ));
     }
     std::fs::create_dir_all(path)
+}
+
+/// The deepest of `path` and its parents that exists (`.` where no part of a relative
+/// path does), where the rest would be made; `Err` with it where it is not a folder,
+/// so that nothing can be made below it.
+pub fn deepest_folder(path: &Path) -> Result<&Path, &Path> {
+    let deepest = (path.ancestors())
+        .find(|a| !a.as_os_str().is_empty() && a.exists())
+        .unwrap_or(Path::new("."));
+    match deepest.is_dir() {
+        true => Ok(deepest),
+        false => Err(deepest),
+    }
 }
 
 /// Writes `bytes` to `path` through a temporary file in the same folder and a rename.

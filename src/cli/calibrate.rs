@@ -3,12 +3,11 @@
 //! ([`crate::report::operator::calibrate`]); and `correct`, its installation applied to
 //! another dive ([`crate::operator::correct`], printed by
 //! [`crate::report::operator::correct`]). In: the parsed arguments. Out: what they
-//! found on stdout; on stderr what each will cost before it starts
-//! ([`crate::operator::cost`]) and the files written.
+//! found on stdout, the files written named on stderr (what each will cost, it says
+//! itself before it starts: [`crate::operator::cost`]).
 
 use super::args;
 use super::{CliError, input, stopped};
-use crate::installation::estimate::clock::{MAX_SEARCH_S, SearchGrid};
 use crate::installation::terms::names::TermName;
 use crate::operator::calibrate::{CalibrateArgs, calibrate as calibrated};
 use crate::operator::calibrate_joint::{JointArgs, calibrate_joint as calibrated_jointly};
@@ -87,9 +86,6 @@ fn parse_terms((flag, terms): (&str, &[String])) -> Result<Vec<TermName>, CliErr
 /// `calibrate`: the terms of one recording, their bound, how long the recording needed,
 /// and the recording corrected.
 fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
-    if let Ok(cost) = args.cost() {
-        eprintln!("{cost}");
-    }
     let calibration = calibrated(args).map_err(stopped)?;
     print!("{}", calibration_text(&calibration));
     for path in &calibration.corrected {
@@ -111,12 +107,6 @@ fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
 /// `correct`: the installation of `--installation` applied to the dive, its clock found
 /// again, and how well it fits.
 fn correct(args: &CorrectArgs) -> Result<(), CliError> {
-    if let Ok(cost) = args.cost() {
-        eprintln!("{cost}");
-    }
-    if args.time_offset_s.is_none() && (0.0..=MAX_SEARCH_S).contains(&args.search_s) {
-        eprintln!("{}", SearchGrid::of(args.search_s));
-    }
     let correction = corrected(args).map_err(stopped)?;
     print!("{}", correction_text(&correction));
     for path in &correction.written {
@@ -128,9 +118,6 @@ fn correct(args: &CorrectArgs) -> Result<(), CliError> {
 /// `calibrate A.csv B.csv …`: the vehicle's terms over every recording, each one's clock
 /// its own, whether they agree, and each recording corrected.
 fn calibrate_joint(args: &JointArgs) -> Result<(), CliError> {
-    if let Ok(cost) = args.cost() {
-        eprintln!("{cost}");
-    }
     let calibration = calibrated_jointly(args).map_err(stopped)?;
     print!("{}", joint_text(&calibration));
     for path in &calibration.written {

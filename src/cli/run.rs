@@ -36,20 +36,8 @@ fn writable(plots: &std::path::Path) -> Result<(), CliError> {
             plots.display()
         ))
     };
-    let deepest = plots
-        .ancestors()
-        .map(|p| {
-            if p.as_os_str().is_empty() {
-                std::path::Path::new(".")
-            } else {
-                p
-            }
-        })
-        .find(|p| p.exists())
-        .unwrap_or(std::path::Path::new("."));
-    if !deepest.is_dir() {
-        return Err(refused(format!("{} is not a folder", deepest.display())));
-    }
+    let deepest = crate::files::deepest_folder(plots)
+        .map_err(|file| refused(format!("{} is not a folder", file.display())))?;
     tempfile::tempfile_in(deepest)
         .map(drop)
         .map_err(|e| refused(format!("{} cannot be written ({e})", deepest.display())))

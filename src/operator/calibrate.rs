@@ -259,7 +259,7 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
             });
         }
     }
-    args.cost()?.refused()?;
+    args.cost()?.state()?;
     let read = read(args)?;
     let recording_sha256 = read.dvl_sha256.clone();
     outputs.not_another_recordings(args.dvl, &recording_sha256)?;
@@ -688,7 +688,7 @@ mod tests {
         let rows = |dvl_rows| Rows {
             dvl: PathBuf::from("dive.csv"),
             dvl_rows,
-            reference: None,
+            reference_rows: None,
         };
         let refused = Cost::on(CALIBRATE, vec![rows(10_000_000)], limit)
             .refused()

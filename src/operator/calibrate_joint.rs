@@ -129,7 +129,7 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
             path: save.to_path_buf(),
         });
     }
-    args.cost()?.refused()?;
+    args.cost()?.state()?;
     let sources = sources(args)?;
     let (loaded, shas) = load(args, &sources, &outputs)?;
     let recordings = read_all(args, loaded)?;

@@ -13,7 +13,7 @@ use crate::Vec3;
 use crate::data::paired::{PairedError, PairedRecording, ReadCounts, Source};
 use crate::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise};
 use crate::installation::estimate::clock::{
-    Carried, Clock, ClockError, ClockSearch, MAX_SEARCH_S, refind,
+    Carried, Clock, ClockError, ClockSearch, MAX_SEARCH_S, SearchGrid, refind,
 };
 use crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S;
 use crate::installation::estimate::robust::outliers_among;
@@ -184,7 +184,10 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
         return Err(CorrectError::OverInput { output, input });
     }
     let columns = columns(args.columns, args.reading).map_err(CorrectError::Columns)?;
-    args.cost()?.refused()?;
+    args.cost()?.state()?;
+    if args.time_offset_s.is_none() {
+        eprintln!("{}", SearchGrid::of(args.search_s));
+    }
     let source = Source::csv(args.dvl, args.reference, columns);
     let loaded = source.load()?;
     let recording_sha256 = loaded.dvl_sha256().to_string();

@@ -57,8 +57,8 @@ pub const JOINT: PerRow = PerRow {
 pub struct Rows {
     pub dvl: PathBuf,
     pub dvl_rows: usize,
-    /// The reference's own file and its rows; `None` where the DVL's file holds it.
-    pub reference: Option<(PathBuf, usize)>,
+    /// The rows of the reference's own file; `None` where the DVL's file holds it.
+    pub reference_rows: Option<usize>,
 }
 
 impl Rows {
@@ -67,24 +67,19 @@ impl Rows {
         Ok(Rows {
             dvl: dvl.to_path_buf(),
             dvl_rows: row_count(dvl)?,
-            reference: match reference {
-                Some(path) => Some((path.to_path_buf(), row_count(path)?)),
-                None => None,
-            },
+            reference_rows: reference.map(row_count).transpose()?,
         })
     }
 
     /// Every row read.
     fn all(&self) -> usize {
-        self.dvl_rows + self.reference.as_ref().map_or(0, |(_, rows)| *rows)
+        self.dvl_rows + self.reference_rows.unwrap_or(0)
     }
 
     /// The memory of these rows at `per_row`, bytes.
     fn bytes(&self, per_row: PerRow) -> f64 {
-        match &self.reference {
-            Some((_, rows)) => {
-                self.dvl_rows as f64 * per_row.dvl + *rows as f64 * per_row.reference
-            }
+        match self.reference_rows {
+            Some(rows) => self.dvl_rows as f64 * per_row.dvl + rows as f64 * per_row.reference,
             None => self.dvl_rows as f64 * (per_row.dvl + per_row.reference),
         }
     }
@@ -128,6 +123,14 @@ impl Cost {
         self.recordings.iter().map(Rows::all).sum()
     }
 
+    /// Says the cost on stderr, before the command reads its recordings, or refuses it
+    /// where the memory is beyond this process's.
+    pub fn state(&self) -> Result<(), BeyondMemory> {
+        self.refused()?;
+        eprintln!("{self}");
+        Ok(())
+    }
+
     /// The refusal of a cost beyond this machine's memory.
     pub fn refused(&self) -> Result<(), BeyondMemory> {
         if self.need <= self.have {
@@ -146,7 +149,7 @@ impl Cost {
     fn files(&self) -> String {
         let first = self.recordings[0].dvl.display();
         let files: usize = (self.recordings.iter())
-            .map(|r| 1 + usize::from(r.reference.is_some()))
+            .map(|r| 1 + usize::from(r.reference_rows.is_some()))
             .sum();
         let others = files - 1;
         match others {

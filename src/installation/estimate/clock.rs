@@ -202,11 +202,6 @@ impl SearchGrid {
             samples: SEARCH_SAMPLES.min(SEARCH_BUDGET / coarse).max(1),
         }
     }
-
-    /// The most predictions the search makes: offsets × samples.
-    pub fn predictions(&self) -> usize {
-        (self.coarse + self.fine) * self.samples
-    }
 }
 
 impl std::fmt::Display for SearchGrid {
@@ -325,18 +320,11 @@ pub fn refind(
     .ok_or(ClockError::NoOverlap {
         search_s: search.search_s,
     })?;
-    // The best at an end of the search (the very bounds the grid is clamped to): the
-    // search did not bracket it. A search within one coarse step has no inside.
-    let carried_s = carried.installation.time_offset_s;
-    let at_an_end = searched_offset_s <= carried_s - search.search_s
-        || searched_offset_s >= carried_s + search.search_s;
-    if at_an_end && search.search_s > TIME_OFFSET_SCAN_STEP_S {
-        return Err(ClockError::AtEdge {
-            found_s: searched_offset_s,
-            carried_s,
-            search_s: search.search_s,
-        });
-    }
+    inside_the_search(
+        searched_offset_s,
+        carried.installation.time_offset_s,
+        search.search_s,
+    )?;
     let start = Installation {
         time_offset_s: searched_offset_s,
         ..carried.installation
@@ -387,6 +375,21 @@ pub fn refind(
         });
     }
     Ok(clock)
+}
+
+/// Refuses a search's best offset `found_s` at an end of the ±`search_s` about
+/// `carried_s` (the very bounds its grid is clamped to): the search did not bracket it.
+/// A search within one coarse step has no inside, and is not judged.
+fn inside_the_search(found_s: f64, carried_s: f64, search_s: f64) -> Result<(), ClockError> {
+    let at_an_end = found_s <= carried_s - search_s || found_s >= carried_s + search_s;
+    match at_an_end && search_s > TIME_OFFSET_SCAN_STEP_S {
+        true => Err(ClockError::AtEdge {
+            found_s,
+            carried_s,
+            search_s,
+        }),
+        false => Ok(()),
+    }
 }
 
 /// The variance each of `fit`'s dive terms inherits from the carried terms'
