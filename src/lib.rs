@@ -53,8 +53,8 @@
 //! Beneath them all, importing no other module: [`vocab`], the words every stage
 //! shares (a DVL's error terms, error models, methods, corrections, activation,
 //! backend, stop reason, phase); [`files`], atomic writes and content hashes; [`memory`],
-//! the allocator's settings and counts; [`rng`], the seeded streams; and [`progress`],
-//! the progress bars. The modules are declared
+//! the allocator's settings and counts; [`rng`], the seeded streams; [`rotation`], 3×3
+//! rotations; and [`progress`], the progress bars. The modules are declared
 //! below in this order, and `tests/layering.rs` fails on an import that points up it or
 //! on any import cycle in `src/`.
 
@@ -62,6 +62,7 @@ pub mod files;
 pub mod memory;
 pub mod progress;
 pub mod rng;
+pub mod rotation;
 pub mod vocab;
 
 pub mod spec;

@@ -203,6 +203,29 @@ pub(super) struct ReadingArgs {
     /// `gap_limit_s` in the --columns table
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     pub(super) gap_limit_s: Option<f64>,
+    /// A bag's DVL topic [default: its only DVL topic]: marine_acoustic_msgs/msg/Dvl,
+    /// geometry_msgs/msg/TwistWithCovarianceStamped or TwistStamped
+    #[arg(long, value_name = "TOPIC")]
+    pub(super) dvl_topic: Option<String>,
+    /// A bag's reference topic [default: its only nav_msgs/msg/Odometry topic]
+    #[arg(long, value_name = "TOPIC")]
+    pub(super) reference_topic: Option<String>,
+    /// A bag's stamps: the headers' (when each measurement was valid) or the
+    /// recording's (when the bag received it)
+    #[arg(long, value_enum, default_value_t = StampsArg::Header)]
+    pub(super) stamps: StampsArg,
+    /// A bag's body frame: the reference's twist is in it, the DVL's frame is placed in
+    /// it by /tf_static, and the installation is reported in it (forward-left-up, as
+    /// REP-103 has it, unless its name ends in _frd)
+    #[arg(long, value_name = "FRAME", default_value = "base_link")]
+    pub(super) frame: String,
+}
+
+/// The stamps a bag is read on, as typed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub(super) enum StampsArg {
+    Header,
+    Receive,
 }
 
 impl ReadingArgs {
@@ -211,6 +234,13 @@ impl ReadingArgs {
         crate::operator::inputs::Reading {
             valid_column: self.valid_column.as_deref(),
             gap_limit_s: self.gap_limit_s,
+            dvl_topic: self.dvl_topic.as_deref(),
+            reference_topic: self.reference_topic.as_deref(),
+            stamps: match self.stamps {
+                StampsArg::Header => crate::data::paired::bag::Stamps::Header,
+                StampsArg::Receive => crate::data::paired::bag::Stamps::Receive,
+            },
+            frame: &self.frame,
         }
     }
 }
@@ -334,7 +364,9 @@ impl Drawing {
 
 #[derive(Debug, Subcommand)]
 pub(super) enum DataCommand {
-    /// Trajectories, lengths, mean speeds, window counts and dataset size of a spec
+    /// Trajectories, lengths, mean speeds, window counts and dataset size of a spec;
+    /// or a ROS 2 bag's topics: types, message counts, rates, time span, and which
+    /// this tool reads
     Info {
         spec: PathBuf,
         #[command(flatten)]

@@ -1,5 +1,6 @@
 //! `validate`, `data info` and `data fetch`: a spec and its data checked and
-//! described without running anything, and the Snapir or A-KIT recordings downloaded.
+//! described without running anything (or a ROS 2 bag's topics listed), and the Snapir
+//! or A-KIT recordings downloaded.
 
 use super::{CliError, about, failure, footprints, input, load_spec, training_seconds};
 use crate::data::{fetch, load_trajectories};
@@ -50,6 +51,9 @@ pub(super) fn validate(spec_path: &Path, set: &[String]) -> Result<(), CliError>
 }
 
 pub(super) fn info(spec_path: &Path, set: &[String]) -> Result<(), CliError> {
+    if crate::data::paired::bag::is_bag(spec_path) {
+        return bag_info(spec_path);
+    }
     let spec = load_spec(spec_path, set)?;
     let trajectories = load_trajectories(&spec).map_err(input)?;
     let mut table = comfy_table::Table::new();
@@ -154,5 +158,35 @@ pub(super) fn fetch_data(
             }
         }
     }
+    Ok(())
+}
+
+/// `data info BAG`: its files, storage and time span, and each topic with its type,
+/// message count, rate, and whether this tool reads it.
+fn bag_info(path: &Path) -> Result<(), CliError> {
+    use crate::data::paired::bag::{Bag, topic_lines};
+    let bag = Bag::open(path).map_err(input)?;
+    let survey = bag.survey().map_err(input)?;
+    let first = survey.topics.iter().filter_map(|t| t.first_ns).min();
+    let last = survey.topics.iter().filter_map(|t| t.last_ns).max();
+    println!(
+        "{}: a {} bag, {}, {} messages{}",
+        path.display(),
+        match bag.storage {
+            crate::data::paired::bag::Storage::Mcap => "MCAP",
+            crate::data::paired::bag::Storage::Sqlite => "sqlite3",
+        },
+        crate::count(bag.files.len(), "file"),
+        survey.topics.iter().map(|t| t.count).sum::<u64>(),
+        match (first, last) {
+            (Some(first), Some(last)) => format!(
+                ", recorded over {:.3} s (from {:.3} s after the epoch)",
+                (last - first) as f64 * 1e-9,
+                first as f64 * 1e-9
+            ),
+            _ => String::new(),
+        }
+    );
+    println!("{}", topic_lines(&survey));
     Ok(())
 }

@@ -7,7 +7,8 @@
 //! In: [`CalibrateArgs`]. Out: a [`Calibration`], everything the command prints, or a
 //! [`CalibrateError`] that names the argument, file or step at fault.
 
-use crate::data::paired::{PairedError, PairedRecording, ReadCounts, Source};
+use crate::data::paired::bag::BagFrames;
+use crate::data::paired::{PairedError, PairedRecording, ReadCounts};
 use crate::installation::estimate::bound::{Noise, TermBound, Why, bound};
 use crate::installation::estimate::filter::{FilterSettings, run_filter};
 use crate::installation::estimate::fit::{
@@ -21,8 +22,9 @@ use crate::installation::study::spec::{ObservabilityFile, default_filter_setting
 use crate::installation::terms::names::{TermName, term_list_faults, term_set};
 use crate::installation::terms::{AxisRmse, Installation, TermSet, score};
 use crate::operator::cost::{BeyondMemory, CALIBRATE, Cost};
-use crate::operator::inputs::{Reading, columns, not_over_an_input};
+use crate::operator::inputs::{Reading, not_over_an_input, source};
 use crate::operator::installation_file::SavedInstallation;
+use crate::operator::ros::RosInstallation;
 use crate::results::ResultsError;
 use crate::results::corrected::{
     OtherRecording, Outputs, corrected_samples, stem, write, write_terms_in_time,
@@ -182,6 +184,9 @@ pub struct Calibration {
     /// against time.
     pub corrected: Vec<PathBuf>,
     pub terms_in_time: PathBuf,
+    /// A bag's topics and frames, and the installation as ROS uses it.
+    pub frames: Option<BagFrames>,
+    pub ros: Option<RosInstallation>,
 }
 
 /// The recording read, its reference, the samples scored (those
@@ -192,6 +197,7 @@ struct Read {
     /// The SHA-256 of the DVL's file, as read.
     dvl_sha256: String,
     reference: Reference,
+    frames: Option<BagFrames>,
     scored: Range<usize>,
     /// The samples of `scored` the fit found outliers (see [`Read::without_outliers`]),
     /// which no score counts.
@@ -292,8 +298,18 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     let settled_s = settling_time(&curve, args.tolerance_pct / 100.0, change).map(|p| p.length_s);
     let (corrected, terms_in_time) =
         write_files(&outputs, &recording_sha256, &read, &applied, &filter)?;
+    let ros = (read.frames.as_ref()).map(|frames| {
+        let lever_arm_found = args.terms.iter().any(|t| t.name() == "lever_arm");
+        RosInstallation::of(frames, &applied, lever_arm_found, fitted.residual_rms_m_s)
+    });
     if let Some(path) = args.save {
         save(path, args, (&fitted, &bounded), &recording_sha256)?;
+        if let Some(ros) = &ros {
+            ros.write(path).map_err(|source| ResultsError::Io {
+                path: path.to_path_buf(),
+                source,
+            })?;
+        }
     }
     Ok(Calibration {
         fitted,
@@ -314,6 +330,8 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
         window_s: args.window_s,
         corrected,
         terms_in_time,
+        frames: read.frames,
+        ros,
     })
 }
 
@@ -471,10 +489,11 @@ fn outputs(args: &CalibrateArgs) -> Outputs {
 
 /// The recording of `args`, its reference, and its window where one is asked.
 fn read(args: &CalibrateArgs) -> Result<Read, CalibrateError> {
-    let columns = columns(args.columns, args.reading).map_err(CalibrateError::Columns)?;
-    let source = Source::csv(args.dvl, args.reference, columns);
+    let source = source(args.dvl, args.reference, args.columns, args.reading)
+        .map_err(CalibrateError::Columns)?;
     let read = source.read()?;
     let dvl_sha256 = read.dvl_sha256().to_string();
+    let frames = read.frames;
     let recording = read.recording;
     let reference = Reference::new(&recording);
     let scored = reference.interior(&recording.time_s, TIME_OFFSET_MARGIN_S);
@@ -483,6 +502,7 @@ fn read(args: &CalibrateArgs) -> Result<Read, CalibrateError> {
         recording,
         dvl_sha256,
         reference,
+        frames,
         scored,
         outliers: Vec::new(),
         window,

@@ -19,7 +19,7 @@ use crate::installation::frames::Reference;
 use crate::installation::terms::names::{TermName, term_set};
 use crate::operator::calibrate::{CalibrateError, Request, named, refused};
 use crate::operator::cost::{Cost, JOINT};
-use crate::operator::inputs::{Reading, columns, not_over_an_input};
+use crate::operator::inputs::{Reading, not_over_an_input, source};
 use crate::operator::installation_file::{SavedInstallation, SavedTerm};
 use crate::results::ResultsError;
 use crate::results::corrected::{Outputs, corrected_samples, stem, write};
@@ -188,12 +188,11 @@ fn names(dvls: &[std::path::PathBuf]) -> Vec<String> {
 
 /// Each recording of `args`: its DVL's file beside its reference's, or the DVL's own.
 fn sources(args: &JointArgs) -> Result<Vec<Source>, CalibrateError> {
-    let columns = columns(args.columns, args.reading).map_err(CalibrateError::Columns)?;
     let source = |(k, dvl): (usize, &PathBuf)| {
         let reference = args.references.get(k).map(|r| r.as_path());
-        Source::csv(dvl, reference, columns.clone())
+        source(dvl, reference, args.columns, args.reading).map_err(CalibrateError::Columns)
     };
-    Ok(args.dvls.iter().enumerate().map(source).collect())
+    args.dvls.iter().enumerate().map(source).collect()
 }
 
 /// The files of each of `sources` read from disk and hashed, and each DVL file's

@@ -10,7 +10,7 @@
 //! and what to do; nothing is written unless everything before the writing succeeded.
 
 use crate::Vec3;
-use crate::data::paired::{PairedError, PairedRecording, ReadCounts, Source};
+use crate::data::paired::{PairedError, PairedRecording, ReadCounts};
 use crate::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise};
 use crate::installation::estimate::clock::{
     Carried, Clock, ClockError, ClockSearch, MAX_SEARCH_S, SearchGrid, refind,
@@ -20,7 +20,7 @@ use crate::installation::estimate::robust::outliers_among;
 use crate::installation::frames::Reference;
 use crate::installation::terms::{AxisRmse, Installation, corrected_error};
 use crate::operator::cost::{BeyondMemory, CORRECT, Cost};
-use crate::operator::inputs::{Reading, columns, not_over_an_input};
+use crate::operator::inputs::{Reading, not_over_an_input, source};
 use crate::operator::installation_file::{InstallationFileError, SavedInstallation};
 use crate::results::ResultsError;
 use crate::results::corrected::{OtherRecording, Outputs, corrected_samples, stem, write};
@@ -183,12 +183,12 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
     if let Some((output, input)) = not_over_an_input(&inputs, &outputs.all()) {
         return Err(CorrectError::OverInput { output, input });
     }
-    let columns = columns(args.columns, args.reading).map_err(CorrectError::Columns)?;
+    let source = source(args.dvl, args.reference, args.columns, args.reading)
+        .map_err(CorrectError::Columns)?;
     args.cost()?.state()?;
     if args.time_offset_s.is_none() {
         eprintln!("{}", SearchGrid::of(args.search_s));
     }
-    let source = Source::csv(args.dvl, args.reference, columns);
     let loaded = source.load()?;
     let recording_sha256 = loaded.dvl_sha256().to_string();
     outputs.not_another_recordings(args.dvl, &recording_sha256)?;

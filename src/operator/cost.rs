@@ -6,7 +6,9 @@
 //! allocation, with a backtrace). In: the command's files and its [`PerRow`]. Out: a
 //! [`Cost`], or the [`BeyondMemory`] that refuses it.
 
-use crate::data::csv::{CsvError, row_count};
+use crate::data::csv::row_count;
+use crate::data::paired::PairedError;
+use crate::data::paired::bag::{is_bag, message_counts};
 use crate::footprint::{Bytes, machine_memory};
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -62,8 +64,17 @@ pub struct Rows {
 }
 
 impl Rows {
-    /// The rows of `dvl` and of `reference` where it is a file of its own.
-    pub fn count(dvl: &Path, reference: Option<&Path>) -> Result<Rows, CsvError> {
+    /// The rows of `dvl` and of `reference` where it is a file of its own; of a bag,
+    /// the messages of the topics it could be read from.
+    pub fn count(dvl: &Path, reference: Option<&Path>) -> Result<Rows, PairedError> {
+        if is_bag(dvl) {
+            let (dvl_rows, reference_rows) = message_counts(dvl, None)?;
+            return Ok(Rows {
+                dvl: dvl.to_path_buf(),
+                dvl_rows: dvl_rows as usize,
+                reference_rows: Some(reference_rows as usize),
+            });
+        }
         Ok(Rows {
             dvl: dvl.to_path_buf(),
             dvl_rows: row_count(dvl)?,
@@ -99,7 +110,7 @@ pub struct Cost {
 impl Cost {
     /// The cost of `per_row`'s command over `recordings`, each a DVL file and its
     /// reference's where it is a file of its own, on this machine.
-    pub fn of(per_row: PerRow, recordings: &[(&Path, Option<&Path>)]) -> Result<Cost, CsvError> {
+    pub fn of(per_row: PerRow, recordings: &[(&Path, Option<&Path>)]) -> Result<Cost, PairedError> {
         let recordings = recordings
             .iter()
             .map(|&(dvl, reference)| Rows::count(dvl, reference))
@@ -149,7 +160,7 @@ impl Cost {
     fn files(&self) -> String {
         let first = self.recordings[0].dvl.display();
         let files: usize = (self.recordings.iter())
-            .map(|r| 1 + usize::from(r.reference_rows.is_some()))
+            .map(|r| 1 + usize::from(r.reference_rows.is_some() && !is_bag(&r.dvl)))
             .sum();
         let others = files - 1;
         match others {

@@ -3,7 +3,8 @@
 //! it reads.
 //! In: the paths given on the command line. Out: the columns, or the file at fault.
 
-use crate::data::paired::{GapLimit, PairedColumns};
+use crate::data::paired::bag::{BagTopics, Stamps, is_bag};
+use crate::data::paired::{GapLimit, PairedColumns, Source};
 use crate::spec::{SpecError, TomlFile};
 use std::path::{Path, PathBuf};
 
@@ -57,13 +58,97 @@ pub fn identity(path: &Path) -> PathBuf {
 }
 
 /// What the command line says of how to read a recording, beyond its columns: each
-/// as the `[columns]` table's key of the same name, and over it.
-#[derive(Debug, Clone, Copy, Default)]
+/// as the `[columns]` table's key of the same name, and over it; and, for a bag, its
+/// topics, stamps and body frame.
+#[derive(Debug, Clone, Copy)]
 pub struct Reading<'a> {
     /// The DVL's validity column (`--valid-column`, the table's `valid`).
     pub valid_column: Option<&'a str>,
     /// The gap limit, s (`--gap-limit-s`, the table's `gap_limit_s`).
     pub gap_limit_s: Option<f64>,
+    /// A bag's DVL topic (`--dvl-topic`), reference topic (`--reference-topic`).
+    pub dvl_topic: Option<&'a str>,
+    pub reference_topic: Option<&'a str>,
+    /// A bag's stamps (`--stamps`).
+    pub stamps: Stamps,
+    /// A bag's body frame, the frame the installation is reported in (`--frame`).
+    pub frame: &'a str,
+}
+
+impl Default for Reading<'_> {
+    fn default() -> Self {
+        Reading {
+            valid_column: None,
+            gap_limit_s: None,
+            dvl_topic: None,
+            reference_topic: None,
+            stamps: Stamps::Header,
+            frame: "base_link",
+        }
+    }
+}
+
+/// The recording of the DVL file (or bag) `dvl`, its reference's file where that is
+/// another, read with the columns of `columns_file` (a CSV recording) or the topics of
+/// `reading` (a bag); a flag that does not apply to it is refused by name.
+pub fn source(
+    dvl: &Path,
+    reference: Option<&Path>,
+    columns_file: Option<&Path>,
+    reading: Reading,
+) -> Result<Source, SpecError> {
+    let refused = |flag: &str, message: String| SpecError {
+        location: flag.into(),
+        key: String::new(),
+        message,
+    };
+    if !is_bag(dvl) {
+        for (flag, given) in [
+            ("--dvl-topic", reading.dvl_topic),
+            ("--reference-topic", reading.reference_topic),
+        ] {
+            if given.is_some() {
+                return Err(refused(
+                    flag,
+                    format!(
+                        "{} is not a bag (a rosbag2 folder, an .mcap or a .db3 file): a CSV recording is read by its columns",
+                        dvl.display()
+                    ),
+                ));
+            }
+        }
+        return Ok(Source::csv(dvl, reference, columns(columns_file, reading)?));
+    }
+    let not_for_a_bag = [
+        (
+            "--reference",
+            reference.is_some(),
+            "it holds the reference too: name its topic with --reference-topic",
+        ),
+        (
+            "--columns",
+            columns_file.is_some(),
+            "its fields are named by its types: name the topics with --dvl-topic and --reference-topic",
+        ),
+        (
+            "--valid-column",
+            reading.valid_column.is_some(),
+            "a ping's validity is read from its message (bottom track, good beams, beam velocities valid)",
+        ),
+    ];
+    if let Some((flag, _, why)) = not_for_a_bag.iter().find(|(_, given, _)| *given) {
+        return Err(refused(flag, format!("{} is a bag: {why}", dvl.display())));
+    }
+    Ok(Source::Bag {
+        path: dvl.to_path_buf(),
+        topics: BagTopics {
+            dvl: reading.dvl_topic.map(String::from),
+            reference: reading.reference_topic.map(String::from),
+            stamps: reading.stamps,
+            frame: reading.frame.to_string(),
+            gap_limit_s: reading.gap_limit_s.map(GapLimit),
+        },
+    })
 }
 
 /// The columns of `path`'s `[columns]` table, or A-KIT's, with what the command line
@@ -72,6 +157,7 @@ pub fn columns(path: Option<&Path>, reading: Reading) -> Result<PairedColumns, S
     let Reading {
         valid_column: valid,
         gap_limit_s,
+        ..
     } = reading;
     let gap_limit_s = gap_limit_s.map(GapLimit);
     #[derive(serde::Deserialize)]

@@ -1,6 +1,7 @@
 //! The operator's commands on recordings named on the command line: [`calibrate`] one
 //! recording, [`calibrate_joint`] several at once, the [`installation_file`] that
-//! `calibrate --save` writes, and [`correct`], which carries a saved installation to
+//! `calibrate --save` writes (and, for a bag, the installation as ROS uses it:
+//! [`ros`]), and [`correct`], which carries a saved installation to
 //! the next dive and finds its clock again; what they share about their [`inputs`], and
 //! what each will [`cost`] this machine.
 //! In: the command's arguments. Out: what each command prints, and the corrected
@@ -10,5 +11,6 @@ pub mod inputs;
 pub mod cost;
 pub mod calibrate;
 pub mod installation_file;
+pub mod ros;
 pub mod correct;
 pub mod calibrate_joint;

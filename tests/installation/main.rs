@@ -8,6 +8,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod bags;
 mod coverage;
 mod dive_clock;
 mod installation;

@@ -15,6 +15,8 @@ pub enum PairedError {
     Missing { path: PathBuf, hint: String },
     #[error(transparent)]
     Csv(CsvError),
+    #[error(transparent)]
+    Bag(#[from] crate::data::paired::bag::BagError),
     #[error(
         "{}:{line}: {column}: {time_s} s follows {previous_s} s of line {previous_line}: time stamps must increase",
         path.display()

@@ -1,7 +1,8 @@
 //! A DVL recorded beside a reference with attitude: per sample, the time, the DVL's
 //! velocity in its body frame, and the reference's NED velocity, roll, pitch and yaw
 //! (optionally its body angular rate). A recording is read through one way in, a
-//! [`Source`] (`source.rs`): today one or two CSV files whose columns the spec names
+//! [`Source`] (`source.rs`): one or two CSV files whose columns the spec names, or a
+//! ROS 2 bag ([`bag`], its own room)
 //! (`columns.rs`, the A-KIT names by default, [`PairedColumns::akit`]), parsed by
 //! `csv.rs`; each file is read from disk once and hashed as it is read. Every sample is
 //! checked, whatever the format (`checks.rs`): a field that is missing, empty, not a
@@ -13,12 +14,14 @@
 //! In: a [`Source`]. Out: a [`ReadRecording`]: the [`PairedRecording`], angles in
 //! radians, and the SHA-256 of each of its files.
 
+pub mod bag;
 mod checks;
 mod columns;
 mod csv;
 mod error;
 mod source;
 
+pub use checks::{Locator, Unchecked};
 pub use columns::{GapLimit, PairedColumns, PairedFiles};
 pub use error::{PairedError, left_out_words};
 pub use source::{Loaded, ReadRecording, Recordings, Source, SourceFile};

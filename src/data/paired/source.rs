@@ -1,7 +1,8 @@
-//! One way in for a paired recording: a [`Source`] (one variant per format; CSV
-//! today) is read into a [`ReadRecording`]. Each of its files is read from disk once,
-//! hashed as it is read and parsed from memory ([`Source::load`], then
-//! [`Loaded::parse`]), and its samples go through the plausibility checks of
+//! One way in for a paired recording: a [`Source`] (one variant per format: CSV
+//! files, or a ROS 2 bag) is read into a [`ReadRecording`]. Each of its files is read
+//! from disk once and hashed as it is read: a CSV file whole, then parsed from memory
+//! ([`Source::load`], then [`Loaded::parse`]); a bag streamed, its two topics decoded as
+//! it goes ([`crate::data::paired::bag`]). Its samples go through the plausibility checks of
 //! `checks.rs`, whatever the format. [`Recordings`] reads each source once,
 //! however many times it is asked for.
 //! In: a [`Source`]. Out: the checked [`PairedRecording`] with the SHA-256 of each of
@@ -9,6 +10,7 @@
 
 use super::{PairedColumns, PairedError, PairedRecording, checks};
 use crate::data::csv::read_bytes;
+use crate::data::paired::bag::{self, BagFrames, BagTopics};
 use crate::files::sha256_hex;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -23,6 +25,8 @@ pub enum Source {
         reference: PathBuf,
         columns: PairedColumns,
     },
+    /// The DVL's and the reference's topics of the ROS 2 bag at `path`.
+    Bag { path: PathBuf, topics: BagTopics },
 }
 
 impl Source {
@@ -41,11 +45,21 @@ impl Source {
         match self {
             Source::Csv { dvl, reference, .. } if dvl == reference => vec![dvl],
             Source::Csv { dvl, reference, .. } => vec![dvl, reference],
+            Source::Bag { path, .. } => vec![path],
         }
     }
 
-    /// Reads each of its files from disk, once, and hashes it; nothing is parsed yet.
+    /// Reads each of its files from disk, once, and hashes it; nothing is parsed yet
+    /// but a bag's two topics, decoded as it is streamed.
     pub fn load(&self) -> Result<Loaded<'_>, PairedError> {
+        if let Source::Bag { path, topics } = self {
+            let read = bag::read(path, topics)?;
+            return Ok(Loaded {
+                source: self,
+                files: read.files,
+                content: Content::Bag(Box::new((read.samples, read.at, read.frames))),
+            });
+        }
         let mut files = Vec::new();
         let mut bytes = Vec::new();
         for path in self.files() {
@@ -59,7 +73,7 @@ impl Source {
         Ok(Loaded {
             source: self,
             files,
-            bytes,
+            content: Content::Bytes(bytes),
         })
     }
 
@@ -81,8 +95,15 @@ pub struct SourceFile {
 pub struct Loaded<'a> {
     source: &'a Source,
     files: Vec<SourceFile>,
-    /// The bytes of each of `files`.
-    bytes: Vec<Vec<u8>>,
+    content: Content,
+}
+
+/// What a source's files gave before the checks.
+enum Content {
+    /// The bytes of each CSV file.
+    Bytes(Vec<Vec<u8>>),
+    /// A bag's samples, where each came from, and its frames.
+    Bag(Box<(super::Unchecked, super::Locator, BagFrames)>),
 }
 
 impl Loaded<'_> {
@@ -93,15 +114,23 @@ impl Loaded<'_> {
 
     /// The samples of the files, parsed from the bytes read and checked.
     pub fn parse(self) -> Result<ReadRecording, PairedError> {
-        let (samples, at) = match self.source {
-            Source::Csv { columns, .. } => {
-                let file = |k: usize| (self.files[k].path.as_path(), &self.bytes[k][..]);
-                super::csv::parse(file(0), (self.files.len() > 1).then(|| file(1)), columns)?
+        let (samples, at, frames) = match (self.source, self.content) {
+            (Source::Csv { columns, .. }, Content::Bytes(bytes)) => {
+                let file = |k: usize| (self.files[k].path.as_path(), &bytes[k][..]);
+                let (samples, at) =
+                    super::csv::parse(file(0), (self.files.len() > 1).then(|| file(1)), columns)?;
+                (samples, at, None)
             }
+            (_, Content::Bag(read)) => {
+                let (samples, at, frames) = *read;
+                (samples, at, Some(frames))
+            }
+            (Source::Bag { .. }, Content::Bytes(_)) => unreachable!("a bag is loaded as samples"),
         };
         Ok(ReadRecording {
             recording: checks::check(samples, &at)?,
             files: self.files,
+            frames,
         })
     }
 }
@@ -112,6 +141,8 @@ impl Loaded<'_> {
 pub struct ReadRecording {
     pub recording: PairedRecording,
     pub files: Vec<SourceFile>,
+    /// A bag's topics and frames, as read.
+    pub frames: Option<BagFrames>,
 }
 
 impl ReadRecording {
@@ -173,6 +204,7 @@ mod tests {
                 sha256: sha256.clone()
             }]
         );
+        assert_eq!(read.frames, None);
         assert_eq!(read.dvl_sha256(), sha256);
         assert_eq!(read.recording.time_s, vec![0.0, 1.0, 2.0]);
         assert_eq!(source.load().unwrap().dvl_sha256(), sha256);

@@ -14,15 +14,52 @@ use crate::installation::estimate::settling::SettlingPoint;
 use crate::installation::terms::AxisRmse;
 use crate::operator::calibrate::Calibration;
 use crate::operator::calibrate_joint::{AGREEMENT_P_VALUE, JointCalibration};
+use crate::operator::ros::body_axes_terms;
 use crate::report::kit::readable::{readable_term, readable_why};
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 
 /// Everything `calibrate` prints: the fit, a blank line, the filter; ends in a newline.
 pub fn calibration_text(calibration: &Calibration) -> String {
     format!(
-        "{}\n\n{}\n",
+        "{}{}\n\n{}\n",
+        printed_frames(calibration),
         printed_fit(calibration),
         printed_settling(calibration)
+    )
+}
+
+/// For a bag: the topics and frames it was read in, then (after the fit) the terms in
+/// the body frame's own axes, and the DVL's frame as ROS places it.
+fn printed_frames(calibration: &Calibration) -> String {
+    let Some(frames) = &calibration.frames else {
+        return String::new();
+    };
+    format!("Read from the bag: {frames}. The terms below are in forward-right-down axes.\n\n")
+}
+
+/// For a bag: the terms in the body frame's own axes, and the DVL's frame placed.
+fn printed_ros(calibration: &Calibration) -> String {
+    let (Some(frames), Some(ros)) = (&calibration.frames, &calibration.ros) else {
+        return String::new();
+    };
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    table.set_header(["term", "estimate", "standard deviation"]);
+    for (name, value, std) in body_axes_terms(&calibration.bound, frames.axes) {
+        let (readable, unit, factor) = readable_term(&name);
+        table.add_row([
+            readable,
+            format!("{:.4} {unit}", value * factor),
+            format!("{:.4} {unit}", std * factor),
+        ]);
+    }
+    format!(
+        "\n\nThe same terms in {}'s own axes ({}):\n\n{table}\n\nThe DVL's frame {} in {}, as found: {}\n",
+        frames.body,
+        frames.axes.words(),
+        ros.dvl_frame,
+        ros.body,
+        ros.static_transform_publisher()
     )
 }
 
@@ -97,6 +134,7 @@ fn printed_fit(calibration: &Calibration) -> String {
         printed_rmse(calibration.before),
         printed_rmse(calibration.after)
     ));
+    text.push_str(&printed_ros(calibration));
     text
 }
 

@@ -1,0 +1,307 @@
+//! ROS's frames carried into this tool's. ROS (REP-103, REP-105) gives a world frame
+//! east-north-up and a body frame forward-left-up (`base_link`); this tool works in
+//! north-east-down and forward-right-down. A world frame whose name ends in `_ned`, or a
+//! body frame whose name ends in `_frd`, is taken as already so. The DVL's velocity is
+//! in its own frame (its message's `frame_id`), placed in the body frame by the chain
+//! of `/tf_static` transforms between them.
+//! In: quaternions, vectors and the static transforms. Out: attitudes, NED velocities,
+//! forward-right-down body vectors, and the [`BagFrames`] a reading used.
+
+use crate::Vec3;
+use crate::rotation::{Mat3, apply, multiply, transpose};
+
+/// The axes of a body frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Axes {
+    /// x forward, y left, z up: REP-103's body frame.
+    ForwardLeftUp,
+    /// x forward, y right, z down.
+    ForwardRightDown,
+}
+
+impl Axes {
+    /// The axes of the body frame named `frame`: forward-right-down where its name ends
+    /// in `_frd`, REP-103's forward-left-up otherwise.
+    pub fn of_body(frame: &str) -> Axes {
+        match frame.ends_with("_frd") {
+            true => Axes::ForwardRightDown,
+            false => Axes::ForwardLeftUp,
+        }
+    }
+
+    /// Takes a vector in these axes into forward-right-down (and back: it is its own
+    /// inverse).
+    pub fn to_frd(self) -> Mat3 {
+        match self {
+            Axes::ForwardLeftUp => [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]],
+            Axes::ForwardRightDown => IDENTITY,
+        }
+    }
+
+    pub fn words(self) -> &'static str {
+        match self {
+            Axes::ForwardLeftUp => "FLU: x forward, y left, z up",
+            Axes::ForwardRightDown => "FRD: x forward, y right, z down",
+        }
+    }
+}
+
+pub const IDENTITY: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+/// ENU into NED (its own inverse).
+const ENU_TO_NED: Mat3 = [[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]];
+
+/// Whether the world frame named `frame` is north-east-down (its name ends in `_ned`)
+/// rather than REP-103's east-north-up.
+pub fn world_is_ned(frame: &str) -> bool {
+    frame.ends_with("_ned")
+}
+
+/// The rotation of the unit quaternion `[x, y, z, w]` (normalised first).
+pub fn quaternion_matrix([x, y, z, w]: [f64; 4]) -> Mat3 {
+    let n = (x * x + y * y + z * z + w * w).sqrt();
+    let (x, y, z, w) = (x / n, y / n, z / n, w / n);
+    [
+        [
+            1.0 - 2.0 * (y * y + z * z),
+            2.0 * (x * y - z * w),
+            2.0 * (x * z + y * w),
+        ],
+        [
+            2.0 * (x * y + z * w),
+            1.0 - 2.0 * (x * x + z * z),
+            2.0 * (y * z - x * w),
+        ],
+        [
+            2.0 * (x * z - y * w),
+            2.0 * (y * z + x * w),
+            1.0 - 2.0 * (x * x + y * y),
+        ],
+    ]
+}
+
+/// The quaternion `[x, y, z, w]` of the rotation `r`.
+pub fn matrix_quaternion(r: &Mat3) -> [f64; 4] {
+    let [roll, pitch, yaw] = euler_zyx(r);
+    let (sr, cr) = (roll / 2.0).sin_cos();
+    let (sp, cp) = (pitch / 2.0).sin_cos();
+    let (sy, cy) = (yaw / 2.0).sin_cos();
+    [
+        sr * cp * cy - cr * sp * sy,
+        cr * sp * cy + sr * cp * sy,
+        cr * cp * sy - sr * sp * cy,
+        cr * cp * cy + sr * sp * sy,
+    ]
+}
+
+/// Roll, pitch, yaw (ZYX, as ROS's rpy and this tool's attitude), radians, of `r`.
+pub fn euler_zyx(r: &Mat3) -> Vec3 {
+    [
+        r[2][1].atan2(r[2][2]),
+        (-r[2][0]).clamp(-1.0, 1.0).asin(),
+        r[1][0].atan2(r[0][0]),
+    ]
+}
+
+/// The body-to-NED rotation of a vehicle whose pose in the world frame `world` says
+/// `orientation` (body frame `body` to world), bodies in forward-right-down.
+pub fn body_to_ned(orientation: [f64; 4], world_ned: bool, body: Axes) -> Mat3 {
+    let world_to_ned = if world_ned { IDENTITY } else { ENU_TO_NED };
+    multiply(
+        &multiply(&world_to_ned, &quaternion_matrix(orientation)),
+        &body.to_frd(),
+    )
+}
+
+/// A rigid transform: a vector in the child frame is `rotation · v` in the parent's,
+/// and the child's origin is at `translation_m` in the parent's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Transform {
+    pub rotation: Mat3,
+    pub translation_m: Vec3,
+}
+
+impl Transform {
+    fn then(&self, inner: &Transform) -> Transform {
+        let moved = apply(&self.rotation, inner.translation_m);
+        Transform {
+            rotation: multiply(&self.rotation, &inner.rotation),
+            translation_m: [0, 1, 2].map(|k| moved[k] + self.translation_m[k]),
+        }
+    }
+
+    fn inverse(&self) -> Transform {
+        let rotation = transpose(&self.rotation);
+        let back = apply(&rotation, self.translation_m);
+        Transform {
+            rotation,
+            translation_m: back.map(|v| -v),
+        }
+    }
+}
+
+/// One static transform: from `parent` to `child`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StaticTransform {
+    pub parent: String,
+    pub child: String,
+    pub transform: Transform,
+}
+
+/// A frame's name without the leading `/` ROS 1 put there.
+pub fn frame_name(name: &str) -> &str {
+    name.trim_start_matches('/')
+}
+
+/// The transform from `from` to `to` through the chain of `transforms` that joins
+/// them (either way along each), where one does.
+pub fn chain(transforms: &[StaticTransform], from: &str, to: &str) -> Option<Transform> {
+    let identity = Transform {
+        rotation: IDENTITY,
+        translation_m: [0.0; 3],
+    };
+    let mut reached: Vec<(String, Transform)> = vec![(from.to_string(), identity)];
+    let mut at = 0;
+    while at < reached.len() {
+        let (frame, so_far) = reached[at].clone();
+        if frame == to {
+            return Some(so_far);
+        }
+        for edge in transforms {
+            let (next, step) = if frame_name(&edge.parent) == frame {
+                (frame_name(&edge.child), edge.transform)
+            } else if frame_name(&edge.child) == frame {
+                (frame_name(&edge.parent), edge.transform.inverse())
+            } else {
+                continue;
+            };
+            if !reached.iter().any(|(f, _)| f == next) {
+                reached.push((next.to_string(), so_far.then(&step)));
+            }
+        }
+        at += 1;
+    }
+    None
+}
+
+/// The frames a bag's reading used: the topics, the body frame and its axes, the
+/// world frame, and where the DVL's frame sits in the body's.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BagFrames {
+    pub dvl_topic: String,
+    pub dvl_type: String,
+    pub reference_topic: String,
+    pub reference_type: String,
+    pub body: String,
+    pub axes: Axes,
+    pub world: String,
+    pub world_ned: bool,
+    pub dvl_frame: String,
+    /// The DVL's frame in the body's, from `/tf_static` (the identity where they are
+    /// one frame).
+    pub mount: Transform,
+    /// Whether `mount` came from `/tf_static`.
+    pub from_tf_static: bool,
+    /// The whole second since the epoch the samples' times count from (the first
+    /// stamp's), so that they keep their nanoseconds.
+    pub origin_s: i64,
+}
+
+impl std::fmt::Display for BagFrames {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [roll, pitch, yaw] = euler_zyx(&self.mount.rotation).map(f64::to_degrees);
+        let [x, y, z] = self.mount.translation_m;
+        write!(
+            f,
+            "the DVL from {} ({}) in frame {}, ",
+            self.dvl_topic, self.dvl_type, self.dvl_frame
+        )?;
+        if self.from_tf_static {
+            write!(
+                f,
+                "placed in {} by /tf_static at ({x:.3}, {y:.3}, {z:.3}) m, roll {roll:.1}°, pitch {pitch:.1}°, yaw {yaw:.1}°",
+                self.body
+            )?;
+        } else {
+            write!(f, "the body frame itself")?;
+        }
+        write!(
+            f,
+            "; the reference from {} ({}), world {} ({}), body {} ({}); read into north-east-down and forward-right-down, times in seconds from {} s after the epoch",
+            self.reference_topic,
+            self.reference_type,
+            self.world,
+            if self.world_ned { "NED" } else { "ENU" },
+            self.body,
+            self.axes.words(),
+            self.origin_s
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rotation::body_to_ned as attitude_matrix;
+
+    fn close(a: Vec3, b: Vec3) {
+        for k in 0..3 {
+            assert!((a[k] - b[k]).abs() < 1e-12, "{a:?} against {b:?}");
+        }
+    }
+
+    /// A vehicle heading north-east in ENU (yaw 45° from east, so 45° from north too),
+    /// pitched 10° nose up in FLU: in NED its yaw is 45°, its pitch +10° (nose up is
+    /// positive pitch both ways), and a body x velocity points north-east and up.
+    #[test]
+    fn an_enu_flu_pose_reads_as_the_ned_frd_attitude() {
+        let (pitch, yaw) = (10f64.to_radians(), 45f64.to_radians());
+        // FLU to ENU: yaw about up, then pitch about left (nose up is negative about y
+        // in FLU's right-handed axes).
+        let (sy, cy) = (yaw / 2.0).sin_cos();
+        let (sp, cp) = (-pitch / 2.0).sin_cos();
+        let q = [-sy * sp, cy * sp, sy * cp, cy * cp];
+        let r = body_to_ned(q, false, Axes::ForwardLeftUp);
+        close(euler_zyx(&r), [0.0, pitch, yaw]);
+        let r_tool = attitude_matrix([0.0, pitch, yaw]);
+        for (row, expected) in r.iter().zip(r_tool) {
+            close(*row, expected);
+        }
+        let north_east_up = apply(&r, [1.0, 0.0, 0.0]);
+        let horizontal = pitch.cos() / 2f64.sqrt();
+        close(north_east_up, [horizontal, horizontal, -pitch.sin()]);
+    }
+
+    /// A chain of two static transforms is composed, and walked backwards too.
+    #[test]
+    fn static_transforms_chain_both_ways() {
+        let yawed = |deg: f64, at: Vec3| Transform {
+            rotation: attitude_matrix([0.0, 0.0, deg.to_radians()]),
+            translation_m: at,
+        };
+        let transforms = vec![
+            StaticTransform {
+                parent: "base_link".into(),
+                child: "mount".into(),
+                transform: yawed(90.0, [1.0, 0.0, 0.0]),
+            },
+            StaticTransform {
+                parent: "/mount".into(),
+                child: "dvl".into(),
+                transform: yawed(0.0, [2.0, 0.0, 0.0]),
+            },
+        ];
+        let chained = chain(&transforms, "base_link", "dvl").unwrap();
+        close(chained.translation_m, [1.0, 2.0, 0.0]);
+        close(apply(&chained.rotation, [1.0, 0.0, 0.0]), [0.0, 1.0, 0.0]);
+        let back = chain(&transforms, "dvl", "base_link").unwrap();
+        close(apply(&back.rotation, [0.0, 1.0, 0.0]), [1.0, 0.0, 0.0]);
+        close(back.translation_m, [-2.0, 1.0, 0.0]);
+        assert!(chain(&transforms, "base_link", "camera").is_none());
+        let q = matrix_quaternion(&chained.rotation);
+        let again = quaternion_matrix(q);
+        for (a, b) in again.iter().zip(chained.rotation) {
+            close(*a, b);
+        }
+    }
+}

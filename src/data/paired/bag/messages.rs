@@ -1,0 +1,567 @@
+//! A bag's DVL and reference topics read into samples: one pass over the bag decodes
+//! the messages of every topic that could be the DVL, the reference or `/tf_static`
+//! (by the fields of its type), then the topics asked for (or the only one of a kind)
+//! are chosen, and their samples carried into north-east-down and forward-right-down
+//! (`frames.rs`).
+//! In: a bag's path and the [`BagTopics`]. Out: a [`ReadBag`]: the samples for the
+//! plausibility checks, where each came from, the bag's files with their SHA-256, and
+//! the frames used.
+
+use super::cdr::{Value, decode};
+use super::definitions::Definitions;
+use super::frames::{self, Axes, BagFrames, StaticTransform, Transform, frame_name};
+use super::storage::{Bag, Survey};
+use super::{BagError, BagTopics, Stamps};
+use crate::Vec3;
+use crate::data::paired::{Locator, PairedColumns, SourceFile, Unchecked};
+use crate::rotation::{Mat3, apply, multiply};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// What a bag gave: the samples, where each came from, its files, and its frames.
+#[derive(Debug, Clone)]
+pub struct ReadBag {
+    pub samples: Unchecked,
+    pub at: Locator,
+    pub files: Vec<SourceFile>,
+    pub frames: BagFrames,
+}
+
+/// What a topic can be, by the fields of its type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Role {
+    Dvl,
+    Reference,
+    Transforms,
+}
+
+impl Role {
+    fn words(self) -> &'static str {
+        match self {
+            Role::Dvl => {
+                "DVL (marine_acoustic_msgs/msg/Dvl, geometry_msgs/msg/TwistWithCovarianceStamped or TwistStamped, or a type with their fields)"
+            }
+            Role::Reference => "reference (nav_msgs/msg/Odometry, or a type with its fields)",
+            Role::Transforms => "static transform",
+        }
+    }
+
+    fn flag(self) -> &'static str {
+        match self {
+            Role::Dvl => "--dvl-topic",
+            _ => "--reference-topic",
+        }
+    }
+}
+
+/// Where a type keeps what a role reads: each a path of field indices.
+#[derive(Debug, Clone)]
+struct Layout {
+    role: Role,
+    stamp: [Vec<usize>; 2],
+    frame_id: Vec<usize>,
+    /// The DVL's velocity, or the reference's body velocity.
+    velocity: [Vec<usize>; 3],
+    /// The reference's orientation, x, y, z, w, and body rate.
+    orientation: Option<[Vec<usize>; 4]>,
+    rate: Option<[Vec<usize>; 3]>,
+    child_frame_id: Option<Vec<usize>>,
+    /// The DVL's validity: its mode, good beams and beam velocities' flag, where its
+    /// type has them.
+    mode: Option<Vec<usize>>,
+    good_beams: Option<Vec<usize>>,
+    beams_valid: Option<Vec<usize>>,
+}
+
+/// The layout of `type_name` on `topic`, where it is a type a role reads.
+fn layout(topic: &str, type_name: &str, definitions: &Definitions) -> Option<Layout> {
+    let path = |p: &str| definitions.path(type_name, p).map(|(indices, _)| indices);
+    let triple = |prefix: &str| -> Option<[Vec<usize>; 3]> {
+        Some([
+            path(&format!("{prefix}.x"))?,
+            path(&format!("{prefix}.y"))?,
+            path(&format!("{prefix}.z"))?,
+        ])
+    };
+    if topic == "/tf_static" && path("transforms").is_some() {
+        return Some(Layout {
+            role: Role::Transforms,
+            stamp: [vec![], vec![]],
+            frame_id: vec![],
+            velocity: [vec![], vec![], vec![]],
+            orientation: None,
+            rate: None,
+            child_frame_id: None,
+            mode: None,
+            good_beams: None,
+            beams_valid: None,
+        });
+    }
+    let stamp = [path("header.stamp.sec")?, path("header.stamp.nanosec")?];
+    let frame_id = path("header.frame_id")?;
+    let base = |role, velocity| Layout {
+        role,
+        stamp: stamp.clone(),
+        frame_id: frame_id.clone(),
+        velocity,
+        orientation: None,
+        rate: None,
+        child_frame_id: None,
+        mode: path("velocity_mode"),
+        good_beams: path("num_good_beams"),
+        beams_valid: path("beam_velocities_valid"),
+    };
+    if let (Some(orientation), Some(child), Some(linear)) = (
+        (|| {
+            Some([
+                path("pose.pose.orientation.x")?,
+                path("pose.pose.orientation.y")?,
+                path("pose.pose.orientation.z")?,
+                path("pose.pose.orientation.w")?,
+            ])
+        })(),
+        path("child_frame_id"),
+        triple("twist.twist.linear"),
+    ) {
+        return Some(Layout {
+            orientation: Some(orientation),
+            rate: triple("twist.twist.angular"),
+            child_frame_id: Some(child),
+            ..base(Role::Reference, linear)
+        });
+    }
+    let velocity = triple("velocity")
+        .or_else(|| triple("twist.twist.linear"))
+        .or_else(|| triple("twist.linear"))?;
+    Some(base(Role::Dvl, velocity))
+}
+
+/// One message's samples as read, before frames are applied.
+#[derive(Debug, Clone, Default)]
+struct Samples {
+    layout: Option<Layout>,
+    type_name: String,
+    frame_id: Option<String>,
+    child_frame_id: Option<String>,
+    /// Each message's stamp, ns since the epoch.
+    stamp_ns: Vec<i64>,
+    message: Vec<u64>,
+    velocity: Vec<Vec3>,
+    orientation: Vec<[f64; 4]>,
+    rate: Vec<Vec3>,
+    valid: Vec<bool>,
+    transforms: Vec<StaticTransform>,
+}
+
+/// The numbers at `paths` of `value`.
+fn numbers<const N: usize>(value: &Value, paths: &[Vec<usize>; N]) -> Option<[f64; N]> {
+    let mut out = [0.0; N];
+    for (k, path) in paths.iter().enumerate() {
+        out[k] = value.at(path)?.number()?;
+    }
+    Some(out)
+}
+
+impl Samples {
+    /// Adds the message `value`, recorded at `receive_ns`, the `message`th of its topic.
+    fn add(
+        &mut self,
+        value: &Value,
+        receive_ns: u64,
+        message: u64,
+        stamps: Stamps,
+    ) -> Result<(), String> {
+        let layout = self.layout.as_ref().expect("a wanted topic has a layout");
+        let missing = || "a field of its type is missing or not a number".to_string();
+        if layout.role == Role::Transforms {
+            for transform in value.at(&[0]).and_then(list).ok_or_else(missing)? {
+                self.transforms
+                    .push(static_transform(transform).ok_or_else(missing)?);
+            }
+            return Ok(());
+        }
+        let [sec, nanosec] = numbers(value, &layout.stamp).ok_or_else(missing)?;
+        self.stamp_ns.push(match stamps {
+            Stamps::Header => sec as i64 * 1_000_000_000 + nanosec as i64,
+            Stamps::Receive => receive_ns as i64,
+        });
+        self.message.push(message);
+        if self.frame_id.is_none() {
+            self.frame_id = value
+                .at(&layout.frame_id)
+                .and_then(Value::text)
+                .map(|f| frame_name(f).to_string());
+            self.child_frame_id = (layout.child_frame_id.as_ref())
+                .and_then(|path| value.at(path)?.text().map(|f| frame_name(f).to_string()));
+        }
+        self.velocity
+            .push(numbers(value, &layout.velocity).ok_or_else(missing)?);
+        if let Some(orientation) = &layout.orientation {
+            self.orientation
+                .push(numbers(value, orientation).ok_or_else(missing)?);
+        }
+        if let Some(rate) = &layout.rate {
+            self.rate.push(numbers(value, rate).ok_or_else(missing)?);
+        }
+        let flag = |path: &Option<Vec<usize>>| path.as_ref().and_then(|p| value.at(p)?.number());
+        let bottom_track = flag(&layout.mode).is_none_or(|mode| mode == 1.0);
+        let good_beams = flag(&layout.good_beams).is_none_or(|beams| beams >= 3.0);
+        let beams_valid = flag(&layout.beams_valid).is_none_or(|valid| valid != 0.0);
+        self.valid.push(bottom_track && good_beams && beams_valid);
+        Ok(())
+    }
+}
+
+fn list(value: &Value) -> Option<&[Value]> {
+    match value {
+        Value::List(items) => Some(items),
+        _ => None,
+    }
+}
+
+/// A `geometry_msgs/TransformStamped`'s parent, child and transform.
+fn static_transform(value: &Value) -> Option<StaticTransform> {
+    let number = |path: &[usize]| value.at(path)?.number();
+    let vector = |k: usize| {
+        Some([
+            number(&[2, k, 0])?,
+            number(&[2, k, 1])?,
+            number(&[2, k, 2])?,
+        ])
+    };
+    let rotation = [
+        number(&[2, 1, 0])?,
+        number(&[2, 1, 1])?,
+        number(&[2, 1, 2])?,
+        number(&[2, 1, 3])?,
+    ];
+    Some(StaticTransform {
+        parent: value.at(&[0, 1])?.text()?.to_string(),
+        child: value.at(&[1])?.text()?.to_string(),
+        transform: Transform {
+            rotation: frames::quaternion_matrix(rotation),
+            translation_m: vector(0)?,
+        },
+    })
+}
+
+/// Reads the bag at `path` as `topics` says.
+pub fn read(path: &Path, topics: &BagTopics) -> Result<ReadBag, BagError> {
+    let bag = Bag::open(path)?;
+    let mut by_topic: BTreeMap<String, Samples> = BTreeMap::new();
+    let survey = bag.stream(
+        &|topic, type_name, definitions| layout(topic, type_name, definitions).is_some(),
+        &mut |topic, definitions, receive_ns, data| {
+            let fault = |problem: String| BagError::Message {
+                path: path.to_path_buf(),
+                topic: topic.name.clone(),
+                message: topic.count,
+                problem,
+            };
+            let samples = by_topic
+                .entry(topic.name.clone())
+                .or_insert_with(|| Samples {
+                    layout: layout(&topic.name, &topic.type_name, definitions),
+                    type_name: topic.type_name.clone(),
+                    ..Samples::default()
+                });
+            let value =
+                decode(data, &topic.type_name, definitions).map_err(|e| fault(e.to_string()))?;
+            samples
+                .add(&value, receive_ns, topic.count, topics.stamps)
+                .map_err(fault)
+        },
+    )?;
+    let dvl_topic = choose(path, &survey, &by_topic, Role::Dvl, topics.dvl.as_deref())?;
+    let reference_topic = choose(
+        path,
+        &survey,
+        &by_topic,
+        Role::Reference,
+        topics.reference.as_deref(),
+    )?;
+    let transforms: Vec<StaticTransform> = (by_topic.values())
+        .flat_map(|samples| samples.transforms.iter().cloned())
+        .collect();
+    let dvl = &by_topic[&dvl_topic];
+    let reference = &by_topic[&reference_topic];
+    let frames = bag_frames(
+        path,
+        topics,
+        (&dvl_topic, dvl),
+        (&reference_topic, reference),
+        &transforms,
+    )?;
+    let samples = unchecked(dvl, reference, &frames);
+    let at = locator(
+        path,
+        topics,
+        (&dvl_topic, dvl),
+        (&reference_topic, reference),
+        samples.rate.is_some(),
+    );
+    let files = (survey.sha256.into_iter())
+        .map(|(path, sha256)| SourceFile { path, sha256 })
+        .collect();
+    Ok(ReadBag {
+        samples,
+        at,
+        files,
+        frames,
+    })
+}
+
+/// The topic that plays `role`: the one `given`, or the bag's only topic of a type
+/// the role reads.
+fn choose(
+    path: &Path,
+    survey: &Survey,
+    read: &BTreeMap<String, Samples>,
+    role: Role,
+    given: Option<&str>,
+) -> Result<String, BagError> {
+    let plays = |name: &str| {
+        read.get(name)
+            .and_then(|s| s.layout.as_ref())
+            .is_some_and(|l| l.role == role)
+    };
+    let refused = |problem: String| BagError::Topic {
+        path: path.to_path_buf(),
+        problem,
+        topics: topic_lines(survey),
+    };
+    match given {
+        Some(name) => {
+            let Some(topic) = survey.topics.iter().find(|t| t.name == name) else {
+                return Err(refused(format!(
+                    "{}: no topic {name} in the bag",
+                    role.flag()
+                )));
+            };
+            if !plays(name) {
+                return Err(refused(format!(
+                    "{}: {name} is {} with {} messages, not a {} type this tool reads",
+                    role.flag(),
+                    topic.type_name,
+                    topic.count,
+                    role.words()
+                )));
+            }
+            Ok(name.to_string())
+        }
+        None => {
+            let candidates: Vec<&str> = (survey.topics.iter())
+                .map(|t| t.name.as_str())
+                .filter(|name| plays(name))
+                .collect();
+            match candidates.as_slice() {
+                [only] => Ok(only.to_string()),
+                [] => Err(refused(format!(
+                    "no topic is a {} type this tool reads",
+                    role.words()
+                ))),
+                several => Err(refused(format!(
+                    "{} topics could be the {}: {}; name one with {}",
+                    several.len(),
+                    role.words().split(' ').next().unwrap_or(""),
+                    several.join(", "),
+                    role.flag()
+                ))),
+            }
+        }
+    }
+}
+
+/// The bag's topics, a line each: name, type, message count, rate, and whether this
+/// tool reads it.
+pub fn topic_lines(survey: &Survey) -> String {
+    let readable = |name: &str, type_name: &str| match layout(name, type_name, &survey.definitions)
+    {
+        Some(l) if l.role == Role::Dvl => "read as a DVL",
+        Some(l) if l.role == Role::Reference => "read as a reference",
+        Some(_) => "read for the DVL's frame",
+        None => "not read",
+    };
+    (survey.topics.iter())
+        .map(|t| {
+            format!(
+                "  {}  {}  {} messages{}  ({})",
+                t.name,
+                t.type_name,
+                t.count,
+                t.rate_hz()
+                    .map(|r| format!(", {r:.2} Hz"))
+                    .unwrap_or_default(),
+                readable(&t.name, &t.type_name)
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// The frames of a reading: the body's (as `topics` names it, and the reference's
+/// twist is in), the world's, and the DVL's frame placed in the body's.
+fn bag_frames(
+    path: &Path,
+    topics: &BagTopics,
+    (dvl_topic, dvl): (&str, &Samples),
+    (reference_topic, reference): (&str, &Samples),
+    transforms: &[StaticTransform],
+) -> Result<BagFrames, BagError> {
+    let refused = |problem: String| BagError::Frames {
+        path: path.to_path_buf(),
+        problem,
+    };
+    let body = frame_name(&topics.frame).to_string();
+    let child = reference.child_frame_id.clone().unwrap_or_default();
+    if !child.is_empty() && child != body {
+        return Err(refused(format!(
+            "the reference {reference_topic} gives its twist in {child}, not in {body}: name the body frame with --frame {child}"
+        )));
+    }
+    let dvl_frame = dvl.frame_id.clone().unwrap_or_default();
+    let (mount, from_tf_static) = if dvl_frame.is_empty() || dvl_frame == body {
+        (
+            Transform {
+                rotation: frames::IDENTITY,
+                translation_m: [0.0; 3],
+            },
+            false,
+        )
+    } else {
+        let mount = frames::chain(transforms, &body, &dvl_frame).ok_or_else(|| {
+            let known: Vec<String> = (transforms.iter())
+                .map(|t| format!("{} → {}", frame_name(&t.parent), frame_name(&t.child)))
+                .collect();
+            refused(format!(
+                "the DVL {dvl_topic} is in frame {dvl_frame}, which /tf_static does not join to {body} ({}): the tool cannot turn its velocity into the body's axes",
+                match known.is_empty() {
+                    true => "the bag has no /tf_static".to_string(),
+                    false => format!("it holds {}", known.join(", ")),
+                }
+            ))
+        })?;
+        (mount, true)
+    };
+    let world = reference.frame_id.clone().unwrap_or_default();
+    let first_ns = (dvl
+        .stamp_ns
+        .first()
+        .into_iter()
+        .chain(reference.stamp_ns.first()))
+    .min()
+    .copied()
+    .unwrap_or(0);
+    Ok(BagFrames {
+        origin_s: first_ns.div_euclid(1_000_000_000),
+        dvl_topic: dvl_topic.to_string(),
+        dvl_type: dvl.type_name.clone(),
+        reference_topic: reference_topic.to_string(),
+        reference_type: reference.type_name.clone(),
+        axes: Axes::of_body(&body),
+        body,
+        world_ned: frames::world_is_ned(&world),
+        world,
+        dvl_frame,
+        mount,
+        from_tf_static,
+    })
+}
+
+/// The samples of `dvl` and `reference` in north-east-down and forward-right-down.
+fn unchecked(dvl: &Samples, reference: &Samples, frames: &BagFrames) -> Unchecked {
+    let to_frd = frames.axes.to_frd();
+    let dvl_to_frd: Mat3 = multiply(&to_frd, &frames.mount.rotation);
+    let layout = dvl.layout.as_ref().expect("chosen topics have layouts");
+    let flagged =
+        layout.mode.is_some() || layout.good_beams.is_some() || layout.beams_valid.is_some();
+    let mut velocity_ned = Vec::with_capacity(reference.stamp_ns.len());
+    let mut attitude = Vec::with_capacity(reference.stamp_ns.len());
+    let seconds = |stamps: &[i64]| -> Vec<f64> {
+        (stamps.iter())
+            .map(|&ns| (ns - frames.origin_s * 1_000_000_000) as f64 * 1e-9)
+            .collect()
+    };
+    for (orientation, velocity) in reference.orientation.iter().zip(&reference.velocity) {
+        let body_to_ned = frames::body_to_ned(*orientation, frames.world_ned, frames.axes);
+        velocity_ned.push(apply(&body_to_ned, apply(&to_frd, *velocity)));
+        attitude.push(frames::euler_zyx(&body_to_ned));
+    }
+    let recorded_rate = reference
+        .rate
+        .iter()
+        .any(|rate| rate.iter().any(|&r| r != 0.0));
+    Unchecked {
+        dvl_time_s: seconds(&dvl.stamp_ns),
+        dvl_m_s: dvl
+            .velocity
+            .iter()
+            .map(|v| apply(&dvl_to_frd, *v))
+            .collect(),
+        dvl_valid: flagged.then(|| dvl.valid.clone()),
+        reference_time_s: seconds(&reference.stamp_ns),
+        velocity_ned_m_s: velocity_ned,
+        attitude,
+        rate: recorded_rate.then(|| reference.rate.iter().map(|r| apply(&to_frd, *r)).collect()),
+        angles_in_degrees: false,
+    }
+}
+
+/// Where each sample came from: the bag, each message's place in its topic, and the
+/// fields that gave each quantity.
+fn locator(
+    path: &Path,
+    topics: &BagTopics,
+    (dvl_topic, dvl): (&str, &Samples),
+    (reference_topic, reference): (&str, &Samples),
+    rate: bool,
+) -> Locator {
+    let names = |topic: &str, what: &str, axes: [&str; 3]| {
+        axes.map(|axis| format!("{topic} {what} {axis}"))
+    };
+    let layout = dvl.layout.as_ref().expect("chosen topics have layouts");
+    let flagged =
+        layout.mode.is_some() || layout.good_beams.is_some() || layout.beams_valid.is_some();
+    Locator {
+        dvl: path.to_path_buf(),
+        reference: path.to_path_buf(),
+        dvl_lines: dvl.message.clone(),
+        reference_lines: reference.message.clone(),
+        names: PairedColumns {
+            time: match topics.stamps {
+                Stamps::Header => "header.stamp".into(),
+                Stamps::Receive => "recording time".into(),
+            },
+            dvl: names(dvl_topic, "velocity", ["forward", "right", "down"]),
+            velocity_ned: names(reference_topic, "velocity", ["north", "east", "down"]),
+            attitude: names(reference_topic, "attitude", ["roll", "pitch", "yaw"]),
+            rate: rate.then(|| names(reference_topic, "body rate", ["p", "q", "r"])),
+            angles_in_degrees: false,
+            valid: flagged
+                .then(|| format!("{dvl_topic} bottom track, good beams, beam velocities valid")),
+            zero_is_valid: false,
+            gap_limit_s: topics.gap_limit_s,
+        },
+    }
+}
+
+/// How many messages of `bag` a reading of `topics` decodes: the DVL's and the
+/// reference's (each topic's named, or every topic that could be one), from the bag's
+/// counts.
+pub fn message_counts(path: &Path, topics: Option<&BagTopics>) -> Result<(u64, u64), BagError> {
+    let survey = Bag::open(path)?.counts()?;
+    let count = |role: Role, given: Option<&str>| -> u64 {
+        (survey.topics.iter())
+            .filter(|t| match given {
+                Some(name) => t.name == name,
+                None => layout(&t.name, &t.type_name, &survey.definitions)
+                    .is_some_and(|l| l.role == role),
+            })
+            .map(|t| t.count)
+            .sum()
+    };
+    Ok((
+        count(Role::Dvl, topics.and_then(|t| t.dvl.as_deref())),
+        count(Role::Reference, topics.and_then(|t| t.reference.as_deref())),
+    ))
+}
