@@ -10,7 +10,9 @@
 //! the joint `calibrate` of two such dives, with the process's peak resident memory.
 //! With `-- --memory`: each command's peak resident memory, run as the binary on dives
 //! of one and five hours, beside the estimate with which it refuses a recording beyond
-//! the machine's memory before reading it.
+//! the machine's memory before reading it. With `-- --bag`: `calibrate` of a ROS 2 bag
+//! (MCAP) of an hour's dive, the INS at 100 Hz and the DVL at 10 Hz, alone and beside a
+//! camera topic the reading passes over, its seconds and peak resident memory.
 
 #[allow(dead_code)]
 #[path = "../tests/common/installed.rs"]
@@ -36,6 +38,9 @@ fn main() {
     }
     if args.iter().any(|a| a == "--memory") {
         return memory();
+    }
+    if args.iter().any(|a| a == "--bag") {
+        return bag();
     }
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
@@ -257,6 +262,50 @@ fn memory() {
     }
     run(JOINT, &[0, 1], &[]);
     run(JOINT, &[2, 0], &[]);
+}
+
+/// The `--bag` case: `calibrate` of an hour's dive as an MCAP bag (`Odometry` at 100
+/// Hz, `Dvl` at 10 Hz), alone and with a camera topic of 1 MB a second beside it (3.6
+/// GB), run as the binary: seconds and peak resident memory of each, and the bag's
+/// size.
+fn bag() {
+    use dcnet_exp::data::paired::bag::write::{Format, RosLayout, write_recording};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    installed::write_installed_at_rates(d, 1, &[], installed::INSTALLED, 3, (360_000, 0.01), 10);
+    let files = PairedFiles {
+        dvl: d.join("Trajectory1/DVL_trajectory1.csv"),
+        reference: d.join("Trajectory1/GT_trajectory1.csv"),
+    };
+    let recording = read(&files, &PairedColumns::akit()).unwrap();
+    println!("| bag (MCAP, zstd chunks) | size | calibrate s | peak resident memory |");
+    println!("|---|---|---|---|");
+    for (name, other) in [
+        ("navigation only", 0),
+        ("beside a camera of 1 MB/s", 1 << 20),
+    ] {
+        let path = d.join(format!("dive-{other}.mcap"));
+        let layout = RosLayout {
+            other_bytes_per_s: other,
+            ..RosLayout::default()
+        };
+        write_recording(&recording, &path, Format::Mcap { compressed: true }, layout).unwrap();
+        let size = std::fs::metadata(&path).unwrap().len();
+        let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_dcnet-exp"));
+        command
+            .arg("calibrate")
+            .arg(&path)
+            .arg("--out")
+            .arg(d.join(format!("out-{other}")));
+        let start = Instant::now();
+        let peak = peak_of(command);
+        println!(
+            "| {name} | {:.0} MB | {:.1} | {:.0} MB |",
+            size as f64 / 1e6,
+            start.elapsed().as_secs_f64(),
+            peak / 1e6
+        );
+    }
 }
 
 /// Runs `command` to its end (it must succeed): its peak resident memory, bytes, as the

@@ -210,15 +210,21 @@ pub(super) struct ReadingArgs {
     /// A bag's reference topic [default: its only nav_msgs/msg/Odometry topic]
     #[arg(long, value_name = "TOPIC")]
     pub(super) reference_topic: Option<String>,
+    /// A bag's sensor_msgs/msg/Imu topic for the body rate [default: the reference's
+    /// twist, or the attitude's change where it carries none]
+    #[arg(long, value_name = "TOPIC")]
+    pub(super) rate_topic: Option<String>,
     /// A bag's stamps: the headers' (when each measurement was valid) or the
     /// recording's (when the bag received it)
-    #[arg(long, value_enum, default_value_t = StampsArg::Header)]
-    pub(super) stamps: StampsArg,
+    /// [default: header]
+    #[arg(long, value_enum)]
+    pub(super) stamps: Option<StampsArg>,
     /// A bag's body frame: the reference's twist is in it, the DVL's frame is placed in
     /// it by /tf_static, and the installation is reported in it (forward-left-up, as
     /// REP-103 has it, unless its name ends in _frd)
-    #[arg(long, value_name = "FRAME", default_value = "base_link")]
-    pub(super) frame: String,
+    /// [default: base_link]
+    #[arg(long, value_name = "FRAME")]
+    pub(super) frame: Option<String>,
 }
 
 /// The stamps a bag is read on, as typed.
@@ -236,11 +242,12 @@ impl ReadingArgs {
             gap_limit_s: self.gap_limit_s,
             dvl_topic: self.dvl_topic.as_deref(),
             reference_topic: self.reference_topic.as_deref(),
-            stamps: match self.stamps {
+            rate_topic: self.rate_topic.as_deref(),
+            stamps: self.stamps.map(|stamps| match stamps {
                 StampsArg::Header => crate::data::paired::bag::Stamps::Header,
                 StampsArg::Receive => crate::data::paired::bag::Stamps::Receive,
-            },
-            frame: &self.frame,
+            }),
+            frame: self.frame.as_deref(),
         }
     }
 }

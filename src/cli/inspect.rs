@@ -51,9 +51,6 @@ pub(super) fn validate(spec_path: &Path, set: &[String]) -> Result<(), CliError>
 }
 
 pub(super) fn info(spec_path: &Path, set: &[String]) -> Result<(), CliError> {
-    if crate::data::paired::bag::is_bag(spec_path) {
-        return bag_info(spec_path);
-    }
     let spec = load_spec(spec_path, set)?;
     let trajectories = load_trajectories(&spec).map_err(input)?;
     let mut table = comfy_table::Table::new();
@@ -163,7 +160,7 @@ pub(super) fn fetch_data(
 
 /// `data info BAG`: its files, storage and time span, and each topic with its type,
 /// message count, rate, and whether this tool reads it.
-fn bag_info(path: &Path) -> Result<(), CliError> {
+pub(super) fn bag_info(path: &Path) -> Result<(), CliError> {
     use crate::data::paired::bag::{Bag, topic_lines};
     let bag = Bag::open(path).map_err(input)?;
     let survey = bag.survey().map_err(input)?;

@@ -217,6 +217,9 @@ fn parsed() -> Result<Option<Cli>, CliError> {
 /// `data info` and `data fetch`.
 fn data_command(command: DataCommand) -> Result<(), CliError> {
     match command {
+        DataCommand::Info { spec, .. } if crate::data::paired::bag::is_bag(&spec) => {
+            inspect::bag_info(&spec)
+        }
         DataCommand::Info { spec, overrides } => inspect::info(&spec, &overrides.set),
         DataCommand::Fetch {
             dataset,

@@ -303,13 +303,13 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
         RosInstallation::of(frames, &applied, lever_arm_found, fitted.residual_rms_m_s)
     });
     if let Some(path) = args.save {
-        save(path, args, (&fitted, &bounded), &recording_sha256)?;
-        if let Some(ros) = &ros {
-            ros.write(path).map_err(|source| ResultsError::Io {
-                path: path.to_path_buf(),
-                source,
-            })?;
-        }
+        save(
+            path,
+            args,
+            (&fitted, &bounded),
+            &recording_sha256,
+            ros.as_ref(),
+        )?;
     }
     Ok(Calibration {
         fitted,
@@ -350,8 +350,7 @@ pub(super) struct Request<'a> {
 impl CalibrateArgs<'_> {
     /// What calibrating the recording will ask of this machine.
     pub fn cost(&self) -> Result<Cost, CalibrateError> {
-        Cost::of(CALIBRATE, &[(self.dvl, self.reference)])
-            .map_err(|fault| CalibrateError::Read(PairedError::from(fault)))
+        Cost::of(CALIBRATE, &[(self.dvl, self.reference)]).map_err(CalibrateError::Read)
     }
 
     fn request(&self) -> Request<'_> {
@@ -461,12 +460,14 @@ pub fn is_noise(bounded: &TermBound, name: &str) -> bool {
 }
 
 /// Writes the installation file of `fitted` and its bound, from the DVL file whose
-/// SHA-256 is `recording_sha256`, to `path`.
+/// SHA-256 is `recording_sha256`, to `path`; and beside it, for a bag, the installation
+/// as ROS uses it.
 fn save(
     path: &Path,
     args: &CalibrateArgs,
     (fitted, bounded): (&Fit, &TermBound),
     recording_sha256: &str,
+    ros: Option<&RosInstallation>,
 ) -> Result<(), CalibrateError> {
     let saved = SavedInstallation::of(
         bounded,
@@ -475,10 +476,14 @@ fn save(
         (args.dvl_noise_cm_s, args.reference_noise_cm_s),
         fitted.residual_rms_m_s,
     );
-    saved.write(path).map_err(|source| ResultsError::Io {
+    let io = |source| ResultsError::Io {
         path: path.to_path_buf(),
         source,
-    })?;
+    };
+    saved.write(path).map_err(io)?;
+    if let Some(ros) = ros {
+        ros.write(path).map_err(io)?;
+    }
     Ok(())
 }
 

@@ -9,7 +9,7 @@
 //! In: [`JointArgs`]. Out: a [`JointCalibration`], or the [`CalibrateError`] of the
 //! recording at fault.
 
-use crate::data::paired::{Loaded, PairedError, PairedRecording, ReadCounts, Source};
+use crate::data::paired::{Loaded, PairedRecording, ReadCounts, Source};
 use crate::evaluate::statistics::mean_std;
 use crate::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise, TermBound, bound};
 use crate::installation::estimate::clock::DEFAULT_SEARCH_S;
@@ -50,7 +50,7 @@ impl JointArgs<'_> {
         let files: Vec<(&Path, Option<&Path>)> = (self.dvls.iter().enumerate())
             .map(|(k, dvl)| (dvl.as_path(), self.references.get(k).map(PathBuf::as_path)))
             .collect();
-        Cost::of(JOINT, &files).map_err(|fault| CalibrateError::Read(PairedError::from(fault)))
+        Cost::of(JOINT, &files).map_err(CalibrateError::Read)
     }
 
     /// What is asked beyond the files, checked as one recording's calibration is.

@@ -10,6 +10,7 @@
 //! and what to do; nothing is written unless everything before the writing succeeded.
 
 use crate::Vec3;
+use crate::data::paired::bag::BagFrames;
 use crate::data::paired::{PairedError, PairedRecording, ReadCounts};
 use crate::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise};
 use crate::installation::estimate::clock::{
@@ -23,7 +24,9 @@ use crate::operator::cost::{BeyondMemory, CORRECT, Cost};
 use crate::operator::inputs::{Reading, not_over_an_input, source};
 use crate::operator::installation_file::{InstallationFileError, SavedInstallation};
 use crate::results::ResultsError;
-use crate::results::corrected::{OtherRecording, Outputs, corrected_samples, stem, write};
+use crate::results::corrected::{
+    CorrectedSample, OtherRecording, Outputs, corrected_samples, stem, write, write_bag,
+};
 use crate::spec::SpecError;
 use std::path::{Path, PathBuf};
 
@@ -52,8 +55,7 @@ pub struct CorrectArgs<'a> {
 impl CorrectArgs<'_> {
     /// What correcting the dive will ask of this machine.
     pub fn cost(&self) -> Result<Cost, CorrectError> {
-        Cost::of(CORRECT, &[(self.dvl, self.reference)])
-            .map_err(|fault| CorrectError::Read(PairedError::from(fault)))
+        Cost::of(CORRECT, &[(self.dvl, self.reference)]).map_err(CorrectError::Read)
     }
 }
 
@@ -180,7 +182,10 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
         args.columns,
         Some(args.installation),
     ];
-    if let Some((output, input)) = not_over_an_input(&inputs, &outputs.all()) {
+    let bag_output = outputs.csv.with_extension("mcap");
+    let mut written = outputs.all().to_vec();
+    written.push(&bag_output);
+    if let Some((output, input)) = not_over_an_input(&inputs, &written) {
         return Err(CorrectError::OverInput { output, input });
     }
     let source = source(args.dvl, args.reference, args.columns, args.reading)
@@ -192,7 +197,8 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
     let loaded = source.load()?;
     let recording_sha256 = loaded.dvl_sha256().to_string();
     outputs.not_another_recordings(args.dvl, &recording_sha256)?;
-    let recording = loaded.parse()?.recording;
+    let read = loaded.parse()?;
+    let (recording, frames) = (read.recording, read.frames);
     let reference = Reference::new(&recording);
     let duration_s = recording.duration_s();
     if args.time_offset_s.is_none() && duration_s <= args.window_s {
@@ -228,7 +234,10 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
             time_offset_s: applied.time_offset_s,
         });
     }
-    let written = write(&outputs, &samples, &recording_sha256)?;
+    let mut files = write(&outputs, &samples, &recording_sha256)?;
+    if let Some(frames) = &frames {
+        files.push(write_corrected_bag(bag_output, &samples, frames, &saved)?);
+    }
     let total = |v: crate::Vec3| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
     Ok(Correction {
         noise_cm_s: 3f64.sqrt() * 100.0 * noise.per_axis_m_s(),
@@ -242,7 +251,7 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
         window_s: args.window_s,
         search_s: args.search_s,
         installation_file: args.installation.to_path_buf(),
-        written,
+        written: files,
         read: recording.counts(),
     })
 }
@@ -345,4 +354,34 @@ fn fit_after(
         from = to;
     }
     (after, blocks, outliers)
+}
+
+/// The matrix with `values` on its diagonal.
+fn diagonal(values: crate::Vec3) -> [[f64; 3]; 3] {
+    let mut matrix = [[0.0; 3]; 3];
+    for k in 0..3 {
+        matrix[k][k] = values[k];
+    }
+    matrix
+}
+
+/// Writes the corrected `samples` of a dive read from a bag of `frames` as a bag at
+/// `path`, its covariance the calibration's residual noise in `saved`, and says how many
+/// samples it holds.
+fn write_corrected_bag(
+    path: PathBuf,
+    samples: &[CorrectedSample],
+    frames: &BagFrames,
+    saved: &SavedInstallation,
+) -> Result<PathBuf, CorrectError> {
+    let topic = format!("{}/corrected", frames.dvl_topic.trim_end_matches('/'));
+    let covariance = diagonal(saved.residual_cm_s.map(|r| (r / 100.0).powi(2)));
+    let messages = write_bag(&path, &topic, samples, frames, covariance)?;
+    eprintln!(
+        "{} of the dive's {} samples written to {} on {topic} (those with no velocity are in the CSV with their reasons)",
+        messages,
+        samples.len(),
+        path.display()
+    );
+    Ok(path)
 }

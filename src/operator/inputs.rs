@@ -60,7 +60,7 @@ pub fn identity(path: &Path) -> PathBuf {
 /// What the command line says of how to read a recording, beyond its columns: each
 /// as the `[columns]` table's key of the same name, and over it; and, for a bag, its
 /// topics, stamps and body frame.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, Default)]
 pub struct Reading<'a> {
     /// The DVL's validity column (`--valid-column`, the table's `valid`).
     pub valid_column: Option<&'a str>,
@@ -69,23 +69,13 @@ pub struct Reading<'a> {
     /// A bag's DVL topic (`--dvl-topic`), reference topic (`--reference-topic`).
     pub dvl_topic: Option<&'a str>,
     pub reference_topic: Option<&'a str>,
-    /// A bag's stamps (`--stamps`).
-    pub stamps: Stamps,
-    /// A bag's body frame, the frame the installation is reported in (`--frame`).
-    pub frame: &'a str,
-}
-
-impl Default for Reading<'_> {
-    fn default() -> Self {
-        Reading {
-            valid_column: None,
-            gap_limit_s: None,
-            dvl_topic: None,
-            reference_topic: None,
-            stamps: Stamps::Header,
-            frame: "base_link",
-        }
-    }
+    /// A bag's IMU topic for the body rate (`--rate-topic`).
+    pub rate_topic: Option<&'a str>,
+    /// A bag's stamps (`--stamps`; the headers' where not given).
+    pub stamps: Option<Stamps>,
+    /// A bag's body frame, the frame the installation is reported in (`--frame`;
+    /// `base_link` where not given).
+    pub frame: Option<&'a str>,
 }
 
 /// The recording of the DVL file (or bag) `dvl`, its reference's file where that is
@@ -106,6 +96,9 @@ pub fn source(
         for (flag, given) in [
             ("--dvl-topic", reading.dvl_topic),
             ("--reference-topic", reading.reference_topic),
+            ("--rate-topic", reading.rate_topic),
+            ("--stamps", reading.stamps.map(|_| "")),
+            ("--frame", reading.frame),
         ] {
             if given.is_some() {
                 return Err(refused(
@@ -144,8 +137,11 @@ pub fn source(
         topics: BagTopics {
             dvl: reading.dvl_topic.map(String::from),
             reference: reading.reference_topic.map(String::from),
-            stamps: reading.stamps,
-            frame: reading.frame.to_string(),
+            rate: reading.rate_topic.map(String::from),
+            stamps: reading.stamps.unwrap_or_default(),
+            frame: reading
+                .frame
+                .map_or_else(|| BagTopics::default().frame, String::from),
             gap_limit_s: reading.gap_limit_s.map(GapLimit),
         },
     })

@@ -11,17 +11,23 @@
 //! Beside it, the Kalman filter's terms after every sample of the recording.
 //! Both Parquet files record the SHA-256 of the DVL file they come from, so that a
 //! later `calibrate` or `correct` into the same folder never replaces another recording's.
+//! A dive read from a ROS 2 bag is also written as a bag of its own, its corrected
+//! velocities as ROS carries them ([`write_bag`]).
 //! In: the corrected samples and the filter's terms. Out: `<stem>-corrected.csv` and
-//! `.parquet`, and `<stem>-terms-in-time.parquet` ([`Outputs`]).
+//! `.parquet`, and `<stem>-terms-in-time.parquet` ([`Outputs`]); for a bag,
+//! `<stem>-corrected.mcap`.
 
 use super::record::{Record, encode};
 use super::{ResultsError, io, write_table};
 use crate::Vec3;
+use crate::data::paired::bag::BagFrames;
+use crate::data::paired::bag::write::{BagWriter, twist_with_covariance_message};
 use crate::data::paired::{LeftOutWhy, PairedRecording};
 use crate::files::write_atomic;
 use crate::installation::frames::Reference;
 use crate::installation::study::rows::FilterPoint;
 use crate::installation::terms::Installation;
+use crate::rotation::apply;
 use arrow_array::RecordBatch;
 use std::path::{Path, PathBuf};
 
@@ -239,6 +245,50 @@ pub fn write(
     let parquet = outputs.parquet.clone();
     write_table(&parquet, &table)?;
     Ok(vec![csv, parquet])
+}
+
+/// Writes the corrected samples of a dive read from a bag as a bag of their own at
+/// `path` (MCAP): a `geometry_msgs/msg/TwistWithCovarianceStamped` per sample with a
+/// velocity, on `topic`, in the body frame of `frames` and its own axes, stamped when
+/// it is valid (its stamp plus the time offset, since the epoch) with `covariance`,
+/// (m/s)² in those axes. A sample with no velocity has no message: the CSV and Parquet
+/// files hold it with its reason. Gives how many messages were written.
+pub fn write_bag(
+    path: &Path,
+    topic: &str,
+    samples: &[CorrectedSample],
+    frames: &BagFrames,
+    covariance: [[f64; 3]; 3],
+) -> Result<usize, ResultsError> {
+    let fault = |e: String| ResultsError::Io {
+        path: path.to_path_buf(),
+        source: std::io::Error::other(e),
+    };
+    let partial = crate::files::partial_beside(path).map_err(io(path))?;
+    let mut bag =
+        BagWriter::mcap(partial.reopen().map_err(io(path))?).map_err(|e| fault(e.to_string()))?;
+    bag.topic(topic, "geometry_msgs/msg/TwistWithCovarianceStamped")
+        .map_err(|e| fault(e.to_string()))?;
+    let to_body = frames.axes.to_frd();
+    let mut written = 0;
+    for sample in samples {
+        let Ok(velocity) = sample.velocity_m_s else {
+            continue;
+        };
+        let stamp_ns = frames.origin_s * 1_000_000_000 + (sample.valid_at_s * 1e9).round() as i64;
+        let message = twist_with_covariance_message(
+            stamp_ns,
+            &frames.body,
+            apply(&to_body, velocity),
+            covariance,
+        );
+        bag.write(topic, stamp_ns.max(0) as u64, &message)
+            .map_err(|e| fault(e.to_string()))?;
+        written += 1;
+    }
+    bag.finish().map_err(|e| fault(e.to_string()))?;
+    crate::files::persist_partial(partial, path).map_err(io(path))?;
+    Ok(written)
 }
 
 /// Writes the Kalman filter's terms after every sample to the terms file of `outputs`,

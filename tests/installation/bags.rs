@@ -9,6 +9,7 @@ use crate::common::{akit, dcnet, stderr, stdout};
 use dcnet_exp::data::paired::bag::write::{
     BagWriter, DvlStatus, Format, RosLayout, dvl_message, write_recording,
 };
+use dcnet_exp::data::paired::bag::{Bag, decode};
 use dcnet_exp::data::paired::{self, PairedColumns, PairedFiles};
 use std::path::{Path, PathBuf};
 
@@ -116,7 +117,7 @@ fn a_bag_written_from_a_csv_recording_gives_the_csv_terms_in_every_storage() {
         let out = format!("out-{bag}");
         let text = calibrate(dir.path(), &[bag, TERMS, "--out", &out]);
         assert_eq!(term_rows(&text), expected, "{bag}:\n{text}");
-        assert!(text.contains("the DVL from /dvl/data (marine_acoustic_msgs/msg/Dvl) in frame dvl_link, placed in base_link by /tf_static at (0.000, 0.000, 0.000) m, roll 180.0°"), "{text}");
+        assert!(text.contains("the DVL from /dvl/data (marine_acoustic_msgs/msg/Dvl) in frame dvl_link, each ping's bottom lock read from its message, placed in base_link by /tf_static at (0.000, 0.000, 0.000) m, roll 180.0°"), "{text}");
         assert!(
             text.contains("world odom (ENU), body base_link (FLU: x forward, y left, z up)"),
             "{text}"
@@ -185,11 +186,54 @@ fn a_bag_written_from_a_csv_recording_gives_the_csv_terms_in_every_storage() {
         ],
     );
     assert!(output.status.success(), "{}", stderr(&output));
+    let corrected =
+        std::fs::read_to_string(dir.path().join("corrected/plain-corrected.csv")).unwrap();
     assert!(
-        dir.path().join("corrected/plain-corrected.csv").is_file(),
+        stderr(&output).contains("399 of the dive's 400 samples written to"),
         "{}",
         stderr(&output)
     );
+    // The corrected bag: one TwistWithCovarianceStamped a sample, in base_link's FLU
+    // axes, stamped when it is valid, each the CSV's velocity with y and z negated.
+    let bag = Bag::open(&dir.path().join("corrected/plain-corrected.mcap")).unwrap();
+    let mut messages = Vec::new();
+    let survey = bag
+        .stream(&|_, _, _| true, &mut |topic, definitions, _, data| {
+            messages.push(decode(data, &topic.type_name, definitions).unwrap());
+            Ok(())
+        })
+        .unwrap();
+    assert_eq!(survey.topics[0].name, "/dvl/data/corrected");
+    assert_eq!(
+        survey.topics[0].type_name,
+        "geometry_msgs/msg/TwistWithCovarianceStamped"
+    );
+    assert_eq!(messages.len(), 399);
+    for (line, message) in corrected
+        .lines()
+        .skip(1)
+        .filter(|l| !l.contains(",,,"))
+        .zip(&messages)
+        .step_by(97)
+    {
+        let cells: Vec<f64> = line
+            .split(',')
+            .take(5)
+            .map(|c| c.parse().unwrap())
+            .collect();
+        let number = |path: &[usize]| message.at(path).unwrap().number().unwrap();
+        let stamp = number(&[0, 0, 0]) - 1_700_000_000.0 + number(&[0, 0, 1]) * 1e-9;
+        assert!((stamp - cells[1]).abs() < 1e-6, "{line}: stamped {stamp}");
+        assert_eq!(message.at(&[0, 1]).unwrap().text(), Some("base_link"));
+        for (k, sign) in [(0, 1.0), (1, -1.0), (2, -1.0)] {
+            assert!(
+                (number(&[1, 0, 0, k]) - sign * cells[2 + k]).abs() < 1e-12,
+                "{line}"
+            );
+        }
+        let variance = number(&[1, 1, 0]);
+        assert!(variance > 1e-5 && variance < 1e-2, "{variance}");
+    }
     // The mount is rolled 180°: the rotation found stays within a degree of it.
     let roll: f64 = ros
         .split("--roll ")
@@ -318,6 +362,23 @@ fn topics_missing_or_ambiguous_and_a_damaged_bag_are_refused_by_name() {
     );
     let error = refused(&[files.dvl.to_str().unwrap(), "--dvl-topic", "/dvl"]);
     assert!(error.contains("is not a bag"), "{error}");
+    let error = refused(&[files.dvl.to_str().unwrap(), "--frame", "base_link"]);
+    assert!(
+        error.contains("--frame") && error.contains("is not a bag"),
+        "{error}"
+    );
+    // A folder rosbag2 compressed itself: refused by name, not as damaged.
+    std::fs::create_dir(dir.path().join("squeezed")).unwrap();
+    std::fs::write(
+        dir.path().join("squeezed/metadata.yaml"),
+        "rosbag2_bagfile_information:\n  storage_identifier: mcap\n  compression_format: zstd\n  compression_mode: FILE\n  relative_file_paths:\n    - squeezed_0.mcap.zstd\n",
+    )
+    .unwrap();
+    let error = refused(&["squeezed"]);
+    assert!(
+        error.contains("compression_format \"zstd\": a bag compressed by rosbag2 is not read here"),
+        "{error}"
+    );
     // Two DVL topics, none named.
     let two = dir.path().join("two.mcap");
     let mut writer = BagWriter::create(&two, Format::Mcap { compressed: false }).unwrap();
@@ -431,4 +492,75 @@ fn an_akit_segment_as_a_bag_calibrates_to_the_csv_terms() {
             );
         }
     }
+}
+
+/// A study whose recordings are bags gives the held-out scores (to 1e-6 cm/s) of the same study over
+/// the CSV files; a bag key on a CSV recording is refused at its key.
+#[test]
+fn a_study_of_bags_scores_as_the_study_of_their_csv_files() {
+    use crate::common::installed::write_study_spec;
+    use crate::common::{floats, read_parquet, strings};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    crate::common::installed::write_installed(&d.join("data/syn"), 3, &[], INSTALLED, 5);
+    write_study_spec(d, "csv", "syn", 3, "");
+    std::fs::create_dir_all(d.join("data/bags")).unwrap();
+    let mut spec = std::fs::read_to_string(d.join("experiments/csv.toml"))
+        .unwrap()
+        .replace("name = \"csv\"", "name = \"bags\"");
+    for n in 1..=3 {
+        let folder = d.join(format!("data/syn/Trajectory{n}"));
+        let files = PairedFiles {
+            dvl: folder.join(format!("DVL_trajectory{n}.csv")),
+            reference: folder.join(format!("GT_trajectory{n}.csv")),
+        };
+        let recording = paired::read(&files, &PairedColumns::akit()).unwrap();
+        let bag = d.join(format!("data/bags/S{n}.mcap"));
+        write_recording(
+            &recording,
+            &bag,
+            Format::Mcap { compressed: true },
+            RosLayout::default(),
+        )
+        .unwrap();
+        spec = spec.replace(
+            &format!("dvl = \"../data/syn/Trajectory{n}/DVL_trajectory{n}.csv\"\nreference = \"../data/syn/Trajectory{n}/GT_trajectory{n}.csv\""),
+            &format!("dvl = \"../data/bags/S{n}.mcap\"\ndvl_topic = \"/dvl/data\""),
+        );
+    }
+    std::fs::write(d.join("experiments/bags.toml"), &spec).unwrap();
+    for name in ["csv", "bags"] {
+        let output = dcnet(
+            d,
+            &["run", &format!("experiments/{name}.toml"), "--no-plots"],
+        );
+        assert!(output.status.success(), "{name}: {}", stderr(&output));
+    }
+    let scores = |name: &str| {
+        let batch = read_parquet(&d.join(format!("results/{name}/summary.parquet")));
+        (strings(&batch, "method"), floats(&batch, "rmse_cm_s"))
+    };
+    let (csv, bags) = (scores("csv"), scores("bags"));
+    assert_eq!(csv.0, bags.0);
+    assert!(!csv.1.is_empty());
+    for (a, b) in csv.1.iter().zip(&bags.1) {
+        assert!(
+            (a.unwrap() - b.unwrap()).abs() < 1e-6,
+            "{a:?} against {b:?}"
+        );
+    }
+    let wrong = spec
+        .replace(
+            "dvl = \"../data/bags/S1.mcap\"",
+            "dvl = \"../data/syn/Trajectory1/DVL_trajectory1.csv\"",
+        )
+        .replace("name = \"bags\"", "name = \"wrong\"");
+    std::fs::write(d.join("experiments/wrong.toml"), wrong).unwrap();
+    let output = dcnet(d, &["validate", "experiments/wrong.toml"]);
+    assert!(!output.status.success());
+    assert!(
+        stderr(&output).contains("recordings.trajectories[0].dvl_topic"),
+        "{}",
+        stderr(&output)
+    );
 }

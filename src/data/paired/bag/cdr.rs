@@ -57,6 +57,9 @@ pub enum CdrError {
     Encapsulation(u16),
     #[error("{0} is not defined in the bag's schema")]
     Undefined(String),
+    #[error("{0} lies more than 32 messages deep: a type that holds itself")]
+    Nested(String),
+
     #[error("{type_name}.{field}: a sequence of {count} elements is longer than the message")]
     Length {
         type_name: String,
@@ -86,6 +89,7 @@ pub fn decode(bytes: &[u8], type_name: &str, definitions: &Definitions) -> Resul
         at: 0,
         little,
         definitions,
+        depth: 0,
     };
     reader.message(type_name)
 }
@@ -95,16 +99,26 @@ struct Reader<'a> {
     at: usize,
     little: bool,
     definitions: &'a Definitions,
+    /// How many messages deep the reading is.
+    depth: usize,
 }
+
+/// The deepest nesting of messages read: deeper is a type that holds itself.
+const MAX_DEPTH: usize = 32;
 
 impl Reader<'_> {
     fn message(&mut self, type_name: &str) -> Result<Value, CdrError> {
+        self.depth += 1;
+        if self.depth > MAX_DEPTH {
+            return Err(CdrError::Nested(type_name.to_string()));
+        }
         let fields = (self.definitions.fields(type_name))
             .ok_or_else(|| CdrError::Undefined(type_name.to_string()))?;
         let mut values = Vec::with_capacity(fields.len());
         for field in fields {
             values.push(self.field(type_name, field)?);
         }
+        self.depth -= 1;
         Ok(Value::List(values))
     }
 
@@ -114,7 +128,7 @@ impl Reader<'_> {
             Count::Fixed(n) => n,
             Count::Sequence => {
                 let n = self.primitive(type_name, field, Primitive::U32)? as usize;
-                if n > self.bytes.len() {
+                if n > self.bytes.len() - self.at {
                     return Err(CdrError::Length {
                         type_name: type_name.into(),
                         field: field.name.clone(),
@@ -124,7 +138,7 @@ impl Reader<'_> {
                 n
             }
         };
-        let mut items = Vec::with_capacity(count);
+        let mut items = Vec::with_capacity(count.min(self.bytes.len() - self.at));
         for _ in 0..count {
             items.push(self.element(type_name, field)?);
         }
@@ -331,6 +345,15 @@ mod tests {
             error.to_string(),
             "the message ends at byte 40 where geometry_msgs/msg/Vector3.y needs 4 more"
         );
+        // A type that holds itself is refused, not followed until the stack runs out;
+        // a sequence longer than what is left of the message, likewise.
+        let mut looped = Definitions::default();
+        looped.add("a/Loop", "a/Loop inner\n").unwrap();
+        let error = decode(&[0, 1, 0, 0], "a/Loop", &looped).unwrap_err();
+        assert!(matches!(error, CdrError::Nested(_)), "{error}");
+        let long = [0, 1, 0, 0, 255, 255, 255, 0];
+        let error = decode(&long, "tf2_msgs/msg/TFMessage", &definitions).unwrap_err();
+        assert!(matches!(error, CdrError::Length { .. }), "{error}");
         let error = decode(&[0, 3, 0, 0], "std_msgs/msg/Header", &definitions).unwrap_err();
         assert!(error.to_string().contains("0x0003"), "{error}");
     }

@@ -187,6 +187,9 @@ impl Definitions {
     }
 }
 
+/// The longest fixed array read: a schema with a longer one is damaged.
+const MAX_FIXED_LENGTH: usize = 1 << 20;
+
 /// One field's type `kind` and `name`, in a definition of the package of `within`.
 fn field(kind: &str, name: &str, within: &str) -> Result<Field, String> {
     let (base, count) = match kind.split_once('[') {
@@ -198,11 +201,14 @@ fn field(kind: &str, name: &str, within: &str) -> Result<Field, String> {
             let count = if inside.is_empty() || inside.starts_with("<=") {
                 Count::Sequence
             } else {
-                Count::Fixed(
-                    inside
-                        .parse()
-                        .map_err(|_| format!("{kind}: not an array length"))?,
-                )
+                let length: usize =
+                    (inside.parse()).map_err(|_| format!("{kind}: not an array length"))?;
+                if length > MAX_FIXED_LENGTH {
+                    return Err(format!(
+                        "{kind}: an array of {length} elements, beyond any message's"
+                    ));
+                }
+                Count::Fixed(length)
             };
             (base, count)
         }
@@ -410,6 +416,15 @@ mod tests {
         ] {
             assert_eq!(from_schema.fields(name), carried.fields(name), "{name}");
         }
+        let error = Definitions::default()
+            .add("a/B", "float64[99999999999] x\n")
+            .unwrap_err();
+        assert!(
+            error
+                .to_string()
+                .contains("an array of 99999999999 elements, beyond any message's"),
+            "{error}"
+        );
         let error = Definitions::default().add("a/B", "float64\n").unwrap_err();
         assert_eq!(
             error.to_string(),

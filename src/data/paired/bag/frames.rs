@@ -80,27 +80,61 @@ pub fn quaternion_matrix([x, y, z, w]: [f64; 4]) -> Mat3 {
     ]
 }
 
-/// The quaternion `[x, y, z, w]` of the rotation `r`.
+/// The quaternion `[x, y, z, w]` of the rotation `r` (w ≥ 0), read from the matrix's
+/// largest diagonal term (Shepperd's method), exact at any attitude.
 pub fn matrix_quaternion(r: &Mat3) -> [f64; 4] {
-    let [roll, pitch, yaw] = euler_zyx(r);
-    let (sr, cr) = (roll / 2.0).sin_cos();
-    let (sp, cp) = (pitch / 2.0).sin_cos();
-    let (sy, cy) = (yaw / 2.0).sin_cos();
-    [
-        sr * cp * cy - cr * sp * sy,
-        cr * sp * cy + sr * cp * sy,
-        cr * cp * sy - sr * sp * cy,
-        cr * cp * cy + sr * sp * sy,
-    ]
+    let trace = r[0][0] + r[1][1] + r[2][2];
+    let q = if trace > r[0][0].max(r[1][1]).max(r[2][2]) {
+        let w = 0.5 * (1.0 + trace).sqrt();
+        let f = 0.25 / w;
+        [
+            (r[2][1] - r[1][2]) * f,
+            (r[0][2] - r[2][0]) * f,
+            (r[1][0] - r[0][1]) * f,
+            w,
+        ]
+    } else if r[0][0] >= r[1][1] && r[0][0] >= r[2][2] {
+        let x = 0.5 * (1.0 + r[0][0] - r[1][1] - r[2][2]).sqrt();
+        let f = 0.25 / x;
+        [
+            x,
+            (r[0][1] + r[1][0]) * f,
+            (r[0][2] + r[2][0]) * f,
+            (r[2][1] - r[1][2]) * f,
+        ]
+    } else if r[1][1] >= r[2][2] {
+        let y = 0.5 * (1.0 - r[0][0] + r[1][1] - r[2][2]).sqrt();
+        let f = 0.25 / y;
+        [
+            (r[0][1] + r[1][0]) * f,
+            y,
+            (r[1][2] + r[2][1]) * f,
+            (r[0][2] - r[2][0]) * f,
+        ]
+    } else {
+        let z = 0.5 * (1.0 - r[0][0] - r[1][1] + r[2][2]).sqrt();
+        let f = 0.25 / z;
+        [
+            (r[0][2] + r[2][0]) * f,
+            (r[1][2] + r[2][1]) * f,
+            z,
+            (r[1][0] - r[0][1]) * f,
+        ]
+    };
+    match q[3] < 0.0 {
+        true => q.map(|v| -v),
+        false => q,
+    }
 }
 
-/// Roll, pitch, yaw (ZYX, as ROS's rpy and this tool's attitude), radians, of `r`.
+/// Roll, pitch, yaw (ZYX, as ROS's rpy and this tool's attitude), radians, of `r`; at
+/// pitch ±90°, where only roll − yaw (or roll + yaw) is defined, roll 0.
 pub fn euler_zyx(r: &Mat3) -> Vec3 {
-    [
-        r[2][1].atan2(r[2][2]),
-        (-r[2][0]).clamp(-1.0, 1.0).asin(),
-        r[1][0].atan2(r[0][0]),
-    ]
+    let pitch = (-r[2][0]).clamp(-1.0, 1.0).asin();
+    if r[2][0].abs() > 1.0 - 1e-12 {
+        return [0.0, pitch, (-r[0][1]).atan2(r[1][1])];
+    }
+    [r[2][1].atan2(r[2][2]), pitch, r[1][0].atan2(r[0][0])]
 }
 
 /// The body-to-NED rotation of a vehicle whose pose in the world frame `world` says
@@ -197,6 +231,8 @@ pub struct BagFrames {
     pub world: String,
     pub world_ned: bool,
     pub dvl_frame: String,
+    /// Whether the DVL's messages say whether each ping had bottom lock.
+    pub dvl_flags_lock: bool,
     /// The DVL's frame in the body's, from `/tf_static` (the identity where they are
     /// one frame).
     pub mount: Transform,
@@ -213,8 +249,15 @@ impl std::fmt::Display for BagFrames {
         let [x, y, z] = self.mount.translation_m;
         write!(
             f,
-            "the DVL from {} ({}) in frame {}, ",
-            self.dvl_topic, self.dvl_type, self.dvl_frame
+            "the DVL from {} ({}) in frame {}, {}, ",
+            self.dvl_topic,
+            self.dvl_type,
+            self.dvl_frame,
+            match self.dvl_flags_lock {
+                true => "each ping's bottom lock read from its message",
+                false =>
+                    "its messages saying nothing of bottom lock (only pings of exactly 0, 0, 0 are left out as lost)",
+            }
         )?;
         if self.from_tf_static {
             write!(
@@ -243,6 +286,7 @@ impl std::fmt::Display for BagFrames {
 mod tests {
     use super::*;
     use crate::rotation::body_to_ned as attitude_matrix;
+    use std::f64::consts::PI;
 
     fn close(a: Vec3, b: Vec3) {
         for k in 0..3 {
@@ -270,6 +314,27 @@ mod tests {
         let north_east_up = apply(&r, [1.0, 0.0, 0.0]);
         let horizontal = pitch.cos() / 2f64.sqrt();
         close(north_east_up, [horizontal, horizontal, -pitch.sin()]);
+    }
+
+    /// A rotation's quaternion and angles give it back at any attitude, pitch ±90°
+    /// and a 180° roll among them.
+    #[test]
+    fn rotations_round_trip_through_quaternions_and_angles_at_any_attitude() {
+        for attitude in [
+            [0.3, 0.2, -2.0],
+            [PI, 0.0, 0.0],
+            [0.0, PI / 2.0, 0.7],
+            [0.0, -PI / 2.0, -0.4],
+            [1.0, 0.4, PI],
+        ] {
+            let r = attitude_matrix(attitude);
+            let again = attitude_matrix(euler_zyx(&r));
+            let from_quaternion = quaternion_matrix(matrix_quaternion(&r));
+            for k in 0..3 {
+                close(again[k], r[k]);
+                close(from_quaternion[k], r[k]);
+            }
+        }
     }
 
     /// A chain of two static transforms is composed, and walked backwards too.

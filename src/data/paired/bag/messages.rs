@@ -32,6 +32,8 @@ pub struct ReadBag {
 enum Role {
     Dvl,
     Reference,
+    /// An IMU's body rate, read where one is named.
+    Rate,
     Transforms,
 }
 
@@ -42,6 +44,7 @@ impl Role {
                 "DVL (marine_acoustic_msgs/msg/Dvl, geometry_msgs/msg/TwistWithCovarianceStamped or TwistStamped, or a type with their fields)"
             }
             Role::Reference => "reference (nav_msgs/msg/Odometry, or a type with its fields)",
+            Role::Rate => "body rate (sensor_msgs/msg/Imu, or a type with its fields)",
             Role::Transforms => "static transform",
         }
     }
@@ -49,6 +52,7 @@ impl Role {
     fn flag(self) -> &'static str {
         match self {
             Role::Dvl => "--dvl-topic",
+            Role::Rate => "--rate-topic",
             _ => "--reference-topic",
         }
     }
@@ -129,6 +133,9 @@ fn layout(topic: &str, type_name: &str, definitions: &Definitions) -> Option<Lay
             child_frame_id: Some(child),
             ..base(Role::Reference, linear)
         });
+    }
+    if let (Some(rate), Some(_)) = (triple("angular_velocity"), path("linear_acceleration.x")) {
+        return Some(base(Role::Rate, rate));
     }
     let velocity = triple("velocity")
         .or_else(|| triple("twist.twist.linear"))
@@ -247,6 +254,79 @@ fn static_transform(value: &Value) -> Option<StaticTransform> {
 
 /// Reads the bag at `path` as `topics` says.
 pub fn read(path: &Path, topics: &BagTopics) -> Result<ReadBag, BagError> {
+    let (survey, by_topic) = decoded(path, topics.stamps)?;
+    let dvl_topic = choose(
+        path,
+        &survey,
+        &|name| by_topic.contains_key(name),
+        Role::Dvl,
+        topics.dvl.as_deref(),
+    )?;
+    let reference_topic = choose(
+        path,
+        &survey,
+        &|name| name != dvl_topic && by_topic.contains_key(name),
+        Role::Reference,
+        topics.reference.as_deref(),
+    )?;
+    let transforms: Vec<StaticTransform> = (by_topic.values())
+        .flat_map(|samples| samples.transforms.iter().cloned())
+        .collect();
+    let dvl = &by_topic[&dvl_topic];
+    let reference = &by_topic[&reference_topic];
+    let frames = bag_frames(
+        path,
+        topics,
+        (&dvl_topic, dvl),
+        (&reference_topic, reference),
+        &transforms,
+    )?;
+    let mut samples = unchecked(dvl, reference, &frames);
+    let rate_topic = match topics.rate.as_deref() {
+        Some(given) => Some(choose(
+            path,
+            &survey,
+            &|name| by_topic.contains_key(name),
+            Role::Rate,
+            Some(given),
+        )?),
+        None => None,
+    };
+    if let Some(rate_topic) = &rate_topic {
+        let imu = &by_topic[rate_topic];
+        samples.rate = Some(imu_rate(
+            path,
+            (rate_topic, imu),
+            &reference.stamp_ns,
+            &frames,
+            &transforms,
+        )?);
+    }
+    let at = locator(
+        path,
+        topics,
+        (&dvl_topic, dvl),
+        (&reference_topic, reference),
+        match (&rate_topic, samples.rate.is_some()) {
+            (Some(imu), _) => Some(format!("{imu} angular_velocity")),
+            (None, true) => Some(format!("{reference_topic} twist.twist.angular")),
+            (None, false) => None,
+        },
+    );
+    let files = (survey.sha256.into_iter())
+        .map(|(path, sha256)| SourceFile { path, sha256 })
+        .collect();
+    Ok(ReadBag {
+        samples,
+        at,
+        files,
+        frames,
+    })
+}
+
+/// One pass over the bag at `path`: its survey, and the samples of each topic that
+/// could play a role, stamped by `stamps`.
+fn decoded(path: &Path, stamps: Stamps) -> Result<(Survey, BTreeMap<String, Samples>), BagError> {
     let bag = Bag::open(path)?;
     let mut by_topic: BTreeMap<String, Samples> = BTreeMap::new();
     let survey = bag.stream(
@@ -268,62 +348,32 @@ pub fn read(path: &Path, topics: &BagTopics) -> Result<ReadBag, BagError> {
             let value =
                 decode(data, &topic.type_name, definitions).map_err(|e| fault(e.to_string()))?;
             samples
-                .add(&value, receive_ns, topic.count, topics.stamps)
+                .add(&value, receive_ns, topic.count, stamps)
                 .map_err(fault)
         },
     )?;
-    let dvl_topic = choose(path, &survey, &by_topic, Role::Dvl, topics.dvl.as_deref())?;
-    let reference_topic = choose(
-        path,
-        &survey,
-        &by_topic,
-        Role::Reference,
-        topics.reference.as_deref(),
-    )?;
-    let transforms: Vec<StaticTransform> = (by_topic.values())
-        .flat_map(|samples| samples.transforms.iter().cloned())
-        .collect();
-    let dvl = &by_topic[&dvl_topic];
-    let reference = &by_topic[&reference_topic];
-    let frames = bag_frames(
-        path,
-        topics,
-        (&dvl_topic, dvl),
-        (&reference_topic, reference),
-        &transforms,
-    )?;
-    let samples = unchecked(dvl, reference, &frames);
-    let at = locator(
-        path,
-        topics,
-        (&dvl_topic, dvl),
-        (&reference_topic, reference),
-        samples.rate.is_some(),
-    );
-    let files = (survey.sha256.into_iter())
-        .map(|(path, sha256)| SourceFile { path, sha256 })
-        .collect();
-    Ok(ReadBag {
-        samples,
-        at,
-        files,
-        frames,
-    })
+    Ok((survey, by_topic))
 }
 
-/// The topic that plays `role`: the one `given`, or the bag's only topic of a type
-/// the role reads.
+/// The topic that plays `role`: the one `given`, or the bag's only topic with messages
+/// (as `has_messages` says, which also leaves out a topic already chosen) of a type the
+/// role reads.
 fn choose(
     path: &Path,
     survey: &Survey,
-    read: &BTreeMap<String, Samples>,
+    has_messages: &dyn Fn(&str) -> bool,
     role: Role,
     given: Option<&str>,
 ) -> Result<String, BagError> {
-    let plays = |name: &str| {
-        read.get(name)
-            .and_then(|s| s.layout.as_ref())
-            .is_some_and(|l| l.role == role)
+    // A topic plays the role its type's fields give it; a topic named as the DVL may
+    // also be an odometry's twist (a DVL driver that publishes one).
+    let plays = |name: &str, named: bool| {
+        let topic = survey.topics.iter().find(|t| t.name == name);
+        topic
+            .and_then(|t| layout(&t.name, &t.type_name, &survey.definitions))
+            .is_some_and(|l| {
+                l.role == role || (named && role == Role::Dvl && l.role == Role::Reference)
+            })
     };
     let refused = |problem: String| BagError::Topic {
         path: path.to_path_buf(),
@@ -338,7 +388,7 @@ fn choose(
                     role.flag()
                 )));
             };
-            if !plays(name) {
+            if !plays(name, true) {
                 return Err(refused(format!(
                     "{}: {name} is {} with {} messages, not a {} type this tool reads",
                     role.flag(),
@@ -347,12 +397,15 @@ fn choose(
                     role.words()
                 )));
             }
+            if !has_messages(name) {
+                return Err(refused(format!("{}: {name} has no messages", role.flag())));
+            }
             Ok(name.to_string())
         }
         None => {
             let candidates: Vec<&str> = (survey.topics.iter())
                 .map(|t| t.name.as_str())
-                .filter(|name| plays(name))
+                .filter(|name| plays(name, false) && has_messages(name))
                 .collect();
             match candidates.as_slice() {
                 [only] => Ok(only.to_string()),
@@ -379,6 +432,7 @@ pub fn topic_lines(survey: &Survey) -> String {
     {
         Some(l) if l.role == Role::Dvl => "read as a DVL",
         Some(l) if l.role == Role::Reference => "read as a reference",
+        Some(l) if l.role == Role::Rate => "read for the body rate where named",
         Some(_) => "read for the DVL's frame",
         None => "not read",
     };
@@ -419,7 +473,13 @@ fn bag_frames(
             "the reference {reference_topic} gives its twist in {child}, not in {body}: name the body frame with --frame {child}"
         )));
     }
-    let dvl_frame = dvl.frame_id.clone().unwrap_or_default();
+    // An odometry's twist is in its child frame, any other DVL message's in its frame.
+    let dvl_layout = dvl.layout.as_ref().expect("chosen topics have layouts");
+    let dvl_frame = match dvl_layout.role {
+        Role::Reference => dvl.child_frame_id.clone(),
+        _ => dvl.frame_id.clone(),
+    }
+    .unwrap_or_default();
     let (mount, from_tf_static) = if dvl_frame.is_empty() || dvl_frame == body {
         (
             Transform {
@@ -463,9 +523,69 @@ fn bag_frames(
         world_ned: frames::world_is_ned(&world),
         world,
         dvl_frame,
+        dvl_flags_lock: dvl_layout.mode.is_some()
+            || dvl_layout.good_beams.is_some()
+            || dvl_layout.beams_valid.is_some(),
         mount,
         from_tf_static,
     })
+}
+
+/// The body rate of the IMU `imu` at each of the reference's stamps `at_ns`,
+/// forward-right-down, rad/s: its angular velocity turned from its frame into the
+/// body's (by `/tf_static` where they differ), read linearly between its two samples
+/// either side; a reference stamp beyond the IMU's first or last sample is refused.
+fn imu_rate(
+    path: &Path,
+    (topic, imu): (&str, &Samples),
+    at_ns: &[i64],
+    frames: &BagFrames,
+    transforms: &[StaticTransform],
+) -> Result<Vec<Vec3>, BagError> {
+    let refused = |problem: String| BagError::Frames {
+        path: path.to_path_buf(),
+        problem,
+    };
+    let frame = imu.frame_id.clone().unwrap_or_default();
+    let into_body =
+        match frame.is_empty() || frame == frames.body {
+            true => frames::IDENTITY,
+            false => frames::chain(transforms, &frames.body, &frame)
+                .ok_or_else(|| {
+                    refused(format!(
+                        "the IMU {topic} is in frame {frame}, which /tf_static does not join to {}",
+                        frames.body
+                    ))
+                })?
+                .rotation,
+        };
+    let to_frd = multiply(&frames.axes.to_frd(), &into_body);
+    let stamps = &imu.stamp_ns;
+    let seconds = |ns: i64| (ns - frames.origin_s * 1_000_000_000) as f64 / 1e9;
+    at_ns
+        .iter()
+        .map(|&t| {
+            let after = stamps.partition_point(|&s| s < t);
+            let (a, b) = match (after.checked_sub(1), stamps.get(after)) {
+                _ if stamps.get(after) == Some(&t) => (after, after),
+                (Some(before), Some(_)) => (before, after),
+                _ => {
+                    return Err(refused(format!(
+                        "the IMU {topic} runs from {:.3} s to {:.3} s, and the reference has a sample at {:.3} s beyond it: its body rate there was not recorded",
+                        seconds(stamps.first().copied().unwrap_or(0)),
+                        seconds(stamps.last().copied().unwrap_or(0)),
+                        seconds(t)
+                    )));
+                }
+            };
+            let weight = match a == b {
+                true => 0.0,
+                false => (t - stamps[a]) as f64 / (stamps[b] - stamps[a]) as f64,
+            };
+            let rate: Vec3 = [0, 1, 2].map(|k| imu.velocity[a][k] + weight * (imu.velocity[b][k] - imu.velocity[a][k]));
+            Ok(apply(&to_frd, rate))
+        })
+        .collect()
 }
 
 /// The samples of `dvl` and `reference` in north-east-down and forward-right-down.
@@ -479,7 +599,7 @@ fn unchecked(dvl: &Samples, reference: &Samples, frames: &BagFrames) -> Unchecke
     let mut attitude = Vec::with_capacity(reference.stamp_ns.len());
     let seconds = |stamps: &[i64]| -> Vec<f64> {
         (stamps.iter())
-            .map(|&ns| (ns - frames.origin_s * 1_000_000_000) as f64 * 1e-9)
+            .map(|&ns| (ns - frames.origin_s * 1_000_000_000) as f64 / 1e9)
             .collect()
     };
     for (orientation, velocity) in reference.orientation.iter().zip(&reference.velocity) {
@@ -514,7 +634,7 @@ fn locator(
     topics: &BagTopics,
     (dvl_topic, dvl): (&str, &Samples),
     (reference_topic, reference): (&str, &Samples),
-    rate: bool,
+    rate: Option<String>,
 ) -> Locator {
     let names = |topic: &str, what: &str, axes: [&str; 3]| {
         axes.map(|axis| format!("{topic} {what} {axis}"))
@@ -535,7 +655,7 @@ fn locator(
             dvl: names(dvl_topic, "velocity", ["forward", "right", "down"]),
             velocity_ned: names(reference_topic, "velocity", ["north", "east", "down"]),
             attitude: names(reference_topic, "attitude", ["roll", "pitch", "yaw"]),
-            rate: rate.then(|| names(reference_topic, "body rate", ["p", "q", "r"])),
+            rate: rate.map(|source| names(&source, "body rate", ["p", "q", "r"])),
             angles_in_degrees: false,
             valid: flagged
                 .then(|| format!("{dvl_topic} bottom track, good beams, beam velocities valid")),
@@ -564,4 +684,128 @@ pub fn message_counts(path: &Path, topics: Option<&BagTopics>) -> Result<(u64, u
         count(Role::Dvl, topics.and_then(|t| t.dvl.as_deref())),
         count(Role::Reference, topics.and_then(|t| t.reference.as_deref())),
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::paired::bag::write::{
+        BagWriter, Format, imu_message, odometry_message, twist_message,
+        twist_with_covariance_message,
+    };
+
+    /// A vehicle turning left at 0.1 rad/s in ENU/FLU (yaw growing from east towards
+    /// north), 2 m/s forward and 0.1 m/s left, its DVL in base_link as `type_name`:
+    /// each `step_s` for 20 samples, each recorded 5 ms after its stamp.
+    fn turning_bag(path: &Path, type_name: &str) {
+        let mut bag = BagWriter::create(path, Format::Mcap { compressed: false }).unwrap();
+        bag.topic("/dvl", type_name).unwrap();
+        bag.topic("/odom", "nav_msgs/msg/Odometry").unwrap();
+        bag.topic("/imu", "sensor_msgs/msg/Imu").unwrap();
+        // The IMU 50 ms before each reference sample, and once after the last: its
+        // rate about z 0.2 rad/s and rising 0.01 rad/s a sample.
+        for k in 0..21 {
+            let stamp_ns = 950_000_000 + k * 100_000_000;
+            let imu = imu_message(stamp_ns, "base_link", [0.0, 0.0, 0.2 + 0.01 * k as f64]);
+            bag.write("/imu", stamp_ns as u64, &imu).unwrap();
+        }
+        for k in 0..20 {
+            let stamp_ns = 1_000_000_000 + k * 100_000_000;
+            let yaw = 0.1 * k as f64 * 0.1;
+            let orientation = [0.0, 0.0, (yaw / 2.0).sin(), (yaw / 2.0).cos()];
+            let odometry = odometry_message(
+                stamp_ns,
+                ("odom", "base_link"),
+                orientation,
+                [2.0, 0.1, 0.0],
+                [0.0, 0.0, 0.1],
+            );
+            let velocity = [2.0, 0.1, -0.05];
+            let dvl = match type_name {
+                "geometry_msgs/msg/TwistStamped" => twist_message(stamp_ns, "base_link", velocity),
+                _ => twist_with_covariance_message(
+                    stamp_ns,
+                    "base_link",
+                    velocity,
+                    [[1e-4, 0.0, 0.0], [0.0, 1e-4, 0.0], [0.0, 0.0, 1e-4]],
+                ),
+            };
+            let receive = (stamp_ns + 5_000_000) as u64;
+            bag.write("/odom", receive, &odometry).unwrap();
+            bag.write("/dvl", receive, &dvl).unwrap();
+        }
+        bag.finish().unwrap();
+    }
+
+    /// Turning left in FLU is a negative yaw rate in FRD, a left velocity a negative y,
+    /// and the heading east-then-north of ENU is a yaw from 90° falling in NED; each
+    /// twist type reads; receive stamps are the recording's.
+    #[test]
+    fn a_turning_vehicle_reads_in_ned_and_forward_right_down() {
+        let dir = tempfile::tempdir().unwrap();
+        for type_name in [
+            "geometry_msgs/msg/TwistStamped",
+            "geometry_msgs/msg/TwistWithCovarianceStamped",
+        ] {
+            let path = dir.path().join("turning.mcap");
+            turning_bag(&path, type_name);
+            let read = read(&path, &BagTopics::default()).unwrap();
+            let samples = &read.samples;
+            assert_eq!(read.frames.origin_s, 1);
+            assert_eq!(samples.dvl_time_s[3], 0.3);
+            assert_eq!(samples.dvl_m_s[0], [2.0, -0.1, 0.05], "{type_name}");
+            assert_eq!(samples.dvl_valid, None);
+            let rate = samples.rate.as_ref().unwrap();
+            assert_eq!(rate[5], [0.0, 0.0, -0.1]);
+            let [roll, pitch, yaw] = samples.attitude[10];
+            assert!(roll.abs() < 1e-12 && pitch.abs() < 1e-12);
+            assert!(
+                (yaw - (std::f64::consts::FRAC_PI_2 - 0.1)).abs() < 1e-12,
+                "{yaw}"
+            );
+            // Forward along yaw, left of it: in NED, north cos·2 + ..., as the body
+            // velocity (2, −0.1, 0) FRD turned by the yaw.
+            let (s, c) = yaw.sin_cos();
+            let v = samples.velocity_ned_m_s[10];
+            assert!(
+                (v[0] - (2.0 * c + 0.1 * s)).abs() < 1e-12
+                    && (v[1] - (2.0 * s - 0.1 * c)).abs() < 1e-12,
+                "{v:?}"
+            );
+            assert_eq!(read.frames.dvl_type, type_name);
+            assert!(!read.frames.from_tf_static);
+            // An IMU named: its rate, read between its samples either side, in FRD.
+            let with_imu = BagTopics {
+                rate: Some("/imu".into()),
+                ..BagTopics::default()
+            };
+            let rate = super::read(&path, &with_imu).unwrap().samples.rate.unwrap();
+            for (k, rate) in rate.iter().enumerate() {
+                assert!(
+                    (rate[2] + 0.2 + 0.01 * (k as f64 + 0.5)).abs() < 1e-12,
+                    "{k}: {rate:?}"
+                );
+            }
+            let error = super::read(
+                &path,
+                &BagTopics {
+                    rate: Some("/odom".into()),
+                    ..BagTopics::default()
+                },
+            )
+            .unwrap_err();
+            assert!(
+                error.to_string().contains(
+                    "--rate-topic: /odom is nav_msgs/msg/Odometry with 20 messages, not a body rate"
+                ),
+                "{error}"
+            );
+            let receive = BagTopics {
+                stamps: Stamps::Receive,
+                ..BagTopics::default()
+            };
+            let read = super::read(&path, &receive).unwrap();
+            assert!((read.samples.dvl_time_s[3] - 0.305).abs() < 1e-12);
+        }
+    }
 }

@@ -10,7 +10,8 @@
 //! track with at least 3 good beams and its beam velocities valid; the rest are left
 //! out, flagged), `geometry_msgs/msg/TwistWithCovarianceStamped` or `TwistStamped`, or
 //! a vendor's type with the same fields; the reference from `nav_msgs/msg/Odometry` (or
-//! the same fields). The stamps are the headers' (the time of validity), or the
+//! the same fields), its body rate from an IMU's `sensor_msgs/msg/Imu` where one is
+//! named. The stamps are the headers' (the time of validity), or the
 //! recording's with [`Stamps::Receive`].
 //! In: a bag's path and the [`BagTopics`] to read. Out: a [`ReadBag`].
 
@@ -21,6 +22,8 @@ mod messages;
 mod storage;
 pub mod write;
 
+pub use cdr::{Value, decode};
+pub use definitions::Definitions;
 pub use frames::{Axes, BagFrames, euler_zyx, matrix_quaternion};
 pub use messages::{ReadBag, message_counts, read, topic_lines};
 pub use storage::{Bag, Storage, Survey, Topic, is_bag};
@@ -44,6 +47,9 @@ pub enum Stamps {
 pub struct BagTopics {
     pub dvl: Option<String>,
     pub reference: Option<String>,
+    /// An IMU's topic for the body rate, where one is named (the reference's twist
+    /// otherwise).
+    pub rate: Option<String>,
     pub stamps: Stamps,
     pub frame: String,
     pub gap_limit_s: Option<crate::data::paired::GapLimit>,
@@ -54,6 +60,7 @@ impl Default for BagTopics {
         BagTopics {
             dvl: None,
             reference: None,
+            rate: None,
             stamps: Stamps::Header,
             frame: "base_link".into(),
             gap_limit_s: None,

@@ -144,6 +144,8 @@ impl Bag {
         struct Information {
             storage_identifier: String,
             relative_file_paths: Vec<PathBuf>,
+            #[serde(default)]
+            compression_format: String,
         }
         let metadata = path.join("metadata.yaml");
         let text = std::fs::read_to_string(&metadata).map_err(|e| {
@@ -155,6 +157,13 @@ impl Bag {
         let information = serde_yaml_ng::from_str::<Metadata>(&text)
             .map_err(|e| format!("{}: {e}", metadata.display()))?
             .rosbag2_bagfile_information;
+        if !information.compression_format.is_empty() {
+            return Err(format!(
+                "{}: compression_format {:?}: a bag compressed by rosbag2 is not read here; decompress it first (`ros2 bag decompress`), or record with MCAP's own chunk compression",
+                metadata.display(),
+                information.compression_format
+            ));
+        }
         let storage = match information.storage_identifier.as_str() {
             "mcap" => Storage::Mcap,
             "sqlite3" => Storage::Sqlite,
@@ -234,8 +243,7 @@ fn stream_mcap(
     wanted: &Wanted,
     visit: &mut Visit,
 ) -> Result<String, BagError> {
-    use mcap::records::Record;
-    use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader};
+    use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
     let io = |source| BagError::Io {
         path: path.to_path_buf(),
         source,
@@ -248,10 +256,14 @@ fn stream_mcap(
         byte: fed,
         problem,
     };
-    let mut schemas: BTreeMap<u16, String> = BTreeMap::new();
-    // Each channel: its topic's place in the survey, and whether it is wanted.
-    let mut channels: BTreeMap<u16, (usize, bool)> = BTreeMap::new();
-    let mut reader = LinearReader::new();
+    let mut channels = Channels::default();
+    // No record longer than the file (a damaged length is refused, not allocated), and
+    // every chunk's CRC checked (a flipped bit is refused, not read).
+    let size = file.metadata().map_err(io)?.len();
+    let options = LinearReaderOptions::default()
+        .with_record_length_limit(usize::try_from(size).unwrap_or(usize::MAX))
+        .with_validate_chunk_crcs(true);
+    let mut reader = LinearReader::new_with_options(options);
     while let Some(event) = reader.next_event() {
         match event.map_err(|e| damaged(fed, e.to_string()))? {
             LinearReadEvent::ReadRequest(need) => {
@@ -269,54 +281,77 @@ fn stream_mcap(
             LinearReadEvent::Record { data, opcode } => {
                 let record =
                     mcap::parse_record(opcode, data).map_err(|e| damaged(fed, e.to_string()))?;
-                match record {
-                    Record::Schema { header, data } => {
-                        if header.encoding == "ros2msg" {
-                            let text = String::from_utf8_lossy(&data);
-                            survey.definitions.add(&header.name, &text).map_err(|e| {
-                                damaged(fed, format!("schema {}: {e}", header.name))
-                            })?;
-                        }
-                        schemas.insert(header.id, header.name);
-                    }
-                    Record::Channel(channel) => {
-                        let type_name =
-                            schemas.get(&channel.schema_id).cloned().unwrap_or_default();
-                        let at = survey.topic(&channel.topic, &type_name);
-                        let readable = channel.message_encoding == "cdr"
-                            && wanted(
-                                &channel.topic,
-                                &survey.topics[at].type_name,
-                                &survey.definitions,
-                            );
-                        channels.insert(channel.id, (at, readable));
-                    }
-                    Record::Message { header, data } => {
-                        let Some(&(at, readable)) = channels.get(&header.channel_id) else {
-                            return Err(damaged(
-                                fed,
-                                format!(
-                                    "a message on channel {} that no channel record precedes",
-                                    header.channel_id
-                                ),
-                            ));
-                        };
-                        survey.count(at, header.log_time);
-                        if readable {
-                            visit(
-                                &survey.topics[at],
-                                &survey.definitions,
-                                header.log_time,
-                                &data,
-                            )?;
-                        }
-                    }
-                    _ => {}
-                }
+                channels.take(record, survey, (wanted, visit), &|problem| {
+                    damaged(fed, problem)
+                })?;
             }
         }
     }
     Ok(format!("{:x}", hasher.finalize()))
+}
+
+/// An MCAP file's schemas' names and channels as read so far: each channel's topic's
+/// place in the survey, and whether its messages are wanted.
+#[derive(Default)]
+struct Channels {
+    schemas: BTreeMap<u16, String>,
+    channels: BTreeMap<u16, (usize, bool)>,
+}
+
+impl Channels {
+    /// Takes one record: a schema's definitions and a channel are kept, a message
+    /// counted (and visited where its topic is wanted); a fault is `damaged`'s.
+    fn take(
+        &mut self,
+        record: mcap::records::Record,
+        survey: &mut Survey,
+        (wanted, visit): (&Wanted, &mut Visit),
+        damaged: &dyn Fn(String) -> BagError,
+    ) -> Result<(), BagError> {
+        use mcap::records::Record;
+        match record {
+            Record::Schema { header, data } => {
+                if header.encoding == "ros2msg" {
+                    let text = String::from_utf8_lossy(&data);
+                    (survey.definitions.add(&header.name, &text))
+                        .map_err(|e| damaged(format!("schema {}: {e}", header.name)))?;
+                }
+                self.schemas.insert(header.id, header.name);
+            }
+            Record::Channel(channel) => {
+                let type_name = (self.schemas.get(&channel.schema_id))
+                    .cloned()
+                    .unwrap_or_default();
+                let at = survey.topic(&channel.topic, &type_name);
+                let readable = channel.message_encoding == "cdr"
+                    && wanted(
+                        &channel.topic,
+                        &survey.topics[at].type_name,
+                        &survey.definitions,
+                    );
+                self.channels.insert(channel.id, (at, readable));
+            }
+            Record::Message { header, data } => {
+                let Some(&(at, readable)) = self.channels.get(&header.channel_id) else {
+                    return Err(damaged(format!(
+                        "a message on channel {} that no channel record precedes",
+                        header.channel_id
+                    )));
+                };
+                survey.count(at, header.log_time);
+                if readable {
+                    visit(
+                        &survey.topics[at],
+                        &survey.definitions,
+                        header.log_time,
+                        &data,
+                    )?;
+                }
+            }
+            _ => {}
+        }
+        Ok(())
+    }
 }
 
 /// One sqlite3 file streamed in the order of its messages' recording times; its

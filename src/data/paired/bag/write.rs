@@ -77,6 +77,17 @@ impl BagWriter {
         })
     }
 
+    /// A new MCAP bag written into the open `file`, its chunks zstd-compressed.
+    pub fn mcap(file: std::fs::File) -> Result<BagWriter, WriteError> {
+        let options = mcap::WriteOptions::new()
+            .profile("ros2")
+            .compression(Some(mcap::Compression::Zstd));
+        Ok(BagWriter {
+            storage: Storage::Mcap(Box::new(options.create(BufWriter::new(file))?)),
+            topics: BTreeMap::new(),
+        })
+    }
+
     /// Adds the topic `name` of `type_name` (written with the carried definition).
     pub fn topic(&mut self, name: &str, type_name: &str) -> Result<(), WriteError> {
         let type_name = full_name(type_name);
@@ -232,6 +243,19 @@ pub fn odometry_message(
     e.finish()
 }
 
+/// A `sensor_msgs/msg/Imu` in `frame`: its angular velocity, rad/s (its orientation
+/// and acceleration unknown: zero, their covariances −1).
+pub fn imu_message(stamp_ns: i64, frame: &str, angular_rad_s: Vec3) -> Vec<u8> {
+    let mut e = Encoder::default();
+    let unknown = [-1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    e.header(stamp_ns, frame)
+        .f64s(&[0.0, 0.0, 0.0, 1.0])
+        .f64s(&unknown);
+    e.f64s(&angular_rad_s).f64s(&[0.0; 9]);
+    e.f64s(&[0.0; 3]).f64s(&unknown);
+    e.finish()
+}
+
 /// A `tf2_msgs/msg/TFMessage` of static transforms: each its parent, child,
 /// translation, m, and rotation `[x, y, z, w]`.
 pub fn tf_message(stamp_ns: i64, transforms: &[(&str, &str, Vec3, [f64; 4])]) -> Vec<u8> {
@@ -259,6 +283,10 @@ pub struct RosLayout<'a> {
     pub lost_lock_every: Option<usize>,
     /// Whole seconds added to every stamp (a bag's stamps are times since the epoch).
     pub epoch_s: i64,
+    /// Bytes a second of a topic this tool does not read (`/camera/image`, of type
+    /// `sensor_msgs/msg/Image`, a message a second): a camera or a sonar beside the
+    /// navigation, for a reading to pass over.
+    pub other_bytes_per_s: usize,
 }
 
 impl Default for RosLayout<'_> {
@@ -270,6 +298,7 @@ impl Default for RosLayout<'_> {
             mount_yaw_deg: 0.0,
             lost_lock_every: None,
             epoch_s: 1_700_000_000,
+            other_bytes_per_s: 0,
         }
     }
 }
@@ -288,7 +317,6 @@ pub fn write_recording(
     use super::frames::{Axes, matrix_quaternion};
     use crate::rotation::{apply, body_to_ned, multiply, transpose};
     let flu = Axes::ForwardLeftUp.to_frd();
-    let enu = [[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]];
     // The DVL's frame from the body's (FLU): rolled, then yawed.
     let mount = body_to_ned([
         layout.mount_roll_deg.to_radians(),
@@ -335,28 +363,68 @@ pub fn write_recording(
         ));
     }
     for (k, &t) in recording.reference_time_s.iter().enumerate() {
-        let body_to_ned_k = body_to_ned(recording.attitude_rad[k]);
-        let pose = multiply(&multiply(&enu, &body_to_ned_k), &flu);
-        let body_velocity = apply(
-            &flu,
-            apply(&transpose(&body_to_ned_k), recording.velocity_ned_m_s[k]),
+        messages.push((stamp(t), "/ins/odom", odometry_of(recording, k, stamp(t))));
+    }
+    if layout.other_bytes_per_s > 0 {
+        bag.topic("/camera/image", "sensor_msgs/msg/Image")?;
+        let (start, end) = (
+            recording.reference_time_s[0],
+            recording.reference_time_s[recording.reference_time_s.len() - 1],
         );
-        let rate = recording
-            .rate_rad_s
-            .as_ref()
-            .map_or([0.0; 3], |rate| apply(&flu, rate[k]));
-        let odometry = odometry_message(
-            stamp(t),
-            ("odom", "base_link"),
-            matrix_quaternion(&pose),
-            body_velocity,
-            rate,
-        );
-        messages.push((stamp(t), "/ins/odom", odometry));
+        // Each image made as it is written (below), so that they are never all held.
+        for second in 0..=(end - start).floor() as usize {
+            messages.push((stamp(start + second as f64), "/camera/image", Vec::new()));
+        }
     }
     messages.sort_by_key(|(stamp, topic, _)| (*stamp, *topic));
+    let mut state = 0x9e37_79b9_7f4a_7c15_u64;
     for (stamp, topic, data) in messages {
-        bag.write(topic, stamp as u64, &data)?;
+        match topic {
+            "/camera/image" => {
+                let image = incompressible(layout.other_bytes_per_s, &mut state);
+                bag.write(topic, stamp as u64, &image)?
+            }
+            _ => bag.write(topic, stamp as u64, &data)?,
+        }
     }
     bag.finish()
+}
+
+/// The reference sample `k` of `recording` as an INS's `nav_msgs/msg/Odometry`
+/// stamped `stamp_ns`: its pose in ENU, its twist in base_link's FLU axes.
+fn odometry_of(
+    recording: &crate::data::paired::PairedRecording,
+    k: usize,
+    stamp_ns: i64,
+) -> Vec<u8> {
+    use super::frames::{Axes, matrix_quaternion};
+    use crate::rotation::{apply, body_to_ned, multiply, transpose};
+    let flu = Axes::ForwardLeftUp.to_frd();
+    let enu = [[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]];
+    let body_to_ned_k = body_to_ned(recording.attitude_rad[k]);
+    let pose = multiply(&multiply(&enu, &body_to_ned_k), &flu);
+    let body_velocity = apply(
+        &flu,
+        apply(&transpose(&body_to_ned_k), recording.velocity_ned_m_s[k]),
+    );
+    let rate = (recording.rate_rad_s.as_ref()).map_or([0.0; 3], |rate| apply(&flu, rate[k]));
+    odometry_message(
+        stamp_ns,
+        ("odom", "base_link"),
+        matrix_quaternion(&pose),
+        body_velocity,
+        rate,
+    )
+}
+
+/// `bytes` bytes no compressor shrinks, as a camera's JPEGs (xorshift64 from `state`).
+fn incompressible(bytes: usize, state: &mut u64) -> Vec<u8> {
+    (0..bytes)
+        .map(|_| {
+            *state ^= *state << 13;
+            *state ^= *state >> 7;
+            *state ^= *state << 17;
+            *state as u8
+        })
+        .collect()
 }

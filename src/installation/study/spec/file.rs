@@ -44,6 +44,15 @@ pub struct PairedTrajectoryFile {
     pub dvl: PathBuf,
     /// The reference's CSV file; the DVL's when it holds both.
     pub reference: Option<PathBuf>,
+    /// Where `dvl` is a ROS 2 bag: its DVL topic and reference topic (each its only
+    /// one of its type where not named), an IMU topic for the body rate,
+    /// `"header"` or `"receive"` stamps, and the body
+    /// frame, as `calibrate`'s flags of the same names.
+    pub dvl_topic: Option<String>,
+    pub reference_topic: Option<String>,
+    pub rate_topic: Option<String>,
+    pub stamps: Option<String>,
+    pub frame: Option<String>,
 }
 
 #[derive(Debug, Clone, serde::Deserialize)]
