@@ -469,13 +469,16 @@ fn save(
     recording_sha256: &str,
     ros: Option<&RosInstallation>,
 ) -> Result<(), CalibrateError> {
-    let saved = SavedInstallation::of(
+    let mut saved = SavedInstallation::of(
         bounded,
         (args.terms, args.dive_terms),
         (args.dvl, recording_sha256),
         (args.dvl_noise_cm_s, args.reference_noise_cm_s),
         fitted.residual_rms_m_s,
     );
+    if let Some(ros) = ros {
+        saved = saved.with_mount(ros.tf_static.clone());
+    }
     let io = |source| ResultsError::Io {
         path: path.to_path_buf(),
         source,

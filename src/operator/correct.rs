@@ -22,6 +22,7 @@ use crate::installation::frames::Reference;
 use crate::installation::terms::{AxisRmse, Installation, corrected_error};
 use crate::operator::cost::{BeyondMemory, CORRECT, Cost};
 use crate::operator::inputs::{Reading, not_over_an_input, source};
+use crate::operator::installation_file::SavedMount;
 use crate::operator::installation_file::{InstallationFileError, SavedInstallation};
 use crate::results::ResultsError;
 use crate::results::corrected::{
@@ -63,6 +64,20 @@ impl CorrectArgs<'_> {
 pub enum CorrectError {
     #[error(transparent)]
     Installation(#[from] InstallationFileError),
+    #[error(
+        "{}: its /tf_static places {dvl_frame} in {body} at roll, pitch, yaw {dive} deg, but the installation {} was found with it at {saved} deg: its misalignment is a turn from that mount, and would be applied to another ({why})",
+        dvl.display(),
+        installation.display()
+    )]
+    Mount {
+        dvl: PathBuf,
+        installation: PathBuf,
+        body: String,
+        dvl_frame: String,
+        dive: String,
+        saved: String,
+        why: &'static str,
+    },
     #[error("--window-s {}: give a positive number of seconds", crate::Shown(*.0))]
     Window(f64),
     #[error("--search-s {}: give a positive number of seconds, at most {MAX_SEARCH_S}", crate::Shown(*.0))]
@@ -106,6 +121,11 @@ pub enum CorrectError {
     #[error(transparent)]
     Write(#[from] ResultsError),
 }
+
+/// The most the DVL's mount in a dive's `/tf_static` may differ from the one the
+/// installation was found on, degrees: beyond it, the misalignment found (a turn from
+/// that mount) would be applied to another.
+pub const MOUNT_TOLERANCE_DEG: f64 = 0.01;
 
 impl CorrectError {
     /// Whether the fault lies in what was given rather than in writing the results.
@@ -199,6 +219,9 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
     outputs.not_another_recordings(args.dvl, &recording_sha256)?;
     let read = loaded.parse()?;
     let (recording, frames) = (read.recording, read.frames);
+    if let (Some(frames), Some(mount)) = (&frames, &saved.mount) {
+        on_the_same_mount(args, frames, mount)?;
+    }
     let reference = Reference::new(&recording);
     let duration_s = recording.duration_s();
     if args.time_offset_s.is_none() && duration_s <= args.window_s {
@@ -384,4 +407,42 @@ fn write_corrected_bag(
         path.display()
     );
     Ok(path)
+}
+
+/// Refuses a dive whose `/tf_static` mounts the DVL otherwise than the bag the
+/// installation was found on (other frames, or a turn beyond [`MOUNT_TOLERANCE_DEG`]).
+fn on_the_same_mount(
+    args: &CorrectArgs,
+    frames: &BagFrames,
+    mount: &SavedMount,
+) -> Result<(), CorrectError> {
+    use crate::data::paired::bag::euler_zyx;
+    use crate::rotation::{body_to_ned, multiply, transpose};
+    let dive = euler_zyx(&frames.mount.rotation);
+    let between = multiply(
+        &transpose(&body_to_ned(mount.rpy_rad)),
+        &frames.mount.rotation,
+    );
+    let trace = between[0][0] + between[1][1] + between[2][2];
+    let turned_deg = ((trace - 1.0) / 2.0).clamp(-1.0, 1.0).acos().to_degrees();
+    let why = if frames.body != mount.body || frames.dvl_frame != mount.dvl_frame {
+        "other frames"
+    } else if turned_deg > MOUNT_TOLERANCE_DEG {
+        "another turn: calibrate on this mount, or correct a dive recorded with the mount the installation was found on"
+    } else {
+        return Ok(());
+    };
+    let degrees = |rpy: crate::Vec3| {
+        let [r, p, y] = rpy.map(f64::to_degrees);
+        format!("{r:.2}, {p:.2}, {y:.2}")
+    };
+    Err(CorrectError::Mount {
+        dvl: args.dvl.to_path_buf(),
+        installation: args.installation.to_path_buf(),
+        body: frames.body.clone(),
+        dvl_frame: frames.dvl_frame.clone(),
+        dive: degrees(dive),
+        saved: degrees(mount.rpy_rad),
+        why,
+    })
 }

@@ -48,6 +48,20 @@ pub struct InstallationFile {
     pub terms: Vec<SavedTerm>,
     /// The correlation coefficients of the terms, in their order.
     pub correlation: Vec<Vec<f64>>,
+    /// For a calibration read from a ROS 2 bag: the frames, and the mount of the
+    /// DVL's frame `/tf_static` gave, which the misalignment is a turn from.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mount: Option<SavedMount>,
+}
+
+/// The DVL's frame as `/tf_static` placed it in the body's, when a calibration read a
+/// bag: roll, pitch, yaw (ZYX), radians.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SavedMount {
+    pub body: String,
+    pub dvl_frame: String,
+    pub rpy_rad: Vec3,
 }
 
 /// An installation, checked: its terms named in the order of its term lists, each
@@ -112,6 +126,12 @@ pub enum InstallationFileError {
 }
 
 impl SavedInstallation {
+    /// This installation with the mount `/tf_static` gave the bag it was found on.
+    pub fn with_mount(mut self, mount: SavedMount) -> SavedInstallation {
+        self.file.mount = Some(mount);
+        self
+    }
+
     /// The installation of a calibration: `terms` fitted, with `bound`'s values,
     /// standard deviations and correlations, those of `dive_terms` the dive's, the rest
     /// the vehicle's.
@@ -172,6 +192,7 @@ impl SavedInstallation {
                 .collect(),
             terms: saved,
             correlation,
+            mount: None,
         };
         SavedInstallation { file }
     }
@@ -297,6 +318,14 @@ impl InstallationFile {
             )));
         }
         self.check_numbers(expected.len()).map_err(malformed)?;
+        if let Some(mount) = &self.mount
+            && !mount.rpy_rad.iter().all(|a| a.is_finite())
+        {
+            return Err(malformed(format!(
+                "mount.rpy_rad {:?} is not three finite angles",
+                mount.rpy_rad
+            )));
+        }
         for (index, (term, name)) in self.terms.iter().zip(&expected).enumerate() {
             term.check(name)
                 .map_err(|(name, what)| InstallationFileError::BadTerm {
@@ -437,6 +466,7 @@ mod tests {
             correlation: (0..4)
                 .map(|i| (0..4).map(|j| f64::from(u8::from(i == j))).collect())
                 .collect(),
+            mount: None,
         }
     }
 

@@ -11,6 +11,7 @@ use crate::data::paired::bag::euler_zyx;
 use crate::data::paired::bag::{Axes, BagFrames};
 use crate::installation::estimate::bound::TermBound;
 use crate::installation::terms::Installation;
+use crate::operator::installation_file::SavedMount;
 use crate::rotation::{Mat3, apply, body_to_ned, multiply};
 use std::path::{Path, PathBuf};
 
@@ -25,6 +26,8 @@ pub struct RosInstallation {
     pub rotation: Mat3,
     /// The DVL's velocity covariance in the body frame's axes, (m/s)², row-major.
     pub covariance: [[f64; 3]; 3],
+    /// The mount `/tf_static` gave, which the misalignment found is a turn from.
+    pub tf_static: SavedMount,
 }
 
 impl RosInstallation {
@@ -57,6 +60,11 @@ impl RosInstallation {
             translation_m,
             rotation,
             covariance,
+            tf_static: SavedMount {
+                body: frames.body.clone(),
+                dvl_frame: frames.dvl_frame.clone(),
+                rpy_rad: euler_zyx(&frames.mount.rotation),
+            },
         }
     }
 

@@ -234,6 +234,41 @@ fn a_bag_written_from_a_csv_recording_gives_the_csv_terms_in_every_storage() {
         let variance = number(&[1, 1, 0]);
         assert!(variance > 1e-5 && variance < 1e-2, "{variance}");
     }
+    // The installation remembers the mount it was found on: a dive whose /tf_static
+    // mounts the DVL otherwise is refused, not corrected with a turn from another.
+    let saved = std::fs::read_to_string(dir.path().join("dvl.toml")).unwrap();
+    assert!(
+        saved.contains("[mount]") && saved.contains("dvl_frame = \"dvl_link\""),
+        "{saved}"
+    );
+    let yawed = RosLayout {
+        mount_yaw_deg: 10.0,
+        ..RosLayout::default()
+    };
+    write_recording(
+        &recording,
+        &dir.path().join("yawed.mcap"),
+        Format::Mcap { compressed: true },
+        yawed,
+    )
+    .unwrap();
+    let output = dcnet(
+        dir.path(),
+        &[
+            "correct",
+            "yawed.mcap",
+            "--installation",
+            "dvl.toml",
+            "--out",
+            "yawed",
+        ],
+    );
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("its /tf_static places dvl_link in base_link at roll, pitch, yaw 180.00, -0.00, 10.00 deg, but the installation dvl.toml was found with it at 180.00, -0.00, 0.00 deg"),
+        "{}",
+        stderr(&output)
+    );
     // The mount is rolled 180°: the rotation found stays within a degree of it.
     let roll: f64 = ros
         .split("--roll ")
