@@ -298,10 +298,8 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     let settled_s = settling_time(&curve, args.tolerance_pct / 100.0, change).map(|p| p.length_s);
     let (corrected, terms_in_time) =
         write_files(&outputs, &recording_sha256, &read, &applied, &filter)?;
-    let ros = (read.frames.as_ref()).map(|frames| {
-        let lever_arm_found = args.terms.iter().any(|t| t.name() == "lever_arm");
-        RosInstallation::of(frames, &applied, lever_arm_found, fitted.residual_rms_m_s)
-    });
+    let ros =
+        (read.frames.as_ref()).map(|frames| ros_installation(args, frames, &applied, &fitted));
     if let Some(path) = args.save {
         save(
             path,
@@ -488,6 +486,18 @@ fn save(
         ros.write(path).map_err(io)?;
     }
     Ok(())
+}
+
+/// A bag's installation as ROS uses it: `frames`' mount turned by `applied`, its
+/// lever arm where `args` estimated one.
+fn ros_installation(
+    args: &CalibrateArgs,
+    frames: &BagFrames,
+    applied: &Installation,
+    fitted: &Fit,
+) -> RosInstallation {
+    let lever_arm_found = args.terms.iter().any(|t| t.name() == "lever_arm");
+    RosInstallation::of(frames, applied, lever_arm_found, fitted.residual_rms_m_s)
 }
 
 /// The files written for `args`, named after the DVL's file.

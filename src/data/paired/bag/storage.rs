@@ -354,6 +354,24 @@ impl Channels {
     }
 }
 
+/// A sqlite3 error of the bag at `path`, as the bag's fault.
+fn sqlite_fault(path: &Path) -> impl Fn(rusqlite::Error) -> BagError + '_ {
+    move |e| BagError::Bag {
+        path: path.to_path_buf(),
+        problem: format!("not a readable sqlite3 bag: {e}"),
+    }
+}
+
+/// The sqlite3 file at `path` opened to read, its types read by the definitions this
+/// tool carries (added to `survey`'s).
+fn open_sqlite(path: &Path, survey: &mut Survey) -> Result<rusqlite::Connection, BagError> {
+    use rusqlite::{Connection, OpenFlags};
+    if survey.definitions.types.is_empty() {
+        survey.definitions = Definitions::carried();
+    }
+    Connection::open_with_flags(path, OpenFlags::SQLITE_OPEN_READ_ONLY).map_err(sqlite_fault(path))
+}
+
 /// One sqlite3 file streamed in the order of its messages' recording times; its
 /// SHA-256. Its types are read by the definitions this tool carries.
 fn stream_sqlite(
@@ -362,28 +380,20 @@ fn stream_sqlite(
     wanted: &Wanted,
     visit: &mut Visit,
 ) -> Result<String, BagError> {
-    use rusqlite::{Connection, OpenFlags};
-    let fault = |e: rusqlite::Error| BagError::Bag {
-        path: path.to_path_buf(),
-        problem: format!("not a readable sqlite3 bag: {e}"),
-    };
-    if survey.definitions.types.is_empty() {
-        survey.definitions = Definitions::carried();
-    }
-    let connection =
-        Connection::open_with_flags(path, OpenFlags::SQLITE_OPEN_READ_ONLY).map_err(fault)?;
+    let fault = sqlite_fault(path);
+    let connection = open_sqlite(path, survey)?;
     let mut topics: BTreeMap<i64, (usize, bool)> = BTreeMap::new();
     {
         let mut statement = (connection
             .prepare("SELECT id, name, type, serialization_format FROM topics ORDER BY id"))
-        .map_err(fault)?;
-        let mut rows = statement.query([]).map_err(fault)?;
-        while let Some(row) = rows.next().map_err(fault)? {
+        .map_err(&fault)?;
+        let mut rows = statement.query([]).map_err(&fault)?;
+        while let Some(row) = rows.next().map_err(&fault)? {
             let (id, name, type_name, format): (i64, String, String, String) = (
-                row.get(0).map_err(fault)?,
-                row.get(1).map_err(fault)?,
-                row.get(2).map_err(fault)?,
-                row.get(3).map_err(fault)?,
+                row.get(0).map_err(&fault)?,
+                row.get(1).map_err(&fault)?,
+                row.get(2).map_err(&fault)?,
+                row.get(3).map_err(&fault)?,
             );
             let at = survey.topic(&name, &type_name);
             let readable =
@@ -393,11 +403,11 @@ fn stream_sqlite(
     }
     let mut statement = (connection
         .prepare("SELECT topic_id, timestamp, data FROM messages ORDER BY timestamp, id"))
-    .map_err(fault)?;
-    let mut rows = statement.query([]).map_err(fault)?;
-    while let Some(row) = rows.next().map_err(fault)? {
-        let id: i64 = row.get(0).map_err(fault)?;
-        let time_ns: i64 = row.get(1).map_err(fault)?;
+    .map_err(&fault)?;
+    let mut rows = statement.query([]).map_err(&fault)?;
+    while let Some(row) = rows.next().map_err(&fault)? {
+        let id: i64 = row.get(0).map_err(&fault)?;
+        let time_ns: i64 = row.get(1).map_err(&fault)?;
         let Some(&(at, readable)) = topics.get(&id) else {
             return Err(BagError::Bag {
                 path: path.to_path_buf(),
@@ -411,7 +421,7 @@ fn stream_sqlite(
         if readable {
             let data = row
                 .get_ref(2)
-                .map_err(fault)?
+                .map_err(&fault)?
                 .as_blob()
                 .map_err(|e| fault(e.into()))?;
             visit(&survey.topics[at], &survey.definitions, time_ns, data)?;
@@ -504,26 +514,18 @@ fn mcap_summary(path: &Path, survey: &mut Survey) -> Result<bool, BagError> {
 
 /// Adds the topics and counts of a sqlite3 file to `survey`.
 fn sqlite_counts(path: &Path, survey: &mut Survey) -> Result<bool, BagError> {
-    use rusqlite::{Connection, OpenFlags};
-    let fault = |e: rusqlite::Error| BagError::Bag {
-        path: path.to_path_buf(),
-        problem: format!("not a readable sqlite3 bag: {e}"),
-    };
-    if survey.definitions.types.is_empty() {
-        survey.definitions = Definitions::carried();
-    }
-    let connection =
-        Connection::open_with_flags(path, OpenFlags::SQLITE_OPEN_READ_ONLY).map_err(fault)?;
+    let fault = sqlite_fault(path);
+    let connection = open_sqlite(path, survey)?;
     let mut statement = (connection.prepare(
         "SELECT t.name, t.type, COUNT(m.id) FROM topics t LEFT JOIN messages m ON m.topic_id = t.id GROUP BY t.id ORDER BY t.id",
     ))
-    .map_err(fault)?;
-    let mut rows = statement.query([]).map_err(fault)?;
-    while let Some(row) = rows.next().map_err(fault)? {
+    .map_err(&fault)?;
+    let mut rows = statement.query([]).map_err(&fault)?;
+    while let Some(row) = rows.next().map_err(&fault)? {
         let (name, type_name, count): (String, String, i64) = (
-            row.get(0).map_err(fault)?,
-            row.get(1).map_err(fault)?,
-            row.get(2).map_err(fault)?,
+            row.get(0).map_err(&fault)?,
+            row.get(1).map_err(&fault)?,
+            row.get(2).map_err(&fault)?,
         );
         let at = survey.topic(&name, &type_name);
         survey.topics[at].count += count.max(0) as u64;

@@ -315,7 +315,7 @@ pub fn write_recording(
     layout: RosLayout,
 ) -> Result<(), WriteError> {
     use super::frames::{Axes, matrix_quaternion};
-    use crate::rotation::{apply, body_to_ned, multiply, transpose};
+    use crate::rotation::{body_to_ned, multiply, transpose};
     let flu = Axes::ForwardLeftUp.to_frd();
     // The DVL's frame from the body's (FLU): rolled, then yawed.
     let mount = body_to_ned([
@@ -340,28 +340,7 @@ pub fn write_recording(
         )],
     );
     bag.write("/tf_static", first as u64, &tf)?;
-    let mut messages: Vec<(i64, &str, Vec<u8>)> = Vec::new();
-    for (k, (&t, &v)) in recording.time_s.iter().zip(&recording.dvl_m_s).enumerate() {
-        let lost = layout
-            .lost_lock_every
-            .is_some_and(|every| k % every == every - 1);
-        let (velocity, status) = match lost {
-            true => (
-                [0.0; 3],
-                DvlStatus {
-                    velocity_mode: 2,
-                    num_good_beams: 2,
-                    beam_velocities_valid: false,
-                },
-            ),
-            false => (apply(&into_dvl, v), DvlStatus::BOTTOM_LOCK),
-        };
-        messages.push((
-            stamp(t),
-            layout.dvl_topic,
-            dvl_message(stamp(t), layout.dvl_frame, velocity, status, 4e-4),
-        ));
-    }
+    let mut messages = dvl_messages(recording, &layout, &into_dvl, &stamp);
     for (k, &t) in recording.reference_time_s.iter().enumerate() {
         messages.push((stamp(t), "/ins/odom", odometry_of(recording, k, stamp(t))));
     }
@@ -388,6 +367,35 @@ pub fn write_recording(
         }
     }
     bag.finish()
+}
+
+/// The DVL samples of `recording` as `marine_acoustic_msgs/msg/Dvl` pings in the
+/// DVL's axes (`into_dvl` from the tool's), each stamped by `stamp` and tagged with
+/// its topic; every `layout.lost_lock_every`-th sent as lost bottom lock.
+fn dvl_messages<'a>(
+    recording: &crate::data::paired::PairedRecording,
+    layout: &RosLayout<'a>,
+    into_dvl: &crate::rotation::Mat3,
+    stamp: &dyn Fn(f64) -> i64,
+) -> Vec<(i64, &'a str, Vec<u8>)> {
+    let lost_lock = DvlStatus {
+        velocity_mode: 2,
+        num_good_beams: 2,
+        beam_velocities_valid: false,
+    };
+    (recording.time_s.iter().zip(&recording.dvl_m_s).enumerate())
+        .map(|(k, (&t, &v))| {
+            let lost = layout
+                .lost_lock_every
+                .is_some_and(|every| k % every == every - 1);
+            let (velocity, status) = match lost {
+                true => ([0.0; 3], lost_lock),
+                false => (crate::rotation::apply(into_dvl, v), DvlStatus::BOTTOM_LOCK),
+            };
+            let ping = dvl_message(stamp(t), layout.dvl_frame, velocity, status, 4e-4);
+            (stamp(t), layout.dvl_topic, ping)
+        })
+        .collect()
 }
 
 /// The reference sample `k` of `recording` as an INS's `nav_msgs/msg/Odometry`
