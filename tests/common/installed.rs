@@ -29,22 +29,84 @@ pub const INSTALLED: Installed = Installed {
     noise_m_s: 0.02,
 };
 
-/// Roll, pitch, yaw (rad) and their rates at `t` for trajectory `k`: turns of up to
-/// about 12°/s one way and the other, and a slow pitch; `turning` false holds the
-/// heading.
-fn attitude(t: f64, k: usize, turning: bool) -> ([f64; 3], [f64; 3]) {
+/// What a trajectory does with its heading.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Shape {
+    /// Turns of up to about 12°/s one way and the other, and speed changes: the shape
+    /// the end-to-end tests calibrate on.
+    Turning,
+    /// The heading held, the same speed changes.
+    Straight,
+    /// A survey's lines: 100-s legs at a steady speed, each joined to the next by a
+    /// 30-s half turn, the next one the other way.
+    Lawnmower,
+    /// Circles one way, then the other: the turn rate a sine of 200 s.
+    FigureEight,
+    /// 80-s legs and 40-s half turns, every turn the same way.
+    Racetrack,
+}
+
+impl Shape {
+    /// The shapes held out from the end-to-end tests' `Turning`: surveys at a steady
+    /// speed whose turns alone show the lever arm and the clock.
+    pub const SURVEYS: [Shape; 3] = [Shape::Lawnmower, Shape::FigureEight, Shape::Racetrack];
+
+    fn steady(self) -> bool {
+        !matches!(self, Shape::Turning | Shape::Straight)
+    }
+}
+
+/// Yaw (rad) and its rate at `t` for legs of `leg_s` joined by half turns of `turn_s`
+/// whose rate rises and falls as 1 − cos; each turn the other way where `alternate`.
+fn legs_and_turns(t: f64, leg_s: f64, turn_s: f64, alternate: bool) -> (f64, f64) {
+    use std::f64::consts::PI;
+    let cycle = leg_s + turn_s;
+    let n = (t / cycle).floor();
+    let within = t - n * cycle;
+    let way = |i: f64| if alternate && i % 2.0 == 1.0 { -1.0 } else { 1.0 };
+    let before = if alternate { PI * (n % 2.0) } else { PI * n };
+    if within < leg_s {
+        return (before, 0.0);
+    }
+    let w = within - leg_s;
+    let phase = 2.0 * PI * w / turn_s;
+    let rate = PI / turn_s * (1.0 - phase.cos());
+    let turned = PI / turn_s * (w - turn_s / (2.0 * PI) * phase.sin());
+    (before + way(n) * turned, way(n) * rate)
+}
+
+/// Roll, pitch, yaw (rad) and their rates at `t` for trajectory `k` of `shape`, with
+/// a slow pitch and roll.
+fn attitude(t: f64, k: usize, shape: Shape) -> ([f64; 3], [f64; 3]) {
+    use std::f64::consts::PI;
     let phase = 0.7 * k as f64;
-    let w = 2.0 * std::f64::consts::PI / (60.0 + 10.0 * k as f64);
-    let (yaw, yaw_rate) = if turning {
-        let amplitude = 1.6;
-        (
-            amplitude * (w * t + phase).sin() + 0.3 * k as f64,
-            amplitude * w * (w * t + phase).cos(),
-        )
-    } else {
-        (0.3 * k as f64, 0.0)
+    let w = 2.0 * PI / (60.0 + 10.0 * k as f64);
+    let heading = 0.3 * k as f64;
+    let (yaw, yaw_rate) = match shape {
+        Shape::Turning => {
+            let amplitude = 1.6;
+            (
+                amplitude * (w * t + phase).sin() + heading,
+                amplitude * w * (w * t + phase).cos(),
+            )
+        }
+        Shape::Straight => (heading, 0.0),
+        Shape::Lawnmower => {
+            let (yaw, rate) = legs_and_turns(t, 100.0, 30.0, true);
+            (yaw + heading, rate)
+        }
+        Shape::Racetrack => {
+            let (yaw, rate) = legs_and_turns(t, 80.0, 40.0, false);
+            (yaw + heading, rate)
+        }
+        Shape::FigureEight => {
+            let period = 200.0;
+            let peak = 2.0 * PI * PI / period;
+            let u = 2.0 * PI * t / period;
+            (heading - PI * u.cos(), peak * u.sin())
+        }
     };
-    let wp = 2.0 * std::f64::consts::PI / 90.0;
+    let wp = 2.0 * PI / 90.0;
     let pitch = 0.08 * (wp * t).sin();
     let pitch_rate = 0.08 * wp * (wp * t).cos();
     let roll = 0.03 * (wp * 1.7 * t).cos();
@@ -64,9 +126,11 @@ fn body_to_ned([roll, pitch, yaw]: [f64; 3]) -> [[f64; 3]; 3] {
     ]
 }
 
-/// The body velocity (m/s) at `t`: surge with speed changes, a little heave.
-fn body_velocity(t: f64, k: usize) -> [f64; 3] {
-    let surge = 1.8 + 0.3 * (2.0 * std::f64::consts::PI * t / (75.0 + 5.0 * k as f64)).sin();
+/// The body velocity (m/s) at `t`: surge with speed changes (a survey's held within
+/// 5 cm/s), a little heave.
+fn body_velocity(t: f64, k: usize, shape: Shape) -> [f64; 3] {
+    let change = if shape.steady() { 0.05 } else { 0.3 };
+    let surge = 1.8 + change * (2.0 * std::f64::consts::PI * t / (75.0 + 5.0 * k as f64)).sin();
     [surge, 0.0, 0.05 * (t / 13.0).sin()]
 }
 
@@ -123,10 +187,28 @@ pub fn write_installed_at_rates(
     (rows, step_s): (usize, f64),
     dvl_every: usize,
 ) {
+    let shapes: Vec<Shape> = (1..=count)
+        .map(|n| match straight.contains(&n) {
+            true => Shape::Straight,
+            false => Shape::Turning,
+        })
+        .collect();
+    write_shaped(folder, &shapes, installed, seed, (rows, step_s), dvl_every);
+}
+
+/// Trajectory N = 1, 2, … of `folder` in the shape `shapes[N − 1]`, as
+/// [`write_installed_at_rates`] writes them.
+pub fn write_shaped(
+    folder: &Path,
+    shapes: &[Shape],
+    installed: Installed,
+    seed: u64,
+    (rows, step_s): (usize, f64),
+    dvl_every: usize,
+) {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let noise = Normal::new(0.0, installed.noise_m_s).unwrap();
-    for n in 1..=count {
-        let turning = !straight.contains(&n);
+    for (n, &shape) in (1..).zip(shapes) {
         let segment = folder.join(format!("Trajectory{n}"));
         std::fs::create_dir_all(&segment).unwrap();
         let mut dvl = String::from("Time [s],DVL X [m/s],DVL Y [m/s],DVL Z [m/s]\n");
@@ -135,9 +217,9 @@ pub fn write_installed_at_rates(
         );
         for i in 0..rows {
             let t = i as f64 * step_s;
-            let (angles, _) = attitude(t, n, turning);
+            let (angles, _) = attitude(t, n, shape);
             let c = body_to_ned(angles);
-            let v_b = body_velocity(t, n);
+            let v_b = body_velocity(t, n, shape);
             let v_n: Vec<f64> = (0..3)
                 .map(|r| (0..3).map(|k| c[r][k] * v_b[k]).sum())
                 .collect();
@@ -154,10 +236,10 @@ pub fn write_installed_at_rates(
                 continue;
             }
             let later = t + installed.time_offset_s;
-            let (angles, rates) = attitude(later, n, turning);
+            let (angles, rates) = attitude(later, n, shape);
             let omega = body_rate(angles, rates);
             let lever = cross(omega, installed.lever_arm_m);
-            let v = body_velocity(later, n);
+            let v = body_velocity(later, n, shape);
             let measured: Vec<f64> = (0..3)
                 .map(|a| {
                     (1.0 + installed.scale) * (v[a] + lever[a])

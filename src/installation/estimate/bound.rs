@@ -136,6 +136,13 @@ pub struct TermBound {
 }
 
 impl TermBound {
+    /// The half-width of the 95 % interval of term `k`: its standard deviation times
+    /// Student's t on the degrees of freedom of the noise it was read from
+    /// ([`ResidualNoise::quantile_95`]), which a short window of correlated noise widens.
+    pub fn half_width_95(&self, k: usize) -> f64 {
+        self.residual_noise.quantile_95() * self.std[k]
+    }
+
     /// Whether the window cannot show the term named `name`.
     pub fn is_unseen(&self, name: &str) -> bool {
         self.unseen.iter().any(|unseen| unseen.term == name)
@@ -150,7 +157,11 @@ pub fn bound(fit: &Fit, noise: Noise, tolerances: &Tolerances) -> TermBound {
     let sigma_m_s = noise.per_axis_m_s();
     let information = UnitInformation::of(fit, names.len());
     let (inverse, flat_with) = information.pseudo_inverse(&names);
-    let residual_noise = fit.residual_noise();
+    let residual_noise = fit.residual_noise().counting_the_absorbed(
+        (&fit.jacobian, &fit.follows),
+        fit.parameters.len(),
+        |weighted| information.absorbed(&inverse, weighted),
+    );
     let modelled = information.sandwich(
         &inverse,
         &residual_noise.weighted_information(&fit.jacobian, &fit.follows),
@@ -162,12 +173,11 @@ pub fn bound(fit: &Fit, noise: Noise, tolerances: &Tolerances) -> TermBound {
             &fit.residuals,
         ),
     );
-    let widening = residual_noise.widening();
     let std: Vec<f64> = information
         .standard_deviations(&modelled, &flat_with)
         .into_iter()
         .zip(information.standard_deviations(&unmodelled, &flat_with))
-        .map(|(modelled, unmodelled)| widening * modelled.max(unmodelled))
+        .map(|(modelled, unmodelled)| modelled.max(unmodelled))
         .collect();
     let bound_std = information.standard_deviations(&(sigma_m_s.powi(2) * &inverse), &flat_with);
     // Residuals of zero (a noise-free recording) leave the shape of the bound's.
@@ -266,6 +276,16 @@ impl UnitInformation {
             weighted[(felt[a], felt[b])] / (self.scale[felt[a]] * self.scale[felt[b]])
         });
         inverse * middle * inverse
+    }
+
+    /// tr((JᵀJ)⁻¹ M) over the felt terms, for an `M` over every term (JᵀRJ of a noise
+    /// R): how much of that noise the fit absorbs, in samples.
+    fn absorbed(&self, inverse: &DMatrix<f64>, weighted: &DMatrix<f64>) -> f64 {
+        let felt = &self.felt;
+        let middle = DMatrix::from_fn(felt.len(), felt.len(), |a, b| {
+            weighted[(felt[a], felt[b])] / (self.scale[felt[a]] * self.scale[felt[b]])
+        });
+        (inverse * middle).trace()
     }
 
     /// Each term's standard deviation from `covariance` (in the unit-diagonal scaling):
@@ -554,14 +574,12 @@ mod tests {
                 .map(|l| (n - l as f64) * rho.powi(l as i32))
                 .sum::<f64>();
         let expected = noise.std_m_s[0] * sum.sqrt() / n;
-        // The AR(1) sandwich, widened for its estimated correlation, or the batch means'
-        // where they read wider.
-        let widened = bound.residual_noise.widening() * expected;
+        // The AR(1) sandwich, or the batch means' where they read wider.
         for k in 0..3 {
-            let ratio = bound.std[k] / widened;
+            let ratio = bound.std[k] / expected;
             assert!(
                 (1.0 - 1e-9..1.3).contains(&ratio),
-                "{} against {widened}",
+                "{} against {expected}",
                 bound.std[k]
             );
             assert!((bound.bound_std[k] - 0.02 / n.sqrt()).abs() < 1e-15);

@@ -122,6 +122,13 @@ impl Clock {
         index.map_or(f64::NAN, |i| self.std[i])
     }
 
+    /// The half-width of the time offset's 95 % interval, s: its standard deviation
+    /// times Student's t on the degrees of freedom of the window's noise
+    /// ([`crate::installation::estimate::residual_noise::ResidualNoise::quantile_95`]).
+    pub fn time_offset_half_width_95_s(&self) -> f64 {
+        self.bound.residual_noise.quantile_95() * self.time_offset_std_s()
+    }
+
     /// Whether the window cannot show the time offset (its standard deviation beyond the
     /// tolerance, or one with another term).
     pub fn time_offset_unseen(&self) -> bool {
