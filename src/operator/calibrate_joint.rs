@@ -20,7 +20,7 @@ use crate::installation::terms::names::{TermName, term_set};
 use crate::operator::calibrate::{CalibrateError, Request, named, refused};
 use crate::operator::cost::{Cost, JOINT};
 use crate::operator::inputs::{Reading, not_over_an_input, source};
-use crate::operator::installation_file::{SavedInstallation, SavedTerm};
+use crate::operator::installation_file::{SavedInstallation, SavedSpread, SavedTerm};
 use crate::results::ResultsError;
 use crate::results::corrected::{Outputs, corrected_samples, stem, write};
 use std::path::{Path, PathBuf};
@@ -74,8 +74,6 @@ pub struct Agreement {
     /// Σ ((θ_k − θ) / σ_k)² over the recordings, and its p-value under χ²(K − 1).
     pub chi_square: f64,
     pub p_value: f64,
-    /// The standard deviation of the recordings' estimates, in the term's unit.
-    pub spread: f64,
 }
 
 /// Everything a joint `calibrate` found and wrote.
@@ -302,20 +300,19 @@ fn agreement(joint: &JointFit, alone: &[TermBound]) -> Vec<Agreement> {
             let chi_square: f64 = mine.iter().map(|(v, s)| ((v - value) / s).powi(2)).sum();
             let freedom = (count.max(2) - 1) as f64;
             let p_value = ChiSquared::new(freedom).map_or(f64::NAN, |d| 1.0 - d.cdf(chi_square));
-            let (_, spread) = mean_std(mine.iter().map(|(v, _)| *v));
             Agreement {
                 term,
                 chi_square,
                 p_value,
-                spread,
             }
         })
         .collect()
 }
 
-/// The installation file of a joint calibration: the vehicle's terms with their bound;
-/// each dive term at its mean over the recordings, its standard deviation their spread
-/// (it is found again on each dive).
+/// The installation file of a joint calibration: the vehicle's terms with their bound
+/// and, over three recordings or more, their spread between dives; each dive term at its
+/// mean over the recordings, its standard deviation their spread (it is found again on
+/// each dive).
 fn saved(args: &JointArgs, joint: &JointFit, shas: Vec<String>) -> SavedInstallation {
     let every = term_set(args.terms);
     let names = every.parameter_names();
@@ -381,4 +378,21 @@ fn saved(args: &JointArgs, joint: &JointFit, shas: Vec<String>) -> SavedInstalla
         (args.dvl_noise_cm_s, args.reference_noise_cm_s),
         residual.map(f64::sqrt),
     )
+    .with_spread(joint.dives.len(), spreads(joint))
+}
+
+/// The spread between dives of each vehicle term of `joint` that has one, as the
+/// installation file saves it.
+fn spreads(joint: &JointFit) -> Vec<SavedSpread> {
+    (joint.bound.names.iter().zip(&joint.between))
+        .filter_map(|(name, between)| {
+            let between = between.as_ref()?;
+            let (low, high) = between.next_dive_95();
+            Some(SavedSpread {
+                name: name.to_string(),
+                std: between.std,
+                next_dive: [low, high],
+            })
+        })
+        .collect()
 }

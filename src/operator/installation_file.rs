@@ -48,6 +48,14 @@ pub struct InstallationFile {
     pub terms: Vec<SavedTerm>,
     /// The correlation coefficients of the terms, in their order.
     pub correlation: Vec<Vec<f64>>,
+    /// How many dives (recordings) the terms were calibrated on together.
+    pub dives: usize,
+    /// Of a joint calibration over three dives or more, how far each vehicle term moves
+    /// from one dive to the next, and where a next dive's own calibration should find
+    /// it; empty for fewer dives, whose terms may differ on the next dive by more than
+    /// their standard deviations.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub between_dives: Vec<SavedSpread>,
     /// For a calibration read from a ROS 2 bag: the frames, and the mount of the
     /// DVL's frame `/tf_static` gave, which the misalignment is a turn from.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -90,6 +98,18 @@ pub struct SavedTerm {
     pub std: f64,
 }
 
+/// One vehicle term's spread between the dives of a joint calibration, in the term's
+/// unit: its standard deviation from dive to dive beyond their noise, and the 95 %
+/// interval of a next dive's own estimate
+/// ([`crate::installation::estimate::between_dives`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SavedSpread {
+    pub name: String,
+    pub std: f64,
+    pub next_dive: [f64; 2],
+}
+
 /// Why an installation file cannot be used.
 #[derive(Debug, thiserror::Error)]
 pub enum InstallationFileError {
@@ -130,6 +150,22 @@ impl SavedInstallation {
     pub fn with_mount(mut self, mount: SavedMount) -> SavedInstallation {
         self.file.mount = Some(mount);
         self
+    }
+
+    /// This installation with the spread between the `dives` it was calibrated on.
+    pub fn with_spread(
+        mut self,
+        dives: usize,
+        between_dives: Vec<SavedSpread>,
+    ) -> SavedInstallation {
+        self.file.dives = dives;
+        self.file.between_dives = between_dives;
+        self
+    }
+
+    /// The spread between dives of the term named `name`, where the file holds one.
+    pub fn spread_of(&self, name: &str) -> Option<&SavedSpread> {
+        self.between_dives.iter().find(|s| s.name == name)
     }
 
     /// The installation of a calibration: `terms` fitted, with `bound`'s values,
@@ -192,6 +228,8 @@ impl SavedInstallation {
                 .collect(),
             terms: saved,
             correlation,
+            dives: 1,
+            between_dives: Vec::new(),
             mount: None,
         };
         SavedInstallation { file }
@@ -318,6 +356,7 @@ impl InstallationFile {
             )));
         }
         self.check_numbers(expected.len()).map_err(malformed)?;
+        self.check_spread().map_err(malformed)?;
         if let Some(mount) = &self.mount
             && !mount.rpy_rad.iter().all(|a| a.is_finite())
         {
@@ -372,6 +411,45 @@ impl InstallationFile {
         }
         if !self.dive_terms.contains(&TermName::TimeOffset) {
             return Err("its dive_terms do not hold \"time_offset\"".into());
+        }
+        Ok(())
+    }
+
+    /// The spread between dives as a joint calibration writes it: of three dives or
+    /// more, each entry a vehicle term's once, its standard deviation zero or more and
+    /// its interval finite and in order.
+    fn check_spread(&self) -> Result<(), String> {
+        if self.dives == 0 {
+            return Err("dives is 0: an installation is calibrated on one dive or more".into());
+        }
+        if !self.between_dives.is_empty() && self.dives < 3 {
+            return Err(format!(
+                "between_dives holds a spread, but dives is {}: a spread needs three dives or more",
+                self.dives
+            ));
+        }
+        let vehicle = term_set(&self.vehicle_terms).parameter_names();
+        for (index, spread) in self.between_dives.iter().enumerate() {
+            let [low, high] = spread.next_dive;
+            let fault = if !vehicle.contains(&spread.name.as_str()) {
+                Some("not one of the vehicle's terms".to_string())
+            } else if self.between_dives[..index]
+                .iter()
+                .any(|s| s.name == spread.name)
+            {
+                Some("listed twice".to_string())
+            } else if !(spread.std.is_finite() && spread.std >= 0.0) {
+                Some(format!("its std is {}", spread.std))
+            } else if !(low.is_finite() && high.is_finite() && low <= high) {
+                Some(format!(
+                    "its next_dive [{low}, {high}] is not a finite interval"
+                ))
+            } else {
+                None
+            };
+            if let Some(fault) = fault {
+                return Err(format!("between_dives[{index}] ({}): {fault}", spread.name));
+            }
         }
         Ok(())
     }
@@ -466,6 +544,8 @@ mod tests {
             correlation: (0..4)
                 .map(|i| (0..4).map(|j| f64::from(u8::from(i == j))).collect())
                 .collect(),
+            dives: 1,
+            between_dives: Vec::new(),
             mount: None,
         }
     }
@@ -549,6 +629,27 @@ mod tests {
         let message = refusal(&far.to_text());
         assert!(
             message.contains("the fitted lever arm x is -1000000 m, beyond the ±100 m"),
+            "{message}"
+        );
+        // A spread between dives of too few dives, or of a term not the vehicle's.
+        let mut two = file();
+        two.dives = 2;
+        two.between_dives = vec![SavedSpread {
+            name: "lever_arm_x_m".into(),
+            std: 0.01,
+            next_dive: [-1.95, -1.85],
+        }];
+        assert!(refusal(&two.to_text()).contains("a spread needs three dives or more"));
+        let mut clock = file();
+        clock.dives = 4;
+        clock.between_dives = vec![SavedSpread {
+            name: "time_offset_s".into(),
+            std: 0.01,
+            next_dive: [1.0, 2.0],
+        }];
+        let message = refusal(&clock.to_text());
+        assert!(
+            message.contains("between_dives[0] (time_offset_s): not one of the vehicle's terms"),
             "{message}"
         );
         // Not a file, or far too large for one.

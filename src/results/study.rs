@@ -389,6 +389,9 @@ mod tests {
                     bound_std: 0.012,
                     unseen: String::new(),
                     asked: "scale χ² 48.1".into(),
+                    between_dives_std: 0.01,
+                    next_dive_low: -1.95,
+                    next_dive_high: -1.85,
                 },
                 TermRow {
                     method: "installation lever+offset".into(),
@@ -400,6 +403,9 @@ mod tests {
                     bound_std: f64::INFINITY,
                     unseen: "standard deviation 1e9 s; correlated −0.97 with bias_y_m_s".into(),
                     asked: String::new(),
+                    between_dives_std: 0.01,
+                    next_dive_low: -1.95,
+                    next_dive_high: -1.85,
                 },
             ],
             summary: vec![SummaryRow {
@@ -555,8 +561,34 @@ mod tests {
         assert_eq!(names(trace_batch(&[]))[4], "before_x_cm_s");
         assert_eq!(
             names(terms_batch(&[]))[5..],
-            ["std", "bound_std", "unseen", "asked"]
+            [
+                "std",
+                "bound_std",
+                "unseen",
+                "asked",
+                "between_dives_std",
+                "next_dive_low",
+                "next_dive_high"
+            ]
         );
+    }
+
+    #[test]
+    fn a_terms_table_written_before_the_spread_between_dives_reads_it_as_none() {
+        let folder = tempfile::tempdir().unwrap();
+        let path = folder.path().join(TERMS);
+        let mut older = terms_batch(&study().terms);
+        for column in ["between_dives_std", "next_dive_low", "next_dive_high"] {
+            older.remove_column(older.schema().index_of(column).unwrap());
+        }
+        crate::results::write_table(&path, &older).unwrap();
+        let rows: Vec<TermRow> = read_records(&path, Ok).unwrap();
+        assert_eq!(rows.len(), study().terms.len());
+        assert!(
+            rows.iter()
+                .all(|r| r.next_dive_low.is_nan() && r.between_dives_std.is_nan())
+        );
+        assert_eq!(rows[0].value, study().terms[0].value);
     }
 
     #[test]

@@ -63,7 +63,13 @@ fn legs_and_turns(t: f64, leg_s: f64, turn_s: f64, alternate: bool) -> (f64, f64
     let cycle = leg_s + turn_s;
     let n = (t / cycle).floor();
     let within = t - n * cycle;
-    let way = |i: f64| if alternate && i % 2.0 == 1.0 { -1.0 } else { 1.0 };
+    let way = |i: f64| {
+        if alternate && i % 2.0 == 1.0 {
+            -1.0
+        } else {
+            1.0
+        }
+    };
     let before = if alternate { PI * (n % 2.0) } else { PI * n };
     if within < leg_s {
         return (before, 0.0);

@@ -48,7 +48,7 @@ const EVERY_TERM: TermSet = TermSet {
 const SEEDS: u64 = 1000;
 
 /// The simulated DVL's noise per axis, m/s.
-const NOISE_M_S: f64 = 0.01;
+pub(crate) const NOISE_M_S: f64 = 0.01;
 
 /// The fraction of seeds whose interval holds the truth, per parameter: the honest
 /// standard deviation's, and the bound's at the true noise and at twice it.
@@ -62,7 +62,7 @@ struct Coverage {
 /// A DVL of `installation` simulated on `segment` with [`NOISE_M_S`] of noise of
 /// correlation `correlation_at_1_s`: the stamps whose t + τ falls inside the reference,
 /// and their samples.
-fn simulated(
+pub(crate) fn simulated(
     segment: &Recording,
     installation: &Installation,
     correlation_at_1_s: f64,
@@ -160,7 +160,7 @@ fn coverage(
 }
 
 /// The segments of `files`, read as A-KIT files.
-fn segments(files: &[PairedFiles]) -> Vec<Recording> {
+pub(crate) fn segments(files: &[PairedFiles]) -> Vec<Recording> {
     files
         .iter()
         .enumerate()
@@ -231,7 +231,12 @@ fn honest_intervals_cover_the_truth_on_held_out_survey_shapes() {
         .map(|n| PairedFiles::akit(dir.path(), n))
         .collect();
     let correlated = [("AR(1) 0.9 at 1 s", (0.9, 0.0))];
-    check("held-out survey shapes", &segments(&files), 999, &correlated);
+    check(
+        "held-out survey shapes",
+        &segments(&files),
+        999,
+        &correlated,
+    );
 }
 
 #[test]
@@ -603,8 +608,8 @@ fn the_clocks_standard_deviation_is_its_error_on_short_windows_of_correlated_noi
                 .map(|seed| {
                     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
                     let dive = &segments[seed as usize % 4];
-                    let clock_s = 20.0
-                        * (rand_distr::Uniform::new(0.0, 1.0).unwrap().sample(&mut rng) - 0.5);
+                    let clock_s =
+                        20.0 * (rand_distr::Uniform::new(0.0, 1.0).unwrap().sample(&mut rng) - 0.5);
                     let truth = Installation {
                         time_offset_s: clock_s,
                         ..TRUTH
@@ -713,7 +718,14 @@ fn the_joint_fit_covers_the_vehicles_terms_and_every_clock() {
                 .names
                 .iter()
                 .enumerate()
-                .map(|(k, &name)| (name, joint.bound.value[k], joint.bound.half_width_95(k), truth[k]))
+                .map(|(k, &name)| {
+                    (
+                        name,
+                        joint.bound.value[k],
+                        joint.bound.half_width_95(k),
+                        truth[k],
+                    )
+                })
                 .collect();
             for (k, &clock_s) in clocks.iter().enumerate() {
                 let name: &'static str = ["clock 1", "clock 2", "clock 3"][k];

@@ -186,7 +186,12 @@ fn a_dive_at_constant_velocity_has_no_clock_to_find() {
 /// A study in `d` of the first three dives of [`CLOCKS_S`], each clock re-found in the
 /// windows `dive_windows_s` (a TOML list).
 fn write_dives_study(d: &Path, dive_windows_s: &str) {
-    for (k, &clock) in CLOCKS_S.iter().take(3).enumerate() {
+    write_study_of_dives(d, dive_windows_s, &CLOCKS_S[..3]);
+}
+
+/// A study in `d` of dives whose clocks are `clocks`, as [`write_dives_study`].
+fn write_study_of_dives(d: &Path, dive_windows_s: &str, clocks: &[f64]) {
+    for (k, &clock) in clocks.iter().enumerate() {
         let installed = Installed {
             time_offset_s: clock,
             ..INSTALLED
@@ -206,9 +211,60 @@ fn write_dives_study(d: &Path, dive_windows_s: &str) {
         d,
         "dives",
         "dives",
-        3,
+        clocks.len(),
         &format!("\n[calibration.dive]\nwindow_s = {dive_windows_s}\n"),
     );
+}
+
+/// Four dives of one vehicle, their clocks within the ±3 s a fit alone starts from
+/// (each joint fit starts from the left-out dive's own): each joint fit over the three a calibration leaves out
+/// states how far each term moves between them and the interval of a next dive's own
+/// fit, in `terms.parquet`; the report counts how often the dive left out falls inside
+/// it by its own fit. Three dives leave two to each joint fit: no spread, no table.
+#[test]
+fn a_study_of_four_dives_states_and_scores_its_next_dive_intervals() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_study_of_dives(d, "[60.0]", &[0.6, 1.2, -0.8, 2.1]);
+    let output = common::dcnet(d, &["run", "experiments/dives.toml", "--out", "results"]);
+    assert!(output.status.success(), "{}", common::stderr(&output));
+    let terms = common::read_parquet(&d.join("results/dives/terms.parquet"));
+    let methods = common::strings(&terms, "method");
+    let lows = common::floats(&terms, "next_dive_low");
+    let highs = common::floats(&terms, "next_dive_high");
+    let model = "installation lever+offset+bias+scale";
+    let joint = format!("{model}, joint");
+    for (k, method) in methods.iter().enumerate() {
+        let (low, high) = (lows[k].unwrap(), highs[k].unwrap());
+        match method.as_deref() == Some(joint.as_str()) {
+            true => assert!(low.is_finite() && low < high, "{method:?}: {low} to {high}"),
+            false => assert!(low.is_nan() && high.is_nan(), "{method:?}: {low}"),
+        }
+    }
+    let report = std::fs::read_to_string(d.join("results/dives/report.md")).unwrap();
+    assert!(
+        report.contains(&format!("The next dive: {joint}")),
+        "{report}"
+    );
+    // One row per vehicle term, each judged on the four dives left out.
+    let lever = report
+        .lines()
+        .find(|l| l.starts_with("| lever arm x ") && l.contains(" of 4 "))
+        .unwrap_or_else(|| panic!("{report}"));
+    let inside: usize = lever.split('|').nth(3).unwrap().trim()[..1]
+        .parse()
+        .unwrap();
+    assert!(inside >= 3, "{lever}");
+
+    let three = tempfile::tempdir().unwrap();
+    write_dives_study(three.path(), "[60.0]");
+    let output = common::dcnet(
+        three.path(),
+        &["run", "experiments/dives.toml", "--out", "results"],
+    );
+    assert!(output.status.success(), "{}", common::stderr(&output));
+    let report = std::fs::read_to_string(three.path().join("results/dives/report.md")).unwrap();
+    assert!(!report.contains("The next dive"), "{report}");
 }
 
 /// A dive window of one sample: no clock found in it, every scoring keeps the

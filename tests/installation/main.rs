@@ -9,6 +9,7 @@
 mod common;
 
 mod bags;
+mod between_dives;
 mod coverage;
 mod dive_clock;
 mod installation;

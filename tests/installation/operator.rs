@@ -115,6 +115,11 @@ fn an_installation_saved_from_one_dive_corrects_another_whose_clock_differs() {
             "{name}: {residual}\n{printed}"
         );
         assert!(!printed.contains("warning"), "{printed}");
+        // One dive: no spread between dives to carry, and `correct` says so.
+        assert!(
+            printed.contains("calibrated on 1 dive: the file holds no spread between dives"),
+            "{printed}"
+        );
         assert!(out.join("DVL_trajectory1-corrected.csv").is_file());
         assert!(out.join("DVL_trajectory1-corrected.parquet").is_file());
     }
@@ -292,6 +297,21 @@ fn dives_calibrated_jointly_share_the_vehicles_terms_and_keep_their_clocks() {
         (lever_x + 1.9).abs() < 3.0 * lever_std,
         "{lever_x} ± {lever_std}\n{printed}"
     );
+    // The spread between the three dives: the vehicle's lever arm inside its interval
+    // and inside the next dive's, which is wider.
+    let interval = |cell: &str| -> (f64, f64) {
+        let (low, rest) = cell.split_once(" to ").expect("an interval");
+        (low.parse().unwrap(), first(rest))
+    };
+    let (vehicle, next) = (interval(&lever[6]), interval(&lever[7]));
+    assert!(vehicle.0 < -1.9 && -1.9 < vehicle.1, "{lever:?}");
+    assert!(next.0 < vehicle.0 && vehicle.1 < next.1, "{lever:?}");
+    let saved = std::fs::read_to_string(d.join("joint.toml")).unwrap();
+    assert!(saved.contains("dives = 3\n"), "{saved}");
+    assert!(
+        saved.contains("[[between_dives]]\nname = \"lever_arm_x_m\""),
+        "{saved}"
+    );
     // Three files of one name: each recording's outputs named by its place.
     for (k, clock) in clocks.iter().enumerate() {
         let row = cells(&format!("| {}-DVL_trajectory1", k + 1));
@@ -315,7 +335,25 @@ fn dives_calibrated_jointly_share_the_vehicles_terms_and_keep_their_clocks() {
         ],
     );
     assert!(output.status.success(), "{}", stderr(&output));
-    assert!(!stdout(&output).contains("warning"), "{}", stdout(&output));
+    let printed = stdout(&output);
+    assert!(!printed.contains("warning"), "{printed}");
+    // The next-dive interval of each carried term, where the fourth dive's own
+    // calibration should find it.
+    let lever = printed
+        .lines()
+        .find(|l| l.starts_with("| lever arm x"))
+        .unwrap_or_else(|| panic!("{printed}"));
+    let next = lever.split('|').nth(5).unwrap().trim();
+    let (low, high) = next.split_once(" to ").expect("an interval");
+    let high = high.trim_end_matches(" m");
+    assert!(
+        low.parse::<f64>().unwrap() < -1.9 && -1.9 < high.parse::<f64>().unwrap(),
+        "{printed}"
+    );
+    assert!(
+        printed.contains("from how far the terms moved between the 3 dives calibrated jointly"),
+        "{printed}"
+    );
 }
 
 /// An installation edited by hand, a dive shorter than the seconds that find its

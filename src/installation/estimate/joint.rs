@@ -22,11 +22,18 @@
 //! `(B_kᵀB_k)⁻¹ B_kᵀA_k`. Under the robust loss every product carries its weights D,
 //! the bread's: `Ã_k = A_k − B_k (B_kᵀDB_k)⁻¹ B_kᵀDA_k`, the residuals the
 //! pseudo-residuals.
+//!
+//! Each recording's own estimate of the vehicle's terms is one Gauss–Newton step from
+//! the joint solution on its samples alone, its dive terms free: θ_k = θ − (Ã_kᵀDÃ_k)⁺
+//! Ã_kᵀψ_k, whose information-weighted mean is θ itself; its standard deviations the
+//! same bound over its samples, their residuals taken at θ_k. From them
+//! [`super::between_dives`] reads how far each term moves between dives.
 //! In: the recordings and their references, the vehicle's and the dive's terms. Out: a
 //! [`JointFit`].
 
 use crate::Vec3;
-use crate::installation::estimate::bound::{Noise, TermBound, Tolerances, bound};
+use crate::installation::estimate::between_dives::{BetweenDives, between_dives};
+use crate::installation::estimate::bound::{FLAT_EIGENVALUE, Noise, TermBound, Tolerances, bound};
 use crate::installation::estimate::clock::{covariance, search_offset};
 use crate::installation::estimate::fit::{
     Fit, FitError, TIME_OFFSET_MARGIN_S, beyond_any_installation, linearised, mask_about,
@@ -70,6 +77,12 @@ pub struct JointFit {
     pub sample_counts: Vec<usize>,
     /// Each recording's samples the robust loss rejected as outliers.
     pub outliers: Vec<usize>,
+    /// Each recording's own estimate of the vehicle's terms (its dive terms free), with
+    /// its standard deviations, in the order of `bound`'s names.
+    pub own: Vec<TermBound>,
+    /// Each vehicle term's spread between the recordings, in the order of `bound`'s
+    /// names; `None` where fewer than three recordings show it.
+    pub between: Vec<Option<BetweenDives>>,
 }
 
 impl JointFit {
@@ -297,17 +310,7 @@ pub fn joint_fit(
         .map(|(r, start)| mask_about(r.time_s, r.reference, start.time_offset_s))
         .collect();
     let parameters = dive_terms.parameter_count();
-    if let Some(usable) = masks
-        .iter()
-        .map(|m| m.len())
-        .find(|&n| 3 * n <= parameters + 1)
-    {
-        return Err(FitError::TooFewSamples {
-            usable,
-            parameters,
-            margin_s: TIME_OFFSET_MARGIN_S,
-        });
-    }
+    enough_samples(&masks, parameters)?;
     let mut problem = Problem {
         recordings,
         masks,
@@ -343,7 +346,13 @@ pub fn joint_fit(
     }
     let stacked = stacked_fit(&weighed, vehicle_terms, vehicle, robust, all_outliers);
     let bound = bound(&stacked, noise, tolerances);
+    let own: Vec<TermBound> = (weighed.iter().zip(&fitted))
+        .map(|(w, f)| own_estimate(w, f.as_ref(), (vehicle_terms, vehicle), (noise, tolerances)))
+        .collect();
+    let between = spread_of(&own, bound.names.len());
     Ok(JointFit {
+        own,
+        between,
         vehicle_terms,
         dive_terms,
         vehicle,
@@ -362,6 +371,23 @@ pub fn joint_fit(
         sample_counts: blocks.iter().map(|b| b.raw.len() / 3).collect(),
         outliers,
     })
+}
+
+/// Refuses recordings of which one has no more samples in its mask (`masks`) than its
+/// `parameters` dive terms can fit.
+fn enough_samples(masks: &[std::ops::Range<usize>], parameters: usize) -> Result<(), FitError> {
+    match masks
+        .iter()
+        .map(|m| m.len())
+        .find(|&n| 3 * n <= parameters + 1)
+    {
+        Some(usable) => Err(FitError::TooFewSamples {
+            usable,
+            parameters,
+            margin_s: TIME_OFFSET_MARGIN_S,
+        }),
+        None => Ok(()),
+    }
 }
 
 /// What `robust`'s loss makes of each recording's raw residuals (none under least
@@ -453,6 +479,91 @@ impl<'a> Weighed<'a> {
         let inverse = self.dive_inverse.as_ref()?;
         Some(inverse * (b.dive.transpose() * weighted(&self.curvature, &b.vehicle)))
     }
+
+    /// The vehicle's columns with the dive's terms projected out (in the D-metric),
+    /// Ã = A − B (BᵀDB)⁻¹ BᵀDA; A itself where the dive has no terms or they are not
+    /// seen.
+    fn projected_vehicle(&self) -> DMatrix<f64> {
+        let b = self.blocks;
+        match self.gain() {
+            Some(gain) if b.dive.ncols() > 0 => &b.vehicle - &b.dive * gain,
+            _ => b.vehicle.clone(),
+        }
+    }
+}
+
+/// Each of the `terms` vehicle terms' spread between the recordings, from their `own`
+/// estimates.
+fn spread_of(own: &[TermBound], terms: usize) -> Vec<Option<BetweenDives>> {
+    (0..terms)
+        .map(|j| {
+            let each: Vec<(f64, f64)> = own.iter().map(|o| (o.value[j], o.std[j])).collect();
+            between_dives(&each)
+        })
+        .collect()
+}
+
+/// One recording's own estimate of the vehicle's terms, from `vehicle` (the joint
+/// solution of `terms`): one Gauss–Newton step on its samples alone with its dive terms
+/// projected out, under the loss's weights, and its bound there, the residuals (the
+/// pseudo-residuals ψ, as the meat reads them) carried to the step, ψ + D Ã δ.
+fn own_estimate(
+    w: &Weighed,
+    fitted: Option<&RobustFit>,
+    (terms, vehicle): (TermSet, Installation),
+    (noise, tolerances): (Noise, &Tolerances),
+) -> TermBound {
+    let b = w.blocks;
+    let at = vehicle.to_parameters(&terms);
+    let mut own = Fit {
+        terms,
+        installation: vehicle,
+        parameters: at.clone(),
+        residual_rms_m_s: [0.0; 3],
+        sample_count: b.raw.len() / 3,
+        jacobian: w.projected_vehicle(),
+        residuals: w.meat.clone(),
+        robust: fitted.cloned(),
+        follows: b.follows.clone(),
+        termination: "joint".into(),
+    };
+    let step = gauss_newton_step(&own);
+    let moved = &own.jacobian * &step;
+    for (i, r) in own.residuals.iter_mut().enumerate() {
+        *r += w.curvature[i] * moved[i];
+    }
+    own.parameters = at.iter().zip(step.iter()).map(|(a, d)| a + d).collect();
+    own.installation = Installation::default().with_parameters(&terms, &own.parameters);
+    bound(&own, noise, tolerances)
+}
+
+/// −(JᵀDJ)⁺ Jᵀψ of `fit` (its Jacobian, weights and pseudo-residuals), the inverse taken
+/// on the information scaled to a unit diagonal over its directions above
+/// [`FLAT_EIGENVALUE`] of the largest, as the bound takes it: no step along a flat one.
+fn gauss_newton_step(fit: &Fit) -> DVector<f64> {
+    let information = fit.information();
+    let n = information.nrows();
+    let scale: Vec<f64> = (0..n).map(|k| information[(k, k)].sqrt()).collect();
+    let unscaled = |a: usize, value: f64| {
+        if scale[a] > 0.0 {
+            value / scale[a]
+        } else {
+            0.0
+        }
+    };
+    let unit = DMatrix::from_fn(n, n, |a, b| unscaled(a, unscaled(b, information[(a, b)])));
+    let gradient = fit.jacobian.transpose() * &fit.residuals;
+    let scaled = DVector::from_fn(n, |a, _| unscaled(a, gradient[a]));
+    let eigen = nalgebra::SymmetricEigen::new(unit);
+    let largest = eigen.eigenvalues.max();
+    let mut step = DVector::<f64>::zeros(n);
+    for (i, &value) in eigen.eigenvalues.iter().enumerate() {
+        if value > FLAT_EIGENVALUE * largest {
+            let vector = eigen.eigenvectors.column(i);
+            step -= vector * (vector.dot(&scaled) / value);
+        }
+    }
+    DVector::from_fn(n, |a, _| unscaled(a, step[a]))
 }
 
 /// diag(`d`) · `m`: each row of `m` times its weight.
@@ -522,13 +633,8 @@ fn projected(weighed: &[Weighed]) -> (DMatrix<f64>, DVector<f64>, Vec<bool>) {
     let mut jacobian = DMatrix::zeros(rows, p);
     let mut at = 0;
     for w in weighed {
-        let b = w.blocks;
-        let n = b.raw.len();
-        let part = match w.gain() {
-            Some(gain) if b.dive.ncols() > 0 => &b.vehicle - &b.dive * gain,
-            _ => b.vehicle.clone(),
-        };
-        jacobian.rows_mut(at, n).copy_from(&part);
+        let n = w.blocks.raw.len();
+        jacobian.rows_mut(at, n).copy_from(&w.projected_vehicle());
         at += n;
     }
     let residuals = stack(weighed.iter().map(|w| &w.meat));

@@ -3,7 +3,8 @@
 //! residuals show; [`bound`] gives their standard deviations and the Fisher bound, and
 //! the terms a recording cannot show; [`missing`] the terms left out that the residuals
 //! still ask for; [`clock`] finds a dive's clock again with the rest carried; [`joint`]
-//! fits several recordings at once; [`filter`] estimates the terms sample by sample
+//! fits several recordings at once, and [`between_dives`] reads from it how far the
+//! vehicle's terms move between dives; [`filter`] estimates the terms sample by sample
 //! (an extended Kalman filter) with the noise [`filter_noise`] reads as it runs; and
 //! [`settling`] says how much of a recording the filter needed.
 //! In: a [`Reference`](crate::installation::frames::Reference) and DVL samples. Out:
@@ -16,6 +17,7 @@ pub mod bound;
 pub mod missing;
 pub mod clock;
 pub mod joint;
+pub mod between_dives;
 pub mod filter_noise;
 pub mod filter;
 pub mod settling;

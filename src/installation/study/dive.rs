@@ -224,6 +224,7 @@ impl OnRecording<'_> {
             asked: Vec::new(),
             filtered: None,
             uncertainty: carried.uncertainty,
+            between: joint.between,
         })
     }
 }

@@ -5,6 +5,7 @@
 //! model and the window's samples. Out: an [`Estimate`] and its [`TermRow`]s.
 
 use crate::estimators::{Baseline, Estimator, LeastSquares};
+use crate::installation::estimate::between_dives::BetweenDives;
 use crate::installation::estimate::bound::{TermBound, bound};
 use crate::installation::estimate::clock::Carried;
 use crate::installation::estimate::fit::fit;
@@ -30,6 +31,8 @@ pub(super) struct Estimate {
     /// The terms a fit or a filter estimated, with their covariance: what a dive that
     /// carries them inherits.
     pub(super) uncertainty: Option<(TermSet, DMatrix<f64>)>,
+    /// A joint fit's spread between dives, per term of `bound`; empty otherwise.
+    pub(super) between: Vec<Option<BetweenDives>>,
 }
 
 impl Estimate {
@@ -41,6 +44,7 @@ impl Estimate {
             asked: Vec::new(),
             filtered: None,
             uncertainty: None,
+            between: Vec::new(),
         }
     }
 
@@ -103,6 +107,7 @@ impl OnRecording<'_> {
                         asked: Vec::new(),
                         filtered: Some(terms),
                         uncertainty,
+                        between: Vec::new(),
                     }
                 })
             }
@@ -166,6 +171,7 @@ impl OnRecording<'_> {
                     .uncertainty,
                     bound: Some(bounded),
                     filtered: None,
+                    between: Vec::new(),
                 })
             }
             Err(why) => Err(FitFailure {
@@ -202,6 +208,9 @@ impl OnRecording<'_> {
             bound_std,
             unseen,
             asked: asked.clone(),
+            between_dives_std: f64::NAN,
+            next_dive_low: f64::NAN,
+            next_dive_high: f64::NAN,
         };
         let mut rows = Vec::new();
         // A learned method's terms (no standard deviation), or a filter's.
@@ -228,12 +237,18 @@ impl OnRecording<'_> {
                     .map(|u| u.why.to_string())
                     .collect::<Vec<_>>()
                     .join("; ");
-                rows.push(row(
+                let mut term = row(
                     name,
                     bound.value[i],
                     (bound.std[i], bound.bound_std[i]),
                     unseen,
-                ));
+                );
+                if let Some(Some(between)) = estimate.between.get(i) {
+                    let (low, high) = between.next_dive_95();
+                    term.between_dives_std = between.std;
+                    (term.next_dive_low, term.next_dive_high) = (low, high);
+                }
+                rows.push(term);
             }
         }
         rows

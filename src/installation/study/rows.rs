@@ -48,6 +48,22 @@ pub struct TermRow {
     /// test's χ² (`scale χ² 48.1`, `; `-separated), the same on each term of a fit;
     /// empty when none, or for a method that is not a fit.
     pub asked: String,
+    /// Of a joint method's vehicle term over three calibration trajectories or more
+    /// ([`crate::installation::estimate::between_dives`]): its standard deviation from
+    /// one trajectory to the next beyond their noise, and the 95 % interval a next
+    /// trajectory's own fit should fall in, in the term's unit; NaN otherwise (and in
+    /// tables written before them).
+    #[serde(default = "not_a_number")]
+    pub between_dives_std: f64,
+    #[serde(default = "not_a_number")]
+    pub next_dive_low: f64,
+    #[serde(default = "not_a_number")]
+    pub next_dive_high: f64,
+}
+
+/// What a term row holds where it has no spread between dives.
+fn not_a_number() -> f64 {
+    f64::NAN
 }
 
 /// A method's mean held-out RMSE over calibration trajectories, with its 95 % interval.

@@ -121,6 +121,9 @@ mod tests {
                 bound_std: f64::INFINITY,
                 unseen: "flat".into(),
                 asked: String::new(),
+                between_dives_std: 0.01,
+                next_dive_low: -1.95,
+                next_dive_high: -1.85,
             }],
             ..Calibrated::default()
         };

@@ -55,8 +55,9 @@ const PROTOCOL_CODE_VERSION: u32 = 2;
 /// noise beside the bound's; 4: the terms left out that the residuals still follow;
 /// 5: the Kalman filter's standard deviations from the noise its residuals show, and
 /// its run up to the longest window only; 6: the rows with the dive's clock found
-/// again).
-const INSTALLATION_CODE_VERSION: u32 = 6;
+/// again; 7: the noise's level counting what the fit absorbs, standard deviations no
+/// longer widened, a joint fit's spread between dives).
+const INSTALLATION_CODE_VERSION: u32 = 7;
 /// Bumped whenever the tables put together from an installation study's calibrations
 /// change (2: the calibration time's band of what calibration can change).
 const INSTALLATION_TABLES_CODE_VERSION: u32 = 2;

@@ -258,6 +258,9 @@ mod tests {
             bound_std: 0.01,
             unseen: unseen.into(),
             asked: String::new(),
+            between_dives_std: f64::NAN,
+            next_dive_low: f64::NAN,
+            next_dive_high: f64::NAN,
         }
     }
 

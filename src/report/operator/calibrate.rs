@@ -6,6 +6,7 @@
 //! In: a [`Calibration`] or a [`JointCalibration`]. Out: the text.
 
 use crate::evaluate::calibration_time::tolerance_band;
+use crate::installation::estimate::between_dives::MIN_DIVES;
 use crate::installation::estimate::filter::GATE_CHI2;
 use crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S;
 use crate::installation::estimate::residual_noise::ResidualNoise;
@@ -309,13 +310,28 @@ pub fn joint_text(calibration: &JointCalibration) -> String {
         "residuals: {per_axis} cm/s per axis x, y, z (correlation {correlation} from one sample to the next) against the specified {specified:.2} cm/s per axis: {}; the standard deviations are from the noise the residuals show, the bound's from the specified noise\n",
         if level <= 1.2 * specified { "consistent with the noise" } else { "above the noise: the model leaves something out, or the noise is larger than specified" }
     ));
+    text.push_str(&between_dives_text(names.len()));
     text.push_str(&format!(
-        "alone: each recording fitted by itself; spread, the standard deviation of their estimates, and spread / √K the standard error of their mean over the K recordings (where they disagree, the joint term's uncertainty is nearer this than its own standard deviation); χ², Σ ((alone − joint) / its standard deviation)² over the {} recordings, and its p-value on {} degrees of freedom (under {AGREEMENT_P_VALUE}: the recordings disagree beyond their intervals)\n",
+        "alone: each recording fitted by itself; χ², Σ ((alone − joint) / its standard deviation)² over the {} recordings, and its p-value on {} degrees of freedom (under {AGREEMENT_P_VALUE}: the recordings disagree beyond their intervals)\n",
         names.len(),
         names.len() - 1
     ));
     text.push_str(&format!("{}\n", dives_table(calibration)));
     text
+}
+
+/// What the columns of the spread between dives say, for `dives` recordings; or, for
+/// fewer than three, that there is none.
+fn between_dives_text(dives: usize) -> String {
+    if dives < MIN_DIVES {
+        return format!(
+            "between dives: with {dives} recordings the spread of the terms from one dive to the next cannot be estimated (it takes {MIN_DIVES} or more): on the next dive the terms may differ by more than their standard deviations; calibrate jointly over at least {MIN_DIVES} dives\n"
+        );
+    }
+    format!(
+        "between dives: how far each term moves from one recording to the next beyond their noise (a random-effects model over each recording's own estimate, its spread by Paule and Mandel's method); vehicle's term, 95 %: its interval where the dives differ (Hartung and Knapp, Student's t on {} degrees of freedom); next dive's own fit, 95 %: where a next dive's own calibration, as long as these, should find the term\n",
+        dives - 1
+    )
 }
 
 /// The noise a fit's residuals show, as both calibrations print it: its level per axis
@@ -331,7 +347,7 @@ fn residual_noise(shown: &ResidualNoise) -> (String, String) {
 
 /// The vehicle's terms of a joint calibration, beside the recordings fitted alone.
 fn vehicle_table(calibration: &JointCalibration) -> Table {
-    let (bound, names) = (&calibration.joint.bound, &calibration.names);
+    let bound = &calibration.joint.bound;
     let agreement = &calibration.agreement;
     let mut table = Table::new();
 
@@ -341,8 +357,9 @@ fn vehicle_table(calibration: &JointCalibration) -> Table {
         "joint estimate",
         "standard deviation",
         "bound (specified noise)",
-        "alone: spread",
-        "spread / √K",
+        "between dives",
+        "vehicle's term, 95 %",
+        "next dive's own fit, 95 %",
         "alone: χ² (p)",
     ]);
     for (i, name) in bound.names.iter().enumerate() {
@@ -353,16 +370,18 @@ fn vehicle_table(calibration: &JointCalibration) -> Table {
         } else {
             ""
         };
+        let interval =
+            |(low, high): (f64, f64)| format!("{:.4} to {:.4} {unit}", low * factor, high * factor);
+        let between = calibration.joint.between[i];
+        let none = || "-".to_string();
         table.add_row([
             readable,
             format!("{:.4} {unit}", bound.value[i] * factor),
             format!("{:.4} {unit}", bound.std[i] * factor),
             format!("{:.4} {unit}", bound.bound_std[i] * factor),
-            format!("{:.4} {unit}", agree.spread * factor),
-            format!(
-                "{:.4} {unit}",
-                agree.spread * factor / (names.len() as f64).sqrt()
-            ),
+            between.map_or_else(none, |b| format!("{:.4} {unit}", b.std * factor)),
+            between.map_or_else(none, |b| interval(b.vehicle_95())),
+            between.map_or_else(none, |b| interval(b.next_dive_95())),
             format!("{:.1} ({:.1e}{mark})", agree.chi_square, agree.p_value),
         ]);
     }

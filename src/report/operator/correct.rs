@@ -4,8 +4,10 @@
 //! and the residual at calibration, with a warning where it fits far worse.
 //! In: a [`Correction`]. Out: the text.
 
+use crate::installation::estimate::between_dives::MIN_DIVES;
 use crate::installation::estimate::robust::TUKEY_C;
 use crate::operator::correct::Correction;
+use crate::operator::installation_file::SavedInstallation;
 use crate::report::kit::readable::readable_term;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 
@@ -14,10 +16,11 @@ pub fn correction_text(correction: &Correction) -> String {
     let saved = &correction.saved;
     let table = applied_table(correction);
     let mut text = format!(
-        "read: {}\ninstallation of {} (calibrated on {}) applied\n{table}\n",
+        "read: {}\ninstallation of {} (calibrated on {}) applied\n{table}\n{}",
         correction.read,
         correction.installation_file.display(),
-        saved.recording
+        saved.recording,
+        spread_text(saved),
     );
     if let Some(clock) = &correction.clock {
         text.push_str(&format!(
@@ -67,13 +70,35 @@ pub fn correction_text(correction: &Correction) -> String {
     text
 }
 
-/// Each term applied: its value, its standard deviation, and whether it was carried,
-/// found again on this dive or given.
+/// What the next-dive column says: the spread between the dives calibrated on, or
+/// that the file holds none.
+fn spread_text(saved: &SavedInstallation) -> String {
+    if saved.between_dives.is_empty() {
+        return format!(
+            "calibrated on {} dive{}: the file holds no spread between dives, and on this dive the vehicle's terms may differ by more than their standard deviations (a lever arm absorbs what a dive's model leaves out, a DVL's bias moves between dives); calibrate jointly over at least {MIN_DIVES} dives for an interval that holds on the next one\n",
+            saved.dives,
+            if saved.dives == 1 { "" } else { "s" }
+        );
+    }
+    format!(
+        "next dive, 95 %: where this dive's own calibration should find each vehicle term, from how far the terms moved between the {} dives calibrated jointly\n",
+        saved.dives
+    )
+}
+
+/// Each term applied: its value, its standard deviation, whether it was carried, found
+/// again on this dive or given, and where a carried term's next-dive interval lies.
 fn applied_table(correction: &Correction) -> Table {
     let saved = &correction.saved;
     let mut table = Table::new();
     table.load_preset(ASCII_MARKDOWN);
-    table.set_header(["term", "value", "standard deviation", "from"]);
+    table.set_header([
+        "term",
+        "value",
+        "standard deviation",
+        "from",
+        "next dive, 95 %",
+    ]);
     let dive = saved.dive_term_set().parameter_names();
     let applied = correction.applied.to_parameters(&saved.term_set());
     for (k, term) in saved.terms.iter().enumerate() {
@@ -95,11 +120,16 @@ fn applied_table(correction: &Correction) -> Table {
             true => "-".to_string(),
             false => format!("{:.4} {unit}", std * factor),
         };
+        let next_dive = saved.spread_of(&term.name).map_or("-".to_string(), |s| {
+            let [low, high] = s.next_dive;
+            format!("{:.4} to {:.4} {unit}", low * factor, high * factor)
+        });
         table.add_row([
             readable,
             format!("{:.4} {unit}", applied[k] * factor),
             std,
             from,
+            next_dive,
         ]);
     }
     table

@@ -381,6 +381,9 @@ mod tests {
             bound_std: 0.01,
             unseen: String::new(),
             asked: String::new(),
+            between_dives_std: f64::NAN,
+            next_dive_low: f64::NAN,
+            next_dive_high: f64::NAN,
         };
         let score = |method: &str, calibration: &str, total_cm_s| TransferRow {
             method: method.into(),

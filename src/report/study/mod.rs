@@ -12,6 +12,8 @@
 //!   cannot show marked and why listed under the table;
 //! - [`agreement`]: the paragraph on where those estimates agree across calibration
 //!   trajectories within their intervals;
+//! - [`next_dive`]: for a joint method, how far its terms move between trajectories,
+//!   and how often the one it left out falls inside its interval for a next dive;
 //! - [`learned`]: with `[learned]`, every method on the pairs inside the folds, fold by
 //!   fold, and the learned terms against the installation fit of every trajectory;
 //! - [`timing`]: each method's calibration time on each calibration trajectory;
@@ -23,6 +25,7 @@
 pub mod heldout;
 pub mod terms;
 pub mod agreement;
+pub mod next_dive;
 pub mod learned;
 pub mod timing;
 pub mod printed;
@@ -35,6 +38,7 @@ use crate::installation::study::rows::{NO_CALIBRATION, StudyResults, TermRow};
 use crate::report::kit::table::{Section, symbols};
 use agreement::agreement;
 use heldout::{clocks_kept, heldout_section, methods, windows, windows_section};
+use next_dive::next_dive_section;
 use std::fmt::Write;
 use terms::terms_section;
 
@@ -131,6 +135,9 @@ fn sections(study: &StudyResults) -> Vec<Section> {
                     .push(format!("{}: {}.", failure.calibration, failure.why));
             }
             sections.push(section);
+            if Method::parse(method).is_joint() {
+                sections.extend(next_dive_section(method, largest, &rows, &study.terms));
+            }
         }
     }
     sections
@@ -162,6 +169,9 @@ pub(crate) mod tests {
             bound_std: std,
             unseen: unseen.into(),
             asked: String::new(),
+            between_dives_std: f64::NAN,
+            next_dive_low: f64::NAN,
+            next_dive_high: f64::NAN,
         };
         StudyResults {
             heldout: Vec::new(),

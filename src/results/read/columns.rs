@@ -11,7 +11,13 @@ use arrow_schema::Schema;
 
 /// Columns added after the first results folders were written: a folder that lacks
 /// one still reads, with the value those runs implied.
-const LATER_COLUMNS: [&str; 2] = ["stop_reason", "efficiency"];
+const LATER_COLUMNS: [&str; 5] = [
+    "stop_reason",
+    "efficiency",
+    "between_dives_std",
+    "next_dive_low",
+    "next_dive_high",
+];
 
 pub(super) fn check_schema(found: &Schema, expected: &Schema) -> Result<(), ColumnError> {
     for field in expected.fields() {

@@ -201,6 +201,9 @@ pub(crate) mod tests {
                             bound_std: std,
                             unseen: unseen.into(),
                             asked: String::new(),
+                            between_dives_std: f64::NAN,
+                            next_dive_low: f64::NAN,
+                            next_dive_high: f64::NAN,
                         })
                     };
                     let lever_std = if straight { 0.36 } else { 0.013 };
