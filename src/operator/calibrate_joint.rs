@@ -388,7 +388,8 @@ fn spreads(joint: &JointFit) -> Vec<SavedSpread> {
         .filter_map(|(name, between)| {
             let between = between.as_ref()?;
             let (low, high) = between.next_dive_95();
-            Some(SavedSpread {
+            let finite = [between.std, low, high].iter().all(|v| v.is_finite());
+            finite.then(|| SavedSpread {
                 name: name.to_string(),
                 std: between.std,
                 next_dive: [low, high],

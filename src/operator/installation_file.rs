@@ -49,6 +49,7 @@ pub struct InstallationFile {
     /// The correlation coefficients of the terms, in their order.
     pub correlation: Vec<Vec<f64>>,
     /// How many dives (recordings) the terms were calibrated on together.
+    #[serde(default = "one_dive")]
     pub dives: usize,
     /// Of a joint calibration over three dives or more, how far each vehicle term moves
     /// from one dive to the next, and where a next dive's own calibration should find
@@ -60,6 +61,11 @@ pub struct InstallationFile {
     /// DVL's frame `/tf_static` gave, which the misalignment is a turn from.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mount: Option<SavedMount>,
+}
+
+/// What a file that does not say how many dives it was calibrated on was: one.
+fn one_dive() -> usize {
+    1
 }
 
 /// The DVL's frame as `/tf_static` placed it in the body's, when a calibration read a
@@ -310,12 +316,31 @@ impl SavedInstallation {
     }
 }
 
+/// Why an installation calibrated on `dives` holds no spread between dives, and what
+/// to do.
+pub fn no_spread_why(dives: usize) -> String {
+    match dives {
+        1 => "calibrated on 1 dive; calibrate jointly over three dives or more".into(),
+        2 => "calibrated on 2 dives; calibrate jointly over three dives or more".into(),
+        _ => format!(
+            "calibrated on {dives} dives, no vehicle term seen on three of them; calibrate jointly over dives that turn"
+        ),
+    }
+}
+
 impl InstallationFile {
     /// The file's text: the checksum line, then the contents.
     pub fn to_text(&self) -> String {
         let body = toml::to_string(self).expect("an installation serialises");
+        let spread = match self.between_dives.is_empty() {
+            true => format!(
+                "# It holds no spread between dives ({}): on another dive the vehicle's terms\n# may differ by more than their standard deviations.\n",
+                no_spread_why(self.dives)
+            ),
+            false => String::new(),
+        };
         let body = format!(
-            "# The installation `dcnet-exp calibrate --save` found, for `dcnet-exp correct`.\n# Edited by hand, it is refused: calibrate again instead.\n{body}"
+            "# The installation `dcnet-exp calibrate --save` found, for `dcnet-exp correct`.\n# Edited by hand, it is refused: calibrate again instead.\n{spread}{body}"
         );
         format!(
             "{CHECKSUM_KEY} = \"{}\"\n{body}",
@@ -561,6 +586,12 @@ mod tests {
         saved().write(&path).unwrap();
         let read = SavedInstallation::read(&path).unwrap();
         assert_eq!(read, saved());
+        // Of one dive, the file says it holds no spread between dives.
+        let written = std::fs::read_to_string(&path).unwrap();
+        assert!(
+            written.contains("# It holds no spread between dives (calibrated on 1 dive; "),
+            "{written}"
+        );
         assert_eq!(read.installation().lever_arm_m, [-1.9, 0.05, 0.4]);
         assert_eq!(read.installation().time_offset_s, 1.45);
         let text = std::fs::read_to_string(&path).unwrap();

@@ -319,8 +319,9 @@ fn on_akit_the_next_dive_interval_of_four_segments_holds_a_fifths_own_fit() {
         .collect();
     let (per_term, all) = shares(&hits);
     println!(
-        "A-KIT, every ordered pair of the 13 segments: B's own fit within 1.96 √(σ_A² + σ_B²) of A's {:.3}",
-        one_dive_against_the_next(&akit, noise)
+        "A-KIT, every ordered pair of the 13 segments: B's own fit within 1.96 √(σ_A² + σ_B²) of A's {:.3}; of the 11 turning ones {:.3}",
+        one_dive_against_the_next(&akit, noise, 13),
+        one_dive_against_the_next(&akit, noise, TURNING)
     );
     println!(
         "A-KIT, {} joint calibrations of four turning segments: a fifth's own fit within the next-dive interval {all:.3} (lever arm x, y, z, bias x, y, z: {per_term:.3?})",
@@ -329,12 +330,12 @@ fn on_akit_the_next_dive_interval_of_four_segments_holds_a_fifths_own_fit() {
     assert!(all >= 0.88, "{all:.3}");
 }
 
-/// Over every ordered pair (A, B) of the 13 A-KIT segments, each fitted alone (lever arm,
-/// time offset, bias), the share of B's lever arm and bias within 1.96 √(σ_A² + σ_B²) of
-/// A's: one dive's interval against the next dive's own fit.
-fn one_dive_against_the_next(akit: &std::path::Path, noise: Noise) -> f64 {
+/// Over every ordered pair (A, B) of the first `count` A-KIT segments, each fitted alone
+/// (lever arm, time offset, bias), the share of B's lever arm and bias within
+/// 1.96 √(σ_A² + σ_B²) of A's: one dive's interval against the next dive's own fit.
+fn one_dive_against_the_next(akit: &std::path::Path, noise: Noise, count: usize) -> f64 {
     use dcnet_exp::installation::estimate::bound::bound;
-    let files: Vec<PairedFiles> = (1..=13).map(|n| PairedFiles::akit(akit, n)).collect();
+    let files: Vec<PairedFiles> = (1..=count).map(|n| PairedFiles::akit(akit, n)).collect();
     let fitted: Vec<(Vec<f64>, Vec<f64>)> = segments(&files)
         .iter()
         .map(|s| {

@@ -117,7 +117,7 @@ fn an_installation_saved_from_one_dive_corrects_another_whose_clock_differs() {
         assert!(!printed.contains("warning"), "{printed}");
         // One dive: no spread between dives to carry, and `correct` says so.
         assert!(
-            printed.contains("calibrated on 1 dive: the file holds no spread between dives"),
+            printed.contains("the file holds no spread between dives (calibrated on 1 dive; "),
             "{printed}"
         );
         assert!(out.join("DVL_trajectory1-corrected.csv").is_file());

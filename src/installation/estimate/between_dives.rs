@@ -60,14 +60,14 @@ impl BetweenDives {
 }
 
 /// The spread of one term over dives whose own estimates are `own`, (value, standard
-/// deviation) each; dives with a standard deviation that is not finite (a dive that
-/// cannot show the term) are left out. `None` where fewer than [`MIN_DIVES`] remain.
+/// deviation) each; dives with a standard deviation that is not finite and positive (a
+/// dive that cannot show the term, or a noise-free one that weighs without bound) are
+/// left out. `None` where fewer than [`MIN_DIVES`] remain.
 pub fn between_dives(own: &[(f64, f64)]) -> Option<BetweenDives> {
     let shown: Vec<(f64, f64)> = own
         .iter()
-        .filter(|(value, std)| value.is_finite() && std.is_finite())
-        // A noise-free dive's weight is kept finite.
-        .map(|&(value, std)| (value, (std * std).max(f64::MIN_POSITIVE)))
+        .filter(|(value, std)| value.is_finite() && std.is_finite() && *std > 0.0)
+        .map(|&(value, std)| (value, std * std))
         .collect();
     let k = shown.len();
     if k < MIN_DIVES {

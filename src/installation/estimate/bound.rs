@@ -157,11 +157,11 @@ pub fn bound(fit: &Fit, noise: Noise, tolerances: &Tolerances) -> TermBound {
     let sigma_m_s = noise.per_axis_m_s();
     let information = UnitInformation::of(fit, names.len());
     let (inverse, flat_with) = information.pseudo_inverse(&names);
-    let residual_noise = fit.residual_noise().counting_the_absorbed(
-        (&fit.jacobian, &fit.follows),
-        fit.parameters.len(),
-        |weighted| information.absorbed(&inverse, weighted),
-    );
+    let residual_noise = fit
+        .residual_noise()
+        .counting_the_absorbed((&fit.curved(&fit.jacobian), &fit.follows), |weighted| {
+            information.absorbed(&inverse, weighted)
+        });
     let modelled = information.sandwich(
         &inverse,
         &residual_noise.weighted_information(&fit.jacobian, &fit.follows),

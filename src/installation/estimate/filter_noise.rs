@@ -158,6 +158,7 @@ impl OnlineNoise {
                 std_m_s: [0.0; 3],
                 lag_one: [0.0; 3],
                 samples: self.samples,
+                kept: [1.0; 3],
             }
         };
         let n = self.parameters;

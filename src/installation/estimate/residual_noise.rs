@@ -44,6 +44,9 @@ pub struct ResidualNoise {
     pub lag_one: Vec3,
     /// How many samples they were read from.
     pub samples: usize,
+    /// Per axis, the samples' worth of noise the fit left in the residuals, n − f_k
+    /// ([`Self::counting_the_absorbed`]; n less a third of the parameters until then).
+    pub kept: Vec3,
 }
 
 impl ResidualNoise {
@@ -78,6 +81,7 @@ impl ResidualNoise {
             std_m_s: [0.0; 3],
             lag_one: [0.0; 3],
             samples,
+            kept: [(samples as f64 - parameters as f64 / 3.0).max(1.0); 3],
         };
         for k in 0..3 {
             let (power, lagged) = (sums.power[k], sums.lagged[k]);
@@ -107,15 +111,15 @@ impl ResidualNoise {
     /// for white noise only: a correlated noise's slow part looks like the terms (a bias
     /// absorbs (1 + ρ)/(1 − ρ) samples' worth of it), and the level read short would
     /// narrow every interval. `absorbed` gives f_k of one axis's JᵀR_kJ, the bread's
-    /// inverse applied; `parameters` are those [`Self::of_sums`] counted.
+    /// inverse applied; `jacobian` is the rows as the bread weighs them (a robust loss's
+    /// D J, an outlier's row zero). Per axis this is the sum's share, exact where each
+    /// parameter moves one axis, an approximation where one moves several.
     pub fn counting_the_absorbed(
         &self,
         (jacobian, follows): (&DMatrix<f64>, &[bool]),
-        parameters: usize,
         absorbed: impl Fn(&DMatrix<f64>) -> f64,
     ) -> ResidualNoise {
         let n = self.samples as f64;
-        let counted = n - parameters as f64 / 3.0;
         let mut noise = *self;
         for k in 0..3 {
             let mut unit = ResidualNoise {
@@ -123,28 +127,29 @@ impl ResidualNoise {
                 ..*self
             };
             unit.std_m_s[k] = 1.0;
-            let share = absorbed(&unit.weighted_information(jacobian, follows));
-            let kept = (n - share).max(1.0);
-            noise.std_m_s[k] = self.std_m_s[k] * (counted.max(1.0) / kept).sqrt();
+            let share = absorbed(&unit.weighted_information(jacobian, follows)).clamp(0.0, n - 1.0);
+            noise.kept[k] = n - share;
+            noise.std_m_s[k] = self.std_m_s[k] * (self.kept[k] / noise.kept[k]).sqrt();
         }
         noise
     }
 
     /// The degrees of freedom of the noise's level as read from these residuals: on
-    /// each axis Bartlett's n (1 − ρ²) / (1 + ρ²), the samples an AR(1) series of
-    /// correlation ρ is worth for its variance, and their mean over the three axes. 400
-    /// white samples are worth 400; 60 at ρ = 0.9, about 6.
+    /// each axis Bartlett's m (1 − ρ²) / (1 + ρ²), m the samples' worth the fit left
+    /// ([`Self::kept`]), what an AR(1) series of correlation ρ is worth for its variance,
+    /// and their mean over the three axes. 400 white samples are worth about 400; 60 at
+    /// ρ = 0.9, about 6.
     pub fn freedom(&self) -> f64 {
-        let per_axis = self.lag_one.map(|rho| {
-            let r2 = rho * rho;
-            self.samples as f64 * (1.0 - r2) / (1.0 + r2)
+        let per_axis = [0, 1, 2].map(|k| {
+            let r2 = self.lag_one[k] * self.lag_one[k];
+            self.kept[k] * (1.0 - r2) / (1.0 + r2)
         });
         (per_axis.iter().sum::<f64>() / 3.0).max(1.0)
     }
 
     /// The 95 % quantile a standard deviation read from this noise takes for an interval
     /// that holds 95 %, though the noise's level and correlation are themselves estimated:
-    /// Student's t₀.₉₇₅ on [`Self::freedom`] degrees of freedom. 1.96 for white noise
+    /// Student's t₀.₉₇₅ on [`Self::freedom`] degrees of freedom. 1.97 for white noise
     /// over 400 samples, about 2.4 for a minute at 1 Hz under a correlation of 0.9.
     pub fn quantile_95(&self) -> f64 {
         use statrs::distribution::{ContinuousCDF, StudentsT};
@@ -161,7 +166,7 @@ impl ResidualNoise {
         let (rows, n) = jacobian.shape();
         let samples = rows / 3;
         let mut information = DMatrix::zeros(n, n);
-        for k in 0..3 {
+        for k in (0..3).filter(|&k| self.std_m_s[k] != 0.0) {
             let (variance, rho) = (self.std_m_s[k].powi(2), self.lag_one[k]);
             let mut running = DVector::<f64>::zeros(n);
             let mut pairs = DMatrix::<f64>::zeros(n, n);
@@ -273,6 +278,7 @@ mod tests {
             std_m_s: [0.5, 1.0, 2.0],
             lag_one: [0.8, 0.0, -0.3],
             samples,
+            kept: [samples as f64; 3],
         };
         let fast = noise.weighted_information(&jacobian, &follows);
         let mut dense = DMatrix::<f64>::zeros(3, 3);

@@ -81,6 +81,7 @@ fn printed_fit(calibration: &Calibration) -> String {
         "standard deviation",
         "bound (specified noise)",
         "seen",
+        "95 % interval",
     ]);
     for (i, name) in bound.names.iter().enumerate() {
         let (readable, unit, factor) = readable_term(name);
@@ -97,6 +98,7 @@ fn printed_fit(calibration: &Calibration) -> String {
             format!("{:.4} {unit}", bound.std[i] * factor),
             format!("{:.4} {unit}", bound.bound_std[i] * factor),
             seen.to_string(),
+            format!("± {:.4} {unit}", bound.half_width_95(i) * factor),
         ]);
     }
     let shown = bound.residual_noise;
@@ -109,7 +111,9 @@ fn printed_fit(calibration: &Calibration) -> String {
     );
     let (level, correlation) = residual_noise(&shown);
     text.push_str(&format!(
-        "standard deviation: from the noise the fit leaves, per axis x, y, z {level} cm/s with a correlation of {correlation} from one sample to the next (an AR(1) noise); bound: from the specified white noise of {assumed:.2} cm/s per axis, the best these samples could give\n",
+        "standard deviation: from the noise the fit leaves, per axis x, y, z {level} cm/s with a correlation of {correlation} from one sample to the next (an AR(1) noise); 95 % interval: ± {:.3} standard deviations, Student's t on the {:.0} degrees of freedom that noise is read with; bound: from the specified white noise of {assumed:.2} cm/s per axis, the best these samples could give\n",
+        shown.quantile_95(),
+        shown.freedom(),
     ));
     for asked in &calibration.asked {
         text.push_str(&format!(
@@ -329,7 +333,7 @@ fn between_dives_text(dives: usize) -> String {
         );
     }
     format!(
-        "between dives: how far each term moves from one recording to the next beyond their noise (a random-effects model over each recording's own estimate, its spread by Paule and Mandel's method); vehicle's term, 95 %: its interval where the dives differ (Hartung and Knapp, Student's t on {} degrees of freedom); next dive's own fit, 95 %: where a next dive's own calibration, as long as these, should find the term\n",
+        "between dives: how far each term moves from one recording to the next beyond their noise (a random-effects model over each recording's own estimate, its spread by Paule and Mandel's method, over the recordings that show the term); vehicle's term, 95 %: its interval where the dives differ, about the recordings' random-effects mean (Hartung and Knapp, Student's t on {} degrees of freedom, fewer where a term is shown by fewer recordings; where the recordings agree more closely than their noise it can be narrower than the standard deviation's, and holds 95 % over calibrations); next dive's own fit, 95 %: where a next dive's own calibration, as long as these, should find the term\n",
         dives - 1
     )
 }
@@ -379,7 +383,13 @@ fn vehicle_table(calibration: &JointCalibration) -> Table {
             format!("{:.4} {unit}", bound.value[i] * factor),
             format!("{:.4} {unit}", bound.std[i] * factor),
             format!("{:.4} {unit}", bound.bound_std[i] * factor),
-            between.map_or_else(none, |b| format!("{:.4} {unit}", b.std * factor)),
+            between.map_or_else(none, |b| {
+                let of = match b.dives == calibration.names.len() {
+                    true => String::new(),
+                    false => format!(" ({} of {} recordings)", b.dives, calibration.names.len()),
+                };
+                format!("{:.4} {unit}{of}", b.std * factor)
+            }),
             between.map_or_else(none, |b| interval(b.vehicle_95())),
             between.map_or_else(none, |b| interval(b.next_dive_95())),
             format!("{:.1} ({:.1e}{mark})", agree.chi_square, agree.p_value),

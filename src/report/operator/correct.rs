@@ -7,7 +7,7 @@
 use crate::installation::estimate::between_dives::MIN_DIVES;
 use crate::installation::estimate::robust::TUKEY_C;
 use crate::operator::correct::Correction;
-use crate::operator::installation_file::SavedInstallation;
+use crate::operator::installation_file::{SavedInstallation, no_spread_why};
 use crate::report::kit::readable::readable_term;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 
@@ -24,11 +24,12 @@ pub fn correction_text(correction: &Correction) -> String {
     );
     if let Some(clock) = &correction.clock {
         text.push_str(&format!(
-            "clock found again: the search over ±{} s put the time offset at {:.2} s, least squares at {:.4} s ± {:.4} s{}\n",
+            "clock found again: the search over ±{} s put the time offset at {:.2} s, least squares at {:.4} s ± {:.4} s (95 %: ± {:.4} s, Student's t on the window's noise){}\n",
             correction.search_s,
             clock.searched_offset_s,
             clock.installation.time_offset_s,
             clock.time_offset_std_s(),
+            clock.time_offset_half_width_95_s(),
             if clock.time_offset_unseen() { " (not seen: its standard deviation is beyond the 0.05 s a clock is held to, or it is tied to another term: these seconds show the clock poorly, and a longer --window-s shows it better)" } else { "" }
         ));
     }
@@ -75,9 +76,8 @@ pub fn correction_text(correction: &Correction) -> String {
 fn spread_text(saved: &SavedInstallation) -> String {
     if saved.between_dives.is_empty() {
         return format!(
-            "calibrated on {} dive{}: the file holds no spread between dives, and on this dive the vehicle's terms may differ by more than their standard deviations (a lever arm absorbs what a dive's model leaves out, a DVL's bias moves between dives); calibrate jointly over at least {MIN_DIVES} dives for an interval that holds on the next one\n",
-            saved.dives,
-            if saved.dives == 1 { "" } else { "s" }
+            "the file holds no spread between dives ({}): on this dive the vehicle's terms may differ by more than their standard deviations (a lever arm absorbs what a dive's model leaves out, a DVL's bias moves between dives); a joint calibration over at least {MIN_DIVES} dives gives an interval that holds on the next one\n",
+            no_spread_why(saved.dives)
         );
     }
     format!(
