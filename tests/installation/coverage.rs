@@ -500,7 +500,7 @@ fn covered(
 /// fit of another segment of the same vehicle: its interval covers the dive's true time
 /// offset, drawn within ±10 s, under white and AR(1) noise. Without the variance the
 /// carried terms' uncertainty passes on, it covered 85.2 % (white) and 92.3 % (AR(1));
-/// with it, 97.1 % and 98.4 %: the carried terms' intervals, from a whole segment, are
+/// with it, 97.1 % and 98.5 %: the carried terms' intervals, from a whole segment, are
 /// themselves a little wide for a minute's use, so the band is 93–99 %.
 #[test]
 fn the_clock_found_again_covers_the_dives_true_time_offset() {
