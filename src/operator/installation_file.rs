@@ -320,8 +320,10 @@ impl SavedInstallation {
 /// to do.
 pub fn no_spread_why(dives: usize) -> String {
     match dives {
-        1 => "calibrated on 1 dive; calibrate jointly over three dives or more".into(),
-        2 => "calibrated on 2 dives; calibrate jointly over three dives or more".into(),
+        1 | 2 => format!(
+            "calibrated on {dives} dive{}; calibrate jointly over three dives or more",
+            if dives == 1 { "" } else { "s" }
+        ),
         _ => format!(
             "calibrated on {dives} dives, no vehicle term seen on three of them; calibrate jointly over dives that turn"
         ),

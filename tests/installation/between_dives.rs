@@ -9,8 +9,7 @@
 //!
 //! [`between_dives`]: dcnet_exp::installation::estimate::between_dives
 
-use crate::common::installed;
-use crate::coverage::{NOISE_M_S, segments, simulated};
+use crate::coverage::{NOISE, segments, simulated, synthetic_segments};
 use dcnet_exp::data::paired::PairedFiles;
 use dcnet_exp::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise};
 use dcnet_exp::installation::estimate::fit::{fit, fit_about};
@@ -67,8 +66,19 @@ struct Dive<'a> {
     segment: &'a Recording,
 }
 
+impl Dive<'_> {
+    /// The dive as a joint fit (or its clock's search) takes it.
+    fn recording(&self) -> JointRecording<'_> {
+        JointRecording {
+            time_s: &self.time_s,
+            dvl_m_s: &self.dvl,
+            reference: &self.segment.reference,
+        }
+    }
+}
+
 /// Dive `k` of seed `rng`'s draw: the vehicle's terms with `departures`, a clock
-/// within ±5 s, white noise of [`NOISE_M_S`], on trajectory `k % 4`.
+/// within ±5 s, white noise of 1 cm/s ([`NOISE`]), on trajectory `k % 4`.
 fn dive<'a>(
     segments: &'a [Recording],
     k: usize,
@@ -95,39 +105,19 @@ fn dive<'a>(
 /// The joint calibration of `dives`, started from the vehicle's terms off by a little
 /// and no clock (the search finds each).
 fn jointly(dives: &[Dive]) -> JointFit {
-    let recordings: Vec<JointRecording> = dives
-        .iter()
-        .map(|d| JointRecording {
-            time_s: &d.time_s,
-            dvl_m_s: &d.dvl,
-            reference: &d.segment.reference,
-        })
-        .collect();
+    let recordings: Vec<JointRecording> = dives.iter().map(Dive::recording).collect();
     let start = Installation {
         lever_arm_m: [-1.7, 0.0, 0.3],
         ..VEHICLE
     };
     let starts = starts_from(&recordings, start, 10.0);
-    let noise = Noise {
-        dvl_m_s: NOISE_M_S,
-        reference_m_s: 0.0,
-    };
     joint_fit(
         &recordings,
         &starts,
         (LEVER_OFFSET_BIAS, CLOCK),
-        (noise, &DEFAULT_TOLERANCES),
+        (NOISE, &DEFAULT_TOLERANCES),
     )
     .expect("a joint fit")
-}
-
-/// The four synthetic turning trajectories.
-fn trajectories() -> (tempfile::TempDir, Vec<Recording>) {
-    let dir = tempfile::tempdir().unwrap();
-    installed::write_installed(dir.path(), 4, &[], installed::INSTALLED, 1);
-    let files: Vec<PairedFiles> = (1..=4).map(|n| PairedFiles::akit(dir.path(), n)).collect();
-    let recordings = segments(&files);
-    (dir, recordings)
 }
 
 /// Per term, the share of `hits` (one row of the six terms per seed) that hold; and
@@ -143,7 +133,7 @@ fn shares(hits: &[Vec<bool>]) -> (Vec<f64>, f64) {
 
 #[test]
 fn the_joint_intervals_hold_the_vehicles_terms_at_three_five_and_ten_dives() {
-    let (_dir, segments) = trajectories();
+    let (_dir, segments) = synthetic_segments();
     let mut outside = Vec::new();
     for (kind, departures) in [("shared", SHARED), ("varying", VARYING)] {
         for dives in [3, 5, 10] {
@@ -195,7 +185,7 @@ fn the_joint_intervals_hold_the_vehicles_terms_at_three_five_and_ten_dives() {
 
 #[test]
 fn the_next_dive_interval_holds_a_left_out_dives_own_fit() {
-    let (_dir, segments) = trajectories();
+    let (_dir, segments) = synthetic_segments();
     let mut outside = Vec::new();
     for (kind, departures) in [("shared", SHARED), ("varying", VARYING)] {
         let hits: Vec<Vec<bool>> = (0..400u64)
@@ -208,12 +198,7 @@ fn the_next_dive_interval_holds_a_left_out_dives_own_fit() {
                 let left_out = drawn.pop().expect("six dives");
                 let joint = jointly(&drawn);
                 // Its own fit, from the joint terms and its clock's search.
-                let recording = JointRecording {
-                    time_s: &left_out.time_s,
-                    dvl_m_s: &left_out.dvl,
-                    reference: &left_out.segment.reference,
-                };
-                let start = starts_from(&[recording], joint.vehicle, 10.0)[0];
+                let start = starts_from(&[left_out.recording()], joint.vehicle, 10.0)[0];
                 let own = fit_about(
                     &left_out.time_s,
                     &left_out.dvl,

@@ -14,6 +14,7 @@ use crate::common;
 use common::installed;
 use dcnet_exp::data::paired::{PairedColumns, PairedFiles, read};
 use dcnet_exp::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise, bound};
+use dcnet_exp::installation::estimate::clock::ClockSearch;
 use dcnet_exp::installation::estimate::filter::{FilterSettings, run_filter_observed};
 use dcnet_exp::installation::estimate::fit::fit;
 use dcnet_exp::installation::learned::simulate::simulate_dvl_correlated;
@@ -157,6 +158,30 @@ fn coverage(
         bound_at_twice: fraction(2),
         names,
     }
+}
+
+/// The noise the simulated DVL is told it has: [`NOISE_M_S`] of white noise.
+pub(crate) const NOISE: Noise = Noise {
+    dvl_m_s: NOISE_M_S,
+    reference_m_s: 0.0,
+};
+
+/// A dive's clock found again alone, within ±30 s.
+const CLOCK_SEARCH: ClockSearch = ClockSearch {
+    dive_terms: TermSet {
+        time_offset: true,
+        ..TermSet::NONE
+    },
+    search_s: 30.0,
+};
+
+/// The four synthetic turning trajectories of `common::installed`, in the folder that
+/// holds them (kept for as long as they are read).
+pub(crate) fn synthetic_segments() -> (tempfile::TempDir, Vec<Recording>) {
+    let dir = tempfile::tempdir().unwrap();
+    installed::write_installed(dir.path(), 4, &[], installed::INSTALLED, 1);
+    let files: Vec<PairedFiles> = (1..=4).map(|n| PairedFiles::akit(dir.path(), n)).collect();
+    (dir, segments(&files))
 }
 
 /// The segments of `files`, read as A-KIT files.
@@ -504,22 +529,8 @@ fn covered(
 /// themselves a little wide for a minute's use, so the band is 93–99 %.
 #[test]
 fn the_clock_found_again_covers_the_dives_true_time_offset() {
-    use dcnet_exp::installation::estimate::clock::{Carried, ClockSearch, refind};
-    let dir = tempfile::tempdir().unwrap();
-    installed::write_installed(dir.path(), 4, &[], installed::INSTALLED, 1);
-    let files: Vec<PairedFiles> = (1..=4).map(|n| PairedFiles::akit(dir.path(), n)).collect();
-    let segments = segments(&files);
-    let search = ClockSearch {
-        dive_terms: TermSet {
-            time_offset: true,
-            ..TermSet::NONE
-        },
-        search_s: 30.0,
-    };
-    let noise = Noise {
-        dvl_m_s: NOISE_M_S,
-        reference_m_s: 0.0,
-    };
+    use dcnet_exp::installation::estimate::clock::{Carried, refind};
+    let (_dir, segments) = synthetic_segments();
     let mut outside = Vec::new();
     for correlation in [0.0, 0.8] {
         let coverage = covered(1000, |seed| {
@@ -529,7 +540,7 @@ fn the_clock_found_again_covers_the_dives_true_time_offset() {
             // The vehicle's terms, fitted on the calibration segment.
             let (time_s, dvl) = simulated(calibration, &TRUTH, correlation, &mut rng);
             let fitted = fit(&time_s, &dvl, &calibration.reference, EVERY_TERM).expect("a fit");
-            let bounded = bound(&fitted, noise, &DEFAULT_TOLERANCES);
+            let bounded = bound(&fitted, NOISE, &DEFAULT_TOLERANCES);
             let carried = Carried::with(
                 fitted.installation,
                 EVERY_TERM,
@@ -549,8 +560,8 @@ fn the_clock_found_again_covers_the_dives_true_time_offset() {
                 (&time_s[..first], &dvl[..first]),
                 &dive.reference,
                 &carried,
-                search,
-                (noise, &DEFAULT_TOLERANCES),
+                CLOCK_SEARCH,
+                (NOISE, &DEFAULT_TOLERANCES),
             )
             .expect("the clock is found");
             vec![(
@@ -584,22 +595,8 @@ fn the_clock_found_again_covers_the_dives_true_time_offset() {
 /// read as 0.99), a minute under AR(1) 0.9 said ±0.88 s of a clock found to ±0.24 s.
 #[test]
 fn the_clocks_standard_deviation_is_its_error_on_short_windows_of_correlated_noise() {
-    use dcnet_exp::installation::estimate::clock::{Carried, ClockSearch, refind};
-    let dir = tempfile::tempdir().unwrap();
-    installed::write_installed(dir.path(), 4, &[], installed::INSTALLED, 1);
-    let files: Vec<PairedFiles> = (1..=4).map(|n| PairedFiles::akit(dir.path(), n)).collect();
-    let segments = segments(&files);
-    let search = ClockSearch {
-        dive_terms: TermSet {
-            time_offset: true,
-            ..TermSet::NONE
-        },
-        search_s: 30.0,
-    };
-    let noise = Noise {
-        dvl_m_s: NOISE_M_S,
-        reference_m_s: 0.0,
-    };
+    use dcnet_exp::installation::estimate::clock::{Carried, refind};
+    let (_dir, segments) = synthetic_segments();
     let mut outside = Vec::new();
     for correlation in [0.0, 0.9] {
         for window_s in [30.0, 60.0, 120.0] {
@@ -620,8 +617,8 @@ fn the_clocks_standard_deviation_is_its_error_on_short_windows_of_correlated_noi
                         (&time_s[..first], &dvl[..first]),
                         &dive.reference,
                         &Carried::exact(TRUTH),
-                        search,
-                        (noise, &DEFAULT_TOLERANCES),
+                        CLOCK_SEARCH,
+                        (NOISE, &DEFAULT_TOLERANCES),
                     )
                     .expect("the clock is found");
                     (
@@ -659,14 +656,7 @@ fn the_clocks_standard_deviation_is_its_error_on_short_windows_of_correlated_noi
 #[test]
 fn the_joint_fit_covers_the_vehicles_terms_and_every_clock() {
     use dcnet_exp::installation::estimate::joint::{JointRecording, joint_fit, starts_from};
-    let dir = tempfile::tempdir().unwrap();
-    installed::write_installed(dir.path(), 4, &[], installed::INSTALLED, 1);
-    let files: Vec<PairedFiles> = (1..=4).map(|n| PairedFiles::akit(dir.path(), n)).collect();
-    let segments = segments(&files);
-    let noise = Noise {
-        dvl_m_s: NOISE_M_S,
-        reference_m_s: 0.0,
-    };
+    let (_dir, segments) = synthetic_segments();
     let clocks = [0.6, -4.2, 7.7];
     let dive_terms = TermSet {
         time_offset: true,
@@ -709,7 +699,7 @@ fn the_joint_fit_covers_the_vehicles_terms_and_every_clock() {
                 &recordings,
                 &starts,
                 (EVERY_TERM, dive_terms),
-                (noise, &DEFAULT_TOLERANCES),
+                (NOISE, &DEFAULT_TOLERANCES),
             )
             .expect("a joint fit");
             let truth = TRUTH.to_parameters(&joint.vehicle_terms);

@@ -17,7 +17,7 @@
 use crate::installation::estimate::fit::Fit;
 use crate::installation::estimate::residual_noise::ResidualNoise;
 use crate::installation::terms::PerKind;
-use nalgebra::{DMatrix, SymmetricEigen};
+use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use std::fmt;
 
 /// |correlation| beyond which two terms cannot be told apart.
@@ -201,6 +201,26 @@ pub fn bound(fit: &Fit, noise: Noise, tolerances: &Tolerances) -> TermBound {
     }
 }
 
+/// −(JᵀDJ)⁺ Jᵀr of `fit` (its Jacobian, weights and residuals, pseudo-residuals under a
+/// robust loss): the Gauss–Newton step, the inverse the bound's own, taken on the
+/// information scaled to a unit diagonal over its directions above [`FLAT_EIGENVALUE`]
+/// of the largest; no step along a flat direction, nor in a term the residuals ignore.
+pub fn gauss_newton_step(fit: &Fit) -> DVector<f64> {
+    let names = fit.terms.parameter_names();
+    let information = UnitInformation::of(fit, names.len());
+    let (inverse, _) = information.pseudo_inverse(&names);
+    let gradient = fit.jacobian.transpose() * &fit.residuals;
+    let felt = &information.felt;
+    let scale = &information.scale;
+    let scaled = DVector::from_fn(felt.len(), |a, _| gradient[felt[a]] / scale[felt[a]]);
+    let unit_step = -(inverse * scaled);
+    let mut step = DVector::zeros(names.len());
+    for (a, &k) in felt.iter().enumerate() {
+        step[k] = unit_step[a] / scale[k];
+    }
+    step
+}
+
 /// For each term, `Some(the others)` when it lies on a flat direction (a term the
 /// residuals ignore is flat alone), `None` otherwise.
 type FlatWith = Vec<Option<Vec<&'static str>>>;
@@ -271,21 +291,21 @@ impl UnitInformation {
     /// `self` and whose noise weights it to `weighted` (JᵀΣJ over every term):
     /// `inverse` · D⁻¹ JᵀΣJ D⁻¹ · `inverse`.
     fn sandwich(&self, inverse: &DMatrix<f64>, weighted: &DMatrix<f64>) -> DMatrix<f64> {
-        let felt = &self.felt;
-        let middle = DMatrix::from_fn(felt.len(), felt.len(), |a, b| {
-            weighted[(felt[a], felt[b])] / (self.scale[felt[a]] * self.scale[felt[b]])
-        });
-        inverse * middle * inverse
+        inverse * self.scaled(weighted) * inverse
     }
 
     /// tr((JᵀJ)⁻¹ M) over the felt terms, for an `M` over every term (JᵀRJ of a noise
     /// R): how much of that noise the fit absorbs, in samples.
     fn absorbed(&self, inverse: &DMatrix<f64>, weighted: &DMatrix<f64>) -> f64 {
+        (inverse * self.scaled(weighted)).trace()
+    }
+
+    /// D⁻¹ M D⁻¹ over the felt terms, for an `M` over every term.
+    fn scaled(&self, weighted: &DMatrix<f64>) -> DMatrix<f64> {
         let felt = &self.felt;
-        let middle = DMatrix::from_fn(felt.len(), felt.len(), |a, b| {
+        DMatrix::from_fn(felt.len(), felt.len(), |a, b| {
             weighted[(felt[a], felt[b])] / (self.scale[felt[a]] * self.scale[felt[b]])
-        });
-        (inverse * middle).trace()
+        })
     }
 
     /// Each term's standard deviation from `covariance` (in the unit-diagonal scaling):

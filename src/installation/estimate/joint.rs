@@ -33,7 +33,9 @@
 
 use crate::Vec3;
 use crate::installation::estimate::between_dives::{BetweenDives, between_dives};
-use crate::installation::estimate::bound::{FLAT_EIGENVALUE, Noise, TermBound, Tolerances, bound};
+use crate::installation::estimate::bound::{
+    Noise, TermBound, Tolerances, bound, gauss_newton_step,
+};
 use crate::installation::estimate::clock::{covariance, search_offset};
 use crate::installation::estimate::fit::{
     Fit, FitError, TIME_OFFSET_MARGIN_S, beyond_any_installation, linearised, mask_about,
@@ -480,6 +482,29 @@ impl<'a> Weighed<'a> {
         Some(inverse * (b.dive.transpose() * weighted(&self.curvature, &b.vehicle)))
     }
 
+    /// This recording's samples as a fit of `terms` at `at` whose Jacobian is
+    /// `jacobian` (some of its columns), for the single fit's [`bound`]: its residuals as
+    /// the meat reads them, `fitted`'s loss, its pieces.
+    fn fit(
+        &self,
+        (terms, at): (TermSet, Installation),
+        jacobian: DMatrix<f64>,
+        fitted: Option<&RobustFit>,
+    ) -> Fit {
+        Fit {
+            terms,
+            installation: at,
+            parameters: at.to_parameters(&terms),
+            residual_rms_m_s: [0.0; 3],
+            sample_count: self.blocks.raw.len() / 3,
+            jacobian,
+            residuals: self.meat.clone(),
+            robust: fitted.cloned(),
+            follows: self.blocks.follows.clone(),
+            termination: "joint".into(),
+        }
+    }
+
     /// The vehicle's columns with the dive's terms projected out (in the D-metric),
     /// Ã = A − B (BᵀDB)⁻¹ BᵀDA; A itself where the dive has no terms or they are not
     /// seen.
@@ -513,20 +538,8 @@ fn own_estimate(
     (terms, vehicle): (TermSet, Installation),
     (noise, tolerances): (Noise, &Tolerances),
 ) -> TermBound {
-    let b = w.blocks;
     let at = vehicle.to_parameters(&terms);
-    let mut own = Fit {
-        terms,
-        installation: vehicle,
-        parameters: at.clone(),
-        residual_rms_m_s: [0.0; 3],
-        sample_count: b.raw.len() / 3,
-        jacobian: w.projected_vehicle(),
-        residuals: w.meat.clone(),
-        robust: fitted.cloned(),
-        follows: b.follows.clone(),
-        termination: "joint".into(),
-    };
+    let mut own = w.fit((terms, vehicle), w.projected_vehicle(), fitted);
     let step = gauss_newton_step(&own);
     let moved = &own.jacobian * &step;
     for (i, r) in own.residuals.iter_mut().enumerate() {
@@ -535,35 +548,6 @@ fn own_estimate(
     own.parameters = at.iter().zip(step.iter()).map(|(a, d)| a + d).collect();
     own.installation = Installation::default().with_parameters(&terms, &own.parameters);
     bound(&own, noise, tolerances)
-}
-
-/// −(JᵀDJ)⁺ Jᵀψ of `fit` (its Jacobian, weights and pseudo-residuals), the inverse taken
-/// on the information scaled to a unit diagonal over its directions above
-/// [`FLAT_EIGENVALUE`] of the largest, as the bound takes it: no step along a flat one.
-fn gauss_newton_step(fit: &Fit) -> DVector<f64> {
-    let information = fit.information();
-    let n = information.nrows();
-    let scale: Vec<f64> = (0..n).map(|k| information[(k, k)].sqrt()).collect();
-    let unscaled = |a: usize, value: f64| {
-        if scale[a] > 0.0 {
-            value / scale[a]
-        } else {
-            0.0
-        }
-    };
-    let unit = DMatrix::from_fn(n, n, |a, b| unscaled(a, unscaled(b, information[(a, b)])));
-    let gradient = fit.jacobian.transpose() * &fit.residuals;
-    let scaled = DVector::from_fn(n, |a, _| unscaled(a, gradient[a]));
-    let eigen = nalgebra::SymmetricEigen::new(unit);
-    let largest = eigen.eigenvalues.max();
-    let mut step = DVector::<f64>::zeros(n);
-    for (i, &value) in eigen.eigenvalues.iter().enumerate() {
-        if value > FLAT_EIGENVALUE * largest {
-            let vector = eigen.eigenvectors.column(i);
-            step -= vector * (vector.dot(&scaled) / value);
-        }
-    }
-    DVector::from_fn(n, |a, _| unscaled(a, step[a]))
 }
 
 /// diag(`d`) · `m`: each row of `m` times its weight.
@@ -665,18 +649,11 @@ fn dive_standard_deviations(
             let Some(gain) = w.gain() else {
                 return vec![f64::INFINITY; b.dive.ncols()];
             };
-            let own = Fit {
-                terms: dive_terms,
-                installation: Installation::default(),
-                parameters: vec![0.0; b.dive.ncols()],
-                residual_rms_m_s: [0.0; 3],
-                sample_count: b.raw.len() / 3,
-                jacobian: b.dive.clone(),
-                residuals: w.meat.clone(),
-                robust: fitted.clone(),
-                follows: b.follows.clone(),
-                termination: "joint".into(),
-            };
+            let own = w.fit(
+                (dive_terms, Installation::default()),
+                b.dive.clone(),
+                fitted.as_ref(),
+            );
             let given = bound(&own, noise, tolerances).std;
             let carried = &gain * &covariance * gain.transpose();
             (0..b.dive.ncols())
