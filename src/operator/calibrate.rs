@@ -253,18 +253,8 @@ impl Read {
 pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     refused(args.request())?;
     let outputs = outputs(args);
-    let written: Vec<&Path> = outputs.all().into_iter().chain(args.save).collect();
     let inputs = [Some(args.dvl), args.reference, args.columns];
-    if let Some(over) = not_over_an_input(&inputs, &written) {
-        return Err(CalibrateError::over_input(over, args.save));
-    }
-    if let Some(save) = args.save {
-        if not_over_an_input(&[Some(save)], &outputs.all()).is_some() {
-            return Err(CalibrateError::SaveOverOutput {
-                path: save.to_path_buf(),
-            });
-        }
-    }
+    clear_of_inputs(&inputs, &outputs.all(), args.save)?;
     args.cost()?.state()?;
     let read = read(args)?;
     let recording_sha256 = read.dvl_sha256.clone();
@@ -331,6 +321,27 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
         frames: read.frames,
         ros,
     })
+}
+
+/// Refuses a calibration whose `corrected` files or `save` would write over one of its
+/// `inputs`, or whose `save` is one of its `corrected` files.
+pub(crate) fn clear_of_inputs(
+    inputs: &[Option<&Path>],
+    corrected: &[&Path],
+    save: Option<&Path>,
+) -> Result<(), CalibrateError> {
+    let written: Vec<&Path> = corrected.iter().copied().chain(save).collect();
+    if let Some(over) = not_over_an_input(inputs, &written) {
+        return Err(CalibrateError::over_input(over, save));
+    }
+    match save {
+        Some(save) if not_over_an_input(&[Some(save)], corrected).is_some() => {
+            Err(CalibrateError::SaveOverOutput {
+                path: save.to_path_buf(),
+            })
+        }
+        _ => Ok(()),
+    }
 }
 
 /// What a calibration is asked beyond its files, one recording's or several's: what

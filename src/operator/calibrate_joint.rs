@@ -17,9 +17,9 @@ use crate::installation::estimate::fit::{fit, fit_about};
 use crate::installation::estimate::joint::{JointFit, JointRecording, joint_fit, starts_from};
 use crate::installation::frames::Reference;
 use crate::installation::terms::names::{TermName, term_set};
-use crate::operator::calibrate::{CalibrateError, Request, named, refused};
+use crate::operator::calibrate::{CalibrateError, Request, clear_of_inputs, named, refused};
 use crate::operator::cost::{Cost, JOINT};
-use crate::operator::inputs::{Reading, not_over_an_input, source};
+use crate::operator::inputs::{Reading, source};
 use crate::operator::installation_file::{SavedInstallation, SavedSpread, SavedTerm};
 use crate::results::ResultsError;
 use crate::results::corrected::{Outputs, corrected_samples, stem, write};
@@ -107,26 +107,12 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
     };
     let names = names(args.dvls);
     let outputs: Vec<Outputs> = names.iter().map(|s| Outputs::of(args.out, s)).collect();
-    let written: Vec<&Path> = outputs
-        .iter()
-        .flat_map(|o| o.all())
-        .chain(args.save)
-        .collect();
     let inputs: Vec<Option<&Path>> = (args.dvls.iter().chain(args.references))
         .map(|p| Some(p.as_path()))
         .chain([args.columns])
         .collect();
-    if let Some(over) = not_over_an_input(&inputs, &written) {
-        return Err(CalibrateError::over_input(over, args.save));
-    }
     let corrected: Vec<&Path> = outputs.iter().flat_map(|o| o.all()).collect();
-    if let Some(save) = args.save
-        && not_over_an_input(&[Some(save)], &corrected).is_some()
-    {
-        return Err(CalibrateError::SaveOverOutput {
-            path: save.to_path_buf(),
-        });
-    }
+    clear_of_inputs(&inputs, &corrected, args.save)?;
     args.cost()?.state()?;
     let sources = sources(args)?;
     let (loaded, shas) = load(args, &sources, &outputs)?;

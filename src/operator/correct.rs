@@ -223,32 +223,11 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
         on_the_same_mount(args, frames, mount)?;
     }
     let reference = Reference::new(&recording);
-    let duration_s = recording.duration_s();
-    if args.time_offset_s.is_none() && duration_s <= args.window_s {
-        return Err(CorrectError::TooShort {
-            dvl: args.dvl.to_path_buf(),
-            duration_s,
-            window_s: args.window_s,
-        });
-    }
     let noise = Noise {
         dvl_m_s: saved.dvl_noise_cm_s / 100.0,
         reference_m_s: saved.reference_noise_cm_s / 100.0,
     };
-    let carried = saved.installation();
-    let (applied, clock) = match args.time_offset_s {
-        Some(time_offset_s) => (
-            Installation {
-                time_offset_s,
-                ..carried
-            },
-            None,
-        ),
-        None => {
-            let clock = find_clock(args, &saved, (&recording, &reference), noise)?;
-            (clock.installation, Some(clock))
-        }
-    };
+    let (applied, clock) = applied(args, &saved, (&recording, &reference), noise)?;
     let (after, blocks, outliers) = fit_after(args, &recording, &reference, &applied);
     let samples = corrected_samples(&applied, &recording, &reference);
     if samples.iter().all(|s| s.velocity_m_s.is_err()) {
@@ -277,6 +256,34 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
         written: files,
         read: recording.counts(),
     })
+}
+
+/// The installation applied to the dive: the saved one with the clock `args` give, or
+/// with the dive's terms found again from its first seconds (and that clock); refused
+/// where the dive is not longer than those seconds.
+fn applied(
+    args: &CorrectArgs,
+    saved: &SavedInstallation,
+    (recording, reference): (&PairedRecording, &Reference),
+    noise: Noise,
+) -> Result<(Installation, Option<Clock>), CorrectError> {
+    if let Some(time_offset_s) = args.time_offset_s {
+        let given = Installation {
+            time_offset_s,
+            ..saved.installation()
+        };
+        return Ok((given, None));
+    }
+    let duration_s = recording.duration_s();
+    if duration_s <= args.window_s {
+        return Err(CorrectError::TooShort {
+            dvl: args.dvl.to_path_buf(),
+            duration_s,
+            window_s: args.window_s,
+        });
+    }
+    let clock = find_clock(args, saved, (recording, reference), noise)?;
+    Ok((clock.installation, Some(clock)))
 }
 
 /// The first argument of `args` at fault, where one is.
