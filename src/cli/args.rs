@@ -154,13 +154,27 @@ pub(super) struct CalibrateArgs {
     #[command(flatten)]
     pub(super) reading: ReadingArgs,
     /// The terms to estimate: scale, scale_per_axis, misalignment, lever_arm,
-    /// time_offset, bias, bias_scalar
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "lever_arm,time_offset,bias"
-    )]
-    pub(super) terms: Vec<String>,
+    /// time_offset, bias, bias_scalar [default: lever_arm,time_offset,bias; with
+    /// --fixes: scale,misalignment,lever_arm,time_offset]
+    #[arg(long, value_delimiter = ',')]
+    pub(super) terms: Option<Vec<String>>,
+    /// Calibrate against position fixes rather than a velocity reference: a CSV file of
+    /// a time and a latitude and longitude (or north and east, m, as its [fix_columns]
+    /// table in --columns names them; A-KIT's reference file's by default), optionally a
+    /// depth, on the attitude's clock; needs --attitude and --fix-noise-m
+    #[arg(long, value_name = "FILE")]
+    pub(super) fixes: Option<PathBuf>,
+    /// With --fixes: the CSV file of the attitude (an AHRS's roll, pitch, yaw, as
+    /// [columns] names them), on its own clock and at its own rate
+    #[arg(long, value_name = "FILE")]
+    pub(super) attitude: Option<PathBuf>,
+    /// With --fixes: the fixes' noise per horizontal axis, m (a USBL's metres, a GNSS's
+    /// less)
+    #[arg(long, value_name = "METRES", allow_negative_numbers = true)]
+    pub(super) fix_noise_m: Option<f64>,
+    /// With --fixes that have a depth: its noise, m [default: --fix-noise-m]
+    #[arg(long, value_name = "METRES", allow_negative_numbers = true)]
+    pub(super) depth_noise_m: Option<f64>,
     /// Calibrate on the first SECONDS of the recording [default: all of it]
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     pub(super) window_s: Option<f64>,

@@ -8,12 +8,15 @@
 
 use super::args;
 use super::{CliError, input, stopped};
+use crate::installation::estimate::fixes::default_fix_terms;
 use crate::installation::terms::names::TermName;
 use crate::operator::calibrate::{CalibrateArgs, calibrate as calibrated};
+use crate::operator::calibrate_fixes::{FixArgs, calibrate_fixes as calibrated_on_fixes};
 use crate::operator::calibrate_joint::{JointArgs, calibrate_joint as calibrated_jointly};
 use crate::operator::correct::{CorrectArgs, correct as corrected};
 use crate::report::operator::calibrate::{calibration_text, joint_text};
 use crate::report::operator::correct::correction_text;
+use crate::report::operator::fixes::fixes_text;
 
 /// `calibrate` as typed: one recording, or several calibrated jointly.
 pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliError> {
@@ -23,7 +26,22 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
             args.reference.len()
         )));
     }
-    let terms = parse_terms(("--terms", &args.terms))?;
+    if let Some(fixes) = &args.fixes {
+        return calibrate_fixes(args, fixes);
+    }
+    for (flag, given) in [
+        ("--attitude", args.attitude.is_some()),
+        ("--fix-noise-m", args.fix_noise_m.is_some()),
+        ("--depth-noise-m", args.depth_noise_m.is_some()),
+    ] {
+        if given {
+            return Err(input(anyhow::anyhow!(
+                "{flag}: calibrates against position fixes: give them with --fixes"
+            )));
+        }
+    }
+    let default_terms = ["lever_arm", "time_offset", "bias"].map(String::from);
+    let terms = parse_terms(("--terms", args.terms.as_deref().unwrap_or(&default_terms)))?;
     let dive_terms = parse_terms(("--dive-terms", &args.dive_terms))?;
     if args.dvl.len() > 1 {
         return calibrate_joint(&JointArgs {
@@ -55,6 +73,71 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
         save: args.save.as_deref(),
         dive_terms: &dive_terms,
     })
+}
+
+/// `calibrate DVL.csv --fixes FIXES.csv --attitude ATTITUDE.csv --fix-noise-m σ`: the
+/// terms the fixes show, printed, and saved where asked.
+fn calibrate_fixes(args: &args::CalibrateArgs, fixes: &std::path::Path) -> Result<(), CliError> {
+    let refuse = |message: String| Err(input(anyhow::anyhow!(message)));
+    if args.dvl.len() > 1 {
+        return refuse(format!(
+            "--fixes: {} DVL files: a fit to fixes calibrates one dive; give one",
+            args.dvl.len()
+        ));
+    }
+    let Some(attitude) = &args.attitude else {
+        return refuse(
+            "--fixes: give the attitude beside it with --attitude (an AHRS's roll, pitch and yaw)"
+                .into(),
+        );
+    };
+    let Some(fix_noise_m) = args.fix_noise_m else {
+        return refuse(
+            "--fixes: give the fixes' noise per horizontal axis with --fix-noise-m (metres)".into(),
+        );
+    };
+    for (flag, given) in [
+        ("--reference", !args.reference.is_empty()),
+        ("--window-s", args.window_s.is_some()),
+        ("--dvl-topic", args.reading.dvl_topic.is_some()),
+        ("--reference-topic", args.reading.reference_topic.is_some()),
+        ("--rate-topic", args.reading.rate_topic.is_some()),
+        ("--stamps", args.reading.stamps.is_some()),
+        ("--frame", args.reading.frame.is_some()),
+    ] {
+        if given {
+            return refuse(format!(
+                "{flag}: does not apply to a calibration against fixes (--fixes), which reads CSV files: the DVL's, the attitude's and the fixes'"
+            ));
+        }
+    }
+    let terms = match &args.terms {
+        Some(terms) => parse_terms(("--terms", terms))?,
+        None => default_fix_terms(),
+    };
+    let dive_terms = parse_terms(("--dive-terms", &args.dive_terms))?;
+    let calibration = calibrated_on_fixes(&FixArgs {
+        dvl: &args.dvl[0],
+        attitude,
+        fixes,
+        columns: args.columns.as_deref(),
+        reading: args.reading.reading(),
+        terms: &terms,
+        dive_terms: &dive_terms,
+        fix_noise_m,
+        depth_noise_m: args.depth_noise_m,
+        dvl_noise_cm_s: args.dvl_noise_cm_s,
+        save: args.save.as_deref(),
+    })
+    .map_err(stopped)?;
+    print!("{}", fixes_text(&calibration));
+    if let Some(path) = &args.save {
+        eprintln!(
+            "installation saved to {} (apply it to another dive with `dcnet-exp correct`)",
+            path.display()
+        );
+    }
+    Ok(())
 }
 
 /// `correct` as typed.

@@ -85,6 +85,8 @@ pub enum Quantity {
     AngularRate,
     /// A sample's validity: 1 or `true` valid, 0 or `false` not (read as 1 or 0).
     Validity,
+    /// A position: metres, or a latitude or longitude.
+    Position,
 }
 
 impl Quantity {
@@ -96,6 +98,7 @@ impl Quantity {
             Quantity::Angle => "angle",
             Quantity::AngularRate => "angular rate",
             Quantity::Validity => "validity flag",
+            Quantity::Position => "position",
         }
     }
 
@@ -107,6 +110,7 @@ impl Quantity {
             Quantity::Angle => "an angle",
             Quantity::AngularRate => "an angular rate",
             Quantity::Validity => "a validity flag (1, 0, true or false)",
+            Quantity::Position => "a position",
         }
     }
 }

@@ -8,6 +8,8 @@
 pub mod catalogue;
 pub mod csv;
 pub mod fetch;
+pub mod fixes;
+pub mod local_plane;
 pub mod npy;
 pub mod paired;
 pub mod synthetic;

@@ -60,6 +60,59 @@ pub fn body_rate(attitude_rad: Vec3, attitude_rate_rad_s: Vec3) -> Vec3 {
     ]
 }
 
+/// An attitude to read at any time: roll, pitch and yaw (unwrapped) at each recorded
+/// time, linearly interpolated between two samples no further apart than
+/// [`REFERENCE_GAP_INTERVALS`] of its median interval.
+#[derive(Debug, Clone)]
+pub struct Attitude {
+    /// Seconds, strictly increasing.
+    pub time_s: Vec<f64>,
+    /// Roll, pitch, yaw, radians, yaw unwrapped.
+    pub angles_rad: Vec<Vec3>,
+    pub max_gap_s: f64,
+}
+
+impl Attitude {
+    /// The attitude recorded at `time_s` (yaw wrapped or not).
+    pub fn new(time_s: &[f64], attitude_rad: &[Vec3]) -> Attitude {
+        let yaw: Vec<f64> = attitude_rad.iter().map(|a| a[2]).collect();
+        Attitude {
+            time_s: time_s.to_vec(),
+            angles_rad: (attitude_rad.iter().zip(unwrap(&yaw)))
+                .map(|(a, yaw)| [a[0], a[1], yaw])
+                .collect(),
+            max_gap_s: REFERENCE_GAP_INTERVALS * sample_interval(time_s),
+        }
+    }
+
+    /// The attitude of a recording's reference.
+    pub fn of(recording: &PairedRecording) -> Attitude {
+        Attitude::new(&recording.reference_time_s, &recording.attitude_rad)
+    }
+
+    /// C_b^n at `time_s`; `None` outside the recorded span or inside a gap.
+    pub fn body_to_ned_at(&self, time_s: f64) -> Option<Mat3> {
+        let (&first, &last) = (self.time_s.first()?, self.time_s.last()?);
+        if !(first..=last).contains(&time_s) {
+            return None;
+        }
+        let after = self.time_s.partition_point(|&t| t < time_s);
+        if self.time_s[after] == time_s {
+            return Some(body_to_ned(self.angles_rad[after]));
+        }
+        let before = after - 1;
+        let span_s = self.time_s[after] - self.time_s[before];
+        if span_s > self.max_gap_s {
+            return None;
+        }
+        let weight = (time_s - self.time_s[before]) / span_s;
+        let (a, b) = (self.angles_rad[before], self.angles_rad[after]);
+        Some(body_to_ned(
+            [0, 1, 2].map(|k| a[k] + weight * (b[k] - a[k])),
+        ))
+    }
+}
+
 /// The reference as the body sees it, at each recorded time.
 #[derive(Debug, Clone)]
 pub struct Reference {
@@ -209,6 +262,7 @@ mod tests {
             velocity_ned_m_s,
             attitude_rad,
             rate_rad_s: None,
+            position_ne_m: None,
             gap_limit_s: 3.0,
         }
     }

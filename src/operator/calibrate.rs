@@ -9,6 +9,7 @@
 
 use crate::data::paired::bag::BagFrames;
 use crate::data::paired::{PairedError, PairedRecording, ReadCounts};
+use crate::installation::dead_reckoning::{Drift, drift_of};
 use crate::installation::estimate::bound::{Noise, TermBound, Why, bound};
 use crate::installation::estimate::filter::{FilterSettings, run_filter};
 use crate::installation::estimate::fit::{
@@ -84,6 +85,17 @@ pub enum CalibrateError {
     ReferenceNoise(f64),
     #[error("--window-s {}: give a positive number of seconds", crate::Shown(*.0))]
     Window(f64),
+    #[error("{flag} {}: give a positive number of metres: the fit weighs the fixes by it", crate::Shown(*value))]
+    FixNoise { flag: &'static str, value: f64 },
+    /// The fixes file, placed at its line and column.
+    #[error(transparent)]
+    Fixes(#[from] crate::data::fixes::FixesError),
+    #[error("{}: calibrating {terms} against these fixes: {fault}", fixes.display())]
+    FixFit {
+        fixes: PathBuf,
+        terms: String,
+        fault: crate::installation::estimate::fixes::FixFitError,
+    },
     #[error(
         "--tolerance-pct {}: give a positive percentage, at most 100 (how close to its last value the filter's RMSE must stay)",
         crate::Shown(*.0)
@@ -171,6 +183,9 @@ pub struct Calibration {
     /// fit's; `None` with no sample to score.
     pub before: Option<AxisRmse>,
     pub after: Option<AxisRmse>,
+    /// The dead reckoning's drift over the recording with no terms and with the terms
+    /// applied, where the reference records positions.
+    pub drift: Option<(Drift, Drift)>,
     /// The Kalman filter, its run over the samples fitted, and its settling curve
     /// (scored on every sample) with the length after which it settles.
     pub settings: FilterSettings,
@@ -310,6 +325,8 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
         read: read.recording.counts(),
         before,
         after,
+        drift: drift_of(&Installation::default(), &read.recording)
+            .zip(drift_of(&applied, &read.recording)),
         settings,
         filter,
         curve,

@@ -3,6 +3,7 @@
 //! it reads.
 //! In: the paths given on the command line. Out: the columns, or the file at fault.
 
+use crate::data::fixes::FixColumns;
 use crate::data::paired::bag::{BagTopics, Stamps, is_bag};
 use crate::data::paired::{GapLimit, PairedColumns, Source};
 use crate::spec::{SpecError, TomlFile};
@@ -156,11 +157,6 @@ pub fn columns(path: Option<&Path>, reading: Reading) -> Result<PairedColumns, S
         ..
     } = reading;
     let gap_limit_s = gap_limit_s.map(GapLimit);
-    #[derive(serde::Deserialize)]
-    #[serde(deny_unknown_fields)]
-    struct ColumnsFile {
-        columns: PairedColumns,
-    }
     let Some(path) = path else {
         let mut columns = PairedColumns::akit();
         columns.valid = valid.map(String::from);
@@ -174,18 +170,47 @@ pub fn columns(path: Option<&Path>, reading: Reading) -> Result<PairedColumns, S
             None => Ok(columns),
         };
     };
-    let mut file = TomlFile::<ColumnsFile>::read(path)?;
+    let file = TomlFile::<ColumnsFile>::read(path)?;
+    let mut columns = file
+        .value
+        .columns
+        .clone()
+        .unwrap_or_else(PairedColumns::akit);
     if let Some(valid) = valid {
-        file.value.columns.valid = Some(valid.to_string());
+        columns.valid = Some(valid.to_string());
     }
     if gap_limit_s.is_some() {
-        file.value.columns.gap_limit_s = gap_limit_s;
+        columns.gap_limit_s = gap_limit_s;
     }
-    if let Some((key, why)) = file.value.columns.named_twice() {
+    if let Some((key, why)) = columns.named_twice() {
         let fault = file.fault(&format!("columns.{key}"), why);
         return Err(fault);
     }
-    Ok(file.value.columns)
+    Ok(columns)
+}
+
+/// A `--columns` file: its `[columns]` table (a recording's, A-KIT's without one) and
+/// its `[fix_columns]` table (a fixes file's, A-KIT's reference's without one).
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ColumnsFile {
+    columns: Option<PairedColumns>,
+    fix_columns: Option<FixColumns>,
+}
+
+/// The columns of a fixes file: `path`'s `[fix_columns]` table, or A-KIT's reference
+/// file's latitude and longitude.
+pub fn fix_columns(path: Option<&Path>) -> Result<FixColumns, SpecError> {
+    let Some(path) = path else {
+        return Ok(FixColumns::default());
+    };
+    let file = TomlFile::<ColumnsFile>::read(path)?;
+    let columns = file.value.fix_columns.clone().unwrap_or_default();
+    if columns.latitude_longitude.is_some() == columns.north_east.is_some() {
+        let why = "name the fixes' position as latitude_longitude or as north_east, one of them";
+        return Err(file.fault("fix_columns.north_east", why.to_string()));
+    }
+    Ok(columns)
 }
 
 #[cfg(test)]

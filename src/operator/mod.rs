@@ -2,7 +2,8 @@
 //! recording, [`calibrate_joint`] several at once, the [`installation_file`] that
 //! `calibrate --save` writes (and, for a bag, the installation as ROS uses it:
 //! [`ros`]), and [`correct`], which carries a saved installation to
-//! the next dive and finds its clock again; what they share about their [`inputs`], and
+//! the next dive and finds its clock again; [`calibrate_fixes`], a DVL calibrated
+//! against position fixes and an attitude; what they share about their [`inputs`], and
 //! what each will [`cost`] this machine.
 //! In: the command's arguments. Out: what each command prints, and the corrected
 //! recordings written through [`crate::results::corrected`].
@@ -14,3 +15,4 @@ pub mod installation_file;
 pub mod ros;
 pub mod correct;
 pub mod calibrate_joint;
+pub mod calibrate_fixes;

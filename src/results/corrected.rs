@@ -370,6 +370,7 @@ mod tests {
             velocity_ned_m_s: vec![[1.0, 0.0, 0.0]; 20],
             attitude_rad: vec![[0.0; 3]; 20],
             rate_rad_s: None,
+            position_ne_m: None,
             gap_limit_s: 3.0,
         };
         let installation = Installation {

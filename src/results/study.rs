@@ -146,6 +146,10 @@ struct TransferRecord {
     rmse_y_cm_s: f64,
     rmse_z_cm_s: f64,
     rmse_cm_s: f64,
+    #[serde(default = "crate::installation::study::rows::not_a_number")]
+    drift_rms_pct: f64,
+    #[serde(default = "crate::installation::study::rows::not_a_number")]
+    drift_end_pct: f64,
 }
 
 impl Record for TransferRecord {}
@@ -162,6 +166,8 @@ impl From<&TransferRow> for TransferRecord {
             rmse_y_cm_s,
             rmse_z_cm_s,
             rmse_cm_s: row.total_cm_s,
+            drift_rms_pct: row.drift_rms_pct,
+            drift_end_pct: row.drift_end_pct,
         }
     }
 }
@@ -175,6 +181,8 @@ impl From<TransferRecord> for TransferRow {
             scored: record.scored,
             rmse_cm_s: [record.rmse_x_cm_s, record.rmse_y_cm_s, record.rmse_z_cm_s],
             total_cm_s: record.rmse_cm_s,
+            drift_rms_pct: record.drift_rms_pct,
+            drift_end_pct: record.drift_end_pct,
         }
     }
 }
@@ -368,6 +376,8 @@ mod tests {
                     scored: "T2".into(),
                     rmse_cm_s: [4.0, 12.6, 2.4],
                     total_cm_s: 13.4,
+                    drift_rms_pct: 0.25,
+                    drift_end_pct: 0.5,
                 },
                 TransferRow {
                     method: "installation lever+offset".into(),
@@ -376,6 +386,8 @@ mod tests {
                     scored: "T1".into(),
                     rmse_cm_s: [2.6, 3.8, 1.0 / 3.0],
                     total_cm_s: 4.6,
+                    drift_rms_pct: 0.25,
+                    drift_end_pct: 0.5,
                 },
             ],
             terms: vec![
@@ -540,7 +552,9 @@ mod tests {
                 "rmse_x_cm_s",
                 "rmse_y_cm_s",
                 "rmse_z_cm_s",
-                "rmse_cm_s"
+                "rmse_cm_s",
+                "drift_rms_pct",
+                "drift_end_pct"
             ]
         );
         assert_eq!(

@@ -119,6 +119,7 @@ fn synthetic(motion: &Motion, truth: &Installation, seed: u64) -> (Vec<f64>, Vec
         reference_time_s,
         attitude_rad: attitude,
         rate_rad_s: None,
+        position_ne_m: None,
         gap_limit_s: 3.0,
     };
     let mut rng = ChaCha8Rng::seed_from_u64(seed);

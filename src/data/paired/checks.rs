@@ -36,6 +36,9 @@ pub struct Unchecked {
     /// The body angular rate, in deg/s where `angles_in_degrees`, rad/s otherwise.
     pub rate: Option<Vec<Vec3>>,
     pub angles_in_degrees: bool,
+    /// The reference's position where it records one, and whether it is latitude and
+    /// longitude (in the angles' unit) rather than north and east in metres.
+    pub position: Option<(Vec<[f64; 2]>, bool)>,
 }
 
 impl Unchecked {
@@ -97,10 +100,18 @@ impl Unchecked {
                 .map(|[a, b, c]| [a * to_rad, b * to_rad, c * to_rad])
                 .collect()
         };
+        let position_ne_m = self.position.map(|(values, geographic)| {
+            if !geographic {
+                return values;
+            }
+            let radians: Vec<[f64; 2]> = values.iter().map(|p| p.map(|v| v * to_rad)).collect();
+            crate::data::local_plane::north_east_m(radians[0], &radians)
+        });
         PairedRecording {
             time_s,
             dvl_m_s,
             left_out,
+            position_ne_m,
             reference_time_s: self.reference_time_s,
             velocity_ned_m_s: self.velocity_ned_m_s,
             attitude_rad: scaled(self.attitude),
@@ -158,6 +169,7 @@ pub fn check(samples: Unchecked, at: &Locator) -> Result<PairedRecording, Paired
         &at.reference_lines,
     )?;
     check_attitude(&samples, at)?;
+    check_latitude(&samples, at)?;
     check_reference_motion(&samples, at)?;
     for (path, samples) in [
         (&at.dvl, samples.dvl_time_s.len()),
@@ -239,6 +251,28 @@ fn check_attitude(samples: &Unchecked, at: &Locator) -> Result<(), PairedError> 
     Ok(())
 }
 
+/// A latitude within ±90° (±π/2 in radians), where the position is geographic.
+fn check_latitude(samples: &Unchecked, at: &Locator) -> Result<(), PairedError> {
+    let (Some((values, true)), Some((names, _))) = (&samples.position, at.names.position()) else {
+        return Ok(());
+    };
+    let bound = if samples.angles_in_degrees {
+        90.0
+    } else {
+        PI / 2.0
+    };
+    match values.iter().position(|p| p[0].abs() > bound) {
+        Some(row) => Err(PairedError::LatitudeOutOfRange {
+            path: at.reference.clone(),
+            line: at.reference_lines[row],
+            column: names[0].clone(),
+            value: values[row][0],
+            degrees: samples.angles_in_degrees,
+        }),
+        None => Ok(()),
+    }
+}
+
 /// The reference's velocity within [`MAX_DVL_SPEED_M_S`], its recorded body rate
 /// within [`MAX_BODY_RATE_RAD_S`], and its attitude turning no faster than that between
 /// two samples (each angle's change taken the short way round).
@@ -248,7 +282,8 @@ fn check_reference_motion(samples: &Unchecked, at: &Locator) -> Result<(), Paire
     for row in 0..samples.reference_time_s.len() {
         let line = at.reference_lines[row];
         for axis in 0..3 {
-            let value = samples.velocity_ned_m_s[row][axis];
+            // An attitude alone has no velocity.
+            let value = samples.velocity_ned_m_s.get(row).map_or(0.0, |v| v[axis]);
             if value.abs() > MAX_DVL_SPEED_M_S {
                 return Err(PairedError::ReferenceOutOfRange {
                     path: path(),
@@ -354,6 +389,7 @@ mod tests {
             attitude: vec![[0.0, 0.0, 90.0], [0.0, 0.0, 100.0], [0.0, 0.0, 110.0]],
             rate: None,
             angles_in_degrees: true,
+            position: None,
         };
         let names = |names: [&str; 3]| names.map(String::from);
         let at = Locator {
@@ -371,6 +407,8 @@ mod tests {
                 valid: None,
                 zero_is_valid: false,
                 gap_limit_s: None,
+                latitude_longitude: None,
+                north_east: None,
             },
         };
         (samples, at)

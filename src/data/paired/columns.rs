@@ -36,6 +36,13 @@ pub struct PairedColumns {
     /// [`DVL_GAP_INTERVALS`](super::DVL_GAP_INTERVALS) of the DVL's median interval.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gap_limit_s: Option<GapLimit>,
+    /// The reference's position, where it records one, for the dead-reckoning drift:
+    /// its latitude and longitude (in the unit of its angles) ...
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub latitude_longitude: Option<[String; 2]>,
+    /// ... or its north and east of any fixed point, metres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub north_east: Option<[String; 2]>,
 }
 
 /// A gap limit in seconds, as a recording's reading sets it: compared and hashed by its
@@ -55,8 +62,12 @@ impl std::hash::Hash for GapLimit {
 impl PairedColumns {
     /// The first column named for two quantities, as the key of the second
     /// (`velocity_ned[1]`, say) and what is wrong with it: a recording cannot hold both
-    /// in one column.
+    /// in one column; or the position named both ways.
     pub fn named_twice(&self) -> Option<(String, String)> {
+        if self.latitude_longitude.is_some() && self.north_east.is_some() {
+            let why = "the position is named both by latitude and longitude and by north and east: give one".to_string();
+            return Some(("north_east".into(), why));
+        }
         let mut named: Vec<(String, &String)> = vec![("time".into(), &self.time)];
         let triples = [
             ("dvl", Some(&self.dvl)),
@@ -66,6 +77,14 @@ impl PairedColumns {
         ];
         for (key, names) in triples {
             for (i, name) in names.into_iter().flatten().enumerate() {
+                named.push((format!("{key}[{i}]"), name));
+            }
+        }
+        for (key, names) in [
+            ("latitude_longitude", &self.latitude_longitude),
+            ("north_east", &self.north_east),
+        ] {
+            for (i, name) in names.iter().flatten().enumerate() {
                 named.push((format!("{key}[{i}]"), name));
             }
         }
@@ -86,7 +105,8 @@ impl PairedColumns {
     /// The columns of the A-KIT recordings, as their headers spell them: the DVL file's
     /// `Time [s], DVL X [m/s], DVL Y [m/s], DVL Z [m/s]`, the reference (GT) file's
     /// `Time [s], V North [m/s], V East [m/s], V Down [m/s], Roll [rad], Pitch [rad],
-    /// Yaw [rad]` (its position columns are not read); no angular rate.
+    /// Yaw [rad]`; no angular rate, and not its position (a file of A-KIT's columns
+    /// may not hold one: [`Self::akit_with_positions`] reads it).
     pub fn akit() -> PairedColumns {
         let names = |names: [&str; 3]| names.map(String::from);
         PairedColumns {
@@ -99,6 +119,25 @@ impl PairedColumns {
             valid: None,
             zero_is_valid: false,
             gap_limit_s: None,
+            latitude_longitude: None,
+            north_east: None,
+        }
+    }
+
+    /// A-KIT's columns with its reference's position, `Latitude [rad], Longitude [rad]`.
+    pub fn akit_with_positions() -> PairedColumns {
+        PairedColumns {
+            latitude_longitude: Some(["Latitude [rad]", "Longitude [rad]"].map(String::from)),
+            ..PairedColumns::akit()
+        }
+    }
+
+    /// The reference's position columns and whether they are latitude and longitude.
+    pub fn position(&self) -> Option<(&[String; 2], bool)> {
+        match (&self.latitude_longitude, &self.north_east) {
+            (Some(names), _) => Some((names, true)),
+            (None, Some(names)) => Some((names, false)),
+            (None, None) => None,
         }
     }
 }

@@ -12,11 +12,13 @@ use crate::data::csv::{Column, Quantity, Rows, parse_columns};
 use std::path::Path;
 
 /// The samples of `dvl` (a path and its bytes) and, where the reference is in another
-/// file, of `reference`, with `columns`.
+/// file, of `reference`, with `columns`; the reference's velocity only `with_velocity`
+/// (an attitude alone, beside position fixes, has none).
 pub fn parse(
     dvl: (&Path, &[u8]),
     reference: Option<(&Path, &[u8])>,
     columns: &PairedColumns,
+    with_velocity: bool,
 ) -> Result<(Unchecked, Locator), PairedError> {
     let time = Column {
         name: &columns.time,
@@ -32,8 +34,9 @@ pub fn parse(
     let dvl_columns: Vec<Column> = std::iter::once(time)
         .chain(triple(&columns.dvl, Quantity::MeasuredVelocity))
         .collect();
+    let velocity = with_velocity.then(|| triple(&columns.velocity_ned, Quantity::Velocity));
     let reference_columns: Vec<Column> = std::iter::once(time)
-        .chain(triple(&columns.velocity_ned, Quantity::Velocity))
+        .chain(velocity.into_iter().flatten())
         .chain(triple(&columns.attitude, Quantity::Angle))
         .chain(
             columns
@@ -41,6 +44,12 @@ pub fn parse(
                 .iter()
                 .flat_map(|rate| triple(rate, Quantity::AngularRate)),
         )
+        .chain(columns.position().into_iter().flat_map(|(names, _)| {
+            names.iter().map(|name| Column {
+                name,
+                holds: Quantity::Position,
+            })
+        }))
         .collect();
     // The reference's values start after the time, or, in one file, after the time
     // and the DVL's three; the DVL's validity flag, where there is one, is the last.
@@ -63,18 +72,34 @@ pub fn parse(
         }
     };
     let flag = dvl_rows.width - 1;
+    // Where the attitude starts: after the velocity, where it is read.
+    let attitude = if with_velocity { start + 3 } else { start };
     let samples = Unchecked {
         dvl_time_s: dvl_rows.column(0).collect(),
         dvl_m_s: triples(&dvl_rows, 1),
         dvl_valid: validity.map(|_| dvl_rows.column(flag).map(|v| v != 0.0).collect()),
         reference_time_s: reference_rows.column(0).collect(),
-        velocity_ned_m_s: triples(&reference_rows, start),
-        attitude: triples(&reference_rows, start + 3),
+        velocity_ned_m_s: if with_velocity {
+            triples(&reference_rows, start)
+        } else {
+            Vec::new()
+        },
+        attitude: triples(&reference_rows, attitude),
         rate: columns
             .rate
             .as_ref()
-            .map(|_| triples(&reference_rows, start + 6)),
+            .map(|_| triples(&reference_rows, attitude + 3)),
         angles_in_degrees: columns.angles_in_degrees,
+        position: columns.position().map(|(_, geographic)| {
+            let start = attitude + 3 + if columns.rate.is_some() { 3 } else { 0 };
+            let values = (0..reference_rows.len())
+                .map(|row| {
+                    let values = &reference_rows.row(row)[start..start + 2];
+                    [values[0], values[1]]
+                })
+                .collect();
+            (values, geographic)
+        }),
     };
     let at = Locator {
         dvl: dvl.0.to_path_buf(),

@@ -41,6 +41,20 @@ pub enum PairedError {
         value: f64,
     },
     #[error(
+        "{}:{line}: {column}: a latitude of {} {}, beyond the pole: {}",
+        path.display(),
+        crate::Shown(*value),
+        if *.degrees { "deg" } else { "rad" },
+        if *.degrees { "the latitude is the first of latitude_longitude" } else { "if the file's angles are in degrees, set angles_in_degrees = true" }
+    )]
+    LatitudeOutOfRange {
+        path: PathBuf,
+        line: u64,
+        column: String,
+        value: f64,
+        degrees: bool,
+    },
+    #[error(
         "{}:{line}: {column}: {} m/s is beyond {MAX_DVL_SPEED_M_S} m/s, faster than any vehicle a DVL rides: a bad value or a unit other than m/s; remove the row before calibrating",
         path.display(),
         crate::Shown(*value)

@@ -28,6 +28,7 @@ pub use source::{Loaded, ReadRecording, Recordings, Source, SourceFile};
 
 use crate::Vec3;
 use std::ops::Range;
+use std::path::Path;
 
 /// The fewest samples a recording may have.
 pub const MIN_SAMPLES: usize = 3;
@@ -212,12 +213,18 @@ pub struct PairedRecording {
     /// The reference's stamps, seconds on its clock, strictly increasing; the fields
     /// below are on them.
     pub reference_time_s: Vec<f64>,
-    /// The reference's velocity, north, east, down, m/s.
+    /// The reference's velocity, north, east, down, m/s; empty where the reference is an
+    /// attitude alone (beside position fixes: [`crate::data::fixes`]), which nothing
+    /// compares a DVL's velocity with.
     pub velocity_ned_m_s: Vec<Vec3>,
     /// Roll, pitch, yaw in radians, as recorded (yaw may wrap at ±π, or run on unwrapped).
     pub attitude_rad: Vec<Vec3>,
     /// The reference's body angular rate (p, q, r) in rad/s, when recorded.
     pub rate_rad_s: Option<Vec<Vec3>>,
+    /// The reference's position, when recorded: north and east, metres, of its first
+    /// sample where it records latitude and longitude (or of the point its north and
+    /// east are from): what a dead reckoning's drift is scored against.
+    pub position_ne_m: Option<Vec<[f64; 2]>>,
     /// The longest step between two kept DVL samples of one piece, s: everything that
     /// runs in time runs within pieces ([`pieces`]).
     pub gap_limit_s: f64,
@@ -291,10 +298,43 @@ impl PairedRecording {
             rate_rad_s: self
                 .rate_rad_s
                 .as_ref()
-                .map(|rate| rate[reference].to_vec()),
+                .map(|rate| rate[reference.clone()].to_vec()),
+            position_ne_m: (self.position_ne_m.as_ref())
+                .map(|position| position[reference].to_vec()),
             gap_limit_s: self.gap_limit_s,
         }
     }
+}
+
+/// The DVL of the CSV file `dvl` beside the reference of `reference` that records an
+/// attitude and no velocity, read with `columns` (whose velocity names are not read)
+/// and checked as any recording's: `velocity_ned_m_s` is empty.
+pub fn read_without_velocity(
+    dvl: &Path,
+    reference: &Path,
+    columns: &PairedColumns,
+) -> Result<ReadRecording, PairedError> {
+    let mut files = Vec::new();
+    let mut bytes = Vec::new();
+    for path in [dvl, reference] {
+        let read = crate::data::csv::read_bytes(path)?;
+        files.push(SourceFile {
+            path: path.to_path_buf(),
+            sha256: crate::files::sha256_hex(&read),
+        });
+        bytes.push(read);
+    }
+    let (samples, at) = csv::parse(
+        (dvl, &bytes[0]),
+        Some((reference, &bytes[1])),
+        columns,
+        false,
+    )?;
+    Ok(ReadRecording {
+        recording: checks::check(samples, &at)?,
+        files,
+        frames: None,
+    })
 }
 
 /// The checked samples of the CSV files `files` with `columns`: a shorthand of
@@ -325,6 +365,8 @@ mod tests {
             valid: None,
             zero_is_valid: false,
             gap_limit_s: None,
+            latitude_longitude: None,
+            north_east: None,
         }
     }
 

@@ -117,8 +117,12 @@ impl Loaded<'_> {
         let (samples, at, frames) = match (self.source, self.content) {
             (Source::Csv { columns, .. }, Content::Bytes(bytes)) => {
                 let file = |k: usize| (self.files[k].path.as_path(), &bytes[k][..]);
-                let (samples, at) =
-                    super::csv::parse(file(0), (self.files.len() > 1).then(|| file(1)), columns)?;
+                let (samples, at) = super::csv::parse(
+                    file(0),
+                    (self.files.len() > 1).then(|| file(1)),
+                    columns,
+                    true,
+                )?;
                 (samples, at, None)
             }
             (_, Content::Bag(read)) => {

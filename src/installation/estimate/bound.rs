@@ -84,6 +84,9 @@ pub enum Why {
     /// Moving it (with the others named, in some proportion) leaves the residuals
     /// unchanged.
     Flat { with: Vec<&'static str> },
+    /// A yaw fitted to position fixes over headings that span only `span_rad`: at one
+    /// heading the DVL's yaw is not told apart from the attitude's heading error there.
+    OneHeading { span_rad: f64 },
 }
 
 impl fmt::Display for Why {
@@ -104,6 +107,11 @@ impl fmt::Display for Why {
             Why::Flat { with } => {
                 write!(f, "flat together with {}", with.join(", "))
             }
+            Why::OneHeading { span_rad } => write!(
+                f,
+                "the vehicle's heading spans {:.0}° only: at one heading the DVL's yaw is not told apart from the attitude's heading error there",
+                span_rad.to_degrees()
+            ),
         }
     }
 }
@@ -221,6 +229,25 @@ pub fn gauss_newton_step(fit: &Fit) -> DVector<f64> {
     step
 }
 
+/// Of estimates whose information is `normal` (JᵀΣ⁻¹J, the residuals whitened by their
+/// noise Σ) and whose noise is `variance_factor` times Σ, the parameters named `names`:
+/// each one's standard deviation (infinite on a flat direction), their correlations,
+/// and every reason each cannot be seen, parameter k beyond `tolerance(k)`.
+pub fn whitened_bound(
+    normal: &DMatrix<f64>,
+    names: &[&'static str],
+    variance_factor: f64,
+    tolerance: impl Fn(usize) -> f64,
+) -> (Vec<f64>, Vec<Vec<f64>>, Vec<Unseen>) {
+    let information = UnitInformation::of_normal(normal, names.len());
+    let (inverse, flat_with) = information.pseudo_inverse(names);
+    let covariance = variance_factor * &inverse;
+    let std = information.standard_deviations(&covariance, &flat_with);
+    let correlation = information.correlations(&inverse, &std);
+    let unseen = unseen(names, &flat_with, &std, &correlation, tolerance);
+    (std, correlation, unseen)
+}
+
 /// For each term, `Some(the others)` when it lies on a flat direction (a term the
 /// residuals ignore is flat alone), `None` otherwise.
 type FlatWith = Vec<Option<Vec<&'static str>>>;
@@ -239,7 +266,11 @@ struct UnitInformation {
 impl UnitInformation {
     /// Of `fit`'s `n` terms.
     fn of(fit: &Fit, n: usize) -> UnitInformation {
-        let normal = fit.information();
+        Self::of_normal(&fit.information(), n)
+    }
+
+    /// Of the information `normal` of `n` terms.
+    fn of_normal(normal: &DMatrix<f64>, n: usize) -> UnitInformation {
         let scale: Vec<f64> = (0..n).map(|k| normal[(k, k)].sqrt()).collect();
         let felt: Vec<usize> = (0..n).filter(|&k| scale[k] > 0.0).collect();
         let unit = DMatrix::from_fn(felt.len(), felt.len(), |a, b| {

@@ -4,7 +4,8 @@
 //! the terms a recording cannot show; [`missing`] the terms left out that the residuals
 //! still ask for; [`clock`] finds a dive's clock again with the rest carried; [`joint`]
 //! fits several recordings at once, and [`between_dives`] reads from it how far the
-//! vehicle's terms move between dives; [`filter`] estimates the terms sample by sample
+//! vehicle's terms move between dives; [`fixes`] fits the terms to position fixes
+//! through the dead reckoning, for a vehicle with no velocity reference; [`filter`] estimates the terms sample by sample
 //! (an extended Kalman filter) with the noise [`filter_noise`] reads as it runs; and
 //! [`settling`] says how much of a recording the filter needed.
 //! In: a [`Reference`](crate::installation::frames::Reference) and DVL samples. Out:
@@ -18,6 +19,7 @@ pub mod missing;
 pub mod clock;
 pub mod joint;
 pub mod between_dives;
+pub mod fixes;
 pub mod filter_noise;
 pub mod filter;
 pub mod settling;

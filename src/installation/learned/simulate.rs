@@ -288,6 +288,7 @@ pub(crate) mod tests {
                 .collect(),
             time_s,
             rate_rad_s: None,
+            position_ne_m: None,
             gap_limit_s: 3.0,
         };
         Recording::new(name.to_string(), recording)

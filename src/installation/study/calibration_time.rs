@@ -105,6 +105,9 @@ mod tests {
             scored: scored.into(),
             rmse_cm_s: [0.0; 3],
             total_cm_s,
+
+            drift_rms_pct: f64::NAN,
+            drift_end_pct: f64::NAN,
         }
     }
 

@@ -4,18 +4,22 @@
 //! out that its residuals still follow; and the rows of those terms. In: a method's
 //! model and the window's samples. Out: an [`Estimate`] and its [`TermRow`]s.
 
+use crate::data::fixes::{FixSimulation, simulate_fixes};
 use crate::estimators::{Baseline, Estimator, LeastSquares};
 use crate::installation::estimate::between_dives::BetweenDives;
 use crate::installation::estimate::bound::{TermBound, bound};
 use crate::installation::estimate::clock::Carried;
 use crate::installation::estimate::fit::fit;
+use crate::installation::estimate::fixes::{FixFitError, FixNoise, default_fix_terms, fit_fixes};
 use crate::installation::estimate::missing::{Asked, asked_for};
+use crate::installation::frames::Attitude;
 use crate::installation::study::estimators::LearnedModel;
 use crate::installation::study::on_recording::OnRecording;
 use crate::installation::study::rows::{FitFailure, TermRow};
 use crate::installation::study::spec::Model;
 use crate::installation::terms::names::{TermName, term_set};
 use crate::installation::terms::{Installation, TermSet};
+use crate::rng::task_rng;
 use crate::vocab::Correction;
 use nalgebra::DMatrix;
 use std::ops::Range;
@@ -120,7 +124,62 @@ impl OnRecording<'_> {
                 (self.estimators.learned)(learned, self.calibration(), range).map(Estimate::bare)
             }),
             Model::Installation { terms, .. } => Some(self.fitted(model, terms, range, window_s)?),
+            Model::Fixes { simulation, seed } => {
+                self.fitted_to_fixes(model, (simulation, *seed), range, window_s)?
+            }
         })
+    }
+
+    /// The installation fitted to fixes simulated by `simulation` from the calibration
+    /// trajectory's positions (one draw per trajectory, from `seed` and its name, the
+    /// same for every window), those of the samples `range`; `None` where the window
+    /// holds fewer fixes than the fit has parameters.
+    fn fitted_to_fixes(
+        &self,
+        model: &Model,
+        (simulation, seed): (&FixSimulation, u64),
+        range: Range<usize>,
+        window_s: f64,
+    ) -> Result<Option<Estimate>, FitFailure> {
+        let calibration = self.calibration();
+        let recording = &calibration.recording;
+        let failure = |why: String| FitFailure {
+            method: model.label(),
+            calibration: calibration.name.clone(),
+            window_s,
+            why,
+        };
+        let Some(positions) = &recording.position_ne_m else {
+            return Err(failure(
+                "the recording has no positions to simulate fixes from".into(),
+            ));
+        };
+        let mut rng = task_rng(seed, &[&"fixes", &calibration.name]);
+        let fixes = simulate_fixes(
+            (&recording.reference_time_s, positions),
+            simulation,
+            &mut rng,
+        );
+        let window = (
+            &recording.time_s[range.clone()],
+            &recording.dvl_m_s[range.clone()],
+        );
+        let pieces: Vec<Range<usize>> = (recording.pieces().into_iter())
+            .map(|p| p.start.min(range.end)..p.end.min(range.end))
+            .filter(|p| !p.is_empty())
+            .collect();
+        let noise = FixNoise {
+            fix_m: simulation.noise_m,
+            depth_m: simulation.noise_m,
+            dvl_m_s: self.noise.dvl_m_s,
+        };
+        let terms = term_set(&default_fix_terms());
+        let attitude = Attitude::of(recording);
+        match fit_fixes(window, &pieces, &attitude, &fixes, terms, noise) {
+            Ok(fitted) => Ok(Some(Estimate::bare(fitted.installation))),
+            Err(FixFitError::TooFewFixes { .. } | FixFitError::NoOverlap { .. }) => Ok(None),
+            Err(fault) => Err(failure(fault.to_string())),
+        }
     }
 
     /// The scale-and-bias correction of one of the paper's methods, from the DVL and the
@@ -133,7 +192,10 @@ impl OnRecording<'_> {
                 LeastSquares(*error_model).estimate(&dvl, &reference)
             }
             Model::Dcnet(error_model) => (self.estimators.dcnet)(*error_model, &dvl, &reference)?,
-            Model::Installation { .. } | Model::Filter { .. } | Model::Learned { .. } => {
+            Model::Installation { .. }
+            | Model::Filter { .. }
+            | Model::Learned { .. }
+            | Model::Fixes { .. } => {
                 unreachable!()
             }
         };

@@ -1,7 +1,8 @@
 //! Held-out scoring: a method's terms correct the DVL of a scored recording, scored
 //! against the reference in the body frame on the samples inside it whatever the time
-//! offset. In: the terms and the recordings they are scored on. Out: [`TransferRow`]s.
+//! offset, and, where the reference records positions, dead-reckon it: its drift. In: the terms and the recordings they are scored on. Out: [`TransferRow`]s.
 
+use crate::installation::dead_reckoning::drift_of;
 use crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S;
 use crate::installation::study::on_recording::OnRecording;
 use crate::installation::study::recording::Recording;
@@ -50,6 +51,7 @@ pub(super) fn transfer_row(
         &scored.reference,
         samples,
     )?;
+    let drift = drift_of(installation, recording);
     Some(TransferRow {
         method: method.to_string(),
         calibration: calibration.to_string(),
@@ -57,5 +59,7 @@ pub(super) fn transfer_row(
         scored: scored.name.clone(),
         rmse_cm_s: [100.0 * rmse.x_m_s, 100.0 * rmse.y_m_s, 100.0 * rmse.z_m_s],
         total_cm_s: 100.0 * rmse.total_m_s,
+        drift_rms_pct: drift.map_or(f64::NAN, |d| d.rms_pct),
+        drift_end_pct: drift.map_or(f64::NAN, |d| d.end_pct),
     })
 }

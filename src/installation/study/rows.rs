@@ -25,6 +25,10 @@ pub struct TransferRow {
     pub scored: String,
     pub rmse_cm_s: Vec3,
     pub total_cm_s: f64,
+    /// The dead reckoning's horizontal drift over the scored trajectory, RMS and at its
+    /// end, % of the distance travelled; NaN where its reference records no position.
+    pub drift_rms_pct: f64,
+    pub drift_end_pct: f64,
 }
 
 /// One estimated term of one calibration, with its standard deviations.
@@ -62,7 +66,7 @@ pub struct TermRow {
 }
 
 /// What a term row holds where it has no spread between dives.
-fn not_a_number() -> f64 {
+pub(crate) fn not_a_number() -> f64 {
     f64::NAN
 }
 

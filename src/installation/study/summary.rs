@@ -128,6 +128,9 @@ mod tests {
             scored: scored.into(),
             rmse_cm_s: [total_cm_s, 0.0, 0.0],
             total_cm_s,
+
+            drift_rms_pct: f64::NAN,
+            drift_end_pct: f64::NAN,
         }
     }
 

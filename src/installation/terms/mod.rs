@@ -548,6 +548,7 @@ mod tests {
                 .collect(),
             attitude_rad: time_s.iter().map(|t| [0.0, 0.0, 0.1 * t]).collect(),
             rate_rad_s: None,
+            position_ne_m: None,
             gap_limit_s: 3.0,
         };
         let reference = Reference::new(&recording);

@@ -57,10 +57,10 @@ const PROTOCOL_CODE_VERSION: u32 = 2;
 /// its run up to the longest window only; 6: the rows with the dive's clock found
 /// again; 7: the noise's level counting what the fit absorbs, standard deviations no
 /// longer widened, a joint fit's spread between dives).
-const INSTALLATION_CODE_VERSION: u32 = 7;
+const INSTALLATION_CODE_VERSION: u32 = 8;
 /// Bumped whenever the tables put together from an installation study's calibrations
 /// change (2: the calibration time's band of what calibration can change).
-const INSTALLATION_TABLES_CODE_VERSION: u32 = 2;
+const INSTALLATION_TABLES_CODE_VERSION: u32 = 3;
 /// Bumped whenever the tables put together from the blocks change (2: the bound rows
 /// and the efficiency column; 3: the held-out curves and the calibration time; 4: the
 /// calibration time read at the calibration windows, its band of the excess over the

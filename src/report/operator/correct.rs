@@ -68,6 +68,7 @@ pub fn correction_text(correction: &Correction) -> String {
         }
         None => text.push_str("no sample after the first seconds to score the installation on\n"),
     }
+    text.push_str(&super::drift_line(&correction.drift));
     text
 }
 

@@ -392,6 +392,8 @@ mod tests {
             scored: "C".into(),
             rmse_cm_s: [total_cm_s; 3],
             total_cm_s,
+            drift_rms_pct: f64::NAN,
+            drift_end_pct: f64::NAN,
         };
         let mut study = StudyResults::default();
         for calibration in ["A", "B"] {

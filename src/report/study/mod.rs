@@ -7,6 +7,8 @@
 //!
 //! - [`heldout`]: the mean held-out RMSE of each method at the largest window with its
 //!   95 % interval and its ratio to no calibration, and the same means per window;
+//! - [`drift`]: every method's dead-reckoning drift on the trajectories it corrects,
+//!   where they record positions;
 //! - [`terms`]: for each installation model, the terms each calibration trajectory
 //!   estimated with their standard deviations, in readable units, those the window
 //!   cannot show marked and why listed under the table;
@@ -23,6 +25,7 @@
 //! - this module: the tables in order, set as Markdown and as LaTeX.
 
 pub mod heldout;
+pub mod drift;
 pub mod terms;
 pub mod agreement;
 pub mod next_dive;
@@ -93,6 +96,7 @@ fn sections(study: &StudyResults) -> Vec<Section> {
         .table
         .notes
         .extend(clocks_kept(study, Some(largest)));
+    sections.extend(drift::drift_section(study, &methods, largest));
     if windows.len() > 1 {
         sections.push(windows_section(study, &methods, &windows));
     }
@@ -234,6 +238,8 @@ pub(crate) mod tests {
                 scored: scored.into(),
                 rmse_cm_s: [3.0; 3],
                 total_cm_s: 5.2,
+                drift_rms_pct: f64::NAN,
+                drift_end_pct: f64::NAN,
             });
         }
         let failure = |method: &str, why: &str| FitFailure {

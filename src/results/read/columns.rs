@@ -11,7 +11,9 @@ use arrow_schema::Schema;
 
 /// Columns added after the first results folders were written: a folder that lacks
 /// one still reads, with the value those runs implied.
-const LATER_COLUMNS: [&str; 5] = [
+const LATER_COLUMNS: [&str; 7] = [
+    "drift_rms_pct",
+    "drift_end_pct",
     "stop_reason",
     "efficiency",
     "between_dives_std",

@@ -624,6 +624,7 @@ fn unchecked(dvl: &Samples, reference: &Samples, frames: &BagFrames) -> Unchecke
         attitude,
         rate: recorded_rate.then(|| reference.rate.iter().map(|r| apply(&to_frd, *r)).collect()),
         angles_in_degrees: false,
+        position: None,
     }
 }
 
@@ -661,6 +662,8 @@ fn locator(
                 .then(|| format!("{dvl_topic} bottom track, good beams, beam velocities valid")),
             zero_is_valid: false,
             gap_limit_s: topics.gap_limit_s,
+            latitude_longitude: None,
+            north_east: None,
         },
     }
 }

@@ -84,6 +84,34 @@ pub struct StudyCalibrationFile {
     pub time_tolerance_pct: f64,
     /// The terms of the dive, found again on each scored trajectory; none when absent.
     pub dive: Option<DiveFile>,
+    /// The method calibrated against fixes simulated from the recordings' positions;
+    /// none when absent.
+    pub fixes: Option<FixesFile>,
+}
+
+/// `[calibration.fixes]`: fixes simulated from each calibration recording's positions,
+/// one every `interval_s` seconds with `noise_m` metres of white noise per horizontal
+/// axis, a share `outlier_share` of them displaced `outlier_m` further (multipath),
+/// drawn from the stream of `seed` and the recording's name.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FixesFile {
+    pub interval_s: f64,
+    pub noise_m: f64,
+    #[serde(default)]
+    pub outlier_share: f64,
+    #[serde(default = "FixesFile::default_outlier_m")]
+    pub outlier_m: f64,
+    #[serde(default)]
+    pub seed: u64,
+}
+
+impl FixesFile {
+    /// A multipath fix's displacement, m, where the spec gives none: ten times a USBL's
+    /// typical 2.5 m.
+    fn default_outlier_m() -> f64 {
+        25.0
+    }
 }
 
 /// `[calibration.dive]`: which terms belong to the dive (its clock, and the bias where

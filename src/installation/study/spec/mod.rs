@@ -22,6 +22,7 @@ pub use file::{
     StudyCalibrationFile, StudyFile, TermSetFile,
 };
 
+use crate::data::fixes::FixSimulation;
 use crate::data::paired::Source;
 use crate::installation::estimate::bound::Noise;
 use crate::installation::estimate::clock::ClockSearch;
@@ -57,6 +58,12 @@ pub enum Model {
     Filter { name: String, terms: Vec<TermName> },
     /// The paper spec's DCNet for an error model.
     Dcnet(ErrorModel),
+    /// The installation fitted to fixes simulated from the calibration trajectory's
+    /// positions (`[calibration.fixes]`), seeded by the trajectory's name and the seed.
+    Fixes {
+        simulation: FixSimulation,
+        seed: u64,
+    },
     /// `[learned]`'s DCNet trained on a source, replicate `replicate` (of
     /// `learned.training.replicates`), the model of the calibration trajectory's fold.
     Learned {
@@ -74,6 +81,7 @@ impl Model {
             Model::Installation { name, .. } => format!("installation {name}"),
             Model::Filter { name, .. } => format!("Kalman filter {name}"),
             Model::Dcnet(model) => format!("DCNet {model}"),
+            Model::Fixes { .. } => FIXES_LABEL.into(),
             Model::Learned { source, replicate } => {
                 let on = match source {
                     TrainingSource::Simulated => "simulation",
@@ -87,6 +95,9 @@ impl Model {
         }
     }
 }
+
+/// The label of the method calibrated against fixes.
+pub const FIXES_LABEL: &str = "installation from fixes";
 
 /// `[calibration.dive]`, checked: the dive's terms and the search for its clock, and
 /// the windows (the first w seconds of a scored trajectory, increasing) they are found
@@ -175,6 +186,17 @@ fn check(document: &Document<StudyFile>) -> Result<StudySpec, Vec<(String, Strin
         faults.add("name", format!("{name:?} must be non-empty, at most {MAX_NAME_CHARS} characters, use only letters, digits, '-', '_' and '.', and not start with '.' (it names the results folder)"));
     }
     let listed = recordings.trajectories.len();
+    if calibration.fixes.is_some()
+        && recordings
+            .columns
+            .as_ref()
+            .is_none_or(|c| c.position().is_none())
+    {
+        faults.add(
+            "calibration.fixes",
+            "fixes are simulated from the recordings' positions: name them in [recordings.columns] (latitude_longitude, or north_east)",
+        );
+    }
     let trajectories = check_recordings(recordings, &document.folder, &mut faults);
     let (dvl_noise_m_s, reference_noise_m_s) = check_noise(noise, &mut faults);
     let calibration = check_calibration(calibration, &mut faults);

@@ -130,6 +130,8 @@ pub(crate) mod tests {
                             scored: scored.clone(),
                             rmse_cm_s: share.map(|v| v / norm * total),
                             total_cm_s: total,
+                            drift_rms_pct: f64::NAN,
+                            drift_end_pct: f64::NAN,
                         });
                     }
                 }

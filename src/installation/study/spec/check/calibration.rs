@@ -5,13 +5,16 @@
 //! then its Kalman filter), whether "dcnet" is listed, the filter's settings and the
 //! tolerance as a fraction.
 
+use crate::data::fixes::FixSimulation;
 use crate::installation::estimate::clock::ClockSearch;
 use crate::installation::estimate::filter::FilterSettings;
 use crate::installation::study::spec::DiveSpec;
 use crate::installation::study::spec::Model;
 use crate::installation::study::spec::check::check_terms;
 use crate::installation::study::spec::check::kalman::check_kalman;
-use crate::installation::study::spec::file::{DiveFile, StudyCalibrationFile, TermSetFile};
+use crate::installation::study::spec::file::{
+    DiveFile, FixesFile, StudyCalibrationFile, TermSetFile,
+};
 use crate::installation::terms::names::{TermName, term_set};
 use crate::spec::check::Faults;
 use crate::vocab::ErrorModel;
@@ -44,6 +47,7 @@ pub(in crate::installation::study::spec) fn check_calibration(
         kalman,
         time_tolerance_pct,
         dive,
+        fixes,
     } = calibration;
     let windows_s = check_windows("calibration.window_s", &window_s, faults);
     let (mut methods, wants_dcnet) = check_methods(&names, faults);
@@ -63,6 +67,9 @@ pub(in crate::installation::study::spec) fn check_calibration(
             });
         }
     }
+    if let Some(fixes) = fixes {
+        methods.push(check_fixes(fixes, faults));
+    }
     if !(time_tolerance_pct.is_finite() && time_tolerance_pct > 0.0) {
         faults.add(
             "calibration.time_tolerance_pct",
@@ -76,6 +83,54 @@ pub(in crate::installation::study::spec) fn check_calibration(
         filter,
         time_tolerance: time_tolerance_pct / 100.0,
         dive: dive.map(|dive| check_dive(dive, faults)),
+    }
+}
+
+/// `[calibration.fixes]`: an interval and a noise above zero, a share of outliers in
+/// [0, 1) and their distance zero or more.
+fn check_fixes(fixes: FixesFile, faults: &mut Faults) -> Model {
+    let FixesFile {
+        interval_s,
+        noise_m,
+        outlier_share,
+        outlier_m,
+        seed,
+    } = fixes;
+    let positive = |v: f64| v.is_finite() && v > 0.0;
+    if !positive(interval_s) {
+        faults.add(
+            "calibration.fixes.interval_s",
+            format!("{interval_s} must be a number of seconds above zero"),
+        );
+    }
+    if !positive(noise_m) {
+        faults.add(
+            "calibration.fixes.noise_m",
+            format!(
+                "{noise_m} must be a number of metres above zero: the fit weighs the fixes by it"
+            ),
+        );
+    }
+    if !(0.0..1.0).contains(&outlier_share) {
+        faults.add(
+            "calibration.fixes.outlier_share",
+            format!("{outlier_share} must be a share of the fixes, at least 0 and below 1"),
+        );
+    }
+    if !(outlier_m.is_finite() && outlier_m >= 0.0) {
+        faults.add(
+            "calibration.fixes.outlier_m",
+            format!("{outlier_m} must be a number of metres, zero or more"),
+        );
+    }
+    Model::Fixes {
+        simulation: FixSimulation {
+            interval_s,
+            noise_m,
+            outlier_share,
+            outlier_m,
+        },
+        seed,
     }
 }
 

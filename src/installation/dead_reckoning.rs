@@ -1,0 +1,191 @@
+//! Dead reckoning: the DVL's velocity, corrected by an installation and turned into NED
+//! by the attitude, summed over time into a track; and the operator's score of a
+//! calibration, the track's drift from the reference's positions as a percentage of
+//! the distance travelled.
+//! In: an installation, a piece of DVL samples, an [`Attitude`]. Out: a [`Track`] of
+//! the reference point, and its [`Drift`].
+//!
+//! The DVL sample stamped t measured at t + τ; corrected, u = R(δ)ᵀ(I + S)⁻¹(v − b) is
+//! the velocity of the DVL's own point in body axes. The DVL's point moves at C_b^n u,
+//! summed by the trapezoidal rule between two samples of a piece; the reference point
+//! (where the fixes or the reference's positions are) lies at p_DVL − C_b^n l. The
+//! lever arm's part is thereby exact: the ω × l the velocity correction removes
+//! integrates to C_b^n l.
+
+use crate::Vec3;
+use crate::data::paired::{GAP_MARGIN_S, PairedRecording};
+use crate::installation::frames::{Attitude, apply};
+use crate::installation::terms::Installation;
+use std::ops::Range;
+
+/// The reference point's track of one piece: at each DVL sample's t + τ, its position,
+/// metres north, east and down of the DVL's point at the piece's first sample.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Track {
+    pub time_s: Vec<f64>,
+    pub position_m: Vec<Vec3>,
+}
+
+impl Track {
+    /// The position at `time_s`, linearly interpolated between two samples (exact at
+    /// one); `None` outside the track.
+    pub fn at(&self, time_s: f64) -> Option<Vec3> {
+        let (&first, &last) = (self.time_s.first()?, self.time_s.last()?);
+        if !(first..=last).contains(&time_s) {
+            return None;
+        }
+        let after = self.time_s.partition_point(|&t| t < time_s);
+        if self.time_s[after] == time_s {
+            return Some(self.position_m[after]);
+        }
+        let before = after - 1;
+        let weight = (time_s - self.time_s[before]) / (self.time_s[after] - self.time_s[before]);
+        let (a, b) = (self.position_m[before], self.position_m[after]);
+        Some([0, 1, 2].map(|k| a[k] + weight * (b[k] - a[k])))
+    }
+}
+
+/// The track of the DVL samples `dvl` (stamps and velocities of one piece) through
+/// `installation`, with `attitude` read at each stamp plus the time offset; `None`
+/// where the attitude is not read at one of them.
+pub fn dead_reckon(
+    installation: &Installation,
+    (time_s, dvl_m_s): (&[f64], &[Vec3]),
+    attitude: &Attitude,
+) -> Option<Track> {
+    let mut track = Track {
+        time_s: Vec::with_capacity(time_s.len()),
+        position_m: Vec::with_capacity(time_s.len()),
+    };
+    let (mut dvl_point, mut previous) = ([0.0; 3], None::<(f64, Vec3)>);
+    for (&stamp, &dvl) in time_s.iter().zip(dvl_m_s) {
+        let t = stamp + installation.time_offset_s;
+        let body_to_ned = attitude.body_to_ned_at(t)?;
+        let velocity = apply(&body_to_ned, installation.correct(dvl, [0.0; 3]));
+        if let Some((before_s, before)) = previous {
+            let dt = t - before_s;
+            dvl_point = [0, 1, 2].map(|k| dvl_point[k] + 0.5 * dt * (before[k] + velocity[k]));
+        }
+        let lever = apply(&body_to_ned, installation.lever_arm_m);
+        track.time_s.push(t);
+        track
+            .position_m
+            .push([0, 1, 2].map(|k| dvl_point[k] - lever[k]));
+        previous = Some((t, velocity));
+    }
+    Some(track)
+}
+
+/// A dead reckoning's horizontal error against the reference's positions, as a share
+/// of the distance travelled: over every sample of every piece, the RMS of the error
+/// over its piece's distance, and the error at each piece's end over its distance
+/// (pieces summed), both in %; the distance, m, and the samples scored.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Drift {
+    pub rms_pct: f64,
+    pub end_pct: f64,
+    pub distance_m: f64,
+    pub samples: usize,
+}
+
+/// The reference's horizontal positions on their stamps, read at any time.
+pub struct Positions<'a> {
+    pub time_s: &'a [f64],
+    pub north_east_m: &'a [[f64; 2]],
+}
+
+impl Positions<'_> {
+    /// The position at `time_s`, linearly interpolated; `None` outside.
+    pub fn at(&self, time_s: f64) -> Option<[f64; 2]> {
+        let (&first, &last) = (self.time_s.first()?, self.time_s.last()?);
+        if !(first..=last).contains(&time_s) {
+            return None;
+        }
+        let after = self.time_s.partition_point(|&t| t < time_s);
+        if self.time_s[after] == time_s {
+            return Some(self.north_east_m[after]);
+        }
+        let before = after - 1;
+        let weight = (time_s - self.time_s[before]) / (self.time_s[after] - self.time_s[before]);
+        let (a, b) = (self.north_east_m[before], self.north_east_m[after]);
+        Some([0, 1].map(|k| a[k] + weight * (b[k] - a[k])))
+    }
+}
+
+/// The drift of `installation`'s dead reckoning over the `pieces` of the DVL record
+/// `dvl` against `positions`, each piece started at the reference's position: `None`
+/// where no piece could be scored (the attitude or the positions not read over it, or
+/// a vehicle that did not move). Every installation is scored on the same samples:
+/// those whose t + τ lies inside the attitude whatever τ within ±[`GAP_MARGIN_S`].
+pub fn drift(
+    installation: &Installation,
+    (time_s, dvl_m_s): (&[f64], &[Vec3]),
+    pieces: &[Range<usize>],
+    attitude: &Attitude,
+    positions: &Positions,
+) -> Option<Drift> {
+    let (mut squares, mut samples, mut end_error_m, mut distance_m) = (0.0, 0, 0.0, 0.0);
+    let inside = interior(attitude, time_s);
+    for piece in pieces {
+        let piece = piece.start.max(inside.start)..piece.end.min(inside.end);
+        let Some(track) = dead_reckon(
+            installation,
+            (&time_s[piece.clone()], &dvl_m_s[piece.clone()]),
+            attitude,
+        ) else {
+            continue;
+        };
+        let reference: Option<Vec<[f64; 2]>> =
+            track.time_s.iter().map(|&t| positions.at(t)).collect();
+        let Some(reference) = reference else {
+            continue;
+        };
+        let travelled: f64 = (reference.windows(2))
+            .map(|pair| (pair[1][0] - pair[0][0]).hypot(pair[1][1] - pair[0][1]))
+            .sum();
+        if reference.len() < 2 || travelled <= 0.0 {
+            continue;
+        }
+        let start = [0, 1].map(|k| reference[0][k] - track.position_m[0][k]);
+        let errors: Vec<f64> = (track.position_m.iter().zip(&reference))
+            .map(|(p, r)| (p[0] + start[0] - r[0]).hypot(p[1] + start[1] - r[1]))
+            .collect();
+        squares += errors.iter().map(|e| (e / travelled).powi(2)).sum::<f64>();
+        samples += errors.len();
+        end_error_m += errors[errors.len() - 1];
+        distance_m += travelled;
+    }
+    (samples > 0).then(|| Drift {
+        rms_pct: 100.0 * (squares / samples as f64).sqrt(),
+        end_pct: 100.0 * end_error_m / distance_m,
+        distance_m,
+        samples,
+    })
+}
+
+/// The drift of `installation` over `recording` against its reference's positions,
+/// where it records them ([`drift`]).
+pub fn drift_of(installation: &Installation, recording: &PairedRecording) -> Option<Drift> {
+    let positions = Positions {
+        time_s: &recording.reference_time_s,
+        north_east_m: recording.position_ne_m.as_deref()?,
+    };
+    drift(
+        installation,
+        (&recording.time_s, &recording.dvl_m_s),
+        &recording.pieces(),
+        &Attitude::of(recording),
+        &positions,
+    )
+}
+
+/// The samples stamped `time_s` whose t + τ lies inside `attitude`'s span for every
+/// |τ| ≤ [`GAP_MARGIN_S`] (empty where none does).
+pub fn interior(attitude: &Attitude, time_s: &[f64]) -> Range<usize> {
+    let (Some(&first), Some(&last)) = (attitude.time_s.first(), attitude.time_s.last()) else {
+        return 0..0;
+    };
+    let start = time_s.partition_point(|&t| t - GAP_MARGIN_S < first);
+    let end = time_s.partition_point(|&t| t + GAP_MARGIN_S <= last);
+    start..end.max(start)
+}

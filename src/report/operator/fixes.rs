@@ -1,0 +1,96 @@
+//! What `calibrate --fixes` prints on stdout: the DVL, attitude and fixes read, the
+//! terms fitted to the fixes with their standard deviations, Fisher bound and 95 %
+//! intervals, the terms the fixes cannot show and why (not applied), the fixes left out,
+//! and the fixes' residual before and after as metres and as a share of the distance
+//! travelled.
+//! In: a [`FixCalibration`]. Out: the text.
+
+use crate::installation::estimate::fixes::{FIX_TOLERANCES, MIN_HEADING_SPAN_RAD};
+use crate::operator::calibrate_fixes::FixCalibration;
+use crate::report::kit::readable::{readable_term, readable_why};
+use comfy_table::{Table, presets::ASCII_MARKDOWN};
+
+/// Everything `calibrate --fixes` prints; ends in a newline.
+pub fn fixes_text(calibration: &FixCalibration) -> String {
+    let FixCalibration { fit, noise, .. } = calibration;
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    table.set_header([
+        "term",
+        "estimate",
+        "standard deviation",
+        "bound (specified noise)",
+        "applied",
+        "95 % interval",
+    ]);
+    for (k, name) in fit.names.iter().enumerate() {
+        if !fit.estimated[k] {
+            continue;
+        }
+        let (readable, unit, factor) = readable_term(name);
+        table.add_row([
+            readable,
+            format!("{:.4} {unit}", fit.value[k] * factor),
+            format!("{:.4} {unit}", fit.std[k] * factor),
+            format!("{:.4} {unit}", fit.bound_std[k] * factor),
+            if fit.is_applied(name) {
+                "yes"
+            } else {
+                "no, not seen"
+            }
+            .to_string(),
+            format!("± {:.4} {unit}", fit.half_width_95(k) * factor),
+        ]);
+    }
+    let mut text = format!(
+        "read: {}; {} fixes, {} fitted ({} outside the DVL's pieces, {} outliers beyond Tukey's 4.685 of their standard deviations, left out), over {} piece{} with a start position each\n{table}\n",
+        calibration.read,
+        calibration.fixes,
+        fit.fitted,
+        fit.outside,
+        fit.outliers.len(),
+        fit.pieces,
+        if fit.pieces == 1 { "" } else { "s" },
+    );
+    text.push_str(&format!(
+        "standard deviation: the Fisher bound scaled by the variance factor {:.2} the fixes' whitened residuals show (1 where the noise is as given: fixes {:.2} m per axis{}, the DVL {:.2} cm/s per axis summed into a random walk); 95 % interval: Student's t on {} degrees of freedom\n",
+        fit.variance_factor,
+        noise.fix_m,
+        if fit.axes == 3 { format!(", depth {:.2} m", noise.depth_m) } else { String::new() },
+        100.0 * noise.dvl_m_s,
+        fit.freedom,
+    ));
+    if fit.axes == 2 {
+        text.push_str("not estimated: the misalignment's roll and pitch and the lever arm's depth, which horizontal fixes do not feel (give the fixes' depth for roll and pitch)\n");
+    }
+    for name in &fit.names {
+        let reasons: Vec<String> = (fit.unseen.iter())
+            .filter(|u| u.term == *name)
+            .map(|u| u.why.to_string())
+            .collect();
+        if !reasons.is_empty() {
+            text.push_str(&format!(
+                "not seen, not applied: {}: {}\n",
+                readable_term(name).0,
+                readable_why(name, &reasons.join("; "))
+            ));
+        }
+    }
+    text.push_str(&format!(
+        "fixes' horizontal residual RMS: {:.2} m with no terms (the start positions alone), {:.2} m with the terms applied; over the {:.0} m travelled, {:.3} % and {:.3} % of the distance (the fixes' own noise included)\n",
+        calibration.before_m,
+        calibration.after_m,
+        calibration.distance_m,
+        100.0 * calibration.before_m / calibration.distance_m,
+        100.0 * calibration.after_m / calibration.distance_m,
+    ));
+    text.push_str(&format!(
+        "a term is applied when the fixes show it: not flat, correlated within ±0.95 with every other term and start position, its standard deviation within its tolerance (scale {:.2} %, misalignment {:.2}°, lever arm {:.2} m, time offset {:.2} s), and for the yaw, headings spanning {:.0}° or more\n",
+        100.0 * FIX_TOLERANCES.scale,
+        FIX_TOLERANCES.misalignment_rad.to_degrees(),
+        FIX_TOLERANCES.lever_arm_m,
+        FIX_TOLERANCES.time_offset_s,
+        MIN_HEADING_SPAN_RAD.to_degrees(),
+    ));
+    text
+}
