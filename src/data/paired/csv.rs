@@ -24,9 +24,6 @@ pub fn parse(
         name: &columns.time,
         holds: Quantity::Time,
     };
-    fn triple(names: &[String; 3], holds: Quantity) -> Vec<Column<'_>> {
-        names.iter().map(|name| Column { name, holds }).collect()
-    }
     let validity = columns.valid.as_deref().map(|name| Column {
         name,
         holds: Quantity::Validity,
@@ -34,23 +31,7 @@ pub fn parse(
     let dvl_columns: Vec<Column> = std::iter::once(time)
         .chain(triple(&columns.dvl, Quantity::MeasuredVelocity))
         .collect();
-    let velocity = with_velocity.then(|| triple(&columns.velocity_ned, Quantity::Velocity));
-    let reference_columns: Vec<Column> = std::iter::once(time)
-        .chain(velocity.into_iter().flatten())
-        .chain(triple(&columns.attitude, Quantity::Angle))
-        .chain(
-            columns
-                .rate
-                .iter()
-                .flat_map(|rate| triple(rate, Quantity::AngularRate)),
-        )
-        .chain(columns.position().into_iter().flat_map(|(names, _)| {
-            names.iter().map(|name| Column {
-                name,
-                holds: Quantity::Position,
-            })
-        }))
-        .collect();
+    let reference_columns = reference_columns(time, columns, with_velocity);
     // The reference's values start after the time, or, in one file, after the time
     // and the DVL's three; the DVL's validity flag, where there is one, is the last.
     let (dvl_rows, reference_rows, start, reference_path) = match reference {
@@ -90,16 +71,7 @@ pub fn parse(
             .as_ref()
             .map(|_| triples(&reference_rows, attitude + 3)),
         angles_in_degrees: columns.angles_in_degrees,
-        position: columns.position().map(|(_, geographic)| {
-            let start = attitude + 3 + if columns.rate.is_some() { 3 } else { 0 };
-            let values = (0..reference_rows.len())
-                .map(|row| {
-                    let values = &reference_rows.row(row)[start..start + 2];
-                    [values[0], values[1]]
-                })
-                .collect();
-            (values, geographic)
-        }),
+        position: positions(&reference_rows, attitude + 3, columns),
     };
     let at = Locator {
         dvl: dvl.0.to_path_buf(),
@@ -118,5 +90,51 @@ fn triples(rows: &Rows, start: usize) -> Vec<Vec3> {
             let values = &rows.row(row)[start..start + 3];
             [values[0], values[1], values[2]]
         })
+        .collect()
+}
+
+/// The reference's position columns of `rows` where `columns` names them, after the
+/// attitude's (which end at `after`) and the rate's, and whether they are latitude and
+/// longitude.
+fn positions(rows: &Rows, after: usize, columns: &PairedColumns) -> Option<(Vec<[f64; 2]>, bool)> {
+    let (_, geographic) = columns.position()?;
+    let start = after + if columns.rate.is_some() { 3 } else { 0 };
+    let values = (0..rows.len())
+        .map(|row| {
+            let values = &rows.row(row)[start..start + 2];
+            [values[0], values[1]]
+        })
+        .collect();
+    Some((values, geographic))
+}
+
+/// The columns of `names`, each holding `holds`.
+fn triple(names: &[String; 3], holds: Quantity) -> Vec<Column<'_>> {
+    names.iter().map(|name| Column { name, holds }).collect()
+}
+
+/// The reference's columns: its time, velocity (`with_velocity`), attitude, rate and
+/// position, those `columns` names.
+fn reference_columns<'a>(
+    time: Column<'a>,
+    columns: &'a PairedColumns,
+    with_velocity: bool,
+) -> Vec<Column<'a>> {
+    let velocity = with_velocity.then(|| triple(&columns.velocity_ned, Quantity::Velocity));
+    std::iter::once(time)
+        .chain(velocity.into_iter().flatten())
+        .chain(triple(&columns.attitude, Quantity::Angle))
+        .chain(
+            columns
+                .rate
+                .iter()
+                .flat_map(|rate| triple(rate, Quantity::AngularRate)),
+        )
+        .chain(columns.position().into_iter().flat_map(|(names, _)| {
+            names.iter().map(|name| Column {
+                name,
+                holds: Quantity::Position,
+            })
+        }))
         .collect()
 }

@@ -214,7 +214,7 @@ pub struct PairedRecording {
     /// below are on them.
     pub reference_time_s: Vec<f64>,
     /// The reference's velocity, north, east, down, m/s; empty where the reference is an
-    /// attitude alone (beside position fixes: [`crate::data::fixes`]), which nothing
+    /// attitude alone (beside position fixes, `data::fixes`), which nothing
     /// compares a DVL's velocity with.
     pub velocity_ned_m_s: Vec<Vec3>,
     /// Roll, pitch, yaw in radians, as recorded (yaw may wrap at ±π, or run on unwrapped).

@@ -84,8 +84,8 @@ pub enum Why {
     /// Moving it (with the others named, in some proportion) leaves the residuals
     /// unchanged.
     Flat { with: Vec<&'static str> },
-    /// A yaw fitted to position fixes over headings that span only `span_rad`: at one
-    /// heading the DVL's yaw is not told apart from the attitude's heading error there.
+    /// A term only turns show (the yaw, the lever arm, the clock) fitted to position
+    /// fixes over headings that span only `span_rad`.
     OneHeading { span_rad: f64 },
 }
 
@@ -109,7 +109,7 @@ impl fmt::Display for Why {
             }
             Why::OneHeading { span_rad } => write!(
                 f,
-                "the vehicle's heading spans {:.0}° only: at one heading the DVL's yaw is not told apart from the attitude's heading error there",
+                "the vehicle's heading spans {:.0}° only: the yaw, the lever arm and the clock show only as it turns (at one heading the yaw is the attitude's heading error there, the lever arm and the clock a shift of the start)",
                 span_rad.to_degrees()
             ),
         }

@@ -29,10 +29,14 @@
 //! Standard deviations: the whitened information JᵀΣ⁻¹J gives the Fisher bound; scaled
 //! by the variance factor the residuals show (their whitened sum of squares over n − p),
 //! the standard deviations, whose 95 % interval takes Student's t on n − p degrees of
-//! freedom. A term the fixes cannot show (flat, correlated beyond
-//! [`CORRELATION_LIMIT`](crate::installation::estimate::bound::CORRELATION_LIMIT) with
-//! another or with a start, or beyond its tolerance in [`FIX_TOLERANCES`]) is not
-//! applied: the terms are fitted again without it. A straight line shows neither the
+//! freedom. A term the fixes do not show (over headings spanning under a quarter turn,
+//! the yaw, the lever arm and the clock; or flat, correlated beyond
+//! [`CORRELATION_LIMIT`] with a start position, or beyond its tolerance in
+//! [`FIX_TOLERANCES`]) is not applied, held at zero: the one shown least is left out and
+//! the rest fitted again, until none is left (a term nearly flat with another inflates
+//! that one's standard deviation too, which the next fit no longer does). The others'
+//! intervals then take it to be zero. A term tied beyond the limit to another term but
+//! within its tolerance is seen poorly, said, and applied.
 //! lever arm (C_b^n l does not change) nor the clock (a shift in time is one along the
 //! track).
 
@@ -40,7 +44,9 @@ use crate::Vec3;
 use crate::data::fixes::Fixes;
 use crate::data::paired::GAP_MARGIN_S;
 use crate::installation::dead_reckoning::{Track, dead_reckon, interior};
-use crate::installation::estimate::bound::{Tolerances, Unseen, Why, whitened_bound};
+use crate::installation::estimate::bound::{
+    CORRELATION_LIMIT, Tolerances, Unseen, Why, whitened_bound,
+};
 use crate::installation::estimate::fit::{MAX_LEVER_ARM_M, MAX_SCALE};
 use crate::installation::frames::Attitude;
 use crate::installation::terms::names::TermName;
@@ -63,11 +69,27 @@ pub fn default_fix_terms() -> Vec<TermName> {
 /// fitted, so that every trial offset reads the attitude over the same fixes.
 pub const TIME_OFFSET_MARGIN_S: f64 = GAP_MARGIN_S;
 
-/// The least span of headings over which a yaw misalignment fitted to fixes is applied,
-/// rad (a quarter turn): at one heading the DVL's yaw and the attitude's heading error
-/// there are one, and on A-KIT a straight segment's yaw, applied to the turning ones,
-/// leaves more drift than none.
+/// The least span of headings over which the terms only turns show
+/// ([`SHOWN_BY_TURNS`]) are fitted to fixes, rad (a quarter turn): at one heading the
+/// DVL's yaw and the attitude's heading error there are one, and the lever arm (C_b^n l)
+/// and the clock (a shift along the track) move the track as its start does. On A-KIT a
+/// straight segment's yaw, applied to the turning ones, left more drift than none, and
+/// its lever arm and clock, fitted where they were barely tied to the start, twice as
+/// much.
 pub const MIN_HEADING_SPAN_RAD: f64 = std::f64::consts::FRAC_PI_2;
+
+/// The terms only a turning vehicle shows to fixes.
+const SHOWN_BY_TURNS: [&str; 4] = [
+    "misalignment_z_rad",
+    "lever_arm_x_m",
+    "lever_arm_y_m",
+    "time_offset_s",
+];
+
+/// The dead reckoning's random walks considered, in the white DVL noise's: a DVL noise
+/// of AR(1) correlation ρ from one sample to the next walks (1 + ρ)/(1 − ρ) times as far
+/// in variance (9 at ρ = 0.8, 39 at 0.95).
+const WALK_SCALES: [f64; 8] = [1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 128.0];
 
 /// The scan's step for the time offset's start, s.
 const SCAN_STEP_S: f64 = 0.25;
@@ -89,6 +111,13 @@ pub const FIX_TOLERANCES: Tolerances = PerKind {
     bias_m_s: 0.01,
 };
 
+/// The names of a piece's start position, north, east and depth, m, as the bound names
+/// them, each beginning with [`START`].
+const START: &str = "start_";
+const START_NORTH: &str = "start_north_m";
+const START_EAST: &str = "start_east_m";
+const START_DEPTH: &str = "start_depth_m";
+
 /// The noise of a fit to fixes: a fix's per horizontal axis and in depth, m, and the
 /// DVL's white noise per axis, m/s.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -105,8 +134,8 @@ pub struct FixFit {
     /// show held at zero.
     pub terms: TermSet,
     pub installation: Installation,
-    /// Each parameter of `terms`, in their order: its name, its value (the first fit's
-    /// for a term not applied), its standard deviation and Fisher bound, and whether it
+    /// Each parameter of `terms`, in their order: its name, its value (for a term not
+    /// applied, that of the fit it was left out of), its standard deviation and Fisher bound, and whether it
     /// was estimated at all (a horizontal fit does not estimate roll, pitch or the
     /// lever arm's depth).
     pub names: Vec<&'static str>,
@@ -114,11 +143,16 @@ pub struct FixFit {
     pub std: Vec<f64>,
     pub bound_std: Vec<f64>,
     pub estimated: Vec<bool>,
+    /// Whether each parameter is applied: estimated, and not left out as one the fixes
+    /// do not show.
+    pub applied: Vec<bool>,
     /// The correlations of the parameters applied, `[term][term]` over `names`; NaN
     /// with one not applied.
     pub correlation: Vec<Vec<f64>>,
-    /// Why each term not applied could not be seen (from the fit of every term asked).
+    /// Why each term not applied could not be seen (from the fit it was left out of).
     pub unseen: Vec<Unseen>,
+    /// The dead reckoning's random walk the residuals read, in the white DVL noise's.
+    pub walk_scale: f64,
     /// The variance factor of the whitened residuals, and its degrees of freedom n − p.
     pub variance_factor: f64,
     pub freedom: usize,
@@ -151,7 +185,7 @@ impl FixFit {
     /// Whether the parameter named `name` was applied.
     pub fn is_applied(&self, name: &str) -> bool {
         let k = self.names.iter().position(|n| *n == name);
-        k.is_some_and(|k| self.estimated[k] && !self.unseen.iter().any(|u| u.term == name))
+        k.is_some_and(|k| self.applied[k])
     }
 }
 
@@ -192,49 +226,27 @@ pub fn fit_fixes(
     noise: FixNoise,
 ) -> Result<FixFit, FixFitError> {
     let problem = Problem::new(dvl, pieces, attitude, fixes, terms, noise)?;
-    let all = problem.estimated.clone();
-    let first = problem.robust_fit(&all)?;
-    let (std, _, unseen) = problem.bound(&first, &all);
-    let mut unseen: Vec<Unseen> = unseen
-        .into_iter()
-        .filter(|u| problem.names.contains(&u.term))
-        .collect();
-    let span_rad = problem.heading_span_rad();
-    if span_rad < MIN_HEADING_SPAN_RAD && problem.names.contains(&"misalignment_z_rad") {
-        unseen.push(Unseen {
-            term: "misalignment_z_rad",
-            why: Why::OneHeading { span_rad },
-        });
+    let mut shown = Shown::of(&problem);
+    let last = shown.eliminate(&problem)?;
+    let (last_std, correlation, _) = problem.bound(&last, &shown.applied);
+    let last_bound = problem.bound_at(&last, &shown.applied, 1.0).0;
+    for k in 0..problem.names.len() {
+        if shown.applied[k] {
+            shown.keep(k, (last.terms[k], last_std[k], last_bound[k]));
+        }
     }
-    let applied: Vec<bool> = (problem.names.iter().zip(&all))
-        .map(|(name, &on)| on && !unseen.iter().any(|u| u.term == *name))
-        .collect();
-    let last = if applied == all {
-        first.clone()
-    } else {
-        problem.robust_fit(&applied)?
-    };
-    let (last_std, correlation, _) = problem.bound(&last, &applied);
-    let (bound_std, ..) = problem.bound_at(&last, &applied, 1.0);
-    let n_terms = problem.names.len();
-    let pick = |k: usize, last: f64, first: f64| if applied[k] { last } else { first };
-    let first_bound = problem.bound_at(&first, &all, 1.0).0;
     Ok(FixFit {
         terms,
         installation: Installation::from_parameters(&terms, &last.terms),
         names: problem.names.clone(),
-        value: (0..n_terms)
-            .map(|k| pick(k, last.terms[k], first.terms[k]))
-            .collect(),
-        std: (0..n_terms).map(|k| pick(k, last_std[k], std[k])).collect(),
-        bound_std: (0..n_terms)
-            .map(|k| pick(k, bound_std[k], first_bound[k]))
-            .collect(),
-        estimated: all,
-        correlation: (0..n_terms)
-            .map(|j| (0..n_terms).map(|k| correlation[j][k]).collect())
-            .collect(),
-        unseen,
+        value: shown.value,
+        std: shown.std,
+        bound_std: shown.bound_std,
+        estimated: problem.estimated.clone(),
+        applied: shown.applied,
+        correlation,
+        unseen: shown.unseen,
+        walk_scale: problem.walk_scale.get(),
         variance_factor: last.variance_factor(),
         freedom: last.freedom,
         fitted: last.kept.iter().filter(|&&kept| kept).count(),
@@ -254,6 +266,97 @@ pub fn fit_fixes(
             })
             .sum(),
     })
+}
+
+/// Which terms the fixes show: those applied, why each other is not (and why one
+/// applied is seen poorly), and each term's value and standard deviations (a term not
+/// applied keeps those of the fit it was left out of).
+struct Shown {
+    applied: Vec<bool>,
+    unseen: Vec<Unseen>,
+    value: Vec<f64>,
+    std: Vec<f64>,
+    bound_std: Vec<f64>,
+}
+
+impl Shown {
+    /// Every term estimated, but those only turns show where the headings span under
+    /// [`MIN_HEADING_SPAN_RAD`].
+    fn of(problem: &Problem) -> Shown {
+        let n = problem.names.len();
+        let mut shown = Shown {
+            applied: problem.estimated.clone(),
+            unseen: Vec::new(),
+            value: vec![0.0; n],
+            std: vec![f64::INFINITY; n],
+            bound_std: vec![f64::INFINITY; n],
+        };
+        let span_rad = problem.heading_span_rad();
+        if span_rad < MIN_HEADING_SPAN_RAD {
+            for (k, name) in problem.names.iter().enumerate() {
+                if shown.applied[k] && SHOWN_BY_TURNS.contains(name) {
+                    shown.applied[k] = false;
+                    shown.unseen.push(Unseen {
+                        term: name,
+                        why: Why::OneHeading { span_rad },
+                    });
+                }
+            }
+        }
+        shown
+    }
+
+    /// Term `k`'s value, standard deviation and bound.
+    fn keep(&mut self, k: usize, (value, std, bound_std): (f64, f64, f64)) {
+        (self.value[k], self.std[k], self.bound_std[k]) = (value, std, bound_std);
+    }
+
+    /// Backward elimination: the term the fixes show least (flat, or furthest beyond
+    /// the correlation limit with a start or its tolerance) is left out and the rest
+    /// fitted again, until no term left is one the fixes do not show; the last fit.
+    fn eliminate(&mut self, problem: &Problem) -> Result<Solution, FixFitError> {
+        loop {
+            let solution = problem.robust_fit(&self.applied)?;
+            let (term_std, _, found) = problem.bound(&solution, &self.applied);
+            let found: Vec<Unseen> = (found.into_iter())
+                .filter(|u| problem.names.contains(&u.term))
+                .collect();
+            let worst = (found.iter())
+                .map(|u| (u.term, unseen_by(u, &term_std, problem)))
+                .filter(|(_, by)| *by > 1.0)
+                .max_by(|a, b| a.1.total_cmp(&b.1));
+            let Some((term, _)) = worst else {
+                // Seen, if poorly: tied to another term.
+                self.unseen.extend(found);
+                return Ok(solution);
+            };
+            let k = problem.position(term);
+            let bound = problem.bound_at(&solution, &self.applied, 1.0).0[k];
+            self.keep(k, (solution.terms[k], term_std[k], bound));
+            self.unseen
+                .extend(found.into_iter().filter(|u| u.term == term));
+            self.applied[k] = false;
+        }
+    }
+}
+
+/// How far beyond being shown `unseen` puts its term, where above 1 the fixes do not
+/// show it: infinite on a flat direction, its correlation with a start position over
+/// the limit, or its standard deviation over its tolerance. A term tied to another term
+/// within its tolerance is seen, if poorly, and applied.
+fn unseen_by(unseen: &Unseen, std: &[f64], problem: &Problem) -> f64 {
+    let k = problem.position(unseen.term);
+    let beyond = std[k] / FIX_TOLERANCES.of(problem.terms.parameter_kinds()[k]);
+    match &unseen.why {
+        Why::Flat { .. } => f64::INFINITY,
+        // Tied to a start position, a term moves the track as the start does, and the
+        // start takes its place; tied to another term, it is left in, or the other
+        // would take its true value.
+        Why::Correlated { correlation, with } if with.starts_with(START) => {
+            beyond.max(correlation.abs() / CORRELATION_LIMIT)
+        }
+        _ => beyond,
+    }
 }
 
 /// A fit's state: the term parameters (every one of the term set, those not estimated
@@ -291,6 +394,9 @@ struct Problem<'a> {
     fix_of: Vec<usize>,
     outside: usize,
     axes: usize,
+    /// The dead reckoning's random walk over the white DVL noise's, as the residuals
+    /// read it ([`Problem::read_walk`]): a DVL noise correlated in time walks further.
+    walk_scale: std::cell::Cell<f64>,
 }
 
 impl<'a> Problem<'a> {
@@ -313,26 +419,7 @@ impl<'a> Problem<'a> {
             })
             .collect();
         let time_s = dvl.0;
-        let (mut used, mut held) = (Vec::new(), Vec::new());
-        // Every trial time offset reads the attitude over the same samples.
-        let inside = interior(attitude, time_s);
-        let pieces: Vec<Range<usize>> = (pieces.iter())
-            .map(|p| p.start.max(inside.start)..p.end.min(inside.end))
-            .filter(|p| p.len() >= 2)
-            .collect();
-        for piece in &pieces {
-            let (first, last) = (time_s[piece.start], time_s[piece.end - 1]);
-            let inside: Vec<usize> = (0..fixes.len())
-                .filter(|&j| {
-                    let t = fixes.time_s[j];
-                    t >= first + TIME_OFFSET_MARGIN_S && t <= last - TIME_OFFSET_MARGIN_S
-                })
-                .collect();
-            if !inside.is_empty() {
-                used.push(piece.clone());
-                held.push(inside);
-            }
-        }
+        let (used, held) = pieces_with_fixes(time_s, pieces, attitude, fixes);
         let fix_of: Vec<usize> = held.iter().flatten().copied().collect();
         if fix_of.is_empty() {
             let span = |t: &[f64]| {
@@ -361,6 +448,7 @@ impl<'a> Problem<'a> {
             held,
             fix_of,
             axes,
+            walk_scale: std::cell::Cell::new(1.0),
         };
         let parameters = problem.free_count(&problem.estimated);
         let residuals = problem.fix_of.len() * axes;
@@ -372,6 +460,13 @@ impl<'a> Problem<'a> {
             });
         }
         Ok(problem)
+    }
+
+    /// Where the parameter named `name` is among the terms'.
+    fn position(&self, name: &str) -> usize {
+        (self.names.iter())
+            .position(|n| *n == name)
+            .expect("a term's name")
     }
 
     /// The span of the attitude's (unwrapped) yaw over the pieces fitted, rad.
@@ -433,7 +528,7 @@ impl<'a> Problem<'a> {
     /// is left out, its variance far beyond any other).
     fn whiteners(&self, weights: &[f64]) -> Vec<DMatrix<f64>> {
         let step_s = crate::data::paired::sample_interval(self.dvl.0);
-        let walk = self.noise.dvl_m_s.powi(2) * step_s;
+        let walk = self.walk_scale.get() * self.noise.dvl_m_s.powi(2) * step_s;
         let mut offset = 0;
         let mut factors = Vec::new();
         for (piece, held) in self.pieces.iter().zip(&self.held) {
@@ -573,7 +668,8 @@ impl<'a> Problem<'a> {
     /// the fixes barely feel stops there, and is then found unseen.
     fn limit(&self, k: usize) -> f64 {
         match self.names[k] {
-            "time_offset_s" => TIME_OFFSET_MARGIN_S,
+            // Inside the margin by more than the Jacobian's step.
+            "time_offset_s" => TIME_OFFSET_MARGIN_S - 0.01,
             "scale" => MAX_SCALE,
             name if name.starts_with("lever_arm") => MAX_LEVER_ARM_M,
             _ => std::f64::consts::FRAC_PI_2,
@@ -613,9 +709,51 @@ impl<'a> Problem<'a> {
             solution.kept = weights.iter().map(|&w| w > 0.0).collect();
         }
         let kept = solution.kept.clone();
-        let mut last = self.solve(solution, free, &self.weights(&kept))?;
+        let weights = self.weights(&kept);
+        self.read_walk(&solution, free, &weights)?;
+        let mut last = self.solve(solution, free, &weights)?;
         last.kept = kept;
         Ok(last)
+    }
+
+    /// Reads the dead reckoning's random walk from the residuals: of the walks
+    /// [`WALK_SCALES`] times the white DVL noise's, the one under which the fixes kept are
+    /// likeliest (the Gaussian likelihood, its scale profiled out), kept for the fits
+    /// and bounds that follow.
+    fn read_walk(
+        &self,
+        start: &Solution,
+        free: &[bool],
+        weights: &[f64],
+    ) -> Result<(), FixFitError> {
+        let mut best = (f64::NEG_INFINITY, 1.0);
+        for scale in WALK_SCALES {
+            self.walk_scale.set(scale);
+            let solved = self.solve(start.clone(), free, weights)?;
+            let factors = self.whiteners(weights);
+            let kept = weights.iter().filter(|&&w| w > 0.0).count() * self.axes;
+            // Of the fixes kept: a fix left out has a variance beyond all others, the
+            // same under every walk, and drops out of the comparison.
+            let mut log_det = 0.0;
+            let (mut block, mut offset) = (0, 0);
+            for held in &self.held {
+                for _ in 0..self.axes {
+                    let diagonal = factors[block].diagonal();
+                    for a in (0..held.len()).filter(|&a| weights[offset + a] > 0.0) {
+                        log_det += 2.0 * diagonal[a].ln();
+                    }
+                    block += 1;
+                }
+                offset += held.len();
+            }
+            let n = kept as f64;
+            let likelihood = -0.5 * (n * (solved.whitened.norm_squared() / n).ln() + log_det);
+            if likelihood > best.0 {
+                best = (likelihood, scale);
+            }
+        }
+        self.walk_scale.set(best.1);
+        Ok(())
     }
 
     /// Each fitted fix's residual in its own standard deviations: the root mean square
@@ -623,7 +761,7 @@ impl<'a> Problem<'a> {
     fn standardised(&self, solution: &Solution) -> Result<Vec<f64>, FixFitError> {
         let residuals = self.residuals(&solution.terms, &solution.starts)?;
         let step_s = crate::data::paired::sample_interval(self.dvl.0);
-        let walk = self.noise.dvl_m_s.powi(2) * step_s;
+        let walk = self.walk_scale.get() * self.noise.dvl_m_s.powi(2) * step_s;
         let mut squares = vec![0.0; self.fix_of.len()];
         let (mut row, mut offset) = (0, 0);
         for (piece, held) in self.pieces.iter().zip(&self.held) {
@@ -665,7 +803,8 @@ impl<'a> Problem<'a> {
         let mut best: Option<(f64, Solution)> = None;
         for step in -steps..=steps {
             let mut trial = start.clone();
-            trial.terms[offset] = step as f64 * SCAN_STEP_S;
+            let limit = self.limit(offset);
+            trial.terms[offset] = (step as f64 * SCAN_STEP_S).clamp(-limit, limit);
             let Ok(solved) = self.solve(trial, &others, &ones) else {
                 continue;
             };
@@ -701,7 +840,7 @@ impl<'a> Problem<'a> {
         let whitened = self.whiten(&factors, &jacobian);
         let normal = whitened.transpose() * &whitened;
         let mut names: Vec<&'static str> = free_terms.iter().map(|&k| self.names[k]).collect();
-        let start_names = ["start_north_m", "start_east_m", "start_depth_m"];
+        let start_names = [START_NORTH, START_EAST, START_DEPTH];
         for _ in 0..self.pieces.len() {
             names.extend(&start_names[..self.axes]);
         }
@@ -758,6 +897,38 @@ impl<'a> Problem<'a> {
             }
         })
     }
+}
+
+/// The pieces of the DVL record stamped `time_s` that hold a fix, each cut to the
+/// samples whose t + τ reads `attitude` whatever τ (so that every trial time offset
+/// reads it over the same samples), and the fixes each holds: those at least
+/// [`TIME_OFFSET_MARGIN_S`] inside it.
+fn pieces_with_fixes(
+    time_s: &[f64],
+    pieces: &[Range<usize>],
+    attitude: &Attitude,
+    fixes: &Fixes,
+) -> (Vec<Range<usize>>, Vec<Vec<usize>>) {
+    let inside = interior(attitude, time_s);
+    let (mut used, mut held) = (Vec::new(), Vec::new());
+    for piece in pieces {
+        let piece = piece.start.max(inside.start)..piece.end.min(inside.end);
+        if piece.len() < 2 {
+            continue;
+        }
+        let (first, last) = (time_s[piece.start], time_s[piece.end - 1]);
+        let within: Vec<usize> = (0..fixes.len())
+            .filter(|&j| {
+                let t = fixes.time_s[j];
+                t >= first + TIME_OFFSET_MARGIN_S && t <= last - TIME_OFFSET_MARGIN_S
+            })
+            .collect();
+        if !within.is_empty() {
+            used.push(piece);
+            held.push(within);
+        }
+    }
+    (used, held)
 }
 
 /// The Gauss–Newton step of whitened residuals `r` with Jacobian `j`: the least-squares

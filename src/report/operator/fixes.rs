@@ -5,6 +5,7 @@
 //! travelled.
 //! In: a [`FixCalibration`]. Out: the text.
 
+use crate::installation::estimate::fixes::FixFit;
 use crate::installation::estimate::fixes::{FIX_TOLERANCES, MIN_HEADING_SPAN_RAD};
 use crate::operator::calibrate_fixes::FixCalibration;
 use crate::report::kit::readable::{readable_term, readable_why};
@@ -13,35 +14,7 @@ use comfy_table::{Table, presets::ASCII_MARKDOWN};
 /// Everything `calibrate --fixes` prints; ends in a newline.
 pub fn fixes_text(calibration: &FixCalibration) -> String {
     let FixCalibration { fit, noise, .. } = calibration;
-    let mut table = Table::new();
-    table.load_preset(ASCII_MARKDOWN);
-    table.set_header([
-        "term",
-        "estimate",
-        "standard deviation",
-        "bound (specified noise)",
-        "applied",
-        "95 % interval",
-    ]);
-    for (k, name) in fit.names.iter().enumerate() {
-        if !fit.estimated[k] {
-            continue;
-        }
-        let (readable, unit, factor) = readable_term(name);
-        table.add_row([
-            readable,
-            format!("{:.4} {unit}", fit.value[k] * factor),
-            format!("{:.4} {unit}", fit.std[k] * factor),
-            format!("{:.4} {unit}", fit.bound_std[k] * factor),
-            if fit.is_applied(name) {
-                "yes"
-            } else {
-                "no, not seen"
-            }
-            .to_string(),
-            format!("± {:.4} {unit}", fit.half_width_95(k) * factor),
-        ]);
-    }
+    let table = terms_table(fit);
     let mut text = format!(
         "read: {}; {} fixes, {} fitted ({} outside the DVL's pieces, {} outliers beyond Tukey's 4.685 of their standard deviations, left out), over {} piece{} with a start position each\n{table}\n",
         calibration.read,
@@ -70,7 +43,12 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
             .collect();
         if !reasons.is_empty() {
             text.push_str(&format!(
-                "not seen, not applied: {}: {}\n",
+                "{}: {}: {}\n",
+                if fit.is_applied(name) {
+                    "seen poorly, applied"
+                } else {
+                    "not seen, not applied"
+                },
                 readable_term(name).0,
                 readable_why(name, &reasons.join("; "))
             ));
@@ -85,12 +63,50 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
         100.0 * calibration.after_m / calibration.distance_m,
     ));
     text.push_str(&format!(
-        "a term is applied when the fixes show it: not flat, correlated within ±0.95 with every other term and start position, its standard deviation within its tolerance (scale {:.2} %, misalignment {:.2}°, lever arm {:.2} m, time offset {:.2} s), and for the yaw, headings spanning {:.0}° or more\n",
+        "a term is applied when the fixes show it: over headings spanning {:.0}° or more for the yaw, the lever arm and the clock, and not flat, tied within ±0.95 to every start position, its standard deviation within its tolerance (scale {:.2} %, misalignment {:.2}°, lever arm {:.2} m, time offset {:.2} s); one not applied is held at zero, and the others' intervals take it to be zero\n",
+        MIN_HEADING_SPAN_RAD.to_degrees(),
         100.0 * FIX_TOLERANCES.scale,
         FIX_TOLERANCES.misalignment_rad.to_degrees(),
         FIX_TOLERANCES.lever_arm_m,
         FIX_TOLERANCES.time_offset_s,
-        MIN_HEADING_SPAN_RAD.to_degrees(),
     ));
     text
+}
+
+/// The terms estimated: each one's estimate, standard deviation, bound, whether it is
+/// applied, and its 95 % interval, in readable units.
+fn terms_table(fit: &FixFit) -> Table {
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    table.set_header([
+        "term",
+        "estimate",
+        "standard deviation",
+        "bound (specified noise)",
+        "applied",
+        "95 % interval",
+    ]);
+    for (k, name) in fit.names.iter().enumerate() {
+        if !fit.estimated[k] {
+            continue;
+        }
+        let (readable, unit, factor) = readable_term(name);
+        table.add_row([
+            readable,
+            format!("{:.4} {unit}", fit.value[k] * factor),
+            format!("{:.4} {unit}", fit.std[k] * factor),
+            format!("{:.4} {unit}", fit.bound_std[k] * factor),
+            match (
+                fit.is_applied(name),
+                fit.unseen.iter().any(|u| u.term == *name),
+            ) {
+                (true, false) => "yes",
+                (true, true) => "yes, seen poorly",
+                (false, _) => "no, not seen",
+            }
+            .to_string(),
+            format!("± {:.4} {unit}", fit.half_width_95(k) * factor),
+        ]);
+    }
+    table
 }
