@@ -140,7 +140,7 @@ fn printed_fit(calibration: &Calibration) -> String {
         printed_rmse(calibration.after)
     ));
     let drift = super::drift_line(&calibration.drift);
-    text.push_str(&format!("\n{drift}").trim_end());
+    text.push_str(format!("\n{drift}").trim_end());
     text.push_str(&printed_ros(calibration));
     text
 }
