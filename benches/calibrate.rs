@@ -85,6 +85,7 @@ fn calibrate_seconds(
         out,
         save: None,
         dive_terms: &[TermName::TimeOffset],
+        search_s: None,
     };
     let clock = Instant::now();
     let calibration = calibrate(&args).expect("the synthetic recording calibrates");

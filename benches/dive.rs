@@ -12,7 +12,9 @@
 //! of one and five hours, beside the estimate with which it refuses a recording beyond
 //! the machine's memory before reading it. With `-- --bag`: `calibrate` of a ROS 2 bag
 //! (MCAP) of an hour's dive, the INS at 100 Hz and the DVL at 10 Hz, alone and beside a
-//! camera topic the reading passes over, its seconds and peak resident memory.
+//! camera topic the reading passes over, its seconds and peak resident memory. With
+//! `-- --address-limits`: each command under an address-space limit of 60 MB to 2 GB,
+//! finished or refused up front, never aborted.
 
 #[allow(dead_code)]
 #[path = "../tests/common/installed.rs"]
@@ -41,6 +43,9 @@ fn main() {
     }
     if args.iter().any(|a| a == "--bag") {
         return bag();
+    }
+    if args.iter().any(|a| a == "--address-limits") {
+        return address_limits();
     }
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
@@ -178,6 +183,7 @@ fn hour(which: Option<&str>) {
                 tolerance_pct: 10.0,
                 out: &d.join("joint"),
                 save: None,
+                search_s: None,
             })
             .expect("the dives calibrate jointly");
             let found = joint.joint.dives[1].time_offset_s;
@@ -262,6 +268,113 @@ fn memory() {
     }
     run(JOINT, &[0, 1], &[]);
     run(JOINT, &[2, 0], &[]);
+}
+
+/// The `--address-limits` case: each operator command on a dive of ten minutes at
+/// 100 Hz (calibrate, correct, and the joint calibrate of two such dives), run as the
+/// binary under an address-space limit (`ulimit -v`) of 60 MB to 2 GB: whether it
+/// finished (0), was refused up front naming the memory (1, and nothing written), or
+/// failed otherwise (an abort after it started): the last must never be seen.
+fn address_limits() {
+    use std::os::unix::process::CommandExt;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let saved = saved_installation(d);
+    let at = d.join("dive");
+    let clocked = installed::Installed {
+        time_offset_s: 1.3,
+        ..installed::INSTALLED
+    };
+    installed::write_installed_at_rates(&at, 2, &[], clocked, 3, (60_000, 0.01), 1);
+    let file = |n: usize, name: &str| {
+        at.join(format!("Trajectory{n}/{name}_trajectory{n}.csv"))
+            .display()
+            .to_string()
+    };
+    let (dvl, reference) = (file(1, "DVL"), file(1, "GT"));
+    let installation = saved.display().to_string();
+    let commands: [(&str, Vec<String>); 3] = [
+        (
+            "calibrate",
+            vec![
+                "calibrate".into(),
+                dvl.clone(),
+                "--reference".into(),
+                reference.clone(),
+            ],
+        ),
+        (
+            "correct",
+            vec![
+                "correct".into(),
+                dvl.clone(),
+                "--reference".into(),
+                reference.clone(),
+                "--installation".into(),
+                installation,
+            ],
+        ),
+        (
+            "joint calibrate",
+            vec![
+                "calibrate".into(),
+                dvl,
+                file(2, "DVL"),
+                "--reference".into(),
+                reference,
+                "--reference".into(),
+                file(2, "GT"),
+            ],
+        ),
+    ];
+    let limits_mb = [
+        60, 80, 100, 125, 150, 200, 250, 300, 400, 500, 600, 800, 1000, 1100, 1200, 1500, 2000,
+    ];
+    println!(
+        "| command | threads | {} |",
+        limits_mb.map(|mb| format!("{mb} MB")).join(" | ")
+    );
+    println!("|---|---|{}", "---|".repeat(limits_mb.len()));
+    for (name, args) in &commands {
+        for threads in [1, 2] {
+            let outcomes: Vec<String> = limits_mb
+                .iter()
+                .map(|&mb| {
+                    let out = d.join(format!("out-{name}-{threads}-{mb}").replace(' ', "-"));
+                    let limit = mb * 1_000_000u64;
+                    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_dcnet-exp"));
+                    command
+                        .args(["--threads", &threads.to_string()])
+                        .args(args)
+                        .arg("--out")
+                        .arg(&out);
+                    // SAFETY: setrlimit only sets the child's own limit, between fork and exec.
+                    unsafe {
+                        command.pre_exec(move || {
+                            let rlimit = libc::rlimit {
+                                rlim_cur: limit,
+                                rlim_max: limit,
+                            };
+                            match libc::setrlimit(libc::RLIMIT_AS, &rlimit) {
+                                0 => Ok(()),
+                                _ => Err(std::io::Error::last_os_error()),
+                            }
+                        });
+                    }
+                    let output = command.output().unwrap();
+                    let stderr = String::from_utf8_lossy(&output.stderr);
+                    match output.status.code() {
+                        Some(0) => "done".to_string(),
+                        Some(1) if stderr.contains("this process may use") && !out.exists() => {
+                            "refused".to_string()
+                        }
+                        other => format!("**failed ({other:?})**"),
+                    }
+                })
+                .collect();
+            println!("| {name} | {threads} | {} |", outcomes.join(" | "));
+        }
+    }
 }
 
 /// The `--bag` case: `calibrate` of an hour's dive as an MCAP bag (`Odometry` at 100
@@ -370,6 +483,7 @@ fn saved_installation(d: &std::path::Path) -> std::path::PathBuf {
         out: &d.join("calibrated"),
         save: Some(&saved),
         dive_terms: &[TermName::TimeOffset],
+        search_s: None,
     })
     .expect("the synthetic recording calibrates");
     saved

@@ -91,8 +91,9 @@ impl Footprint {
     }
 }
 
-/// The memory this process may use: the machine's, or its control group's limit or its
-/// address-space limit (`ulimit -v`) when that is lower.
+/// The memory this process may use: the machine's, or its control group's limit when
+/// that is lower; under an address-space limit (`ulimit -v`) what that limit leaves once
+/// the process's fixed needs are met ([`address_space_left`]) when that is lower.
 pub fn machine_memory() -> u64 {
     let mut system = sysinfo::System::new();
     system.refresh_memory();
@@ -100,26 +101,50 @@ pub fn machine_memory() -> u64 {
     let grouped = system
         .cgroup_limits()
         .map_or(total, |limits| total.min(limits.total_memory));
-    grouped.min(address_space_limit())
+    match crate::memory::address_space_limit() {
+        Some(limit) => grouped.min(address_space_left(limit)),
+        None => grouped,
+    }
 }
 
-/// What the process's address-space limit leaves of it, bytes: the limit less the
-/// address space it already holds (its libraries, thread stacks, allocator arenas);
-/// `u64::MAX` where there is no limit.
-fn address_space_limit() -> u64 {
-    #[cfg(unix)]
-    {
-        let mut limit = libc::rlimit {
-            rlim_cur: 0,
-            rlim_max: 0,
-        };
-        // SAFETY: getrlimit writes one rlimit, which `limit` is.
-        let read = unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut limit) };
-        if read == 0 && limit.rlim_cur != libc::RLIM_INFINITY {
-            return limit.rlim_cur.saturating_sub(address_space_held());
-        }
+/// The address space a thread the process has yet to start takes, bytes: its stack
+/// (2 MiB, Rust's default) and its guard page, and the allocator's first segment for
+/// it (32 MiB, mimalloc's).
+const THREAD_ADDRESS_SPACE: u64 = (2 << 20) + 4096 + (32 << 20);
+
+/// The address space the process's own growth takes beyond what its data need, bytes:
+/// a new allocator segment (32 MiB) where the last is full.
+const GROWTH_ADDRESS_SPACE: u64 = 32 << 20;
+
+/// The threads a command may start beyond those it holds when it states its cost: the
+/// pool of the matrix products (matrixmultiply's, started at their first large one),
+/// which by its own rule takes none on one core, one on two or three, and three on
+/// four or more (`MATMUL_NUM_THREADS` where set, the cores otherwise; the cores this
+/// process may use count at least the physical ones it reads, so the count errs high).
+fn threads_to_start() -> u64 {
+    let asked = std::env::var("MATMUL_NUM_THREADS")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok());
+    let cores =
+        asked.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    match cores {
+        0 | 1 => 0,
+        2 | 3 => 1,
+        _ => 3,
     }
-    u64::MAX
+}
+
+/// What the address-space `limit` leaves to a command's data, bytes: the limit less
+/// the address space the process holds now (its code and libraries, its stacks, the
+/// rayon pool started, the allocator's segments), the threads it may yet start and its
+/// allocator's growth. The allocator reserves no arena ahead under a limit
+/// ([`crate::memory::reserve_no_arena_under_an_address_limit`]), so what is held is
+/// what is used. Reading it starts rayon's pool, so that its threads are counted held.
+fn address_space_left(limit: u64) -> u64 {
+    let _ = rayon::current_num_threads();
+    limit
+        .saturating_sub(address_space_held())
+        .saturating_sub(threads_to_start() * THREAD_ADDRESS_SPACE + GROWTH_ADDRESS_SPACE)
 }
 
 /// The address space this process holds, bytes (the first field of Linux's

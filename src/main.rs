@@ -6,6 +6,14 @@ use std::process::ExitCode;
 #[global_allocator]
 static ALLOCATOR: dcnet_exp::memory::CountingAllocator = dcnet_exp::memory::CountingAllocator;
 
+/// Run before anything allocates (a constructor, before `main`): under `ulimit -v`,
+/// the allocator's first allocation must not reserve a gigabyte of address space ahead.
+#[cfg(target_os = "linux")]
+#[used]
+#[unsafe(link_section = ".init_array")]
+static BEFORE_THE_FIRST_ALLOCATION: extern "C" fn() =
+    dcnet_exp::memory::reserve_no_arena_under_an_address_limit;
+
 fn main() -> ExitCode {
     // Output piped into a reader that stops early (`plan … | head`) ends the process
     // quietly, as it ends any Unix tool, rather than panicking at the next line.

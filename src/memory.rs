@@ -1,5 +1,6 @@
 //! The process's memory, as training sees it: mimalloc as the allocator, told to keep
-//! what is freed, counting its calls while asked to, and the minor page faults so far.
+//! what is freed (and, under an address-space limit, to reserve none ahead), counting
+//! its calls while asked to, and the minor page faults so far.
 //! `bench` prints both counts per training step; a test holds the page faults of a warm
 //! step at zero.
 
@@ -10,6 +11,49 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 /// mimalloc's option number for the delay before it gives freed pages back to the kernel
 /// (`mi_option_purge_delay` in its header; the crate does not name it).
 const PURGE_DELAY: libmimalloc_sys::mi_option_t = 15;
+
+/// mimalloc's option number for the address space it reserves ahead for its arenas,
+/// KiB (`mi_option_arena_reserve` in its header, 1 GiB by default; the crate does not
+/// name it).
+const ARENA_RESERVE: libmimalloc_sys::mi_option_t = 23;
+
+/// Under an address-space limit (`ulimit -v`), tells the allocator to reserve no arena
+/// ahead: it otherwise reserves 1 GiB of address space at its first allocation where
+/// the limit leaves room for it and none where it does not, so that the address space
+/// left for a command swung by a gigabyte with the limit, and a command could not tell
+/// what it may use. Without one, nothing changes. The binary calls it before the
+/// process's first allocation (a constructor of its own).
+pub extern "C" fn reserve_no_arena_under_an_address_limit() {
+    if address_space_limit().is_some() {
+        // SAFETY: mi_option_set only sets one of the allocator's parameters.
+        unsafe { libmimalloc_sys::mi_option_set(ARENA_RESERVE, 0) };
+        // glibc's allocator, which the C libraries and the threads' own bookkeeping
+        // use, reserves 64 MiB of address space for each thread's arena: one arena
+        // for them all serves their few allocations.
+        // SAFETY: mallopt only sets one of glibc's allocator parameters.
+        #[cfg(all(target_os = "linux", target_env = "gnu"))]
+        unsafe {
+            libc::mallopt(libc::M_ARENA_MAX, 1);
+        }
+    }
+}
+
+/// The process's address-space limit (`ulimit -v`), bytes; `None` where there is none.
+pub fn address_space_limit() -> Option<u64> {
+    #[cfg(unix)]
+    {
+        let mut limit = libc::rlimit {
+            rlim_cur: 0,
+            rlim_max: 0,
+        };
+        // SAFETY: getrlimit writes one rlimit, which `limit` is.
+        let read = unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut limit) };
+        if read == 0 && limit.rlim_cur != libc::RLIM_INFINITY {
+            return Some(limit.rlim_cur);
+        }
+    }
+    None
+}
 
 /// Tells the allocator to keep what is freed. A training step still makes about 850
 /// short-lived allocations that are not ours (burn's tensors and autodiff nodes, the

@@ -181,17 +181,25 @@ pub(super) struct CalibrateArgs {
     /// The DVL's white noise per axis, cm/s, for the bound
     #[arg(long, default_value_t = 2.0, allow_negative_numbers = true)]
     pub(super) dvl_noise_cm_s: f64,
-    /// The reference velocity's white noise per axis, cm/s, for the bound
-    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
-    pub(super) reference_noise_cm_s: f64,
+    /// The reference velocity's white noise per axis, cm/s, for the bound [default:
+    /// 0.5]
+    #[arg(long, allow_negative_numbers = true)]
+    pub(super) reference_noise_cm_s: Option<f64>,
     /// How close the Kalman filter's RMSE must stay to its value with the whole
     /// recording, for the length the recording needed: within this % of what
     /// calibration changes (the RMSE before it less that after the fit of all of it)
-    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
-    pub(super) tolerance_pct: f64,
+    /// [default: 10]
+    #[arg(long, allow_negative_numbers = true)]
+    pub(super) tolerance_pct: Option<f64>,
+    /// How far from zero the search for the time offset looks, s: the fit starts from
+    /// the search's best (for two logs whose clocks were never set alike) [default:
+    /// none, the fit's own scan of ±3 s]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    pub(super) search_s: Option<f64>,
     /// Folder the corrected recording and the filter's terms against time go to
-    #[arg(long, default_value = "calibrated")]
-    pub(super) out: PathBuf,
+    /// [default: calibrated]
+    #[arg(long)]
+    pub(super) out: Option<PathBuf>,
     /// Save the installation found (terms, standard deviations, correlations) to
     /// this TOML file, for `correct` to apply to other dives
     #[arg(long, value_name = "FILE")]
@@ -201,6 +209,25 @@ pub(super) struct CalibrateArgs {
     /// are each recording's own: time_offset, bias, bias_scalar
     #[arg(long, value_delimiter = ',', default_value = "time_offset")]
     pub(super) dive_terms: Vec<String>,
+}
+
+impl CalibrateArgs {
+    /// The reference's noise per axis, cm/s: as given, or 0.5.
+    pub(super) fn reference_noise_cm_s(&self) -> f64 {
+        self.reference_noise_cm_s.unwrap_or(0.5)
+    }
+
+    /// The settling tolerance, %: as given, or 10.
+    pub(super) fn tolerance_pct(&self) -> f64 {
+        self.tolerance_pct.unwrap_or(10.0)
+    }
+
+    /// The folder the corrected recording goes to: as given, or `calibrated`.
+    pub(super) fn out(&self) -> &std::path::Path {
+        self.out
+            .as_deref()
+            .unwrap_or(std::path::Path::new("calibrated"))
+    }
 }
 
 /// How `calibrate` and `correct` read a recording beyond its columns.

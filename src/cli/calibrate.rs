@@ -53,10 +53,11 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
             dive_terms: &dive_terms,
             window_s: args.window_s,
             dvl_noise_cm_s: args.dvl_noise_cm_s,
-            reference_noise_cm_s: args.reference_noise_cm_s,
-            tolerance_pct: args.tolerance_pct,
-            out: &args.out,
+            reference_noise_cm_s: args.reference_noise_cm_s(),
+            tolerance_pct: args.tolerance_pct(),
+            out: args.out(),
             save: args.save.as_deref(),
+            search_s: args.search_s,
         });
     }
     calibrate(&CalibrateArgs {
@@ -67,11 +68,12 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
         terms: &terms,
         window_s: args.window_s,
         dvl_noise_cm_s: args.dvl_noise_cm_s,
-        reference_noise_cm_s: args.reference_noise_cm_s,
-        tolerance_pct: args.tolerance_pct,
-        out: &args.out,
+        reference_noise_cm_s: args.reference_noise_cm_s(),
+        tolerance_pct: args.tolerance_pct(),
+        out: args.out(),
         save: args.save.as_deref(),
         dive_terms: &dive_terms,
+        search_s: args.search_s,
     })
 }
 
@@ -104,10 +106,17 @@ fn calibrate_fixes(args: &args::CalibrateArgs, fixes: &std::path::Path) -> Resul
         ("--rate-topic", args.reading.rate_topic.is_some()),
         ("--stamps", args.reading.stamps.is_some()),
         ("--frame", args.reading.frame.is_some()),
+        ("--out", args.out.is_some()),
+        ("--tolerance-pct", args.tolerance_pct.is_some()),
+        (
+            "--reference-noise-cm-s",
+            args.reference_noise_cm_s.is_some(),
+        ),
+        ("--search-s", args.search_s.is_some()),
     ] {
         if given {
             return refuse(format!(
-                "{flag}: does not apply to a calibration against fixes (--fixes), which reads CSV files: the DVL's, the attitude's and the fixes'"
+                "{flag}: does not apply to a calibration against fixes (--fixes), which reads CSV files (the DVL's, the attitude's and the fixes'), writes no corrected recording and runs no filter"
             ));
         }
     }

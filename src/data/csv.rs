@@ -16,6 +16,8 @@ pub enum CsvError {
     Missing { path: PathBuf },
     #[error("{}: not a regular file (a device or a pipe): a recording is a CSV file", path.display())]
     NotAFile { path: PathBuf },
+    #[error("{}: {what}", path.display())]
+    NotCsv { path: PathBuf, what: &'static str },
     #[error("{}: cannot read as CSV", path.display())]
     Read {
         path: PathBuf,
@@ -265,11 +267,26 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>, CsvError> {
     std::fs::read(path).map_err(|source| io_error(path, source))
 }
 
-/// Refuses a `path` that is a device or a pipe (followed through its links); a folder
-/// is left to the read, whose error says so.
+/// Refuses a `path` that is a device or a pipe (followed through its links), a folder
+/// (a rosbag2 folder that lost its `metadata.yaml`, say) and a ROS 1 bag, each as what
+/// it is rather than as a CSV file that could not be read.
 fn regular(path: &Path) -> Result<(), CsvError> {
     let metadata = std::fs::metadata(path).map_err(|source| io_error(path, source))?;
-    if metadata.is_file() || metadata.is_dir() {
+    let not_csv = |what: &'static str| {
+        Err(CsvError::NotCsv {
+            path: path.to_path_buf(),
+            what,
+        })
+    };
+    if metadata.is_dir() {
+        not_csv(
+            "a folder with no metadata.yaml, so not a bag, and not a CSV file: a rosbag2 folder holds metadata.yaml beside its files (give its .mcap or .db3 file itself where that was lost)",
+        )
+    } else if path.extension().is_some_and(|e| e == "bag") {
+        not_csv(
+            "a ROS 1 bag, which this tool does not read: convert it to a ROS 2 bag first (rosbags-convert, of the Python package rosbags, writes one)",
+        )
+    } else if metadata.is_file() {
         Ok(())
     } else {
         Err(CsvError::NotAFile {
@@ -523,7 +540,10 @@ mod tests {
     #[test]
     fn a_file_that_cannot_be_read_keeps_its_cause_and_prints_it_once() {
         let dir = tempfile::tempdir().unwrap();
-        let error = read_velocities(dir.path(), &columns()).unwrap_err();
+        // A path beneath a file: the system says it is not a folder.
+        std::fs::write(dir.path().join("file"), b"").unwrap();
+        let beneath = dir.path().join("file/x.csv");
+        let error = read_velocities(&beneath, &columns()).unwrap_err();
         assert!(matches!(error, CsvError::Io { .. }), "{error:?}");
         let cause = std::error::Error::source(&error)
             .expect("the cause is kept")
@@ -531,7 +551,12 @@ mod tests {
         let shown = format!("{:#}", anyhow::Error::from(error));
         assert_eq!(
             shown,
-            format!("{}: cannot read as CSV: {cause}", dir.path().display())
+            format!("{}: cannot read as CSV: {cause}", beneath.display())
+        );
+        let error = read_velocities(dir.path(), &columns()).unwrap_err();
+        assert!(
+            error.to_string().contains("a folder with no metadata.yaml"),
+            "{error}"
         );
         // Invalid UTF-8 in the header is the CSV reader's fault, kept as the cause.
         let path = dir.path().join("latin1.csv");

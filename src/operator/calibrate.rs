@@ -7,13 +7,14 @@
 //! In: [`CalibrateArgs`]. Out: a [`Calibration`], everything the command prints, or a
 //! [`CalibrateError`] that names the argument, file or step at fault.
 
-use crate::data::paired::bag::BagFrames;
+use crate::data::paired::bag::{BagFrames, is_bag};
 use crate::data::paired::{PairedError, PairedRecording, ReadCounts};
 use crate::installation::dead_reckoning::{Drift, drift_of};
 use crate::installation::estimate::bound::{Noise, TermBound, Why, bound};
-use crate::installation::estimate::filter::{FilterSettings, run_filter};
+use crate::installation::estimate::clock::{MAX_SEARCH_S, fit_searched};
+use crate::installation::estimate::filter::{FilterSettings, run_filter_from};
 use crate::installation::estimate::fit::{
-    Fit, FitError, TIME_OFFSET_MARGIN_S, beyond_any_installation, fit,
+    Fit, FitError, TIME_OFFSET_MARGIN_S, beyond_any_installation,
 };
 use crate::installation::estimate::missing::{Asked, asked_for};
 use crate::installation::estimate::settling::{SettlingPoint, settling_curve, settling_time};
@@ -56,7 +57,15 @@ pub struct CalibrateArgs<'a> {
     /// are the dive's (found again on each dive), the rest the vehicle's.
     pub save: Option<&'a Path>,
     pub dive_terms: &'a [TermName],
+    /// How far from zero a search for τ looks, s, before the fit; the fit's own scan
+    /// alone where `None`.
+    pub search_s: Option<f64>,
 }
+
+/// How far the noise a fit to fixes reads may lie from the noise given, as a factor
+/// on the standard deviation, before the noise given is refused: a USBL's noise given
+/// to a few times over is a judgement; a hundred times is a unit or a digit wrong.
+pub const NOISE_RATIO_LIMIT: f64 = 100.0;
 
 /// Why `calibrate` did not finish: an argument, the columns file, the recording or the
 /// fit at fault (bad input), or a file that could not be written (a failure while
@@ -65,6 +74,8 @@ pub struct CalibrateArgs<'a> {
 pub enum CalibrateError {
     #[error("--terms: {0}")]
     Terms(String),
+    #[error("--search-s {}: give a positive number of seconds, at most {MAX_SEARCH_S}", crate::Shown(*.0))]
+    Search(f64),
     #[error("--dive-terms: {0}")]
     DiveTerms(String),
     #[error("--save {}: {why}: give the path of a file", path.display())]
@@ -87,6 +98,38 @@ pub enum CalibrateError {
     Window(f64),
     #[error("{flag} {}: give a positive number of metres: the fit weighs the fixes by it", crate::Shown(*value))]
     FixNoise { flag: &'static str, value: f64 },
+    #[error("--depth-noise-m: {} gives no depth, so there is no depth noise to weigh: leave it out, or name the fixes' depth column in [fix_columns]", fixes.display())]
+    NoDepths { fixes: PathBuf },
+    #[error(
+        "{}: {outliers} of the {fitted} fixes fitted lie beyond the robust fit's reach of the dead reckoning: more than a quarter are outliers, so the fixes do not show the installation (fixes of another vehicle or dive, or a clock beyond the fit's scan)",
+        fixes.display()
+    )]
+    FixOutliers {
+        fixes: PathBuf,
+        outliers: usize,
+        fitted: usize,
+    },
+    #[error(
+        "--fix-noise-m {}: the fixes' residuals are {} m RMS per horizontal axis, {} times the noise given, beyond a factor of {NOISE_RATIO_LIMIT} either way: the fit weighs the fixes and reads its intervals by it, so give the noise of these fixes (a USBL's metres, a GNSS's decimetres)",
+        crate::Shown(*given_m),
+        crate::Shown(*read_m),
+        crate::Shown(*ratio)
+    )]
+    FixNoiseContradicted {
+        given_m: f64,
+        read_m: f64,
+        ratio: f64,
+    },
+    #[error(
+        "{}: the fixes travel {fixes_m:.1} m over their span and the DVL {dvl_m:.1} m{hint}: no installation makes one of the other",
+        fixes.display()
+    )]
+    FixesOtherMotion {
+        fixes: PathBuf,
+        fixes_m: f64,
+        dvl_m: f64,
+        hint: &'static str,
+    },
     /// The fixes file, placed at its line and column.
     #[error(transparent)]
     Fixes(#[from] crate::data::fixes::FixesError),
@@ -148,8 +191,8 @@ impl CalibrateError {
 
     /// An output that would replace an input: `--save`'s where it is that file,
     /// otherwise one under `--out`.
-    pub(super) fn over_input((output, input): (PathBuf, PathBuf), save: Option<&Path>) -> Self {
-        let flag = if save == Some(output.as_path()) {
+    pub(super) fn over_input((output, input): (PathBuf, PathBuf), saved: &[&Path]) -> Self {
+        let flag = if saved.contains(&output.as_path()) {
             "--save"
         } else {
             "--out"
@@ -295,7 +338,12 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     );
     let before = read.score(&Installation::default());
     let after = read.score(&applied);
-    let (settings, filter, curve) = settle(&read, terms, noise);
+    // The filter starts from the clock the search found, where one was asked for.
+    let from = Installation {
+        time_offset_s: fitted.mask_centre_s.unwrap_or(0.0),
+        ..Installation::default()
+    };
+    let (settings, filter, curve) = settle(&read, (terms, from), noise);
     let change = (
         before.map_or(f64::NAN, |r| 100.0 * r.total_m_s),
         after.map_or(f64::NAN, |r| 100.0 * r.total_m_s),
@@ -341,23 +389,35 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
 }
 
 /// Refuses a calibration whose `corrected` files or `save` would write over one of its
-/// `inputs`, or whose `save` is one of its `corrected` files.
+/// `inputs` (every file a bag is read from), or whose `save` is one of its `corrected`
+/// files; where an input is a bag, the URDF and ROS text `--save` writes beside its
+/// file count as `save` too.
 pub(crate) fn clear_of_inputs(
     inputs: &[Option<&Path>],
     corrected: &[&Path],
     save: Option<&Path>,
 ) -> Result<(), CalibrateError> {
-    let written: Vec<&Path> = corrected.iter().copied().chain(save).collect();
+    let from_a_bag = inputs.iter().flatten().any(|input| is_bag(input));
+    let beside: Vec<PathBuf> = match save {
+        Some(save) if from_a_bag => RosInstallation::paths(save).to_vec(),
+        _ => Vec::new(),
+    };
+    let saved: Vec<&Path> = save
+        .into_iter()
+        .chain(beside.iter().map(PathBuf::as_path))
+        .collect();
+    let written: Vec<&Path> = corrected
+        .iter()
+        .copied()
+        .chain(saved.iter().copied())
+        .collect();
     if let Some(over) = not_over_an_input(inputs, &written) {
-        return Err(CalibrateError::over_input(over, save));
+        return Err(CalibrateError::over_input(over, &saved));
     }
-    match save {
-        Some(save) if not_over_an_input(&[Some(save)], corrected).is_some() => {
-            Err(CalibrateError::SaveOverOutput {
-                path: save.to_path_buf(),
-            })
-        }
-        _ => Ok(()),
+    let saved: Vec<Option<&Path>> = saved.into_iter().map(Some).collect();
+    match not_over_an_input(&saved, corrected) {
+        Some((_, path)) => Err(CalibrateError::SaveOverOutput { path }),
+        None => Ok(()),
     }
 }
 
@@ -371,6 +431,7 @@ pub(super) struct Request<'a> {
     pub(super) reference_noise_cm_s: f64,
     pub(super) tolerance_pct: f64,
     pub(super) save: Option<&'a Path>,
+    pub(super) search_s: Option<f64>,
 }
 
 impl CalibrateArgs<'_> {
@@ -388,6 +449,7 @@ impl CalibrateArgs<'_> {
             reference_noise_cm_s: self.reference_noise_cm_s,
             tolerance_pct: self.tolerance_pct,
             save: self.save,
+            search_s: self.search_s,
         }
     }
 }
@@ -410,6 +472,17 @@ pub(super) fn refused(args: Request) -> Result<(), CalibrateError> {
     }
     if !(args.tolerance_pct > 0.0 && args.tolerance_pct <= 100.0) {
         return Err(CalibrateError::Tolerance(args.tolerance_pct));
+    }
+    if let Some(search_s) = args.search_s {
+        if !(search_s > 0.0 && search_s <= MAX_SEARCH_S) {
+            return Err(CalibrateError::Search(search_s));
+        }
+        if !args.terms.contains(&TermName::TimeOffset) {
+            return Err(CalibrateError::Terms(
+                "--search-s looks for the time offset, which is not among them: add time_offset"
+                    .into(),
+            ));
+        }
     }
     dive_terms_refused(args.terms, args.dive_terms, args.save.is_some())
         .map_err(CalibrateError::DiveTerms)?;
@@ -558,11 +631,11 @@ fn read(args: &CalibrateArgs) -> Result<Read, CalibrateError> {
 /// The fit of `terms` on the samples calibrated on.
 fn fit_terms(args: &CalibrateArgs, read: &Read, terms: TermSet) -> Result<Fit, CalibrateError> {
     let calibrating = read.calibrating();
-    fit(
-        &calibrating.time_s,
-        &calibrating.dvl_m_s,
+    fit_searched(
+        (&calibrating.time_s, &calibrating.dvl_m_s),
         &read.reference,
         terms,
+        args.search_s,
     )
     .map_err(|fault| fit_error(args, read, fault))
 }
@@ -590,7 +663,7 @@ fn fit_error(args: &CalibrateArgs, read: &Read, fault: FitError) -> CalibrateErr
 /// samples calibrated on, and its settling curve scored on every sample.
 fn settle(
     read: &Read,
-    terms: TermSet,
+    (terms, from): (TermSet, Installation),
     noise: Noise,
 ) -> (FilterSettings, FilterRun, Vec<SettlingPoint>) {
     let settings = default_filter_settings();
@@ -598,11 +671,9 @@ fn settle(
     let filter = FilterRun {
         label: "Kalman filter".into(),
         terms,
-        steps: run_filter(
-            &calibrating.time_s,
-            &calibrating.dvl_m_s,
-            &read.reference,
-            terms,
+        steps: run_filter_from(
+            (&calibrating.time_s, &calibrating.dvl_m_s, &read.reference),
+            (terms, from),
             &settings,
             noise,
         ),
@@ -680,6 +751,7 @@ mod tests {
             out,
             save: None,
             dive_terms: &[TermName::TimeOffset],
+            search_s: None,
         }
     }
 

@@ -11,7 +11,7 @@ use crate::data::paired::{PairedRecording, ReadCounts};
 use crate::installation::estimate::fixes::{DEFAULT_FIX_TERMS, FixFit, FixNoise, fit_fixes};
 use crate::installation::frames::Attitude;
 use crate::installation::terms::names::{TermName, term_set};
-use crate::operator::calibrate::{CalibrateError, clear_of_inputs, named};
+use crate::operator::calibrate::{CalibrateError, NOISE_RATIO_LIMIT, clear_of_inputs, named};
 use crate::operator::inputs::{Reading, columns, fix_columns};
 use crate::operator::installation_file::{SavedInstallation, SavedTerm};
 use crate::results::ResultsError;
@@ -62,7 +62,13 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
     let fix_columns = fix_columns(args.columns).map_err(CalibrateError::Columns)?;
     let read = read_beside_attitude(args.dvl, args.attitude, &columns)?;
     let (fixes, _) = read_fixes(args.fixes, &fix_columns).map_err(CalibrateError::Fixes)?;
+    if args.depth_noise_m.is_some() && fixes.depth_m.is_none() {
+        return Err(CalibrateError::NoDepths {
+            fixes: args.fixes.to_path_buf(),
+        });
+    }
     let recording = &read.recording;
+    same_motion(args, &fix_columns, recording, &fixes)?;
     let attitude = Attitude::new(&recording.reference_time_s, &recording.attitude_rad);
     let noise = FixNoise {
         fix_m: args.fix_noise_m,
@@ -71,6 +77,7 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
     };
     let fit = fit_on(recording, &attitude, &fixes, term_set(args.terms), noise)
         .map_err(|fault| fix_error(args, fault))?;
+    believable(args, &fit)?;
     // The fixes' residual with no terms: the start positions alone.
     let bare = fit_on(recording, &attitude, &fixes, term_set(&[]), noise)
         .map_err(|fault| fix_error(args, fault))?;
@@ -86,6 +93,106 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
         noise,
         fit,
     })
+}
+
+/// The shortest step between two fixes whose displacement [`same_motion`] sums, s: long
+/// enough that the fixes' noise adds little to the displacement, short enough that a
+/// turn takes little from it.
+const STEP_S: f64 = 30.0;
+
+/// The least distance, m, the DVL must travel over the fixes' span before
+/// [`same_motion`] compares the two.
+const LEAST_DISTANCE_M: f64 = 100.0;
+
+/// How many times shorter or longer than the DVL's the fixes' track may be before it is
+/// taken as read in another unit: a turn and the fixes' noise move it by well under
+/// this; a radian read as a degree, by 57.3.
+const UNIT_FACTOR: f64 = 10.0;
+
+/// Refuses fixes whose track over their span is [`UNIT_FACTOR`] times shorter or longer
+/// than the DVL's (the displacement between fixes [`STEP_S`] apart, summed, against the
+/// DVL's horizontal speed integrated): positions in another unit than the columns say
+/// (latitude and longitude in radians read as degrees travel 57.3 times less), which no
+/// installation explains, before any fit reads them.
+fn same_motion(
+    args: &FixArgs,
+    columns: &crate::data::fixes::FixColumns,
+    recording: &PairedRecording,
+    fixes: &Fixes,
+) -> Result<(), CalibrateError> {
+    let (time_s, dvl) = (&recording.time_s, &recording.dvl_m_s);
+    let (Some(&first), Some(&last)) = (time_s.first(), time_s.last()) else {
+        return Ok(());
+    };
+    let inside: Vec<usize> = (0..fixes.len())
+        .filter(|&k| (first..=last).contains(&fixes.time_s[k]))
+        .collect();
+    let mut fixes_m = 0.0;
+    let mut from = inside.first().copied();
+    for &k in &inside {
+        if let Some(at) = from
+            && fixes.time_s[k] - fixes.time_s[at] >= STEP_S
+        {
+            let [n0, e0] = fixes.north_east_m[at];
+            let [n1, e1] = fixes.north_east_m[k];
+            fixes_m += (n1 - n0).hypot(e1 - e0);
+            from = Some(k);
+        }
+    }
+    let (Some(&start), Some(end)) = (inside.first(), from) else {
+        return Ok(());
+    };
+    let span = fixes.time_s[start]..=fixes.time_s[end];
+    let dvl_m: f64 = (1..time_s.len())
+        .filter(|&i| span.contains(&time_s[i - 1]) && span.contains(&time_s[i]))
+        .filter(|&i| time_s[i] - time_s[i - 1] <= recording.gap_limit_s)
+        .map(|i| dvl[i][0].hypot(dvl[i][1]) * (time_s[i] - time_s[i - 1]))
+        .sum();
+    let ratio = fixes_m / dvl_m;
+    if dvl_m < LEAST_DISTANCE_M || (1.0 / UNIT_FACTOR..=UNIT_FACTOR).contains(&ratio) {
+        return Ok(());
+    }
+    let radians_as_degrees =
+        columns.latitude_longitude.is_some() && columns.angles_in_degrees && ratio < 1.0;
+    Err(CalibrateError::FixesOtherMotion {
+        fixes: args.fixes.to_path_buf(),
+        fixes_m,
+        dvl_m,
+        hint: match radians_as_degrees {
+            true => {
+                " (latitude and longitude in radians, read as degrees, travel 57.3 times less: say angles_in_degrees = false in [fix_columns])"
+            }
+            false => {
+                " (positions in another unit than [fix_columns] says, or fixes of another vehicle)"
+            }
+        },
+    })
+}
+
+/// Refuses a fit the fixes contradict: over a quarter of them outliers (as a fit to a
+/// velocity reference refuses), or residuals [`NOISE_RATIO_LIMIT`] times the noise
+/// given or more, or as many times less, by which noise the fit weighs the fixes
+/// against the dead reckoning (the dead reckoning's own walk adds to the residuals,
+/// well within that factor).
+fn believable(args: &FixArgs, fit: &FixFit) -> Result<(), CalibrateError> {
+    if 4 * fit.outliers.len() > fit.fitted {
+        return Err(CalibrateError::FixOutliers {
+            fixes: args.fixes.to_path_buf(),
+            outliers: fit.outliers.len(),
+            fitted: fit.fitted,
+        });
+    }
+    let rms = fit.residual_rms_m;
+    let read_m = ((rms[0].powi(2) + rms[1].powi(2)) / 2.0).sqrt();
+    let ratio = read_m / args.fix_noise_m;
+    match ratio < NOISE_RATIO_LIMIT && ratio > 1.0 / NOISE_RATIO_LIMIT {
+        true => Ok(()),
+        false => Err(CalibrateError::FixNoiseContradicted {
+            given_m: args.fix_noise_m,
+            read_m,
+            ratio,
+        }),
+    }
 }
 
 /// The fit of `terms` on `recording`'s pieces against `fixes`.

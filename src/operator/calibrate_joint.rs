@@ -12,8 +12,8 @@
 use crate::data::paired::{Loaded, PairedRecording, ReadCounts, Source};
 use crate::evaluate::statistics::mean_std;
 use crate::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise, TermBound, bound};
-use crate::installation::estimate::clock::DEFAULT_SEARCH_S;
-use crate::installation::estimate::fit::{fit, fit_about};
+use crate::installation::estimate::clock::{DEFAULT_SEARCH_S, fit_searched};
+use crate::installation::estimate::fit::fit_about;
 use crate::installation::estimate::joint::{JointFit, JointRecording, joint_fit, starts_from};
 use crate::installation::frames::Reference;
 use crate::installation::terms::names::{TermName, term_set};
@@ -42,6 +42,9 @@ pub struct JointArgs<'a> {
     pub tolerance_pct: f64,
     pub out: &'a Path,
     pub save: Option<&'a Path>,
+    /// How far from zero the first recording's clock is searched, s, and each other's
+    /// from it ([`DEFAULT_SEARCH_S`] where `None`).
+    pub search_s: Option<f64>,
 }
 
 impl JointArgs<'_> {
@@ -63,6 +66,7 @@ impl JointArgs<'_> {
             reference_noise_cm_s: self.reference_noise_cm_s,
             tolerance_pct: self.tolerance_pct,
             save: self.save,
+            search_s: self.search_s,
         }
     }
 }
@@ -246,8 +250,10 @@ fn fitted(
         fault,
     };
     let r = &calibrating[0];
-    let first = fit(r.time_s, r.dvl_m_s, r.reference, terms).map_err(|f| fault(0, f))?;
-    let starts = starts_from(calibrating, first.installation, DEFAULT_SEARCH_S);
+    let first = fit_searched((r.time_s, r.dvl_m_s), r.reference, terms, args.search_s)
+        .map_err(|f| fault(0, f))?;
+    let search_s = args.search_s.unwrap_or(DEFAULT_SEARCH_S);
+    let starts = starts_from(calibrating, first.installation, search_s);
     let mut alone = vec![bound(&first, noise, &DEFAULT_TOLERANCES)];
     for (k, r) in calibrating.iter().enumerate().skip(1) {
         let fitted = fit_about(r.time_s, r.dvl_m_s, r.reference, terms, starts[k])

@@ -329,6 +329,13 @@ fn find_clock(
         &std,
         &saved.correlation,
     );
+    let calibrated = saved
+        .residual_cm_s
+        .iter()
+        .map(|r| r * r)
+        .sum::<f64>()
+        .sqrt()
+        / 100.0;
     refind(
         (&recording.time_s[..end], &recording.dvl_m_s[..end]),
         reference,
@@ -336,6 +343,11 @@ fn find_clock(
         search,
         (noise, &DEFAULT_TOLERANCES),
     )
+    .and_then(|clock| {
+        let carried_s = saved.installation().time_offset_s;
+        clock.within_the_search(carried_s, args.search_s, calibrated)?;
+        Ok(clock)
+    })
     .map_err(|fault| CorrectError::Clock {
         dvl: args.dvl.to_path_buf(),
         window_s: args.window_s,

@@ -10,6 +10,7 @@ use crate::data::csv::row_count;
 use crate::data::paired::PairedError;
 use crate::data::paired::bag::{is_bag, message_counts};
 use crate::footprint::{Bytes, machine_memory};
+use crate::memory::address_space_limit;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -153,6 +154,7 @@ impl Cost {
             need: self.need,
             have: self.have,
             per_row: self.per_row,
+            address_limit: address_space_limit(),
         })
     }
 
@@ -190,10 +192,14 @@ impl fmt::Display for Cost {
 /// process may use.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error(
-    "{files}: {rows} rows need about {} of memory to {} and this process may use {}: {}",
+    "{files}: {rows} rows need about {} of memory to {} and this process may use {}{}: {}",
     Bytes(*need),
     per_row.command,
     Bytes(*have),
+    address_limit.map_or_else(String::new, |limit| format!(
+        " (what its address-space limit, ulimit -v, of {} leaves once its code, stacks and threads are held)",
+        Bytes(limit as f64)
+    )),
     per_row.instead
 )]
 pub struct BeyondMemory {
@@ -202,4 +208,6 @@ pub struct BeyondMemory {
     pub need: f64,
     pub have: f64,
     pub per_row: PerRow,
+    /// The address-space limit this process runs under, bytes, where it has one.
+    pub address_limit: Option<u64>,
 }

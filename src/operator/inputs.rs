@@ -4,24 +4,43 @@
 //! In: the paths given on the command line. Out: the columns, or the file at fault.
 
 use crate::data::fixes::FixColumns;
-use crate::data::paired::bag::{BagTopics, Stamps, is_bag};
+use crate::data::paired::bag::{Bag, BagTopics, Stamps, is_bag};
 use crate::data::paired::{GapLimit, PairedColumns, Source};
 use crate::spec::{SpecError, TomlFile};
 use std::path::{Path, PathBuf};
 
 /// The first of `outputs` that would replace one of `inputs`, and that input: the same
-/// file by [`identity`], however each is spelled.
+/// file by [`identity`], however each is spelled. A bag's input is each file it is read
+/// from ([`files_read`]), so no output replaces its `metadata.yaml` or a data file.
 pub fn not_over_an_input(
     inputs: &[Option<&Path>],
     outputs: &[&Path],
 ) -> Option<(PathBuf, PathBuf)> {
+    let read: Vec<(PathBuf, PathBuf)> = (inputs.iter().flatten())
+        .flat_map(|input| files_read(input))
+        .map(|file| (identity(&file), file))
+        .collect();
     for output in outputs {
         let written = identity(output);
-        if let Some(input) = inputs.iter().flatten().find(|i| identity(i) == written) {
-            return Some((output.to_path_buf(), input.to_path_buf()));
+        if let Some((_, input)) = read.iter().find(|(same, _)| *same == written) {
+            return Some((output.to_path_buf(), input.clone()));
         }
     }
     None
+}
+
+/// Every file the input at `path` is read from: the path itself and, for a rosbag2
+/// folder, its `metadata.yaml` and each data file it lists (a folder that cannot be
+/// opened as a bag is refused later, where it is read).
+pub fn files_read(path: &Path) -> Vec<PathBuf> {
+    let mut files = vec![path.to_path_buf()];
+    if path.is_dir() && is_bag(path) {
+        files.push(path.join("metadata.yaml"));
+        if let Ok(bag) = Bag::open(path) {
+            files.extend(bag.files);
+        }
+    }
+    files
 }
 
 /// A file's identity, whether it exists yet or not: the deepest folder or file of its
@@ -132,6 +151,17 @@ pub fn source(
     ];
     if let Some((flag, _, why)) = not_for_a_bag.iter().find(|(_, given, _)| *given) {
         return Err(refused(flag, format!("{} is a bag: {why}", dvl.display())));
+    }
+    if let (Some(dvl_topic), Some(reference_topic)) = (reading.dvl_topic, reading.reference_topic)
+        && dvl_topic == reference_topic
+    {
+        return Err(refused(
+            "--reference-topic",
+            format!(
+                "{reference_topic} is also --dvl-topic: the DVL is calibrated against another sensor, so name the reference's own topic (data info {} lists them)",
+                dvl.display()
+            ),
+        ));
     }
     Ok(Source::Bag {
         path: dvl.to_path_buf(),

@@ -424,16 +424,17 @@ fn more_threads_than_cores_are_run_with_a_warning() {
 fn output_piped_into_a_reader_that_stopped_ends_the_command_quietly() {
     use std::os::unix::process::ExitStatusExt;
     let project = project(false);
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_dcnet-exp"))
+    // The pipe's reader is closed before the command starts, so its first line finds no
+    // one whatever the machine's load (a reader dropped after the start raced the plan).
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let output = std::process::Command::new(env!("CARGO_BIN_EXE_dcnet-exp"))
         .current_dir(project.path())
         .args(["plan", "experiments/quick.toml"])
-        .stdout(std::process::Stdio::piped())
+        .stdout(writer)
         .stderr(std::process::Stdio::piped())
-        .spawn()
+        .output()
         .unwrap();
-    // The reader goes before the plan is read and printed: its first line finds no one.
-    drop(child.stdout.take());
-    let output = child.wait_with_output().unwrap();
     assert!(!stderr(&output).contains("panicked"), "{}", stderr(&output));
     assert_eq!(
         output.status.signal(),

@@ -599,3 +599,291 @@ fn a_study_of_bags_scores_as_the_study_of_their_csv_files() {
         stderr(&output)
     );
 }
+
+/// `calibrate` or `correct` as typed in `dir`, refused as bad input (exit 1): its error.
+fn refused_in(dir: &Path, args: &[&str]) -> String {
+    let output = dcnet(dir, args);
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    stderr(&output)
+}
+
+/// A rosbag2 folder `name` in `dir` holding the synthetic recording in one MCAP file
+/// named `file`.
+fn bag_folder(dir: &Path, name: &str, file: &str) -> PathBuf {
+    let files = synthetic(dir);
+    let recording = paired::read(&files, &PairedColumns::akit()).unwrap();
+    let folder = dir.join(name);
+    std::fs::create_dir_all(&folder).unwrap();
+    let data = folder.join(file);
+    write_recording(
+        &recording,
+        &data,
+        Format::Mcap { compressed: true },
+        RosLayout::default(),
+    )
+    .unwrap();
+    std::fs::write(
+        folder.join("metadata.yaml"),
+        format!("rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: mcap\n  relative_file_paths:\n    - {file}\n"),
+    )
+    .unwrap();
+    data
+}
+
+/// No output replaces a file a bag is read from: `--save` over its data file or its
+/// `metadata.yaml`, the URDF `--save` writes beside its file over a data file of that
+/// name, and `correct`'s corrected bag over a data file of its name are each refused,
+/// naming the file, and the recording is left as it was.
+#[test]
+fn a_bags_own_files_are_inputs_no_output_replaces() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let data = bag_folder(d, "dive", "dive.mcap");
+    let recorded = std::fs::read(&data).unwrap();
+    for save in ["dive/dive.mcap", "dive/./metadata.yaml"] {
+        let error = refused_in(d, &["calibrate", "dive", TERMS, "--save", save]);
+        assert!(
+            error.contains("calibrate would write over its input"),
+            "{error}"
+        );
+        assert!(error.contains("give another --save"), "{error}");
+    }
+    assert_eq!(std::fs::read(&data).unwrap(), recorded);
+    assert!(
+        std::fs::read_to_string(d.join("dive/metadata.yaml"))
+            .unwrap()
+            .contains("dive.mcap")
+    );
+
+    let data = bag_folder(d, "named", "inst.urdf");
+    let recorded = std::fs::read(&data).unwrap();
+    let error = refused_in(
+        d,
+        &["calibrate", "named", TERMS, "--save", "named/inst.toml"],
+    );
+    assert!(
+        error.contains("named/inst.urdf: calibrate would write over its input named/inst.urdf: give another --save"),
+        "{error}"
+    );
+    assert_eq!(std::fs::read(&data).unwrap(), recorded);
+    assert!(!d.join("named/inst.toml").exists());
+
+    calibrate(
+        d,
+        &["dive", TERMS, "--out", "calibrated", "--save", "inst.toml"],
+    );
+    let data = bag_folder(d, "again", "again-corrected.mcap");
+    let recorded = std::fs::read(&data).unwrap();
+    let error = refused_in(
+        d,
+        &[
+            "correct",
+            "again",
+            "--installation",
+            "inst.toml",
+            "--out",
+            "again",
+        ],
+    );
+    assert!(
+        error.contains("again/again-corrected.mcap: correct would write over its input again/again-corrected.mcap"),
+        "{error}"
+    );
+    assert_eq!(std::fs::read(&data).unwrap(), recorded);
+    assert!(!d.join("again/again-corrected.csv").exists());
+}
+
+/// The synthetic recording as a sqlite3 bag `dive.db3` in `dir`, its connection, and
+/// the ids of its messages on `topic` in time order.
+fn sqlite_bag(dir: &Path, layout: RosLayout) -> PathBuf {
+    let files = synthetic(dir);
+    let recording = paired::read(&files, &PairedColumns::akit()).unwrap();
+    let path = dir.join("dive.db3");
+    let _ = std::fs::remove_file(&path);
+    write_recording(&recording, &path, Format::Sqlite, layout).unwrap();
+    path
+}
+
+/// The id and receive stamp of the `n`th message (1 = the first) of `topic` in the
+/// sqlite3 bag at `path`, and the topic's id.
+fn nth_message(path: &Path, topic: &str, n: usize) -> (i64, i64, i64) {
+    let connection = rusqlite::Connection::open(path).unwrap();
+    let topic_id: i64 = connection
+        .query_row("SELECT id FROM topics WHERE name = ?1", [topic], |row| {
+            row.get(0)
+        })
+        .unwrap();
+    let (id, stamp) = connection
+        .query_row(
+            "SELECT id, timestamp FROM messages WHERE topic_id = ?1 ORDER BY timestamp, id LIMIT 1 OFFSET ?2",
+            [topic_id, n as i64 - 1],
+            |row| Ok((row.get(0)?, row.get(1)?)),
+        )
+        .unwrap();
+    (id, stamp, topic_id)
+}
+
+/// Runs `sql` with `params` on the sqlite3 bag at `path`.
+fn edit(path: &Path, sql: &str, params: impl rusqlite::Params) {
+    rusqlite::Connection::open(path)
+        .unwrap()
+        .execute(sql, params)
+        .unwrap();
+}
+
+/// Every number read from a bag is checked where it is read, and named by its topic
+/// and message: a `/tf_static` translation of NaN (which reached the URDF), a zero
+/// quaternion in the reference, a receive stamp before 1970 (once read as 0), a DVL
+/// whose frame changes, two `/tf_static` transforms that disagree; one topic given
+/// both roles, a folder with no `metadata.yaml` and a ROS 1 bag are said as such. A
+/// DVL that names no frame is read as the body's, and says so.
+#[test]
+fn a_bags_numbers_and_frames_are_checked_where_read() {
+    use dcnet_exp::data::paired::bag::write::{odometry_message, tf_message};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let nan = RosLayout {
+        mount_translation_m: [f64::NAN, 0.0, 0.0],
+        ..RosLayout::default()
+    };
+    let bag = sqlite_bag(d, nan);
+    let error = refused_in(
+        d,
+        &[
+            "calibrate",
+            bag.to_str().unwrap(),
+            "--terms=time_offset,bias",
+            "--save",
+            "i.toml",
+        ],
+    );
+    assert!(
+        error.contains("/tf_static, message 1: the /tf_static transform from base_link to dvl_link: its translation (m) [NaN, 0.0, 0.0] is not a finite number"),
+        "{error}"
+    );
+    assert!(!d.join("i.toml").exists() && !d.join("i.urdf").exists());
+
+    let bag = sqlite_bag(d, RosLayout::default());
+    let (id, stamp, _) = nth_message(&bag, "/ins/odom", 10);
+    let zero = odometry_message(
+        stamp,
+        ("odom", "base_link"),
+        [0.0; 4],
+        [1.0, 0.0, 0.0],
+        [0.0; 3],
+    );
+    edit(
+        &bag,
+        "UPDATE messages SET data = ?1 WHERE id = ?2",
+        rusqlite::params![zero, id],
+    );
+    let error = refused_in(d, &["calibrate", "dive.db3", TERMS]);
+    assert!(
+        error.contains("/ins/odom, message 10: its orientation quaternion [0.0, 0.0, 0.0, 0.0] is zero, which is no rotation"),
+        "{error}"
+    );
+
+    let bag = sqlite_bag(d, RosLayout::default());
+    let (id, _, _) = nth_message(&bag, "/dvl/data", 5);
+    edit(
+        &bag,
+        "UPDATE messages SET timestamp = -5 WHERE id = ?1",
+        [id],
+    );
+    let error = refused_in(d, &["calibrate", "dive.db3", TERMS, "--stamps", "receive"]);
+    assert!(
+        error.contains("/dvl/data, message 1: its receive stamp is -5 ns, before 1970"),
+        "{error}"
+    );
+
+    let bag = sqlite_bag(d, RosLayout::default());
+    let (id, stamp, _) = nth_message(&bag, "/dvl/data", 7);
+    let moved = dvl_message(
+        stamp,
+        "other_link",
+        [1.0, 0.0, 0.0],
+        DvlStatus::BOTTOM_LOCK,
+        4e-4,
+    );
+    edit(
+        &bag,
+        "UPDATE messages SET data = ?1 WHERE id = ?2",
+        rusqlite::params![moved, id],
+    );
+    let error = refused_in(d, &["calibrate", "dive.db3", TERMS]);
+    assert!(
+        error.contains("/dvl/data, message 7: its frame_id is \"other_link\" where its first message's is \"dvl_link\""),
+        "{error}"
+    );
+
+    let bag = sqlite_bag(d, RosLayout::default());
+    let (_, stamp, tf) = nth_message(&bag, "/tf_static", 1);
+    let turned = tf_message(
+        stamp,
+        &[
+            ("base_link", "dvl_link", [0.0; 3], [1.0, 0.0, 0.0, 0.0]),
+            (
+                "base_link",
+                "dvl_link",
+                [0.2, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0],
+            ),
+        ],
+    );
+    edit(
+        &bag,
+        "INSERT INTO messages (topic_id, timestamp, data) VALUES (?1, ?2, ?3)",
+        rusqlite::params![tf, stamp + 1, turned],
+    );
+    let error = refused_in(d, &["calibrate", "dive.db3", TERMS]);
+    assert!(error.contains("/tf_static places one frame twice, otherwise: base_link → dvl_link at (0.0000, 0.0000, 0.0000) m, roll 180.000°"), "{error}");
+    assert!(
+        error.contains("base_link → dvl_link at (0.2000, 0.0000, 0.0000) m, roll 0.000°"),
+        "{error}"
+    );
+
+    let bag = sqlite_bag(d, RosLayout::default());
+    let error = refused_in(
+        d,
+        &[
+            "calibrate",
+            bag.to_str().unwrap(),
+            "--dvl-topic",
+            "/ins/odom",
+            "--reference-topic",
+            "/ins/odom",
+        ],
+    );
+    assert!(
+        error.contains("--reference-topic: /ins/odom is also --dvl-topic"),
+        "{error}"
+    );
+
+    std::fs::create_dir(d.join("lost")).unwrap();
+    std::fs::copy(&bag, d.join("lost/lost_0.db3")).unwrap();
+    let error = refused_in(d, &["calibrate", "lost"]);
+    assert!(
+        error.contains("lost: a folder with no metadata.yaml, so not a bag"),
+        "{error}"
+    );
+    std::fs::write(d.join("old.bag"), b"#ROSBAG V2.0\n").unwrap();
+    let error = refused_in(d, &["calibrate", "old.bag"]);
+    assert!(
+        error.contains("old.bag: a ROS 1 bag, which this tool does not read"),
+        "{error}"
+    );
+
+    let nameless = RosLayout {
+        dvl_frame: "",
+        mount_roll_deg: 0.0,
+        ..RosLayout::default()
+    };
+    sqlite_bag(d, nameless);
+    let text = calibrate(d, &["dive.db3", TERMS, "--out", "nameless"]);
+    assert!(
+        text.contains(
+            "in frame (none: its messages' frame_id is empty, so it is read as the body's)"
+        ),
+        "{text}"
+    );
+}

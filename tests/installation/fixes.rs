@@ -317,6 +317,72 @@ fn calibrate_with_fixes_finds_the_installation_and_refuses_bad_input() {
         &["--fix-noise-m", "1", "--terms", "bias"],
         "bias: fixes calibrate scale, misalignment, lever_arm, time_offset",
     );
+    // A noise the residuals contradict by orders of magnitude: a unit or a digit wrong.
+    for noise in ["1e-9", "1e308"] {
+        refused(
+            &["--fix-noise-m", noise],
+            "times the noise given, beyond a factor of 100 either way",
+        );
+    }
+    refused(
+        &["--fix-noise-m", "0.5", "--depth-noise-m", "0.3"],
+        "--depth-noise-m: fixes.csv gives no depth",
+    );
+    for flag in [
+        ["--out", "elsewhere"],
+        ["--tolerance-pct", "5"],
+        ["--reference-noise-cm-s", "1"],
+        ["--search-s", "60"],
+    ] {
+        let expected = format!("{}: does not apply to a calibration against fixes", flag[0]);
+        refused(
+            &[&["--fix-noise-m", "0.5"][..], &flag[..]].concat(),
+            &expected,
+        );
+    }
+    // The reference's latitude and longitude, in radians, read as degrees.
+    std::fs::write(
+        d.join("degrees.toml"),
+        "[fix_columns]\ntime = \"Time [s]\"\nlatitude_longitude = [\"Latitude [rad]\", \"Longitude [rad]\"]\nangles_in_degrees = true\n",
+    )
+    .unwrap();
+    let mut degrees_args = args(&["--fix-noise-m", "0.5"]);
+    degrees_args[3] = attitude.clone();
+    degrees_args[7] = "degrees.toml".into();
+    let refs: Vec<&str> = degrees_args.iter().map(String::as_str).collect();
+    let output = common::dcnet(d, &refs);
+    let message = common::stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{message}");
+    assert!(
+        message
+            .contains("latitude and longitude in radians, read as degrees, travel 57.3 times less"),
+        "{message}"
+    );
+    // Two fixes in five moved 300 m: more than a quarter are outliers.
+    let jumped: String = std::fs::read_to_string(d.join("fixes.csv"))
+        .unwrap()
+        .lines()
+        .enumerate()
+        .map(|(i, line)| match i % 5 {
+            1 | 3 if i > 0 => {
+                let (t, rest) = line.split_once(',').unwrap();
+                let (n, e) = rest.split_once(',').unwrap();
+                format!("{t},{},{e}\n", n.parse::<f64>().unwrap() + 300.0)
+            }
+            _ => format!("{line}\n"),
+        })
+        .collect();
+    std::fs::write(d.join("jumped.csv"), jumped).unwrap();
+    let mut jumped_args = args(&["--fix-noise-m", "0.5"]);
+    jumped_args[3] = "jumped.csv".into();
+    let refs: Vec<&str> = jumped_args.iter().map(String::as_str).collect();
+    let output = common::dcnet(d, &refs);
+    let message = common::stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{message}");
+    assert!(
+        message.contains("more than a quarter are outliers"),
+        "{message}"
+    );
     // Fixes of another hour: none overlaps the DVL.
     let late: String = std::fs::read_to_string(d.join("fixes.csv"))
         .unwrap()

@@ -441,6 +441,7 @@ mod tests {
             robust: None,
             residual_rms_m_s: [0.0; 3],
             sample_count: rows / 3,
+            mask_centre_s: Some(0.0),
             follows: (0..rows / 3).map(|i| i > 0).collect(),
             termination: "test".into(),
         }

@@ -22,7 +22,7 @@ use crate::Vec3;
 use crate::data::paired::sample_interval;
 use crate::installation::estimate::bound::{Noise, TermBound, Tolerances, bound};
 use crate::installation::estimate::fit::{
-    Fit, FitError, TIME_OFFSET_SCAN_STEP_S, fit_about, linearised, mask_about,
+    Fit, FitError, TIME_OFFSET_MARGIN_S, TIME_OFFSET_SCAN_STEP_S, fit_about, linearised, mask_about,
 };
 use crate::installation::frames::Reference;
 use crate::installation::terms::{Installation, PerAxis, TermSet};
@@ -150,8 +150,8 @@ pub enum ClockError {
         noise_cm_s: f64,
     },
     #[error(
-        "no step of the ±{search_s} s search finds the DVL's samples inside the reference: \
-         the two recordings do not overlap in time"
+        "no step of the ±{search_s} s search finds half the window's DVL samples inside the reference: \
+         the clock may lie beyond the search (a wider --search-s may find it), or the two recordings do not overlap in time"
     )]
     NoOverlap { search_s: f64 },
     #[error(
@@ -164,8 +164,31 @@ pub enum ClockError {
         carried_s: f64,
         search_s: f64,
     },
-    #[error("the least squares of the dive's terms failed: {0}")]
-    Fit(#[from] FitError),
+    #[error(
+        "the best time offset within ±{} s of the installation's {carried_s:.2} s, {found_s:.2} s, is not shown by the window, and there the DVL fits the installation to {fitted_cm_s:.2} cm/s (three axes), over {} times the {calibrated_cm_s:.2} cm/s its calibration left: \
+         the clock may lie beyond the search, and a wider --search-s may find it (or the installation does not hold on this dive)",
+        crate::Shown(*search_s),
+        MISFIT_RATIO
+    )]
+    BeyondSearch {
+        found_s: f64,
+        carried_s: f64,
+        search_s: f64,
+        fitted_cm_s: f64,
+        calibrated_cm_s: f64,
+    },
+    #[error(
+        "the least squares of the dive's terms from the search's best, {found_s:.2} s, failed: {fault}{}",
+        match fault {
+            FitError::TooFewSamples { .. } | FitError::LengthMismatch { .. } => String::new(),
+            _ => format!("; the clock may lie beyond the ±{} s searched, and a wider --search-s may find it", crate::Shown(*search_s)),
+        }
+    )]
+    Fit {
+        found_s: f64,
+        search_s: f64,
+        fault: FitError,
+    },
     #[error(
         "its time offset is known only to ±{std_s} s, beyond the ±{search_s} s searched: these seconds do not show the clock"
     )]
@@ -290,6 +313,38 @@ pub fn search_offset(
     best_of(&mut fine, Some((centre_s, rms)))
 }
 
+/// Fits `terms` to the DVL record (`time_s`, `dvl_m_s`) against `reference` as
+/// [`fit`](crate::installation::estimate::fit::fit) does, but with τ started from the
+/// best of a search over ±`search_s` about zero ([`search_offset`], the installation
+/// held at none: a first calibration knows no other) where a search is asked: two logs
+/// whose clocks were never set alike are seconds or minutes apart, beyond the fit's own
+/// scan of ±[`TIME_OFFSET_MARGIN_S`]. Without one, or without τ among `terms`, the
+/// plain fit.
+pub fn fit_searched(
+    (time_s, dvl_m_s): (&[f64], &[Vec3]),
+    reference: &Reference,
+    terms: TermSet,
+    search_s: Option<f64>,
+) -> Result<Fit, FitError> {
+    let start = match search_s {
+        Some(search_s) if terms.time_offset => {
+            let searched = search_offset(
+                (time_s, dvl_m_s),
+                reference,
+                Installation::default(),
+                search_s,
+            );
+            let (tau, _) = searched.ok_or(FitError::NoClockInSearch { search_s })?;
+            Installation {
+                time_offset_s: tau,
+                ..Installation::default()
+            }
+        }
+        _ => Installation::default(),
+    };
+    fit_about(time_s, dvl_m_s, reference, terms, start)
+}
+
 /// The standard deviation of the DVL's velocity over the window, the three axes'
 /// variances summed, m/s: how much the motion changes.
 fn motion_std(dvl_m_s: &[Vec3]) -> f64 {
@@ -313,11 +368,6 @@ pub fn refind(
     search: ClockSearch,
     (noise, tolerances): (Noise, &Tolerances),
 ) -> Result<Clock, ClockError> {
-    let window_s = time_s
-        .last()
-        .zip(time_s.first())
-        .map_or(0.0, |(l, f)| l - f)
-        + sample_interval(time_s);
     let (searched_offset_s, searched_rms_m_s) = search_offset(
         (time_s, dvl_m_s),
         reference,
@@ -336,7 +386,13 @@ pub fn refind(
         time_offset_s: searched_offset_s,
         ..carried.installation
     };
-    let fit = fit_about(time_s, dvl_m_s, reference, search.dive_terms, start)?;
+    let fit = fit_about(time_s, dvl_m_s, reference, search.dive_terms, start).map_err(|fault| {
+        ClockError::Fit {
+            found_s: searched_offset_s,
+            search_s: search.search_s,
+            fault,
+        }
+    })?;
     let bound = bound(&fit, noise, tolerances);
     // A window whose DVL moves no more than the noise its residuals show has no clock
     // to show; above it, whether the window shows τ is the bound's to say. The noise
@@ -347,7 +403,7 @@ pub fn refind(
     let motion_m_s = motion_std(dvl_m_s);
     if !(motion_m_s > noise_shown_m_s) {
         return Err(ClockError::FlatMotion {
-            window_s: (window_s * 10.0).round() / 10.0,
+            window_s: (window_length_s(time_s) * 10.0).round() / 10.0,
             std_cm_s: 100.0 * motion_m_s,
             noise_cm_s: 100.0 * noise_shown_m_s,
         });
@@ -382,6 +438,50 @@ pub fn refind(
         });
     }
     Ok(clock)
+}
+
+/// How many times the residual its calibration left a dive's fit may leave where the
+/// window does not show its clock before the clock is taken as lying beyond the search:
+/// a clock found in a side lobe leaves the turns unmatched (tens of cm/s), a dive merely
+/// noisier than its calibration a few times the residual.
+pub const MISFIT_RATIO: f64 = 3.0;
+
+impl Clock {
+    /// Refuses this clock where it lies more than the fit's ±3 s scan from the
+    /// carried one, `carried_s`, the window does not show it, and the dive fits the
+    /// installation far worse than its calibration, `calibrated_m_s` (three axes): a
+    /// search whose range held no clock finds its best in a side lobe, which a dive's
+    /// corrected files must not be written with. A clock found near the carried one
+    /// that fits badly is a DVL that moved (remounted), which `correct` warns of.
+    pub fn within_the_search(
+        &self,
+        carried_s: f64,
+        search_s: f64,
+        calibrated_m_s: f64,
+    ) -> Result<(), ClockError> {
+        let rms = self.fit.residual_rms_m_s;
+        let fitted_m_s = (rms[0].powi(2) + rms[1].powi(2) + rms[2].powi(2)).sqrt();
+        let far = (self.installation.time_offset_s - carried_s).abs() > TIME_OFFSET_MARGIN_S;
+        match far && self.time_offset_unseen() && fitted_m_s > MISFIT_RATIO * calibrated_m_s {
+            true => Err(ClockError::BeyondSearch {
+                found_s: self.installation.time_offset_s,
+                carried_s,
+                search_s,
+                fitted_cm_s: 100.0 * fitted_m_s,
+                calibrated_cm_s: 100.0 * calibrated_m_s,
+            }),
+            false => Ok(()),
+        }
+    }
+}
+
+/// The length of the window stamped `time_s`, s: its span and one sample interval.
+fn window_length_s(time_s: &[f64]) -> f64 {
+    let span_s = time_s
+        .last()
+        .zip(time_s.first())
+        .map_or(0.0, |(l, f)| l - f);
+    span_s + sample_interval(time_s)
 }
 
 /// Refuses a search's best offset `found_s` at an end of the ±`search_s` about

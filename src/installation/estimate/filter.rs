@@ -15,7 +15,7 @@
 use crate::Vec3;
 use crate::installation::estimate::bound::Noise;
 use crate::installation::estimate::filter_noise::OnlineNoise;
-use crate::installation::estimate::fit::{TIME_OFFSET_MARGIN_S, reference_held, slope_held};
+use crate::installation::estimate::fit::{mask_about, reference_held, slope_held};
 use crate::installation::frames::Reference;
 use crate::installation::terms::{Installation, PerKind, TermSet};
 use crate::kalman::{Filter, Measurement, Prior};
@@ -84,7 +84,8 @@ fn gated(measurement: &Measurement, covariance: &DMatrix<f64>) -> bool {
 }
 
 /// Runs the filter over every sample of the record whose time lies at least
-/// [`TIME_OFFSET_MARGIN_S`] inside the reference (the fit's mask).
+/// [`crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S`] inside the reference (the fit's mask), its terms starting
+/// at zero.
 pub fn run_filter(
     time_s: &[f64],
     dvl_m_s: &[Vec3],
@@ -93,10 +94,27 @@ pub fn run_filter(
     settings: &FilterSettings,
     noise: Noise,
 ) -> Vec<FilterStep> {
-    let mut steps = Vec::new();
-    run_filter_observed(
+    run_filter_from(
         (time_s, dvl_m_s, reference),
-        terms,
+        (terms, Installation::default()),
+        settings,
+        noise,
+    )
+}
+
+/// [`run_filter`], its terms starting at `from`'s (a clock a search found seconds
+/// away, which the prior's standard deviation would not reach) and its samples those
+/// inside the reference at t + `from`'s time offset.
+pub fn run_filter_from(
+    (time_s, dvl_m_s, reference): (&[f64], &[Vec3], &Reference),
+    (terms, from): (TermSet, Installation),
+    settings: &FilterSettings,
+    noise: Noise,
+) -> Vec<FilterStep> {
+    let mut steps = Vec::new();
+    observed_from(
+        (time_s, dvl_m_s, reference),
+        (terms, from),
         settings,
         noise,
         |step, _| steps.push(step),
@@ -112,12 +130,24 @@ pub fn run_filter_observed(
     terms: TermSet,
     settings: &FilterSettings,
     noise: Noise,
+    observe: impl FnMut(FilterStep, &DMatrix<f64>),
+) {
+    let from = (terms, Installation::default());
+    observed_from((time_s, dvl_m_s, reference), from, settings, noise, observe)
+}
+
+/// [`run_filter_observed`] from `from`'s terms, as [`run_filter_from`].
+fn observed_from(
+    (time_s, dvl_m_s, reference): (&[f64], &[Vec3], &Reference),
+    (terms, from): (TermSet, Installation),
+    settings: &FilterSettings,
+    noise: Noise,
     mut observe: impl FnMut(FilterStep, &DMatrix<f64>),
 ) {
     let kinds = terms.parameter_kinds();
     let n = kinds.len();
     let prior = Prior {
-        mean: vec![0.0; n],
+        mean: from.to_parameters(&terms),
         std: kinds.iter().map(|&k| settings.prior.of(k)).collect(),
         walk_per_sqrt_s: kinds.iter().map(|&k| settings.random_walk.of(k)).collect(),
     };
@@ -149,7 +179,7 @@ pub fn run_filter_observed(
     // previous one, whether it is its neighbour).
     let mut early: Vec<(usize, f64, bool)> = Vec::new();
     let mut previous: Option<f64> = None;
-    for i in reference.interior(time_s, TIME_OFFSET_MARGIN_S) {
+    for i in mask_about(time_s, reference, from.time_offset_s) {
         let t = time_s[i];
         let elapsed_s = previous.map_or(0.0, |p| t - p);
         // Across a gap the terms carry on (the installation is the same; a random walk
@@ -351,7 +381,12 @@ pub(crate) mod tests {
             std: kinds.iter().map(|&k| settings().prior.of(k)).collect(),
             walk_per_sqrt_s: vec![0.0; kinds.len()],
         };
-        let samples: Vec<usize> = reference.interior(&time, TIME_OFFSET_MARGIN_S).collect();
+        let samples: Vec<usize> = reference
+            .interior(
+                &time,
+                crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S,
+            )
+            .collect();
         let zero = Installation::default();
         let measurements: Vec<Measurement> = samples
             .iter()

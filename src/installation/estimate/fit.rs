@@ -72,6 +72,11 @@ pub struct Fit {
     pub residual_rms_m_s: Vec3,
     /// How many DVL samples were fitted (those inside the fixed mask).
     pub sample_count: usize,
+    /// The time offset the fixed mask lies about, s: its samples are those whose
+    /// t + this lies inside the reference's interior (0 for a fit from no clock, the
+    /// search's best or the carried τ otherwise); `None` for a joint fit, each of whose
+    /// recordings has its own.
+    pub mask_centre_s: Option<f64>,
     /// Whether each fitted sample follows the one before it within a piece
     /// ([`Reference::follows`]): the noise's correlation in time is read within pieces.
     pub follows: Vec<bool>,
@@ -127,13 +132,21 @@ pub enum FitError {
         super::robust::TUKEY_C
     )]
     Outliers { outliers: usize, samples: usize },
+    #[error(
+        "no time offset within ±{search_s} s puts half the DVL's samples inside the reference: the recordings do not overlap that near"
+    )]
+    NoClockInSearch { search_s: f64 },
     #[error("the fit did not converge: {termination}")]
     NotConverged { termination: String },
     #[error(
-        "the fitted time offset {time_offset_s} s is beyond ±{margin_s} s, \
+        "the fitted time offset {time_offset_s:.3} s lies more than {margin_s} s from the {centre_s:.3} s the fit started from, \
          outside what the window can show"
     )]
-    TimeOffsetBeyondMargin { time_offset_s: f64, margin_s: f64 },
+    TimeOffsetBeyondMargin {
+        time_offset_s: f64,
+        centre_s: f64,
+        margin_s: f64,
+    },
     /// A term fitted beyond what any DVL installation is off by: the recording does not
     /// show the installation (a DVL that reads no motion fits a scale of −100 %).
     #[error(
@@ -155,7 +168,7 @@ impl FitError {
         match self {
             FitError::Unphysical { .. } => "",
             _ => {
-                "; a window too short for its terms, terms it cannot tell apart (a scale and a bias at constant speed, say), or a time offset beyond the ±3 s the fit scans fail this way: give a longer --window-s or fewer --terms, or line up the recordings' clocks to within 3 s"
+                "; a window too short for its terms, terms it cannot tell apart (a scale and a bias at constant speed, say), or a time offset beyond the ±3 s the fit scans fail this way: give a longer --window-s or fewer --terms, or where the clocks may be further apart let --search-s look for them (--search-s 60 looks ±60 s)"
             }
         }
     }
@@ -434,10 +447,11 @@ pub fn fit_about(
     if (installation.time_offset_s - centre_s).abs() > TIME_OFFSET_MARGIN_S {
         return Err(FitError::TimeOffsetBeyondMargin {
             time_offset_s: installation.time_offset_s,
+            centre_s,
             margin_s: TIME_OFFSET_MARGIN_S,
         });
     }
-    solution(solved, termination, mask.len())
+    solution(solved, termination, (mask.len(), centre_s))
 }
 
 /// The fit of the solved `problem` over its `sample_count` samples: its raw residuals'
@@ -446,7 +460,7 @@ pub fn fit_about(
 fn solution(
     solved: Problem<'_>,
     termination: String,
-    sample_count: usize,
+    (sample_count, centre_s): (usize, f64),
 ) -> Result<Fit, FitError> {
     let (terms, installation) = (solved.terms, solved.installation());
     let follows = solved.reference.follows(solved.time_s);
@@ -473,6 +487,7 @@ fn solution(
         residuals,
         robust,
         sample_count,
+        mask_centre_s: Some(centre_s),
         follows,
         termination,
     })
@@ -551,16 +566,16 @@ pub fn mask_about(time_s: &[f64], reference: &Reference, centre_s: f64) -> std::
 }
 
 /// The Jacobian of `terms` at `installation` over the samples a fit of this record
-/// fits (the fixed mask), rows as [`Fit::jacobian`]'s: what the residuals of a fit
-/// would feel of terms it left out.
+/// fits (the fixed mask about `centre_s`, [`Fit::mask_centre_s`]), rows as
+/// [`Fit::jacobian`]'s: what the residuals of a fit would feel of terms it left out.
 pub fn jacobian_at(
-    time_s: &[f64],
-    dvl_m_s: &[Vec3],
+    (time_s, dvl_m_s): (&[f64], &[Vec3]),
     reference: &Reference,
     terms: TermSet,
     installation: Installation,
+    centre_s: f64,
 ) -> DMatrix<f64> {
-    let mask = reference.interior(time_s, TIME_OFFSET_MARGIN_S);
+    let mask = mask_about(time_s, reference, centre_s);
     Problem {
         time_s: &time_s[mask.clone()],
         dvl_m_s: &dvl_m_s[mask],

@@ -433,6 +433,7 @@ fn stacked_fit(
         parameters: vehicle.to_parameters(&terms),
         residual_rms_m_s: [0.0; 3],
         sample_count: residuals.len() / 3,
+        mask_centre_s: None,
         jacobian,
         residuals,
         robust: robust.map(|loss| RobustFit {
@@ -497,6 +498,7 @@ impl<'a> Weighed<'a> {
             parameters: at.to_parameters(&terms),
             residual_rms_m_s: [0.0; 3],
             sample_count: self.blocks.raw.len() / 3,
+            mask_centre_s: None,
             jacobian,
             residuals: self.meat.clone(),
             robust: fitted.cloned(),

@@ -52,7 +52,14 @@ pub fn asked_for(
     left_out(fit.terms)
         .into_iter()
         .filter_map(|(term, extended)| {
-            let full = jacobian_at(time_s, dvl_m_s, reference, extended, fit.installation);
+            let centre_s = fit.mask_centre_s.unwrap_or(0.0);
+            let full = jacobian_at(
+                (time_s, dvl_m_s),
+                reference,
+                extended,
+                fit.installation,
+                centre_s,
+            );
             let added: Vec<usize> = extended
                 .parameter_names()
                 .iter()

@@ -173,7 +173,12 @@ fn printed_settling(calibration: &Calibration) -> String {
     let shown = shown_points(calibration, all);
     let gated = calibration.filter.steps.iter().filter(|s| s.gated).count();
     let mut text = format!(
-        "the Kalman filter over the same samples, its terms constant, starting at zero with standard deviations {}, {gated} of {} samples gated as outliers (innovation beyond χ²₃ {GATE_CHI2} at the specified noise); its terms after each length, ± its standard deviation (from the noise its residuals show so far, as the fit's):\n{}\n",
+        "the Kalman filter over the same samples, its terms constant, starting at zero{} with standard deviations {}, {gated} of {} samples gated as outliers (innovation beyond χ²₃ {GATE_CHI2} at the specified noise); its terms after each length, ± its standard deviation (from the noise its residuals show so far, as the fit's):\n{}\n",
+        match calibration.fitted.mask_centre_s {
+            Some(searched) if searched != 0.0 =>
+                format!(" but the clock, at the search's {searched:.2} s"),
+            _ => String::new(),
+        },
         priors(calibration).join(", "),
         calibration.filter.steps.len(),
         settling_table(calibration, &shown, all)

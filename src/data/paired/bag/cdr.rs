@@ -347,8 +347,26 @@ mod tests {
         );
         // A type that holds itself is refused, not followed until the stack runs out;
         // a sequence longer than what is left of the message, likewise.
+        // Its definition is refused where it is read, naming the field; decoding
+        // does not rely on that.
         let mut looped = Definitions::default();
-        looped.add("a/Loop", "a/Loop inner\n").unwrap();
+        let error = looped.add("a/Loop", "a/Loop inner\n").unwrap_err();
+        assert_eq!(
+            error.to_string(),
+            "the definition of a/msg/Loop, line 1: field inner is a a/msg/Loop itself: a type that holds itself has no end, and no ROS message is one"
+        );
+        let mut again = Definitions::default();
+        again
+            .add("a/Pair", "a/Other first\n===\nMSG: a/Other\na/Pair back\n")
+            .unwrap_err();
+        looped.types.insert(
+            "a/msg/Loop".into(),
+            vec![Field {
+                name: "inner".into(),
+                element: Element::Message("a/msg/Loop".into()),
+                count: Count::One,
+            }],
+        );
         let error = decode(&[0, 1, 0, 0], "a/Loop", &looped).unwrap_err();
         assert!(matches!(error, CdrError::Nested(_)), "{error}");
         let long = [0, 1, 0, 0, 255, 255, 255, 0];

@@ -110,6 +110,8 @@ impl Definitions {
     pub fn add(&mut self, type_name: &str, text: &str) -> Result<(), DefinitionError> {
         let mut current = full_name(type_name);
         let mut fields = Vec::new();
+        // Each field's line, for a type found to hold itself.
+        let mut lines: BTreeMap<(String, String), usize> = BTreeMap::new();
         for (number, line) in text.lines().enumerate() {
             let line = line.split('#').next().unwrap_or("").trim();
             if line.starts_with("===") {
@@ -137,9 +139,47 @@ impl Definitions {
                 continue; // a constant
             }
             fields.push(field(kind, name, &current).map_err(|p| error(&p))?);
+            lines.insert((current.clone(), name.to_string()), number + 1);
         }
         self.types.insert(current, fields);
-        Ok(())
+        match self.holding_itself(&full_name(type_name), &mut Vec::new()) {
+            Some((holder, field, held)) => Err(DefinitionError {
+                line: lines
+                    .get(&(holder.clone(), field.clone()))
+                    .copied()
+                    .unwrap_or(0),
+                problem: match held == holder {
+                    true => format!("field {field} is a {held} itself"),
+                    false => format!("field {field} is a {held}, which holds {holder} in turn"),
+                } + ": a type that holds itself has no end, and no ROS message is one",
+                type_name: holder,
+            }),
+            None => Ok(()),
+        }
+    }
+
+    /// The first type on the way from `type_name` that holds a type it lies within
+    /// (`within`, the types on the way): that type, its field and the type it holds.
+    fn holding_itself(
+        &self,
+        type_name: &str,
+        within: &mut Vec<String>,
+    ) -> Option<(String, String, String)> {
+        within.push(type_name.to_string());
+        for field in self.fields(type_name).into_iter().flatten() {
+            let Element::Message(inner) = &field.element else {
+                continue;
+            };
+            let inner = full_name(inner);
+            if within.contains(&inner) {
+                return Some((type_name.to_string(), field.name.clone(), inner));
+            }
+            if let Some(found) = self.holding_itself(&inner, within) {
+                return Some(found);
+            }
+        }
+        within.pop();
+        None
     }
 
     /// The fields of `type_name` (either spelling), where it is defined.

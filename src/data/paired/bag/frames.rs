@@ -187,6 +187,38 @@ pub fn frame_name(name: &str) -> &str {
     name.trim_start_matches('/')
 }
 
+/// The first two of `transforms` that join the same two frames (either way) but place
+/// the child otherwise: by more than a micrometre, or a turn of more than a
+/// microradian. A `/tf_static` published again with other numbers leaves the mount
+/// unknown.
+pub fn disagreeing(transforms: &[StaticTransform]) -> Option<(&StaticTransform, &StaticTransform)> {
+    let ends = |t: &StaticTransform| {
+        (
+            frame_name(&t.parent).to_string(),
+            frame_name(&t.child).to_string(),
+        )
+    };
+    for (k, first) in transforms.iter().enumerate() {
+        for again in &transforms[k + 1..] {
+            let (parent, child) = ends(first);
+            let seen = match ends(again) {
+                same if same == (parent.clone(), child.clone()) => again.transform,
+                swapped if swapped == (child, parent) => again.transform.inverse(),
+                _ => continue,
+            };
+            let moved = (0..3)
+                .any(|i| (seen.translation_m[i] - first.transform.translation_m[i]).abs() > 1e-6);
+            let turned = (seen.rotation.iter().flatten())
+                .zip(first.transform.rotation.iter().flatten())
+                .any(|(a, b)| (a - b).abs() > 1e-6);
+            if moved || turned {
+                return Some((first, again));
+            }
+        }
+    }
+    None
+}
+
 /// The transform from `from` to `to` through the chain of `transforms` that joins
 /// them (either way along each), where one does.
 pub fn chain(transforms: &[StaticTransform], from: &str, to: &str) -> Option<Transform> {
@@ -252,7 +284,10 @@ impl std::fmt::Display for BagFrames {
             "the DVL from {} ({}) in frame {}, {}, ",
             self.dvl_topic,
             self.dvl_type,
-            self.dvl_frame,
+            match self.dvl_frame.is_empty() {
+                true => "(none: its messages' frame_id is empty, so it is read as the body's)",
+                false => &self.dvl_frame,
+            },
             match self.dvl_flags_lock {
                 true => "each ping's bottom lock read from its message",
                 false =>

@@ -182,33 +182,64 @@ impl Samples {
         let missing = || "a field of its type is missing or not a number".to_string();
         if layout.role == Role::Transforms {
             for transform in value.at(&[0]).and_then(list).ok_or_else(missing)? {
-                self.transforms
-                    .push(static_transform(transform).ok_or_else(missing)?);
+                let (transform, quaternion) = static_transform(transform).ok_or_else(missing)?;
+                finite_transform(&transform, quaternion)?;
+                self.transforms.push(transform);
             }
             return Ok(());
         }
         let [sec, nanosec] = numbers(value, &layout.stamp).ok_or_else(missing)?;
+        if stamps == Stamps::Header && sec < 0.0 {
+            return Err(format!(
+                "its header stamp is {sec} s, before 1970: read it on the bag's receive stamps (--stamps receive), or mend the driver's clock"
+            ));
+        }
         self.stamp_ns.push(match stamps {
             Stamps::Header => sec as i64 * 1_000_000_000 + nanosec as i64,
             Stamps::Receive => receive_ns as i64,
         });
         self.message.push(message);
-        if self.frame_id.is_none() {
-            self.frame_id = value
-                .at(&layout.frame_id)
-                .and_then(Value::text)
-                .map(|f| frame_name(f).to_string());
-            self.child_frame_id = (layout.child_frame_id.as_ref())
-                .and_then(|path| value.at(path)?.text().map(|f| frame_name(f).to_string()));
+        let frame = |path: &[usize]| value.at(path).and_then(Value::text).map(frame_name);
+        let frames = (
+            frame(&layout.frame_id),
+            (layout.child_frame_id.as_deref()).and_then(frame),
+        );
+        match (&self.frame_id, &self.child_frame_id) {
+            (None, _) => {
+                self.frame_id = frames.0.map(String::from);
+                self.child_frame_id = frames.1.map(String::from);
+            }
+            (first, first_child) => {
+                for ((now, then), key) in [(frames.0, first), (frames.1, first_child)]
+                    .into_iter()
+                    .zip(["frame_id", "child_frame_id"])
+                {
+                    if now != then.as_deref() {
+                        return Err(format!(
+                            "its {key} is {:?} where its first message's is {:?}: a topic's velocities are read in one frame, so a recording whose frame changes is not read",
+                            now.unwrap_or(""),
+                            then.as_deref().unwrap_or("")
+                        ));
+                    }
+                }
+            }
         }
-        self.velocity
-            .push(numbers(value, &layout.velocity).ok_or_else(missing)?);
+        let velocity = numbers(value, &layout.velocity).ok_or_else(missing)?;
+        // A DVL's velocity that is not a number is a ping with none (left out and
+        // counted where the recording is checked); the reference's must be a number.
+        if layout.role != Role::Dvl {
+            finite("its velocity", &velocity)?;
+        }
+        self.velocity.push(velocity);
         if let Some(orientation) = &layout.orientation {
-            self.orientation
-                .push(numbers(value, orientation).ok_or_else(missing)?);
+            let quaternion = numbers(value, orientation).ok_or_else(missing)?;
+            rotation_quaternion("its orientation", quaternion)?;
+            self.orientation.push(quaternion);
         }
         if let Some(rate) = &layout.rate {
-            self.rate.push(numbers(value, rate).ok_or_else(missing)?);
+            let rate = numbers(value, rate).ok_or_else(missing)?;
+            finite("its angular velocity", &rate)?;
+            self.rate.push(rate);
         }
         let flag = |path: &Option<Vec<usize>>| path.as_ref().and_then(|p| value.at(p)?.number());
         let bottom_track = flag(&layout.mode).is_none_or(|mode| mode == 1.0);
@@ -219,6 +250,45 @@ impl Samples {
     }
 }
 
+/// Refuses `values` (what a message holds as `what`) where one is not a finite number.
+fn finite(what: &str, values: &[f64]) -> Result<(), String> {
+    match values.iter().all(|v| v.is_finite()) {
+        true => Ok(()),
+        false => Err(format!(
+            "{what} {values:?} is not a finite number on every axis"
+        )),
+    }
+}
+
+/// Refuses the quaternion `[x, y, z, w]` (what a message holds as `what`) where it is
+/// no rotation: a number not finite, or all four (nearly) zero, which no normalising
+/// turns into one.
+fn rotation_quaternion(what: &str, quaternion: [f64; 4]) -> Result<(), String> {
+    finite(&format!("{what} quaternion"), &quaternion)?;
+    let norm = quaternion.iter().map(|q| q * q).sum::<f64>().sqrt();
+    match norm > 1e-6 {
+        true => Ok(()),
+        false => Err(format!(
+            "{what} quaternion {quaternion:?} is zero, which is no rotation (a driver that publishes no attitude yet)"
+        )),
+    }
+}
+
+/// Refuses a `/tf_static` transform whose translation or rotation `quaternion` is not a
+/// number or no rotation: it would place the DVL nowhere, and reach the URDF and the
+/// static transform written.
+fn finite_transform(transform: &StaticTransform, quaternion: [f64; 4]) -> Result<(), String> {
+    let what = format!(
+        "the /tf_static transform from {} to {}",
+        transform.parent, transform.child
+    );
+    finite(
+        &format!("{what}: its translation (m)"),
+        &transform.transform.translation_m,
+    )?;
+    rotation_quaternion(&format!("{what}: its rotation"), quaternion)
+}
+
 fn list(value: &Value) -> Option<&[Value]> {
     match value {
         Value::List(items) => Some(items),
@@ -226,8 +296,10 @@ fn list(value: &Value) -> Option<&[Value]> {
     }
 }
 
-/// A `geometry_msgs/TransformStamped`'s parent, child and transform.
-fn static_transform(value: &Value) -> Option<StaticTransform> {
+/// A `geometry_msgs/TransformStamped`'s parent, child and transform; `None` where a
+/// field is missing. Its numbers are checked where it is read, with its frames named
+/// ([`finite_transform`]).
+fn static_transform(value: &Value) -> Option<(StaticTransform, [f64; 4])> {
     let number = |path: &[usize]| value.at(path)?.number();
     let vector = |k: usize| {
         Some([
@@ -242,14 +314,15 @@ fn static_transform(value: &Value) -> Option<StaticTransform> {
         number(&[2, 1, 2])?,
         number(&[2, 1, 3])?,
     ];
-    Some(StaticTransform {
+    let transform = StaticTransform {
         parent: value.at(&[0, 1])?.text()?.to_string(),
         child: value.at(&[1])?.text()?.to_string(),
         transform: Transform {
             rotation: frames::quaternion_matrix(rotation),
             translation_m: vector(0)?,
         },
-    })
+    };
+    Some((transform, rotation))
 }
 
 /// Reads the bag at `path` as `topics` says.
@@ -453,6 +526,31 @@ pub fn topic_lines(survey: &Survey) -> String {
         .join("\n")
 }
 
+/// Refuses `transforms` where two of `/tf_static`'s join the same frames otherwise:
+/// which mount held is not known. Both are named, with where they place the child.
+fn one_mount(path: &Path, transforms: &[StaticTransform]) -> Result<(), BagError> {
+    let Some((first, again)) = frames::disagreeing(transforms) else {
+        return Ok(());
+    };
+    let placed = |t: &StaticTransform| {
+        let [roll, pitch, yaw] = frames::euler_zyx(&t.transform.rotation).map(f64::to_degrees);
+        let [x, y, z] = t.transform.translation_m;
+        format!(
+            "{} → {} at ({x:.4}, {y:.4}, {z:.4}) m, roll {roll:.3}°, pitch {pitch:.3}°, yaw {yaw:.3}°",
+            frame_name(&t.parent),
+            frame_name(&t.child)
+        )
+    };
+    Err(BagError::Frames {
+        path: path.to_path_buf(),
+        problem: format!(
+            "/tf_static places one frame twice, otherwise: {}, and {}: which mount held is not known, so the DVL is not placed: write the bag again with the one that held",
+            placed(first),
+            placed(again)
+        ),
+    })
+}
+
 /// The frames of a reading: the body's (as `topics` names it, and the reference's
 /// twist is in), the world's, and the DVL's frame placed in the body's.
 fn bag_frames(
@@ -466,6 +564,7 @@ fn bag_frames(
         path: path.to_path_buf(),
         problem,
     };
+    one_mount(path, transforms)?;
     let body = frame_name(&topics.frame).to_string();
     let child = reference.child_frame_id.clone().unwrap_or_default();
     if !child.is_empty() && child != body {

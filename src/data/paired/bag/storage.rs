@@ -416,7 +416,16 @@ fn stream_sqlite(
                 ),
             });
         };
-        let time_ns = time_ns.max(0) as u64;
+        let Ok(time_ns) = u64::try_from(time_ns) else {
+            return Err(BagError::Message {
+                path: path.to_path_buf(),
+                topic: survey.topics[at].name.clone(),
+                message: survey.topics[at].count + 1,
+                problem: format!(
+                    "its receive stamp is {time_ns} ns, before 1970: a bag's stamps count from the epoch, and this one is not read as 0 or any other"
+                ),
+            });
+        };
         survey.count(at, time_ns);
         if readable {
             let data = row

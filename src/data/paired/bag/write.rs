@@ -272,7 +272,7 @@ pub fn tf_message(stamp_ns: i64, transforms: &[(&str, &str, Vec3, [f64; 4])]) ->
 
 /// How [`write_recording`] lays a recording out as a ROS 2 vehicle would: the DVL's
 /// topic and frame, that frame's roll and yaw from the body frame (written to
-/// `/tf_static`, the DVL's velocity in its own axes), and every how-many-th ping is
+/// `/tf_static` with its translation, the DVL's velocity in its own axes), and every how-many-th ping is
 /// sent as lost bottom lock (water track, two good beams, a velocity of nothing).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RosLayout<'a> {
@@ -280,6 +280,8 @@ pub struct RosLayout<'a> {
     pub dvl_frame: &'a str,
     pub mount_roll_deg: f64,
     pub mount_yaw_deg: f64,
+    /// Where `/tf_static` places the DVL's frame in the body's, m.
+    pub mount_translation_m: Vec3,
     pub lost_lock_every: Option<usize>,
     /// Whole seconds added to every stamp (a bag's stamps are times since the epoch).
     pub epoch_s: i64,
@@ -296,6 +298,7 @@ impl Default for RosLayout<'_> {
             dvl_frame: "dvl_link",
             mount_roll_deg: 180.0,
             mount_yaw_deg: 0.0,
+            mount_translation_m: [0.0; 3],
             lost_lock_every: None,
             epoch_s: 1_700_000_000,
             other_bytes_per_s: 0,
@@ -335,7 +338,7 @@ pub fn write_recording(
         &[(
             "base_link",
             layout.dvl_frame,
-            [0.0; 3],
+            layout.mount_translation_m,
             matrix_quaternion(&mount),
         )],
     );
