@@ -113,20 +113,22 @@ pub fn machine_memory() -> u64 {
 const THREAD_ADDRESS_SPACE: u64 = (2 << 20) + 4096 + (32 << 20);
 
 /// The address space the process's own growth takes beyond what its data need, bytes:
-/// a new allocator segment (32 MiB) where the last is full.
-const GROWTH_ADDRESS_SPACE: u64 = 32 << 20;
+/// a new allocator segment where the last is full, mapped aligned (32 MiB, from a
+/// mapping of twice that where the system's first does not come back aligned).
+const GROWTH_ADDRESS_SPACE: u64 = 2 * (32 << 20);
 
 /// The threads a command may start beyond those it holds when it states its cost: the
 /// pool of the matrix products (matrixmultiply's, started at their first large one),
 /// which by its own rule takes none on one core, one on two or three, and three on
-/// four or more (`MATMUL_NUM_THREADS` where set, the cores otherwise; the cores this
-/// process may use count at least the physical ones it reads, so the count errs high).
+/// four or more (`MATMUL_NUM_THREADS` where set and not empty, the machine's physical
+/// cores otherwise, whatever this process's CPU quota or affinity; the larger of those
+/// and the cores this process may use is counted, so the count never errs low).
 fn threads_to_start() -> u64 {
-    let asked = std::env::var("MATMUL_NUM_THREADS")
-        .ok()
-        .and_then(|v| v.parse::<usize>().ok());
-    let cores =
-        asked.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let asked = (std::env::var("MATMUL_NUM_THREADS").ok())
+        .filter(|v| !v.is_empty())
+        .map(|v| v.parse::<usize>().unwrap_or(1));
+    let usable = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let cores = asked.unwrap_or_else(|| num_cpus::get_physical().max(usable));
     match cores {
         0 | 1 => 0,
         2 | 3 => 1,

@@ -14,7 +14,7 @@ use crate::installation::estimate::bound::{Noise, TermBound, Why, bound};
 use crate::installation::estimate::clock::{MAX_SEARCH_S, fit_searched};
 use crate::installation::estimate::filter::{FilterSettings, run_filter_from};
 use crate::installation::estimate::fit::{
-    Fit, FitError, TIME_OFFSET_MARGIN_S, beyond_any_installation,
+    Fit, FitError, TIME_OFFSET_MARGIN_S, beyond_any_installation, mask_about,
 };
 use crate::installation::estimate::missing::{Asked, asked_for};
 use crate::installation::estimate::settling::{SettlingPoint, settling_curve, settling_time};
@@ -101,13 +101,13 @@ pub enum CalibrateError {
     #[error("--depth-noise-m: {} gives no depth, so there is no depth noise to weigh: leave it out, or name the fixes' depth column in [fix_columns]", fixes.display())]
     NoDepths { fixes: PathBuf },
     #[error(
-        "{}: {outliers} of the {fitted} fixes fitted lie beyond the robust fit's reach of the dead reckoning: more than a quarter are outliers, so the fixes do not show the installation (fixes of another vehicle or dive, or a clock beyond the fit's scan)",
+        "{}: {outliers} of the {within} fixes within the DVL's pieces lie beyond the robust fit's reach of the dead reckoning: more than a quarter are outliers, so the fixes do not show the installation (fixes of another vehicle or dive, or a clock beyond the fit's scan)",
         fixes.display()
     )]
     FixOutliers {
         fixes: PathBuf,
         outliers: usize,
-        fitted: usize,
+        within: usize,
     },
     #[error(
         "--fix-noise-m {}: the fixes' residuals are {} m RMS per horizontal axis, {} times the noise given, beyond a factor of {NOISE_RATIO_LIMIT} either way: the fit weighs the fixes and reads its intervals by it, so give the noise of these fixes (a USBL's metres, a GNSS's decimetres)",
@@ -284,9 +284,13 @@ impl Read {
         )
     }
 
-    /// This read with the samples scored whose residual under `fitted`'s terms is an
-    /// outlier by its robust loss set aside.
+    /// This read scored about `fitted`'s clock (the samples whose t + the τ its mask
+    /// lies about is inside the reference: with a clock searched seconds away, not
+    /// those at τ = 0), the samples whose residual under `fitted`'s terms is an outlier
+    /// by its robust loss set aside.
     fn without_outliers(mut self, fitted: &Fit) -> Read {
+        let centre_s = fitted.mask_centre_s.unwrap_or(0.0);
+        self.scored = mask_about(&self.recording.time_s, &self.reference, centre_s);
         let Some(robust) = fitted.robust.as_ref().map(|r| r.loss) else {
             return self;
         };
@@ -312,7 +316,7 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     refused(args.request())?;
     let outputs = outputs(args);
     let inputs = [Some(args.dvl), args.reference, args.columns];
-    clear_of_inputs(&inputs, &outputs.all(), args.save)?;
+    clear_of_inputs(&inputs, &outputs.all(), (args.save, is_bag(args.dvl)))?;
     args.cost()?.state()?;
     let read = read(args)?;
     let recording_sha256 = read.dvl_sha256.clone();
@@ -390,16 +394,15 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
 
 /// Refuses a calibration whose `corrected` files or `save` would write over one of its
 /// `inputs` (every file a bag is read from), or whose `save` is one of its `corrected`
-/// files; where an input is a bag, the URDF and ROS text `--save` writes beside its
-/// file count as `save` too.
+/// files; where the calibration `writes_ros` (one recording, a bag), the URDF and ROS
+/// text `--save` writes beside its file count as `save` too.
 pub(crate) fn clear_of_inputs(
     inputs: &[Option<&Path>],
     corrected: &[&Path],
-    save: Option<&Path>,
+    (save, writes_ros): (Option<&Path>, bool),
 ) -> Result<(), CalibrateError> {
-    let from_a_bag = inputs.iter().flatten().any(|input| is_bag(input));
     let beside: Vec<PathBuf> = match save {
-        Some(save) if from_a_bag => RosInstallation::paths(save).to_vec(),
+        Some(save) if writes_ros => RosInstallation::paths(save).to_vec(),
         _ => Vec::new(),
     };
     let saved: Vec<&Path> = save

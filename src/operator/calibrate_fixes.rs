@@ -57,7 +57,7 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
         Some(args.fixes),
         args.columns,
     ];
-    clear_of_inputs(&inputs, &[], args.save)?;
+    clear_of_inputs(&inputs, &[], (args.save, false))?;
     let columns = columns(args.columns, args.reading).map_err(CalibrateError::Columns)?;
     let fix_columns = fix_columns(args.columns).map_err(CalibrateError::Columns)?;
     let read = read_beside_attitude(args.dvl, args.attitude, &columns)?;
@@ -175,11 +175,12 @@ fn same_motion(
 /// against the dead reckoning (the dead reckoning's own walk adds to the residuals,
 /// well within that factor).
 fn believable(args: &FixArgs, fit: &FixFit) -> Result<(), CalibrateError> {
-    if 4 * fit.outliers.len() > fit.fitted {
+    let outliers = fit.outliers.len();
+    if 4 * outliers > fit.fitted + outliers {
         return Err(CalibrateError::FixOutliers {
             fixes: args.fixes.to_path_buf(),
-            outliers: fit.outliers.len(),
-            fitted: fit.fitted,
+            outliers,
+            within: fit.fitted + outliers,
         });
     }
     let rms = fit.residual_rms_m;

@@ -116,7 +116,7 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
         .chain([args.columns])
         .collect();
     let corrected: Vec<&Path> = outputs.iter().flat_map(|o| o.all()).collect();
-    clear_of_inputs(&inputs, &corrected, args.save)?;
+    clear_of_inputs(&inputs, &corrected, (args.save, false))?;
     args.cost()?.state()?;
     let sources = sources(args)?;
     let (loaded, shas) = load(args, &sources, &outputs)?;

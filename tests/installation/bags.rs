@@ -836,11 +836,28 @@ fn a_bags_numbers_and_frames_are_checked_where_read() {
         rusqlite::params![tf, stamp + 1, turned],
     );
     let error = refused_in(d, &["calibrate", "dive.db3", TERMS]);
-    assert!(error.contains("/tf_static places one frame twice, otherwise: base_link → dvl_link at (0.0000, 0.0000, 0.0000) m, roll 180.000°"), "{error}");
+    assert!(error.contains("/tf_static places a frame on the DVL's mount twice, otherwise: base_link → dvl_link at (0.0000, 0.0000, 0.0000) m, roll 180.000°"), "{error}");
     assert!(
         error.contains("base_link → dvl_link at (0.2000, 0.0000, 0.0000) m, roll 0.000°"),
         "{error}"
     );
+
+    // Two that disagree off the DVL's mount (a camera's) change nothing read.
+    let bag = sqlite_bag(d, RosLayout::default());
+    let (_, stamp, tf) = nth_message(&bag, "/tf_static", 1);
+    let camera = tf_message(
+        stamp,
+        &[
+            ("base_link", "camera", [0.1, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]),
+            ("base_link", "camera", [0.3, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]),
+        ],
+    );
+    edit(
+        &bag,
+        "INSERT INTO messages (topic_id, timestamp, data) VALUES (?1, ?2, ?3)",
+        rusqlite::params![tf, stamp + 1, camera],
+    );
+    calibrate(d, &["dive.db3", TERMS, "--out", "camera"]);
 
     let bag = sqlite_bag(d, RosLayout::default());
     let error = refused_in(

@@ -945,7 +945,7 @@ fn under_an_address_space_limit_calibrate_refuses_up_front_or_finishes() {
 /// Surveys whose clock lies beyond `correct`'s search (±30 s about the installation's
 /// 0.6 s), their steady legs and repeated turns a trap for a search: none is corrected
 /// (exit 0) with a clock it did not find; each is refused, exit 1, saying the clock may
-/// lie beyond the search, or that its window shows no clock.
+/// lie beyond the search; so is a remounted DVL whose search's best is a side lobe.
 #[test]
 fn a_surveys_clock_beyond_the_search_is_said_beyond_it() {
     use common::installed::{Shape, write_shaped};
@@ -996,6 +996,40 @@ fn a_surveys_clock_beyond_the_search_is_said_beyond_it() {
             assert!(!d.join(&out).exists());
         }
     }
+    // A remounted DVL (its lever arm 1.9 m forward) on a turning dive 9.1 s late: the
+    // search's best, 7.4 s, lies far from the installation's clock, the window does not
+    // show it, and the dive fits over three times worse than its calibration: a side
+    // lobe, refused rather than written with that clock.
+    let remounted = Installed {
+        lever_arm_m: [0.0, 0.05, 0.4],
+        ..clocked(9.1)
+    };
+    let folder = d.join("remounted");
+    write_shaped(&folder, &[Shape::Turning], remounted, 23, (800, 1.0), 1);
+    let at = folder.join("Trajectory1");
+    let (dvl, reference) = (
+        path(&at.join("DVL_trajectory1.csv")),
+        path(&at.join("GT_trajectory1.csv")),
+    );
+    let args = [
+        "correct",
+        &dvl,
+        "--reference",
+        &reference,
+        "--installation",
+        "installation.toml",
+        "--out",
+        "remounted-out",
+    ];
+    let output = dcnet(d, &args);
+    let message = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{message}");
+    assert!(
+        message.contains("is not shown by the window, and there the DVL fits the installation to")
+            && message.contains("the clock may lie beyond the search"),
+        "{message}"
+    );
+    assert!(!d.join("remounted-out").exists());
 }
 
 /// A-KIT's T1 with its DVL's stamps moved back 12.35 s, as a DVL whose clock was never

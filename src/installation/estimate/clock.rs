@@ -318,7 +318,8 @@ pub fn search_offset(
 /// best of a search over ±`search_s` about zero ([`search_offset`], the installation
 /// held at none: a first calibration knows no other) where a search is asked: two logs
 /// whose clocks were never set alike are seconds or minutes apart, beyond the fit's own
-/// scan of ±[`TIME_OFFSET_MARGIN_S`]. Without one, or without τ among `terms`, the
+/// scan of ±[`TIME_OFFSET_MARGIN_S`]. A best at an end of the search is refused (the
+/// search did not bracket the clock). Without a search, or without τ among `terms`, the
 /// plain fit.
 pub fn fit_searched(
     (time_s, dvl_m_s): (&[f64], &[Vec3]),
@@ -335,6 +336,12 @@ pub fn fit_searched(
                 search_s,
             );
             let (tau, _) = searched.ok_or(FitError::NoClockInSearch { search_s })?;
+            if inside_the_search(tau, 0.0, search_s).is_err() {
+                return Err(FitError::ClockAtSearchEdge {
+                    found_s: tau,
+                    search_s,
+                });
+            }
             Installation {
                 time_offset_s: tau,
                 ..Installation::default()

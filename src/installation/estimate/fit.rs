@@ -136,6 +136,11 @@ pub enum FitError {
         "no time offset within ±{search_s} s puts half the DVL's samples inside the reference: the recordings do not overlap that near"
     )]
     NoClockInSearch { search_s: f64 },
+    #[error(
+        "the search's best time offset, {found_s:.2} s, lies at the edge of the ±{} s searched: the clock may lie beyond it, and a wider --search-s may find it",
+        crate::Shown(*search_s)
+    )]
+    ClockAtSearchEdge { found_s: f64, search_s: f64 },
     #[error("the fit did not converge: {termination}")]
     NotConverged { termination: String },
     #[error(
@@ -166,7 +171,9 @@ impl FitError {
     /// cannot tell apart; none where the recording itself is at fault.
     pub fn advice(&self) -> &'static str {
         match self {
-            FitError::Unphysical { .. } => "",
+            FitError::Unphysical { .. }
+            | FitError::ClockAtSearchEdge { .. }
+            | FitError::NoClockInSearch { .. } => "",
             _ => {
                 "; a window too short for its terms, terms it cannot tell apart (a scale and a bias at constant speed, say), or a time offset beyond the ±3 s the fit scans fail this way: give a longer --window-s or fewer --terms, or where the clocks may be further apart let --search-s look for them (--search-s 60 looks ±60 s)"
             }

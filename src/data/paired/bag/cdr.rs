@@ -353,7 +353,7 @@ mod tests {
         let error = looped.add("a/Loop", "a/Loop inner\n").unwrap_err();
         assert_eq!(
             error.to_string(),
-            "the definition of a/msg/Loop, line 1: field inner is a a/msg/Loop itself: a type that holds itself has no end, and no ROS message is one"
+            "the definition of a/msg/Loop, line 1: field inner is of type a/msg/Loop itself: a type that holds itself has no end, and no ROS message is one"
         );
         let mut again = Definitions::default();
         again

@@ -142,15 +142,17 @@ impl Definitions {
             lines.insert((current.clone(), name.to_string()), number + 1);
         }
         self.types.insert(current, fields);
-        match self.holding_itself(&full_name(type_name), &mut Vec::new()) {
+        match self.holding_itself(&full_name(type_name), &mut Vec::new(), &mut Vec::new()) {
             Some((holder, field, held)) => Err(DefinitionError {
                 line: lines
                     .get(&(holder.clone(), field.clone()))
                     .copied()
                     .unwrap_or(0),
                 problem: match held == holder {
-                    true => format!("field {field} is a {held} itself"),
-                    false => format!("field {field} is a {held}, which holds {holder} in turn"),
+                    true => format!("field {field} is of type {held} itself"),
+                    false => {
+                        format!("field {field} is of type {held}, which holds {holder} in turn")
+                    }
                 } + ": a type that holds itself has no end, and no ROS message is one",
                 type_name: holder,
             }),
@@ -160,10 +162,12 @@ impl Definitions {
 
     /// The first type on the way from `type_name` that holds a type it lies within
     /// (`within`, the types on the way): that type, its field and the type it holds.
+    /// Each type is walked once (`done`, those whose every way was walked).
     fn holding_itself(
         &self,
         type_name: &str,
         within: &mut Vec<String>,
+        done: &mut Vec<String>,
     ) -> Option<(String, String, String)> {
         within.push(type_name.to_string());
         for field in self.fields(type_name).into_iter().flatten() {
@@ -174,11 +178,15 @@ impl Definitions {
             if within.contains(&inner) {
                 return Some((type_name.to_string(), field.name.clone(), inner));
             }
-            if let Some(found) = self.holding_itself(&inner, within) {
+            if done.contains(&inner) {
+                continue;
+            }
+            if let Some(found) = self.holding_itself(&inner, within, done) {
                 return Some(found);
             }
         }
         within.pop();
+        done.push(type_name.to_string());
         None
     }
 

@@ -187,51 +187,74 @@ pub fn frame_name(name: &str) -> &str {
     name.trim_start_matches('/')
 }
 
-/// The first two of `transforms` that join the same two frames (either way) but place
-/// the child otherwise: by more than a micrometre, or a turn of more than a
-/// microradian. A `/tf_static` published again with other numbers leaves the mount
-/// unknown.
-pub fn disagreeing(transforms: &[StaticTransform]) -> Option<(&StaticTransform, &StaticTransform)> {
+/// The pairs of `transforms` (by their places) that join the same two frames (either
+/// way) but place the child otherwise: by more than a micrometre, or a turn of more
+/// than a microradian. A `/tf_static` published again with other numbers.
+pub fn disagreeing(transforms: &[StaticTransform]) -> Vec<(usize, usize)> {
     let ends = |t: &StaticTransform| {
         (
             frame_name(&t.parent).to_string(),
             frame_name(&t.child).to_string(),
         )
     };
+    let mut pairs = Vec::new();
     for (k, first) in transforms.iter().enumerate() {
-        for again in &transforms[k + 1..] {
+        for (j, again) in transforms.iter().enumerate().skip(k + 1) {
             let (parent, child) = ends(first);
             let seen = match ends(again) {
                 same if same == (parent.clone(), child.clone()) => again.transform,
                 swapped if swapped == (child, parent) => again.transform.inverse(),
                 _ => continue,
             };
-            let moved = (0..3)
-                .any(|i| (seen.translation_m[i] - first.transform.translation_m[i]).abs() > 1e-6);
-            let turned = (seen.rotation.iter().flatten())
-                .zip(first.transform.rotation.iter().flatten())
-                .any(|(a, b)| (a - b).abs() > 1e-6);
-            if moved || turned {
-                return Some((first, again));
+            if !same_transform(&seen, &first.transform) {
+                pairs.push((k, j));
             }
         }
     }
-    None
+    pairs
+}
+
+/// Whether `a` and `b` place a frame alike: within a micrometre, and a turn within a
+/// microradian.
+pub fn same_transform(a: &Transform, b: &Transform) -> bool {
+    let moved = (0..3).any(|i| (a.translation_m[i] - b.translation_m[i]).abs() > 1e-6);
+    let turned = (a.rotation.iter().flatten())
+        .zip(b.rotation.iter().flatten())
+        .any(|(x, y)| (x - y).abs() > 1e-6);
+    !(moved || turned)
 }
 
 /// The transform from `from` to `to` through the chain of `transforms` that joins
 /// them (either way along each), where one does.
 pub fn chain(transforms: &[StaticTransform], from: &str, to: &str) -> Option<Transform> {
+    reach(transforms, from, to).map(|(transform, _)| transform)
+}
+
+/// [`chain`]'s transform, and the frames it passes through from `from` to `to`, both
+/// included.
+pub fn reach(
+    transforms: &[StaticTransform],
+    from: &str,
+    to: &str,
+) -> Option<(Transform, Vec<String>)> {
     let identity = Transform {
         rotation: IDENTITY,
         translation_m: [0.0; 3],
     };
-    let mut reached: Vec<(String, Transform)> = vec![(from.to_string(), identity)];
+    // Each frame reached, the transform to it, and the frame it was reached from.
+    let mut reached: Vec<(String, Transform, usize)> = vec![(from.to_string(), identity, 0)];
     let mut at = 0;
     while at < reached.len() {
-        let (frame, so_far) = reached[at].clone();
+        let (frame, so_far, _) = reached[at].clone();
         if frame == to {
-            return Some(so_far);
+            let mut path = vec![frame];
+            let mut back = at;
+            while back != 0 {
+                back = reached[back].2;
+                path.push(reached[back].0.clone());
+            }
+            path.reverse();
+            return Some((so_far, path));
         }
         for edge in transforms {
             let (next, step) = if frame_name(&edge.parent) == frame {
@@ -241,8 +264,8 @@ pub fn chain(transforms: &[StaticTransform], from: &str, to: &str) -> Option<Tra
             } else {
                 continue;
             };
-            if !reached.iter().any(|(f, _)| f == next) {
-                reached.push((next.to_string(), so_far.then(&step)));
+            if !reached.iter().any(|(f, _, _)| f == next) {
+                reached.push((next.to_string(), so_far.then(&step), at));
             }
         }
         at += 1;

@@ -196,7 +196,9 @@ impl Samples {
         }
         self.stamp_ns.push(match stamps {
             Stamps::Header => sec as i64 * 1_000_000_000 + nanosec as i64,
-            Stamps::Receive => receive_ns as i64,
+            Stamps::Receive => i64::try_from(receive_ns).map_err(|_| {
+                format!("its receive stamp {receive_ns} ns lies beyond the year 2262, which no clock of a dive reads")
+            })?,
         });
         self.message.push(message);
         let frame = |path: &[usize]| value.at(path).and_then(Value::text).map(frame_name);
@@ -526,10 +528,28 @@ pub fn topic_lines(survey: &Survey) -> String {
         .join("\n")
 }
 
-/// Refuses `transforms` where two of `/tf_static`'s join the same frames otherwise:
-/// which mount held is not known. Both are named, with where they place the child.
-fn one_mount(path: &Path, transforms: &[StaticTransform]) -> Result<(), BagError> {
-    let Some((first, again)) = frames::disagreeing(transforms) else {
+/// Refuses `transforms` where two of `/tf_static`'s join the same two frames otherwise
+/// and those frames lie on the DVL's mount, the chain from `body` to `dvl_frame`: which
+/// mount held is not known. Both are named, with where they place the child. Two that
+/// disagree off the chain (a camera's, say) change nothing read.
+fn one_mount(
+    path: &Path,
+    transforms: &[StaticTransform],
+    (body, dvl_frame): (&str, &str),
+) -> Result<(), BagError> {
+    let Some((_, on_the_mount)) = frames::reach(transforms, body, dvl_frame) else {
+        return Ok(());
+    };
+    let matters = |&(k, _): &(usize, usize)| {
+        let t: &StaticTransform = &transforms[k];
+        [&t.parent, &t.child]
+            .iter()
+            .all(|f| on_the_mount.iter().any(|m| m == frame_name(f)))
+    };
+    let Some(&(k, j)) = frames::disagreeing(transforms)
+        .iter()
+        .find(|pair| matters(pair))
+    else {
         return Ok(());
     };
     let placed = |t: &StaticTransform| {
@@ -544,9 +564,9 @@ fn one_mount(path: &Path, transforms: &[StaticTransform]) -> Result<(), BagError
     Err(BagError::Frames {
         path: path.to_path_buf(),
         problem: format!(
-            "/tf_static places one frame twice, otherwise: {}, and {}: which mount held is not known, so the DVL is not placed: write the bag again with the one that held",
-            placed(first),
-            placed(again)
+            "/tf_static places a frame on the DVL's mount twice, otherwise: {}, and {}: which mount held is not known, so the DVL is not placed: write the bag again with the one that held",
+            placed(&transforms[k]),
+            placed(&transforms[j])
         ),
     })
 }
@@ -564,7 +584,6 @@ fn bag_frames(
         path: path.to_path_buf(),
         problem,
     };
-    one_mount(path, transforms)?;
     let body = frame_name(&topics.frame).to_string();
     let child = reference.child_frame_id.clone().unwrap_or_default();
     if !child.is_empty() && child != body {
@@ -588,6 +607,7 @@ fn bag_frames(
             false,
         )
     } else {
+        one_mount(path, transforms, (&body, &dvl_frame))?;
         let mount = frames::chain(transforms, &body, &dvl_frame).ok_or_else(|| {
             let known: Vec<String> = (transforms.iter())
                 .map(|t| format!("{} → {}", frame_name(&t.parent), frame_name(&t.child)))
