@@ -12,7 +12,7 @@
 //! with no reference velocity, and [`Fixes`].
 
 use crate::data::csv::{Column, Quantity, parse_columns, read_bytes};
-use crate::data::local_plane::north_east_m;
+use crate::data::local_plane::{north_east_m, off_the_globe};
 use crate::data::paired::{PairedColumns, PairedError, ReadRecording, SourceFile};
 use crate::files::sha256_hex;
 use std::path::{Path, PathBuf};
@@ -143,14 +143,14 @@ pub fn read_fixes(path: &Path, columns: &FixColumns) -> Result<(Fixes, SourceFil
         } else {
             1.0
         };
-        let bound = std::f64::consts::FRAC_PI_2;
-        if let Some(row) = position.iter().position(|p| (p[0] * to_rad).abs() > bound) {
-            return Err(PairedError::LatitudeOutOfRange {
+        if let Some((row, axis)) = off_the_globe(&position, columns.angles_in_degrees) {
+            return Err(PairedError::OffTheGlobe {
                 path: path.into(),
                 line: rows.lines[row],
-                column: names[0].clone(),
-                value: position[row][0],
+                column: names[axis].clone(),
+                value: position[row][axis],
                 degrees: columns.angles_in_degrees,
+                longitude: axis == 1,
             }
             .into());
         }

@@ -3,13 +3,33 @@
 //! prime-vertical radii at its latitude. Over the few kilometres of a dive the plane's
 //! error is centimetres (it grows with the square of the distance over the Earth's
 //! radius), far below a position fix's noise.
-//! In: latitudes and longitudes, radians. Out: north and east, metres.
+//! In: latitudes and longitudes, radians. Out: north and east, metres; or the first
+//! point off the globe.
 
 /// The WGS-84 ellipsoid's semi-major axis, m.
 const SEMI_MAJOR_AXIS_M: f64 = 6_378_137.0;
 
 /// The WGS-84 ellipsoid's first eccentricity squared.
 const ECCENTRICITY_SQUARED: f64 = 6.694_379_990_14e-3;
+
+/// The first of `latitude_longitude` (in degrees where `degrees`, radians otherwise)
+/// that lies off the globe, and which of its two: a latitude beyond ±90°, or a
+/// longitude beyond −180° to 360° (either convention, ±180° or 0° to 360°).
+pub fn off_the_globe(latitude_longitude: &[[f64; 2]], degrees: bool) -> Option<(usize, usize)> {
+    let to_deg = if degrees { 1.0 } else { 1f64.to_degrees() };
+    latitude_longitude
+        .iter()
+        .enumerate()
+        .find_map(|(row, &[latitude, longitude])| {
+            if !((latitude * to_deg).abs() <= 90.0) {
+                Some((row, 0))
+            } else if !((-180.0..=360.0).contains(&(longitude * to_deg))) {
+                Some((row, 1))
+            } else {
+                None
+            }
+        })
+}
 
 /// North and east of `origin` (latitude, longitude in radians) of each point of
 /// `latitude_longitude_rad`, metres, on the plane tangent at `origin`.
@@ -44,5 +64,22 @@ mod tests {
         assert!((east - 1314.11).abs() < 0.01, "{east}");
         let [_, east] = north_east_m([0.0, 0.0], &[[0.0, minute]])[0];
         assert!((east - 1855.32).abs() < 0.01, "{east}");
+    }
+
+    /// A latitude past a pole, a longitude past either convention, and a value that is
+    /// not a number are off the globe, in degrees and in radians; the edges are not.
+    #[test]
+    fn a_point_off_the_globe_is_found_with_its_axis() {
+        let on = [[90.0, -180.0], [-90.0, 360.0], [32.8, 34.9]];
+        assert_eq!(off_the_globe(&on, true), None);
+        let radians: Vec<[f64; 2]> = on.iter().map(|p| p.map(f64::to_radians)).collect();
+        assert_eq!(off_the_globe(&radians, false), None);
+        assert_eq!(
+            off_the_globe(&[[32.8, 34.9], [32.8, 500.0]], true),
+            Some((1, 1))
+        );
+        assert_eq!(off_the_globe(&[[90.5, 0.0]], true), Some((0, 0)));
+        assert_eq!(off_the_globe(&[[0.0, -3.2]], false), Some((0, 1)));
+        assert_eq!(off_the_globe(&[[f64::NAN, 0.0]], true), Some((0, 0)));
     }
 }

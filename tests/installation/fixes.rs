@@ -358,6 +358,31 @@ fn calibrate_with_fixes_finds_the_installation_and_refuses_bad_input() {
             .contains("latitude and longitude in radians, read as degrees, travel 57.3 times less"),
         "{message}"
     );
+    // One fix's longitude of 500°: refused at its line, not its good neighbours
+    // thrown out.
+    std::fs::write(
+        d.join("geo.toml"),
+        "[fix_columns]\ntime = \"t\"\nlatitude_longitude = [\"lat\", \"lon\"]\nangles_in_degrees = true\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("geo.csv"),
+        "t,lat,lon\n0,32.8,34.9\n5,32.8,500\n10,32.8,34.9\n",
+    )
+    .unwrap();
+    let mut geo_args = args(&["--fix-noise-m", "0.5"]);
+    geo_args[3] = "geo.csv".into();
+    geo_args[7] = "geo.toml".into();
+    let refs: Vec<&str> = geo_args.iter().map(String::as_str).collect();
+    let output = common::dcnet(d, &refs);
+    let message = common::stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{message}");
+    assert!(
+        message.contains(
+            "geo.csv:3: lon: a longitude of 500 deg, off the globe (beyond -180 to 360 deg)"
+        ),
+        "{message}"
+    );
     // Two fixes in five moved 300 m: more than a quarter are outliers.
     let jumped: String = std::fs::read_to_string(d.join("fixes.csv"))
         .unwrap()

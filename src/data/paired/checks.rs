@@ -15,6 +15,7 @@ use super::{
     REFERENCE_GAP_INTERVALS, default_gap_limit_s, sample_interval,
 };
 use crate::Vec3;
+use crate::data::local_plane::off_the_globe;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
@@ -169,7 +170,7 @@ pub fn check(samples: Unchecked, at: &Locator) -> Result<PairedRecording, Paired
         &at.reference_lines,
     )?;
     check_attitude(&samples, at)?;
-    check_latitude(&samples, at)?;
+    check_on_the_globe(&samples, at)?;
     check_reference_motion(&samples, at)?;
     for (path, samples) in [
         (&at.dvl, samples.dvl_time_s.len()),
@@ -251,23 +252,20 @@ fn check_attitude(samples: &Unchecked, at: &Locator) -> Result<(), PairedError> 
     Ok(())
 }
 
-/// A latitude within ±90° (±π/2 in radians), where the position is geographic.
-fn check_latitude(samples: &Unchecked, at: &Locator) -> Result<(), PairedError> {
+/// A latitude within ±90° and a longitude within −180° to 360°, where the position is
+/// geographic ([`off_the_globe`]).
+fn check_on_the_globe(samples: &Unchecked, at: &Locator) -> Result<(), PairedError> {
     let (Some((values, true)), Some((names, _))) = (&samples.position, at.names.position()) else {
         return Ok(());
     };
-    let bound = if samples.angles_in_degrees {
-        90.0
-    } else {
-        PI / 2.0
-    };
-    match values.iter().position(|p| p[0].abs() > bound) {
-        Some(row) => Err(PairedError::LatitudeOutOfRange {
+    match off_the_globe(values, samples.angles_in_degrees) {
+        Some((row, axis)) => Err(PairedError::OffTheGlobe {
             path: at.reference.clone(),
             line: at.reference_lines[row],
-            column: names[0].clone(),
-            value: values[row][0],
+            column: names[axis].clone(),
+            value: values[row][axis],
             degrees: samples.angles_in_degrees,
+            longitude: axis == 1,
         }),
         None => Ok(()),
     }

@@ -41,18 +41,26 @@ pub enum PairedError {
         value: f64,
     },
     #[error(
-        "{}:{line}: {column}: a latitude of {} {}, beyond the pole: {}",
+        "{}:{line}: {column}: a {} of {} {}, {}: {}",
         path.display(),
+        if *.longitude { "longitude" } else { "latitude" },
         crate::Shown(*value),
         if *.degrees { "deg" } else { "rad" },
-        if *.degrees { "the latitude is the first of latitude_longitude" } else { "if the file's angles are in degrees, set angles_in_degrees = true" }
+        if *.longitude { "off the globe (beyond -180 to 360 deg)" } else { "beyond the pole" },
+        match (*.degrees, *.longitude) {
+            (true, false) => "the latitude is the first of latitude_longitude",
+            (true, true) => "a bad value; remove the row before calibrating",
+            (false, _) => "if the file's angles are in degrees, set angles_in_degrees = true",
+        }
     )]
-    LatitudeOutOfRange {
+    OffTheGlobe {
         path: PathBuf,
         line: u64,
         column: String,
         value: f64,
         degrees: bool,
+        /// Whether the value is the longitude (the latitude otherwise).
+        longitude: bool,
     },
     #[error(
         "{}:{line}: {column}: {} m/s is beyond {MAX_DVL_SPEED_M_S} m/s, faster than any vehicle a DVL rides: a bad value or a unit other than m/s; remove the row before calibrating",
