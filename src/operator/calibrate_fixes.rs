@@ -183,8 +183,8 @@ fn believable(args: &FixArgs, fit: &FixFit) -> Result<(), CalibrateError> {
             within: fit.fitted + outliers,
         });
     }
-    let rms = fit.residual_rms_m;
-    let read_m = ((rms[0].powi(2) + rms[1].powi(2)) / 2.0).sqrt();
+    // Per horizontal axis, as the noise is given.
+    let read_m = horizontal(fit.residual_rms_m) / std::f64::consts::SQRT_2;
     let ratio = read_m / args.fix_noise_m;
     match ratio < NOISE_RATIO_LIMIT && ratio > 1.0 / NOISE_RATIO_LIMIT {
         true => Ok(()),

@@ -731,6 +731,18 @@ fn edit(path: &Path, sql: &str, params: impl rusqlite::Params) {
         .unwrap();
 }
 
+/// Adds to the sqlite3 bag at `path` a second `/tf_static` message of `transforms`, just
+/// after its first.
+fn another_tf_static(path: &Path, transforms: &[(&str, &str, [f64; 3], [f64; 4])]) {
+    use dcnet_exp::data::paired::bag::write::tf_message;
+    let (_, stamp, tf) = nth_message(path, "/tf_static", 1);
+    edit(
+        path,
+        "INSERT INTO messages (topic_id, timestamp, data) VALUES (?1, ?2, ?3)",
+        rusqlite::params![tf, stamp + 1, tf_message(stamp, transforms)],
+    );
+}
+
 /// Every number read from a bag is checked where it is read, and named by its topic
 /// and message: a `/tf_static` translation of NaN (which reached the URDF), a zero
 /// quaternion in the reference, a receive stamp before 1970 (once read as 0), a DVL
@@ -739,7 +751,7 @@ fn edit(path: &Path, sql: &str, params: impl rusqlite::Params) {
 /// DVL that names no frame is read as the body's, and says so.
 #[test]
 fn a_bags_numbers_and_frames_are_checked_where_read() {
-    use dcnet_exp::data::paired::bag::write::{odometry_message, tf_message};
+    use dcnet_exp::data::paired::bag::write::odometry_message;
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let nan = RosLayout {
@@ -817,9 +829,8 @@ fn a_bags_numbers_and_frames_are_checked_where_read() {
     );
 
     let bag = sqlite_bag(d, RosLayout::default());
-    let (_, stamp, tf) = nth_message(&bag, "/tf_static", 1);
-    let turned = tf_message(
-        stamp,
+    another_tf_static(
+        &bag,
         &[
             ("base_link", "dvl_link", [0.0; 3], [1.0, 0.0, 0.0, 0.0]),
             (
@@ -830,11 +841,6 @@ fn a_bags_numbers_and_frames_are_checked_where_read() {
             ),
         ],
     );
-    edit(
-        &bag,
-        "INSERT INTO messages (topic_id, timestamp, data) VALUES (?1, ?2, ?3)",
-        rusqlite::params![tf, stamp + 1, turned],
-    );
     let error = refused_in(d, &["calibrate", "dive.db3", TERMS]);
     assert!(error.contains("/tf_static places a frame on the DVL's mount twice, otherwise: base_link → dvl_link at (0.0000, 0.0000, 0.0000) m, roll 180.000°"), "{error}");
     assert!(
@@ -844,18 +850,12 @@ fn a_bags_numbers_and_frames_are_checked_where_read() {
 
     // Two that disagree off the DVL's mount (a camera's) change nothing read.
     let bag = sqlite_bag(d, RosLayout::default());
-    let (_, stamp, tf) = nth_message(&bag, "/tf_static", 1);
-    let camera = tf_message(
-        stamp,
+    another_tf_static(
+        &bag,
         &[
             ("base_link", "camera", [0.1, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]),
             ("base_link", "camera", [0.3, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]),
         ],
-    );
-    edit(
-        &bag,
-        "INSERT INTO messages (topic_id, timestamp, data) VALUES (?1, ?2, ?3)",
-        rusqlite::params![tf, stamp + 1, camera],
     );
     calibrate(d, &["dive.db3", TERMS, "--out", "camera"]);
 

@@ -299,6 +299,14 @@ fn calibrate_with_fixes_finds_the_installation_and_refuses_bad_input() {
         "{found:?}"
     );
     assert!((found.scale[0] - truth.scale).abs() < 0.002, "{found:?}");
+    // As `run`, on other fixes and columns files.
+    let run_on = |fixes: &str, columns: &str, extra: &[&str]| {
+        let mut owned = args(extra);
+        owned[3] = fixes.to_string();
+        owned[7] = columns.to_string();
+        let refs: Vec<&str> = owned.iter().map(String::as_str).collect();
+        common::dcnet(d, &refs)
+    };
     let refused = |extra: &[&str], expected: &str| {
         let output = run(extra);
         let message = common::stderr(&output);
@@ -346,11 +354,7 @@ fn calibrate_with_fixes_finds_the_installation_and_refuses_bad_input() {
         "[fix_columns]\ntime = \"Time [s]\"\nlatitude_longitude = [\"Latitude [rad]\", \"Longitude [rad]\"]\nangles_in_degrees = true\n",
     )
     .unwrap();
-    let mut degrees_args = args(&["--fix-noise-m", "0.5"]);
-    degrees_args[3] = attitude.clone();
-    degrees_args[7] = "degrees.toml".into();
-    let refs: Vec<&str> = degrees_args.iter().map(String::as_str).collect();
-    let output = common::dcnet(d, &refs);
+    let output = run_on(&attitude, "degrees.toml", &["--fix-noise-m", "0.5"]);
     let message = common::stderr(&output);
     assert_eq!(output.status.code(), Some(1), "{message}");
     assert!(
@@ -370,11 +374,7 @@ fn calibrate_with_fixes_finds_the_installation_and_refuses_bad_input() {
         "t,lat,lon\n0,32.8,34.9\n5,32.8,500\n10,32.8,34.9\n",
     )
     .unwrap();
-    let mut geo_args = args(&["--fix-noise-m", "0.5"]);
-    geo_args[3] = "geo.csv".into();
-    geo_args[7] = "geo.toml".into();
-    let refs: Vec<&str> = geo_args.iter().map(String::as_str).collect();
-    let output = common::dcnet(d, &refs);
+    let output = run_on("geo.csv", "geo.toml", &["--fix-noise-m", "0.5"]);
     let message = common::stderr(&output);
     assert_eq!(output.status.code(), Some(1), "{message}");
     assert!(
@@ -398,10 +398,7 @@ fn calibrate_with_fixes_finds_the_installation_and_refuses_bad_input() {
         })
         .collect();
     std::fs::write(d.join("jumped.csv"), jumped).unwrap();
-    let mut jumped_args = args(&["--fix-noise-m", "0.5"]);
-    jumped_args[3] = "jumped.csv".into();
-    let refs: Vec<&str> = jumped_args.iter().map(String::as_str).collect();
-    let output = common::dcnet(d, &refs);
+    let output = run_on("jumped.csv", "columns.toml", &["--fix-noise-m", "0.5"]);
     let message = common::stderr(&output);
     assert_eq!(output.status.code(), Some(1), "{message}");
     assert!(

@@ -953,34 +953,33 @@ fn a_surveys_clock_beyond_the_search_is_said_beyond_it() {
     let d = dir.path();
     let path = |p: &Path| p.to_str().unwrap().to_string();
     save_first_dive(d);
+    // `correct` with the installation saved, of a dive of `shape` written to `folder`.
+    let correct_shaped = |(folder, shape, installed, seed): (&str, Shape, Installed, u64),
+                          out: &str| {
+        write_shaped(&d.join(folder), &[shape], installed, seed, (800, 1.0), 1);
+        let at = d.join(folder).join("Trajectory1");
+        let (dvl, reference) = (
+            path(&at.join("DVL_trajectory1.csv")),
+            path(&at.join("GT_trajectory1.csv")),
+        );
+        let args = [
+            "correct",
+            &dvl,
+            "--reference",
+            &reference,
+            "--installation",
+            "installation.toml",
+            "--out",
+            out,
+        ];
+        dcnet(d, &args)
+    };
     for (k, shape) in Shape::SURVEYS.into_iter().enumerate() {
         for time_offset_s in [37.3, 52.9, 71.6] {
-            let folder = d.join(format!("survey-{k}-{time_offset_s}"));
-            write_shaped(
-                &folder,
-                &[shape],
-                clocked(time_offset_s),
-                11 + k as u64,
-                (800, 1.0),
-                1,
-            );
-            let at = folder.join("Trajectory1");
-            let (dvl, reference) = (
-                path(&at.join("DVL_trajectory1.csv")),
-                path(&at.join("GT_trajectory1.csv")),
-            );
             let out = format!("out-{k}-{time_offset_s}");
-            let args = [
-                "correct",
-                &dvl,
-                "--reference",
-                &reference,
-                "--installation",
-                "installation.toml",
-                "--out",
-                &out,
-            ];
-            let output = dcnet(d, &args);
+            let folder = format!("survey-{k}-{time_offset_s}");
+            let installed = clocked(time_offset_s);
+            let output = correct_shaped((&folder, shape, installed, 11 + k as u64), &out);
             let message = stderr(&output);
             assert_eq!(
                 output.status.code(),
@@ -1004,24 +1003,10 @@ fn a_surveys_clock_beyond_the_search_is_said_beyond_it() {
         lever_arm_m: [0.0, 0.05, 0.4],
         ..clocked(9.1)
     };
-    let folder = d.join("remounted");
-    write_shaped(&folder, &[Shape::Turning], remounted, 23, (800, 1.0), 1);
-    let at = folder.join("Trajectory1");
-    let (dvl, reference) = (
-        path(&at.join("DVL_trajectory1.csv")),
-        path(&at.join("GT_trajectory1.csv")),
-    );
-    let args = [
-        "correct",
-        &dvl,
-        "--reference",
-        &reference,
-        "--installation",
-        "installation.toml",
-        "--out",
+    let output = correct_shaped(
+        ("remounted", Shape::Turning, remounted, 23),
         "remounted-out",
-    ];
-    let output = dcnet(d, &args);
+    );
     let message = stderr(&output);
     assert_eq!(output.status.code(), Some(1), "{message}");
     assert!(

@@ -187,6 +187,42 @@ pub fn frame_name(name: &str) -> &str {
     name.trim_start_matches('/')
 }
 
+/// The problem with `transforms` where two of `/tf_static`'s join the same two frames otherwise
+/// and those frames lie on the DVL's mount, the chain from `body` to `dvl_frame`: which
+/// mount held is not known. Both are named, with where they place the child. Two that
+/// disagree off the chain (a camera's, say) change nothing read.
+pub fn one_mount(
+    transforms: &[StaticTransform],
+    (body, dvl_frame): (&str, &str),
+) -> Result<(), String> {
+    let Some((_, on_the_mount)) = reach(transforms, body, dvl_frame) else {
+        return Ok(());
+    };
+    let matters = |&(k, _): &(usize, usize)| {
+        let t: &StaticTransform = &transforms[k];
+        [&t.parent, &t.child]
+            .iter()
+            .all(|f| on_the_mount.iter().any(|m| m == frame_name(f)))
+    };
+    let Some(&(k, j)) = disagreeing(transforms).iter().find(|pair| matters(pair)) else {
+        return Ok(());
+    };
+    let placed = |t: &StaticTransform| {
+        let [roll, pitch, yaw] = euler_zyx(&t.transform.rotation).map(f64::to_degrees);
+        let [x, y, z] = t.transform.translation_m;
+        format!(
+            "{} → {} at ({x:.4}, {y:.4}, {z:.4}) m, roll {roll:.3}°, pitch {pitch:.3}°, yaw {yaw:.3}°",
+            frame_name(&t.parent),
+            frame_name(&t.child)
+        )
+    };
+    Err(format!(
+        "/tf_static places a frame on the DVL's mount twice, otherwise: {}, and {}: which mount held is not known, so the DVL is not placed: write the bag again with the one that held",
+        placed(&transforms[k]),
+        placed(&transforms[j])
+    ))
+}
+
 /// The pairs of `transforms` (by their places) that join the same two frames (either
 /// way) but place the child otherwise: by more than a micrometre, or a turn of more
 /// than a microradian. A `/tf_static` published again with other numbers.

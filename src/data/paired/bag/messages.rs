@@ -11,6 +11,7 @@ use super::cdr::{Value, decode};
 use super::definitions::Definitions;
 use super::frames::{self, Axes, BagFrames, StaticTransform, Transform, frame_name};
 use super::storage::{Bag, Survey};
+use super::values::{finite, finite_transform, rotation_quaternion};
 use super::{BagError, BagTopics, Stamps};
 use crate::Vec3;
 use crate::data::paired::{Locator, PairedColumns, SourceFile, Unchecked};
@@ -252,45 +253,6 @@ impl Samples {
     }
 }
 
-/// Refuses `values` (what a message holds as `what`) where one is not a finite number.
-fn finite(what: &str, values: &[f64]) -> Result<(), String> {
-    match values.iter().all(|v| v.is_finite()) {
-        true => Ok(()),
-        false => Err(format!(
-            "{what} {values:?} is not a finite number on every axis"
-        )),
-    }
-}
-
-/// Refuses the quaternion `[x, y, z, w]` (what a message holds as `what`) where it is
-/// no rotation: a number not finite, or all four (nearly) zero, which no normalising
-/// turns into one.
-fn rotation_quaternion(what: &str, quaternion: [f64; 4]) -> Result<(), String> {
-    finite(&format!("{what} quaternion"), &quaternion)?;
-    let norm = quaternion.iter().map(|q| q * q).sum::<f64>().sqrt();
-    match norm > 1e-6 {
-        true => Ok(()),
-        false => Err(format!(
-            "{what} quaternion {quaternion:?} is zero, which is no rotation (a driver that publishes no attitude yet)"
-        )),
-    }
-}
-
-/// Refuses a `/tf_static` transform whose translation or rotation `quaternion` is not a
-/// number or no rotation: it would place the DVL nowhere, and reach the URDF and the
-/// static transform written.
-fn finite_transform(transform: &StaticTransform, quaternion: [f64; 4]) -> Result<(), String> {
-    let what = format!(
-        "the /tf_static transform from {} to {}",
-        transform.parent, transform.child
-    );
-    finite(
-        &format!("{what}: its translation (m)"),
-        &transform.transform.translation_m,
-    )?;
-    rotation_quaternion(&format!("{what}: its rotation"), quaternion)
-}
-
 fn list(value: &Value) -> Option<&[Value]> {
     match value {
         Value::List(items) => Some(items),
@@ -528,49 +490,6 @@ pub fn topic_lines(survey: &Survey) -> String {
         .join("\n")
 }
 
-/// Refuses `transforms` where two of `/tf_static`'s join the same two frames otherwise
-/// and those frames lie on the DVL's mount, the chain from `body` to `dvl_frame`: which
-/// mount held is not known. Both are named, with where they place the child. Two that
-/// disagree off the chain (a camera's, say) change nothing read.
-fn one_mount(
-    path: &Path,
-    transforms: &[StaticTransform],
-    (body, dvl_frame): (&str, &str),
-) -> Result<(), BagError> {
-    let Some((_, on_the_mount)) = frames::reach(transforms, body, dvl_frame) else {
-        return Ok(());
-    };
-    let matters = |&(k, _): &(usize, usize)| {
-        let t: &StaticTransform = &transforms[k];
-        [&t.parent, &t.child]
-            .iter()
-            .all(|f| on_the_mount.iter().any(|m| m == frame_name(f)))
-    };
-    let Some(&(k, j)) = frames::disagreeing(transforms)
-        .iter()
-        .find(|pair| matters(pair))
-    else {
-        return Ok(());
-    };
-    let placed = |t: &StaticTransform| {
-        let [roll, pitch, yaw] = frames::euler_zyx(&t.transform.rotation).map(f64::to_degrees);
-        let [x, y, z] = t.transform.translation_m;
-        format!(
-            "{} → {} at ({x:.4}, {y:.4}, {z:.4}) m, roll {roll:.3}°, pitch {pitch:.3}°, yaw {yaw:.3}°",
-            frame_name(&t.parent),
-            frame_name(&t.child)
-        )
-    };
-    Err(BagError::Frames {
-        path: path.to_path_buf(),
-        problem: format!(
-            "/tf_static places a frame on the DVL's mount twice, otherwise: {}, and {}: which mount held is not known, so the DVL is not placed: write the bag again with the one that held",
-            placed(&transforms[k]),
-            placed(&transforms[j])
-        ),
-    })
-}
-
 /// The frames of a reading: the body's (as `topics` names it, and the reference's
 /// twist is in), the world's, and the DVL's frame placed in the body's.
 fn bag_frames(
@@ -607,7 +526,7 @@ fn bag_frames(
             false,
         )
     } else {
-        one_mount(path, transforms, (&body, &dvl_frame))?;
+        frames::one_mount(transforms, (&body, &dvl_frame)).map_err(refused)?;
         let mount = frames::chain(transforms, &body, &dvl_frame).ok_or_else(|| {
             let known: Vec<String> = (transforms.iter())
                 .map(|t| format!("{} → {}", frame_name(&t.parent), frame_name(&t.child)))

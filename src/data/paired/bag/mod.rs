@@ -20,6 +20,7 @@ mod definitions;
 mod frames;
 mod messages;
 mod storage;
+mod values;
 pub mod write;
 
 pub use cdr::{Value, decode};
