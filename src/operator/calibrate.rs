@@ -96,7 +96,7 @@ pub enum CalibrateError {
     ReferenceNoise(f64),
     #[error("--window-s {}: give a positive number of seconds", crate::Shown(*.0))]
     Window(f64),
-    #[error("{flag} {}: give a positive number of metres: the fit weighs the fixes by it", crate::Shown(*value))]
+    #[error("{flag} {}: give a positive number of metres, under 10,000 km: the fit weighs the fixes by it", crate::Shown(*value))]
     FixNoise { flag: &'static str, value: f64 },
     #[error("--depth-noise-m: {} gives no depth, so there is no depth noise to weigh: leave it out, or name the fixes' depth column in [fix_columns]", fixes.display())]
     NoDepths { fixes: PathBuf },

@@ -169,20 +169,12 @@ fn same_motion(
     })
 }
 
-/// Refuses a fit the fixes contradict: over a quarter of them outliers (as a fit to a
-/// velocity reference refuses), or residuals [`NOISE_RATIO_LIMIT`] times the noise
+/// Refuses a fit the fixes contradict: residuals [`NOISE_RATIO_LIMIT`] times the noise
 /// given or more, or as many times less, by which noise the fit weighs the fixes
 /// against the dead reckoning (the dead reckoning's own walk adds to the residuals,
-/// well within that factor).
+/// well within that factor). Over a quarter of the fixes outliers the fit refuses
+/// itself.
 fn believable(args: &FixArgs, fit: &FixFit) -> Result<(), CalibrateError> {
-    let outliers = fit.outliers.len();
-    if 4 * outliers > fit.fitted + outliers {
-        return Err(CalibrateError::FixOutliers {
-            fixes: args.fixes.to_path_buf(),
-            outliers,
-            within: fit.fitted + outliers,
-        });
-    }
     // Per horizontal axis, as the noise is given.
     let read_m = horizontal(fit.residual_rms_m) / std::f64::consts::SQRT_2;
     let ratio = read_m / args.fix_noise_m;
@@ -224,7 +216,8 @@ fn refused(args: &FixArgs) -> Result<(), CalibrateError> {
             ALLOWED.join(", ")
         )));
     }
-    let positive = |v: f64| v > 0.0 && v.is_finite();
+    // Beyond the Earth's size, no fix's noise.
+    let positive = |v: f64| v > 0.0 && v < 1e7;
     if !positive(args.fix_noise_m) {
         return Err(CalibrateError::FixNoise {
             flag: "--fix-noise-m",
@@ -254,6 +247,14 @@ fn fix_error(
     args: &FixArgs,
     fault: crate::installation::estimate::fixes::FixFitError,
 ) -> CalibrateError {
+    use crate::installation::estimate::fixes::FixFitError;
+    if let FixFitError::Outliers { outliers, within } = fault {
+        return CalibrateError::FixOutliers {
+            fixes: args.fixes.to_path_buf(),
+            outliers,
+            within,
+        };
+    }
     CalibrateError::FixFit {
         fixes: args.fixes.to_path_buf(),
         terms: named(args.terms),

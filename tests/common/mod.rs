@@ -11,6 +11,7 @@
 
 #![allow(dead_code)]
 
+pub mod fix_dives;
 pub mod installed;
 
 use arrow_array::{Array, BooleanArray, Float64Array, Int64Array, RecordBatch, StringArray};

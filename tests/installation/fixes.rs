@@ -1,13 +1,15 @@
 //! A DVL calibrated against position fixes: the fit's 95 % intervals cover the truth on
-//! synthetic dives (white and correlated DVL noise, fixes with and without multipath
-//! outliers), a straight dive shows no lever arm and no clock and applies neither,
-//! `calibrate --fixes` refuses bad input by name, and on A-KIT the fixes' installation
-//! carried to other turning segments leaves less drift than none.
+//! synthetic dives with multipath outliers (and without, in `fix_coverage`), a straight
+//! dive shows no lever arm and no clock and applies neither, `calibrate --fixes` refuses
+//! bad input by name, and on A-KIT the fixes' installation carried to other turning
+//! segments leaves less drift than none.
 
 use crate::common::{self, installed};
 use crate::coverage::{NOISE_M_S, simulated, synthetic_segments};
 use dcnet_exp::data::fixes::{FixSimulation, Fixes, simulate_fixes};
-use dcnet_exp::installation::estimate::fixes::{FixFit, FixNoise, default_fix_terms, fit_fixes};
+use dcnet_exp::installation::estimate::fixes::{
+    FixFit, FixFitError, FixNoise, default_fix_terms, fit_fixes,
+};
 use dcnet_exp::installation::frames::Attitude;
 use dcnet_exp::installation::study::Recording;
 use dcnet_exp::installation::terms::Installation;
@@ -60,6 +62,17 @@ fn dive(
     fixes: &FixSimulation,
     seed: u64,
 ) -> (FixFit, Fixes) {
+    fitted_dive(segment, correlation_at_1_s, fixes, seed)
+        .unwrap_or_else(|e| panic!("seed {seed}: {e}"))
+}
+
+/// [`dive`], or the fit's refusal.
+fn fitted_dive(
+    segment: &Recording,
+    correlation_at_1_s: f64,
+    fixes: &FixSimulation,
+    seed: u64,
+) -> Result<(FixFit, Fixes), FixFitError> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let (time_s, dvl) = simulated(segment, &TRUTH, correlation_at_1_s, &mut rng);
     let reference_time_s = &segment.recording.reference_time_s;
@@ -72,38 +85,41 @@ fn dive(
     };
     let attitude = Attitude::of(&segment.recording);
     let terms = term_set(&default_fix_terms());
-    let fit = fit_fixes((&time_s, &dvl), &pieces, &attitude, &drawn, terms, noise).unwrap();
-    (fit, drawn)
+    let fit = fit_fixes((&time_s, &dvl), &pieces, &attitude, &drawn, terms, noise)?;
+    Ok((fit, drawn))
 }
 
 /// Of `seeds` dives on the segments in turn, per term estimated (scale, yaw, lever arm
 /// x and y, time offset): the share of the dives that applied it whose 95 % interval
 /// holds the truth, and how many applied it (the rest say the term is not seen, and do
-/// not apply it).
+/// not apply it); and how many dives the fit refused.
 fn coverage(
     segments: &[Recording],
     correlation_at_1_s: f64,
     fixes: &FixSimulation,
     seeds: u64,
-) -> Vec<(&'static str, f64, usize)> {
+) -> (Vec<(&'static str, f64, usize)>, usize) {
     let truth = TRUTH.to_parameters(&term_set(&default_fix_terms()));
-    let dives: Vec<Vec<(&'static str, Option<bool>)>> = (0..seeds)
+    let fitted: Vec<Option<Vec<(&'static str, Option<bool>)>>> = (0..seeds)
         .into_par_iter()
         .map(|seed| {
             let segment = &segments[seed as usize % segments.len()];
-            let (fit, _) = dive(segment, correlation_at_1_s, fixes, seed);
-            (0..fit.names.len())
+            let (fit, _) = fitted_dive(segment, correlation_at_1_s, fixes, seed).ok()?;
+            let terms = (0..fit.names.len())
                 .filter(|&k| fit.estimated[k])
                 .map(|k| {
                     let error = (fit.value[k] - truth[k]).abs();
                     let applied = fit.is_applied(fit.names[k]);
                     (fit.names[k], applied.then(|| error <= fit.half_width_95(k)))
                 })
-                .collect()
+                .collect();
+            Some(terms)
         })
         .collect();
+    let refused = fitted.iter().filter(|dive| dive.is_none()).count();
+    let dives: Vec<Vec<(&'static str, Option<bool>)>> = fitted.into_iter().flatten().collect();
     let names: Vec<&'static str> = dives[0].iter().map(|(name, _)| *name).collect();
-    names
+    let table = names
         .iter()
         .enumerate()
         .map(|(k, &name)| {
@@ -115,7 +131,8 @@ fn coverage(
                 applied.len(),
             )
         })
-        .collect()
+        .collect();
+    (table, refused)
 }
 
 /// Prints each term's coverage and checks that, pooled over the terms applied, it lies
@@ -137,12 +154,6 @@ fn check_coverage(case: &str, coverage: &[(&str, f64, usize)]) {
     }
 }
 
-#[test]
-fn intervals_of_a_fit_to_fixes_cover_the_truth_under_white_dvl_noise() {
-    let (_dir, segments) = synthetic_segments();
-    check_coverage("white DVL noise", &coverage(&segments, 0.0, &FIXES, 400));
-}
-
 /// 5 % of the fixes displaced 10 m (multipath): each is left out as an outlier, and the
 /// intervals still cover.
 #[test]
@@ -160,10 +171,11 @@ fn multipath_fixes_are_left_out_and_the_intervals_still_cover() {
         fixes.len()
     );
     assert_eq!(clean.outliers, Vec::<usize>::new());
-    check_coverage(
-        "5 % of fixes 10 m off",
-        &coverage(&segments, 0.0, &multipath, 400),
-    );
+    // One dive in 400 (seed 230) runs its clock to the scan's edge, and is refused
+    // rather than answered there.
+    let (table, refused) = coverage(&segments, 0.0, &multipath, 400);
+    assert!(refused <= 4, "{refused} of 400 dives refused");
+    check_coverage("5 % of fixes 10 m off", &table);
 }
 
 /// A dive that never turns shows neither the lever arm nor the clock, nor (at one
@@ -326,12 +338,14 @@ fn calibrate_with_fixes_finds_the_installation_and_refuses_bad_input() {
         "bias: fixes calibrate scale, misalignment, lever_arm, time_offset",
     );
     // A noise the residuals contradict by orders of magnitude: a unit or a digit wrong.
-    for noise in ["1e-9", "1e308"] {
-        refused(
-            &["--fix-noise-m", noise],
-            "times the noise given, beyond a factor of 100 either way",
-        );
-    }
+    refused(
+        &["--fix-noise-m", "1e-9"],
+        "times the noise given, beyond a factor of 100 either way",
+    );
+    refused(
+        &["--fix-noise-m", "1e308"],
+        "--fix-noise-m 1e308: give a positive number of metres, under 10,000 km",
+    );
     refused(
         &["--fix-noise-m", "0.5", "--depth-noise-m", "0.3"],
         "--depth-noise-m: fixes.csv gives no depth",

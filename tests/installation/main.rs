@@ -12,6 +12,7 @@ mod bags;
 mod between_dives;
 mod coverage;
 mod dive_clock;
+mod fix_coverage;
 mod fixes;
 mod installation;
 mod installation_compare;

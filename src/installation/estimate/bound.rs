@@ -215,9 +215,20 @@ pub fn bound(fit: &Fit, noise: Noise, tolerances: &Tolerances) -> TermBound {
 /// of the largest; no step along a flat direction, nor in a term the residuals ignore.
 pub fn gauss_newton_step(fit: &Fit) -> DVector<f64> {
     let names = fit.terms.parameter_names();
-    let information = UnitInformation::of(fit, names.len());
-    let (inverse, _) = information.pseudo_inverse(&names);
     let gradient = fit.jacobian.transpose() * &fit.residuals;
+    normal_step(&fit.information(), &gradient, &names)
+}
+
+/// −`normal`⁺ `gradient`: the Gauss–Newton step of parameters `names` whose information
+/// is `normal` (JᵀJ, or JᵀDJ) and whose cost's half gradient is `gradient` (Jᵀr), the
+/// inverse the bound's own ([`gauss_newton_step`]).
+pub fn normal_step(
+    normal: &DMatrix<f64>,
+    gradient: &DVector<f64>,
+    names: &[&'static str],
+) -> DVector<f64> {
+    let information = UnitInformation::of_normal(normal, names.len());
+    let (inverse, _) = information.pseudo_inverse(names);
     let felt = &information.felt;
     let scale = &information.scale;
     let scaled = DVector::from_fn(felt.len(), |a, _| gradient[felt[a]] / scale[felt[a]]);

@@ -29,6 +29,22 @@ pub const HUBER_C: f64 = 1.345;
 /// (70 scales on A-KIT, 25 at 2 cm/s of white noise) is still rejected.
 pub const TUKEY_C: f64 = 20.0;
 
+/// Tukey's bisquare tuning constant for residuals standardised by a noise the fit
+/// models (a position fix's innovation over its own standard deviation, not a scale
+/// read from the residuals' spread): the textbook 4.685, 95 % efficient on Gaussian
+/// noise.
+pub const TUKEY_C_MODELLED: f64 = 4.685;
+
+/// The weight ψ(u)/u of a residual `u` standardised by its modelled noise, under
+/// `loss` (Tukey's with the constant `tukey_c`): iteratively reweighted least squares'.
+pub fn weight(loss: Loss, u: f64, tukey_c: f64) -> f64 {
+    match loss {
+        Loss::Huber => (HUBER_C / u.abs()).min(1.0),
+        Loss::Tukey if u.abs() < tukey_c => (1.0 - (u / tukey_c).powi(2)).powi(2),
+        Loss::Tukey => 0.0,
+    }
+}
+
 /// The factor from a median absolute deviation to a Gaussian standard deviation.
 const MAD_TO_STD: f64 = 1.482_602_218_505_602;
 

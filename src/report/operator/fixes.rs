@@ -7,6 +7,7 @@
 
 use crate::installation::estimate::fixes::FixFit;
 use crate::installation::estimate::fixes::{FIX_TOLERANCES, MIN_HEADING_SPAN_RAD};
+use crate::installation::estimate::robust::TUKEY_C_MODELLED;
 use crate::operator::calibrate_fixes::FixCalibration;
 use crate::report::kit::readable::{readable_term, readable_why};
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
@@ -16,7 +17,7 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
     let FixCalibration { fit, noise, .. } = calibration;
     let table = terms_table(fit);
     let mut text = format!(
-        "read: {}; {} fixes, {} fitted ({} outside the DVL's pieces, {} outliers beyond Tukey's 4.685 of their standard deviations, left out), over {} piece{} with a start position each\n{table}\n",
+        "read: {}; {} fixes, {} fitted ({} outside the DVL's pieces, {} outliers beyond Tukey's {TUKEY_C_MODELLED} of their standard deviations, left out), over {} piece{} with a start position each\n{table}\n",
         calibration.read,
         calibration.fixes,
         fit.fitted,
@@ -25,12 +26,25 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
         fit.pieces,
         if fit.pieces == 1 { "" } else { "s" },
     );
+    let shape = fit.noise_shape;
+    let wander = match shape.wander_ratio {
+        0.0 => "white fixes".to_string(),
+        ratio => format!(
+            "fixes whose error also wanders, {:.2} m per axis with a correlation time of {:.0} s",
+            ratio.sqrt() * noise.fix_m,
+            shape.wander_time_s
+        ),
+    };
     text.push_str(&format!(
-        "standard deviation: the Fisher bound scaled by the variance factor {:.2} the fixes' whitened residuals show (1 where the noise is as given: fixes {:.2} m per axis{}, the DVL {:.2} cm/s per axis summed into a random walk); 95 % interval: Student's t on {} degrees of freedom\n",
+        "noise: as the residuals read it, the DVL's walk {} times that of white noise of {:.2} cm/s per axis (a DVL noise correlated in time walks further), and {wander}\n",
+        crate::Shown(shape.walk_scale),
+        100.0 * noise.dvl_m_s,
+    ));
+    text.push_str(&format!(
+        "standard deviation: under that noise, scaled by the variance factor {:.2} the fixes' whitened residuals show (1 where the noise is as given: fixes {:.2} m per axis{}); bound: under the noise as given, white fixes and white DVL noise; 95 % interval: Student's t on {} degrees of freedom\n",
         fit.variance_factor,
         noise.fix_m,
         if fit.axes == 3 { format!(", depth {:.2} m", noise.depth_m) } else { String::new() },
-        100.0 * noise.dvl_m_s,
         fit.freedom,
     ));
     if fit.axes == 2 {
@@ -63,12 +77,12 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
         100.0 * calibration.after_m / calibration.distance_m,
     ));
     text.push_str(&format!(
-        "a term is applied when the fixes show it: over headings spanning {:.0}° or more for the yaw, the lever arm and the clock, and not flat, tied within ±0.95 to every start position, its standard deviation within its tolerance (scale {:.2} %, misalignment {:.2}°, lever arm {:.2} m, time offset {:.2} s); one not applied is held at zero, and the others' intervals take it to be zero\n",
-        MIN_HEADING_SPAN_RAD.to_degrees(),
+        "every term is applied at its estimate with its standard deviation, however loosely the fixes show it (beyond its tolerance, scale {:.2} %, misalignment {:.2}°, lever arm {:.2} m, time offset {:.2} s, or tied beyond ±0.95 to another, it is said to be seen poorly), but where they cannot show it at all: the yaw, the lever arm and the clock over headings spanning under {:.0}°, or a term the residuals do not depend on; that one is held at zero, as the start positions take its place exactly\n",
         100.0 * FIX_TOLERANCES.scale,
         FIX_TOLERANCES.misalignment_rad.to_degrees(),
         FIX_TOLERANCES.lever_arm_m,
         FIX_TOLERANCES.time_offset_s,
+        MIN_HEADING_SPAN_RAD.to_degrees(),
     ));
     text
 }

@@ -1,0 +1,769 @@
+//! The problem a fit to position fixes solves (for `fit_fixes`): the DVL's pieces
+//! that hold a fix and the fixes each holds; the residuals (the dead reckoning through
+//! the terms, less the fixes) and their Jacobian; their whitening under the noise
+//! ([`super::fix_noise`]), each piece's start profiled out; Gauss–Newton through the
+//! bound's own step; the scan over the time offset, the robust loop, the noise read from
+//! the residuals and the terms averaged over its walks; and the bound of a solution.
+//! In: the DVL samples, an [`Attitude`], the [`Fixes`], the terms and the noise. Out: a
+//! [`Solution`] and its bound.
+
+use crate::Vec3;
+use crate::data::fixes::Fixes;
+use crate::data::paired::GAP_MARGIN_S;
+use crate::installation::dead_reckoning::{Track, dead_reckon, interior};
+use crate::installation::estimate::bound::{Tolerances, Unseen, normal_step, whitened_bound};
+use crate::installation::estimate::fit::{MAX_LEVER_ARM_M, MAX_SCALE};
+use crate::installation::estimate::fix_noise::{NoiseShape, Whitener, Whitening};
+use crate::installation::estimate::robust::{Loss, TUKEY_C_MODELLED, weight};
+use crate::installation::frames::Attitude;
+use crate::installation::terms::kind::TermKind;
+use crate::installation::terms::{Installation, PerKind, TermSet};
+use nalgebra::{DMatrix, DVector};
+use std::ops::Range;
+
+/// The largest time offset considered, s: fixes within it of a piece's ends are not
+/// fitted, so that every trial offset reads the attitude over the same fixes.
+pub const TIME_OFFSET_MARGIN_S: f64 = GAP_MARGIN_S;
+
+/// The tolerance of each term fitted to fixes: beyond it a term is said to be seen
+/// poorly (and still applied, with its standard deviation). Fixes of metres place a
+/// scale and a yaw well (they grow with the distance travelled), a lever arm and a
+/// clock only as well as the turns show them; a lever arm within half a metre and a
+/// clock within half a second move a dead reckoning by less than the fixes' noise.
+pub const FIX_TOLERANCES: Tolerances = PerKind {
+    scale: 0.005,
+    misalignment_rad: 0.5 * (std::f64::consts::PI / 180.0),
+    lever_arm_m: 0.5,
+    time_offset_s: 0.5,
+    bias_m_s: 0.01,
+};
+
+/// The noise of a fit to fixes: a fix's per horizontal axis and in depth, m, and the
+/// DVL's white noise per axis, m/s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FixNoise {
+    pub fix_m: f64,
+    pub depth_m: f64,
+    pub dvl_m_s: f64,
+}
+
+/// Why the terms cannot be fitted to the fixes.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FixFitError {
+    #[error(
+        "no fix lies within a piece of the DVL record ({fixes} fixes from {fix_span_s:?} s, the DVL's {pieces} pieces from {dvl_span_s:?} s on its clock, each less {TIME_OFFSET_MARGIN_S} s at its ends): the fixes do not overlap the DVL; give fixes of the same dive, on the attitude's clock"
+    )]
+    NoOverlap {
+        fixes: usize,
+        fix_span_s: (f64, f64),
+        pieces: usize,
+        dvl_span_s: (f64, f64),
+    },
+    #[error(
+        "{fitted} fixes within the DVL's pieces, {outliers} of them outliers left out, give {residuals} residuals for {parameters} parameters (the terms and a start position per piece): a fit needs more; give more fixes, or fewer terms"
+    )]
+    TooFewFixes {
+        fitted: usize,
+        outliers: usize,
+        residuals: usize,
+        parameters: usize,
+    },
+    #[error(
+        "{outliers} of the {within} fixes within the DVL's pieces lie beyond the robust fit's reach of the dead reckoning: more than a quarter are outliers, so the fixes do not show the installation"
+    )]
+    Outliers { outliers: usize, within: usize },
+    #[error(
+        "the attitude does not cover the DVL's samples at the time offset {time_offset_s} s: give the attitude of the whole dive"
+    )]
+    NoAttitude { time_offset_s: f64 },
+    #[error(
+        "the time offset that fits the fixes best, {time_offset_s:.2} s, lies at the edge of the ±{TIME_OFFSET_MARGIN_S} s a fit to fixes searches: the clocks may lie further apart than that (or the fixes and the attitude on different clocks), and nothing fitted at the edge is the installation; put the DVL, the attitude and the fixes on one clock to within {TIME_OFFSET_MARGIN_S} s"
+    )]
+    ClockAtScanEdge { time_offset_s: f64 },
+    #[error(
+        "the terms fitted leave the fixes further from the dead reckoning than no terms do (whitened sum of squares {with:.1} against {without:.1}): the fit found no installation the fixes show; the fixes may be on another clock, another vehicle's, or in another frame"
+    )]
+    WorseThanNone { with: f64, without: f64 },
+}
+
+/// The scan's step for the time offset's start, s.
+const SCAN_STEP_S: f64 = 0.25;
+
+/// The terms averaged over the noise's walks: their values, standard deviations and
+/// correlations, over every parameter of the term set.
+pub(super) type Averaged = (Vec<f64>, Vec<f64>, Vec<Vec<f64>>);
+
+/// A fit's state: the term parameters (every one of the term set, those not estimated
+/// zero), each block's start position (piece by piece, axis by axis, profiled), which
+/// fixes it kept, the noise's shape, and its whitened residuals.
+#[derive(Debug, Clone)]
+pub(super) struct Solution {
+    pub(super) terms: Vec<f64>,
+    starts: Vec<f64>,
+    pub(super) kept: Vec<bool>,
+    pub(super) shape: NoiseShape,
+    whitened: Vec<f64>,
+    pub(super) freedom: usize,
+}
+
+impl Solution {
+    pub(super) fn variance_factor(&self) -> f64 {
+        self.cost() / self.freedom.max(1) as f64
+    }
+
+    /// The whitened residuals' sum of squares.
+    fn cost(&self) -> f64 {
+        self.whitened.iter().map(|w| w * w).sum()
+    }
+
+    /// Each fitted fix's weight: 1 where kept, 0 where not.
+    fn weights(&self) -> Vec<f64> {
+        self.kept.iter().map(|&k| f64::from(u8::from(k))).collect()
+    }
+}
+
+/// What a fit to fixes works on: the DVL's pieces with a fix, the fixes each holds
+/// (indices into the fixes), the terms and which of them are estimated.
+pub(super) struct Problem<'a> {
+    dvl: (&'a [f64], &'a [Vec3]),
+    attitude: &'a Attitude,
+    fixes: &'a Fixes,
+    terms: TermSet,
+    noise: FixNoise,
+    pub(super) names: Vec<&'static str>,
+    kinds: Vec<TermKind>,
+    pub(super) estimated: Vec<bool>,
+    pub(super) pieces: Vec<Range<usize>>,
+    /// For each piece, the fixes in it.
+    held: Vec<Vec<usize>>,
+    /// For each fix fitted (pieces in order), its index among the fixes.
+    pub(super) fix_of: Vec<usize>,
+    pub(super) outside: usize,
+    pub(super) axes: usize,
+}
+
+impl<'a> Problem<'a> {
+    pub(super) fn new(
+        dvl: (&'a [f64], &'a [Vec3]),
+        pieces: &[Range<usize>],
+        attitude: &'a Attitude,
+        fixes: &'a Fixes,
+        terms: TermSet,
+        noise: FixNoise,
+    ) -> Result<Problem<'a>, FixFitError> {
+        let axes = if fixes.depth_m.is_some() { 3 } else { 2 };
+        let names = terms.parameter_names();
+        let estimated = names
+            .iter()
+            .map(|name| match *name {
+                "lever_arm_z_m" => false,
+                "misalignment_x_rad" | "misalignment_y_rad" => axes == 3,
+                _ => true,
+            })
+            .collect();
+        let time_s = dvl.0;
+        let (used, held) = pieces_with_fixes(time_s, pieces, attitude, fixes);
+        let fix_of: Vec<usize> = held.iter().flatten().copied().collect();
+        if fix_of.is_empty() {
+            let span = |t: &[f64]| {
+                (
+                    t.first().copied().unwrap_or(f64::NAN),
+                    t.last().copied().unwrap_or(f64::NAN),
+                )
+            };
+            return Err(FixFitError::NoOverlap {
+                fixes: fixes.len(),
+                fix_span_s: span(&fixes.time_s),
+                pieces: pieces.len(),
+                dvl_span_s: span(time_s),
+            });
+        }
+        let problem = Problem {
+            dvl,
+            attitude,
+            fixes,
+            terms,
+            noise,
+            names,
+            kinds: terms.parameter_kinds(),
+            estimated,
+            outside: fixes.len() - fix_of.len(),
+            pieces: used,
+            held,
+            fix_of,
+            axes,
+        };
+        problem.enough(&vec![true; problem.fix_of.len()], &problem.estimated)?;
+        Ok(problem)
+    }
+
+    /// Refuses a fit of the `free` terms to the fixes `kept` that leaves no residual
+    /// beyond its parameters.
+    fn enough(&self, kept: &[bool], free: &[bool]) -> Result<(), FixFitError> {
+        let fitted = kept.iter().filter(|&&k| k).count();
+        let starts = (self.held.iter().scan(0, |offset, held| {
+            let inside = &kept[*offset..*offset + held.len()];
+            *offset += held.len();
+            Some(inside.iter().any(|&k| k))
+        }))
+        .filter(|&any| any)
+        .count();
+        let parameters = free.iter().filter(|&&f| f).count() + starts * self.axes;
+        let residuals = fitted * self.axes;
+        if residuals <= parameters {
+            return Err(FixFitError::TooFewFixes {
+                fitted: kept.len(),
+                outliers: kept.len() - fitted,
+                residuals,
+                parameters,
+            });
+        }
+        Ok(())
+    }
+
+    /// Where the parameter named `name` is among the terms'.
+    pub(super) fn position(&self, name: &str) -> usize {
+        (self.names.iter())
+            .position(|n| *n == name)
+            .expect("a term's name")
+    }
+
+    /// The span of the attitude's (unwrapped) yaw over the pieces fitted, rad.
+    pub(super) fn heading_span_rad(&self) -> f64 {
+        let (first, last) = (self.pieces[0].start, self.pieces[self.pieces.len() - 1].end);
+        let (from, to) = (self.dvl.0[first], self.dvl.0[last - 1]);
+        let yaw = (self.attitude.time_s.iter().zip(&self.attitude.angles_rad))
+            .filter(|(t, _)| (from..=to).contains(*t))
+            .map(|(_, angles)| angles[2]);
+        let (low, high) = yaw.fold((f64::INFINITY, f64::NEG_INFINITY), |(low, high), y| {
+            (low.min(y), high.max(y))
+        });
+        (high - low).max(0.0)
+    }
+
+    /// Each piece's track under the term parameters `terms`.
+    pub(super) fn tracks(&self, terms: &[f64]) -> Result<Vec<Track>, FixFitError> {
+        let installation = Installation::from_parameters(&self.terms, terms);
+        (self.pieces.iter())
+            .map(|piece| {
+                let dvl = (&self.dvl.0[piece.clone()], &self.dvl.1[piece.clone()]);
+                dead_reckon(&installation, dvl, self.attitude).ok_or(FixFitError::NoAttitude {
+                    time_offset_s: installation.time_offset_s,
+                })
+            })
+            .collect()
+    }
+
+    /// The residuals before the start positions (the track less the fix), in blocks of
+    /// one piece and one axis, fixes in order; a fix's place in its block is its place
+    /// in the piece.
+    fn residuals(&self, terms: &[f64]) -> Result<Vec<f64>, FixFitError> {
+        let tracks = self.tracks(terms)?;
+        let time_offset_s = self.time_offset().map_or(0.0, |k| terms[k]);
+        let mut residuals = Vec::with_capacity(self.fix_of.len() * self.axes);
+        for (track, held) in tracks.iter().zip(&self.held) {
+            for axis in 0..self.axes {
+                for &j in held {
+                    let position = (track.at(self.fixes.time_s[j]))
+                        .ok_or(FixFitError::NoAttitude { time_offset_s })?;
+                    let fix = match axis {
+                        2 => self.fixes.depth_m.as_ref().expect("a depth")[j],
+                        _ => self.fixes.north_east_m[j][axis],
+                    };
+                    residuals.push(position[axis] - fix);
+                }
+            }
+        }
+        Ok(residuals)
+    }
+
+    /// The residuals of `terms` with each block's start added: `starts` per block.
+    fn with_starts(&self, residuals: &[f64], starts: &[f64]) -> Vec<f64> {
+        let mut out = residuals.to_vec();
+        let mut row = 0;
+        let mut block = 0;
+        for held in &self.held {
+            for _ in 0..self.axes {
+                for value in &mut out[row..row + held.len()] {
+                    *value += starts[block];
+                }
+                row += held.len();
+                block += 1;
+            }
+        }
+        out
+    }
+
+    /// The whitening of the residuals with the fixes weighed by `weights` (one per
+    /// fitted fix; a fix of weight w has σ_f² / w, one of weight zero is left out)
+    /// under the noise of `shape`, its variances in the horizontal fix noise's (so that
+    /// the variance factor is 1 where the noise is as given, and no noise given, however
+    /// far from the fixes', overflows).
+    fn whitening(&self, weights: &[f64], shape: NoiseShape) -> Whitening {
+        let step_s = crate::data::paired::sample_interval(self.dvl.0);
+        let walk_m2_s = (self.noise.dvl_m_s / self.noise.fix_m).powi(2) * step_s;
+        let mut blocks = Vec::new();
+        let (mut row, mut offset) = (0, 0);
+        for (piece, held) in self.pieces.iter().zip(&self.held) {
+            let start_s = self.dvl.0[piece.start];
+            let time_s: Vec<f64> = held.iter().map(|&j| self.fixes.time_s[j]).collect();
+            let weights = &weights[offset..offset + held.len()];
+            for axis in 0..self.axes {
+                let fix = match axis {
+                    2 => self.noise.depth_m / self.noise.fix_m,
+                    _ => 1.0,
+                };
+                let model = shape.model(fix * fix, walk_m2_s);
+                blocks.push((
+                    row..row + held.len(),
+                    Whitener::new(&model, start_s, &time_s, weights),
+                ));
+                row += held.len();
+            }
+            offset += held.len();
+        }
+        Whitening::new(blocks, self.noise.fix_m)
+    }
+
+    /// The Jacobian of the residuals in the free term parameters (central differences),
+    /// a column per free term.
+    fn jacobian(&self, terms: &[f64], free: &[bool]) -> Result<Vec<Vec<f64>>, FixFitError> {
+        (0..free.len())
+            .filter(|&k| free[k])
+            .map(|k| {
+                let step = self.difference_step(k);
+                let moved = |by: f64| {
+                    let mut terms = terms.to_vec();
+                    terms[k] += by;
+                    self.residuals(&terms)
+                };
+                let (up, down) = (moved(step)?, moved(-step)?);
+                Ok((up.iter().zip(&down))
+                    .map(|(u, d)| (u - d) / (2.0 * step))
+                    .collect())
+            })
+            .collect()
+    }
+
+    /// Gauss–Newton on the whitened residuals from `solution`, with the `free` terms
+    /// and each fix weighed by `weights` (one per fitted fix), under `shape`.
+    fn solve(
+        &self,
+        mut solution: Solution,
+        free: &[bool],
+        weights: &[f64],
+        shape: NoiseShape,
+    ) -> Result<Solution, FixFitError> {
+        let whitening = self.whitening(weights, shape);
+        let free_terms: Vec<usize> = (0..free.len()).filter(|&k| free[k]).collect();
+        for _ in 0..30 {
+            if free_terms.is_empty() {
+                break;
+            }
+            let residuals = DVector::from_vec(whitening.whiten(&self.residuals(&solution.terms)?));
+            let columns: Vec<DVector<f64>> = (self.jacobian(&solution.terms, free)?.iter())
+                .map(|column| DVector::from_vec(whitening.whiten(column)))
+                .collect();
+            let normal = DMatrix::from_fn(columns.len(), columns.len(), |a, b| {
+                columns[a].dot(&columns[b])
+            });
+            let gradient = DVector::from_fn(columns.len(), |a, _| columns[a].dot(&residuals));
+            let names: Vec<&'static str> = free_terms.iter().map(|&k| self.names[k]).collect();
+            let step = normal_step(&normal, &gradient, &names);
+            for (column, &k) in free_terms.iter().enumerate() {
+                let limit = self.limit(k);
+                solution.terms[k] = (solution.terms[k] + step[column]).clamp(-limit, limit);
+            }
+            let scale_of_step = (free_terms.iter().enumerate())
+                .map(|(column, &k)| step[column].abs() / self.step_tolerance(k))
+                .fold(0.0, f64::max);
+            if scale_of_step < 1.0 {
+                break;
+            }
+        }
+        let residuals = self.residuals(&solution.terms)?;
+        solution.starts = whitening.starts(&residuals);
+        solution.whitened = whitening.whiten(&residuals);
+        solution.shape = shape;
+        let kept_rows = weights.iter().filter(|&&w| w > 0.0).count() * self.axes;
+        solution.freedom = kept_rows.saturating_sub(free_terms.len() + whitening.starts_fitted());
+        Ok(solution)
+    }
+
+    /// Where the time offset is among the terms', if asked for.
+    fn time_offset(&self) -> Option<usize> {
+        self.kinds
+            .iter()
+            .position(|&kind| kind == TermKind::TimeOffset)
+    }
+
+    /// The largest magnitude parameter `k` may take: the time offset within the margin
+    /// its fixes were chosen for, the others within any installation's
+    /// ([`MAX_SCALE`], [`MAX_LEVER_ARM_M`], a quarter turn).
+    fn limit(&self, k: usize) -> f64 {
+        match self.kinds[k] {
+            // Inside the margin by more than the Jacobian's step.
+            TermKind::TimeOffset => TIME_OFFSET_MARGIN_S - 0.01,
+            TermKind::Scale => MAX_SCALE,
+            TermKind::LeverArm => MAX_LEVER_ARM_M,
+            TermKind::Misalignment | TermKind::Bias => std::f64::consts::FRAC_PI_2,
+        }
+    }
+
+    /// The step of parameter `k`'s central difference.
+    fn difference_step(&self, k: usize) -> f64 {
+        match self.kinds[k] {
+            TermKind::TimeOffset | TermKind::LeverArm => 1e-3,
+            _ => 1e-6,
+        }
+    }
+
+    /// A step in parameter `k` below which Gauss–Newton has converged.
+    fn step_tolerance(&self, k: usize) -> f64 {
+        match self.kinds[k] {
+            TermKind::TimeOffset | TermKind::LeverArm => 1e-5,
+            _ => 1e-8,
+        }
+    }
+
+    /// Least squares of the `free` terms (the time offset from the best of a scan) and
+    /// the noise's shape read from its residuals; Huber's and Tukey's weights under it;
+    /// then least squares on the fixes kept, the noise's shape read again.
+    pub(super) fn robust_fit(&self, free: &[bool]) -> Result<Solution, FixFitError> {
+        let blank = Solution {
+            terms: vec![0.0; self.names.len()],
+            starts: Vec::new(),
+            kept: vec![true; self.fix_of.len()],
+            shape: NoiseShape::GIVEN,
+            whitened: Vec::new(),
+            freedom: 0,
+        };
+        let scanned = self.scan_time_offset(blank, free)?;
+        let mut solution = self.read_noise(&scanned, free, false)?;
+        let shape = solution.shape;
+        for loss in [
+            Loss::Huber,
+            Loss::Huber,
+            Loss::Tukey,
+            Loss::Tukey,
+            Loss::Tukey,
+        ] {
+            let u = self.standardised(&solution, shape)?;
+            let weights: Vec<f64> = (u.iter())
+                .map(|&u| weight(loss, u, TUKEY_C_MODELLED))
+                .collect();
+            solution = self.solve(solution, free, &weights, shape)?;
+            solution.kept = weights.iter().map(|&w| w > 0.0).collect();
+            let outliers = solution.kept.iter().filter(|&&k| !k).count();
+            if 4 * outliers > self.fix_of.len() {
+                return Err(FixFitError::Outliers {
+                    outliers,
+                    within: self.fix_of.len(),
+                });
+            }
+            self.enough(&solution.kept, free)?;
+        }
+        let mut last = self.read_noise(&solution, free, true)?;
+        last.kept = solution.kept;
+        self.within_the_scan(&last)?;
+        Ok(last)
+    }
+
+    /// The noise's shape under which the fixes `solution` kept are likeliest, each
+    /// shape's terms fitted again from `solution`'s (the variance factor profiled out,
+    /// the starts restricted), less Schwarz's penalty for the noise's parameters it
+    /// reads (½ ln n each), so that the noise as given stands unless the residuals show
+    /// otherwise: of the walks ([`NoiseShape::walks`]), then of the wandering errors
+    /// beside the best ([`NoiseShape::wanders`]) where `wandering` (the robust loop's
+    /// first reading, on residuals an outlier may still pull, reads the walk alone);
+    /// with its fit.
+    fn read_noise(
+        &self,
+        solution: &Solution,
+        free: &[bool],
+        wandering: bool,
+    ) -> Result<Solution, FixFitError> {
+        let weights = solution.weights();
+        let rows = weights.iter().filter(|&&w| w > 0.0).count() * self.axes;
+        let likelihood = |solved: &Solution| -> Result<f64, FixFitError> {
+            let penalty = 0.5 * solved.shape.parameters() as f64 * (rows as f64).ln();
+            let whitening = self.whitening(&weights, solved.shape);
+            Ok(whitening.log_likelihood(&self.residuals(&solved.terms)?, rows) - penalty)
+        };
+        let consider = |shapes: Vec<NoiseShape>, best: &mut Option<(f64, Solution)>| {
+            for shape in shapes {
+                let solved = self.solve(solution.clone(), free, &weights, shape)?;
+                let score = likelihood(&solved)?;
+                if best.as_ref().is_none_or(|(b, _)| score > *b) {
+                    *best = Some((score, solved));
+                }
+            }
+            Ok::<(), FixFitError>(())
+        };
+        let mut best = None;
+        consider(NoiseShape::walks(), &mut best)?;
+        let walk = best.as_ref().expect("walks to choose among").1.shape;
+        if wandering {
+            consider(walk.wanders(), &mut best)?;
+        }
+        Ok(best.expect("shapes to choose among").1)
+    }
+
+    /// Each fitted fix's innovation in its own standard deviations under `shape`, the
+    /// fixes `solution` kept observed: the root mean square over its axes.
+    fn standardised(
+        &self,
+        solution: &Solution,
+        shape: NoiseShape,
+    ) -> Result<Vec<f64>, FixFitError> {
+        let whitening = self.whitening(&solution.weights(), shape);
+        let residuals = self.with_starts(&self.residuals(&solution.terms)?, &solution.starts);
+        let u = whitening.standardised(&residuals);
+        let mut squares = vec![0.0; self.fix_of.len()];
+        let (mut row, mut offset) = (0, 0);
+        for held in &self.held {
+            for _ in 0..self.axes {
+                for a in 0..held.len() {
+                    squares[offset + a] += u[row + a].powi(2);
+                }
+                row += held.len();
+            }
+            offset += held.len();
+        }
+        Ok(squares
+            .iter()
+            .map(|s| (s / self.axes as f64).sqrt())
+            .collect())
+    }
+
+    /// The fit from the best time offset of a scan over ±[`TIME_OFFSET_MARGIN_S`]
+    /// (each trial a least-squares fit of the other terms), then of every free term;
+    /// without a free time offset, least squares from zero. A best at the scan's edge
+    /// is refused.
+    fn scan_time_offset(&self, start: Solution, free: &[bool]) -> Result<Solution, FixFitError> {
+        let ones = vec![1.0; self.fix_of.len()];
+        let given = NoiseShape::GIVEN;
+        let Some(offset) = self.time_offset().filter(|&k| free[k]) else {
+            return self.solve(start, free, &ones, given);
+        };
+        let mut others = free.to_vec();
+        others[offset] = false;
+        let steps = (TIME_OFFSET_MARGIN_S / SCAN_STEP_S).round() as i64;
+        let mut best: Option<(f64, i64, Solution)> = None;
+        for step in -steps..=steps {
+            let mut trial = start.clone();
+            let limit = self.limit(offset);
+            trial.terms[offset] = (step as f64 * SCAN_STEP_S).clamp(-limit, limit);
+            let Ok(solved) = self.solve(trial, &others, &ones, given) else {
+                continue;
+            };
+            let cost = solved.cost();
+            if best.as_ref().is_none_or(|(c, _, _)| cost < *c) {
+                best = Some((cost, step, solved));
+            }
+        }
+        let (_, step, best) = best.ok_or(FixFitError::NoAttitude { time_offset_s: 0.0 })?;
+        if step.abs() == steps {
+            return Err(FixFitError::ClockAtScanEdge {
+                time_offset_s: best.terms[offset],
+            });
+        }
+        self.solve(best, free, &ones, given)
+    }
+
+    /// Refuses a fit whose time offset went to the edge of the scan.
+    fn within_the_scan(&self, solution: &Solution) -> Result<(), FixFitError> {
+        let Some(k) = self.time_offset() else {
+            return Ok(());
+        };
+        let time_offset_s = solution.terms[k];
+        match time_offset_s.abs() >= self.limit(k) - SCAN_STEP_S {
+            true => Err(FixFitError::ClockAtScanEdge { time_offset_s }),
+            false => Ok(()),
+        }
+    }
+
+    /// Refuses `solution` where the fixes it kept lie further from the dead reckoning
+    /// with its terms than with none (the start positions alone), under its noise.
+    pub(super) fn better_than_none(&self, solution: &Solution) -> Result<(), FixFitError> {
+        let whitening = self.whitening(&solution.weights(), solution.shape);
+        let bare = whitening.whiten(&self.residuals(&vec![0.0; self.names.len()])?);
+        let without: f64 = bare.iter().map(|w| w * w).sum();
+        let with = solution.cost();
+        match with > without * (1.0 + 1e-9) {
+            true => Err(FixFitError::WorseThanNone { with, without }),
+            false => Ok(()),
+        }
+    }
+
+    /// The standard deviations, correlations and unseen terms of `solution` over the
+    /// term parameters (infinite or NaN where not `free`), under the noise of `shape`
+    /// scaled by `factor` (its variance factor; the noise as given and 1: the Fisher
+    /// bound, [`Self::fisher_bound`]).
+    pub(super) fn bound(
+        &self,
+        solution: &Solution,
+        free: &[bool],
+        shape: NoiseShape,
+        factor: f64,
+    ) -> (Vec<f64>, Vec<Vec<f64>>, Vec<Unseen>) {
+        let free_terms: Vec<usize> = (0..free.len()).filter(|&k| free[k]).collect();
+        let whitening = self.whitening(&solution.weights(), shape);
+        let columns: Vec<DVector<f64>> = (self.jacobian(&solution.terms, free))
+            .expect("the solution's residuals were read")
+            .iter()
+            .map(|column| DVector::from_vec(whitening.whiten(column)))
+            .collect();
+        let normal = DMatrix::from_fn(columns.len(), columns.len(), |a, b| {
+            columns[a].dot(&columns[b])
+        });
+        let names: Vec<&'static str> = free_terms.iter().map(|&k| self.names[k]).collect();
+        let tolerance = |c: usize| FIX_TOLERANCES.of(self.kinds[free_terms[c]]);
+        let (std, correlation, unseen) = whitened_bound(&normal, &names, factor, tolerance);
+        let n = self.names.len();
+        let place = |k: usize| free_terms.iter().position(|&f| f == k);
+        let term_std = (0..n)
+            .map(|k| place(k).map_or(f64::INFINITY, |c| std[c]))
+            .collect();
+        let term_correlation = (0..n)
+            .map(|j| {
+                (0..n)
+                    .map(|k| match (place(j), place(k)) {
+                        (Some(a), Some(b)) => correlation[a][b],
+                        _ if j == k => 1.0,
+                        _ => f64::NAN,
+                    })
+                    .collect()
+            })
+            .collect();
+        (term_std, term_correlation, unseen)
+    }
+
+    /// The terms, their standard deviations and correlations averaged over the walks
+    /// ([`NoiseShape::walks`], beside `solution`'s wandering error), each walk's fit
+    /// weighed by its likelihood: the mean of the fits' terms, and the mean of their
+    /// covariances plus the spread of their terms about that mean. A walk read from
+    /// the residuals of one dive is uncertain (at ρ = 0.8 over 600 s, between a quarter
+    /// and twice the truth's), and the terms' intervals carry that.
+    pub(super) fn averaged(
+        &self,
+        solution: &Solution,
+        free: &[bool],
+    ) -> Result<Averaged, FixFitError> {
+        let weights = solution.weights();
+        let rows = weights.iter().filter(|&&w| w > 0.0).count() * self.axes;
+        let mut fits = Vec::new();
+        for walk in NoiseShape::walks() {
+            let shape = NoiseShape {
+                walk_scale: walk.walk_scale,
+                ..solution.shape
+            };
+            let solved = self.solve(solution.clone(), free, &weights, shape)?;
+            let whitening = self.whitening(&weights, shape);
+            let likelihood = whitening.log_likelihood(&self.residuals(&solved.terms)?, rows);
+            let (std, correlation, _) = self.bound(&solved, free, shape, solved.variance_factor());
+            fits.push((likelihood, solved.terms, std, correlation));
+        }
+        let best = fits.iter().map(|f| f.0).fold(f64::NEG_INFINITY, f64::max);
+        let total: f64 = fits.iter().map(|f| (f.0 - best).exp()).sum();
+        let n = self.names.len();
+        let mut mean = vec![0.0; n];
+        for (likelihood, terms, _, _) in &fits {
+            let p = (likelihood - best).exp() / total;
+            for k in 0..n {
+                mean[k] += p * terms[k];
+            }
+        }
+        let mut covariance = vec![vec![0.0; n]; n];
+        for (likelihood, terms, std, correlation) in &fits {
+            let p = (likelihood - best).exp() / total;
+            for j in (0..n).filter(|&j| free[j]) {
+                for k in (0..n).filter(|&k| free[k]) {
+                    let own = correlation[j][k] * std[j] * std[k];
+                    let spread = (terms[j] - mean[j]) * (terms[k] - mean[k]);
+                    covariance[j][k] += p * (own + spread);
+                }
+            }
+        }
+        let std: Vec<f64> = (0..n)
+            .map(|k| match free[k] {
+                true => covariance[k][k].sqrt(),
+                false => f64::INFINITY,
+            })
+            .collect();
+        let correlation = (0..n)
+            .map(|j| {
+                (0..n)
+                    .map(|k| match (free[j], free[k]) {
+                        (true, true) => covariance[j][k] / (std[j] * std[k]),
+                        _ if j == k => 1.0,
+                        _ => f64::NAN,
+                    })
+                    .collect()
+            })
+            .collect();
+        Ok((mean, std, correlation))
+    }
+
+    /// The standard deviations of `solution`'s terms under the noise as given: the
+    /// Fisher bound.
+    pub(super) fn fisher_bound(&self, solution: &Solution, free: &[bool]) -> Vec<f64> {
+        self.bound(solution, free, NoiseShape::GIVEN, 1.0).0
+    }
+
+    /// The RMS of the residuals of the fixes kept, per axis, m (NaN on an axis not
+    /// fitted).
+    pub(super) fn residual_rms(&self, solution: &Solution) -> Result<Vec3, FixFitError> {
+        let residuals = self.with_starts(&self.residuals(&solution.terms)?, &solution.starts);
+        let (mut sums, mut counts) = ([0.0; 3], [0usize; 3]);
+        let (mut row, mut offset) = (0, 0);
+        for held in &self.held {
+            for axis in 0..self.axes {
+                for a in 0..held.len() {
+                    if solution.kept[offset + a] {
+                        sums[axis] += residuals[row].powi(2);
+                        counts[axis] += 1;
+                    }
+                    row += 1;
+                }
+            }
+            offset += held.len();
+        }
+        Ok([0, 1, 2].map(|k| match counts[k] {
+            0 => f64::NAN,
+            count => (sums[k] / count as f64).sqrt(),
+        }))
+    }
+}
+
+/// The pieces of the DVL record stamped `time_s` that hold a fix, each cut to the
+/// samples whose t + τ reads `attitude` whatever τ (so that every trial time offset
+/// reads it over the same samples), and the fixes each holds: those at least
+/// [`TIME_OFFSET_MARGIN_S`] inside it.
+fn pieces_with_fixes(
+    time_s: &[f64],
+    pieces: &[Range<usize>],
+    attitude: &Attitude,
+    fixes: &Fixes,
+) -> (Vec<Range<usize>>, Vec<Vec<usize>>) {
+    let inside = interior(attitude, time_s);
+    let (mut used, mut held) = (Vec::new(), Vec::new());
+    for piece in pieces {
+        let piece = piece.start.max(inside.start)..piece.end.min(inside.end);
+        if piece.len() < 2 {
+            continue;
+        }
+        let (first, last) = (time_s[piece.start], time_s[piece.end - 1]);
+        let from = fixes
+            .time_s
+            .partition_point(|&t| t < first + TIME_OFFSET_MARGIN_S);
+        let to = fixes
+            .time_s
+            .partition_point(|&t| t <= last - TIME_OFFSET_MARGIN_S);
+        if from < to {
+            used.push(piece);
+            held.push((from..to).collect());
+        }
+    }
+    (used, held)
+}

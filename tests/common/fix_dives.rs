@@ -1,0 +1,243 @@
+//! Synthetic dives for a fit to position fixes, written from the model in
+//! docs/installation.md alone (not from the tool's own prediction): a horizontal
+//! vehicle on an analytic track (a weaving transect, a three-petal clover, a widening
+//! spiral), its heading the track's course plus a slow crab of ±4°, the attitude at
+//! 10 Hz, the DVL at 2 Hz on its own clock, the fixes every 5 s on the attitude's clock,
+//! late by a latency, each with white noise; the DVL's noise white or AR(1) in time.
+//!
+//! The DVL sample stamped t measures, at t + τ, v_dvl = (1 + s) · Rz(δz)ᵀ · [C_n^b ·
+//! v_n + ω_b × l] + noise, with C_n^b = Rz(ψ)ᵀ and ω_b = (0, 0, ψ̇) for a level vehicle;
+//! the fix stamped t is the reference point's position at t − latency.
+
+use dcnet_exp::Vec3;
+use dcnet_exp::data::fixes::Fixes;
+use dcnet_exp::installation::frames::Attitude;
+use dcnet_exp::installation::terms::Installation;
+use rand::SeedableRng;
+use rand_distr::{Distribution, Normal};
+use std::f64::consts::PI;
+
+/// How long each dive lasts, s.
+pub const DIVE_S: f64 = 600.0;
+
+/// The DVL's sample interval, s, and its white noise per axis per sample, m/s.
+pub const DVL_STEP_S: f64 = 0.5;
+pub const DVL_NOISE_M_S: f64 = 0.03;
+
+/// The interval between fixes, s.
+pub const FIX_INTERVAL_S: f64 = 5.0;
+
+/// A case of the coverage study: the fixes' noise per axis, m; the DVL noise's AR(1)
+/// correlation from one sample to the next (0 for white); the DVL's clock τ, s; and the
+/// fixes' latency, s.
+#[derive(Debug, Clone, Copy)]
+pub struct Case {
+    pub fix_m: f64,
+    pub correlation: f64,
+    pub clock_s: f64,
+    pub latency_s: f64,
+}
+
+/// The installation of every dive, the clock of `case`: the independent check's.
+pub fn truth(case: &Case) -> Installation {
+    Installation {
+        scale: [0.007; 3],
+        misalignment_rad: [0.0, 0.0, 1.1f64.to_radians()],
+        lever_arm_m: [0.3, -0.6, 0.0],
+        time_offset_s: case.clock_s,
+        bias_m_s: [0.0; 3],
+    }
+}
+
+/// The three tracks, in turn by seed.
+#[derive(Debug, Clone, Copy)]
+enum Track {
+    Weave,
+    Clover,
+    Spiral,
+}
+
+impl Track {
+    /// Position (north, east), m, and velocity, m/s, at `t`.
+    fn at(self, t: f64) -> ([f64; 2], [f64; 2]) {
+        match self {
+            Track::Weave => {
+                let (speed, amplitude, period) = (1.5, 40.0, 120.0);
+                let w = 2.0 * PI / period;
+                (
+                    [speed * t, amplitude * (w * t).sin()],
+                    [speed, amplitude * w * (w * t).cos()],
+                )
+            }
+            Track::Clover => {
+                // r = R cos 3θ, θ = ωt: speed Rω √(9 sin² 3θ + cos² 3θ).
+                let (radius, w) = (150.0, 0.0048);
+                let theta = w * t + 0.1;
+                let r = radius * (3.0 * theta).cos();
+                let dr = -3.0 * radius * (3.0 * theta).sin() * w;
+                let (c, s) = (theta.cos(), theta.sin());
+                ([r * c, r * s], [dr * c - r * s * w, dr * s + r * c * w])
+            }
+            Track::Spiral => {
+                let (w, r0, growth) = (0.03, 40.0, 0.1);
+                let r = r0 + growth * t;
+                let (c, s) = ((w * t).cos(), (w * t).sin());
+                (
+                    [r * c, r * s],
+                    [growth * c - r * w * s, growth * s + r * w * c],
+                )
+            }
+        }
+    }
+
+    /// The heading, rad, unwrapped by continuity from `before`: the course plus a crab
+    /// of ±4° over 47 s.
+    fn heading(self, t: f64, before: f64) -> f64 {
+        let (_, v) = self.at(t);
+        let course = v[1].atan2(v[0]) + 4f64.to_radians() * (2.0 * PI * t / 47.0).sin();
+        course + 2.0 * PI * ((before - course) / (2.0 * PI)).round()
+    }
+}
+
+/// One dive: the DVL's stamps and velocities, the attitude and the fixes.
+pub struct Dive {
+    pub time_s: Vec<f64>,
+    pub dvl_m_s: Vec<Vec3>,
+    pub attitude: Attitude,
+    pub fixes: Fixes,
+}
+
+/// The dive of `seed` under `case`, [`DIVE_S`] long with a fix every
+/// [`FIX_INTERVAL_S`], on each track in turn by seed.
+pub fn dive(case: &Case, seed: u64) -> Dive {
+    let track = [Track::Weave, Track::Clover, Track::Spiral][seed as usize % 3];
+    dive_on(track, case, seed, (DIVE_S, FIX_INTERVAL_S))
+}
+
+/// A weaving transect of `dive_s` seconds with a fix every `fix_interval_s`, under
+/// `case` (the benchmark's long dives: the other tracks leave a bounded area).
+pub fn long_dive(case: &Case, seed: u64, (dive_s, fix_interval_s): (f64, f64)) -> Dive {
+    dive_on(Track::Weave, case, seed, (dive_s, fix_interval_s))
+}
+
+/// The dive of `seed` on `track` under `case`.
+fn dive_on(track: Track, case: &Case, seed: u64, (dive_s, fix_interval_s): (f64, f64)) -> Dive {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let unit = Normal::new(0.0, 1.0).unwrap();
+    let truth = truth(case);
+    // The attitude at 10 Hz over the dive and 5 s either side.
+    let attitude_time: Vec<f64> = (0..((dive_s + 10.0) * 10.0) as usize + 1)
+        .map(|i| -5.0 + 0.1 * i as f64)
+        .collect();
+    let mut heading = 0.0;
+    let angles: Vec<Vec3> = (attitude_time.iter())
+        .map(|&t| {
+            heading = track.heading(t, heading);
+            [0.0, 0.0, heading]
+        })
+        .collect();
+    let heading_at = |t: f64| track.heading(t, heading_near(&attitude_time, &angles, t));
+    let time_s: Vec<f64> = (0..(dive_s / DVL_STEP_S) as usize + 1)
+        .map(|i| i as f64 * DVL_STEP_S)
+        .collect();
+    let (rho, mut noise) = (case.correlation, [0.0; 3]);
+    let dvl_m_s = (time_s.iter())
+        .map(|&stamp| {
+            let t = stamp + truth.time_offset_s;
+            let (_, v) = track.at(t);
+            let psi = heading_at(t);
+            let rate = (heading_at(t + 1e-4) - heading_at(t - 1e-4)) / 2e-4;
+            // C_n^b v_n + ω × l, then Rz(δz)ᵀ and the scale.
+            let body = rotate_z_transposed(psi, [v[0], v[1]]);
+            let point = [
+                body[0] - rate * truth.lever_arm_m[1],
+                body[1] + rate * truth.lever_arm_m[0],
+            ];
+            let dvl = rotate_z_transposed(truth.misalignment_rad[2], point);
+            for n in &mut noise {
+                *n = rho * *n + (1.0 - rho * rho).sqrt() * DVL_NOISE_M_S * unit.sample(&mut rng);
+            }
+            let s = 1.0 + truth.scale[0];
+            [s * dvl[0] + noise[0], s * dvl[1] + noise[1], noise[2]]
+        })
+        .collect();
+    let fix_time: Vec<f64> = (0..(dive_s / fix_interval_s) as usize)
+        .map(|k| fix_interval_s / 2.0 + fix_interval_s * k as f64)
+        .collect();
+    let north_east_m = (fix_time.iter())
+        .map(|&t| {
+            let (p, _) = track.at(t - case.latency_s);
+            [0, 1].map(|k| p[k] + case.fix_m * unit.sample(&mut rng))
+        })
+        .collect();
+    Dive {
+        time_s,
+        dvl_m_s,
+        attitude: Attitude::new(&attitude_time, &angles),
+        fixes: Fixes {
+            lines: (0..fix_time.len() as u64).collect(),
+            time_s: fix_time,
+            north_east_m,
+            depth_m: None,
+        },
+    }
+}
+
+/// The unwrapped heading sampled nearest `t`, to unwrap another by.
+fn heading_near(time_s: &[f64], angles: &[Vec3], t: f64) -> f64 {
+    let i = time_s.partition_point(|&s| s < t).min(time_s.len() - 1);
+    angles[i][2]
+}
+
+/// Rz(a)ᵀ · (x, y): a horizontal vector turned into axes yawed by a.
+fn rotate_z_transposed(a: f64, v: [f64; 2]) -> [f64; 2] {
+    let (c, s) = (a.cos(), a.sin());
+    [c * v[0] + s * v[1], -s * v[0] + c * v[1]]
+}
+
+/// Of `dives` dives of `case` (seeds 0 on), per term estimated: the share of those that
+/// applied it whose 95 % interval holds the truth, and how many applied it; and how
+/// many dives the fit refused.
+pub fn coverage(case: &Case, dives: u64) -> (Vec<(&'static str, f64, usize)>, usize) {
+    use dcnet_exp::installation::estimate::fixes::{FixNoise, default_fix_terms, fit_fixes};
+    use dcnet_exp::installation::terms::names::term_set;
+    use rayon::prelude::*;
+    let terms = term_set(&default_fix_terms());
+    let truth = truth(case).to_parameters(&terms);
+    let noise = FixNoise {
+        fix_m: case.fix_m,
+        depth_m: case.fix_m,
+        dvl_m_s: DVL_NOISE_M_S,
+    };
+    let fits: Vec<Option<Vec<(&'static str, Option<bool>)>>> = (0..dives)
+        .into_par_iter()
+        .map(|seed| {
+            let dive = dive(case, seed);
+            let pieces = vec![0..dive.time_s.len()];
+            let dvl = (&dive.time_s[..], &dive.dvl_m_s[..]);
+            let fit = fit_fixes(dvl, &pieces, &dive.attitude, &dive.fixes, terms, noise).ok()?;
+            Some(
+                (0..fit.names.len())
+                    .filter(|&k| fit.estimated[k])
+                    .map(|k| {
+                        let error = (fit.value[k] - truth[k]).abs();
+                        let covered = error <= fit.half_width_95(k);
+                        (fit.names[k], fit.applied[k].then_some(covered))
+                    })
+                    .collect(),
+            )
+        })
+        .collect();
+    let refused = fits.iter().filter(|f| f.is_none()).count();
+    let fits: Vec<_> = fits.into_iter().flatten().collect();
+    let names: Vec<&'static str> = fits[0].iter().map(|(name, _)| *name).collect();
+    let table = (names.iter().enumerate())
+        .map(|(k, &name)| {
+            let applied: Vec<bool> = fits.iter().filter_map(|fit| fit[k].1).collect();
+            let covered = applied.iter().filter(|&&inside| inside).count();
+            let share = covered as f64 / applied.len().max(1) as f64;
+            (name, share, applied.len())
+        })
+        .collect();
+    (table, refused)
+}
