@@ -10,7 +10,8 @@
 //! the joint `calibrate` of two such dives, with the process's peak resident memory.
 //! With `-- --memory`: each command's peak resident memory, run as the binary on dives
 //! of one and five hours, beside the estimate with which it refuses a recording beyond
-//! the machine's memory before reading it. With `-- --bag`: `calibrate` of a ROS 2 bag
+//! the machine's memory before reading it (`-- --memory fixes`: `calibrate --fixes`
+//! alone). With `-- --bag`: `calibrate` of a ROS 2 bag
 //! (MCAP) of an hour's dive, the INS at 100 Hz and the DVL at 10 Hz, alone and beside a
 //! camera topic the reading passes over, its seconds and peak resident memory. With
 //! `-- --address-limits`: each command under an address-space limit of 60 MB to 2 GB,
@@ -199,7 +200,7 @@ fn hour(which: Option<&str>) {
 /// resident memory beside the estimate that refuses it up front
 /// ([`dcnet_exp::operator::cost`]).
 fn memory() {
-    use dcnet_exp::operator::cost::{CALIBRATE, CORRECT, Cost, JOINT, PerRow};
+    use dcnet_exp::operator::cost::{CALIBRATE, CORRECT, Cost, FIXES, JOINT, PerRow, Rows};
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let saved = saved_installation(d);
@@ -262,12 +263,94 @@ fn memory() {
         );
     };
     let installation = ["--installation", saved.to_str().unwrap()];
-    for k in 0..dives.len() {
+    // `-- --memory fixes`: `calibrate --fixes` alone.
+    let only_fixes = std::env::args().any(|a| a == "fixes");
+    for k in (0..dives.len()).filter(|_| !only_fixes) {
         run(CALIBRATE, &[k], &[]);
         run(CORRECT, &[k], &installation);
     }
-    run(JOINT, &[0, 1], &[]);
-    run(JOINT, &[2, 0], &[]);
+    if !only_fixes {
+        run(JOINT, &[0, 1], &[]);
+        run(JOINT, &[2, 0], &[]);
+    }
+    // `calibrate --fixes`: the reference's own positions as fixes, every second of the
+    // DVL at 100 Hz, and ten a second (a fix-heavy recording) of the DVL at 10 Hz.
+    // Their dives have no bias, which fixes do not calibrate.
+    let unbiased = installed::Installed {
+        bias_m_s: [0.0; 3],
+        ..installed::INSTALLED
+    };
+    for (k, every) in [(0, 100), (1, 10)] {
+        let (name, rows, dvl_every, _) = dives[k];
+        let at = d.join(format!("fixes{k}"));
+        installed::write_installed_at_rates(&at, 1, &[], unbiased, 3, (rows, 0.01), dvl_every);
+        let at = at.join("Trajectory1");
+        let (dvl, reference) = (
+            at.join("DVL_trajectory1.csv"),
+            at.join("GT_trajectory1.csv"),
+        );
+        let fixes = write_fixes(d, k, (&dvl, &reference), every);
+        let rows = Rows::count(&dvl, Some(&reference)).unwrap();
+        let cost = Cost::on(FIXES, vec![rows.with_fixes(&fixes).unwrap()], f64::INFINITY);
+        let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_dcnet-exp"));
+        command
+            .arg("calibrate")
+            .arg(&dvl)
+            .arg("--attitude")
+            .arg(&reference)
+            .arg("--fixes")
+            .arg(&fixes)
+            .arg("--columns")
+            .arg(d.join("fix_columns.toml"))
+            .args(["--fix-noise-m", "0.5"]);
+        let peak = peak_of(command);
+        println!(
+            "| {} | {name}, a fix every {} s | {} | {:.0} MB | {:.0} MB | {:.0} |",
+            FIXES.command,
+            every as f64 / 100.0,
+            cost.rows(),
+            peak / 1e6,
+            cost.need / 1e6,
+            peak / cost.rows() as f64
+        );
+    }
+}
+
+/// Writes the reference's own positions (its NED velocity summed by the trapezoidal
+/// rule) at every `every`-th of its rows as fixes in `d`, and the columns that read
+/// them: the fixes' path.
+fn write_fixes(
+    d: &std::path::Path,
+    k: usize,
+    (dvl, reference): (&std::path::Path, &std::path::Path),
+    every: usize,
+) -> std::path::PathBuf {
+    let files = PairedFiles {
+        dvl: dvl.to_path_buf(),
+        reference: reference.to_path_buf(),
+    };
+    let r = read(&files, &PairedColumns::akit()).unwrap();
+    let (mut position, mut text) = ([0.0; 2], String::from("t,n,e\n"));
+    for i in 0..r.reference_time_s.len() {
+        if i > 0 {
+            let dt = r.reference_time_s[i] - r.reference_time_s[i - 1];
+            for (axis, p) in position.iter_mut().enumerate() {
+                *p += 0.5 * dt * (r.velocity_ned_m_s[i][axis] + r.velocity_ned_m_s[i - 1][axis]);
+            }
+        }
+        if i % every == 0 {
+            let t = r.reference_time_s[i];
+            text.push_str(&format!("{t},{},{}\n", position[0], position[1]));
+        }
+    }
+    let path = d.join(format!("fixes{k}.csv"));
+    std::fs::write(&path, text).unwrap();
+    std::fs::write(
+        d.join("fix_columns.toml"),
+        "[fix_columns]\ntime = \"t\"\nnorth_east = [\"n\", \"e\"]\n",
+    )
+    .unwrap();
+    path
 }
 
 /// The `--address-limits` case: each operator command on a dive of ten minutes at
@@ -433,19 +516,23 @@ fn peak_of(mut command: std::process::Command) -> f64 {
         libc::malloc_trim(0);
     }
     let _ = std::fs::write("/proc/self/clear_refs", "5");
+    let stderr = tempfile::tempfile().unwrap();
     let child = command
         .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
+        .stderr(stderr.try_clone().unwrap())
         .spawn()
         .unwrap();
     let (mut status, mut usage) = (0, unsafe { std::mem::zeroed::<libc::rusage>() });
     // SAFETY: waits for the child just spawned, writing its status and usage.
     let waited = unsafe { libc::wait4(child.id() as i32, &mut status, 0, &mut usage) };
     assert_eq!(waited, child.id() as i32);
-    assert!(
-        libc::WIFEXITED(status) && libc::WEXITSTATUS(status) == 0,
-        "{command:?} failed"
-    );
+    if !(libc::WIFEXITED(status) && libc::WEXITSTATUS(status) == 0) {
+        use std::io::{Read, Seek};
+        let (mut stderr, mut said) = (stderr, String::new());
+        stderr.rewind().unwrap();
+        stderr.read_to_string(&mut said).unwrap();
+        panic!("{command:?} failed:\n{said}");
+    }
     usage.ru_maxrss as f64 * 1024.0
 }
 

@@ -59,12 +59,13 @@ fn main() {
 }
 
 /// The cases of the coverage study.
-const CASES: [Case; 5] = [
+const CASES: [Case; 6] = [
     case(0.5, 0.0, 0.0),
     case(2.0, 0.0, 1.5),
-    case(5.0, 0.9, 0.6),
     case(0.5, 0.8, 0.6),
+    case(0.5, 0.9, 0.6),
     case(2.0, 0.9, 0.0),
+    case(5.0, 0.9, 0.6),
 ];
 
 const fn case(fix_m: f64, correlation: f64, clock_s: f64) -> Case {

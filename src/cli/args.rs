@@ -158,20 +158,8 @@ pub(super) struct CalibrateArgs {
     /// --fixes: scale,misalignment,lever_arm,time_offset]
     #[arg(long, value_delimiter = ',')]
     pub(super) terms: Option<Vec<String>>,
-    /// Calibrate against position fixes rather than a velocity reference: a CSV file of
-    /// a time and a latitude and longitude (or north and east, m, as its [fix_columns]
-    /// table in --columns names them; A-KIT's reference file's by default), optionally a
-    /// depth, on the attitude's clock; needs --attitude and --fix-noise-m
-    #[arg(long, value_name = "FILE")]
-    pub(super) fixes: Option<PathBuf>,
-    /// With --fixes: the CSV file of the attitude (an AHRS's roll, pitch, yaw, as
-    /// [columns] names them), on its own clock and at its own rate
-    #[arg(long, value_name = "FILE")]
-    pub(super) attitude: Option<PathBuf>,
-    /// With --fixes: the fixes' noise per horizontal axis, m (a USBL's metres, a GNSS's
-    /// less)
-    #[arg(long, value_name = "METRES", allow_negative_numbers = true)]
-    pub(super) fix_noise_m: Option<f64>,
+    #[command(flatten)]
+    pub(super) fix: FixFlags,
     /// With --fixes that have a depth: its noise, m [default: --fix-noise-m]
     #[arg(long, value_name = "METRES", allow_negative_numbers = true)]
     pub(super) depth_noise_m: Option<f64>,
@@ -227,6 +215,60 @@ impl CalibrateArgs {
         self.out
             .as_deref()
             .unwrap_or(std::path::Path::new("calibrated"))
+    }
+}
+
+/// Position fixes in place of a velocity reference, for `calibrate` and `correct`.
+#[derive(Debug, clap::Args)]
+pub(super) struct FixFlags {
+    /// Position fixes rather than a velocity reference: a CSV file of a time and a
+    /// latitude and longitude (or north and east, m, as its [fix_columns] table in
+    /// --columns names them; A-KIT's reference file's by default), optionally a depth,
+    /// on the attitude's clock; needs --attitude and --fix-noise-m
+    #[arg(long, value_name = "FILE")]
+    pub(super) fixes: Option<PathBuf>,
+    /// With --fixes: the CSV file of the attitude (an AHRS's roll, pitch, yaw, as
+    /// [columns] names them), on its own clock and at its own rate
+    #[arg(long, value_name = "FILE")]
+    pub(super) attitude: Option<PathBuf>,
+    /// With --fixes: the fixes' noise per horizontal axis, m (a USBL's metres, a GNSS's
+    /// less)
+    #[arg(long, value_name = "METRES", allow_negative_numbers = true)]
+    pub(super) fix_noise_m: Option<f64>,
+}
+
+impl FixFlags {
+    /// The fixes, where given, with the attitude and noise they need; the flags given
+    /// without fixes refused.
+    pub(super) fn given(
+        &self,
+    ) -> Result<Option<(&std::path::Path, &std::path::Path, f64)>, String> {
+        let Some(fixes) = &self.fixes else {
+            for (flag, given) in [
+                ("--attitude", self.attitude.is_some()),
+                ("--fix-noise-m", self.fix_noise_m.is_some()),
+            ] {
+                if given {
+                    return Err(format!(
+                        "{flag}: goes with position fixes: give them with --fixes"
+                    ));
+                }
+            }
+            return Ok(None);
+        };
+        let Some(attitude) = &self.attitude else {
+            return Err(
+                "--fixes: give the attitude beside it with --attitude (an AHRS's roll, pitch and yaw)"
+                    .into(),
+            );
+        };
+        let Some(fix_noise_m) = self.fix_noise_m else {
+            return Err(
+                "--fixes: give the fixes' noise per horizontal axis with --fix-noise-m (metres)"
+                    .into(),
+            );
+        };
+        Ok(Some((fixes, attitude, fix_noise_m)))
     }
 }
 
@@ -310,17 +352,16 @@ pub(super) struct CorrectArgs {
     pub(super) columns: Option<PathBuf>,
     #[command(flatten)]
     pub(super) reading: ReadingArgs,
+    #[command(flatten)]
+    pub(super) fix: FixFlags,
     /// The first SECONDS of the dive that find its clock again; scored after them
-    #[arg(
-        long,
-        value_name = "SECONDS",
-        default_value_t = 60.0,
-        allow_negative_numbers = true
-    )]
-    pub(super) window_s: f64,
+    /// [default: 60; with --fixes, the whole dive's fixes]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    pub(super) window_s: Option<f64>,
     /// How far from the calibration's time offset the search for the clock looks, s
-    #[arg(long, default_value_t = crate::installation::estimate::clock::DEFAULT_SEARCH_S, allow_negative_numbers = true)]
-    pub(super) search_s: f64,
+    /// [default: 30; with --fixes, the fit's own scan of ±3 s]
+    #[arg(long, allow_negative_numbers = true)]
+    pub(super) search_s: Option<f64>,
     /// The dive's time offset, s, where it is known: no search
     #[arg(long, allow_negative_numbers = true)]
     pub(super) time_offset_s: Option<f64>,

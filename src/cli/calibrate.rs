@@ -8,14 +8,16 @@
 
 use super::args;
 use super::{CliError, input, stopped};
+use crate::installation::estimate::clock::DEFAULT_SEARCH_S;
 use crate::installation::estimate::fixes::default_fix_terms;
 use crate::installation::terms::names::TermName;
 use crate::operator::calibrate::{CalibrateArgs, calibrate as calibrated};
-use crate::operator::calibrate_fixes::{FixArgs, calibrate_fixes as calibrated_on_fixes};
+use crate::operator::calibrate_fixes::{FixArgs, FixFiles, calibrate_fixes as calibrated_on_fixes};
 use crate::operator::calibrate_joint::{JointArgs, calibrate_joint as calibrated_jointly};
 use crate::operator::correct::{CorrectArgs, correct as corrected};
+use crate::operator::correct_fixes::{FixCorrectArgs, correct_fixes as corrected_on_fixes};
 use crate::report::operator::calibrate::{calibration_text, joint_text};
-use crate::report::operator::correct::correction_text;
+use crate::report::operator::correct::{correction_text, fix_correction_text};
 use crate::report::operator::fixes::fixes_text;
 
 /// `calibrate` as typed: one recording, or several calibrated jointly.
@@ -26,19 +28,13 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
             args.reference.len()
         )));
     }
-    if let Some(fixes) = &args.fixes {
-        return calibrate_fixes(args, fixes);
+    if let Some(given) = args.fix.given().map_err(|m| input(anyhow::anyhow!(m)))? {
+        return calibrate_fixes(args, given);
     }
-    for (flag, given) in [
-        ("--attitude", args.attitude.is_some()),
-        ("--fix-noise-m", args.fix_noise_m.is_some()),
-        ("--depth-noise-m", args.depth_noise_m.is_some()),
-    ] {
-        if given {
-            return Err(input(anyhow::anyhow!(
-                "{flag}: calibrates against position fixes: give them with --fixes"
-            )));
-        }
+    if args.depth_noise_m.is_some() {
+        return Err(input(anyhow::anyhow!(
+            "--depth-noise-m: goes with position fixes: give them with --fixes"
+        )));
     }
     let default_terms = ["lever_arm", "time_offset", "bias"].map(String::from);
     let terms = parse_terms(("--terms", args.terms.as_deref().unwrap_or(&default_terms)))?;
@@ -79,7 +75,10 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
 
 /// `calibrate DVL.csv --fixes FIXES.csv --attitude ATTITUDE.csv --fix-noise-m σ`: the
 /// terms the fixes show, printed, and saved where asked.
-fn calibrate_fixes(args: &args::CalibrateArgs, fixes: &std::path::Path) -> Result<(), CliError> {
+fn calibrate_fixes(
+    args: &args::CalibrateArgs,
+    (fixes, attitude, fix_noise_m): (&std::path::Path, &std::path::Path, f64),
+) -> Result<(), CliError> {
     let refuse = |message: String| Err(input(anyhow::anyhow!(message)));
     if args.dvl.len() > 1 {
         return refuse(format!(
@@ -87,17 +86,6 @@ fn calibrate_fixes(args: &args::CalibrateArgs, fixes: &std::path::Path) -> Resul
             args.dvl.len()
         ));
     }
-    let Some(attitude) = &args.attitude else {
-        return refuse(
-            "--fixes: give the attitude beside it with --attitude (an AHRS's roll, pitch and yaw)"
-                .into(),
-        );
-    };
-    let Some(fix_noise_m) = args.fix_noise_m else {
-        return refuse(
-            "--fixes: give the fixes' noise per horizontal axis with --fix-noise-m (metres)".into(),
-        );
-    };
     for (flag, given) in [
         ("--reference", !args.reference.is_empty()),
         ("--window-s", args.window_s.is_some()),
@@ -106,7 +94,6 @@ fn calibrate_fixes(args: &args::CalibrateArgs, fixes: &std::path::Path) -> Resul
         ("--rate-topic", args.reading.rate_topic.is_some()),
         ("--stamps", args.reading.stamps.is_some()),
         ("--frame", args.reading.frame.is_some()),
-        ("--out", args.out.is_some()),
         ("--tolerance-pct", args.tolerance_pct.is_some()),
         (
             "--reference-noise-cm-s",
@@ -116,7 +103,7 @@ fn calibrate_fixes(args: &args::CalibrateArgs, fixes: &std::path::Path) -> Resul
     ] {
         if given {
             return refuse(format!(
-                "{flag}: does not apply to a calibration against fixes (--fixes), which reads CSV files (the DVL's, the attitude's and the fixes'), writes no corrected recording and runs no filter"
+                "{flag}: does not apply to a calibration against fixes (--fixes), which reads CSV files (the DVL's, the attitude's and the fixes') and runs no filter"
             ));
         }
     }
@@ -126,20 +113,26 @@ fn calibrate_fixes(args: &args::CalibrateArgs, fixes: &std::path::Path) -> Resul
     };
     let dive_terms = parse_terms(("--dive-terms", &args.dive_terms))?;
     let calibration = calibrated_on_fixes(&FixArgs {
-        dvl: &args.dvl[0],
-        attitude,
-        fixes,
-        columns: args.columns.as_deref(),
-        reading: args.reading.reading(),
+        files: FixFiles {
+            dvl: &args.dvl[0],
+            attitude,
+            fixes,
+            columns: args.columns.as_deref(),
+            reading: args.reading.reading(),
+        },
         terms: &terms,
         dive_terms: &dive_terms,
         fix_noise_m,
         depth_noise_m: args.depth_noise_m,
         dvl_noise_cm_s: args.dvl_noise_cm_s,
         save: args.save.as_deref(),
+        out: args.out(),
     })
     .map_err(stopped)?;
     print!("{}", fixes_text(&calibration));
+    for path in &calibration.corrected {
+        eprintln!("corrected recording written to {}", path.display());
+    }
     if let Some(path) = &args.save {
         eprintln!(
             "installation saved to {} (apply it to another dive with `dcnet-exp correct`)",
@@ -149,19 +142,69 @@ fn calibrate_fixes(args: &args::CalibrateArgs, fixes: &std::path::Path) -> Resul
     Ok(())
 }
 
-/// `correct` as typed.
+/// `correct` as typed: against a velocity reference, or against fixes.
 pub(super) fn correct_command(args: &args::CorrectArgs) -> Result<(), CliError> {
+    if let Some(given) = args.fix.given().map_err(|m| input(anyhow::anyhow!(m)))? {
+        return correct_fixes(args, given);
+    }
     correct(&CorrectArgs {
         dvl: &args.dvl,
         reference: args.reference.as_deref(),
         columns: args.columns.as_deref(),
         reading: args.reading.reading(),
         installation: &args.installation,
-        window_s: args.window_s,
-        search_s: args.search_s,
+        window_s: args.window_s.unwrap_or(DEFAULT_WINDOW_S),
+        search_s: args.search_s.unwrap_or(DEFAULT_SEARCH_S),
         time_offset_s: args.time_offset_s,
         out: &args.out,
     })
+}
+
+/// The first seconds of a dive that find its clock again against a velocity reference.
+const DEFAULT_WINDOW_S: f64 = 60.0;
+
+/// `correct DVL.csv --installation FILE --fixes FIXES.csv --attitude ATTITUDE.csv
+/// --fix-noise-m σ`: the installation carried, the clock found again from the fixes.
+fn correct_fixes(
+    args: &args::CorrectArgs,
+    (fixes, attitude, fix_noise_m): (&std::path::Path, &std::path::Path, f64),
+) -> Result<(), CliError> {
+    let refuse = |message: String| Err(input(anyhow::anyhow!(message)));
+    for (flag, given) in [
+        ("--reference", args.reference.is_some()),
+        ("--search-s", args.search_s.is_some()),
+        ("--dvl-topic", args.reading.dvl_topic.is_some()),
+        ("--reference-topic", args.reading.reference_topic.is_some()),
+        ("--rate-topic", args.reading.rate_topic.is_some()),
+        ("--stamps", args.reading.stamps.is_some()),
+        ("--frame", args.reading.frame.is_some()),
+    ] {
+        if given {
+            return refuse(format!(
+                "{flag}: does not apply to a correction against fixes (--fixes), which reads CSV files (the DVL's, the attitude's and the fixes') and scans the clock within ±3 s of the installation's"
+            ));
+        }
+    }
+    let correction = corrected_on_fixes(&FixCorrectArgs {
+        files: FixFiles {
+            dvl: &args.dvl,
+            attitude,
+            fixes,
+            columns: args.columns.as_deref(),
+            reading: args.reading.reading(),
+        },
+        installation: &args.installation,
+        fix_noise_m,
+        window_s: args.window_s,
+        time_offset_s: args.time_offset_s,
+        out: &args.out,
+    })
+    .map_err(stopped)?;
+    print!("{}", fix_correction_text(&correction));
+    for path in &correction.written {
+        eprintln!("corrected dive written to {}", path.display());
+    }
+    Ok(())
 }
 
 /// `--terms` (or `--dive-terms`) as typed, each a term's name.

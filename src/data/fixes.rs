@@ -12,6 +12,7 @@
 //! with no reference velocity, and [`Fixes`].
 
 use crate::data::csv::{Column, Quantity, parse_columns, read_bytes};
+use crate::data::interpolate::Between;
 use crate::data::local_plane::{north_east_m, off_the_globe};
 use crate::data::paired::{PairedColumns, PairedError, ReadRecording, SourceFile};
 use crate::files::sha256_hex;
@@ -229,18 +230,12 @@ pub fn simulate_fixes(
     };
     for k in 0..count {
         let t = first + k as f64 * simulation.interval_s;
-        let after = time_s.partition_point(|&s| s < t).min(time_s.len() - 1);
-        let before = after.saturating_sub(1);
-        let span = time_s[after] - time_s[before];
-        let weight = if span > 0.0 {
-            (t - time_s[before]) / span
-        } else {
-            0.0
-        };
-        let (a, b) = (north_east_m[before], north_east_m[after]);
+        let at = Between::locate(time_s, t.min(last), f64::INFINITY)
+            .expect("a time inside the positions")
+            .of(north_east_m);
         let mut position = [0, 1].map(|axis| {
             let noise: f64 = StandardNormal.sample(rng);
-            a[axis] + weight * (b[axis] - a[axis]) + simulation.noise_m * noise
+            at[axis] + simulation.noise_m * noise
         });
         if rng.random::<f64>() < simulation.outlier_share {
             let direction = rng.random::<f64>() * std::f64::consts::TAU;

@@ -9,6 +9,7 @@ pub mod catalogue;
 pub mod csv;
 pub mod fetch;
 pub mod fixes;
+pub mod interpolate;
 pub mod local_plane;
 pub mod npy;
 pub mod paired;

@@ -13,6 +13,7 @@
 //! integrates to C_b^n l.
 
 use crate::Vec3;
+use crate::data::interpolate::Between;
 use crate::data::paired::{GAP_MARGIN_S, PairedRecording};
 use crate::installation::frames::{Attitude, apply};
 use crate::installation::terms::Installation;
@@ -30,18 +31,7 @@ impl Track {
     /// The position at `time_s`, linearly interpolated between two samples (exact at
     /// one); `None` outside the track.
     pub fn at(&self, time_s: f64) -> Option<Vec3> {
-        let (&first, &last) = (self.time_s.first()?, self.time_s.last()?);
-        if !(first..=last).contains(&time_s) {
-            return None;
-        }
-        let after = self.time_s.partition_point(|&t| t < time_s);
-        if self.time_s[after] == time_s {
-            return Some(self.position_m[after]);
-        }
-        let before = after - 1;
-        let weight = (time_s - self.time_s[before]) / (self.time_s[after] - self.time_s[before]);
-        let (a, b) = (self.position_m[before], self.position_m[after]);
-        Some([0, 1, 2].map(|k| a[k] + weight * (b[k] - a[k])))
+        Between::locate(&self.time_s, time_s, f64::INFINITY).map(|at| at.of(&self.position_m))
     }
 }
 
@@ -97,18 +87,7 @@ pub struct Positions<'a> {
 impl Positions<'_> {
     /// The position at `time_s`, linearly interpolated; `None` outside.
     pub fn at(&self, time_s: f64) -> Option<[f64; 2]> {
-        let (&first, &last) = (self.time_s.first()?, self.time_s.last()?);
-        if !(first..=last).contains(&time_s) {
-            return None;
-        }
-        let after = self.time_s.partition_point(|&t| t < time_s);
-        if self.time_s[after] == time_s {
-            return Some(self.north_east_m[after]);
-        }
-        let before = after - 1;
-        let weight = (time_s - self.time_s[before]) / (self.time_s[after] - self.time_s[before]);
-        let (a, b) = (self.north_east_m[before], self.north_east_m[after]);
-        Some([0, 1].map(|k| a[k] + weight * (b[k] - a[k])))
+        Between::locate(self.time_s, time_s, f64::INFINITY).map(|at| at.of(self.north_east_m))
     }
 }
 

@@ -9,6 +9,7 @@
 //! body-frame vector into NED, and C_n^b = (C_b^n)ᵀ takes it back.
 
 use crate::Vec3;
+use crate::data::interpolate::Between;
 use crate::data::paired::{PairedRecording, REFERENCE_GAP_INTERVALS, sample_interval};
 use std::f64::consts::PI;
 use std::ops::Range;
@@ -92,24 +93,8 @@ impl Attitude {
 
     /// C_b^n at `time_s`; `None` outside the recorded span or inside a gap.
     pub fn body_to_ned_at(&self, time_s: f64) -> Option<Mat3> {
-        let (&first, &last) = (self.time_s.first()?, self.time_s.last()?);
-        if !(first..=last).contains(&time_s) {
-            return None;
-        }
-        let after = self.time_s.partition_point(|&t| t < time_s);
-        if self.time_s[after] == time_s {
-            return Some(body_to_ned(self.angles_rad[after]));
-        }
-        let before = after - 1;
-        let span_s = self.time_s[after] - self.time_s[before];
-        if span_s > self.max_gap_s {
-            return None;
-        }
-        let weight = (time_s - self.time_s[before]) / span_s;
-        let (a, b) = (self.angles_rad[before], self.angles_rad[after]);
-        Some(body_to_ned(
-            [0, 1, 2].map(|k| a[k] + weight * (b[k] - a[k])),
-        ))
+        let at = Between::locate(&self.time_s, time_s, self.max_gap_s)?;
+        Some(body_to_ned(at.of(&self.angles_rad)))
     }
 }
 
@@ -141,7 +126,9 @@ impl Reference {
     /// The reference of a recording: v_b = C_n^b · v_n at every sample, and ω_b as
     /// recorded, or else from the attitude: yaw unwrapped, the Euler angles
     /// differentiated (central differences inside, one-sided at the ends), then
-    /// [`body_rate`].
+    /// [`body_rate`]. A recording whose reference has no velocity (an attitude beside
+    /// fixes) gives the body rate alone: [`Self::at`] reads nothing of it, and
+    /// [`Self::rate_at`] its rate.
     pub fn new(recording: &PairedRecording) -> Self {
         let velocity_body_m_s = recording
             .attitude_rad
@@ -190,32 +177,22 @@ impl Reference {
         self.read(time_s, f64::INFINITY)
     }
 
+    /// The body rate at `time_s`, where [`Self::at`] would read the reference (with or
+    /// without a velocity): what corrects a DVL's lever arm.
+    pub fn rate_at(&self, time_s: f64) -> Option<Vec3> {
+        let at = Between::locate(&self.time_s, time_s, self.max_gap_s)?;
+        Some(at.of(&self.rate_rad_s))
+    }
+
     /// The reference at `time_s`, read across gaps up to `max_gap_s`.
     fn read(&self, time_s: f64, max_gap_s: f64) -> Option<ReferenceAt> {
-        let (&first, &last) = (self.time_s.first()?, self.time_s.last()?);
-        if !(first..=last).contains(&time_s) {
+        if self.velocity_body_m_s.is_empty() {
             return None;
         }
-        // The first sample at or after `time_s`.
-        let after = self.time_s.partition_point(|&t| t < time_s);
-        if self.time_s[after] == time_s {
-            return Some(ReferenceAt {
-                velocity_body_m_s: self.velocity_body_m_s[after],
-                rate_rad_s: self.rate_rad_s[after],
-            });
-        }
-        let before = after - 1;
-        if self.time_s[after] - self.time_s[before] > max_gap_s {
-            return None;
-        }
-        let weight = (time_s - self.time_s[before]) / (self.time_s[after] - self.time_s[before]);
-        let blend = |a: Vec3, b: Vec3| [0, 1, 2].map(|k| a[k] + weight * (b[k] - a[k]));
+        let at = Between::locate(&self.time_s, time_s, max_gap_s)?;
         Some(ReferenceAt {
-            velocity_body_m_s: blend(
-                self.velocity_body_m_s[before],
-                self.velocity_body_m_s[after],
-            ),
-            rate_rad_s: blend(self.rate_rad_s[before], self.rate_rad_s[after]),
+            velocity_body_m_s: at.of(&self.velocity_body_m_s),
+            rate_rad_s: at.of(&self.rate_rad_s),
         })
     }
 

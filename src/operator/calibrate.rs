@@ -101,7 +101,7 @@ pub enum CalibrateError {
     #[error("--depth-noise-m: {} gives no depth, so there is no depth noise to weigh: leave it out, or name the fixes' depth column in [fix_columns]", fixes.display())]
     NoDepths { fixes: PathBuf },
     #[error(
-        "{}: {outliers} of the {within} fixes within the DVL's pieces lie beyond the robust fit's reach of the dead reckoning: more than a quarter are outliers, so the fixes do not show the installation (fixes of another vehicle or dive, or a clock beyond the fit's scan)",
+        "{}: {outliers} of the {within} fixes within the DVL's pieces lie beyond the robust fit's reach of the dead reckoning: more than a quarter are outliers, so the fixes do not show the installation (fixes of another vehicle or dive, a clock beyond the fit's scan, or a DVL bias, which fixes do not calibrate)",
         fixes.display()
     )]
     FixOutliers {
@@ -830,6 +830,7 @@ mod tests {
             dvl: PathBuf::from("dive.csv"),
             dvl_rows,
             reference_rows: None,
+            fix_rows: None,
         };
         let refused = Cost::on(CALIBRATE, vec![rows(10_000_000)], limit)
             .refused()

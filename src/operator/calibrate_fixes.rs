@@ -2,28 +2,39 @@
 //! vehicle with no velocity reference, by one library call: the DVL beside the attitude
 //! and the fixes are read ([`crate::data::fixes`]), the terms fitted to the fixes
 //! through the dead reckoning ([`crate::installation::estimate::fixes`]), the fixes'
-//! residual before and after, and the installation saved for `correct` as any other.
+//! residual before and after, the recording written corrected (as `calibrate` writes
+//! it), and the installation saved for `correct` as any other.
 //! In: [`FixArgs`]. Out: a [`FixCalibration`], everything the command prints, or a
 //! [`CalibrateError`] naming the argument, file or step at fault.
 
 use crate::data::fixes::{Fixes, read_beside_attitude, read_fixes};
-use crate::data::paired::{PairedRecording, ReadCounts};
+use crate::data::paired::{PairedError, PairedRecording, ReadCounts, ReadRecording};
+use crate::footprint::machine_memory;
 use crate::installation::estimate::fixes::{DEFAULT_FIX_TERMS, FixFit, FixNoise, fit_fixes};
-use crate::installation::frames::Attitude;
+use crate::installation::frames::{Attitude, Reference};
 use crate::installation::terms::names::{TermName, term_set};
 use crate::operator::calibrate::{CalibrateError, NOISE_RATIO_LIMIT, clear_of_inputs, named};
+use crate::operator::cost::{Cost, FIXES, PerRow, Rows};
 use crate::operator::inputs::{Reading, columns, fix_columns};
 use crate::operator::installation_file::{SavedInstallation, SavedTerm};
 use crate::results::ResultsError;
-use std::path::Path;
+use crate::results::corrected::{Outputs, corrected_samples, stem, write};
+use std::path::{Path, PathBuf};
 
-/// What `calibrate --fixes` is asked.
-pub struct FixArgs<'a> {
+/// The files a DVL is fitted to fixes from: the DVL's, the attitude's beside it, the
+/// fixes', and the columns that name theirs.
+#[derive(Clone, Copy)]
+pub struct FixFiles<'a> {
     pub dvl: &'a Path,
     pub attitude: &'a Path,
     pub fixes: &'a Path,
     pub columns: Option<&'a Path>,
     pub reading: Reading<'a>,
+}
+
+/// What `calibrate --fixes` is asked.
+pub struct FixArgs<'a> {
+    pub files: FixFiles<'a>,
     pub terms: &'a [TermName],
     pub dive_terms: &'a [TermName],
     /// The fixes' noise per horizontal axis and in depth, m; the DVL's per axis, cm/s.
@@ -31,6 +42,43 @@ pub struct FixArgs<'a> {
     pub depth_noise_m: Option<f64>,
     pub dvl_noise_cm_s: f64,
     pub save: Option<&'a Path>,
+    /// The folder the corrected recording goes to.
+    pub out: &'a Path,
+}
+
+impl FixFiles<'_> {
+    /// What fitting the DVL to the fixes will ask of this machine, as `per_row` counts
+    /// it.
+    pub fn cost(&self, per_row: PerRow) -> Result<Cost, PairedError> {
+        let rows = Rows::count(self.dvl, Some(self.attitude))?.with_fixes(self.fixes)?;
+        Ok(Cost::on(per_row, vec![rows], machine_memory() as f64))
+    }
+
+    /// Every file read.
+    pub fn inputs(&self) -> [Option<&Path>; 4] {
+        [
+            Some(self.dvl),
+            Some(self.attitude),
+            Some(self.fixes),
+            self.columns,
+        ]
+    }
+
+    /// The DVL beside the attitude, and the fixes, read and checked: fixes with a depth
+    /// where `depth` asks for one, and on the DVL's track ([`same_motion`]).
+    pub fn read(&self, depth: bool) -> Result<(ReadRecording, Fixes), CalibrateError> {
+        let columns = columns(self.columns, self.reading).map_err(CalibrateError::Columns)?;
+        let fix_columns = fix_columns(self.columns).map_err(CalibrateError::Columns)?;
+        let read = read_beside_attitude(self.dvl, self.attitude, &columns)?;
+        let (fixes, _) = read_fixes(self.fixes, &fix_columns).map_err(CalibrateError::Fixes)?;
+        if depth && fixes.depth_m.is_none() {
+            return Err(CalibrateError::NoDepths {
+                fixes: self.fixes.to_path_buf(),
+            });
+        }
+        same_motion(self.fixes, &fix_columns, &read.recording, &fixes)?;
+        Ok((read, fixes))
+    }
 }
 
 /// What `calibrate --fixes` found.
@@ -46,29 +94,21 @@ pub struct FixCalibration {
     pub after_m: f64,
     pub distance_m: f64,
     pub noise: FixNoise,
+    /// The corrected recording's files written.
+    pub corrected: Vec<PathBuf>,
 }
 
 /// `calibrate --fixes`: the terms the fixes show, their bound, and the fixes' residual.
 pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError> {
     refused(args)?;
-    let inputs = [
-        Some(args.dvl),
-        Some(args.attitude),
-        Some(args.fixes),
-        args.columns,
-    ];
-    clear_of_inputs(&inputs, &[], (args.save, false))?;
-    let columns = columns(args.columns, args.reading).map_err(CalibrateError::Columns)?;
-    let fix_columns = fix_columns(args.columns).map_err(CalibrateError::Columns)?;
-    let read = read_beside_attitude(args.dvl, args.attitude, &columns)?;
-    let (fixes, _) = read_fixes(args.fixes, &fix_columns).map_err(CalibrateError::Fixes)?;
-    if args.depth_noise_m.is_some() && fixes.depth_m.is_none() {
-        return Err(CalibrateError::NoDepths {
-            fixes: args.fixes.to_path_buf(),
-        });
-    }
+    let files = &args.files;
+    let outputs = Outputs::of(args.out, &stem(files.dvl));
+    let corrected = [outputs.csv.as_path(), outputs.parquet.as_path()];
+    clear_of_inputs(&files.inputs(), &corrected, (args.save, false))?;
+    files.cost(FIXES).map_err(CalibrateError::Read)?.state()?;
+    let (read, fixes) = files.read(args.depth_noise_m.is_some())?;
+    outputs.not_another_recordings(files.dvl, read.dvl_sha256())?;
     let recording = &read.recording;
-    same_motion(args, &fix_columns, recording, &fixes)?;
     let attitude = Attitude::new(&recording.reference_time_s, &recording.attitude_rad);
     let noise = FixNoise {
         fix_m: args.fix_noise_m,
@@ -81,10 +121,13 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
     // The fixes' residual with no terms: the start positions alone.
     let bare = fit_on(recording, &attitude, &fixes, term_set(&[]), noise)
         .map_err(|fault| fix_error(args, fault))?;
+    let samples = corrected_samples(&fit.installation, recording, &Reference::new(recording));
+    let corrected = write(&outputs, &samples, read.dvl_sha256()).map_err(CalibrateError::Write)?;
     if let Some(path) = args.save {
         save(path, args, &fit, read.dvl_sha256())?;
     }
     Ok(FixCalibration {
+        corrected,
         read: recording.counts(),
         fixes: fixes.len(),
         before_m: horizontal(bare.residual_rms_m),
@@ -115,7 +158,7 @@ const UNIT_FACTOR: f64 = 10.0;
 /// (latitude and longitude in radians read as degrees travel 57.3 times less), which no
 /// installation explains, before any fit reads them.
 fn same_motion(
-    args: &FixArgs,
+    fixes_file: &Path,
     columns: &crate::data::fixes::FixColumns,
     recording: &PairedRecording,
     fixes: &Fixes,
@@ -155,7 +198,7 @@ fn same_motion(
     let radians_as_degrees =
         columns.latitude_longitude.is_some() && columns.angles_in_degrees && ratio < 1.0;
     Err(CalibrateError::FixesOtherMotion {
-        fixes: args.fixes.to_path_buf(),
+        fixes: fixes_file.to_path_buf(),
         fixes_m,
         dvl_m,
         hint: match radians_as_degrees {
@@ -250,13 +293,13 @@ fn fix_error(
     use crate::installation::estimate::fixes::FixFitError;
     if let FixFitError::Outliers { outliers, within } = fault {
         return CalibrateError::FixOutliers {
-            fixes: args.fixes.to_path_buf(),
+            fixes: args.files.fixes.to_path_buf(),
             outliers,
             within,
         };
     }
     CalibrateError::FixFit {
-        fixes: args.fixes.to_path_buf(),
+        fixes: args.files.fixes.to_path_buf(),
         terms: named(args.terms),
         fault,
     }
@@ -282,7 +325,10 @@ fn save(
             std: fit.std[k],
         })
         .collect();
-    let recording = (args.dvl.display().to_string(), recording_sha256.to_string());
+    let recording = (
+        args.files.dvl.display().to_string(),
+        recording_sha256.to_string(),
+    );
     // Fixes measure no velocity residual: what a dive this installation fits leaves is
     // the DVL's own noise, as given.
     let file = SavedInstallation::of_terms(

@@ -118,6 +118,13 @@ pub enum CorrectError {
     #[error(transparent)]
     Memory(#[from] BeyondMemory),
     #[error(transparent)]
+    Fixes(#[from] Box<crate::operator::calibrate::CalibrateError>),
+    #[error("{}: the dive's dead reckoning cannot be fitted to its fixes: {fault}", fixes.display())]
+    FixFit {
+        fixes: PathBuf,
+        fault: Box<crate::installation::estimate::fixes::FixFitError>,
+    },
+    #[error(transparent)]
     OtherRecording(#[from] OtherRecording),
     #[error(transparent)]
     Write(#[from] ResultsError),
@@ -131,7 +138,10 @@ pub const MOUNT_TOLERANCE_DEG: f64 = 0.01;
 impl CorrectError {
     /// Whether the fault lies in what was given rather than in writing the results.
     pub fn is_input(&self) -> bool {
-        !matches!(self, CorrectError::Write(_))
+        match self {
+            CorrectError::Fixes(fault) => fault.is_input(),
+            _ => !matches!(self, CorrectError::Write(_)),
+        }
     }
 }
 

@@ -25,6 +25,8 @@ pub struct PerRow {
     pub command: &'static str,
     pub dvl: f64,
     pub reference: f64,
+    /// A position fix's row, where the command reads fixes.
+    pub fix: f64,
     /// What to do instead, as the refusal says it.
     pub instead: &'static str,
 }
@@ -35,6 +37,7 @@ pub const CALIBRATE: PerRow = PerRow {
     command: "calibrate",
     dvl: 3_200.0,
     reference: 400.0,
+    fix: 0.0,
     instead: "calibrate a part of it, a file of fewer rows",
 };
 
@@ -43,6 +46,7 @@ pub const CORRECT: PerRow = PerRow {
     command: "correct",
     dvl: 450.0,
     reference: 500.0,
+    fix: 0.0,
     instead: "correct it in parts, files of fewer rows",
 };
 
@@ -52,7 +56,29 @@ pub const JOINT: PerRow = PerRow {
     command: "calibrate jointly",
     dvl: 1_200.0,
     reference: 450.0,
+    fix: 0.0,
     instead: "calibrate fewer recordings jointly, or parts of them",
+};
+
+/// `calibrate --fixes`: the DVL's and the attitude's rows read, the fixes', and the fit's
+/// dead reckoning and whitened fixes (linear in each: the fixes' noise is never held as
+/// an n × n covariance). Peaks of an hour's dive with the attitude at 100 Hz, the DVL
+/// at 100 Hz with a fix a second (188 MB) and at 10 Hz with ten fixes a second
+/// (130 MB; `cargo bench --bench dive -- --memory fixes`), rounded up.
+pub const FIXES: PerRow = PerRow {
+    command: "calibrate with fixes",
+    dvl: 600.0,
+    reference: 400.0,
+    fix: 2_000.0,
+    instead: "calibrate a part of it, files of fewer rows",
+};
+
+/// `correct --fixes`: as [`FIXES`], its fit one parameter (the clock) and the dive
+/// corrected.
+pub const CORRECT_FIXES: PerRow = PerRow {
+    command: "correct with fixes",
+    instead: "correct it in parts, files of fewer rows",
+    ..FIXES
 };
 
 /// The rows of one recording's files.
@@ -62,6 +88,8 @@ pub struct Rows {
     pub dvl_rows: usize,
     /// The rows of the reference's own file; `None` where the DVL's file holds it.
     pub reference_rows: Option<usize>,
+    /// The rows of a file of position fixes read beside them.
+    pub fix_rows: Option<usize>,
 }
 
 impl Rows {
@@ -74,26 +102,38 @@ impl Rows {
                 dvl: dvl.to_path_buf(),
                 dvl_rows: dvl_rows as usize,
                 reference_rows: Some(reference_rows as usize),
+                fix_rows: None,
             });
         }
         Ok(Rows {
             dvl: dvl.to_path_buf(),
             dvl_rows: row_count(dvl)?,
             reference_rows: reference.map(row_count).transpose()?,
+            fix_rows: None,
+        })
+    }
+
+    /// These rows and those of the position fixes in `fixes`.
+    pub fn with_fixes(self, fixes: &Path) -> Result<Rows, PairedError> {
+        Ok(Rows {
+            fix_rows: Some(row_count(fixes)?),
+            ..self
         })
     }
 
     /// Every row read.
     fn all(&self) -> usize {
-        self.dvl_rows + self.reference_rows.unwrap_or(0)
+        self.dvl_rows + self.reference_rows.unwrap_or(0) + self.fix_rows.unwrap_or(0)
     }
 
     /// The memory of these rows at `per_row`, bytes.
     fn bytes(&self, per_row: PerRow) -> f64 {
-        match self.reference_rows {
-            Some(rows) => self.dvl_rows as f64 * per_row.dvl + rows as f64 * per_row.reference,
-            None => self.dvl_rows as f64 * (per_row.dvl + per_row.reference),
-        }
+        let fixes = self.fix_rows.unwrap_or(0) as f64 * per_row.fix;
+        fixes
+            + match self.reference_rows {
+                Some(rows) => self.dvl_rows as f64 * per_row.dvl + rows as f64 * per_row.reference,
+                None => self.dvl_rows as f64 * (per_row.dvl + per_row.reference),
+            }
     }
 }
 
@@ -162,7 +202,10 @@ impl Cost {
     fn files(&self) -> String {
         let first = self.recordings[0].dvl.display();
         let files: usize = (self.recordings.iter())
-            .map(|r| 1 + usize::from(r.reference_rows.is_some() && !is_bag(&r.dvl)))
+            .map(|r| {
+                1 + usize::from(r.reference_rows.is_some() && !is_bag(&r.dvl))
+                    + usize::from(r.fix_rows.is_some())
+            })
             .sum();
         let others = files - 1;
         match others {

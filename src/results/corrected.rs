@@ -76,8 +76,8 @@ pub fn corrected_samples(
         .zip(&recording.dvl_m_s)
         .map(|(&t, &dvl)| {
             let velocity_m_s = reference
-                .at(t + tau)
-                .map(|at| installation.correct(dvl, at.rate_rad_s))
+                .rate_at(t + tau)
+                .map(|rate| installation.correct(dvl, rate))
                 .ok_or(NotCorrected::OutsideReference);
             CorrectedSample {
                 time_s: t,

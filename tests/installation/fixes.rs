@@ -224,6 +224,19 @@ fn a_straight_dive_applies_no_lever_arm_clock_or_yaw_and_says_why() {
     }
 }
 
+/// The installation the dives of `calibrate --fixes` and `correct --fixes` are written
+/// with: without its bias, which fixes do not calibrate, and its clock a whole sample
+/// ahead (at 0.6 s the 1 Hz dead reckoning of these 1 Hz piecewise-linear turns is
+/// itself 0.67 m off after 400 s at the true terms, and the noise-free fixes put the
+/// clock at 0.43 ± 0.03 s: docs/installation.md); its lever arm's depth, which
+/// horizontal fixes feel only through roll and pitch, zero.
+const FIX_TRUTH: installed::Installed = installed::Installed {
+    bias_m_s: [0.0; 3],
+    time_offset_s: 1.0,
+    lever_arm_m: [-1.9, 0.05, 0.0],
+    ..installed::INSTALLED
+};
+
 /// The fixes the tests write: a time and north, east in metres, every 5 s of the
 /// segment written by `common::installed` (its reference positions, no noise).
 fn write_fixes(path: &Path, segment: &Recording, every: usize) {
@@ -243,17 +256,7 @@ fn write_fixes(path: &Path, segment: &Recording, every: usize) {
 fn calibrate_with_fixes_finds_the_installation_and_refuses_bad_input() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    // The installation without its bias, which fixes do not calibrate, and its clock a
-    // whole sample ahead: at 0.6 s the 1 Hz dead reckoning of these 1 Hz piecewise-linear
-    // turns is itself 0.67 m off after 400 s at the true terms, and the noise-free fixes
-    // put the clock at 0.43 ± 0.03 s (docs/installation.md).
-    let truth = installed::Installed {
-        bias_m_s: [0.0; 3],
-        time_offset_s: 1.0,
-        // Its depth, which horizontal fixes feel only through roll and pitch.
-        lever_arm_m: [-1.9, 0.05, 0.0],
-        ..installed::INSTALLED
-    };
+    let truth = FIX_TRUTH;
     installed::write_installed(d, 1, &[], truth, 1);
     let files = [dcnet_exp::data::paired::PairedFiles::akit(d, 1)];
     let segment = &crate::coverage::segments(&files)[0];
@@ -311,6 +314,10 @@ fn calibrate_with_fixes_finds_the_installation_and_refuses_bad_input() {
         "{found:?}"
     );
     assert!((found.scale[0] - truth.scale).abs() < 0.002, "{found:?}");
+    // The recording written corrected by what was found, a row per DVL sample.
+    let corrected =
+        std::fs::read_to_string(d.join("calibrated/DVL_trajectory1-corrected.csv")).unwrap();
+    assert_eq!(corrected.lines().count(), 401, "{corrected}");
     // As `run`, on other fixes and columns files.
     let run_on = |fixes: &str, columns: &str, extra: &[&str]| {
         let mut owned = args(extra);
@@ -319,12 +326,7 @@ fn calibrate_with_fixes_finds_the_installation_and_refuses_bad_input() {
         let refs: Vec<&str> = owned.iter().map(String::as_str).collect();
         common::dcnet(d, &refs)
     };
-    let refused = |extra: &[&str], expected: &str| {
-        let output = run(extra);
-        let message = common::stderr(&output);
-        assert_eq!(output.status.code(), Some(1), "{extra:?}: {message}");
-        assert!(message.contains(expected), "{extra:?}: {message}");
-    };
+    let refused = |extra: &[&str], expected: &str| refused_naming(&run(extra), expected, extra);
     refused(
         &["--fix-noise-m", "0"],
         "--fix-noise-m 0: give a positive number of metres",
@@ -351,7 +353,6 @@ fn calibrate_with_fixes_finds_the_installation_and_refuses_bad_input() {
         "--depth-noise-m: fixes.csv gives no depth",
     );
     for flag in [
-        ["--out", "elsewhere"],
         ["--tolerance-pct", "5"],
         ["--reference-noise-cm-s", "1"],
         ["--search-s", "60"],
@@ -470,6 +471,194 @@ fn calibrate_with_fixes_finds_the_installation_and_refuses_bad_input() {
         message.contains("back.csv:3: t: 5 s follows 10 s of line 2"),
         "{message}"
     );
+}
+
+/// A dive written by `common::installed` under `truth` into `folder`, with its
+/// reference's positions every 5 s as fixes beside it: the DVL's, the attitude's and
+/// the fixes' paths.
+fn fix_dive(folder: &Path, truth: installed::Installed, seed: u64) -> [String; 3] {
+    installed::write_installed(folder, 1, &[], truth, seed);
+    let files = [dcnet_exp::data::paired::PairedFiles::akit(folder, 1)];
+    let segment = &crate::coverage::segments(&files)[0];
+    let fixes = folder.join("fixes.csv");
+    write_fixes(&fixes, segment, 5);
+    [&files[0].dvl, &files[0].reference, &fixes].map(|p| p.to_str().unwrap().to_string())
+}
+
+/// `correct --fixes`: an installation calibrated on one dive's fixes carried to another
+/// whose clock is 0.8 s later, the clock found again from the second dive's fixes (all
+/// of them, or its first 200 s), the dive corrected and written, the fixes' residual
+/// lower with the installation than without; a clock given is applied as given; what
+/// does not apply refused by name.
+#[test]
+fn correct_with_fixes_finds_the_dives_clock_again_and_carries_the_rest() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let truth = FIX_TRUTH;
+    let [dvl, attitude, fixes] = fix_dive(&d.join("first"), truth, 1);
+    std::fs::write(
+        d.join("columns.toml"),
+        "[fix_columns]\ntime = \"t\"\nnorth_east = [\"n\", \"e\"]\n",
+    )
+    .unwrap();
+    let calibrate = [
+        "calibrate",
+        &dvl,
+        "--fixes",
+        &fixes,
+        "--attitude",
+        &attitude,
+        "--columns",
+        "columns.toml",
+        "--fix-noise-m",
+        "0.5",
+        "--save",
+        "fixes.toml",
+    ];
+    let output = common::dcnet(d, &calibrate);
+    assert!(output.status.success(), "{}", common::stderr(&output));
+    let saved =
+        dcnet_exp::operator::installation_file::SavedInstallation::read(&d.join("fixes.toml"))
+            .unwrap()
+            .installation();
+    let later = installed::Installed {
+        time_offset_s: 1.8,
+        ..truth
+    };
+    let [dvl, attitude, fixes] = fix_dive(&d.join("second"), later, 2);
+    let correct = |extra: &[&str]| {
+        let mut args = vec![
+            "correct",
+            &dvl,
+            "--installation",
+            "fixes.toml",
+            "--fixes",
+            &fixes,
+            "--attitude",
+            &attitude,
+            "--columns",
+            "columns.toml",
+        ];
+        args.extend(extra);
+        common::dcnet(d, &args)
+    };
+    let succeeded = |extra: &[&str]| {
+        let output = correct(extra);
+        let said = common::stderr(&output);
+        assert!(output.status.success(), "{said}");
+        assert!(
+            said.contains("correct with fixes: "),
+            "the cost stated: {said}"
+        );
+        String::from_utf8_lossy(&output.stdout).to_string()
+    };
+    let stdout = succeeded(&["--fix-noise-m", "0.5", "--out", "corrected"]);
+    // The clock found again: the saved one moved by the dives' 0.8 s, the few
+    // centimetres of the 1 Hz dead reckoning's own error aside.
+    let found = number_after(&stdout, "the time offset at ");
+    assert!(
+        (found - saved.time_offset_s - 0.8).abs() < 0.1,
+        "found {found} s, saved {} s: {stdout}",
+        saved.time_offset_s
+    );
+    let before = number_after(&stdout, "over the ");
+    assert!(before > 100.0, "{stdout}");
+    let residual = |after: &str| number_after(&stdout, after);
+    let (bare, applied) = (
+        residual("m travelled: "),
+        residual("% of the distance) with no terms, "),
+    );
+    assert!(applied < 0.2 * bare, "{stdout}");
+    let corrected =
+        std::fs::read_to_string(d.join("corrected/DVL_trajectory1-corrected.csv")).unwrap();
+    assert_eq!(
+        corrected.lines().count(),
+        401,
+        "a row per DVL sample and a header"
+    );
+    // The first 200 s' fixes alone.
+    let stdout = succeeded(&[
+        "--fix-noise-m",
+        "0.5",
+        "--window-s",
+        "200",
+        "--out",
+        "window",
+    ]);
+    let used = number_after(&stdout, "clock found again from ");
+    assert!((30.0..=41.0).contains(&used), "{stdout}");
+    // A clock given: applied as given.
+    let stdout = succeeded(&[
+        "--fix-noise-m",
+        "0.5",
+        "--time-offset-s",
+        "1.25",
+        "--out",
+        "given",
+    ]);
+    assert!(stdout.contains("| 1.2500 s "), "{stdout}");
+    assert!(stdout.contains("given"), "{stdout}");
+    let refused = |extra: &[&str], expected: &str| refused_naming(&correct(extra), expected, extra);
+    refused(
+        &[],
+        "--fixes: give the fixes' noise per horizontal axis with --fix-noise-m",
+    );
+    refused(
+        &["--fix-noise-m", "0.5", "--reference", &attitude],
+        "--reference: does not apply to a correction against fixes",
+    );
+    refused(
+        &["--fix-noise-m", "0.5", "--search-s", "10"],
+        "--search-s: does not apply to a correction against fixes",
+    );
+    refused(
+        &["--fix-noise-m", "0.5", "--window-s", "0"],
+        "--window-s 0: give a positive number of seconds",
+    );
+    refused(
+        &["--fix-noise-m", "-2"],
+        "--fix-noise-m -2: give a positive number of metres",
+    );
+    let output = common::dcnet(
+        d,
+        &[
+            "correct",
+            &dvl,
+            "--installation",
+            "fixes.toml",
+            "--attitude",
+            &attitude,
+        ],
+    );
+    assert_eq!(output.status.code(), Some(1));
+    assert!(
+        common::stderr(&output)
+            .contains("--attitude: goes with position fixes: give them with --fixes"),
+        "{}",
+        common::stderr(&output)
+    );
+}
+
+/// Checks that the command run with the arguments `extra` exited 1 saying `expected`.
+fn refused_naming(output: &std::process::Output, expected: &str, extra: &[&str]) {
+    let message = common::stderr(output);
+    assert_eq!(output.status.code(), Some(1), "{extra:?}: {message}");
+    assert!(message.contains(expected), "{extra:?}: {message}");
+}
+
+/// The number that follows `after` in `text`.
+fn number_after(text: &str, after: &str) -> f64 {
+    let at = text
+        .find(after)
+        .unwrap_or_else(|| panic!("{after:?} in {text}"))
+        + after.len();
+    let number: String = text[at..]
+        .chars()
+        .take_while(|c| c.is_ascii_digit() || *c == '.' || *c == '-' || *c == '+')
+        .collect();
+    number
+        .parse()
+        .unwrap_or_else(|_| panic!("a number after {after:?} in {text}"))
 }
 
 /// On A-KIT, fixes every 5 s with 2 m of noise simulated from the reference's positions

@@ -748,6 +748,29 @@ fn costs_are_stated_and_memory_and_file_size_limits_refused_by_name() {
         "{message}"
     );
     assert!(!d.join("long-out").exists());
+    // Four million fixes (never read): some 8 GB to calibrate against.
+    let fixes = [
+        "calibrate",
+        &path(&first_dvl),
+        "--attitude",
+        &path(&first_reference),
+        "--fixes",
+        &path(&long),
+        "--fix-noise-m",
+        "2",
+        "--save",
+        "long-fixes.toml",
+    ];
+    let output = dcnet_limited(d, limit, &fixes);
+    let message = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{message}");
+    assert!(
+        message.contains("and 2 other files: 4000800 rows need about")
+            && message.contains("of memory to calibrate with fixes and this process may use ")
+            && message.contains(": calibrate a part of it, files of fewer rows"),
+        "{message}"
+    );
+    assert!(!d.join("long-fixes.toml").exists());
     // A file-size limit of 4 KiB, below the corrected CSV's size.
     let args = correct(&dvl, "small-out");
     let output = dcnet_limited(

@@ -507,7 +507,7 @@ fn robustly(
     (solved, termination): (Problem<'_>, String),
 ) -> Result<(Problem<'_>, String), FitError> {
     let mut current = (solved, termination);
-    for loss in [Loss::Huber, Loss::Tukey] {
+    for loss in [Loss::Huber, Loss::TUKEY] {
         let Some(scale_m_s) = scales(&current.0.raw_residuals()) else {
             return Ok(current);
         };

@@ -14,7 +14,7 @@ use crate::installation::dead_reckoning::{Track, dead_reckon, interior};
 use crate::installation::estimate::bound::{Tolerances, Unseen, normal_step, whitened_bound};
 use crate::installation::estimate::fit::{MAX_LEVER_ARM_M, MAX_SCALE};
 use crate::installation::estimate::fix_noise::{NoiseShape, Whitener, Whitening};
-use crate::installation::estimate::robust::{Loss, TUKEY_C_MODELLED, weight};
+use crate::installation::estimate::robust::Loss;
 use crate::installation::frames::Attitude;
 use crate::installation::terms::kind::TermKind;
 use crate::installation::terms::{Installation, PerKind, TermSet};
@@ -77,7 +77,7 @@ pub enum FixFitError {
     )]
     NoAttitude { time_offset_s: f64 },
     #[error(
-        "the time offset that fits the fixes best, {time_offset_s:.2} s, lies at the edge of the ±{TIME_OFFSET_MARGIN_S} s a fit to fixes searches: the clocks may lie further apart than that (or the fixes and the attitude on different clocks), and nothing fitted at the edge is the installation; put the DVL, the attitude and the fixes on one clock to within {TIME_OFFSET_MARGIN_S} s"
+        "the time offset that fits the fixes best, {time_offset_s:.2} s, lies at the edge of the ±{TIME_OFFSET_MARGIN_S} s a fit to fixes searches, and nothing fitted at the edge is the installation: the clocks may lie further apart than that (or the fixes and the attitude on different clocks): put the DVL, the attitude and the fixes on one clock to within {TIME_OFFSET_MARGIN_S} s; or the fixes do not place the clock at all (fixes of metres over a dive of minutes, or one steady turn, which ties a clock to the yaw): calibrate on a longer dive with more varied turns, or where the clocks are known to agree, leave time_offset out of --terms (correct: give the clock with --time-offset-s)"
     )]
     ClockAtScanEdge { time_offset_s: f64 },
     #[error(
@@ -118,8 +118,13 @@ impl Solution {
 
     /// Each fitted fix's weight: 1 where kept, 0 where not.
     fn weights(&self) -> Vec<f64> {
-        self.kept.iter().map(|&k| f64::from(u8::from(k))).collect()
+        weights_of(&self.kept)
     }
+}
+
+/// The weight of each fix `kept`: 1, or 0 where left out.
+fn weights_of(kept: &[bool]) -> Vec<f64> {
+    kept.iter().map(|&k| f64::from(u8::from(k))).collect()
 }
 
 /// What a fit to fixes works on: the DVL's pieces with a fix, the fixes each holds
@@ -129,6 +134,9 @@ pub(super) struct Problem<'a> {
     attitude: &'a Attitude,
     fixes: &'a Fixes,
     terms: TermSet,
+    /// The installation the terms are fitted around (each parameter an offset from its
+    /// value): none for a calibration, the one carried to a dive for its clock.
+    carried: Installation,
     noise: FixNoise,
     pub(super) names: Vec<&'static str>,
     kinds: Vec<TermKind>,
@@ -148,7 +156,7 @@ impl<'a> Problem<'a> {
         pieces: &[Range<usize>],
         attitude: &'a Attitude,
         fixes: &'a Fixes,
-        terms: TermSet,
+        (terms, carried): (TermSet, Installation),
         noise: FixNoise,
     ) -> Result<Problem<'a>, FixFitError> {
         let axes = if fixes.depth_m.is_some() { 3 } else { 2 };
@@ -183,6 +191,7 @@ impl<'a> Problem<'a> {
             attitude,
             fixes,
             terms,
+            carried,
             noise,
             names,
             kinds: terms.parameter_kinds(),
@@ -201,14 +210,8 @@ impl<'a> Problem<'a> {
     /// beyond its parameters.
     fn enough(&self, kept: &[bool], free: &[bool]) -> Result<(), FixFitError> {
         let fitted = kept.iter().filter(|&&k| k).count();
-        let starts = (self.held.iter().scan(0, |offset, held| {
-            let inside = &kept[*offset..*offset + held.len()];
-            *offset += held.len();
-            Some(inside.iter().any(|&k| k))
-        }))
-        .filter(|&any| any)
-        .count();
-        let parameters = free.iter().filter(|&&f| f).count() + starts * self.axes;
+        let starts = (self.whitening(&weights_of(kept), NoiseShape::GIVEN)).starts_fitted();
+        let parameters = free.iter().filter(|&&f| f).count() + starts;
         let residuals = fitted * self.axes;
         if residuals <= parameters {
             return Err(FixFitError::TooFewFixes {
@@ -241,9 +244,17 @@ impl<'a> Problem<'a> {
         (high - low).max(0.0)
     }
 
+    /// The installation of the term parameters `terms`: the carried one, each
+    /// parameter moved by its term.
+    pub(super) fn installation(&self, terms: &[f64]) -> Installation {
+        let carried = self.carried.to_parameters(&self.terms);
+        let moved: Vec<f64> = carried.iter().zip(terms).map(|(c, t)| c + t).collect();
+        self.carried.with_parameters(&self.terms, &moved)
+    }
+
     /// Each piece's track under the term parameters `terms`.
     pub(super) fn tracks(&self, terms: &[f64]) -> Result<Vec<Track>, FixFitError> {
-        let installation = Installation::from_parameters(&self.terms, terms);
+        let installation = self.installation(terms);
         (self.pieces.iter())
             .map(|piece| {
                 let dvl = (&self.dvl.0[piece.clone()], &self.dvl.1[piece.clone()]);
@@ -259,7 +270,7 @@ impl<'a> Problem<'a> {
     /// in the piece.
     fn residuals(&self, terms: &[f64]) -> Result<Vec<f64>, FixFitError> {
         let tracks = self.tracks(terms)?;
-        let time_offset_s = self.time_offset().map_or(0.0, |k| terms[k]);
+        let time_offset_s = self.installation(terms).time_offset_s;
         let mut residuals = Vec::with_capacity(self.fix_of.len() * self.axes);
         for (track, held) in tracks.iter().zip(&self.held) {
             for axis in 0..self.axes {
@@ -441,17 +452,10 @@ impl<'a> Problem<'a> {
         let scanned = self.scan_time_offset(blank, free)?;
         let mut solution = self.read_noise(&scanned, free, false)?;
         let shape = solution.shape;
-        for loss in [
-            Loss::Huber,
-            Loss::Huber,
-            Loss::Tukey,
-            Loss::Tukey,
-            Loss::Tukey,
-        ] {
+        let tukey = Loss::TUKEY_MODELLED;
+        for loss in [Loss::Huber, Loss::Huber, tukey, tukey, tukey] {
             let u = self.standardised(&solution, shape)?;
-            let weights: Vec<f64> = (u.iter())
-                .map(|&u| weight(loss, u, TUKEY_C_MODELLED))
-                .collect();
+            let weights: Vec<f64> = u.iter().map(|&u| loss.weight(u)).collect();
             solution = self.solve(solution, free, &weights, shape)?;
             solution.kept = weights.iter().map(|&w| w > 0.0).collect();
             let outliers = solution.kept.iter().filter(|&&k| !k).count();

@@ -154,7 +154,24 @@ pub fn fit_fixes(
     terms: TermSet,
     noise: FixNoise,
 ) -> Result<FixFit, FixFitError> {
-    let problem = Problem::new(dvl, pieces, attitude, fixes, terms, noise)?;
+    let carried = (terms, Installation::default());
+    fit_fixes_around(dvl, pieces, attitude, fixes, carried, noise)
+}
+
+/// [`fit_fixes`] around the installation `carried`: each of `terms` fitted as an offset
+/// from its carried value (the rest held at theirs), its time offset scanned within
+/// ±[`TIME_OFFSET_MARGIN_S`] of the carried clock; the fit's values are those offsets,
+/// and its installation the carried one moved by them. A dive's clock found again
+/// from its fixes, the vehicle's terms carried.
+pub fn fit_fixes_around(
+    dvl: (&[f64], &[Vec3]),
+    pieces: &[Range<usize>],
+    attitude: &Attitude,
+    fixes: &Fixes,
+    (terms, carried): (TermSet, Installation),
+    noise: FixNoise,
+) -> Result<FixFit, FixFitError> {
+    let problem = Problem::new(dvl, pieces, attitude, fixes, (terms, carried), noise)?;
     let mut shown = Shown::of(&problem);
     let last = shown.eliminate(&problem)?;
     problem.better_than_none(&last)?;
@@ -167,7 +184,7 @@ pub fn fit_fixes(
     }
     Ok(FixFit {
         terms,
-        installation: Installation::from_parameters(&terms, &value),
+        installation: problem.installation(&value),
         names: problem.names.clone(),
         value: shown.value,
         std: shown.std,

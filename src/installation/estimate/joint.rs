@@ -241,7 +241,7 @@ impl Problem<'_> {
     /// at the last loss (none where the residuals have no scale).
     fn solve(&mut self, start: Parameters) -> Parameters {
         let (mut solution, mut blocks) = self.minimise(start);
-        for loss in [Loss::Huber, Loss::Tukey] {
+        for loss in [Loss::Huber, Loss::TUKEY] {
             let raw = stack(blocks.iter().map(|b| &b.raw));
             let Some(scale_m_s) = scales(&raw) else {
                 break;

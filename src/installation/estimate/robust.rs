@@ -35,36 +35,32 @@ pub const TUKEY_C: f64 = 20.0;
 /// noise.
 pub const TUKEY_C_MODELLED: f64 = 4.685;
 
-/// The weight ψ(u)/u of a residual `u` standardised by its modelled noise, under
-/// `loss` (Tukey's with the constant `tukey_c`): iteratively reweighted least squares'.
-pub fn weight(loss: Loss, u: f64, tukey_c: f64) -> f64 {
-    match loss {
-        Loss::Huber => (HUBER_C / u.abs()).min(1.0),
-        Loss::Tukey if u.abs() < tukey_c => (1.0 - (u / tukey_c).powi(2)).powi(2),
-        Loss::Tukey => 0.0,
-    }
-}
-
 /// The factor from a median absolute deviation to a Gaussian standard deviation.
 const MAD_TO_STD: f64 = 1.482_602_218_505_602;
 
-/// A robust loss ρ(u) of a residual in scales.
+/// A robust loss ρ(u) of a residual in scales: Huber's, or Tukey's bisquare with its
+/// constant.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Loss {
     Huber,
-    Tukey,
+    Tukey(f64),
 }
 
 impl Loss {
+    /// Tukey's bisquare for residuals in scales read from their spread ([`TUKEY_C`]).
+    pub const TUKEY: Loss = Loss::Tukey(TUKEY_C);
+    /// Tukey's bisquare for residuals standardised by a modelled noise
+    /// ([`TUKEY_C_MODELLED`]).
+    pub const TUKEY_MODELLED: Loss = Loss::Tukey(TUKEY_C_MODELLED);
+
     /// ρ(u).
     fn rho(self, u: f64) -> f64 {
         match self {
             Loss::Huber if u.abs() <= HUBER_C => 0.5 * u * u,
             Loss::Huber => HUBER_C * (u.abs() - 0.5 * HUBER_C),
-            Loss::Tukey => {
-                let c2 = TUKEY_C * TUKEY_C;
-                let inside = (1.0 - (u * u / c2).min(1.0)).powi(3);
-                c2 / 6.0 * (1.0 - inside)
+            Loss::Tukey(c) => {
+                let inside = (1.0 - (u * u / (c * c)).min(1.0)).powi(3);
+                c * c / 6.0 * (1.0 - inside)
             }
         }
     }
@@ -73,8 +69,16 @@ impl Loss {
     pub fn psi(self, u: f64) -> f64 {
         match self {
             Loss::Huber => u.clamp(-HUBER_C, HUBER_C),
-            Loss::Tukey if u.abs() < TUKEY_C => u * (1.0 - (u / TUKEY_C).powi(2)).powi(2),
-            Loss::Tukey => 0.0,
+            Loss::Tukey(c) if u.abs() < c => u * (1.0 - (u / c).powi(2)).powi(2),
+            Loss::Tukey(_) => 0.0,
+        }
+    }
+
+    /// The weight ψ(u)/u (1 at u = 0): iteratively reweighted least squares'.
+    pub fn weight(self, u: f64) -> f64 {
+        match u == 0.0 {
+            true => 1.0,
+            false => self.psi(u) / u,
         }
     }
 
@@ -82,11 +86,11 @@ impl Loss {
     pub fn psi_prime(self, u: f64) -> f64 {
         match self {
             Loss::Huber => f64::from(u8::from(u.abs() <= HUBER_C)),
-            Loss::Tukey if u.abs() < TUKEY_C => {
-                let v = (u / TUKEY_C).powi(2);
+            Loss::Tukey(c) if u.abs() < c => {
+                let v = (u / c).powi(2);
                 (1.0 - v) * (1.0 - 5.0 * v)
             }
-            Loss::Tukey => 0.0,
+            Loss::Tukey(_) => 0.0,
         }
     }
 
@@ -207,7 +211,7 @@ pub fn outliers_among(residuals: &[Vec3]) -> Vec<bool> {
     match scales(&flat) {
         Some(scale_m_s) => {
             let tukey = Robust {
-                loss: Loss::Tukey,
+                loss: Loss::TUKEY,
                 scale_m_s,
             };
             residuals.iter().map(|r| tukey.is_outlier(*r)).collect()
@@ -222,7 +226,7 @@ mod tests {
 
     #[test]
     fn each_loss_is_its_derivatives_integral_and_its_residuals_square_is_twice_it() {
-        for loss in [Loss::Huber, Loss::Tukey] {
+        for loss in [Loss::Huber, Loss::TUKEY, Loss::TUKEY_MODELLED] {
             for u in [-7.0, -3.0, -1.0, -0.2, 0.0, 0.3, 1.2, 2.0, 4.0, 6.0] {
                 let step = 1e-6;
                 let numeric = (loss.rho(u + step) - loss.rho(u - step)) / (2.0 * step);
@@ -244,7 +248,9 @@ mod tests {
                 }
             }
         }
-        assert_eq!(Loss::Tukey.psi(TUKEY_C + 1.0), 0.0);
+        assert_eq!(Loss::TUKEY.psi(TUKEY_C + 1.0), 0.0);
+        assert_eq!(Loss::TUKEY_MODELLED.weight(TUKEY_C_MODELLED + 0.1), 0.0);
+        assert_eq!(Loss::Huber.weight(2.0 * HUBER_C), 0.5);
         assert_eq!(Loss::Huber.psi(5.0), HUBER_C);
     }
 

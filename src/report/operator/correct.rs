@@ -2,11 +2,14 @@
 //! carried, the dive's found again with their standard deviations), then how well it
 //! fits the dive after the seconds that found its clock, against the specified noise
 //! and the residual at calibration, with a warning where it fits far worse.
-//! In: a [`Correction`]. Out: the text.
+//! `correct --fixes` prints the same installation, its clock found again from the
+//! fixes, and the fixes' horizontal residual with no terms and with it.
+//! In: a [`Correction`] or a [`FixCorrection`]. Out: the text.
 
 use crate::installation::estimate::between_dives::MIN_DIVES;
 use crate::installation::estimate::robust::TUKEY_C;
 use crate::operator::correct::Correction;
+use crate::operator::correct_fixes::FixCorrection;
 use crate::operator::installation_file::{SavedInstallation, no_spread_why};
 use crate::report::kit::readable::readable_term;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
@@ -134,4 +137,81 @@ fn applied_table(correction: &Correction) -> Table {
         ]);
     }
     table
+}
+
+/// Everything `correct --fixes` prints; ends in a newline.
+pub fn fix_correction_text(correction: &FixCorrection) -> String {
+    let saved = &correction.saved;
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    table.set_header(["term", "value", "standard deviation", "from"]);
+    let applied = correction.applied.to_parameters(&saved.term_set());
+    for (k, term) in saved.terms.iter().enumerate() {
+        let (readable, unit, factor) = readable_term(&term.name);
+        let (std, from) = match (term.name.as_str(), &correction.clock) {
+            ("time_offset_s", Some(clock)) if clock.fit.is_applied("time_offset_s") => (
+                format!("{:.4} {unit}", clock.fit.std[0] * factor),
+                "this dive's fixes".to_string(),
+            ),
+            ("time_offset_s", Some(_)) => ("-".to_string(), "carried".to_string()),
+            ("time_offset_s", None) => ("-".to_string(), "given".to_string()),
+            _ => (
+                format!("{:.4} {unit}", term.std * factor),
+                "carried".to_string(),
+            ),
+        };
+        let value = format!("{:.4} {unit}", applied[k] * factor);
+        table.add_row([readable, value, std, from]);
+    }
+    let mut text = format!(
+        "read: {}; {} fixes\ninstallation of {} (calibrated on {}) applied\n{table}\n",
+        correction.read,
+        correction.fixes,
+        correction.installation_file.display(),
+        saved.recording,
+    );
+    if let Some(clock) = &correction.clock {
+        text.push_str(&clock_text(clock));
+    }
+    let (before, after) = (correction.before, correction.after);
+    text.push_str(&format!(
+        "fixes' horizontal residual RMS, each piece of the DVL record started where the fixes put it, over the {:.0} m travelled: {:.2} m ({:.3} % of the distance) with no terms, {:.2} m ({:.3} %) with the installation applied; white fixes of {:.2} m per axis alone leave about {:.2} m\n",
+        after.distance_m,
+        before.rms_m,
+        before.pct(),
+        after.rms_m,
+        after.pct(),
+        correction.fix_noise_m,
+        correction.fix_noise_m * std::f64::consts::SQRT_2,
+    ));
+    text
+}
+
+/// How the clock was found again from the fixes, or why the carried one stands.
+fn clock_text(clock: &crate::operator::correct_fixes::FixClock) -> String {
+    let fit = &clock.fit;
+    if !fit.is_applied("time_offset_s") {
+        let why: Vec<String> = fit.unseen.iter().map(|u| u.why.to_string()).collect();
+        return format!(
+            "clock not found again: the {} fixes cannot show it ({}); the carried {:.4} s is applied\n",
+            clock.fixes_used,
+            why.join("; "),
+            clock.carried_s
+        );
+    }
+    format!(
+        "clock found again from {} fixes: the time offset at {:.4} s ± {:.4} s (95 %: ± {:.4} s, Student's t on {} degrees of freedom), {:+.4} s from the {:.4} s carried{}\n",
+        clock.fixes_used,
+        clock.time_offset_s(),
+        fit.std[0],
+        fit.half_width_95(0),
+        fit.freedom,
+        fit.value[0],
+        clock.carried_s,
+        match fit.unseen.is_empty() {
+            true => "",
+            false =>
+                " (seen poorly: its standard deviation is beyond the tolerance a clock is held to)",
+        }
+    )
 }

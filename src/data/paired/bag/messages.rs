@@ -14,6 +14,7 @@ use super::storage::{Bag, Survey};
 use super::values::{finite, finite_transform, rotation_quaternion};
 use super::{BagError, BagTopics, Stamps};
 use crate::Vec3;
+use crate::data::interpolate::Between;
 use crate::data::paired::{Locator, PairedColumns, SourceFile, Unchecked};
 use crate::rotation::{Mat3, apply, multiply};
 use std::collections::BTreeMap;
@@ -603,24 +604,15 @@ fn imu_rate(
     at_ns
         .iter()
         .map(|&t| {
-            let after = stamps.partition_point(|&s| s < t);
-            let (a, b) = match (after.checked_sub(1), stamps.get(after)) {
-                _ if stamps.get(after) == Some(&t) => (after, after),
-                (Some(before), Some(_)) => (before, after),
-                _ => {
-                    return Err(refused(format!(
-                        "the IMU {topic} runs from {:.3} s to {:.3} s, and the reference has a sample at {:.3} s beyond it: its body rate there was not recorded",
-                        seconds(stamps.first().copied().unwrap_or(0)),
-                        seconds(stamps.last().copied().unwrap_or(0)),
-                        seconds(t)
-                    )));
-                }
-            };
-            let weight = match a == b {
-                true => 0.0,
-                false => (t - stamps[a]) as f64 / (stamps[b] - stamps[a]) as f64,
-            };
-            let rate: Vec3 = [0, 1, 2].map(|k| imu.velocity[a][k] + weight * (imu.velocity[b][k] - imu.velocity[a][k]));
+            let at = Between::locate(stamps, t, f64::INFINITY).ok_or_else(|| {
+                refused(format!(
+                    "the IMU {topic} runs from {:.3} s to {:.3} s, and the reference has a sample at {:.3} s beyond it: its body rate there was not recorded",
+                    seconds(stamps.first().copied().unwrap_or(0)),
+                    seconds(stamps.last().copied().unwrap_or(0)),
+                    seconds(t)
+                ))
+            })?;
+            let rate: Vec3 = at.of(&imu.velocity);
             Ok(apply(&to_frd, rate))
         })
         .collect()

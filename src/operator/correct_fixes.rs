@@ -1,0 +1,234 @@
+//! `correct --fixes`: an installation that `calibrate --save` wrote carried to a dive of
+//! a vehicle with no velocity reference, only an attitude and position fixes. The
+//! vehicle's terms are carried; the dive's clock is found again from its fixes (the
+//! time offset alone fitted around the carried installation through the dead
+//! reckoning, [`crate::installation::estimate::fixes::fit_fixes_around`]), from all of
+//! them or those of its first `--window-s` seconds, or taken as given. The dive is
+//! written corrected (CSV and Parquet, as `correct` writes), and how well the
+//! installation carries is measured against the fixes: their horizontal residual, each
+//! piece of the DVL record started where the fixes put it, with no terms and with the
+//! installation applied, in metres and in % of the distance travelled.
+//! In: [`FixCorrectArgs`]. Out: a [`FixCorrection`], or a [`CorrectError`] naming the
+//! file and what to do; nothing is written unless everything before the writing
+//! succeeded.
+
+use crate::data::fixes::Fixes;
+use crate::data::paired::{PairedRecording, ReadCounts};
+use crate::installation::estimate::fixes::{FixFit, FixFitError, FixNoise, fit_fixes_around};
+use crate::installation::frames::{Attitude, Reference};
+use crate::installation::terms::Installation;
+use crate::installation::terms::names::term_set;
+use crate::operator::calibrate::CalibrateError;
+use crate::operator::calibrate_fixes::FixFiles;
+use crate::operator::correct::CorrectError;
+use crate::operator::cost::CORRECT_FIXES;
+use crate::operator::inputs::not_over_an_input;
+use crate::operator::installation_file::SavedInstallation;
+use crate::results::corrected::{Outputs, corrected_samples, stem, write};
+use std::path::{Path, PathBuf};
+
+/// What `correct --fixes` is asked.
+pub struct FixCorrectArgs<'a> {
+    pub files: FixFiles<'a>,
+    pub installation: &'a Path,
+    /// The fixes' noise per horizontal axis, m.
+    pub fix_noise_m: f64,
+    /// The first seconds of the dive whose fixes find its clock again; all of them
+    /// where `None`.
+    pub window_s: Option<f64>,
+    /// The dive's time offset, s, where it is known: no fit.
+    pub time_offset_s: Option<f64>,
+    pub out: &'a Path,
+}
+
+/// The dive's clock found again from its fixes: the fit of its offset from the carried
+/// clock (one parameter), and how many fixes it read.
+pub struct FixClock {
+    pub fit: FixFit,
+    pub carried_s: f64,
+    pub fixes_used: usize,
+}
+
+impl FixClock {
+    /// The time offset found, s: the carried one moved by the fit, or the carried one
+    /// where the fixes cannot show a clock at all.
+    pub fn time_offset_s(&self) -> f64 {
+        self.fit.installation.time_offset_s
+    }
+}
+
+/// The fixes' horizontal residual RMS under an installation, each piece started where
+/// the fixes put it, m.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FixResidual {
+    pub rms_m: f64,
+    /// How far the dead reckoning travelled over the fixes fitted, m.
+    pub distance_m: f64,
+}
+
+impl FixResidual {
+    /// The RMS in % of the distance travelled.
+    pub fn pct(&self) -> f64 {
+        100.0 * self.rms_m / self.distance_m
+    }
+}
+
+/// Everything `correct --fixes` found and wrote.
+pub struct FixCorrection {
+    pub saved: SavedInstallation,
+    pub installation_file: PathBuf,
+    /// The clock found again, where it was not given.
+    pub clock: Option<FixClock>,
+    /// The installation applied: the carried terms with the dive's clock.
+    pub applied: Installation,
+    /// The fixes' residual with no terms and with `applied`.
+    pub before: FixResidual,
+    pub after: FixResidual,
+    pub fix_noise_m: f64,
+    /// The DVL's samples read, kept and left out, and the fixes read.
+    pub read: ReadCounts,
+    pub fixes: usize,
+    pub written: Vec<PathBuf>,
+}
+
+/// `correct --fixes`: the installation file applied to the dive of `args`, its clock
+/// found again from its fixes.
+pub fn correct_fixes(args: &FixCorrectArgs) -> Result<FixCorrection, CorrectError> {
+    refused(args)?;
+    let saved = SavedInstallation::read(args.installation)?;
+    let files = &args.files;
+    let outputs = Outputs::of(args.out, &stem(files.dvl));
+    let mut inputs = files.inputs().to_vec();
+    inputs.push(Some(args.installation));
+    if let Some((output, input)) = not_over_an_input(&inputs, &outputs.all()) {
+        return Err(CorrectError::OverInput { output, input });
+    }
+    files.cost(CORRECT_FIXES)?.state()?;
+    let (read, fixes) = files.read(false).map_err(Box::new)?;
+    let recording_sha256 = read.dvl_sha256().to_string();
+    outputs.not_another_recordings(files.dvl, &recording_sha256)?;
+    let recording = &read.recording;
+    let attitude = Attitude::of(recording);
+    let noise = FixNoise {
+        fix_m: args.fix_noise_m,
+        depth_m: args.fix_noise_m,
+        dvl_m_s: saved.dvl_noise_cm_s / 100.0,
+    };
+    let dive = FixDive {
+        args,
+        recording,
+        attitude: &attitude,
+        fixes: &fixes,
+        noise,
+    };
+    let (applied, clock) = match args.time_offset_s {
+        Some(time_offset_s) => {
+            let given = Installation {
+                time_offset_s,
+                ..saved.installation()
+            };
+            (given, None)
+        }
+        None => {
+            let clock = dive.clock(&saved)?;
+            (clock.fit.installation, Some(clock))
+        }
+    };
+    let before = dive.residual(Installation::default())?;
+    let after = dive.residual(applied)?;
+    let samples = corrected_samples(&applied, recording, &Reference::new(recording));
+    if samples.iter().all(|s| s.velocity_m_s.is_err()) {
+        return Err(CorrectError::NoOverlap {
+            dvl: files.dvl.to_path_buf(),
+            time_offset_s: applied.time_offset_s,
+        });
+    }
+    let written = write(&outputs, &samples, &recording_sha256)?;
+    Ok(FixCorrection {
+        saved,
+        installation_file: args.installation.to_path_buf(),
+        clock,
+        applied,
+        before,
+        after,
+        fix_noise_m: args.fix_noise_m,
+        read: recording.counts(),
+        fixes: fixes.len(),
+        written,
+    })
+}
+
+/// The first argument of `args` at fault, where one is.
+fn refused(args: &FixCorrectArgs) -> Result<(), CorrectError> {
+    // Beyond the Earth's size, no fix's noise.
+    if !(args.fix_noise_m > 0.0 && args.fix_noise_m < 1e7) {
+        return Err(Box::new(CalibrateError::FixNoise {
+            flag: "--fix-noise-m",
+            value: args.fix_noise_m,
+        })
+        .into());
+    }
+    if let Some(window_s) = args.window_s.filter(|w| !(w.is_finite() && *w > 0.0)) {
+        return Err(CorrectError::Window(window_s));
+    }
+    match args.time_offset_s {
+        Some(tau) if !tau.is_finite() => Err(CorrectError::TimeOffset(tau)),
+        _ => Ok(()),
+    }
+}
+
+/// A dive read beside its attitude and fixes.
+struct FixDive<'a> {
+    args: &'a FixCorrectArgs<'a>,
+    recording: &'a PairedRecording,
+    attitude: &'a Attitude,
+    fixes: &'a Fixes,
+    noise: FixNoise,
+}
+
+impl FixDive<'_> {
+    /// The dive's clock: its offset from the saved one fitted to the fixes of the
+    /// window, the vehicle's terms carried.
+    fn clock(&self, saved: &SavedInstallation) -> Result<FixClock, CorrectError> {
+        let fixes = match self.args.window_s {
+            Some(window_s) => {
+                let end = self.recording.time_s[0] + window_s;
+                self.fixes.select(|k| self.fixes.time_s[k] < end)
+            }
+            None => self.fixes.clone(),
+        };
+        let terms = term_set(&["time_offset".parse().expect("a term's name")]);
+        let carried = saved.installation();
+        let fit = self.fit(&fixes, (terms, carried))?;
+        Ok(FixClock {
+            fixes_used: fit.fitted,
+            carried_s: carried.time_offset_s,
+            fit,
+        })
+    }
+
+    /// The fixes' horizontal residual under `installation`, no term fitted.
+    fn residual(&self, installation: Installation) -> Result<FixResidual, CorrectError> {
+        let fit = self.fit(self.fixes, (term_set(&[]), installation))?;
+        Ok(FixResidual {
+            rms_m: fit.residual_rms_m[0].hypot(fit.residual_rms_m[1]),
+            distance_m: fit.distance_m,
+        })
+    }
+
+    /// `terms` fitted to `fixes` around the installation carried.
+    fn fit(
+        &self,
+        fixes: &Fixes,
+        carried: (crate::installation::terms::TermSet, Installation),
+    ) -> Result<FixFit, CorrectError> {
+        let dvl = (&self.recording.time_s[..], &self.recording.dvl_m_s[..]);
+        let pieces = self.recording.pieces();
+        fit_fixes_around(dvl, &pieces, self.attitude, fixes, carried, self.noise).map_err(
+            |fault: FixFitError| CorrectError::FixFit {
+                fixes: self.args.files.fixes.to_path_buf(),
+                fault: Box::new(fault),
+            },
+        )
+    }
+}
