@@ -119,6 +119,16 @@ pub enum CorrectError {
     Memory(#[from] BeyondMemory),
     #[error(transparent)]
     Fixes(#[from] Box<crate::operator::calibrate::CalibrateError>),
+    #[error(
+        "{}: the installation applied (time offset {time_offset_s:.3} s) leaves the fixes further from the dead reckoning than no terms do ({after_m:.2} m RMS horizontally against {before_m:.2} m): it does not carry to this dive (the DVL remounted, the fixes on another clock, or a clock given wrongly); nothing written: calibrate this dive with calibrate --fixes",
+        fixes.display()
+    )]
+    FixesFitWorse {
+        fixes: PathBuf,
+        time_offset_s: f64,
+        before_m: f64,
+        after_m: f64,
+    },
     #[error("{}: the dive's dead reckoning cannot be fitted to its fixes: {fault}", fixes.display())]
     FixFit {
         fixes: PathBuf,

@@ -24,7 +24,7 @@ use crate::operator::correct::CorrectError;
 use crate::operator::cost::CORRECT_FIXES;
 use crate::operator::inputs::not_over_an_input;
 use crate::operator::installation_file::SavedInstallation;
-use crate::results::corrected::{Outputs, corrected_samples, stem, write};
+use crate::results::corrected::{NotCorrected, Outputs, corrected_samples, stem, write};
 use std::path::{Path, PathBuf};
 
 /// What `correct --fixes` is asked.
@@ -88,8 +88,17 @@ pub struct FixCorrection {
     /// The DVL's samples read, kept and left out, and the fixes read.
     pub read: ReadCounts,
     pub fixes: usize,
+    /// The dive's samples whose t + τ lies outside the attitude, or in a gap of it:
+    /// written without a velocity.
+    pub outside: usize,
     pub written: Vec<PathBuf>,
 }
+
+/// How far above the fixes' residual with no terms the installation's may lie before
+/// the correction is refused, as a ratio: the RMS of a few hundred fixes varies by a few
+/// per cent from noise alone, and an installation that fits a dive worse than none
+/// does not carry to it.
+pub const WORSE_RATIO: f64 = 1.1;
 
 /// `correct --fixes`: the installation file applied to the dive of `args`, its clock
 /// found again from its fixes.
@@ -136,7 +145,18 @@ pub fn correct_fixes(args: &FixCorrectArgs) -> Result<FixCorrection, CorrectErro
     };
     let before = dive.residual(Installation::default())?;
     let after = dive.residual(applied)?;
+    if after.rms_m > WORSE_RATIO * before.rms_m {
+        return Err(CorrectError::FixesFitWorse {
+            fixes: files.fixes.to_path_buf(),
+            time_offset_s: applied.time_offset_s,
+            before_m: before.rms_m,
+            after_m: after.rms_m,
+        });
+    }
     let samples = corrected_samples(&applied, recording, &Reference::new(recording));
+    let outside = (samples.iter())
+        .filter(|s| matches!(s.velocity_m_s, Err(NotCorrected::OutsideReference)))
+        .count();
     if samples.iter().all(|s| s.velocity_m_s.is_err()) {
         return Err(CorrectError::NoOverlap {
             dvl: files.dvl.to_path_buf(),
@@ -154,6 +174,7 @@ pub fn correct_fixes(args: &FixCorrectArgs) -> Result<FixCorrection, CorrectErro
         fix_noise_m: args.fix_noise_m,
         read: recording.counts(),
         fixes: fixes.len(),
+        outside,
         written,
     })
 }

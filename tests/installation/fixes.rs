@@ -230,6 +230,76 @@ fn a_straight_dive_applies_no_lever_arm_clock_or_yaw_and_says_why() {
     }
 }
 
+/// Fixes over only a stretch of a turning dive where its heading spans under 80° show
+/// no yaw, lever arm or clock, however much the dive turns around them: the heading's
+/// span is read over the fixes' own times (it was once read over the whole dive, and
+/// fixes of A-KIT T2's first minute applied a clock 7σ from the dive's own); the
+/// distance travelled is the fixes' span's.
+#[test]
+fn fixes_over_a_stretch_of_few_headings_apply_no_term_only_turns_show() {
+    let dir = tempfile::tempdir().unwrap();
+    installed::write_installed(dir.path(), 1, &[], installed::INSTALLED, 1);
+    let files = [dcnet_exp::data::paired::PairedFiles::akit(dir.path(), 1)];
+    let segment = &crate::coverage::segments(&files)[0];
+    let (whole, drawn) = dive(segment, 0.0, &FIXES, 3);
+    let turns_only = [
+        "lever_arm_x_m",
+        "lever_arm_y_m",
+        "time_offset_s",
+        "misalignment_z_rad",
+    ];
+    assert!(turns_only.iter().all(|name| whole.is_applied(name)));
+    // The longest stretch of the dive over which the heading spans under 80°.
+    let attitude = Attitude::of(&segment.recording);
+    let yaw = |t: f64| {
+        let k = attitude
+            .time_s
+            .partition_point(|&s| s < t)
+            .min(attitude.time_s.len() - 1);
+        attitude.angles_rad[k][2]
+    };
+    let span = |from: usize, to: usize| {
+        let yaws: Vec<f64> = (from..=to).map(|k| yaw(drawn.time_s[k])).collect();
+        let low = yaws.iter().cloned().fold(f64::INFINITY, f64::min);
+        yaws.iter().cloned().fold(f64::NEG_INFINITY, f64::max) - low
+    };
+    let (mut best, mut from) = ((0, 0), 0);
+    for to in 0..drawn.len() {
+        while span(from, to) >= 80f64.to_radians() {
+            from += 1;
+        }
+        if to - from > best.1 - best.0 {
+            best = (from, to);
+        }
+    }
+    let window = drawn.time_s[best.0]..=drawn.time_s[best.1];
+    let start = drawn.select(|k| window.contains(&drawn.time_s[k]));
+    assert!(start.len() >= 6, "{} fixes over {window:?} s", start.len());
+    let (time_s, dvl) = {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        simulated(segment, &TRUTH, 0.0, &mut rng)
+    };
+    let noise = FixNoise {
+        fix_m: FIXES.noise_m,
+        depth_m: FIXES.noise_m,
+        dvl_m_s: NOISE_M_S,
+    };
+    let terms = term_set(&default_fix_terms());
+    let pieces = [0..time_s.len()];
+    let fit = fit_fixes((&time_s, &dvl), &pieces, &attitude, &start, terms, noise).unwrap();
+    for name in turns_only {
+        assert!(
+            !fit.is_applied(name),
+            "{name} applied over {window:?} s: {:?}",
+            fit.unseen
+        );
+    }
+    assert!(
+        fit.distance_m < 0.5 * whole.distance_m,
+        "the distance over the fixes' span"
+    );
+}
+
 /// The installation the dives of `calibrate --fixes` and `correct --fixes` are written
 /// with: without its bias, which fixes do not calibrate, and its clock a whole sample
 /// ahead (at 0.6 s the 1 Hz dead reckoning of these 1 Hz piecewise-linear turns is
@@ -532,7 +602,7 @@ fn correct_with_fixes_finds_the_dives_clock_again_and_carries_the_rest() {
         ..truth
     };
     let [dvl, attitude, fixes] = fix_dive(&d.join("second"), later, 2);
-    let correct = |extra: &[&str]| {
+    let correct_with = |attitude: &str, extra: &[&str]| {
         let mut args = vec![
             "correct",
             &dvl,
@@ -541,13 +611,14 @@ fn correct_with_fixes_finds_the_dives_clock_again_and_carries_the_rest() {
             "--fixes",
             &fixes,
             "--attitude",
-            &attitude,
+            attitude,
             "--columns",
             "columns.toml",
         ];
         args.extend(extra);
         common::dcnet(d, &args)
     };
+    let correct = |extra: &[&str]| correct_with(&attitude, extra);
     let succeeded = |extra: &[&str]| {
         let output = correct(extra);
         let said = common::stderr(&output);
@@ -604,6 +675,33 @@ fn correct_with_fixes_finds_the_dives_clock_again_and_carries_the_rest() {
     ]);
     assert!(stdout.contains("| 1.2500 s "), "{stdout}");
     assert!(stdout.contains("given"), "{stdout}");
+    // A clock given 4.3 s wrong: the installation fits the fixes worse than none, and
+    // nothing is written.
+    refused_naming(
+        &correct(&[
+            "--fix-noise-m",
+            "0.5",
+            "--time-offset-s",
+            "-2.5",
+            "--out",
+            "wrong",
+        ]),
+        "leaves the fixes further from the dead reckoning than no terms do",
+        &["--time-offset-s", "-2.5"],
+    );
+    assert!(!d.join("wrong").exists());
+    // An attitude of the dive's first 300 s: the samples beyond it are counted.
+    let attitude_text = std::fs::read_to_string(&attitude).unwrap();
+    let cut: Vec<&str> = attitude_text.lines().take(301).collect();
+    std::fs::write(d.join("cut.csv"), cut.join("\n") + "\n").unwrap();
+    let output = correct_with("cut.csv", &["--fix-noise-m", "0.5", "--out", "cut"]);
+    let stdout = String::from_utf8_lossy(&output.stdout).to_string();
+    assert!(output.status.success(), "{}", common::stderr(&output));
+    let line = (stdout.lines())
+        .find(|l| l.contains("of the dive's samples lie outside the attitude"))
+        .unwrap_or_else(|| panic!("{stdout}"));
+    let outside: usize = line.split_whitespace().next().unwrap().parse().unwrap();
+    assert!((95..=105).contains(&outside), "{stdout}");
     let refused = |extra: &[&str], expected: &str| refused_naming(&correct(extra), expected, extra);
     refused(
         &[],

@@ -231,17 +231,40 @@ impl<'a> Problem<'a> {
             .expect("a term's name")
     }
 
-    /// The span of the attitude's (unwrapped) yaw over the pieces fitted, rad.
+    /// The span of the attitude's (unwrapped) yaw over the times the fixes fitted span,
+    /// rad: where the fixes cover only part of a dive, the turns they see.
     pub(super) fn heading_span_rad(&self) -> f64 {
-        let (first, last) = (self.pieces[0].start, self.pieces[self.pieces.len() - 1].end);
-        let (from, to) = (self.dvl.0[first], self.dvl.0[last - 1]);
+        let spans = self.fix_spans();
         let yaw = (self.attitude.time_s.iter().zip(&self.attitude.angles_rad))
-            .filter(|(t, _)| (from..=to).contains(*t))
+            .filter(|(t, _)| spans.iter().any(|span| span.contains(*t)))
             .map(|(_, angles)| angles[2]);
         let (low, high) = yaw.fold((f64::INFINITY, f64::NEG_INFINITY), |(low, high), y| {
             (low.min(y), high.max(y))
         });
         (high - low).max(0.0)
+    }
+
+    /// The times each piece's fixes span, from its first fix to its last (on the
+    /// attitude's clock): what the fixes see of the dive.
+    fn fix_spans(&self) -> Vec<std::ops::RangeInclusive<f64>> {
+        (self.held.iter())
+            .map(|held| self.fixes.time_s[held[0]]..=self.fixes.time_s[held[held.len() - 1]])
+            .collect()
+    }
+
+    /// How far the dead reckoning under the term parameters `terms` travelled,
+    /// horizontally, over the times its fixes span, m.
+    pub(super) fn distance_m(&self, terms: &[f64]) -> Result<f64, FixFitError> {
+        let tracks = self.tracks(terms)?;
+        let spans = self.fix_spans();
+        Ok((tracks.iter().zip(&spans))
+            .map(|(track, span)| {
+                (track.time_s.windows(2).zip(track.position_m.windows(2)))
+                    .filter(|(t, _)| span.contains(&t[0]) && span.contains(&t[1]))
+                    .map(|(_, p)| (p[1][0] - p[0][0]).hypot(p[1][1] - p[0][1]))
+                    .sum::<f64>()
+            })
+            .sum())
     }
 
     /// The installation of the term parameters `terms`: the carried one, each

@@ -123,8 +123,8 @@ pub struct FixFit {
     pub residual_rms_m: Vec3,
     /// The axes fitted: 2 (north, east) or 3 (and depth).
     pub axes: usize,
-    /// How far the dead reckoning with the terms applied travelled over the pieces
-    /// fitted, horizontally, m.
+    /// How far the dead reckoning with the terms applied travelled, horizontally, over
+    /// the times the fixes fitted span (each piece from its first fix to its last), m.
     pub distance_m: f64,
 }
 
@@ -205,13 +205,7 @@ pub fn fit_fixes_around(
         pieces: problem.pieces.len(),
         residual_rms_m: problem.residual_rms(&last)?,
         axes: problem.axes,
-        distance_m: (problem.tracks(&last.terms)?.iter())
-            .map(|track| {
-                (track.position_m.windows(2))
-                    .map(|pair| (pair[1][0] - pair[0][0]).hypot(pair[1][1] - pair[0][1]))
-                    .sum::<f64>()
-            })
-            .sum(),
+        distance_m: problem.distance_m(&last.terms)?,
     })
 }
 

@@ -184,6 +184,12 @@ pub fn fix_correction_text(correction: &FixCorrection) -> String {
         correction.fix_noise_m,
         correction.fix_noise_m * std::f64::consts::SQRT_2,
     ));
+    if correction.outside > 0 {
+        text.push_str(&format!(
+            "{} of the dive's samples lie outside the attitude (or in a gap of it) at the clock applied: written without a velocity, marked outside_reference\n",
+            correction.outside
+        ));
+    }
     text
 }
 
