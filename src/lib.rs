@@ -109,6 +109,23 @@ impl std::fmt::Display for Shown {
     }
 }
 
+/// A computed number as a message shows it: three significant figures, at least two
+/// decimals (a variance factor of 0.00432 is not 0.00, a ratio of 5890.76 not
+/// 5890.756046138612).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ThreeFigures(pub f64);
+
+impl std::fmt::Display for ThreeFigures {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let value = self.0;
+        let decimals = match value.is_finite() && value != 0.0 {
+            true => (2 - value.abs().log10().floor() as i32).max(2) as usize,
+            false => 2,
+        };
+        write!(f, "{value:.decimals$}")
+    }
+}
+
 /// `n` of `what`, with a plural `s` where `n` is not 1: `1 model`, `5 models`.
 pub fn count(n: usize, what: &str) -> String {
     match n {
@@ -126,4 +143,19 @@ pub fn first_seen<T: PartialEq>(values: impl IntoIterator<Item = T>) -> Vec<T> {
         }
     }
     seen
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ThreeFigures;
+
+    #[test]
+    fn a_computed_number_keeps_three_figures_and_two_decimals() {
+        let shown = |value| ThreeFigures(value).to_string();
+        assert_eq!(shown(0.004321), "0.00432");
+        assert_eq!(shown(0.0321), "0.0321");
+        assert_eq!(shown(1.0749), "1.07");
+        assert_eq!(shown(5890.756046138612), "5890.76");
+        assert_eq!(shown(0.0), "0.00");
+    }
 }

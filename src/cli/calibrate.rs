@@ -79,34 +79,26 @@ fn calibrate_fixes(
     args: &args::CalibrateArgs,
     (fixes, attitude, fix_noise_m): (&std::path::Path, &std::path::Path, f64),
 ) -> Result<(), CliError> {
-    let refuse = |message: String| Err(input(anyhow::anyhow!(message)));
     if args.dvl.len() > 1 {
-        return refuse(format!(
+        return Err(input(anyhow::anyhow!(
             "--fixes: {} DVL files: a fit to fixes calibrates one dive; give one",
             args.dvl.len()
-        ));
+        )));
     }
-    for (flag, given) in [
-        ("--reference", !args.reference.is_empty()),
-        ("--window-s", args.window_s.is_some()),
-        ("--dvl-topic", args.reading.dvl_topic.is_some()),
-        ("--reference-topic", args.reading.reference_topic.is_some()),
-        ("--rate-topic", args.reading.rate_topic.is_some()),
-        ("--stamps", args.reading.stamps.is_some()),
-        ("--frame", args.reading.frame.is_some()),
-        ("--tolerance-pct", args.tolerance_pct.is_some()),
-        (
-            "--reference-noise-cm-s",
-            args.reference_noise_cm_s.is_some(),
-        ),
-        ("--search-s", args.search_s.is_some()),
-    ] {
-        if given {
-            return refuse(format!(
-                "{flag}: does not apply to a calibration against fixes (--fixes), which reads CSV files (the DVL's, the attitude's and the fixes') and runs no filter"
-            ));
-        }
-    }
+    refuse_beside_fixes(
+        &[
+            ("--reference", !args.reference.is_empty()),
+            ("--window-s", args.window_s.is_some()),
+            ("--tolerance-pct", args.tolerance_pct.is_some()),
+            (
+                "--reference-noise-cm-s",
+                args.reference_noise_cm_s.is_some(),
+            ),
+            ("--search-s", args.search_s.is_some()),
+        ],
+        &args.reading,
+        "a calibration against fixes (--fixes), which reads CSV files (the DVL's, the attitude's and the fixes') and runs no filter",
+    )?;
     let terms = match &args.terms {
         Some(terms) => parse_terms(("--terms", terms))?,
         None => default_fix_terms(),
@@ -142,6 +134,28 @@ fn calibrate_fixes(
     Ok(())
 }
 
+/// Refuses the first of `flags` given, or of a bag's flags in `reading`, saying that it
+/// does not apply to `command` (a command against fixes, and what it does instead).
+fn refuse_beside_fixes(
+    flags: &[(&str, bool)],
+    reading: &args::ReadingArgs,
+    command: &str,
+) -> Result<(), CliError> {
+    let bag = [
+        ("--dvl-topic", reading.dvl_topic.is_some()),
+        ("--reference-topic", reading.reference_topic.is_some()),
+        ("--rate-topic", reading.rate_topic.is_some()),
+        ("--stamps", reading.stamps.is_some()),
+        ("--frame", reading.frame.is_some()),
+    ];
+    match flags.iter().chain(&bag).find(|(_, given)| *given) {
+        Some((flag, _)) => Err(input(anyhow::anyhow!(
+            "{flag}: does not apply to {command}"
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// `correct` as typed: against a velocity reference, or against fixes.
 pub(super) fn correct_command(args: &args::CorrectArgs) -> Result<(), CliError> {
     if let Some(given) = args.fix.given().map_err(|m| input(anyhow::anyhow!(m)))? {
@@ -169,22 +183,14 @@ fn correct_fixes(
     args: &args::CorrectArgs,
     (fixes, attitude, fix_noise_m): (&std::path::Path, &std::path::Path, f64),
 ) -> Result<(), CliError> {
-    let refuse = |message: String| Err(input(anyhow::anyhow!(message)));
-    for (flag, given) in [
-        ("--reference", args.reference.is_some()),
-        ("--search-s", args.search_s.is_some()),
-        ("--dvl-topic", args.reading.dvl_topic.is_some()),
-        ("--reference-topic", args.reading.reference_topic.is_some()),
-        ("--rate-topic", args.reading.rate_topic.is_some()),
-        ("--stamps", args.reading.stamps.is_some()),
-        ("--frame", args.reading.frame.is_some()),
-    ] {
-        if given {
-            return refuse(format!(
-                "{flag}: does not apply to a correction against fixes (--fixes), which reads CSV files (the DVL's, the attitude's and the fixes') and scans the clock within ±3 s of the installation's"
-            ));
-        }
-    }
+    refuse_beside_fixes(
+        &[
+            ("--reference", args.reference.is_some()),
+            ("--search-s", args.search_s.is_some()),
+        ],
+        &args.reading,
+        "a correction against fixes (--fixes), which reads CSV files (the DVL's, the attitude's and the fixes') and scans the clock within ±3 s of the installation's",
+    )?;
     let correction = corrected_on_fixes(&FixCorrectArgs {
         files: FixFiles {
             dvl: &args.dvl,

@@ -104,7 +104,7 @@ pub fn drift(
     positions: &Positions,
 ) -> Option<Drift> {
     let (mut squares, mut samples, mut end_error_m, mut distance_m) = (0.0, 0, 0.0, 0.0);
-    let inside = interior(attitude, time_s);
+    let inside = interior(attitude, time_s, 0.0);
     for piece in pieces {
         let piece = piece.start.max(inside.start)..piece.end.min(inside.end);
         let Some(track) = dead_reckon(
@@ -158,13 +158,13 @@ pub fn drift_of(installation: &Installation, recording: &PairedRecording) -> Opt
     )
 }
 
-/// The samples stamped `time_s` whose t + τ lies inside `attitude`'s span for every
-/// |τ| ≤ [`GAP_MARGIN_S`] (empty where none does).
-pub fn interior(attitude: &Attitude, time_s: &[f64]) -> Range<usize> {
+/// The samples stamped `time_s` whose t + τ lies inside `attitude`'s span for every τ
+/// within [`GAP_MARGIN_S`] of `centre_s` (empty where none does).
+pub fn interior(attitude: &Attitude, time_s: &[f64], centre_s: f64) -> Range<usize> {
     let (Some(&first), Some(&last)) = (attitude.time_s.first(), attitude.time_s.last()) else {
         return 0..0;
     };
-    let start = time_s.partition_point(|&t| t - GAP_MARGIN_S < first);
-    let end = time_s.partition_point(|&t| t + GAP_MARGIN_S <= last);
+    let start = time_s.partition_point(|&t| t + centre_s - GAP_MARGIN_S < first);
+    let end = time_s.partition_point(|&t| t + centre_s + GAP_MARGIN_S <= last);
     start..end.max(start)
 }

@@ -112,8 +112,8 @@ pub enum CalibrateError {
     #[error(
         "--fix-noise-m {}: the fixes' residuals are {} m RMS per horizontal axis, {} times the noise given, beyond a factor of {NOISE_RATIO_LIMIT} either way: the fit weighs the fixes and reads its intervals by it, so give the noise of these fixes (a USBL's metres, a GNSS's decimetres)",
         crate::Shown(*given_m),
-        crate::Shown(*read_m),
-        crate::Shown(*ratio)
+        crate::ThreeFigures(*read_m),
+        crate::ThreeFigures(*ratio)
     )]
     FixNoiseContradicted {
         given_m: f64,

@@ -128,7 +128,7 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
     }
     Ok(FixCalibration {
         corrected,
-        read: recording.counts(),
+        read: recording.counts().beside_attitude(),
         fixes: fixes.len(),
         before_m: horizontal(bare.residual_rms_m),
         after_m: horizontal(fit.residual_rms_m),

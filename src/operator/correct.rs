@@ -129,6 +129,29 @@ pub enum CorrectError {
         before_m: f64,
         after_m: f64,
     },
+    #[error(
+        "{}: the dive's clock cannot be found from the fixes of its first {} s (--window-s): {fault}; give a longer --window-s (without it, every fix of the dive), or its clock with --time-offset-s",
+        fixes.display(),
+        crate::Shown(*window_s)
+    )]
+    FixWindow {
+        fixes: PathBuf,
+        window_s: f64,
+        fault: Box<crate::installation::estimate::fixes::FixFitError>,
+    },
+    #[error(
+        "--window-s {}: with --time-offset-s there is no clock to find, and against fixes the window is only where it is found: leave one of them out",
+        crate::Shown(*.0)
+    )]
+    WindowWithClock(f64),
+    #[error(
+        "--time-offset-s {}: the installation at the clock given does not fit the dive's fixes: {fault}; give the dive's clock in seconds, or leave it out and let correct find it from the fixes",
+        crate::Shown(*time_offset_s)
+    )]
+    GivenClock {
+        time_offset_s: f64,
+        fault: Box<crate::installation::estimate::fixes::FixFitError>,
+    },
     #[error("{}: the dive's dead reckoning cannot be fitted to its fixes: {fault}", fixes.display())]
     FixFit {
         fixes: PathBuf,

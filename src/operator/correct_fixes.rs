@@ -130,29 +130,8 @@ pub fn correct_fixes(args: &FixCorrectArgs) -> Result<FixCorrection, CorrectErro
         fixes: &fixes,
         noise,
     };
-    let (applied, clock) = match args.time_offset_s {
-        Some(time_offset_s) => {
-            let given = Installation {
-                time_offset_s,
-                ..saved.installation()
-            };
-            (given, None)
-        }
-        None => {
-            let clock = dive.clock(&saved)?;
-            (clock.fit.installation, Some(clock))
-        }
-    };
-    let before = dive.residual(Installation::default())?;
-    let after = dive.residual(applied)?;
-    if after.rms_m > WORSE_RATIO * before.rms_m {
-        return Err(CorrectError::FixesFitWorse {
-            fixes: files.fixes.to_path_buf(),
-            time_offset_s: applied.time_offset_s,
-            before_m: before.rms_m,
-            after_m: after.rms_m,
-        });
-    }
+    let (applied, clock) = dive.applied(&saved)?;
+    let (before, after) = dive.residuals(applied)?;
     let samples = corrected_samples(&applied, recording, &Reference::new(recording));
     let outside = (samples.iter())
         .filter(|s| matches!(s.velocity_m_s, Err(NotCorrected::OutsideReference)))
@@ -172,7 +151,7 @@ pub fn correct_fixes(args: &FixCorrectArgs) -> Result<FixCorrection, CorrectErro
         before,
         after,
         fix_noise_m: args.fix_noise_m,
-        read: recording.counts(),
+        read: recording.counts().beside_attitude(),
         fixes: fixes.len(),
         outside,
         written,
@@ -191,6 +170,9 @@ fn refused(args: &FixCorrectArgs) -> Result<(), CorrectError> {
     }
     if let Some(window_s) = args.window_s.filter(|w| !(w.is_finite() && *w > 0.0)) {
         return Err(CorrectError::Window(window_s));
+    }
+    if let (Some(window_s), Some(_)) = (args.window_s, args.time_offset_s) {
+        return Err(CorrectError::WindowWithClock(window_s));
     }
     match args.time_offset_s {
         Some(tau) if !tau.is_finite() => Err(CorrectError::TimeOffset(tau)),
@@ -220,12 +202,67 @@ impl FixDive<'_> {
         };
         let terms = term_set(&["time_offset".parse().expect("a term's name")]);
         let carried = saved.installation();
-        let fit = self.fit(&fixes, (terms, carried))?;
+        let fit = match (self.fit(&fixes, (terms, carried)), self.args.window_s) {
+            (Err(CorrectError::FixFit { fixes, fault }), Some(window_s)) => {
+                return Err(CorrectError::FixWindow {
+                    fixes,
+                    window_s,
+                    fault,
+                });
+            }
+            (fit, _) => fit?,
+        };
         Ok(FixClock {
             fixes_used: fit.fitted,
             carried_s: carried.time_offset_s,
             fit,
         })
+    }
+
+    /// The installation applied to the dive: the saved one at the clock given, or at
+    /// the clock found again from the fixes (and that clock).
+    fn applied(
+        &self,
+        saved: &SavedInstallation,
+    ) -> Result<(Installation, Option<FixClock>), CorrectError> {
+        Ok(match self.args.time_offset_s {
+            Some(time_offset_s) => {
+                let given = Installation {
+                    time_offset_s,
+                    ..saved.installation()
+                };
+                (given, None)
+            }
+            None => {
+                let clock = self.clock(saved)?;
+                (clock.fit.installation, Some(clock))
+            }
+        })
+    }
+
+    /// The fixes' residual with no terms and with `applied`; refused where `applied`
+    /// leaves it more than [`WORSE_RATIO`] times the other, and where the fixes cannot
+    /// be fitted about a clock given (the flag named).
+    fn residuals(&self, applied: Installation) -> Result<(FixResidual, FixResidual), CorrectError> {
+        let before = self.residual(Installation::default())?;
+        let after = match (self.residual(applied), self.args.time_offset_s) {
+            (Err(CorrectError::FixFit { fault, .. }), Some(time_offset_s)) => {
+                return Err(CorrectError::GivenClock {
+                    time_offset_s,
+                    fault,
+                });
+            }
+            (after, _) => after?,
+        };
+        if after.rms_m > WORSE_RATIO * before.rms_m {
+            return Err(CorrectError::FixesFitWorse {
+                fixes: self.args.files.fixes.to_path_buf(),
+                time_offset_s: applied.time_offset_s,
+                before_m: before.rms_m,
+                after_m: after.rms_m,
+            });
+        }
+        Ok((before, after))
     }
 
     /// The fixes' horizontal residual under `installation`, no term fitted.

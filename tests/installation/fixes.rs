@@ -79,10 +79,21 @@ fn fitted_dive(
     fixes: &FixSimulation,
     seed: u64,
 ) -> Result<(FixFit, Fixes), FixFitError> {
+    fitted_dive_edited(segment, (correlation_at_1_s, fixes), seed, |_| {})
+}
+
+/// [`fitted_dive`] with the fixes drawn changed by `edit` before the fit.
+fn fitted_dive_edited(
+    segment: &Recording,
+    (correlation_at_1_s, fixes): (f64, &FixSimulation),
+    seed: u64,
+    edit: impl FnOnce(&mut Fixes),
+) -> Result<(FixFit, Fixes), FixFitError> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let (time_s, dvl) = simulated(segment, &TRUTH, correlation_at_1_s, &mut rng);
     let reference_time_s = &segment.recording.reference_time_s;
-    let drawn = simulate_fixes((reference_time_s, &positions(segment)), fixes, &mut rng);
+    let mut drawn = simulate_fixes((reference_time_s, &positions(segment)), fixes, &mut rng);
+    edit(&mut drawn);
     let pieces = vec![0..time_s.len()];
     let noise = FixNoise {
         fix_m: fixes.noise_m,
@@ -182,6 +193,34 @@ fn multipath_fixes_are_left_out_and_the_intervals_still_cover() {
     let (table, refused) = coverage(&segments, 0.0, &multipath, 400);
     assert!(refused <= 4, "{refused} of 400 dives refused");
     check_coverage("5 % of fixes 10 m off", &table);
+}
+
+/// One fix 300 m off and one 10 m off among fixes of 0.5 m: both left out, and every
+/// term as the fit without them gives it. (The 300-m fix, read with the others, made
+/// the noise a walk under which most good fixes were outliers, and the fit was refused
+/// as "more than a quarter are outliers"; the 10-m one, under the walk the good fixes
+/// read, hid within it and moved the clock by several standard deviations.)
+#[test]
+fn a_fix_hundreds_of_metres_off_is_left_out_and_the_fit_is_the_clean_ones() {
+    let (_dir, segments) = synthetic_segments();
+    let (clean, _) = dive(&segments[0], 0.0, &FIXES, 7);
+    let (fit, _) = fitted_dive_edited(&segments[0], (0.0, &FIXES), 7, |fixes| {
+        fixes.north_east_m[40][0] += 300.0;
+        fixes.north_east_m[50][1] += 10.0;
+    })
+    .unwrap();
+    assert_eq!(clean.outliers, Vec::<usize>::new());
+    assert_eq!(fit.outliers, vec![40, 50]);
+    for k in (0..fit.names.len()).filter(|&k| fit.estimated[k]) {
+        assert!(
+            (fit.value[k] - clean.value[k]).abs() < 0.25 * clean.std[k],
+            "{}: {} against {} ± {} without the two fixes",
+            fit.names[k],
+            fit.value[k],
+            clean.value[k],
+            clean.std[k]
+        );
+    }
 }
 
 /// A dive that never turns shows neither the lever arm nor the clock, nor (at one
@@ -415,11 +454,18 @@ fn calibrate_with_fixes_finds_the_installation_and_refuses_bad_input() {
         &["--fix-noise-m", "1", "--terms", "bias"],
         "bias: fixes calibrate scale, misalignment, lever_arm, time_offset",
     );
-    // A noise the residuals contradict by orders of magnitude: a unit or a digit wrong.
-    refused(
-        &["--fix-noise-m", "1e-9"],
+    // A noise the residuals contradict by orders of magnitude: a unit or a digit wrong;
+    // the residuals' size and the ratio to three figures.
+    let contradicted = run(&["--fix-noise-m", "1e-9"]);
+    refused_naming(
+        &contradicted,
         "times the noise given, beyond a factor of 100 either way",
+        &["--fix-noise-m", "1e-9"],
     );
+    let digits = (common::stderr(&contradicted).split(|c: char| !c.is_ascii_digit()))
+        .map(str::len)
+        .max();
+    assert!(digits < Some(10), "{}", common::stderr(&contradicted));
     refused(
         &["--fix-noise-m", "1e308"],
         "--fix-noise-m 1e308: give a positive number of metres, under 10,000 km",
@@ -675,6 +721,10 @@ fn correct_with_fixes_finds_the_dives_clock_again_and_carries_the_rest() {
     ]);
     assert!(stdout.contains("| 1.2500 s "), "{stdout}");
     assert!(stdout.contains("given"), "{stdout}");
+    assert!(
+        stdout.contains("beside the attitude's 400 on its own stamps"),
+        "{stdout}"
+    );
     // A clock given 4.3 s wrong: the installation fits the fixes worse than none, and
     // nothing is written.
     refused_naming(
@@ -718,6 +768,48 @@ fn correct_with_fixes_finds_the_dives_clock_again_and_carries_the_rest() {
     refused(
         &["--fix-noise-m", "0.5", "--window-s", "0"],
         "--window-s 0: give a positive number of seconds",
+    );
+    // A window of 5 s holds a fix, but none 3 s inside the DVL's start: the flag named.
+    refused(
+        &["--fix-noise-m", "0.5", "--window-s", "5"],
+        "cannot be found from the fixes of its first 5 s (--window-s): no fix lies within",
+    );
+    refused(
+        &[
+            "--fix-noise-m",
+            "0.5",
+            "--window-s",
+            "100",
+            "--time-offset-s",
+            "1",
+        ],
+        "--window-s 100: with --time-offset-s there is no clock to find",
+    );
+    // A clock given 50 s off: the fixes fitted about it, the flag named.
+    refused(
+        &["--fix-noise-m", "0.5", "--time-offset-s", "50"],
+        "--time-offset-s 50: the installation at the clock given does not fit the dive's fixes",
+    );
+    // Fixes 5 s late on the attitude's clock: the search about the carried clock meets
+    // its edge, said as such (it read the attitude beyond its end before).
+    let late: String = (std::fs::read_to_string(&fixes).unwrap().lines())
+        .enumerate()
+        .map(|(i, line)| match i {
+            0 => format!("{line}\n"),
+            _ => {
+                let (t, rest) = line.split_once(',').unwrap();
+                format!("{},{rest}\n", t.parse::<f64>().unwrap() + 5.0)
+            }
+        })
+        .collect();
+    std::fs::write(d.join("late.csv"), late).unwrap();
+    let mut late_args = vec!["correct", &dvl, "--installation", "fixes.toml"];
+    late_args.extend(["--fixes", "late.csv", "--attitude", &attitude]);
+    late_args.extend(["--columns", "columns.toml", "--fix-noise-m", "0.5"]);
+    refused_naming(
+        &common::dcnet(d, &late_args),
+        "lies at the edge of the ±3 s a fit to fixes searches",
+        &["fixes 5 s late"],
     );
     refused(
         &["--fix-noise-m", "-2"],

@@ -126,6 +126,9 @@ pub struct ReadCounts {
     pub kept: usize,
     pub left_out: Vec<(LeftOutWhy, usize)>,
     pub reference: usize,
+    /// What the reference's samples are: `reference`, or `attitude` where a calibration
+    /// against fixes reads only the attitude of the second file.
+    pub beside: &'static str,
     pub pieces: usize,
     pub gap_limit_s: f64,
     /// The longest step between two kept DVL samples, s.
@@ -137,16 +140,25 @@ impl ReadCounts {
     pub fn read(&self) -> usize {
         self.kept + self.left_out.iter().map(|(_, n)| n).sum::<usize>()
     }
+
+    /// The same counts, the second file read as the attitude beside fixes.
+    pub fn beside_attitude(self) -> ReadCounts {
+        ReadCounts {
+            beside: "attitude",
+            ..self
+        }
+    }
 }
 
 impl std::fmt::Display for ReadCounts {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "the DVL's {} samples, {} kept ({}), beside the reference's {} on its own stamps; {} (gaps over {:.2} s cut it), the longest loss {:.2} s",
+            "the DVL's {} samples, {} kept ({}), beside the {}'s {} on its own stamps; {} (gaps over {:.2} s cut it), the longest loss {:.2} s",
             self.read(),
             self.kept,
             left_out_words(&self.left_out),
+            self.beside,
             self.reference,
             match self.pieces {
                 1 => "one piece".to_string(),
@@ -254,6 +266,7 @@ impl PairedRecording {
             kept: self.len(),
             left_out: self.left_out_counts(),
             reference: self.reference_time_s.len(),
+            beside: "reference",
             pieces: self.pieces().len(),
             gap_limit_s: self.gap_limit_s,
             longest_loss_s: (self.time_s.windows(2))

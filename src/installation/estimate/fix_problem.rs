@@ -9,10 +9,9 @@
 
 use crate::Vec3;
 use crate::data::fixes::Fixes;
-use crate::data::paired::GAP_MARGIN_S;
 use crate::installation::dead_reckoning::{Track, dead_reckon, interior};
 use crate::installation::estimate::bound::{Tolerances, Unseen, normal_step, whitened_bound};
-use crate::installation::estimate::fit::{MAX_LEVER_ARM_M, MAX_SCALE};
+use crate::installation::estimate::fit::{MAX_LEVER_ARM_M, MAX_SCALE, TIME_OFFSET_MARGIN_S};
 use crate::installation::estimate::fix_noise::{NoiseShape, Whitener, Whitening};
 use crate::installation::estimate::robust::Loss;
 use crate::installation::frames::Attitude;
@@ -20,10 +19,6 @@ use crate::installation::terms::kind::TermKind;
 use crate::installation::terms::{Installation, PerKind, TermSet};
 use nalgebra::{DMatrix, DVector};
 use std::ops::Range;
-
-/// The largest time offset considered, s: fixes within it of a piece's ends are not
-/// fitted, so that every trial offset reads the attitude over the same fixes.
-pub const TIME_OFFSET_MARGIN_S: f64 = GAP_MARGIN_S;
 
 /// The tolerance of each term fitted to fixes: beyond it a term is said to be seen
 /// poorly (and still applied, with its standard deviation). Fixes of metres place a
@@ -51,13 +46,14 @@ pub struct FixNoise {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum FixFitError {
     #[error(
-        "no fix lies within a piece of the DVL record ({fixes} fixes from {fix_span_s:?} s, the DVL's {pieces} pieces from {dvl_span_s:?} s on its clock, each less {TIME_OFFSET_MARGIN_S} s at its ends): the fixes do not overlap the DVL; give fixes of the same dive, on the attitude's clock"
+        "no fix lies within a piece of the DVL record ({fixes} fixes from {:.1} to {:.1} s, the DVL's {pieces} piece(s) from {:.1} to {:.1} s on its clock, each less {TIME_OFFSET_MARGIN_S} s at its ends, about a time offset of {centre_s:.3} s): the fixes do not overlap the DVL; give fixes of the same dive, on the attitude's clock", fix_span_s.0, fix_span_s.1, dvl_span_s.0, dvl_span_s.1
     )]
     NoOverlap {
         fixes: usize,
         fix_span_s: (f64, f64),
         pieces: usize,
         dvl_span_s: (f64, f64),
+        centre_s: f64,
     },
     #[error(
         "{fitted} fixes within the DVL's pieces, {outliers} of them outliers left out, give {residuals} residuals for {parameters} parameters (the terms and a start position per piece): a fit needs more; give more fixes, or fewer terms"
@@ -73,7 +69,7 @@ pub enum FixFitError {
     )]
     Outliers { outliers: usize, within: usize },
     #[error(
-        "the attitude does not cover the DVL's samples at the time offset {time_offset_s} s: give the attitude of the whole dive"
+        "the attitude does not cover the DVL's samples at the time offset {time_offset_s:.3} s: give the attitude of the whole dive"
     )]
     NoAttitude { time_offset_s: f64 },
     #[error(
@@ -85,6 +81,11 @@ pub enum FixFitError {
     )]
     WorseThanNone { with: f64, without: f64 },
 }
+
+/// How many times the fixes' median distance from the first fit's dead reckoning a fix
+/// lies before it is left out as grossly off: a white error's largest of thousands lies
+/// within 5 medians, A-KIT's positions (whose error wanders) within 10.
+const GROSS: f64 = 30.0;
 
 /// The scan's step for the time offset's start, s.
 const SCAN_STEP_S: f64 = 0.25;
@@ -170,7 +171,8 @@ impl<'a> Problem<'a> {
             })
             .collect();
         let time_s = dvl.0;
-        let (used, held) = pieces_with_fixes(time_s, pieces, attitude, fixes);
+        let centre_s = carried.time_offset_s;
+        let (used, held) = pieces_with_fixes(time_s, pieces, attitude, fixes, centre_s);
         let fix_of: Vec<usize> = held.iter().flatten().copied().collect();
         if fix_of.is_empty() {
             let span = |t: &[f64]| {
@@ -184,6 +186,7 @@ impl<'a> Problem<'a> {
                 fix_span_s: span(&fixes.time_s),
                 pieces: pieces.len(),
                 dvl_span_s: span(time_s),
+                centre_s,
             });
         }
         let problem = Problem {
@@ -461,7 +464,8 @@ impl<'a> Problem<'a> {
     }
 
     /// Least squares of the `free` terms (the time offset from the best of a scan) and
-    /// the noise's shape read from its residuals; Huber's and Tukey's weights under it;
+    /// the noise's shape read from its residuals, the fixes grossly off left out
+    /// ([`Self::not_gross`]); Huber's and Tukey's weights under it;
     /// then least squares on the fixes kept, the noise's shape read again.
     pub(super) fn robust_fit(&self, free: &[bool]) -> Result<Solution, FixFitError> {
         let blank = Solution {
@@ -472,13 +476,29 @@ impl<'a> Problem<'a> {
             whitened: Vec::new(),
             freedom: 0,
         };
-        let scanned = self.scan_time_offset(blank, free)?;
+        // Fixes grossly off pull least squares across the scan: screened first about
+        // the carried clock, then about the scan's.
+        let mut about_carried = free.to_vec();
+        if let Some(offset) = self.time_offset() {
+            about_carried[offset] = false;
+        }
+        let ones = vec![1.0; self.fix_of.len()];
+        let carried = self.solve(blank.clone(), &about_carried, &ones, NoiseShape::GIVEN)?;
+        let screened = Solution {
+            kept: self.not_gross(&carried, free)?,
+            ..blank
+        };
+        let mut scanned = self.scan_time_offset(screened, free)?;
+        let not_gross = self.not_gross(&scanned, free)?;
+        scanned.kept = not_gross.clone();
         let mut solution = self.read_noise(&scanned, free, false)?;
         let shape = solution.shape;
         let tukey = Loss::TUKEY_MODELLED;
         for loss in [Loss::Huber, Loss::Huber, tukey, tukey, tukey] {
             let u = self.standardised(&solution, shape)?;
-            let weights: Vec<f64> = u.iter().map(|&u| loss.weight(u)).collect();
+            let weights: Vec<f64> = (u.iter().zip(&not_gross))
+                .map(|(&u, &fit)| if fit { loss.weight(u) } else { 0.0 })
+                .collect();
             solution = self.solve(solution, free, &weights, shape)?;
             solution.kept = weights.iter().map(|&w| w > 0.0).collect();
             let outliers = solution.kept.iter().filter(|&&k| !k).count();
@@ -494,6 +514,23 @@ impl<'a> Problem<'a> {
         last.kept = solution.kept;
         self.within_the_scan(&last)?;
         Ok(last)
+    }
+
+    /// Which fixes `solution` keeps: all but those more than [`GROSS`] times the fixes'
+    /// median from its dead reckoning (in their given noise's standard deviations).
+    /// They stay out of the robust loop: one fix tens or hundreds of metres off, read
+    /// with the others, made the noise read a walk that hid it from Tukey's weights or
+    /// made most of the good fixes outliers.
+    fn not_gross(&self, solution: &Solution, free: &[bool]) -> Result<Vec<bool>, FixFitError> {
+        let u = self.standardised(solution, NoiseShape::GIVEN)?;
+        let mut sorted = u.clone();
+        sorted.sort_by(f64::total_cmp);
+        let median = sorted[sorted.len() / 2];
+        let kept: Vec<bool> = u.iter().map(|&u| u <= GROSS * median).collect();
+        Ok(match self.enough(&kept, free) {
+            Ok(()) => kept,
+            Err(_) => vec![true; u.len()],
+        })
     }
 
     /// The noise's shape under which the fixes `solution` kept are likeliest, each
@@ -564,11 +601,12 @@ impl<'a> Problem<'a> {
     }
 
     /// The fit from the best time offset of a scan over ±[`TIME_OFFSET_MARGIN_S`]
-    /// (each trial a least-squares fit of the other terms), then of every free term;
+    /// (each trial a least-squares fit of the other terms to the fixes `start` keeps),
+    /// then of every free term;
     /// without a free time offset, least squares from zero. A best at the scan's edge
     /// is refused.
     fn scan_time_offset(&self, start: Solution, free: &[bool]) -> Result<Solution, FixFitError> {
-        let ones = vec![1.0; self.fix_of.len()];
+        let ones = start.weights();
         let given = NoiseShape::GIVEN;
         let Some(offset) = self.time_offset().filter(|&k| free[k]) else {
             return self.solve(start, free, &ones, given);
@@ -764,23 +802,27 @@ impl<'a> Problem<'a> {
 }
 
 /// The pieces of the DVL record stamped `time_s` that hold a fix, each cut to the
-/// samples whose t + τ reads `attitude` whatever τ (so that every trial time offset
-/// reads it over the same samples), and the fixes each holds: those at least
-/// [`TIME_OFFSET_MARGIN_S`] inside it.
+/// samples whose t + τ reads `attitude` whatever τ within [`TIME_OFFSET_MARGIN_S`] of
+/// `centre_s` (so that every trial time offset reads it over the same samples), and
+/// the fixes each holds: those at least that margin inside it about `centre_s`.
 fn pieces_with_fixes(
     time_s: &[f64],
     pieces: &[Range<usize>],
     attitude: &Attitude,
     fixes: &Fixes,
+    centre_s: f64,
 ) -> (Vec<Range<usize>>, Vec<Vec<usize>>) {
-    let inside = interior(attitude, time_s);
+    let inside = interior(attitude, time_s, centre_s);
     let (mut used, mut held) = (Vec::new(), Vec::new());
     for piece in pieces {
         let piece = piece.start.max(inside.start)..piece.end.min(inside.end);
         if piece.len() < 2 {
             continue;
         }
-        let (first, last) = (time_s[piece.start], time_s[piece.end - 1]);
+        let (first, last) = (
+            time_s[piece.start] + centre_s,
+            time_s[piece.end - 1] + centre_s,
+        );
         let from = fixes
             .time_s
             .partition_point(|&t| t < first + TIME_OFFSET_MARGIN_S);

@@ -20,7 +20,7 @@
 //! and memory linear in the fixes; each piece's start position is profiled out of the
 //! whitened residuals. The fit is Gauss–Newton on them (a Jacobian of central
 //! differences). The time offset starts from the best of a scan over
-//! ±[`TIME_OFFSET_MARGIN_S`]; a best at the scan's edge is refused, as is a fit that
+//! ±[`TIME_OFFSET_MARGIN_S`](super::fit::TIME_OFFSET_MARGIN_S); a best at the scan's edge is refused, as is a fit that
 //! leaves the fixes further from the track than no terms do.
 //!
 //! A USBL's multipath outliers: after least squares, each fix's innovation in its own
@@ -45,9 +45,7 @@ use crate::Vec3;
 use crate::data::fixes::Fixes;
 use crate::installation::estimate::bound::{Unseen, Why};
 use crate::installation::estimate::fix_noise::NoiseShape;
-pub use crate::installation::estimate::fix_problem::{
-    FIX_TOLERANCES, FixFitError, FixNoise, TIME_OFFSET_MARGIN_S,
-};
+pub use crate::installation::estimate::fix_problem::{FIX_TOLERANCES, FixFitError, FixNoise};
 use crate::installation::estimate::fix_problem::{Problem, Solution};
 use crate::installation::frames::Attitude;
 use crate::installation::terms::names::TermName;
@@ -160,7 +158,7 @@ pub fn fit_fixes(
 
 /// [`fit_fixes`] around the installation `carried`: each of `terms` fitted as an offset
 /// from its carried value (the rest held at theirs), its time offset scanned within
-/// ±[`TIME_OFFSET_MARGIN_S`] of the carried clock; the fit's values are those offsets,
+/// ±[`TIME_OFFSET_MARGIN_S`](super::fit::TIME_OFFSET_MARGIN_S) of the carried clock; the fit's values are those offsets,
 /// and its installation the carried one moved by them. A dive's clock found again
 /// from its fixes, the vehicle's terms carried.
 pub fn fit_fixes_around(

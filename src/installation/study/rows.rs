@@ -156,6 +156,7 @@ impl RecordingRow {
                 .filter(|&(_, count)| count > 0)
                 .collect(),
             reference: self.reference_samples as usize,
+            beside: "reference",
             pieces: self.pieces as usize,
             gap_limit_s: self.gap_limit_s,
             longest_loss_s: self.longest_loss_s,

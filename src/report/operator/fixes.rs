@@ -42,7 +42,7 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
     ));
     text.push_str(&format!(
         "standard deviation: under that noise, scaled by the variance factor {} the fixes' whitened residuals show (1 where the noise is as given: fixes {:.2} m per axis{}); bound: under the noise as given, white fixes and white DVL noise; 95 % interval: Student's t on {} degrees of freedom\n",
-        three_figures(fit.variance_factor),
+        crate::ThreeFigures(fit.variance_factor),
         noise.fix_m,
         if fit.axes == 3 { format!(", depth {:.2} m", noise.depth_m) } else { String::new() },
         fit.freedom,
@@ -123,28 +123,4 @@ fn terms_table(fit: &FixFit) -> Table {
         ]);
     }
     table
-}
-
-/// `value` to three significant figures, at least two decimals: a variance factor of
-/// 0.00432 is not 0.00.
-fn three_figures(value: f64) -> String {
-    let decimals = match value.is_finite() && value != 0.0 {
-        true => (2 - value.abs().log10().floor() as i32).max(2) as usize,
-        false => 2,
-    };
-    format!("{value:.decimals$}")
-}
-
-#[cfg(test)]
-mod tests {
-    use super::three_figures;
-
-    #[test]
-    fn a_small_variance_factor_keeps_three_figures() {
-        assert_eq!(three_figures(0.004321), "0.00432");
-        assert_eq!(three_figures(0.0321), "0.0321");
-        assert_eq!(three_figures(1.0749), "1.07");
-        assert_eq!(three_figures(123.456), "123.46");
-        assert_eq!(three_figures(0.0), "0.00");
-    }
 }

@@ -279,6 +279,7 @@ pub(crate) mod tests {
             kept: 370,
             left_out,
             reference: 4000,
+            beside: "reference",
             pieces,
             gap_limit_s: 3.0,
             longest_loss_s: 16.0,
