@@ -20,11 +20,13 @@
 //! and memory linear in the fixes; each piece's start position is profiled out of the
 //! whitened residuals. The fit is Gauss–Newton on them (a Jacobian of central
 //! differences). The time offset starts from the best of a scan over
-//! ±[`TIME_OFFSET_MARGIN_S`](super::fit::TIME_OFFSET_MARGIN_S); a best at the scan's edge is refused, as is a fit that
-//! leaves the fixes further from the track than no terms do.
+//! ±[`TIME_OFFSET_MARGIN_S`](super::fit::TIME_OFFSET_MARGIN_S); a best at the scan's
+//! edge is refused, as is a fit that leaves the fixes further from the track than no
+//! terms do. A fix grossly off is left out before the scan, and stays out.
 //!
-//! A USBL's multipath outliers: after least squares, each fix's innovation in its own
-//! standard deviations u (the root mean square over its axes) weighs it by Huber's
+//! A USBL's multipath outliers: after least squares, each fix's distance from the dead
+//! reckoning in its own standard deviations u (the walk since its piece's start, the
+//! wandering error and its own; the root mean square over its axes) weighs it by Huber's
 //! loss, then by Tukey's bisquare ([`super::robust`]); a fix beyond Tukey's constant is
 //! an outlier, left out and counted, and the terms are fitted again by least squares on
 //! the fixes kept.
@@ -158,9 +160,10 @@ pub fn fit_fixes(
 
 /// [`fit_fixes`] around the installation `carried`: each of `terms` fitted as an offset
 /// from its carried value (the rest held at theirs), its time offset scanned within
-/// ±[`TIME_OFFSET_MARGIN_S`](super::fit::TIME_OFFSET_MARGIN_S) of the carried clock; the fit's values are those offsets,
-/// and its installation the carried one moved by them. A dive's clock found again
-/// from its fixes, the vehicle's terms carried.
+/// ±[`TIME_OFFSET_MARGIN_S`](super::fit::TIME_OFFSET_MARGIN_S) of the carried clock
+/// (the DVL's samples read where the attitude covers every clock so scanned); the fit's
+/// values are those offsets, and its installation the carried one moved by them. A
+/// dive's clock found again from its fixes, the vehicle's terms carried.
 pub fn fit_fixes_around(
     dvl: (&[f64], &[Vec3]),
     pieces: &[Range<usize>],
