@@ -111,13 +111,16 @@ impl std::fmt::Display for Shown {
 
 /// A computed number as a message shows it: three significant figures, at least two
 /// decimals (a variance factor of 0.00432 is not 0.00, a ratio of 5890.76 not
-/// 5890.756046138612).
+/// 5890.756046138612), and in scientific notation from 1e15 on (not 300 digits).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ThreeFigures(pub f64);
 
 impl std::fmt::Display for ThreeFigures {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let value = self.0;
+        if value.is_finite() && value.abs() >= 1e15 {
+            return write!(f, "{value:.2e}");
+        }
         let decimals = match value.is_finite() && value != 0.0 {
             true => (2 - value.abs().log10().floor() as i32).max(2) as usize,
             false => 2,
@@ -157,5 +160,6 @@ mod tests {
         assert_eq!(shown(1.0749), "1.07");
         assert_eq!(shown(5890.756046138612), "5890.76");
         assert_eq!(shown(0.0), "0.00");
+        assert_eq!(shown(1e308), "1.00e308");
     }
 }

@@ -121,11 +121,12 @@ pub enum CalibrateError {
         ratio: f64,
     },
     #[error(
-        "{}: the fixes travel {fixes_m:.1} m over their span and the DVL {dvl_m:.1} m{hint}: no installation makes one of the other",
+        "{}: the fixes move {fixes_m:.1} m and the DVL {dvl_m:.1} m in the median step of {step_s} s over their span{hint}: no installation makes one of the other",
         fixes.display()
     )]
     FixesOtherMotion {
         fixes: PathBuf,
+        step_s: f64,
         fixes_m: f64,
         dvl_m: f64,
         hint: &'static str,

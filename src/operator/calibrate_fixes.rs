@@ -153,10 +153,12 @@ const LEAST_DISTANCE_M: f64 = 100.0;
 const UNIT_FACTOR: f64 = 10.0;
 
 /// Refuses fixes whose track over their span is [`UNIT_FACTOR`] times shorter or longer
-/// than the DVL's (the displacement between fixes [`STEP_S`] apart, summed, against the
-/// DVL's horizontal speed integrated): positions in another unit than the columns say
-/// (latitude and longitude in radians read as degrees travel 57.3 times less), which no
-/// installation explains, before any fit reads them.
+/// than the DVL's (the median displacement between fixes [`STEP_S`] apart against the
+/// median of the DVL's horizontal speed integrated over the same steps): positions in
+/// another unit than the columns say (latitude and longitude in radians read as degrees
+/// travel 57.3 times less), which no installation explains, before any fit reads them.
+/// Medians, so that one fix kilometres off (two steps of a dozen) is the robust fit's to
+/// leave out, not taken for another unit.
 fn same_motion(
     fixes_file: &Path,
     columns: &crate::data::fixes::FixColumns,
@@ -170,7 +172,8 @@ fn same_motion(
     let inside: Vec<usize> = (0..fixes.len())
         .filter(|&k| (first..=last).contains(&fixes.time_s[k]))
         .collect();
-    let mut fixes_m = 0.0;
+    // Each step's displacement of the fixes and distance of the DVL, in turn.
+    let mut steps: Vec<(f64, f64)> = Vec::new();
     let mut from = inside.first().copied();
     for &k in &inside {
         if let Some(at) = from
@@ -178,27 +181,36 @@ fn same_motion(
         {
             let [n0, e0] = fixes.north_east_m[at];
             let [n1, e1] = fixes.north_east_m[k];
-            fixes_m += (n1 - n0).hypot(e1 - e0);
+            let span = fixes.time_s[at]..=fixes.time_s[k];
+            let dvl_m: f64 = (1..time_s.len())
+                .filter(|&i| span.contains(&time_s[i - 1]) && span.contains(&time_s[i]))
+                .filter(|&i| time_s[i] - time_s[i - 1] <= recording.gap_limit_s)
+                .map(|i| dvl[i][0].hypot(dvl[i][1]) * (time_s[i] - time_s[i - 1]))
+                .sum();
+            steps.push(((n1 - n0).hypot(e1 - e0), dvl_m));
             from = Some(k);
         }
     }
-    let (Some(&start), Some(end)) = (inside.first(), from) else {
+    let travelled: f64 = steps.iter().map(|step| step.1).sum();
+    if steps.is_empty() || travelled < LEAST_DISTANCE_M {
         return Ok(());
+    }
+    let median = |values: Vec<f64>| {
+        let mut values = values;
+        values.sort_by(f64::total_cmp);
+        values[values.len() / 2]
     };
-    let span = fixes.time_s[start]..=fixes.time_s[end];
-    let dvl_m: f64 = (1..time_s.len())
-        .filter(|&i| span.contains(&time_s[i - 1]) && span.contains(&time_s[i]))
-        .filter(|&i| time_s[i] - time_s[i - 1] <= recording.gap_limit_s)
-        .map(|i| dvl[i][0].hypot(dvl[i][1]) * (time_s[i] - time_s[i - 1]))
-        .sum();
+    let fixes_m = median(steps.iter().map(|step| step.0).collect());
+    let dvl_m = median(steps.iter().map(|step| step.1).collect());
     let ratio = fixes_m / dvl_m;
-    if dvl_m < LEAST_DISTANCE_M || (1.0 / UNIT_FACTOR..=UNIT_FACTOR).contains(&ratio) {
+    if (1.0 / UNIT_FACTOR..=UNIT_FACTOR).contains(&ratio) {
         return Ok(());
     }
     let radians_as_degrees =
         columns.latitude_longitude.is_some() && columns.angles_in_degrees && ratio < 1.0;
     Err(CalibrateError::FixesOtherMotion {
         fixes: fixes_file.to_path_buf(),
+        step_s: STEP_S,
         fixes_m,
         dvl_m,
         hint: match radians_as_degrees {

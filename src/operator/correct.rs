@@ -120,7 +120,7 @@ pub enum CorrectError {
     #[error(transparent)]
     Fixes(#[from] Box<crate::operator::calibrate::CalibrateError>),
     #[error(
-        "{}: the installation applied (time offset {time_offset_s:.3} s) leaves the fixes further from the dead reckoning than no terms do ({after_m:.2} m RMS horizontally against {before_m:.2} m): it does not carry to this dive (the DVL remounted, the fixes on another clock, or a clock given wrongly); nothing written: calibrate this dive with calibrate --fixes",
+        "{}: the installation applied (time offset {time_offset_s:.3} s, found from the fixes) leaves the fixes further from the dead reckoning than no terms do ({after_m:.2} m RMS horizontally against {before_m:.2} m): it does not carry to this dive (the DVL remounted, the fixes on another clock, or the dive's clock more than 3 s from the installation's, beyond the fit's search: give it with --time-offset-s); nothing written: calibrate this dive with calibrate --fixes",
         fixes.display()
     )]
     FixesFitWorse {
@@ -144,6 +144,22 @@ pub enum CorrectError {
         crate::Shown(*.0)
     )]
     WindowWithClock(f64),
+    #[error(
+        "--time-offset-s {}: the installation at the clock given leaves the fixes further from the dead reckoning than no terms do ({after_m:.2} m RMS horizontally against {before_m:.2} m): the clock is not this dive's, or the installation does not carry to it; nothing written: leave --time-offset-s out to find the clock from the fixes, or calibrate this dive with calibrate --fixes",
+        crate::Shown(*time_offset_s)
+    )]
+    GivenClockFitsWorse {
+        time_offset_s: f64,
+        before_m: f64,
+        after_m: f64,
+    },
+    #[error(
+        "{}: the first {} s of the dive (--window-s) hold no fix the fit can read (it reads those at least {} s inside the DVL's pieces, about the installation's clock): give a longer --window-s, or the dive's clock with --time-offset-s",
+        fixes.display(),
+        crate::Shown(*window_s),
+        crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S
+    )]
+    WindowHoldsNoFix { fixes: PathBuf, window_s: f64 },
     #[error(
         "--time-offset-s {}: the installation at the clock given does not fit the dive's fixes: {fault}; give the dive's clock in seconds, or leave it out and let correct find it from the fixes",
         crate::Shown(*time_offset_s)

@@ -204,10 +204,15 @@ impl FixDive<'_> {
         let carried = saved.installation();
         let fit = match (self.fit(&fixes, (terms, carried)), self.args.window_s) {
             (Err(CorrectError::FixFit { fixes, fault }), Some(window_s)) => {
-                return Err(CorrectError::FixWindow {
-                    fixes,
-                    window_s,
-                    fault,
+                return Err(match *fault {
+                    FixFitError::NoOverlap { .. } => {
+                        CorrectError::WindowHoldsNoFix { fixes, window_s }
+                    }
+                    _ => CorrectError::FixWindow {
+                        fixes,
+                        window_s,
+                        fault,
+                    },
                 });
             }
             (fit, _) => fit?,
@@ -255,11 +260,18 @@ impl FixDive<'_> {
             (after, _) => after?,
         };
         if after.rms_m > WORSE_RATIO * before.rms_m {
-            return Err(CorrectError::FixesFitWorse {
-                fixes: self.args.files.fixes.to_path_buf(),
-                time_offset_s: applied.time_offset_s,
-                before_m: before.rms_m,
-                after_m: after.rms_m,
+            return Err(match self.args.time_offset_s {
+                Some(time_offset_s) => CorrectError::GivenClockFitsWorse {
+                    time_offset_s,
+                    before_m: before.rms_m,
+                    after_m: after.rms_m,
+                },
+                None => CorrectError::FixesFitWorse {
+                    fixes: self.args.files.fixes.to_path_buf(),
+                    time_offset_s: applied.time_offset_s,
+                    before_m: before.rms_m,
+                    after_m: after.rms_m,
+                },
             });
         }
         Ok((before, after))

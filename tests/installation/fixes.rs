@@ -736,7 +736,7 @@ fn correct_with_fixes_finds_the_dives_clock_again_and_carries_the_rest() {
             "--out",
             "wrong",
         ]),
-        "leaves the fixes further from the dead reckoning than no terms do",
+        "--time-offset-s -2.5: the installation at the clock given leaves the fixes further from the dead reckoning than no terms do",
         &["--time-offset-s", "-2.5"],
     );
     assert!(!d.join("wrong").exists());
@@ -769,10 +769,10 @@ fn correct_with_fixes_finds_the_dives_clock_again_and_carries_the_rest() {
         &["--fix-noise-m", "0.5", "--window-s", "0"],
         "--window-s 0: give a positive number of seconds",
     );
-    // A window of 5 s holds a fix, but none 3 s inside the DVL's start: the flag named.
+    // A window of 5 s holds fixes, but none 3 s inside the DVL's start: the flag named.
     refused(
         &["--fix-noise-m", "0.5", "--window-s", "5"],
-        "cannot be found from the fixes of its first 5 s (--window-s): no fix lies within",
+        "the first 5 s of the dive (--window-s) hold no fix the fit can read",
     );
     refused(
         &[

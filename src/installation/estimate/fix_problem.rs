@@ -13,7 +13,7 @@ use crate::installation::dead_reckoning::{Track, dead_reckon, interior};
 use crate::installation::estimate::bound::{Tolerances, Unseen, normal_step, whitened_bound};
 use crate::installation::estimate::fit::{MAX_LEVER_ARM_M, MAX_SCALE, TIME_OFFSET_MARGIN_S};
 use crate::installation::estimate::fix_noise::{NoiseShape, Whitener, Whitening};
-use crate::installation::estimate::robust::Loss;
+use crate::installation::estimate::robust::{Loss, gross_jumps};
 use crate::installation::frames::Attitude;
 use crate::installation::terms::kind::TermKind;
 use crate::installation::terms::{Installation, PerKind, TermSet};
@@ -46,7 +46,7 @@ pub struct FixNoise {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum FixFitError {
     #[error(
-        "no fix lies within a piece of the DVL record ({fixes} fixes from {:.1} to {:.1} s, the DVL's {pieces} piece(s) from {:.1} to {:.1} s on its clock, each less {TIME_OFFSET_MARGIN_S} s at its ends, about a time offset of {centre_s:.3} s): the fixes do not overlap the DVL; give fixes of the same dive, on the attitude's clock", fix_span_s.0, fix_span_s.1, dvl_span_s.0, dvl_span_s.1
+        "no fix lies within a piece of the DVL record ({fixes} fixes from {:.1} to {:.1} s, the DVL's {pieces} piece(s) from {:.1} to {:.1} s on its clock, each less {TIME_OFFSET_MARGIN_S} s at its ends, about a time offset of {} s): the fixes do not overlap the DVL; give fixes of the same dive, on the attitude's clock", fix_span_s.0, fix_span_s.1, dvl_span_s.0, dvl_span_s.1, crate::ThreeFigures(*centre_s)
     )]
     NoOverlap {
         fixes: usize,
@@ -56,7 +56,8 @@ pub enum FixFitError {
         centre_s: f64,
     },
     #[error(
-        "{fitted} fixes within the DVL's pieces, {outliers} of them outliers left out, give {residuals} residuals for {parameters} parameters (the terms and a start position per piece): a fit needs more; give more fixes, or fewer terms"
+        "{} within the DVL's pieces, {outliers} of them outliers left out, give {residuals} residuals for {parameters} parameters (the terms and a start position per piece): a fit needs more; give more fixes, or fewer terms",
+        match fitted { 1 => "1 fix".to_string(), n => format!("{n} fixes") }
     )]
     TooFewFixes {
         fitted: usize,
@@ -82,10 +83,12 @@ pub enum FixFitError {
     WorseThanNone { with: f64, without: f64 },
 }
 
-/// How many times the fixes' median distance from the first fit's dead reckoning a fix
-/// lies before it is left out as grossly off: a white error's largest of thousands lies
-/// within 5 medians, A-KIT's positions (whose error wanders) within 10.
-const GROSS: f64 = 30.0;
+/// How many times the median jump of the fixes' distance from the dead reckoning, one
+/// fix to the next, and their given noise per axis σ, a fix's jumps must be for it to be
+/// left out as grossly off. White fixes jump by σ√2 per axis; one of 10 σ has odds of
+/// about 1e-11. On A-KIT's positions (no noise), the uncorrected lever arm alone makes
+/// the turns' jumps ten times the median, hence the floor at the noise given.
+const GROSS: f64 = 10.0;
 
 /// The scan's step for the time offset's start, s.
 const SCAN_STEP_S: f64 = 0.25;
@@ -476,21 +479,13 @@ impl<'a> Problem<'a> {
             whitened: Vec::new(),
             freedom: 0,
         };
-        // Fixes grossly off pull least squares across the scan: screened first about
-        // the carried clock, then about the scan's.
-        let mut about_carried = free.to_vec();
-        if let Some(offset) = self.time_offset() {
-            about_carried[offset] = false;
-        }
-        let ones = vec![1.0; self.fix_of.len()];
-        let carried = self.solve(blank.clone(), &about_carried, &ones, NoiseShape::GIVEN)?;
+        // Fixes grossly off pull least squares across the scan: left out before it.
+        let not_gross = self.not_gross(free)?;
         let screened = Solution {
-            kept: self.not_gross(&carried, free)?,
+            kept: not_gross.clone(),
             ..blank
         };
-        let mut scanned = self.scan_time_offset(screened, free)?;
-        let not_gross = self.not_gross(&scanned, free)?;
-        scanned.kept = not_gross.clone();
+        let scanned = self.scan_time_offset(screened, free)?;
         let mut solution = self.read_noise(&scanned, free, false)?;
         let shape = solution.shape;
         let tukey = Loss::TUKEY_MODELLED;
@@ -516,20 +511,19 @@ impl<'a> Problem<'a> {
         Ok(last)
     }
 
-    /// Which fixes `solution` keeps: all but those more than [`GROSS`] times the fixes'
-    /// median from its dead reckoning (in their given noise's standard deviations).
-    /// They stay out of the robust loop: one fix tens or hundreds of metres off, read
-    /// with the others, made the noise read a walk that hid it from Tukey's weights or
-    /// made most of the good fixes outliers.
-    fn not_gross(&self, solution: &Solution, free: &[bool]) -> Result<Vec<bool>, FixFitError> {
-        let u = self.standardised(solution, NoiseShape::GIVEN)?;
-        let mut sorted = u.clone();
-        sorted.sort_by(f64::total_cmp);
-        let median = sorted[sorted.len() / 2];
-        let kept: Vec<bool> = u.iter().map(|&u| u <= GROSS * median).collect();
+    /// Which fixes to fit: all but those grossly off ([`gross_jumps`]), read from their
+    /// distances from the dead reckoning under the installation carried, beyond
+    /// [`GROSS`] times the fixes' given noise. Such fixes stay out of the robust loop:
+    /// one fix hundreds of metres off made the scan's least squares run to its edge,
+    /// or the noise read a walk under which most good fixes were outliers.
+    fn not_gross(&self, free: &[bool]) -> Result<Vec<bool>, FixFitError> {
+        let residuals = self.residuals(&vec![0.0; self.names.len()])?;
+        let blocks: Vec<usize> = self.held.iter().map(Vec::len).collect();
+        let floor = GROSS * self.noise.fix_m;
+        let kept = gross_jumps(&residuals, (&blocks, self.axes), (GROSS, floor));
         Ok(match self.enough(&kept, free) {
             Ok(()) => kept,
-            Err(_) => vec![true; u.len()],
+            Err(_) => vec![true; self.fix_of.len()],
         })
     }
 

@@ -9,8 +9,11 @@
 //! The standard deviations are the M-estimator's sandwich: the bread JᵀDJ with D =
 //! ψ′(u), the meat from the pseudo-residuals σ · ψ(u) (the fit's
 //! `curvature` and `residuals`).
+//! Beside them, for a fit to positions, the positions grossly off, found by their jumps
+//! from one to the next ([`gross_jumps`]), which no fit's parameters can hide.
 //! In: a fit's residuals, x, y, z of each sample in order. Out: the scales, the
-//! transformed residuals and Jacobian rows, the pseudo-residuals and the curvature.
+//! transformed residuals and Jacobian rows, the pseudo-residuals and the curvature; the
+//! positions to keep.
 
 use crate::Vec3;
 use nalgebra::DVector;
@@ -220,6 +223,49 @@ pub fn outliers_among(residuals: &[Vec3]) -> Vec<bool> {
     }
 }
 
+/// Which of a fit's positions to keep: all but those that jump away from their
+/// neighbours and back. `residuals` hold blocks of one piece and one axis (`blocks`: the
+/// positions in each piece, every axis of a piece in turn, `axes` of them); a jump is
+/// the change of the residual, over the axes, from one position of a piece to the next.
+/// A position is gross where its jumps to both neighbours exceed `times` the median
+/// jump and `floor` (at a piece's end: its one jump, where its neighbour's other jump
+/// does not); in a piece of fewer than three, none is. A jump does not depend on a
+/// fit's parameters, so a position that pulls least squares towards it cannot hide.
+pub fn gross_jumps(
+    residuals: &[f64],
+    (blocks, axes): (&[usize], usize),
+    (times, floor): (f64, f64),
+) -> Vec<bool> {
+    let mut jumps: Vec<Vec<f64>> = Vec::with_capacity(blocks.len());
+    let mut row = 0;
+    for &n in blocks {
+        let jump = |j: usize| {
+            (0..axes)
+                .map(|axis| residuals[row + axis * n + j + 1] - residuals[row + axis * n + j])
+                .map(|d| d * d)
+                .sum::<f64>()
+                .sqrt()
+        };
+        jumps.push((0..n.saturating_sub(1)).map(jump).collect());
+        row += n * axes;
+    }
+    let mut sorted: Vec<f64> = jumps.iter().flatten().copied().collect();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
+    let gross = (times * median).max(floor);
+    let big = |jumps: &[f64], j: usize| jumps.get(j).is_some_and(|&jump| jump > gross);
+    (jumps.iter().zip(blocks))
+        .flat_map(|(jumps, &n)| {
+            (0..n).map(move |j| match j {
+                _ if n < 3 => true,
+                0 => !(big(jumps, 0) && !big(jumps, 1)),
+                j if j == n - 1 => !(big(jumps, j - 1) && !big(jumps, j - 2)),
+                j => !(big(jumps, j - 1) && big(jumps, j)),
+            })
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -269,5 +315,25 @@ mod tests {
             assert!((s - 0.02).abs() < 0.001, "{scale:?}");
         }
         assert_eq!(scales(&DVector::zeros(9)), None);
+    }
+
+    /// One position 300 m off in the middle of a piece and one at its start are gross;
+    /// a step that stays (its jumps at its two ends only), a smooth drift, and a piece
+    /// of two are not; the second axis's block is read as the same positions'.
+    #[test]
+    fn a_position_that_jumps_away_and_back_is_gross_and_a_step_is_not() {
+        let smooth: Vec<f64> = (0..12).map(|j| 0.1 * f64::from(j)).collect();
+        let mut north = smooth.clone();
+        north[0] += 300.0;
+        north[5] += 300.0;
+        for value in &mut north[8..] {
+            *value += 50.0;
+        }
+        let residuals = [north, vec![0.0; 12]].concat();
+        let kept = gross_jumps(&residuals, (&[12], 2), (10.0, 5.0));
+        let gross: Vec<usize> = (0..12).filter(|&j| !kept[j]).collect();
+        assert_eq!(gross, vec![0, 5]);
+        let kept = gross_jumps(&[0.0, 500.0, 0.0, 0.0], (&[2], 2), (10.0, 5.0));
+        assert_eq!(kept, vec![true, true]);
     }
 }
