@@ -172,6 +172,17 @@ fn same_motion(
     let inside: Vec<usize> = (0..fixes.len())
         .filter(|&k| (first..=last).contains(&fixes.time_s[k]))
         .collect();
+    // The DVL's horizontal distance up to each sample (no step across a gap), so that a
+    // step's is one difference, not a pass over the record.
+    let mut travelled_m = vec![0.0; time_s.len()];
+    for i in 1..time_s.len() {
+        let dt = time_s[i] - time_s[i - 1];
+        let step_m = match dt <= recording.gap_limit_s {
+            true => dvl[i][0].hypot(dvl[i][1]) * dt,
+            false => 0.0,
+        };
+        travelled_m[i] = travelled_m[i - 1] + step_m;
+    }
     // Each step's displacement of the fixes and distance of the DVL, in turn.
     let mut steps: Vec<(f64, f64)> = Vec::new();
     let mut from = inside.first().copied();
@@ -181,12 +192,14 @@ fn same_motion(
         {
             let [n0, e0] = fixes.north_east_m[at];
             let [n1, e1] = fixes.north_east_m[k];
-            let span = fixes.time_s[at]..=fixes.time_s[k];
-            let dvl_m: f64 = (1..time_s.len())
-                .filter(|&i| span.contains(&time_s[i - 1]) && span.contains(&time_s[i]))
-                .filter(|&i| time_s[i] - time_s[i - 1] <= recording.gap_limit_s)
-                .map(|i| dvl[i][0].hypot(dvl[i][1]) * (time_s[i] - time_s[i - 1]))
-                .sum();
+            // The DVL's samples from the first at or after the step's start to the last
+            // at or before its end.
+            let low = time_s.partition_point(|&t| t < fixes.time_s[at]);
+            let high = time_s.partition_point(|&t| t <= fixes.time_s[k]);
+            let dvl_m = match high > low + 1 {
+                true => travelled_m[high - 1] - travelled_m[low],
+                false => 0.0,
+            };
             steps.push(((n1 - n0).hypot(e1 - e0), dvl_m));
             from = Some(k);
         }
