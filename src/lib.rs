@@ -137,6 +137,14 @@ pub fn count(n: usize, what: &str) -> String {
     }
 }
 
+/// The median of `values` (the upper of the middle two where their count is even);
+/// NaN where there are none.
+pub fn median(values: &[f64]) -> f64 {
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    sorted.get(sorted.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
 /// The distinct values of `values`, in the order they first appear.
 pub fn first_seen<T: PartialEq>(values: impl IntoIterator<Item = T>) -> Vec<T> {
     let mut seen = Vec::new();

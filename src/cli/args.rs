@@ -231,44 +231,64 @@ pub(super) struct FixFlags {
     /// [columns] names them), on its own clock and at its own rate
     #[arg(long, value_name = "FILE")]
     pub(super) attitude: Option<PathBuf>,
-    /// With --fixes: the fixes' noise per horizontal axis, m (a USBL's metres, a GNSS's
-    /// less)
+    /// Position fixes from the bag's topic rather than a velocity reference: a
+    /// sensor_msgs/msg/NavSatFix, geometry_msgs/msg/PoseWithCovarianceStamped or
+    /// nav_msgs/msg/Odometry (its pose), each fix weighed by its covariance; the
+    /// attitude from the bag's odometry (--reference-topic), its velocity not read
+    #[arg(long, value_name = "TOPIC")]
+    pub(super) fixes_topic: Option<String>,
+    /// The fixes' noise per horizontal axis, m (a USBL's metres, a GNSS's less);
+    /// needed with --fixes, and with --fixes-topic where a fix carries no covariance
+    /// (given, it stands for every fix's own)
     #[arg(long, value_name = "METRES", allow_negative_numbers = true)]
     pub(super) fix_noise_m: Option<f64>,
 }
 
+/// Where position fixes come from, as typed.
+pub(super) enum GivenFixes<'a> {
+    /// A fixes file beside an attitude file.
+    Files { fixes: &'a Path, attitude: &'a Path },
+    /// A topic of the bag.
+    Topic(&'a str),
+}
+
 impl FixFlags {
-    /// The fixes, where given, with the attitude and noise they need; the flags given
-    /// without fixes refused.
-    pub(super) fn given(
-        &self,
-    ) -> Result<Option<(&std::path::Path, &std::path::Path, f64)>, String> {
-        let Some(fixes) = &self.fixes else {
-            for (flag, given) in [
-                ("--attitude", self.attitude.is_some()),
-                ("--fix-noise-m", self.fix_noise_m.is_some()),
-            ] {
-                if given {
-                    return Err(format!(
-                        "{flag}: goes with position fixes: give them with --fixes"
-                    ));
+    /// The fixes, where given, with the attitude they need; the flags given without
+    /// fixes refused.
+    pub(super) fn given(&self) -> Result<Option<GivenFixes<'_>>, String> {
+        match (&self.fixes, &self.fixes_topic) {
+            (Some(_), Some(_)) => Err(
+                "--fixes-topic: fixes come from a file (--fixes) or from a bag's topic (--fixes-topic): give one"
+                    .into(),
+            ),
+            (None, Some(topic)) => match &self.attitude {
+                Some(_) => Err(
+                    "--attitude: with --fixes-topic the attitude is the bag's own (its odometry, --reference-topic)"
+                        .into(),
+                ),
+                None => Ok(Some(GivenFixes::Topic(topic))),
+            },
+            (Some(fixes), None) => match &self.attitude {
+                Some(attitude) => Ok(Some(GivenFixes::Files { fixes, attitude })),
+                None => Err(
+                    "--fixes: give the attitude beside it with --attitude (an AHRS's roll, pitch and yaw)"
+                        .into(),
+                ),
+            },
+            (None, None) => {
+                for (flag, given) in [
+                    ("--attitude", self.attitude.is_some()),
+                    ("--fix-noise-m", self.fix_noise_m.is_some()),
+                ] {
+                    if given {
+                        return Err(format!(
+                            "{flag}: goes with position fixes: give them with --fixes or --fixes-topic"
+                        ));
+                    }
                 }
+                Ok(None)
             }
-            return Ok(None);
-        };
-        let Some(attitude) = &self.attitude else {
-            return Err(
-                "--fixes: give the attitude beside it with --attitude (an AHRS's roll, pitch and yaw)"
-                    .into(),
-            );
-        };
-        let Some(fix_noise_m) = self.fix_noise_m else {
-            return Err(
-                "--fixes: give the fixes' noise per horizontal axis with --fix-noise-m (metres)"
-                    .into(),
-            );
-        };
-        Ok(Some((fixes, attitude, fix_noise_m)))
+        }
     }
 }
 

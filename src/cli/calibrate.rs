@@ -6,7 +6,7 @@
 //! found on stdout, the files written named on stderr (what each will cost, it says
 //! itself before it starts: [`crate::operator::cost`]).
 
-use super::args;
+use super::args::{self, GivenFixes};
 use super::{CliError, input, stopped};
 use crate::installation::estimate::clock::DEFAULT_SEARCH_S;
 use crate::installation::estimate::fixes::default_fix_terms;
@@ -75,10 +75,7 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
 
 /// `calibrate DVL.csv --fixes FIXES.csv --attitude ATTITUDE.csv --fix-noise-m σ`: the
 /// terms the fixes show, printed, and saved where asked.
-fn calibrate_fixes(
-    args: &args::CalibrateArgs,
-    (fixes, attitude, fix_noise_m): (&std::path::Path, &std::path::Path, f64),
-) -> Result<(), CliError> {
+fn calibrate_fixes(args: &args::CalibrateArgs, given: GivenFixes) -> Result<(), CliError> {
     if args.dvl.len() > 1 {
         return Err(input(anyhow::anyhow!(
             "--fixes: {} DVL files: a fit to fixes calibrates one dive; give one",
@@ -96,8 +93,8 @@ fn calibrate_fixes(
             ),
             ("--search-s", args.search_s.is_some()),
         ],
-        &args.reading,
-        "a calibration against fixes (--fixes), which reads CSV files (the DVL's, the attitude's and the fixes') and runs no filter",
+        (&args.reading, &given),
+        "a calibration against fixes, which runs no filter",
     )?;
     let terms = match &args.terms {
         Some(terms) => parse_terms(("--terms", terms))?,
@@ -105,16 +102,10 @@ fn calibrate_fixes(
     };
     let dive_terms = parse_terms(("--dive-terms", &args.dive_terms))?;
     let calibration = calibrated_on_fixes(&FixArgs {
-        files: FixFiles {
-            dvl: &args.dvl[0],
-            attitude,
-            fixes,
-            columns: args.columns.as_deref(),
-            reading: args.reading.reading(),
-        },
+        files: fix_files(&args.dvl[0], &given, args.columns.as_deref(), &args.reading),
         terms: &terms,
         dive_terms: &dive_terms,
-        fix_noise_m,
+        fix_noise_m: args.fix.fix_noise_m,
         depth_noise_m: args.depth_noise_m,
         dvl_noise_cm_s: args.dvl_noise_cm_s,
         save: args.save.as_deref(),
@@ -134,13 +125,43 @@ fn calibrate_fixes(
     Ok(())
 }
 
-/// Refuses the first of `flags` given, or of a bag's flags in `reading`, saying that it
-/// does not apply to `command` (a command against fixes, and what it does instead).
+/// The files of a fit to the fixes `given`, beside the DVL's file (or bag) `dvl`.
+fn fix_files<'a>(
+    dvl: &'a std::path::Path,
+    given: &GivenFixes<'a>,
+    columns: Option<&'a std::path::Path>,
+    reading: &'a args::ReadingArgs,
+) -> FixFiles<'a> {
+    let (attitude, fixes, fix_topic) = match *given {
+        GivenFixes::Files { fixes, attitude } => (attitude, fixes, None),
+        GivenFixes::Topic(topic) => (dvl, dvl, Some(topic)),
+    };
+    FixFiles {
+        dvl,
+        attitude,
+        fixes,
+        fix_topic,
+        columns,
+        reading: reading.reading(),
+    }
+}
+
+/// Refuses the first of `flags` given, or, with fixes from files, of a bag's flags in
+/// `reading`, saying that it does not apply to `command` (a command against fixes, and
+/// what it does instead).
 fn refuse_beside_fixes(
     flags: &[(&str, bool)],
-    reading: &args::ReadingArgs,
+    (reading, given): (&args::ReadingArgs, &GivenFixes),
     command: &str,
 ) -> Result<(), CliError> {
+    if let Some((flag, _)) = flags.iter().find(|(_, given)| *given) {
+        return Err(input(anyhow::anyhow!(
+            "{flag}: does not apply to {command}"
+        )));
+    }
+    if let GivenFixes::Topic(_) = given {
+        return Ok(());
+    }
     let bag = [
         ("--dvl-topic", reading.dvl_topic.is_some()),
         ("--reference-topic", reading.reference_topic.is_some()),
@@ -148,9 +169,9 @@ fn refuse_beside_fixes(
         ("--stamps", reading.stamps.is_some()),
         ("--frame", reading.frame.is_some()),
     ];
-    match flags.iter().chain(&bag).find(|(_, given)| *given) {
+    match bag.iter().find(|(_, given)| *given) {
         Some((flag, _)) => Err(input(anyhow::anyhow!(
-            "{flag}: does not apply to {command}"
+            "{flag}: does not apply to {command} from --fixes, which reads CSV files (the DVL's, the attitude's and the fixes'); a bag's fixes are read with --fixes-topic"
         ))),
         None => Ok(()),
     }
@@ -179,28 +200,19 @@ const DEFAULT_WINDOW_S: f64 = 60.0;
 
 /// `correct DVL.csv --installation FILE --fixes FIXES.csv --attitude ATTITUDE.csv
 /// --fix-noise-m σ`: the installation carried, the clock found again from the fixes.
-fn correct_fixes(
-    args: &args::CorrectArgs,
-    (fixes, attitude, fix_noise_m): (&std::path::Path, &std::path::Path, f64),
-) -> Result<(), CliError> {
+fn correct_fixes(args: &args::CorrectArgs, given: GivenFixes) -> Result<(), CliError> {
     refuse_beside_fixes(
         &[
             ("--reference", args.reference.is_some()),
             ("--search-s", args.search_s.is_some()),
         ],
-        &args.reading,
-        "a correction against fixes (--fixes), which reads CSV files (the DVL's, the attitude's and the fixes') and scans the clock within ±3 s of the installation's",
+        (&args.reading, &given),
+        "a correction against fixes, which scans the clock within ±3 s of the installation's",
     )?;
     let correction = corrected_on_fixes(&FixCorrectArgs {
-        files: FixFiles {
-            dvl: &args.dvl,
-            attitude,
-            fixes,
-            columns: args.columns.as_deref(),
-            reading: args.reading.reading(),
-        },
+        files: fix_files(&args.dvl, &given, args.columns.as_deref(), &args.reading),
         installation: &args.installation,
-        fix_noise_m,
+        fix_noise_m: args.fix.fix_noise_m,
         window_s: args.window_s,
         time_offset_s: args.time_offset_s,
         out: &args.out,

@@ -7,7 +7,9 @@
 //! longitude, carried to metres on the plane tangent at the first fix), and optionally a
 //! depth, each field a finite number, the stamps increasing. The fixes' and the
 //! attitude's clocks are taken to be one (the vehicle's navigation clock); the DVL's may
-//! lead or lag it, by the time offset the calibration finds.
+//! lead or lag it, by the time offset the calibration finds. A bag gives all three
+//! ([`crate::data::paired::bag::read_bag_beside_attitude`]: its odometry's attitude, and the fixes of a topic,
+//! each with its own noise where its covariance gives one).
 //! In: the files and the columns that name their fields. Out: a [`PairedRecording`]
 //! with no reference velocity, and [`Fixes`].
 
@@ -15,6 +17,7 @@ use crate::data::csv::{Column, Quantity, parse_columns, read_bytes};
 use crate::data::interpolate::Between;
 use crate::data::local_plane::{north_east_m, off_the_globe};
 use crate::data::paired::{PairedColumns, PairedError, ReadRecording, SourceFile};
+pub use crate::data::position_fixes::Fixes;
 use crate::files::sha256_hex;
 use std::path::{Path, PathBuf};
 
@@ -45,42 +48,6 @@ impl Default for FixColumns {
             north_east: None,
             depth: None,
             angles_in_degrees: false,
-        }
-    }
-}
-
-/// Position fixes, on the attitude's clock.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Fixes {
-    /// Each fix's line in its file (the header is line 1), or its place among fixes
-    /// simulated.
-    pub lines: Vec<u64>,
-    /// Seconds, strictly increasing.
-    pub time_s: Vec<f64>,
-    /// North and east, metres (of the first fix, where the file gives latitude and
-    /// longitude).
-    pub north_east_m: Vec<[f64; 2]>,
-    /// Depth, metres, positive down, where the file gives one.
-    pub depth_m: Option<Vec<f64>>,
-}
-
-impl Fixes {
-    pub fn len(&self) -> usize {
-        self.time_s.len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.time_s.is_empty()
-    }
-
-    /// The fixes `keep` selects (in order), with the same file.
-    pub fn select(&self, keep: impl Fn(usize) -> bool) -> Fixes {
-        let chosen: Vec<usize> = (0..self.len()).filter(|&i| keep(i)).collect();
-        Fixes {
-            lines: chosen.iter().map(|&i| self.lines[i]).collect(),
-            time_s: chosen.iter().map(|&i| self.time_s[i]).collect(),
-            north_east_m: chosen.iter().map(|&i| self.north_east_m[i]).collect(),
-            depth_m: (self.depth_m.as_ref()).map(|d| chosen.iter().map(|&i| d[i]).collect()),
         }
     }
 }
@@ -169,6 +136,7 @@ pub fn read_fixes(path: &Path, columns: &FixColumns) -> Result<(Fixes, SourceFil
         lines: rows.lines,
         time_s,
         north_east_m,
+        noise_m: None,
     };
     Ok((fixes, file))
 }
@@ -219,6 +187,7 @@ pub fn simulate_fixes(
             time_s: Vec::new(),
             north_east_m: Vec::new(),
             depth_m: None,
+            noise_m: None,
         };
     };
     let count = ((last - first) / simulation.interval_s).floor() as usize + 1;
@@ -227,6 +196,7 @@ pub fn simulate_fixes(
         time_s: Vec::with_capacity(count),
         north_east_m: Vec::with_capacity(count),
         depth_m: None,
+        noise_m: None,
     };
     for k in 0..count {
         let t = first + k as f64 * simulation.interval_s;

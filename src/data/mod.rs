@@ -13,6 +13,7 @@ pub mod interpolate;
 pub mod local_plane;
 pub mod npy;
 pub mod paired;
+pub mod position_fixes;
 pub mod synthetic;
 
 use crate::Vec3;

@@ -98,34 +98,34 @@ pub enum CalibrateError {
     Window(f64),
     #[error("{flag} {}: give a positive number of metres, under 10,000 km: the fit weighs the fixes by it", crate::Shown(*value))]
     FixNoise { flag: &'static str, value: f64 },
+    #[error("{flag}: give the fixes' noise per horizontal axis with --fix-noise-m (metres): {why}")]
+    NoFixNoise { flag: String, why: String },
     #[error("--depth-noise-m: {} gives no depth, so there is no depth noise to weigh: leave it out, or name the fixes' depth column in [fix_columns]", fixes.display())]
     NoDepths { fixes: PathBuf },
     #[error(
-        "{}: {outliers} of the {within} fixes within the DVL's pieces lie beyond the robust fit's reach of the dead reckoning: more than a quarter are outliers, so the fixes do not show the installation (fixes of another vehicle or dive, a clock beyond the fit's scan, or a DVL bias, which fixes do not calibrate)",
-        fixes.display()
+        "{fixes}: {outliers} of the {within} fixes within the DVL's pieces lie beyond the robust fit's reach of the dead reckoning: more than a quarter are outliers, so the fixes do not show the installation (fixes of another vehicle or dive, a clock beyond the fit's scan, or a DVL bias, which fixes do not calibrate)"
     )]
     FixOutliers {
-        fixes: PathBuf,
+        fixes: String,
         outliers: usize,
         within: usize,
     },
     #[error(
-        "--fix-noise-m {}: the fixes' residuals are {} m RMS per horizontal axis, {} times the noise given, beyond a factor of {NOISE_RATIO_LIMIT} either way: the fit weighs the fixes and reads its intervals by it, so give the noise of these fixes (a USBL's metres, a GNSS's decimetres)",
-        crate::Shown(*given_m),
+        "{noise}: the fixes' residuals are {} m RMS per horizontal axis, {} times the noise given, beyond a factor of {NOISE_RATIO_LIMIT} either way: the fit weighs the fixes and reads its intervals by it, so give the noise of these fixes (a USBL's metres, a GNSS's decimetres)",
         crate::ThreeFigures(*read_m),
         crate::ThreeFigures(*ratio)
     )]
     FixNoiseContradicted {
-        given_m: f64,
+        /// The noise given: the flag and its value, or the fixes' own.
+        noise: String,
         read_m: f64,
         ratio: f64,
     },
     #[error(
-        "{}: the fixes move {fixes_m:.1} m and the DVL {dvl_m:.1} m in the median step of {step_s} s over their span{hint}: no installation makes one of the other",
-        fixes.display()
+        "{fixes}: the fixes move {fixes_m:.1} m and the DVL {dvl_m:.1} m in the median step of {step_s} s over their span{hint}: no installation makes one of the other"
     )]
     FixesOtherMotion {
-        fixes: PathBuf,
+        fixes: String,
         step_s: f64,
         fixes_m: f64,
         dvl_m: f64,
@@ -134,9 +134,9 @@ pub enum CalibrateError {
     /// The fixes file, placed at its line and column.
     #[error(transparent)]
     Fixes(#[from] crate::data::fixes::FixesError),
-    #[error("{}: calibrating {terms} against these fixes: {fault}", fixes.display())]
+    #[error("{fixes}: calibrating {terms} against these fixes: {fault}")]
     FixFit {
-        fixes: PathBuf,
+        fixes: String,
         terms: String,
         fault: crate::installation::estimate::fixes::FixFitError,
     },

@@ -8,6 +8,8 @@
 //! [`CalibrateError`] naming the argument, file or step at fault.
 
 use crate::data::fixes::{Fixes, read_beside_attitude, read_fixes};
+use crate::data::paired::Source;
+use crate::data::paired::bag::{BagError, is_bag, read_bag_beside_attitude};
 use crate::data::paired::{PairedError, PairedRecording, ReadCounts, ReadRecording};
 use crate::footprint::machine_memory;
 use crate::installation::estimate::fixes::{DEFAULT_FIX_TERMS, FixFit, FixNoise, fit_fixes};
@@ -15,21 +17,33 @@ use crate::installation::frames::{Attitude, Reference};
 use crate::installation::terms::names::{TermName, term_set};
 use crate::operator::calibrate::{CalibrateError, NOISE_RATIO_LIMIT, clear_of_inputs, named};
 use crate::operator::cost::{Cost, FIXES, PerRow, Rows};
-use crate::operator::inputs::{Reading, columns, fix_columns};
+use crate::operator::inputs::{Reading, columns, fix_columns, source};
 use crate::operator::installation_file::{SavedInstallation, SavedTerm};
 use crate::results::ResultsError;
 use crate::results::corrected::{Outputs, corrected_samples, stem, write};
 use std::path::{Path, PathBuf};
 
 /// The files a DVL is fitted to fixes from: the DVL's, the attitude's beside it, the
-/// fixes', and the columns that name theirs.
+/// fixes', and the columns that name theirs; or one bag, its reference's attitude and
+/// its `fix_topic` (the attitude's and the fixes' paths then the bag's).
 #[derive(Clone, Copy)]
 pub struct FixFiles<'a> {
     pub dvl: &'a Path,
     pub attitude: &'a Path,
     pub fixes: &'a Path,
+    pub fix_topic: Option<&'a str>,
     pub columns: Option<&'a Path>,
     pub reading: Reading<'a>,
+}
+
+/// What is read for a fit to fixes: the DVL beside the attitude, the fixes, and the
+/// fixes left out, each with its reason.
+pub struct FixReading {
+    pub read: ReadRecording,
+    pub fixes: Fixes,
+    pub left_out: Vec<(&'static str, usize)>,
+    /// How many fixes read carry no noise of their own (a covariance).
+    pub without_noise: usize,
 }
 
 /// What `calibrate --fixes` is asked.
@@ -37,8 +51,9 @@ pub struct FixArgs<'a> {
     pub files: FixFiles<'a>,
     pub terms: &'a [TermName],
     pub dive_terms: &'a [TermName],
-    /// The fixes' noise per horizontal axis and in depth, m; the DVL's per axis, cm/s.
-    pub fix_noise_m: f64,
+    /// The fixes' noise per horizontal axis, m, where given (each fix's own, from its
+    /// covariance, otherwise), and in depth; the DVL's per axis, cm/s.
+    pub fix_noise_m: Option<f64>,
     pub depth_noise_m: Option<f64>,
     pub dvl_noise_cm_s: f64,
     pub save: Option<&'a Path>,
@@ -50,8 +65,20 @@ impl FixFiles<'_> {
     /// What fitting the DVL to the fixes will ask of this machine, as `per_row` counts
     /// it.
     pub fn cost(&self, per_row: PerRow) -> Result<Cost, PairedError> {
-        let rows = Rows::count(self.dvl, Some(self.attitude))?.with_fixes(self.fixes)?;
+        if self.fix_topic.is_some() && !is_bag(self.dvl) {
+            return Err(self.not_a_bag().into());
+        }
+        let rows =
+            Rows::count(self.dvl, Some(self.attitude))?.with_fixes(self.fixes, self.fix_topic)?;
         Ok(Cost::on(per_row, vec![rows], machine_memory() as f64))
+    }
+
+    /// The refusal of fixes from a topic of a recording that is no bag.
+    fn not_a_bag(&self) -> BagError {
+        BagError::Bag {
+            path: self.dvl.to_path_buf(),
+            problem: "--fixes-topic: not a bag (a rosbag2 folder, an .mcap or a .db3 file): a CSV recording's fixes are read from --fixes".into(),
+        }
     }
 
     /// Every file read.
@@ -64,29 +91,104 @@ impl FixFiles<'_> {
         ]
     }
 
+    /// Where the fixes come from, as the command line names it.
+    pub fn fixes_named(&self) -> String {
+        match self.fix_topic {
+            Some(topic) => format!("{} --fixes-topic {topic}", self.dvl.display()),
+            None => self.fixes.display().to_string(),
+        }
+    }
+
     /// The DVL beside the attitude, and the fixes, read and checked: fixes with a depth
     /// where `depth` asks for one, and on the DVL's track ([`same_motion`]).
-    pub fn read(&self, depth: bool) -> Result<(ReadRecording, Fixes), CalibrateError> {
-        let columns = columns(self.columns, self.reading).map_err(CalibrateError::Columns)?;
+    pub fn read(&self, depth: bool) -> Result<FixReading, CalibrateError> {
         let fix_columns = fix_columns(self.columns).map_err(CalibrateError::Columns)?;
-        let read = read_beside_attitude(self.dvl, self.attitude, &columns)?;
-        let (fixes, _) = read_fixes(self.fixes, &fix_columns).map_err(CalibrateError::Fixes)?;
+        let (read, fixes, left_out, without_noise) = match self.fix_topic {
+            Some(topic) => {
+                let source = source(self.dvl, None, self.columns, self.reading)
+                    .map_err(CalibrateError::Columns)?;
+                let Source::Bag { path, topics } = source else {
+                    return Err(CalibrateError::Read(self.not_a_bag().into()));
+                };
+                let (read, mut bag) = read_bag_beside_attitude(&path, &topics, topic)?;
+                // A fix's altitude (a GNSS's height, a USBL's depth) is fitted only
+                // where its noise is given.
+                if !depth {
+                    bag.fixes.depth_m = None;
+                }
+                let left_out = vec![
+                    ("no fix (NavSatFix status −1)", bag.no_fix),
+                    ("a position that is not a number", bag.not_a_number),
+                ];
+                (read, bag.fixes, left_out, bag.without_covariance)
+            }
+            None => {
+                let columns =
+                    columns(self.columns, self.reading).map_err(CalibrateError::Columns)?;
+                let read = read_beside_attitude(self.dvl, self.attitude, &columns)?;
+                let (fixes, _) =
+                    read_fixes(self.fixes, &fix_columns).map_err(CalibrateError::Fixes)?;
+                let without_noise = fixes.len();
+                (read, fixes, Vec::new(), without_noise)
+            }
+        };
         if depth && fixes.depth_m.is_none() {
             return Err(CalibrateError::NoDepths {
                 fixes: self.fixes.to_path_buf(),
             });
         }
-        same_motion(self.fixes, &fix_columns, &read.recording, &fixes)?;
-        Ok((read, fixes))
+        same_motion(&self.fixes_named(), &fix_columns, &read.recording, &fixes)?;
+        let left_out = left_out.into_iter().filter(|(_, n)| *n > 0).collect();
+        Ok(FixReading {
+            read,
+            fixes,
+            left_out,
+            without_noise,
+        })
+    }
+
+    /// The fixes' noise per horizontal axis, m: as `given` (the fixes' own then set
+    /// aside), or the median of the fixes' own, which each keeps; refused where neither.
+    pub fn noise_m(
+        &self,
+        reading: &mut FixReading,
+        given: Option<f64>,
+    ) -> Result<f64, CalibrateError> {
+        let fixes = &mut reading.fixes;
+        if let Some(given) = given {
+            fixes.noise_m = None;
+            return Ok(given);
+        }
+        match &fixes.noise_m {
+            Some(own) if !own.is_empty() => Ok(crate::median(own)),
+            _ => Err(CalibrateError::NoFixNoise {
+                flag: match self.fix_topic {
+                    Some(topic) => format!("--fixes-topic {topic}"),
+                    None => "--fixes".to_string(),
+                },
+                why: match self.fix_topic {
+                    Some(_) => format!(
+                        "{} of its {} fixes carry no covariance",
+                        reading.without_noise,
+                        fixes.len()
+                    ),
+                    None => "a fixes file gives no noise of its own".to_string(),
+                },
+            }),
+        }
     }
 }
 
 /// What `calibrate --fixes` found.
 pub struct FixCalibration {
     pub fit: FixFit,
-    /// The DVL's samples read, kept and left out, and the fixes read.
+    /// The DVL's samples read, kept and left out, and the fixes read, those left out
+    /// with their reasons, and whether each fix was weighed by its own noise (its
+    /// covariance; `noise.fix_m` their median) rather than one given.
     pub read: ReadCounts,
     pub fixes: usize,
+    pub fixes_left_out: Vec<(&'static str, usize)>,
+    pub own_noise: bool,
     /// The RMS of the fixes' horizontal residual with no terms (the start positions
     /// alone fitted) and with the terms applied, m; and the distance the dead
     /// reckoning travelled over the fixes fitted, m.
@@ -106,18 +208,25 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
     let corrected = [outputs.csv.as_path(), outputs.parquet.as_path()];
     clear_of_inputs(&files.inputs(), &corrected, (args.save, false))?;
     files.cost(FIXES).map_err(CalibrateError::Read)?.state()?;
-    let (read, fixes) = files.read(args.depth_noise_m.is_some())?;
+    let mut reading = files.read(args.depth_noise_m.is_some())?;
+    let fix_m = files.noise_m(&mut reading, args.fix_noise_m)?;
+    let FixReading {
+        read,
+        fixes,
+        left_out,
+        ..
+    } = reading;
     outputs.not_another_recordings(files.dvl, read.dvl_sha256())?;
     let recording = &read.recording;
     let attitude = Attitude::new(&recording.reference_time_s, &recording.attitude_rad);
     let noise = FixNoise {
-        fix_m: args.fix_noise_m,
-        depth_m: args.depth_noise_m.unwrap_or(args.fix_noise_m),
+        fix_m,
+        depth_m: args.depth_noise_m.unwrap_or(fix_m),
         dvl_m_s: args.dvl_noise_cm_s / 100.0,
     };
     let fit = fit_on(recording, &attitude, &fixes, term_set(args.terms), noise)
         .map_err(|fault| fix_error(args, fault))?;
-    believable(args, &fit)?;
+    believable(&noise, fixes.noise_m.is_some(), &fit)?;
     // The fixes' residual with no terms: the start positions alone.
     let bare = fit_on(recording, &attitude, &fixes, term_set(&[]), noise)
         .map_err(|fault| fix_error(args, fault))?;
@@ -130,6 +239,8 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
         corrected,
         read: recording.counts().beside_attitude(),
         fixes: fixes.len(),
+        fixes_left_out: left_out,
+        own_noise: fixes.noise_m.is_some(),
         before_m: horizontal(bare.residual_rms_m),
         after_m: horizontal(fit.residual_rms_m),
         distance_m: fit.distance_m,
@@ -160,7 +271,7 @@ const UNIT_FACTOR: f64 = 10.0;
 /// Medians, so that one fix kilometres off (two steps of a dozen) is the robust fit's to
 /// leave out, not taken for another unit.
 fn same_motion(
-    fixes_file: &Path,
+    fixes_named: &str,
     columns: &crate::data::fixes::FixColumns,
     recording: &PairedRecording,
     fixes: &Fixes,
@@ -208,11 +319,7 @@ fn same_motion(
     if steps.is_empty() || travelled < LEAST_DISTANCE_M {
         return Ok(());
     }
-    let median = |values: Vec<f64>| {
-        let mut values = values;
-        values.sort_by(f64::total_cmp);
-        values[values.len() / 2]
-    };
+    let median = |values: Vec<f64>| crate::median(&values);
     let fixes_m = median(steps.iter().map(|step| step.0).collect());
     let dvl_m = median(steps.iter().map(|step| step.1).collect());
     let ratio = fixes_m / dvl_m;
@@ -222,7 +329,7 @@ fn same_motion(
     let radians_as_degrees =
         columns.latitude_longitude.is_some() && columns.angles_in_degrees && ratio < 1.0;
     Err(CalibrateError::FixesOtherMotion {
-        fixes: fixes_file.to_path_buf(),
+        fixes: fixes_named.to_string(),
         step_s: STEP_S,
         fixes_m,
         dvl_m,
@@ -242,14 +349,20 @@ fn same_motion(
 /// against the dead reckoning (the dead reckoning's own walk adds to the residuals,
 /// well within that factor). Over a quarter of the fixes outliers the fit refuses
 /// itself.
-fn believable(args: &FixArgs, fit: &FixFit) -> Result<(), CalibrateError> {
+fn believable(noise: &FixNoise, own: bool, fit: &FixFit) -> Result<(), CalibrateError> {
     // Per horizontal axis, as the noise is given.
     let read_m = horizontal(fit.residual_rms_m) / std::f64::consts::SQRT_2;
-    let ratio = read_m / args.fix_noise_m;
+    let ratio = read_m / noise.fix_m;
     match ratio < NOISE_RATIO_LIMIT && ratio > 1.0 / NOISE_RATIO_LIMIT {
         true => Ok(()),
         false => Err(CalibrateError::FixNoiseContradicted {
-            given_m: args.fix_noise_m,
+            noise: match own {
+                true => format!(
+                    "the fixes' own noise (their covariances, median {} m)",
+                    crate::ThreeFigures(noise.fix_m)
+                ),
+                false => format!("--fix-noise-m {}", crate::Shown(noise.fix_m)),
+            },
             read_m,
             ratio,
         }),
@@ -286,10 +399,10 @@ fn refused(args: &FixArgs) -> Result<(), CalibrateError> {
     }
     // Beyond the Earth's size, no fix's noise.
     let positive = |v: f64| v > 0.0 && v < 1e7;
-    if !positive(args.fix_noise_m) {
+    if let Some(fix) = args.fix_noise_m.filter(|&f| !positive(f)) {
         return Err(CalibrateError::FixNoise {
             flag: "--fix-noise-m",
-            value: args.fix_noise_m,
+            value: fix,
         });
     }
     if let Some(depth) = args.depth_noise_m.filter(|&d| !positive(d)) {
@@ -318,13 +431,13 @@ fn fix_error(
     use crate::installation::estimate::fixes::FixFitError;
     if let FixFitError::Outliers { outliers, within } = fault {
         return CalibrateError::FixOutliers {
-            fixes: args.files.fixes.to_path_buf(),
+            fixes: args.files.fixes_named(),
             outliers,
             within,
         };
     }
     CalibrateError::FixFit {
-        fixes: args.files.fixes.to_path_buf(),
+        fixes: args.files.fixes_named(),
         terms: named(args.terms),
         fault,
     }

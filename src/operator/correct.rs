@@ -120,22 +120,20 @@ pub enum CorrectError {
     #[error(transparent)]
     Fixes(#[from] Box<crate::operator::calibrate::CalibrateError>),
     #[error(
-        "{}: the installation applied (time offset {time_offset_s:.3} s, found from the fixes) leaves the fixes further from the dead reckoning than no terms do ({after_m:.2} m RMS horizontally against {before_m:.2} m): it does not carry to this dive (the DVL remounted, the fixes on another clock, or the dive's clock more than 3 s from the installation's, beyond the fit's search: give it with --time-offset-s); nothing written: calibrate this dive with calibrate --fixes",
-        fixes.display()
+        "{fixes}: the installation applied (time offset {time_offset_s:.3} s, found from the fixes) leaves the fixes further from the dead reckoning than no terms do ({after_m:.2} m RMS horizontally against {before_m:.2} m): it does not carry to this dive (the DVL remounted, the fixes on another clock, or the dive's clock more than 3 s from the installation's, beyond the fit's search: give it with --time-offset-s); nothing written: calibrate this dive with calibrate --fixes"
     )]
     FixesFitWorse {
-        fixes: PathBuf,
+        fixes: String,
         time_offset_s: f64,
         before_m: f64,
         after_m: f64,
     },
     #[error(
-        "{}: the dive's clock cannot be found from the fixes of its first {} s (--window-s): {fault}; give a longer --window-s (without it, every fix of the dive), or its clock with --time-offset-s",
-        fixes.display(),
+        "{fixes}: the dive's clock cannot be found from the fixes of its first {} s (--window-s): {fault}; give a longer --window-s (without it, every fix of the dive), or its clock with --time-offset-s",
         crate::Shown(*window_s)
     )]
     FixWindow {
-        fixes: PathBuf,
+        fixes: String,
         window_s: f64,
         fault: Box<crate::installation::estimate::fixes::FixFitError>,
     },
@@ -154,12 +152,11 @@ pub enum CorrectError {
         after_m: f64,
     },
     #[error(
-        "{}: the first {} s of the dive (--window-s) hold no fix the fit can read (it reads those at least {} s inside the DVL's pieces, about the installation's clock): give a longer --window-s, or the dive's clock with --time-offset-s",
-        fixes.display(),
+        "{fixes}: the first {} s of the dive (--window-s) hold no fix the fit can read (it reads those at least {} s inside the DVL's pieces, about the installation's clock): give a longer --window-s, or the dive's clock with --time-offset-s",
         crate::Shown(*window_s),
         crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S
     )]
-    WindowHoldsNoFix { fixes: PathBuf, window_s: f64 },
+    WindowHoldsNoFix { fixes: String, window_s: f64 },
     #[error(
         "--time-offset-s {}: the installation at the clock given does not fit the dive's fixes: {fault}; give the dive's clock in seconds, or leave it out and let correct find it from the fixes",
         crate::Shown(*time_offset_s)
@@ -168,9 +165,9 @@ pub enum CorrectError {
         time_offset_s: f64,
         fault: Box<crate::installation::estimate::fixes::FixFitError>,
     },
-    #[error("{}: the dive's dead reckoning cannot be fitted to its fixes: {fault}", fixes.display())]
+    #[error("{fixes}: the dive's dead reckoning cannot be fitted to its fixes: {fault}")]
     FixFit {
-        fixes: PathBuf,
+        fixes: String,
         fault: Box<crate::installation::estimate::fixes::FixFitError>,
     },
     #[error(transparent)]

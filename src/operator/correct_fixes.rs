@@ -19,7 +19,7 @@ use crate::installation::frames::{Attitude, Reference};
 use crate::installation::terms::Installation;
 use crate::installation::terms::names::term_set;
 use crate::operator::calibrate::CalibrateError;
-use crate::operator::calibrate_fixes::FixFiles;
+use crate::operator::calibrate_fixes::{FixFiles, FixReading};
 use crate::operator::correct::CorrectError;
 use crate::operator::cost::CORRECT_FIXES;
 use crate::operator::inputs::not_over_an_input;
@@ -31,8 +31,9 @@ use std::path::{Path, PathBuf};
 pub struct FixCorrectArgs<'a> {
     pub files: FixFiles<'a>,
     pub installation: &'a Path,
-    /// The fixes' noise per horizontal axis, m.
-    pub fix_noise_m: f64,
+    /// The fixes' noise per horizontal axis, m, where given (each fix's own, from its
+    /// covariance, otherwise).
+    pub fix_noise_m: Option<f64>,
     /// The first seconds of the dive whose fixes find its clock again; all of them
     /// where `None`.
     pub window_s: Option<f64>,
@@ -84,10 +85,15 @@ pub struct FixCorrection {
     /// The fixes' residual with no terms and with `applied`.
     pub before: FixResidual,
     pub after: FixResidual,
+    /// The fixes' noise per horizontal axis, m: as given, or the median of their own
+    /// where `own_noise` (each fix weighed by its covariance).
     pub fix_noise_m: f64,
-    /// The DVL's samples read, kept and left out, and the fixes read.
+    pub own_noise: bool,
+    /// The DVL's samples read, kept and left out, and the fixes read, those left out
+    /// with their reasons.
     pub read: ReadCounts,
     pub fixes: usize,
+    pub fixes_left_out: Vec<(&'static str, usize)>,
     /// The dive's samples whose t + τ lies outside the attitude, or in a gap of it:
     /// written without a velocity.
     pub outside: usize,
@@ -113,14 +119,23 @@ pub fn correct_fixes(args: &FixCorrectArgs) -> Result<FixCorrection, CorrectErro
         return Err(CorrectError::OverInput { output, input });
     }
     files.cost(CORRECT_FIXES)?.state()?;
-    let (read, fixes) = files.read(false).map_err(Box::new)?;
+    let mut reading = files.read(false).map_err(Box::new)?;
+    let fix_m = files
+        .noise_m(&mut reading, args.fix_noise_m)
+        .map_err(Box::new)?;
+    let FixReading {
+        read,
+        fixes,
+        left_out,
+        ..
+    } = reading;
     let recording_sha256 = read.dvl_sha256().to_string();
     outputs.not_another_recordings(files.dvl, &recording_sha256)?;
     let recording = &read.recording;
     let attitude = Attitude::of(recording);
     let noise = FixNoise {
-        fix_m: args.fix_noise_m,
-        depth_m: args.fix_noise_m,
+        fix_m,
+        depth_m: fix_m,
         dvl_m_s: saved.dvl_noise_cm_s / 100.0,
     };
     let dive = FixDive {
@@ -150,9 +165,11 @@ pub fn correct_fixes(args: &FixCorrectArgs) -> Result<FixCorrection, CorrectErro
         applied,
         before,
         after,
-        fix_noise_m: args.fix_noise_m,
+        fix_noise_m: fix_m,
+        own_noise: fixes.noise_m.is_some(),
         read: recording.counts().beside_attitude(),
         fixes: fixes.len(),
+        fixes_left_out: left_out,
         outside,
         written,
     })
@@ -161,10 +178,10 @@ pub fn correct_fixes(args: &FixCorrectArgs) -> Result<FixCorrection, CorrectErro
 /// The first argument of `args` at fault, where one is.
 fn refused(args: &FixCorrectArgs) -> Result<(), CorrectError> {
     // Beyond the Earth's size, no fix's noise.
-    if !(args.fix_noise_m > 0.0 && args.fix_noise_m < 1e7) {
+    if let Some(fix) = args.fix_noise_m.filter(|f| !(*f > 0.0 && *f < 1e7)) {
         return Err(Box::new(CalibrateError::FixNoise {
             flag: "--fix-noise-m",
-            value: args.fix_noise_m,
+            value: fix,
         })
         .into());
     }
@@ -267,7 +284,7 @@ impl FixDive<'_> {
                     after_m: after.rms_m,
                 },
                 None => CorrectError::FixesFitWorse {
-                    fixes: self.args.files.fixes.to_path_buf(),
+                    fixes: self.args.files.fixes_named(),
                     time_offset_s: applied.time_offset_s,
                     before_m: before.rms_m,
                     after_m: after.rms_m,
@@ -296,7 +313,7 @@ impl FixDive<'_> {
         let pieces = self.recording.pieces();
         fit_fixes_around(dvl, &pieces, self.attitude, fixes, carried, self.noise).map_err(
             |fault: FixFitError| CorrectError::FixFit {
-                fixes: self.args.files.fixes.to_path_buf(),
+                fixes: self.args.files.fixes_named(),
                 fault: Box::new(fault),
             },
         )

@@ -8,7 +8,7 @@
 
 use crate::data::csv::row_count;
 use crate::data::paired::PairedError;
-use crate::data::paired::bag::{is_bag, message_counts};
+use crate::data::paired::bag::{Bag, is_bag, message_counts};
 use crate::footprint::{Bytes, machine_memory};
 use crate::memory::address_space_limit;
 use std::fmt;
@@ -113,10 +113,18 @@ impl Rows {
         })
     }
 
-    /// These rows and those of the position fixes in `fixes`.
-    pub fn with_fixes(self, fixes: &Path) -> Result<Rows, PairedError> {
+    /// These rows and those of the position fixes in `fixes`
+    /// (a bag's messages of the topic `topic`, where named).
+    pub fn with_fixes(self, fixes: &Path, topic: Option<&str>) -> Result<Rows, PairedError> {
+        let fix_rows = match topic {
+            Some(topic) => (Bag::open(fixes)?.counts()?.topics.iter())
+                .filter(|t| t.name == topic)
+                .map(|t| t.count as usize)
+                .sum(),
+            None => row_count(fixes)?,
+        };
         Ok(Rows {
-            fix_rows: Some(row_count(fixes)?),
+            fix_rows: Some(fix_rows),
             ..self
         })
     }

@@ -179,6 +179,7 @@ fn dive_on(track: Track, case: &Case, seed: u64, (dive_s, fix_interval_s): (f64,
             time_s: fix_time,
             north_east_m,
             depth_m: None,
+            noise_m: None,
         },
     }
 }

@@ -46,7 +46,7 @@ const USBL_FIXES: FixSimulation = FixSimulation {
 
 /// The true positions of a segment's reference point: its NED velocity summed by the
 /// trapezoidal rule from zero.
-fn positions(segment: &Recording) -> Vec<[f64; 2]> {
+pub(crate) fn positions(segment: &Recording) -> Vec<[f64; 2]> {
     let r = &segment.recording;
     let mut position = [0.0; 2];
     let mut out = vec![position];
@@ -345,7 +345,7 @@ fn fixes_over_a_stretch_of_few_headings_apply_no_term_only_turns_show() {
 /// itself 0.67 m off after 400 s at the true terms, and the noise-free fixes put the
 /// clock at 0.43 ± 0.03 s: docs/installation.md); its lever arm's depth, which
 /// horizontal fixes feel only through roll and pitch, zero.
-const FIX_TRUTH: installed::Installed = installed::Installed {
+pub(crate) const FIX_TRUTH: installed::Installed = installed::Installed {
     bias_m_s: [0.0; 3],
     time_offset_s: 1.0,
     lever_arm_m: [-1.9, 0.05, 0.0],
@@ -354,7 +354,7 @@ const FIX_TRUTH: installed::Installed = installed::Installed {
 
 /// The fixes the tests write: a time and north, east in metres, every 5 s of the
 /// segment written by `common::installed` (its reference positions, no noise).
-fn write_fixes(path: &Path, segment: &Recording, every: usize) {
+pub(crate) fn write_fixes(path: &Path, segment: &Recording, every: usize) {
     let positions = positions(segment);
     let mut text = String::from("t,n,e\n");
     for (i, p) in positions.iter().enumerate().step_by(every) {
@@ -836,14 +836,14 @@ fn correct_with_fixes_finds_the_dives_clock_again_and_carries_the_rest() {
 }
 
 /// Checks that the command run with the arguments `extra` exited 1 saying `expected`.
-fn refused_naming(output: &std::process::Output, expected: &str, extra: &[&str]) {
+pub(crate) fn refused_naming(output: &std::process::Output, expected: &str, extra: &[&str]) {
     let message = common::stderr(output);
     assert_eq!(output.status.code(), Some(1), "{extra:?}: {message}");
     assert!(message.contains(expected), "{extra:?}: {message}");
 }
 
 /// The number that follows `after` in `text`.
-fn number_after(text: &str, after: &str) -> f64 {
+pub(crate) fn number_after(text: &str, after: &str) -> f64 {
     let at = text
         .find(after)
         .unwrap_or_else(|| panic!("{after:?} in {text}"))

@@ -9,6 +9,7 @@
 mod common;
 
 mod bags;
+mod bag_fixes;
 mod between_dives;
 mod coverage;
 mod dive_clock;

@@ -350,6 +350,23 @@ pub fn read_without_velocity(
     })
 }
 
+/// The DVL and the reference's attitude of the bag at `path`, read as `topics` says and
+/// checked as [`read_without_velocity`] checks a CSV recording: the reference's
+/// velocity is not read (an AHRS's odometry may carry none worth the name).
+pub fn read_bag_without_velocity(
+    path: &Path,
+    topics: &bag::BagTopics,
+) -> Result<ReadRecording, PairedError> {
+    let read = bag::read(path, topics)?;
+    let mut samples = read.samples;
+    samples.velocity_ned_m_s.clear();
+    Ok(ReadRecording {
+        recording: checks::check(samples, &read.at)?,
+        files: read.files,
+        frames: Some(read.frames),
+    })
+}
+
 /// The checked samples of the CSV files `files` with `columns`: a shorthand of
 /// [`Source::read`] for a caller that wants neither the files' hashes nor a cache.
 pub fn read(files: &PairedFiles, columns: &PairedColumns) -> Result<PairedRecording, PairedError> {

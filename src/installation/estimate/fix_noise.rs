@@ -133,16 +133,23 @@ pub struct Whitener {
 }
 
 impl Whitener {
-    /// Of the fixes at `time_s` in a piece that starts at `start_s`, each weighed by its
-    /// `weights` (its white variance σ_f² / w; zero: not observed), under `model`.
-    pub fn new(model: &FixNoiseModel, start_s: f64, time_s: &[f64], weights: &[f64]) -> Whitener {
+    /// Of the fixes at `time_s` in a piece that starts at `start_s`, each of its own
+    /// `relative` white variance (in the model's: σ_f² r) and weighed by its `weights`
+    /// (σ_f² r / w; zero: not observed), under `model`.
+    pub fn new(
+        model: &FixNoiseModel,
+        start_s: f64,
+        time_s: &[f64],
+        (weights, relative): (&[f64], &[f64]),
+    ) -> Whitener {
         // The state's covariance, [walk, wander]: the walk from the piece's start, the
         // wandering error at its stationary variance.
         let mut p = [[0.0; 2]; 2];
         p[1][1] = model.wander_m2;
         let (mut steps, mut log_det, mut before_s) =
             (Vec::with_capacity(time_s.len()), 0.0, start_s);
-        for (&t, &weight) in time_s.iter().zip(weights) {
+        for ((&t, &weight), &relative) in time_s.iter().zip(weights).zip(relative) {
+            let fix_m2 = model.fix_m2 * relative;
             let dt = t - before_s;
             before_s = t;
             let decay = if model.wander_m2 > 0.0 {
@@ -155,7 +162,7 @@ impl Whitener {
             p[0][1] *= decay;
             p[1][0] = p[0][1];
             let predicted = p[0][0] + 2.0 * p[0][1] + p[1][1];
-            let marginal_m2 = model.walk_m2_s * (t - start_s) + model.wander_m2 + model.fix_m2;
+            let marginal_m2 = model.walk_m2_s * (t - start_s) + model.wander_m2 + fix_m2;
             let marginal_std = marginal_m2.sqrt();
             if weight <= 0.0 {
                 steps.push(Step {
@@ -166,7 +173,7 @@ impl Whitener {
                 });
                 continue;
             }
-            let variance = predicted + model.fix_m2 / weight;
+            let variance = predicted + fix_m2 / weight;
             let gain = [
                 (p[0][0] + p[0][1]) / variance,
                 (p[1][0] + p[1][1]) / variance,
@@ -382,7 +389,7 @@ mod tests {
             .l()
             .solve_lower_triangular(&DVector::from_vec(column.clone()))
             .unwrap();
-        let whitener = Whitener::new(&model, 0.0, &time_s, &weights);
+        let whitener = Whitener::new(&model, 0.0, &time_s, (&weights, &vec![1.0; time_s.len()]));
         for (got, want) in whitener.whiten(&column).iter().zip(expected.iter()) {
             assert!((got - want).abs() < 1e-10, "{got} against {want}");
         }
@@ -400,8 +407,8 @@ mod tests {
         };
         let time_s = [5.0, 10.0, 15.0, 20.0];
         let column = [1.0, 50.0, -0.5, 2.0];
-        let with = Whitener::new(&model, 0.0, &time_s, &[1.0, 0.0, 1.0, 1.0]);
-        let without = Whitener::new(&model, 0.0, &[5.0, 15.0, 20.0], &[1.0; 3]);
+        let with = Whitener::new(&model, 0.0, &time_s, (&[1.0, 0.0, 1.0, 1.0], &[1.0; 4]));
+        let without = Whitener::new(&model, 0.0, &[5.0, 15.0, 20.0], (&[1.0; 3], &[1.0; 3]));
         let (a, b) = (with.whiten(&column), without.whiten(&[1.0, -0.5, 2.0]));
         assert_eq!(a[1], 0.0);
         for (x, y) in [a[0], a[2], a[3]].iter().zip(&b) {
@@ -414,5 +421,37 @@ mod tests {
             (u - 50.0 / (0.01f64 * 10.0 + 1.0).sqrt()).abs() < 1e-12,
             "{u}"
         );
+    }
+
+    /// A fix of its own variance (a covariance four times the noise's) whitens as a fix
+    /// of a quarter the weight, and stands four times the variance from the track when
+    /// standardised, whatever its weight: an outlier left out is judged by its own noise.
+    #[test]
+    fn a_fix_of_its_own_noise_is_weighed_and_standardised_by_it() {
+        let model = FixNoiseModel {
+            fix_m2: 0.25,
+            walk_m2_s: 0.004,
+            wander_m2: 0.3,
+            wander_time_s: 30.0,
+        };
+        let time_s = [5.0, 10.0, 15.0, 20.0];
+        let column = [1.0, 4.0, -0.5, 2.0];
+        let own = Whitener::new(&model, 0.0, &time_s, (&[1.0; 4], &[1.0, 4.0, 1.0, 1.0]));
+        let weighed = Whitener::new(&model, 0.0, &time_s, (&[1.0, 0.25, 1.0, 1.0], &[1.0; 4]));
+        for (x, y) in own.whiten(&column).iter().zip(weighed.whiten(&column)) {
+            assert!((x - y).abs() < 1e-12, "{x} against {y}");
+        }
+        assert!((own.log_det() - weighed.log_det()).abs() < 1e-12);
+        let left_out = Whitener::new(
+            &model,
+            0.0,
+            &time_s,
+            (&[1.0, 0.0, 1.0, 1.0], &[1.0, 4.0, 1.0, 1.0]),
+        );
+        let marginal = (0.004f64 * 10.0 + 0.3 + 4.0 * 0.25).sqrt();
+        for whitener in [&own, &left_out] {
+            let u = whitener.standardised(&column)[1];
+            assert!((u - 4.0 / marginal).abs() < 1e-12, "{u}");
+        }
     }
 }

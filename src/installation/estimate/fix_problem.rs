@@ -150,6 +150,9 @@ pub(super) struct Problem<'a> {
     held: Vec<Vec<usize>>,
     /// For each fix fitted (pieces in order), its index among the fixes.
     pub(super) fix_of: Vec<usize>,
+    /// For each fix fitted, its horizontal white variance in the noise's (`fix_m`'s):
+    /// 1, or its own where the fixes carry their noise.
+    relative: Vec<f64>,
     pub(super) outside: usize,
     pub(super) axes: usize,
 }
@@ -203,6 +206,14 @@ impl<'a> Problem<'a> {
             kinds: terms.parameter_kinds(),
             estimated,
             outside: fixes.len() - fix_of.len(),
+            relative: (fix_of.iter())
+                .map(|&j| {
+                    fixes
+                        .noise_m
+                        .as_ref()
+                        .map_or(1.0, |n| (n[j] / noise.fix_m).powi(2))
+                })
+                .collect(),
             pieces: used,
             held,
             fix_of,
@@ -347,16 +358,18 @@ impl<'a> Problem<'a> {
         for (piece, held) in self.pieces.iter().zip(&self.held) {
             let start_s = self.dvl.0[piece.start];
             let time_s: Vec<f64> = held.iter().map(|&j| self.fixes.time_s[j]).collect();
-            let weights = &weights[offset..offset + held.len()];
+            let fixes = offset..offset + held.len();
+            let (weights, ones) = (&weights[fixes.clone()], vec![1.0; held.len()]);
             for axis in 0..self.axes {
-                let fix = match axis {
-                    2 => self.noise.depth_m / self.noise.fix_m,
-                    _ => 1.0,
+                // The fixes' own noise is horizontal; their depth's is one.
+                let (fix, relative) = match axis {
+                    2 => (self.noise.depth_m / self.noise.fix_m, &ones[..]),
+                    _ => (1.0, &self.relative[fixes.clone()]),
                 };
                 let model = shape.model(fix * fix, walk_m2_s);
                 blocks.push((
                     row..row + held.len(),
-                    Whitener::new(&model, start_s, &time_s, weights),
+                    Whitener::new(&model, start_s, &time_s, (weights, relative)),
                 ));
                 row += held.len();
             }

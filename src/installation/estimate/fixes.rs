@@ -314,6 +314,7 @@ mod tests {
             time_s: chosen.iter().map(|&i| i as f64 + late_s).collect(),
             north_east_m: chosen.iter().map(|&i| positions[i]).collect(),
             depth_m: None,
+            noise_m: None,
         };
         (
             recording.time_s.clone(),

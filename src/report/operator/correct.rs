@@ -164,9 +164,9 @@ pub fn fix_correction_text(correction: &FixCorrection) -> String {
         table.add_row([readable, value, std, from]);
     }
     let mut text = format!(
-        "read: {}; {} fixes\ninstallation of {} (calibrated on {}) applied\n{table}\n",
+        "read: {}; {}\ninstallation of {} (calibrated on {}) applied\n{table}\n",
         correction.read,
-        correction.fixes,
+        super::fixes::fixes_read(correction.fixes, &correction.fixes_left_out),
         correction.installation_file.display(),
         saved.recording,
     );
@@ -175,13 +175,13 @@ pub fn fix_correction_text(correction: &FixCorrection) -> String {
     }
     let (before, after) = (correction.before, correction.after);
     text.push_str(&format!(
-        "fixes' horizontal residual RMS, each piece of the DVL record started where the fixes put it, over the {:.0} m travelled: {:.2} m ({:.3} % of the distance) with no terms, {:.2} m ({:.3} %) with the installation applied; white fixes of {:.2} m per axis alone leave about {:.2} m\n",
+        "fixes' horizontal residual RMS, each piece of the DVL record started where the fixes put it, over the {:.0} m travelled: {:.2} m ({:.3} % of the distance) with no terms, {:.2} m ({:.3} %) with the installation applied; white fixes of {} alone leave about {:.2} m\n",
         after.distance_m,
         before.rms_m,
         before.pct(),
         after.rms_m,
         after.pct(),
-        correction.fix_noise_m,
+        super::fixes::fix_noise(correction.fix_noise_m, correction.own_noise),
         correction.fix_noise_m * std::f64::consts::SQRT_2,
     ));
     if correction.outside > 0 {

@@ -12,14 +12,35 @@ use crate::operator::calibrate_fixes::FixCalibration;
 use crate::report::kit::readable::{readable_term, readable_why};
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 
+/// `fixes` fixes read, and those left out before any fit, each with its reason.
+pub fn fixes_read(fixes: usize, left_out: &[(&str, usize)]) -> String {
+    let mut text = match fixes {
+        1 => "1 fix".to_string(),
+        n => format!("{n} fixes"),
+    };
+    for (why, count) in left_out {
+        text.push_str(&format!(" ({count} more left out: {why})"));
+    }
+    text
+}
+
+/// The fixes' noise per horizontal axis, `fix_m`, m: as given, or their median where
+/// each fix is weighed by its `own` (its covariance).
+pub fn fix_noise(fix_m: f64, own: bool) -> String {
+    match own {
+        true => format!("each of its own covariance, median {fix_m:.2} m per axis"),
+        false => format!("{fix_m:.2} m per axis"),
+    }
+}
+
 /// Everything `calibrate --fixes` prints; ends in a newline.
 pub fn fixes_text(calibration: &FixCalibration) -> String {
     let FixCalibration { fit, noise, .. } = calibration;
     let table = terms_table(fit);
     let mut text = format!(
-        "read: {}; {} fixes, {} fitted ({} outside the DVL's pieces, {} outliers beyond Tukey's {TUKEY_C_MODELLED} of their standard deviations, left out), over {} piece{} with a start position each\n{table}\n",
+        "read: {}; {}, {} fitted ({} outside the DVL's pieces, {} outliers beyond Tukey's {TUKEY_C_MODELLED} of their standard deviations, left out), over {} piece{} with a start position each\n{table}\n",
         calibration.read,
-        calibration.fixes,
+        fixes_read(calibration.fixes, &calibration.fixes_left_out),
         fit.fitted,
         fit.outside,
         fit.outliers.len(),
@@ -41,9 +62,9 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
         100.0 * noise.dvl_m_s,
     ));
     text.push_str(&format!(
-        "standard deviation: under that noise, scaled by the variance factor {} the fixes' whitened residuals show (1 where the noise is as given: fixes {:.2} m per axis{}); bound: under the noise as given, white fixes and white DVL noise; 95 % interval: Student's t on {} degrees of freedom\n",
+        "standard deviation: under that noise, scaled by the variance factor {} the fixes' whitened residuals show (1 where the noise is as given: fixes {}{}); bound: under the noise as given, white fixes and white DVL noise; 95 % interval: Student's t on {} degrees of freedom\n",
         crate::ThreeFigures(fit.variance_factor),
-        noise.fix_m,
+        fix_noise(noise.fix_m, calibration.own_noise),
         if fit.axes == 3 { format!(", depth {:.2} m", noise.depth_m) } else { String::new() },
         fit.freedom,
     ));

@@ -230,6 +230,12 @@ impl Encoder {
         self
     }
 
+    pub fn u16(&mut self, value: u16) -> &mut Self {
+        self.align(2);
+        self.bytes.extend_from_slice(&value.to_le_bytes());
+        self
+    }
+
     pub fn i32(&mut self, value: i32) -> &mut Self {
         self.align(4);
         self.bytes.extend_from_slice(&value.to_le_bytes());

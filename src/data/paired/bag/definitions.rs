@@ -359,6 +359,35 @@ float64[9] angular_velocity_covariance
 geometry_msgs/Vector3 linear_acceleration
 float64[9] linear_acceleration_covariance
 ================================================================================
+MSG: geometry_msgs/PoseWithCovarianceStamped
+std_msgs/Header header
+geometry_msgs/PoseWithCovariance pose
+================================================================================
+MSG: sensor_msgs/NavSatStatus
+int8 STATUS_NO_FIX=-1
+int8 STATUS_FIX=0
+int8 STATUS_SBAS_FIX=1
+int8 STATUS_GBAS_FIX=2
+int8 status
+uint16 SERVICE_GPS=1
+uint16 SERVICE_GLONASS=2
+uint16 SERVICE_COMPASS=4
+uint16 SERVICE_GALILEO=8
+uint16 service
+================================================================================
+MSG: sensor_msgs/NavSatFix
+std_msgs/Header header
+sensor_msgs/NavSatStatus status
+float64 latitude
+float64 longitude
+float64 altitude
+float64[9] position_covariance
+uint8 COVARIANCE_TYPE_UNKNOWN=0
+uint8 COVARIANCE_TYPE_APPROXIMATED=1
+uint8 COVARIANCE_TYPE_DIAGONAL_KNOWN=2
+uint8 COVARIANCE_TYPE_KNOWN=3
+uint8 position_covariance_type
+================================================================================
 MSG: marine_acoustic_msgs/Dvl
 uint8 DVL_MODE_BOTTOM=1
 uint8 DVL_MODE_WATER=2

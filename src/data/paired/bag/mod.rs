@@ -12,11 +12,13 @@
 //! a vendor's type with the same fields; the reference from `nav_msgs/msg/Odometry` (or
 //! the same fields), its body rate from an IMU's `sensor_msgs/msg/Imu` where one is
 //! named. The stamps are the headers' (the time of validity), or the
-//! recording's with [`Stamps::Receive`].
+//! recording's with [`Stamps::Receive`]. Position fixes are read from a topic of
+//! their own (`fix_topic.rs`: a NavSatFix, or a pose) on the same clock.
 //! In: a bag's path and the [`BagTopics`] to read. Out: a [`ReadBag`].
 
 mod cdr;
 mod definitions;
+mod fix_topic;
 mod frames;
 mod messages;
 mod storage;
@@ -25,6 +27,7 @@ pub mod write;
 
 pub use cdr::{Value, decode};
 pub use definitions::Definitions;
+pub use fix_topic::{BagFixes, read_bag_beside_attitude, read_fix_topic};
 pub use frames::{Axes, BagFrames, euler_zyx, matrix_quaternion};
 pub use messages::{ReadBag, message_counts, read, topic_lines};
 pub use storage::{Bag, Storage, Survey, Topic, is_bag};

@@ -256,6 +256,51 @@ pub fn imu_message(stamp_ns: i64, frame: &str, angular_rad_s: Vec3) -> Vec<u8> {
     e.finish()
 }
 
+/// A `sensor_msgs/msg/NavSatFix` in `frame`: `status` (−1: no fix), latitude and
+/// longitude, degrees, altitude, m, and the position's ENU covariance, m², where known
+/// (a diagonal of the same variance east and north, another up), unknown otherwise.
+pub fn nav_sat_fix_message(
+    stamp_ns: i64,
+    frame: &str,
+    status: i8,
+    [latitude_deg, longitude_deg, altitude_m]: Vec3,
+    variance_m2: Option<[f64; 2]>,
+) -> Vec<u8> {
+    let mut e = Encoder::default();
+    e.header(stamp_ns, frame).u8(status as u8).u16(1);
+    e.f64s(&[latitude_deg, longitude_deg, altitude_m]);
+    let (covariance, kind) = match variance_m2 {
+        Some([horizontal, up]) => {
+            let mut c = [0.0; 9];
+            (c[0], c[4], c[8]) = (horizontal, horizontal, up);
+            (c, 2)
+        }
+        None => ([0.0; 9], 0),
+    };
+    e.f64s(&covariance).u8(kind);
+    e.finish()
+}
+
+/// A `geometry_msgs/msg/PoseWithCovarianceStamped` in the world frame `world`: the
+/// position, m, an identity orientation, and the variance of x and y, m², on the
+/// covariance's diagonal (zero, unknown, where none).
+pub fn pose_with_covariance_message(
+    stamp_ns: i64,
+    world: &str,
+    position_m: Vec3,
+    variance_m2: Option<f64>,
+) -> Vec<u8> {
+    let mut e = Encoder::default();
+    e.header(stamp_ns, world).f64s(&position_m);
+    e.f64s(&[0.0, 0.0, 0.0, 1.0]);
+    let mut covariance = [0.0; 36];
+    if let Some(variance) = variance_m2 {
+        (covariance[0], covariance[7]) = (variance, variance);
+    }
+    e.f64s(&covariance);
+    e.finish()
+}
+
 /// A `tf2_msgs/msg/TFMessage` of static transforms: each its parent, child,
 /// translation, m, and rotation `[x, y, z, w]`.
 pub fn tf_message(stamp_ns: i64, transforms: &[(&str, &str, Vec3, [f64; 4])]) -> Vec<u8> {
@@ -289,6 +334,18 @@ pub struct RosLayout<'a> {
     /// `sensor_msgs/msg/Image`, a message a second): a camera or a sonar beside the
     /// navigation, for a reading to pass over.
     pub other_bytes_per_s: usize,
+    /// Topics of other sensors written beside (a USBL's fixes), each message recorded
+    /// at its stamp.
+    pub other_topics: &'a [OtherTopic<'a>],
+}
+
+/// A topic [`write_recording`] writes beside the DVL and the reference: its name, its
+/// type, and its messages, each with its stamp, ns since the epoch.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OtherTopic<'a> {
+    pub name: &'a str,
+    pub type_name: &'a str,
+    pub messages: &'a [(i64, Vec<u8>)],
 }
 
 impl Default for RosLayout<'_> {
@@ -302,6 +359,7 @@ impl Default for RosLayout<'_> {
             lost_lock_every: None,
             epoch_s: 1_700_000_000,
             other_bytes_per_s: 0,
+            other_topics: &[],
         }
     }
 }
@@ -357,6 +415,11 @@ pub fn write_recording(
         for second in 0..=(end - start).floor() as usize {
             messages.push((stamp(start + second as f64), "/camera/image", Vec::new()));
         }
+    }
+    for other in layout.other_topics {
+        bag.topic(other.name, other.type_name)?;
+        let stamped = other.messages.iter();
+        messages.extend(stamped.map(|(stamp, data)| (*stamp, other.name, data.clone())));
     }
     messages.sort_by_key(|(stamp, topic, _)| (*stamp, *topic));
     let mut state = 0x9e37_79b9_7f4a_7c15_u64;
