@@ -291,7 +291,11 @@ fn memory() {
         );
         let fixes = write_fixes(d, k, (&dvl, &reference), every);
         let rows = Rows::count(&dvl, Some(&reference)).unwrap();
-        let cost = Cost::on(FIXES, vec![rows.with_fixes(&fixes, None).unwrap()], f64::INFINITY);
+        let cost = Cost::on(
+            FIXES,
+            vec![rows.with_fixes(&fixes, None).unwrap()],
+            f64::INFINITY,
+        );
         let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_dcnet-exp"));
         command
             .arg("calibrate")

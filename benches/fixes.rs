@@ -74,6 +74,7 @@ const fn case(fix_m: f64, correlation: f64, clock_s: f64) -> Case {
         correlation,
         clock_s,
         latency_s: 0.0,
+        noise_spread: 1.0,
     }
 }
 

@@ -44,6 +44,8 @@ pub struct FixReading {
     pub left_out: Vec<(&'static str, usize)>,
     /// How many fixes read carry no noise of their own (a covariance).
     pub without_noise: usize,
+    /// From a bag: the topics and frames read, in words.
+    pub from_bag: Option<String>,
 }
 
 /// What `calibrate --fixes` is asked.
@@ -65,8 +67,16 @@ impl FixFiles<'_> {
     /// What fitting the DVL to the fixes will ask of this machine, as `per_row` counts
     /// it.
     pub fn cost(&self, per_row: PerRow) -> Result<Cost, PairedError> {
-        if self.fix_topic.is_some() && !is_bag(self.dvl) {
-            return Err(self.not_a_bag().into());
+        match (self.fix_topic, is_bag(self.dvl)) {
+            (Some(_), false) => return Err(self.not_a_bag().into()),
+            (None, true) => {
+                return Err(BagError::Bag {
+                    path: self.dvl.to_path_buf(),
+                    problem: "--fixes: a bag's fixes are read from its own topic with --fixes-topic, beside its odometry's attitude (--fixes reads CSV files)".into(),
+                }
+                .into());
+            }
+            _ => {}
         }
         let rows =
             Rows::count(self.dvl, Some(self.attitude))?.with_fixes(self.fixes, self.fix_topic)?;
@@ -103,7 +113,7 @@ impl FixFiles<'_> {
     /// where `depth` asks for one, and on the DVL's track ([`same_motion`]).
     pub fn read(&self, depth: bool) -> Result<FixReading, CalibrateError> {
         let fix_columns = fix_columns(self.columns).map_err(CalibrateError::Columns)?;
-        let (read, fixes, left_out, without_noise) = match self.fix_topic {
+        let (read, fixes, left_out, (without_noise, from_bag)) = match self.fix_topic {
             Some(topic) => {
                 let source = source(self.dvl, None, self.columns, self.reading)
                     .map_err(CalibrateError::Columns)?;
@@ -120,7 +130,20 @@ impl FixFiles<'_> {
                     ("no fix (NavSatFix status −1)", bag.no_fix),
                     ("a position that is not a number", bag.not_a_number),
                 ];
-                (read, bag.fixes, left_out, bag.without_covariance)
+                let from_bag = format!(
+                    "{}; of the reference its attitude alone (its velocity not read); the fixes from {} ({})",
+                    read.frames
+                        .as_ref()
+                        .expect("a bag's reading has its frames"),
+                    bag.topic,
+                    bag.type_name
+                );
+                (
+                    read,
+                    bag.fixes,
+                    left_out,
+                    (bag.without_covariance, Some(from_bag)),
+                )
             }
             None => {
                 let columns =
@@ -129,7 +152,7 @@ impl FixFiles<'_> {
                 let (fixes, _) =
                     read_fixes(self.fixes, &fix_columns).map_err(CalibrateError::Fixes)?;
                 let without_noise = fixes.len();
-                (read, fixes, Vec::new(), without_noise)
+                (read, fixes, Vec::new(), (without_noise, None))
             }
         };
         if depth && fixes.depth_m.is_none() {
@@ -144,6 +167,7 @@ impl FixFiles<'_> {
             fixes,
             left_out,
             without_noise,
+            from_bag,
         })
     }
 
@@ -189,6 +213,8 @@ pub struct FixCalibration {
     pub fixes: usize,
     pub fixes_left_out: Vec<(&'static str, usize)>,
     pub own_noise: bool,
+    /// From a bag: the topics and frames read, in words.
+    pub from_bag: Option<String>,
     /// The RMS of the fixes' horizontal residual with no terms (the start positions
     /// alone fitted) and with the terms applied, m; and the distance the dead
     /// reckoning travelled over the fixes fitted, m.
@@ -214,6 +240,7 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
         read,
         fixes,
         left_out,
+        from_bag,
         ..
     } = reading;
     outputs.not_another_recordings(files.dvl, read.dvl_sha256())?;
@@ -241,6 +268,7 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
         fixes: fixes.len(),
         fixes_left_out: left_out,
         own_noise: fixes.noise_m.is_some(),
+        from_bag,
         before_m: horizontal(bare.residual_rms_m),
         after_m: horizontal(fit.residual_rms_m),
         distance_m: fit.distance_m,

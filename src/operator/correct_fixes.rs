@@ -94,6 +94,8 @@ pub struct FixCorrection {
     pub read: ReadCounts,
     pub fixes: usize,
     pub fixes_left_out: Vec<(&'static str, usize)>,
+    /// From a bag: the topics and frames read, in words.
+    pub from_bag: Option<String>,
     /// The dive's samples whose t + τ lies outside the attitude, or in a gap of it:
     /// written without a velocity.
     pub outside: usize,
@@ -127,6 +129,7 @@ pub fn correct_fixes(args: &FixCorrectArgs) -> Result<FixCorrection, CorrectErro
         read,
         fixes,
         left_out,
+        from_bag,
         ..
     } = reading;
     let recording_sha256 = read.dvl_sha256().to_string();
@@ -170,6 +173,7 @@ pub fn correct_fixes(args: &FixCorrectArgs) -> Result<FixCorrection, CorrectErro
         read: recording.counts().beside_attitude(),
         fixes: fixes.len(),
         fixes_left_out: left_out,
+        from_bag,
         outside,
         written,
     })

@@ -211,8 +211,9 @@ impl Cost {
         let first = self.recordings[0].dvl.display();
         let files: usize = (self.recordings.iter())
             .map(|r| {
-                1 + usize::from(r.reference_rows.is_some() && !is_bag(&r.dvl))
-                    + usize::from(r.fix_rows.is_some())
+                let own = !is_bag(&r.dvl);
+                1 + usize::from(r.reference_rows.is_some() && own)
+                    + usize::from(r.fix_rows.is_some() && own)
             })
             .sum();
         let others = files - 1;

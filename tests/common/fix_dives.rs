@@ -13,7 +13,7 @@ use dcnet_exp::Vec3;
 use dcnet_exp::data::fixes::Fixes;
 use dcnet_exp::installation::frames::Attitude;
 use dcnet_exp::installation::terms::Installation;
-use rand::SeedableRng;
+use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, Normal};
 use std::f64::consts::PI;
 
@@ -28,14 +28,18 @@ pub const DVL_NOISE_M_S: f64 = 0.03;
 pub const FIX_INTERVAL_S: f64 = 5.0;
 
 /// A case of the coverage study: the fixes' noise per axis, m; the DVL noise's AR(1)
-/// correlation from one sample to the next (0 for white); the DVL's clock τ, s; and the
-/// fixes' latency, s.
+/// correlation from one sample to the next (0 for white); the DVL's clock τ, s; the
+/// fixes' latency, s; and how far each fix's own noise spreads about `fix_m`, as a
+/// factor (1: every fix's is `fix_m`, and the fixes carry none of their own; 4: each
+/// fix's is drawn log-uniform from a quarter to four times `fix_m`, and carried with it,
+/// as a USBL's covariance grows with its range).
 #[derive(Debug, Clone, Copy)]
 pub struct Case {
     pub fix_m: f64,
     pub correlation: f64,
     pub clock_s: f64,
     pub latency_s: f64,
+    pub noise_spread: f64,
 }
 
 /// The installation of every dive, the clock of `case`: the independent check's.
@@ -164,10 +168,17 @@ fn dive_on(track: Track, case: &Case, seed: u64, (dive_s, fix_interval_s): (f64,
     let fix_time: Vec<f64> = (0..(dive_s / fix_interval_s) as usize)
         .map(|k| fix_interval_s / 2.0 + fix_interval_s * k as f64)
         .collect();
-    let north_east_m = (fix_time.iter())
-        .map(|&t| {
+    // Drawn only where they spread, so that the other cases' draws stay as they were.
+    let own_noise_m: Vec<f64> = (fix_time.iter())
+        .map(|_| match case.noise_spread == 1.0 {
+            true => case.fix_m,
+            false => case.fix_m * case.noise_spread.powf(2.0 * rng.random::<f64>() - 1.0),
+        })
+        .collect();
+    let north_east_m = (fix_time.iter().zip(&own_noise_m))
+        .map(|(&t, &noise_m)| {
             let (p, _) = track.at(t - case.latency_s);
-            [0, 1].map(|k| p[k] + case.fix_m * unit.sample(&mut rng))
+            [0, 1].map(|k| p[k] + noise_m * unit.sample(&mut rng))
         })
         .collect();
     Dive {
@@ -179,7 +190,7 @@ fn dive_on(track: Track, case: &Case, seed: u64, (dive_s, fix_interval_s): (f64,
             time_s: fix_time,
             north_east_m,
             depth_m: None,
-            noise_m: None,
+            noise_m: (case.noise_spread != 1.0).then_some(own_noise_m),
         },
     }
 }
@@ -205,17 +216,24 @@ pub fn coverage(case: &Case, dives: u64) -> (Vec<(&'static str, f64, usize)>, us
     use rayon::prelude::*;
     let terms = term_set(&default_fix_terms());
     let truth = truth(case).to_parameters(&terms);
-    let noise = FixNoise {
-        fix_m: case.fix_m,
-        depth_m: case.fix_m,
-        dvl_m_s: DVL_NOISE_M_S,
-    };
     let fits: Vec<Option<Vec<(&'static str, Option<bool>)>>> = (0..dives)
         .into_par_iter()
         .map(|seed| {
             let dive = dive(case, seed);
             let pieces = vec![0..dive.time_s.len()];
             let dvl = (&dive.time_s[..], &dive.dvl_m_s[..]);
+            // The fixes' own noise where they carry it, their median standing for
+            // them, as `calibrate --fixes-topic` takes it.
+            let fix_m = dive
+                .fixes
+                .noise_m
+                .as_deref()
+                .map_or(case.fix_m, dcnet_exp::median);
+            let noise = FixNoise {
+                fix_m,
+                depth_m: fix_m,
+                dvl_m_s: DVL_NOISE_M_S,
+            };
             let fit = fit_fixes(dvl, &pieces, &dive.attitude, &dive.fixes, terms, noise).ok()?;
             Some(
                 (0..fit.names.len())

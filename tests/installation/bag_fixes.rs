@@ -165,6 +165,10 @@ fn fixes_from_a_bags_topic_calibrate_as_the_same_fixes_from_a_file() {
         stdout.contains("each of its own covariance, median 0.50 m per axis"),
         "{stdout}"
     );
+    assert!(
+        stdout.contains("the fixes from /usbl/fix (sensor_msgs/msg/NavSatFix)"),
+        "{stdout}"
+    );
     let folder = d.join("navsat/Trajectory1");
     let [dvl, attitude] = ["DVL_trajectory1.csv", "GT_trajectory1.csv"]
         .map(|f| folder.join(f).to_str().unwrap().to_string());
@@ -354,5 +358,21 @@ fn a_bags_installation_carries_to_the_next_dives_bag_and_bad_input_is_refused() 
         &output,
         "DVL_trajectory1.csv: --fixes-topic: not a bag",
         &["--fixes-topic on a CSV file"],
+    );
+    // A bag's fixes are not a file's.
+    let fixes = d.join("second/fixes.csv");
+    let attitude = d.join("second/Trajectory1/GT_trajectory1.csv");
+    let output = correct(&[
+        "--fixes",
+        fixes.to_str().unwrap(),
+        "--attitude",
+        attitude.to_str().unwrap(),
+        "--fix-noise-m",
+        "0.5",
+    ]);
+    refused_naming(
+        &output,
+        "dive.mcap: --fixes: a bag's fixes are read from its own topic with --fixes-topic",
+        &["--fixes beside a bag"],
     );
 }

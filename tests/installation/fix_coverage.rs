@@ -44,6 +44,7 @@ fn intervals_hold_with_fixes_of_two_metres_and_a_clock_of_a_second_and_a_half() 
             correlation: 0.0,
             clock_s: 1.5,
             latency_s: 0.0,
+            noise_spread: 1.0,
         },
         40,
     );
@@ -58,7 +59,25 @@ fn intervals_hold_with_fixes_of_half_a_metre() {
             correlation: 0.0,
             clock_s: 0.0,
             latency_s: 0.0,
+            noise_spread: 1.0,
         },
         0,
+    );
+}
+
+/// Fixes each of its own noise, a quarter to four times 1 m (log-uniform), carried with
+/// each fix as a bag's covariances carry it: each weighed by its own, the intervals hold
+/// as with one noise.
+#[test]
+fn intervals_hold_with_fixes_each_of_its_own_noise() {
+    holds(
+        Case {
+            fix_m: 1.0,
+            correlation: 0.0,
+            clock_s: 0.6,
+            latency_s: 0.0,
+            noise_spread: 4.0,
+        },
+        20,
     );
 }

@@ -163,13 +163,14 @@ pub fn fix_correction_text(correction: &FixCorrection) -> String {
         let value = format!("{:.4} {unit}", applied[k] * factor);
         table.add_row([readable, value, std, from]);
     }
-    let mut text = format!(
+    let mut text = super::fixes::from_bag(&correction.from_bag);
+    text.push_str(&format!(
         "read: {}; {}\ninstallation of {} (calibrated on {}) applied\n{table}\n",
         correction.read,
         super::fixes::fixes_read(correction.fixes, &correction.fixes_left_out),
         correction.installation_file.display(),
         saved.recording,
-    );
+    ));
     if let Some(clock) = &correction.clock {
         text.push_str(&clock_text(clock));
     }

@@ -24,6 +24,14 @@ pub fn fixes_read(fixes: usize, left_out: &[(&str, usize)]) -> String {
     text
 }
 
+/// For fixes read from a bag, the topics and frames it was read in, a paragraph.
+pub fn from_bag(read: &Option<String>) -> String {
+    match read {
+        Some(read) => format!("Read from the bag: {read}.\n\n"),
+        None => String::new(),
+    }
+}
+
 /// The fixes' noise per horizontal axis, `fix_m`, m: as given, or their median where
 /// each fix is weighed by its `own` (its covariance).
 pub fn fix_noise(fix_m: f64, own: bool) -> String {
@@ -37,7 +45,8 @@ pub fn fix_noise(fix_m: f64, own: bool) -> String {
 pub fn fixes_text(calibration: &FixCalibration) -> String {
     let FixCalibration { fit, noise, .. } = calibration;
     let table = terms_table(fit);
-    let mut text = format!(
+    let mut text = from_bag(&calibration.from_bag);
+    text.push_str(&format!(
         "read: {}; {}, {} fitted ({} outside the DVL's pieces, {} outliers beyond Tukey's {TUKEY_C_MODELLED} of their standard deviations, left out), over {} piece{} with a start position each\n{table}\n",
         calibration.read,
         fixes_read(calibration.fixes, &calibration.fixes_left_out),
@@ -46,7 +55,7 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
         fit.outliers.len(),
         fit.pieces,
         if fit.pieces == 1 { "" } else { "s" },
-    );
+    ));
     let shape = fit.noise_shape;
     let wander = match shape.wander_ratio {
         0.0 => "white fixes".to_string(),
