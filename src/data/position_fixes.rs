@@ -30,6 +30,13 @@ impl Fixes {
         self.time_s.is_empty()
     }
 
+    /// The root mean square of the fixes' own noise per horizontal axis, m, where they
+    /// carry it: the residual RMS white fixes of that noise leave per axis.
+    pub fn rms_noise_m(&self) -> Option<f64> {
+        let own = self.noise_m.as_ref().filter(|own| !own.is_empty())?;
+        Some((own.iter().map(|n| n * n).sum::<f64>() / own.len() as f64).sqrt())
+    }
+
     /// The fixes `keep` selects (in order), with the same file.
     pub fn select(&self, keep: impl Fn(usize) -> bool) -> Fixes {
         let chosen: Vec<usize> = (0..self.len()).filter(|&i| keep(i)).collect();

@@ -128,7 +128,10 @@ impl FixFiles<'_> {
                 }
                 let left_out = vec![
                     ("no fix (NavSatFix status −1)", bag.no_fix),
-                    ("a position that is not a number", bag.not_a_number),
+                    (
+                        "a latitude and longitude (or x and y) not a number",
+                        bag.not_a_number,
+                    ),
                 ];
                 let from_bag = format!(
                     "{}; of the reference its attitude alone (its velocity not read); the fixes from {} ({})",
@@ -253,7 +256,7 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
     };
     let fit = fit_on(recording, &attitude, &fixes, term_set(args.terms), noise)
         .map_err(|fault| fix_error(args, fault))?;
-    believable(&noise, fixes.noise_m.is_some(), &fit)?;
+    believable(&noise, fixes.rms_noise_m(), &fit)?;
     // The fixes' residual with no terms: the start positions alone.
     let bare = fit_on(recording, &attitude, &fixes, term_set(&[]), noise)
         .map_err(|fault| fix_error(args, fault))?;
@@ -377,19 +380,24 @@ fn same_motion(
 /// against the dead reckoning (the dead reckoning's own walk adds to the residuals,
 /// well within that factor). Over a quarter of the fixes outliers the fit refuses
 /// itself.
-fn believable(noise: &FixNoise, own: bool, fit: &FixFit) -> Result<(), CalibrateError> {
-    // Per horizontal axis, as the noise is given.
+fn believable(
+    noise: &FixNoise,
+    own_rms_m: Option<f64>,
+    fit: &FixFit,
+) -> Result<(), CalibrateError> {
+    // Per horizontal axis, as the noise is given; fixes of their own noise leave its
+    // root mean square.
     let read_m = horizontal(fit.residual_rms_m) / std::f64::consts::SQRT_2;
-    let ratio = read_m / noise.fix_m;
+    let ratio = read_m / own_rms_m.unwrap_or(noise.fix_m);
     match ratio < NOISE_RATIO_LIMIT && ratio > 1.0 / NOISE_RATIO_LIMIT {
         true => Ok(()),
         false => Err(CalibrateError::FixNoiseContradicted {
-            noise: match own {
-                true => format!(
-                    "the fixes' own noise (their covariances, median {} m)",
-                    crate::ThreeFigures(noise.fix_m)
+            noise: match own_rms_m {
+                Some(rms_m) => format!(
+                    "the fixes' own noise (their covariances, RMS {} m)",
+                    crate::ThreeFigures(rms_m)
                 ),
-                false => format!("--fix-noise-m {}", crate::Shown(noise.fix_m)),
+                None => format!("--fix-noise-m {}", crate::Shown(noise.fix_m)),
             },
             read_m,
             ratio,

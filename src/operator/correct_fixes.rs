@@ -89,6 +89,8 @@ pub struct FixCorrection {
     /// where `own_noise` (each fix weighed by its covariance).
     pub fix_noise_m: f64,
     pub own_noise: bool,
+    /// The horizontal residual RMS white fixes of that noise alone leave, m.
+    pub white_fixes_leave_m: f64,
     /// The DVL's samples read, kept and left out, and the fixes read, those left out
     /// with their reasons.
     pub read: ReadCounts,
@@ -170,6 +172,7 @@ pub fn correct_fixes(args: &FixCorrectArgs) -> Result<FixCorrection, CorrectErro
         after,
         fix_noise_m: fix_m,
         own_noise: fixes.noise_m.is_some(),
+        white_fixes_leave_m: std::f64::consts::SQRT_2 * fixes.rms_noise_m().unwrap_or(fix_m),
         read: recording.counts().beside_attitude(),
         fixes: fixes.len(),
         fixes_left_out: left_out,

@@ -13,6 +13,8 @@ use dcnet_exp::data::paired::bag::write::{
     write_recording,
 };
 use dcnet_exp::operator::installation_file::SavedInstallation;
+use rand::SeedableRng;
+use rand_distr::Distribution;
 use std::path::{Path, PathBuf};
 
 /// Where the fixes of the bags written lie: latitude and longitude of the first, deg.
@@ -31,6 +33,9 @@ enum Written {
     NavSatFixNoCovariance,
     /// PoseWithCovarianceStamped in the ENU `map` frame.
     Pose,
+    /// NavSatFix with its covariance, every tenth fix of 2 m noise and the others of
+    /// 5 cm (an RTK GNSS that loses its fix now and then), each drawn with its noise.
+    Mixed,
 }
 
 /// Latitude and longitude, degrees, of the point `north_east_m` from [`ORIGIN_DEG`] on
@@ -61,8 +66,18 @@ fn bag_dive(folder: &Path, truth: installed::Installed, seed: u64, written: Writ
     let variance = FIX_NOISE_M * FIX_NOISE_M;
     let mut messages = Vec::new();
     let time_s = &segment.recording.reference_time_s;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let unit = rand_distr::Normal::new(0.0, 1.0).unwrap();
     for (k, (i, &[north, east])) in positions(segment).iter().enumerate().step_by(5).enumerate() {
         let at = stamp(time_s[i]);
+        let noise_m = if k % 10 == 4 { 5.0 } else { 0.02 };
+        let (north, east) = match written {
+            Written::Mixed => (
+                north + noise_m * unit.sample(&mut rng),
+                east + noise_m * unit.sample(&mut rng),
+            ),
+            _ => (north, east),
+        };
         let [latitude, longitude] = latitude_longitude([north, east]);
         messages.push(match written {
             Written::NavSatFix => (
@@ -73,6 +88,16 @@ fn bag_dive(folder: &Path, truth: installed::Installed, seed: u64, written: Writ
                     0,
                     [latitude, longitude, -5.0],
                     Some([variance, 1.0]),
+                ),
+            ),
+            Written::Mixed => (
+                at,
+                nav_sat_fix_message(
+                    at,
+                    "usbl",
+                    0,
+                    [latitude, longitude, -5.0],
+                    Some([noise_m * noise_m, 1.0]),
                 ),
             ),
             Written::NavSatFixNoCovariance => (
@@ -375,4 +400,39 @@ fn a_bags_installation_carries_to_the_next_dives_bag_and_bad_input_is_refused() 
         "dive.mcap: --fixes: a bag's fixes are read from its own topic with --fixes-topic",
         &["--fixes beside a bag"],
     );
+}
+
+/// Fixes of centimetres with one in ten of metres, each its covariance: each is judged
+/// by its own noise, so none of the metre fixes is taken for gross (measured against
+/// the centimetres, 8 of them were left out as outliers) and the terms are the truth's.
+#[test]
+fn fixes_of_mixed_noise_are_each_judged_by_their_own() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // A DVL installed as the vehicle's frame: the dead reckoning with no terms is
+    // already near the track, and the fixes' own noise is what the jumps show.
+    let truth = installed::Installed {
+        scale: 0.0,
+        lever_arm_m: [0.0; 3],
+        time_offset_s: 0.0,
+        ..FIX_TRUTH
+    };
+    let bag = bag_dive(&d.join("mixed"), truth, 3, Written::Mixed);
+    let (saved, stdout) = saved_after(
+        d,
+        &[
+            "calibrate",
+            bag.to_str().unwrap(),
+            "--fixes-topic",
+            "/usbl/fix",
+            "--save",
+            "mixed.toml",
+        ],
+        "mixed.toml",
+    );
+    assert!(stdout.contains(", 0 outliers beyond Tukey's"), "{stdout}");
+    assert!(stdout.contains("median 0.02 m per axis"), "{stdout}");
+    let found = saved.installation();
+    assert!(found.time_offset_s.abs() < 0.15, "{found:?}");
+    assert!(found.lever_arm_m[0].abs() < 0.1, "{found:?}");
 }

@@ -525,7 +525,8 @@ impl<'a> Problem<'a> {
     }
 
     /// Which fixes to fit: all but those grossly off ([`gross_jumps`]), read from their
-    /// distances from the dead reckoning under the installation carried, beyond
+    /// distances from the dead reckoning under the installation carried (each in its
+    /// own noise where the fixes carry theirs), beyond
     /// [`GROSS`] times the fixes' given noise. Such fixes stay out of the robust loop:
     /// one fix hundreds of metres off made the scan's least squares run to its edge,
     /// or the noise read a walk under which most good fixes were outliers.
@@ -533,7 +534,10 @@ impl<'a> Problem<'a> {
         let residuals = self.residuals(&vec![0.0; self.names.len()])?;
         let blocks: Vec<usize> = self.held.iter().map(Vec::len).collect();
         let floor = GROSS * self.noise.fix_m;
-        let kept = gross_jumps(&residuals, (&blocks, self.axes), (GROSS, floor));
+        // Each fix's jumps in its own noise, so that a fix whose covariance says metres
+        // is not gross beside centimetres.
+        let noise: Vec<f64> = self.relative.iter().map(|r| r.sqrt()).collect();
+        let kept = gross_jumps(&residuals, (&blocks, self.axes, &noise), (GROSS, floor));
         Ok(match self.enough(&kept, free) {
             Ok(()) => kept,
             Err(_) => vec![true; self.fix_of.len()],

@@ -229,25 +229,30 @@ pub fn outliers_among(residuals: &[Vec3]) -> Vec<bool> {
 /// the change of the residual, over the axes, from one position of a piece to the next.
 /// A position is gross where its jumps to both neighbours exceed `times` the median
 /// jump and `floor` (at a piece's end: its one jump, where its neighbour's other jump
-/// does not); in a piece of fewer than three, none is. A jump does not depend on a
+/// does not); in a piece of fewer than three, none is. Each jump is read in the
+/// positions' own `noise` (one relative standard deviation per position, pieces in
+/// turn: the root mean square of the two a jump joins). A jump does not depend on a
 /// fit's parameters, so a position that pulls least squares towards it cannot hide.
 pub fn gross_jumps(
     residuals: &[f64],
-    (blocks, axes): (&[usize], usize),
+    (blocks, axes, noise): (&[usize], usize, &[f64]),
     (times, floor): (f64, f64),
 ) -> Vec<bool> {
     let mut jumps: Vec<Vec<f64>> = Vec::with_capacity(blocks.len());
-    let mut row = 0;
+    let (mut row, mut offset) = (0, 0);
     for &n in blocks {
         let jump = |j: usize| {
+            let own = (0.5 * (noise[offset + j].powi(2) + noise[offset + j + 1].powi(2))).sqrt();
             (0..axes)
                 .map(|axis| residuals[row + axis * n + j + 1] - residuals[row + axis * n + j])
                 .map(|d| d * d)
                 .sum::<f64>()
                 .sqrt()
+                / own
         };
         jumps.push((0..n.saturating_sub(1)).map(jump).collect());
         row += n * axes;
+        offset += n;
     }
     let mut sorted: Vec<f64> = jumps.iter().flatten().copied().collect();
     sorted.sort_by(f64::total_cmp);
@@ -330,10 +335,10 @@ mod tests {
             *value += 50.0;
         }
         let residuals = [north, vec![0.0; 12]].concat();
-        let kept = gross_jumps(&residuals, (&[12], 2), (10.0, 5.0));
+        let kept = gross_jumps(&residuals, (&[12], 2, &[1.0; 12]), (10.0, 5.0));
         let gross: Vec<usize> = (0..12).filter(|&j| !kept[j]).collect();
         assert_eq!(gross, vec![0, 5]);
-        let kept = gross_jumps(&[0.0, 500.0, 0.0, 0.0], (&[2], 2), (10.0, 5.0));
+        let kept = gross_jumps(&[0.0, 500.0, 0.0, 0.0], (&[2], 2, &[1.0; 2]), (10.0, 5.0));
         assert_eq!(kept, vec![true, true]);
     }
 }

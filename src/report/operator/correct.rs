@@ -183,7 +183,7 @@ pub fn fix_correction_text(correction: &FixCorrection) -> String {
         after.rms_m,
         after.pct(),
         super::fixes::fix_noise(correction.fix_noise_m, correction.own_noise),
-        correction.fix_noise_m * std::f64::consts::SQRT_2,
+        correction.white_fixes_leave_m,
     ));
     if correction.outside > 0 {
         text.push_str(&format!(

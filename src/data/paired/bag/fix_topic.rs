@@ -4,8 +4,9 @@
 //! `geometry_msgs/msg/PoseWithCovarianceStamped` or a `nav_msgs/msg/Odometry`'s (ENU,
 //! or NED where the frame's name ends in `_ned`). Each fix's horizontal noise is read
 //! from its covariance where it gives one (the mean of its east and north variances);
-//! a NavSatFix without a fix (status −1) or without a position (not a number) is left
-//! out and counted. The stamps are those of the recording the fixes go with.
+//! a NavSatFix without a fix (status −1) or without a horizontal position (not a
+//! number) is left out and counted; the fixes have a depth where every one has an
+//! altitude. The stamps are those of the recording the fixes go with.
 //! In: the bag, the topic, the stamps and the frames of the DVL's reading. Out:
 //! [`BagFixes`].
 
@@ -26,8 +27,8 @@ pub struct BagFixes {
     pub fixes: Fixes,
     pub topic: String,
     pub type_name: String,
-    /// Messages left out: a NavSatFix with no fix (status −1), or with a latitude,
-    /// longitude or altitude that is not a number.
+    /// Messages left out: a NavSatFix with no fix (status −1), or a latitude and
+    /// longitude (x and y) that is not a number.
     pub no_fix: usize,
     pub not_a_number: usize,
     /// Fixes read that carry no covariance.
@@ -200,8 +201,15 @@ fn stamp(
             .ok_or_else(|| format!("its {p} is missing or not a number"))
     };
     match stamps {
-        Stamps::Header => Ok(field("header.stamp.sec")? as i64 * 1_000_000_000
-            + field("header.stamp.nanosec")? as i64),
+        Stamps::Header => {
+            let sec = field("header.stamp.sec")?;
+            if sec < 0.0 {
+                return Err(format!(
+                    "its header stamp is {sec} s, before 1970: read it on the bag's receive stamps (--stamps receive), or mend the driver's clock"
+                ));
+            }
+            Ok(sec as i64 * 1_000_000_000 + field("header.stamp.nanosec")? as i64)
+        }
         Stamps::Receive => i64::try_from(receive_ns)
             .map_err(|_| format!("its receive stamp {receive_ns} ns lies beyond the year 2262")),
     }
@@ -236,6 +244,9 @@ fn message(value: &Value, layout: &Layout) -> Result<Message, String> {
                 return Ok(Message::NoFix);
             }
             let position = triple(position)?;
+            if !horizontal_finite(&position) {
+                return Ok(Message::NotANumber);
+            }
             let known = number(covariance_type, "position_covariance_type")? > 0.0;
             let variance = match known {
                 true => Some(horizontal_variance(
@@ -252,6 +263,9 @@ fn message(value: &Value, layout: &Layout) -> Result<Message, String> {
             covariance,
         } => {
             let position = triple(position)?;
+            if !horizontal_finite(&position) {
+                return Ok(Message::NotANumber);
+            }
             let (x, y) = (
                 element(covariance, 0, "pose.covariance")?,
                 element(covariance, 7, "pose.covariance")?,
@@ -264,15 +278,18 @@ fn message(value: &Value, layout: &Layout) -> Result<Message, String> {
             (position, variance)
         }
     };
-    if position.iter().any(|v| !v.is_finite()) {
-        return Ok(Message::NotANumber);
-    }
     Ok(Message::Fix(Read {
         stamp_ns: 0,
         message: 0,
         position,
         variance_m2,
     }))
+}
+
+/// Whether a fix's horizontal position (latitude and longitude, or x and y) is a
+/// number: its altitude may not be (a NavSatFix without one), and is then no depth.
+fn horizontal_finite(position: &[f64; 3]) -> bool {
+    position[0].is_finite() && position[1].is_finite()
 }
 
 /// The mean of a fix's two horizontal variances, m², each a positive number.
@@ -346,13 +363,15 @@ fn fixes_of(
     let noise_m = (read.iter())
         .map(|r| r.variance_m2.map(f64::sqrt))
         .collect::<Option<Vec<f64>>>();
+    // The depth where every fix has one.
+    let depth_m = depth_m.iter().all(|d| d.is_finite()).then_some(depth_m);
     Ok(Fixes {
         lines: read.iter().map(|r| r.message).collect(),
         time_s: (read.iter())
             .map(|r| (r.stamp_ns - origin_s * 1_000_000_000) as f64 / 1e9)
             .collect(),
         north_east_m: north_east,
-        depth_m: Some(depth_m),
+        depth_m,
         noise_m,
     })
 }
@@ -392,7 +411,7 @@ mod tests {
                 good(100.0, 0.0),
                 (101.0, -1, [0.0, 0.0, 0.0], None),
                 good(102.0, 10.0),
-                (103.0, 0, [f64::NAN, 7.0, 0.0], Some([0.25, 1.0])),
+                (103.0, 0, [f64::NAN, 7.0, 0.0], Some([f64::NAN, 1.0])),
                 good(104.0, 20.0),
             ],
         );
@@ -413,6 +432,14 @@ mod tests {
             let fault = read_fix_topic(&path, "/fix", Stamps::Header, 90).unwrap_err();
             assert!(fault.to_string().contains(expected), "{fault}");
         };
+        // An altitude that is not a number: the fixes stand, with no depth.
+        bag(
+            &path,
+            &[good(100.0, 0.0), (101.0, 0, [45.0, 7.0, f64::NAN], None)],
+        );
+        let read = read_fix_topic(&path, "/fix", Stamps::Header, 90).unwrap();
+        assert_eq!((read.fixes.len(), read.not_a_number), (2, 0));
+        assert_eq!(read.fixes.depth_m, None);
         refused(
             &[good(100.0, 0.0), good(99.0, 1.0)],
             "/fix, message 2: its stamp is not after",
