@@ -14,6 +14,7 @@ use super::cdr::{Value, decode};
 use super::definitions::Definitions;
 use super::frames::{frame_name, world_is_ned};
 use super::storage::Bag;
+use super::values::stamp_ns;
 use super::{BagError, BagTopics, Stamps};
 use crate::data::local_plane::{north_east_m, off_the_globe};
 use crate::data::paired::{PairedError, ReadRecording};
@@ -200,19 +201,8 @@ fn stamp(
             .and_then(|(indices, _)| value.at(&indices)?.number())
             .ok_or_else(|| format!("its {p} is missing or not a number"))
     };
-    match stamps {
-        Stamps::Header => {
-            let sec = field("header.stamp.sec")?;
-            if sec < 0.0 {
-                return Err(format!(
-                    "its header stamp is {sec} s, before 1970: read it on the bag's receive stamps (--stamps receive), or mend the driver's clock"
-                ));
-            }
-            Ok(sec as i64 * 1_000_000_000 + field("header.stamp.nanosec")? as i64)
-        }
-        Stamps::Receive => i64::try_from(receive_ns)
-            .map_err(|_| format!("its receive stamp {receive_ns} ns lies beyond the year 2262")),
-    }
+    let header = [field("header.stamp.sec")?, field("header.stamp.nanosec")?];
+    stamp_ns(header, receive_ns, stamps)
 }
 
 /// The fix of one message `value` laid out as `layout`.

@@ -11,7 +11,7 @@ use super::cdr::{Value, decode};
 use super::definitions::Definitions;
 use super::frames::{self, Axes, BagFrames, StaticTransform, Transform, frame_name};
 use super::storage::{Bag, Survey};
-use super::values::{finite, finite_transform, rotation_quaternion};
+use super::values::{finite, finite_transform, rotation_quaternion, stamp_ns};
 use super::{BagError, BagTopics, Stamps};
 use crate::Vec3;
 use crate::data::interpolate::Between;
@@ -190,18 +190,8 @@ impl Samples {
             }
             return Ok(());
         }
-        let [sec, nanosec] = numbers(value, &layout.stamp).ok_or_else(missing)?;
-        if stamps == Stamps::Header && sec < 0.0 {
-            return Err(format!(
-                "its header stamp is {sec} s, before 1970: read it on the bag's receive stamps (--stamps receive), or mend the driver's clock"
-            ));
-        }
-        self.stamp_ns.push(match stamps {
-            Stamps::Header => sec as i64 * 1_000_000_000 + nanosec as i64,
-            Stamps::Receive => i64::try_from(receive_ns).map_err(|_| {
-                format!("its receive stamp {receive_ns} ns lies beyond the year 2262, which no clock of a dive reads")
-            })?,
-        });
+        let header = numbers(value, &layout.stamp).ok_or_else(missing)?;
+        self.stamp_ns.push(stamp_ns(header, receive_ns, stamps)?);
         self.message.push(message);
         let frame = |path: &[usize]| value.at(path).and_then(Value::text).map(frame_name);
         let frames = (
