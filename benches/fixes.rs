@@ -5,8 +5,9 @@
 //! filter, never held as an n × n covariance. Then the coverage of every applied term's
 //! 95 % interval over 400 synthetic dives (`tests/common/fix_dives.rs`) in each case of
 //! the study in docs/installation.md: fixes of 0.5, 2 and 5 m, DVL noise white and
-//! AR(1) 0.8 and 0.9, clocks of 0, 0.6 and 1.5 s (each level in at least one case; the
-//! tests assert two of them). With `-- --fixes N`: one fit of N fixes, its seconds and
+//! AR(1) 0.8 and 0.9, clocks of 0, 0.6 and 1.5 s, fixes' latencies of 0 and 1 s (fitted
+//! with `--fix-latency`'s parameter, and once not, to show what a latency left out
+//! does); each level in at least one case; the tests assert two of them. With `-- --fixes N`: one fit of N fixes, its seconds and
 //! peak memory (what the first part runs); with `-- --coverage`: the coverage alone.
 
 #[allow(dead_code)]
@@ -38,19 +39,26 @@ fn main() {
         }
     }
     println!(
-        "\n| fixes, m | DVL noise | clock, s | dives refused | scale | yaw | lever arm x | lever arm y | clock |\n|---|---|---|---|---|---|---|---|---|"
+        "\n| fixes, m | DVL noise | clock, s | fixes' latency, s | dives refused | scale | yaw | lever arm x | lever arm y | clock | latency |\n|---|---|---|---|---|---|---|---|---|---|---|"
     );
     for case in CASES {
         let (table, refused) = coverage(&case, 400);
-        let shares: Vec<String> = (table.iter())
+        let mut shares: Vec<String> = (table.iter())
             .map(|(_, share, applied)| format!("{:.1} % of {applied}", 100.0 * share))
             .collect();
         let noise = match case.correlation {
             0.0 => "white".to_string(),
             rho => format!("AR(1) {rho}"),
         };
+        let latency = match case.fits_latency {
+            true => format!("{}, fitted", case.latency_s),
+            false => format!("{}, not fitted", case.latency_s),
+        };
+        if !case.fits_latency {
+            shares.push("–".into());
+        }
         println!(
-            "| {} | {noise} | {} | {refused} | {} |",
+            "| {} | {noise} | {} | {latency} | {refused} | {} |",
             case.fix_m,
             case.clock_s,
             shares.join(" | ")
@@ -59,14 +67,27 @@ fn main() {
 }
 
 /// The cases of the coverage study.
-const CASES: [Case; 6] = [
+const CASES: [Case; 9] = [
     case(0.5, 0.0, 0.0),
     case(2.0, 0.0, 1.5),
     case(0.5, 0.8, 0.6),
     case(0.5, 0.9, 0.6),
     case(2.0, 0.9, 0.0),
     case(5.0, 0.9, 0.6),
+    late(0.5, true),
+    late(2.0, true),
+    late(2.0, false),
 ];
+
+/// Fixes of `fix_m` a second late, white DVL noise, a clock of 0.6 s; the latency
+/// fitted or not.
+const fn late(fix_m: f64, fits_latency: bool) -> Case {
+    Case {
+        latency_s: 1.0,
+        fits_latency,
+        ..case(fix_m, 0.0, 0.6)
+    }
+}
 
 const fn case(fix_m: f64, correlation: f64, clock_s: f64) -> Case {
     Case {
@@ -75,6 +96,7 @@ const fn case(fix_m: f64, correlation: f64, clock_s: f64) -> Case {
         clock_s,
         latency_s: 0.0,
         noise_spread: 1.0,
+        fits_latency: false,
     }
 }
 

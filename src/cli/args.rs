@@ -163,6 +163,11 @@ pub(super) struct CalibrateArgs {
     /// With --fixes that have a depth: its noise, m [default: --fix-noise-m]
     #[arg(long, value_name = "METRES", allow_negative_numbers = true)]
     pub(super) depth_noise_m: Option<f64>,
+    /// With fixes: estimate how late each fix is stamped after the position it gives
+    /// (a USBL's acoustic travel and processing), within ±3 s, beside the DVL's clock;
+    /// where the two cannot be told apart, their sum is printed
+    #[arg(long)]
+    pub(super) fix_latency: bool,
     /// Calibrate on the first SECONDS of the recording [default: all of it]
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     pub(super) window_s: Option<f64>,
@@ -242,7 +247,16 @@ pub(super) struct FixFlags {
     /// (given, it stands for every fix's own)
     #[arg(long, value_name = "METRES", allow_negative_numbers = true)]
     pub(super) fix_noise_m: Option<f64>,
+    /// The fixes' latency where it is known (a USBL's specification, a test at the
+    /// dock), s: each fix gives the position this long before its stamp, and is read
+    /// there
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    pub(super) fix_latency_s: Option<f64>,
 }
+
+/// The longest latency `--fix-latency-s` takes, s: beyond it, fixes are on another
+/// clock.
+const MAX_FIX_LATENCY_S: f64 = 60.0;
 
 /// Where position fixes come from, as typed.
 pub(super) enum GivenFixes<'a> {
@@ -256,6 +270,14 @@ impl FixFlags {
     /// The fixes, where given, with the attitude they need; the flags given without
     /// fixes refused.
     pub(super) fn given(&self) -> Result<Option<GivenFixes<'_>>, String> {
+        if let Some(latency) = self
+            .fix_latency_s
+            .filter(|l| !(l.abs() <= MAX_FIX_LATENCY_S))
+        {
+            return Err(format!(
+                "--fix-latency-s: {latency} is no latency of a fix: give the seconds each fix is stamped after the position it gives, within ±{MAX_FIX_LATENCY_S} s (beyond, the fixes are on another clock: put them on the attitude's)"
+            ));
+        }
         match (&self.fixes, &self.fixes_topic) {
             (Some(_), Some(_)) => Err(
                 "--fixes-topic: fixes come from a file (--fixes) or from a bag's topic (--fixes-topic): give one"
@@ -279,6 +301,7 @@ impl FixFlags {
                 for (flag, given) in [
                     ("--attitude", self.attitude.is_some()),
                     ("--fix-noise-m", self.fix_noise_m.is_some()),
+                    ("--fix-latency-s", self.fix_latency_s.is_some()),
                 ] {
                     if given {
                         return Err(format!(

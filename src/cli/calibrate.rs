@@ -31,10 +31,15 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
     if let Some(given) = args.fix.given().map_err(|m| input(anyhow::anyhow!(m)))? {
         return calibrate_fixes(args, given);
     }
-    if args.depth_noise_m.is_some() {
-        return Err(input(anyhow::anyhow!(
-            "--depth-noise-m: goes with position fixes: give them with --fixes"
-        )));
+    for (flag, given) in [
+        ("--depth-noise-m", args.depth_noise_m.is_some()),
+        ("--fix-latency", args.fix_latency),
+    ] {
+        if given {
+            return Err(input(anyhow::anyhow!(
+                "{flag}: goes with position fixes: give them with --fixes or --fixes-topic"
+            )));
+        }
     }
     let default_terms = ["lever_arm", "time_offset", "bias"].map(String::from);
     let terms = parse_terms(("--terms", args.terms.as_deref().unwrap_or(&default_terms)))?;
@@ -102,11 +107,18 @@ fn calibrate_fixes(args: &args::CalibrateArgs, given: GivenFixes) -> Result<(), 
     };
     let dive_terms = parse_terms(("--dive-terms", &args.dive_terms))?;
     let calibration = calibrated_on_fixes(&FixArgs {
-        files: fix_files(&args.dvl[0], &given, args.columns.as_deref(), &args.reading),
+        files: fix_files(
+            &args.dvl[0],
+            &given,
+            args.columns.as_deref(),
+            &args.reading,
+            &args.fix,
+        ),
         terms: &terms,
         dive_terms: &dive_terms,
         fix_noise_m: args.fix.fix_noise_m,
         depth_noise_m: args.depth_noise_m,
+        fix_latency: args.fix_latency,
         dvl_noise_cm_s: args.dvl_noise_cm_s,
         save: args.save.as_deref(),
         out: args.out(),
@@ -131,6 +143,7 @@ fn fix_files<'a>(
     given: &GivenFixes<'a>,
     columns: Option<&'a std::path::Path>,
     reading: &'a args::ReadingArgs,
+    flags: &args::FixFlags,
 ) -> FixFiles<'a> {
     let (attitude, fixes, fix_topic) = match *given {
         GivenFixes::Files { fixes, attitude } => (attitude, fixes, None),
@@ -143,6 +156,7 @@ fn fix_files<'a>(
         fix_topic,
         columns,
         reading: reading.reading(),
+        fix_latency_s: flags.fix_latency_s.unwrap_or(0.0),
     }
 }
 
@@ -210,7 +224,13 @@ fn correct_fixes(args: &args::CorrectArgs, given: GivenFixes) -> Result<(), CliE
         "a correction against fixes, which scans the clock within ±3 s of the installation's",
     )?;
     let correction = corrected_on_fixes(&FixCorrectArgs {
-        files: fix_files(&args.dvl, &given, args.columns.as_deref(), &args.reading),
+        files: fix_files(
+            &args.dvl,
+            &given,
+            args.columns.as_deref(),
+            &args.reading,
+            &args.fix,
+        ),
         installation: &args.installation,
         fix_noise_m: args.fix.fix_noise_m,
         window_s: args.window_s,

@@ -12,7 +12,9 @@ use crate::data::paired::Source;
 use crate::data::paired::bag::{BagError, is_bag, read_bag_beside_attitude};
 use crate::data::paired::{PairedError, PairedRecording, ReadCounts, ReadRecording};
 use crate::footprint::machine_memory;
-use crate::installation::estimate::fixes::{DEFAULT_FIX_TERMS, FixFit, FixNoise, fit_fixes};
+use crate::installation::estimate::fixes::{
+    DEFAULT_FIX_TERMS, FixFit, FixNoise, FixTerms, fit_fixes,
+};
 use crate::installation::frames::{Attitude, Reference};
 use crate::installation::terms::names::{TermName, term_set};
 use crate::operator::calibrate::{CalibrateError, NOISE_RATIO_LIMIT, clear_of_inputs, named};
@@ -34,6 +36,8 @@ pub struct FixFiles<'a> {
     pub fix_topic: Option<&'a str>,
     pub columns: Option<&'a Path>,
     pub reading: Reading<'a>,
+    /// The fixes' latency given, s: each fix read this long before its stamp.
+    pub fix_latency_s: f64,
 }
 
 /// What is read for a fit to fixes: the DVL beside the attitude, the fixes, and the
@@ -57,6 +61,8 @@ pub struct FixArgs<'a> {
     /// covariance, otherwise), and in depth; the DVL's per axis, cm/s.
     pub fix_noise_m: Option<f64>,
     pub depth_noise_m: Option<f64>,
+    /// Whether the fixes' latency is estimated beside the terms.
+    pub fix_latency: bool,
     pub dvl_noise_cm_s: f64,
     pub save: Option<&'a Path>,
     /// The folder the corrected recording goes to.
@@ -158,6 +164,10 @@ impl FixFiles<'_> {
                 (read, fixes, Vec::new(), (without_noise, None))
             }
         };
+        let mut fixes = fixes;
+        for t in &mut fixes.time_s {
+            *t -= self.fix_latency_s;
+        }
         if depth && fixes.depth_m.is_none() {
             return Err(CalibrateError::NoDepths {
                 fixes: self.fixes.to_path_buf(),
@@ -215,6 +225,8 @@ pub struct FixCalibration {
     pub read: ReadCounts,
     pub fixes: usize,
     pub fixes_left_out: Vec<(&'static str, usize)>,
+    /// The fixes' latency given, s: each read this long before its stamp.
+    pub fix_latency_s: f64,
     pub own_noise: bool,
     /// From a bag: the topics and frames read, in words.
     pub from_bag: Option<String>,
@@ -254,11 +266,15 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
         depth_m: args.depth_noise_m.unwrap_or(fix_m),
         dvl_m_s: args.dvl_noise_cm_s / 100.0,
     };
-    let fit = fit_on(recording, &attitude, &fixes, term_set(args.terms), noise)
+    let terms = FixTerms {
+        set: term_set(args.terms),
+        fix_latency: args.fix_latency,
+    };
+    let fit = fit_on(recording, &attitude, &fixes, terms, noise)
         .map_err(|fault| fix_error(args, fault))?;
     believable(&noise, fixes.rms_noise_m(), &fit)?;
     // The fixes' residual with no terms: the start positions alone.
-    let bare = fit_on(recording, &attitude, &fixes, term_set(&[]), noise)
+    let bare = fit_on(recording, &attitude, &fixes, term_set(&[]).into(), noise)
         .map_err(|fault| fix_error(args, fault))?;
     let samples = corrected_samples(&fit.installation, recording, &Reference::new(recording));
     let corrected = write(&outputs, &samples, read.dvl_sha256()).map_err(CalibrateError::Write)?;
@@ -270,6 +286,7 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
         read: recording.counts().beside_attitude(),
         fixes: fixes.len(),
         fixes_left_out: left_out,
+        fix_latency_s: files.fix_latency_s,
         own_noise: fixes.noise_m.is_some(),
         from_bag,
         before_m: horizontal(bare.residual_rms_m),
@@ -410,11 +427,18 @@ fn fit_on(
     recording: &PairedRecording,
     attitude: &Attitude,
     fixes: &Fixes,
-    terms: crate::installation::terms::TermSet,
+    terms: FixTerms,
     noise: FixNoise,
 ) -> Result<FixFit, crate::installation::estimate::fixes::FixFitError> {
     let dvl = (&recording.time_s[..], &recording.dvl_m_s[..]);
     fit_fixes(dvl, &recording.pieces(), attitude, fixes, terms, noise)
+}
+
+/// The correlations among the first `count` parameters of `correlation`.
+fn correlation_of(correlation: &[Vec<f64>], count: usize) -> Vec<Vec<f64>> {
+    (correlation.iter().take(count))
+        .map(|row| row[..count].to_vec())
+        .collect()
 }
 
 /// The horizontal RMS of per-axis RMS values north and east, m.
@@ -488,7 +512,10 @@ fn save(
     fit: &FixFit,
     recording_sha256: &str,
 ) -> Result<(), CalibrateError> {
+    // The fixes' latency is theirs, not the DVL's installation's.
+    let dvl_terms = fit.terms.parameter_names().len();
     let saved = (fit.names.iter().enumerate())
+        .take(dvl_terms)
         .map(|(k, name)| SavedTerm {
             name: name.to_string(),
             value: if fit.is_applied(name) {
@@ -506,7 +533,7 @@ fn save(
     // Fixes measure no velocity residual: what a dive this installation fits leaves is
     // the DVL's own noise, as given.
     let file = SavedInstallation::of_terms(
-        (saved, fit.correlation.clone()),
+        (saved, correlation_of(&fit.correlation, dvl_terms)),
         (args.terms, args.dive_terms),
         recording,
         (args.dvl_noise_cm_s, 0.0),

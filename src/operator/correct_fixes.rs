@@ -96,6 +96,8 @@ pub struct FixCorrection {
     pub read: ReadCounts,
     pub fixes: usize,
     pub fixes_left_out: Vec<(&'static str, usize)>,
+    /// The fixes' latency given, s: each read this long before its stamp.
+    pub fix_latency_s: f64,
     /// From a bag: the topics and frames read, in words.
     pub from_bag: Option<String>,
     /// The dive's samples whose t + τ lies outside the attitude, or in a gap of it:
@@ -176,6 +178,7 @@ pub fn correct_fixes(args: &FixCorrectArgs) -> Result<FixCorrection, CorrectErro
         read: recording.counts().beside_attitude(),
         fixes: fixes.len(),
         fixes_left_out: left_out,
+        fix_latency_s: files.fix_latency_s,
         from_bag,
         outside,
         written,
@@ -318,6 +321,7 @@ impl FixDive<'_> {
     ) -> Result<FixFit, CorrectError> {
         let dvl = (&self.recording.time_s[..], &self.recording.dvl_m_s[..]);
         let pieces = self.recording.pieces();
+        let carried = (carried.0.into(), carried.1);
         fit_fixes_around(dvl, &pieces, self.attitude, fixes, carried, self.noise).map_err(
             |fault: FixFitError| CorrectError::FixFit {
                 fixes: self.args.files.fixes_named(),

@@ -32,7 +32,8 @@ pub const FIX_INTERVAL_S: f64 = 5.0;
 /// fixes' latency, s; and how far each fix's own noise spreads about `fix_m`, as a
 /// factor (1: every fix's is `fix_m`, and the fixes carry none of their own; 4: each
 /// fix's is drawn log-uniform from a quarter to four times `fix_m`, and carried with it,
-/// as a USBL's covariance grows with its range).
+/// as a USBL's covariance grows with its range); and whether the fit estimates the
+/// fixes' latency.
 #[derive(Debug, Clone, Copy)]
 pub struct Case {
     pub fix_m: f64,
@@ -40,6 +41,7 @@ pub struct Case {
     pub clock_s: f64,
     pub latency_s: f64,
     pub noise_spread: f64,
+    pub fits_latency: bool,
 }
 
 /// The installation of every dive, the clock of `case`: the independent check's.
@@ -211,11 +213,17 @@ fn rotate_z_transposed(a: f64, v: [f64; 2]) -> [f64; 2] {
 /// applied it whose 95 % interval holds the truth, and how many applied it; and how
 /// many dives the fit refused.
 pub fn coverage(case: &Case, dives: u64) -> (Vec<(&'static str, f64, usize)>, usize) {
-    use dcnet_exp::installation::estimate::fixes::{FixNoise, default_fix_terms, fit_fixes};
+    use dcnet_exp::installation::estimate::fixes::{
+        FixNoise, FixTerms, default_fix_terms, fit_fixes,
+    };
     use dcnet_exp::installation::terms::names::term_set;
     use rayon::prelude::*;
-    let terms = term_set(&default_fix_terms());
-    let truth = truth(case).to_parameters(&terms);
+    let terms = FixTerms {
+        set: term_set(&default_fix_terms()),
+        fix_latency: case.fits_latency,
+    };
+    let mut truth = truth(case).to_parameters(&terms.set);
+    truth.push(case.latency_s);
     let fits: Vec<Option<Vec<(&'static str, Option<bool>)>>> = (0..dives)
         .into_par_iter()
         .map(|seed| {

@@ -45,6 +45,7 @@ fn intervals_hold_with_fixes_of_two_metres_and_a_clock_of_a_second_and_a_half() 
             clock_s: 1.5,
             latency_s: 0.0,
             noise_spread: 1.0,
+            fits_latency: false,
         },
         40,
     );
@@ -60,6 +61,7 @@ fn intervals_hold_with_fixes_of_half_a_metre() {
             clock_s: 0.0,
             latency_s: 0.0,
             noise_spread: 1.0,
+            fits_latency: false,
         },
         0,
     );
@@ -77,6 +79,7 @@ fn intervals_hold_with_fixes_each_of_its_own_noise() {
             clock_s: 0.6,
             latency_s: 0.0,
             noise_spread: 4.0,
+            fits_latency: false,
         },
         20,
     );

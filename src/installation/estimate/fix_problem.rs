@@ -10,78 +10,18 @@
 use crate::Vec3;
 use crate::data::fixes::Fixes;
 use crate::installation::dead_reckoning::{Track, dead_reckon, interior};
-use crate::installation::estimate::bound::{Tolerances, Unseen, normal_step, whitened_bound};
+use crate::installation::estimate::bound::{Unseen, normal_step, whitened_bound};
 use crate::installation::estimate::fit::{MAX_LEVER_ARM_M, MAX_SCALE, TIME_OFFSET_MARGIN_S};
 use crate::installation::estimate::fix_noise::{NoiseShape, Whitener, Whitening};
+use crate::installation::estimate::fix_terms::{
+    FIX_LATENCY, FIX_TOLERANCES, FixFitError, FixNoise, FixTerms,
+};
 use crate::installation::estimate::robust::{Loss, gross_jumps};
 use crate::installation::frames::Attitude;
 use crate::installation::terms::kind::TermKind;
-use crate::installation::terms::{Installation, PerKind, TermSet};
+use crate::installation::terms::{Installation, TermSet};
 use nalgebra::{DMatrix, DVector};
 use std::ops::Range;
-
-/// The tolerance of each term fitted to fixes: beyond it a term is said to be seen
-/// poorly (and still applied, with its standard deviation). Fixes of metres place a
-/// scale and a yaw well (they grow with the distance travelled), a lever arm and a
-/// clock only as well as the turns show them; a lever arm within half a metre and a
-/// clock within half a second move a dead reckoning by less than the fixes' noise.
-pub const FIX_TOLERANCES: Tolerances = PerKind {
-    scale: 0.005,
-    misalignment_rad: 0.5 * (std::f64::consts::PI / 180.0),
-    lever_arm_m: 0.5,
-    time_offset_s: 0.5,
-    bias_m_s: 0.01,
-};
-
-/// The noise of a fit to fixes: a fix's per horizontal axis and in depth, m, and the
-/// DVL's white noise per axis, m/s.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FixNoise {
-    pub fix_m: f64,
-    pub depth_m: f64,
-    pub dvl_m_s: f64,
-}
-
-/// Why the terms cannot be fitted to the fixes.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum FixFitError {
-    #[error(
-        "no fix lies within a piece of the DVL record ({fixes} fixes from {:.1} to {:.1} s, the DVL's {pieces} piece(s) from {:.1} to {:.1} s on its clock, each less {TIME_OFFSET_MARGIN_S} s at its ends, about a time offset of {} s): the fixes do not overlap the DVL; give fixes of the same dive, on the attitude's clock", fix_span_s.0, fix_span_s.1, dvl_span_s.0, dvl_span_s.1, crate::ThreeFigures(*centre_s)
-    )]
-    NoOverlap {
-        fixes: usize,
-        fix_span_s: (f64, f64),
-        pieces: usize,
-        dvl_span_s: (f64, f64),
-        centre_s: f64,
-    },
-    #[error(
-        "{} within the DVL's pieces, {outliers} of them outliers left out, give {residuals} residuals for {parameters} parameters (the terms and a start position per piece): a fit needs more; give more fixes, or fewer terms",
-        match fitted { 1 => "1 fix".to_string(), n => format!("{n} fixes") }
-    )]
-    TooFewFixes {
-        fitted: usize,
-        outliers: usize,
-        residuals: usize,
-        parameters: usize,
-    },
-    #[error(
-        "{outliers} of the {within} fixes within the DVL's pieces lie beyond the robust fit's reach of the dead reckoning: more than a quarter are outliers, so the fixes do not show the installation"
-    )]
-    Outliers { outliers: usize, within: usize },
-    #[error(
-        "the attitude does not cover the DVL's samples at the time offset {time_offset_s:.3} s: give the attitude of the whole dive"
-    )]
-    NoAttitude { time_offset_s: f64 },
-    #[error(
-        "the time offset that fits the fixes best, {time_offset_s:.2} s, lies at the edge of the ±{TIME_OFFSET_MARGIN_S} s a fit to fixes searches, and nothing fitted at the edge is the installation: the clocks may lie further apart than that (or the fixes and the attitude on different clocks): put the DVL, the attitude and the fixes on one clock to within {TIME_OFFSET_MARGIN_S} s; or the fixes do not place the clock at all (fixes of metres over a dive of minutes, or one steady turn, which ties a clock to the yaw): calibrate on a longer dive with more varied turns, or where the clocks are known to agree, leave time_offset out of --terms (correct: give the clock with --time-offset-s)"
-    )]
-    ClockAtScanEdge { time_offset_s: f64 },
-    #[error(
-        "the terms fitted leave the fixes further from the dead reckoning than no terms do (whitened sum of squares {with:.1} against {without:.1}): the fit found no installation the fixes show; the fixes may be on another clock, another vehicle's, or in another frame"
-    )]
-    WorseThanNone { with: f64, without: f64 },
-}
 
 /// How many times the median jump of the fixes' distance from the dead reckoning, one
 /// fix to the next, and their given noise per axis σ, a fix's jumps must be for it to be
@@ -142,8 +82,11 @@ pub(super) struct Problem<'a> {
     /// value): none for a calibration, the one carried to a dive for its clock.
     carried: Installation,
     noise: FixNoise,
+    /// The parameters: the term set's, then the fixes' latency where it is fitted.
     pub(super) names: Vec<&'static str>,
     kinds: Vec<TermKind>,
+    /// Where the fixes' latency is among the parameters, where it is fitted.
+    latency: Option<usize>,
     pub(super) estimated: Vec<bool>,
     pub(super) pieces: Vec<Range<usize>>,
     /// For each piece, the fixes in it.
@@ -163,11 +106,18 @@ impl<'a> Problem<'a> {
         pieces: &[Range<usize>],
         attitude: &'a Attitude,
         fixes: &'a Fixes,
-        (terms, carried): (TermSet, Installation),
+        (terms, carried): (FixTerms, Installation),
         noise: FixNoise,
     ) -> Result<Problem<'a>, FixFitError> {
         let axes = if fixes.depth_m.is_some() { 3 } else { 2 };
-        let names = terms.parameter_names();
+        let mut names = terms.set.parameter_names();
+        let mut kinds = terms.set.parameter_kinds();
+        let latency = terms.fix_latency.then_some(names.len());
+        if latency.is_some() {
+            // A time, limited, stepped and tolerated as the DVL's clock is.
+            names.push(FIX_LATENCY);
+            kinds.push(TermKind::TimeOffset);
+        }
         let estimated = names
             .iter()
             .map(|name| match *name {
@@ -178,7 +128,12 @@ impl<'a> Problem<'a> {
             .collect();
         let time_s = dvl.0;
         let centre_s = carried.time_offset_s;
-        let (used, held) = pieces_with_fixes(time_s, pieces, attitude, fixes, centre_s);
+        // A fix read up to a latency's limit earlier needs the track that much longer.
+        let margin_s = match latency {
+            Some(_) => 2.0 * TIME_OFFSET_MARGIN_S,
+            None => TIME_OFFSET_MARGIN_S,
+        };
+        let (used, held) = pieces_with_fixes(time_s, pieces, attitude, fixes, (centre_s, margin_s));
         let fix_of: Vec<usize> = held.iter().flatten().copied().collect();
         if fix_of.is_empty() {
             let span = |t: &[f64]| {
@@ -199,11 +154,12 @@ impl<'a> Problem<'a> {
             dvl,
             attitude,
             fixes,
-            terms,
+            terms: terms.set,
             carried,
             noise,
             names,
-            kinds: terms.parameter_kinds(),
+            kinds,
+            latency,
             estimated,
             outside: fixes.len() - fix_of.len(),
             relative: (fix_of.iter())
@@ -288,6 +244,7 @@ impl<'a> Problem<'a> {
     /// parameter moved by its term.
     pub(super) fn installation(&self, terms: &[f64]) -> Installation {
         let carried = self.carried.to_parameters(&self.terms);
+        let terms = &terms[..carried.len()];
         let moved: Vec<f64> = carried.iter().zip(terms).map(|(c, t)| c + t).collect();
         self.carried.with_parameters(&self.terms, &moved)
     }
@@ -311,11 +268,12 @@ impl<'a> Problem<'a> {
     fn residuals(&self, terms: &[f64]) -> Result<Vec<f64>, FixFitError> {
         let tracks = self.tracks(terms)?;
         let time_offset_s = self.installation(terms).time_offset_s;
+        let latency_s = self.latency.map_or(0.0, |k| terms[k]);
         let mut residuals = Vec::with_capacity(self.fix_of.len() * self.axes);
         for (track, held) in tracks.iter().zip(&self.held) {
             for axis in 0..self.axes {
                 for &j in held {
-                    let position = (track.at(self.fixes.time_s[j]))
+                    let position = (track.at(self.fixes.time_s[j] - latency_s))
                         .ok_or(FixFitError::NoAttitude { time_offset_s })?;
                     let fix = match axis {
                         2 => self.fixes.depth_m.as_ref().expect("a depth")[j],
@@ -445,9 +403,8 @@ impl<'a> Problem<'a> {
 
     /// Where the time offset is among the terms', if asked for.
     fn time_offset(&self) -> Option<usize> {
-        self.kinds
-            .iter()
-            .position(|&kind| kind == TermKind::TimeOffset)
+        let latency = self.latency;
+        (0..self.kinds.len()).find(|&k| self.kinds[k] == TermKind::TimeOffset && Some(k) != latency)
     }
 
     /// The largest magnitude parameter `k` may take: the time offset within the margin
@@ -499,6 +456,8 @@ impl<'a> Problem<'a> {
             ..blank
         };
         let scanned = self.scan_time_offset(screened, free)?;
+        // A latency run to its edge leaves most fixes outliers: refused as what it is.
+        self.latency_within_the_search(&scanned)?;
         let mut solution = self.read_noise(&scanned, free, false)?;
         let shape = solution.shape;
         let tukey = Loss::TUKEY_MODELLED;
@@ -647,16 +606,29 @@ impl<'a> Problem<'a> {
         self.solve(best, free, &ones, given)
     }
 
-    /// Refuses a fit whose time offset went to the edge of the scan.
+    /// Refuses a fit whose time offset, or the fixes' latency, went to the edge of the
+    /// scan.
     fn within_the_scan(&self, solution: &Solution) -> Result<(), FixFitError> {
-        let Some(k) = self.time_offset() else {
-            return Ok(());
-        };
-        let time_offset_s = solution.terms[k];
-        match time_offset_s.abs() >= self.limit(k) - SCAN_STEP_S {
-            true => Err(FixFitError::ClockAtScanEdge { time_offset_s }),
-            false => Ok(()),
+        if let Some(k) = self.time_offset().filter(|&k| self.at_edge(solution, k)) {
+            let time_offset_s = solution.terms[k];
+            return Err(FixFitError::ClockAtScanEdge { time_offset_s });
         }
+        self.latency_within_the_search(solution)
+    }
+
+    /// Refuses a fit whose fixes' latency went to the edge of its search.
+    fn latency_within_the_search(&self, solution: &Solution) -> Result<(), FixFitError> {
+        match self.latency.filter(|&k| self.at_edge(solution, k)) {
+            Some(k) => Err(FixFitError::LatencyAtScanEdge {
+                latency_s: solution.terms[k],
+            }),
+            None => Ok(()),
+        }
+    }
+
+    /// Whether `solution`'s parameter `k` lies within a scan step of its limit.
+    fn at_edge(&self, solution: &Solution, k: usize) -> bool {
+        solution.terms[k].abs() >= self.limit(k) - SCAN_STEP_S
     }
 
     /// Refuses `solution` where the fixes it kept lie further from the dead reckoning
@@ -815,13 +787,14 @@ impl<'a> Problem<'a> {
 /// The pieces of the DVL record stamped `time_s` that hold a fix, each cut to the
 /// samples whose t + τ reads `attitude` whatever τ within [`TIME_OFFSET_MARGIN_S`] of
 /// `centre_s` (so that every trial time offset reads it over the same samples), and
-/// the fixes each holds: those at least that margin inside it about `centre_s`.
+/// the fixes each holds: those at least `margin_s` inside it about `centre_s` (the
+/// time offset's margin, and the latency's beside it where that is fitted).
 fn pieces_with_fixes(
     time_s: &[f64],
     pieces: &[Range<usize>],
     attitude: &Attitude,
     fixes: &Fixes,
-    centre_s: f64,
+    (centre_s, margin_s): (f64, f64),
 ) -> (Vec<Range<usize>>, Vec<Vec<usize>>) {
     let inside = interior(attitude, time_s, centre_s);
     let (mut used, mut held) = (Vec::new(), Vec::new());
@@ -834,12 +807,8 @@ fn pieces_with_fixes(
             time_s[piece.start] + centre_s,
             time_s[piece.end - 1] + centre_s,
         );
-        let from = fixes
-            .time_s
-            .partition_point(|&t| t < first + TIME_OFFSET_MARGIN_S);
-        let to = fixes
-            .time_s
-            .partition_point(|&t| t <= last - TIME_OFFSET_MARGIN_S);
+        let from = fixes.time_s.partition_point(|&t| t < first + margin_s);
+        let to = fixes.time_s.partition_point(|&t| t <= last - margin_s);
         if from < to {
             used.push(piece);
             held.push((from..to).collect());

@@ -10,7 +10,10 @@
 //! The terms: the scale (one for all axes), the misalignment's yaw (and its roll and
 //! pitch where the fixes have a depth: horizontal fixes do not feel them), the time
 //! offset and the horizontal lever arm (its depth part moves a fix only through roll
-//! and pitch, and is not estimated).
+//! and pitch, and is not estimated); and where asked ([`FixTerms`]), the fixes' own
+//! latency, [`FIX_LATENCY`]: the fix stamped t gives the position at t − L, so the
+//! dead reckoning is read there. The clock both reads the attitude at another time
+//! and shifts the track; the latency only shifts it.
 //!
 //! The noise of a fix's residual ([`super::fix_noise`]): the dead reckoning's random
 //! walk (the DVL's noise summed, its level read from the residuals, so that a DVL noise
@@ -47,8 +50,10 @@ use crate::Vec3;
 use crate::data::fixes::Fixes;
 use crate::installation::estimate::bound::{Unseen, Why};
 use crate::installation::estimate::fix_noise::NoiseShape;
-pub use crate::installation::estimate::fix_problem::{FIX_TOLERANCES, FixFitError, FixNoise};
 use crate::installation::estimate::fix_problem::{Problem, Solution};
+pub use crate::installation::estimate::fix_terms::{
+    FIX_LATENCY, FIX_TOLERANCES, FixFitError, FixNoise, FixTerms,
+};
 use crate::installation::frames::Attitude;
 use crate::installation::terms::names::TermName;
 use crate::installation::terms::{Installation, TermSet};
@@ -74,12 +79,14 @@ pub fn default_fix_terms() -> Vec<TermName> {
 /// much.
 pub const MIN_HEADING_SPAN_RAD: f64 = std::f64::consts::FRAC_PI_2;
 
-/// The terms only a turning vehicle shows to fixes.
-const SHOWN_BY_TURNS: [&str; 4] = [
+/// The terms only a turning vehicle shows to fixes (a latency shifts the track along
+/// itself, as its start does on a straight run).
+const SHOWN_BY_TURNS: [&str; 5] = [
     "misalignment_z_rad",
     "lever_arm_x_m",
     "lever_arm_y_m",
     "time_offset_s",
+    FIX_LATENCY,
 ];
 
 /// The terms fitted to fixes, their bound, and the fixes used.
@@ -89,7 +96,8 @@ pub struct FixFit {
     /// show held at zero.
     pub terms: TermSet,
     pub installation: Installation,
-    /// Each parameter of `terms`, in their order: its name, its value (for a term not
+    /// Each parameter of `terms`, in their order, then the fixes' latency
+    /// ([`FIX_LATENCY`]) where it was fitted: its name, its value (for a term not
     /// applied, that of the fit it was left out of), its standard deviation and Fisher
     /// bound, and whether it was estimated at all (a horizontal fit does not estimate
     /// roll, pitch or the lever arm's depth).
@@ -145,16 +153,17 @@ impl FixFit {
 }
 
 /// Fits `terms` (scale, misalignment, lever arm, time offset; any other is refused by
-/// the caller) to `fixes` from the DVL samples `dvl` cut into `pieces`, under `noise`.
+/// the caller; and the fixes' latency where asked) to `fixes` from the DVL samples
+/// `dvl` cut into `pieces`, under `noise`.
 pub fn fit_fixes(
     dvl: (&[f64], &[Vec3]),
     pieces: &[Range<usize>],
     attitude: &Attitude,
     fixes: &Fixes,
-    terms: TermSet,
+    terms: impl Into<FixTerms>,
     noise: FixNoise,
 ) -> Result<FixFit, FixFitError> {
-    let carried = (terms, Installation::default());
+    let carried = (terms.into(), Installation::default());
     fit_fixes_around(dvl, pieces, attitude, fixes, carried, noise)
 }
 
@@ -169,7 +178,7 @@ pub fn fit_fixes_around(
     pieces: &[Range<usize>],
     attitude: &Attitude,
     fixes: &Fixes,
-    (terms, carried): (TermSet, Installation),
+    (terms, carried): (FixTerms, Installation),
     noise: FixNoise,
 ) -> Result<FixFit, FixFitError> {
     let problem = Problem::new(dvl, pieces, attitude, fixes, (terms, carried), noise)?;
@@ -184,7 +193,7 @@ pub fn fit_fixes_around(
         }
     }
     Ok(FixFit {
-        terms,
+        terms: terms.set,
         installation: problem.installation(&value),
         names: problem.names.clone(),
         value: shown.value,
@@ -354,6 +363,40 @@ mod tests {
         assert!(fit.outliers.is_empty());
     }
 
+    /// Fixes stamped a second after the positions they give: with the latency fitted,
+    /// the installation and the latency come back; without it, the lever arm takes up
+    /// most of the shift (2.8 m for 0.8 m) and the fixes lie far further from the track.
+    #[test]
+    fn fixes_stamped_late_give_their_latency_and_the_installation_back() {
+        let (time_s, dvl, attitude, fixes) = dive(&TRUTH, 1.0);
+        let pieces = [0..time_s.len()];
+        let set = term_set(&default_fix_terms());
+        let terms = FixTerms {
+            set,
+            fix_latency: true,
+        };
+        let fit = fit_fixes((&time_s, &dvl), &pieces, &attitude, &fixes, terms, NOISE).unwrap();
+        let found = fit.installation;
+        let latency = fit.value[fit.names.len() - 1];
+        assert_eq!(fit.names.last(), Some(&FIX_LATENCY));
+        assert!((latency - 1.0).abs() < 0.02, "{latency} {found:?}");
+        assert!((found.time_offset_s - 1.0).abs() < 0.02, "{found:?}");
+        assert!((found.lever_arm_m[0] - 0.8).abs() < 0.05, "{found:?}");
+        assert!((found.misalignment_rad[2] - 0.02).abs() < 1e-3, "{found:?}");
+        let blind = fit_fixes((&time_s, &dvl), &pieces, &attitude, &fixes, set, NOISE).unwrap();
+        // The shift along the track is mostly taken up by the lever arm's x (C_b^n l
+        // moves a fix along the body's x as a latency does at a steady speed).
+        let lever_x = blind.installation.lever_arm_m[0];
+        assert!((lever_x - 0.8).abs() > 1.0, "{:?}", blind.installation);
+        let rms = |fit: &FixFit| fit.residual_rms_m[0].hypot(fit.residual_rms_m[1]);
+        assert!(
+            rms(&blind) > 10.0 * rms(&fit),
+            "{} {}",
+            rms(&blind),
+            rms(&fit)
+        );
+    }
+
     #[test]
     fn fixes_on_a_clock_beyond_the_scan_are_refused_not_fitted() {
         let (time_s, dvl, attitude, fixes) = dive(&TRUTH, 5.0);
@@ -368,6 +411,16 @@ mod tests {
                     | FixFitError::WorseThanNone { .. }
                     | FixFitError::Outliers { .. }
             ),
+            "{error}"
+        );
+        let terms = FixTerms {
+            set: terms,
+            fix_latency: true,
+        };
+        let error =
+            fit_fixes((&time_s, &dvl), &pieces, &attitude, &fixes, terms, NOISE).unwrap_err();
+        assert!(
+            matches!(error, FixFitError::LatencyAtScanEdge { .. }),
             "{error}"
         );
     }

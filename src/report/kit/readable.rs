@@ -14,16 +14,22 @@ use crate::report::kit::numbers::three_digits;
 /// radians, a fraction for a scale) to that unit, as its kind's row gives them
 /// ([`TermKind::of_parameter`]): `lever_arm_x_m` → ("lever arm x", "m", 1),
 /// `bias_x_m_s` → ("bias x", "cm/s", 100), `misalignment_x_rad` → degrees, `scale_x` →
-/// %. A name no kind gives is shown as it is, with no unit.
+/// %. A name no kind gives (the fixes' latency, `fix_latency_s`) is shown with its
+/// suffix `_s` or `_m` read as its unit, or else as it is, with no unit.
 pub fn readable_term(term: &str) -> (String, &'static str, f64) {
-    match TermKind::of_parameter(term) {
-        Some((kind, axis)) => (
+    if let Some((kind, axis)) = TermKind::of_parameter(term) {
+        return (
             kind.readable_name(axis),
             kind.unit.symbol(),
             kind.unit.factor(),
-        ),
-        None => (term.replace('_', " "), "", 1.0),
+        );
     }
+    for (suffix, unit) in [("_s", "s"), ("_m", "m")] {
+        if let Some(name) = term.strip_suffix(suffix) {
+            return (name.replace('_', " "), unit, 1.0);
+        }
+    }
+    (term.replace('_', " "), "", 1.0)
 }
 
 /// A value of a reason in its table unit: three significant digits, trailing zeros

@@ -167,7 +167,11 @@ pub fn fix_correction_text(correction: &FixCorrection) -> String {
     text.push_str(&format!(
         "read: {}; {}\ninstallation of {} (calibrated on {}) applied\n{table}\n",
         correction.read,
-        super::fixes::fixes_read(correction.fixes, &correction.fixes_left_out),
+        super::fixes::fixes_read(
+            correction.fixes,
+            &correction.fixes_left_out,
+            correction.fix_latency_s
+        ),
         correction.installation_file.display(),
         saved.recording,
     ));

@@ -5,19 +5,26 @@
 //! travelled.
 //! In: a [`FixCalibration`]. Out: the text.
 
-use crate::installation::estimate::fixes::FixFit;
+use crate::installation::estimate::fixes::{FIX_LATENCY, FixFit};
 use crate::installation::estimate::fixes::{FIX_TOLERANCES, MIN_HEADING_SPAN_RAD};
 use crate::installation::estimate::robust::TUKEY_C_MODELLED;
 use crate::operator::calibrate_fixes::FixCalibration;
 use crate::report::kit::readable::{readable_term, readable_why};
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 
-/// `fixes` fixes read, and those left out before any fit, each with its reason.
-pub fn fixes_read(fixes: usize, left_out: &[(&str, usize)]) -> String {
+/// `fixes` fixes read, each `latency_s` before its stamp where that is given, and those
+/// left out before any fit, each with its reason.
+pub fn fixes_read(fixes: usize, left_out: &[(&str, usize)], latency_s: f64) -> String {
     let mut text = match fixes {
         1 => "1 fix".to_string(),
         n => format!("{n} fixes"),
     };
+    if latency_s != 0.0 {
+        text.push_str(&format!(
+            " (each read {} s before its stamp, the latency given)",
+            crate::Shown(latency_s)
+        ));
+    }
     for (why, count) in left_out {
         text.push_str(&format!(" ({count} more left out: {why})"));
     }
@@ -49,7 +56,11 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
     text.push_str(&format!(
         "read: {}; {}, {} fitted ({} outside the DVL's pieces, {} outliers beyond Tukey's {TUKEY_C_MODELLED} of their standard deviations, left out), over {} piece{} with a start position each\n{table}\n",
         calibration.read,
-        fixes_read(calibration.fixes, &calibration.fixes_left_out),
+        fixes_read(
+            calibration.fixes,
+            &calibration.fixes_left_out,
+            calibration.fix_latency_s
+        ),
         fit.fitted,
         fit.outside,
         fit.outliers.len(),
@@ -98,6 +109,7 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
             ));
         }
     }
+    text.push_str(&clock_and_latency(fit));
     text.push_str(&format!(
         "fixes' horizontal residual RMS: {:.2} m with no terms (the start positions alone), {:.2} m with the terms applied; over the {:.0} m travelled, {:.3} % and {:.3} % of the distance (the fixes' own noise included)\n",
         calibration.before_m,
@@ -115,6 +127,31 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
         MIN_HEADING_SPAN_RAD.to_degrees(),
     ));
     text
+}
+
+/// Where the DVL's clock and the fixes' latency are both applied, their sum: the shift
+/// of the whole track against the fixes, which both make, where the clock alone also
+/// reads the attitude at another time than the DVL's velocity. Fixes of metres see the
+/// shift far better than that reading, so the two are often tied and their sum known
+/// where neither is. A line, or nothing.
+fn clock_and_latency(fit: &FixFit) -> String {
+    let place = |name: &str| (fit.names.iter()).position(|n| *n == name && fit.is_applied(n));
+    let (Some(clock), Some(latency)) = (place("time_offset_s"), place(FIX_LATENCY)) else {
+        return String::new();
+    };
+    let correlation = fit.correlation[clock][latency];
+    let (a, b) = (fit.std[clock], fit.std[latency]);
+    let std = (a * a + b * b + 2.0 * correlation * a * b).max(0.0).sqrt();
+    let half_width = fit.half_width_95(clock) / fit.std[clock] * std;
+    format!(
+        "the DVL's clock and the fixes' latency, correlated {correlation:.3}: their sum, the shift of the whole track against the fixes, {:.4} s, standard deviation {std:.4} s, 95 % interval ± {half_width:.4} s{}\n",
+        fit.value[clock] + fit.value[latency],
+        if correlation.abs() > crate::installation::estimate::bound::CORRELATION_LIMIT {
+            " (the fixes tell the two apart only through the attitude read at the DVL's clock; the sum is what they show)"
+        } else {
+            ""
+        },
+    )
 }
 
 /// The terms estimated: each one's estimate, standard deviation, bound, whether it is

@@ -1,0 +1,185 @@
+//! The fixes' latency (`calibrate --fix-latency`): fixes stamped a second after the
+//! positions they give are fitted with their latency beside the DVL's clock, the two
+//! and their sum printed with their intervals, the latency kept out of the installation
+//! saved (it is the fixes', not the DVL's); a latency beyond the search, and the flag
+//! without fixes, refused by name. A latency known (`--fix-latency-s`) reads each fix
+//! that long before its stamp, in `calibrate` and in `correct`.
+
+use crate::common::{self, installed};
+use crate::fixes::{FIX_TRUTH, number_after, positions, refused_naming};
+use std::path::Path;
+
+/// Writes the positions of the dive written in `folder` every 5 s as fixes stamped
+/// `late_s` after them; the DVL's, the attitude's and the fixes' paths.
+fn late_fix_dive(folder: &Path, late_s: f64) -> [String; 3] {
+    installed::write_installed(folder, 1, &[], FIX_TRUTH, 1);
+    let files = [dcnet_exp::data::paired::PairedFiles::akit(folder, 1)];
+    let segment = &crate::coverage::segments(&files)[0];
+    let mut text = String::from("t,n,e\n");
+    for (i, p) in positions(segment).iter().enumerate().step_by(5) {
+        let t = segment.recording.reference_time_s[i] + late_s;
+        text.push_str(&format!("{t},{},{}\n", p[0], p[1]));
+    }
+    let fixes = folder.join(format!("fixes-{late_s}.csv"));
+    std::fs::write(&fixes, text).unwrap();
+    [&files[0].dvl, &files[0].reference, &fixes].map(|p| p.to_str().unwrap().to_string())
+}
+
+/// The estimate and 95 % half-width of the term `row` names in the printed table.
+fn estimate(text: &str, row: &str) -> (f64, f64) {
+    let line = (text.lines())
+        .find(|l| l.starts_with(&format!("| {row} ")))
+        .unwrap_or_else(|| panic!("{row} in {text}"));
+    (number_after(line, " | "), number_after(line, "± "))
+}
+
+#[test]
+fn fixes_stamped_late_give_their_latency_beside_the_clock_and_the_sum() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let [dvl, attitude, fixes] = late_fix_dive(d, 1.0);
+    std::fs::write(
+        d.join("columns.toml"),
+        "[fix_columns]\ntime = \"t\"\nnorth_east = [\"n\", \"e\"]\n",
+    )
+    .unwrap();
+    let args = |fixes: &str, extra: &[&str]| -> Vec<String> {
+        let mut args: Vec<String> = [
+            "calibrate",
+            &dvl,
+            "--fixes",
+            fixes,
+            "--attitude",
+            &attitude,
+            "--columns",
+            "columns.toml",
+            "--fix-noise-m",
+            "0.5",
+        ]
+        .map(String::from)
+        .to_vec();
+        args.extend(extra.iter().map(|a| a.to_string()));
+        args
+    };
+    let run = |args: Vec<String>| {
+        let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+        common::dcnet(d, &refs)
+    };
+    let output = run(args(&fixes, &["--fix-latency", "--save", "late.toml"]));
+    let text = String::from_utf8_lossy(&output.stdout).to_string();
+    assert!(output.status.success(), "{}", common::stderr(&output));
+    println!("{text}");
+    // Noise-free fixes on this dive's 1 Hz turns, whose dead reckoning is itself off
+    // by decimetres (tests/installation/fixes.rs: FIX_TRUTH): within a tenth or so of
+    // a second, the intervals' own coverage is tests/installation/fix_coverage.rs's.
+    let (latency, latency_95) = estimate(&text, "fix latency");
+    let (clock, clock_95) = estimate(&text, "time offset");
+    assert!((latency - 1.0).abs() < 0.15, "{latency} ± {latency_95}");
+    assert!(
+        (clock - FIX_TRUTH.time_offset_s).abs() < 0.15,
+        "{clock} ± {clock_95}"
+    );
+    let sum = number_after(&text, "the shift of the whole track against the fixes, ");
+    assert!((sum - latency - clock).abs() < 1e-3, "{sum}");
+    assert!((sum - 2.0).abs() < 0.05, "{sum}");
+    // The latency is the fixes': the installation saved is the DVL's alone, and reads.
+    let saved = std::fs::read_to_string(d.join("late.toml")).unwrap();
+    assert!(!saved.contains("latency"), "{saved}");
+    dcnet_exp::operator::installation_file::SavedInstallation::read(&d.join("late.toml")).unwrap();
+    // Fixes 5 s late: a latency beyond the search is refused, not fitted at its edge.
+    let [_, _, five] = late_fix_dive(d, 5.0);
+    let output = run(args(&five, &["--fix-latency"]));
+    refused_naming(&output, "the fixes' latency that fits them best", &[]);
+    // The flag goes with fixes.
+    let output = common::dcnet(
+        d,
+        &["calibrate", &dvl, "--reference", &attitude, "--fix-latency"],
+    );
+    refused_naming(&output, "--fix-latency: goes with position fixes", &[]);
+}
+
+/// The saved terms of `file` in `dir`: each name and value.
+fn saved_terms(dir: &Path, file: &str) -> Vec<(String, f64)> {
+    let saved =
+        dcnet_exp::operator::installation_file::SavedInstallation::read(&dir.join(file)).unwrap();
+    saved
+        .terms
+        .iter()
+        .map(|t| (t.name.clone(), t.value))
+        .collect()
+}
+
+#[test]
+fn a_latency_given_reads_each_fix_before_its_stamp_in_calibrate_and_correct() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let [dvl, attitude, on_time] = late_fix_dive(d, 0.0);
+    let [_, _, late] = late_fix_dive(d, 1.0);
+    std::fs::write(
+        d.join("columns.toml"),
+        "[fix_columns]\ntime = \"t\"\nnorth_east = [\"n\", \"e\"]\n",
+    )
+    .unwrap();
+    let run = |command: &str, fixes: &str, extra: &[&str]| {
+        let mut args = vec![
+            command,
+            &dvl,
+            "--fixes",
+            fixes,
+            "--attitude",
+            &attitude,
+            "--columns",
+            "columns.toml",
+            "--fix-noise-m",
+            "0.5",
+        ];
+        args.extend(extra);
+        common::dcnet(d, &args)
+    };
+    let output = run("calibrate", &on_time, &["--save", "on-time.toml"]);
+    assert!(output.status.success(), "{}", common::stderr(&output));
+    let output = run(
+        "calibrate",
+        &late,
+        &[
+            "--fix-latency-s",
+            "1",
+            "--save",
+            "late.toml",
+            "--out",
+            "late",
+        ],
+    );
+    assert!(output.status.success(), "{}", common::stderr(&output));
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        text.contains("(each read 1 s before its stamp, the latency given)"),
+        "{text}"
+    );
+    // The same fixes as on time, but for the rounding of t + 1 − 1.
+    let (on_time_terms, late_terms) = (saved_terms(d, "on-time.toml"), saved_terms(d, "late.toml"));
+    assert_eq!(on_time_terms.len(), late_terms.len());
+    for ((name, a), (_, b)) in on_time_terms.iter().zip(&late_terms) {
+        assert!((a - b).abs() < 1e-6, "{name}: {a} against {b}");
+    }
+    // `correct` reads the next dive's fixes by the same latency.
+    let output = run(
+        "correct",
+        &late,
+        &[
+            "--installation",
+            "late.toml",
+            "--fix-latency-s",
+            "1",
+            "--out",
+            "corrected",
+        ],
+    );
+    assert!(output.status.success(), "{}", common::stderr(&output));
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert!(text.contains("each read 1 s before its stamp"), "{text}");
+    for bad in ["nan", "120", "inf"] {
+        let output = run("calibrate", &late, &["--fix-latency-s", bad]);
+        refused_naming(&output, "--fix-latency-s: ", &[bad]);
+    }
+}
