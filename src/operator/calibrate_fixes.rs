@@ -115,9 +115,22 @@ impl FixFiles<'_> {
         }
     }
 
+    /// The DVL beside the attitude, and the fixes, read and checked ([`Self::read`]),
+    /// and the fixes' noise per horizontal axis, m ([`Self::noise_m`]: as `given`, or
+    /// the median of their own).
+    pub fn read_with_noise(
+        &self,
+        depth: bool,
+        given: Option<f64>,
+    ) -> Result<(FixReading, f64), CalibrateError> {
+        let mut reading = self.read(depth)?;
+        let fix_m = self.noise_m(&mut reading, given)?;
+        Ok((reading, fix_m))
+    }
+
     /// The DVL beside the attitude, and the fixes, read and checked: fixes with a depth
     /// where `depth` asks for one, and on the DVL's track ([`same_motion`]).
-    pub fn read(&self, depth: bool) -> Result<FixReading, CalibrateError> {
+    fn read(&self, depth: bool) -> Result<FixReading, CalibrateError> {
         let fix_columns = fix_columns(self.columns).map_err(CalibrateError::Columns)?;
         let (read, fixes, left_out, (without_noise, from_bag)) = match self.fix_topic {
             Some(topic) => {
@@ -186,11 +199,7 @@ impl FixFiles<'_> {
 
     /// The fixes' noise per horizontal axis, m: as `given` (the fixes' own then set
     /// aside), or the median of the fixes' own, which each keeps; refused where neither.
-    pub fn noise_m(
-        &self,
-        reading: &mut FixReading,
-        given: Option<f64>,
-    ) -> Result<f64, CalibrateError> {
+    fn noise_m(&self, reading: &mut FixReading, given: Option<f64>) -> Result<f64, CalibrateError> {
         let fixes = &mut reading.fixes;
         if let Some(given) = given {
             fixes.noise_m = None;
@@ -249,8 +258,7 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
     let corrected = [outputs.csv.as_path(), outputs.parquet.as_path()];
     clear_of_inputs(&files.inputs(), &corrected, (args.save, false))?;
     files.cost(FIXES).map_err(CalibrateError::Read)?.state()?;
-    let mut reading = files.read(args.depth_noise_m.is_some())?;
-    let fix_m = files.noise_m(&mut reading, args.fix_noise_m)?;
+    let (reading, fix_m) = files.read_with_noise(args.depth_noise_m.is_some(), args.fix_noise_m)?;
     let FixReading {
         read,
         fixes,

@@ -125,10 +125,7 @@ pub fn correct_fixes(args: &FixCorrectArgs) -> Result<FixCorrection, CorrectErro
         return Err(CorrectError::OverInput { output, input });
     }
     files.cost(CORRECT_FIXES)?.state()?;
-    let mut reading = files.read(false).map_err(Box::new)?;
-    let fix_m = files
-        .noise_m(&mut reading, args.fix_noise_m)
-        .map_err(Box::new)?;
+    let (reading, fix_m) = (files.read_with_noise(false, args.fix_noise_m)).map_err(Box::new)?;
     let FixReading {
         read,
         fixes,

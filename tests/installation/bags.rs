@@ -780,7 +780,7 @@ fn a_bags_numbers_and_frames_are_checked_where_read() {
     let zero = odometry_message(
         stamp,
         ("odom", "base_link"),
-        [0.0; 4],
+        ([0.0; 3], [0.0; 4]),
         [1.0, 0.0, 0.0],
         [0.0; 3],
     );

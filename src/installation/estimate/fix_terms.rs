@@ -87,7 +87,7 @@ pub enum FixFitError {
     )]
     ClockAtScanEdge { time_offset_s: f64 },
     #[error(
-        "the fixes' latency that fits them best, {latency_s:.2} s, lies at the edge of the ±{TIME_OFFSET_MARGIN_S} s a fit searches, and nothing fitted at the edge is the installation: the fixes may be stamped on another clock than the attitude's (put them on one clock to within {TIME_OFFSET_MARGIN_S} s), or they do not place a latency at all (a straight run at one speed shifts the track as its start does): calibrate on a dive with turns and changes of speed, or leave out --fix-latency"
+        "the fixes' latency that fits them best, {latency_s:.2} s, lies at the edge of the ±{TIME_OFFSET_MARGIN_S} s a fit searches, and nothing fitted at the edge is the installation: the fixes may be stamped on another clock than the attitude's (put them on one clock to within {TIME_OFFSET_MARGIN_S} s), or they do not place a latency at all (a straight run at one speed shifts the track as its start does, and fixes of metres tell a latency from the DVL's clock only through the attitude read at that clock): give the latency where it is known with --fix-latency-s, or calibrate on a dive with turns and changes of speed"
     )]
     LatencyAtScanEdge { latency_s: f64 },
     #[error(

@@ -369,7 +369,9 @@ fn fixes_of(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::data::paired::bag::write::{BagWriter, Format, nav_sat_fix_message};
+    use crate::data::paired::bag::write::{
+        BagWriter, Format, nav_sat_fix_message, odometry_message, pose_with_covariance_message,
+    };
 
     /// A bag at `path` of NavSatFix messages on `/fix`, each its stamp, s, status,
     /// position and variance.
@@ -442,5 +444,70 @@ mod tests {
             &[(100.0, 0, [45.0, 7.0, 0.0], Some([-1.0, 1.0]))],
             "/fix, message 1: its position_covariance (east, north) variances are -1 and -1 m²",
         );
+    }
+
+    /// A pose's position is read in its world frame: ENU (`map`: x east, y north, z up)
+    /// or NED (`map_ned`), carried to north, east and down; a covariance of zeros is
+    /// none, and counted; with `Stamps::Receive` a fix's time is its recording's, not
+    /// its header's.
+    #[test]
+    fn a_pose_topic_reads_its_fixes_in_its_world_frame_on_either_stamp() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("poses.mcap");
+        let poses = |world: &str| {
+            let mut bag = BagWriter::create(&path, Format::Mcap { compressed: false }).unwrap();
+            bag.topic("/usbl", "geometry_msgs/msg/PoseWithCovarianceStamped")
+                .unwrap();
+            for (k, variance) in [Some(4.0), None, Some(1.0)].into_iter().enumerate() {
+                let header_ns = (100 + k as i64) * 1_000_000_000;
+                let position = [1.0 + k as f64, 2.0, 3.0];
+                let data = pose_with_covariance_message(header_ns, world, position, variance);
+                // Received half a second after its stamp.
+                bag.write("/usbl", header_ns as u64 + 500_000_000, &data)
+                    .unwrap();
+            }
+            bag.finish().unwrap();
+        };
+        poses("map");
+        let read = read_fix_topic(&path, "/usbl", Stamps::Header, 90).unwrap();
+        assert_eq!(read.without_covariance, 1);
+        assert_eq!(read.fixes.time_s, [10.0, 11.0, 12.0]);
+        // ENU: north is y, east is x, down is −z.
+        assert_eq!(read.fixes.north_east_m[1], [2.0, 2.0]);
+        assert_eq!(read.fixes.north_east_m[2], [2.0, 3.0]);
+        assert_eq!(read.fixes.depth_m, Some(vec![-3.0; 3]));
+        // Without every fix's covariance, none carries its own noise.
+        assert_eq!(read.fixes.noise_m, None);
+        let read = read_fix_topic(&path, "/usbl", Stamps::Receive, 90).unwrap();
+        assert_eq!(read.fixes.time_s, [10.5, 11.5, 12.5]);
+        poses("/map_ned");
+        let read = read_fix_topic(&path, "/usbl", Stamps::Header, 90).unwrap();
+        // NED: north is x, east is y, down is z.
+        assert_eq!(read.fixes.north_east_m[2], [3.0, 2.0]);
+        assert_eq!(read.fixes.depth_m, Some(vec![3.0; 3]));
+    }
+
+    /// An odometry's pose is a fix as a pose's is (in `odom`, ENU), its twist not read;
+    /// its covariance of zeros is none.
+    #[test]
+    fn an_odometry_topic_gives_its_pose_as_fixes() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("odometry.mcap");
+        let mut bag = BagWriter::create(&path, Format::Mcap { compressed: false }).unwrap();
+        bag.topic("/odom", "nav_msgs/msg/Odometry").unwrap();
+        for k in 0..3 {
+            let stamp_ns = (100 + k) * 1_000_000_000;
+            let pose = ([10.0 * k as f64, -5.0, -2.0], [0.0, 0.0, 0.0, 1.0]);
+            let data = odometry_message(stamp_ns, ("odom", "base_link"), pose, [1.0; 3], [0.0; 3]);
+            bag.write("/odom", stamp_ns as u64, &data).unwrap();
+        }
+        bag.finish().unwrap();
+        let read = read_fix_topic(&path, "/odom", Stamps::Header, 100).unwrap();
+        assert_eq!(read.type_name, "nav_msgs/msg/Odometry");
+        assert_eq!((read.fixes.len(), read.without_covariance), (3, 3));
+        assert_eq!(read.fixes.time_s, [0.0, 1.0, 2.0]);
+        assert_eq!(read.fixes.north_east_m[2], [-5.0, 20.0]);
+        assert_eq!(read.fixes.depth_m, Some(vec![2.0; 3]));
+        assert_eq!(read.fixes.noise_m, None);
     }
 }

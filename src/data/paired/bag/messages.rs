@@ -739,7 +739,7 @@ mod tests {
             let odometry = odometry_message(
                 stamp_ns,
                 ("odom", "base_link"),
-                orientation,
+                ([0.0; 3], orientation),
                 [2.0, 0.1, 0.0],
                 [0.0, 0.0, 0.1],
             );

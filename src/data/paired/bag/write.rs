@@ -227,18 +227,19 @@ pub fn twist_message(stamp_ns: i64, frame: &str, linear_m_s: Vec3) -> Vec<u8> {
     e.finish()
 }
 
-/// A `nav_msgs/msg/Odometry`: the pose's orientation `[x, y, z, w]` (body to `world`),
-/// the twist's linear and angular parts in the body frame `child`.
+/// A `nav_msgs/msg/Odometry`: the pose's position, m, in `world`, and its orientation
+/// `[x, y, z, w]` (body to `world`), its covariance unknown (zeros); the twist's linear
+/// and angular parts in the body frame `child`.
 pub fn odometry_message(
     stamp_ns: i64,
     (world, child): (&str, &str),
-    orientation: [f64; 4],
+    (position_m, orientation): (Vec3, [f64; 4]),
     linear_m_s: Vec3,
     angular_rad_s: Vec3,
 ) -> Vec<u8> {
     let mut e = Encoder::default();
     e.header(stamp_ns, world).text(child);
-    e.f64s(&[0.0; 3]).f64s(&orientation).f64s(&[0.0; 36]);
+    e.f64s(&position_m).f64s(&orientation).f64s(&[0.0; 36]);
     e.f64s(&linear_m_s).f64s(&angular_rad_s).f64s(&[0.0; 36]);
     e.finish()
 }
@@ -485,7 +486,7 @@ fn odometry_of(
     odometry_message(
         stamp_ns,
         ("odom", "base_link"),
-        matrix_quaternion(&pose),
+        ([0.0; 3], matrix_quaternion(&pose)),
         body_velocity,
         rate,
     )
