@@ -28,6 +28,11 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
             args.reference.len()
         )));
     }
+    if args.fix_latency && args.fix.fix_latency_s.is_some() {
+        return Err(input(anyhow::anyhow!(
+            "--fix-latency: estimates the fixes' latency, where --fix-latency-s gives it known: give one"
+        )));
+    }
     if let Some(given) = args.fix.given().map_err(|m| input(anyhow::anyhow!(m)))? {
         return calibrate_fixes(args, given);
     }

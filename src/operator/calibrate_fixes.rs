@@ -240,7 +240,7 @@ pub struct FixCalibration {
     /// From a bag: the topics and frames read, in words.
     pub from_bag: Option<String>,
     /// The RMS of the fixes' horizontal residual with no terms (the start positions
-    /// alone fitted) and with the terms applied, m; and the distance the dead
+    /// alone fitted, to the fixes the fit kept) and with the terms applied, m; and the distance the dead
     /// reckoning travelled over the fixes fitted, m.
     pub before_m: f64,
     pub after_m: f64,
@@ -281,9 +281,6 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
     let fit = fit_on(recording, &attitude, &fixes, terms, noise)
         .map_err(|fault| fix_error(args, fault))?;
     believable(&noise, fixes.rms_noise_m(), &fit)?;
-    // The fixes' residual with no terms: the start positions alone.
-    let bare = fit_on(recording, &attitude, &fixes, term_set(&[]).into(), noise)
-        .map_err(|fault| fix_error(args, fault))?;
     let samples = corrected_samples(&fit.installation, recording, &Reference::new(recording));
     let corrected = write(&outputs, &samples, read.dvl_sha256()).map_err(CalibrateError::Write)?;
     if let Some(path) = args.save {
@@ -297,7 +294,7 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
         fix_latency_s: files.fix_latency_s,
         own_noise: fixes.noise_m.is_some(),
         from_bag,
-        before_m: horizontal(bare.residual_rms_m),
+        before_m: horizontal(fit.bare_residual_rms_m),
         after_m: horizontal(fit.residual_rms_m),
         distance_m: fit.distance_m,
         noise,

@@ -162,24 +162,47 @@ fn a_latency_given_reads_each_fix_before_its_stamp_in_calibrate_and_correct() {
     for ((name, a), (_, b)) in on_time_terms.iter().zip(&late_terms) {
         assert!((a - b).abs() < 1e-6, "{name}: {a} against {b}");
     }
-    // `correct` reads the next dive's fixes by the same latency.
-    let output = run(
-        "correct",
-        &late,
-        &[
-            "--installation",
-            "late.toml",
-            "--fix-latency-s",
-            "1",
-            "--out",
-            "corrected",
-        ],
+    // `correct` reads the next dive's fixes by the same latency: the clock it finds
+    // again is the one the fixes on time give. Unshifted, the installation fits the
+    // late fixes worse than no terms, and the dive is refused.
+    let correct = |fixes: &str, extra: &[&str], out: &str| {
+        let mut args = vec!["--installation", "late.toml", "--out", out];
+        args.extend(extra);
+        let output = run("correct", fixes, &args);
+        assert!(output.status.success(), "{}", common::stderr(&output));
+        String::from_utf8_lossy(&output.stdout).to_string()
+    };
+    let shifted = correct(&late, &["--fix-latency-s", "1"], "shifted");
+    assert!(
+        shifted.contains("each read 1 s before its stamp"),
+        "{shifted}"
     );
-    assert!(output.status.success(), "{}", common::stderr(&output));
-    let text = String::from_utf8_lossy(&output.stdout);
-    assert!(text.contains("each read 1 s before its stamp"), "{text}");
+    let on_time = correct(&on_time, &[], "on-time");
+    // The value column of correct's table (it has no interval's).
+    let clock = |text: &str| {
+        let line = (text.lines())
+            .find(|l| l.starts_with("| time offset "))
+            .unwrap_or_else(|| panic!("{text}"));
+        number_after(line, " | ")
+    };
+    assert!(
+        (clock(&shifted) - clock(&on_time)).abs() < 1e-3,
+        "{shifted}\n{on_time}"
+    );
+    let unshifted = ["--installation", "late.toml", "--out", "unshifted"];
+    refused_naming(
+        &run("correct", &late, &unshifted),
+        "further from the dead reckoning than no terms do",
+        &unshifted,
+    );
     for bad in ["nan", "120", "inf"] {
         let output = run("calibrate", &late, &["--fix-latency-s", bad]);
         refused_naming(&output, "--fix-latency-s: ", &[bad]);
     }
+    let both = ["--fix-latency-s", "1", "--fix-latency"];
+    refused_naming(
+        &run("calibrate", &late, &both),
+        "--fix-latency: estimates",
+        &both,
+    );
 }

@@ -148,6 +148,7 @@ impl<'a> Problem<'a> {
                 pieces: pieces.len(),
                 dvl_span_s: span(time_s),
                 centre_s,
+                margin_s,
             });
         }
         let problem = Problem {
@@ -631,14 +632,28 @@ impl<'a> Problem<'a> {
         solution.terms[k].abs() >= self.limit(k) - SCAN_STEP_S
     }
 
+    /// `solution`'s fixes under no terms at all, only each piece's start fitted, under
+    /// its noise: the fit's own fixes, to set its residual beside.
+    pub(super) fn bare(&self, solution: &Solution) -> Result<Solution, FixFitError> {
+        let blank = Solution {
+            terms: vec![0.0; self.names.len()],
+            ..solution.clone()
+        };
+        let none = vec![false; self.names.len()];
+        self.solve(blank, &none, &solution.weights(), solution.shape)
+    }
+
     /// Refuses `solution` where the fixes it kept lie further from the dead reckoning
-    /// with its terms than with none (the start positions alone), under its noise.
+    /// with its terms than with none (the start positions alone), under its noise, by
+    /// more than one in the whitened sum of squares (what one parameter is expected to
+    /// explain): where no term was already best (a dive corrected by its own
+    /// calibration), Gauss–Newton's last step may leave it a hair above.
     pub(super) fn better_than_none(&self, solution: &Solution) -> Result<(), FixFitError> {
         let whitening = self.whitening(&solution.weights(), solution.shape);
         let bare = whitening.whiten(&self.residuals(&vec![0.0; self.names.len()])?);
         let without: f64 = bare.iter().map(|w| w * w).sum();
         let with = solution.cost();
-        match with > without * (1.0 + 1e-9) {
+        match with > without + 1.0 {
             true => Err(FixFitError::WorseThanNone { with, without }),
             false => Ok(()),
         }

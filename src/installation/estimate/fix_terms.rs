@@ -55,7 +55,7 @@ pub struct FixNoise {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum FixFitError {
     #[error(
-        "no fix lies within a piece of the DVL record ({fixes} fixes from {:.1} to {:.1} s, the DVL's {pieces} piece(s) from {:.1} to {:.1} s on its clock, each less {TIME_OFFSET_MARGIN_S} s at its ends, about a time offset of {} s): the fixes do not overlap the DVL; give fixes of the same dive, on the attitude's clock", fix_span_s.0, fix_span_s.1, dvl_span_s.0, dvl_span_s.1, crate::ThreeFigures(*centre_s)
+        "no fix lies within a piece of the DVL record ({fixes} fixes from {:.1} to {:.1} s, the DVL's {pieces} piece(s) from {:.1} to {:.1} s on its clock, each less {margin_s} s at its ends (the clock's search, and the latency's where it is fitted), about a time offset of {} s): the fixes do not overlap the DVL; give fixes of the same dive, on the attitude's clock", fix_span_s.0, fix_span_s.1, dvl_span_s.0, dvl_span_s.1, crate::ThreeFigures(*centre_s)
     )]
     NoOverlap {
         fixes: usize,
@@ -63,6 +63,7 @@ pub enum FixFitError {
         pieces: usize,
         dvl_span_s: (f64, f64),
         centre_s: f64,
+        margin_s: f64,
     },
     #[error(
         "{} within the DVL's pieces, {outliers} of them outliers left out, give {residuals} residuals for {parameters} parameters (the terms and a start position per piece): a fit needs more; give more fixes, or fewer terms",
@@ -87,7 +88,7 @@ pub enum FixFitError {
     )]
     ClockAtScanEdge { time_offset_s: f64 },
     #[error(
-        "the fixes' latency that fits them best, {latency_s:.2} s, lies at the edge of the ±{TIME_OFFSET_MARGIN_S} s a fit searches, and nothing fitted at the edge is the installation: the fixes may be stamped on another clock than the attitude's (put them on one clock to within {TIME_OFFSET_MARGIN_S} s), or they do not place a latency at all (a straight run at one speed shifts the track as its start does, and fixes of metres tell a latency from the DVL's clock only through the attitude read at that clock): give the latency where it is known with --fix-latency-s, or calibrate on a dive with turns and changes of speed"
+        "the fixes' latency that fits them best, {latency_s:.2} s, lies at the edge of the ±{TIME_OFFSET_MARGIN_S} s a fit allows it, and nothing fitted at the edge is the installation: the fixes may be stamped on another clock than the attitude's (put them on one clock to within {TIME_OFFSET_MARGIN_S} s), or they do not place a latency at all (a straight run at one speed shifts the track as its start does, and fixes of metres tell a latency from the DVL's clock only through the attitude read at that clock): give the latency where it is known with --fix-latency-s, or calibrate on a dive with turns and changes of speed"
     )]
     LatencyAtScanEdge { latency_s: f64 },
     #[error(

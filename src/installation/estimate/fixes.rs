@@ -127,8 +127,9 @@ pub struct FixFit {
     /// How many pieces of the DVL record the fixes cover (a start position each).
     pub pieces: usize,
     /// The RMS of the residuals of the fixes fitted, north, east and depth (NaN without
-    /// one), m.
+    /// one), m; and of the same fixes with no term, each piece's start alone fitted.
     pub residual_rms_m: Vec3,
+    pub bare_residual_rms_m: Vec3,
     /// The axes fitted: 2 (north, east) or 3 (and depth).
     pub axes: usize,
     /// How far the dead reckoning with the terms applied travelled, horizontally, over
@@ -140,9 +141,15 @@ impl FixFit {
     /// The half-width of the 95 % interval of parameter `k`: Student's t on
     /// [`Self::freedom`] times its standard deviation.
     pub fn half_width_95(&self, k: usize) -> f64 {
+        self.student_t_95() * self.std[k]
+    }
+
+    /// Student's t on [`Self::freedom`] at 97.5 %: a 95 % interval's half-width in
+    /// standard deviations.
+    pub fn student_t_95(&self) -> f64 {
         use statrs::distribution::{ContinuousCDF, StudentsT};
         let t = StudentsT::new(0.0, 1.0, self.freedom.max(1) as f64).expect("positive freedom");
-        t.inverse_cdf(0.975) * self.std[k]
+        t.inverse_cdf(0.975)
     }
 
     /// Whether the parameter named `name` was applied.
@@ -214,6 +221,7 @@ pub fn fit_fixes_around(
         outside: problem.outside,
         pieces: problem.pieces.len(),
         residual_rms_m: problem.residual_rms(&last)?,
+        bare_residual_rms_m: problem.residual_rms(&problem.bare(&last)?)?,
         axes: problem.axes,
         distance_m: problem.distance_m(&last.terms)?,
     })

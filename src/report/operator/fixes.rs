@@ -111,7 +111,7 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
     }
     text.push_str(&clock_and_latency(fit));
     text.push_str(&format!(
-        "fixes' horizontal residual RMS: {:.2} m with no terms (the start positions alone), {:.2} m with the terms applied; over the {:.0} m travelled, {:.3} % and {:.3} % of the distance (the fixes' own noise included)\n",
+        "fixes' horizontal residual RMS: {:.2} m with no terms (the start positions alone, to the same fixes), {:.2} m with the terms applied; over the {:.0} m travelled, {:.3} % and {:.3} % of the distance (the fixes' own noise included)\n",
         calibration.before_m,
         calibration.after_m,
         calibration.distance_m,
@@ -142,7 +142,7 @@ fn clock_and_latency(fit: &FixFit) -> String {
     let correlation = fit.correlation[clock][latency];
     let (a, b) = (fit.std[clock], fit.std[latency]);
     let std = (a * a + b * b + 2.0 * correlation * a * b).max(0.0).sqrt();
-    let half_width = fit.half_width_95(clock) / fit.std[clock] * std;
+    let half_width = fit.student_t_95() * std;
     format!(
         "the DVL's clock and the fixes' latency, correlated {correlation:.3}: their sum, the shift of the whole track against the fixes, {:.4} s, standard deviation {std:.4} s, 95 % interval ± {half_width:.4} s{}\n",
         fit.value[clock] + fit.value[latency],
