@@ -258,6 +258,17 @@ pub(super) struct FixFlags {
 /// clock.
 const MAX_FIX_LATENCY_S: f64 = 60.0;
 
+/// Refuses the first of `flags` given (each its name and whether it was), where no
+/// position fixes were: each goes with them.
+pub(super) fn without_fixes(flags: &[(&str, bool)]) -> Result<(), String> {
+    match flags.iter().find(|(_, given)| *given) {
+        Some((flag, _)) => Err(format!(
+            "{flag}: goes with position fixes: give them with --fixes or --fixes-topic"
+        )),
+        None => Ok(()),
+    }
+}
+
 /// Where position fixes come from, as typed.
 pub(super) enum GivenFixes<'a> {
     /// A fixes file beside an attitude file.
@@ -298,17 +309,11 @@ impl FixFlags {
                 ),
             },
             (None, None) => {
-                for (flag, given) in [
+                without_fixes(&[
                     ("--attitude", self.attitude.is_some()),
                     ("--fix-noise-m", self.fix_noise_m.is_some()),
                     ("--fix-latency-s", self.fix_latency_s.is_some()),
-                ] {
-                    if given {
-                        return Err(format!(
-                            "{flag}: goes with position fixes: give them with --fixes or --fixes-topic"
-                        ));
-                    }
-                }
+                ])?;
                 Ok(None)
             }
         }

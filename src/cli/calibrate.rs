@@ -36,16 +36,11 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
     if let Some(given) = args.fix.given().map_err(|m| input(anyhow::anyhow!(m)))? {
         return calibrate_fixes(args, given);
     }
-    for (flag, given) in [
+    args::without_fixes(&[
         ("--depth-noise-m", args.depth_noise_m.is_some()),
         ("--fix-latency", args.fix_latency),
-    ] {
-        if given {
-            return Err(input(anyhow::anyhow!(
-                "{flag}: goes with position fixes: give them with --fixes or --fixes-topic"
-            )));
-        }
-    }
+    ])
+    .map_err(|m| input(anyhow::anyhow!(m)))?;
     let default_terms = ["lever_arm", "time_offset", "bias"].map(String::from);
     let terms = parse_terms(("--terms", args.terms.as_deref().unwrap_or(&default_terms)))?;
     let dive_terms = parse_terms(("--dive-terms", &args.dive_terms))?;

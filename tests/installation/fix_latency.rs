@@ -7,22 +7,68 @@
 
 use crate::common::{self, installed};
 use crate::fixes::{FIX_TRUTH, number_after, positions, refused_naming};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-/// Writes the positions of the dive written in `folder` every 5 s as fixes stamped
-/// `late_s` after them; the DVL's, the attitude's and the fixes' paths.
-fn late_fix_dive(folder: &Path, late_s: f64) -> [String; 3] {
-    installed::write_installed(folder, 1, &[], FIX_TRUTH, 1);
-    let files = [dcnet_exp::data::paired::PairedFiles::akit(folder, 1)];
-    let segment = &crate::coverage::segments(&files)[0];
-    let mut text = String::from("t,n,e\n");
-    for (i, p) in positions(segment).iter().enumerate().step_by(5) {
-        let t = segment.recording.reference_time_s[i] + late_s;
-        text.push_str(&format!("{t},{},{}\n", p[0], p[1]));
+/// A dive written by `common::installed` under [`FIX_TRUTH`], its positions every 5 s
+/// as fixes stamped each of `lates` seconds after them, and the columns that read them.
+struct LateFixDive {
+    folder: PathBuf,
+    dvl: String,
+    attitude: String,
+    /// One file per latency of `lates`, in their order.
+    fixes: Vec<String>,
+}
+
+impl LateFixDive {
+    fn written(folder: &Path, lates: &[f64]) -> LateFixDive {
+        installed::write_installed(folder, 1, &[], FIX_TRUTH, 1);
+        let files = dcnet_exp::data::paired::PairedFiles::akit(folder, 1);
+        let segment = &crate::coverage::segments(std::slice::from_ref(&files))[0];
+        let positions = positions(segment);
+        let text = |p: &Path| p.to_str().unwrap().to_string();
+        let fixes = (lates.iter())
+            .map(|late_s| {
+                let mut rows = String::from("t,n,e\n");
+                for (i, p) in positions.iter().enumerate().step_by(5) {
+                    let t = segment.recording.reference_time_s[i] + late_s;
+                    rows.push_str(&format!("{t},{},{}\n", p[0], p[1]));
+                }
+                let path = folder.join(format!("fixes-{late_s}.csv"));
+                std::fs::write(&path, rows).unwrap();
+                text(&path)
+            })
+            .collect();
+        std::fs::write(
+            folder.join("columns.toml"),
+            "[fix_columns]\ntime = \"t\"\nnorth_east = [\"n\", \"e\"]\n",
+        )
+        .unwrap();
+        LateFixDive {
+            folder: folder.to_path_buf(),
+            dvl: text(&files.dvl),
+            attitude: text(&files.reference),
+            fixes,
+        }
     }
-    let fixes = folder.join(format!("fixes-{late_s}.csv"));
-    std::fs::write(&fixes, text).unwrap();
-    [&files[0].dvl, &files[0].reference, &fixes].map(|p| p.to_str().unwrap().to_string())
+
+    /// `command` (calibrate or correct) on the DVL against `fixes`, at 0.5 m of noise,
+    /// with the arguments `extra`.
+    fn run(&self, command: &str, fixes: &str, extra: &[&str]) -> std::process::Output {
+        let mut args = vec![
+            command,
+            &self.dvl,
+            "--fixes",
+            fixes,
+            "--attitude",
+            &self.attitude,
+            "--columns",
+            "columns.toml",
+            "--fix-noise-m",
+            "0.5",
+        ];
+        args.extend(extra);
+        common::dcnet(&self.folder, &args)
+    }
 }
 
 /// The estimate and 95 % half-width of the term `row` names in the printed table.
@@ -37,35 +83,9 @@ fn estimate(text: &str, row: &str) -> (f64, f64) {
 fn fixes_stamped_late_give_their_latency_beside_the_clock_and_the_sum() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let [dvl, attitude, fixes] = late_fix_dive(d, 1.0);
-    std::fs::write(
-        d.join("columns.toml"),
-        "[fix_columns]\ntime = \"t\"\nnorth_east = [\"n\", \"e\"]\n",
-    )
-    .unwrap();
-    let args = |fixes: &str, extra: &[&str]| -> Vec<String> {
-        let mut args: Vec<String> = [
-            "calibrate",
-            &dvl,
-            "--fixes",
-            fixes,
-            "--attitude",
-            &attitude,
-            "--columns",
-            "columns.toml",
-            "--fix-noise-m",
-            "0.5",
-        ]
-        .map(String::from)
-        .to_vec();
-        args.extend(extra.iter().map(|a| a.to_string()));
-        args
-    };
-    let run = |args: Vec<String>| {
-        let refs: Vec<&str> = args.iter().map(String::as_str).collect();
-        common::dcnet(d, &refs)
-    };
-    let output = run(args(&fixes, &["--fix-latency", "--save", "late.toml"]));
+    let dive = LateFixDive::written(d, &[1.0, 5.0]);
+    let [late, five] = [&dive.fixes[0], &dive.fixes[1]];
+    let output = dive.run("calibrate", late, &["--fix-latency", "--save", "late.toml"]);
     let text = String::from_utf8_lossy(&output.stdout).to_string();
     assert!(output.status.success(), "{}", common::stderr(&output));
     println!("{text}");
@@ -87,13 +107,18 @@ fn fixes_stamped_late_give_their_latency_beside_the_clock_and_the_sum() {
     assert!(!saved.contains("latency"), "{saved}");
     dcnet_exp::operator::installation_file::SavedInstallation::read(&d.join("late.toml")).unwrap();
     // Fixes 5 s late: a latency beyond the search is refused, not fitted at its edge.
-    let [_, _, five] = late_fix_dive(d, 5.0);
-    let output = run(args(&five, &["--fix-latency"]));
+    let output = dive.run("calibrate", five, &["--fix-latency"]);
     refused_naming(&output, "the fixes' latency that fits them best", &[]);
     // The flag goes with fixes.
     let output = common::dcnet(
         d,
-        &["calibrate", &dvl, "--reference", &attitude, "--fix-latency"],
+        &[
+            "calibrate",
+            &dive.dvl,
+            "--reference",
+            &dive.attitude,
+            "--fix-latency",
+        ],
     );
     refused_naming(&output, "--fix-latency: goes with position fixes", &[]);
 }
@@ -113,29 +138,9 @@ fn saved_terms(dir: &Path, file: &str) -> Vec<(String, f64)> {
 fn a_latency_given_reads_each_fix_before_its_stamp_in_calibrate_and_correct() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let [dvl, attitude, on_time] = late_fix_dive(d, 0.0);
-    let [_, _, late] = late_fix_dive(d, 1.0);
-    std::fs::write(
-        d.join("columns.toml"),
-        "[fix_columns]\ntime = \"t\"\nnorth_east = [\"n\", \"e\"]\n",
-    )
-    .unwrap();
-    let run = |command: &str, fixes: &str, extra: &[&str]| {
-        let mut args = vec![
-            command,
-            &dvl,
-            "--fixes",
-            fixes,
-            "--attitude",
-            &attitude,
-            "--columns",
-            "columns.toml",
-            "--fix-noise-m",
-            "0.5",
-        ];
-        args.extend(extra);
-        common::dcnet(d, &args)
-    };
+    let dive = LateFixDive::written(d, &[0.0, 1.0]);
+    let run = |command: &str, fixes: &str, extra: &[&str]| dive.run(command, fixes, extra);
+    let [on_time, late] = [&dive.fixes[0], &dive.fixes[1]];
     let output = run("calibrate", &on_time, &["--save", "on-time.toml"]);
     assert!(output.status.success(), "{}", common::stderr(&output));
     let output = run(
