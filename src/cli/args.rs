@@ -229,13 +229,14 @@ pub(super) struct FixFlags {
     /// Position fixes rather than a velocity reference: a CSV file of a time and a
     /// latitude and longitude (or north and east, m, as its [fix_columns] table in
     /// --columns names them; A-KIT's reference file's by default), optionally a depth,
-    /// on the attitude's clock; needs --attitude and --fix-noise-m
+    /// on the attitude's clock; needs --attitude and --fix-noise-m; once per DVL file,
+    /// in the same order, when there are several (calibrated jointly)
     #[arg(long, value_name = "FILE")]
-    pub(super) fixes: Option<PathBuf>,
+    pub(super) fixes: Vec<PathBuf>,
     /// With --fixes: the CSV file of the attitude (an AHRS's roll, pitch, yaw, as
-    /// [columns] names them), on its own clock and at its own rate
+    /// [columns] names them), on its own clock and at its own rate; once per --fixes
     #[arg(long, value_name = "FILE")]
-    pub(super) attitude: Option<PathBuf>,
+    pub(super) attitude: Vec<PathBuf>,
     /// Position fixes from the bag's topic rather than a velocity reference: a
     /// sensor_msgs/msg/NavSatFix, geometry_msgs/msg/PoseWithCovarianceStamped or
     /// nav_msgs/msg/Odometry (its pose), each fix weighed by its covariance; the
@@ -269,7 +270,16 @@ pub(super) fn without_fixes(flags: &[(&str, bool)]) -> Result<(), String> {
     }
 }
 
+/// `n` files, in words.
+fn files(n: usize) -> String {
+    match n {
+        1 => "1 file".to_string(),
+        n => format!("{n} files"),
+    }
+}
+
 /// Where position fixes come from, as typed.
+#[derive(Clone, Copy)]
 pub(super) enum GivenFixes<'a> {
     /// A fixes file beside an attitude file.
     Files { fixes: &'a Path, attitude: &'a Path },
@@ -278,9 +288,18 @@ pub(super) enum GivenFixes<'a> {
 }
 
 impl FixFlags {
-    /// The fixes, where given, with the attitude they need; the flags given without
-    /// fixes refused.
+    /// The fixes of one dive, where given, with the attitude they need; the flags given
+    /// without fixes refused.
     pub(super) fn given(&self) -> Result<Option<GivenFixes<'_>>, String> {
+        Ok(self.given_per_dive(1)?.map(|mut each| each.remove(0)))
+    }
+
+    /// The fixes of each of `dives` dives (one recording each), where given, with the
+    /// attitude they need; the flags given without fixes refused.
+    pub(super) fn given_per_dive(
+        &self,
+        dives: usize,
+    ) -> Result<Option<Vec<GivenFixes<'_>>>, String> {
         if let Some(latency) = self
             .fix_latency_s
             .filter(|l| !(l.abs() <= MAX_FIX_LATENCY_S))
@@ -289,28 +308,42 @@ impl FixFlags {
                 "--fix-latency-s: {latency} is no latency of a fix: give the seconds each fix is stamped after the position it gives, within ±{MAX_FIX_LATENCY_S} s (beyond, the fixes are on another clock: put them on the attitude's)"
             ));
         }
-        match (&self.fixes, &self.fixes_topic) {
-            (Some(_), Some(_)) => Err(
+        match (&self.fixes[..], &self.fixes_topic) {
+            ([_, ..], Some(_)) => Err(
                 "--fixes-topic: fixes come from a file (--fixes) or from a bag's topic (--fixes-topic): give one"
                     .into(),
             ),
-            (None, Some(topic)) => match &self.attitude {
-                Some(_) => Err(
+            ([], Some(topic)) => match &self.attitude[..] {
+                [_, ..] => Err(
                     "--attitude: with --fixes-topic the attitude is the bag's own (its odometry, --reference-topic)"
                         .into(),
                 ),
-                None => Ok(Some(GivenFixes::Topic(topic))),
+                [] => Ok(Some(vec![GivenFixes::Topic(topic); dives])),
             },
-            (Some(fixes), None) => match &self.attitude {
-                Some(attitude) => Ok(Some(GivenFixes::Files { fixes, attitude })),
-                None => Err(
+            (fixes @ [_, ..], None) if fixes.len() != dives => Err(format!(
+                "--fixes: {} for {}: give one --fixes per DVL file, in the same order",
+                files(fixes.len()),
+                files(dives).replace("file", "DVL file")
+            )),
+            (fixes @ [_, ..], None) => match self.attitude.len() {
+                0 => Err(
                     "--fixes: give the attitude beside it with --attitude (an AHRS's roll, pitch and yaw)"
                         .into(),
                 ),
+                n if n != fixes.len() => Err(format!(
+                    "--attitude: {} for {} --fixes: give one --attitude per --fixes, in the same order",
+                    files(n),
+                    fixes.len()
+                )),
+                _ => Ok(Some(
+                    (fixes.iter().zip(&self.attitude))
+                        .map(|(fixes, attitude)| GivenFixes::Files { fixes, attitude })
+                        .collect(),
+                )),
             },
-            (None, None) => {
+            ([], None) => {
                 without_fixes(&[
-                    ("--attitude", self.attitude.is_some()),
+                    ("--attitude", !self.attitude.is_empty()),
                     ("--fix-noise-m", self.fix_noise_m.is_some()),
                     ("--fix-latency-s", self.fix_latency_s.is_some()),
                 ])?;

@@ -13,12 +13,14 @@ use crate::installation::estimate::fixes::default_fix_terms;
 use crate::installation::terms::names::TermName;
 use crate::operator::calibrate::{CalibrateArgs, calibrate as calibrated};
 use crate::operator::calibrate_fixes::{FixArgs, FixFiles, calibrate_fixes as calibrated_on_fixes};
+use crate::operator::calibrate_fixes_joint::calibrate_fixes_joint as calibrated_on_fixes_jointly;
 use crate::operator::calibrate_joint::{JointArgs, calibrate_joint as calibrated_jointly};
 use crate::operator::correct::{CorrectArgs, correct as corrected};
 use crate::operator::correct_fixes::{FixCorrectArgs, correct_fixes as corrected_on_fixes};
 use crate::report::operator::calibrate::{calibration_text, joint_text};
 use crate::report::operator::correct::{correction_text, fix_correction_text};
 use crate::report::operator::fixes::fixes_text;
+use crate::report::operator::fixes_joint::joint_fixes_text;
 
 /// `calibrate` as typed: one recording, or several calibrated jointly.
 pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliError> {
@@ -33,8 +35,9 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
             "--fix-latency: estimates the fixes' latency, where --fix-latency-s gives it known: give one"
         )));
     }
-    if let Some(given) = args.fix.given().map_err(|m| input(anyhow::anyhow!(m)))? {
-        return calibrate_fixes(args, given);
+    let given = (args.fix.given_per_dive(args.dvl.len())).map_err(|m| input(anyhow::anyhow!(m)))?;
+    if let Some(given) = given {
+        return calibrate_fixes(args, &given);
     }
     args::without_fixes(&[
         ("--depth-noise-m", args.depth_noise_m.is_some()),
@@ -79,14 +82,9 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
 }
 
 /// `calibrate DVL.csv --fixes FIXES.csv --attitude ATTITUDE.csv --fix-noise-m σ`: the
-/// terms the fixes show, printed, and saved where asked.
-fn calibrate_fixes(args: &args::CalibrateArgs, given: GivenFixes) -> Result<(), CliError> {
-    if args.dvl.len() > 1 {
-        return Err(input(anyhow::anyhow!(
-            "--fixes: {} DVL files: a fit to fixes calibrates one dive; give one",
-            args.dvl.len()
-        )));
-    }
+/// terms the fixes show, printed, and saved where asked; of several dives (one `given`
+/// each), the vehicle's terms over them.
+fn calibrate_fixes(args: &args::CalibrateArgs, given: &[GivenFixes]) -> Result<(), CliError> {
     refuse_beside_fixes(
         &[
             ("--reference", !args.reference.is_empty()),
@@ -98,7 +96,7 @@ fn calibrate_fixes(args: &args::CalibrateArgs, given: GivenFixes) -> Result<(), 
             ),
             ("--search-s", args.search_s.is_some()),
         ],
-        (&args.reading, &given),
+        (&args.reading, &given[0]),
         "a calibration against fixes, which runs no filter",
     )?;
     let terms = match &args.terms {
@@ -106,26 +104,38 @@ fn calibrate_fixes(args: &args::CalibrateArgs, given: GivenFixes) -> Result<(), 
         None => default_fix_terms(),
     };
     let dive_terms = parse_terms(("--dive-terms", &args.dive_terms))?;
-    let calibration = calibrated_on_fixes(&FixArgs {
-        files: fix_files(
-            &args.dvl[0],
-            &given,
-            args.columns.as_deref(),
-            &args.reading,
-            &args.fix,
-        ),
-        terms: &terms,
-        dive_terms: &dive_terms,
-        fix_noise_m: args.fix.fix_noise_m,
-        depth_noise_m: args.depth_noise_m,
-        fix_latency: args.fix_latency,
-        dvl_noise_cm_s: args.dvl_noise_cm_s,
-        save: args.save.as_deref(),
-        out: args.out(),
-    })
-    .map_err(stopped)?;
-    print!("{}", fixes_text(&calibration));
-    for path in &calibration.corrected {
+    let dives: Vec<FixArgs> = (args.dvl.iter().zip(given))
+        .map(|(dvl, given)| FixArgs {
+            files: fix_files(
+                dvl,
+                given,
+                args.columns.as_deref(),
+                &args.reading,
+                &args.fix,
+            ),
+            terms: &terms,
+            dive_terms: &dive_terms,
+            fix_noise_m: args.fix.fix_noise_m,
+            depth_noise_m: args.depth_noise_m,
+            fix_latency: args.fix_latency,
+            dvl_noise_cm_s: args.dvl_noise_cm_s,
+            save: args.save.as_deref(),
+            out: args.out(),
+        })
+        .collect();
+    let corrected = match &dives[..] {
+        [one] => {
+            let calibration = calibrated_on_fixes(one).map_err(stopped)?;
+            print!("{}", fixes_text(&calibration));
+            calibration.corrected
+        }
+        _ => {
+            let calibration = calibrated_on_fixes_jointly(&dives).map_err(stopped)?;
+            print!("{}", joint_fixes_text(&calibration));
+            calibration.written
+        }
+    };
+    for path in &corrected {
         eprintln!("corrected recording written to {}", path.display());
     }
     if let Some(path) = &args.save {

@@ -73,6 +73,16 @@ impl FixFiles<'_> {
     /// What fitting the DVL to the fixes will ask of this machine, as `per_row` counts
     /// it.
     pub fn cost(&self, per_row: PerRow) -> Result<Cost, PairedError> {
+        Ok(Cost::on(
+            per_row,
+            vec![self.rows()?],
+            machine_memory() as f64,
+        ))
+    }
+
+    /// The rows of the files read (a bag's messages); refused where the fixes' source
+    /// does not match the DVL's (a topic of a CSV file, a file beside a bag).
+    pub fn rows(&self) -> Result<Rows, PairedError> {
         match (self.fix_topic, is_bag(self.dvl)) {
             (Some(_), false) => return Err(self.not_a_bag().into()),
             (None, true) => {
@@ -84,9 +94,7 @@ impl FixFiles<'_> {
             }
             _ => {}
         }
-        let rows =
-            Rows::count(self.dvl, Some(self.attitude))?.with_fixes(self.fixes, self.fix_topic)?;
-        Ok(Cost::on(per_row, vec![rows], machine_memory() as f64))
+        Rows::count(self.dvl, Some(self.attitude))?.with_fixes(self.fixes, self.fix_topic)
     }
 
     /// The refusal of fixes from a topic of a recording that is no bag.
@@ -258,17 +266,66 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
     let corrected = [outputs.csv.as_path(), outputs.parquet.as_path()];
     clear_of_inputs(&files.inputs(), &corrected, (args.save, false))?;
     files.cost(FIXES).map_err(CalibrateError::Read)?.state()?;
+    let dive = fitted_dive(args, &outputs)?;
+    let recording = &dive.reading.read.recording;
+    let (fit, sha256) = (&dive.fit, dive.reading.read.dvl_sha256());
+    let samples = corrected_samples(&fit.installation, recording, &Reference::new(recording));
+    let corrected = write(&outputs, &samples, sha256).map_err(CalibrateError::Write)?;
+    if let Some(path) = args.save {
+        save(path, args, fit, sha256)?;
+    }
+    Ok(FixCalibration::of(dive, files.fix_latency_s, corrected))
+}
+
+impl FixCalibration {
+    /// What `dive`'s fit found, its fixes read `fix_latency_s` before their stamps, and
+    /// the files written of it.
+    pub fn of(dive: FittedDive, fix_latency_s: f64, corrected: Vec<PathBuf>) -> FixCalibration {
+        let FittedDive {
+            reading,
+            noise,
+            fit,
+        } = dive;
+        FixCalibration {
+            corrected,
+            read: reading.read.recording.counts().beside_attitude(),
+            fixes: reading.fixes.len(),
+            fixes_left_out: reading.left_out,
+            fix_latency_s,
+            own_noise: reading.fixes.noise_m.is_some(),
+            from_bag: reading.from_bag,
+            before_m: horizontal(fit.bare_residual_rms_m),
+            after_m: horizontal(fit.residual_rms_m),
+            distance_m: fit.distance_m,
+            noise,
+            fit,
+        }
+    }
+}
+
+/// One dive read beside its attitude and fixes, and its terms fitted to them.
+pub struct FittedDive {
+    pub reading: FixReading,
+    pub noise: FixNoise,
+    pub fit: FixFit,
+}
+
+impl FittedDive {
+    /// The dive's attitude, as its fit read it.
+    pub fn attitude(&self) -> Attitude {
+        let recording = &self.reading.read.recording;
+        Attitude::new(&recording.reference_time_s, &recording.attitude_rad)
+    }
+}
+
+/// The dive of `args` read (refused where `outputs` hold another recording's results)
+/// and its terms fitted to its fixes, the fit refused where its residuals contradict
+/// the fixes' noise.
+pub fn fitted_dive(args: &FixArgs, outputs: &Outputs) -> Result<FittedDive, CalibrateError> {
+    let files = &args.files;
     let (reading, fix_m) = files.read_with_noise(args.depth_noise_m.is_some(), args.fix_noise_m)?;
-    let FixReading {
-        read,
-        fixes,
-        left_out,
-        from_bag,
-        ..
-    } = reading;
+    let read = &reading.read;
     outputs.not_another_recordings(files.dvl, read.dvl_sha256())?;
-    let recording = &read.recording;
-    let attitude = Attitude::new(&recording.reference_time_s, &recording.attitude_rad);
     let noise = FixNoise {
         fix_m,
         depth_m: args.depth_noise_m.unwrap_or(fix_m),
@@ -278,25 +335,14 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
         set: term_set(args.terms),
         fix_latency: args.fix_latency,
     };
-    let fit = fit_on(recording, &attitude, &fixes, terms, noise)
+    let recording = &read.recording;
+    let attitude = Attitude::new(&recording.reference_time_s, &recording.attitude_rad);
+    let fixes = &reading.fixes;
+    let fit = fit_on(recording, &attitude, fixes, terms, noise)
         .map_err(|fault| fix_error(args, fault))?;
     believable(&noise, fixes.rms_noise_m(), &fit)?;
-    let samples = corrected_samples(&fit.installation, recording, &Reference::new(recording));
-    let corrected = write(&outputs, &samples, read.dvl_sha256()).map_err(CalibrateError::Write)?;
-    if let Some(path) = args.save {
-        save(path, args, &fit, read.dvl_sha256())?;
-    }
-    Ok(FixCalibration {
-        corrected,
-        read: recording.counts().beside_attitude(),
-        fixes: fixes.len(),
-        fixes_left_out: left_out,
-        fix_latency_s: files.fix_latency_s,
-        own_noise: fixes.noise_m.is_some(),
-        from_bag,
-        before_m: horizontal(fit.bare_residual_rms_m),
-        after_m: horizontal(fit.residual_rms_m),
-        distance_m: fit.distance_m,
+    Ok(FittedDive {
+        reading,
         noise,
         fit,
     })
@@ -453,7 +499,7 @@ fn horizontal(rms_m: crate::Vec3) -> f64 {
 
 /// Refuses what the fixes cannot fit: a term other than scale, misalignment, lever arm
 /// and time offset, a noise that is not a positive number.
-fn refused(args: &FixArgs) -> Result<(), CalibrateError> {
+pub(crate) fn refused(args: &FixArgs) -> Result<(), CalibrateError> {
     const ALLOWED: [&str; 4] = DEFAULT_FIX_TERMS;
     if let Some(term) = args.terms.iter().find(|t| !ALLOWED.contains(&t.name())) {
         return Err(CalibrateError::Terms(format!(

@@ -11,6 +11,7 @@
 
 use crate::data::paired::{Loaded, PairedRecording, ReadCounts, Source};
 use crate::evaluate::statistics::mean_std;
+use crate::installation::estimate::between_dives::BetweenDives;
 use crate::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise, TermBound, bound};
 use crate::installation::estimate::clock::{DEFAULT_SEARCH_S, fit_searched};
 use crate::installation::estimate::fit::fit_about;
@@ -109,7 +110,7 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
         dvl_m_s: args.dvl_noise_cm_s / 100.0,
         reference_m_s: args.reference_noise_cm_s / 100.0,
     };
-    let names = names(args.dvls);
+    let names = names(&args.dvls.iter().map(PathBuf::as_path).collect::<Vec<_>>());
     let outputs: Vec<Outputs> = names.iter().map(|s| Outputs::of(args.out, s)).collect();
     let inputs: Vec<Option<&Path>> = (args.dvls.iter().chain(args.references))
         .map(|p| Some(p.as_path()))
@@ -162,7 +163,7 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
 
 /// Each recording's name in the outputs and the table: its DVL file's stem, numbered
 /// by its place where two files share one (the same layout in several folders).
-fn names(dvls: &[std::path::PathBuf]) -> Vec<String> {
+pub(crate) fn names(dvls: &[&Path]) -> Vec<String> {
     let stems: Vec<String> = dvls.iter().map(|d| stem(d)).collect();
     if crate::first_seen(stems.iter().map(String::as_str)).len() == stems.len() {
         return stems;
@@ -273,13 +274,7 @@ fn fitted(
 
 /// Each vehicle term's recordings alone against the joint estimate.
 fn agreement(joint: &JointFit, alone: &[TermBound]) -> Vec<Agreement> {
-    use statrs::distribution::{ChiSquared, ContinuousCDF};
-    let count = alone.len();
-    joint
-        .bound
-        .names
-        .iter()
-        .enumerate()
+    (joint.bound.names.iter().enumerate())
         .map(|(k, &term)| {
             let mine: Vec<(f64, f64)> = alone
                 .iter()
@@ -288,17 +283,25 @@ fn agreement(joint: &JointFit, alone: &[TermBound]) -> Vec<Agreement> {
                     Some((b.value[i], b.std[i]))
                 })
                 .collect();
-            let value = joint.bound.value[k];
-            let chi_square: f64 = mine.iter().map(|(v, s)| ((v - value) / s).powi(2)).sum();
-            let freedom = (count.max(2) - 1) as f64;
-            let p_value = ChiSquared::new(freedom).map_or(f64::NAN, |d| 1.0 - d.cdf(chi_square));
-            Agreement {
-                term,
-                chi_square,
-                p_value,
-            }
+            Agreement::of(term, joint.bound.value[k], &mine)
         })
         .collect()
+}
+
+impl Agreement {
+    /// How far the recordings' own estimates of `term`, `alone` (value, standard
+    /// deviation each), lie from its joint estimate `joint`.
+    pub fn of(term: &'static str, joint: f64, alone: &[(f64, f64)]) -> Agreement {
+        use statrs::distribution::{ChiSquared, ContinuousCDF};
+        let chi_square: f64 = alone.iter().map(|(v, s)| ((v - joint) / s).powi(2)).sum();
+        let freedom = (alone.len().max(2) - 1) as f64;
+        let p_value = ChiSquared::new(freedom).map_or(f64::NAN, |d| 1.0 - d.cdf(chi_square));
+        Agreement {
+            term,
+            chi_square,
+            p_value,
+        }
+    }
 }
 
 /// The installation file of a joint calibration: the vehicle's terms with their bound
@@ -370,13 +373,16 @@ fn saved(args: &JointArgs, joint: &JointFit, shas: Vec<String>) -> SavedInstalla
         (args.dvl_noise_cm_s, args.reference_noise_cm_s),
         residual.map(f64::sqrt),
     )
-    .with_spread(joint.dives.len(), spreads(joint))
+    .with_spread(
+        joint.dives.len(),
+        spreads(&joint.bound.names, &joint.between),
+    )
 }
 
-/// The spread between dives of each vehicle term of `joint` that has one, as the
-/// installation file saves it.
-fn spreads(joint: &JointFit) -> Vec<SavedSpread> {
-    (joint.bound.names.iter().zip(&joint.between))
+/// The spread between dives of each vehicle term of `names` that has one in `between`,
+/// as the installation file saves it.
+pub(crate) fn spreads(names: &[&str], between: &[Option<BetweenDives>]) -> Vec<SavedSpread> {
+    (names.iter().zip(between))
         .filter_map(|(name, between)| {
             let between = between.as_ref()?;
             let (low, high) = between.next_dive_95();

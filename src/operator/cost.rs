@@ -81,6 +81,14 @@ pub const CORRECT_FIXES: PerRow = PerRow {
     ..FIXES
 };
 
+/// A joint `calibrate` with fixes: as [`FIXES`] over every dive, each held until all
+/// are fitted.
+pub const JOINT_FIXES: PerRow = PerRow {
+    command: "calibrate jointly with fixes",
+    instead: "calibrate fewer dives jointly, or parts of them",
+    ..FIXES
+};
+
 /// The rows of one recording's files.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Rows {

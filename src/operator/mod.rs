@@ -3,7 +3,8 @@
 //! `calibrate --save` writes (and, for a bag, the installation as ROS uses it:
 //! [`ros`]), and [`correct`], which carries a saved installation to
 //! the next dive and finds its clock again; [`calibrate_fixes`], a DVL calibrated
-//! against position fixes and an attitude, and [`correct_fixes`], its installation
+//! against position fixes and an attitude, [`calibrate_fixes_joint`] several such dives
+//! as one vehicle, and [`correct_fixes`], its installation
 //! carried to the next such dive; what they share about their [`inputs`], and
 //! what each will [`cost`] this machine.
 //! In: the command's arguments. Out: what each command prints, and the corrected
@@ -17,4 +18,5 @@ pub mod ros;
 pub mod correct;
 pub mod calibrate_joint;
 pub mod calibrate_fixes;
+pub mod calibrate_fixes_joint;
 pub mod correct_fixes;

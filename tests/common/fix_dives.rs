@@ -11,6 +11,7 @@
 
 use dcnet_exp::Vec3;
 use dcnet_exp::data::fixes::Fixes;
+use dcnet_exp::installation::estimate::fixes::FixFit;
 use dcnet_exp::installation::frames::Attitude;
 use dcnet_exp::installation::terms::Installation;
 use rand::{RngExt, SeedableRng};
@@ -209,10 +210,9 @@ fn rotate_z_transposed(a: f64, v: [f64; 2]) -> [f64; 2] {
     [c * v[0] + s * v[1], -s * v[0] + c * v[1]]
 }
 
-/// Of `dives` dives of `case` (seeds 0 on), per term estimated: the share of those that
-/// applied it whose 95 % interval holds the truth, and how many applied it; and how
-/// many dives the fit refused.
-pub fn coverage(case: &Case, dives: u64) -> (Vec<(&'static str, f64, usize)>, usize) {
+/// The fits of `dives` dives of `case` (seeds 0 on), `None` for each refused; and the
+/// truth of each of their parameters (the fixes' latency last).
+pub fn fits(case: &Case, dives: u64) -> (Vec<Option<FixFit>>, Vec<f64>) {
     use dcnet_exp::installation::estimate::fixes::{
         FixNoise, FixTerms, default_fix_terms, fit_fixes,
     };
@@ -224,7 +224,7 @@ pub fn coverage(case: &Case, dives: u64) -> (Vec<(&'static str, f64, usize)>, us
     };
     let mut truth = truth(case).to_parameters(&terms.set);
     truth.push(case.latency_s);
-    let fits: Vec<Option<Vec<(&'static str, Option<bool>)>>> = (0..dives)
+    let fits = (0..dives)
         .into_par_iter()
         .map(|seed| {
             let dive = dive(case, seed);
@@ -242,21 +242,40 @@ pub fn coverage(case: &Case, dives: u64) -> (Vec<(&'static str, f64, usize)>, us
                 depth_m: fix_m,
                 dvl_m_s: DVL_NOISE_M_S,
             };
-            let fit = fit_fixes(dvl, &pieces, &dive.attitude, &dive.fixes, terms, noise).ok()?;
-            Some(
-                (0..fit.names.len())
-                    .filter(|&k| fit.estimated[k])
-                    .map(|k| {
-                        let error = (fit.value[k] - truth[k]).abs();
-                        let covered = error <= fit.half_width_95(k);
-                        (fit.names[k], fit.applied[k].then_some(covered))
-                    })
-                    .collect(),
-            )
+            fit_fixes(dvl, &pieces, &dive.attitude, &dive.fixes, terms, noise).ok()
         })
         .collect();
+    (fits, truth)
+}
+
+/// Of `dives` dives of `case` (seeds 0 on), per term estimated: the share of those that
+/// applied it whose 95 % interval holds the truth, and how many applied it; and how
+/// many dives the fit refused.
+pub fn coverage(case: &Case, dives: u64) -> (Vec<(&'static str, f64, usize)>, usize) {
+    let (fits, truth) = fits(case, dives);
+    coverage_of(&fits, &truth)
+}
+
+/// Of `fits` (`None` for a dive refused) of parameters whose truth is `truth`, per term
+/// estimated: the share of those that applied it whose 95 % interval holds the truth,
+/// and how many applied it; and how many dives were refused.
+pub fn coverage_of(
+    fits: &[Option<FixFit>],
+    truth: &[f64],
+) -> (Vec<(&'static str, f64, usize)>, usize) {
     let refused = fits.iter().filter(|f| f.is_none()).count();
-    let fits: Vec<_> = fits.into_iter().flatten().collect();
+    let fits: Vec<Vec<(&'static str, Option<bool>)>> = (fits.iter().flatten())
+        .map(|fit| {
+            (0..fit.names.len())
+                .filter(|&k| fit.estimated[k])
+                .map(|k| {
+                    let error = (fit.value[k] - truth[k]).abs();
+                    let covered = error <= fit.half_width_95(k);
+                    (fit.names[k], fit.applied[k].then_some(covered))
+                })
+                .collect()
+        })
+        .collect();
     let names: Vec<&'static str> = fits[0].iter().map(|(name, _)| *name).collect();
     let table = (names.iter().enumerate())
         .map(|(k, &name)| {
@@ -267,4 +286,47 @@ pub fn coverage(case: &Case, dives: u64) -> (Vec<(&'static str, f64, usize)>, us
         })
         .collect();
     (table, refused)
+}
+
+/// How often a joint calibration's intervals hold, per vehicle term, over `fits` taken
+/// four at a time (each group's dives of the same truth `truth`): the first three
+/// calibrated jointly, the fourth the next dive. The shares of groups whose joint
+/// estimate ± 1.96 standard deviations, whose vehicle's 95 % interval (where the dives
+/// differ) and whose next dive's 95 % interval (the fourth dive's own estimate) hold
+/// the truth, of the groups whose four dives were fitted and applied the term (their
+/// count last).
+pub fn joint_coverage(
+    fits: &[Option<FixFit>],
+    truth: &[f64],
+) -> Vec<(&'static str, [f64; 3], usize)> {
+    use dcnet_exp::installation::estimate::fix_joint::fix_vehicle;
+    let groups: Vec<Vec<FixFit>> = (fits.chunks_exact(4))
+        .filter_map(|group| group.iter().cloned().collect::<Option<Vec<FixFit>>>())
+        .collect();
+    let names = fix_vehicle(&groups[0][..3], &["time_offset_s"]).names;
+    let (mut held, mut shown) = (vec![[0usize; 3]; names.len()], vec![0; names.len()]);
+    for group in &groups {
+        let vehicle = fix_vehicle(&group[..3], &["time_offset_s"]);
+        let next = &group[3];
+        for (i, name) in vehicle.names.iter().enumerate() {
+            let k = next.names.iter().position(|n| n == name).expect("a term");
+            let Some(between) = vehicle.between[i].filter(|_| next.applied[k]) else {
+                continue;
+            };
+            let inside = |(low, high): (f64, f64), x: f64| low <= x && x <= high;
+            let joint = (vehicle.value[i] - truth[k]).abs() <= 1.96 * vehicle.std[i];
+            let counts = [
+                joint,
+                inside(between.vehicle_95(), truth[k]),
+                inside(between.next_dive_95(), next.value[k]),
+            ];
+            for (count, inside) in held[i].iter_mut().zip(counts) {
+                *count += usize::from(inside);
+            }
+            shown[i] += 1;
+        }
+    }
+    (names.into_iter().zip(held).zip(shown))
+        .map(|((name, held), shown)| (name, held.map(|c| c as f64 / shown.max(1) as f64), shown))
+        .collect()
 }

@@ -14,6 +14,7 @@ mod between_dives;
 mod coverage;
 mod dive_clock;
 mod fix_coverage;
+mod fix_joint;
 mod fix_latency;
 mod fixes;
 mod installation;

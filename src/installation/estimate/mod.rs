@@ -23,6 +23,7 @@ pub mod joint;
 pub mod between_dives;
 pub mod fix_noise;
 pub mod fixes;
+pub mod fix_joint;
 mod fix_terms;
 mod fix_problem;
 pub mod filter_noise;

@@ -6,6 +6,7 @@
 //! In: a [`Calibration`] or a [`JointCalibration`]. Out: the text.
 
 use crate::evaluate::calibration_time::tolerance_band;
+use crate::installation::estimate::between_dives::BetweenDives;
 use crate::installation::estimate::between_dives::MIN_DIVES;
 use crate::installation::estimate::filter::GATE_CHI2;
 use crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S;
@@ -14,7 +15,7 @@ use crate::installation::estimate::robust::TUKEY_C;
 use crate::installation::estimate::settling::SettlingPoint;
 use crate::installation::terms::AxisRmse;
 use crate::operator::calibrate::Calibration;
-use crate::operator::calibrate_joint::{AGREEMENT_P_VALUE, JointCalibration};
+use crate::operator::calibrate_joint::{AGREEMENT_P_VALUE, Agreement, JointCalibration};
 use crate::operator::ros::body_axes_terms;
 use crate::report::kit::readable::{readable_term, readable_why};
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
@@ -333,7 +334,7 @@ pub fn joint_text(calibration: &JointCalibration) -> String {
 
 /// What the columns of the spread between dives say, for `dives` recordings; or, for
 /// fewer than three, that there is none.
-fn between_dives_text(dives: usize) -> String {
+pub(crate) fn between_dives_text(dives: usize) -> String {
     if dives < MIN_DIVES {
         return format!(
             "between dives: with {dives} recordings the spread of the terms from one dive to the next cannot be estimated (it takes {MIN_DIVES} or more): on the next dive the terms may differ by more than their standard deviations; calibrate jointly over at least {MIN_DIVES} dives\n"
@@ -359,23 +360,54 @@ fn residual_noise(shown: &ResidualNoise) -> (String, String) {
 /// The vehicle's terms of a joint calibration, beside the recordings fitted alone.
 fn vehicle_table(calibration: &JointCalibration) -> Table {
     let bound = &calibration.joint.bound;
-    let agreement = &calibration.agreement;
-    let mut table = Table::new();
+    vehicle_rows(&VehicleRows {
+        names: &bound.names,
+        value: &bound.value,
+        std: &bound.std,
+        bound_std: Some(&bound.bound_std),
+        between: &calibration.joint.between,
+        agreement: &calibration.agreement,
+        recordings: calibration.names.len(),
+    })
+}
 
+/// The vehicle's terms of a joint calibration, as its table shows them.
+pub(crate) struct VehicleRows<'a> {
+    pub names: &'a [&'static str],
+    pub value: &'a [f64],
+    /// Each term's standard deviation; infinite for one no recording shows.
+    pub std: &'a [f64],
+    /// The Fisher bound's standard deviations, where the calibration gives one.
+    pub bound_std: Option<&'a [f64]>,
+    pub between: &'a [Option<BetweenDives>],
+    pub agreement: &'a [Agreement],
+    pub recordings: usize,
+}
+
+/// The table of the vehicle's terms `rows`: each one's joint estimate and standard
+/// deviation (and bound), its spread between dives with the vehicle's and a next dive's
+/// 95 % intervals, and how far the recordings alone lie from it.
+pub(crate) fn vehicle_rows(rows: &VehicleRows) -> Table {
+    let mut table = Table::new();
     table.load_preset(ASCII_MARKDOWN);
-    table.set_header([
-        "vehicle term",
-        "joint estimate",
-        "standard deviation",
-        "bound (specified noise)",
+    let mut header = vec!["vehicle term", "joint estimate", "standard deviation"];
+    if rows.bound_std.is_some() {
+        header.push("bound (specified noise)");
+    }
+    header.extend([
         "between dives",
         "vehicle's term, 95 %",
         "next dive's own fit, 95 %",
         "alone: χ² (p)",
     ]);
-    for (i, name) in bound.names.iter().enumerate() {
+    table.set_header(header);
+    for (i, name) in rows.names.iter().enumerate() {
         let (readable, unit, factor) = readable_term(name);
-        let agree = &agreement[i];
+        if !rows.std[i].is_finite() {
+            table.add_row([readable, "0 (not applied: no recording shows it)".into()]);
+            continue;
+        }
+        let agree = &rows.agreement[i];
         let mark = if agree.p_value < AGREEMENT_P_VALUE {
             ", disagree"
         } else {
@@ -383,17 +415,21 @@ fn vehicle_table(calibration: &JointCalibration) -> Table {
         };
         let interval =
             |(low, high): (f64, f64)| format!("{:.4} to {:.4} {unit}", low * factor, high * factor);
-        let between = calibration.joint.between[i];
+        let between = rows.between[i];
         let none = || "-".to_string();
-        table.add_row([
+        let mut row = vec![
             readable,
-            format!("{:.4} {unit}", bound.value[i] * factor),
-            format!("{:.4} {unit}", bound.std[i] * factor),
-            format!("{:.4} {unit}", bound.bound_std[i] * factor),
+            format!("{:.4} {unit}", rows.value[i] * factor),
+            format!("{:.4} {unit}", rows.std[i] * factor),
+        ];
+        if let Some(bound_std) = rows.bound_std {
+            row.push(format!("{:.4} {unit}", bound_std[i] * factor));
+        }
+        row.extend([
             between.map_or_else(none, |b| {
-                let of = match b.dives == calibration.names.len() {
+                let of = match b.dives == rows.recordings {
                     true => String::new(),
-                    false => format!(" ({} of {} recordings)", b.dives, calibration.names.len()),
+                    false => format!(" ({} of {} recordings)", b.dives, rows.recordings),
                 };
                 format!("{:.4} {unit}{of}", b.std * factor)
             }),
@@ -401,6 +437,7 @@ fn vehicle_table(calibration: &JointCalibration) -> Table {
             between.map_or_else(none, |b| interval(b.next_dive_95())),
             format!("{:.1} ({:.1e}{mark})", agree.chi_square, agree.p_value),
         ]);
+        table.add_row(row);
     }
     table
 }

@@ -94,15 +94,7 @@ fn spread_text(saved: &SavedInstallation) -> String {
 /// again on this dive or given, and where a carried term's next-dive interval lies.
 fn applied_table(correction: &Correction) -> Table {
     let saved = &correction.saved;
-    let mut table = Table::new();
-    table.load_preset(ASCII_MARKDOWN);
-    table.set_header([
-        "term",
-        "value",
-        "standard deviation",
-        "from",
-        "next dive, 95 %",
-    ]);
+    let mut table = applied_header();
     let dive = saved.dive_term_set().parameter_names();
     let applied = correction.applied.to_parameters(&saved.term_set());
     for (k, term) in saved.terms.iter().enumerate() {
@@ -124,27 +116,46 @@ fn applied_table(correction: &Correction) -> Table {
             true => "-".to_string(),
             false => format!("{:.4} {unit}", std * factor),
         };
-        let next_dive = saved.spread_of(&term.name).map_or("-".to_string(), |s| {
-            let [low, high] = s.next_dive;
-            format!("{:.4} to {:.4} {unit}", low * factor, high * factor)
-        });
         table.add_row([
             readable,
             format!("{:.4} {unit}", applied[k] * factor),
             std,
             from,
-            next_dive,
+            next_dive(saved, &term.name),
         ]);
     }
     table
 }
 
+/// The table of the terms a correction applied, its header alone: each term's value,
+/// standard deviation, where it is from, and where a next dive should find it.
+fn applied_header() -> Table {
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    table.set_header([
+        "term",
+        "value",
+        "standard deviation",
+        "from",
+        "next dive, 95 %",
+    ]);
+    table
+}
+
+/// Where a next dive's own calibration should find the term `name`, from the spread
+/// between the dives `saved` was calibrated on; "-" where it holds none.
+fn next_dive(saved: &SavedInstallation, name: &str) -> String {
+    let (_, unit, factor) = readable_term(name);
+    saved.spread_of(name).map_or("-".to_string(), |s| {
+        let [low, high] = s.next_dive;
+        format!("{:.4} to {:.4} {unit}", low * factor, high * factor)
+    })
+}
+
 /// Everything `correct --fixes` prints; ends in a newline.
 pub fn fix_correction_text(correction: &FixCorrection) -> String {
     let saved = &correction.saved;
-    let mut table = Table::new();
-    table.load_preset(ASCII_MARKDOWN);
-    table.set_header(["term", "value", "standard deviation", "from"]);
+    let mut table = applied_header();
     let applied = correction.applied.to_parameters(&saved.term_set());
     for (k, term) in saved.terms.iter().enumerate() {
         let (readable, unit, factor) = readable_term(&term.name);
@@ -161,7 +172,7 @@ pub fn fix_correction_text(correction: &FixCorrection) -> String {
             ),
         };
         let value = format!("{:.4} {unit}", applied[k] * factor);
-        table.add_row([readable, value, std, from]);
+        table.add_row([readable, value, std, from, next_dive(saved, &term.name)]);
     }
     let mut text = super::fixes::from_bag(&correction.from_bag);
     text.push_str(&format!(
@@ -175,6 +186,7 @@ pub fn fix_correction_text(correction: &FixCorrection) -> String {
         correction.installation_file.display(),
         saved.recording,
     ));
+    text.push_str(&spread_text(saved));
     if let Some(clock) = &correction.clock {
         text.push_str(&clock_text(clock));
     }

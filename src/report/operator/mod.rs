@@ -1,13 +1,14 @@
 //! The room of the operator's commands: what `calibrate` and `correct` print about
 //! the recordings given on the command line, with the kit's readable terms. In: a
 //! calibration of one recording or of several jointly ([`calibrate`]), of a DVL against
-//! position fixes ([`fixes`]), or a recording's
-//! clock found again and its correction ([`correct`]). Out: the text printed on stdout.
+//! position fixes ([`fixes`]) or of several such dives jointly ([`fixes_joint`]), or a
+//! recording's clock found again and its correction ([`correct`]). Out: the text printed on stdout.
 //! They draw no figures: their results are the files `results::corrected` writes.
 
 pub mod calibrate;
 pub mod correct;
 pub mod fixes;
+pub mod fixes_joint;
 
 use crate::installation::dead_reckoning::Drift;
 

@@ -1,0 +1,114 @@
+//! What a joint `calibrate` with position fixes prints on stdout: each dive read, the
+//! vehicle's terms over the dives with their spread between dives (the table a joint
+//! velocity calibration prints), then each dive: its fixes fitted, its own estimate of
+//! each term, its clock alone and with the vehicle's terms, and the fixes' residual with
+//! no terms, with its own and with the vehicle's.
+//! In: a [`JointFixCalibration`]. Out: the text.
+
+use crate::operator::calibrate_fixes_joint::JointFixCalibration;
+use crate::operator::calibrate_joint::AGREEMENT_P_VALUE;
+use crate::report::kit::readable::readable_term;
+use crate::report::operator::calibrate::{VehicleRows, between_dives_text, vehicle_rows};
+use crate::report::operator::fixes::{fix_noise, fixes_read, from_bag};
+use comfy_table::{Table, presets::ASCII_MARKDOWN};
+
+/// Everything a joint `calibrate` with fixes prints; ends in a newline.
+pub fn joint_fixes_text(calibration: &JointFixCalibration) -> String {
+    let JointFixCalibration {
+        names,
+        alone,
+        vehicle,
+        ..
+    } = calibration;
+    let mut text = String::new();
+    for (name, dive) in names.iter().zip(alone) {
+        text.push_str(&from_bag(&dive.from_bag));
+        text.push_str(&format!(
+            "read {name}: {}; {}; the fixes' noise {}\n",
+            dive.read,
+            fixes_read(dive.fixes, &dive.fixes_left_out, dive.fix_latency_s),
+            fix_noise(dive.noise.fix_m, dive.own_noise),
+        ));
+    }
+    let table = vehicle_rows(&VehicleRows {
+        names: &vehicle.names,
+        value: &vehicle.value,
+        std: &vehicle.std,
+        bound_std: None,
+        between: &vehicle.between,
+        agreement: &calibration.agreement,
+        recordings: names.len(),
+    });
+    text.push_str(&format!(
+        "calibrated jointly on {} dives with position fixes: each dive fitted alone (as `calibrate --fixes` fits one: its clock, its pieces' start positions and the noise its residuals read its own); the vehicle's terms are the dives' estimates weighed by their information, each dive's clock profiled out, a dive weighing in on the terms it applied; standard deviation: of that weighed estimate, from the dives' own\n{table}\n",
+        names.len()
+    ));
+    text.push_str(&between_dives_text(names.len()));
+    text.push_str(&format!(
+        "alone: χ², Σ ((alone − joint) / its standard deviation)² over the dives that applied the term, and its p-value on one fewer degrees of freedom (under {AGREEMENT_P_VALUE}: the dives disagree beyond their intervals)\n"
+    ));
+    text.push_str(&format!(
+        "each dive: its fixes fitted and left out as outliers; its own estimate of each term (± its standard deviation; - where it did not apply it); its clock alone and with the vehicle's terms carried (found again from its fixes: the clock it is written corrected with); the fixes' horizontal residual RMS with no terms, with its own terms and with the vehicle's, m\n{}\n",
+        dives_table(calibration)
+    ));
+    text
+}
+
+/// Each dive's fixes, own terms, clocks and residuals.
+fn dives_table(calibration: &JointFixCalibration) -> Table {
+    let JointFixCalibration {
+        names,
+        alone,
+        vehicle,
+        carried,
+        ..
+    } = calibration;
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    let mut header = vec!["dive".to_string(), "fixes fitted (outliers)".to_string()];
+    header.extend(vehicle.names.iter().map(|n| {
+        let (readable, unit, _) = readable_term(n);
+        format!("{readable}, alone ({unit})")
+    }));
+    header.extend([
+        "clock alone (s)".to_string(),
+        "clock, vehicle's terms (s)".to_string(),
+        "residual: none / own / vehicle's (m)".to_string(),
+    ]);
+    table.set_header(header);
+    for (k, name) in names.iter().enumerate() {
+        let fit = &alone[k].fit;
+        let mut row = vec![
+            name.clone(),
+            format!("{} ({})", fit.fitted, fit.outliers.len()),
+        ];
+        row.extend(vehicle.names.iter().enumerate().map(|(i, n)| {
+            let (_, _, factor) = readable_term(n);
+            vehicle.own[k][i].map_or("-".to_string(), |(value, std)| {
+                format!("{:.4} ± {:.4}", value * factor, std * factor)
+            })
+        }));
+        row.push(clock(fit));
+        row.push(clock(&carried[k]));
+        let after = carried[k].residual_rms_m;
+        row.push(format!(
+            "{:.2} / {:.2} / {:.2}",
+            alone[k].before_m,
+            alone[k].after_m,
+            after[0].hypot(after[1])
+        ));
+        table.add_row(row);
+    }
+    table
+}
+
+/// The clock of a fit's installation and its standard deviation, or "-" where it
+/// fitted none.
+fn clock(fit: &crate::installation::estimate::fixes::FixFit) -> String {
+    match fit.names.iter().position(|n| *n == "time_offset_s") {
+        Some(k) if fit.applied[k] => {
+            format!("{:.3} ± {:.3}", fit.installation.time_offset_s, fit.std[k])
+        }
+        _ => "-".to_string(),
+    }
+}
