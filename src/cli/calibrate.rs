@@ -166,7 +166,7 @@ fn fix_files<'a>(
         fix_topic,
         columns,
         reading: reading.reading(),
-        fix_latency_s: flags.fix_latency_s.unwrap_or(0.0),
+        fix_latency_s: flags.fix_latency_s,
     }
 }
 

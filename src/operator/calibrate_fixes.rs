@@ -13,7 +13,7 @@ use crate::data::paired::bag::{BagError, is_bag, read_bag_beside_attitude};
 use crate::data::paired::{PairedError, PairedRecording, ReadCounts, ReadRecording};
 use crate::footprint::machine_memory;
 use crate::installation::estimate::fixes::{
-    DEFAULT_FIX_TERMS, FixFit, FixNoise, FixTerms, fit_fixes,
+    DEFAULT_FIX_TERMS, FIX_LATENCY, FixFit, FixNoise, FixTerms, fit_fixes,
 };
 use crate::installation::frames::{Attitude, Reference};
 use crate::installation::terms::names::{TermName, term_set};
@@ -36,8 +36,9 @@ pub struct FixFiles<'a> {
     pub fix_topic: Option<&'a str>,
     pub columns: Option<&'a Path>,
     pub reading: Reading<'a>,
-    /// The fixes' latency given, s: each fix read this long before its stamp.
-    pub fix_latency_s: f64,
+    /// The fixes' latency, s, where given (or carried): each fix read this long before
+    /// its stamp.
+    pub fix_latency_s: Option<f64>,
 }
 
 /// What is read for a fit to fixes: the DVL beside the attitude, the fixes, and the
@@ -187,7 +188,7 @@ impl FixFiles<'_> {
         };
         let mut fixes = fixes;
         for t in &mut fixes.time_s {
-            *t -= self.fix_latency_s;
+            *t -= self.fix_latency_s.unwrap_or(0.0);
         }
         if depth && fixes.depth_m.is_none() {
             return Err(CalibrateError::NoDepths {
@@ -274,7 +275,11 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
     if let Some(path) = args.save {
         save(path, args, fit, sha256)?;
     }
-    Ok(FixCalibration::of(dive, files.fix_latency_s, corrected))
+    Ok(FixCalibration::of(
+        dive,
+        files.fix_latency_s.unwrap_or(0.0),
+        corrected,
+    ))
 }
 
 impl FixCalibration {
@@ -563,7 +568,7 @@ fn save(
     fit: &FixFit,
     recording_sha256: &str,
 ) -> Result<(), CalibrateError> {
-    // The fixes' latency is theirs, not the DVL's installation's.
+    // The fixes' latency is theirs, not the DVL's installation's: kept apart.
     let dvl_terms = fit.terms.parameter_names().len();
     let saved = (fit.names.iter().enumerate())
         .take(dvl_terms)
@@ -583,13 +588,19 @@ fn save(
     );
     // Fixes measure no velocity residual: what a dive this installation fits leaves is
     // the DVL's own noise, as given.
-    let file = SavedInstallation::of_terms(
+    let mut file = SavedInstallation::of_terms(
         (saved, correlation_of(&fit.correlation, dvl_terms)),
         (args.terms, args.dive_terms),
         recording,
         (args.dvl_noise_cm_s, 0.0),
         [args.dvl_noise_cm_s / 100.0; 3],
-    );
+    )
+    .of_fixes();
+    // The fixes' latency, where estimated and applied, beside the installation: the
+    // next dive's fixes, of the same system, are read by it.
+    if let Some(k) = (fit.names.iter()).position(|n| *n == FIX_LATENCY && fit.is_applied(n)) {
+        file = file.with_fix_latency(fit.value[k], fit.std[k]);
+    }
     file.write(path).map_err(|source| {
         CalibrateError::Write(ResultsError::Io {
             path: path.to_path_buf(),

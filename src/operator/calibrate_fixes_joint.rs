@@ -95,7 +95,9 @@ pub fn calibrate_fixes_joint(dives: &[FixArgs]) -> Result<JointFixCalibration, C
         })
         .collect();
     let alone = (dives.iter().zip(fitted))
-        .map(|(dive, fitted)| FixCalibration::of(fitted, dive.files.fix_latency_s, Vec::new()))
+        .map(|(dive, fitted)| {
+            FixCalibration::of(fitted, dive.files.fix_latency_s.unwrap_or(0.0), Vec::new())
+        })
         .collect();
     Ok(JointFixCalibration {
         names,
@@ -218,5 +220,6 @@ fn saved(
         (noise_cm_s, 0.0),
         [noise_cm_s / 100.0; 3],
     )
+    .of_fixes()
     .with_spread(dives.len(), spreads(&vehicle.names, &vehicle.between))
 }

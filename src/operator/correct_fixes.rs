@@ -96,14 +96,24 @@ pub struct FixCorrection {
     pub read: ReadCounts,
     pub fixes: usize,
     pub fixes_left_out: Vec<(&'static str, usize)>,
-    /// The fixes' latency given, s: each read this long before its stamp.
-    pub fix_latency_s: f64,
+    /// The fixes' latency, s, each read this long before its stamp, and whether it was
+    /// given or carried with the installation; `None` where neither.
+    pub fix_latency: Option<(f64, LatencyFrom)>,
     /// From a bag: the topics and frames read, in words.
     pub from_bag: Option<String>,
     /// The dive's samples whose t + τ lies outside the attitude, or in a gap of it:
     /// written without a velocity.
     pub outside: usize,
     pub written: Vec<PathBuf>,
+}
+
+/// Where the fixes' latency a correction reads them by comes from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LatencyFrom {
+    /// `--fix-latency-s`.
+    Given,
+    /// The installation file, whose calibration estimated it (`--fix-latency`).
+    Carried,
 }
 
 /// How far above the fixes' residual with no terms the installation's may lie before
@@ -117,7 +127,13 @@ pub const WORSE_RATIO: f64 = 1.1;
 pub fn correct_fixes(args: &FixCorrectArgs) -> Result<FixCorrection, CorrectError> {
     refused(args)?;
     let saved = SavedInstallation::read(args.installation)?;
-    let files = &args.files;
+    // The fixes' latency: as given, or as the calibration estimated it for fixes of
+    // the same system.
+    let carried = saved.fix_latency.as_ref().map(|latency| latency.value);
+    let files = &FixFiles {
+        fix_latency_s: args.files.fix_latency_s.or(carried),
+        ..args.files
+    };
     let outputs = Outputs::of(args.out, &stem(files.dvl));
     let mut inputs = files.inputs().to_vec();
     inputs.push(Some(args.installation));
@@ -175,7 +191,13 @@ pub fn correct_fixes(args: &FixCorrectArgs) -> Result<FixCorrection, CorrectErro
         read: recording.counts().beside_attitude(),
         fixes: fixes.len(),
         fixes_left_out: left_out,
-        fix_latency_s: files.fix_latency_s,
+        fix_latency: files.fix_latency_s.map(|latency_s| {
+            let from = match args.files.fix_latency_s {
+                Some(_) => LatencyFrom::Given,
+                None => LatencyFrom::Carried,
+            };
+            (latency_s, from)
+        }),
         from_bag,
         outside,
         written,

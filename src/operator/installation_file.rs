@@ -8,7 +8,8 @@
 
 use crate::Vec3;
 use crate::installation::estimate::bound::TermBound;
-use crate::installation::estimate::fit::beyond_any_installation;
+use crate::installation::estimate::fit::{TIME_OFFSET_MARGIN_S, beyond_any_installation};
+use crate::installation::estimate::fixes::FIX_LATENCY;
 use crate::installation::terms::names::{TermName, term_list_faults, term_set};
 use crate::installation::terms::{Installation, TermSet};
 use std::path::{Path, PathBuf};
@@ -40,6 +41,11 @@ pub struct InstallationFile {
     /// The RMS of the residual per DVL axis at calibration, cm/s: what a dive the
     /// installation fits as well leaves.
     pub residual_cm_s: Vec3,
+    /// Whether `residual_cm_s` was measured (against a velocity reference), or is the
+    /// DVL's noise as given, standing for it (a calibration against fixes, which
+    /// measure no velocity).
+    #[serde(default = "measured", skip_serializing_if = "is_measured")]
+    pub residual_measured: bool,
     /// The terms carried to every dive, and those found again on each.
     pub vehicle_terms: Vec<TermName>,
     pub dive_terms: Vec<TermName>,
@@ -57,10 +63,27 @@ pub struct InstallationFile {
     /// their standard deviations.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub between_dives: Vec<SavedSpread>,
+    /// Of a calibration against fixes that estimated their latency (`--fix-latency`):
+    /// the fixes' own latency, s, with its standard deviation. Not a term of the DVL's
+    /// installation; `correct --fixes` reads the next dive's fixes by it, as fixes of
+    /// the same system.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fix_latency: Option<SavedTerm>,
     /// For a calibration read from a ROS 2 bag: the frames, and the mount of the
     /// DVL's frame `/tf_static` gave, which the misalignment is a turn from.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mount: Option<SavedMount>,
+}
+
+/// What a file that does not say whether its residual was measured holds: a measured
+/// one (a velocity reference's).
+fn measured() -> bool {
+    true
+}
+
+/// Whether the residual is measured, which the file then leaves unsaid.
+fn is_measured(measured: &bool) -> bool {
+    *measured
 }
 
 /// What a file that does not say how many dives it was calibrated on was: one.
@@ -169,6 +192,24 @@ impl SavedInstallation {
         self
     }
 
+    /// This installation calibrated against fixes: its residual the DVL's noise given,
+    /// not measured.
+    pub fn of_fixes(mut self) -> SavedInstallation {
+        self.file.residual_measured = false;
+        self
+    }
+
+    /// This installation with the fixes' latency estimated beside it, s, and its
+    /// standard deviation.
+    pub fn with_fix_latency(mut self, value_s: f64, std_s: f64) -> SavedInstallation {
+        self.file.fix_latency = Some(SavedTerm {
+            name: FIX_LATENCY.to_string(),
+            value: value_s,
+            std: std_s,
+        });
+        self
+    }
+
     /// The spread between dives of the term named `name`, where the file holds one.
     pub fn spread_of(&self, name: &str) -> Option<&SavedSpread> {
         self.between_dives.iter().find(|s| s.name == name)
@@ -226,6 +267,7 @@ impl SavedInstallation {
             dvl_noise_cm_s,
             reference_noise_cm_s,
             residual_cm_s: residual_m_s.map(|r| 100.0 * r),
+            residual_measured: true,
             vehicle_terms,
             dive_terms: dive_terms
                 .iter()
@@ -236,6 +278,7 @@ impl SavedInstallation {
             correlation,
             dives: 1,
             between_dives: Vec::new(),
+            fix_latency: None,
             mount: None,
         };
         SavedInstallation { file }
@@ -391,6 +434,17 @@ impl InstallationFile {
                 "mount.rpy_rad {:?} is not three finite angles",
                 mount.rpy_rad
             )));
+        }
+        if let Some(latency) = &self.fix_latency {
+            latency
+                .check(FIX_LATENCY)
+                .map_err(|(name, what)| malformed(format!("fix_latency ({name}): {what}")))?;
+            if latency.value.abs() > TIME_OFFSET_MARGIN_S {
+                return Err(malformed(format!(
+                    "fix_latency: {} s lies beyond the ±{TIME_OFFSET_MARGIN_S} s a fit allows a latency",
+                    latency.value
+                )));
+            }
         }
         for (index, (term, name)) in self.terms.iter().zip(&expected).enumerate() {
             term.check(name)
@@ -552,6 +606,7 @@ mod tests {
             dvl_noise_cm_s: 2.0,
             reference_noise_cm_s: 0.5,
             residual_cm_s: [1.0, 2.0, 0.5],
+            residual_measured: true,
             vehicle_terms: vec![TermName::LeverArm],
             dive_terms: vec![TermName::TimeOffset],
             terms: [
@@ -573,6 +628,7 @@ mod tests {
                 .collect(),
             dives: 1,
             between_dives: Vec::new(),
+            fix_latency: None,
             mount: None,
         }
     }
@@ -662,6 +718,29 @@ mod tests {
         let message = refusal(&far.to_text());
         assert!(
             message.contains("the fitted lever arm x is -1000000 m, beyond the ±100 m"),
+            "{message}"
+        );
+        // The fixes' latency: read back, and refused beyond the fit's reach or named
+        // as another.
+        let latency = (file().check(Path::new("a.toml")))
+            .unwrap()
+            .with_fix_latency(0.4, 0.1);
+        let read = InstallationFile::clone(&latency)
+            .check(Path::new("a.toml"))
+            .unwrap();
+        assert_eq!(read.fix_latency.as_ref().map(|l| l.value), Some(0.4));
+        let mut far = InstallationFile::clone(&latency);
+        far.fix_latency.as_mut().unwrap().value = 5.0;
+        let message = refusal(&far.to_text());
+        assert!(
+            message.contains("fix_latency: 5 s lies beyond the ±3 s"),
+            "{message}"
+        );
+        let mut other = InstallationFile::clone(&latency);
+        other.fix_latency.as_mut().unwrap().name = "time_offset_s".into();
+        let message = refusal(&other.to_text());
+        assert!(
+            message.contains("fix_latency (time_offset_s): expected fix_latency_s"),
             "{message}"
         );
         // A spread between dives of too few dives, or of a term not the vehicle's.

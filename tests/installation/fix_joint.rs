@@ -1,7 +1,7 @@
 //! Several dives with position fixes calibrated as one vehicle: the vehicle's terms are
-//! the dives' own weighed by their information (a known answer: one dive twice is that
-//! dive, its standard deviations over √2; a dive that does not apply a term adds
-//! nothing to it), the joint `calibrate` with fixes end to end (its table, the
+//! the dives' own weighed by their information in each (known answers: one dive twice
+//! is that dive, its standard deviations over √2; a dive that does not apply a term
+//! adds nothing to it; two dives that disagree give their weighed mean), the joint `calibrate` with fixes end to end (its table, the
 //! installation saved with the spread between dives, each dive written corrected,
 //! `correct --fixes` showing the next dive's band), and its refusals. The intervals'
 //! coverage is in `fix_coverage`.
@@ -27,8 +27,7 @@ fn one_fit() -> dcnet_exp::installation::estimate::fixes::FixFit {
 
 /// One dive twice is that dive, known twice as well: each vehicle term its value, its
 /// standard deviation over √2, its correlations its own; its clock is the dive's and
-/// not the vehicle's. A copy that did not apply the yaw adds nothing to the yaw's value
-/// and narrows it only through the terms tied to it.
+/// not the vehicle's. A copy that did not apply the yaw adds nothing to the yaw.
 #[test]
 fn the_vehicles_terms_are_the_dives_weighed_by_their_information() {
     let fit = one_fit();
@@ -74,13 +73,42 @@ fn the_vehicles_terms_are_the_dives_weighed_by_their_information() {
     let vehicle = fix_vehicle(&[without_yaw, fit.clone()], &["time_offset_s"]);
     assert_eq!(vehicle.own[0][1], None);
     assert!((vehicle.value[1] - fit.value[yaw]).abs() <= 1e-9 * fit.std[yaw]);
-    // The other dive's other terms, tied to the yaw, still narrow it: less than the one
-    // dive's standard deviation, more than two dives' that both show it.
-    let std = vehicle.std[1];
-    assert!(
-        std < fit.std[yaw] && std > fit.std[yaw] / 2f64.sqrt(),
-        "{std}"
-    );
+    assert!((vehicle.std[1] / fit.std[yaw] - 1.0).abs() < 1e-9);
+    // Nor the other terms: weighed term by term, each lies within the dives' own.
+    for (i, name) in vehicle.names.iter().enumerate() {
+        let k = at(name);
+        assert!(
+            (vehicle.value[i] - fit.value[k]).abs() <= 1e-9 * fit.std[k],
+            "{name}"
+        );
+    }
+}
+
+/// Two dives that disagree: each vehicle term lies between their own estimates,
+/// weighed by their information in it (a dive known twice as well weighs four times).
+#[test]
+fn each_vehicle_term_lies_between_the_dives_own() {
+    let fit = one_fit();
+    let mut other = fit.clone();
+    for k in 0..other.names.len() {
+        other.value[k] += 3.0 * other.std[k];
+        other.std[k] *= 0.5;
+    }
+    let vehicle = fix_vehicle(&[fit.clone(), other], &["time_offset_s"]);
+    let at = |name: &str| fit.names.iter().position(|n| *n == name).unwrap();
+    for (i, name) in vehicle.names.iter().enumerate() {
+        let k = at(name);
+        // (1 · θ + 4 · (θ + 3 s)) / 5 = θ + 2.4 s; standard deviation s / √5.
+        let expected = fit.value[k] + 2.4 * fit.std[k];
+        assert!(
+            (vehicle.value[i] - expected).abs() < 1e-9 * fit.std[k],
+            "{name}"
+        );
+        assert!(
+            (vehicle.std[i] / (fit.std[k] / 5f64.sqrt()) - 1.0).abs() < 1e-9,
+            "{name}"
+        );
+    }
 }
 
 /// Three dives of one vehicle, their clocks 1.0, 1.3 and 0.8 s, calibrated jointly with
@@ -139,6 +167,8 @@ fn dives_with_fixes_calibrate_jointly_and_carry_their_spread_to_the_next() {
     }
     let saved = SavedInstallation::read(&d.join("vehicle.toml")).unwrap();
     assert_eq!(saved.dives, 3);
+    // Fixes measure no velocity residual: the one saved is the noise given, and says so.
+    assert!(!saved.residual_measured);
     let found = saved.installation();
     // Near the truth, as one dive's fit is (the 1 Hz dead reckoning's own error of a
     // few centimetres aside); the clock saved the dives' mean.
@@ -207,6 +237,23 @@ fn dives_with_fixes_calibrate_jointly_and_carry_their_spread_to_the_next() {
     assert!(stdout.contains("next dive, 95 %"), "{stdout}");
     let found = number_after(&stdout, "the time offset at ");
     assert!((found - 1.1).abs() < 0.15, "{stdout}");
+    // Against the dive's velocity reference, the residual it leaves is not set beside
+    // one the calibration never measured.
+    let args = [
+        "correct",
+        dvl,
+        "--installation",
+        "vehicle.toml",
+        "--reference",
+        attitude,
+    ];
+    let output = common::dcnet(d, &[&args[..], &["--out", "against-velocity"]].concat());
+    let stdout = String::from_utf8_lossy(&output.stdout).to_string();
+    assert!(output.status.success(), "{}", common::stderr(&output));
+    assert!(
+        stdout.contains("the calibration, against fixes, measured no velocity residual"),
+        "{stdout}"
+    );
     // Refused: fixes or attitudes not one per DVL file, one dive twice.
     let [dvl0, attitude0, fixes0] = &dives[0];
     let [dvl1, _, fixes1] = &dives[1];

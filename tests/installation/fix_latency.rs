@@ -1,8 +1,9 @@
 //! The fixes' latency (`calibrate --fix-latency`): fixes stamped a second after the
 //! positions they give are fitted with their latency beside the DVL's clock, the two
-//! and their sum printed with their intervals, the latency kept out of the installation
-//! saved (it is the fixes', not the DVL's); a latency beyond the search, and the flag
-//! without fixes, refused by name. A latency known (`--fix-latency-s`) reads each fix
+//! and their sum printed with their intervals, the latency saved beside the
+//! installation rather than among its terms (it is the fixes', not the DVL's) and
+//! carried by `correct --fixes`; a latency beyond the search, and the flag without
+//! fixes, refused by name. A latency known (`--fix-latency-s`) reads each fix
 //! that long before its stamp, in `calibrate` and in `correct`.
 
 use crate::common::{self, installed};
@@ -102,10 +103,37 @@ fn fixes_stamped_late_give_their_latency_beside_the_clock_and_the_sum() {
     let sum = number_after(&text, "the shift of the whole track against the fixes, ");
     assert!((sum - latency - clock).abs() < 1e-3, "{sum}");
     assert!((sum - 2.0).abs() < 0.05, "{sum}");
-    // The latency is the fixes': the installation saved is the DVL's alone, and reads.
-    let saved = std::fs::read_to_string(d.join("late.toml")).unwrap();
-    assert!(!saved.contains("latency"), "{saved}");
-    dcnet_exp::operator::installation_file::SavedInstallation::read(&d.join("late.toml")).unwrap();
+    // The latency is the fixes': saved beside the DVL's terms, not among them.
+    let saved =
+        dcnet_exp::operator::installation_file::SavedInstallation::read(&d.join("late.toml"))
+            .unwrap();
+    assert!(saved.terms.iter().all(|t| !t.name.contains("latency")));
+    let carried = saved.fix_latency.as_ref().expect("the latency saved");
+    assert!((carried.value - latency).abs() < 1e-3, "{carried:?}");
+    // `correct --fixes` on the same late fixes reads them by the latency carried, and
+    // finds the clock again where the calibration put it; given, another stands.
+    let correct = |extra: &[&str], out: &str| {
+        let mut args = vec!["--installation", "late.toml", "--out", out];
+        args.extend(extra);
+        let output = dive.run("correct", late, &args);
+        assert!(output.status.success(), "{}", common::stderr(&output));
+        String::from_utf8_lossy(&output.stdout).to_string()
+    };
+    let text = correct(&[], "carried");
+    assert!(
+        text.contains("s before its stamp, the latency carried with the installation"),
+        "{text}"
+    );
+    let found = number_after(&text, "the time offset at ");
+    assert!(
+        (found - clock).abs() < 0.05,
+        "{found} against {clock}: {text}"
+    );
+    let text = correct(&["--fix-latency-s", "0.5"], "given");
+    assert!(
+        text.contains("(each read 0.5 s before its stamp, the latency given)"),
+        "{text}"
+    );
     // Fixes 5 s late: a latency beyond the search is refused, not fitted at its edge.
     let output = dive.run("calibrate", five, &["--fix-latency"]);
     refused_naming(&output, "the fixes' latency that fits them best", &[]);

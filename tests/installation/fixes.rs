@@ -862,7 +862,7 @@ pub(crate) fn number_after(text: &str, after: &str) -> f64 {
 /// of a turning segment (T1, T4, T8) calibrate an installation that, carried to the other
 /// turning segments T2, T3, T9 and T10, leaves at most 0.20 % of the distance travelled
 /// in RMS drift (no calibration: about 0.56 %; measured 0.141 % in the mean); the three
-/// calibrated jointly, at most 0.13 % (measured 0.082 % in the mean); from the
+/// calibrated jointly, at most 0.13 % (measured 0.090 % in the mean); from the
 /// straight T12, no more drift than no calibration. T13 (one turn of 228°) is printed,
 /// not held to that: every term it shows is seen poorly, and applied at its estimate
 /// they left 0.85 and 0.96 % on two of three draws (docs/findings.md).

@@ -1,18 +1,22 @@
 //! Several dives of one vehicle fitted to fixes, as one vehicle: each dive's own fit
 //! ([`super::fixes`], its clock, its pieces' start positions, the noise its residuals
-//! show and the fixes' latency its own) gives the vehicle's terms with their
-//! covariance, the dive's clock profiled out (the covariance's block of the vehicle's
-//! terms). The vehicle's terms are the dives' estimates weighed by their information,
-//! θ̂ = (Σ Pₖ⁻¹)⁻¹ Σ Pₖ⁻¹ θₖ with covariance (Σ Pₖ⁻¹)⁻¹: the joint least-squares
-//! solution of the dives' fits wherever each is linear about its own estimate, a dive
-//! weighing in only on the terms it applied. Beside it, as for a joint velocity
+//! show and the fixes' latency its own) gives each vehicle term with its standard
+//! deviation sₖ, the dive's clock profiled out. Each vehicle term is the dives'
+//! estimates weighed by their information in it, θ̂ = Σ wₖ θₖ with wₖ = sₖ⁻² / Σ sⱼ⁻²,
+//! its standard deviation (Σ sₖ⁻²)^(−1/2), over the dives that applied it; two terms'
+//! covariance is Σ wₖ w′ₖ cov(θₖ, θ′ₖ). Term by term, not with each dive's whole
+//! covariance: weighed by whole covariances, dives that disagree in one term pull
+//! another through its correlations within a dive, beyond every dive's own value (on
+//! A-KIT, the lever arm x of T3, T6 and T13 (−1.689, −1.691, −1.672 m) once combined to
+//! −1.756 m, T13's terms tied at 0.99), and a straight dive that applied the scale
+//! alone moved the lever arm; term by term, each lies within the dives' own estimates
+//! and a dive moves only the terms it applied. Beside it, as for a joint velocity
 //! calibration, each term's spread between dives ([`super::between_dives`]).
 //! In: each dive's [`FixFit`] and the dive's own terms. Out: a [`FixVehicle`].
 
 use crate::installation::estimate::between_dives::{BetweenDives, between_dives};
 use crate::installation::estimate::fixes::{FIX_LATENCY, FixFit};
 use crate::installation::terms::{Installation, TermSet};
-use nalgebra::{DMatrix, DVector};
 
 /// The vehicle's terms over several dives fitted to fixes.
 #[derive(Debug, Clone, PartialEq)]
@@ -62,47 +66,42 @@ pub fn fix_vehicle(fits: &[FixFit], dive: &[&str]) -> FixVehicle {
         .map(|fit| {
             (columns.iter())
                 .map(|&k| {
-                    let shown = fit.applied[k] && fit.std[k].is_finite();
+                    let shown = fit.applied[k] && fit.std[k].is_finite() && fit.std[k] > 0.0;
                     shown.then_some((fit.value[k], fit.std[k]))
                 })
                 .collect()
         })
         .collect();
     let m = columns.len();
-    let mut information: DMatrix<f64> = DMatrix::zeros(m, m);
-    let mut weighed: DVector<f64> = DVector::zeros(m);
-    for (fit, own) in fits.iter().zip(&own) {
-        let shown: Vec<usize> = (0..m).filter(|&i| own[i].is_some()).collect();
-        let Some(inverse) = covariance(fit, &columns, &shown).try_inverse() else {
-            continue;
-        };
-        for (a, &i) in shown.iter().enumerate() {
-            for (b, &j) in shown.iter().enumerate() {
-                information[(i, j)] += inverse[(a, b)];
-                weighed[i] += inverse[(a, b)] * fit.value[columns[j]];
+    // Each dive's weight in each term: its information in the term over the dives'.
+    let information: Vec<f64> = (0..m)
+        .map(|i| {
+            own.iter()
+                .filter_map(|d| d[i])
+                .map(|(_, s)| 1.0 / (s * s))
+                .sum()
+        })
+        .collect();
+    let weight =
+        |k: usize, i: usize| own[k][i].map_or(0.0, |(_, s)| 1.0 / (s * s) / information[i]);
+    let applied: Vec<bool> = information.iter().map(|&i| i > 0.0).collect();
+    let value: Vec<f64> = (0..m)
+        .map(|i| {
+            (0..fits.len())
+                .filter_map(|k| own[k][i].map(|(y, _)| weight(k, i) * y))
+                .sum()
+        })
+        .collect();
+    let std: Vec<f64> = (information.iter())
+        .map(|&i| {
+            if i > 0.0 {
+                1.0 / i.sqrt()
+            } else {
+                f64::INFINITY
             }
-        }
-    }
-    let applied: Vec<bool> = (0..m).map(|i| information[(i, i)] > 0.0).collect();
-    let kept: Vec<usize> = (0..m).filter(|&i| applied[i]).collect();
-    let inverse = (information
-        .select_rows(&kept)
-        .select_columns(&kept)
-        .try_inverse())
-    .expect("a sum of the dives' information matrices, each positive definite");
-    // Symmetric to the last digit, as a covariance is.
-    let joint = (&inverse + inverse.transpose()) / 2.0;
-    let (mut value, mut std) = (vec![0.0; m], vec![f64::INFINITY; m]);
-    let mut correlation = vec![vec![f64::NAN; m]; m];
-    for (a, &i) in kept.iter().enumerate() {
-        value[i] = (0..kept.len())
-            .map(|b| joint[(a, b)] * weighed[kept[b]])
-            .sum();
-        std[i] = joint[(a, a)].sqrt();
-        for (b, &j) in kept.iter().enumerate() {
-            correlation[i][j] = joint[(a, b)] / (joint[(a, a)] * joint[(b, b)]).sqrt();
-        }
-    }
+        })
+        .collect();
+    let correlation = correlation(fits, (&columns, &own), (&weight, &std));
     let between = (0..m)
         .map(|i| {
             let shown: Vec<(f64, f64)> = own.iter().filter_map(|dive| dive[i]).collect();
@@ -120,12 +119,36 @@ pub fn fix_vehicle(fits: &[FixFit], dive: &[&str]) -> FixVehicle {
     }
 }
 
-/// The covariance of `fit`'s parameters `columns[shown]`, from their standard
-/// deviations and correlations.
-fn covariance(fit: &FixFit, columns: &[usize], shown: &[usize]) -> DMatrix<f64> {
-    DMatrix::from_fn(shown.len(), shown.len(), |a, b| {
-        let (i, j) = (columns[shown[a]], columns[shown[b]]);
-        let correlation = if i == j { 1.0 } else { fit.correlation[i][j] };
-        fit.std[i] * fit.std[j] * correlation
-    })
+/// The correlations of the vehicle's terms, each the weighed sum `weight(k, i)` over the
+/// dives k of `fits` of their own `own` estimates of the parameters `columns`, whose
+/// standard deviations are `std`: each dive's covariance of two terms, where it applied
+/// both, times its two weights. NaN with a term no dive applied.
+fn correlation(
+    fits: &[FixFit],
+    (columns, own): (&[usize], &[Vec<Option<(f64, f64)>>]),
+    (weight, std): (&dyn Fn(usize, usize) -> f64, &[f64]),
+) -> Vec<Vec<f64>> {
+    let m = columns.len();
+    let covariance = |i: usize, j: usize| -> f64 {
+        (fits.iter().enumerate())
+            .filter_map(|(k, fit)| {
+                let ((_, si), (_, sj)) = (own[k][i]?, own[k][j]?);
+                let c = match i == j {
+                    true => 1.0,
+                    false => fit.correlation[columns[i]][columns[j]],
+                };
+                Some(weight(k, i) * weight(k, j) * si * sj * c)
+            })
+            .sum()
+    };
+    (0..m)
+        .map(|i| {
+            (0..m)
+                .map(|j| match std[i].is_finite() && std[j].is_finite() {
+                    true => covariance(i, j) / (std[i] * std[j]),
+                    false => f64::NAN,
+                })
+                .collect()
+        })
+        .collect()
 }

@@ -9,7 +9,7 @@
 use crate::installation::estimate::between_dives::MIN_DIVES;
 use crate::installation::estimate::robust::TUKEY_C;
 use crate::operator::correct::Correction;
-use crate::operator::correct_fixes::FixCorrection;
+use crate::operator::correct_fixes::{FixCorrection, LatencyFrom};
 use crate::operator::installation_file::{SavedInstallation, no_spread_why};
 use crate::report::kit::readable::readable_term;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
@@ -39,7 +39,7 @@ pub fn correction_text(correction: &Correction) -> String {
     match correction.after {
         Some(after) => {
             text.push_str(&format!(
-                "residual after the first {} s: {:.2} cm/s in total (x {:.2}, y {:.2}, z {:.2} cm/s, body axes, over {} samples, {} outliers aside: a component beyond {TUKEY_C} scales of the rest); the specified noise leaves {:.2}, the calibration left {:.2}\n",
+                "residual after the first {} s: {:.2} cm/s in total (x {:.2}, y {:.2}, z {:.2} cm/s, body axes, over {} samples, {} outliers aside: a component beyond {TUKEY_C} scales of the rest); the specified noise leaves {:.2}, {}\n",
                 correction.window_s,
                 100.0 * after.total_m_s,
                 100.0 * after.x_m_s,
@@ -48,7 +48,13 @@ pub fn correction_text(correction: &Correction) -> String {
                 after.sample_count,
                 correction.outliers,
                 correction.noise_cm_s,
-                correction.calibration_cm_s,
+                match correction.saved.residual_measured {
+                    true => format!("the calibration left {:.2}", correction.calibration_cm_s),
+                    false => format!(
+                        "the calibration, against fixes, measured no velocity residual (the DVL noise it was given, {:.2}, stands for it)",
+                        correction.calibration_cm_s
+                    ),
+                },
             ));
             if correction.fits_far_worse() {
                 text.push_str(&format!(
@@ -181,7 +187,14 @@ pub fn fix_correction_text(correction: &FixCorrection) -> String {
         super::fixes::fixes_read(
             correction.fixes,
             &correction.fixes_left_out,
-            correction.fix_latency_s
+            correction.fix_latency.map(|(latency_s, from)| {
+                let from = match from {
+                    LatencyFrom::Given => "given",
+                    LatencyFrom::Carried =>
+                        "carried with the installation (its calibration estimated it; --fix-latency-s gives another)",
+                };
+                (latency_s, from)
+            })
         ),
         correction.installation_file.display(),
         saved.recording,

@@ -12,16 +12,21 @@ use crate::operator::calibrate_fixes::FixCalibration;
 use crate::report::kit::readable::{readable_term, readable_why};
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 
-/// `fixes` fixes read, each `latency_s` before its stamp where that is given, and those
-/// left out before any fit, each with its reason.
-pub fn fixes_read(fixes: usize, left_out: &[(&str, usize)], latency_s: f64) -> String {
+/// `fixes` fixes read, each `latency_s` before its stamp where there is a latency (and
+/// where it is from, in words), and those left out before any fit, each with its
+/// reason.
+pub fn fixes_read(
+    fixes: usize,
+    left_out: &[(&str, usize)],
+    latency: Option<(f64, &str)>,
+) -> String {
     let mut text = match fixes {
         1 => "1 fix".to_string(),
         n => format!("{n} fixes"),
     };
-    if latency_s != 0.0 {
+    if let Some((latency_s, from)) = latency {
         text.push_str(&format!(
-            " (each read {} s before its stamp, the latency given)",
+            " (each read {} s before its stamp, the latency {from})",
             crate::Shown(latency_s)
         ));
     }
@@ -29,6 +34,11 @@ pub fn fixes_read(fixes: usize, left_out: &[(&str, usize)], latency_s: f64) -> S
         text.push_str(&format!(" ({count} more left out: {why})"));
     }
     text
+}
+
+/// A latency given with `--fix-latency-s`, as [`fixes_read`] says it: none where zero.
+pub fn given_latency(latency_s: f64) -> Option<(f64, &'static str)> {
+    (latency_s != 0.0).then_some((latency_s, "given"))
 }
 
 /// For fixes read from a bag, the topics and frames it was read in, a paragraph.
@@ -59,7 +69,7 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
         fixes_read(
             calibration.fixes,
             &calibration.fixes_left_out,
-            calibration.fix_latency_s
+            given_latency(calibration.fix_latency_s)
         ),
         fit.fitted,
         fit.outside,
@@ -91,24 +101,7 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
     if fit.axes == 2 {
         text.push_str("not estimated: the misalignment's roll and pitch and the lever arm's depth, which horizontal fixes do not feel (give the fixes' depth for roll and pitch)\n");
     }
-    for name in &fit.names {
-        let reasons: Vec<String> = (fit.unseen.iter())
-            .filter(|u| u.term == *name)
-            .map(|u| u.why.to_string())
-            .collect();
-        if !reasons.is_empty() {
-            text.push_str(&format!(
-                "{}: {}: {}\n",
-                if fit.is_applied(name) {
-                    "seen poorly, applied"
-                } else {
-                    "not seen, not applied"
-                },
-                readable_term(name).0,
-                readable_why(name, &reasons.join("; "))
-            ));
-        }
-    }
+    text.push_str(&unseen_lines(fit, ""));
     text.push_str(&clock_and_latency(fit));
     text.push_str(&format!(
         "fixes' horizontal residual RMS: {:.2} m with no terms (the start positions alone, to the same fixes), {:.2} m with the terms applied; over the {:.0} m travelled, {:.3} % and {:.3} % of the distance (the fixes' own noise included)\n",
@@ -126,6 +119,31 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
         FIX_TOLERANCES.time_offset_s,
         MIN_HEADING_SPAN_RAD.to_degrees(),
     ));
+    text
+}
+
+/// Each term of `fit` seen poorly (applied) or not seen (not applied), with why, a line
+/// each, each line opening with `prefix`.
+pub fn unseen_lines(fit: &FixFit, prefix: &str) -> String {
+    let mut text = String::new();
+    for name in &fit.names {
+        let reasons: Vec<String> = (fit.unseen.iter())
+            .filter(|u| u.term == *name)
+            .map(|u| u.why.to_string())
+            .collect();
+        if !reasons.is_empty() {
+            text.push_str(&format!(
+                "{prefix}{}: {}: {}\n",
+                if fit.is_applied(name) {
+                    "seen poorly, applied"
+                } else {
+                    "not seen, not applied"
+                },
+                readable_term(name).0,
+                readable_why(name, &reasons.join("; "))
+            ));
+        }
+    }
     text
 }
 

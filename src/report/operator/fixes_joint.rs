@@ -5,11 +5,14 @@
 //! no terms, with its own and with the vehicle's.
 //! In: a [`JointFixCalibration`]. Out: the text.
 
+use crate::installation::estimate::fixes::{FIX_LATENCY, FixFit};
 use crate::operator::calibrate_fixes_joint::JointFixCalibration;
 use crate::operator::calibrate_joint::AGREEMENT_P_VALUE;
 use crate::report::kit::readable::readable_term;
 use crate::report::operator::calibrate::{VehicleRows, between_dives_text, vehicle_rows};
-use crate::report::operator::fixes::{fix_noise, fixes_read, from_bag};
+use crate::report::operator::fixes::{
+    fix_noise, fixes_read, from_bag, given_latency, unseen_lines,
+};
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 
 /// Everything a joint `calibrate` with fixes prints; ends in a newline.
@@ -26,7 +29,11 @@ pub fn joint_fixes_text(calibration: &JointFixCalibration) -> String {
         text.push_str(&format!(
             "read {name}: {}; {}; the fixes' noise {}\n",
             dive.read,
-            fixes_read(dive.fixes, &dive.fixes_left_out, dive.fix_latency_s),
+            fixes_read(
+                dive.fixes,
+                &dive.fixes_left_out,
+                given_latency(dive.fix_latency_s)
+            ),
             fix_noise(dive.noise.fix_m, dive.own_noise),
         ));
     }
@@ -40,7 +47,7 @@ pub fn joint_fixes_text(calibration: &JointFixCalibration) -> String {
         recordings: names.len(),
     });
     text.push_str(&format!(
-        "calibrated jointly on {} dives with position fixes: each dive fitted alone (as `calibrate --fixes` fits one: its clock, its pieces' start positions and the noise its residuals read its own); the vehicle's terms are the dives' estimates weighed by their information, each dive's clock profiled out, a dive weighing in on the terms it applied; standard deviation: of that weighed estimate, from the dives' own\n{table}\n",
+        "calibrated jointly on {} dives with position fixes: each dive fitted alone (as `calibrate --fixes` fits one: its clock, its pieces' start positions and the noise its residuals read its own); each vehicle term is the dives' estimates weighed by their information in it, term by term (each dive's clock profiled out; a dive weighs in on the terms it applied); standard deviation: of that weighed mean, from the dives' noise alone (where the dives disagree beyond it, χ² below, it says too little: the vehicle's 95 % interval, about the random-effects mean, is the one that holds)\n{table}\n",
         names.len()
     ));
     text.push_str(&between_dives_text(names.len()));
@@ -48,9 +55,12 @@ pub fn joint_fixes_text(calibration: &JointFixCalibration) -> String {
         "alone: χ², Σ ((alone − joint) / its standard deviation)² over the dives that applied the term, and its p-value on one fewer degrees of freedom (under {AGREEMENT_P_VALUE}: the dives disagree beyond their intervals)\n"
     ));
     text.push_str(&format!(
-        "each dive: its fixes fitted and left out as outliers; its own estimate of each term (± its standard deviation; - where it did not apply it); its clock alone and with the vehicle's terms carried (found again from its fixes: the clock it is written corrected with); the fixes' horizontal residual RMS with no terms, with its own terms and with the vehicle's, m\n{}\n",
+        "each dive: its fixes fitted and left out as outliers; its own estimate of each term (± its standard deviation; - where it did not apply it); its clock (and the fixes' latency, where fitted) alone and with the vehicle's terms carried (found again from its fixes: those it is written corrected with); the fixes' horizontal residual RMS with no terms, with its own terms and with the vehicle's, m\n{}\n",
         dives_table(calibration)
     ));
+    for (name, dive) in names.iter().zip(alone) {
+        text.push_str(&unseen_lines(&dive.fit, &format!("{name} alone: ")));
+    }
     text
 }
 
@@ -70,11 +80,18 @@ fn dives_table(calibration: &JointFixCalibration) -> Table {
         let (readable, unit, _) = readable_term(n);
         format!("{readable}, alone ({unit})")
     }));
+    let latency = alone[0].fit.names.contains(&FIX_LATENCY);
     header.extend([
         "clock alone (s)".to_string(),
         "clock, vehicle's terms (s)".to_string(),
-        "residual: none / own / vehicle's (m)".to_string(),
     ]);
+    if latency {
+        header.extend([
+            "fixes' latency alone (s)".to_string(),
+            "fixes' latency, vehicle's terms (s)".to_string(),
+        ]);
+    }
+    header.push("residual: none / own / vehicle's (m)".to_string());
     table.set_header(header);
     for (k, name) in names.iter().enumerate() {
         let fit = &alone[k].fit;
@@ -88,8 +105,12 @@ fn dives_table(calibration: &JointFixCalibration) -> Table {
                 format!("{:.4} ± {:.4}", value * factor, std * factor)
             })
         }));
-        row.push(clock(fit));
-        row.push(clock(&carried[k]));
+        row.push(shown(fit, "time_offset_s"));
+        row.push(shown(&carried[k], "time_offset_s"));
+        if latency {
+            row.push(shown(fit, FIX_LATENCY));
+            row.push(shown(&carried[k], FIX_LATENCY));
+        }
         let after = carried[k].residual_rms_m;
         row.push(format!(
             "{:.2} / {:.2} / {:.2}",
@@ -102,13 +123,16 @@ fn dives_table(calibration: &JointFixCalibration) -> Table {
     table
 }
 
-/// The clock of a fit's installation and its standard deviation, or "-" where it
-/// fitted none.
-fn clock(fit: &crate::installation::estimate::fixes::FixFit) -> String {
-    match fit.names.iter().position(|n| *n == "time_offset_s") {
-        Some(k) if fit.applied[k] => {
-            format!("{:.3} ± {:.3}", fit.installation.time_offset_s, fit.std[k])
-        }
+/// A fit's clock (that of its installation, where it fitted one about a carried clock)
+/// or its fixes' latency, named `name`, and its standard deviation; "-" where it
+/// applied none.
+fn shown(fit: &FixFit, name: &str) -> String {
+    let value = |k: usize| match name {
+        "time_offset_s" => fit.installation.time_offset_s,
+        _ => fit.value[k],
+    };
+    match fit.names.iter().position(|n| *n == name) {
+        Some(k) if fit.applied[k] => format!("{:.3} ± {:.3}", value(k), fit.std[k]),
         _ => "-".to_string(),
     }
 }
