@@ -84,7 +84,7 @@ pub enum CalibrateError {
     SaveOverOutput { path: PathBuf },
     #[error("{} and {} hold the same recording (the same SHA-256): a joint calibration counts each recording once", first.display(), again.display())]
     Duplicate { first: PathBuf, again: PathBuf },
-    #[error("{} and {} hold the same DVL samples (the same stamps and velocities, though not the same bytes: other line endings, or the digits written otherwise): a joint calibration counts each recording once", first.display(), again.display())]
+    #[error("{} and {} hold the same DVL samples (each stamp within a millisecond and each velocity within a millimetre per second of the other's, though not the same bytes: other line endings, the digits written otherwise or rounded): a joint calibration counts each recording once", first.display(), again.display())]
     SameSamples { first: PathBuf, again: PathBuf },
     #[error(
         "--reference: {references} files for {dvls} DVL files: give one --reference per DVL file, in the same order, or none where each DVL file holds its reference"

@@ -120,9 +120,7 @@ fn not_twice(dvls: &[&Path], fitted: &[FittedDive]) -> Result<(), CalibrateError
             if earlier.dvl_sha256() == read.dvl_sha256() {
                 return Err(CalibrateError::Duplicate { first, again });
             }
-            let same = earlier.recording.time_s == recording.time_s
-                && earlier.recording.dvl_m_s == recording.dvl_m_s;
-            if same {
+            if earlier.recording.same_samples(recording) {
                 return Err(CalibrateError::SameSamples { first, again });
             }
         }

@@ -219,9 +219,7 @@ fn read_all(
     let mut recordings: Vec<(PairedRecording, Reference, Option<PairedRecording>)> = Vec::new();
     for (k, loaded) in loaded.into_iter().enumerate() {
         let recording = loaded.parse()?.recording;
-        let same = |(earlier, _, _): &(PairedRecording, _, _)| {
-            earlier.time_s == recording.time_s && earlier.dvl_m_s == recording.dvl_m_s
-        };
+        let same = |(earlier, _, _): &(PairedRecording, _, _)| earlier.same_samples(&recording);
         if let Some(first) = recordings.iter().position(same) {
             return Err(CalibrateError::SameSamples {
                 first: args.dvls[first].clone(),

@@ -533,8 +533,21 @@ fn a_save_that_cannot_be_a_dive_terms_outside_the_fit_and_a_recording_twice_are_
     ];
     refused(
         &crlf,
-        "crlf.csv hold the same DVL samples (the same stamps and velocities, though not the same bytes",
+        "crlf.csv hold the same DVL samples (each stamp within a millisecond and each velocity within a millimetre per second of the other's, though not the same bytes",
     );
+    // Its stamps moved by a fraction of a millisecond (written again, rounded): the
+    // same recording, refused too.
+    let mut lines = text.lines();
+    let mut moved = format!("{}\n", lines.next().unwrap());
+    for line in lines {
+        let (time, rest) = line.split_once(',').unwrap();
+        let time: f64 = time.parse().unwrap();
+        moved.push_str(&format!("{},{rest}\n", time + 4e-4));
+    }
+    std::fs::write(d.join("moved.csv"), moved).unwrap();
+    let mut moved_twice = crlf;
+    moved_twice[2] = "moved.csv";
+    refused(&moved_twice, "moved.csv hold the same DVL samples");
     // Jointly too, however spelled.
     let joint = [
         &twice[..],

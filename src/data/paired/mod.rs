@@ -242,7 +242,23 @@ pub struct PairedRecording {
     pub gap_limit_s: f64,
 }
 
+/// How close two recordings' stamps (s) and DVL velocities (m/s) lie, each sample's,
+/// for them to be one recording written twice: a millisecond and a millimetre per
+/// second, far below any DVL's noise and rate, far above the rounding of a file written
+/// again with other digits.
+pub const SAME_SAMPLES_WITHIN: (f64, f64) = (1e-3, 1e-3);
+
 impl PairedRecording {
+    /// Whether `other` holds the same DVL samples, each stamp and velocity within
+    /// [`SAME_SAMPLES_WITHIN`] of its own: one recording written twice.
+    pub fn same_samples(&self, other: &PairedRecording) -> bool {
+        let (time_s, velocity_m_s) = SAME_SAMPLES_WITHIN;
+        self.len() == other.len()
+            && (self.time_s.iter().zip(&other.time_s)).all(|(a, b)| (a - b).abs() <= time_s)
+            && (self.dvl_m_s.iter().zip(&other.dvl_m_s))
+                .all(|(a, b)| (0..3).all(|k| (a[k] - b[k]).abs() <= velocity_m_s))
+    }
+
     /// How many samples it has.
     pub fn len(&self) -> usize {
         self.time_s.len()
