@@ -315,14 +315,6 @@ pub struct FittedDive {
     pub fit: FixFit,
 }
 
-impl FittedDive {
-    /// The dive's attitude, as its fit read it.
-    pub fn attitude(&self) -> Attitude {
-        let recording = &self.reading.read.recording;
-        Attitude::new(&recording.reference_time_s, &recording.attitude_rad)
-    }
-}
-
 /// The dive of `args` read (refused where `outputs` hold another recording's results)
 /// and its terms fitted to its fixes, the fit refused where its residuals contradict
 /// the fixes' noise.
@@ -341,7 +333,7 @@ pub fn fitted_dive(args: &FixArgs, outputs: &Outputs) -> Result<FittedDive, Cali
         fix_latency: args.fix_latency,
     };
     let recording = &read.recording;
-    let attitude = Attitude::new(&recording.reference_time_s, &recording.attitude_rad);
+    let attitude = Attitude::of(recording);
     let fixes = &reading.fixes;
     let fit = fit_on(recording, &attitude, fixes, terms, noise)
         .map_err(|fault| fix_error(args, fault))?;

@@ -13,11 +13,11 @@
 use crate::evaluate::statistics::mean_std;
 use crate::installation::estimate::fix_joint::{FixVehicle, fix_vehicle};
 use crate::installation::estimate::fixes::{FixFit, FixTerms, fit_fixes_around};
-use crate::installation::frames::Reference;
+use crate::installation::frames::{Attitude, Reference};
 use crate::installation::terms::names::term_set;
 use crate::operator::calibrate::{CalibrateError, clear_of_inputs, named};
 use crate::operator::calibrate_fixes::{FittedDive, FixArgs, FixCalibration, fitted_dive};
-use crate::operator::calibrate_joint::{Agreement, names, spreads};
+use crate::operator::calibrate_joint::{Agreement, correlation_over, names, spreads};
 use crate::operator::cost::{Cost, JOINT_FIXES};
 use crate::operator::installation_file::{SavedInstallation, SavedTerm};
 use crate::results::ResultsError;
@@ -143,7 +143,7 @@ fn carried(
     };
     let carried = vehicle.installation(&term_set(dive.terms), own_clock);
     let dvl = (&recording.time_s[..], &recording.dvl_m_s[..]);
-    let attitude = fitted.attitude();
+    let attitude = Attitude::of(recording);
     let (fixes, noise) = (&fitted.reading.fixes, fitted.noise);
     fit_fixes_around(
         dvl,
@@ -190,22 +190,9 @@ fn saved(
             }
         })
         .collect();
-    let correlation: Vec<Vec<f64>> = (every.iter())
-        .map(|a| {
-            (every.iter())
-                .map(|b| {
-                    let at = |name| vehicle.names.iter().position(|n| n == name);
-                    match (at(a), at(b)) {
-                        (Some(i), Some(j)) if vehicle.applied[i] && vehicle.applied[j] => {
-                            vehicle.correlation[i][j]
-                        }
-                        _ if a == b => 1.0,
-                        _ => 0.0,
-                    }
-                })
-                .collect()
-        })
-        .collect();
+    let correlation = correlation_over(&every, (&vehicle.names, &vehicle.correlation), |i| {
+        vehicle.applied[i]
+    });
     let recording = (dives.iter())
         .map(|d| d.files.dvl.display().to_string())
         .collect::<Vec<_>>()

@@ -336,25 +336,7 @@ fn saved(args: &JointArgs, joint: &JointFit, shas: Vec<String>) -> SavedInstalla
             },
         )
         .collect();
-    let correlation: Vec<Vec<f64>> = names
-        .iter()
-        .map(|a| {
-            names
-                .iter()
-                .map(|b| {
-                    let (i, j) = (
-                        vehicle.names.iter().position(|n| n == a),
-                        vehicle.names.iter().position(|n| n == b),
-                    );
-                    match (i, j) {
-                        (Some(i), Some(j)) => vehicle.correlation[i][j],
-                        _ if a == b => 1.0,
-                        _ => 0.0,
-                    }
-                })
-                .collect()
-        })
-        .collect();
+    let correlation = correlation_over(&names, (&vehicle.names, &vehicle.correlation), |_| true);
     let residual = joint.residual_rms_m_s.iter().fold([0.0; 3], |sum, r| {
         [0, 1, 2].map(|k| sum[k] + r[k] * r[k] / joint.residual_rms_m_s.len() as f64)
     });
@@ -375,6 +357,28 @@ fn saved(args: &JointArgs, joint: &JointFit, shas: Vec<String>) -> SavedInstalla
         joint.dives.len(),
         spreads(&joint.bound.names, &joint.between),
     )
+}
+
+/// The correlations of the vehicle's terms `names` (`correlation` among them) over every
+/// parameter `every` an installation file saves, in its order: a parameter's with
+/// itself 1, and 0 beside one not among `names` or not `kept` (by its place in `names`).
+pub(crate) fn correlation_over(
+    every: &[&str],
+    (names, correlation): (&[&str], &[Vec<f64>]),
+    kept: impl Fn(usize) -> bool,
+) -> Vec<Vec<f64>> {
+    let at = |name: &&str| names.iter().position(|n| n == name).filter(|&i| kept(i));
+    (every.iter())
+        .map(|a| {
+            (every.iter())
+                .map(|b| match (at(a), at(b)) {
+                    (Some(i), Some(j)) => correlation[i][j],
+                    _ if a == b => 1.0,
+                    _ => 0.0,
+                })
+                .collect()
+        })
+        .collect()
 }
 
 /// The spread between dives of each vehicle term of `names` that has one in `between`,
