@@ -319,15 +319,24 @@ impl Whitening {
             .collect()
     }
 
-    /// The log-likelihood of residuals `column` (before their starts) over the `rows`
-    /// observed, the variance factor profiled out and the starts restricted (what is
-    /// left of the data once the starts are fitted; so that the walk before the first
-    /// fix, which a start absorbs, weighs nothing): −½ (n ln(r̃ᵀr̃ / n) + ln |Σ| + Σ ln
-    /// 1ᵀΣ⁻¹1).
-    pub fn log_likelihood(&self, column: &[f64], rows: usize) -> f64 {
-        let whitened = self.whiten(column);
-        let n = rows as f64;
-        let squares = dot(&whitened, &whitened);
+    /// The restricted log-likelihood of a fit whose whitened residuals' sum of squares
+    /// is `squares` on `freedom` degrees of freedom (the rows observed less the starts
+    /// and the terms fitted), `terms_log_det` the log-determinant of its terms' whitened
+    /// information: the variance factor profiled out, and the starts and the terms
+    /// restricted (what is left of the data once they are fitted, Patterson and
+    /// Thompson's REML): −½ ((n − p) ln(r̃ᵀr̃ / (n − p)) + ln |Σ| + Σ ln 1ᵀΣ⁻¹1 + ln
+    /// |J̃ᵀJ̃|). Restricted, the walk that the terms and the starts absorb weighs
+    /// nothing: by likelihood alone, a scale takes up the walk along a transect, the
+    /// residuals read a walk too small, and under a DVL noise of AR(1) 0.9 with fixes of
+    /// 2 m the scale's interval covered 86.6 % (the walk read at the white noise's on 78
+    /// dives of 284, where the truth's is 19 times it).
+    pub fn restricted_log_likelihood(
+        &self,
+        squares: f64,
+        freedom: usize,
+        terms_log_det: f64,
+    ) -> f64 {
+        let n = freedom.max(1) as f64;
         let log_det: f64 = (self.blocks.iter())
             .map(|b| {
                 b.whitener.log_det()
@@ -338,7 +347,7 @@ impl Whitening {
                     }
             })
             .sum();
-        -0.5 * (n * (squares / n).ln() + log_det)
+        -0.5 * (n * (squares / n).ln() + log_det + terms_log_det)
     }
 }
 

@@ -48,6 +48,10 @@ pub(super) struct Solution {
     pub(super) shape: NoiseShape,
     whitened: Vec<f64>,
     pub(super) freedom: usize,
+    /// ln |J̃ᵀJ̃|, the log-determinant of the free terms' whitened information (the
+    /// starts profiled out) under `shape`: what the terms take of the residuals, which
+    /// the restricted likelihood gives back ([`Whitening::restricted_log_likelihood`]).
+    information_log_det: f64,
 }
 
 impl Solution {
@@ -64,6 +68,23 @@ impl Solution {
     fn weights(&self) -> Vec<f64> {
         weights_of(&self.kept)
     }
+
+    /// The restricted log-likelihood of this fit's noise shape, its fixes weighed by
+    /// `weights` ([`Whitening::restricted_log_likelihood`]).
+    fn likelihood(&self, whitening: &Whitening) -> f64 {
+        whitening.restricted_log_likelihood(self.cost(), self.freedom, self.information_log_det)
+    }
+}
+
+/// ln |A| of a symmetric positive semi-definite `a`, each eigenvalue floored at 1e-12 of
+/// the largest (a direction no residual feels counts alike under every noise).
+fn log_det_symmetric(a: &DMatrix<f64>) -> f64 {
+    let eigenvalues = a.clone().symmetric_eigen().eigenvalues;
+    let floor = 1e-12 * eigenvalues.iter().fold(0.0f64, |m, &l| m.max(l));
+    eigenvalues
+        .iter()
+        .map(|&l| l.max(floor).max(f64::MIN_POSITIVE).ln())
+        .sum()
 }
 
 /// The weight of each fix `kept`: 1, or 0 where left out.
@@ -368,6 +389,7 @@ impl<'a> Problem<'a> {
     ) -> Result<Solution, FixFitError> {
         let whitening = self.whitening(weights, shape);
         let free_terms: Vec<usize> = (0..free.len()).filter(|&k| free[k]).collect();
+        solution.information_log_det = 0.0;
         for _ in 0..30 {
             if free_terms.is_empty() {
                 break;
@@ -380,6 +402,7 @@ impl<'a> Problem<'a> {
                 columns[a].dot(&columns[b])
             });
             let gradient = DVector::from_fn(columns.len(), |a, _| columns[a].dot(&residuals));
+            solution.information_log_det = log_det_symmetric(&normal);
             let names: Vec<&'static str> = free_terms.iter().map(|&k| self.names[k]).collect();
             let step = normal_step(&normal, &gradient, &names);
             for (column, &k) in free_terms.iter().enumerate() {
@@ -449,6 +472,7 @@ impl<'a> Problem<'a> {
             shape: NoiseShape::GIVEN,
             whitened: Vec::new(),
             freedom: 0,
+            information_log_det: 0.0,
         };
         // Fixes grossly off pull least squares across the scan: left out before it.
         let not_gross = self.not_gross(free)?;
@@ -505,8 +529,9 @@ impl<'a> Problem<'a> {
     }
 
     /// The noise's shape under which the fixes `solution` kept are likeliest, each
-    /// shape's terms fitted again from `solution`'s (the variance factor profiled out,
-    /// the starts restricted), less Schwarz's penalty for the noise's parameters it
+    /// shape's terms fitted again from `solution`'s (by their restricted likelihood:
+    /// the variance factor profiled out, the starts and terms restricted), less
+    /// Schwarz's penalty for the noise's parameters it
     /// reads (½ ln n each), so that the noise as given stands unless the residuals show
     /// otherwise: of the walks ([`NoiseShape::walks`]), then of the wandering errors
     /// beside the best ([`NoiseShape::wanders`]) where `wandering` (the robust loop's
@@ -522,8 +547,7 @@ impl<'a> Problem<'a> {
         let rows = weights.iter().filter(|&&w| w > 0.0).count() * self.axes;
         let likelihood = |solved: &Solution| -> Result<f64, FixFitError> {
             let penalty = 0.5 * solved.shape.parameters() as f64 * (rows as f64).ln();
-            let whitening = self.whitening(&weights, solved.shape);
-            Ok(whitening.log_likelihood(&self.residuals(&solved.terms)?, rows) - penalty)
+            Ok(solved.likelihood(&self.whitening(&weights, solved.shape)) - penalty)
         };
         let consider = |shapes: Vec<NoiseShape>, best: &mut Option<(f64, Solution)>| {
             for shape in shapes {
@@ -704,7 +728,7 @@ impl<'a> Problem<'a> {
 
     /// The terms, their standard deviations and correlations averaged over the walks
     /// ([`NoiseShape::walks`], beside `solution`'s wandering error), each walk's fit
-    /// weighed by its likelihood: the mean of the fits' terms, and the mean of their
+    /// weighed by its restricted likelihood: the mean of the fits' terms, and the mean of their
     /// covariances plus the spread of their terms about that mean. A walk read from
     /// the residuals of one dive is uncertain (at ρ = 0.8 over 600 s, between a quarter
     /// and twice the truth's), and the terms' intervals carry that.
@@ -714,7 +738,6 @@ impl<'a> Problem<'a> {
         free: &[bool],
     ) -> Result<Averaged, FixFitError> {
         let weights = solution.weights();
-        let rows = weights.iter().filter(|&&w| w > 0.0).count() * self.axes;
         let mut fits = Vec::new();
         for walk in NoiseShape::walks() {
             let shape = NoiseShape {
@@ -722,8 +745,7 @@ impl<'a> Problem<'a> {
                 ..solution.shape
             };
             let solved = self.solve(solution.clone(), free, &weights, shape)?;
-            let whitening = self.whitening(&weights, shape);
-            let likelihood = whitening.log_likelihood(&self.residuals(&solved.terms)?, rows);
+            let likelihood = solved.likelihood(&self.whitening(&weights, shape));
             let (std, correlation, _) = self.bound(&solved, free, shape, solved.variance_factor());
             fits.push((likelihood, solved.terms, std, correlation));
         }

@@ -16,10 +16,10 @@
 //! and shifts the track; the latency only shifts it.
 //!
 //! The noise of a fix's residual ([`super::fix_noise`]): the dead reckoning's random
-//! walk (the DVL's noise summed, its level read from the residuals, so that a DVL noise
-//! correlated in time walks as far as it does), the fix's white error, and its slowly
-//! wandering one (a Gauss–Markov error, its variance and correlation time read from the
-//! residuals), whitened by a Kalman filter over each piece's fixes on each axis, in time
+//! walk (the DVL's noise summed, its level read from the residuals by their restricted
+//! likelihood, so that a DVL noise correlated in time walks as far as it does), the
+//! fix's white error, and its slowly wandering one (a Gauss–Markov error, its variance
+//! and correlation time read from the residuals), whitened by a Kalman filter over each piece's fixes on each axis, in time
 //! and memory linear in the fixes; each piece's start position is profiled out of the
 //! whitened residuals. The fit is Gauss–Newton on them (a Jacobian of central
 //! differences). The time offset starts from the best of a scan over
