@@ -69,8 +69,9 @@ impl Solution {
         weights_of(&self.kept)
     }
 
-    /// The restricted log-likelihood of this fit's noise shape, its fixes weighed by
-    /// `weights` ([`Whitening::restricted_log_likelihood`]).
+    /// The restricted log-likelihood of this fit's noise shape under `whitening` (its
+    /// shape, its fixes weighed as the fit weighed them;
+    /// [`Whitening::restricted_log_likelihood`]).
     fn likelihood(&self, whitening: &Whitening) -> f64 {
         whitening.restricted_log_likelihood(self.cost(), self.freedom, self.information_log_det)
     }
@@ -531,12 +532,11 @@ impl<'a> Problem<'a> {
     /// The noise's shape under which the fixes `solution` kept are likeliest, each
     /// shape's terms fitted again from `solution`'s (by their restricted likelihood:
     /// the variance factor profiled out, the starts and terms restricted), less
-    /// Schwarz's penalty for the noise's parameters it
-    /// reads (½ ln n each), so that the noise as given stands unless the residuals show
-    /// otherwise: of the walks ([`NoiseShape::walks`]), then of the wandering errors
-    /// beside the best ([`NoiseShape::wanders`]) where `wandering` (the robust loop's
-    /// first reading, on residuals an outlier may still pull, reads the walk alone);
-    /// with its fit.
+    /// Schwarz's penalty for the noise's parameters it reads (½ ln n each), so that the
+    /// noise as given stands unless the residuals show otherwise: of the walks
+    /// ([`NoiseShape::walks`]), then of the wandering errors beside the best
+    /// ([`NoiseShape::wanders`]) where `wandering` (the robust loop's first reading, on
+    /// residuals an outlier may still pull, reads the walk alone); with its fit.
     fn read_noise(
         &self,
         solution: &Solution,
@@ -728,9 +728,9 @@ impl<'a> Problem<'a> {
 
     /// The terms, their standard deviations and correlations averaged over the walks
     /// ([`NoiseShape::walks`], beside `solution`'s wandering error), each walk's fit
-    /// weighed by its restricted likelihood: the mean of the fits' terms, and the mean of their
-    /// covariances plus the spread of their terms about that mean. A walk read from
-    /// the residuals of one dive is uncertain (at ρ = 0.8 over 600 s, between a quarter
+    /// weighed by its restricted likelihood: the mean of the fits' terms, and the mean
+    /// of their covariances plus the spread of their terms about that mean. A walk read
+    /// from the residuals of one dive is uncertain (at ρ = 0.8 over 600 s, between a quarter
     /// and twice the truth's), and the terms' intervals carry that.
     pub(super) fn averaged(
         &self,
