@@ -7,7 +7,8 @@
 //! the study in docs/installation.md: fixes of 0.5, 2 and 5 m, DVL noise white and
 //! AR(1) 0.8 and 0.9, clocks of 0, 0.6 and 1.5 s, fixes' latencies of 0 and 1 s (fitted
 //! with `--fix-latency`'s parameter, and once not, to show what a latency left out
-//! does); each level in at least one case; the tests assert two of them. With `-- --fixes N`: one fit of N fixes, its seconds and
+//! does), and fixes each of its own noise (a quarter to four times 1 m, as a bag's
+//! covariances give them); each level in at least one case; the tests assert two of them. With `-- --fixes N`: one fit of N fixes, its seconds and
 //! peak memory (what the first part runs); with `-- --coverage`: the coverage alone.
 
 #[allow(dead_code)]
@@ -57,9 +58,12 @@ fn main() {
         if !case.fits_latency {
             shares.push("–".into());
         }
+        let fixes = match case.noise_spread {
+            1.0 => format!("{}", case.fix_m),
+            spread => format!("{}, each its own (÷{spread} to ×{spread})", case.fix_m),
+        };
         println!(
-            "| {} | {noise} | {} | {latency} | {refused} | {} |",
-            case.fix_m,
+            "| {fixes} | {noise} | {} | {latency} | {refused} | {} |",
             case.clock_s,
             shares.join(" | ")
         );
@@ -67,8 +71,12 @@ fn main() {
 }
 
 /// The cases of the coverage study.
-const CASES: [Case; 9] = [
+const CASES: [Case; 10] = [
     case(0.5, 0.0, 0.0),
+    Case {
+        noise_spread: 4.0,
+        ..case(1.0, 0.0, 0.6)
+    },
     case(2.0, 0.0, 1.5),
     case(0.5, 0.8, 0.6),
     case(0.5, 0.9, 0.6),

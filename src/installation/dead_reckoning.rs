@@ -15,9 +15,10 @@
 use crate::Vec3;
 use crate::data::interpolate::Between;
 use crate::data::paired::{GAP_MARGIN_S, PairedRecording};
-use crate::installation::frames::{Attitude, apply};
+use crate::installation::frames::{Attitude, Mat3, apply};
 use crate::installation::terms::Installation;
 use std::ops::Range;
+use std::sync::{Arc, Mutex};
 
 /// The reference point's track of one piece: at each DVL sample's t + τ, its position,
 /// metres north, east and down of the DVL's point at the piece's first sample.
@@ -40,30 +41,100 @@ impl Track {
 /// where the attitude is not read at one of them.
 pub fn dead_reckon(
     installation: &Installation,
-    (time_s, dvl_m_s): (&[f64], &[Vec3]),
+    dvl: (&[f64], &[Vec3]),
     attitude: &Attitude,
 ) -> Option<Track> {
+    let body_to_ned = attitude_along(dvl.0, installation.time_offset_s, attitude)?;
+    Some(dead_reckon_along(installation, dvl, &body_to_ned))
+}
+
+/// C_b^n at each of the stamps `time_s` plus `time_offset_s`, what a dead reckoning
+/// reads of the attitude; `None` where it is not read at one of them. A fit that moves
+/// every term but the clock reads the same, once.
+pub fn attitude_along(
+    time_s: &[f64],
+    time_offset_s: f64,
+    attitude: &Attitude,
+) -> Option<Vec<Mat3>> {
+    (time_s.iter())
+        .map(|&stamp| attitude.body_to_ned_at(stamp + time_offset_s))
+        .collect()
+}
+
+/// The attitude a fit's dead reckonings read along each piece of a DVL record (C_b^n
+/// at each sample's stamp plus the clock, [`attitude_along`]), kept for the last
+/// [`Self::KEPT`] clocks: a Jacobian's columns other than the clock's, and every step
+/// of a scan's trial at one clock, read it at the same times, and reading it
+/// (interpolating and turning angles into a matrix) was three quarters of a fit to
+/// fixes' time.
+#[derive(Default)]
+pub struct AttitudeRead {
+    /// The clock's bits, and the attitude along each piece.
+    kept: Mutex<Vec<(u64, AttitudeAlong)>>,
+}
+
+/// C_b^n at each DVL sample of each piece, shared by the fits that read it.
+pub type AttitudeAlong = Arc<Vec<Vec<Mat3>>>;
+
+impl AttitudeRead {
+    /// The clock, and the clock moved either way by a Jacobian's step.
+    const KEPT: usize = 3;
+
+    /// The attitude along each of `pieces` of the DVL's stamps `time_s` at
+    /// `time_offset_s`, read where it is not kept; `None` where it is not read at one
+    /// of them.
+    pub fn along(
+        &self,
+        (time_s, pieces): (&[f64], &[Range<usize>]),
+        time_offset_s: f64,
+        attitude: &Attitude,
+    ) -> Option<AttitudeAlong> {
+        let bits = time_offset_s.to_bits();
+        let mut kept = self.kept.lock().expect("the attitude read, not poisoned");
+        if let Some(k) = kept.iter().position(|(b, _)| *b == bits) {
+            let found = kept.remove(k);
+            kept.push(found.clone());
+            return Some(found.1);
+        }
+        let along: Option<Vec<Vec<Mat3>>> = (pieces.iter())
+            .map(|piece| attitude_along(&time_s[piece.clone()], time_offset_s, attitude))
+            .collect();
+        let along = Arc::new(along?);
+        if kept.len() == Self::KEPT {
+            kept.remove(0);
+        }
+        kept.push((bits, along.clone()));
+        Some(along)
+    }
+}
+
+/// [`dead_reckon`] with the attitude read already: `body_to_ned[i]` at stamp i plus
+/// the installation's time offset ([`attitude_along`]).
+pub fn dead_reckon_along(
+    installation: &Installation,
+    (time_s, dvl_m_s): (&[f64], &[Vec3]),
+    body_to_ned: &[Mat3],
+) -> Track {
     let mut track = Track {
         time_s: Vec::with_capacity(time_s.len()),
         position_m: Vec::with_capacity(time_s.len()),
     };
     let (mut dvl_point, mut previous) = ([0.0; 3], None::<(f64, Vec3)>);
-    for (&stamp, &dvl) in time_s.iter().zip(dvl_m_s) {
+    for ((&stamp, &dvl), body_to_ned) in time_s.iter().zip(dvl_m_s).zip(body_to_ned) {
         let t = stamp + installation.time_offset_s;
-        let body_to_ned = attitude.body_to_ned_at(t)?;
-        let velocity = apply(&body_to_ned, installation.correct(dvl, [0.0; 3]));
+        let velocity = apply(body_to_ned, installation.correct(dvl, [0.0; 3]));
         if let Some((before_s, before)) = previous {
             let dt = t - before_s;
             dvl_point = [0, 1, 2].map(|k| dvl_point[k] + 0.5 * dt * (before[k] + velocity[k]));
         }
-        let lever = apply(&body_to_ned, installation.lever_arm_m);
+        let lever = apply(body_to_ned, installation.lever_arm_m);
         track.time_s.push(t);
         track
             .position_m
             .push([0, 1, 2].map(|k| dvl_point[k] - lever[k]));
         previous = Some((t, velocity));
     }
-    Some(track)
+    track
 }
 
 /// A dead reckoning's horizontal error against the reference's positions, as a share
@@ -167,4 +238,56 @@ pub fn interior(attitude: &Attitude, time_s: &[f64], centre_s: f64) -> Range<usi
     let start = time_s.partition_point(|&t| t + centre_s - GAP_MARGIN_S < first);
     let end = time_s.partition_point(|&t| t + centre_s + GAP_MARGIN_S <= last);
     start..end.max(start)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A turning attitude at 10 Hz over 60 s, and a DVL at 2 Hz in two pieces.
+    fn turning() -> (Attitude, Vec<f64>, Vec<Vec3>, Vec<Range<usize>>) {
+        let attitude_s: Vec<f64> = (0..=600).map(|i| i as f64 / 10.0).collect();
+        let angles: Vec<Vec3> = (attitude_s.iter())
+            .map(|t| [0.02 * t.sin(), -0.01, 0.05 * t])
+            .collect();
+        let time_s: Vec<f64> = (4..=110).map(|i| i as f64 / 2.0).collect();
+        let dvl = (time_s.iter()).map(|t| [1.5, 0.1 * t.cos(), 0.0]).collect();
+        let pieces = vec![0..50, 50..time_s.len()];
+        (Attitude::new(&attitude_s, &angles), time_s, dvl, pieces)
+    }
+
+    #[test]
+    fn the_attitude_kept_gives_the_tracks_read_afresh_at_every_clock() {
+        let (attitude, time_s, dvl, pieces) = turning();
+        let read = AttitudeRead::default();
+        // Four clocks, the first again after the fourth evicted it, then the last kept.
+        for time_offset_s in [0.3, 0.301, 0.299, -1.0, 0.3, -1.0] {
+            let installation = Installation {
+                scale: [0.01; 3],
+                misalignment_rad: [0.0, 0.0, 0.02],
+                lever_arm_m: [0.8, -0.5, 0.1],
+                time_offset_s,
+                bias_m_s: [0.0; 3],
+            };
+            let along = read
+                .along((&time_s, &pieces), time_offset_s, &attitude)
+                .unwrap();
+            for (piece, body_to_ned) in pieces.iter().zip(along.iter()) {
+                let dvl = (&time_s[piece.clone()], &dvl[piece.clone()]);
+                let afresh = dead_reckon(&installation, dvl, &attitude).unwrap();
+                assert_eq!(dead_reckon_along(&installation, dvl, body_to_ned), afresh);
+            }
+            assert!(read.kept.lock().unwrap().len() <= AttitudeRead::KEPT);
+        }
+        // A clock that reads past the attitude's end reads nothing, and keeps nothing.
+        assert!(read.along((&time_s, &pieces), 10.0, &attitude).is_none());
+        assert!(
+            !read
+                .kept
+                .lock()
+                .unwrap()
+                .iter()
+                .any(|(b, _)| *b == 10f64.to_bits())
+        );
+    }
 }

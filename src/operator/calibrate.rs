@@ -10,7 +10,7 @@
 use crate::data::paired::bag::{BagFrames, is_bag};
 use crate::data::paired::{PairedError, PairedRecording, ReadCounts};
 use crate::installation::dead_reckoning::{Drift, drift_of};
-use crate::installation::estimate::bound::{Noise, TermBound, Why, bound};
+use crate::installation::estimate::bound::{Noise, TermBound, bound};
 use crate::installation::estimate::clock::{MAX_SEARCH_S, fit_searched};
 use crate::installation::estimate::filter::{FilterSettings, run_filter_from};
 use crate::installation::estimate::fit::{
@@ -543,23 +543,10 @@ fn save_refused(path: &Path) -> Result<(), CalibrateError> {
 /// value is noise, not the installation's) at zero. A term correlated with another, or
 /// known only loosely, is applied: together with the others it still corrects.
 fn seen_terms(fitted: &Fit, bounded: &TermBound) -> Installation {
-    let parameters: Vec<f64> = fitted
-        .parameters
-        .iter()
-        .zip(&bounded.names)
-        .map(|(&value, name)| match is_noise(bounded, name) {
-            true => 0.0,
-            false => value,
-        })
+    let parameters: Vec<f64> = (fitted.parameters.iter().zip(&bounded.applied))
+        .map(|(&value, &applied)| if applied { value } else { 0.0 })
         .collect();
     Installation::from_parameters(&fitted.terms, &parameters)
-}
-
-/// Whether the residuals do not depend on term `name` at all.
-pub fn is_noise(bounded: &TermBound, name: &str) -> bool {
-    bounded.unseen.iter().any(|unseen| {
-        unseen.term == name && matches!(&unseen.why, Why::Flat { with } if with.is_empty())
-    })
 }
 
 /// Writes the installation file of `fitted` and its bound, from the DVL file whose

@@ -20,7 +20,7 @@ use crate::installation::terms::names::{TermName, term_set};
 use crate::operator::calibrate::{CalibrateError, NOISE_RATIO_LIMIT, clear_of_inputs, named};
 use crate::operator::cost::{Cost, FIXES, PerRow, Rows};
 use crate::operator::inputs::{Reading, columns, fix_columns, source};
-use crate::operator::installation_file::{SavedInstallation, SavedTerm};
+use crate::operator::installation_file::SavedInstallation;
 use crate::results::ResultsError;
 use crate::results::corrected::{Outputs, corrected_samples, stem, write};
 use std::path::{Path, PathBuf};
@@ -482,13 +482,6 @@ fn fit_on(
     fit_fixes(dvl, &recording.pieces(), attitude, fixes, terms, noise)
 }
 
-/// The correlations among the first `count` parameters of `correlation`.
-fn correlation_of(correlation: &[Vec<f64>], count: usize) -> Vec<Vec<f64>> {
-    (correlation.iter().take(count))
-        .map(|row| row[..count].to_vec())
-        .collect()
-}
-
 /// The horizontal RMS of per-axis RMS values north and east, m.
 fn horizontal(rms_m: crate::Vec3) -> f64 {
     (rms_m[0].powi(2) + rms_m[1].powi(2)).sqrt()
@@ -562,36 +555,22 @@ fn save(
 ) -> Result<(), CalibrateError> {
     // The fixes' latency is theirs, not the DVL's installation's: kept apart.
     let dvl_terms = fit.terms.parameter_names().len();
-    let saved = (fit.names.iter().enumerate())
-        .take(dvl_terms)
-        .map(|(k, name)| SavedTerm {
-            name: name.to_string(),
-            value: if fit.is_applied(name) {
-                fit.value[k]
-            } else {
-                0.0
-            },
-            std: fit.std[k],
-        })
-        .collect();
-    let recording = (
-        args.files.dvl.display().to_string(),
-        recording_sha256.to_string(),
-    );
     // Fixes measure no velocity residual: what a dive this installation fits leaves is
     // the DVL's own noise, as given.
-    let mut file = SavedInstallation::of_terms(
-        (saved, correlation_of(&fit.correlation, dvl_terms)),
+    let mut file = SavedInstallation::of(
+        &fit.bound.first(dvl_terms),
         (args.terms, args.dive_terms),
-        recording,
+        (&args.files.dvl, recording_sha256),
         (args.dvl_noise_cm_s, 0.0),
         [args.dvl_noise_cm_s / 100.0; 3],
     )
     .of_fixes();
     // The fixes' latency, where estimated and applied, beside the installation: the
     // next dive's fixes, of the same system, are read by it.
-    if let Some(k) = (fit.names.iter()).position(|n| *n == FIX_LATENCY && fit.is_applied(n)) {
-        file = file.with_fix_latency(fit.value[k], fit.std[k]);
+    if let Some(k) =
+        (fit.bound.names.iter()).position(|n| *n == FIX_LATENCY && fit.bound.is_applied(n))
+    {
+        file = file.with_fix_latency(fit.bound.value[k], fit.bound.std[k]);
     }
     file.write(path).map_err(|source| {
         CalibrateError::Write(ResultsError::Io {

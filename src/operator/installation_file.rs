@@ -215,23 +215,24 @@ impl SavedInstallation {
         self.between_dives.iter().find(|s| s.name == name)
     }
 
-    /// The installation of a calibration: `terms` fitted, with `bound`'s values,
-    /// standard deviations and correlations, those of `dive_terms` the dive's, the rest
-    /// the vehicle's.
-    pub fn of(
-        bound: &TermBound,
+    /// The installation of a calibration against any reference: `terms` fitted, with
+    /// `bound`'s values (a term not applied at zero), standard deviations and
+    /// correlations, those of `dive_terms` the dive's, the rest the vehicle's.
+    pub fn of<N>(
+        bound: &TermBound<N>,
         terms: (&[TermName], &[TermName]),
         recording: (&Path, &str),
         noise_cm_s: (f64, f64),
         residual_m_s: Vec3,
     ) -> SavedInstallation {
-        let saved = bound
-            .names
-            .iter()
-            .enumerate()
+        let saved = (bound.names.iter().enumerate())
             .map(|(i, name)| SavedTerm {
                 name: name.to_string(),
-                value: bound.value[i],
+                value: if bound.applied[i] {
+                    bound.value[i]
+                } else {
+                    0.0
+                },
                 std: bound.std[i],
             })
             .collect();

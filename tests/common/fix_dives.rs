@@ -266,12 +266,12 @@ pub fn coverage_of(
     let refused = fits.iter().filter(|f| f.is_none()).count();
     let fits: Vec<Vec<(&'static str, Option<bool>)>> = (fits.iter().flatten())
         .map(|fit| {
-            (0..fit.names.len())
+            (0..fit.bound.names.len())
                 .filter(|&k| fit.estimated[k])
                 .map(|k| {
-                    let error = (fit.value[k] - truth[k]).abs();
-                    let covered = error <= fit.half_width_95(k);
-                    (fit.names[k], fit.applied[k].then_some(covered))
+                    let error = (fit.bound.value[k] - truth[k]).abs();
+                    let covered = error <= fit.bound.half_width_95(k);
+                    (fit.bound.names[k], fit.bound.applied[k].then_some(covered))
                 })
                 .collect()
         })
@@ -309,8 +309,13 @@ pub fn joint_coverage(
         let vehicle = fix_vehicle(&group[..3], &["time_offset_s"]);
         let next = &group[3];
         for (i, name) in vehicle.names.iter().enumerate() {
-            let k = next.names.iter().position(|n| n == name).expect("a term");
-            let Some(between) = vehicle.between[i].filter(|_| next.applied[k]) else {
+            let k = next
+                .bound
+                .names
+                .iter()
+                .position(|n| n == name)
+                .expect("a term");
+            let Some(between) = vehicle.between[i].filter(|_| next.bound.applied[k]) else {
                 continue;
             };
             let inside = |(low, high): (f64, f64), x: f64| low <= x && x <= high;
@@ -318,7 +323,7 @@ pub fn joint_coverage(
             let counts = [
                 joint,
                 inside(between.vehicle_95(), truth[k]),
-                inside(between.next_dive_95(), next.value[k]),
+                inside(between.next_dive_95(), next.bound.value[k]),
             ];
             for (count, inside) in held[i].iter_mut().zip(counts) {
                 *count += usize::from(inside);

@@ -41,44 +41,47 @@ fn the_vehicles_terms_are_the_dives_weighed_by_their_information() {
             "lever_arm_y_m"
         ]
     );
-    let at = |name: &str| fit.names.iter().position(|n| *n == name).unwrap();
+    let at = |name: &str| fit.bound.names.iter().position(|n| *n == name).unwrap();
     for (i, name) in vehicle.names.iter().enumerate() {
         let k = at(name);
         assert!(vehicle.applied[i], "{name}");
         assert!(
-            (vehicle.value[i] - fit.value[k]).abs() <= 1e-9 * fit.std[k],
+            (vehicle.value[i] - fit.bound.value[k]).abs() <= 1e-9 * fit.bound.std[k],
             "{name}"
         );
-        let std = fit.std[k] / 2f64.sqrt();
+        let std = fit.bound.std[k] / 2f64.sqrt();
         assert!((vehicle.std[i] / std - 1.0).abs() < 1e-9, "{name}");
         for (j, other) in vehicle.names.iter().enumerate() {
             let own = if i == j {
                 1.0
             } else {
-                fit.correlation[k][at(other)]
+                fit.bound.correlation[k][at(other)]
             };
             assert!(
                 (vehicle.correlation[i][j] - own).abs() < 1e-9,
                 "{name}, {other}"
             );
         }
-        assert_eq!(vehicle.own[1][i], Some((fit.value[k], fit.std[k])));
+        assert_eq!(
+            vehicle.own[1][i],
+            Some((fit.bound.value[k], fit.bound.std[k]))
+        );
     }
     // Two dives show no spread between dives: it takes three.
     assert!(vehicle.between.iter().all(Option::is_none));
     let yaw = at("misalignment_z_rad");
     let mut without_yaw = fit.clone();
-    without_yaw.applied[yaw] = false;
-    without_yaw.value[yaw] += 1.0;
+    without_yaw.bound.applied[yaw] = false;
+    without_yaw.bound.value[yaw] += 1.0;
     let vehicle = fix_vehicle(&[without_yaw, fit.clone()], &["time_offset_s"]);
     assert_eq!(vehicle.own[0][1], None);
-    assert!((vehicle.value[1] - fit.value[yaw]).abs() <= 1e-9 * fit.std[yaw]);
-    assert!((vehicle.std[1] / fit.std[yaw] - 1.0).abs() < 1e-9);
+    assert!((vehicle.value[1] - fit.bound.value[yaw]).abs() <= 1e-9 * fit.bound.std[yaw]);
+    assert!((vehicle.std[1] / fit.bound.std[yaw] - 1.0).abs() < 1e-9);
     // Nor the other terms: weighed term by term, each lies within the dives' own.
     for (i, name) in vehicle.names.iter().enumerate() {
         let k = at(name);
         assert!(
-            (vehicle.value[i] - fit.value[k]).abs() <= 1e-9 * fit.std[k],
+            (vehicle.value[i] - fit.bound.value[k]).abs() <= 1e-9 * fit.bound.std[k],
             "{name}"
         );
     }
@@ -90,22 +93,22 @@ fn the_vehicles_terms_are_the_dives_weighed_by_their_information() {
 fn each_vehicle_term_lies_between_the_dives_own() {
     let fit = one_fit();
     let mut other = fit.clone();
-    for k in 0..other.names.len() {
-        other.value[k] += 3.0 * other.std[k];
-        other.std[k] *= 0.5;
+    for k in 0..other.bound.names.len() {
+        other.bound.value[k] += 3.0 * other.bound.std[k];
+        other.bound.std[k] *= 0.5;
     }
     let vehicle = fix_vehicle(&[fit.clone(), other], &["time_offset_s"]);
-    let at = |name: &str| fit.names.iter().position(|n| *n == name).unwrap();
+    let at = |name: &str| fit.bound.names.iter().position(|n| *n == name).unwrap();
     for (i, name) in vehicle.names.iter().enumerate() {
         let k = at(name);
         // (1 · θ + 4 · (θ + 3 s)) / 5 = θ + 2.4 s; standard deviation s / √5.
-        let expected = fit.value[k] + 2.4 * fit.std[k];
+        let expected = fit.bound.value[k] + 2.4 * fit.bound.std[k];
         assert!(
-            (vehicle.value[i] - expected).abs() < 1e-9 * fit.std[k],
+            (vehicle.value[i] - expected).abs() < 1e-9 * fit.bound.std[k],
             "{name}"
         );
         assert!(
-            (vehicle.std[i] / (fit.std[k] / 5f64.sqrt()) - 1.0).abs() < 1e-9,
+            (vehicle.std[i] / (fit.bound.std[k] / 5f64.sqrt()) - 1.0).abs() < 1e-9,
             "{name}"
         );
     }

@@ -123,12 +123,15 @@ fn coverage(
         .map(|seed| {
             let segment = &segments[seed as usize % segments.len()];
             let (fit, _) = fitted_dive(segment, correlation_at_1_s, fixes, seed).ok()?;
-            let terms = (0..fit.names.len())
+            let terms = (0..fit.bound.names.len())
                 .filter(|&k| fit.estimated[k])
                 .map(|k| {
-                    let error = (fit.value[k] - truth[k]).abs();
-                    let applied = fit.is_applied(fit.names[k]);
-                    (fit.names[k], applied.then(|| error <= fit.half_width_95(k)))
+                    let error = (fit.bound.value[k] - truth[k]).abs();
+                    let applied = fit.bound.is_applied(fit.bound.names[k]);
+                    (
+                        fit.bound.names[k],
+                        applied.then(|| error <= fit.bound.half_width_95(k)),
+                    )
                 })
                 .collect();
             Some(terms)
@@ -212,14 +215,14 @@ fn a_fix_hundreds_of_metres_off_is_left_out_and_the_fit_is_the_clean_ones() {
     .unwrap();
     assert_eq!(clean.outliers, Vec::<usize>::new());
     assert_eq!(fit.outliers, vec![40, 50]);
-    for k in (0..fit.names.len()).filter(|&k| fit.estimated[k]) {
+    for k in (0..fit.bound.names.len()).filter(|&k| fit.estimated[k]) {
         assert!(
-            (fit.value[k] - clean.value[k]).abs() < 0.25 * clean.std[k],
+            (fit.bound.value[k] - clean.bound.value[k]).abs() < 0.25 * clean.bound.std[k],
             "{}: {} against {} ± {} without the two fixes",
-            fit.names[k],
-            fit.value[k],
-            clean.value[k],
-            clean.std[k]
+            fit.bound.names[k],
+            fit.bound.value[k],
+            clean.bound.value[k],
+            clean.bound.std[k]
         );
     }
 }
@@ -247,14 +250,18 @@ fn a_straight_dive_applies_no_lever_arm_clock_or_yaw_and_says_why() {
         "time_offset_s",
         "misalignment_z_rad",
     ] {
-        assert!(!fit.is_applied(name), "{name} applied: {:?}", fit.unseen);
         assert!(
-            fit.unseen.iter().any(|u| u.term == name),
+            !fit.bound.is_applied(name),
+            "{name} applied: {:?}",
+            fit.bound.unseen
+        );
+        assert!(
+            fit.bound.unseen.iter().any(|u| u.term == name),
             "{name}: {:?}",
-            fit.unseen
+            fit.bound.unseen
         );
     }
-    assert!(fit.is_applied("scale"), "{:?}", fit.unseen);
+    assert!(fit.bound.is_applied("scale"), "{:?}", fit.bound.unseen);
     let applied = fit.installation;
     assert_eq!(
         (
@@ -265,7 +272,13 @@ fn a_straight_dive_applies_no_lever_arm_clock_or_yaw_and_says_why() {
         ([0.0; 3], 0.0, [0.0; 3])
     );
     for name in ["lever_arm_x_m", "time_offset_s", "misalignment_z_rad"] {
-        let why = &fit.unseen.iter().find(|u| u.term == name).unwrap().why;
+        let why = &fit
+            .bound
+            .unseen
+            .iter()
+            .find(|u| u.term == name)
+            .unwrap()
+            .why;
         assert!(why.to_string().contains("show only as it turns"), "{why}");
     }
 }
@@ -288,7 +301,7 @@ fn fixes_over_a_stretch_of_few_headings_apply_no_term_only_turns_show() {
         "time_offset_s",
         "misalignment_z_rad",
     ];
-    assert!(turns_only.iter().all(|name| whole.is_applied(name)));
+    assert!(turns_only.iter().all(|name| whole.bound.is_applied(name)));
     // The longest stretch of the dive over which the heading spans under 80°.
     let attitude = Attitude::of(&segment.recording);
     let yaw = |t: f64| {
@@ -329,9 +342,9 @@ fn fixes_over_a_stretch_of_few_headings_apply_no_term_only_turns_show() {
     let fit = fit_fixes((&time_s, &dvl), &pieces, &attitude, &start, terms, noise).unwrap();
     for name in turns_only {
         assert!(
-            !fit.is_applied(name),
+            !fit.bound.is_applied(name),
             "{name} applied over {window:?} s: {:?}",
-            fit.unseen
+            fit.bound.unseen
         );
     }
     assert!(

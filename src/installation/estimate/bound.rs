@@ -89,6 +89,14 @@ pub enum Why {
     OneHeading { span_rad: f64 },
 }
 
+impl Why {
+    /// Whether the residuals do not depend on the term at all, alone: its value is
+    /// noise, not the installation's.
+    pub fn is_flat_alone(&self) -> bool {
+        matches!(self, Why::Flat { with } if with.is_empty())
+    }
+}
+
 impl fmt::Display for Why {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -123,9 +131,26 @@ pub struct Unseen {
     pub why: Why,
 }
 
-/// The standard deviations of a fit's terms, in the order of its parameters.
+/// The noise a fit's residuals showed, from which its standard deviations were read:
+/// the quantile a 95 % interval takes in them.
+pub trait ReadNoise {
+    /// The half-width of a 95 % interval in standard deviations: Student's t₀.₉₇₅ on the
+    /// degrees of freedom the noise was read with.
+    fn quantile_95(&self) -> f64;
+}
+
+impl ReadNoise for ResidualNoise {
+    fn quantile_95(&self) -> f64 {
+        ResidualNoise::quantile_95(self)
+    }
+}
+
+/// The terms a fit found, in the order of its parameters, whichever reference it was
+/// fitted to: each one's value, standard deviations and correlations, whether it is
+/// applied, and why any is not seen; `N` the noise its standard deviations were read
+/// from (the velocity residuals' [`ResidualNoise`] by default).
 #[derive(Debug, Clone, PartialEq)]
-pub struct TermBound {
+pub struct TermBound<N = ResidualNoise> {
     pub names: Vec<&'static str>,
     pub value: Vec<f64>,
     /// Standard deviations under the noise the fit's residuals show, in each term's
@@ -134,19 +159,23 @@ pub struct TermBound {
     /// The Fisher bound's: under the specified white noise.
     pub bound_std: Vec<f64>,
     /// Correlation coefficients of the estimates, `[term][term]`; NaN with a term of
-    /// infinite std.
+    /// infinite std, or one not applied.
     pub correlation: Vec<Vec<f64>>,
     /// Every reason each term cannot be seen (a term may appear more than once), from
     /// `std` and `correlation`.
     pub unseen: Vec<Unseen>,
+    /// Whether each term is applied: a term the residuals do not depend on at all (its
+    /// value noise, not the installation's) is held at zero; one known loosely or tied
+    /// to another is applied at its value, said to be seen poorly.
+    pub applied: Vec<bool>,
     /// The noise the residuals show.
-    pub residual_noise: ResidualNoise,
+    pub residual_noise: N,
 }
 
-impl TermBound {
+impl<N: ReadNoise> TermBound<N> {
     /// The half-width of the 95 % interval of term `k`: its standard deviation times
     /// Student's t on the degrees of freedom of the noise it was read from
-    /// ([`ResidualNoise::quantile_95`]), which a short window of correlated noise widens.
+    /// ([`ReadNoise::quantile_95`]), which a short window of correlated noise widens.
     pub fn half_width_95(&self, k: usize) -> f64 {
         self.residual_noise.quantile_95() * self.std[k]
     }
@@ -154,6 +183,36 @@ impl TermBound {
     /// Whether the window cannot show the term named `name`.
     pub fn is_unseen(&self, name: &str) -> bool {
         self.unseen.iter().any(|unseen| unseen.term == name)
+    }
+
+    /// The first `count` terms alone (a fit to fixes places the fixes' latency after
+    /// the installation's terms).
+    pub fn first(&self, count: usize) -> TermBound<N>
+    where
+        N: Clone,
+    {
+        let correlation = (self.correlation.iter().take(count))
+            .map(|row| row[..count].to_vec())
+            .collect();
+        TermBound {
+            names: self.names[..count].to_vec(),
+            value: self.value[..count].to_vec(),
+            std: self.std[..count].to_vec(),
+            bound_std: self.bound_std[..count].to_vec(),
+            correlation,
+            unseen: (self.unseen.iter())
+                .filter(|u| self.names[..count].contains(&u.term))
+                .cloned()
+                .collect(),
+            applied: self.applied[..count].to_vec(),
+            residual_noise: self.residual_noise.clone(),
+        }
+    }
+
+    /// Whether the term named `name` is one of these and applied.
+    pub fn is_applied(&self, name: &str) -> bool {
+        let k = self.names.iter().position(|n| *n == name);
+        k.is_some_and(|k| self.applied[k])
     }
 }
 
@@ -198,6 +257,14 @@ pub fn bound(fit: &Fit, noise: Noise, tolerances: &Tolerances) -> TermBound {
     let unseen = unseen(&names, &flat_with, &std, &correlation, |k| {
         tolerances.of(kinds[k])
     });
+    let applied = names
+        .iter()
+        .map(|name| {
+            !unseen
+                .iter()
+                .any(|u| u.term == *name && u.why.is_flat_alone())
+        })
+        .collect();
     TermBound {
         names,
         value: fit.parameters.clone(),
@@ -205,6 +272,7 @@ pub fn bound(fit: &Fit, noise: Noise, tolerances: &Tolerances) -> TermBound {
         bound_std,
         correlation,
         unseen,
+        applied,
         residual_noise,
     }
 }

@@ -57,17 +57,19 @@ impl FixVehicle {
 /// parameters that are each dive's own.
 pub fn fix_vehicle(fits: &[FixFit], dive: &[&str]) -> FixVehicle {
     let first = &fits[0];
-    let columns: Vec<usize> = (0..first.names.len())
+    let columns: Vec<usize> = (0..first.bound.names.len())
         .filter(|&k| first.estimated[k])
-        .filter(|&k| first.names[k] != FIX_LATENCY && !dive.contains(&first.names[k]))
+        .filter(|&k| first.bound.names[k] != FIX_LATENCY && !dive.contains(&first.bound.names[k]))
         .collect();
     let own: Vec<Vec<Option<(f64, f64)>>> = fits
         .iter()
         .map(|fit| {
             (columns.iter())
                 .map(|&k| {
-                    let shown = fit.applied[k] && fit.std[k].is_finite() && fit.std[k] > 0.0;
-                    shown.then_some((fit.value[k], fit.std[k]))
+                    let shown = fit.bound.applied[k]
+                        && fit.bound.std[k].is_finite()
+                        && fit.bound.std[k] > 0.0;
+                    shown.then_some((fit.bound.value[k], fit.bound.std[k]))
                 })
                 .collect()
         })
@@ -109,7 +111,7 @@ pub fn fix_vehicle(fits: &[FixFit], dive: &[&str]) -> FixVehicle {
         })
         .collect();
     FixVehicle {
-        names: columns.iter().map(|&k| first.names[k]).collect(),
+        names: columns.iter().map(|&k| first.bound.names[k]).collect(),
         applied,
         value,
         std,
@@ -135,7 +137,7 @@ fn correlation(
                 let ((_, si), (_, sj)) = (own[k][i]?, own[k][j]?);
                 let c = match i == j {
                     true => 1.0,
-                    false => fit.correlation[columns[i]][columns[j]],
+                    false => fit.bound.correlation[columns[i]][columns[j]],
                 };
                 Some(weight(k, i) * weight(k, j) * si * sj * c)
             })

@@ -34,6 +34,31 @@ pub struct FixNoiseModel {
     pub wander_time_s: f64,
 }
 
+/// The noise the residuals of a fit to fixes showed: the shape they chose, the variance
+/// factor of their whitened sum of squares, and its degrees of freedom n − p.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FixResidualNoise {
+    pub shape: NoiseShape,
+    pub variance_factor: f64,
+    pub freedom: usize,
+}
+
+impl FixResidualNoise {
+    /// A 95 % interval's half-width in standard deviations: Student's t₀.₉₇₅ on n − p
+    /// degrees of freedom.
+    pub fn quantile_95(&self) -> f64 {
+        use statrs::distribution::{ContinuousCDF, StudentsT};
+        let t = StudentsT::new(0.0, 1.0, self.freedom.max(1) as f64).expect("positive freedom");
+        t.inverse_cdf(0.975)
+    }
+}
+
+impl crate::installation::estimate::bound::ReadNoise for FixResidualNoise {
+    fn quantile_95(&self) -> f64 {
+        FixResidualNoise::quantile_95(self)
+    }
+}
+
 /// The shape of the noise of a fit to fixes, relative to the noises given: the dead
 /// reckoning's walk in the white DVL noise's, and the fixes' wandering error's variance
 /// in their white error's, with its correlation time. The residuals choose it among

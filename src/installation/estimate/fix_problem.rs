@@ -9,7 +9,7 @@
 
 use crate::Vec3;
 use crate::data::fixes::Fixes;
-use crate::installation::dead_reckoning::{Track, dead_reckon, interior};
+use crate::installation::dead_reckoning::{AttitudeRead, Track, dead_reckon_along, interior};
 use crate::installation::estimate::bound::{Unseen, normal_step, whitened_bound};
 use crate::installation::estimate::fit::{MAX_LEVER_ARM_M, MAX_SCALE, TIME_OFFSET_MARGIN_S};
 use crate::installation::estimate::fix_noise::{NoiseShape, Whitener, Whitening};
@@ -120,6 +120,8 @@ pub(super) struct Problem<'a> {
     relative: Vec<f64>,
     pub(super) outside: usize,
     pub(super) axes: usize,
+    /// The attitude read along each piece at the clocks read last.
+    read: AttitudeRead,
 }
 
 impl<'a> Problem<'a> {
@@ -197,6 +199,7 @@ impl<'a> Problem<'a> {
             held,
             fix_of,
             axes,
+            read: AttitudeRead::default(),
         };
         problem.enough(&vec![true; problem.fix_of.len()], &problem.estimated)?;
         Ok(problem)
@@ -275,14 +278,17 @@ impl<'a> Problem<'a> {
     /// Each piece's track under the term parameters `terms`.
     pub(super) fn tracks(&self, terms: &[f64]) -> Result<Vec<Track>, FixFitError> {
         let installation = self.installation(terms);
-        (self.pieces.iter())
-            .map(|piece| {
+        let time_offset_s = installation.time_offset_s;
+        let along = (self.read)
+            .along((self.dvl.0, &self.pieces), time_offset_s, self.attitude)
+            .ok_or(FixFitError::NoAttitude { time_offset_s })?;
+        let tracks = (self.pieces.iter().zip(along.iter()))
+            .map(|(piece, body_to_ned)| {
                 let dvl = (&self.dvl.0[piece.clone()], &self.dvl.1[piece.clone()]);
-                dead_reckon(&installation, dvl, self.attitude).ok_or(FixFitError::NoAttitude {
-                    time_offset_s: installation.time_offset_s,
-                })
+                dead_reckon_along(&installation, dvl, body_to_ned)
             })
-            .collect()
+            .collect();
+        Ok(tracks)
     }
 
     /// The residuals before the start positions (the track less the fix), in blocks of

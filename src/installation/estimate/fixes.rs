@@ -48,8 +48,8 @@
 
 use crate::Vec3;
 use crate::data::fixes::Fixes;
-use crate::installation::estimate::bound::{Unseen, Why};
-use crate::installation::estimate::fix_noise::NoiseShape;
+use crate::installation::estimate::bound::{TermBound, Unseen, Why};
+use crate::installation::estimate::fix_noise::FixResidualNoise;
 use crate::installation::estimate::fix_problem::{Problem, Solution};
 pub use crate::installation::estimate::fix_terms::{
     FIX_LATENCY, FIX_TOLERANCES, FixFitError, FixNoise, FixTerms,
@@ -97,28 +97,13 @@ pub struct FixFit {
     pub terms: TermSet,
     pub installation: Installation,
     /// Each parameter of `terms`, in their order, then the fixes' latency
-    /// ([`FIX_LATENCY`]) where it was fitted: its name, its value (for a term not
-    /// applied, that of the fit it was left out of), its standard deviation and Fisher
-    /// bound, and whether it was estimated at all (a horizontal fit does not estimate
+    /// ([`FIX_LATENCY`]) where it was fitted: its value (for a term not applied, that of
+    /// the fit it was left out of), standard deviations, correlations, whether it is
+    /// applied and why any is seen poorly or not at all.
+    pub bound: TermBound<FixResidualNoise>,
+    /// Whether each parameter was estimated at all (a horizontal fit does not estimate
     /// roll, pitch or the lever arm's depth).
-    pub names: Vec<&'static str>,
-    pub value: Vec<f64>,
-    pub std: Vec<f64>,
-    pub bound_std: Vec<f64>,
     pub estimated: Vec<bool>,
-    /// Whether each parameter is applied: estimated, and not left out as one the fixes
-    /// cannot show at all.
-    pub applied: Vec<bool>,
-    /// The correlations of the parameters applied, `[term][term]` over `names`; NaN
-    /// with one not applied.
-    pub correlation: Vec<Vec<f64>>,
-    /// Why each term not applied cannot be seen, and why each applied is seen poorly.
-    pub unseen: Vec<Unseen>,
-    /// The noise's shape the residuals chose.
-    pub noise_shape: NoiseShape,
-    /// The variance factor of the whitened residuals, and its degrees of freedom n − p.
-    pub variance_factor: f64,
-    pub freedom: usize,
     /// The fixes fitted, those left out as outliers (their indices in the fixes), and
     /// those outside every piece of the DVL record (beyond its margin).
     pub fitted: usize,
@@ -135,28 +120,6 @@ pub struct FixFit {
     /// How far the dead reckoning with the terms applied travelled, horizontally, over
     /// the times the fixes fitted span (each piece from its first fix to its last), m.
     pub distance_m: f64,
-}
-
-impl FixFit {
-    /// The half-width of the 95 % interval of parameter `k`: Student's t on
-    /// [`Self::freedom`] times its standard deviation.
-    pub fn half_width_95(&self, k: usize) -> f64 {
-        self.student_t_95() * self.std[k]
-    }
-
-    /// Student's t on [`Self::freedom`] at 97.5 %: a 95 % interval's half-width in
-    /// standard deviations.
-    pub fn student_t_95(&self) -> f64 {
-        use statrs::distribution::{ContinuousCDF, StudentsT};
-        let t = StudentsT::new(0.0, 1.0, self.freedom.max(1) as f64).expect("positive freedom");
-        t.inverse_cdf(0.975)
-    }
-
-    /// Whether the parameter named `name` was applied.
-    pub fn is_applied(&self, name: &str) -> bool {
-        let k = self.names.iter().position(|n| *n == name);
-        k.is_some_and(|k| self.applied[k])
-    }
 }
 
 /// Fits `terms` (scale, misalignment, lever arm, time offset; any other is refused by
@@ -202,17 +165,21 @@ pub fn fit_fixes_around(
     Ok(FixFit {
         terms: terms.set,
         installation: problem.installation(&value),
-        names: problem.names.clone(),
-        value: shown.value,
-        std: shown.std,
-        bound_std: shown.bound_std,
+        bound: TermBound {
+            names: problem.names.clone(),
+            value: shown.value,
+            std: shown.std,
+            bound_std: shown.bound_std,
+            correlation,
+            unseen: shown.unseen,
+            applied: shown.applied,
+            residual_noise: FixResidualNoise {
+                shape: last.shape,
+                variance_factor: last.variance_factor(),
+                freedom: last.freedom,
+            },
+        },
         estimated: problem.estimated.clone(),
-        applied: shown.applied,
-        correlation,
-        unseen: shown.unseen,
-        noise_shape: last.shape,
-        variance_factor: last.variance_factor(),
-        freedom: last.freedom,
         fitted: last.kept.iter().filter(|&&kept| kept).count(),
         outliers: (last.kept.iter().enumerate())
             .filter(|(_, kept)| !**kept)
@@ -367,7 +334,13 @@ mod tests {
         assert!((found.lever_arm_m[0] - 0.8).abs() < 0.05, "{found:?}");
         assert!((found.lever_arm_m[1] + 0.5).abs() < 0.05, "{found:?}");
         assert!((found.time_offset_s - 1.0).abs() < 0.02, "{found:?}");
-        assert!(fit.applied.iter().zip(&fit.estimated).all(|(a, e)| a == e));
+        assert!(
+            fit.bound
+                .applied
+                .iter()
+                .zip(&fit.estimated)
+                .all(|(a, e)| a == e)
+        );
         assert!(fit.outliers.is_empty());
     }
 
@@ -385,8 +358,8 @@ mod tests {
         };
         let fit = fit_fixes((&time_s, &dvl), &pieces, &attitude, &fixes, terms, NOISE).unwrap();
         let found = fit.installation;
-        let latency = fit.value[fit.names.len() - 1];
-        assert_eq!(fit.names.last(), Some(&FIX_LATENCY));
+        let latency = fit.bound.value[fit.bound.names.len() - 1];
+        assert_eq!(fit.bound.names.last(), Some(&FIX_LATENCY));
         assert!((latency - 1.0).abs() < 0.02, "{latency} {found:?}");
         assert!((found.time_offset_s - 1.0).abs() < 0.02, "{found:?}");
         assert!((found.lever_arm_m[0] - 0.8).abs() < 0.05, "{found:?}");

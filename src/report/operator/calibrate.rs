@@ -74,34 +74,7 @@ fn printed_fit(calibration: &Calibration) -> String {
         noise,
         ..
     } = calibration;
-    let mut table = Table::new();
-    table.load_preset(ASCII_MARKDOWN);
-    table.set_header([
-        "term",
-        "estimate",
-        "standard deviation",
-        "bound (specified noise)",
-        "seen",
-        "95 % interval",
-    ]);
-    for (i, name) in bound.names.iter().enumerate() {
-        let (readable, unit, factor) = readable_term(name);
-        let seen = if crate::operator::calibrate::is_noise(bound, name) {
-            "no, not applied"
-        } else if bound.is_unseen(name) {
-            "no"
-        } else {
-            "yes"
-        };
-        table.add_row([
-            readable,
-            format!("{:.4} {unit}", bound.value[i] * factor),
-            format!("{:.4} {unit}", bound.std[i] * factor),
-            format!("{:.4} {unit}", bound.bound_std[i] * factor),
-            seen.to_string(),
-            format!("± {:.4} {unit}", bound.half_width_95(i) * factor),
-        ]);
-    }
+    let table = super::terms_table(bound, |_| true);
     let shown = bound.residual_noise;
     let assumed = 100.0 * noise.per_axis_m_s();
     let mut text = format!(

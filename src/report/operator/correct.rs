@@ -166,8 +166,8 @@ pub fn fix_correction_text(correction: &FixCorrection) -> String {
     for (k, term) in saved.terms.iter().enumerate() {
         let (readable, unit, factor) = readable_term(&term.name);
         let (std, from) = match (term.name.as_str(), &correction.clock) {
-            ("time_offset_s", Some(clock)) if clock.fit.is_applied("time_offset_s") => (
-                format!("{:.4} {unit}", clock.fit.std[0] * factor),
+            ("time_offset_s", Some(clock)) if clock.fit.bound.is_applied("time_offset_s") => (
+                format!("{:.4} {unit}", clock.fit.bound.std[0] * factor),
                 "this dive's fixes".to_string(),
             ),
             ("time_offset_s", Some(_)) => ("-".to_string(), "carried".to_string()),
@@ -226,8 +226,8 @@ pub fn fix_correction_text(correction: &FixCorrection) -> String {
 /// How the clock was found again from the fixes, or why the carried one stands.
 fn clock_text(clock: &crate::operator::correct_fixes::FixClock) -> String {
     let fit = &clock.fit;
-    if !fit.is_applied("time_offset_s") {
-        let why: Vec<String> = fit.unseen.iter().map(|u| u.why.to_string()).collect();
+    if !fit.bound.is_applied("time_offset_s") {
+        let why: Vec<String> = fit.bound.unseen.iter().map(|u| u.why.to_string()).collect();
         return format!(
             "clock not found again: the {} fixes cannot show it ({}); the carried {:.4} s is applied\n",
             clock.fixes_used,
@@ -239,12 +239,12 @@ fn clock_text(clock: &crate::operator::correct_fixes::FixClock) -> String {
         "clock found again from {} fixes: the time offset at {:.4} s ± {:.4} s (95 %: ± {:.4} s, Student's t on {} degrees of freedom), {:+.4} s from the {:.4} s carried{}\n",
         clock.fixes_used,
         clock.time_offset_s(),
-        fit.std[0],
-        fit.half_width_95(0),
-        fit.freedom,
-        fit.value[0],
+        fit.bound.std[0],
+        fit.bound.half_width_95(0),
+        fit.bound.residual_noise.freedom,
+        fit.bound.value[0],
         clock.carried_s,
-        match fit.unseen.is_empty() {
+        match fit.bound.unseen.is_empty() {
             true => "",
             false =>
                 " (seen poorly: its standard deviation is beyond the tolerance a clock is held to)",

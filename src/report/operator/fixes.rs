@@ -10,7 +10,6 @@ use crate::installation::estimate::fixes::{FIX_TOLERANCES, MIN_HEADING_SPAN_RAD}
 use crate::installation::estimate::robust::TUKEY_C_MODELLED;
 use crate::operator::calibrate_fixes::FixCalibration;
 use crate::report::kit::readable::{readable_term, readable_why};
-use comfy_table::{Table, presets::ASCII_MARKDOWN};
 
 /// `fixes` fixes read, each `latency_s` before its stamp where there is a latency (and
 /// where it is from, in words), and those left out before any fit, each with its
@@ -61,7 +60,7 @@ pub fn fix_noise(fix_m: f64, own: bool) -> String {
 /// Everything `calibrate --fixes` prints; ends in a newline.
 pub fn fixes_text(calibration: &FixCalibration) -> String {
     let FixCalibration { fit, noise, .. } = calibration;
-    let table = terms_table(fit);
+    let table = super::terms_table(&fit.bound, |k| fit.estimated[k]);
     let mut text = from_bag(&calibration.from_bag);
     text.push_str(&format!(
         "read: {}; {}, {} fitted ({} outside the DVL's pieces, {} outliers beyond Tukey's {TUKEY_C_MODELLED} of their standard deviations, left out), over {} piece{} with a start position each\n{table}\n",
@@ -77,7 +76,7 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
         fit.pieces,
         if fit.pieces == 1 { "" } else { "s" },
     ));
-    let shape = fit.noise_shape;
+    let shape = fit.bound.residual_noise.shape;
     let wander = match shape.wander_ratio {
         0.0 => "white fixes".to_string(),
         ratio => format!(
@@ -93,10 +92,10 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
     ));
     text.push_str(&format!(
         "standard deviation: under that noise, scaled by the variance factor {} the fixes' whitened residuals show (1 where the noise is as given: fixes {}{}); bound: under the noise as given, white fixes and white DVL noise; 95 % interval: Student's t on {} degrees of freedom\n",
-        crate::ThreeFigures(fit.variance_factor),
+        crate::ThreeFigures(fit.bound.residual_noise.variance_factor),
         fix_noise(noise.fix_m, calibration.own_noise),
         if fit.axes == 3 { format!(", depth {:.2} m", noise.depth_m) } else { String::new() },
-        fit.freedom,
+        fit.bound.residual_noise.freedom,
     ));
     if fit.axes == 2 {
         text.push_str("not estimated: the misalignment's roll and pitch and the lever arm's depth, which horizontal fixes do not feel (give the fixes' depth for roll and pitch)\n");
@@ -126,15 +125,15 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
 /// each, each line opening with `prefix`.
 pub fn unseen_lines(fit: &FixFit, prefix: &str) -> String {
     let mut text = String::new();
-    for name in &fit.names {
-        let reasons: Vec<String> = (fit.unseen.iter())
+    for name in &fit.bound.names {
+        let reasons: Vec<String> = (fit.bound.unseen.iter())
             .filter(|u| u.term == *name)
             .map(|u| u.why.to_string())
             .collect();
         if !reasons.is_empty() {
             text.push_str(&format!(
                 "{prefix}{}: {}: {}\n",
-                if fit.is_applied(name) {
+                if fit.bound.is_applied(name) {
                     "seen poorly, applied"
                 } else {
                     "not seen, not applied"
@@ -153,59 +152,22 @@ pub fn unseen_lines(fit: &FixFit, prefix: &str) -> String {
 /// shift far better than that reading, so the two are often tied and their sum known
 /// where neither is. A line, or nothing.
 fn clock_and_latency(fit: &FixFit) -> String {
-    let place = |name: &str| (fit.names.iter()).position(|n| *n == name && fit.is_applied(n));
+    let place =
+        |name: &str| (fit.bound.names.iter()).position(|n| *n == name && fit.bound.is_applied(n));
     let (Some(clock), Some(latency)) = (place("time_offset_s"), place(FIX_LATENCY)) else {
         return String::new();
     };
-    let correlation = fit.correlation[clock][latency];
-    let (a, b) = (fit.std[clock], fit.std[latency]);
+    let correlation = fit.bound.correlation[clock][latency];
+    let (a, b) = (fit.bound.std[clock], fit.bound.std[latency]);
     let std = (a * a + b * b + 2.0 * correlation * a * b).max(0.0).sqrt();
-    let half_width = fit.student_t_95() * std;
+    let half_width = fit.bound.residual_noise.quantile_95() * std;
     format!(
         "the DVL's clock and the fixes' latency, correlated {correlation:.3}: their sum, the shift of the whole track against the fixes, {:.4} s, standard deviation {std:.4} s, 95 % interval ± {half_width:.4} s{}\n",
-        fit.value[clock] + fit.value[latency],
+        fit.bound.value[clock] + fit.bound.value[latency],
         if correlation.abs() > crate::installation::estimate::bound::CORRELATION_LIMIT {
             " (the fixes tell the two apart only through the attitude read at the DVL's clock; the sum is what they show)"
         } else {
             ""
         },
     )
-}
-
-/// The terms estimated: each one's estimate, standard deviation, bound, whether it is
-/// applied, and its 95 % interval, in readable units.
-fn terms_table(fit: &FixFit) -> Table {
-    let mut table = Table::new();
-    table.load_preset(ASCII_MARKDOWN);
-    table.set_header([
-        "term",
-        "estimate",
-        "standard deviation",
-        "bound (specified noise)",
-        "applied",
-        "95 % interval",
-    ]);
-    for (k, name) in fit.names.iter().enumerate() {
-        if !fit.estimated[k] {
-            continue;
-        }
-        let (readable, unit, factor) = readable_term(name);
-        table.add_row([
-            readable,
-            format!("{:.4} {unit}", fit.value[k] * factor),
-            format!("{:.4} {unit}", fit.std[k] * factor),
-            format!("{:.4} {unit}", fit.bound_std[k] * factor),
-            match (
-                fit.is_applied(name),
-                fit.unseen.iter().any(|u| u.term == *name),
-            ) {
-                (true, false) => "yes",
-                (true, true) => "yes, seen poorly",
-                (false, _) => "no, not seen",
-            }
-            .to_string(),
-            format!("± {:.4} {unit}", fit.half_width_95(k) * factor),
-        ]);
-    }
-    table
 }

@@ -80,7 +80,7 @@ fn dives_table(calibration: &JointFixCalibration) -> Table {
         let (readable, unit, _) = readable_term(n);
         format!("{readable}, alone ({unit})")
     }));
-    let latency = alone[0].fit.names.contains(&FIX_LATENCY);
+    let latency = alone[0].fit.bound.names.contains(&FIX_LATENCY);
     header.extend([
         "clock alone (s)".to_string(),
         "clock, vehicle's terms (s)".to_string(),
@@ -129,10 +129,10 @@ fn dives_table(calibration: &JointFixCalibration) -> Table {
 fn shown(fit: &FixFit, name: &str) -> String {
     let value = |k: usize| match name {
         "time_offset_s" => fit.installation.time_offset_s,
-        _ => fit.value[k],
+        _ => fit.bound.value[k],
     };
-    match fit.names.iter().position(|n| *n == name) {
-        Some(k) if fit.applied[k] => format!("{:.3} ± {:.3}", value(k), fit.std[k]),
+    match fit.bound.names.iter().position(|n| *n == name) {
+        Some(k) if fit.bound.applied[k] => format!("{:.3} ± {:.3}", value(k), fit.bound.std[k]),
         _ => "-".to_string(),
     }
 }

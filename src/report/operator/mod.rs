@@ -11,6 +11,43 @@ pub mod fixes;
 pub mod fixes_joint;
 
 use crate::installation::dead_reckoning::Drift;
+use crate::installation::estimate::bound::{ReadNoise, TermBound};
+use crate::report::kit::readable::readable_term;
+use comfy_table::{Table, presets::ASCII_MARKDOWN};
+
+/// The terms of a calibration against any reference, those `shown` (a fit to
+/// horizontal fixes estimates no roll or pitch): each one's estimate, standard
+/// deviation, Fisher bound, whether it is applied (and seen poorly), and its 95 %
+/// interval, in readable units.
+pub fn terms_table<N: ReadNoise>(bound: &TermBound<N>, shown: impl Fn(usize) -> bool) -> Table {
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    table.set_header([
+        "term",
+        "estimate",
+        "standard deviation",
+        "bound (specified noise)",
+        "applied",
+        "95 % interval",
+    ]);
+    for (k, name) in bound.names.iter().enumerate().filter(|(k, _)| shown(*k)) {
+        let (readable, unit, factor) = readable_term(name);
+        let applied = match (bound.applied[k], bound.is_unseen(name)) {
+            (true, false) => "yes",
+            (true, true) => "yes, seen poorly",
+            (false, _) => "no, not seen",
+        };
+        table.add_row([
+            readable,
+            format!("{:.4} {unit}", bound.value[k] * factor),
+            format!("{:.4} {unit}", bound.std[k] * factor),
+            format!("{:.4} {unit}", bound.bound_std[k] * factor),
+            applied.to_string(),
+            format!("± {:.4} {unit}", bound.half_width_95(k) * factor),
+        ]);
+    }
+    table
+}
 
 /// The line that says how far a dead reckoning drifts with no terms and with the terms
 /// applied, against the reference's positions; empty where it records none.
