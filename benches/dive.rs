@@ -306,7 +306,9 @@ fn memory() {
             .arg(&fixes)
             .arg("--columns")
             .arg(d.join("fix_columns.toml"))
-            .args(["--fix-noise-m", "0.5"]);
+            .args(["--fix-noise-m", "0.5"])
+            .arg("--out")
+            .arg(d.join(format!("fixes{k}-out")));
         let peak = peak_of(command);
         println!(
             "| {} | {name}, a fix every {} s | {} | {:.0} MB | {:.0} MB | {:.0} |",

@@ -96,13 +96,14 @@ impl AttitudeRead {
             kept.push(found.clone());
             return Some(found.1);
         }
+        // The oldest let go first: no more than KEPT are ever held.
+        if kept.len() == Self::KEPT {
+            kept.remove(0);
+        }
         let along: Option<Vec<Vec<Mat3>>> = (pieces.iter())
             .map(|piece| attitude_along(&time_s[piece.clone()], time_offset_s, attitude))
             .collect();
         let along = Arc::new(along?);
-        if kept.len() == Self::KEPT {
-            kept.remove(0);
-        }
         kept.push((bits, along.clone()));
         Some(along)
     }

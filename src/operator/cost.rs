@@ -63,8 +63,8 @@ pub const JOINT: PerRow = PerRow {
 /// `calibrate --fixes`: the DVL's and the attitude's rows read, the fixes', and the fit's
 /// dead reckoning and whitened fixes (linear in each: the fixes' noise is never held as
 /// an n × n covariance). Peaks of an hour's dive with the attitude at 100 Hz, the DVL
-/// at 100 Hz with a fix a second (188 MB) and at 10 Hz with ten fixes a second
-/// (130 MB; `cargo bench --bench dive -- --memory fixes`), rounded up.
+/// at 100 Hz with a fix a second (257 MB) and at 10 Hz with ten fixes a second
+/// (135 MB; `cargo bench --bench dive -- --memory fixes`), rounded up.
 pub const FIXES: PerRow = PerRow {
     command: "calibrate with fixes",
     dvl: 600.0,
