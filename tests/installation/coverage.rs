@@ -13,7 +13,7 @@ use crate::common;
 
 use common::installed;
 use dcnet_exp::data::paired::{PairedColumns, PairedFiles, read};
-use dcnet_exp::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise, bound};
+use dcnet_exp::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise, ReadNoise, bound};
 use dcnet_exp::installation::estimate::clock::ClockSearch;
 use dcnet_exp::installation::estimate::filter::{FilterSettings, run_filter_observed};
 use dcnet_exp::installation::estimate::fit::fit;

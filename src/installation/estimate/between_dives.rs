@@ -20,7 +20,7 @@
 //! (`tests/installation/between_dives.rs`). In: each dive's own estimate of one term.
 //! Out: a [`BetweenDives`], or nothing where fewer than [`MIN_DIVES`] dives show it.
 
-use statrs::distribution::{ContinuousCDF, StudentsT};
+use crate::evaluate::statistics::student_t_975;
 
 /// The fewest dives whose spread is estimated: two dives give one degree of freedom
 /// for the mean and the spread together.
@@ -79,9 +79,7 @@ pub fn between_dives(own: &[(f64, f64)]) -> Option<BetweenDives> {
     let q = spread / freedom;
     let mean_variance = q / weight;
     let own_variance = shown.iter().map(|(_, v)| v).sum::<f64>() / k as f64;
-    let quantile = StudentsT::new(0.0, 1.0, freedom)
-        .expect("positive degrees of freedom")
-        .inverse_cdf(0.975);
+    let quantile = student_t_975(freedom);
     Some(BetweenDives {
         dives: k,
         std: tau2.sqrt(),

@@ -14,6 +14,7 @@
 //! [`FLAT_EIGENVALUE`] times the largest is flat, and every term with a weight in it has
 //! an infinite standard deviation and is flagged, naming the others that share it.
 
+use crate::evaluate::statistics::student_t_975;
 use crate::installation::estimate::fit::Fit;
 use crate::installation::estimate::residual_noise::ResidualNoise;
 use crate::installation::terms::PerKind;
@@ -134,14 +135,19 @@ pub struct Unseen {
 /// The noise a fit's residuals showed, from which its standard deviations were read:
 /// the quantile a 95 % interval takes in them.
 pub trait ReadNoise {
-    /// The half-width of a 95 % interval in standard deviations: Student's t₀.₉₇₅ on the
-    /// degrees of freedom the noise was read with.
-    fn quantile_95(&self) -> f64;
+    /// The degrees of freedom the noise's level was read with.
+    fn freedom(&self) -> f64;
+
+    /// The half-width of a 95 % interval in standard deviations, though the noise's
+    /// level is itself estimated: Student's t₀.₉₇₅ on [`Self::freedom`].
+    fn quantile_95(&self) -> f64 {
+        student_t_975(self.freedom())
+    }
 }
 
 impl ReadNoise for ResidualNoise {
-    fn quantile_95(&self) -> f64 {
-        ResidualNoise::quantile_95(self)
+    fn freedom(&self) -> f64 {
+        ResidualNoise::freedom(self)
     }
 }
 

@@ -20,7 +20,7 @@
 
 use crate::Vec3;
 use crate::data::paired::sample_interval;
-use crate::installation::estimate::bound::{Noise, TermBound, Tolerances, bound};
+use crate::installation::estimate::bound::{Noise, ReadNoise, TermBound, Tolerances, bound};
 use crate::installation::estimate::fit::{
     Fit, FitError, TIME_OFFSET_MARGIN_S, TIME_OFFSET_SCAN_STEP_S, fit_about, linearised, mask_about,
 };
@@ -124,7 +124,7 @@ impl Clock {
 
     /// The half-width of the time offset's 95 % interval, s: its standard deviation
     /// times Student's t on the degrees of freedom of the window's noise
-    /// ([`crate::installation::estimate::residual_noise::ResidualNoise::quantile_95`]).
+    /// ([`crate::installation::estimate::bound::ReadNoise::quantile_95`]).
     pub fn time_offset_half_width_95_s(&self) -> f64 {
         self.bound.residual_noise.quantile_95() * self.time_offset_std_s()
     }

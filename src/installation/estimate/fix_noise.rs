@@ -43,19 +43,10 @@ pub struct FixResidualNoise {
     pub freedom: usize,
 }
 
-impl FixResidualNoise {
-    /// A 95 % interval's half-width in standard deviations: Student's t₀.₉₇₅ on n − p
-    /// degrees of freedom.
-    pub fn quantile_95(&self) -> f64 {
-        use statrs::distribution::{ContinuousCDF, StudentsT};
-        let t = StudentsT::new(0.0, 1.0, self.freedom.max(1) as f64).expect("positive freedom");
-        t.inverse_cdf(0.975)
-    }
-}
-
+/// Its degrees of freedom are n − p: the fixes' rows less the terms and starts fitted.
 impl crate::installation::estimate::bound::ReadNoise for FixResidualNoise {
-    fn quantile_95(&self) -> f64 {
-        FixResidualNoise::quantile_95(self)
+    fn freedom(&self) -> f64 {
+        self.freedom as f64
     }
 }
 

@@ -147,16 +147,6 @@ impl ResidualNoise {
         (per_axis.iter().sum::<f64>() / 3.0).max(1.0)
     }
 
-    /// The 95 % quantile a standard deviation read from this noise takes for an interval
-    /// that holds 95 %, though the noise's level and correlation are themselves estimated:
-    /// Student's t₀.₉₇₅ on [`Self::freedom`] degrees of freedom. 1.97 for white noise
-    /// over 400 samples, about 2.4 for a minute at 1 Hz under a correlation of 0.9.
-    pub fn quantile_95(&self) -> f64 {
-        use statrs::distribution::{ContinuousCDF, StudentsT};
-        let t = StudentsT::new(0.0, 1.0, self.freedom()).expect("positive degrees of freedom");
-        t.inverse_cdf(0.975)
-    }
-
     /// JᵀΣJ for a Jacobian whose rows are x, y, z of each sample in order: per axis, Σ's
     /// entry for samples i and j of one piece is σ² ρ^|i−j|, for samples of two pieces
     /// zero (`follows` as [`Self::of`]'s). With the running sum fᵢ = Jᵢ + ρ fᵢ₋₁ (fᵢ =

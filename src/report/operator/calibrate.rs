@@ -8,6 +8,7 @@
 use crate::evaluate::calibration_time::tolerance_band;
 use crate::installation::estimate::between_dives::BetweenDives;
 use crate::installation::estimate::between_dives::MIN_DIVES;
+use crate::installation::estimate::bound::ReadNoise;
 use crate::installation::estimate::filter::GATE_CHI2;
 use crate::installation::estimate::fit::TIME_OFFSET_MARGIN_S;
 use crate::installation::estimate::residual_noise::ResidualNoise;

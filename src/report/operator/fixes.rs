@@ -5,6 +5,7 @@
 //! travelled.
 //! In: a [`FixCalibration`]. Out: the text.
 
+use crate::installation::estimate::bound::ReadNoise;
 use crate::installation::estimate::fixes::{FIX_LATENCY, FixFit};
 use crate::installation::estimate::fixes::{FIX_TOLERANCES, MIN_HEADING_SPAN_RAD};
 use crate::installation::estimate::robust::TUKEY_C_MODELLED;
