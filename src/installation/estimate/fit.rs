@@ -596,9 +596,9 @@ pub fn jacobian_at(
 }
 
 /// The start of LM when τ is fitted: τ held at each step of the scan over `base`'s τ
-/// ± [`TIME_OFFSET_MARGIN_S`], the other terms of `terms` solved from `base`'s values,
-/// and the installation of the lowest cost kept. `problem` makes the problem of free
-/// terms and held ones.
+/// ([`scan_offsets`]), the other terms of `terms` solved from `base`'s values, and the
+/// installation of the lowest cost kept. `problem` makes the problem of free terms and
+/// held ones.
 fn scan_time_offset<'a>(
     problem: &impl Fn(TermSet, Installation) -> Problem<'a>,
     terms: TermSet,
@@ -608,11 +608,9 @@ fn scan_time_offset<'a>(
         time_offset: false,
         ..terms
     };
-    let steps = (TIME_OFFSET_MARGIN_S / TIME_OFFSET_SCAN_STEP_S).round() as i64;
-    let mut best: Option<(f64, Installation)> = None;
-    for step in -steps..=steps {
+    let scanned = scan_offsets(base.time_offset_s, |time_offset_s| {
         let held = Installation {
-            time_offset_s: base.time_offset_s + step as f64 * TIME_OFFSET_SCAN_STEP_S,
+            time_offset_s,
             ..base
         };
         let candidate = if others.parameter_count() == 0 {
@@ -620,12 +618,41 @@ fn scan_time_offset<'a>(
         } else {
             minimize(problem(others, held))?.0
         };
-        let cost = candidate.cost();
-        if best.as_ref().is_none_or(|(lowest, _)| cost < *lowest) {
-            best = Some((cost, candidate.installation()));
+        Ok(Some((candidate.cost(), candidate.installation())))
+    })?;
+    Ok(scanned.expect("the scan has steps").best)
+}
+
+/// The best of a scan over a time offset: the trial of the lowest cost, and whether it
+/// lies at an end of the scan (where the scan did not bracket the offset).
+pub struct Scanned<T> {
+    pub best: T,
+    pub at_an_end: bool,
+}
+
+/// The scan every fit starts a free time offset from: `trial` at each offset over
+/// `centre_s` ± [`TIME_OFFSET_MARGIN_S`] in steps of [`TIME_OFFSET_SCAN_STEP_S`], ends
+/// included, gives the cost of the other terms solved there and what it solved (nothing
+/// where it could not); the trial of the lowest cost is kept. Nothing where no trial
+/// gave a cost; a trial's error ends the scan.
+pub fn scan_offsets<T, E>(
+    centre_s: f64,
+    mut trial: impl FnMut(f64) -> Result<Option<(f64, T)>, E>,
+) -> Result<Option<Scanned<T>>, E> {
+    let steps = (TIME_OFFSET_MARGIN_S / TIME_OFFSET_SCAN_STEP_S).round() as i64;
+    let mut best: Option<(f64, i64, T)> = None;
+    for step in -steps..=steps {
+        let Some((cost, solved)) = trial(centre_s + step as f64 * TIME_OFFSET_SCAN_STEP_S)? else {
+            continue;
+        };
+        if best.as_ref().is_none_or(|(lowest, _, _)| cost < *lowest) {
+            best = Some((cost, step, solved));
         }
     }
-    Ok(best.expect("the scan has steps").1)
+    Ok(best.map(|(_, step, best)| Scanned {
+        best,
+        at_an_end: step.abs() == steps,
+    }))
 }
 
 /// The RMS per axis of `residuals` (x, y, z of each of `sample_count` samples).

@@ -12,6 +12,7 @@ use crate::data::fixes::Fixes;
 use crate::installation::dead_reckoning::{AttitudeRead, Track, dead_reckon_along, interior};
 use crate::installation::estimate::bound::{Unseen, normal_step, whitened_bound};
 use crate::installation::estimate::fit::{MAX_LEVER_ARM_M, MAX_SCALE, TIME_OFFSET_MARGIN_S};
+use crate::installation::estimate::fit::{TIME_OFFSET_SCAN_STEP_S, scan_offsets};
 use crate::installation::estimate::fix_noise::{NoiseShape, Whitener, Whitening};
 use crate::installation::estimate::fix_terms::{
     FIX_LATENCY, FIX_TOLERANCES, FixFitError, FixNoise, FixTerms,
@@ -29,9 +30,6 @@ use std::ops::Range;
 /// about 1e-11. On A-KIT's positions (no noise), the uncorrected lever arm alone makes
 /// the turns' jumps ten times the median, hence the floor at the noise given.
 const GROSS: f64 = 10.0;
-
-/// The scan's step for the time offset's start, s.
-const SCAN_STEP_S: f64 = 0.25;
 
 /// The terms averaged over the noise's walks: their values, standard deviations and
 /// correlations, over every parameter of the term set.
@@ -601,11 +599,10 @@ impl<'a> Problem<'a> {
             .collect())
     }
 
-    /// The fit from the best time offset of a scan over ±[`TIME_OFFSET_MARGIN_S`]
-    /// (each trial a least-squares fit of the other terms to the fixes `start` keeps),
-    /// then of every free term;
-    /// without a free time offset, least squares from zero. A best at the scan's edge
-    /// is refused.
+    /// The fit from the best time offset of the scan every fit starts from
+    /// ([`scan_offsets`], each trial a least-squares fit of the other terms to the
+    /// fixes `start` keeps), then of every free term; without a free time offset,
+    /// least squares from zero. A best at the scan's end is refused.
     fn scan_time_offset(&self, start: Solution, free: &[bool]) -> Result<Solution, FixFitError> {
         let ones = start.weights();
         let given = NoiseShape::GIVEN;
@@ -614,27 +611,20 @@ impl<'a> Problem<'a> {
         };
         let mut others = free.to_vec();
         others[offset] = false;
-        let steps = (TIME_OFFSET_MARGIN_S / SCAN_STEP_S).round() as i64;
-        let mut best: Option<(f64, i64, Solution)> = None;
-        for step in -steps..=steps {
+        let limit = self.limit(offset);
+        let scanned = scan_offsets(0.0, |time_offset_s| {
             let mut trial = start.clone();
-            let limit = self.limit(offset);
-            trial.terms[offset] = (step as f64 * SCAN_STEP_S).clamp(-limit, limit);
-            let Ok(solved) = self.solve(trial, &others, &ones, given) else {
-                continue;
-            };
-            let cost = solved.cost();
-            if best.as_ref().is_none_or(|(c, _, _)| cost < *c) {
-                best = Some((cost, step, solved));
-            }
-        }
-        let (_, step, best) = best.ok_or(FixFitError::NoAttitude { time_offset_s: 0.0 })?;
-        if step.abs() == steps {
+            trial.terms[offset] = time_offset_s.clamp(-limit, limit);
+            let solved = self.solve(trial, &others, &ones, given).ok();
+            Ok::<_, FixFitError>(solved.map(|solved| (solved.cost(), solved)))
+        })?;
+        let scanned = scanned.ok_or(FixFitError::NoAttitude { time_offset_s: 0.0 })?;
+        if scanned.at_an_end {
             return Err(FixFitError::ClockAtScanEdge {
-                time_offset_s: best.terms[offset],
+                time_offset_s: scanned.best.terms[offset],
             });
         }
-        self.solve(best, free, &ones, given)
+        self.solve(scanned.best, free, &ones, given)
     }
 
     /// Refuses a fit whose time offset, or the fixes' latency, went to the edge of the
@@ -659,7 +649,7 @@ impl<'a> Problem<'a> {
 
     /// Whether `solution`'s parameter `k` lies within a scan step of its limit.
     fn at_edge(&self, solution: &Solution, k: usize) -> bool {
-        solution.terms[k].abs() >= self.limit(k) - SCAN_STEP_S
+        solution.terms[k].abs() >= self.limit(k) - TIME_OFFSET_SCAN_STEP_S
     }
 
     /// `solution`'s fixes under no terms at all, only each piece's start fitted, under
