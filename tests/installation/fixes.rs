@@ -804,8 +804,8 @@ fn correct_with_fixes_finds_the_dives_clock_again_and_carries_the_rest() {
         &["--fix-noise-m", "0.5", "--time-offset-s", "50"],
         "--time-offset-s 50: the installation at the clock given does not fit the dive's fixes",
     );
-    // Fixes 5 s late on the attitude's clock: the search about the carried clock meets
-    // its edge, said as such (it read the attitude beyond its end before).
+    // Fixes 5 s late on the attitude's clock, beyond the search about the carried clock:
+    // refused, the clocks named (it read the attitude beyond its end before).
     let late: String = (std::fs::read_to_string(&fixes).unwrap().lines())
         .enumerate()
         .map(|(i, line)| match i {
@@ -822,7 +822,7 @@ fn correct_with_fixes_finds_the_dives_clock_again_and_carries_the_rest() {
     late_args.extend(["--columns", "columns.toml", "--fix-noise-m", "0.5"]);
     refused_naming(
         &common::dcnet(d, &late_args),
-        "lies at the edge of the ±3 s a fit to fixes searches",
+        "on another clock than the attitude's, more than the ±3 s a fit searches apart",
         &["fixes 5 s late"],
     );
     refused(

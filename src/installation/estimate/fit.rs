@@ -383,17 +383,31 @@ fn minimize(problem: Problem<'_>) -> Result<(Problem<'_>, String), FitError> {
 
 /// Runs LM on `problem` from its current parameters, to the relative `tolerance`.
 fn minimize_to(problem: Problem<'_>, tolerance: f64) -> Result<(Problem<'_>, String), FitError> {
+    let (problem, termination) = levenberg_marquardt(problem, tolerance, PATIENCE);
+    termination
+        .map(|termination| (problem, termination))
+        .map_err(|termination| FitError::NotConverged { termination })
+}
+
+/// The solve loop of every fit: Levenberg–Marquardt on `problem` from its parameters,
+/// stopped at the relative `tolerance` (on the cost, the step and the gradient) or
+/// after `patience` times (parameters + 1) evaluations; with how it stopped, an error
+/// where it did not converge.
+pub fn levenberg_marquardt<P: LeastSquaresProblem<f64, Dyn, Dyn>>(
+    problem: P,
+    tolerance: f64,
+    patience: usize,
+) -> (P, Result<String, String>) {
     let (problem, report) = LevenbergMarquardt::new()
         .with_ftol(tolerance)
         .with_xtol(tolerance)
         .with_gtol(tolerance)
-        .with_patience(PATIENCE)
+        .with_patience(patience)
         .minimize(problem);
     let termination = format!("{:?}", report.termination);
-    if report.termination.was_successful() {
-        Ok((problem, termination))
-    } else {
-        Err(FitError::NotConverged { termination })
+    match report.termination.was_successful() {
+        true => (problem, Ok(termination)),
+        false => (problem, Err(termination)),
     }
 }
 

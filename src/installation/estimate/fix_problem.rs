@@ -1,8 +1,8 @@
 //! The problem a fit to position fixes solves (for `fit_fixes`): the DVL's pieces
 //! that hold a fix and the fixes each holds; the residuals (the dead reckoning through
 //! the terms, less the fixes) and their Jacobian; their whitening under the noise
-//! ([`super::fix_noise`]), each piece's start profiled out; Gauss–Newton through the
-//! bound's own step; the scan over the time offset, the robust loop, the noise read from
+//! ([`super::fix_noise`]), each piece's start profiled out; the fits' one solve loop
+//! on them; the scan over the time offset, the robust loop, the noise read from
 //! the residuals and the terms averaged over its walks; and the bound of a solution.
 //! In: the DVL samples, an [`Attitude`], the [`Fixes`], the terms and the noise. Out: a
 //! [`Solution`] and its bound.
@@ -10,9 +10,11 @@
 use crate::Vec3;
 use crate::data::fixes::Fixes;
 use crate::installation::dead_reckoning::{AttitudeRead, Track, dead_reckon_along, interior};
-use crate::installation::estimate::bound::{Unseen, normal_step, whitened_bound};
+use crate::installation::estimate::bound::{Unseen, whitened_bound};
 use crate::installation::estimate::fit::{MAX_LEVER_ARM_M, MAX_SCALE, TIME_OFFSET_MARGIN_S};
-use crate::installation::estimate::fit::{TIME_OFFSET_SCAN_STEP_S, scan_offsets};
+use crate::installation::estimate::fit::{
+    TIME_OFFSET_SCAN_STEP_S, levenberg_marquardt, scan_offsets,
+};
 use crate::installation::estimate::fix_noise::{NoiseShape, Whitener, Whitening};
 use crate::installation::estimate::fix_terms::{
     FIX_LATENCY, FIX_TOLERANCES, FixFitError, FixNoise, FixTerms,
@@ -21,7 +23,9 @@ use crate::installation::estimate::robust::{Loss, gross_jumps};
 use crate::installation::frames::Attitude;
 use crate::installation::terms::kind::TermKind;
 use crate::installation::terms::{Installation, TermSet};
-use nalgebra::{DMatrix, DVector};
+use levenberg_marquardt::LeastSquaresProblem;
+use nalgebra::storage::Owned;
+use nalgebra::{DMatrix, DVector, Dyn};
 use std::ops::Range;
 
 /// How many times the median jump of the fixes' distance from the dead reckoning, one
@@ -30,6 +34,15 @@ use std::ops::Range;
 /// about 1e-11. On A-KIT's positions (no noise), the uncorrected lever arm alone makes
 /// the turns' jumps ten times the median, hence the floor at the noise given.
 const GROSS: f64 = 10.0;
+
+/// The relative tolerance that stops the solve loop on the fixes (on the cost, the
+/// step and the gradient): their Jacobian is by central differences, good to about
+/// 10⁻⁶ of a step's effect, so that a tighter one only spends evaluations.
+const TOLERANCE: f64 = 1e-10;
+
+/// The solve loop's patience on the fixes: it gives up after this many times
+/// (parameters + 1) evaluations, each a dead reckoning of every piece.
+const PATIENCE: usize = 100;
 
 /// The terms averaged over the noise's walks: their values, standard deviations and
 /// correlations, over every parameter of the term set.
@@ -383,8 +396,9 @@ impl<'a> Problem<'a> {
             .collect()
     }
 
-    /// Gauss–Newton on the whitened residuals from `solution`, with the `free` terms
-    /// and each fix weighed by `weights` (one per fitted fix), under `shape`.
+    /// The fit's solve loop ([`levenberg_marquardt`]) on the whitened residuals from
+    /// `solution`, with the `free` terms and each fix weighed by `weights` (one per
+    /// fitted fix), under `shape`.
     fn solve(
         &self,
         mut solution: Solution,
@@ -395,31 +409,27 @@ impl<'a> Problem<'a> {
         let whitening = self.whitening(weights, shape);
         let free_terms: Vec<usize> = (0..free.len()).filter(|&k| free[k]).collect();
         solution.information_log_det = 0.0;
-        for _ in 0..30 {
-            if free_terms.is_empty() {
-                break;
+        if !free_terms.is_empty() {
+            let whitened = Whitened {
+                problem: self,
+                whitening: &whitening,
+                free,
+                terms: solution.terms,
+                failed: std::cell::RefCell::new(None),
+            };
+            let (solved, termination) = levenberg_marquardt(whitened, TOLERANCE, PATIENCE);
+            if let Some(error) = solved.failed.into_inner() {
+                return Err(error);
             }
-            let residuals = DVector::from_vec(whitening.whiten(&self.residuals(&solution.terms)?));
+            termination.map_err(|termination| FixFitError::NotConverged { termination })?;
+            solution.terms = solved.terms;
             let columns: Vec<DVector<f64>> = (self.jacobian(&solution.terms, free)?.iter())
                 .map(|column| DVector::from_vec(whitening.whiten(column)))
                 .collect();
             let normal = DMatrix::from_fn(columns.len(), columns.len(), |a, b| {
                 columns[a].dot(&columns[b])
             });
-            let gradient = DVector::from_fn(columns.len(), |a, _| columns[a].dot(&residuals));
             solution.information_log_det = log_det_symmetric(&normal);
-            let names: Vec<&'static str> = free_terms.iter().map(|&k| self.names[k]).collect();
-            let step = normal_step(&normal, &gradient, &names);
-            for (column, &k) in free_terms.iter().enumerate() {
-                let limit = self.limit(k);
-                solution.terms[k] = (solution.terms[k] + step[column]).clamp(-limit, limit);
-            }
-            let scale_of_step = (free_terms.iter().enumerate())
-                .map(|(column, &k)| step[column].abs() / self.step_tolerance(k))
-                .fold(0.0, f64::max);
-            if scale_of_step < 1.0 {
-                break;
-            }
         }
         let residuals = self.residuals(&solution.terms)?;
         solution.starts = whitening.starts(&residuals);
@@ -454,14 +464,6 @@ impl<'a> Problem<'a> {
         match self.kinds[k] {
             TermKind::TimeOffset | TermKind::LeverArm => 1e-3,
             _ => 1e-6,
-        }
-    }
-
-    /// A step in parameter `k` below which Gauss–Newton has converged.
-    fn step_tolerance(&self, k: usize) -> f64 {
-        match self.kinds[k] {
-            TermKind::TimeOffset | TermKind::LeverArm => 1e-5,
-            _ => 1e-8,
         }
     }
 
@@ -500,6 +502,8 @@ impl<'a> Problem<'a> {
             solution.kept = weights.iter().map(|&w| w > 0.0).collect();
             let outliers = solution.kept.iter().filter(|&&k| !k).count();
             if 4 * outliers > self.fix_of.len() {
+                // A clock run to the scan's edge leaves most fixes outliers: said as such.
+                self.within_the_scan(&solution)?;
                 return Err(FixFitError::Outliers {
                     outliers,
                     within: self.fix_of.len(),
@@ -667,7 +671,7 @@ impl<'a> Problem<'a> {
     /// with its terms than with none (the start positions alone), under its noise, by
     /// more than one in the whitened sum of squares (what one parameter is expected to
     /// explain): where no term was already best (a dive corrected by its own
-    /// calibration), Gauss–Newton's last step may leave it a hair above.
+    /// calibration), the solve loop's last step may leave it a hair above.
     pub(super) fn better_than_none(&self, solution: &Solution) -> Result<(), FixFitError> {
         let whitening = self.whitening(&solution.weights(), solution.shape);
         let bare = whitening.whiten(&self.residuals(&vec![0.0; self.names.len()])?);
@@ -814,6 +818,64 @@ impl<'a> Problem<'a> {
             0 => f64::NAN,
             count => (sums[k] / count as f64).sqrt(),
         }))
+    }
+}
+
+/// The fixes' whitened residuals in the free terms, as the solve loop takes them: the
+/// terms a trial step takes beyond any installation's limits held at them, and the
+/// first error a residual met kept to be returned.
+struct Whitened<'p, 'a> {
+    problem: &'p Problem<'a>,
+    whitening: &'p Whitening,
+    free: &'p [bool],
+    terms: Vec<f64>,
+    failed: std::cell::RefCell<Option<FixFitError>>,
+}
+
+impl Whitened<'_, '_> {
+    fn free_terms(&self) -> impl Iterator<Item = usize> + '_ {
+        (0..self.free.len()).filter(|&k| self.free[k])
+    }
+
+    /// `value`, or nothing with its error kept.
+    fn kept<T>(&self, value: Result<T, FixFitError>) -> Option<T> {
+        value
+            .map_err(|error| *self.failed.borrow_mut() = Some(error))
+            .ok()
+    }
+}
+
+impl LeastSquaresProblem<f64, Dyn, Dyn> for Whitened<'_, '_> {
+    type ResidualStorage = Owned<f64, Dyn>;
+    type JacobianStorage = Owned<f64, Dyn, Dyn>;
+    type ParameterStorage = Owned<f64, Dyn>;
+
+    fn set_params(&mut self, parameters: &DVector<f64>) {
+        let free: Vec<usize> = self.free_terms().collect();
+        for (column, k) in free.into_iter().enumerate() {
+            let limit = self.problem.limit(k);
+            self.terms[k] = parameters[column].clamp(-limit, limit);
+        }
+    }
+
+    fn params(&self) -> DVector<f64> {
+        DVector::from_iterator(
+            self.free.iter().filter(|&&f| f).count(),
+            self.free_terms().map(|k| self.terms[k]),
+        )
+    }
+
+    fn residuals(&self) -> Option<DVector<f64>> {
+        let residuals = self.kept(self.problem.residuals(&self.terms))?;
+        Some(DVector::from_vec(self.whitening.whiten(&residuals)))
+    }
+
+    fn jacobian(&self) -> Option<DMatrix<f64>> {
+        let columns = self.kept(self.problem.jacobian(&self.terms, self.free))?;
+        let whitened: Vec<DVector<f64>> = (columns.iter())
+            .map(|column| DVector::from_vec(self.whitening.whiten(column)))
+            .collect();
+        Some(DMatrix::from_columns(&whitened))
     }
 }
 

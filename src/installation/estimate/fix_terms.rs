@@ -76,7 +76,7 @@ pub enum FixFitError {
         parameters: usize,
     },
     #[error(
-        "{outliers} of the {within} fixes within the DVL's pieces lie beyond the robust fit's reach of the dead reckoning: more than a quarter are outliers, so the fixes do not show the installation"
+        "{outliers} of the {within} fixes within the DVL's pieces lie beyond the robust fit's reach of the dead reckoning: more than a quarter are outliers, so the fixes do not show the installation (fixes on another clock than the attitude's, more than the ±{TIME_OFFSET_MARGIN_S} s a fit searches apart, leave most of them so: put them on one clock)"
     )]
     Outliers { outliers: usize, within: usize },
     #[error(
@@ -95,4 +95,6 @@ pub enum FixFitError {
         "the terms fitted leave the fixes further from the dead reckoning than no terms do (whitened sum of squares {with:.1} against {without:.1}): the fit found no installation the fixes show; the fixes may be on another clock, another vehicle's, or in another frame"
     )]
     WorseThanNone { with: f64, without: f64 },
+    #[error("the fit to the fixes did not converge: {termination}")]
+    NotConverged { termination: String },
 }

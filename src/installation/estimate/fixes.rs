@@ -21,8 +21,8 @@
 //! fix's white error, and its slowly wandering one (a Gauss–Markov error, its variance
 //! and correlation time read from the residuals), whitened by a Kalman filter over each
 //! piece's fixes on each axis, in time and memory linear in the fixes; each piece's
-//! start position is profiled out of the whitened residuals. The fit is Gauss–Newton on
-//! them (a Jacobian of central differences). The time offset starts from the best of a
+//! start position is profiled out of the whitened residuals. The fit is the velocity
+//! fit's solve loop (Levenberg–Marquardt) on them, a Jacobian of central differences. The time offset starts from the best of a
 //! scan over ±[`TIME_OFFSET_MARGIN_S`](super::fit::TIME_OFFSET_MARGIN_S); a best at
 //! the scan's edge is refused, as is a fit that leaves the fixes further from the track
 //! than no terms do. A fix grossly off is left out before the scan, and stays out.
