@@ -16,6 +16,7 @@ use crate::installation::estimate::fit::{
     TIME_OFFSET_SCAN_STEP_S, levenberg_marquardt, scan_offsets,
 };
 use crate::installation::estimate::fix_noise::{NoiseShape, Whitener, Whitening};
+use crate::installation::estimate::fix_solve::Whitened;
 use crate::installation::estimate::fix_terms::{
     FIX_LATENCY, FIX_TOLERANCES, FixFitError, FixNoise, FixTerms,
 };
@@ -23,9 +24,7 @@ use crate::installation::estimate::robust::{Loss, gross_jumps};
 use crate::installation::frames::Attitude;
 use crate::installation::terms::kind::TermKind;
 use crate::installation::terms::{Installation, TermSet};
-use levenberg_marquardt::LeastSquaresProblem;
-use nalgebra::storage::Owned;
-use nalgebra::{DMatrix, DVector, Dyn};
+use nalgebra::{DMatrix, DVector};
 use std::ops::Range;
 
 /// How many times the median jump of the fixes' distance from the dead reckoning, one
@@ -378,7 +377,11 @@ impl<'a> Problem<'a> {
 
     /// The Jacobian of the residuals in the free term parameters (central differences),
     /// a column per free term.
-    fn jacobian(&self, terms: &[f64], free: &[bool]) -> Result<Vec<Vec<f64>>, FixFitError> {
+    pub(super) fn jacobian(
+        &self,
+        terms: &[f64],
+        free: &[bool],
+    ) -> Result<Vec<Vec<f64>>, FixFitError> {
         (0..free.len())
             .filter(|&k| free[k])
             .map(|k| {
@@ -410,13 +413,16 @@ impl<'a> Problem<'a> {
         let free_terms: Vec<usize> = (0..free.len()).filter(|&k| free[k]).collect();
         solution.information_log_det = 0.0;
         if !free_terms.is_empty() {
-            let whitened = Whitened {
-                problem: self,
-                whitening: &whitening,
+            let residuals = |terms: &[f64]| self.residuals(terms);
+            let jacobian = |terms: &[f64], free: &[bool]| self.jacobian(terms, free);
+            let limits = (0..self.names.len()).map(|k| self.limit(k)).collect();
+            let whitened = Whitened::new(
+                (&residuals, &jacobian),
+                limits,
+                &whitening,
                 free,
-                terms: solution.terms,
-                failed: std::cell::RefCell::new(None),
-            };
+                solution.terms,
+            );
             let (solved, termination) = levenberg_marquardt(whitened, TOLERANCE, PATIENCE);
             if let Some(error) = solved.failed.into_inner() {
                 return Err(error);
@@ -818,64 +824,6 @@ impl<'a> Problem<'a> {
             0 => f64::NAN,
             count => (sums[k] / count as f64).sqrt(),
         }))
-    }
-}
-
-/// The fixes' whitened residuals in the free terms, as the solve loop takes them: the
-/// terms a trial step takes beyond any installation's limits held at them, and the
-/// first error a residual met kept to be returned.
-struct Whitened<'p, 'a> {
-    problem: &'p Problem<'a>,
-    whitening: &'p Whitening,
-    free: &'p [bool],
-    terms: Vec<f64>,
-    failed: std::cell::RefCell<Option<FixFitError>>,
-}
-
-impl Whitened<'_, '_> {
-    fn free_terms(&self) -> impl Iterator<Item = usize> + '_ {
-        (0..self.free.len()).filter(|&k| self.free[k])
-    }
-
-    /// `value`, or nothing with its error kept.
-    fn kept<T>(&self, value: Result<T, FixFitError>) -> Option<T> {
-        value
-            .map_err(|error| *self.failed.borrow_mut() = Some(error))
-            .ok()
-    }
-}
-
-impl LeastSquaresProblem<f64, Dyn, Dyn> for Whitened<'_, '_> {
-    type ResidualStorage = Owned<f64, Dyn>;
-    type JacobianStorage = Owned<f64, Dyn, Dyn>;
-    type ParameterStorage = Owned<f64, Dyn>;
-
-    fn set_params(&mut self, parameters: &DVector<f64>) {
-        let free: Vec<usize> = self.free_terms().collect();
-        for (column, k) in free.into_iter().enumerate() {
-            let limit = self.problem.limit(k);
-            self.terms[k] = parameters[column].clamp(-limit, limit);
-        }
-    }
-
-    fn params(&self) -> DVector<f64> {
-        DVector::from_iterator(
-            self.free.iter().filter(|&&f| f).count(),
-            self.free_terms().map(|k| self.terms[k]),
-        )
-    }
-
-    fn residuals(&self) -> Option<DVector<f64>> {
-        let residuals = self.kept(self.problem.residuals(&self.terms))?;
-        Some(DVector::from_vec(self.whitening.whiten(&residuals)))
-    }
-
-    fn jacobian(&self) -> Option<DMatrix<f64>> {
-        let columns = self.kept(self.problem.jacobian(&self.terms, self.free))?;
-        let whitened: Vec<DVector<f64>> = (columns.iter())
-            .map(|column| DVector::from_vec(self.whitening.whiten(column)))
-            .collect();
-        Some(DMatrix::from_columns(&whitened))
     }
 }
 

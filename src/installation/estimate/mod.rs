@@ -5,8 +5,8 @@
 //! still ask for; [`clock`] finds a dive's clock again with the rest carried; [`joint`]
 //! fits several recordings at once, and [`between_dives`] reads from it how far the
 //! vehicle's terms move between dives; [`fixes`] fits the terms to position fixes
-//! through the dead reckoning (the problem in `fix_problem`, what it is asked and its
-//! refusals in `fix_terms`) under the noise [`fix_noise`]
+//! through the dead reckoning (the problem in `fix_problem`, solved through `fix_solve`,
+//! what it is asked and its refusals in `fix_terms`) under the noise [`fix_noise`]
 //! whitens, for a vehicle with no velocity reference; [`filter`] estimates the terms sample by sample
 //! (an extended Kalman filter) with the noise [`filter_noise`] reads as it runs; and
 //! [`settling`] says how much of a recording the filter needed.
@@ -26,6 +26,7 @@ pub mod fixes;
 pub mod fix_joint;
 mod fix_terms;
 mod fix_problem;
+mod fix_solve;
 pub mod filter_noise;
 pub mod filter;
 pub mod settling;
