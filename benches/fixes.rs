@@ -9,7 +9,8 @@
 //! with `--fix-latency`'s parameter, and once not, to show what a latency left out
 //! does), and fixes each of its own noise (a quarter to four times 1 m, as a bag's
 //! covariances give them); each level in at least one case; the tests assert two of them. With `-- --fixes N`: one fit of N fixes, its seconds and
-//! peak memory (what the first part runs); with `-- --coverage`: the coverage alone.
+//! peak memory (what the first part runs); with `-- --coverage`: the coverage alone; with
+//! `-- --coverage K`: only the table's row K (from 1).
 
 #[allow(dead_code)]
 #[path = "../tests/common/fix_dives.rs"]
@@ -29,7 +30,11 @@ fn main() {
             .expect("--fixes N");
         return one_fit(count);
     }
-    if !args.iter().any(|a| a == "--coverage") {
+    let coverage_at = args.iter().position(|a| a == "--coverage");
+    let only_row: Option<usize> = coverage_at
+        .and_then(|at| args.get(at + 1))
+        .map(|k| k.parse().expect("--coverage K, a row from 1"));
+    if coverage_at.is_none() {
         println!("| fixes | seconds | peak resident memory, MB |\n|---|---|---|");
         for count in [10_000, 100_000] {
             let output = std::process::Command::new(std::env::current_exe().unwrap())
@@ -42,7 +47,10 @@ fn main() {
     println!(
         "\n| fixes, m | DVL noise | clock, s | fixes' latency, s | dives refused | scale | yaw | lever arm x | lever arm y | clock | latency |\n|---|---|---|---|---|---|---|---|---|---|---|"
     );
-    for case in CASES {
+    for (row, case) in CASES.into_iter().enumerate() {
+        if only_row.is_some_and(|k| k != row + 1) {
+            continue;
+        }
         let (table, refused) = coverage(&case, 400);
         let mut shares: Vec<String> = (table.iter())
             .map(|(_, share, applied)| format!("{:.1} % of {applied}", 100.0 * share))

@@ -44,8 +44,9 @@ const SCAN_SAMPLES: usize = 36_000;
 
 /// LM's patience: it gives up after this many times (parameters + 1) evaluations. A
 /// pair of terms a window hardly tells apart (a scale and a bias at constant speed)
-/// makes a long, flat valley, which LM's default of 100 does not always cross.
-const PATIENCE: usize = 2000;
+/// makes a long, flat valley, which LM's default of 100 does not always cross; so does a
+/// clock and a fix latency that the fixes' turns hardly tell apart.
+pub(super) const PATIENCE: usize = 2000;
 
 /// The relative tolerances that stop LM (on the cost, the step and the gradient).
 const TOLERANCE: f64 = 1e-12;

@@ -11,7 +11,9 @@ use crate::Vec3;
 use crate::data::fixes::Fixes;
 use crate::installation::dead_reckoning::{AttitudeRead, Track, dead_reckon_along, interior};
 use crate::installation::estimate::bound::{Unseen, whitened_bound};
-use crate::installation::estimate::fit::{MAX_LEVER_ARM_M, MAX_SCALE, TIME_OFFSET_MARGIN_S};
+use crate::installation::estimate::fit::{
+    MAX_LEVER_ARM_M, MAX_SCALE, PATIENCE, TIME_OFFSET_MARGIN_S,
+};
 use crate::installation::estimate::fit::{
     TIME_OFFSET_SCAN_STEP_S, levenberg_marquardt, scan_offsets,
 };
@@ -38,10 +40,6 @@ const GROSS: f64 = 10.0;
 /// step and the gradient): their Jacobian is by central differences, good to about
 /// 10⁻⁶ of a step's effect, so that a tighter one only spends evaluations.
 const TOLERANCE: f64 = 1e-10;
-
-/// The solve loop's patience on the fixes: it gives up after this many times
-/// (parameters + 1) evaluations, each a dead reckoning of every piece.
-const PATIENCE: usize = 100;
 
 /// The terms averaged over the noise's walks: their values, standard deviations and
 /// correlations, over every parameter of the term set.
