@@ -11,7 +11,7 @@
 
 use dcnet_exp::Vec3;
 use dcnet_exp::data::fixes::Fixes;
-use dcnet_exp::installation::estimate::fixes::FixFit;
+use dcnet_exp::installation::estimate::fixes::{FIX_LATENCY, FixFit};
 use dcnet_exp::installation::frames::Attitude;
 use dcnet_exp::installation::terms::Installation;
 use rand::{RngExt, SeedableRng};
@@ -257,7 +257,8 @@ pub fn coverage(case: &Case, dives: u64) -> (Vec<(&'static str, f64, usize)>, us
 }
 
 /// Of `fits` (`None` for a dive refused) of parameters whose truth is `truth`, per term
-/// estimated: the share of those that applied it whose 95 % interval holds the truth,
+/// estimated (a clock that is the sum of itself and the fixes' latency, the next
+/// latency, against the sum of theirs): the share of those that applied it whose 95 % interval holds the truth,
 /// and how many applied it; and how many dives were refused.
 pub fn coverage_of(
     fits: &[Option<FixFit>],
@@ -269,7 +270,13 @@ pub fn coverage_of(
             (0..fit.bound.names.len())
                 .filter(|&k| fit.estimated[k])
                 .map(|k| {
-                    let error = (fit.bound.value[k] - truth[k]).abs();
+                    // A clock that carries the fixes' latency too is their sum.
+                    let latency = (fit.bound.names.iter()).position(|n| *n == FIX_LATENCY);
+                    let truth = match (fit.bound.names[k], latency) {
+                        ("time_offset_s", Some(l)) if fit.clock_is_the_sum() => truth[k] + truth[l],
+                        _ => truth[k],
+                    };
+                    let error = (fit.bound.value[k] - truth).abs();
                     let covered = error <= fit.bound.half_width_95(k);
                     (fit.bound.names[k], fit.bound.applied[k].then_some(covered))
                 })

@@ -14,7 +14,7 @@ use dcnet_exp::installation::estimate::fixes::FixFit;
 /// Runs `case` over 400 dives and checks each term applied on most of them, and the
 /// terms pooled, within 93–97 % (a term's share over 400 has a standard error of 1.1 %:
 /// each within 91–98.5 %, the pool within 93–97 %); at most `refusals` dives refused
-/// (a clock at the scan's edge, where a steady turn ties the clock to the yaw).
+/// (a clock at the scan's edge that the fixes place there: not held).
 fn holds(case: Case, refusals: usize) -> (Vec<Option<FixFit>>, Vec<f64>) {
     let (fits, truth) = fits(&case, 400);
     let (table, refused) = coverage_of(&fits, &truth);
@@ -66,9 +66,10 @@ fn holds_jointly(fits: &[Option<FixFit>], truth: &[f64]) {
 /// Fixes of 2 m, where a clock of 1.5 s was once held at zero on half the dives and the
 /// other terms' intervals, taking it to be zero, failed. On the spiral, whose steady
 /// turn ties the clock to the yaw (a shift in time turns the track as a yaw does), about
-/// one dive in five (25 of these 400 dives) finds its clock at the scan's edge and is
-/// refused. The same dives calibrated jointly, three at a time, hold the joint
-/// calibration's intervals.
+/// one dive in five finds its clock at the scan's edge: held at zero there, its
+/// uncertainty carried into the others' intervals (23 of these 400 dives), where it was
+/// refused (25); 2 are refused. The same dives calibrated jointly, three at a time, hold
+/// the joint calibration's intervals.
 #[test]
 fn intervals_hold_with_fixes_of_two_metres_and_a_clock_of_a_second_and_a_half() {
     let (fits, truth) = holds(
@@ -80,7 +81,7 @@ fn intervals_hold_with_fixes_of_two_metres_and_a_clock_of_a_second_and_a_half() 
             noise_spread: 1.0,
             fits_latency: false,
         },
-        40,
+        8,
     );
     holds_jointly(&fits, &truth);
 }
@@ -89,7 +90,8 @@ fn intervals_hold_with_fixes_of_two_metres_and_a_clock_of_a_second_and_a_half() 
 /// times the white noise's in the long run), under fixes of 2 m: the walk is read from
 /// the residuals by their restricted likelihood, and the intervals hold. By likelihood
 /// alone, the scale took up the walk along the track, the walk was read at the white
-/// noise's on a quarter of the dives, and the scale's interval covered 86.6 %.
+/// noise's on a quarter of the dives, and the scale's interval covered 86.6 %. A clock
+/// run to the scan's edge is held with its uncertainty (14 dives); 5 are refused.
 #[test]
 fn intervals_hold_under_a_dvl_noise_correlated_in_time() {
     holds(
@@ -101,6 +103,45 @@ fn intervals_hold_under_a_dvl_noise_correlated_in_time() {
             noise_spread: 1.0,
             fits_latency: false,
         },
-        40,
+        10,
     );
+}
+
+/// Fixes of 2 m a second late, the latency fitted beside a clock of 0.6 s: each alone
+/// is known to 2–3 s, and the fit runs one or the other to the edge of the ±3 s search
+/// on about half the dives. Such a dive is fitted, not refused: the term at the edge
+/// held at zero with its uncertainty in the others' intervals, or, where the two are
+/// tied, the latency held and the clock their sum, its interval the sum's (each applied
+/// term's coverage over 400 dives in docs/installation.md). The first 24 dives hold
+/// both kinds; most terms' intervals hold the truth on them (the clock that is the sum
+/// against the sum of the truths).
+#[test]
+fn a_clock_or_latency_the_fixes_do_not_place_is_held_with_its_uncertainty_or_summed() {
+    use dcnet_exp::installation::estimate::bound::Why;
+    use dcnet_exp::installation::estimate::fixes::FIX_LATENCY;
+    let case = Case {
+        fix_m: 2.0,
+        correlation: 0.0,
+        clock_s: 0.6,
+        latency_s: 1.0,
+        noise_spread: 1.0,
+        fits_latency: true,
+    };
+    let (fits, truth) = fits(&case, 24);
+    let fitted: Vec<&FixFit> = fits.iter().flatten().collect();
+    let held =
+        |fit: &FixFit| (fit.bound.unseen.iter()).any(|u| matches!(u.why, Why::BeyondSearch { .. }));
+    let summed = fitted.iter().filter(|fit| fit.clock_is_the_sum()).count();
+    let held = fitted.iter().filter(|fit| held(fit)).count();
+    let (table, refused) = coverage_of(&fits, &truth);
+    println!("{summed} summed, {held} held, {refused} refused: {table:?}");
+    assert!(summed >= 1 && held >= 1, "{summed} summed, {held} held");
+    // A latency applied beside the clock, however tied to it, leaves the clock its own.
+    let both = (fitted.iter()).filter(|fit| fit.bound.is_applied(FIX_LATENCY));
+    assert!(both.clone().count() >= 1);
+    assert!(both.clone().all(|fit| !fit.clock_is_the_sum()));
+    assert!(refused <= 6, "{refused} refused");
+    let applied: usize = table.iter().map(|c| c.2).sum();
+    let pooled = table.iter().map(|c| c.1 * c.2 as f64).sum::<f64>() / applied as f64;
+    assert!(pooled >= 0.9, "pooled {pooled:.3}: {table:?}");
 }

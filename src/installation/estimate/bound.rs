@@ -88,6 +88,10 @@ pub enum Why {
     /// A term only turns show (the yaw, the lever arm, the clock) fitted to position
     /// fixes over headings that span only `span_rad`.
     OneHeading { span_rad: f64 },
+    /// A time term (the clock, the fixes' latency) fitted to fixes ran to the edge of its
+    /// search, ±`edge_s`, which lies within its 95 % interval of zero (its standard
+    /// deviation `std_s` there): the fixes do not place it within the search.
+    BeyondSearch { edge_s: f64, std_s: f64 },
 }
 
 impl Why {
@@ -120,6 +124,10 @@ impl fmt::Display for Why {
                 f,
                 "the vehicle's heading spans {:.0}° only: the yaw, the lever arm and the clock show only as it turns (at one heading the yaw is the attitude's heading error there, the lever arm and the clock a shift of the start)",
                 span_rad.to_degrees()
+            ),
+            Why::BeyondSearch { edge_s, std_s } => write!(
+                f,
+                "it ran to the edge of its search, ±{edge_s:.2} s, and its standard deviation there, {std_s:.2} s, puts that edge within its 95 % interval of zero: the fixes do not place it; held at zero, its uncertainty carried into the other terms' intervals"
             ),
         }
     }

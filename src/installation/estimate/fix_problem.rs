@@ -453,7 +453,7 @@ impl<'a> Problem<'a> {
     /// The largest magnitude parameter `k` may take: the time offset within the margin
     /// its fixes were chosen for, the others within any installation's
     /// ([`MAX_SCALE`], [`MAX_LEVER_ARM_M`], a quarter turn).
-    fn limit(&self, k: usize) -> f64 {
+    pub(super) fn limit(&self, k: usize) -> f64 {
         match self.kinds[k] {
             // Inside the margin by more than the Jacobian's step.
             TermKind::TimeOffset => TIME_OFFSET_MARGIN_S - 0.01,
@@ -735,11 +735,13 @@ impl<'a> Problem<'a> {
     /// weighed by its restricted likelihood: the mean of the fits' terms, and the mean
     /// of their covariances plus the spread of their terms about that mean. A walk read
     /// from the residuals of one dive is uncertain (at ρ = 0.8 over 600 s, between a quarter
-    /// and twice the truth's), and the terms' intervals carry that.
+    /// and twice the truth's), and the terms' intervals carry that. The terms `free` are
+    /// fitted; the covariance is that of `bounded`, those and any held at its value whose
+    /// uncertainty the others carry (marginalised over it).
     pub(super) fn averaged(
         &self,
         solution: &Solution,
-        free: &[bool],
+        (free, bounded): (&[bool], &[bool]),
     ) -> Result<Averaged, FixFitError> {
         let weights = solution.weights();
         let mut fits = Vec::new();
@@ -750,7 +752,8 @@ impl<'a> Problem<'a> {
             };
             let solved = self.solve(solution.clone(), free, &weights, shape)?;
             let likelihood = solved.likelihood(&self.whitening(&weights, shape));
-            let (std, correlation, _) = self.bound(&solved, free, shape, solved.variance_factor());
+            let (std, correlation, _) =
+                self.bound(&solved, bounded, shape, solved.variance_factor());
             fits.push((likelihood, solved.terms, std, correlation));
         }
         let best = fits.iter().map(|f| f.0).fold(f64::NEG_INFINITY, f64::max);
@@ -766,8 +769,8 @@ impl<'a> Problem<'a> {
         let mut covariance = vec![vec![0.0; n]; n];
         for (likelihood, terms, std, correlation) in &fits {
             let p = (likelihood - best).exp() / total;
-            for j in (0..n).filter(|&j| free[j]) {
-                for k in (0..n).filter(|&k| free[k]) {
+            for j in (0..n).filter(|&j| bounded[j]) {
+                for k in (0..n).filter(|&k| bounded[k]) {
                     let own = correlation[j][k] * std[j] * std[k];
                     let spread = (terms[j] - mean[j]) * (terms[k] - mean[k]);
                     covariance[j][k] += p * (own + spread);
@@ -775,7 +778,7 @@ impl<'a> Problem<'a> {
             }
         }
         let std: Vec<f64> = (0..n)
-            .map(|k| match free[k] {
+            .map(|k| match bounded[k] {
                 true => covariance[k][k].sqrt(),
                 false => f64::INFINITY,
             })
@@ -783,7 +786,7 @@ impl<'a> Problem<'a> {
         let correlation = (0..n)
             .map(|j| {
                 (0..n)
-                    .map(|k| match (free[j], free[k]) {
+                    .map(|k| match (bounded[j], bounded[k]) {
                         (true, true) => covariance[j][k] / (std[j] * std[k]),
                         _ if j == k => 1.0,
                         _ => f64::NAN,

@@ -40,15 +40,19 @@
 //! 95 % interval takes Student's t on n − p degrees of freedom. No term is held at zero
 //! for being known loosely: every term is applied at its estimate with its standard
 //! deviation (one beyond its tolerance in [`FIX_TOLERANCES`], or tied beyond
-//! [`CORRELATION_LIMIT`](super::bound::CORRELATION_LIMIT) to another, is said to be seen poorly), but where the fixes
+//! [`CORRELATION_LIMIT`] to another, is said to be seen poorly), but where the fixes
 //! cannot show it at all: over headings spanning under a quarter turn, the yaw, the
 //! lever arm and the clock; or a direction the residuals do not feel. Such a term is
 //! held at zero, as the dead reckoning's start absorbs it exactly, and the rest fitted
-//! again.
+//! again. A clock or a latency run to the edge of its search, where that edge lies
+//! within its 95 % interval of zero, is not placed by the fixes: it is held at zero and
+//! the others' intervals carry its uncertainty (marginalised over it); where the two
+//! are tied, the latency is held and the clock is their sum.
 
 use crate::Vec3;
 use crate::data::fixes::Fixes;
-use crate::installation::estimate::bound::{TermBound, Unseen, Why};
+use crate::evaluate::statistics::student_t_975;
+use crate::installation::estimate::bound::{CORRELATION_LIMIT, TermBound, Unseen, Why};
 use crate::installation::estimate::fix_noise::FixResidualNoise;
 use crate::installation::estimate::fix_problem::{Problem, Solution};
 pub use crate::installation::estimate::fix_terms::{
@@ -122,6 +126,22 @@ pub struct FixFit {
     pub distance_m: f64,
 }
 
+impl FixFit {
+    /// Whether the clock applied is the sum of the DVL's clock and the fixes' latency,
+    /// the latency held at zero: the fixes placed the track's shift against them, not
+    /// how the two split it.
+    pub fn clock_is_the_sum(&self) -> bool {
+        let held = |name: &str| {
+            (self.bound.names.iter()).any(|n| *n == name) && !self.bound.is_applied(name)
+        };
+        held(FIX_LATENCY)
+            && (self.bound.unseen.iter()).any(|u| {
+                u.term == FIX_LATENCY
+                    && matches!(u.why, Why::Correlated { with, .. } if with == "time_offset_s")
+            })
+    }
+}
+
 /// Fits `terms` (scale, misalignment, lever arm, time offset; any other is refused by
 /// the caller; and the fixes' latency where asked) to `fixes` from the DVL samples
 /// `dvl` cut into `pieces`, under `noise`.
@@ -155,8 +175,18 @@ pub fn fit_fixes_around(
     let mut shown = Shown::of(&problem);
     let last = shown.eliminate(&problem)?;
     problem.better_than_none(&last)?;
-    let (value, last_std, correlation) = problem.averaged(&last, &shown.applied)?;
-    let last_bound = problem.fisher_bound(&last, &shown.applied);
+    let bounded = shown.bounded();
+    let (value, mut last_std, mut correlation) =
+        problem.averaged(&last, (&shown.applied, &bounded))?;
+    let mut last_bound = problem.fisher_bound(&last, &bounded);
+    if let Some((clock, latency)) = shown.tied {
+        clock_as_the_sum(&mut last_std, &mut correlation, (clock, latency));
+        last_bound[clock] = problem.fisher_bound(&last, &shown.applied)[clock];
+        shown.keep(latency, (0.0, last_std[latency], last_bound[latency]));
+    }
+    for k in shown.held.clone() {
+        shown.keep(k, (0.0, last_std[k], last_bound[k]));
+    }
     for k in 0..problem.names.len() {
         if shown.applied[k] {
             shown.keep(k, (value[k], last_std[k], last_bound[k]));
@@ -203,6 +233,12 @@ struct Shown {
     value: Vec<f64>,
     std: Vec<f64>,
     bound_std: Vec<f64>,
+    /// Where the fixes did not tell the DVL's clock from their own latency: the places
+    /// of the clock, which carries their sum, and of the latency, held at zero.
+    tied: Option<(usize, usize)>,
+    /// The clock or the latency held at zero where the fixes do not place it within its
+    /// search.
+    held: Vec<usize>,
 }
 
 impl Shown {
@@ -216,6 +252,8 @@ impl Shown {
             value: vec![0.0; n],
             std: vec![f64::INFINITY; n],
             bound_std: vec![f64::INFINITY; n],
+            tied: None,
+            held: Vec::new(),
         };
         let span_rad = problem.heading_span_rad();
         if span_rad < MIN_HEADING_SPAN_RAD {
@@ -242,7 +280,13 @@ impl Shown {
     /// known loosely or tied to another stays, said to be seen poorly.
     fn eliminate(&mut self, problem: &Problem) -> Result<Solution, FixFitError> {
         loop {
-            let solution = problem.robust_fit(&self.applied)?;
+            let solution = match problem.robust_fit(&self.applied) {
+                Err(
+                    edge @ (FixFitError::ClockAtScanEdge { .. }
+                    | FixFitError::LatencyAtScanEdge { .. }),
+                ) => self.hold_at_the_edge(problem, edge)?,
+                fitted => fitted?,
+            };
             let factor = solution.variance_factor();
             let (term_std, _, found) =
                 problem.bound(&solution, &self.applied, solution.shape, factor);
@@ -258,6 +302,125 @@ impl Shown {
             self.applied[k] = false;
         }
     }
+
+    /// Where a fit ran the clock or the fixes' latency to the edge of its search
+    /// (`edge`), and the fit with that term held at zero places the edge within its 95 %
+    /// interval of zero (at 2 m every 5 s each is known to 2–3 s, and ±3 s is searched):
+    /// that fit, the term held with its uncertainty carried ([`Shown::bounded`]). Where
+    /// the clock and the latency are then tied beyond [`CORRELATION_LIMIT`], it is the
+    /// latency that is held, and the clock is their sum, the track's shift against the
+    /// fixes, which they place where they place neither alone. Otherwise `edge`, the
+    /// refusal it was: fixes stamped 5 s late place their shift far beyond the search.
+    fn hold_at_the_edge(
+        &mut self,
+        problem: &Problem,
+        edge: FixFitError,
+    ) -> Result<Solution, FixFitError> {
+        let applied = |name: &str| {
+            (problem.names.iter())
+                .position(|n| *n == name)
+                .filter(|&k| self.applied[k])
+        };
+        let (clock, latency) = (applied("time_offset_s"), applied(FIX_LATENCY));
+        let ran = match edge {
+            FixFitError::ClockAtScanEdge { .. } => clock,
+            FixFitError::LatencyAtScanEdge { .. } => latency,
+            _ => None,
+        };
+        let Some(ran) = ran else {
+            return Err(edge);
+        };
+        let hold = |k: usize| {
+            let mut held = self.applied.clone();
+            held[k] = false;
+            let solution = problem.robust_fit(&held).ok()?;
+            let factor = solution.variance_factor();
+            let (std, correlation, _) =
+                problem.bound(&solution, &self.applied, solution.shape, factor);
+            Some((held, solution, std, correlation))
+        };
+        let Some((mut held, mut solution, std, correlation)) = hold(ran) else {
+            return Err(edge);
+        };
+        if let (Some(clock), Some(latency)) = (clock, latency) {
+            let tied = correlation[clock][latency];
+            if tied.abs() > CORRELATION_LIMIT {
+                if ran == clock {
+                    let Some(by_latency) = hold(latency) else {
+                        return Err(edge);
+                    };
+                    (held, solution, _, _) = by_latency;
+                }
+                self.applied = held;
+                let why = Why::Correlated {
+                    with: "time_offset_s",
+                    correlation: tied,
+                };
+                self.unseen.push(Unseen {
+                    term: FIX_LATENCY,
+                    why,
+                });
+                self.tied = Some((clock, latency));
+                return Ok(solution);
+            }
+        }
+        let edge_s = problem.limit(ran);
+        if edge_s > student_t_975(solution.freedom as f64) * std[ran] {
+            return Err(edge);
+        }
+        self.applied = held;
+        let why = Why::BeyondSearch {
+            edge_s,
+            std_s: std[ran],
+        };
+        self.unseen.push(Unseen {
+            term: problem.names[ran],
+            why,
+        });
+        self.held.push(ran);
+        Ok(solution)
+    }
+
+    /// The terms whose uncertainty the intervals carry: those applied, and a clock or a
+    /// latency held at zero at the edge of its search.
+    fn bounded(&self) -> Vec<bool> {
+        let mut bounded = self.applied.clone();
+        for &k in self
+            .held
+            .iter()
+            .chain(self.tied.as_ref().map(|(_, latency)| latency))
+        {
+            bounded[k] = true;
+        }
+        bounded
+    }
+}
+
+/// The standard deviations `std` and `correlation`s of a fit whose `clock`, the latency
+/// held at zero, is the sum of itself and the `latency`, taken from those of both (the
+/// covariance marginalised over the latency): the clock's variance that of the sum, its
+/// covariance with each other term the sum of theirs; the latency keeps its standard
+/// deviation and correlates with nothing (it is not applied).
+fn clock_as_the_sum(
+    std: &mut [f64],
+    correlation: &mut [Vec<f64>],
+    (clock, latency): (usize, usize),
+) {
+    let covariance = |j: usize, k: usize| correlation[j][k] * std[j] * std[k];
+    let with_sum: Vec<f64> = (0..std.len())
+        .map(|k| covariance(clock, k) + covariance(latency, k))
+        .collect();
+    let sum_variance = with_sum[clock] + with_sum[latency];
+    let sum_std = sum_variance.max(0.0).sqrt();
+    for k in (0..std.len()).filter(|&k| k != clock && k != latency) {
+        correlation[clock][k] = with_sum[k] / (sum_std * std[k]);
+        correlation[k][clock] = correlation[clock][k];
+    }
+    for k in (0..std.len()).filter(|&k| k != latency) {
+        correlation[latency][k] = f64::NAN;
+        correlation[k][latency] = f64::NAN;
+    }
+    std[clock] = sum_std;
 }
 
 #[cfg(test)]
@@ -360,6 +523,8 @@ mod tests {
         let found = fit.installation;
         let latency = fit.bound.value[fit.bound.names.len() - 1];
         assert_eq!(fit.bound.names.last(), Some(&FIX_LATENCY));
+        // Both applied, each its own: the clock is not their sum, however tied they are.
+        assert!(fit.bound.is_applied(FIX_LATENCY) && !fit.clock_is_the_sum());
         assert!((latency - 1.0).abs() < 0.02, "{latency} {found:?}");
         assert!((found.time_offset_s - 1.0).abs() < 0.02, "{found:?}");
         assert!((found.lever_arm_m[0] - 0.8).abs() < 0.05, "{found:?}");
@@ -376,6 +541,26 @@ mod tests {
             rms(&blind),
             rms(&fit)
         );
+    }
+
+    /// A known covariance over (scale, clock, latency): the clock read as the sum takes
+    /// var(c) + var(l) + 2 cov(c, l) and cov(s, c) + cov(s, l); the latency keeps its
+    /// standard deviation and correlates with nothing.
+    #[test]
+    fn a_clock_read_as_the_sum_takes_the_sums_covariance() {
+        let mut std = vec![2.0, 3.0, 4.0];
+        let mut correlation = vec![
+            vec![1.0, 0.5, -0.25],
+            vec![0.5, 1.0, -0.9],
+            vec![-0.25, -0.9, 1.0],
+        ];
+        clock_as_the_sum(&mut std, &mut correlation, (1, 2));
+        // var = 9 + 16 − 2 · 0.9 · 12 = 3.4; cov(s, c + l) = 0.5 · 6 − 0.25 · 8 = 1.
+        assert!((std[1] - 3.4f64.sqrt()).abs() < 1e-12, "{std:?}");
+        assert!((correlation[0][1] - 1.0 / (2.0 * 3.4f64.sqrt())).abs() < 1e-12);
+        assert_eq!(correlation[0][1], correlation[1][0]);
+        assert_eq!((std[0], std[2], correlation[2][2]), (2.0, 4.0, 1.0));
+        assert!(correlation[2][0].is_nan() && correlation[1][2].is_nan());
     }
 
     #[test]

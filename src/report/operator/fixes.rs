@@ -151,8 +151,12 @@ pub fn unseen_lines(fit: &FixFit, prefix: &str) -> String {
 /// of the whole track against the fixes, which both make, where the clock alone also
 /// reads the attitude at another time than the DVL's velocity. Fixes of metres see the
 /// shift far better than that reading, so the two are often tied and their sum known
-/// where neither is. A line, or nothing.
+/// where neither is; where the fit could not place them apart, the clock is their sum
+/// ([`FixFit::clock_is_the_sum`]), and the line says so. A line, or nothing.
 fn clock_and_latency(fit: &FixFit) -> String {
+    if fit.clock_is_the_sum() {
+        return "the DVL's clock and the fixes' latency: the fit with both ran one to the edge of its search, and there they are tied (above); these fixes place the shift of the whole track against them, not how the two split it: the latency is held at zero, the time offset printed is their sum with the sum's interval, and the other terms' intervals carry the latency's uncertainty; a velocity corrected by this time offset is read late by the fixes' latency (give it with --fix-latency-s where it is known)\n".to_string();
+    }
     let place =
         |name: &str| (fit.bound.names.iter()).position(|n| *n == name && fit.bound.is_applied(n));
     let (Some(clock), Some(latency)) = (place("time_offset_s"), place(FIX_LATENCY)) else {
