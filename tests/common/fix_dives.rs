@@ -257,9 +257,9 @@ pub fn coverage(case: &Case, dives: u64) -> (Vec<(&'static str, f64, usize)>, us
 }
 
 /// Of `fits` (`None` for a dive refused) of parameters whose truth is `truth`, per term
-/// estimated (a clock that is the sum of itself and the fixes' latency, the next
-/// latency, against the sum of theirs): the share of those that applied it whose 95 % interval holds the truth,
-/// and how many applied it; and how many dives were refused.
+/// estimated (a clock that is the sum of itself and the fixes' latency against the sum
+/// of their truths): the share of those that applied it whose 95 % interval holds the
+/// truth, and how many applied it; and how many dives were refused.
 pub fn coverage_of(
     fits: &[Option<FixFit>],
     truth: &[f64],
@@ -267,11 +267,11 @@ pub fn coverage_of(
     let refused = fits.iter().filter(|f| f.is_none()).count();
     let fits: Vec<Vec<(&'static str, Option<bool>)>> = (fits.iter().flatten())
         .map(|fit| {
+            // A clock that carries the fixes' latency too is their sum.
+            let latency = (fit.bound.names.iter()).position(|n| *n == FIX_LATENCY);
             (0..fit.bound.names.len())
                 .filter(|&k| fit.estimated[k])
                 .map(|k| {
-                    // A clock that carries the fixes' latency too is their sum.
-                    let latency = (fit.bound.names.iter()).position(|n| *n == FIX_LATENCY);
                     let truth = match (fit.bound.names[k], latency) {
                         ("time_offset_s", Some(l)) if fit.clock_is_the_sum() => truth[k] + truth[l],
                         _ => truth[k],

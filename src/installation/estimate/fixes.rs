@@ -22,10 +22,11 @@
 //! and correlation time read from the residuals), whitened by a Kalman filter over each
 //! piece's fixes on each axis, in time and memory linear in the fixes; each piece's
 //! start position is profiled out of the whitened residuals. The fit is the velocity
-//! fit's solve loop (Levenberg–Marquardt) on them, a Jacobian of central differences. The time offset starts from the best of a
-//! scan over ±[`TIME_OFFSET_MARGIN_S`](super::fit::TIME_OFFSET_MARGIN_S); a best at
-//! the scan's edge is refused, as is a fit that leaves the fixes further from the track
-//! than no terms do. A fix grossly off is left out before the scan, and stays out.
+//! fit's solve loop (Levenberg–Marquardt) on them, a Jacobian of central differences.
+//! The time offset starts from the best of a scan over
+//! ±[`TIME_OFFSET_MARGIN_S`](super::fit::TIME_OFFSET_MARGIN_S); a best at the scan's
+//! edge is held or refused (below), and a fit that leaves the fixes further from the
+//! track than no terms do is refused. A fix grossly off is left out before the scan, and stays out.
 //!
 //! A USBL's multipath outliers: after least squares, each fix's distance from the dead
 //! reckoning in its own standard deviations u (the walk since its piece's start, the
@@ -131,10 +132,7 @@ impl FixFit {
     /// the latency held at zero: the fixes placed the track's shift against them, not
     /// how the two split it.
     pub fn clock_is_the_sum(&self) -> bool {
-        let held = |name: &str| {
-            (self.bound.names.iter()).any(|n| *n == name) && !self.bound.is_applied(name)
-        };
-        held(FIX_LATENCY)
+        !self.bound.is_applied(FIX_LATENCY)
             && (self.bound.unseen.iter()).any(|u| {
                 u.term == FIX_LATENCY
                     && matches!(u.why, Why::Correlated { with, .. } if with == "time_offset_s")
