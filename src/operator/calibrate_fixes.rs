@@ -572,6 +572,9 @@ fn save(
     {
         file = file.with_fix_latency(fit.bound.value[k], fit.bound.std[k]);
     }
+    if fit.clock_is_the_sum() {
+        file = file.with_time_offset_including_fix_latency();
+    }
     file.write(path).map_err(|source| {
         CalibrateError::Write(ResultsError::Io {
             path: path.to_path_buf(),

@@ -69,6 +69,12 @@ pub struct InstallationFile {
     /// the same system.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fix_latency: Option<SavedTerm>,
+    /// Of a calibration against fixes whose clock and latency the fixes placed only
+    /// as their sum (the latency held at zero): the time offset saved is that sum, the
+    /// shift of the whole track against the fixes, and not the DVL's clock alone;
+    /// against a velocity reference it would read the DVL late by the fixes' latency.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub time_offset_includes_fix_latency: bool,
     /// For a calibration read from a ROS 2 bag: the frames, and the mount of the
     /// DVL's frame `/tf_static` gave, which the misalignment is a turn from.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -210,6 +216,13 @@ impl SavedInstallation {
         self
     }
 
+    /// This installation with its time offset the sum of the DVL's clock and the
+    /// fixes' latency, which the fixes could not tell apart.
+    pub fn with_time_offset_including_fix_latency(mut self) -> SavedInstallation {
+        self.file.time_offset_includes_fix_latency = true;
+        self
+    }
+
     /// The spread between dives of the term named `name`, where the file holds one.
     pub fn spread_of(&self, name: &str) -> Option<&SavedSpread> {
         self.between_dives.iter().find(|s| s.name == name)
@@ -280,6 +293,7 @@ impl SavedInstallation {
             dives: 1,
             between_dives: Vec::new(),
             fix_latency: None,
+            time_offset_includes_fix_latency: false,
             mount: None,
         };
         SavedInstallation { file }
@@ -630,6 +644,7 @@ mod tests {
             dives: 1,
             between_dives: Vec::new(),
             fix_latency: None,
+            time_offset_includes_fix_latency: false,
             mount: None,
         }
     }
@@ -730,6 +745,17 @@ mod tests {
             .check(Path::new("a.toml"))
             .unwrap();
         assert_eq!(read.fix_latency.as_ref().map(|l| l.value), Some(0.4));
+        // A time offset that is the clock and the latency summed says so; others say
+        // nothing of it.
+        let summed = (file().check(Path::new("a.toml")))
+            .unwrap()
+            .with_time_offset_including_fix_latency();
+        let text = InstallationFile::clone(&summed).to_text();
+        assert!(
+            text.contains("time_offset_includes_fix_latency = true"),
+            "{text}"
+        );
+        assert!(!file().to_text().contains("includes_fix_latency"));
         let mut far = InstallationFile::clone(&latency);
         far.fix_latency.as_mut().unwrap().value = 5.0;
         let message = refusal(&far.to_text());

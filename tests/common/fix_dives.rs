@@ -198,6 +198,32 @@ fn dive_on(track: Track, case: &Case, seed: u64, (dive_s, fix_interval_s): (f64,
     }
 }
 
+/// Writes `dive` into `folder` as a user's files: the DVL (`dvl.csv`) and the attitude
+/// (`attitude.csv`) in A-KIT's columns, the fixes (`fixes.csv`: `t`, `n`, `e`, metres)
+/// and `columns.toml` naming the fixes' columns; the paths of the first three.
+pub fn write(dive: &Dive, folder: &std::path::Path) -> [std::path::PathBuf; 3] {
+    use std::fmt::Write;
+    let mut dvl = String::from("Time [s],DVL X [m/s],DVL Y [m/s],DVL Z [m/s]\n");
+    for (t, v) in dive.time_s.iter().zip(&dive.dvl_m_s) {
+        writeln!(dvl, "{t},{},{},{}", v[0], v[1], v[2]).unwrap();
+    }
+    let mut attitude = String::from("Time [s],Roll [rad],Pitch [rad],Yaw [rad]\n");
+    for (t, a) in dive.attitude.time_s.iter().zip(&dive.attitude.angles_rad) {
+        writeln!(attitude, "{t},{},{},{}", a[0], a[1], a[2]).unwrap();
+    }
+    let mut fixes = String::from("t,n,e\n");
+    for (t, p) in dive.fixes.time_s.iter().zip(&dive.fixes.north_east_m) {
+        writeln!(fixes, "{t},{},{}", p[0], p[1]).unwrap();
+    }
+    let columns = "[fix_columns]\ntime = \"t\"\nnorth_east = [\"n\", \"e\"]\n";
+    std::fs::write(folder.join("columns.toml"), columns).unwrap();
+    let files = ["dvl.csv", "attitude.csv", "fixes.csv"].map(|name| folder.join(name));
+    for (path, text) in files.iter().zip([dvl, attitude, fixes]) {
+        std::fs::write(path, text).unwrap();
+    }
+    files
+}
+
 /// The unwrapped heading sampled nearest `t`, to unwrap another by.
 fn heading_near(time_s: &[f64], angles: &[Vec3], t: f64) -> f64 {
     let i = time_s.partition_point(|&s| s < t).min(time_s.len() - 1);

@@ -8,7 +8,7 @@
 //! fixes each of its own noise among them (docs/installation.md has its table, with
 //! where the intervals run wide).
 
-use crate::common::fix_dives::{Case, coverage_of, fits, joint_coverage};
+use crate::common::fix_dives::{self, Case, coverage_of, fits, joint_coverage};
 use dcnet_exp::installation::estimate::fixes::FixFit;
 
 /// Runs `case` over 400 dives and checks each term applied on most of them, and the
@@ -129,10 +129,10 @@ fn a_clock_or_latency_the_fixes_do_not_place_is_held_with_its_uncertainty_or_sum
     };
     let (fits, truth) = fits(&case, 24);
     let fitted: Vec<&FixFit> = fits.iter().flatten().collect();
-    let held =
+    let is_held =
         |fit: &FixFit| (fit.bound.unseen.iter()).any(|u| matches!(u.why, Why::BeyondSearch { .. }));
     let summed = fitted.iter().filter(|fit| fit.clock_is_the_sum()).count();
-    let held = fitted.iter().filter(|fit| held(fit)).count();
+    let held = fitted.iter().filter(|fit| is_held(fit)).count();
     let (table, refused) = coverage_of(&fits, &truth);
     println!("{summed} summed, {held} held, {refused} refused: {table:?}");
     assert!(summed >= 1 && held >= 1, "{summed} summed, {held} held");
@@ -144,4 +144,78 @@ fn a_clock_or_latency_the_fixes_do_not_place_is_held_with_its_uncertainty_or_sum
     let applied: usize = table.iter().map(|c| c.2).sum();
     let pooled = table.iter().map(|c| c.1 * c.2 as f64).sum::<f64>() / applied as f64;
     assert!(pooled >= 0.9, "pooled {pooled:.3}: {table:?}");
+    // `calibrate --fixes --fix-latency` on the first dive of each kind, from files:
+    // it prints what the fit found, says why, and saves whether its clock is the sum.
+    let first = |kind: &dyn Fn(&FixFit) -> bool| {
+        let seed = (fits.iter()).position(|fit| fit.as_ref().is_some_and(kind));
+        seed.expect("a dive of each kind") as u64
+    };
+    let summed = first(&|fit| fit.clock_is_the_sum());
+    let held_alone = first(&|fit| is_held(fit) && !fit.clock_is_the_sum());
+    for seed in [summed, held_alone] {
+        let fit = fits[seed as usize].as_ref().unwrap();
+        let (text, saved) = calibrated_from_files(&case, seed);
+        let clock = fit.bound.value[fit
+            .bound
+            .names
+            .iter()
+            .position(|n| *n == "time_offset_s")
+            .unwrap()];
+        let line = (text.lines().find(|l| l.starts_with("| time offset ")))
+            .unwrap_or_else(|| panic!("the time offset in {text}"));
+        let printed = crate::fixes::number_after(line, " | ");
+        assert!(
+            (printed - clock).abs() < 1e-3,
+            "{printed} against {clock}: {text}"
+        );
+        let edge = text.contains("it ran to the edge of its search, ±");
+        assert!(edge || seed == summed, "{text}");
+        let sum_line = "the time offset printed is their sum with the sum's interval";
+        assert_eq!(text.contains(sum_line), seed == summed, "{text}");
+        assert_eq!(saved.time_offset_includes_fix_latency, seed == summed);
+    }
+}
+
+/// `calibrate --fixes --fix-latency --save` on the dive of `case` and `seed` written to
+/// files, its noises given as the dive's: what it printed, and the installation saved.
+fn calibrated_from_files(
+    case: &Case,
+    seed: u64,
+) -> (
+    String,
+    dcnet_exp::operator::installation_file::SavedInstallation,
+) {
+    let dir = tempfile::tempdir().unwrap();
+    let [dvl, attitude, fixes] = fix_dives::write(&fix_dives::dive(case, seed), dir.path());
+    let [dvl, attitude, fixes] = [&dvl, &attitude, &fixes].map(|p| p.to_str().unwrap());
+    let fix_m = case.fix_m.to_string();
+    let dvl_cm_s = (100.0 * fix_dives::DVL_NOISE_M_S).to_string();
+    let output = crate::common::dcnet(
+        dir.path(),
+        &[
+            "calibrate",
+            dvl,
+            "--attitude",
+            attitude,
+            "--fixes",
+            fixes,
+            "--columns",
+            "columns.toml",
+            "--fix-noise-m",
+            &fix_m,
+            "--dvl-noise-cm-s",
+            &dvl_cm_s,
+            "--fix-latency",
+            "--save",
+            "dvl.toml",
+        ],
+    );
+    assert!(
+        output.status.success(),
+        "{}",
+        crate::common::stderr(&output)
+    );
+    let path = dir.path().join("dvl.toml");
+    let saved = dcnet_exp::operator::installation_file::SavedInstallation::read(&path).unwrap();
+    (crate::common::stdout(&output), saved)
 }
