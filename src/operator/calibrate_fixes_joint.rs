@@ -10,6 +10,7 @@
 //! In: one [`FixArgs`] per dive. Out: a [`JointFixCalibration`], or the
 //! [`CalibrateError`] of the dive at fault; nothing is written unless every dive fitted.
 
+use crate::data::paired::PairedRecording;
 use crate::evaluate::statistics::mean_std;
 use crate::installation::estimate::fix_joint::{FixVehicle, fix_vehicle};
 use crate::installation::estimate::fixes::{FixFit, FixTerms, fit_fixes_around};
@@ -17,7 +18,9 @@ use crate::installation::frames::{Attitude, Reference};
 use crate::installation::terms::names::term_set;
 use crate::operator::calibrate::{CalibrateError, clear_of_inputs, named};
 use crate::operator::calibrate_fixes::{FittedDive, FixArgs, FixCalibration, fitted_dive};
-use crate::operator::calibrate_joint::{Agreement, correlation_over, names, spreads};
+use crate::operator::calibrate_joint::{
+    Agreement, correlation_over, each_recording_once, names, spreads,
+};
 use crate::operator::cost::{Cost, JOINT_FIXES};
 use crate::operator::installation_file::{SavedInstallation, SavedTerm};
 use crate::results::ResultsError;
@@ -60,7 +63,13 @@ pub fn calibrate_fixes_joint(dives: &[FixArgs]) -> Result<JointFixCalibration, C
     let fitted = (dives.par_iter().zip(&outputs))
         .map(|(dive, outputs)| fitted_dive(dive, outputs))
         .collect::<Result<Vec<FittedDive>, _>>()?;
-    not_twice(&dvls, &fitted)?;
+    let read: Vec<(&Path, &str, &PairedRecording)> = (dvls.iter().zip(&fitted))
+        .map(|(dvl, dive)| {
+            let read = &dive.reading.read;
+            (*dvl, read.dvl_sha256(), &read.recording)
+        })
+        .collect();
+    each_recording_once(&read)?;
     let fits: Vec<FixFit> = fitted.iter().map(|d| d.fit.clone()).collect();
     let dive_terms = term_set(first.dive_terms).parameter_names();
     let vehicle = fix_vehicle(&fits, &dive_terms);
@@ -107,25 +116,6 @@ pub fn calibrate_fixes_joint(dives: &[FixArgs]) -> Result<JointFixCalibration, C
         carried,
         written,
     })
-}
-
-/// Refuses two dives that are one recording (the same DVL file's bytes, or the same
-/// samples written otherwise): a joint calibration counts each dive once.
-fn not_twice(dvls: &[&Path], fitted: &[FittedDive]) -> Result<(), CalibrateError> {
-    for k in 1..fitted.len() {
-        let (read, recording) = (&fitted[k].reading.read, &fitted[k].reading.read.recording);
-        for j in 0..k {
-            let earlier = &fitted[j].reading.read;
-            let (first, again) = (dvls[j].to_path_buf(), dvls[k].to_path_buf());
-            if earlier.dvl_sha256() == read.dvl_sha256() {
-                return Err(CalibrateError::Duplicate { first, again });
-            }
-            if earlier.recording.same_samples(recording) {
-                return Err(CalibrateError::SameSamples { first, again });
-            }
-        }
-    }
-    Ok(())
 }
 
 /// The dive's own terms (its clock, and the fixes' latency where asked) fitted again to

@@ -122,6 +122,11 @@ pub fn calibrate_joint(args: &JointArgs) -> Result<JointCalibration, CalibrateEr
     let sources = sources(args)?;
     let (loaded, shas) = load(args, &sources, &outputs)?;
     let recordings = read_all(args, loaded)?;
+    let dives: Vec<(&Path, &str, &PairedRecording)> = (args.dvls.iter().zip(&shas))
+        .zip(&recordings)
+        .map(|((dvl, sha), (recording, _, _))| (dvl.as_path(), sha.as_str(), recording))
+        .collect();
+    each_recording_once(&dives)?;
     let calibrating: Vec<JointRecording> = recordings
         .iter()
         .map(|(recording, reference, window)| {
@@ -185,8 +190,7 @@ fn sources(args: &JointArgs) -> Result<Vec<Source>, CalibrateError> {
 }
 
 /// The files of each of `sources` read from disk and hashed, and each DVL file's
-/// SHA-256; refused where `outputs` already there hold another recording's results, or
-/// where two DVL files are the same recording.
+/// SHA-256; refused where `outputs` already there hold another recording's results.
 fn load<'a>(
     args: &JointArgs,
     sources: &'a [Source],
@@ -200,14 +204,27 @@ fn load<'a>(
     for ((dvl, ours), outputs) in args.dvls.iter().zip(&shas).zip(outputs) {
         outputs.not_another_recordings(dvl, ours)?;
     }
-    if let Some(k) = (1..shas.len()).find(|&k| shas[..k].contains(&shas[k])) {
-        let first = shas.iter().position(|s| *s == shas[k]).expect("seen");
-        return Err(CalibrateError::Duplicate {
-            first: args.dvls[first].clone(),
-            again: args.dvls[k].clone(),
-        });
-    }
     Ok((loaded, shas))
+}
+
+/// Refuses two of `dives` (each its DVL file, that file's SHA-256 and its recording)
+/// that are one recording: the same bytes, or the same samples written otherwise. A
+/// joint calibration, against a reference or fixes, counts each recording once.
+pub(super) fn each_recording_once(
+    dives: &[(&Path, &str, &PairedRecording)],
+) -> Result<(), CalibrateError> {
+    for (k, (dvl, sha, recording)) in dives.iter().enumerate() {
+        for (first, first_sha, earlier) in &dives[..k] {
+            let (first, again) = (first.to_path_buf(), dvl.to_path_buf());
+            if first_sha == sha {
+                return Err(CalibrateError::Duplicate { first, again });
+            }
+            if earlier.same_samples(recording) {
+                return Err(CalibrateError::SameSamples { first, again });
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Each recording of `args`, parsed from the files `loaded` read, its reference, and
@@ -217,15 +234,8 @@ fn read_all(
     loaded: Vec<Loaded>,
 ) -> Result<Vec<(PairedRecording, Reference, Option<PairedRecording>)>, CalibrateError> {
     let mut recordings: Vec<(PairedRecording, Reference, Option<PairedRecording>)> = Vec::new();
-    for (k, loaded) in loaded.into_iter().enumerate() {
+    for loaded in loaded {
         let recording = loaded.parse()?.recording;
-        let same = |(earlier, _, _): &(PairedRecording, _, _)| earlier.same_samples(&recording);
-        if let Some(first) = recordings.iter().position(same) {
-            return Err(CalibrateError::SameSamples {
-                first: args.dvls[first].clone(),
-                again: args.dvls[k].clone(),
-            });
-        }
         let reference = Reference::new(&recording);
         let window = args.window_s.map(|w| recording.first_seconds(w));
         recordings.push((recording, reference, window));
