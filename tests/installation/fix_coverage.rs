@@ -155,12 +155,8 @@ fn a_clock_or_latency_the_fixes_do_not_place_is_held_with_its_uncertainty_or_sum
     for seed in [summed, held_alone] {
         let fit = fits[seed as usize].as_ref().unwrap();
         let (text, saved) = calibrated_from_files(&case, seed);
-        let clock = fit.bound.value[fit
-            .bound
-            .names
-            .iter()
-            .position(|n| *n == "time_offset_s")
-            .unwrap()];
+        let k = (fit.bound.names.iter()).position(|n| *n == "time_offset_s");
+        let clock = fit.bound.value[k.unwrap()];
         let line = (text.lines().find(|l| l.starts_with("| time offset ")))
             .unwrap_or_else(|| panic!("the time offset in {text}"));
         let printed = crate::fixes::number_after(line, " | ");
