@@ -319,10 +319,25 @@ pub struct FittedDive {
 /// and its terms fitted to its fixes, the fit refused where its residuals contradict
 /// the fixes' noise.
 pub fn fitted_dive(args: &FixArgs, outputs: &Outputs) -> Result<FittedDive, CalibrateError> {
+    fitted_from(args, read_dive(args, outputs)?)
+}
+
+/// The dive of `args` read, with the fixes' noise per axis (given, or their own);
+/// refused where `outputs` hold another recording's results.
+pub fn read_dive(args: &FixArgs, outputs: &Outputs) -> Result<(FixReading, f64), CalibrateError> {
     let files = &args.files;
     let (reading, fix_m) = files.read_with_noise(args.depth_noise_m.is_some(), args.fix_noise_m)?;
+    outputs.not_another_recordings(files.dvl, reading.read.dvl_sha256())?;
+    Ok((reading, fix_m))
+}
+
+/// The terms of `args` fitted to the fixes of the dive `reading`, whose fixes' noise
+/// per axis is `fix_m`; refused where the fit's residuals contradict that noise.
+pub fn fitted_from(
+    args: &FixArgs,
+    (reading, fix_m): (FixReading, f64),
+) -> Result<FittedDive, CalibrateError> {
     let read = &reading.read;
-    outputs.not_another_recordings(files.dvl, read.dvl_sha256())?;
     let noise = FixNoise {
         fix_m,
         depth_m: args.depth_noise_m.unwrap_or(fix_m),

@@ -17,7 +17,9 @@ use crate::installation::estimate::fixes::{FixFit, FixTerms, fit_fixes_around};
 use crate::installation::frames::{Attitude, Reference};
 use crate::installation::terms::names::term_set;
 use crate::operator::calibrate::{CalibrateError, clear_of_inputs, named};
-use crate::operator::calibrate_fixes::{FittedDive, FixArgs, FixCalibration, fitted_dive};
+use crate::operator::calibrate_fixes::{
+    FittedDive, FixArgs, FixCalibration, fitted_from, read_dive,
+};
 use crate::operator::calibrate_joint::{
     Agreement, correlation_over, each_recording_once, names, spreads,
 };
@@ -60,16 +62,19 @@ pub fn calibrate_fixes_joint(dives: &[FixArgs]) -> Result<JointFixCalibration, C
         .collect::<Result<Vec<_>, _>>()
         .map_err(CalibrateError::Read)?;
     Cost::on(JOINT_FIXES, rows, crate::footprint::machine_memory() as f64).state()?;
-    let fitted = (dives.par_iter().zip(&outputs))
-        .map(|(dive, outputs)| fitted_dive(dive, outputs))
-        .collect::<Result<Vec<FittedDive>, _>>()?;
-    let read: Vec<(&Path, &str, &PairedRecording)> = (dvls.iter().zip(&fitted))
-        .map(|(dvl, dive)| {
-            let read = &dive.reading.read;
+    let readings = (dives.par_iter().zip(&outputs))
+        .map(|(dive, outputs)| read_dive(dive, outputs))
+        .collect::<Result<Vec<_>, _>>()?;
+    let each: Vec<(&Path, &str, &PairedRecording)> = (dvls.iter().zip(&readings))
+        .map(|(dvl, (reading, _))| {
+            let read = &reading.read;
             (*dvl, read.dvl_sha256(), &read.recording)
         })
         .collect();
-    each_recording_once(&read)?;
+    each_recording_once(&each)?;
+    let fitted = (dives.par_iter().zip(readings))
+        .map(|(dive, reading)| fitted_from(dive, reading))
+        .collect::<Result<Vec<FittedDive>, _>>()?;
     let fits: Vec<FixFit> = fitted.iter().map(|d| d.fit.clone()).collect();
     let dive_terms = term_set(first.dive_terms).parameter_names();
     let vehicle = fix_vehicle(&fits, &dive_terms);
@@ -188,7 +193,7 @@ fn saved(
         .collect::<Vec<_>>()
         .join(", ");
     let noise_cm_s = first.dvl_noise_cm_s;
-    SavedInstallation::of_terms(
+    let file = SavedInstallation::of_terms(
         (terms, correlation),
         (first.terms, first.dive_terms),
         (recording, shas.join(", ")),
@@ -196,5 +201,10 @@ fn saved(
         [noise_cm_s / 100.0; 3],
     )
     .of_fixes()
-    .with_spread(dives.len(), spreads(&vehicle.names, &vehicle.between))
+    .with_spread(dives.len(), spreads(&vehicle.names, &vehicle.between));
+    // The clock saved is the dives' mean: the sum of clock and latency where any is.
+    match carried.iter().any(FixFit::clock_is_the_sum) {
+        true => file.with_time_offset_including_fix_latency(),
+        false => file,
+    }
 }

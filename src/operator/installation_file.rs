@@ -755,6 +755,9 @@ mod tests {
             text.contains("time_offset_includes_fix_latency = true"),
             "{text}"
         );
+        std::fs::write(&path, &text).unwrap();
+        let read = SavedInstallation::read(&path).unwrap();
+        assert!(read.time_offset_includes_fix_latency);
         assert!(!file().to_text().contains("includes_fix_latency"));
         let mut far = InstallationFile::clone(&latency);
         far.fix_latency.as_mut().unwrap().value = 5.0;

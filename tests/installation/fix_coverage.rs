@@ -114,7 +114,9 @@ fn intervals_hold_under_a_dvl_noise_correlated_in_time() {
 /// tied, the latency held and the clock their sum, its interval the sum's (each applied
 /// term's coverage over 400 dives in docs/installation.md). The first 24 dives hold
 /// both kinds; most terms' intervals hold the truth on them (the clock that is the sum
-/// against the sum of the truths).
+/// against the sum of the truths). `calibrate --fixes --fix-latency --save`, on the
+/// first summed dive and the first held alone written to files, prints the fit's clock
+/// and why, and marks the saved clock only where it is the sum.
 #[test]
 fn a_clock_or_latency_the_fixes_do_not_place_is_held_with_its_uncertainty_or_summed() {
     use dcnet_exp::installation::estimate::bound::Why;
@@ -150,11 +152,11 @@ fn a_clock_or_latency_the_fixes_do_not_place_is_held_with_its_uncertainty_or_sum
         let seed = (fits.iter()).position(|fit| fit.as_ref().is_some_and(kind));
         seed.expect("a dive of each kind") as u64
     };
-    let summed = first(&|fit| fit.clock_is_the_sum());
-    let held_alone = first(&|fit| is_held(fit) && !fit.clock_is_the_sum());
-    for seed in [summed, held_alone] {
+    let summed_seed = first(&|fit| fit.clock_is_the_sum());
+    let held_seed = first(&|fit| is_held(fit) && !fit.clock_is_the_sum());
+    for seed in [summed_seed, held_seed] {
         let fit = fits[seed as usize].as_ref().unwrap();
-        let (text, saved) = calibrated_from_files(&case, seed);
+        let (text, saved) = calibrated_from_files(&case, &[seed]);
         let k = (fit.bound.names.iter()).position(|n| *n == "time_offset_s");
         let clock = fit.bound.value[k.unwrap()];
         let line = (text.lines().find(|l| l.starts_with("| time offset ")))
@@ -165,47 +167,63 @@ fn a_clock_or_latency_the_fixes_do_not_place_is_held_with_its_uncertainty_or_sum
             "{printed} against {clock}: {text}"
         );
         let edge = text.contains("it ran to the edge of its search, ±");
-        assert!(edge || seed == summed, "{text}");
+        assert!(edge || seed == summed_seed, "{text}");
         let sum_line = "the time offset printed is their sum with the sum's interval";
-        assert_eq!(text.contains(sum_line), seed == summed, "{text}");
-        assert_eq!(saved.time_offset_includes_fix_latency, seed == summed);
+        assert_eq!(text.contains(sum_line), seed == summed_seed, "{text}");
+        assert_eq!(saved.time_offset_includes_fix_latency, seed == summed_seed);
     }
+    // Jointly, each dive's clock that is the sum is marked in the table, and the clock
+    // saved, the dives' mean with the vehicle's terms, where any of those is.
+    let third = (0..)
+        .find(|s| ![summed_seed, held_seed].contains(s))
+        .unwrap();
+    let (text, saved) = calibrated_from_files(&case, &[summed_seed, held_seed, third]);
+    let mark = "(clock + latency)";
+    let alone = column(&text, "clock alone (s)");
+    assert!(
+        alone[0].ends_with(mark) && !alone[1].ends_with(mark),
+        "{text}"
+    );
+    let carried = column(&text, "clock, vehicle's terms (s)");
+    let any = carried.iter().any(|c| c.ends_with(mark));
+    assert_eq!(saved.time_offset_includes_fix_latency, any, "{text}");
 }
 
-/// `calibrate --fixes --fix-latency --save` on the dive of `case` and `seed` written to
-/// files, its noises given as the dive's: what it printed, and the installation saved.
+/// `calibrate --fixes --fix-latency --save` on the dives of `case` and `seeds` written to
+/// files (jointly where there are several), the noises given as the dives': what it
+/// printed, and the installation saved.
 fn calibrated_from_files(
     case: &Case,
-    seed: u64,
+    seeds: &[u64],
 ) -> (
     String,
     dcnet_exp::operator::installation_file::SavedInstallation,
 ) {
     let dir = tempfile::tempdir().unwrap();
-    let [dvl, attitude, fixes] = fix_dives::write(&fix_dives::dive(case, seed), dir.path());
-    let [dvl, attitude, fixes] = [&dvl, &attitude, &fixes].map(|p| p.to_str().unwrap());
+    let text = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let mut args: Vec<String> = vec!["calibrate".into()];
+    let mut each = Vec::new();
+    for &seed in seeds {
+        let folder = dir.path().join(format!("dive{seed}"));
+        std::fs::create_dir(&folder).unwrap();
+        let [dvl, attitude, fixes] = fix_dives::write(&fix_dives::dive(case, seed), &folder);
+        args.push(text(&dvl));
+        each.extend([
+            "--attitude".into(),
+            text(&attitude),
+            "--fixes".into(),
+            text(&fixes),
+        ]);
+    }
+    args.extend(each);
+    let columns = dir.path().join(format!("dive{}/columns.toml", seeds[0]));
     let fix_m = case.fix_m.to_string();
     let dvl_cm_s = (100.0 * fix_dives::DVL_NOISE_M_S).to_string();
-    let output = crate::common::dcnet(
-        dir.path(),
-        &[
-            "calibrate",
-            dvl,
-            "--attitude",
-            attitude,
-            "--fixes",
-            fixes,
-            "--columns",
-            "columns.toml",
-            "--fix-noise-m",
-            &fix_m,
-            "--dvl-noise-cm-s",
-            &dvl_cm_s,
-            "--fix-latency",
-            "--save",
-            "dvl.toml",
-        ],
-    );
+    args.extend(["--columns".into(), text(&columns)]);
+    args.extend(["--fix-noise-m", &fix_m, "--dvl-noise-cm-s", &dvl_cm_s].map(String::from));
+    args.extend(["--fix-latency", "--save", "dvl.toml"].map(String::from));
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let output = crate::common::dcnet(dir.path(), &args);
     assert!(
         output.status.success(),
         "{}",
@@ -214,4 +232,17 @@ fn calibrated_from_files(
     let path = dir.path().join("dvl.toml");
     let saved = dcnet_exp::operator::installation_file::SavedInstallation::read(&path).unwrap();
     (crate::common::stdout(&output), saved)
+}
+
+/// The cells of the column headed `header` in the first table of `text` that has one.
+fn column<'a>(text: &'a str, header: &str) -> Vec<&'a str> {
+    let cells = |line: &'a str| line.split('|').map(str::trim).collect::<Vec<_>>();
+    let mut lines = text.lines().skip_while(|l| !l.contains(header));
+    let at = (lines.next().map(cells))
+        .and_then(|h| h.iter().position(|c| *c == header))
+        .unwrap_or_else(|| panic!("{header} in {text}"));
+    (lines.skip(1))
+        .take_while(|l| l.starts_with('|'))
+        .map(|l| cells(l)[at])
+        .collect()
 }

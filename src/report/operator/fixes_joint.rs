@@ -55,7 +55,7 @@ pub fn joint_fixes_text(calibration: &JointFixCalibration) -> String {
         "alone: χ², Σ ((alone − joint) / its standard deviation)² over the dives that applied the term, and its p-value on one fewer degrees of freedom (under {AGREEMENT_P_VALUE}: the dives disagree beyond their intervals)\n"
     ));
     text.push_str(&format!(
-        "each dive: its fixes fitted and left out as outliers; its own estimate of each term (± its standard deviation; - where it did not apply it); its clock (and the fixes' latency, where fitted) alone and with the vehicle's terms carried (found again from its fixes: those it is written corrected with); the fixes' horizontal residual RMS with no terms, with its own terms and with the vehicle's, m\n{}\n",
+        "each dive: its fixes fitted and left out as outliers; its own estimate of each term (± its standard deviation; - where it did not apply it); its clock (and the fixes' latency, where fitted) alone and with the vehicle's terms carried (found again from its fixes: those it is written corrected with; a clock marked {SUM_MARK} is the two summed, where the fixes place their sum and not its split, the latency held at zero; the clock saved, the dives' mean with the vehicle's terms, is then marked so too); the fixes' horizontal residual RMS with no terms, with its own terms and with the vehicle's, m\n{}\n",
         dives_table(calibration)
     ));
     for (name, dive) in names.iter().zip(alone) {
@@ -124,15 +124,25 @@ fn dives_table(calibration: &JointFixCalibration) -> Table {
 }
 
 /// A fit's clock (that of its installation, where it fitted one about a carried clock)
-/// or its fixes' latency, named `name`, and its standard deviation; "-" where it
-/// applied none.
+/// or its fixes' latency, named `name`, and its standard deviation, a clock marked
+/// where it is the sum of the clock and the latency ([`FixFit::clock_is_the_sum`]);
+/// "-" where it applied none.
 fn shown(fit: &FixFit, name: &str) -> String {
     let value = |k: usize| match name {
         "time_offset_s" => fit.installation.time_offset_s,
         _ => fit.bound.value[k],
     };
+    let sum = match name == "time_offset_s" && fit.clock_is_the_sum() {
+        true => format!(" {SUM_MARK}"),
+        false => String::new(),
+    };
     match fit.bound.names.iter().position(|n| *n == name) {
-        Some(k) if fit.bound.applied[k] => format!("{:.3} ± {:.3}", value(k), fit.bound.std[k]),
+        Some(k) if fit.bound.applied[k] => {
+            format!("{:.3} ± {:.3}{sum}", value(k), fit.bound.std[k])
+        }
         _ => "-".to_string(),
     }
 }
+
+/// What marks a clock that is the sum of the DVL's clock and the fixes' latency.
+const SUM_MARK: &str = "(clock + latency)";
