@@ -389,6 +389,25 @@ pub(super) struct ReadingArgs {
     /// [default: base_link]
     #[arg(long, value_name = "FRAME")]
     pub(super) frame: Option<String>,
+    /// The DVL file's format where it is the DVL's own log [default: found from its
+    /// content: PD0 by its 0x7F 0x7F]; its reference is then the CSV file --reference
+    #[arg(long, value_enum)]
+    pub(super) dvl_format: Option<DvlFormatArg>,
+    /// A DVL log's bottom-track correlation a beam must reach to count, 0–255
+    /// [default: the instrument's own verdict]
+    #[arg(long, value_name = "COUNTS")]
+    pub(super) bt_correlation_min: Option<u8>,
+    /// A DVL log's bottom-track percent good a beam must reach to count, in beam
+    /// coordinates, % [default: the instrument's own verdict]
+    #[arg(long, value_name = "PERCENT")]
+    pub(super) bt_percent_good_min: Option<u8>,
+}
+
+/// A DVL log's format, as typed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub(super) enum DvlFormatArg {
+    /// Teledyne RDI's binary PD0
+    Pd0,
 }
 
 /// The stamps a bag is read on, as typed.
@@ -412,6 +431,13 @@ impl ReadingArgs {
                 StampsArg::Receive => crate::data::paired::bag::Stamps::Receive,
             }),
             frame: self.frame.as_deref(),
+            dvl_format: self.dvl_format.map(|format| match format {
+                DvlFormatArg::Pd0 => crate::data::paired::dvl_log::LogFormat::Pd0,
+            }),
+            thresholds: crate::data::paired::dvl_log::Thresholds {
+                correlation_min: self.bt_correlation_min,
+                percent_good_min: self.bt_percent_good_min,
+            },
         }
     }
 }

@@ -3,6 +3,7 @@
 //! or A-KIT recordings downloaded.
 
 use super::{CliError, about, failure, footprints, input, load_spec, training_seconds};
+use crate::data::paired::dvl_log;
 use crate::data::{fetch, load_trajectories};
 use crate::dataset::{DatasetSize, TrainingSet};
 use crate::footprint::{self, Bytes};
@@ -160,6 +161,13 @@ pub(super) fn fetch_data(
 
 /// `data info BAG`: its files, storage and time span, and each topic with its type,
 /// message count, rate, and whether this tool reads it.
+/// `data info` of a DVL's own log: its span, pings, frames, data types and validity.
+pub(super) fn log_info(path: &Path, format: dvl_log::LogFormat) -> Result<(), CliError> {
+    let log = dvl_log::read(path, format, dvl_log::Thresholds::default()).map_err(input)?;
+    println!("{}", log.describe());
+    Ok(())
+}
+
 pub(super) fn bag_info(path: &Path) -> Result<(), CliError> {
     use crate::data::paired::bag::{Bag, topic_lines};
     let bag = Bag::open(path).map_err(input)?;

@@ -21,6 +21,7 @@ pub use args::Cli;
 
 use crate::count;
 use crate::data;
+use crate::data::paired::dvl_log;
 use crate::footprint::{self, Footprint};
 use crate::pipeline::{Mode, Shard};
 use crate::spec::{Experiment, Spec, SpecErrors, TrajectorySource, load, load_experiment};
@@ -219,6 +220,9 @@ fn data_command(command: DataCommand) -> Result<(), CliError> {
     match command {
         DataCommand::Info { spec, .. } if crate::data::paired::bag::is_bag(&spec) => {
             inspect::bag_info(&spec)
+        }
+        DataCommand::Info { spec, .. } if let Some(format) = dvl_log::format_of(&spec) => {
+            inspect::log_info(&spec, format)
         }
         DataCommand::Info { spec, overrides } => inspect::info(&spec, &overrides.set),
         DataCommand::Fetch {

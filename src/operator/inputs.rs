@@ -5,6 +5,7 @@
 
 use crate::data::fixes::FixColumns;
 use crate::data::paired::bag::{Bag, BagTopics, Stamps, is_bag};
+use crate::data::paired::dvl_log::{self, LogFormat, Thresholds};
 use crate::data::paired::{GapLimit, PairedColumns, Source};
 use crate::spec::{SpecError, TomlFile};
 use std::path::{Path, PathBuf};
@@ -96,6 +97,10 @@ pub struct Reading<'a> {
     /// A bag's body frame, the frame the installation is reported in (`--frame`;
     /// `base_link` where not given).
     pub frame: Option<&'a str>,
+    /// A DVL log's format (`--dvl-format`; found from the file's content where not
+    /// given), and the thresholds a beam must reach.
+    pub dvl_format: Option<LogFormat>,
+    pub thresholds: Thresholds,
 }
 
 /// The recording of the DVL file (or bag) `dvl`, its reference's file where that is
@@ -130,6 +135,29 @@ pub fn source(
                 ));
             }
         }
+        if let Some(format) = reading.dvl_format.or_else(|| dvl_log::format_of(dvl)) {
+            return log_source(dvl, format, reference, columns_file, reading);
+        }
+        for (flag, given) in [
+            (
+                "--bt-correlation-min",
+                reading.thresholds.correlation_min.is_some(),
+            ),
+            (
+                "--bt-percent-good-min",
+                reading.thresholds.percent_good_min.is_some(),
+            ),
+        ] {
+            if given {
+                return Err(refused(
+                    flag,
+                    format!(
+                        "{} is not a DVL's own log (PD0): a CSV recording's validity is its --valid-column",
+                        dvl.display()
+                    ),
+                ));
+            }
+        }
         return Ok(Source::csv(dvl, reference, columns(columns_file, reading)?));
     }
     let not_for_a_bag = [
@@ -147,6 +175,16 @@ pub fn source(
             "--valid-column",
             reading.valid_column.is_some(),
             "a ping's validity is read from its message (bottom track, good beams, beam velocities valid)",
+        ),
+        (
+            "--dvl-format",
+            reading.dvl_format.is_some(),
+            "its DVL is read from its topic",
+        ),
+        (
+            "--bt-correlation-min",
+            reading.thresholds != Thresholds::default(),
+            "a ping's validity is read from its message",
         ),
     ];
     if let Some((flag, _, why)) = not_for_a_bag.iter().find(|(_, given, _)| *given) {
@@ -175,6 +213,50 @@ pub fn source(
                 .map_or_else(|| BagTopics::default().frame, String::from),
             gap_limit_s: reading.gap_limit_s.map(GapLimit),
         },
+    })
+}
+
+/// The recording of the DVL log `dvl` in `format` beside the reference's CSV file,
+/// read with the columns of `columns_file` (whose DVL columns are not read).
+fn log_source(
+    dvl: &Path,
+    format: LogFormat,
+    reference: Option<&Path>,
+    columns_file: Option<&Path>,
+    reading: Reading,
+) -> Result<Source, SpecError> {
+    let refused = |flag: &str, message: String| SpecError {
+        location: flag.into(),
+        key: String::new(),
+        message,
+    };
+    let Some(reference) = reference else {
+        return Err(refused(
+            "--reference",
+            format!(
+                "{} is a {} log, which holds the DVL alone: name the reference's CSV file with --reference",
+                dvl.display(),
+                format.words()
+            ),
+        ));
+    };
+    if reading.valid_column.is_some() {
+        return Err(refused(
+            "--valid-column",
+            format!(
+                "{} is a {} log: a ping's validity is read from the log (data info {} says from what)",
+                dvl.display(),
+                format.words(),
+                dvl.display()
+            ),
+        ));
+    }
+    Ok(Source::Log {
+        dvl: dvl.to_path_buf(),
+        format,
+        thresholds: reading.thresholds,
+        reference: reference.to_path_buf(),
+        columns: columns(columns_file, reading)?,
     })
 }
 

@@ -12,6 +12,7 @@
 #![allow(dead_code)]
 
 pub mod fix_dives;
+pub mod pd0;
 pub mod installed;
 
 use arrow_array::{Array, BooleanArray, Float64Array, Int64Array, RecordBatch, StringArray};

@@ -34,7 +34,7 @@ fn term_rows(stdout: &str) -> Vec<String> {
 }
 
 /// Each term's name, estimate and standard deviation from [`term_rows`].
-fn terms(stdout: &str) -> Vec<(String, f64, f64)> {
+pub(crate) fn terms(stdout: &str) -> Vec<(String, f64, f64)> {
     term_rows(stdout)
         .iter()
         .map(|row| {
@@ -51,13 +51,13 @@ fn terms(stdout: &str) -> Vec<(String, f64, f64)> {
         .collect()
 }
 
-fn calibrate(dir: &Path, args: &[&str]) -> String {
+pub(crate) fn calibrate(dir: &Path, args: &[&str]) -> String {
     let output = dcnet(dir, &[&["calibrate"], args].concat());
     assert!(output.status.success(), "{}", stderr(&output));
     stdout(&output)
 }
 
-fn csv_args(files: &PairedFiles) -> Vec<String> {
+pub(crate) fn csv_args(files: &PairedFiles) -> Vec<String> {
     vec![
         files.dvl.display().to_string(),
         "--reference".into(),
@@ -65,7 +65,7 @@ fn csv_args(files: &PairedFiles) -> Vec<String> {
     ]
 }
 
-const TERMS: &str = "--terms=lever_arm,time_offset,bias,scale";
+pub(crate) const TERMS: &str = "--terms=lever_arm,time_offset,bias,scale";
 
 /// The same recording as CSV and as bags of each storage (MCAP compressed and not,
 /// sqlite3, and a rosbag2 folder) gives the same terms to the printed digits; the

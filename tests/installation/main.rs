@@ -13,6 +13,7 @@ mod bag_fixes;
 mod between_dives;
 mod coverage;
 mod dive_clock;
+mod dvl_logs;
 mod fix_coverage;
 mod fix_joint;
 mod fix_latency;

@@ -27,8 +27,9 @@ pub struct Unchecked {
     pub dvl_time_s: Vec<f64>,
     /// The DVL's body-frame velocity, m/s; NaN where it has none.
     pub dvl_m_s: Vec<Vec3>,
-    /// The DVL's validity flag per sample, where the recording has one.
-    pub dvl_valid: Option<Vec<bool>>,
+    /// Why the recording states a DVL sample is not a measurement, per sample, where it
+    /// states it: a validity flag down, or what a DVL's own log says of the ping.
+    pub dvl_stated: Option<Vec<Option<LeftOutWhy>>>,
     pub reference_time_s: Vec<f64>,
     /// The reference's north, east, down velocity, m/s.
     pub velocity_ned_m_s: Vec<Vec3>,
@@ -57,8 +58,8 @@ impl Unchecked {
     /// valid reading here).
     fn invalid(&self, row: usize, zero_is_valid: bool) -> Option<LeftOutWhy> {
         let velocity = self.dvl_m_s[row];
-        if self.dvl_valid.as_ref().is_some_and(|valid| !valid[row]) {
-            Some(LeftOutWhy::Flagged)
+        if let Some(why) = self.dvl_stated.as_ref().and_then(|stated| stated[row]) {
+            Some(why)
         } else if velocity.iter().any(|v| v.is_nan()) {
             Some(LeftOutWhy::NoVelocity)
         } else if velocity.contains(&INVALID_MARKER_M_S) {
@@ -381,7 +382,7 @@ mod tests {
         let samples = Unchecked {
             dvl_time_s: vec![0.0, 1.0, 2.0],
             dvl_m_s: vec![[1.0, 0.0, 0.0]; 3],
-            dvl_valid: None,
+            dvl_stated: None,
             reference_time_s: vec![0.0, 1.0, 2.0],
             velocity_ned_m_s: vec![[1.0, 0.0, 0.0]; 3],
             attitude: vec![[0.0, 0.0, 90.0], [0.0, 0.0, 100.0], [0.0, 0.0, 110.0]],

@@ -6,7 +6,7 @@
 //! [`PairedColumns`]. Out: the [`Unchecked`] samples and the [`Locator`] of their lines.
 
 use super::checks::{Locator, Unchecked};
-use super::{PairedColumns, PairedError};
+use super::{LeftOutWhy, PairedColumns, PairedError};
 use crate::Vec3;
 use crate::data::csv::{Column, Quantity, Rows, parse_columns};
 use std::path::Path;
@@ -53,25 +53,15 @@ pub fn parse(
         }
     };
     let flag = dvl_rows.width - 1;
-    // Where the attitude starts: after the velocity, where it is read.
-    let attitude = if with_velocity { start + 3 } else { start };
     let samples = Unchecked {
         dvl_time_s: dvl_rows.column(0).collect(),
         dvl_m_s: triples(&dvl_rows, 1),
-        dvl_valid: validity.map(|_| dvl_rows.column(flag).map(|v| v != 0.0).collect()),
-        reference_time_s: reference_rows.column(0).collect(),
-        velocity_ned_m_s: if with_velocity {
-            triples(&reference_rows, start)
-        } else {
-            Vec::new()
-        },
-        attitude: triples(&reference_rows, attitude),
-        rate: columns
-            .rate
-            .as_ref()
-            .map(|_| triples(&reference_rows, attitude + 3)),
-        angles_in_degrees: columns.angles_in_degrees,
-        position: positions(&reference_rows, attitude + 3, columns),
+        dvl_stated: validity.map(|_| {
+            (dvl_rows.column(flag))
+                .map(|v| (v == 0.0).then_some(LeftOutWhy::Flagged))
+                .collect()
+        }),
+        ..reference_samples(&reference_rows, start, columns, with_velocity)
     };
     let at = Locator {
         dvl: dvl.0.to_path_buf(),
@@ -81,6 +71,55 @@ pub fn parse(
         names: columns.clone(),
     };
     Ok((samples, at))
+}
+
+/// The reference's samples of the CSV file `reference` (a path and its bytes) alone,
+/// the DVL's fields left empty (a DVL's own log gives them), and the line of each.
+pub fn parse_reference(
+    (path, bytes): (&Path, &[u8]),
+    columns: &PairedColumns,
+    with_velocity: bool,
+) -> Result<(Unchecked, Vec<u64>), PairedError> {
+    let time = Column {
+        name: &columns.time,
+        holds: Quantity::Time,
+    };
+    let rows = parse_columns(
+        path,
+        bytes,
+        &reference_columns(time, columns, with_velocity),
+    )?;
+    Ok((
+        reference_samples(&rows, 1, columns, with_velocity),
+        rows.lines,
+    ))
+}
+
+/// The reference's samples of `rows`, its values from `start` (after the time), the
+/// DVL's fields empty.
+fn reference_samples(
+    rows: &Rows,
+    start: usize,
+    columns: &PairedColumns,
+    with_velocity: bool,
+) -> Unchecked {
+    // Where the attitude starts: after the velocity, where it is read.
+    let attitude = if with_velocity { start + 3 } else { start };
+    Unchecked {
+        dvl_time_s: Vec::new(),
+        dvl_m_s: Vec::new(),
+        dvl_stated: None,
+        reference_time_s: rows.column(0).collect(),
+        velocity_ned_m_s: if with_velocity {
+            triples(rows, start)
+        } else {
+            Vec::new()
+        },
+        attitude: triples(rows, attitude),
+        rate: columns.rate.as_ref().map(|_| triples(rows, attitude + 3)),
+        angles_in_degrees: columns.angles_in_degrees,
+        position: positions(rows, attitude + 3, columns),
+    }
 }
 
 /// The three values of each row from `start`.

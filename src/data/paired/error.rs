@@ -17,6 +17,8 @@ pub enum PairedError {
     Csv(CsvError),
     #[error(transparent)]
     Bag(#[from] crate::data::paired::bag::BagError),
+    #[error(transparent)]
+    Pd0(#[from] crate::data::paired::dvl_log::pd0::Pd0Error),
     #[error(
         "{}:{line}: {column}: {time_s} s follows {previous_s} s of line {previous_line}: time stamps must increase",
         path.display()

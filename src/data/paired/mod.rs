@@ -16,6 +16,7 @@
 
 pub mod bag;
 mod checks;
+pub mod dvl_log;
 mod columns;
 mod csv;
 mod error;
@@ -73,11 +74,18 @@ pub enum LeftOutWhy {
     Flagged,
     /// A velocity cell empty or NaN.
     NoVelocity,
-    /// The invalid marker, [`INVALID_MARKER_M_S`], on an axis.
+    /// The invalid marker, [`INVALID_MARKER_M_S`], on an axis (in a DVL's log: no
+    /// velocity on an axis, or on more than one beam).
     Marker,
     /// Exactly 0, 0, 0: what many DVLs and drivers send without bottom lock (unless
     /// the recording says zero is a valid reading).
     AllZero,
+    /// Fewer than three beams with the correlation the thresholds ask (a DVL's log).
+    LowCorrelation,
+    /// Fewer than three beams with the percent good the thresholds ask (a DVL's log).
+    LowPercentGood,
+    /// Tracking the water, not the bottom (a DVL's log).
+    WaterTrack,
     /// Stamped within [`GAP_MARGIN_S`] of a gap in the reference longer than
     /// [`REFERENCE_GAP_INTERVALS`] of its median sample intervals: its t + τ may fall in
     /// the gap, where the reference is not read.
@@ -86,11 +94,14 @@ pub enum LeftOutWhy {
 
 impl LeftOutWhy {
     /// Every reason, in the order they are tested and reported.
-    pub const ALL: [LeftOutWhy; 5] = [
+    pub const ALL: [LeftOutWhy; 8] = [
         LeftOutWhy::Flagged,
         LeftOutWhy::NoVelocity,
         LeftOutWhy::Marker,
         LeftOutWhy::AllZero,
+        LeftOutWhy::LowCorrelation,
+        LeftOutWhy::LowPercentGood,
+        LeftOutWhy::WaterTrack,
         LeftOutWhy::ReferenceGap,
     ];
 
@@ -101,6 +112,9 @@ impl LeftOutWhy {
             LeftOutWhy::NoVelocity => "no_velocity",
             LeftOutWhy::Marker => "invalid_marker",
             LeftOutWhy::AllZero => "all_zero",
+            LeftOutWhy::LowCorrelation => "low_correlation",
+            LeftOutWhy::LowPercentGood => "low_percent_good",
+            LeftOutWhy::WaterTrack => "water_track",
             LeftOutWhy::ReferenceGap => "reference_gap",
         }
     }
@@ -112,6 +126,9 @@ impl LeftOutWhy {
             LeftOutWhy::NoVelocity => "with no velocity",
             LeftOutWhy::Marker => "with the invalid marker -32.768 m/s",
             LeftOutWhy::AllZero => "of exactly 0, 0, 0",
+            LeftOutWhy::LowCorrelation => "with fewer than 3 beams of the correlation asked",
+            LeftOutWhy::LowPercentGood => "with fewer than 3 beams of the percent good asked",
+            LeftOutWhy::WaterTrack => "tracking the water, not the bottom",
             LeftOutWhy::ReferenceGap => "beside a gap in the reference",
         }
     }

@@ -11,6 +11,7 @@
 use super::{PairedColumns, PairedError, PairedRecording, checks};
 use crate::data::csv::read_bytes;
 use crate::data::paired::bag::{self, BagFrames, BagTopics};
+use crate::data::paired::dvl_log::{self, DvlLog, LogFormat, Thresholds};
 use crate::files::sha256_hex;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -27,6 +28,15 @@ pub enum Source {
     },
     /// The DVL's and the reference's topics of the ROS 2 bag at `path`.
     Bag { path: PathBuf, topics: BagTopics },
+    /// The DVL's own log `dvl` in `format`, each beam held to `thresholds`, beside the
+    /// reference's CSV file `reference` read with `columns` (its DVL names unread).
+    Log {
+        dvl: PathBuf,
+        format: LogFormat,
+        thresholds: Thresholds,
+        reference: PathBuf,
+        columns: PairedColumns,
+    },
 }
 
 impl Source {
@@ -46,19 +56,45 @@ impl Source {
             Source::Csv { dvl, reference, .. } if dvl == reference => vec![dvl],
             Source::Csv { dvl, reference, .. } => vec![dvl, reference],
             Source::Bag { path, .. } => vec![path],
+            Source::Log { dvl, reference, .. } => vec![dvl, reference],
         }
     }
 
     /// Reads each of its files from disk, once, and hashes it; nothing is parsed yet
     /// but a bag's two topics, decoded as it is streamed.
     pub fn load(&self) -> Result<Loaded<'_>, PairedError> {
-        if let Source::Bag { path, topics } = self {
-            let read = bag::read(path, topics)?;
-            return Ok(Loaded {
-                source: self,
-                files: read.files,
-                content: Content::Bag(Box::new((read.samples, read.at, read.frames))),
-            });
+        match self {
+            Source::Bag { path, topics } => {
+                let read = bag::read(path, topics)?;
+                return Ok(Loaded {
+                    source: self,
+                    files: read.files,
+                    content: Content::Bag(Box::new((read.samples, read.at, read.frames))),
+                });
+            }
+            Source::Log {
+                dvl,
+                format,
+                thresholds,
+                reference,
+                ..
+            } => {
+                let log = dvl_log::read(dvl, *format, *thresholds)?;
+                let bytes = read_bytes(reference)?;
+                let files = vec![
+                    log.summary.file.clone(),
+                    SourceFile {
+                        path: reference.clone(),
+                        sha256: sha256_hex(&bytes),
+                    },
+                ];
+                return Ok(Loaded {
+                    source: self,
+                    files,
+                    content: Content::Log(Box::new(log), bytes),
+                });
+            }
+            Source::Csv { .. } => {}
         }
         let mut files = Vec::new();
         let mut bytes = Vec::new();
@@ -83,6 +119,39 @@ impl Source {
     }
 }
 
+/// The samples of a DVL log beside its reference's CSV file (a path and its bytes)
+/// read with `columns`, and where each came from: a ping's place is its number in the
+/// log.
+fn log_samples(
+    log: DvlLog,
+    reference: (&Path, &[u8]),
+    columns: &PairedColumns,
+) -> Result<(super::Unchecked, super::Locator), PairedError> {
+    let (reference_samples, reference_lines) =
+        super::csv::parse_reference(reference, columns, true)?;
+    let mut names = columns.clone();
+    names.dvl = [
+        "bottom track forward",
+        "bottom track starboard",
+        "bottom track down",
+    ]
+    .map(String::from);
+    let at = super::Locator {
+        dvl: log.summary.file.path.clone(),
+        reference: reference.0.to_path_buf(),
+        dvl_lines: log.number,
+        reference_lines,
+        names,
+    };
+    let samples = super::Unchecked {
+        dvl_time_s: log.time_s,
+        dvl_m_s: log.velocity_m_s,
+        dvl_stated: Some(log.stated),
+        ..reference_samples
+    };
+    Ok((samples, at))
+}
+
 /// A file a recording was read from, and the SHA-256 of its bytes as read.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct SourceFile {
@@ -104,6 +173,8 @@ enum Content {
     Bytes(Vec<Vec<u8>>),
     /// A bag's samples, where each came from, and its frames.
     Bag(Box<(super::Unchecked, super::Locator, BagFrames)>),
+    /// A DVL log as read, and the bytes of the reference's CSV file.
+    Log(Box<DvlLog>, Vec<u8>),
 }
 
 impl Loaded<'_> {
@@ -129,7 +200,13 @@ impl Loaded<'_> {
                 let (samples, at, frames) = *read;
                 (samples, at, Some(frames))
             }
-            (Source::Bag { .. }, Content::Bytes(_)) => unreachable!("a bag is loaded as samples"),
+            (Source::Log { columns, .. }, Content::Log(log, bytes)) => {
+                let (samples, at) = log_samples(*log, (&self.files[1].path, &bytes), columns)?;
+                (samples, at, None)
+            }
+            (_, Content::Bytes(_) | Content::Log(..)) => {
+                unreachable!("a bag is loaded as samples, a log as pings")
+            }
         };
         Ok(ReadRecording {
             recording: checks::check(samples, &at)?,

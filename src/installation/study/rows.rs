@@ -106,6 +106,12 @@ pub struct RecordingRow {
     pub left_out_no_velocity: u64,
     pub left_out_invalid_marker: u64,
     pub left_out_all_zero: u64,
+    #[serde(default)]
+    pub left_out_low_correlation: u64,
+    #[serde(default)]
+    pub left_out_low_percent_good: u64,
+    #[serde(default)]
+    pub left_out_water_track: u64,
     pub left_out_reference_gap: u64,
     pub reference_samples: u64,
     pub pieces: u64,
@@ -128,6 +134,9 @@ impl RecordingRow {
             left_out_no_velocity: left_out(LeftOutWhy::NoVelocity),
             left_out_invalid_marker: left_out(LeftOutWhy::Marker),
             left_out_all_zero: left_out(LeftOutWhy::AllZero),
+            left_out_low_correlation: left_out(LeftOutWhy::LowCorrelation),
+            left_out_low_percent_good: left_out(LeftOutWhy::LowPercentGood),
+            left_out_water_track: left_out(LeftOutWhy::WaterTrack),
             left_out_reference_gap: left_out(LeftOutWhy::ReferenceGap),
             reference_samples: counts.reference as u64,
             pieces: counts.pieces as u64,
@@ -143,6 +152,9 @@ impl RecordingRow {
             LeftOutWhy::NoVelocity => self.left_out_no_velocity,
             LeftOutWhy::Marker => self.left_out_invalid_marker,
             LeftOutWhy::AllZero => self.left_out_all_zero,
+            LeftOutWhy::LowCorrelation => self.left_out_low_correlation,
+            LeftOutWhy::LowPercentGood => self.left_out_low_percent_good,
+            LeftOutWhy::WaterTrack => self.left_out_water_track,
             LeftOutWhy::ReferenceGap => self.left_out_reference_gap,
         }
     }

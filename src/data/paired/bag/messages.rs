@@ -15,7 +15,7 @@ use super::values::{finite, finite_transform, rotation_quaternion, stamp_ns};
 use super::{BagError, BagTopics, Stamps};
 use crate::Vec3;
 use crate::data::interpolate::Between;
-use crate::data::paired::{Locator, PairedColumns, SourceFile, Unchecked};
+use crate::data::paired::{LeftOutWhy, Locator, PairedColumns, SourceFile, Unchecked};
 use crate::rotation::{Mat3, apply, multiply};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -638,7 +638,11 @@ fn unchecked(dvl: &Samples, reference: &Samples, frames: &BagFrames) -> Unchecke
             .iter()
             .map(|v| apply(&dvl_to_frd, *v))
             .collect(),
-        dvl_valid: flagged.then(|| dvl.valid.clone()),
+        dvl_stated: flagged.then(|| {
+            (dvl.valid.iter())
+                .map(|&valid| (!valid).then_some(LeftOutWhy::Flagged))
+                .collect()
+        }),
         reference_time_s: seconds(&reference.stamp_ns),
         velocity_ned_m_s: velocity_ned,
         attitude,
@@ -777,7 +781,7 @@ mod tests {
             assert_eq!(read.frames.origin_s, 1);
             assert_eq!(samples.dvl_time_s[3], 0.3);
             assert_eq!(samples.dvl_m_s[0], [2.0, -0.1, 0.05], "{type_name}");
-            assert_eq!(samples.dvl_valid, None);
+            assert_eq!(samples.dvl_stated, None);
             let rate = samples.rate.as_ref().unwrap();
             assert_eq!(rate[5], [0.0, 0.0, -0.1]);
             let [roll, pitch, yaw] = samples.attitude[10];
