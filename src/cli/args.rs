@@ -390,7 +390,8 @@ pub(super) struct ReadingArgs {
     #[arg(long, value_name = "FRAME")]
     pub(super) frame: Option<String>,
     /// The DVL file's format where it is the DVL's own log [default: found from its
-    /// content: PD0 by its 0x7F 0x7F]; its reference is then the CSV file --reference
+    /// content: PD0 by its 0x7F 0x7F, Water Linked's by a JSON object with a "type"];
+    /// its reference is then the CSV file --reference
     #[arg(long, value_enum)]
     pub(super) dvl_format: Option<DvlFormatArg>,
     /// A DVL log's bottom-track correlation a beam must reach to count, 0–255
@@ -408,6 +409,8 @@ pub(super) struct ReadingArgs {
 pub(super) enum DvlFormatArg {
     /// Teledyne RDI's binary PD0
     Pd0,
+    /// Water Linked's JSON reports (A50, A125), one a line
+    WaterLinked,
 }
 
 /// The stamps a bag is read on, as typed.
@@ -433,6 +436,7 @@ impl ReadingArgs {
             frame: self.frame.as_deref(),
             dvl_format: self.dvl_format.map(|format| match format {
                 DvlFormatArg::Pd0 => crate::data::paired::dvl_log::LogFormat::Pd0,
+                DvlFormatArg::WaterLinked => crate::data::paired::dvl_log::LogFormat::WaterLinked,
             }),
             thresholds: crate::data::paired::dvl_log::Thresholds {
                 correlation_min: self.bt_correlation_min,

@@ -11,6 +11,7 @@ pub mod fetch;
 pub mod fixes;
 pub mod interpolate;
 pub mod local_plane;
+pub mod nmea;
 pub mod npy;
 pub mod paired;
 pub mod position_fixes;

@@ -8,8 +8,10 @@
 //! [`CalibrateError`] naming the argument, file or step at fault.
 
 use crate::data::fixes::{Fixes, read_beside_attitude, read_fixes};
+use crate::data::nmea::gga_fixes;
 use crate::data::paired::Source;
 use crate::data::paired::bag::{BagError, is_bag, read_bag_beside_attitude};
+use crate::data::paired::dvl_log::{self, LogFormat, read_beside_own_attitude};
 use crate::data::paired::{PairedError, PairedRecording, ReadCounts, ReadRecording};
 use crate::footprint::machine_memory;
 use crate::installation::estimate::fixes::{
@@ -19,7 +21,7 @@ use crate::installation::frames::{Attitude, Reference};
 use crate::installation::terms::names::{TermName, term_set};
 use crate::operator::calibrate::{CalibrateError, NOISE_RATIO_LIMIT, clear_of_inputs, named};
 use crate::operator::cost::{Cost, FIXES, PerRow, Rows};
-use crate::operator::inputs::{Reading, columns, fix_columns, source};
+use crate::operator::inputs::{self, Reading, columns, fix_columns, source};
 use crate::operator::installation_file::SavedInstallation;
 use crate::results::ResultsError;
 use crate::results::corrected::{Outputs, corrected_samples, stem, write};
@@ -50,7 +52,7 @@ pub struct FixReading {
     /// How many fixes read carry no noise of their own (a covariance).
     pub without_noise: usize,
     /// From a bag: the topics and frames read, in words.
-    pub from_bag: Option<String>,
+    pub read_from: Option<String>,
 }
 
 /// What `calibrate --fixes` is asked.
@@ -141,7 +143,17 @@ impl FixFiles<'_> {
     /// where `depth` asks for one, and on the DVL's track ([`same_motion`]).
     fn read(&self, depth: bool) -> Result<FixReading, CalibrateError> {
         let fix_columns = fix_columns(self.columns).map_err(CalibrateError::Columns)?;
-        let (read, fixes, left_out, (without_noise, from_bag)) = match self.fix_topic {
+        if let Some(format) = (self.reading.dvl_format).or_else(|| dvl_log::format_of(self.dvl)) {
+            let reading = self.read_log(format, depth)?;
+            same_motion(
+                &self.fixes_named(),
+                &fix_columns,
+                &reading.read.recording,
+                &reading.fixes,
+            )?;
+            return Ok(reading);
+        }
+        let (read, fixes, left_out, (without_noise, read_from)) = match self.fix_topic {
             Some(topic) => {
                 let source = source(self.dvl, None, self.columns, self.reading)
                     .map_err(CalibrateError::Columns)?;
@@ -161,8 +173,8 @@ impl FixFiles<'_> {
                         bag.not_a_number,
                     ),
                 ];
-                let from_bag = format!(
-                    "{}; of the reference its attitude alone (its velocity not read); the fixes from {} ({})",
+                let read_from = format!(
+                    "from the bag: {}; of the reference its attitude alone (its velocity not read); the fixes from {} ({})",
                     read.frames
                         .as_ref()
                         .expect("a bag's reading has its frames"),
@@ -173,7 +185,7 @@ impl FixFiles<'_> {
                     read,
                     bag.fixes,
                     left_out,
-                    (bag.without_covariance, Some(from_bag)),
+                    (bag.without_covariance, Some(read_from)),
                 )
             }
             None => {
@@ -202,7 +214,70 @@ impl FixFiles<'_> {
             fixes,
             left_out,
             without_noise,
-            from_bag,
+            read_from,
+        })
+    }
+
+    /// A DVL log beside its own attitude (what it turned its velocities by) and the
+    /// fixes of its own GNSS (the GGA sentences its recorder wrote into it): the one
+    /// file named as the DVL, the attitude and the fixes.
+    fn read_log(&self, format: LogFormat, depth: bool) -> Result<FixReading, CalibrateError> {
+        let refused = |flag: &str, message| CalibrateError::Columns(inputs::refused(flag, message));
+        let own = |flag: &str, path: &Path| {
+            (path != self.dvl).then(|| {
+                refused(
+                    flag,
+                    format!(
+                        "{} is a {} log: it is calibrated against its own attitude and the fixes its recorder wrote into it, so name it again here (not {})",
+                        self.dvl.display(),
+                        format.words(),
+                        path.display()
+                    ),
+                )
+            })
+        };
+        if let Some(refusal) =
+            own("--attitude", self.attitude).or_else(|| own("--fixes", self.fixes))
+        {
+            return Err(refusal);
+        }
+        if depth {
+            return Err(CalibrateError::NoDepths {
+                fixes: self.fixes.to_path_buf(),
+            });
+        }
+        let (read, log) = read_beside_own_attitude(self.dvl, format, self.reading.thresholds)?;
+        let Some(gga) = gga_fixes(&log.sentences) else {
+            return Err(refused(
+                "--fixes",
+                format!(
+                    "{}: no GGA sentence with a fix among the {} NMEA sentences its recorder wrote into it",
+                    self.dvl.display(),
+                    log.sentences.len()
+                ),
+            ));
+        };
+        let from_log = format!(
+            "from the {} log: {}; of the DVL's own attitude (roll, pitch, heading: what its velocities were turned by); the fixes from its GGA sentences (north and east of {:.7}°, {:.7}°; {} of them without a checksum, so unchecked; {} other sentences passed over), placed on the log's clock, which runs {:.2} s behind the GNSS's (the median of each fix's time less its ping's)",
+            format.words(),
+            log.summary.frames.join("; "),
+            gga.origin_deg[0],
+            gga.origin_deg[1],
+            gga.without_checksum,
+            gga.others,
+            gga.recorder_behind_s
+        );
+        let (left_out, mut fixes) = (gga.left_out.clone(), gga.on_the_recorders_clock());
+        for t in &mut fixes.time_s {
+            *t -= self.fix_latency_s.unwrap_or(0.0);
+        }
+        let without_noise = fixes.len();
+        Ok(FixReading {
+            read,
+            fixes,
+            left_out,
+            without_noise,
+            read_from: Some(from_log),
         })
     }
 
@@ -247,7 +322,7 @@ pub struct FixCalibration {
     pub fix_latency_s: f64,
     pub own_noise: bool,
     /// From a bag: the topics and frames read, in words.
-    pub from_bag: Option<String>,
+    pub read_from: Option<String>,
     /// The RMS of the fixes' horizontal residual with no terms (the start positions
     /// alone fitted, to the fixes the fit kept) and with the terms applied, m; and the distance the dead
     /// reckoning travelled over the fixes fitted, m.
@@ -298,7 +373,7 @@ impl FixCalibration {
             fixes_left_out: reading.left_out,
             fix_latency_s,
             own_noise: reading.fixes.noise_m.is_some(),
-            from_bag: reading.from_bag,
+            read_from: reading.read_from,
             before_m: horizontal(fit.bare_residual_rms_m),
             after_m: horizontal(fit.residual_rms_m),
             distance_m: fit.distance_m,

@@ -100,7 +100,7 @@ pub struct FixCorrection {
     /// given or carried with the installation; `None` where neither.
     pub fix_latency: Option<(f64, LatencyFrom)>,
     /// From a bag: the topics and frames read, in words.
-    pub from_bag: Option<String>,
+    pub read_from: Option<String>,
     /// The dive's samples whose t + τ lies outside the attitude, or in a gap of it:
     /// written without a velocity.
     pub outside: usize,
@@ -146,7 +146,7 @@ pub fn correct_fixes(args: &FixCorrectArgs) -> Result<FixCorrection, CorrectErro
         read,
         fixes,
         left_out,
-        from_bag,
+        read_from,
         ..
     } = reading;
     let recording_sha256 = read.dvl_sha256().to_string();
@@ -198,7 +198,7 @@ pub fn correct_fixes(args: &FixCorrectArgs) -> Result<FixCorrection, CorrectErro
             };
             (latency_s, from)
         }),
-        from_bag,
+        read_from,
         outside,
         written,
     })

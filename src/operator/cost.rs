@@ -113,6 +113,16 @@ impl Rows {
                 fix_rows: None,
             });
         }
+        if crate::data::paired::dvl_log::format_of(dvl).is_some() {
+            // A PD0 ensemble with bottom track holds 200 bytes or more.
+            let bytes = std::fs::metadata(dvl).map_or(0, |m| m.len());
+            return Ok(Rows {
+                dvl: dvl.to_path_buf(),
+                dvl_rows: (bytes / 200) as usize,
+                reference_rows: reference.filter(|&r| r != dvl).map(row_count).transpose()?,
+                fix_rows: None,
+            });
+        }
         Ok(Rows {
             dvl: dvl.to_path_buf(),
             dvl_rows: row_count(dvl)?,
@@ -125,6 +135,8 @@ impl Rows {
     /// (a bag's messages of the topic `topic`, where named).
     pub fn with_fixes(self, fixes: &Path, topic: Option<&str>) -> Result<Rows, PairedError> {
         let fix_rows = match topic {
+            // A log's own fixes, at most one a ping.
+            None if fixes == self.dvl => self.dvl_rows,
             Some(topic) => (Bag::open(fixes)?.counts()?.topics.iter())
                 .filter(|t| t.name == topic)
                 .map(|t| t.count as usize)

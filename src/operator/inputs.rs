@@ -103,6 +103,15 @@ pub struct Reading<'a> {
     pub thresholds: Thresholds,
 }
 
+/// The refusal of the command-line flag `flag`, saying why.
+pub fn refused(flag: &str, message: String) -> SpecError {
+    SpecError {
+        location: flag.into(),
+        key: String::new(),
+        message,
+    }
+}
+
 /// The recording of the DVL file (or bag) `dvl`, its reference's file where that is
 /// another, read with the columns of `columns_file` (a CSV recording) or the topics of
 /// `reading` (a bag); a flag that does not apply to it is refused by name.
@@ -112,53 +121,8 @@ pub fn source(
     columns_file: Option<&Path>,
     reading: Reading,
 ) -> Result<Source, SpecError> {
-    let refused = |flag: &str, message: String| SpecError {
-        location: flag.into(),
-        key: String::new(),
-        message,
-    };
     if !is_bag(dvl) {
-        for (flag, given) in [
-            ("--dvl-topic", reading.dvl_topic),
-            ("--reference-topic", reading.reference_topic),
-            ("--rate-topic", reading.rate_topic),
-            ("--stamps", reading.stamps.map(|_| "")),
-            ("--frame", reading.frame),
-        ] {
-            if given.is_some() {
-                return Err(refused(
-                    flag,
-                    format!(
-                        "{} is not a bag (a rosbag2 folder, an .mcap or a .db3 file): a CSV recording is read by its columns",
-                        dvl.display()
-                    ),
-                ));
-            }
-        }
-        if let Some(format) = reading.dvl_format.or_else(|| dvl_log::format_of(dvl)) {
-            return log_source(dvl, format, reference, columns_file, reading);
-        }
-        for (flag, given) in [
-            (
-                "--bt-correlation-min",
-                reading.thresholds.correlation_min.is_some(),
-            ),
-            (
-                "--bt-percent-good-min",
-                reading.thresholds.percent_good_min.is_some(),
-            ),
-        ] {
-            if given {
-                return Err(refused(
-                    flag,
-                    format!(
-                        "{} is not a DVL's own log (PD0): a CSV recording's validity is its --valid-column",
-                        dvl.display()
-                    ),
-                ));
-            }
-        }
-        return Ok(Source::csv(dvl, reference, columns(columns_file, reading)?));
+        return file_source(dvl, reference, columns_file, reading);
     }
     let not_for_a_bag = [
         (
@@ -216,6 +180,57 @@ pub fn source(
     })
 }
 
+/// The recording of the DVL file `dvl` that is no bag: a DVL's own log (its format
+/// named or found from its content), or a CSV file; a bag's flag is refused by name.
+fn file_source(
+    dvl: &Path,
+    reference: Option<&Path>,
+    columns_file: Option<&Path>,
+    reading: Reading,
+) -> Result<Source, SpecError> {
+    for (flag, given) in [
+        ("--dvl-topic", reading.dvl_topic),
+        ("--reference-topic", reading.reference_topic),
+        ("--rate-topic", reading.rate_topic),
+        ("--stamps", reading.stamps.map(|_| "")),
+        ("--frame", reading.frame),
+    ] {
+        if given.is_some() {
+            return Err(refused(
+                flag,
+                format!(
+                    "{} is not a bag (a rosbag2 folder, an .mcap or a .db3 file): a CSV recording is read by its columns",
+                    dvl.display()
+                ),
+            ));
+        }
+    }
+    if let Some(format) = reading.dvl_format.or_else(|| dvl_log::format_of(dvl)) {
+        return log_source(dvl, format, reference, columns_file, reading);
+    }
+    for (flag, given) in [
+        (
+            "--bt-correlation-min",
+            reading.thresholds.correlation_min.is_some(),
+        ),
+        (
+            "--bt-percent-good-min",
+            reading.thresholds.percent_good_min.is_some(),
+        ),
+    ] {
+        if given {
+            return Err(refused(
+                flag,
+                format!(
+                    "{} is not a DVL's own log (PD0): a CSV recording's validity is its --valid-column",
+                    dvl.display()
+                ),
+            ));
+        }
+    }
+    return Ok(Source::csv(dvl, reference, columns(columns_file, reading)?));
+}
+
 /// The recording of the DVL log `dvl` in `format` beside the reference's CSV file,
 /// read with the columns of `columns_file` (whose DVL columns are not read).
 fn log_source(
@@ -225,11 +240,6 @@ fn log_source(
     columns_file: Option<&Path>,
     reading: Reading,
 ) -> Result<Source, SpecError> {
-    let refused = |flag: &str, message: String| SpecError {
-        location: flag.into(),
-        key: String::new(),
-        message,
-    };
     let Some(reference) = reference else {
         return Err(refused(
             "--reference",

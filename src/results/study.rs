@@ -491,6 +491,7 @@ mod tests {
                 left_out_low_correlation: 0,
                 left_out_low_percent_good: 0,
                 left_out_water_track: 0,
+                left_out_looking_up: 0,
                 left_out_reference_gap: 0,
                 reference_samples: 4000,
                 pieces: 3,

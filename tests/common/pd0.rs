@@ -70,6 +70,12 @@ pub fn beams_of(vehicle_m_s: [f64; 3], setup: &Setup) -> [f64; 4] {
 
 /// The bytes of ensemble `number` of `ping` under `setup`, its checksum last.
 pub fn ensemble(setup: &Setup, number: u32, ping: &Ping) -> Vec<u8> {
+    framed(&blocks(setup, number, ping))
+}
+
+/// The data types of ensemble `number`: its fixed leader, variable leader and bottom
+/// track.
+pub fn blocks(setup: &Setup, number: u32, ping: &Ping) -> [Vec<u8>; 3] {
     let mut fixed = vec![0u8; 59];
     fixed[4] = 0b0000_0010 | if setup.convex { 0b1000 } else { 0 }; // 600 kHz, down
     fixed[5] = 0b0100_0000 | setup.beam_angle_code; // four-beam Janus
@@ -114,7 +120,7 @@ pub fn ensemble(setup: &Setup, number: u32, ping: &Ping) -> Vec<u8> {
         bottom[36 + k] = 80;
         bottom[40 + k] = ping.percent_good[k];
     }
-    framed(&[fixed, variable, bottom])
+    [fixed, variable, bottom]
 }
 
 /// The data types `blocks` as one ensemble: the header and its offsets, the blocks, the

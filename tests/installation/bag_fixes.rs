@@ -168,7 +168,7 @@ fn fixes_from_a_bags_topic_calibrate_as_the_same_fixes_from_a_file() {
     let d = dir.path();
     let bag = bag_dive(&d.join("navsat"), FIX_TRUTH, 1, Written::NavSatFix);
     let bag = bag.to_str().unwrap();
-    let (from_bag, stdout) = saved_after(
+    let (read_from, stdout) = saved_after(
         d,
         &[
             "calibrate",
@@ -239,11 +239,11 @@ fn fixes_from_a_bags_topic_calibrate_as_the_same_fixes_from_a_file() {
             assert!(same_std, "{name}: {std} against {expected_std}");
         }
     };
-    close(&values(&from_bag), &values(&from_file));
+    close(&values(&read_from), &values(&from_file));
     assert!(
-        (from_bag.installation().time_offset_s - FIX_TRUTH.time_offset_s).abs() < 0.15,
+        (read_from.installation().time_offset_s - FIX_TRUTH.time_offset_s).abs() < 0.15,
         "{:?}",
-        from_bag.installation()
+        read_from.installation()
     );
     // The same fixes as poses in ENU.
     let bag = bag_dive(&d.join("pose"), FIX_TRUTH, 1, Written::Pose);

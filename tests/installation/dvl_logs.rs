@@ -119,7 +119,7 @@ fn data_info_says_what_a_pd0_log_holds() {
     for expected in [
         "a Teledyne RDI PD0 log, 1721 pings over 2580.00 s from 2017-05-24 11:50:13.400 UTC",
         "SHA-256 cdb9c80b6014c0a0eded27a318350d0362153789761cf48915a7fc34c16ddfe6",
-        "pings: 901 with bottom lock kept (4 of them on three beams), 820 left out: 820 with the invalid marker",
+        "pings: 901 with bottom lock kept (4 of them on three beams), 820 left out: 509 with the invalid marker -32.768 m/s, 311 with the DVL looking up",
         "the last ensemble, at byte 999901, is cut short by the file's end (99 of its 581 bytes): not read",
         "frame: earth coordinates, turned back by each ensemble's heading, pitch and roll",
         "0x0600 bottom track: 1721",
@@ -298,6 +298,20 @@ fn bad_bytes_in_a_pd0_log_are_counted_or_refused_by_name() {
         .unwrap_err()
         .to_string();
     assert!(error.contains("no PD0 ensemble"), "{error}");
+    // A ping of the DVL looking up (system configuration bit 7) is left out as such.
+    let mut up = ensemble(&setup, 1, &pings[0]);
+    let fixed_at = usize::from(u16::from_le_bytes([up[6], up[7]]));
+    up[fixed_at + 4] |= 0x80;
+    let length = up.len() - 2;
+    let sum = up[..length]
+        .iter()
+        .fold(0u16, |s, &b| s.wrapping_add(u16::from(b)));
+    up[length..].copy_from_slice(&sum.to_le_bytes());
+    up.extend(ensemble(&setup, 2, &pings[1]));
+    let path = dir.path().join("up.pd0");
+    std::fs::write(&path, &up).unwrap();
+    let read = dvl_log::read(&path, LogFormat::Pd0, Thresholds::default()).unwrap();
+    assert_eq!(read.stated, vec![Some(LeftOutWhy::LookingUp), None]);
     let survey = pd0::read(&public("RiverPro_test01_first20.PD0"), &mut |_| {}).unwrap();
     assert_eq!(
         (
@@ -327,8 +341,9 @@ fn as_pd0(recording: &PairedRecording, path: &Path) {
     std::fs::write(path, log(&setup, &pings)).unwrap();
 }
 
-/// `calibrate` reads a PD0 log beside its reference's CSV file, found by its content,
-/// and finds every term within one standard deviation of the same recording as CSV; a
+/// `calibrate` reads a PD0 log (and Water Linked reports) beside its reference's CSV
+/// file, found by its content, and finds every term within one standard deviation of
+/// the same recording as CSV; a
 /// log without --reference, or with --valid-column, is refused by the flag.
 #[test]
 fn calibrate_reads_a_pd0_log_beside_its_reference_csv() {
@@ -364,38 +379,43 @@ fn calibrate_reads_a_pd0_log_beside_its_reference_csv() {
     );
 }
 
-/// Writes `files`' DVL as `dvl.pd0` in `dir` and checks its calibration against the CSV's.
+/// Writes `files`' DVL as `dvl.pd0` and as Water Linked reports in `dir`, and checks
+/// each one's calibration against the CSV's: every term within one standard deviation.
 fn calibrates_as_its_csv(dir: &Path, files: &PairedFiles) {
     let recording = paired::read(files, &PairedColumns::akit()).unwrap();
-    let pd0 = dir.join("dvl.pd0");
+    let (pd0, json) = (dir.join("dvl.pd0"), dir.join("dvl.json"));
     as_pd0(&recording, &pd0);
+    as_water_linked(&recording, &json);
     let csv_args = csv_args(files);
     let csv_args: Vec<&str> = csv_args.iter().map(String::as_str).collect();
-    let csv = calibrate(dir, &[&csv_args[..], &[TERMS, "--out", "csv"]].concat());
-    let reference = files.reference.to_str().unwrap();
-    let text = calibrate(
+    let csv = terms(&calibrate(
         dir,
-        &[
-            pd0.to_str().unwrap(),
+        &[&csv_args[..], &[TERMS, "--out", "csv"]].concat(),
+    ));
+    let reference = files.reference.to_str().unwrap();
+    for (log, out) in [(&pd0, "out-pd0"), (&json, "out-json")] {
+        let args = [
+            log.to_str().unwrap(),
             "--reference",
             reference,
             TERMS,
             "--out",
-            "pd0",
-        ],
-    );
-    let (log, csv) = (terms(&text), terms(&csv));
-    assert_eq!(log.len(), csv.len(), "{text}");
-    for ((term, log, _), (_, csv, std)) in log.iter().zip(&csv) {
-        assert!(
-            (log - csv).abs() <= *std,
-            "{term}: {log} against {csv} ± {std}"
-        );
+            out,
+        ];
+        let text = calibrate(dir, &args);
+        let found = terms(&text);
+        assert_eq!(found.len(), csv.len(), "{text}");
+        for ((term, log, _), (_, csv, std)) in found.iter().zip(&csv) {
+            assert!(
+                (log - csv).abs() <= *std,
+                "{out}: {term}: {log} against {csv} ± {std}"
+            );
+        }
     }
 }
 
-/// An A-KIT segment's DVL written as PD0 calibrates as its CSV does, each term within
-/// one standard deviation.
+/// An A-KIT segment's DVL written as PD0 and as Water Linked reports calibrates as its
+/// CSV does, each term within one standard deviation.
 #[test]
 #[ignore = "needs the A-KIT recordings: dcnet-exp data fetch akit"]
 fn an_akit_segment_as_pd0_calibrates_to_the_csv_terms() {
@@ -406,4 +426,153 @@ fn an_akit_segment_as_pd0_calibrates_to_the_csv_terms() {
         reference: akit.join("Trajectory1/GT_trajectory1.csv"),
     };
     calibrates_as_its_csv(dir.path(), &files);
+}
+
+/// `calibrate --fixes` on a public WinRiver PD0 log: its own heading, pitch and roll as
+/// the attitude, its GGA sentences as the fixes, placed on the log's clock (4 h and
+/// 26.3 s behind the GNSS's: the recorder ran on local time), the fixes outside the
+/// DVL's pieces left out; an attitude from another file is refused by the flag.
+#[test]
+fn a_pd0_log_is_fitted_to_its_own_gnss_fixes_on_its_own_clock() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = public("winriver02.PD0");
+    let log = log.to_str().unwrap();
+    let fit = |attitude: &str| {
+        let args = ["calibrate", log, "--fixes", log, "--attitude", attitude];
+        let more = ["--fix-noise-m", "10", "--terms", "scale,misalignment"];
+        dcnet(dir.path(), &[&args[..], &more, &["--out", "out"]].concat())
+    };
+    let output = fit(log);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = stdout(&output);
+    for expected in [
+        "Read from the Teledyne RDI PD0 log: ship coordinates",
+        "50 of them without a checksum, so unchecked",
+        "placed on the log's clock, which runs 14426.30 s behind the GNSS's",
+        "the DVL's 75 samples, 69 kept (6 left out: 6 beside a gap in the reference)",
+        "50 fixes, 38 fitted (12 outside the DVL's pieces",
+    ] {
+        assert!(text.contains(expected), "{expected}\nnot in\n{text}");
+    }
+    let other = dir.path().join("attitude.csv");
+    std::fs::write(
+        &other,
+        "Time [s],Roll [rad],Pitch [rad],Yaw [rad]\n0,0,0,0\n",
+    )
+    .unwrap();
+    let output = fit(other.to_str().unwrap());
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("--attitude: "),
+        "{}",
+        stderr(&output)
+    );
+}
+
+/// A velocity report as a Water Linked DVL sends it, `time_of_validity` in µs since 1970.
+fn water_linked_report(
+    time_s: f64,
+    velocity_m_s: [f64; 3],
+    valid: bool,
+    beams: usize,
+    kind: &str,
+) -> String {
+    let transducers: Vec<String> = (0..4)
+        .map(|id| format!(r#"{{"id":{id},"velocity":0.1,"distance":1.2,"rssi":-30.0,"nsd":-90.0,"beam_valid":{}}}"#, id < beams))
+        .collect();
+    format!(
+        r#"{{"time":10.0,"vx":{},"vy":{},"vz":{},"fom":0.002,"altitude":1.2,"transducers":[{}],"velocity_valid":{valid},"status":0,"format":"json_v3.3","type":"{kind}","time_of_validity":{},"time_of_transmission":{}}}"#,
+        velocity_m_s[0],
+        velocity_m_s[1],
+        velocity_m_s[2],
+        transducers.join(","),
+        (time_s * 1e6).round() as u64,
+        (time_s * 1e6).round() as u64 + 150_000,
+    )
+}
+
+/// The public Water Linked report reads as its numbers; a log of velocity reports,
+/// one without lock, one tracking the water, one on three beams, a dead-reckoning
+/// report and a last line cut short reads each ping with its reason; an unknown format
+/// is refused naming its line.
+#[test]
+fn water_linked_reports_read_each_ping_with_its_validity() {
+    let read = dvl_log::read(
+        &repo().join("tests/data/water_linked/velocity_report.json"),
+        LogFormat::WaterLinked,
+        Thresholds::default(),
+    )
+    .unwrap();
+    assert_eq!(read.time_s, vec![1_638_191_471.563_017]);
+    assert_eq!(
+        read.velocity_m_s,
+        vec![[
+            -3.713480691658333e-05,
+            5.703703573090024e-05,
+            2.4990416932269e-05
+        ]]
+    );
+    assert_eq!(read.stated, vec![None]);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("dvl.json");
+    let lines = [
+        water_linked_report(1.7e9, [1.0, 0.1, 0.0], true, 4, "velocity"),
+        water_linked_report(1.7e9 + 0.2, [0.0, 0.0, 0.0], false, 0, "velocity"),
+        r#"{"ts":49056.8,"x":1.0,"y":2.0,"z":3.0,"std":0.01,"roll":0.6,"pitch":0.6,"yaw":0.6,"type":"position_local","status":0,"format":"json_v3.3"}"#.to_string(),
+        water_linked_report(1.7e9 + 0.4, [0.9, 0.1, 0.0], true, 4, "velocity_water"),
+        water_linked_report(1.7e9 + 0.6, [1.1, 0.0, 0.05], true, 3, "velocity"),
+        r#"{"time":10.0,"vx":1.0,"#.to_string(),
+    ];
+    std::fs::write(&path, lines.join("\n")).unwrap();
+    assert_eq!(dvl_log::format_of(&path), Some(LogFormat::WaterLinked));
+    let read = dvl_log::read(&path, LogFormat::WaterLinked, Thresholds::default()).unwrap();
+    assert_eq!(
+        read.stated,
+        vec![
+            None,
+            Some(LeftOutWhy::Flagged),
+            Some(LeftOutWhy::WaterTrack),
+            None
+        ]
+    );
+    assert_eq!(read.number, vec![1, 2, 4, 5]);
+    assert_eq!(read.velocity_m_s[3], [1.1, 0.0, 0.05]);
+    assert_eq!(
+        (read.summary.three_beam, read.summary.cut_short_line),
+        (1, Some(6))
+    );
+    let output = dcnet(dir.path(), &["data", "info", path.to_str().unwrap()]);
+    let info = stdout(&output);
+    for expected in [
+        "a Water Linked JSON log, 4 pings over 0.60 s",
+        "pings: 2 with bottom lock kept (1 of them on three beams), 2 left out: 1 flagged invalid, 1 tracking the water, not the bottom",
+        "the last line, 6, is cut short by the file's end (no JSON report): not read",
+        "\"position_local\" reports: 1",
+    ] {
+        assert!(
+            info.contains(expected),
+            "{expected}\nnot in\n{info}\n{}",
+            stderr(&output)
+        );
+    }
+    let unknown = lines[0].replace("json_v3.3", "json_v4");
+    std::fs::write(&path, format!("{}\n{unknown}\n", lines[4])).unwrap();
+    let error = dvl_log::read(&path, LogFormat::WaterLinked, Thresholds::default())
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        error,
+        format!(
+            "{}:2: format \"json_v4\": the reports read are json_v3, json_v3.1, json_v3.2, json_v3.3",
+            path.display()
+        )
+    );
+}
+
+/// `recording`'s DVL as Water Linked velocity reports, stamped as the CSV's seconds.
+fn as_water_linked(recording: &PairedRecording, path: &Path) {
+    let lines: Vec<String> = (recording.time_s.iter().zip(&recording.dvl_m_s))
+        .map(|(&time_s, &v)| water_linked_report(time_s, v, true, 4, "velocity"))
+        .collect();
+    std::fs::write(path, lines.join("\n") + "\n").unwrap();
 }

@@ -18,7 +18,7 @@ pub enum PairedError {
     #[error(transparent)]
     Bag(#[from] crate::data::paired::bag::BagError),
     #[error(transparent)]
-    Pd0(#[from] crate::data::paired::dvl_log::pd0::Pd0Error),
+    Log(#[from] crate::data::paired::dvl_log::LogError),
     #[error(
         "{}:{line}: {column}: {time_s} s follows {previous_s} s of line {previous_line}: time stamps must increase",
         path.display()

@@ -86,6 +86,8 @@ pub enum LeftOutWhy {
     LowPercentGood,
     /// Tracking the water, not the bottom (a DVL's log).
     WaterTrack,
+    /// The DVL looking up (a PD0 ensemble's system configuration): no bottom below.
+    LookingUp,
     /// Stamped within [`GAP_MARGIN_S`] of a gap in the reference longer than
     /// [`REFERENCE_GAP_INTERVALS`] of its median sample intervals: its t + τ may fall in
     /// the gap, where the reference is not read.
@@ -94,7 +96,7 @@ pub enum LeftOutWhy {
 
 impl LeftOutWhy {
     /// Every reason, in the order they are tested and reported.
-    pub const ALL: [LeftOutWhy; 8] = [
+    pub const ALL: [LeftOutWhy; 9] = [
         LeftOutWhy::Flagged,
         LeftOutWhy::NoVelocity,
         LeftOutWhy::Marker,
@@ -102,6 +104,7 @@ impl LeftOutWhy {
         LeftOutWhy::LowCorrelation,
         LeftOutWhy::LowPercentGood,
         LeftOutWhy::WaterTrack,
+        LeftOutWhy::LookingUp,
         LeftOutWhy::ReferenceGap,
     ];
 
@@ -115,6 +118,7 @@ impl LeftOutWhy {
             LeftOutWhy::LowCorrelation => "low_correlation",
             LeftOutWhy::LowPercentGood => "low_percent_good",
             LeftOutWhy::WaterTrack => "water_track",
+            LeftOutWhy::LookingUp => "looking_up",
             LeftOutWhy::ReferenceGap => "reference_gap",
         }
     }
@@ -129,6 +133,7 @@ impl LeftOutWhy {
             LeftOutWhy::LowCorrelation => "with fewer than 3 beams of the correlation asked",
             LeftOutWhy::LowPercentGood => "with fewer than 3 beams of the percent good asked",
             LeftOutWhy::WaterTrack => "tracking the water, not the bottom",
+            LeftOutWhy::LookingUp => "with the DVL looking up",
             LeftOutWhy::ReferenceGap => "beside a gap in the reference",
         }
     }

@@ -112,6 +112,8 @@ pub struct RecordingRow {
     pub left_out_low_percent_good: u64,
     #[serde(default)]
     pub left_out_water_track: u64,
+    #[serde(default)]
+    pub left_out_looking_up: u64,
     pub left_out_reference_gap: u64,
     pub reference_samples: u64,
     pub pieces: u64,
@@ -137,6 +139,7 @@ impl RecordingRow {
             left_out_low_correlation: left_out(LeftOutWhy::LowCorrelation),
             left_out_low_percent_good: left_out(LeftOutWhy::LowPercentGood),
             left_out_water_track: left_out(LeftOutWhy::WaterTrack),
+            left_out_looking_up: left_out(LeftOutWhy::LookingUp),
             left_out_reference_gap: left_out(LeftOutWhy::ReferenceGap),
             reference_samples: counts.reference as u64,
             pieces: counts.pieces as u64,
@@ -155,6 +158,7 @@ impl RecordingRow {
             LeftOutWhy::LowCorrelation => self.left_out_low_correlation,
             LeftOutWhy::LowPercentGood => self.left_out_low_percent_good,
             LeftOutWhy::WaterTrack => self.left_out_water_track,
+            LeftOutWhy::LookingUp => self.left_out_looking_up,
             LeftOutWhy::ReferenceGap => self.left_out_reference_gap,
         }
     }

@@ -180,7 +180,7 @@ pub fn fix_correction_text(correction: &FixCorrection) -> String {
         let value = format!("{:.4} {unit}", applied[k] * factor);
         table.add_row([readable, value, std, from, next_dive(saved, &term.name)]);
     }
-    let mut text = super::fixes::from_bag(&correction.from_bag);
+    let mut text = super::fixes::read_from(&correction.read_from);
     text.push_str(&format!(
         "read: {}; {}\ninstallation of {} (calibrated on {}) applied\n{table}\n",
         correction.read,

@@ -41,10 +41,10 @@ pub fn given_latency(latency_s: f64) -> Option<(f64, &'static str)> {
     (latency_s != 0.0).then_some((latency_s, "given"))
 }
 
-/// For fixes read from a bag, the topics and frames it was read in, a paragraph.
-pub fn from_bag(read: &Option<String>) -> String {
+/// For fixes read from a bag or a DVL's log, what was read there and how, a paragraph.
+pub fn read_from(read: &Option<String>) -> String {
     match read {
-        Some(read) => format!("Read from the bag: {read}.\n\n"),
+        Some(read) => format!("Read {read}.\n\n"),
         None => String::new(),
     }
 }
@@ -62,7 +62,7 @@ pub fn fix_noise(fix_m: f64, own: bool) -> String {
 pub fn fixes_text(calibration: &FixCalibration) -> String {
     let FixCalibration { fit, noise, .. } = calibration;
     let table = super::terms_table(&fit.bound, |k| fit.estimated[k]);
-    let mut text = from_bag(&calibration.from_bag);
+    let mut text = read_from(&calibration.read_from);
     text.push_str(&format!(
         "read: {}; {}, {} fitted ({} outside the DVL's pieces, {} outliers beyond Tukey's {TUKEY_C_MODELLED} of their standard deviations, left out), over {} piece{} with a start position each\n{table}\n",
         calibration.read,

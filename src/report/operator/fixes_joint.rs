@@ -11,7 +11,7 @@ use crate::operator::calibrate_joint::AGREEMENT_P_VALUE;
 use crate::report::kit::readable::readable_term;
 use crate::report::operator::calibrate::{VehicleRows, between_dives_text, vehicle_rows};
 use crate::report::operator::fixes::{
-    fix_noise, fixes_read, from_bag, given_latency, unseen_lines,
+    fix_noise, fixes_read, given_latency, read_from, unseen_lines,
 };
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 
@@ -25,7 +25,7 @@ pub fn joint_fixes_text(calibration: &JointFixCalibration) -> String {
     } = calibration;
     let mut text = String::new();
     for (name, dive) in names.iter().zip(alone) {
-        text.push_str(&from_bag(&dive.from_bag));
+        text.push_str(&read_from(&dive.read_from));
         text.push_str(&format!(
             "read {name}: {}; {}; the fixes' noise {}\n",
             dive.read,

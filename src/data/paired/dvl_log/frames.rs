@@ -1,6 +1,8 @@
 //! From a PD0 ensemble's bottom track to the vehicle's velocity in this tool's DVL
 //! axes (x forward, y starboard, z down), and the ping's validity as the instrument
 //! states it.
+//! - A ping of the DVL looking up (its system configuration, which a Workhorse may
+//!   change between ensembles as it is turned over) is left out: no bottom below.
 //! - Out of beam coordinates, a marker (−32768) on x, y or z says the instrument made no
 //!   solution: the ping is left out.
 //! - A beam is good where, in beam coordinates, it has a velocity and, where
@@ -52,10 +54,13 @@ pub enum Ping {
 
 /// The vehicle's velocity that `ensemble` measured, or why it is left out.
 pub fn ping(ensemble: &Ensemble, thresholds: Thresholds) -> Ping {
+    let leader = &ensemble.leader;
+    if leader.looking_up {
+        return Ping::LeftOut(LeftOutWhy::LookingUp);
+    }
     let Some(bottom) = &ensemble.bottom else {
         return Ping::LeftOut(LeftOutWhy::NoVelocity);
     };
-    let leader = &ensemble.leader;
     let in_beams = leader.frame == Frame::Beam;
     let axes = bottom.velocity_mm_s.map(|v| f64::from(v) / 1000.0);
     // Out of beam coordinates the instrument made the solution: a marker on an axis
@@ -134,6 +139,19 @@ pub fn instrument_to_earth([h, p, r]: Vec3) -> Mat3 {
         [-sh * cr + ch * sp * sr, ch * cp, -sh * sr - ch * sp * cr],
         [-cp * sr, sp, cp * cr],
     ]
+}
+
+/// The ensemble's roll, pitch and yaw (this tool's order), degrees, as its velocities
+/// are turned by: the pitch as a gimbal's where the internal tilt sensor gave it.
+pub fn roll_pitch_yaw_deg(ensemble: &Ensemble) -> Vec3 {
+    let [heading, pitch, roll] = ensemble.attitude_deg;
+    let pitch = match ensemble.leader.sensor_source & 0b1000 != 0 {
+        true => (pitch.to_radians().tan() * roll.to_radians().cos())
+            .atan()
+            .to_degrees(),
+        false => pitch,
+    };
+    [roll, pitch, heading]
 }
 
 /// Ship or earth axes turned back into the instrument's by the ensemble's attitude.

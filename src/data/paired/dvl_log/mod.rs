@@ -11,24 +11,60 @@
 
 mod frames;
 pub mod pd0;
+pub mod water_linked;
 
 pub use frames::{Ping, Thresholds, instrument_to_earth, ping};
 
-use super::{LeftOutWhy, PairedError, SourceFile};
+use super::{
+    LeftOutWhy, Locator, PairedColumns, PairedError, ReadRecording, SourceFile, Unchecked,
+};
 use crate::Vec3;
 use std::io::Read;
 use std::path::{Path, PathBuf};
+
+/// Why a DVL log cannot be read: the file, and the ensemble's byte or the line at fault.
+#[derive(Debug, thiserror::Error)]
+pub enum LogError {
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{}: the ensemble at byte {byte}: {problem}", path.display())]
+    Ensemble {
+        path: PathBuf,
+        byte: u64,
+        problem: String,
+    },
+    #[error("{}:{line}: {problem}", path.display())]
+    Line {
+        path: PathBuf,
+        line: u64,
+        problem: String,
+    },
+    #[error("{}: no PD0 ensemble (bytes 0x7F 0x7F with a checksum that holds) in {bytes} bytes", path.display())]
+    Empty { path: PathBuf, bytes: u64 },
+    #[error("{}: no velocity report (\"type\": \"velocity\") in its {lines} lines", path.display())]
+    NoReports { path: PathBuf, lines: u64 },
+    #[error("{}: a {} log's pings carry no attitude: give the attitude's own file with --attitude", path.display(), format.words())]
+    NoAttitude { path: PathBuf, format: LogFormat },
+}
 
 /// A DVL log's format.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum LogFormat {
     /// Teledyne RDI's binary PD0.
     Pd0,
+    /// Water Linked's JSON reports, one a line.
+    WaterLinked,
 }
 
 impl LogFormat {
     /// The formats by the key `--dvl-format` and the spec take.
-    pub const KEYS: [(&'static str, LogFormat); 1] = [("pd0", LogFormat::Pd0)];
+    pub const KEYS: [(&'static str, LogFormat); 2] = [
+        ("pd0", LogFormat::Pd0),
+        ("water-linked", LogFormat::WaterLinked),
+    ];
 
     /// The format a key names.
     pub fn from_key(key: &str) -> Option<LogFormat> {
@@ -38,6 +74,7 @@ impl LogFormat {
     pub fn words(self) -> &'static str {
         match self {
             LogFormat::Pd0 => "Teledyne RDI PD0",
+            LogFormat::WaterLinked => "Water Linked JSON",
         }
     }
 }
@@ -46,15 +83,18 @@ impl LogFormat {
 const SNIFFED: usize = 4096;
 
 /// The DVL log format of the file at `path`, found from its first bytes: PD0 where
-/// they hold 0x7F 0x7F; `None` for any other file (a CSV file, a folder).
+/// they hold 0x7F 0x7F, Water Linked's where the first is `{` and a `"type"` follows;
+/// `None` for any other file (a CSV file, a folder).
 pub fn format_of(path: &Path) -> Option<LogFormat> {
     let mut first = Vec::with_capacity(SNIFFED);
     let file = std::fs::File::open(path).ok()?;
     file.take(SNIFFED as u64).read_to_end(&mut first).ok()?;
-    first
-        .windows(2)
-        .any(|pair| pair == [0x7F, 0x7F])
-        .then_some(LogFormat::Pd0)
+    if first.windows(2).any(|pair| pair == [0x7F, 0x7F]) {
+        return Some(LogFormat::Pd0);
+    }
+    let json =
+        first.trim_ascii_start().starts_with(b"{") && first.windows(6).any(|w| w == b"\"type\"");
+    json.then_some(LogFormat::WaterLinked)
 }
 
 /// A DVL log as read: each ping's stamp, the vehicle's velocity in the DVL's axes
@@ -67,6 +107,12 @@ pub struct DvlLog {
     pub stated: Vec<Option<LeftOutWhy>>,
     /// Each ping's number in the log (a PD0 ensemble's), where messages place it.
     pub number: Vec<u64>,
+    /// Each ping's roll, pitch and yaw as the DVL recorded them (its own sensors', or
+    /// the vehicle's it was given), degrees: what the log's velocities were turned by.
+    pub attitude_deg: Vec<Vec3>,
+    /// The NMEA sentences the recorder wrote beside each ping: the ping's stamp, its
+    /// number and the sentence.
+    pub sentences: Vec<(f64, u64, String)>,
     pub summary: LogSummary,
 }
 
@@ -84,6 +130,8 @@ pub struct LogSummary {
     pub bytes_between: u64,
     /// The last ensemble, where the file ends inside it (`pd0::Pd0Survey::cut_short`).
     pub cut_short: Option<(u64, usize, usize)>,
+    /// The last line of a JSON log, where the file ends inside it.
+    pub cut_short_line: Option<u64>,
     /// The frames the velocities were recorded in, and how they were turned.
     pub frames: Vec<String>,
     /// The data types present, each with the count of ensembles holding it.
@@ -96,17 +144,63 @@ pub struct LogSummary {
 pub fn read(path: &Path, format: LogFormat, thresholds: Thresholds) -> Result<DvlLog, PairedError> {
     match format {
         LogFormat::Pd0 => read_pd0(path, thresholds),
+        LogFormat::WaterLinked => read_water_linked(path),
     }
 }
 
+/// Water Linked's reports: each velocity report a ping, its validity as the report
+/// states it (thresholds do not apply: the DVL gives no correlation).
+fn read_water_linked(path: &Path) -> Result<DvlLog, PairedError> {
+    let mut log = DvlLog::empty(LogFormat::WaterLinked, path);
+    let survey = water_linked::read(path, &mut |report| {
+        let stated = if report.water_track {
+            Some(LeftOutWhy::WaterTrack)
+        } else if !report.velocity_valid {
+            Some(LeftOutWhy::Flagged)
+        } else {
+            None
+        };
+        log.summary.three_beam += usize::from(stated.is_none() && report.beams_valid == 3);
+        log.time_s.push(report.time_s);
+        log.velocity_m_s.push(match stated {
+            None => report.velocity_m_s,
+            Some(_) => [f64::NAN; 3],
+        });
+        log.stated.push(stated);
+        log.number.push(report.line);
+    })?;
+    if log.time_s.is_empty() {
+        let lines = survey.types.values().sum::<usize>() as u64;
+        return Err(LogError::NoReports {
+            path: path.to_path_buf(),
+            lines,
+        }
+        .into());
+    }
+    let summary = &mut log.summary;
+    summary.file.sha256 = survey.sha256;
+    summary.pings = log.time_s.len();
+    summary.cut_short_line = survey.cut_short;
+    summary.frames = vec![
+        "the DVL's body frame (x forward, y right, z down), as its velocity reports give it".into(),
+    ];
+    summary.blocks = (survey
+        .types
+        .iter()
+        .map(|(kind, &n)| (format!("\"{kind}\" reports"), n)))
+    .chain(
+        survey
+            .formats
+            .iter()
+            .map(|(format, &n)| (format!("format {format}"), n)),
+    )
+    .collect();
+    summary.validity = "a velocity report's velocity_valid (false: flagged invalid) and its type (velocity_water: water tracking, left out); three transducers with beam_valid make a three-beam solution, kept and counted".into();
+    Ok(log)
+}
+
 fn read_pd0(path: &Path, thresholds: Thresholds) -> Result<DvlLog, PairedError> {
-    let mut log = DvlLog {
-        time_s: Vec::new(),
-        velocity_m_s: Vec::new(),
-        stated: Vec::new(),
-        number: Vec::new(),
-        summary: LogSummary::empty(LogFormat::Pd0, path),
-    };
+    let mut log = DvlLog::empty(LogFormat::Pd0, path);
     let (mut frames, mut applied) = (Vec::new(), None);
     let survey = pd0::read(path, &mut |ensemble| {
         let ping = frames::ping(&ensemble, thresholds);
@@ -131,6 +225,9 @@ fn read_pd0(path: &Path, thresholds: Thresholds) -> Result<DvlLog, PairedError> 
         log.velocity_m_s.push(velocity_m_s);
         log.stated.push(stated);
         log.number.push(u64::from(ensemble.number));
+        log.attitude_deg.push(frames::roll_pitch_yaw_deg(&ensemble));
+        let (time_s, number) = (ensemble.time_s, u64::from(ensemble.number));
+        (log.sentences).extend(ensemble.sentences.into_iter().map(|s| (time_s, number, s)));
     })?;
     let summary = &mut log.summary;
     summary.file.sha256 = survey.sha256;
@@ -142,7 +239,65 @@ fn read_pd0(path: &Path, thresholds: Thresholds) -> Result<DvlLog, PairedError> 
     summary.blocks = (survey.blocks.iter())
         .map(|(&id, &count)| (format!("0x{id:04X} {}", pd0::block_name(id)), count))
         .collect();
-    summary.validity = match applied {
+    summary.validity = validity_words(applied, thresholds);
+    Ok(log)
+}
+
+/// The log at `path` as a recording of the DVL beside its own attitude (what its
+/// velocities were turned by, on its own clock), checked as any recording: the
+/// reference has no velocity, for a calibration against fixes; and the log as read.
+pub fn read_beside_own_attitude(
+    path: &Path,
+    format: LogFormat,
+    thresholds: Thresholds,
+) -> Result<(ReadRecording, DvlLog), PairedError> {
+    let log = read(path, format, thresholds)?;
+    if log.attitude_deg.len() != log.time_s.len() {
+        return Err(LogError::NoAttitude {
+            path: path.to_path_buf(),
+            format,
+        }
+        .into());
+    }
+    let samples = Unchecked {
+        dvl_time_s: log.time_s.clone(),
+        dvl_m_s: log.velocity_m_s.clone(),
+        dvl_stated: Some(log.stated.clone()),
+        reference_time_s: log.time_s.clone(),
+        velocity_ned_m_s: Vec::new(),
+        attitude: log.attitude_deg.clone(),
+        rate: None,
+        angles_in_degrees: true,
+        position: None,
+    };
+    let mut names = PairedColumns::akit();
+    names.time = "clock".into();
+    names.dvl = [
+        "bottom track forward",
+        "bottom track starboard",
+        "bottom track down",
+    ]
+    .map(String::from);
+    names.attitude = ["roll", "pitch", "heading"].map(String::from);
+    let at = Locator {
+        dvl: path.to_path_buf(),
+        reference: path.to_path_buf(),
+        dvl_lines: log.number.clone(),
+        reference_lines: log.number.clone(),
+        names,
+    };
+    let read = ReadRecording {
+        recording: super::checks::check(samples, &at)?,
+        files: vec![log.summary.file.clone()],
+        frames: None,
+    };
+    Ok((read, log))
+}
+
+/// What a PD0 ping's validity is read from, in words: `applied`, the instrument's
+/// thresholds (BC, BG) where any ensemble has bottom track, and those set.
+fn validity_words(applied: Option<(u8, u8)>, thresholds: Thresholds) -> String {
+    match applied {
         Some((correlation, percent_good)) => format!(
             "bottom track (ID 0x0600): out of beam coordinates a ping counts where the instrument gave x, y and z, in beam coordinates a beam counts where it has a velocity (the instrument marks those below its own thresholds, here BC {correlation} and BG {percent_good} %, with -32768); {}; three beams make a three-beam solution, fewer leave the ping out",
             match thresholds {
@@ -161,8 +316,7 @@ fn read_pd0(path: &Path, thresholds: Thresholds) -> Result<DvlLog, PairedError> 
             }
         ),
         None => "no ensemble has bottom track (ID 0x0600): no ping measured the vehicle".into(),
-    };
-    Ok(log)
+    }
 }
 
 /// The frame an ensemble's velocities are in, and how they are turned into the DVL's
@@ -201,6 +355,7 @@ impl LogSummary {
             bad_checksums: Vec::new(),
             bytes_between: 0,
             cut_short: None,
+            cut_short_line: None,
             frames: Vec::new(),
             blocks: Vec::new(),
             validity: String::new(),
@@ -209,6 +364,18 @@ impl LogSummary {
 }
 
 impl DvlLog {
+    fn empty(format: LogFormat, path: &Path) -> DvlLog {
+        DvlLog {
+            time_s: Vec::new(),
+            velocity_m_s: Vec::new(),
+            stated: Vec::new(),
+            number: Vec::new(),
+            attitude_deg: Vec::new(),
+            sentences: Vec::new(),
+            summary: LogSummary::empty(format, path),
+        }
+    }
+
     /// What `data info` prints of it: the span and rate, the pings kept and left out
     /// per reason, the frames, the data types and what a ping's validity is read from.
     pub fn describe(&self) -> String {
@@ -238,7 +405,7 @@ impl DvlLog {
                 super::left_out_words(&left_out)
             ),
             format!(
-                "ensembles whose checksum failed, not read: {}{}; bytes outside any ensemble: {}",
+                "ensembles whose checksum failed, not read: {}{}; bytes outside any ensemble or report: {}",
                 summary.bad_checksums.len(),
                 match summary.bad_checksums.first() {
                     Some(byte) => format!(" (the first at byte {byte})"),
@@ -250,6 +417,11 @@ impl DvlLog {
         if let Some((byte, stated, held)) = summary.cut_short {
             lines.push(format!(
                 "the last ensemble, at byte {byte}, is cut short by the file's end ({held} of its {stated} bytes): not read"
+            ));
+        }
+        if let Some(line) = summary.cut_short_line {
+            lines.push(format!(
+                "the last line, {line}, is cut short by the file's end (no JSON report): not read"
             ));
         }
         lines.extend(summary.frames.iter().map(|frame| format!("frame: {frame}")));

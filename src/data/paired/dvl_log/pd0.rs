@@ -5,7 +5,8 @@
 //! angle and pattern, the heading alignment EA, where the attitude came from, EZ), the
 //! variable leader (the ensemble's clock and attitude) and bottom track (four
 //! velocities in mm/s, −32768 for none, each beam's correlation, evaluation amplitude,
-//! percent good and range). Every other data type is counted by its ID and not read.
+//! percent good and range), and the NMEA sentences WinRiver writes as text (IDs
+//! 0x2101–0x2104). Every other data type is counted by its ID and not read.
 //! The file is streamed: a long log is never held whole.
 //! An ensemble whose checksum fails is counted and not read, and so is a last ensemble
 //! the file ends inside (a log cut as the recorder stopped: its length points past
@@ -14,10 +15,11 @@
 //! In: a file's path. Out: each [`Ensemble`] handed to a visitor, then a [`Pd0Survey`]
 //! with the file's SHA-256.
 
+use super::LogError;
 use sha2::{Digest, Sha256};
 use std::collections::BTreeMap;
 use std::io::Read;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The two bytes every ensemble starts with.
 const MAGIC: [u8; 2] = [0x7F, 0x7F];
@@ -25,6 +27,8 @@ const MAGIC: [u8; 2] = [0x7F, 0x7F];
 const FIXED_LEADER: u16 = 0x0000;
 const VARIABLE_LEADER: u16 = 0x0080;
 pub const BOTTOM_TRACK: u16 = 0x0600;
+/// WinRiver's blocks of NMEA sentences as text.
+const NMEA_TEXT: std::ops::RangeInclusive<u16> = 0x2101..=0x2104;
 /// Bottom track's marker of a beam (or an axis) with no velocity, mm/s.
 pub const NO_VELOCITY_MM_S: i16 = -32768;
 /// How much of the file is read at a time, bytes.
@@ -102,6 +106,9 @@ pub struct Ensemble {
     pub attitude_deg: [f64; 3],
     pub leader: FixedLeader,
     pub bottom: Option<BottomTrack>,
+    /// The NMEA sentences a recorder wrote into it as text (WinRiver's IDs
+    /// 0x2101–0x2104: a GNSS's GGA, VTG, ...), as written.
+    pub sentences: Vec<String>,
 }
 
 /// What a whole file held beyond its ensembles.
@@ -119,23 +126,6 @@ pub struct Pd0Survey {
     pub cut_short: Option<(u64, usize, usize)>,
     /// How many ensembles held each data type, by ID.
     pub blocks: BTreeMap<u16, usize>,
-}
-
-#[derive(Debug, thiserror::Error)]
-pub enum Pd0Error {
-    #[error("{}: {source}", path.display())]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
-    #[error("{}: the ensemble at byte {byte}: {problem}", path.display())]
-    Ensemble {
-        path: PathBuf,
-        byte: u64,
-        problem: String,
-    },
-    #[error("{}: no PD0 ensemble (bytes 0x7F 0x7F with a checksum that holds) in {bytes} bytes", path.display())]
-    Empty { path: PathBuf, bytes: u64 },
 }
 
 /// The name of a PD0 data type, where it is one this reader knows.
@@ -157,8 +147,8 @@ pub fn block_name(id: u16) -> &'static str {
 }
 
 /// Reads `path` ensemble by ensemble, handing each to `visit`.
-pub fn read(path: &Path, visit: &mut dyn FnMut(Ensemble)) -> Result<Pd0Survey, Pd0Error> {
-    let io = |source| Pd0Error::Io {
+pub fn read(path: &Path, visit: &mut dyn FnMut(Ensemble)) -> Result<Pd0Survey, LogError> {
+    let io = |source| LogError::Io {
         path: path.to_path_buf(),
         source,
     };
@@ -184,7 +174,7 @@ pub fn read(path: &Path, visit: &mut dyn FnMut(Ensemble)) -> Result<Pd0Survey, P
         }
     }
     if survey.ensembles == 0 {
-        return Err(Pd0Error::Empty {
+        return Err(LogError::Empty {
             path: path.to_path_buf(),
             bytes: start + pending.len() as u64,
         });
@@ -203,7 +193,7 @@ fn take_ensembles(
     at_end: bool,
     survey: &mut Pd0Survey,
     visit: &mut dyn FnMut(Ensemble),
-) -> Result<usize, Pd0Error> {
+) -> Result<usize, LogError> {
     let mut at = 0;
     while let Some(found) = find_magic(&bytes[at..]) {
         survey.bytes_between += found as u64;
@@ -235,7 +225,7 @@ fn take_ensembles(
             at += 2;
             continue;
         }
-        let refuse = |problem: String| Pd0Error::Ensemble {
+        let refuse = |problem: String| LogError::Ensemble {
             path: path.to_path_buf(),
             byte,
             problem,
@@ -305,6 +295,10 @@ fn parse(bytes: &[u8], byte: u64, survey: &mut Pd0Survey) -> Result<Ensemble, St
         .ok_or("it has no variable leader (ID 0x0080)")?;
     let (number, time_s, attitude_deg) = variable_leader(variable)?;
     let bottom = block(&[BOTTOM_TRACK], "bottom track", 44)?.map(bottom_track);
+    let sentences = (blocks.iter())
+        .filter(|(id, ..)| NMEA_TEXT.contains(id))
+        .filter_map(|(_, _, block)| nmea_text(block))
+        .collect();
     Ok(Ensemble {
         byte,
         number,
@@ -312,7 +306,19 @@ fn parse(bytes: &[u8], byte: u64, survey: &mut Pd0Survey) -> Result<Ensemble, St
         attitude_deg,
         leader,
         bottom,
+        sentences,
     })
+}
+
+/// The NMEA sentence of a WinRiver text block: its ID, its length (2 bytes each), then
+/// the sentence; `None` where it holds no `$` sentence.
+fn nmea_text(block: &[u8]) -> Option<String> {
+    let length = usize::from(*block.get(2)?) | usize::from(*block.get(3)?) << 8;
+    let text = block.get(4..(4 + length).min(block.len()))?;
+    let text = std::str::from_utf8(text)
+        .ok()?
+        .trim_end_matches(['\r', '\n', '\0']);
+    text.starts_with('$').then(|| text.to_string())
 }
 
 fn u16_at(bytes: &[u8], at: usize) -> u16 {

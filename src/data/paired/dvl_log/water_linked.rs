@@ -1,0 +1,143 @@
+//! Water Linked's DVL reports (A50, A125), one JSON object a line, as the DVL's TCP
+//! API sends them and loggers store them, read with serde_json. A `velocity` report is a
+//! ping: its `time_of_validity` (the middle of the ping, µs since 1970 UTC) the stamp,
+//! `vx`, `vy`, `vz` the DVL's own velocity in its body frame (x forward, y right, z down),
+//! `velocity_valid` whether it had lock, each transducer's `beam_valid` how many beams it
+//! used (three make a three-beam solution, kept and counted). A `velocity_water` report
+//! (water tracking, from json_v3.2) is a ping left out as such. Other reports (dead
+//! reckoning, responses) are counted by type and not read. The file is read a line at
+//! a time; a line that is no JSON report, or a format other than json_v3 to json_v3.3,
+//! is refused naming its line, but for a last line the file ends inside (a logger
+//! stopped mid-write), which is counted.
+//! In: a file's path. Out: each [`Report`] handed to a visitor, then a
+//! [`ReportSurvey`] with the file's SHA-256.
+
+use super::LogError;
+use sha2::{Digest, Sha256};
+use std::collections::BTreeMap;
+use std::io::BufRead;
+use std::path::Path;
+
+/// The report formats read.
+const FORMATS: [&str; 4] = ["json_v3", "json_v3.1", "json_v3.2", "json_v3.3"];
+
+/// A ping as a velocity report gives it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Report {
+    /// Its line in the file (the first is 1).
+    pub line: u64,
+    /// The middle of the ping, s since 1970 UTC.
+    pub time_s: f64,
+    /// The DVL's velocity, m/s, forward, right, down.
+    pub velocity_m_s: [f64; 3],
+    pub velocity_valid: bool,
+    /// How many transducers' beams were valid.
+    pub beams_valid: usize,
+    /// Tracking the water (`velocity_water`), not the bottom.
+    pub water_track: bool,
+}
+
+/// What a whole file held beyond its pings.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ReportSurvey {
+    pub sha256: String,
+    /// How many lines held each type of report.
+    pub types: BTreeMap<String, usize>,
+    /// The formats the reports state.
+    pub formats: BTreeMap<String, usize>,
+    /// The last line, where the file ends inside it: its number. Not read.
+    pub cut_short: Option<u64>,
+}
+
+#[derive(serde::Deserialize)]
+struct Kind {
+    #[serde(rename = "type")]
+    kind: String,
+    format: Option<String>,
+}
+
+#[derive(serde::Deserialize)]
+struct Velocity {
+    vx: f64,
+    vy: f64,
+    vz: f64,
+    velocity_valid: bool,
+    time_of_validity: u64,
+    #[serde(default)]
+    transducers: Vec<Transducer>,
+}
+
+#[derive(serde::Deserialize)]
+struct Transducer {
+    beam_valid: bool,
+}
+
+/// Reads `path` a line at a time, handing each ping to `visit`.
+pub fn read(path: &Path, visit: &mut dyn FnMut(Report)) -> Result<ReportSurvey, LogError> {
+    let io = |source| LogError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let refuse = |line: u64, problem: String| LogError::Line {
+        path: path.to_path_buf(),
+        line,
+        problem,
+    };
+    let mut reader = std::io::BufReader::new(std::fs::File::open(path).map_err(io)?);
+    let (mut hasher, mut survey, mut text) = (Sha256::new(), ReportSurvey::default(), Vec::new());
+    let mut line = 0;
+    loop {
+        text.clear();
+        if reader.read_until(b'\n', &mut text).map_err(io)? == 0 {
+            break;
+        }
+        hasher.update(&text);
+        line += 1;
+        let complete = text.ends_with(b"\n");
+        let trimmed = text.trim_ascii();
+        if trimmed.is_empty() {
+            continue;
+        }
+        let kind: Kind = match serde_json::from_slice(trimmed) {
+            Ok(kind) => kind,
+            Err(_) if !complete => {
+                survey.cut_short = Some(line);
+                continue;
+            }
+            Err(error) => {
+                return Err(refuse(
+                    line,
+                    format!("not a JSON report with a type: {error}"),
+                ));
+            }
+        };
+        *survey.types.entry(kind.kind.clone()).or_default() += 1;
+        if let Some(format) = &kind.format {
+            if !FORMATS.contains(&format.as_str()) {
+                return Err(refuse(
+                    line,
+                    format!(
+                        "format {format:?}: the reports read are {}",
+                        FORMATS.join(", ")
+                    ),
+                ));
+            }
+            *survey.formats.entry(format.clone()).or_default() += 1;
+        }
+        if kind.kind != "velocity" && kind.kind != "velocity_water" {
+            continue;
+        }
+        let report: Velocity = serde_json::from_slice(trimmed)
+            .map_err(|error| refuse(line, format!("a {} report: {error}", kind.kind)))?;
+        visit(Report {
+            line,
+            time_s: report.time_of_validity as f64 * 1e-6,
+            velocity_m_s: [report.vx, report.vy, report.vz],
+            velocity_valid: report.velocity_valid,
+            beams_valid: report.transducers.iter().filter(|t| t.beam_valid).count(),
+            water_track: kind.kind == "velocity_water",
+        });
+    }
+    survey.sha256 = format!("{:x}", hasher.finalize());
+    Ok(survey)
+}
