@@ -137,7 +137,8 @@ pub(super) struct ValidateArgs {
 /// The arguments of `calibrate`.
 #[derive(Debug, clap::Args)]
 pub(super) struct CalibrateArgs {
-    /// The DVL's CSV file (A-KIT's columns unless --columns names others); several
+    /// The DVL's CSV file (A-KIT's columns unless --columns names others), a bag, or
+    /// the DVL's own log (PD0, Water Linked JSON: beside --reference); several
     /// recordings of the same vehicle are calibrated jointly: the vehicle's terms
     /// shared, each recording's --dive-terms its own
     #[arg(required = true, num_args = 1..)]
@@ -449,7 +450,7 @@ impl ReadingArgs {
 /// The arguments of `correct`.
 #[derive(Debug, clap::Args)]
 pub(super) struct CorrectArgs {
-    /// The dive's DVL CSV file
+    /// The dive's DVL CSV file, bag, or DVL log (PD0, Water Linked JSON)
     pub(super) dvl: PathBuf,
     /// The installation file `calibrate --save` wrote
     #[arg(long, value_name = "FILE")]

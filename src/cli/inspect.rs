@@ -159,8 +159,6 @@ pub(super) fn fetch_data(
     Ok(())
 }
 
-/// `data info BAG`: its files, storage and time span, and each topic with its type,
-/// message count, rate, and whether this tool reads it.
 /// `data info` of a DVL's own log: its span, pings, frames, data types and validity.
 pub(super) fn log_info(path: &Path, format: dvl_log::LogFormat) -> Result<(), CliError> {
     let log = dvl_log::read(path, format, dvl_log::Thresholds::default()).map_err(input)?;
@@ -168,6 +166,8 @@ pub(super) fn log_info(path: &Path, format: dvl_log::LogFormat) -> Result<(), Cl
     Ok(())
 }
 
+/// `data info BAG`: its files, storage and time span, and each topic with its type,
+/// message count, rate, and whether this tool reads it.
 pub(super) fn bag_info(path: &Path) -> Result<(), CliError> {
     use crate::data::paired::bag::{Bag, topic_lines};
     let bag = Bag::open(path).map_err(input)?;

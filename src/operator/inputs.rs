@@ -103,6 +103,15 @@ pub struct Reading<'a> {
     pub thresholds: Thresholds,
 }
 
+/// The flag of the bottom-track threshold set in `thresholds` (the correlation's where
+/// both are).
+fn threshold_flag(thresholds: Thresholds) -> &'static str {
+    match thresholds.correlation_min {
+        Some(_) => "--bt-correlation-min",
+        None => "--bt-percent-good-min",
+    }
+}
+
 /// The refusal of the command-line flag `flag`, saying why.
 pub fn refused(flag: &str, message: String) -> SpecError {
     SpecError {
@@ -146,7 +155,7 @@ pub fn source(
             "its DVL is read from its topic",
         ),
         (
-            "--bt-correlation-min",
+            threshold_flag(reading.thresholds),
             reading.thresholds != Thresholds::default(),
             "a ping's validity is read from its message",
         ),
@@ -250,6 +259,16 @@ fn log_source(
             ),
         ));
     };
+    if format == LogFormat::WaterLinked && reading.thresholds != Thresholds::default() {
+        return Err(refused(
+            threshold_flag(reading.thresholds),
+            format!(
+                "{} is a {} log: its reports carry no correlation or percent good; a ping's validity is its velocity_valid",
+                dvl.display(),
+                format.words()
+            ),
+        ));
+    }
     if reading.valid_column.is_some() {
         return Err(refused(
             "--valid-column",

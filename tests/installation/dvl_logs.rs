@@ -312,6 +312,20 @@ fn bad_bytes_in_a_pd0_log_are_counted_or_refused_by_name() {
     std::fs::write(&path, &up).unwrap();
     let read = dvl_log::read(&path, LogFormat::Pd0, Thresholds::default()).unwrap();
     assert_eq!(read.stated, vec![Some(LeftOutWhy::LookingUp), None]);
+    // A stray 0x7F before a header, and a false start whose length runs past the
+    // file's end, lose no ensemble after them.
+    let clean = log(&setup, &pings);
+    for stray in [&[0x7F][..], &[0x7F, 0x7F, 0xFF, 0xFF, 0, 2, 10, 0][..]] {
+        let mut bytes = clean[..3 * one].to_vec();
+        bytes.extend_from_slice(stray);
+        bytes.extend_from_slice(&clean[3 * one..]);
+        let path = dir.path().join("stray.pd0");
+        std::fs::write(&path, &bytes).unwrap();
+        let read = dvl_log::read(&path, LogFormat::Pd0, Thresholds::default()).unwrap();
+        assert_eq!(read.time_s.len(), 5, "{stray:?}");
+        assert_eq!(read.summary.cut_short, None, "{stray:?}");
+        assert_eq!(read.summary.bytes_between, stray.len() as u64, "{stray:?}");
+    }
     let survey = pd0::read(&public("RiverPro_test01_first20.PD0"), &mut |_| {}).unwrap();
     assert_eq!(
         (

@@ -19,10 +19,10 @@
 //!   own heading, pitch and roll (RDI's matrix, the pitch corrected for the internal
 //!   tilt sensor, the tilts left out where the file did not use them); levelled ship
 //!   coordinates by its pitch and roll.
-//! - The instrument's axes (x to starboard of beam 3, y toward beam 3, z up, for a DVL
-//!   looking down) are then the vehicle's turned by the heading alignment EA; bottom
-//!   track is the bottom's velocity relative to the instrument, so the vehicle's is
-//!   its negative.
+//! - Every frame is turned back into the instrument's axes (x to starboard of beam 3, y
+//!   toward beam 3, z up, for a DVL looking down: ship axes by EA too), which are the
+//!   vehicle's turned by the heading alignment EA; bottom track is the bottom's velocity
+//!   relative to the instrument, so the vehicle's is its negative.
 //!
 //! In: an [`Ensemble`] and the [`Thresholds`]. Out: a [`Ping`].
 
@@ -101,7 +101,7 @@ pub fn ping(ensemble: &Ensemble, thresholds: Thresholds) -> Ping {
         )
     };
     Ping::Kept {
-        velocity_m_s: vehicle_axes(instrument, leader, leader.frame == Frame::Ship),
+        velocity_m_s: vehicle_axes(instrument, leader),
         three_beam,
     }
 }
@@ -154,7 +154,9 @@ pub fn roll_pitch_yaw_deg(ensemble: &Ensemble) -> Vec3 {
     [roll, pitch, heading]
 }
 
-/// Ship or earth axes turned back into the instrument's by the ensemble's attitude.
+/// Ship or earth axes turned back into the instrument's: earth's by the ensemble's
+/// heading (taken as beam 3's), pitch and roll, ship's by EA and, where they were
+/// levelled, pitch and roll (RDI builds both with one matrix).
 fn to_instrument(axes: Vec3, ensemble: &Ensemble) -> Vec3 {
     let leader = &ensemble.leader;
     let [heading, pitch, roll] = ensemble.attitude_deg.map(f64::to_radians);
@@ -164,9 +166,10 @@ fn to_instrument(axes: Vec3, ensemble: &Ensemble) -> Vec3 {
         true if leader.sensor_source & 0b1000 != 0 => ((pitch.tan() * roll.cos()).atan(), roll),
         true => (pitch, roll),
     };
+    // Ship axes are the instrument's turned by EA (and levelled where tilts were used).
     let heading = match leader.frame {
         Frame::Earth => heading,
-        _ => 0.0,
+        _ => leader.heading_alignment_deg.to_radians(),
     };
     apply(
         &transpose(&instrument_to_earth([heading, pitch, roll])),
@@ -175,13 +178,9 @@ fn to_instrument(axes: Vec3, ensemble: &Ensemble) -> Vec3 {
 }
 
 /// The vehicle's velocity in the DVL's axes (forward, starboard, down) from the
-/// bottom's in the instrument's (or ship's, `in_ship`: EA already applied).
-fn vehicle_axes([x, y, z]: Vec3, leader: &FixedLeader, in_ship: bool) -> Vec3 {
+/// bottom's in the instrument's, turned by the heading alignment EA.
+fn vehicle_axes([x, y, z]: Vec3, leader: &FixedLeader) -> Vec3 {
     let [forward, starboard, down] = [-y, -x, z];
-    let alignment = if in_ship {
-        0.0
-    } else {
-        leader.heading_alignment_deg.to_radians()
-    };
+    let alignment = leader.heading_alignment_deg.to_radians();
     apply(&rotation_z(alignment), [forward, starboard, down])
 }

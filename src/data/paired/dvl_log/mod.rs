@@ -44,8 +44,8 @@ pub enum LogError {
     },
     #[error("{}: no PD0 ensemble (bytes 0x7F 0x7F with a checksum that holds) in {bytes} bytes", path.display())]
     Empty { path: PathBuf, bytes: u64 },
-    #[error("{}: no velocity report (\"type\": \"velocity\") in its {lines} lines", path.display())]
-    NoReports { path: PathBuf, lines: u64 },
+    #[error("{}: no velocity report (\"type\": \"velocity\") among its {reports} reports", path.display())]
+    NoReports { path: PathBuf, reports: u64 },
     #[error("{}: a {} log's pings carry no attitude: give the attitude's own file with --attitude", path.display(), format.words())]
     NoAttitude { path: PathBuf, format: LogFormat },
 }
@@ -170,10 +170,10 @@ fn read_water_linked(path: &Path) -> Result<DvlLog, PairedError> {
         log.number.push(report.line);
     })?;
     if log.time_s.is_empty() {
-        let lines = survey.types.values().sum::<usize>() as u64;
+        let reports = survey.types.values().sum::<usize>() as u64;
         return Err(LogError::NoReports {
             path: path.to_path_buf(),
-            lines,
+            reports,
         }
         .into());
     }
@@ -219,7 +219,7 @@ fn read_pd0(path: &Path, thresholds: Thresholds) -> Result<DvlLog, PairedError> 
             frames.push(frame);
         }
         if let Some(bottom) = &ensemble.bottom {
-            applied.get_or_insert((bottom.correlation_min, bottom.percent_good_min));
+            applied.get_or_insert((bottom.correlation_min, bottom.amplitude_min));
         }
         log.time_s.push(ensemble.time_s);
         log.velocity_m_s.push(velocity_m_s);
@@ -295,11 +295,11 @@ pub fn read_beside_own_attitude(
 }
 
 /// What a PD0 ping's validity is read from, in words: `applied`, the instrument's
-/// thresholds (BC, BG) where any ensemble has bottom track, and those set.
+/// thresholds (BC, BA) where any ensemble has bottom track, and those set.
 fn validity_words(applied: Option<(u8, u8)>, thresholds: Thresholds) -> String {
     match applied {
-        Some((correlation, percent_good)) => format!(
-            "bottom track (ID 0x0600): out of beam coordinates a ping counts where the instrument gave x, y and z, in beam coordinates a beam counts where it has a velocity (the instrument marks those below its own thresholds, here BC {correlation} and BG {percent_good} %, with -32768); {}; three beams make a three-beam solution, fewer leave the ping out",
+        Some((correlation, amplitude)) => format!(
+            "bottom track (ID 0x0600): out of beam coordinates a ping counts where the instrument gave x, y and z, in beam coordinates a beam counts where it has a velocity (the instrument marks those below its own thresholds, here BC {correlation} and BA {amplitude}, with -32768); {}; three beams make a three-beam solution, fewer leave the ping out",
             match thresholds {
                 Thresholds {
                     correlation_min: None,
@@ -329,16 +329,15 @@ fn frame_words(leader: &pd0::FixedLeader) -> String {
             if leader.convex { "convex" } else { "concave" }
         ),
         pd0::Frame::Instrument => "as the instrument's axes".into(),
-        pd0::Frame::Ship => "turned back by each ensemble's pitch and roll where levelled".into(),
+        pd0::Frame::Ship => {
+            "turned back into the instrument's by EA and, where levelled, each ensemble's pitch and roll".into()
+        }
         pd0::Frame::Earth => "turned back by each ensemble's heading, pitch and roll".into(),
     };
-    let alignment = match leader.frame {
-        pd0::Frame::Ship | pd0::Frame::Earth => String::new(),
-        _ => format!(
-            ", then by the heading alignment EA {:.2}°",
-            leader.heading_alignment_deg
-        ),
-    };
+    let alignment = format!(
+        ", then into the vehicle's by the heading alignment EA {:.2}°",
+        leader.heading_alignment_deg
+    );
     format!("{} coordinates, {turned}{alignment}", leader.frame.words())
 }
 
@@ -387,16 +386,20 @@ impl DvlLog {
         let kept = self.stated.iter().filter(|s| s.is_none()).count();
         let (first, last) = (self.time_s[0], self.time_s[self.time_s.len() - 1]);
         let interval_s = super::sample_interval(&self.time_s);
-        let mut lines = vec![
-            format!(
-                "{}: a {} log, {} pings over {:.2} s from {} ({:.3} s between pings, median; {:.2} Hz), SHA-256 {}",
-                summary.file.path.display(),
-                summary.format.words(),
-                summary.pings,
+        let rate = match self.time_s.len() {
+            1 => "one ping".to_string(),
+            n => format!(
+                "{n} pings over {:.2} s from {} ({interval_s:.3} s between pings, median; {:.2} Hz)",
                 last - first,
                 utc(first),
-                interval_s,
-                1.0 / interval_s,
+                1.0 / interval_s
+            ),
+        };
+        let mut lines = vec![
+            format!(
+                "{}: a {} log, {rate}, SHA-256 {}",
+                summary.file.path.display(),
+                summary.format.words(),
                 summary.file.sha256
             ),
             format!(
@@ -404,16 +407,18 @@ impl DvlLog {
                 summary.three_beam,
                 super::left_out_words(&left_out)
             ),
-            format!(
-                "ensembles whose checksum failed, not read: {}{}; bytes outside any ensemble or report: {}",
+        ];
+        if summary.format == LogFormat::Pd0 {
+            lines.push(format!(
+                "ensembles whose checksum failed, not read: {}{}; bytes outside any ensemble: {}",
                 summary.bad_checksums.len(),
                 match summary.bad_checksums.first() {
                     Some(byte) => format!(" (the first at byte {byte})"),
                     None => String::new(),
                 },
                 summary.bytes_between
-            ),
-        ];
+            ));
+        }
         if let Some((byte, stated, held)) = summary.cut_short {
             lines.push(format!(
                 "the last ensemble, at byte {byte}, is cut short by the file's end ({held} of its {stated} bytes): not read"
@@ -426,7 +431,10 @@ impl DvlLog {
         }
         lines.extend(summary.frames.iter().map(|frame| format!("frame: {frame}")));
         lines.push(format!("validity: {}", summary.validity));
-        lines.push("data types (ensembles holding each):".into());
+        lines.push(match summary.format {
+            LogFormat::Pd0 => "data types (ensembles holding each):".into(),
+            LogFormat::WaterLinked => "reports (lines of each type, and of each format):".into(),
+        });
         lines.extend((summary.blocks.iter()).map(|(name, count)| format!("  {name}: {count}")));
         lines.join("\n")
     }

@@ -116,7 +116,8 @@ pub struct Ensemble {
 pub struct Pd0Survey {
     pub sha256: String,
     pub ensembles: usize,
-    /// Where each ensemble whose checksum failed starts, bytes: left out, not read.
+    /// Where each ensemble whose checksum failed starts, bytes (0x7F 0x7F and a header
+    /// whose first offset follows its table): left out, not read.
     pub bad_checksums: Vec<u64>,
     /// Bytes outside any ensemble read (before the first, after a failed checksum, or
     /// an ensemble cut short at the file's end), counted with those below.
@@ -199,30 +200,41 @@ fn take_ensembles(
         survey.bytes_between += found as u64;
         at += found;
         let byte = start + at as u64;
-        let Some(length) = bytes
-            .get(at + 2..at + 4)
-            .map(|b| u16::from_le_bytes([b[0], b[1]]))
-        else {
+        let Some(header) = bytes.get(at..at + 8) else {
             break;
         };
-        let length = usize::from(length);
+        let length = usize::from(u16::from_le_bytes([header[2], header[3]]));
+        let types = usize::from(header[5]);
+        let first_offset = usize::from(u16::from_le_bytes([header[6], header[7]]));
+        // An ensemble's first data type follows its table of offsets: 0x7F 0x7F with
+        // another header is no ensemble's start, only bytes between.
+        if types == 0 || first_offset != 6 + 2 * types || length < first_offset {
+            survey.bytes_between += 1;
+            at += 1;
+            continue;
+        }
         if at + length + 2 > bytes.len() {
-            if at_end {
-                survey.cut_short = Some((byte, length + 2, bytes.len() - at));
-                survey.bytes_between += (bytes.len() - at) as u64;
-                at = bytes.len();
+            if !at_end {
+                break;
             }
-            break;
+            // The file ends inside it, unless a later ensemble's checksum holds.
+            survey
+                .cut_short
+                .get_or_insert((byte, length + 2, bytes.len() - at));
+            survey.bytes_between += 1;
+            at += 1;
+            continue;
         }
         let ensemble = &bytes[at..at + length];
         let stated = u16::from_le_bytes([bytes[at + length], bytes[at + length + 1]]);
         let sum = ensemble
             .iter()
             .fold(0u16, |sum, &b| sum.wrapping_add(u16::from(b)));
-        if length < 6 || sum != stated {
+        if sum != stated {
+            // Read on from the next byte: the next ensemble may start inside this one.
             survey.bad_checksums.push(byte);
-            survey.bytes_between += 2;
-            at += 2;
+            survey.bytes_between += 1;
+            at += 1;
             continue;
         }
         let refuse = |problem: String| LogError::Ensemble {
@@ -232,6 +244,7 @@ fn take_ensembles(
         };
         visit(parse(ensemble, byte, survey).map_err(refuse)?);
         survey.ensembles += 1;
+        survey.cut_short = None;
         at += length + 2;
     }
     if find_magic(&bytes[at..]).is_none() {
@@ -263,7 +276,7 @@ fn parse(bytes: &[u8], byte: u64, survey: &mut Pd0Survey) -> Result<Ensemble, St
         .map(|k| usize::from(u16_at(bytes, 6 + 2 * k)))
         .collect();
     offsets.sort_unstable();
-    let mut blocks = Vec::with_capacity(types);
+    let mut blocks: Vec<(u16, usize, &[u8])> = Vec::with_capacity(types);
     for (k, &offset) in offsets.iter().enumerate() {
         let end = offsets.get(k + 1).copied().unwrap_or(bytes.len());
         if offset < table_end || offset + 2 > bytes.len() || (end == offset && k + 1 < types) {
@@ -273,7 +286,9 @@ fn parse(bytes: &[u8], byte: u64, survey: &mut Pd0Survey) -> Result<Ensemble, St
             ));
         }
         let id = u16_at(bytes, offset);
-        *survey.blocks.entry(id).or_default() += 1;
+        if blocks.iter().all(|(seen, ..)| *seen != id) {
+            *survey.blocks.entry(id).or_default() += 1;
+        }
         blocks.push((id, offset, &bytes[offset..end]));
     }
     let block = |wanted: &[u16], what: &str, length: usize| {
