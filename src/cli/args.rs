@@ -230,7 +230,9 @@ pub(super) struct FixFlags {
     /// Position fixes rather than a velocity reference: a CSV file of a time and a
     /// latitude and longitude (or north and east, m, as its [fix_columns] table in
     /// --columns names them; A-KIT's reference file's by default), optionally a depth,
-    /// on the attitude's clock; needs --attitude and --fix-noise-m; once per DVL file,
+    /// on the attitude's clock, or an NMEA file of GGA dated by RMC or ZDA (on UTC), or
+    /// a DVL log whose recorder wrote GGA into it (named again as --attitude); needs
+    /// --attitude and --fix-noise-m; once per DVL file,
     /// in the same order, when there are several (calibrated jointly)
     #[arg(long, value_name = "FILE")]
     pub(super) fixes: Vec<PathBuf>,

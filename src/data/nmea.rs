@@ -10,12 +10,100 @@
 //! fix's time less its stamp says how far behind the GNSS's it runs, and places the
 //! fixes on it ([`GgaFixes::on_the_recorders_clock`]); what remains of the clocks'
 //! difference is the calibration's time offset to find.
+//! An NMEA file of its own (a GNSS's or a USBL's log) is read a line at a time, each GGA
+//! dated by the last RMC or ZDA before it ([`read_nmea_fixes`]).
 //! In: the sentences, each with the stamp it was recorded beside (s since 1970 UTC) and
-//! its place. Out: [`GgaFixes`]: the fixes, north and east of the first, and the
-//! counts of those left out.
+//! its place, or an NMEA file. Out: [`GgaFixes`]: the fixes, north and east of the
+//! first, and the counts of those left out.
 
 use crate::data::local_plane::north_east_m;
+use crate::data::paired::SourceFile;
 use crate::data::position_fixes::Fixes;
+use sha2::{Digest, Sha256};
+use std::io::BufRead;
+use std::path::{Path, PathBuf};
+
+/// Why an NMEA file gives no fixes.
+#[derive(Debug, thiserror::Error)]
+pub enum NmeaError {
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{}: no GGA sentence with a fix and a date among its {sentences} sentences ({undated} GGA before any RMC or ZDA gave the date)", path.display())]
+    NoFixes {
+        path: PathBuf,
+        sentences: usize,
+        undated: usize,
+    },
+}
+
+/// Whether the file at `path` is NMEA: its first character, past white space, is `$`.
+pub fn is_nmea(path: &Path) -> bool {
+    use std::io::Read;
+    let mut first = Vec::with_capacity(256);
+    let Ok(file) = std::fs::File::open(path) else {
+        return false;
+    };
+    file.take(256).read_to_end(&mut first).is_ok() && first.trim_ascii_start().starts_with(b"$")
+}
+
+/// The GGA fixes of the NMEA file at `path` (a GNSS's or a USBL's log, a sentence a
+/// line), each dated by the last RMC or ZDA before it (a GGA before any is counted as
+/// undated), on UTC in seconds since 1970; the file with its SHA-256; and how many GGA
+/// were undated. Read a line at a time.
+pub fn read_nmea_fixes(path: &Path) -> Result<(GgaFixes, SourceFile, usize), NmeaError> {
+    let io = |source| NmeaError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut reader = std::io::BufReader::new(std::fs::File::open(path).map_err(io)?);
+    let (mut hasher, mut text, mut line) = (Sha256::new(), Vec::new(), 0u64);
+    let (mut dated_s, mut undated, mut sentences) = (None, 0, Vec::new());
+    loop {
+        text.clear();
+        if reader.read_until(b'\n', &mut text).map_err(io)? == 0 {
+            break;
+        }
+        hasher.update(&text);
+        line += 1;
+        let Ok(sentence) = std::str::from_utf8(text.trim_ascii()) else {
+            continue;
+        };
+        match sentence.get(3..6) {
+            Some("RMC" | "ZDA") => dated_s = date_time_s(sentence).or(dated_s),
+            Some("GGA") => match dated_s {
+                Some(stamp_s) => sentences.push((stamp_s, line, sentence.to_string())),
+                None => undated += 1,
+            },
+            _ => {}
+        }
+    }
+    let Some(fixes) = gga_fixes(&sentences) else {
+        return Err(NmeaError::NoFixes {
+            path: path.to_path_buf(),
+            sentences: line as usize,
+            undated,
+        });
+    };
+    let file = SourceFile {
+        path: path.to_path_buf(),
+        sha256: format!("{:x}", hasher.finalize()),
+    };
+    Ok((fixes, file, undated))
+}
+
+/// The UTC date and time an RMC or ZDA sentence gives, s since 1970 (`None` where it
+/// gives none or fails its checksum).
+fn date_time_s(sentence: &str) -> Option<f64> {
+    let (date, time) = match nmea::parse_str(sentence).ok()? {
+        nmea::ParseResult::RMC(rmc) => (rmc.fix_date?, rmc.fix_time?),
+        nmea::ParseResult::ZDA(zda) => (zda.utc_date()?, zda.utc_time?),
+        _ => return None,
+    };
+    Some(date.and_time(time).and_utc().timestamp_micros() as f64 * 1e-6)
+}
 
 /// Half a day, s: a time of day further than this from its sentence's stamp has
 /// wrapped at midnight.

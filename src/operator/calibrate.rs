@@ -134,6 +134,9 @@ pub enum CalibrateError {
     /// The fixes file, placed at its line and column.
     #[error(transparent)]
     Fixes(#[from] crate::data::fixes::FixesError),
+    /// An NMEA file of fixes that gives none.
+    #[error(transparent)]
+    Nmea(#[from] crate::data::nmea::NmeaError),
     #[error("{fixes}: calibrating {terms} against these fixes: {fault}")]
     FixFit {
         fixes: String,

@@ -8,7 +8,7 @@
 //! [`CalibrateError`] naming the argument, file or step at fault.
 
 use crate::data::fixes::{Fixes, read_beside_attitude, read_fixes};
-use crate::data::nmea::gga_fixes;
+use crate::data::nmea::{gga_fixes, is_nmea, read_nmea_fixes};
 use crate::data::paired::Source;
 use crate::data::paired::bag::{BagError, is_bag, read_bag_beside_attitude};
 use crate::data::paired::dvl_log::{self, LogFormat, read_beside_own_attitude};
@@ -192,10 +192,16 @@ impl FixFiles<'_> {
                 let columns =
                     columns(self.columns, self.reading).map_err(CalibrateError::Columns)?;
                 let read = read_beside_attitude(self.dvl, self.attitude, &columns)?;
-                let (fixes, _) =
-                    read_fixes(self.fixes, &fix_columns).map_err(CalibrateError::Fixes)?;
+                let (fixes, left_out, read_from) = match is_nmea(self.fixes) {
+                    true => nmea_fixes(self.fixes)?,
+                    false => {
+                        let (fixes, _) =
+                            read_fixes(self.fixes, &fix_columns).map_err(CalibrateError::Fixes)?;
+                        (fixes, Vec::new(), None)
+                    }
+                };
                 let without_noise = fixes.len();
-                (read, fixes, Vec::new(), (without_noise, None))
+                (read, fixes, left_out, (without_noise, read_from))
             }
         };
         let mut fixes = fixes;
@@ -575,6 +581,25 @@ fn fit_on(
 /// The horizontal RMS of per-axis RMS values north and east, m.
 fn horizontal(rms_m: crate::Vec3) -> f64 {
     (rms_m[0].powi(2) + rms_m[1].powi(2)).sqrt()
+}
+
+/// Fixes as an NMEA file gives them: the fixes, those left out by reason, and what was
+/// read there, in words.
+type NmeaRead = (Fixes, Vec<(&'static str, usize)>, Option<String>);
+
+/// The GGA fixes of the NMEA file `path` (on UTC, dated by its RMC or ZDA).
+fn nmea_fixes(path: &Path) -> Result<NmeaRead, CalibrateError> {
+    let (gga, _, undated) = read_nmea_fixes(path)?;
+    let mut left_out = gga.left_out.clone();
+    left_out.push(("a GGA before any RMC or ZDA gave the date", undated));
+    let read_from = format!(
+        "from the NMEA file {}: its GGA sentences, each dated by the last RMC or ZDA before it, on UTC in seconds since 1970 (the attitude's clock must be too; north and east of {:.7}°, {:.7}°; {} of them without a checksum, so unchecked)",
+        path.display(),
+        gga.origin_deg[0],
+        gga.origin_deg[1],
+        gga.without_checksum
+    );
+    Ok((gga.fixes, left_out, Some(read_from)))
 }
 
 /// Refuses what the fixes cannot fit: a term other than scale, misalignment, lever arm

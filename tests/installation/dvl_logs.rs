@@ -590,3 +590,121 @@ fn as_water_linked(recording: &PairedRecording, path: &Path) {
         .collect();
     std::fs::write(path, lines.join("\n") + "\n").unwrap();
 }
+
+/// A latitude or longitude (radians) as NMEA's degrees and minutes, and its hemisphere.
+fn nmea_angle(rad: f64, degree_digits: usize, hemispheres: [char; 2]) -> String {
+    let degrees = rad.to_degrees();
+    let (whole, minutes) = (degrees.abs().trunc(), (degrees.abs().fract()) * 60.0);
+    let hemisphere = if degrees < 0.0 {
+        hemispheres[1]
+    } else {
+        hemispheres[0]
+    };
+    format!(
+        "{:0degree_digits$}{minutes:09.6},{hemisphere}",
+        whole as u32
+    )
+}
+
+/// `body` (between `$` and `*`) as a sentence with its checksum.
+fn sentence(body: &str) -> String {
+    let sum = body.bytes().fold(0u8, |sum, b| sum ^ b);
+    format!("${body}*{sum:02X}")
+}
+
+/// An NMEA file of GGA fixes (dated by a ZDA, the reference's seconds from 1970-01-01
+/// UTC) gives the calibration the same fixes as a CSV file gives, every term within a
+/// tenth of its standard deviation; a GGA before any date is counted, one with a bad
+/// checksum left out and counted.
+#[test]
+fn nmea_gga_fixes_calibrate_as_the_same_fixes_in_csv() {
+    use crate::common::installed::{INSTALLED, write_installed};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_installed(d, 1, &[], INSTALLED, 3);
+    let files = PairedFiles::akit(d, 1);
+    let segment = &crate::coverage::segments(std::slice::from_ref(&files))[0];
+    let positions = crate::fixes::positions(segment);
+    let (mut nmea, mut csv) = (Vec::new(), vec!["t,lat,lon".to_string()]);
+    let gga = |t: f64, lat: f64, lon: f64| {
+        let (h, m, s) = (
+            (t / 3600.0).floor(),
+            ((t % 3600.0) / 60.0).floor(),
+            t % 60.0,
+        );
+        sentence(&format!(
+            "GPGGA,{h:02}{m:02}{s:05.2},{},{},2,9,0.9,1.0,M,0.0,M,,",
+            nmea_angle(lat, 2, ['N', 'S']),
+            nmea_angle(lon, 3, ['E', 'W'])
+        ))
+    };
+    // North and east turned into latitude and longitude about 44° N, 67° W.
+    let (lat0, lon0, earth_m) = (44f64.to_radians(), -67f64.to_radians(), 6_378_137.0);
+    for (k, p) in positions.iter().enumerate().step_by(5) {
+        let t = segment.recording.reference_time_s[k];
+        let (lat, lon) = (lat0 + p[0] / earth_m, lon0 + p[1] / (earth_m * lat0.cos()));
+        if k == 0 {
+            nmea.push(gga(t, lat, lon));
+            nmea.push(sentence("GPZDA,000000.00,01,01,1970,00,00"));
+            continue;
+        }
+        let mut fix = gga(t, lat, lon);
+        if k == 50 {
+            fix.truncate(fix.len() - 2);
+            fix.push_str("00");
+        } else {
+            // The CSV file's fix is the sentence's, rounded as the sentence rounds it.
+            let read = dcnet_exp::data::nmea::gga_fixes(&[(t, 0, fix.clone())]).unwrap();
+            let origin = read.origin_deg.map(f64::to_radians);
+            csv.push(format!("{t},{},{}", origin[0], origin[1]));
+        }
+        nmea.push(fix);
+    }
+    std::fs::write(d.join("fixes.nmea"), nmea.join("\r\n") + "\r\n").unwrap();
+    std::fs::write(d.join("fixes.csv"), csv.join("\n") + "\n").unwrap();
+    std::fs::write(
+        d.join("columns.toml"),
+        "[fix_columns]\ntime = \"t\"\nlatitude_longitude = [\"lat\", \"lon\"]\n",
+    )
+    .unwrap();
+    let (dvl, attitude) = (
+        files.dvl.to_str().unwrap(),
+        files.reference.to_str().unwrap(),
+    );
+    let fit = |fixes: &str, out: &str| {
+        let args = [
+            "calibrate",
+            dvl,
+            "--attitude",
+            attitude,
+            "--fixes",
+            fixes,
+            "--columns",
+            "columns.toml",
+        ];
+        let output = dcnet(
+            d,
+            &[&args[..], &["--fix-noise-m", "0.5", "--out", out]].concat(),
+        );
+        assert!(output.status.success(), "{}", stderr(&output));
+        stdout(&output)
+    };
+    let (from_csv, from_nmea) = (fit("fixes.csv", "out-csv"), fit("fixes.nmea", "out-nmea"));
+    assert!(from_nmea.contains("from the NMEA file"), "{from_nmea}");
+    assert!(
+        from_nmea.contains("(1 more left out: a GGA before any RMC or ZDA gave the date)"),
+        "{from_nmea}"
+    );
+    assert!(
+        from_nmea.contains("78 fixes (1 more left out: a GGA whose checksum fails"),
+        "{from_nmea}"
+    );
+    let (csv_terms, nmea_terms) = (terms(&from_csv), terms(&from_nmea));
+    assert_eq!(csv_terms.len(), nmea_terms.len(), "{from_nmea}");
+    for ((term, a, std), (_, b, _)) in csv_terms.iter().zip(&nmea_terms) {
+        assert!(
+            (a - b).abs() <= 0.1 * std,
+            "{term}: {b} from NMEA against {a} ± {std} from CSV"
+        );
+    }
+}
