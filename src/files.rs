@@ -115,6 +115,29 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
         .collect()
 }
 
+/// Reads the file at `path` a line at a time, hashing its bytes as it reads: each line,
+/// numbered from 1, with its ending, goes to `visit`; gives the file's SHA-256 (as 64
+/// lowercase hex digits). `io` turns a failure to read into the caller's error.
+pub fn read_lines<E>(
+    path: &Path,
+    io: impl Fn(std::io::Error) -> E,
+    mut visit: impl FnMut(u64, &[u8]) -> Result<(), E>,
+) -> Result<String, E> {
+    use std::io::BufRead;
+    let mut reader = std::io::BufReader::new(std::fs::File::open(path).map_err(&io)?);
+    let (mut hasher, mut text, mut line) = (Sha256::new(), Vec::new(), 0);
+    loop {
+        text.clear();
+        if reader.read_until(b'\n', &mut text).map_err(&io)? == 0 {
+            break;
+        }
+        hasher.update(&text);
+        line += 1;
+        visit(line, &text)?;
+    }
+    Ok(format!("{:x}", hasher.finalize()))
+}
+
 /// What a sealed file's seal says of it.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Seal {

@@ -19,8 +19,7 @@
 use crate::data::local_plane::north_east_m;
 use crate::data::paired::SourceFile;
 use crate::data::position_fixes::Fixes;
-use sha2::{Digest, Sha256};
-use std::io::BufRead;
+use crate::files::read_lines;
 use std::path::{Path, PathBuf};
 
 /// Why an NMEA file gives no fixes.
@@ -58,18 +57,11 @@ pub fn read_nmea_fixes(path: &Path) -> Result<(GgaFixes, SourceFile, usize), Nme
         path: path.to_path_buf(),
         source,
     };
-    let mut reader = std::io::BufReader::new(std::fs::File::open(path).map_err(io)?);
-    let (mut hasher, mut text, mut line) = (Sha256::new(), Vec::new(), 0u64);
-    let (mut dated_s, mut undated, mut sentences) = (None, 0, Vec::new());
-    loop {
-        text.clear();
-        if reader.read_until(b'\n', &mut text).map_err(io)? == 0 {
-            break;
-        }
-        hasher.update(&text);
-        line += 1;
+    let (mut dated_s, mut undated, mut sentences, mut lines) = (None, 0, Vec::new(), 0);
+    let sha256 = read_lines(path, io, |line, text| {
+        lines = line;
         let Ok(sentence) = std::str::from_utf8(text.trim_ascii()) else {
-            continue;
+            return Ok(());
         };
         match sentence.get(3..6) {
             Some("RMC" | "ZDA") => dated_s = date_time_s(sentence).or(dated_s),
@@ -79,17 +71,18 @@ pub fn read_nmea_fixes(path: &Path) -> Result<(GgaFixes, SourceFile, usize), Nme
             },
             _ => {}
         }
-    }
+        Ok(())
+    })?;
     let Some(fixes) = gga_fixes(&sentences) else {
         return Err(NmeaError::NoFixes {
             path: path.to_path_buf(),
-            sentences: line as usize,
+            sentences: lines as usize,
             undated,
         });
     };
     let file = SourceFile {
         path: path.to_path_buf(),
-        sha256: format!("{:x}", hasher.finalize()),
+        sha256,
     };
     Ok((fixes, file, undated))
 }

@@ -143,52 +143,11 @@ impl FixFiles<'_> {
     /// where `depth` asks for one, and on the DVL's track ([`same_motion`]).
     fn read(&self, depth: bool) -> Result<FixReading, CalibrateError> {
         let fix_columns = fix_columns(self.columns).map_err(CalibrateError::Columns)?;
-        if let Some(format) = (self.reading.dvl_format).or_else(|| dvl_log::format_of(self.dvl)) {
-            let reading = self.read_log(format, depth)?;
-            same_motion(
-                &self.fixes_named(),
-                &fix_columns,
-                &reading.read.recording,
-                &reading.fixes,
-            )?;
-            return Ok(reading);
-        }
-        let (read, fixes, left_out, (without_noise, read_from)) = match self.fix_topic {
-            Some(topic) => {
-                let source = source(self.dvl, None, self.columns, self.reading)
-                    .map_err(CalibrateError::Columns)?;
-                let Source::Bag { path, topics } = source else {
-                    return Err(CalibrateError::Read(self.not_a_bag().into()));
-                };
-                let (read, mut bag) = read_bag_beside_attitude(&path, &topics, topic)?;
-                // A fix's altitude (a GNSS's height, a USBL's depth) is fitted only
-                // where its noise is given.
-                if !depth {
-                    bag.fixes.depth_m = None;
-                }
-                let left_out = vec![
-                    ("no fix (NavSatFix status −1)", bag.no_fix),
-                    (
-                        "a latitude and longitude (or x and y) not a number",
-                        bag.not_a_number,
-                    ),
-                ];
-                let read_from = format!(
-                    "from the bag: {}; of the reference its attitude alone (its velocity not read); the fixes from {} ({})",
-                    read.frames
-                        .as_ref()
-                        .expect("a bag's reading has its frames"),
-                    bag.topic,
-                    bag.type_name
-                );
-                (
-                    read,
-                    bag.fixes,
-                    left_out,
-                    (bag.without_covariance, Some(read_from)),
-                )
-            }
-            None => {
+        let log = (self.reading.dvl_format).or_else(|| dvl_log::format_of(self.dvl));
+        let (read, mut fixes, left_out, (without_noise, read_from)) = match (log, self.fix_topic) {
+            (Some(format), _) => self.read_log(format, depth)?,
+            (None, Some(topic)) => self.read_bag(topic, depth)?,
+            (None, None) => {
                 let columns =
                     columns(self.columns, self.reading).map_err(CalibrateError::Columns)?;
                 let read = read_beside_attitude(self.dvl, self.attitude, &columns)?;
@@ -204,7 +163,6 @@ impl FixFiles<'_> {
                 (read, fixes, left_out, (without_noise, read_from))
             }
         };
-        let mut fixes = fixes;
         for t in &mut fixes.time_s {
             *t -= self.fix_latency_s.unwrap_or(0.0);
         }
@@ -224,10 +182,46 @@ impl FixFiles<'_> {
         })
     }
 
+    /// The bag's DVL beside its odometry's attitude, and the fixes of its `topic`.
+    fn read_bag(&self, topic: &str, depth: bool) -> Result<FixesRead, CalibrateError> {
+        let source =
+            source(self.dvl, None, self.columns, self.reading).map_err(CalibrateError::Columns)?;
+        let Source::Bag { path, topics } = source else {
+            return Err(CalibrateError::Read(self.not_a_bag().into()));
+        };
+        let (read, mut bag) = read_bag_beside_attitude(&path, &topics, topic)?;
+        // A fix's altitude (a GNSS's height, a USBL's depth) is fitted only where its
+        // noise is given.
+        if !depth {
+            bag.fixes.depth_m = None;
+        }
+        let left_out = vec![
+            ("no fix (NavSatFix status −1)", bag.no_fix),
+            (
+                "a latitude and longitude (or x and y) not a number",
+                bag.not_a_number,
+            ),
+        ];
+        let read_from = format!(
+            "from the bag: {}; of the reference its attitude alone (its velocity not read); the fixes from {} ({})",
+            read.frames
+                .as_ref()
+                .expect("a bag's reading has its frames"),
+            bag.topic,
+            bag.type_name
+        );
+        Ok((
+            read,
+            bag.fixes,
+            left_out,
+            (bag.without_covariance, Some(read_from)),
+        ))
+    }
+
     /// A DVL log beside its own attitude (what it turned its velocities by) and the
     /// fixes of its own GNSS (the GGA sentences its recorder wrote into it): the one
     /// file named as the DVL, the attitude and the fixes.
-    fn read_log(&self, format: LogFormat, depth: bool) -> Result<FixReading, CalibrateError> {
+    fn read_log(&self, format: LogFormat, depth: bool) -> Result<FixesRead, CalibrateError> {
         let refused = |flag: &str, message| CalibrateError::Columns(inputs::refused(flag, message));
         let own = |flag: &str, path: &Path| {
             (path != self.dvl).then(|| {
@@ -273,18 +267,9 @@ impl FixFiles<'_> {
             gga.others,
             gga.recorder_behind_s
         );
-        let (left_out, mut fixes) = (gga.left_out.clone(), gga.on_the_recorders_clock());
-        for t in &mut fixes.time_s {
-            *t -= self.fix_latency_s.unwrap_or(0.0);
-        }
+        let (left_out, fixes) = (gga.left_out.clone(), gga.on_the_recorders_clock());
         let without_noise = fixes.len();
-        Ok(FixReading {
-            read,
-            fixes,
-            left_out,
-            without_noise,
-            read_from: Some(from_log),
-        })
+        Ok((read, fixes, left_out, (without_noise, Some(from_log))))
     }
 
     /// The fixes' noise per horizontal axis, m: as `given` (the fixes' own then set
@@ -582,6 +567,16 @@ fn fit_on(
 fn horizontal(rms_m: crate::Vec3) -> f64 {
     (rms_m[0].powi(2) + rms_m[1].powi(2)).sqrt()
 }
+
+/// What a reading for a fit to fixes gives before its common checks: the DVL beside the
+/// attitude, the fixes, those left out by reason, how many carry no noise of their own,
+/// and what was read there, in words.
+type FixesRead = (
+    ReadRecording,
+    Fixes,
+    Vec<(&'static str, usize)>,
+    (usize, Option<String>),
+);
 
 /// Fixes as an NMEA file gives them: the fixes, those left out by reason, and what was
 /// read there, in words.

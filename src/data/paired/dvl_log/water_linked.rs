@@ -13,9 +13,8 @@
 //! [`ReportSurvey`] with the file's SHA-256.
 
 use super::LogError;
-use sha2::{Digest, Sha256};
+use crate::files::read_lines;
 use std::collections::BTreeMap;
-use std::io::BufRead;
 use std::path::Path;
 
 /// The report formats read.
@@ -83,26 +82,18 @@ pub fn read(path: &Path, visit: &mut dyn FnMut(Report)) -> Result<ReportSurvey, 
         line,
         problem,
     };
-    let mut reader = std::io::BufReader::new(std::fs::File::open(path).map_err(io)?);
-    let (mut hasher, mut survey, mut text) = (Sha256::new(), ReportSurvey::default(), Vec::new());
-    let mut line = 0;
-    loop {
-        text.clear();
-        if reader.read_until(b'\n', &mut text).map_err(io)? == 0 {
-            break;
-        }
-        hasher.update(&text);
-        line += 1;
+    let mut survey = ReportSurvey::default();
+    survey.sha256 = read_lines(path, io, |line, text| {
         let complete = text.ends_with(b"\n");
         let trimmed = text.trim_ascii();
         if trimmed.is_empty() {
-            continue;
+            return Ok(());
         }
         let kind: Kind = match serde_json::from_slice(trimmed) {
             Ok(kind) => kind,
             Err(_) if !complete => {
                 survey.cut_short = Some(line);
-                continue;
+                return Ok(());
             }
             Err(error) => {
                 return Err(refuse(
@@ -125,7 +116,7 @@ pub fn read(path: &Path, visit: &mut dyn FnMut(Report)) -> Result<ReportSurvey, 
             *survey.formats.entry(format.clone()).or_default() += 1;
         }
         if kind.kind != "velocity" && kind.kind != "velocity_water" {
-            continue;
+            return Ok(());
         }
         let report: Velocity = serde_json::from_slice(trimmed)
             .map_err(|error| refuse(line, format!("a {} report: {error}", kind.kind)))?;
@@ -137,7 +128,7 @@ pub fn read(path: &Path, visit: &mut dyn FnMut(Report)) -> Result<ReportSurvey, 
             beams_valid: report.transducers.iter().filter(|t| t.beam_valid).count(),
             water_track: kind.kind == "velocity_water",
         });
-    }
-    survey.sha256 = format!("{:x}", hasher.finalize());
+        Ok(())
+    })?;
     Ok(survey)
 }
