@@ -423,6 +423,16 @@ pub(super) enum StampsArg {
     Receive,
 }
 
+impl DvlFormatArg {
+    /// The format as the library names it.
+    pub(super) fn format(self) -> crate::data::paired::dvl_log::LogFormat {
+        match self {
+            DvlFormatArg::Pd0 => crate::data::paired::dvl_log::LogFormat::Pd0,
+            DvlFormatArg::WaterLinked => crate::data::paired::dvl_log::LogFormat::WaterLinked,
+        }
+    }
+}
+
 impl ReadingArgs {
     /// As the operator's commands take it.
     pub(super) fn reading(&self) -> crate::operator::inputs::Reading<'_> {
@@ -437,10 +447,7 @@ impl ReadingArgs {
                 StampsArg::Receive => crate::data::paired::bag::Stamps::Receive,
             }),
             frame: self.frame.as_deref(),
-            dvl_format: self.dvl_format.map(|format| match format {
-                DvlFormatArg::Pd0 => crate::data::paired::dvl_log::LogFormat::Pd0,
-                DvlFormatArg::WaterLinked => crate::data::paired::dvl_log::LogFormat::WaterLinked,
-            }),
+            dvl_format: self.dvl_format.map(DvlFormatArg::format),
             thresholds: crate::data::paired::dvl_log::Thresholds {
                 correlation_min: self.bt_correlation_min,
                 percent_good_min: self.bt_percent_good_min,
@@ -569,11 +576,16 @@ impl Drawing {
 pub(super) enum DataCommand {
     /// Trajectories, lengths, mean speeds, window counts and dataset size of a spec;
     /// or a ROS 2 bag's topics: types, message counts, rates, time span, and which
-    /// this tool reads
+    /// this tool reads; or a DVL's own log (PD0, Water Linked JSON): its span, pings
+    /// kept and left out by reason, frames and data types
     Info {
         spec: PathBuf,
         #[command(flatten)]
         overrides: Overrides,
+        /// The file's format where it is a DVL's own log [default: found from its
+        /// content]
+        #[arg(long, value_enum)]
+        dvl_format: Option<DvlFormatArg>,
     },
     /// Download a dataset's recordings and check their SHA-256: `data fetch` (or `data fetch
     /// snapir`) the Snapir recordings, `data fetch akit` the A-KIT recordings

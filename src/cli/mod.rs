@@ -221,10 +221,16 @@ fn data_command(command: DataCommand) -> Result<(), CliError> {
         DataCommand::Info { spec, .. } if crate::data::paired::bag::is_bag(&spec) => {
             inspect::bag_info(&spec)
         }
-        DataCommand::Info { spec, .. } if let Some(format) = dvl_log::format_of(&spec) => {
+        DataCommand::Info {
+            spec, dvl_format, ..
+        } if let Some(format) =
+            (dvl_format.map(args::DvlFormatArg::format)).or_else(|| dvl_log::format_of(&spec)) =>
+        {
             inspect::log_info(&spec, format)
         }
-        DataCommand::Info { spec, overrides } => inspect::info(&spec, &overrides.set),
+        DataCommand::Info {
+            spec, overrides, ..
+        } => inspect::info(&spec, &overrides.set),
         DataCommand::Fetch {
             dataset,
             dest,

@@ -708,3 +708,66 @@ fn nmea_gga_fixes_calibrate_as_the_same_fixes_in_csv() {
         );
     }
 }
+
+/// A study whose recordings' DVLs are Water Linked logs (the same velocities, written
+/// whole) scores as the same study over the CSV files, to 1e-6 cm/s; a log's format
+/// named wrongly, or a log without its reference, is refused at its key.
+#[test]
+fn a_study_of_dvl_logs_scores_as_the_study_of_their_csv_files() {
+    use crate::common::installed::write_study_spec;
+    use crate::common::{floats, read_parquet, strings};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_installed(&d.join("data/syn"), 3, &[], INSTALLED, 5);
+    write_study_spec(d, "csv", "syn", 3, "");
+    std::fs::create_dir_all(d.join("data/logs")).unwrap();
+    let mut spec = std::fs::read_to_string(d.join("experiments/csv.toml"))
+        .unwrap()
+        .replace("name = \"csv\"", "name = \"logs\"");
+    for n in 1..=3 {
+        let files = PairedFiles::akit(&d.join("data/syn"), n);
+        let recording = paired::read(&files, &PairedColumns::akit()).unwrap();
+        as_water_linked(&recording, &d.join(format!("data/logs/S{n}.json")));
+        spec = spec.replace(
+            &format!("dvl = \"../data/syn/Trajectory{n}/DVL_trajectory{n}.csv\""),
+            &format!("dvl = \"../data/logs/S{n}.json\""),
+        );
+    }
+    std::fs::write(d.join("experiments/logs.toml"), &spec).unwrap();
+    for name in ["csv", "logs"] {
+        let output = dcnet(
+            d,
+            &["run", &format!("experiments/{name}.toml"), "--no-plots"],
+        );
+        assert!(output.status.success(), "{name}: {}", stderr(&output));
+    }
+    let scores = |name: &str| {
+        let batch = read_parquet(&d.join(format!("results/{name}/summary.parquet")));
+        (strings(&batch, "method"), floats(&batch, "rmse_cm_s"))
+    };
+    let (csv, logs) = (scores("csv"), scores("logs"));
+    assert_eq!(csv.0, logs.0);
+    assert!(!csv.1.is_empty());
+    for (a, b) in csv.1.iter().zip(&logs.1) {
+        assert!(
+            (a.unwrap() - b.unwrap()).abs() < 1e-6,
+            "{a:?} against {b:?}"
+        );
+    }
+    let wrong = spec
+        .replace("dvl = \"../data/logs/S1.json\"", "dvl = \"../data/logs/S1.json\"\ndvl_format = \"nortek\"")
+        .replace(
+            "dvl = \"../data/logs/S2.json\"\nreference = \"../data/syn/Trajectory2/GT_trajectory2.csv\"",
+            "dvl = \"../data/logs/S2.json\"",
+        )
+        .replace("name = \"logs\"", "name = \"wrong\"");
+    std::fs::write(d.join("experiments/wrong.toml"), wrong).unwrap();
+    let output = dcnet(d, &["validate", "experiments/wrong.toml"]);
+    assert!(!output.status.success());
+    let error = stderr(&output);
+    assert!(error.contains("recordings.trajectories[0].dvl_format: \"nortek\": a DVL log's format is one of pd0, water-linked"), "{error}");
+    assert!(
+        error.contains("recordings.trajectories[1].reference: "),
+        "{error}"
+    );
+}

@@ -53,6 +53,9 @@ pub struct PairedTrajectoryFile {
     pub rate_topic: Option<String>,
     pub stamps: Option<String>,
     pub frame: Option<String>,
+    /// Where `dvl` is the DVL's own log: its format, `"pd0"` or `"water-linked"` (found
+    /// from the file's content where not given), as `calibrate --dvl-format`.
+    pub dvl_format: Option<String>,
 }
 
 #[derive(Debug, Clone, serde::Deserialize)]

@@ -6,6 +6,7 @@
 //! quantity.
 
 use crate::data::paired::bag::{BagTopics, Stamps, is_bag};
+use crate::data::paired::dvl_log::{self, LogFormat, Thresholds};
 use crate::data::paired::{PairedColumns, Source};
 use crate::installation::study::spec::file::{PairedTrajectoryFile, RecordingsFile};
 use crate::spec::check::Faults;
@@ -82,9 +83,61 @@ fn trajectory_source(
         rate_topic,
         stamps,
         frame,
+        dvl_format,
     } = trajectory;
     let key = |field: &str| format!("recordings.trajectories[{i}].{field}");
     let dvl = folder.join(dvl);
+    let format = match dvl_format.as_deref() {
+        None => dvl_log::format_of(&dvl),
+        Some(named) => LogFormat::from_key(named).or_else(|| {
+            let keys: Vec<&str> = LogFormat::KEYS.iter().map(|(k, _)| *k).collect();
+            faults.add(
+                key("dvl_format"),
+                format!(
+                    "{named:?}: a DVL log's format is one of {}",
+                    keys.join(", ")
+                ),
+            );
+            None
+        }),
+    };
+    if let Some(format) = format {
+        let bag_keys = [
+            ("dvl_topic", dvl_topic.is_some()),
+            ("reference_topic", reference_topic.is_some()),
+            ("rate_topic", rate_topic.is_some()),
+            ("stamps", stamps.is_some()),
+            ("frame", frame.is_some()),
+        ];
+        for (field, _) in bag_keys.iter().filter(|(_, given)| *given) {
+            faults.add(
+                key(field),
+                format!(
+                    "{} is a {} log, not a ROS 2 bag",
+                    dvl.display(),
+                    format.words()
+                ),
+            );
+        }
+        let Some(reference) = reference else {
+            faults.add(
+                key("reference"),
+                format!(
+                    "{} is a {} log, which holds the DVL alone: name the reference's CSV file",
+                    dvl.display(),
+                    format.words()
+                ),
+            );
+            return Source::csv(&dvl, None, columns.clone());
+        };
+        return Source::Log {
+            reference: folder.join(reference),
+            dvl,
+            format,
+            thresholds: Thresholds::default(),
+            columns: columns.clone(),
+        };
+    }
     if !is_bag(&dvl) {
         let bag_keys = [
             ("dvl_topic", dvl_topic.is_some()),
