@@ -534,7 +534,6 @@ fn an_akit_segment_as_a_bag_calibrates_to_the_csv_terms() {
 #[test]
 fn a_study_of_bags_scores_as_the_study_of_their_csv_files() {
     use crate::common::installed::write_study_spec;
-    use crate::common::{floats, read_parquet, strings};
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     crate::common::installed::write_installed(&d.join("data/syn"), 3, &[], INSTALLED, 5);
@@ -564,26 +563,7 @@ fn a_study_of_bags_scores_as_the_study_of_their_csv_files() {
         );
     }
     std::fs::write(d.join("experiments/bags.toml"), &spec).unwrap();
-    for name in ["csv", "bags"] {
-        let output = dcnet(
-            d,
-            &["run", &format!("experiments/{name}.toml"), "--no-plots"],
-        );
-        assert!(output.status.success(), "{name}: {}", stderr(&output));
-    }
-    let scores = |name: &str| {
-        let batch = read_parquet(&d.join(format!("results/{name}/summary.parquet")));
-        (strings(&batch, "method"), floats(&batch, "rmse_cm_s"))
-    };
-    let (csv, bags) = (scores("csv"), scores("bags"));
-    assert_eq!(csv.0, bags.0);
-    assert!(!csv.1.is_empty());
-    for (a, b) in csv.1.iter().zip(&bags.1) {
-        assert!(
-            (a.unwrap() - b.unwrap()).abs() < 1e-6,
-            "{a:?} against {b:?}"
-        );
-    }
+    crate::common::installed::studies_score_alike(d, "csv", "bags");
     let wrong = spec
         .replace(
             "dvl = \"../data/bags/S1.mcap\"",

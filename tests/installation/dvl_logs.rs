@@ -715,7 +715,6 @@ fn nmea_gga_fixes_calibrate_as_the_same_fixes_in_csv() {
 #[test]
 fn a_study_of_dvl_logs_scores_as_the_study_of_their_csv_files() {
     use crate::common::installed::write_study_spec;
-    use crate::common::{floats, read_parquet, strings};
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     write_installed(&d.join("data/syn"), 3, &[], INSTALLED, 5);
@@ -734,26 +733,7 @@ fn a_study_of_dvl_logs_scores_as_the_study_of_their_csv_files() {
         );
     }
     std::fs::write(d.join("experiments/logs.toml"), &spec).unwrap();
-    for name in ["csv", "logs"] {
-        let output = dcnet(
-            d,
-            &["run", &format!("experiments/{name}.toml"), "--no-plots"],
-        );
-        assert!(output.status.success(), "{name}: {}", stderr(&output));
-    }
-    let scores = |name: &str| {
-        let batch = read_parquet(&d.join(format!("results/{name}/summary.parquet")));
-        (strings(&batch, "method"), floats(&batch, "rmse_cm_s"))
-    };
-    let (csv, logs) = (scores("csv"), scores("logs"));
-    assert_eq!(csv.0, logs.0);
-    assert!(!csv.1.is_empty());
-    for (a, b) in csv.1.iter().zip(&logs.1) {
-        assert!(
-            (a.unwrap() - b.unwrap()).abs() < 1e-6,
-            "{a:?} against {b:?}"
-        );
-    }
+    crate::common::installed::studies_score_alike(d, "csv", "logs");
     let wrong = spec
         .replace("dvl = \"../data/logs/S1.json\"", "dvl = \"../data/logs/S1.json\"\ndvl_format = \"nortek\"")
         .replace(

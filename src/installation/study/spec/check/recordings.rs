@@ -11,7 +11,7 @@ use crate::data::paired::{PairedColumns, Source};
 use crate::installation::study::spec::file::{PairedTrajectoryFile, RecordingsFile};
 use crate::spec::check::Faults;
 use std::collections::HashSet;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Checks `[recordings]`, its files found from `folder`: names defined once, at least
 /// two trajectories (one to calibrate on, another to score on).
@@ -66,8 +66,80 @@ pub(in crate::installation::study::spec) fn check_recordings(
     trajectories
 }
 
-/// The [`Source`] of trajectory `i`, its files found from `folder`: a bag read with its
-/// topics, or CSV files read with `columns`; a key of one given to the other is a fault.
+/// The format of the DVL log `dvl`, as `named` (a fault at `key("dvl_format")` where it
+/// names none) or found from its content; `None` for a file that is no log.
+fn log_format(
+    dvl: &Path,
+    named: Option<&str>,
+    key: &dyn Fn(&str) -> String,
+    faults: &mut Faults,
+) -> Option<LogFormat> {
+    let Some(named) = named else {
+        return dvl_log::format_of(dvl);
+    };
+    let format = LogFormat::from_key(named);
+    if format.is_none() {
+        let keys: Vec<&str> = LogFormat::KEYS.iter().map(|(k, _)| *k).collect();
+        faults.add(
+            key("dvl_format"),
+            format!(
+                "{named:?}: a DVL log's format is one of {}",
+                keys.join(", ")
+            ),
+        );
+    }
+    format
+}
+
+/// A bag's stamps as the key `stamps` names them (the headers' where not given); a
+/// fault at it where it names neither.
+fn bag_stamps(named: Option<&str>, key: &dyn Fn(&str) -> String, faults: &mut Faults) -> Stamps {
+    match named {
+        None | Some("header") => Stamps::Header,
+        Some("receive") => Stamps::Receive,
+        Some(other) => {
+            faults.add(
+                key("stamps"),
+                format!("{other:?}: a bag's stamps are \"header\" or \"receive\""),
+            );
+            Stamps::Header
+        }
+    }
+}
+
+/// The [`Source`] of the DVL log `dvl` in `format` beside its reference's CSV file
+/// `reference`, read with `columns`; a fault at `key("reference")` where none is named.
+fn log_source(
+    dvl: PathBuf,
+    format: LogFormat,
+    reference: Option<PathBuf>,
+    columns: &PairedColumns,
+    key: &dyn Fn(&str) -> String,
+    faults: &mut Faults,
+) -> Source {
+    let Some(reference) = reference else {
+        faults.add(
+            key("reference"),
+            format!(
+                "{} is a {} log, which holds the DVL alone: name the reference's CSV file",
+                dvl.display(),
+                format.words()
+            ),
+        );
+        return Source::csv(&dvl, None, columns.clone());
+    };
+    Source::Log {
+        dvl,
+        format,
+        thresholds: Thresholds::default(),
+        reference,
+        columns: columns.clone(),
+    }
+}
+
+/// The [`Source`] of trajectory `i`, its files found from `folder`: a DVL log beside its
+/// reference's CSV file, a bag read with its topics, or CSV files read with `columns`;
+/// a key of one given to another is a fault.
 fn trajectory_source(
     i: usize,
     trajectory: PairedTrajectoryFile,
@@ -87,85 +159,53 @@ fn trajectory_source(
     } = trajectory;
     let key = |field: &str| format!("recordings.trajectories[{i}].{field}");
     let dvl = folder.join(dvl);
-    let format = match dvl_format.as_deref() {
-        None => dvl_log::format_of(&dvl),
-        Some(named) => LogFormat::from_key(named).or_else(|| {
-            let keys: Vec<&str> = LogFormat::KEYS.iter().map(|(k, _)| *k).collect();
-            faults.add(
-                key("dvl_format"),
-                format!(
-                    "{named:?}: a DVL log's format is one of {}",
-                    keys.join(", ")
-                ),
-            );
-            None
-        }),
-    };
-    if let Some(format) = format {
-        let bag_keys = [
-            ("dvl_topic", dvl_topic.is_some()),
-            ("reference_topic", reference_topic.is_some()),
-            ("rate_topic", rate_topic.is_some()),
-            ("stamps", stamps.is_some()),
-            ("frame", frame.is_some()),
-        ];
-        for (field, _) in bag_keys.iter().filter(|(_, given)| *given) {
-            faults.add(
-                key(field),
-                format!(
-                    "{} is a {} log, not a ROS 2 bag",
-                    dvl.display(),
-                    format.words()
-                ),
-            );
+    let bag_keys_given = [
+        ("dvl_topic", dvl_topic.is_some()),
+        ("reference_topic", reference_topic.is_some()),
+        ("rate_topic", rate_topic.is_some()),
+        ("stamps", stamps.is_some()),
+        ("frame", frame.is_some()),
+    ]
+    .into_iter()
+    .filter_map(|(field, given)| given.then_some(field));
+    let not_a_bag = |why: String, faults: &mut Faults| {
+        for field in bag_keys_given.clone() {
+            faults.add(key(field), why.clone());
         }
-        let Some(reference) = reference else {
-            faults.add(
-                key("reference"),
-                format!(
-                    "{} is a {} log, which holds the DVL alone: name the reference's CSV file",
-                    dvl.display(),
-                    format.words()
-                ),
-            );
-            return Source::csv(&dvl, None, columns.clone());
-        };
-        return Source::Log {
-            reference: folder.join(reference),
+    };
+    if let Some(format) = log_format(&dvl, dvl_format.as_deref(), &key, faults) {
+        not_a_bag(
+            format!(
+                "{} is a {} log, not a ROS 2 bag",
+                dvl.display(),
+                format.words()
+            ),
+            faults,
+        );
+        return log_source(
             dvl,
             format,
-            thresholds: Thresholds::default(),
-            columns: columns.clone(),
-        };
+            reference.map(|r| folder.join(r)),
+            columns,
+            &key,
+            faults,
+        );
     }
     if !is_bag(&dvl) {
-        let bag_keys = [
-            ("dvl_topic", dvl_topic.is_some()),
-            ("reference_topic", reference_topic.is_some()),
-            ("rate_topic", rate_topic.is_some()),
-            ("stamps", stamps.is_some()),
-            ("frame", frame.is_some()),
-        ];
-        for (field, _) in bag_keys.iter().filter(|(_, given)| *given) {
-            faults.add(key(field), format!("{} is not a ROS 2 bag (a rosbag2 folder, an .mcap or a .db3 file): a CSV recording is read by its columns", dvl.display()));
-        }
+        not_a_bag(
+            format!(
+                "{} is not a ROS 2 bag (a rosbag2 folder, an .mcap or a .db3 file): a CSV recording is read by its columns",
+                dvl.display()
+            ),
+            faults,
+        );
         let reference = reference.map(|r| folder.join(r));
         return Source::csv(&dvl, reference.as_deref(), columns.clone());
     }
     if reference.is_some() {
         faults.add(key("reference"), format!("{} is a ROS 2 bag, which holds the reference too: name its topic with reference_topic", dvl.display()));
     }
-    let stamps = match stamps.as_deref() {
-        None | Some("header") => Stamps::Header,
-        Some("receive") => Stamps::Receive,
-        Some(other) => {
-            faults.add(
-                key("stamps"),
-                format!("{other:?}: a bag's stamps are \"header\" or \"receive\""),
-            );
-            Stamps::Header
-        }
-    };
+    let stamps = bag_stamps(stamps.as_deref(), &key, faults);
     Source::Bag {
         path: dvl,
         topics: BagTopics {
