@@ -2,7 +2,8 @@
 //! reads them; logs the tests write (`common::pd0`, from the byte layout) turned from
 //! beam, instrument and earth coordinates into the vehicle's velocity; bad bytes counted
 //! or refused by name; and `calibrate` on a PD0 log beside its reference's CSV file
-//! finding the terms the same recording finds as CSV.
+//! finding the terms the same recording finds as CSV; a public log against its own GNSS
+//! calibrated as an independent least-squares fit calibrates it.
 
 use crate::bags::{TERMS, calibrate, csv_args, terms};
 use crate::common::installed::{INSTALLED, write_installed};
@@ -445,7 +446,11 @@ fn an_akit_segment_as_pd0_calibrates_to_the_csv_terms() {
 /// `calibrate --fixes` on a public WinRiver PD0 log: its own heading, pitch and roll as
 /// the attitude, its GGA sentences as the fixes, placed on the log's clock (4 h and
 /// 26.3 s behind the GNSS's: the recorder ran on local time), the fixes outside the
-/// DVL's pieces left out; an attitude from another file is refused by the flag.
+/// DVL's pieces left out. Its scale and yaw are those an independent least-squares fit
+/// of the same model finds (`tests/data/pd0/gnss_fit.py`: numpy over dolfyn's decode,
+/// 1.0266 and −25.73°), each within the tool's 95 % interval; the heading spans 52°, so
+/// the yaw is said to be seen poorly. An attitude from another file is refused by the
+/// flag.
 #[test]
 fn a_pd0_log_is_fitted_to_its_own_gnss_fixes_on_its_own_clock() {
     let dir = tempfile::tempdir().unwrap();
@@ -465,8 +470,27 @@ fn a_pd0_log_is_fitted_to_its_own_gnss_fixes_on_its_own_clock() {
         "placed on the log's clock, which runs 14426.30 s behind the GNSS's",
         "the DVL's 75 samples, 69 kept (6 left out: 6 beside a gap in the reference)",
         "50 fixes, 38 fitted (12 outside the DVL's pieces",
+        "seen poorly, applied: misalignment z: the vehicle's heading spans 52° only",
     ] {
         assert!(text.contains(expected), "{expected}\nnot in\n{text}");
+    }
+    let independent = std::fs::read_to_string(public("winriver02.gnss_fit.csv")).unwrap();
+    let row: Vec<f64> = (independent.lines().nth(1).unwrap().split(','))
+        .map(|c| c.parse().unwrap())
+        .collect();
+    // v_dvl = (1 + s) R(δ) v_b, R(δ) taking the body's axes into the DVL's: the GNSS's
+    // distance over the DVL's is 1 / (1 + s), and the GNSS's track lies δ_z clockwise of
+    // the DVL's.
+    let expected = [
+        ("scale", 100.0 * (1.0 / row[3] - 1.0)),
+        ("misalignment z", row[4]),
+    ];
+    for (term, independent) in expected {
+        let (estimate, half_width) = table_row(&text, term);
+        assert!(
+            half_width.is_finite() && (estimate - independent).abs() <= half_width,
+            "{term}: {estimate} ± {half_width} against the independent fit's {independent}\n{text}"
+        );
     }
     let other = dir.path().join("attitude.csv");
     std::fs::write(
@@ -481,6 +505,22 @@ fn a_pd0_log_is_fitted_to_its_own_gnss_fixes_on_its_own_clock() {
         "{}",
         stderr(&output)
     );
+}
+
+/// The estimate and the 95 % half-width of `term` in the terms table `calibrate` prints
+/// (in the unit it prints them in).
+fn table_row(text: &str, term: &str) -> (f64, f64) {
+    let line = (text.lines())
+        .find(|line| line.starts_with(&format!("| {term} ")))
+        .unwrap_or_else(|| panic!("no row for {term} in\n{text}"));
+    let cells: Vec<&str> = line.split('|').map(str::trim).collect();
+    let number = |cell: &str| -> f64 {
+        let digits = cell.trim_start_matches("± ").split(' ').next().unwrap();
+        digits
+            .parse()
+            .unwrap_or_else(|_| panic!("{cell} in {line}"))
+    };
+    (number(cells[2]), number(cells[cells.len() - 2]))
 }
 
 /// A velocity report as a Water Linked DVL sends it, `time_of_validity` in µs since 1970.

@@ -1,12 +1,13 @@
 //! A DVL calibrated against position fixes: the fit's 95 % intervals cover the truth on
 //! synthetic dives with multipath outliers (and without, in `fix_coverage`), a straight
-//! dive shows no lever arm and no clock and applies neither, `calibrate --fixes` refuses
+//! dive shows no lever arm and no clock and applies neither (its yaw, seen poorly), `calibrate --fixes` refuses
 //! bad input by name, and on A-KIT the fixes' installation carried to other turning
 //! segments leaves less drift than none.
 
 use crate::common::{self, installed};
 use crate::coverage::{NOISE_M_S, simulated, synthetic_segments};
 use dcnet_exp::data::fixes::{FixSimulation, Fixes, simulate_fixes};
+use dcnet_exp::installation::estimate::bound::Why;
 use dcnet_exp::installation::estimate::fix_joint::fix_vehicle;
 use dcnet_exp::installation::estimate::fixes::{
     FixFit, FixFitError, FixNoise, default_fix_terms, fit_fixes,
@@ -227,10 +228,12 @@ fn a_fix_hundreds_of_metres_off_is_left_out_and_the_fit_is_the_clean_ones() {
     }
 }
 
-/// A dive that never turns shows neither the lever arm nor the clock, nor (at one
-/// heading) the yaw: none is applied and the flags say why; its scale is.
+/// A dive that never turns shows neither the lever arm nor the clock: neither is
+/// applied and the flags say why. Its scale is applied, and so is its yaw, which the
+/// track's direction shows at any heading: found within its 95 % interval of the truth,
+/// and said to be seen poorly (at one heading it holds the attitude's heading error).
 #[test]
-fn a_straight_dive_applies_no_lever_arm_clock_or_yaw_and_says_why() {
+fn a_straight_dive_applies_no_lever_arm_or_clock_and_its_yaw_seen_poorly() {
     let dir = tempfile::tempdir().unwrap();
     let straight = [installed::Shape::Straight];
     installed::write_shaped(
@@ -244,47 +247,50 @@ fn a_straight_dive_applies_no_lever_arm_clock_or_yaw_and_says_why() {
     let files = [dcnet_exp::data::paired::PairedFiles::akit(dir.path(), 1)];
     let segment = &crate::coverage::segments(&files)[0];
     let (fit, _) = dive(segment, 0.0, &FIXES, 3);
-    for name in [
-        "lever_arm_x_m",
-        "lever_arm_y_m",
-        "time_offset_s",
-        "misalignment_z_rad",
-    ] {
+    let why = |name: &str| {
+        let found = fit.bound.unseen.iter().find(|u| u.term == name);
+        found
+            .unwrap_or_else(|| panic!("{name}: {:?}", fit.bound.unseen))
+            .why
+            .to_string()
+    };
+    for name in ["lever_arm_x_m", "lever_arm_y_m", "time_offset_s"] {
         assert!(
             !fit.bound.is_applied(name),
-            "{name} applied: {:?}",
-            fit.bound.unseen
-        );
-        assert!(
-            fit.bound.unseen.iter().any(|u| u.term == name),
             "{name}: {:?}",
             fit.bound.unseen
         );
+        assert!(why(name).contains("show only as it turns"), "{}", why(name));
     }
     assert!(fit.bound.is_applied("scale"), "{:?}", fit.bound.unseen);
+    assert!(
+        fit.bound.is_applied("misalignment_z_rad"),
+        "{:?}",
+        fit.bound.unseen
+    );
+    assert!(why("misalignment_z_rad").contains("heading error at these headings"));
+    let k = fit
+        .bound
+        .names
+        .iter()
+        .position(|n| *n == "misalignment_z_rad")
+        .unwrap();
+    let half_width = fit.bound.half_width_95(k);
+    let yaw_rad = fit.installation.misalignment_rad[2];
+    assert!(
+        (yaw_rad - TRUTH.misalignment_rad[2]).abs() <= half_width,
+        "yaw {yaw_rad:.5} ± {half_width:.5} rad against {}",
+        TRUTH.misalignment_rad[2]
+    );
     let applied = fit.installation;
     assert_eq!(
-        (
-            applied.lever_arm_m,
-            applied.time_offset_s,
-            applied.misalignment_rad
-        ),
-        ([0.0; 3], 0.0, [0.0; 3])
+        (applied.lever_arm_m, applied.time_offset_s),
+        ([0.0; 3], 0.0)
     );
-    for name in ["lever_arm_x_m", "time_offset_s", "misalignment_z_rad"] {
-        let why = &fit
-            .bound
-            .unseen
-            .iter()
-            .find(|u| u.term == name)
-            .unwrap()
-            .why;
-        assert!(why.to_string().contains("show only as it turns"), "{why}");
-    }
 }
 
 /// Fixes over only a stretch of a turning dive where its heading spans under 80° show
-/// no yaw, lever arm or clock, however much the dive turns around them: the heading's
+/// no lever arm or clock (and the yaw only poorly), however much the dive turns around them: the heading's
 /// span is read over the fixes' own times (it was once read over the whole dive, and
 /// fixes of A-KIT T2's first minute applied a clock 7σ from the dive's own); the
 /// distance travelled is the fixes' span's.
@@ -340,13 +346,23 @@ fn fixes_over_a_stretch_of_few_headings_apply_no_term_only_turns_show() {
     let terms = term_set(&default_fix_terms());
     let pieces = [0..time_s.len()];
     let fit = fit_fixes((&time_s, &dvl), &pieces, &attitude, &start, terms, noise).unwrap();
-    for name in turns_only {
+    for name in &turns_only[..3] {
         assert!(
             !fit.bound.is_applied(name),
             "{name} applied over {window:?} s: {:?}",
             fit.bound.unseen
         );
     }
+    let yaw_why = fit
+        .bound
+        .unseen
+        .iter()
+        .find(|u| u.term == "misalignment_z_rad");
+    assert!(
+        yaw_why.is_some_and(|u| matches!(u.why, Why::FewHeadings { .. })),
+        "{:?}",
+        fit.bound.unseen
+    );
     assert!(
         fit.distance_m < 0.5 * whole.distance_m,
         "the distance over the fixes' span"
@@ -875,8 +891,11 @@ pub(crate) fn number_after(text: &str, after: &str) -> f64 {
 /// of a turning segment (T1, T4, T8) calibrate an installation that, carried to the other
 /// turning segments T2, T3, T9 and T10, leaves at most 0.20 % of the distance travelled
 /// in RMS drift (no calibration: about 0.56 %; measured 0.141 % in the mean); the three
-/// calibrated jointly, at most 0.13 % (measured 0.090 % in the mean); from the
-/// straight T12, no more drift than no calibration. T13 (one turn of 228°) is printed,
+/// calibrated jointly, at most 0.13 % (measured 0.090 % in the mean). The straight
+/// T12's yaw (−0.25 ± 0.12° on the first draw, seen poorly) leaves T12 itself with
+/// less drift than its yaw held at zero (measured 0.073 % against 0.192 %), and the
+/// turning segments with at most 0.1 % more than no calibration (measured 0.61–0.63 %:
+/// at one heading the yaw holds the attitude's heading error there). T13 (one turn of 228°) is printed,
 /// not held to that: every term it shows is seen poorly, and applied at its estimate
 /// they left 0.85 and 0.96 % on two of three draws (docs/findings.md).
 #[test]
@@ -924,10 +943,21 @@ fn fixes_from_a_turning_akit_segment_halve_the_drift_of_the_others() {
         .flat_map(|&k| (0..3).map(move |seed| (k, seed)))
         .map(|(k, seed)| mean_drift(&fitted(k, seed).installation))
         .collect();
-    let straight: Vec<f64> = [12]
-        .iter()
-        .flat_map(|&k| (0..3).map(move |seed| (k, seed)))
-        .map(|(k, seed)| mean_drift(&fitted(k, seed).installation))
+    // T12's own drift with its installation, and with its yaw held at zero; the
+    // others' drift with it.
+    let t12 = segment(12);
+    let straight: Vec<[f64; 3]> = (0..3)
+        .map(|seed| {
+            let installation = fitted(12, seed).installation;
+            let mut yaw_held = installation;
+            yaw_held.misalignment_rad[2] = 0.0;
+            let own = |i: &Installation| drift_of(i, &t12).unwrap().rms_pct;
+            [
+                own(&installation),
+                own(&yaw_held),
+                mean_drift(&installation),
+            ]
+        })
         .collect();
     // T1, T4 and T8 of each draw calibrated jointly: the vehicle's terms, the clock the
     // three dives' mean.
@@ -945,7 +975,7 @@ fn fixes_from_a_turning_akit_segment_halve_the_drift_of_the_others() {
         .collect();
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
     println!(
-        "A-KIT drift on T2, T3, T9, T10: none {none:.3} %, from turning segments {turning:.3?} (mean {:.3} %), from T1, T4 and T8 jointly {joint:.3?} (mean {:.3} %), from the straight T12 {straight:.3?}, from T13's one turn {:.3?}",
+        "A-KIT drift on T2, T3, T9, T10: none {none:.3} %, from turning segments {turning:.3?} (mean {:.3} %), from T1, T4 and T8 jointly {joint:.3?} (mean {:.3} %), from the straight T12 [own, own with its yaw held, others] {straight:.3?}, from T13's one turn {:.3?}",
         mean(&turning),
         mean(&joint),
         (0..3)
@@ -955,10 +985,14 @@ fn fixes_from_a_turning_akit_segment_halve_the_drift_of_the_others() {
     assert!((0.5..0.6).contains(&none), "no calibration: {none:.3} %");
     assert!(mean(&turning) <= 0.20, "{turning:?}");
     assert!(mean(&joint) <= 0.13, "jointly {joint:?}");
-    for drift in &straight {
+    for [own, own_yaw_held, others] in &straight {
         assert!(
-            *drift <= none + 0.005,
-            "from a straight segment {drift:.3} % against {none:.3} %"
+            own < own_yaw_held,
+            "T12's own drift {own:.3} % with its yaw, {own_yaw_held:.3} % without"
+        );
+        assert!(
+            *others <= none + 0.1,
+            "from a straight segment {others:.3} % against {none:.3} %"
         );
     }
 }

@@ -85,9 +85,12 @@ pub enum Why {
     /// Moving it (with the others named, in some proportion) leaves the residuals
     /// unchanged.
     Flat { with: Vec<&'static str> },
-    /// A term only turns show (the yaw, the lever arm, the clock) fitted to position
-    /// fixes over headings that span only `span_rad`.
+    /// A term only turns show (the lever arm, the clock) fitted to position fixes over
+    /// headings that span only `span_rad`.
     OneHeading { span_rad: f64 },
+    /// The yaw fitted to position fixes over headings that span only `span_rad`: the
+    /// DVL's yaw and the attitude's heading error at those headings, together.
+    FewHeadings { span_rad: f64 },
     /// A time term (the clock, the fixes' latency) fitted to fixes ran to the edge of its
     /// search, ±`edge_s`, which lies within its 95 % interval of zero (its standard
     /// deviation `std_s` there): the fixes do not place it within the search.
@@ -122,7 +125,12 @@ impl fmt::Display for Why {
             }
             Why::OneHeading { span_rad } => write!(
                 f,
-                "the vehicle's heading spans {:.0}° only: the yaw, the lever arm and the clock show only as it turns (at one heading the yaw is the attitude's heading error there, the lever arm and the clock a shift of the start)",
+                "the vehicle's heading spans {:.0}° only: the lever arm and the clock show only as it turns (at one heading they are a shift of the start)",
+                span_rad.to_degrees()
+            ),
+            Why::FewHeadings { span_rad } => write!(
+                f,
+                "the vehicle's heading spans {:.0}° only: the yaw found is the DVL's and the attitude's heading error at these headings together, and holds at other headings only as far as that error is the same there",
                 span_rad.to_degrees()
             ),
             Why::BeyondSearch { edge_s, std_s } => write!(

@@ -42,8 +42,9 @@
 //! for being known loosely: every term is applied at its estimate with its standard
 //! deviation (one beyond its tolerance in [`FIX_TOLERANCES`], or tied beyond
 //! [`CORRELATION_LIMIT`] to another, is said to be seen poorly), but where the fixes
-//! cannot show it at all: over headings spanning under a quarter turn, the yaw, the
-//! lever arm and the clock; or a direction the residuals do not feel. Such a term is
+//! cannot show it at all: over headings spanning under a quarter turn, the lever arm and
+//! the clock (the yaw is applied there, said to be seen poorly: at few headings it holds
+//! the attitude's heading error there too); or a direction the residuals do not feel. Such a term is
 //! held at zero, as the dead reckoning's start absorbs it exactly, and the rest fitted
 //! again. A clock or a latency run to the edge of its search, where that edge lies
 //! within its 95 % interval of zero, is not placed by the fixes: it is held at zero and
@@ -77,22 +78,26 @@ pub fn default_fix_terms() -> Vec<TermName> {
 
 /// The least span of headings over which the terms only turns show
 /// ([`SHOWN_BY_TURNS`]) are fitted to fixes, rad (a quarter turn): at one heading the
-/// DVL's yaw and the attitude's heading error there are one, and the lever arm (C_b^n l)
-/// and the clock (a shift along the track) move the track as its start does. On A-KIT a
-/// straight segment's yaw, applied to the turning ones, left more drift than none, and
-/// its lever arm and clock, fitted where they were barely tied to the start, twice as
-/// much.
+/// lever arm (C_b^n l) and the clock (a shift along the track) move the track as its
+/// start does. On A-KIT a straight segment's lever arm and clock, fitted where they were
+/// barely tied to the start, applied to the turning ones, left twice the drift of none.
+/// Below it the yaw is fitted and applied, but said to be seen poorly
+/// ([`Why::FewHeadings`]): at one heading it is the DVL's yaw and the attitude's heading
+/// error there together.
 pub const MIN_HEADING_SPAN_RAD: f64 = std::f64::consts::FRAC_PI_2;
 
 /// The terms only a turning vehicle shows to fixes (a latency shifts the track along
 /// itself, as its start does on a straight run).
-const SHOWN_BY_TURNS: [&str; 5] = [
-    "misalignment_z_rad",
+const SHOWN_BY_TURNS: [&str; 4] = [
     "lever_arm_x_m",
     "lever_arm_y_m",
     "time_offset_s",
     FIX_LATENCY,
 ];
+
+/// The yaw, which any heading shows (the track's direction against the DVL's), but
+/// which holds at other headings only as far as the attitude's heading error is the same.
+const YAW: &str = "misalignment_z_rad";
 
 /// The terms fitted to fixes, their bound, and the fixes used.
 #[derive(Debug, Clone, PartialEq)]
@@ -241,7 +246,7 @@ struct Shown {
 
 impl Shown {
     /// Every term estimated, but those only turns show where the headings span under
-    /// [`MIN_HEADING_SPAN_RAD`].
+    /// [`MIN_HEADING_SPAN_RAD`] (and there the yaw said to be seen poorly).
     fn of(problem: &Problem) -> Shown {
         let n = problem.names.len();
         let mut shown = Shown {
@@ -261,6 +266,11 @@ impl Shown {
                     shown.unseen.push(Unseen {
                         term: name,
                         why: Why::OneHeading { span_rad },
+                    });
+                } else if shown.applied[k] && *name == YAW {
+                    shown.unseen.push(Unseen {
+                        term: name,
+                        why: Why::FewHeadings { span_rad },
                     });
                 }
             }

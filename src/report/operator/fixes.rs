@@ -112,7 +112,7 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
         100.0 * calibration.after_m / calibration.distance_m,
     ));
     text.push_str(&format!(
-        "every term is applied at its estimate with its standard deviation, however loosely the fixes show it (beyond its tolerance, scale {:.2} %, misalignment {:.2}°, lever arm {:.2} m, time offset {:.2} s, or tied beyond ±0.95 to another, it is said to be seen poorly), but where they cannot show it at all: the yaw, the lever arm and the clock over headings spanning under {:.0}°, or a term the residuals do not depend on; that one is held at zero, as the start positions take its place exactly; and a clock or a latency the fit ran to the edge of its search where that edge lies within its 95 % interval of zero, held at zero with its uncertainty carried into the others'\n",
+        "every term is applied at its estimate with its standard deviation, however loosely the fixes show it (beyond its tolerance, scale {:.2} %, misalignment {:.2}°, lever arm {:.2} m, time offset {:.2} s, or tied beyond ±0.95 to another, it is said to be seen poorly, as is the yaw over headings spanning under {:.0}°), but where they cannot show it at all: the lever arm and the clock over those headings, or a term the residuals do not depend on; that one is held at zero, as the start positions take its place exactly; and a clock or a latency the fit ran to the edge of its search where that edge lies within its 95 % interval of zero, held at zero with its uncertainty carried into the others'\n",
         100.0 * FIX_TOLERANCES.scale,
         FIX_TOLERANCES.misalignment_rad.to_degrees(),
         FIX_TOLERANCES.lever_arm_m,
