@@ -115,6 +115,13 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
         .collect()
 }
 
+/// A file something was read from, and the SHA-256 of its bytes as read.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SourceFile {
+    pub path: PathBuf,
+    pub sha256: String,
+}
+
 /// Reads the file at `path` a line at a time, hashing its bytes as it reads: each line,
 /// numbered from 1, with its ending, goes to `visit`; gives the file's SHA-256 (as 64
 /// lowercase hex digits). `io` turns a failure to read into the caller's error.

@@ -143,8 +143,9 @@ pub(super) struct CalibrateArgs {
     /// shared, each recording's --dive-terms its own
     #[arg(required = true, num_args = 1..)]
     pub(super) dvl: Vec<PathBuf>,
-    /// The reference's CSV file, when it is not the DVL's; once per DVL file, in the
-    /// same order, when there are several
+    /// The reference's CSV file, when it is not the DVL's, or an NMEA file (a surface
+    /// vehicle's: RMC ground velocity beside PASHR attitude, the down velocity zero);
+    /// once per DVL file, in the same order, when there are several
     #[arg(long)]
     pub(super) reference: Vec<PathBuf>,
     /// A TOML file whose [columns] table names the columns (time, dvl, velocity_ned,
@@ -237,7 +238,8 @@ pub(super) struct FixFlags {
     #[arg(long, value_name = "FILE")]
     pub(super) fixes: Vec<PathBuf>,
     /// With --fixes: the CSV file of the attitude (an AHRS's roll, pitch, yaw, as
-    /// [columns] names them), on its own clock and at its own rate; once per --fixes
+    /// [columns] names them), or an NMEA file of PASHR dated by RMC or ZDA (on UTC), on
+    /// its own clock and at its own rate; once per --fixes
     #[arg(long, value_name = "FILE")]
     pub(super) attitude: Vec<PathBuf>,
     /// Position fixes from the bag's topic rather than a velocity reference: a
@@ -464,8 +466,8 @@ pub(super) struct CorrectArgs {
     /// The installation file `calibrate --save` wrote
     #[arg(long, value_name = "FILE")]
     pub(super) installation: PathBuf,
-    /// The reference's CSV file, when it is not the DVL's (its body rate corrects
-    /// the lever arm; its velocity finds the clock)
+    /// The reference's CSV file, when it is not the DVL's, or an NMEA file as for
+    /// calibrate (its body rate corrects the lever arm; its velocity finds the clock)
     #[arg(long)]
     pub(super) reference: Option<PathBuf>,
     /// A TOML file whose [columns] table names the columns, as for calibrate

@@ -260,6 +260,8 @@ struct Read {
     dvl_sha256: String,
     reference: Reference,
     frames: Option<BagFrames>,
+    /// How many samples were read, and left out (of an NMEA reference, sentences).
+    counts: ReadCounts,
     scored: Range<usize>,
     /// The samples of `scored` the fit found outliers (see [`Read::without_outliers`]),
     /// which no score counts.
@@ -378,7 +380,7 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
         noise,
         scored: read.scored.len() - read.outliers.len(),
         recorded: read.recording.time_s.len(),
-        read: read.recording.counts(),
+        read: read.counts.clone(),
         before,
         after,
         drift: drift_of(&Installation::default(), &read.recording)
@@ -606,6 +608,7 @@ fn read(args: &CalibrateArgs) -> Result<Read, CalibrateError> {
         .map_err(CalibrateError::Columns)?;
     let read = source.read()?;
     let dvl_sha256 = read.dvl_sha256().to_string();
+    let counts = read.counts();
     let frames = read.frames;
     let recording = read.recording;
     let reference = Reference::new(&recording);
@@ -616,6 +619,7 @@ fn read(args: &CalibrateArgs) -> Result<Read, CalibrateError> {
         dvl_sha256,
         reference,
         frames,
+        counts,
         scored,
         outliers: Vec::new(),
         window,

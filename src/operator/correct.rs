@@ -278,6 +278,7 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
     let recording_sha256 = loaded.dvl_sha256().to_string();
     outputs.not_another_recordings(args.dvl, &recording_sha256)?;
     let read = loaded.parse()?;
+    let counts = read.counts();
     let (recording, frames) = (read.recording, read.frames);
     if let (Some(frames), Some(mount)) = (&frames, &saved.mount) {
         on_the_same_mount(args, frames, mount)?;
@@ -314,7 +315,7 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
         search_s: args.search_s,
         installation_file: args.installation.to_path_buf(),
         written: files,
-        read: recording.counts(),
+        read: counts,
         drift: drift_of(&Installation::default(), &recording).zip(drift_of(&applied, &recording)),
     })
 }

@@ -51,6 +51,19 @@ pub(crate) fn terms(stdout: &str) -> Vec<(String, f64, f64)> {
         .collect()
 }
 
+/// Asserts that the terms `found` prints are those `expected` prints, each within
+/// `share` of the standard deviation `expected` gives it.
+pub(crate) fn terms_agree(expected: &str, found: &str, share: f64) {
+    let (expected_terms, found_terms) = (terms(expected), terms(found));
+    assert_eq!(expected_terms.len(), found_terms.len(), "{found}");
+    for ((term, a, std), (_, b, _)) in expected_terms.iter().zip(&found_terms) {
+        assert!(
+            (a - b).abs() <= share * std,
+            "{term}: {b} against {a} ± {std}\n{found}"
+        );
+    }
+}
+
 pub(crate) fn calibrate(dir: &Path, args: &[&str]) -> String {
     let output = dcnet(dir, &[&["calibrate"], args].concat());
     assert!(output.status.success(), "{}", stderr(&output));

@@ -5,7 +5,7 @@
 //! finding the terms the same recording finds as CSV; a public log against its own GNSS
 //! calibrated as an independent least-squares fit calibrates it.
 
-use crate::bags::{TERMS, calibrate, csv_args, terms};
+use crate::bags::{TERMS, calibrate, csv_args, terms, terms_agree};
 use crate::common::installed::{INSTALLED, write_installed};
 use crate::common::pd0::{Ping, Setup, beams_of, ensemble, framed, log};
 use crate::common::{akit, dcnet, repo, stderr, stdout};
@@ -358,8 +358,8 @@ fn as_pd0(recording: &PairedRecording, path: &Path) {
 
 /// `calibrate` reads a PD0 log (and Water Linked reports) beside its reference's CSV
 /// file, found by its content, and finds every term within one standard deviation of
-/// the same recording as CSV; a
-/// log without --reference, or with --valid-column, is refused by the flag.
+/// the same recording as CSV; a log without --reference, or with --valid-column, is
+/// refused by the flag; `correct` finds the log's clock again as it finds the CSV's.
 #[test]
 fn calibrate_reads_a_pd0_log_beside_its_reference_csv() {
     let dir = tempfile::tempdir().unwrap();
@@ -392,6 +392,29 @@ fn calibrate_reads_a_pd0_log_beside_its_reference_csv() {
         "{}",
         stderr(&output)
     );
+    // `correct` reads the log as it reads the CSV: the clock found again within a
+    // tenth of its standard deviation (the log's velocities are whole mm/s).
+    let csv = files.dvl.to_str().unwrap();
+    let save = ["--save", "installation.toml", "--out", "saved"];
+    calibrate(
+        dir.path(),
+        &[&[csv, "--reference", reference, TERMS][..], &save].concat(),
+    );
+    let corrected = |dvl: &str, out: &str| {
+        let args = ["correct", dvl, "--installation", "installation.toml"];
+        let output = dcnet(
+            dir.path(),
+            &[&args[..], &["--reference", reference, "--out", out]].concat(),
+        );
+        assert!(output.status.success(), "{}", stderr(&output));
+        stdout(&output)
+    };
+    let (from_csv, from_pd0) = (
+        corrected(csv, "from-csv"),
+        corrected(pd0.to_str().unwrap(), "from-pd0"),
+    );
+    assert!(from_pd0.contains("clock found again"), "{from_pd0}");
+    terms_agree(&from_csv, &from_pd0, 0.1);
 }
 
 /// Writes `files`' DVL as `dvl.pd0` and as Water Linked reports in `dir`, and checks
@@ -739,14 +762,7 @@ fn nmea_gga_fixes_calibrate_as_the_same_fixes_in_csv() {
         from_nmea.contains("78 fixes (1 more left out: a GGA whose checksum fails"),
         "{from_nmea}"
     );
-    let (csv_terms, nmea_terms) = (terms(&from_csv), terms(&from_nmea));
-    assert_eq!(csv_terms.len(), nmea_terms.len(), "{from_nmea}");
-    for ((term, a, std), (_, b, _)) in csv_terms.iter().zip(&nmea_terms) {
-        assert!(
-            (a - b).abs() <= 0.1 * std,
-            "{term}: {b} from NMEA against {a} ± {std} from CSV"
-        );
-    }
+    terms_agree(&from_csv, &from_nmea, 0.1);
 }
 
 /// A study whose recordings' DVLs are Water Linked logs (the same velocities, written

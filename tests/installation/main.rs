@@ -24,4 +24,5 @@ mod installation_study;
 mod installation_sweep;
 mod learned;
 mod operator;
+mod nmea_reference;
 mod paired_recordings;

@@ -16,6 +16,7 @@ use super::{
 };
 use crate::Vec3;
 use crate::data::local_plane::off_the_globe;
+use crate::data::nmea::reference::SentencesRead;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
@@ -41,6 +42,8 @@ pub struct Unchecked {
     /// The reference's position where it records one, and whether it is latitude and
     /// longitude (in the angles' unit) rather than north and east in metres.
     pub position: Option<(Vec<[f64; 2]>, bool)>,
+    /// What an NMEA reference gave, and left out ([`crate::data::nmea::reference`]).
+    pub reference_read: Option<SentencesRead>,
 }
 
 impl Unchecked {
@@ -389,6 +392,7 @@ mod tests {
             rate: None,
             angles_in_degrees: true,
             position: None,
+            reference_read: None,
         };
         let names = |names: [&str; 3]| names.map(String::from);
         let at = Locator {

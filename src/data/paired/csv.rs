@@ -9,6 +9,7 @@ use super::checks::{Locator, Unchecked};
 use super::{LeftOutWhy, PairedColumns, PairedError};
 use crate::Vec3;
 use crate::data::csv::{Column, Quantity, Rows, parse_columns};
+use crate::data::nmea::reference::parse_reference as parse_nmea_reference;
 use std::path::Path;
 
 /// The samples of `dvl` (a path and its bytes) and, where the reference is in another
@@ -31,11 +32,11 @@ pub fn parse(
     let dvl_columns: Vec<Column> = std::iter::once(time)
         .chain(triple(&columns.dvl, Quantity::MeasuredVelocity))
         .collect();
-    let reference_columns = reference_columns(time, columns, with_velocity);
-    // The reference's values start after the time, or, in one file, after the time
-    // and the DVL's three; the DVL's validity flag, where there is one, is the last.
-    let (dvl_rows, reference_rows, start, reference_path) = match reference {
+    // In one file, the reference's values start after the time and the DVL's three;
+    // the DVL's validity flag, where there is one, is the last.
+    let (dvl_rows, (reference_samples, reference_lines), reference_path) = match reference {
         None => {
+            let reference_columns = reference_columns(time, columns, with_velocity);
             let all: Vec<Column> = dvl_columns
                 .iter()
                 .chain(&reference_columns[1..])
@@ -43,16 +44,25 @@ pub fn parse(
                 .copied()
                 .collect();
             let rows = parse_columns(dvl.0, dvl.1, &all)?;
-            (rows.clone(), rows, 4, dvl.0)
+            let reference = reference_samples(&rows, 4, columns, with_velocity);
+            let lines = rows.lines.clone();
+            (rows, (reference, lines), dvl.0)
         }
         Some((path, bytes)) => {
             let dvl_with_flag: Vec<Column> = dvl_columns.iter().chain(&validity).copied().collect();
             let dvl_rows = parse_columns(dvl.0, dvl.1, &dvl_with_flag)?;
-            let reference_rows = parse_columns(path, bytes, &reference_columns)?;
-            (dvl_rows, reference_rows, 1, path)
+            (
+                dvl_rows,
+                parse_reference((path, bytes), columns, with_velocity)?,
+                path,
+            )
         }
     };
     let flag = dvl_rows.width - 1;
+    let names = match reference_samples.reference_read {
+        Some(_) => nmea_names(columns),
+        None => columns.clone(),
+    };
     let samples = Unchecked {
         dvl_time_s: dvl_rows.column(0).collect(),
         dvl_m_s: triples(&dvl_rows, 1),
@@ -61,25 +71,57 @@ pub fn parse(
                 .map(|v| (v == 0.0).then_some(LeftOutWhy::Flagged))
                 .collect()
         }),
-        ..reference_samples(&reference_rows, start, columns, with_velocity)
+        ..reference_samples
     };
     let at = Locator {
         dvl: dvl.0.to_path_buf(),
         reference: reference_path.to_path_buf(),
         dvl_lines: dvl_rows.lines,
-        reference_lines: reference_rows.lines,
-        names: columns.clone(),
+        reference_lines,
+        names,
     };
     Ok((samples, at))
 }
 
-/// The reference's samples of the CSV file `reference` (a path and its bytes) alone,
-/// the DVL's fields left empty (a DVL's own log gives them), and the line of each.
+/// The names the plausibility checks give an NMEA reference's fields: the sentences'
+/// (the DVL's as `columns` names them).
+pub fn nmea_names(columns: &PairedColumns) -> PairedColumns {
+    PairedColumns {
+        velocity_ned: ["RMC north", "RMC east", "RMC down (zero)"].map(String::from),
+        attitude: ["PASHR roll", "PASHR pitch", "PASHR heading"].map(String::from),
+        angles_in_degrees: true,
+        rate: None,
+        latitude_longitude: None,
+        north_east: None,
+        ..columns.clone()
+    }
+}
+
+/// The reference's samples of the file `reference` (a path and its bytes) alone, the
+/// DVL's fields left empty (a DVL's own log gives them), and the line of each: a CSV
+/// file's columns, or an NMEA file's sentences (its first character `$`:
+/// [`crate::data::nmea::reference`]).
 pub fn parse_reference(
     (path, bytes): (&Path, &[u8]),
     columns: &PairedColumns,
     with_velocity: bool,
 ) -> Result<(Unchecked, Vec<u64>), PairedError> {
+    if bytes.trim_ascii_start().starts_with(b"$") {
+        let nmea = parse_nmea_reference(path, bytes, with_velocity)?;
+        let samples = Unchecked {
+            dvl_time_s: Vec::new(),
+            dvl_m_s: Vec::new(),
+            dvl_stated: None,
+            reference_time_s: nmea.time_s,
+            velocity_ned_m_s: nmea.velocity_ned_m_s,
+            attitude: nmea.attitude_deg,
+            rate: None,
+            angles_in_degrees: true,
+            position: None,
+            reference_read: Some(nmea.read),
+        };
+        return Ok((samples, nmea.lines));
+    }
     let time = Column {
         name: &columns.time,
         holds: Quantity::Time,
@@ -119,6 +161,7 @@ fn reference_samples(
         rate: columns.rate.as_ref().map(|_| triples(rows, attitude + 3)),
         angles_in_degrees: columns.angles_in_degrees,
         position: positions(rows, attitude + 3, columns),
+        reference_read: None,
     }
 }
 

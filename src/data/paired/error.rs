@@ -19,6 +19,8 @@ pub enum PairedError {
     Bag(#[from] crate::data::paired::bag::BagError),
     #[error(transparent)]
     Log(#[from] crate::data::paired::dvl_log::LogError),
+    #[error(transparent)]
+    Nmea(#[from] crate::data::nmea::NmeaError),
     #[error(
         "{}:{line}: {column}: {time_s} s follows {previous_s} s of line {previous_line}: time stamps must increase",
         path.display()

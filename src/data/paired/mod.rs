@@ -22,10 +22,11 @@ mod csv;
 mod error;
 mod source;
 
+pub use crate::files::SourceFile;
 pub use checks::{Locator, Unchecked};
 pub use columns::{GapLimit, PairedColumns, PairedFiles};
 pub use error::{PairedError, left_out_words};
-pub use source::{Loaded, ReadRecording, Recordings, Source, SourceFile};
+pub use source::{Loaded, ReadRecording, Recordings, Source};
 
 use crate::Vec3;
 use std::ops::Range;
@@ -155,6 +156,8 @@ pub struct ReadCounts {
     pub gap_limit_s: f64,
     /// The longest step between two kept DVL samples, s.
     pub longest_loss_s: f64,
+    /// What an NMEA reference gave, and left out.
+    pub reference_read: Option<crate::data::nmea::reference::SentencesRead>,
 }
 
 impl ReadCounts {
@@ -188,7 +191,11 @@ impl std::fmt::Display for ReadCounts {
             },
             self.gap_limit_s,
             self.longest_loss_s,
-        )
+        )?;
+        match &self.reference_read {
+            Some(read) => write!(f, "; the {}: {read}", self.beside),
+            None => Ok(()),
+        }
     }
 }
 
@@ -310,6 +317,7 @@ impl PairedRecording {
             longest_loss_s: (self.time_s.windows(2))
                 .map(|pair| pair[1] - pair[0])
                 .fold(0.0, f64::max),
+            reference_read: None,
         }
     }
 
@@ -375,16 +383,18 @@ pub fn read_without_velocity(
         });
         bytes.push(read);
     }
-    let (samples, at) = csv::parse(
+    let (mut samples, at) = csv::parse(
         (dvl, &bytes[0]),
         Some((reference, &bytes[1])),
         columns,
         false,
     )?;
+    let reference_read = samples.reference_read.take();
     Ok(ReadRecording {
         recording: checks::check(samples, &at)?,
         files,
         frames: None,
+        reference_read,
     })
 }
 
@@ -400,6 +410,7 @@ pub fn read_bag_without_velocity(
     samples.velocity_ned_m_s.clear();
     Ok(ReadRecording {
         recording: checks::check(samples, &read.at)?,
+        reference_read: None,
         files: read.files,
         frames: Some(read.frames),
     })

@@ -10,8 +10,10 @@
 
 use super::{PairedColumns, PairedError, PairedRecording, checks};
 use crate::data::csv::read_bytes;
+use crate::data::nmea::reference::SentencesRead;
 use crate::data::paired::bag::{self, BagFrames, BagTopics};
 use crate::data::paired::dvl_log::{self, DvlLog, LogFormat, Thresholds};
+use crate::files::SourceFile;
 use crate::files::sha256_hex;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -129,13 +131,11 @@ fn log_samples(
 ) -> Result<(super::Unchecked, super::Locator), PairedError> {
     let (reference_samples, reference_lines) =
         super::csv::parse_reference(reference, columns, true)?;
-    let mut names = columns.clone();
-    names.dvl = [
-        "bottom track forward",
-        "bottom track starboard",
-        "bottom track down",
-    ]
-    .map(String::from);
+    let mut names = match reference_samples.reference_read {
+        Some(_) => super::csv::nmea_names(columns),
+        None => columns.clone(),
+    };
+    names.dvl = dvl_log::VELOCITY_NAMES.map(String::from);
     let at = super::Locator {
         dvl: log.summary.file.path.clone(),
         reference: reference.0.to_path_buf(),
@@ -150,13 +150,6 @@ fn log_samples(
         ..reference_samples
     };
     Ok((samples, at))
-}
-
-/// A file a recording was read from, and the SHA-256 of its bytes as read.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct SourceFile {
-    pub path: PathBuf,
-    pub sha256: String,
 }
 
 /// A source's files read and hashed, not yet parsed: what lets a caller refuse a
@@ -208,10 +201,13 @@ impl Loaded<'_> {
                 unreachable!("a bag is loaded as samples, a log as pings")
             }
         };
+        let mut samples = samples;
+        let reference_read = samples.reference_read.take();
         Ok(ReadRecording {
             recording: checks::check(samples, &at)?,
             files: self.files,
             frames,
+            reference_read,
         })
     }
 }
@@ -224,12 +220,22 @@ pub struct ReadRecording {
     pub files: Vec<SourceFile>,
     /// A bag's topics and frames, as read.
     pub frames: Option<BagFrames>,
+    /// What an NMEA reference gave, and left out.
+    pub reference_read: Option<SentencesRead>,
 }
 
 impl ReadRecording {
     /// The SHA-256 of the DVL's file, which the outputs computed from it record.
     pub fn dvl_sha256(&self) -> &str {
         &self.files[0].sha256
+    }
+
+    /// How many samples it read, and of an NMEA reference how many sentences.
+    pub fn counts(&self) -> super::ReadCounts {
+        super::ReadCounts {
+            reference_read: self.reference_read.clone(),
+            ..self.recording.counts()
+        }
     }
 }
 

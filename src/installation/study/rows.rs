@@ -176,6 +176,7 @@ impl RecordingRow {
             pieces: self.pieces as usize,
             gap_limit_s: self.gap_limit_s,
             longest_loss_s: self.longest_loss_s,
+            reference_read: None,
         }
     }
 }

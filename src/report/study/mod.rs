@@ -283,6 +283,7 @@ pub(crate) mod tests {
             pieces,
             gap_limit_s: 3.0,
             longest_loss_s: 16.0,
+            reference_read: None,
         };
         let mut study = small();
         study.recordings = vec![

@@ -649,6 +649,7 @@ fn unchecked(dvl: &Samples, reference: &Samples, frames: &BagFrames) -> Unchecke
         rate: recorded_rate.then(|| reference.rate.iter().map(|r| apply(&to_frd, *r)).collect()),
         angles_in_degrees: false,
         position: None,
+        reference_read: None,
     }
 }
 

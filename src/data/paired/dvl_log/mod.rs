@@ -243,6 +243,14 @@ fn read_pd0(path: &Path, thresholds: Thresholds) -> Result<DvlLog, PairedError> 
     Ok(log)
 }
 
+/// What the checks' messages call a log's velocity, by axis: the vehicle's, from
+/// bottom track.
+pub const VELOCITY_NAMES: [&str; 3] = [
+    "bottom track forward",
+    "bottom track starboard",
+    "bottom track down",
+];
+
 /// The log at `path` as a recording of the DVL beside its own attitude (what its
 /// velocities were turned by, on its own clock), checked as any recording: the
 /// reference has no velocity, for a calibration against fixes; and the log as read.
@@ -269,15 +277,11 @@ pub fn read_beside_own_attitude(
         rate: None,
         angles_in_degrees: true,
         position: None,
+        reference_read: None,
     };
     let mut names = PairedColumns::akit();
     names.time = "clock".into();
-    names.dvl = [
-        "bottom track forward",
-        "bottom track starboard",
-        "bottom track down",
-    ]
-    .map(String::from);
+    names.dvl = VELOCITY_NAMES.map(String::from);
     names.attitude = ["roll", "pitch", "heading"].map(String::from);
     let at = Locator {
         dvl: path.to_path_buf(),
@@ -290,6 +294,7 @@ pub fn read_beside_own_attitude(
         recording: super::checks::check(samples, &at)?,
         files: vec![log.summary.file.clone()],
         frames: None,
+        reference_read: None,
     };
     Ok((read, log))
 }

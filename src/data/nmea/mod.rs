@@ -16,9 +16,11 @@
 //! its place, or an NMEA file. Out: [`GgaFixes`]: the fixes, north and east of the
 //! first, and the counts of those left out.
 
+pub mod reference;
+
 use crate::data::local_plane::north_east_m;
-use crate::data::paired::SourceFile;
 use crate::data::position_fixes::Fixes;
+use crate::files::SourceFile;
 use crate::files::read_lines;
 use std::path::{Path, PathBuf};
 
@@ -29,6 +31,11 @@ pub enum NmeaError {
     Io {
         path: PathBuf,
         source: std::io::Error,
+    },
+    #[error("{}: no reference sample among its sentences: {read}", path.display())]
+    NoReference {
+        path: PathBuf,
+        read: reference::SentencesRead,
     },
     #[error("{}: no GGA sentence with a fix and a date among its {sentences} sentences ({undated} GGA before any RMC or ZDA gave the date)", path.display())]
     NoFixes {
