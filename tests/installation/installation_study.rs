@@ -500,7 +500,7 @@ fn the_akit_study_removes_two_thirds_of_the_error_from_a_turning_segment() {
     let none = mean("no calibration", "T1");
     let best = mean("installation lever+offset+bias", "T1");
     // Dead-reckoning drift: the fixes' installation (fixes every 5 s, 2 m) from a turning
-    // segment halves it on the other turning ones; from a straight one it adds none.
+    // segment halves it on the other turning ones; from a straight one it adds a little.
     let scored = strings(&batch, "scored");
     let drifts = floats(&batch, "drift_rms_pct");
     let drift = |method: &str, from: &[&str], on: &[&str]| {

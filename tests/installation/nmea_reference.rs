@@ -13,7 +13,7 @@ use std::path::Path;
 const KNOT_M_S: f64 = 1852.0 / 3600.0;
 
 /// 2017-04-06 00:00 UTC, s since 1970: the day RMC's date gives (its two-digit year
-/// read as 20yy), and the written trajectory's stamps are moved to.
+/// read as 20yy below 83), and the written trajectory's stamps are moved to.
 const DAY_S: f64 = 1_491_436_800.0;
 
 /// `body` (between `$` and `*`) as a sentence with its checksum.

@@ -258,8 +258,9 @@ impl Reading {
     }
 
     /// Each RMC's velocity (north, east, down zero) beside the PASHR of its time, and
-    /// its line; those with none within [`ATTITUDE_WITHIN_S`] counted. (One faster than
-    /// any vehicle a DVL rides is refused by the recording's checks, naming its line.)
+    /// its line; those with none within [`ATTITUDE_WITHIN_S`] counted. (One whose north
+    /// or east velocity is beyond any vehicle a DVL rides is refused by the recording's
+    /// checks, naming its line.)
     fn velocities(&mut self) -> Vec<(f64, [f64; 3], [f64; 3], u64)> {
         let mut kept = Vec::new();
         for (time_s, [north, east], line) in std::mem::take(&mut self.grounds) {
