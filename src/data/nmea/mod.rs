@@ -52,7 +52,13 @@ pub fn is_nmea(path: &Path) -> bool {
     let Ok(file) = std::fs::File::open(path) else {
         return false;
     };
-    file.take(256).read_to_end(&mut first).is_ok() && first.trim_ascii_start().starts_with(b"$")
+    file.take(256).read_to_end(&mut first).is_ok() && holds_nmea(&first)
+}
+
+/// Whether `bytes` (a file's, or its start) are NMEA: their first character, past white
+/// space, is `$`.
+pub fn holds_nmea(bytes: &[u8]) -> bool {
+    bytes.trim_ascii_start().starts_with(b"$")
 }
 
 /// The GGA fixes of the NMEA file at `path` (a GNSS's or a USBL's log, a sentence a
@@ -218,8 +224,12 @@ pub fn gga_fixes(sentences: &[(f64, u64, String)]) -> Option<GgaFixes> {
 
 /// The sentence of `body` (what lies between `$` and `*`) with its checksum.
 fn with_checksum(body: &str) -> String {
-    let sum = body.bytes().fold(0u8, |sum, b| sum ^ b);
-    format!("${body}*{sum:02X}")
+    format!("${body}*{:02X}", checksum(body))
+}
+
+/// NMEA's checksum of `body` (what lies between `$` and `*`): its bytes XORed.
+fn checksum(body: &str) -> u8 {
+    body.bytes().fold(0u8, |sum, b| sum ^ b)
 }
 
 /// Whether `sentence` is a GGA of any talker (`$GPGGA`, `$GNGGA`, ...).

@@ -13,7 +13,7 @@
 //! In: an NMEA file's path and bytes. Out: the [`NmeaReference`]: its samples, the line
 //! of each, and what was read.
 
-use super::{NmeaError, date_time_s, on_the_day_of, with_checksum};
+use super::{NmeaError, checksum, date_time_s, on_the_day_of, with_checksum};
 use std::path::Path;
 
 /// A knot, m/s.
@@ -191,8 +191,7 @@ impl Reading {
         let body = text.strip_prefix('$')?;
         match body.split_once('*') {
             Some((body, sum)) => {
-                let expected = body.bytes().fold(0u8, |sum, b| sum ^ b);
-                (u8::from_str_radix(sum, 16).ok()? == expected).then(|| text.to_string())
+                (u8::from_str_radix(sum, 16).ok()? == checksum(body)).then(|| text.to_string())
             }
             None => {
                 self.unchecked += 1;

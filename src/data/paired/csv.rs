@@ -59,10 +59,7 @@ pub fn parse(
         }
     };
     let flag = dvl_rows.width - 1;
-    let names = match reference_samples.reference_read {
-        Some(_) => nmea_names(columns),
-        None => columns.clone(),
-    };
+    let names = reference_names(&reference_samples, columns);
     let samples = Unchecked {
         dvl_time_s: dvl_rows.column(0).collect(),
         dvl_m_s: triples(&dvl_rows, 1),
@@ -83,9 +80,12 @@ pub fn parse(
     Ok((samples, at))
 }
 
-/// The names the plausibility checks give an NMEA reference's fields: the sentences'
-/// (the DVL's as `columns` names them).
-pub fn nmea_names(columns: &PairedColumns) -> PairedColumns {
+/// The names the plausibility checks give `reference`'s fields: `columns`, or where it
+/// was read from NMEA, the sentences' (the DVL's as `columns` names them).
+pub fn reference_names(reference: &Unchecked, columns: &PairedColumns) -> PairedColumns {
+    if reference.reference_read.is_none() {
+        return columns.clone();
+    }
     PairedColumns {
         velocity_ned: ["RMC north", "RMC east", "RMC down (zero)"].map(String::from),
         attitude: ["PASHR roll", "PASHR pitch", "PASHR heading"].map(String::from),
@@ -106,7 +106,7 @@ pub fn parse_reference(
     columns: &PairedColumns,
     with_velocity: bool,
 ) -> Result<(Unchecked, Vec<u64>), PairedError> {
-    if bytes.trim_ascii_start().starts_with(b"$") {
+    if crate::data::nmea::holds_nmea(bytes) {
         let nmea = parse_nmea_reference(path, bytes, with_velocity)?;
         let samples = Unchecked {
             dvl_time_s: Vec::new(),

@@ -131,10 +131,7 @@ fn log_samples(
 ) -> Result<(super::Unchecked, super::Locator), PairedError> {
     let (reference_samples, reference_lines) =
         super::csv::parse_reference(reference, columns, true)?;
-    let mut names = match reference_samples.reference_read {
-        Some(_) => super::csv::nmea_names(columns),
-        None => columns.clone(),
-    };
+    let mut names = super::csv::reference_names(&reference_samples, columns);
     names.dvl = dvl_log::VELOCITY_NAMES.map(String::from);
     let at = super::Locator {
         dvl: log.summary.file.path.clone(),
