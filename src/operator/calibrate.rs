@@ -8,7 +8,7 @@
 //! [`CalibrateError`] that names the argument, file or step at fault.
 
 use crate::data::paired::bag::{BagFrames, is_bag};
-use crate::data::paired::{PairedError, PairedRecording, ReadCounts};
+use crate::data::paired::{PairedError, PairedRecording, ReadCounts, Source};
 use crate::installation::dead_reckoning::{Drift, drift_of};
 use crate::installation::estimate::bound::{Noise, TermBound, bound};
 use crate::installation::estimate::clock::{MAX_SEARCH_S, fit_searched};
@@ -323,8 +323,9 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     let outputs = outputs(args);
     let inputs = [Some(args.dvl), args.reference, args.columns];
     clear_of_inputs(&inputs, &outputs.all(), (args.save, is_bag(args.dvl)))?;
-    args.cost()?.state()?;
-    let read = read(args)?;
+    let source = source(args.dvl, args.reference, args.columns, args.reading)
+        .map_err(CalibrateError::Columns)?;
+    let read = read(args, source)?;
     let recording_sha256 = read.dvl_sha256.clone();
     outputs.not_another_recordings(args.dvl, &recording_sha256)?;
     let terms = term_set(args.terms);
@@ -602,13 +603,13 @@ fn outputs(args: &CalibrateArgs) -> Outputs {
     Outputs::of(args.out, &stem(args.dvl))
 }
 
-/// The recording of `args`, its reference, and its window where one is asked.
-fn read(args: &CalibrateArgs) -> Result<Read, CalibrateError> {
-    let source = source(args.dvl, args.reference, args.columns, args.reading)
-        .map_err(CalibrateError::Columns)?;
+/// The recording of `args` from its `source`, its reference, and its window where one
+/// is asked, its cost stated first.
+fn read(args: &CalibrateArgs, source: Source) -> Result<Read, CalibrateError> {
+    args.cost()?.state()?;
     let read = source.read()?;
     let dvl_sha256 = read.dvl_sha256().to_string();
-    let counts = read.counts();
+    let counts = read.recording.counts();
     let frames = read.frames;
     let recording = read.recording;
     let reference = Reference::new(&recording);

@@ -359,7 +359,7 @@ impl FixCalibration {
         } = dive;
         FixCalibration {
             corrected,
-            read: reading.read.counts().beside_attitude(),
+            read: reading.read.recording.counts().beside_attitude(),
             fixes: reading.fixes.len(),
             fixes_left_out: reading.left_out,
             fix_latency_s,

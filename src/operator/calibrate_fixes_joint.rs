@@ -104,7 +104,9 @@ pub fn calibrate_fixes_joint(dives: &[FixArgs]) -> Result<JointFixCalibration, C
     }
     let agreement = (vehicle.names.iter().enumerate())
         .map(|(i, &term)| {
-            let alone: Vec<(f64, f64)> = vehicle.own.iter().filter_map(|d| d[i]).collect();
+            let alone: Vec<(f64, f64)> = (0..vehicle.own.len())
+                .filter_map(|k| vehicle.weighed(k, i))
+                .collect();
             Agreement::of(term, vehicle.value[i], &alone)
         })
         .collect();

@@ -278,7 +278,7 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
     let recording_sha256 = loaded.dvl_sha256().to_string();
     outputs.not_another_recordings(args.dvl, &recording_sha256)?;
     let read = loaded.parse()?;
-    let counts = read.counts();
+    let counts = read.recording.counts();
     let (recording, frames) = (read.recording, read.frames);
     if let (Some(frames), Some(mount)) = (&frames, &saved.mount) {
         on_the_same_mount(args, frames, mount)?;

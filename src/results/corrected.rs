@@ -372,6 +372,7 @@ mod tests {
             rate_rad_s: None,
             position_ne_m: None,
             gap_limit_s: 3.0,
+            reference_read: None,
         };
         let installation = Installation {
             time_offset_s: 2.0,

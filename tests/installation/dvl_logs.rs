@@ -359,7 +359,7 @@ fn as_pd0(recording: &PairedRecording, path: &Path) {
 /// `calibrate` reads a PD0 log (and Water Linked reports) beside its reference's CSV
 /// file, found by its content, and finds every term within one standard deviation of
 /// the same recording as CSV; a log without --reference, or with --valid-column, is
-/// refused by the flag; `correct` finds the log's clock again as it finds the CSV's.
+/// refused by the flag (before the cost line); `correct` finds the log's clock again as it finds the CSV's.
 #[test]
 fn calibrate_reads_a_pd0_log_beside_its_reference_csv() {
     let dir = tempfile::tempdir().unwrap();
@@ -372,8 +372,9 @@ fn calibrate_reads_a_pd0_log_beside_its_reference_csv() {
     let pd0 = dir.path().join("dvl.pd0");
     let output = dcnet(dir.path(), &["calibrate", pd0.to_str().unwrap()]);
     assert_eq!(output.status.code(), Some(1));
+    // Refused before its cost is stated: nothing is read of a log it cannot calibrate.
     assert!(
-        stderr(&output).contains("--reference: "),
+        stderr(&output).starts_with("error: --reference: "),
         "{}",
         stderr(&output)
     );

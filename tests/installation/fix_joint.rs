@@ -114,6 +114,52 @@ fn each_vehicle_term_lies_between_the_dives_own() {
     }
 }
 
+/// A dive that saw few headings applies a yaw that holds the attitude's heading error
+/// at those headings: beside a dive that turned, it is set aside (shown, not weighed),
+/// however tight; its other terms are weighed. Where no dive turned, its yaw is weighed.
+#[test]
+fn a_yaw_seen_over_few_headings_is_set_aside_beside_a_turning_dive() {
+    use dcnet_exp::installation::estimate::bound::{Unseen, Why};
+    let fit = one_fit();
+    let at = |name: &str| fit.bound.names.iter().position(|n| *n == name).unwrap();
+    let yaw = at("misalignment_z_rad");
+    let mut straight = fit.clone();
+    straight.bound.value[yaw] += 10.0 * fit.bound.std[yaw];
+    straight.bound.std[yaw] *= 0.5;
+    straight.bound.unseen.push(Unseen {
+        term: "misalignment_z_rad",
+        why: Why::FewHeadings { span_rad: 0.1 },
+    });
+    let vehicle = fix_vehicle(&[fit.clone(), straight.clone()], &["time_offset_s"]);
+    let i = vehicle
+        .names
+        .iter()
+        .position(|n| *n == "misalignment_z_rad")
+        .unwrap();
+    assert!(vehicle.set_aside[1][i] && !vehicle.set_aside[0][i]);
+    assert_eq!(
+        vehicle.own[1][i],
+        Some((straight.bound.value[yaw], straight.bound.std[yaw]))
+    );
+    assert_eq!(vehicle.weighed(1, i), None);
+    assert!((vehicle.value[i] - fit.bound.value[yaw]).abs() <= 1e-9 * fit.bound.std[yaw]);
+    assert!((vehicle.std[i] / fit.bound.std[yaw] - 1.0).abs() < 1e-9);
+    let scale = vehicle.names.iter().position(|n| *n == "scale").unwrap();
+    assert!(!vehicle.set_aside[1][scale]);
+    let std = fit.bound.std[at("scale")] / 2f64.sqrt();
+    assert!((vehicle.std[scale] / std - 1.0).abs() < 1e-9);
+    // Two dives that both saw few headings: both yaws weighed, (1 · θ + 4 · (θ + 10 s)) / 5.
+    let mut first = fit.clone();
+    first
+        .bound
+        .unseen
+        .push(straight.bound.unseen.last().unwrap().clone());
+    let vehicle = fix_vehicle(&[first, straight], &["time_offset_s"]);
+    assert!(vehicle.set_aside.iter().flatten().all(|aside| !aside));
+    let expected = fit.bound.value[yaw] + 8.0 * fit.bound.std[yaw];
+    assert!((vehicle.value[i] - expected).abs() < 1e-9 * fit.bound.std[yaw]);
+}
+
 /// Three dives of one vehicle, their clocks 1.0, 1.3 and 0.8 s, calibrated jointly with
 /// their fixes: the vehicle's terms near the truth, each dive's clock its own, the
 /// installation saved with the three dives' spread, each dive written corrected (two

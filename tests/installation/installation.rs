@@ -121,6 +121,7 @@ fn synthetic(motion: &Motion, truth: &Installation, seed: u64) -> (Vec<f64>, Vec
         rate_rad_s: None,
         position_ne_m: None,
         gap_limit_s: 3.0,
+        reference_read: None,
     };
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let noise = Normal::new(0.0, NOISE.dvl_m_s).unwrap();

@@ -115,7 +115,9 @@ fn an_nmea_reference_calibrates_as_its_csv_with_the_down_velocity_zero() {
     };
     let (from_csv, from_nmea) = (fit("reference.csv", "csv"), fit("gnss.nmea", "nmea"));
     for expected in [
-        "the reference: 398 RMC ground velocities beside their PASHR attitude (the down velocity zero), read from NMEA sentences (3 left out: 1 whose checksum fails or that do not parse, 1 PASHR with no true heading, roll or pitch, 1 RMC with no PASHR within 0.05 s; 0 without a checksum",
+        // 800 sentences: the RMC of sample 100 fails its checksum (its PASHR then serves
+        // none), the PASHR of sample 200 has a magnetic heading (its RMC then has none).
+        "the reference: 398 RMC ground velocities beside their PASHR attitude (the down velocity zero), read from NMEA sentences (398 more that dated them or gave their attitude; 4 left out: 1 whose checksum fails or that do not parse, 1 PASHR with no true heading, roll or pitch, 1 RMC with no PASHR within 0.05 s, 1 PASHR with no RMC within 0.05 s; 0 without a checksum",
     ] {
         assert!(
             from_nmea.contains(expected),
@@ -183,9 +185,44 @@ fn a_pashr_attitude_beside_fixes_calibrates_as_its_csv() {
     };
     let from_csv = fit(files.reference.to_str().unwrap(), "csv");
     let from_nmea = fit("ahrs.nmea", "nmea");
-    assert!(
-        from_nmea.contains("the attitude: 400 PASHR attitudes, read from NMEA sentences (0 left out; 0 without a checksum, so unchecked; 0 other sentences passed over)"),
-        "{from_nmea}"
-    );
+    let read = "the attitude: 400 PASHR attitudes, read from NMEA sentences (1 more that dated them or gave their attitude; 0 left out; 0 without a checksum, so unchecked; 0 other sentences passed over)";
+    assert!(from_nmea.contains(read), "{from_nmea}");
     terms_agree(&from_csv, &from_nmea, 0.1);
+    // `correct --fixes` reads the same file and says so on its own read line.
+    let saved = [&["--save", "saved.toml"][..], &["--out", "saved"]].concat();
+    let output = dcnet(
+        d,
+        &[
+            &[
+                "calibrate",
+                dvl,
+                "--attitude",
+                "ahrs.nmea",
+                "--fixes",
+                "fixes.csv",
+            ][..],
+            &["--columns", "columns.toml", "--fix-noise-m", "0.5"],
+            &saved,
+        ]
+        .concat(),
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let output = dcnet(
+        d,
+        &[
+            &[
+                "correct",
+                dvl,
+                "--installation",
+                "saved.toml",
+                "--fixes",
+                "fixes.csv",
+            ][..],
+            &["--attitude", "ahrs.nmea", "--columns", "columns.toml"],
+            &["--fix-noise-m", "0.5", "--out", "next"],
+        ]
+        .concat(),
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(stdout(&output).contains(read), "{}", stdout(&output));
 }

@@ -8,8 +8,10 @@
 //! interpolated), its down velocity zero: RMC gives none, and a vehicle at the surface
 //! has none but its heave. Where only an attitude is asked for (`--attitude`, beside
 //! position fixes), the reference is the PASHR sentences themselves.
-//! A sentence left out is counted by its reason ([`SentencesRead`]), never repaired; a
-//! sentence without a checksum is read as written and counted as unchecked.
+//! Every sentence is counted once ([`SentencesRead`]): as a sample kept, as one that
+//! served the samples (a date, an RMC's attitude), as left out by its reason (never
+//! repaired), or as passed over; one without a checksum is read as written and counted
+//! as unchecked besides.
 //! In: an NMEA file's path and bytes. Out: the [`NmeaReference`]: its samples, the line
 //! of each, and what was read.
 
@@ -22,13 +24,16 @@ const KNOT_M_S: f64 = 1852.0 / 3600.0;
 /// How far from an RMC's time a PASHR may be to give its attitude, s.
 pub const ATTITUDE_WITHIN_S: f64 = 0.05;
 
-/// What an NMEA file gave as a reference: the samples kept and what they are, those
-/// left out by reason, those read without a checksum, and how many sentences of other
-/// types were passed over.
+/// What an NMEA file gave as a reference: the samples kept and what they are, the
+/// sentences that served them (RMC or ZDA for the date; PASHR for an RMC's attitude),
+/// those left out by reason, those read without a checksum, and how many sentences of
+/// other types were passed over. Every sentence is in one of `kept`, `served`,
+/// `left_out` and `passed_over`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SentencesRead {
     pub kept: usize,
     pub what: &'static str,
+    pub served: usize,
     pub left_out: Vec<(&'static str, usize)>,
     pub unchecked: usize,
     pub passed_over: usize,
@@ -41,9 +46,10 @@ impl std::fmt::Display for SentencesRead {
             .collect();
         write!(
             f,
-            "{} {}, read from NMEA sentences ({} left out{}{}; {} without a checksum, so unchecked; {} other sentences passed over)",
+            "{} {}, read from NMEA sentences ({} more that dated them or gave their attitude; {} left out{}{}; {} without a checksum, so unchecked; {} other sentences passed over)",
             self.kept,
             self.what,
+            self.served,
             self.left_out.iter().map(|(_, n)| n).sum::<usize>(),
             if left_out.is_empty() { "" } else { ": " },
             left_out.join(", "),
@@ -53,14 +59,16 @@ impl std::fmt::Display for SentencesRead {
     }
 }
 
-/// Why a sentence gives no reference sample.
-const LEFT_OUT: [&str; 6] = [
+/// Why a sentence gives no reference sample, nor serves one.
+const LEFT_OUT: [&str; 8] = [
     "whose checksum fails or that do not parse",
-    "before any RMC or ZDA gave the date",
+    "PASHR before any RMC or ZDA gave the date",
     "PASHR with no true heading, roll or pitch",
     "stamped at or before the previous one",
     "RMC with no fix (status V) or no speed or course",
     "RMC with no PASHR within 0.05 s",
+    "RMC or ZDA with no date or time",
+    "PASHR with no RMC within 0.05 s",
 ];
 
 /// A PASHR's attitude: its UTC time (s since 1970) and roll, pitch, heading in degrees.
@@ -86,7 +94,10 @@ pub fn parse_reference(
     bytes: &[u8],
     with_velocity: bool,
 ) -> Result<NmeaReference, NmeaError> {
-    let mut read = Reading::default();
+    let mut read = Reading {
+        with_velocity,
+        ..Reading::default()
+    };
     for (k, text) in bytes.split(|&b| b == b'\n').enumerate() {
         read.take(k as u64 + 1, text);
     }
@@ -123,6 +134,7 @@ pub fn parse_reference(
     let summary = SentencesRead {
         kept: lines.len(),
         what,
+        served: read.served,
         left_out: (LEFT_OUT.into_iter().zip(read.counts))
             .filter(|&(_, n)| n > 0)
             .collect(),
@@ -147,13 +159,16 @@ pub fn parse_reference(
 /// The sentences of a file as they are read, in order.
 #[derive(Default)]
 struct Reading {
+    /// Whether the samples are RMC's ground velocities (else PASHR's attitudes).
+    with_velocity: bool,
     /// The last RMC's or ZDA's date and time, s since 1970 UTC.
     dated_s: Option<f64>,
     attitudes: Vec<Attitude>,
     attitude_lines: Vec<u64>,
     /// Each RMC with a fix: its time, north and east velocity, m/s, and line.
     grounds: Vec<(f64, [f64; 2], u64)>,
-    counts: [usize; 6],
+    counts: [usize; 8],
+    served: usize,
     unchecked: usize,
     passed_over: usize,
 }
@@ -177,8 +192,12 @@ impl Reading {
             Some(kind) if kind.ends_with("RMC") || kind.ends_with("ZDA") => {
                 let dated_s = date_time_s(&sentence);
                 self.dated_s = dated_s.or(self.dated_s);
-                if kind.ends_with("RMC") {
-                    self.ground(line, &sentence, dated_s);
+                match dated_s {
+                    None => self.counts[6] += 1,
+                    Some(time_s) if self.with_velocity && kind.ends_with("RMC") => {
+                        self.ground(line, &sentence, time_s)
+                    }
+                    Some(_) => self.served += 1,
                 }
             }
             _ => self.passed_over += 1,
@@ -230,15 +249,13 @@ impl Reading {
         self.attitude_lines.push(line);
     }
 
-    /// An RMC's ground velocity, where it has a fix, a speed and a course.
-    fn ground(&mut self, line: u64, sentence: &str, time_s: Option<f64>) {
+    /// An RMC's ground velocity at `time_s`, where it has a fix, a speed and a course.
+    fn ground(&mut self, line: u64, sentence: &str, time_s: f64) {
         let Ok(nmea::ParseResult::RMC(rmc)) = nmea::parse_str(sentence) else {
             self.counts[0] += 1;
             return;
         };
-        let (Some(time_s), Some(knots), Some(course_deg)) =
-            (time_s, rmc.speed_over_ground, rmc.true_course)
-        else {
+        let (Some(knots), Some(course_deg)) = (rmc.speed_over_ground, rmc.true_course) else {
             self.counts[4] += 1;
             return;
         };
@@ -257,24 +274,31 @@ impl Reading {
     }
 
     /// Each RMC's velocity (north, east, down zero) beside the PASHR of its time, and
-    /// its line; those with none within [`ATTITUDE_WITHIN_S`] counted. (One whose north
+    /// its line; those with none within [`ATTITUDE_WITHIN_S`] counted, and so are the
+    /// PASHR that served an RMC and those that served none. (One whose north
     /// or east velocity is beyond any vehicle a DVL rides is refused by the recording's
     /// checks, naming its line.)
     fn velocities(&mut self) -> Vec<(f64, [f64; 3], [f64; 3], u64)> {
         let mut kept = Vec::new();
+        let mut served = vec![false; self.attitudes.len()];
         for (time_s, [north, east], line) in std::mem::take(&mut self.grounds) {
             let next = self.attitudes.partition_point(|a| a.0 < time_s);
+            let distance = |k: &usize| (self.attitudes[*k].0 - time_s).abs();
             let nearest = [next.wrapping_sub(1), next]
                 .into_iter()
-                .filter_map(|k| self.attitudes.get(k))
-                .min_by(|a, b| (a.0 - time_s).abs().total_cmp(&(b.0 - time_s).abs()));
+                .filter(|&k| k < self.attitudes.len())
+                .min_by(|a, b| distance(a).total_cmp(&distance(b)));
             match nearest {
-                Some(&(at_s, attitude)) if (at_s - time_s).abs() <= ATTITUDE_WITHIN_S => {
-                    kept.push((time_s, [north, east, 0.0], attitude, line))
+                Some(k) if distance(&k) <= ATTITUDE_WITHIN_S => {
+                    served[k] = true;
+                    kept.push((time_s, [north, east, 0.0], self.attitudes[k].1, line))
                 }
                 _ => self.counts[5] += 1,
             }
         }
+        let used = served.iter().filter(|&&s| s).count();
+        self.served += used;
+        self.counts[7] += served.len() - used;
         kept
     }
 }
@@ -306,12 +330,40 @@ mod tests {
             (read.left_out.clone(), read.unchecked, read.passed_over),
             (vec![(LEFT_OUT[0], 1), (LEFT_OUT[3], 1)], 2, 0)
         );
+        assert_eq!(every_sentence(&read), 5);
         assert!(
             read.to_string().starts_with(
-                "2 PASHR attitudes, read from NMEA sentences (2 left out: 1 whose checksum fails"
+                "2 PASHR attitudes, read from NMEA sentences (1 more that dated them or gave their attitude; 2 left out: 1 whose checksum fails"
             ),
             "{read}"
         );
+    }
+
+    /// The sentences `read` accounts for: each is kept, served, left out or passed over.
+    fn every_sentence(read: &SentencesRead) -> usize {
+        let left_out: usize = read.left_out.iter().map(|(_, n)| n).sum();
+        read.kept + read.served + left_out + read.passed_over
+    }
+
+    /// Beside fixes, where the samples are PASHR's, an RMC only dates them: a valid one
+    /// and a void one each serve, an undated one is left out, and none is a sample.
+    #[test]
+    fn for_an_attitude_alone_rmc_and_zda_only_date_the_pashr() {
+        let file = [
+            with_checksum("GPRMC,120000.00,A,4455.1,N,06659.2,W,3.0,090.0,060417,,,D"),
+            with_checksum("PASHR,120000.00,030.00,T,+01.00,-02.00,+00.00,0.1,0.1,0.2,1,1"),
+            with_checksum("GPRMC,120001.00,V,,,,,,,060417,,,N"),
+            with_checksum("GPRMC,120002.00,A,4455.1,N,06659.2,W,3.0,090.0,,,,D"),
+            with_checksum("PASHR,120002.00,030.00,T,+01.00,-02.00,+00.00,0.1,0.1,0.2,1,1"),
+            with_checksum("GPGGA,120002.00,4455.1,N,06659.2,W,1,08,0.9,0.0,M,0.0,M,,"),
+        ]
+        .join("\n");
+        let read = parse_reference(Path::new("a.nmea"), file.as_bytes(), false).unwrap();
+        assert_eq!(read.lines, vec![2, 5]);
+        let read = read.read;
+        assert_eq!((read.kept, read.served, read.passed_over), (2, 2, 1));
+        assert_eq!(read.left_out, vec![(LEFT_OUT[6], 1)]);
+        assert_eq!(every_sentence(&read), 6);
     }
 
     /// An RMC's speed and course give north and east (down zero) beside the PASHR of
@@ -353,7 +405,12 @@ mod tests {
             "{v:?}"
         );
         assert_eq!(read.attitude_deg[1], [1.0, -2.0, 30.0]);
-        assert_eq!(read.read.left_out, vec![(LEFT_OUT[4], 1), (LEFT_OUT[5], 1)]);
+        // Two PASHR served an RMC, two served none; the void RMC is left out.
+        assert_eq!(
+            read.read.left_out,
+            vec![(LEFT_OUT[4], 1), (LEFT_OUT[5], 1), (LEFT_OUT[7], 2)]
+        );
+        assert_eq!((read.read.served, every_sentence(&read.read)), (2, 8));
         // No PASHR at all: nothing to keep, refused naming the file.
         let error = parse_reference(
             Path::new("g.nmea"),

@@ -123,6 +123,7 @@ impl Unchecked {
             rate_rad_s: self.rate.map(scaled),
             gap_limit_s: (at.names.gap_limit_s)
                 .map_or_else(|| default_gap_limit_s(&self.dvl_time_s), |limit| limit.0),
+            reference_read: self.reference_read,
         }
     }
 }

@@ -269,6 +269,9 @@ pub struct PairedRecording {
     /// The longest step between two kept DVL samples of one piece, s: everything that
     /// runs in time runs within pieces ([`pieces`]).
     pub gap_limit_s: f64,
+    /// What an NMEA reference's file gave, and left out, sentence by sentence (of the
+    /// whole file, in a window of it too); `None` for any other reference.
+    pub reference_read: Option<crate::data::nmea::reference::SentencesRead>,
 }
 
 /// How close two recordings' stamps (s) and DVL velocities (m/s) lie, each sample's,
@@ -317,7 +320,7 @@ impl PairedRecording {
             longest_loss_s: (self.time_s.windows(2))
                 .map(|pair| pair[1] - pair[0])
                 .fold(0.0, f64::max),
-            reference_read: None,
+            reference_read: self.reference_read.clone(),
         }
     }
 
@@ -361,6 +364,7 @@ impl PairedRecording {
             position_ne_m: (self.position_ne_m.as_ref())
                 .map(|position| position[reference].to_vec()),
             gap_limit_s: self.gap_limit_s,
+            reference_read: self.reference_read.clone(),
         }
     }
 }
@@ -383,18 +387,16 @@ pub fn read_without_velocity(
         });
         bytes.push(read);
     }
-    let (mut samples, at) = csv::parse(
+    let (samples, at) = csv::parse(
         (dvl, &bytes[0]),
         Some((reference, &bytes[1])),
         columns,
         false,
     )?;
-    let reference_read = samples.reference_read.take();
     Ok(ReadRecording {
         recording: checks::check(samples, &at)?,
         files,
         frames: None,
-        reference_read,
     })
 }
 
@@ -410,7 +412,6 @@ pub fn read_bag_without_velocity(
     samples.velocity_ned_m_s.clear();
     Ok(ReadRecording {
         recording: checks::check(samples, &read.at)?,
-        reference_read: None,
         files: read.files,
         frames: Some(read.frames),
     })

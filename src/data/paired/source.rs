@@ -10,7 +10,6 @@
 
 use super::{PairedColumns, PairedError, PairedRecording, checks};
 use crate::data::csv::read_bytes;
-use crate::data::nmea::reference::SentencesRead;
 use crate::data::paired::bag::{self, BagFrames, BagTopics};
 use crate::data::paired::dvl_log::{self, DvlLog, LogFormat, Thresholds};
 use crate::files::SourceFile;
@@ -198,13 +197,10 @@ impl Loaded<'_> {
                 unreachable!("a bag is loaded as samples, a log as pings")
             }
         };
-        let mut samples = samples;
-        let reference_read = samples.reference_read.take();
         Ok(ReadRecording {
             recording: checks::check(samples, &at)?,
             files: self.files,
             frames,
-            reference_read,
         })
     }
 }
@@ -217,22 +213,12 @@ pub struct ReadRecording {
     pub files: Vec<SourceFile>,
     /// A bag's topics and frames, as read.
     pub frames: Option<BagFrames>,
-    /// What an NMEA reference gave, and left out.
-    pub reference_read: Option<SentencesRead>,
 }
 
 impl ReadRecording {
     /// The SHA-256 of the DVL's file, which the outputs computed from it record.
     pub fn dvl_sha256(&self) -> &str {
         &self.files[0].sha256
-    }
-
-    /// How many samples it read, and of an NMEA reference how many sentences.
-    pub fn counts(&self) -> super::ReadCounts {
-        super::ReadCounts {
-            reference_read: self.reference_read.clone(),
-            ..self.recording.counts()
-        }
     }
 }
 

@@ -10,11 +10,17 @@
 //! A-KIT, the lever arm x of T3, T6 and T13 (−1.689, −1.691, −1.672 m) once combined to
 //! −1.756 m, T13's terms tied at 0.99), and a straight dive that applied the scale
 //! alone moved the lever arm; term by term, each lies within the dives' own estimates
-//! and a dive moves only the terms it applied. Beside it, as for a joint velocity
-//! calibration, each term's spread between dives ([`super::between_dives`]).
+//! and a dive moves only the terms it applied. A dive that saw few headings
+//! ([`Why::FewHeadings`]) applies a yaw that is the DVL's and the attitude's heading
+//! error there together, often tighter than a turning dive's (A-KIT's straight T12:
+//! ±0.12° against ±0.25–0.32°): where any dive turned, that yaw is set aside, shown but
+//! not weighed, as it would carry its headings' error to every other. Beside it, as for
+//! a joint velocity calibration, each term's spread between dives
+//! ([`super::between_dives`]).
 //! In: each dive's [`FixFit`] and the dive's own terms. Out: a [`FixVehicle`].
 
 use crate::installation::estimate::between_dives::{BetweenDives, between_dives};
+use crate::installation::estimate::bound::Why;
 use crate::installation::estimate::fixes::{FIX_LATENCY, FixFit};
 use crate::installation::terms::{Installation, TermSet};
 
@@ -34,11 +40,19 @@ pub struct FixVehicle {
     /// Each dive's own estimate of each term and its standard deviation, `[dive][term]`,
     /// where the dive applied it.
     pub own: Vec<Vec<Option<(f64, f64)>>>,
-    /// Each term's spread between the dives; `None` where fewer than three show it.
+    /// Whether each dive's own estimate of each term is left out of the vehicle's,
+    /// `[dive][term]`: a yaw seen over few headings where another dive turned.
+    pub set_aside: Vec<Vec<bool>>,
+    /// Each term's spread between the dives weighed; `None` where fewer than three show it.
     pub between: Vec<Option<BetweenDives>>,
 }
 
 impl FixVehicle {
+    /// Dive `k`'s own estimate of term `i` where it is weighed in the vehicle's.
+    pub fn weighed(&self, k: usize, i: usize) -> Option<(f64, f64)> {
+        self.own[k][i].filter(|_| !self.set_aside[k][i])
+    }
+
     /// The installation of `terms` at the vehicle's terms (each no dive applied at
     /// zero) with the clock `clock_s`.
     pub fn installation(&self, terms: &TermSet, clock_s: f64) -> Installation {
@@ -74,23 +88,32 @@ pub fn fix_vehicle(fits: &[FixFit], dive: &[&str]) -> FixVehicle {
                 .collect()
         })
         .collect();
+    let set_aside = set_aside(fits, &columns, &own);
+    let weighed: Vec<Vec<Option<(f64, f64)>>> = (own.iter().zip(&set_aside))
+        .map(|(dive, aside)| {
+            (dive.iter().zip(aside))
+                .map(|(estimate, &aside)| estimate.filter(|_| !aside))
+                .collect()
+        })
+        .collect();
     let m = columns.len();
     // Each dive's weight in each term: its information in the term over the dives'.
     let information: Vec<f64> = (0..m)
         .map(|i| {
-            own.iter()
+            weighed
+                .iter()
                 .filter_map(|d| d[i])
                 .map(|(_, s)| 1.0 / (s * s))
                 .sum()
         })
         .collect();
     let weight =
-        |k: usize, i: usize| own[k][i].map_or(0.0, |(_, s)| 1.0 / (s * s) / information[i]);
+        |k: usize, i: usize| weighed[k][i].map_or(0.0, |(_, s)| 1.0 / (s * s) / information[i]);
     let applied: Vec<bool> = information.iter().map(|&i| i > 0.0).collect();
     let value: Vec<f64> = (0..m)
         .map(|i| {
             (0..fits.len())
-                .filter_map(|k| own[k][i].map(|(y, _)| weight(k, i) * y))
+                .filter_map(|k| weighed[k][i].map(|(y, _)| weight(k, i) * y))
                 .sum()
         })
         .collect();
@@ -103,10 +126,10 @@ pub fn fix_vehicle(fits: &[FixFit], dive: &[&str]) -> FixVehicle {
             }
         })
         .collect();
-    let correlation = correlation(fits, (&columns, &own), (&weight, &std));
+    let correlation = correlation(fits, (&columns, &weighed), (&weight, &std));
     let between = (0..m)
         .map(|i| {
-            let shown: Vec<(f64, f64)> = own.iter().filter_map(|dive| dive[i]).collect();
+            let shown: Vec<(f64, f64)> = weighed.iter().filter_map(|dive| dive[i]).collect();
             between_dives(&shown)
         })
         .collect();
@@ -117,8 +140,39 @@ pub fn fix_vehicle(fits: &[FixFit], dive: &[&str]) -> FixVehicle {
         std,
         correlation,
         own,
+        set_aside,
         between,
     }
+}
+
+/// Which of the dives' `own` estimates of the parameters `columns` of `fits` are left
+/// out of the vehicle's: a yaw seen over few headings, where some dive's yaw is seen
+/// over a turn. Where no dive turned, every dive's yaw is weighed.
+fn set_aside(
+    fits: &[FixFit],
+    columns: &[usize],
+    own: &[Vec<Option<(f64, f64)>>],
+) -> Vec<Vec<bool>> {
+    let few_headings = |fit: &FixFit, k: usize| {
+        let name = fit.bound.names[k];
+        (fit.bound.unseen.iter())
+            .any(|u| u.term == name && matches!(u.why, Why::FewHeadings { .. }))
+    };
+    let aside: Vec<Vec<bool>> = (fits.iter().zip(own))
+        .map(|(fit, dive)| {
+            (columns.iter().zip(dive))
+                .map(|(&k, estimate)| estimate.is_some() && few_headings(fit, k))
+                .collect()
+        })
+        .collect();
+    let any_turned = |i: usize| (own.iter().zip(&aside)).any(|(d, a)| d[i].is_some() && !a[i]);
+    (0..aside.len())
+        .map(|k| {
+            (0..columns.len())
+                .map(|i| aside[k][i] && any_turned(i))
+                .collect()
+        })
+        .collect()
 }
 
 /// The correlations of the vehicle's terms, each the weighed sum `weight(k, i)` over the

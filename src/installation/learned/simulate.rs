@@ -290,6 +290,7 @@ pub(crate) mod tests {
             rate_rad_s: None,
             position_ne_m: None,
             gap_limit_s: 3.0,
+            reference_read: None,
         };
         Recording::new(name.to_string(), recording)
     }

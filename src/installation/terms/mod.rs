@@ -550,6 +550,7 @@ mod tests {
             rate_rad_s: None,
             position_ne_m: None,
             gap_limit_s: 3.0,
+            reference_read: None,
         };
         let reference = Reference::new(&recording);
         let truth = Installation {

@@ -101,8 +101,13 @@ fn dives_table(calibration: &JointFixCalibration) -> Table {
         ];
         row.extend(vehicle.names.iter().enumerate().map(|(i, n)| {
             let (_, _, factor) = readable_term(n);
+            let aside = if vehicle.set_aside[k][i] {
+                " (set aside: few headings)"
+            } else {
+                ""
+            };
             vehicle.own[k][i].map_or("-".to_string(), |(value, std)| {
-                format!("{:.4} ± {:.4}", value * factor, std * factor)
+                format!("{:.4} ± {:.4}{aside}", value * factor, std * factor)
             })
         }));
         row.push(shown(fit, "time_offset_s"));

@@ -294,7 +294,6 @@ pub fn read_beside_own_attitude(
         recording: super::checks::check(samples, &at)?,
         files: vec![log.summary.file.clone()],
         frames: None,
-        reference_read: None,
     };
     Ok((read, log))
 }
