@@ -199,6 +199,10 @@ pub(super) struct CalibrateArgs {
     /// this TOML file, for `correct` to apply to other dives
     #[arg(long, value_name = "FILE")]
     pub(super) save: Option<PathBuf>,
+    /// Write the calibration's report to this folder [default: --out's]: report.md,
+    /// a self-contained report.html, and its figures as PNG and SVG
+    #[arg(long, value_name = "DIR", num_args = 0..=1)]
+    pub(super) report: Option<Option<PathBuf>>,
     /// Which of the terms belong to the dive and are found again on each dive by
     /// `correct` (the rest, the vehicle's, are carried), and with several recordings
     /// are each recording's own: time_offset, bias, bias_scalar
@@ -222,6 +226,11 @@ impl CalibrateArgs {
         self.out
             .as_deref()
             .unwrap_or(std::path::Path::new("calibrated"))
+    }
+
+    /// The folder the report goes to, where one is asked for: as given, or [`Self::out`].
+    pub(super) fn report(&self) -> Option<&std::path::Path> {
+        (self.report.as_ref()).map(|dir| dir.as_deref().unwrap_or(self.out()))
     }
 }
 

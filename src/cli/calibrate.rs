@@ -7,7 +7,7 @@
 //! itself before it starts: [`crate::operator::cost`]).
 
 use super::args::{self, GivenFixes};
-use super::{CliError, input, stopped};
+use super::{CliError, failure, input, stopped};
 use crate::installation::estimate::clock::DEFAULT_SEARCH_S;
 use crate::installation::estimate::fixes::default_fix_terms;
 use crate::installation::terms::names::TermName;
@@ -17,10 +17,14 @@ use crate::operator::calibrate_fixes_joint::calibrate_fixes_joint as calibrated_
 use crate::operator::calibrate_joint::{JointArgs, calibrate_joint as calibrated_jointly};
 use crate::operator::correct::{CorrectArgs, correct as corrected};
 use crate::operator::correct_fixes::{FixCorrectArgs, correct_fixes as corrected_on_fixes};
+use crate::report::kit::plots::PlotError;
 use crate::report::operator::calibrate::{calibration_text, joint_text};
 use crate::report::operator::correct::{correction_text, fix_correction_text};
+use crate::report::operator::figures::calibration_figures;
 use crate::report::operator::fixes::fixes_text;
 use crate::report::operator::fixes_joint::joint_fixes_text;
+use crate::report::operator::page::{HTML, write_report};
+use std::path::Path;
 
 /// `calibrate` as typed: one recording, or several calibrated jointly.
 pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliError> {
@@ -36,6 +40,11 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
         )));
     }
     let given = (args.fix.given_per_dive(args.dvl.len())).map_err(|m| input(anyhow::anyhow!(m)))?;
+    if args.report.is_some() && (given.is_some() || args.dvl.len() > 1) {
+        return Err(input(anyhow::anyhow!(
+            "--report: a report is drawn for one recording calibrated against a velocity reference; not yet for fixes or several recordings"
+        )));
+    }
     if let Some(given) = given {
         return calibrate_fixes(args, &given);
     }
@@ -64,7 +73,7 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
             search_s: args.search_s,
         });
     }
-    calibrate(&CalibrateArgs {
+    let one = CalibrateArgs {
         dvl: &args.dvl[0],
         reference: args.reference.first().map(std::path::PathBuf::as_path),
         columns: args.columns.as_deref(),
@@ -78,7 +87,8 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
         save: args.save.as_deref(),
         dive_terms: &dive_terms,
         search_s: args.search_s,
-    })
+    };
+    calibrate(&one, args.report())
 }
 
 /// `calibrate DVL.csv --fixes FIXES.csv --attitude ATTITUDE.csv --fix-noise-m σ`: the
@@ -267,10 +277,23 @@ fn parse_terms((flag, terms): (&str, &[String])) -> Result<Vec<TermName>, CliErr
 }
 
 /// `calibrate`: the terms of one recording, their bound, how long the recording needed,
-/// and the recording corrected.
-fn calibrate(args: &CalibrateArgs) -> Result<(), CliError> {
+/// and the recording corrected; its report written to `report` where one is asked.
+fn calibrate(args: &CalibrateArgs, report: Option<&Path>) -> Result<(), CliError> {
     let calibration = calibrated(args).map_err(stopped)?;
-    print!("{}", calibration_text(&calibration));
+    let printed = calibration_text(&calibration);
+    print!("{printed}");
+    if let Some(folder) = report {
+        let name = (args.dvl.file_stem()).map_or("recording".into(), |s| s.to_string_lossy());
+        let title = format!("Calibration of {}", args.dvl.display());
+        calibration_figures(&calibration, &name)
+            .map_err(|source| PlotError::Draw {
+                what: "calibration's",
+                source,
+            })
+            .and_then(|drawn| write_report(folder, &title, &printed, drawn))
+            .map_err(failure)?;
+        eprintln!("report written to {}", folder.join(HTML).display());
+    }
     for path in &calibration.corrected {
         eprintln!("corrected recording written to {}", path.display());
     }

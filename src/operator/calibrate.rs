@@ -26,6 +26,7 @@ use crate::installation::terms::{AxisRmse, Installation, TermSet, score};
 use crate::operator::cost::{BeyondMemory, CALIBRATE, Cost};
 use crate::operator::inputs::{Reading, not_over_an_input, source};
 use crate::operator::installation_file::SavedInstallation;
+use crate::operator::residual::Trace;
 use crate::operator::ros::RosInstallation;
 use crate::results::ResultsError;
 use crate::results::corrected::{
@@ -230,6 +231,8 @@ pub struct Calibration {
     /// fit's; `None` with no sample to score.
     pub before: Option<AxisRmse>,
     pub after: Option<AxisRmse>,
+    /// The residual on each sample scored, before and after, that these RMSE are of.
+    pub trace: Trace,
     /// The dead reckoning's drift over the recording with no terms and with the terms
     /// applied, where the reference records positions.
     pub drift: Option<(Drift, Drift)>,
@@ -290,6 +293,12 @@ impl Read {
         )
     }
 
+    /// The residual `applied` leaves on each sample scored, and none.
+    fn trace(&self, applied: &Installation) -> Trace {
+        let scored = (self.scored.clone(), &self.outliers[..]);
+        Trace::of((&self.recording, &self.reference), scored, applied)
+    }
+
     /// This read scored about `fitted`'s clock (the samples whose t + the τ its mask
     /// lies about is inside the reference: with a clock searched seconds away, not
     /// those at τ = 0), the samples whose residual under `fitted`'s terms is an outlier
@@ -331,10 +340,7 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
     let terms = term_set(args.terms);
     let fitted = fit_terms(args, &read, terms)?;
     let read = read.without_outliers(&fitted);
-    let noise = Noise {
-        dvl_m_s: args.dvl_noise_cm_s / 100.0,
-        reference_m_s: args.reference_noise_cm_s / 100.0,
-    };
+    let noise = args.noise();
     let bounded = bound(&fitted, noise, &ObservabilityFile::default().tolerances());
     let applied = seen_terms(&fitted, &bounded);
     if let Some(fault) = beyond_any_installation(&applied) {
@@ -384,6 +390,7 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
         read: read.counts.clone(),
         before,
         after,
+        trace: read.trace(&applied),
         drift: drift_of(&Installation::default(), &read.recording)
             .zip(drift_of(&applied, &read.recording)),
         settings,
@@ -446,6 +453,14 @@ pub(super) struct Request<'a> {
 
 impl CalibrateArgs<'_> {
     /// What calibrating the recording will ask of this machine.
+    /// The noise the bound is under, m/s.
+    fn noise(&self) -> Noise {
+        Noise {
+            dvl_m_s: self.dvl_noise_cm_s / 100.0,
+            reference_m_s: self.reference_noise_cm_s / 100.0,
+        }
+    }
+
     pub fn cost(&self) -> Result<Cost, CalibrateError> {
         Cost::of(CALIBRATE, &[(self.dvl, self.reference)]).map_err(CalibrateError::Read)
     }

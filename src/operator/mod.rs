@@ -1,5 +1,6 @@
 //! The operator's commands on recordings named on the command line: [`calibrate`] one
-//! recording, [`calibrate_joint`] several at once, the [`installation_file`] that
+//! recording (its [`residual`] sample by sample kept for its report), [`calibrate_joint`]
+//! several at once, the [`installation_file`] that
 //! `calibrate --save` writes (and, for a bag, the installation as ROS uses it:
 //! [`ros`]), and [`correct`], which carries a saved installation to
 //! the next dive and finds its clock again; [`calibrate_fixes`], a DVL calibrated
@@ -13,6 +14,7 @@
 pub mod inputs;
 pub mod cost;
 pub mod calibrate;
+pub mod residual;
 pub mod installation_file;
 pub mod ros;
 pub mod correct;

@@ -131,7 +131,7 @@ fn a_synthetic_installation_is_recovered_within_its_bound_and_a_straight_segment
     assert!(plotted.status.success(), "{}", stderr(&plotted));
     assert_png(
         &d.join("redrawn/syn/installation_residual.png"),
-        (2680, 1800),
+        (3280, 1800),
     );
     for file in [
         "heldout.parquet",

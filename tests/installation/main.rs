@@ -26,3 +26,4 @@ mod learned;
 mod operator;
 mod nmea_reference;
 mod paired_recordings;
+mod report;

@@ -3,10 +3,13 @@
 //! calibration of one recording or of several jointly ([`calibrate`]), of a DVL against
 //! position fixes ([`fixes`]) or of several such dives jointly ([`fixes_joint`]), or a
 //! recording's clock found again and its correction ([`correct`]). Out: the text printed on stdout.
-//! They draw no figures: their results are the files `results::corrected` writes.
+//! With `--report`, a calibration's [`figures`] and its [`page`]: `report.md` and a
+//! self-contained `report.html`.
 
 pub mod calibrate;
 pub mod correct;
+pub mod figures;
+pub mod page;
 pub mod fixes;
 pub mod fixes_joint;
 

@@ -315,7 +315,7 @@ fn labelled(labels: Vec<String>, cells: Vec<Option<Cell>>) -> Vec<Entry> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::report::kit::table::Tally;
     use crate::report::paper::ReportTables;
@@ -346,7 +346,7 @@ mod tests {
         }
     }
 
-    fn evaluation(
+    pub(crate) fn evaluation(
         estimator: EstimatorKind,
         error_model: Option<ErrorModel>,
         rmse_cm_s: f64,
@@ -388,7 +388,7 @@ mod tests {
     /// quick.toml's spec (DVL1 and DVL2, calibration on SCal) at a 10 % tolerance, with
     /// DVL1's rows alone: the baseline and DCNet EM5 at T_conv and beside them the
     /// published cells, and the floor and the bound without any.
-    fn run() -> StoredRun {
+    pub(crate) fn run() -> StoredRun {
         let mut spec: SpecFile = toml::from_str(include_str!("../../../experiments/quick.toml"))
             .expect("quick.toml reads as a spec");
         spec.report.tolerance_pct = 10.0;

@@ -3,7 +3,8 @@
 //! [`canvas::Outcome`] (the figure, or why it does not apply). Every numeric axis is
 //! chosen by [`scale`] (linear or logarithmic, its ticks, far values cut), or by
 //! [`broken_axis`] in crowded panels; the shared pieces (looks, legends, marks) come
-//! from [`draw`], and a grid of terms against time from [`term_panels`]. [`render`]
+//! from [`draw`], a grid of terms against time from [`term_panels`] and a recording's
+//! residual before and after from [`residual`]. [`render`]
 //! writes each figure as PNG and as SVG with the text outlined, both from the embedded
 //! font, and this module writes the files ([`write_figures`]). In: the figures a room
 //! drew. Out: the figure files, and each figure's caption or why it is absent
@@ -13,6 +14,7 @@ pub mod broken_axis;
 pub mod canvas;
 pub mod draw;
 pub mod render;
+pub mod residual;
 pub mod scale;
 pub mod term_panels;
 

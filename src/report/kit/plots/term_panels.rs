@@ -51,8 +51,9 @@ fn y_scale(panel: &TermPanel) -> Scale {
     Scale::linear((low - pad)..(high + pad))
 }
 
-/// A grid of term panels, one row per entry of `rows` (its name, its panels), under
-/// `caption`; `reference` names the dashed line in the legend.
+/// A grid of term panels, one row per entry of `rows` (its name, its panels: each
+/// panel titled by both, or by its own where the row's name is empty), under `caption`;
+/// `reference` names the dashed line in the legend.
 pub fn draw_panels(
     caption: &str,
     rows: &[(String, Vec<TermPanel>)],
@@ -70,7 +71,11 @@ pub fn draw_panels(
                 let area = &grid[r * columns + c];
                 let start = panel.points.first().map_or(0.0, |p| p.0);
                 let end = panel.points.last().map_or(1.0, |p| p.0).max(start + 1.0);
-                let mut chart = chart_on(area, &format!("{name}: {}", panel.title), 60)
+                let title = match name.is_empty() {
+                    true => panel.title.clone(),
+                    false => format!("{name}: {}", panel.title),
+                };
+                let mut chart = chart_on(area, &title, 60)
                     .build_cartesian_2d(Scale::linear(0.0..end), y_scale(panel))?;
                 mesh(&mut chart)
                     .x_desc("time [s]")

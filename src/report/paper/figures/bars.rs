@@ -146,14 +146,11 @@ fn draw_bar(
     Ok(cut_at_top)
 }
 
-/// The legend of the bar figures: the estimators, then `whisker` as a line when it is
-/// not empty, then each line of `notes`.
-fn bar_legend(
-    area: &Area,
-    estimators: &[EstimatorKind],
-    whisker: &str,
-    notes: &[&str],
-) -> PlotResult {
+/// The legend of the bar figures: the estimators of the `drawn` bars (every panel's),
+/// each once in the order first drawn, then `whisker` as a line when it is not empty,
+/// then each line of `notes`.
+fn bar_legend(area: &Area, drawn: &[Bar], whisker: &str, notes: &[&str]) -> PlotResult {
+    let estimators = crate::first_seen(drawn.iter().map(|bar| bar.estimator));
     let mut entries: Vec<(Swatch, String)> = estimators
         .iter()
         .map(|e| (Swatch::Bar(estimator_color(*e)), e.label().to_string()))
@@ -214,13 +211,12 @@ pub fn rmse_first_window(run: &StoredRun) -> PlotResult<Outcome> {
     let width = 520 * dvls.len() as u32 + LEGEND_WIDTH;
     let svg = draw_svg((width, 560), |root| {
         let (panels, legend_area) = panels_and_legend(root, &caption, width, dvls.len())?;
-        let mut cut = false;
+        let (mut cut, mut drawn) = (false, Vec::new());
         for (area, dvl) in panels.iter().zip(&dvls) {
             let bars = first_window_bars(run, dvl, window, &models, &estimators);
             cut |= bar_panel(area, dvl, &groups, &bars, "RMSE [cm/s]", None, true)?;
+            drawn.extend(bars);
         }
-        let mut shown = vec![EstimatorKind::Baseline];
-        shown.extend(&estimators);
         let notes: &[&str] = if cut {
             &[
                 "bars above the axis are cut;",
@@ -229,7 +225,7 @@ pub fn rmse_first_window(run: &StoredRun) -> PlotResult<Outcome> {
         } else {
             &[]
         };
-        bar_legend(&legend_area, &shown, "± std over runs", notes)
+        bar_legend(&legend_area, &drawn, "± std over runs", notes)
     })?;
     Ok(Outcome::Drawn(Drawn { caption, svg }))
 }
@@ -281,15 +277,12 @@ pub fn improvement_em5(run: &StoredRun) -> PlotResult<Outcome> {
         ));
     }
     let trajectories = crate::first_seen(run.evaluation.iter().map(|r| r.trajectory.clone()));
-    let estimators: Vec<EstimatorKind> = [EstimatorKind::LeastSquares, EstimatorKind::Dcnet]
-        .into_iter()
-        .filter(|e| rows.iter().any(|r| r.estimator == *e))
-        .collect();
     let dvls = run.dvls();
     let caption = "Improvement in RMSE over the baseline with EM5, per test trajectory".to_string();
     let width = 520 * dvls.len() as u32 + LEGEND_WIDTH;
     let svg = draw_svg((width, 560), |root| {
         let (panels, legend_area) = panels_and_legend(root, &caption, width, dvls.len())?;
+        let mut drawn = Vec::new();
         for (area, dvl) in panels.iter().zip(&dvls) {
             let bars: Vec<Bar> = rows
                 .iter()
@@ -312,10 +305,11 @@ pub fn improvement_em5(run: &StoredRun) -> PlotResult<Outcome> {
                 Some(-100.0),
                 false,
             )?;
+            drawn.extend(bars);
         }
         bar_legend(
             &legend_area,
-            &estimators,
+            &drawn,
             "",
             &[
                 "bars below -100 % are cut;",
@@ -324,4 +318,41 @@ pub fn improvement_em5(run: &StoredRun) -> PlotResult<Outcome> {
         )
     })?;
     Ok(Outcome::Drawn(Drawn { caption, svg }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::paper::source::tests::{evaluation, run};
+    use EstimatorKind::{Baseline, Dcnet, Kalman, LeastSquares};
+
+    /// The estimators a figure's legend names: its SVG's text that is an estimator's
+    /// label.
+    fn named(svg: &str) -> Vec<EstimatorKind> {
+        let every = [Baseline, LeastSquares, Kalman, Dcnet];
+        (every.into_iter())
+            .filter(|e| svg.contains(&format!(">\n{}\n</text>", e.label())))
+            .collect()
+    }
+
+    /// Every bar figure's legend names exactly the estimators it draws bars of: EM5's
+    /// improvement drew the Kalman filter's bars and named only least squares and DCNet.
+    #[test]
+    fn each_bar_figures_legend_names_what_it_draws() {
+        crate::report::kit::plots::render::register_font();
+        let mut run = run();
+        run.evaluation.extend([
+            evaluation(Kalman, Some(ErrorModel::Em5), 4.2, Some(31.0)),
+            evaluation(LeastSquares, Some(ErrorModel::Em5), 4.8, Some(21.0)),
+        ]);
+        let Outcome::Drawn(drawn) = improvement_em5(&run).unwrap() else {
+            panic!("EM5 improvement not drawn")
+        };
+        assert_eq!(named(&drawn.svg), [LeastSquares, Kalman, Dcnet]);
+        let Outcome::Drawn(drawn) = rmse_first_window(&run).unwrap() else {
+            panic!("first window not drawn")
+        };
+        // The calibration table holds the baseline and DCNet EM5 at its first window.
+        assert_eq!(named(&drawn.svg), [Baseline, Dcnet]);
+    }
 }

@@ -1,0 +1,117 @@
+//! The figures of a calibration's report, drawn with the kit's pieces: the residual
+//! before and after against time ([`residual`], the kit's [`draw_residual`]), each
+//! caption's RMSE computed from the very samples drawn, which are those the printed
+//! RMSE is of; and the Kalman filter's terms against time with their ± band beside the
+//! fit of the whole recording ([`filter_terms`], the kit's [`draw_panels`]), the
+//! settling time in the caption. In: a [`Calibration`] and the recording's name. Out:
+//! each figure, or why there is none.
+
+use crate::data::paired::pieces;
+use crate::installation::study::rows::FilterPoint;
+use crate::operator::calibrate::Calibration;
+use crate::operator::residual::Trace;
+use crate::report::kit::plots::canvas::{Drawn, Outcome};
+use crate::report::kit::plots::draw::PlotResult;
+use crate::report::kit::plots::residual::{ResidualSample, ResidualTrace, draw_residual};
+use crate::report::kit::plots::term_panels::{TermPanel, draw_panels};
+use crate::report::kit::readable::readable_term;
+
+/// The figures of `calibration` of the recording `name`, each with its file's stem.
+pub fn calibration_figures(
+    calibration: &Calibration,
+    name: &str,
+) -> PlotResult<Vec<(String, Outcome)>> {
+    crate::report::kit::plots::render::register_font();
+    Ok(vec![
+        ("residual".to_string(), residual(&calibration.trace, name)?),
+        ("filter_terms".to_string(), filter_terms(calibration, name)?),
+    ])
+}
+
+/// The residual before and after on every sample scored, per axis, with the yaw rate.
+pub fn residual(trace: &Trace, name: &str) -> PlotResult<Outcome> {
+    let (Some(before), Some(after)) = (trace.rmse(true), trace.rmse(false)) else {
+        return Ok(Outcome::NotApplicable(
+            "no sample was scored against the reference".into(),
+        ));
+    };
+    let times: Vec<f64> = trace.samples.iter().map(|s| s.time_s).collect();
+    let cm = |v: [f64; 3]| v.map(|c| 100.0 * c);
+    let drawn = ResidualTrace {
+        samples: (trace.samples.iter())
+            .map(|s| ResidualSample {
+                time_s: s.time_s,
+                before_cm_s: cm(s.before_m_s),
+                after_cm_s: cm(s.after_m_s),
+                yaw_rate_deg_s: s.yaw_rate_rad_s.to_degrees(),
+                outlier: s.outlier,
+            })
+            .collect(),
+        pieces: pieces(&times, trace.gap_limit_s),
+        left_out_s: trace.left_out_s.clone(),
+        outlier_is: "the fit's outlier (not scored)".into(),
+    };
+    let outliers = trace.samples.iter().filter(|s| s.outlier).count();
+    let caption = format!(
+        "{name}: DVL − reference (body frame) before and after the terms: RMSE {:.2} → {:.2} cm/s, total over the {} samples scored, outliers aside{}{}",
+        100.0 * before.total_m_s,
+        100.0 * after.total_m_s,
+        after.sample_count,
+        match outliers {
+            0 => String::new(),
+            1 => "; 1 outlier ×".to_string(),
+            n => format!("; {n} outliers ×"),
+        },
+        match trace.left_out_s.len() {
+            0 => String::new(),
+            1 => "; 1 sample left out ▼".to_string(),
+            n => format!("; {n} samples left out ▼"),
+        },
+    );
+    let svg = draw_residual(&caption, &drawn)?;
+    Ok(Outcome::Drawn(Drawn { caption, svg }))
+}
+
+/// The Kalman filter's terms against time, a row per kind of term, each beside the fit
+/// of the whole recording.
+pub fn filter_terms(calibration: &Calibration, name: &str) -> PlotResult<Outcome> {
+    let points: Vec<FilterPoint> = calibration.filter.points(name);
+    if points.is_empty() {
+        return Ok(Outcome::NotApplicable("the filter kept no sample".into()));
+    }
+    let fit = &calibration.bound;
+    let terms = crate::first_seen(points.iter().map(|p| p.term.as_str()));
+    // A row per kind of term (its axes side by side), each panel titled by its term.
+    let (mut kinds, mut rows): (Vec<String>, Vec<(String, Vec<TermPanel>)>) = Default::default();
+    for term in terms {
+        let (title, unit, factor) = readable_term(term);
+        let kind = title.trim_end_matches([' ', 'x', 'y', 'z']).to_string();
+        let own: Vec<&FilterPoint> = points.iter().filter(|p| p.term == term).collect();
+        let panel = TermPanel {
+            title,
+            unit,
+            points: (own.iter())
+                .map(|p| (p.time_s, factor * p.value, factor * p.std))
+                .collect(),
+            reference: (fit.names.iter().position(|n| *n == term)).map(|k| factor * fit.value[k]),
+            bound_std: own.iter().map(|p| factor * p.bound_std).collect(),
+        };
+        match kinds.last() {
+            Some(last) if *last == kind => rows.last_mut().expect("a row per kind").1.push(panel),
+            _ => {
+                kinds.push(kind);
+                rows.push((String::new(), vec![panel]));
+            }
+        }
+    }
+    let caption = format!(
+        "{name}: {} against time, each term ± its standard deviation, beside the fit of the whole recording (dashed){}",
+        calibration.filter.label,
+        match calibration.settled_s {
+            Some(settled_s) => format!("; settled after {settled_s:.0} s"),
+            None => "; it did not settle within the recording".to_string(),
+        }
+    );
+    let svg = draw_panels(&caption, &rows, "the fit of the whole recording")?;
+    Ok(Outcome::Drawn(Drawn { caption, svg }))
+}

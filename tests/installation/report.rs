@@ -1,0 +1,152 @@
+//! `calibrate --report`: the operator's report of one recording calibrated against a
+//! velocity reference. Known answers on a synthetic dive with one lost ping and one
+//! spike: the residual figure's caption gives the RMSE before and after of the samples
+//! it draws, which are the printed ones; the filter's figure gives the printed settling
+//! time; `report.html` stands alone (every figure inlined as a PNG that decodes, no
+//! address outside the page, no script). Asked for fixes or several recordings, it is
+//! refused by its flag.
+
+use crate::bags::TERMS;
+use crate::common::installed::{INSTALLED, write_installed};
+use crate::common::{dcnet, stderr, stdout};
+use base64::Engine;
+use std::path::Path;
+
+/// The synthetic dive, its 101st ping lost (no velocity) and its 201st a spike of
+/// 1 m/s forward.
+fn dive(d: &Path) -> String {
+    write_installed(d, 1, &[], INSTALLED, 11);
+    let dvl = d.join("Trajectory1/DVL_trajectory1.csv");
+    let text = std::fs::read_to_string(&dvl).unwrap();
+    let rows: Vec<String> = (text.lines().enumerate())
+        .map(|(k, line)| {
+            let mut cells: Vec<String> = line.split(',').map(String::from).collect();
+            match k {
+                101 => cells[1] = String::new(),
+                201 => cells[1] = (cells[1].parse::<f64>().unwrap() + 1.0).to_string(),
+                _ => {}
+            }
+            cells.join(",")
+        })
+        .collect();
+    std::fs::write(&dvl, rows.join("\n") + "\n").unwrap();
+    dvl.display().to_string()
+}
+
+/// The number after `label` in `text`, up to the next space.
+fn after<'a>(text: &'a str, label: &str) -> &'a str {
+    let start = text
+        .find(label)
+        .unwrap_or_else(|| panic!("{label} not in {text}"))
+        + label.len();
+    text[start..].split_whitespace().next().unwrap()
+}
+
+#[test]
+fn a_calibrations_report_draws_the_printed_numbers_and_stands_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let dvl = dive(d);
+    let reference = d.join("Trajectory1/GT_trajectory1.csv");
+    let args = [
+        "calibrate",
+        &dvl,
+        "--reference",
+        reference.to_str().unwrap(),
+        TERMS,
+    ];
+    let output = dcnet(d, &[&args[..], &["--out", "cal", "--report"]].concat());
+    assert!(output.status.success(), "{}", stderr(&output));
+    let printed = stdout(&output);
+    // "… outliers aside: 19.73 cm/s (x …) before, 2.81 cm/s (x …) after"
+    let line = (printed.lines())
+        .find(|l| l.starts_with("RMSE against the reference"))
+        .unwrap();
+    let before = after(line, "outliers aside: ");
+    let after_cm_s = line
+        .rsplit(") before, ")
+        .next()
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap();
+    let markdown = std::fs::read_to_string(d.join("cal/report.md")).unwrap();
+    for caption in [
+        format!("RMSE {before} → {after_cm_s} cm/s, total over the "),
+        "samples scored, outliers aside; 1 outlier ×; 1 sample left out ▼".to_string(),
+    ] {
+        assert!(markdown.contains(&caption), "{caption}\nnot in\n{markdown}");
+    }
+    assert!(printed.contains("1 with no velocity"), "{printed}");
+    let settled = after(&printed, "\nafter ");
+    assert!(
+        markdown.contains(&format!("; settled after {settled} s")),
+        "{markdown}"
+    );
+    // The printed terms table is the report's.
+    assert!(markdown.contains("| lever arm x"), "{markdown}");
+    for stem in ["residual", "filter_terms"] {
+        for extension in ["png", "svg"] {
+            assert!(
+                d.join(format!("cal/{stem}.{extension}")).is_file(),
+                "{stem}.{extension}"
+            );
+        }
+    }
+    let html = std::fs::read_to_string(d.join("cal/report.html")).unwrap();
+    stands_alone(&html, 2);
+    // --report DIR writes there.
+    let output = dcnet(
+        d,
+        &[&args[..], &["--out", "again", "--report", "elsewhere"]].concat(),
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(d.join("elsewhere/report.html").is_file());
+    // Not yet for fixes: refused by the flag.
+    let fixes = [
+        &dvl,
+        "--fixes",
+        &dvl,
+        "--attitude",
+        &dvl,
+        "--fix-noise-m",
+        "1",
+        "--report",
+    ];
+    let output = dcnet(d, &[&["calibrate"][..], &fixes].concat());
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("--report: "),
+        "{}",
+        stderr(&output)
+    );
+}
+
+/// `html` needs nothing beyond itself: `figures` images, each a PNG inlined that
+/// decodes, no other source or link to an address, no script.
+fn stands_alone(html: &str, figures: usize) {
+    let sources: Vec<&str> = html
+        .split("src=\"")
+        .skip(1)
+        .map(|s| s.split('"').next().unwrap())
+        .collect();
+    assert_eq!(sources.len(), figures, "{sources:?}");
+    for source in sources {
+        let encoded = source
+            .strip_prefix("data:image/png;base64,")
+            .expect("a PNG inlined");
+        let bytes = base64::engine::general_purpose::STANDARD
+            .decode(encoded)
+            .unwrap();
+        let decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+        let info = decoder
+            .read_info()
+            .expect("a PNG that decodes")
+            .info()
+            .clone();
+        assert!(info.width > 500 && info.height > 500, "{info:?}");
+    }
+    for outside in ["http:", "https:", "<script", "<link", "href=\""] {
+        assert!(!html.contains(outside), "{outside} in the page");
+    }
+}
