@@ -199,9 +199,9 @@ pub(super) struct CalibrateArgs {
     /// this TOML file, for `correct` to apply to other dives
     #[arg(long, value_name = "FILE")]
     pub(super) save: Option<PathBuf>,
-    /// Write the calibration's report to this folder [default: --out's]: report.md,
-    /// a self-contained report.html, and its figures as PNG and SVG
-    #[arg(long, value_name = "DIR", num_args = 0..=1)]
+    /// Write the calibration's report: report.md, a self-contained report.html and its
+    /// figures as PNG and SVG, into --out's folder, or --report=DIR's
+    #[arg(long, value_name = "DIR", num_args = 0..=1, require_equals = true)]
     pub(super) report: Option<Option<PathBuf>>,
     /// Which of the terms belong to the dive and are found again on each dive by
     /// `correct` (the rest, the vehicle's, are carried), and with several recordings

@@ -282,18 +282,6 @@ fn calibrate(args: &CalibrateArgs, report: Option<&Path>) -> Result<(), CliError
     let calibration = calibrated(args).map_err(stopped)?;
     let printed = calibration_text(&calibration);
     print!("{printed}");
-    if let Some(folder) = report {
-        let name = (args.dvl.file_stem()).map_or("recording".into(), |s| s.to_string_lossy());
-        let title = format!("Calibration of {}", args.dvl.display());
-        calibration_figures(&calibration, &name)
-            .map_err(|source| PlotError::Draw {
-                what: "calibration's",
-                source,
-            })
-            .and_then(|drawn| write_report(folder, &title, &printed, drawn))
-            .map_err(failure)?;
-        eprintln!("report written to {}", folder.join(HTML).display());
-    }
     for path in &calibration.corrected {
         eprintln!("corrected recording written to {}", path.display());
     }
@@ -307,6 +295,18 @@ fn calibrate(args: &CalibrateArgs, report: Option<&Path>) -> Result<(), CliError
         "the filter's terms against time written to {}",
         calibration.terms_in_time.display()
     );
+    if let Some(folder) = report {
+        let name = (args.dvl.file_stem()).map_or("recording".into(), |s| s.to_string_lossy());
+        let title = format!("Calibration of {}", args.dvl.display());
+        calibration_figures(&calibration, &name)
+            .map_err(|source| PlotError::Draw {
+                what: "calibration's",
+                source,
+            })
+            .and_then(|drawn| write_report(folder, &title, &printed, drawn))
+            .map_err(failure)?;
+        eprintln!("report written to {}", folder.join(HTML).display());
+    }
     Ok(())
 }
 

@@ -353,8 +353,8 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
         &read.reference,
         &bounded.residual_noise,
     );
-    let before = read.score(&Installation::default());
-    let after = read.score(&applied);
+    let trace = read.trace(&applied);
+    let (before, after) = (trace.rmse(true), trace.rmse(false));
     // The filter starts from the clock the search found, where one was asked for.
     let from = Installation {
         time_offset_s: fitted.mask_centre_s.unwrap_or(0.0),
@@ -390,7 +390,7 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
         read: read.counts.clone(),
         before,
         after,
-        trace: read.trace(&applied),
+        trace,
         drift: drift_of(&Installation::default(), &read.recording)
             .zip(drift_of(&applied, &read.recording)),
         settings,

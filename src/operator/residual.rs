@@ -1,11 +1,12 @@
-//! A calibration's residual sample by sample, as its report draws it: on each sample
-//! scored, the DVL less the reference in the body frame with no terms (the reference
-//! read at the DVL's own stamp) and with the terms applied (the corrected DVL less the
-//! reference at t + τ), both by [`corrected_error`], the one the RMSE is scored with; the
-//! yaw rate there; and whether the fit found it an outlier, which no RMSE counts.
-//! In: the recording, its reference, the samples scored, the outliers and the terms.
-//! Out: its [`Trace`]: a [`ScoredResidual`] per sample scored that the reference covers
-//! both ways, the recording's gap limit and the times of its samples left out.
+//! A calibration's residual sample by sample: on each sample scored, the DVL less the
+//! reference in the body frame with no terms (the reference read at the DVL's own
+//! stamp) and with the terms applied (the corrected DVL less the reference at t + τ),
+//! each by [`corrected_error`] where the reference covers it; the yaw rate there; and
+//! whether the fit found it an outlier, which no RMSE counts. The RMSE `calibrate`
+//! prints before and after are this trace's ([`Trace::rmse`]), and its report draws
+//! it: one source for both. In: the recording, its reference, the samples scored, the
+//! outliers and the terms. Out: its [`Trace`], with the recording's gap limit and the
+//! times of its samples left out.
 
 use crate::Vec3;
 use crate::data::paired::PairedRecording;
@@ -13,14 +14,16 @@ use crate::installation::frames::Reference;
 use crate::installation::terms::{AxisRmse, Installation, corrected_error};
 use std::ops::Range;
 
-/// One scored sample's residual before and after, m/s per body axis.
+/// One scored sample's residual before and after, m/s per body axis; `None` where the
+/// reference does not cover it (at t before, at t + τ after: a clock searched seconds
+/// away leaves some samples one or the other).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ScoredResidual {
     /// The DVL's stamp, s on its clock.
     pub time_s: f64,
-    pub before_m_s: Vec3,
-    pub after_m_s: Vec3,
-    /// The reference's yaw rate at the stamp, rad/s.
+    pub before_m_s: Option<Vec3>,
+    pub after_m_s: Option<Vec3>,
+    /// The reference's yaw rate at the stamp or, beyond it, at t + τ, rad/s.
     pub yaw_rate_rad_s: f64,
     pub outlier: bool,
 }
@@ -51,12 +54,12 @@ impl Trace {
     }
 
     /// The RMSE of its samples after the terms (before, with `before`), outliers
-    /// aside: what the calibration prints, from the samples the report draws.
+    /// aside: what the calibration prints, and its report draws.
     pub fn rmse(&self, before: bool) -> Option<AxisRmse> {
         AxisRmse::of_errors(
             (self.samples.iter())
                 .filter(|r| !r.outlier)
-                .map(|r| if before { r.before_m_s } else { r.after_m_s }),
+                .filter_map(|r| if before { r.before_m_s } else { r.after_m_s }),
         )
     }
 }
@@ -71,11 +74,12 @@ fn scored_residual(
     let record = (&recording.time_s[..], &recording.dvl_m_s[..]);
     scored
         .filter_map(|i| {
-            let before = corrected_error(&Installation::default(), record, reference, i)?;
-            let after = corrected_error(applied, record, reference, i)?;
-            let at = reference.at(recording.time_s[i])?;
+            let before = corrected_error(&Installation::default(), record, reference, i);
+            let after = corrected_error(applied, record, reference, i);
+            let t = recording.time_s[i];
+            let at = (reference.at(t)).or_else(|| reference.at(t + applied.time_offset_s))?;
             Some(ScoredResidual {
-                time_s: recording.time_s[i],
+                time_s: t,
                 before_m_s: before,
                 after_m_s: after,
                 yaw_rate_rad_s: at.rate_rad_s[2],

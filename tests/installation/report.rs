@@ -3,8 +3,8 @@
 //! spike: the residual figure's caption gives the RMSE before and after of the samples
 //! it draws, which are the printed ones; the filter's figure gives the printed settling
 //! time; `report.html` stands alone (every figure inlined as a PNG that decodes, no
-//! address outside the page, no script). Asked for fixes or several recordings, it is
-//! refused by its flag.
+//! address outside the page, no script); `--report` takes a folder only as
+//! `--report=DIR`. Asked for fixes or several recordings, it is refused by its flag.
 
 use crate::bags::TERMS;
 use crate::common::installed::{INSTALLED, write_installed};
@@ -13,14 +13,17 @@ use base64::Engine;
 use std::path::Path;
 
 /// The synthetic dive, its 101st ping lost (no velocity) and its 201st a spike of
-/// 1 m/s forward.
-fn dive(d: &Path) -> String {
+/// 1 m/s forward, the DVL's stamps `shift_s` late.
+fn dive(d: &Path, shift_s: f64) -> String {
     write_installed(d, 1, &[], INSTALLED, 11);
     let dvl = d.join("Trajectory1/DVL_trajectory1.csv");
     let text = std::fs::read_to_string(&dvl).unwrap();
     let rows: Vec<String> = (text.lines().enumerate())
         .map(|(k, line)| {
             let mut cells: Vec<String> = line.split(',').map(String::from).collect();
+            if k > 0 {
+                cells[0] = (cells[0].parse::<f64>().unwrap() + shift_s).to_string();
+            }
             match k {
                 101 => cells[1] = String::new(),
                 201 => cells[1] = (cells[1].parse::<f64>().unwrap() + 1.0).to_string(),
@@ -46,7 +49,7 @@ fn after<'a>(text: &'a str, label: &str) -> &'a str {
 fn a_calibrations_report_draws_the_printed_numbers_and_stands_alone() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let dvl = dive(d);
+    let dvl = dive(d, 0.0);
     let reference = d.join("Trajectory1/GT_trajectory1.csv");
     let args = [
         "calibrate",
@@ -55,28 +58,21 @@ fn a_calibrations_report_draws_the_printed_numbers_and_stands_alone() {
         reference.to_str().unwrap(),
         TERMS,
     ];
-    let output = dcnet(d, &[&args[..], &["--out", "cal", "--report"]].concat());
+    // `--report` takes its folder only as --report=DIR: before the DVL file, it leaves it
+    // be.
+    let first = [
+        &["calibrate", "--report"][..],
+        &args[1..],
+        &["--out", "cal"],
+    ]
+    .concat();
+    let output = dcnet(d, &first);
     assert!(output.status.success(), "{}", stderr(&output));
     let printed = stdout(&output);
-    // "… outliers aside: 19.73 cm/s (x …) before, 2.81 cm/s (x …) after"
-    let line = (printed.lines())
-        .find(|l| l.starts_with("RMSE against the reference"))
-        .unwrap();
-    let before = after(line, "outliers aside: ");
-    let after_cm_s = line
-        .rsplit(") before, ")
-        .next()
-        .unwrap()
-        .split(' ')
-        .next()
-        .unwrap();
     let markdown = std::fs::read_to_string(d.join("cal/report.md")).unwrap();
-    for caption in [
-        format!("RMSE {before} → {after_cm_s} cm/s, total over the "),
-        "samples scored, outliers aside; 1 outlier ×; 1 sample left out ▼".to_string(),
-    ] {
-        assert!(markdown.contains(&caption), "{caption}\nnot in\n{markdown}");
-    }
+    caption_is_printed(&printed, &markdown);
+    let marks = "samples scored, outliers aside; 1 outlier ×; 1 sample left out ▼";
+    assert!(markdown.contains(marks), "{markdown}");
     assert!(printed.contains("1 with no velocity"), "{printed}");
     let settled = after(&printed, "\nafter ");
     assert!(
@@ -98,7 +94,7 @@ fn a_calibrations_report_draws_the_printed_numbers_and_stands_alone() {
     // --report DIR writes there.
     let output = dcnet(
         d,
-        &[&args[..], &["--out", "again", "--report", "elsewhere"]].concat(),
+        &[&args[..], &["--out", "again", "--report=elsewhere"]].concat(),
     );
     assert!(output.status.success(), "{}", stderr(&output));
     assert!(d.join("elsewhere/report.html").is_file());
@@ -120,6 +116,42 @@ fn a_calibrations_report_draws_the_printed_numbers_and_stands_alone() {
         "{}",
         stderr(&output)
     );
+}
+
+/// The residual figure's caption in `markdown` gives the RMSE before and after that
+/// `printed` gives.
+fn caption_is_printed(printed: &str, markdown: &str) {
+    // "… outliers aside: 19.73 cm/s (x …) before, 2.81 cm/s (x …) after"
+    let line = (printed.lines())
+        .find(|l| l.starts_with("RMSE against the reference"))
+        .unwrap();
+    let before = after(line, "outliers aside: ");
+    let after_cm_s = (line.rsplit(") before, ").next().unwrap().split(' ').next()).unwrap();
+    let caption = format!("RMSE {before} → {after_cm_s} cm/s, total over the ");
+    assert!(markdown.contains(&caption), "{caption}\nnot in\n{markdown}");
+}
+
+/// The DVL's clock 20 s late, found by a search: samples at the ends are scored before
+/// or after only (the reference covers t or t + τ), and the caption still gives the
+/// printed RMSE, each of its own samples.
+#[test]
+fn a_searched_clocks_report_gives_the_printed_numbers() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let dvl = dive(d, 20.0);
+    let reference = d.join("Trajectory1/GT_trajectory1.csv");
+    let args = [
+        "calibrate",
+        &dvl,
+        "--reference",
+        reference.to_str().unwrap(),
+        TERMS,
+    ];
+    let more = ["--search-s", "30", "--out", "late", "--report"];
+    let output = dcnet(d, &[&args[..], &more].concat());
+    assert!(output.status.success(), "{}", stderr(&output));
+    let markdown = std::fs::read_to_string(d.join("late/report.md")).unwrap();
+    caption_is_printed(&stdout(&output), &markdown);
 }
 
 /// `html` needs nothing beyond itself: `figures` images, each a PNG inlined that

@@ -26,14 +26,16 @@ pub const ATTITUDE_WITHIN_S: f64 = 0.05;
 
 /// What an NMEA file gave as a reference: the samples kept and what they are, the
 /// sentences that served them (RMC or ZDA for the date; PASHR for an RMC's attitude),
-/// those left out by reason, those read without a checksum, and how many sentences of
-/// other types were passed over. Every sentence is in one of `kept`, `served`,
-/// `left_out` and `passed_over`.
+/// the PASHR no RMC took (with a velocity asked for), those left out by reason, those
+/// read without a checksum, and how many sentences of other types were passed over.
+/// Every sentence is in one of `kept`, `served`, `not_taken`, `left_out` and
+/// `passed_over`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SentencesRead {
     pub kept: usize,
     pub what: &'static str,
     pub served: usize,
+    pub not_taken: usize,
     pub left_out: Vec<(&'static str, usize)>,
     pub unchecked: usize,
     pub passed_over: usize,
@@ -46,10 +48,14 @@ impl std::fmt::Display for SentencesRead {
             .collect();
         write!(
             f,
-            "{} {}, read from NMEA sentences ({} more that dated them or gave their attitude; {} left out{}{}; {} without a checksum, so unchecked; {} other sentences passed over)",
+            "{} {}, read from NMEA sentences ({} more that dated them or gave their attitude{}; {} left out{}{}; {} without a checksum, so unchecked; {} other sentences passed over)",
             self.kept,
             self.what,
             self.served,
+            match self.not_taken {
+                0 => String::new(),
+                n => format!(", {n} PASHR no RMC took"),
+            },
             self.left_out.iter().map(|(_, n)| n).sum::<usize>(),
             if left_out.is_empty() { "" } else { ": " },
             left_out.join(", "),
@@ -60,7 +66,7 @@ impl std::fmt::Display for SentencesRead {
 }
 
 /// Why a sentence gives no reference sample, nor serves one.
-const LEFT_OUT: [&str; 8] = [
+const LEFT_OUT: [&str; 7] = [
     "whose checksum fails or that do not parse",
     "PASHR before any RMC or ZDA gave the date",
     "PASHR with no true heading, roll or pitch",
@@ -68,7 +74,6 @@ const LEFT_OUT: [&str; 8] = [
     "RMC with no fix (status V) or no speed or course",
     "RMC with no PASHR within 0.05 s",
     "RMC or ZDA with no date or time",
-    "PASHR with no RMC within 0.05 s",
 ];
 
 /// A PASHR's attitude: its UTC time (s since 1970) and roll, pitch, heading in degrees.
@@ -135,6 +140,7 @@ pub fn parse_reference(
         kept: lines.len(),
         what,
         served: read.served,
+        not_taken: read.not_taken,
         left_out: (LEFT_OUT.into_iter().zip(read.counts))
             .filter(|&(_, n)| n > 0)
             .collect(),
@@ -167,8 +173,10 @@ struct Reading {
     attitude_lines: Vec<u64>,
     /// Each RMC with a fix: its time, north and east velocity, m/s, and line.
     grounds: Vec<(f64, [f64; 2], u64)>,
-    counts: [usize; 8],
+    counts: [usize; 7],
     served: usize,
+    /// With a velocity asked for, the PASHR no RMC took (a faster AHRS has many).
+    not_taken: usize,
     unchecked: usize,
     passed_over: usize,
 }
@@ -298,7 +306,7 @@ impl Reading {
         }
         let used = served.iter().filter(|&&s| s).count();
         self.served += used;
-        self.counts[7] += served.len() - used;
+        self.not_taken += served.len() - used;
         kept
     }
 }
@@ -342,7 +350,7 @@ mod tests {
     /// The sentences `read` accounts for: each is kept, served, left out or passed over.
     fn every_sentence(read: &SentencesRead) -> usize {
         let left_out: usize = read.left_out.iter().map(|(_, n)| n).sum();
-        read.kept + read.served + left_out + read.passed_over
+        read.kept + read.served + read.not_taken + left_out + read.passed_over
     }
 
     /// Beside fixes, where the samples are PASHR's, an RMC only dates them: a valid one
@@ -406,11 +414,9 @@ mod tests {
         );
         assert_eq!(read.attitude_deg[1], [1.0, -2.0, 30.0]);
         // Two PASHR served an RMC, two served none; the void RMC is left out.
-        assert_eq!(
-            read.read.left_out,
-            vec![(LEFT_OUT[4], 1), (LEFT_OUT[5], 1), (LEFT_OUT[7], 2)]
-        );
-        assert_eq!((read.read.served, every_sentence(&read.read)), (2, 8));
+        assert_eq!(read.read.left_out, vec![(LEFT_OUT[4], 1), (LEFT_OUT[5], 1)]);
+        let counts = (read.read.served, read.read.not_taken);
+        assert_eq!((counts, every_sentence(&read.read)), ((2, 2), 8));
         // No PASHR at all: nothing to keep, refused naming the file.
         let error = parse_reference(
             Path::new("g.nmea"),

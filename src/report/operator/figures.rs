@@ -30,13 +30,21 @@ pub fn calibration_figures(
 
 /// The residual before and after on every sample scored, per axis, with the yaw rate.
 pub fn residual(trace: &Trace, name: &str) -> PlotResult<Outcome> {
-    let (Some(before), Some(after)) = (trace.rmse(true), trace.rmse(false)) else {
+    let Some(after) = trace.rmse(false) else {
         return Ok(Outcome::NotApplicable(
             "no sample was scored against the reference".into(),
         ));
     };
+    // None where the two clocks lie so far apart that no stamp is in the reference.
+    let before =
+        (trace.rmse(true)).map_or("-".to_string(), |r| format!("{:.2}", 100.0 * r.total_m_s));
     let times: Vec<f64> = trace.samples.iter().map(|s| s.time_s).collect();
-    let cm = |v: [f64; 3]| v.map(|c| 100.0 * c);
+    let cm = |v: Option<[f64; 3]>| v.map(|v| v.map(|c| 100.0 * c));
+    // The samples left out within the span drawn.
+    let (first, last) = (times[0], times[times.len() - 1]);
+    let left_out_s: Vec<f64> = (trace.left_out_s.iter().copied())
+        .filter(|t| (first..=last).contains(t))
+        .collect();
     let drawn = ResidualTrace {
         samples: (trace.samples.iter())
             .map(|s| ResidualSample {
@@ -48,13 +56,12 @@ pub fn residual(trace: &Trace, name: &str) -> PlotResult<Outcome> {
             })
             .collect(),
         pieces: pieces(&times, trace.gap_limit_s),
-        left_out_s: trace.left_out_s.clone(),
+        left_out_s: left_out_s.clone(),
         outlier_is: "the fit's outlier (not scored)".into(),
     };
     let outliers = trace.samples.iter().filter(|s| s.outlier).count();
     let caption = format!(
-        "{name}: DVL − reference (body frame) before and after the terms: RMSE {:.2} → {:.2} cm/s, total over the {} samples scored, outliers aside{}{}",
-        100.0 * before.total_m_s,
+        "{name}: DVL − reference (body frame) before and after the terms: RMSE {before} → {:.2} cm/s, total over the {} samples scored, outliers aside{}{}",
         100.0 * after.total_m_s,
         after.sample_count,
         match outliers {
@@ -62,7 +69,7 @@ pub fn residual(trace: &Trace, name: &str) -> PlotResult<Outcome> {
             1 => "; 1 outlier ×".to_string(),
             n => format!("; {n} outliers ×"),
         },
-        match trace.left_out_s.len() {
+        match left_out_s.len() {
             0 => String::new(),
             1 => "; 1 sample left out ▼".to_string(),
             n => format!("; {n} samples left out ▼"),
@@ -109,7 +116,7 @@ pub fn filter_terms(calibration: &Calibration, name: &str) -> PlotResult<Outcome
         calibration.filter.label,
         match calibration.settled_s {
             Some(settled_s) => format!("; settled after {settled_s:.0} s"),
-            None => "; it did not settle within the recording".to_string(),
+            None => "; it diverged: its terms leave no finite RMSE".to_string(),
         }
     );
     let svg = draw_panels(&caption, &rows, "the fit of the whole recording")?;

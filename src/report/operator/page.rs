@@ -39,11 +39,36 @@ pub fn write_report(
     Ok(written)
 }
 
-/// `text` with the characters Markdown would read as markup escaped.
+/// The line `text` as a Markdown paragraph of that text: its leading spaces dropped
+/// (four would open a code block), a line-start marker of a list, a rule or a heading
+/// escaped, and the characters inline markup reads ([`inline`]).
 fn escaped(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
+    let text = text.trim_start();
+    let mut out = String::with_capacity(text.len() + 8);
+    if text.starts_with(['-', '+', '=']) {
+        out.push('\\');
+    }
+    // An ordered list's marker: digits, then `.` or `)` and a space (digits are ASCII).
+    let digits = text.bytes().take_while(u8::is_ascii_digit).count();
+    let (number, rest) = text.split_at(digits);
+    out.push_str(number);
+    if digits > 0
+        && (rest.starts_with(". ") || rest.starts_with(") ") || rest == "." || rest == ")")
+    {
+        out.push('\\');
+    }
+    out.push_str(&inline(rest));
+    out
+}
+
+/// `text` with each character inline Markdown reads as markup escaped.
+fn inline(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + 8);
     for c in text.chars() {
-        if matches!(c, '\\' | '*' | '_' | '<' | '>' | '[' | ']' | '`' | '#') {
+        if matches!(
+            c,
+            '\\' | '*' | '_' | '<' | '>' | '[' | ']' | '`' | '#' | '&'
+        ) {
             out.push('\\');
         }
         out.push(c);
@@ -64,7 +89,7 @@ fn markdown(title: &str, printed: &str, figures: &[Written]) -> String {
         }
         match (table_row, line.trim().is_empty()) {
             (true, _) => {
-                let row: Vec<String> = line.split('|').map(escaped).collect();
+                let row: Vec<String> = line.split('|').map(inline).collect();
                 out.push_str(&row.join("|"));
                 out.push('\n');
             }
@@ -77,14 +102,15 @@ fn markdown(title: &str, printed: &str, figures: &[Written]) -> String {
         in_table = table_row;
     }
     out.push_str("\n## Figures\n\n");
-    for (k, figure) in figures.iter().enumerate() {
+    let mut number = 0;
+    for figure in figures {
         match &figure.caption {
             Caption::Drawn(caption) => {
+                number += 1;
                 let png = format!("{}.png", figure.stem);
                 out.push_str(&format!(
-                    "![{}]({png})\n\n*Figure {}.* {}\n\n",
+                    "![{}](<{png}>)\n\n*Figure {number}.* {}\n\n",
                     escaped(caption),
-                    k + 1,
                     escaped(caption)
                 ));
             }
@@ -157,7 +183,7 @@ mod tests {
     /// kept as text.
     #[test]
     fn printed_lines_are_paragraphs_and_tables_tables() {
-        let printed = "read: 400 samples, *none* left out\n| term | estimate |\n|------|----------|\n| scale | -0.2 % |\nafter <all> of it\n";
+        let printed = "read: 400 samples, *none* left out\n| term | estimate |\n|------|----------|\n| scale | -0.2 % |\nafter <all> of it &amp; more\n    - 1. four spaces, a list\n2. a number\n2.81 cm/s\n";
         let markdown = markdown("T1", printed, &[]);
         let html = html("T1 & T2", &markdown, Path::new(".")).unwrap();
         assert!(
@@ -165,7 +191,13 @@ mod tests {
             "{html}"
         );
         assert!(html.contains("<td>-0.2 %</td>"), "{html}");
-        assert!(html.contains("<p>after &lt;all&gt; of it</p>"), "{html}");
+        assert!(
+            html.contains("<p>after &lt;all&gt; of it &amp;amp; more</p>"),
+            "{html}"
+        );
+        assert!(html.contains("<p>- 1. four spaces, a list</p>"), "{html}");
+        assert!(html.contains("<p>2. a number</p>"), "{html}");
+        assert!(html.contains("<p>2.81 cm/s</p>"), "{html}");
         assert!(html.contains("<title>T1 &amp; T2</title>"), "{html}");
     }
 }

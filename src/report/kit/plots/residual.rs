@@ -3,10 +3,11 @@
 //! it (in colour), one panel per axis, and the yaw rate in a panel under them, so that
 //! a residual that follows the turns shows as such. Outliers are crossed; the lines
 //! break between pieces (a lost bottom lock), never drawn across a gap; the samples
-//! left out of the recording are ticked under each axis at their times. A trace of
-//! more samples than a panel has pixels is thinned to each column's extremes
-//! ([`thinned`]), which draws the same envelope. In: a [`ResidualTrace`] and its
-//! caption. Out: the SVG.
+//! left out of the recording are marked ▼ at each axis's foot at their times. A piece
+//! of more than twice as many samples as the panel is wide in pixels is thinned
+//! ([`thinned`]): cut into as many runs as the panel has pixel columns, each drawn
+//! through its lowest and highest value, which keeps the envelope. In: a
+//! [`ResidualTrace`] and its caption. Out: the SVG.
 
 use super::canvas::draw_svg;
 use super::draw::*;
@@ -26,13 +27,14 @@ const MARK: RGBColor = RGBColor(0, 0, 0);
 /// The figure's panels' width, px: a piece of more samples than twice this is thinned.
 const WIDTH: u32 = 1400;
 
-/// One sample as drawn: its time, residual before and after (cm/s, body x, y, z),
-/// the yaw rate there, and whether it is an outlier.
+/// One sample as drawn: its time, residual before and after (cm/s, body x, y, z; none
+/// where the reference does not cover it), the yaw rate there, and whether it is an
+/// outlier.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ResidualSample {
     pub time_s: f64,
-    pub before_cm_s: Vec3,
-    pub after_cm_s: Vec3,
+    pub before_cm_s: Option<Vec3>,
+    pub after_cm_s: Option<Vec3>,
     pub yaw_rate_deg_s: f64,
     pub outlier: bool,
 }
@@ -110,35 +112,29 @@ fn padded(values: impl Iterator<Item = f64>) -> Scale {
     Scale::linear((low - pad)..(high + pad))
 }
 
-/// The points `value` gives of `samples`, thinned to at most two per column of a
-/// panel `WIDTH` wide: each column's lowest and highest, in time order. A piece of
-/// fewer samples than that is drawn whole.
+/// The points (time, value) `value` gives of `samples` (those it gives one), thinned
+/// where there are more than twice `WIDTH`: cut into `WIDTH` runs of samples, each
+/// drawn through its lowest and highest value in time order.
 pub fn thinned(
     samples: &[ResidualSample],
-    value: impl Fn(&ResidualSample) -> f64,
+    value: impl Fn(&ResidualSample) -> Option<f64>,
 ) -> Vec<(f64, f64)> {
+    let given: Vec<(f64, f64)> = (samples.iter())
+        .filter_map(|s| Some((s.time_s, value(s)?)))
+        .collect();
     let columns = WIDTH as usize;
-    if samples.len() <= 2 * columns {
-        return samples.iter().map(|s| (s.time_s, value(s))).collect();
+    if given.len() <= 2 * columns {
+        return given;
     }
-    let per_column = samples.len().div_ceil(columns);
     let mut points = Vec::with_capacity(2 * columns);
-    for chunk in samples.chunks(per_column) {
-        let by_value = |a: &&ResidualSample, b: &&ResidualSample| value(a).total_cmp(&value(b));
-        let low = chunk
-            .iter()
-            .min_by(by_value)
-            .expect("a chunk is never empty");
-        let high = chunk
-            .iter()
-            .max_by(by_value)
-            .expect("a chunk is never empty");
-        let (first, second) = match low.time_s <= high.time_s {
-            true => (low, high),
-            false => (high, low),
-        };
-        points.push((first.time_s, value(first)));
-        points.push((second.time_s, value(second)));
+    for run in given.chunks(given.len().div_ceil(columns)) {
+        let by_value = |a: &&(f64, f64), b: &&(f64, f64)| a.1.total_cmp(&b.1);
+        let low = *run.iter().min_by(by_value).expect("a run is never empty");
+        let high = *run.iter().max_by(by_value).expect("a run is never empty");
+        points.extend(match low.0 <= high.0 {
+            true => [low, high],
+            false => [high, low],
+        });
     }
     points
 }
@@ -152,27 +148,24 @@ fn axis_panel(
     name: &str,
 ) -> PlotResult {
     let samples = &trace.samples;
-    let y = padded(
-        samples
-            .iter()
-            .flat_map(|s| [s.before_cm_s[axis], s.after_cm_s[axis]]),
-    );
+    let values = (samples.iter()).flat_map(|s| [s.before_cm_s, s.after_cm_s]);
+    let y = padded(values.flatten().map(|v| v[axis]));
     let mut chart = chart_on(area, "", 70).build_cartesian_2d(time.clone(), y)?;
     mesh(&mut chart).y_desc(format!("{name} [cm/s]")).draw()?;
     for piece in &trace.pieces {
         let piece = &samples[piece.clone()];
         chart.draw_series(LineSeries::new(
-            thinned(piece, |s| s.before_cm_s[axis]),
+            thinned(piece, |s| s.before_cm_s.map(|v| v[axis])),
             BEFORE.stroke_width(1),
         ))?;
         chart.draw_series(LineSeries::new(
-            thinned(piece, |s| s.after_cm_s[axis]),
+            thinned(piece, |s| s.after_cm_s.map(|v| v[axis])),
             AFTER.stroke_width(1),
         ))?;
     }
     let crosses: Vec<(f64, f64)> = (samples.iter())
         .filter(|s| s.outlier)
-        .map(|s| (s.time_s, s.after_cm_s[axis]))
+        .filter_map(|s| Some((s.time_s, s.after_cm_s?[axis])))
         .collect();
     Marker::Cross.draw(&mut chart, &crosses, MARK)?;
     let foot = chart.y_range().start;
@@ -190,7 +183,7 @@ fn yaw_rate_panel(trace: &ResidualTrace, area: &Area, time: &Scale) -> PlotResul
         .draw()?;
     for piece in &trace.pieces {
         chart.draw_series(LineSeries::new(
-            thinned(&trace.samples[piece.clone()], |s| s.yaw_rate_deg_s),
+            thinned(&trace.samples[piece.clone()], |s| Some(s.yaw_rate_deg_s)),
             YAW_RATE.stroke_width(2),
         ))?;
     }
@@ -201,7 +194,7 @@ fn yaw_rate_panel(trace: &ResidualTrace, area: &Area, time: &Scale) -> PlotResul
 mod tests {
     use super::*;
 
-    /// A long piece is thinned to each column's extremes, which keep its envelope: the
+    /// A long piece is thinned to each run's extremes, which keep its envelope: the
     /// highest and lowest values drawn are the trace's, in time order; a short one is
     /// drawn whole.
     #[test]
@@ -209,25 +202,28 @@ mod tests {
         let samples: Vec<ResidualSample> = (0..100_000)
             .map(|i| ResidualSample {
                 time_s: 0.1 * f64::from(i),
-                before_cm_s: [0.0; 3],
-                after_cm_s: [
+                before_cm_s: None,
+                after_cm_s: Some([
                     (f64::from(i) * 0.37).sin() + if i == 54_321 { 9.0 } else { 0.0 },
                     0.0,
                     0.0,
-                ],
+                ]),
                 yaw_rate_deg_s: 0.0,
                 outlier: false,
             })
             .collect();
-        let points = thinned(&samples, |s| s.after_cm_s[0]);
+        let after = |s: &ResidualSample| s.after_cm_s.map(|v| v[0]);
+        let points = thinned(&samples, after);
         assert!(points.len() <= 2 * WIDTH as usize, "{}", points.len());
         let high = points.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
         let low = points.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
-        let all = samples.iter().map(|s| s.after_cm_s[0]);
+        let all = samples.iter().filter_map(after);
         assert_eq!(high, all.clone().fold(f64::NEG_INFINITY, f64::max));
         assert_eq!(low, all.fold(f64::INFINITY, f64::min));
         assert!(points.windows(2).all(|w| w[0].0 <= w[1].0));
         let few = &samples[..100];
-        assert_eq!(thinned(few, |s| s.after_cm_s[0]).len(), 100);
+        assert_eq!(thinned(few, after).len(), 100);
+        // A sample with no value is left out of the line.
+        assert!(thinned(few, |s| s.before_cm_s.map(|v| v[0])).is_empty());
     }
 }

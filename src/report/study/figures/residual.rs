@@ -41,8 +41,8 @@ pub fn residual(study: &StudyResults) -> PlotResult<Outcome> {
         samples: (points.iter().zip(outlying))
             .map(|(p, outlier)| ResidualSample {
                 time_s: p.time_s,
-                before_cm_s: p.before_cm_s,
-                after_cm_s: p.after_cm_s,
+                before_cm_s: Some(p.before_cm_s),
+                after_cm_s: Some(p.after_cm_s),
                 yaw_rate_deg_s: p.yaw_rate_deg_s,
                 outlier,
             })
