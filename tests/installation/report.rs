@@ -12,9 +12,10 @@ use crate::common::{dcnet, stderr, stdout};
 use base64::Engine;
 use std::path::Path;
 
-/// The synthetic dive, its 101st ping lost (no velocity) and its 201st a spike of
-/// 1 m/s forward, the DVL's stamps `shift_s` late.
-fn dive(d: &Path, shift_s: f64) -> String {
+/// Writes the synthetic dive, its 101st ping lost (no velocity) and its 201st a spike
+/// of 1 m/s forward, the DVL's stamps `shift_s` late; its DVL file, and the arguments
+/// that calibrate it.
+fn dive(d: &Path, shift_s: f64) -> (String, Vec<String>) {
     write_installed(d, 1, &[], INSTALLED, 11);
     let dvl = d.join("Trajectory1/DVL_trajectory1.csv");
     let text = std::fs::read_to_string(&dvl).unwrap();
@@ -33,7 +34,16 @@ fn dive(d: &Path, shift_s: f64) -> String {
         })
         .collect();
     std::fs::write(&dvl, rows.join("\n") + "\n").unwrap();
-    dvl.display().to_string()
+    let reference = d.join("Trajectory1/GT_trajectory1.csv");
+    let dvl = dvl.display().to_string();
+    let args = [
+        "calibrate",
+        &dvl,
+        "--reference",
+        reference.to_str().unwrap(),
+        TERMS,
+    ];
+    (dvl.clone(), args.map(String::from).to_vec())
 }
 
 /// The number after `label` in `text`, up to the next space.
@@ -49,15 +59,8 @@ fn after<'a>(text: &'a str, label: &str) -> &'a str {
 fn a_calibrations_report_draws_the_printed_numbers_and_stands_alone() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let dvl = dive(d, 0.0);
-    let reference = d.join("Trajectory1/GT_trajectory1.csv");
-    let args = [
-        "calibrate",
-        &dvl,
-        "--reference",
-        reference.to_str().unwrap(),
-        TERMS,
-    ];
+    let (dvl, args) = dive(d, 0.0);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
     // `--report` takes its folder only as --report=DIR: before the DVL file, it leaves it
     // be.
     let first = [
@@ -138,15 +141,8 @@ fn caption_is_printed(printed: &str, markdown: &str) {
 fn a_searched_clocks_report_gives_the_printed_numbers() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let dvl = dive(d, 20.0);
-    let reference = d.join("Trajectory1/GT_trajectory1.csv");
-    let args = [
-        "calibrate",
-        &dvl,
-        "--reference",
-        reference.to_str().unwrap(),
-        TERMS,
-    ];
+    let (_, args) = dive(d, 20.0);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
     let more = ["--search-s", "30", "--out", "late", "--report"];
     let output = dcnet(d, &[&args[..], &more].concat());
     assert!(output.status.success(), "{}", stderr(&output));

@@ -155,17 +155,13 @@ fn html(title: &str, markdown: &str, folder: &Path) -> Result<String, PlotError>
     }
     let mut body = String::new();
     pulldown_cmark::html::push_html(&mut body, events.into_iter());
-    let title = escaped_html(title);
+    let mut escaped_title = String::new();
+    pulldown_cmark_escape::escape_html(&mut escaped_title, title)
+        .expect("writing to a String never fails");
+    let title = escaped_title;
     Ok(format!(
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>{title}</title>\n<style>\n{STYLE}</style>\n</head>\n<body>\n{body}</body>\n</html>\n"
     ))
-}
-
-/// `text` with HTML's special characters escaped.
-fn escaped_html(text: &str) -> String {
-    text.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
 }
 
 /// The page's look: readable widths, tables ruled, figures within the page.
