@@ -7,11 +7,12 @@
 //! In: [`FixArgs`]. Out: a [`FixCalibration`], everything the command prints, or a
 //! [`CalibrateError`] naming the argument, file or step at fault.
 
-use crate::data::fixes::{Fixes, read_beside_attitude, read_fixes};
+use crate::data::fixes::{FixColumns, Fixes, read_beside_attitude, read_fixes};
 use crate::data::nmea::{gga_fixes, is_nmea, read_nmea_fixes};
 use crate::data::paired::Source;
 use crate::data::paired::bag::{BagError, is_bag, read_bag_beside_attitude};
 use crate::data::paired::dvl_log::{self, LogFormat, read_beside_own_attitude};
+use crate::data::paired::read_log_beside_attitude;
 use crate::data::paired::{PairedError, PairedRecording, ReadCounts, ReadRecording};
 use crate::footprint::machine_memory;
 use crate::installation::estimate::fixes::{
@@ -145,20 +146,13 @@ impl FixFiles<'_> {
         let fix_columns = fix_columns(self.columns).map_err(CalibrateError::Columns)?;
         let log = (self.reading.dvl_format).or_else(|| dvl_log::format_of(self.dvl));
         let (read, mut fixes, left_out, (without_noise, read_from)) = match (log, self.fix_topic) {
-            (Some(format), _) => self.read_log(format, depth)?,
+            (Some(format), _) => self.read_log(format, depth, &fix_columns)?,
             (None, Some(topic)) => self.read_bag(topic, depth)?,
             (None, None) => {
                 let columns =
                     columns(self.columns, self.reading).map_err(CalibrateError::Columns)?;
                 let read = read_beside_attitude(self.dvl, self.attitude, &columns)?;
-                let (fixes, left_out, read_from) = match is_nmea(self.fixes) {
-                    true => nmea_fixes(self.fixes)?,
-                    false => {
-                        let (fixes, _) =
-                            read_fixes(self.fixes, &fix_columns).map_err(CalibrateError::Fixes)?;
-                        (fixes, Vec::new(), None)
-                    }
-                };
+                let (fixes, left_out, read_from) = self.fixes_file(&fix_columns)?;
                 let without_noise = fixes.len();
                 (read, fixes, left_out, (without_noise, read_from))
             }
@@ -218,49 +212,58 @@ impl FixFiles<'_> {
         ))
     }
 
-    /// A DVL log beside its own attitude (what it turned its velocities by) and the
-    /// fixes of its own GNSS (the GGA sentences its recorder wrote into it): the one
-    /// file named as the DVL, the attitude and the fixes.
-    fn read_log(&self, format: LogFormat, depth: bool) -> Result<FixesRead, CalibrateError> {
-        let refused = |flag: &str, message| CalibrateError::Columns(inputs::refused(flag, message));
-        let own = |flag: &str, path: &Path| {
-            (path != self.dvl).then(|| {
-                refused(
-                    flag,
-                    format!(
-                        "{} is a {} log: it is calibrated against its own attitude and the fixes its recorder wrote into it, so name it again here (not {})",
-                        self.dvl.display(),
-                        format.words(),
-                        path.display()
-                    ),
-                )
-            })
+    /// A DVL log beside an attitude and fixes: its own attitude where `--attitude` names
+    /// the log again ([`dvl_log::OwnAttitude`]), another file's otherwise (CSV or NMEA);
+    /// the GGA sentences its recorder wrote into it where `--fixes` names the log again,
+    /// placed on the log's clock, another file's fixes otherwise.
+    fn read_log(
+        &self,
+        format: LogFormat,
+        depth: bool,
+        fix_columns: &FixColumns,
+    ) -> Result<FixesRead, CalibrateError> {
+        let thresholds = self.reading.thresholds;
+        let (read, log) = if self.attitude == self.dvl {
+            read_beside_own_attitude(self.dvl, format, thresholds)?
+        } else {
+            let columns = columns(self.columns, self.reading).map_err(CalibrateError::Columns)?;
+            read_log_beside_attitude((self.dvl, format, thresholds), self.attitude, &columns)?
         };
-        if let Some(refusal) =
-            own("--attitude", self.attitude).or_else(|| own("--fixes", self.fixes))
-        {
-            return Err(refusal);
+        let attitude_from = match self.attitude == self.dvl {
+            true => format!(
+                "of the DVL's own attitude ({})",
+                format.own_attitude_words()
+            ),
+            false => format!("the attitude from {}", self.attitude.display()),
+        };
+        let head = format!(
+            "from the {} log: {}; {attitude_from}",
+            format.words(),
+            log.summary.frames.join("; ")
+        );
+        if self.fixes != self.dvl {
+            let (fixes, left_out, from) = self.fixes_file(fix_columns)?;
+            let from = from.map_or(head.clone(), |from| format!("{head}; the fixes {from}"));
+            let without_noise = fixes.len();
+            return Ok((read, fixes, left_out, (without_noise, Some(from))));
         }
         if depth {
             return Err(CalibrateError::NoDepths {
                 fixes: self.fixes.to_path_buf(),
             });
         }
-        let (read, log) = read_beside_own_attitude(self.dvl, format, self.reading.thresholds)?;
         let Some(gga) = gga_fixes(&log.sentences) else {
-            return Err(refused(
+            return Err(CalibrateError::Columns(inputs::refused(
                 "--fixes",
                 format!(
                     "{}: no GGA sentence with a fix among the {} NMEA sentences its recorder wrote into it",
                     self.dvl.display(),
                     log.sentences.len()
                 ),
-            ));
+            )));
         };
         let from_log = format!(
-            "from the {} log: {}; of the DVL's own attitude (roll, pitch, heading: what its velocities were turned by); the fixes from its GGA sentences (north and east of {:.7}°, {:.7}°; {} of them without a checksum, so unchecked; {} other sentences passed over), placed on the log's clock, which runs {:.2} s behind the GNSS's (the median of each fix's time less its ping's)",
-            format.words(),
-            log.summary.frames.join("; "),
+            "{head}; the fixes from its GGA sentences (north and east of {:.7}°, {:.7}°; {} of them without a checksum, so unchecked; {} other sentences passed over), placed on the log's clock, which runs {:.2} s behind the GNSS's (the median of each fix's time less its ping's)",
             gga.origin_deg[0],
             gga.origin_deg[1],
             gga.without_checksum,
@@ -270,6 +273,16 @@ impl FixFiles<'_> {
         let (left_out, fixes) = (gga.left_out.clone(), gga.on_the_recorders_clock());
         let without_noise = fixes.len();
         Ok((read, fixes, left_out, (without_noise, Some(from_log))))
+    }
+
+    /// The fixes of their own file: an NMEA file's GGA sentences, or a CSV file's
+    /// columns; and where they came from, in words, for an NMEA file.
+    fn fixes_file(&self, fix_columns: &FixColumns) -> Result<NmeaRead, CalibrateError> {
+        if is_nmea(self.fixes) {
+            return nmea_fixes(self.fixes);
+        }
+        let (fixes, _) = read_fixes(self.fixes, fix_columns).map_err(CalibrateError::Fixes)?;
+        Ok((fixes, Vec::new(), None))
     }
 
     /// The fixes' noise per horizontal axis, m: as `given` (the fixes' own then set

@@ -473,8 +473,8 @@ fn an_akit_segment_as_pd0_calibrates_to_the_csv_terms() {
 /// DVL's pieces left out. Its scale and yaw are those an independent least-squares fit
 /// of the same model finds (`tests/data/pd0/gnss_fit.py`: numpy over dolfyn's decode,
 /// 1.0266 and −25.73°), each within the tool's 95 % interval; the heading spans 52°, so
-/// the yaw is said to be seen poorly. An attitude from another file is refused by the
-/// flag.
+/// the yaw is said to be seen poorly. An attitude named from another file is that
+/// file's, not the log's: one too short is refused naming it.
 #[test]
 fn a_pd0_log_is_fitted_to_its_own_gnss_fixes_on_its_own_clock() {
     let dir = tempfile::tempdir().unwrap();
@@ -525,7 +525,7 @@ fn a_pd0_log_is_fitted_to_its_own_gnss_fixes_on_its_own_clock() {
     let output = fit(other.to_str().unwrap());
     assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
     assert!(
-        stderr(&output).contains("--attitude: "),
+        stderr(&output).contains("attitude.csv: 1 samples below the header"),
         "{}",
         stderr(&output)
     );
@@ -676,15 +676,11 @@ fn sentence(body: &str) -> String {
     format!("${body}*{sum:02X}")
 }
 
-/// An NMEA file of GGA fixes (dated by a ZDA, the reference's seconds from 1970-01-01
-/// UTC) gives the calibration the same fixes as a CSV file gives, every term within a
-/// tenth of its standard deviation; a GGA before any date is counted, one with a bad
-/// checksum left out and counted.
-#[test]
-fn nmea_gga_fixes_calibrate_as_the_same_fixes_in_csv() {
-    use crate::common::installed::{INSTALLED, write_installed};
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
+/// Synthetic segment 1 in `d`, and its reference's positions as GGA fixes every fifth
+/// sample, in `fixes.nmea` (dated by a ZDA, the reference's seconds from 1970-01-01
+/// UTC, after one GGA before any date; one with a bad checksum) and in `fixes.csv`
+/// (the sentences' fixes as they round them), with `columns.toml` naming its columns.
+fn gga_fixture(d: &Path) -> PairedFiles {
     write_installed(d, 1, &[], INSTALLED, 3);
     let files = PairedFiles::akit(d, 1);
     let segment = &crate::coverage::segments(std::slice::from_ref(&files))[0];
@@ -731,6 +727,18 @@ fn nmea_gga_fixes_calibrate_as_the_same_fixes_in_csv() {
         "[fix_columns]\ntime = \"t\"\nlatitude_longitude = [\"lat\", \"lon\"]\n",
     )
     .unwrap();
+    files
+}
+
+/// An NMEA file of GGA fixes (dated by a ZDA, the reference's seconds from 1970-01-01
+/// UTC) gives the calibration the same fixes as a CSV file gives, every term within a
+/// tenth of its standard deviation; a GGA before any date is counted, one with a bad
+/// checksum left out and counted.
+#[test]
+fn nmea_gga_fixes_calibrate_as_the_same_fixes_in_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let files = gga_fixture(d);
     let (dvl, attitude) = (
         files.dvl.to_str().unwrap(),
         files.reference.to_str().unwrap(),
@@ -764,6 +772,73 @@ fn nmea_gga_fixes_calibrate_as_the_same_fixes_in_csv() {
         "{from_nmea}"
     );
     terms_agree(&from_csv, &from_nmea, 0.1);
+}
+
+/// A DVL's own log fitted to fixes beside another file's attitude and fixes (the
+/// reference's CSV, an NMEA file), and a Water Linked log beside its own attitude (its
+/// dead-reckoning reports), calibrate as the same recording's CSV: every term within
+/// one standard deviation (PD0's velocities are whole mm/s). A Water Linked log with
+/// no dead-reckoning report, named as its own attitude, is refused naming the file.
+#[test]
+fn dvl_logs_fit_fixes_beside_their_own_or_another_files_attitude() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let files = gga_fixture(d);
+    let recording = paired::read(&files, &PairedColumns::akit()).unwrap();
+    as_pd0(&recording, &d.join("dvl.pd0"));
+    as_water_linked(&recording, &d.join("bare.json"));
+    let mut lines = std::fs::read_to_string(d.join("bare.json")).unwrap();
+    for (&t, rpy) in recording
+        .reference_time_s
+        .iter()
+        .zip(&recording.attitude_rad)
+    {
+        let [roll, pitch, yaw] = rpy.map(f64::to_degrees);
+        lines.push_str(&format!(
+            r#"{{"ts":{t},"x":0.0,"y":0.0,"z":0.0,"std":0.01,"roll":{roll},"pitch":{pitch},"yaw":{yaw},"type":"position_local","status":0,"format":"json_v3.3"}}"#
+        ));
+        lines.push('\n');
+    }
+    std::fs::write(d.join("own.json"), lines).unwrap();
+    let fit = |dvl: &str, attitude: &str, out: &str| {
+        let args = [
+            "calibrate",
+            dvl,
+            "--attitude",
+            attitude,
+            "--fixes",
+            "fixes.nmea",
+        ];
+        dcnet(
+            d,
+            &[&args[..], &["--fix-noise-m", "0.5", "--out", out]].concat(),
+        )
+    };
+    let reference = files.reference.to_str().unwrap();
+    let from_csv = fit(files.dvl.to_str().unwrap(), reference, "out-csv");
+    assert!(from_csv.status.success(), "{}", stderr(&from_csv));
+    for (dvl, attitude, expected) in [
+        ("dvl.pd0", reference, "the attitude from "),
+        (
+            "own.json",
+            "own.json",
+            "the roll, pitch and yaw of its dead-reckoning reports",
+        ),
+    ] {
+        let output = fit(dvl, attitude, &format!("out-{dvl}"));
+        assert!(output.status.success(), "{dvl}: {}", stderr(&output));
+        let text = stdout(&output);
+        assert!(text.contains(expected), "{expected}\nnot in\n{text}");
+        assert!(text.contains("the fixes from the NMEA file"), "{text}");
+        terms_agree(&stdout(&from_csv), &text, 1.0);
+    }
+    let output = fit("bare.json", "bare.json", "out-bare");
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("bare.json: this Water Linked JSON log records no attitude"),
+        "{}",
+        stderr(&output)
+    );
 }
 
 /// A study whose recordings' DVLs are Water Linked logs (the same velocities, written

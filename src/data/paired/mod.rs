@@ -26,7 +26,7 @@ pub use crate::files::SourceFile;
 pub use checks::{Locator, Unchecked};
 pub use columns::{GapLimit, PairedColumns, PairedFiles};
 pub use error::{PairedError, left_out_words};
-pub use source::{Loaded, ReadRecording, Recordings, Source};
+pub use source::{Loaded, ReadRecording, Recordings, Source, read_log_beside_attitude};
 
 use crate::Vec3;
 use std::ops::Range;

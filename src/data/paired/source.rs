@@ -120,16 +120,44 @@ impl Source {
     }
 }
 
-/// The samples of a DVL log beside its reference's CSV file (a path and its bytes)
-/// read with `columns`, and where each came from: a ping's place is its number in the
-/// log.
+/// The DVL's own log `(path, format, thresholds)` beside the attitude of the file
+/// `attitude` (a CSV file's columns as `columns` names them, or an NMEA file's PASHR),
+/// checked as any recording: the reference has no velocity, for a calibration against
+/// fixes; and the log as read.
+pub fn read_log_beside_attitude(
+    (dvl, format, thresholds): (&Path, LogFormat, Thresholds),
+    attitude: &Path,
+    columns: &PairedColumns,
+) -> Result<(ReadRecording, DvlLog), PairedError> {
+    let log = dvl_log::read(dvl, format, thresholds)?;
+    let bytes = read_bytes(attitude)?;
+    let files = vec![
+        log.summary.file.clone(),
+        SourceFile {
+            path: attitude.to_path_buf(),
+            sha256: sha256_hex(&bytes),
+        },
+    ];
+    let (samples, at) = log_samples(log.clone(), (attitude, &bytes), columns, false)?;
+    let read = ReadRecording {
+        recording: checks::check(samples, &at)?,
+        files,
+        frames: None,
+    };
+    Ok((read, log))
+}
+
+/// The samples of a DVL log beside its reference's file (a path and its bytes) read
+/// with `columns`, its velocity where `with_velocity`, and where each came from: a
+/// ping's place is its number in the log.
 fn log_samples(
     log: DvlLog,
     reference: (&Path, &[u8]),
     columns: &PairedColumns,
+    with_velocity: bool,
 ) -> Result<(super::Unchecked, super::Locator), PairedError> {
     let (reference_samples, reference_lines) =
-        super::csv::parse_reference(reference, columns, true)?;
+        super::csv::parse_reference(reference, columns, with_velocity)?;
     let mut names = super::csv::reference_names(&reference_samples, columns);
     names.dvl = dvl_log::VELOCITY_NAMES.map(String::from);
     let at = super::Locator {
@@ -190,7 +218,8 @@ impl Loaded<'_> {
                 (samples, at, Some(frames))
             }
             (Source::Log { columns, .. }, Content::Log(log, bytes)) => {
-                let (samples, at) = log_samples(*log, (&self.files[1].path, &bytes), columns)?;
+                let (samples, at) =
+                    log_samples(*log, (&self.files[1].path, &bytes), columns, true)?;
                 (samples, at, None)
             }
             (_, Content::Bytes(_) | Content::Log(..)) => {

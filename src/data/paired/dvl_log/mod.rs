@@ -1,7 +1,8 @@
 //! A DVL's own log as the DVL's half of a paired recording, beside a reference read
 //! from CSV: Teledyne RDI's PD0 (`pd0.rs`, turned into the vehicle's axes by
-//! `frames.rs`). The format is found from the file's first bytes (PD0's 0x7F 0x7F) or
-//! named. Every ping is kept as a sample, those the instrument did not measure with
+//! `frames.rs`) or Water Linked's JSON reports (`water_linked.rs`); or beside the
+//! attitude the log itself records ([`OwnAttitude`]), for a fit to fixes. The format
+//! is found from the file's first bytes (PD0's 0x7F 0x7F, a JSON report) or named. Every ping is kept as a sample, those the instrument did not measure with
 //! the reason it states (no bottom track, no velocity, too few beams of the correlation
 //! or percent good asked), so that the plausibility checks count them with the
 //! recording's other left-out samples; a three-beam solution is kept and counted. An
@@ -46,7 +47,7 @@ pub enum LogError {
     Empty { path: PathBuf, bytes: u64 },
     #[error("{}: no velocity report (\"type\": \"velocity\") among its {reports} reports", path.display())]
     NoReports { path: PathBuf, reports: u64 },
-    #[error("{}: a {} log's pings carry no attitude: give the attitude's own file with --attitude", path.display(), format.words())]
+    #[error("{}: this {} log records no attitude (a Water Linked log's is in its dead-reckoning reports, \"position_local\"): give the attitude's own file with --attitude", path.display(), format.words())]
     NoAttitude { path: PathBuf, format: LogFormat },
 }
 
@@ -75,6 +76,26 @@ impl LogFormat {
         match self {
             LogFormat::Pd0 => "Teledyne RDI PD0",
             LogFormat::WaterLinked => "Water Linked JSON",
+        }
+    }
+
+    /// What the log's own heading is called.
+    fn own_heading(self) -> &'static str {
+        match self {
+            LogFormat::Pd0 => "heading",
+            LogFormat::WaterLinked => "yaw",
+        }
+    }
+
+    /// Where the log's own attitude comes from, in words.
+    pub fn own_attitude_words(self) -> &'static str {
+        match self {
+            LogFormat::Pd0 => {
+                "each ensemble's roll, pitch and heading: what its velocities were turned by"
+            }
+            LogFormat::WaterLinked => {
+                "the roll, pitch and yaw of its dead-reckoning reports (\"position_local\"), the DVL's own: a yaw offset from north is a constant the fitted misalignment z takes"
+            }
         }
     }
 }
@@ -107,13 +128,24 @@ pub struct DvlLog {
     pub stated: Vec<Option<LeftOutWhy>>,
     /// Each ping's number in the log (a PD0 ensemble's), where messages place it.
     pub number: Vec<u64>,
-    /// Each ping's roll, pitch and yaw as the DVL recorded them (its own sensors', or
-    /// the vehicle's it was given), degrees: what the log's velocities were turned by.
-    pub attitude_deg: Vec<Vec3>,
+    /// The attitude the log records, on its clock.
+    pub attitude: OwnAttitude,
     /// The NMEA sentences the recorder wrote beside each ping: the ping's stamp, its
     /// number and the sentence.
     pub sentences: Vec<(f64, u64, String)>,
     pub summary: LogSummary,
+}
+
+/// The attitude a DVL's log records (its own sensors', or the vehicle's it was given):
+/// a PD0 ensemble's heading, pitch and roll (what its velocities were turned by), a
+/// Water Linked dead-reckoning report's roll, pitch and yaw.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct OwnAttitude {
+    pub time_s: Vec<f64>,
+    /// Roll, pitch and yaw (the heading), degrees.
+    pub roll_pitch_yaw_deg: Vec<Vec3>,
+    /// Where each was read: a PD0 ensemble's number, a JSON report's line.
+    pub number: Vec<u64>,
 }
 
 /// What a log held, beyond its pings: what `data info` says of it.
@@ -152,7 +184,16 @@ pub fn read(path: &Path, format: LogFormat, thresholds: Thresholds) -> Result<Dv
 /// states it (thresholds do not apply: the DVL gives no correlation).
 fn read_water_linked(path: &Path) -> Result<DvlLog, PairedError> {
     let mut log = DvlLog::empty(LogFormat::WaterLinked, path);
-    let survey = water_linked::read(path, &mut |report| {
+    let survey = water_linked::read(path, &mut |read| {
+        let report = match read {
+            water_linked::Read::Ping(report) => report,
+            water_linked::Read::Attitude(own) => {
+                log.attitude.time_s.push(own.time_s);
+                log.attitude.roll_pitch_yaw_deg.push(own.roll_pitch_yaw_deg);
+                log.attitude.number.push(own.line);
+                return;
+            }
+        };
         let stated = if report.water_track {
             Some(LeftOutWhy::WaterTrack)
         } else if !report.velocity_valid {
@@ -225,8 +266,10 @@ fn read_pd0(path: &Path, thresholds: Thresholds) -> Result<DvlLog, PairedError> 
         log.velocity_m_s.push(velocity_m_s);
         log.stated.push(stated);
         log.number.push(u64::from(ensemble.number));
-        log.attitude_deg.push(frames::roll_pitch_yaw_deg(&ensemble));
         let (time_s, number) = (ensemble.time_s, u64::from(ensemble.number));
+        log.attitude.time_s.push(time_s);
+        (log.attitude.roll_pitch_yaw_deg).push(frames::roll_pitch_yaw_deg(&ensemble));
+        log.attitude.number.push(number);
         (log.sentences).extend(ensemble.sentences.into_iter().map(|s| (time_s, number, s)));
     })?;
     let summary = &mut log.summary;
@@ -251,16 +294,16 @@ pub const VELOCITY_NAMES: [&str; 3] = [
     "bottom track down",
 ];
 
-/// The log at `path` as a recording of the DVL beside its own attitude (what its
-/// velocities were turned by, on its own clock), checked as any recording: the
-/// reference has no velocity, for a calibration against fixes; and the log as read.
+/// The log at `path` as a recording of the DVL beside its own attitude ([`OwnAttitude`],
+/// on the log's clock), checked as any recording: the reference has no velocity, for a
+/// calibration against fixes; and the log as read.
 pub fn read_beside_own_attitude(
     path: &Path,
     format: LogFormat,
     thresholds: Thresholds,
 ) -> Result<(ReadRecording, DvlLog), PairedError> {
     let log = read(path, format, thresholds)?;
-    if log.attitude_deg.len() != log.time_s.len() {
+    if log.attitude.time_s.is_empty() {
         return Err(LogError::NoAttitude {
             path: path.to_path_buf(),
             format,
@@ -271,9 +314,9 @@ pub fn read_beside_own_attitude(
         dvl_time_s: log.time_s.clone(),
         dvl_m_s: log.velocity_m_s.clone(),
         dvl_stated: Some(log.stated.clone()),
-        reference_time_s: log.time_s.clone(),
+        reference_time_s: log.attitude.time_s.clone(),
         velocity_ned_m_s: Vec::new(),
-        attitude: log.attitude_deg.clone(),
+        attitude: log.attitude.roll_pitch_yaw_deg.clone(),
         rate: None,
         angles_in_degrees: true,
         position: None,
@@ -282,12 +325,12 @@ pub fn read_beside_own_attitude(
     let mut names = PairedColumns::akit();
     names.time = "clock".into();
     names.dvl = VELOCITY_NAMES.map(String::from);
-    names.attitude = ["roll", "pitch", "heading"].map(String::from);
+    names.attitude = ["roll", "pitch", format.own_heading()].map(String::from);
     let at = Locator {
         dvl: path.to_path_buf(),
         reference: path.to_path_buf(),
         dvl_lines: log.number.clone(),
-        reference_lines: log.number.clone(),
+        reference_lines: log.attitude.number.clone(),
         names,
     };
     let read = ReadRecording {
@@ -373,7 +416,7 @@ impl DvlLog {
             velocity_m_s: Vec::new(),
             stated: Vec::new(),
             number: Vec::new(),
-            attitude_deg: Vec::new(),
+            attitude: OwnAttitude::default(),
             sentences: Vec::new(),
             summary: LogSummary::empty(format, path),
         }

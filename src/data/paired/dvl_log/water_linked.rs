@@ -4,13 +4,15 @@
 //! `vx`, `vy`, `vz` the DVL's own velocity in its body frame (x forward, y right, z down),
 //! `velocity_valid` whether it had lock, each transducer's `beam_valid` how many beams it
 //! used (three make a three-beam solution, kept and counted). A `velocity_water` report
-//! (water tracking, from json_v3.2) is a ping left out as such. Other reports (dead
-//! reckoning, responses) are counted by type and not read. The file is read a line at
+//! (water tracking, from json_v3.2) is a ping left out as such. A `position_local`
+//! report (dead reckoning) gives the DVL's own attitude: `roll`, `pitch`, `yaw` in
+//! degrees at `ts` (s since 1970 UTC). Other reports (responses) are counted by type
+//! and not read. The file is read a line at
 //! a time; a line that is no JSON report, or a format other than json_v3 to json_v3.3,
 //! is refused naming its line, but for a last line the file ends inside (a logger
 //! stopped mid-write), which is counted.
-//! In: a file's path. Out: each [`Report`] handed to a visitor, then a
-//! [`ReportSurvey`] with the file's SHA-256.
+//! In: a file's path. Out: each [`Report`] and [`DeadReckoning`] handed to a visitor,
+//! then a [`ReportSurvey`] with the file's SHA-256.
 
 use super::LogError;
 use crate::files::read_lines;
@@ -34,6 +36,24 @@ pub struct Report {
     pub beams_valid: usize,
     /// Tracking the water (`velocity_water`), not the bottom.
     pub water_track: bool,
+}
+
+/// The DVL's own attitude as a dead-reckoning report gives it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DeadReckoning {
+    /// Its line in the file (the first is 1).
+    pub line: u64,
+    /// s since 1970 UTC.
+    pub time_s: f64,
+    /// Roll, pitch and yaw, degrees: about the DVL's x (forward), y (right), z (down).
+    pub roll_pitch_yaw_deg: [f64; 3],
+}
+
+/// A report read: a ping, or the DVL's attitude.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Read {
+    Ping(Report),
+    Attitude(DeadReckoning),
 }
 
 /// What a whole file held beyond its pings.
@@ -67,12 +87,20 @@ struct Velocity {
 }
 
 #[derive(serde::Deserialize)]
+struct Position {
+    ts: f64,
+    roll: f64,
+    pitch: f64,
+    yaw: f64,
+}
+
+#[derive(serde::Deserialize)]
 struct Transducer {
     beam_valid: bool,
 }
 
-/// Reads `path` a line at a time, handing each ping to `visit`.
-pub fn read(path: &Path, visit: &mut dyn FnMut(Report)) -> Result<ReportSurvey, LogError> {
+/// Reads `path` a line at a time, handing each ping and attitude to `visit`.
+pub fn read(path: &Path, visit: &mut dyn FnMut(Read)) -> Result<ReportSurvey, LogError> {
     let io = |source| LogError::Io {
         path: path.to_path_buf(),
         source,
@@ -115,19 +143,28 @@ pub fn read(path: &Path, visit: &mut dyn FnMut(Report)) -> Result<ReportSurvey, 
             }
             *survey.formats.entry(format.clone()).or_default() += 1;
         }
+        let malformed = |error| refuse(line, format!("a {} report: {error}", kind.kind));
+        if kind.kind == "position_local" {
+            let report: Position = serde_json::from_slice(trimmed).map_err(malformed)?;
+            visit(Read::Attitude(DeadReckoning {
+                line,
+                time_s: report.ts,
+                roll_pitch_yaw_deg: [report.roll, report.pitch, report.yaw],
+            }));
+            return Ok(());
+        }
         if kind.kind != "velocity" && kind.kind != "velocity_water" {
             return Ok(());
         }
-        let report: Velocity = serde_json::from_slice(trimmed)
-            .map_err(|error| refuse(line, format!("a {} report: {error}", kind.kind)))?;
-        visit(Report {
+        let report: Velocity = serde_json::from_slice(trimmed).map_err(malformed)?;
+        visit(Read::Ping(Report {
             line,
             time_s: report.time_of_validity as f64 * 1e-6,
             velocity_m_s: [report.vx, report.vy, report.vz],
             velocity_valid: report.velocity_valid,
             beams_valid: report.transducers.iter().filter(|t| t.beam_valid).count(),
             water_track: kind.kind == "velocity_water",
-        });
+        }));
         Ok(())
     })?;
     Ok(survey)
