@@ -290,36 +290,3 @@ pub fn peak_resident_memory() -> String {
         })
         .unwrap_or_else(|| "not measured (no /proc/self/status)".into())
 }
-
-/// Runs the studies `experiments/{csv}.toml` and `experiments/{other}.toml` in `dir`
-/// (`--no-plots`) and checks that they score alike: the same methods, each held-out
-/// RMSE within 1e-6 cm/s of the other's.
-pub fn studies_score_alike(dir: &Path, csv: &str, other: &str) {
-    for name in [csv, other] {
-        let output = super::dcnet(
-            dir,
-            &["run", &format!("experiments/{name}.toml"), "--no-plots"],
-        );
-        assert!(
-            output.status.success(),
-            "{name}: {}",
-            super::stderr(&output)
-        );
-    }
-    let scores = |name: &str| {
-        let batch = super::read_parquet(&dir.join(format!("results/{name}/summary.parquet")));
-        (
-            super::strings(&batch, "method"),
-            super::floats(&batch, "rmse_cm_s"),
-        )
-    };
-    let (csv, other) = (scores(csv), scores(other));
-    assert_eq!(csv.0, other.0);
-    assert!(!csv.1.is_empty());
-    for (a, b) in csv.1.iter().zip(&other.1) {
-        assert!(
-            (a.unwrap() - b.unwrap()).abs() < 1e-6,
-            "{a:?} against {b:?}"
-        );
-    }
-}

@@ -166,6 +166,32 @@ pub fn small_quick_run(dir: &Path, extra: &[&str]) {
     quick_run(dir, &[&small, extra].concat());
 }
 
+/// Runs the studies `experiments/{csv}.toml` and `experiments/{other}.toml` in `dir`
+/// (`--no-plots`) and checks that they score alike: the same methods, each held-out
+/// RMSE within 1e-6 cm/s of the other's.
+pub fn studies_score_alike(dir: &Path, csv: &str, other: &str) {
+    for name in [csv, other] {
+        let output = dcnet(
+            dir,
+            &["run", &format!("experiments/{name}.toml"), "--no-plots"],
+        );
+        assert!(output.status.success(), "{name}: {}", stderr(&output));
+    }
+    let scores = |name: &str| {
+        let batch = read_parquet(&dir.join(format!("results/{name}/summary.parquet")));
+        (strings(&batch, "method"), floats(&batch, "rmse_cm_s"))
+    };
+    let (csv, other) = (scores(csv), scores(other));
+    assert_eq!(csv.0, other.0);
+    assert!(!csv.1.is_empty());
+    for (a, b) in csv.1.iter().zip(&other.1) {
+        assert!(
+            (a.unwrap() - b.unwrap()).abs() < 1e-6,
+            "{a:?} against {b:?}"
+        );
+    }
+}
+
 pub fn read_parquet(path: &Path) -> RecordBatch {
     let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let reader = ParquetRecordBatchReaderBuilder::try_new(file)

@@ -576,7 +576,7 @@ fn a_study_of_bags_scores_as_the_study_of_their_csv_files() {
         );
     }
     std::fs::write(d.join("experiments/bags.toml"), &spec).unwrap();
-    crate::common::installed::studies_score_alike(d, "csv", "bags");
+    crate::common::studies_score_alike(d, "csv", "bags");
     let wrong = spec
         .replace(
             "dvl = \"../data/bags/S1.mcap\"",

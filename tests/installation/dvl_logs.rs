@@ -865,7 +865,7 @@ fn a_study_of_dvl_logs_scores_as_the_study_of_their_csv_files() {
         );
     }
     std::fs::write(d.join("experiments/logs.toml"), &spec).unwrap();
-    crate::common::installed::studies_score_alike(d, "csv", "logs");
+    crate::common::studies_score_alike(d, "csv", "logs");
     let wrong = spec
         .replace("dvl = \"../data/logs/S1.json\"", "dvl = \"../data/logs/S1.json\"\ndvl_format = \"nortek\"")
         .replace(
