@@ -11,7 +11,7 @@ use crate::data::fixes::{FixColumns, Fixes, read_beside_attitude, read_fixes};
 use crate::data::nmea::{gga_fixes, is_nmea, read_nmea_fixes};
 use crate::data::paired::Source;
 use crate::data::paired::bag::{BagError, is_bag, read_bag_beside_attitude};
-use crate::data::paired::dvl_log::{self, LogFormat, read_beside_own_attitude};
+use crate::data::paired::dvl_log::{self, LogFormat, navigation_fixes, read_beside_own_attitude};
 use crate::data::paired::read_log_beside_attitude;
 use crate::data::paired::{PairedError, PairedRecording, ReadCounts, ReadRecording};
 use crate::footprint::machine_memory;
@@ -252,23 +252,36 @@ impl FixFiles<'_> {
                 fixes: self.fixes.to_path_buf(),
             });
         }
-        let Some(gga) = gga_fixes(&log.sentences) else {
+        let logged = match gga_fixes(&log.sentences) {
+            Some(gga) => {
+                let named = format!(
+                    "its GGA sentences ({} of them without a checksum, so unchecked; {} other sentences passed over; ",
+                    gga.without_checksum, gga.others
+                );
+                Some((gga, named))
+            }
+            None => navigation_fixes(&log).map(|fixes| {
+                let named = format!(
+                    "its VmDAS navigation blocks (each ping's last fix before it; {} blocks repeating the fix before, read once; ",
+                    fixes.others
+                );
+                (fixes, named)
+            }),
+        };
+        let Some((gga, named)) = logged else {
             return Err(CalibrateError::Columns(inputs::refused(
                 "--fixes",
                 format!(
-                    "{}: no GGA sentence with a fix among the {} NMEA sentences its recorder wrote into it",
+                    "{}: no fix among the {} NMEA sentences (GGA) and {} VmDAS navigation blocks its recorder wrote into it",
                     self.dvl.display(),
-                    log.sentences.len()
+                    log.sentences.len(),
+                    log.navigation.len()
                 ),
             )));
         };
         let from_log = format!(
-            "{head}; the fixes from its GGA sentences (north and east of {:.7}°, {:.7}°; {} of them without a checksum, so unchecked; {} other sentences passed over), placed on the log's clock, which runs {:.2} s behind the GNSS's (the median of each fix's time less its ping's)",
-            gga.origin_deg[0],
-            gga.origin_deg[1],
-            gga.without_checksum,
-            gga.others,
-            gga.recorder_behind_s
+            "{head}; the fixes from {named}north and east of {:.7}°, {:.7}°), placed on the log's clock, which runs {:.2} s behind the GNSS's (the median of each fix's time less its ping's)",
+            gga.origin_deg[0], gga.origin_deg[1], gga.recorder_behind_s
         );
         let (left_out, fixes) = (gga.left_out.clone(), gga.on_the_recorders_clock());
         let without_noise = fixes.len();

@@ -151,3 +151,28 @@ pub fn log(setup: &Setup, pings: &[Ping]) -> Vec<u8> {
         .flat_map(|(k, ping)| ensemble(setup, k as u32 + 1, ping))
         .collect()
 }
+
+/// VmDAS's navigation block (ID 0x2000, 78 bytes) of a fix at `time_s` (s since 1970
+/// UTC) at `position_deg` (latitude, longitude), flagged updated with its date and time
+/// valid, and its position where `valid`: the UTC date (bytes 2–5: day, month, year), the last fix's
+/// time of day (22–25, 0.1 ms), latitude and longitude (26–33, binary angles of 32
+/// bits), the flags (46–47).
+pub fn navigation(time_s: f64, position_deg: [f64; 2], valid: bool) -> Vec<u8> {
+    use chrono::Datelike;
+    let mut block = vec![0u8; 78];
+    block[0..2].copy_from_slice(&0x2000u16.to_le_bytes());
+    let millis = (time_s * 1000.0).round() as i64;
+    let time = chrono::DateTime::from_timestamp_millis(millis).unwrap();
+    block[2] = time.day() as u8;
+    block[3] = time.month() as u8;
+    block[4..6].copy_from_slice(&(time.year() as u16).to_le_bytes());
+    let of_day = (time_s.rem_euclid(86_400.0) * 1e4).round() as u32;
+    block[22..26].copy_from_slice(&of_day.to_le_bytes());
+    for (k, degrees) in position_deg.into_iter().enumerate() {
+        let bam = (degrees / 180.0 * 2_147_483_648.0).round() as i32;
+        block[26 + 4 * k..30 + 4 * k].copy_from_slice(&bam.to_le_bytes());
+    }
+    let flags: u16 = if valid { 0b10_0011 } else { 0b10_0001 };
+    block[46..48].copy_from_slice(&flags.to_le_bytes());
+    block
+}

@@ -7,7 +7,7 @@
 
 use crate::bags::{TERMS, calibrate, csv_args, terms, terms_agree};
 use crate::common::installed::{INSTALLED, write_installed};
-use crate::common::pd0::{Ping, Setup, beams_of, ensemble, framed, log};
+use crate::common::pd0::{Ping, Setup, beams_of, blocks, ensemble, framed, log, navigation};
 use crate::common::{akit, dcnet, repo, stderr, stdout};
 use dcnet_exp::data::paired::dvl_log::{self, LogFormat, Thresholds, pd0};
 use dcnet_exp::data::paired::{self, LeftOutWhy, PairedColumns, PairedFiles, PairedRecording};
@@ -467,6 +467,52 @@ fn an_akit_segment_as_pd0_calibrates_to_the_csv_terms() {
     calibrates_as_its_csv(dir.path(), &files);
 }
 
+/// The navigation blocks (ID 0x2000) of a public VmDAS log read as dolfyn reads them:
+/// each ensemble's last GNSS fix before its ping, its UTC time to 0.1 ms, its latitude
+/// and longitude within a unit in the last place of dolfyn's float32 (dolfyn leaves out
+/// the file's last ensemble, whose checksum holds). As fixes, each new time is one
+/// (none repeats here: the GNSS and the pings are both at 1 Hz), placed on the log's
+/// clock, which runs 7 h 1 min behind UTC (the recorder on local time, and its drift).
+#[test]
+fn vmdas_navigation_blocks_read_as_dolfyn_reads_them() {
+    let log = dvl_log::read(
+        &public("vmdas01_wh_first200.ENX"),
+        LogFormat::Pd0,
+        Thresholds::default(),
+    )
+    .unwrap();
+    let reference = std::fs::read_to_string(public("vmdas01_wh_first200.dolfyn_nav.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = (reference.lines().skip(1))
+        .map(|line| line.split(',').map(|c| c.parse().unwrap()).collect())
+        .collect();
+    assert_eq!((log.navigation.len(), rows.len()), (200, 199));
+    let ulp = |v: f64| {
+        let single = v as f32;
+        f64::from(f32::from_bits(single.to_bits() + 1) - single).abs()
+    };
+    for ((stamp_s, _, fix), row) in log.navigation.iter().zip(&rows) {
+        assert!((stamp_s - row[0]).abs() < 1e-3, "{stamp_s} against {row:?}");
+        let time_s = fix.time_s.unwrap();
+        assert!((time_s - row[1]).abs() < 1e-4, "{time_s} against {row:?}");
+        assert!(
+            (fix.latitude_deg - row[2]).abs() <= ulp(row[2]),
+            "{fix:?} against {row:?}"
+        );
+        assert!(
+            (fix.longitude_deg - row[3]).abs() <= ulp(row[3]),
+            "{fix:?} against {row:?}"
+        );
+        assert!(fix.position_valid && fix.time_valid, "{fix:?}");
+    }
+    let fixes = dvl_log::navigation_fixes(&log).unwrap();
+    assert_eq!((fixes.fixes.len(), fixes.left_out.len()), (200, 0));
+    assert!(
+        (fixes.recorder_behind_s - 25_268.79).abs() < 0.01,
+        "{}",
+        fixes.recorder_behind_s
+    );
+}
+
 /// `calibrate --fixes` on a public WinRiver PD0 log: its own heading, pitch and roll as
 /// the attitude, its GGA sentences as the fixes, placed on the log's clock (4 h and
 /// 26.3 s behind the GNSS's: the recorder ran on local time), the fixes outside the
@@ -839,6 +885,85 @@ fn dvl_logs_fit_fixes_beside_their_own_or_another_files_attitude() {
         "{}",
         stderr(&output)
     );
+}
+
+/// A PD0 log whose recorder wrote VmDAS navigation blocks (each ping's last fix before
+/// it, from the GGA fixes' positions; before the first fix, the position flagged
+/// invalid) is fitted to them beside the reference's attitude as the CSV DVL is fitted
+/// to the same fixes in CSV: every term within one standard deviation; each block
+/// repeating the fix before is read once and counted, each flagged invalid left out
+/// and counted (the log's velocities are whole mm/s, and the fixes are placed on its
+/// clock by the median of their age at each ping).
+#[test]
+fn a_pd0_logs_vmdas_navigation_blocks_are_its_fixes() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let files = gga_fixture(d);
+    let recording = paired::read(&files, &PairedColumns::akit()).unwrap();
+    let fixes: Vec<(f64, [f64; 2])> = (std::fs::read_to_string(d.join("fixes.csv")).unwrap())
+        .lines()
+        .skip(1)
+        .map(|line| {
+            let row: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
+            (row[0], [row[1].to_degrees(), row[2].to_degrees()])
+        })
+        .collect();
+    let setup = Setup {
+        frame: 1,
+        beam_angle_code: 2,
+        convex: true,
+        alignment_deg: 0.0,
+    };
+    let (mut bytes, mut before_any) = (Vec::new(), 0);
+    for (k, (&time_s, v)) in recording.time_s.iter().zip(&recording.dvl_m_s).enumerate() {
+        let mm = |x: f64| (x * 1000.0).round() as i16;
+        let ping = Ping::good(time_s, [mm(-v[1]), mm(-v[0]), mm(v[2]), 0]);
+        let mut blocks = blocks(&setup, k as u32 + 1, &ping).to_vec();
+        // Before the first fix, VmDAS writes its block with the position flagged invalid.
+        match fixes.iter().rev().find(|(t, _)| *t <= time_s) {
+            Some(&(fix_s, position_deg)) => blocks.push(navigation(fix_s, position_deg, true)),
+            None => {
+                blocks.push(navigation(time_s, [0.0; 2], false));
+                before_any += 1;
+            }
+        }
+        bytes.extend(framed(&blocks));
+    }
+    std::fs::write(d.join("nav.pd0"), bytes).unwrap();
+    let reference = files.reference.to_str().unwrap();
+    let fit = |dvl: &str, fixes: &str, out: &str| {
+        let args = ["calibrate", dvl, "--attitude", reference, "--fixes", fixes];
+        let more = [
+            "--columns",
+            "columns.toml",
+            "--fix-noise-m",
+            "0.5",
+            "--out",
+            out,
+        ];
+        let output = dcnet(d, &[&args[..], &more].concat());
+        assert!(output.status.success(), "{}", stderr(&output));
+        stdout(&output)
+    };
+    let from_csv = fit(files.dvl.to_str().unwrap(), "fixes.csv", "out-csv");
+    let from_log = fit("nav.pd0", "nav.pd0", "out-log");
+    let repeats = recording.time_s.len() - before_any - fixes.len();
+    for expected in [
+        format!(
+            "the fixes from its VmDAS navigation blocks (each ping's last fix before it; {repeats} blocks repeating the fix before, read once;"
+        ),
+        format!(
+            "{} fixes ({before_any} more left out: a VmDAS navigation block whose position is flagged invalid)",
+            fixes.len()
+        ),
+    ] {
+        assert!(
+            from_log.contains(&expected),
+            "{expected}\nnot in\n{from_log}"
+        );
+    }
+    assert!(before_any > 0 && repeats > 0, "{before_any} {repeats}");
+    terms_agree(&from_csv, &from_log, 1.0);
 }
 
 /// A study whose recordings' DVLs are Water Linked logs (the same velocities, written

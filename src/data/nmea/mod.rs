@@ -8,12 +8,12 @@
 //! as written and counted as unchecked.
 //! The recorder's clock may run on another time zone, and drift: the median of each
 //! fix's time less its stamp says how far behind the GNSS's it runs, and places the
-//! fixes on it ([`GgaFixes::on_the_recorders_clock`]); what remains of the clocks'
+//! fixes on it ([`LoggedFixes::on_the_recorders_clock`]); what remains of the clocks'
 //! difference is the calibration's time offset to find.
 //! An NMEA file of its own (a GNSS's or a USBL's log) is read a line at a time, each GGA
 //! dated by the last RMC or ZDA before it ([`read_nmea_fixes`]).
 //! In: the sentences, each with the stamp it was recorded beside (s since 1970 UTC) and
-//! its place, or an NMEA file. Out: [`GgaFixes`]: the fixes, north and east of the
+//! its place, or an NMEA file. Out: [`LoggedFixes`]: the fixes, north and east of the
 //! first, and the counts of those left out.
 
 pub mod reference;
@@ -65,7 +65,7 @@ pub fn holds_nmea(bytes: &[u8]) -> bool {
 /// line), each dated by the last RMC or ZDA before it (a GGA before any is counted as
 /// undated), on UTC in seconds since 1970; the file with its SHA-256; and how many GGA
 /// were undated. Read a line at a time.
-pub fn read_nmea_fixes(path: &Path) -> Result<(GgaFixes, SourceFile, usize), NmeaError> {
+pub fn read_nmea_fixes(path: &Path) -> Result<(LoggedFixes, SourceFile, usize), NmeaError> {
     let io = |source| NmeaError::Io {
         path: path.to_path_buf(),
         source,
@@ -115,16 +115,18 @@ fn date_time_s(sentence: &str) -> Option<f64> {
 /// wrapped at midnight.
 const HALF_DAY_S: f64 = 43_200.0;
 
-/// The fixes of a set of sentences, and the GGA sentences left out, by reason.
+/// The fixes a recorder logged beside a DVL's pings (GGA sentences, VmDAS's navigation
+/// blocks), and those left out, by reason.
 #[derive(Debug, Clone, PartialEq)]
-pub struct GgaFixes {
+pub struct LoggedFixes {
     pub fixes: Fixes,
     /// The first fix's latitude and longitude, degrees: where north and east are from.
     pub origin_deg: [f64; 2],
     pub left_out: Vec<(&'static str, usize)>,
-    /// How many sentences of other types were passed over.
+    /// How many sentences of other types were passed over (GGA), or blocks repeating
+    /// the fix before, read once (VmDAS).
     pub others: usize,
-    /// How many GGA sentences came without a checksum, so unchecked.
+    /// How many GGA sentences came without a checksum, so unchecked (none but GGA).
     pub without_checksum: usize,
     /// The median of each fix's time less the stamp it was recorded beside, s: how far
     /// the recorder's clock runs behind the GNSS's (its time zone, its drift, and the
@@ -132,9 +134,47 @@ pub struct GgaFixes {
     pub recorder_behind_s: f64,
 }
 
-impl GgaFixes {
+/// A fix a recorder logged beside a ping: the ping's stamp (s on the recorder's clock)
+/// and place, the fix's own time (s since 1970 UTC), its latitude and longitude (°).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoggedFix {
+    pub stamp_s: f64,
+    pub place: u64,
+    pub time_s: f64,
+    pub position_deg: [f64; 2],
+}
+
+impl LoggedFixes {
+    /// `fixes` (each later than the one before), north and east of the first, with
+    /// those `left_out` by reason; `None` where there is none.
+    pub fn new(
+        fixes: &[LoggedFix],
+        left_out: Vec<(&'static str, usize)>,
+        (others, without_checksum): (usize, usize),
+    ) -> Option<LoggedFixes> {
+        let origin_deg = fixes.first()?.position_deg;
+        let radians: Vec<[f64; 2]> = (fixes.iter())
+            .map(|fix| fix.position_deg.map(f64::to_radians))
+            .collect();
+        let behind_s: Vec<f64> = fixes.iter().map(|fix| fix.time_s - fix.stamp_s).collect();
+        Some(LoggedFixes {
+            fixes: Fixes {
+                lines: fixes.iter().map(|fix| fix.place).collect(),
+                time_s: fixes.iter().map(|fix| fix.time_s).collect(),
+                north_east_m: north_east_m(radians[0], &radians),
+                depth_m: None,
+                noise_m: None,
+            },
+            origin_deg,
+            left_out: left_out.into_iter().filter(|&(_, n)| n > 0).collect(),
+            others,
+            without_checksum,
+            recorder_behind_s: crate::median(&behind_s),
+        })
+    }
+
     /// The fixes placed on the recorder's clock: each moved by
-    /// [`GgaFixes::recorder_behind_s`].
+    /// [`LoggedFixes::recorder_behind_s`].
     pub fn on_the_recorders_clock(mut self) -> Fixes {
         for t in &mut self.fixes.time_s {
             *t -= self.recorder_behind_s;
@@ -153,11 +193,10 @@ const LEFT_OUT: [&str; 4] = [
 
 /// The fixes of `sentences` (each the stamp it was recorded beside, its place, the
 /// sentence); `None` where no GGA gives a fix.
-pub fn gga_fixes(sentences: &[(f64, u64, String)]) -> Option<GgaFixes> {
+pub fn gga_fixes(sentences: &[(f64, u64, String)]) -> Option<LoggedFixes> {
     let mut counts = [0usize; 4];
     let (mut others, mut without_checksum) = (0, 0);
-    let (mut lines, mut time_s, mut position_deg) = (Vec::new(), Vec::new(), Vec::new());
-    let mut behind_s = Vec::new();
+    let mut fixes: Vec<LoggedFix> = Vec::new();
     for (stamp_s, place, sentence) in sentences {
         if !is_gga(sentence) {
             others += 1;
@@ -190,36 +229,19 @@ pub fn gga_fixes(sentences: &[(f64, u64, String)]) -> Option<GgaFixes> {
             continue;
         };
         let fix_s = on_the_day_of(*stamp_s, time);
-        if time_s.last().is_some_and(|&last| fix_s <= last) {
+        if fixes.last().is_some_and(|last| fix_s <= last.time_s) {
             counts[3] += 1;
             continue;
         }
-        lines.push(*place);
-        behind_s.push(fix_s - stamp_s);
-        time_s.push(fix_s);
-        position_deg.push([latitude, longitude]);
+        fixes.push(LoggedFix {
+            stamp_s: *stamp_s,
+            place: *place,
+            time_s: fix_s,
+            position_deg: [latitude, longitude],
+        });
     }
-    let origin_deg = *position_deg.first()?;
-    let radians: Vec<[f64; 2]> = position_deg
-        .iter()
-        .map(|p| p.map(f64::to_radians))
-        .collect();
-    Some(GgaFixes {
-        fixes: Fixes {
-            lines,
-            time_s,
-            north_east_m: north_east_m(radians[0], &radians),
-            depth_m: None,
-            noise_m: None,
-        },
-        origin_deg,
-        left_out: (LEFT_OUT.into_iter().zip(counts))
-            .filter(|&(_, n)| n > 0)
-            .collect(),
-        others,
-        without_checksum,
-        recorder_behind_s: crate::median(&behind_s),
-    })
+    let left_out = LEFT_OUT.into_iter().zip(counts).collect();
+    LoggedFixes::new(&fixes, left_out, (others, without_checksum))
 }
 
 /// The sentence of `body` (what lies between `$` and `*`) with its checksum.

@@ -20,6 +20,7 @@ use super::{
     LeftOutWhy, Locator, PairedColumns, PairedError, ReadRecording, SourceFile, Unchecked,
 };
 use crate::Vec3;
+use crate::data::nmea::{LoggedFix, LoggedFixes};
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
@@ -133,6 +134,9 @@ pub struct DvlLog {
     /// The NMEA sentences the recorder wrote beside each ping: the ping's stamp, its
     /// number and the sentence.
     pub sentences: Vec<(f64, u64, String)>,
+    /// The fixes VmDAS wrote beside each ping (its navigation block): the ping's stamp,
+    /// its number and the fix.
+    pub navigation: Vec<(f64, u64, pd0::NavigationFix)>,
     pub summary: LogSummary,
 }
 
@@ -271,6 +275,7 @@ fn read_pd0(path: &Path, thresholds: Thresholds) -> Result<DvlLog, PairedError> 
         (log.attitude.roll_pitch_yaw_deg).push(frames::roll_pitch_yaw_deg(&ensemble));
         log.attitude.number.push(number);
         (log.sentences).extend(ensemble.sentences.into_iter().map(|s| (time_s, number, s)));
+        (log.navigation).extend(ensemble.navigation.map(|fix| (time_s, number, fix)));
     })?;
     let summary = &mut log.summary;
     summary.file.sha256 = survey.sha256;
@@ -339,6 +344,55 @@ pub fn read_beside_own_attitude(
         frames: None,
     };
     Ok((read, log))
+}
+
+/// Why a VmDAS navigation block gives no fix.
+const NAVIGATION_LEFT_OUT: [&str; 3] = [
+    "a VmDAS navigation block whose position is flagged invalid",
+    "a VmDAS navigation block whose date and time are flagged invalid, or no date",
+    "a VmDAS navigation block whose fix is stamped at or before the previous one, at another position",
+];
+
+/// The fixes of the VmDAS navigation blocks of `log`, each block's last fix before its
+/// ping, on UTC (a block repeating the fix before, where pings outpace the GNSS, is that
+/// fix, read once and counted among [`LoggedFixes::others`]); `None` where no block
+/// gives one.
+pub fn navigation_fixes(log: &DvlLog) -> Option<LoggedFixes> {
+    let (mut counts, mut repeats) = ([0usize; 3], 0);
+    let mut fixes: Vec<LoggedFix> = Vec::new();
+    for &(stamp_s, place, fix) in &log.navigation {
+        let time_s = match (fix.position_valid, fix.time_valid, fix.time_s) {
+            (false, ..) => {
+                counts[0] += 1;
+                continue;
+            }
+            (true, true, Some(time_s)) => time_s,
+            (true, ..) => {
+                counts[1] += 1;
+                continue;
+            }
+        };
+        let position_deg = [fix.latitude_deg, fix.longitude_deg];
+        match fixes.last() {
+            Some(last) if (last.time_s, last.position_deg) == (time_s, position_deg) => {
+                repeats += 1;
+                continue;
+            }
+            Some(last) if time_s <= last.time_s => {
+                counts[2] += 1;
+                continue;
+            }
+            _ => {}
+        }
+        fixes.push(LoggedFix {
+            stamp_s,
+            place,
+            time_s,
+            position_deg,
+        });
+    }
+    let left_out = NAVIGATION_LEFT_OUT.into_iter().zip(counts).collect();
+    LoggedFixes::new(&fixes, left_out, (repeats, 0))
 }
 
 /// What a PD0 ping's validity is read from, in words: `applied`, the instrument's
@@ -418,6 +472,7 @@ impl DvlLog {
             number: Vec::new(),
             attitude: OwnAttitude::default(),
             sentences: Vec::new(),
+            navigation: Vec::new(),
             summary: LogSummary::empty(format, path),
         }
     }

@@ -5,8 +5,9 @@
 //! angle and pattern, the heading alignment EA, where the attitude came from, EZ), the
 //! variable leader (the ensemble's clock and attitude) and bottom track (four
 //! velocities in mm/s, −32768 for none, each beam's correlation, evaluation amplitude,
-//! percent good and range), and the NMEA sentences WinRiver writes as text (IDs
-//! 0x2101–0x2104). Every other data type is counted by its ID and not read.
+//! percent good and range), the NMEA sentences WinRiver writes as text (IDs
+//! 0x2101–0x2104) and the last GNSS fix VmDAS writes in its navigation block (ID
+//! 0x2000). Every other data type is counted by its ID and not read.
 //! The file is streamed: a long log is never held whole.
 //! An ensemble whose checksum fails is counted and not read, and so is a last ensemble
 //! the file ends inside (a log cut as the recorder stopped: its length points past
@@ -29,6 +30,11 @@ const VARIABLE_LEADER: u16 = 0x0080;
 pub const BOTTOM_TRACK: u16 = 0x0600;
 /// WinRiver's blocks of NMEA sentences as text.
 const NMEA_TEXT: std::ops::RangeInclusive<u16> = 0x2101..=0x2104;
+/// VmDAS's navigation block, and the bytes read of it (to the last fix's longitude).
+const VMDAS_NAVIGATION: u16 = 0x2000;
+const VMDAS_NAVIGATION_READ: usize = 48;
+/// Degrees per unit of a binary angle of 32 bits.
+const DEG_PER_BAM32: f64 = 180.0 / 2_147_483_648.0;
 /// Bottom track's marker of a beam (or an axis) with no velocity, mm/s.
 pub const NO_VELOCITY_MM_S: i16 = -32768;
 /// How much of the file is read at a time, bytes.
@@ -109,6 +115,21 @@ pub struct Ensemble {
     /// The NMEA sentences a recorder wrote into it as text (WinRiver's IDs
     /// 0x2101–0x2104: a GNSS's GGA, VTG, ...), as written.
     pub sentences: Vec<String>,
+    /// The last GNSS fix before its ping, where VmDAS wrote one (ID 0x2000).
+    pub navigation: Option<NavigationFix>,
+}
+
+/// The last GNSS fix before an ensemble's ping, as VmDAS's navigation block gives it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NavigationFix {
+    /// s since 1970 UTC: the block's UTC date and the fix's time of day (0.1 ms); `None`
+    /// where the date is no date.
+    pub time_s: Option<f64>,
+    pub latitude_deg: f64,
+    pub longitude_deg: f64,
+    /// The block's flags: bit 1 the position valid, bit 5 the date and time.
+    pub position_valid: bool,
+    pub time_valid: bool,
 }
 
 /// What a whole file held beyond its ensembles.
@@ -314,6 +335,12 @@ fn parse(bytes: &[u8], byte: u64, survey: &mut Pd0Survey) -> Result<Ensemble, St
         .filter(|(id, ..)| NMEA_TEXT.contains(id))
         .filter_map(|(_, _, block)| nmea_text(block))
         .collect();
+    let navigation = block(
+        &[VMDAS_NAVIGATION],
+        "VmDAS navigation",
+        VMDAS_NAVIGATION_READ,
+    )?
+    .map(navigation_fix);
     Ok(Ensemble {
         byte,
         number,
@@ -322,7 +349,28 @@ fn parse(bytes: &[u8], byte: u64, survey: &mut Pd0Survey) -> Result<Ensemble, St
         leader,
         bottom,
         sentences,
+        navigation,
     })
+}
+
+/// The last fix of VmDAS's navigation `block`, at least 48 bytes: its UTC date (day,
+/// month, year, bytes 2–5), the last fix's time of day (bytes 22–25, 0.1 ms), latitude
+/// and longitude (26–33, binary angles of 32 bits) and the flags (46–47).
+fn navigation_fix(block: &[u8]) -> NavigationFix {
+    let (day, month) = (u32::from(block[2]), u32::from(block[3]));
+    let year = i32::from(u16_at(block, 4));
+    let i32_at = |at: usize| i32::from_le_bytes(std::array::from_fn(|k| block[at + k]));
+    let of_day_s = f64::from(i32_at(22) as u32) * 1e-4;
+    let time_s = chrono::NaiveDate::from_ymd_opt(year, month, day)
+        .map(|date| date.and_hms_opt(0, 0, 0).unwrap().and_utc().timestamp() as f64 + of_day_s);
+    let flags = u16_at(block, 46);
+    NavigationFix {
+        time_s,
+        latitude_deg: f64::from(i32_at(26)) * DEG_PER_BAM32,
+        longitude_deg: f64::from(i32_at(30)) * DEG_PER_BAM32,
+        position_valid: flags & 0b10 != 0,
+        time_valid: flags & 0b10_0000 != 0,
+    }
 }
 
 /// The NMEA sentence of a WinRiver text block: its ID, its length (2 bytes each), then
