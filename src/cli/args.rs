@@ -203,6 +203,16 @@ pub(super) struct CalibrateArgs {
     /// figures as PNG and SVG, into --out's folder, or --report=DIR's
     #[arg(long, value_name = "DIR", num_args = 0..=1, require_equals = true)]
     pub(super) report: Option<Option<PathBuf>>,
+    /// Hold the calibration to acceptance thresholds, each one's verdict (pass,
+    /// marginal, fail) printed and in the report: the misalignment's angle, the
+    /// scale's distance from 1, the dead reckoning's end drift; --accept=KEY=VALUE,...
+    /// sets them over the defaults misalignment_deg=2,scale_pct=5,drift_pct=0.1
+    #[arg(long, value_name = "KEY=VALUE,...", num_args = 0..=1, require_equals = true, default_missing_value = "")]
+    pub(super) accept: Option<String>,
+    /// With --accept, exit with status 3 where the calibration is rejected (a check
+    /// failed or could not be made), after every file is written
+    #[arg(long, requires = "accept")]
+    pub(super) fail_on_reject: bool,
     /// Which of the terms belong to the dive and are found again on each dive by
     /// `correct` (the rest, the vehicle's, are carried), and with several recordings
     /// are each recording's own: time_offset, bias, bias_scalar

@@ -11,6 +11,7 @@ use super::{CliError, failure, input, stopped};
 use crate::installation::estimate::clock::DEFAULT_SEARCH_S;
 use crate::installation::estimate::fixes::default_fix_terms;
 use crate::installation::terms::names::TermName;
+use crate::operator::acceptance::{Thresholds, accept};
 use crate::operator::calibrate::{CalibrateArgs, calibrate as calibrated};
 use crate::operator::calibrate_fixes::{FixArgs, FixFiles, calibrate_fixes as calibrated_on_fixes};
 use crate::operator::calibrate_fixes_joint::calibrate_fixes_joint as calibrated_on_fixes_jointly;
@@ -18,6 +19,7 @@ use crate::operator::calibrate_joint::{JointArgs, calibrate_joint as calibrated_
 use crate::operator::correct::{CorrectArgs, correct as corrected};
 use crate::operator::correct_fixes::{FixCorrectArgs, correct_fixes as corrected_on_fixes};
 use crate::report::kit::plots::PlotError;
+use crate::report::operator::acceptance::acceptance_text;
 use crate::report::operator::calibrate::{calibration_text, joint_text};
 use crate::report::operator::correct::{correction_text, fix_correction_text};
 use crate::report::operator::figures::calibration_figures;
@@ -40,11 +42,20 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
         )));
     }
     let given = (args.fix.given_per_dive(args.dvl.len())).map_err(|m| input(anyhow::anyhow!(m)))?;
-    if args.report.is_some() && (given.is_some() || args.dvl.len() > 1) {
-        return Err(input(anyhow::anyhow!(
-            "--report: a report is drawn for one recording calibrated against a velocity reference; not yet for fixes or several recordings"
-        )));
+    for (flag, asked) in [
+        ("--report", args.report.is_some()),
+        ("--accept", args.accept.is_some()),
+    ] {
+        if asked && (given.is_some() || args.dvl.len() > 1) {
+            return Err(input(anyhow::anyhow!(
+                "{flag}: for one recording calibrated against a velocity reference; not yet for fixes or several recordings"
+            )));
+        }
     }
+    let thresholds = (args.accept.as_deref())
+        .map(Thresholds::parse)
+        .transpose()
+        .map_err(|message| input(anyhow::anyhow!("--accept: {message}")))?;
     if let Some(given) = given {
         return calibrate_fixes(args, &given);
     }
@@ -88,7 +99,13 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
         dive_terms: &dive_terms,
         search_s: args.search_s,
     };
-    calibrate(&one, args.report())
+    let rejected = calibrate(&one, args.report(), thresholds)?;
+    match rejected && args.fail_on_reject {
+        true => Err(CliError::Rejected(anyhow::anyhow!(
+            "the calibration is rejected by --accept (--fail-on-reject); every file was written"
+        ))),
+        false => Ok(()),
+    }
 }
 
 /// `calibrate DVL.csv --fixes FIXES.csv --attitude ATTITUDE.csv --fix-noise-m σ`: the
@@ -277,10 +294,20 @@ fn parse_terms((flag, terms): (&str, &[String])) -> Result<Vec<TermName>, CliErr
 }
 
 /// `calibrate`: the terms of one recording, their bound, how long the recording needed,
-/// and the recording corrected; its report written to `report` where one is asked.
-fn calibrate(args: &CalibrateArgs, report: Option<&Path>) -> Result<(), CliError> {
+/// and the recording corrected; held to `thresholds` where asked, and its report
+/// written to `report` where one is asked. Returns whether the thresholds reject it.
+fn calibrate(
+    args: &CalibrateArgs,
+    report: Option<&Path>,
+    thresholds: Option<Thresholds>,
+) -> Result<bool, CliError> {
     let calibration = calibrated(args).map_err(stopped)?;
-    let printed = calibration_text(&calibration);
+    let mut printed = calibration_text(&calibration);
+    let acceptance = (thresholds)
+        .map(|thresholds| accept(&calibration.bound, calibration.drift.as_ref(), thresholds));
+    if let Some(acceptance) = &acceptance {
+        printed.push_str(&format!("\n{}", acceptance_text(acceptance)));
+    }
     print!("{printed}");
     for path in &calibration.corrected {
         eprintln!("corrected recording written to {}", path.display());
@@ -307,7 +334,7 @@ fn calibrate(args: &CalibrateArgs, report: Option<&Path>) -> Result<(), CliError
             .map_err(failure)?;
         eprintln!("report written to {}", folder.join(HTML).display());
     }
-    Ok(())
+    Ok(acceptance.is_some_and(|a| a.rejected()))
 }
 
 /// `correct`: the installation of `--installation` applied to the dive, its clock found

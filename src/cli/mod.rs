@@ -37,6 +37,9 @@ pub enum CliError {
     Input(anyhow::Error),
     /// A failure while running: exit code 2.
     Failure(anyhow::Error),
+    /// A calibration computed and written, and rejected by `--accept` where
+    /// `--fail-on-reject` asks: exit code 3.
+    Rejected(anyhow::Error),
 }
 
 impl CliError {
@@ -44,18 +47,19 @@ impl CliError {
         match self {
             CliError::Input(_) => 1,
             CliError::Failure(_) => 2,
+            CliError::Rejected(_) => 3,
         }
     }
 
     pub fn cause(&self) -> &anyhow::Error {
         match self {
-            CliError::Input(e) | CliError::Failure(e) => e,
+            CliError::Input(e) | CliError::Failure(e) | CliError::Rejected(e) => e,
         }
     }
 
     pub fn into_cause(self) -> anyhow::Error {
         match self {
-            CliError::Input(e) | CliError::Failure(e) => e,
+            CliError::Input(e) | CliError::Failure(e) | CliError::Rejected(e) => e,
         }
     }
 }

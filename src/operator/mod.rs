@@ -7,7 +7,8 @@
 //! against position fixes and an attitude, [`calibrate_fixes_joint`] several such dives
 //! as one vehicle, and [`correct_fixes`], its installation
 //! carried to the next such dive; what they share about their [`inputs`], and
-//! what each will [`cost`] this machine.
+//! what each will [`cost`] this machine; a calibration's [`acceptance`] against a
+//! vendor's thresholds.
 //! In: the command's arguments. Out: what each command prints, and the corrected
 //! recordings written through [`crate::results::corrected`].
 
@@ -15,6 +16,7 @@ pub mod inputs;
 pub mod cost;
 pub mod calibrate;
 pub mod residual;
+pub mod acceptance;
 pub mod installation_file;
 pub mod ros;
 pub mod correct;

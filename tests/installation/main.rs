@@ -8,6 +8,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod acceptance;
 mod bags;
 mod bag_fixes;
 mod between_dives;

@@ -4,8 +4,9 @@
 //! position fixes ([`fixes`]) or of several such dives jointly ([`fixes_joint`]), or a
 //! recording's clock found again and its correction ([`correct`]). Out: the text printed on stdout.
 //! With `--report`, a calibration's [`figures`] and its [`page`]: `report.md` and a
-//! self-contained `report.html`.
+//! self-contained `report.html`; with `--accept`, its [`acceptance`].
 
+pub mod acceptance;
 pub mod calibrate;
 pub mod correct;
 pub mod figures;

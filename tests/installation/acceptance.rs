@@ -1,0 +1,114 @@
+//! `calibrate --accept`: the calibration held to acceptance thresholds. Known answers on
+//! a synthetic dive installed with a scale of 1 % and no misalignment: at the default
+//! thresholds (2°, 5 %, 0.1 %) the misalignment and the scale pass; a scale limit of
+//! 0.5 % fails it, and `--fail-on-reject` then exits 3 with every file written; a limit
+//! at the estimate itself falls inside its interval, so marginal; terms not estimated,
+//! or a reference with no positions, are not checked and the calibration is rejected.
+
+use crate::common::installed::{INSTALLED, write_installed_sampled};
+use crate::common::{dcnet, stderr, stdout};
+use std::path::Path;
+
+const TERMS: &str = "--terms=lever_arm,time_offset,bias,scale,misalignment";
+
+/// `calibrate` of the synthetic dive in `d` with `extra` arguments, into `out`.
+fn calibrate(d: &Path, extra: &[&str], out: &str) -> std::process::Output {
+    let dvl = d.join("Trajectory1/DVL_trajectory1.csv");
+    let reference = d.join("Trajectory1/GT_trajectory1.csv");
+    let args = [
+        "calibrate",
+        dvl.to_str().unwrap(),
+        "--reference",
+        reference.to_str().unwrap(),
+        "--out",
+        out,
+    ];
+    dcnet(d, &[&args[..], extra].concat())
+}
+
+/// The row of the acceptance table whose check starts with `name`: its cells.
+fn row<'a>(text: &'a str, name: &str) -> Vec<&'a str> {
+    let table = &text[text
+        .find("acceptance (--accept)")
+        .expect("no acceptance table")..];
+    let line = (table.lines())
+        .find(|line| line.starts_with(&format!("| {name}")))
+        .unwrap_or_else(|| panic!("no {name} row in\n{text}"));
+    line.split('|')
+        .map(str::trim)
+        .filter(|c| !c.is_empty())
+        .collect()
+}
+
+#[test]
+fn a_calibration_is_accepted_marginal_or_rejected_by_its_intervals() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // 4000 s at 1 Hz: the scale's interval narrow enough (about ± 0.4 %) to fail 0.5 %.
+    write_installed_sampled(d, 1, &[], INSTALLED, 13, (4000, 1.0));
+    let output = calibrate(d, &[TERMS, "--accept"], "default");
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = stdout(&output);
+    assert_eq!(row(&text, "misalignment")[4], "pass", "{text}");
+    let scale = row(&text, "scale");
+    assert_eq!(scale[4], "pass", "{text}");
+    let value: f64 = scale[1].trim_end_matches(" %").parse().unwrap();
+    let half_width: f64 = scale[2]
+        .trim_start_matches("± ")
+        .trim_end_matches(" %")
+        .parse()
+        .unwrap();
+    // The installed 1 %, within its interval.
+    assert!((value - 1.0).abs() <= half_width, "{value} ± {half_width}");
+    // The synthetic reference records no positions: the drift is not checked.
+    assert!(
+        text.contains("verdict: rejected (not checked: drift)"),
+        "{text}"
+    );
+
+    let output = calibrate(
+        d,
+        &[
+            TERMS,
+            "--accept=scale_pct=0.5",
+            "--fail-on-reject",
+            "--report",
+        ],
+        "strict",
+    );
+    assert_eq!(output.status.code(), Some(3), "{}", stderr(&output));
+    let text = stdout(&output);
+    assert_eq!(row(&text, "scale")[4], "fail", "{text}");
+    assert!(
+        text.contains("verdict: rejected (failed: scale; not checked: drift)"),
+        "{text}"
+    );
+    for written in ["strict/report.html", "strict/report.md"] {
+        assert!(d.join(written).is_file(), "{written} not written");
+    }
+    let report = std::fs::read_to_string(d.join("strict/report.md")).unwrap();
+    assert!(report.contains("verdict: rejected"), "{report}");
+
+    let at_estimate = format!("--accept=scale_pct={value}");
+    let output = calibrate(d, &[TERMS, &at_estimate], "marginal");
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert_eq!(row(&stdout(&output), "scale")[4], "marginal");
+
+    let output = calibrate(d, &["--accept", "--fail-on-reject"], "unestimated");
+    assert_eq!(output.status.code(), Some(3), "{}", stderr(&output));
+    let text = stdout(&output);
+    assert!(
+        text.contains("not checked: not estimated (add misalignment to --terms)"),
+        "{text}"
+    );
+
+    let output = calibrate(d, &[TERMS, "--accept=scale=3"], "bad");
+    assert_eq!(output.status.code(), Some(1));
+    assert!(
+        stderr(&output).contains(
+            "--accept: scale: not a threshold; the keys are misalignment_deg, scale_pct, drift_pct"
+        ),
+        "{}",
+        stderr(&output)
+    );
+}
