@@ -7,7 +7,9 @@
 //! recording's length. With `-- --rates`, a case of its own instead: a ten-hour dive
 //! with the DVL at 10 Hz (360,000 samples) beside a reference at 100 Hz (3,600,000
 //! rows) in two files, `calibrate` alone, with the process's peak resident memory
-//! (Linux's VmHWM, which counts the synthetic files' writing too).
+//! (Linux's VmHWM, which counts the synthetic files' writing too). With `-- --report`,
+//! the report of a ten-hour recording at 10 Hz (360,000 samples): `calibrate`, then its
+//! figures drawn and `report.md` and `report.html` written, each timed.
 
 #[allow(dead_code)]
 #[path = "../tests/common/installed.rs"]
@@ -16,11 +18,17 @@ mod installed;
 use dcnet_exp::installation::terms::names::TermName;
 use dcnet_exp::operator::calibrate::{CalibrateArgs, calibrate};
 use dcnet_exp::operator::inputs::Reading;
+use dcnet_exp::report::operator::calibrate::calibration_text;
+use dcnet_exp::report::operator::figures::calibration_figures;
+use dcnet_exp::report::operator::page::write_report;
 use std::time::Instant;
 
 fn main() {
     if std::env::args().any(|a| a == "--rates") {
         return rates();
+    }
+    if std::env::args().any(|a| a == "--report") {
+        return report();
     }
     let long = std::env::args().any(|a| a == "--long");
     let mut rows = vec![36_000, 360_000];
@@ -90,6 +98,74 @@ fn calibrate_seconds(
     let clock = Instant::now();
     let calibration = calibrate(&args).expect("the synthetic recording calibrates");
     (clock.elapsed().as_secs_f64(), calibration.recorded)
+}
+
+/// The `--report` case: ten hours at 10 Hz calibrated, then its report drawn and
+/// written.
+fn report() {
+    let dir = tempfile::tempdir().unwrap();
+    let rows = 360_000;
+    installed::write_installed_sampled(
+        &dir.path().join("data/report"),
+        1,
+        &[],
+        installed::INSTALLED,
+        7,
+        (rows, 0.1),
+    );
+    let segment = dir.path().join("data/report/Trajectory1");
+    let (dvl, reference) = (
+        segment.join("DVL_trajectory1.csv"),
+        segment.join("GT_trajectory1.csv"),
+    );
+    let out = dir.path().join("out");
+    let args = CalibrateArgs {
+        dvl: &dvl,
+        reference: Some(&reference),
+        columns: None,
+        reading: Reading::default(),
+        terms: &TERMS,
+        window_s: None,
+        dvl_noise_cm_s: 2.0,
+        reference_noise_cm_s: 0.5,
+        tolerance_pct: 10.0,
+        out: &out,
+        save: None,
+        dive_terms: &[TermName::TimeOffset],
+        search_s: None,
+    };
+    let clock = Instant::now();
+    let calibration = calibrate(&args).expect("the synthetic recording calibrates");
+    let calibrated_s = clock.elapsed().as_secs_f64();
+    let printed = calibration_text(&calibration);
+    let clock = Instant::now();
+    let drawn = calibration_figures(&calibration, "report").expect("the figures draw");
+    let drawn_s = clock.elapsed().as_secs_f64();
+    let clock = Instant::now();
+    let written = write_report(&out, "Calibration of a ten-hour recording", &printed, drawn)
+        .expect("the report is written");
+    let written_s = clock.elapsed().as_secs_f64();
+    let bytes: u64 = (written.iter())
+        .map(|p| std::fs::metadata(p).map_or(0, |m| m.len()))
+        .sum();
+    println!(
+        "| hours | samples (10 Hz) | calibrate s | figures drawn s | report written s (PNG, SVG, Markdown, HTML) | files | MiB written |"
+    );
+    println!("|---|---|---|---|---|---|---|");
+    println!(
+        "| 10 | {} | {calibrated_s:.1} | {drawn_s:.2} | {written_s:.2} | {} | {:.1} |",
+        calibration.recorded,
+        written.len(),
+        bytes as f64 / (1 << 20) as f64
+    );
+    for path in &written {
+        let size = std::fs::metadata(path).map_or(0, |m| m.len());
+        println!(
+            "{}: {:.2} MiB",
+            path.file_name().unwrap().to_string_lossy(),
+            size as f64 / (1 << 20) as f64
+        );
+    }
 }
 
 /// The `--rates` case: ten hours, the DVL at 10 Hz beside the reference at 100 Hz.

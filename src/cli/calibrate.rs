@@ -1,8 +1,9 @@
 //! `calibrate`: one recording of a DVL beside a reference with attitude, calibrated by
 //! one library call ([`crate::operator::calibrate`]) and printed
-//! ([`crate::report::operator::calibrate`]); and `correct`, its installation applied to
+//! ([`crate::report::operator::calibrate`]), held to `--accept`'s thresholds where asked
+//! ([`crate::operator::acceptance`]); and `correct`, its installation applied to
 //! another dive ([`crate::operator::correct`], printed by
-//! [`crate::report::operator::correct`]). In: the parsed arguments. Out: what they
+//! [`crate::report::operator::correct`]); either's report written with `--report`. In: the parsed arguments. Out: what they
 //! found on stdout, the files written named on stderr (what each will cost, it says
 //! itself before it starts: [`crate::operator::cost`]).
 
@@ -22,7 +23,7 @@ use crate::report::kit::plots::PlotError;
 use crate::report::operator::acceptance::acceptance_text;
 use crate::report::operator::calibrate::{calibration_text, joint_text};
 use crate::report::operator::correct::{correction_text, fix_correction_text};
-use crate::report::operator::figures::calibration_figures;
+use crate::report::operator::figures::{calibration_figures, correction_figures};
 use crate::report::operator::fixes::fixes_text;
 use crate::report::operator::fixes_joint::joint_fixes_text;
 use crate::report::operator::page::{HTML, write_report};
@@ -231,19 +232,28 @@ fn refuse_beside_fixes(
 /// `correct` as typed: against a velocity reference, or against fixes.
 pub(super) fn correct_command(args: &args::CorrectArgs) -> Result<(), CliError> {
     if let Some(given) = args.fix.given().map_err(|m| input(anyhow::anyhow!(m)))? {
+        if args.report.is_some() {
+            return Err(input(anyhow::anyhow!(
+                "--report: for a dive corrected against a velocity reference; not yet against fixes"
+            )));
+        }
         return correct_fixes(args, given);
     }
-    correct(&CorrectArgs {
-        dvl: &args.dvl,
-        reference: args.reference.as_deref(),
-        columns: args.columns.as_deref(),
-        reading: args.reading.reading(),
-        installation: &args.installation,
-        window_s: args.window_s.unwrap_or(DEFAULT_WINDOW_S),
-        search_s: args.search_s.unwrap_or(DEFAULT_SEARCH_S),
-        time_offset_s: args.time_offset_s,
-        out: &args.out,
-    })
+    let report = (args.report.as_ref()).map(|dir| dir.as_deref().unwrap_or(&args.out));
+    correct(
+        &CorrectArgs {
+            dvl: &args.dvl,
+            reference: args.reference.as_deref(),
+            columns: args.columns.as_deref(),
+            reading: args.reading.reading(),
+            installation: &args.installation,
+            window_s: args.window_s.unwrap_or(DEFAULT_WINDOW_S),
+            search_s: args.search_s.unwrap_or(DEFAULT_SEARCH_S),
+            time_offset_s: args.time_offset_s,
+            out: &args.out,
+        },
+        report,
+    )
 }
 
 /// The first seconds of a dive that find its clock again against a velocity reference.
@@ -325,26 +335,55 @@ fn calibrate(
     if let Some(folder) = report {
         let name = (args.dvl.file_stem()).map_or("recording".into(), |s| s.to_string_lossy());
         let title = format!("Calibration of {}", args.dvl.display());
-        calibration_figures(&calibration, &name)
-            .map_err(|source| PlotError::Draw {
-                what: "calibration's",
-                source,
-            })
-            .and_then(|drawn| write_report(folder, &title, &printed, drawn))
-            .map_err(failure)?;
-        eprintln!("report written to {}", folder.join(HTML).display());
+        write_drawn(
+            folder,
+            &title,
+            &printed,
+            calibration_figures(&calibration, &name),
+        )?;
     }
     Ok(acceptance.is_some_and(|a| a.rejected()))
 }
 
 /// `correct`: the installation of `--installation` applied to the dive, its clock found
-/// again, and how well it fits.
-fn correct(args: &CorrectArgs) -> Result<(), CliError> {
+/// again, and how well it fits; its report written to `report` where one is asked.
+fn correct(args: &CorrectArgs, report: Option<&Path>) -> Result<(), CliError> {
     let correction = corrected(args).map_err(stopped)?;
-    print!("{}", correction_text(&correction));
+    let printed = correction_text(&correction);
+    print!("{printed}");
     for path in &correction.written {
         eprintln!("corrected dive written to {}", path.display());
     }
+    if let Some(folder) = report {
+        let name = (args.dvl.file_stem()).map_or("dive".into(), |s| s.to_string_lossy());
+        let title = format!("Correction of {}", args.dvl.display());
+        write_drawn(
+            folder,
+            &title,
+            &printed,
+            correction_figures(&correction, &name),
+        )?;
+    }
+    Ok(())
+}
+
+/// The report titled `title` of what was `printed` and `drawn`, written into `folder`.
+fn write_drawn(
+    folder: &Path,
+    title: &str,
+    printed: &str,
+    drawn: crate::report::kit::plots::draw::PlotResult<
+        Vec<(String, crate::report::kit::plots::canvas::Outcome)>,
+    >,
+) -> Result<(), CliError> {
+    drawn
+        .map_err(|source| PlotError::Draw {
+            what: "report's",
+            source,
+        })
+        .and_then(|drawn| write_report(folder, title, printed, drawn))
+        .map_err(failure)?;
+    eprintln!("report written to {}", folder.join(HTML).display());
     Ok(())
 }
 

@@ -2,7 +2,8 @@
 //! info`, `data fetch` and `bench`. Each reads a spec through
 //! [`crate::spec::load_experiment`] (or results folders), hands the work to
 //! [`crate::pipeline`] or the stage it names, and reports bad input (exit code 1) apart
-//! from failures while running (exit code 2). In: the command line. Out: what the
+//! from failures while running (exit code 2) and a calibration rejected where asked
+//! (exit code 3). In: the command line. Out: what the
 //! stages write, and what they did on stderr.
 //!
 //! `args` declares the command line; `run` runs, plans and collects experiments;

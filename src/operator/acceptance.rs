@@ -42,6 +42,7 @@ impl Thresholds {
     /// a message naming the key or value at fault otherwise.
     pub fn parse(given: &str) -> Result<Thresholds, String> {
         let mut thresholds = Thresholds::default();
+        let mut seen = Vec::new();
         for pair in given.split(',').filter(|pair| !pair.trim().is_empty()) {
             let (key, value) = pair.split_once('=').ok_or_else(|| {
                 format!(
@@ -52,6 +53,10 @@ impl Thresholds {
             let value: f64 = (value.trim().parse().ok())
                 .filter(|v: &f64| v.is_finite() && *v > 0.0)
                 .ok_or_else(|| format!("{key}={value}: not a positive number"))?;
+            if seen.contains(&key.trim()) {
+                return Err(format!("{}: given twice", key.trim()));
+            }
+            seen.push(key.trim());
             match key.trim() {
                 "misalignment_deg" => thresholds.misalignment_deg = value,
                 "scale_pct" => thresholds.scale_pct = value,
@@ -154,8 +159,10 @@ fn verdict_of(value: f64, half_width: f64, limit: f64) -> Verdict {
 }
 
 /// The misalignment's angle: the length of its rotation vector (roll, pitch, yaw; in
-/// small angles the rotation's angle), its half-width by the estimates' covariance
-/// along it.
+/// small angles the rotation's angle), its half-width that of the estimates' worst-known
+/// direction (t times the square root of their covariance's largest eigenvalue): the
+/// angle moves by no more than the vector does, and a roll the recording barely shows
+/// widens it however tight the yaw.
 fn misalignment<N: ReadNoise>(bound: &TermBound<N>, limit_deg: f64) -> Check {
     let axes: Vec<usize> = [
         "misalignment_x_rad",
@@ -167,7 +174,10 @@ fn misalignment<N: ReadNoise>(bound: &TermBound<N>, limit_deg: f64) -> Check {
     .collect();
     let mut check = Check {
         name: "misalignment",
-        what: "misalignment (its angle)",
+        what: match axes.len() {
+            3 => "misalignment (its angle)",
+            _ => "misalignment (its angle over the axes estimated)",
+        },
         unit: "°",
         value: f64::NAN,
         half_width_95: None,
@@ -180,28 +190,24 @@ fn misalignment<N: ReadNoise>(bound: &TermBound<N>, limit_deg: f64) -> Check {
         check.not_made = Some("not estimated (add misalignment to --terms)".into());
         return check;
     }
-    let angle = (axes.iter().map(|&k| bound.value[k].powi(2)).sum::<f64>()).sqrt();
-    // Along the rotation vector where it has a direction; the largest axis's otherwise.
-    let direction: Vec<f64> = match angle > 0.0 {
-        true => axes.iter().map(|&k| bound.value[k] / angle).collect(),
-        false => axes
-            .iter()
-            .map(|_| 1.0 / (axes.len() as f64).sqrt())
-            .collect(),
+    let covariance = nalgebra::DMatrix::from_fn(axes.len(), axes.len(), |a, b| {
+        let (i, j) = (axes[a], axes[b]);
+        let correlation = if i == j { 1.0 } else { bound.correlation[i][j] };
+        correlation * bound.std[i] * bound.std[j]
+    });
+    let widest = match covariance.iter().all(|c| c.is_finite()) {
+        true => covariance.symmetric_eigenvalues().max().max(0.0).sqrt(),
+        false => f64::INFINITY,
     };
-    let mut variance = 0.0;
-    for (a, &i) in axes.iter().enumerate() {
-        for (b, &j) in axes.iter().enumerate() {
-            let correlation = if i == j { 1.0 } else { bound.correlation[i][j] };
-            variance += direction[a] * direction[b] * correlation * bound.std[i] * bound.std[j];
-        }
-    }
-    let half_width = bound.residual_noise.quantile_95() * variance.sqrt();
+    let angle = (axes.iter().map(|&k| bound.value[k].powi(2)).sum::<f64>()).sqrt();
+    let half_width = (bound.residual_noise.quantile_95() * widest).to_degrees();
     check.value = angle.to_degrees();
-    check.half_width_95 = Some(half_width.to_degrees());
-    check.verdict = verdict_of(check.value, half_width.to_degrees(), limit_deg);
-    if axes.len() < 3 {
-        check.what = "misalignment (its angle over the axes estimated)";
+    check.half_width_95 = Some(half_width);
+    check.verdict = verdict_of(check.value, half_width, limit_deg);
+    if check.verdict == Verdict::NotChecked {
+        check.not_made = Some(
+            "an axis the recording does not show (its standard deviation is not finite)".into(),
+        );
     }
     check
 }
@@ -214,16 +220,24 @@ fn scale<N: ReadNoise>(bound: &TermBound<N>, limit_pct: f64) -> Check {
         .collect();
     let checks = scales.iter().map(|&k| {
         let (value, half_width) = (100.0 * bound.value[k].abs(), 100.0 * bound.half_width_95(k));
+        let verdict = verdict_of(value, half_width, limit_pct);
         Check {
             name: "scale",
-            what: "scale (its distance from 1)",
+            what: match bound.names[k] {
+                "scale_x" => "scale x, the worst axis (its distance from 1)",
+                "scale_y" => "scale y, the worst axis (its distance from 1)",
+                "scale_z" => "scale z, the worst axis (its distance from 1)",
+                _ => "scale (its distance from 1)",
+            },
             unit: "%",
             value,
             half_width_95: Some(half_width),
             limit: limit_pct,
             marginal_to: None,
-            verdict: verdict_of(value, half_width, limit_pct),
-            not_made: None,
+            verdict,
+            not_made: (verdict == Verdict::NotChecked).then(|| {
+                "the recording does not show it (its standard deviation is not finite)".into()
+            }),
         }
     });
     checks
@@ -245,8 +259,10 @@ fn scale<N: ReadNoise>(bound: &TermBound<N>, limit_pct: f64) -> Check {
         })
 }
 
-/// The dead reckoning's end error with the terms applied, % of the distance: a pass
-/// within the limit, marginal within twice it.
+/// The dead reckoning's end error with the terms applied, % of the distance: each
+/// piece's error at its end, summed over the distance travelled, on the recording the
+/// terms were fitted to ([`Drift::end_pct`]); a pass within the limit, marginal within
+/// twice it.
 fn drift_check(drift: Option<&(Drift, Drift)>, limit_pct: f64) -> Check {
     let mut check = Check {
         name: "drift",
@@ -260,7 +276,10 @@ fn drift_check(drift: Option<&(Drift, Drift)>, limit_pct: f64) -> Check {
         not_made: None,
     };
     let Some((_, after)) = drift else {
-        check.not_made = Some("the reference records no positions to dead-reckon against".into());
+        check.not_made = Some(
+            "no dead reckoning against the reference's positions (it records none, or no piece could be scored)"
+                .into(),
+        );
         return check;
     };
     check.value = after.end_pct.abs();
@@ -279,8 +298,8 @@ fn drift_check(drift: Option<&(Drift, Drift)>, limit_pct: f64) -> Check {
 mod tests {
     use super::*;
 
-    /// Inside, across and beyond the limit; an interval of no width where a term is not
-    /// seen at all is no check.
+    /// Inside, across and beyond the limit; an interval without bound (a term not seen at
+    /// all) is no check.
     #[test]
     fn an_interval_within_across_or_beyond_its_limit_passes_is_marginal_or_fails() {
         assert_eq!(verdict_of(1.0, 0.5, 2.0), Verdict::Pass);
@@ -292,6 +311,97 @@ mod tests {
             checks: vec![drift_check(None, 0.1)],
         };
         assert!(acceptance.rejected());
+    }
+
+    /// The dead reckoning's end drift: within the limit a pass, within twice it marginal,
+    /// beyond a fail.
+    #[test]
+    fn the_drift_passes_within_its_limit_and_is_marginal_within_twice_it() {
+        let drift = |end_pct: f64| {
+            let at = Drift {
+                rms_pct: 0.0,
+                end_pct,
+                distance_m: 1000.0,
+                samples: 100,
+            };
+            drift_check(Some(&(at, at)), 0.1).verdict
+        };
+        assert_eq!(drift(0.08), Verdict::Pass);
+        assert_eq!(drift(-0.15), Verdict::Marginal);
+        assert_eq!(drift(0.3), Verdict::Fail);
+    }
+
+    /// Degrees of freedom enough for t to be 1.96.
+    struct Known;
+    impl ReadNoise for Known {
+        fn freedom(&self) -> f64 {
+            1e9
+        }
+    }
+
+    /// The misalignment's terms at `value` (rad) with standard deviations `std` (rad)
+    /// and the roll–yaw correlation `rho`.
+    fn misaligned(value: [f64; 3], std: [f64; 3], rho: f64) -> TermBound<Known> {
+        let mut correlation = vec![vec![0.0; 3]; 3];
+        for k in 0..3 {
+            correlation[k][k] = 1.0;
+        }
+        (correlation[0][2], correlation[2][0]) = (rho, rho);
+        TermBound {
+            names: vec![
+                "misalignment_x_rad",
+                "misalignment_y_rad",
+                "misalignment_z_rad",
+            ],
+            value: value.to_vec(),
+            std: std.to_vec(),
+            bound_std: std.to_vec(),
+            correlation,
+            unseen: Vec::new(),
+            applied: vec![true; 3],
+            residual_noise: Known,
+        }
+    }
+
+    /// Known answers: the angle is the rotation vector's length; its half-width 1.96
+    /// times the largest standard deviation where they are uncorrelated (a roll barely
+    /// shown widens the angle's interval however tight the yaw), and that of the
+    /// covariance's largest eigenvalue where roll and yaw are correlated.
+    #[test]
+    fn the_misalignments_interval_covers_its_worst_known_direction() {
+        let deg = f64::to_radians;
+        let check = misalignment(
+            &misaligned(
+                [deg(0.1), 0.0, deg(1.0)],
+                [deg(2.0), deg(0.05), deg(0.05)],
+                0.0,
+            ),
+            2.0,
+        );
+        assert!((check.value - 0.1f64.hypot(1.0)).abs() < 1e-9, "{check:?}");
+        let half_width = check.half_width_95.unwrap();
+        assert!((half_width - 1.959_964 * 2.0).abs() < 1e-4, "{check:?}");
+        assert_eq!(check.verdict, Verdict::Marginal);
+        // Roll and yaw of 1° each, correlated 0.5: the largest eigenvalue of
+        // [[1, 0.5], [0.5, 1]] (deg²) is 1.5.
+        let check = misalignment(
+            &misaligned([0.0, 0.0, deg(0.2)], [deg(1.0), deg(0.1), deg(1.0)], 0.5),
+            5.0,
+        );
+        assert!(
+            (check.half_width_95.unwrap() - 1.959_964 * 1.5f64.sqrt()).abs() < 1e-4,
+            "{check:?}"
+        );
+        assert_eq!(check.verdict, Verdict::Pass);
+        let check = misalignment(
+            &misaligned([deg(3.0), 0.0, deg(4.0)], [deg(0.1); 3], 0.0),
+            2.0,
+        );
+        assert!((check.value - 5.0).abs() < 1e-9);
+        assert_eq!(check.verdict, Verdict::Fail);
+        let unseen = misalignment(&misaligned([0.0; 3], [f64::INFINITY, 0.1, 0.1], 0.0), 2.0);
+        assert_eq!(unseen.verdict, Verdict::NotChecked);
+        assert!(unseen.not_made.is_some());
     }
 
     #[test]

@@ -8,7 +8,7 @@
 //! [`CalibrateError`] naming the argument, file or step at fault.
 
 use crate::data::fixes::{FixColumns, Fixes, read_beside_attitude, read_fixes};
-use crate::data::nmea::{gga_fixes, is_nmea, read_nmea_fixes};
+use crate::data::nmea::{LoggedFixes, gga_fixes, is_gga, is_nmea, read_nmea_fixes};
 use crate::data::paired::Source;
 use crate::data::paired::bag::{BagError, is_bag, read_bag_beside_attitude};
 use crate::data::paired::dvl_log::{self, LogFormat, navigation_fixes, read_beside_own_attitude};
@@ -223,13 +223,17 @@ impl FixFiles<'_> {
         fix_columns: &FixColumns,
     ) -> Result<FixesRead, CalibrateError> {
         let thresholds = self.reading.thresholds;
-        let (read, log) = if self.attitude == self.dvl {
+        let (own_attitude, own_fixes) = (
+            same_file(self.attitude, self.dvl),
+            same_file(self.fixes, self.dvl),
+        );
+        let (read, log) = if own_attitude {
             read_beside_own_attitude(self.dvl, format, thresholds)?
         } else {
             let columns = columns(self.columns, self.reading).map_err(CalibrateError::Columns)?;
             read_log_beside_attitude((self.dvl, format, thresholds), self.attitude, &columns)?
         };
-        let attitude_from = match self.attitude == self.dvl {
+        let attitude_from = match own_attitude {
             true => format!(
                 "of the DVL's own attitude ({})",
                 format.own_attitude_words()
@@ -241,7 +245,7 @@ impl FixFiles<'_> {
             format.words(),
             log.summary.frames.join("; ")
         );
-        if self.fixes != self.dvl {
+        if !own_fixes {
             let (fixes, left_out, from) = self.fixes_file(fix_columns)?;
             let from = from.map_or(head.clone(), |from| format!("{head}; the fixes {from}"));
             let without_noise = fixes.len();
@@ -252,30 +256,25 @@ impl FixFiles<'_> {
                 fixes: self.fixes.to_path_buf(),
             });
         }
-        let logged = match gga_fixes(&log.sentences) {
-            Some(gga) => {
-                let named = format!(
-                    "its GGA sentences ({} of them without a checksum, so unchecked; {} other sentences passed over; ",
-                    gga.without_checksum, gga.others
-                );
-                Some((gga, named))
-            }
-            None => navigation_fixes(&log).map(|fixes| {
-                let named = format!(
-                    "its VmDAS navigation blocks (each ping's last fix before it; {} blocks repeating the fix before, read once; ",
-                    fixes.others
-                );
-                (fixes, named)
-            }),
-        };
+        let has_gga = log
+            .sentences
+            .iter()
+            .any(|(_, _, sentence)| is_gga(sentence));
+        let logged = fixes_in_log(&log, has_gga);
         let Some((gga, named)) = logged else {
             return Err(CalibrateError::Columns(inputs::refused(
                 "--fixes",
                 format!(
-                    "{}: no fix among the {} NMEA sentences (GGA) and {} VmDAS navigation blocks its recorder wrote into it",
+                    "{}: no fix among the {} {} its recorder wrote into it",
                     self.dvl.display(),
-                    log.sentences.len(),
-                    log.navigation.len()
+                    match has_gga {
+                        true => log.sentences.len(),
+                        false => log.navigation.len(),
+                    },
+                    match has_gga {
+                        true => "NMEA sentences (every GGA without a fix, or failing its checksum)",
+                        false => "VmDAS navigation blocks and NMEA sentences (no GGA)",
+                    }
                 ),
             )));
         };
@@ -607,6 +606,43 @@ type FixesRead = (
 /// Fixes as an NMEA file gives them: the fixes, those left out by reason, and what was
 /// read there, in words.
 type NmeaRead = (Fixes, Vec<(&'static str, usize)>, Option<String>);
+
+/// The fixes a DVL log's recorder wrote into it, and where they came from in words:
+/// its GGA sentences where it holds any (`has_gga`; VmDAS navigation blocks beside them,
+/// then, are not read: said so), its VmDAS navigation blocks otherwise; `None` where
+/// they give no fix.
+fn fixes_in_log(log: &dvl_log::DvlLog, has_gga: bool) -> Option<(LoggedFixes, String)> {
+    match has_gga {
+        true => gga_fixes(&log.sentences).map(|gga| {
+            let named = format!(
+                "its GGA sentences ({} of them without a checksum, so unchecked; {} other sentences passed over{}; ",
+                gga.without_checksum,
+                gga.others,
+                match log.navigation.len() {
+                    0 => String::new(),
+                    n => format!("; its {n} VmDAS navigation blocks not read"),
+                }
+            );
+            (gga, named)
+        }),
+        false => navigation_fixes(log).map(|fixes| {
+            let named = format!(
+                "its VmDAS navigation blocks (each ping's last fix before it; {} blocks repeating the fix before, read once; ",
+                fixes.others
+            );
+            (fixes, named)
+        }),
+    }
+}
+
+/// Whether `a` and `b` name one file (however each is written: `./dvl.pd0`, an
+/// absolute path), or, where either cannot be resolved, are the same path.
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => a == b,
+    }
+}
 
 /// The GGA fixes of the NMEA file `path` (on UTC, dated by its RMC or ZDA).
 fn nmea_fixes(path: &Path) -> Result<NmeaRead, CalibrateError> {

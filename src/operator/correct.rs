@@ -25,6 +25,7 @@ use crate::operator::cost::{BeyondMemory, CORRECT, Cost};
 use crate::operator::inputs::{Reading, not_over_an_input, source};
 use crate::operator::installation_file::SavedMount;
 use crate::operator::installation_file::{InstallationFileError, SavedInstallation};
+use crate::operator::residual::Trace;
 use crate::results::ResultsError;
 use crate::results::corrected::{
     CorrectedSample, OtherRecording, Outputs, corrected_samples, stem, write, write_bag,
@@ -213,6 +214,9 @@ pub struct Correction {
     /// The samples after the first w seconds left out of `after` and `blocks` as
     /// outliers.
     pub outliers: usize,
+    /// The residual on each of those samples, with no terms and with the installation
+    /// applied: what `after` is of, and the report draws.
+    pub trace: Trace,
     pub noise_cm_s: f64,
     pub calibration_cm_s: f64,
     pub window_s: f64,
@@ -289,7 +293,7 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
         reference_m_s: saved.reference_noise_cm_s / 100.0,
     };
     let (applied, clock) = applied(args, &saved, (&recording, &reference), noise)?;
-    let (after, blocks, outliers) = fit_after(args, &recording, &reference, &applied);
+    let (after, blocks, outliers, trace) = fit_after(args, &recording, &reference, &applied);
     let samples = corrected_samples(&applied, &recording, &reference);
     if samples.iter().all(|s| s.velocity_m_s.is_err()) {
         return Err(CorrectError::NoOverlap {
@@ -311,6 +315,7 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
         after,
         blocks,
         outliers,
+        trace,
         window_s: args.window_s,
         search_s: args.search_s,
         installation_file: args.installation.to_path_buf(),
@@ -415,13 +420,14 @@ fn find_clock(
 /// The residual of `applied` after the first `args.window_s` seconds, whole and in
 /// blocks of that length (a last block shorter than half of it joins the one before),
 /// the outliers among those samples aside (a component beyond the fits' `TUKEY_C`
-/// scales of the rest): a spike is not a DVL that fits worse. Also how many there were.
+/// scales of the rest): a spike is not a DVL that fits worse. Also how many there were,
+/// and the residual on each sample, before and after, that the whole is of.
 fn fit_after(
     args: &CorrectArgs,
     recording: &PairedRecording,
     reference: &Reference,
     applied: &Installation,
-) -> (Option<AxisRmse>, Vec<Stretch>, usize) {
+) -> (Option<AxisRmse>, Vec<Stretch>, usize, Trace) {
     let time = &recording.time_s;
     let inside = reference.interior(time, TIME_OFFSET_MARGIN_S);
     let index = |seconds: f64| time.partition_point(|&t| t - time[0] < seconds);
@@ -436,6 +442,14 @@ fn fit_after(
         .map(|e| e.filter(|_| !flags.next().expect("a flag per error")))
         .collect();
     let outliers = scored.len() - kept.iter().flatten().count();
+    let outlier_at: Vec<usize> = (begin..inside.end.max(begin))
+        .filter(|&i| errors[i - begin].is_some() && kept[i - begin].is_none())
+        .collect();
+    let trace = Trace::of(
+        (recording, reference),
+        (begin..inside.end.max(begin), &outlier_at),
+        applied,
+    );
     let rmse =
         |range: std::ops::Range<usize>| AxisRmse::of_errors(range.filter_map(|i| kept[i - begin]));
     let after = rmse(begin..inside.end.max(begin));
@@ -457,7 +471,7 @@ fn fit_after(
         }
         from = to;
     }
-    (after, blocks, outliers)
+    (after, blocks, outliers, trace)
 }
 
 /// The matrix with `values` on its diagonal.

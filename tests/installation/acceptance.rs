@@ -112,3 +112,91 @@ fn a_calibration_is_accepted_marginal_or_rejected_by_its_intervals() {
         stderr(&output)
     );
 }
+
+/// A-KIT's T1, its reference's positions named by `--columns`: the drift check is the
+/// printed drift with the terms applied (at the end, % of the distance), judged against
+/// its limit; the verdict is the worst check's. Asked with fixes, `--accept` is refused
+/// by name.
+#[test]
+#[ignore = "needs the A-KIT recordings: dcnet-exp data fetch akit"]
+fn an_akit_segments_drift_is_checked_as_printed() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let segment = crate::common::akit().join("Trajectory1");
+    let (dvl, reference) = (
+        segment.join("DVL_trajectory1.csv"),
+        segment.join("GT_trajectory1.csv"),
+    );
+    std::fs::write(
+        d.join("columns.toml"),
+        "[columns]\ntime = \"Time [s]\"\ndvl = [\"DVL X [m/s]\", \"DVL Y [m/s]\", \"DVL Z [m/s]\"]\nvelocity_ned = [\"V North [m/s]\", \"V East [m/s]\", \"V Down [m/s]\"]\nattitude = [\"Roll [rad]\", \"Pitch [rad]\", \"Yaw [rad]\"]\nlatitude_longitude = [\"Latitude [rad]\", \"Longitude [rad]\"]\n",
+    )
+    .unwrap();
+    let args = [
+        "calibrate",
+        dvl.to_str().unwrap(),
+        "--reference",
+        reference.to_str().unwrap(),
+        "--columns",
+        "columns.toml",
+        TERMS,
+        "--accept",
+        "--out",
+        "t1",
+    ];
+    let output = dcnet(d, &args);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = stdout(&output);
+    // "… RMS 0.5 % of the distance with no terms, 0.2 % with the terms applied; at the
+    // end 0.300 % and 0.120 %"
+    let end = text.split("; at the end ").nth(1).expect("a drift line");
+    let applied = end
+        .split(" and ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap();
+    let applied: f64 = applied.parse().unwrap();
+    let drift = row(&text, "dead-reckoning drift");
+    assert_eq!(drift[1], format!("{:.3} %", applied.abs()), "{text}");
+    let expected = match applied.abs() {
+        v if v <= 0.1 => "pass",
+        v if v <= 0.2 => "marginal",
+        _ => "fail",
+    };
+    assert_eq!(drift[4], expected, "{text}");
+    let verdicts: Vec<&str> = ["misalignment", "scale", "dead-reckoning drift"]
+        .iter()
+        .map(|name| row(&text, name)[4])
+        .collect();
+    let verdict = text.lines().find(|l| l.starts_with("verdict: ")).unwrap();
+    let worst = ["fail", "not checked", "marginal", "pass"]
+        .into_iter()
+        .find(|w| verdicts.iter().any(|v| v.starts_with(w)))
+        .unwrap();
+    let said = match worst {
+        "pass" => "verdict: accepted: every check passed",
+        "marginal" => "verdict: accepted, marginal",
+        _ => "verdict: rejected",
+    };
+    assert!(verdict.starts_with(said), "{verdict} against {verdicts:?}");
+    let fixes = [
+        "calibrate",
+        dvl.to_str().unwrap(),
+        "--fixes",
+        reference.to_str().unwrap(),
+        "--attitude",
+        reference.to_str().unwrap(),
+        "--fix-noise-m",
+        "1",
+        "--accept",
+    ];
+    let output = dcnet(d, &fixes);
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("--accept: "),
+        "{}",
+        stderr(&output)
+    );
+}

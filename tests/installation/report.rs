@@ -121,8 +121,8 @@ fn a_calibrations_report_draws_the_printed_numbers_and_stands_alone() {
     );
 }
 
-/// The residual figure's caption in `markdown` gives the RMSE before and after that
-/// `printed` gives.
+/// The residual figure's caption in `markdown` gives the RMSE before and after, and the
+/// count of samples, that `printed` gives.
 fn caption_is_printed(printed: &str, markdown: &str) {
     // "… outliers aside: 19.73 cm/s (x …) before, 2.81 cm/s (x …) after"
     let line = (printed.lines())
@@ -130,7 +130,9 @@ fn caption_is_printed(printed: &str, markdown: &str) {
         .unwrap();
     let before = after(line, "outliers aside: ");
     let after_cm_s = (line.rsplit(") before, ").next().unwrap().split(' ').next()).unwrap();
-    let caption = format!("RMSE {before} → {after_cm_s} cm/s, total over the ");
+    // The count printed is the samples the RMSE after is of: the caption's.
+    let count = after(line, "body frame, on the ");
+    let caption = format!("RMSE {before} → {after_cm_s} cm/s, total over the {count} samples");
     assert!(markdown.contains(&caption), "{caption}\nnot in\n{markdown}");
 }
 
@@ -177,4 +179,82 @@ fn stands_alone(html: &str, figures: usize) {
     for outside in ["http:", "https:", "<script", "<link", "href=\""] {
         assert!(!html.contains(outside), "{outside} in the page");
     }
+}
+
+/// `correct --report`: the installation of the dive with a lost ping and a spike,
+/// carried to another dive whose clock is 7.3 s late, found again by its search; the
+/// report's clock-search figure gives the printed search's best and the clock found,
+/// its residual figure the printed residual after the first seconds (its total and its
+/// count of samples), and the page stands alone. Against fixes, refused by the
+/// flag.
+#[test]
+fn a_corrections_report_draws_the_printed_residual() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (_, args) = dive(&d.join("first"), 0.0);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let save = ["--save", "installation.toml", "--out", "cal"];
+    let output = dcnet(d, &[&args[..], &save].concat());
+    assert!(output.status.success(), "{}", stderr(&output));
+    let (next, next_args) = dive(&d.join("next"), 7.3);
+    let reference = next_args[3].as_str();
+    let correct = [
+        "correct",
+        next.as_str(),
+        "--reference",
+        reference,
+        "--installation",
+        "installation.toml",
+        "--out",
+        "corrected",
+        "--report",
+    ];
+    let output = dcnet(d, &correct);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let printed = stdout(&output);
+    assert!(printed.contains("clock found again"), "{printed}");
+    // "residual after the first 60 s: 3.52 cm/s in total (… body axes, over 338 samples, …"
+    let line = (printed.lines())
+        .find(|l| l.starts_with("residual after the first"))
+        .unwrap();
+    let total = after(line, " s: ");
+    let count = after(line, "body axes, over ");
+    let markdown = std::fs::read_to_string(d.join("corrected/report.md")).unwrap();
+    let caption = format!("→ {total} cm/s, total over the {count} samples scored");
+    assert!(markdown.contains(&caption), "{caption}\nnot in\n{markdown}");
+    assert!(markdown.contains("clock found again"), "{markdown}");
+    // The clock search's caption gives the printed search's best and least squares' clock.
+    let best = after(&printed, "put the time offset at ");
+    let found = after(&printed, "least squares at ");
+    let half_width = after(&printed, "(95 %: ± ");
+    let search = format!("its best {best} s at ");
+    let fitted = format!("least squares from there {found} s ± {half_width} s (95 %)");
+    for expected in [search, fitted, "the clock search over ±30 s".to_string()] {
+        assert!(
+            markdown.contains(&expected),
+            "{expected}\nnot in\n{markdown}"
+        );
+    }
+    let html = std::fs::read_to_string(d.join("corrected/report.html")).unwrap();
+    stands_alone(&html, 2);
+    let fixes = [
+        "correct",
+        next.as_str(),
+        "--installation",
+        "installation.toml",
+        "--fixes",
+        next.as_str(),
+        "--attitude",
+        reference,
+        "--fix-noise-m",
+        "1",
+        "--report",
+    ];
+    let output = dcnet(d, &fixes);
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("--report: "),
+        "{}",
+        stderr(&output)
+    );
 }

@@ -255,7 +255,7 @@ fn checksum(body: &str) -> u8 {
 }
 
 /// Whether `sentence` is a GGA of any talker (`$GPGGA`, `$GNGGA`, ...).
-fn is_gga(sentence: &str) -> bool {
+pub fn is_gga(sentence: &str) -> bool {
     sentence.get(3..6) == Some("GGA")
 }
 

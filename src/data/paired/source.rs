@@ -4,7 +4,9 @@
 //! ([`Source::load`], then [`Loaded::parse`]); a bag streamed, its two topics decoded as
 //! it goes ([`crate::data::paired::bag`]). Its samples go through the plausibility checks of
 //! `checks.rs`, whatever the format. [`Recordings`] reads each source once,
-//! however many times it is asked for.
+//! however many times it is asked for. A DVL's own log beside an attitude alone, for a
+//! fit to fixes, is read by [`read_log_beside_attitude`], through the same parsing and
+//! checks.
 //! In: a [`Source`]. Out: the checked [`PairedRecording`] with the SHA-256 of each of
 //! its files, or the first [`PairedError`].
 

@@ -102,10 +102,9 @@ pub fn covariance(std: &[f64], correlation: &[Vec<f64>]) -> DMatrix<f64> {
 pub struct Clock {
     /// The carried terms with the dive's replaced.
     pub installation: Installation,
-    /// The search's τ, s, and the RMS of the DVL against the carried prediction there,
-    /// m/s (all three axes).
-    pub searched_offset_s: f64,
-    pub searched_rms_m_s: f64,
+    /// The search that started it: its best τ, s, and the RMS of the DVL against the
+    /// carried prediction there, m/s (all three axes), and every offset it tried.
+    pub search: Search,
     /// The least squares of the dive's terms, and their bound given the carried terms.
     pub fit: Fit,
     pub bound: TermBound,
@@ -259,11 +258,33 @@ impl std::fmt::Display for SearchGrid {
 /// counts when at least half the samples land inside the reference. `None` where no
 /// step does.
 pub fn search_offset(
-    (time_s, dvl_m_s): (&[f64], &[Vec3]),
+    record: (&[f64], &[Vec3]),
     reference: &Reference,
     carried: Installation,
     search_s: f64,
 ) -> Option<(f64, f64)> {
+    search(record, reference, carried, search_s).map(|found| found.best)
+}
+
+/// A clock search as done: its best offset and RMS, and each offset tried with the RMS
+/// there (those where enough samples land inside the reference), sorted by offset.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Search {
+    /// τ, s, and the RMS of the DVL against the carried prediction there, m/s.
+    pub best: (f64, f64),
+    /// (τ s, RMS m/s) of each offset tried, by τ.
+    pub tried: Vec<(f64, f64)>,
+    /// The search's edges: the carried τ ∓ the search's range, s.
+    pub edges_s: (f64, f64),
+}
+
+/// [`search_offset`]'s search, every offset it tried kept.
+pub fn search(
+    (time_s, dvl_m_s): (&[f64], &[Vec3]),
+    reference: &Reference,
+    carried: Installation,
+    search_s: f64,
+) -> Option<Search> {
     let grid = SearchGrid::of(search_s);
     let stride = time_s.len().div_ceil(grid.samples).max(1);
     let read: Vec<(f64, Vec3)> = (time_s.iter().zip(dvl_m_s))
@@ -284,12 +305,14 @@ pub fn search_offset(
         let enough = count > 0 && count as f64 >= SEARCH_COVERAGE * read.len() as f64;
         enough.then(|| (sum / count as f64).sqrt())
     };
-    let best_of = |offsets: &mut dyn Iterator<Item = f64>, mut best: Option<(f64, f64)>| {
+    let mut tried: Vec<(f64, f64)> = Vec::new();
+    let mut best_of = |offsets: &mut dyn Iterator<Item = f64>, mut best: Option<(f64, f64)>| {
         for offset_s in offsets {
-            if let Some(rms) = rms_at(offset_s)
-                && best.is_none_or(|(_, lowest)| rms < lowest)
-            {
-                best = Some((offset_s, rms));
+            if let Some(rms) = rms_at(offset_s) {
+                tried.push((offset_s, rms));
+                if best.is_none_or(|(_, lowest)| rms < lowest) {
+                    best = Some((offset_s, rms));
+                }
             }
         }
         best
@@ -310,7 +333,14 @@ pub fn search_offset(
         .filter(|&k| k != 0)
         .map(|k| centre_s + k as f64 * fine_s)
         .filter(|offset_s| (lowest_s..=highest_s).contains(offset_s));
-    best_of(&mut fine, Some((centre_s, rms)))
+    let best = best_of(&mut fine, Some((centre_s, rms)))?;
+    tried.sort_by(|a, b| a.0.total_cmp(&b.0));
+    tried.dedup_by(|a, b| a.0 == b.0);
+    Some(Search {
+        best,
+        tried,
+        edges_s: (lowest_s, highest_s),
+    })
 }
 
 /// Fits `terms` to the DVL record (`time_s`, `dvl_m_s`) against `reference` as
@@ -375,7 +405,7 @@ pub fn refind(
     search: ClockSearch,
     (noise, tolerances): (Noise, &Tolerances),
 ) -> Result<Clock, ClockError> {
-    let (searched_offset_s, searched_rms_m_s) = search_offset(
+    let searched = self::search(
         (time_s, dvl_m_s),
         reference,
         carried.installation,
@@ -384,6 +414,7 @@ pub fn refind(
     .ok_or(ClockError::NoOverlap {
         search_s: search.search_s,
     })?;
+    let (searched_offset_s, _) = searched.best;
     inside_the_search(
         searched_offset_s,
         carried.installation.time_offset_s,
@@ -431,8 +462,7 @@ pub fn refind(
         .collect();
     let clock = Clock {
         installation: fit.installation,
-        searched_offset_s,
-        searched_rms_m_s,
+        search: searched,
         fit,
         bound,
         std,
@@ -670,9 +700,9 @@ pub(crate) mod tests {
         assert!(error.abs() < 4.0 * std, "{error} against {std}");
         assert_eq!(clock.installation.lever_arm_m, truth.lever_arm_m);
         assert!(
-            (clock.searched_offset_s - 20.3).abs() < 0.5,
+            (clock.search.best.0 - 20.3).abs() < 0.5,
             "{}",
-            clock.searched_offset_s
+            clock.search.best.0
         );
     }
 }

@@ -107,9 +107,16 @@ fn printed_fit(calibration: &Calibration) -> String {
             readable_why(unseen.term, &unseen.why.to_string())
         ));
     }
+    // Each side's RMSE over the samples the reference covers on its clock (at t before,
+    // at t + τ after): a clock searched seconds away leaves the ends one side only.
+    let counted = |rmse: Option<AxisRmse>| rmse.map_or(calibration.scored, |r| r.sample_count);
+    let before_on = match counted(calibration.before) == counted(calibration.after) {
+        true => String::new(),
+        false => format!(" (on the {} it covers at t)", counted(calibration.before)),
+    };
     text.push_str(&format!(
-        "RMSE against the reference, body frame, on the {} of {} samples {TIME_OFFSET_MARGIN_S} s inside it, outliers aside: {} before, {} after",
-        calibration.scored,
+        "RMSE against the reference, body frame, on the {} of {} samples {TIME_OFFSET_MARGIN_S} s inside it, outliers aside: {}{before_on} before, {} after",
+        counted(calibration.after),
         calibration.recorded,
         printed_rmse(calibration.before),
         printed_rmse(calibration.after)

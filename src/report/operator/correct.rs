@@ -29,7 +29,7 @@ pub fn correction_text(correction: &Correction) -> String {
         text.push_str(&format!(
             "clock found again: the search over ±{} s put the time offset at {:.2} s, least squares at {:.4} s ± {:.4} s (95 %: ± {:.4} s, Student's t on the window's noise){}\n",
             correction.search_s,
-            clock.searched_offset_s,
+            clock.search.best.0,
             clock.installation.time_offset_s,
             clock.time_offset_std_s(),
             clock.time_offset_half_width_95_s(),

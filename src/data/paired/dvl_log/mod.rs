@@ -8,7 +8,9 @@
 //! recording's other left-out samples; a three-beam solution is kept and counted. An
 //! ensemble whose checksum fails is not a sample: it is counted in the [`LogSummary`].
 //! The log's clock is read as UTC, in seconds since 1970: the reference's must be on it.
-//! In: the log's path, its [`LogFormat`] and the [`Thresholds`]. Out: a [`DvlLog`].
+//! In: the log's path, its [`LogFormat`] and the [`Thresholds`]. Out: a [`DvlLog`], and
+//! the fixes its recorder wrote into it as VmDAS navigation blocks
+//! ([`navigation_fixes`]; its GGA sentences are read by [`crate::data::nmea`]).
 
 mod frames;
 pub mod pd0;
@@ -95,7 +97,7 @@ impl LogFormat {
                 "each ensemble's roll, pitch and heading: what its velocities were turned by"
             }
             LogFormat::WaterLinked => {
-                "the roll, pitch and yaw of its dead-reckoning reports (\"position_local\"), the DVL's own: a yaw offset from north is a constant the fitted misalignment z takes"
+                "the roll, pitch and yaw of its dead-reckoning reports (\"position_local\"), the DVL's own, its yaw from its gyro: an offset from north goes into the fitted misalignment z (exactly where the vehicle is level), a drift or a reset of it is not modelled"
             }
         }
     }
@@ -168,6 +170,9 @@ pub struct LogSummary {
     pub cut_short: Option<(u64, usize, usize)>,
     /// The last line of a JSON log, where the file ends inside it.
     pub cut_short_line: Option<u64>,
+    /// VmDAS navigation blocks too short to hold a fix, not read; Water Linked
+    /// dead-reckoning reports with a status other than 0, not read as attitude.
+    pub not_read: Vec<(&'static str, usize)>,
     /// The frames the velocities were recorded in, and how they were turned.
     pub frames: Vec<String>,
     /// The data types present, each with the count of ensembles holding it.
@@ -226,6 +231,10 @@ fn read_water_linked(path: &Path) -> Result<DvlLog, PairedError> {
     summary.file.sha256 = survey.sha256;
     summary.pings = log.time_s.len();
     summary.cut_short_line = survey.cut_short;
+    summary.not_read = vec![(
+        "dead-reckoning reports with a status other than 0, not read as attitude",
+        survey.attitude_not_ok,
+    )];
     summary.frames = vec![
         "the DVL's body frame (x forward, y right, z down), as its velocity reports give it".into(),
     ];
@@ -283,6 +292,10 @@ fn read_pd0(path: &Path, thresholds: Thresholds) -> Result<DvlLog, PairedError> 
     summary.bad_checksums = survey.bad_checksums;
     summary.bytes_between = survey.bytes_between;
     summary.cut_short = survey.cut_short;
+    summary.not_read = vec![(
+        "VmDAS navigation blocks too short to hold a fix",
+        survey.short_navigation,
+    )];
     summary.frames = frames;
     summary.blocks = (survey.blocks.iter())
         .map(|(&id, &count)| (format!("0x{id:04X} {}", pd0::block_name(id)), count))
@@ -456,6 +469,7 @@ impl LogSummary {
             bytes_between: 0,
             cut_short: None,
             cut_short_line: None,
+            not_read: Vec::new(),
             frames: Vec::new(),
             blocks: Vec::new(),
             validity: String::new(),
@@ -530,6 +544,9 @@ impl DvlLog {
             lines.push(format!(
                 "the last line, {line}, is cut short by the file's end (no JSON report): not read"
             ));
+        }
+        for &(what, count) in summary.not_read.iter().filter(|(_, count)| *count > 0) {
+            lines.push(format!("not read: {count} {what}"));
         }
         lines.extend(summary.frames.iter().map(|frame| format!("frame: {frame}")));
         lines.push(format!("validity: {}", summary.validity));

@@ -9,8 +9,8 @@
 //! 0x2101–0x2104) and the last GNSS fix VmDAS writes in its navigation block (ID
 //! 0x2000). Every other data type is counted by its ID and not read.
 //! The file is streamed: a long log is never held whole.
-//! An ensemble whose checksum fails is counted and not read, and so is a last ensemble
-//! the file ends inside (a log cut as the recorder stopped: its length points past
+//! An ensemble whose checksum fails is counted and not read, and so are a navigation
+//! block too short to hold its fix and a last ensemble the file ends inside (a log cut as the recorder stopped: its length points past
 //! the file); an offset that overlaps another or leaves its ensemble, or an ensemble
 //! without its leaders, is refused, naming the byte.
 //! In: a file's path. Out: each [`Ensemble`] handed to a visitor, then a [`Pd0Survey`]
@@ -30,7 +30,7 @@ const VARIABLE_LEADER: u16 = 0x0080;
 pub const BOTTOM_TRACK: u16 = 0x0600;
 /// WinRiver's blocks of NMEA sentences as text.
 const NMEA_TEXT: std::ops::RangeInclusive<u16> = 0x2101..=0x2104;
-/// VmDAS's navigation block, and the bytes read of it (to the last fix's longitude).
+/// VmDAS's navigation block, and the bytes read of it (to its flags).
 const VMDAS_NAVIGATION: u16 = 0x2000;
 const VMDAS_NAVIGATION_READ: usize = 48;
 /// Degrees per unit of a binary angle of 32 bits.
@@ -148,6 +148,8 @@ pub struct Pd0Survey {
     pub cut_short: Option<(u64, usize, usize)>,
     /// How many ensembles held each data type, by ID.
     pub blocks: BTreeMap<u16, usize>,
+    /// How many VmDAS navigation blocks were too short to hold a fix: not read.
+    pub short_navigation: usize,
 }
 
 /// The name of a PD0 data type, where it is one this reader knows.
@@ -335,12 +337,19 @@ fn parse(bytes: &[u8], byte: u64, survey: &mut Pd0Survey) -> Result<Ensemble, St
         .filter(|(id, ..)| NMEA_TEXT.contains(id))
         .filter_map(|(_, _, block)| nmea_text(block))
         .collect();
-    let navigation = block(
-        &[VMDAS_NAVIGATION],
-        "VmDAS navigation",
-        VMDAS_NAVIGATION_READ,
-    )?
-    .map(navigation_fix);
+    // A navigation block too short to hold a fix is counted, not refused: the log's
+    // pings do not need it.
+    let navigation = (blocks.iter())
+        .find(|(id, ..)| *id == VMDAS_NAVIGATION)
+        .and_then(
+            |&(_, _, block)| match block.len() >= VMDAS_NAVIGATION_READ {
+                true => Some(navigation_fix(block)),
+                false => {
+                    survey.short_navigation += 1;
+                    None
+                }
+            },
+        );
     Ok(Ensemble {
         byte,
         number,
@@ -354,13 +363,17 @@ fn parse(bytes: &[u8], byte: u64, survey: &mut Pd0Survey) -> Result<Ensemble, St
 }
 
 /// The last fix of VmDAS's navigation `block`, at least 48 bytes: its UTC date (day,
-/// month, year, bytes 2–5), the last fix's time of day (bytes 22–25, 0.1 ms), latitude
-/// and longitude (26–33, binary angles of 32 bits) and the flags (46–47).
+/// month, year, bytes 2–5: the first fix's), the last fix's time of day (bytes 22–25,
+/// 0.1 ms; a day later where it is earlier than the first fix's, bytes 6–9: midnight
+/// between them), latitude and longitude (26–33, binary angles of 32 bits) and the
+/// flags (46–47).
 fn navigation_fix(block: &[u8]) -> NavigationFix {
     let (day, month) = (u32::from(block[2]), u32::from(block[3]));
     let year = i32::from(u16_at(block, 4));
     let i32_at = |at: usize| i32::from_le_bytes(std::array::from_fn(|k| block[at + k]));
-    let of_day_s = f64::from(i32_at(22) as u32) * 1e-4;
+    let (first_s, last_s) = (i32_at(6) as u32, i32_at(22) as u32);
+    let wrapped_s = if last_s < first_s { 86_400.0 } else { 0.0 };
+    let of_day_s = f64::from(last_s) * 1e-4 + wrapped_s;
     let time_s = chrono::NaiveDate::from_ymd_opt(year, month, day)
         .map(|date| date.and_hms_opt(0, 0, 0).unwrap().and_utc().timestamp() as f64 + of_day_s);
     let flags = u16_at(block, 46);

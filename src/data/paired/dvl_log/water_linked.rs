@@ -6,7 +6,7 @@
 //! used (three make a three-beam solution, kept and counted). A `velocity_water` report
 //! (water tracking, from json_v3.2) is a ping left out as such. A `position_local`
 //! report (dead reckoning) gives the DVL's own attitude: `roll`, `pitch`, `yaw` in
-//! degrees at `ts` (s since 1970 UTC). Other reports (responses) are counted by type
+//! degrees at `ts` (s since 1970 UTC), where its `status` is 0 (others counted). Other reports (responses) are counted by type
 //! and not read. The file is read a line at
 //! a time; a line that is no JSON report, or a format other than json_v3 to json_v3.3,
 //! is refused naming its line, but for a last line the file ends inside (a logger
@@ -66,6 +66,8 @@ pub struct ReportSurvey {
     pub formats: BTreeMap<String, usize>,
     /// The last line, where the file ends inside it: its number. Not read.
     pub cut_short: Option<u64>,
+    /// Dead-reckoning reports whose status is not 0 (the DVL's error): not read.
+    pub attitude_not_ok: usize,
 }
 
 #[derive(serde::Deserialize)]
@@ -88,6 +90,8 @@ struct Velocity {
 
 #[derive(serde::Deserialize)]
 struct Position {
+    #[serde(default)]
+    status: i64,
     ts: f64,
     roll: f64,
     pitch: f64,
@@ -146,6 +150,10 @@ pub fn read(path: &Path, visit: &mut dyn FnMut(Read)) -> Result<ReportSurvey, Lo
         let malformed = |error| refuse(line, format!("a {} report: {error}", kind.kind));
         if kind.kind == "position_local" {
             let report: Position = serde_json::from_slice(trimmed).map_err(malformed)?;
+            if report.status != 0 {
+                survey.attitude_not_ok += 1;
+                return Ok(());
+            }
             visit(Read::Attitude(DeadReckoning {
                 line,
                 time_s: report.ts,

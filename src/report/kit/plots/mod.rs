@@ -4,7 +4,7 @@
 //! chosen by [`scale`] (linear or logarithmic, its ticks, far values cut), or by
 //! [`broken_axis`] in crowded panels; the shared pieces (looks, legends, marks) come
 //! from [`draw`], a grid of terms against time from [`term_panels`] and a recording's
-//! residual before and after from [`residual`]. [`render`]
+//! residual before and after from [`residual`], a clock search from [`search`]. [`render`]
 //! writes each figure as PNG and as SVG with the text outlined, both from the embedded
 //! font, and this module writes the files ([`write_figures`]). In: the figures a room
 //! drew. Out: the figure files, and each figure's caption or why it is absent
@@ -16,6 +16,7 @@ pub mod draw;
 pub mod render;
 pub mod residual;
 pub mod scale;
+pub mod search;
 pub mod term_panels;
 
 use crate::files::write_atomic;
