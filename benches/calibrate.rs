@@ -16,7 +16,7 @@
 mod installed;
 
 use dcnet_exp::installation::terms::names::TermName;
-use dcnet_exp::operator::calibrate::{CalibrateArgs, calibrate};
+use dcnet_exp::operator::calibrate::{CalibrateArgs, Calibration, calibrate};
 use dcnet_exp::operator::inputs::Reading;
 use dcnet_exp::report::operator::calibrate::calibration_text;
 use dcnet_exp::report::operator::figures::calibration_figures;
@@ -80,6 +80,16 @@ fn calibrate_seconds(
     reference: &std::path::Path,
     out: &std::path::Path,
 ) -> (f64, usize) {
+    let (seconds, calibration) = timed_calibration(dvl, reference, out);
+    (seconds, calibration.recorded)
+}
+
+/// `calibrate` of the DVL file `dvl` beside `reference` into `out`, and its seconds.
+fn timed_calibration(
+    dvl: &std::path::Path,
+    reference: &std::path::Path,
+    out: &std::path::Path,
+) -> (f64, Calibration) {
     let args = CalibrateArgs {
         dvl,
         reference: Some(reference),
@@ -97,7 +107,7 @@ fn calibrate_seconds(
     };
     let clock = Instant::now();
     let calibration = calibrate(&args).expect("the synthetic recording calibrates");
-    (clock.elapsed().as_secs_f64(), calibration.recorded)
+    (clock.elapsed().as_secs_f64(), calibration)
 }
 
 /// The `--report` case: ten hours at 10 Hz calibrated, then its report drawn and
@@ -119,24 +129,7 @@ fn report() {
         segment.join("GT_trajectory1.csv"),
     );
     let out = dir.path().join("out");
-    let args = CalibrateArgs {
-        dvl: &dvl,
-        reference: Some(&reference),
-        columns: None,
-        reading: Reading::default(),
-        terms: &TERMS,
-        window_s: None,
-        dvl_noise_cm_s: 2.0,
-        reference_noise_cm_s: 0.5,
-        tolerance_pct: 10.0,
-        out: &out,
-        save: None,
-        dive_terms: &[TermName::TimeOffset],
-        search_s: None,
-    };
-    let clock = Instant::now();
-    let calibration = calibrate(&args).expect("the synthetic recording calibrates");
-    let calibrated_s = clock.elapsed().as_secs_f64();
+    let (calibrated_s, calibration) = timed_calibration(&dvl, &reference, &out);
     let printed = calibration_text(&calibration);
     let clock = Instant::now();
     let drawn = calibration_figures(&calibration, "report").expect("the figures draw");

@@ -112,6 +112,23 @@ pub struct Check {
     pub not_made: Option<String>,
 }
 
+impl Check {
+    /// A check not yet made: its name, what it holds, its unit and limit.
+    fn unmade(name: &'static str, what: &'static str, unit: &'static str, limit: f64) -> Check {
+        Check {
+            name,
+            what,
+            unit,
+            value: f64::NAN,
+            half_width_95: None,
+            limit,
+            marginal_to: None,
+            verdict: Verdict::NotChecked,
+            not_made: None,
+        }
+    }
+}
+
 /// The checks of a calibration and the verdict over them: the worst of theirs.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Acceptance {
@@ -172,20 +189,11 @@ fn misalignment<N: ReadNoise>(bound: &TermBound<N>, limit_deg: f64) -> Check {
     .iter()
     .filter_map(|name| bound.names.iter().position(|n| n == name))
     .collect();
-    let mut check = Check {
-        name: "misalignment",
-        what: match axes.len() {
-            3 => "misalignment (its angle)",
-            _ => "misalignment (its angle over the axes estimated)",
-        },
-        unit: "°",
-        value: f64::NAN,
-        half_width_95: None,
-        limit: limit_deg,
-        marginal_to: None,
-        verdict: Verdict::NotChecked,
-        not_made: None,
+    let what = match axes.len() {
+        3 => "misalignment (its angle)",
+        _ => "misalignment (its angle over the axes estimated)",
     };
+    let mut check = Check::unmade("misalignment", what, "°", limit_deg);
     if axes.is_empty() {
         check.not_made = Some("not estimated (add misalignment to --terms)".into());
         return check;
@@ -247,15 +255,8 @@ fn scale<N: ReadNoise>(bound: &TermBound<N>, limit_pct: f64) -> Check {
                 .unwrap()
         })
         .unwrap_or(Check {
-            name: "scale",
-            what: "scale (its distance from 1)",
-            unit: "%",
-            value: f64::NAN,
-            half_width_95: None,
-            limit: limit_pct,
-            marginal_to: None,
-            verdict: Verdict::NotChecked,
             not_made: Some("not estimated (add scale to --terms)".into()),
+            ..Check::unmade("scale", "scale (its distance from 1)", "%", limit_pct)
         })
 }
 
@@ -264,16 +265,10 @@ fn scale<N: ReadNoise>(bound: &TermBound<N>, limit_pct: f64) -> Check {
 /// terms were fitted to ([`Drift::end_pct`]); a pass within the limit, marginal within
 /// twice it.
 fn drift_check(drift: Option<&(Drift, Drift)>, limit_pct: f64) -> Check {
+    let what = "dead-reckoning drift at the end, terms applied (% of the distance travelled)";
     let mut check = Check {
-        name: "drift",
-        what: "dead-reckoning drift at the end, terms applied (% of the distance travelled)",
-        unit: "%",
-        value: f64::NAN,
-        half_width_95: None,
-        limit: limit_pct,
         marginal_to: Some(2.0 * limit_pct),
-        verdict: Verdict::NotChecked,
-        not_made: None,
+        ..Check::unmade("drift", what, "%", limit_pct)
     };
     let Some((_, after)) = drift else {
         check.not_made = Some(
