@@ -213,6 +213,13 @@ pub(super) struct CalibrateArgs {
     /// failed or could not be made), after every file is written
     #[arg(long, requires = "accept")]
     pub(super) fail_on_reject: bool,
+    /// With --fixes: verify the calibration over a blackout, the fixes inside it
+    /// withheld from the fit and the dead reckoning carried through it, its error at
+    /// the blackout's end printed as a share of the distance travelled in it (--accept
+    /// holds it to drift_pct); START seconds after the DVL's first sample, LENGTH
+    /// seconds long
+    #[arg(long, value_name = "START:LENGTH")]
+    pub(super) blackout_s: Option<String>,
     /// Which of the terms belong to the dive and are found again on each dive by
     /// `correct` (the rest, the vehicle's, are carried), and with several recordings
     /// are each recording's own: time_offset, bias, bias_scalar

@@ -12,18 +12,20 @@ use super::{CliError, failure, input, stopped};
 use crate::installation::estimate::clock::DEFAULT_SEARCH_S;
 use crate::installation::estimate::fixes::default_fix_terms;
 use crate::installation::terms::names::TermName;
-use crate::operator::acceptance::{Thresholds, accept};
+use crate::operator::acceptance::{Thresholds, accept, reference_drift};
 use crate::operator::calibrate::{CalibrateArgs, calibrate as calibrated};
 use crate::operator::calibrate_fixes::{FixArgs, FixFiles, calibrate_fixes as calibrated_on_fixes};
 use crate::operator::calibrate_fixes_joint::calibrate_fixes_joint as calibrated_on_fixes_jointly;
 use crate::operator::calibrate_joint::{JointArgs, calibrate_joint as calibrated_jointly};
 use crate::operator::correct::{CorrectArgs, correct as corrected};
 use crate::operator::correct_fixes::{FixCorrectArgs, correct_fixes as corrected_on_fixes};
+use crate::operator::fix_drifts::BlackoutAsked;
 use crate::report::kit::plots::PlotError;
 use crate::report::operator::acceptance::acceptance_text;
 use crate::report::operator::calibrate::{calibration_text, joint_text};
 use crate::report::operator::correct::{correction_text, fix_correction_text};
 use crate::report::operator::figures::{calibration_figures, correction_figures};
+use crate::report::operator::fix_figures::fix_calibration_figures;
 use crate::report::operator::fixes::fixes_text;
 use crate::report::operator::fixes_joint::joint_fixes_text;
 use crate::report::operator::page::{HTML, write_report};
@@ -46,10 +48,11 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
     for (flag, asked) in [
         ("--report", args.report.is_some()),
         ("--accept", args.accept.is_some()),
+        ("--blackout-s", args.blackout_s.is_some()),
     ] {
-        if asked && (given.is_some() || args.dvl.len() > 1) {
+        if asked && args.dvl.len() > 1 {
             return Err(input(anyhow::anyhow!(
-                "{flag}: for one recording calibrated against a velocity reference; not yet for fixes or several recordings"
+                "{flag}: for one recording; not yet for several calibrated jointly"
             )));
         }
     }
@@ -58,11 +61,13 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
         .transpose()
         .map_err(|message| input(anyhow::anyhow!("--accept: {message}")))?;
     if let Some(given) = given {
-        return calibrate_fixes(args, &given);
+        let rejected = calibrate_fixes(args, &given, thresholds)?;
+        return rejection(rejected && args.fail_on_reject);
     }
     args::without_fixes(&[
         ("--depth-noise-m", args.depth_noise_m.is_some()),
         ("--fix-latency", args.fix_latency),
+        ("--blackout-s", args.blackout_s.is_some()),
     ])
     .map_err(|m| input(anyhow::anyhow!(m)))?;
     let default_terms = ["lever_arm", "time_offset", "bias"].map(String::from);
@@ -101,7 +106,12 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
         search_s: args.search_s,
     };
     let rejected = calibrate(&one, args.report(), thresholds)?;
-    match rejected && args.fail_on_reject {
+    rejection(rejected && args.fail_on_reject)
+}
+
+/// Exit status 3 where `--fail-on-reject` meets a calibration `--accept` rejected.
+fn rejection(fail: bool) -> Result<(), CliError> {
+    match fail {
         true => Err(CliError::Rejected(anyhow::anyhow!(
             "the calibration is rejected by --accept (--fail-on-reject); every file was written"
         ))),
@@ -110,9 +120,14 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
 }
 
 /// `calibrate DVL.csv --fixes FIXES.csv --attitude ATTITUDE.csv --fix-noise-m σ`: the
-/// terms the fixes show, printed, and saved where asked; of several dives (one `given`
-/// each), the vehicle's terms over them.
-fn calibrate_fixes(args: &args::CalibrateArgs, given: &[GivenFixes]) -> Result<(), CliError> {
+/// terms the fixes show, printed, and saved where asked, held to `thresholds` and its
+/// report written where asked; of several dives (one `given` each), the vehicle's terms
+/// over them. Returns whether the thresholds reject it.
+fn calibrate_fixes(
+    args: &args::CalibrateArgs,
+    given: &[GivenFixes],
+    thresholds: Option<Thresholds>,
+) -> Result<bool, CliError> {
     refuse_beside_fixes(
         &[
             ("--reference", !args.reference.is_empty()),
@@ -132,6 +147,10 @@ fn calibrate_fixes(args: &args::CalibrateArgs, given: &[GivenFixes]) -> Result<(
         None => default_fix_terms(),
     };
     let dive_terms = parse_terms(("--dive-terms", &args.dive_terms))?;
+    let blackout = (args.blackout_s.as_deref())
+        .map(BlackoutAsked::parse)
+        .transpose()
+        .map_err(|message| input(anyhow::anyhow!("--blackout-s {message}")))?;
     let dives: Vec<FixArgs> = (args.dvl.iter().zip(given))
         .map(|(dvl, given)| FixArgs {
             files: fix_files(
@@ -149,30 +168,61 @@ fn calibrate_fixes(args: &args::CalibrateArgs, given: &[GivenFixes]) -> Result<(
             dvl_noise_cm_s: args.dvl_noise_cm_s,
             save: args.save.as_deref(),
             out: args.out(),
+            blackout,
         })
         .collect();
-    let corrected = match &dives[..] {
-        [one] => {
-            let calibration = calibrated_on_fixes(one).map_err(stopped)?;
-            print!("{}", fixes_text(&calibration));
-            calibration.corrected
-        }
-        _ => {
-            let calibration = calibrated_on_fixes_jointly(&dives).map_err(stopped)?;
-            print!("{}", joint_fixes_text(&calibration));
-            calibration.written
-        }
+    let [one] = &dives[..] else {
+        let calibration = calibrated_on_fixes_jointly(&dives).map_err(stopped)?;
+        print!("{}", joint_fixes_text(&calibration));
+        written(&calibration.written, args.save.as_deref());
+        return Ok(false);
     };
-    for path in &corrected {
+    let calibration = calibrated_on_fixes(one).map_err(stopped)?;
+    let mut printed = fixes_text(&calibration);
+    let acceptance = thresholds.map(|thresholds| {
+        let estimated = |k: usize| calibration.fit.estimated[k];
+        let drift = calibration.drifts.scored();
+        accept((&calibration.fit.bound, &estimated), drift, thresholds)
+    });
+    if let Some(acceptance) = &acceptance {
+        printed.push_str(&format!("\n{}", acceptance_text(acceptance)));
+    }
+    print!("{printed}");
+    written(&calibration.corrected, args.save.as_deref());
+    if let Some(folder) = args.report() {
+        let drawn = fix_calibration_figures(&calibration, &name_of(one.files.dvl));
+        write_drawn(
+            folder,
+            &title("Calibration", one.files.dvl),
+            &printed,
+            drawn,
+        )?;
+    }
+    Ok(acceptance.is_some_and(|a| a.rejected()))
+}
+
+/// Says on stderr where the `corrected` recordings were written and where the
+/// installation was `saved`, if it was.
+fn written(corrected: &[std::path::PathBuf], saved: Option<&Path>) {
+    for path in corrected {
         eprintln!("corrected recording written to {}", path.display());
     }
-    if let Some(path) = &args.save {
+    if let Some(path) = saved {
         eprintln!(
             "installation saved to {} (apply it to another dive with `dcnet-exp correct`)",
             path.display()
         );
     }
-    Ok(())
+}
+
+/// The name a report gives the recording `dvl`: its file's stem.
+fn name_of(dvl: &Path) -> String {
+    (dvl.file_stem()).map_or("recording".into(), |s| s.to_string_lossy().into_owned())
+}
+
+/// A report's title: what was done (`Calibration`, `Correction`) of `dvl`.
+fn title(done: &str, dvl: &Path) -> String {
+    format!("{done} of {}", dvl.display())
 }
 
 /// The files of a fit to the fixes `given`, beside the DVL's file (or bag) `dvl`.
@@ -313,34 +363,22 @@ fn calibrate(
 ) -> Result<bool, CliError> {
     let calibration = calibrated(args).map_err(stopped)?;
     let mut printed = calibration_text(&calibration);
-    let acceptance = (thresholds)
-        .map(|thresholds| accept(&calibration.bound, calibration.drift.as_ref(), thresholds));
+    let acceptance = thresholds.map(|thresholds| {
+        let drift = reference_drift(calibration.drift.as_ref());
+        accept((&calibration.bound, &|_| true), drift, thresholds)
+    });
     if let Some(acceptance) = &acceptance {
         printed.push_str(&format!("\n{}", acceptance_text(acceptance)));
     }
     print!("{printed}");
-    for path in &calibration.corrected {
-        eprintln!("corrected recording written to {}", path.display());
-    }
-    if let Some(path) = args.save {
-        eprintln!(
-            "installation saved to {} (apply it to another dive with `dcnet-exp correct`)",
-            path.display()
-        );
-    }
+    written(&calibration.corrected, args.save);
     eprintln!(
         "the filter's terms against time written to {}",
         calibration.terms_in_time.display()
     );
     if let Some(folder) = report {
-        let name = (args.dvl.file_stem()).map_or("recording".into(), |s| s.to_string_lossy());
-        let title = format!("Calibration of {}", args.dvl.display());
-        write_drawn(
-            folder,
-            &title,
-            &printed,
-            calibration_figures(&calibration, &name),
-        )?;
+        let drawn = calibration_figures(&calibration, &name_of(args.dvl));
+        write_drawn(folder, &title("Calibration", args.dvl), &printed, drawn)?;
     }
     Ok(acceptance.is_some_and(|a| a.rejected()))
 }
@@ -355,14 +393,8 @@ fn correct(args: &CorrectArgs, report: Option<&Path>) -> Result<(), CliError> {
         eprintln!("corrected dive written to {}", path.display());
     }
     if let Some(folder) = report {
-        let name = (args.dvl.file_stem()).map_or("dive".into(), |s| s.to_string_lossy());
-        let title = format!("Correction of {}", args.dvl.display());
-        write_drawn(
-            folder,
-            &title,
-            &printed,
-            correction_figures(&correction, &name),
-        )?;
+        let drawn = correction_figures(&correction, &name_of(args.dvl));
+        write_drawn(folder, &title("Correction", args.dvl), &printed, drawn)?;
     }
     Ok(())
 }
@@ -392,14 +424,6 @@ fn write_drawn(
 fn calibrate_joint(args: &JointArgs) -> Result<(), CliError> {
     let calibration = calibrated_jointly(args).map_err(stopped)?;
     print!("{}", joint_text(&calibration));
-    for path in &calibration.written {
-        eprintln!("corrected recording written to {}", path.display());
-    }
-    if let Some(path) = args.save {
-        eprintln!(
-            "installation saved to {} (apply it to another dive with `dcnet-exp correct`)",
-            path.display()
-        );
-    }
+    written(&calibration.written, args.save);
     Ok(())
 }

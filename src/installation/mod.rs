@@ -5,7 +5,8 @@
 //! in the body frame at any time (rotation, body rate); [`terms`] holds which terms are
 //! estimated, their values and names, the model's prediction, the correction of a DVL
 //! record and its score against the reference; [`dead_reckoning`] sums the corrected
-//! velocity into a track and scores its drift against positions; [`estimate`] fits them, bounds them,
+//! velocity into a track and scores its drift against positions, [`fix_drift`] against
+//! position fixes, over a blackout or a whole dive; [`estimate`] fits them, bounds them,
 //! finds a dive's clock, fits several recordings jointly and runs the Kalman filter;
 //! [`study`] is the installation study (`kind = "installation"`): its spec and the
 //! held-out protocol that scores every method; [`learned`] the DCNets that learn an
@@ -16,6 +17,7 @@
 pub mod frames;
 pub mod terms;
 pub mod dead_reckoning;
+pub mod fix_drift;
 pub mod estimate;
 pub mod study;
 pub mod learned;

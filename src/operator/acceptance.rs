@@ -1,7 +1,8 @@
 //! Acceptance of a calibration, the way the vendors' procedures accept one: the DVL's
 //! misalignment under a limit (2° by default), its scale within one of 1 (0.95–1.05),
 //! and the dead reckoning with the terms applied within a share of the distance
-//! travelled at the recording's end (0.1 %, marginal to 0.2 %). An estimate is a claim
+//! travelled (0.1 %, marginal to 0.2 %): at a blackout's end where one was asked (the
+//! fixes inside it withheld from the fit), at the recording's end otherwise. An estimate is a claim
 //! with an interval, so a term passes where its whole 95 % interval lies within the
 //! limit, fails where the whole interval lies beyond, and is marginal where the limit
 //! falls inside it. A check the calibration cannot make (the term not estimated, no
@@ -147,15 +148,37 @@ impl Acceptance {
     }
 }
 
-/// The checks of the terms `bound` and of the dead reckoning's `drift` (with no terms
-/// and with them, where the reference records positions) against `thresholds`.
+/// A dead reckoning's drift with the terms applied, as the acceptance holds it: what it
+/// is, in words, and its error at the end, % of the distance travelled.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScoredDrift {
+    pub what: &'static str,
+    pub end_pct: f64,
+}
+
+/// The drift the acceptance holds of a calibration against a velocity reference: its
+/// dead reckoning's with the terms applied, against the reference's positions, where
+/// it records them.
+pub fn reference_drift(drift: Option<&(Drift, Drift)>) -> Result<ScoredDrift, String> {
+    match drift {
+        Some((_, after)) => Ok(ScoredDrift {
+            what: "dead-reckoning drift at the end, terms applied (% of the distance travelled)",
+            end_pct: after.end_pct,
+        }),
+        None => Err("no dead reckoning against the reference's positions (it records none, or no piece could be scored)".into()),
+    }
+}
+
+/// The checks of the terms `bound` (those `estimated`: a fit to horizontal fixes does
+/// not estimate roll and pitch) and of the dead reckoning's `drift` (or why there is
+/// none) against `thresholds`.
 pub fn accept<N: ReadNoise>(
-    bound: &TermBound<N>,
-    drift: Option<&(Drift, Drift)>,
+    (bound, estimated): (&TermBound<N>, &dyn Fn(usize) -> bool),
+    drift: Result<ScoredDrift, String>,
     thresholds: Thresholds,
 ) -> Acceptance {
     let checks = vec![
-        misalignment(bound, thresholds.misalignment_deg),
+        misalignment((bound, estimated), thresholds.misalignment_deg),
         scale(bound, thresholds.scale_pct),
         drift_check(drift, thresholds.drift_pct),
     ];
@@ -180,7 +203,10 @@ fn verdict_of(value: f64, half_width: f64, limit: f64) -> Verdict {
 /// direction (t times the square root of their covariance's largest eigenvalue): the
 /// angle moves by no more than the vector does, and a roll the recording barely shows
 /// widens it however tight the yaw.
-fn misalignment<N: ReadNoise>(bound: &TermBound<N>, limit_deg: f64) -> Check {
+fn misalignment<N: ReadNoise>(
+    (bound, estimated): (&TermBound<N>, &dyn Fn(usize) -> bool),
+    limit_deg: f64,
+) -> Check {
     let axes: Vec<usize> = [
         "misalignment_x_rad",
         "misalignment_y_rad",
@@ -188,9 +214,13 @@ fn misalignment<N: ReadNoise>(bound: &TermBound<N>, limit_deg: f64) -> Check {
     ]
     .iter()
     .filter_map(|name| bound.names.iter().position(|n| n == name))
+    .filter(|&k| estimated(k))
     .collect();
     let what = match axes.len() {
         3 => "misalignment (its angle)",
+        1 if bound.names[axes[0]] == "misalignment_z_rad" => {
+            "misalignment (its yaw: horizontal fixes do not feel roll and pitch)"
+        }
         _ => "misalignment (its angle over the axes estimated)",
     };
     let mut check = Check::unmade("misalignment", what, "°", limit_deg);
@@ -260,24 +290,25 @@ fn scale<N: ReadNoise>(bound: &TermBound<N>, limit_pct: f64) -> Check {
         })
 }
 
-/// The dead reckoning's end error with the terms applied, % of the distance: each
-/// piece's error at its end, summed over the distance travelled, on the recording the
-/// terms were fitted to ([`Drift::end_pct`]); a pass within the limit, marginal within
-/// twice it.
-fn drift_check(drift: Option<&(Drift, Drift)>, limit_pct: f64) -> Check {
-    let what = "dead-reckoning drift at the end, terms applied (% of the distance travelled)";
+/// The dead reckoning's end error with the terms applied, % of the distance, as
+/// `drift` says what it is (or why there is none); a pass within the limit, marginal
+/// within twice it.
+fn drift_check(drift: Result<ScoredDrift, String>, limit_pct: f64) -> Check {
+    let what = (drift.as_ref()).map_or("dead-reckoning drift (% of the distance travelled)", |d| {
+        d.what
+    });
     let mut check = Check {
         marginal_to: Some(2.0 * limit_pct),
         ..Check::unmade("drift", what, "%", limit_pct)
     };
-    let Some((_, after)) = drift else {
-        check.not_made = Some(
-            "no dead reckoning against the reference's positions (it records none, or no piece could be scored)"
-                .into(),
-        );
-        return check;
+    let drift = match drift {
+        Ok(drift) => drift,
+        Err(why) => {
+            check.not_made = Some(why);
+            return check;
+        }
     };
-    check.value = after.end_pct.abs();
+    check.value = drift.end_pct.abs();
     check.verdict = if check.value <= limit_pct {
         Verdict::Pass
     } else if check.value <= 2.0 * limit_pct {
@@ -303,7 +334,7 @@ mod tests {
         assert_eq!(verdict_of(1.0, f64::INFINITY, 2.0), Verdict::NotChecked);
         let acceptance = Acceptance {
             thresholds: Thresholds::default(),
-            checks: vec![drift_check(None, 0.1)],
+            checks: vec![drift_check(Err("no positions".into()), 0.1)],
         };
         assert!(acceptance.rejected());
     }
@@ -313,13 +344,8 @@ mod tests {
     #[test]
     fn the_drift_passes_within_its_limit_and_is_marginal_within_twice_it() {
         let drift = |end_pct: f64| {
-            let at = Drift {
-                rms_pct: 0.0,
-                end_pct,
-                distance_m: 1000.0,
-                samples: 100,
-            };
-            drift_check(Some(&(at, at)), 0.1).verdict
+            let what = "drift";
+            drift_check(Ok(ScoredDrift { what, end_pct }), 0.1).verdict
         };
         assert_eq!(drift(0.08), Verdict::Pass);
         assert_eq!(drift(-0.15), Verdict::Marginal);
@@ -365,11 +391,15 @@ mod tests {
     #[test]
     fn the_misalignments_interval_covers_its_worst_known_direction() {
         let deg = f64::to_radians;
+        let all = |_| true;
         let check = misalignment(
-            &misaligned(
-                [deg(0.1), 0.0, deg(1.0)],
-                [deg(2.0), deg(0.05), deg(0.05)],
-                0.0,
+            (
+                &misaligned(
+                    [deg(0.1), 0.0, deg(1.0)],
+                    [deg(2.0), deg(0.05), deg(0.05)],
+                    0.0,
+                ),
+                &all,
             ),
             2.0,
         );
@@ -380,7 +410,10 @@ mod tests {
         // Roll and yaw of 1° each, correlated 0.5: the largest eigenvalue of
         // [[1, 0.5], [0.5, 1]] (deg²) is 1.5.
         let check = misalignment(
-            &misaligned([0.0, 0.0, deg(0.2)], [deg(1.0), deg(0.1), deg(1.0)], 0.5),
+            (
+                &misaligned([0.0, 0.0, deg(0.2)], [deg(1.0), deg(0.1), deg(1.0)], 0.5),
+                &all,
+            ),
             5.0,
         );
         assert!(
@@ -388,13 +421,15 @@ mod tests {
             "{check:?}"
         );
         assert_eq!(check.verdict, Verdict::Pass);
-        let check = misalignment(
-            &misaligned([deg(3.0), 0.0, deg(4.0)], [deg(0.1); 3], 0.0),
-            2.0,
-        );
+        let tilted = misaligned([deg(3.0), 0.0, deg(4.0)], [deg(0.1); 3], 0.0);
+        let check = misalignment((&tilted, &all), 2.0);
         assert!((check.value - 5.0).abs() < 1e-9);
         assert_eq!(check.verdict, Verdict::Fail);
-        let unseen = misalignment(&misaligned([0.0; 3], [f64::INFINITY, 0.1, 0.1], 0.0), 2.0);
+        // The yaw alone, where roll and pitch were not estimated (horizontal fixes).
+        let yaw = misalignment((&tilted, &|k| k == 2), 2.0);
+        assert!((yaw.value - 4.0).abs() < 1e-9 && yaw.what.contains("its yaw"));
+        let unseen = misaligned([0.0; 3], [f64::INFINITY, 0.1, 0.1], 0.0);
+        let unseen = misalignment((&unseen, &all), 2.0);
         assert_eq!(unseen.verdict, Verdict::NotChecked);
         assert!(unseen.not_made.is_some());
     }

@@ -97,6 +97,8 @@ pub enum CalibrateError {
     ReferenceNoise(f64),
     #[error("--window-s {}: give a positive number of seconds", crate::Shown(*.0))]
     Window(f64),
+    #[error("--blackout-s {0}")]
+    Blackout(String),
     #[error("{flag} {}: give a positive number of metres, under 10,000 km: the fit weighs the fixes by it", crate::Shown(*value))]
     FixNoise { flag: &'static str, value: f64 },
     #[error("{flag}: give the fixes' noise per horizontal axis with --fix-noise-m (metres): {why}")]

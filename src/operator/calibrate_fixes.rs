@@ -22,6 +22,7 @@ use crate::installation::frames::{Attitude, Reference};
 use crate::installation::terms::names::{TermName, term_set};
 use crate::operator::calibrate::{CalibrateError, NOISE_RATIO_LIMIT, clear_of_inputs, named};
 use crate::operator::cost::{Cost, FIXES, PerRow, Rows};
+use crate::operator::fix_drifts::{BlackoutAsked, FixDrifts, drifts, withhold};
 use crate::operator::inputs::{self, Reading, columns, fix_columns, source};
 use crate::operator::installation_file::SavedInstallation;
 use crate::results::ResultsError;
@@ -71,6 +72,8 @@ pub struct FixArgs<'a> {
     pub save: Option<&'a Path>,
     /// The folder the corrected recording goes to.
     pub out: &'a Path,
+    /// The blackout whose fixes are withheld from the fit, to verify it, where asked.
+    pub blackout: Option<BlackoutAsked>,
 }
 
 impl FixFiles<'_> {
@@ -346,6 +349,12 @@ pub struct FixCalibration {
     pub after_m: f64,
     pub distance_m: f64,
     pub noise: FixNoise,
+    /// The fixes the fit was given (a blackout's withheld), which `fit.residuals` index.
+    pub fitted_fixes: Fixes,
+    /// The DVL's first sample's stamp, s: `--blackout-s` and the figures count from it.
+    pub record_start_s: f64,
+    /// The dead reckoning scored against the fixes, and across the blackout.
+    pub drifts: FixDrifts,
     /// The corrected recording's files written.
     pub corrected: Vec<PathBuf>,
 }
@@ -358,7 +367,12 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
     let corrected = [outputs.csv.as_path(), outputs.parquet.as_path()];
     clear_of_inputs(&files.inputs(), &corrected, (args.save, false))?;
     files.cost(FIXES).map_err(CalibrateError::Read)?.state()?;
-    let dive = fitted_dive(args, &outputs)?;
+    let (mut reading, fix_m) = read_dive(args, &outputs)?;
+    let blackout = (args.blackout)
+        .map(|asked| withhold(&mut reading, asked).map(|(window, fixes)| (asked, window, fixes)))
+        .transpose()?;
+    let dive = fitted_from(args, (reading, fix_m))?;
+    let drifts = drifts(&dive, blackout);
     let recording = &dive.reading.read.recording;
     let (fit, sha256) = (&dive.fit, dive.reading.read.dvl_sha256());
     let samples = corrected_samples(&fit.installation, recording, &Reference::new(recording));
@@ -367,25 +381,31 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
         save(path, args, fit, sha256)?;
     }
     Ok(FixCalibration::of(
-        dive,
+        (dive, drifts),
         files.fix_latency_s.unwrap_or(0.0),
         corrected,
     ))
 }
 
 impl FixCalibration {
-    /// What `dive`'s fit found, its fixes read `fix_latency_s` before their stamps, and
-    /// the files written of it.
-    pub fn of(dive: FittedDive, fix_latency_s: f64, corrected: Vec<PathBuf>) -> FixCalibration {
+    /// What `dive`'s fit found and its dead reckoning's `drifts`, its fixes read
+    /// `fix_latency_s` before their stamps, and the files written of it.
+    pub fn of(
+        (dive, drifts): (FittedDive, FixDrifts),
+        fix_latency_s: f64,
+        corrected: Vec<PathBuf>,
+    ) -> FixCalibration {
         let FittedDive {
             reading,
             noise,
             fit,
         } = dive;
+        let withheld = drifts.blackout.as_ref().map_or(0, |b| b.withheld.len());
+        let record_start_s = reading.read.recording.time_s[0];
         FixCalibration {
             corrected,
             read: reading.read.recording.counts().beside_attitude(),
-            fixes: reading.fixes.len(),
+            fixes: reading.fixes.len() + withheld,
             fixes_left_out: reading.left_out,
             fix_latency_s,
             own_noise: reading.fixes.noise_m.is_some(),
@@ -395,6 +415,9 @@ impl FixCalibration {
             distance_m: fit.distance_m,
             noise,
             fit,
+            fitted_fixes: reading.fixes,
+            record_start_s,
+            drifts,
         }
     }
 }

@@ -4,7 +4,8 @@
 //! `calibrate --save` writes (and, for a bag, the installation as ROS uses it:
 //! [`ros`]), and [`correct`], which carries a saved installation to
 //! the next dive and finds its clock again; [`calibrate_fixes`], a DVL calibrated
-//! against position fixes and an attitude, [`calibrate_fixes_joint`] several such dives
+//! against position fixes and an attitude (its dead reckoning scored on them, and across
+//! a blackout: [`fix_drifts`]), [`calibrate_fixes_joint`] several such dives
 //! as one vehicle, and [`correct_fixes`], its installation
 //! carried to the next such dive; what they share about their [`inputs`], and
 //! what each will [`cost`] this machine; a calibration's [`acceptance`] against a
@@ -22,5 +23,6 @@ pub mod ros;
 pub mod correct;
 pub mod calibrate_joint;
 pub mod calibrate_fixes;
+pub mod fix_drifts;
 pub mod calibrate_fixes_joint;
 pub mod correct_fixes;

@@ -629,11 +629,21 @@ fn calibrate_with_fixes_finds_the_installation_and_refuses_bad_input() {
 /// reference's positions every 5 s as fixes beside it: the DVL's, the attitude's and
 /// the fixes' paths.
 pub(crate) fn fix_dive(folder: &Path, truth: installed::Installed, seed: u64) -> [String; 3] {
+    fix_dive_every(folder, truth, seed, 5)
+}
+
+/// [`fix_dive`] with a fix every `every` seconds.
+pub(crate) fn fix_dive_every(
+    folder: &Path,
+    truth: installed::Installed,
+    seed: u64,
+    every: usize,
+) -> [String; 3] {
     installed::write_installed(folder, 1, &[], truth, seed);
     let files = [dcnet_exp::data::paired::PairedFiles::akit(folder, 1)];
     let segment = &crate::coverage::segments(&files)[0];
     let fixes = folder.join("fixes.csv");
-    write_fixes(&fixes, segment, 5);
+    write_fixes(&fixes, segment, every);
     [&files[0].dvl, &files[0].reference, &fixes].map(|p| p.to_str().unwrap().to_string())
 }
 

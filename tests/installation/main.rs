@@ -9,6 +9,7 @@
 mod common;
 
 mod acceptance;
+mod blackout;
 mod bags;
 mod bag_fixes;
 mod between_dives;

@@ -803,23 +803,40 @@ impl<'a> Problem<'a> {
         self.bound(solution, free, NoiseShape::GIVEN, 1.0).0
     }
 
+    /// Each fitted fix's residual under `solution` (the dead reckoning, its piece placed
+    /// at the start fitted, less the fix), north, east and depth (NaN where not
+    /// fitted), m, in the order of [`Self::fix_of`].
+    pub(super) fn fix_residuals(&self, solution: &Solution) -> Result<Vec<Vec3>, FixFitError> {
+        let residuals = self.with_starts(&self.residuals(&solution.terms)?, &solution.starts);
+        let mut out = Vec::with_capacity(self.fix_of.len());
+        let mut row = 0;
+        for held in &self.held {
+            for a in 0..held.len() {
+                let mut residual = [f64::NAN; 3];
+                for (axis, value) in residual.iter_mut().enumerate().take(self.axes) {
+                    *value = residuals[row + axis * held.len() + a];
+                }
+                out.push(residual);
+            }
+            row += self.axes * held.len();
+        }
+        Ok(out)
+    }
+
     /// The RMS of the residuals of the fixes kept, per axis, m (NaN on an axis not
     /// fitted).
     pub(super) fn residual_rms(&self, solution: &Solution) -> Result<Vec3, FixFitError> {
-        let residuals = self.with_starts(&self.residuals(&solution.terms)?, &solution.starts);
+        let residuals = self.fix_residuals(solution)?;
         let (mut sums, mut counts) = ([0.0; 3], [0usize; 3]);
-        let (mut row, mut offset) = (0, 0);
-        for held in &self.held {
+        for (residual, _) in residuals
+            .iter()
+            .zip(&solution.kept)
+            .filter(|(_, kept)| **kept)
+        {
             for axis in 0..self.axes {
-                for a in 0..held.len() {
-                    if solution.kept[offset + a] {
-                        sums[axis] += residuals[row].powi(2);
-                        counts[axis] += 1;
-                    }
-                    row += 1;
-                }
+                sums[axis] += residual[axis].powi(2);
+                counts[axis] += 1;
             }
-            offset += held.len();
         }
         Ok([0, 1, 2].map(|k| match counts[k] {
             0 => f64::NAN,

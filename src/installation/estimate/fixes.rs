@@ -125,11 +125,44 @@ pub struct FixFit {
     /// one), m; and of the same fixes with no term, each piece's start alone fitted.
     pub residual_rms_m: Vec3,
     pub bare_residual_rms_m: Vec3,
+    /// Each fitted fix's horizontal residual with no terms and with them (those
+    /// `residual_rms_m` and `bare_residual_rms_m` are the RMS of, over the fixes kept).
+    pub residuals: Vec<FixResidual>,
     /// The axes fitted: 2 (north, east) or 3 (and depth).
     pub axes: usize,
     /// How far the dead reckoning with the terms applied travelled, horizontally, over
     /// the times the fixes fitted span (each piece from its first fix to its last), m.
     pub distance_m: f64,
+}
+
+/// A fitted fix's residual: the dead reckoning, its piece placed at the start fitted,
+/// less the fix, north and east, m, with no terms (each piece's start alone fitted) and
+/// with the terms applied.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FixResidual {
+    /// Its index among the fixes.
+    pub fix: usize,
+    pub before_m: [f64; 2],
+    pub after_m: [f64; 2],
+    /// Whether the fit kept it (an outlier is not).
+    pub kept: bool,
+}
+
+/// Each fitted fix's residual under the `bare` fit (no terms) and the `last` one.
+fn fix_residuals(
+    problem: &Problem,
+    bare: &Solution,
+    last: &Solution,
+) -> Result<Vec<FixResidual>, FixFitError> {
+    let (before, after) = (problem.fix_residuals(bare)?, problem.fix_residuals(last)?);
+    Ok((problem.fix_of.iter().enumerate())
+        .map(|(j, &fix)| FixResidual {
+            fix,
+            before_m: [before[j][0], before[j][1]],
+            after_m: [after[j][0], after[j][1]],
+            kept: last.kept[j],
+        })
+        .collect())
 }
 
 impl FixFit {
@@ -182,6 +215,7 @@ pub fn fit_fixes_around(
     let (value, mut last_std, mut correlation) =
         problem.averaged(&last, (&shown.applied, &bounded))?;
     let mut last_bound = problem.fisher_bound(&last, &bounded);
+    let bare = problem.bare(&last)?;
     if let Some((clock, latency)) = shown.tied {
         clock_as_the_sum(&mut last_std, &mut correlation, (clock, latency));
         last_bound[clock] = problem.fisher_bound(&last, &shown.applied)[clock];
@@ -221,7 +255,8 @@ pub fn fit_fixes_around(
         outside: problem.outside,
         pieces: problem.pieces.len(),
         residual_rms_m: problem.residual_rms(&last)?,
-        bare_residual_rms_m: problem.residual_rms(&problem.bare(&last)?)?,
+        bare_residual_rms_m: problem.residual_rms(&bare)?,
+        residuals: fix_residuals(&problem, &bare, &last)?,
         axes: problem.axes,
         distance_m: problem.distance_m(&last.terms)?,
     })

@@ -9,6 +9,7 @@ use crate::installation::estimate::bound::ReadNoise;
 use crate::installation::estimate::fixes::{FIX_LATENCY, FixFit};
 use crate::installation::estimate::fixes::{FIX_TOLERANCES, MIN_HEADING_SPAN_RAD};
 use crate::installation::estimate::robust::TUKEY_C_MODELLED;
+use crate::installation::fix_drift::{ANCHOR_S, SpanDrift};
 use crate::operator::calibrate_fixes::FixCalibration;
 use crate::report::kit::readable::{readable_term, readable_why};
 
@@ -64,7 +65,7 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
     let table = super::terms_table(&fit.bound, |k| fit.estimated[k]);
     let mut text = read_from(&calibration.read_from);
     text.push_str(&format!(
-        "read: {}; {}, {} fitted ({} outside the DVL's pieces, {} outliers beyond Tukey's {TUKEY_C_MODELLED} of their standard deviations, left out), over {} piece{} with a start position each\n{table}\n",
+        "read: {}; {}, {} fitted ({}{} outside the DVL's pieces, {} outliers beyond Tukey's {TUKEY_C_MODELLED} of their standard deviations, left out), over {} piece{} with a start position each\n{table}\n",
         calibration.read,
         fixes_read(
             calibration.fixes,
@@ -72,6 +73,10 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
             given_latency(calibration.fix_latency_s)
         ),
         fit.fitted,
+        match &calibration.drifts.blackout {
+            Some(blackout) => format!("{} withheld in the blackout, ", blackout.withheld.len()),
+            None => String::new(),
+        },
         fit.outside,
         fit.outliers.len(),
         fit.pieces,
@@ -111,6 +116,7 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
         100.0 * calibration.before_m / calibration.distance_m,
         100.0 * calibration.after_m / calibration.distance_m,
     ));
+    text.push_str(&drift_lines(calibration));
     text.push_str(&format!(
         "every term is applied at its estimate with its standard deviation, however loosely the fixes show it (beyond its tolerance, scale {:.2} %, misalignment {:.2}°, lever arm {:.2} m, time offset {:.2} s, or tied beyond ±0.95 to another, it is said to be seen poorly, as is the yaw over headings spanning under {:.0}°), but where they cannot show it at all: the lever arm and the clock over those headings, or a term the residuals do not depend on; that one is held at zero, as the start positions take its place exactly; and a clock or a latency the fit ran to the edge of its search where that edge lies within its 95 % interval of zero, held at zero with its uncertainty carried into the others'\n",
         100.0 * FIX_TOLERANCES.scale,
@@ -119,6 +125,52 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
         FIX_TOLERANCES.time_offset_s,
         MIN_HEADING_SPAN_RAD.to_degrees(),
     ));
+    text
+}
+
+/// The dead reckoning against the fixes: over the whole dive, and across the blackout
+/// where one was asked; a line each.
+pub fn drift_lines(calibration: &FixCalibration) -> String {
+    let drifts = &calibration.drifts;
+    let mut text = match &drifts.dive {
+        Some((before, after)) => format!(
+            "dead reckoning against the fixes (horizontal; each piece placed on its fixes of its first {ANCHOR_S} s and scored on those of its last {ANCHOR_S} s, the pieces' end errors summed over the {:.0} m travelled): at the end {:.3} % of the distance with no terms, {:.3} % with the terms applied ({:.2} m and {:.2} m)\n",
+            after.distance_m(),
+            before.end_pct(),
+            after.end_pct(),
+            before.spans.iter().map(SpanDrift::error_m).sum::<f64>(),
+            after.spans.iter().map(SpanDrift::error_m).sum::<f64>(),
+        ),
+        None => "dead reckoning against the fixes: not scored, no piece of the DVL's record holds fixes at both its ends\n".to_string(),
+    };
+    let Some(blackout) = &drifts.blackout else {
+        return text;
+    };
+    let asked = blackout.asked;
+    text.push_str(&format!(
+        "blackout from {} s to {} s after the DVL's first sample: its {} fixes withheld from the fit; ",
+        crate::Shown(asked.start_s),
+        crate::Shown(asked.start_s + asked.length_s),
+        blackout.withheld.len()
+    ));
+    match &blackout.drift {
+        Ok((before, after)) => {
+            let floor_m = after.noise_floor_m(calibration.noise.fix_m);
+            text.push_str(&format!(
+                "the dead reckoning placed on the {} fixes of the {ANCHOR_S} s before it and scored on the {} of the {ANCHOR_S} s after it, over the {:.1} m travelled between them: at its end {:.3} % of the distance with no terms, {:.3} % with the terms fitted without its fixes ({:.2} m and {:.2} m); white fixes of {:.2} m per axis alone would leave about {floor_m:.2} m ({:.3} %)\n",
+                after.anchored.0,
+                after.anchored.1,
+                after.distance_m,
+                before.pct(),
+                after.pct(),
+                before.error_m(),
+                after.error_m(),
+                calibration.noise.fix_m,
+                100.0 * floor_m / after.distance_m,
+            ));
+        }
+        Err(why) => text.push_str(&format!("not scored: {why}\n")),
+    }
     text
 }
 

@@ -3,13 +3,14 @@
 //! calibration of one recording or of several jointly ([`calibrate`]), of a DVL against
 //! position fixes ([`fixes`]) or of several such dives jointly ([`fixes_joint`]), or a
 //! recording's clock found again and its correction ([`correct`]). Out: the text printed on stdout.
-//! With `--report`, a calibration's [`figures`] and its [`page`]: `report.md` and a
+//! With `--report`, a calibration's [`figures`] (against fixes, [`fix_figures`]) and its [`page`]: `report.md` and a
 //! self-contained `report.html`; with `--accept`, its [`acceptance`].
 
 pub mod acceptance;
 pub mod calibrate;
 pub mod correct;
 pub mod figures;
+pub mod fix_figures;
 pub mod page;
 pub mod fixes;
 pub mod fixes_joint;

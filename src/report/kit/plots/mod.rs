@@ -4,7 +4,8 @@
 //! chosen by [`scale`] (linear or logarithmic, its ticks, far values cut), or by
 //! [`broken_axis`] in crowded panels; the shared pieces (looks, legends, marks) come
 //! from [`draw`], a grid of terms against time from [`term_panels`] and a recording's
-//! residual before and after from [`residual`], a clock search from [`search`]. [`render`]
+//! residual before and after from [`residual`], a clock search from [`search`], a fit to
+//! position fixes in plan view and its fixes' residual from [`fixes`]. [`render`]
 //! writes each figure as PNG and as SVG with the text outlined, both from the embedded
 //! font, and this module writes the files ([`write_figures`]). In: the figures a room
 //! drew. Out: the figure files, and each figure's caption or why it is absent
@@ -13,6 +14,7 @@
 pub mod broken_axis;
 pub mod canvas;
 pub mod draw;
+pub mod fixes;
 pub mod render;
 pub mod residual;
 pub mod scale;

@@ -1,0 +1,237 @@
+//! The figures of a fit to position fixes. The plan view ([`draw_plan`]): east across,
+//! north up, one metre the same length on both; the fixes (those the fit left out
+//! crossed, those a blackout withheld ringed), and each piece's dead reckoning placed
+//! on its first fixes, with no terms (grey) and with them (in colour), and the
+//! blackout's own dead reckoning, placed at its start, in red: a track that bends away
+//! from the fixes shows as such. The fixes' residual against time ([`draw_fix_residual`]):
+//! north and east, before and after, the outliers crossed, the blackout shaded. Every
+//! line is drawn at one point in k where it holds more than [`MOST_POINTS`], its ends
+//! kept. In: a [`PlanView`] or a [`FixResidualTrace`]. Out: the SVG.
+
+use super::canvas::draw_svg;
+use super::draw::*;
+use super::scale::Scale;
+use plotters::prelude::*;
+
+/// The colour of the dead reckoning with the terms, and of the residual after them.
+const AFTER: RGBColor = RGBColor(31, 119, 180);
+/// The colour of the dead reckoning and the residual with no terms.
+const BEFORE: RGBColor = RGBColor(170, 170, 170);
+/// The colour of the fixes.
+const FIX: RGBColor = RGBColor(60, 60, 60);
+/// The colour of the blackout: its dead reckoning, its withheld fixes, its shade.
+const BLACKOUT: RGBColor = RGBColor(214, 39, 40);
+
+/// The colour of the blackout's shade.
+const SHADE: RGBColor = RGBColor(249, 224, 224);
+/// The colour of the fixes a blackout withheld, drawn under the lines.
+const WITHHELD: RGBColor = RGBColor(245, 170, 170);
+
+/// The most points a line or a set of marks is drawn with.
+pub const MOST_POINTS: usize = 3000;
+
+/// A fit to fixes in plan view: positions north and east, m.
+pub struct PlanView {
+    /// The fixes fitted, those the fit left out as outliers, those withheld.
+    pub fixes: Vec<[f64; 2]>,
+    pub outliers: Vec<[f64; 2]>,
+    pub withheld: Vec<[f64; 2]>,
+    /// Each piece's dead reckoning with no terms and with them.
+    pub before: Vec<Vec<[f64; 2]>>,
+    pub after: Vec<Vec<[f64; 2]>>,
+    /// The blackout's dead reckoning with the terms, placed at its start.
+    pub blackout: Option<Vec<[f64; 2]>>,
+}
+
+/// Every `k`-th of `points` and its last, so that at most about `most` are left.
+pub fn thinned<T: Copy>(points: &[T], most: usize) -> Vec<T> {
+    let stride = points.len().div_ceil(most.max(1)).max(1);
+    let last = points.len().saturating_sub(1);
+    (points.iter().enumerate())
+        .filter(|(k, _)| k % stride == 0 || *k == last)
+        .map(|(_, p)| *p)
+        .collect()
+}
+
+/// East, north: the plotted point of a north-east position.
+fn east_north(p: &[f64; 2]) -> (f64, f64) {
+    (p[1], p[0])
+}
+
+/// The plan view `plan` under `title`.
+pub fn draw_plan(title: &str, plan: &PlanView) -> PlotResult<String> {
+    let everything = || {
+        (plan.fixes.iter())
+            .chain(&plan.outliers)
+            .chain(&plan.withheld)
+            .chain(plan.before.iter().flatten())
+            .chain(plan.after.iter().flatten())
+    };
+    let (mut low, mut high) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in everything() {
+        for k in 0..2 {
+            (low[k], high[k]) = (low[k].min(p[k]), high[k].max(p[k]));
+        }
+    }
+    if !low[0].is_finite() {
+        (low, high) = ([0.0; 2], [1.0; 2]);
+    }
+    // One metre the same length across and up: both axes span the wider extent.
+    let half = 0.55 * (high[0] - low[0]).max(high[1] - low[1]).max(1.0);
+    let centre = [0.5 * (low[0] + high[0]), 0.5 * (low[1] + high[1])];
+    let side = 900;
+    let width = side + LEGEND_WIDTH;
+    draw_svg((width, side + 40), |root| {
+        let (panels, legend_area) = panels_and_legend(root, title, width, 1)?;
+        let mut chart = chart_on(&panels[0], "", 70).build_cartesian_2d(
+            Scale::linear((centre[1] - half)..(centre[1] + half)),
+            Scale::linear((centre[0] - half)..(centre[0] + half)),
+        )?;
+        mesh(&mut chart)
+            .x_desc("east [m]")
+            .y_desc("north [m]")
+            .draw()?;
+        let drawn = |points: &[[f64; 2]]| -> Vec<(f64, f64)> {
+            thinned(points, MOST_POINTS)
+                .iter()
+                .map(east_north)
+                .collect()
+        };
+        // The withheld fixes under the lines, so that the tracks through them show.
+        Marker::Ring.draw(&mut chart, &drawn(&plan.withheld), WITHHELD)?;
+        Marker::Dot.draw(&mut chart, &drawn(&plan.fixes), FIX)?;
+        for track in &plan.before {
+            line(&mut chart, drawn(track), BEFORE, Stroke::Solid)?;
+        }
+        for track in &plan.after {
+            line(&mut chart, drawn(track), AFTER, Stroke::Solid)?;
+        }
+        if let Some(track) = &plan.blackout {
+            line(&mut chart, drawn(track), BLACKOUT, Stroke::Solid)?;
+        }
+        Marker::Cross.draw(&mut chart, &drawn(&plan.outliers), BLACK)?;
+        legend(&legend_area, "plan view", &plan_entries(plan))
+    })
+}
+
+/// The plan view's legend: what it draws, and only that.
+fn plan_entries(plan: &PlanView) -> Vec<(Swatch, String)> {
+    let mut entries = vec![
+        (Swatch::Mark(FIX, Marker::Dot), "fix fitted".to_string()),
+        (
+            Swatch::Line(BEFORE, Stroke::Solid),
+            "dead reckoning, no terms".to_string(),
+        ),
+        (
+            Swatch::Line(AFTER, Stroke::Solid),
+            "dead reckoning, terms".to_string(),
+        ),
+    ];
+    if !plan.withheld.is_empty() {
+        entries.push((
+            Swatch::Mark(WITHHELD, Marker::Ring),
+            "fix withheld (blackout)".to_string(),
+        ));
+    }
+    if plan.blackout.is_some() {
+        entries.push((
+            Swatch::Line(BLACKOUT, Stroke::Solid),
+            "through the blackout".to_string(),
+        ));
+    }
+    if !plan.outliers.is_empty() {
+        entries.push((
+            Swatch::Mark(BLACK, Marker::Cross),
+            "outlier, left out".to_string(),
+        ));
+    }
+    entries
+}
+
+/// The fixes' residuals as drawn: each fitted fix's time, s, its residual north and
+/// east with no terms and with them, m, and whether the fit kept it; the blackout's
+/// window, s, where there was one.
+pub struct FixResidualTrace {
+    pub time_s: Vec<f64>,
+    pub before_m: Vec<[f64; 2]>,
+    pub after_m: Vec<[f64; 2]>,
+    pub kept: Vec<bool>,
+    pub blackout_s: Option<(f64, f64)>,
+}
+
+/// The fixes' residual `trace` under `title`: a panel north, a panel east.
+pub fn draw_fix_residual(title: &str, trace: &FixResidualTrace) -> PlotResult<String> {
+    let start = trace.time_s.first().copied().unwrap_or(0.0);
+    let end = trace.time_s.last().copied().unwrap_or(1.0).max(start + 1.0);
+    let (start, end) = match trace.blackout_s {
+        Some((from, to)) => (start.min(from), end.max(to)),
+        None => (start, end),
+    };
+    let width = 1400 + LEGEND_WIDTH;
+    draw_svg((width, 700), |root| {
+        let (panels, legend_area) = panels_and_legend(root, title, width, 1)?;
+        let rows = panels[0].split_evenly((2, 1));
+        for (axis, name) in ["north", "east"].iter().enumerate() {
+            let values = (trace.before_m.iter().chain(&trace.after_m)).map(|r| r[axis].abs());
+            let top = values.fold(0.0, f64::max).max(1e-3) * 1.05;
+            let mut chart = chart_on(&rows[axis], "", 70)
+                .build_cartesian_2d(Scale::linear(start..end), Scale::linear(-top..top))?;
+            mesh(&mut chart)
+                .x_desc("time [s]")
+                .y_desc(format!("{name}, dead reckoning − fix [m]"))
+                .draw()?;
+            if let Some((from, to)) = trace.blackout_s {
+                chart.draw_series(std::iter::once(Rectangle::new(
+                    [(from, -top), (to, top)],
+                    SHADE.filled(),
+                )))?;
+            }
+            let series = |of: &[[f64; 2]], keep: bool| -> Vec<(f64, f64)> {
+                let points: Vec<(f64, f64)> = (trace.time_s.iter().zip(of).zip(&trace.kept))
+                    .filter(|(_, kept)| **kept == keep)
+                    .map(|((t, r), _)| (*t, r[axis]))
+                    .collect();
+                thinned(&points, MOST_POINTS)
+            };
+            Marker::Dot.draw(&mut chart, &series(&trace.before_m, true), BEFORE)?;
+            Marker::Dot.draw(&mut chart, &series(&trace.after_m, true), AFTER)?;
+            Marker::Cross.draw(&mut chart, &series(&trace.after_m, false), BLACK)?;
+        }
+        legend(&legend_area, "fixes' residual", &residual_entries(trace))
+    })
+}
+
+/// The residual figure's legend: what it draws, and only that.
+fn residual_entries(trace: &FixResidualTrace) -> Vec<(Swatch, String)> {
+    let mut entries = vec![
+        (Swatch::Mark(BEFORE, Marker::Dot), "no terms".to_string()),
+        (Swatch::Mark(AFTER, Marker::Dot), "terms".to_string()),
+    ];
+    if trace.kept.iter().any(|kept| !kept) {
+        entries.push((
+            Swatch::Mark(BLACK, Marker::Cross),
+            "outlier, left out".to_string(),
+        ));
+    }
+    if trace.blackout_s.is_some() {
+        entries.push((
+            Swatch::Bar(BLACKOUT),
+            "blackout, fixes withheld".to_string(),
+        ));
+    }
+    entries
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_long_line_is_thinned_to_about_the_most_points_its_ends_kept() {
+        let points: Vec<usize> = (0..10_001).collect();
+        let drawn = thinned(&points, 3000);
+        assert!(drawn.len() <= 3001, "{}", drawn.len());
+        assert_eq!((drawn[0], drawn[drawn.len() - 1]), (0, 10_000));
+        assert_eq!(thinned(&points[..5], 3000), vec![0, 1, 2, 3, 4]);
+    }
+}
