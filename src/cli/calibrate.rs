@@ -28,6 +28,7 @@ use crate::report::operator::figures::{calibration_figures, correction_figures};
 use crate::report::operator::fix_figures::fix_calibration_figures;
 use crate::report::operator::fixes::fixes_text;
 use crate::report::operator::fixes_joint::joint_fixes_text;
+use crate::report::operator::joint_figures::joint_figures;
 use crate::report::operator::page::{HTML, write_report};
 use std::path::Path;
 
@@ -45,16 +46,8 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
         )));
     }
     let given = (args.fix.given_per_dive(args.dvl.len())).map_err(|m| input(anyhow::anyhow!(m)))?;
-    for (flag, asked) in [
-        ("--report", args.report.is_some()),
-        ("--accept", args.accept.is_some()),
-        ("--blackout-s", args.blackout_s.is_some()),
-    ] {
-        if asked && args.dvl.len() > 1 {
-            return Err(input(anyhow::anyhow!(
-                "{flag}: for one recording; not yet for several calibrated jointly"
-            )));
-        }
+    if args.dvl.len() > 1 {
+        refuse_for_several(args, given.is_some())?;
     }
     let thresholds = (args.accept.as_deref())
         .map(Thresholds::parse)
@@ -74,7 +67,7 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
     let terms = parse_terms(("--terms", args.terms.as_deref().unwrap_or(&default_terms)))?;
     let dive_terms = parse_terms(("--dive-terms", &args.dive_terms))?;
     if args.dvl.len() > 1 {
-        return calibrate_joint(&JointArgs {
+        let joint = JointArgs {
             dvls: &args.dvl,
             references: &args.reference,
             columns: args.columns.as_deref(),
@@ -88,7 +81,8 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
             out: args.out(),
             save: args.save.as_deref(),
             search_s: args.search_s,
-        });
+        };
+        return calibrate_joint(&joint, args.report());
     }
     let one = CalibrateArgs {
         dvl: &args.dvl[0],
@@ -107,6 +101,24 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
     };
     let rejected = calibrate(&one, args.report(), thresholds)?;
     rejection(rejected && args.fail_on_reject)
+}
+
+/// Refuses what a joint calibration does not do yet: `--accept` and `--blackout-s`, and
+/// against fixes (`fixes`), `--report`.
+fn refuse_for_several(args: &args::CalibrateArgs, fixes: bool) -> Result<(), CliError> {
+    let against = if fixes { " against fixes" } else { "" };
+    for (flag, asked) in [
+        ("--report", args.report.is_some() && fixes),
+        ("--accept", args.accept.is_some()),
+        ("--blackout-s", args.blackout_s.is_some()),
+    ] {
+        if asked {
+            return Err(input(anyhow::anyhow!(
+                "{flag}: for one recording (--report: or several against a velocity reference); not yet for several calibrated jointly{against}"
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Exit status 3 where `--fail-on-reject` meets a calibration `--accept` rejected.
@@ -420,10 +432,16 @@ fn write_drawn(
 }
 
 /// `calibrate A.csv B.csv …`: the vehicle's terms over every recording, each one's clock
-/// its own, whether they agree, and each recording corrected.
-fn calibrate_joint(args: &JointArgs) -> Result<(), CliError> {
+/// its own, whether they agree, and each recording corrected; its report written to
+/// `report` where one is asked.
+fn calibrate_joint(args: &JointArgs, report: Option<&Path>) -> Result<(), CliError> {
     let calibration = calibrated_jointly(args).map_err(stopped)?;
-    print!("{}", joint_text(&calibration));
+    let printed = joint_text(&calibration);
+    print!("{printed}");
     written(&calibration.written, args.save);
+    if let Some(folder) = report {
+        let title = format!("Joint calibration of {} recordings", args.dvls.len());
+        write_drawn(folder, &title, &printed, joint_figures(&calibration))?;
+    }
     Ok(())
 }

@@ -18,6 +18,7 @@ use crate::footprint::machine_memory;
 use crate::installation::estimate::fixes::{
     DEFAULT_FIX_TERMS, FIX_LATENCY, FixFit, FixNoise, FixTerms, fit_fixes,
 };
+use crate::installation::fix_drift::Span;
 use crate::installation::frames::{Attitude, Reference};
 use crate::installation::terms::names::{TermName, term_set};
 use crate::operator::calibrate::{CalibrateError, NOISE_RATIO_LIMIT, clear_of_inputs, named};
@@ -368,11 +369,12 @@ pub fn calibrate_fixes(args: &FixArgs) -> Result<FixCalibration, CalibrateError>
     clear_of_inputs(&files.inputs(), &corrected, (args.save, false))?;
     files.cost(FIXES).map_err(CalibrateError::Read)?.state()?;
     let (mut reading, fix_m) = read_dive(args, &outputs)?;
+    let record = (&reading.read.recording.time_s[..], &mut reading.fixes);
     let blackout = (args.blackout)
-        .map(|asked| withhold(&mut reading, asked).map(|(window, fixes)| (asked, window, fixes)))
+        .map(|asked| withhold(record, asked).map(|(window, fixes)| (asked, window, fixes)))
         .transpose()?;
     let dive = fitted_from(args, (reading, fix_m))?;
-    let drifts = drifts(&dive, blackout);
+    let drifts = dive.drifts(blackout);
     let recording = &dive.reading.read.recording;
     let (fit, sha256) = (&dive.fit, dive.reading.read.dvl_sha256());
     let samples = corrected_samples(&fit.installation, recording, &Reference::new(recording));
@@ -427,6 +429,17 @@ pub struct FittedDive {
     pub reading: FixReading,
     pub noise: FixNoise,
     pub fit: FixFit,
+}
+
+impl FittedDive {
+    /// Its dead reckoning scored against its fixes, and across `blackout` where asked.
+    pub fn drifts(&self, blackout: Option<(BlackoutAsked, Span, Fixes)>) -> FixDrifts {
+        let reading = &self.reading;
+        drifts(
+            (&reading.read.recording, &reading.fixes, &self.fit),
+            blackout,
+        )
+    }
 }
 
 /// The dive of `args` read (refused where `outputs` hold another recording's results)

@@ -24,7 +24,6 @@ use crate::operator::calibrate_joint::{
     Agreement, correlation_over, each_recording_once, names, spreads,
 };
 use crate::operator::cost::{Cost, JOINT_FIXES};
-use crate::operator::fix_drifts::drifts;
 use crate::operator::installation_file::{SavedInstallation, SavedTerm};
 use crate::results::ResultsError;
 use crate::results::corrected::{Outputs, corrected_samples, write};
@@ -113,7 +112,7 @@ pub fn calibrate_fixes_joint(dives: &[FixArgs]) -> Result<JointFixCalibration, C
         .collect();
     let alone = (dives.iter().zip(fitted))
         .map(|(dive, fitted)| {
-            let drifts = drifts(&fitted, None);
+            let drifts = fitted.drifts(None);
             let latency_s = dive.files.fix_latency_s.unwrap_or(0.0);
             FixCalibration::of((fitted, drifts), latency_s, Vec::new())
         })

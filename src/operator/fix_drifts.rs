@@ -7,6 +7,7 @@
 //! window and its fixes withheld ([`withhold`]), then the [`FixDrifts`].
 
 use crate::data::fixes::Fixes;
+use crate::data::paired::PairedRecording;
 use crate::installation::estimate::fixes::{FIX_LATENCY, FixFit};
 use crate::installation::fix_drift::{
     AgainstFixes, DiveDrift, Span, SpanDrift, blackout_drift, dive_drift,
@@ -15,7 +16,6 @@ use crate::installation::frames::Attitude;
 use crate::installation::terms::Installation;
 use crate::operator::acceptance::ScoredDrift;
 use crate::operator::calibrate::CalibrateError;
-use crate::operator::calibrate_fixes::{FittedDive, FixReading};
 
 /// A blackout as `--blackout-s START:LENGTH` asks for it: its start, s after the DVL's
 /// first sample, and its length, s.
@@ -64,14 +64,13 @@ pub struct FixDrifts {
     pub blackout: Option<Blackout>,
 }
 
-/// The window `asked` of `reading`'s record on the fixes' clock, its fixes taken out of
-/// `reading` (withheld from the fit) and returned; refused where the window does not lie
-/// within the DVL's record.
+/// The window `asked` of the DVL's record stamped `time_s` on the fixes' clock, its
+/// fixes taken out of `fixes` (withheld from the fit) and returned; refused where the
+/// window does not lie within the record.
 pub fn withhold(
-    reading: &mut FixReading,
+    (time_s, fixes): (&[f64], &mut Fixes),
     asked: BlackoutAsked,
 ) -> Result<(Span, Fixes), CalibrateError> {
-    let time_s = &reading.read.recording.time_s;
     let (first, last) = (time_s[0], time_s[time_s.len() - 1]);
     let window = (
         first + asked.start_s,
@@ -86,27 +85,29 @@ pub fn withhold(
             last - first
         )));
     }
-    let fixes = &reading.fixes;
     let inside = |j: usize| window.0 < fixes.time_s[j] && fixes.time_s[j] < window.1;
     let withheld = fixes.select(inside);
-    reading.fixes = fixes.select(|j| !inside(j));
+    *fixes = fixes.select(|j| !inside(j));
     Ok((window, withheld))
 }
 
-/// The drifts of `dive`'s dead reckoning against its fixes, with no terms and with its
-/// fit's, and across `blackout` (the window and its fixes withheld) where one was asked.
-pub fn drifts(dive: &FittedDive, blackout: Option<(BlackoutAsked, Span, Fixes)>) -> FixDrifts {
-    let recording = &dive.reading.read.recording;
+/// The drifts of the dead reckoning of `recording` against the `fixes` `fit` was fitted
+/// to, with no terms and with the fit's, and across `blackout` (the window and its
+/// fixes withheld) where one was asked.
+pub fn drifts(
+    (recording, fixes, fit): (&PairedRecording, &Fixes, &FixFit),
+    blackout: Option<(BlackoutAsked, Span, Fixes)>,
+) -> FixDrifts {
     let (attitude, pieces) = (Attitude::of(recording), recording.pieces());
     let against = |latency_s| AgainstFixes {
         dvl: (&recording.time_s, &recording.dvl_m_s),
         pieces: &pieces,
         attitude: &attitude,
-        fixes: &dive.reading.fixes,
+        fixes,
         latency_s,
     };
     let none = (&Installation::default(), against(0.0));
-    let terms = (&dive.fit.installation, against(fitted_latency_s(&dive.fit)));
+    let terms = (&fit.installation, against(fitted_latency_s(fit)));
     let window = blackout.as_ref().map(|(_, window, _)| *window);
     let dive_drifts =
         dive_drift(none.0, &none.1, window).zip(dive_drift(terms.0, &terms.1, window));

@@ -10,6 +10,7 @@ mod common;
 
 mod acceptance;
 mod blackout;
+mod browser;
 mod bags;
 mod bag_fixes;
 mod between_dives;

@@ -268,7 +268,7 @@ fn dives_calibrated_jointly_share_the_vehicles_terms_and_keep_their_clocks() {
     // The dives' DVL reads 1 % fast: the scale is among the terms.
     let terms = ["--terms", "lever_arm,time_offset,bias,scale"];
     args.extend(
-        ["--save", "joint.toml", "--out", "joint"]
+        ["--save", "joint.toml", "--out", "joint", "--report"]
             .into_iter()
             .chain(terms)
             .map(String::from),
@@ -306,6 +306,26 @@ fn dives_calibrated_jointly_share_the_vehicles_terms_and_keep_their_clocks() {
     let (vehicle, next) = (interval(&lever[6]), interval(&lever[7]));
     assert!(vehicle.0 < -1.9 && -1.9 < vehicle.1, "{lever:?}");
     assert!(next.0 < vehicle.0 && vehicle.1 < next.1, "{lever:?}");
+    // The report's forest plot: its intervals the printed ones.
+    let markdown = std::fs::read_to_string(d.join("joint/report.md")).unwrap();
+    assert!(
+        markdown.contains(&format!("lever arm x joint {} ± ", lever[2])),
+        "{markdown}"
+    );
+    assert!(
+        markdown.contains(&format!("vehicle {}, next dive {}", lever[6], lever[7])),
+        "{markdown}"
+    );
+    assert!(d.join("joint/forest.png").is_file());
+    // Each recording's own fit, printed, as the plot's rows.
+    let own = &printed[printed.find("each recording's own fit").expect(&printed)..];
+    assert_eq!(
+        own.lines()
+            .filter(|l| l.contains("-DVL_trajectory1 |"))
+            .count(),
+        3,
+        "{own}"
+    );
     let saved = std::fs::read_to_string(d.join("joint.toml")).unwrap();
     assert!(saved.contains("dives = 3\n"), "{saved}");
     assert!(

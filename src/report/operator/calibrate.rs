@@ -19,6 +19,7 @@ use crate::operator::calibrate::Calibration;
 use crate::operator::calibrate_joint::{AGREEMENT_P_VALUE, Agreement, JointCalibration};
 use crate::operator::ros::body_axes_terms;
 use crate::report::kit::readable::{readable_term, readable_why};
+use crate::report::operator::joint_figures::own_fit;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
 
 /// Everything `calibrate` prints: the fit, a blank line, the filter; ends in a newline.
@@ -310,6 +311,10 @@ pub fn joint_text(calibration: &JointCalibration) -> String {
         names.len() - 1
     ));
     text.push_str(&format!("{}\n", dives_table(calibration)));
+    text.push_str(&format!(
+        "each recording's own fit of the vehicle's terms, its dive terms free (what the spread between dives is read from): estimate ± its 95 % interval\n{}\n",
+        own_table(calibration)
+    ));
     text
 }
 
@@ -418,6 +423,35 @@ pub(crate) fn vehicle_rows(rows: &VehicleRows) -> Table {
             between.map_or_else(none, |b| interval(b.next_dive_95())),
             format!("{:.1} ({:.1e}{mark})", agree.chi_square, agree.p_value),
         ]);
+        table.add_row(row);
+    }
+    table
+}
+
+/// Each recording's own fit of the vehicle's terms, a row each: estimate ± 95 %
+/// half-width ([`own_fit`]), of each term the joint fit shows.
+fn own_table(calibration: &JointCalibration) -> Table {
+    let bound = &calibration.joint.bound;
+    let shown: Vec<usize> = (0..bound.names.len())
+        .filter(|&i| bound.std[i].is_finite())
+        .collect();
+    let mut table = Table::new();
+    table.load_preset(ASCII_MARKDOWN);
+    let mut header = vec!["recording".to_string()];
+    header.extend(shown.iter().map(|&i| {
+        let (readable, unit, _) = readable_term(bound.names[i]);
+        format!("{readable} ({unit})")
+    }));
+    table.set_header(header);
+    for (k, name) in calibration.names.iter().enumerate() {
+        let mut row = vec![name.clone()];
+        row.extend(shown.iter().map(|&i| {
+            let (_, _, factor) = readable_term(bound.names[i]);
+            match own_fit(calibration, k, i) {
+                Some((value, half)) => format!("{:.4} ± {:.4}", value * factor, half * factor),
+                None => "-".to_string(),
+            }
+        }));
         table.add_row(row);
     }
     table

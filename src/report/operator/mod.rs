@@ -3,7 +3,8 @@
 //! calibration of one recording or of several jointly ([`calibrate`]), of a DVL against
 //! position fixes ([`fixes`]) or of several such dives jointly ([`fixes_joint`]), or a
 //! recording's clock found again and its correction ([`correct`]). Out: the text printed on stdout.
-//! With `--report`, a calibration's [`figures`] (against fixes, [`fix_figures`]) and its [`page`]: `report.md` and a
+//! With `--report`, a calibration's [`figures`] (against fixes, [`fix_figures`]; of
+//! several recordings, [`joint_figures`]) and its [`page`]: `report.md` and a
 //! self-contained `report.html`; with `--accept`, its [`acceptance`].
 
 pub mod acceptance;
@@ -14,6 +15,7 @@ pub mod fix_figures;
 pub mod page;
 pub mod fixes;
 pub mod fixes_joint;
+pub mod joint_figures;
 
 use crate::installation::dead_reckoning::Drift;
 use crate::installation::estimate::bound::{ReadNoise, TermBound};

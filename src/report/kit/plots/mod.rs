@@ -5,7 +5,8 @@
 //! [`broken_axis`] in crowded panels; the shared pieces (looks, legends, marks) come
 //! from [`draw`], a grid of terms against time from [`term_panels`] and a recording's
 //! residual before and after from [`residual`], a clock search from [`search`], a fit to
-//! position fixes in plan view and its fixes' residual from [`fixes`]. [`render`]
+//! position fixes in plan view and its fixes' residual from [`fixes`], a joint
+//! calibration's terms dive by dive from [`forest`]. [`render`]
 //! writes each figure as PNG and as SVG with the text outlined, both from the embedded
 //! font, and this module writes the files ([`write_figures`]). In: the figures a room
 //! drew. Out: the figure files, and each figure's caption or why it is absent
@@ -15,6 +16,7 @@ pub mod broken_axis;
 pub mod canvas;
 pub mod draw;
 pub mod fixes;
+pub mod forest;
 pub mod render;
 pub mod residual;
 pub mod scale;
