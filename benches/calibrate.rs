@@ -9,7 +9,9 @@
 //! rows) in two files, `calibrate` alone, with the process's peak resident memory
 //! (Linux's VmHWM, which counts the synthetic files' writing too). With `-- --report`,
 //! the report of a ten-hour recording at 10 Hz (360,000 samples): `calibrate`, then its
-//! figures drawn and `report.md` and `report.html` written, each timed.
+//! figures drawn and `report.md` and `report.html` written, each timed; with `--
+//! --fix-report`, the same recording calibrated against its positions at 1 Hz as fixes
+//! (36,000) with a 300-s blackout, then its report (plan view, fixes' residual).
 
 #[allow(dead_code)]
 #[path = "../tests/common/installed.rs"]
@@ -29,6 +31,9 @@ fn main() {
     }
     if std::env::args().any(|a| a == "--report") {
         return report();
+    }
+    if std::env::args().any(|a| a == "--fix-report") {
+        return fix_report();
     }
     let long = std::env::args().any(|a| a == "--long");
     let mut rows = vec![36_000, 360_000];
@@ -131,16 +136,9 @@ fn report() {
     let out = dir.path().join("out");
     let (calibrated_s, calibration) = timed_calibration(&dvl, &reference, &out);
     let printed = calibration_text(&calibration);
-    let clock = Instant::now();
-    let drawn = calibration_figures(&calibration, "report").expect("the figures draw");
-    let drawn_s = clock.elapsed().as_secs_f64();
-    let clock = Instant::now();
-    let written = write_report(&out, "Calibration of a ten-hour recording", &printed, drawn)
-        .expect("the report is written");
-    let written_s = clock.elapsed().as_secs_f64();
-    let bytes: u64 = (written.iter())
-        .map(|p| std::fs::metadata(p).map_or(0, |m| m.len()))
-        .sum();
+    let (drawn_s, written_s, written, bytes) = timed_report(&out, &printed, || {
+        calibration_figures(&calibration, "report")
+    });
     println!(
         "| hours | samples (10 Hz) | calibrate s | figures drawn s | report written s (PNG, SVG, Markdown, HTML) | files | MiB written |"
     );
@@ -159,6 +157,118 @@ fn report() {
             size as f64 / (1 << 20) as f64
         );
     }
+}
+
+/// The figures `draw` draws, then the report of them and of what was `printed` written
+/// into `out`: the seconds of each, the files written and their bytes.
+fn timed_report(
+    out: &std::path::Path,
+    printed: &str,
+    draw: impl FnOnce() -> dcnet_exp::report::kit::plots::draw::PlotResult<
+        Vec<(String, dcnet_exp::report::kit::plots::canvas::Outcome)>,
+    >,
+) -> (f64, f64, Vec<std::path::PathBuf>, u64) {
+    let clock = Instant::now();
+    let drawn = draw().expect("the figures draw");
+    let drawn_s = clock.elapsed().as_secs_f64();
+    let clock = Instant::now();
+    let written =
+        write_report(out, "A ten-hour recording", printed, drawn).expect("the report is written");
+    let written_s = clock.elapsed().as_secs_f64();
+    let bytes: u64 = (written.iter())
+        .map(|p| std::fs::metadata(p).map_or(0, |m| m.len()))
+        .sum();
+    (drawn_s, written_s, written, bytes)
+}
+
+/// The `--fix-report` case: ten hours at 10 Hz calibrated against its positions each
+/// second as fixes, a 300-s blackout five hours in, then its report drawn and written.
+fn fix_report() {
+    use dcnet_exp::installation::estimate::fixes::default_fix_terms;
+    use dcnet_exp::operator::calibrate_fixes::{FixArgs, FixFiles, calibrate_fixes};
+    use dcnet_exp::operator::fix_drifts::BlackoutAsked;
+    use dcnet_exp::report::operator::fix_figures::fix_calibration_figures;
+    use dcnet_exp::report::operator::fixes::fixes_text;
+    let dir = tempfile::tempdir().unwrap();
+    installed::write_installed_sampled(
+        &dir.path().join("data/report"),
+        1,
+        &[],
+        installed::INSTALLED,
+        7,
+        (360_000, 0.1),
+    );
+    let segment = dir.path().join("data/report/Trajectory1");
+    let (dvl, reference) = (
+        segment.join("DVL_trajectory1.csv"),
+        segment.join("GT_trajectory1.csv"),
+    );
+    // The reference's positions (its north and east velocity summed by the trapezoidal
+    // rule), each second.
+    let text = std::fs::read_to_string(&reference).unwrap();
+    let (mut fixes, mut position) = (String::from("t,n,e\n"), [0.0; 2]);
+    let mut last: Option<(f64, [f64; 2])> = None;
+    for (k, line) in text.lines().skip(1).enumerate() {
+        let cells: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
+        let (t, velocity) = (cells[0], [cells[4], cells[5]]);
+        if let Some((before_s, before)) = last {
+            let dt = t - before_s;
+            position = [0, 1].map(|j| position[j] + 0.5 * dt * (velocity[j] + before[j]));
+        }
+        last = Some((t, velocity));
+        if k % 10 == 0 {
+            fixes.push_str(&format!("{t},{},{}\n", position[0], position[1]));
+        }
+    }
+    let fixes_path = dir.path().join("fixes.csv");
+    std::fs::write(&fixes_path, fixes).unwrap();
+    let columns = dir.path().join("columns.toml");
+    std::fs::write(
+        &columns,
+        "[fix_columns]\ntime = \"t\"\nnorth_east = [\"n\", \"e\"]\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let args = FixArgs {
+        files: FixFiles {
+            dvl: &dvl,
+            attitude: &reference,
+            fixes: &fixes_path,
+            fix_topic: None,
+            columns: Some(&columns),
+            reading: Reading::default(),
+            fix_latency_s: None,
+        },
+        terms: &default_fix_terms(),
+        dive_terms: &[TermName::TimeOffset],
+        fix_noise_m: Some(0.5),
+        depth_noise_m: None,
+        fix_latency: false,
+        dvl_noise_cm_s: 2.0,
+        save: None,
+        out: &out,
+        blackout: Some(BlackoutAsked {
+            start_s: 18_000.0,
+            length_s: 300.0,
+        }),
+    };
+    let clock = Instant::now();
+    let calibration = calibrate_fixes(&args).expect("the synthetic recording calibrates");
+    let calibrated_s = clock.elapsed().as_secs_f64();
+    let printed = fixes_text(&calibration);
+    let (drawn_s, written_s, _, bytes) = timed_report(&out, &printed, || {
+        fix_calibration_figures(&calibration, "report")
+    });
+    println!(
+        "| hours | samples kept (10 Hz) | fixes (1 Hz) | calibrate --fixes s | figures drawn s | report written s | MiB written |"
+    );
+    println!("|---|---|---|---|---|---|---|");
+    println!(
+        "| 10 | {} | {} | {calibrated_s:.1} | {drawn_s:.2} | {written_s:.2} | {:.1} |",
+        calibration.read.kept,
+        calibration.fixes,
+        bytes as f64 / (1 << 20) as f64
+    );
 }
 
 /// The `--rates` case: ten hours, the DVL at 10 Hz beside the reference at 100 Hz.

@@ -214,10 +214,10 @@ pub(super) struct CalibrateArgs {
     #[arg(long, requires = "accept")]
     pub(super) fail_on_reject: bool,
     /// With --fixes: verify the calibration over a blackout, the fixes inside it
-    /// withheld from the fit and the dead reckoning carried through it, its error at
-    /// the blackout's end printed as a share of the distance travelled in it (--accept
-    /// holds it to drift_pct); START seconds after the DVL's first sample, LENGTH
-    /// seconds long
+    /// withheld from the fit (the terms printed, saved and applied are that fit's) and
+    /// the dead reckoning carried through it, its error at the blackout's end printed
+    /// as a share of the distance travelled in it (--accept holds it to drift_pct);
+    /// START seconds after the DVL's first stamp, LENGTH seconds long
     #[arg(long, value_name = "START:LENGTH")]
     pub(super) blackout_s: Option<String>,
     /// Which of the terms belong to the dive and are found again on each dive by

@@ -25,10 +25,10 @@ use crate::report::operator::acceptance::acceptance_text;
 use crate::report::operator::calibrate::{calibration_text, joint_text};
 use crate::report::operator::correct::{correction_text, fix_correction_text};
 use crate::report::operator::figures::{calibration_figures, correction_figures};
-use crate::report::operator::fix_figures::fix_calibration_figures;
+use crate::report::operator::fix_figures::{fix_calibration_figures, fix_correction_figures};
 use crate::report::operator::fixes::fixes_text;
 use crate::report::operator::fixes_joint::joint_fixes_text;
-use crate::report::operator::joint_figures::joint_figures;
+use crate::report::operator::joint_figures::{joint_figures, joint_fix_figures};
 use crate::report::operator::page::{HTML, write_report};
 use std::path::Path;
 
@@ -45,9 +45,16 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
             "--fix-latency: estimates the fixes' latency, where --fix-latency-s gives it known: give one"
         )));
     }
+    if let Some(typed) = (args.dvl.iter()).find(|dvl| thresholds_typed_apart(dvl)) {
+        return Err(input(anyhow::anyhow!(
+            "{}: not a DVL file but a threshold: give it after an equals sign, --accept={}",
+            typed.display(),
+            typed.display()
+        )));
+    }
     let given = (args.fix.given_per_dive(args.dvl.len())).map_err(|m| input(anyhow::anyhow!(m)))?;
     if args.dvl.len() > 1 {
-        refuse_for_several(args, given.is_some())?;
+        refuse_for_several(args)?;
     }
     let thresholds = (args.accept.as_deref())
         .map(Thresholds::parse)
@@ -103,18 +110,25 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
     rejection(rejected && args.fail_on_reject)
 }
 
-/// Refuses what a joint calibration does not do yet: `--accept` and `--blackout-s`, and
-/// against fixes (`fixes`), `--report`.
-fn refuse_for_several(args: &args::CalibrateArgs, fixes: bool) -> Result<(), CliError> {
-    let against = if fixes { " against fixes" } else { "" };
+/// Whether `dvl`, named as a DVL file, is no file but `--accept`'s thresholds typed
+/// after a space (`--accept scale_pct=1`), which the flag does not take.
+fn thresholds_typed_apart(dvl: &Path) -> bool {
+    let typed = dvl.to_string_lossy();
+    !dvl.exists()
+        && (typed.split(',')).all(|pair| {
+            (pair.split_once('=')).is_some_and(|(key, _)| Thresholds::KEYS.contains(&key.trim()))
+        })
+}
+
+/// Refuses what a joint calibration does not do yet: `--accept` and `--blackout-s`.
+fn refuse_for_several(args: &args::CalibrateArgs) -> Result<(), CliError> {
     for (flag, asked) in [
-        ("--report", args.report.is_some() && fixes),
         ("--accept", args.accept.is_some()),
         ("--blackout-s", args.blackout_s.is_some()),
     ] {
         if asked {
             return Err(input(anyhow::anyhow!(
-                "{flag}: for one recording (--report: or several against a velocity reference); not yet for several calibrated jointly{against}"
+                "{flag}: for one recording; not yet for several calibrated jointly"
             )));
         }
     }
@@ -184,9 +198,7 @@ fn calibrate_fixes(
         })
         .collect();
     let [one] = &dives[..] else {
-        let calibration = calibrated_on_fixes_jointly(&dives).map_err(stopped)?;
-        print!("{}", joint_fixes_text(&calibration));
-        written(&calibration.written, args.save.as_deref());
+        calibrate_fixes_jointly(args, &dives)?;
         return Ok(false);
     };
     let calibration = calibrated_on_fixes(one).map_err(stopped)?;
@@ -211,6 +223,20 @@ fn calibrate_fixes(
         )?;
     }
     Ok(acceptance.is_some_and(|a| a.rejected()))
+}
+
+/// Several `dives` against fixes calibrated jointly as one vehicle, printed, saved where
+/// asked, and their report written where asked.
+fn calibrate_fixes_jointly(args: &args::CalibrateArgs, dives: &[FixArgs]) -> Result<(), CliError> {
+    let calibration = calibrated_on_fixes_jointly(dives).map_err(stopped)?;
+    let printed = joint_fixes_text(&calibration);
+    print!("{printed}");
+    written(&calibration.written, args.save.as_deref());
+    if let Some(folder) = args.report() {
+        let title = format!("Joint calibration of {} dives with fixes", dives.len());
+        write_drawn(folder, &title, &printed, joint_fix_figures(&calibration))?;
+    }
+    Ok(())
 }
 
 /// Says on stderr where the `corrected` recordings were written and where the
@@ -293,15 +319,10 @@ fn refuse_beside_fixes(
 
 /// `correct` as typed: against a velocity reference, or against fixes.
 pub(super) fn correct_command(args: &args::CorrectArgs) -> Result<(), CliError> {
-    if let Some(given) = args.fix.given().map_err(|m| input(anyhow::anyhow!(m)))? {
-        if args.report.is_some() {
-            return Err(input(anyhow::anyhow!(
-                "--report: for a dive corrected against a velocity reference; not yet against fixes"
-            )));
-        }
-        return correct_fixes(args, given);
-    }
     let report = (args.report.as_ref()).map(|dir| dir.as_deref().unwrap_or(&args.out));
+    if let Some(given) = args.fix.given().map_err(|m| input(anyhow::anyhow!(m)))? {
+        return correct_fixes(args, given, report);
+    }
     correct(
         &CorrectArgs {
             dvl: &args.dvl,
@@ -322,8 +343,13 @@ pub(super) fn correct_command(args: &args::CorrectArgs) -> Result<(), CliError> 
 const DEFAULT_WINDOW_S: f64 = 60.0;
 
 /// `correct DVL.csv --installation FILE --fixes FIXES.csv --attitude ATTITUDE.csv
-/// --fix-noise-m σ`: the installation carried, the clock found again from the fixes.
-fn correct_fixes(args: &args::CorrectArgs, given: GivenFixes) -> Result<(), CliError> {
+/// --fix-noise-m σ`: the installation carried, the clock found again from the fixes;
+/// its report written to `report` where one is asked.
+fn correct_fixes(
+    args: &args::CorrectArgs,
+    given: GivenFixes,
+    report: Option<&Path>,
+) -> Result<(), CliError> {
     refuse_beside_fixes(
         &[
             ("--reference", args.reference.is_some()),
@@ -347,9 +373,14 @@ fn correct_fixes(args: &args::CorrectArgs, given: GivenFixes) -> Result<(), CliE
         out: &args.out,
     })
     .map_err(stopped)?;
-    print!("{}", fix_correction_text(&correction));
+    let printed = fix_correction_text(&correction);
+    print!("{printed}");
     for path in &correction.written {
         eprintln!("corrected dive written to {}", path.display());
+    }
+    if let Some(folder) = report {
+        let drawn = fix_correction_figures(&correction, &name_of(&args.dvl));
+        write_drawn(folder, &title("Correction", &args.dvl), &printed, drawn)?;
     }
     Ok(())
 }

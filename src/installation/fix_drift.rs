@@ -2,13 +2,15 @@
 //! verification scores it: the track of one piece (between losses of bottom lock) placed
 //! at a span's start on the fixes there, and its error at the span's end against the
 //! fixes there, as a share of the distance the dead reckoning travelled in between.
-//! Each end is placed by the mean offset of the fixes within [`ANCHOR_S`] of it from the
-//! track (the fixes inside a blackout withheld), so that the fixes' white noise is
-//! averaged over those fixes ([`SpanDrift::noise_floor_m`] says how much of it is left);
-//! the span runs between the mean times of the two ends' fixes. A blackout is one span
-//! ([`blackout_drift`]); a whole dive is each piece from its first fix to its last, the
-//! errors summed over the distances ([`dive_drift`]), as [`Drift::end_pct`] sums them
-//! against a reference's positions.
+//! Each end is placed by the mean offset from the track of the fixes of the [`ANCHOR_S`]
+//! beside it (outside a blackout, whose own fixes are withheld: before its start, after
+//! its end; inside a piece: after its first fix, before its last), so that the fixes'
+//! white noise is averaged over those fixes ([`SpanDrift::noise_floor_m`] says how much
+//! of it is left); the span runs between the mean times of the two ends' fixes. A
+//! blackout is one span ([`blackout_drift`]); a whole dive is each piece, the errors
+//! summed over the distances ([`dive_drift`]), as [`Drift::end_pct`] sums them against a
+//! reference's positions. The fixes are chosen by their stamps, the same whatever
+//! latency a dead reckoning reads them with.
 //! In: an installation, the DVL's samples and pieces, an [`Attitude`], the [`Fixes`]
 //! (their times on the attitude's clock) and the fixes' latency. Out: a [`SpanDrift`]
 //! per span, each with its track placed on the fixes.
@@ -20,13 +22,13 @@ use crate::data::fixes::Fixes;
 use crate::installation::dead_reckoning::{Track, dead_reckon, interior};
 use crate::installation::frames::Attitude;
 use crate::installation::terms::Installation;
-use std::ops::Range;
+use std::ops::{Range, RangeInclusive};
 
 /// How far from a span's end the fixes that place it lie, s: a USBL's ten fixes at
 /// 1 Hz, over which a dead reckoning moves by a few millimetres.
 pub const ANCHOR_S: f64 = 10.0;
 
-/// A time span on the fixes' clock, s: its start and its end.
+/// A time span on the fixes' stamps, s: its start and its end.
 pub type Span = (f64, f64);
 
 /// The dead reckoning's drift over one span: placed at its start on the fixes there,
@@ -61,7 +63,12 @@ impl SpanDrift {
 
     /// The error at the end, % of the distance travelled.
     pub fn pct(&self) -> f64 {
-        100.0 * self.error_m() / self.distance_m
+        self.pct_of(self.distance_m)
+    }
+
+    /// The error at the end, % of `distance_m` (another dead reckoning's of the span).
+    pub fn pct_of(&self, distance_m: f64) -> f64 {
+        100.0 * self.error_m() / distance_m
     }
 
     /// The horizontal RMS error that white fixes of `fix_m` per axis leave alone, m:
@@ -82,7 +89,17 @@ pub struct DiveDrift {
 impl DiveDrift {
     /// The pieces' end errors summed over the distances they travelled, %.
     pub fn end_pct(&self) -> f64 {
-        100.0 * self.spans.iter().map(SpanDrift::error_m).sum::<f64>() / self.distance_m()
+        self.end_pct_of(self.distance_m())
+    }
+
+    /// The pieces' end errors summed, % of `distance_m` (another dead reckoning's).
+    pub fn end_pct_of(&self, distance_m: f64) -> f64 {
+        100.0 * self.error_m() / distance_m
+    }
+
+    /// The pieces' end errors summed, m.
+    pub fn error_m(&self) -> f64 {
+        self.spans.iter().map(SpanDrift::error_m).sum()
     }
 
     /// The distance travelled over every span, m.
@@ -104,9 +121,10 @@ pub struct AgainstFixes<'a> {
 }
 
 impl AgainstFixes<'_> {
-    /// Each piece's track through `installation`, cut to where the attitude is read.
+    /// Each piece's track through `installation`, cut to the samples whose stamp plus
+    /// its clock reads the attitude.
     fn tracks(&self, installation: &Installation) -> Vec<Track> {
-        let inside = interior(self.attitude, self.dvl.0, 0.0);
+        let inside = interior(self.attitude, self.dvl.0, installation.time_offset_s);
         (self.pieces.iter())
             .map(|piece| piece.start.max(inside.start)..piece.end.min(inside.end))
             .filter(|piece| piece.len() >= 2)
@@ -117,83 +135,21 @@ impl AgainstFixes<'_> {
             .collect()
     }
 
-    /// The times of the fixes on the track's clock: each stamp less the latency.
-    fn fix_times(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
-        (self.fixes.time_s.iter().enumerate()).map(|(j, t)| (j, t - self.latency_s))
-    }
-}
-
-/// The drift of `installation`'s dead reckoning over the whole dive: each piece from
-/// its first fix to its last (the fixes in `withheld` placing neither end); `None`
-/// where no piece holds fixes at both ends apart.
-pub fn dive_drift(
-    installation: &Installation,
-    against: &AgainstFixes,
-    withheld: Option<Span>,
-) -> Option<DiveDrift> {
-    let mut spans = Vec::new();
-    for track in against.tracks(installation) {
-        let within = |t: f64| (track.time_s[0]..=track.time_s[track.time_s.len() - 1]).contains(&t);
-        let times: Vec<f64> = (against.fix_times())
-            .map(|(_, t)| t)
-            .filter(|&t| within(t) && !withheld.is_some_and(|w| inside_open(w, t)))
-            .collect();
-        let (Some(&first), Some(&last)) = (times.first(), times.last()) else {
-            continue;
-        };
-        if let Some(span) = span_drift(&track, against, (first, last), withheld) {
-            spans.push(span);
-        }
-    }
-    (!spans.is_empty()).then_some(DiveDrift { spans })
-}
-
-/// The drift of `installation`'s dead reckoning across the blackout `window` (whose
-/// fixes place neither end): placed on the fixes in the [`ANCHOR_S`] before its start,
-/// scored on those in the [`ANCHOR_S`] after its end; why not, in words, where it
-/// cannot be scored.
-pub fn blackout_drift(
-    installation: &Installation,
-    against: &AgainstFixes,
-    window: Span,
-) -> Result<SpanDrift, String> {
-    let tracks = against.tracks(installation);
-    let track = (tracks.iter())
-        .find(|track| track.time_s[0] <= window.0 && window.1 <= track.time_s[track.time_s.len() - 1])
-        .ok_or_else(|| {
-            "no piece of the DVL's record spans it (the DVL lost bottom lock within it, or it lies beyond the record)".to_string()
-        })?;
-    span_drift(track, against, window, Some(window)).ok_or_else(|| {
-        format!(
-            "no fix within {ANCHOR_S} s before its start, or after its end, inside the DVL's record"
-        )
-    })
-}
-
-/// Whether `t` lies strictly inside `span`.
-fn inside_open(span: Span, t: f64) -> bool {
-    span.0 < t && t < span.1
-}
-
-/// `track` over `span`: placed on the fixes within [`ANCHOR_S`] of its start, scored on
-/// those within it of its end (neither those in `withheld`); `None` where an end has no
-/// fix on the track, or the track does not move between the two.
-fn span_drift(
-    track: &Track,
-    against: &AgainstFixes,
-    span: Span,
-    withheld: Option<Span>,
-) -> Option<SpanDrift> {
-    let anchor = |at: f64| -> Option<(f64, [f64; 2], usize)> {
+    /// The mean time (on the track's clock: the stamp less the latency) and the mean
+    /// offset, north and east, of the fixes stamped within `stamps` from `track`, and
+    /// how many; `None` where none lies on the track.
+    fn anchor(&self, track: &Track, stamps: RangeInclusive<f64>) -> Option<(f64, [f64; 2], usize)> {
         let (mut time, mut offset, mut count) = (0.0, [0.0; 2], 0);
-        for (j, t) in against.fix_times() {
-            if (t - at).abs() > ANCHOR_S || withheld.is_some_and(|w| inside_open(w, t)) {
-                continue;
+        let first = self.fixes.time_s.partition_point(|t| t < stamps.start());
+        for j in first..self.fixes.len() {
+            if self.fixes.time_s[j] > *stamps.end() {
+                break;
             }
+            let t = self.fixes.time_s[j] - self.latency_s;
             let Some(position) = track.at(t) else {
                 continue;
             };
-            let fix = against.fixes.north_east_m[j];
+            let fix = self.fixes.north_east_m[j];
             time += t;
             offset = [0, 1].map(|k| offset[k] + fix[k] - position[k]);
             count += 1;
@@ -202,9 +158,71 @@ fn span_drift(
             let n = count as f64;
             (time / n, offset.map(|o| o / n), count)
         })
-    };
-    let (from_s, start, before) = anchor(span.0)?;
-    let (to_s, end, after) = anchor(span.1)?;
+    }
+}
+
+/// The drift of `installation`'s dead reckoning over the whole dive: each piece placed
+/// on its fixes of the [`ANCHOR_S`] after its first and scored on those of the
+/// [`ANCHOR_S`] before its last (a piece whose fixes span less than twice that is not
+/// scored); `None` where no piece is.
+pub fn dive_drift(installation: &Installation, against: &AgainstFixes) -> Option<DiveDrift> {
+    let mut spans = Vec::new();
+    for track in against.tracks(installation) {
+        let within = |t: f64| (track.time_s[0]..=track.time_s[track.time_s.len() - 1]).contains(&t);
+        let stamps: Vec<f64> = (against.fixes.time_s.iter().copied())
+            .filter(|&t| within(t - against.latency_s))
+            .collect();
+        let (Some(&first), Some(&last)) = (stamps.first(), stamps.last()) else {
+            continue;
+        };
+        if last - first < 2.0 * ANCHOR_S {
+            continue;
+        }
+        let ends = (first..=first + ANCHOR_S, last - ANCHOR_S..=last);
+        if let Some(span) = span_drift(&track, against, ends) {
+            spans.push(span);
+        }
+    }
+    (!spans.is_empty()).then_some(DiveDrift { spans })
+}
+
+/// The drift of `installation`'s dead reckoning across the blackout `window` (on the
+/// fixes' stamps; its own fixes withheld from `against`): placed on the fixes of the
+/// [`ANCHOR_S`] before its start, scored on those of the [`ANCHOR_S`] after its end; why
+/// not, in words, where it cannot be scored.
+pub fn blackout_drift(
+    installation: &Installation,
+    against: &AgainstFixes,
+    window: Span,
+) -> Result<SpanDrift, String> {
+    let tracks = against.tracks(installation);
+    let (from, to) = (window.0 - against.latency_s, window.1 - against.latency_s);
+    let track = (tracks.iter())
+        .find(|track| track.time_s[0] <= from && to <= track.time_s[track.time_s.len() - 1])
+        .ok_or_else(|| {
+            "no piece of the DVL's record spans it (the DVL lost bottom lock within it, or it lies beyond the record)".to_string()
+        })?;
+    let ends = (
+        window.0 - ANCHOR_S..=window.0,
+        window.1..=window.1 + ANCHOR_S,
+    );
+    span_drift(track, against, ends).ok_or_else(|| {
+        format!(
+            "no fix within {ANCHOR_S} s before its start, or after its end, inside the DVL's record"
+        )
+    })
+}
+
+/// `track` placed on the fixes stamped within the first of `ends`, scored on those
+/// within the second; `None` where an end has no fix on the track, or the track does
+/// not move between the two.
+fn span_drift(
+    track: &Track,
+    against: &AgainstFixes,
+    ends: (RangeInclusive<f64>, RangeInclusive<f64>),
+) -> Option<SpanDrift> {
+    let (from_s, start, before) = against.anchor(track, ends.0)?;
+    let (to_s, end, after) = against.anchor(track, ends.1)?;
     let placed = |p: Vec3| [p[0] + start[0], p[1] + start[1]];
     // The track from `from_s` to `to_s`: its samples between, and both ends.
     let (from, to) = (track.at(from_s)?, track.at(to_s)?);
@@ -273,7 +291,7 @@ mod tests {
             latency_s: 0.0,
         };
         let none = Installation::default();
-        let dive = dive_drift(&none, &against(&fast), None).unwrap();
+        let dive = dive_drift(&none, &against(&fast)).unwrap();
         let pct = 1.0 / 1.01;
         assert!((dive.end_pct() - pct).abs() < 1e-9, "{}", dive.end_pct());
         let window = (200.0, 500.0);
@@ -306,6 +324,29 @@ mod tests {
         assert!(blackout_drift(&none, &against, (150.0, 250.0)).is_err());
         assert!(blackout_drift(&none, &against, (210.0, 260.0)).is_ok());
         assert!(blackout_drift(&none, &against, (500.0, 588.5)).is_err());
-        assert_eq!(dive_drift(&none, &against, None).unwrap().spans.len(), 2);
+        assert_eq!(dive_drift(&none, &against).unwrap().spans.len(), 2);
+    }
+
+    /// A clock of seconds reads the attitude that far on: the samples are cut about it,
+    /// so that a record that reaches the attitude's end is still reckoned whole.
+    #[test]
+    fn a_clock_of_seconds_still_reckons_the_record_to_the_attitudes_end() {
+        let (attitude, _, _, fixes) = straight();
+        let time_s: Vec<f64> = (10..=2990).map(|i| i as f64 / 5.0).collect();
+        let dvl = vec![[1.5, 0.0, 0.0]; time_s.len()];
+        let pieces = [0..time_s.len()];
+        let against = AgainstFixes {
+            dvl: (&time_s, &dvl),
+            pieces: &pieces,
+            attitude: &attitude,
+            fixes: &fixes,
+            latency_s: 0.0,
+        };
+        let late = Installation {
+            time_offset_s: 5.0,
+            ..Installation::default()
+        };
+        let dive = dive_drift(&late, &against).expect("the piece reckoned");
+        assert!(dive.error_m() < 1e-9, "{}", dive.error_m());
     }
 }

@@ -14,6 +14,7 @@
 
 use crate::data::fixes::Fixes;
 use crate::data::paired::{PairedRecording, ReadCounts};
+use crate::installation::estimate::fixes::FixResidual as FixResidualOf;
 use crate::installation::estimate::fixes::{FixFit, FixFitError, FixNoise, fit_fixes_around};
 use crate::installation::frames::{Attitude, Reference};
 use crate::installation::terms::Installation;
@@ -22,6 +23,7 @@ use crate::operator::calibrate::CalibrateError;
 use crate::operator::calibrate_fixes::{FixFiles, FixReading};
 use crate::operator::correct::CorrectError;
 use crate::operator::cost::CORRECT_FIXES;
+use crate::operator::fix_drifts::{FixDrifts, drifts};
 use crate::operator::inputs::not_over_an_input;
 use crate::operator::installation_file::SavedInstallation;
 use crate::results::corrected::{NotCorrected, Outputs, corrected_samples, stem, write};
@@ -105,6 +107,16 @@ pub struct FixCorrection {
     /// written without a velocity.
     pub outside: usize,
     pub written: Vec<PathBuf>,
+    /// The DVL's first sample's stamp, s: the figures count from it.
+    pub record_start_s: f64,
+    /// The dead reckoning scored against the fixes, with no terms and with `applied`.
+    pub drifts: FixDrifts,
+    /// Each fix's residual with no terms and with `applied`, each fit's own (each piece
+    /// placed at the start it fitted; the `after_m` of each), of the fixes
+    /// `fitted_fixes` (the latency taken off their stamps).
+    pub before_residuals: Vec<FixResidualOf>,
+    pub after_residuals: Vec<FixResidualOf>,
+    pub fitted_fixes: Fixes,
 }
 
 /// Where the fixes' latency a correction reads them by comes from.
@@ -166,7 +178,8 @@ pub fn correct_fixes(args: &FixCorrectArgs) -> Result<FixCorrection, CorrectErro
         noise,
     };
     let (applied, clock) = dive.applied(&saved)?;
-    let (before, after) = dive.residuals(applied)?;
+    let [(before, before_fit), (after, after_fit)] = dive.residuals(applied)?;
+    let drifts = drifts((recording, &fixes, &after_fit), None);
     let samples = corrected_samples(&applied, recording, &Reference::new(recording));
     let outside = (samples.iter())
         .filter(|s| matches!(s.velocity_m_s, Err(NotCorrected::OutsideReference)))
@@ -191,17 +204,26 @@ pub fn correct_fixes(args: &FixCorrectArgs) -> Result<FixCorrection, CorrectErro
         read: recording.counts().beside_attitude(),
         fixes: fixes.len(),
         fixes_left_out: left_out,
-        fix_latency: files.fix_latency_s.map(|latency_s| {
-            let from = match args.files.fix_latency_s {
-                Some(_) => LatencyFrom::Given,
-                None => LatencyFrom::Carried,
-            };
-            (latency_s, from)
-        }),
+        fix_latency: latency_read(files.fix_latency_s, args.files.fix_latency_s),
         read_from,
         outside,
         written,
+        record_start_s: recording.time_s[0],
+        drifts,
+        before_residuals: before_fit.residuals,
+        after_residuals: after_fit.residuals,
+        fitted_fixes: fixes,
     })
+}
+
+/// The fixes' latency a correction reads them by (`read`), and whence: given where it
+/// is the one `given`, carried with the installation otherwise.
+fn latency_read(read: Option<f64>, given: Option<f64>) -> Option<(f64, LatencyFrom)> {
+    let from = match given {
+        Some(_) => LatencyFrom::Given,
+        None => LatencyFrom::Carried,
+    };
+    read.map(|latency_s| (latency_s, from))
 }
 
 /// The first argument of `args` at fault, where one is.
@@ -291,11 +313,11 @@ impl FixDive<'_> {
         })
     }
 
-    /// The fixes' residual with no terms and with `applied`; refused where `applied`
-    /// leaves it more than [`WORSE_RATIO`] times the other, and where the fixes cannot
-    /// be fitted about a clock given (the flag named).
-    fn residuals(&self, applied: Installation) -> Result<(FixResidual, FixResidual), CorrectError> {
-        let before = self.residual(Installation::default())?;
+    /// The fixes' residual with no terms and with `applied`, and each one's fit; refused
+    /// where `applied` leaves it more than [`WORSE_RATIO`] times the other, and where
+    /// the fixes cannot be fitted about a clock given (the flag named).
+    fn residuals(&self, applied: Installation) -> Result<[(FixResidual, FixFit); 2], CorrectError> {
+        let (before, before_fit) = self.residual(Installation::default())?;
         let after = match (self.residual(applied), self.args.time_offset_s) {
             (Err(CorrectError::FixFit { fault, .. }), Some(time_offset_s)) => {
                 return Err(CorrectError::GivenClock {
@@ -305,6 +327,7 @@ impl FixDive<'_> {
             }
             (after, _) => after?,
         };
+        let (after, after_fit) = after;
         if after.rms_m > WORSE_RATIO * before.rms_m {
             return Err(match self.args.time_offset_s {
                 Some(time_offset_s) => CorrectError::GivenClockFitsWorse {
@@ -320,16 +343,17 @@ impl FixDive<'_> {
                 },
             });
         }
-        Ok((before, after))
+        Ok([(before, before_fit), (after, after_fit)])
     }
 
-    /// The fixes' horizontal residual under `installation`, no term fitted.
-    fn residual(&self, installation: Installation) -> Result<FixResidual, CorrectError> {
+    /// The fixes' horizontal residual under `installation`, no term fitted, and that fit.
+    fn residual(&self, installation: Installation) -> Result<(FixResidual, FixFit), CorrectError> {
         let fit = self.fit(self.fixes, (term_set(&[]), installation))?;
-        Ok(FixResidual {
+        let residual = FixResidual {
             rms_m: fit.residual_rms_m[0].hypot(fit.residual_rms_m[1]),
             distance_m: fit.distance_m,
-        })
+        };
+        Ok((residual, fit))
     }
 
     /// `terms` fitted to `fixes` around the installation carried.

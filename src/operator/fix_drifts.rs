@@ -108,9 +108,7 @@ pub fn drifts(
     };
     let none = (&Installation::default(), against(0.0));
     let terms = (&fit.installation, against(fitted_latency_s(fit)));
-    let window = blackout.as_ref().map(|(_, window, _)| *window);
-    let dive_drifts =
-        dive_drift(none.0, &none.1, window).zip(dive_drift(terms.0, &terms.1, window));
+    let dive_drifts = dive_drift(none.0, &none.1).zip(dive_drift(terms.0, &terms.1));
     let blackout = blackout.map(|(asked, window, withheld)| Blackout {
         asked,
         window,

@@ -102,6 +102,15 @@ fn a_calibration_is_accepted_marginal_or_rejected_by_its_intervals() {
         "{text}"
     );
 
+    // Thresholds after a space are read as a DVL file by the command line: said so.
+    let output = calibrate(d, &[TERMS, "--accept", "scale_pct=1"], "spaced");
+    assert_eq!(output.status.code(), Some(1));
+    assert!(
+        stderr(&output).contains("scale_pct=1: not a DVL file but a threshold: give it after an equals sign, --accept=scale_pct=1"),
+        "{}",
+        stderr(&output)
+    );
+
     let output = calibrate(d, &[TERMS, "--accept=scale=3"], "bad");
     assert_eq!(output.status.code(), Some(1));
     assert!(

@@ -3,9 +3,10 @@
 //! end a share of the distance travelled in it. Known answer on a synthetic dive whose
 //! DVL reads 1 % fast and has no other error: with no terms, the dead reckoning placed
 //! on the fixes before the window is off, on the fixes after it, by 1 % of the chord
-//! between the two (its distance 1.01 times the path); with the scale fitted without the
-//! window's fixes, by far less. `--accept` holds the blackout's drift; `--report` draws
-//! the plan view and the fixes' residual, each caption the printed numbers.
+//! between the two, a share of the path the calibrated dead reckoning travels; with the
+//! scale fitted without the window's fixes, by far less. `--accept` holds the blackout's drift; `--report` draws
+//! the plan view and the fixes' residual, each caption the printed numbers, and so does
+//! `correct --fixes --report` of the installation carried to the next dive.
 
 use crate::common::installed::Installed;
 use crate::common::{dcnet, stderr, stdout};
@@ -41,8 +42,9 @@ fn first_stamp(path: &str) -> f64 {
 
 /// The expected drift, % of the distance, of a DVL reading 1 % fast across the window
 /// `(from, to)`: each end placed on the mean of the fixes within 10 s outside it, the
-/// error 1 % of the chord between those means, the distance 1.01 times the fixes' path
-/// between them. And the number of fixes strictly inside the window.
+/// error 1 % of the chord between those means, the distance the fixes' path between
+/// them (the calibrated dead reckoning's). And the number of fixes strictly inside the
+/// window.
 fn expected(fixes: &[[f64; 3]], (from, to): (f64, f64)) -> (f64, usize) {
     let mean = |range: std::ops::RangeInclusive<f64>| {
         let inside: Vec<&[f64; 3]> = fixes.iter().filter(|f| range.contains(&f[0])).collect();
@@ -61,7 +63,7 @@ fn expected(fixes: &[[f64; 3]], (from, to): (f64, f64)) -> (f64, usize) {
         .map(|p| (p[1][1] - p[0][1]).hypot(p[1][2] - p[0][2]))
         .sum();
     let withheld = fixes.iter().filter(|f| from < f[0] && f[0] < to).count();
-    (100.0 * 0.01 * chord / (1.01 * length), withheld)
+    (100.0 * 0.01 * chord / length, withheld)
 }
 
 #[test]
@@ -90,7 +92,14 @@ fn a_blackout_is_carried_through_by_the_dead_reckoning_and_scored_at_its_end() {
         ];
         dcnet(d, &[&args[..], extra].concat())
     };
-    let output = run(&["--blackout-s", "150:100", "--accept", "--report=report"]);
+    let output = run(&[
+        "--blackout-s",
+        "150:100",
+        "--accept",
+        "--report=report",
+        "--save",
+        "fast.toml",
+    ]);
     assert!(output.status.success(), "{}", stderr(&output));
     let text = stdout(&output);
     let start = first_stamp(&dvl);
@@ -139,6 +148,40 @@ fn a_blackout_is_carried_through_by_the_dead_reckoning_and_scored_at_its_end() {
         assert!(d.join(format!("report/{figure}.png")).exists(), "{figure}");
     }
     assert!(d.join("report/report.html").exists());
+
+    // The installation carried to the next dive, its report's residual the printed one.
+    let [dvl, attitude, fixes] = fix_dive_every(&d.join("next"), FAST, 4, 1);
+    let args = [
+        "correct",
+        &dvl,
+        "--installation",
+        "fast.toml",
+        "--fixes",
+        &fixes,
+        "--attitude",
+        &attitude,
+        "--columns",
+        "columns.toml",
+        "--fix-noise-m",
+        "0.1",
+        "--report=next-report",
+    ];
+    let output = dcnet(d, &args);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let printed = stdout(&output);
+    let line = &printed[printed.find("fixes' horizontal residual RMS").unwrap()..];
+    let (before, after) = (
+        number_after(line, "travelled: "),
+        number_after(line, "of the distance) with no terms, "),
+    );
+    let markdown = std::fs::read_to_string(d.join("next-report/report.md")).unwrap();
+    assert!(
+        markdown.contains(&format!(
+            "RMS {before:.2} m with no terms, {after:.2} m with the installation applied"
+        )),
+        "{printed}\n{markdown}"
+    );
+    assert!(d.join("next-report/track.png").exists());
 
     // A blackout past the record, or without fixes, is refused by name.
     let past = ["--blackout-s", "350:100"];

@@ -198,13 +198,27 @@ fn dives_with_fixes_calibrate_jointly_and_carry_their_spread_to_the_next() {
         common::dcnet(d, &refs)
     };
     let three: Vec<&[String; 3]> = dives[..3].iter().collect();
-    let output = joint(&three, &["--save", "vehicle.toml"]);
+    let output = joint(&three, &["--save", "vehicle.toml", "--report"]);
     let stdout = String::from_utf8_lossy(&output.stdout).to_string();
     assert!(output.status.success(), "{}", common::stderr(&output));
     assert!(
         stdout.contains("calibrated jointly on 3 dives with position fixes"),
         "{stdout}"
     );
+    // The report's forest plot gives the vehicle's lever arm as the table prints it.
+    let lever: Vec<&str> = (stdout.lines())
+        .find(|l| l.starts_with("| lever arm x"))
+        .unwrap_or_else(|| panic!("{stdout}"))
+        .split('|')
+        .map(str::trim)
+        .collect();
+    let markdown = std::fs::read_to_string(d.join("calibrated/report.md")).unwrap();
+    let said = format!(
+        "lever arm x joint {}, standard deviation {}, vehicle {}, next dive {}",
+        lever[2], lever[3], lever[5], lever[6]
+    );
+    assert!(markdown.contains(&said), "{said}\n{markdown}");
+    assert!(d.join("calibrated/forest.png").is_file());
     for name in [
         "1-DVL_trajectory1",
         "2-DVL_trajectory1",

@@ -308,10 +308,11 @@ fn dives_calibrated_jointly_share_the_vehicles_terms_and_keep_their_clocks() {
     assert!(next.0 < vehicle.0 && vehicle.1 < next.1, "{lever:?}");
     // The report's forest plot: its intervals the printed ones.
     let markdown = std::fs::read_to_string(d.join("joint/report.md")).unwrap();
-    assert!(
-        markdown.contains(&format!("lever arm x joint {} ± ", lever[2])),
-        "{markdown}"
+    let joint = format!(
+        "lever arm x joint {}, standard deviation {}",
+        lever[2], lever[3]
     );
+    assert!(markdown.contains(&joint), "{joint}\n{markdown}");
     assert!(
         markdown.contains(&format!("vehicle {}, next dive {}", lever[6], lever[7])),
         "{markdown}"

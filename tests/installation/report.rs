@@ -219,24 +219,4 @@ fn a_corrections_report_draws_the_printed_residual() {
     }
     let html = std::fs::read_to_string(d.join("corrected/report.html")).unwrap();
     stands_alone(&html, 2);
-    let fixes = [
-        "correct",
-        next.as_str(),
-        "--installation",
-        "installation.toml",
-        "--fixes",
-        next.as_str(),
-        "--attitude",
-        reference,
-        "--fix-noise-m",
-        "1",
-        "--report",
-    ];
-    let output = dcnet(d, &fixes);
-    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
-    assert!(
-        stderr(&output).contains("--report: "),
-        "{}",
-        stderr(&output)
-    );
 }

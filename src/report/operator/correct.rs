@@ -214,6 +214,11 @@ pub fn fix_correction_text(correction: &FixCorrection) -> String {
         super::fixes::fix_noise(correction.fix_noise_m, correction.own_noise),
         correction.white_fixes_leave_m,
     ));
+    text.push_str(&super::fixes::drift_lines(
+        &correction.drifts,
+        correction.fix_noise_m,
+        "the installation applied",
+    ));
     if correction.outside > 0 {
         text.push_str(&format!(
             "{} of the dive's samples lie outside the attitude (or in a gap of it) at the clock applied: written without a velocity, marked outside_reference\n",

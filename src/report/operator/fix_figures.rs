@@ -1,42 +1,105 @@
-//! The figures of a calibration against position fixes, drawn with the kit's pieces
-//! ([`crate::report::kit::plots::fixes`]): the dead reckoning in plan view against the
-//! fixes, with no terms and with them, each piece placed on its first fixes, and the
-//! blackout's own dead reckoning ([`track`]), its caption the printed drifts; and the
-//! fixes' residual against time ([`fix_residual`]), its caption's RMS computed from the
-//! very residuals drawn, which are those the printed RMS is of. In: a
-//! [`FixCalibration`] and the recording's name. Out: each figure, or why there is none.
+//! The figures of a calibration against position fixes, or of a correction carried to
+//! a dive with fixes, drawn with the kit's pieces ([`crate::report::kit::plots::fixes`]):
+//! the dead reckoning in plan view against the fixes, with no terms and with them, each
+//! piece placed on its first fixes, and the blackout's own dead reckoning ([`track`]),
+//! its caption the printed drifts; and the fixes' residual against time
+//! ([`fix_residual`]), its caption's RMS computed from the very residuals drawn, which
+//! are those the printed RMS is of. In: a [`FixCalibration`] or a [`FixCorrection`] and
+//! the recording's name. Out: each figure, or why there is none.
 
+use crate::data::fixes::Fixes;
+use crate::installation::estimate::fixes::FixResidual;
 use crate::installation::fix_drift::{ANCHOR_S, PlacedTrack};
 use crate::operator::calibrate_fixes::FixCalibration;
+use crate::operator::correct_fixes::FixCorrection;
+use crate::operator::fix_drifts::FixDrifts;
 use crate::report::kit::plots::canvas::{Drawn, Outcome};
 use crate::report::kit::plots::draw::PlotResult;
-use crate::report::kit::plots::fixes::{FixResidualTrace, PlanView, draw_fix_residual, draw_plan};
+use crate::report::kit::plots::fixes::{
+    FixResidualTrace, PlanView, ResidualPoint, draw_fix_residual, draw_plan,
+};
+
+/// A fit to fixes as its figures draw it: the fixes fitted; of each, by its index, its
+/// residual with no terms and with them, each fit's own (and whether that fit kept it);
+/// the dead reckoning's drifts, the DVL's first stamp (the times count from it), and
+/// what "the terms" were, in words.
+struct FixesDrawn<'a> {
+    fixes: &'a Fixes,
+    before: Vec<(usize, [f64; 2], bool)>,
+    after: Vec<(usize, [f64; 2], bool)>,
+    drifts: &'a FixDrifts,
+    record_start_s: f64,
+    terms: &'static str,
+}
 
 /// The figures of `calibration` of the recording `name`, each with its file's stem.
 pub fn fix_calibration_figures(
     calibration: &FixCalibration,
     name: &str,
 ) -> PlotResult<Vec<(String, Outcome)>> {
+    figures(
+        &FixesDrawn {
+            fixes: &calibration.fitted_fixes,
+            before: (calibration.fit.residuals.iter())
+                .map(|r| (r.fix, r.before_m, r.kept))
+                .collect(),
+            after: after_of(&calibration.fit.residuals),
+            drifts: &calibration.drifts,
+            record_start_s: calibration.record_start_s,
+            terms: "the terms applied",
+        },
+        name,
+    )
+}
+
+/// The figures of `correction` of the dive `name`, each with its file's stem.
+pub fn fix_correction_figures(
+    correction: &FixCorrection,
+    name: &str,
+) -> PlotResult<Vec<(String, Outcome)>> {
+    figures(
+        &FixesDrawn {
+            fixes: &correction.fitted_fixes,
+            before: after_of(&correction.before_residuals),
+            after: after_of(&correction.after_residuals),
+            drifts: &correction.drifts,
+            record_start_s: correction.record_start_s,
+            terms: "the installation applied",
+        },
+        name,
+    )
+}
+
+/// Each fix of a fit, its residual with the fit's terms and whether the fit kept it.
+fn after_of(residuals: &[FixResidual]) -> Vec<(usize, [f64; 2], bool)> {
+    (residuals.iter())
+        .map(|r| (r.fix, r.after_m, r.kept))
+        .collect()
+}
+
+/// The plan view and the fixes' residual of `drawn`.
+fn figures(drawn: &FixesDrawn, name: &str) -> PlotResult<Vec<(String, Outcome)>> {
     crate::report::kit::plots::render::register_font();
     Ok(vec![
-        ("track".to_string(), track(calibration, name)?),
-        ("fix_residual".to_string(), fix_residual(calibration, name)?),
+        ("track".to_string(), track(drawn, name)?),
+        ("fix_residual".to_string(), fix_residual(drawn, name)?),
     ])
 }
 
 /// The plan view: the fixes, each piece's dead reckoning with no terms and with them,
 /// and the blackout's.
-fn track(calibration: &FixCalibration, name: &str) -> PlotResult<Outcome> {
-    let drifts = &calibration.drifts;
+fn track(drawn: &FixesDrawn, name: &str) -> PlotResult<Outcome> {
+    let drifts = drawn.drifts;
     let Some((before, after)) = &drifts.dive else {
         return Ok(Outcome::NotApplicable(
             "no piece of the DVL's record holds fixes at both its ends".into(),
         ));
     };
-    let fixes = &calibration.fitted_fixes;
-    let outlier: Vec<bool> = (0..fixes.len())
-        .map(|j| calibration.fit.outliers.contains(&j))
-        .collect();
+    let fixes = drawn.fixes;
+    let mut outlier = vec![false; fixes.len()];
+    for &(fix, _, _) in drawn.after.iter().filter(|p| !p.2) {
+        outlier[fix] = true;
+    }
     let positions = |outliers: bool| -> Vec<[f64; 2]> {
         (fixes.north_east_m.iter().zip(&outlier))
             .filter(|(_, o)| **o == outliers)
@@ -60,17 +123,18 @@ fn track(calibration: &FixCalibration, name: &str) -> PlotResult<Outcome> {
         }),
     };
     let mut caption = format!(
-        "{name}: the dead reckoning in plan view against the fixes, each piece placed on its fixes of its first {ANCHOR_S} s: at the end {:.3} % of the {:.0} m travelled with no terms (grey), {:.3} % with the terms applied",
-        before.end_pct(),
+        "{name}: the dead reckoning in plan view against the fixes, each piece placed on its fixes of its first {ANCHOR_S} s: at the end {:.3} % of the {:.0} m travelled with no terms (grey), {:.3} % with {}",
+        before.end_pct_of(after.distance_m()),
         after.distance_m(),
         after.end_pct(),
+        drawn.terms,
     );
     if let Some(blackout) = blackout {
         caption.push_str(&match &blackout.drift {
             Ok((before, after)) => format!(
                 "; through the blackout (its {} fixes ringed, withheld from the fit), placed on the fixes before it: {:.3} % of the {:.1} m travelled in it with no terms, {:.3} % with the terms (red)",
                 blackout.withheld.len(),
-                before.pct(),
+                before.pct_of(after.distance_m),
                 after.distance_m,
                 after.pct(),
             ),
@@ -82,7 +146,7 @@ fn track(calibration: &FixCalibration, name: &str) -> PlotResult<Outcome> {
     }
     let title = format!(
         "{name}: dead reckoning against the fixes, end drift {:.3} % → {:.3} %",
-        before.end_pct(),
+        before.end_pct_of(after.distance_m()),
         after.end_pct()
     );
     let svg = draw_plan(&title, &plan)?;
@@ -91,41 +155,45 @@ fn track(calibration: &FixCalibration, name: &str) -> PlotResult<Outcome> {
 
 /// Each fitted fix's residual, north and east, with no terms and with them, against
 /// time after the DVL's first sample.
-fn fix_residual(calibration: &FixCalibration, name: &str) -> PlotResult<Outcome> {
-    let residuals = &calibration.fit.residuals;
-    let fixes = &calibration.fitted_fixes;
-    let start_s = calibration.record_start_s;
+fn fix_residual(drawn: &FixesDrawn, name: &str) -> PlotResult<Outcome> {
+    let start_s = drawn.record_start_s;
+    let timed = |of: &[(usize, [f64; 2], bool)]| -> Vec<ResidualPoint> {
+        (of.iter())
+            .map(|&(fix, residual, kept)| (drawn.fixes.time_s[fix] - start_s, residual, kept))
+            .collect()
+    };
     let trace = FixResidualTrace {
-        time_s: (residuals.iter())
-            .map(|r| fixes.time_s[r.fix] - start_s)
-            .collect(),
-        before_m: residuals.iter().map(|r| r.before_m).collect(),
-        after_m: residuals.iter().map(|r| r.after_m).collect(),
-        kept: residuals.iter().map(|r| r.kept).collect(),
-        blackout_s: (calibration.drifts.blackout.as_ref())
+        before: timed(&drawn.before),
+        after: timed(&drawn.after),
+        blackout_s: (drawn.drifts.blackout.as_ref())
             .map(|b| (b.window.0 - start_s, b.window.1 - start_s)),
     };
-    let kept = trace.kept.iter().filter(|&&k| k).count();
+    let kept = trace.after.iter().filter(|p| p.2).count();
+    let kept_before = trace.before.iter().filter(|p| p.2).count();
     if kept == 0 {
         return Ok(Outcome::NotApplicable("no fix was kept by the fit".into()));
     }
-    let rms = |of: &[[f64; 2]]| {
-        let squares: f64 = (of.iter().zip(&trace.kept))
-            .filter(|(_, kept)| **kept)
-            .map(|(r, _)| r[0] * r[0] + r[1] * r[1])
-            .sum();
-        (squares / kept as f64).sqrt()
+    // Each fit's RMS over the fixes it kept, as it is printed.
+    let rms = |of: &[ResidualPoint]| {
+        let kept: Vec<&ResidualPoint> = of.iter().filter(|p| p.2).collect();
+        let squares: f64 = kept.iter().map(|p| p.1[0].powi(2) + p.1[1].powi(2)).sum();
+        (squares / kept.len() as f64).sqrt()
     };
-    let outliers = trace.kept.len() - kept;
+    let outliers = trace.after.len() - kept;
     let caption = format!(
-        "{name}: the fixes' horizontal residual (the dead reckoning, each piece placed at the start fitted, less the fix) against time after the DVL's first sample: RMS {:.2} m with no terms, {:.2} m with the terms applied, over the {kept} fixes kept{}{}",
-        rms(&trace.before_m),
-        rms(&trace.after_m),
+        "{name}: the fixes' horizontal residual (the dead reckoning, each piece placed at the start fitted, less the fix) against time after the DVL's first sample: RMS {:.2} m with no terms, {:.2} m with {}, over the {kept} fixes kept{}{}{}",
+        rms(&trace.before),
+        rms(&trace.after),
+        drawn.terms,
+        match kept_before == kept {
+            true => String::new(),
+            false => format!(" ({kept_before} with no terms, that fit's own)"),
+        },
         match outliers {
             0 => String::new(),
             n => format!("; {n} outliers ×, left out"),
         },
-        match &calibration.drifts.blackout {
+        match &drawn.drifts.blackout {
             Some(blackout) => format!(
                 "; the blackout shaded, its {} fixes withheld",
                 blackout.withheld.len()
@@ -135,8 +203,8 @@ fn fix_residual(calibration: &FixCalibration, name: &str) -> PlotResult<Outcome>
     );
     let title = format!(
         "{name}: the fixes' residual, RMS {:.2} m → {:.2} m",
-        rms(&trace.before_m),
-        rms(&trace.after_m)
+        rms(&trace.before),
+        rms(&trace.after)
     );
     let svg = draw_fix_residual(&title, &trace)?;
     Ok(Outcome::Drawn(Drawn { caption, svg }))

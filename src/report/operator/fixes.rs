@@ -9,8 +9,9 @@ use crate::installation::estimate::bound::ReadNoise;
 use crate::installation::estimate::fixes::{FIX_LATENCY, FixFit};
 use crate::installation::estimate::fixes::{FIX_TOLERANCES, MIN_HEADING_SPAN_RAD};
 use crate::installation::estimate::robust::TUKEY_C_MODELLED;
-use crate::installation::fix_drift::{ANCHOR_S, SpanDrift};
+use crate::installation::fix_drift::ANCHOR_S;
 use crate::operator::calibrate_fixes::FixCalibration;
+use crate::operator::fix_drifts::FixDrifts;
 use crate::report::kit::readable::{readable_term, readable_why};
 
 /// `fixes` fixes read, each `latency_s` before its stamp where there is a latency (and
@@ -116,7 +117,11 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
         100.0 * calibration.before_m / calibration.distance_m,
         100.0 * calibration.after_m / calibration.distance_m,
     ));
-    text.push_str(&drift_lines(calibration));
+    text.push_str(&drift_lines(
+        &calibration.drifts,
+        noise.fix_m,
+        "the terms applied",
+    ));
     text.push_str(&format!(
         "every term is applied at its estimate with its standard deviation, however loosely the fixes show it (beyond its tolerance, scale {:.2} %, misalignment {:.2}°, lever arm {:.2} m, time offset {:.2} s, or tied beyond ±0.95 to another, it is said to be seen poorly, as is the yaw over headings spanning under {:.0}°), but where they cannot show it at all: the lever arm and the clock over those headings, or a term the residuals do not depend on; that one is held at zero, as the start positions take its place exactly; and a clock or a latency the fit ran to the edge of its search where that edge lies within its 95 % interval of zero, held at zero with its uncertainty carried into the others'\n",
         100.0 * FIX_TOLERANCES.scale,
@@ -128,18 +133,18 @@ pub fn fixes_text(calibration: &FixCalibration) -> String {
     text
 }
 
-/// The dead reckoning against the fixes: over the whole dive, and across the blackout
-/// where one was asked; a line each.
-pub fn drift_lines(calibration: &FixCalibration) -> String {
-    let drifts = &calibration.drifts;
+/// The dead reckoning against the fixes, with no terms and with `terms` (in words):
+/// over the whole dive, and across the blackout where one was asked, its fixes' noise
+/// per axis `fix_m`; a line each.
+pub fn drift_lines(drifts: &FixDrifts, fix_m: f64, terms: &str) -> String {
     let mut text = match &drifts.dive {
         Some((before, after)) => format!(
-            "dead reckoning against the fixes (horizontal; each piece placed on its fixes of its first {ANCHOR_S} s and scored on those of its last {ANCHOR_S} s, the pieces' end errors summed over the {:.0} m travelled): at the end {:.3} % of the distance with no terms, {:.3} % with the terms applied ({:.2} m and {:.2} m)\n",
+            "dead reckoning against the fixes (horizontal; each piece placed on its fixes of its first {ANCHOR_S} s and scored on those of its last {ANCHOR_S} s, the pieces' end errors summed, over the {:.0} m the dead reckoning with {terms} travelled): at the end {:.3} % of the distance with no terms, {:.3} % with {terms} ({:.2} m and {:.2} m)\n",
             after.distance_m(),
-            before.end_pct(),
+            before.end_pct_of(after.distance_m()),
             after.end_pct(),
-            before.spans.iter().map(SpanDrift::error_m).sum::<f64>(),
-            after.spans.iter().map(SpanDrift::error_m).sum::<f64>(),
+            before.error_m(),
+            after.error_m(),
         ),
         None => "dead reckoning against the fixes: not scored, no piece of the DVL's record holds fixes at both its ends\n".to_string(),
     };
@@ -155,17 +160,17 @@ pub fn drift_lines(calibration: &FixCalibration) -> String {
     ));
     match &blackout.drift {
         Ok((before, after)) => {
-            let floor_m = after.noise_floor_m(calibration.noise.fix_m);
+            let floor_m = after.noise_floor_m(fix_m);
             text.push_str(&format!(
                 "the dead reckoning placed on the {} fixes of the {ANCHOR_S} s before it and scored on the {} of the {ANCHOR_S} s after it, over the {:.1} m travelled between them: at its end {:.3} % of the distance with no terms, {:.3} % with the terms fitted without its fixes ({:.2} m and {:.2} m); white fixes of {:.2} m per axis alone would leave about {floor_m:.2} m ({:.3} %)\n",
                 after.anchored.0,
                 after.anchored.1,
                 after.distance_m,
-                before.pct(),
+                before.pct_of(after.distance_m),
                 after.pct(),
                 before.error_m(),
                 after.error_m(),
-                calibration.noise.fix_m,
+                fix_m,
                 100.0 * floor_m / after.distance_m,
             ));
         }

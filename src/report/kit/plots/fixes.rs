@@ -66,6 +66,7 @@ pub fn draw_plan(title: &str, plan: &PlanView) -> PlotResult<String> {
             .chain(&plan.withheld)
             .chain(plan.before.iter().flatten())
             .chain(plan.after.iter().flatten())
+            .chain(plan.blackout.iter().flatten())
     };
     let (mut low, mut high) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
     for p in everything() {
@@ -148,21 +149,26 @@ fn plan_entries(plan: &PlanView) -> Vec<(Swatch, String)> {
     entries
 }
 
-/// The fixes' residuals as drawn: each fitted fix's time, s, its residual north and
-/// east with no terms and with them, m, and whether the fit kept it; the blackout's
-/// window, s, where there was one.
+/// A fix's residual as drawn: its time, s, north and east, m, and whether its fit kept it.
+pub type ResidualPoint = (f64, [f64; 2], bool);
+
+/// The fixes' residuals as drawn, each fit's own: with no terms and with them; the
+/// blackout's window, s, where there was one.
 pub struct FixResidualTrace {
-    pub time_s: Vec<f64>,
-    pub before_m: Vec<[f64; 2]>,
-    pub after_m: Vec<[f64; 2]>,
-    pub kept: Vec<bool>,
+    pub before: Vec<ResidualPoint>,
+    pub after: Vec<ResidualPoint>,
     pub blackout_s: Option<(f64, f64)>,
 }
 
 /// The fixes' residual `trace` under `title`: a panel north, a panel east.
 pub fn draw_fix_residual(title: &str, trace: &FixResidualTrace) -> PlotResult<String> {
-    let start = trace.time_s.first().copied().unwrap_or(0.0);
-    let end = trace.time_s.last().copied().unwrap_or(1.0).max(start + 1.0);
+    let times = || (trace.before.iter().chain(&trace.after)).map(|p| p.0);
+    let start = times().fold(f64::INFINITY, f64::min);
+    let end = times().fold(f64::NEG_INFINITY, f64::max);
+    let (start, end) = match start.is_finite() {
+        true => (start, end.max(start + 1.0)),
+        false => (0.0, 1.0),
+    };
     let (start, end) = match trace.blackout_s {
         Some((from, to)) => (start.min(from), end.max(to)),
         None => (start, end),
@@ -172,7 +178,7 @@ pub fn draw_fix_residual(title: &str, trace: &FixResidualTrace) -> PlotResult<St
         let (panels, legend_area) = panels_and_legend(root, title, width, 1)?;
         let rows = panels[0].split_evenly((2, 1));
         for (axis, name) in ["north", "east"].iter().enumerate() {
-            let values = (trace.before_m.iter().chain(&trace.after_m)).map(|r| r[axis].abs());
+            let values = (trace.before.iter().chain(&trace.after)).map(|p| p.1[axis].abs());
             let top = values.fold(0.0, f64::max).max(1e-3) * 1.05;
             let mut chart = chart_on(&rows[axis], "", 70)
                 .build_cartesian_2d(Scale::linear(start..end), Scale::linear(-top..top))?;
@@ -186,16 +192,16 @@ pub fn draw_fix_residual(title: &str, trace: &FixResidualTrace) -> PlotResult<St
                     SHADE.filled(),
                 )))?;
             }
-            let series = |of: &[[f64; 2]], keep: bool| -> Vec<(f64, f64)> {
-                let points: Vec<(f64, f64)> = (trace.time_s.iter().zip(of).zip(&trace.kept))
-                    .filter(|(_, kept)| **kept == keep)
-                    .map(|((t, r), _)| (*t, r[axis]))
+            let series = |of: &[ResidualPoint], keep: bool| -> Vec<(f64, f64)> {
+                let points: Vec<(f64, f64)> = (of.iter())
+                    .filter(|p| p.2 == keep)
+                    .map(|p| (p.0, p.1[axis]))
                     .collect();
                 thinned(&points, MOST_POINTS)
             };
-            Marker::Dot.draw(&mut chart, &series(&trace.before_m, true), BEFORE)?;
-            Marker::Dot.draw(&mut chart, &series(&trace.after_m, true), AFTER)?;
-            Marker::Cross.draw(&mut chart, &series(&trace.after_m, false), BLACK)?;
+            Marker::Dot.draw(&mut chart, &series(&trace.before, true), BEFORE)?;
+            Marker::Dot.draw(&mut chart, &series(&trace.after, true), AFTER)?;
+            Marker::Cross.draw(&mut chart, &series(&trace.after, false), BLACK)?;
         }
         legend(&legend_area, "fixes' residual", &residual_entries(trace))
     })
@@ -207,7 +213,7 @@ fn residual_entries(trace: &FixResidualTrace) -> Vec<(Swatch, String)> {
         (Swatch::Mark(BEFORE, Marker::Dot), "no terms".to_string()),
         (Swatch::Mark(AFTER, Marker::Dot), "terms".to_string()),
     ];
-    if trace.kept.iter().any(|kept| !kept) {
+    if trace.after.iter().any(|p| !p.2) {
         entries.push((
             Swatch::Mark(BLACK, Marker::Cross),
             "outlier, left out".to_string(),
