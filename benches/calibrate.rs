@@ -8,8 +8,9 @@
 //! with the DVL at 10 Hz (360,000 samples) beside a reference at 100 Hz (3,600,000
 //! rows) in two files, `calibrate` alone, with the process's peak resident memory
 //! (Linux's VmHWM, which counts the synthetic files' writing too). With `-- --report`,
-//! the report of a ten-hour recording at 10 Hz (360,000 samples): `calibrate`, then its
-//! figures drawn and `report.md` and `report.html` written, each timed; with `--
+//! the report of a ten-hour recording at 10 Hz (360,000 samples), its reference with
+//! positions: `calibrate`, then its figures drawn (residual, filter's terms, plan view)
+//! and `report.md` and `report.html` written, each timed; with `--
 //! --fix-report`, the same recording calibrated against its positions at 1 Hz as fixes
 //! (36,000) with a 300-s blackout, then its report (plan view, fixes' residual).
 
@@ -85,20 +86,21 @@ fn calibrate_seconds(
     reference: &std::path::Path,
     out: &std::path::Path,
 ) -> (f64, usize) {
-    let (seconds, calibration) = timed_calibration(dvl, reference, out);
+    let (seconds, calibration) = timed_calibration(dvl, (reference, None), out);
     (seconds, calibration.recorded)
 }
 
-/// `calibrate` of the DVL file `dvl` beside `reference` into `out`, and its seconds.
+/// `calibrate` of the DVL file `dvl` beside `reference` (its columns named by `columns`
+/// where given) into `out`, and its seconds.
 fn timed_calibration(
     dvl: &std::path::Path,
-    reference: &std::path::Path,
+    (reference, columns): (&std::path::Path, Option<&std::path::Path>),
     out: &std::path::Path,
 ) -> (f64, Calibration) {
     let args = CalibrateArgs {
         dvl,
         reference: Some(reference),
-        columns: None,
+        columns,
         reading: Reading::default(),
         terms: &TERMS,
         window_s: None,
@@ -115,8 +117,8 @@ fn timed_calibration(
     (clock.elapsed().as_secs_f64(), calibration)
 }
 
-/// The `--report` case: ten hours at 10 Hz calibrated, then its report drawn and
-/// written.
+/// The `--report` case: ten hours at 10 Hz calibrated against a reference with
+/// positions, then its report drawn (residual, filter's terms, plan view) and written.
 fn report() {
     let dir = tempfile::tempdir().unwrap();
     let rows = 360_000;
@@ -133,8 +135,11 @@ fn report() {
         segment.join("DVL_trajectory1.csv"),
         segment.join("GT_trajectory1.csv"),
     );
+    installed::add_positions(&reference);
+    let columns = dir.path().join("columns.toml");
+    std::fs::write(&columns, installed::COLUMNS_WITH_POSITIONS).unwrap();
     let out = dir.path().join("out");
-    let (calibrated_s, calibration) = timed_calibration(&dvl, &reference, &out);
+    let (calibrated_s, calibration) = timed_calibration(&dvl, (&reference, Some(&columns)), &out);
     let printed = calibration_text(&calibration);
     let (drawn_s, written_s, written, bytes) = timed_report(&out, &printed, || {
         calibration_figures(&calibration, "report")
@@ -203,22 +208,10 @@ fn fix_report() {
         segment.join("DVL_trajectory1.csv"),
         segment.join("GT_trajectory1.csv"),
     );
-    // The reference's positions (its north and east velocity summed by the trapezoidal
-    // rule), each second.
-    let text = std::fs::read_to_string(&reference).unwrap();
-    let (mut fixes, mut position) = (String::from("t,n,e\n"), [0.0; 2]);
-    let mut last: Option<(f64, [f64; 2])> = None;
-    for (k, line) in text.lines().skip(1).enumerate() {
-        let cells: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
-        let (t, velocity) = (cells[0], [cells[4], cells[5]]);
-        if let Some((before_s, before)) = last {
-            let dt = t - before_s;
-            position = [0, 1].map(|j| position[j] + 0.5 * dt * (velocity[j] + before[j]));
-        }
-        last = Some((t, velocity));
-        if k % 10 == 0 {
-            fixes.push_str(&format!("{t},{},{}\n", position[0], position[1]));
-        }
+    // The reference's positions each second.
+    let mut fixes = String::from("t,n,e\n");
+    for (t, position) in installed::add_positions(&reference).iter().step_by(10) {
+        fixes.push_str(&format!("{t},{},{}\n", position[0], position[1]));
     }
     let fixes_path = dir.path().join("fixes.csv");
     std::fs::write(&fixes_path, fixes).unwrap();

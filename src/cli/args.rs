@@ -518,7 +518,8 @@ pub(super) struct CorrectArgs {
     #[arg(long, default_value = "corrected")]
     pub(super) out: PathBuf,
     /// Write the correction's report: report.md, a self-contained report.html and its
-    /// figure as PNG and SVG, into --out's folder, or --report=DIR's
+    /// figures (the clock search, the residual, the track where the reference records
+    /// positions) as PNG and SVG, into --out's folder, or --report=DIR's
     #[arg(long, value_name = "DIR", num_args = 0..=1, require_equals = true)]
     pub(super) report: Option<Option<PathBuf>>,
 }

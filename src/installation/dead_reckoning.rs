@@ -163,19 +163,46 @@ impl Positions<'_> {
     }
 }
 
-/// The drift of `installation`'s dead reckoning over the `pieces` of the DVL record
-/// `dvl` against `positions`, each piece started at the reference's position: `None`
-/// where no piece could be scored (the attitude or the positions not read over it, or
-/// a vehicle that did not move). Every installation is scored on the same samples:
-/// those whose t + τ lies inside the attitude whatever τ within ±[`GAP_MARGIN_S`].
-pub fn drift(
+/// One piece's dead reckoning in plan view, placed on the reference's position at its
+/// first sample, beside the reference's positions at the same times: north and east, m.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlacedPiece {
+    pub reckoned_ne_m: Vec<[f64; 2]>,
+    pub reference_ne_m: Vec<[f64; 2]>,
+}
+
+/// A dead reckoning scored against the reference's positions: its [`Drift`], and the
+/// pieces it is the drift of.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Reckoning {
+    pub drift: Drift,
+    pub pieces: Vec<PlacedPiece>,
+}
+
+/// The horizontal length of the path through `points` (north and east first), m.
+pub fn path_length_m<P: AsRef<[f64]>>(points: &[P]) -> f64 {
+    (points.windows(2))
+        .map(|pair| {
+            let (a, b) = (pair[0].as_ref(), pair[1].as_ref());
+            (b[0] - a[0]).hypot(b[1] - a[1])
+        })
+        .sum()
+}
+
+/// `installation`'s dead reckoning over the `pieces` of the DVL record `dvl` against
+/// `positions`, each piece started at the reference's position: `None` where no piece
+/// could be scored (the attitude or the positions not read over it, or a vehicle that
+/// did not move). Every installation is scored on the same samples: those whose t + τ
+/// lies inside the attitude whatever τ within ±[`GAP_MARGIN_S`].
+pub fn reckon_against(
     installation: &Installation,
     (time_s, dvl_m_s): (&[f64], &[Vec3]),
     pieces: &[Range<usize>],
     attitude: &Attitude,
     positions: &Positions,
-) -> Option<Drift> {
-    let (mut squares, mut samples, mut end_error_m, mut distance_m) = (0.0, 0, 0.0, 0.0);
+) -> Option<Reckoning> {
+    let (mut squares, mut end_error_m, mut distance_m) = (0.0, 0.0, 0.0);
+    let mut placed = Vec::new();
     let inside = interior(attitude, time_s, 0.0);
     for piece in pieces {
         let piece = piece.start.max(inside.start)..piece.end.min(inside.end);
@@ -191,43 +218,57 @@ pub fn drift(
         let Some(reference) = reference else {
             continue;
         };
-        let travelled: f64 = (reference.windows(2))
-            .map(|pair| (pair[1][0] - pair[0][0]).hypot(pair[1][1] - pair[0][1]))
-            .sum();
+        let travelled = path_length_m(&reference);
         if reference.len() < 2 || travelled <= 0.0 {
             continue;
         }
         let start = [0, 1].map(|k| reference[0][k] - track.position_m[0][k]);
-        let errors: Vec<f64> = (track.position_m.iter().zip(&reference))
-            .map(|(p, r)| (p[0] + start[0] - r[0]).hypot(p[1] + start[1] - r[1]))
+        let reckoned: Vec<[f64; 2]> = (track.position_m.iter())
+            .map(|p| [p[0] + start[0], p[1] + start[1]])
+            .collect();
+        let errors: Vec<f64> = (reckoned.iter().zip(&reference))
+            .map(|(p, r)| (p[0] - r[0]).hypot(p[1] - r[1]))
             .collect();
         squares += errors.iter().map(|e| (e / travelled).powi(2)).sum::<f64>();
-        samples += errors.len();
         end_error_m += errors[errors.len() - 1];
         distance_m += travelled;
+        placed.push(PlacedPiece {
+            reckoned_ne_m: reckoned,
+            reference_ne_m: reference,
+        });
     }
-    (samples > 0).then(|| Drift {
-        rms_pct: 100.0 * (squares / samples as f64).sqrt(),
-        end_pct: 100.0 * end_error_m / distance_m,
-        distance_m,
-        samples,
+    let samples: usize = placed.iter().map(|p| p.reckoned_ne_m.len()).sum();
+    (samples > 0).then(|| Reckoning {
+        drift: Drift {
+            rms_pct: 100.0 * (squares / samples as f64).sqrt(),
+            end_pct: 100.0 * end_error_m / distance_m,
+            distance_m,
+            samples,
+        },
+        pieces: placed,
     })
 }
 
-/// The drift of `installation` over `recording` against its reference's positions,
-/// where it records them ([`drift`]).
-pub fn drift_of(installation: &Installation, recording: &PairedRecording) -> Option<Drift> {
+/// `installation`'s dead reckoning over `recording` against its reference's positions,
+/// where it records them ([`reckon_against`]).
+pub fn reckoning_of(installation: &Installation, recording: &PairedRecording) -> Option<Reckoning> {
     let positions = Positions {
         time_s: &recording.reference_time_s,
         north_east_m: recording.position_ne_m.as_deref()?,
     };
-    drift(
+    reckon_against(
         installation,
         (&recording.time_s, &recording.dvl_m_s),
         &recording.pieces(),
         &Attitude::of(recording),
         &positions,
     )
+}
+
+/// The drift of `installation` over `recording` against its reference's positions
+/// ([`reckoning_of`]).
+pub fn drift_of(installation: &Installation, recording: &PairedRecording) -> Option<Drift> {
+    reckoning_of(installation, recording).map(|r| r.drift)
 }
 
 /// The samples stamped `time_s` whose t + τ lies inside `attitude`'s span for every τ
@@ -255,6 +296,68 @@ mod tests {
         let dvl = (time_s.iter()).map(|t| [1.5, 0.1 * t.cos(), 0.0]).collect();
         let pieces = vec![0..50, 50..time_s.len()];
         (Attitude::new(&attitude_s, &angles), time_s, dvl, pieces)
+    }
+
+    /// A circle at 1.5 m/s turning 0.05 rad/s, the DVL 1 % fast: with no terms, each
+    /// position is 1.01 times its displacement from the start, so the end error is 1 %
+    /// of the chord, 2R sin(ωT/2), over the arc ωRT travelled (0.665 % over 60 s), the
+    /// end placed there; with the scale applied, under 0.001 % (the sampling's own).
+    #[test]
+    fn a_fast_dvl_drifts_its_share_of_the_chord_over_the_arc() {
+        let (speed, rate) = (1.5, 0.05);
+        let radius = speed / rate;
+        let on_circle = |t: f64| [radius * (rate * t).sin(), radius * (1.0 - (rate * t).cos())];
+        let reference_s: Vec<f64> = (0..=700).map(|i| i as f64 / 10.0).collect();
+        let angles: Vec<Vec3> = reference_s.iter().map(|t| [0.0, 0.0, rate * t]).collect();
+        let attitude = Attitude::new(&reference_s, &angles);
+        let north_east: Vec<[f64; 2]> = reference_s.iter().map(|&t| on_circle(t)).collect();
+        let positions = Positions {
+            time_s: &reference_s,
+            north_east_m: &north_east,
+        };
+        let time_s: Vec<f64> = (50..=650).map(|i| i as f64 / 10.0).collect();
+        let dvl: Vec<Vec3> = vec![[1.01 * speed, 0.0, 0.0]; time_s.len()];
+        let pieces = [0..time_s.len()];
+        let reckon = |installation: &Installation| {
+            reckon_against(
+                installation,
+                (&time_s, &dvl),
+                &pieces,
+                &attitude,
+                &positions,
+            )
+            .unwrap()
+        };
+        let none = reckon(&Installation::default());
+        let arc_m = speed * 60.0;
+        let chord_m = 2.0 * radius * (rate * 60.0 / 2.0).sin();
+        assert!(
+            (none.drift.distance_m - arc_m).abs() < 1e-3,
+            "{:?}",
+            none.drift
+        );
+        assert!(
+            (none.drift.end_pct - chord_m / arc_m).abs() < 1e-3,
+            "{:?}",
+            none.drift
+        );
+        assert_eq!(none.drift.samples, time_s.len());
+        let piece = &none.pieces[0];
+        assert_eq!(piece.reference_ne_m[0], piece.reckoned_ne_m[0]);
+        let start = on_circle(5.0);
+        let end = on_circle(65.0);
+        let last = piece.reckoned_ne_m[time_s.len() - 1];
+        let expected = [0, 1].map(|k| start[k] + 1.01 * (end[k] - start[k]));
+        assert!(
+            (last[0] - expected[0]).hypot(last[1] - expected[1]) < 1e-3,
+            "{last:?}"
+        );
+        let scaled = Installation {
+            scale: [0.01; 3],
+            ..Installation::default()
+        };
+        let fitted = reckon(&scaled).drift;
+        assert!(fitted.end_pct < 1e-3 && fitted.rms_pct < 1e-3, "{fitted:?}");
     }
 
     #[test]

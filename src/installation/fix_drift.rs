@@ -7,10 +7,11 @@
 //! its end; inside a piece: after its first fix, before its last), so that the fixes'
 //! white noise is averaged over those fixes ([`SpanDrift::noise_floor_m`] says how much
 //! of it is left); the span runs between the mean times of the two ends' fixes. A
-//! blackout is one span ([`blackout_drift`]); a whole dive is each piece, the errors
-//! summed over the distances ([`dive_drift`]), as [`Drift::end_pct`] sums them against a
+//! blackout is one span ([`Reckoned::blackout_drift`]); a whole dive is each piece, the
+//! errors summed over the distances ([`Reckoned::dive_drift`]), as [`Drift::end_pct`] sums them against a
 //! reference's positions. The fixes are chosen by their stamps, the same whatever
-//! latency a dead reckoning reads them with.
+//! latency a dead reckoning reads them with; each piece is reckoned once for both
+//! ([`AgainstFixes::reckon`]).
 //! In: an installation, the DVL's samples and pieces, an [`Attitude`], the [`Fixes`]
 //! (their times on the attitude's clock) and the fixes' latency. Out: a [`SpanDrift`]
 //! per span, each with its track placed on the fixes.
@@ -19,7 +20,7 @@
 
 use crate::Vec3;
 use crate::data::fixes::Fixes;
-use crate::installation::dead_reckoning::{Track, dead_reckon, interior};
+use crate::installation::dead_reckoning::{Track, dead_reckon, interior, path_length_m};
 use crate::installation::frames::Attitude;
 use crate::installation::terms::Installation;
 use std::ops::{Range, RangeInclusive};
@@ -120,19 +121,30 @@ pub struct AgainstFixes<'a> {
     pub latency_s: f64,
 }
 
-impl AgainstFixes<'_> {
+/// The dead reckoning through one installation, scored against fixes: what it is scored
+/// against, and each piece's track.
+pub struct Reckoned<'a> {
+    against: AgainstFixes<'a>,
+    tracks: Vec<Track>,
+}
+
+impl<'a> AgainstFixes<'a> {
     /// Each piece's track through `installation`, cut to the samples whose stamp plus
     /// its clock reads the attitude.
-    fn tracks(&self, installation: &Installation) -> Vec<Track> {
+    pub fn reckon(&self, installation: &Installation) -> Reckoned<'a> {
         let inside = interior(self.attitude, self.dvl.0, installation.time_offset_s);
-        (self.pieces.iter())
+        let tracks = (self.pieces.iter())
             .map(|piece| piece.start.max(inside.start)..piece.end.min(inside.end))
             .filter(|piece| piece.len() >= 2)
             .filter_map(|piece| {
                 let dvl = (&self.dvl.0[piece.clone()], &self.dvl.1[piece]);
                 dead_reckon(installation, dvl, self.attitude)
             })
-            .collect()
+            .collect();
+        Reckoned {
+            against: *self,
+            tracks,
+        }
     }
 
     /// The mean time (on the track's clock: the stamp less the latency) and the mean
@@ -161,56 +173,56 @@ impl AgainstFixes<'_> {
     }
 }
 
-/// The drift of `installation`'s dead reckoning over the whole dive: each piece placed
-/// on its fixes of the [`ANCHOR_S`] after its first and scored on those of the
-/// [`ANCHOR_S`] before its last (a piece whose fixes span less than twice that is not
-/// scored); `None` where no piece is.
-pub fn dive_drift(installation: &Installation, against: &AgainstFixes) -> Option<DiveDrift> {
-    let mut spans = Vec::new();
-    for track in against.tracks(installation) {
-        let within = |t: f64| (track.time_s[0]..=track.time_s[track.time_s.len() - 1]).contains(&t);
-        let stamps: Vec<f64> = (against.fixes.time_s.iter().copied())
-            .filter(|&t| within(t - against.latency_s))
-            .collect();
-        let (Some(&first), Some(&last)) = (stamps.first(), stamps.last()) else {
-            continue;
-        };
-        if last - first < 2.0 * ANCHOR_S {
-            continue;
+impl Reckoned<'_> {
+    /// The drift of the dead reckoning over the whole dive: each piece placed on its
+    /// fixes of the [`ANCHOR_S`] after its first and scored on those of the [`ANCHOR_S`]
+    /// before its last (a piece whose fixes span less than twice that is not scored);
+    /// `None` where no piece is.
+    pub fn dive_drift(&self) -> Option<DiveDrift> {
+        let against = &self.against;
+        let mut spans = Vec::new();
+        for track in &self.tracks {
+            let within =
+                |t: f64| (track.time_s[0]..=track.time_s[track.time_s.len() - 1]).contains(&t);
+            let stamps: Vec<f64> = (against.fixes.time_s.iter().copied())
+                .filter(|&t| within(t - against.latency_s))
+                .collect();
+            let (Some(&first), Some(&last)) = (stamps.first(), stamps.last()) else {
+                continue;
+            };
+            if last - first < 2.0 * ANCHOR_S {
+                continue;
+            }
+            let ends = (first..=first + ANCHOR_S, last - ANCHOR_S..=last);
+            if let Some(span) = span_drift(track, against, ends) {
+                spans.push(span);
+            }
         }
-        let ends = (first..=first + ANCHOR_S, last - ANCHOR_S..=last);
-        if let Some(span) = span_drift(&track, against, ends) {
-            spans.push(span);
-        }
+        (!spans.is_empty()).then_some(DiveDrift { spans })
     }
-    (!spans.is_empty()).then_some(DiveDrift { spans })
-}
 
-/// The drift of `installation`'s dead reckoning across the blackout `window` (on the
-/// fixes' stamps; its own fixes withheld from `against`): placed on the fixes of the
-/// [`ANCHOR_S`] before its start, scored on those of the [`ANCHOR_S`] after its end; why
-/// not, in words, where it cannot be scored.
-pub fn blackout_drift(
-    installation: &Installation,
-    against: &AgainstFixes,
-    window: Span,
-) -> Result<SpanDrift, String> {
-    let tracks = against.tracks(installation);
-    let (from, to) = (window.0 - against.latency_s, window.1 - against.latency_s);
-    let track = (tracks.iter())
-        .find(|track| track.time_s[0] <= from && to <= track.time_s[track.time_s.len() - 1])
-        .ok_or_else(|| {
+    /// The drift of the dead reckoning across the blackout `window` (on the fixes'
+    /// stamps; its own fixes withheld from those scored against): placed on the fixes
+    /// of the [`ANCHOR_S`] before its start, scored on those of the [`ANCHOR_S`] after its
+    /// end; why not, in words, where it cannot be scored.
+    pub fn blackout_drift(&self, window: Span) -> Result<SpanDrift, String> {
+        let against = &self.against;
+        let (from, to) = (window.0 - against.latency_s, window.1 - against.latency_s);
+        let spans =
+            |track: &&Track| track.time_s[0] <= from && to <= track.time_s[track.time_s.len() - 1];
+        let track = self.tracks.iter().find(spans).ok_or_else(|| {
             "no piece of the DVL's record spans it (the DVL lost bottom lock within it, or it lies beyond the record)".to_string()
         })?;
-    let ends = (
-        window.0 - ANCHOR_S..=window.0,
-        window.1..=window.1 + ANCHOR_S,
-    );
-    span_drift(track, against, ends).ok_or_else(|| {
-        format!(
-            "no fix within {ANCHOR_S} s before its start, or after its end, inside the DVL's record"
-        )
-    })
+        let ends = (
+            window.0 - ANCHOR_S..=window.0,
+            window.1..=window.1 + ANCHOR_S,
+        );
+        span_drift(track, against, ends).ok_or_else(|| {
+            format!(
+                "no fix within {ANCHOR_S} s before its start, or after its end, inside the DVL's record"
+            )
+        })
+    }
 }
 
 /// `track` placed on the fixes stamped within the first of `ends`, scored on those
@@ -236,9 +248,7 @@ fn span_drift(
         placed_track.time_s.push(t);
         placed_track.north_east_m.push(placed(p));
     }
-    let distance_m: f64 = (placed_track.north_east_m.windows(2))
-        .map(|pair| (pair[1][0] - pair[0][0]).hypot(pair[1][1] - pair[0][1]))
-        .sum();
+    let distance_m = path_length_m(&placed_track.north_east_m);
     (distance_m > 0.0).then(|| SpanDrift {
         from_s,
         to_s,
@@ -291,11 +301,13 @@ mod tests {
             latency_s: 0.0,
         };
         let none = Installation::default();
-        let dive = dive_drift(&none, &against(&fast)).unwrap();
+        let dive = against(&fast).reckon(&none).dive_drift().unwrap();
         let pct = 1.0 / 1.01;
         assert!((dive.end_pct() - pct).abs() < 1e-9, "{}", dive.end_pct());
         let window = (200.0, 500.0);
-        let blackout = blackout_drift(&none, &against(&fast), window).unwrap();
+        let blackout = (against(&fast).reckon(&none))
+            .blackout_drift(window)
+            .unwrap();
         assert!((blackout.pct() - pct).abs() < 1e-9, "{}", blackout.pct());
         // The fixes 10 s before 200 s and after 500 s: 11 each, their mean times 195 s
         // and 505 s.
@@ -303,7 +315,7 @@ mod tests {
         assert!((blackout.from_s - 195.0).abs() < 1e-9 && (blackout.to_s - 505.0).abs() < 1e-9);
         assert!((blackout.distance_m - 1.01 * 1.5 * 310.0).abs() < 1e-6);
         assert!((blackout.error_m() - 0.01 * 1.5 * 310.0).abs() < 1e-6);
-        let truth = blackout_drift(&none, &against(&dvl), window).unwrap();
+        let truth = against(&dvl).reckon(&none).blackout_drift(window).unwrap();
         assert!(truth.error_m() < 1e-9, "{}", truth.error_m());
         assert!((truth.noise_floor_m(2.0) - 2.0 * (4.0f64 / 11.0).sqrt()).abs() < 1e-12);
     }
@@ -320,11 +332,11 @@ mod tests {
             fixes: &fixes,
             latency_s: 0.0,
         };
-        let none = Installation::default();
-        assert!(blackout_drift(&none, &against, (150.0, 250.0)).is_err());
-        assert!(blackout_drift(&none, &against, (210.0, 260.0)).is_ok());
-        assert!(blackout_drift(&none, &against, (500.0, 588.5)).is_err());
-        assert_eq!(dive_drift(&none, &against).unwrap().spans.len(), 2);
+        let reckoned = against.reckon(&Installation::default());
+        assert!(reckoned.blackout_drift((150.0, 250.0)).is_err());
+        assert!(reckoned.blackout_drift((210.0, 260.0)).is_ok());
+        assert!(reckoned.blackout_drift((500.0, 588.5)).is_err());
+        assert_eq!(reckoned.dive_drift().unwrap().spans.len(), 2);
     }
 
     /// A clock of seconds reads the attitude that far on: the samples are cut about it,
@@ -346,7 +358,7 @@ mod tests {
             time_offset_s: 5.0,
             ..Installation::default()
         };
-        let dive = dive_drift(&late, &against).expect("the piece reckoned");
+        let dive = (against.reckon(&late).dive_drift()).expect("the piece reckoned");
         assert!(dive.error_m() < 1e-9, "{}", dive.error_m());
     }
 }

@@ -10,7 +10,7 @@
 //! accepted. In: `--accept`'s thresholds, and a calibration's terms and drift. Out: an
 //! [`Acceptance`], each check with its verdict.
 
-use crate::installation::dead_reckoning::Drift;
+use crate::installation::dead_reckoning::Reckoning;
 use crate::installation::estimate::bound::{ReadNoise, TermBound};
 
 /// The limits a calibration is held to.
@@ -159,11 +159,11 @@ pub struct ScoredDrift {
 /// The drift the acceptance holds of a calibration against a velocity reference: its
 /// dead reckoning's with the terms applied, against the reference's positions, where
 /// it records them.
-pub fn reference_drift(drift: Option<&(Drift, Drift)>) -> Result<ScoredDrift, String> {
+pub fn reference_drift(drift: Option<&(Reckoning, Reckoning)>) -> Result<ScoredDrift, String> {
     match drift {
         Some((_, after)) => Ok(ScoredDrift {
             what: "dead-reckoning drift at the end, terms applied (% of the distance travelled)",
-            end_pct: after.end_pct,
+            end_pct: after.drift.end_pct,
         }),
         None => Err("no dead reckoning against the reference's positions (it records none, or no piece could be scored)".into()),
     }

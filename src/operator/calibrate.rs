@@ -9,7 +9,7 @@
 
 use crate::data::paired::bag::{BagFrames, is_bag};
 use crate::data::paired::{PairedError, PairedRecording, ReadCounts, Source};
-use crate::installation::dead_reckoning::{Drift, drift_of};
+use crate::installation::dead_reckoning::{Reckoning, reckoning_of};
 use crate::installation::estimate::bound::{Noise, TermBound, bound};
 use crate::installation::estimate::clock::{MAX_SEARCH_S, fit_searched};
 use crate::installation::estimate::filter::{FilterSettings, run_filter_from};
@@ -237,7 +237,7 @@ pub struct Calibration {
     pub trace: Trace,
     /// The dead reckoning's drift over the recording with no terms and with the terms
     /// applied, where the reference records positions.
-    pub drift: Option<(Drift, Drift)>,
+    pub drift: Option<(Reckoning, Reckoning)>,
     /// The Kalman filter, its run over the samples fitted, and its settling curve
     /// (scored on every sample) with the length after which it settles.
     pub settings: FilterSettings,
@@ -393,8 +393,8 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
         before,
         after,
         trace,
-        drift: drift_of(&Installation::default(), &read.recording)
-            .zip(drift_of(&applied, &read.recording)),
+        drift: reckoning_of(&Installation::default(), &read.recording)
+            .zip(reckoning_of(&applied, &read.recording)),
         settings,
         filter,
         curve,

@@ -12,7 +12,7 @@
 use crate::Vec3;
 use crate::data::paired::bag::BagFrames;
 use crate::data::paired::{PairedError, PairedRecording, ReadCounts};
-use crate::installation::dead_reckoning::{Drift, drift_of};
+use crate::installation::dead_reckoning::{Reckoning, reckoning_of};
 use crate::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise};
 use crate::installation::estimate::clock::{
     Carried, Clock, ClockError, ClockSearch, MAX_SEARCH_S, SearchGrid, refind,
@@ -227,7 +227,7 @@ pub struct Correction {
     pub read: ReadCounts,
     /// The dead reckoning's drift over the whole dive with no terms and with the
     /// installation applied, where the reference records positions.
-    pub drift: Option<(Drift, Drift)>,
+    pub drift: Option<(Reckoning, Reckoning)>,
 }
 
 impl Correction {
@@ -321,7 +321,8 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
         installation_file: args.installation.to_path_buf(),
         written: files,
         read: counts,
-        drift: drift_of(&Installation::default(), &recording).zip(drift_of(&applied, &recording)),
+        drift: reckoning_of(&Installation::default(), &recording)
+            .zip(reckoning_of(&applied, &recording)),
     })
 }
 

@@ -9,9 +9,7 @@
 use crate::data::fixes::Fixes;
 use crate::data::paired::PairedRecording;
 use crate::installation::estimate::fixes::{FIX_LATENCY, FixFit};
-use crate::installation::fix_drift::{
-    AgainstFixes, DiveDrift, Span, SpanDrift, blackout_drift, dive_drift,
-};
+use crate::installation::fix_drift::{AgainstFixes, DiveDrift, Span, SpanDrift};
 use crate::installation::frames::Attitude;
 use crate::installation::terms::Installation;
 use crate::operator::acceptance::ScoredDrift;
@@ -106,15 +104,15 @@ pub fn drifts(
         fixes,
         latency_s,
     };
-    let none = (&Installation::default(), against(0.0));
-    let terms = (&fit.installation, against(fitted_latency_s(fit)));
-    let dive_drifts = dive_drift(none.0, &none.1).zip(dive_drift(terms.0, &terms.1));
+    let none = against(0.0).reckon(&Installation::default());
+    let terms = against(fitted_latency_s(fit)).reckon(&fit.installation);
+    let dive_drifts = none.dive_drift().zip(terms.dive_drift());
     let blackout = blackout.map(|(asked, window, withheld)| Blackout {
         asked,
         window,
         withheld,
-        drift: blackout_drift(none.0, &none.1, window)
-            .and_then(|before| Ok((before, blackout_drift(terms.0, &terms.1, window)?))),
+        drift: (none.blackout_drift(window))
+            .and_then(|before| Ok((before, terms.blackout_drift(window)?))),
     });
     FixDrifts {
         dive: dive_drifts,

@@ -260,6 +260,36 @@ pub fn write_shaped(
     }
 }
 
+/// The columns of a reference file [`add_positions`] wrote, with its positions, as
+/// `--columns` reads them.
+pub const COLUMNS_WITH_POSITIONS: &str = "[columns]\ntime = \"Time [s]\"\ndvl = [\"DVL X [m/s]\", \"DVL Y [m/s]\", \"DVL Z [m/s]\"]\nvelocity_ned = [\"V North [m/s]\", \"V East [m/s]\", \"V Down [m/s]\"]\nattitude = [\"Roll [rad]\", \"Pitch [rad]\", \"Yaw [rad]\"]\nnorth_east = [\"North [m]\", \"East [m]\"]\n";
+
+/// Adds to the reference file `path` its positions, north and east of its first, m (its
+/// north and east velocity summed over time by the trapezoidal rule), as the columns
+/// `North [m]` and `East [m]`; each row's time and position.
+pub fn add_positions(path: &Path) -> Vec<(f64, [f64; 2])> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let mut rows = vec![format!("{},North [m],East [m]", lines.next().unwrap())];
+    let mut positions: Vec<(f64, [f64; 2])> = Vec::new();
+    let mut previous = None::<(f64, [f64; 2])>;
+    for line in lines {
+        let cells: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
+        let (t, velocity) = (cells[0], [cells[4], cells[5]]);
+        let position = match (previous, positions.last()) {
+            (Some((before_s, before)), Some((_, at))) => {
+                [0, 1].map(|k| at[k] + 0.5 * (t - before_s) * (before[k] + velocity[k]))
+            }
+            _ => [0.0; 2],
+        };
+        rows.push(format!("{line},{},{}", position[0], position[1]));
+        positions.push((t, position));
+        previous = Some((t, velocity));
+    }
+    std::fs::write(path, rows.join("\n") + "\n").unwrap();
+    positions
+}
+
 /// An installation spec over `count` trajectories in `data/<folder>/` of `dir`.
 pub fn write_study_spec(dir: &Path, name: &str, folder: &str, count: usize, extra: &str) {
     let mut text = format!("name = \"{name}\"\nkind = \"installation\"\n\n[recordings]\n");

@@ -73,6 +73,20 @@ pub fn akit_candidates() -> Vec<PathBuf> {
     candidates
 }
 
+/// The columns of an A-KIT segment with its reference's positions (latitude and
+/// longitude), as `--columns` reads them.
+pub const AKIT_COLUMNS_WITH_POSITIONS: &str = "[columns]\ntime = \"Time [s]\"\ndvl = [\"DVL X [m/s]\", \"DVL Y [m/s]\", \"DVL Z [m/s]\"]\nvelocity_ned = [\"V North [m/s]\", \"V East [m/s]\", \"V Down [m/s]\"]\nattitude = [\"Roll [rad]\", \"Pitch [rad]\", \"Yaw [rad]\"]\nlatitude_longitude = [\"Latitude [rad]\", \"Longitude [rad]\"]\n";
+
+/// A-KIT's segment `k`: its DVL file and its reference file.
+pub fn akit_segment(k: usize) -> [String; 2] {
+    let segment = akit().join(format!("Trajectory{k}"));
+    [
+        format!("DVL_trajectory{k}.csv"),
+        format!("GT_trajectory{k}.csv"),
+    ]
+    .map(|file| segment.join(file).display().to_string())
+}
+
 /// The first folder of [`akit_candidates`] that holds the 13 segments; a test that
 /// needs them fails here, naming every place searched, when none does.
 pub fn akit() -> PathBuf {

@@ -131,21 +131,17 @@ fn a_calibration_is_accepted_marginal_or_rejected_by_its_intervals() {
 fn an_akit_segments_drift_is_checked_as_printed() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let segment = crate::common::akit().join("Trajectory1");
-    let (dvl, reference) = (
-        segment.join("DVL_trajectory1.csv"),
-        segment.join("GT_trajectory1.csv"),
-    );
+    let [dvl, reference] = crate::common::akit_segment(1);
     std::fs::write(
         d.join("columns.toml"),
-        "[columns]\ntime = \"Time [s]\"\ndvl = [\"DVL X [m/s]\", \"DVL Y [m/s]\", \"DVL Z [m/s]\"]\nvelocity_ned = [\"V North [m/s]\", \"V East [m/s]\", \"V Down [m/s]\"]\nattitude = [\"Roll [rad]\", \"Pitch [rad]\", \"Yaw [rad]\"]\nlatitude_longitude = [\"Latitude [rad]\", \"Longitude [rad]\"]\n",
+        crate::common::AKIT_COLUMNS_WITH_POSITIONS,
     )
     .unwrap();
     let args = [
         "calibrate",
-        dvl.to_str().unwrap(),
+        &dvl,
         "--reference",
-        reference.to_str().unwrap(),
+        &reference,
         "--columns",
         "columns.toml",
         TERMS,

@@ -9,7 +9,9 @@
 
 use crate::Vec3;
 use crate::data::fixes::Fixes;
-use crate::installation::dead_reckoning::{AttitudeRead, Track, dead_reckon_along, interior};
+use crate::installation::dead_reckoning::{
+    AttitudeRead, Track, dead_reckon_along, interior, path_length_m,
+};
 use crate::installation::estimate::bound::{Unseen, whitened_bound};
 use crate::installation::estimate::fit::{
     MAX_LEVER_ARM_M, MAX_SCALE, PATIENCE, TIME_OFFSET_MARGIN_S,
@@ -266,10 +268,9 @@ impl<'a> Problem<'a> {
         let spans = self.fix_spans();
         Ok((tracks.iter().zip(&spans))
             .map(|(track, span)| {
-                (track.time_s.windows(2).zip(track.position_m.windows(2)))
-                    .filter(|(t, _)| span.contains(&t[0]) && span.contains(&t[1]))
-                    .map(|(_, p)| (p[1][0] - p[0][0]).hypot(p[1][1] - p[0][1]))
-                    .sum::<f64>()
+                let start = track.time_s.partition_point(|t| t < span.start());
+                let end = track.time_s.partition_point(|t| t <= span.end());
+                path_length_m(&track.position_m[start..end.max(start)])
             })
             .sum())
     }

@@ -3,18 +3,23 @@
 //! caption's RMSE computed from the very samples drawn, which are those the printed
 //! RMSE is of; and the Kalman filter's terms against time with their ± band beside the
 //! fit of the whole recording ([`filter_terms`], the kit's [`draw_panels`]), the
-//! settling time in the caption. `correct`'s report draws its clock search (the RMS
-//! at each offset tried, the kit's [`draw_search`]) and its dive's residual before and
-//! after the installation carried. In: a [`Calibration`] or a [`Correction`] and the
-//! recording's name. Out: each figure, or why there is none.
+//! settling time in the caption; and, where the reference records positions, the dead
+//! reckoning in plan view against them, with no terms and with them ([`track`], the
+//! kit's [`draw_plan`]), its caption's drifts computed from the very lines drawn, which
+//! are the printed ones. `correct`'s report draws its clock search (the RMS at each
+//! offset tried, the kit's [`draw_search`]), its dive's residual before and after the
+//! installation carried, and its plan view. In: a [`Calibration`] or a [`Correction`]
+//! and the recording's name. Out: each figure, or why there is none.
 
 use crate::data::paired::pieces;
+use crate::installation::dead_reckoning::{Reckoning, path_length_m};
 use crate::installation::study::rows::FilterPoint;
 use crate::operator::calibrate::Calibration;
 use crate::operator::correct::Correction;
 use crate::operator::residual::Trace;
 use crate::report::kit::plots::canvas::{Drawn, Outcome};
-use crate::report::kit::plots::draw::PlotResult;
+use crate::report::kit::plots::draw::{PlotResult, strided};
+use crate::report::kit::plots::fixes::{PlanView, draw_plan};
 use crate::report::kit::plots::residual::{ResidualSample, ResidualTrace, draw_residual};
 use crate::report::kit::plots::search::{SearchCurve, draw_search};
 use crate::report::kit::plots::term_panels::{TermPanel, draw_panels};
@@ -27,9 +32,11 @@ pub fn correction_figures(
     name: &str,
 ) -> PlotResult<Vec<(String, Outcome)>> {
     crate::report::kit::plots::render::register_font();
+    let terms = "the installation applied";
     Ok(vec![
         ("clock_search".to_string(), clock_search(correction, name)?),
         ("residual".to_string(), residual(&correction.trace, name)?),
+        ("track".to_string(), track(&correction.drift, name, terms)?),
     ])
 }
 
@@ -79,6 +86,10 @@ pub fn calibration_figures(
     Ok(vec![
         ("residual".to_string(), residual(&calibration.trace, name)?),
         ("filter_terms".to_string(), filter_terms(calibration, name)?),
+        (
+            "track".to_string(),
+            track(&calibration.drift, name, "the terms applied")?,
+        ),
     ])
 }
 
@@ -147,19 +158,14 @@ pub fn filter_terms(calibration: &Calibration, name: &str) -> PlotResult<Outcome
     let fit = &calibration.bound;
     let terms = crate::first_seen(points.iter().map(|p| p.term.as_str()));
     let per_term = points.len() / terms.len().max(1);
-    let stride = per_term.div_ceil(FILTER_POINTS_DRAWN).max(1);
     // A row per kind of term (its axes side by side), each panel titled by its term.
     let (mut kinds, mut rows): (Vec<String>, Vec<(String, Vec<TermPanel>)>) = Default::default();
     for term in terms {
         let (title, unit, factor) = readable_term(term);
         let kind = title.trim_end_matches([' ', 'x', 'y', 'z']).to_string();
         let own: Vec<&FilterPoint> = points.iter().filter(|p| p.term == term).collect();
-        // A long recording's filter is drawn at every `stride`-th sample and its last.
-        let last = own.len().saturating_sub(1);
-        let own: Vec<&FilterPoint> = (own.iter().enumerate())
-            .filter(|(k, _)| k % stride == 0 || *k == last)
-            .map(|(_, p)| *p)
-            .collect();
+        // A long recording's filter is drawn at every k-th sample and its last.
+        let own = strided(&own, FILTER_POINTS_DRAWN);
         let panel = TermPanel {
             title,
             unit,
@@ -180,8 +186,8 @@ pub fn filter_terms(calibration: &Calibration, name: &str) -> PlotResult<Outcome
     let caption = format!(
         "{name}: {} against time, each term ± its standard deviation, beside the fit of the whole recording (dashed){}{}",
         calibration.filter.label,
-        match stride {
-            1 => String::new(),
+        match per_term.div_ceil(FILTER_POINTS_DRAWN) {
+            0 | 1 => String::new(),
             k => format!(", drawn at one sample in {k} of its {per_term}"),
         },
         match calibration.settled_s {
@@ -191,4 +197,63 @@ pub fn filter_terms(calibration: &Calibration, name: &str) -> PlotResult<Outcome
     );
     let svg = draw_panels(&caption, &rows, "the fit of the whole recording")?;
     Ok(Outcome::Drawn(Drawn { caption, svg }))
+}
+
+/// The dead reckoning in plan view against the reference's positions, each piece
+/// placed on the reference's position at its first sample, with no terms and with
+/// `terms`; its caption's drifts computed from the very lines drawn.
+fn track(drift: &Option<(Reckoning, Reckoning)>, name: &str, terms: &str) -> PlotResult<Outcome> {
+    let Some((before, after)) = drift else {
+        return Ok(Outcome::NotApplicable(
+            "the reference records no positions (or none along a piece of the DVL's record)".into(),
+        ));
+    };
+    let reckoned = |of: &Reckoning| -> Vec<Vec<[f64; 2]>> {
+        (of.pieces.iter())
+            .map(|p| p.reckoned_ne_m.clone())
+            .collect()
+    };
+    let plan = PlanView {
+        reference: (after.pieces.iter())
+            .map(|p| p.reference_ne_m.clone())
+            .collect(),
+        fixes: Vec::new(),
+        outliers: Vec::new(),
+        withheld: Vec::new(),
+        before: reckoned(before),
+        after: reckoned(after),
+        blackout: None,
+    };
+    let (before_pct, after_pct) = (end_drift_pct(before), end_drift_pct(after));
+    let distance_m: f64 = (after.pieces.iter())
+        .map(|p| path_length_m(&p.reference_ne_m))
+        .sum();
+    let caption = format!(
+        "{name}: the dead reckoning in plan view against the reference's positions (black), {} placed on the reference's position at its first sample: at the end {before_pct:.3} % of the {distance_m:.0} m travelled with no terms (grey), {after_pct:.3} % with {terms} (blue); RMS over every sample {:.3} % and {:.3} %",
+        match after.pieces.len() {
+            1 => "its one piece".to_string(),
+            n => format!("each of its {n} pieces"),
+        },
+        before.drift.rms_pct,
+        after.drift.rms_pct,
+    );
+    let title = format!(
+        "{name}: dead reckoning against the reference's positions, end drift {before_pct:.3} % → {after_pct:.3} %"
+    );
+    let svg = draw_plan(&title, &plan)?;
+    Ok(Outcome::Drawn(Drawn { caption, svg }))
+}
+
+/// The pieces' horizontal errors at their ends, summed, over the distances the
+/// reference travelled along them, %.
+fn end_drift_pct(reckoning: &Reckoning) -> f64 {
+    let (mut error_m, mut distance_m) = (0.0, 0.0);
+    for piece in &reckoning.pieces {
+        let (end, reference) = (piece.reckoned_ne_m.last(), piece.reference_ne_m.last());
+        if let (Some(end), Some(reference)) = (end, reference) {
+            error_m += (end[0] - reference[0]).hypot(end[1] - reference[1]);
+        }
+        distance_m += path_length_m(&piece.reference_ne_m);
+    }
+    100.0 * error_m / distance_m
 }

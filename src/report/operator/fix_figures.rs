@@ -112,6 +112,7 @@ fn track(drawn: &FixesDrawn, name: &str) -> PlotResult<Outcome> {
     let blackout = drifts.blackout.as_ref();
     let scored = blackout.and_then(|b| b.drift.as_ref().ok());
     let plan = PlanView {
+        reference: Vec::new(),
         fixes: positions(false),
         outliers: positions(true),
         withheld: blackout.map_or(Vec::new(), |b| b.withheld.north_east_m.clone()),

@@ -17,7 +17,7 @@ pub mod fixes;
 pub mod fixes_joint;
 pub mod joint_figures;
 
-use crate::installation::dead_reckoning::Drift;
+use crate::installation::dead_reckoning::Reckoning;
 use crate::installation::estimate::bound::{ReadNoise, TermBound};
 use crate::report::kit::readable::readable_term;
 use comfy_table::{Table, presets::ASCII_MARKDOWN};
@@ -58,10 +58,11 @@ pub fn terms_table<N: ReadNoise>(bound: &TermBound<N>, shown: impl Fn(usize) -> 
 
 /// The line that says how far a dead reckoning drifts with no terms and with the terms
 /// applied, against the reference's positions; empty where it records none.
-pub fn drift_line(drift: &Option<(Drift, Drift)>) -> String {
+pub fn drift_line(drift: &Option<(Reckoning, Reckoning)>) -> String {
     let Some((before, after)) = drift else {
         return String::new();
     };
+    let (before, after) = (before.drift, after.drift);
     format!(
         "dead-reckoning drift against the reference's positions (horizontal, each piece started at the reference's position, over the {:.0} m travelled): RMS {:.3} % of the distance with no terms, {:.3} % with the terms applied; at the end {:.3} % and {:.3} %\n",
         after.distance_m, before.rms_pct, after.rms_pct, before.end_pct, after.end_pct

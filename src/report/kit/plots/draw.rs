@@ -457,6 +457,16 @@ pub fn box_stats(values: &[f64]) -> [f64; 5] {
     [low, q1, median, q3, high]
 }
 
+/// Every `k`-th of `points` and its last, so that at most about `most` are left.
+pub fn strided<T: Copy>(points: &[T], most: usize) -> Vec<T> {
+    let stride = points.len().div_ceil(most.max(1)).max(1);
+    let last = points.len().saturating_sub(1);
+    (points.iter().enumerate())
+        .filter(|(k, _)| k % stride == 0 || *k == last)
+        .map(|(_, p)| *p)
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -478,5 +488,14 @@ mod tests {
         assert_eq!(three_digits(1234.0), "1234");
         assert_eq!(category(&["a".into(), "b".into()], 1.0), "b");
         assert_eq!(category(&["a".into(), "b".into()], 0.5), "");
+    }
+
+    #[test]
+    fn a_long_line_is_strided_to_about_the_most_points_its_ends_kept() {
+        let points: Vec<usize> = (0..10_001).collect();
+        let drawn = strided(&points, 3000);
+        assert!(drawn.len() <= 3001, "{}", drawn.len());
+        assert_eq!((drawn[0], drawn[drawn.len() - 1]), (0, 10_000));
+        assert_eq!(strided(&points[..5], 3000), vec![0, 1, 2, 3, 4]);
     }
 }

@@ -1,12 +1,13 @@
-//! The figures of a fit to position fixes. The plan view ([`draw_plan`]): east across,
-//! north up, one metre the same length on both; the fixes (those the fit left out
-//! crossed, those a blackout withheld ringed), and each piece's dead reckoning placed
-//! on its first fixes, with no terms (grey) and with them (in colour), and the
-//! blackout's own dead reckoning, placed at its start, in red: a track that bends away
-//! from the fixes shows as such. The fixes' residual against time ([`draw_fix_residual`]):
-//! north and east, before and after, the outliers crossed, the blackout shaded. Every
-//! line is drawn at one point in k where it holds more than [`MOST_POINTS`], its ends
-//! kept. In: a [`PlanView`] or a [`FixResidualTrace`]. Out: the SVG.
+//! The figures of a dead reckoning against positions. The plan view ([`draw_plan`]):
+//! east across, north up, one metre the same length on both; the fixes (those the fit
+//! left out crossed, those a blackout withheld ringed) or the reference's positions (a
+//! line), and each piece's dead reckoning placed on its first fixes or position, with
+//! no terms (grey) and with them (in colour), and the blackout's own dead reckoning,
+//! placed at its start, in red: a track that bends away from the fixes shows as such.
+//! The fixes' residual against time ([`draw_fix_residual`]): north and east, before
+//! and after, the outliers crossed, the blackout shaded. Every line is drawn at one
+//! point in k where it holds more than [`MOST_POINTS`], its ends kept. In: a
+//! [`PlanView`] or a [`FixResidualTrace`]. Out: the SVG.
 
 use super::canvas::draw_svg;
 use super::draw::*;
@@ -30,8 +31,11 @@ const WITHHELD: RGBColor = RGBColor(245, 170, 170);
 /// The most points a line or a set of marks is drawn with.
 pub const MOST_POINTS: usize = 3000;
 
-/// A fit to fixes in plan view: positions north and east, m.
+/// A dead reckoning in plan view, against fixes or the reference's positions:
+/// positions north and east, m.
 pub struct PlanView {
+    /// The reference's positions along each piece (none against fixes).
+    pub reference: Vec<Vec<[f64; 2]>>,
     /// The fixes fitted, those the fit left out as outliers, those withheld.
     pub fixes: Vec<[f64; 2]>,
     pub outliers: Vec<[f64; 2]>,
@@ -43,16 +47,6 @@ pub struct PlanView {
     pub blackout: Option<Vec<[f64; 2]>>,
 }
 
-/// Every `k`-th of `points` and its last, so that at most about `most` are left.
-pub fn thinned<T: Copy>(points: &[T], most: usize) -> Vec<T> {
-    let stride = points.len().div_ceil(most.max(1)).max(1);
-    let last = points.len().saturating_sub(1);
-    (points.iter().enumerate())
-        .filter(|(k, _)| k % stride == 0 || *k == last)
-        .map(|(_, p)| *p)
-        .collect()
-}
-
 /// East, north: the plotted point of a north-east position.
 fn east_north(p: &[f64; 2]) -> (f64, f64) {
     (p[1], p[0])
@@ -62,6 +56,7 @@ fn east_north(p: &[f64; 2]) -> (f64, f64) {
 pub fn draw_plan(title: &str, plan: &PlanView) -> PlotResult<String> {
     let everything = || {
         (plan.fixes.iter())
+            .chain(plan.reference.iter().flatten())
             .chain(&plan.outliers)
             .chain(&plan.withheld)
             .chain(plan.before.iter().flatten())
@@ -93,7 +88,7 @@ pub fn draw_plan(title: &str, plan: &PlanView) -> PlotResult<String> {
             .y_desc("north [m]")
             .draw()?;
         let drawn = |points: &[[f64; 2]]| -> Vec<(f64, f64)> {
-            thinned(points, MOST_POINTS)
+            strided(points, MOST_POINTS)
                 .iter()
                 .map(east_north)
                 .collect()
@@ -101,6 +96,9 @@ pub fn draw_plan(title: &str, plan: &PlanView) -> PlotResult<String> {
         // The withheld fixes under the lines, so that the tracks through them show.
         Marker::Ring.draw(&mut chart, &drawn(&plan.withheld), WITHHELD)?;
         Marker::Dot.draw(&mut chart, &drawn(&plan.fixes), FIX)?;
+        for track in &plan.reference {
+            line(&mut chart, drawn(track), FIX, Stroke::Solid)?;
+        }
         for track in &plan.before {
             line(&mut chart, drawn(track), BEFORE, Stroke::Solid)?;
         }
@@ -117,8 +115,17 @@ pub fn draw_plan(title: &str, plan: &PlanView) -> PlotResult<String> {
 
 /// The plan view's legend: what it draws, and only that.
 fn plan_entries(plan: &PlanView) -> Vec<(Swatch, String)> {
-    let mut entries = vec![
-        (Swatch::Mark(FIX, Marker::Dot), "fix fitted".to_string()),
+    let mut entries = Vec::new();
+    if !plan.fixes.is_empty() {
+        entries.push((Swatch::Mark(FIX, Marker::Dot), "fix fitted".to_string()));
+    }
+    if !plan.reference.is_empty() {
+        entries.push((
+            Swatch::Line(FIX, Stroke::Solid),
+            "reference's positions".to_string(),
+        ));
+    }
+    entries.extend([
         (
             Swatch::Line(BEFORE, Stroke::Solid),
             "dead reckoning, no terms".to_string(),
@@ -127,7 +134,7 @@ fn plan_entries(plan: &PlanView) -> Vec<(Swatch, String)> {
             Swatch::Line(AFTER, Stroke::Solid),
             "dead reckoning, terms".to_string(),
         ),
-    ];
+    ]);
     if !plan.withheld.is_empty() {
         entries.push((
             Swatch::Mark(WITHHELD, Marker::Ring),
@@ -197,7 +204,7 @@ pub fn draw_fix_residual(title: &str, trace: &FixResidualTrace) -> PlotResult<St
                     .filter(|p| p.2 == keep)
                     .map(|p| (p.0, p.1[axis]))
                     .collect();
-                thinned(&points, MOST_POINTS)
+                strided(&points, MOST_POINTS)
             };
             Marker::Dot.draw(&mut chart, &series(&trace.before, true), BEFORE)?;
             Marker::Dot.draw(&mut chart, &series(&trace.after, true), AFTER)?;
@@ -226,18 +233,4 @@ fn residual_entries(trace: &FixResidualTrace) -> Vec<(Swatch, String)> {
         ));
     }
     entries
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_long_line_is_thinned_to_about_the_most_points_its_ends_kept() {
-        let points: Vec<usize> = (0..10_001).collect();
-        let drawn = thinned(&points, 3000);
-        assert!(drawn.len() <= 3001, "{}", drawn.len());
-        assert_eq!((drawn[0], drawn[drawn.len() - 1]), (0, 10_000));
-        assert_eq!(thinned(&points[..5], 3000), vec![0, 1, 2, 3, 4]);
-    }
 }
