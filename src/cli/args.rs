@@ -522,6 +522,16 @@ pub(super) struct CorrectArgs {
     /// positions) as PNG and SVG, into --out's folder, or --report=DIR's
     #[arg(long, value_name = "DIR", num_args = 0..=1, require_equals = true)]
     pub(super) report: Option<Option<PathBuf>>,
+    /// Hold the installation carried to this dive to an acceptance threshold, its
+    /// verdict (pass, marginal, fail) printed and in the report: the dead reckoning's
+    /// end drift on the dive against the reference's positions or the fixes, which its
+    /// calibration did not see; --accept=drift_pct=VALUE sets it over the default 0.1
+    #[arg(long, value_name = "drift_pct=VALUE", num_args = 0..=1, require_equals = true, default_missing_value = "")]
+    pub(super) accept: Option<String>,
+    /// With --accept, exit with status 3 where the installation is rejected on this
+    /// dive (its drift failed or could not be scored), after every file is written
+    #[arg(long, requires = "accept")]
+    pub(super) fail_on_reject: bool,
 }
 
 /// The arguments of `bench`.

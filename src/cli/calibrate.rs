@@ -3,7 +3,8 @@
 //! ([`crate::report::operator::calibrate`]), held to `--accept`'s thresholds where asked
 //! ([`crate::operator::acceptance`]); and `correct`, its installation applied to
 //! another dive ([`crate::operator::correct`], printed by
-//! [`crate::report::operator::correct`]); either's report written with `--report`. In: the parsed arguments. Out: what they
+//! [`crate::report::operator::correct`]), held to `--accept`'s drift there where asked;
+//! either's report written with `--report`. In: the parsed arguments. Out: what they
 //! found on stdout, the files written named on stderr (what each will cost, it says
 //! itself before it starts: [`crate::operator::cost`]).
 
@@ -12,7 +13,10 @@ use super::{CliError, failure, input, stopped};
 use crate::installation::estimate::clock::DEFAULT_SEARCH_S;
 use crate::installation::estimate::fixes::default_fix_terms;
 use crate::installation::terms::names::TermName;
-use crate::operator::acceptance::{Thresholds, accept, reference_drift};
+use crate::operator::acceptance::{
+    Acceptance, CALIBRATED_DRIFT, CARRIED_DRIFT, Thresholds, accept, accept_carried,
+    reference_drift,
+};
 use crate::operator::calibrate::{CalibrateArgs, calibrate as calibrated};
 use crate::operator::calibrate_fixes::{FixArgs, FixFiles, calibrate_fixes as calibrated_on_fixes};
 use crate::operator::calibrate_fixes_joint::calibrate_fixes_joint as calibrated_on_fixes_jointly;
@@ -56,10 +60,7 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
     if args.dvl.len() > 1 {
         refuse_for_several(args)?;
     }
-    let thresholds = (args.accept.as_deref())
-        .map(Thresholds::parse)
-        .transpose()
-        .map_err(|message| input(anyhow::anyhow!("--accept: {message}")))?;
+    let thresholds = thresholds(args.accept.as_deref())?;
     if let Some(given) = given {
         let rejected = calibrate_fixes(args, &given, thresholds)?;
         return rejection(rejected && args.fail_on_reject);
@@ -110,6 +111,12 @@ pub(super) fn calibrate_command(args: &args::CalibrateArgs) -> Result<(), CliErr
     rejection(rejected && args.fail_on_reject)
 }
 
+/// `--accept`'s thresholds, where asked, parsed and named at fault.
+fn thresholds(given: Option<&str>) -> Result<Option<Thresholds>, CliError> {
+    (given.map(Thresholds::parse).transpose())
+        .map_err(|message| input(anyhow::anyhow!("--accept: {message}")))
+}
+
 /// Whether `dvl`, named as a DVL file, is no file but `--accept`'s thresholds typed
 /// after a space (`--accept scale_pct=1`), which the flag does not take.
 fn thresholds_typed_apart(dvl: &Path) -> bool {
@@ -143,6 +150,35 @@ fn rejection(fail: bool) -> Result<(), CliError> {
         ))),
         false => Ok(()),
     }
+}
+
+/// `correct --accept`'s threshold: the drift alone, the terms' thresholds named as held
+/// where the installation was calibrated.
+fn carried_thresholds(given: Option<&str>) -> Result<Option<Thresholds>, CliError> {
+    let keys = given.into_iter().flat_map(|g| g.split(','));
+    let named = |pair: &str| pair.split('=').next().unwrap_or("").trim().to_string();
+    if let Some(key) = keys
+        .map(named)
+        .find(|k| k != "drift_pct" && Thresholds::KEYS.contains(&k.as_str()))
+    {
+        return Err(input(anyhow::anyhow!(
+            "--accept: {key}: the terms are held to their thresholds where the installation is calibrated (calibrate --accept); correct holds its dead reckoning on this dive to drift_pct"
+        )));
+    }
+    thresholds(given)
+}
+
+/// The acceptance of an installation carried to a dive whose dead reckoning there
+/// drifted as `drift` says, where `thresholds` were asked; its text appended to
+/// `printed`.
+fn carried_acceptance(
+    thresholds: Option<Thresholds>,
+    drift: Result<crate::operator::acceptance::ScoredDrift, String>,
+    printed: &mut String,
+) -> Option<Acceptance> {
+    let acceptance = accept_carried(drift, thresholds?);
+    printed.push_str(&format!("\n{}", acceptance_text(&acceptance)));
+    Some(acceptance)
 }
 
 /// `calibrate DVL.csv --fixes FIXES.csv --attitude ATTITUDE.csv --fix-noise-m σ`: the
@@ -320,9 +356,25 @@ fn refuse_beside_fixes(
 /// `correct` as typed: against a velocity reference, or against fixes.
 pub(super) fn correct_command(args: &args::CorrectArgs) -> Result<(), CliError> {
     let report = (args.report.as_ref()).map(|dir| dir.as_deref().unwrap_or(&args.out));
-    if let Some(given) = args.fix.given().map_err(|m| input(anyhow::anyhow!(m)))? {
-        return correct_fixes(args, given, report);
+    let thresholds = carried_thresholds(args.accept.as_deref())?;
+    let rejected = match args.fix.given().map_err(|m| input(anyhow::anyhow!(m)))? {
+        Some(given) => correct_fixes(args, given, (report, thresholds))?,
+        None => correct_velocity(args, (report, thresholds))?,
+    };
+    match rejected && args.fail_on_reject {
+        true => Err(CliError::Rejected(anyhow::anyhow!(
+            "the installation is rejected on this dive by --accept (--fail-on-reject); every file was written"
+        ))),
+        false => Ok(()),
     }
+}
+
+/// `correct` against a velocity reference, its report written and its acceptance held
+/// where asked; whether it is rejected.
+fn correct_velocity(
+    args: &args::CorrectArgs,
+    asked: (Option<&Path>, Option<Thresholds>),
+) -> Result<bool, CliError> {
     correct(
         &CorrectArgs {
             dvl: &args.dvl,
@@ -335,7 +387,7 @@ pub(super) fn correct_command(args: &args::CorrectArgs) -> Result<(), CliError> 
             time_offset_s: args.time_offset_s,
             out: &args.out,
         },
-        report,
+        asked,
     )
 }
 
@@ -344,12 +396,12 @@ const DEFAULT_WINDOW_S: f64 = 60.0;
 
 /// `correct DVL.csv --installation FILE --fixes FIXES.csv --attitude ATTITUDE.csv
 /// --fix-noise-m σ`: the installation carried, the clock found again from the fixes;
-/// its report written to `report` where one is asked.
+/// its report written and its acceptance held where asked; whether it is rejected.
 fn correct_fixes(
     args: &args::CorrectArgs,
     given: GivenFixes,
-    report: Option<&Path>,
-) -> Result<(), CliError> {
+    (report, thresholds): (Option<&Path>, Option<Thresholds>),
+) -> Result<bool, CliError> {
     refuse_beside_fixes(
         &[
             ("--reference", args.reference.is_some()),
@@ -373,7 +425,8 @@ fn correct_fixes(
         out: &args.out,
     })
     .map_err(stopped)?;
-    let printed = fix_correction_text(&correction);
+    let mut printed = fix_correction_text(&correction);
+    let acceptance = carried_acceptance(thresholds, correction.drifts.carried(), &mut printed);
     print!("{printed}");
     for path in &correction.written {
         eprintln!("corrected dive written to {}", path.display());
@@ -382,7 +435,7 @@ fn correct_fixes(
         let drawn = fix_correction_figures(&correction, &name_of(&args.dvl));
         write_drawn(folder, &title("Correction", &args.dvl), &printed, drawn)?;
     }
-    Ok(())
+    Ok(acceptance.is_some_and(|a| a.rejected()))
 }
 
 /// `--terms` (or `--dive-terms`) as typed, each a term's name.
@@ -407,7 +460,7 @@ fn calibrate(
     let calibration = calibrated(args).map_err(stopped)?;
     let mut printed = calibration_text(&calibration);
     let acceptance = thresholds.map(|thresholds| {
-        let drift = reference_drift(calibration.drift.as_ref());
+        let drift = reference_drift(calibration.drift.as_ref(), CALIBRATED_DRIFT);
         accept((&calibration.bound, &|_| true), drift, thresholds)
     });
     if let Some(acceptance) = &acceptance {
@@ -427,10 +480,16 @@ fn calibrate(
 }
 
 /// `correct`: the installation of `--installation` applied to the dive, its clock found
-/// again, and how well it fits; its report written to `report` where one is asked.
-fn correct(args: &CorrectArgs, report: Option<&Path>) -> Result<(), CliError> {
+/// again, and how well it fits; its report written and its acceptance held where asked.
+/// Returns whether the threshold rejects it.
+fn correct(
+    args: &CorrectArgs,
+    (report, thresholds): (Option<&Path>, Option<Thresholds>),
+) -> Result<bool, CliError> {
     let correction = corrected(args).map_err(stopped)?;
-    let printed = correction_text(&correction);
+    let mut printed = correction_text(&correction);
+    let drift = reference_drift(correction.drift.as_ref(), CARRIED_DRIFT);
+    let acceptance = carried_acceptance(thresholds, drift, &mut printed);
     print!("{printed}");
     for path in &correction.written {
         eprintln!("corrected dive written to {}", path.display());
@@ -439,7 +498,7 @@ fn correct(args: &CorrectArgs, report: Option<&Path>) -> Result<(), CliError> {
         let drawn = correction_figures(&correction, &name_of(args.dvl));
         write_drawn(folder, &title("Correction", args.dvl), &printed, drawn)?;
     }
-    Ok(())
+    Ok(acceptance.is_some_and(|a| a.rejected()))
 }
 
 /// The report titled `title` of what was `printed` and `drawn`, written into `folder`.

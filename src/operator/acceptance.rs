@@ -7,8 +7,11 @@
 //! limit, fails where the whole interval lies beyond, and is marginal where the limit
 //! falls inside it. A check the calibration cannot make (the term not estimated, no
 //! positions to dead-reckon against) is said so, and the calibration is then not
-//! accepted. In: `--accept`'s thresholds, and a calibration's terms and drift. Out: an
-//! [`Acceptance`], each check with its verdict.
+//! accepted. An installation carried to the next dive (`correct --accept`) is held to
+//! its dead reckoning's drift there, which its calibration did not see: the vendors'
+//! verification run. In: `--accept`'s thresholds, and a calibration's terms and drift
+//! or a carried installation's drift. Out: an [`Acceptance`], each check with its
+//! verdict.
 
 use crate::installation::dead_reckoning::Reckoning;
 use crate::installation::estimate::bound::{ReadNoise, TermBound};
@@ -156,13 +159,23 @@ pub struct ScoredDrift {
     pub end_pct: f64,
 }
 
-/// The drift the acceptance holds of a calibration against a velocity reference: its
-/// dead reckoning's with the terms applied, against the reference's positions, where
-/// it records them.
-pub fn reference_drift(drift: Option<&(Reckoning, Reckoning)>) -> Result<ScoredDrift, String> {
+/// What the drift of a calibration against a velocity reference is, in words.
+pub const CALIBRATED_DRIFT: &str =
+    "dead-reckoning drift at the end, terms applied (% of the distance travelled)";
+
+/// What the drift of an installation carried to a dive is, in words.
+pub const CARRIED_DRIFT: &str = "dead-reckoning drift at the dive's end, the installation carried to it (% of the distance travelled; held out from its calibration)";
+
+/// The drift the acceptance holds against a velocity reference: the dead reckoning's
+/// with the terms applied, against the reference's positions where it records them;
+/// `what` it is, in words.
+pub fn reference_drift(
+    drift: Option<&(Reckoning, Reckoning)>,
+    what: &'static str,
+) -> Result<ScoredDrift, String> {
     match drift {
         Some((_, after)) => Ok(ScoredDrift {
-            what: "dead-reckoning drift at the end, terms applied (% of the distance travelled)",
+            what,
             end_pct: after.drift.end_pct,
         }),
         None => Err("no dead reckoning against the reference's positions (it records none, or no piece could be scored)".into()),
@@ -182,6 +195,14 @@ pub fn accept<N: ReadNoise>(
         scale(bound, thresholds.scale_pct),
         drift_check(drift, thresholds.drift_pct),
     ];
+    Acceptance { thresholds, checks }
+}
+
+/// The check of an installation carried to a dive: its dead reckoning's `drift` there
+/// (or why there is none) against `thresholds`' drift; its terms were held to theirs
+/// where they were calibrated.
+pub fn accept_carried(drift: Result<ScoredDrift, String>, thresholds: Thresholds) -> Acceptance {
+    let checks = vec![drift_check(drift, thresholds.drift_pct)];
     Acceptance { thresholds, checks }
 }
 

@@ -12,7 +12,7 @@ use crate::installation::estimate::fixes::{FIX_LATENCY, FixFit};
 use crate::installation::fix_drift::{AgainstFixes, DiveDrift, Span, SpanDrift};
 use crate::installation::frames::Attitude;
 use crate::installation::terms::Installation;
-use crate::operator::acceptance::ScoredDrift;
+use crate::operator::acceptance::{CARRIED_DRIFT, ScoredDrift};
 use crate::operator::calibrate::CalibrateError;
 
 /// A blackout as `--blackout-s START:LENGTH` asks for it: its start, s after the DVL's
@@ -127,6 +127,9 @@ fn fitted_latency_s(fit: &FixFit) -> f64 {
         .map_or(0.0, |k| fit.bound.value[k])
 }
 
+/// Why a dive against fixes has no drift.
+const NO_PIECE: &str = "no piece of the DVL's record holds fixes at both its ends";
+
 impl FixDrifts {
     /// The drift the acceptance holds: the blackout's where one was asked, the whole
     /// dive's otherwise; or why there is none.
@@ -143,7 +146,19 @@ impl FixDrifts {
                 what: "dead-reckoning drift at the dive's end, terms applied, placed on the fixes at its start (% of the distance travelled; on the fixes fitted: give --blackout-s to withhold some)",
                 end_pct: after.end_pct(),
             }),
-            (None, None) => Err("no piece of the DVL's record holds fixes at both its ends".into()),
+            (None, None) => Err(NO_PIECE.into()),
+        }
+    }
+
+    /// The drift the acceptance holds of an installation carried to a dive: the whole
+    /// dive's with it; or why there is none.
+    pub fn carried(&self) -> Result<ScoredDrift, String> {
+        match &self.dive {
+            Some((_, after)) => Ok(ScoredDrift {
+                what: CARRIED_DRIFT,
+                end_pct: after.end_pct(),
+            }),
+            None => Err(NO_PIECE.into()),
         }
     }
 }

@@ -4,6 +4,7 @@
 //! 0.5 % fails it, and `--fail-on-reject` then exits 3 with every file written; a limit
 //! at the estimate itself falls inside its interval, so marginal; terms not estimated,
 //! or a reference with no positions, are not checked and the calibration is rejected.
+//! `correct --accept`: the installation carried to the next dive held to its drift there.
 
 use crate::common::installed::{INSTALLED, write_installed_sampled};
 use crate::common::{dcnet, stderr, stdout};
@@ -38,6 +39,15 @@ fn row<'a>(text: &'a str, name: &str) -> Vec<&'a str> {
         .map(str::trim)
         .filter(|c| !c.is_empty())
         .collect()
+}
+
+/// The end drift with the terms applied that `text`'s drift line prints, as printed:
+/// "… RMS 0.5 % of the distance with no terms, 0.2 % with the terms applied; at the end
+/// 0.300 % and 0.120 %" gives "0.120".
+fn printed_end_drift(text: &str) -> &str {
+    let end = text.split("; at the end ").nth(1).expect("a drift line");
+    let applied = end.split(" and ").nth(1).expect("a drift with the terms");
+    applied.split(' ').next().unwrap()
 }
 
 #[test]
@@ -152,17 +162,7 @@ fn an_akit_segments_drift_is_checked_as_printed() {
     let output = dcnet(d, &args);
     assert!(output.status.success(), "{}", stderr(&output));
     let text = stdout(&output);
-    // "… RMS 0.5 % of the distance with no terms, 0.2 % with the terms applied; at the
-    // end 0.300 % and 0.120 %"
-    let end = text.split("; at the end ").nth(1).expect("a drift line");
-    let applied = end
-        .split(" and ")
-        .nth(1)
-        .unwrap()
-        .split(' ')
-        .next()
-        .unwrap();
-    let applied: f64 = applied.parse().unwrap();
+    let applied: f64 = printed_end_drift(&text).parse().unwrap();
     let drift = row(&text, "dead-reckoning drift");
     assert_eq!(drift[1], format!("{:.3} %", applied.abs()), "{text}");
     let expected = match applied.abs() {
@@ -186,4 +186,73 @@ fn an_akit_segments_drift_is_checked_as_printed() {
         _ => "verdict: rejected",
     };
     assert!(verdict.starts_with(said), "{verdict} against {verdicts:?}");
+}
+
+/// `correct --accept`: the installation of a synthetic dive carried to the next one (its
+/// reference with positions), held to its dead reckoning's end drift there, which its
+/// calibration did not see: the check's value is the printed drift with the
+/// installation applied; 0.1 % passes it, 0.01 % fails it, and `--fail-on-reject`
+/// then exits 3 with every file written; the terms' thresholds are refused by name.
+#[test]
+fn an_installation_carried_is_held_to_its_drift_on_the_next_dive() {
+    use crate::common::installed::{COLUMNS_WITH_POSITIONS, add_positions};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("columns.toml"), COLUMNS_WITH_POSITIONS).unwrap();
+    let mut dives = Vec::new();
+    for (name, shift_s) in [("first", 0.0), ("next", 7.3)] {
+        let (dvl, args) = crate::report::dive(&d.join(name), shift_s);
+        add_positions(Path::new(&args[3]));
+        dives.push((dvl, args));
+    }
+    let first: Vec<&str> = dives[0].1.iter().map(String::as_str).collect();
+    let save = ["--columns", "columns.toml", "--save", "installation.toml"];
+    let output = dcnet(d, &[&first[..], &save].concat());
+    assert!(output.status.success(), "{}", stderr(&output));
+    let (next, next_args) = &dives[1];
+    let correct = |extra: &[&str], out: &str| {
+        let args = [
+            "correct",
+            next,
+            "--reference",
+            &next_args[3],
+            "--installation",
+            "installation.toml",
+            "--columns",
+            "columns.toml",
+            "--out",
+            out,
+        ];
+        dcnet(d, &[&args[..], extra].concat())
+    };
+    let output = correct(&["--accept"], "held");
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = stdout(&output);
+    let applied = printed_end_drift(&text);
+    let check = row(&text, "dead-reckoning drift at the dive's end");
+    assert_eq!(check[1], format!("{applied} %"), "{text}");
+    assert_eq!(check[4], "pass", "{text}");
+    assert!(
+        text.contains("verdict: accepted: every check passed"),
+        "{text}"
+    );
+
+    let strict = ["--accept=drift_pct=0.01", "--fail-on-reject", "--report"];
+    let output = correct(&strict, "strict");
+    assert_eq!(output.status.code(), Some(3), "{}", stderr(&output));
+    let text = stdout(&output);
+    assert_eq!(row(&text, "dead-reckoning drift")[4], "fail", "{text}");
+    assert!(text.contains("verdict: rejected (failed: drift)"), "{text}");
+    for written in ["strict/report.html", "strict/DVL_trajectory1-corrected.csv"] {
+        assert!(d.join(written).is_file(), "{written} not written");
+    }
+    assert!(stderr(&output).contains("the installation is rejected on this dive"));
+
+    let output = correct(&["--accept=scale_pct=1"], "refused");
+    assert_eq!(output.status.code(), Some(1));
+    assert!(
+        stderr(&output).contains("--accept: scale_pct: the terms are held to their thresholds where the installation is calibrated"),
+        "{}",
+        stderr(&output)
+    );
 }

@@ -165,10 +165,19 @@ fn a_blackout_is_carried_through_by_the_dead_reckoning_and_scored_at_its_end() {
         "--fix-noise-m",
         "0.1",
         "--report=next-report",
+        "--accept",
     ];
     let output = dcnet(d, &args);
     assert!(output.status.success(), "{}", stderr(&output));
     let printed = stdout(&output);
+    // --accept holds the carried installation's drift on the dive as printed.
+    let dive_drift = number_after(&printed, "% of the distance with no terms, ");
+    let check = (printed.lines())
+        .find(|l| {
+            l.starts_with("| dead-reckoning drift at the dive's end, the installation carried")
+        })
+        .unwrap_or_else(|| panic!("{printed}"));
+    assert!(check.contains(&format!("| {dive_drift:.3} %")), "{check}");
     let line = &printed[printed.find("fixes' horizontal residual RMS").unwrap()..];
     let (before, after) = (
         number_after(line, "travelled: "),

@@ -57,7 +57,13 @@ pub fn acceptance_text(acceptance: &Acceptance) -> String {
             format!("rejected ({})", why.join("; "))
         }
     };
+    let terms = match acceptance.checks.iter().any(|c| c.name != "drift") {
+        true => {
+            "a term passes where its whole 95 % interval lies within its limit, is marginal where the limit falls inside the interval, fails where the interval lies beyond; "
+        }
+        false => "",
+    };
     format!(
-        "acceptance (--accept): a term passes where its whole 95 % interval lies within its limit, is marginal where the limit falls inside the interval, fails where the interval lies beyond; the drift passes within its limit, is marginal within twice it\n{table}\nverdict: {verdict}\n"
+        "acceptance (--accept): {terms}the drift passes within its limit, is marginal within twice it\n{table}\nverdict: {verdict}\n"
     )
 }
