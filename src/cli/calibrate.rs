@@ -157,15 +157,16 @@ fn rejection(fail: bool) -> Result<(), CliError> {
 fn carried_thresholds(given: Option<&str>) -> Result<Option<Thresholds>, CliError> {
     let keys = given.into_iter().flat_map(|g| g.split(','));
     let named = |pair: &str| pair.split('=').next().unwrap_or("").trim().to_string();
-    if let Some(key) = keys
-        .map(named)
-        .find(|k| k != "drift_pct" && Thresholds::KEYS.contains(&k.as_str()))
-    {
-        return Err(input(anyhow::anyhow!(
+    let other = keys.map(named).find(|k| !k.is_empty() && k != "drift_pct");
+    match other {
+        Some(key) if Thresholds::KEYS.contains(&key.as_str()) => Err(input(anyhow::anyhow!(
             "--accept: {key}: the terms are held to their thresholds where the installation is calibrated (calibrate --accept); correct holds its dead reckoning on this dive to drift_pct"
-        )));
+        ))),
+        Some(key) => Err(input(anyhow::anyhow!(
+            "--accept: {key}: not a threshold; correct takes drift_pct"
+        ))),
+        None => thresholds(given),
     }
-    thresholds(given)
 }
 
 /// The acceptance of an installation carried to a dive whose dead reckoning there

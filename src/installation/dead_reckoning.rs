@@ -3,7 +3,8 @@
 //! calibration, the track's drift from the reference's positions as a percentage of
 //! the distance travelled.
 //! In: an installation, a piece of DVL samples, an [`Attitude`]. Out: a [`Track`] of
-//! the reference point, and its [`Drift`].
+//! the reference point; against the reference's positions, a [`Reckoning`]: each piece
+//! placed on them, and the [`Drift`].
 //!
 //! The DVL sample stamped t measured at t + τ; corrected, u = R(δ)ᵀ(I + S)⁻¹(v − b) is
 //! the velocity of the DVL's own point in body axes. The DVL's point moves at C_b^n u,
@@ -150,6 +151,15 @@ pub struct Drift {
     pub samples: usize,
 }
 
+impl Drift {
+    /// The pieces' end errors summed over `distance_m` instead of their own distance, %:
+    /// a dead reckoning on another clock, over the distance the one it is set beside
+    /// travelled.
+    pub fn end_pct_of(&self, distance_m: f64) -> f64 {
+        self.end_pct * self.distance_m / distance_m
+    }
+}
+
 /// The reference's horizontal positions on their stamps, read at any time.
 pub struct Positions<'a> {
     pub time_s: &'a [f64],
@@ -189,75 +199,102 @@ pub fn path_length_m<P: AsRef<[f64]>>(points: &[P]) -> f64 {
         .sum()
 }
 
-/// `installation`'s dead reckoning over the `pieces` of the DVL record `dvl` against
-/// `positions`, each piece started at the reference's position: `None` where no piece
-/// could be scored (the attitude or the positions not read over it, or a vehicle that
-/// did not move). Every installation is scored on the same samples: those whose t + τ
-/// lies inside the attitude whatever τ within ±[`GAP_MARGIN_S`].
-pub fn reckon_against(
-    installation: &Installation,
+/// The dead reckonings of `installations` over the `pieces` of the DVL record `dvl`
+/// against `positions`, each piece started at the reference's position (at the first
+/// sample's t + τ, each on its own clock): `None` where no piece could be scored (the
+/// attitude or the positions not read over it, or a vehicle that did not move). Every
+/// installation is scored on the same samples and pieces: those whose t lies inside
+/// the attitude within ±[`GAP_MARGIN_S`] (so that any τ within it reads the attitude,
+/// and methods compared are scored alike) and whose t + τ does for each installation's
+/// clock (a clock found seconds away, which `correct` searches for), a piece left out
+/// for all where one of them cannot reckon it.
+pub fn reckon_alike<const N: usize>(
+    installations: [&Installation; N],
     (time_s, dvl_m_s): (&[f64], &[Vec3]),
     pieces: &[Range<usize>],
     attitude: &Attitude,
     positions: &Positions,
-) -> Option<Reckoning> {
-    let (mut squares, mut end_error_m, mut distance_m) = (0.0, 0.0, 0.0);
-    let mut placed = Vec::new();
-    let inside = interior(attitude, time_s, 0.0);
+) -> Option<[Reckoning; N]> {
+    let inside = (installations.iter()).fold(interior(attitude, time_s, 0.0), |inside, i| {
+        let read = within(attitude, time_s, i.time_offset_s);
+        inside.start.max(read.start)..inside.end.min(read.end)
+    });
+    let mut placed: [Vec<PlacedPiece>; N] = std::array::from_fn(|_| Vec::new());
     for piece in pieces {
         let piece = piece.start.max(inside.start)..piece.end.min(inside.end);
-        let Some(track) = dead_reckon(
-            installation,
-            (&time_s[piece.clone()], &dvl_m_s[piece.clone()]),
-            attitude,
-        ) else {
-            continue;
-        };
-        let reference: Option<Vec<[f64; 2]>> =
-            track.time_s.iter().map(|&t| positions.at(t)).collect();
-        let Some(reference) = reference else {
-            continue;
-        };
-        let travelled = path_length_m(&reference);
-        if reference.len() < 2 || travelled <= 0.0 {
-            continue;
+        let dvl = (&time_s[piece.clone()], &dvl_m_s[piece]);
+        let each: Option<Vec<PlacedPiece>> = (installations.iter())
+            .map(|installation| place(&dead_reckon(installation, dvl, attitude)?, positions))
+            .collect();
+        for (k, piece) in each.into_iter().flatten().enumerate() {
+            placed[k].push(piece);
         }
-        let start = [0, 1].map(|k| reference[0][k] - track.position_m[0][k]);
-        let reckoned: Vec<[f64; 2]> = (track.position_m.iter())
-            .map(|p| [p[0] + start[0], p[1] + start[1]])
-            .collect();
-        let errors: Vec<f64> = (reckoned.iter().zip(&reference))
-            .map(|(p, r)| (p[0] - r[0]).hypot(p[1] - r[1]))
-            .collect();
-        squares += errors.iter().map(|e| (e / travelled).powi(2)).sum::<f64>();
-        end_error_m += errors[errors.len() - 1];
-        distance_m += travelled;
-        placed.push(PlacedPiece {
-            reckoned_ne_m: reckoned,
-            reference_ne_m: reference,
-        });
     }
-    let samples: usize = placed.iter().map(|p| p.reckoned_ne_m.len()).sum();
-    (samples > 0).then(|| Reckoning {
-        drift: Drift {
-            rms_pct: 100.0 * (squares / samples as f64).sqrt(),
-            end_pct: 100.0 * end_error_m / distance_m,
-            distance_m,
-            samples,
-        },
-        pieces: placed,
+    let reckonings = placed.map(|pieces| {
+        let drift = drift_over(&pieces);
+        drift.map(|drift| Reckoning { drift, pieces })
+    });
+    reckonings
+        .into_iter()
+        .collect::<Option<Vec<_>>>()?
+        .try_into()
+        .ok()
+}
+
+/// `track` placed on `positions` at its first sample, beside them at each of its
+/// samples; `None` where the positions are not read at one of them, or the reference
+/// did not move.
+fn place(track: &Track, positions: &Positions) -> Option<PlacedPiece> {
+    let reference: Vec<[f64; 2]> = (track.time_s.iter())
+        .map(|&t| positions.at(t))
+        .collect::<Option<_>>()?;
+    if reference.len() < 2 || path_length_m(&reference) <= 0.0 {
+        return None;
+    }
+    let start = [0, 1].map(|k| reference[0][k] - track.position_m[0][k]);
+    Some(PlacedPiece {
+        reckoned_ne_m: (track.position_m.iter())
+            .map(|p| [p[0] + start[0], p[1] + start[1]])
+            .collect(),
+        reference_ne_m: reference,
     })
 }
 
-/// `installation`'s dead reckoning over `recording` against its reference's positions,
-/// where it records them ([`reckon_against`]).
-pub fn reckoning_of(installation: &Installation, recording: &PairedRecording) -> Option<Reckoning> {
+/// The drift of the placed `pieces`: over every sample, the RMS of the error over its
+/// piece's distance, and the pieces' end errors summed over their distances; `None`
+/// with no piece.
+fn drift_over(pieces: &[PlacedPiece]) -> Option<Drift> {
+    let (mut squares, mut samples, mut end_error_m, mut distance_m) = (0.0, 0, 0.0, 0.0);
+    for piece in pieces {
+        let travelled = path_length_m(&piece.reference_ne_m);
+        let errors: Vec<f64> = (piece.reckoned_ne_m.iter().zip(&piece.reference_ne_m))
+            .map(|(p, r)| (p[0] - r[0]).hypot(p[1] - r[1]))
+            .collect();
+        squares += errors.iter().map(|e| (e / travelled).powi(2)).sum::<f64>();
+        samples += errors.len();
+        end_error_m += errors[errors.len() - 1];
+        distance_m += travelled;
+    }
+    (samples > 0).then(|| Drift {
+        rms_pct: 100.0 * (squares / samples as f64).sqrt(),
+        end_pct: 100.0 * end_error_m / distance_m,
+        distance_m,
+        samples,
+    })
+}
+
+/// The dead reckonings of `installations` over `recording` against its reference's
+/// positions, where it records them, scored alike ([`reckon_alike`]).
+pub fn reckonings_of<const N: usize>(
+    installations: [&Installation; N],
+    recording: &PairedRecording,
+) -> Option<[Reckoning; N]> {
     let positions = Positions {
         time_s: &recording.reference_time_s,
         north_east_m: recording.position_ne_m.as_deref()?,
     };
-    reckon_against(
-        installation,
+    reckon_alike(
+        installations,
         (&recording.time_s, &recording.dvl_m_s),
         &recording.pieces(),
         &Attitude::of(recording),
@@ -266,9 +303,19 @@ pub fn reckoning_of(installation: &Installation, recording: &PairedRecording) ->
 }
 
 /// The drift of `installation` over `recording` against its reference's positions
-/// ([`reckoning_of`]).
+/// ([`reckonings_of`]).
 pub fn drift_of(installation: &Installation, recording: &PairedRecording) -> Option<Drift> {
-    reckoning_of(installation, recording).map(|r| r.drift)
+    reckonings_of([installation], recording).map(|[r]| r.drift)
+}
+
+/// The samples stamped `time_s` whose t + `time_offset_s` lies inside `attitude`'s span.
+fn within(attitude: &Attitude, time_s: &[f64], time_offset_s: f64) -> Range<usize> {
+    let (Some(&first), Some(&last)) = (attitude.time_s.first(), attitude.time_s.last()) else {
+        return 0..0;
+    };
+    let start = time_s.partition_point(|&t| t + time_offset_s < first);
+    let end = time_s.partition_point(|&t| t + time_offset_s <= last);
+    start..end.max(start)
 }
 
 /// The samples stamped `time_s` whose t + τ lies inside `attitude`'s span for every τ
@@ -319,14 +366,15 @@ mod tests {
         let dvl: Vec<Vec3> = vec![[1.01 * speed, 0.0, 0.0]; time_s.len()];
         let pieces = [0..time_s.len()];
         let reckon = |installation: &Installation| {
-            reckon_against(
-                installation,
+            let [reckoning] = reckon_alike(
+                [installation],
                 (&time_s, &dvl),
                 &pieces,
                 &attitude,
                 &positions,
             )
-            .unwrap()
+            .unwrap();
+            reckoning
         };
         let none = reckon(&Installation::default());
         let arc_m = speed * 60.0;

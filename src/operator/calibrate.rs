@@ -9,7 +9,7 @@
 
 use crate::data::paired::bag::{BagFrames, is_bag};
 use crate::data::paired::{PairedError, PairedRecording, ReadCounts, Source};
-use crate::installation::dead_reckoning::{Reckoning, reckoning_of};
+use crate::installation::dead_reckoning::{Reckoning, reckonings_of};
 use crate::installation::estimate::bound::{Noise, TermBound, bound};
 use crate::installation::estimate::clock::{MAX_SEARCH_S, fit_searched};
 use crate::installation::estimate::filter::{FilterSettings, run_filter_from};
@@ -393,8 +393,7 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<Calibration, CalibrateError> {
         before,
         after,
         trace,
-        drift: reckoning_of(&Installation::default(), &read.recording)
-            .zip(reckoning_of(&applied, &read.recording)),
+        drift: reckonings_of([&Installation::default(), &applied], &read.recording).map(Into::into),
         settings,
         filter,
         curve,

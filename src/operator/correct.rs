@@ -12,7 +12,7 @@
 use crate::Vec3;
 use crate::data::paired::bag::BagFrames;
 use crate::data::paired::{PairedError, PairedRecording, ReadCounts};
-use crate::installation::dead_reckoning::{Reckoning, reckoning_of};
+use crate::installation::dead_reckoning::{Reckoning, reckonings_of};
 use crate::installation::estimate::bound::{DEFAULT_TOLERANCES, Noise};
 use crate::installation::estimate::clock::{
     Carried, Clock, ClockError, ClockSearch, MAX_SEARCH_S, SearchGrid, refind,
@@ -321,8 +321,7 @@ pub fn correct(args: &CorrectArgs) -> Result<Correction, CorrectError> {
         installation_file: args.installation.to_path_buf(),
         written: files,
         read: counts,
-        drift: reckoning_of(&Installation::default(), &recording)
-            .zip(reckoning_of(&applied, &recording)),
+        drift: reckonings_of([&Installation::default(), &applied], &recording).map(Into::into),
     })
 }
 

@@ -248,11 +248,19 @@ fn an_installation_carried_is_held_to_its_drift_on_the_next_dive() {
     }
     assert!(stderr(&output).contains("the installation is rejected on this dive"));
 
-    let output = correct(&["--accept=scale_pct=1"], "refused");
-    assert_eq!(output.status.code(), Some(1));
-    assert!(
-        stderr(&output).contains("--accept: scale_pct: the terms are held to their thresholds where the installation is calibrated"),
-        "{}",
-        stderr(&output)
-    );
+    let refused = [
+        (
+            "--accept=scale_pct=1",
+            "--accept: scale_pct: the terms are held to their thresholds where the installation is calibrated",
+        ),
+        (
+            "--accept=drift=1",
+            "--accept: drift: not a threshold; correct takes drift_pct",
+        ),
+    ];
+    for (flag, message) in refused {
+        let output = correct(&[flag], "refused");
+        assert_eq!(output.status.code(), Some(1));
+        assert!(stderr(&output).contains(message), "{}", stderr(&output));
+    }
 }

@@ -25,8 +25,9 @@ use crate::report::kit::plots::search::{SearchCurve, draw_search};
 use crate::report::kit::plots::term_panels::{TermPanel, draw_panels};
 use crate::report::kit::readable::readable_term;
 
-/// The figures of `correction` of the dive `name`: its clock search, and its residual
-/// before and after the installation carried, after the seconds that found its clock.
+/// The figures of `correction` of the dive `name`: its clock search, its residual before
+/// and after the installation carried, after the seconds that found its clock, and its
+/// dead reckoning in plan view where the reference records positions.
 pub fn correction_figures(
     correction: &Correction,
     name: &str,
@@ -201,33 +202,39 @@ pub fn filter_terms(calibration: &Calibration, name: &str) -> PlotResult<Outcome
 
 /// The dead reckoning in plan view against the reference's positions, each piece
 /// placed on the reference's position at its first sample, with no terms and with
-/// `terms`; its caption's drifts computed from the very lines drawn.
+/// `terms`; its caption's end drifts computed from the very lines drawn, both over the
+/// distance the reference travelled along the pieces with the terms (each dead
+/// reckoning is on its own clock: the reference's path is drawn along both).
 fn track(drift: &Option<(Reckoning, Reckoning)>, name: &str, terms: &str) -> PlotResult<Outcome> {
     let Some((before, after)) = drift else {
         return Ok(Outcome::NotApplicable(
             "the reference records no positions (or none along a piece of the DVL's record)".into(),
         ));
     };
-    let reckoned = |of: &Reckoning| -> Vec<Vec<[f64; 2]>> {
+    let lines = |of: &Reckoning, reference: bool| -> Vec<Vec<[f64; 2]>> {
         (of.pieces.iter())
-            .map(|p| p.reckoned_ne_m.clone())
+            .map(|p| match reference {
+                true => p.reference_ne_m.clone(),
+                false => p.reckoned_ne_m.clone(),
+            })
             .collect()
     };
     let plan = PlanView {
-        reference: (after.pieces.iter())
-            .map(|p| p.reference_ne_m.clone())
-            .collect(),
+        reference: [lines(before, true), lines(after, true)].concat(),
         fixes: Vec::new(),
         outliers: Vec::new(),
         withheld: Vec::new(),
-        before: reckoned(before),
-        after: reckoned(after),
+        before: lines(before, false),
+        after: lines(after, false),
         blackout: None,
     };
-    let (before_pct, after_pct) = (end_drift_pct(before), end_drift_pct(after));
     let distance_m: f64 = (after.pieces.iter())
         .map(|p| path_length_m(&p.reference_ne_m))
         .sum();
+    let (before_pct, after_pct) = (
+        100.0 * end_error_m(before) / distance_m,
+        100.0 * end_error_m(after) / distance_m,
+    );
     let caption = format!(
         "{name}: the dead reckoning in plan view against the reference's positions (black), {} placed on the reference's position at its first sample: at the end {before_pct:.3} % of the {distance_m:.0} m travelled with no terms (grey), {after_pct:.3} % with {terms} (blue); RMS over every sample {:.3} % and {:.3} %",
         match after.pieces.len() {
@@ -244,16 +251,12 @@ fn track(drift: &Option<(Reckoning, Reckoning)>, name: &str, terms: &str) -> Plo
     Ok(Outcome::Drawn(Drawn { caption, svg }))
 }
 
-/// The pieces' horizontal errors at their ends, summed, over the distances the
-/// reference travelled along them, %.
-fn end_drift_pct(reckoning: &Reckoning) -> f64 {
-    let (mut error_m, mut distance_m) = (0.0, 0.0);
-    for piece in &reckoning.pieces {
-        let (end, reference) = (piece.reckoned_ne_m.last(), piece.reference_ne_m.last());
-        if let (Some(end), Some(reference)) = (end, reference) {
-            error_m += (end[0] - reference[0]).hypot(end[1] - reference[1]);
-        }
-        distance_m += path_length_m(&piece.reference_ne_m);
-    }
-    100.0 * error_m / distance_m
+/// The pieces' horizontal errors at their ends against the reference, summed, m.
+fn end_error_m(reckoning: &Reckoning) -> f64 {
+    (reckoning.pieces.iter())
+        .filter_map(|piece| {
+            let (end, reference) = (piece.reckoned_ne_m.last()?, piece.reference_ne_m.last()?);
+            Some((end[0] - reference[0]).hypot(end[1] - reference[1]))
+        })
+        .sum()
 }

@@ -57,7 +57,8 @@ pub fn terms_table<N: ReadNoise>(bound: &TermBound<N>, shown: impl Fn(usize) -> 
 }
 
 /// The line that says how far a dead reckoning drifts with no terms and with the terms
-/// applied, against the reference's positions; empty where it records none.
+/// applied, against the reference's positions, both end errors over the distance the
+/// one with the terms travelled (on its clock); empty where it records none.
 pub fn drift_line(drift: &Option<(Reckoning, Reckoning)>) -> String {
     let Some((before, after)) = drift else {
         return String::new();
@@ -65,6 +66,10 @@ pub fn drift_line(drift: &Option<(Reckoning, Reckoning)>) -> String {
     let (before, after) = (before.drift, after.drift);
     format!(
         "dead-reckoning drift against the reference's positions (horizontal, each piece started at the reference's position, over the {:.0} m travelled): RMS {:.3} % of the distance with no terms, {:.3} % with the terms applied; at the end {:.3} % and {:.3} %\n",
-        after.distance_m, before.rms_pct, after.rms_pct, before.end_pct, after.end_pct
+        after.distance_m,
+        before.rms_pct,
+        after.rms_pct,
+        before.end_pct_of(after.distance_m),
+        after.end_pct
     )
 }

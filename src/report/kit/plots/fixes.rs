@@ -97,7 +97,7 @@ pub fn draw_plan(title: &str, plan: &PlanView) -> PlotResult<String> {
         Marker::Ring.draw(&mut chart, &drawn(&plan.withheld), WITHHELD)?;
         Marker::Dot.draw(&mut chart, &drawn(&plan.fixes), FIX)?;
         for track in &plan.reference {
-            line(&mut chart, drawn(track), FIX, Stroke::Solid)?;
+            line(&mut chart, drawn(track), BLACK, Stroke::Solid)?;
         }
         for track in &plan.before {
             line(&mut chart, drawn(track), BEFORE, Stroke::Solid)?;
@@ -121,7 +121,7 @@ fn plan_entries(plan: &PlanView) -> Vec<(Swatch, String)> {
     }
     if !plan.reference.is_empty() {
         entries.push((
-            Swatch::Line(FIX, Stroke::Solid),
+            Swatch::Line(BLACK, Stroke::Solid),
             "reference's positions".to_string(),
         ));
     }
