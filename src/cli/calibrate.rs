@@ -144,9 +144,14 @@ fn refuse_for_several(args: &args::CalibrateArgs) -> Result<(), CliError> {
 
 /// Exit status 3 where `--fail-on-reject` meets a calibration `--accept` rejected.
 fn rejection(fail: bool) -> Result<(), CliError> {
+    rejected_as(fail, "the calibration is rejected")
+}
+
+/// Exit status 3 where `fail`, saying that `what` (is rejected) by `--accept`.
+fn rejected_as(fail: bool, what: &str) -> Result<(), CliError> {
     match fail {
         true => Err(CliError::Rejected(anyhow::anyhow!(
-            "the calibration is rejected by --accept (--fail-on-reject); every file was written"
+            "{what} by --accept (--fail-on-reject); every file was written"
         ))),
         false => Ok(()),
     }
@@ -362,12 +367,10 @@ pub(super) fn correct_command(args: &args::CorrectArgs) -> Result<(), CliError> 
         Some(given) => correct_fixes(args, given, (report, thresholds))?,
         None => correct_velocity(args, (report, thresholds))?,
     };
-    match rejected && args.fail_on_reject {
-        true => Err(CliError::Rejected(anyhow::anyhow!(
-            "the installation is rejected on this dive by --accept (--fail-on-reject); every file was written"
-        ))),
-        false => Ok(()),
-    }
+    rejected_as(
+        rejected && args.fail_on_reject,
+        "the installation is rejected on this dive",
+    )
 }
 
 /// `correct` against a velocity reference, its report written and its acceptance held

@@ -181,6 +181,24 @@ pub struct PlacedPiece {
     pub reference_ne_m: Vec<[f64; 2]>,
 }
 
+impl PlacedPiece {
+    /// The horizontal error of the dead reckoning at each sample, m.
+    pub fn errors_m(&self) -> impl Iterator<Item = f64> + '_ {
+        (self.reckoned_ne_m.iter().zip(&self.reference_ne_m))
+            .map(|(p, r)| (p[0] - r[0]).hypot(p[1] - r[1]))
+    }
+
+    /// The horizontal error at the piece's end, m.
+    pub fn end_error_m(&self) -> f64 {
+        self.errors_m().last().unwrap_or(0.0)
+    }
+
+    /// How far the reference travelled along the piece, horizontally, m.
+    pub fn travelled_m(&self) -> f64 {
+        path_length_m(&self.reference_ne_m)
+    }
+}
+
 /// A dead reckoning scored against the reference's positions: its [`Drift`], and the
 /// pieces it is the drift of.
 #[derive(Debug, Clone, PartialEq)]
@@ -216,7 +234,7 @@ pub fn reckon_alike<const N: usize>(
     positions: &Positions,
 ) -> Option<[Reckoning; N]> {
     let inside = (installations.iter()).fold(interior(attitude, time_s, 0.0), |inside, i| {
-        let read = within(attitude, time_s, i.time_offset_s);
+        let read = within(attitude, time_s, (i.time_offset_s, 0.0));
         inside.start.max(read.start)..inside.end.min(read.end)
     });
     let mut placed: [Vec<PlacedPiece>; N] = std::array::from_fn(|_| Vec::new());
@@ -266,13 +284,13 @@ fn place(track: &Track, positions: &Positions) -> Option<PlacedPiece> {
 fn drift_over(pieces: &[PlacedPiece]) -> Option<Drift> {
     let (mut squares, mut samples, mut end_error_m, mut distance_m) = (0.0, 0, 0.0, 0.0);
     for piece in pieces {
-        let travelled = path_length_m(&piece.reference_ne_m);
-        let errors: Vec<f64> = (piece.reckoned_ne_m.iter().zip(&piece.reference_ne_m))
-            .map(|(p, r)| (p[0] - r[0]).hypot(p[1] - r[1]))
-            .collect();
-        squares += errors.iter().map(|e| (e / travelled).powi(2)).sum::<f64>();
-        samples += errors.len();
-        end_error_m += errors[errors.len() - 1];
+        let travelled = piece.travelled_m();
+        squares += piece
+            .errors_m()
+            .map(|e| (e / travelled).powi(2))
+            .sum::<f64>();
+        samples += piece.reckoned_ne_m.len();
+        end_error_m += piece.end_error_m();
         distance_m += travelled;
     }
     (samples > 0).then(|| Drift {
@@ -308,24 +326,20 @@ pub fn drift_of(installation: &Installation, recording: &PairedRecording) -> Opt
     reckonings_of([installation], recording).map(|[r]| r.drift)
 }
 
-/// The samples stamped `time_s` whose t + `time_offset_s` lies inside `attitude`'s span.
-fn within(attitude: &Attitude, time_s: &[f64], time_offset_s: f64) -> Range<usize> {
-    let (Some(&first), Some(&last)) = (attitude.time_s.first(), attitude.time_s.last()) else {
-        return 0..0;
-    };
-    let start = time_s.partition_point(|&t| t + time_offset_s < first);
-    let end = time_s.partition_point(|&t| t + time_offset_s <= last);
-    start..end.max(start)
-}
-
 /// The samples stamped `time_s` whose t + τ lies inside `attitude`'s span for every τ
 /// within [`GAP_MARGIN_S`] of `centre_s` (empty where none does).
 pub fn interior(attitude: &Attitude, time_s: &[f64], centre_s: f64) -> Range<usize> {
+    within(attitude, time_s, (centre_s, GAP_MARGIN_S))
+}
+
+/// The samples stamped `time_s` whose t + τ lies inside `attitude`'s span for every τ
+/// within `margin_s` of `centre_s` (empty where none does).
+fn within(attitude: &Attitude, time_s: &[f64], (centre_s, margin_s): (f64, f64)) -> Range<usize> {
     let (Some(&first), Some(&last)) = (attitude.time_s.first(), attitude.time_s.last()) else {
         return 0..0;
     };
-    let start = time_s.partition_point(|&t| t + centre_s - GAP_MARGIN_S < first);
-    let end = time_s.partition_point(|&t| t + centre_s + GAP_MARGIN_S <= last);
+    let start = time_s.partition_point(|&t| t + centre_s - margin_s < first);
+    let end = time_s.partition_point(|&t| t + centre_s + margin_s <= last);
     start..end.max(start)
 }
 

@@ -12,7 +12,7 @@
 //! and the recording's name. Out: each figure, or why there is none.
 
 use crate::data::paired::pieces;
-use crate::installation::dead_reckoning::{Reckoning, path_length_m};
+use crate::installation::dead_reckoning::{PlacedPiece, Reckoning};
 use crate::installation::study::rows::FilterPoint;
 use crate::operator::calibrate::Calibration;
 use crate::operator::correct::Correction;
@@ -228,9 +228,7 @@ fn track(drift: &Option<(Reckoning, Reckoning)>, name: &str, terms: &str) -> Plo
         after: lines(after, false),
         blackout: None,
     };
-    let distance_m: f64 = (after.pieces.iter())
-        .map(|p| path_length_m(&p.reference_ne_m))
-        .sum();
+    let distance_m: f64 = after.pieces.iter().map(PlacedPiece::travelled_m).sum();
     let (before_pct, after_pct) = (
         100.0 * end_error_m(before) / distance_m,
         100.0 * end_error_m(after) / distance_m,
@@ -253,10 +251,5 @@ fn track(drift: &Option<(Reckoning, Reckoning)>, name: &str, terms: &str) -> Plo
 
 /// The pieces' horizontal errors at their ends against the reference, summed, m.
 fn end_error_m(reckoning: &Reckoning) -> f64 {
-    (reckoning.pieces.iter())
-        .filter_map(|piece| {
-            let (end, reference) = (piece.reckoned_ne_m.last()?, piece.reference_ne_m.last()?);
-            Some((end[0] - reference[0]).hypot(end[1] - reference[1]))
-        })
-        .sum()
+    reckoning.pieces.iter().map(PlacedPiece::end_error_m).sum()
 }
